@@ -1,0 +1,777 @@
+//! The interpreter: decode and encode any frame straight from the IR, at run time.
+//!
+//! It is the independent oracle the generated code is tested and fuzzed against, the engine that
+//! replays every example during validation, and what the CLI uses for a spec given at run time.
+//! It never panics: every index is checked, every length compared before it is used.
+
+use std::fmt;
+
+use crate::checksum;
+use crate::ir::{BitField, ByteOrder, Direction, Field, Message, MessageRef, Part, Protocol};
+
+/// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Raw {
+    Int(i64),
+    Text(Vec<u8>),
+}
+
+/// One named value of a decoded frame; packed words appear as their sub-fields.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Value {
+    pub name: String,
+    pub raw: Raw,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Frame {
+    pub message: MessageRef,
+    pub address: u8,
+    pub values: Vec<Value>,
+}
+
+impl Frame {
+    pub fn get(&self, name: &str) -> Option<&Raw> {
+        self.values.iter().find(|v| v.name == name).map(|v| &v.raw)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum DecodeError {
+    /// Fewer bytes than the shortest frame that could start like this one.
+    Truncated {
+        needed: usize,
+        found: usize,
+    },
+    BadStart {
+        expected: u8,
+        found: u8,
+    },
+    ChecksumMismatch {
+        offset: usize,
+        expected: u64,
+        found: u64,
+        width: u8,
+    },
+    UnknownCode {
+        offset: usize,
+        code: Vec<u8>,
+    },
+    WrongLength {
+        message: String,
+        expected: Vec<usize>,
+        found: usize,
+    },
+    ConstantMismatch {
+        message: String,
+        field: String,
+        offset: usize,
+        expected: u64,
+        found: u64,
+    },
+    NotEqual {
+        message: String,
+        field: String,
+        offset: usize,
+        other: String,
+        expected: i64,
+        found: i64,
+    },
+    /// Several messages fit the bytes; only the request they answer can tell them apart.
+    Ambiguous {
+        candidates: Vec<String>,
+    },
+}
+
+fn hex(bytes: &[u8]) -> String {
+    let mut s = String::from("0x");
+    for b in bytes {
+        s.push_str(&format!("{b:02X}"));
+    }
+    s
+}
+
+fn hex_width(v: u64, bits: u8) -> String {
+    let digits = usize::from(bits.div_ceil(4)).max(2);
+    format!("0x{v:0digits$X}")
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DecodeError::Truncated { needed, found } => {
+                write!(f, "truncated frame: need at least {needed} bytes, found {found}")
+            }
+            DecodeError::BadStart { expected, found } => {
+                write!(f, "bad start byte at offset 0: expected 0x{expected:02X}, found 0x{found:02X}")
+            }
+            DecodeError::ChecksumMismatch { offset, expected, found, width } => write!(
+                f,
+                "checksum mismatch at offset {offset}: expected {}, found {}",
+                hex_width(*expected, *width),
+                hex_width(*found, *width)
+            ),
+            DecodeError::UnknownCode { offset, code } => {
+                write!(f, "unknown command code {} at offset {offset}", hex(code))
+            }
+            DecodeError::WrongLength { message, expected, found } => {
+                let exp: Vec<String> = expected.iter().map(|n| n.to_string()).collect();
+                write!(f, "wrong length for {message}: expected {} bytes, found {found}", exp.join(" or "))
+            }
+            DecodeError::ConstantMismatch { message, field, offset, expected, found } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
+            ),
+            DecodeError::NotEqual { message, field, offset, other, expected, found } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: must repeat {other} ({expected}), found {found}"
+            ),
+            DecodeError::Ambiguous { candidates } => write!(
+                f,
+                "ambiguous frame: could be {}; decode it together with the request it answers",
+                candidates.join(" or ")
+            ),
+        }
+    }
+}
+
+impl std::error::Error for DecodeError {}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum EncodeError {
+    MissingValue {
+        field: String,
+    },
+    UnknownValue {
+        field: String,
+    },
+    OutOfRange {
+        field: String,
+        value: i64,
+        min: i64,
+        max: i64,
+    },
+    WrongTextLength {
+        field: String,
+        expected: usize,
+        found: usize,
+    },
+    NotText {
+        field: String,
+    },
+    NotNumber {
+        field: String,
+    },
+    BadAddress {
+        address: u8,
+    },
+}
+
+impl fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EncodeError::MissingValue { field } => write!(f, "no value given for field {field}"),
+            EncodeError::UnknownValue { field } => write!(
+                f,
+                "value given for {field}, which the message does not have"
+            ),
+            EncodeError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => {
+                write!(
+                    f,
+                    "{field} = {value} does not fit the field ({min}..={max})"
+                )
+            }
+            EncodeError::WrongTextLength {
+                field,
+                expected,
+                found,
+            } => {
+                write!(
+                    f,
+                    "{field} takes exactly {expected} characters, got {found}"
+                )
+            }
+            EncodeError::NotText { field } => write!(f, "{field} takes text"),
+            EncodeError::NotNumber { field } => write!(f, "{field} takes a number"),
+            EncodeError::BadAddress { address } => write!(
+                f,
+                "address 0x{address:02X} is not a device or broadcast address"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for EncodeError {}
+
+/// Byte offsets of the parts of a frame whose code has `code_len` bytes.
+#[derive(Debug, Clone, Copy)]
+pub struct Offsets {
+    pub start: Option<usize>,
+    pub address: usize,
+    pub code: usize,
+    pub payload: usize,
+    pub checksum: usize,
+}
+
+pub fn offsets(p: &Protocol, code_len: usize, payload_len: usize) -> Offsets {
+    let mut o = Offsets {
+        start: None,
+        address: 0,
+        code: 0,
+        payload: 0,
+        checksum: 0,
+    };
+    let mut at = 0;
+    for part in &p.framing.layout {
+        match part {
+            Part::Start => {
+                o.start = Some(at);
+                at += 1;
+            }
+            Part::Address => {
+                o.address = at;
+                at += 1;
+            }
+            Part::Code => {
+                o.code = at;
+                at += code_len;
+            }
+            Part::Payload => {
+                o.payload = at;
+                at += payload_len;
+            }
+            Part::Checksum => {
+                o.checksum = at;
+                at += p.framing.checksum.len();
+            }
+        }
+    }
+    o
+}
+
+/// Reads an unsigned integer of `bytes.len()` bytes.
+pub fn read_uint(bytes: &[u8], order: ByteOrder) -> u64 {
+    let fold = |acc: u64, b: &u8| (acc << 8) | u64::from(*b);
+    match order {
+        ByteOrder::Big => bytes.iter().fold(0, fold),
+        ByteOrder::Little => bytes.iter().rev().fold(0, fold),
+    }
+}
+
+/// Writes the low `out.len()` bytes of `v`.
+pub fn write_uint(v: u64, out: &mut [u8], order: ByteOrder) {
+    let n = out.len();
+    for (i, slot) in out.iter_mut().enumerate() {
+        let shift = 8 * match order {
+            ByteOrder::Big => n - 1 - i,
+            ByteOrder::Little => i,
+        };
+        *slot = if shift < 64 { (v >> shift) as u8 } else { 0 };
+    }
+}
+
+fn sign_extend(v: u64, bits: u32) -> i64 {
+    if bits == 0 || bits >= 64 {
+        return v as i64;
+    }
+    let shift = 64 - bits;
+    ((v << shift) as i64) >> shift
+}
+
+fn bit_value(container: u64, b: &BitField) -> i64 {
+    let w = u32::from(b.width());
+    let mask = if w >= 64 { u64::MAX } else { (1u64 << w) - 1 };
+    let v = (container >> b.lsb) & mask;
+    if b.signed {
+        sign_extend(v, w)
+    } else {
+        v as i64
+    }
+}
+
+/// The inclusive range of raw values a field of `bits` bits can hold.
+pub fn raw_limits(bits: u32, signed: bool) -> (i64, i64) {
+    match (signed, bits) {
+        (_, 0) => (0, 0),
+        (true, b) if b >= 64 => (i64::MIN, i64::MAX),
+        (false, b) if b >= 63 => (0, i64::MAX),
+        (true, b) => (-(1i64 << (b - 1)), (1i64 << (b - 1)) - 1),
+        (false, b) => (0, (1i64 << b) - 1),
+    }
+}
+
+/// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
+/// responses that only the request they answer can tell apart.
+pub fn decode(
+    p: &Protocol,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    wire: &[u8],
+) -> Result<Frame, DecodeError> {
+    let directions: &[Direction] = match direction {
+        Some(Direction::Request) => &[Direction::Request],
+        Some(Direction::Response) => &[Direction::Response],
+        None => &[Direction::Request, Direction::Response],
+    };
+    let shortest = directions
+        .iter()
+        .flat_map(|d| p.messages(*d))
+        .map(|m| p.frame_len(m))
+        .min()
+        .unwrap_or(0);
+    let min_code = directions
+        .iter()
+        .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
+        .min()
+        .unwrap_or(1);
+    let first = offsets(p, min_code, 0);
+    if let (Some(at), Some(expected)) = (first.start, p.framing.start) {
+        if let Some(&found) = wire.get(at) {
+            if found != expected {
+                return Err(DecodeError::BadStart { expected, found });
+            }
+        }
+    }
+    if wire.len() < shortest.max(p.framing.overhead() + min_code) {
+        return Err(DecodeError::Truncated {
+            needed: shortest,
+            found: wire.len(),
+        });
+    }
+    check_checksum(p, wire)?;
+
+    // Messages whose code matches the bytes where the code sits.
+    let mut by_code: Vec<MessageRef> = Vec::new();
+    for &d in directions {
+        for (index, m) in p.messages(d).iter().enumerate() {
+            let o = offsets(p, m.code.len(), m.payload_len);
+            if wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..]) {
+                by_code.push(MessageRef {
+                    direction: d,
+                    index,
+                });
+            }
+        }
+    }
+    if by_code.is_empty() {
+        let o = offsets(p, min_code, 0);
+        let longest = directions
+            .iter()
+            .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
+            .max()
+            .unwrap_or(1);
+        let end = (o.code + longest).min(wire.len().saturating_sub(p.framing.checksum.len()));
+        let code = wire.get(o.code..end.max(o.code)).unwrap_or(&[]).to_vec();
+        return Err(DecodeError::UnknownCode {
+            offset: o.code,
+            code,
+        });
+    }
+    let by_len: Vec<MessageRef> = by_code
+        .iter()
+        .copied()
+        .filter(|r| p.frame_len(p.message(*r)) == wire.len())
+        .collect();
+    if by_len.is_empty() {
+        let mut expected: Vec<usize> = by_code.iter().map(|r| p.frame_len(p.message(*r))).collect();
+        expected.sort_unstable();
+        expected.dedup();
+        let name = p.message(by_code[0]).name.clone();
+        if expected.iter().all(|&n| n > wire.len()) {
+            return Err(DecodeError::Truncated {
+                needed: expected[0],
+                found: wire.len(),
+            });
+        }
+        return Err(DecodeError::WrongLength {
+            message: name,
+            expected,
+            found: wire.len(),
+        });
+    }
+    let mut fitting = Vec::new();
+    let mut first_err = None;
+    for r in by_len {
+        match decode_fields(p, p.message(r), wire) {
+            Ok(values) => fitting.push((r, values)),
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    if fitting.len() > 1 {
+        if let Some(cmd) = reply_to {
+            let answers = |r: &MessageRef| {
+                r.direction == Direction::Response
+                    && p.commands
+                        .get(cmd)
+                        .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
+            };
+            fitting.retain(|(r, _)| answers(r));
+        }
+    }
+    match fitting.len() {
+        0 => Err(first_err.unwrap_or(DecodeError::Truncated {
+            needed: shortest,
+            found: wire.len(),
+        })),
+        1 => {
+            let (message, values) = fitting.remove(0);
+            let m = p.message(message);
+            let o = offsets(p, m.code.len(), m.payload_len);
+            Ok(Frame {
+                message,
+                address: wire.get(o.address).copied().unwrap_or(0),
+                values,
+            })
+        }
+        _ => Err(DecodeError::Ambiguous {
+            candidates: fitting
+                .iter()
+                .map(|(r, _)| p.message(*r).name.clone())
+                .collect(),
+        }),
+    }
+}
+
+/// Decodes `wire` as the given message, reporting the first thing that does not fit it.
+pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, DecodeError> {
+    let m = p.message(r);
+    let len = p.frame_len(m);
+    let o = offsets(p, m.code.len(), m.payload_len);
+    if let (Some(at), Some(expected)) = (o.start, p.framing.start) {
+        if let Some(&found) = wire.get(at) {
+            if found != expected {
+                return Err(DecodeError::BadStart { expected, found });
+            }
+        }
+    }
+    if wire.len() < len {
+        return Err(DecodeError::Truncated {
+            needed: len,
+            found: wire.len(),
+        });
+    }
+    if wire.len() > len {
+        return Err(DecodeError::WrongLength {
+            message: m.name.clone(),
+            expected: vec![len],
+            found: wire.len(),
+        });
+    }
+    if wire.get(o.code..o.code + m.code.len()) != Some(&m.code[..]) {
+        return Err(DecodeError::UnknownCode {
+            offset: o.code,
+            code: wire[o.code..o.code + m.code.len()].to_vec(),
+        });
+    }
+    check_checksum(p, wire)?;
+    let values = decode_fields(p, m, wire)?;
+    Ok(Frame {
+        message: r,
+        address: wire[o.address],
+        values,
+    })
+}
+
+fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
+    let c = &p.framing.checksum;
+    let Some(at) = wire.len().checked_sub(c.len()) else {
+        return Err(DecodeError::Truncated {
+            needed: c.len(),
+            found: wire.len(),
+        });
+    };
+    let expected = checksum::compute(&c.algorithm, &wire[..at]);
+    let found = read_uint(&wire[at..], c.byte_order);
+    if expected != found {
+        return Err(DecodeError::ChecksumMismatch {
+            offset: at,
+            expected,
+            found,
+            width: c.width,
+        });
+    }
+    Ok(())
+}
+
+/// Field values of a frame already known to have the message's length.
+fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
+    let o = offsets(p, m.code.len(), m.payload_len);
+    let payload = wire
+        .get(o.payload..o.payload + m.payload_len)
+        .unwrap_or(&[]);
+    let mut values = Vec::new();
+    let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
+    for f in &m.fields {
+        let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
+        let at = o.payload + f.offset;
+        if f.is_ascii() {
+            ints.push(0);
+            values.push(Value {
+                name: f.name.clone(),
+                raw: Raw::Text(bytes.to_vec()),
+            });
+            continue;
+        }
+        let unsigned = read_uint(bytes, f.byte_order);
+        let v = if f.signed {
+            sign_extend(unsigned, 8 * f.width as u32)
+        } else {
+            unsigned as i64
+        };
+        ints.push(v);
+        if let Some(c) = f.constant {
+            if unsigned != c {
+                return Err(DecodeError::ConstantMismatch {
+                    message: m.name.clone(),
+                    field: f.name.clone(),
+                    offset: at,
+                    expected: c,
+                    found: unsigned,
+                });
+            }
+        }
+        if let Some(other) = f.equals {
+            let expected = ints.get(other).copied().unwrap_or(0);
+            if v != expected {
+                return Err(DecodeError::NotEqual {
+                    message: m.name.clone(),
+                    field: f.name.clone(),
+                    offset: at,
+                    other: m
+                        .fields
+                        .get(other)
+                        .map(|o| o.name.clone())
+                        .unwrap_or_default(),
+                    expected,
+                    found: v,
+                });
+            }
+        }
+        if f.bits.is_empty() {
+            values.push(Value {
+                name: f.name.clone(),
+                raw: Raw::Int(v),
+            });
+        }
+        for b in &f.bits {
+            let bv = bit_value(unsigned, b);
+            if let Some(c) = b.constant {
+                if bv as u64 != c {
+                    return Err(DecodeError::ConstantMismatch {
+                        message: m.name.clone(),
+                        field: b.name.clone(),
+                        offset: at,
+                        expected: c,
+                        found: bv as u64,
+                    });
+                }
+            }
+            values.push(Value {
+                name: b.name.clone(),
+                raw: Raw::Int(bv),
+            });
+        }
+    }
+    Ok(values)
+}
+
+/// Encodes a message for `address` from named raw values. Constants and repeated fields fill
+/// themselves in and need no value; every other leaf must be given exactly once.
+pub fn encode(
+    p: &Protocol,
+    r: MessageRef,
+    address: u8,
+    values: &[Value],
+) -> Result<Vec<u8>, EncodeError> {
+    let m = p.message(r);
+    for v in values {
+        if !m.leaves().any(|l| l.name() == v.name) {
+            return Err(EncodeError::UnknownValue {
+                field: v.name.clone(),
+            });
+        }
+    }
+    let lookup = |name: &str| values.iter().find(|v| v.name == name).map(|v| &v.raw);
+    let int = |name: &str| match lookup(name) {
+        Some(Raw::Int(i)) => Ok(*i),
+        Some(Raw::Text(_)) => Err(EncodeError::NotNumber {
+            field: name.to_owned(),
+        }),
+        None => Err(EncodeError::MissingValue {
+            field: name.to_owned(),
+        }),
+    };
+    let o = offsets(p, m.code.len(), m.payload_len);
+    let mut out = vec![0u8; p.frame_len(m)];
+    if let (Some(at), Some(s)) = (o.start, p.framing.start) {
+        out[at] = s;
+    }
+    out[o.address] = address;
+    out[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
+    let mut ints: Vec<u64> = Vec::with_capacity(m.fields.len());
+    for f in &m.fields {
+        let at = o.payload + f.offset;
+        let slot = &mut out[at..at + f.width];
+        if f.is_ascii() {
+            let text = match lookup(&f.name) {
+                Some(Raw::Text(t)) => t,
+                Some(Raw::Int(_)) => {
+                    return Err(EncodeError::NotText {
+                        field: f.name.clone(),
+                    })
+                }
+                None => {
+                    return Err(EncodeError::MissingValue {
+                        field: f.name.clone(),
+                    })
+                }
+            };
+            if text.len() != f.width {
+                return Err(EncodeError::WrongTextLength {
+                    field: f.name.clone(),
+                    expected: f.width,
+                    found: text.len(),
+                });
+            }
+            slot.copy_from_slice(text);
+            ints.push(0);
+            continue;
+        }
+        let word: u64 = if let Some(c) = f.constant {
+            c
+        } else if let Some(other) = f.equals {
+            ints.get(other).copied().unwrap_or(0)
+        } else if !f.bits.is_empty() {
+            let mut word = 0u64;
+            for b in &f.bits {
+                let v = match b.constant {
+                    Some(c) => c as i64,
+                    None => int(&b.name)?,
+                };
+                let (min, max) = raw_limits(u32::from(b.width()), b.signed);
+                if v < min || v > max {
+                    return Err(EncodeError::OutOfRange {
+                        field: b.name.clone(),
+                        value: v,
+                        min,
+                        max,
+                    });
+                }
+                let mask = (1u64 << b.width()) - 1;
+                word |= ((v as u64) & mask) << b.lsb;
+            }
+            word
+        } else {
+            let v = int(&f.name)?;
+            let (min, max) = raw_limits(8 * f.width as u32, f.signed);
+            if v < min || v > max {
+                return Err(EncodeError::OutOfRange {
+                    field: f.name.clone(),
+                    value: v,
+                    min,
+                    max,
+                });
+            }
+            let bits = 8 * f.width as u32;
+            (v as u64)
+                & if bits >= 64 {
+                    u64::MAX
+                } else {
+                    (1u64 << bits) - 1
+                }
+        };
+        write_uint(word, slot, f.byte_order);
+        ints.push(word);
+    }
+    let c = &p.framing.checksum;
+    let sum = checksum::compute(&c.algorithm, &out[..o.checksum]);
+    write_uint(
+        sum,
+        &mut out[o.checksum..o.checksum + c.len()],
+        c.byte_order,
+    );
+    Ok(out)
+}
+
+/// Reorders a frame between the document's printed byte order and the wire's: every multi-byte
+/// number field (and the checksum) is reversed when the two orders differ. `text` must already
+/// have the message's frame length.
+pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
+    let mut wire = printed.to_vec();
+    let o = offsets(p, m.code.len(), m.payload_len);
+    let flip = |order: ByteOrder| order != p.printed_byte_order;
+    for f in &m.fields {
+        if f.is_ascii() || f.width < 2 || !flip(f.byte_order) {
+            continue;
+        }
+        let at = o.payload + f.offset;
+        if let Some(s) = wire.get_mut(at..at + f.width) {
+            s.reverse();
+        }
+    }
+    let c = &p.framing.checksum;
+    if c.len() > 1 && flip(c.byte_order) {
+        if let Some(s) = wire.get_mut(o.checksum..o.checksum + c.len()) {
+            s.reverse();
+        }
+    }
+    wire
+}
+
+/// The same reordering the other way; it is its own inverse.
+pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
+    printed_to_wire(p, m, wire)
+}
+
+/// Parses frame text as people write it: hex digits with optional `0x` prefixes, spaces,
+/// commas, colons, dashes. `"0x AA21 2000 0000 3A98 BD"` is nine bytes.
+pub fn parse_hex(text: &str) -> Result<Vec<u8>, String> {
+    let mut digits = Vec::new();
+    let cleaned = text.replace("0x", " ").replace("0X", " ");
+    for (i, ch) in cleaned.chars().enumerate() {
+        match ch {
+            c if c.is_ascii_hexdigit() => digits.push(c.to_digit(16).unwrap_or(0) as u8),
+            ' ' | '\t' | ',' | ':' | '-' | '_' | '\n' | '\r' => {}
+            other => {
+                return Err(format!(
+                    "`{other}` at character {} is not a hex digit",
+                    i + 1
+                ))
+            }
+        }
+    }
+    if digits.is_empty() {
+        return Err("no hex digits".to_owned());
+    }
+    if digits.len() % 2 != 0 {
+        return Err(format!("odd number of hex digits ({})", digits.len()));
+    }
+    Ok(digits.chunks(2).map(|d| (d[0] << 4) | d[1]).collect())
+}
+
+/// Uppercase hex, bytes separated by spaces: `AA 21 50 1B`.
+pub fn format_hex(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A message's leaf names paired with the field that holds each.
+pub fn leaf_field<'a>(m: &'a Message, name: &str) -> Option<(&'a Field, Option<&'a BitField>)> {
+    m.fields.iter().find_map(|f| {
+        if f.bits.is_empty() {
+            (f.name == name).then_some((f, None))
+        } else {
+            f.bits.iter().find(|b| b.name == name).map(|b| (f, Some(b)))
+        }
+    })
+}

@@ -1,0 +1,406 @@
+//! The IR: a spec resolved and checked. Offsets, widths, byte orders, scales, checksum parameters
+//! and request→response pairing are all worked out here, so no emitter works anything out again.
+//!
+//! Only [`crate::validate`] builds these; holding a [`Protocol`] means every invariant the
+//! validator checks holds (references resolve, widths add up, values fit, examples replay).
+
+pub use crate::model::{
+    Broadcast, ByteOrder, CommandKind, Document, FieldType, FrameRate, Parity, Part, ResponseKind,
+};
+use crate::rational::Rational;
+
+#[derive(Debug, Clone)]
+pub struct Protocol {
+    pub name: String,
+    pub title: String,
+    pub document: Document,
+    pub byte_order: ByteOrder,
+    pub printed_byte_order: ByteOrder,
+    pub serial: Serial,
+    pub framing: Framing,
+    pub units: Vec<Unit>,
+    pub enums: Vec<Enum>,
+    pub flags: Vec<FlagSet>,
+    pub commands: Vec<Message>,
+    pub responses: Vec<Message>,
+    /// Indices into `responses` that every command may get.
+    pub common_responses: Vec<usize>,
+    pub examples: Vec<Example>,
+    pub errata: Vec<Erratum>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Serial {
+    pub section: Option<String>,
+    pub baud: u32,
+    pub data_bits: u8,
+    pub parity: Parity,
+    pub stop_bits: u8,
+    pub inter_frame_gap_ms: Option<u32>,
+    pub frame_rate: Option<FrameRate>,
+    /// Index into `Protocol::enums`.
+    pub baud_rates: Option<usize>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Framing {
+    pub section: Option<String>,
+    pub layout: Vec<Part>,
+    pub start: Option<u8>,
+    pub address: Address,
+    pub request: DirectionFraming,
+    pub response: DirectionFraming,
+    pub checksum: Checksum,
+}
+
+impl Framing {
+    /// Bytes in a frame besides code and payload: start, address, checksum.
+    pub fn overhead(&self) -> usize {
+        self.layout
+            .iter()
+            .map(|p| match p {
+                Part::Start | Part::Address => 1,
+                Part::Checksum => self.checksum.len(),
+                Part::Code | Part::Payload => 0,
+            })
+            .sum()
+    }
+
+    pub fn direction(&self, d: Direction) -> &DirectionFraming {
+        match d {
+            Direction::Request => &self.request,
+            Direction::Response => &self.response,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Address {
+    pub host: Option<u8>,
+    pub min: u8,
+    pub max: u8,
+    pub broadcast: Option<u8>,
+    pub default: Option<u8>,
+}
+
+#[derive(Debug, Clone)]
+pub struct DirectionFraming {
+    pub code_lengths: Vec<usize>,
+    pub payload_min: usize,
+    pub payload_max: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ChecksumAlgorithm {
+    /// 8-bit sum of every byte, modulo 256.
+    Sum8,
+    Crc(CrcParams),
+}
+
+/// A CRC in the catalogue's (Rocksoft) parameter model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CrcParams {
+    pub width: u8,
+    pub poly: u64,
+    pub init: u64,
+    pub refin: bool,
+    pub refout: bool,
+    pub xorout: u64,
+}
+
+#[derive(Debug, Clone)]
+pub struct Checksum {
+    pub algorithm: ChecksumAlgorithm,
+    /// Width in bits: 8, 16 or 32.
+    pub width: u8,
+    pub byte_order: ByteOrder,
+    pub catalogue: Option<String>,
+    pub check: u64,
+}
+
+impl Checksum {
+    /// Bytes the checksum takes in the frame.
+    pub fn len(&self) -> usize {
+        usize::from(self.width / 8)
+    }
+
+    /// Never true: every checksum takes at least one byte.
+    pub fn is_empty(&self) -> bool {
+        self.width == 0
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Direction {
+    Request,
+    Response,
+}
+
+impl Direction {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Direction::Request => "request",
+            Direction::Response => "response",
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Unit {
+    pub name: String,
+    pub symbol: String,
+    pub scale: Rational,
+    pub offset: Rational,
+    pub doc: String,
+}
+
+impl Unit {
+    /// `raw * scale + offset`.
+    pub fn physical(&self, raw: i64) -> Rational {
+        // Scales and offsets are parsed with at most 18 digits, so this cannot overflow i128.
+        let r = Rational::int(i128::from(raw));
+        r.times(self.scale)
+            .and_then(|v| v.plus(self.offset))
+            .unwrap_or(Rational::ZERO)
+    }
+
+    /// The raw value whose physical value is `v`, if there is an exact one.
+    pub fn raw_exact(&self, v: Rational) -> Option<i128> {
+        let r = v.minus(self.offset)?.over(self.scale)?;
+        r.is_integer().then_some(r.num)
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Enum {
+    pub name: String,
+    pub section: Option<String>,
+    pub doc: String,
+    pub values: Vec<EnumValue>,
+}
+
+#[derive(Debug, Clone)]
+pub struct EnumValue {
+    pub value: u64,
+    pub name: String,
+    pub doc: String,
+}
+
+#[derive(Debug, Clone)]
+pub struct FlagSet {
+    pub name: String,
+    pub section: Option<String>,
+    pub doc: String,
+    pub bits: Vec<Flag>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Flag {
+    pub bit: u8,
+    pub name: String,
+    pub doc: String,
+}
+
+#[derive(Debug, Clone)]
+pub enum MessageKind {
+    Command(CommandKind),
+    Response(ResponseKind),
+}
+
+#[derive(Debug, Clone)]
+pub struct Message {
+    pub name: String,
+    pub title: String,
+    pub section: String,
+    pub doc: String,
+    pub direction: Direction,
+    pub kind: MessageKind,
+    pub code: Vec<u8>,
+    pub fields: Vec<Field>,
+    /// Payload bytes (sum of field widths).
+    pub payload_len: usize,
+    /// Commands: every response it may get (its own, then the common ones), as indices into
+    /// `Protocol::responses`, each with what it means for this command where the spec says.
+    pub responses: Vec<(usize, Option<String>)>,
+    /// Responses: the commands that may get it, as indices into `Protocol::commands`.
+    pub answers: Vec<usize>,
+    pub broadcast: Option<Broadcast>,
+    pub needs_request: bool,
+}
+
+impl Message {
+    /// The code as written in the spec: `0x2000`.
+    pub fn code_hex(&self) -> String {
+        let mut s = String::from("0x");
+        for b in &self.code {
+            s.push_str(&format!("{b:02X}"));
+        }
+        s
+    }
+
+    /// Every named value of the payload, packed sub-fields flattened, in wire order.
+    pub fn leaves(&self) -> impl Iterator<Item = Leaf<'_>> {
+        self.fields.iter().enumerate().flat_map(|(i, f)| {
+            let own = (f.bits.is_empty()).then_some(Leaf::Field(i, f));
+            let bits = f.bits.iter().map(move |b| Leaf::Bits(i, f, b));
+            own.into_iter().chain(bits)
+        })
+    }
+}
+
+/// A named value of a message: a whole field, or a packed sub-field of one.
+#[derive(Debug, Clone, Copy)]
+pub enum Leaf<'a> {
+    Field(usize, &'a Field),
+    Bits(usize, &'a Field, &'a BitField),
+}
+
+impl Leaf<'_> {
+    pub fn name(&self) -> &str {
+        match self {
+            Leaf::Field(_, f) => &f.name,
+            Leaf::Bits(_, _, b) => &b.name,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Field {
+    pub name: String,
+    pub doc: String,
+    pub ty: FieldType,
+    /// Offset in the payload, bytes.
+    pub offset: usize,
+    /// Width on the wire, bytes.
+    pub width: usize,
+    pub signed: bool,
+    /// The protocol's byte order, resolved here so emitters need not look it up.
+    pub byte_order: ByteOrder,
+    pub unit: Option<usize>,
+    pub range: Option<(i64, i64)>,
+    pub constant: Option<u64>,
+    pub enumeration: Option<usize>,
+    pub flags: Option<usize>,
+    /// Index of an earlier field of the same message this one repeats.
+    pub equals: Option<usize>,
+    pub special: Vec<Special>,
+    pub bits: Vec<BitField>,
+}
+
+impl Field {
+    pub fn is_ascii(&self) -> bool {
+        self.ty == FieldType::Ascii
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Special {
+    pub value: i64,
+    pub name: String,
+    pub doc: String,
+}
+
+#[derive(Debug, Clone)]
+pub struct BitField {
+    pub name: String,
+    pub doc: String,
+    pub msb: u8,
+    pub lsb: u8,
+    pub signed: bool,
+    pub unit: Option<usize>,
+    pub range: Option<(i64, i64)>,
+    pub constant: Option<u64>,
+}
+
+impl BitField {
+    pub fn width(&self) -> u8 {
+        self.msb - self.lsb + 1
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Example {
+    pub section: String,
+    /// The message it shows.
+    pub message: MessageRef,
+    /// The request a response example answers.
+    pub reply_to: Option<usize>,
+    /// Verbatim from the document, or `None` for a derived example.
+    pub printed: Option<String>,
+    /// Our own frame text for a derived example.
+    pub derived: Option<String>,
+    pub comment: Option<String>,
+    /// Stated values, as written in the spec (physical units, names for enums).
+    pub values: Vec<(String, StatedValue)>,
+    /// Index into `Protocol::errata`.
+    pub erratum: Option<usize>,
+    pub corrected: Option<String>,
+    /// The bytes on the wire this example stands for (byte order applied).
+    pub wire: Vec<u8>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MessageRef {
+    pub direction: Direction,
+    pub index: usize,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum StatedValue {
+    Number(Rational),
+    Name(String),
+    Names(Vec<String>),
+}
+
+#[derive(Debug, Clone)]
+pub struct Erratum {
+    pub id: String,
+    pub section: String,
+    pub says: String,
+    pub decision: String,
+    pub why: String,
+}
+
+impl Protocol {
+    pub fn message(&self, r: MessageRef) -> &Message {
+        match r.direction {
+            Direction::Request => &self.commands[r.index],
+            Direction::Response => &self.responses[r.index],
+        }
+    }
+
+    pub fn messages(&self, d: Direction) -> &[Message] {
+        match d {
+            Direction::Request => &self.commands,
+            Direction::Response => &self.responses,
+        }
+    }
+
+    /// Frame length of a message, in bytes.
+    pub fn frame_len(&self, m: &Message) -> usize {
+        self.framing.overhead() + m.code.len() + m.payload_len
+    }
+
+    /// The longest frame in a direction.
+    pub fn max_frame_len(&self, d: Direction) -> usize {
+        self.messages(d)
+            .iter()
+            .map(|m| self.frame_len(m))
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Finds a command or response by name.
+    pub fn find(&self, name: &str) -> Option<MessageRef> {
+        let find = |d: Direction| {
+            self.messages(d)
+                .iter()
+                .position(|m| m.name == name)
+                .map(|index| MessageRef {
+                    direction: d,
+                    index,
+                })
+        };
+        find(Direction::Request).or_else(|| find(Direction::Response))
+    }
+}

@@ -1,0 +1,185 @@
+//! YAML text to [`Spec`]: shape errors only, every one of them, each with its path.
+//!
+//! The file is parsed to a YAML tree first, then each top-level key and each element of each
+//! list is deserialized on its own, so one misspelt key in one command does not hide the errors
+//! in the next. Nothing here panics on any input: serde_yaml bounds recursion and alias expansion.
+
+use serde::de::DeserializeOwned;
+use serde_yaml::{Mapping, Value};
+
+use crate::diag::{join, Sink};
+use crate::model::{self, Spec, SPEC_KEYS};
+
+/// Top-level keys whose values are lists deserialized element by element.
+const LIST_KEYS: &[&str] = &[
+    "units",
+    "enums",
+    "flags",
+    "commands",
+    "responses",
+    "examples",
+    "errata",
+];
+
+/// Parses spec text. On failure returns every shape error found.
+pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
+    let root: Value = match serde_yaml::from_str(text) {
+        Ok(v) => v,
+        Err(e) => {
+            let at = e
+                .location()
+                .map(|l| format!("line {} column {}", l.line(), l.column()))
+                .unwrap_or_else(|| "(top)".to_owned());
+            sink.error(
+                at,
+                format!("not valid YAML: {}", strip_location(&e.to_string())),
+            );
+            return None;
+        }
+    };
+    let Value::Mapping(mut map) = root else {
+        sink.error(
+            "",
+            format!(
+                "expected a mapping of spec keys at the top, found {}",
+                kind(&root)
+            ),
+        );
+        return None;
+    };
+    for key in map.keys() {
+        match key.as_str() {
+            Some(k) if SPEC_KEYS.contains(&k) => {}
+            Some(k) => sink.error(
+                k,
+                format!(
+                    "unknown key `{k}`, expected one of {}",
+                    SPEC_KEYS.join(", ")
+                ),
+            ),
+            None => sink.error(
+                "",
+                format!("top-level keys must be strings, found {}", kind(key)),
+            ),
+        }
+    }
+
+    // Lists are taken out and read element by element; the rest is read in one go.
+    let mut lists: Vec<(&str, Vec<Value>)> = Vec::new();
+    for &key in LIST_KEYS {
+        match map.remove(key) {
+            None | Some(Value::Null) => lists.push((key, Vec::new())),
+            Some(Value::Sequence(items)) => {
+                map.insert(Value::from(key), Value::Sequence(Vec::new()));
+                lists.push((key, items));
+            }
+            Some(other) => {
+                sink.error(key, format!("expected a list, found {}", kind(&other)));
+                lists.push((key, Vec::new()));
+            }
+        }
+    }
+    map.retain(|k, _| k.as_str().is_some_and(|k| SPEC_KEYS.contains(&k)));
+    let head: Option<Spec> = deserialize_at(&Value::Mapping(map), "", sink);
+
+    let mut spec = head?;
+    for (key, items) in lists {
+        match key {
+            "units" => spec.units = elements(key, &items, sink),
+            "enums" => spec.enums = elements(key, &items, sink),
+            "flags" => spec.flags = elements(key, &items, sink),
+            "commands" => spec.commands = elements(key, &items, sink),
+            "responses" => spec.responses = elements(key, &items, sink),
+            "examples" => spec.examples = elements(key, &items, sink),
+            "errata" => spec.errata = elements::<model::Erratum>(key, &items, sink),
+            _ => unreachable_key(key, sink),
+        }
+    }
+    sink.is_empty().then_some(spec)
+}
+
+fn unreachable_key(key: &str, sink: &mut Sink) {
+    // LIST_KEYS and the match above are kept in step; say so loudly rather than panic.
+    sink.error(key, "internal: list key without a reader");
+}
+
+/// Reads each element of a list on its own, naming it by its `name` (or `id`) where it has one.
+fn elements<T: DeserializeOwned>(key: &str, items: &[Value], sink: &mut Sink) -> Vec<T> {
+    let mut out = Vec::with_capacity(items.len());
+    for (i, item) in items.iter().enumerate() {
+        let label = element_label(item).unwrap_or_else(|| format!("[{i}]"));
+        if let Some(v) = deserialize_at(item, &join(key, &label), sink) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// The segment naming a list element: its `name`, else its `id`, else its `message` with index.
+pub fn element_label(item: &Value) -> Option<String> {
+    let map = item.as_mapping()?;
+    for key in ["name", "id"] {
+        if let Some(s) = map.get(key).and_then(Value::as_str) {
+            if !s.is_empty() && !s.contains(['.', '[', ']', ' ']) {
+                return Some(s.to_owned());
+            }
+        }
+    }
+    None
+}
+
+fn deserialize_at<T: DeserializeOwned>(value: &Value, path: &str, sink: &mut Sink) -> Option<T> {
+    match serde_path_to_error::deserialize::<_, T>(value) {
+        Ok(v) => Some(v),
+        Err(e) => {
+            let inner = e.path().to_string();
+            let at = if inner == "." {
+                path.to_owned()
+            } else {
+                join(path, &inner)
+            };
+            sink.error(at, strip_location(&e.into_inner().to_string()));
+            None
+        }
+    }
+}
+
+/// serde_yaml appends " at line L column C" to messages; the path already says where.
+fn strip_location(msg: &str) -> String {
+    match msg.find(" at line ") {
+        Some(i) => msg[..i].to_owned(),
+        None => msg.to_owned(),
+    }
+}
+
+fn kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "nothing",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Sequence(_) => "a list",
+        Value::Mapping(_) => "a mapping",
+        Value::Tagged(_) => "a tagged value",
+    }
+}
+
+/// Reads a mapping's entries as `(name, value)` pairs in file order, reporting non-string keys.
+pub fn named_entries<'a>(
+    map: &'a Mapping,
+    path: &str,
+    sink: &mut Sink,
+) -> Vec<(String, &'a Value)> {
+    let mut out = Vec::new();
+    for (k, v) in map {
+        match k.as_str() {
+            Some(s) => out.push((s.to_owned(), v)),
+            None => sink.error(path, format!("keys must be names, found {}", kind(k))),
+        }
+    }
+    out
+}
+
+pub fn describe(v: &Value) -> &'static str {
+    kind(v)
+}

@@ -1,0 +1,425 @@
+//! The spec model: the YAML file exactly as written, before any checking beyond its shape.
+//!
+//! Every struct rejects unknown keys, so a misspelt key is an error and never silently ignored.
+//! `spec/SCHEMA.md` documents the format for the people who edit it; keep the two in step.
+
+use serde::{Deserialize, Deserializer};
+
+/// A number written as decimal text (`"0.01"`, `"360/4096"`) or as a YAML number.
+///
+/// Kept as text so that `0.01` stays exact: [`crate::rational::Rational`] parses it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NumberText(pub String);
+
+impl<'de> Deserialize<'de> for NumberText {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = NumberText;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, or a decimal or fraction as text (\"0.01\", \"360/4096\")")
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<NumberText, E> {
+                Ok(NumberText(s.to_owned()))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<NumberText, E> {
+                Ok(NumberText(v.to_string()))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<NumberText, E> {
+                Ok(NumberText(v.to_string()))
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<NumberText, E> {
+                // `{}` prints the shortest text that reads back as the same f64: 0.01 -> "0.01".
+                Ok(NumberText(format!("{v}")))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    pub protocol: String,
+    pub title: String,
+    pub document: Document,
+    pub byte_order: ByteOrder,
+    pub printed_byte_order: ByteOrder,
+    pub serial: Serial,
+    pub framing: Framing,
+    #[serde(default)]
+    pub units: Vec<Unit>,
+    #[serde(default)]
+    pub enums: Vec<EnumDef>,
+    #[serde(default)]
+    pub flags: Vec<FlagSet>,
+    #[serde(default)]
+    pub commands: Vec<Command>,
+    #[serde(default)]
+    pub responses: Vec<Response>,
+    #[serde(default)]
+    pub common_responses: Vec<String>,
+    #[serde(default)]
+    pub examples: Vec<Example>,
+    #[serde(default)]
+    pub errata: Vec<Erratum>,
+}
+
+/// The keys of [`Spec`], in file order; the loader checks top-level keys against it.
+pub const SPEC_KEYS: &[&str] = &[
+    "protocol",
+    "title",
+    "document",
+    "byte_order",
+    "printed_byte_order",
+    "serial",
+    "framing",
+    "units",
+    "enums",
+    "flags",
+    "commands",
+    "responses",
+    "common_responses",
+    "examples",
+    "errata",
+];
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Document {
+    pub title: String,
+    #[serde(default)]
+    pub file: Option<String>,
+    pub revision: String,
+    pub date: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ByteOrder {
+    Little,
+    Big,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Parity {
+    None,
+    Even,
+    Odd,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Serial {
+    #[serde(default)]
+    pub section: Option<String>,
+    pub baud: u32,
+    pub data_bits: u8,
+    pub parity: Parity,
+    pub stop_bits: u8,
+    #[serde(default)]
+    pub inter_frame_gap_ms: Option<u32>,
+    #[serde(default)]
+    pub frame_rate: Option<FrameRate>,
+    #[serde(default)]
+    pub baud_rates: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameRate {
+    pub typical_per_s: u32,
+    pub max_per_s: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Part {
+    Start,
+    Address,
+    Code,
+    Payload,
+    Checksum,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Framing {
+    #[serde(default)]
+    pub section: Option<String>,
+    pub layout: Vec<Part>,
+    #[serde(default)]
+    pub start: Option<i64>,
+    pub address: Address,
+    pub request: DirectionFraming,
+    pub response: DirectionFraming,
+    pub checksum: Checksum,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Address {
+    #[serde(default)]
+    pub host: Option<i64>,
+    pub devices: Range,
+    #[serde(default)]
+    pub broadcast: Option<i64>,
+    #[serde(default)]
+    pub default: Option<i64>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Range {
+    pub min: i64,
+    pub max: i64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionFraming {
+    pub code_lengths: Vec<i64>,
+    pub payload: Range,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChecksumAlgorithm {
+    Sum8,
+    Crc,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Checksum {
+    pub algorithm: ChecksumAlgorithm,
+    pub width: i64,
+    #[serde(default)]
+    pub byte_order: Option<ByteOrder>,
+    #[serde(default)]
+    pub poly: Option<i64>,
+    #[serde(default)]
+    pub init: Option<i64>,
+    #[serde(default)]
+    pub refin: Option<bool>,
+    #[serde(default)]
+    pub refout: Option<bool>,
+    #[serde(default)]
+    pub xorout: Option<i64>,
+    #[serde(default)]
+    pub catalogue: Option<String>,
+    pub check: i64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Unit {
+    pub name: String,
+    pub symbol: String,
+    pub scale: NumberText,
+    #[serde(default)]
+    pub offset: Option<NumberText>,
+    #[serde(default)]
+    pub doc: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnumDef {
+    pub name: String,
+    #[serde(default)]
+    pub section: Option<String>,
+    #[serde(default)]
+    pub doc: Option<String>,
+    pub values: Vec<EnumValue>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnumValue {
+    pub value: i64,
+    pub name: String,
+    #[serde(default)]
+    pub doc: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlagSet {
+    pub name: String,
+    #[serde(default)]
+    pub section: Option<String>,
+    #[serde(default)]
+    pub doc: Option<String>,
+    pub bits: Vec<Flag>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Flag {
+    pub bit: i64,
+    pub name: String,
+    #[serde(default)]
+    pub doc: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CommandKind {
+    Movement,
+    CompletionCheck,
+    Setter,
+    Getter,
+    Reset,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ResponseKind {
+    Ack,
+    Nak,
+    Data,
+    Echo,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Broadcast {
+    pub accepted: bool,
+    pub answered: bool,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Command {
+    pub name: String,
+    pub title: String,
+    pub section: String,
+    pub kind: CommandKind,
+    pub code: String,
+    #[serde(default)]
+    pub doc: Option<String>,
+    #[serde(default)]
+    pub fields: Vec<Field>,
+    #[serde(default)]
+    pub responses: Vec<String>,
+    #[serde(default)]
+    pub response_meanings: serde_yaml::Mapping,
+    #[serde(default)]
+    pub broadcast: Option<Broadcast>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Response {
+    pub name: String,
+    pub title: String,
+    pub section: String,
+    pub kind: ResponseKind,
+    pub code: String,
+    #[serde(default)]
+    pub doc: Option<String>,
+    #[serde(default)]
+    pub fields: Vec<Field>,
+    #[serde(default)]
+    pub needs_request: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FieldType {
+    U8,
+    U16,
+    U32,
+    I8,
+    I16,
+    I32,
+    Ascii,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Field {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub ty: FieldType,
+    #[serde(default)]
+    pub length: Option<i64>,
+    #[serde(default)]
+    pub unit: Option<String>,
+    #[serde(default)]
+    pub range: Option<Range>,
+    #[serde(default)]
+    pub value: Option<i64>,
+    #[serde(default, rename = "enum")]
+    pub enum_: Option<String>,
+    #[serde(default)]
+    pub flags: Option<String>,
+    #[serde(default)]
+    pub equals: Option<String>,
+    #[serde(default)]
+    pub special: Vec<Special>,
+    #[serde(default)]
+    pub bits: Vec<BitField>,
+    #[serde(default)]
+    pub doc: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Special {
+    pub value: i64,
+    pub name: String,
+    #[serde(default)]
+    pub doc: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BitField {
+    pub name: String,
+    pub msb: i64,
+    pub lsb: i64,
+    #[serde(default)]
+    pub signed: bool,
+    #[serde(default)]
+    pub unit: Option<String>,
+    #[serde(default)]
+    pub range: Option<Range>,
+    #[serde(default)]
+    pub value: Option<i64>,
+    #[serde(default)]
+    pub doc: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Example {
+    pub section: String,
+    pub message: String,
+    #[serde(default)]
+    pub reply_to: Option<String>,
+    #[serde(default)]
+    pub printed: Option<String>,
+    #[serde(default)]
+    pub derived: Option<String>,
+    #[serde(default)]
+    pub comment: Option<String>,
+    #[serde(default)]
+    pub values: serde_yaml::Mapping,
+    #[serde(default)]
+    pub erratum: Option<String>,
+    #[serde(default)]
+    pub corrected: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Erratum {
+    pub id: String,
+    pub section: String,
+    pub says: String,
+    pub decision: String,
+    pub why: String,
+}

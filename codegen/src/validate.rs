@@ -1,0 +1,1586 @@
+//! Spec model to IR: resolve every reference, lay out every frame, check every rule, and replay
+//! every example through the interpreter. All problems are collected, each with its path.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use serde_yaml::Value as Yaml;
+
+use crate::checksum;
+use crate::diag::{join, Sink};
+use crate::interp::{self, raw_limits, Raw};
+use crate::ir::*;
+use crate::load::describe;
+use crate::model;
+use crate::rational::Rational;
+
+/// Rust keywords (2021 edition, strict and reserved): a spec name must not be one, since names
+/// become identifiers in generated code.
+const KEYWORDS: &[&str] = &[
+    "as", "async", "await", "break", "const", "continue", "crate", "dyn", "else", "enum", "extern",
+    "false", "fn", "for", "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub",
+    "ref", "return", "self", "static", "struct", "super", "trait", "true", "type", "unsafe", "use",
+    "where", "while", "abstract", "become", "box", "do", "final", "gen", "macro", "override",
+    "priv", "try", "typeof", "unsized", "virtual", "yield", "union",
+];
+
+/// Checks that `name` is a lower snake_case identifier usable in generated code.
+pub fn check_ident(name: &str, path: &str, what: &str, sink: &mut Sink) -> bool {
+    let mut chars = name.chars();
+    let ok_start = chars.next().is_some_and(|c| c.is_ascii_lowercase());
+    let ok_rest = chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+    if !ok_start || !ok_rest {
+        sink.error(
+            path,
+            format!("{what} `{name}` is not a valid identifier: use lower snake_case, starting with a letter ([a-z][a-z0-9_]*)"),
+        );
+        return false;
+    }
+    if KEYWORDS.contains(&name) {
+        sink.error(
+            path,
+            format!("{what} `{name}` is a Rust keyword and cannot name generated code"),
+        );
+        return false;
+    }
+    true
+}
+
+fn fits_unsigned(v: i64, bits: u32) -> bool {
+    let (_, max) = raw_limits(bits, false);
+    v >= 0 && v <= max
+}
+
+fn u8_of(v: i64, path: &str, what: &str, sink: &mut Sink) -> u8 {
+    if !(0..=255).contains(&v) {
+        sink.error(
+            path,
+            format!("{what} {v} does not fit in one byte (0..=255)"),
+        );
+        return 0;
+    }
+    v as u8
+}
+
+fn text(o: &Option<String>) -> String {
+    o.clone().unwrap_or_default()
+}
+
+/// Resolves names to indices and reports duplicates.
+struct Names {
+    map: BTreeMap<String, usize>,
+}
+
+impl Names {
+    fn build<'a>(
+        items: impl Iterator<Item = &'a str>,
+        list: &str,
+        what: &str,
+        sink: &mut Sink,
+    ) -> Names {
+        let mut map = BTreeMap::new();
+        for (i, name) in items.enumerate() {
+            let path = join(list, name);
+            check_ident(name, &path, what, sink);
+            if map.insert(name.to_owned(), i).is_some() {
+                sink.error(path, format!("duplicate {what} name `{name}`"));
+            }
+        }
+        Names { map }
+    }
+
+    fn get(&self, name: &str) -> Option<usize> {
+        self.map.get(name).copied()
+    }
+}
+
+pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
+    check_ident(&spec.protocol, "protocol", "protocol name", sink);
+    if spec.title.trim().is_empty() {
+        sink.error("title", "title is empty");
+    }
+    for (key, v) in [
+        ("revision", &spec.document.revision),
+        ("date", &spec.document.date),
+        ("title", &spec.document.title),
+    ] {
+        if v.trim().is_empty() {
+            sink.error(join("document", key), format!("document {key} is empty"));
+        }
+    }
+
+    let units = units(spec, sink);
+    let enum_names = Names::build(
+        spec.enums.iter().map(|e| e.name.as_str()),
+        "enums",
+        "enum",
+        sink,
+    );
+    let enums = enums(spec, sink);
+    let flag_names = Names::build(
+        spec.flags.iter().map(|f| f.name.as_str()),
+        "flags",
+        "flag set",
+        sink,
+    );
+    let flags = flag_sets(spec, sink);
+    let unit_names = Names::build(
+        spec.units.iter().map(|u| u.name.as_str()),
+        "units",
+        "unit",
+        sink,
+    );
+
+    let serial = Serial {
+        section: spec.serial.section.clone(),
+        baud: spec.serial.baud,
+        data_bits: spec.serial.data_bits,
+        parity: spec.serial.parity,
+        stop_bits: spec.serial.stop_bits,
+        inter_frame_gap_ms: spec.serial.inter_frame_gap_ms,
+        frame_rate: spec.serial.frame_rate.clone(),
+        baud_rates: spec.serial.baud_rates.as_ref().and_then(|n| {
+            let r = enum_names.get(n);
+            if r.is_none() {
+                sink.error(
+                    "serial.baud_rates",
+                    format!("refers to enum `{n}`, which is not defined"),
+                );
+            }
+            r
+        }),
+    };
+    if spec.serial.baud == 0 {
+        sink.error("serial.baud", "baud rate must be positive");
+    }
+    if !(5..=9).contains(&spec.serial.data_bits) {
+        sink.error(
+            "serial.data_bits",
+            format!("{} data bits: expected 5..=9", spec.serial.data_bits),
+        );
+    }
+    if !(1..=2).contains(&spec.serial.stop_bits) {
+        sink.error(
+            "serial.stop_bits",
+            format!("{} stop bits: expected 1 or 2", spec.serial.stop_bits),
+        );
+    }
+
+    let framing = framing(&spec.framing, spec.byte_order, sink);
+
+    // Commands and responses share one name space: examples refer to either by name.
+    let all_names = spec
+        .commands
+        .iter()
+        .map(|c| c.name.as_str())
+        .chain(spec.responses.iter().map(|r| r.name.as_str()));
+    let mut seen = BTreeSet::new();
+    for (i, name) in all_names.enumerate() {
+        let list = if i < spec.commands.len() {
+            "commands"
+        } else {
+            "responses"
+        };
+        let path = join(list, name);
+        check_ident(name, &path, "message", sink);
+        if !seen.insert(name) {
+            sink.error(
+                path,
+                format!(
+                    "duplicate message name `{name}` (commands and responses share one name space)"
+                ),
+            );
+        }
+    }
+    let refs = Refs {
+        units: &unit_names,
+        enums: &enum_names,
+        flags: &flag_names,
+        enum_defs: &enums,
+        flag_defs: &flags,
+    };
+    let response_names = Names {
+        map: spec
+            .responses
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (r.name.clone(), i))
+            .collect(),
+    };
+    let command_names = Names {
+        map: spec
+            .commands
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.name.clone(), i))
+            .collect(),
+    };
+
+    let mut common = Vec::new();
+    for (i, name) in spec.common_responses.iter().enumerate() {
+        let path = format!("common_responses[{i}]");
+        match response_names.get(name) {
+            Some(r) if common.contains(&r) => {
+                sink.error(path, format!("response `{name}` listed twice"))
+            }
+            Some(r) => common.push(r),
+            None => sink.error(path, missing_response(name, &command_names)),
+        }
+    }
+
+    let mut commands = Vec::new();
+    for c in &spec.commands {
+        let path = join("commands", &c.name);
+        let (code, fields, payload_len) = message_body(
+            &c.code,
+            &c.fields,
+            &path,
+            Direction::Request,
+            &framing,
+            spec.byte_order,
+            &refs,
+            sink,
+        );
+        let mut responses: Vec<(usize, Option<String>)> = Vec::new();
+        for (i, name) in c.responses.iter().enumerate() {
+            let rpath = format!("{path}.responses[{i}]");
+            match response_names.get(name) {
+                Some(r) if responses.iter().any(|(x, _)| *x == r) || common.contains(&r) => {
+                    sink.error(rpath, format!("response `{name}` listed twice (common responses apply to every command already)"))
+                }
+                Some(r) => responses.push((r, None)),
+                None => sink.error(rpath, missing_response(name, &command_names)),
+            }
+        }
+        responses.extend(common.iter().map(|&r| (r, None)));
+        for (k, v) in &c.response_meanings {
+            let mpath = join(&path, "response_meanings");
+            let (Some(k), Some(v)) = (k.as_str(), v.as_str()) else {
+                sink.error(mpath, "response_meanings maps response names to text");
+                continue;
+            };
+            match response_names
+                .get(k)
+                .and_then(|r| responses.iter_mut().find(|(x, _)| *x == r))
+            {
+                Some(slot) => slot.1 = Some(v.to_owned()),
+                None => sink.error(
+                    join(&mpath, k),
+                    format!("`{k}` is not one of this command's responses"),
+                ),
+            }
+        }
+        if c.responses.is_empty() && common.is_empty() {
+            sink.error(
+                join(&path, "responses"),
+                "a command must list the responses it may get",
+            );
+        }
+        if c.broadcast.is_some() && framing.address.broadcast.is_none() {
+            sink.error(
+                join(&path, "broadcast"),
+                "the protocol has no broadcast address (framing.address.broadcast)",
+            );
+        }
+        if let Some(b) = &c.broadcast {
+            if b.answered && !b.accepted {
+                sink.error(
+                    join(&path, "broadcast"),
+                    "a broadcast that is not accepted cannot be answered",
+                );
+            }
+        }
+        check_section(&c.section, &path, sink);
+        commands.push(Message {
+            name: c.name.clone(),
+            title: c.title.clone(),
+            section: c.section.clone(),
+            doc: text(&c.doc),
+            direction: Direction::Request,
+            kind: MessageKind::Command(c.kind),
+            code,
+            fields,
+            payload_len,
+            responses,
+            answers: Vec::new(),
+            broadcast: c.broadcast.clone(),
+            needs_request: false,
+        });
+    }
+
+    let mut responses = Vec::new();
+    for (ri, r) in spec.responses.iter().enumerate() {
+        let path = join("responses", &r.name);
+        let (code, fields, payload_len) = message_body(
+            &r.code,
+            &r.fields,
+            &path,
+            Direction::Response,
+            &framing,
+            spec.byte_order,
+            &refs,
+            sink,
+        );
+        let answers: Vec<usize> = commands
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.responses.iter().any(|(x, _)| *x == ri))
+            .map(|(i, _)| i)
+            .collect();
+        if answers.is_empty() {
+            sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`)");
+        }
+        check_section(&r.section, &path, sink);
+        responses.push(Message {
+            name: r.name.clone(),
+            title: r.title.clone(),
+            section: r.section.clone(),
+            doc: text(&r.doc),
+            direction: Direction::Response,
+            kind: MessageKind::Response(r.kind),
+            code,
+            fields,
+            payload_len,
+            responses: Vec::new(),
+            answers,
+            broadcast: None,
+            needs_request: r.needs_request,
+        });
+    }
+
+    check_overlaps(&framing, &commands, "commands", sink);
+    check_overlaps(&framing, &responses, "responses", sink);
+
+    let mut errata = Vec::new();
+    let mut ids = BTreeSet::new();
+    for e in &spec.errata {
+        let path = join("errata", &e.id);
+        if !ids.insert(e.id.as_str()) {
+            sink.error(&path, format!("duplicate erratum id `{}`", e.id));
+        }
+        for (key, v) in [
+            ("says", &e.says),
+            ("decision", &e.decision),
+            ("why", &e.why),
+            ("section", &e.section),
+        ] {
+            if v.trim().is_empty() {
+                sink.error(join(&path, key), format!("erratum {key} is empty"));
+            }
+        }
+        errata.push(Erratum {
+            id: e.id.clone(),
+            section: e.section.clone(),
+            says: e.says.clone(),
+            decision: e.decision.clone(),
+            why: e.why.clone(),
+        });
+    }
+
+    if !sink.is_empty() {
+        return None;
+    }
+    let mut proto = Protocol {
+        name: spec.protocol.clone(),
+        title: spec.title.clone(),
+        document: spec.document.clone(),
+        byte_order: spec.byte_order,
+        printed_byte_order: spec.printed_byte_order,
+        serial,
+        framing,
+        units,
+        enums,
+        flags,
+        commands,
+        responses,
+        common_responses: common,
+        examples: Vec::new(),
+        errata,
+    };
+    proto.examples = examples(spec, &proto, sink);
+    sink.is_empty().then_some(proto)
+}
+
+fn missing_response(name: &str, commands: &Names) -> String {
+    if commands.get(name).is_some() {
+        format!("`{name}` is a command, not a response")
+    } else {
+        format!("refers to response `{name}`, which is not defined")
+    }
+}
+
+fn check_section(section: &str, path: &str, sink: &mut Sink) {
+    if section.trim().is_empty() {
+        sink.error(
+            join(path, "section"),
+            "section is empty: cite the document section",
+        );
+    }
+}
+
+fn units(spec: &model::Spec, sink: &mut Sink) -> Vec<Unit> {
+    let mut out = Vec::new();
+    for u in &spec.units {
+        let path = join("units", &u.name);
+        let scale = match Rational::parse(&u.scale.0) {
+            Ok(s) if s.num > 0 => s,
+            Ok(s) => {
+                sink.error(
+                    join(&path, "scale"),
+                    format!("scale {s} must be greater than zero"),
+                );
+                Rational::ONE
+            }
+            Err(e) => {
+                sink.error(join(&path, "scale"), format!("bad scale: {e}"));
+                Rational::ONE
+            }
+        };
+        let offset = match u.offset.as_ref().map(|o| Rational::parse(&o.0)) {
+            None => Rational::ZERO,
+            Some(Ok(o)) => o,
+            Some(Err(e)) => {
+                sink.error(join(&path, "offset"), format!("bad offset: {e}"));
+                Rational::ZERO
+            }
+        };
+        if u.symbol.chars().any(char::is_control) {
+            sink.error(
+                join(&path, "symbol"),
+                "unit symbol contains control characters",
+            );
+        }
+        out.push(Unit {
+            name: u.name.clone(),
+            symbol: u.symbol.clone(),
+            scale,
+            offset,
+            doc: text(&u.doc),
+        });
+    }
+    out
+}
+
+fn enums(spec: &model::Spec, sink: &mut Sink) -> Vec<Enum> {
+    let mut out = Vec::new();
+    for e in &spec.enums {
+        let path = join("enums", &e.name);
+        if e.values.is_empty() {
+            sink.error(join(&path, "values"), "an enum needs at least one value");
+        }
+        let _ = Names::build(
+            e.values.iter().map(|v| v.name.as_str()),
+            &join(&path, "values"),
+            "enum value",
+            sink,
+        );
+        let mut seen = BTreeSet::new();
+        let mut values = Vec::new();
+        for v in &e.values {
+            let vpath = join(&join(&path, "values"), &v.name);
+            if v.value < 0 {
+                sink.error(
+                    &vpath,
+                    format!(
+                        "enum value {} is negative; enum values are raw unsigned wire values",
+                        v.value
+                    ),
+                );
+            } else if !seen.insert(v.value) {
+                sink.error(
+                    &vpath,
+                    format!("value {} is used twice in enum `{}`", v.value, e.name),
+                );
+            }
+            values.push(EnumValue {
+                value: v.value.max(0) as u64,
+                name: v.name.clone(),
+                doc: text(&v.doc),
+            });
+        }
+        out.push(Enum {
+            name: e.name.clone(),
+            section: e.section.clone(),
+            doc: text(&e.doc),
+            values,
+        });
+    }
+    out
+}
+
+fn flag_sets(spec: &model::Spec, sink: &mut Sink) -> Vec<FlagSet> {
+    let mut out = Vec::new();
+    for f in &spec.flags {
+        let path = join("flags", &f.name);
+        let _ = Names::build(
+            f.bits.iter().map(|b| b.name.as_str()),
+            &join(&path, "bits"),
+            "flag",
+            sink,
+        );
+        let mut seen = BTreeSet::new();
+        let mut bits = Vec::new();
+        for b in &f.bits {
+            let bpath = join(&join(&path, "bits"), &b.name);
+            if !(0..64).contains(&b.bit) {
+                sink.error(&bpath, format!("bit {} is outside 0..=63", b.bit));
+            } else if !seen.insert(b.bit) {
+                sink.error(
+                    &bpath,
+                    format!("bit {} is used twice in flag set `{}`", b.bit, f.name),
+                );
+            }
+            bits.push(Flag {
+                bit: b.bit.clamp(0, 63) as u8,
+                name: b.name.clone(),
+                doc: text(&b.doc),
+            });
+        }
+        out.push(FlagSet {
+            name: f.name.clone(),
+            section: f.section.clone(),
+            doc: text(&f.doc),
+            bits,
+        });
+    }
+    out
+}
+
+fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framing {
+    let path = "framing";
+    let count = |p: Part| f.layout.iter().filter(|x| **x == p).count();
+    for (p, name) in [
+        (Part::Address, "address"),
+        (Part::Code, "code"),
+        (Part::Payload, "payload"),
+        (Part::Checksum, "checksum"),
+    ] {
+        if count(p) != 1 {
+            sink.error(
+                "framing.layout",
+                format!("layout must hold `{name}` exactly once, found {}", count(p)),
+            );
+        }
+    }
+    if count(Part::Start) > 1 {
+        sink.error("framing.layout", "layout holds `start` more than once");
+    }
+    if f.layout.last() != Some(&Part::Checksum) {
+        sink.error(
+            "framing.layout",
+            "the checksum must be the last part of the frame: it covers every byte before it",
+        );
+    }
+    let start = match (count(Part::Start), f.start) {
+        (1, Some(s)) => Some(u8_of(s, "framing.start", "start byte", sink)),
+        (1, None) => {
+            sink.error(
+                "framing.start",
+                "layout has `start` but no start byte is given",
+            );
+            None
+        }
+        (_, Some(_)) => {
+            sink.error(
+                "framing.start",
+                "a start byte is given but the layout has no `start`",
+            );
+            None
+        }
+        _ => None,
+    };
+    let a = &f.address;
+    let apath = join(path, "address");
+    let min = u8_of(a.devices.min, &join(&apath, "devices.min"), "address", sink);
+    let max = u8_of(a.devices.max, &join(&apath, "devices.max"), "address", sink);
+    if min > max {
+        sink.error(
+            join(&apath, "devices"),
+            format!("device address range is empty: min 0x{min:02X} > max 0x{max:02X}"),
+        );
+    }
+    let host = a
+        .host
+        .map(|h| u8_of(h, &join(&apath, "host"), "host address", sink));
+    let broadcast = a
+        .broadcast
+        .map(|b| u8_of(b, &join(&apath, "broadcast"), "broadcast address", sink));
+    let default = a
+        .default
+        .map(|d| u8_of(d, &join(&apath, "default"), "default address", sink));
+    for (name, v) in [("host", host), ("broadcast", broadcast)] {
+        if let Some(v) = v {
+            if (min..=max).contains(&v) {
+                sink.error(join(&apath, name), format!("{name} address 0x{v:02X} lies inside the device range 0x{min:02X}..=0x{max:02X}"));
+            }
+        }
+    }
+    if let Some(d) = default {
+        if !(min..=max).contains(&d) {
+            sink.error(join(&apath, "default"), format!("default address 0x{d:02X} is outside the device range 0x{min:02X}..=0x{max:02X}"));
+        }
+    }
+    let direction = |d: &model::DirectionFraming, name: &str, sink: &mut Sink| {
+        let dpath = join(path, name);
+        if d.code_lengths.is_empty() {
+            sink.error(
+                join(&dpath, "code_lengths"),
+                "at least one code length is needed",
+            );
+        }
+        let mut lens = Vec::new();
+        for &l in &d.code_lengths {
+            if !(1..=4).contains(&l) {
+                sink.error(
+                    join(&dpath, "code_lengths"),
+                    format!("code length {l} is outside 1..=4 bytes"),
+                );
+            } else {
+                lens.push(l as usize);
+            }
+        }
+        if d.payload.min < 0 || d.payload.max < d.payload.min || d.payload.max > 255 {
+            sink.error(
+                join(&dpath, "payload"),
+                format!(
+                    "payload length range {}..={} is invalid (0 <= min <= max <= 255)",
+                    d.payload.min, d.payload.max
+                ),
+            );
+        }
+        DirectionFraming {
+            code_lengths: lens,
+            payload_min: d.payload.min.clamp(0, 255) as usize,
+            payload_max: d.payload.max.clamp(0, 255) as usize,
+        }
+    };
+    let request = direction(&f.request, "request", sink);
+    let response = direction(&f.response, "response", sink);
+    let checksum = checksum_params(&f.checksum, byte_order, sink);
+    Framing {
+        section: f.section.clone(),
+        layout: f.layout.clone(),
+        start,
+        address: Address {
+            host,
+            min,
+            max,
+            broadcast,
+            default,
+        },
+        request,
+        response,
+        checksum,
+    }
+}
+
+fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) -> Checksum {
+    let path = "framing.checksum";
+    let width = if matches!(c.width, 8 | 16 | 32) {
+        c.width as u8
+    } else {
+        sink.error(
+            join(path, "width"),
+            format!("checksum width {} is not 8, 16 or 32 bits", c.width),
+        );
+        8
+    };
+    let fits = |v: i64, key: &str, sink: &mut Sink| -> u64 {
+        if fits_unsigned(v, u32::from(width)) {
+            v as u64
+        } else {
+            sink.error(
+                join(path, key),
+                format!("{key} 0x{v:X} does not fit in {width} bits"),
+            );
+            0
+        }
+    };
+    let crc_keys = [
+        ("poly", c.poly.is_some()),
+        ("init", c.init.is_some()),
+        ("refin", c.refin.is_some()),
+        ("refout", c.refout.is_some()),
+        ("xorout", c.xorout.is_some()),
+    ];
+    let algorithm = match c.algorithm {
+        model::ChecksumAlgorithm::Sum8 => {
+            if width != 8 {
+                sink.error(join(path, "width"), "sum8 is 8 bits wide");
+            }
+            for (k, given) in crc_keys {
+                if given {
+                    sink.error(
+                        join(path, k),
+                        format!("`{k}` is a CRC parameter; sum8 takes none"),
+                    );
+                }
+            }
+            ChecksumAlgorithm::Sum8
+        }
+        model::ChecksumAlgorithm::Crc => {
+            for (k, given) in crc_keys {
+                if !given {
+                    sink.error(join(path, k), format!("a CRC needs `{k}`"));
+                }
+            }
+            let poly = fits(c.poly.unwrap_or(1), "poly", sink);
+            if poly & 1 == 0 {
+                sink.error(
+                    join(path, "poly"),
+                    format!(
+                        "poly 0x{poly:X} is even: a CRC generator polynomial has its x^0 term set"
+                    ),
+                );
+            }
+            ChecksumAlgorithm::Crc(CrcParams {
+                width,
+                poly,
+                init: fits(c.init.unwrap_or(0), "init", sink),
+                refin: c.refin.unwrap_or(false),
+                refout: c.refout.unwrap_or(false),
+                xorout: fits(c.xorout.unwrap_or(0), "xorout", sink),
+            })
+        }
+    };
+    let check = fits(c.check, "check", sink);
+    let computed = checksum::compute(&algorithm, checksum::CHECK_INPUT);
+    let digits = usize::from(width / 4);
+    if sink.is_empty() && computed != check {
+        sink.error(
+            join(path, "check"),
+            format!("check value 0x{check:0digits$X} does not match the parameters, which give 0x{computed:0digits$X} over \"123456789\""),
+        );
+    }
+    if width > 8 && c.byte_order.is_none() {
+        sink.error(
+            join(path, "byte_order"),
+            "a multi-byte checksum must say its byte order",
+        );
+    }
+    Checksum {
+        algorithm,
+        width,
+        byte_order: c.byte_order.unwrap_or(byte_order),
+        catalogue: c.catalogue.clone(),
+        check,
+    }
+}
+
+struct Refs<'a> {
+    units: &'a Names,
+    enums: &'a Names,
+    flags: &'a Names,
+    enum_defs: &'a [Enum],
+    flag_defs: &'a [FlagSet],
+}
+
+/// Parses `"0x2000"`: the number of hex digits gives the code's width.
+fn parse_code(code: &str, path: &str, sink: &mut Sink) -> Vec<u8> {
+    let digits = code.strip_prefix("0x").or_else(|| code.strip_prefix("0X"));
+    let Some(digits) = digits
+        .filter(|d| !d.is_empty() && d.len() % 2 == 0 && d.bytes().all(|b| b.is_ascii_hexdigit()))
+    else {
+        sink.error(path, format!("code `{code}` must be written as 0x followed by an even number of hex digits, e.g. \"0x2000\""));
+        return Vec::new();
+    };
+    interp::parse_hex(digits).unwrap_or_default()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn message_body(
+    code: &str,
+    fields: &[model::Field],
+    path: &str,
+    direction: Direction,
+    framing: &Framing,
+    byte_order: ByteOrder,
+    refs: &Refs,
+    sink: &mut Sink,
+) -> (Vec<u8>, Vec<Field>, usize) {
+    let code = parse_code(code, &join(path, "code"), sink);
+    let dir = framing.direction(direction);
+    if !code.is_empty() && !dir.code_lengths.contains(&code.len()) {
+        sink.error(
+            join(path, "code"),
+            format!(
+                "a {}-byte code, but {}s have codes of {:?} bytes (framing.{}.code_lengths)",
+                code.len(),
+                direction.as_str(),
+                dir.code_lengths,
+                direction.as_str()
+            ),
+        );
+    }
+    let fpath = join(path, "fields");
+    // Field and sub-field names share one name space per message: they are the keys of its values.
+    let mut leaf_names = BTreeSet::new();
+    let mut out: Vec<Field> = Vec::new();
+    let mut offset = 0usize;
+    for f in fields {
+        let p = join(&fpath, &f.name);
+        check_ident(&f.name, &p, "field", sink);
+        if f.bits.is_empty() && !leaf_names.insert(f.name.clone()) {
+            sink.error(&p, format!("duplicate field name `{}`", f.name));
+        }
+        let field = field(f, &p, offset, byte_order, &out, refs, sink);
+        for b in &field.bits {
+            if !leaf_names.insert(b.name.clone()) {
+                sink.error(
+                    join(&join(&p, "bits"), &b.name),
+                    format!("duplicate field name `{}`", b.name),
+                );
+            }
+        }
+        offset += field.width;
+        out.push(field);
+    }
+    if offset < dir.payload_min || offset > dir.payload_max {
+        sink.error(
+            &fpath,
+            format!(
+                "fields add up to {offset} payload bytes, but {} payloads are {}..={} bytes (framing.{}.payload)",
+                direction.as_str(),
+                dir.payload_min,
+                dir.payload_max,
+                direction.as_str()
+            ),
+        );
+    }
+    (code, out, offset)
+}
+
+fn field(
+    f: &model::Field,
+    p: &str,
+    offset: usize,
+    byte_order: ByteOrder,
+    earlier: &[Field],
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Field {
+    use model::FieldType as T;
+    let (width, signed) = match f.ty {
+        T::U8 => (1, false),
+        T::U16 => (2, false),
+        T::U32 => (4, false),
+        T::I8 => (1, true),
+        T::I16 => (2, true),
+        T::I32 => (4, true),
+        T::Ascii => match f.length {
+            Some(n) if (1..=255).contains(&n) => (n as usize, false),
+            Some(n) => {
+                sink.error(
+                    join(p, "length"),
+                    format!("ascii length {n} is outside 1..=255"),
+                );
+                (1, false)
+            }
+            None => {
+                sink.error(join(p, "length"), "an ascii field needs a `length`");
+                (1, false)
+            }
+        },
+    };
+    let bits = 8 * width as u32;
+    if f.ty != T::Ascii && f.length.is_some() {
+        sink.error(
+            join(p, "length"),
+            "`length` is only for ascii fields; a number's width comes from its type",
+        );
+    }
+    let mut out = Field {
+        name: f.name.clone(),
+        doc: text(&f.doc),
+        ty: f.ty,
+        offset,
+        width,
+        signed,
+        byte_order,
+        unit: None,
+        range: None,
+        constant: None,
+        enumeration: None,
+        flags: None,
+        equals: None,
+        special: Vec::new(),
+        bits: Vec::new(),
+    };
+    let given: Vec<&str> = [
+        ("unit", f.unit.is_some()),
+        ("range", f.range.is_some()),
+        ("value", f.value.is_some()),
+        ("enum", f.enum_.is_some()),
+        ("flags", f.flags.is_some()),
+        ("equals", f.equals.is_some()),
+        ("special", !f.special.is_empty()),
+        ("bits", !f.bits.is_empty()),
+    ]
+    .into_iter()
+    .filter(|(_, g)| *g)
+    .map(|(k, _)| k)
+    .collect();
+    let allow = |allowed: &[&str], what: &str, sink: &mut Sink| {
+        for k in &given {
+            if !allowed.contains(k) {
+                sink.error(join(p, k), format!("`{k}` cannot be combined with {what}"));
+            }
+        }
+    };
+
+    if f.ty == T::Ascii {
+        allow(&[], "an ascii field", sink);
+        return out;
+    }
+    if let Some(v) = f.value {
+        allow(&["value"], "a constant `value`", sink);
+        if fits_unsigned(v, bits) {
+            out.constant = Some(v as u64);
+        } else {
+            sink.error(
+                join(p, "value"),
+                format!("constant 0x{v:X} does not fit in a {bits}-bit field"),
+            );
+        }
+        return out;
+    }
+    if let Some(other) = &f.equals {
+        allow(&["equals"], "`equals`", sink);
+        match earlier.iter().position(|e| &e.name == other) {
+            Some(i) if earlier[i].ty == f.ty => out.equals = Some(i),
+            Some(_) => sink.error(join(p, "equals"), format!("`{other}` has a different type")),
+            None => sink.error(
+                join(p, "equals"),
+                format!("refers to `{other}`, which is not an earlier field of this message"),
+            ),
+        }
+        return out;
+    }
+    if !f.bits.is_empty() {
+        allow(&["bits"], "packed `bits`", sink);
+        if signed {
+            sink.error(
+                join(p, "type"),
+                "a packed field must have an unsigned type; sub-fields say their own signedness",
+            );
+        }
+        out.bits = bit_fields(&f.bits, bits, p, refs, sink);
+        return out;
+    }
+    if let Some(e) = &f.enum_ {
+        allow(&["enum", "range"], "an enum", sink);
+        match refs.enums.get(e) {
+            Some(i) => {
+                out.enumeration = Some(i);
+                for v in &refs.enum_defs[i].values {
+                    if !fits_unsigned(v.value as i64, bits) {
+                        sink.error(
+                            join(p, "enum"),
+                            format!(
+                                "enum `{e}` value {} ({}) does not fit in a {bits}-bit field",
+                                v.name, v.value
+                            ),
+                        );
+                    }
+                }
+            }
+            None => sink.error(
+                join(p, "enum"),
+                format!("refers to enum `{e}`, which is not defined"),
+            ),
+        }
+    } else if let Some(fl) = &f.flags {
+        allow(&["flags"], "flags", sink);
+        match refs.flags.get(fl) {
+            Some(i) => {
+                out.flags = Some(i);
+                for b in &refs.flag_defs[i].bits {
+                    if u32::from(b.bit) >= bits {
+                        sink.error(
+                            join(p, "flags"),
+                            format!(
+                                "flag `{}` is bit {}, outside a {bits}-bit field",
+                                b.name, b.bit
+                            ),
+                        );
+                    }
+                }
+            }
+            None => sink.error(
+                join(p, "flags"),
+                format!("refers to flag set `{fl}`, which is not defined"),
+            ),
+        }
+    } else {
+        match &f.unit {
+            Some(u) => match refs.units.get(u) {
+                Some(i) => out.unit = Some(i),
+                None => sink.error(
+                    join(p, "unit"),
+                    format!("refers to unit `{u}`, which is not defined in `units`"),
+                ),
+            },
+            None => sink.error(
+                p,
+                "a number field needs a `unit` (or an enum, flags, bits, constant value or equals)",
+            ),
+        }
+    }
+    out.range = f
+        .range
+        .and_then(|r| range(r, bits, signed, &join(p, "range"), sink));
+    let mut names = BTreeSet::new();
+    for s in &f.special {
+        let sp = join(&join(p, "special"), &s.name);
+        check_ident(&s.name, &sp, "special value", sink);
+        if !names.insert(s.name.clone()) {
+            sink.error(&sp, format!("duplicate special value name `{}`", s.name));
+        }
+        let (min, max) = raw_limits(bits, signed);
+        if s.value < min || s.value > max {
+            sink.error(
+                &sp,
+                format!(
+                    "special value {} does not fit in the field ({min}..={max})",
+                    s.value
+                ),
+            );
+        }
+        out.special.push(Special {
+            value: s.value,
+            name: s.name.clone(),
+            doc: text(&s.doc),
+        });
+    }
+    out
+}
+
+fn range(r: model::Range, bits: u32, signed: bool, p: &str, sink: &mut Sink) -> Option<(i64, i64)> {
+    let (lo, hi) = raw_limits(bits, signed);
+    let mut ok = true;
+    for (k, v) in [("min", r.min), ("max", r.max)] {
+        if v < lo || v > hi {
+            sink.error(
+                join(p, k),
+                format!(
+                    "{k} {v} does not fit in a {}{bits}-bit field ({lo}..={hi})",
+                    if signed { "signed " } else { "" }
+                ),
+            );
+            ok = false;
+        }
+    }
+    if r.min > r.max {
+        sink.error(p, format!("range is empty: min {} > max {}", r.min, r.max));
+        ok = false;
+    }
+    ok.then_some((r.min, r.max))
+}
+
+fn bit_fields(
+    bits: &[model::BitField],
+    total: u32,
+    p: &str,
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Vec<BitField> {
+    let mut covered = 0u64;
+    let mut out = Vec::new();
+    for b in bits {
+        let bp = join(&join(p, "bits"), &b.name);
+        check_ident(&b.name, &bp, "field", sink);
+        if b.lsb < 0 || b.msb < b.lsb || b.msb >= i64::from(total) {
+            sink.error(&bp, format!("bits {}..{} are not a range inside a {total}-bit field (msb >= lsb, msb < {total})", b.msb, b.lsb));
+            continue;
+        }
+        let (msb, lsb) = (b.msb as u8, b.lsb as u8);
+        let w = u32::from(msb - lsb + 1);
+        let mask = (if w >= 64 { u64::MAX } else { (1u64 << w) - 1 }) << lsb;
+        if covered & mask != 0 {
+            sink.error(&bp, format!("bits {msb}..{lsb} overlap another sub-field"));
+        }
+        covered |= mask;
+        let mut bf = BitField {
+            name: b.name.clone(),
+            doc: text(&b.doc),
+            msb,
+            lsb,
+            signed: b.signed,
+            unit: None,
+            range: None,
+            constant: None,
+        };
+        if let Some(v) = b.value {
+            if b.unit.is_some() || b.range.is_some() || b.signed {
+                sink.error(
+                    &bp,
+                    "a constant sub-field takes no unit, range or signedness",
+                );
+            }
+            if fits_unsigned(v, w) {
+                bf.constant = Some(v as u64);
+            } else {
+                sink.error(
+                    join(&bp, "value"),
+                    format!("constant {v} does not fit in {w} bits"),
+                );
+            }
+        } else {
+            match &b.unit {
+                Some(u) => match refs.units.get(u) {
+                    Some(i) => bf.unit = Some(i),
+                    None => sink.error(
+                        join(&bp, "unit"),
+                        format!("refers to unit `{u}`, which is not defined in `units`"),
+                    ),
+                },
+                None => sink.error(&bp, "a sub-field needs a `unit` (or a constant `value`)"),
+            }
+            bf.range = b
+                .range
+                .and_then(|r| range(r, w, b.signed, &join(&bp, "range"), sink));
+        }
+        out.push(bf);
+    }
+    let full = if total >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << total) - 1
+    };
+    if covered != full && !out.is_empty() {
+        let missing: Vec<String> = (0..total)
+            .rev()
+            .filter(|i| covered & (1 << i) == 0)
+            .map(|i| i.to_string())
+            .collect();
+        sink.error(
+            join(p, "bits"),
+            format!(
+                "sub-fields must cover all {total} bits; bits {} are not covered",
+                missing.join(", ")
+            ),
+        );
+    }
+    out
+}
+
+/// The fixed bytes of a frame (code and constants) with `None` where any byte may stand.
+fn template(framing: &Framing, m: &Message) -> Vec<Option<u8>> {
+    let mut t = vec![None; m.code.len() + m.payload_len];
+    for (i, b) in m.code.iter().enumerate() {
+        t[i] = Some(*b);
+    }
+    for f in &m.fields {
+        if let Some(c) = f.constant {
+            let mut bytes = vec![0u8; f.width];
+            interp::write_uint(c, &mut bytes, f.byte_order);
+            for (i, b) in bytes.into_iter().enumerate() {
+                t[m.code.len() + f.offset + i] = Some(b);
+            }
+        }
+    }
+    let _ = framing;
+    t
+}
+
+fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Sink) {
+    for (i, a) in msgs.iter().enumerate() {
+        for b in &msgs[i + 1..] {
+            if a.code.is_empty() || b.code.is_empty() {
+                continue;
+            }
+            let path = join(list, &b.name);
+            let (short, long) = if a.code.len() <= b.code.len() {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            if short.code.len() < long.code.len() && long.code.starts_with(&short.code) {
+                sink.error(
+                    &path,
+                    format!(
+                        "code {} of `{}` is a prefix of code {} of `{}`: a receiver could not tell where the code ends",
+                        short.code_hex(), short.name, long.code_hex(), long.name
+                    ),
+                );
+                continue;
+            }
+            let (ta, tb) = (template(framing, a), template(framing, b));
+            if ta.len() != tb.len() {
+                continue;
+            }
+            let clash = ta.iter().zip(&tb).all(|(x, y)| match (x, y) {
+                (Some(x), Some(y)) => x == y,
+                _ => true,
+            });
+            if clash && !(a.needs_request && b.needs_request) {
+                let how = if a.code == b.code {
+                    "duplicate code"
+                } else {
+                    "overlapping codes"
+                };
+                sink.error(
+                    path,
+                    format!(
+                        "{how}: `{}` ({}) and `{}` ({}) have the same length and no constant field tells them apart{}",
+                        a.name,
+                        a.code_hex(),
+                        b.name,
+                        b.code_hex(),
+                        if list == "responses" { " (if only the request can tell them apart, mark both `needs_request: true`)" } else { "" }
+                    ),
+                );
+            }
+        }
+    }
+    for (i, m) in msgs.iter().enumerate() {
+        if !m.needs_request {
+            continue;
+        }
+        let t = template(framing, m);
+        let shared = msgs.iter().enumerate().any(|(j, o)| {
+            j != i && o.code == m.code && {
+                let u = template(framing, o);
+                u.len() == t.len()
+                    && u.iter()
+                        .zip(&t)
+                        .all(|(x, y)| x.is_none() || y.is_none() || x == y)
+            }
+        });
+        if !shared {
+            sink.error(
+                join(list, &m.name),
+                "`needs_request` is set, but no other response shares its code and length",
+            );
+        }
+    }
+}
+
+fn stated(v: &Yaml) -> Result<StatedValue, String> {
+    match v {
+        Yaml::Number(n) => {
+            let t = if let Some(i) = n.as_i64() {
+                i.to_string()
+            } else if let Some(u) = n.as_u64() {
+                u.to_string()
+            } else {
+                format!("{}", n.as_f64().unwrap_or(f64::NAN))
+            };
+            Rational::parse(&t).map(StatedValue::Number)
+        }
+        Yaml::String(s) => Ok(StatedValue::Name(s.clone())),
+        Yaml::Sequence(items) => items
+            .iter()
+            .map(|i| {
+                i.as_str()
+                    .map(str::to_owned)
+                    .ok_or_else(|| "a list of flag names holds something else".to_owned())
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map(StatedValue::Names),
+        other => Err(format!(
+            "a stated value must be a number, a name, text or a list of flag names, found {}",
+            describe(other)
+        )),
+    }
+}
+
+fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
+    let mut out = Vec::new();
+    for (i, e) in spec.examples.iter().enumerate() {
+        let path = format!("examples[{i}]");
+        let Some(r) = p.find(&e.message) else {
+            sink.error(
+                join(&path, "message"),
+                format!("refers to message `{}`, which is not defined", e.message),
+            );
+            continue;
+        };
+        let m = p.message(r);
+        let at = format!("§{} {}", e.section, m.name);
+        let reply_to = match (&e.reply_to, r.direction) {
+            (None, _) => {
+                if m.needs_request {
+                    sink.error(join(&path, "reply_to"), format!("{at}: `{}` can only be decoded with its request: say which with `reply_to`", m.name));
+                }
+                None
+            }
+            (Some(_), Direction::Request) => {
+                sink.error(
+                    join(&path, "reply_to"),
+                    format!("{at}: only a response example answers a request"),
+                );
+                None
+            }
+            (Some(name), Direction::Response) => {
+                match p.commands.iter().position(|c| &c.name == name) {
+                    Some(c) if p.commands[c].responses.iter().any(|(x, _)| *x == r.index) => {
+                        Some(c)
+                    }
+                    Some(_) => {
+                        sink.error(
+                            join(&path, "reply_to"),
+                            format!(
+                                "{at}: command `{name}` does not list `{}` among its responses",
+                                m.name
+                            ),
+                        );
+                        None
+                    }
+                    None => {
+                        sink.error(
+                            join(&path, "reply_to"),
+                            format!("{at}: refers to command `{name}`, which is not defined"),
+                        );
+                        None
+                    }
+                }
+            }
+        };
+        let erratum = match &e.erratum {
+            None => None,
+            Some(id) => {
+                let found = p.errata.iter().position(|x| &x.id == id);
+                if found.is_none() {
+                    sink.error(
+                        join(&path, "erratum"),
+                        format!(
+                            "{at}: refers to erratum `{id}`, which is not recorded in `errata`"
+                        ),
+                    );
+                }
+                found
+            }
+        };
+        let (source_key, source) = match (&e.printed, &e.derived) {
+            (Some(t), None) => ("printed", t),
+            (None, Some(t)) => ("derived", t),
+            _ => {
+                sink.error(&path, format!("{at}: give exactly one of `printed` (verbatim from the document) and `derived`"));
+                continue;
+            }
+        };
+        if e.corrected.is_some() && (e.printed.is_none() || e.erratum.is_none()) {
+            sink.error(
+                join(&path, "corrected"),
+                format!("{at}: `corrected` belongs to a printed example with an `erratum`"),
+            );
+            continue;
+        }
+        let mut values = Vec::new();
+        for (k, v) in &e.values {
+            let Some(k) = k.as_str() else {
+                sink.error(
+                    join(&path, "values"),
+                    format!("{at}: value keys are field names"),
+                );
+                continue;
+            };
+            match stated(v) {
+                Ok(s) => values.push((k.to_owned(), s)),
+                Err(msg) => sink.error(join(&join(&path, "values"), k), format!("{at}: {msg}")),
+            }
+        }
+        // The printed frame must replay as it stands, or be excused by an erratum and corrected.
+        let printed_check = frame_problems(p, r, reply_to, source, &values, e.erratum.is_some());
+        let wire = match (printed_check, &e.corrected) {
+            (Ok(wire), None) => wire,
+            (Ok(_), Some(_)) => {
+                sink.error(join(&path, "corrected"), format!("{at}: the printed frame replays as it stands; `corrected` is only for frames the document got wrong"));
+                continue;
+            }
+            (Err(problem), None) => {
+                let hint = if e.erratum.is_some() {
+                    " (an erratum is cited: give the `corrected` frame)"
+                } else {
+                    ""
+                };
+                sink.error(join(&path, source_key), format!("{at}: {problem}{hint}"));
+                continue;
+            }
+            (Err(_), Some(fixed)) if erratum.is_some() => {
+                match frame_problems(p, r, reply_to, fixed, &values, true) {
+                    Ok(wire) => wire,
+                    Err(problem) => {
+                        sink.error(join(&path, "corrected"), format!("{at}: {problem}"));
+                        continue;
+                    }
+                }
+            }
+            (Err(_), Some(_)) => continue,
+        };
+        out.push(Example {
+            section: e.section.clone(),
+            message: r,
+            reply_to,
+            printed: e.printed.clone(),
+            derived: e.derived.clone(),
+            comment: e.comment.clone(),
+            values,
+            erratum,
+            corrected: e.corrected.clone(),
+            wire,
+        });
+    }
+    out
+}
+
+/// Replays one example text as message `r`: length, start, code, checksum, constants, stated
+/// values. Returns the wire bytes, or the first problem.
+fn frame_problems(
+    p: &Protocol,
+    r: MessageRef,
+    reply_to: Option<usize>,
+    frame_text: &str,
+    values: &[(String, StatedValue)],
+    excused: bool,
+) -> Result<Vec<u8>, String> {
+    let m = p.message(r);
+    let printed =
+        interp::parse_hex(frame_text).map_err(|e| format!("frame text `{frame_text}`: {e}"))?;
+    let len = p.frame_len(m);
+    if printed.len() != len {
+        return Err(format!(
+            "frame `{frame_text}` has {} bytes, but a {} frame has {len} ({} overhead + {}-byte code + {} payload)",
+            printed.len(),
+            m.name,
+            p.framing.overhead(),
+            m.code.len(),
+            m.payload_len
+        ));
+    }
+    let wire = interp::printed_to_wire(p, m, &printed);
+    let frame = interp::decode_as(p, r, &wire).map_err(|e| e.to_string())?;
+    // The frame must also decode on its own, without being told what it is (as a sniffer would),
+    // unless only its request can tell it apart.
+    match interp::decode(p, Some(r.direction), reply_to, &wire) {
+        Ok(f) if f.message == r => {}
+        Ok(f) => {
+            return Err(format!(
+                "decodes as `{}`, not `{}`",
+                p.message(f.message).name,
+                m.name
+            ))
+        }
+        Err(e) => return Err(format!("does not decode on its own: {e}")),
+    }
+    for (name, want) in values {
+        let Some((field, bits)) = interp::leaf_field(m, name) else {
+            return Err(format!(
+                "states a value for `{name}`, which `{}` does not have",
+                m.name
+            ));
+        };
+        let Some(raw) = frame.get(name) else {
+            return Err(format!("no value decoded for `{name}`"));
+        };
+        compare(p, field, bits, raw, want, excused).map_err(|e| format!("{name}: {e}"))?;
+    }
+    Ok(wire)
+}
+
+fn compare(
+    p: &Protocol,
+    f: &Field,
+    bits: Option<&BitField>,
+    raw: &Raw,
+    want: &StatedValue,
+    excused: bool,
+) -> Result<(), String> {
+    let int = match raw {
+        Raw::Text(t) => {
+            let got = String::from_utf8_lossy(t);
+            return match want {
+                StatedValue::Name(s) if *s == got => Ok(()),
+                StatedValue::Name(s) => Err(format!(
+                    "the frame carries \"{got}\", the example states \"{s}\""
+                )),
+                _ => Err(format!(
+                    "an ascii field; state it as text (the frame carries \"{got}\")"
+                )),
+            };
+        }
+        Raw::Int(i) => *i,
+    };
+    let (unit, range) = match bits {
+        Some(b) => (b.unit, b.range),
+        None => (f.unit, f.range),
+    };
+    // A special value (no sensor, defective) lies outside the range on purpose.
+    let special = bits.is_none() && f.special.iter().any(|s| s.value == int);
+    if let (Some((lo, hi)), false, false) = (range, excused, special) {
+        if int < lo || int > hi {
+            return Err(format!(
+                "raw value {int} is outside the field's range {lo}..={hi}"
+            ));
+        }
+    }
+    match want {
+        StatedValue::Number(n) => {
+            let (got, sym) = match unit.map(|u| &p.units[u]) {
+                Some(u) => (u.physical(int), u.symbol.as_str()),
+                None => (Rational::int(i128::from(int)), ""),
+            };
+            if got == *n {
+                Ok(())
+            } else {
+                Err(
+                    format!("the frame carries {got} {sym} (raw {int}), the example states {n}")
+                        .replace("  (", " ("),
+                )
+            }
+        }
+        StatedValue::Name(name) => {
+            if let Some(e) = f.enumeration.map(|e| &p.enums[e]) {
+                return match e.values.iter().find(|v| v.value as i64 == int) {
+                    Some(v) if &v.name == name => Ok(()),
+                    Some(v) => Err(format!(
+                        "the frame carries {} ({int}), the example states {name}",
+                        v.name
+                    )),
+                    None => Err(format!(
+                        "the frame carries {int}, not a value of enum `{}`",
+                        e.name
+                    )),
+                };
+            }
+            match f.special.iter().find(|s| s.value == int) {
+                Some(s) if &s.name == name => Ok(()),
+                Some(s) => Err(format!(
+                    "the frame carries {} ({int}), the example states {name}",
+                    s.name
+                )),
+                None => Err(format!(
+                    "the example states `{name}`, but raw {int} is not a named value of this field"
+                )),
+            }
+        }
+        StatedValue::Names(names) => {
+            let Some(fs) = f.flags.map(|x| &p.flags[x]) else {
+                return Err("a list of names is only for flag fields".to_owned());
+            };
+            for n in names {
+                if !fs.bits.iter().any(|b| &b.name == n) {
+                    return Err(format!("`{n}` is not a flag of `{}`", fs.name));
+                }
+            }
+            let set: BTreeSet<&str> = fs
+                .bits
+                .iter()
+                .filter(|b| (int >> b.bit) & 1 == 1)
+                .map(|b| b.name.as_str())
+                .collect();
+            let want: BTreeSet<&str> = names.iter().map(String::as_str).collect();
+            let named: i64 = fs.bits.iter().map(|b| 1i64 << b.bit).sum();
+            if set != want {
+                Err(format!(
+                    "the frame sets {:?}, the example states {:?}",
+                    set, want
+                ))
+            } else if int & !named != 0 {
+                Err(format!("the frame sets unnamed bits 0x{:X}", int & !named))
+            } else {
+                Ok(())
+            }
+        }
+    }
+}
