@@ -389,7 +389,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
     if !p.enums.is_empty() {
         o.push_str("## Enums\n\nEnums are open: a value not listed decodes as unknown and re-encodes unchanged.\n\n");
         for e in &p.enums {
-            let _ = writeln!(o, "### enum `{0}` {{#enum-{0}}}\n", e.name);
+            let _ = writeln!(o, "<a id=\"enum-{0}\"></a>\n\n### enum `{0}`\n", e.name);
             if !e.doc.is_empty() {
                 let _ = writeln!(
                     o,
@@ -418,7 +418,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
     if !p.flags.is_empty() {
         o.push_str("## Flags\n\n");
         for fs in &p.flags {
-            let _ = writeln!(o, "### flags `{0}` {{#flags-{0}}}\n", fs.name);
+            let _ = writeln!(o, "<a id=\"flags-{0}\"></a>\n\n### flags `{0}`\n", fs.name);
             if !fs.doc.is_empty() {
                 let _ = writeln!(
                     o,
@@ -467,11 +467,11 @@ pub fn render(p: &Protocol, source: &str) -> String {
         for (index, m) in p.messages(d).iter().enumerate() {
             let _ = writeln!(
                 o,
-                "### `{}` — {} (§{}) {{#{}}}\n",
+                "<a id=\"{}\"></a>\n\n### `{}` — {} (§{})\n",
+                anchor(&m.name),
                 m.name,
                 m.title,
-                m.section,
-                anchor(&m.name)
+                m.section
             );
             let _ = writeln!(
                 o,
@@ -551,7 +551,13 @@ pub fn render(p: &Protocol, source: &str) -> String {
     if !p.errata.is_empty() {
         o.push_str("## Errata\n\nWhere the document is wrong or contradicts itself, and what busspec does about it.\n\n");
         for e in &p.errata {
-            let _ = writeln!(o, "### {} (§{}) {{#{}}}\n", e.id, e.section, anchor(&e.id));
+            let _ = writeln!(
+                o,
+                "<a id=\"{}\"></a>\n\n### {} (§{})\n",
+                anchor(&e.id),
+                e.id,
+                e.section
+            );
             let _ = writeln!(
                 o,
                 "- **The document says:** {}\n- **Decision:** {}\n- **Why:** {}\n",

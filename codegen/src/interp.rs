@@ -165,6 +165,12 @@ pub enum EncodeError {
     BadAddress {
         address: u8,
     },
+    /// A value was given for a constant or repeated field and differs from what it must be.
+    Fixed {
+        field: String,
+        expected: i64,
+        found: i64,
+    },
 }
 
 impl fmt::Display for EncodeError {
@@ -198,9 +204,14 @@ impl fmt::Display for EncodeError {
             }
             EncodeError::NotText { field } => write!(f, "{field} takes text"),
             EncodeError::NotNumber { field } => write!(f, "{field} takes a number"),
+            EncodeError::Fixed {
+                field,
+                expected,
+                found,
+            } => write!(f, "{field} is fixed at {expected} in this message, got {found}"),
             EncodeError::BadAddress { address } => write!(
                 f,
-                "address 0x{address:02X} is not a device or broadcast address"
+                "address 0x{address:02X} is outside the device range and is not the broadcast address of a request"
             ),
         }
     }
@@ -591,6 +602,11 @@ pub fn encode(
     values: &[Value],
 ) -> Result<Vec<u8>, EncodeError> {
     let m = p.message(r);
+    let a = &p.framing.address;
+    let broadcast = r.direction == Direction::Request && a.broadcast == Some(address);
+    if !(a.min..=a.max).contains(&address) && !broadcast {
+        return Err(EncodeError::BadAddress { address });
+    }
     for v in values {
         if !m.leaves().any(|l| l.name() == v.name) {
             return Err(EncodeError::UnknownValue {
@@ -644,16 +660,39 @@ pub fn encode(
             ints.push(0);
             continue;
         }
-        let word: u64 = if let Some(c) = f.constant {
+        let word: u64 = if let Some(c) = f
+            .constant
+            .or_else(|| f.equals.and_then(|o| ints.get(o).copied()))
+        {
+            // Constants and repeats fill themselves in; a value given for one must agree.
+            let expected = if f.signed {
+                sign_extend(c, 8 * f.width as u32)
+            } else {
+                c as i64
+            };
+            if let Some(Raw::Int(given)) = lookup(&f.name) {
+                if *given != expected {
+                    return Err(EncodeError::Fixed {
+                        field: f.name.clone(),
+                        expected,
+                        found: *given,
+                    });
+                }
+            }
             c
-        } else if let Some(other) = f.equals {
-            ints.get(other).copied().unwrap_or(0)
         } else if !f.bits.is_empty() {
             let mut word = 0u64;
             for b in &f.bits {
-                let v = match b.constant {
-                    Some(c) => c as i64,
-                    None => int(&b.name)?,
+                let v = match (b.constant, lookup(&b.name)) {
+                    (Some(c), Some(Raw::Int(given))) if *given != c as i64 => {
+                        return Err(EncodeError::Fixed {
+                            field: b.name.clone(),
+                            expected: c as i64,
+                            found: *given,
+                        });
+                    }
+                    (Some(c), _) => c as i64,
+                    (None, _) => int(&b.name)?,
                 };
                 let (min, max) = raw_limits(u32::from(b.width()), b.signed);
                 if v < min || v > max {
