@@ -12,6 +12,7 @@
 pub mod checksum;
 pub mod diag;
 pub mod docs;
+pub mod emit;
 pub mod interp;
 pub mod ir;
 pub mod load;
