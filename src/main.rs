@@ -1,16 +1,80 @@
-//! `busspec`: check protocol specs and render their reference documentation.
+//! `busspec`: check protocol specs, render their reference documentation, and decode and
+//! encode frames.
 
+mod frames;
+
+use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use busspec_codegen::{docs, load_file, Protocol};
-use clap::{Parser, Subcommand};
+use busspec_codegen::ir::Direction;
+use busspec_codegen::stream::StreamDecoder;
+use busspec_codegen::{docs, interp, load_file, load_str, Protocol};
+use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
+
+/// The built-in specs, embedded so the binary works from any directory.
+const BUILT_IN: [(&str, &str, &str); 2] = [
+    ("ub2", "spec/ub2.yaml", include_str!("../spec/ub2.yaml")),
+    ("sd", "spec/sd.yaml", include_str!("../spec/sd.yaml")),
+];
+
+const DECODE_HELP: &str = "\
+Decode frames to JSON, one line per frame.
+
+Each HEX argument is one frame: hex digits in wire order (the order the bytes travel), with
+spaces and 0x prefixes allowed, so a frame pastes in as printed: \"0xAA21 4101 3E1F 0000 6A\".
+Each decoded frame prints as one JSON object, keys in this order:
+
+  {\"protocol\":\"ub2\",\"direction\":\"response\",\"address\":33,\"code\":\"0x4101\",
+   \"message\":\"actual_capacitance\",\"fields\":{\"capacitance\":79.98}}
+
+Field values: numbers with a unit are physical values (raw * scale + offset) in the unit the
+spec declares (pF, °, °/s, A, V, °C, ...), exact; `special` raw values by name; enums by value
+name (a value the enum does not list as its raw number); flags as the list of set flag names
+(a set bit the spec does not name as its numeric mask); constants, repeated fields and other
+unit-less numbers as raw numbers; text as a string, one character per byte.
+
+Without --direction the direction follows from code and length. Responses that only their
+request can tell apart (SD 0x22..0x28, 0x38) need --reply-to <command>.
+
+Exit status: 0 when every frame decoded. Otherwise the frames that decoded still print, each
+failure prints one line on stderr, `frame N (TEXT): reason`, and the exit status is 1. Wrong
+arguments: 2.
+
+--stream FILE (- for stdin) reads raw bytes of a bus capture instead, both directions mixed,
+and prints one line per frame with \"offset\" (the byte offset of its first byte) as the first
+key; bytes that start no frame print as {\"offset\":N,\"skipped\":K,\"bytes\":\"A5FF\"}, and a frame
+only its request could identify, with no request before it, as
+{\"offset\":N,\"ambiguous\":[names],\"bytes\":\"...\"}. After noise the decoder drops one byte and
+tries again; where messages share a code the longest complete frame that checksums wins; a
+response is paired with the request just before it (--reply-to gives the request to assume when
+there is none). Exit status 0 unless the capture cannot be read.";
+
+const ENCODE_HELP: &str = "\
+Encode JSON lines from stdin to frames, one hex line per frame.
+
+Each input line is the object `busspec decode` prints (\"offset\" from --stream is ignored):
+\"message\" and \"address\" are required; \"direction\" only when a request and a response share
+the message name; \"code\" and \"protocol\", when present, must match. \"fields\" holds every field
+the message has, in the same form decode prints; constants and repeated fields may be left out.
+Physical values convert back exactly: a value that is not a whole number of the unit's steps
+is an error naming the field, the value and the step. A value must fit its field's width; the
+spec's `range`s are not enforced (a device may send such a frame, a test may provoke a NAK with
+one). The address must be a device address (or the broadcast address, on a request).
+
+Output: each frame as uppercase hex digits in wire order, no spaces and no 0x prefix
+(AA2141013E1F00006A), so `busspec decode P X | busspec encode P` prints X back for any frame X
+written that way (from a device address).
+
+Empty lines are skipped. A line that cannot be encoded (bad JSON, unknown message or field,
+missing field, value out of range) prints `line N: reason` on stderr and the next line is
+read; the exit status is then 1.";
 
 #[derive(Parser)]
 #[command(
     name = "busspec",
     version,
-    about = "Vendor serial protocols as declarative specs: check them, document them."
+    about = "Vendor serial protocols as declarative specs: check them, document them, decode and encode their frames."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -35,6 +99,61 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Decode frames (hex arguments, or a raw capture with --stream) to JSON lines.
+    #[command(long_about = DECODE_HELP)]
+    Decode(DecodeArgs),
+    /// Encode JSON lines read from stdin to frames, one uppercase hex line each.
+    #[command(long_about = ENCODE_HELP)]
+    Encode(EncodeArgs),
+}
+
+#[derive(Args)]
+struct DecodeArgs {
+    /// The protocol: ub2 or sd (built in), or the `protocol:` of the spec given with --spec.
+    protocol: String,
+    /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed.
+    #[arg(
+        value_name = "HEX",
+        required_unless_present = "stream",
+        conflicts_with = "stream"
+    )]
+    frames: Vec<String>,
+    /// Decode only as this direction (default: inferred from code and length).
+    #[arg(long, value_enum)]
+    direction: Option<DirectionArg>,
+    /// Load the spec from this file instead of the built-in one.
+    #[arg(long, value_name = "FILE")]
+    spec: Option<PathBuf>,
+    /// The request (a command name) the frames answer: settles responses only it can tell apart.
+    #[arg(long, value_name = "COMMAND")]
+    reply_to: Option<String>,
+    /// Read a raw bus capture (binary) from FILE, `-` for stdin, instead of hex arguments.
+    #[arg(long, value_name = "FILE")]
+    stream: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct EncodeArgs {
+    /// The protocol: ub2 or sd (built in), or the `protocol:` of the spec given with --spec.
+    protocol: String,
+    /// Load the spec from this file instead of the built-in one.
+    #[arg(long, value_name = "FILE")]
+    spec: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DirectionArg {
+    Request,
+    Response,
+}
+
+impl From<DirectionArg> for Direction {
+    fn from(d: DirectionArg) -> Direction {
+        match d {
+            DirectionArg::Request => Direction::Request,
+            DirectionArg::Response => Direction::Response,
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -42,6 +161,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check { files } => check(files),
         Command::Docs { files, out, check } => render_docs(files, &out, check),
+        Command::Decode(args) => decode(args),
+        Command::Encode(args) => encode(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -156,5 +277,179 @@ fn render_docs(files: Vec<PathBuf>, out: &Path, check: bool) -> Result<(), Strin
             "stale documentation (run `busspec docs` and commit): {}",
             stale.join(", ")
         ))
+    }
+}
+
+/// Exits with clap's usage error (status 2) for a subcommand's arguments.
+fn usage_error(subcommand: &str, msg: String) -> ! {
+    let mut cmd = Cli::command();
+    let sub = cmd.find_subcommand_mut(subcommand).cloned();
+    match sub {
+        Some(sub) => {
+            let mut sub = sub.bin_name(format!("busspec {subcommand}"));
+            sub.error(clap::error::ErrorKind::InvalidValue, msg).exit()
+        }
+        None => cmd.error(clap::error::ErrorKind::InvalidValue, msg).exit(),
+    }
+}
+
+/// The protocol to work with: a built-in spec, or the one in `--spec FILE` whose name must match.
+fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Protocol, String> {
+    let loaded = match spec {
+        Some(file) => load_file(file).map_err(|d| {
+            let n = d.items.len();
+            format!(
+                "{d}\n{}: {n} error{}",
+                d.file,
+                if n == 1 { "" } else { "s" }
+            )
+        })?,
+        None => {
+            let Some((_, file, text)) = BUILT_IN.iter().find(|(n, _, _)| *n == name) else {
+                let known: Vec<&str> = BUILT_IN.iter().map(|(n, _, _)| *n).collect();
+                usage_error(
+                    subcommand,
+                    format!(
+                        "unknown protocol `{name}`: the built-in ones are {} (or give --spec FILE)",
+                        known.join(", ")
+                    ),
+                );
+            };
+            load_str(file, text).map_err(|d| format!("built-in spec is invalid:\n{d}"))?
+        }
+    };
+    if loaded.name != name {
+        let file = spec.map(|f| f.display().to_string()).unwrap_or_default();
+        usage_error(
+            subcommand,
+            format!(
+                "{file} defines protocol `{}`, not `{name}`: name the protocol the spec defines",
+                loaded.name
+            ),
+        );
+    }
+    Ok(loaded)
+}
+
+/// Writes one line of output; a closed pipe ends the run quietly.
+fn emit(out: &mut impl Write, line: &str) -> Result<(), String> {
+    writeln!(out, "{line}").map_err(|e| {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            String::new()
+        } else {
+            format!("error: cannot write output: {e}")
+        }
+    })
+}
+
+fn decode(args: DecodeArgs) -> Result<(), String> {
+    let p = protocol("decode", &args.protocol, args.spec.as_deref())?;
+    let reply_to = args.reply_to.as_deref().map(|name| {
+        p.commands
+            .iter()
+            .position(|c| c.name == name)
+            .unwrap_or_else(|| {
+                usage_error(
+                    "decode",
+                    format!("--reply-to `{name}` is not a command of {}", p.name),
+                )
+            })
+    });
+    let direction = args.direction.map(Direction::from);
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    if let Some(file) = &args.stream {
+        return decode_stream(&p, direction, reply_to, file, &mut out);
+    }
+    let mut failed = 0;
+    for (i, text) in args.frames.iter().enumerate() {
+        let result = interp::parse_hex(text)
+            .and_then(|wire| frames::decode_frame(&p, direction, reply_to, &wire));
+        match result {
+            Ok(frame) => emit(&mut out, &frames::frame_line(&p, &frame, None))?,
+            Err(reason) => {
+                failed += 1;
+                let _ = out.flush();
+                eprintln!("frame {} ({text}): {reason}", i + 1);
+            }
+        }
+    }
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(String::new())
+    }
+}
+
+fn decode_stream(
+    p: &Protocol,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    file: &Path,
+    out: &mut impl Write,
+) -> Result<(), String> {
+    let name = file.display().to_string();
+    let mut input: Box<dyn Read> = if name == "-" {
+        Box::new(std::io::stdin().lock())
+    } else {
+        Box::new(std::fs::File::open(file).map_err(|e| format!("error: cannot read {name}: {e}"))?)
+    };
+    let mut decoder = StreamDecoder::new(p, direction).with_default_request(reply_to);
+    let mut chunk = vec![0u8; 4096];
+    loop {
+        let n = match input.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(format!("error: cannot read {name}: {e}")),
+        };
+        for event in decoder.push(&chunk[..n]) {
+            emit(out, &frames::event_line(p, &event))?;
+        }
+        out.flush()
+            .map_err(|e| format!("error: cannot write output: {e}"))?;
+    }
+    for event in decoder.flush() {
+        emit(out, &frames::event_line(p, &event))?;
+    }
+    Ok(())
+}
+
+fn encode(args: EncodeArgs) -> Result<(), String> {
+    let p = protocol("encode", &args.protocol, args.spec.as_deref())?;
+    let stdin = std::io::stdin();
+    let mut input = stdin.lock();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let mut failed = 0;
+    let mut line = Vec::new();
+    for number in 1.. {
+        line.clear();
+        match input.read_until(b'\n', &mut line) {
+            Ok(0) => break,
+            Ok(_) => {}
+            Err(e) => return Err(format!("error: cannot read stdin: {e}")),
+        }
+        let result = match std::str::from_utf8(&line) {
+            Ok(text) if text.trim().is_empty() => continue,
+            Ok(text) => frames::encode_line(&p, text.trim()),
+            Err(e) => Err(format!(
+                "not UTF-8 text: invalid byte at offset {}",
+                e.valid_up_to()
+            )),
+        };
+        match result {
+            Ok(wire) => emit(&mut out, &frames::hex(&wire))?,
+            Err(reason) => {
+                failed += 1;
+                let _ = out.flush();
+                eprintln!("line {number}: {reason}");
+            }
+        }
+    }
+    if failed == 0 {
+        Ok(())
+    } else {
+        Err(String::new())
     }
 }

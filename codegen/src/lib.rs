@@ -4,6 +4,7 @@
 //! ```text
 //! spec/*.yaml ──load──▶ model ──validate──▶ IR ──┬─ docs      (Markdown reference)
 //!                                                └─ interp    (decode/encode at run time)
+//!                                                     └─ stream   (frames out of a bus capture)
 //! ```
 //!
 //! Every stage is a pure function of its input; file I/O happens only in [`load_file`] and in
@@ -18,6 +19,7 @@ pub mod ir;
 pub mod load;
 pub mod model;
 pub mod rational;
+pub mod stream;
 pub mod validate;
 
 use std::path::Path;

@@ -32,7 +32,10 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
                 .unwrap_or_else(|| "(top)".to_owned());
             sink.error(
                 at,
-                format!("not valid YAML: {}", strip_location(&e.to_string())),
+                format!(
+                    "not valid YAML: {}",
+                    explain_big_integer(&strip_location(&e.to_string()))
+                ),
             );
             return None;
         }
@@ -132,8 +135,8 @@ fn deserialize_at<T: DeserializeOwned>(value: &Value, path: &str, sink: &mut Sin
     match serde_path_to_error::deserialize::<_, T>(value) {
         Ok(v) => Some(v),
         Err(e) => {
-            let inner = e.path().to_string();
-            let at = if inner == "." {
+            let inner = named_path(value, e.path());
+            let at = if inner.is_empty() {
                 path.to_owned()
             } else {
                 join(path, &inner)
@@ -142,6 +145,51 @@ fn deserialize_at<T: DeserializeOwned>(value: &Value, path: &str, sink: &mut Sin
             None
         }
     }
+}
+
+/// Renders serde's path inside `value` the way the validator names things, so that one field
+/// has one path whichever stage complains: a list element by its `name` (or `id`) where it has
+/// one (`fields.target`), by its index otherwise (`examples[3]`).
+fn named_path(value: &Value, path: &serde_path_to_error::Path) -> String {
+    use serde_path_to_error::Segment;
+    let mut out = String::new();
+    let mut at = Some(value);
+    for segment in path {
+        let (label, next) = match segment {
+            Segment::Seq { index } => {
+                let item = at.and_then(Value::as_sequence).and_then(|s| s.get(*index));
+                let label = item
+                    .and_then(element_label)
+                    .unwrap_or_else(|| format!("[{index}]"));
+                (label, item)
+            }
+            Segment::Map { key } => (key.clone(), at.and_then(|v| v.get(key.as_str()))),
+            Segment::Enum { variant } => (variant.clone(), None),
+            Segment::Unknown => ("?".to_owned(), None),
+        };
+        out = join(&out, &label);
+        at = next;
+    }
+    out
+}
+
+/// serde_yaml reads an integer beyond 64 bits as a u128 or i128, which its `Value` cannot hold,
+/// and says "invalid type: integer `N` as u128, expected any YAML value": say what is wrong.
+fn explain_big_integer(msg: &str) -> String {
+    for ty in ["u128", "i128"] {
+        let tail = format!(" as {ty}, expected any YAML value");
+        if let (Some(start), Some(end)) = (msg.find("invalid type: integer `"), msg.find(&tail)) {
+            if start < end {
+                let number = &msg[start + "invalid type: integer ".len()..end];
+                return format!(
+                    "{}integer {number} is too large: numbers must fit in 64 bits{}",
+                    &msg[..start],
+                    &msg[end + tail.len()..]
+                );
+            }
+        }
+    }
+    msg.to_owned()
 }
 
 /// serde_yaml appends " at line L column C" to messages; the path already says where.

@@ -156,17 +156,20 @@ impl fmt::Display for Rational {
             d /= 5;
             fives += 1;
         }
-        if d != 1 {
-            return write!(f, "{}/{}", self.num, self.den);
-        }
         let places = twos.max(fives);
-        let scaled = self.num * (10i128.pow(places) / self.den);
+        // A denominator like 2^40 needs 40 decimal places, more than i128 holds: print such
+        // values (and any other whose scaling would overflow) as a fraction.
+        let scaled = 10i128
+            .checked_pow(places)
+            .and_then(|p| Some((p, self.num.checked_mul(p / self.den)?)));
+        let Some((p, scaled)) = scaled.filter(|_| d == 1) else {
+            return write!(f, "{}/{}", self.num, self.den);
+        };
         if places == 0 {
             return write!(f, "{scaled}");
         }
         let sign = if scaled < 0 { "-" } else { "" };
-        let a = scaled.abs();
-        let p = 10i128.pow(places);
+        let (a, p) = (scaled.unsigned_abs(), p.unsigned_abs());
         write!(
             f,
             "{sign}{}.{:0width$}",
@@ -216,6 +219,15 @@ mod tests {
             "0.087890625"
         );
         assert_eq!(Rational::new(1, 3).unwrap().to_string(), "1/3");
+        // 2^40 would need 40 decimal places; i128 cannot scale that far.
+        assert_eq!(
+            Rational::new(-1, 1 << 40).unwrap().to_string(),
+            "-1/1099511627776"
+        );
+        assert_eq!(
+            Rational::new(1, 1 << 20).unwrap().to_string(),
+            "0.00000095367431640625"
+        );
     }
 
     #[test]

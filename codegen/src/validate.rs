@@ -50,6 +50,16 @@ fn fits_unsigned(v: i64, bits: u32) -> bool {
     v >= 0 && v <= max
 }
 
+/// `0x1FF` for a value written as a wire constant; a negative one stays decimal (`-1`), where
+/// `{:X}` would print its two's complement (`0xFFFFFFFFFFFFFFFF`).
+fn hex_or_negative(v: i64) -> String {
+    if v < 0 {
+        v.to_string()
+    } else {
+        format!("0x{v:X}")
+    }
+}
+
 fn u8_of(v: i64, path: &str, what: &str, sink: &mut Sink) -> u8 {
     if !(0..=255).contains(&v) {
         sink.error(
@@ -675,6 +685,8 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
 
 fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) -> Checksum {
     let path = "framing.checksum";
+    // Errors found elsewhere before this point must not hide a wrong check value.
+    let errors_before = sink.items.len();
     let width = if matches!(c.width, 8 | 16 | 32) {
         c.width as u8
     } else {
@@ -690,7 +702,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
         } else {
             sink.error(
                 join(path, key),
-                format!("{key} 0x{v:X} does not fit in {width} bits"),
+                format!("{key} {} does not fit in {width} bits", hex_or_negative(v)),
             );
             0
         }
@@ -745,7 +757,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
     let check = fits(c.check, "check", sink);
     let computed = checksum::compute(&algorithm, checksum::CHECK_INPUT);
     let digits = usize::from(width / 4);
-    if sink.is_empty() && computed != check {
+    if sink.items.len() == errors_before && computed != check {
         sink.error(
             join(path, "check"),
             format!("check value 0x{check:0digits$X} does not match the parameters, which give 0x{computed:0digits$X} over \"123456789\""),
@@ -938,7 +950,10 @@ fn field(
         } else {
             sink.error(
                 join(p, "value"),
-                format!("constant 0x{v:X} does not fit in a {bits}-bit field"),
+                format!(
+                    "constant {} does not fit in a {bits}-bit field",
+                    hex_or_negative(v)
+                ),
             );
         }
         return out;
@@ -1336,6 +1351,10 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
                 }
             }
         };
+        if m.needs_request && reply_to.is_none() {
+            // Already reported above; without its request the frame would only add "ambiguous".
+            continue;
+        }
         let erratum = match &e.erratum {
             None => None,
             Some(id) => {
@@ -1375,6 +1394,16 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
                 );
                 continue;
             };
+            if interp::leaf_field(m, k).is_none() {
+                sink.error(
+                    join(&join(&path, "values"), k),
+                    format!(
+                        "{at}: states a value for `{k}`, which `{}` does not have",
+                        m.name
+                    ),
+                );
+                continue;
+            }
             match stated(v) {
                 Ok(s) => values.push((k.to_owned(), s)),
                 Err(msg) => sink.error(join(&join(&path, "values"), k), format!("{at}: {msg}")),

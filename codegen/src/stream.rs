@@ -1,0 +1,569 @@
+//! A streaming frame decoder for bus captures: bytes in, in chunks of any size; frames out.
+//!
+//! [`StreamDecoder`] is sans-IO: it reads nothing and prints nothing. Push the bytes as they come
+//! ([`StreamDecoder::push`]) and call [`StreamDecoder::flush`] at the end of the capture (or when
+//! the bus has gone quiet for longer than a frame takes); each call returns the [`Event`]s it
+//! settled. It never panics, and its buffer never holds more than [`StreamDecoder::capacity`]
+//! bytes: the longest frame of the directions it decodes.
+//!
+//! # The framing rule
+//!
+//! A sniffer on an RS485 pair sees both directions, noise, and frames cut short, with nothing but
+//! the bytes themselves to say where a frame starts. The decoder looks at the bytes at the head
+//! of its buffer (the earliest byte not yet accounted for) and asks which messages could start
+//! there:
+//!
+//! 1. A message is a *candidate* while every byte already buffered agrees with it: the start byte
+//!    (protocols that have one), its code, and a plausible address — one in the device range, or
+//!    the broadcast address for a request (the same rule [`crate::interp::encode`] applies).
+//!    Every message of the decoded directions is considered, whatever its direction: UB2 setter
+//!    requests and their echo ACKs share a code and differ only in length; SD codes are disjoint
+//!    per direction.
+//! 2. No candidate: the head byte starts no frame. It is dropped as noise and the next byte is
+//!    tried (*resynchronisation by one byte*). Consecutive dropped bytes are reported together as
+//!    one [`Event::Skipped`] (split every [`MAX_SKIPPED_RUN`] bytes, so memory stays bounded).
+//! 3. While any candidate is longer than what is buffered, the decoder waits for more bytes
+//!    (unless flushing).
+//! 4. Then every candidate length that is complete is tried, **longest first**: the first length
+//!    whose bytes checksum and decode (through [`crate::interp::decode`]: code, length,
+//!    constants, repeated fields) is the frame, and that many bytes are consumed. A frame that
+//!    checksums but fits several messages that only its request can tell apart (SD 0x22..0x28,
+//!    0x38) is paired with the request (see below) or else reported as [`Event::Ambiguous`],
+//!    still consuming its bytes. If no length works, the head byte is noise (rule 2).
+//!
+//! Why longest first: when a short and a long message share a code (a UB2 setter request
+//! `AA 21 43 00 a s cs` and its ACK `AA 21 43 00 cs`), preferring the short one would misread
+//! every request whose first payload byte happens to equal the ACK's checksum — a fixed value
+//! (`0x0E` for address 0x21, code 0x4300), so a whole class of requests would always be lost.
+//! Preferring the long one errs only when an ACK and the bytes after it checksum as the long
+//! message by chance: about one in 256 for UB2's 8-bit sum, and then with plausible start,
+//! address and code already matched.
+//!
+//! Limits, stated plainly:
+//! - A short frame sharing its code with a longer one is settled only once the longer one's
+//!   length has arrived or [`StreamDecoder::flush`] is called: a live sniffer should flush when
+//!   the line goes idle (UB2 requires 10 ms between requests).
+//! - The chance misreading above: the long frame then swallows the start of the next frame,
+//!   whose remaining bytes are skipped as noise until the decoder resynchronises.
+//! - A frame whose checksum passes by chance inside noise is reported as a frame: an 8-bit sum
+//!   makes this likelier than a 16-bit CRC does; the start byte, code and address checks
+//!   narrow it.
+//! - Frames from an address outside the spec's device range are never recognised in a stream
+//!   (decode such a frame on its own with [`crate::interp::decode`]).
+//! - Decisions depend only on the bytes, never on how they were cut into chunks: the same capture
+//!   gives the same events however it is pushed, as long as `flush` is called only at its end.
+//!
+//! # Pairing responses with requests
+//!
+//! A response that only its request can identify is decoded as the answer to the last request
+//! seen since the previous response (a sniffer sees the request just before its reply). A
+//! response ends the pairing, since a request gets one reply; failing a current request, the
+//! default request given to [`StreamDecoder::with_default_request`] is used (for a capture of
+//! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`].
+
+use crate::interp::{self, DecodeError, Frame, Offsets};
+use crate::ir::{Direction, Message, MessageRef, Protocol};
+
+/// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
+pub const MAX_SKIPPED_RUN: usize = 256;
+
+/// What the decoder found in the capture. Offsets count bytes from the first byte ever pushed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Event {
+    /// A frame that checksummed and decoded.
+    Frame {
+        offset: u64,
+        bytes: Vec<u8>,
+        frame: Frame,
+    },
+    /// A frame that checksummed but fits several messages only its request could tell apart,
+    /// with no request to pair it with. Its bytes are consumed.
+    Ambiguous {
+        offset: u64,
+        bytes: Vec<u8>,
+        candidates: Vec<String>,
+    },
+    /// Bytes that start no frame.
+    Skipped { offset: u64, bytes: Vec<u8> },
+}
+
+impl Event {
+    /// Offset of the event's first byte in the capture.
+    pub fn offset(&self) -> u64 {
+        match self {
+            Event::Frame { offset, .. }
+            | Event::Ambiguous { offset, .. }
+            | Event::Skipped { offset, .. } => *offset,
+        }
+    }
+
+    /// The bytes the event accounts for.
+    pub fn bytes(&self) -> &[u8] {
+        match self {
+            Event::Frame { bytes, .. }
+            | Event::Ambiguous { bytes, .. }
+            | Event::Skipped { bytes, .. } => bytes,
+        }
+    }
+}
+
+/// One message as the framing rule sees it.
+#[derive(Debug, Clone)]
+struct Shape {
+    direction: Direction,
+    code: Vec<u8>,
+    len: usize,
+    at: Offsets,
+}
+
+/// What one step of the framing rule did.
+enum Step {
+    Progress,
+    NeedMore,
+}
+
+/// Splits a byte stream into frames of one protocol. See the module docs for the rule.
+#[derive(Debug, Clone)]
+pub struct StreamDecoder<'p> {
+    p: &'p Protocol,
+    direction: Option<Direction>,
+    shapes: Vec<Shape>,
+    capacity: usize,
+    /// Bytes not yet accounted for; `buf[0]` is at capture offset `head`.
+    buf: Vec<u8>,
+    head: u64,
+    /// Noise not yet reported; its first byte is at capture offset `noise_at`.
+    noise: Vec<u8>,
+    noise_at: u64,
+    /// Command index of the last request seen since the previous response.
+    last_request: Option<usize>,
+    default_request: Option<usize>,
+}
+
+impl<'p> StreamDecoder<'p> {
+    /// A decoder for `direction` (`None`: both, as a sniffer sees them).
+    pub fn new(p: &'p Protocol, direction: Option<Direction>) -> StreamDecoder<'p> {
+        let mut shapes = Vec::new();
+        for d in [Direction::Request, Direction::Response] {
+            if direction.is_some_and(|want| want != d) {
+                continue;
+            }
+            for m in p.messages(d) {
+                shapes.push(shape(p, m));
+            }
+        }
+        let capacity = shapes.iter().map(|s| s.len).max().unwrap_or(0).max(1);
+        StreamDecoder {
+            p,
+            direction,
+            shapes,
+            capacity,
+            buf: Vec::with_capacity(capacity),
+            head: 0,
+            noise: Vec::new(),
+            noise_at: 0,
+            last_request: None,
+            default_request: None,
+        }
+    }
+
+    /// The request (a command index) to pair ambiguous responses with when no request has been
+    /// seen since the previous response: for captures of the device's side only.
+    pub fn with_default_request(mut self, command: Option<usize>) -> StreamDecoder<'p> {
+        self.default_request = command.filter(|&c| c < self.p.commands.len());
+        self
+    }
+
+    /// The most bytes the decoder ever buffers: the longest frame it decodes.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Bytes pushed so far and settled (reported, or noise waiting to be reported).
+    pub fn settled(&self) -> u64 {
+        self.head
+    }
+
+    /// Feeds bytes; returns what they settled. Bytes that might still start a frame stay
+    /// buffered until more arrive or [`StreamDecoder::flush`] is called.
+    pub fn push(&mut self, mut data: &[u8]) -> Vec<Event> {
+        let mut out = Vec::new();
+        while !data.is_empty() {
+            let room = self.capacity.saturating_sub(self.buf.len()).max(1);
+            let n = room.min(data.len());
+            self.buf.extend_from_slice(&data[..n]);
+            data = &data[n..];
+            self.drain(false, &mut out);
+        }
+        out
+    }
+
+    /// Settles everything buffered, as at the end of a capture or after an idle gap: complete
+    /// frames are decoded with the candidates that fit, the rest is noise. The decoder stays
+    /// usable; offsets continue.
+    pub fn flush(&mut self) -> Vec<Event> {
+        let mut out = Vec::new();
+        self.drain(true, &mut out);
+        self.report_noise(&mut out);
+        out
+    }
+
+    fn drain(&mut self, flushing: bool, out: &mut Vec<Event>) {
+        while let Step::Progress = self.step(flushing, out) {}
+    }
+
+    /// Applies the framing rule once at the head of the buffer.
+    fn step(&mut self, flushing: bool, out: &mut Vec<Event>) -> Step {
+        if self.buf.is_empty() {
+            return Step::NeedMore;
+        }
+        let live: Vec<&Shape> = self.shapes.iter().filter(|s| self.agrees(s)).collect();
+        if live.is_empty() {
+            self.drop_byte(out);
+            return Step::Progress;
+        }
+        if !flushing && live.iter().any(|s| s.len > self.buf.len()) {
+            return Step::NeedMore;
+        }
+        let mut lens: Vec<usize> = live
+            .iter()
+            .map(|s| s.len)
+            .filter(|&l| l <= self.buf.len())
+            .collect();
+        lens.sort_unstable_by(|a, b| b.cmp(a));
+        lens.dedup();
+        for len in lens {
+            if let Some(event) = self.try_frame(len) {
+                self.report_noise(out);
+                self.consume(len);
+                out.push(event);
+                return Step::Progress;
+            }
+        }
+        self.drop_byte(out);
+        Step::Progress
+    }
+
+    /// Whether the buffered bytes agree with a message so far.
+    fn agrees(&self, s: &Shape) -> bool {
+        let buf = &self.buf;
+        if let (Some(at), Some(start)) = (s.at.start, self.p.framing.start) {
+            if buf.get(at).is_some_and(|&b| b != start) {
+                return false;
+            }
+        }
+        for (i, &c) in s.code.iter().enumerate() {
+            if buf.get(s.at.code + i).is_some_and(|&b| b != c) {
+                return false;
+            }
+        }
+        match buf.get(s.at.address) {
+            Some(&a) => plausible_address(self.p, s.direction, a),
+            None => true,
+        }
+    }
+
+    /// The event for the first `len` buffered bytes, if they are a frame.
+    fn try_frame(&mut self, len: usize) -> Option<Event> {
+        let bytes = self.buf.get(..len)?.to_vec();
+        let offset = self.head;
+        let found = match interp::decode(self.p, self.direction, None, &bytes) {
+            Ok(frame) => Ok(frame),
+            Err(DecodeError::Ambiguous { candidates }) => {
+                let request = self.last_request.or(self.default_request);
+                match request.map(|r| interp::decode(self.p, self.direction, Some(r), &bytes)) {
+                    Some(Ok(frame)) => Ok(frame),
+                    _ => Err(candidates),
+                }
+            }
+            Err(_) => return None,
+        };
+        match found {
+            Ok(frame) => {
+                let m = self.p.message(frame.message);
+                let at = interp::offsets(self.p, m.code.len(), m.payload_len);
+                let address = bytes.get(at.address).copied().unwrap_or(0);
+                if !plausible_address(self.p, frame.message.direction, address) {
+                    return None;
+                }
+                self.pair(frame.message);
+                Some(Event::Frame {
+                    offset,
+                    bytes,
+                    frame,
+                })
+            }
+            Err(candidates) => {
+                self.last_request = None;
+                Some(Event::Ambiguous {
+                    offset,
+                    bytes,
+                    candidates,
+                })
+            }
+        }
+    }
+
+    fn pair(&mut self, r: MessageRef) {
+        self.last_request = match r.direction {
+            Direction::Request => Some(r.index),
+            Direction::Response => None,
+        };
+    }
+
+    fn consume(&mut self, len: usize) {
+        let n = len.min(self.buf.len());
+        self.buf.drain(..n);
+        self.head += n as u64;
+    }
+
+    fn drop_byte(&mut self, out: &mut Vec<Event>) {
+        let Some(&b) = self.buf.first() else {
+            return;
+        };
+        if self.noise.is_empty() {
+            self.noise_at = self.head;
+        }
+        self.noise.push(b);
+        self.consume(1);
+        if self.noise.len() >= MAX_SKIPPED_RUN {
+            self.report_noise(out);
+        }
+    }
+
+    fn report_noise(&mut self, out: &mut Vec<Event>) {
+        if !self.noise.is_empty() {
+            out.push(Event::Skipped {
+                offset: self.noise_at,
+                bytes: std::mem::take(&mut self.noise),
+            });
+        }
+    }
+}
+
+fn shape(p: &Protocol, m: &Message) -> Shape {
+    Shape {
+        direction: m.direction,
+        code: m.code.clone(),
+        len: p.frame_len(m),
+        at: interp::offsets(p, m.code.len(), m.payload_len),
+    }
+}
+
+/// An address a frame of this direction can carry: a device's, or the broadcast address on a
+/// request.
+fn plausible_address(p: &Protocol, d: Direction, address: u8) -> bool {
+    let a = &p.framing.address;
+    (a.min..=a.max).contains(&address) || (d == Direction::Request && a.broadcast == Some(address))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::Example;
+    use crate::load_str;
+
+    fn ub2() -> Protocol {
+        load_str("ub2.yaml", include_str!("../../spec/ub2.yaml")).unwrap_or_else(|d| panic!("{d}"))
+    }
+
+    fn sd() -> Protocol {
+        load_str("sd.yaml", include_str!("../../spec/sd.yaml")).unwrap_or_else(|d| panic!("{d}"))
+    }
+
+    fn run(p: &Protocol, chunks: &[&[u8]]) -> Vec<Event> {
+        let mut d = StreamDecoder::new(p, None);
+        let mut events = Vec::new();
+        for c in chunks {
+            events.extend(d.push(c));
+            assert!(d.buf.len() <= d.capacity(), "buffer over capacity");
+        }
+        events.extend(d.flush());
+        events
+    }
+
+    /// Every example frame that decodes without its request, in spec order, with noise
+    /// between some of them, and what the decoder should report.
+    fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<(u64, String)>) {
+        let mut bytes = Vec::new();
+        let mut expected = Vec::new();
+        let usable: Vec<&Example> = p
+            .examples
+            .iter()
+            .filter(|e| !p.message(e.message).needs_request)
+            .collect();
+        for (i, e) in usable.iter().enumerate() {
+            if let Some(n) = noise.get(i % (noise.len() + 3)) {
+                expected.push((bytes.len() as u64, format!("skip {}", n.len())));
+                bytes.extend_from_slice(n);
+            }
+            expected.push((bytes.len() as u64, p.message(e.message).name.clone()));
+            bytes.extend_from_slice(&e.wire);
+        }
+        (bytes, expected)
+    }
+
+    fn summary(p: &Protocol, events: &[Event]) -> Vec<(u64, String)> {
+        events
+            .iter()
+            .map(|e| match e {
+                Event::Frame { offset, frame, .. } => {
+                    (*offset, p.message(frame.message).name.clone())
+                }
+                Event::Skipped { offset, bytes } => (*offset, format!("skip {}", bytes.len())),
+                Event::Ambiguous {
+                    offset, candidates, ..
+                } => (*offset, format!("ambiguous {}", candidates.join("|"))),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ub2_examples_with_noise_frame_exactly() {
+        let p = ub2();
+        let (bytes, expected) = capture(&p, &[&[0x00], &[0xFF, 0x13, 0x55], &[0xAA]]);
+        let events = run(&p, &[&bytes]);
+        assert_eq!(summary(&p, &events), expected);
+        // Every byte is accounted for exactly once, in order.
+        let mut at = 0u64;
+        for e in &events {
+            assert_eq!(e.offset(), at);
+            at += e.bytes().len() as u64;
+        }
+        assert_eq!(at, bytes.len() as u64);
+    }
+
+    #[test]
+    fn sd_examples_with_noise_frame_exactly() {
+        let p = sd();
+        let (bytes, expected) = capture(&p, &[&[0x00], &[0xFF, 0xEE], &[0x01, 0x02, 0x03]]);
+        assert_eq!(summary(&p, &run(&p, &[&bytes])), expected);
+    }
+
+    #[test]
+    fn every_cut_into_two_chunks_gives_the_same_events() {
+        for p in [ub2(), sd()] {
+            let (bytes, _) = capture(&p, &[&[0x00, 0xAA], &[0xFF]]);
+            let bytes = &bytes[..bytes.len().min(400)];
+            let whole = run(&p, &[bytes]);
+            for cut in 0..=bytes.len() {
+                let (a, b) = bytes.split_at(cut);
+                assert_eq!(run(&p, &[a, b]), whole, "{}: cut at {cut}", p.name);
+            }
+            let singles: Vec<&[u8]> = bytes.chunks(1).collect();
+            assert_eq!(run(&p, &singles), whole, "{}: byte by byte", p.name);
+        }
+    }
+
+    #[test]
+    fn setter_request_and_its_echo_share_a_code() {
+        let p = ub2();
+        // set_acceleration_speed_index for 0x21 with acceleration index 0x0E, the ACK's own
+        // checksum: the longest-first rule still reads the request, then its ACK.
+        let req = interp::parse_hex("AA21 4300 0E05 ").unwrap();
+        let mut req = req;
+        let sum = req.iter().fold(0u8, |a, b| a.wrapping_add(*b));
+        req.push(sum);
+        let ack = interp::parse_hex("AA21 4300 0E").unwrap();
+        let mut bytes = req.clone();
+        bytes.extend_from_slice(&ack);
+        bytes.extend_from_slice(&interp::parse_hex("AA21 1000 DB").unwrap());
+        let events = run(&p, &[&bytes]);
+        assert_eq!(
+            summary(&p, &events),
+            vec![
+                (0, "set_acceleration_speed_index".to_owned()),
+                (7, "set_acceleration_speed_index_ack".to_owned()),
+                (12, "reference_run".to_owned()),
+            ]
+        );
+        // An ACK at the very end settles on flush, not before.
+        let mut d = StreamDecoder::new(&p, None);
+        assert!(d.push(&ack).is_empty());
+        assert_eq!(
+            summary(&p, &d.flush()),
+            vec![(0, "set_acceleration_speed_index_ack".to_owned())]
+        );
+    }
+
+    #[test]
+    fn ambiguous_responses_pair_with_the_request_before_them() {
+        let p = sd();
+        let example = |name: &str| {
+            p.examples
+                .iter()
+                .find(|e| p.message(e.message).name == name)
+                .unwrap_or_else(|| panic!("no example of {name}"))
+                .wire
+                .clone()
+        };
+        let reply = example("total_runtime_min_sec");
+        let mut bytes = example("read_total_runtime_min_sec");
+        bytes.extend_from_slice(&reply);
+        // The same reply again, with no request before it: ambiguous.
+        bytes.extend_from_slice(&reply);
+        let events = run(&p, &[&bytes]);
+        assert_eq!(
+            summary(&p, &events),
+            vec![
+                (0, "read_total_runtime_min_sec".to_owned()),
+                (6, "total_runtime_min_sec".to_owned()),
+                (
+                    12,
+                    "ambiguous total_runtime_hours|total_runtime_min_sec".to_owned()
+                ),
+            ]
+        );
+        // A default request settles replies of a device-side capture.
+        let hours = p
+            .commands
+            .iter()
+            .position(|c| c.name == "read_total_runtime_hours");
+        let mut d = StreamDecoder::new(&p, Some(Direction::Response)).with_default_request(hours);
+        let mut events = d.push(&reply);
+        events.extend(d.flush());
+        assert_eq!(
+            summary(&p, &events),
+            vec![(0, "total_runtime_hours".to_owned())]
+        );
+    }
+
+    #[test]
+    fn long_noise_is_reported_in_bounded_runs_and_never_panics() {
+        let p = ub2();
+        let noise = vec![0x55u8; MAX_SKIPPED_RUN * 2 + 7];
+        let events = run(&p, &[&noise]);
+        let lens: Vec<usize> = events.iter().map(|e| e.bytes().len()).collect();
+        assert_eq!(lens, vec![MAX_SKIPPED_RUN, MAX_SKIPPED_RUN, 7]);
+        // Arbitrary bytes, including truncated frames and lone start bytes.
+        let mut x: u32 = 12345;
+        let junk: Vec<u8> = (0..5000)
+            .map(|_| {
+                x = x.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+                if x % 7 == 0 {
+                    0xAA
+                } else {
+                    (x >> 16) as u8
+                }
+            })
+            .collect();
+        for p in [ub2(), sd()] {
+            let events = run(&p, &[&junk]);
+            let total: usize = events.iter().map(|e| e.bytes().len()).sum();
+            assert_eq!(total, junk.len());
+        }
+    }
+
+    #[test]
+    fn truncated_frame_then_good_frame_resynchronises() {
+        let p = ub2();
+        // go_to_capacitance cut after 5 bytes, then a whole reference_run.
+        let mut bytes = interp::parse_hex("AA21 2000 00").unwrap();
+        bytes.extend_from_slice(&interp::parse_hex("AA21 1000 DB").unwrap());
+        let events = run(&p, &[&bytes]);
+        assert_eq!(
+            summary(&p, &events),
+            vec![(0, "skip 5".to_owned()), (5, "reference_run".to_owned())]
+        );
+    }
+}

@@ -1,0 +1,676 @@
+//! The broken-spec fixture suite.
+//!
+//! `fixtures/valid/` holds two small, complete, valid specs: `minimal.yaml` (sum8, start byte,
+//! little-endian wire, printed big-endian) and `minimal_crc.yaml` (CRC-16/CMS, code-first layout,
+//! a `needs_request` pair). Every file in `fixtures/broken/` is one of them with one deliberate
+//! defect (a few hold several on purpose, to prove all are reported at once). [`CASES`] says, for
+//! each, exactly which diagnostics it must give: their number, each one's path, and a distinctive
+//! part of each one's message. A fixture cannot pass through an unrelated error, and a new
+//! fixture cannot be forgotten: every file in `fixtures/broken/` must have a row.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use busspec_codegen::ir::{ChecksumAlgorithm, Direction};
+use busspec_codegen::{load_str, Diagnostics};
+
+/// Fixture name → every diagnostic it must give, as (path, part of the message).
+/// The number of diagnostics must equal the number of rows.
+const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- shape: the loader
+    (
+        "yaml_syntax_error",
+        &[(
+            "line 22 column 8",
+            "not valid YAML: did not find expected ',' or ']'",
+        )],
+    ),
+    (
+        "top_level_not_mapping",
+        &[("", "expected a mapping of spec keys at the top, found a list")],
+    ),
+    (
+        "top_level_scalar",
+        &[("", "expected a mapping of spec keys at the top, found a string")],
+    ),
+    ("unknown_top_level_key", &[("eratta", "unknown key `eratta`")]),
+    (
+        "unknown_field_key",
+        &[(
+            "commands.go_to.fields.target.widht",
+            "unknown field `widht`, expected one of `name`, `type`",
+        )],
+    ),
+    (
+        "wrong_type_string_for_int",
+        &[("serial.baud", "invalid type: string \"fast\", expected u32")],
+    ),
+    (
+        "wrong_enum_variant",
+        &[(
+            "commands.get_status.fields.channel.type",
+            "unknown variant `u24`",
+        )],
+    ),
+    (
+        "list_is_mapping",
+        &[("flags", "expected a list, found a mapping")],
+    ),
+    (
+        "two_shape_errors_in_list",
+        &[
+            ("commands.go_to.knid", "unknown field `knid`"),
+            ("commands.get_status.tilte", "unknown field `tilte`"),
+        ],
+    ),
+    (
+        "missing_required_key",
+        &[("responses.started", "missing field `kind`")],
+    ),
+    (
+        "duplicate_yaml_key",
+        &[("line 65 column 5", "duplicate entry with key \"code\"")],
+    ),
+    (
+        "integer_too_large",
+        &[(
+            "line 71 column 75",
+            "integer `99999999999999999999999` is too large: numbers must fit in 64 bits",
+        )],
+    ),
+    // ---- framing and codes
+    (
+        "duplicate_command_code",
+        &[(
+            "commands.get_status",
+            "duplicate code: `set_mode` (0x3000) and `get_status` (0x3000) have the same length",
+        )],
+    ),
+    (
+        "code_prefix_overlap",
+        &[(
+            "responses.set_mode_ack",
+            "code 0x50 of `started` is a prefix of code 0x5000 of `set_mode_ack`",
+        )],
+    ),
+    (
+        "responses_same_code_and_length",
+        &[(
+            "responses.nak",
+            "duplicate code: `started` (0x50) and `nak` (0x50) have the same length",
+        )],
+    ),
+    (
+        "needs_request_alone",
+        &[(
+            "responses.status",
+            "`needs_request` is set, but no other response shares its code and length",
+        )],
+    ),
+    (
+        "payload_too_long",
+        &[(
+            "responses.status.fields",
+            "fields add up to 9 payload bytes, but response payloads are 0..=8 bytes",
+        )],
+    ),
+    (
+        "payload_too_short",
+        &[
+            (
+                "commands.set_mode.fields",
+                "fields add up to 1 payload bytes, but request payloads are 2..=4 bytes",
+            ),
+            (
+                "commands.get_status.fields",
+                "fields add up to 1 payload bytes, but request payloads are 2..=4 bytes",
+            ),
+        ],
+    ),
+    (
+        "code_length_not_allowed",
+        &[(
+            "commands.go_to.code",
+            "a 1-byte code, but requests have codes of [2] bytes",
+        )],
+    ),
+    (
+        "code_not_hex",
+        &[(
+            "commands.go_to.code",
+            "code `8192` must be written as 0x followed by an even number of hex digits",
+        )],
+    ),
+    // ---- field values
+    (
+        "constant_too_wide",
+        &[(
+            "responses.status.fields.reserved.value",
+            "constant 0x100 does not fit in a 8-bit field",
+        )],
+    ),
+    (
+        "constant_negative",
+        &[(
+            "responses.status.fields.reserved.value",
+            "constant -1 does not fit in a 8-bit field",
+        )],
+    ),
+    (
+        "range_too_wide",
+        &[(
+            "commands.get_status.fields.channel.range.max",
+            "max 300 does not fit in a 8-bit field (0..=255)",
+        )],
+    ),
+    (
+        "range_min_greater_than_max",
+        &[(
+            "commands.get_status.fields.channel.range",
+            "range is empty: min 3 > max 1",
+        )],
+    ),
+    (
+        "enum_value_too_wide",
+        &[(
+            "commands.set_mode.fields.mode.enum",
+            "enum `mode` value auto (256) does not fit in a 8-bit field",
+        )],
+    ),
+    (
+        "flag_bit_outside_field",
+        &[(
+            "responses.status.fields.error_bits.flags",
+            "flag `reset` is bit 8, outside a 8-bit field",
+        )],
+    ),
+    (
+        "bits_overlap",
+        &[(
+            "responses.status.fields.position_word.bits.position",
+            "bits 11..0 overlap another sub-field",
+        )],
+    ),
+    (
+        "bits_not_covering",
+        &[(
+            "responses.status.fields.position_word.bits",
+            "sub-fields must cover all 16 bits; bits 12 are not covered",
+        )],
+    ),
+    (
+        "ascii_with_unit",
+        &[(
+            "responses.status.fields.firmware.unit",
+            "`unit` cannot be combined with an ascii field",
+        )],
+    ),
+    (
+        "equals_later_field",
+        &[(
+            "commands.set_counter.fields.counter.equals",
+            "refers to `spare`, which is not an earlier field of this message",
+        )],
+    ),
+    // ---- units
+    (
+        "bad_scale_text",
+        &[(
+            "units.capacitance.scale",
+            "bad scale: `abc` is not a decimal number or fraction",
+        )],
+    ),
+    (
+        "bad_scale_zero",
+        &[("units.capacitance.scale", "scale 0 must be greater than zero")],
+    ),
+    (
+        "bad_scale_negative",
+        &[("units.capacitance.scale", "scale -1 must be greater than zero")],
+    ),
+    (
+        "bad_scale_negative_fraction",
+        &[(
+            "units.capacitance.scale",
+            "scale -1/1099511627776 must be greater than zero",
+        )],
+    ),
+    (
+        "bad_scale_division_by_zero",
+        &[("units.capacitance.scale", "bad scale: `1/0` divides by zero")],
+    ),
+    (
+        "undefined_unit",
+        &[(
+            "commands.go_to.fields.target.unit",
+            "refers to unit `picofarad`, which is not defined in `units`",
+        )],
+    ),
+    (
+        "number_without_unit",
+        &[(
+            "commands.get_status.fields.channel",
+            "a number field needs a `unit`",
+        )],
+    ),
+    // ---- names
+    (
+        "name_camel_case",
+        &[(
+            "commands.GoTo",
+            "message `GoTo` is not a valid identifier: use lower snake_case",
+        )],
+    ),
+    (
+        "name_starts_with_digit",
+        &[(
+            "units.2celsius",
+            "unit `2celsius` is not a valid identifier",
+        )],
+    ),
+    (
+        "name_rust_keyword",
+        &[(
+            "commands.set_mode.fields.type",
+            "field `type` is a Rust keyword",
+        )],
+    ),
+    (
+        "duplicate_message_name",
+        &[(
+            "responses.go_to",
+            "duplicate message name `go_to` (commands and responses share one name space)",
+        )],
+    ),
+    // ---- references
+    (
+        "response_reference_undefined",
+        &[(
+            "commands.go_to.responses[1]",
+            "refers to response `nakk`, which is not defined",
+        )],
+    ),
+    (
+        "command_listed_as_response",
+        &[(
+            "commands.go_to.responses[2]",
+            "`set_mode` is a command, not a response",
+        )],
+    ),
+    (
+        "response_unused",
+        &[("responses.started", "no command lists this response")],
+    ),
+    (
+        "broadcast_without_address",
+        &[(
+            "commands.get_status.broadcast",
+            "the protocol has no broadcast address",
+        )],
+    ),
+    // ---- checksum
+    (
+        "sum8_with_crc_params",
+        &[(
+            "framing.checksum.poly",
+            "`poly` is a CRC parameter; sum8 takes none",
+        )],
+    ),
+    (
+        "sum8_check_mismatch",
+        &[(
+            "framing.checksum.check",
+            "check value 0xDE does not match the parameters, which give 0xDD",
+        )],
+    ),
+    (
+        "crc_check_mismatch",
+        &[(
+            "framing.checksum.check",
+            "check value 0xAEE8 does not match the parameters, which give 0xAEE7 over \"123456789\"",
+        )],
+    ),
+    (
+        "crc_missing_param",
+        &[("framing.checksum.refout", "a CRC needs `refout`")],
+    ),
+    (
+        "crc_even_poly",
+        &[("framing.checksum.poly", "poly 0x8004 is even")],
+    ),
+    (
+        "crc_negative_init",
+        &[("framing.checksum.init", "init -1 does not fit in 16 bits")],
+    ),
+    // ---- examples
+    (
+        "example_bad_checksum",
+        &[(
+            "examples[0].printed",
+            "§4.1 go_to: checksum mismatch at offset 8: expected 0xBD, found 0xBE",
+        )],
+    ),
+    (
+        "example_wrong_length",
+        &[(
+            "examples[0].printed",
+            "has 8 bytes, but a go_to frame has 9 (3 overhead + 2-byte code + 4 payload)",
+        )],
+    ),
+    (
+        "example_wrong_value",
+        &[(
+            "examples[0].printed",
+            "target: the frame carries 150 pF (raw 15000), the example states 151",
+        )],
+    ),
+    (
+        "example_wrong_value_binary_scale",
+        &[(
+            "examples[5].printed",
+            "position: the frame carries 1/1099511627776 ° (raw 512), the example states 46",
+        )],
+    ),
+    (
+        "example_wrong_flags",
+        &[(
+            "examples[5].printed",
+            "error_bits: the frame sets {\"overcurrent\", \"reset\"}, the example states {\"overheat\", \"reset\"}",
+        )],
+    ),
+    (
+        "example_unknown_value_name",
+        &[(
+            "examples[4].values.chanel",
+            "states a value for `chanel`, which `get_status` does not have",
+        )],
+    ),
+    (
+        "example_unknown_erratum",
+        &[(
+            "examples[2].erratum",
+            "refers to erratum `mini-e99`, which is not recorded in `errata`",
+        )],
+    ),
+    (
+        "example_corrected_valid_frame",
+        &[(
+            "examples[4].corrected",
+            "the printed frame replays as it stands; `corrected` is only for frames the document got wrong",
+        )],
+    ),
+    (
+        "example_undefined_message",
+        &[(
+            "examples[0].message",
+            "refers to message `goto`, which is not defined",
+        )],
+    ),
+    (
+        "example_reply_to_not_listing",
+        &[(
+            "examples[1].reply_to",
+            "command `get_status` does not list `started` among its responses",
+        )],
+    ),
+    (
+        "example_needs_request_without_reply_to",
+        &[(
+            "examples[3].reply_to",
+            "`runtime_min_sec` can only be decoded with its request: say which with `reply_to`",
+        )],
+    ),
+    (
+        "example_printed_and_derived",
+        &[("examples[4]", "give exactly one of `printed`")],
+    ),
+    (
+        "example_constant_mismatch",
+        &[(
+            "examples[0].derived",
+            "invalid value for read_runtime_hours.selector at offset 2: expected 0x01, found 0x02",
+        )],
+    ),
+    // ---- several defects in one file: every one is reported, each at its own path
+    (
+        "multiple_errors",
+        &[
+            ("units.angle.scale", "bad scale: `360/0` divides by zero"),
+            (
+                "commands.go_to.fields.target.unit",
+                "refers to unit `picofarad`",
+            ),
+            (
+                "commands.get_status.fields.channel.range",
+                "range is empty: min 3 > max 1",
+            ),
+        ],
+    ),
+    (
+        "multiple_errors_crc",
+        &[
+            (
+                "units.count.scale",
+                "bad scale: `one` is not a decimal number or fraction",
+            ),
+            (
+                "framing.checksum.check",
+                "check value 0xAEE8 does not match the parameters, which give 0xAEE7",
+            ),
+        ],
+    ),
+];
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn label(kind: &str, name: &str) -> String {
+    format!("fixtures/{kind}/{name}.yaml")
+}
+
+fn load_broken(name: &str) -> Diagnostics {
+    let text = read(&fixtures().join(format!("broken/{name}.yaml")));
+    match load_str(&label("broken", name), &text) {
+        Ok(_) => panic!("fixtures/broken/{name}.yaml loaded without error"),
+        Err(d) => d,
+    }
+}
+
+/// Checks one fixture against its row; returns what is wrong, if anything.
+fn mismatch(name: &str, want: &[(&str, &str)]) -> Option<String> {
+    let got = load_broken(name);
+    let listing = || {
+        got.items
+            .iter()
+            .map(|d| format!("    [{}] {}", d.path, d.message))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    if got.file != label("broken", name) {
+        return Some(format!("{name}: diagnostics name file `{}`", got.file));
+    }
+    if got.items.len() != want.len() {
+        return Some(format!(
+            "{name}: expected {} diagnostic(s), got {}:\n{}",
+            want.len(),
+            got.items.len(),
+            listing()
+        ));
+    }
+    let mut used = vec![false; got.items.len()];
+    for (path, part) in want {
+        let hit = got
+            .items
+            .iter()
+            .enumerate()
+            .position(|(i, d)| !used[i] && d.path == *path && d.message.contains(part));
+        match hit {
+            Some(i) => used[i] = true,
+            None => {
+                return Some(format!(
+                    "{name}: no diagnostic at `{path}` containing `{part}`; got:\n{}",
+                    listing()
+                ))
+            }
+        }
+    }
+    None
+}
+
+#[test]
+fn every_broken_fixture_gives_exactly_its_diagnostics() {
+    let failures: Vec<String> = CASES
+        .iter()
+        .filter_map(|(name, want)| mismatch(name, want))
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} fixtures failed:\n{}",
+        failures.len(),
+        CASES.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn every_broken_fixture_is_in_the_table_and_every_row_has_a_fixture() {
+    let dir = fixtures().join("broken");
+    let on_disk: BTreeSet<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.expect("directory entry").path())
+        .map(|p| {
+            assert_eq!(
+                p.extension().and_then(|x| x.to_str()),
+                Some("yaml"),
+                "{}: fixtures are .yaml files",
+                p.display()
+            );
+            p.file_stem()
+                .and_then(|s| s.to_str())
+                .expect("UTF-8 file name")
+                .to_owned()
+        })
+        .collect();
+    let mut in_table = BTreeSet::new();
+    for (name, want) in CASES {
+        assert!(in_table.insert(name.to_string()), "`{name}` has two rows");
+        assert!(!want.is_empty(), "`{name}`: a row must expect a diagnostic");
+    }
+    let untested: Vec<_> = on_disk.difference(&in_table).collect();
+    let missing: Vec<_> = in_table.difference(&on_disk).collect();
+    assert!(
+        untested.is_empty(),
+        "fixtures without a row in CASES: {untested:?}"
+    );
+    assert!(
+        missing.is_empty(),
+        "rows in CASES without a fixture: {missing:?}"
+    );
+    assert!(
+        on_disk.len() >= 30,
+        "only {} broken fixtures",
+        on_disk.len()
+    );
+}
+
+#[test]
+fn every_broken_fixture_says_what_is_wrong_with_it() {
+    for (name, _) in CASES {
+        let text = read(&fixtures().join(format!("broken/{name}.yaml")));
+        assert!(
+            text.starts_with("# Broken fixture: "),
+            "fixtures/broken/{name}.yaml must open with a `# Broken fixture: <defect>` comment"
+        );
+    }
+}
+
+#[test]
+fn diagnostics_display_as_file_path_message() {
+    let d = load_broken("multiple_errors");
+    let text = d.to_string();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(
+        lines.contains(
+            &"fixtures/broken/multiple_errors.yaml: commands.go_to.fields.target.unit: \
+              refers to unit `picofarad`, which is not defined in `units`"
+        ),
+        "{text}"
+    );
+    // A diagnostic about the whole file has no path segment.
+    let top = load_broken("top_level_not_mapping").to_string();
+    assert_eq!(
+        top,
+        "fixtures/broken/top_level_not_mapping.yaml: \
+         expected a mapping of spec keys at the top, found a list"
+    );
+}
+
+fn load_valid(name: &str) -> busspec_codegen::Protocol {
+    let text = read(&fixtures().join(format!("valid/{name}.yaml")));
+    load_str(&label("valid", name), &text).unwrap_or_else(|d| panic!("{d}"))
+}
+
+#[test]
+fn minimal_sum8_fixture_loads() {
+    let p = load_valid("minimal");
+    assert_eq!(p.name, "mini");
+    assert_eq!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8);
+    assert_eq!(p.framing.start, Some(0xAA));
+    assert_eq!((p.commands.len(), p.responses.len()), (3, 4));
+    assert_eq!((p.units.len(), p.enums.len(), p.flags.len()), (4, 1, 1));
+    assert_eq!((p.examples.len(), p.errata.len()), (6, 1));
+    let status = &p.responses[3];
+    assert_eq!(status.payload_len, 8);
+    assert_eq!(status.fields[1].bits.len(), 2, "position_word is packed");
+    assert!(status.fields[2].is_ascii());
+    assert_eq!(status.fields[4].constant, Some(0));
+    // Printed most significant byte first, sent little-endian: the replay reordered the target.
+    let go_to = &p.examples[0];
+    assert_eq!(
+        go_to.wire,
+        [0xAA, 0x21, 0x20, 0x00, 0x98, 0x3A, 0x00, 0x00, 0xBD]
+    );
+    // The one printed frame with a wrong checksum is excused by its erratum and corrected.
+    let set_mode = &p.examples[2];
+    assert_eq!(set_mode.erratum, Some(0));
+    assert_eq!(set_mode.wire.last(), Some(&0xFD));
+    assert_eq!(
+        p.examples.iter().filter(|e| e.corrected.is_some()).count(),
+        1
+    );
+}
+
+#[test]
+fn minimal_crc_fixture_loads() {
+    let p = load_valid("minimal_crc");
+    assert_eq!(p.name, "mini_crc");
+    let ChecksumAlgorithm::Crc(crc) = &p.framing.checksum.algorithm else {
+        panic!("expected a CRC");
+    };
+    assert_eq!(
+        (crc.width, crc.poly, crc.init, crc.refin, crc.refout, crc.xorout),
+        (16, 0x8005, 0xFFFF, false, false, 0)
+    );
+    assert_eq!(p.framing.checksum.catalogue.as_deref(), Some("CRC-16/CMS"));
+    assert_eq!(p.framing.start, None);
+    let paired: Vec<&str> = p
+        .responses
+        .iter()
+        .filter(|r| r.needs_request)
+        .map(|r| r.name.as_str())
+        .collect();
+    assert_eq!(paired, ["runtime_hours", "runtime_min_sec"]);
+    assert_eq!(p.examples.len(), 5);
+    // The two paired responses' examples were replayed with the request they answer.
+    for e in &p.examples {
+        if e.message.direction == Direction::Response && p.message(e.message).needs_request {
+            assert!(e.reply_to.is_some());
+        }
+    }
+}

@@ -1,0 +1,594 @@
+//! The decode/encode contract of the `busspec` CLI: JSON shape, exit codes, error lines, the
+//! round trip, streaming captures, run-time specs and request pairing.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use busspec_codegen::{load_file, Protocol};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run_in(dir: &Path, args: &[&str], stdin: &[u8]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_busspec"))
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run busspec");
+    {
+        let mut input = child.stdin.take().expect("stdin");
+        input.write_all(stdin).expect("write stdin");
+    }
+    child.wait_with_output().expect("wait for busspec")
+}
+
+fn busspec(args: &[&str]) -> Output {
+    run_in(root(), args, b"")
+}
+
+fn busspec_stdin(args: &[&str], stdin: &str) -> Output {
+    run_in(root(), args, stdin.as_bytes())
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn spec(name: &str) -> Protocol {
+    load_file(&root().join("spec").join(name)).unwrap_or_else(|d| panic!("{d}"))
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02X}")).collect()
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("busspec-cli-decode-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const ACTUAL_79_98: &str = r#"{"protocol":"ub2","direction":"response","address":33,"code":"0x4101","message":"actual_capacitance","fields":{"capacitance":79.98}}"#;
+
+#[test]
+fn documented_frame_decodes_to_exact_json() {
+    for frame in [
+        "AA21 4101 3E1F 0000 6A",
+        "0xAA21 4101 3E1F 0000 6A",
+        "AA2141013E1F00006A",
+        "0xAA 0x21 0x41 0x01 0x3E 0x1F 0x00 0x00 0x6A",
+    ] {
+        let out = busspec(&["decode", "ub2", frame]);
+        assert_eq!(out.status.code(), Some(0), "{frame}: {}", text(&out.stderr));
+        assert_eq!(text(&out.stdout), format!("{ACTUAL_79_98}\n"), "{frame}");
+        assert!(out.stderr.is_empty());
+    }
+}
+
+#[test]
+fn ub2_is_little_endian_on_the_wire_so_the_printed_frame_is_another_value() {
+    // §6.1 prints `AA21 4101 0000 1F3E 6A` most significant byte first; on the wire (§3,
+    // little-endian) that frame is `AA 21 41 01 3E 1F 00 00 6A` = 79.98 pF.
+    let p = spec("ub2.yaml");
+    let e = p
+        .examples
+        .iter()
+        .find(|e| e.printed.as_deref() == Some("AA21 4101 0000 1F3E 6A"))
+        .expect("the §6.1 example");
+    assert_eq!(e.section, "6.1");
+    assert_eq!(hex(&e.wire), "AA2141013E1F00006A");
+    // The printed bytes taken as wire bytes still checksum (an 8-bit sum does not see the
+    // order) and decode, to 0x3E1F0000 * 0.01 pF.
+    let out = busspec(&["decode", "ub2", "AA21 4101 0000 1F3E 6A"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(0x3E1F_0000u32, 1_042_219_008);
+    assert_eq!(
+        text(&out.stdout),
+        r#"{"protocol":"ub2","direction":"response","address":33,"code":"0x4101","message":"actual_capacitance","fields":{"capacitance":10422190.08}}"#.to_owned()
+            + "\n"
+    );
+}
+
+#[test]
+fn several_frames_one_line_each_and_value_kinds() {
+    let out = busspec(&[
+        "decode",
+        "sd",
+        "20 01 55 5C 7F F2", // temperatures 35 °C, 42 °C (offset -50)
+        "20 01 00 FF 02 3D", // special values by name
+        "76 01 3E 00 BC 27", // packed bits: freshness 3, position -45°
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            r#"{"protocol":"sd","direction":"response","address":1,"code":"0x20","message":"temperatures","fields":{"motor_temperature":35,"pcb_temperature":42}}"#,
+            r#"{"protocol":"sd","direction":"response","address":1,"code":"0x20","message":"temperatures","fields":{"motor_temperature":"no_sensor","pcb_temperature":"defective"}}"#,
+            r#"{"protocol":"sd","direction":"request","address":1,"code":"0x76","message":"set_point","fields":{"freshness":3,"position":-45}}"#,
+        ]
+    );
+    // Every line is valid JSON.
+    for l in lines {
+        serde_json::from_str::<serde_json::Value>(l).unwrap();
+    }
+}
+
+#[test]
+fn direction_is_inferred_from_code_and_length() {
+    let direction = |args: &[&str]| {
+        let out = busspec(args);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (
+            v["direction"].as_str().unwrap().to_owned(),
+            v["message"].as_str().unwrap().to_owned(),
+        )
+    };
+    assert_eq!(
+        direction(&["decode", "ub2", "AA21 1000 DB"]),
+        ("request".into(), "reference_run".into())
+    );
+    assert_eq!(
+        direction(&["decode", "ub2", "AA21 501B"]),
+        ("response".into(), "movement_started".into())
+    );
+    // A setter request and its echo ACK share code 0x4300; length tells them apart.
+    assert_eq!(
+        direction(&["decode", "ub2", "AA21 4300 0405 17"]),
+        ("request".into(), "set_acceleration_speed_index".into())
+    );
+    assert_eq!(
+        direction(&["decode", "ub2", "AA21 4300 0E"]),
+        ("response".into(), "set_acceleration_speed_index_ack".into())
+    );
+    assert_eq!(
+        direction(&["decode", "ub2", "--direction", "response", "AA21 4300 0E"]),
+        ("response".into(), "set_acceleration_speed_index_ack".into())
+    );
+    // Forcing the wrong direction fails, naming the frame.
+    let out = busspec(&["decode", "ub2", "--direction", "request", "AA21 501B"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    assert!(
+        text(&out.stderr).starts_with("frame 1 (AA21 501B): "),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+#[test]
+fn a_bad_frame_is_named_on_stderr_and_the_others_still_print() {
+    let out = busspec(&[
+        "decode",
+        "ub2",
+        "AA21 4101 3E1F 0000 6A",
+        "AA21 4101 0000 1F3E 6B",
+        "zz",
+        "AA21 501B",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = text(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 2, "{stdout}");
+    assert_eq!(lines[0], ACTUAL_79_98);
+    assert!(lines[1].contains(r#""message":"movement_started""#));
+    assert_eq!(
+        text(&out.stderr),
+        "frame 2 (AA21 4101 0000 1F3E 6B): checksum mismatch at offset 8: expected 0x6A, found 0x6B\n\
+         frame 3 (zz): `z` at character 1 is not a hex digit\n"
+    );
+}
+
+/// Decodes every example's wire bytes as contiguous uppercase hex arguments (those that need
+/// their request with `--reply-to` it), pipes the JSON back through `encode`, and expects the
+/// same hex, line for line.
+fn round_trip(file: &str) -> usize {
+    let p = spec(file);
+    // One `decode` run per distinct --reply-to: none for most.
+    let mut groups: Vec<(Option<String>, Vec<usize>)> = Vec::new();
+    for (i, e) in p.examples.iter().enumerate() {
+        let reply_to = p
+            .message(e.message)
+            .needs_request
+            .then(|| p.commands[e.reply_to.expect("reply_to")].name.clone());
+        match groups.iter_mut().find(|(r, _)| *r == reply_to) {
+            Some((_, list)) => list.push(i),
+            None => groups.push((reply_to, vec![i])),
+        }
+    }
+    let mut lines = String::new();
+    let mut expected = String::new();
+    for (reply_to, list) in &groups {
+        let wires: Vec<String> = list.iter().map(|&i| hex(&p.examples[i].wire)).collect();
+        let mut args = vec!["decode", p.name.as_str()];
+        if let Some(r) = reply_to {
+            args.extend(["--reply-to", r.as_str()]);
+        }
+        args.extend(wires.iter().map(String::as_str));
+        let out = busspec(&args);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}: {}",
+            p.name,
+            text(&out.stderr)
+        );
+        let stdout = text(&out.stdout);
+        let decoded: Vec<&str> = stdout.lines().collect();
+        assert_eq!(decoded.len(), list.len());
+        for ((&i, line), wire) in list.iter().zip(decoded).zip(&wires) {
+            let e = &p.examples[i];
+            let v: serde_json::Value = serde_json::from_str(line).unwrap();
+            assert_eq!(
+                v["message"],
+                p.message(e.message).name.as_str(),
+                "example {i}"
+            );
+            assert_eq!(v["direction"], e.message.direction.as_str(), "example {i}");
+            lines.push_str(line);
+            lines.push('\n');
+            expected.push_str(wire);
+            expected.push('\n');
+        }
+    }
+    let out = busspec_stdin(&["encode", &p.name], &lines);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), expected);
+    p.examples.len()
+}
+
+#[test]
+fn every_ub2_example_round_trips_through_decode_and_encode() {
+    assert!(round_trip("ub2.yaml") >= 80);
+}
+
+#[test]
+fn every_sd_example_round_trips_through_decode_and_encode() {
+    assert!(round_trip("sd.yaml") >= 50);
+}
+
+#[test]
+fn encode_takes_direction_and_code_optionally() {
+    let out = busspec_stdin(
+        &["encode", "ub2"],
+        "{\"message\":\"actual_capacitance\",\"address\":33,\"fields\":{\"capacitance\":79.98}}\n\
+         \n\
+         {\"protocol\":\"ub2\",\"direction\":\"request\",\"code\":\"0x2000\",\"message\":\"go_to_capacitance\",\"address\":33,\"fields\":{\"target\":150}}\n\
+         {\"message\":\"go_to_capacitance\",\"address\":33,\"fields\":{\"target\":1.5e2}}\n\
+         {\"message\":\"reference_run\",\"address\":33}\n\
+         {\"message\":\"status\",\"address\":33,\"fields\":{\"error_bits\":[\"oca\",\"reset\",128],\"reserved\":0}}\n",
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout),
+        "AA2141013E1F00006A\nAA212000983A0000BD\nAA212000983A0000BD\nAA211000DB\nAA214122A100CF\n"
+    );
+    // The flags round trip, unnamed bit included.
+    let out = busspec(&["decode", "ub2", "AA214122A100CF"]);
+    assert!(
+        text(&out.stdout).contains(r#""fields":{"error_bits":["oca","reset",128],"reserved":0}"#),
+        "{}",
+        text(&out.stdout)
+    );
+}
+
+#[test]
+fn encode_reports_each_bad_line_and_goes_on() {
+    let input = [
+        r#"{"message":"go_to_capacitance","address":33,"fields":{"target":79.985}}"#,
+        r#"not json"#,
+        r#"{"message":"go_to_capacitanse","address":33}"#,
+        r#"{"message":"go_to_capacitance","address":33,"fields":{}}"#,
+        r#"{"message":"go_to_capacitance","address":33,"fields":{"target":50000000}}"#,
+        "",
+        r#"{"message":"reference_run","address":33}"#,
+        r#"{"message":"go_to_capacitance","address":33,"code":"0x2001","fields":{"target":1}}"#,
+        r#"{"message":"set_mode_of_operation","address":33,"fields":{"mode":"turbo"}}"#,
+        r#"{"message":"go_to_capacitance","address":33,"fields":{"targt":1}}"#,
+        r#"{"message":"go_to_capacitance","direction":"response","address":33,"fields":{"target":1}}"#,
+        r#"{"protocol":"sd","message":"reference_run","address":33}"#,
+        r#"{"message":"reference_run","address":300}"#,
+    ]
+    .join("\n");
+    let out = busspec_stdin(&["encode", "ub2"], &input);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(text(&out.stdout), "AA211000DB\n");
+    let stderr = text(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            "line 1: target: 79.985 pF is not a whole number of steps of 0.01 pF",
+            "line 2: invalid JSON at column 2: expected ident",
+            "line 3: unknown message `go_to_capacitanse` in ub2",
+            "line 4: no value given for field target",
+            "line 5: target: 50000000 pF is out of range: the field holds 0 pF to 42949672.95 pF",
+            "line 8: code 0x2001 does not match go_to_capacitance (0x2000)",
+            "line 9: mode: `turbo` is not a value of mode_of_operation (one of: encoder_disabled, close_loop_control, open_loop_control)",
+            "line 10: go_to_capacitance has no field `targt` (its fields: target)",
+            "line 11: go_to_capacitance is a request, not a response",
+            "line 12: protocol `sd` does not match this spec (`ub2`)",
+            "line 13: address 300 is not a byte (0..=255)",
+        ]
+    );
+}
+
+#[test]
+fn encode_converts_offsets_and_angles_exactly() {
+    // SD temperature: °C = raw - 50; angle: 360/4096 ° per digit.
+    let out = busspec_stdin(
+        &["encode", "sd"],
+        "{\"message\":\"temperatures\",\"address\":1,\"fields\":{\"motor_temperature\":35,\"pcb_temperature\":42}}\n\
+         {\"message\":\"set_point\",\"address\":1,\"fields\":{\"freshness\":3,\"position\":-45}}\n\
+         {\"message\":\"set_point\",\"address\":1,\"fields\":{\"freshness\":3,\"position\":0.087890625}}\n\
+         {\"message\":\"set_point\",\"address\":1,\"fields\":{\"freshness\":3,\"position\":0.088}}\n",
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = text(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines[..2], ["2001555C7FF2", "76013E00BC27"]);
+    assert!(lines[2].starts_with("76013001"), "{stdout}");
+    assert_eq!(
+        text(&out.stderr),
+        "line 4: position: 0.088 ° is not a whole number of steps of 0.087890625 °\n"
+    );
+}
+
+/// A capture of example frames (those that decode without their request) with noise between
+/// some of them, and the JSON lines expected from `--stream`: each frame's `decode` line with
+/// its offset first.
+fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
+    let frames: Vec<&[u8]> = p
+        .examples
+        .iter()
+        .filter(|e| !p.message(e.message).needs_request)
+        .map(|e| e.wire.as_slice())
+        .collect();
+    let mut args = vec!["decode".to_owned(), p.name.clone()];
+    args.extend(frames.iter().map(|f| hex(f)));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = busspec(&args);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let mut bytes = Vec::new();
+    let mut expected = Vec::new();
+    for (n, (frame, line)) in frames.iter().zip(stdout.lines()).enumerate() {
+        if n % 4 == 1 {
+            let junk = noise[(n / 4) % noise.len()];
+            expected.push(format!(
+                r#"{{"offset":{},"skipped":{},"bytes":"{}"}}"#,
+                bytes.len(),
+                junk.len(),
+                hex(junk)
+            ));
+            bytes.extend_from_slice(junk);
+        }
+        expected.push(format!(
+            r#"{{"offset":{},{}"#,
+            bytes.len(),
+            line.trim_start_matches('{')
+        ));
+        bytes.extend_from_slice(frame);
+    }
+    (bytes, expected)
+}
+
+#[test]
+fn stream_reports_frames_with_offsets_and_skipped_noise() {
+    let dir = temp_dir("stream");
+    for (file, noise) in [
+        (
+            "ub2.yaml",
+            &[&[0x00u8, 0x13][..], &[0xAA], &[0xFF, 0x55, 0x21]][..],
+        ),
+        (
+            "sd.yaml",
+            &[&[0x00u8][..], &[0xFF, 0xEE], &[0x01, 0x02, 0x03]][..],
+        ),
+    ] {
+        let p = spec(file);
+        let (bytes, expected) = capture(&p, noise);
+        assert!(expected.iter().filter(|l| l.contains("skipped")).count() >= 3);
+        let path = dir.join(format!("{}.bin", p.name));
+        std::fs::write(&path, &bytes).unwrap();
+        let out = busspec(&["decode", &p.name, "--stream", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        let stdout = text(&out.stdout);
+        let lines: Vec<&str> = stdout.lines().collect();
+        assert_eq!(lines.len(), expected.len());
+        for (got, want) in lines.iter().zip(&expected) {
+            assert_eq!(got, want);
+        }
+        // The same from stdin.
+        let out = run_in(root(), &["decode", &p.name, "--stream", "-"], &bytes);
+        assert_eq!(out.status.code(), Some(0));
+        assert_eq!(text(&out.stdout), stdout);
+    }
+}
+
+#[test]
+fn stream_pairs_ambiguous_responses_with_the_request_before_them() {
+    let p = spec("sd.yaml");
+    let wire = |name: &str| {
+        p.examples
+            .iter()
+            .find(|e| p.message(e.message).name == name)
+            .unwrap()
+            .wire
+            .clone()
+    };
+    let reply = wire("total_runtime_min_sec");
+    let mut bytes = wire("read_total_runtime_min_sec");
+    bytes.extend_from_slice(&reply);
+    bytes.extend_from_slice(&reply);
+    let out = run_in(root(), &["decode", "sd", "--stream", "-"], &bytes);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 3, "{stdout}");
+    assert!(lines[0].starts_with(r#"{"offset":0,"protocol":"sd","direction":"request""#));
+    assert!(lines[1].starts_with(r#"{"offset":6,"#));
+    assert!(lines[1].contains(r#""message":"total_runtime_min_sec""#));
+    assert_eq!(
+        lines[2],
+        format!(
+            r#"{{"offset":12,"ambiguous":["total_runtime_hours","total_runtime_min_sec"],"bytes":"{}"}}"#,
+            hex(&reply)
+        )
+    );
+    // --reply-to is the request assumed when none came before.
+    let out = run_in(
+        root(),
+        &[
+            "decode",
+            "sd",
+            "--reply-to",
+            "read_total_runtime_hours",
+            "--stream",
+            "-",
+        ],
+        &reply,
+    );
+    assert!(text(&out.stdout).contains(r#""message":"total_runtime_hours""#));
+}
+
+#[test]
+fn reply_to_settles_responses_only_the_request_tells_apart() {
+    let frame = "22 01 1E 3B 6C A5";
+    let out = busspec(&["decode", "sd", frame]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "frame 1 ({frame}): ambiguous frame: could be total_runtime_hours or total_runtime_min_sec; \
+             only the request it answers tells them apart: give --reply-to read_total_runtime_hours \
+             or --reply-to read_total_runtime_min_sec\n"
+        )
+    );
+    let decoded = |cmd: &str| {
+        let out = busspec(&["decode", "sd", "--reply-to", cmd, frame]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        text(&out.stdout)
+    };
+    assert_eq!(
+        decoded("read_total_runtime_min_sec"),
+        "{\"protocol\":\"sd\",\"direction\":\"response\",\"address\":1,\"code\":\"0x22\",\"message\":\"total_runtime_min_sec\",\"fields\":{\"runtime_minutes\":30,\"runtime_seconds\":59}}\n"
+    );
+    assert!(decoded("read_total_runtime_hours")
+        .contains(r#""message":"total_runtime_hours","fields":{"runtime_hours":7739}"#));
+    // A request that gets neither reply says so; an unknown command is a usage error.
+    let out = busspec(&["decode", "sd", "--reply-to", "read_temperatures", frame]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("read_temperatures (--reply-to) gets none of them"));
+    let out = busspec(&["decode", "sd", "--reply-to", "read_nothing", frame]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("`read_nothing` is not a command of sd"));
+    // Direction decided by --direction is compatible with --reply-to.
+    let out = busspec(&[
+        "decode",
+        "sd",
+        "--direction",
+        "response",
+        "--reply-to",
+        "read_total_runtime_min_sec",
+        frame,
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+}
+
+#[test]
+fn spec_file_is_loaded_at_run_time() {
+    let dir = temp_dir("spec");
+    let good = std::fs::read_to_string(root().join("spec/ub2.yaml")).unwrap();
+    // Scale capacitance by 0.1 instead of 0.01: the frame now reads ten times larger. (The
+    // examples state values in pF, so their stated values go too.)
+    let changed = good.replacen("    scale: \"0.01\"", "    scale: \"0.1\"", 1);
+    assert_ne!(changed, good);
+    let changed = strip_examples(&changed);
+    let file = dir.join("ub2-tenth.yaml");
+    std::fs::write(&file, changed).unwrap();
+    let f = file.to_str().unwrap();
+    let out = busspec(&["decode", "ub2", "--spec", f, "AA21 4101 3E1F 0000 6A"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains(r#""fields":{"capacitance":799.8}"#));
+    let out = busspec_stdin(
+        &["encode", "ub2", "--spec", f],
+        r#"{"message":"actual_capacitance","address":33,"fields":{"capacitance":799.8}}"#,
+    );
+    assert_eq!(text(&out.stdout), "AA2141013E1F00006A\n");
+    // The protocol named must be the one the spec defines.
+    let out = busspec(&["decode", "sd", "--spec", f, "AA21 501B"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains(&format!("{f} defines protocol `ub2`, not `sd`")),
+        "{}",
+        text(&out.stderr)
+    );
+    // A spec that does not load is reported as `check` reports it.
+    let broken = dir.join("broken.yaml");
+    std::fs::write(&broken, "protocol: ub2\n").unwrap();
+    let out = busspec(&[
+        "decode",
+        "ub2",
+        "--spec",
+        broken.to_str().unwrap(),
+        "AA21 501B",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains(broken.to_str().unwrap()));
+}
+
+/// Drops `examples:` (and what follows it up to `errata:`) so a spec whose units changed still
+/// validates.
+fn strip_examples(spec: &str) -> String {
+    let start = spec.find("\nexamples:\n").expect("examples") + 1;
+    let end = spec[start..]
+        .find("\nerrata:\n")
+        .map(|i| start + i + 1)
+        .unwrap_or(spec.len());
+    format!("{}examples: []\n{}", &spec[..start], &spec[end..])
+}
+
+#[test]
+fn built_in_specs_work_from_any_directory() {
+    let dir = temp_dir("cwd");
+    let out = run_in(&dir, &["decode", "ub2", "AA21 4101 3E1F 0000 6A"], b"");
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), format!("{ACTUAL_79_98}\n"));
+}
+
+#[test]
+fn wrong_arguments_are_usage_errors() {
+    for args in [
+        &["decode", "ub3", "AA21 501B"][..],
+        &["decode", "ub2"],
+        &["decode", "ub2", "--direction", "sideways", "AA21 501B"],
+        &["decode", "ub2", "--stream", "-", "AA21 501B"],
+        &["encode"],
+    ] {
+        let out = busspec(args);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+        assert!(text(&out.stderr).starts_with("error: "), "{args:?}");
+    }
+    // The output format is documented.
+    let out = busspec(&["encode", "--help"]);
+    assert!(text(&out.stdout).contains("uppercase hex"));
+}
