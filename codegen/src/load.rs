@@ -67,7 +67,7 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
         }
     }
 
-    // Lists are taken out and read element by element; the rest is read in one go.
+    // Lists are taken out and read element by element, after the rest.
     let mut lists: Vec<(&str, Vec<Value>)> = Vec::new();
     for &key in LIST_KEYS {
         match map.remove(key) {
@@ -83,22 +83,75 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
         }
     }
     map.retain(|k, _| k.as_str().is_some_and(|k| SPEC_KEYS.contains(&k)));
-    let head: Option<Spec> = deserialize_at(&Value::Mapping(map), "", sink);
+    // The other keys are read one by one too, so that an error in `serial` does not hide one in
+    // `framing`, and every missing key is named, not just the first.
+    let errors_before = sink.items.len();
+    for (key, value) in &map {
+        if let Some(key) = key.as_str() {
+            read_key(key, value, sink);
+        }
+    }
+    for key in REQUIRED_KEYS {
+        if !map.contains_key(*key) {
+            sink.error("", format!("missing field `{key}`"));
+        }
+    }
+    let head: Option<Spec> = if sink.items.len() == errors_before {
+        deserialize_at(&Value::Mapping(map), "", sink)
+    } else {
+        None
+    };
 
-    let mut spec = head?;
+    // Every list is read even when the head failed: its errors are reported all the same.
+    let mut spec = head;
     for (key, items) in lists {
+        let s = spec.as_mut();
         match key {
-            "units" => spec.units = elements(key, &items, sink),
-            "enums" => spec.enums = elements(key, &items, sink),
-            "flags" => spec.flags = elements(key, &items, sink),
-            "commands" => spec.commands = elements(key, &items, sink),
-            "responses" => spec.responses = elements(key, &items, sink),
-            "examples" => spec.examples = elements(key, &items, sink),
-            "errata" => spec.errata = elements::<model::Erratum>(key, &items, sink),
+            "units" => set(s, elements(key, &items, sink), |s| &mut s.units),
+            "enums" => set(s, elements(key, &items, sink), |s| &mut s.enums),
+            "flags" => set(s, elements(key, &items, sink), |s| &mut s.flags),
+            "commands" => set(s, elements(key, &items, sink), |s| &mut s.commands),
+            "responses" => set(s, elements(key, &items, sink), |s| &mut s.responses),
+            "examples" => set(s, elements(key, &items, sink), |s| &mut s.examples),
+            "errata" => set(s, elements(key, &items, sink), |s| &mut s.errata),
             _ => unreachable_key(key, sink),
         }
     }
-    sink.is_empty().then_some(spec)
+    spec.filter(|_| sink.is_empty())
+}
+
+/// Top-level keys without a default: [`Spec`]'s fields that are not lists.
+const REQUIRED_KEYS: &[&str] = &[
+    "protocol",
+    "title",
+    "document",
+    "byte_order",
+    "printed_byte_order",
+    "serial",
+    "framing",
+];
+
+/// Reads one top-level key that is not a list, reporting its shape errors.
+fn read_key(key: &str, value: &Value, sink: &mut Sink) {
+    fn check<T: DeserializeOwned>(value: &Value, key: &str, sink: &mut Sink) {
+        let _: Option<T> = deserialize_at(value, key, sink);
+    }
+    match key {
+        "protocol" | "title" => check::<String>(value, key, sink),
+        "document" => check::<model::Document>(value, key, sink),
+        "byte_order" | "printed_byte_order" => check::<model::ByteOrder>(value, key, sink),
+        "serial" => check::<model::Serial>(value, key, sink),
+        "framing" => check::<model::Framing>(value, key, sink),
+        "common_responses" => check::<Vec<String>>(value, key, sink),
+        // Lists (emptied above: read element by element) and keys reported as unknown.
+        _ => {}
+    }
+}
+
+fn set<T>(spec: Option<&mut Spec>, items: Vec<T>, field: impl FnOnce(&mut Spec) -> &mut Vec<T>) {
+    if let Some(spec) = spec {
+        *field(spec) = items;
+    }
 }
 
 fn unreachable_key(key: &str, sink: &mut Sink) {

@@ -447,6 +447,15 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         ],
     ),
     (
+        "multiple_shape_errors",
+        &[
+            ("", "missing field `title`"),
+            ("serial.baud", "invalid type: string \"fast\", expected u32"),
+            ("framing.checksum.algorithm", "unknown variant `md5`"),
+            ("commands.go_to.knid", "unknown field `knid`"),
+        ],
+    ),
+    (
         "multiple_errors_crc",
         &[
             (
