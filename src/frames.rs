@@ -39,6 +39,20 @@ fn quote(s: &str) -> String {
     serde_json::to_string(s).unwrap_or_else(|_| "\"\"".to_owned())
 }
 
+/// Writes `{"k":v,...}`, keys in the order given.
+fn write_object<'a>(out: &mut String, pairs: impl Iterator<Item = (&'a str, &'a Json)>) {
+    out.push('{');
+    for (i, (k, v)) in pairs.enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        out.push_str(&quote(k));
+        out.push(':');
+        v.write(out);
+    }
+    out.push('}');
+}
+
 impl Json {
     fn write(&self, out: &mut String) {
         match self {
@@ -54,30 +68,8 @@ impl Json {
                 }
                 out.push(']');
             }
-            Json::Obj(pairs) => {
-                out.push('{');
-                for (i, (k, v)) in pairs.iter().enumerate() {
-                    if i > 0 {
-                        out.push(',');
-                    }
-                    out.push_str(&quote(k));
-                    out.push(':');
-                    v.write(out);
-                }
-                out.push('}');
-            }
-            Json::Fields(pairs) => {
-                out.push('{');
-                for (i, (k, v)) in pairs.iter().enumerate() {
-                    if i > 0 {
-                        out.push(',');
-                    }
-                    out.push_str(&quote(k));
-                    out.push(':');
-                    v.write(out);
-                }
-                out.push('}');
-            }
+            Json::Obj(pairs) => write_object(out, pairs.iter().map(|(k, v)| (*k, v))),
+            Json::Fields(pairs) => write_object(out, pairs.iter().map(|(k, v)| (k.as_str(), v))),
         }
     }
 
