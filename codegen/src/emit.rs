@@ -318,6 +318,7 @@ fn module_tokens(p: &Protocol, source: &str) -> TokenStream {
     let requests = emit_messages(&ctx, Direction::Request);
     let responses = emit_messages(&ctx, Direction::Response);
     let pairing = emit_pairing(p);
+    let stream = emit_stream(p);
     let name = ident(&p.name);
     quote! {
       pub mod #name {
@@ -329,6 +330,7 @@ fn module_tokens(p: &Protocol, source: &str) -> TokenStream {
         #requests
         #responses
         #pairing
+        #stream
       }
     }
 }
@@ -374,13 +376,7 @@ fn emit_header(p: &Protocol, source: &str) -> TokenStream {
         pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = #lo..=#hi;
         /// The broadcast address, if the protocol has one.
         pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = #broadcast;
-        /// A decoded frame: the address it carried and its message.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-        pub struct Decoded<M> {
-            pub address: u8,
-            pub message: M,
-        }
+        pub use crate::Decoded;
     }
 }
 
@@ -468,6 +464,7 @@ fn emit_units(ctx: &Ctx) -> TokenStream {
             #d
             #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
             #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+            #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
             pub struct #ty(pub #r);
             impl #ty {
                 /// The unit's symbol.
@@ -544,6 +541,7 @@ fn emit_enums(ctx: &Ctx) -> TokenStream {
             #d
             #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
             #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+            #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
             pub enum #ty {
                 #(#variants,)*
                 /// A value this revision of the document does not list.
@@ -617,6 +615,7 @@ fn emit_flags(ctx: &Ctx) -> TokenStream {
             #d
             #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
             #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+            #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
             pub struct #ty(pub #r);
             impl #ty {
                 #(#consts)*
@@ -674,6 +673,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let mut codes = Vec::new();
     let mut lens = Vec::new();
     let mut encode_arms = Vec::new();
+    let mut visit_arms = Vec::new();
     let mut decoders = Vec::new();
     for m in msgs {
         let v = variant(m);
@@ -721,6 +721,18 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         codes.push(quote!(#pattern => &[#(#code_bytes),*]));
         lens.push(quote!(#pattern => #len));
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls));
+        let visits = ls.iter().map(|l| {
+            let (n, v) = (l.name, local(l.name));
+            let value = match ctx.kind(l) {
+                Kind::Int(_) => quote!(crate::FieldValue::Int(*#v as i64)),
+                Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
+                    quote!(crate::FieldValue::Int(#v.raw() as i64))
+                }
+                Kind::Text(_) => quote!(crate::FieldValue::Text(&#v[..])),
+            };
+            quote!(f(#n, #value);)
+        });
+        visit_arms.push(quote!(#pattern => { #(#visits)* }));
         decoders.push(emit_decode_fn(ctx, m, &ty, &ls));
     }
     let dispatch = emit_dispatch(p, d, &ty);
@@ -729,6 +741,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         #[doc = #what]
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[allow(clippy::large_enum_variant)]
         pub enum #ty {
             #(#variants,)*
@@ -748,6 +761,13 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             pub const fn frame_len(&self) -> usize {
                 #[allow(unused_variables)]
                 match self { #(#lens,)* }
+            }
+            /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
+            /// field is signed), in frame order; constant and repeated fields are not visited.
+            pub fn visit(&self, mut f: impl FnMut(&'static str, crate::FieldValue<'_>)) {
+                let _ = &mut f;
+                #[allow(unused_variables)]
+                match self { #(#visit_arms)* }
             }
             /// Encodes the frame for `address` into `buf`; returns the frame length.
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, crate::EncodeError> {
@@ -1091,6 +1111,7 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
     let min_len = msgs.iter().map(|m| p.frame_len(m)).min().unwrap_or(0);
     let max_len = p.max_frame_len(d);
     let code_len = |l: usize| offsets(p, l, 0).code;
+    let replies = d == Direction::Response;
     let start_check = match (offsets(p, 1, 0).start, p.framing.start) {
         (Some(at), Some(s)) => quote! {
             if let ::core::option::Option::Some(&found) = frame.get(#at) {
@@ -1111,111 +1132,66 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
     lens.sort_unstable();
     lens.dedup();
     let mut by_code_len = Vec::new();
-    let mut reply_arms = Vec::new();
     for l in lens {
         let at = code_len(l);
-        let code_bytes: Vec<TokenStream> = (0..l)
-            .map(|i| {
-                let x = at + i;
-                quote!((frame[#x] as u32))
-            })
-            .collect();
-        let code_expr = code_bytes
-            .iter()
-            .enumerate()
-            .fold(quote!(0u32), |acc, (i, b)| {
-                let shift = 8 * (l - 1 - i) as u32;
-                quote!(#acc | (#b << #shift))
-            });
-        let mut codes: Vec<Vec<u8>> = msgs
-            .iter()
-            .filter(|m| m.code.len() == l)
-            .map(|m| m.code.clone())
-            .collect();
-        codes.dedup();
-        let mut seen = std::collections::BTreeSet::new();
+        let code_expr = (0..l).fold(quote!(0u32), |acc, i| {
+            let x = at + i;
+            let shift = 8 * (l - 1 - i) as u32;
+            quote!(#acc | ((frame[#x] as u32) << #shift))
+        });
+        let mut codes: Vec<&[u8]> = Vec::new();
+        for m in msgs.iter().filter(|m| m.code.len() == l) {
+            if !codes.contains(&m.code.as_slice()) {
+                codes.push(&m.code);
+            }
+        }
         let mut arms = Vec::new();
         for code in codes {
-            if !seen.insert(code.clone()) {
-                continue;
-            }
             let value = code.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b));
             let group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
-            let mut tries = Vec::new();
-            let mut reply_tries = Vec::new();
-            let mut lens_here = Vec::new();
-            for m in &group {
-                let len = p.frame_len(m);
-                lens_here.push(len);
-                let f = decode_fn_name(m);
-                let ambiguous = m.needs_request
-                    && group
-                        .iter()
-                        .filter(|o| o.needs_request && p.frame_len(o) == len)
-                        .count()
-                        > 1;
-                if ambiguous {
-                    tries.push(quote! {
-                        if let ::core::result::Result::Ok(a) = <&[u8; #len]>::try_from(frame) {
-                            if #f(a).is_ok() {
-                                return ::core::result::Result::Err(crate::DecodeError::Ambiguous { code: #value });
-                            }
-                        }
-                    });
-                } else {
-                    tries.push(quote! {
-                        if let ::core::result::Result::Ok(a) = <&[u8; #len]>::try_from(frame) {
-                            match #f(a) {
-                                ::core::result::Result::Ok(m) => return ::core::result::Result::Ok(Decoded { address, message: m }),
-                                ::core::result::Result::Err(e) => { last = ::core::option::Option::Some(e); }
-                            }
-                        }
-                    });
-                }
-                if d == Direction::Response {
-                    let v = variant(m);
-                    let idx = p
-                        .responses
-                        .iter()
-                        .position(|r| r.name == m.name)
-                        .unwrap_or(0);
-                    let askers: Vec<TokenStream> = p
-                        .commands
-                        .iter()
-                        .filter(|c| c.responses.iter().any(|(r, _)| *r == idx))
-                        .map(|c| any_of(&ident("Request"), c))
-                        .collect();
-                    let _ = v;
-                    reply_tries.push(quote! {
-                        if matches!(request, #(#askers)|*) {
-                            if let ::core::result::Result::Ok(a) = <&[u8; #len]>::try_from(frame) {
-                                match #f(a) {
-                                    ::core::result::Result::Ok(m) => return ::core::result::Result::Ok(Decoded { address, message: m }),
-                                    ::core::result::Result::Err(e) => { last = ::core::option::Option::Some(e); }
-                                }
-                            }
-                        }
-                    });
-                }
-            }
-            lens_here.sort_unstable();
-            lens_here.dedup();
-            let expected = lens_here[0];
+            let tries: Vec<TokenStream> = group
+                .iter()
+                .map(|m| emit_candidate(p, m, &group, value, replies))
+                .collect();
+            let expected = group.iter().map(|m| p.frame_len(m)).min().unwrap_or(0);
             let lit = Literal::u32_unsuffixed(value);
+            let fallback = if replies {
+                quote! {
+                    if admitted {
+                        crate::DecodeError::WrongLength { expected: #expected, found: frame.len() }
+                    } else {
+                        crate::DecodeError::NotAReply { code: #value }
+                    }
+                }
+            } else {
+                quote!(crate::DecodeError::WrongLength { expected: #expected, found: frame.len() })
+            };
+            let admitted = if replies {
+                quote!(let mut admitted = false;)
+            } else {
+                quote!()
+            };
+            let (found, take_found) = if group.iter().any(|m| is_ambiguous(p, m, &group)) {
+                (
+                    quote!(let mut found: ::core::option::Option<#ty> = ::core::option::Option::None;),
+                    quote! {
+                        if let ::core::option::Option::Some(m) = found {
+                            return ::core::result::Result::Ok(Decoded { address, message: m });
+                        }
+                    },
+                )
+            } else {
+                (quote!(), quote!())
+            };
             arms.push(quote! {
                 #lit => {
+                    #admitted
+                    #found
                     #(#tries)*
-                    return ::core::result::Result::Err(last.unwrap_or(crate::DecodeError::WrongLength { expected: #expected, found: frame.len() }));
+                    #take_found
+                    return ::core::result::Result::Err(last.unwrap_or(#fallback));
                 }
             });
-            if d == Direction::Response {
-                reply_arms.push((l, at, code_expr.clone(), quote! {
-                    #lit => {
-                        #(#reply_tries)*
-                        return ::core::result::Result::Err(last.unwrap_or(crate::DecodeError::NotAReply { code: #value }));
-                    }
-                }));
-            }
         }
         let need = at + l + clen;
         by_code_len.push(quote! {
@@ -1230,7 +1206,6 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         });
     }
     let first_code_at = code_len(1);
-    let addr_fixed = offsets(p, 1, 0).address;
     // Where the code precedes the address, the address sits after a code of this direction's
     // only length; the validator restricts such layouts to one code length.
     let addr_at = if p.framing.layout.iter().position(|x| *x == Part::Code)
@@ -1245,9 +1220,9 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
             .unwrap_or(1);
         offsets(p, l, 0).address
     } else {
-        addr_fixed
+        offsets(p, 1, 0).address
     };
-    let header = quote! {
+    let body = quote! {
         #start_check
         if frame.len() < #min_len {
             return ::core::result::Result::Err(crate::DecodeError::Truncated { needed: #min_len, found: frame.len() });
@@ -1266,63 +1241,259 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         let address = frame[#addr_at];
         #[allow(unused_mut)]
         let mut last: ::core::option::Option<crate::DecodeError> = ::core::option::Option::None;
-    };
-    let unknown = quote! {
-        let _ = &mut last;
+        #(#by_code_len)*
         let mut code = 0u32;
         for b in frame.iter().skip(#first_code_at).take(frame.len().saturating_sub(#first_code_at + #clen).min(2)) {
             code = (code << 8) | *b as u32;
         }
         ::core::result::Result::Err(crate::DecodeError::UnknownCommand { offset: #first_code_at, code })
     };
-    let decode = quote! {
+    let doc_decode = quote! {
         /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
         /// constants and repeated fields.
-        pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
-            #header
-            #(#by_code_len)*
-            #unknown
-        }
     };
-    if d == Direction::Request {
-        return decode;
+    if !replies {
+        return quote! {
+            #doc_decode
+            pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
+                #body
+            }
+        };
     }
-    let reply_blocks: Vec<TokenStream> = {
-        let mut lens: Vec<usize> = reply_arms.iter().map(|(l, ..)| *l).collect();
-        lens.dedup();
-        lens.into_iter()
-            .map(|l| {
-                let arms: Vec<&TokenStream> = reply_arms
-                    .iter()
-                    .filter(|(x, ..)| *x == l)
-                    .map(|(.., a)| a)
-                    .collect();
-                let (_, at, expr, _) = reply_arms.iter().find(|(x, ..)| *x == l).expect("an arm");
-                let need = at + l + clen;
-                quote! {
-                    if frame.len() >= #need {
-                        let code: u32 = #expr;
-                        #[allow(unreachable_patterns)]
-                        match code {
-                            #(#arms)*
-                            _ => {}
-                        }
-                    }
-                }
-            })
-            .collect()
-    };
     quote! {
-        #decode
+        #doc_decode
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`crate::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
+            Self::decode_for(frame, ::core::option::Option::None)
+        }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
         /// reported as [`crate::DecodeError::Ambiguous`]).
+        #[inline]
         pub fn decode_reply(frame: &[u8], request: &Request) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
-            #header
-            #(#reply_blocks)*
-            #unknown
+            Self::decode_for(frame, ::core::option::Option::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
+            #body
         }
     }
+}
+
+/// Whether `m` shares code and length with another `needs_request` message of `group` (its
+/// code group), so that only the request can tell them apart.
+fn is_ambiguous(p: &Protocol, m: &Message, group: &[&Message]) -> bool {
+    let len = p.frame_len(m);
+    m.needs_request
+        && group
+            .iter()
+            .filter(|o| o.needs_request && p.frame_len(o) == len)
+            .count()
+            > 1
+}
+
+/// One candidate message for a frame whose code matched: try its decoder if the frame has its
+/// length (and, for a reply, if the request may get it).
+fn emit_candidate(
+    p: &Protocol,
+    m: &Message,
+    group: &[&Message],
+    value: u32,
+    replies: bool,
+) -> TokenStream {
+    let len = p.frame_len(m);
+    let f = decode_fn_name(m);
+    // Several `needs_request` responses with this code and length: without the request, a frame
+    // that decodes as one of them is ambiguous.
+    let ambiguous = is_ambiguous(p, m, group);
+    // Without the request, a frame that decodes as one of them is ambiguous only if it also
+    // decodes as another (their constants may tell them apart).
+    let on_ok = if ambiguous {
+        quote! {
+            if request.is_none() {
+                if found.is_some() {
+                    return ::core::result::Result::Err(crate::DecodeError::Ambiguous { code: #value });
+                }
+                found = ::core::option::Option::Some(m);
+            } else {
+                return ::core::result::Result::Ok(Decoded { address, message: m });
+            }
+        }
+    } else {
+        quote!(return ::core::result::Result::Ok(Decoded { address, message: m });)
+    };
+    let attempt = quote! {
+        if let ::core::result::Result::Ok(a) = <&[u8; #len]>::try_from(frame) {
+            match #f(a) {
+                ::core::result::Result::Ok(m) => { #on_ok }
+                ::core::result::Result::Err(e) => { last = ::core::option::Option::Some(e); }
+            }
+        }
+    };
+    if !replies {
+        return attempt;
+    }
+    let idx = p.responses.iter().position(|r| r.name == m.name);
+    let askers: Vec<TokenStream> = p
+        .commands
+        .iter()
+        .filter(|c| c.responses.iter().any(|(r, _)| Some(*r) == idx))
+        .map(|c| any_of(&ident("Request"), c))
+        .collect();
+    let admits = if askers.is_empty() {
+        quote!(request.is_none())
+    } else {
+        quote! {
+            match request {
+                ::core::option::Option::None => true,
+                ::core::option::Option::Some(r) => matches!(r, #(#askers)|*),
+            }
+        }
+    };
+    quote! {
+        if #admits {
+            admitted = true;
+            #attempt
+        }
+    }
+}
+
+/// The stream decoder's view of the protocol: every distinct frame length (longest first) and a
+/// `candidates` function that narrows them by start byte, address and code, as a trie of matches
+/// on the code bytes.
+fn emit_stream(p: &Protocol) -> TokenStream {
+    let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
+        .iter()
+        .flat_map(|d| p.messages(*d).iter().map(|m| p.frame_len(m)))
+        .collect();
+    lengths.sort_unstable_by(|a, b| b.cmp(a));
+    lengths.dedup();
+    // Shapes: (code, mask) where the mask has bit i (requests) or 64 + i (responses) for
+    // LENGTHS[i]. The validator keeps distinct lengths to at most 64.
+    let mut shapes: Vec<(&[u8], u128)> = Vec::new();
+    for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
+        for m in p.messages(d) {
+            let i = lengths
+                .iter()
+                .position(|&l| l == p.frame_len(m))
+                .unwrap_or(0) as u32;
+            shapes.push((&m.code, 1u128 << (i + shift)));
+        }
+    }
+    let all_requests = shapes
+        .iter()
+        .filter(|s| s.1 as u64 != 0)
+        .fold(0u128, |a, s| a | s.1);
+    let first = offsets(p, 1, 0);
+    let code_at = first.code;
+    let addr_at = {
+        let l = p.framing.request.code_lengths.first().copied().unwrap_or(1);
+        offsets(p, l, 0).address
+    };
+    let start_check = match (first.start, p.framing.start) {
+        (Some(at), Some(s)) => quote! {
+            if head.get(#at).is_some_and(|&b| b != #s) {
+                return crate::stream::Candidates { requests: 0, responses: 0 };
+            }
+        },
+        _ => quote!(),
+    };
+    let (lo, hi) = (p.framing.address.min, p.framing.address.max);
+    let broadcast = match p.framing.address.broadcast {
+        Some(b) => quote!(a == #b),
+        None => quote!(false),
+    };
+    let trie = code_trie(&shapes, code_at, 0);
+    let lens = lengths.iter().map(|l| quote!(#l));
+    let all_requests = mask_lit(all_requests);
+    quote! {
+        /// This protocol's codec for [`crate::stream::StreamDecoder`].
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub struct Codec;
+        impl crate::stream::Codec for Codec {
+            type Request = Request;
+            type Response = Response;
+            const LENGTHS: &'static [usize] = &[#(#lens),*];
+            fn candidates(head: &[u8]) -> crate::stream::Candidates {
+                #start_check
+                let mut mask: u128 = #trie;
+                if let ::core::option::Option::Some(&a) = head.get(#addr_at) {
+                    if !(#lo..=#hi).contains(&a) {
+                        mask &= if #broadcast { #all_requests } else { 0 };
+                    }
+                }
+                crate::stream::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
+            }
+            #[inline]
+            fn decode_request(frame: &[u8]) -> ::core::result::Result<Decoded<Request>, crate::DecodeError> {
+                Request::decode(frame)
+            }
+            #[inline]
+            fn decode_response(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
+                Response::decode_for(frame, request)
+            }
+        }
+        /// A streaming decoder for this protocol: see [`crate::stream`].
+        pub type StreamDecoder = crate::stream::StreamDecoder<Codec, MAX_FRAME_LEN>;
+        /// What [`StreamDecoder`] finds in a stream.
+        pub type Event = crate::stream::Event<Request, Response>;
+    }
+}
+
+/// The candidate mask for code bytes from `depth` on, among `shapes` whose first `depth` code
+/// bytes already matched: a byte not yet buffered leaves every shape below; a shape whose code
+/// ends here matches whatever follows.
+fn code_trie(shapes: &[(&[u8], u128)], code_at: usize, depth: usize) -> TokenStream {
+    let all = mask_lit(shapes.iter().fold(0, |a, s| a | s.1));
+    let ended = shapes
+        .iter()
+        .filter(|s| s.0.len() == depth)
+        .fold(0u128, |a, s| a | s.1);
+    let mut next: Vec<u8> = shapes
+        .iter()
+        .filter_map(|s| s.0.get(depth).copied())
+        .collect();
+    next.sort_unstable();
+    next.dedup();
+    if next.is_empty() {
+        return quote!(#all);
+    }
+    let at = code_at + depth;
+    let arms = next.iter().map(|b| {
+        let below: Vec<(&[u8], u128)> = shapes
+            .iter()
+            .filter(|s| s.0.get(depth) == Some(b))
+            .copied()
+            .collect();
+        let sub = code_trie(&below, code_at, depth + 1);
+        let b: TokenStream = format!("{b:#04x}").parse().unwrap_or_else(|_| quote!(#b));
+        quote!(#b => #sub,)
+    });
+    let ended_expr = if ended == 0 {
+        quote!()
+    } else {
+        let e = mask_lit(ended);
+        quote!(#e |)
+    };
+    quote! {
+        match head.get(#at) {
+            ::core::option::Option::None => #all,
+            ::core::option::Option::Some(&b) => #ended_expr match b {
+                #(#arms)*
+                _ => 0,
+            },
+        }
+    }
+}
+
+/// A candidate mask as a hex literal, so its bits can be read.
+fn mask_lit(v: u128) -> TokenStream {
+    let lit = Literal::u128_unsuffixed(v);
+    format!("{v:#x}").parse().unwrap_or_else(|_| quote!(#lit))
 }
 
 /// A pattern matching any value of a message's variant.

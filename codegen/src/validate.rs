@@ -103,6 +103,9 @@ impl Names {
     }
 }
 
+/// The generated stream decoder keeps its candidate frame lengths in a 64-bit set.
+pub const MAX_DISTINCT_LENGTHS: usize = 64;
+
 pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     check_ident(&spec.protocol, "protocol", "protocol name", sink);
     if spec.title.trim().is_empty() {
@@ -359,6 +362,22 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
 
     check_overlaps(&framing, &commands, "commands", sink);
     check_overlaps(&framing, &responses, "responses", sink);
+    let mut lengths: Vec<usize> = commands
+        .iter()
+        .chain(&responses)
+        .map(|m| framing.overhead() + m.code.len() + m.payload_len)
+        .collect();
+    lengths.sort_unstable();
+    lengths.dedup();
+    if lengths.len() > MAX_DISTINCT_LENGTHS {
+        sink.error(
+            "framing",
+            format!(
+                "messages have {} distinct frame lengths; the generated stream decoder tracks at most {MAX_DISTINCT_LENGTHS}",
+                lengths.len()
+            ),
+        );
+    }
 
     let mut errata = Vec::new();
     let mut ids = BTreeSet::new();
@@ -665,6 +684,25 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     };
     let request = direction(&f.request, "request", sink);
     let response = direction(&f.response, "response", sink);
+    let pos = |p: Part| f.layout.iter().position(|x| *x == p);
+    if pos(Part::Code) < pos(Part::Address) {
+        let mut lens: Vec<usize> = request
+            .code_lengths
+            .iter()
+            .chain(&response.code_lengths)
+            .copied()
+            .collect();
+        lens.sort_unstable();
+        lens.dedup();
+        if lens.len() > 1 {
+            sink.error(
+                "framing.layout",
+                format!(
+                    "the code comes before the address, so every code must have one length (the address's offset depends on it); code_lengths give {lens:?}"
+                ),
+            );
+        }
+    }
     let checksum = checksum_params(&f.checksum, byte_order, sink);
     Framing {
         section: f.section.clone(),

@@ -447,6 +447,13 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         ],
     ),
     (
+        "code_first_mixed_code_lengths",
+        &[(
+            "framing.layout",
+            "the code comes before the address, so every code must have one length",
+        )],
+    ),
+    (
         "multiple_shape_errors",
         &[
             ("", "missing field `title`"),
@@ -682,4 +689,51 @@ fn minimal_crc_fixture_loads() {
             assert!(e.reply_to.is_some());
         }
     }
+}
+
+/// The generated stream decoder tracks candidate frame lengths in a 64-bit set, so a spec with
+/// more distinct frame lengths is refused at validation rather than at code generation.
+#[test]
+fn more_than_64_distinct_frame_lengths_is_refused() {
+    let base = read(&fixtures().join("valid/minimal_crc.yaml"));
+    let commands_at = base.find("commands:\n").expect("minimal_crc has commands");
+    let mut text = base[..commands_at]
+        .replace(
+            "request:  {code_lengths: [1], payload: {min: 2, max: 2}}",
+            "request:  {code_lengths: [1], payload: {min: 1, max: 255}}",
+        )
+        .replace(
+            "response: {code_lengths: [1], payload: {min: 2, max: 2}}",
+            "response: {code_lengths: [1], payload: {min: 1, max: 255}}",
+        );
+    text.push_str("commands:\n");
+    // Command k carries k one-byte fields: frame lengths 6..=70, 65 of them.
+    for k in 1..=65u32 {
+        text.push_str(&format!(
+            "  - name: set_{k}\n    title: \"Set {k}\"\n    section: \"3\"\n    kind: setter\n    code: \"0x{:02X}\"\n    fields:\n",
+            k + 0x80
+        ));
+        for f in 0..k {
+            text.push_str(&format!("      - {{name: b{f}, type: u8, unit: count}}\n"));
+        }
+        text.push_str("    responses: [counter_echo]\n");
+    }
+    text.push_str(
+        "responses:\n  - name: counter_echo\n    title: \"Counter echo\"\n    section: \"3.3\"\n    kind: echo\n    code: \"0x70\"\n    fields:\n      - {name: counter, type: u16, unit: count}\n",
+    );
+    text.push_str("examples: []\nerrata: []\n");
+    let diags = match load_str("many_lengths.yaml", &text) {
+        Ok(_) => panic!("a spec with 65 distinct frame lengths loaded"),
+        Err(d) => d,
+    };
+    let all = diags.to_string();
+    assert!(
+        all.contains("many_lengths.yaml: framing: messages have 65 distinct frame lengths; the generated stream decoder tracks at most 64"),
+        "{all}"
+    );
+    assert_eq!(
+        all.lines().count(),
+        1,
+        "only the length limit is wrong:\n{all}"
+    );
 }

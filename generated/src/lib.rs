@@ -14,6 +14,26 @@
 
 use core::fmt;
 
+pub mod stream;
+
+/// A decoded frame: the address it carried and its message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+pub struct Decoded<M> {
+    pub address: u8,
+    pub message: M,
+}
+
+/// One field's value as it travels: the raw wire integer (sign-extended where the field is
+/// signed; enums, flags and units by their raw value) or an ASCII field's bytes.
+/// See each message type's `visit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FieldValue<'a> {
+    Int(i64),
+    Text(&'a [u8]),
+}
+
 /// Why a frame did not decode, and where.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DecodeError {
@@ -142,8 +162,9 @@ pub fn sum8(bytes: &[u8]) -> u8 {
 }
 
 /// `x` rounded to the nearest integer, ties away from zero; `None` if not finite or beyond `i64`.
-/// (`f64::round` lives in std; this crate is `no_std`.)
-pub(crate) fn round(x: f64) -> Option<i64> {
+/// (`f64::round` lives in std; this crate is `no_std`.) Public only for generated code.
+#[doc(hidden)]
+pub fn round(x: f64) -> Option<i64> {
     if !x.is_finite() || x.abs() >= 9.0e18 {
         return None;
     }

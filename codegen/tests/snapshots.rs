@@ -1,0 +1,51 @@
+//! Snapshot tests of the generator: the code emitted for the small fixture specs in
+//! `fixtures/valid/` is kept in `snapshots/`, so every change to the generated code shows up in
+//! review as a diff of readable Rust. `busspec-protocols`' `tests/snapshots_compile.rs` compiles
+//! the same files against the runtime and runs them.
+//!
+//! After an intended change, refresh them with
+//! `BUSSPEC_UPDATE_SNAPSHOTS=1 cargo test -p busspec-codegen --test snapshots`.
+
+use std::path::{Path, PathBuf};
+
+fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests")
+}
+
+fn check(fixture: &str, snapshot: &str) {
+    let spec = dir().join("fixtures/valid").join(fixture);
+    let p = busspec_codegen::load_file(&spec).unwrap_or_else(|d| panic!("{d}"));
+    let code =
+        busspec_codegen::emit::emit_module(&p, &format!("codegen/tests/fixtures/valid/{fixture}"))
+            .unwrap_or_else(|e| panic!("{e}"));
+    let path = dir().join("snapshots").join(snapshot);
+    if std::env::var_os("BUSSPEC_UPDATE_SNAPSHOTS").is_some() {
+        std::fs::write(&path, &code).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        return;
+    }
+    let want = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    if want != code {
+        let line = want
+            .lines()
+            .zip(code.lines())
+            .position(|(a, b)| a != b)
+            .unwrap_or(want.lines().count().min(code.lines().count()));
+        panic!(
+            "the code generated for {fixture} differs from snapshots/{snapshot} from line {}:\n  snapshot:  {}\n  generated: {}\n\
+             If the change is intended, run BUSSPEC_UPDATE_SNAPSHOTS=1 cargo test -p busspec-codegen --test snapshots",
+            line + 1,
+            want.lines().nth(line).unwrap_or("<end>"),
+            code.lines().nth(line).unwrap_or("<end>"),
+        );
+    }
+}
+
+#[test]
+fn minimal_sum8_spec_generates_its_snapshot() {
+    check("minimal.yaml", "mini.rs");
+}
+
+#[test]
+fn minimal_crc_spec_generates_its_snapshot() {
+    check("minimal_crc.yaml", "mini_crc.rs");
+}

@@ -1,0 +1,361 @@
+//! The streaming decoder: bytes of a bus in chunks of any size, frames out. `no_std`, no
+//! allocation, sans-IO.
+//!
+//! Each protocol module has its own `StreamDecoder` (this type with the protocol's codec and a
+//! buffer of exactly its longest frame) and `Event`. Feed bytes with [`StreamDecoder::push`]
+//! (it takes what fits and says how many) and take events with [`StreamDecoder::poll`] until it
+//! returns `None`; at the end of a capture, or when the line has gone idle for longer than a
+//! frame takes, call [`StreamDecoder::finish`] until it returns `None`.
+//! [`StreamDecoder::feed`] wraps that loop in an iterator.
+//!
+//! # The framing rule
+//!
+//! The decoder looks at the earliest byte not yet accounted for and asks which messages could
+//! start there (their *candidates*): those whose start byte, code and address agree with every
+//! byte buffered so far (an address in the device range, or the broadcast address for a
+//! request). No candidate: the byte is noise; it is dropped and the next one tried, and
+//! consecutive dropped bytes are reported as one [`Event::Skipped`] (split every
+//! [`MAX_SKIPPED_RUN`] bytes). While a candidate is longer than what is buffered, the decoder
+//! waits. Then every complete candidate length is tried, **longest first**; the first that
+//! checksums and decodes is the frame. This is the rule of busspec's interpreter stream decoder
+//! (`busspec_codegen::stream`), whose module documentation gives the reasons and the limits; the
+//! two are tested against each other.
+//!
+//! A response only its request can identify (SD 0x22..0x28, 0x38) is decoded as the answer to
+//! the last request seen since the previous response, or else to the default request
+//! ([`StreamDecoder::with_default_request`]); failing both it is an [`Event::Ambiguous`].
+//!
+//! Decisions depend only on the bytes, never on how they were cut into chunks, as long as
+//! `finish` is called only at the end.
+
+use crate::{DecodeError, Decoded};
+
+/// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
+pub const MAX_SKIPPED_RUN: u64 = 256;
+
+/// Which way a frame travels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Direction {
+    /// Master to device.
+    Request,
+    /// Device to master.
+    Response,
+}
+
+/// The messages that could start at the head of the buffer, as sets of frame lengths: bit `i`
+/// stands for [`Codec::LENGTHS`]`[i]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Candidates {
+    pub requests: u64,
+    pub responses: u64,
+}
+
+/// What a protocol module provides to the stream decoder; implemented by each module's `Codec`.
+pub trait Codec {
+    type Request: Copy;
+    type Response: Copy;
+    /// Every distinct frame length of the protocol, longest first (at most 64).
+    const LENGTHS: &'static [usize];
+    /// The messages whose start byte, code and address agree with `head`, the bytes buffered
+    /// from a possible frame start (possibly fewer than a whole frame).
+    fn candidates(head: &[u8]) -> Candidates;
+    fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError>;
+    fn decode_response(
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Decoded<Self::Response>, DecodeError>;
+}
+
+/// What the decoder found. Offsets count bytes from the first byte ever pushed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Event<Q, R> {
+    /// A request frame of `len` bytes at `offset`.
+    Request {
+        offset: u64,
+        len: usize,
+        frame: Decoded<Q>,
+    },
+    /// A response frame of `len` bytes at `offset`.
+    Response {
+        offset: u64,
+        len: usize,
+        frame: Decoded<R>,
+    },
+    /// A frame that checksums and decodes as more than one message, and no request settles it.
+    Ambiguous { offset: u64, len: usize, code: u32 },
+    /// `len` bytes at `offset` that start no frame.
+    Skipped { offset: u64, len: u64 },
+}
+
+impl<Q, R> Event<Q, R> {
+    /// Where the event's bytes start in the stream.
+    pub fn offset(&self) -> u64 {
+        match *self {
+            Event::Request { offset, .. }
+            | Event::Response { offset, .. }
+            | Event::Ambiguous { offset, .. }
+            | Event::Skipped { offset, .. } => offset,
+        }
+    }
+
+    /// How many bytes of the stream the event accounts for.
+    pub fn len(&self) -> u64 {
+        match *self {
+            Event::Request { len, .. }
+            | Event::Response { len, .. }
+            | Event::Ambiguous { len, .. } => len as u64,
+            Event::Skipped { len, .. } => len,
+        }
+    }
+
+    /// Whether the event accounts for no bytes (never true of an event the decoder returns).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A streaming decoder for codec `C` with an `N`-byte buffer (the protocol's longest frame;
+/// each protocol module names the right one `StreamDecoder`).
+pub struct StreamDecoder<C: Codec, const N: usize> {
+    buf: [u8; N],
+    len: usize,
+    /// Stream offset of `buf[0]`.
+    head: u64,
+    requests: bool,
+    responses: bool,
+    last_request: Option<C::Request>,
+    default_request: Option<C::Request>,
+    noise_at: u64,
+    noise_len: u64,
+    pending: Option<Event<C::Request, C::Response>>,
+}
+
+impl<C: Codec, const N: usize> Default for StreamDecoder<C, N> {
+    fn default() -> Self {
+        Self::new(None)
+    }
+}
+
+impl<C: Codec, const N: usize> StreamDecoder<C, N> {
+    /// A decoder for frames of one direction (a master that knows what it expects), or of both
+    /// (`None`: a sniffer on a shared bus).
+    pub fn new(direction: Option<Direction>) -> Self {
+        StreamDecoder {
+            buf: [0; N],
+            len: 0,
+            head: 0,
+            requests: direction != Some(Direction::Response),
+            responses: direction != Some(Direction::Request),
+            last_request: None,
+            default_request: None,
+            noise_at: 0,
+            noise_len: 0,
+            pending: None,
+        }
+    }
+
+    /// Responses that only their request identifies are decoded as answers to `request` when
+    /// no request precedes them in the stream (a capture of the device's side only).
+    pub fn with_default_request(mut self, request: Option<C::Request>) -> Self {
+        self.default_request = request;
+        self
+    }
+
+    /// Stream offset of the next byte [`Self::push`] will take.
+    pub fn position(&self) -> u64 {
+        self.head + self.len as u64
+    }
+
+    /// Bytes buffered and not yet settled.
+    pub fn buffered(&self) -> usize {
+        self.len
+    }
+
+    /// Takes as many bytes of `data` as the buffer has room for and returns how many; call
+    /// [`Self::poll`] until it returns `None` to make room again.
+    pub fn push(&mut self, data: &[u8]) -> usize {
+        let n = (N - self.len).min(data.len());
+        self.buf[self.len..self.len + n].copy_from_slice(&data[..n]);
+        self.len += n;
+        n
+    }
+
+    /// The next event the buffered bytes settle, or `None` when more bytes are needed.
+    pub fn poll(&mut self) -> Option<Event<C::Request, C::Response>> {
+        self.step(false)
+    }
+
+    /// Settles what is buffered, as at the end of a capture or after an idle line: complete
+    /// frames are decoded, the rest is noise. Call until it returns `None`; the decoder then
+    /// stays usable and offsets continue.
+    pub fn finish(&mut self) -> Option<Event<C::Request, C::Response>> {
+        self.step(true)
+    }
+
+    /// Pushes all of `data`, yielding each event as it is settled. Bytes the iterator has not
+    /// reached when it is dropped are not consumed: see [`Feed::remaining`].
+    pub fn feed<'a, 'd>(&'a mut self, data: &'d [u8]) -> Feed<'a, 'd, C, N> {
+        Feed {
+            decoder: self,
+            data,
+        }
+    }
+
+    fn step(&mut self, flushing: bool) -> Option<Event<C::Request, C::Response>> {
+        loop {
+            if let Some(ev) = self.pending.take() {
+                return Some(ev);
+            }
+            if self.len == 0 {
+                return if flushing { self.take_noise() } else { None };
+            }
+            let head = &self.buf[..self.len];
+            let c = C::candidates(head);
+            let requests = if self.requests { c.requests } else { 0 };
+            let responses = if self.responses { c.responses } else { 0 };
+            let live = requests | responses;
+            if live != 0 {
+                // Bit i is LENGTHS[i], longest first: a live candidate longer than what is
+                // buffered is one whose bit lies below the first length that fits.
+                let fits = C::LENGTHS.iter().position(|&l| l <= self.len).unwrap_or(64);
+                let longer = if fits >= 64 {
+                    u64::MAX
+                } else {
+                    (1u64 << fits) - 1
+                };
+                if !flushing && live & longer != 0 {
+                    return None;
+                }
+                let mut rest = live & !longer;
+                while rest != 0 {
+                    let i = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    let Some(&len) = C::LENGTHS.get(i) else { break };
+                    let bit = 1u64 << i;
+                    if let Some(ev) = self.try_frame(len, requests & bit != 0, responses & bit != 0)
+                    {
+                        self.consume(len);
+                        if self.noise_len > 0 {
+                            self.pending = Some(ev);
+                            return self.take_noise();
+                        }
+                        return Some(ev);
+                    }
+                }
+            }
+            // The head byte starts no frame.
+            if self.noise_len == 0 {
+                self.noise_at = self.head;
+            }
+            self.noise_len += 1;
+            self.consume(1);
+            if self.noise_len >= MAX_SKIPPED_RUN {
+                return self.take_noise();
+            }
+        }
+    }
+
+    /// The event for the first `len` buffered bytes, if they are a frame.
+    fn try_frame(
+        &mut self,
+        len: usize,
+        request: bool,
+        response: bool,
+    ) -> Option<Event<C::Request, C::Response>> {
+        let frame = self.buf.get(..len)?;
+        let offset = self.head;
+        let as_request = if request {
+            C::decode_request(frame).ok()
+        } else {
+            None
+        };
+        let as_response = if response {
+            match C::decode_response(frame, None) {
+                Ok(d) => Some(Ok(d)),
+                Err(DecodeError::Ambiguous { code }) => {
+                    let by = self.last_request.or(self.default_request);
+                    match by.map(|r| C::decode_response(frame, Some(&r))) {
+                        Some(Ok(d)) => Some(Ok(d)),
+                        _ => Some(Err(code)),
+                    }
+                }
+                Err(_) => None,
+            }
+        } else {
+            None
+        };
+        let ev = match (as_request, as_response) {
+            (Some(frame), None) => {
+                self.last_request = Some(frame.message);
+                Event::Request { offset, len, frame }
+            }
+            (None, Some(Ok(frame))) => {
+                self.last_request = None;
+                Event::Response { offset, len, frame }
+            }
+            (None, Some(Err(code))) => {
+                self.last_request = None;
+                Event::Ambiguous { offset, len, code }
+            }
+            (Some(_), Some(_)) => {
+                self.last_request = None;
+                let code = frame
+                    .iter()
+                    .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
+                Event::Ambiguous { offset, len, code }
+            }
+            (None, None) => return None,
+        };
+        Some(ev)
+    }
+
+    fn take_noise(&mut self) -> Option<Event<C::Request, C::Response>> {
+        if self.noise_len == 0 {
+            return None;
+        }
+        let ev = Event::Skipped {
+            offset: self.noise_at,
+            len: self.noise_len,
+        };
+        self.noise_len = 0;
+        Some(ev)
+    }
+
+    fn consume(&mut self, n: usize) {
+        let n = n.min(self.len);
+        self.buf.copy_within(n..self.len, 0);
+        self.len -= n;
+        self.head += n as u64;
+    }
+}
+
+/// The iterator [`StreamDecoder::feed`] returns.
+pub struct Feed<'a, 'd, C: Codec, const N: usize> {
+    decoder: &'a mut StreamDecoder<C, N>,
+    data: &'d [u8],
+}
+
+impl<'d, C: Codec, const N: usize> Feed<'_, 'd, C, N> {
+    /// The bytes not yet pushed into the decoder.
+    pub fn remaining(&self) -> &'d [u8] {
+        self.data
+    }
+}
+
+impl<C: Codec, const N: usize> Iterator for Feed<'_, '_, C, N> {
+    type Item = Event<C::Request, C::Response>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            if let Some(ev) = self.decoder.poll() {
+                return Some(ev);
+            }
+            if self.data.is_empty() {
+                return None;
+            }
+            let n = self.decoder.push(self.data);
+            self.data = &self.data[n..];
+        }
+    }
+}

@@ -1,0 +1,290 @@
+//! The generated `StreamDecoder` against the interpreter's, on captures of example frames
+//! (both directions, as a sniffer sees them) mixed with noise and cut short frames, pushed in
+//! random chunks: both must report the same events at the same offsets, with the same messages
+//! and values; and every byte must be accounted for exactly once.
+
+mod common;
+
+use busspec_codegen::interp;
+use busspec_codegen::ir::{Direction, Protocol};
+use busspec_codegen::stream::{Event as InterpEvent, StreamDecoder as InterpDecoder};
+use common::{interp_values, spec, visit_values, Values};
+
+/// An event reduced to what both decoders report: kind, offset, length, message, address, values.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Seen {
+    Frame {
+        offset: u64,
+        len: u64,
+        name: String,
+        address: u8,
+        values: Values,
+    },
+    Ambiguous {
+        offset: u64,
+        len: u64,
+    },
+    Skipped {
+        offset: u64,
+        len: u64,
+    },
+}
+
+/// Consecutive skipped runs are one run, however each decoder splits them.
+fn merge(events: Vec<Seen>) -> Vec<Seen> {
+    let mut out: Vec<Seen> = Vec::new();
+    for e in events {
+        if let (
+            Some(Seen::Skipped { offset, len }),
+            Seen::Skipped {
+                offset: o2,
+                len: l2,
+            },
+        ) = (out.last_mut(), &e)
+        {
+            if *offset + *len == *o2 {
+                *len += l2;
+                continue;
+            }
+        }
+        out.push(e);
+    }
+    out
+}
+
+fn interp_events(p: &Protocol, capture: &[u8], chunks: &[usize]) -> Vec<Seen> {
+    let mut d = InterpDecoder::new(p, None);
+    let mut events = Vec::new();
+    let mut rest = capture;
+    for &n in chunks {
+        let (a, b) = rest.split_at(n.min(rest.len()));
+        events.extend(d.push(a));
+        rest = b;
+    }
+    events.extend(d.push(rest));
+    events.extend(d.flush());
+    merge(
+        events
+            .into_iter()
+            .map(|e| match e {
+                InterpEvent::Frame {
+                    offset,
+                    bytes,
+                    frame,
+                } => Seen::Frame {
+                    offset,
+                    len: bytes.len() as u64,
+                    name: p.message(frame.message).name.clone(),
+                    address: frame.address,
+                    values: interp_values(p, &frame),
+                },
+                InterpEvent::Ambiguous { offset, bytes, .. } => Seen::Ambiguous {
+                    offset,
+                    len: bytes.len() as u64,
+                },
+                InterpEvent::Skipped { offset, bytes } => Seen::Skipped {
+                    offset,
+                    len: bytes.len() as u64,
+                },
+            })
+            .collect(),
+    )
+}
+
+macro_rules! generated_events {
+    ($proto:ident, $capture:expr, $chunks:expr) => {{
+        use busspec_protocols::stream::Event;
+        use busspec_protocols::$proto::StreamDecoder;
+        let mut d = StreamDecoder::new(None);
+        let mut raw = Vec::new();
+        let mut rest: &[u8] = $capture;
+        let mut chunks: Vec<usize> = $chunks.to_vec();
+        chunks.push(usize::MAX);
+        for n in chunks {
+            let (a, b) = rest.split_at(n.min(rest.len()));
+            raw.extend(d.feed(a));
+            rest = b;
+        }
+        while let Some(e) = d.finish() {
+            raw.push(e);
+        }
+        assert_eq!(d.buffered(), 0);
+        merge(
+            raw.into_iter()
+                .map(|e| match e {
+                    Event::Request { offset, len, frame } => Seen::Frame {
+                        offset,
+                        len: len as u64,
+                        name: frame.message.name().to_owned(),
+                        address: frame.address,
+                        values: visit_values(|f| frame.message.visit(f)),
+                    },
+                    Event::Response { offset, len, frame } => Seen::Frame {
+                        offset,
+                        len: len as u64,
+                        name: frame.message.name().to_owned(),
+                        address: frame.address,
+                        values: visit_values(|f| frame.message.visit(f)),
+                    },
+                    Event::Ambiguous { offset, len, .. } => Seen::Ambiguous {
+                        offset,
+                        len: len as u64,
+                    },
+                    Event::Skipped { offset, len } => Seen::Skipped { offset, len },
+                })
+                .collect(),
+        )
+    }};
+}
+
+/// A capture: example frames in random order, with noise bursts and cut-short frames between.
+fn capture(p: &Protocol, rng: &mut fastrand::Rng, frames: usize) -> Vec<u8> {
+    let mut out = Vec::new();
+    for _ in 0..frames {
+        let e = &p.examples[rng.usize(..p.examples.len())];
+        match rng.u8(..16) {
+            0 => out.extend((0..rng.usize(1..6)).map(|_| rng.u8(..))),
+            1 => out.extend_from_slice(&e.wire[..rng.usize(1..e.wire.len())]),
+            _ => {}
+        }
+        out.extend_from_slice(&e.wire);
+    }
+    out
+}
+
+fn chunks(rng: &mut fastrand::Rng, total: usize) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut n = 0;
+    while n < total {
+        let c = rng.usize(1..24);
+        out.push(c);
+        n += c;
+    }
+    out
+}
+
+/// Every byte is in exactly one event, in order.
+fn covers(events: &[Seen], total: u64) {
+    let mut at = 0;
+    for e in events {
+        let (offset, len) = match e {
+            Seen::Frame { offset, len, .. }
+            | Seen::Ambiguous { offset, len }
+            | Seen::Skipped { offset, len } => (*offset, *len),
+        };
+        assert_eq!(offset, at, "gap or overlap before {e:?}");
+        at += len;
+    }
+    assert_eq!(at, total);
+}
+
+macro_rules! stream_agrees {
+    ($proto:ident, $file:literal, $seed:expr) => {{
+        let p = spec($file);
+        let mut rng = fastrand::Rng::with_seed($seed);
+        let mut frames = 0;
+        for _ in 0..300 {
+            let cap = capture(&p, &mut rng, 40);
+            let cuts = chunks(&mut rng, cap.len());
+            let want = interp_events(&p, &cap, &cuts);
+            let got = generated_events!($proto, &cap, &cuts);
+            assert_eq!(got, want, "capture {}", interp::format_hex(&cap));
+            // However the capture is cut, the events are the same.
+            assert_eq!(generated_events!($proto, &cap, &[1usize; 0]), got);
+            covers(&got, cap.len() as u64);
+            frames += got
+                .iter()
+                .filter(|e| matches!(e, Seen::Frame { .. }))
+                .count();
+        }
+        assert!(frames > 300 * 30, "only {frames} frames found");
+    }};
+}
+
+#[test]
+fn ub2_generated_stream_matches_the_interpreter() {
+    stream_agrees!(ub2, "ub2.yaml", 7);
+}
+
+#[test]
+fn sd_generated_stream_matches_the_interpreter() {
+    stream_agrees!(sd, "sd.yaml", 8);
+}
+
+/// A valid frame placed after garbage of any length is found, whole, at its offset.
+#[test]
+fn a_frame_after_garbage_is_found() {
+    use busspec_protocols::stream::Event;
+    let p = spec("sd.yaml");
+    let frame = &p.examples[0].wire;
+    let mut rng = fastrand::Rng::with_seed(3);
+    for garbage in 0..600 {
+        let mut cap: Vec<u8> = (0..garbage).map(|_| rng.u8(..)).collect();
+        cap.extend_from_slice(frame);
+        let mut d = busspec_protocols::sd::StreamDecoder::new(Some(
+            busspec_protocols::stream::Direction::Request,
+        ));
+        let mut events: Vec<_> = d.feed(&cap).collect();
+        while let Some(e) = d.finish() {
+            events.push(e);
+        }
+        let found = events.iter().any(
+            |e| matches!(e, Event::Request { offset, len: 6, .. } if *offset == garbage as u64),
+        );
+        // Garbage may itself end in bytes that form a frame overlapping ours; count that out.
+        let swallowed = events.iter().any(|e| matches!(e, Event::Request { offset, len, .. } if *offset < garbage as u64 && offset + *len as u64 > garbage as u64));
+        assert!(
+            found || swallowed,
+            "frame after {garbage} bytes of garbage lost: {events:?}"
+        );
+        assert!(events.iter().all(|e| !matches!(e, Event::Skipped { len, .. } if *len > busspec_protocols::stream::MAX_SKIPPED_RUN)));
+    }
+}
+
+/// The master's view, responses only: a reply that only its request identifies is ambiguous
+/// alone, and decodes as the reply to the default request when one is given.
+#[test]
+fn direction_and_default_request() {
+    use busspec_protocols::sd::{Request, Response, StreamDecoder};
+    use busspec_protocols::stream::{Direction as D, Event};
+    let p = spec("sd.yaml");
+    let reply = p
+        .examples
+        .iter()
+        .find(|e| {
+            e.message.direction == Direction::Response
+                && matches!(
+                    Response::decode(&e.wire),
+                    Err(busspec_protocols::DecodeError::Ambiguous { .. })
+                )
+        })
+        .expect("an SD reply that only its request identifies");
+    let request_wire = common::request_example(&p, reply.reply_to.unwrap()).unwrap();
+    let request = Request::decode(request_wire).unwrap().message;
+    let mut plain = StreamDecoder::new(Some(D::Response));
+    let mut all: Vec<_> = plain.feed(&reply.wire).collect();
+    while let Some(e) = plain.finish() {
+        all.push(e);
+    }
+    assert!(
+        matches!(
+            all[..],
+            [Event::Ambiguous {
+                offset: 0,
+                len: 6,
+                ..
+            }]
+        ),
+        "{all:?}"
+    );
+    let mut paired = StreamDecoder::new(Some(D::Response)).with_default_request(Some(request));
+    let mut all: Vec<_> = paired.feed(&reply.wire).collect();
+    while let Some(e) = paired.finish() {
+        all.push(e);
+    }
+    let want = Response::decode_reply(&reply.wire, &request).unwrap();
+    assert!(
+        matches!(all[..], [Event::Response { offset: 0, len: 6, frame }] if frame == want),
+        "{all:?}"
+    );
+}
