@@ -372,29 +372,14 @@ pub fn encode_line(p: &Protocol, line: &str) -> Result<Vec<u8>, String> {
 }
 
 fn find_message(p: &Protocol, name: &str, d: Option<Direction>) -> Result<MessageRef, String> {
-    let find = |d: Direction| {
-        p.messages(d)
-            .iter()
-            .position(|m| m.name == name)
-            .map(|index| MessageRef {
-                direction: d,
-                index,
-            })
-    };
-    let req = find(Direction::Request);
-    let resp = find(Direction::Response);
-    match (d, req, resp) {
-        (Some(Direction::Request), Some(r), _) | (Some(Direction::Response), _, Some(r)) => Ok(r),
-        (Some(want), None, Some(_)) | (Some(want), Some(_), None) => Err(format!(
+    match (d, p.find(name)) {
+        (_, None) => Err(format!("unknown message `{name}` in {}", p.name)),
+        (Some(want), Some(r)) if r.direction != want => Err(format!(
             "{name} is a {}, not a {}",
             want_other(want).as_str(),
             want.as_str()
         )),
-        (None, Some(_), Some(_)) => Err(format!(
-            "{name} names both a request and a response: give \"direction\""
-        )),
-        (None, Some(r), None) | (None, None, Some(r)) => Ok(r),
-        (_, None, None) => Err(format!("unknown message `{name}` in {}", p.name)),
+        (_, Some(r)) => Ok(r),
     }
 }
 

@@ -288,3 +288,23 @@ fn direction_and_default_request() {
         "{all:?}"
     );
 }
+
+/// A decoder declared with a buffer shorter than the longest frame still makes progress: it
+/// settles a full buffer instead of waiting forever for room it will never have.
+#[test]
+fn a_too_small_buffer_never_hangs() {
+    use busspec_protocols::stream::{Event, StreamDecoder};
+    use busspec_protocols::ub2;
+    let p = spec("ub2.yaml");
+    let cap: Vec<u8> = p.examples.iter().flat_map(|e| e.wire.clone()).collect();
+    let mut d: StreamDecoder<ub2::Codec, 4> = StreamDecoder::new(None);
+    let mut accounted = 0;
+    for e in d.feed(&cap) {
+        accounted += e.len();
+        assert!(!matches!(e, Event::Request { len, .. } | Event::Response { len, .. } if len > 4));
+    }
+    while let Some(e) = d.finish() {
+        accounted += e.len();
+    }
+    assert_eq!(accounted, cap.len() as u64);
+}

@@ -392,15 +392,19 @@ impl Protocol {
 
     /// Finds a command or response by name.
     pub fn find(&self, name: &str) -> Option<MessageRef> {
-        let find = |d: Direction| {
-            self.messages(d)
-                .iter()
-                .position(|m| m.name == name)
-                .map(|index| MessageRef {
-                    direction: d,
-                    index,
-                })
-        };
-        find(Direction::Request).or_else(|| find(Direction::Response))
+        self.find_in(name, Direction::Request)
+            .or_else(|| self.find_in(name, Direction::Response))
+    }
+
+    /// The message of direction `d` named `name` (commands and responses share one name space,
+    /// so a name is never found in both).
+    pub fn find_in(&self, name: &str, d: Direction) -> Option<MessageRef> {
+        self.messages(d)
+            .iter()
+            .position(|m| m.name == name)
+            .map(|index| MessageRef {
+                direction: d,
+                index,
+            })
     }
 }

@@ -224,7 +224,9 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
                 } else {
                     (1u64 << fits) - 1
                 };
-                if !flushing && live & longer != 0 {
+                // A full buffer cannot wait (only a buffer shorter than the longest frame, which
+                // no protocol module declares, fills up while waiting): settle what is there.
+                if !flushing && live & longer != 0 && self.len < N {
                     return None;
                 }
                 let mut rest = live & !longer;
