@@ -3,8 +3,9 @@
 //!
 //! ```text
 //! spec/*.yaml ──load──▶ model ──validate──▶ IR ──┬─ docs      (Markdown reference)
-//!                                                └─ interp    (decode/encode at run time)
-//!                                                     └─ stream   (frames out of a bus capture)
+//!                                                ├─ interp    (decode/encode at run time)
+//!                                                │    └─ stream   (frames out of a bus capture)
+//!                                                └─ diff      (what a revision breaks)
 //! ```
 //!
 //! Every stage is a pure function of its input; file I/O happens only in [`load_file`] and in
@@ -12,6 +13,7 @@
 
 pub mod checksum;
 pub mod diag;
+pub mod diff;
 pub mod docs;
 pub mod emit;
 pub mod interp;
