@@ -514,6 +514,17 @@ fn encode(args: EncodeArgs) -> Result<(), String> {
     }
 }
 
+/// The `--json` document of `busspec diff`; README.md documents it.
+#[derive(serde::Serialize)]
+struct DiffJson<'a> {
+    old: &'a diff::Side,
+    new: &'a diff::Side,
+    counts: std::collections::BTreeMap<&'static str, usize>,
+    denied: Vec<&'static str>,
+    failed: bool,
+    changes: &'a [diff::Change],
+}
+
 fn diff(args: DiffArgs) -> ExitCode {
     if let Some(g) = args.allow.iter().find(|g| args.deny.contains(g)) {
         let name = g.to_possible_value().map(|v| v.get_name().to_owned());
@@ -551,18 +562,17 @@ fn diff(args: DiffArgs) -> ExitCode {
         .filter(|c| changes.iter().any(|ch| ch.category == *c))
         .collect();
     let text = if args.json {
-        let counts: serde_json::Map<String, serde_json::Value> = diff::counts(&changes)
-            .into_iter()
-            .map(|(c, n)| (c.as_str().to_owned(), n.into()))
-            .collect();
-        let doc = serde_json::json!({
-            "old": sides.0,
-            "new": sides.1,
-            "counts": counts,
-            "changes": changes,
-            "denied": denied.iter().map(|c| c.as_str()).collect::<Vec<_>>(),
-            "failed": !failing.is_empty(),
-        });
+        let doc = DiffJson {
+            old: &sides.0,
+            new: &sides.1,
+            counts: diff::counts(&changes)
+                .into_iter()
+                .map(|(c, n)| (c.as_str(), n))
+                .collect(),
+            denied: denied.iter().map(|c| c.as_str()).collect(),
+            failed: !failing.is_empty(),
+            changes: &changes,
+        };
         serde_json::to_string_pretty(&doc).unwrap_or_default() + "\n"
     } else if args.changelog {
         diff::render_markdown(&sides.0, &sides.1, &changes)
@@ -581,13 +591,13 @@ fn diff(args: DiffArgs) -> ExitCode {
     }
     for c in failing {
         let n = changes.iter().filter(|ch| ch.category == c).count();
-        let gate = if c == Category::WireBreaking {
-            "wire"
+        let why = if c == Category::WireBreaking {
+            "pass --allow wire to accept them"
         } else {
-            "api"
+            "denied by --deny api"
         };
         eprintln!(
-            "error: {n} {} change{} (pass --allow {gate} to accept them)",
+            "error: {n} {} change{} ({why})",
             c.as_str(),
             if n == 1 { "" } else { "s" }
         );
