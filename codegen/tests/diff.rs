@@ -251,3 +251,35 @@ fn the_changelog_lists_breaking_changes_first_under_the_new_revision() {
     assert!(wire_at < compatible_at, "{md}");
     assert!(md.contains("- command `reset` (0x1000) removed\n"), "{md}");
 }
+
+#[test]
+fn any_two_specs_diff_without_panicking_and_each_against_itself_is_empty() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["tests/fixtures/valid", "tests/fixtures/diff", "../spec"] {
+        for e in std::fs::read_dir(root.join(dir)).expect("fixture directory") {
+            let path = e.expect("directory entry").path();
+            if path.extension().is_some_and(|x| x == "yaml") {
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() >= 9, "{files:?}");
+    let specs: Vec<Protocol> = files
+        .iter()
+        .map(|f| load_file(f).unwrap_or_else(|d| panic!("{d}")))
+        .collect();
+    for (i, a) in specs.iter().enumerate() {
+        for (j, b) in specs.iter().enumerate() {
+            // Every file here differs from every other in substance, not just in comments.
+            let changes = diff::diff(a, b);
+            assert_eq!(
+                changes.is_empty(),
+                i == j,
+                "{} → {}",
+                files[i].display(),
+                files[j].display()
+            );
+        }
+    }
+}
