@@ -7,6 +7,7 @@ use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use busspec_codegen::diff::{self, Category};
 use busspec_codegen::ir::Direction;
 use busspec_codegen::stream::StreamDecoder;
 use busspec_codegen::{docs, interp, load_file, load_str, Protocol};
@@ -105,6 +106,68 @@ enum Command {
     /// Encode JSON lines read from stdin to frames, one uppercase hex line each.
     #[command(long_about = ENCODE_HELP)]
     Encode(EncodeArgs),
+    /// Every change between two revisions of a spec, classified by what it breaks.
+    #[command(long_about = DIFF_HELP)]
+    Diff(DiffArgs),
+}
+
+const DIFF_HELP: &str = "\
+Every change between two revisions of a spec, classified by what it breaks.
+
+  wire-breaking  a peer built from the old spec reads or writes some frame differently: a code
+                 removed, changed or reused; a field's offset, width, signedness, byte order,
+                 scale, packing or constant changed; an enum, flag or special value removed or
+                 renumbered; a reply a command may get removed; checksum, framing, address range
+                 or serial settings changed; a frame's length changed.
+  api-breaking   the bytes mean the same, but code using the generated crate or the JSON of
+                 `busspec decode` must change: a message, field, unit, enum or value renamed; a
+                 field's type changed without a wire change; a range narrowed.
+  compatible     a command, response, reply, enum value or flag added; a range widened;
+                 documentation, examples, errata or provenance changed.
+
+Both files must load and validate; otherwise every error prints as `file: path: message`.
+
+Output: a summary and one line per change (`path: text`), grouped by category; --json prints
+one JSON document instead, --changelog a Markdown changelog entry for release notes.
+
+Exit status: 0 when no change falls in a denied category; 1 when one does (wire-breaking is
+denied by default; --allow wire accepts it, --deny api denies API-breaking changes too); 2 for
+wrong arguments or a spec that does not load.";
+
+#[derive(Args)]
+struct DiffArgs {
+    /// The old revision of the spec.
+    old: PathBuf,
+    /// The new revision of the spec.
+    new: PathBuf,
+    /// Print one JSON document (for CI) instead of text.
+    #[arg(long, conflicts_with = "changelog")]
+    json: bool,
+    /// Print a Markdown changelog entry instead of text.
+    #[arg(long)]
+    changelog: bool,
+    /// Accept changes of this category (exit 0 despite them).
+    #[arg(long, value_enum, value_name = "CATEGORY")]
+    allow: Vec<Gate>,
+    /// Fail (exit 1) on changes of this category.
+    #[arg(long, value_enum, value_name = "CATEGORY")]
+    deny: Vec<Gate>,
+}
+
+/// A breaking category that can be allowed or denied.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Gate {
+    Wire,
+    Api,
+}
+
+impl Gate {
+    fn category(self) -> Category {
+        match self {
+            Gate::Wire => Category::WireBreaking,
+            Gate::Api => Category::ApiBreaking,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -163,6 +226,7 @@ fn main() -> ExitCode {
         Command::Docs { files, out, check } => render_docs(files, &out, check),
         Command::Decode(args) => decode(args),
         Command::Encode(args) => encode(args),
+        Command::Diff(args) => return diff(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -201,6 +265,16 @@ fn spec_files(files: Vec<PathBuf>) -> Result<Vec<PathBuf>, String> {
     Ok(found)
 }
 
+/// Every diagnostic of a spec that failed to load, then a count line.
+fn load_errors(d: &busspec_codegen::Diagnostics) -> String {
+    let n = d.items.len();
+    format!(
+        "{d}\n{}: {n} error{}",
+        d.file,
+        if n == 1 { "" } else { "s" }
+    )
+}
+
 /// Loads every file, printing all diagnostics of every file that fails.
 fn load_all(files: Vec<PathBuf>) -> Result<Vec<(PathBuf, Protocol)>, String> {
     let mut loaded = Vec::new();
@@ -208,14 +282,7 @@ fn load_all(files: Vec<PathBuf>) -> Result<Vec<(PathBuf, Protocol)>, String> {
     for f in spec_files(files)? {
         match load_file(&f) {
             Ok(p) => loaded.push((f, p)),
-            Err(d) => {
-                let n = d.items.len();
-                errors.push(format!(
-                    "{d}\n{}: {n} error{}",
-                    d.file,
-                    if n == 1 { "" } else { "s" }
-                ));
-            }
+            Err(d) => errors.push(load_errors(&d)),
         }
     }
     if errors.is_empty() {
@@ -296,14 +363,7 @@ fn usage_error(subcommand: &str, msg: String) -> ! {
 /// The protocol to work with: a built-in spec, or the one in `--spec FILE` whose name must match.
 fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Protocol, String> {
     let loaded = match spec {
-        Some(file) => load_file(file).map_err(|d| {
-            let n = d.items.len();
-            format!(
-                "{d}\n{}: {n} error{}",
-                d.file,
-                if n == 1 { "" } else { "s" }
-            )
-        })?,
+        Some(file) => load_file(file).map_err(|d| load_errors(&d))?,
         None => {
             let Some((_, file, text)) = BUILT_IN.iter().find(|(n, _, _)| *n == name) else {
                 let known: Vec<&str> = BUILT_IN.iter().map(|(n, _, _)| *n).collect();
@@ -452,4 +512,95 @@ fn encode(args: EncodeArgs) -> Result<(), String> {
     } else {
         Err(String::new())
     }
+}
+
+/// The `--json` document of `busspec diff`; README.md documents it.
+#[derive(serde::Serialize)]
+struct DiffJson<'a> {
+    old: &'a diff::Side,
+    new: &'a diff::Side,
+    counts: std::collections::BTreeMap<&'static str, usize>,
+    denied: Vec<&'static str>,
+    failed: bool,
+    changes: &'a [diff::Change],
+}
+
+fn diff(args: DiffArgs) -> ExitCode {
+    if let Some(g) = args.allow.iter().find(|g| args.deny.contains(g)) {
+        let name = g.to_possible_value().map(|v| v.get_name().to_owned());
+        usage_error(
+            "diff",
+            format!("`{}` is both allowed and denied", name.unwrap_or_default()),
+        );
+    }
+    let mut denied = vec![Category::WireBreaking];
+    denied.retain(|c| !args.allow.iter().any(|g| g.category() == *c));
+    for g in &args.deny {
+        if !denied.contains(&g.category()) {
+            denied.push(g.category());
+        }
+    }
+    // Both sides load before either is reported, so every error of both files shows.
+    let (old, new) = (load_file(&args.old), load_file(&args.new));
+    let (old, new) = match (old, new) {
+        (Ok(o), Ok(n)) => (o, n),
+        (o, n) => {
+            for d in [o.err(), n.err()].into_iter().flatten() {
+                eprintln!("{}", load_errors(&d));
+            }
+            return ExitCode::from(2);
+        }
+    };
+    let changes = diff::diff(&old, &new);
+    let sides = (
+        diff::Side::of(&args.old.display().to_string(), &old),
+        diff::Side::of(&args.new.display().to_string(), &new),
+    );
+    let failing: Vec<Category> = denied
+        .iter()
+        .copied()
+        .filter(|c| changes.iter().any(|ch| ch.category == *c))
+        .collect();
+    let text = if args.json {
+        let doc = DiffJson {
+            old: &sides.0,
+            new: &sides.1,
+            counts: diff::counts(&changes)
+                .into_iter()
+                .map(|(c, n)| (c.as_str(), n))
+                .collect(),
+            denied: denied.iter().map(|c| c.as_str()).collect(),
+            failed: !failing.is_empty(),
+            changes: &changes,
+        };
+        serde_json::to_string_pretty(&doc).unwrap_or_default() + "\n"
+    } else if args.changelog {
+        diff::render_markdown(&sides.0, &sides.1, &changes)
+    } else {
+        diff::render_text(&sides.0, &sides.1, &changes)
+    };
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("error: cannot write output: {e}");
+            return ExitCode::from(2);
+        }
+    }
+    if failing.is_empty() {
+        return ExitCode::SUCCESS;
+    }
+    for c in failing {
+        let n = changes.iter().filter(|ch| ch.category == c).count();
+        let why = if c == Category::WireBreaking {
+            "pass --allow wire to accept them"
+        } else {
+            "denied by --deny api"
+        };
+        eprintln!(
+            "error: {n} {} change{} ({why})",
+            c.as_str(),
+            if n == 1 { "" } else { "s" }
+        );
+    }
+    ExitCode::FAILURE
 }

@@ -1,4 +1,4 @@
-//! The `busspec` command line: exit codes, summaries, and errors that say what and where.
+//! The `busspec` command line: exit codes, summaries, errors that say what and where, and `diff`.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -136,4 +136,138 @@ fn docs_check_notices_a_stale_reference() {
         text(&out.stderr)
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+// `busspec diff`: exit codes, `--allow`/`--deny`, the JSON document, the changelog, load errors.
+
+const BASE: &str = "codegen/tests/fixtures/diff/base.yaml";
+const WIRE: &str = "codegen/tests/fixtures/diff/wire.yaml";
+const API: &str = "codegen/tests/fixtures/diff/api.yaml";
+const COMPATIBLE: &str = "codegen/tests/fixtures/diff/compatible.yaml";
+
+#[test]
+fn wire_breaking_changes_fail_unless_allowed() {
+    let out = busspec(&["diff", BASE, WIRE]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.lines().nth(1) == Some("23 wire-breaking, 0 api-breaking, 0 compatible"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("\nWire-breaking:\n  byte_order: "),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("\n  commands.reset: command `reset` (0x1000) removed\n"),
+        "{stdout}"
+    );
+    assert_eq!(
+        text(&out.stderr),
+        "error: 23 wire-breaking changes (pass --allow wire to accept them)\n"
+    );
+    let out = busspec(&["diff", "--allow", "wire", BASE, WIRE]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(out.stderr.is_empty());
+}
+
+#[test]
+fn api_breaking_changes_pass_unless_denied() {
+    let out = busspec(&["diff", BASE, API]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stdout)
+        .contains("\nAPI-breaking:\n  units.counter: unit `count` renamed to `counter`\n"));
+    let out = busspec(&["diff", "--deny", "api", BASE, API]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stderr),
+        "error: 8 api-breaking changes (denied by --deny api)\n"
+    );
+    // Compatible changes pass even with everything denied.
+    let out = busspec(&["diff", "--deny", "api", "--deny", "wire", BASE, COMPATIBLE]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+}
+
+#[test]
+fn json_is_one_document_with_sides_counts_and_changes() {
+    let out = busspec(&["diff", "--json", BASE, WIRE]);
+    assert_eq!(out.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    assert_eq!(v["old"]["file"], BASE);
+    assert_eq!(v["new"]["revision"], "1.0");
+    assert_eq!(v["old"]["spec_sha256"].as_str().map(str::len), Some(64));
+    assert_eq!(v["counts"]["wire-breaking"], 23);
+    assert_eq!(v["counts"]["api-breaking"], 0);
+    assert_eq!(v["denied"], serde_json::json!(["wire-breaking"]));
+    assert_eq!(v["failed"], true);
+    let changes = v["changes"].as_array().expect("changes");
+    assert_eq!(changes.len(), 23);
+    assert_eq!(
+        changes[10],
+        serde_json::json!({
+            "category": "wire-breaking",
+            "kind": "code_changed",
+            "path": "commands.set_mode",
+            "text": "command `set_mode`: code 0x3000 → 0x3100"
+        })
+    );
+    let out = busspec(&["diff", "--json", "--allow", "wire", BASE, WIRE]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    assert_eq!(v["denied"], serde_json::json!([]));
+    assert_eq!(v["failed"], false);
+    assert_eq!(out.status.code(), Some(0));
+}
+
+#[test]
+fn changelog_is_markdown_for_release_notes() {
+    let out = busspec(&["diff", "--changelog", BASE, COMPATIBLE]);
+    assert_eq!(out.status.code(), Some(0));
+    let md = text(&out.stdout);
+    assert!(md.starts_with("## mini: revision 1.1 (2024-06-01)\n\n*Minimal protocol reference*, revision 1.0 → 1.1."), "{md}");
+    assert!(md.contains("\n### Compatible (15)\n\n"), "{md}");
+    assert!(
+        md.contains("\n- command `get_supply` (0x4100, §4.7) added\n"),
+        "{md}"
+    );
+    assert!(md.ends_with("- erratum mini-e01 (§4.7) added\n"), "{md}");
+}
+
+#[test]
+fn a_spec_that_does_not_load_is_exit_2_with_every_error() {
+    let broken = "codegen/tests/fixtures/broken/bits_overlap.yaml";
+    let out = busspec(&["diff", "no/such.yaml", broken]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("no/such.yaml: cannot read:"), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "{broken}: responses.status.fields.position_word.bits.position: bits 11..0 overlap another sub-field"
+        )),
+        "{stderr}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn contradicting_or_missing_arguments_are_usage_errors() {
+    let out = busspec(&["diff", "--allow", "wire", "--deny", "wire", BASE, WIRE]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("`wire` is both allowed and denied"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert_eq!(busspec(&["diff", BASE]).status.code(), Some(2));
+    assert_eq!(
+        busspec(&["diff", "--json", "--changelog", BASE, WIRE])
+            .status
+            .code(),
+        Some(2)
+    );
+    assert_eq!(
+        busspec(&["diff", "--allow", "everything", BASE, WIRE])
+            .status
+            .code(),
+        Some(2)
+    );
 }

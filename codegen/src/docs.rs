@@ -237,7 +237,8 @@ pub fn render(p: &Protocol, source: &str) -> String {
     let _ = writeln!(o, "# {} — `{}`\n", p.title, p.name);
     let _ = writeln!(
         o,
-        "Source: `{source}`, transcribed from *{}*, revision {} ({}){}.\n",
+        "Source: `{source}` (SHA-256 `{}`), transcribed from *{}*, revision {} ({}){}.\n",
+        p.spec_sha256,
         p.document.title,
         p.document.revision,
         p.document.date,

@@ -340,6 +340,7 @@ fn emit_header(p: &Protocol, source: &str) -> TokenStream {
     let title = &d.title;
     let revision = &d.revision;
     let date = &d.date;
+    let spec_sha256 = &p.spec_sha256;
     let name = &p.name;
     let max_req = p.max_frame_len(Direction::Request);
     let max_resp = p.max_frame_len(Direction::Response);
@@ -366,6 +367,10 @@ fn emit_header(p: &Protocol, source: &str) -> TokenStream {
         pub const DOCUMENT: &str = #title;
         /// The document's revision.
         pub const DOCUMENT_REVISION: &str = #revision;
+        /// The document's date.
+        pub const DOCUMENT_DATE: &str = #date;
+        /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
+        pub const SPEC_SHA256: &str = #spec_sha256;
         /// The longest request frame, in bytes.
         pub const MAX_REQUEST_LEN: usize = #max_req;
         /// The longest response frame, in bytes.

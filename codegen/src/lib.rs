@@ -3,8 +3,9 @@
 //!
 //! ```text
 //! spec/*.yaml ──load──▶ model ──validate──▶ IR ──┬─ docs      (Markdown reference)
-//!                                                └─ interp    (decode/encode at run time)
-//!                                                     └─ stream   (frames out of a bus capture)
+//!                                                ├─ interp    (decode/encode at run time)
+//!                                                │    └─ stream   (frames out of a bus capture)
+//!                                                └─ diff      (what a revision breaks)
 //! ```
 //!
 //! Every stage is a pure function of its input; file I/O happens only in [`load_file`] and in
@@ -12,6 +13,7 @@
 
 pub mod checksum;
 pub mod diag;
+pub mod diff;
 pub mod docs;
 pub mod emit;
 pub mod interp;
@@ -51,9 +53,22 @@ pub fn load_str(file: &str, text: &str) -> Result<Protocol, Diagnostics> {
         return Err(fail(sink));
     };
     match validate::validate(&spec, &mut sink) {
-        Some(p) => Ok(p),
+        Some(mut p) => {
+            p.spec_sha256 = spec_sha256(text);
+            Ok(p)
+        }
         None => Err(fail(sink)),
     }
+}
+
+/// SHA-256 of a spec's text as lowercase hex: the same digest `sha256sum FILE` prints, so a
+/// generated artifact can be traced to the exact file it came from.
+pub fn spec_sha256(text: &str) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 /// Reads and validates a spec file.
@@ -74,4 +89,16 @@ pub fn load_file(path: &Path) -> Result<Protocol, Diagnostics> {
         )],
     })?;
     load_str(&file, &text)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn spec_hash_is_plain_sha256_of_the_text() {
+        // The FIPS 180-2 test vector for "abc".
+        assert_eq!(
+            super::spec_sha256("abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
 }

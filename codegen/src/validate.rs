@@ -424,6 +424,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         common_responses: common,
         examples: Vec::new(),
         errata,
+        spec_sha256: String::new(),
     };
     proto.examples = examples(spec, &proto, sink);
     sink.is_empty().then_some(proto)

@@ -19,6 +19,10 @@ pub mod mini {
     pub const DOCUMENT: &str = "Minimal protocol reference";
     /// The document's revision.
     pub const DOCUMENT_REVISION: &str = "1.0";
+    /// The document's date.
+    pub const DOCUMENT_DATE: &str = "2024-01-01";
+    /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
+    pub const SPEC_SHA256: &str = "fc5dfeca68fced08f85438b676b63905acfeadd57ec00df1fefe50721d5313c0";
     /// The longest request frame, in bytes.
     pub const MAX_REQUEST_LEN: usize = 9usize;
     /// The longest response frame, in bytes.

@@ -19,6 +19,10 @@ pub mod mini_crc {
     pub const DOCUMENT: &str = "Minimal CRC protocol reference";
     /// The document's revision.
     pub const DOCUMENT_REVISION: &str = "1.0";
+    /// The document's date.
+    pub const DOCUMENT_DATE: &str = "2024-01-01";
+    /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
+    pub const SPEC_SHA256: &str = "f571681e28660c68d1349608b0ddf8a94b21af51b1df4ab7380e67a070d6b7c3";
     /// The longest request frame, in bytes.
     pub const MAX_REQUEST_LEN: usize = 6usize;
     /// The longest response frame, in bytes.

@@ -1,0 +1,1558 @@
+//! What changed between two revisions of a spec, and what each change breaks.
+//!
+//! Both sides are validated IR, so offsets, widths, byte orders and scales are already resolved
+//! and compared as the wire sees them. Every change gets one [`Category`]:
+//!
+//! - **wire-breaking**: a peer built from the old spec reads or writes some frame differently:
+//!   a code removed, changed or reused; a field's offset, width, signedness, byte order, scale,
+//!   packing or constant changed; an enum, flag or special value removed or renumbered; a reply
+//!   a command may get removed; the checksum, framing, address range or serial settings changed;
+//!   a frame's length changed.
+//! - **API-breaking**: the bytes mean the same, but code written against the old generated crate
+//!   or JSON contract must change: a message, field, unit, enum or value renamed; a field's type
+//!   changed without a wire change (a raw number becoming an enum); a range narrowed; a unit or
+//!   enum removed.
+//! - **compatible**: a command, response, reply, enum value or flag added, a range widened, or
+//!   documentation changed (titles, docs, sections, examples, errata, provenance).
+//!
+//! Messages are matched by name first, then by direction and code (with any constant selector
+//! fields), so a renamed message is one change, not a removal and an addition; fields are
+//! matched by offset. A message that keeps its code but gets another name *and* another layout
+//! is reported as a reused code.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use crate::ir::{Direction, Enum, Field, FlagSet, Message, Protocol, Unit};
+use crate::rational::Rational;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Category {
+    WireBreaking,
+    ApiBreaking,
+    Compatible,
+}
+
+impl Category {
+    pub const ALL: [Category; 3] = [
+        Category::WireBreaking,
+        Category::ApiBreaking,
+        Category::Compatible,
+    ];
+
+    /// The name used in output and in JSON: `wire-breaking`, `api-breaking`, `compatible`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Category::WireBreaking => "wire-breaking",
+            Category::ApiBreaking => "api-breaking",
+            Category::Compatible => "compatible",
+        }
+    }
+
+    fn heading(self) -> &'static str {
+        match self {
+            Category::WireBreaking => "Wire-breaking",
+            Category::ApiBreaking => "API-breaking",
+            Category::Compatible => "Compatible",
+        }
+    }
+}
+
+/// One change between two specs.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Change {
+    pub category: Category,
+    /// A stable identifier of what changed (`message_renamed`, `field_width_changed`, ...).
+    pub kind: &'static str,
+    /// Where, in the spec's path notation; names are the new spec's where the item still exists.
+    pub path: String,
+    /// The change in words, naming both sides.
+    pub text: String,
+}
+
+/// Every change from `old` to `new`, in spec order: document, serial, framing, units, enums,
+/// flags, commands, responses, examples, errata.
+pub fn diff(old: &Protocol, new: &Protocol) -> Vec<Change> {
+    let mut d = Differ {
+        old,
+        new,
+        out: Vec::new(),
+    };
+    d.protocol();
+    d.serial();
+    d.framing();
+    let units = d.units();
+    let enums = d.enums();
+    let flags = d.flag_sets();
+    let maps = Maps {
+        units,
+        enums,
+        flags,
+        messages: BTreeMap::new(),
+    };
+    let mut maps = maps;
+    for dir in [Direction::Request, Direction::Response] {
+        let pairs = d.messages(dir, &maps);
+        maps.messages.insert(dir, pairs);
+    }
+    d.replies(&maps);
+    d.examples();
+    d.errata();
+    d.out
+}
+
+/// Counts per category.
+pub fn counts(changes: &[Change]) -> BTreeMap<Category, usize> {
+    let mut c: BTreeMap<Category, usize> = Category::ALL.iter().map(|&c| (c, 0)).collect();
+    for ch in changes {
+        *c.entry(ch.category).or_default() += 1;
+    }
+    c
+}
+
+/// One side of a diff as the renderers show it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Side {
+    pub file: String,
+    pub protocol: String,
+    pub document: String,
+    pub revision: String,
+    pub date: String,
+    pub spec_sha256: String,
+}
+
+impl Side {
+    pub fn of(file: &str, p: &Protocol) -> Side {
+        Side {
+            file: file.to_owned(),
+            protocol: p.name.clone(),
+            document: p.document.title.clone(),
+            revision: p.document.revision.clone(),
+            date: p.document.date.clone(),
+            spec_sha256: p.spec_sha256.clone(),
+        }
+    }
+
+    fn short_hash(&self) -> &str {
+        self.spec_sha256.get(..12).unwrap_or(&self.spec_sha256)
+    }
+}
+
+/// The human-readable report: a header naming both sides, the counts, then the changes grouped
+/// by category, each as `path: text`.
+pub fn render_text(old: &Side, new: &Side, changes: &[Change]) -> String {
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "{}: {} (rev {}, {}, sha256 {}) → {} (rev {}, {}, sha256 {})",
+        new.protocol,
+        old.file,
+        old.revision,
+        old.date,
+        old.short_hash(),
+        new.file,
+        new.revision,
+        new.date,
+        new.short_hash()
+    );
+    let c = counts(changes);
+    let summary: Vec<String> = Category::ALL
+        .iter()
+        .map(|k| format!("{} {}", c[k], k.as_str()))
+        .collect();
+    let _ = writeln!(o, "{}", summary.join(", "));
+    for cat in Category::ALL {
+        let these: Vec<&Change> = changes.iter().filter(|ch| ch.category == cat).collect();
+        if these.is_empty() {
+            continue;
+        }
+        let _ = writeln!(o, "\n{}:", cat.heading());
+        for ch in these {
+            let _ = writeln!(o, "  {}: {}", ch.path, ch.text);
+        }
+    }
+    o
+}
+
+/// A Markdown changelog entry for release notes: the new revision as heading, provenance, then
+/// the changes as bullet lists under one heading per category, breaking ones first.
+pub fn render_markdown(old: &Side, new: &Side, changes: &[Change]) -> String {
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "## {}: revision {} ({})\n",
+        new.protocol, new.revision, new.date
+    );
+    let _ = writeln!(
+        o,
+        "*{}*, revision {} → {}. Spec `{}` (SHA-256 `{}`), previously `{}` (SHA-256 `{}`).\n",
+        new.document,
+        old.revision,
+        new.revision,
+        new.file,
+        new.spec_sha256,
+        old.file,
+        old.spec_sha256
+    );
+    if changes.is_empty() {
+        let _ = writeln!(o, "No changes.");
+        return o;
+    }
+    for cat in Category::ALL {
+        let these: Vec<&Change> = changes.iter().filter(|ch| ch.category == cat).collect();
+        if these.is_empty() {
+            continue;
+        }
+        let _ = writeln!(o, "### {} ({})\n", cat.heading(), these.len());
+        for ch in these {
+            let _ = writeln!(o, "- {}", ch.text);
+        }
+        o.push('\n');
+    }
+    o.truncate(o.trim_end().len());
+    o.push('\n');
+    o
+}
+
+/// Which old item became which new one.
+struct Maps {
+    units: Vec<Option<usize>>,
+    enums: Vec<Option<usize>>,
+    flags: Vec<Option<usize>>,
+    /// Per direction: old message index → new message index.
+    messages: BTreeMap<Direction, Vec<Option<usize>>>,
+}
+
+struct Differ<'a> {
+    old: &'a Protocol,
+    new: &'a Protocol,
+    out: Vec<Change>,
+}
+
+/// An enum or a flag set, as the diff compares it.
+struct ValueSet<'a> {
+    name: &'a str,
+    section: &'a str,
+    doc: &'a str,
+    values: Vec<(i64, &'a str)>,
+    value_docs: String,
+}
+
+/// How changes to enums or to flag sets are named.
+struct SetWords {
+    what: &'static str,
+    list: &'static str,
+    values: &'static str,
+    value: &'static str,
+    value_docs: &'static str,
+    removed: &'static str,
+    renamed: &'static str,
+    added: &'static str,
+}
+
+const ENUMS: SetWords = SetWords {
+    what: "enum",
+    list: "enums",
+    values: "values",
+    value: "",
+    value_docs: "value docs",
+    removed: "enum_removed",
+    renamed: "enum_renamed",
+    added: "enum_added",
+};
+
+const FLAGS: SetWords = SetWords {
+    what: "flag set",
+    list: "flags",
+    values: "bits",
+    value: " bit",
+    value_docs: "bit docs",
+    removed: "flags_removed",
+    renamed: "flags_renamed",
+    added: "flags_added",
+};
+
+/// What happened to one named value of an enum, flag set or `special` list.
+enum ValueChange<'a> {
+    Removed(i64, &'a str),
+    Renumbered(&'a str, i64, i64),
+    Renamed(i64, &'a str, &'a str),
+    Added(i64, &'a str),
+}
+
+/// Compares two lists of `(value, name)`: a value keeps its identity by number, a name that
+/// moved to another number was renumbered.
+fn value_changes<'a>(old: &[(i64, &'a str)], new: &[(i64, &'a str)]) -> Vec<ValueChange<'a>> {
+    let by_value = |l: &[(i64, &'a str)], v: i64| l.iter().find(|(x, _)| *x == v).map(|p| p.1);
+    let by_name = |l: &[(i64, &'a str)], n: &str| l.iter().find(|(_, x)| *x == n).map(|p| p.0);
+    let mut out = Vec::new();
+    for &(v, name) in old {
+        match (by_value(new, v), by_name(new, name)) {
+            (Some(n), _) if n == name => {}
+            (_, Some(nv)) if nv != v => out.push(ValueChange::Renumbered(name, v, nv)),
+            (Some(n), _) => out.push(ValueChange::Renamed(v, name, n)),
+            (None, _) => out.push(ValueChange::Removed(v, name)),
+        }
+    }
+    for &(v, name) in new {
+        if by_value(old, v).is_none() && by_name(old, name).is_none() {
+            out.push(ValueChange::Added(v, name));
+        }
+    }
+    out
+}
+
+/// Pairs named items: by name, then an unmatched old item with the first unmatched new one of
+/// the same content (a rename). Returns old index → new index.
+fn pair_named<T>(
+    old: &[T],
+    new: &[T],
+    name: impl Fn(&T) -> &str,
+    same: impl Fn(&T, &T) -> bool,
+) -> Vec<Option<usize>> {
+    let mut map: Vec<Option<usize>> = old
+        .iter()
+        .map(|o| new.iter().position(|n| name(n) == name(o)))
+        .collect();
+    for (i, o) in old.iter().enumerate() {
+        if map[i].is_some() {
+            continue;
+        }
+        map[i] = (0..new.len()).find(|&j| {
+            !map.contains(&Some(j))
+                && !old.iter().any(|x| name(x) == name(&new[j]))
+                && same(o, &new[j])
+        });
+    }
+    map
+}
+
+fn taken(map: &[Option<usize>], j: usize) -> bool {
+    map.contains(&Some(j))
+}
+
+fn enum_values(e: &Enum) -> Vec<(i64, &str)> {
+    e.values
+        .iter()
+        .map(|v| (v.value as i64, v.name.as_str()))
+        .collect()
+}
+
+fn flag_bits(f: &FlagSet) -> Vec<(i64, &str)> {
+    f.bits
+        .iter()
+        .map(|b| (i64::from(b.bit), b.name.as_str()))
+        .collect()
+}
+
+fn specials(f: &Field) -> Vec<(i64, &str)> {
+    f.special
+        .iter()
+        .map(|s| (s.value, s.name.as_str()))
+        .collect()
+}
+
+fn direction_word(d: Direction) -> &'static str {
+    match d {
+        Direction::Request => "command",
+        Direction::Response => "response",
+    }
+}
+
+fn list_key(d: Direction) -> &'static str {
+    match d {
+        Direction::Request => "commands",
+        Direction::Response => "responses",
+    }
+}
+
+fn conversion(u: &Unit) -> String {
+    if u.offset == Rational::ZERO {
+        format!("raw × {}", u.scale)
+    } else if u.offset < Rational::ZERO {
+        let magnitude = Rational::ZERO.minus(u.offset).unwrap_or(u.offset);
+        format!("raw × {} − {magnitude}", u.scale)
+    } else {
+        format!("raw × {} + {}", u.scale, u.offset)
+    }
+}
+
+fn range_text(r: Option<(i64, i64)>) -> String {
+    match r {
+        Some((a, b)) => format!("{a}..={b}"),
+        None => "any".to_owned(),
+    }
+}
+
+fn type_name(f: &Field) -> String {
+    if f.is_ascii() {
+        format!("ascii[{}]", f.width)
+    } else {
+        format!("{}{}", if f.signed { "i" } else { "u" }, f.width * 8)
+    }
+}
+
+/// `Some(true)`: `new` contains `old`; `Some(false)`: it does not; `None`: equal.
+fn widened(old: Option<(i64, i64)>, new: Option<(i64, i64)>) -> Option<bool> {
+    match (old, new) {
+        _ if old == new => None,
+        (_, None) => Some(true),
+        (None, Some(_)) => Some(false),
+        (Some((a, b)), Some((c, d))) => Some(c <= a && b <= d),
+    }
+}
+
+impl<'a> Differ<'a> {
+    fn push(&mut self, category: Category, kind: &'static str, path: String, text: String) {
+        self.out.push(Change {
+            category,
+            kind,
+            path,
+            text,
+        });
+    }
+
+    fn wire(&mut self, kind: &'static str, path: impl Into<String>, text: String) {
+        self.push(Category::WireBreaking, kind, path.into(), text);
+    }
+
+    fn api(&mut self, kind: &'static str, path: impl Into<String>, text: String) {
+        self.push(Category::ApiBreaking, kind, path.into(), text);
+    }
+
+    fn compatible(&mut self, kind: &'static str, path: impl Into<String>, text: String) {
+        self.push(Category::Compatible, kind, path.into(), text);
+    }
+
+    /// A documentation-only change of one item: which of its texts changed.
+    fn doc_change(&mut self, path: String, what: &str, pairs: &[(&str, &str, &str)]) {
+        let changed: Vec<String> = pairs
+            .iter()
+            .filter(|(_, a, b)| a != b)
+            .map(|(k, a, b)| {
+                if *k == "section" {
+                    let show = |s: &str| {
+                        if s.is_empty() {
+                            "none".to_owned()
+                        } else {
+                            format!("§{s}")
+                        }
+                    };
+                    format!("section {} → {}", show(a), show(b))
+                } else {
+                    (*k).to_owned()
+                }
+            })
+            .collect();
+        if !changed.is_empty() {
+            self.compatible(
+                "documentation_changed",
+                path,
+                format!("{what}: {} changed", changed.join(", ")),
+            );
+        }
+    }
+
+    fn protocol(&mut self) {
+        let (o, n) = (self.old, self.new);
+        if o.name != n.name {
+            self.api(
+                "protocol_renamed",
+                "protocol",
+                format!(
+                    "protocol `{}` renamed to `{}` (the generated module's name)",
+                    o.name, n.name
+                ),
+            );
+        }
+        let (od, nd) = (&o.document, &n.document);
+        let fields = [
+            ("title", &od.title, &nd.title),
+            ("revision", &od.revision, &nd.revision),
+            ("date", &od.date, &nd.date),
+        ];
+        for (k, a, b) in fields {
+            if a != b {
+                self.compatible(
+                    "document_changed",
+                    format!("document.{k}"),
+                    format!("document {k}: {a} → {b}"),
+                );
+            }
+        }
+        if od.file != nd.file {
+            self.compatible(
+                "document_changed",
+                "document.file",
+                format!(
+                    "document file: {} → {}",
+                    od.file.as_deref().unwrap_or("none"),
+                    nd.file.as_deref().unwrap_or("none")
+                ),
+            );
+        }
+        self.doc_change("title".into(), "protocol", &[("title", &o.title, &n.title)]);
+        if o.byte_order != n.byte_order {
+            self.wire(
+                "byte_order_changed",
+                "byte_order",
+                format!(
+                    "numbers travel {:?} instead of {:?} endian: every multi-byte field reads differently",
+                    n.byte_order, o.byte_order
+                )
+                .to_lowercase(),
+            );
+        }
+        if o.printed_byte_order != n.printed_byte_order {
+            self.compatible(
+                "documentation_changed",
+                "printed_byte_order",
+                format!(
+                    "the document prints numbers {:?} instead of {:?} endian (examples only)",
+                    n.printed_byte_order, o.printed_byte_order
+                )
+                .to_lowercase(),
+            );
+        }
+    }
+
+    fn serial(&mut self) {
+        let (o, n) = (&self.old.serial, &self.new.serial);
+        let settings = [
+            ("baud", o.baud.to_string(), n.baud.to_string()),
+            (
+                "data_bits",
+                o.data_bits.to_string(),
+                n.data_bits.to_string(),
+            ),
+            (
+                "parity",
+                format!("{:?}", o.parity).to_lowercase(),
+                format!("{:?}", n.parity).to_lowercase(),
+            ),
+            (
+                "stop_bits",
+                o.stop_bits.to_string(),
+                n.stop_bits.to_string(),
+            ),
+        ];
+        for (k, a, b) in settings {
+            if a != b {
+                self.wire(
+                    "serial_changed",
+                    format!("serial.{k}"),
+                    format!("serial {k}: {a} → {b}"),
+                );
+            }
+        }
+        let (og, ng) = (
+            o.inter_frame_gap_ms.unwrap_or(0),
+            n.inter_frame_gap_ms.unwrap_or(0),
+        );
+        if og != ng {
+            let text = format!("minimum gap between frames: {og} ms → {ng} ms");
+            if ng > og {
+                self.wire("timing_changed", "serial.inter_frame_gap_ms", text);
+            } else {
+                self.compatible("timing_changed", "serial.inter_frame_gap_ms", text);
+            }
+        }
+        let rate = |r: &Option<crate::ir::FrameRate>| r.as_ref().map(|r| r.max_per_s);
+        let (orate, nrate) = (rate(&o.frame_rate), rate(&n.frame_rate));
+        if orate != nrate {
+            let show = |r: Option<u32>| r.map_or("unlimited".to_owned(), |r| format!("{r}/s"));
+            let text = format!("maximum frame rate: {} → {}", show(orate), show(nrate));
+            // Fewer frames per second allowed: a host sending at the old rate now overruns.
+            if nrate.unwrap_or(u32::MAX) < orate.unwrap_or(u32::MAX) {
+                self.wire("timing_changed", "serial.frame_rate", text);
+            } else {
+                self.compatible("timing_changed", "serial.frame_rate", text);
+            }
+        }
+        let sec = |s: &Option<String>| s.clone().unwrap_or_default();
+        self.doc_change(
+            "serial".into(),
+            "serial",
+            &[("section", &sec(&o.section), &sec(&n.section))],
+        );
+    }
+
+    fn framing(&mut self) {
+        let (o, n) = (&self.old.framing, &self.new.framing);
+        if o.layout != n.layout {
+            self.wire(
+                "framing_changed",
+                "framing.layout",
+                format!("frame layout: {:?} → {:?}", o.layout, n.layout).to_lowercase(),
+            );
+        }
+        if o.start != n.start {
+            let show = |s: Option<u8>| s.map_or("none".to_owned(), |s| format!("0x{s:02X}"));
+            self.wire(
+                "framing_changed",
+                "framing.start",
+                format!("start byte: {} → {}", show(o.start), show(n.start)),
+            );
+        }
+        let (oc, nc) = (&o.checksum, &n.checksum);
+        // The byte order of a one-byte checksum means nothing on the wire.
+        let order_changed = oc.byte_order != nc.byte_order && oc.width.max(nc.width) > 8;
+        if oc.algorithm != nc.algorithm || oc.width != nc.width || order_changed {
+            let show = |c: &crate::ir::Checksum| {
+                let name = match &c.algorithm {
+                    crate::ir::ChecksumAlgorithm::Sum8 => "sum8".to_owned(),
+                    crate::ir::ChecksumAlgorithm::Crc(_) => {
+                        c.catalogue.clone().unwrap_or_else(|| "crc".to_owned())
+                    }
+                };
+                let order = match (c.width, c.byte_order) {
+                    (8, _) => "",
+                    (_, crate::ir::ByteOrder::Big) => ", high byte first",
+                    (_, crate::ir::ByteOrder::Little) => ", low byte first",
+                };
+                format!("{name} ({} bits, check 0x{:X}{order})", c.width, c.check)
+            };
+            self.wire(
+                "checksum_changed",
+                "framing.checksum",
+                format!("checksum: {} → {}", show(oc), show(nc)),
+            );
+        } else if oc.catalogue != nc.catalogue {
+            self.compatible(
+                "documentation_changed",
+                "framing.checksum.catalogue",
+                "checksum catalogue name changed".to_owned(),
+            );
+        }
+        let (oa, na) = (&o.address, &n.address);
+        if (oa.min, oa.max) != (na.min, na.max) {
+            let text = format!(
+                "device addresses: 0x{:02X}..=0x{:02X} → 0x{:02X}..=0x{:02X}",
+                oa.min, oa.max, na.min, na.max
+            );
+            if na.min <= oa.min && oa.max <= na.max {
+                self.compatible("address_range_widened", "framing.address.devices", text);
+            } else {
+                self.wire("address_range_narrowed", "framing.address.devices", text);
+            }
+        }
+        let show = |a: Option<u8>| a.map_or("none".to_owned(), |a| format!("0x{a:02X}"));
+        for (k, a, b) in [
+            ("host", oa.host, na.host),
+            ("broadcast", oa.broadcast, na.broadcast),
+            ("default", oa.default, na.default),
+        ] {
+            if a == b {
+                continue;
+            }
+            let text = format!("{k} address: {} → {}", show(a), show(b));
+            if k == "broadcast" && a.is_none() {
+                self.compatible("address_changed", format!("framing.address.{k}"), text);
+            } else {
+                self.wire("address_changed", format!("framing.address.{k}"), text);
+            }
+        }
+        for dir in [Direction::Request, Direction::Response] {
+            let (of, nf) = (o.direction(dir), n.direction(dir));
+            let key = format!("framing.{}", dir.as_str());
+            if of.code_lengths != nf.code_lengths {
+                let text = format!(
+                    "{} code lengths: {:?} → {:?} bytes",
+                    dir.as_str(),
+                    of.code_lengths,
+                    nf.code_lengths
+                );
+                if of.code_lengths.iter().all(|l| nf.code_lengths.contains(l)) {
+                    self.compatible("framing_widened", format!("{key}.code_lengths"), text);
+                } else {
+                    self.wire("framing_changed", format!("{key}.code_lengths"), text);
+                }
+            }
+            if (of.payload_min, of.payload_max) != (nf.payload_min, nf.payload_max) {
+                let text = format!(
+                    "{} payload: {}..={} → {}..={} bytes",
+                    dir.as_str(),
+                    of.payload_min,
+                    of.payload_max,
+                    nf.payload_min,
+                    nf.payload_max
+                );
+                if nf.payload_min <= of.payload_min && of.payload_max <= nf.payload_max {
+                    self.compatible("framing_widened", format!("{key}.payload"), text);
+                } else {
+                    self.wire("framing_changed", format!("{key}.payload"), text);
+                }
+            }
+        }
+        let sec = |s: &Option<String>| s.clone().unwrap_or_default();
+        self.doc_change(
+            "framing".into(),
+            "framing",
+            &[("section", &sec(&o.section), &sec(&n.section))],
+        );
+    }
+
+    fn units(&mut self) -> Vec<Option<usize>> {
+        let (o, n) = (&self.old.units, &self.new.units);
+        let map = pair_named(
+            o,
+            n,
+            |u| &u.name,
+            |a, b| a.scale == b.scale && a.offset == b.offset && a.symbol == b.symbol,
+        );
+        for (i, u) in o.iter().enumerate() {
+            let Some(j) = map[i] else {
+                self.api(
+                    "unit_removed",
+                    format!("units.{}", u.name),
+                    format!("unit `{}` removed", u.name),
+                );
+                continue;
+            };
+            let v = &n[j];
+            let path = format!("units.{}", v.name);
+            if u.name != v.name {
+                self.api(
+                    "unit_renamed",
+                    path.clone(),
+                    format!("unit `{}` renamed to `{}`", u.name, v.name),
+                );
+            }
+            if u.scale != v.scale || u.offset != v.offset {
+                self.wire(
+                    "unit_scale_changed",
+                    path.clone(),
+                    format!(
+                        "unit `{}`: physical value {} → {}; every field in it reads differently",
+                        v.name,
+                        conversion(u),
+                        conversion(v)
+                    ),
+                );
+            }
+            self.doc_change(
+                path,
+                &format!("unit `{}`", v.name),
+                &[("symbol", &u.symbol, &v.symbol), ("doc", &u.doc, &v.doc)],
+            );
+        }
+        for (j, v) in n.iter().enumerate() {
+            if !taken(&map, j) {
+                self.compatible(
+                    "unit_added",
+                    format!("units.{}", v.name),
+                    format!("unit `{}` added ({} {})", v.name, conversion(v), v.symbol)
+                        .trim_end()
+                        .to_owned(),
+                );
+            }
+        }
+        map
+    }
+
+    /// Reports what happened to each value of a matched enum, flag set or special list.
+    fn values(&mut self, path: &str, what: &str, changes: Vec<ValueChange>) {
+        for c in changes {
+            match c {
+                ValueChange::Removed(v, name) => self.wire(
+                    "value_removed",
+                    format!("{path}.{name}"),
+                    format!("{what}: `{name}` ({v}) removed"),
+                ),
+                ValueChange::Renumbered(name, a, b) => self.wire(
+                    "value_renumbered",
+                    format!("{path}.{name}"),
+                    format!("{what}: `{name}` renumbered from {a} to {b}"),
+                ),
+                ValueChange::Renamed(v, a, b) => self.api(
+                    "value_renamed",
+                    format!("{path}.{b}"),
+                    format!("{what}: {v} renamed from `{a}` to `{b}`"),
+                ),
+                ValueChange::Added(v, name) => self.compatible(
+                    "value_added",
+                    format!("{path}.{name}"),
+                    format!("{what}: `{name}` ({v}) added"),
+                ),
+            }
+        }
+    }
+
+    fn enums(&mut self) -> Vec<Option<usize>> {
+        let sets = |p: &'a Protocol| -> Vec<ValueSet<'a>> {
+            p.enums
+                .iter()
+                .map(|e| ValueSet {
+                    name: &e.name,
+                    section: e.section.as_deref().unwrap_or(""),
+                    doc: &e.doc,
+                    values: enum_values(e),
+                    value_docs: e.values.iter().map(|v| v.doc.as_str()).collect(),
+                })
+                .collect()
+        };
+        self.value_sets(&ENUMS, &sets(self.old), &sets(self.new))
+    }
+
+    fn flag_sets(&mut self) -> Vec<Option<usize>> {
+        let sets = |p: &'a Protocol| -> Vec<ValueSet<'a>> {
+            p.flags
+                .iter()
+                .map(|f| ValueSet {
+                    name: &f.name,
+                    section: f.section.as_deref().unwrap_or(""),
+                    doc: &f.doc,
+                    values: flag_bits(f),
+                    value_docs: f.bits.iter().map(|b| b.doc.as_str()).collect(),
+                })
+                .collect()
+        };
+        self.value_sets(&FLAGS, &sets(self.old), &sets(self.new))
+    }
+
+    /// Pairs enums (or flag sets) by name, then by identical values, and compares each pair
+    /// value by value. Returns old index → new index.
+    fn value_sets(
+        &mut self,
+        w: &SetWords,
+        old: &[ValueSet<'a>],
+        new: &[ValueSet<'a>],
+    ) -> Vec<Option<usize>> {
+        let map = pair_named(old, new, |s| s.name, |a, b| a.values == b.values);
+        for (i, e) in old.iter().enumerate() {
+            let Some(j) = map[i] else {
+                self.api(
+                    w.removed,
+                    format!("{}.{}", w.list, e.name),
+                    format!("{} `{}` removed", w.what, e.name),
+                );
+                continue;
+            };
+            let f = &new[j];
+            let path = format!("{}.{}", w.list, f.name);
+            let what = format!("{} `{}`", w.what, f.name);
+            if e.name != f.name {
+                self.api(
+                    w.renamed,
+                    path.clone(),
+                    format!("{} `{}` renamed to `{}`", w.what, e.name, f.name),
+                );
+            }
+            let changes = value_changes(&e.values, &f.values);
+            self.values(
+                &format!("{path}.{}", w.values),
+                &format!("{what}{}", w.value),
+                changes,
+            );
+            self.doc_change(
+                path,
+                &what,
+                &[
+                    ("section", e.section, f.section),
+                    ("doc", e.doc, f.doc),
+                    (w.value_docs, &e.value_docs, &f.value_docs),
+                ],
+            );
+        }
+        for (j, f) in new.iter().enumerate() {
+            if !taken(&map, j) {
+                self.compatible(
+                    w.added,
+                    format!("{}.{}", w.list, f.name),
+                    format!("{} `{}` added", w.what, f.name),
+                );
+            }
+        }
+        map
+    }
+
+    /// Pairs and compares the messages of one direction; returns old index → new index.
+    fn messages(&mut self, dir: Direction, maps: &Maps) -> Vec<Option<usize>> {
+        let (o, n) = (self.old.messages(dir), self.new.messages(dir));
+        let word = direction_word(dir);
+        let list = list_key(dir);
+        // By name first; then by wire identity (code and constant selector fields).
+        let mut map: Vec<Option<usize>> = o
+            .iter()
+            .map(|m| n.iter().position(|x| x.name == m.name))
+            .collect();
+        for (i, m) in o.iter().enumerate() {
+            if map[i].is_some() {
+                continue;
+            }
+            map[i] = (0..n.len()).find(|&j| {
+                !taken(&map, j) && !o.iter().any(|x| x.name == n[j].name) && key(m) == key(&n[j])
+            });
+        }
+        for (i, m) in o.iter().enumerate() {
+            let Some(j) = map[i] else {
+                self.wire(
+                    "message_removed",
+                    format!("{list}.{}", m.name),
+                    format!("{word} `{}` ({}) removed", m.name, m.code_hex()),
+                );
+                continue;
+            };
+            let x = &n[j];
+            let path = format!("{list}.{}", x.name);
+            let mut sub = Differ {
+                old: self.old,
+                new: self.new,
+                out: Vec::new(),
+            };
+            sub.message_body(m, x, &path, maps);
+            let wire_changed = sub.out.iter().any(|c| c.category == Category::WireBreaking);
+            if m.name != x.name && wire_changed {
+                let first: Vec<&str> = sub
+                    .out
+                    .iter()
+                    .filter(|c| c.category == Category::WireBreaking)
+                    .map(|c| c.text.as_str())
+                    .collect();
+                self.wire(
+                    "code_reused",
+                    path,
+                    format!(
+                        "{word} code {} reused: `{}` replaced by `{}` with a different layout ({})",
+                        x.code_hex(),
+                        m.name,
+                        x.name,
+                        first.join("; ")
+                    ),
+                );
+                continue;
+            }
+            if m.name != x.name {
+                self.api(
+                    "message_renamed",
+                    path.clone(),
+                    format!(
+                        "{word} `{}` ({}) renamed to `{}`",
+                        m.name,
+                        x.code_hex(),
+                        x.name
+                    ),
+                );
+            }
+            if m.code != x.code {
+                self.wire(
+                    "code_changed",
+                    path.clone(),
+                    format!(
+                        "{word} `{}`: code {} → {}",
+                        x.name,
+                        m.code_hex(),
+                        x.code_hex()
+                    ),
+                );
+            }
+            self.out.append(&mut sub.out);
+        }
+        for (j, x) in n.iter().enumerate() {
+            if !taken(&map, j) {
+                self.compatible(
+                    "message_added",
+                    format!("{list}.{}", x.name),
+                    format!(
+                        "{word} `{}` ({}, §{}) added",
+                        x.name,
+                        x.code_hex(),
+                        x.section
+                    ),
+                );
+            }
+        }
+        map
+    }
+
+    /// Everything about a matched message except its name and code.
+    fn message_body(&mut self, m: &Message, x: &Message, path: &str, maps: &Maps) {
+        let (o, n) = (self.old, self.new);
+        let word = direction_word(m.direction);
+        let (ol, nl) = (o.frame_len(m), n.frame_len(x));
+        if ol != nl {
+            self.wire(
+                "frame_length_changed",
+                path.to_owned(),
+                format!("{word} `{}`: frame length {ol} → {nl} bytes", x.name),
+            );
+        }
+        // A field keeps its name where it moved; otherwise what sits at its offset is it.
+        let fmap = pair_named(
+            &m.fields,
+            &x.fields,
+            |f| &f.name,
+            |f, g| f.offset == g.offset,
+        );
+        for (i, f) in m.fields.iter().enumerate() {
+            let Some(g) = fmap[i].map(|j| &x.fields[j]) else {
+                self.wire(
+                    "field_removed",
+                    format!("{path}.fields.{}", f.name),
+                    format!(
+                        "{word} `{}`: field `{}` ({} at offset {}) removed",
+                        x.name,
+                        f.name,
+                        type_name(f),
+                        f.offset
+                    ),
+                );
+                continue;
+            };
+            let fpath = format!("{path}.fields.{}", g.name);
+            if f.offset != g.offset {
+                self.wire(
+                    "field_offset_changed",
+                    fpath.clone(),
+                    format!(
+                        "field `{}.{}`: offset {} → {}",
+                        x.name, g.name, f.offset, g.offset
+                    ),
+                );
+            }
+            self.field((m, f), (x, g), &fpath, maps);
+        }
+        for (j, g) in x.fields.iter().enumerate() {
+            if !taken(&fmap, j) {
+                self.wire(
+                    "field_added",
+                    format!("{path}.fields.{}", g.name),
+                    format!(
+                        "{word} `{}`: field `{}` ({} at offset {}) added",
+                        x.name,
+                        g.name,
+                        type_name(g),
+                        g.offset
+                    ),
+                );
+            }
+        }
+        if m.needs_request != x.needs_request {
+            self.api(
+                "needs_request_changed",
+                path.to_owned(),
+                format!(
+                    "response `{}` {} be told apart without its request",
+                    x.name,
+                    if x.needs_request {
+                        "can no longer"
+                    } else {
+                        "can now"
+                    }
+                ),
+            );
+        }
+        let bc = |b: &Option<crate::ir::Broadcast>| {
+            b.as_ref()
+                .map_or((false, false), |b| (b.accepted, b.answered))
+        };
+        let (ob, nb) = (bc(&m.broadcast), bc(&x.broadcast));
+        if ob != nb {
+            let text = format!(
+                "command `{}`: broadcast accepted {} → {}, answered {} → {}",
+                x.name, ob.0, nb.0, ob.1, nb.1
+            );
+            if (!ob.0 || nb.0) && ob.1 == nb.1 {
+                self.compatible("broadcast_changed", format!("{path}.broadcast"), text);
+            } else {
+                self.api("broadcast_changed", format!("{path}.broadcast"), text);
+            }
+        }
+        let kind = |m: &Message| format!("{:?}", m.kind);
+        self.doc_change(
+            path.to_owned(),
+            &format!("{word} `{}`", x.name),
+            &[
+                ("section", &m.section, &x.section),
+                ("title", &m.title, &x.title),
+                ("doc", &m.doc, &x.doc),
+                ("kind", &kind(m), &kind(x)),
+            ],
+        );
+    }
+
+    fn field(
+        &mut self,
+        (m, f): (&Message, &Field),
+        (x, g): (&Message, &Field),
+        path: &str,
+        maps: &Maps,
+    ) {
+        let msg = x.name.as_str();
+        let what = format!("`{msg}.{}`", g.name);
+        if f.name != g.name {
+            self.api(
+                "field_renamed",
+                path.to_owned(),
+                format!("field `{msg}.{}` renamed to `{}`", f.name, g.name),
+            );
+        }
+        if f.width != g.width {
+            self.wire(
+                "field_width_changed",
+                path.to_owned(),
+                format!(
+                    "field {what}: {} → {} ({} → {} bytes)",
+                    type_name(f),
+                    type_name(g),
+                    f.width,
+                    g.width
+                ),
+            );
+        } else if f.signed != g.signed {
+            self.wire(
+                "field_signedness_changed",
+                path.to_owned(),
+                format!("field {what}: {} → {}", type_name(f), type_name(g)),
+            );
+        } else if f.is_ascii() != g.is_ascii() {
+            self.api(
+                "field_type_changed",
+                path.to_owned(),
+                format!("field {what}: {} → {}", type_name(f), type_name(g)),
+            );
+        }
+        if f.constant != g.constant {
+            let show =
+                |c: Option<u64>| c.map_or("not constant".to_owned(), |c| format!("0x{c:02X}"));
+            self.wire(
+                "constant_changed",
+                path.to_owned(),
+                format!(
+                    "field {what}: constant {} → {}",
+                    show(f.constant),
+                    show(g.constant)
+                ),
+            );
+        }
+        // `equals` points at an earlier field of the same message; compare where it points.
+        let (oe, ne) = (
+            f.equals.and_then(|i| m.fields.get(i)).map(|e| e.offset),
+            g.equals.and_then(|i| x.fields.get(i)).map(|e| e.offset),
+        );
+        if oe != ne {
+            self.wire(
+                "field_equals_changed",
+                path.to_owned(),
+                format!("field {what}: which earlier field it repeats changed"),
+            );
+        }
+        self.field_meaning(
+            (f.unit, f.enumeration, f.flags),
+            (g.unit, g.enumeration, g.flags),
+            path,
+            &what,
+            maps,
+        );
+        self.range(f.range, g.range, path, &what);
+        let changes = value_changes(&specials(f), &specials(g));
+        self.values(
+            &format!("{path}.special"),
+            &format!("field {what} special value"),
+            changes,
+        );
+        // Packed sub-fields, matched by their lowest bit.
+        if f.bits.is_empty() != g.bits.is_empty() {
+            self.wire(
+                "field_packing_changed",
+                path.to_owned(),
+                format!(
+                    "field {what}: {} → {}",
+                    if f.bits.is_empty() {
+                        "one value"
+                    } else {
+                        "packed sub-fields"
+                    },
+                    if g.bits.is_empty() {
+                        "one value"
+                    } else {
+                        "packed sub-fields"
+                    }
+                ),
+            );
+        }
+        if !f.bits.is_empty() && !g.bits.is_empty() {
+            for b in &f.bits {
+                let Some(c) = g.bits.iter().find(|c| c.lsb == b.lsb) else {
+                    self.wire(
+                        "field_removed",
+                        format!("{path}.bits.{}", b.name),
+                        format!(
+                            "field {what}: sub-field `{}` (bits {}..{}) removed",
+                            b.name, b.msb, b.lsb
+                        ),
+                    );
+                    continue;
+                };
+                let bpath = format!("{path}.bits.{}", c.name);
+                let bwhat = format!("`{msg}.{}`", c.name);
+                if b.name != c.name {
+                    self.api(
+                        "field_renamed",
+                        bpath.clone(),
+                        format!("sub-field `{msg}.{}` renamed to `{}`", b.name, c.name),
+                    );
+                }
+                if (b.msb, b.signed) != (c.msb, c.signed) || b.constant != c.constant {
+                    self.wire(
+                        "bits_changed",
+                        bpath.clone(),
+                        format!(
+                            "sub-field {bwhat}: bits {}..{} {} → bits {}..{} {}",
+                            b.msb,
+                            b.lsb,
+                            if b.signed { "signed" } else { "unsigned" },
+                            c.msb,
+                            c.lsb,
+                            if c.signed { "signed" } else { "unsigned" }
+                        ),
+                    );
+                }
+                self.field_meaning(
+                    (b.unit, None, None),
+                    (c.unit, None, None),
+                    &bpath,
+                    &bwhat,
+                    maps,
+                );
+                self.range(b.range, c.range, &bpath, &bwhat);
+                self.doc_change(
+                    bpath,
+                    &format!("sub-field {bwhat}"),
+                    &[("doc", &b.doc, &c.doc)],
+                );
+            }
+            for c in &g.bits {
+                if !f.bits.iter().any(|b| b.lsb == c.lsb) {
+                    self.wire(
+                        "field_added",
+                        format!("{path}.bits.{}", c.name),
+                        format!(
+                            "field {what}: sub-field `{}` (bits {}..{}) added",
+                            c.name, c.msb, c.lsb
+                        ),
+                    );
+                }
+            }
+        }
+        self.doc_change(
+            path.to_owned(),
+            &format!("field {what}"),
+            &[("doc", &f.doc, &g.doc)],
+        );
+    }
+
+    /// How a field's raw value is read: unit (scale and offset), enum, flags, or a plain number.
+    fn field_meaning(
+        &mut self,
+        old: (Option<usize>, Option<usize>, Option<usize>),
+        new: (Option<usize>, Option<usize>, Option<usize>),
+        path: &str,
+        what: &str,
+        maps: &Maps,
+    ) {
+        let (o, n) = (self.old, self.new);
+        let describe = |p: &Protocol, m: (Option<usize>, Option<usize>, Option<usize>)| match m {
+            (Some(u), _, _) => format!("unit `{}`", p.units[u].name),
+            (_, Some(e), _) => format!("enum `{}`", p.enums[e].name),
+            (_, _, Some(f)) => format!("flags `{}`", p.flags[f].name),
+            _ => "a plain number".to_owned(),
+        };
+        let text = format!("field {what}: {} → {}", describe(o, old), describe(n, new));
+        match (old, new) {
+            ((Some(a), ..), (Some(b), ..)) => {
+                if maps.units[a] == Some(b) {
+                    return; // the unit itself is compared once, under `units`
+                }
+                let (ua, ub) = (&o.units[a], &n.units[b]);
+                if (ua.scale, ua.offset) != (ub.scale, ub.offset) {
+                    self.wire(
+                        "field_scale_changed",
+                        path.to_owned(),
+                        format!(
+                            "{text}: physical value {} → {}",
+                            conversion(ua),
+                            conversion(ub)
+                        ),
+                    );
+                } else {
+                    self.api("field_type_changed", path.to_owned(), text);
+                }
+            }
+            ((_, Some(a), _), (_, Some(b), _)) => {
+                if maps.enums[a] == Some(b) {
+                    return;
+                }
+                let lost = value_changes(&enum_values(&o.enums[a]), &enum_values(&n.enums[b]))
+                    .iter()
+                    .any(|c| !matches!(c, ValueChange::Added(..)));
+                if lost {
+                    self.wire(
+                        "field_enum_changed",
+                        path.to_owned(),
+                        format!("{text}, whose values differ"),
+                    );
+                } else {
+                    self.api("field_type_changed", path.to_owned(), text);
+                }
+            }
+            ((_, _, Some(a)), (_, _, Some(b))) => {
+                if maps.flags[a] == Some(b) {
+                    return;
+                }
+                let lost = value_changes(&flag_bits(&o.flags[a]), &flag_bits(&n.flags[b]))
+                    .iter()
+                    .any(|c| !matches!(c, ValueChange::Added(..)));
+                if lost {
+                    self.wire(
+                        "field_flags_changed",
+                        path.to_owned(),
+                        format!("{text}, whose bits differ"),
+                    );
+                } else {
+                    self.api("field_type_changed", path.to_owned(), text);
+                }
+            }
+            _ if old == (None, None, None) && new == (None, None, None) => {}
+            ((Some(a), ..), _)
+                if o.units[a].scale != Rational::ONE || o.units[a].offset != Rational::ZERO =>
+            {
+                // A scaled number becoming an enum, flags or plain number: its value changes.
+                self.wire("field_scale_changed", path.to_owned(), text);
+            }
+            (_, (Some(b), ..))
+                if n.units[b].scale != Rational::ONE || n.units[b].offset != Rational::ZERO =>
+            {
+                self.wire("field_scale_changed", path.to_owned(), text);
+            }
+            _ => self.api("field_type_changed", path.to_owned(), text),
+        }
+    }
+
+    fn range(&mut self, a: Option<(i64, i64)>, b: Option<(i64, i64)>, path: &str, what: &str) {
+        let Some(wider) = widened(a, b) else {
+            return;
+        };
+        let text = format!("field {what}: range {} → {}", range_text(a), range_text(b));
+        if wider {
+            self.compatible("range_widened", format!("{path}.range"), text);
+        } else {
+            self.api(
+                "range_narrowed",
+                format!("{path}.range"),
+                format!("{text}; values valid before are now out of range"),
+            );
+        }
+    }
+
+    /// The replies each command may get, and the common ones.
+    fn replies(&mut self, maps: &Maps) {
+        let (o, n) = (self.old, self.new);
+        let rmap = &maps.messages[&Direction::Response];
+        let cmap = &maps.messages[&Direction::Request];
+        let mapped =
+            |set: &[usize]| -> BTreeSet<Option<usize>> { set.iter().map(|&r| rmap[r]).collect() };
+        let old_common = mapped(&o.common_responses);
+        let new_common: BTreeSet<Option<usize>> =
+            n.common_responses.iter().map(|&r| Some(r)).collect();
+        let name = |r: Option<usize>| r.map_or("?", |r| n.responses[r].name.as_str());
+        for r in &o.common_responses {
+            if !new_common.contains(&rmap[*r]) {
+                self.wire(
+                    "reply_removed",
+                    "common_responses".to_owned(),
+                    format!(
+                        "`{}` is no longer a response every command may get",
+                        o.responses[*r].name
+                    ),
+                );
+            }
+        }
+        for r in new_common.difference(&old_common) {
+            self.compatible(
+                "reply_added",
+                "common_responses".to_owned(),
+                format!("`{}` is now a response every command may get", name(*r)),
+            );
+        }
+        for (i, c) in o.commands.iter().enumerate() {
+            let Some(j) = cmap[i] else { continue };
+            let d = &n.commands[j];
+            let before: BTreeMap<Option<usize>, Option<&String>> = c
+                .responses
+                .iter()
+                .map(|(r, meaning)| (rmap[*r], meaning.as_ref()))
+                .collect();
+            let after: BTreeMap<Option<usize>, Option<&String>> = d
+                .responses
+                .iter()
+                .map(|(r, meaning)| (Some(*r), meaning.as_ref()))
+                .collect();
+            let path = format!("commands.{}.responses", d.name);
+            for (idx, _) in &c.responses {
+                let r = &rmap[*idx];
+                let common_change = old_common.contains(r) && !new_common.contains(r);
+                if !after.contains_key(r) && !common_change {
+                    self.wire(
+                        "reply_removed",
+                        path.clone(),
+                        format!(
+                            "command `{}` no longer gets `{}`",
+                            d.name, o.responses[*idx].name
+                        ),
+                    );
+                }
+            }
+            for (r, meaning) in &after {
+                match before.get(r) {
+                    None if !new_common.contains(r) || old_common.contains(r) => self.compatible(
+                        "reply_added",
+                        path.clone(),
+                        format!("command `{}` may now get `{}`", d.name, name(*r)),
+                    ),
+                    Some(m) if m != meaning => self.compatible(
+                        "documentation_changed",
+                        format!("commands.{}.response_meanings.{}", d.name, name(*r)),
+                        format!("command `{}`: meaning of `{}` changed", d.name, name(*r)),
+                    ),
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    fn examples(&mut self) {
+        let (o, n) = (&self.old.examples, &self.new.examples);
+        let key = |e: &crate::ir::Example| {
+            (
+                e.section.clone(),
+                e.printed
+                    .clone()
+                    .or_else(|| e.derived.clone())
+                    .unwrap_or_default(),
+            )
+        };
+        let label = |p: &Protocol, e: &crate::ir::Example| {
+            format!(
+                "§{} `{}` `{}`",
+                e.section,
+                p.message(e.message).name,
+                e.printed.as_deref().or(e.derived.as_deref()).unwrap_or("")
+            )
+        };
+        let mut used = vec![false; n.len()];
+        for e in o {
+            let found = (0..n.len()).find(|&j| !used[j] && key(&n[j]) == key(e));
+            match found {
+                Some(j) => {
+                    used[j] = true;
+                    let f = &n[j];
+                    let erratum = |p: &Protocol, e: &crate::ir::Example| {
+                        e.erratum.map(|i| p.errata[i].id.clone())
+                    };
+                    if e.values != f.values
+                        || e.comment != f.comment
+                        || e.corrected != f.corrected
+                        || erratum(self.old, e) != erratum(self.new, f)
+                    {
+                        self.compatible(
+                            "example_changed",
+                            "examples".to_owned(),
+                            format!("example {} changed", label(self.new, f)),
+                        );
+                    }
+                }
+                None => self.compatible(
+                    "example_removed",
+                    "examples".to_owned(),
+                    format!("example {} removed", label(self.old, e)),
+                ),
+            }
+        }
+        for (j, f) in n.iter().enumerate() {
+            if !used[j] {
+                self.compatible(
+                    "example_added",
+                    "examples".to_owned(),
+                    format!("example {} added", label(self.new, f)),
+                );
+            }
+        }
+    }
+
+    fn errata(&mut self) {
+        let (o, n) = (&self.old.errata, &self.new.errata);
+        for e in o {
+            match n.iter().find(|f| f.id == e.id) {
+                None => self.compatible(
+                    "erratum_removed",
+                    format!("errata.{}", e.id),
+                    format!("erratum {} (§{}) removed", e.id, e.section),
+                ),
+                Some(f) => self.doc_change(
+                    format!("errata.{}", f.id),
+                    &format!("erratum {}", f.id),
+                    &[
+                        ("section", &e.section, &f.section),
+                        ("says", &e.says, &f.says),
+                        ("decision", &e.decision, &f.decision),
+                        ("why", &e.why, &f.why),
+                    ],
+                ),
+            }
+        }
+        for f in n {
+            if !o.iter().any(|e| e.id == f.id) {
+                self.compatible(
+                    "erratum_added",
+                    format!("errata.{}", f.id),
+                    format!("erratum {} (§{}) added", f.id, f.section),
+                );
+            }
+        }
+    }
+}
+
+/// A message's wire identity within its direction: its code and its constant fields
+/// (offset, value), which select between messages sharing a code.
+fn key(m: &Message) -> (Vec<u8>, Vec<(usize, u64)>) {
+    let constants = m
+        .fields
+        .iter()
+        .filter_map(|f| f.constant.map(|c| (f.offset, c)))
+        .collect();
+    (m.code.clone(), constants)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_are_matched_by_number_and_a_moved_name_is_renumbered() {
+        let old = [(0, "idle"), (1, "manual"), (2, "auto")];
+        let new = [(0, "idle"), (1, "hand"), (3, "auto"), (4, "service")];
+        let got: Vec<String> = value_changes(&old, &new)
+            .into_iter()
+            .map(|c| match c {
+                ValueChange::Removed(v, n) => format!("-{v}{n}"),
+                ValueChange::Renumbered(n, a, b) => format!("{n}:{a}>{b}"),
+                ValueChange::Renamed(v, a, b) => format!("{v}:{a}>{b}"),
+                ValueChange::Added(v, n) => format!("+{v}{n}"),
+            })
+            .collect();
+        assert_eq!(got, ["1:manual>hand", "auto:2>3", "+4service"]);
+    }
+
+    #[test]
+    fn a_range_that_contains_the_old_one_is_wider() {
+        assert_eq!(widened(Some((0, 9)), Some((0, 9))), None);
+        assert_eq!(widened(Some((0, 9)), Some((0, 10))), Some(true));
+        assert_eq!(widened(Some((0, 9)), None), Some(true));
+        assert_eq!(widened(None, Some((0, 9))), Some(false));
+        assert_eq!(widened(Some((0, 9)), Some((1, 12))), Some(false));
+    }
+}

@@ -1,0 +1,285 @@
+//! `diff` over fixture pairs: `fixtures/diff/base.yaml` against a copy with the changes of one
+//! category applied. Each test lists every change it expects, so a change reported in the wrong
+//! category, under the wrong path, or not at all fails it.
+
+use std::path::{Path, PathBuf};
+
+use busspec_codegen::diff::{self, Category, Change};
+use busspec_codegen::{load_file, Protocol};
+use Category::{ApiBreaking as Api, Compatible as Compat, WireBreaking as Wire};
+
+fn fixture(name: &str) -> (PathBuf, Protocol) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/diff")
+        .join(name);
+    let p = load_file(&path).unwrap_or_else(|d| panic!("{d}"));
+    (path, p)
+}
+
+fn changes(old: &str, new: &str) -> Vec<Change> {
+    diff::diff(&fixture(old).1, &fixture(new).1)
+}
+
+fn summary(changes: &[Change]) -> Vec<(Category, &str, &str)> {
+    changes
+        .iter()
+        .map(|c| (c.category, c.kind, c.path.as_str()))
+        .collect()
+}
+
+#[test]
+fn a_spec_against_itself_has_no_changes() {
+    for f in ["base.yaml", "wire.yaml", "api.yaml", "compatible.yaml"] {
+        assert_eq!(changes(f, f), [], "{f}");
+    }
+}
+
+#[test]
+fn every_wire_breaking_change_is_found() {
+    let got = changes("base.yaml", "wire.yaml");
+    assert_eq!(
+        summary(&got),
+        [
+            (Wire, "byte_order_changed", "byte_order"),
+            (Wire, "serial_changed", "serial.baud"),
+            (Wire, "framing_changed", "framing.start"),
+            (Wire, "checksum_changed", "framing.checksum"),
+            (Wire, "address_range_narrowed", "framing.address.devices"),
+            (Wire, "unit_scale_changed", "units.celsius"),
+            (Wire, "value_removed", "enums.mode.values.manual"),
+            (Wire, "value_renumbered", "enums.mode.values.auto"),
+            (Wire, "value_removed", "flags.status_bits.bits.overheat"),
+            (
+                Wire,
+                "field_signedness_changed",
+                "commands.go_to.fields.target"
+            ),
+            (Wire, "code_changed", "commands.set_mode"),
+            (Wire, "frame_length_changed", "commands.get_status"),
+            (
+                Wire,
+                "field_width_changed",
+                "commands.get_status.fields.channel"
+            ),
+            (
+                Wire,
+                "constant_changed",
+                "commands.get_upper_limit.fields.index"
+            ),
+            (Wire, "message_removed", "commands.reset"),
+            (Wire, "frame_length_changed", "responses.status"),
+            (
+                Wire,
+                "field_scale_changed",
+                "responses.status.fields.position_word.bits.freshness"
+            ),
+            (
+                Wire,
+                "bits_changed",
+                "responses.status.fields.position_word.bits.position"
+            ),
+            (
+                Wire,
+                "value_removed",
+                "responses.status.fields.temperature.special.no_sensor"
+            ),
+            (Wire, "field_removed", "responses.status.fields.reserved"),
+            (
+                Wire,
+                "field_offset_changed",
+                "responses.limit.fields.capacitance"
+            ),
+            (Wire, "field_offset_changed", "responses.limit.fields.spare"),
+            (Wire, "reply_removed", "commands.go_to.responses"),
+        ]
+    );
+    // The texts name both sides.
+    let text = |kind: &str| &got.iter().find(|c| c.kind == kind).unwrap().text;
+    assert_eq!(
+        text("code_changed"),
+        "command `set_mode`: code 0x3000 → 0x3100"
+    );
+    assert_eq!(
+        text("unit_scale_changed"),
+        "unit `celsius`: physical value raw × 1 − 50 → raw × 1 − 40; every field in it reads differently"
+    );
+    assert_eq!(
+        text("checksum_changed"),
+        "checksum: sum8 (8 bits, check 0xDD) → CRC-8/SMBUS (8 bits, check 0xF4)"
+    );
+    assert_eq!(
+        text("field_width_changed"),
+        "field `get_status.channel`: u8 → u16 (1 → 2 bytes)"
+    );
+}
+
+#[test]
+fn every_api_breaking_change_is_found_and_nothing_on_the_wire() {
+    let got = changes("base.yaml", "api.yaml");
+    assert_eq!(
+        summary(&got),
+        [
+            (Api, "unit_renamed", "units.counter"),
+            (Api, "enum_renamed", "enums.operating_mode"),
+            (Api, "value_renamed", "flags.status_bits.bits.restarted"),
+            (Api, "message_renamed", "commands.go_to_capacitance"),
+            (
+                Api,
+                "field_renamed",
+                "commands.go_to_capacitance.fields.capacitance"
+            ),
+            (
+                Api,
+                "range_narrowed",
+                "commands.go_to_capacitance.fields.capacitance.range"
+            ),
+            (
+                Api,
+                "value_renamed",
+                "responses.status.fields.temperature.special.sensor_missing"
+            ),
+            (Api, "field_type_changed", "responses.limit.fields.spare"),
+        ]
+    );
+    assert_eq!(
+        got[3].text,
+        "command `go_to` (0x2000) renamed to `go_to_capacitance`"
+    );
+}
+
+#[test]
+fn every_compatible_change_is_found() {
+    let got = changes("base.yaml", "compatible.yaml");
+    assert_eq!(
+        summary(&got),
+        [
+            (Compat, "document_changed", "document.revision"),
+            (Compat, "document_changed", "document.date"),
+            (Compat, "address_range_widened", "framing.address.devices"),
+            (Compat, "framing_widened", "framing.response.payload"),
+            (Compat, "unit_added", "units.volts"),
+            (Compat, "value_added", "enums.mode.values.service"),
+            (Compat, "value_added", "flags.status_bits.bits.undervoltage"),
+            (Compat, "documentation_changed", "commands.go_to"),
+            (
+                Compat,
+                "range_widened",
+                "commands.get_status.fields.channel.range"
+            ),
+            (Compat, "message_added", "commands.get_supply"),
+            (
+                Compat,
+                "value_added",
+                "responses.status.fields.temperature.special.sensor_fault"
+            ),
+            (Compat, "message_added", "responses.supply"),
+            (Compat, "reply_added", "commands.get_status.responses"),
+            (Compat, "example_added", "examples"),
+            (Compat, "erratum_added", "errata.mini-e01"),
+        ]
+    );
+}
+
+#[test]
+fn going_back_from_additions_removes_them_on_the_wire() {
+    // The reverse of compatible.yaml: what was added is removed, what was widened narrowed.
+    let got = changes("compatible.yaml", "base.yaml");
+    let s = summary(&got);
+    for expected in [
+        (Wire, "message_removed", "commands.get_supply"),
+        (Wire, "message_removed", "responses.supply"),
+        (Wire, "value_removed", "enums.mode.values.service"),
+        (Wire, "address_range_narrowed", "framing.address.devices"),
+        (Wire, "framing_changed", "framing.response.payload"),
+        (Wire, "reply_removed", "commands.get_status.responses"),
+        (
+            Api,
+            "range_narrowed",
+            "commands.get_status.fields.channel.range",
+        ),
+        (Api, "unit_removed", "units.volts"),
+        (Compat, "example_removed", "examples"),
+        (Compat, "erratum_removed", "errata.mini-e01"),
+    ] {
+        assert!(s.contains(&expected), "{expected:?} missing from {s:#?}");
+    }
+}
+
+#[test]
+fn a_code_reused_with_another_layout_is_one_wire_breaking_change() {
+    let got = changes("base.yaml", "reused.yaml");
+    assert_eq!(
+        summary(&got),
+        [(Wire, "code_reused", "commands.get_version")]
+    );
+    assert!(
+        got[0]
+            .text
+            .starts_with("command code 0x4000 reused: `get_status` replaced by `get_version`"),
+        "{}",
+        got[0].text
+    );
+}
+
+#[test]
+fn the_changelog_lists_breaking_changes_first_under_the_new_revision() {
+    let (op, old) = fixture("base.yaml");
+    let (np, new) = fixture("compatible.yaml");
+    let old_side = diff::Side::of(&op.display().to_string(), &old);
+    let new_side = diff::Side::of(&np.display().to_string(), &new);
+    let md = diff::render_markdown(&old_side, &new_side, &diff::diff(&old, &new));
+    assert!(
+        md.starts_with("## mini: revision 1.1 (2024-06-01)\n"),
+        "{md}"
+    );
+    assert!(
+        md.contains(&format!("(SHA-256 `{}`)", new.spec_sha256)),
+        "{md}"
+    );
+    assert!(
+        md.contains("\n### Compatible (15)\n\n- document revision: 1.0 → 1.1\n"),
+        "{md}"
+    );
+    assert!(!md.contains("Wire-breaking"), "{md}");
+
+    let (wp, wire) = fixture("wire.yaml");
+    let wire_side = diff::Side::of(&wp.display().to_string(), &wire);
+    let mixed = [diff::diff(&old, &wire), diff::diff(&old, &new)].concat();
+    let md = diff::render_markdown(&old_side, &wire_side, &mixed);
+    let wire_at = md.find("### Wire-breaking (23)").expect(&md);
+    let compatible_at = md.find("### Compatible (15)").expect(&md);
+    assert!(wire_at < compatible_at, "{md}");
+    assert!(md.contains("- command `reset` (0x1000) removed\n"), "{md}");
+}
+
+#[test]
+fn any_two_specs_diff_without_panicking_and_each_against_itself_is_empty() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["tests/fixtures/valid", "tests/fixtures/diff", "../spec"] {
+        for e in std::fs::read_dir(root.join(dir)).expect("fixture directory") {
+            let path = e.expect("directory entry").path();
+            if path.extension().is_some_and(|x| x == "yaml") {
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() >= 9, "{files:?}");
+    let specs: Vec<Protocol> = files
+        .iter()
+        .map(|f| load_file(f).unwrap_or_else(|d| panic!("{d}")))
+        .collect();
+    for (i, a) in specs.iter().enumerate() {
+        for (j, b) in specs.iter().enumerate() {
+            // Every file here differs from every other in substance, not just in comments.
+            let changes = diff::diff(a, b);
+            assert_eq!(
+                changes.is_empty(),
+                i == j,
+                "{} → {}",
+                files[i].display(),
+                files[j].display()
+            );
+        }
+    }
+}
