@@ -1,7 +1,10 @@
 //! `busspec`: check protocol specs, render their reference documentation, and decode and
 //! encode frames.
 
+mod demo;
 mod frames;
+mod link_cli;
+mod svg;
 
 use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
@@ -109,6 +112,104 @@ enum Command {
     /// Every change between two revisions of a spec, classified by what it breaks.
     #[command(long_about = DIFF_HELP)]
     Diff(DiffArgs),
+    /// Run simulated devices on a pseudo-terminal (printing its path) or a serial port.
+    #[command(long_about = SIM_HELP)]
+    Sim(SimArgs),
+    /// Run one transaction with a device on a serial port and print the reply as JSON.
+    #[command(long_about = TALK_HELP)]
+    Talk(TalkArgs),
+    /// A scripted session against simulated devices: no hardware needed.
+    Demo {
+        /// Also draw the simulated capacitor's C-curve into this SVG file.
+        #[arg(long, value_name = "FILE")]
+        svg: Option<PathBuf>,
+    },
+    /// Many transactions through a faulty simulated line; counts what got through.
+    Soak {
+        /// Transactions per protocol.
+        #[arg(long, default_value_t = 100_000)]
+        transactions: u64,
+        /// Byte-error rate (0.01 = 1 %), split over corrupted, dropped and duplicated bytes,
+        /// with truncated, silenced and late frames at a fifth of it each.
+        #[arg(long, default_value_t = 0.01)]
+        rate: f64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Only this protocol (default: both).
+        protocol: Option<String>,
+    },
+}
+
+const SIM_HELP: &str = "\
+Run simulated devices on a line until killed.
+
+With --pty, opens a pseudo-terminal pair and prints the path of the end to talk to (one line on
+stdout), e.g. /dev/pts/5; `busspec talk --port /dev/pts/5 ...` then talks to the simulators.
+With --port PATH, serves on that serial port instead. Several --address options put several
+devices on the one line (default: ub2 0x21, sd 0x01). --verbose logs every frame on stderr.";
+
+const TALK_HELP: &str = "\
+Run one transaction with a device and print its reply as one JSON line, in the shape `busspec
+decode` prints.
+
+The command is a command name from the spec (`busspec decode --help` lists the value forms;
+docs/<protocol>.md lists the commands) and its fields follow as name=value, in the spec's
+units: `go_to_capacitance target=150` (pF), `set_point position=45` (degrees),
+`set_mode_of_operation mode=close_loop_control`. Constant and repeated fields are filled in;
+the SD freshness counter is the master's and is filled in too.
+
+Movements wait for completion, showing progress on stderr, and print the trigger's reply and
+the final completion reply (--no-wait: only the trigger's). `c-curve` (ub2) reads the whole
+C-curve table, one line per entry, and with --svg FILE draws it. An SD string readout without
+byte_number reads the whole string and prints {\"protocol\",\"address\",\"message\",\"text\"}.
+
+Reads and setters are retried on a garbled reply or a timeout; movements and resets never.
+Exit status 1 with `error: ...` on stderr when no valid reply comes.";
+
+#[derive(Args)]
+struct SimArgs {
+    /// ub2 or sd.
+    protocol: String,
+    /// A device address (decimal or 0x..); repeat for several devices.
+    #[arg(long = "address", value_name = "A", value_parser = link_cli::parse_address)]
+    addresses: Vec<u8>,
+    /// Serve on a new pseudo-terminal and print its path.
+    #[arg(long, conflicts_with = "port")]
+    pty: bool,
+    /// Serve on this serial port.
+    #[arg(long, value_name = "PATH")]
+    port: Option<String>,
+    /// Log every frame on stderr.
+    #[arg(long)]
+    verbose: bool,
+}
+
+#[derive(Args)]
+struct TalkArgs {
+    /// The serial port (or pseudo-terminal) the device is on.
+    #[arg(long, value_name = "PATH")]
+    port: String,
+    /// Baud rate (default: the document's: ub2 19200, sd 115200).
+    #[arg(long)]
+    baud: Option<u32>,
+    /// Reply timeout in milliseconds (default: ub2 200, sd 50).
+    #[arg(long, value_name = "MS")]
+    timeout: Option<u64>,
+    /// ub2 or sd.
+    protocol: String,
+    /// The device address (decimal or 0x..); the SD broadcast ID 0x1F where the command takes it.
+    #[arg(long, value_parser = link_cli::parse_address)]
+    address: u8,
+    /// A command name (snake_case, as in the spec), or `c-curve` (ub2).
+    command: String,
+    /// The command's fields as name=value.
+    args: Vec<String>,
+    /// Do not wait for a movement to complete.
+    #[arg(long)]
+    no_wait: bool,
+    /// With c-curve: draw the table into this SVG file.
+    #[arg(long, value_name = "FILE")]
+    svg: Option<PathBuf>,
 }
 
 const DIFF_HELP: &str = "\
@@ -227,6 +328,28 @@ fn main() -> ExitCode {
         Command::Decode(args) => decode(args),
         Command::Encode(args) => encode(args),
         Command::Diff(args) => return diff(args),
+        Command::Sim(a) => link_cli::sim(
+            &a.protocol,
+            &a.addresses,
+            a.pty,
+            a.port.as_deref(),
+            a.verbose,
+        ),
+        Command::Talk(a) => talk(a),
+        Command::Demo { svg } => demo(svg.as_deref()),
+        Command::Soak {
+            transactions,
+            rate,
+            seed,
+            protocol,
+        } => {
+            let all = ["ub2", "sd"];
+            let chosen: Vec<&str> = match protocol.as_deref() {
+                Some(p) => vec![p],
+                None => all.to_vec(),
+            };
+            link_cli::soak(&chosen, transactions, rate, seed)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -603,4 +726,31 @@ fn diff(args: DiffArgs) -> ExitCode {
         );
     }
     ExitCode::FAILURE
+}
+
+fn talk(a: TalkArgs) -> Result<(), String> {
+    let p = protocol("talk", &a.protocol, None)?;
+    let options = link_cli::TalkOptions {
+        port: &a.port,
+        baud: a.baud,
+        address: a.address,
+        command: &a.command,
+        args: &a.args,
+        wait: !a.no_wait,
+        svg: a.svg.as_deref(),
+        timeout: a.timeout.map(std::time::Duration::from_millis),
+    };
+    link_cli::talk(&p, &options).map_err(|e| {
+        if e.starts_with("error: ") {
+            e
+        } else {
+            format!("error: {e}")
+        }
+    })
+}
+
+fn demo(svg: Option<&Path>) -> Result<(), String> {
+    let ub2 = protocol("demo", "ub2", None)?;
+    let sd = protocol("demo", "sd", None)?;
+    link_cli::demo(&ub2, &sd, svg).map(|_| ())
 }

@@ -1,0 +1,394 @@
+//! The soak: many transactions between a master and simulated devices through a faulty line,
+//! counting what got through and what did not.
+//!
+//! Every transaction is judged against a reference: just before it, the target device is
+//! copied, and the copy answers the request as sent (undamaged) at the same instant — device
+//! time is held still within a transaction, so a retry sees the same time. Then:
+//!
+//! - **completed**: the master returned a reply equal to the reference's, and the device ended
+//!   in the reference's state; **retried** if that took more than one send;
+//! - **failed**: the master returned an error (no reply, no valid reply, ...);
+//! - **silent wrong**: the master returned a reply, but it differs from the reference's or the
+//!   device's state does (a damaged request that still passed the device's checks).
+//!
+//! For comparison the same run also judges a master that accepts whatever arrives before the
+//! line goes quiet as soon as its checksum is right — no length, address or pairing checks: the
+//! first such reply in a transaction counts as silently wrong when its bytes differ from the
+//! reference's reply, or when the device's state does.
+//!
+//! After each transaction the device is reset to the reference's state, so faults do not pile
+//! up and every transaction starts from a known device.
+
+use std::cell::RefCell;
+use std::fmt;
+use std::rc::Rc;
+use std::time::Duration;
+
+use busspec_protocols::{sd, ub2};
+
+use crate::clock::{Clock, SimClock};
+use crate::fault::{FaultConfig, FaultCounts, Faulty};
+use crate::master::{Master, Timing, TraceEvent};
+use crate::protocol::{Protocol, Sd, Ub2};
+use crate::sim::sd::SdSim;
+use crate::sim::ub2::Ub2Sim;
+use crate::sim::{BusConfig, Device, SimBus};
+
+/// A protocol the soak can run: its device and a mix of requests.
+pub trait SoakTarget: Protocol {
+    type Device: Device + Clone + PartialEq;
+    fn device(index: u8) -> Self::Device;
+    /// A request from the soak's mix, for this device as it is now.
+    fn request(rng: &mut fastrand::Rng, device: &Self::Device) -> Self::Request;
+}
+
+impl SoakTarget for Ub2 {
+    type Device = Ub2Sim;
+
+    fn device(index: u8) -> Ub2Sim {
+        Ub2Sim::new(0x21 + index)
+    }
+
+    fn request(rng: &mut fastrand::Rng, d: &Ub2Sim) -> ub2::Request {
+        use ub2::Request as Q;
+        let cap = |rng: &mut fastrand::Rng| {
+            let lo = d.lower_factory_limit().0;
+            let hi = d.upper_factory_limit().0;
+            ub2::Capacitance(rng.u32(lo.saturating_sub(500)..=hi + 500))
+        };
+        match rng.u32(0..100) {
+            0..=4 => Q::GetActualCapacitance,
+            5..=8 => Q::GetActualFullStepPosition,
+            9..=10 => Q::GetMinimumCapacitance,
+            11..=12 => Q::GetMaximumCapacitance,
+            13..=15 => Q::GetAccelerationSpeed,
+            16..=27 => Q::GetCCurveIndexedFullStepCapacitance {
+                index: rng.u16(0..210),
+            },
+            28..=29 => Q::GetControllerTemperature,
+            30..=33 => Q::GetMicroStepPosition,
+            34..=36 => Q::GetFirmwareVersion,
+            37..=39 => Q::GetSerialNumber,
+            40 => Q::GetCminNom,
+            41 => Q::GetCmaxNom,
+            42..=43 => Q::GetLowerCustomerLimit,
+            44..=45 => Q::GetUpperCustomerLimit,
+            46 => Q::GetLowerFactoryLimit,
+            47 => Q::GetUpperFactoryLimit,
+            48 => Q::GetPresetCapacitance,
+            49 => Q::GetPresetFullStepPosition,
+            50..=53 => Q::GetStoredFullStepPosition {
+                index: rng.u8(0..=10),
+            },
+            54..=55 => Q::GetModeOfOperation,
+            56..=57 => Q::GetStatus,
+            58..=61 => Q::GoToFullStepPositionStatus,
+            62..=63 => Q::MoveFullStepsStatus,
+            64..=65 => Q::GoToCapacitanceStatus,
+            66..=69 => Q::SetAccelerationSpeedIndex {
+                acceleration_index: rng.u8(0..=19),
+                speed_index: rng.u8(0..=19),
+            },
+            70..=72 => Q::SetCurrent {
+                idle_current: rng.u8(0..=110),
+                drive_current: rng.u8(0..=210),
+            },
+            73..=77 => Q::StoreIndexedPosition {
+                index: rng.u8(0..=10),
+                position: rng.u16(0..10_000),
+            },
+            78..=79 => Q::SetModeOfOperation {
+                mode: ub2::ModeOfOperation::from_raw(rng.u8(0..=3)),
+            },
+            80..=83 => Q::SetLowerCustomerLimit { limit: cap(rng) },
+            84..=87 => Q::SetUpperCustomerLimit { limit: cap(rng) },
+            88..=91 => Q::GoToFullStepPosition {
+                target: rng.u16(0..10_000),
+            },
+            92..=95 => Q::MoveFullSteps {
+                steps: rng.i16(-2000..=2000),
+            },
+            _ => Q::GoToCapacitance { target: cap(rng) },
+        }
+    }
+}
+
+impl SoakTarget for Sd {
+    type Device = SdSim;
+
+    fn device(index: u8) -> SdSim {
+        SdSim::new(1 + index)
+    }
+
+    fn request(rng: &mut fastrand::Rng, _d: &SdSim) -> sd::Request {
+        use sd::Request as Q;
+        match rng.u32(0..100) {
+            0..=14 => Q::SetPoint {
+                freshness: 0,
+                position: sd::Angle(rng.i16(-2048..=2047)),
+            },
+            15..=24 => Q::ReadActualPosition,
+            25..=29 => Q::SetVelocity {
+                set_velocity: sd::Velocity(rng.i16(-3600..=3600)),
+            },
+            30..=33 => Q::ReadActualVelocity,
+            34..=35 => Q::ReadServoId,
+            36..=38 => Q::ReadCurrentConsumption,
+            39..=40 => Q::ReadBusVoltages,
+            41..=42 => Q::ReadExtendedCurrentConsumption,
+            43..=45 => Q::ReadTemperatures,
+            46..=47 => Q::ReadHumidity,
+            48..=50 => Q::ReadSkippedFramesCounter,
+            51 => Q::ResetDroppedFramesCounter,
+            52..=54 => Q::ReadActuatorStatusWord,
+            55 => Q::ResetActuatorStatusWord,
+            56 => Q::ResetDefaultRoleAndErrorFlags,
+            57 => Q::SetCurrentPositionAsZero,
+            58..=59 => Q::ReadCurrentZeroOffset,
+            60 => Q::ResetZeroOffset,
+            61..=64 => Q::ReadElectronicSerialNumber {
+                byte_number: rng.u8(0..=31),
+            },
+            65..=68 => Q::ReadProductDescription {
+                byte_number: rng.u8(0..=31),
+            },
+            69..=70 => Q::ReadSoftwareRevision {
+                byte_number: rng.u8(0..=31),
+            },
+            71..=72 => Q::ReadHardwareRevision {
+                byte_number: rng.u8(0..=31),
+            },
+            73..=74 => Q::ReadTotalRuntimeHours,
+            75..=76 => Q::ReadTotalRuntimeMinSec,
+            77 => Q::ReadLoadRuntime024Hours,
+            78 => Q::ReadLoadRuntime024MinSec,
+            79 => Q::ResetLoadRuntime024,
+            80 => Q::ReadLoadRuntime2549Hours,
+            81 => Q::ReadLoadRuntime2549MinSec,
+            82 => Q::ResetLoadRuntime2549,
+            83 => Q::ReadLoadRuntime5074Hours,
+            84 => Q::ReadLoadRuntime5074MinSec,
+            85 => Q::ResetLoadRuntime5074,
+            86 => Q::ReadLoadRuntime7599Hours,
+            87 => Q::ReadLoadRuntime7599MinSec,
+            88 => Q::ResetLoadRuntime7599,
+            89 => Q::ReadLoadRuntime100Hours,
+            90 => Q::ReadLoadRuntime100MinSec,
+            91 => Q::ResetLoadRuntime100,
+            92..=94 => Q::ReadStallEventCounter,
+            95 => Q::ResetStallEventCounter,
+            _ => Q::ReadPowerUpCycles,
+        }
+    }
+}
+
+/// What to run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SoakConfig {
+    pub transactions: u64,
+    /// Total byte-error rate, see [`FaultConfig::byte_error_rate`].
+    pub byte_error_rate: f64,
+    pub seed: u64,
+    /// Devices on the bus.
+    pub devices: u8,
+}
+
+/// What happened.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SoakReport {
+    pub protocol: &'static str,
+    pub transactions: u64,
+    /// Completed correctly on the first send.
+    pub completed: u64,
+    /// Completed correctly after one or more retries.
+    pub retried: u64,
+    /// Ended with an error.
+    pub failed: u64,
+    /// Answered with a refusal (NAK) other than the reference's answer.
+    pub refused: u64,
+    /// Of failed and refused, those after which the device's state differs from the intended one.
+    pub failed_with_device_changed: u64,
+    /// Returned a reply that was wrong, or left the device in a wrong state, with no error.
+    pub silent_wrong: u64,
+    /// The checksum-only master: transactions where some reply passed its checksum.
+    pub checksum_only_accepted: u64,
+    /// The checksum-only master: of those, wrong.
+    pub checksum_only_silent_wrong: u64,
+    pub sends: u64,
+    pub faults: FaultCounts,
+    /// Simulated time the run took.
+    pub bus_time: Duration,
+    /// A few examples of silent wrong values, for the record.
+    pub examples: Vec<String>,
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02X}")).collect()
+}
+
+impl fmt::Display for SoakReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let pct = |n: u64| 100.0 * n as f64 / (self.transactions.max(1) as f64);
+        writeln!(
+            f,
+            "{}: {} transactions, {} sends, {:.0} s of simulated bus time",
+            self.protocol,
+            self.transactions,
+            self.sends,
+            self.bus_time.as_secs_f64()
+        )?;
+        writeln!(
+            f,
+            "  faults injected: {} bytes corrupted, {} dropped, {} duplicated; {} chunks truncated, {} silenced, {} late (of {} bytes)",
+            self.faults.corrupted, self.faults.dropped, self.faults.duplicated, self.faults.truncated, self.faults.silenced, self.faults.delayed, self.faults.bytes
+        )?;
+        writeln!(
+            f,
+            "  completed first time      {:>8} ({:.2} %)",
+            self.completed,
+            pct(self.completed)
+        )?;
+        writeln!(
+            f,
+            "  completed after retries   {:>8} ({:.2} %)",
+            self.retried,
+            pct(self.retried)
+        )?;
+        writeln!(
+            f,
+            "  failed with a clear error {:>8} ({:.2} %; device changed anyway in {} failed or refused)",
+            self.failed,
+            pct(self.failed),
+            self.failed_with_device_changed
+        )?;
+        writeln!(
+            f,
+            "  refused (unexpected NAK)  {:>8} ({:.2} %)",
+            self.refused,
+            pct(self.refused)
+        )?;
+        writeln!(f, "  wrong, accepted silently  {:>8}", self.silent_wrong)?;
+        write!(
+            f,
+            "  checksum-only master: accepted {}, of which wrong {}",
+            self.checksum_only_accepted, self.checksum_only_silent_wrong
+        )
+    }
+}
+
+/// Runs the soak for protocol `P`.
+pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
+    let clock = SimClock::new();
+    let devices: Vec<P::Device> = (0..config.devices.max(1)).map(P::device).collect();
+    let addresses: Vec<u8> = devices.iter().map(Device::address).collect();
+    let bus = SimBus::new(clock.clone(), BusConfig::new(P::BAUD), devices);
+    let timing = Timing::for_protocol::<P>();
+    let faults = FaultConfig::byte_error_rate(config.byte_error_rate, timing.reply_timeout);
+    let line = Faulty::new(bus.clone(), clock.clone(), faults, config.seed);
+    let mut master: Master<P, _, _> = Master::new(line, clock.clone()).with_timing(timing);
+    let received: Rc<RefCell<Vec<Vec<u8>>>> = Rc::default();
+    let sends = Rc::new(RefCell::new(0u64));
+    {
+        let received = Rc::clone(&received);
+        let sends = Rc::clone(&sends);
+        master.observe(move |e| match e {
+            TraceEvent::Received { bytes, .. } => received.borrow_mut().push(bytes.to_vec()),
+            TraceEvent::Sent { .. } => *sends.borrow_mut() += 1,
+            _ => {}
+        });
+    }
+    for &a in &addresses {
+        master.set_freshness(a, 0x0F);
+    }
+    let mut rng = fastrand::Rng::with_seed(config.seed ^ 0x5EED);
+    let mut report = SoakReport {
+        protocol: P::NAME,
+        transactions: config.transactions,
+        ..SoakReport::default()
+    };
+    for _ in 0..config.transactions {
+        let which = rng.usize(0..addresses.len());
+        let address = addresses[which];
+        let device = bus.with_devices(|d| d[which].clone());
+        let mut request = P::request(&mut rng, &device);
+        if let Some(f) = P::freshness_mut(&mut request) {
+            *f = master.next_freshness_value(address).unwrap_or(0);
+        }
+        // The reference: the device as it is, answering the request as sent, at this instant.
+        let t0 = clock.now();
+        let mut reference = device;
+        let mut sent = vec![0u8; P::MAX_FRAME_LEN];
+        let n = P::encode_request(&request, address, &mut sent).unwrap_or(0);
+        sent.truncate(n);
+        let expected = reference.on_frame(&sent, t0);
+        let expected_response = expected
+            .as_deref()
+            .and_then(|f| P::decode_reply(f, &request).ok())
+            .map(|(_, r)| r);
+        bus.freeze_time(Some(t0));
+        received.borrow_mut().clear();
+        let result = master.transact(address, request);
+        bus.freeze_time(None);
+        let actual = bus.with_devices(|d| std::mem::replace(&mut d[which], reference.clone()));
+        let state_ok = actual == reference;
+        match result {
+            Ok(ex) if ex.response == expected_response && state_ok => {
+                if ex.attempts > 1 {
+                    report.retried += 1;
+                } else {
+                    report.completed += 1;
+                }
+            }
+            // A refusal is not taken for a value: the caller sees the NAK.
+            Ok(ex) if ex.response.as_ref().is_some_and(P::is_nak) => {
+                report.refused += 1;
+                if !state_ok {
+                    report.failed_with_device_changed += 1;
+                }
+            }
+            Ok(ex) => {
+                report.silent_wrong += 1;
+                if report.examples.len() < 5 {
+                    report.examples.push(format!(
+                        "{} to 0x{address:02X}: sent {}, accepted {} ({:?}), expected {:?}{}",
+                        P::request_name(&request),
+                        hex(&sent),
+                        hex(&ex.frame),
+                        ex.response,
+                        expected_response,
+                        if state_ok {
+                            ""
+                        } else {
+                            "; device state differs"
+                        }
+                    ));
+                }
+            }
+            Err(_) => {
+                report.failed += 1;
+                if !state_ok {
+                    report.failed_with_device_changed += 1;
+                }
+            }
+        }
+        // The checksum-only master takes the first reply whose checksum is right. It still
+        // tells a NAK from an answer: a checksum NAK makes it send again, another NAK is a
+        // refusal, not a value.
+        for bytes in received.borrow().iter().filter(|b| P::checksum_ok(b)) {
+            match P::decode_reply(bytes, &request) {
+                Ok((_, r)) if P::is_checksum_nak(&r) => continue,
+                Ok((_, r)) if P::is_nak(&r) => break,
+                _ => {}
+            }
+            report.checksum_only_accepted += 1;
+            if Some(bytes.as_slice()) != expected.as_deref() || !state_ok {
+                report.checksum_only_silent_wrong += 1;
+            }
+            break;
+        }
+    }
+    report.sends = *sends.borrow();
+    report.faults = master.transport_mut().counts;
+    report.bus_time = clock.now();
+    report
+}

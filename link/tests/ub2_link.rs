@@ -1,0 +1,426 @@
+//! The UB2 master against simulated capacitors on a simulated bus, in simulated time.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::Duration;
+
+use busspec_link::clock::Clock;
+use busspec_link::fault::{FaultConfig, Faulty};
+use busspec_link::master::{ub2_completion_check, LinkError, Progress, TraceEvent};
+use busspec_link::sim::ub2::{Ub2Sim, MICRO_STEPS};
+use busspec_link::sim::{BusConfig, SimBus};
+use busspec_link::{Master, SimClock, Ub2};
+use busspec_protocols::ub2::{self, Capacitance, Request, Response};
+
+type Bus = SimBus<Ub2Sim>;
+
+fn bus(addresses: &[u8]) -> (Bus, Master<Ub2, Bus, SimClock>, SimClock) {
+    let clock = SimClock::new();
+    let devices = addresses.iter().map(|&a| Ub2Sim::new(a)).collect();
+    let bus = SimBus::new(clock.clone(), BusConfig::new(19_200), devices);
+    let master = Master::new(bus.clone(), clock.clone());
+    (bus, master, clock)
+}
+
+#[test]
+fn reads_answer_from_the_device_state() {
+    let (bus, mut m, _) = bus(&[0x21]);
+    let r = m.ask(0x21, Request::GetFirmwareVersion).unwrap();
+    assert_eq!(
+        r,
+        Response::FirmwareVersion {
+            firmware_version: *b"20100433.00"
+        }
+    );
+    let expected = bus.with_devices(|d| d[0].capacitance_at(d[0].position));
+    assert_eq!(
+        m.ask(0x21, Request::GetActualCapacitance).unwrap(),
+        Response::ActualCapacitance {
+            capacitance: expected
+        }
+    );
+}
+
+#[test]
+fn requests_are_at_least_10_ms_apart() {
+    let (_, mut m, clock) = bus(&[0x21]);
+    let sends = Rc::new(RefCell::new(Vec::new()));
+    let s = Rc::clone(&sends);
+    let c = clock.clone();
+    m.observe(move |e| {
+        if let TraceEvent::Sent { .. } = e {
+            s.borrow_mut().push(c.now());
+        }
+    });
+    for _ in 0..5 {
+        m.ask(0x21, Request::GetActualFullStepPosition).unwrap();
+    }
+    let t = sends.borrow();
+    assert_eq!(t.len(), 5);
+    for w in t.windows(2) {
+        // The gap counts from the end of the reply, so starts are more than 10 ms apart.
+        assert!(w[1] - w[0] > Duration::from_millis(10), "{:?}", w);
+    }
+}
+
+#[test]
+fn several_capacitors_share_the_bus_and_answer_only_to_their_address() {
+    let (bus, mut m, _) = bus(&[0x21, 0x22, 0x30]);
+    bus.with_devices(|d| d[1].stored_positions[4] = 777);
+    let r = m
+        .transact(0x22, Request::GetStoredFullStepPosition { index: 4 })
+        .unwrap();
+    assert_eq!(r.address, 0x22);
+    assert_eq!(
+        r.response,
+        Some(Response::StoredFullStepPosition {
+            index: 4,
+            full_steps: 777
+        })
+    );
+    let r = m
+        .ask(0x21, Request::GetStoredFullStepPosition { index: 4 })
+        .unwrap();
+    assert_eq!(
+        r,
+        Response::StoredFullStepPosition {
+            index: 4,
+            full_steps: 0
+        }
+    );
+    // Nobody at 0x25: a clear timeout, retried as a read may be.
+    match m.transact(0x25, Request::GetActualCapacitance) {
+        Err(LinkError::NoReply {
+            attempts: 3,
+            address: 0x25,
+            ..
+        }) => {}
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_movement_runs_in_simulated_time_and_reports_progress() {
+    let (bus, mut m, clock) = bus(&[0x21]);
+    let mut seen = Vec::new();
+    let report = m
+        .run_movement(
+            0x21,
+            Request::GoToFullStepPosition { target: 3000 },
+            Duration::from_millis(100),
+            Duration::from_secs(60),
+            &mut |p| seen.push(p),
+        )
+        .unwrap();
+    assert_eq!(report.started, Response::MovementStarted);
+    assert_eq!(report.finished, Some(Response::MovementCompleted));
+    assert!(!report.clipped);
+    assert_eq!(report.lost_micro_steps, None);
+    // 2362 full steps at speed index 7 (450 steps/s) take several seconds.
+    assert!(report.elapsed > Duration::from_secs(4), "{report:?}");
+    assert!(clock.now() > Duration::from_secs(4));
+    let positions: Vec<f64> = seen
+        .iter()
+        .map(|p| match p {
+            Progress::Moving { position, .. } => *position,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert!(positions.len() > 10);
+    assert!(positions.windows(2).all(|w| w[0] <= w[1]), "{positions:?}");
+    assert_eq!(
+        bus.with_devices(|d| d[0].position_at(clock.now())),
+        3000 * MICRO_STEPS
+    );
+}
+
+#[test]
+fn step_loss_and_limit_clipping_are_surfaced() {
+    let (bus, mut m, _) = bus(&[0x21]);
+    bus.with_devices(|d| d[0].lose_steps_next_move = 3);
+    let r = m
+        .run_movement(
+            0x21,
+            Request::MoveFullSteps { steps: 100 },
+            Duration::from_millis(50),
+            Duration::from_secs(30),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(r.lost_micro_steps, Some(3));
+    assert_eq!(
+        r.finished,
+        Some(Response::MovementCompletedWithStepLoss {
+            lost_micro_steps: 3
+        })
+    );
+
+    // An upper customer limit of 300 pF: going to 400 pF runs to the limit, with 0x93.
+    assert_eq!(
+        m.ask(
+            0x21,
+            Request::SetUpperCustomerLimit {
+                limit: Capacitance(30000)
+            }
+        )
+        .unwrap(),
+        Response::SetUpperCustomerLimitAck
+    );
+    let r = m
+        .run_movement(
+            0x21,
+            Request::GoToCapacitance {
+                target: Capacitance(40000),
+            },
+            Duration::from_millis(50),
+            Duration::from_secs(60),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert!(r.clipped);
+    assert_eq!(r.started, Response::NakLimitReached);
+    match m.ask(0x21, Request::GetActualCapacitance).unwrap() {
+        Response::ActualCapacitance { capacitance } => {
+            assert!(capacitance.0.abs_diff(30000) <= 2, "{capacitance:?}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn naks_follow_the_document() {
+    let (_, mut m, _) = bus(&[0x21]);
+    let nak = |m: &mut Master<Ub2, Bus, SimClock>, r| m.ask(0x21, r).unwrap();
+    assert_eq!(
+        nak(&mut m, Request::GetStoredFullStepPosition { index: 10 }),
+        Response::NakIndexOutOfRange
+    );
+    assert_eq!(
+        nak(&mut m, Request::GoToStoredPosition { index: 12 }),
+        Response::NakIndexOutOfRange
+    );
+    assert_eq!(
+        nak(
+            &mut m,
+            Request::GetCCurveIndexedFullStepCapacitance { index: 499 }
+        ),
+        Response::NakIndexOutOfRange
+    );
+    assert_eq!(
+        nak(
+            &mut m,
+            Request::SetAccelerationSpeedIndex {
+                acceleration_index: 19,
+                speed_index: 3
+            }
+        ),
+        Response::NakIndexOutOfRange
+    );
+    assert_eq!(
+        nak(&mut m, Request::SetSlaveAddress { address: 0x41 }),
+        Response::NakIndexOutOfRange
+    );
+    assert_eq!(
+        nak(
+            &mut m,
+            Request::SetLowerCustomerLimit {
+                limit: Capacitance(1000)
+            }
+        ),
+        Response::NakLimitReached
+    );
+    // Not idle: mode changes and new movements are refused while moving.
+    assert_eq!(
+        nak(&mut m, Request::GoToFullStepPosition { target: 9000 }),
+        Response::MovementStarted
+    );
+    assert_eq!(
+        nak(
+            &mut m,
+            Request::SetModeOfOperation {
+                mode: ub2::ModeOfOperation::CloseLoopControl
+            }
+        ),
+        Response::NakIncompatibleStatus
+    );
+    assert_eq!(
+        nak(&mut m, Request::MoveFullSteps { steps: 1 }),
+        Response::NakIncompatibleStatus
+    );
+    assert_eq!(
+        nak(&mut m, Request::GoToCminStatus),
+        Response::MovementNotTriggered
+    );
+    assert_eq!(
+        nak(&mut m, Request::GoToFullStepPositionStatus),
+        Response::MovementNotCompleted
+    );
+}
+
+#[test]
+fn the_device_naks_a_bad_checksum_and_ignores_other_addresses_and_start_bytes() {
+    let mut sim = Ub2Sim::new(0x21);
+    let t = Duration::ZERO;
+    assert_eq!(
+        sim.on_frame_bytes(&[0xAA, 0x21, 0x40, 0x01, 0x0D], t),
+        Some(vec![0xAA, 0x21, 0x92, 0x5D])
+    );
+    assert_eq!(
+        sim.on_frame_bytes(&[0xAA, 0x21, 0x40, 0x99, 0xA4], t),
+        Some(vec![0xAA, 0x21, 0x90, 0x5B])
+    );
+    assert_eq!(sim.on_frame_bytes(&[0xAA, 0x22, 0x40, 0x01, 0x0D], t), None);
+    assert_eq!(sim.on_frame_bytes(&[0xAB, 0x21, 0x40, 0x01, 0x0D], t), None);
+    // 0x4072 with index 5: no such limit, "index out of range".
+    assert_eq!(
+        sim.on_frame_bytes(&[0xAA, 0x21, 0x40, 0x72, 0x05, 0x82], t),
+        Some(vec![0xAA, 0x21, 0x94, 0x5F])
+    );
+}
+
+trait FrameBytes {
+    fn on_frame_bytes(&mut self, frame: &[u8], now: Duration) -> Option<Vec<u8>>;
+}
+
+impl FrameBytes for Ub2Sim {
+    fn on_frame_bytes(&mut self, frame: &[u8], now: Duration) -> Option<Vec<u8>> {
+        busspec_link::sim::Device::on_frame(self, frame, now)
+    }
+}
+
+#[test]
+fn status_reports_reset_once() {
+    let (_, mut m, _) = bus(&[0x21]);
+    let bits = |r| match r {
+        Response::Status { error_bits, .. } => error_bits,
+        other => panic!("{other:?}"),
+    };
+    assert!(bits(m.ask(0x21, Request::GetStatus).unwrap()).contains(ub2::StatusErrorBits::RESET));
+    assert!(!bits(m.ask(0x21, Request::GetStatus).unwrap()).contains(ub2::StatusErrorBits::RESET));
+}
+
+#[test]
+fn the_c_curve_table_reads_whole() {
+    let (bus, mut m, _) = bus(&[0x21]);
+    let mut last = 0;
+    let table = m
+        .read_c_curve(0x21, &mut |p| {
+            if let Progress::Read { done } = p {
+                last = done
+            }
+        })
+        .unwrap();
+    let curve = bus.with_devices(|d| d[0].config.c_curve.clone());
+    assert_eq!(table.len(), curve.len());
+    assert_eq!(last, curve.len());
+    for (p, (steps, c)) in table.iter().zip(&curve) {
+        assert_eq!((p.full_steps, p.capacitance), (*steps, *c));
+    }
+}
+
+#[test]
+fn a_500_entry_table_reads_to_the_end() {
+    let clock = SimClock::new();
+    let mut sim = Ub2Sim::new(0x21);
+    sim.config.c_curve = (0..500u16)
+        .map(|i| (i * 20, Capacitance(5000 + u32::from(i) * 90)))
+        .collect();
+    let bus = SimBus::new(clock.clone(), BusConfig::new(19_200), vec![sim]);
+    let mut m: Master<Ub2, _, _> = Master::new(bus, clock);
+    assert_eq!(m.read_c_curve(0x21, &mut |_| {}).unwrap().len(), 500);
+}
+
+#[test]
+fn the_slave_address_changes_after_the_ack_from_the_old_one() {
+    let (_, mut m, _) = bus(&[0x21]);
+    let ex = m
+        .transact(0x21, Request::SetSlaveAddress { address: 0x24 })
+        .unwrap();
+    assert_eq!(
+        (ex.address, ex.response),
+        (0x21, Some(Response::SetSlaveAddressAck))
+    );
+    assert!(m.ask(0x24, Request::GetSerialNumber).is_ok());
+    assert!(matches!(
+        m.transact(0x21, Request::GetSerialNumber),
+        Err(LinkError::NoReply { .. })
+    ));
+}
+
+/// A master to one capacitor at 0x21 through a line with these faults.
+fn faulty(cfg: FaultConfig) -> Master<Ub2, Faulty<Bus, SimClock>, SimClock> {
+    let (bus, _, clock) = bus(&[0x21]);
+    Master::new(Faulty::new(bus, clock.clone(), cfg, 7), clock)
+}
+
+#[test]
+fn movements_are_never_retried_but_reads_are() {
+    // A line that swallows every reply: the read is sent 3 times, the movement once.
+    let mut cfg = FaultConfig::none();
+    cfg.silence = 1.0;
+    let mut m = faulty(cfg);
+    let sends = Rc::new(RefCell::new(0));
+    let s = Rc::clone(&sends);
+    m.observe(move |e| {
+        if let TraceEvent::Sent { .. } = e {
+            *s.borrow_mut() += 1
+        }
+    });
+    assert!(matches!(
+        m.transact(0x21, Request::GetActualCapacitance),
+        Err(LinkError::NoReply { attempts: 3, .. })
+    ));
+    assert_eq!(*sends.borrow(), 3);
+    let err = m
+        .transact(0x21, Request::GoToFullStepPosition { target: 100 })
+        .unwrap_err();
+    assert!(
+        matches!(err, LinkError::NoReply { attempts: 1, .. }),
+        "{err}"
+    );
+    assert_eq!(*sends.borrow(), 4);
+    assert_eq!(
+        err.to_string(),
+        "ub2 go_to_full_step_position to address 0x21: no reply within 200 ms (1 attempt)"
+    );
+}
+
+#[test]
+fn a_corrupted_reply_is_retried_and_the_error_says_what_was_wrong() {
+    let mut cfg = FaultConfig::none();
+    cfg.corrupt = 1.0;
+    cfg.replies_only = true;
+    let mut m = faulty(cfg);
+    let err = m
+        .transact(0x21, Request::GetMinimumCapacitance)
+        .unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.starts_with(
+            "ub2 get_minimum_capacitance to address 0x21: no valid reply (3 attempts); last reply "
+        ),
+        "{text}"
+    );
+}
+
+#[test]
+fn every_trigger_has_its_completion_check() {
+    let triggers = [
+        Request::ReferenceRun,
+        Request::GoToCapacitance {
+            target: Capacitance(0),
+        },
+        Request::GoToFullStepPosition { target: 0 },
+        Request::MoveFullSteps { steps: 0 },
+        Request::GoToCmin,
+        Request::GoToCmax,
+        Request::GoToMicroStepPosition { target: 0 },
+        Request::MoveMicroSteps { steps: 0 },
+        Request::GoToStoredPosition { index: 0 },
+    ];
+    for t in triggers {
+        let check = ub2_completion_check(&t).unwrap_or_else(|| panic!("{t:?}"));
+        assert_eq!(check.name(), format!("{}_status", t.name()));
+    }
+    assert_eq!(ub2_completion_check(&Request::GetStatus), None);
+}

@@ -1,0 +1,683 @@
+//! The commands that talk to devices: `sim`, `talk`, `demo`, `soak`.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use busspec_codegen::ir::Direction;
+use busspec_codegen::Protocol as Spec;
+use busspec_link::clock::Clock;
+use busspec_link::master::{LinkError, Progress, SdString};
+use busspec_link::sim::sd::SdSim;
+use busspec_link::sim::ub2::Ub2Sim;
+use busspec_link::sim::{serve, Device};
+use busspec_link::soak::{self, SoakConfig};
+use busspec_link::{Master, Protocol, Sd, SerialTransport, SystemClock, Transport, Ub2};
+use busspec_protocols::{sd, ub2};
+
+use crate::{frames, svg};
+
+/// An address as `33`, `0x21` or `0X21`.
+pub fn parse_address(text: &str) -> Result<u8, String> {
+    let t = text.trim();
+    let parsed = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(hex) => u8::from_str_radix(hex, 16),
+        None => t.parse::<u8>(),
+    };
+    parsed.map_err(|_| format!("address `{text}` is not a byte (decimal, or hex with 0x)"))
+}
+
+/// The request frame for `command` with `name=value` arguments, through the same JSON contract
+/// as `busspec encode`: values in the spec's units, enum and special values by name.
+pub fn request_frame(
+    spec: &Spec,
+    command: &str,
+    address: u8,
+    args: &[String],
+) -> Result<Vec<u8>, String> {
+    let Some(c) = spec.commands.iter().find(|c| c.name == command) else {
+        return Err(format!(
+            "unknown command `{command}` in {}; its commands: {}",
+            spec.name,
+            spec.commands
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    };
+    let mut fields = serde_json::Map::new();
+    for arg in args {
+        let Some((name, value)) = arg.split_once('=') else {
+            return Err(format!(
+                "argument `{arg}` is not name=value (the fields of {command}: {})",
+                field_list(c)
+            ));
+        };
+        // JSON where it parses (numbers, quoted text, lists), else a name (enum or special value).
+        let v = serde_json::from_str::<serde_json::Value>(value)
+            .unwrap_or_else(|_| serde_json::Value::String(value.to_owned()));
+        fields.insert(name.to_owned(), v);
+    }
+    // The freshness counter is the master's to keep (SD §3.1): it replaces whatever is given.
+    if c.leaves().any(|l| l.name() == "freshness") && !fields.contains_key("freshness") {
+        fields.insert("freshness".to_owned(), serde_json::Value::from(0));
+    }
+    let missing: Vec<String> = c
+        .leaves()
+        .filter(|l| match l {
+            busspec_codegen::ir::Leaf::Field(_, f) => f.constant.is_none() && f.equals.is_none(),
+            busspec_codegen::ir::Leaf::Bits(_, _, b) => b.constant.is_none(),
+        })
+        .map(|l| l.name().to_owned())
+        .filter(|n| !fields.contains_key(n))
+        .collect();
+    if !missing.is_empty() {
+        return Err(format!(
+            "{command} needs {}: give them as name=value",
+            missing.join(", ")
+        ));
+    }
+    let line = serde_json::json!({
+        "message": command,
+        "direction": "request",
+        "address": address,
+        "fields": fields,
+    });
+    frames::encode_line(spec, &line.to_string()).map_err(|e| format!("{command}: {e}"))
+}
+
+fn field_list(c: &busspec_codegen::ir::Message) -> String {
+    let names: Vec<String> = c.leaves().map(|l| l.name().to_owned()).collect();
+    if names.is_empty() {
+        "none".to_owned()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// The JSON line `busspec decode` prints for this reply.
+fn reply_line<P: Protocol>(
+    spec: &Spec,
+    request: &P::Request,
+    response: &P::Response,
+    address: u8,
+) -> String {
+    let mut buf = vec![0u8; P::MAX_FRAME_LEN];
+    let wire = match P::encode_response(response, address, &mut buf) {
+        Ok(n) => &buf[..n],
+        Err(e) => return format!("{{\"error\":{:?}}}", e.to_string()),
+    };
+    let reply_to = spec
+        .commands
+        .iter()
+        .position(|c| c.name == P::request_name(request));
+    match frames::decode_frame(spec, Some(Direction::Response), reply_to, wire) {
+        Ok(f) => frames::frame_line(spec, &f, None),
+        Err(e) => format!("{{\"error\":{:?}}}", e),
+    }
+}
+
+/// Prints progress on stderr, at most every `every`.
+struct ProgressLine {
+    last: Option<Instant>,
+    every: Duration,
+}
+
+impl ProgressLine {
+    fn new() -> Self {
+        ProgressLine {
+            last: None,
+            every: Duration::from_millis(250),
+        }
+    }
+
+    fn show(&mut self, unit: &str, p: Progress) {
+        if self.last.is_some_and(|t| t.elapsed() < self.every) {
+            return;
+        }
+        self.last = Some(Instant::now());
+        match p {
+            Progress::Moving { elapsed, position } => eprintln!(
+                "moving: {position:.2} {unit} after {:.1} s",
+                elapsed.as_secs_f64()
+            ),
+            Progress::Read { done } => eprintln!("read {done} {unit}"),
+        }
+    }
+}
+
+/// What `talk` does besides one transaction.
+pub struct TalkOptions<'a> {
+    pub port: &'a str,
+    pub baud: Option<u32>,
+    pub address: u8,
+    pub command: &'a str,
+    pub args: &'a [String],
+    /// Wait for a movement to complete (default).
+    pub wait: bool,
+    pub svg: Option<&'a Path>,
+    pub timeout: Option<Duration>,
+}
+
+fn link_error(e: LinkError) -> String {
+    format!("error: {e}")
+}
+
+fn open<P: Protocol>(o: &TalkOptions) -> Result<Master<P, SerialTransport, SystemClock>, String> {
+    let t = SerialTransport::open(o.port, o.baud.unwrap_or(P::BAUD))
+        .map_err(|e| format!("error: {e}"))?;
+    let mut m = Master::new(t, SystemClock::new());
+    if let Some(timeout) = o.timeout {
+        let mut timing = m.timing();
+        timing.reply_timeout = timeout;
+        timing.settle = timeout;
+        m = m.with_timing(timing);
+    }
+    Ok(m)
+}
+
+/// `busspec talk`: one transaction (or one long operation) on a real port.
+pub fn talk(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
+    match spec.name.as_str() {
+        "ub2" => talk_ub2(spec, o),
+        "sd" => talk_sd(spec, o),
+        other => Err(format!(
+            "error: busspec cannot talk {other}: only ub2 and sd have a transaction layer"
+        )),
+    }
+}
+
+fn typed<P: Protocol>(spec: &Spec, o: &TalkOptions) -> Result<P::Request, String> {
+    let frame = request_frame(spec, o.command, o.address, o.args)?;
+    P::decode_request(&frame).map(|(_, r)| r).map_err(|e| {
+        format!(
+            "error: {} does not decode as a request: {e}",
+            frames::hex(&frame)
+        )
+    })
+}
+
+fn print(line: &str) -> Result<(), String> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{line}").map_err(|e| format!("error: cannot write output: {e}"))
+}
+
+fn one<P: Protocol, T: Transport, C: Clock>(
+    spec: &Spec,
+    m: &mut Master<P, T, C>,
+    address: u8,
+    request: P::Request,
+) -> Result<(), String> {
+    let ex = m.transact(address, request).map_err(link_error)?;
+    match ex.response {
+        Some(r) => print(&reply_line::<P>(spec, &request, &r, ex.address)),
+        None => {
+            eprintln!(
+                "sent {} to broadcast address 0x{address:02X}; it is not answered",
+                P::request_name(&request)
+            );
+            Ok(())
+        }
+    }
+}
+
+fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
+    let mut m = open::<Ub2>(o)?;
+    if o.command == "c-curve" {
+        let mut line = ProgressLine::new();
+        let table = m
+            .read_c_curve(o.address, &mut |p| line.show("entries", p))
+            .map_err(link_error)?;
+        for p in &table {
+            let request = ub2::Request::GetCCurveIndexedFullStepCapacitance { index: p.index };
+            let r = ub2::Response::CCurveEntry {
+                index: p.index,
+                full_steps: p.full_steps,
+                capacitance: p.capacitance,
+            };
+            print(&reply_line::<Ub2>(spec, &request, &r, o.address))?;
+        }
+        eprintln!("read {} C-curve entries", table.len());
+        if let Some(path) = o.svg {
+            write_svg(path, &table, o.address)?;
+        }
+        return Ok(());
+    }
+    let request = typed::<Ub2>(spec, o)?;
+    if o.wait && busspec_link::master::ub2_completion_check(&request).is_some() {
+        let mut line = ProgressLine::new();
+        let report = m
+            .run_movement(
+                o.address,
+                request,
+                Duration::from_millis(50),
+                Duration::from_secs(600),
+                &mut |p| line.show("full-steps", p),
+            )
+            .map_err(link_error)?;
+        let check = busspec_link::master::ub2_completion_check(&request).unwrap_or(request);
+        print_move::<Ub2>(spec, &request, &check, &report, o.address)?;
+        if report.clipped {
+            eprintln!("the target lay outside the customer limits: the capacitor ran to the limit");
+        }
+        if let Some(lost) = report.lost_micro_steps {
+            eprintln!("movement completed with step loss: {lost} micro-steps lost");
+        }
+        return Ok(());
+    }
+    one(spec, &mut m, o.address, request)
+}
+
+/// Prints a movement's trigger reply and its final reply (to `check`).
+fn print_move<P: Protocol>(
+    spec: &Spec,
+    request: &P::Request,
+    check: &P::Request,
+    report: &busspec_link::master::MoveReport<P::Response>,
+    address: u8,
+) -> Result<(), String> {
+    print(&reply_line::<P>(spec, request, &report.started, address))?;
+    match &report.finished {
+        Some(done) => print(&reply_line::<P>(spec, check, done, address)),
+        None => Ok(()),
+    }
+}
+
+fn write_svg(
+    path: &Path,
+    table: &[busspec_link::master::CCurvePoint],
+    address: u8,
+) -> Result<(), String> {
+    let points: Vec<(f64, f64)> = table
+        .iter()
+        .map(|p| (f64::from(p.full_steps), p.capacitance.value()))
+        .collect();
+    let title = format!(
+        "UB2 capacitor at 0x{address:02X}: C-curve ({} entries)",
+        table.len()
+    );
+    std::fs::write(path, svg::c_curve(&points, &title))
+        .map_err(|e| format!("error: cannot write {}: {e}", path.display()))?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
+    let mut m = open::<Sd>(o)?;
+    // A string readout without a byte number reads the whole string.
+    let readout = SdString::ALL
+        .into_iter()
+        .find(|s| s.request(0).name() == o.command);
+    if let (Some(which), true) = (readout, o.args.is_empty()) {
+        let mut line = ProgressLine::new();
+        let text = m
+            .read_string(o.address, which, &mut |p| line.show("characters", p))
+            .map_err(link_error)?;
+        let line = serde_json::json!({
+            "protocol": "sd",
+            "address": o.address,
+            "message": o.command,
+            "text": text.iter().map(|&b| char::from(b)).collect::<String>(),
+        });
+        return print(&line.to_string());
+    }
+    let request = typed::<Sd>(spec, o)?;
+    if let (true, sd::Request::SetPoint { position, .. }) =
+        (o.wait && Some(o.address) != sd::BROADCAST_ADDRESS, request)
+    {
+        let mut line = ProgressLine::new();
+        let report = m
+            .move_to(
+                o.address,
+                position,
+                Duration::from_millis(20),
+                Duration::from_secs(600),
+                &mut |p| line.show("°", p),
+            )
+            .map_err(link_error)?;
+        print_move::<Sd>(
+            spec,
+            &request,
+            &sd::Request::ReadActualPosition,
+            &report,
+            o.address,
+        )?;
+        return Ok(());
+    }
+    one(spec, &mut m, o.address, request)
+}
+
+/// `busspec sim`: serves simulated devices on a pseudo-terminal (printing its path) or a port.
+pub fn sim(
+    protocol: &str,
+    addresses: &[u8],
+    pty: bool,
+    port: Option<&str>,
+    verbose: bool,
+) -> Result<(), String> {
+    match protocol {
+        "ub2" => {
+            let addresses = if addresses.is_empty() {
+                vec![0x21]
+            } else {
+                addresses.to_vec()
+            };
+            check_addresses::<Ub2>(&addresses)?;
+            let devices: Vec<Ub2Sim> = addresses.iter().map(|&a| Ub2Sim::new(a)).collect();
+            run_sim::<Ub2, _>(devices, pty, port, verbose)
+        }
+        "sd" => {
+            let addresses = if addresses.is_empty() {
+                vec![0x01]
+            } else {
+                addresses.to_vec()
+            };
+            check_addresses::<Sd>(&addresses)?;
+            let devices: Vec<SdSim> = addresses.iter().map(|&a| SdSim::new(a)).collect();
+            run_sim::<Sd, _>(devices, pty, port, verbose)
+        }
+        other => Err(format!(
+            "error: no simulator for `{other}`: there are ub2 and sd"
+        )),
+    }
+}
+
+fn check_addresses<P: Protocol>(addresses: &[u8]) -> Result<(), String> {
+    for (i, a) in addresses.iter().enumerate() {
+        if !P::DEVICE_ADDRESSES.contains(a) {
+            return Err(format!(
+                "error: address 0x{a:02X} is not a {} device address (0x{:02X}..=0x{:02X})",
+                P::NAME,
+                P::DEVICE_ADDRESSES.start(),
+                P::DEVICE_ADDRESSES.end()
+            ));
+        }
+        if addresses[..i].contains(a) {
+            return Err(format!(
+                "error: address 0x{a:02X} given twice: devices on one bus need distinct addresses"
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn run_sim<P: Protocol, D: Device>(
+    mut devices: Vec<D>,
+    pty: bool,
+    port: Option<&str>,
+    verbose: bool,
+) -> Result<(), String> {
+    // Keep the pty's other end open for as long as we serve, so the line never hangs up.
+    let mut _slave = None;
+    let mut transport = match (pty, port) {
+        (true, _) => {
+            let (ours, theirs) = serialport::TTYPort::pair()
+                .map_err(|e| format!("error: cannot open a pseudo-terminal: {e}"))?;
+            let name = serialport::SerialPort::name(&theirs).unwrap_or_default();
+            print(&name)?;
+            _slave = Some(theirs);
+            SerialTransport::from_port(Box::new(ours))
+        }
+        (false, Some(path)) => {
+            SerialTransport::open(path, P::BAUD).map_err(|e| format!("error: {e}"))?
+        }
+        (false, None) => return Err("error: give --pty or --port PATH".to_owned()),
+    };
+    let _ = std::io::stdout().flush();
+    let addresses: Vec<String> = devices
+        .iter()
+        .map(|d| format!("0x{:02X}", d.address()))
+        .collect();
+    eprintln!(
+        "{} simulator serving address{} {}",
+        P::NAME,
+        if addresses.len() == 1 { "" } else { "es" },
+        addresses.join(", ")
+    );
+    let clock = SystemClock::new();
+    serve(
+        &mut transport,
+        &clock,
+        &mut devices,
+        Duration::from_millis(3),
+        || true,
+        |req, reply| {
+            if verbose {
+                eprintln!(
+                    "{} -> {}",
+                    frames::hex(req),
+                    reply
+                        .map(frames::hex)
+                        .unwrap_or_else(|| "(no reply)".to_owned())
+                );
+            }
+        },
+    )
+    .map_err(|e| format!("error: serving the simulator: {e}"))
+}
+
+/// `busspec soak`.
+pub fn soak(protocols: &[&str], transactions: u64, rate: f64, seed: u64) -> Result<(), String> {
+    if !(0.0..=1.0).contains(&rate) {
+        return Err(format!("error: --rate {rate} is not a probability (0..=1)"));
+    }
+    let config = SoakConfig {
+        transactions,
+        byte_error_rate: rate,
+        seed,
+        devices: 2,
+    };
+    for p in protocols {
+        let started = Instant::now();
+        let report = match *p {
+            "ub2" => soak::run::<Ub2>(config),
+            "sd" => soak::run::<Sd>(config),
+            other => return Err(format!("error: no soak for `{other}`")),
+        };
+        print(&format!("{report}"))?;
+        for e in &report.examples {
+            print(&format!("  e.g. {e}"))?;
+        }
+        eprintln!("({} took {:.1} s)", p, started.elapsed().as_secs_f64());
+    }
+    Ok(())
+}
+
+pub use crate::demo::demo;
+
+/// Used by the demo to show a reply like `decode` would.
+pub(crate) fn reply_json<P: Protocol>(
+    spec: &Spec,
+    request: &P::Request,
+    response: &P::Response,
+    address: u8,
+) -> String {
+    reply_line::<P>(spec, request, response, address)
+}
+
+pub(crate) fn svg_file(
+    path: &Path,
+    table: &[busspec_link::master::CCurvePoint],
+    address: u8,
+) -> Result<(), String> {
+    write_svg(path, table, address)
+}
+
+#[cfg(test)]
+mod tests {
+    //! Every command of both specs, sent the way `talk` sends it (name=value arguments through
+    //! the JSON contract, then the typed codec), to a fresh simulator: each must get a reply the
+    //! spec lists for it, and not a refusal. The commands come from the spec, not from a list.
+
+    use super::*;
+    use busspec_codegen::ir::{Leaf, MessageKind, MessageRef, ResponseKind, StatedValue};
+    use busspec_link::sim::{BusConfig, SimBus};
+    use busspec_link::SimClock;
+
+    fn spec(name: &str) -> Spec {
+        let (file, text) = match name {
+            "ub2" => ("spec/ub2.yaml", include_str!("../spec/ub2.yaml")),
+            _ => ("spec/sd.yaml", include_str!("../spec/sd.yaml")),
+        };
+        busspec_codegen::load_str(file, text).expect("built-in spec loads")
+    }
+
+    /// name=value arguments for command `i`: the values of its first example the document does
+    /// not get wrong, else the lowest valid value of each field.
+    fn arguments(spec: &Spec, i: usize) -> Vec<String> {
+        // The examples whose values the simulated capacitor (factory limits 50-500 pF) rightly
+        // refuses: 25 pF (ub2-e11) and 800 pF (ub2-e12).
+        match (spec.name.as_str(), spec.commands[i].name.as_str()) {
+            ("ub2", "set_lower_customer_limit") => return vec!["limit=150".to_owned()],
+            ("ub2", "set_upper_customer_limit") => return vec!["limit=400".to_owned()],
+            _ => {}
+        }
+        let me = MessageRef {
+            direction: Direction::Request,
+            index: i,
+        };
+        if let Some(e) = spec
+            .examples
+            .iter()
+            .find(|e| e.message == me && e.erratum.is_none() && !e.values.is_empty())
+        {
+            return e
+                .values
+                .iter()
+                .map(|(name, v)| {
+                    let text = match v {
+                        StatedValue::Number(r) if r.to_string().contains('/') => {
+                            format!("{}", r.to_f64())
+                        }
+                        StatedValue::Number(r) => r.to_string(),
+                        StatedValue::Name(n) => n.clone(),
+                        StatedValue::Names(ns) => serde_json::to_string(ns).unwrap_or_default(),
+                    };
+                    format!("{name}={text}")
+                })
+                .collect();
+        }
+        let c = &spec.commands[i];
+        c.leaves()
+            .filter_map(|l| match l {
+                Leaf::Field(_, f) if f.constant.is_some() || f.equals.is_some() => None,
+                Leaf::Field(_, f) => {
+                    let v = match (f.enumeration, f.range) {
+                        (Some(e), _) => spec.enums[e].values[0].name.clone(),
+                        (None, Some((lo, _))) => lo.to_string(),
+                        (None, None) => "0".to_owned(),
+                    };
+                    Some(format!("{}={v}", f.name))
+                }
+                Leaf::Bits(_, _, b) if b.constant.is_some() => None,
+                Leaf::Bits(_, _, b) => Some(format!("{}=0", b.name)),
+            })
+            .collect()
+    }
+
+    fn check_every_command<P: Protocol, D: Device>(
+        name: &str,
+        address: u8,
+        device: impl Fn() -> D,
+    ) {
+        let spec = spec(name);
+        assert!(!spec.commands.is_empty());
+        for (i, c) in spec.commands.iter().enumerate() {
+            let args = arguments(&spec, i);
+            let frame = request_frame(&spec, &c.name, address, &args)
+                .unwrap_or_else(|e| panic!("{name} {}: {e}", c.name));
+            let (_, request) =
+                P::decode_request(&frame).unwrap_or_else(|e| panic!("{} {e}", c.name));
+            assert_eq!(P::request_name(&request), c.name);
+            let clock = SimClock::new();
+            let bus = SimBus::new(clock.clone(), BusConfig::new(P::BAUD), vec![device()]);
+            let mut m: Master<P, _, _> = Master::new(bus, clock);
+            let ex = m
+                .transact(address, request)
+                .unwrap_or_else(|e| panic!("{name} {} {args:?}: {e}", c.name));
+            let response = ex.response.expect("a device address gets an answer");
+            let rname = P::response_name(&response);
+            let listed = c
+                .responses
+                .iter()
+                .any(|(r, _)| spec.responses[*r].name == rname);
+            assert!(
+                listed,
+                "{name} {}: answered {rname}, which the spec does not list for it",
+                c.name
+            );
+            let r = spec
+                .responses
+                .iter()
+                .find(|r| r.name == rname)
+                .expect("listed");
+            assert!(
+                !matches!(r.kind, MessageKind::Response(ResponseKind::Nak)),
+                "{name} {} {args:?}: refused with {rname}",
+                c.name
+            );
+            // The JSON line is the one `decode` prints for the reply.
+            let line = reply_line::<P>(&spec, &request, &response, ex.address);
+            let json: serde_json::Value = serde_json::from_str(&line).expect("JSON");
+            assert_eq!(json["message"], rname, "{line}");
+            assert_eq!(json["address"], ex.address, "{line}");
+            assert_eq!(json["direction"], "response", "{line}");
+        }
+    }
+
+    #[test]
+    fn every_ub2_command_is_sent_and_answered() {
+        check_every_command::<Ub2, _>("ub2", 0x21, || Ub2Sim::new(0x21));
+    }
+
+    #[test]
+    fn every_sd_command_is_sent_and_answered() {
+        check_every_command::<Sd, _>("sd", 0x01, || SdSim::new(0x01));
+    }
+
+    #[test]
+    fn arguments_are_checked_before_anything_is_sent() {
+        let ub2 = spec("ub2");
+        let err = request_frame(&ub2, "go_to_capacitanse", 0x21, &[]).unwrap_err();
+        assert!(
+            err.starts_with(
+                "unknown command `go_to_capacitanse` in ub2; its commands: reference_run, "
+            ),
+            "{err}"
+        );
+        let err = request_frame(&ub2, "go_to_capacitance", 0x21, &[]).unwrap_err();
+        assert_eq!(
+            err,
+            "go_to_capacitance needs target: give them as name=value"
+        );
+        let err =
+            request_frame(&ub2, "go_to_capacitance", 0x21, &["target".to_owned()]).unwrap_err();
+        assert_eq!(
+            err,
+            "argument `target` is not name=value (the fields of go_to_capacitance: target)"
+        );
+        let err = request_frame(
+            &ub2,
+            "go_to_capacitance",
+            0x21,
+            &["target=150.001".to_owned()],
+        )
+        .unwrap_err();
+        assert!(
+            err.contains("not a whole number of steps of 0.01 pF"),
+            "{err}"
+        );
+        let ok = request_frame(
+            &ub2,
+            "set_mode_of_operation",
+            0x21,
+            &["mode=close_loop_control".to_owned()],
+        )
+        .unwrap();
+        assert_eq!(frames::hex(&ok), "AA218000014C");
+        assert_eq!(parse_address("0x21"), Ok(0x21));
+        assert_eq!(parse_address("33"), Ok(33));
+        assert!(parse_address("0x121").is_err());
+    }
+}

@@ -1,0 +1,168 @@
+//! End to end through a real pseudo-terminal pair: `busspec sim --pty` on one end,
+//! `busspec talk` processes on the other.
+
+#![cfg(unix)]
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Output, Stdio};
+
+const BIN: &str = env!("CARGO_BIN_EXE_busspec");
+
+/// A running simulator, killed when dropped.
+struct Sim {
+    child: Child,
+    path: String,
+}
+
+impl Sim {
+    fn start(args: &[&str]) -> Sim {
+        let mut child = Command::new(BIN)
+            .arg("sim")
+            .args(args)
+            .arg("--pty")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("busspec runs");
+        let mut line = String::new();
+        let stdout = child.stdout.take().expect("piped");
+        BufReader::new(stdout).read_line(&mut line).expect("reads");
+        let path = line.trim().to_owned();
+        assert!(path.starts_with("/dev/"), "sim printed {line:?}");
+        Sim { child, path }
+    }
+
+    fn talk(&self, args: &[&str]) -> Output {
+        Command::new(BIN)
+            .args(["talk", "--port", &self.path])
+            .args(args)
+            .output()
+            .expect("busspec runs")
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn lines(o: &Output) -> Vec<serde_json::Value> {
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+#[test]
+fn talk_to_simulated_capacitors_through_a_pty() {
+    let sim = Sim::start(&["ub2", "--address", "0x21", "--address", "0x22"]);
+    let out = sim.talk(&["ub2", "--address", "0x21", "get_firmware_version"]);
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "{\"protocol\":\"ub2\",\"direction\":\"response\",\"address\":33,\"code\":\"0x4161\",\"message\":\"firmware_version\",\"fields\":{\"firmware_version\":\"20100433.00\"}}\n"
+    );
+    // Writes land in the device and read back, on the second capacitor only.
+    let r = lines(&sim.talk(&[
+        "ub2",
+        "--address",
+        "0x22",
+        "store_indexed_position",
+        "index=2",
+        "position=532",
+    ]));
+    assert_eq!(r[0]["message"], "store_indexed_position_ack");
+    let r = lines(&sim.talk(&[
+        "ub2",
+        "--address",
+        "0x22",
+        "get_stored_full_step_position",
+        "index=2",
+    ]));
+    assert_eq!(r[0]["fields"]["full_steps"], 532);
+    let r = lines(&sim.talk(&[
+        "ub2",
+        "--address",
+        "0x21",
+        "get_stored_full_step_position",
+        "index=2",
+    ]));
+    assert_eq!(r[0]["fields"]["full_steps"], 0);
+    // A short movement, waited for: the trigger's reply, then the completion.
+    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "move_full_steps", "steps=60"]));
+    assert_eq!(r.len(), 2);
+    assert_eq!(r[0]["message"], "movement_started");
+    assert_eq!(r[1]["message"], "movement_completed");
+    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "get_actual_full_step_position"]));
+    assert_eq!(r[0]["fields"]["full_steps"], 638 + 60);
+    // A refusal is a reply, printed like any other.
+    let r = lines(&sim.talk(&[
+        "ub2",
+        "--address",
+        "0x21",
+        "get_c_curve_indexed_full_step_capacitance",
+        "index=499",
+    ]));
+    assert_eq!(r[0]["message"], "nak_index_out_of_range");
+    // Nobody at 0x30: a clear error and exit status 1.
+    let out = sim.talk(&["ub2", "--address", "0x30", "--timeout", "50", "get_status"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr),
+        "error: ub2 get_status to address 0x30: no reply within 50 ms (1 attempt)\n"
+    );
+}
+
+#[test]
+fn the_c_curve_reads_through_a_pty_and_draws() {
+    let sim = Sim::start(&["ub2"]);
+    let dir = std::env::temp_dir().join(format!("busspec-pty-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let svg = dir.join("c-curve.svg");
+    let out = sim.talk(&[
+        "ub2",
+        "--address",
+        "0x21",
+        "c-curve",
+        "--svg",
+        svg.to_str().expect("utf-8 path"),
+    ]);
+    let r = lines(&out);
+    assert_eq!(r.len(), 200);
+    assert_eq!(r[3]["message"], "c_curve_entry");
+    assert_eq!(r[3]["fields"]["index"], 3);
+    assert_eq!(r[3]["fields"]["full_steps"], 150);
+    let picture = std::fs::read_to_string(&svg).expect("svg written");
+    assert!(picture.contains("capacitance [pF]") && picture.contains("position [full-steps]"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn talk_to_simulated_actuators_through_a_pty() {
+    let sim = Sim::start(&["sd", "--address", "1"]);
+    let r = lines(&sim.talk(&["sd", "--address", "1", "read_product_description"]));
+    assert_eq!(r[0]["text"], "SD-02 servo actuator (busspec si");
+    let r = lines(&sim.talk(&["sd", "--address", "1", "set_velocity", "set_velocity=360"]));
+    assert_eq!(r[0]["message"], "set_velocity_reply");
+    let r = lines(&sim.talk(&["sd", "--address", "1", "set_point", "position=22.5"]));
+    assert_eq!(r[0]["message"], "set_point_reply");
+    assert_eq!(r[1]["message"], "actual_position");
+    assert_eq!(r[1]["fields"]["position"], 22.5);
+    // The next process starts its freshness counter from the actuator's (read with 0x37), so
+    // no frame counts as dropped.
+    let _ = lines(&sim.talk(&["sd", "--address", "1", "set_point", "position=-22.5"]));
+    let r = lines(&sim.talk(&["sd", "--address", "1", "read_skipped_frames_counter"]));
+    assert_eq!(r[0]["fields"]["dropped_frames"], 0);
+    let r = lines(&sim.talk(&["sd", "--address", "1", "read_actuator_status_word"]));
+    assert_eq!(r[0]["fields"]["status_bits"], serde_json::json!([]));
+    // A broadcast set point is not answered: nothing on stdout, a note on stderr.
+    let out = sim.talk(&["sd", "--address", "0x1F", "set_point", "position=0"]);
+    assert!(out.status.success());
+    assert!(out.stdout.is_empty());
+}
