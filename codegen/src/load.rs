@@ -91,7 +91,7 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
             read_key(key, value, sink);
         }
     }
-    for key in REQUIRED_KEYS {
+    for key in SPEC_KEYS.iter().filter(|k| required(k)) {
         if !map.contains_key(*key) {
             sink.error("", format!("missing field `{key}`"));
         }
@@ -120,16 +120,13 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
     spec.filter(|_| sink.is_empty())
 }
 
-/// Top-level keys without a default: [`Spec`]'s fields that are not lists.
-const REQUIRED_KEYS: &[&str] = &[
-    "protocol",
-    "title",
-    "document",
-    "byte_order",
-    "printed_byte_order",
-    "serial",
-    "framing",
-];
+/// Top-level keys with a default when absent: the lists, and `common_responses`.
+const DEFAULTED_KEYS: &[&str] = &["common_responses"];
+
+/// Whether a top-level key must be present: [`Spec`]'s fields without a default.
+fn required(key: &str) -> bool {
+    !LIST_KEYS.contains(&key) && !DEFAULTED_KEYS.contains(&key)
+}
 
 /// Reads one top-level key that is not a list, reporting its shape errors.
 fn read_key(key: &str, value: &Value, sink: &mut Sink) {
@@ -283,4 +280,30 @@ pub fn named_entries<'a>(
 
 pub fn describe(v: &Value) -> &'static str {
     kind(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `required` agrees with serde: dropping a key from a valid spec makes deserialization fail
+    /// for that key exactly when `required` says so.
+    #[test]
+    fn required_keys_are_the_fields_without_a_default() {
+        let text = include_str!("../tests/fixtures/valid/minimal.yaml");
+        let root: Value = serde_yaml::from_str(text).expect("the fixture is YAML");
+        for key in SPEC_KEYS {
+            let mut map = root.as_mapping().expect("a mapping").clone();
+            map.remove(*key);
+            let serde_requires = match serde_yaml::from_value::<Spec>(Value::Mapping(map)) {
+                Ok(_) => false,
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(e.contains("missing field"), "key `{key}`: {e}");
+                    e.contains(&format!("missing field `{key}`"))
+                }
+            };
+            assert_eq!(serde_requires, required(key), "key `{key}`");
+        }
+    }
 }
