@@ -91,11 +91,28 @@ pub fn demo(ub2_spec: &Spec, sd_spec: &Spec, svg: Option<&Path>) -> Result<Vec<S
         lines: Vec::new(),
         spec: ub2_spec,
     };
+    document_frame(&mut out)?;
     ub2_part(&mut out, svg)?;
     out.spec = sd_spec;
     sd_part(&mut out)?;
     faults_part(&mut out)?;
     Ok(out.lines)
+}
+
+/// First, what `busspec decode` does with a frame the UB2 document prints (§6.1).
+fn document_frame(out: &mut Out) -> Result<(), String> {
+    let printed = "AA21 4101 0000 1F3E 6A";
+    let wire = "AA21 4101 3E1F 0000 6A";
+    out.say(format!(
+        "== A frame from the UB2 document (§6.1, printed {printed}; on the wire {wire}, erratum ub2-e01): busspec decode ub2 \"{wire}\""
+    ));
+    let bytes = busspec_codegen::interp::parse_hex(wire)?;
+    let frame = crate::frames::decode_frame(out.spec, None, None, &bytes)?;
+    out.say(format!(
+        "← {}",
+        crate::frames::frame_line(out.spec, &frame, None)
+    ));
+    Ok(())
 }
 
 fn ub2_part(out: &mut Out, svg: Option<&Path>) -> Result<(), String> {

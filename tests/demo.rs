@@ -15,6 +15,7 @@ fn the_demo_runs_and_shows_each_feature() {
     );
     let text = String::from_utf8_lossy(&out.stdout);
     for needle in [
+        "← {\"protocol\":\"ub2\",\"direction\":\"response\",\"address\":33,\"code\":\"0x4101\",\"message\":\"actual_capacitance\",\"fields\":{\"capacitance\":79.98}}",
         "\"message\":\"firmware_version\",\"fields\":{\"firmware_version\":\"20100433.00\"}",
         "\"message\":\"actual_capacitance\",\"fields\":{\"capacitance\":150}",
         "\"message\":\"nak_limit_reached\"",
