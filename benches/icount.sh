@@ -28,6 +28,10 @@ per() {
   local proto=$1 who=$2 op=$3 lo=$4 hi=$5 unit=$6
   read -r a units < <(count "$proto" "$who" "$op" "$lo")
   read -r b _ < <(count "$proto" "$who" "$op" "$hi")
+  # `icount PROTO stream CONTENDER` names the operation first.
+  if [[ $who == stream ]]; then
+    who=$op op=stream
+  fi
   awk -v a="$a" -v b="$b" -v n="$(((hi - lo) * units))" -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" \
     'BEGIN { printf "| %s | %s | %s | %.1f per %s |\n", p, o, w, (b - a) / n, u }'
 }
