@@ -425,7 +425,9 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                     check: #check,
                     residue: 0,
                 };
-                const CRC: ::crc::Crc<#ty> = ::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
+                // A static, not a const: one table in memory. Where `checksum` was not inlined,
+                // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, sd/checksum).
+                static CRC: ::crc::Crc<#ty> = ::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
                 /// The frame checksum over `bytes`.
                 #[inline]
                 pub fn checksum(bytes: &[u8]) -> #ty {

@@ -43,7 +43,7 @@ pub mod mini_crc {
         check: 0xAEE7u16,
         residue: 0,
     };
-    const CRC: ::crc::Crc<u16> = ::crc::Crc::<u16>::new(&CRC_ALGORITHM);
+    static CRC: ::crc::Crc<u16> = ::crc::Crc::<u16>::new(&CRC_ALGORITHM);
     /// The frame checksum over `bytes`.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
