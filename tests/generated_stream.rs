@@ -308,3 +308,41 @@ fn a_too_small_buffer_never_hangs() {
     }
     assert_eq!(accounted, cap.len() as u64);
 }
+
+/// `feed` decides on the caller's bytes in place where it can, handing buffered bytes back to
+/// the input to do so. Whatever it has reached when the iterator is dropped, `remaining()` and
+/// `position()` agree, and feeding the rest on gives the events a single feed gives.
+#[test]
+fn a_feed_dropped_partway_leaves_exactly_the_rest() {
+    use busspec_protocols::ub2::StreamDecoder;
+    let p = spec("ub2.yaml");
+    let mut rng = fastrand::Rng::with_seed(11);
+    for _ in 0..200 {
+        let cap = capture(&p, &mut rng, 30);
+        let mut one = StreamDecoder::new(None);
+        let mut want: Vec<_> = one.feed(&cap).collect();
+        want.extend(std::iter::from_fn(|| one.finish()));
+
+        let mut d = StreamDecoder::new(None);
+        let mut got = Vec::new();
+        let mut carry: Vec<u8> = Vec::new();
+        let mut rest: &[u8] = &cap;
+        while !rest.is_empty() || !carry.is_empty() {
+            let (chunk, after) = rest.split_at(rng.usize(0..=rest.len().min(40)));
+            let mut input = std::mem::take(&mut carry);
+            input.extend_from_slice(chunk);
+            rest = after;
+            let mut feed = d.feed(&input);
+            got.extend(feed.by_ref().take(rng.usize(1..=4)));
+            // The iterator ends here, with bytes of its input possibly unread.
+            carry = feed.remaining().to_vec();
+            assert_eq!(
+                d.position() + carry.len() as u64,
+                (cap.len() - rest.len()) as u64,
+                "position() and remaining() disagree"
+            );
+        }
+        got.extend(std::iter::from_fn(|| d.finish()));
+        assert_eq!(got, want, "capture {}", interp::format_hex(&cap));
+    }
+}

@@ -430,7 +430,9 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                     check: #check,
                     residue: 0,
                 };
-                const CRC: ::crc::Crc<#ty> = ::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
+                // A static, not a const: one table in memory. Where `checksum` was not inlined,
+                // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, sd/checksum).
+                static CRC: ::crc::Crc<#ty> = ::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
                 /// The frame checksum over `bytes`.
                 #[inline]
                 pub fn checksum(bytes: &[u8]) -> #ty {
@@ -742,6 +744,21 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     }
     let dispatch = emit_dispatch(p, d, &ty);
     let max = p.max_frame_len(d);
+    let sum_len = p.framing.checksum.len();
+    let sum_conv = to_bytes(p.framing.checksum.byte_order);
+    let sum_after = if checksum_in_arms(p) {
+        quote!()
+    } else {
+        quote! {
+            let available = buf.len();
+            let frame = buf
+                .get_mut(..len)
+                .ok_or(crate::EncodeError::BufferTooSmall { needed: len, available })?;
+            let at = len - #sum_len;
+            let sum = checksum(&frame[..at]);
+            frame[at..].copy_from_slice(&sum.#sum_conv());
+        }
+    };
     quote! {
         #[doc = #what]
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -777,7 +794,9 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             /// Encodes the frame for `address` into `buf`; returns the frame length.
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, crate::EncodeError> {
                 let _ = #max;
-                match *self { #(#encode_arms)* }
+                let len: usize = match *self { #(#encode_arms)* };
+                #sum_after
+                ::core::result::Result::Ok(len)
             }
             #dispatch
         }
@@ -931,13 +950,15 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             out[#at..#end].copy_from_slice(&#n.#conv());
         });
     }
-    let c = &p.framing.checksum;
-    let cat = o.checksum;
-    let cend = cat + c.len();
-    let conv = match c.byte_order {
-        ByteOrder::Little => format_ident!("to_le_bytes"),
-        ByteOrder::Big => format_ident!("to_be_bytes"),
-    };
+    if checksum_in_arms(p) {
+        let cat = o.checksum;
+        let cend = cat + p.framing.checksum.len();
+        let conv = to_bytes(p.framing.checksum.byte_order);
+        writes.push(quote! {
+            let sum = checksum(&out[..#cat]);
+            out[#cat..#cend].copy_from_slice(&sum.#conv());
+        });
+    }
     quote! {
         #pattern => {
             let available = buf.len();
@@ -946,10 +967,24 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
                 .and_then(|s| s.try_into().ok())
                 .ok_or(crate::EncodeError::BufferTooSmall { needed: #len, available })?;
             #(#writes)*
-            let sum = checksum(&out[..#cat]);
-            out[#cat..#cend].copy_from_slice(&sum.#conv());
-            ::core::result::Result::Ok(#len)
+            #len
         }
+    }
+}
+
+/// Whether `encode` computes the checksum in each arm of its match, over the frame as a
+/// fixed-size array, or once after it. A sum-8 in each arm is inlined and folds the constant
+/// header bytes (UB2: 36 instructions per frame against 58 after the match); a table CRC in
+/// each arm is a call the inliner refuses in a match this large, and costs twice as much as
+/// one call site after the match, which it inlines (SD: 138 against 68).
+fn checksum_in_arms(p: &Protocol) -> bool {
+    matches!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8)
+}
+
+fn to_bytes(order: ByteOrder) -> Ident {
+    match order {
+        ByteOrder::Little => format_ident!("to_le_bytes"),
+        ByteOrder::Big => format_ident!("to_be_bytes"),
     }
 }
 

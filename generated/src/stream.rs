@@ -118,9 +118,16 @@ impl<Q, R> Event<Q, R> {
 /// A streaming decoder for codec `C` with an `N`-byte buffer (the protocol's longest frame;
 /// each protocol module names the right one `StreamDecoder`).
 pub struct StreamDecoder<C: Codec, const N: usize> {
+    /// Bytes pushed and not yet settled; `buf[0]` is at stream offset `core.head`.
     buf: [u8; N],
     len: usize,
-    /// Stream offset of `buf[0]`.
+    core: Core<C>,
+}
+
+/// Everything but the buffer: what the framing rule has seen so far. Kept apart so the rule
+/// can run on the buffer or, in [`Feed`], straight on the caller's bytes.
+struct Core<C: Codec> {
+    /// Stream offset of the first unsettled byte.
     head: u64,
     requests: bool,
     responses: bool,
@@ -144,27 +151,29 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
         StreamDecoder {
             buf: [0; N],
             len: 0,
-            head: 0,
-            requests: direction != Some(Direction::Response),
-            responses: direction != Some(Direction::Request),
-            last_request: None,
-            default_request: None,
-            noise_at: 0,
-            noise_len: 0,
-            pending: None,
+            core: Core {
+                head: 0,
+                requests: direction != Some(Direction::Response),
+                responses: direction != Some(Direction::Request),
+                last_request: None,
+                default_request: None,
+                noise_at: 0,
+                noise_len: 0,
+                pending: None,
+            },
         }
     }
 
     /// Responses that only their request identifies are decoded as answers to `request` when
     /// no request precedes them in the stream (a capture of the device's side only).
     pub fn with_default_request(mut self, request: Option<C::Request>) -> Self {
-        self.default_request = request;
+        self.core.default_request = request;
         self
     }
 
     /// Stream offset of the next byte [`Self::push`] will take.
     pub fn position(&self) -> u64 {
-        self.head + self.len as u64
+        self.core.head + self.len as u64
     }
 
     /// Bytes buffered and not yet settled.
@@ -198,75 +207,113 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
     pub fn feed<'a, 'd>(&'a mut self, data: &'d [u8]) -> Feed<'a, 'd, C, N> {
         Feed {
             decoder: self,
-            data,
+            input: data,
+            at: 0,
         }
     }
 
     fn step(&mut self, flushing: bool) -> Option<Event<C::Request, C::Response>> {
         loop {
-            if let Some(ev) = self.pending.take() {
+            if let Some(ev) = self.core.pending.take() {
                 return Some(ev);
             }
             if self.len == 0 {
-                return if flushing { self.take_noise() } else { None };
-            }
-            let head = &self.buf[..self.len];
-            let c = C::candidates(head);
-            let requests = if self.requests { c.requests } else { 0 };
-            let responses = if self.responses { c.responses } else { 0 };
-            let live = requests | responses;
-            if live != 0 {
-                // Bit i is LENGTHS[i], longest first: a live candidate longer than what is
-                // buffered is one whose bit lies below the first length that fits.
-                let fits = C::LENGTHS.iter().position(|&l| l <= self.len).unwrap_or(64);
-                let longer = if fits >= 64 {
-                    u64::MAX
+                return if flushing {
+                    self.core.take_noise()
                 } else {
-                    (1u64 << fits) - 1
+                    None
                 };
-                // A full buffer cannot wait (only a buffer shorter than the longest frame, which
-                // no protocol module declares, fills up while waiting): settle what is there.
-                if !flushing && live & longer != 0 && self.len < N {
-                    return None;
-                }
-                let mut rest = live & !longer;
-                while rest != 0 {
-                    let i = rest.trailing_zeros() as usize;
-                    rest &= rest - 1;
-                    let Some(&len) = C::LENGTHS.get(i) else { break };
-                    let bit = 1u64 << i;
-                    if let Some(ev) = self.try_frame(len, requests & bit != 0, responses & bit != 0)
-                    {
-                        self.consume(len);
-                        if self.noise_len > 0 {
-                            self.pending = Some(ev);
-                            return self.take_noise();
-                        }
-                        return Some(ev);
-                    }
-                }
             }
-            // The head byte starts no frame.
-            if self.noise_len == 0 {
-                self.noise_at = self.head;
-            }
-            self.noise_len += 1;
-            self.consume(1);
-            if self.noise_len >= MAX_SKIPPED_RUN {
-                return self.take_noise();
+            // A full buffer cannot wait for more (only a buffer shorter than the longest frame,
+            // which no protocol module declares, fills up while waiting): settle what is there.
+            let (n, ev) = self
+                .core
+                .advance(&self.buf[..self.len], flushing || self.len == N)?;
+            self.consume(n);
+            if ev.is_some() {
+                return ev;
             }
         }
     }
 
-    /// The event for the first `len` buffered bytes, if they are a frame.
+    fn consume(&mut self, n: usize) {
+        let n = n.min(self.len);
+        self.buf.copy_within(n..self.len, 0);
+        self.len -= n;
+    }
+}
+
+/// What one application of the framing rule settled: that many bytes, and the event to report.
+type Settled<C> = (
+    usize,
+    Option<Event<<C as Codec>::Request, <C as Codec>::Response>>,
+);
+
+impl<C: Codec> Core<C> {
+    /// Applies the framing rule once to `window`, the unsettled bytes from `head` on (only the
+    /// first `N` matter, and all of them are there unless the window ends the buffered bytes):
+    /// `None` when a candidate is longer than the window and more bytes may come; otherwise how
+    /// many bytes it settled (a frame, or one byte of noise) and the event to report, if any.
+    fn advance(&mut self, window: &[u8], flushing: bool) -> Option<Settled<C>> {
+        let c = C::candidates(window);
+        let requests = if self.requests { c.requests } else { 0 };
+        let responses = if self.responses { c.responses } else { 0 };
+        let live = requests | responses;
+        if live != 0 {
+            // Bit i is LENGTHS[i], longest first: a live candidate longer than the window is
+            // one whose bit lies below the first length that fits.
+            let fits = C::LENGTHS
+                .iter()
+                .position(|&l| l <= window.len())
+                .unwrap_or(64);
+            let longer = if fits >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << fits) - 1
+            };
+            if !flushing && live & longer != 0 {
+                return None;
+            }
+            let mut rest = live & !longer;
+            while rest != 0 {
+                let i = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                let Some(&len) = C::LENGTHS.get(i) else { break };
+                let Some(frame) = window.get(..len) else {
+                    break;
+                };
+                let bit = 1u64 << i;
+                if let Some(ev) = self.try_frame(frame, requests & bit != 0, responses & bit != 0) {
+                    self.head += len as u64;
+                    if self.noise_len > 0 {
+                        self.pending = Some(ev);
+                        return Some((len, self.take_noise()));
+                    }
+                    return Some((len, Some(ev)));
+                }
+            }
+        }
+        // The head byte starts no frame.
+        if self.noise_len == 0 {
+            self.noise_at = self.head;
+        }
+        self.noise_len += 1;
+        self.head += 1;
+        if self.noise_len >= MAX_SKIPPED_RUN {
+            return Some((1, self.take_noise()));
+        }
+        Some((1, None))
+    }
+
+    /// The event for `frame` (the bytes at `head`), if it is a frame.
     fn try_frame(
         &mut self,
-        len: usize,
+        frame: &[u8],
         request: bool,
         response: bool,
     ) -> Option<Event<C::Request, C::Response>> {
-        let frame = self.buf.get(..len)?;
         let offset = self.head;
+        let len = frame.len();
         let as_request = if request {
             C::decode_request(frame).ok()
         } else {
@@ -323,25 +370,25 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
         self.noise_len = 0;
         Some(ev)
     }
-
-    fn consume(&mut self, n: usize) {
-        let n = n.min(self.len);
-        self.buf.copy_within(n..self.len, 0);
-        self.len -= n;
-        self.head += n as u64;
-    }
 }
 
 /// The iterator [`StreamDecoder::feed`] returns.
+///
+/// Where nothing is buffered and a whole longest frame of the caller's bytes lies ahead, it
+/// applies the framing rule to those bytes in place instead of copying them through the
+/// buffer: the same decisions (the rule only ever looks at the next `N` bytes), without copying
+/// every byte in and shifting it out again, which cost about as much as decoding the frame.
 pub struct Feed<'a, 'd, C: Codec, const N: usize> {
     decoder: &'a mut StreamDecoder<C, N>,
-    data: &'d [u8],
+    input: &'d [u8],
+    /// `input[..at]` has been pushed or settled in place.
+    at: usize,
 }
 
 impl<'d, C: Codec, const N: usize> Feed<'_, 'd, C, N> {
     /// The bytes not yet pushed into the decoder.
     pub fn remaining(&self) -> &'d [u8] {
-        self.data
+        self.input.get(self.at..).unwrap_or_default()
     }
 }
 
@@ -350,14 +397,36 @@ impl<C: Codec, const N: usize> Iterator for Feed<'_, '_, C, N> {
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
-            if let Some(ev) = self.decoder.poll() {
+            let d = &mut *self.decoder;
+            if let Some(ev) = d.core.pending.take() {
                 return Some(ev);
             }
-            if self.data.is_empty() {
+            // Buffered bytes that all came from this input are still there, right before
+            // `at` (the buffer holds the last bytes pushed): give them back to the input.
+            if d.len > 0 && d.len <= self.at && self.input.len() - (self.at - d.len) >= N {
+                self.at -= d.len;
+                d.len = 0;
+            }
+            if d.len == 0 {
+                if let Some(window) = self.input.get(self.at..self.at + N) {
+                    // A whole buffer's worth of bytes: as in `step`, a full window settles.
+                    if let Some((n, ev)) = d.core.advance(window, true) {
+                        self.at += n;
+                        if ev.is_some() {
+                            return ev;
+                        }
+                        continue;
+                    }
+                }
+            }
+            if let Some(ev) = d.poll() {
+                return Some(ev);
+            }
+            let rest = self.input.get(self.at..).unwrap_or_default();
+            if rest.is_empty() {
                 return None;
             }
-            let n = self.decoder.push(self.data);
-            self.data = &self.data[n..];
+            self.at += d.push(rest);
         }
     }
 }

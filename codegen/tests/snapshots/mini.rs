@@ -295,7 +295,7 @@ pub mod mini {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, crate::EncodeError> {
             let _ = 9usize;
-            match *self {
+            let len: usize = match *self {
                 Self::GoTo { target: v_target } => {
                     let available = buf.len();
                     let out: &mut [u8; 9usize] = buf
@@ -313,7 +313,7 @@ pub mod mini {
                     out[4usize..8usize].copy_from_slice(&field_0.to_le_bytes());
                     let sum = checksum(&out[..8usize]);
                     out[8usize..9usize].copy_from_slice(&sum.to_le_bytes());
-                    ::core::result::Result::Ok(9usize)
+                    9usize
                 }
                 Self::SetMode { mode: v_mode } => {
                     let available = buf.len();
@@ -332,7 +332,7 @@ pub mod mini {
                     out[4usize..5usize].copy_from_slice(&field_0.to_le_bytes());
                     let sum = checksum(&out[..5usize]);
                     out[5usize..6usize].copy_from_slice(&sum.to_le_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
                 Self::GetStatus { channel: v_channel } => {
                     let available = buf.len();
@@ -351,9 +351,10 @@ pub mod mini {
                     out[4usize..5usize].copy_from_slice(&field_0.to_le_bytes());
                     let sum = checksum(&out[..5usize]);
                     out[5usize..6usize].copy_from_slice(&sum.to_le_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
-            }
+            };
+            ::core::result::Result::Ok(len)
         }
         /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
         /// constants and repeated fields.
@@ -628,7 +629,7 @@ pub mod mini {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, crate::EncodeError> {
             let _ = 13usize;
-            match *self {
+            let len: usize = match *self {
                 Self::Started => {
                     let available = buf.len();
                     let out: &mut [u8; 4usize] = buf
@@ -643,7 +644,7 @@ pub mod mini {
                     out[2usize] = 80u8;
                     let sum = checksum(&out[..3usize]);
                     out[3usize..4usize].copy_from_slice(&sum.to_le_bytes());
-                    ::core::result::Result::Ok(4usize)
+                    4usize
                 }
                 Self::Nak => {
                     let available = buf.len();
@@ -659,7 +660,7 @@ pub mod mini {
                     out[2usize] = 144u8;
                     let sum = checksum(&out[..3usize]);
                     out[3usize..4usize].copy_from_slice(&sum.to_le_bytes());
-                    ::core::result::Result::Ok(4usize)
+                    4usize
                 }
                 Self::SetModeAck => {
                     let available = buf.len();
@@ -676,7 +677,7 @@ pub mod mini {
                     out[3usize] = 0u8;
                     let sum = checksum(&out[..4usize]);
                     out[4usize..5usize].copy_from_slice(&sum.to_le_bytes());
-                    ::core::result::Result::Ok(5usize)
+                    5usize
                 }
                 Self::Status {
                     error_bits: v_error_bits,
@@ -726,9 +727,10 @@ pub mod mini {
                     out[11usize..12usize].copy_from_slice(&field_4.to_le_bytes());
                     let sum = checksum(&out[..12usize]);
                     out[12usize..13usize].copy_from_slice(&sum.to_le_bytes());
-                    ::core::result::Result::Ok(13usize)
+                    13usize
                 }
-            }
+            };
+            ::core::result::Result::Ok(len)
         }
         /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
         /// constants and repeated fields.

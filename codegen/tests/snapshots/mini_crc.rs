@@ -47,7 +47,7 @@ pub mod mini_crc {
         check: 0xAEE7u16,
         residue: 0,
     };
-    const CRC: ::crc::Crc<u16> = ::crc::Crc::<u16>::new(&CRC_ALGORITHM);
+    static CRC: ::crc::Crc<u16> = ::crc::Crc::<u16>::new(&CRC_ALGORITHM);
     /// The frame checksum over `bytes`.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -117,7 +117,7 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, crate::EncodeError> {
             let _ = 6usize;
-            match *self {
+            let len: usize = match *self {
                 Self::ReadRuntimeHours => {
                     let available = buf.len();
                     let out: &mut [u8; 6usize] = buf
@@ -133,9 +133,7 @@ pub mod mini_crc {
                     out[2usize..3usize].copy_from_slice(&field_0.to_be_bytes());
                     let field_1: u8 = 0x0u8 as u8;
                     out[3usize..4usize].copy_from_slice(&field_1.to_be_bytes());
-                    let sum = checksum(&out[..4usize]);
-                    out[4usize..6usize].copy_from_slice(&sum.to_be_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
                 Self::ReadRuntimeMinSec => {
                     let available = buf.len();
@@ -152,9 +150,7 @@ pub mod mini_crc {
                     out[2usize..3usize].copy_from_slice(&field_0.to_be_bytes());
                     let field_1: u8 = 0x0u8 as u8;
                     out[3usize..4usize].copy_from_slice(&field_1.to_be_bytes());
-                    let sum = checksum(&out[..4usize]);
-                    out[4usize..6usize].copy_from_slice(&sum.to_be_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
                 Self::SetCounter { counter: v_counter } => {
                     let available = buf.len();
@@ -169,11 +165,20 @@ pub mod mini_crc {
                     out[0usize] = 112u8;
                     let field_0: u16 = v_counter;
                     out[2usize..4usize].copy_from_slice(&field_0.to_be_bytes());
-                    let sum = checksum(&out[..4usize]);
-                    out[4usize..6usize].copy_from_slice(&sum.to_be_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
-            }
+            };
+            let available = buf.len();
+            let frame = buf
+                .get_mut(..len)
+                .ok_or(crate::EncodeError::BufferTooSmall {
+                    needed: len,
+                    available,
+                })?;
+            let at = len - 2usize;
+            let sum = checksum(&frame[..at]);
+            frame[at..].copy_from_slice(&sum.to_be_bytes());
+            ::core::result::Result::Ok(len)
         }
         /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
         /// constants and repeated fields.
@@ -430,7 +435,7 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, crate::EncodeError> {
             let _ = 6usize;
-            match *self {
+            let len: usize = match *self {
                 Self::RuntimeHours { hours: v_hours } => {
                     let available = buf.len();
                     let out: &mut [u8; 6usize] = buf
@@ -444,9 +449,7 @@ pub mod mini_crc {
                     out[0usize] = 34u8;
                     let field_0: u16 = v_hours;
                     out[2usize..4usize].copy_from_slice(&field_0.to_be_bytes());
-                    let sum = checksum(&out[..4usize]);
-                    out[4usize..6usize].copy_from_slice(&sum.to_be_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
                 Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
                     let available = buf.len();
@@ -463,9 +466,7 @@ pub mod mini_crc {
                     out[2usize..3usize].copy_from_slice(&field_0.to_be_bytes());
                     let field_1: u8 = v_seconds;
                     out[3usize..4usize].copy_from_slice(&field_1.to_be_bytes());
-                    let sum = checksum(&out[..4usize]);
-                    out[4usize..6usize].copy_from_slice(&sum.to_be_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
                 Self::CounterEcho { counter: v_counter } => {
                     let available = buf.len();
@@ -480,11 +481,20 @@ pub mod mini_crc {
                     out[0usize] = 112u8;
                     let field_0: u16 = v_counter;
                     out[2usize..4usize].copy_from_slice(&field_0.to_be_bytes());
-                    let sum = checksum(&out[..4usize]);
-                    out[4usize..6usize].copy_from_slice(&sum.to_be_bytes());
-                    ::core::result::Result::Ok(6usize)
+                    6usize
                 }
-            }
+            };
+            let available = buf.len();
+            let frame = buf
+                .get_mut(..len)
+                .ok_or(crate::EncodeError::BufferTooSmall {
+                    needed: len,
+                    available,
+                })?;
+            let at = len - 2usize;
+            let sum = checksum(&frame[..at]);
+            frame[at..].copy_from_slice(&sum.to_be_bytes());
+            ::core::result::Result::Ok(len)
         }
         /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
         /// constants and repeated fields.

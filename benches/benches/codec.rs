@@ -1,0 +1,241 @@
+//! Frame throughput of the generated codecs, each group with its baselines measured in the same
+//! run (see BENCHMARKS.md): per protocol
+//!
+//! - `<p>/decode`, `<p>/encode`: the mixed stream of 128 frames, per frame (`frames`) and per
+//!   byte (`bytes`): generated, hand-written, deku, interpreter;
+//! - `<p>/stream`: a 1 MiB synthetic capture with 1 % noise: the generated stream decoder, the
+//!   plain byte pass (the memory floor), the interpreter's stream decoder (on the first 64 KiB);
+//! - `<p>/checksum`: the checksum alone over the bytes it covers in each frame of the mixed
+//!   stream.
+//!
+//! `cargo bench -p busspec-benches -- ub2/decode` runs one group; `-- --test` runs each once.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use busspec_benches::mixed::{capture, Mixed, Proto, CAPTURE_BYTES};
+use busspec_benches::{
+    decode_all, encode_all, jobs, messages, plain_sum, stream_interp, stream_sd, stream_ub2,
+    Contender, Deku, Generated, Hand, Interp, Sd, Ub2,
+};
+use busspec_codegen::ir::Protocol;
+use criterion::measurement::WallTime;
+use criterion::{
+    criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
+};
+
+/// The interpreter's stream decoder runs on this much of the capture (it is slow, and its
+/// figure is per byte anyway).
+const INTERP_CAPTURE_BYTES: usize = 64 << 10;
+
+/// Per frame and per byte: the same measurement under both throughputs.
+fn throughputs(mixed: &Mixed) -> [(&'static str, Throughput); 2] {
+    [
+        ("frames", Throughput::Elements(mixed.entries.len() as u64)),
+        ("bytes", Throughput::Bytes(mixed.bytes.len() as u64)),
+    ]
+}
+
+fn decode_one<C: Contender>(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    name: &str,
+    unit: &str,
+    c: &C,
+    mixed: &Mixed,
+) {
+    let jobs = jobs(c, mixed);
+    assert_eq!(
+        decode_all(c, &mixed.bytes, &jobs),
+        mixed.entries.len(),
+        "{name}"
+    );
+    g.bench_function(BenchmarkId::new(name, unit), |b| {
+        b.iter(|| decode_all(c, black_box(&mixed.bytes), black_box(&jobs)))
+    });
+}
+
+fn encode_one<C: Contender>(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    name: &str,
+    unit: &str,
+    c: &C,
+    mixed: &Mixed,
+) {
+    let msgs = messages(c, mixed);
+    let mut out = vec![0u8; mixed.bytes.len()];
+    assert_eq!(
+        encode_all(c, &msgs, &mut out),
+        Some(mixed.bytes.len()),
+        "{name}"
+    );
+    g.bench_function(BenchmarkId::new(name, unit), |b| {
+        b.iter(|| encode_all(c, black_box(&msgs), black_box(&mut out)))
+    });
+}
+
+/// The four contenders of a protocol.
+struct Contenders<'p, G, H, D> {
+    generated: G,
+    hand: H,
+    deku: D,
+    interp: Interp<'p>,
+}
+
+fn frames<G: Contender, H: Contender, D: Contender>(
+    c: &mut Criterion,
+    proto: Proto,
+    spec: &Protocol,
+    k: &Contenders<'_, G, H, D>,
+) {
+    let mixed = Mixed::from_spec(proto, spec);
+    let mut g = c.benchmark_group(format!("{}/decode", proto.name()));
+    for (unit, t) in throughputs(&mixed) {
+        g.throughput(t);
+        decode_one(&mut g, "generated", unit, &k.generated, &mixed);
+        decode_one(&mut g, "hand-written", unit, &k.hand, &mixed);
+        decode_one(&mut g, "deku", unit, &k.deku, &mixed);
+        decode_one(&mut g, "interpreter", unit, &k.interp, &mixed);
+    }
+    g.finish();
+    let mut g = c.benchmark_group(format!("{}/encode", proto.name()));
+    for (unit, t) in throughputs(&mixed) {
+        g.throughput(t);
+        encode_one(&mut g, "generated", unit, &k.generated, &mixed);
+        encode_one(&mut g, "hand-written", unit, &k.hand, &mixed);
+        encode_one(&mut g, "deku", unit, &k.deku, &mixed);
+        encode_one(&mut g, "interpreter", unit, &k.interp, &mixed);
+    }
+    g.finish();
+}
+
+fn stream(
+    c: &mut Criterion,
+    proto: Proto,
+    spec: &Protocol,
+    generated: fn(&[u8]) -> busspec_benches::StreamCount,
+) {
+    let cap = capture(spec, CAPTURE_BYTES);
+    let found = generated(&cap);
+    assert_eq!(found.bytes, cap.len() as u64);
+    let mut g = c.benchmark_group(format!("{}/stream", proto.name()));
+    g.throughput(Throughput::Bytes(cap.len() as u64));
+    g.bench_function("generated", |b| b.iter(|| generated(black_box(&cap))));
+    g.bench_function("plain-sum", |b| b.iter(|| plain_sum(black_box(&cap))));
+    let head = &cap[..INTERP_CAPTURE_BYTES];
+    g.throughput(Throughput::Bytes(head.len() as u64));
+    g.bench_function("interpreter-64KiB", |b| {
+        b.iter(|| stream_interp(spec, black_box(head)))
+    });
+    g.finish();
+}
+
+/// The bytes each frame's checksum covers, frame by frame.
+fn covered(mixed: &Mixed, spec: &Protocol) -> Vec<Vec<u8>> {
+    let n = spec.framing.checksum.len();
+    mixed
+        .entries
+        .iter()
+        .map(|e| {
+            let f = mixed.frame(e);
+            f[..f.len() - n].to_vec()
+        })
+        .collect()
+}
+
+fn checksum_one<T>(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    name: &str,
+    frames: &[Vec<u8>],
+    f: impl Fn(&[u8]) -> T,
+) {
+    g.bench_function(name, |b| {
+        b.iter(|| {
+            for frame in black_box(frames) {
+                black_box(f(frame));
+            }
+        })
+    });
+}
+
+fn checksum_group<'c>(
+    c: &'c mut Criterion,
+    proto: Proto,
+    spec: &Protocol,
+) -> (BenchmarkGroup<'c, WallTime>, Vec<Vec<u8>>) {
+    let frames = covered(&Mixed::from_spec(proto, spec), spec);
+    let mut g = c.benchmark_group(format!("{}/checksum", proto.name()));
+    g.throughput(Throughput::Bytes(
+        frames.iter().map(Vec::len).sum::<usize>() as u64,
+    ));
+    (g, frames)
+}
+
+fn ub2(c: &mut Criterion) {
+    let spec = Proto::Ub2.spec();
+    let k = Contenders {
+        generated: Generated::<Ub2>::default(),
+        hand: Hand::<Ub2>::default(),
+        deku: Deku::<Ub2>::default(),
+        interp: Interp(&spec),
+    };
+    frames(c, Proto::Ub2, &spec, &k);
+    stream(c, Proto::Ub2, &spec, stream_ub2);
+    let (mut g, frames) = checksum_group(c, Proto::Ub2, &spec);
+    let algorithm = &spec.framing.checksum.algorithm;
+    checksum_one(
+        &mut g,
+        "generated",
+        &frames,
+        busspec_protocols::ub2::checksum,
+    );
+    checksum_one(&mut g, "interpreter", &frames, |f| {
+        busspec_codegen::checksum::compute(algorithm, f)
+    });
+    g.finish();
+}
+
+fn sd(c: &mut Criterion) {
+    let spec = Proto::Sd.spec();
+    let k = Contenders {
+        generated: Generated::<Sd>::default(),
+        hand: Hand::<Sd>::default(),
+        deku: Deku::<Sd>::default(),
+        interp: Interp(&spec),
+    };
+    frames(c, Proto::Sd, &spec, &k);
+    stream(c, Proto::Sd, &spec, stream_sd);
+    let (mut g, frames) = checksum_group(c, Proto::Sd, &spec);
+    let algorithm = &spec.framing.checksum.algorithm;
+    checksum_one(
+        &mut g,
+        "generated",
+        &frames,
+        busspec_protocols::sd::checksum,
+    );
+    // The other implementations the crc crate offers: bit by bit, and slice-by-16.
+    static BITWISE: crc::Crc<u16, crc::NoTable> =
+        crc::Crc::<u16, crc::NoTable>::new(&crc::CRC_16_CMS);
+    static SLICE16: crc::Crc<u16, crc::Table<16>> =
+        crc::Crc::<u16, crc::Table<16>>::new(&crc::CRC_16_CMS);
+    checksum_one(&mut g, "crc-no-table", &frames, |f| BITWISE.checksum(f));
+    checksum_one(&mut g, "crc-slice16", &frames, |f| SLICE16.checksum(f));
+    checksum_one(&mut g, "interpreter", &frames, |f| {
+        busspec_codegen::checksum::compute(algorithm, f)
+    });
+    g.finish();
+}
+
+fn config() -> Criterion {
+    // Short runs: the machine is shared; ratios within one run are what BENCHMARKS.md reports.
+    Criterion::default()
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+        .sample_size(50)
+}
+
+criterion_group! {
+    name = benches;
+    config = config();
+    targets = ub2, sd
+}
+criterion_main!(benches);

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Instructions per frame (decode, encode) and per byte (stream), from callgrind: runs the
+# `icount` binary for two pass counts and divides the difference in instructions by the
+# difference in frames or bytes, so set-up (loading the spec, building the inputs) cancels out.
+# Prints Markdown table rows. Needs valgrind. Usage: bash benches/icount.sh [ub2|sd ...]
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+cargo build --release --locked -q -p busspec-benches --bin icount
+bin=target/release/icount
+
+# count ARGS... -> "instructions units_per_pass"
+count() {
+  local out
+  out=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null "$bin" "$@" 2>&1)
+  local ir units
+  ir=$(sed -n 's/.*Collected : \([0-9]*\).*/\1/p' <<<"$out")
+  units=$(sed -n 's/^units per pass: \([0-9]*\).*/\1/p' <<<"$out")
+  if [[ -z $ir || -z $units ]]; then
+    echo "icount $* failed:" >&2
+    echo "$out" >&2
+    exit 1
+  fi
+  echo "$ir $units"
+}
+
+# per PROTO WHO OP LO HI UNIT -> one table row
+per() {
+  local proto=$1 who=$2 op=$3 lo=$4 hi=$5 unit=$6
+  read -r a units < <(count "$proto" "$who" "$op" "$lo")
+  read -r b _ < <(count "$proto" "$who" "$op" "$hi")
+  # `icount PROTO stream CONTENDER` names the operation first.
+  if [[ $who == stream ]]; then
+    who=$op op=stream
+  fi
+  awk -v a="$a" -v b="$b" -v n="$(((hi - lo) * units))" -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" \
+    'BEGIN { printf "| %s | %s | %s | %.1f per %s |\n", p, o, w, (b - a) / n, u }'
+}
+
+protos=("$@")
+[[ ${#protos[@]} -gt 0 ]] || protos=(ub2 sd)
+echo "| protocol | operation | contender | instructions |"
+echo "|---|---|---|---|"
+for proto in "${protos[@]}"; do
+  for op in decode encode; do
+    for who in generated hand-written deku; do
+      per "$proto" "$who" "$op" 10 110 frame
+    done
+    per "$proto" interpreter "$op" 2 12 frame
+  done
+  per "$proto" stream generated 1 3 byte
+  per "$proto" stream plain-sum 1 3 byte
+done

@@ -1,0 +1,105 @@
+//! Runs one contender over the benches' inputs a given number of times, for counting
+//! instructions under callgrind (`benches/icount.sh`): the difference between two pass counts,
+//! divided by the difference in frames (or bytes), is the cost of one frame (or byte) with the
+//! set-up subtracted out.
+//!
+//! ```text
+//! icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>
+//! icount <ub2|sd> stream <generated|plain-sum> <passes>
+//! ```
+//!
+//! A decode or encode pass is the 128-frame mixed stream; a stream pass is the 1 MiB capture.
+//! Prints the units one pass stands for (frames or bytes) and a value computed from the work,
+//! so none of it can be optimised away.
+
+use std::process::ExitCode;
+
+use busspec_benches::mixed::{capture, Mixed, Proto, CAPTURE_BYTES};
+use busspec_benches::{
+    decode_all, encode_all, jobs, messages, plain_sum, stream_sd, stream_ub2, Contender, Deku,
+    Generated, Hand, Interp, Sd, Ub2,
+};
+
+const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <ub2|sd> stream <generated|plain-sum> <passes>";
+
+fn run<C: Contender>(c: &C, mixed: &Mixed, op: &str, passes: u64) -> Result<u64, String> {
+    match op {
+        "decode" => {
+            let jobs = jobs(c, mixed);
+            Ok((0..passes)
+                .map(|_| decode_all(c, &mixed.bytes, &jobs) as u64)
+                .sum())
+        }
+        "encode" => {
+            let msgs = messages(c, mixed);
+            let mut out = vec![0u8; mixed.bytes.len()];
+            (0..passes)
+                .map(|_| encode_all(c, &msgs, &mut out).map(|n| n as u64))
+                .sum::<Option<u64>>()
+                .ok_or_else(|| "a message did not encode".to_owned())
+        }
+        _ => Err(format!("unknown operation `{op}`\n{USAGE}")),
+    }
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [proto, who, op, passes] = &args[..] else {
+        eprintln!("{USAGE}");
+        return ExitCode::from(2);
+    };
+    let proto = match proto.as_str() {
+        "ub2" => Proto::Ub2,
+        "sd" => Proto::Sd,
+        other => {
+            eprintln!("unknown protocol `{other}`\n{USAGE}");
+            return ExitCode::from(2);
+        }
+    };
+    let Ok(passes) = passes.parse::<u64>() else {
+        eprintln!("passes must be a whole number, not `{passes}`\n{USAGE}");
+        return ExitCode::from(2);
+    };
+    let spec = proto.spec();
+    let result = if who == "stream" {
+        let cap = capture(&spec, CAPTURE_BYTES);
+        let f = match (proto, op.as_str()) {
+            (Proto::Ub2, "generated") => |c: &[u8]| stream_ub2(c).frames,
+            (Proto::Sd, "generated") => |c: &[u8]| stream_sd(c).frames,
+            (_, "plain-sum") => |c: &[u8]| u64::from(plain_sum(c)),
+            (_, other) => {
+                eprintln!("unknown stream contender `{other}`\n{USAGE}");
+                return ExitCode::from(2);
+            }
+        };
+        println!("units per pass: {} bytes", cap.len());
+        Ok((0..passes).map(|_| f(&cap)).sum())
+    } else {
+        let mixed = Mixed::from_spec(proto, &spec);
+        println!(
+            "units per pass: {} frames ({} bytes)",
+            mixed.entries.len(),
+            mixed.bytes.len()
+        );
+        match (proto, who.as_str()) {
+            (Proto::Ub2, "generated") => run(&Generated::<Ub2>::default(), &mixed, op, passes),
+            (Proto::Ub2, "hand-written") => run(&Hand::<Ub2>::default(), &mixed, op, passes),
+            (Proto::Ub2, "deku") => run(&Deku::<Ub2>::default(), &mixed, op, passes),
+            (Proto::Sd, "generated") => run(&Generated::<Sd>::default(), &mixed, op, passes),
+            (Proto::Sd, "hand-written") => run(&Hand::<Sd>::default(), &mixed, op, passes),
+            (Proto::Sd, "deku") => run(&Deku::<Sd>::default(), &mixed, op, passes),
+            (_, "interpreter") => run(&Interp(&spec), &mixed, op, passes),
+            (_, other) => Err(format!("unknown contender `{other}`\n{USAGE}")),
+        }
+    };
+    match result {
+        Ok(v) => {
+            println!("result: {v}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("{e}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,267 @@
+//! UB2 frames decoded and encoded by hand: `0xAA`, address, 2-byte request code or 1/2-byte
+//! response code, little-endian payload, 8-bit sum. Only the messages of the bench subset.
+
+use busspec_protocols::ub2::{Capacitance, ModeOfOperation, Request, Response};
+use busspec_protocols::{DecodeError, Decoded, EncodeError};
+
+const START: u8 = 0xAA;
+
+fn sum8(bytes: &[u8]) -> u8 {
+    bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b))
+}
+
+/// Start byte, length bounds and checksum; returns address and the bytes between the address
+/// and the checksum (code and payload).
+#[inline]
+fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeError> {
+    if let Some(&found) = frame.first() {
+        if found != START {
+            return Err(DecodeError::BadStart {
+                expected: START,
+                found,
+            });
+        }
+    }
+    if frame.len() < min {
+        return Err(DecodeError::Truncated {
+            needed: min,
+            found: frame.len(),
+        });
+    }
+    if frame.len() > max {
+        return Err(DecodeError::WrongLength {
+            expected: max,
+            found: frame.len(),
+        });
+    }
+    let (body, sum) = frame.split_at(frame.len() - 1);
+    let expected = sum8(body);
+    if sum[0] != expected {
+        return Err(DecodeError::ChecksumMismatch {
+            offset: body.len(),
+            expected: expected.into(),
+            found: sum[0].into(),
+        });
+    }
+    Ok((body[1], &body[2..]))
+}
+
+fn u16le(a: u8, b: u8) -> u16 {
+    u16::from_le_bytes([a, b])
+}
+
+fn u32le(a: u8, b: u8, c: u8, d: u8) -> u32 {
+    u32::from_le_bytes([a, b, c, d])
+}
+
+fn wrong_length(expected: usize, frame: &[u8]) -> DecodeError {
+    DecodeError::WrongLength {
+        expected,
+        found: frame.len(),
+    }
+}
+
+pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
+    let (address, rest) = envelope(frame, 5, 9)?;
+    let message = match *rest {
+        [0x10, 0x00] => Request::ReferenceRun,
+        [0x20, 0x00, a, b, c, d] => Request::GoToCapacitance {
+            target: Capacitance(u32le(a, b, c, d)),
+        },
+        [0x20, 0x01] => Request::GoToCapacitanceStatus,
+        [0x21, 0x00, a, b] => Request::GoToFullStepPosition {
+            target: u16le(a, b),
+        },
+        [0x22, 0x00, a, b] => Request::MoveFullSteps {
+            steps: i16::from_le_bytes([a, b]),
+        },
+        [0x80, 0x00, m] => Request::SetModeOfOperation {
+            mode: ModeOfOperation::from_raw(m),
+        },
+        [0x40, 0x01] => Request::GetActualCapacitance,
+        [0x40, 0x80] => Request::GetModeOfOperation,
+        [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance { index: u16le(a, b) },
+        [0x40, 0x32] => Request::GetControllerTemperature,
+        [0x40, 0x61] => Request::GetFirmwareVersion,
+        [0x40, 0x72, index] => match index {
+            0x01 => Request::GetLowerCustomerLimit,
+            0x02 => Request::GetUpperCustomerLimit,
+            found => {
+                return Err(DecodeError::InvalidValue {
+                    field: "index",
+                    offset: 4,
+                    found: found.into(),
+                })
+            }
+        },
+        [0x20, 0x00, ..] => return Err(wrong_length(9, frame)),
+        [0x21 | 0x22, 0x00, ..] | [0x40, 0x30, ..] => return Err(wrong_length(7, frame)),
+        [0x80, 0x00, ..] | [0x40, 0x72, ..] => return Err(wrong_length(6, frame)),
+        [0x10, 0x00, ..] | [0x20, 0x01, ..] | [0x40, 0x01 | 0x32 | 0x61 | 0x80, ..] => {
+            return Err(wrong_length(5, frame))
+        }
+        [hi, lo, ..] => {
+            return Err(DecodeError::UnknownCommand {
+                offset: 2,
+                code: u32::from(u16::from_be_bytes([hi, lo])),
+            })
+        }
+        _ => return Err(wrong_length(5, frame)),
+    };
+    Ok(Decoded { address, message })
+}
+
+/// UB2 responses need no request to be told apart; `_request` keeps the SD decoder's shape.
+pub fn decode_response(
+    frame: &[u8],
+    _request: Option<&Request>,
+) -> Result<Decoded<Response>, DecodeError> {
+    let (address, rest) = envelope(frame, 4, 16)?;
+    let message = match *rest {
+        [0x50] => Response::MovementStarted,
+        [0x51] => Response::MovementCompleted,
+        [0x52] => Response::MovementNotCompleted,
+        [0x93] => Response::NakLimitReached,
+        [0x94] => Response::NakIndexOutOfRange,
+        [0x80, 0x00] => Response::SetModeOfOperationAck,
+        [0x41, 0x01, a, b, c, d] => Response::ActualCapacitance {
+            capacitance: Capacitance(u32le(a, b, c, d)),
+        },
+        [0x41, 0x80, m] => Response::ActualModeOfOperation {
+            mode: ModeOfOperation::from_raw(m),
+        },
+        [0x41, 0x30, i0, i1, f0, f1, c0, c1, c2, c3] => Response::CCurveEntry {
+            index: u16le(i0, i1),
+            full_steps: u16le(f0, f1),
+            capacitance: Capacitance(u32le(c0, c1, c2, c3)),
+        },
+        [0x41, 0x32, t] => Response::ControllerTemperature { temperature: t },
+        [0x41, 0x61, ref text @ ..] if text.len() == 11 => {
+            let mut firmware_version = [0u8; 11];
+            firmware_version.copy_from_slice(text);
+            Response::FirmwareVersion { firmware_version }
+        }
+        [0x41, 0x72, index, a, b, c, d] => {
+            let capacitance = Capacitance(u32le(a, b, c, d));
+            match index {
+                0x01 => Response::LowerCustomerLimit { capacitance },
+                0x02 => Response::UpperCustomerLimit { capacitance },
+                found => {
+                    return Err(DecodeError::InvalidValue {
+                        field: "index",
+                        offset: 4,
+                        found: found.into(),
+                    })
+                }
+            }
+        }
+        [0x50..=0x52 | 0x93 | 0x94, ..] => return Err(wrong_length(4, frame)),
+        [0x80, 0x00, ..] => return Err(wrong_length(5, frame)),
+        [0x41, 0x01, ..] => return Err(wrong_length(9, frame)),
+        [0x41, 0x80, ..] => return Err(wrong_length(6, frame)),
+        [0x41, 0x30, ..] => return Err(wrong_length(13, frame)),
+        [0x41, 0x32, ..] => return Err(wrong_length(6, frame)),
+        [0x41, 0x61, ..] => return Err(wrong_length(16, frame)),
+        [0x41, 0x72, ..] => return Err(wrong_length(10, frame)),
+        [code, ..] => {
+            return Err(DecodeError::UnknownCommand {
+                offset: 2,
+                code: code.into(),
+            })
+        }
+        [] => return Err(wrong_length(4, frame)),
+    };
+    Ok(Decoded { address, message })
+}
+
+/// Writes start, address, code and payload, then the checksum; returns the frame length.
+fn put(address: u8, code: &[u8], payload: &[u8], buf: &mut [u8]) -> Result<usize, EncodeError> {
+    let len = 3 + code.len() + payload.len();
+    let available = buf.len();
+    let out = buf.get_mut(..len).ok_or(EncodeError::BufferTooSmall {
+        needed: len,
+        available,
+    })?;
+    out[0] = START;
+    out[1] = address;
+    out[2..2 + code.len()].copy_from_slice(code);
+    out[2 + code.len()..len - 1].copy_from_slice(payload);
+    out[len - 1] = sum8(&out[..len - 1]);
+    Ok(len)
+}
+
+/// Encodes a request of the subset; `None` for any other message.
+pub fn encode_request(
+    m: &Request,
+    address: u8,
+    buf: &mut [u8],
+) -> Option<Result<usize, EncodeError>> {
+    Some(match *m {
+        Request::ReferenceRun => put(address, &[0x10, 0x00], &[], buf),
+        Request::GoToCapacitance { target } => {
+            put(address, &[0x20, 0x00], &target.0.to_le_bytes(), buf)
+        }
+        Request::GoToCapacitanceStatus => put(address, &[0x20, 0x01], &[], buf),
+        Request::GoToFullStepPosition { target } => {
+            put(address, &[0x21, 0x00], &target.to_le_bytes(), buf)
+        }
+        Request::MoveFullSteps { steps } => put(address, &[0x22, 0x00], &steps.to_le_bytes(), buf),
+        Request::SetModeOfOperation { mode } => put(address, &[0x80, 0x00], &[mode.raw()], buf),
+        Request::GetActualCapacitance => put(address, &[0x40, 0x01], &[], buf),
+        Request::GetModeOfOperation => put(address, &[0x40, 0x80], &[], buf),
+        Request::GetCCurveIndexedFullStepCapacitance { index } => {
+            put(address, &[0x40, 0x30], &index.to_le_bytes(), buf)
+        }
+        Request::GetControllerTemperature => put(address, &[0x40, 0x32], &[], buf),
+        Request::GetFirmwareVersion => put(address, &[0x40, 0x61], &[], buf),
+        Request::GetLowerCustomerLimit => put(address, &[0x40, 0x72], &[0x01], buf),
+        Request::GetUpperCustomerLimit => put(address, &[0x40, 0x72], &[0x02], buf),
+        _ => return None,
+    })
+}
+
+/// Encodes a response of the subset; `None` for any other message.
+pub fn encode_response(
+    m: &Response,
+    address: u8,
+    buf: &mut [u8],
+) -> Option<Result<usize, EncodeError>> {
+    Some(match *m {
+        Response::MovementStarted => put(address, &[0x50], &[], buf),
+        Response::MovementCompleted => put(address, &[0x51], &[], buf),
+        Response::MovementNotCompleted => put(address, &[0x52], &[], buf),
+        Response::NakLimitReached => put(address, &[0x93], &[], buf),
+        Response::NakIndexOutOfRange => put(address, &[0x94], &[], buf),
+        Response::SetModeOfOperationAck => put(address, &[0x80, 0x00], &[], buf),
+        Response::ActualCapacitance { capacitance } => {
+            put(address, &[0x41, 0x01], &capacitance.0.to_le_bytes(), buf)
+        }
+        Response::ActualModeOfOperation { mode } => put(address, &[0x41, 0x80], &[mode.raw()], buf),
+        Response::CCurveEntry {
+            index,
+            full_steps,
+            capacitance,
+        } => {
+            let mut p = [0u8; 8];
+            p[..2].copy_from_slice(&index.to_le_bytes());
+            p[2..4].copy_from_slice(&full_steps.to_le_bytes());
+            p[4..].copy_from_slice(&capacitance.0.to_le_bytes());
+            put(address, &[0x41, 0x30], &p, buf)
+        }
+        Response::ControllerTemperature { temperature } => {
+            put(address, &[0x41, 0x32], &[temperature], buf)
+        }
+        Response::FirmwareVersion { firmware_version } => {
+            put(address, &[0x41, 0x61], &firmware_version, buf)
+        }
+        Response::LowerCustomerLimit { capacitance } => {
+            let c = capacitance.0.to_le_bytes();
+            put(address, &[0x41, 0x72], &[0x01, c[0], c[1], c[2], c[3]], buf)
+        }
+        Response::UpperCustomerLimit { capacitance } => {
+            let c = capacitance.0.to_le_bytes();
+            put(address, &[0x41, 0x72], &[0x02, c[0], c[1], c[2], c[3]], buf)
+        }
+        _ => return None,
+    })
+}

@@ -1,0 +1,348 @@
+//! What busspec's benches measure, shared by the criterion benches (`benches/`), the
+//! instruction counter (`src/bin/icount.rs`) and the tests that hold every contender to the
+//! generated code (`tests/`).
+//!
+//! Contenders, each behind [`Contender`]:
+//! - [`Generated`]: the generated codec crate (`busspec-protocols`), the thing measured;
+//! - [`Hand`]: decoders and encoders written by hand ([`hand`]), the practical limit;
+//! - [`Deku`]: the same frames derived with deku ([`peer`]), what people would otherwise use;
+//! - [`Interp`]: busspec's run-time interpreter, the oracle.
+//!
+//! Every contender decodes the same [`mixed::Mixed`] stream (the spec's example frames of a
+//! subset of messages every contender implements, [`mixed::Proto::subset`]).
+
+pub mod hand;
+pub mod mixed;
+pub mod peer;
+
+use std::hint::black_box;
+use std::ops::Range;
+
+use busspec_codegen::interp;
+use busspec_codegen::ir::{Direction, Protocol};
+use mixed::Mixed;
+
+/// One decoder/encoder of one protocol.
+pub trait Contender {
+    /// A decoded request, with its address.
+    type Request: Clone;
+    /// A decoded response, with its address.
+    type Response: Clone;
+    type DecodeError: std::fmt::Debug;
+    type EncodeError: std::fmt::Debug;
+    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, Self::DecodeError>;
+    /// `request` is given for responses only their request identifies.
+    fn decode_response(
+        &self,
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Self::Response, Self::DecodeError>;
+    fn encode_request(&self, m: &Self::Request, buf: &mut [u8])
+        -> Result<usize, Self::EncodeError>;
+    fn encode_response(
+        &self,
+        m: &Self::Response,
+        buf: &mut [u8],
+    ) -> Result<usize, Self::EncodeError>;
+}
+
+/// The generated codec of a protocol module.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Generated<P>(std::marker::PhantomData<P>);
+
+/// The hand-written decoders and encoders of [`hand`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Hand<P>(std::marker::PhantomData<P>);
+
+/// The deku-derived peer of [`peer`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Deku<P>(std::marker::PhantomData<P>);
+
+/// Marks the UB2 contenders.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Ub2;
+/// Marks the SD contenders.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Sd;
+
+/// `impl Contender` from the four operations, written over `frame`, `request`, `m` and `buf`.
+macro_rules! contender {
+    (
+        $ty:ty, $q:ty, $r:ty, $de:ty, $ee:ty,
+        |$frame:ident, $request:ident, $m:ident, $buf:ident|
+        $decode_request:expr, $decode_response:expr, $encode_request:expr, $encode_response:expr
+    ) => {
+        impl Contender for $ty {
+            type Request = $q;
+            type Response = $r;
+            type DecodeError = $de;
+            type EncodeError = $ee;
+            #[inline]
+            fn decode_request(&self, $frame: &[u8]) -> Result<$q, $de> {
+                $decode_request
+            }
+            #[inline]
+            fn decode_response(&self, $frame: &[u8], $request: Option<&$q>) -> Result<$r, $de> {
+                $decode_response
+            }
+            #[inline]
+            fn encode_request(&self, $m: &$q, $buf: &mut [u8]) -> Result<usize, $ee> {
+                $encode_request
+            }
+            #[inline]
+            fn encode_response(&self, $m: &$r, $buf: &mut [u8]) -> Result<usize, $ee> {
+                $encode_response
+            }
+        }
+    };
+}
+
+macro_rules! protocol_contenders {
+    ($marker:ty, $module:ident, $deku_response:ty) => {
+        contender!(
+            Generated<$marker>,
+            busspec_protocols::Decoded<busspec_protocols::$module::Request>,
+            busspec_protocols::Decoded<busspec_protocols::$module::Response>,
+            busspec_protocols::DecodeError,
+            busspec_protocols::EncodeError,
+            |frame, request, m, buf| busspec_protocols::$module::Request::decode(frame),
+            match request {
+                None => busspec_protocols::$module::Response::decode(frame),
+                Some(r) => busspec_protocols::$module::Response::decode_reply(frame, &r.message),
+            },
+            m.message.encode(m.address, buf),
+            m.message.encode(m.address, buf)
+        );
+        contender!(
+            Hand<$marker>,
+            busspec_protocols::Decoded<busspec_protocols::$module::Request>,
+            busspec_protocols::Decoded<busspec_protocols::$module::Response>,
+            busspec_protocols::DecodeError,
+            hand::EncodeError,
+            |frame, request, m, buf| hand::$module::decode_request(frame),
+            hand::$module::decode_response(frame, request.map(|r| &r.message)),
+            hand::subset(
+                m.message.name(),
+                hand::$module::encode_request(&m.message, m.address, buf)
+            ),
+            hand::subset(
+                m.message.name(),
+                hand::$module::encode_response(&m.message, m.address, buf)
+            )
+        );
+        contender!(
+            Deku<$marker>,
+            peer::$module::RequestFrame,
+            $deku_response,
+            peer::Error,
+            peer::Error,
+            |frame, request, m, buf| peer::$module::decode_request(frame),
+            peer::$module::decode_response(frame, request),
+            peer::$module::encode_request(m, buf),
+            peer::$module::encode_response(m, buf)
+        );
+    };
+}
+
+protocol_contenders!(Ub2, ub2, peer::ub2::ResponseFrame);
+protocol_contenders!(Sd, sd, peer::sd::Reply);
+
+/// busspec's interpreter over a loaded spec.
+pub struct Interp<'p>(pub &'p Protocol);
+
+/// Why the interpreter did not encode a frame into the caller's buffer.
+#[derive(Debug)]
+pub enum InterpEncodeError {
+    Encode(interp::EncodeError),
+    BufferTooSmall { needed: usize },
+}
+
+impl Contender for Interp<'_> {
+    type Request = interp::Frame;
+    type Response = interp::Frame;
+    type DecodeError = interp::DecodeError;
+    type EncodeError = InterpEncodeError;
+    fn decode_request(&self, frame: &[u8]) -> Result<interp::Frame, interp::DecodeError> {
+        interp::decode(self.0, Some(Direction::Request), None, frame)
+    }
+    fn decode_response(
+        &self,
+        frame: &[u8],
+        request: Option<&interp::Frame>,
+    ) -> Result<interp::Frame, interp::DecodeError> {
+        let reply_to = request.map(|r| r.message.index);
+        interp::decode(self.0, Some(Direction::Response), reply_to, frame)
+    }
+    fn encode_request(
+        &self,
+        m: &interp::Frame,
+        buf: &mut [u8],
+    ) -> Result<usize, InterpEncodeError> {
+        self.encode_response(m, buf)
+    }
+    fn encode_response(
+        &self,
+        m: &interp::Frame,
+        buf: &mut [u8],
+    ) -> Result<usize, InterpEncodeError> {
+        let wire = interp::encode(self.0, m.message, m.address, &m.values)
+            .map_err(InterpEncodeError::Encode)?;
+        buf.get_mut(..wire.len())
+            .ok_or(InterpEncodeError::BufferTooSmall { needed: wire.len() })?
+            .copy_from_slice(&wire);
+        Ok(wire.len())
+    }
+}
+
+/// One frame of the mixed stream as a contender is handed it: where it lies, and for a reply
+/// only its request identifies, that request already decoded by the same contender.
+#[derive(Debug, Clone)]
+pub enum Job<Q> {
+    Request(Range<usize>),
+    Response(Range<usize>, Option<Q>),
+}
+
+/// The mixed stream's jobs for contender `c` (decodes the requests replies need; not timed).
+pub fn jobs<C: Contender>(c: &C, mixed: &Mixed) -> Vec<Job<C::Request>> {
+    mixed
+        .entries
+        .iter()
+        .map(|e| match e.direction {
+            Direction::Request => Job::Request(e.range.clone()),
+            Direction::Response => Job::Response(
+                e.range.clone(),
+                e.reply_to.as_ref().map(|r| {
+                    c.decode_request(r)
+                        .unwrap_or_else(|err| panic!("request of {}: {err:?}", e.message))
+                }),
+            ),
+        })
+        .collect()
+}
+
+/// Decodes every frame of the stream in order; returns how many decoded. Each result goes
+/// through `black_box`, so none is optimised away.
+#[inline(never)]
+pub fn decode_all<C: Contender>(c: &C, bytes: &[u8], jobs: &[Job<C::Request>]) -> usize {
+    let mut ok = 0;
+    for job in jobs {
+        let decoded = match job {
+            Job::Request(r) => black_box(c.decode_request(&bytes[r.clone()])).is_ok(),
+            Job::Response(r, q) => {
+                black_box(c.decode_response(&bytes[r.clone()], q.as_ref())).is_ok()
+            }
+        };
+        ok += usize::from(decoded);
+    }
+    ok
+}
+
+/// A decoded message, for the encode benches.
+#[derive(Debug, Clone)]
+pub enum Message<Q, R> {
+    Request(Q),
+    Response(R),
+}
+
+/// Every frame of the stream decoded by `c` (not timed); panics on a frame it rejects.
+pub fn messages<C: Contender>(c: &C, mixed: &Mixed) -> Vec<Message<C::Request, C::Response>> {
+    let jobs = jobs(c, mixed);
+    jobs.iter()
+        .zip(&mixed.entries)
+        .map(|(job, e)| match job {
+            Job::Request(r) => Message::Request(
+                c.decode_request(&mixed.bytes[r.clone()])
+                    .unwrap_or_else(|err| panic!("{}: {err:?}", e.message)),
+            ),
+            Job::Response(r, q) => Message::Response(
+                c.decode_response(&mixed.bytes[r.clone()], q.as_ref())
+                    .unwrap_or_else(|err| panic!("{}: {err:?}", e.message)),
+            ),
+        })
+        .collect()
+}
+
+/// Encodes every message back to back into `out`; returns the bytes written, or `None` if
+/// one did not encode.
+#[inline(never)]
+pub fn encode_all<C: Contender>(
+    c: &C,
+    messages: &[Message<C::Request, C::Response>],
+    out: &mut [u8],
+) -> Option<usize> {
+    let mut at = 0;
+    for m in messages {
+        let buf = out.get_mut(at..)?;
+        let n = match m {
+            Message::Request(q) => c.encode_request(q, buf),
+            Message::Response(r) => c.encode_response(r, buf),
+        };
+        at += n.ok()?;
+    }
+    Some(at)
+}
+
+/// What a stream decoder found in a capture.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StreamCount {
+    pub frames: u64,
+    pub ambiguous: u64,
+    pub skipped_bytes: u64,
+    /// Bytes accounted for by all events.
+    pub bytes: u64,
+}
+
+macro_rules! generated_stream {
+    ($name:ident, $module:ident) => {
+        /// The generated streaming decoder over a whole capture, sniffing both directions.
+        #[inline(never)]
+        pub fn $name(capture: &[u8]) -> StreamCount {
+            use busspec_protocols::stream::Event;
+            let mut d = busspec_protocols::$module::StreamDecoder::new(None);
+            let mut n = StreamCount::default();
+            let mut count = |ev: Event<_, _>| {
+                n.bytes += ev.len();
+                match ev {
+                    Event::Request { .. } | Event::Response { .. } => n.frames += 1,
+                    Event::Ambiguous { .. } => n.ambiguous += 1,
+                    Event::Skipped { len, .. } => n.skipped_bytes += len,
+                }
+            };
+            for ev in d.feed(capture) {
+                count(black_box(ev));
+            }
+            while let Some(ev) = d.finish() {
+                count(black_box(ev));
+            }
+            n
+        }
+    };
+}
+
+generated_stream!(stream_ub2, ub2);
+generated_stream!(stream_sd, sd);
+
+/// The interpreter's streaming decoder over a whole capture, sniffing both directions.
+pub fn stream_interp(p: &Protocol, capture: &[u8]) -> StreamCount {
+    use busspec_codegen::stream::{Event, StreamDecoder};
+    let mut d = StreamDecoder::new(p, None);
+    let mut n = StreamCount::default();
+    let mut events = d.push(capture);
+    events.extend(d.flush());
+    for ev in events {
+        n.bytes += ev.bytes().len() as u64;
+        match ev {
+            Event::Frame { .. } => n.frames += 1,
+            Event::Ambiguous { .. } => n.ambiguous += 1,
+            Event::Skipped { bytes, .. } => n.skipped_bytes += bytes.len() as u64,
+        }
+    }
+    n
+}
+
+/// The memory floor: one pass over the bytes adding them up, as the compiler makes of it
+/// (auto-vectorised on x86-64).
+#[inline(never)]
+pub fn plain_sum(bytes: &[u8]) -> u8 {
+    bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b))
+}

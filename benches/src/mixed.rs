@@ -1,0 +1,234 @@
+//! What the benches feed every contender: a sequential stream of mixed frames built from the
+//! spec's own example frames, and a synthetic bus capture with noise.
+
+use std::ops::Range;
+
+use busspec_codegen::ir::{Direction, Protocol};
+
+/// A protocol the benches cover.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Proto {
+    Ub2,
+    Sd,
+}
+
+impl Proto {
+    pub const ALL: [Proto; 2] = [Proto::Ub2, Proto::Sd];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Proto::Ub2 => "ub2",
+            Proto::Sd => "sd",
+        }
+    }
+
+    /// The validated spec, loaded from `spec/` at run time (the interpreter's input).
+    pub fn spec(self) -> Protocol {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../spec")
+            .join(format!("{}.yaml", self.name()));
+        busspec_codegen::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
+    }
+
+    /// The messages every contender implements, by spec name. The mixed stream holds the
+    /// spec's examples of exactly these (see BENCHMARKS.md for why a subset).
+    pub fn subset(self) -> &'static [&'static str] {
+        match self {
+            Proto::Ub2 => UB2_SUBSET,
+            Proto::Sd => SD_SUBSET,
+        }
+    }
+}
+
+/// Every kind of UB2 frame: 1- and 2-byte codes, no payload to 11 ASCII bytes, u16/i16/u32
+/// little-endian fields, an enum (both ways), a code shared by messages told apart by a
+/// constant (0x4072), a setter and its echo ACK sharing a code (0x8000), NAKs.
+const UB2_SUBSET: &[&str] = &[
+    "reference_run",
+    "go_to_capacitance",
+    "go_to_capacitance_status",
+    "go_to_full_step_position",
+    "move_full_steps",
+    "set_mode_of_operation",
+    "get_actual_capacitance",
+    "get_mode_of_operation",
+    "get_c_curve_indexed_full_step_capacitance",
+    "get_controller_temperature",
+    "get_firmware_version",
+    "get_lower_customer_limit",
+    "get_upper_customer_limit",
+    "movement_started",
+    "movement_completed",
+    "movement_not_completed",
+    "nak_limit_reached",
+    "nak_index_out_of_range",
+    "set_mode_of_operation_ack",
+    "actual_capacitance",
+    "actual_mode_of_operation",
+    "c_curve_entry",
+    "controller_temperature",
+    "firmware_version",
+    "lower_customer_limit",
+    "upper_customer_limit",
+];
+
+/// Every kind of SD frame: packed bit fields (a signed 12-bit position, a constant nibble),
+/// signed 16-bit values, constant arguments, a repeated argument, codes shared by requests
+/// told apart by a constant (0x40), special values, a flag set, and replies only their
+/// request identifies (0x22).
+const SD_SUBSET: &[&str] = &[
+    "set_point",
+    "read_actual_position",
+    "set_velocity",
+    "read_actual_velocity",
+    "set_servo_id",
+    "read_temperatures",
+    "read_humidity",
+    "read_actuator_status_word",
+    "reset_actuator_status_word",
+    "read_total_runtime_hours",
+    "read_total_runtime_min_sec",
+    "set_point_reply",
+    "actual_position",
+    "set_velocity_reply",
+    "actual_velocity",
+    "set_servo_id_reply",
+    "temperatures",
+    "humidity",
+    "actuator_status_word",
+    "total_runtime_hours",
+    "total_runtime_min_sec",
+];
+
+/// Frames per iteration of the decode and encode benches: enough that the figure is the cost
+/// of a frame in a stream, not of one frame overlapped with itself in the pipeline.
+pub const FRAMES: usize = 128;
+
+/// At most this many examples of one message go into the mix, so the short ACKs the UB2 spec
+/// shows for every movement do not crowd out the rest.
+const PER_MESSAGE: usize = 2;
+
+/// One frame of the mixed stream.
+#[derive(Debug, Clone)]
+pub struct Entry {
+    pub message: String,
+    pub direction: Direction,
+    /// Where the frame lies in [`Mixed::bytes`].
+    pub range: Range<usize>,
+    /// For a response only its request identifies: that request's frame.
+    pub reply_to: Option<Vec<u8>>,
+}
+
+/// An example chosen for the mix.
+struct Picked {
+    name: String,
+    direction: Direction,
+    wire: Vec<u8>,
+    reply_to: Option<Vec<u8>>,
+}
+
+/// [`FRAMES`] frames back to back, both directions, cycling through the selected examples.
+#[derive(Debug, Clone)]
+pub struct Mixed {
+    pub proto: Proto,
+    pub bytes: Vec<u8>,
+    pub entries: Vec<Entry>,
+}
+
+impl Mixed {
+    pub fn new(proto: Proto) -> Mixed {
+        Self::from_spec(proto, &proto.spec())
+    }
+
+    pub fn from_spec(proto: Proto, p: &Protocol) -> Mixed {
+        let subset = proto.subset();
+        let mut picked: Vec<Picked> = Vec::new();
+        for e in &p.examples {
+            let m = p.message(e.message);
+            if !subset.contains(&m.name.as_str()) {
+                continue;
+            }
+            if picked.iter().filter(|x| x.name == m.name).count() >= PER_MESSAGE {
+                continue;
+            }
+            let reply_to = if m.needs_request {
+                let cmd = e
+                    .reply_to
+                    .unwrap_or_else(|| panic!("example of {} names no request", m.name));
+                let req = p
+                    .examples
+                    .iter()
+                    .find(|x| x.message.direction == Direction::Request && x.message.index == cmd)
+                    .unwrap_or_else(|| panic!("no example of request {}", p.commands[cmd].name));
+                Some(req.wire.clone())
+            } else {
+                None
+            };
+            picked.push(Picked {
+                name: m.name.clone(),
+                direction: e.message.direction,
+                wire: e.wire.clone(),
+                reply_to,
+            });
+        }
+        for name in subset {
+            assert!(
+                picked.iter().any(|x| x.name == *name),
+                "{}: no example of {name} in the spec",
+                proto.name()
+            );
+        }
+        let mut bytes = Vec::new();
+        let mut entries = Vec::with_capacity(FRAMES);
+        for x in picked.iter().cycle().take(FRAMES) {
+            let start = bytes.len();
+            bytes.extend_from_slice(&x.wire);
+            entries.push(Entry {
+                message: x.name.clone(),
+                direction: x.direction,
+                range: start..bytes.len(),
+                reply_to: x.reply_to.clone(),
+            });
+        }
+        Mixed {
+            proto,
+            bytes,
+            entries,
+        }
+    }
+
+    pub fn frame(&self, e: &Entry) -> &[u8] {
+        &self.bytes[e.range.clone()]
+    }
+}
+
+/// Size of the synthetic capture the stream benches decode.
+pub const CAPTURE_BYTES: usize = 1 << 20;
+
+/// One byte in a hundred of the capture is noise.
+pub const NOISE_PER_MILLE: u32 = 10;
+
+/// A synthetic bus capture of `len` bytes: every example frame of the protocol (both
+/// directions, so requests and replies alternate as the spec lists them) over and over, with
+/// [`NOISE_PER_MILLE`] of the bytes random noise inserted between frames. The last frame is
+/// cut at `len`. Seeded, so every run decodes the same capture.
+pub fn capture(p: &Protocol, len: usize) -> Vec<u8> {
+    let mut rng = fastrand::Rng::with_seed(0x0062_7573_7370_6563);
+    let frames: Vec<&[u8]> = p.examples.iter().map(|e| e.wire.as_slice()).collect();
+    let mean = frames.iter().map(|f| f.len()).sum::<usize>() as f64 / frames.len() as f64;
+    // Noise bytes between two frames: Bernoulli per frame with the probability that makes
+    // noise / total = NOISE_PER_MILLE / 1000 on average.
+    let share = f64::from(NOISE_PER_MILLE) / 1000.0;
+    let per_frame = share * mean / (1.0 - share);
+    let mut out = Vec::with_capacity(len + 32);
+    let mut i = 0;
+    while out.len() < len {
+        out.extend_from_slice(frames[i % frames.len()]);
+        i += 1;
+        if rng.f64() < per_frame {
+            out.push(rng.u8(..));
+        }
+    }
+    out.truncate(len);
+    out
+}
