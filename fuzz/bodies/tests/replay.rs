@@ -81,7 +81,7 @@ replay_tests!(
 );
 
 #[test]
-fn every_target_has_a_replay_test_and_a_fuzz_target() {
+fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
     let names = [
         "ub2_decode",
         "ub2_roundtrip",
@@ -96,6 +96,7 @@ fn every_target_has_a_replay_test_and_a_fuzz_target() {
     let targets: Vec<&str> = TARGETS.iter().map(|t| t.name).collect();
     assert_eq!(targets, names);
     let manifest = std::fs::read_to_string(repo_root().join("fuzz/Cargo.toml")).unwrap();
+    let nightly = std::fs::read_to_string(repo_root().join(".github/workflows/fuzz.yml")).unwrap();
     for t in TARGETS {
         let file = repo_root().join(format!("fuzz/fuzz_targets/{}.rs", t.name));
         let body =
@@ -110,6 +111,11 @@ fn every_target_has_a_replay_test_and_a_fuzz_target() {
         assert!(
             manifest.contains(&format!("name = \"{}\"", t.name)),
             "fuzz/Cargo.toml has no [[bin]] {}",
+            t.name
+        );
+        assert!(
+            nightly.contains(&format!("          - {}\n", t.name)),
+            "the nightly workflow's matrix lacks {}",
             t.name
         );
     }
