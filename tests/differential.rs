@@ -10,84 +10,14 @@
 
 mod common;
 
-use busspec_codegen::interp::{self, DecodeError as InterpError};
-use busspec_codegen::ir::{Direction, Protocol};
-use common::{interp_values, random_input, request_example, spec, Generated};
-
-generated!(Ub2, ub2, "ub2.yaml");
-generated!(Sd, sd, "sd.yaml");
+use busspec_codegen::ir::Direction;
+use common::{agree, random_input, spec, Generated, Sd, Ub2};
 
 fn random_inputs() -> usize {
     std::env::var("BUSSPEC_RANDOM_INPUTS")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(500_000)
-}
-
-/// Decodes `frame` with both engines in `direction` (as the reply to command `reply_to` if
-/// given) and asserts they agree; returns whether it was accepted.
-fn agree<G: Generated>(
-    p: &Protocol,
-    frame: &[u8],
-    direction: Direction,
-    reply_to: Option<usize>,
-) -> bool {
-    let reply_frame = reply_to.and_then(|c| request_example(p, c));
-    let reply_to = reply_frame.and(reply_to);
-    let oracle = interp::decode(p, Some(direction), reply_to, frame);
-    let generated = match direction {
-        Direction::Request => G::request(frame),
-        Direction::Response => G::response(frame, reply_frame),
-    };
-    // decode_reply admits only responses the request may get; the interpreter uses the request
-    // only to settle ambiguity, so hold it to the same rule here.
-    let oracle = match (oracle, reply_to) {
-        (Ok(f), Some(c))
-            if !p.commands[c]
-                .responses
-                .iter()
-                .any(|(r, _)| *r == f.message.index) =>
-        {
-            Err(None)
-        }
-        (Ok(f), _) => Ok(f),
-        (Err(e), _) => Err(Some(e)),
-    };
-    let ctx = || {
-        format!(
-            "{} {direction:?} {} (reply to {reply_to:?})",
-            G::FILE,
-            interp::format_hex(frame)
-        )
-    };
-    match (oracle, generated) {
-        (Ok(f), Ok(g)) => {
-            assert_eq!(g.name, p.message(f.message).name, "{}", ctx());
-            assert_eq!(g.address, f.address, "{}", ctx());
-            assert_eq!(g.values, interp_values(p, &f), "{}", ctx());
-            assert_eq!(g.reencoded, frame, "re-encoding {}", ctx());
-            true
-        }
-        (Err(Some(InterpError::Ambiguous { .. })), Err(g)) => {
-            assert!(
-                matches!(g, busspec_protocols::DecodeError::Ambiguous { .. }),
-                "the interpreter finds it ambiguous, the generated code says {g}: {}",
-                ctx()
-            );
-            false
-        }
-        (Err(_), Err(_)) => false,
-        (Ok(f), Err(g)) => panic!(
-            "only the interpreter accepts ({}), generated: {g}: {}",
-            p.message(f.message).name,
-            ctx()
-        ),
-        (Err(e), Ok(g)) => panic!(
-            "only the generated code accepts ({}), interpreter: {e:?}: {}",
-            g.name,
-            ctx()
-        ),
-    }
 }
 
 fn every_example<G: Generated>() {

@@ -7,135 +7,8 @@ mod common;
 
 use busspec_codegen::interp;
 use busspec_codegen::ir::{Direction, Protocol};
-use busspec_codegen::stream::{Event as InterpEvent, StreamDecoder as InterpDecoder};
-use common::{interp_values, spec, visit_values, Values};
-
-/// An event reduced to what both decoders report: kind, offset, length, message, address, values.
-#[derive(Debug, Clone, PartialEq, Eq)]
-enum Seen {
-    Frame {
-        offset: u64,
-        len: u64,
-        name: String,
-        address: u8,
-        values: Values,
-    },
-    Ambiguous {
-        offset: u64,
-        len: u64,
-    },
-    Skipped {
-        offset: u64,
-        len: u64,
-    },
-}
-
-/// Consecutive skipped runs are one run, however each decoder splits them.
-fn merge(events: Vec<Seen>) -> Vec<Seen> {
-    let mut out: Vec<Seen> = Vec::new();
-    for e in events {
-        if let (
-            Some(Seen::Skipped { offset, len }),
-            Seen::Skipped {
-                offset: o2,
-                len: l2,
-            },
-        ) = (out.last_mut(), &e)
-        {
-            if *offset + *len == *o2 {
-                *len += l2;
-                continue;
-            }
-        }
-        out.push(e);
-    }
-    out
-}
-
-fn interp_events(p: &Protocol, capture: &[u8], chunks: &[usize]) -> Vec<Seen> {
-    let mut d = InterpDecoder::new(p, None);
-    let mut events = Vec::new();
-    let mut rest = capture;
-    for &n in chunks {
-        let (a, b) = rest.split_at(n.min(rest.len()));
-        events.extend(d.push(a));
-        rest = b;
-    }
-    events.extend(d.push(rest));
-    events.extend(d.flush());
-    merge(
-        events
-            .into_iter()
-            .map(|e| match e {
-                InterpEvent::Frame {
-                    offset,
-                    bytes,
-                    frame,
-                } => Seen::Frame {
-                    offset,
-                    len: bytes.len() as u64,
-                    name: p.message(frame.message).name.clone(),
-                    address: frame.address,
-                    values: interp_values(p, &frame),
-                },
-                InterpEvent::Ambiguous { offset, bytes, .. } => Seen::Ambiguous {
-                    offset,
-                    len: bytes.len() as u64,
-                },
-                InterpEvent::Skipped { offset, bytes } => Seen::Skipped {
-                    offset,
-                    len: bytes.len() as u64,
-                },
-            })
-            .collect(),
-    )
-}
-
-macro_rules! generated_events {
-    ($proto:ident, $capture:expr, $chunks:expr) => {{
-        use busspec_protocols::stream::Event;
-        use busspec_protocols::$proto::StreamDecoder;
-        let mut d = StreamDecoder::new(None);
-        let mut raw = Vec::new();
-        let mut rest: &[u8] = $capture;
-        let mut chunks: Vec<usize> = $chunks.to_vec();
-        chunks.push(usize::MAX);
-        for n in chunks {
-            let (a, b) = rest.split_at(n.min(rest.len()));
-            raw.extend(d.feed(a));
-            rest = b;
-        }
-        while let Some(e) = d.finish() {
-            raw.push(e);
-        }
-        assert_eq!(d.buffered(), 0);
-        merge(
-            raw.into_iter()
-                .map(|e| match e {
-                    Event::Request { offset, len, frame } => Seen::Frame {
-                        offset,
-                        len: len as u64,
-                        name: frame.message.name().to_owned(),
-                        address: frame.address,
-                        values: visit_values(|f| frame.message.visit(f)),
-                    },
-                    Event::Response { offset, len, frame } => Seen::Frame {
-                        offset,
-                        len: len as u64,
-                        name: frame.message.name().to_owned(),
-                        address: frame.address,
-                        values: visit_values(|f| frame.message.visit(f)),
-                    },
-                    Event::Ambiguous { offset, len, .. } => Seen::Ambiguous {
-                        offset,
-                        len: len as u64,
-                    },
-                    Event::Skipped { offset, len } => Seen::Skipped { offset, len },
-                })
-                .collect(),
-        )
-    }};
-}
+use busspec_fuzz_bodies::events::{covers, interp_events, Seen};
+use common::spec;
 
 /// A capture: example frames in random order, with noise bursts and cut-short frames between.
 fn capture(p: &Protocol, rng: &mut fastrand::Rng, frames: usize) -> Vec<u8> {
@@ -163,34 +36,20 @@ fn chunks(rng: &mut fastrand::Rng, total: usize) -> Vec<usize> {
     out
 }
 
-/// Every byte is in exactly one event, in order.
-fn covers(events: &[Seen], total: u64) {
-    let mut at = 0;
-    for e in events {
-        let (offset, len) = match e {
-            Seen::Frame { offset, len, .. }
-            | Seen::Ambiguous { offset, len }
-            | Seen::Skipped { offset, len } => (*offset, *len),
-        };
-        assert_eq!(offset, at, "gap or overlap before {e:?}");
-        at += len;
-    }
-    assert_eq!(at, total);
-}
-
 macro_rules! stream_agrees {
     ($proto:ident, $file:literal, $seed:expr) => {{
+        use busspec_fuzz_bodies::$proto;
         let p = spec($file);
         let mut rng = fastrand::Rng::with_seed($seed);
         let mut frames = 0;
         for _ in 0..300 {
             let cap = capture(&p, &mut rng, 40);
             let cuts = chunks(&mut rng, cap.len());
-            let want = interp_events(&p, &cap, &cuts);
-            let got = generated_events!($proto, &cap, &cuts);
+            let want = interp_events(&p, None, &cap, &cuts);
+            let got = $proto::seen(&$proto::stream_events(None, &cap, &cuts));
             assert_eq!(got, want, "capture {}", interp::format_hex(&cap));
             // However the capture is cut, the events are the same.
-            assert_eq!(generated_events!($proto, &cap, &[1usize; 0]), got);
+            assert_eq!($proto::seen(&$proto::stream_events(None, &cap, &[])), got);
             covers(&got, cap.len() as u64);
             frames += got
                 .iter()

@@ -548,11 +548,21 @@ fn emit_enums(ctx: &Ctx) -> TokenStream {
             #d
             #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
             #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-            #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
             pub enum #ty {
                 #(#variants,)*
                 /// A value this revision of the document does not list.
                 Unknown(#r),
+            }
+            /// Not derived: an arbitrary value goes through `from_raw`, so `Unknown` never holds
+            /// a listed value (which would encode as that value and decode as its variant).
+            #[cfg(feature = "arbitrary")]
+            impl<'a> ::arbitrary::Arbitrary<'a> for #ty {
+                fn arbitrary(u: &mut ::arbitrary::Unstructured<'a>) -> ::arbitrary::Result<Self> {
+                    ::core::result::Result::Ok(Self::from_raw(<#r as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
+                }
+                fn size_hint(depth: usize) -> (usize, ::core::option::Option<usize>) {
+                    <#r as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
+                }
             }
             impl #ty {
                 /// From a raw wire value; never fails.

@@ -12,6 +12,11 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+// `arbitrary`'s derive counts recursion in a `std` thread-local, and `arbitrary` needs `std`
+// anyway: the feature is for fuzzing and tests, never for a device build.
+#[cfg(feature = "arbitrary")]
+extern crate std;
+
 use core::fmt;
 
 pub mod stream;

@@ -1,12 +1,16 @@
-//! Shared by the tests that hold the generated crate against the interpreter: loading the specs,
-//! the values each engine decodes (compared field by field, raw), and random frames.
+//! Shared by the tests that hold the generated crate against the interpreter: loading the specs
+//! and random frames. The comparison itself (the values each engine decodes, field by field,
+//! raw; `agree`) lives in busspec-fuzz-bodies, which the fuzz targets use too.
 
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
-use busspec_codegen::interp::{self, Frame, Raw};
+use busspec_codegen::interp;
 use busspec_codegen::ir::{Direction, Message, MessageRef, Protocol};
 use busspec_codegen::{checksum, load_file};
-use busspec_protocols::FieldValue;
+
+pub use busspec_fuzz_bodies::oracle::{
+    agree, interp_values, request_example, visit_values, Decoded, Generated, Sd, Ub2, Values,
+};
 
 pub fn spec(name: &str) -> Protocol {
     load_file(
@@ -15,121 +19,6 @@ pub fn spec(name: &str) -> Protocol {
             .join(name),
     )
     .unwrap_or_else(|d| panic!("{d}"))
-}
-
-/// One decoded field: name and raw wire value.
-pub type Values = Vec<(String, Raw)>;
-
-/// What the generated code made of a frame.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Decoded {
-    pub name: &'static str,
-    pub address: u8,
-    pub values: Values,
-    /// The frame the generated encoder writes back for the decoded message.
-    pub reencoded: Vec<u8>,
-}
-
-/// Collects a generated message's fields through its `visit`.
-pub fn visit_values(visit: impl FnOnce(&mut dyn FnMut(&'static str, FieldValue<'_>))) -> Values {
-    let mut out = Vec::new();
-    visit(&mut |name, v| {
-        let raw = match v {
-            FieldValue::Int(i) => Raw::Int(i),
-            FieldValue::Text(t) => Raw::Text(t.to_vec()),
-        };
-        out.push((name.to_owned(), raw));
-    });
-    out
-}
-
-/// The interpreter's values for the fields the generated types carry: constants, repeated
-/// fields and constant bits are checked by both decoders but are not values of the message.
-pub fn interp_values(p: &Protocol, f: &Frame) -> Values {
-    let m = p.message(f.message);
-    f.values
-        .iter()
-        .filter(|v| match interp::leaf_field(m, &v.name) {
-            Some((field, bits)) => {
-                field.constant.is_none()
-                    && field.equals.is_none()
-                    && bits.map_or(true, |b| b.constant.is_none())
-            }
-            None => false,
-        })
-        .map(|v| (v.name.clone(), v.raw.clone()))
-        .collect()
-}
-
-/// The generated decoders of one protocol, behind one interface so the checks are written once.
-pub trait Generated {
-    const FILE: &'static str;
-    /// `Request::decode`.
-    fn request(frame: &[u8]) -> Result<Decoded, busspec_protocols::DecodeError>;
-    /// `Response::decode`, or `Response::decode_reply` to the request `reply_to` (a whole
-    /// request frame, decoded first).
-    fn response(
-        frame: &[u8],
-        reply_to: Option<&[u8]>,
-    ) -> Result<Decoded, busspec_protocols::DecodeError>;
-}
-
-#[macro_export]
-macro_rules! generated {
-    ($t:ident, $proto:ident, $file:literal) => {
-        pub struct $t;
-        impl $crate::common::Generated for $t {
-            const FILE: &'static str = $file;
-            fn request(
-                frame: &[u8],
-            ) -> Result<$crate::common::Decoded, busspec_protocols::DecodeError> {
-                use busspec_protocols::$proto::{Request, MAX_FRAME_LEN};
-                let d = Request::decode(frame)?;
-                let mut buf = [0xA5u8; MAX_FRAME_LEN];
-                let n = d
-                    .message
-                    .encode(d.address, &mut buf)
-                    .expect("a decoded message encodes");
-                Ok($crate::common::Decoded {
-                    name: d.message.name(),
-                    address: d.address,
-                    values: $crate::common::visit_values(|f| d.message.visit(f)),
-                    reencoded: buf[..n].to_vec(),
-                })
-            }
-            fn response(
-                frame: &[u8],
-                reply_to: Option<&[u8]>,
-            ) -> Result<$crate::common::Decoded, busspec_protocols::DecodeError> {
-                use busspec_protocols::$proto::{Request, Response, MAX_FRAME_LEN};
-                let d = match reply_to {
-                    None => Response::decode(frame)?,
-                    Some(r) => {
-                        let r = Request::decode(r)
-                            .expect("reply_to is a request frame")
-                            .message;
-                        let d = Response::decode_reply(frame, &r)?;
-                        assert!(
-                            d.message.answers(&r),
-                            "decode_reply gave a response that does not answer"
-                        );
-                        d
-                    }
-                };
-                let mut buf = [0xA5u8; MAX_FRAME_LEN];
-                let n = d
-                    .message
-                    .encode(d.address, &mut buf)
-                    .expect("a decoded message encodes");
-                Ok($crate::common::Decoded {
-                    name: d.message.name(),
-                    address: d.address,
-                    values: $crate::common::visit_values(|f| d.message.visit(f)),
-                    reencoded: buf[..n].to_vec(),
-                })
-            }
-        }
-    };
 }
 
 /// Writes the checksum of `frame`'s bytes before it into its last bytes.
@@ -214,12 +103,4 @@ pub fn random_input(p: &Protocol, rng: &mut fastrand::Rng) -> Vec<u8> {
             random_frame(p, p.message(r), rng)
         }
     }
-}
-
-/// A request frame for command `index`: its first example, if it has one.
-pub fn request_example(p: &Protocol, index: usize) -> Option<&[u8]> {
-    p.examples
-        .iter()
-        .find(|e| e.message.direction == Direction::Request && e.message.index == index)
-        .map(|e| e.wire.as_slice())
 }

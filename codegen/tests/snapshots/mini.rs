@@ -146,7 +146,6 @@ pub mod mini {
     /// Open: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-    #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub enum Mode {
         ///  (0)
         Idle,
@@ -156,6 +155,21 @@ pub mod mini {
         Auto,
         /// A value this revision of the document does not list.
         Unknown(u8),
+    }
+    /// Not derived: an arbitrary value goes through `from_raw`, so `Unknown` never holds
+    /// a listed value (which would encode as that value and decode as its variant).
+    #[cfg(feature = "arbitrary")]
+    impl<'a> ::arbitrary::Arbitrary<'a> for Mode {
+        fn arbitrary(
+            u: &mut ::arbitrary::Unstructured<'a>,
+        ) -> ::arbitrary::Result<Self> {
+            ::core::result::Result::Ok(
+                Self::from_raw(<u8 as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?),
+            )
+        }
+        fn size_hint(depth: usize) -> (usize, ::core::option::Option<usize>) {
+            <u8 as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
+        }
     }
     impl Mode {
         /// From a raw wire value; never fails.

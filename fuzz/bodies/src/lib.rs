@@ -1,0 +1,540 @@
+//! The bodies of busspec's fuzz targets, one plain function per target, so that the cargo-fuzz
+//! crate (`fuzz/`, nightly) and `cargo test` (stable, over the seed corpus and every stored
+//! regression input) run exactly the same checks. Each body panics on a broken promise and
+//! returns normally otherwise.
+//!
+//! For each protocol ([`ub2`], [`sd`]):
+//! * `decode`: arbitrary bytes through `Request::decode`, `Response::decode` and
+//!   `Response::decode_reply`; errors point inside the frame, and every accepted frame
+//!   re-encodes to the same bytes;
+//! * `roundtrip`: `Arbitrary` messages → `encode` → `decode` → equal (a value that does not fit
+//!   its wire field may be refused with `OutOfRange`, nothing else); the encoded frame also
+//!   goes through [`oracle::agree`];
+//! * `stream`: arbitrary bytes, cut into chunks the input chooses, through the `StreamDecoder`:
+//!   bounded buffer, every byte in exactly one event, every frame valid, the same events however
+//!   the bytes are cut and the same as the interpreter's stream decoder; then an example frame
+//!   placed after the bytes is found;
+//! * `differential`: the generated decoder and the interpreter agree on every input
+//!   ([`oracle::agree`]).
+//!
+//! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
+//! the docs renderer and the code emitter): errors with messages, never a panic.
+//!
+//! Input layouts (so seeds and regression inputs can be written by hand):
+//! * `decode`: the frame;
+//! * `differential`: one byte choosing the command whose example request a response answers,
+//!   then the frame;
+//! * `stream`: three bytes — direction (`% 3`: both, requests, responses), which example frame
+//!   to place after the capture, the seed of the chunk sizes — then the capture;
+//! * `roundtrip`: raw material for `arbitrary::Unstructured`;
+//! * `spec_loader`: the spec text (invalid UTF-8 replaced).
+
+use std::sync::OnceLock;
+
+use busspec_codegen::ir::Protocol;
+use busspec_protocols::DecodeError;
+
+pub mod events;
+pub mod oracle;
+pub mod seeds;
+
+/// One fuzz target: its name (the `fuzz/fuzz_targets/<name>.rs` file, the corpus and
+/// regression directories) and its body.
+#[derive(Debug, Clone, Copy)]
+pub struct Target {
+    pub name: &'static str,
+    pub body: fn(&[u8]),
+}
+
+/// Every fuzz target, in the order CI runs them.
+pub const TARGETS: &[Target] = &[
+    Target {
+        name: "ub2_decode",
+        body: ub2::decode,
+    },
+    Target {
+        name: "ub2_roundtrip",
+        body: ub2::roundtrip,
+    },
+    Target {
+        name: "ub2_stream",
+        body: ub2::stream,
+    },
+    Target {
+        name: "ub2_differential",
+        body: ub2::differential,
+    },
+    Target {
+        name: "sd_decode",
+        body: sd::decode,
+    },
+    Target {
+        name: "sd_roundtrip",
+        body: sd::roundtrip,
+    },
+    Target {
+        name: "sd_stream",
+        body: sd::stream,
+    },
+    Target {
+        name: "sd_differential",
+        body: sd::differential,
+    },
+    Target {
+        name: "spec_loader",
+        body: spec_loader,
+    },
+];
+
+/// The spec files the generated crate is built from, embedded so a fuzz binary needs no files.
+pub const SPECS: &[(&str, &str)] = &[
+    ("ub2.yaml", include_str!("../../../spec/ub2.yaml")),
+    ("sd.yaml", include_str!("../../../spec/sd.yaml")),
+];
+
+/// The protocol of a built-in spec file (`"ub2.yaml"`, `"sd.yaml"`), loaded once.
+pub fn spec(file: &str) -> &'static Protocol {
+    static LOADED: [OnceLock<Protocol>; 2] = [OnceLock::new(), OnceLock::new()];
+    let i = SPECS
+        .iter()
+        .position(|(f, _)| *f == file)
+        .unwrap_or_else(|| panic!("no built-in spec {file}"));
+    LOADED[i].get_or_init(|| {
+        busspec_codegen::load_str(SPECS[i].0, SPECS[i].1).unwrap_or_else(|d| panic!("{d}"))
+    })
+}
+
+/// A decode error must say where, and the place must be inside the `len`-byte frame.
+fn check_error(e: &DecodeError, len: usize) {
+    assert!(!e.to_string().is_empty());
+    match *e {
+        DecodeError::Truncated { needed, found } => {
+            assert_eq!(found, len, "{e}");
+            assert!(needed > found, "{e}");
+        }
+        DecodeError::BadStart { expected, found } => {
+            assert!(len > 0 && expected != found, "{e}")
+        }
+        DecodeError::ChecksumMismatch {
+            offset,
+            expected,
+            found,
+        } => assert!(offset < len && expected != found, "{e}"),
+        DecodeError::UnknownCommand { offset, .. } | DecodeError::InvalidValue { offset, .. } => {
+            assert!(offset < len, "{e}")
+        }
+        DecodeError::WrongLength { expected, found } => {
+            assert!(found == len && expected != len, "{e}")
+        }
+        DecodeError::Ambiguous { .. } | DecodeError::NotAReply { .. } => {}
+    }
+}
+
+macro_rules! protocol_bodies {
+    ($proto:ident, $gen:ident, $file:literal) => {
+        /// The fuzz target bodies for this protocol; see the crate docs.
+        pub mod $proto {
+            use std::sync::OnceLock;
+
+            use arbitrary::Unstructured;
+            use busspec_codegen::ir::Direction;
+            use busspec_protocols::stream::{Direction as StreamDirection, MAX_SKIPPED_RUN};
+            use busspec_protocols::$proto::{
+                Event, Request, Response, StreamDecoder, MAX_FRAME_LEN,
+            };
+            use busspec_protocols::{DecodeError, Decoded, EncodeError};
+
+            use crate::events::{self, Seen};
+            use crate::oracle::{self, agree, visit_values};
+
+            /// The spec file.
+            pub const FILE: &str = $file;
+
+            fn spec() -> &'static busspec_codegen::Protocol {
+                crate::spec(FILE)
+            }
+
+            /// The first example request of every command that has one, with its command index.
+            pub fn example_requests() -> &'static [(usize, Request)] {
+                static REQUESTS: OnceLock<Vec<(usize, Request)>> = OnceLock::new();
+                REQUESTS.get_or_init(|| {
+                    let p = spec();
+                    (0..p.commands.len())
+                        .filter_map(|c| {
+                            let wire = oracle::request_example(p, c)?;
+                            let r = Request::decode(wire).expect("an example request decodes");
+                            Some((c, r.message))
+                        })
+                        .collect()
+                })
+            }
+
+            fn reencode_request(d: &Decoded<Request>) -> Vec<u8> {
+                oracle::Decoded::new("", 0, Vec::new(), [0xA5u8; MAX_FRAME_LEN], |b| {
+                    d.message.encode(d.address, b)
+                })
+                .reencoded
+            }
+
+            fn reencode_response(d: &Decoded<Response>) -> Vec<u8> {
+                oracle::Decoded::new("", 0, Vec::new(), [0xA5u8; MAX_FRAME_LEN], |b| {
+                    d.message.encode(d.address, b)
+                })
+                .reencoded
+            }
+
+            /// Arbitrary bytes through every decoder.
+            pub fn decode(data: &[u8]) {
+                match Request::decode(data) {
+                    Ok(d) => {
+                        assert_eq!(reencode_request(&d), data, "{d:?} re-encodes differently");
+                    }
+                    Err(e) => crate::check_error(&e, data.len()),
+                }
+                let alone = Response::decode(data);
+                match &alone {
+                    Ok(d) => {
+                        assert_eq!(reencode_response(d), data, "{d:?} re-encodes differently");
+                    }
+                    Err(e) => crate::check_error(e, data.len()),
+                }
+                for (_, r) in example_requests() {
+                    match Response::decode_reply(data, r) {
+                        Ok(d) => {
+                            assert!(d.message.answers(r), "{d:?} does not answer {r:?}");
+                            // A reply decodes alone too, unless only its request can tell it.
+                            match alone {
+                                Ok(a) => assert_eq!(a, d),
+                                Err(DecodeError::Ambiguous { .. }) => {}
+                                Err(e) => panic!("{d:?} decodes as a reply but alone: {e}"),
+                            }
+                            assert_eq!(reencode_response(&d), data, "{d:?} re-encodes differently");
+                        }
+                        Err(e) => {
+                            crate::check_error(&e, data.len());
+                            if let Ok(a) = alone {
+                                assert!(
+                                    !a.message.answers(r),
+                                    "{a:?} answers {r:?}, but decode_reply says {e}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+
+            /// Arbitrary typed messages through encode and back.
+            pub fn roundtrip(data: &[u8]) {
+                let mut u = Unstructured::new(data);
+                // Several messages per input, while the input lasts.
+                for _ in 0..64 {
+                    if u.is_empty() {
+                        break;
+                    }
+                    let Ok(request) = u.arbitrary::<Decoded<Request>>() else {
+                        break;
+                    };
+                    request_roundtrip(&request);
+                    let Ok(response) = u.arbitrary::<Decoded<Response>>() else {
+                        break;
+                    };
+                    response_roundtrip(&response);
+                }
+            }
+
+            /// Encodes `d` into a buffer of exactly its length and into one a byte short.
+            fn encode_checked(
+                encode: impl Fn(&mut [u8]) -> Result<usize, EncodeError>,
+                frame_len: usize,
+            ) -> Option<Vec<u8>> {
+                let mut buf = [0xA5u8; MAX_FRAME_LEN];
+                match encode(&mut buf) {
+                    Ok(n) => {
+                        assert_eq!(n, frame_len, "encode and frame_len disagree");
+                        let mut exact = vec![0x5Au8; n];
+                        assert_eq!(encode(&mut exact), Ok(n));
+                        assert_eq!(exact, buf[..n], "encode depends on the buffer");
+                        let mut short = vec![0u8; n - 1];
+                        assert_eq!(
+                            encode(&mut short),
+                            Err(EncodeError::BufferTooSmall {
+                                needed: n,
+                                available: n - 1
+                            })
+                        );
+                        Some(exact)
+                    }
+                    Err(EncodeError::OutOfRange { .. }) => None,
+                    Err(e) => panic!("encode into MAX_FRAME_LEN bytes: {e}"),
+                }
+            }
+
+            fn request_roundtrip(d: &Decoded<Request>) {
+                let Some(frame) =
+                    encode_checked(|b| d.message.encode(d.address, b), d.message.frame_len())
+                else {
+                    return;
+                };
+                assert_eq!(Request::decode(&frame), Ok(*d), "{}", events::hex(&frame));
+                assert_eq!(d.message.code(), code_of(&frame, d.message.code().len()));
+                assert!(agree::<oracle::$gen>(
+                    spec(),
+                    &frame,
+                    Direction::Request,
+                    None
+                ));
+            }
+
+            fn response_roundtrip(d: &Decoded<Response>) {
+                let Some(frame) =
+                    encode_checked(|b| d.message.encode(d.address, b), d.message.frame_len())
+                else {
+                    return;
+                };
+                let p = spec();
+                let needs_request = match Response::decode(&frame) {
+                    Ok(back) => {
+                        assert_eq!(back, *d, "{}", events::hex(&frame));
+                        assert!(agree::<oracle::$gen>(p, &frame, Direction::Response, None));
+                        false
+                    }
+                    Err(DecodeError::Ambiguous { .. }) => {
+                        assert!(!agree::<oracle::$gen>(p, &frame, Direction::Response, None));
+                        true
+                    }
+                    Err(e) => panic!("{d:?} encodes to {} but: {e}", events::hex(&frame)),
+                };
+                let mut answered = false;
+                for (c, r) in example_requests() {
+                    if d.message.answers(r) {
+                        answered = true;
+                        assert_eq!(
+                            Response::decode_reply(&frame, r),
+                            Ok(*d),
+                            "as the reply to {r:?}: {}",
+                            events::hex(&frame)
+                        );
+                        assert!(agree::<oracle::$gen>(
+                            p,
+                            &frame,
+                            Direction::Response,
+                            Some(*c)
+                        ));
+                    }
+                }
+                assert!(
+                    answered || !needs_request,
+                    "{} needs its request, but no example request gets it",
+                    d.message.name()
+                );
+            }
+
+            /// Where `encode` wrote the code: the bytes of the code in the frame.
+            fn code_of(frame: &[u8], len: usize) -> &[u8] {
+                let p = spec();
+                let o = busspec_codegen::interp::offsets(p, len, 0);
+                &frame[o.code..o.code + len]
+            }
+
+            /// `capture` through the generated stream decoder for `direction`, pushed in
+            /// `chunks` (the rest in one piece) with push/poll, then finished. Asserts the buffer
+            /// never grows past the longest frame and the decoder never stalls.
+            pub fn stream_events(
+                direction: Option<StreamDirection>,
+                capture: &[u8],
+                chunks: &[usize],
+            ) -> Vec<Event> {
+                let mut d = StreamDecoder::new(direction);
+                let mut out = Vec::new();
+                let mut rest = capture;
+                let mut cuts = chunks.iter().copied().chain(std::iter::once(usize::MAX));
+                while !rest.is_empty() {
+                    let (mut chunk, r) = rest.split_at(cuts.next().unwrap_or(1).min(rest.len()));
+                    rest = r;
+                    while !chunk.is_empty() {
+                        let n = d.push(chunk);
+                        chunk = &chunk[n..];
+                        let before = out.len();
+                        while let Some(e) = d.poll() {
+                            out.push(e);
+                        }
+                        assert!(
+                            d.buffered() <= MAX_FRAME_LEN,
+                            "buffer past the longest frame"
+                        );
+                        assert!(
+                            n > 0 || out.len() > before,
+                            "the decoder takes no bytes and settles nothing"
+                        );
+                    }
+                }
+                while let Some(e) = d.finish() {
+                    out.push(e);
+                }
+                assert_eq!(d.buffered(), 0, "finish left bytes buffered");
+                assert_eq!(d.position(), capture.len() as u64);
+                out
+            }
+
+            /// The generated decoder's events, for comparing with the interpreter's.
+            pub fn seen(events: &[Event]) -> Vec<Seen> {
+                events::merge(events.iter().map(|e| match *e {
+                    Event::Request { offset, len, frame } => Seen::Frame {
+                        offset,
+                        len: len as u64,
+                        name: frame.message.name().to_owned(),
+                        address: frame.address,
+                        values: visit_values(|f| frame.message.visit(f)),
+                    },
+                    Event::Response { offset, len, frame } => Seen::Frame {
+                        offset,
+                        len: len as u64,
+                        name: frame.message.name().to_owned(),
+                        address: frame.address,
+                        values: visit_values(|f| frame.message.visit(f)),
+                    },
+                    Event::Ambiguous { offset, len, .. } => Seen::Ambiguous {
+                        offset,
+                        len: len as u64,
+                    },
+                    Event::Skipped { offset, len } => Seen::Skipped { offset, len },
+                }))
+            }
+
+            /// Every event is what it claims to be.
+            fn check_events(direction: Option<StreamDirection>, capture: &[u8], evs: &[Event]) {
+                for e in evs {
+                    let bytes = events::bytes_of(capture, e.offset(), e.len());
+                    match *e {
+                        Event::Request { frame, .. } => {
+                            assert_ne!(direction, Some(StreamDirection::Response));
+                            assert_eq!(Request::decode(bytes), Ok(frame));
+                        }
+                        Event::Response { frame, .. } => {
+                            assert_ne!(direction, Some(StreamDirection::Request));
+                            assert_eq!(
+                                reencode_response(&frame),
+                                bytes,
+                                "{frame:?} is not its bytes"
+                            );
+                            match Response::decode(bytes) {
+                                Ok(d) => assert_eq!(d, frame),
+                                Err(DecodeError::Ambiguous { .. }) => {}
+                                Err(e) => panic!("{frame:?} found in bytes that say {e}"),
+                            }
+                        }
+                        Event::Ambiguous { .. } => {
+                            let both = Request::decode(bytes).is_ok()
+                                && Response::decode(bytes).is_ok()
+                                && direction.is_none();
+                            let reply = matches!(
+                                Response::decode(bytes),
+                                Err(DecodeError::Ambiguous { .. })
+                            );
+                            assert!(both || reply, "ambiguous {}", events::hex(bytes));
+                        }
+                        Event::Skipped { len, .. } => {
+                            assert!(len > 0 && len <= MAX_SKIPPED_RUN, "skipped {len}")
+                        }
+                    }
+                }
+            }
+
+            /// Arbitrary bytes through the stream decoder, then an example frame after them.
+            pub fn stream(data: &[u8]) {
+                let Some((&[mode, pick, cut], capture)) = data.split_first_chunk::<3>() else {
+                    return;
+                };
+                let p = spec();
+                let direction = match mode % 3 {
+                    0 => None,
+                    1 => Some(StreamDirection::Request),
+                    _ => Some(StreamDirection::Response),
+                };
+                let chunks = events::chunks(cut, capture.len(), 2 * MAX_FRAME_LEN);
+                let evs = stream_events(direction, capture, &chunks);
+                check_events(direction, capture, &evs);
+                let got = seen(&evs);
+                events::covers(&got, capture.len() as u64);
+                assert_eq!(
+                    stream_events(direction, capture, &[]),
+                    evs,
+                    "events depend on how the bytes are cut"
+                );
+                let want = events::interp_events(p, events::direction(direction), capture, &chunks);
+                assert_eq!(got, want, "capture {}", events::hex(capture));
+
+                // An example frame after the bytes is found, unless a frame that starts in them
+                // runs into it.
+                let e = &p.examples[usize::from(pick) % p.examples.len()];
+                let dir = match e.message.direction {
+                    Direction::Request => StreamDirection::Request,
+                    Direction::Response => StreamDirection::Response,
+                };
+                let at = capture.len() as u64;
+                let mut whole = capture.to_vec();
+                whole.extend_from_slice(&e.wire);
+                let evs = stream_events(Some(dir), &whole, &chunks);
+                check_events(Some(dir), &whole, &evs);
+                let found = evs.iter().any(|ev| {
+                    !matches!(ev, Event::Skipped { .. })
+                        && ev.offset() == at
+                        && ev.len() == e.wire.len() as u64
+                });
+                let swallowed = evs.iter().any(|ev| {
+                    !matches!(ev, Event::Skipped { .. })
+                        && ev.offset() < at
+                        && ev.offset() + ev.len() > at
+                });
+                assert!(
+                    found || swallowed,
+                    "example §{} after {} lost: {evs:?}",
+                    e.section,
+                    events::hex(capture)
+                );
+            }
+
+            /// The generated decoder and the interpreter on the same bytes, both directions and
+            /// as the reply to a chosen command.
+            pub fn differential(data: &[u8]) {
+                let Some((&pick, frame)) = data.split_first() else {
+                    return;
+                };
+                let p = spec();
+                agree::<oracle::$gen>(p, frame, Direction::Request, None);
+                agree::<oracle::$gen>(p, frame, Direction::Response, None);
+                let command = usize::from(pick) % p.commands.len();
+                agree::<oracle::$gen>(p, frame, Direction::Response, Some(command));
+            }
+        }
+    };
+}
+
+protocol_bodies!(ub2, Ub2, "ub2.yaml");
+protocol_bodies!(sd, Sd, "sd.yaml");
+
+/// Arbitrary text through the loader and validator; a spec that loads is also rendered as docs
+/// and emitted as code.
+pub fn spec_loader(data: &[u8]) {
+    const LABEL: &str = "fuzz.yaml";
+    let text = String::from_utf8_lossy(data);
+    match busspec_codegen::load_str(LABEL, &text) {
+        Ok(p) => {
+            let _ = busspec_codegen::docs::render(&p, LABEL);
+            if let Err(e) = busspec_codegen::emit::emit_module(&p, LABEL) {
+                panic!("a spec that loads does not emit: {e}");
+            }
+        }
+        Err(d) => {
+            assert!(!d.items.is_empty(), "an error without a diagnostic");
+            assert_eq!(d.file, LABEL);
+            for i in &d.items {
+                assert!(
+                    !i.message.trim().is_empty(),
+                    "empty message at `{}`",
+                    i.path
+                );
+            }
+        }
+    }
+}

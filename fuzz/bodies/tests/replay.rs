@@ -1,0 +1,152 @@
+//! Every fuzz target's body, on stable, over its seed corpus (`fuzz/corpus/<target>/seed-*`, and
+//! for the spec loader the specs and fixture specs) and every stored regression input
+//! (`fuzz/regressions/<target>/`): what a crash once was must stay fixed, and the seeds must keep
+//! passing. What a fuzzing run added to a local corpus is not replayed here (it can be large);
+//! `fuzz/run TARGET 0 -runs=0` replays a whole local corpus.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::PathBuf;
+
+use busspec_fuzz_bodies::seeds::{self, repo_root, LOADER_SEED_DIRS};
+use busspec_fuzz_bodies::{Target, TARGETS};
+
+fn inputs(t: &Target) -> Vec<PathBuf> {
+    let fuzz = repo_root().join("fuzz");
+    let corpus = fuzz.join("corpus").join(t.name);
+    let mut files: Vec<PathBuf> = seeds::list(&corpus)
+        .into_iter()
+        .filter(|n| n.starts_with(seeds::SEED_PREFIX))
+        .map(|n| corpus.join(n))
+        .collect();
+    let mut dirs = vec![fuzz.join("regressions").join(t.name)];
+    if t.name == "spec_loader" {
+        dirs.extend(LOADER_SEED_DIRS.iter().map(|d| repo_root().join(d)));
+    }
+    files.extend(
+        dirs.iter()
+            .flat_map(|d| seeds::list(d).into_iter().map(move |n| d.join(n))),
+    );
+    files
+}
+
+/// Runs `t` over all its inputs; returns how many, failing with every input that panicked.
+fn replay(t: &Target) -> usize {
+    let files = inputs(t);
+    let mut failures = Vec::new();
+    for f in &files {
+        let data = std::fs::read(f).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        if let Err(p) = catch_unwind(AssertUnwindSafe(|| (t.body)(&data))) {
+            let why = p
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            failures.push(format!("{}: {why}", f.display()));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{}: {} of {} inputs fail:\n{}",
+        t.name,
+        failures.len(),
+        files.len(),
+        failures.join("\n")
+    );
+    files.len()
+}
+
+macro_rules! replay_tests {
+    ($($name:ident),*) => {$(
+        #[test]
+        fn $name() {
+            let t = TARGETS
+                .iter()
+                .find(|t| t.name == stringify!($name))
+                .expect("a target of this name");
+            assert!(replay(t) >= 3, "too few inputs for {}", t.name);
+        }
+    )*};
+}
+
+replay_tests!(
+    ub2_decode,
+    ub2_roundtrip,
+    ub2_stream,
+    ub2_differential,
+    sd_decode,
+    sd_roundtrip,
+    sd_stream,
+    sd_differential,
+    spec_loader
+);
+
+#[test]
+fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
+    let names = [
+        "ub2_decode",
+        "ub2_roundtrip",
+        "ub2_stream",
+        "ub2_differential",
+        "sd_decode",
+        "sd_roundtrip",
+        "sd_stream",
+        "sd_differential",
+        "spec_loader",
+    ];
+    let targets: Vec<&str> = TARGETS.iter().map(|t| t.name).collect();
+    assert_eq!(targets, names);
+    let manifest = std::fs::read_to_string(repo_root().join("fuzz/Cargo.toml")).unwrap();
+    let nightly = std::fs::read_to_string(repo_root().join(".github/workflows/fuzz.yml")).unwrap();
+    for t in TARGETS {
+        let file = repo_root().join(format!("fuzz/fuzz_targets/{}.rs", t.name));
+        let body =
+            std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        let call = format!("busspec_fuzz_bodies::{}(", t.name.replacen('_', "::", 1));
+        let call_loader = format!("busspec_fuzz_bodies::{}(", t.name);
+        assert!(
+            body.contains(&call) || body.contains(&call_loader),
+            "{} does not call its body",
+            file.display()
+        );
+        assert!(
+            manifest.contains(&format!("name = \"{}\"", t.name)),
+            "fuzz/Cargo.toml has no [[bin]] {}",
+            t.name
+        );
+        assert!(
+            nightly.contains(&format!("          - {}\n", t.name)),
+            "the nightly workflow's matrix lacks {}",
+            t.name
+        );
+    }
+}
+
+#[test]
+fn seed_corpus_and_dictionaries_are_up_to_date() {
+    let stale = seeds::stale(&repo_root().join("fuzz"));
+    assert!(
+        stale.is_empty(),
+        "run `cargo run -p busspec-fuzz-bodies --bin make-corpus`:\n{}",
+        stale.join("\n")
+    );
+}
+
+/// The round trip resolves a response only its request identifies through the example
+/// requests: each such response must be answered by a command that has one.
+#[test]
+fn every_reply_that_needs_its_request_has_an_example_request() {
+    use busspec_codegen::ir::Direction;
+    for (file, _) in busspec_fuzz_bodies::SPECS {
+        let p = busspec_fuzz_bodies::spec(file);
+        for (i, m) in p.messages(Direction::Response).iter().enumerate() {
+            if !m.needs_request {
+                continue;
+            }
+            let answered = p.commands.iter().enumerate().any(|(c, cmd)| {
+                cmd.responses.iter().any(|(r, _)| *r == i)
+                    && busspec_fuzz_bodies::oracle::request_example(p, c).is_some()
+            });
+            assert!(answered, "{file}: no example request gets {}", m.name);
+        }
+    }
+}
