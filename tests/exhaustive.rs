@@ -291,3 +291,49 @@ fn ub2_pairing_matrix_is_the_spec() {
 fn sd_pairing_matrix_is_the_spec() {
     pairing_matrix!(sd, "sd.yaml");
 }
+
+macro_rules! command_info {
+    ($proto:ident, $file:literal) => {{
+        use busspec_codegen::ir::CommandKind as K;
+        use busspec_protocols::$proto::{Request, BAUD, INTER_FRAME_GAP_MS, MAX_FRAMES_PER_S};
+        use busspec_protocols::CommandKind;
+        let p = spec($file);
+        for (i, c) in p.commands.iter().enumerate() {
+            let r = MessageRef {
+                direction: Direction::Request,
+                index: i,
+            };
+            let q = Request::decode(&frame_of(&p, r)).unwrap().message;
+            let MessageKind::Command(kind) = &c.kind else {
+                panic!("{}: not a command", c.name)
+            };
+            let want = match kind {
+                K::Movement => CommandKind::Movement,
+                K::CompletionCheck => CommandKind::CompletionCheck,
+                K::Setter => CommandKind::Setter,
+                K::Getter => CommandKind::Getter,
+                K::Reset => CommandKind::Reset,
+            };
+            assert_eq!(q.kind(), want, "{}", c.name);
+            let b = q.broadcast();
+            let (accepted, answered) = c
+                .broadcast
+                .as_ref()
+                .map_or((false, false), |b| (b.accepted, b.answered));
+            assert_eq!((b.accepted, b.answered), (accepted, answered), "{}", c.name);
+        }
+        assert_eq!(BAUD, p.serial.baud);
+        assert_eq!(INTER_FRAME_GAP_MS, p.serial.inter_frame_gap_ms);
+        assert_eq!(
+            MAX_FRAMES_PER_S,
+            p.serial.frame_rate.as_ref().map(|r| r.max_per_s)
+        );
+    }};
+}
+
+/// Each generated command's `kind()` and `broadcast()`, and the line constants, are the spec's.
+#[test]
+fn generated_command_info_is_the_spec() {
+    command_info!(ub2, "ub2.yaml");
+    command_info!(sd, "sd.yaml");
+}

@@ -356,6 +356,13 @@ fn emit_header(p: &Protocol, source: &str) -> TokenStream {
         Some(b) => quote!(::core::option::Option::Some(#b)),
         None => quote!(::core::option::Option::None),
     };
+    let baud = p.serial.baud;
+    let optional = |v: Option<u32>| match v {
+        Some(v) => quote!(::core::option::Option::Some(#v)),
+        None => quote!(::core::option::Option::None),
+    };
+    let gap = optional(p.serial.inter_frame_gap_ms);
+    let rate = optional(p.serial.frame_rate.as_ref().map(|r| r.max_per_s));
     quote! {
         #inner
         // Generated arithmetic is uniform across fields: shifts by 0, casts to the same type and
@@ -377,6 +384,12 @@ fn emit_header(p: &Protocol, source: &str) -> TokenStream {
         pub const MAX_RESPONSE_LEN: usize = #max_resp;
         /// The longest frame in either direction: a buffer this long holds any frame.
         pub const MAX_FRAME_LEN: usize = #max;
+        /// The document's baud rate.
+        pub const BAUD: u32 = #baud;
+        /// The quiet time the document demands between frames, in milliseconds, if it says.
+        pub const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = #gap;
+        /// The most frames per second the document allows, if it says.
+        pub const MAX_FRAMES_PER_S: ::core::option::Option<u32> = #rate;
         /// Device addresses, inclusive.
         pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = #lo..=#hi;
         /// The broadcast address, if the protocol has one.
@@ -753,6 +766,11 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         decoders.push(emit_decode_fn(ctx, m, &ty, &ls));
     }
     let dispatch = emit_dispatch(p, d, &ty);
+    let command_info = if d == Direction::Request {
+        emit_command_info(p)
+    } else {
+        quote!()
+    };
     let max = p.max_frame_len(d);
     let sum_len = p.framing.checksum.len();
     let sum_conv = to_bytes(p.framing.checksum.byte_order);
@@ -810,6 +828,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
             #dispatch
         }
+        #command_info
         #(#decoders)*
     }
 }
@@ -1544,6 +1563,47 @@ fn code_trie(shapes: &[(&[u8], u128)], code_at: usize, depth: usize) -> TokenStr
 fn mask_lit(v: u128) -> TokenStream {
     let lit = Literal::u128_unsuffixed(v);
     format!("{v:#x}").parse().unwrap_or_else(|_| quote!(#lit))
+}
+
+/// What the spec says of each command beyond its frame: its kind and how it treats the
+/// broadcast address, for transaction layers (what may be retried, what expects no answer).
+fn emit_command_info(p: &Protocol) -> TokenStream {
+    let mut kinds = Vec::new();
+    let mut broadcasts = Vec::new();
+    for c in &p.commands {
+        let pat = any_of(&ident("Request"), c);
+        // Every command has a command kind (the validator builds them so).
+        let MessageKind::Command(kind) = &c.kind else {
+            continue;
+        };
+        let kind = match kind {
+            CommandKind::Movement => quote!(Movement),
+            CommandKind::CompletionCheck => quote!(CompletionCheck),
+            CommandKind::Setter => quote!(Setter),
+            CommandKind::Getter => quote!(Getter),
+            CommandKind::Reset => quote!(Reset),
+        };
+        kinds.push(quote!(#pat => crate::CommandKind::#kind));
+        let (accepted, answered) = c
+            .broadcast
+            .as_ref()
+            .map_or((false, false), |b| (b.accepted, b.answered));
+        broadcasts
+            .push(quote!(#pat => crate::Broadcast { accepted: #accepted, answered: #answered }));
+    }
+    quote! {
+        impl Request {
+            /// What the command does, as the spec classifies it.
+            pub const fn kind(&self) -> crate::CommandKind {
+                match self { #(#kinds,)* }
+            }
+            /// Whether the command may go to the broadcast address, and whether it is then
+            /// answered.
+            pub const fn broadcast(&self) -> crate::Broadcast {
+                match self { #(#broadcasts,)* }
+            }
+        }
+    }
 }
 
 /// A pattern matching any value of a message's variant.

@@ -30,6 +30,32 @@ pub struct Decoded<M> {
     pub message: M,
 }
 
+/// What a command does, as its spec classifies it (each protocol's `Request::kind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum CommandKind {
+    /// Starts a movement; sending it twice moves twice.
+    Movement,
+    /// Asks whether a movement is done.
+    CompletionCheck,
+    /// Sets a value; the device echoes or acknowledges it.
+    Setter,
+    /// Reads a value.
+    Getter,
+    /// Resets a counter, a flag or the device.
+    Reset,
+}
+
+/// How a command treats the broadcast address (each protocol's `Request::broadcast`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Broadcast {
+    /// Devices act on it when it is sent to the broadcast address.
+    pub accepted: bool,
+    /// Devices answer it when it is sent to the broadcast address.
+    pub answered: bool,
+}
+
 /// One field's value as it travels: the raw wire integer (sign-extended where the field is
 /// signed; enums, flags and units by their raw value) or an ASCII field's bytes.
 /// See each message type's `visit`.

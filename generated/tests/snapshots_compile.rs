@@ -3,7 +3,9 @@
 //! encode back to the same bytes.
 
 // Generated modules refer to the runtime as `crate::…`; here the crate is this test.
-pub use busspec_protocols::{round, stream, sum8, DecodeError, Decoded, EncodeError, FieldValue};
+pub use busspec_protocols::{
+    round, stream, sum8, Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldValue,
+};
 
 include!("../../codegen/tests/snapshots/mini.rs");
 include!("../../codegen/tests/snapshots/mini_crc.rs");

@@ -6,19 +6,8 @@ use std::time::Duration;
 
 use busspec_protocols::{sd, ub2, DecodeError, EncodeError};
 
-mod tables {
-    include!(concat!(env!("OUT_DIR"), "/policy.rs"));
-}
-
-/// A command's kind, as the spec declares it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Kind {
-    Movement,
-    CompletionCheck,
-    Setter,
-    Getter,
-    Reset,
-}
+/// A command's kind, as the spec declares it (the generated `Request::kind`).
+pub use busspec_protocols::CommandKind as Kind;
 
 /// How a command may be sent, from the spec.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,12 +17,19 @@ pub struct Policy {
     pub broadcast_answered: bool,
 }
 
-/// A command the tables do not know is treated as the least safe kind: sent once, never retried.
-const UNKNOWN_POLICY: Policy = Policy {
-    kind: Kind::Movement,
-    broadcast_accepted: false,
-    broadcast_answered: false,
-};
+/// The quiet time between two requests: the document's gap between frames, or the period of its
+/// highest frame rate, whichever is longer.
+const fn inter_request_gap(gap_ms: Option<u32>, max_frames_per_s: Option<u32>) -> Duration {
+    let gap = match gap_ms {
+        Some(g) => g as u64,
+        None => 0,
+    };
+    let period = match max_frames_per_s {
+        Some(r) if r > 0 => 1000u64.div_ceil(r as u64),
+        _ => 0,
+    };
+    Duration::from_millis(if gap > period { gap } else { period })
+}
 
 /// One protocol as the link sees it: the generated codec plus the rules of its bus.
 pub trait Protocol: 'static {
@@ -121,8 +117,9 @@ macro_rules! codec {
         const MAX_FRAME_LEN: usize = $m::MAX_FRAME_LEN;
         const DEVICE_ADDRESSES: RangeInclusive<u8> = $m::DEVICE_ADDRESSES;
         const BROADCAST_ADDRESS: Option<u8> = $m::BROADCAST_ADDRESS;
-        const BAUD: u32 = tables::$m::BAUD;
-        const INTER_REQUEST_GAP: Duration = Duration::from_millis(tables::$m::INTER_REQUEST_GAP_MS);
+        const BAUD: u32 = $m::BAUD;
+        const INTER_REQUEST_GAP: Duration =
+            inter_request_gap($m::INTER_FRAME_GAP_MS, $m::MAX_FRAMES_PER_S);
 
         fn request_name(r: &$m::Request) -> &'static str {
             r.name()
@@ -154,7 +151,12 @@ macro_rules! codec {
             $m::Response::decode_reply(frame, request).map(|d| (d.address, d.message))
         }
         fn policy(r: &$m::Request) -> Policy {
-            tables::$m::policy(r.name()).unwrap_or(UNKNOWN_POLICY)
+            let b = r.broadcast();
+            Policy {
+                kind: r.kind(),
+                broadcast_accepted: b.accepted,
+                broadcast_answered: b.answered,
+            }
         }
     };
 }

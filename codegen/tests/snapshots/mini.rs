@@ -29,6 +29,12 @@ pub mod mini {
     pub const MAX_RESPONSE_LEN: usize = 13usize;
     /// The longest frame in either direction: a buffer this long holds any frame.
     pub const MAX_FRAME_LEN: usize = 13usize;
+    /// The document's baud rate.
+    pub const BAUD: u32 = 9600u32;
+    /// The quiet time the document demands between frames, in milliseconds, if it says.
+    pub const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = ::core::option::Option::None;
+    /// The most frames per second the document allows, if it says.
+    pub const MAX_FRAMES_PER_S: ::core::option::Option<u32> = ::core::option::Option::None;
     /// Device addresses, inclusive.
     pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = 33u8..=64u8;
     /// The broadcast address, if the protocol has one.
@@ -502,6 +508,40 @@ pub mod mini {
                 offset: 2usize,
                 code,
             })
+        }
+    }
+    impl Request {
+        /// What the command does, as the spec classifies it.
+        pub const fn kind(&self) -> crate::CommandKind {
+            match self {
+                Request::GoTo { .. } => crate::CommandKind::Movement,
+                Request::SetMode { .. } => crate::CommandKind::Setter,
+                Request::GetStatus { .. } => crate::CommandKind::Getter,
+            }
+        }
+        /// Whether the command may go to the broadcast address, and whether it is then
+        /// answered.
+        pub const fn broadcast(&self) -> crate::Broadcast {
+            match self {
+                Request::GoTo { .. } => {
+                    crate::Broadcast {
+                        accepted: false,
+                        answered: false,
+                    }
+                }
+                Request::SetMode { .. } => {
+                    crate::Broadcast {
+                        accepted: false,
+                        answered: false,
+                    }
+                }
+                Request::GetStatus { .. } => {
+                    crate::Broadcast {
+                        accepted: false,
+                        answered: false,
+                    }
+                }
+            }
         }
     }
     #[inline]

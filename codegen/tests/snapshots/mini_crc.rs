@@ -29,6 +29,12 @@ pub mod mini_crc {
     pub const MAX_RESPONSE_LEN: usize = 6usize;
     /// The longest frame in either direction: a buffer this long holds any frame.
     pub const MAX_FRAME_LEN: usize = 6usize;
+    /// The document's baud rate.
+    pub const BAUD: u32 = 115200u32;
+    /// The quiet time the document demands between frames, in milliseconds, if it says.
+    pub const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = ::core::option::Option::None;
+    /// The most frames per second the document allows, if it says.
+    pub const MAX_FRAMES_PER_S: ::core::option::Option<u32> = ::core::option::Option::None;
     /// Device addresses, inclusive.
     pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = 1u8..=30u8;
     /// The broadcast address, if the protocol has one.
@@ -294,6 +300,40 @@ pub mod mini_crc {
                 offset: 0usize,
                 code,
             })
+        }
+    }
+    impl Request {
+        /// What the command does, as the spec classifies it.
+        pub const fn kind(&self) -> crate::CommandKind {
+            match self {
+                Request::ReadRuntimeHours => crate::CommandKind::Getter,
+                Request::ReadRuntimeMinSec => crate::CommandKind::Getter,
+                Request::SetCounter { .. } => crate::CommandKind::Setter,
+            }
+        }
+        /// Whether the command may go to the broadcast address, and whether it is then
+        /// answered.
+        pub const fn broadcast(&self) -> crate::Broadcast {
+            match self {
+                Request::ReadRuntimeHours => {
+                    crate::Broadcast {
+                        accepted: false,
+                        answered: false,
+                    }
+                }
+                Request::ReadRuntimeMinSec => {
+                    crate::Broadcast {
+                        accepted: false,
+                        answered: false,
+                    }
+                }
+                Request::SetCounter { .. } => {
+                    crate::Broadcast {
+                        accepted: true,
+                        answered: false,
+                    }
+                }
+            }
         }
     }
     #[inline]
