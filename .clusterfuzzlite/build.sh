@@ -9,7 +9,7 @@ for t in $(./run list); do
   seeds=(corpus/"$t"/seed-*)
   if [ -d "regressions/$t" ]; then seeds+=(regressions/"$t"/*); fi
   if [ "$t" = spec_loader ]; then
-    seeds+=(../spec/*.yaml ../codegen/tests/fixtures/valid/*.yaml ../codegen/tests/fixtures/broken/*.yaml)
+    seeds+=(../spec/*.yaml ../model/tests/fixtures/valid/*.yaml ../model/tests/fixtures/broken/*.yaml)
   fi
   zip -q -j "$OUT/${t}_seed_corpus.zip" "${seeds[@]}"
   case $t in

@@ -4,7 +4,6 @@
 use std::path::Path;
 use std::time::Duration;
 
-use busspec_codegen::Protocol as Spec;
 use busspec_link::clock::Clock;
 use busspec_link::fault::{FaultConfig, Faulty};
 use busspec_link::master::{Progress, SdString};
@@ -13,6 +12,7 @@ use busspec_link::sim::ub2::Ub2Sim;
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::soak::{self, SoakConfig};
 use busspec_link::{Master, Protocol, Sd, SimClock, Transport, Ub2};
+use busspec_model::Protocol as Spec;
 use busspec_protocols::sd::{self, Angle};
 use busspec_protocols::ub2::{self, Capacitance};
 
@@ -106,7 +106,7 @@ fn document_frame(out: &mut Out) -> Result<(), String> {
     out.say(format!(
         "== A frame from the UB2 document (§6.1, printed {printed}; on the wire {wire}, erratum ub2-e01): busspec decode ub2 \"{wire}\""
     ));
-    let bytes = busspec_codegen::interp::parse_hex(wire)?;
+    let bytes = busspec_model::interp::parse_hex(wire)?;
     let frame = crate::frames::decode_frame(out.spec, None, None, &bytes)?;
     out.say(format!(
         "← {}",

@@ -17,10 +17,10 @@
 
 use std::collections::BTreeMap;
 
-use busspec_codegen::interp::{self, DecodeError, Frame, Raw, Value};
-use busspec_codegen::ir::{BitField, Direction, Field, MessageRef, Protocol, Unit};
-use busspec_codegen::rational::Rational;
-use busspec_codegen::stream::Event;
+use busspec_model::interp::{self, DecodeError, Frame, Raw, Value};
+use busspec_model::ir::{BitField, Direction, Field, MessageRef, Protocol, Unit};
+use busspec_model::rational::Rational;
+use busspec_model::stream::Event;
 use serde::Deserialize;
 use serde_json::value::RawValue;
 

@@ -4,8 +4,6 @@ use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use busspec_codegen::ir::Direction;
-use busspec_codegen::Protocol as Spec;
 use busspec_link::clock::Clock;
 use busspec_link::master::{LinkError, Progress, SdString};
 use busspec_link::sim::sd::SdSim;
@@ -13,6 +11,8 @@ use busspec_link::sim::ub2::Ub2Sim;
 use busspec_link::sim::{serve, Device};
 use busspec_link::soak::{self, SoakConfig};
 use busspec_link::{Master, Protocol, Sd, SerialTransport, SystemClock, Transport, Ub2};
+use busspec_model::ir::Direction;
+use busspec_model::Protocol as Spec;
 use busspec_protocols::{sd, ub2};
 
 use crate::{frames, svg};
@@ -66,8 +66,8 @@ pub fn request_frame(
     let missing: Vec<String> = c
         .leaves()
         .filter(|l| match l {
-            busspec_codegen::ir::Leaf::Field(_, f) => f.constant.is_none() && f.equals.is_none(),
-            busspec_codegen::ir::Leaf::Bits(_, _, b) => b.constant.is_none(),
+            busspec_model::ir::Leaf::Field(_, f) => f.constant.is_none() && f.equals.is_none(),
+            busspec_model::ir::Leaf::Bits(_, _, b) => b.constant.is_none(),
         })
         .map(|l| l.name().to_owned())
         .filter(|n| !fields.contains_key(n))
@@ -87,7 +87,7 @@ pub fn request_frame(
     frames::encode_line(spec, &line.to_string()).map_err(|e| format!("{command}: {e}"))
 }
 
-fn field_list(c: &busspec_codegen::ir::Message) -> String {
+fn field_list(c: &busspec_model::ir::Message) -> String {
     let names: Vec<String> = c.leaves().map(|l| l.name().to_owned()).collect();
     if names.is_empty() {
         "none".to_owned()
@@ -511,16 +511,16 @@ mod tests {
     //! spec lists for it, and not a refusal. The commands come from the spec, not from a list.
 
     use super::*;
-    use busspec_codegen::ir::{Leaf, MessageKind, MessageRef, ResponseKind, StatedValue};
     use busspec_link::sim::{BusConfig, SimBus};
     use busspec_link::SimClock;
+    use busspec_model::ir::{Leaf, MessageKind, MessageRef, ResponseKind, StatedValue};
 
     fn spec(name: &str) -> Spec {
         let (file, text) = match name {
             "ub2" => ("spec/ub2.yaml", include_str!("../spec/ub2.yaml")),
             _ => ("spec/sd.yaml", include_str!("../spec/sd.yaml")),
         };
-        busspec_codegen::load_str(file, text).expect("built-in spec loads")
+        busspec_model::load_str(file, text).expect("built-in spec loads")
     }
 
     /// name=value arguments for command `i`: the values of its first example the document does

@@ -10,10 +10,10 @@ use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use busspec_codegen::diff::{self, Category};
-use busspec_codegen::ir::Direction;
-use busspec_codegen::stream::StreamDecoder;
-use busspec_codegen::{docs, interp, load_file, load_str, Protocol};
+use busspec_model::diff::{self, Category};
+use busspec_model::ir::Direction;
+use busspec_model::stream::StreamDecoder;
+use busspec_model::{docs, interp, load_file, load_str, Protocol};
 use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
 
 /// The built-in specs, embedded so the binary works from any directory.
@@ -389,7 +389,7 @@ fn spec_files(files: Vec<PathBuf>) -> Result<Vec<PathBuf>, String> {
 }
 
 /// Every diagnostic of a spec that failed to load, then a count line.
-fn load_errors(d: &busspec_codegen::Diagnostics) -> String {
+fn load_errors(d: &busspec_model::Diagnostics) -> String {
     let n = d.items.len();
     format!(
         "{d}\n{}: {n} error{}",

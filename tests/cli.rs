@@ -140,10 +140,10 @@ fn docs_check_notices_a_stale_reference() {
 
 // `busspec diff`: exit codes, `--allow`/`--deny`, the JSON document, the changelog, load errors.
 
-const BASE: &str = "codegen/tests/fixtures/diff/base.yaml";
-const WIRE: &str = "codegen/tests/fixtures/diff/wire.yaml";
-const API: &str = "codegen/tests/fixtures/diff/api.yaml";
-const COMPATIBLE: &str = "codegen/tests/fixtures/diff/compatible.yaml";
+const BASE: &str = "model/tests/fixtures/diff/base.yaml";
+const WIRE: &str = "model/tests/fixtures/diff/wire.yaml";
+const API: &str = "model/tests/fixtures/diff/api.yaml";
+const COMPATIBLE: &str = "model/tests/fixtures/diff/compatible.yaml";
 
 #[test]
 fn wire_breaking_changes_fail_unless_allowed() {
@@ -234,7 +234,7 @@ fn changelog_is_markdown_for_release_notes() {
 
 #[test]
 fn a_spec_that_does_not_load_is_exit_2_with_every_error() {
-    let broken = "codegen/tests/fixtures/broken/bits_overlap.yaml";
+    let broken = "model/tests/fixtures/broken/bits_overlap.yaml";
     let out = busspec(&["diff", "no/such.yaml", broken]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = text(&out.stderr);

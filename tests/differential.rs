@@ -10,7 +10,7 @@
 
 mod common;
 
-use busspec_codegen::ir::Direction;
+use busspec_model::ir::Direction;
 use common::{agree, random_input, spec, Generated, Sd, Ub2};
 
 fn random_inputs() -> usize {

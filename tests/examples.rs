@@ -2,9 +2,9 @@
 //! the message it shows (with its request where only that can tell), and re-encodes from the
 //! decoded values to exactly the same wire bytes.
 
-use busspec_codegen::interp::{self, Raw};
-use busspec_codegen::ir::{Direction, StatedValue};
-use busspec_codegen::{load_file, Protocol};
+use busspec_model::interp::{self, Raw};
+use busspec_model::ir::{Direction, StatedValue};
+use busspec_model::{load_file, Protocol};
 
 fn spec(name: &str) -> Protocol {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -86,7 +86,7 @@ fn sd_examples_cover_every_command_and_response() {
 fn sd_examples_include_the_documented_angles() {
     let p = spec("sd.yaml");
     for want in ["45", "0", "-45", "-180"] {
-        let want = busspec_codegen::rational::Rational::parse(want).unwrap();
+        let want = busspec_model::rational::Rational::parse(want).unwrap();
         let found = p.examples.iter().any(|e| {
             e.values
                 .iter()
@@ -112,9 +112,9 @@ fn flipping_ub2_byte_order_is_one_line() {
         "ub2 travels little-endian (§3)"
     );
     let flipped = text.replacen("byte_order: little", "byte_order: big", 1);
-    let little = busspec_codegen::load_str("ub2.yaml", &text).unwrap();
+    let little = busspec_model::load_str("ub2.yaml", &text).unwrap();
     let big =
-        busspec_codegen::load_str("ub2-flipped.yaml", &flipped).unwrap_or_else(|d| panic!("{d}"));
+        busspec_model::load_str("ub2-flipped.yaml", &flipped).unwrap_or_else(|d| panic!("{d}"));
     let mut changed = 0;
     for (a, b) in little.examples.iter().zip(&big.examples) {
         let m = little.message(a.message);

@@ -5,8 +5,8 @@
 
 mod common;
 
-use busspec_codegen::interp::{self, Raw, Value};
-use busspec_codegen::ir::{Direction, MessageKind, MessageRef, Protocol, ResponseKind};
+use busspec_model::interp::{self, Raw, Value};
+use busspec_model::ir::{Direction, MessageKind, MessageRef, Protocol, ResponseKind};
 use busspec_protocols::{sd, ub2};
 use common::{all_messages, fix_checksum, random_frame, spec};
 
@@ -294,7 +294,7 @@ fn sd_pairing_matrix_is_the_spec() {
 
 macro_rules! command_info {
     ($proto:ident, $file:literal) => {{
-        use busspec_codegen::ir::CommandKind as K;
+        use busspec_model::ir::CommandKind as K;
         use busspec_protocols::$proto::{Request, BAUD, INTER_FRAME_GAP_MS, MAX_FRAMES_PER_S};
         use busspec_protocols::CommandKind;
         let p = spec($file);

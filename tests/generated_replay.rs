@@ -2,8 +2,8 @@
 //! message the spec names, at the right address, and re-encodes it into a buffer pre-filled with
 //! 0xA5 (so a byte the encoder forgets to write shows up) to exactly the same bytes.
 
-use busspec_codegen::ir::{Direction, Protocol};
-use busspec_codegen::load_file;
+use busspec_model::ir::{Direction, Protocol};
+use busspec_model::load_file;
 
 fn spec(name: &str) -> Protocol {
     load_file(

@@ -1,21 +1,14 @@
-//! Cross-checks the specs against the vendor documents themselves (`../shared/seeds`, or the
-//! directory in `BUSSPEC_SEEDS`): every frame the UB2 document prints appears in `spec/ub2.yaml`,
+//! Cross-checks the specs against the vendor documents themselves, kept beside them in `spec/`:
+//! every frame the UB2 document prints appears in `spec/ub2.yaml`,
 //! verbatim, in document order, under its section — so a frame cannot be dropped or retyped.
 
 use std::path::PathBuf;
 
-use busspec_codegen::load_file;
+use busspec_model::load_file;
 
+/// Where the vendor documents are: beside the specs that transcribe them.
 fn seeds() -> PathBuf {
-    let dir = std::env::var_os("BUSSPEC_SEEDS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/seeds"));
-    assert!(
-        dir.is_dir(),
-        "the vendor documents are expected in {} (set BUSSPEC_SEEDS to their directory)",
-        dir.display()
-    );
-    dir
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("spec")
 }
 
 /// `(section, frame text)` for every TX/RX table row of the document whose example column holds

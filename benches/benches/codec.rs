@@ -18,7 +18,7 @@ use busspec_benches::{
     decode_all, encode_all, jobs, messages, plain_sum, stream_interp, stream_sd, stream_ub2,
     Contender, Deku, Generated, Hand, Interp, Sd, Ub2,
 };
-use busspec_codegen::ir::Protocol;
+use busspec_model::ir::Protocol;
 use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
@@ -189,7 +189,7 @@ fn ub2(c: &mut Criterion) {
         busspec_protocols::ub2::checksum,
     );
     checksum_one(&mut g, "interpreter", &frames, |f| {
-        busspec_codegen::checksum::compute(algorithm, f)
+        busspec_model::checksum::compute(algorithm, f)
     });
     g.finish();
 }
@@ -220,7 +220,7 @@ fn sd(c: &mut Criterion) {
     checksum_one(&mut g, "crc-no-table", &frames, |f| BITWISE.checksum(f));
     checksum_one(&mut g, "crc-slice16", &frames, |f| SLICE16.checksum(f));
     checksum_one(&mut g, "interpreter", &frames, |f| {
-        busspec_codegen::checksum::compute(algorithm, f)
+        busspec_model::checksum::compute(algorithm, f)
     });
     g.finish();
 }

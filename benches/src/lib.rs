@@ -18,8 +18,8 @@ pub mod peer;
 use std::hint::black_box;
 use std::ops::Range;
 
-use busspec_codegen::interp;
-use busspec_codegen::ir::{Direction, Protocol};
+use busspec_model::interp;
+use busspec_model::ir::{Direction, Protocol};
 use mixed::Mixed;
 
 /// One decoder/encoder of one protocol.
@@ -324,7 +324,7 @@ generated_stream!(stream_sd, sd);
 
 /// The interpreter's streaming decoder over a whole capture, sniffing both directions.
 pub fn stream_interp(p: &Protocol, capture: &[u8]) -> StreamCount {
-    use busspec_codegen::stream::{Event, StreamDecoder};
+    use busspec_model::stream::{Event, StreamDecoder};
     let mut d = StreamDecoder::new(p, None);
     let mut n = StreamCount::default();
     let mut events = d.push(capture);

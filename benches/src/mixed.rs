@@ -3,7 +3,7 @@
 
 use std::ops::Range;
 
-use busspec_codegen::ir::{Direction, Protocol};
+use busspec_model::ir::{Direction, Protocol};
 
 /// A protocol the benches cover.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -27,7 +27,7 @@ impl Proto {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../spec")
             .join(format!("{}.yaml", self.name()));
-        busspec_codegen::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
+        busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
     }
 
     /// The messages every contender implements, by spec name. The mixed stream holds the

@@ -41,7 +41,7 @@ fn the_mixed_streams_hold_every_message_of_the_subset_in_both_directions() {
         let requests = m
             .entries
             .iter()
-            .filter(|e| e.direction == busspec_codegen::ir::Direction::Request)
+            .filter(|e| e.direction == busspec_model::ir::Direction::Request)
             .count();
         assert!(requests > 20 && requests < 108, "{requests} requests");
     }
@@ -270,13 +270,13 @@ fn deku_sd_response(r: &peer::sd::Reply) -> Decoded<sd::Response> {
 /// The frames of the mixed stream, each also corrupted in one or two random bytes, with and
 /// without the checksum repaired, and cut or extended by a byte: (direction is request,
 /// frame, the request it answers).
-fn variants(mixed: &Mixed, p: &busspec_codegen::Protocol) -> Vec<(bool, Vec<u8>, Option<Vec<u8>>)> {
+fn variants(mixed: &Mixed, p: &busspec_model::Protocol) -> Vec<(bool, Vec<u8>, Option<Vec<u8>>)> {
     let mut rng = fastrand::Rng::with_seed(5);
     let c = &p.framing.checksum;
     let mut out = Vec::new();
     for e in &mixed.entries {
         let frame = mixed.frame(e).to_vec();
-        let is_request = e.direction == busspec_codegen::ir::Direction::Request;
+        let is_request = e.direction == busspec_model::ir::Direction::Request;
         out.push((is_request, frame.clone(), e.reply_to.clone()));
         for _ in 0..40 {
             let mut f = frame.clone();
@@ -287,8 +287,8 @@ fn variants(mixed: &Mixed, p: &busspec_codegen::Protocol) -> Vec<(bool, Vec<u8>,
             if rng.bool() {
                 let n = c.len();
                 let at = f.len() - n;
-                let v = busspec_codegen::checksum::compute(&c.algorithm, &f[..at]);
-                busspec_codegen::interp::write_uint(v, &mut f[at..], c.byte_order);
+                let v = busspec_model::checksum::compute(&c.algorithm, &f[..at]);
+                busspec_model::interp::write_uint(v, &mut f[at..], c.byte_order);
             }
             out.push((is_request, f, e.reply_to.clone()));
         }
@@ -328,7 +328,7 @@ fn agree<T: PartialEq + std::fmt::Debug, E: std::fmt::Debug>(
 
 #[test]
 fn the_hand_written_decoders_and_the_deku_peer_accept_and_reject_what_the_generated_code_does() {
-    let hex = busspec_codegen::interp::format_hex;
+    let hex = busspec_model::interp::format_hex;
     for proto in Proto::ALL {
         let p = proto.spec();
         let mixed = Mixed::from_spec(proto, &p);

@@ -1,8 +1,8 @@
 //! Emits the typed `no_std` Rust module of one protocol from its IR.
 //!
 //! One `emit_*` function per generated item, iterating in spec order so the output is
-//! deterministic. Generated code refers to the hand-written runtime of the `busspec-protocols`
-//! crate through fully qualified `crate::` paths and to core through `::core::`, so no spec name
+//! deterministic. Generated code refers to the shared runtime, `busspec-runtime`, through fully
+//! qualified `::busspec_runtime::` paths and to core through `::core::`, so no spec name
 //! can clash with them. Output is formatted with prettyplease.
 //!
 //! Typing rules:
@@ -16,9 +16,9 @@
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
 
-use crate::interp::{offsets, raw_limits};
-use crate::ir::*;
-use crate::rational::Rational;
+use busspec_model::interp::{offsets, raw_limits};
+use busspec_model::ir::*;
+use busspec_model::rational::Rational;
 
 /// The generated file's first line.
 pub const PREAMBLE: &str =
@@ -57,6 +57,7 @@ impl IntType {
     }
 }
 
+/// `snake_case` to `CamelCase`, as generated type names are spelled.
 pub fn camel(snake: &str) -> String {
     snake
         .split('_')
@@ -301,16 +302,20 @@ fn leaves(m: &Message) -> Vec<Leaf<'_>> {
 }
 
 /// Emits the whole module for one protocol, formatted.
-pub fn emit_module(p: &Protocol, source: &str) -> Result<String, String> {
-    let tokens = module_tokens(p, source);
+///
+/// `source` names the spec in the module's documentation (`spec/ub2.yaml`); `spec_path` is the
+/// path `include_str!` takes the spec's text from for `SPEC_YAML` (absolute, or relative to
+/// the file the module is written to).
+pub fn emit_module(p: &Protocol, source: &str, spec_path: &str) -> Result<String, String> {
+    let tokens = module_tokens(p, source, spec_path);
     let file: syn::File = syn::parse2(tokens)
         .map_err(|e| format!("generated code for {} does not parse: {e}", p.name))?;
     Ok(format!("{PREAMBLE}\n{}", prettyplease::unparse(&file)))
 }
 
-fn module_tokens(p: &Protocol, source: &str) -> TokenStream {
+fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let ctx = Ctx::new(p);
-    let header = emit_header(p, source);
+    let header = emit_header(p, source, spec_path);
     let units = emit_units(&ctx);
     let enums = emit_enums(&ctx);
     let flags = emit_flags(&ctx);
@@ -335,7 +340,7 @@ fn module_tokens(p: &Protocol, source: &str) -> TokenStream {
     }
 }
 
-fn emit_header(p: &Protocol, source: &str) -> TokenStream {
+fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let d = &p.document;
     let title = &d.title;
     let revision = &d.revision;
@@ -378,6 +383,8 @@ fn emit_header(p: &Protocol, source: &str) -> TokenStream {
         pub const DOCUMENT_DATE: &str = #date;
         /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
         pub const SPEC_SHA256: &str = #spec_sha256;
+        /// The spec's text, exactly as this module was generated from it.
+        pub const SPEC_YAML: &str = include_str!(#spec_path);
         /// The longest request frame, in bytes.
         pub const MAX_REQUEST_LEN: usize = #max_req;
         /// The longest response frame, in bytes.
@@ -394,7 +401,7 @@ fn emit_header(p: &Protocol, source: &str) -> TokenStream {
         pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = #lo..=#hi;
         /// The broadcast address, if the protocol has one.
         pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = #broadcast;
-        pub use crate::Decoded;
+        pub use ::busspec_runtime::Decoded;
     }
 }
 
@@ -405,7 +412,7 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
             /// The frame checksum: 8-bit sum of every byte before it.
             #[inline]
             pub fn checksum(bytes: &[u8]) -> u8 {
-                crate::sum8(bytes)
+                ::busspec_runtime::sum8(bytes)
             }
         },
         ChecksumAlgorithm::Crc(k) => {
@@ -433,7 +440,7 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
             let d = format!(" {name}: the frame checksum, over every byte before it.");
             quote! {
                 #[doc = #d]
-                pub const CRC_ALGORITHM: ::crc::Algorithm<#ty> = ::crc::Algorithm {
+                pub const CRC_ALGORITHM: ::busspec_runtime::crc::Algorithm<#ty> = ::busspec_runtime::crc::Algorithm {
                     width: #w as u8,
                     poly: #poly,
                     init: #init,
@@ -445,7 +452,7 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                 };
                 // A static, not a const: one table in memory. Where `checksum` was not inlined,
                 // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, sd/checksum).
-                static CRC: ::crc::Crc<#ty> = ::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
+                static CRC: ::busspec_runtime::crc::Crc<#ty> = ::busspec_runtime::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
                 /// The frame checksum over `bytes`.
                 #[inline]
                 pub fn checksum(bytes: &[u8]) -> #ty {
@@ -502,7 +509,7 @@ fn emit_units(ctx: &Ctx) -> TokenStream {
                 }
                 /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
                 pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-                    let raw = crate::round((value - #on / #od) * #sd / #sn)?;
+                    let raw = ::busspec_runtime::round((value - #on / #od) * #sd / #sn)?;
                     if !(#lo..=#hi).contains(&raw) {
                         return ::core::option::Option::None;
                     }
@@ -754,11 +761,11 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let visits = ls.iter().map(|l| {
             let (n, v) = (l.name, local(l.name));
             let value = match ctx.kind(l) {
-                Kind::Int(_) => quote!(crate::FieldValue::Int(*#v as i64)),
+                Kind::Int(_) => quote!(::busspec_runtime::FieldValue::Int(*#v as i64)),
                 Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
-                    quote!(crate::FieldValue::Int(#v.raw() as i64))
+                    quote!(::busspec_runtime::FieldValue::Int(#v.raw() as i64))
                 }
-                Kind::Text(_) => quote!(crate::FieldValue::Text(&#v[..])),
+                Kind::Text(_) => quote!(::busspec_runtime::FieldValue::Text(&#v[..])),
             };
             quote!(f(#n, #value);)
         });
@@ -781,7 +788,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             let available = buf.len();
             let frame = buf
                 .get_mut(..len)
-                .ok_or(crate::EncodeError::BufferTooSmall { needed: len, available })?;
+                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall { needed: len, available })?;
             let at = len - #sum_len;
             let sum = checksum(&frame[..at]);
             frame[at..].copy_from_slice(&sum.#sum_conv());
@@ -814,19 +821,41 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
             /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
             /// field is signed), in frame order; constant and repeated fields are not visited.
-            pub fn visit(&self, mut f: impl FnMut(&'static str, crate::FieldValue<'_>)) {
+            pub fn visit(&self, mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)) {
                 let _ = &mut f;
                 #[allow(unused_variables)]
                 match self { #(#visit_arms)* }
             }
             /// Encodes the frame for `address` into `buf`; returns the frame length.
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, crate::EncodeError> {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
                 let _ = #max;
                 let len: usize = match *self { #(#encode_arms)* };
                 #sum_after
                 ::core::result::Result::Ok(len)
             }
             #dispatch
+        }
+        impl ::busspec_runtime::Message for #ty {
+            #[inline]
+            fn name(&self) -> &'static str {
+                #ty::name(self)
+            }
+            #[inline]
+            fn code(&self) -> &'static [u8] {
+                #ty::code(self)
+            }
+            #[inline]
+            fn frame_len(&self) -> usize {
+                #ty::frame_len(self)
+            }
+            #[inline]
+            fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(&self, f: F) {
+                #ty::visit(self, f)
+            }
+            #[inline]
+            fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+                #ty::encode(self, address, buf)
+            }
         }
         #command_info
         #(#decoders)*
@@ -885,7 +914,7 @@ fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident) -> TokenStream {
     quote! {{
         let raw = #raw_expr as i64;
         if !(#lo..=#hi).contains(&raw) {
-            return ::core::result::Result::Err(crate::EncodeError::OutOfRange { field: #field_name });
+            return ::core::result::Result::Err(::busspec_runtime::EncodeError::OutOfRange { field: #field_name });
         }
         raw as #w
     }}
@@ -994,7 +1023,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             let out: &mut [u8; #len] = buf
                 .get_mut(..#len)
                 .and_then(|s| s.try_into().ok())
-                .ok_or(crate::EncodeError::BufferTooSmall { needed: #len, available })?;
+                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall { needed: #len, available })?;
             #(#writes)*
             #len
         }
@@ -1057,7 +1086,7 @@ fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStrea
             );
             stmts.push(quote! {
                 if #n as u64 != #l as u64 {
-                    return ::core::result::Result::Err(crate::DecodeError::InvalidValue { field: #name, offset: #at, found: #n as u32 });
+                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue { field: #name, offset: #at, found: #n as u32 });
                 }
             });
         }
@@ -1065,7 +1094,7 @@ fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStrea
             let on = format_ident!("field_{}", other);
             stmts.push(quote! {
                 if #n != #on {
-                    return ::core::result::Result::Err(crate::DecodeError::InvalidValue { field: #name, offset: #at, found: #n as u32 });
+                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue { field: #name, offset: #at, found: #n as u32 });
                 }
             });
         }
@@ -1121,7 +1150,7 @@ fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStrea
                     );
                     stmts.push(quote! {
                         if ((#n as #ut) >> #lsb) & #mask != #l {
-                            return ::core::result::Result::Err(crate::DecodeError::InvalidValue { field: #bname, offset: #at, found: (((#n as #ut) >> #lsb) & #mask) as u32 });
+                            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue { field: #bname, offset: #at, found: (((#n as #ut) >> #lsb) & #mask) as u32 });
                         }
                     });
                 }
@@ -1149,7 +1178,7 @@ fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStrea
     quote! {
         #[inline]
         #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-        fn #fname(frame: &[u8; #len]) -> ::core::result::Result<#ty, crate::DecodeError> {
+        fn #fname(frame: &[u8; #len]) -> ::core::result::Result<#ty, ::busspec_runtime::DecodeError> {
             let _ = frame;
             #(#stmts)*
             ::core::result::Result::Ok(#build)
@@ -1185,7 +1214,7 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         (Some(at), Some(s)) => quote! {
             if let ::core::option::Option::Some(&found) = frame.get(#at) {
                 if found != #s {
-                    return ::core::result::Result::Err(crate::DecodeError::BadStart { expected: #s, found });
+                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart { expected: #s, found });
                 }
             }
         },
@@ -1227,13 +1256,13 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
             let fallback = if replies {
                 quote! {
                     if admitted {
-                        crate::DecodeError::WrongLength { expected: #expected, found: frame.len() }
+                        ::busspec_runtime::DecodeError::WrongLength { expected: #expected, found: frame.len() }
                     } else {
-                        crate::DecodeError::NotAReply { code: #value }
+                        ::busspec_runtime::DecodeError::NotAReply { code: #value }
                     }
                 }
             } else {
-                quote!(crate::DecodeError::WrongLength { expected: #expected, found: frame.len() })
+                quote!(::busspec_runtime::DecodeError::WrongLength { expected: #expected, found: frame.len() })
             };
             let admitted = if replies {
                 quote!(let mut admitted = false;)
@@ -1294,10 +1323,10 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
     let body = quote! {
         #start_check
         if frame.len() < #min_len {
-            return ::core::result::Result::Err(crate::DecodeError::Truncated { needed: #min_len, found: frame.len() });
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated { needed: #min_len, found: frame.len() });
         }
         if frame.len() > #max_len {
-            return ::core::result::Result::Err(crate::DecodeError::WrongLength { expected: #max_len, found: frame.len() });
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength { expected: #max_len, found: frame.len() });
         }
         let at = frame.len() - #clen;
         let mut sum_bytes = [0u8; #clen];
@@ -1305,17 +1334,17 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         let found = #cty::#conv(sum_bytes);
         let expected = checksum(&frame[..at]);
         if found != expected {
-            return ::core::result::Result::Err(crate::DecodeError::ChecksumMismatch { offset: at, expected: expected as u32, found: found as u32 });
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch { offset: at, expected: expected as u32, found: found as u32 });
         }
         let address = frame[#addr_at];
         #[allow(unused_mut)]
-        let mut last: ::core::option::Option<crate::DecodeError> = ::core::option::Option::None;
+        let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
         #(#by_code_len)*
         let mut code = 0u32;
         for b in frame.iter().skip(#first_code_at).take(frame.len().saturating_sub(#first_code_at + #clen).min(2)) {
             code = (code << 8) | *b as u32;
         }
-        ::core::result::Result::Err(crate::DecodeError::UnknownCommand { offset: #first_code_at, code })
+        ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand { offset: #first_code_at, code })
     };
     let doc_decode = quote! {
         /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
@@ -1324,7 +1353,7 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
     if !replies {
         return quote! {
             #doc_decode
-            pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
+            pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
                 #body
             }
         };
@@ -1333,21 +1362,21 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         #doc_decode
         ///
         /// Responses that only their request tells apart are reported as
-        /// [`crate::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
         #[inline]
-        pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
+        pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
             Self::decode_for(frame, ::core::option::Option::None)
         }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
-        /// reported as [`crate::DecodeError::Ambiguous`]).
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
         #[inline]
-        pub fn decode_reply(frame: &[u8], request: &Request) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
+        pub fn decode_reply(frame: &[u8], request: &Request) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
             Self::decode_for(frame, ::core::option::Option::Some(request))
         }
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
         /// [`Self::decode_reply`].
-        fn decode_for(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<#ty>, crate::DecodeError> {
+        fn decode_for(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
             #body
         }
     }
@@ -1385,7 +1414,7 @@ fn emit_candidate(
         quote! {
             if request.is_none() {
                 if found.is_some() {
-                    return ::core::result::Result::Err(crate::DecodeError::Ambiguous { code: #value });
+                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::Ambiguous { code: #value });
                 }
                 found = ::core::option::Option::Some(m);
             } else {
@@ -1466,7 +1495,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     let start_check = match (first.start, p.framing.start) {
         (Some(at), Some(s)) => quote! {
             if head.get(#at).is_some_and(|&b| b != #s) {
-                return crate::stream::Candidates { requests: 0, responses: 0 };
+                return ::busspec_runtime::stream::Candidates { requests: 0, responses: 0 };
             }
         },
         _ => quote!(),
@@ -1479,15 +1508,93 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     let trie = code_trie(&shapes, code_at, 0);
     let lens = lengths.iter().map(|l| quote!(#l));
     let all_requests = mask_lit(all_requests);
+    let ty = type_ident(&p.name);
+    let naks: Vec<TokenStream> = p
+        .responses
+        .iter()
+        .filter(|r| matches!(r.kind, MessageKind::Response(ResponseKind::Nak)))
+        .map(|r| any_of(&ident("Response"), r))
+        .collect();
+    let is_nak = if naks.is_empty() {
+        quote!({
+            let _ = response;
+            false
+        })
+    } else {
+        quote!(matches!(response, #(#naks)|*))
+    };
+    let ck_len = p.framing.checksum.len();
+    let found = match (p.framing.checksum.width, p.framing.checksum.byte_order) {
+        (8, _) => quote!(tail[0]),
+        (_, ByteOrder::Big) => quote!(checksum(body).to_be_bytes() == *tail),
+        (_, ByteOrder::Little) => quote!(checksum(body).to_le_bytes() == *tail),
+    };
+    let checksum_ok = if p.framing.checksum.width == 8 {
+        quote!(checksum(body) == #found)
+    } else {
+        found
+    };
+    let doc_text = format!(
+        "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",
+        p.name
+    );
+    let type_doc = doc(&doc_text);
     quote! {
-        /// This protocol's codec for [`crate::stream::StreamDecoder`].
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-        pub struct Codec;
-        impl crate::stream::Codec for Codec {
+        #type_doc
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+        pub struct #ty;
+        impl ::busspec_runtime::Protocol for #ty {
             type Request = Request;
             type Response = Response;
-            const LENGTHS: &'static [usize] = &[#(#lens),*];
-            fn candidates(head: &[u8]) -> crate::stream::Candidates {
+            type Buffer = [u8; MAX_FRAME_LEN];
+            const NAME: &'static str = PROTOCOL;
+            const DOCUMENT: &'static str = DOCUMENT;
+            const DOCUMENT_REVISION: &'static str = DOCUMENT_REVISION;
+            const SPEC_SHA256: &'static str = SPEC_SHA256;
+            const SPEC_YAML: &'static str = SPEC_YAML;
+            const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+            const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+            const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+            const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
+            const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
+            const BAUD: u32 = BAUD;
+            const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = INTER_FRAME_GAP_MS;
+            const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
+            const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
+            const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
+            #[inline]
+            fn decode_request(frame: &[u8]) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+                Request::decode(frame)
+            }
+            #[inline]
+            fn decode_response_for(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+                Response::decode_for(frame, request)
+            }
+            #[inline]
+            fn answers(request: &Request, response: &Response) -> bool {
+                response.answers(request)
+            }
+            #[inline]
+            fn kind(request: &Request) -> ::busspec_runtime::CommandKind {
+                request.kind()
+            }
+            #[inline]
+            fn broadcast(request: &Request) -> ::busspec_runtime::Broadcast {
+                request.broadcast()
+            }
+            fn is_nak(response: &Response) -> bool {
+                #is_nak
+            }
+            fn checksum_ok(frame: &[u8]) -> bool {
+                match frame.len().checked_sub(#ck_len) {
+                    ::core::option::Option::Some(n) if n > 0 => {
+                        let (body, tail) = frame.split_at(n);
+                        #checksum_ok
+                    }
+                    _ => false,
+                }
+            }
+            fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
                 #start_check
                 let mut mask: u128 = #trie;
                 if let ::core::option::Option::Some(&a) = head.get(#addr_at) {
@@ -1495,21 +1602,13 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                         mask &= if #broadcast { #all_requests } else { 0 };
                     }
                 }
-                crate::stream::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
-            }
-            #[inline]
-            fn decode_request(frame: &[u8]) -> ::core::result::Result<Decoded<Request>, crate::DecodeError> {
-                Request::decode(frame)
-            }
-            #[inline]
-            fn decode_response(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
-                Response::decode_for(frame, request)
+                ::busspec_runtime::stream::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }
         }
-        /// A streaming decoder for this protocol: see [`crate::stream`].
-        pub type StreamDecoder = crate::stream::StreamDecoder<Codec, MAX_FRAME_LEN>;
+        /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
+        pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;
         /// What [`StreamDecoder`] finds in a stream.
-        pub type Event = crate::stream::Event<Request, Response>;
+        pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
     }
 }
 
@@ -1583,23 +1682,23 @@ fn emit_command_info(p: &Protocol) -> TokenStream {
             CommandKind::Getter => quote!(Getter),
             CommandKind::Reset => quote!(Reset),
         };
-        kinds.push(quote!(#pat => crate::CommandKind::#kind));
+        kinds.push(quote!(#pat => ::busspec_runtime::CommandKind::#kind));
         let (accepted, answered) = c
             .broadcast
             .as_ref()
             .map_or((false, false), |b| (b.accepted, b.answered));
         broadcasts
-            .push(quote!(#pat => crate::Broadcast { accepted: #accepted, answered: #answered }));
+            .push(quote!(#pat => ::busspec_runtime::Broadcast { accepted: #accepted, answered: #answered }));
     }
     quote! {
         impl Request {
             /// What the command does, as the spec classifies it.
-            pub const fn kind(&self) -> crate::CommandKind {
+            pub const fn kind(&self) -> ::busspec_runtime::CommandKind {
                 match self { #(#kinds,)* }
             }
             /// Whether the command may go to the broadcast address, and whether it is then
             /// answered.
-            pub const fn broadcast(&self) -> crate::Broadcast {
+            pub const fn broadcast(&self) -> ::busspec_runtime::Broadcast {
                 match self { #(#broadcasts,)* }
             }
         }

@@ -1,104 +1,267 @@
-//! busspec-codegen: load a protocol spec, validate it into an IR, interpret frames from it, and
-//! emit documentation from it.
+//! busspec-codegen: turns busspec protocol specs into typed `no_std` Rust modules, from a build
+//! script.
 //!
 //! ```text
-//! spec/*.yaml ──load──▶ model ──validate──▶ IR ──┬─ docs      (Markdown reference)
-//!                                                ├─ interp    (decode/encode at run time)
-//!                                                │    └─ stream   (frames out of a bus capture)
-//!                                                └─ diff      (what a revision breaks)
+//! spec.yaml ──busspec-model: load, validate──▶ IR ──emit──▶ OUT_DIR/<name>.rs + OUT_DIR/protocols.rs
 //! ```
 //!
-//! Every stage is a pure function of its input; file I/O happens only in [`load_file`] and in
-//! the callers (build scripts, the CLI).
+//! [`Builder`] is the build-script API, in the manner of prost-build: name your spec files, call
+//! [`Builder::compile`], and `include!` the result. Each spec becomes one module named after
+//! the protocol, whose unit type (`ub2::Ub2`) implements `busspec_runtime::Protocol`;
+//! `protocols.rs` includes every module and adds `PROTOCOLS` (their names) and
+//! `with_protocol` (a name to a type, through a `ProtocolVisitor`).
+//!
+//! ```no_run
+//! // build.rs, in `fn main`
+//! busspec_codegen::Builder::new()
+//!     .spec("spec/my_device.yaml")
+//!     .compile();
+//! ```
+//!
+//! ```ignore
+//! // src/lib.rs (the crate depends on busspec-runtime)
+//! include!(concat!(env!("OUT_DIR"), "/protocols.rs"));
+//! ```
+//!
+//! Files are rewritten only when their text changes, so an unchanged spec rebuilds nothing.
+//! Every spec error becomes one cargo diagnostic line, `file: path: message`.
 
-pub mod checksum;
-pub mod diag;
-pub mod diff;
-pub mod docs;
 pub mod emit;
-pub mod interp;
-pub mod ir;
-pub mod load;
-pub mod model;
-pub mod rational;
-pub mod stream;
-pub mod validate;
 
-use std::path::Path;
+use std::fmt;
+use std::path::{Path, PathBuf};
 
-pub use diag::{Diagnostic, Diagnostics};
-pub use ir::Protocol;
+use proc_macro2::TokenStream;
+use quote::{format_ident, quote};
 
-/// Specs larger than this are refused before parsing: a real one is a few hundred KiB.
-pub const MAX_SPEC_BYTES: usize = 16 << 20;
+pub use busspec_model::{Diagnostic, Diagnostics};
 
-/// Loads and validates spec text. `file` names it in diagnostics.
-pub fn load_str(file: &str, text: &str) -> Result<Protocol, Diagnostics> {
-    let mut sink = diag::Sink::default();
-    let fail = |sink: diag::Sink| Diagnostics {
-        file: file.to_owned(),
-        items: sink.items,
-    };
-    if text.len() > MAX_SPEC_BYTES {
-        sink.error(
-            "",
-            format!(
-                "file is {} bytes; specs are limited to {MAX_SPEC_BYTES}",
-                text.len()
+/// The name of the file that includes every generated module.
+pub const INDEX_FILE: &str = "protocols.rs";
+
+/// Generates Rust modules from spec files: the build-script API.
+#[derive(Debug, Clone, Default)]
+pub struct Builder {
+    specs: Vec<PathBuf>,
+    out_dir: Option<PathBuf>,
+}
+
+/// Why generation failed: every spec's diagnostics, or a file that could not be read or
+/// written.
+#[derive(Debug)]
+pub enum Error {
+    /// A spec did not load or validate; each diagnostic says where.
+    Spec(Diagnostics),
+    /// Two specs declare the same protocol name, so their modules would collide.
+    DuplicateProtocol {
+        name: String,
+        first: PathBuf,
+        second: PathBuf,
+    },
+    /// No spec was named.
+    NoSpecs,
+    /// Neither [`Builder::out_dir`] nor the `OUT_DIR` environment variable says where to write.
+    NoOutDir,
+    /// Generated code that does not parse: a bug in the generator, reported as such.
+    Emit(String),
+    /// A file could not be written.
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Spec(d) => write!(f, "{d}"),
+            Error::DuplicateProtocol {
+                name,
+                first,
+                second,
+            } => write!(
+                f,
+                "{}: name: protocol `{name}` is already generated from {}",
+                second.display(),
+                first.display()
             ),
-        );
-        return Err(fail(sink));
-    }
-    let Some(spec) = load::parse(text, &mut sink) else {
-        return Err(fail(sink));
-    };
-    match validate::validate(&spec, &mut sink) {
-        Some(mut p) => {
-            p.spec_sha256 = spec_sha256(text);
-            Ok(p)
+            Error::NoSpecs => f.write_str("no spec files given to busspec_codegen::Builder"),
+            Error::NoOutDir => f.write_str(
+                "no output directory: OUT_DIR is not set (not in a build script?) and Builder::out_dir was not called",
+            ),
+            Error::Emit(e) => write!(f, "{e}"),
+            Error::Io { path, error } => write!(f, "{}: cannot write: {error}", path.display()),
         }
-        None => Err(fail(sink)),
     }
 }
 
-/// SHA-256 of a spec's text as lowercase hex: the same digest `sha256sum FILE` prints, so a
-/// generated artifact can be traced to the exact file it came from.
-pub fn spec_sha256(text: &str) -> String {
-    use sha2::{Digest, Sha256};
-    Sha256::digest(text.as_bytes())
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+impl std::error::Error for Error {}
+
+/// What [`Builder::generate`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Generated {
+    /// Protocol names, in the order the specs were given.
+    pub protocols: Vec<String>,
+    /// Every file written or left as it was (already up to date), the index last.
+    pub files: Vec<PathBuf>,
 }
 
-/// Reads and validates a spec file.
-pub fn load_file(path: &Path) -> Result<Protocol, Diagnostics> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| Diagnostics {
-        file: file.clone(),
-        items: vec![Diagnostic::new("", format!("cannot read: {e}"))],
-    })?;
-    let text = String::from_utf8(bytes).map_err(|e| Diagnostics {
-        file: file.clone(),
-        items: vec![Diagnostic::new(
-            "",
-            format!(
-                "not UTF-8 text: invalid byte at offset {}",
-                e.utf8_error().valid_up_to()
-            ),
-        )],
-    })?;
-    load_str(&file, &text)
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn spec_hash_is_plain_sha256_of_the_text() {
-        // The FIPS 180-2 test vector for "abc".
-        assert_eq!(
-            super::spec_sha256("abc"),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
-        );
+impl Builder {
+    pub fn new() -> Self {
+        Self::default()
     }
+
+    /// Adds a spec file. A relative path is taken from the current directory, which for a build
+    /// script is the package's root.
+    pub fn spec(mut self, path: impl AsRef<Path>) -> Self {
+        self.specs.push(path.as_ref().to_path_buf());
+        self
+    }
+
+    /// Adds several spec files.
+    pub fn specs<I, P>(mut self, paths: I) -> Self
+    where
+        I: IntoIterator<Item = P>,
+        P: AsRef<Path>,
+    {
+        self.specs
+            .extend(paths.into_iter().map(|p| p.as_ref().to_path_buf()));
+        self
+    }
+
+    /// Writes the modules here instead of `OUT_DIR`.
+    pub fn out_dir(mut self, dir: impl AsRef<Path>) -> Self {
+        self.out_dir = Some(dir.as_ref().to_path_buf());
+        self
+    }
+
+    /// Loads, validates and emits every spec, and writes one module per spec plus
+    /// [`INDEX_FILE`]. Every spec is loaded before anything is written, and every spec's errors
+    /// are reported together.
+    pub fn generate(&self) -> Result<Generated, Vec<Error>> {
+        if self.specs.is_empty() {
+            return Err(vec![Error::NoSpecs]);
+        }
+        let out = match &self.out_dir {
+            Some(d) => d.clone(),
+            None => match std::env::var_os("OUT_DIR") {
+                Some(d) => PathBuf::from(d),
+                None => return Err(vec![Error::NoOutDir]),
+            },
+        };
+        let mut errors = Vec::new();
+        let mut modules: Vec<(String, PathBuf, String)> = Vec::new();
+        for spec in &self.specs {
+            let protocol = match busspec_model::load_file(spec) {
+                Ok(p) => p,
+                Err(d) => {
+                    errors.push(Error::Spec(d));
+                    continue;
+                }
+            };
+            if let Some((_, first, _)) = modules.iter().find(|m| m.0 == protocol.name) {
+                errors.push(Error::DuplicateProtocol {
+                    name: protocol.name.clone(),
+                    first: first.clone(),
+                    second: spec.clone(),
+                });
+                continue;
+            }
+            // include_str! needs a path that holds wherever the module is included from.
+            let absolute = std::fs::canonicalize(spec).unwrap_or_else(|_| spec.clone());
+            let source = spec.display().to_string();
+            match emit::emit_module(&protocol, &source, &absolute.to_string_lossy()) {
+                Ok(code) => modules.push((protocol.name.clone(), spec.clone(), code)),
+                Err(e) => errors.push(Error::Emit(e)),
+            }
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        let io = |path: &Path, error| Error::Io {
+            path: path.to_path_buf(),
+            error,
+        };
+        std::fs::create_dir_all(&out).map_err(|e| vec![io(&out, e)])?;
+        let mut files = Vec::new();
+        for (name, _, code) in &modules {
+            let path = out.join(format!("{name}.rs"));
+            write_if_changed(&path, code).map_err(|e| vec![io(&path, e)])?;
+            files.push(path);
+        }
+        let names: Vec<&str> = modules.iter().map(|m| m.0.as_str()).collect();
+        let index = emit_index(&names).map_err(|e| vec![Error::Emit(e)])?;
+        let path = out.join(INDEX_FILE);
+        write_if_changed(&path, &index).map_err(|e| vec![io(&path, e)])?;
+        files.push(path);
+        Ok(Generated {
+            protocols: names.iter().map(|n| n.to_string()).collect(),
+            files,
+        })
+    }
+
+    /// [`Self::generate`] for a build script: tells cargo to rerun when a spec changes, and on
+    /// failure prints every error as a cargo diagnostic line (`file: path: message`) and exits
+    /// the build script with status 1.
+    pub fn compile(&self) {
+        for spec in &self.specs {
+            println!("cargo::rerun-if-changed={}", spec.display());
+        }
+        // Generated types derive serde and arbitrary behind features of those names; the
+        // including crate may not declare them.
+        println!("cargo::rustc-check-cfg=cfg(feature, values(\"serde\", \"arbitrary\"))");
+        if let Err(errors) = self.generate() {
+            for e in errors {
+                for line in e.to_string().lines() {
+                    println!("cargo::error={line}");
+                }
+            }
+            std::process::exit(1);
+        }
+    }
+}
+
+/// Writes `text` to `path` unless the file already holds exactly that, so an unchanged spec
+/// does not make cargo rebuild what includes the file.
+pub fn write_if_changed(path: &Path, text: &str) -> std::io::Result<()> {
+    if std::fs::read_to_string(path).ok().as_deref() == Some(text) {
+        return Ok(());
+    }
+    std::fs::write(path, text)
+}
+
+/// The index file: every module, the list of names, and the name-to-type dispatch.
+pub fn emit_index(names: &[&str]) -> Result<String, String> {
+    let files = names.iter().map(|n| format!("/{n}.rs"));
+    let arms = names.iter().map(|n| {
+        let module = format_ident!("{n}");
+        let ty = format_ident!("{}", emit::camel(n));
+        quote!(#n => ::core::option::Option::Some(visitor.visit::<#module::#ty>()))
+    });
+    let tokens: TokenStream = quote! {
+        #(include!(concat!(env!("OUT_DIR"), #files));)*
+        /// The name of every protocol generated into this crate, in the order its specs were given.
+        pub const PROTOCOLS: &[&str] = &[#(#names),*];
+        /// Runs `visitor` with the protocol called `name` (its spec's `name`), or returns `None`
+        /// when this crate has no such protocol.
+        pub fn with_protocol<V: ::busspec_runtime::ProtocolVisitor>(
+            name: &str,
+            visitor: V,
+        ) -> ::core::option::Option<V::Output> {
+            match name {
+                #(#arms,)*
+                _ => {
+                    let _ = visitor;
+                    ::core::option::Option::None
+                }
+            }
+        }
+    };
+    let file: syn::File =
+        syn::parse2(tokens).map_err(|e| format!("generated index does not parse: {e}"))?;
+    Ok(format!(
+        "{}\n{}",
+        emit::PREAMBLE,
+        prettyplease::unparse(&file)
+    ))
 }

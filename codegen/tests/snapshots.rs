@@ -1,5 +1,5 @@
 //! Snapshot tests of the generator: the code emitted for the small fixture specs in
-//! `fixtures/valid/` is kept in `snapshots/`, so every change to the generated code shows up in
+//! `model/tests/fixtures/valid/` is kept in `snapshots/`, so every change to the generated code shows up in
 //! review as a diff of readable Rust. `busspec-protocols`' `tests/snapshots_compile.rs` compiles
 //! the same files against the runtime and runs them.
 //!
@@ -13,11 +13,15 @@ fn dir() -> PathBuf {
 }
 
 fn check(fixture: &str, snapshot: &str) {
-    let spec = dir().join("fixtures/valid").join(fixture);
-    let p = busspec_codegen::load_file(&spec).unwrap_or_else(|d| panic!("{d}"));
-    let code =
-        busspec_codegen::emit::emit_module(&p, &format!("codegen/tests/fixtures/valid/{fixture}"))
-            .unwrap_or_else(|e| panic!("{e}"));
+    let spec = dir().join("../../model/tests/fixtures/valid").join(fixture);
+    let p = busspec_model::load_file(&spec).unwrap_or_else(|d| panic!("{d}"));
+    // SPEC_YAML's include_str! is relative to the snapshot file.
+    let code = busspec_codegen::emit::emit_module(
+        &p,
+        &format!("model/tests/fixtures/valid/{fixture}"),
+        &format!("../../../model/tests/fixtures/valid/{fixture}"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let path = dir().join("snapshots").join(snapshot);
     if std::env::var_os("BUSSPEC_UPDATE_SNAPSHOTS").is_some() {
         std::fs::write(&path, &code).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

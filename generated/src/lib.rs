@@ -1,9 +1,17 @@
-//! Typed encoders and decoders for the protocols in busspec's `spec/`, generated at build time.
+//! Typed `no_std` encoders and decoders for the two RS485 protocols busspec transcribes,
+//! generated at build time from the specs in `spec/` by `busspec-codegen`:
 //!
-//! One module per protocol ([`ub2`], [`sd`]), each with `Request` and `Response` enums (one
-//! variant per command or response, named fields, physical units as types), `encode` into a
-//! caller's buffer and `decode` from a byte slice. This file is the small hand-written runtime
-//! the generated modules share: errors and checksum helpers.
+//! - [`ub2`]: the Comet motorized vacuum capacitor, Universal-ID UB2 (SB-70);
+//! - [`sd`]: the SD-01/02 servo actuator (RS485 ICD).
+//!
+//! Each module has `Request` and `Response` enums (one variant per command or response, named
+//! fields, physical units as types), `encode` into a caller's buffer, `decode` from a byte
+//! slice, `decode_reply` against the request, a `StreamDecoder` for raw captures, and a unit
+//! type ([`ub2::Ub2`], [`sd::Sd`]) implementing [`Protocol`], so code generic over protocols
+//! works with both. [`PROTOCOLS`] and [`with_protocol`] find a protocol by name.
+//!
+//! Everything protocol-independent (errors, [`Decoded`], [`FieldValue`], the stream decoder) is
+//! `busspec-runtime`'s, re-exported here.
 //!
 //! Invariants: `no_std`, no allocation, no `unsafe`, and no input makes encoding or decoding
 //! panic — every frame is checked for length before any byte is read, and fixed-size arrays carry
@@ -17,197 +25,9 @@
 #[cfg(feature = "arbitrary")]
 extern crate std;
 
-use core::fmt;
-
-pub mod stream;
-
-/// A decoded frame: the address it carried and its message.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
-pub struct Decoded<M> {
-    pub address: u8,
-    pub message: M,
-}
-
-/// What a command does, as its spec classifies it (each protocol's `Request::kind`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub enum CommandKind {
-    /// Starts a movement; sending it twice moves twice.
-    Movement,
-    /// Asks whether a movement is done.
-    CompletionCheck,
-    /// Sets a value; the device echoes or acknowledges it.
-    Setter,
-    /// Reads a value.
-    Getter,
-    /// Resets a counter, a flag or the device.
-    Reset,
-}
-
-/// How a command treats the broadcast address (each protocol's `Request::broadcast`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Broadcast {
-    /// Devices act on it when it is sent to the broadcast address.
-    pub accepted: bool,
-    /// Devices answer it when it is sent to the broadcast address.
-    pub answered: bool,
-}
-
-/// One field's value as it travels: the raw wire integer (sign-extended where the field is
-/// signed; enums, flags and units by their raw value) or an ASCII field's bytes.
-/// See each message type's `visit`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum FieldValue<'a> {
-    Int(i64),
-    Text(&'a [u8]),
-}
-
-/// Why a frame did not decode, and where.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DecodeError {
-    /// Fewer bytes than the shortest frame.
-    Truncated { needed: usize, found: usize },
-    /// The first byte is not the protocol's start byte.
-    BadStart { expected: u8, found: u8 },
-    /// The checksum at `offset` is not what the bytes before it give.
-    ChecksumMismatch {
-        offset: usize,
-        expected: u32,
-        found: u32,
-    },
-    /// No message of this direction has this code.
-    UnknownCommand { offset: usize, code: u32 },
-    /// The code is known but the frame's length is not that of any message with it.
-    WrongLength { expected: usize, found: usize },
-    /// A constant or repeated field holds another value.
-    InvalidValue {
-        field: &'static str,
-        offset: usize,
-        found: u32,
-    },
-    /// Several responses share this code and length; decode it with `decode_reply`.
-    Ambiguous { code: u32 },
-    /// The frame is a valid response, but not one the given request may get.
-    NotAReply { code: u32 },
-}
-
-fn hex(f: &mut fmt::Formatter<'_>, v: u32) -> fmt::Result {
-    if v <= 0xFF {
-        write!(f, "0x{v:02X}")
-    } else if v <= 0xFFFF {
-        write!(f, "0x{v:04X}")
-    } else {
-        write!(f, "0x{v:08X}")
-    }
-}
-
-impl fmt::Display for DecodeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
-            DecodeError::Truncated { needed, found } => write!(
-                f,
-                "truncated frame: need at least {needed} bytes, found {found}"
-            ),
-            DecodeError::BadStart { expected, found } => {
-                write!(
-                    f,
-                    "bad start byte at offset 0: expected 0x{expected:02X}, found 0x{found:02X}"
-                )
-            }
-            DecodeError::ChecksumMismatch {
-                offset,
-                expected,
-                found,
-            } => {
-                write!(f, "checksum mismatch at offset {offset}: expected ")?;
-                hex(f, expected)?;
-                f.write_str(", found ")?;
-                hex(f, found)
-            }
-            DecodeError::UnknownCommand { offset, code } => {
-                f.write_str("unknown command code ")?;
-                hex(f, code)?;
-                write!(f, " at offset {offset}")
-            }
-            DecodeError::WrongLength { expected, found } => {
-                write!(f, "wrong length: expected {expected} bytes, found {found}")
-            }
-            DecodeError::InvalidValue {
-                field,
-                offset,
-                found,
-            } => {
-                write!(f, "invalid value for {field} at offset {offset}: found ")?;
-                hex(f, found)
-            }
-            DecodeError::Ambiguous { code } => {
-                f.write_str("ambiguous response code ")?;
-                hex(f, code)?;
-                f.write_str(": decode it together with the request it answers")
-            }
-            DecodeError::NotAReply { code } => {
-                f.write_str("response code ")?;
-                hex(f, code)?;
-                f.write_str(" does not answer the given request")
-            }
-        }
-    }
-}
-
-impl core::error::Error for DecodeError {}
-
-/// Why a message did not encode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum EncodeError {
-    /// The buffer is shorter than the frame; `MAX_FRAME_LEN` of each protocol always suffices.
-    BufferTooSmall { needed: usize, available: usize },
-    /// A typed value does not fit the wire field it goes into.
-    OutOfRange { field: &'static str },
-}
-
-impl fmt::Display for EncodeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
-            EncodeError::BufferTooSmall { needed, available } => {
-                write!(
-                    f,
-                    "buffer too small: the frame needs {needed} bytes, the buffer has {available}"
-                )
-            }
-            EncodeError::OutOfRange { field } => {
-                write!(f, "value of {field} does not fit its wire field")
-            }
-        }
-    }
-}
-
-impl core::error::Error for EncodeError {}
-
-/// 8-bit sum of `bytes`, modulo 256.
-#[inline]
-pub fn sum8(bytes: &[u8]) -> u8 {
-    bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b))
-}
-
-/// `x` rounded to the nearest integer, ties away from zero; `None` if not finite or beyond `i64`.
-/// (`f64::round` lives in std; this crate is `no_std`.) Public only for generated code.
-#[doc(hidden)]
-pub fn round(x: f64) -> Option<i64> {
-    if !x.is_finite() || x.abs() >= 9.0e18 {
-        return None;
-    }
-    let t = x as i64; // truncates toward zero
-    let frac = x - t as f64;
-    Some(if frac >= 0.5 {
-        t + 1
-    } else if frac <= -0.5 {
-        t - 1
-    } else {
-        t
-    })
-}
+pub use busspec_runtime::{
+    stream, Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldValue, Message,
+    Protocol, ProtocolVisitor,
+};
 
 include!(concat!(env!("OUT_DIR"), "/protocols.rs"));

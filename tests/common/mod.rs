@@ -4,9 +4,9 @@
 
 #![allow(dead_code, unused_imports)]
 
-use busspec_codegen::interp;
-use busspec_codegen::ir::{Direction, Message, MessageRef, Protocol};
-use busspec_codegen::{checksum, load_file};
+use busspec_model::interp;
+use busspec_model::ir::{Direction, Message, MessageRef, Protocol};
+use busspec_model::{checksum, load_file};
 
 pub use busspec_fuzz_bodies::oracle::{
     agree, interp_values, request_example, visit_values, Decoded, Generated, Sd, Ub2, Values,

@@ -2,7 +2,7 @@
 pub mod mini {
     //! Minimal sum8 test protocol (`mini`).
     //!
-    //! Generated from `codegen/tests/fixtures/valid/minimal.yaml`, transcribed from *Minimal protocol reference*, revision 1.0 (2024-01-01).
+    //! Generated from `model/tests/fixtures/valid/minimal.yaml`, transcribed from *Minimal protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel little-endian on the wire.
     #![allow(
         clippy::identity_op,
@@ -23,6 +23,10 @@ pub mod mini {
     pub const DOCUMENT_DATE: &str = "2024-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
     pub const SPEC_SHA256: &str = "fc5dfeca68fced08f85438b676b63905acfeadd57ec00df1fefe50721d5313c0";
+    /// The spec's text, exactly as this module was generated from it.
+    pub const SPEC_YAML: &str = include_str!(
+        "../../../model/tests/fixtures/valid/minimal.yaml"
+    );
     /// The longest request frame, in bytes.
     pub const MAX_REQUEST_LEN: usize = 9usize;
     /// The longest response frame, in bytes.
@@ -39,11 +43,11 @@ pub mod mini {
     pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = 33u8..=64u8;
     /// The broadcast address, if the protocol has one.
     pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::None;
-    pub use crate::Decoded;
+    pub use ::busspec_runtime::Decoded;
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
-        crate::sum8(bytes)
+        ::busspec_runtime::sum8(bytes)
     }
     /// capacitance
     ///
@@ -72,7 +76,7 @@ pub mod mini {
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-            let raw = crate::round((value - 0f64 / 1f64) * 100f64 / 1f64)?;
+            let raw = ::busspec_runtime::round((value - 0f64 / 1f64) * 100f64 / 1f64)?;
             if !(0..=4294967295).contains(&raw) {
                 return ::core::option::Option::None;
             }
@@ -106,7 +110,7 @@ pub mod mini {
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-            let raw = crate::round((value - 0f64 / 1f64) * 512f64 / 45f64)?;
+            let raw = ::busspec_runtime::round((value - 0f64 / 1f64) * 512f64 / 45f64)?;
             if !(-32768..=32767).contains(&raw) {
                 return ::core::option::Option::None;
             }
@@ -140,7 +144,7 @@ pub mod mini {
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-            let raw = crate::round((value - -50f64 / 1f64) * 1f64 / 1f64)?;
+            let raw = ::busspec_runtime::round((value - -50f64 / 1f64) * 1f64 / 1f64)?;
             if !(0..=255).contains(&raw) {
                 return ::core::option::Option::None;
             }
@@ -293,18 +297,24 @@ pub mod mini {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, crate::FieldValue<'_>)) {
+        pub fn visit(
+            &self,
+            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
+        ) {
             let _ = &mut f;
             #[allow(unused_variables)]
             match self {
                 Self::GoTo { target: v_target } => {
-                    f("target", crate::FieldValue::Int(v_target.raw() as i64));
+                    f(
+                        "target",
+                        ::busspec_runtime::FieldValue::Int(v_target.raw() as i64),
+                    );
                 }
                 Self::SetMode { mode: v_mode } => {
-                    f("mode", crate::FieldValue::Int(v_mode.raw() as i64));
+                    f("mode", ::busspec_runtime::FieldValue::Int(v_mode.raw() as i64));
                 }
                 Self::GetStatus { channel: v_channel } => {
-                    f("channel", crate::FieldValue::Int(*v_channel as i64));
+                    f("channel", ::busspec_runtime::FieldValue::Int(*v_channel as i64));
                 }
             }
         }
@@ -313,7 +323,7 @@ pub mod mini {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, crate::EncodeError> {
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 9usize;
             let len: usize = match *self {
                 Self::GoTo { target: v_target } => {
@@ -321,7 +331,7 @@ pub mod mini {
                     let out: &mut [u8; 9usize] = buf
                         .get_mut(..9usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 9usize,
                             available,
                         })?;
@@ -340,7 +350,7 @@ pub mod mini {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -359,7 +369,7 @@ pub mod mini {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -380,23 +390,23 @@ pub mod mini {
         /// constants and repeated fields.
         pub fn decode(
             frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
             if let ::core::option::Option::Some(&found) = frame.get(0usize) {
                 if found != 170u8 {
-                    return ::core::result::Result::Err(crate::DecodeError::BadStart {
+                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
                         expected: 170u8,
                         found,
                     });
                 }
             }
             if frame.len() < 6usize {
-                return ::core::result::Result::Err(crate::DecodeError::Truncated {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 6usize,
                     found: frame.len(),
                 });
             }
             if frame.len() > 9usize {
-                return ::core::result::Result::Err(crate::DecodeError::WrongLength {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
                     expected: 9usize,
                     found: frame.len(),
                 });
@@ -407,7 +417,7 @@ pub mod mini {
             let found = u8::from_le_bytes(sum_bytes);
             let expected = checksum(&frame[..at]);
             if found != expected {
-                return ::core::result::Result::Err(crate::DecodeError::ChecksumMismatch {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
                     offset: at,
                     expected: expected as u32,
                     found: found as u32,
@@ -415,7 +425,7 @@ pub mod mini {
             }
             let address = frame[1usize];
             #[allow(unused_mut)]
-            let mut last: ::core::option::Option<crate::DecodeError> = ::core::option::Option::None;
+            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 5usize {
                 let code: u32 = 0u32 | ((frame[2usize] as u32) << 8u32)
                     | ((frame[3usize] as u32) << 0u32);
@@ -439,7 +449,7 @@ pub mod mini {
                         }
                         return ::core::result::Result::Err(
                             last
-                                .unwrap_or(crate::DecodeError::WrongLength {
+                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
                                     expected: 9usize,
                                     found: frame.len(),
                                 }),
@@ -463,7 +473,7 @@ pub mod mini {
                         }
                         return ::core::result::Result::Err(
                             last
-                                .unwrap_or(crate::DecodeError::WrongLength {
+                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
                                     expected: 6usize,
                                     found: frame.len(),
                                 }),
@@ -487,7 +497,7 @@ pub mod mini {
                         }
                         return ::core::result::Result::Err(
                             last
-                                .unwrap_or(crate::DecodeError::WrongLength {
+                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
                                     expected: 6usize,
                                     found: frame.len(),
                                 }),
@@ -504,39 +514,68 @@ pub mod mini {
             {
                 code = (code << 8) | *b as u32;
             }
-            ::core::result::Result::Err(crate::DecodeError::UnknownCommand {
+            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
                 offset: 2usize,
                 code,
             })
         }
     }
+    impl ::busspec_runtime::Message for Request {
+        #[inline]
+        fn name(&self) -> &'static str {
+            Request::name(self)
+        }
+        #[inline]
+        fn code(&self) -> &'static [u8] {
+            Request::code(self)
+        }
+        #[inline]
+        fn frame_len(&self) -> usize {
+            Request::frame_len(self)
+        }
+        #[inline]
+        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
+            &self,
+            f: F,
+        ) {
+            Request::visit(self, f)
+        }
+        #[inline]
+        fn encode(
+            &self,
+            address: u8,
+            buf: &mut [u8],
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+            Request::encode(self, address, buf)
+        }
+    }
     impl Request {
         /// What the command does, as the spec classifies it.
-        pub const fn kind(&self) -> crate::CommandKind {
+        pub const fn kind(&self) -> ::busspec_runtime::CommandKind {
             match self {
-                Request::GoTo { .. } => crate::CommandKind::Movement,
-                Request::SetMode { .. } => crate::CommandKind::Setter,
-                Request::GetStatus { .. } => crate::CommandKind::Getter,
+                Request::GoTo { .. } => ::busspec_runtime::CommandKind::Movement,
+                Request::SetMode { .. } => ::busspec_runtime::CommandKind::Setter,
+                Request::GetStatus { .. } => ::busspec_runtime::CommandKind::Getter,
             }
         }
         /// Whether the command may go to the broadcast address, and whether it is then
         /// answered.
-        pub const fn broadcast(&self) -> crate::Broadcast {
+        pub const fn broadcast(&self) -> ::busspec_runtime::Broadcast {
             match self {
                 Request::GoTo { .. } => {
-                    crate::Broadcast {
+                    ::busspec_runtime::Broadcast {
                         accepted: false,
                         answered: false,
                     }
                 }
                 Request::SetMode { .. } => {
-                    crate::Broadcast {
+                    ::busspec_runtime::Broadcast {
                         accepted: false,
                         answered: false,
                     }
                 }
                 Request::GetStatus { .. } => {
-                    crate::Broadcast {
+                    ::busspec_runtime::Broadcast {
                         accepted: false,
                         answered: false,
                     }
@@ -548,7 +587,7 @@ pub mod mini {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_request_go_to(
         frame: &[u8; 9usize],
-    ) -> ::core::result::Result<Request, crate::DecodeError> {
+    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u32 = u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]);
         let v_target = Capacitance::from_raw(field_0 as u32);
@@ -558,7 +597,7 @@ pub mod mini {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_request_set_mode(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, crate::DecodeError> {
+    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_le_bytes([frame[4]]);
         let v_mode = Mode::from_raw(field_0 as u8);
@@ -568,7 +607,7 @@ pub mod mini {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_request_get_status(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, crate::DecodeError> {
+    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_le_bytes([frame[4]]);
         let v_channel = field_0 as u8;
@@ -654,7 +693,10 @@ pub mod mini {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, crate::FieldValue<'_>)) {
+        pub fn visit(
+            &self,
+            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
+        ) {
             let _ = &mut f;
             #[allow(unused_variables)]
             match self {
@@ -668,11 +710,23 @@ pub mod mini {
                     firmware: v_firmware,
                     temperature: v_temperature,
                 } => {
-                    f("error_bits", crate::FieldValue::Int(v_error_bits.raw() as i64));
-                    f("freshness", crate::FieldValue::Int(*v_freshness as i64));
-                    f("position", crate::FieldValue::Int(v_position.raw() as i64));
-                    f("firmware", crate::FieldValue::Text(&v_firmware[..]));
-                    f("temperature", crate::FieldValue::Int(v_temperature.raw() as i64));
+                    f(
+                        "error_bits",
+                        ::busspec_runtime::FieldValue::Int(v_error_bits.raw() as i64),
+                    );
+                    f(
+                        "freshness",
+                        ::busspec_runtime::FieldValue::Int(*v_freshness as i64),
+                    );
+                    f(
+                        "position",
+                        ::busspec_runtime::FieldValue::Int(v_position.raw() as i64),
+                    );
+                    f("firmware", ::busspec_runtime::FieldValue::Text(&v_firmware[..]));
+                    f(
+                        "temperature",
+                        ::busspec_runtime::FieldValue::Int(v_temperature.raw() as i64),
+                    );
                 }
             }
         }
@@ -681,7 +735,7 @@ pub mod mini {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, crate::EncodeError> {
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 13usize;
             let len: usize = match *self {
                 Self::Started => {
@@ -689,7 +743,7 @@ pub mod mini {
                     let out: &mut [u8; 4usize] = buf
                         .get_mut(..4usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 4usize,
                             available,
                         })?;
@@ -705,7 +759,7 @@ pub mod mini {
                     let out: &mut [u8; 4usize] = buf
                         .get_mut(..4usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 4usize,
                             available,
                         })?;
@@ -721,7 +775,7 @@ pub mod mini {
                     let out: &mut [u8; 5usize] = buf
                         .get_mut(..5usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 5usize,
                             available,
                         })?;
@@ -744,7 +798,7 @@ pub mod mini {
                     let out: &mut [u8; 13usize] = buf
                         .get_mut(..13usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 13usize,
                             available,
                         })?;
@@ -758,7 +812,7 @@ pub mod mini {
                         | ((({
                             let raw = v_freshness as i64;
                             if !(0..=15).contains(&raw) {
-                                return ::core::result::Result::Err(crate::EncodeError::OutOfRange {
+                                return ::core::result::Result::Err(::busspec_runtime::EncodeError::OutOfRange {
                                     field: "freshness",
                                 });
                             }
@@ -767,7 +821,7 @@ pub mod mini {
                         | ((({
                             let raw = v_position.raw() as i64;
                             if !(-2048..=2047).contains(&raw) {
-                                return ::core::result::Result::Err(crate::EncodeError::OutOfRange {
+                                return ::core::result::Result::Err(::busspec_runtime::EncodeError::OutOfRange {
                                     field: "position",
                                 });
                             }
@@ -790,21 +844,21 @@ pub mod mini {
         /// constants and repeated fields.
         ///
         /// Responses that only their request tells apart are reported as
-        /// [`crate::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
         #[inline]
         pub fn decode(
             frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
             Self::decode_for(frame, ::core::option::Option::None)
         }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
-        /// reported as [`crate::DecodeError::Ambiguous`]).
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
         #[inline]
         pub fn decode_reply(
             frame: &[u8],
             request: &Request,
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
             Self::decode_for(frame, ::core::option::Option::Some(request))
         }
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
@@ -812,23 +866,23 @@ pub mod mini {
         fn decode_for(
             frame: &[u8],
             request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
             if let ::core::option::Option::Some(&found) = frame.get(0usize) {
                 if found != 170u8 {
-                    return ::core::result::Result::Err(crate::DecodeError::BadStart {
+                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
                         expected: 170u8,
                         found,
                     });
                 }
             }
             if frame.len() < 4usize {
-                return ::core::result::Result::Err(crate::DecodeError::Truncated {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 4usize,
                     found: frame.len(),
                 });
             }
             if frame.len() > 13usize {
-                return ::core::result::Result::Err(crate::DecodeError::WrongLength {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
                     expected: 13usize,
                     found: frame.len(),
                 });
@@ -839,7 +893,7 @@ pub mod mini {
             let found = u8::from_le_bytes(sum_bytes);
             let expected = checksum(&frame[..at]);
             if found != expected {
-                return ::core::result::Result::Err(crate::DecodeError::ChecksumMismatch {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
                     offset: at,
                     expected: expected as u32,
                     found: found as u32,
@@ -847,7 +901,7 @@ pub mod mini {
             }
             let address = frame[1usize];
             #[allow(unused_mut)]
-            let mut last: ::core::option::Option<crate::DecodeError> = ::core::option::Option::None;
+            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 4usize {
                 let code: u32 = 0u32 | ((frame[2usize] as u32) << 0u32);
                 #[allow(unreachable_patterns)]
@@ -881,12 +935,12 @@ pub mod mini {
                             last
                                 .unwrap_or(
                                     if admitted {
-                                        crate::DecodeError::WrongLength {
+                                        ::busspec_runtime::DecodeError::WrongLength {
                                             expected: 4usize,
                                             found: frame.len(),
                                         }
                                     } else {
-                                        crate::DecodeError::NotAReply {
+                                        ::busspec_runtime::DecodeError::NotAReply {
                                             code: 80u32,
                                         }
                                     },
@@ -922,12 +976,12 @@ pub mod mini {
                             last
                                 .unwrap_or(
                                     if admitted {
-                                        crate::DecodeError::WrongLength {
+                                        ::busspec_runtime::DecodeError::WrongLength {
                                             expected: 4usize,
                                             found: frame.len(),
                                         }
                                     } else {
-                                        crate::DecodeError::NotAReply {
+                                        ::busspec_runtime::DecodeError::NotAReply {
                                             code: 144u32,
                                         }
                                     },
@@ -971,12 +1025,12 @@ pub mod mini {
                             last
                                 .unwrap_or(
                                     if admitted {
-                                        crate::DecodeError::WrongLength {
+                                        ::busspec_runtime::DecodeError::WrongLength {
                                             expected: 5usize,
                                             found: frame.len(),
                                         }
                                     } else {
-                                        crate::DecodeError::NotAReply {
+                                        ::busspec_runtime::DecodeError::NotAReply {
                                             code: 12288u32,
                                         }
                                     },
@@ -1012,12 +1066,12 @@ pub mod mini {
                             last
                                 .unwrap_or(
                                     if admitted {
-                                        crate::DecodeError::WrongLength {
+                                        ::busspec_runtime::DecodeError::WrongLength {
                                             expected: 13usize,
                                             found: frame.len(),
                                         }
                                     } else {
-                                        crate::DecodeError::NotAReply {
+                                        ::busspec_runtime::DecodeError::NotAReply {
                                             code: 16384u32,
                                         }
                                     },
@@ -1035,17 +1089,46 @@ pub mod mini {
             {
                 code = (code << 8) | *b as u32;
             }
-            ::core::result::Result::Err(crate::DecodeError::UnknownCommand {
+            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
                 offset: 2usize,
                 code,
             })
+        }
+    }
+    impl ::busspec_runtime::Message for Response {
+        #[inline]
+        fn name(&self) -> &'static str {
+            Response::name(self)
+        }
+        #[inline]
+        fn code(&self) -> &'static [u8] {
+            Response::code(self)
+        }
+        #[inline]
+        fn frame_len(&self) -> usize {
+            Response::frame_len(self)
+        }
+        #[inline]
+        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
+            &self,
+            f: F,
+        ) {
+            Response::visit(self, f)
+        }
+        #[inline]
+        fn encode(
+            &self,
+            address: u8,
+            buf: &mut [u8],
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+            Response::encode(self, address, buf)
         }
     }
     #[inline]
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_response_started(
         frame: &[u8; 4usize],
-    ) -> ::core::result::Result<Response, crate::DecodeError> {
+    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         ::core::result::Result::Ok(Response::Started)
     }
@@ -1053,7 +1136,7 @@ pub mod mini {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_response_nak(
         frame: &[u8; 4usize],
-    ) -> ::core::result::Result<Response, crate::DecodeError> {
+    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         ::core::result::Result::Ok(Response::Nak)
     }
@@ -1061,7 +1144,7 @@ pub mod mini {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_response_set_mode_ack(
         frame: &[u8; 5usize],
-    ) -> ::core::result::Result<Response, crate::DecodeError> {
+    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         ::core::result::Result::Ok(Response::SetModeAck)
     }
@@ -1069,7 +1152,7 @@ pub mod mini {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_response_status(
         frame: &[u8; 13usize],
-    ) -> ::core::result::Result<Response, crate::DecodeError> {
+    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_le_bytes([frame[4]]);
         let v_error_bits = StatusBits::from_raw(field_0 as u8);
@@ -1085,7 +1168,7 @@ pub mod mini {
         let v_temperature = Celsius::from_raw(field_3 as u8);
         let field_4: u8 = u8::from_le_bytes([frame[11]]);
         if field_4 as u64 != 0x0u8 as u64 {
-            return ::core::result::Result::Err(crate::DecodeError::InvalidValue {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
                 field: "reserved",
                 offset: 11usize,
                 found: field_4 as u32,
@@ -1111,16 +1194,70 @@ pub mod mini {
             }
         }
     }
-    /// This protocol's codec for [`crate::stream::StreamDecoder`].
-    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-    pub struct Codec;
-    impl crate::stream::Codec for Codec {
+    /// The mini protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct Mini;
+    impl ::busspec_runtime::Protocol for Mini {
         type Request = Request;
         type Response = Response;
-        const LENGTHS: &'static [usize] = &[13usize, 9usize, 6usize, 5usize, 4usize];
-        fn candidates(head: &[u8]) -> crate::stream::Candidates {
+        type Buffer = [u8; MAX_FRAME_LEN];
+        const NAME: &'static str = PROTOCOL;
+        const DOCUMENT: &'static str = DOCUMENT;
+        const DOCUMENT_REVISION: &'static str = DOCUMENT_REVISION;
+        const SPEC_SHA256: &'static str = SPEC_SHA256;
+        const SPEC_YAML: &'static str = SPEC_YAML;
+        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+        const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+        const FRAME_LENGTHS: &'static [usize] = &[
+            13usize, 9usize, 6usize, 5usize, 4usize,
+        ];
+        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
+        const BAUD: u32 = BAUD;
+        const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = INTER_FRAME_GAP_MS;
+        const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
+        const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
+        const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
+        #[inline]
+        fn decode_request(
+            frame: &[u8],
+        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+            Request::decode(frame)
+        }
+        #[inline]
+        fn decode_response_for(
+            frame: &[u8],
+            request: ::core::option::Option<&Request>,
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+            Response::decode_for(frame, request)
+        }
+        #[inline]
+        fn answers(request: &Request, response: &Response) -> bool {
+            response.answers(request)
+        }
+        #[inline]
+        fn kind(request: &Request) -> ::busspec_runtime::CommandKind {
+            request.kind()
+        }
+        #[inline]
+        fn broadcast(request: &Request) -> ::busspec_runtime::Broadcast {
+            request.broadcast()
+        }
+        fn is_nak(response: &Response) -> bool {
+            matches!(response, Response::Nak)
+        }
+        fn checksum_ok(frame: &[u8]) -> bool {
+            match frame.len().checked_sub(1usize) {
+                ::core::option::Option::Some(n) if n > 0 => {
+                    let (body, tail) = frame.split_at(n);
+                    checksum(body) == tail[0]
+                }
+                _ => false,
+            }
+        }
+        fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
             if head.get(0usize).is_some_and(|&b| b != 170u8) {
-                return crate::stream::Candidates {
+                return ::busspec_runtime::stream::Candidates {
                     requests: 0,
                     responses: 0,
                 };
@@ -1173,27 +1310,14 @@ pub mod mini {
                     mask &= if false { 0x6 } else { 0 };
                 }
             }
-            crate::stream::Candidates {
+            ::busspec_runtime::stream::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
             }
         }
-        #[inline]
-        fn decode_request(
-            frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, crate::DecodeError> {
-            Request::decode(frame)
-        }
-        #[inline]
-        fn decode_response(
-            frame: &[u8],
-            request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
-            Response::decode_for(frame, request)
-        }
     }
-    /// A streaming decoder for this protocol: see [`crate::stream`].
-    pub type StreamDecoder = crate::stream::StreamDecoder<Codec, MAX_FRAME_LEN>;
+    /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
+    pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Mini>;
     /// What [`StreamDecoder`] finds in a stream.
-    pub type Event = crate::stream::Event<Request, Response>;
+    pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
 }

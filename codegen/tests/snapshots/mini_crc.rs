@@ -2,7 +2,7 @@
 pub mod mini_crc {
     //! Minimal CRC test protocol (`mini_crc`).
     //!
-    //! Generated from `codegen/tests/fixtures/valid/minimal_crc.yaml`, transcribed from *Minimal CRC protocol reference*, revision 1.0 (2024-01-01).
+    //! Generated from `model/tests/fixtures/valid/minimal_crc.yaml`, transcribed from *Minimal CRC protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel big-endian on the wire.
     #![allow(
         clippy::identity_op,
@@ -23,6 +23,10 @@ pub mod mini_crc {
     pub const DOCUMENT_DATE: &str = "2024-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
     pub const SPEC_SHA256: &str = "f571681e28660c68d1349608b0ddf8a94b21af51b1df4ab7380e67a070d6b7c3";
+    /// The spec's text, exactly as this module was generated from it.
+    pub const SPEC_YAML: &str = include_str!(
+        "../../../model/tests/fixtures/valid/minimal_crc.yaml"
+    );
     /// The longest request frame, in bytes.
     pub const MAX_REQUEST_LEN: usize = 6usize;
     /// The longest response frame, in bytes.
@@ -41,9 +45,9 @@ pub mod mini_crc {
     pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::Some(
         31u8,
     );
-    pub use crate::Decoded;
+    pub use ::busspec_runtime::Decoded;
     /// CRC-16/CMS: the frame checksum, over every byte before it.
-    pub const CRC_ALGORITHM: ::crc::Algorithm<u16> = ::crc::Algorithm {
+    pub const CRC_ALGORITHM: ::busspec_runtime::crc::Algorithm<u16> = ::busspec_runtime::crc::Algorithm {
         width: 16usize as u8,
         poly: 0x8005u16,
         init: 0xFFFFu16,
@@ -53,7 +57,9 @@ pub mod mini_crc {
         check: 0xAEE7u16,
         residue: 0,
     };
-    static CRC: ::crc::Crc<u16> = ::crc::Crc::<u16>::new(&CRC_ALGORITHM);
+    static CRC: ::busspec_runtime::crc::Crc<u16> = ::busspec_runtime::crc::Crc::<
+        u16,
+    >::new(&CRC_ALGORITHM);
     /// The frame checksum over `bytes`.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -105,14 +111,17 @@ pub mod mini_crc {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, crate::FieldValue<'_>)) {
+        pub fn visit(
+            &self,
+            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
+        ) {
             let _ = &mut f;
             #[allow(unused_variables)]
             match self {
                 Self::ReadRuntimeHours => {}
                 Self::ReadRuntimeMinSec => {}
                 Self::SetCounter { counter: v_counter } => {
-                    f("counter", crate::FieldValue::Int(*v_counter as i64));
+                    f("counter", ::busspec_runtime::FieldValue::Int(*v_counter as i64));
                 }
             }
         }
@@ -121,7 +130,7 @@ pub mod mini_crc {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, crate::EncodeError> {
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 6usize;
             let len: usize = match *self {
                 Self::ReadRuntimeHours => {
@@ -129,7 +138,7 @@ pub mod mini_crc {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -146,7 +155,7 @@ pub mod mini_crc {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -163,7 +172,7 @@ pub mod mini_crc {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -177,7 +186,7 @@ pub mod mini_crc {
             let available = buf.len();
             let frame = buf
                 .get_mut(..len)
-                .ok_or(crate::EncodeError::BufferTooSmall {
+                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                     needed: len,
                     available,
                 })?;
@@ -190,15 +199,15 @@ pub mod mini_crc {
         /// constants and repeated fields.
         pub fn decode(
             frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
             if frame.len() < 6usize {
-                return ::core::result::Result::Err(crate::DecodeError::Truncated {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 6usize,
                     found: frame.len(),
                 });
             }
             if frame.len() > 6usize {
-                return ::core::result::Result::Err(crate::DecodeError::WrongLength {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
                     expected: 6usize,
                     found: frame.len(),
                 });
@@ -209,7 +218,7 @@ pub mod mini_crc {
             let found = u16::from_be_bytes(sum_bytes);
             let expected = checksum(&frame[..at]);
             if found != expected {
-                return ::core::result::Result::Err(crate::DecodeError::ChecksumMismatch {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
                     offset: at,
                     expected: expected as u32,
                     found: found as u32,
@@ -217,7 +226,7 @@ pub mod mini_crc {
             }
             let address = frame[1usize];
             #[allow(unused_mut)]
-            let mut last: ::core::option::Option<crate::DecodeError> = ::core::option::Option::None;
+            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 3usize {
                 let code: u32 = 0u32 | ((frame[0usize] as u32) << 0u32);
                 #[allow(unreachable_patterns)]
@@ -255,7 +264,7 @@ pub mod mini_crc {
                         }
                         return ::core::result::Result::Err(
                             last
-                                .unwrap_or(crate::DecodeError::WrongLength {
+                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
                                     expected: 6usize,
                                     found: frame.len(),
                                 }),
@@ -279,7 +288,7 @@ pub mod mini_crc {
                         }
                         return ::core::result::Result::Err(
                             last
-                                .unwrap_or(crate::DecodeError::WrongLength {
+                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
                                     expected: 6usize,
                                     found: frame.len(),
                                 }),
@@ -296,39 +305,68 @@ pub mod mini_crc {
             {
                 code = (code << 8) | *b as u32;
             }
-            ::core::result::Result::Err(crate::DecodeError::UnknownCommand {
+            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
                 offset: 0usize,
                 code,
             })
         }
     }
+    impl ::busspec_runtime::Message for Request {
+        #[inline]
+        fn name(&self) -> &'static str {
+            Request::name(self)
+        }
+        #[inline]
+        fn code(&self) -> &'static [u8] {
+            Request::code(self)
+        }
+        #[inline]
+        fn frame_len(&self) -> usize {
+            Request::frame_len(self)
+        }
+        #[inline]
+        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
+            &self,
+            f: F,
+        ) {
+            Request::visit(self, f)
+        }
+        #[inline]
+        fn encode(
+            &self,
+            address: u8,
+            buf: &mut [u8],
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+            Request::encode(self, address, buf)
+        }
+    }
     impl Request {
         /// What the command does, as the spec classifies it.
-        pub const fn kind(&self) -> crate::CommandKind {
+        pub const fn kind(&self) -> ::busspec_runtime::CommandKind {
             match self {
-                Request::ReadRuntimeHours => crate::CommandKind::Getter,
-                Request::ReadRuntimeMinSec => crate::CommandKind::Getter,
-                Request::SetCounter { .. } => crate::CommandKind::Setter,
+                Request::ReadRuntimeHours => ::busspec_runtime::CommandKind::Getter,
+                Request::ReadRuntimeMinSec => ::busspec_runtime::CommandKind::Getter,
+                Request::SetCounter { .. } => ::busspec_runtime::CommandKind::Setter,
             }
         }
         /// Whether the command may go to the broadcast address, and whether it is then
         /// answered.
-        pub const fn broadcast(&self) -> crate::Broadcast {
+        pub const fn broadcast(&self) -> ::busspec_runtime::Broadcast {
             match self {
                 Request::ReadRuntimeHours => {
-                    crate::Broadcast {
+                    ::busspec_runtime::Broadcast {
                         accepted: false,
                         answered: false,
                     }
                 }
                 Request::ReadRuntimeMinSec => {
-                    crate::Broadcast {
+                    ::busspec_runtime::Broadcast {
                         accepted: false,
                         answered: false,
                     }
                 }
                 Request::SetCounter { .. } => {
-                    crate::Broadcast {
+                    ::busspec_runtime::Broadcast {
                         accepted: true,
                         answered: false,
                     }
@@ -340,11 +378,11 @@ pub mod mini_crc {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_request_read_runtime_hours(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, crate::DecodeError> {
+    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_be_bytes([frame[2]]);
         if field_0 as u64 != 0x1u8 as u64 {
-            return ::core::result::Result::Err(crate::DecodeError::InvalidValue {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
                 field: "selector",
                 offset: 2usize,
                 found: field_0 as u32,
@@ -352,7 +390,7 @@ pub mod mini_crc {
         }
         let field_1: u8 = u8::from_be_bytes([frame[3]]);
         if field_1 as u64 != 0x0u8 as u64 {
-            return ::core::result::Result::Err(crate::DecodeError::InvalidValue {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
                 field: "arg2",
                 offset: 3usize,
                 found: field_1 as u32,
@@ -364,11 +402,11 @@ pub mod mini_crc {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_request_read_runtime_min_sec(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, crate::DecodeError> {
+    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_be_bytes([frame[2]]);
         if field_0 as u64 != 0x2u8 as u64 {
-            return ::core::result::Result::Err(crate::DecodeError::InvalidValue {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
                 field: "selector",
                 offset: 2usize,
                 found: field_0 as u32,
@@ -376,7 +414,7 @@ pub mod mini_crc {
         }
         let field_1: u8 = u8::from_be_bytes([frame[3]]);
         if field_1 as u64 != 0x0u8 as u64 {
-            return ::core::result::Result::Err(crate::DecodeError::InvalidValue {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
                 field: "arg2",
                 offset: 3usize,
                 found: field_1 as u32,
@@ -388,7 +426,7 @@ pub mod mini_crc {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_request_set_counter(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, crate::DecodeError> {
+    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
         let v_counter = field_0 as u16;
@@ -452,19 +490,22 @@ pub mod mini_crc {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, crate::FieldValue<'_>)) {
+        pub fn visit(
+            &self,
+            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
+        ) {
             let _ = &mut f;
             #[allow(unused_variables)]
             match self {
                 Self::RuntimeHours { hours: v_hours } => {
-                    f("hours", crate::FieldValue::Int(*v_hours as i64));
+                    f("hours", ::busspec_runtime::FieldValue::Int(*v_hours as i64));
                 }
                 Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
-                    f("minutes", crate::FieldValue::Int(*v_minutes as i64));
-                    f("seconds", crate::FieldValue::Int(*v_seconds as i64));
+                    f("minutes", ::busspec_runtime::FieldValue::Int(*v_minutes as i64));
+                    f("seconds", ::busspec_runtime::FieldValue::Int(*v_seconds as i64));
                 }
                 Self::CounterEcho { counter: v_counter } => {
-                    f("counter", crate::FieldValue::Int(*v_counter as i64));
+                    f("counter", ::busspec_runtime::FieldValue::Int(*v_counter as i64));
                 }
             }
         }
@@ -473,7 +514,7 @@ pub mod mini_crc {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, crate::EncodeError> {
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 6usize;
             let len: usize = match *self {
                 Self::RuntimeHours { hours: v_hours } => {
@@ -481,7 +522,7 @@ pub mod mini_crc {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -496,7 +537,7 @@ pub mod mini_crc {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -513,7 +554,7 @@ pub mod mini_crc {
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
                         .and_then(|s| s.try_into().ok())
-                        .ok_or(crate::EncodeError::BufferTooSmall {
+                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                             needed: 6usize,
                             available,
                         })?;
@@ -527,7 +568,7 @@ pub mod mini_crc {
             let available = buf.len();
             let frame = buf
                 .get_mut(..len)
-                .ok_or(crate::EncodeError::BufferTooSmall {
+                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
                     needed: len,
                     available,
                 })?;
@@ -540,21 +581,21 @@ pub mod mini_crc {
         /// constants and repeated fields.
         ///
         /// Responses that only their request tells apart are reported as
-        /// [`crate::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
         #[inline]
         pub fn decode(
             frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
             Self::decode_for(frame, ::core::option::Option::None)
         }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
-        /// reported as [`crate::DecodeError::Ambiguous`]).
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
         #[inline]
         pub fn decode_reply(
             frame: &[u8],
             request: &Request,
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
             Self::decode_for(frame, ::core::option::Option::Some(request))
         }
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
@@ -562,15 +603,15 @@ pub mod mini_crc {
         fn decode_for(
             frame: &[u8],
             request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
             if frame.len() < 6usize {
-                return ::core::result::Result::Err(crate::DecodeError::Truncated {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 6usize,
                     found: frame.len(),
                 });
             }
             if frame.len() > 6usize {
-                return ::core::result::Result::Err(crate::DecodeError::WrongLength {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
                     expected: 6usize,
                     found: frame.len(),
                 });
@@ -581,7 +622,7 @@ pub mod mini_crc {
             let found = u16::from_be_bytes(sum_bytes);
             let expected = checksum(&frame[..at]);
             if found != expected {
-                return ::core::result::Result::Err(crate::DecodeError::ChecksumMismatch {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
                     offset: at,
                     expected: expected as u32,
                     found: found as u32,
@@ -589,7 +630,7 @@ pub mod mini_crc {
             }
             let address = frame[1usize];
             #[allow(unused_mut)]
-            let mut last: ::core::option::Option<crate::DecodeError> = ::core::option::Option::None;
+            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 3usize {
                 let code: u32 = 0u32 | ((frame[0usize] as u32) << 0u32);
                 #[allow(unreachable_patterns)]
@@ -611,7 +652,7 @@ pub mod mini_crc {
                                     ::core::result::Result::Ok(m) => {
                                         if request.is_none() {
                                             if found.is_some() {
-                                                return ::core::result::Result::Err(crate::DecodeError::Ambiguous {
+                                                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Ambiguous {
                                                     code: 34u32,
                                                 });
                                             }
@@ -643,7 +684,7 @@ pub mod mini_crc {
                                     ::core::result::Result::Ok(m) => {
                                         if request.is_none() {
                                             if found.is_some() {
-                                                return ::core::result::Result::Err(crate::DecodeError::Ambiguous {
+                                                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Ambiguous {
                                                     code: 34u32,
                                                 });
                                             }
@@ -671,12 +712,12 @@ pub mod mini_crc {
                             last
                                 .unwrap_or(
                                     if admitted {
-                                        crate::DecodeError::WrongLength {
+                                        ::busspec_runtime::DecodeError::WrongLength {
                                             expected: 6usize,
                                             found: frame.len(),
                                         }
                                     } else {
-                                        crate::DecodeError::NotAReply {
+                                        ::busspec_runtime::DecodeError::NotAReply {
                                             code: 34u32,
                                         }
                                     },
@@ -712,12 +753,12 @@ pub mod mini_crc {
                             last
                                 .unwrap_or(
                                     if admitted {
-                                        crate::DecodeError::WrongLength {
+                                        ::busspec_runtime::DecodeError::WrongLength {
                                             expected: 6usize,
                                             found: frame.len(),
                                         }
                                     } else {
-                                        crate::DecodeError::NotAReply {
+                                        ::busspec_runtime::DecodeError::NotAReply {
                                             code: 112u32,
                                         }
                                     },
@@ -735,17 +776,46 @@ pub mod mini_crc {
             {
                 code = (code << 8) | *b as u32;
             }
-            ::core::result::Result::Err(crate::DecodeError::UnknownCommand {
+            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
                 offset: 0usize,
                 code,
             })
+        }
+    }
+    impl ::busspec_runtime::Message for Response {
+        #[inline]
+        fn name(&self) -> &'static str {
+            Response::name(self)
+        }
+        #[inline]
+        fn code(&self) -> &'static [u8] {
+            Response::code(self)
+        }
+        #[inline]
+        fn frame_len(&self) -> usize {
+            Response::frame_len(self)
+        }
+        #[inline]
+        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
+            &self,
+            f: F,
+        ) {
+            Response::visit(self, f)
+        }
+        #[inline]
+        fn encode(
+            &self,
+            address: u8,
+            buf: &mut [u8],
+        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+            Response::encode(self, address, buf)
         }
     }
     #[inline]
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_response_runtime_hours(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Response, crate::DecodeError> {
+    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
         let v_hours = field_0 as u16;
@@ -757,7 +827,7 @@ pub mod mini_crc {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_response_runtime_min_sec(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Response, crate::DecodeError> {
+    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_be_bytes([frame[2]]);
         let v_minutes = field_0 as u8;
@@ -772,7 +842,7 @@ pub mod mini_crc {
     #[allow(clippy::unnecessary_cast, clippy::identity_op)]
     fn decode_response_counter_echo(
         frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Response, crate::DecodeError> {
+    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
         let v_counter = field_0 as u16;
@@ -796,14 +866,69 @@ pub mod mini_crc {
             }
         }
     }
-    /// This protocol's codec for [`crate::stream::StreamDecoder`].
-    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-    pub struct Codec;
-    impl crate::stream::Codec for Codec {
+    /// The mini_crc protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct MiniCrc;
+    impl ::busspec_runtime::Protocol for MiniCrc {
         type Request = Request;
         type Response = Response;
-        const LENGTHS: &'static [usize] = &[6usize];
-        fn candidates(head: &[u8]) -> crate::stream::Candidates {
+        type Buffer = [u8; MAX_FRAME_LEN];
+        const NAME: &'static str = PROTOCOL;
+        const DOCUMENT: &'static str = DOCUMENT;
+        const DOCUMENT_REVISION: &'static str = DOCUMENT_REVISION;
+        const SPEC_SHA256: &'static str = SPEC_SHA256;
+        const SPEC_YAML: &'static str = SPEC_YAML;
+        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+        const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+        const FRAME_LENGTHS: &'static [usize] = &[6usize];
+        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
+        const BAUD: u32 = BAUD;
+        const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = INTER_FRAME_GAP_MS;
+        const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
+        const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
+        const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
+        #[inline]
+        fn decode_request(
+            frame: &[u8],
+        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+            Request::decode(frame)
+        }
+        #[inline]
+        fn decode_response_for(
+            frame: &[u8],
+            request: ::core::option::Option<&Request>,
+        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+            Response::decode_for(frame, request)
+        }
+        #[inline]
+        fn answers(request: &Request, response: &Response) -> bool {
+            response.answers(request)
+        }
+        #[inline]
+        fn kind(request: &Request) -> ::busspec_runtime::CommandKind {
+            request.kind()
+        }
+        #[inline]
+        fn broadcast(request: &Request) -> ::busspec_runtime::Broadcast {
+            request.broadcast()
+        }
+        fn is_nak(response: &Response) -> bool {
+            {
+                let _ = response;
+                false
+            }
+        }
+        fn checksum_ok(frame: &[u8]) -> bool {
+            match frame.len().checked_sub(2usize) {
+                ::core::option::Option::Some(n) if n > 0 => {
+                    let (body, tail) = frame.split_at(n);
+                    checksum(body).to_be_bytes() == *tail
+                }
+                _ => false,
+            }
+        }
+        fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
             let mut mask: u128 = match head.get(0usize) {
                 ::core::option::Option::None => 0x10000000000000001,
                 ::core::option::Option::Some(&b) => {
@@ -820,27 +945,14 @@ pub mod mini_crc {
                     mask &= if a == 31u8 { 0x1 } else { 0 };
                 }
             }
-            crate::stream::Candidates {
+            ::busspec_runtime::stream::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
             }
         }
-        #[inline]
-        fn decode_request(
-            frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, crate::DecodeError> {
-            Request::decode(frame)
-        }
-        #[inline]
-        fn decode_response(
-            frame: &[u8],
-            request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, crate::DecodeError> {
-            Response::decode_for(frame, request)
-        }
     }
-    /// A streaming decoder for this protocol: see [`crate::stream`].
-    pub type StreamDecoder = crate::stream::StreamDecoder<Codec, MAX_FRAME_LEN>;
+    /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
+    pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MiniCrc>;
     /// What [`StreamDecoder`] finds in a stream.
-    pub type Event = crate::stream::Event<Request, Response>;
+    pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
 }

@@ -1,9 +1,9 @@
 //! Stream events reduced to what both stream decoders (generated and interpreter) report, so
 //! the two can be compared; and the checks every event list must pass.
 
-use busspec_codegen::interp;
-use busspec_codegen::ir::{Direction, Protocol};
-use busspec_codegen::stream::{Event as InterpEvent, StreamDecoder as InterpDecoder};
+use busspec_model::interp;
+use busspec_model::ir::{Direction, Protocol};
+use busspec_model::stream::{Event as InterpEvent, StreamDecoder as InterpDecoder};
 
 use crate::oracle::{interp_values, Values};
 

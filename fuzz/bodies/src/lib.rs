@@ -31,7 +31,7 @@
 
 use std::sync::OnceLock;
 
-use busspec_codegen::ir::Protocol;
+use busspec_model::ir::Protocol;
 use busspec_protocols::DecodeError;
 
 pub mod events;
@@ -100,7 +100,7 @@ pub fn spec(file: &str) -> &'static Protocol {
         .position(|(f, _)| *f == file)
         .unwrap_or_else(|| panic!("no built-in spec {file}"));
     LOADED[i].get_or_init(|| {
-        busspec_codegen::load_str(SPECS[i].0, SPECS[i].1).unwrap_or_else(|d| panic!("{d}"))
+        busspec_model::load_str(SPECS[i].0, SPECS[i].1).unwrap_or_else(|d| panic!("{d}"))
     })
 }
 
@@ -137,7 +137,7 @@ macro_rules! protocol_bodies {
             use std::sync::OnceLock;
 
             use arbitrary::Unstructured;
-            use busspec_codegen::ir::Direction;
+            use busspec_model::ir::Direction;
             use busspec_protocols::stream::{Direction as StreamDirection, MAX_SKIPPED_RUN};
             use busspec_protocols::$proto::{
                 Event, Request, Response, StreamDecoder, MAX_FRAME_LEN,
@@ -150,7 +150,7 @@ macro_rules! protocol_bodies {
             /// The spec file.
             pub const FILE: &str = $file;
 
-            fn spec() -> &'static busspec_codegen::Protocol {
+            fn spec() -> &'static busspec_model::Protocol {
                 crate::spec(FILE)
             }
 
@@ -332,7 +332,7 @@ macro_rules! protocol_bodies {
             /// Where `encode` wrote the code: the bytes of the code in the frame.
             fn code_of(frame: &[u8], len: usize) -> &[u8] {
                 let p = spec();
-                let o = busspec_codegen::interp::offsets(p, len, 0);
+                let o = busspec_model::interp::offsets(p, len, 0);
                 &frame[o.code..o.code + len]
             }
 
@@ -518,10 +518,10 @@ protocol_bodies!(sd, Sd, "sd.yaml");
 pub fn spec_loader(data: &[u8]) {
     const LABEL: &str = "fuzz.yaml";
     let text = String::from_utf8_lossy(data);
-    match busspec_codegen::load_str(LABEL, &text) {
+    match busspec_model::load_str(LABEL, &text) {
         Ok(p) => {
-            let _ = busspec_codegen::docs::render(&p, LABEL);
-            if let Err(e) = busspec_codegen::emit::emit_module(&p, LABEL) {
+            let _ = busspec_model::docs::render(&p, LABEL);
+            if let Err(e) = busspec_codegen::emit::emit_module(&p, LABEL, LABEL) {
                 panic!("a spec that loads does not emit: {e}");
             }
         }

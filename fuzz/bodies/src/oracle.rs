@@ -2,8 +2,8 @@
 //! engine decodes (compared field by field, raw) and [`agree`], which decodes one frame with both
 //! and asserts they say the same. Used by the fuzz targets and by the workspace's tests.
 
-use busspec_codegen::interp::{self, DecodeError as InterpError, Frame, Raw};
-use busspec_codegen::ir::{Direction, Protocol};
+use busspec_model::interp::{self, DecodeError as InterpError, Frame, Raw};
+use busspec_model::ir::{Direction, Protocol};
 use busspec_protocols::{DecodeError, FieldValue};
 
 /// One decoded field: name and raw wire value.

@@ -10,8 +10,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use busspec_codegen::interp;
-use busspec_codegen::ir::{Direction, Protocol};
+use busspec_model::interp;
+use busspec_model::ir::{Direction, Protocol};
 
 use crate::spec;
 
@@ -25,8 +25,8 @@ const CAPTURE_FRAMES: usize = 12;
 /// Directories (relative to the repository root) whose files seed `spec_loader`.
 pub const LOADER_SEED_DIRS: &[&str] = &[
     "spec",
-    "codegen/tests/fixtures/valid",
-    "codegen/tests/fixtures/broken",
+    "model/tests/fixtures/valid",
+    "model/tests/fixtures/broken",
 ];
 
 /// The repository root (this crate lives in `fuzz/bodies`).

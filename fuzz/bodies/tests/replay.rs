@@ -135,7 +135,7 @@ fn seed_corpus_and_dictionaries_are_up_to_date() {
 /// requests: each such response must be answered by a command that has one.
 #[test]
 fn every_reply_that_needs_its_request_has_an_example_request() {
-    use busspec_codegen::ir::Direction;
+    use busspec_model::ir::Direction;
     for (file, _) in busspec_fuzz_bodies::SPECS {
         let p = busspec_fuzz_bodies::spec(file);
         for (i, m) in p.messages(Direction::Response).iter().enumerate() {

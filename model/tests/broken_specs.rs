@@ -11,8 +11,8 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-use busspec_codegen::ir::{ChecksumAlgorithm, Direction};
-use busspec_codegen::{load_str, Diagnostics};
+use busspec_model::ir::{ChecksumAlgorithm, Direction};
+use busspec_model::{load_str, Diagnostics};
 
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
@@ -627,7 +627,7 @@ fn diagnostics_display_as_file_path_message() {
     );
 }
 
-fn load_valid(name: &str) -> busspec_codegen::Protocol {
+fn load_valid(name: &str) -> busspec_model::Protocol {
     let text = read(&fixtures().join(format!("valid/{name}.yaml")));
     load_str(&label("valid", name), &text).unwrap_or_else(|d| panic!("{d}"))
 }

@@ -4,8 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use busspec_codegen::diff::{self, Category, Change};
-use busspec_codegen::{load_file, Protocol};
+use busspec_model::diff::{self, Category, Change};
+use busspec_model::{load_file, Protocol};
 use Category::{ApiBreaking as Api, Compatible as Compat, WireBreaking as Wire};
 
 fn fixture(name: &str) -> (PathBuf, Protocol) {

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use busspec_codegen::{load_file, load_str, Diagnostics, Protocol, MAX_SPEC_BYTES};
+use busspec_model::{load_file, load_str, Diagnostics, Protocol, MAX_SPEC_BYTES};
 
 /// xorshift64* (Vigna): small, fast, and good enough to pick mutation sites.
 struct Rng(u64);

@@ -18,7 +18,7 @@
 //! [`MAX_SKIPPED_RUN`] bytes). While a candidate is longer than what is buffered, the decoder
 //! waits. Then every complete candidate length is tried, **longest first**; the first that
 //! checksums and decodes is the frame. This is the rule of busspec's interpreter stream decoder
-//! (`busspec_codegen::stream`), whose module documentation gives the reasons and the limits; the
+//! (`busspec_model::stream`), whose module documentation gives the reasons and the limits; the
 //! two are tested against each other.
 //!
 //! A response only its request can identify (SD 0x22..0x28, 0x38) is decoded as the answer to
@@ -28,7 +28,7 @@
 //! Decisions depend only on the bytes, never on how they were cut into chunks, as long as
 //! `finish` is called only at the end.
 
-use crate::{DecodeError, Decoded};
+use crate::{DecodeError, Decoded, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
 pub const MAX_SKIPPED_RUN: u64 = 256;
@@ -44,27 +44,11 @@ pub enum Direction {
 }
 
 /// The messages that could start at the head of the buffer, as sets of frame lengths: bit `i`
-/// stands for [`Codec::LENGTHS`]`[i]`.
+/// stands for [`Protocol::FRAME_LENGTHS`]`[i]`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Candidates {
     pub requests: u64,
     pub responses: u64,
-}
-
-/// What a protocol module provides to the stream decoder; implemented by each module's `Codec`.
-pub trait Codec {
-    type Request: Copy;
-    type Response: Copy;
-    /// Every distinct frame length of the protocol, longest first (at most 64).
-    const LENGTHS: &'static [usize];
-    /// The messages whose start byte, code and address agree with `head`, the bytes buffered
-    /// from a possible frame start (possibly fewer than a whole frame).
-    fn candidates(head: &[u8]) -> Candidates;
-    fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError>;
-    fn decode_response(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<Decoded<Self::Response>, DecodeError>;
 }
 
 /// What the decoder found. Offsets count bytes from the first byte ever pushed.
@@ -115,18 +99,19 @@ impl<Q, R> Event<Q, R> {
     }
 }
 
-/// A streaming decoder for codec `C` with an `N`-byte buffer (the protocol's longest frame;
-/// each protocol module names the right one `StreamDecoder`).
-pub struct StreamDecoder<C: Codec, const N: usize> {
+/// A streaming decoder for protocol `C`, with a buffer of `C::Buffer` (generated protocols:
+/// exactly the longest frame; each protocol module names the decoder `StreamDecoder`). A
+/// shorter buffer cannot stall it: a full buffer settles as at the end of a capture.
+pub struct StreamDecoder<C: Protocol> {
     /// Bytes pushed and not yet settled; `buf[0]` is at stream offset `core.head`.
-    buf: [u8; N],
+    buf: C::Buffer,
     len: usize,
     core: Core<C>,
 }
 
 /// Everything but the buffer: what the framing rule has seen so far. Kept apart so the rule
 /// can run on the buffer or, in [`Feed`], straight on the caller's bytes.
-struct Core<C: Codec> {
+struct Core<C: Protocol> {
     /// Stream offset of the first unsettled byte.
     head: u64,
     requests: bool,
@@ -138,18 +123,18 @@ struct Core<C: Codec> {
     pending: Option<Event<C::Request, C::Response>>,
 }
 
-impl<C: Codec, const N: usize> Default for StreamDecoder<C, N> {
+impl<C: Protocol> Default for StreamDecoder<C> {
     fn default() -> Self {
         Self::new(None)
     }
 }
 
-impl<C: Codec, const N: usize> StreamDecoder<C, N> {
+impl<C: Protocol> StreamDecoder<C> {
     /// A decoder for frames of one direction (a master that knows what it expects), or of both
     /// (`None`: a sniffer on a shared bus).
     pub fn new(direction: Option<Direction>) -> Self {
         StreamDecoder {
-            buf: [0; N],
+            buf: C::EMPTY_BUFFER,
             len: 0,
             core: Core {
                 head: 0,
@@ -184,8 +169,8 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
     /// Takes as many bytes of `data` as the buffer has room for and returns how many; call
     /// [`Self::poll`] until it returns `None` to make room again.
     pub fn push(&mut self, data: &[u8]) -> usize {
-        let n = (N - self.len).min(data.len());
-        self.buf[self.len..self.len + n].copy_from_slice(&data[..n]);
+        let n = (self.buf.as_ref().len() - self.len).min(data.len());
+        self.buf.as_mut()[self.len..self.len + n].copy_from_slice(&data[..n]);
         self.len += n;
         n
     }
@@ -204,7 +189,7 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
 
     /// Pushes all of `data`, yielding each event as it is settled. Bytes the iterator has not
     /// reached when it is dropped are not consumed: see [`Feed::remaining`].
-    pub fn feed<'a, 'd>(&'a mut self, data: &'d [u8]) -> Feed<'a, 'd, C, N> {
+    pub fn feed<'a, 'd>(&'a mut self, data: &'d [u8]) -> Feed<'a, 'd, C> {
         Feed {
             decoder: self,
             input: data,
@@ -226,9 +211,10 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
             }
             // A full buffer cannot wait for more (only a buffer shorter than the longest frame,
             // which no protocol module declares, fills up while waiting): settle what is there.
-            let (n, ev) = self
-                .core
-                .advance(&self.buf[..self.len], flushing || self.len == N)?;
+            let (n, ev) = self.core.advance(
+                &self.buf.as_ref()[..self.len],
+                flushing || self.len == self.buf.as_ref().len(),
+            )?;
             self.consume(n);
             if ev.is_some() {
                 return ev;
@@ -238,7 +224,7 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
 
     fn consume(&mut self, n: usize) {
         let n = n.min(self.len);
-        self.buf.copy_within(n..self.len, 0);
+        self.buf.as_mut().copy_within(n..self.len, 0);
         self.len -= n;
     }
 }
@@ -246,12 +232,12 @@ impl<C: Codec, const N: usize> StreamDecoder<C, N> {
 /// What one application of the framing rule settled: that many bytes, and the event to report.
 type Settled<C> = (
     usize,
-    Option<Event<<C as Codec>::Request, <C as Codec>::Response>>,
+    Option<Event<<C as Protocol>::Request, <C as Protocol>::Response>>,
 );
 
-impl<C: Codec> Core<C> {
+impl<C: Protocol> Core<C> {
     /// Applies the framing rule once to `window`, the unsettled bytes from `head` on (only the
-    /// first `N` matter, and all of them are there unless the window ends the buffered bytes):
+    /// first `MAX_FRAME_LEN` matter, and all of them are there unless the window ends the buffered bytes):
     /// `None` when a candidate is longer than the window and more bytes may come; otherwise how
     /// many bytes it settled (a frame, or one byte of noise) and the event to report, if any.
     fn advance(&mut self, window: &[u8], flushing: bool) -> Option<Settled<C>> {
@@ -262,7 +248,7 @@ impl<C: Codec> Core<C> {
         if live != 0 {
             // Bit i is LENGTHS[i], longest first: a live candidate longer than the window is
             // one whose bit lies below the first length that fits.
-            let fits = C::LENGTHS
+            let fits = C::FRAME_LENGTHS
                 .iter()
                 .position(|&l| l <= window.len())
                 .unwrap_or(64);
@@ -278,7 +264,9 @@ impl<C: Codec> Core<C> {
             while rest != 0 {
                 let i = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
-                let Some(&len) = C::LENGTHS.get(i) else { break };
+                let Some(&len) = C::FRAME_LENGTHS.get(i) else {
+                    break;
+                };
                 let Some(frame) = window.get(..len) else {
                     break;
                 };
@@ -320,11 +308,11 @@ impl<C: Codec> Core<C> {
             None
         };
         let as_response = if response {
-            match C::decode_response(frame, None) {
+            match C::decode_response_for(frame, None) {
                 Ok(d) => Some(Ok(d)),
                 Err(DecodeError::Ambiguous { code }) => {
                     let by = self.last_request.or(self.default_request);
-                    match by.map(|r| C::decode_response(frame, Some(&r))) {
+                    match by.map(|r| C::decode_response_for(frame, Some(&r))) {
                         Some(Ok(d)) => Some(Ok(d)),
                         _ => Some(Err(code)),
                     }
@@ -376,23 +364,23 @@ impl<C: Codec> Core<C> {
 ///
 /// Where nothing is buffered and a whole longest frame of the caller's bytes lies ahead, it
 /// applies the framing rule to those bytes in place instead of copying them through the
-/// buffer: the same decisions (the rule only ever looks at the next `N` bytes), without copying
+/// buffer: the same decisions (the rule only ever looks at the next `MAX_FRAME_LEN` bytes), without copying
 /// every byte in and shifting it out again, which cost about as much as decoding the frame.
-pub struct Feed<'a, 'd, C: Codec, const N: usize> {
-    decoder: &'a mut StreamDecoder<C, N>,
+pub struct Feed<'a, 'd, C: Protocol> {
+    decoder: &'a mut StreamDecoder<C>,
     input: &'d [u8],
     /// `input[..at]` has been pushed or settled in place.
     at: usize,
 }
 
-impl<'d, C: Codec, const N: usize> Feed<'_, 'd, C, N> {
+impl<'d, C: Protocol> Feed<'_, 'd, C> {
     /// The bytes not yet pushed into the decoder.
     pub fn remaining(&self) -> &'d [u8] {
         self.input.get(self.at..).unwrap_or_default()
     }
 }
 
-impl<C: Codec, const N: usize> Iterator for Feed<'_, '_, C, N> {
+impl<C: Protocol> Iterator for Feed<'_, '_, C> {
     type Item = Event<C::Request, C::Response>;
 
     fn next(&mut self) -> Option<Self::Item> {
@@ -403,12 +391,13 @@ impl<C: Codec, const N: usize> Iterator for Feed<'_, '_, C, N> {
             }
             // Buffered bytes that all came from this input are still there, right before
             // `at` (the buffer holds the last bytes pushed): give them back to the input.
-            if d.len > 0 && d.len <= self.at && self.input.len() - (self.at - d.len) >= N {
+            let cap = d.buf.as_ref().len();
+            if d.len > 0 && d.len <= self.at && self.input.len() - (self.at - d.len) >= cap {
                 self.at -= d.len;
                 d.len = 0;
             }
             if d.len == 0 {
-                if let Some(window) = self.input.get(self.at..self.at + N) {
+                if let Some(window) = self.input.get(self.at..self.at + cap) {
                     // A whole buffer's worth of bytes: as in `step`, a full window settles.
                     if let Some((n, ev)) = d.core.advance(window, true) {
                         self.at += n;

@@ -1,0 +1,219 @@
+//! The runtime every busspec-generated protocol shares: errors, decoded frames, field values,
+//! command kinds, checksum helpers, the streaming decoder, and the [`Protocol`] trait each
+//! generated module implements, so tools are written once, generic over protocols.
+//!
+//! Generated code (from `busspec-codegen`, in a build script) refers to this crate by its name,
+//! so a crate that includes generated modules depends on `busspec-runtime` too. Nothing here is
+//! specific to one protocol.
+//!
+//! Invariants: `no_std`, no allocation, no `unsafe`, and no input makes encoding or decoding
+//! panic — generated decoders check every frame's length before reading any byte, and hand
+//! fixed-size arrays to every field access.
+
+#![no_std]
+#![forbid(unsafe_code)]
+
+// `arbitrary`'s derive counts recursion in a `std` thread-local, and `arbitrary` needs `std`
+// anyway: the feature is for fuzzing and tests, never for a device build.
+#[cfg(feature = "arbitrary")]
+extern crate std;
+
+/// The CRC implementation generated checksums are built on, re-exported so a crate of
+/// generated code needs no dependency of its own on it.
+pub use crc;
+
+mod protocol;
+pub mod stream;
+
+pub use protocol::{Message, Protocol, ProtocolVisitor};
+
+use core::fmt;
+
+/// A decoded frame: the address it carried and its message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+pub struct Decoded<M> {
+    pub address: u8,
+    pub message: M,
+}
+
+/// What a command does, as its spec classifies it (each protocol's `Request::kind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum CommandKind {
+    /// Starts a movement; sending it twice moves twice.
+    Movement,
+    /// Asks whether a movement is done.
+    CompletionCheck,
+    /// Sets a value; the device echoes or acknowledges it.
+    Setter,
+    /// Reads a value.
+    Getter,
+    /// Resets a counter, a flag or the device.
+    Reset,
+}
+
+/// How a command treats the broadcast address (each protocol's `Request::broadcast`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Broadcast {
+    /// Devices act on it when it is sent to the broadcast address.
+    pub accepted: bool,
+    /// Devices answer it when it is sent to the broadcast address.
+    pub answered: bool,
+}
+
+/// One field's value as it travels: the raw wire integer (sign-extended where the field is
+/// signed; enums, flags and units by their raw value) or an ASCII field's bytes.
+/// See each message type's `visit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FieldValue<'a> {
+    Int(i64),
+    Text(&'a [u8]),
+}
+
+/// Why a frame did not decode, and where.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DecodeError {
+    /// Fewer bytes than the shortest frame.
+    Truncated { needed: usize, found: usize },
+    /// The first byte is not the protocol's start byte.
+    BadStart { expected: u8, found: u8 },
+    /// The checksum at `offset` is not what the bytes before it give.
+    ChecksumMismatch {
+        offset: usize,
+        expected: u32,
+        found: u32,
+    },
+    /// No message of this direction has this code.
+    UnknownCommand { offset: usize, code: u32 },
+    /// The code is known but the frame's length is not that of any message with it.
+    WrongLength { expected: usize, found: usize },
+    /// A constant or repeated field holds another value.
+    InvalidValue {
+        field: &'static str,
+        offset: usize,
+        found: u32,
+    },
+    /// Several responses share this code and length; decode it with `decode_reply`.
+    Ambiguous { code: u32 },
+    /// The frame is a valid response, but not one the given request may get.
+    NotAReply { code: u32 },
+}
+
+fn hex(f: &mut fmt::Formatter<'_>, v: u32) -> fmt::Result {
+    if v <= 0xFF {
+        write!(f, "0x{v:02X}")
+    } else if v <= 0xFFFF {
+        write!(f, "0x{v:04X}")
+    } else {
+        write!(f, "0x{v:08X}")
+    }
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            DecodeError::Truncated { needed, found } => write!(
+                f,
+                "truncated frame: need at least {needed} bytes, found {found}"
+            ),
+            DecodeError::BadStart { expected, found } => {
+                write!(
+                    f,
+                    "bad start byte at offset 0: expected 0x{expected:02X}, found 0x{found:02X}"
+                )
+            }
+            DecodeError::ChecksumMismatch {
+                offset,
+                expected,
+                found,
+            } => {
+                write!(f, "checksum mismatch at offset {offset}: expected ")?;
+                hex(f, expected)?;
+                f.write_str(", found ")?;
+                hex(f, found)
+            }
+            DecodeError::UnknownCommand { offset, code } => {
+                f.write_str("unknown command code ")?;
+                hex(f, code)?;
+                write!(f, " at offset {offset}")
+            }
+            DecodeError::WrongLength { expected, found } => {
+                write!(f, "wrong length: expected {expected} bytes, found {found}")
+            }
+            DecodeError::InvalidValue {
+                field,
+                offset,
+                found,
+            } => {
+                write!(f, "invalid value for {field} at offset {offset}: found ")?;
+                hex(f, found)
+            }
+            DecodeError::Ambiguous { code } => {
+                f.write_str("ambiguous response code ")?;
+                hex(f, code)?;
+                f.write_str(": decode it together with the request it answers")
+            }
+            DecodeError::NotAReply { code } => {
+                f.write_str("response code ")?;
+                hex(f, code)?;
+                f.write_str(" does not answer the given request")
+            }
+        }
+    }
+}
+
+impl core::error::Error for DecodeError {}
+
+/// Why a message did not encode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EncodeError {
+    /// The buffer is shorter than the frame; `MAX_FRAME_LEN` of each protocol always suffices.
+    BufferTooSmall { needed: usize, available: usize },
+    /// A typed value does not fit the wire field it goes into.
+    OutOfRange { field: &'static str },
+}
+
+impl fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            EncodeError::BufferTooSmall { needed, available } => {
+                write!(
+                    f,
+                    "buffer too small: the frame needs {needed} bytes, the buffer has {available}"
+                )
+            }
+            EncodeError::OutOfRange { field } => {
+                write!(f, "value of {field} does not fit its wire field")
+            }
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// 8-bit sum of `bytes`, modulo 256.
+#[inline]
+pub fn sum8(bytes: &[u8]) -> u8 {
+    bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b))
+}
+
+/// `x` rounded to the nearest integer, ties away from zero; `None` if not finite or beyond `i64`.
+/// (`f64::round` lives in std; this crate is `no_std`.) Public only for generated code.
+#[doc(hidden)]
+pub fn round(x: f64) -> Option<i64> {
+    if !x.is_finite() || x.abs() >= 9.0e18 {
+        return None;
+    }
+    let t = x as i64; // truncates toward zero
+    let frac = x - t as f64;
+    Some(if frac >= 0.5 {
+        t + 1
+    } else if frac <= -0.5 {
+        t - 1
+    } else {
+        t
+    })
+}

@@ -1,0 +1,120 @@
+//! The traits every generated protocol implements: [`Protocol`] for the protocol as a whole
+//! (its constants, its codec, its framing), [`Message`] for its `Request` and `Response` types.
+//!
+//! Each generated module has a unit type named after the protocol (`ub2::Ub2`, `sd::Sd`) that
+//! implements [`Protocol`]; a transport, a sniffer or a test written against the trait works
+//! for every protocol, built in or brought by a user's build script.
+
+use core::fmt::Debug;
+use core::ops::RangeInclusive;
+
+use crate::stream::Candidates;
+use crate::{Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldValue};
+
+/// One message type of a protocol (its `Request` or its `Response`): every variant is one
+/// message of the spec.
+pub trait Message: Copy + Debug + PartialEq + 'static {
+    /// The message's name in the spec (`go_to_capacitance`).
+    fn name(&self) -> &'static str;
+    /// The message's code bytes, as they travel.
+    fn code(&self) -> &'static [u8];
+    /// The length of the message's frame, in bytes.
+    fn frame_len(&self) -> usize;
+    /// Calls `f` with each field's spec name and raw value, in frame order.
+    fn visit<F: FnMut(&'static str, FieldValue<'_>)>(&self, f: F);
+    /// Writes the frame to `address` into `buf` and returns its length.
+    fn encode(&self, address: u8, buf: &mut [u8]) -> Result<usize, EncodeError>;
+}
+
+/// A protocol generated from a busspec spec: its line constants, its codec and its framing.
+///
+/// Implemented by the unit type each generated module declares. All methods are associated
+/// functions (no `self`): a protocol is a type, not a value.
+pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
+    /// Master to device.
+    type Request: Message;
+    /// Device to master.
+    type Response: Message;
+    /// A buffer of exactly [`Self::MAX_FRAME_LEN`] bytes (`[u8; MAX_FRAME_LEN]`).
+    type Buffer: AsRef<[u8]> + AsMut<[u8]> + Copy + Debug;
+
+    /// The protocol's name in the spec (`ub2`).
+    const NAME: &'static str;
+    /// The vendor document the spec transcribes.
+    const DOCUMENT: &'static str;
+    /// The document's revision.
+    const DOCUMENT_REVISION: &'static str;
+    /// SHA-256 of the spec file the code was generated from, lowercase hex (`sha256sum`).
+    const SPEC_SHA256: &'static str;
+    /// The spec's text, as the code was generated from it: tools that need more than the codec
+    /// (names of units, documentation, the interpreter) load it with `busspec-model`. Costs
+    /// nothing in a binary that does not use it.
+    const SPEC_YAML: &'static str;
+
+    /// The longest request frame, in bytes.
+    const MAX_REQUEST_LEN: usize;
+    /// The longest response frame, in bytes.
+    const MAX_RESPONSE_LEN: usize;
+    /// The longest frame in either direction: a buffer this long holds any frame.
+    const MAX_FRAME_LEN: usize;
+    /// Every distinct frame length, longest first (at most 64).
+    const FRAME_LENGTHS: &'static [usize];
+    /// An all-zero [`Self::Buffer`].
+    const EMPTY_BUFFER: Self::Buffer;
+
+    /// The document's baud rate.
+    const BAUD: u32;
+    /// The quiet time the document demands between frames, in milliseconds, if it says.
+    const INTER_FRAME_GAP_MS: Option<u32>;
+    /// The most frames per second the document allows, if it says.
+    const MAX_FRAMES_PER_S: Option<u32>;
+    /// Device addresses, inclusive.
+    const DEVICE_ADDRESSES: RangeInclusive<u8>;
+    /// The broadcast address, if the protocol has one.
+    const BROADCAST_ADDRESS: Option<u8>;
+
+    /// Decodes a request frame.
+    fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError>;
+    /// Decodes a response frame on its own; a response only its request identifies is
+    /// [`DecodeError::Ambiguous`].
+    fn decode_response(frame: &[u8]) -> Result<Decoded<Self::Response>, DecodeError> {
+        Self::decode_response_for(frame, None)
+    }
+    /// Decodes a frame as the reply to `request`: only the responses `request` may get.
+    fn decode_reply(
+        frame: &[u8],
+        request: &Self::Request,
+    ) -> Result<Decoded<Self::Response>, DecodeError> {
+        Self::decode_response_for(frame, Some(request))
+    }
+    /// [`Self::decode_response`] without a request, [`Self::decode_reply`] with one.
+    fn decode_response_for(
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Decoded<Self::Response>, DecodeError>;
+
+    /// Whether `response` is one the spec lets `request` get.
+    fn answers(request: &Self::Request, response: &Self::Response) -> bool;
+    /// What `request` does, as the spec classifies it.
+    fn kind(request: &Self::Request) -> CommandKind;
+    /// How `request` treats the broadcast address, from the spec.
+    fn broadcast(request: &Self::Request) -> Broadcast;
+    /// Whether `response` is a refusal: the spec marks it `kind: nak`.
+    fn is_nak(response: &Self::Response) -> bool;
+    /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the
+    /// weakest acceptance test (a frame shorter than a checksum fails it).
+    fn checksum_ok(frame: &[u8]) -> bool;
+
+    /// The messages whose start byte, code and address agree with `head`, the bytes buffered
+    /// from a possible frame start (possibly fewer than a whole frame): the stream decoder's
+    /// framing rule.
+    fn candidates(head: &[u8]) -> Candidates;
+}
+
+/// Something to do with a protocol chosen at run time, by name: see each protocols crate's
+/// `with_protocol`. The trait has associated types, so it cannot be a `dyn` object; a visitor
+/// is how a tool turns a name into a type.
+pub trait ProtocolVisitor {
+    type Output;
+    fn visit<P: Protocol>(self) -> Self::Output;
+}
