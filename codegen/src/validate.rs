@@ -3,13 +3,10 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use serde_yaml::Value as Yaml;
-
 use crate::checksum;
 use crate::diag::{join, Sink};
 use crate::interp::{self, raw_limits, Raw};
 use crate::ir::*;
-use crate::load::describe;
 use crate::model;
 use crate::rational::Rational;
 
@@ -1359,20 +1356,12 @@ fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Si
     }
 }
 
-fn stated(v: &Yaml) -> Result<StatedValue, String> {
+fn stated(v: &model::OpenValue) -> Result<StatedValue, String> {
+    use model::OpenValue as V;
     match v {
-        Yaml::Number(n) => {
-            let t = if let Some(i) = n.as_i64() {
-                i.to_string()
-            } else if let Some(u) = n.as_u64() {
-                u.to_string()
-            } else {
-                format!("{}", n.as_f64().unwrap_or(f64::NAN))
-            };
-            Rational::parse(&t).map(StatedValue::Number)
-        }
-        Yaml::String(s) => Ok(StatedValue::Name(s.clone())),
-        Yaml::Sequence(items) => items
+        V::Number(t) => Rational::parse(t).map(StatedValue::Number),
+        V::String(s) => Ok(StatedValue::Name(s.clone())),
+        V::List(items) => items
             .iter()
             .map(|i| {
                 i.as_str()
@@ -1383,7 +1372,7 @@ fn stated(v: &Yaml) -> Result<StatedValue, String> {
             .map(StatedValue::Names),
         other => Err(format!(
             "a stated value must be a number, a name, text or a list of flag names, found {}",
-            describe(other)
+            other.kind()
         )),
     }
 }
