@@ -16,7 +16,7 @@
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
 
-use busspec_model::interp::{offsets, raw_limits};
+use busspec_model::interp::raw_limits;
 use busspec_model::ir::*;
 use busspec_model::rational::Rational;
 
@@ -923,7 +923,7 @@ fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident) -> TokenStream {
 fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -> TokenStream {
     let p = ctx.p;
     let len = p.frame_len(m);
-    let o = offsets(p, m.code.len(), m.payload_len);
+    let o = m.layout;
     let mut writes = Vec::new();
     if let (Some(at), Some(s)) = (o.start, p.framing.start) {
         writes.push(quote!(out[#at] = #s;));
@@ -1055,7 +1055,7 @@ fn decode_fn_name(m: &Message) -> Ident {
 fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStream {
     let p = ctx.p;
     let len = p.frame_len(m);
-    let o = offsets(p, m.code.len(), m.payload_len);
+    let o = m.layout;
     let fname = decode_fn_name(m);
     let v = variant(m);
     let mut stmts = Vec::new();
@@ -1208,9 +1208,9 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
     let clen = c.len();
     let min_len = msgs.iter().map(|m| p.frame_len(m)).min().unwrap_or(0);
     let max_len = p.max_frame_len(d);
-    let code_len = |l: usize| offsets(p, l, 0).code;
+    let code_len = |l: usize| p.framing.head(l).code;
     let replies = d == Direction::Response;
-    let start_check = match (offsets(p, 1, 0).start, p.framing.start) {
+    let start_check = match (p.framing.head(1).start, p.framing.start) {
         (Some(at), Some(s)) => quote! {
             if let ::core::option::Option::Some(&found) = frame.get(#at) {
                 if found != #s {
@@ -1316,9 +1316,9 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
             .first()
             .copied()
             .unwrap_or(1);
-        offsets(p, l, 0).address
+        p.framing.head(l).address
     } else {
-        offsets(p, 1, 0).address
+        p.framing.head(1).address
     };
     let body = quote! {
         #start_check
@@ -1486,11 +1486,11 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         .iter()
         .filter(|s| s.1 as u64 != 0)
         .fold(0u128, |a, s| a | s.1);
-    let first = offsets(p, 1, 0);
+    let first = p.framing.head(1);
     let code_at = first.code;
     let addr_at = {
         let l = p.framing.request.code_lengths.first().copied().unwrap_or(1);
-        offsets(p, l, 0).address
+        p.framing.head(l).address
     };
     let start_check = match (first.start, p.framing.start) {
         (Some(at), Some(s)) => quote! {

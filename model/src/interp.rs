@@ -3,11 +3,13 @@
 //! It is the independent oracle the generated code is tested and fuzzed against, the engine that
 //! replays every example during validation, and what the CLI uses for a spec given at run time.
 //! It never panics: every index is checked, every length compared before it is used.
+//! Where each part of a frame sits is read from the IR ([`crate::ir::Message::layout`],
+//! [`crate::ir::Framing::head`]), resolved once by the validator; nothing here lays out a frame.
 
 use std::fmt;
 
 use crate::checksum;
-use crate::ir::{BitField, ByteOrder, Direction, Field, Message, MessageRef, Part, Protocol};
+use crate::ir::{BitField, ByteOrder, Direction, Field, Message, MessageRef, Protocol};
 
 /// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -219,52 +221,6 @@ impl fmt::Display for EncodeError {
 
 impl std::error::Error for EncodeError {}
 
-/// Byte offsets of the parts of a frame whose code has `code_len` bytes.
-#[derive(Debug, Clone, Copy)]
-pub struct Offsets {
-    pub start: Option<usize>,
-    pub address: usize,
-    pub code: usize,
-    pub payload: usize,
-    pub checksum: usize,
-}
-
-pub fn offsets(p: &Protocol, code_len: usize, payload_len: usize) -> Offsets {
-    let mut o = Offsets {
-        start: None,
-        address: 0,
-        code: 0,
-        payload: 0,
-        checksum: 0,
-    };
-    let mut at = 0;
-    for part in &p.framing.layout {
-        match part {
-            Part::Start => {
-                o.start = Some(at);
-                at += 1;
-            }
-            Part::Address => {
-                o.address = at;
-                at += 1;
-            }
-            Part::Code => {
-                o.code = at;
-                at += code_len;
-            }
-            Part::Payload => {
-                o.payload = at;
-                at += payload_len;
-            }
-            Part::Checksum => {
-                o.checksum = at;
-                at += p.framing.checksum.len();
-            }
-        }
-    }
-    o
-}
-
 /// Reads an unsigned integer of `bytes.len()` bytes.
 pub fn read_uint(bytes: &[u8], order: ByteOrder) -> u64 {
     let fold = |acc: u64, b: &u8| (acc << 8) | u64::from(*b);
@@ -340,7 +296,7 @@ pub fn decode(
         .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
         .min()
         .unwrap_or(1);
-    let first = offsets(p, min_code, 0);
+    let first = p.framing.head(min_code);
     if let (Some(at), Some(expected)) = (first.start, p.framing.start) {
         if let Some(&found) = wire.get(at) {
             if found != expected {
@@ -348,7 +304,7 @@ pub fn decode(
             }
         }
     }
-    if wire.len() < shortest.max(p.framing.overhead() + min_code) {
+    if wire.len() < shortest.max(first.len) {
         return Err(DecodeError::Truncated {
             needed: shortest,
             found: wire.len(),
@@ -360,7 +316,7 @@ pub fn decode(
     let mut by_code: Vec<MessageRef> = Vec::new();
     for &d in directions {
         for (index, m) in p.messages(d).iter().enumerate() {
-            let o = offsets(p, m.code.len(), m.payload_len);
+            let o = m.layout;
             if wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..]) {
                 by_code.push(MessageRef {
                     direction: d,
@@ -370,7 +326,7 @@ pub fn decode(
         }
     }
     if by_code.is_empty() {
-        let o = offsets(p, min_code, 0);
+        let o = p.framing.head(min_code);
         let longest = directions
             .iter()
             .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
@@ -408,7 +364,7 @@ pub fn decode(
     let mut fitting = Vec::new();
     let mut first_err = None;
     for r in by_len {
-        match decode_fields(p, p.message(r), wire) {
+        match decode_fields(p.message(r), wire) {
             Ok(values) => fitting.push((r, values)),
             Err(e) => {
                 first_err.get_or_insert(e);
@@ -434,7 +390,7 @@ pub fn decode(
         1 => {
             let (message, values) = fitting.remove(0);
             let m = p.message(message);
-            let o = offsets(p, m.code.len(), m.payload_len);
+            let o = m.layout;
             Ok(Frame {
                 message,
                 address: wire.get(o.address).copied().unwrap_or(0),
@@ -454,7 +410,7 @@ pub fn decode(
 pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, DecodeError> {
     let m = p.message(r);
     let len = p.frame_len(m);
-    let o = offsets(p, m.code.len(), m.payload_len);
+    let o = m.layout;
     if let (Some(at), Some(expected)) = (o.start, p.framing.start) {
         if let Some(&found) = wire.get(at) {
             if found != expected {
@@ -482,7 +438,7 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
         });
     }
     check_checksum(p, wire)?;
-    let values = decode_fields(p, m, wire)?;
+    let values = decode_fields(m, wire)?;
     Ok(Frame {
         message: r,
         address: wire[o.address],
@@ -512,8 +468,8 @@ fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
 }
 
 /// Field values of a frame already known to have the message's length.
-fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
-    let o = offsets(p, m.code.len(), m.payload_len);
+fn decode_fields(m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
+    let o = m.layout;
     let payload = wire
         .get(o.payload..o.payload + m.payload_len)
         .unwrap_or(&[]);
@@ -624,7 +580,7 @@ pub fn encode(
             field: name.to_owned(),
         }),
     };
-    let o = offsets(p, m.code.len(), m.payload_len);
+    let o = m.layout;
     let mut out = vec![0u8; p.frame_len(m)];
     if let (Some(at), Some(s)) = (o.start, p.framing.start) {
         out[at] = s;
@@ -744,7 +700,7 @@ pub fn encode(
 /// have the message's frame length.
 pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
     let mut wire = printed.to_vec();
-    let o = offsets(p, m.code.len(), m.payload_len);
+    let o = m.layout;
     let flip = |order: ByteOrder| order != p.printed_byte_order;
     for f in &m.fields {
         if f.is_ascii() || f.width < 2 || !flip(f.byte_order) {

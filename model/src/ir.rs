@@ -1,5 +1,9 @@
 //! The IR: a spec resolved and checked. Offsets, widths, byte orders, scales, checksum parameters
 //! and request→response pairing are all worked out here, so no emitter works anything out again.
+//! Each message carries its resolved frame layout ([`Message::layout`]: where start byte, address,
+//! code, payload and checksum sit, and the frame's length), and the framing carries the layout of
+//! an empty-payload frame for each code length ([`Framing::head`]); the validator computes both
+//! once, and every reader takes them from here.
 //!
 //! Only [`crate::validate`] builds these; holding a [`Protocol`] means every invariant the
 //! validator checks holds (references resolve, widths add up, values fit, examples replay).
@@ -54,9 +58,36 @@ pub struct Framing {
     pub request: DirectionFraming,
     pub response: DirectionFraming,
     pub checksum: Checksum,
+    /// The layout of a frame with an empty payload, indexed by code length (0 to
+    /// [`MAX_CODE_LEN`]); see [`Framing::head`].
+    pub heads: Vec<FrameLayout>,
+}
+
+/// The longest code a frame can have, in bytes.
+pub const MAX_CODE_LEN: usize = 4;
+
+/// Byte offsets of the parts of one frame, and its length; resolved by the validator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameLayout {
+    /// `None` when the layout has no start byte.
+    pub start: Option<usize>,
+    pub address: usize,
+    pub code: usize,
+    pub payload: usize,
+    pub checksum: usize,
+    /// Bytes in the whole frame.
+    pub len: usize,
 }
 
 impl Framing {
+    /// Where the start byte, address and code sit in any frame whose code has `code_len` bytes
+    /// (the payload taken as empty, so `payload`, `checksum` and `len` are those of a frame
+    /// without one). Code lengths are at most [`MAX_CODE_LEN`]; a longer one gets the layout of
+    /// the longest.
+    pub fn head(&self, code_len: usize) -> FrameLayout {
+        self.heads[code_len.min(self.heads.len() - 1)]
+    }
+
     /// Bytes in a frame besides code and payload: start, address, checksum.
     pub fn overhead(&self) -> usize {
         self.layout
@@ -222,6 +253,8 @@ pub struct Message {
     pub fields: Vec<Field>,
     /// Payload bytes (sum of field widths).
     pub payload_len: usize,
+    /// Where each part of this message's frame sits, and the frame's length.
+    pub layout: FrameLayout,
     /// Commands: every response it may get (its own, then the common ones), as indices into
     /// `Protocol::responses`, each with what it means for this command where the spec says.
     pub responses: Vec<(usize, Option<String>)>,
@@ -379,9 +412,9 @@ impl Protocol {
         }
     }
 
-    /// Frame length of a message, in bytes.
+    /// Frame length of a message, in bytes (its resolved [`Message::layout`]).
     pub fn frame_len(&self, m: &Message) -> usize {
-        self.framing.overhead() + m.code.len() + m.payload_len
+        m.layout.len
     }
 
     /// The longest frame in a direction.

@@ -306,4 +306,40 @@ mod tests {
             assert_eq!(serde_requires, required(key), "key `{key}`");
         }
     }
+
+    /// The model's open values read YAML the way the validator needs: file order, numbers as
+    /// decimal text, tags kept as such, `~` as no entries, anything else not a mapping refused.
+    #[test]
+    fn open_maps_keep_what_was_written() {
+        use model::{OpenMap, OpenValue as V};
+        let read = |text: &str| {
+            let v: Value = serde_yaml::from_str(text).expect("YAML");
+            serde_yaml::from_value::<OpenMap>(v).map_err(|e| e.to_string())
+        };
+        let m = read("{b: 1, a: -2, c: 1.5, d: x, e: [x, 1], f: ~, g: true, h: !t x, 3: {j: k}}")
+            .expect("a mapping");
+        let s = |t: &str| V::String(t.to_owned());
+        let n = |t: &str| V::Number(t.to_owned());
+        assert_eq!(
+            m.0,
+            vec![
+                (s("b"), n("1")),
+                (s("a"), n("-2")),
+                (s("c"), n("1.5")),
+                (s("d"), s("x")),
+                (s("e"), V::List(vec![s("x"), n("1")])),
+                (s("f"), V::Null),
+                (s("g"), V::Bool(true)),
+                (s("h"), V::Tagged(Box::new(s("x")))),
+                (n("3"), V::Map(OpenMap(vec![(s("j"), s("k"))]))),
+            ]
+        );
+        assert_eq!(m.0[7].1.as_str(), Some("x"));
+        assert_eq!(m.0[7].1.kind(), "a tagged value");
+        assert!(read("~").expect("nothing").is_empty());
+        assert_eq!(
+            read("[a]").unwrap_err(),
+            "invalid type: sequence, expected a YAML mapping"
+        );
+    }
 }

@@ -305,7 +305,7 @@ pub struct Command {
     #[serde(default)]
     pub responses: Vec<String>,
     #[serde(default)]
-    pub response_meanings: serde_yaml::Mapping,
+    pub response_meanings: OpenMap,
     #[serde(default)]
     pub broadcast: Option<Broadcast>,
 }
@@ -407,11 +407,168 @@ pub struct Example {
     #[serde(default)]
     pub comment: Option<String>,
     #[serde(default)]
-    pub values: serde_yaml::Mapping,
+    pub values: OpenMap,
     #[serde(default)]
     pub erratum: Option<String>,
     #[serde(default)]
     pub corrected: Option<String>,
+}
+
+/// A value where the format leaves the shape open (example values, response meanings), kept as
+/// written so that the validator can say what it expected and what it found.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OpenValue {
+    Null,
+    Bool(bool),
+    /// A YAML number, as decimal text (integers exactly; floats as `{}` prints them).
+    Number(String),
+    String(String),
+    List(Vec<OpenValue>),
+    Map(OpenMap),
+    /// A value with a YAML tag (`!name value`); the tag itself is not kept.
+    Tagged(Box<OpenValue>),
+}
+
+impl OpenValue {
+    /// The text, if this is a string (a tagged one too).
+    pub fn as_str(&self) -> Option<&str> {
+        match self {
+            OpenValue::String(s) => Some(s),
+            OpenValue::Tagged(v) => v.as_str(),
+            _ => None,
+        }
+    }
+
+    /// What kind of value this is, for messages: "a number", "a list", ...
+    pub fn kind(&self) -> &'static str {
+        match self {
+            OpenValue::Null => "nothing",
+            OpenValue::Bool(_) => "a boolean",
+            OpenValue::Number(_) => "a number",
+            OpenValue::String(_) => "a string",
+            OpenValue::List(_) => "a list",
+            OpenValue::Map(_) => "a mapping",
+            OpenValue::Tagged(_) => "a tagged value",
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for OpenValue {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = OpenValue;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("any YAML value")
+            }
+            fn visit_unit<E: serde::de::Error>(self) -> Result<OpenValue, E> {
+                Ok(OpenValue::Null)
+            }
+            fn visit_none<E: serde::de::Error>(self) -> Result<OpenValue, E> {
+                Ok(OpenValue::Null)
+            }
+            fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<OpenValue, D::Error> {
+                OpenValue::deserialize(d)
+            }
+            fn visit_bool<E: serde::de::Error>(self, v: bool) -> Result<OpenValue, E> {
+                Ok(OpenValue::Bool(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<OpenValue, E> {
+                Ok(OpenValue::Number(v.to_string()))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<OpenValue, E> {
+                Ok(OpenValue::Number(v.to_string()))
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<OpenValue, E> {
+                Ok(OpenValue::Number(format!("{v}")))
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<OpenValue, E> {
+                Ok(OpenValue::String(s.to_owned()))
+            }
+            fn visit_string<E: serde::de::Error>(self, s: String) -> Result<OpenValue, E> {
+                Ok(OpenValue::String(s))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<OpenValue, A::Error> {
+                let mut items = Vec::new();
+                while let Some(item) = seq.next_element()? {
+                    items.push(item);
+                }
+                Ok(OpenValue::List(items))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<OpenValue, A::Error> {
+                entries(map).map(|e| OpenValue::Map(OpenMap(e)))
+            }
+            fn visit_enum<A: serde::de::EnumAccess<'de>>(
+                self,
+                data: A,
+            ) -> Result<OpenValue, A::Error> {
+                use serde::de::VariantAccess;
+                let (_tag, contents): (String, _) = data.variant()?;
+                Ok(OpenValue::Tagged(Box::new(contents.newtype_variant()?)))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A mapping where the format leaves the keys open, entries in file order. Absent or empty
+/// (`~`) reads as no entries. Duplicate keys never get here: the loader's YAML parser rejects
+/// them.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OpenMap(pub Vec<(OpenValue, OpenValue)>);
+
+impl OpenMap {
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    pub fn iter(&self) -> std::slice::Iter<'_, (OpenValue, OpenValue)> {
+        self.0.iter()
+    }
+}
+
+impl<'a> IntoIterator for &'a OpenMap {
+    type Item = &'a (OpenValue, OpenValue);
+    type IntoIter = std::slice::Iter<'a, (OpenValue, OpenValue)>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
+}
+
+fn entries<'de, A: serde::de::MapAccess<'de>>(
+    mut map: A,
+) -> Result<Vec<(OpenValue, OpenValue)>, A::Error> {
+    let mut out = Vec::new();
+    while let Some(key) = map.next_key::<OpenValue>()? {
+        let value = map.next_value()?;
+        out.push((key, value));
+    }
+    Ok(out)
+}
+
+impl<'de> Deserialize<'de> for OpenMap {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = OpenMap;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a YAML mapping")
+            }
+            fn visit_unit<E: serde::de::Error>(self) -> Result<OpenMap, E> {
+                Ok(OpenMap::default())
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<OpenMap, A::Error> {
+                entries(map).map(OpenMap)
+            }
+        }
+        d.deserialize_map(V)
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]

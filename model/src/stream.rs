@@ -61,8 +61,8 @@
 //! default request given to [`StreamDecoder::with_default_request`] is used (for a capture of
 //! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`].
 
-use crate::interp::{self, DecodeError, Frame, Offsets};
-use crate::ir::{Direction, Message, MessageRef, Protocol};
+use crate::interp::{self, DecodeError, Frame};
+use crate::ir::{Direction, FrameLayout, Message, MessageRef, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
 pub const MAX_SKIPPED_RUN: usize = 256;
@@ -113,7 +113,7 @@ struct Shape {
     direction: Direction,
     code: Vec<u8>,
     len: usize,
-    at: Offsets,
+    at: FrameLayout,
 }
 
 /// What one step of the framing rule did.
@@ -281,7 +281,7 @@ impl<'p> StreamDecoder<'p> {
         match found {
             Ok(frame) => {
                 let m = self.p.message(frame.message);
-                let at = interp::offsets(self.p, m.code.len(), m.payload_len);
+                let at = m.layout;
                 let address = bytes.get(at.address).copied().unwrap_or(0);
                 if !plausible_address(self.p, frame.message.direction, address) {
                     return None;
@@ -346,7 +346,7 @@ fn shape(p: &Protocol, m: &Message) -> Shape {
         direction: m.direction,
         code: m.code.clone(),
         len: p.frame_len(m),
-        at: interp::offsets(p, m.code.len(), m.payload_len),
+        at: m.layout,
     }
 }
 

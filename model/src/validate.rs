@@ -3,13 +3,10 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use serde_yaml::Value as Yaml;
-
 use crate::checksum;
 use crate::diag::{join, Sink};
 use crate::interp::{self, raw_limits, Raw};
 use crate::ir::*;
-use crate::load::describe;
 use crate::model;
 use crate::rational::Rational;
 
@@ -303,6 +300,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             }
         }
         check_section(&c.section, &path, sink);
+        let layout = frame_layout(&framing, code.len(), payload_len);
         commands.push(Message {
             name: c.name.clone(),
             title: c.title.clone(),
@@ -313,6 +311,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             code,
             fields,
             payload_len,
+            layout,
             responses,
             answers: Vec::new(),
             broadcast: c.broadcast.clone(),
@@ -343,6 +342,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`)");
         }
         check_section(&r.section, &path, sink);
+        let layout = frame_layout(&framing, code.len(), payload_len);
         responses.push(Message {
             name: r.name.clone(),
             title: r.title.clone(),
@@ -353,6 +353,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             code,
             fields,
             payload_len,
+            layout,
             responses: Vec::new(),
             answers,
             broadcast: None,
@@ -365,7 +366,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     let mut lengths: Vec<usize> = commands
         .iter()
         .chain(&responses)
-        .map(|m| framing.overhead() + m.code.len() + m.payload_len)
+        .map(|m| m.layout.len)
         .collect();
     lengths.sort_unstable();
     lengths.dedup();
@@ -705,7 +706,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         }
     }
     let checksum = checksum_params(&f.checksum, byte_order, sink);
-    Framing {
+    let mut framing = Framing {
         section: f.section.clone(),
         layout: f.layout.clone(),
         start,
@@ -719,7 +720,53 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         request,
         response,
         checksum,
+        heads: Vec::new(),
+    };
+    framing.heads = (0..=MAX_CODE_LEN)
+        .map(|l| frame_layout(&framing, l, 0))
+        .collect();
+    framing
+}
+
+/// Where each part of a frame sits when its code has `code_len` bytes and its payload
+/// `payload_len`. Used only here, while the IR is built; everything else reads the result from
+/// [`Message::layout`] and [`Framing::head`].
+fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> FrameLayout {
+    let mut o = FrameLayout {
+        start: None,
+        address: 0,
+        code: 0,
+        payload: 0,
+        checksum: 0,
+        len: 0,
+    };
+    let mut at = 0;
+    for part in &framing.layout {
+        match part {
+            Part::Start => {
+                o.start = Some(at);
+                at += 1;
+            }
+            Part::Address => {
+                o.address = at;
+                at += 1;
+            }
+            Part::Code => {
+                o.code = at;
+                at += code_len;
+            }
+            Part::Payload => {
+                o.payload = at;
+                at += payload_len;
+            }
+            Part::Checksum => {
+                o.checksum = at;
+                at += framing.checksum.len();
+            }
+        }
     }
+    o.len = at;
+    o
 }
 
 fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) -> Checksum {
@@ -1309,20 +1356,12 @@ fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Si
     }
 }
 
-fn stated(v: &Yaml) -> Result<StatedValue, String> {
+fn stated(v: &model::OpenValue) -> Result<StatedValue, String> {
+    use model::OpenValue as V;
     match v {
-        Yaml::Number(n) => {
-            let t = if let Some(i) = n.as_i64() {
-                i.to_string()
-            } else if let Some(u) = n.as_u64() {
-                u.to_string()
-            } else {
-                format!("{}", n.as_f64().unwrap_or(f64::NAN))
-            };
-            Rational::parse(&t).map(StatedValue::Number)
-        }
-        Yaml::String(s) => Ok(StatedValue::Name(s.clone())),
-        Yaml::Sequence(items) => items
+        V::Number(t) => Rational::parse(t).map(StatedValue::Number),
+        V::String(s) => Ok(StatedValue::Name(s.clone())),
+        V::List(items) => items
             .iter()
             .map(|i| {
                 i.as_str()
@@ -1333,7 +1372,7 @@ fn stated(v: &Yaml) -> Result<StatedValue, String> {
             .map(StatedValue::Names),
         other => Err(format!(
             "a stated value must be a number, a name, text or a list of flag names, found {}",
-            describe(other)
+            other.kind()
         )),
     }
 }

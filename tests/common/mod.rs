@@ -37,7 +37,7 @@ pub fn fix_checksum(p: &Protocol, frame: &mut [u8]) {
 /// random address (usually a device's) and random payload.
 pub fn random_frame(p: &Protocol, m: &Message, rng: &mut fastrand::Rng) -> Vec<u8> {
     let len = p.frame_len(m);
-    let o = interp::offsets(p, m.code.len(), m.payload_len);
+    let o = m.layout;
     let mut f: Vec<u8> = (0..len).map(|_| rng.u8(..)).collect();
     if let (Some(at), Some(s)) = (o.start, p.framing.start) {
         f[at] = s;

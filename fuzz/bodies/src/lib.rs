@@ -332,7 +332,7 @@ macro_rules! protocol_bodies {
             /// Where `encode` wrote the code: the bytes of the code in the frame.
             fn code_of(frame: &[u8], len: usize) -> &[u8] {
                 let p = spec();
-                let o = busspec_model::interp::offsets(p, len, 0);
+                let o = p.framing.head(len);
                 &frame[o.code..o.code + len]
             }
 

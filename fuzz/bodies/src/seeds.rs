@@ -10,7 +10,6 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use busspec_model::interp;
 use busspec_model::ir::{Direction, Protocol};
 
 use crate::spec;
@@ -106,7 +105,7 @@ pub fn dictionary(p: &Protocol) -> String {
     let mut seen = std::collections::BTreeSet::new();
     for d in [Direction::Request, Direction::Response] {
         for m in p.messages(d) {
-            let o = interp::offsets(p, m.code.len(), m.payload_len);
+            let o = m.layout;
             let len = (o.code + m.code.len()).max(o.address + 1);
             let mut prefix = vec![0u8; len];
             if let (Some(at), Some(s)) = (o.start, p.framing.start) {
