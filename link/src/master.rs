@@ -6,25 +6,32 @@
 //! this address (`decode_reply` checks length, checksum, code and pairing; the address is
 //! checked here), or until the line has been quiet for `byte_gap` after the last byte, or until
 //! `reply_timeout` passes with nothing. A garbled reply or none at all is retried, up to
-//! `attempts` times, only where [`Protocol::retry_safe`] says sending twice is harmless — never
+//! `attempts` times, only where [`Link::retry_safe`] says sending twice is harmless — never
 //! a movement. After a timeout the master waits until the line has been quiet for `settle`
 //! before it sends again, so a reply that comes late is discarded instead of being taken for
 //! the answer to the next request.
 //!
-//! Broadcasts that the spec says go unanswered return at once with no response. The SD set point
-//! freshness counter (§3.1) is kept here, per address: every set point carries the next value,
-//! whatever the caller put in it; the first one to an address starts from the device's own view
-//! of the counter, read with §3.12.
+//! Broadcasts that the spec says go unanswered ([`Protocol::broadcast`]) return at once with no
+//! response. A freshness counter ([`Link::freshness_mut`], the SD set point's, §3.1) is kept
+//! here, per address: every request that carries one carries the next value, whatever the caller
+//! put in it; the first one to an address starts from the device's own view of the counter
+//! ([`Link::freshness_readout`], SD §3.12).
+//!
+//! [`Master`] works for any protocol that implements [`Link`]; the long operations of one
+//! device family (UB2 movements and C-curve table, SD movements and string readouts) are
+//! methods of `Master<Ub2, _, _>` and `Master<Sd, _, _>`.
 
 use std::fmt;
 use std::io;
 use std::marker::PhantomData;
 use std::time::Duration;
 
-use busspec_protocols::{sd, ub2, EncodeError};
+use busspec_protocols::sd::{self, Sd};
+use busspec_protocols::ub2::{self, Ub2};
+use busspec_protocols::{CommandKind, EncodeError, Message, Protocol};
 
 use crate::clock::Clock;
-use crate::protocol::{Protocol, Sd, Ub2};
+use crate::protocol::Link;
 use crate::transport::Transport;
 
 /// Line timing of a master.
@@ -44,7 +51,7 @@ pub struct Timing {
 
 impl Timing {
     /// Defaults for a protocol: its documented gap, and timeouts generous for its baud rate.
-    pub fn for_protocol<P: Protocol>() -> Timing {
+    pub fn for_protocol<P: Link>() -> Timing {
         // The documents give no reply time. UB2 runs at 19,200 baud with a 10 ms command gap;
         // SD at 115,200 baud and 50 frames per second, i.e. one exchange every 20 ms.
         let reply_timeout = if P::BAUD >= 100_000 {
@@ -235,7 +242,7 @@ pub enum TraceEvent<'a> {
 type Observer = Box<dyn FnMut(&TraceEvent<'_>)>;
 
 /// A bus master for protocol `P` over transport `T`, timed by clock `C`.
-pub struct Master<P: Protocol, T: Transport, C: Clock> {
+pub struct Master<P: Link, T: Transport, C: Clock> {
     transport: T,
     clock: C,
     timing: Timing,
@@ -247,7 +254,7 @@ pub struct Master<P: Protocol, T: Transport, C: Clock> {
     _protocol: PhantomData<P>,
 }
 
-impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
+impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
     pub fn new(transport: T, clock: C) -> Self {
         Master {
             transport,
@@ -332,15 +339,15 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
     }
 
     fn check_address(&self, request: &P::Request, address: u8) -> Result<bool, LinkError> {
-        let policy = P::policy(request);
+        let broadcast = P::broadcast(request);
         let err = |reason: String| LinkError::Address {
             protocol: P::NAME,
-            request: P::request_name(request),
+            request: request.name(),
             address,
             reason,
         };
         if Some(address) == P::BROADCAST_ADDRESS {
-            if !policy.broadcast_accepted {
+            if !broadcast.accepted {
                 return Err(err(
                     "this command does not accept the broadcast address".to_owned()
                 ));
@@ -368,7 +375,8 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
         address: u8,
         broadcast: bool,
     ) -> Result<P::Response, String> {
-        let (from, response) = P::decode_reply(bytes, request).map_err(|e| e.to_string())?;
+        let reply = P::decode_reply(bytes, request).map_err(|e| e.to_string())?;
+        let (from, response) = (reply.address, reply.message);
         if broadcast {
             if !P::DEVICE_ADDRESSES.contains(&from) {
                 return Err(format!(
@@ -453,7 +461,7 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
         request: P::Request,
     ) -> Result<Exchange<P::Response>, LinkError> {
         let broadcast = self.check_address(&request, address)?;
-        let policy = P::policy(&request);
+        let answered = P::broadcast(&request).answered;
         let mut request = request;
         if P::freshness_mut(&mut request).is_some() {
             let next = self.next_freshness(address)?;
@@ -461,16 +469,16 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
                 *f = next;
             }
         }
-        let name = P::request_name(&request);
+        let name = request.name();
         let mut frame = vec![0u8; P::MAX_FRAME_LEN];
-        let len = P::encode_request(&request, address, &mut frame).map_err(|source| {
-            LinkError::Encode {
+        let len = request
+            .encode(address, &mut frame)
+            .map_err(|source| LinkError::Encode {
                 request: name,
                 source,
-            }
-        })?;
+            })?;
         frame.truncate(len);
-        let expects_reply = !broadcast || policy.broadcast_answered;
+        let expects_reply = !broadcast || answered;
         let allowed = if P::retry_safe(&request) {
             self.timing.attempts.max(1)
         } else {
@@ -534,7 +542,7 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
                         continue;
                     }
                     let from = P::decode_reply(&got, &request)
-                        .map(|(a, _)| a)
+                        .map(|d| d.address)
                         .unwrap_or(address);
                     return Ok(Exchange {
                         response: Some(response),
@@ -575,7 +583,7 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
         let ex = self.transact(address, request)?;
         ex.response.ok_or(LinkError::Refused {
             protocol: P::NAME,
-            request: P::request_name(&request),
+            request: request.name(),
             address,
             response: "nothing",
             detail: "a broadcast of this command is not answered".to_owned(),
@@ -590,9 +598,9 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
     ) -> LinkError {
         LinkError::Refused {
             protocol: P::NAME,
-            request: P::request_name(request),
+            request: request.name(),
             address,
-            response: P::response_name(response),
+            response: response.name(),
             detail: detail.to_owned(),
         }
     }
@@ -639,13 +647,11 @@ pub fn ub2_completion_check(trigger: &ub2::Request) -> Option<ub2::Request> {
     if code.len() != 2 || code[1] != 0x00 {
         return None;
     }
-    let address = *ub2::DEVICE_ADDRESSES.start();
+    let address = *Ub2::DEVICE_ADDRESSES.start();
     let mut frame = [0xAA, address, code[0], 0x01, 0];
     frame[4] = ub2::checksum(&frame[..4]);
-    match ub2::Request::decode(&frame) {
-        Ok(d) if Ub2::policy(&d.message).kind == crate::protocol::Kind::CompletionCheck => {
-            Some(d.message)
-        }
+    match Ub2::decode_request(&frame) {
+        Ok(d) if Ub2::kind(&d.message) == CommandKind::CompletionCheck => Some(d.message),
         _ => None,
     }
 }
@@ -673,7 +679,8 @@ impl<T: Transport, C: Clock> Master<Ub2, T, C> {
         let started = self.ask(address, trigger)?;
         let clipped = match started {
             ub2::Response::MovementStarted => false,
-            ub2::Response::NakLimitReached => true,
+            // 0x93: approved, the cap runs to the customer limit (§7.2; `Link::nak_approves`).
+            r if Ub2::nak_approves(&trigger, &r) => true,
             other => {
                 return Err(Self::refused(
                     &trigger,
