@@ -302,38 +302,47 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         }
     }
 
-    /// Forgets the freshness counter of `address`, so the next set point re-reads it.
+    /// Forgets the freshness counter of `address`, so the next request that carries one
+    /// re-reads it.
     pub fn forget_freshness(&mut self, address: u8) {
         self.freshness[usize::from(address)] = None;
     }
 
     /// Sets the last freshness counter sent to `address`, e.g. when another master sent before.
     pub fn set_freshness(&mut self, address: u8, last: u8) {
-        self.freshness[usize::from(address)] = Some(last & 0x0F);
+        self.freshness[usize::from(address)] = Some(Self::wrap(u16::from(last)));
     }
 
-    /// The freshness counter the next set point to `address` will carry, if known.
+    /// The freshness counter the next request to `address` that carries one will carry, if known.
     pub fn next_freshness_value(&self, address: u8) -> Option<u8> {
-        self.freshness[usize::from(address)].map(|v| (v + 1) & 0x0F)
+        self.freshness[usize::from(address)].map(|v| Self::wrap(u16::from(v) + 1))
     }
 
-    /// The freshness counter the next set point to `address` carries.
+    /// `v` modulo [`Link::FRESHNESS_MODULUS`].
+    fn wrap(v: u16) -> u8 {
+        // The remainder is below the modulus, at most 256: it fits.
+        (v % P::FRESHNESS_MODULUS.max(1)) as u8
+    }
+
+    /// The freshness counter the next request to `address` that carries one carries.
     fn next_freshness(&mut self, address: u8) -> Result<u8, LinkError> {
+        // The value before 0: with nothing known, counting starts at 0.
+        let before_zero = Self::wrap(P::FRESHNESS_MODULUS.max(1) - 1);
         let last = match self.freshness[usize::from(address)] {
             Some(v) => v,
-            None if Some(address) == P::BROADCAST_ADDRESS => 0x0F,
+            None if Some(address) == P::BROADCAST_ADDRESS => before_zero,
             None => match P::freshness_readout() {
                 Some(readout) => {
                     let ex = self.transact(address, readout)?;
                     ex.response
                         .as_ref()
                         .and_then(P::freshness_from_reply)
-                        .unwrap_or(0x0F)
+                        .unwrap_or(before_zero)
                 }
-                None => 0x0F,
+                None => before_zero,
             },
         };
-        let next = (last + 1) & 0x0F;
+        let next = Self::wrap(u16::from(last) + 1);
         self.freshness[usize::from(address)] = Some(next);
         Ok(next)
     }
@@ -951,5 +960,38 @@ impl<T: Transport, C: Clock> Master<Sd, T, C> {
             });
             self.clock.sleep(poll_every);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clock::SimClock;
+    use crate::sim::sd::SdSim;
+    use crate::sim::ub2::Ub2Sim;
+    use crate::sim::{BusConfig, SimBus};
+
+    /// The freshness counter wraps at the protocol's modulus: SD's 4 bits, a whole byte where a
+    /// protocol does not say.
+    #[test]
+    fn the_freshness_counter_wraps_at_the_protocols_modulus() {
+        let clock = SimClock::new();
+        let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![SdSim::new(1)]);
+        let mut m: Master<Sd, _, _> = Master::new(bus, clock);
+        m.set_freshness(1, 0x0F);
+        assert_eq!(m.next_freshness_value(1), Some(0));
+        m.set_freshness(1, 0x1E);
+        assert_eq!(m.next_freshness_value(1), Some(0x0F));
+        let clock = SimClock::new();
+        let bus = SimBus::new(
+            clock.clone(),
+            BusConfig::new(Ub2::BAUD),
+            vec![Ub2Sim::new(0x21)],
+        );
+        let mut m: Master<Ub2, _, _> = Master::new(bus, clock);
+        m.set_freshness(0x21, 0x0F);
+        assert_eq!(m.next_freshness_value(0x21), Some(0x10));
+        m.set_freshness(0x21, 0xFF);
+        assert_eq!(m.next_freshness_value(0x21), Some(0));
     }
 }

@@ -80,6 +80,9 @@ pub trait Link: Protocol {
         Self::is_nak(response) && !Self::nak_approves(request, response)
     }
 
+    /// How many values the freshness counter takes: the master counts modulo this, from 0
+    /// (1 to 256; a whole byte by default).
+    const FRESHNESS_MODULUS: u16 = 256;
     /// The freshness counter a request carries, if it carries one (SD set point, §3.1).
     fn freshness_mut(_r: &mut Self::Request) -> Option<&mut u8> {
         None
@@ -88,7 +91,8 @@ pub trait Link: Protocol {
     fn freshness_readout() -> Option<Self::Request> {
         None
     }
-    /// The host's freshness counter as the reply to [`Link::freshness_readout`] carries it.
+    /// The host's freshness counter as the reply to [`Link::freshness_readout`] carries it (the
+    /// master takes it modulo [`Link::FRESHNESS_MODULUS`]).
     fn freshness_from_reply(_r: &Self::Response) -> Option<u8> {
         None
     }
@@ -141,6 +145,9 @@ impl Link for sd::Sd {
         }
     }
 
+    /// §3.1: "the 4-bit host data freshness counter" (bits 15..12 of the set point).
+    const FRESHNESS_MODULUS: u16 = 16;
+
     fn freshness_mut(r: &mut sd::Request) -> Option<&mut u8> {
         match r {
             sd::Request::SetPoint { freshness, .. } => Some(freshness),
@@ -157,7 +164,7 @@ impl Link for sd::Sd {
             sd::Response::SkippedFramesCounter {
                 host_freshness_counter,
                 ..
-            } => Some(*host_freshness_counter & 0x0F),
+            } => Some(*host_freshness_counter),
             _ => None,
         }
     }
