@@ -11,7 +11,7 @@ use busspec_link::sim::sd::SdSim;
 use busspec_link::sim::ub2::Ub2Sim;
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::soak::{self, SoakConfig};
-use busspec_link::{Master, Protocol, Sd, SimClock, Transport, Ub2};
+use busspec_link::{Link, Master, Message, Protocol, Sd, SimClock, Transport, Ub2};
 use busspec_model::Protocol as Spec;
 use busspec_protocols::sd::{self, Angle};
 use busspec_protocols::ub2::{self, Capacitance};
@@ -32,7 +32,7 @@ impl Out<'_> {
     }
 
     /// One transaction, printed as the request (name, hex) and the reply as `decode` prints it.
-    fn step<P: Protocol, T: Transport, C: Clock>(
+    fn step<P: Link, T: Transport, C: Clock>(
         &mut self,
         m: &mut Master<P, T, C>,
         address: u8,
@@ -43,7 +43,7 @@ impl Out<'_> {
             .map_err(|e| format!("demo failed: {e}"))?;
         self.say(format!(
             "→ 0x{address:02X} {:<40} {}",
-            P::request_name(&request),
+            request.name(),
             hex(&ex.sent)
         ));
         match ex.response {

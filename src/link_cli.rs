@@ -10,7 +10,9 @@ use busspec_link::sim::sd::SdSim;
 use busspec_link::sim::ub2::Ub2Sim;
 use busspec_link::sim::{serve, Device};
 use busspec_link::soak::{self, SoakConfig};
-use busspec_link::{Master, Protocol, Sd, SerialTransport, SystemClock, Transport, Ub2};
+use busspec_link::{
+    Link, Master, Message, Protocol, Sd, SerialTransport, SystemClock, Transport, Ub2,
+};
 use busspec_model::ir::Direction;
 use busspec_model::Protocol as Spec;
 use busspec_protocols::{sd, ub2};
@@ -104,14 +106,11 @@ fn reply_line<P: Protocol>(
     address: u8,
 ) -> String {
     let mut buf = vec![0u8; P::MAX_FRAME_LEN];
-    let wire = match P::encode_response(response, address, &mut buf) {
+    let wire = match response.encode(address, &mut buf) {
         Ok(n) => &buf[..n],
         Err(e) => return format!("{{\"error\":{:?}}}", e.to_string()),
     };
-    let reply_to = spec
-        .commands
-        .iter()
-        .position(|c| c.name == P::request_name(request));
+    let reply_to = spec.commands.iter().position(|c| c.name == request.name());
     match frames::decode_frame(spec, Some(Direction::Response), reply_to, wire) {
         Ok(f) => frames::frame_line(spec, &f, None),
         Err(e) => format!("{{\"error\":{:?}}}", e),
@@ -164,7 +163,7 @@ fn link_error(e: LinkError) -> String {
     format!("error: {e}")
 }
 
-fn open<P: Protocol>(o: &TalkOptions) -> Result<Master<P, SerialTransport, SystemClock>, String> {
+fn open<P: Link>(o: &TalkOptions) -> Result<Master<P, SerialTransport, SystemClock>, String> {
     let t = SerialTransport::open(o.port, o.baud.unwrap_or(P::BAUD))
         .map_err(|e| format!("error: {e}"))?;
     let mut m = Master::new(t, SystemClock::new());
@@ -190,7 +189,7 @@ pub fn talk(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
 
 fn typed<P: Protocol>(spec: &Spec, o: &TalkOptions) -> Result<P::Request, String> {
     let frame = request_frame(spec, o.command, o.address, o.args)?;
-    P::decode_request(&frame).map(|(_, r)| r).map_err(|e| {
+    P::decode_request(&frame).map(|d| d.message).map_err(|e| {
         format!(
             "error: {} does not decode as a request: {e}",
             frames::hex(&frame)
@@ -203,7 +202,7 @@ fn print(line: &str) -> Result<(), String> {
     writeln!(out, "{line}").map_err(|e| format!("error: cannot write output: {e}"))
 }
 
-fn one<P: Protocol, T: Transport, C: Clock>(
+fn one<P: Link, T: Transport, C: Clock>(
     spec: &Spec,
     m: &mut Master<P, T, C>,
     address: u8,
@@ -215,7 +214,7 @@ fn one<P: Protocol, T: Transport, C: Clock>(
         None => {
             eprintln!(
                 "sent {} to broadcast address 0x{address:02X}; it is not answered",
-                P::request_name(&request)
+                request.name()
             );
             Ok(())
         }
@@ -576,20 +575,17 @@ mod tests {
             .collect()
     }
 
-    fn check_every_command<P: Protocol, D: Device>(
-        name: &str,
-        address: u8,
-        device: impl Fn() -> D,
-    ) {
+    fn check_every_command<P: Link, D: Device>(name: &str, address: u8, device: impl Fn() -> D) {
         let spec = spec(name);
         assert!(!spec.commands.is_empty());
         for (i, c) in spec.commands.iter().enumerate() {
             let args = arguments(&spec, i);
             let frame = request_frame(&spec, &c.name, address, &args)
                 .unwrap_or_else(|e| panic!("{name} {}: {e}", c.name));
-            let (_, request) =
-                P::decode_request(&frame).unwrap_or_else(|e| panic!("{} {e}", c.name));
-            assert_eq!(P::request_name(&request), c.name);
+            let request = P::decode_request(&frame)
+                .unwrap_or_else(|e| panic!("{} {e}", c.name))
+                .message;
+            assert_eq!(request.name(), c.name);
             let clock = SimClock::new();
             let bus = SimBus::new(clock.clone(), BusConfig::new(P::BAUD), vec![device()]);
             let mut m: Master<P, _, _> = Master::new(bus, clock);
@@ -597,7 +593,7 @@ mod tests {
                 .transact(address, request)
                 .unwrap_or_else(|e| panic!("{name} {} {args:?}: {e}", c.name));
             let response = ex.response.expect("a device address gets an answer");
-            let rname = P::response_name(&response);
+            let rname = response.name();
             let listed = c
                 .responses
                 .iter()

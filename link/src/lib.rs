@@ -1,14 +1,19 @@
 //! busspec-link: talk to the devices busspec's specs describe.
 //!
-//! - [`master::Master`]: the transaction layer over any [`transport::Transport`] — typed
-//!   request out, paired typed response back, with the bus's rules (gap between commands,
-//!   timeouts, safe retries, the SD freshness counter, broadcasts) and the long operations built
-//!   on them (movements, the UB2 C-curve table, SD string readouts).
+//! - [`protocol::Link`]: what a master adds to a generated protocol beyond its spec (safe
+//!   retries, reply address, checksum NAK, freshness counter, gap between requests), an
+//!   extension of [`busspec_runtime::Protocol`] implemented on the generated [`Ub2`] and [`Sd`].
+//! - [`master::Master`]: the transaction layer for any [`Link`] protocol over any
+//!   [`transport::Transport`] — typed request out, paired typed response back, with the bus's
+//!   rules (gap between commands, timeouts, safe retries, the freshness counter, broadcasts)
+//!   and the long operations built on them (UB2 movements and C-curve table, SD movements and
+//!   string readouts).
 //! - [`transport`]: serial ports (through `serialport`) and the trait the rest is written to.
 //! - [`sim`]: UB2 and SD device simulators on the generated codec, a simulated bus that holds
 //!   several of them, and a loop that serves them on a real port (a pseudo-terminal).
 //! - [`fault`]: a transport wrapper that damages traffic, seeded and replayable.
-//! - [`soak`]: many transactions through faults, counting what got through and what did not.
+//! - [`soak`]: many transactions through faults, counting what got through and what did not,
+//!   for any protocol with a simulator and a request mix ([`soak::SoakTarget`]).
 //! - [`clock`]: real or simulated time; everything that waits asks a clock, so tests and soaks
 //!   run in CPU time.
 
@@ -20,7 +25,10 @@ pub mod sim;
 pub mod soak;
 pub mod transport;
 
+pub use busspec_protocols::sd::Sd;
+pub use busspec_protocols::ub2::Ub2;
+pub use busspec_runtime::{Message, Protocol};
 pub use clock::{Clock, SimClock, SystemClock};
 pub use master::{Exchange, LinkError, Master, Progress, Timing, TraceEvent};
-pub use protocol::{Kind, Policy, Protocol, Sd, Ub2};
+pub use protocol::Link;
 pub use transport::{SerialTransport, Transport};

@@ -6,25 +6,32 @@
 //! this address (`decode_reply` checks length, checksum, code and pairing; the address is
 //! checked here), or until the line has been quiet for `byte_gap` after the last byte, or until
 //! `reply_timeout` passes with nothing. A garbled reply or none at all is retried, up to
-//! `attempts` times, only where [`Protocol::retry_safe`] says sending twice is harmless — never
+//! `attempts` times, only where [`Link::retry_safe`] says sending twice is harmless — never
 //! a movement. After a timeout the master waits until the line has been quiet for `settle`
 //! before it sends again, so a reply that comes late is discarded instead of being taken for
 //! the answer to the next request.
 //!
-//! Broadcasts that the spec says go unanswered return at once with no response. The SD set point
-//! freshness counter (§3.1) is kept here, per address: every set point carries the next value,
-//! whatever the caller put in it; the first one to an address starts from the device's own view
-//! of the counter, read with §3.12.
+//! Broadcasts that the spec says go unanswered ([`Protocol::broadcast`]) return at once with no
+//! response. A freshness counter ([`Link::freshness_mut`], the SD set point's, §3.1) is kept
+//! here, per address: every request that carries one carries the next value, whatever the caller
+//! put in it; the first one to an address starts from the device's own view of the counter
+//! ([`Link::freshness_readout`], SD §3.12).
+//!
+//! [`Master`] works for any protocol that implements [`Link`]; the long operations of one
+//! device family (UB2 movements and C-curve table, SD movements and string readouts) are
+//! methods of `Master<Ub2, _, _>` and `Master<Sd, _, _>`.
 
 use std::fmt;
 use std::io;
 use std::marker::PhantomData;
 use std::time::Duration;
 
-use busspec_protocols::{sd, ub2, EncodeError};
+use busspec_protocols::sd::{self, Sd};
+use busspec_protocols::ub2::{self, Ub2};
+use busspec_protocols::{CommandKind, EncodeError, Message, Protocol};
 
 use crate::clock::Clock;
-use crate::protocol::{Protocol, Sd, Ub2};
+use crate::protocol::Link;
 use crate::transport::Transport;
 
 /// Line timing of a master.
@@ -44,7 +51,7 @@ pub struct Timing {
 
 impl Timing {
     /// Defaults for a protocol: its documented gap, and timeouts generous for its baud rate.
-    pub fn for_protocol<P: Protocol>() -> Timing {
+    pub fn for_protocol<P: Link>() -> Timing {
         // The documents give no reply time. UB2 runs at 19,200 baud with a 10 ms command gap;
         // SD at 115,200 baud and 50 frames per second, i.e. one exchange every 20 ms.
         let reply_timeout = if P::BAUD >= 100_000 {
@@ -235,7 +242,7 @@ pub enum TraceEvent<'a> {
 type Observer = Box<dyn FnMut(&TraceEvent<'_>)>;
 
 /// A bus master for protocol `P` over transport `T`, timed by clock `C`.
-pub struct Master<P: Protocol, T: Transport, C: Clock> {
+pub struct Master<P: Link, T: Transport, C: Clock> {
     transport: T,
     clock: C,
     timing: Timing,
@@ -247,7 +254,7 @@ pub struct Master<P: Protocol, T: Transport, C: Clock> {
     _protocol: PhantomData<P>,
 }
 
-impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
+impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
     pub fn new(transport: T, clock: C) -> Self {
         Master {
             transport,
@@ -295,52 +302,61 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
         }
     }
 
-    /// Forgets the freshness counter of `address`, so the next set point re-reads it.
+    /// Forgets the freshness counter of `address`, so the next request that carries one
+    /// re-reads it.
     pub fn forget_freshness(&mut self, address: u8) {
         self.freshness[usize::from(address)] = None;
     }
 
     /// Sets the last freshness counter sent to `address`, e.g. when another master sent before.
     pub fn set_freshness(&mut self, address: u8, last: u8) {
-        self.freshness[usize::from(address)] = Some(last & 0x0F);
+        self.freshness[usize::from(address)] = Some(Self::wrap(u16::from(last)));
     }
 
-    /// The freshness counter the next set point to `address` will carry, if known.
+    /// The freshness counter the next request to `address` that carries one will carry, if known.
     pub fn next_freshness_value(&self, address: u8) -> Option<u8> {
-        self.freshness[usize::from(address)].map(|v| (v + 1) & 0x0F)
+        self.freshness[usize::from(address)].map(|v| Self::wrap(u16::from(v) + 1))
     }
 
-    /// The freshness counter the next set point to `address` carries.
+    /// `v` modulo [`Link::FRESHNESS_MODULUS`].
+    fn wrap(v: u16) -> u8 {
+        // The remainder is below the modulus, at most 256: it fits.
+        (v % P::FRESHNESS_MODULUS.max(1)) as u8
+    }
+
+    /// The freshness counter the next request to `address` that carries one carries.
     fn next_freshness(&mut self, address: u8) -> Result<u8, LinkError> {
+        // The value before 0: with nothing known, counting starts at 0.
+        let before_zero = Self::wrap(P::FRESHNESS_MODULUS.max(1) - 1);
         let last = match self.freshness[usize::from(address)] {
             Some(v) => v,
-            None if Some(address) == P::BROADCAST_ADDRESS => 0x0F,
+            None if Some(address) == P::BROADCAST_ADDRESS => before_zero,
             None => match P::freshness_readout() {
                 Some(readout) => {
                     let ex = self.transact(address, readout)?;
                     ex.response
                         .as_ref()
                         .and_then(P::freshness_from_reply)
-                        .unwrap_or(0x0F)
+                        .unwrap_or(before_zero)
                 }
-                None => 0x0F,
+                None => before_zero,
             },
         };
-        let next = (last + 1) & 0x0F;
+        let next = Self::wrap(u16::from(last) + 1);
         self.freshness[usize::from(address)] = Some(next);
         Ok(next)
     }
 
     fn check_address(&self, request: &P::Request, address: u8) -> Result<bool, LinkError> {
-        let policy = P::policy(request);
+        let broadcast = P::broadcast(request);
         let err = |reason: String| LinkError::Address {
             protocol: P::NAME,
-            request: P::request_name(request),
+            request: request.name(),
             address,
             reason,
         };
         if Some(address) == P::BROADCAST_ADDRESS {
-            if !policy.broadcast_accepted {
+            if !broadcast.accepted {
                 return Err(err(
                     "this command does not accept the broadcast address".to_owned()
                 ));
@@ -368,7 +384,8 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
         address: u8,
         broadcast: bool,
     ) -> Result<P::Response, String> {
-        let (from, response) = P::decode_reply(bytes, request).map_err(|e| e.to_string())?;
+        let reply = P::decode_reply(bytes, request).map_err(|e| e.to_string())?;
+        let (from, response) = (reply.address, reply.message);
         if broadcast {
             if !P::DEVICE_ADDRESSES.contains(&from) {
                 return Err(format!(
@@ -453,7 +470,7 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
         request: P::Request,
     ) -> Result<Exchange<P::Response>, LinkError> {
         let broadcast = self.check_address(&request, address)?;
-        let policy = P::policy(&request);
+        let answered = P::broadcast(&request).answered;
         let mut request = request;
         if P::freshness_mut(&mut request).is_some() {
             let next = self.next_freshness(address)?;
@@ -461,16 +478,16 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
                 *f = next;
             }
         }
-        let name = P::request_name(&request);
+        let name = request.name();
         let mut frame = vec![0u8; P::MAX_FRAME_LEN];
-        let len = P::encode_request(&request, address, &mut frame).map_err(|source| {
-            LinkError::Encode {
+        let len = request
+            .encode(address, &mut frame)
+            .map_err(|source| LinkError::Encode {
                 request: name,
                 source,
-            }
-        })?;
+            })?;
         frame.truncate(len);
-        let expects_reply = !broadcast || policy.broadcast_answered;
+        let expects_reply = !broadcast || answered;
         let allowed = if P::retry_safe(&request) {
             self.timing.attempts.max(1)
         } else {
@@ -534,7 +551,7 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
                         continue;
                     }
                     let from = P::decode_reply(&got, &request)
-                        .map(|(a, _)| a)
+                        .map(|d| d.address)
                         .unwrap_or(address);
                     return Ok(Exchange {
                         response: Some(response),
@@ -575,7 +592,7 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
         let ex = self.transact(address, request)?;
         ex.response.ok_or(LinkError::Refused {
             protocol: P::NAME,
-            request: P::request_name(&request),
+            request: request.name(),
             address,
             response: "nothing",
             detail: "a broadcast of this command is not answered".to_owned(),
@@ -590,9 +607,9 @@ impl<P: Protocol, T: Transport, C: Clock> Master<P, T, C> {
     ) -> LinkError {
         LinkError::Refused {
             protocol: P::NAME,
-            request: P::request_name(request),
+            request: request.name(),
             address,
-            response: P::response_name(response),
+            response: response.name(),
             detail: detail.to_owned(),
         }
     }
@@ -639,13 +656,11 @@ pub fn ub2_completion_check(trigger: &ub2::Request) -> Option<ub2::Request> {
     if code.len() != 2 || code[1] != 0x00 {
         return None;
     }
-    let address = *ub2::DEVICE_ADDRESSES.start();
+    let address = *Ub2::DEVICE_ADDRESSES.start();
     let mut frame = [0xAA, address, code[0], 0x01, 0];
     frame[4] = ub2::checksum(&frame[..4]);
-    match ub2::Request::decode(&frame) {
-        Ok(d) if Ub2::policy(&d.message).kind == crate::protocol::Kind::CompletionCheck => {
-            Some(d.message)
-        }
+    match Ub2::decode_request(&frame) {
+        Ok(d) if Ub2::kind(&d.message) == CommandKind::CompletionCheck => Some(d.message),
         _ => None,
     }
 }
@@ -673,7 +688,8 @@ impl<T: Transport, C: Clock> Master<Ub2, T, C> {
         let started = self.ask(address, trigger)?;
         let clipped = match started {
             ub2::Response::MovementStarted => false,
-            ub2::Response::NakLimitReached => true,
+            // 0x93: approved, the cap runs to the customer limit (§7.2; `Link::nak_approves`).
+            r if Ub2::nak_approves(&trigger, &r) => true,
             other => {
                 return Err(Self::refused(
                     &trigger,
@@ -944,5 +960,38 @@ impl<T: Transport, C: Clock> Master<Sd, T, C> {
             });
             self.clock.sleep(poll_every);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clock::SimClock;
+    use crate::sim::sd::SdSim;
+    use crate::sim::ub2::Ub2Sim;
+    use crate::sim::{BusConfig, SimBus};
+
+    /// The freshness counter wraps at the protocol's modulus: SD's 4 bits, a whole byte where a
+    /// protocol does not say.
+    #[test]
+    fn the_freshness_counter_wraps_at_the_protocols_modulus() {
+        let clock = SimClock::new();
+        let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![SdSim::new(1)]);
+        let mut m: Master<Sd, _, _> = Master::new(bus, clock);
+        m.set_freshness(1, 0x0F);
+        assert_eq!(m.next_freshness_value(1), Some(0));
+        m.set_freshness(1, 0x1E);
+        assert_eq!(m.next_freshness_value(1), Some(0x0F));
+        let clock = SimClock::new();
+        let bus = SimBus::new(
+            clock.clone(),
+            BusConfig::new(Ub2::BAUD),
+            vec![Ub2Sim::new(0x21)],
+        );
+        let mut m: Master<Ub2, _, _> = Master::new(bus, clock);
+        m.set_freshness(0x21, 0x0F);
+        assert_eq!(m.next_freshness_value(0x21), Some(0x10));
+        m.set_freshness(0x21, 0xFF);
+        assert_eq!(m.next_freshness_value(0x21), Some(0));
     }
 }

@@ -16,26 +16,34 @@
 //! first such reply in a transaction counts as silently wrong when its bytes differ from the
 //! reference's reply, or when the device's state does.
 //!
+//! A reply is a refusal when [`Link::is_refusal`] says so: a NAK the spec declares, except
+//! where the master reads it as the answer (UB2 0x93 to a movement).
+//!
 //! After each transaction the device is reset to the reference's state, so faults do not pile
 //! up and every transaction starts from a known device.
+//!
+//! [`run`] works for any protocol that implements [`SoakTarget`]: a simulator to soak and a mix
+//! of requests. UB2 and SD implement it here.
 
 use std::cell::RefCell;
 use std::fmt;
 use std::rc::Rc;
 use std::time::Duration;
 
-use busspec_protocols::{sd, ub2};
+use busspec_protocols::sd::{self, Sd};
+use busspec_protocols::ub2::{self, Ub2};
+use busspec_protocols::Message;
 
 use crate::clock::{Clock, SimClock};
 use crate::fault::{FaultConfig, FaultCounts, Faulty};
 use crate::master::{Master, Timing, TraceEvent};
-use crate::protocol::{Protocol, Sd, Ub2};
+use crate::protocol::Link;
 use crate::sim::sd::SdSim;
 use crate::sim::ub2::Ub2Sim;
 use crate::sim::{BusConfig, Device, SimBus};
 
 /// A protocol the soak can run: its device and a mix of requests.
-pub trait SoakTarget: Protocol {
+pub trait SoakTarget: Link {
     type Device: Device + Clone + PartialEq;
     fn device(index: u8) -> Self::Device;
     /// A request from the soak's mix, for this device as it is now.
@@ -298,7 +306,8 @@ pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
         });
     }
     for &a in &addresses {
-        master.set_freshness(a, 0x0F);
+        // Known from the start, so no request needs a readout first: the first carries 0.
+        master.set_freshness(a, (P::FRESHNESS_MODULUS.max(1) - 1) as u8);
     }
     let mut rng = fastrand::Rng::with_seed(config.seed ^ 0x5EED);
     let mut report = SoakReport {
@@ -318,13 +327,13 @@ pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
         let t0 = clock.now();
         let mut reference = device;
         let mut sent = vec![0u8; P::MAX_FRAME_LEN];
-        let n = P::encode_request(&request, address, &mut sent).unwrap_or(0);
+        let n = request.encode(address, &mut sent).unwrap_or(0);
         sent.truncate(n);
         let expected = reference.on_frame(&sent, t0);
         let expected_response = expected
             .as_deref()
             .and_then(|f| P::decode_reply(f, &request).ok())
-            .map(|(_, r)| r);
+            .map(|d| d.message);
         bus.freeze_time(Some(t0));
         received.borrow_mut().clear();
         let result = master.transact(address, request);
@@ -340,7 +349,12 @@ pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
                 }
             }
             // A refusal is not taken for a value: the caller sees the NAK.
-            Ok(ex) if ex.response.as_ref().is_some_and(P::is_nak) => {
+            Ok(ex)
+                if ex
+                    .response
+                    .as_ref()
+                    .is_some_and(|r| P::is_refusal(&request, r)) =>
+            {
                 report.refused += 1;
                 if !state_ok {
                     report.failed_with_device_changed += 1;
@@ -351,7 +365,7 @@ pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
                 if report.examples.len() < 5 {
                     report.examples.push(format!(
                         "{} to 0x{address:02X}: sent {}, accepted {} ({:?}), expected {:?}{}",
-                        P::request_name(&request),
+                        request.name(),
                         hex(&sent),
                         hex(&ex.frame),
                         ex.response,
@@ -376,8 +390,8 @@ pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
         // refusal, not a value.
         for bytes in received.borrow().iter().filter(|b| P::checksum_ok(b)) {
             match P::decode_reply(bytes, &request) {
-                Ok((_, r)) if P::is_checksum_nak(&r) => continue,
-                Ok((_, r)) if P::is_nak(&r) => break,
+                Ok(d) if P::is_checksum_nak(&d.message) => continue,
+                Ok(d) if P::is_refusal(&request, &d.message) => break,
                 _ => {}
             }
             report.checksum_only_accepted += 1;

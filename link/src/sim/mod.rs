@@ -16,6 +16,8 @@ use std::io;
 use std::rc::Rc;
 use std::time::Duration;
 
+use busspec_protocols::{Message, Protocol};
+
 use crate::clock::{Clock, SimClock};
 use crate::transport::Transport;
 
@@ -244,11 +246,11 @@ pub fn serve<D: Device, T: Transport, C: Clock>(
     Ok(())
 }
 
-/// Encodes a reply frame; `None` (no reply) if the value does not fit, which a simulator bug
-/// would cause and a test then sees as a timeout.
-fn reply<P: crate::protocol::Protocol>(response: &P::Response, address: u8) -> Option<Vec<u8>> {
+/// Encodes a reply frame of protocol `P`; `None` (no reply) if the value does not fit, which a
+/// simulator bug would cause and a test then sees as a timeout.
+fn reply<P: Protocol>(response: &P::Response, address: u8) -> Option<Vec<u8>> {
     let mut buf = vec![0u8; P::MAX_FRAME_LEN];
-    let n = P::encode_response(response, address, &mut buf).ok()?;
+    let n = response.encode(address, &mut buf).ok()?;
     buf.truncate(n);
     Some(buf)
 }

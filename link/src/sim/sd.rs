@@ -18,10 +18,10 @@
 
 use std::time::Duration;
 
-use busspec_protocols::sd::{self, ActuatorStatusBits, Angle, Request, Response, Velocity};
+use busspec_protocols::sd::{self, ActuatorStatusBits, Angle, Request, Response, Sd, Velocity};
+use busspec_protocols::Protocol;
 
 use super::{reply, Device};
-use crate::protocol::{Protocol, Sd};
 
 /// Fixed parameters of a simulated actuator.
 #[derive(Debug, Clone, PartialEq)]
@@ -460,17 +460,18 @@ impl Device for SdSim {
     }
 
     fn on_frame(&mut self, frame: &[u8], now: Duration) -> Option<Vec<u8>> {
-        let (to, request) = Sd::decode_request(frame).ok()?;
-        let broadcast = Some(to) == sd::BROADCAST_ADDRESS;
+        let decoded = Sd::decode_request(frame).ok()?;
+        let (to, request) = (decoded.address, decoded.message);
+        let broadcast = Some(to) == Sd::BROADCAST_ADDRESS;
         if !broadcast && to != self.id {
             return None;
         }
-        let policy = Sd::policy(&request);
-        if broadcast && !policy.broadcast_accepted {
+        let rules = Sd::broadcast(&request);
+        if broadcast && !rules.accepted {
             return None;
         }
         let response = self.respond(&request, now);
-        if broadcast && !policy.broadcast_answered {
+        if broadcast && !rules.answered {
             return None;
         }
         // Replies carry the actuator's own (after set_servo_id: new) ID (sd-e04).

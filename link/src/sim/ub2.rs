@@ -17,12 +17,11 @@
 use std::time::Duration;
 
 use busspec_protocols::ub2::{
-    self, BaudRateIndex, Capacitance, ModeOfOperation, Request, Response,
+    self, BaudRateIndex, Capacitance, ModeOfOperation, Request, Response, Ub2,
 };
-use busspec_protocols::DecodeError;
+use busspec_protocols::{DecodeError, Protocol};
 
 use super::{reply, Device};
-use crate::protocol::Ub2;
 
 /// Micro-steps per full step (§3.3).
 pub const MICRO_STEPS: u32 = 256;
@@ -622,13 +621,11 @@ impl Device for Ub2Sim {
             return None;
         }
         let me = self.address;
-        let response = match ub2::Request::decode(frame) {
+        let response = match Ub2::decode_request(frame) {
             Ok(d) => self.respond(&d.message, now),
             Err(DecodeError::ChecksumMismatch { .. }) => Response::NakChecksumError,
             Err(DecodeError::InvalidValue { .. }) => Response::NakIndexOutOfRange,
-            Err(_) if !<Ub2 as crate::protocol::Protocol>::checksum_ok(frame) => {
-                Response::NakChecksumError
-            }
+            Err(_) if !Ub2::checksum_ok(frame) => Response::NakChecksumError,
             Err(_) => Response::NakUnknownCommand,
         };
         reply::<Ub2>(&response, me)
