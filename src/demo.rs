@@ -37,7 +37,10 @@ impl Out<'_> {
         m: &mut Master<P, T, C>,
         address: u8,
         request: P::Request,
-    ) -> Result<Option<P::Response>, String> {
+    ) -> Result<Option<P::Response>, String>
+    where
+        P::Response: busspec_protocols::Message,
+    {
         let ex = m
             .transact(address, request)
             .map_err(|e| format!("demo failed: {e}"))?;
@@ -106,12 +109,9 @@ fn document_frame(out: &mut Out) -> Result<(), String> {
     out.say(format!(
         "== A frame from the UB2 document (§6.1, printed {printed}; on the wire {wire}, erratum ub2-e01): busspec decode ub2 \"{wire}\""
     ));
-    let bytes = busspec_model::interp::parse_hex(wire)?;
-    let frame = crate::frames::decode_frame(out.spec, None, None, &bytes)?;
-    out.say(format!(
-        "← {}",
-        crate::frames::frame_line(out.spec, &frame, None)
-    ));
+    let bytes = busspec_json::parse_hex(wire)?;
+    let frame = busspec_json::decode_typed::<ub2::Ub2>(out.spec, None, None, &bytes)?;
+    out.say(format!("← {}", frame.line(out.spec, None)?));
     Ok(())
 }
 

@@ -13,7 +13,7 @@ use busspec_link::soak::{self, SoakConfig};
 use busspec_link::{Master, Protocol, Sd, SerialTransport, SystemClock, Transport, Ub2};
 use busspec_model::ir::Direction;
 use busspec_model::Protocol as Spec;
-use busspec_protocols::{sd, ub2};
+use busspec_protocols::{sd, ub2, Message};
 
 use crate::{frames, svg};
 
@@ -84,7 +84,7 @@ pub fn request_frame(
         "address": address,
         "fields": fields,
     });
-    frames::encode_line(spec, &line.to_string()).map_err(|e| format!("{command}: {e}"))
+    frames::encode_built_in(spec, &line.to_string()).map_err(|e| format!("{command}: {e}"))
 }
 
 fn field_list(c: &busspec_model::ir::Message) -> String {
@@ -96,26 +96,18 @@ fn field_list(c: &busspec_model::ir::Message) -> String {
     }
 }
 
-/// The JSON line `busspec decode` prints for this reply.
+/// The JSON line `busspec decode` prints for this reply, from the typed reply itself.
 fn reply_line<P: Protocol>(
     spec: &Spec,
-    request: &P::Request,
+    _request: &P::Request,
     response: &P::Response,
     address: u8,
-) -> String {
-    let mut buf = vec![0u8; P::MAX_FRAME_LEN];
-    let wire = match P::encode_response(response, address, &mut buf) {
-        Ok(n) => &buf[..n],
-        Err(e) => return format!("{{\"error\":{:?}}}", e.to_string()),
-    };
-    let reply_to = spec
-        .commands
-        .iter()
-        .position(|c| c.name == P::request_name(request));
-    match frames::decode_frame(spec, Some(Direction::Response), reply_to, wire) {
-        Ok(f) => frames::frame_line(spec, &f, None),
-        Err(e) => format!("{{\"error\":{:?}}}", e),
-    }
+) -> String
+where
+    P::Response: Message,
+{
+    busspec_json::message_line(spec, Direction::Response, address, response, None)
+        .unwrap_or_else(|e| format!("{{\"error\":{:?}}}", e))
 }
 
 /// Prints progress on stderr, at most every `every`.
@@ -208,7 +200,10 @@ fn one<P: Protocol, T: Transport, C: Clock>(
     m: &mut Master<P, T, C>,
     address: u8,
     request: P::Request,
-) -> Result<(), String> {
+) -> Result<(), String>
+where
+    P::Response: Message,
+{
     let ex = m.transact(address, request).map_err(link_error)?;
     match ex.response {
         Some(r) => print(&reply_line::<P>(spec, &request, &r, ex.address)),
@@ -276,7 +271,10 @@ fn print_move<P: Protocol>(
     check: &P::Request,
     report: &busspec_link::master::MoveReport<P::Response>,
     address: u8,
-) -> Result<(), String> {
+) -> Result<(), String>
+where
+    P::Response: Message,
+{
     print(&reply_line::<P>(spec, request, &report.started, address))?;
     match &report.finished {
         Some(done) => print(&reply_line::<P>(spec, check, done, address)),
@@ -492,7 +490,10 @@ pub(crate) fn reply_json<P: Protocol>(
     request: &P::Request,
     response: &P::Response,
     address: u8,
-) -> String {
+) -> String
+where
+    P::Response: Message,
+{
     reply_line::<P>(spec, request, response, address)
 }
 
@@ -516,11 +517,7 @@ mod tests {
     use busspec_model::ir::{Leaf, MessageKind, MessageRef, ResponseKind, StatedValue};
 
     fn spec(name: &str) -> Spec {
-        let (file, text) = match name {
-            "ub2" => ("spec/ub2.yaml", include_str!("../spec/ub2.yaml")),
-            _ => ("spec/sd.yaml", include_str!("../spec/sd.yaml")),
-        };
-        busspec_model::load_str(file, text).expect("built-in spec loads")
+        frames::built_in_spec(name)
     }
 
     /// name=value arguments for command `i`: the values of its first example the document does
@@ -576,11 +573,10 @@ mod tests {
             .collect()
     }
 
-    fn check_every_command<P: Protocol, D: Device>(
-        name: &str,
-        address: u8,
-        device: impl Fn() -> D,
-    ) {
+    fn check_every_command<P: Protocol, D: Device>(name: &str, address: u8, device: impl Fn() -> D)
+    where
+        P::Response: Message,
+    {
         let spec = spec(name);
         assert!(!spec.commands.is_empty());
         for (i, c) in spec.commands.iter().enumerate() {
