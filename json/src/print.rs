@@ -1,7 +1,7 @@
 //! Printing: a frame's JSON line from its message, address and fields (name and raw value).
 
 use busspec_model::interp::{self, Frame, Raw};
-use busspec_model::ir::{BitField, Direction, Field, Message as IrMessage, MessageRef, Unit};
+use busspec_model::ir::{BitField, Direction, Field, Leaf, Message as IrMessage, MessageRef, Unit};
 use busspec_runtime::{FieldValue, Message};
 
 use crate::{hex, Spec};
@@ -201,9 +201,56 @@ pub fn message_line<M: Message>(
         )
     })?;
     let m = p.message(r);
+    let mut given: Vec<(&'static str, Owned)> = Vec::new();
+    message.visit(|name, raw| {
+        given.push((
+            name,
+            match raw {
+                FieldValue::Int(i) => Owned::Int(i),
+                FieldValue::Text(t) => Owned::Text(t.to_vec()),
+            },
+        ))
+    });
+    let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
+    // Typed messages leave out what the spec fixes (constants, repeated fields); the contract
+    // prints every leaf of the message, as the frame carries it.
     let mut fields = Vec::new();
-    message.visit(|name, raw| fields.push(field(p, m, name, raw)));
+    for leaf in m.leaves() {
+        let name = leaf.name();
+        let fixed = match leaf {
+            Leaf::Field(_, f) => match (f.constant, f.equals) {
+                (Some(c), _) => Some(Owned::Int(c as i64)),
+                (None, Some(i)) => m.fields.get(i).and_then(|e| lookup(&e.name)).cloned(),
+                (None, None) => None,
+            },
+            Leaf::Bits(_, _, b) => b.constant.map(|c| Owned::Int(c as i64)),
+        };
+        if let Some(v) = lookup(name).or(fixed.as_ref()) {
+            fields.push(field(p, m, name, v.as_field()));
+        }
+    }
+    for (name, v) in &given {
+        if !m.leaves().any(|l| l.name() == *name) {
+            fields.push(field(p, m, name, v.as_field()));
+        }
+    }
     Ok(line(p, r, address, fields, offset))
+}
+
+/// A field value held past [`Message::visit`].
+#[derive(Clone)]
+enum Owned {
+    Int(i64),
+    Text(Vec<u8>),
+}
+
+impl Owned {
+    fn as_field(&self) -> FieldValue<'_> {
+        match self {
+            Owned::Int(i) => FieldValue::Int(*i),
+            Owned::Text(t) => FieldValue::Text(t),
+        }
+    }
 }
 
 /// The stream line of `bytes` at `offset` that start no frame.
