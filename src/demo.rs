@@ -37,7 +37,10 @@ impl Out<'_> {
         m: &mut Master<P, T, C>,
         address: u8,
         request: P::Request,
-    ) -> Result<Option<P::Response>, String> {
+    ) -> Result<Option<P::Response>, String>
+    where
+        P::Response: busspec_protocols::Message,
+    {
         let ex = m
             .transact(address, request)
             .map_err(|e| format!("demo failed: {e}"))?;
@@ -55,7 +58,7 @@ impl Out<'_> {
                 };
                 self.say(format!(
                     "← {}{retried}",
-                    reply_json::<P>(self.spec, &request, &r, ex.address)
+                    reply_json::<P>(self.spec, &r, ex.address)
                 ));
                 Ok(Some(r))
             }
@@ -106,12 +109,9 @@ fn document_frame(out: &mut Out) -> Result<(), String> {
     out.say(format!(
         "== A frame from the UB2 document (§6.1, printed {printed}; on the wire {wire}, erratum ub2-e01): busspec decode ub2 \"{wire}\""
     ));
-    let bytes = busspec_model::interp::parse_hex(wire)?;
-    let frame = crate::frames::decode_frame(out.spec, None, None, &bytes)?;
-    out.say(format!(
-        "← {}",
-        crate::frames::frame_line(out.spec, &frame, None)
-    ));
+    let bytes = busspec_json::parse_hex(wire)?;
+    let frame = busspec_json::decode_typed::<ub2::Ub2>(out.spec, None, None, &bytes)?;
+    out.say(format!("← {}", frame.line(out.spec, None)?));
     Ok(())
 }
 
@@ -247,17 +247,11 @@ fn movement<T: Transport, C: Clock>(
     );
     out.lines.extend(lines);
     let r = result.map_err(|e| format!("demo failed: {e}"))?;
-    out.say(format!(
-        "← {}",
-        reply_json::<Ub2>(spec, &trigger, &r.started, 0x21)
-    ));
-    if let (Some(done), Some(check)) = (
-        r.finished,
-        busspec_link::master::ub2_completion_check(&trigger),
-    ) {
+    out.say(format!("← {}", reply_json::<Ub2>(spec, &r.started, 0x21)));
+    if let Some(done) = r.finished {
         out.say(format!(
             "← {}   (after {} completion checks, {:.1} s)",
-            reply_json::<Ub2>(spec, &check, &done, 0x21),
+            reply_json::<Ub2>(spec, &done, 0x21),
             r.polls,
             r.elapsed.as_secs_f64()
         ));
@@ -319,18 +313,11 @@ fn sd_part(out: &mut Out) -> Result<(), String> {
     );
     out.lines.extend(lines);
     let r = r.map_err(|e| format!("demo failed: {e}"))?;
-    let sp = Q::SetPoint {
-        freshness: 0,
-        position: Angle::from_value(45.0).unwrap_or_default(),
-    };
-    out.say(format!(
-        "← {}",
-        reply_json::<Sd>(out.spec, &sp, &r.started, 1)
-    ));
+    out.say(format!("← {}", reply_json::<Sd>(out.spec, &r.started, 1)));
     if let Some(done) = r.finished {
         out.say(format!(
             "← {}   (reached after {:.2} s)",
-            reply_json::<Sd>(out.spec, &Q::ReadActualPosition, &done, 1),
+            reply_json::<Sd>(out.spec, &done, 1),
             r.elapsed.as_secs_f64()
         ));
     }

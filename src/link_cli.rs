@@ -86,7 +86,7 @@ pub fn request_frame(
         "address": address,
         "fields": fields,
     });
-    frames::encode_line(spec, &line.to_string()).map_err(|e| format!("{command}: {e}"))
+    frames::encode_built_in(spec, &line.to_string()).map_err(|e| format!("{command}: {e}"))
 }
 
 fn field_list(c: &busspec_model::ir::Message) -> String {
@@ -98,23 +98,10 @@ fn field_list(c: &busspec_model::ir::Message) -> String {
     }
 }
 
-/// The JSON line `busspec decode` prints for this reply.
-fn reply_line<P: Protocol>(
-    spec: &Spec,
-    request: &P::Request,
-    response: &P::Response,
-    address: u8,
-) -> String {
-    let mut buf = vec![0u8; P::MAX_FRAME_LEN];
-    let wire = match response.encode(address, &mut buf) {
-        Ok(n) => &buf[..n],
-        Err(e) => return format!("{{\"error\":{:?}}}", e.to_string()),
-    };
-    let reply_to = spec.commands.iter().position(|c| c.name == request.name());
-    match frames::decode_frame(spec, Some(Direction::Response), reply_to, wire) {
-        Ok(f) => frames::frame_line(spec, &f, None),
-        Err(e) => format!("{{\"error\":{:?}}}", e),
-    }
+/// The JSON line `busspec decode` prints for this reply, from the typed reply itself.
+fn reply_line<P: Protocol>(spec: &Spec, response: &P::Response, address: u8) -> String {
+    busspec_json::message_line(spec, Direction::Response, address, response, None)
+        .unwrap_or_else(|e| format!("{{\"error\":{:?}}}", e))
 }
 
 /// Prints progress on stderr, at most every `every`.
@@ -210,7 +197,7 @@ fn one<P: Link, T: Transport, C: Clock>(
 ) -> Result<(), String> {
     let ex = m.transact(address, request).map_err(link_error)?;
     match ex.response {
-        Some(r) => print(&reply_line::<P>(spec, &request, &r, ex.address)),
+        Some(r) => print(&reply_line::<P>(spec, &r, ex.address)),
         None => {
             eprintln!(
                 "sent {} to broadcast address 0x{address:02X}; it is not answered",
@@ -229,13 +216,12 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
             .read_c_curve(o.address, &mut |p| line.show("entries", p))
             .map_err(link_error)?;
         for p in &table {
-            let request = ub2::Request::GetCCurveIndexedFullStepCapacitance { index: p.index };
             let r = ub2::Response::CCurveEntry {
                 index: p.index,
                 full_steps: p.full_steps,
                 capacitance: p.capacitance,
             };
-            print(&reply_line::<Ub2>(spec, &request, &r, o.address))?;
+            print(&reply_line::<Ub2>(spec, &r, o.address))?;
         }
         eprintln!("read {} C-curve entries", table.len());
         if let Some(path) = o.svg {
@@ -255,8 +241,7 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
                 &mut |p| line.show("full-steps", p),
             )
             .map_err(link_error)?;
-        let check = busspec_link::master::ub2_completion_check(&request).unwrap_or(request);
-        print_move::<Ub2>(spec, &request, &check, &report, o.address)?;
+        print_move::<Ub2>(spec, &report, o.address)?;
         if report.clipped {
             eprintln!("the target lay outside the customer limits: the capacitor ran to the limit");
         }
@@ -268,17 +253,15 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
     one(spec, &mut m, o.address, request)
 }
 
-/// Prints a movement's trigger reply and its final reply (to `check`).
+/// Prints a movement's trigger reply and its final reply (to the completion check).
 fn print_move<P: Protocol>(
     spec: &Spec,
-    request: &P::Request,
-    check: &P::Request,
     report: &busspec_link::master::MoveReport<P::Response>,
     address: u8,
 ) -> Result<(), String> {
-    print(&reply_line::<P>(spec, request, &report.started, address))?;
+    print(&reply_line::<P>(spec, &report.started, address))?;
     match &report.finished {
-        Some(done) => print(&reply_line::<P>(spec, check, done, address)),
+        Some(done) => print(&reply_line::<P>(spec, done, address)),
         None => Ok(()),
     }
 }
@@ -335,13 +318,7 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
                 &mut |p| line.show("°", p),
             )
             .map_err(link_error)?;
-        print_move::<Sd>(
-            spec,
-            &request,
-            &sd::Request::ReadActualPosition,
-            &report,
-            o.address,
-        )?;
+        print_move::<Sd>(spec, &report, o.address)?;
         return Ok(());
     }
     one(spec, &mut m, o.address, request)
@@ -486,13 +463,8 @@ pub fn soak(protocols: &[&str], transactions: u64, rate: f64, seed: u64) -> Resu
 pub use crate::demo::demo;
 
 /// Used by the demo to show a reply like `decode` would.
-pub(crate) fn reply_json<P: Protocol>(
-    spec: &Spec,
-    request: &P::Request,
-    response: &P::Response,
-    address: u8,
-) -> String {
-    reply_line::<P>(spec, request, response, address)
+pub(crate) fn reply_json<P: Protocol>(spec: &Spec, response: &P::Response, address: u8) -> String {
+    reply_line::<P>(spec, response, address)
 }
 
 pub(crate) fn svg_file(
@@ -515,11 +487,7 @@ mod tests {
     use busspec_model::ir::{Leaf, MessageKind, MessageRef, ResponseKind, StatedValue};
 
     fn spec(name: &str) -> Spec {
-        let (file, text) = match name {
-            "ub2" => ("spec/ub2.yaml", include_str!("../spec/ub2.yaml")),
-            _ => ("spec/sd.yaml", include_str!("../spec/sd.yaml")),
-        };
-        busspec_model::load_str(file, text).expect("built-in spec loads")
+        frames::built_in_spec(name)
     }
 
     /// name=value arguments for command `i`: the values of its first example the document does
@@ -614,7 +582,7 @@ mod tests {
                 c.name
             );
             // The JSON line is the one `decode` prints for the reply.
-            let line = reply_line::<P>(&spec, &request, &response, ex.address);
+            let line = reply_line::<P>(&spec, &response, ex.address);
             let json: serde_json::Value = serde_json::from_str(&line).expect("JSON");
             assert_eq!(json["message"], rname, "{line}");
             assert_eq!(json["address"], ex.address, "{line}");

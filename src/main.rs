@@ -12,15 +12,11 @@ use std::process::ExitCode;
 
 use busspec_model::diff::{self, Category};
 use busspec_model::ir::Direction;
-use busspec_model::stream::StreamDecoder;
-use busspec_model::{docs, interp, load_file, load_str, Protocol};
+use busspec_model::{docs, load_file, Protocol};
+use busspec_protocols::{sd, ub2};
 use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
 
-/// The built-in specs, embedded so the binary works from any directory.
-const BUILT_IN: [(&str, &str, &str); 2] = [
-    ("ub2", "spec/ub2.yaml", include_str!("../spec/ub2.yaml")),
-    ("sd", "spec/sd.yaml", include_str!("../spec/sd.yaml")),
-];
+use frames::Engine;
 
 const DECODE_HELP: &str = "\
 Decode frames to JSON, one line per frame.
@@ -483,31 +479,29 @@ fn usage_error(subcommand: &str, msg: String) -> ! {
     }
 }
 
-/// The protocol to work with: a built-in spec, or the one in `--spec FILE` whose name must match.
-fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Protocol, String> {
+/// The protocol to work with: a built-in one (its generated code, embedded so the binary works
+/// from any directory), or the spec in `--spec FILE` (the interpreter), whose name must match.
+fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Engine, String> {
     let loaded = match spec {
-        Some(file) => load_file(file).map_err(|d| load_errors(&d))?,
-        None => {
-            let Some((_, file, text)) = BUILT_IN.iter().find(|(n, _, _)| *n == name) else {
-                let known: Vec<&str> = BUILT_IN.iter().map(|(n, _, _)| *n).collect();
-                usage_error(
-                    subcommand,
-                    format!(
-                        "unknown protocol `{name}`: the built-in ones are {} (or give --spec FILE)",
-                        known.join(", ")
-                    ),
-                );
-            };
-            load_str(file, text).map_err(|d| format!("built-in spec is invalid:\n{d}"))?
-        }
+        Some(file) => Engine::interpreted(load_file(file).map_err(|d| load_errors(&d))?),
+        None => match Engine::built_in(name) {
+            Some(engine) => engine?,
+            None => usage_error(
+                subcommand,
+                format!(
+                    "unknown protocol `{name}`: the built-in ones are {} (or give --spec FILE)",
+                    busspec_protocols::PROTOCOLS.join(", ")
+                ),
+            ),
+        },
     };
-    if loaded.name != name {
+    if loaded.spec.name != name {
         let file = spec.map(|f| f.display().to_string()).unwrap_or_default();
         usage_error(
             subcommand,
             format!(
                 "{file} defines protocol `{}`, not `{name}`: name the protocol the spec defines",
-                loaded.name
+                loaded.spec.name
             ),
         );
     }
@@ -526,7 +520,8 @@ fn emit(out: &mut impl Write, line: &str) -> Result<(), String> {
 }
 
 fn decode(args: DecodeArgs) -> Result<(), String> {
-    let p = protocol("decode", &args.protocol, args.spec.as_deref())?;
+    let engine = protocol("decode", &args.protocol, args.spec.as_deref())?;
+    let p = &engine.spec;
     let reply_to = args.reply_to.as_deref().map(|name| {
         p.commands
             .iter()
@@ -542,14 +537,14 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     if let Some(file) = &args.stream {
-        return decode_stream(&p, direction, reply_to, file, &mut out);
+        return decode_stream(&engine, direction, reply_to, file, &mut out);
     }
     let mut failed = 0;
     for (i, text) in args.frames.iter().enumerate() {
-        let result = interp::parse_hex(text)
-            .and_then(|wire| frames::decode_frame(&p, direction, reply_to, &wire));
+        let result = busspec_json::parse_hex(text)
+            .and_then(|wire| engine.decode(direction, reply_to, &wire));
         match result {
-            Ok(frame) => emit(&mut out, &frames::frame_line(&p, &frame, None))?,
+            Ok(line) => emit(&mut out, &line)?,
             Err(reason) => {
                 failed += 1;
                 let _ = out.flush();
@@ -565,7 +560,7 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
 }
 
 fn decode_stream(
-    p: &Protocol,
+    engine: &Engine,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     file: &Path,
@@ -577,7 +572,7 @@ fn decode_stream(
     } else {
         Box::new(std::fs::File::open(file).map_err(|e| format!("error: cannot read {name}: {e}"))?)
     };
-    let mut decoder = StreamDecoder::new(p, direction).with_default_request(reply_to);
+    let mut decoder = engine.stream(direction, reply_to);
     let mut chunk = vec![0u8; 4096];
     loop {
         let n = match input.read(&mut chunk) {
@@ -586,20 +581,20 @@ fn decode_stream(
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
             Err(e) => return Err(format!("error: cannot read {name}: {e}")),
         };
-        for event in decoder.push(&chunk[..n]) {
-            emit(out, &frames::event_line(p, &event))?;
+        for line in decoder.push(&chunk[..n]) {
+            emit(out, &line)?;
         }
         out.flush()
             .map_err(|e| format!("error: cannot write output: {e}"))?;
     }
-    for event in decoder.flush() {
-        emit(out, &frames::event_line(p, &event))?;
+    for line in decoder.finish() {
+        emit(out, &line)?;
     }
     Ok(())
 }
 
 fn encode(args: EncodeArgs) -> Result<(), String> {
-    let p = protocol("encode", &args.protocol, args.spec.as_deref())?;
+    let engine = protocol("encode", &args.protocol, args.spec.as_deref())?;
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
     let stdout = std::io::stdout();
@@ -615,7 +610,7 @@ fn encode(args: EncodeArgs) -> Result<(), String> {
         }
         let result = match std::str::from_utf8(&line) {
             Ok(text) if text.trim().is_empty() => continue,
-            Ok(text) => frames::encode_line(&p, text.trim()),
+            Ok(text) => engine.encode(text.trim()),
             Err(e) => Err(format!(
                 "not UTF-8 text: invalid byte at offset {}",
                 e.valid_up_to()
@@ -729,7 +724,7 @@ fn diff(args: DiffArgs) -> ExitCode {
 }
 
 fn talk(a: TalkArgs) -> Result<(), String> {
-    let p = protocol("talk", &a.protocol, None)?;
+    let p = protocol("talk", &a.protocol, None)?.spec;
     let options = link_cli::TalkOptions {
         port: &a.port,
         baud: a.baud,
@@ -750,7 +745,7 @@ fn talk(a: TalkArgs) -> Result<(), String> {
 }
 
 fn demo(svg: Option<&Path>) -> Result<(), String> {
-    let ub2 = protocol("demo", "ub2", None)?;
-    let sd = protocol("demo", "sd", None)?;
+    let ub2 = busspec_json::load_spec::<ub2::Ub2>()?;
+    let sd = busspec_json::load_spec::<sd::Sd>()?;
     link_cli::demo(&ub2, &sd, svg).map(|_| ())
 }

@@ -1,0 +1,188 @@
+//! Decoding one frame for printing, with either engine: errors that say what and where, and an
+//! ambiguity that says how to settle it.
+
+use busspec_model::interp::{self, DecodeError as InterpError, Frame, Raw, Value};
+use busspec_model::ir::{Direction, Leaf, MessageRef};
+use busspec_runtime::{DecodeError, Message, Protocol};
+
+use crate::{Spec, Typed};
+
+/// The commands whose request would settle an ambiguous frame.
+fn settling_requests(p: &Spec, candidates: &[String]) -> Vec<String> {
+    let mut names = Vec::new();
+    for c in &p.commands {
+        let answers = c.responses.iter().any(|(i, _)| {
+            p.responses
+                .get(*i)
+                .is_some_and(|r| candidates.contains(&r.name))
+        });
+        if answers {
+            names.push(c.name.clone());
+        }
+    }
+    names
+}
+
+/// The error of a frame that could be any of `candidates`, given `--reply-to` or not.
+fn ambiguous(p: &Spec, candidates: &[String], reply_to: Option<usize>) -> String {
+    let listed = candidates.join(" or ");
+    match reply_to {
+        None => {
+            let requests = settling_requests(p, candidates);
+            format!(
+                "ambiguous frame: could be {listed}; only the request it answers tells them apart: give --reply-to {}",
+                if requests.is_empty() {
+                    "<command>".to_owned()
+                } else {
+                    requests.join(" or --reply-to ")
+                }
+            )
+        }
+        Some(cmd) => {
+            let name = p.commands.get(cmd).map(|c| c.name.as_str()).unwrap_or("?");
+            format!("ambiguous frame: could be {listed}, and {name} (--reply-to) gets none of them")
+        }
+    }
+}
+
+/// Decodes one frame with the interpreter: like [`interp::decode`], but an ambiguity says how
+/// to settle it, and a `reply_to` (a command index) that settles nothing says so.
+pub fn decode_frame(
+    p: &Spec,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    wire: &[u8],
+) -> Result<Frame, String> {
+    match interp::decode(p, direction, None, wire) {
+        Ok(f) => Ok(f),
+        Err(InterpError::Ambiguous { candidates }) => match reply_to {
+            None => Err(ambiguous(p, &candidates, None)),
+            Some(cmd) => interp::decode(p, direction, Some(cmd), wire)
+                .map_err(|_| ambiguous(p, &candidates, Some(cmd))),
+        },
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// A request of command `cmd` (an index into the spec's commands) of generated protocol `P`:
+/// the command with every field at a neutral value (constants and repeated fields as the spec
+/// fixes them, enums at their first value, other fields zero). What a response decoder needs to
+/// know which request it answers; `None` if the command has no such request.
+pub fn request_for<P: Protocol>(p: &Spec, cmd: usize) -> Option<P::Request> {
+    let c = p.commands.get(cmd)?;
+    let mut values = Vec::new();
+    for leaf in c.leaves() {
+        let raw = match leaf {
+            Leaf::Field(_, f) if f.constant.is_some() || f.equals.is_some() => continue,
+            Leaf::Field(_, f) if f.is_ascii() => Raw::Text(vec![b' '; f.width]),
+            Leaf::Field(_, f) => Raw::Int(
+                f.enumeration
+                    .and_then(|e| p.enums.get(e))
+                    .and_then(|e| e.values.first())
+                    .map_or(0, |v| v.value as i64),
+            ),
+            Leaf::Bits(_, _, b) if b.constant.is_some() => continue,
+            Leaf::Bits(..) => Raw::Int(0),
+        };
+        values.push(Value {
+            name: leaf.name().to_owned(),
+            raw,
+        });
+    }
+    let r = MessageRef {
+        direction: Direction::Request,
+        index: cmd,
+    };
+    let wire = interp::encode(p, r, *P::DEVICE_ADDRESSES.start(), &values).ok()?;
+    P::decode_request(&wire)
+        .ok()
+        .map(|d| d.message)
+        .filter(|q| q.name() == c.name)
+}
+
+/// The responses of `P` a frame decodes as, given some request: the candidates of an
+/// ambiguous frame, in spec order.
+pub(crate) fn candidates<P: Protocol>(p: &Spec, wire: &[u8]) -> Vec<String> {
+    let mut found: Vec<&'static str> = Vec::new();
+    for cmd in 0..p.commands.len() {
+        if let Some(q) = request_for::<P>(p, cmd) {
+            if let Ok(d) = P::decode_reply(wire, &q) {
+                found.push(d.message.name());
+            }
+        }
+    }
+    p.responses
+        .iter()
+        .filter(|r| found.contains(&r.name.as_str()))
+        .map(|r| r.name.clone())
+        .collect()
+}
+
+/// How telling an error is when a frame fails in both directions: the one that got further.
+fn rank(e: &DecodeError) -> u8 {
+    match e {
+        DecodeError::UnknownCommand { .. } => 0,
+        DecodeError::Truncated { .. } => 1,
+        DecodeError::WrongLength { .. } => 2,
+        _ => 3,
+    }
+}
+
+/// The error of a frame that is neither a request nor a response.
+fn either(request: DecodeError, response: DecodeError) -> DecodeError {
+    match (request, response) {
+        (
+            DecodeError::Truncated {
+                needed: a,
+                found: n,
+            },
+            DecodeError::Truncated { needed: b, .. },
+        ) => DecodeError::Truncated {
+            needed: a.min(b),
+            found: n,
+        },
+        (q, r) if rank(&r) > rank(&q) => r,
+        (q, _) => q,
+    }
+}
+
+/// Decodes one frame with generated protocol `P` (`p` its spec, from [`crate::load_spec`]):
+/// as a request or a response (`direction`, or whichever it is), a response that only its
+/// request tells apart as the reply to command `reply_to` (an index into the spec's commands).
+/// Errors as [`decode_frame`] gives them.
+pub fn decode_typed<P: Protocol>(
+    p: &Spec,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    wire: &[u8],
+) -> Result<Typed<P>, String> {
+    let request = match direction {
+        Some(Direction::Response) => None,
+        _ => match P::decode_request(wire) {
+            Ok(d) => return Ok(Typed::Request(d)),
+            Err(e) => Some(e),
+        },
+    };
+    if direction == Some(Direction::Request) {
+        return Err(request.map(|e| e.to_string()).unwrap_or_default());
+    }
+    let response = match P::decode_response(wire) {
+        Ok(d) => return Ok(Typed::Response(d)),
+        Err(DecodeError::Ambiguous { .. }) => {
+            let names = candidates::<P>(p, wire);
+            let settled = reply_to
+                .and_then(|cmd| request_for::<P>(p, cmd))
+                .and_then(|q| P::decode_reply(wire, &q).ok());
+            return match settled {
+                Some(d) => Ok(Typed::Response(d)),
+                None => Err(ambiguous(p, &names, reply_to)),
+            };
+        }
+        Err(e) => e,
+    };
+    let e = match request {
+        Some(q) => either(q, response),
+        None => response,
+    };
+    Err(e.to_string())
+}

@@ -1,0 +1,445 @@
+//! Parsing: a JSON line back to a frame's raw field values, and from those to either engine.
+
+use std::collections::BTreeMap;
+
+use busspec_model::interp::{self, Raw, Value};
+use busspec_model::ir::{BitField, Direction, Field, MessageRef, Unit};
+use busspec_model::rational::Rational;
+use busspec_runtime::{DecodeError, Message, Protocol};
+use serde::Deserialize;
+use serde_json::value::RawValue;
+
+use crate::decode::request_for;
+use crate::print::physical_text;
+use crate::{Spec, Typed};
+
+/// A frame as a JSON line gives it: the message, the address and every field's raw value
+/// (packed sub-fields by name; constants and repeated fields only where the line gives them).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Parsed {
+    pub message: MessageRef,
+    pub address: u8,
+    pub values: Vec<Value>,
+}
+
+impl Parsed {
+    /// The frame's bytes, from the interpreter's encoder: constants and repeated fields filled
+    /// in, every value checked against its field's width, the address against the spec's.
+    pub fn encode(&self, p: &Spec) -> Result<Vec<u8>, String> {
+        interp::encode(p, self.message, self.address, &self.values).map_err(|e| e.to_string())
+    }
+
+    /// The frame as a typed message of generated protocol `P` (`p` its spec, from
+    /// [`crate::load_spec`]): encoded as [`Parsed::encode`] does, then decoded by `P`'s codec,
+    /// a response only its request tells apart as the reply to a command that gets it.
+    pub fn to_typed<P: Protocol>(&self, p: &Spec) -> Result<Typed<P>, String> {
+        let wire = self.encode(p)?;
+        let m = p.message(self.message);
+        let typed = match self.message.direction {
+            Direction::Request => P::decode_request(&wire).map(Typed::Request),
+            Direction::Response => match P::decode_response(&wire) {
+                Err(DecodeError::Ambiguous { code }) => m
+                    .answers
+                    .iter()
+                    .filter_map(|&cmd| request_for::<P>(p, cmd))
+                    .filter_map(|q| P::decode_reply(&wire, &q).ok())
+                    .find(|d| d.message.name() == m.name)
+                    .map(Typed::Response)
+                    .ok_or(DecodeError::Ambiguous { code }),
+                other => other.map(Typed::Response),
+            },
+        };
+        match typed {
+            Ok(t) if t.name() == m.name => Ok(t),
+            Ok(t) => Err(format!(
+                "{} decodes as {} in the generated {} codec",
+                m.name,
+                t.name(),
+                P::NAME
+            )),
+            Err(e) => Err(format!(
+                "{}: the generated {} codec does not decode the frame: {e}",
+                m.name,
+                P::NAME
+            )),
+        }
+    }
+}
+
+/// One input line of `encode`: the object `decode` prints (its `offset` from `--stream` is
+/// accepted and ignored).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Input {
+    #[serde(default, rename = "offset")]
+    _offset: Option<serde::de::IgnoredAny>,
+    #[serde(default)]
+    protocol: Option<String>,
+    #[serde(default)]
+    direction: Option<String>,
+    address: serde_json::Number,
+    #[serde(default)]
+    code: Option<String>,
+    message: String,
+    #[serde(default)]
+    fields: Option<BTreeMap<String, Box<RawValue>>>,
+}
+
+/// A serde_json error without its `at line 1 column N` tail (there is only one line).
+fn json_error(e: &serde_json::Error) -> String {
+    let text = e.to_string();
+    let tail = format!(" at line {} column {}", e.line(), e.column());
+    let msg = text.strip_suffix(&tail).unwrap_or(&text);
+    if e.is_syntax() || e.is_eof() {
+        format!("invalid JSON at column {}: {msg}", e.column())
+    } else {
+        msg.to_owned()
+    }
+}
+
+/// Reads one JSON line: checks it against the spec and converts each field to its raw value.
+pub fn parse_line(p: &Spec, line: &str) -> Result<Parsed, String> {
+    let input: Input = match serde_json::from_str(line) {
+        Ok(i) => i,
+        Err(e) => {
+            // A `--stream` noise or ambiguity report is not a frame; say so plainly.
+            if let Ok(serde_json::Value::Object(o)) = serde_json::from_str(line) {
+                if o.contains_key("skipped") {
+                    return Err("a skipped-bytes report, not a frame".to_owned());
+                }
+                if o.contains_key("ambiguous") {
+                    return Err(
+                        "an ambiguous-frame report, not a frame: name the message instead"
+                            .to_owned(),
+                    );
+                }
+            }
+            return Err(json_error(&e));
+        }
+    };
+    if let Some(name) = &input.protocol {
+        if *name != p.name {
+            return Err(format!(
+                "protocol `{name}` does not match this spec (`{}`)",
+                p.name
+            ));
+        }
+    }
+    let direction = match input.direction.as_deref() {
+        None => None,
+        Some("request") => Some(Direction::Request),
+        Some("response") => Some(Direction::Response),
+        Some(other) => {
+            return Err(format!(
+                "direction `{other}` is neither `request` nor `response`"
+            ))
+        }
+    };
+    let address = match input.address.as_u64().map(u8::try_from) {
+        Some(Ok(a)) => a,
+        _ => return Err(format!("address {} is not a byte (0..=255)", input.address)),
+    };
+    let r = find_message(p, &input.message, direction)?;
+    let m = p.message(r);
+    if let Some(code) = &input.code {
+        let bytes = interp::parse_hex(code).map_err(|e| format!("code `{code}`: {e}"))?;
+        if bytes != m.code {
+            return Err(format!(
+                "code {code} does not match {} ({})",
+                m.name,
+                m.code_hex()
+            ));
+        }
+    }
+    let mut values = Vec::new();
+    for (name, raw) in input.fields.iter().flatten() {
+        let Some((f, bit)) = interp::leaf_field(m, name) else {
+            let all: Vec<String> = m.leaves().map(|l| l.name().to_owned()).collect();
+            return Err(format!(
+                "{} has no field `{name}`{}",
+                m.name,
+                if all.is_empty() {
+                    " (it has no fields)".to_owned()
+                } else {
+                    format!(" (its fields: {})", all.join(", "))
+                }
+            ));
+        };
+        let v = field_value(p, f, bit, name, raw.get())?;
+        values.push(Value {
+            name: name.clone(),
+            raw: v,
+        });
+    }
+    Ok(Parsed {
+        message: r,
+        address,
+        values,
+    })
+}
+
+fn find_message(p: &Spec, name: &str, d: Option<Direction>) -> Result<MessageRef, String> {
+    match (d, p.find(name)) {
+        (_, None) => Err(format!("unknown message `{name}` in {}", p.name)),
+        (Some(want), Some(r)) if r.direction != want => Err(format!(
+            "{name} is a {}, not a {}",
+            want_other(want).as_str(),
+            want.as_str()
+        )),
+        (_, Some(r)) => Ok(r),
+    }
+}
+
+fn want_other(d: Direction) -> Direction {
+    match d {
+        Direction::Request => Direction::Response,
+        Direction::Response => Direction::Request,
+    }
+}
+
+/// Parses JSON number text (`-12.5`, `1e3`, `2.5E-2`) exactly.
+fn parse_number(text: &str) -> Option<Rational> {
+    let (mantissa, exp) = match text.find(['e', 'E']) {
+        Some(i) => (&text[..i], text[i + 1..].parse::<i32>().ok()?),
+        None => (text, 0),
+    };
+    let m = Rational::parse(mantissa).ok()?;
+    if exp.unsigned_abs() > 36 {
+        return None;
+    }
+    let p = Rational::int(10i128.checked_pow(exp.unsigned_abs())?);
+    if exp >= 0 {
+        m.times(p)
+    } else {
+        m.over(p)
+    }
+}
+
+enum Given {
+    Number(String, Rational),
+    Text(String),
+    List(Vec<serde_json::Value>),
+}
+
+fn given(name: &str, raw: &str) -> Result<Given, String> {
+    let t = raw.trim();
+    match t.as_bytes().first() {
+        Some(b'"') => serde_json::from_str::<String>(t)
+            .map(Given::Text)
+            .map_err(|e| format!("{name}: {}", json_error(&e))),
+        Some(b'[') => serde_json::from_str::<Vec<serde_json::Value>>(t)
+            .map(Given::List)
+            .map_err(|e| format!("{name}: {}", json_error(&e))),
+        Some(c) if *c == b'-' || c.is_ascii_digit() => match parse_number(t) {
+            Some(r) => Ok(Given::Number(t.to_owned(), r)),
+            None => Err(format!(
+                "{name}: {t} is not a number busspec can take exactly"
+            )),
+        },
+        _ => Err(format!(
+            "{name}: {t} is not a number, a string or a list of names"
+        )),
+    }
+}
+
+fn integer(name: &str, text: &str, r: Rational) -> Result<i64, String> {
+    if !r.is_integer() {
+        return Err(format!("{name}: {text} is not a whole number"));
+    }
+    i64::try_from(r.num).map_err(|_| format!("{name}: {text} is too large"))
+}
+
+fn kind_of(f: &Field, bit: Option<&BitField>) -> &'static str {
+    match bit {
+        Some(_) => "a number",
+        None if f.is_ascii() => "text",
+        None if f.flags.is_some() => "a list of flag names",
+        None if f.enumeration.is_some() => "a value name or number",
+        None => "a number",
+    }
+}
+
+/// Converts one JSON field value to the raw value the interpreter takes.
+fn field_value(
+    p: &Spec,
+    f: &Field,
+    bit: Option<&BitField>,
+    name: &str,
+    raw: &str,
+) -> Result<Raw, String> {
+    let g = given(name, raw)?;
+    let wrong = || format!("{name} takes {}, got {}", kind_of(f, bit), raw.trim());
+    if let Some(b) = bit {
+        let Given::Number(text, r) = g else {
+            return Err(wrong());
+        };
+        return match (b.constant, b.unit.and_then(|u| p.units.get(u))) {
+            (None, Some(unit)) => {
+                physical_to_raw(unit, name, &text, r, u32::from(b.width()), b.signed).map(Raw::Int)
+            }
+            _ => integer(name, &text, r).map(Raw::Int),
+        };
+    }
+    if f.is_ascii() {
+        let Given::Text(s) = g else {
+            return Err(wrong());
+        };
+        let mut bytes = Vec::with_capacity(s.len());
+        for c in s.chars() {
+            let b = u8::try_from(u32::from(c)).map_err(|_| {
+                format!("{name}: character {c:?} is not a byte (text fields hold U+0000..U+00FF)")
+            })?;
+            bytes.push(b);
+        }
+        return Ok(Raw::Text(bytes));
+    }
+    if f.constant.is_some() || f.equals.is_some() {
+        let Given::Number(text, r) = g else {
+            return Err(wrong());
+        };
+        return integer(name, &text, r).map(Raw::Int);
+    }
+    if let Some(e) = f.enumeration.and_then(|e| p.enums.get(e)) {
+        return match g {
+            Given::Text(s) => match e.values.iter().find(|v| v.name == s) {
+                Some(v) => Ok(Raw::Int(v.value as i64)),
+                None => Err(format!(
+                    "{name}: `{s}` is not a value of {} (one of: {})",
+                    e.name,
+                    e.values
+                        .iter()
+                        .map(|v| v.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )),
+            },
+            Given::Number(text, r) => integer(name, &text, r).map(Raw::Int),
+            Given::List(_) => Err(wrong()),
+        };
+    }
+    if let Some(set) = f.flags.and_then(|i| p.flags.get(i)) {
+        let Given::List(items) = g else {
+            return Err(wrong());
+        };
+        let mut word: i64 = 0;
+        for item in items {
+            match item {
+                serde_json::Value::String(s) => match set.bits.iter().find(|b| b.name == s) {
+                    Some(b) => word |= 1i64.checked_shl(u32::from(b.bit)).unwrap_or(0),
+                    None => {
+                        return Err(format!(
+                            "{name}: `{s}` is not a flag of {} (one of: {})",
+                            set.name,
+                            set.bits
+                                .iter()
+                                .map(|b| b.name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ))
+                    }
+                },
+                serde_json::Value::Number(n) => match n.as_i64() {
+                    Some(v) if v >= 0 => word |= v,
+                    _ => return Err(format!("{name}: {n} is not a bit mask")),
+                },
+                other => return Err(format!("{name}: {other} is not a flag name or bit mask")),
+            }
+        }
+        return Ok(Raw::Int(word));
+    }
+    if let Given::Text(s) = &g {
+        return match f.special.iter().find(|x| x.name == *s) {
+            Some(x) => Ok(Raw::Int(x.value)),
+            None if f.special.is_empty() => Err(wrong()),
+            None => Err(format!(
+                "{name}: `{s}` is not a special value of the field (one of: {})",
+                f.special
+                    .iter()
+                    .map(|x| x.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        };
+    }
+    let Given::Number(text, r) = g else {
+        return Err(wrong());
+    };
+    match f.unit.and_then(|u| p.units.get(u)) {
+        Some(unit) => {
+            physical_to_raw(unit, name, &text, r, 8 * f.width as u32, f.signed).map(Raw::Int)
+        }
+        None => integer(name, &text, r).map(Raw::Int),
+    }
+}
+
+fn with_symbol(v: &str, unit: &Unit) -> String {
+    if unit.symbol.is_empty() {
+        v.to_owned()
+    } else {
+        format!("{v} {}", unit.symbol)
+    }
+}
+
+/// The raw value of a physical one, exactly; else an error naming the field, the value and the
+/// unit's step.
+fn physical_to_raw(
+    unit: &Unit,
+    name: &str,
+    text: &str,
+    v: Rational,
+    bits: u32,
+    signed: bool,
+) -> Result<i64, String> {
+    let raw = match unit.raw_exact(v) {
+        Some(raw) => raw,
+        None => {
+            // A unit without a finite decimal step (1/3) prints the nearest double; take back
+            // exactly what decode prints.
+            let nearest = v
+                .minus(unit.offset)
+                .and_then(|x| x.over(unit.scale))
+                .map(|x| x.round());
+            match nearest.and_then(|n| i64::try_from(n).ok()) {
+                Some(n) if physical_text(unit, n) == text => i128::from(n),
+                _ => {
+                    let offset = if unit.offset == Rational::ZERO {
+                        String::new()
+                    } else {
+                        format!(" from {}", with_symbol(&unit.offset.to_string(), unit))
+                    };
+                    return Err(format!(
+                        "{name}: {} is not a whole number of steps of {}{offset}",
+                        with_symbol(text, unit),
+                        with_symbol(&unit.scale.to_string(), unit),
+                    ));
+                }
+            }
+        }
+    };
+    let (min, max) = interp::raw_limits(bits, signed);
+    match i64::try_from(raw) {
+        Ok(r) if (min..=max).contains(&r) => Ok(r),
+        _ => Err(format!(
+            "{name}: {} is out of range: the field holds {} to {}",
+            with_symbol(text, unit),
+            with_symbol(&physical_text(unit, min), unit),
+            with_symbol(&physical_text(unit, max), unit),
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_numbers_parse_exactly() {
+        let r = |n, d| Rational::new(n, d).unwrap();
+        assert_eq!(parse_number("79.98"), Some(r(7998, 100)));
+        assert_eq!(parse_number("-0.5"), Some(r(-1, 2)));
+        assert_eq!(parse_number("1e3"), Some(r(1000, 1)));
+        assert_eq!(parse_number("2.5E-2"), Some(r(1, 40)));
+        assert_eq!(parse_number("1e99"), None);
+        assert_eq!(parse_number("abc"), None);
+    }
+}

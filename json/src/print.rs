@@ -1,0 +1,283 @@
+//! Printing: a frame's JSON line from its message, address and fields (name and raw value).
+
+use busspec_model::interp::{self, Frame, Raw};
+use busspec_model::ir::{BitField, Direction, Field, Leaf, Message as IrMessage, MessageRef, Unit};
+use busspec_runtime::{FieldValue, Message};
+
+use crate::{hex, Spec};
+
+/// A JSON value, written with keys in the order given.
+pub(crate) enum Json {
+    /// Number text, already valid JSON.
+    Num(String),
+    Str(String),
+    List(Vec<Json>),
+    Obj(Vec<(&'static str, Json)>),
+    /// An object with owned keys (the message's fields).
+    Fields(Vec<(String, Json)>),
+}
+
+fn quote(s: &str) -> String {
+    serde_json::to_string(s).unwrap_or_else(|_| "\"\"".to_owned())
+}
+
+/// Writes `{"k":v,...}`, keys in the order given.
+fn write_object<'a>(out: &mut String, pairs: impl Iterator<Item = (&'a str, &'a Json)>) {
+    out.push('{');
+    for (i, (k, v)) in pairs.enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        out.push_str(&quote(k));
+        out.push(':');
+        v.write(out);
+    }
+    out.push('}');
+}
+
+impl Json {
+    fn write(&self, out: &mut String) {
+        match self {
+            Json::Num(n) => out.push_str(n),
+            Json::Str(s) => out.push_str(&quote(s)),
+            Json::List(items) => {
+                out.push('[');
+                for (i, v) in items.iter().enumerate() {
+                    if i > 0 {
+                        out.push(',');
+                    }
+                    v.write(out);
+                }
+                out.push(']');
+            }
+            Json::Obj(pairs) => write_object(out, pairs.iter().map(|(k, v)| (*k, v))),
+            Json::Fields(pairs) => write_object(out, pairs.iter().map(|(k, v)| (k.as_str(), v))),
+        }
+    }
+
+    pub(crate) fn text(&self) -> String {
+        let mut s = String::new();
+        self.write(&mut s);
+        s
+    }
+}
+
+fn num(v: impl ToString) -> Json {
+    Json::Num(v.to_string())
+}
+
+/// A physical value as JSON number text: exact decimal where one exists, else the nearest
+/// double (a unit whose scale has no finite decimal, such as 1/3).
+pub(crate) fn physical_text(unit: &Unit, raw: i64) -> String {
+    let v = unit.physical(raw);
+    let exact = v.to_string();
+    if exact.contains('/') {
+        format!("{}", v.to_f64())
+    } else {
+        exact
+    }
+}
+
+fn text_of(bytes: &[u8]) -> String {
+    bytes.iter().map(|&b| char::from(b)).collect()
+}
+
+fn field_json(p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue<'_>) -> Json {
+    let v = match raw {
+        FieldValue::Text(t) => return Json::Str(text_of(t)),
+        FieldValue::Int(v) => v,
+    };
+    if let Some(b) = bit {
+        return match (b.constant, b.unit.and_then(|u| p.units.get(u))) {
+            (None, Some(unit)) => Json::Num(physical_text(unit, v)),
+            _ => num(v),
+        };
+    }
+    if f.constant.is_some() {
+        return num(v);
+    }
+    if let Some(s) = f.special.iter().find(|s| s.value == v) {
+        return Json::Str(s.name.clone());
+    }
+    if let Some(e) = f.enumeration.and_then(|e| p.enums.get(e)) {
+        return match e.values.iter().find(|x| x.value as i64 == v) {
+            Some(x) => Json::Str(x.name.clone()),
+            None => num(v),
+        };
+    }
+    if let Some(set) = f.flags.and_then(|i| p.flags.get(i)) {
+        let bits = v as u64;
+        let mut items = Vec::new();
+        let mut named = 0u64;
+        for flag in &set.bits {
+            let mask = 1u64.checked_shl(u32::from(flag.bit)).unwrap_or(0);
+            named |= mask;
+            if bits & mask != 0 {
+                items.push(Json::Str(flag.name.clone()));
+            }
+        }
+        for bit in 0..64u32 {
+            let mask = 1u64 << bit;
+            if bits & mask != 0 && named & mask == 0 {
+                items.push(num(mask));
+            }
+        }
+        return Json::List(items);
+    }
+    match f.unit.and_then(|u| p.units.get(u)) {
+        Some(unit) => Json::Num(physical_text(unit, v)),
+        None => num(v),
+    }
+}
+
+/// One field of message `m`, by its spec name and raw value: the engine-neutral core.
+fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, Json) {
+    let json = match interp::leaf_field(m, name) {
+        Some((f, bit)) => field_json(p, f, bit, raw),
+        None => match raw {
+            FieldValue::Int(i) => num(i),
+            FieldValue::Text(t) => Json::Str(text_of(t)),
+        },
+    };
+    (name.to_owned(), json)
+}
+
+fn line(
+    p: &Spec,
+    r: MessageRef,
+    address: u8,
+    fields: Vec<(String, Json)>,
+    offset: Option<u64>,
+) -> String {
+    let m = p.message(r);
+    let mut obj = Vec::new();
+    if let Some(o) = offset {
+        obj.push(("offset", num(o)));
+    }
+    obj.extend([
+        ("protocol", Json::Str(p.name.clone())),
+        ("direction", Json::Str(r.direction.as_str().to_owned())),
+        ("address", num(address)),
+        ("code", Json::Str(m.code_hex())),
+        ("message", Json::Str(m.name.clone())),
+        ("fields", Json::Fields(fields)),
+    ]);
+    Json::Obj(obj).text()
+}
+
+/// The JSON line of a frame the interpreter decoded; `offset` (stream mode) goes first.
+pub fn frame_line(p: &Spec, frame: &Frame, offset: Option<u64>) -> String {
+    let m = p.message(frame.message);
+    let fields = frame
+        .values
+        .iter()
+        .map(|v| {
+            let raw = match &v.raw {
+                Raw::Int(i) => FieldValue::Int(*i),
+                Raw::Text(t) => FieldValue::Text(t),
+            };
+            field(p, m, &v.name, raw)
+        })
+        .collect();
+    line(p, frame.message, frame.address, fields, offset)
+}
+
+/// The JSON line of a typed message of a generated protocol (a `Request` or `Response`, as
+/// `direction` says) from `address`; `offset` (stream mode) goes first. `p` is the spec the
+/// code was generated from ([`crate::load_spec`]); a message it does not have is an error.
+pub fn message_line<M: Message>(
+    p: &Spec,
+    direction: Direction,
+    address: u8,
+    message: &M,
+    offset: Option<u64>,
+) -> Result<String, String> {
+    let name = message.name();
+    let r = p.find_in(name, direction).ok_or_else(|| {
+        format!(
+            "{} has no {} `{name}`: the code was generated from another spec",
+            p.name,
+            direction.as_str()
+        )
+    })?;
+    let m = p.message(r);
+    let mut given: Vec<(&'static str, Owned)> = Vec::new();
+    message.visit(|name, raw| {
+        given.push((
+            name,
+            match raw {
+                FieldValue::Int(i) => Owned::Int(i),
+                FieldValue::Text(t) => Owned::Text(t.to_vec()),
+            },
+        ))
+    });
+    let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
+    // Typed messages leave out what the spec fixes (constants, repeated fields); the contract
+    // prints every leaf of the message, as the frame carries it.
+    let mut fields = Vec::new();
+    for leaf in m.leaves() {
+        let name = leaf.name();
+        let fixed = match leaf {
+            Leaf::Field(_, f) => match (f.constant, f.equals) {
+                (Some(c), _) => Some(Owned::Int(c as i64)),
+                (None, Some(i)) => m.fields.get(i).and_then(|e| lookup(&e.name)).cloned(),
+                (None, None) => None,
+            },
+            Leaf::Bits(_, _, b) => b.constant.map(|c| Owned::Int(c as i64)),
+        };
+        if let Some(v) = lookup(name).or(fixed.as_ref()) {
+            fields.push(field(p, m, name, v.as_field()));
+        }
+    }
+    for (name, v) in &given {
+        if !m.leaves().any(|l| l.name() == *name) {
+            fields.push(field(p, m, name, v.as_field()));
+        }
+    }
+    Ok(line(p, r, address, fields, offset))
+}
+
+/// A field value held past [`Message::visit`].
+#[derive(Clone)]
+enum Owned {
+    Int(i64),
+    Text(Vec<u8>),
+}
+
+impl Owned {
+    fn as_field(&self) -> FieldValue<'_> {
+        match self {
+            Owned::Int(i) => FieldValue::Int(*i),
+            Owned::Text(t) => FieldValue::Text(t),
+        }
+    }
+}
+
+/// The stream line of `bytes` at `offset` that start no frame.
+pub fn skipped_line(offset: u64, bytes: &[u8]) -> String {
+    Json::Obj(vec![
+        ("offset", num(offset)),
+        ("skipped", num(bytes.len())),
+        ("bytes", Json::Str(hex(bytes))),
+    ])
+    .text()
+}
+
+/// The stream line of a frame at `offset` that could be any of `candidates` (message names)
+/// and that no request settles.
+pub fn ambiguous_line<S: AsRef<str>>(offset: u64, candidates: &[S], bytes: &[u8]) -> String {
+    Json::Obj(vec![
+        ("offset", num(offset)),
+        (
+            "ambiguous",
+            Json::List(
+                candidates
+                    .iter()
+                    .map(|c| Json::Str(c.as_ref().to_owned()))
+                    .collect(),
+            ),
+        ),
+        ("bytes", Json::Str(hex(bytes))),
+    ])
+    .text()
+}
