@@ -11,7 +11,10 @@
 mod common;
 
 use busspec_model::ir::Direction;
-use common::{agree, random_input, spec, Generated, Sd, Ub2};
+use busspec_protocols::sd::Sd;
+use busspec_protocols::ub2::Ub2;
+use busspec_protocols::Protocol;
+use common::{agree, random_input, spec};
 
 fn random_inputs() -> usize {
     std::env::var("BUSSPEC_RANDOM_INPUTS")
@@ -20,8 +23,8 @@ fn random_inputs() -> usize {
         .unwrap_or(500_000)
 }
 
-fn every_example<G: Generated>() {
-    let p = spec(G::FILE);
+fn every_example<P: Protocol>() {
+    let p = spec::<P>();
     for e in &p.examples {
         let reply_to = if p.message(e.message).needs_request {
             e.reply_to
@@ -29,26 +32,26 @@ fn every_example<G: Generated>() {
             None
         };
         assert!(
-            agree::<G>(&p, &e.wire, e.message.direction, reply_to),
+            agree::<P>(&p, &e.wire, e.message.direction, reply_to),
             "{} example §{} does not decode",
-            G::FILE,
+            P::NAME,
             e.section
         );
     }
 }
 
-fn random<G: Generated>(seed: u64) -> (usize, usize) {
-    let p = spec(G::FILE);
+fn random<P: Protocol>(seed: u64) -> (usize, usize) {
+    let p = spec::<P>();
     let mut rng = fastrand::Rng::with_seed(seed);
     let (mut accepted, n) = (0, random_inputs());
     for _ in 0..n {
         let frame = random_input(&p, &mut rng);
         let reply_to = rng.bool().then(|| rng.usize(..p.commands.len()));
         for d in [Direction::Request, Direction::Response] {
-            accepted += usize::from(agree::<G>(&p, &frame, d, None));
+            accepted += usize::from(agree::<P>(&p, &frame, d, None));
         }
         if reply_to.is_some() {
-            agree::<G>(&p, &frame, Direction::Response, reply_to);
+            agree::<P>(&p, &frame, Direction::Response, reply_to);
         }
     }
     (accepted, n)

@@ -7,7 +7,9 @@ mod common;
 
 use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{Direction, MessageKind, MessageRef, Protocol, ResponseKind};
-use busspec_protocols::{sd, ub2};
+use busspec_protocols::sd::{self, Sd};
+use busspec_protocols::ub2::{self, Ub2};
+use busspec_protocols::{Message, Protocol as Generated};
 use common::{all_messages, fix_checksum, random_frame, spec};
 
 /// A frame that decodes as message `r`: its first example, else a random frame of its shape
@@ -26,7 +28,7 @@ fn frame_of(p: &Protocol, r: MessageRef) -> Vec<u8> {
 
 #[test]
 fn sd_set_point_every_angle_and_freshness() {
-    let p = spec("sd.yaml");
+    let p = spec::<Sd>();
     let mut buf = [0xA5u8; sd::MAX_FRAME_LEN];
     let mut seen = std::collections::BTreeSet::new();
     for freshness in 0..16u8 {
@@ -70,7 +72,7 @@ fn sd_set_point_every_angle_and_freshness() {
 
 #[test]
 fn sd_every_command_with_every_argument() {
-    let p = spec("sd.yaml");
+    let p = spec::<Sd>();
     let mut codes: Vec<u8> = p.commands.iter().map(|c| c.code[0]).collect();
     codes.sort_unstable();
     codes.dedup();
@@ -110,7 +112,7 @@ fn sd_every_command_with_every_argument() {
 /// must report the same raw value and write the frame back unchanged.
 #[test]
 fn ub2_every_enum_value_round_trips() {
-    let p = spec("ub2.yaml");
+    let p = spec::<Ub2>();
     let mut checked = 0;
     for r in all_messages(&p) {
         let m = p.message(r);
@@ -176,164 +178,160 @@ fn is_nak(p: &Protocol, r: MessageRef) -> bool {
     matches!(p.message(r).kind, MessageKind::Response(ResponseKind::Nak))
 }
 
-/// Every NAK at every device address decodes through both engines alike and re-encodes.
-#[test]
-fn every_nak_at_every_address() {
-    for (file, proto) in [("ub2.yaml", 0), ("sd.yaml", 1)] {
-        let p = spec(file);
-        let naks: Vec<MessageRef> = all_messages(&p)
-            .into_iter()
-            .filter(|r| is_nak(&p, *r))
-            .collect();
-        if file == "ub2.yaml" {
-            assert_eq!(naks.len(), 5, "UB2 NAKs 0x90..0x94");
-        }
-        for r in naks {
-            let base = interp::decode_as(&p, r, &frame_of(&p, r)).unwrap();
-            for address in p.framing.address.min..=p.framing.address.max {
-                let frame = interp::encode(&p, r, address, &base.values).unwrap();
-                let (name, a, back) = if proto == 0 {
-                    let d = ub2::Response::decode(&frame).unwrap();
-                    let mut buf = [0u8; ub2::MAX_FRAME_LEN];
-                    let n = d.message.encode(address, &mut buf).unwrap();
-                    (d.message.name(), d.address, buf[..n].to_vec())
-                } else {
-                    let d = sd::Response::decode(&frame).unwrap();
-                    let mut buf = [0u8; sd::MAX_FRAME_LEN];
-                    let n = d.message.encode(address, &mut buf).unwrap();
-                    (d.message.name(), d.address, buf[..n].to_vec())
-                };
-                assert_eq!((name, a), (p.message(r).name.as_str(), address));
-                assert_eq!(back, frame);
-            }
+/// Every NAK of `P` at every device address decodes through both engines alike and
+/// re-encodes; returns how many NAKs `P` has.
+fn naks_at_every_address<P: Generated>() -> usize {
+    let p = spec::<P>();
+    let naks: Vec<MessageRef> = all_messages(&p)
+        .into_iter()
+        .filter(|r| is_nak(&p, *r))
+        .collect();
+    for &r in &naks {
+        let base = interp::decode_as(&p, r, &frame_of(&p, r)).unwrap();
+        for address in p.framing.address.min..=p.framing.address.max {
+            let frame = interp::encode(&p, r, address, &base.values).unwrap();
+            let d = P::decode_response(&frame).unwrap();
+            assert!(P::is_nak(&d.message), "{}", d.message.name());
+            let mut buf = P::EMPTY_BUFFER;
+            let n = d.message.encode(address, buf.as_mut()).unwrap();
+            assert_eq!(
+                (d.message.name(), d.address),
+                (p.message(r).name.as_str(), address)
+            );
+            assert_eq!(&buf.as_ref()[..n], &frame[..]);
         }
     }
-}
-
-macro_rules! pairing_matrix {
-    ($proto:ident, $file:literal) => {{
-        use busspec_protocols::$proto::{Request, Response};
-        let p = spec($file);
-        let requests: Vec<Request> = (0..p.commands.len())
-            .map(|i| {
-                let r = MessageRef {
-                    direction: Direction::Request,
-                    index: i,
-                };
-                Request::decode(&frame_of(&p, r)).unwrap().message
-            })
-            .collect();
-        let mut pairs = 0;
-        for j in 0..p.responses.len() {
-            let r = MessageRef {
-                direction: Direction::Response,
-                index: j,
-            };
-            let frame = frame_of(&p, r);
-            for (i, request) in requests.iter().enumerate() {
-                let listed = p.commands[i].responses.iter().any(|(x, _)| *x == j);
-                let reply = Response::decode_reply(&frame, request);
-                match reply {
-                    Ok(d) => {
-                        // The same bytes may be a sibling response (same code and length) that
-                        // this request gets instead; whatever it decodes as, it answers.
-                        let k = p
-                            .responses
-                            .iter()
-                            .position(|x| x.name == d.message.name())
-                            .unwrap();
-                        assert!(
-                            p.commands[i].responses.iter().any(|(x, _)| *x == k),
-                            "{} decodes as a reply to {} but is not listed",
-                            d.message.name(),
-                            p.commands[i].name
-                        );
-                        assert!(d.message.answers(request));
-                        assert_eq!(
-                            k == j,
-                            listed,
-                            "{} for {}",
-                            p.responses[j].name,
-                            p.commands[i].name
-                        );
-                        pairs += usize::from(k == j);
-                    }
-                    Err(e) => {
-                        assert!(
-                            !listed,
-                            "{} is listed for {} but decode_reply says {e}",
-                            p.responses[j].name, p.commands[i].name
-                        );
-                    }
-                }
-                if let Ok(d) = Response::decode(&frame) {
-                    assert_eq!(
-                        d.message.answers(request),
-                        listed,
-                        "answers({}, {})",
-                        p.responses[j].name,
-                        p.commands[i].name
-                    );
-                }
-            }
-        }
-        let listed: usize = p.commands.iter().map(|c| c.responses.len()).sum();
-        assert_eq!(pairs, listed);
-    }};
+    naks.len()
 }
 
 #[test]
-fn ub2_pairing_matrix_is_the_spec() {
-    pairing_matrix!(ub2, "ub2.yaml");
+fn every_nak_at_every_address() {
+    assert_eq!(naks_at_every_address::<Ub2>(), 5, "UB2 NAKs 0x90..0x94");
+    naks_at_every_address::<Sd>();
 }
 
-#[test]
-fn sd_pairing_matrix_is_the_spec() {
-    pairing_matrix!(sd, "sd.yaml");
-}
-
-macro_rules! command_info {
-    ($proto:ident, $file:literal) => {{
-        use busspec_model::ir::CommandKind as K;
-        use busspec_protocols::$proto::{Request, BAUD, INTER_FRAME_GAP_MS, MAX_FRAMES_PER_S};
-        use busspec_protocols::CommandKind;
-        let p = spec($file);
-        for (i, c) in p.commands.iter().enumerate() {
+/// The whole request × response pairing matrix of `P`: `decode_reply` and `answers` are the
+/// spec's lists of responses.
+fn pairing_matrix<P: Generated>() {
+    let p = spec::<P>();
+    let requests: Vec<P::Request> = (0..p.commands.len())
+        .map(|i| {
             let r = MessageRef {
                 direction: Direction::Request,
                 index: i,
             };
-            let q = Request::decode(&frame_of(&p, r)).unwrap().message;
-            let MessageKind::Command(kind) = &c.kind else {
-                panic!("{}: not a command", c.name)
-            };
-            let want = match kind {
-                K::Movement => CommandKind::Movement,
-                K::CompletionCheck => CommandKind::CompletionCheck,
-                K::Setter => CommandKind::Setter,
-                K::Getter => CommandKind::Getter,
-                K::Reset => CommandKind::Reset,
-            };
-            assert_eq!(q.kind(), want, "{}", c.name);
-            let b = q.broadcast();
-            let (accepted, answered) = c
-                .broadcast
-                .as_ref()
-                .map_or((false, false), |b| (b.accepted, b.answered));
-            assert_eq!((b.accepted, b.answered), (accepted, answered), "{}", c.name);
+            P::decode_request(&frame_of(&p, r)).unwrap().message
+        })
+        .collect();
+    let mut pairs = 0;
+    for j in 0..p.responses.len() {
+        let r = MessageRef {
+            direction: Direction::Response,
+            index: j,
+        };
+        let frame = frame_of(&p, r);
+        for (i, request) in requests.iter().enumerate() {
+            let listed = p.commands[i].responses.iter().any(|(x, _)| *x == j);
+            let reply = P::decode_reply(&frame, request);
+            match reply {
+                Ok(d) => {
+                    // The same bytes may be a sibling response (same code and length) that this
+                    // request gets instead; whatever it decodes as, it answers.
+                    let k = p
+                        .responses
+                        .iter()
+                        .position(|x| x.name == d.message.name())
+                        .unwrap();
+                    assert!(
+                        p.commands[i].responses.iter().any(|(x, _)| *x == k),
+                        "{} decodes as a reply to {} but is not listed",
+                        d.message.name(),
+                        p.commands[i].name
+                    );
+                    assert!(P::answers(request, &d.message));
+                    assert_eq!(
+                        k == j,
+                        listed,
+                        "{} for {}",
+                        p.responses[j].name,
+                        p.commands[i].name
+                    );
+                    pairs += usize::from(k == j);
+                }
+                Err(e) => {
+                    assert!(
+                        !listed,
+                        "{} is listed for {} but decode_reply says {e}",
+                        p.responses[j].name, p.commands[i].name
+                    );
+                }
+            }
+            if let Ok(d) = P::decode_response(&frame) {
+                assert_eq!(
+                    P::answers(request, &d.message),
+                    listed,
+                    "answers({}, {})",
+                    p.responses[j].name,
+                    p.commands[i].name
+                );
+            }
         }
-        assert_eq!(BAUD, p.serial.baud);
-        assert_eq!(INTER_FRAME_GAP_MS, p.serial.inter_frame_gap_ms);
-        assert_eq!(
-            MAX_FRAMES_PER_S,
-            p.serial.frame_rate.as_ref().map(|r| r.max_per_s)
-        );
-    }};
+    }
+    let listed: usize = p.commands.iter().map(|c| c.responses.len()).sum();
+    assert_eq!(pairs, listed);
+}
+
+#[test]
+fn ub2_pairing_matrix_is_the_spec() {
+    pairing_matrix::<Ub2>();
+}
+
+#[test]
+fn sd_pairing_matrix_is_the_spec() {
+    pairing_matrix::<Sd>();
+}
+
+/// Each command's kind and broadcast rules, and the line constants, of generated protocol `P`
+/// are its spec's.
+fn command_info<P: Generated>() {
+    use busspec_model::ir::CommandKind as K;
+    use busspec_protocols::CommandKind;
+    let p = spec::<P>();
+    for (i, c) in p.commands.iter().enumerate() {
+        let r = MessageRef {
+            direction: Direction::Request,
+            index: i,
+        };
+        let q = P::decode_request(&frame_of(&p, r)).unwrap().message;
+        let MessageKind::Command(kind) = &c.kind else {
+            panic!("{}: not a command", c.name)
+        };
+        let want = match kind {
+            K::Movement => CommandKind::Movement,
+            K::CompletionCheck => CommandKind::CompletionCheck,
+            K::Setter => CommandKind::Setter,
+            K::Getter => CommandKind::Getter,
+            K::Reset => CommandKind::Reset,
+        };
+        assert_eq!(P::kind(&q), want, "{}", c.name);
+        let b = P::broadcast(&q);
+        let (accepted, answered) = c
+            .broadcast
+            .as_ref()
+            .map_or((false, false), |b| (b.accepted, b.answered));
+        assert_eq!((b.accepted, b.answered), (accepted, answered), "{}", c.name);
+    }
+    assert_eq!(P::BAUD, p.serial.baud);
+    assert_eq!(P::INTER_FRAME_GAP_MS, p.serial.inter_frame_gap_ms);
+    assert_eq!(
+        P::MAX_FRAMES_PER_S,
+        p.serial.frame_rate.as_ref().map(|r| r.max_per_s)
+    );
 }
 
 /// Each generated command's `kind()` and `broadcast()`, and the line constants, are the spec's.
 #[test]
 fn generated_command_info_is_the_spec() {
-    command_info!(ub2, "ub2.yaml");
-    command_info!(sd, "sd.yaml");
+    command_info::<Ub2>();
+    command_info::<Sd>();
 }

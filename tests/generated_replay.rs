@@ -3,65 +3,89 @@
 //! 0xA5 (so a byte the encoder forgets to write shows up) to exactly the same bytes.
 
 use busspec_model::ir::{Direction, Protocol};
-use busspec_model::load_file;
+use busspec_protocols::sd::Sd;
+use busspec_protocols::ub2::Ub2;
+use busspec_protocols::{Decoded, Message, Protocol as Generated};
 
-fn spec(name: &str) -> Protocol {
-    load_file(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("spec")
-            .join(name),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+/// The spec `P`'s code was generated from.
+fn spec<P: Generated>() -> Protocol {
+    busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
 }
 
-macro_rules! replay {
-    ($proto:ident, $file:literal) => {{
-        use busspec_protocols::$proto::{Request, Response, MAX_FRAME_LEN};
-        let p = spec($file);
-        let request_of = |cmd: usize| {
-            let e = p.examples.iter().find(|e| e.message.direction == Direction::Request && e.message.index == cmd)?;
-            Some(Request::decode(&e.wire).expect("request example decodes").message)
+/// Replays every example of `P`'s spec through its generated code; returns how many.
+fn replay<P: Generated>() -> usize {
+    let p = spec::<P>();
+    let file = P::NAME;
+    let request_of = |cmd: usize| {
+        let e = p
+            .examples
+            .iter()
+            .find(|e| e.message.direction == Direction::Request && e.message.index == cmd)?;
+        Some(
+            P::decode_request(&e.wire)
+                .expect("request example decodes")
+                .message,
+        )
+    };
+    for (i, e) in p.examples.iter().enumerate() {
+        let m = p.message(e.message);
+        let mut buf = vec![0xA5u8; P::MAX_FRAME_LEN + 8];
+        let (name, address, n) = match e.message.direction {
+            Direction::Request => {
+                let d = P::decode_request(&e.wire)
+                    .unwrap_or_else(|err| panic!("{file} example {i} §{}: {err}", e.section));
+                (
+                    d.message.name(),
+                    d.address,
+                    d.message.encode(d.address, &mut buf).unwrap(),
+                )
+            }
+            Direction::Response => {
+                let request = e.reply_to.and_then(request_of);
+                let d = match (&request, m.needs_request) {
+                    (Some(r), true) => P::decode_reply(&e.wire, r),
+                    (None, true) => {
+                        panic!("example {i}: a needs_request reply without its request's example")
+                    }
+                    (_, false) => P::decode_response(&e.wire),
+                }
+                .unwrap_or_else(|err| panic!("{file} example {i} §{}: {err}", e.section));
+                if let Some(r) = &request {
+                    assert!(P::answers(r, &d.message), "example {i}: pairing");
+                }
+                (
+                    d.message.name(),
+                    d.address,
+                    d.message.encode(d.address, &mut buf).unwrap(),
+                )
+            }
         };
-        for (i, e) in p.examples.iter().enumerate() {
-            let m = p.message(e.message);
-            let mut buf = [0xA5u8; MAX_FRAME_LEN + 8];
-            let (name, address, n) = match e.message.direction {
-                Direction::Request => {
-                    let d = Request::decode(&e.wire).unwrap_or_else(|err| panic!("{} example {i} §{}: {err}", $file, e.section));
-                    (d.message.name(), d.address, d.message.encode(d.address, &mut buf).unwrap())
-                }
-                Direction::Response => {
-                    let request = e.reply_to.and_then(request_of);
-                    let d = match (&request, m.needs_request) {
-                        (Some(r), true) => Response::decode_reply(&e.wire, r),
-                        (None, true) => panic!("example {i}: a needs_request reply without its request's example"),
-                        (_, false) => Response::decode(&e.wire),
-                    }
-                    .unwrap_or_else(|err| panic!("{} example {i} §{}: {err}", $file, e.section));
-                    if let Some(r) = &request {
-                        assert!(d.message.answers(r), "example {i}: pairing");
-                    }
-                    (d.message.name(), d.address, d.message.encode(d.address, &mut buf).unwrap())
-                }
-            };
-            assert_eq!(name, m.name, "{} example {i} §{}", $file, e.section);
-            // Both layouts put the address second: [start, address, ..] and [code, address, ..].
-            assert_eq!(Some(&address), e.wire.get(1));
-            assert_eq!(&buf[..n], &e.wire[..], "{} example {i} §{} {}", $file, e.section, m.name);
-            assert!(buf[n..].iter().all(|&b| b == 0xA5), "encode wrote past the frame");
-        }
-        p.examples.len()
-    }};
+        assert_eq!(name, m.name, "{file} example {i} §{}", e.section);
+        // Both layouts put the address second: [start, address, ..] and [code, address, ..].
+        assert_eq!(Some(&address), e.wire.get(1));
+        assert_eq!(
+            &buf[..n],
+            &e.wire[..],
+            "{file} example {i} §{} {}",
+            e.section,
+            m.name
+        );
+        assert!(
+            buf[n..].iter().all(|&b| b == 0xA5),
+            "encode wrote past the frame"
+        );
+    }
+    p.examples.len()
 }
 
 #[test]
 fn generated_ub2_replays_every_example() {
-    assert!(replay!(ub2, "ub2.yaml") >= 80);
+    assert!(replay::<Ub2>() >= 80);
 }
 
 #[test]
 fn generated_sd_replays_every_example() {
-    assert!(replay!(sd, "sd.yaml") >= 40);
+    assert!(replay::<Sd>() >= 40);
 }
 
 #[test]
@@ -92,46 +116,46 @@ fn generated_errors_say_what_and_where() {
     );
 }
 
-/// With the `serde` feature, every decoded example serializes and deserializes to itself.
-macro_rules! serde_round_trip {
-    ($proto:ident, $file:literal) => {{
-        use busspec_protocols::$proto::{Request, Response};
-        let p = spec($file);
-        let mut n = 0;
-        for e in &p.examples {
-            let json = match e.message.direction {
-                Direction::Request => {
-                    let d = Request::decode(&e.wire).unwrap();
-                    let json = serde_json::to_string(&d).unwrap();
-                    let back: busspec_protocols::Decoded<Request> =
-                        serde_json::from_str(&json).unwrap();
-                    assert_eq!(back, d, "{json}");
-                    json
-                }
-                Direction::Response => {
-                    let Ok(d) = Response::decode(&e.wire) else {
-                        continue;
-                    };
-                    let json = serde_json::to_string(&d).unwrap();
-                    let back: busspec_protocols::Decoded<Response> =
-                        serde_json::from_str(&json).unwrap();
-                    assert_eq!(back, d, "{json}");
-                    json
-                }
-            };
-            assert!(
-                json.contains(&format!("\"address\":{}", e.wire[1])),
-                "{json}"
-            );
-            n += 1;
-        }
-        // Replies only their request identifies are skipped here; the replay above covers them.
-        assert!(n * 4 >= p.examples.len() * 3, "{n} of {}", p.examples.len());
-    }};
+/// With the `serde` feature, every decoded example of `P` serializes and deserializes to
+/// itself.
+fn serde_round_trip<P: Generated>()
+where
+    Decoded<P::Request>: serde::Serialize + serde::de::DeserializeOwned,
+    Decoded<P::Response>: serde::Serialize + serde::de::DeserializeOwned,
+{
+    let p = spec::<P>();
+    let mut n = 0;
+    for e in &p.examples {
+        let json = match e.message.direction {
+            Direction::Request => {
+                let d = P::decode_request(&e.wire).unwrap();
+                let json = serde_json::to_string(&d).unwrap();
+                let back: Decoded<P::Request> = serde_json::from_str(&json).unwrap();
+                assert_eq!(back, d, "{json}");
+                json
+            }
+            Direction::Response => {
+                let Ok(d) = P::decode_response(&e.wire) else {
+                    continue;
+                };
+                let json = serde_json::to_string(&d).unwrap();
+                let back: Decoded<P::Response> = serde_json::from_str(&json).unwrap();
+                assert_eq!(back, d, "{json}");
+                json
+            }
+        };
+        assert!(
+            json.contains(&format!("\"address\":{}", e.wire[1])),
+            "{json}"
+        );
+        n += 1;
+    }
+    // Replies only their request identifies are skipped here; the replay above covers them.
+    assert!(n * 4 >= p.examples.len() * 3, "{n} of {}", p.examples.len());
 }
 
 #[test]
 fn decoded_messages_round_trip_through_serde() {
-    serde_round_trip!(ub2, "ub2.yaml");
-    serde_round_trip!(sd, "sd.yaml");
+    serde_round_trip::<Ub2>();
+    serde_round_trip::<Sd>();
 }

@@ -15,10 +15,12 @@ use std::time::Duration;
 
 use busspec_benches::mixed::{capture, Mixed, Proto, CAPTURE_BYTES};
 use busspec_benches::{
-    decode_all, encode_all, jobs, messages, plain_sum, stream_interp, stream_sd, stream_ub2,
-    Contender, Deku, Generated, Hand, Interp, Sd, Ub2,
+    decode_all, encode_all, jobs, messages, plain_sum, stream_generated, stream_interp, Contender,
+    Deku, Generated, Hand, Interp,
 };
 use busspec_model::ir::Protocol;
+use busspec_protocols::sd::Sd;
+use busspec_protocols::ub2::Ub2;
 use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
@@ -73,53 +75,50 @@ fn encode_one<C: Contender>(
     });
 }
 
-/// The four contenders of a protocol.
-struct Contenders<'p, G, H, D> {
-    generated: G,
-    hand: H,
-    deku: D,
-    interp: Interp<'p>,
-}
-
-fn frames<G: Contender, H: Contender, D: Contender>(
-    c: &mut Criterion,
-    proto: Proto,
-    spec: &Protocol,
-    k: &Contenders<'_, G, H, D>,
-) {
+/// The decode and encode groups of protocol `P`: its four contenders on its mixed stream.
+fn frames<P: busspec_protocols::Protocol>(c: &mut Criterion, spec: &Protocol)
+where
+    Hand<P>: Contender,
+    Deku<P>: Contender,
+{
+    let proto = Proto::of::<P>();
+    let generated = Generated::<P>::default();
+    let hand = Hand::<P>::default();
+    let deku = Deku::<P>::default();
+    let interp = Interp(spec);
     let mixed = Mixed::from_spec(proto, spec);
     let mut g = c.benchmark_group(format!("{}/decode", proto.name()));
     for (unit, t) in throughputs(&mixed) {
         g.throughput(t);
-        decode_one(&mut g, "generated", unit, &k.generated, &mixed);
-        decode_one(&mut g, "hand-written", unit, &k.hand, &mixed);
-        decode_one(&mut g, "deku", unit, &k.deku, &mixed);
-        decode_one(&mut g, "interpreter", unit, &k.interp, &mixed);
+        decode_one(&mut g, "generated", unit, &generated, &mixed);
+        decode_one(&mut g, "hand-written", unit, &hand, &mixed);
+        decode_one(&mut g, "deku", unit, &deku, &mixed);
+        decode_one(&mut g, "interpreter", unit, &interp, &mixed);
     }
     g.finish();
     let mut g = c.benchmark_group(format!("{}/encode", proto.name()));
     for (unit, t) in throughputs(&mixed) {
         g.throughput(t);
-        encode_one(&mut g, "generated", unit, &k.generated, &mixed);
-        encode_one(&mut g, "hand-written", unit, &k.hand, &mixed);
-        encode_one(&mut g, "deku", unit, &k.deku, &mixed);
-        encode_one(&mut g, "interpreter", unit, &k.interp, &mixed);
+        encode_one(&mut g, "generated", unit, &generated, &mixed);
+        encode_one(&mut g, "hand-written", unit, &hand, &mixed);
+        encode_one(&mut g, "deku", unit, &deku, &mixed);
+        encode_one(&mut g, "interpreter", unit, &interp, &mixed);
     }
     g.finish();
 }
 
-fn stream(
-    c: &mut Criterion,
-    proto: Proto,
-    spec: &Protocol,
-    generated: fn(&[u8]) -> busspec_benches::StreamCount,
-) {
+/// The stream group of protocol `P`: its generated stream decoder on the synthetic capture,
+/// with the plain byte pass and the interpreter's stream decoder.
+fn stream<P: busspec_protocols::Protocol>(c: &mut Criterion, spec: &Protocol) {
+    let proto = Proto::of::<P>();
     let cap = capture(spec, CAPTURE_BYTES);
-    let found = generated(&cap);
+    let found = stream_generated::<P>(&cap);
     assert_eq!(found.bytes, cap.len() as u64);
     let mut g = c.benchmark_group(format!("{}/stream", proto.name()));
     g.throughput(Throughput::Bytes(cap.len() as u64));
-    g.bench_function("generated", |b| b.iter(|| generated(black_box(&cap))));
+    g.bench_function("generated", |b| {
+        b.iter(|| stream_generated::<P>(black_box(&cap)))
+    });
     g.bench_function("plain-sum", |b| b.iter(|| plain_sum(black_box(&cap))));
     let head = &cap[..INTERP_CAPTURE_BYTES];
     g.throughput(Throughput::Bytes(head.len() as u64));
@@ -172,14 +171,8 @@ fn checksum_group<'c>(
 
 fn ub2(c: &mut Criterion) {
     let spec = Proto::Ub2.spec();
-    let k = Contenders {
-        generated: Generated::<Ub2>::default(),
-        hand: Hand::<Ub2>::default(),
-        deku: Deku::<Ub2>::default(),
-        interp: Interp(&spec),
-    };
-    frames(c, Proto::Ub2, &spec, &k);
-    stream(c, Proto::Ub2, &spec, stream_ub2);
+    frames::<Ub2>(c, &spec);
+    stream::<Ub2>(c, &spec);
     let (mut g, frames) = checksum_group(c, Proto::Ub2, &spec);
     let algorithm = &spec.framing.checksum.algorithm;
     checksum_one(
@@ -196,14 +189,8 @@ fn ub2(c: &mut Criterion) {
 
 fn sd(c: &mut Criterion) {
     let spec = Proto::Sd.spec();
-    let k = Contenders {
-        generated: Generated::<Sd>::default(),
-        hand: Hand::<Sd>::default(),
-        deku: Deku::<Sd>::default(),
-        interp: Interp(&spec),
-    };
-    frames(c, Proto::Sd, &spec, &k);
-    stream(c, Proto::Sd, &spec, stream_sd);
+    frames::<Sd>(c, &spec);
+    stream::<Sd>(c, &spec);
     let (mut g, frames) = checksum_group(c, Proto::Sd, &spec);
     let algorithm = &spec.framing.checksum.algorithm;
     checksum_one(

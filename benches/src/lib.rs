@@ -20,6 +20,9 @@ use std::ops::Range;
 
 use busspec_model::interp;
 use busspec_model::ir::{Direction, Protocol};
+use busspec_protocols::sd::{self, Sd};
+use busspec_protocols::ub2::{self, Ub2};
+use busspec_protocols::{Decoded, Message as _};
 use mixed::Mixed;
 
 /// One decoder/encoder of one protocol.
@@ -46,106 +49,189 @@ pub trait Contender {
     ) -> Result<usize, Self::EncodeError>;
 }
 
-/// The generated codec of a protocol module.
+/// The generated codec of protocol `P` (`busspec_protocols::ub2::Ub2`, ...), through the
+/// [`busspec_protocols::Protocol`] and [`busspec_protocols::Message`] traits.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Generated<P>(std::marker::PhantomData<P>);
 
-/// The hand-written decoders and encoders of [`hand`].
+/// The hand-written decoders and encoders of [`hand`], for protocol `P`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Hand<P>(std::marker::PhantomData<P>);
 
-/// The deku-derived peer of [`peer`].
+/// The deku-derived peer of [`peer`], for protocol `P`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Deku<P>(std::marker::PhantomData<P>);
 
-/// Marks the UB2 contenders.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Ub2;
-/// Marks the SD contenders.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Sd;
-
-/// `impl Contender` from the four operations, written over `frame`, `request`, `m` and `buf`.
-macro_rules! contender {
-    (
-        $ty:ty, $q:ty, $r:ty, $de:ty, $ee:ty,
-        |$frame:ident, $request:ident, $m:ident, $buf:ident|
-        $decode_request:expr, $decode_response:expr, $encode_request:expr, $encode_response:expr
-    ) => {
-        impl Contender for $ty {
-            type Request = $q;
-            type Response = $r;
-            type DecodeError = $de;
-            type EncodeError = $ee;
-            #[inline]
-            fn decode_request(&self, $frame: &[u8]) -> Result<$q, $de> {
-                $decode_request
-            }
-            #[inline]
-            fn decode_response(&self, $frame: &[u8], $request: Option<&$q>) -> Result<$r, $de> {
-                $decode_response
-            }
-            #[inline]
-            fn encode_request(&self, $m: &$q, $buf: &mut [u8]) -> Result<usize, $ee> {
-                $encode_request
-            }
-            #[inline]
-            fn encode_response(&self, $m: &$r, $buf: &mut [u8]) -> Result<usize, $ee> {
-                $encode_response
-            }
-        }
-    };
+impl<P: busspec_protocols::Protocol> Contender for Generated<P> {
+    type Request = Decoded<P::Request>;
+    type Response = Decoded<P::Response>;
+    type DecodeError = busspec_protocols::DecodeError;
+    type EncodeError = busspec_protocols::EncodeError;
+    #[inline]
+    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, Self::DecodeError> {
+        P::decode_request(frame)
+    }
+    #[inline]
+    fn decode_response(
+        &self,
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Self::Response, Self::DecodeError> {
+        P::decode_response_for(frame, request.map(|r| &r.message))
+    }
+    #[inline]
+    fn encode_request(
+        &self,
+        m: &Self::Request,
+        buf: &mut [u8],
+    ) -> Result<usize, Self::EncodeError> {
+        m.message.encode(m.address, buf)
+    }
+    #[inline]
+    fn encode_response(
+        &self,
+        m: &Self::Response,
+        buf: &mut [u8],
+    ) -> Result<usize, Self::EncodeError> {
+        m.message.encode(m.address, buf)
+    }
 }
 
-macro_rules! protocol_contenders {
-    ($marker:ty, $module:ident, $deku_response:ty) => {
-        contender!(
-            Generated<$marker>,
-            busspec_protocols::Decoded<busspec_protocols::$module::Request>,
-            busspec_protocols::Decoded<busspec_protocols::$module::Response>,
-            busspec_protocols::DecodeError,
-            busspec_protocols::EncodeError,
-            |frame, request, m, buf| busspec_protocols::$module::Request::decode(frame),
-            match request {
-                None => busspec_protocols::$module::Response::decode(frame),
-                Some(r) => busspec_protocols::$module::Response::decode_reply(frame, &r.message),
-            },
-            m.message.encode(m.address, buf),
-            m.message.encode(m.address, buf)
-        );
-        contender!(
-            Hand<$marker>,
-            busspec_protocols::Decoded<busspec_protocols::$module::Request>,
-            busspec_protocols::Decoded<busspec_protocols::$module::Response>,
-            busspec_protocols::DecodeError,
-            hand::EncodeError,
-            |frame, request, m, buf| hand::$module::decode_request(frame),
-            hand::$module::decode_response(frame, request.map(|r| &r.message)),
-            hand::subset(
-                m.message.name(),
-                hand::$module::encode_request(&m.message, m.address, buf)
-            ),
-            hand::subset(
-                m.message.name(),
-                hand::$module::encode_response(&m.message, m.address, buf)
-            )
-        );
-        contender!(
-            Deku<$marker>,
-            peer::$module::RequestFrame,
-            $deku_response,
-            peer::Error,
-            peer::Error,
-            |frame, request, m, buf| peer::$module::decode_request(frame),
-            peer::$module::decode_response(frame, request),
-            peer::$module::encode_request(m, buf),
-            peer::$module::encode_response(m, buf)
-        );
-    };
+impl Contender for Hand<Ub2> {
+    type Request = Decoded<ub2::Request>;
+    type Response = Decoded<ub2::Response>;
+    type DecodeError = busspec_protocols::DecodeError;
+    type EncodeError = hand::EncodeError;
+    #[inline]
+    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, Self::DecodeError> {
+        hand::ub2::decode_request(frame)
+    }
+    #[inline]
+    fn decode_response(
+        &self,
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Self::Response, Self::DecodeError> {
+        hand::ub2::decode_response(frame, request.map(|r| &r.message))
+    }
+    #[inline]
+    fn encode_request(
+        &self,
+        m: &Self::Request,
+        buf: &mut [u8],
+    ) -> Result<usize, Self::EncodeError> {
+        hand::subset(
+            m.message.name(),
+            hand::ub2::encode_request(&m.message, m.address, buf),
+        )
+    }
+    #[inline]
+    fn encode_response(
+        &self,
+        m: &Self::Response,
+        buf: &mut [u8],
+    ) -> Result<usize, Self::EncodeError> {
+        hand::subset(
+            m.message.name(),
+            hand::ub2::encode_response(&m.message, m.address, buf),
+        )
+    }
 }
 
-protocol_contenders!(Ub2, ub2, peer::ub2::ResponseFrame);
-protocol_contenders!(Sd, sd, peer::sd::Reply);
+impl Contender for Hand<Sd> {
+    type Request = Decoded<sd::Request>;
+    type Response = Decoded<sd::Response>;
+    type DecodeError = busspec_protocols::DecodeError;
+    type EncodeError = hand::EncodeError;
+    #[inline]
+    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, Self::DecodeError> {
+        hand::sd::decode_request(frame)
+    }
+    #[inline]
+    fn decode_response(
+        &self,
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Self::Response, Self::DecodeError> {
+        hand::sd::decode_response(frame, request.map(|r| &r.message))
+    }
+    #[inline]
+    fn encode_request(
+        &self,
+        m: &Self::Request,
+        buf: &mut [u8],
+    ) -> Result<usize, Self::EncodeError> {
+        hand::subset(
+            m.message.name(),
+            hand::sd::encode_request(&m.message, m.address, buf),
+        )
+    }
+    #[inline]
+    fn encode_response(
+        &self,
+        m: &Self::Response,
+        buf: &mut [u8],
+    ) -> Result<usize, Self::EncodeError> {
+        hand::subset(
+            m.message.name(),
+            hand::sd::encode_response(&m.message, m.address, buf),
+        )
+    }
+}
+
+impl Contender for Deku<Ub2> {
+    type Request = peer::ub2::RequestFrame;
+    type Response = peer::ub2::ResponseFrame;
+    type DecodeError = peer::Error;
+    type EncodeError = peer::Error;
+    #[inline]
+    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, peer::Error> {
+        peer::ub2::decode_request(frame)
+    }
+    #[inline]
+    fn decode_response(
+        &self,
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Self::Response, peer::Error> {
+        peer::ub2::decode_response(frame, request)
+    }
+    #[inline]
+    fn encode_request(&self, m: &Self::Request, buf: &mut [u8]) -> Result<usize, peer::Error> {
+        peer::ub2::encode_request(m, buf)
+    }
+    #[inline]
+    fn encode_response(&self, m: &Self::Response, buf: &mut [u8]) -> Result<usize, peer::Error> {
+        peer::ub2::encode_response(m, buf)
+    }
+}
+
+impl Contender for Deku<Sd> {
+    type Request = peer::sd::RequestFrame;
+    type Response = peer::sd::Reply;
+    type DecodeError = peer::Error;
+    type EncodeError = peer::Error;
+    #[inline]
+    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, peer::Error> {
+        peer::sd::decode_request(frame)
+    }
+    #[inline]
+    fn decode_response(
+        &self,
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<Self::Response, peer::Error> {
+        peer::sd::decode_response(frame, request)
+    }
+    #[inline]
+    fn encode_request(&self, m: &Self::Request, buf: &mut [u8]) -> Result<usize, peer::Error> {
+        peer::sd::encode_request(m, buf)
+    }
+    #[inline]
+    fn encode_response(&self, m: &Self::Response, buf: &mut [u8]) -> Result<usize, peer::Error> {
+        peer::sd::encode_response(m, buf)
+    }
+}
 
 /// busspec's interpreter over a loaded spec.
 pub struct Interp<'p>(pub &'p Protocol);
@@ -292,35 +378,29 @@ pub struct StreamCount {
     pub bytes: u64,
 }
 
-macro_rules! generated_stream {
-    ($name:ident, $module:ident) => {
-        /// The generated streaming decoder over a whole capture, sniffing both directions.
-        #[inline(never)]
-        pub fn $name(capture: &[u8]) -> StreamCount {
-            use busspec_protocols::stream::Event;
-            let mut d = busspec_protocols::$module::StreamDecoder::new(None);
-            let mut n = StreamCount::default();
-            let mut count = |ev: Event<_, _>| {
-                n.bytes += ev.len();
-                match ev {
-                    Event::Request { .. } | Event::Response { .. } => n.frames += 1,
-                    Event::Ambiguous { .. } => n.ambiguous += 1,
-                    Event::Skipped { len, .. } => n.skipped_bytes += len,
-                }
-            };
-            for ev in d.feed(capture) {
-                count(black_box(ev));
-            }
-            while let Some(ev) = d.finish() {
-                count(black_box(ev));
-            }
-            n
+/// The generated streaming decoder of protocol `P` over a whole capture, sniffing both
+/// directions.
+#[inline(never)]
+pub fn stream_generated<P: busspec_protocols::Protocol>(capture: &[u8]) -> StreamCount {
+    use busspec_protocols::stream::{Event, StreamDecoder};
+    let mut d = StreamDecoder::<P>::new(None);
+    let mut n = StreamCount::default();
+    let mut count = |ev: Event<P::Request, P::Response>| {
+        n.bytes += ev.len();
+        match ev {
+            Event::Request { .. } | Event::Response { .. } => n.frames += 1,
+            Event::Ambiguous { .. } => n.ambiguous += 1,
+            Event::Skipped { len, .. } => n.skipped_bytes += len,
         }
     };
+    for ev in d.feed(capture) {
+        count(black_box(ev));
+    }
+    while let Some(ev) = d.finish() {
+        count(black_box(ev));
+    }
+    n
 }
-
-generated_stream!(stream_ub2, ub2);
-generated_stream!(stream_sd, sd);
 
 /// The interpreter's streaming decoder over a whole capture, sniffing both directions.
 pub fn stream_interp(p: &Protocol, capture: &[u8]) -> StreamCount {

@@ -4,8 +4,18 @@
 use std::ops::Range;
 
 use busspec_model::ir::{Direction, Protocol};
+use busspec_protocols::sd::Sd;
+use busspec_protocols::ub2::Ub2;
+use busspec_protocols::Protocol as _;
 
-/// A protocol the benches cover.
+/// The validated spec of generated protocol `P`: the text it was generated from
+/// ([`busspec_protocols::Protocol::SPEC_YAML`]), loaded by the interpreter's loader.
+pub fn spec<P: busspec_protocols::Protocol>() -> Protocol {
+    busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
+}
+
+/// A protocol the benches cover: one with hand-written and deku baselines
+/// ([`crate::Hand`], [`crate::Deku`]) of its [`Proto::subset`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Proto {
     Ub2,
@@ -15,19 +25,33 @@ pub enum Proto {
 impl Proto {
     pub const ALL: [Proto; 2] = [Proto::Ub2, Proto::Sd];
 
+    /// The protocol's name in its spec ([`busspec_protocols::Protocol::NAME`]).
     pub fn name(self) -> &'static str {
         match self {
-            Proto::Ub2 => "ub2",
-            Proto::Sd => "sd",
+            Proto::Ub2 => Ub2::NAME,
+            Proto::Sd => Sd::NAME,
         }
     }
 
-    /// The validated spec, loaded from `spec/` at run time (the interpreter's input).
+    /// The benched protocol called `name` (its spec's name).
+    pub fn from_name(name: &str) -> Option<Proto> {
+        Proto::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The benched protocol generated as `P`.
+    ///
+    /// # Panics
+    /// If `P` is not one the benches cover.
+    pub fn of<P: busspec_protocols::Protocol>() -> Proto {
+        Proto::from_name(P::NAME).unwrap_or_else(|| panic!("the benches do not cover {}", P::NAME))
+    }
+
+    /// The validated spec, as the generated code was built from it (the interpreter's input).
     pub fn spec(self) -> Protocol {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../spec")
-            .join(format!("{}.yaml", self.name()));
-        busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
+        match self {
+            Proto::Ub2 => spec::<Ub2>(),
+            Proto::Sd => spec::<Sd>(),
+        }
     }
 
     /// The messages every contender implements, by spec name. The mixed stream holds the

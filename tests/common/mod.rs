@@ -4,21 +4,18 @@
 
 #![allow(dead_code, unused_imports)]
 
+use busspec_model::checksum;
 use busspec_model::interp;
 use busspec_model::ir::{Direction, Message, MessageRef, Protocol};
-use busspec_model::{checksum, load_file};
 
 pub use busspec_fuzz_bodies::oracle::{
-    agree, interp_values, request_example, visit_values, Decoded, Generated, Sd, Ub2, Values,
+    agree, interp_values, request_example, visit_values, Decoded, Values,
 };
 
-pub fn spec(name: &str) -> Protocol {
-    load_file(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("spec")
-            .join(name),
-    )
-    .unwrap_or_else(|d| panic!("{d}"))
+/// The interpreter's view of generated protocol `P`: the spec text its code was generated
+/// from ([`busspec_protocols::Protocol::SPEC_YAML`]), loaded and validated.
+pub fn spec<P: busspec_protocols::Protocol>() -> Protocol {
+    busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
 }
 
 /// Writes the checksum of `frame`'s bytes before it into its last bytes.

@@ -16,9 +16,12 @@ use std::process::ExitCode;
 
 use busspec_benches::mixed::{capture, Mixed, Proto, CAPTURE_BYTES};
 use busspec_benches::{
-    decode_all, encode_all, jobs, messages, plain_sum, stream_sd, stream_ub2, Contender, Deku,
-    Generated, Hand, Interp, Sd, Ub2,
+    decode_all, encode_all, jobs, messages, plain_sum, stream_generated, Contender, Deku,
+    Generated, Hand, Interp,
 };
+use busspec_protocols::sd::Sd;
+use busspec_protocols::ub2::Ub2;
+use busspec_protocols::Protocol;
 
 const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <ub2|sd> stream <generated|plain-sum> <passes>";
 
@@ -42,35 +45,21 @@ fn run<C: Contender>(c: &C, mixed: &Mixed, op: &str, passes: u64) -> Result<u64,
     }
 }
 
-fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let [proto, who, op, passes] = &args[..] else {
-        eprintln!("{USAGE}");
-        return ExitCode::from(2);
-    };
-    let proto = match proto.as_str() {
-        "ub2" => Proto::Ub2,
-        "sd" => Proto::Sd,
-        other => {
-            eprintln!("unknown protocol `{other}`\n{USAGE}");
-            return ExitCode::from(2);
-        }
-    };
-    let Ok(passes) = passes.parse::<u64>() else {
-        eprintln!("passes must be a whole number, not `{passes}`\n{USAGE}");
-        return ExitCode::from(2);
-    };
+/// Runs contender `who` of protocol `P` (`stream` and `op` for the stream contenders); prints
+/// the units of one pass and returns the value the work computed.
+fn measure<P: Protocol>(who: &str, op: &str, passes: u64) -> Result<u64, String>
+where
+    Hand<P>: Contender,
+    Deku<P>: Contender,
+{
+    let proto = Proto::of::<P>();
     let spec = proto.spec();
-    let result = if who == "stream" {
+    if who == "stream" {
         let cap = capture(&spec, CAPTURE_BYTES);
-        let f = match (proto, op.as_str()) {
-            (Proto::Ub2, "generated") => |c: &[u8]| stream_ub2(c).frames,
-            (Proto::Sd, "generated") => |c: &[u8]| stream_sd(c).frames,
-            (_, "plain-sum") => |c: &[u8]| u64::from(plain_sum(c)),
-            (_, other) => {
-                eprintln!("unknown stream contender `{other}`\n{USAGE}");
-                return ExitCode::from(2);
-            }
+        let f = match op {
+            "generated" => |c: &[u8]| stream_generated::<P>(c).frames,
+            "plain-sum" => |c: &[u8]| u64::from(plain_sum(c)),
+            other => return Err(format!("unknown stream contender `{other}`\n{USAGE}")),
         };
         println!("units per pass: {} bytes", cap.len());
         Ok((0..passes).map(|_| f(&cap)).sum())
@@ -81,16 +70,33 @@ fn main() -> ExitCode {
             mixed.entries.len(),
             mixed.bytes.len()
         );
-        match (proto, who.as_str()) {
-            (Proto::Ub2, "generated") => run(&Generated::<Ub2>::default(), &mixed, op, passes),
-            (Proto::Ub2, "hand-written") => run(&Hand::<Ub2>::default(), &mixed, op, passes),
-            (Proto::Ub2, "deku") => run(&Deku::<Ub2>::default(), &mixed, op, passes),
-            (Proto::Sd, "generated") => run(&Generated::<Sd>::default(), &mixed, op, passes),
-            (Proto::Sd, "hand-written") => run(&Hand::<Sd>::default(), &mixed, op, passes),
-            (Proto::Sd, "deku") => run(&Deku::<Sd>::default(), &mixed, op, passes),
-            (_, "interpreter") => run(&Interp(&spec), &mixed, op, passes),
-            (_, other) => Err(format!("unknown contender `{other}`\n{USAGE}")),
+        match who {
+            "generated" => run(&Generated::<P>::default(), &mixed, op, passes),
+            "hand-written" => run(&Hand::<P>::default(), &mixed, op, passes),
+            "deku" => run(&Deku::<P>::default(), &mixed, op, passes),
+            "interpreter" => run(&Interp(&spec), &mixed, op, passes),
+            other => Err(format!("unknown contender `{other}`\n{USAGE}")),
         }
+    }
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [proto, who, op, passes] = &args[..] else {
+        eprintln!("{USAGE}");
+        return ExitCode::from(2);
+    };
+    let Some(proto) = Proto::from_name(proto) else {
+        eprintln!("unknown protocol `{proto}`\n{USAGE}");
+        return ExitCode::from(2);
+    };
+    let Ok(passes) = passes.parse::<u64>() else {
+        eprintln!("passes must be a whole number, not `{passes}`\n{USAGE}");
+        return ExitCode::from(2);
+    };
+    let result = match proto {
+        Proto::Ub2 => measure::<Ub2>(who, op, passes),
+        Proto::Sd => measure::<Sd>(who, op, passes),
     };
     match result {
         Ok(v) => {

@@ -3,18 +3,19 @@
 //! regression input) run exactly the same checks. Each body panics on a broken promise and
 //! returns normally otherwise.
 //!
-//! For each protocol ([`ub2`], [`sd`]):
-//! * `decode`: arbitrary bytes through `Request::decode`, `Response::decode` and
-//!   `Response::decode_reply`; errors point inside the frame, and every accepted frame
+//! For each protocol, one generic body over [`Protocol`] per target, with a thin wrapper per
+//! protocol ([`ub2`], [`sd`]) that the fuzz targets call by name:
+//! * [`decode`]: arbitrary bytes through `decode_request`, `decode_response` and
+//!   `decode_reply`; errors point inside the frame, and every accepted frame
 //!   re-encodes to the same bytes;
-//! * `roundtrip`: `Arbitrary` messages → `encode` → `decode` → equal (a value that does not fit
+//! * [`roundtrip`]: `Arbitrary` messages → `encode` → `decode` → equal (a value that does not fit
 //!   its wire field may be refused with `OutOfRange`, nothing else); the encoded frame also
 //!   goes through [`oracle::agree`];
-//! * `stream`: arbitrary bytes, cut into chunks the input chooses, through the `StreamDecoder`:
+//! * [`stream`]: arbitrary bytes, cut into chunks the input chooses, through the `StreamDecoder`:
 //!   bounded buffer, every byte in exactly one event, every frame valid, the same events however
 //!   the bytes are cut and the same as the interpreter's stream decoder; then an example frame
 //!   placed after the bytes is found;
-//! * `differential`: the generated decoder and the interpreter agree on every input
+//! * [`differential`]: the generated decoder and the interpreter agree on every input
 //!   ([`oracle::agree`]).
 //!
 //! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
@@ -26,13 +27,22 @@
 //!   then the frame;
 //! * `stream`: three bytes — direction (`% 3`: both, requests, responses), which example frame
 //!   to place after the capture, the seed of the chunk sizes — then the capture;
-//! * `roundtrip`: raw material for `arbitrary::Unstructured`;
+//! * [`roundtrip`]: raw material for `arbitrary::Unstructured`;
 //! * `spec_loader`: the spec text (invalid UTF-8 replaced).
 
-use std::sync::OnceLock;
+use std::any::{Any, TypeId};
+use std::cell::RefCell;
+use std::collections::HashMap;
 
-use busspec_model::ir::Protocol;
-use busspec_protocols::DecodeError;
+use arbitrary::{Arbitrary, Unstructured};
+use busspec_model::ir::Direction;
+use busspec_protocols::stream::{
+    Direction as StreamDirection, Event, StreamDecoder, MAX_SKIPPED_RUN,
+};
+use busspec_protocols::{DecodeError, Decoded, EncodeError, Message, Protocol, ProtocolVisitor};
+
+use crate::events::Seen;
+use crate::oracle::{agree, visit_values};
 
 pub mod events;
 pub mod oracle;
@@ -86,22 +96,40 @@ pub const TARGETS: &[Target] = &[
     },
 ];
 
-/// The spec files the generated crate is built from, embedded so a fuzz binary needs no files.
-pub const SPECS: &[(&str, &str)] = &[
-    ("ub2.yaml", include_str!("../../../spec/ub2.yaml")),
-    ("sd.yaml", include_str!("../../../spec/sd.yaml")),
-];
+/// A value made once per thread for the type `K` (leaked: a handful per protocol). Generic
+/// functions cannot have a `static` of their own per type; this is that.
+fn once<K: 'static, T: 'static>(init: impl FnOnce() -> T) -> &'static T {
+    thread_local! {
+        static MADE: RefCell<HashMap<TypeId, &'static dyn Any>> = RefCell::new(HashMap::new());
+    }
+    let key = TypeId::of::<(K, T)>();
+    if let Some(v) = MADE.with(|m| m.borrow().get(&key).copied()) {
+        return v.downcast_ref().expect("keyed by its type");
+    }
+    // Not under the borrow: `init` may itself call `once`.
+    let v: &'static T = Box::leak(Box::new(init()));
+    MADE.with(|m| m.borrow_mut().insert(key, v));
+    v
+}
 
-/// The protocol of a built-in spec file (`"ub2.yaml"`, `"sd.yaml"`), loaded once.
-pub fn spec(file: &str) -> &'static Protocol {
-    static LOADED: [OnceLock<Protocol>; 2] = [OnceLock::new(), OnceLock::new()];
-    let i = SPECS
-        .iter()
-        .position(|(f, _)| *f == file)
-        .unwrap_or_else(|| panic!("no built-in spec {file}"));
-    LOADED[i].get_or_init(|| {
-        busspec_model::load_str(SPECS[i].0, SPECS[i].1).unwrap_or_else(|d| panic!("{d}"))
+/// The spec of protocol `P`, as its code was generated from it
+/// ([`Protocol::SPEC_YAML`]: embedded, so a fuzz binary needs no files), loaded once.
+pub fn spec<P: Protocol>() -> &'static busspec_model::Protocol {
+    once::<P, _>(|| {
+        busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
     })
+}
+
+/// The spec of the generated protocol called `name` (one of [`busspec_protocols::PROTOCOLS`]).
+pub fn spec_named(name: &str) -> Option<&'static busspec_model::Protocol> {
+    struct Spec;
+    impl ProtocolVisitor for Spec {
+        type Output = &'static busspec_model::Protocol;
+        fn visit<P: Protocol>(self) -> Self::Output {
+            spec::<P>()
+        }
+    }
+    busspec_protocols::with_protocol(name, Spec)
 }
 
 /// A decode error must say where, and the place must be inside the `len`-byte frame.
@@ -130,388 +158,396 @@ fn check_error(e: &DecodeError, len: usize) {
     }
 }
 
-macro_rules! protocol_bodies {
-    ($proto:ident, $gen:ident, $file:literal) => {
-        /// The fuzz target bodies for this protocol; see the crate docs.
-        pub mod $proto {
-            use std::sync::OnceLock;
+/// The bodies for the generated protocol UB2, as the fuzz targets call them.
+pub mod ub2 {
+    use busspec_protocols::ub2::Ub2;
 
-            use arbitrary::Unstructured;
-            use busspec_model::ir::Direction;
-            use busspec_protocols::stream::{Direction as StreamDirection, MAX_SKIPPED_RUN};
-            use busspec_protocols::$proto::{
-                Event, Request, Response, StreamDecoder, MAX_FRAME_LEN,
-            };
-            use busspec_protocols::{DecodeError, Decoded, EncodeError};
-
-            use crate::events::{self, Seen};
-            use crate::oracle::{self, agree, visit_values};
-
-            /// The spec file.
-            pub const FILE: &str = $file;
-
-            fn spec() -> &'static busspec_model::Protocol {
-                crate::spec(FILE)
-            }
-
-            /// The first example request of every command that has one, with its command index.
-            pub fn example_requests() -> &'static [(usize, Request)] {
-                static REQUESTS: OnceLock<Vec<(usize, Request)>> = OnceLock::new();
-                REQUESTS.get_or_init(|| {
-                    let p = spec();
-                    (0..p.commands.len())
-                        .filter_map(|c| {
-                            let wire = oracle::request_example(p, c)?;
-                            let r = Request::decode(wire).expect("an example request decodes");
-                            Some((c, r.message))
-                        })
-                        .collect()
-                })
-            }
-
-            fn reencode_request(d: &Decoded<Request>) -> Vec<u8> {
-                oracle::Decoded::new("", 0, Vec::new(), [0xA5u8; MAX_FRAME_LEN], |b| {
-                    d.message.encode(d.address, b)
-                })
-                .reencoded
-            }
-
-            fn reencode_response(d: &Decoded<Response>) -> Vec<u8> {
-                oracle::Decoded::new("", 0, Vec::new(), [0xA5u8; MAX_FRAME_LEN], |b| {
-                    d.message.encode(d.address, b)
-                })
-                .reencoded
-            }
-
-            /// Arbitrary bytes through every decoder.
-            pub fn decode(data: &[u8]) {
-                match Request::decode(data) {
-                    Ok(d) => {
-                        assert_eq!(reencode_request(&d), data, "{d:?} re-encodes differently");
-                    }
-                    Err(e) => crate::check_error(&e, data.len()),
-                }
-                let alone = Response::decode(data);
-                match &alone {
-                    Ok(d) => {
-                        assert_eq!(reencode_response(d), data, "{d:?} re-encodes differently");
-                    }
-                    Err(e) => crate::check_error(e, data.len()),
-                }
-                for (_, r) in example_requests() {
-                    match Response::decode_reply(data, r) {
-                        Ok(d) => {
-                            assert!(d.message.answers(r), "{d:?} does not answer {r:?}");
-                            // A reply decodes alone too, unless only its request can tell it.
-                            match alone {
-                                Ok(a) => assert_eq!(a, d),
-                                Err(DecodeError::Ambiguous { .. }) => {}
-                                Err(e) => panic!("{d:?} decodes as a reply but alone: {e}"),
-                            }
-                            assert_eq!(reencode_response(&d), data, "{d:?} re-encodes differently");
-                        }
-                        Err(e) => {
-                            crate::check_error(&e, data.len());
-                            if let Ok(a) = alone {
-                                assert!(
-                                    !a.message.answers(r),
-                                    "{a:?} answers {r:?}, but decode_reply says {e}"
-                                );
-                            }
-                        }
-                    }
-                }
-            }
-
-            /// Arbitrary typed messages through encode and back.
-            pub fn roundtrip(data: &[u8]) {
-                let mut u = Unstructured::new(data);
-                // Several messages per input, while the input lasts.
-                for _ in 0..64 {
-                    if u.is_empty() {
-                        break;
-                    }
-                    let Ok(request) = u.arbitrary::<Decoded<Request>>() else {
-                        break;
-                    };
-                    request_roundtrip(&request);
-                    let Ok(response) = u.arbitrary::<Decoded<Response>>() else {
-                        break;
-                    };
-                    response_roundtrip(&response);
-                }
-            }
-
-            /// Encodes `d` into a buffer of exactly its length and into one a byte short.
-            fn encode_checked(
-                encode: impl Fn(&mut [u8]) -> Result<usize, EncodeError>,
-                frame_len: usize,
-            ) -> Option<Vec<u8>> {
-                let mut buf = [0xA5u8; MAX_FRAME_LEN];
-                match encode(&mut buf) {
-                    Ok(n) => {
-                        assert_eq!(n, frame_len, "encode and frame_len disagree");
-                        let mut exact = vec![0x5Au8; n];
-                        assert_eq!(encode(&mut exact), Ok(n));
-                        assert_eq!(exact, buf[..n], "encode depends on the buffer");
-                        let mut short = vec![0u8; n - 1];
-                        assert_eq!(
-                            encode(&mut short),
-                            Err(EncodeError::BufferTooSmall {
-                                needed: n,
-                                available: n - 1
-                            })
-                        );
-                        Some(exact)
-                    }
-                    Err(EncodeError::OutOfRange { .. }) => None,
-                    Err(e) => panic!("encode into MAX_FRAME_LEN bytes: {e}"),
-                }
-            }
-
-            fn request_roundtrip(d: &Decoded<Request>) {
-                let Some(frame) =
-                    encode_checked(|b| d.message.encode(d.address, b), d.message.frame_len())
-                else {
-                    return;
-                };
-                assert_eq!(Request::decode(&frame), Ok(*d), "{}", events::hex(&frame));
-                assert_eq!(d.message.code(), code_of(&frame, d.message.code().len()));
-                assert!(agree::<oracle::$gen>(
-                    spec(),
-                    &frame,
-                    Direction::Request,
-                    None
-                ));
-            }
-
-            fn response_roundtrip(d: &Decoded<Response>) {
-                let Some(frame) =
-                    encode_checked(|b| d.message.encode(d.address, b), d.message.frame_len())
-                else {
-                    return;
-                };
-                let p = spec();
-                let needs_request = match Response::decode(&frame) {
-                    Ok(back) => {
-                        assert_eq!(back, *d, "{}", events::hex(&frame));
-                        assert!(agree::<oracle::$gen>(p, &frame, Direction::Response, None));
-                        false
-                    }
-                    Err(DecodeError::Ambiguous { .. }) => {
-                        assert!(!agree::<oracle::$gen>(p, &frame, Direction::Response, None));
-                        true
-                    }
-                    Err(e) => panic!("{d:?} encodes to {} but: {e}", events::hex(&frame)),
-                };
-                let mut answered = false;
-                for (c, r) in example_requests() {
-                    if d.message.answers(r) {
-                        answered = true;
-                        assert_eq!(
-                            Response::decode_reply(&frame, r),
-                            Ok(*d),
-                            "as the reply to {r:?}: {}",
-                            events::hex(&frame)
-                        );
-                        assert!(agree::<oracle::$gen>(
-                            p,
-                            &frame,
-                            Direction::Response,
-                            Some(*c)
-                        ));
-                    }
-                }
-                assert!(
-                    answered || !needs_request,
-                    "{} needs its request, but no example request gets it",
-                    d.message.name()
-                );
-            }
-
-            /// Where `encode` wrote the code: the bytes of the code in the frame.
-            fn code_of(frame: &[u8], len: usize) -> &[u8] {
-                let p = spec();
-                let o = p.framing.head(len);
-                &frame[o.code..o.code + len]
-            }
-
-            /// `capture` through the generated stream decoder for `direction`, pushed in
-            /// `chunks` (the rest in one piece) with push/poll, then finished. Asserts the buffer
-            /// never grows past the longest frame and the decoder never stalls.
-            pub fn stream_events(
-                direction: Option<StreamDirection>,
-                capture: &[u8],
-                chunks: &[usize],
-            ) -> Vec<Event> {
-                let mut d = StreamDecoder::new(direction);
-                let mut out = Vec::new();
-                let mut rest = capture;
-                let mut cuts = chunks.iter().copied().chain(std::iter::once(usize::MAX));
-                while !rest.is_empty() {
-                    let (mut chunk, r) = rest.split_at(cuts.next().unwrap_or(1).min(rest.len()));
-                    rest = r;
-                    while !chunk.is_empty() {
-                        let n = d.push(chunk);
-                        chunk = &chunk[n..];
-                        let before = out.len();
-                        while let Some(e) = d.poll() {
-                            out.push(e);
-                        }
-                        assert!(
-                            d.buffered() <= MAX_FRAME_LEN,
-                            "buffer past the longest frame"
-                        );
-                        assert!(
-                            n > 0 || out.len() > before,
-                            "the decoder takes no bytes and settles nothing"
-                        );
-                    }
-                }
-                while let Some(e) = d.finish() {
-                    out.push(e);
-                }
-                assert_eq!(d.buffered(), 0, "finish left bytes buffered");
-                assert_eq!(d.position(), capture.len() as u64);
-                out
-            }
-
-            /// The generated decoder's events, for comparing with the interpreter's.
-            pub fn seen(events: &[Event]) -> Vec<Seen> {
-                events::merge(events.iter().map(|e| match *e {
-                    Event::Request { offset, len, frame } => Seen::Frame {
-                        offset,
-                        len: len as u64,
-                        name: frame.message.name().to_owned(),
-                        address: frame.address,
-                        values: visit_values(|f| frame.message.visit(f)),
-                    },
-                    Event::Response { offset, len, frame } => Seen::Frame {
-                        offset,
-                        len: len as u64,
-                        name: frame.message.name().to_owned(),
-                        address: frame.address,
-                        values: visit_values(|f| frame.message.visit(f)),
-                    },
-                    Event::Ambiguous { offset, len, .. } => Seen::Ambiguous {
-                        offset,
-                        len: len as u64,
-                    },
-                    Event::Skipped { offset, len } => Seen::Skipped { offset, len },
-                }))
-            }
-
-            /// Every event is what it claims to be.
-            fn check_events(direction: Option<StreamDirection>, capture: &[u8], evs: &[Event]) {
-                for e in evs {
-                    let bytes = events::bytes_of(capture, e.offset(), e.len());
-                    match *e {
-                        Event::Request { frame, .. } => {
-                            assert_ne!(direction, Some(StreamDirection::Response));
-                            assert_eq!(Request::decode(bytes), Ok(frame));
-                        }
-                        Event::Response { frame, .. } => {
-                            assert_ne!(direction, Some(StreamDirection::Request));
-                            assert_eq!(
-                                reencode_response(&frame),
-                                bytes,
-                                "{frame:?} is not its bytes"
-                            );
-                            match Response::decode(bytes) {
-                                Ok(d) => assert_eq!(d, frame),
-                                Err(DecodeError::Ambiguous { .. }) => {}
-                                Err(e) => panic!("{frame:?} found in bytes that say {e}"),
-                            }
-                        }
-                        Event::Ambiguous { .. } => {
-                            let both = Request::decode(bytes).is_ok()
-                                && Response::decode(bytes).is_ok()
-                                && direction.is_none();
-                            let reply = matches!(
-                                Response::decode(bytes),
-                                Err(DecodeError::Ambiguous { .. })
-                            );
-                            assert!(both || reply, "ambiguous {}", events::hex(bytes));
-                        }
-                        Event::Skipped { len, .. } => {
-                            assert!(len > 0 && len <= MAX_SKIPPED_RUN, "skipped {len}")
-                        }
-                    }
-                }
-            }
-
-            /// Arbitrary bytes through the stream decoder, then an example frame after them.
-            pub fn stream(data: &[u8]) {
-                let Some((&[mode, pick, cut], capture)) = data.split_first_chunk::<3>() else {
-                    return;
-                };
-                let p = spec();
-                let direction = match mode % 3 {
-                    0 => None,
-                    1 => Some(StreamDirection::Request),
-                    _ => Some(StreamDirection::Response),
-                };
-                let chunks = events::chunks(cut, capture.len(), 2 * MAX_FRAME_LEN);
-                let evs = stream_events(direction, capture, &chunks);
-                check_events(direction, capture, &evs);
-                let got = seen(&evs);
-                events::covers(&got, capture.len() as u64);
-                assert_eq!(
-                    stream_events(direction, capture, &[]),
-                    evs,
-                    "events depend on how the bytes are cut"
-                );
-                let want = events::interp_events(p, events::direction(direction), capture, &chunks);
-                assert_eq!(got, want, "capture {}", events::hex(capture));
-
-                // An example frame after the bytes is found, unless a frame that starts in them
-                // runs into it.
-                let e = &p.examples[usize::from(pick) % p.examples.len()];
-                let dir = match e.message.direction {
-                    Direction::Request => StreamDirection::Request,
-                    Direction::Response => StreamDirection::Response,
-                };
-                let at = capture.len() as u64;
-                let mut whole = capture.to_vec();
-                whole.extend_from_slice(&e.wire);
-                let evs = stream_events(Some(dir), &whole, &chunks);
-                check_events(Some(dir), &whole, &evs);
-                let found = evs.iter().any(|ev| {
-                    !matches!(ev, Event::Skipped { .. })
-                        && ev.offset() == at
-                        && ev.len() == e.wire.len() as u64
-                });
-                let swallowed = evs.iter().any(|ev| {
-                    !matches!(ev, Event::Skipped { .. })
-                        && ev.offset() < at
-                        && ev.offset() + ev.len() > at
-                });
-                assert!(
-                    found || swallowed,
-                    "example §{} after {} lost: {evs:?}",
-                    e.section,
-                    events::hex(capture)
-                );
-            }
-
-            /// The generated decoder and the interpreter on the same bytes, both directions and
-            /// as the reply to a chosen command.
-            pub fn differential(data: &[u8]) {
-                let Some((&pick, frame)) = data.split_first() else {
-                    return;
-                };
-                let p = spec();
-                agree::<oracle::$gen>(p, frame, Direction::Request, None);
-                agree::<oracle::$gen>(p, frame, Direction::Response, None);
-                let command = usize::from(pick) % p.commands.len();
-                agree::<oracle::$gen>(p, frame, Direction::Response, Some(command));
-            }
-        }
-    };
+    /// [`crate::decode`] for UB2.
+    pub fn decode(data: &[u8]) {
+        crate::decode::<Ub2>(data)
+    }
+    /// [`crate::roundtrip`] for UB2.
+    pub fn roundtrip(data: &[u8]) {
+        crate::roundtrip::<Ub2>(data)
+    }
+    /// [`crate::stream`] for UB2.
+    pub fn stream(data: &[u8]) {
+        crate::stream::<Ub2>(data)
+    }
+    /// [`crate::differential`] for UB2.
+    pub fn differential(data: &[u8]) {
+        crate::differential::<Ub2>(data)
+    }
 }
 
-protocol_bodies!(ub2, Ub2, "ub2.yaml");
-protocol_bodies!(sd, Sd, "sd.yaml");
+/// The bodies for the generated protocol SD, as the fuzz targets call them.
+pub mod sd {
+    use busspec_protocols::sd::Sd;
+
+    /// [`crate::decode`] for SD.
+    pub fn decode(data: &[u8]) {
+        crate::decode::<Sd>(data)
+    }
+    /// [`crate::roundtrip`] for SD.
+    pub fn roundtrip(data: &[u8]) {
+        crate::roundtrip::<Sd>(data)
+    }
+    /// [`crate::stream`] for SD.
+    pub fn stream(data: &[u8]) {
+        crate::stream::<Sd>(data)
+    }
+    /// [`crate::differential`] for SD.
+    pub fn differential(data: &[u8]) {
+        crate::differential::<Sd>(data)
+    }
+}
+
+/// The first example request of every command of `P` that has one, with its command index.
+pub fn example_requests<P: Protocol>() -> &'static [(usize, P::Request)] {
+    once::<P, Vec<(usize, P::Request)>>(|| {
+        let p = spec::<P>();
+        (0..p.commands.len())
+            .filter_map(|c| {
+                let wire = oracle::request_example(p, c)?;
+                let r = P::decode_request(wire).expect("an example request decodes");
+                Some((c, r.message))
+            })
+            .collect()
+    })
+}
+
+/// The frame `d` encodes to, into a buffer of `P`'s longest frame pre-filled with a pattern.
+fn reencode<P: Protocol, M: Message>(d: &Decoded<M>) -> Vec<u8> {
+    oracle::Decoded::new("", 0, Vec::new(), oracle::pattern_buffer::<P>(), |b| {
+        d.message.encode(d.address, b)
+    })
+    .reencoded
+}
+
+/// Arbitrary bytes through every decoder of `P`.
+pub fn decode<P: Protocol>(data: &[u8]) {
+    match P::decode_request(data) {
+        Ok(d) => {
+            assert_eq!(reencode::<P, _>(&d), data, "{d:?} re-encodes differently");
+        }
+        Err(e) => check_error(&e, data.len()),
+    }
+    let alone = P::decode_response(data);
+    match &alone {
+        Ok(d) => {
+            assert_eq!(reencode::<P, _>(d), data, "{d:?} re-encodes differently");
+        }
+        Err(e) => check_error(e, data.len()),
+    }
+    for (_, r) in example_requests::<P>() {
+        match P::decode_reply(data, r) {
+            Ok(d) => {
+                assert!(P::answers(r, &d.message), "{d:?} does not answer {r:?}");
+                // A reply decodes alone too, unless only its request can tell it.
+                match alone {
+                    Ok(a) => assert_eq!(a, d),
+                    Err(DecodeError::Ambiguous { .. }) => {}
+                    Err(e) => panic!("{d:?} decodes as a reply but alone: {e}"),
+                }
+                assert_eq!(reencode::<P, _>(&d), data, "{d:?} re-encodes differently");
+            }
+            Err(e) => {
+                check_error(&e, data.len());
+                if let Ok(a) = alone {
+                    assert!(
+                        !P::answers(r, &a.message),
+                        "{a:?} answers {r:?}, but decode_reply says {e}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Arbitrary typed messages of `P` through encode and back.
+pub fn roundtrip<P: Protocol>(data: &[u8])
+where
+    P::Request: for<'a> Arbitrary<'a>,
+    P::Response: for<'a> Arbitrary<'a>,
+{
+    let mut u = Unstructured::new(data);
+    // Several messages per input, while the input lasts.
+    for _ in 0..64 {
+        if u.is_empty() {
+            break;
+        }
+        let Ok(request) = u.arbitrary::<Decoded<P::Request>>() else {
+            break;
+        };
+        request_roundtrip::<P>(&request);
+        let Ok(response) = u.arbitrary::<Decoded<P::Response>>() else {
+            break;
+        };
+        response_roundtrip::<P>(&response);
+    }
+}
+
+/// Encodes `d` into a buffer of exactly its length and into one a byte short.
+fn encode_checked<P: Protocol>(
+    encode: impl Fn(&mut [u8]) -> Result<usize, EncodeError>,
+    frame_len: usize,
+) -> Option<Vec<u8>> {
+    let mut buf = oracle::pattern_buffer::<P>();
+    let buf = buf.as_mut();
+    match encode(buf) {
+        Ok(n) => {
+            assert_eq!(n, frame_len, "encode and frame_len disagree");
+            let mut exact = vec![0x5Au8; n];
+            assert_eq!(encode(&mut exact), Ok(n));
+            assert_eq!(exact, buf[..n], "encode depends on the buffer");
+            let mut short = vec![0u8; n - 1];
+            assert_eq!(
+                encode(&mut short),
+                Err(EncodeError::BufferTooSmall {
+                    needed: n,
+                    available: n - 1
+                })
+            );
+            Some(exact)
+        }
+        Err(EncodeError::OutOfRange { .. }) => None,
+        Err(e) => panic!("encode into MAX_FRAME_LEN bytes: {e}"),
+    }
+}
+
+fn request_roundtrip<P: Protocol>(d: &Decoded<P::Request>) {
+    let Some(frame) =
+        encode_checked::<P>(|b| d.message.encode(d.address, b), d.message.frame_len())
+    else {
+        return;
+    };
+    assert_eq!(P::decode_request(&frame), Ok(*d), "{}", events::hex(&frame));
+    assert_eq!(
+        d.message.code(),
+        code_of::<P>(&frame, d.message.code().len())
+    );
+    assert!(agree::<P>(spec::<P>(), &frame, Direction::Request, None));
+}
+
+fn response_roundtrip<P: Protocol>(d: &Decoded<P::Response>) {
+    let Some(frame) =
+        encode_checked::<P>(|b| d.message.encode(d.address, b), d.message.frame_len())
+    else {
+        return;
+    };
+    let p = spec::<P>();
+    let needs_request = match P::decode_response(&frame) {
+        Ok(back) => {
+            assert_eq!(back, *d, "{}", events::hex(&frame));
+            assert!(agree::<P>(p, &frame, Direction::Response, None));
+            false
+        }
+        Err(DecodeError::Ambiguous { .. }) => {
+            assert!(!agree::<P>(p, &frame, Direction::Response, None));
+            true
+        }
+        Err(e) => panic!("{d:?} encodes to {} but: {e}", events::hex(&frame)),
+    };
+    let mut answered = false;
+    for (c, r) in example_requests::<P>() {
+        if P::answers(r, &d.message) {
+            answered = true;
+            assert_eq!(
+                P::decode_reply(&frame, r),
+                Ok(*d),
+                "as the reply to {r:?}: {}",
+                events::hex(&frame)
+            );
+            assert!(agree::<P>(p, &frame, Direction::Response, Some(*c)));
+        }
+    }
+    assert!(
+        answered || !needs_request,
+        "{} needs its request, but no example request gets it",
+        d.message.name()
+    );
+}
+
+/// Where `encode` wrote the code: the bytes of the code in the frame.
+fn code_of<P: Protocol>(frame: &[u8], len: usize) -> &[u8] {
+    let p = spec::<P>();
+    let o = p.framing.head(len);
+    &frame[o.code..o.code + len]
+}
+
+/// The events of `P`'s stream decoder.
+pub type Events<P> = Vec<Event<<P as Protocol>::Request, <P as Protocol>::Response>>;
+
+/// `capture` through the generated stream decoder of `P` for `direction`, pushed in `chunks`
+/// (the rest in one piece) with push/poll, then finished. Asserts the buffer never grows past
+/// the longest frame and the decoder never stalls.
+pub fn stream_events<P: Protocol>(
+    direction: Option<StreamDirection>,
+    capture: &[u8],
+    chunks: &[usize],
+) -> Events<P> {
+    let mut d = StreamDecoder::<P>::new(direction);
+    let mut out = Vec::new();
+    let mut rest = capture;
+    let mut cuts = chunks.iter().copied().chain(std::iter::once(usize::MAX));
+    while !rest.is_empty() {
+        let (mut chunk, r) = rest.split_at(cuts.next().unwrap_or(1).min(rest.len()));
+        rest = r;
+        while !chunk.is_empty() {
+            let n = d.push(chunk);
+            chunk = &chunk[n..];
+            let before = out.len();
+            while let Some(e) = d.poll() {
+                out.push(e);
+            }
+            assert!(
+                d.buffered() <= P::MAX_FRAME_LEN,
+                "buffer past the longest frame"
+            );
+            assert!(
+                n > 0 || out.len() > before,
+                "the decoder takes no bytes and settles nothing"
+            );
+        }
+    }
+    while let Some(e) = d.finish() {
+        out.push(e);
+    }
+    assert_eq!(d.buffered(), 0, "finish left bytes buffered");
+    assert_eq!(d.position(), capture.len() as u64);
+    out
+}
+
+/// The generated decoder's events, for comparing with the interpreter's.
+pub fn seen<P: Protocol>(events: &[Event<P::Request, P::Response>]) -> Vec<Seen> {
+    events::merge(events.iter().map(|e| match *e {
+        Event::Request { offset, len, frame } => Seen::Frame {
+            offset,
+            len: len as u64,
+            name: frame.message.name().to_owned(),
+            address: frame.address,
+            values: visit_values(|f| frame.message.visit(f)),
+        },
+        Event::Response { offset, len, frame } => Seen::Frame {
+            offset,
+            len: len as u64,
+            name: frame.message.name().to_owned(),
+            address: frame.address,
+            values: visit_values(|f| frame.message.visit(f)),
+        },
+        Event::Ambiguous { offset, len, .. } => Seen::Ambiguous {
+            offset,
+            len: len as u64,
+        },
+        Event::Skipped { offset, len } => Seen::Skipped { offset, len },
+    }))
+}
+
+/// Every event is what it claims to be.
+fn check_events<P: Protocol>(
+    direction: Option<StreamDirection>,
+    capture: &[u8],
+    evs: &[Event<P::Request, P::Response>],
+) {
+    for e in evs {
+        let bytes = events::bytes_of(capture, e.offset(), e.len());
+        match *e {
+            Event::Request { frame, .. } => {
+                assert_ne!(direction, Some(StreamDirection::Response));
+                assert_eq!(P::decode_request(bytes), Ok(frame));
+            }
+            Event::Response { frame, .. } => {
+                assert_ne!(direction, Some(StreamDirection::Request));
+                assert_eq!(
+                    reencode::<P, _>(&frame),
+                    bytes,
+                    "{frame:?} is not its bytes"
+                );
+                match P::decode_response(bytes) {
+                    Ok(d) => assert_eq!(d, frame),
+                    Err(DecodeError::Ambiguous { .. }) => {}
+                    Err(e) => panic!("{frame:?} found in bytes that say {e}"),
+                }
+            }
+            Event::Ambiguous { .. } => {
+                let both = P::decode_request(bytes).is_ok()
+                    && P::decode_response(bytes).is_ok()
+                    && direction.is_none();
+                let reply = matches!(
+                    P::decode_response(bytes),
+                    Err(DecodeError::Ambiguous { .. })
+                );
+                assert!(both || reply, "ambiguous {}", events::hex(bytes));
+            }
+            Event::Skipped { len, .. } => {
+                assert!(len > 0 && len <= MAX_SKIPPED_RUN, "skipped {len}")
+            }
+        }
+    }
+}
+
+/// Arbitrary bytes through the stream decoder of `P`, then an example frame after them.
+pub fn stream<P: Protocol>(data: &[u8]) {
+    let Some((&[mode, pick, cut], capture)) = data.split_first_chunk::<3>() else {
+        return;
+    };
+    let p = spec::<P>();
+    let direction = match mode % 3 {
+        0 => None,
+        1 => Some(StreamDirection::Request),
+        _ => Some(StreamDirection::Response),
+    };
+    let chunks = events::chunks(cut, capture.len(), 2 * P::MAX_FRAME_LEN);
+    let evs = stream_events::<P>(direction, capture, &chunks);
+    check_events::<P>(direction, capture, &evs);
+    let got = seen::<P>(&evs);
+    events::covers(&got, capture.len() as u64);
+    assert_eq!(
+        stream_events::<P>(direction, capture, &[]),
+        evs,
+        "events depend on how the bytes are cut"
+    );
+    let want = events::interp_events(p, events::direction(direction), capture, &chunks);
+    assert_eq!(got, want, "capture {}", events::hex(capture));
+
+    // An example frame after the bytes is found, unless a frame that starts in them runs into
+    // it.
+    let e = &p.examples[usize::from(pick) % p.examples.len()];
+    let dir = match e.message.direction {
+        Direction::Request => StreamDirection::Request,
+        Direction::Response => StreamDirection::Response,
+    };
+    let at = capture.len() as u64;
+    let mut whole = capture.to_vec();
+    whole.extend_from_slice(&e.wire);
+    let evs = stream_events::<P>(Some(dir), &whole, &chunks);
+    check_events::<P>(Some(dir), &whole, &evs);
+    let found = evs.iter().any(|ev| {
+        !matches!(ev, Event::Skipped { .. }) && ev.offset() == at && ev.len() == e.wire.len() as u64
+    });
+    let swallowed = evs.iter().any(|ev| {
+        !matches!(ev, Event::Skipped { .. }) && ev.offset() < at && ev.offset() + ev.len() > at
+    });
+    assert!(
+        found || swallowed,
+        "example §{} after {} lost: {evs:?}",
+        e.section,
+        events::hex(capture)
+    );
+}
+
+/// The generated decoder of `P` and the interpreter on the same bytes, both directions and as
+/// the reply to a chosen command.
+pub fn differential<P: Protocol>(data: &[u8]) {
+    let Some((&pick, frame)) = data.split_first() else {
+        return;
+    };
+    let p = spec::<P>();
+    agree::<P>(p, frame, Direction::Request, None);
+    agree::<P>(p, frame, Direction::Response, None);
+    let command = usize::from(pick) % p.commands.len();
+    agree::<P>(p, frame, Direction::Response, Some(command));
+}
 
 /// Arbitrary text through the loader and validator; a spec that loads is also rendered as docs
 /// and emitted as code.

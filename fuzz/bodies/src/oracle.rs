@@ -3,8 +3,8 @@
 //! and asserts they say the same. Used by the fuzz targets and by the workspace's tests.
 
 use busspec_model::interp::{self, DecodeError as InterpError, Frame, Raw};
-use busspec_model::ir::{Direction, Protocol};
-use busspec_protocols::{DecodeError, FieldValue};
+use busspec_model::ir::{Direction, Protocol as Spec};
+use busspec_protocols::{DecodeError, FieldValue, Message, Protocol};
 
 /// One decoded field: name and raw wire value.
 pub type Values = Vec<(String, Raw)>;
@@ -22,14 +22,15 @@ pub struct Decoded {
 impl Decoded {
     /// Describes a decoded message; `encode` writes it back into `buf` (filled with a pattern,
     /// so a byte the encoder forgets to write shows).
-    pub fn new<const N: usize>(
+    pub fn new(
         name: &'static str,
         address: u8,
         values: Values,
-        mut buf: [u8; N],
+        mut buf: impl AsMut<[u8]>,
         encode: impl FnOnce(&mut [u8]) -> Result<usize, busspec_protocols::EncodeError>,
     ) -> Decoded {
-        let n = encode(&mut buf).unwrap_or_else(|e| panic!("decoded {name} does not encode: {e}"));
+        let buf = buf.as_mut();
+        let n = encode(buf).unwrap_or_else(|e| panic!("decoded {name} does not encode: {e}"));
         Decoded {
             name,
             address,
@@ -37,6 +38,25 @@ impl Decoded {
             reencoded: buf[..n].to_vec(),
         }
     }
+
+    /// Describes a message of protocol `P` the generated code decoded, re-encoded into a
+    /// buffer of `P`'s longest frame filled with [`pattern_buffer`]'s pattern.
+    pub fn of<P: Protocol, M: Message>(d: &busspec_protocols::Decoded<M>) -> Decoded {
+        Decoded::new(
+            d.message.name(),
+            d.address,
+            visit_values(|f| d.message.visit(f)),
+            pattern_buffer::<P>(),
+            |b| d.message.encode(d.address, b),
+        )
+    }
+}
+
+/// A buffer of `P`'s longest frame, every byte 0xA5: a byte an encoder forgets to write shows.
+pub fn pattern_buffer<P: Protocol>() -> P::Buffer {
+    let mut buf = P::EMPTY_BUFFER;
+    buf.as_mut().fill(0xA5);
+    buf
 }
 
 /// Collects a generated message's fields through its `visit`.
@@ -54,7 +74,7 @@ pub fn visit_values(visit: impl FnOnce(&mut dyn FnMut(&'static str, FieldValue<'
 
 /// The interpreter's values for the fields the generated types carry: constants, repeated
 /// fields and constant bits are checked by both decoders but are not values of the message.
-pub fn interp_values(p: &Protocol, f: &Frame) -> Values {
+pub fn interp_values(p: &Spec, f: &Frame) -> Values {
     let m = p.message(f.message);
     f.values
         .iter()
@@ -70,70 +90,37 @@ pub fn interp_values(p: &Protocol, f: &Frame) -> Values {
         .collect()
 }
 
-/// The generated decoders of one protocol, behind one interface so the checks are written once.
-pub trait Generated {
-    /// The spec file the protocol is generated from.
-    const FILE: &'static str;
-    /// `Request::decode`.
-    fn request(frame: &[u8]) -> Result<Decoded, DecodeError>;
-    /// `Response::decode`, or `Response::decode_reply` to the request `reply_to` (a whole
-    /// request frame, decoded first).
-    fn response(frame: &[u8], reply_to: Option<&[u8]>) -> Result<Decoded, DecodeError>;
+/// `frame` through `P`'s generated request decoder.
+pub fn request<P: Protocol>(frame: &[u8]) -> Result<Decoded, DecodeError> {
+    let d = P::decode_request(frame)?;
+    Ok(Decoded::of::<P, _>(&d))
 }
 
-macro_rules! generated {
-    ($t:ident, $proto:ident, $file:literal) => {
-        /// The generated decoders of this protocol.
-        pub struct $t;
-
-        impl Generated for $t {
-            const FILE: &'static str = $file;
-
-            fn request(frame: &[u8]) -> Result<Decoded, DecodeError> {
-                use busspec_protocols::$proto::{Request, MAX_FRAME_LEN};
-                let d = Request::decode(frame)?;
-                Ok(Decoded::new(
-                    d.message.name(),
-                    d.address,
-                    visit_values(|f| d.message.visit(f)),
-                    [0xA5u8; MAX_FRAME_LEN],
-                    |b| d.message.encode(d.address, b),
-                ))
-            }
-
-            fn response(frame: &[u8], reply_to: Option<&[u8]>) -> Result<Decoded, DecodeError> {
-                use busspec_protocols::$proto::{Request, Response, MAX_FRAME_LEN};
-                let d = match reply_to {
-                    None => Response::decode(frame)?,
-                    Some(r) => {
-                        let r = Request::decode(r)
-                            .expect("reply_to is a request frame")
-                            .message;
-                        let d = Response::decode_reply(frame, &r)?;
-                        assert!(
-                            d.message.answers(&r),
-                            "decode_reply gave a response that does not answer"
-                        );
-                        d
-                    }
-                };
-                Ok(Decoded::new(
-                    d.message.name(),
-                    d.address,
-                    visit_values(|f| d.message.visit(f)),
-                    [0xA5u8; MAX_FRAME_LEN],
-                    |b| d.message.encode(d.address, b),
-                ))
-            }
+/// `frame` through `P`'s generated response decoder: alone, or as the reply to the request
+/// `reply_to` (a whole request frame, decoded first).
+pub fn response<P: Protocol>(
+    frame: &[u8],
+    reply_to: Option<&[u8]>,
+) -> Result<Decoded, DecodeError> {
+    let d = match reply_to {
+        None => P::decode_response(frame)?,
+        Some(r) => {
+            let r = P::decode_request(r)
+                .expect("reply_to is a request frame")
+                .message;
+            let d = P::decode_reply(frame, &r)?;
+            assert!(
+                P::answers(&r, &d.message),
+                "decode_reply gave a response that does not answer"
+            );
+            d
         }
     };
+    Ok(Decoded::of::<P, _>(&d))
 }
 
-generated!(Ub2, ub2, "ub2.yaml");
-generated!(Sd, sd, "sd.yaml");
-
 /// A request frame for command `index`: its first example, if it has one.
-pub fn request_example(p: &Protocol, index: usize) -> Option<&[u8]> {
+pub fn request_example(p: &Spec, index: usize) -> Option<&[u8]> {
     p.examples
         .iter()
         .find(|e| e.message.direction == Direction::Request && e.message.index == index)
@@ -144,8 +131,8 @@ pub fn request_example(p: &Protocol, index: usize) -> Option<&[u8]> {
 /// given; its first example request is the request) and asserts they agree: both accept or both
 /// reject, and where they accept, the same message, address and value for every field, and the
 /// generated encoder writes the frame back byte for byte. Returns whether it was accepted.
-pub fn agree<G: Generated>(
-    p: &Protocol,
+pub fn agree<P: Protocol>(
+    p: &Spec,
     frame: &[u8],
     direction: Direction,
     reply_to: Option<usize>,
@@ -154,8 +141,8 @@ pub fn agree<G: Generated>(
     let reply_to = reply_frame.and(reply_to);
     let oracle = interp::decode(p, Some(direction), reply_to, frame);
     let generated = match direction {
-        Direction::Request => G::request(frame),
-        Direction::Response => G::response(frame, reply_frame),
+        Direction::Request => request::<P>(frame),
+        Direction::Response => response::<P>(frame, reply_frame),
     };
     // decode_reply admits only responses the request may get; the interpreter uses the request
     // only to settle ambiguity, so hold it to the same rule here.
@@ -174,7 +161,7 @@ pub fn agree<G: Generated>(
     let ctx = || {
         format!(
             "{} {direction:?} {} (reply to {reply_to:?})",
-            G::FILE,
+            P::NAME,
             interp::format_hex(frame)
         )
     };

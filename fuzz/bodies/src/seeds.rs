@@ -12,7 +12,15 @@ use std::path::{Path, PathBuf};
 
 use busspec_model::ir::{Direction, Protocol};
 
-use crate::spec;
+use crate::spec_named;
+
+/// The spec of each generated protocol, by name.
+fn specs() -> impl Iterator<Item = (&'static str, &'static Protocol)> {
+    busspec_protocols::PROTOCOLS.iter().map(|&name| {
+        let p = spec_named(name).expect("every name in PROTOCOLS is a protocol");
+        (name, p)
+    })
+}
 
 /// Generated seed files are named `seed-…`; libFuzzer names what it adds by content hash, so
 /// the two never clash and only the generated ones are committed.
@@ -36,8 +44,7 @@ pub fn repo_root() -> PathBuf {
 /// Every generated seed: target name → file name → bytes.
 pub fn corpus() -> BTreeMap<&'static str, BTreeMap<String, Vec<u8>>> {
     let mut out = BTreeMap::new();
-    for (proto, file) in [("ub2", "ub2.yaml"), ("sd", "sd.yaml")] {
-        let p = spec(file);
+    for (proto, p) in specs() {
         let mut put = |kind: &str, name: String, bytes: Vec<u8>| {
             let target: &'static str = crate::TARGETS
                 .iter()
@@ -132,8 +139,7 @@ pub fn files() -> BTreeMap<PathBuf, Vec<u8>> {
             out.insert(Path::new("corpus").join(target).join(name), bytes);
         }
     }
-    for (file, _) in crate::SPECS {
-        let p = spec(file);
+    for (_, p) in specs() {
         out.insert(
             Path::new("dict").join(format!("{}.dict", p.name)),
             dictionary(p).into_bytes(),
