@@ -773,6 +773,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         decoders.push(emit_decode_fn(ctx, m, &ty, &ls));
     }
     let dispatch = emit_dispatch(p, d, &ty);
+    let from_fields = emit_from_fields(ctx, d);
     let command_info = if d == Direction::Request {
         emit_command_info(p)
     } else {
@@ -834,6 +835,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 ::core::result::Result::Ok(len)
             }
             #dispatch
+            #from_fields
         }
         impl ::busspec_runtime::Message for #ty {
             #[inline]
@@ -856,9 +858,78 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
                 #ty::encode(self, address, buf)
             }
+            #[inline]
+            fn from_fields<'v, F: FnMut(&'static str) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>>(
+                name: &str,
+                field: F,
+            ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+                #ty::from_fields(name, field)
+            }
         }
         #command_info
         #(#decoders)*
+    }
+}
+
+/// `from_fields`: one arm per message, building it from the getter's raw value of each field,
+/// each checked against its wire type as the encoder checks it (`to_wire`), then typed as the
+/// decoder types it (`from_wire`).
+fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
+    let arms = ctx.p.messages(d).iter().map(|m| {
+        let name = &m.name;
+        let v = variant(m);
+        let ls = leaves(m);
+        if ls.is_empty() {
+            return quote!(#name => ::core::result::Result::Ok(Self::#v));
+        }
+        let gets = ls.iter().map(|l| {
+            let (n, local) = (l.name, local(l.name));
+            let value = match ctx.kind(l) {
+                Kind::Text(width) => {
+                    let width = Literal::usize_unsuffixed(width);
+                    quote!(::busspec_runtime::field_text::<#width>(#n, field(#n))?)
+                }
+                _ => {
+                    let (lo, hi) = l
+                        .bits
+                        .map(|b| raw_limits(u32::from(b.width()), b.signed))
+                        .unwrap_or(l.wire.limits());
+                    let (lo, hi) = (Literal::i64_unsuffixed(lo), Literal::i64_unsuffixed(hi));
+                    from_wire(
+                        ctx,
+                        l,
+                        quote!(::busspec_runtime::field_int(#n, field(#n), #lo, #hi)?),
+                    )
+                }
+            };
+            quote!(let #local = #value;)
+        });
+        let fields = ls.iter().map(|l| {
+            let (n, v) = (ident(l.name), local(l.name));
+            quote!(#n: #v)
+        });
+        quote! {
+            #name => {
+                #(#gets)*
+                ::core::result::Result::Ok(Self::#v { #(#fields),* })
+            }
+        }
+    });
+    quote! {
+        /// The message called `name` in the spec, from each field's raw wire value by its spec
+        /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
+        /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
+        #[allow(clippy::unnecessary_cast)]
+        pub fn from_fields<'v>(
+            name: &str,
+            mut field: impl FnMut(&'static str) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            let _ = &mut field;
+            match name {
+                #(#arms,)*
+                _ => ::core::result::Result::Err(::busspec_runtime::FieldError::UnknownMessage),
+            }
+        }
     }
 }
 

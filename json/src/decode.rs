@@ -1,9 +1,9 @@
 //! Decoding one frame for printing, with either engine: errors that say what and where, and an
 //! ambiguity that says how to settle it.
 
-use busspec_model::interp::{self, DecodeError as InterpError, Frame, Raw, Value};
-use busspec_model::ir::{Direction, Leaf, MessageRef};
-use busspec_runtime::{DecodeError, Message, Protocol};
+use busspec_model::interp::{self, DecodeError as InterpError, Frame};
+use busspec_model::ir::Direction;
+use busspec_runtime::{DecodeError, FieldValue, Message, Protocol};
 
 use crate::{Spec, Typed};
 
@@ -64,40 +64,32 @@ pub fn decode_frame(
     }
 }
 
-/// A request of command `cmd` (an index into the spec's commands) of generated protocol `P`:
-/// the command with every field at a neutral value (constants and repeated fields as the spec
-/// fixes them, enums at their first value, other fields zero). What a response decoder needs to
-/// know which request it answers; `None` if the command has no such request.
+/// Text to fill an ASCII field of a neutral request (widths are at most 255).
+const SPACES: [u8; 255] = [b' '; 255];
+
+/// A request of command `cmd` (an index into the spec's commands) of generated protocol `P`,
+/// for the JSON contract's places that name a command without its values (`--reply-to`, a
+/// stream's default request, the candidates of an ambiguous frame): what a response decoder
+/// needs to know which request a response answers, which only the command decides. Built with
+/// [`Message::from_fields`] from neutral values: enums at their first listed value, text all
+/// spaces, every other field 0 (constants and repeated fields as the spec fixes them). `None`
+/// if `P` has no such command.
 pub fn request_for<P: Protocol>(p: &Spec, cmd: usize) -> Option<P::Request> {
     let c = p.commands.get(cmd)?;
-    let mut values = Vec::new();
-    for leaf in c.leaves() {
-        let raw = match leaf {
-            Leaf::Field(_, f) if f.constant.is_some() || f.equals.is_some() => continue,
-            Leaf::Field(_, f) if f.is_ascii() => Raw::Text(vec![b' '; f.width]),
-            Leaf::Field(_, f) => Raw::Int(
+    let neutral = |name: &'static str| {
+        let (f, bit) = interp::leaf_field(c, name)?;
+        Some(match bit {
+            Some(_) => FieldValue::Int(0),
+            None if f.is_ascii() => FieldValue::Text(SPACES.get(..f.width)?),
+            None => FieldValue::Int(
                 f.enumeration
                     .and_then(|e| p.enums.get(e))
                     .and_then(|e| e.values.first())
                     .map_or(0, |v| v.value as i64),
             ),
-            Leaf::Bits(_, _, b) if b.constant.is_some() => continue,
-            Leaf::Bits(..) => Raw::Int(0),
-        };
-        values.push(Value {
-            name: leaf.name().to_owned(),
-            raw,
-        });
-    }
-    let r = MessageRef {
-        direction: Direction::Request,
-        index: cmd,
+        })
     };
-    let wire = interp::encode(p, r, *P::DEVICE_ADDRESSES.start(), &values).ok()?;
-    P::decode_request(&wire)
-        .ok()
-        .map(|d| d.message)
-        .filter(|q| q.name() == c.name)
+    P::Request::from_fields(&c.name, neutral).ok()
 }
 
 /// The responses of `P` a frame decodes as, given some request: the candidates of an

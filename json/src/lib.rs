@@ -24,7 +24,8 @@
 //!
 //! The way back, [`parse_line`], checks a line against the spec and gives the frame's raw field
 //! values ([`Parsed`]), which encode through the interpreter ([`Parsed::encode`]) or become a
-//! typed message of a generated protocol ([`Parsed::to_typed`]).
+//! typed message of a generated protocol ([`Parsed::to_typed`], with
+//! [`Message::from_fields`]): a built-in protocol never goes through the interpreter's codec.
 //!
 //! Nothing here panics on any input: every failure is an error message saying what and where.
 

@@ -2,14 +2,13 @@
 
 use std::collections::BTreeMap;
 
-use busspec_model::interp::{self, Raw, Value};
-use busspec_model::ir::{BitField, Direction, Field, MessageRef, Unit};
+use busspec_model::interp::{self, EncodeError, Raw, Value};
+use busspec_model::ir::{BitField, Direction, Field, Message, MessageRef, Unit};
 use busspec_model::rational::Rational;
-use busspec_runtime::{DecodeError, Message, Protocol};
+use busspec_runtime::{Decoded, FieldError, FieldValue, Message as _, Protocol};
 use serde::Deserialize;
 use serde_json::value::RawValue;
 
-use crate::decode::request_for;
 use crate::print::physical_text;
 use crate::{Spec, Typed};
 
@@ -30,40 +29,120 @@ impl Parsed {
     }
 
     /// The frame as a typed message of generated protocol `P` (`p` its spec, from
-    /// [`crate::load_spec`]): encoded as [`Parsed::encode`] does, then decoded by `P`'s codec,
-    /// a response only its request tells apart as the reply to a command that gets it.
+    /// [`crate::load_spec`]), built directly from the line's raw values with
+    /// [`busspec_runtime::Message::from_fields`]. Checked as [`Parsed::encode`] checks it, with the same
+    /// reasons: the address against `P`'s, every value against its field's wire type, and a
+    /// value the line gives for a constant or repeated field against what it must be.
     pub fn to_typed<P: Protocol>(&self, p: &Spec) -> Result<Typed<P>, String> {
-        let wire = self.encode(p)?;
         let m = p.message(self.message);
-        let typed = match self.message.direction {
-            Direction::Request => P::decode_request(&wire).map(Typed::Request),
-            Direction::Response => match P::decode_response(&wire) {
-                Err(DecodeError::Ambiguous { code }) => m
-                    .answers
-                    .iter()
-                    .filter_map(|&cmd| request_for::<P>(p, cmd))
-                    .filter_map(|q| P::decode_reply(&wire, &q).ok())
-                    .find(|d| d.message.name() == m.name)
-                    .map(Typed::Response)
-                    .ok_or(DecodeError::Ambiguous { code }),
-                other => other.map(Typed::Response),
-            },
-        };
-        match typed {
-            Ok(t) if t.name() == m.name => Ok(t),
-            Ok(t) => Err(format!(
-                "{} decodes as {} in the generated {} codec",
-                m.name,
-                t.name(),
-                P::NAME
-            )),
-            Err(e) => Err(format!(
-                "{}: the generated {} codec does not decode the frame: {e}",
-                m.name,
-                P::NAME
-            )),
+        let direction = self.message.direction;
+        let address = self.address;
+        let broadcast = direction == Direction::Request && P::BROADCAST_ADDRESS == Some(address);
+        if !P::DEVICE_ADDRESSES.contains(&address) && !broadcast {
+            return Err(EncodeError::BadAddress { address }.to_string());
         }
+        let field = |name: &'static str| {
+            self.values
+                .iter()
+                .find(|v| v.name == name)
+                .map(|v| match &v.raw {
+                    Raw::Int(i) => FieldValue::Int(*i),
+                    Raw::Text(t) => FieldValue::Text(t),
+                })
+        };
+        let typed = match direction {
+            Direction::Request => P::Request::from_fields(&m.name, field)
+                .map(|message| Typed::Request(Decoded { address, message })),
+            Direction::Response => P::Response::from_fields(&m.name, field)
+                .map(|message| Typed::Response(Decoded { address, message })),
+        };
+        let typed = typed.map_err(|e| match e {
+            // Only a protocol generated from another spec than `p` gets here.
+            FieldError::UnknownMessage => format!(
+                "the generated {} codec has no {} called {}",
+                P::NAME,
+                direction.as_str(),
+                m.name
+            ),
+            e => e.to_string(),
+        })?;
+        check_fixed(m, &self.values)?;
+        Ok(typed)
     }
+}
+
+fn sign_extend(v: u64, bits: u32) -> i64 {
+    if bits == 0 || bits >= 64 {
+        return v as i64;
+    }
+    let shift = 64 - bits;
+    ((v << shift) as i64) >> shift
+}
+
+/// Checks the values `values` gives for constant and repeated fields (and constant sub-fields)
+/// of `m`: each must be what the frame carries, as the interpreter's encoder checks them. A
+/// repeated field repeats the wire word of the field it names.
+fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
+    let int = |name: &str| {
+        values
+            .iter()
+            .find(|v| v.name == name)
+            .and_then(|v| match v.raw {
+                Raw::Int(i) => Some(i),
+                Raw::Text(_) => None,
+            })
+    };
+    let fixed = |field: &str, expected: i64| match int(field) {
+        Some(found) if found != expected => Err(EncodeError::Fixed {
+            field: field.to_owned(),
+            expected,
+            found,
+        }
+        .to_string()),
+        _ => Ok(()),
+    };
+    let mask = |bits: u32| {
+        if bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << bits) - 1
+        }
+    };
+    let mut words: Vec<u64> = Vec::with_capacity(m.fields.len());
+    for f in &m.fields {
+        let bits = 8 * f.width as u32;
+        let word = if f.is_ascii() {
+            0
+        } else if let Some(c) = f
+            .constant
+            .or_else(|| f.equals.and_then(|o| words.get(o).copied()))
+        {
+            let expected = if f.signed {
+                sign_extend(c, bits)
+            } else {
+                c as i64
+            };
+            fixed(&f.name, expected)?;
+            c
+        } else if !f.bits.is_empty() {
+            let mut word = 0u64;
+            for b in &f.bits {
+                let v = match b.constant {
+                    Some(c) => {
+                        fixed(&b.name, c as i64)?;
+                        c as i64
+                    }
+                    None => int(&b.name).unwrap_or(0),
+                };
+                word |= ((v as u64) & mask(u32::from(b.width()))) << b.lsb;
+            }
+            word
+        } else {
+            (int(&f.name).unwrap_or(0) as u64) & mask(bits)
+        };
+        words.push(word);
+    }
+    Ok(())
 }
 
 /// One input line of `encode`: the object `decode` prints (its `offset` from `--stream` is

@@ -365,6 +365,76 @@ fn encode_says_what_is_wrong_with_a_line() {
     }
 }
 
+/// The checks a line passes only at encoding (the value against its field's wire type, text
+/// against its length, constant and repeated fields, the address) give the same reasons from
+/// both engines: the interpreter's encoder and `Message::from_fields`.
+#[test]
+fn encode_checks_values_alike_in_both_engines() {
+    let ub2 = Both::<Ub2>::new();
+    for (line, want) in [
+        (
+            r#"{"message":"set_baud_rate","address":33,"fields":{"baud_rate":300}}"#,
+            Err("baud_rate = 300 does not fit the field (0..=255)"),
+        ),
+        (
+            r#"{"message":"set_baud_rate","address":33,"fields":{"baud_rate":-1}}"#,
+            Err("baud_rate = -1 does not fit the field (0..=255)"),
+        ),
+        (
+            r#"{"message":"firmware_version","address":33,"fields":{"firmware_version":"2010"}}"#,
+            Err("firmware_version takes exactly 11 characters, got 4"),
+        ),
+        (
+            r#"{"message":"firmware_version","address":33,"fields":{"firmware_version":"20100433.000"}}"#,
+            Err("firmware_version takes exactly 11 characters, got 12"),
+        ),
+        (
+            r#"{"message":"get_lower_customer_limit","address":33,"fields":{"index":2}}"#,
+            Err("index is fixed at 1 in this message, got 2"),
+        ),
+        (
+            r#"{"message":"get_lower_customer_limit","address":33,"fields":{"index":1}}"#,
+            Ok(()),
+        ),
+        (
+            r#"{"message":"reference_run","address":5}"#,
+            Err("address 0x05 is outside the device range and is not the broadcast address of a request"),
+        ),
+    ] {
+        let got = ub2.encode(line);
+        match want {
+            Ok(()) => assert!(got.is_ok(), "{line}: {got:?}"),
+            Err(why) => assert_eq!(got.unwrap_err(), why, "{line}"),
+        }
+    }
+    let sd = Both::<Sd>::new();
+    for (line, want) in [
+        (
+            r#"{"message":"set_servo_id","address":1,"fields":{"new_id":5,"new_id_repeat":6}}"#,
+            Err("new_id_repeat is fixed at 5 in this message, got 6"),
+        ),
+        (
+            r#"{"message":"set_servo_id","address":1,"fields":{"new_id":5,"new_id_repeat":5}}"#,
+            Ok(()),
+        ),
+        // The broadcast address takes requests only.
+        (
+            r#"{"message":"set_servo_id","address":31,"fields":{"new_id":5}}"#,
+            Ok(()),
+        ),
+        (
+            r#"{"message":"set_servo_id_reply","address":31,"fields":{"new_id":5}}"#,
+            Err("address 0x1F is outside the device range and is not the broadcast address of a request"),
+        ),
+    ] {
+        let got = sd.encode(line);
+        match want {
+            Ok(()) => assert!(got.is_ok(), "{line}: {got:?}"),
+            Err(why) => assert_eq!(got.unwrap_err(), why, "{line}"),
+        }
+    }
+}
+
 #[test]
 fn encode_converts_offsets_and_angles_exactly() {
     // SD temperature: °C = raw - 50; angle: 360/4096 ° per digit.

@@ -73,6 +73,129 @@ pub enum FieldValue<'a> {
     Text(&'a [u8]),
 }
 
+/// Which kind of [`FieldValue`] a field takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ValueKind {
+    /// [`FieldValue::Int`]: every field but ASCII text.
+    Int,
+    /// [`FieldValue::Text`]: an ASCII field.
+    Text,
+}
+
+/// Why a message could not be built from field values ([`Message::from_fields`]), and where.
+/// The field is named as the spec names it, as [`Message::visit`] reports it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FieldError {
+    /// No message of this type (request or response) has the name given.
+    UnknownMessage,
+    /// The getter gave no value for a field the message has.
+    Missing { field: &'static str },
+    /// The value does not fit the field's wire type (`300` for a `u8`, `16` for a 4-bit
+    /// sub-field); the field holds `min..=max`.
+    OutOfRange {
+        field: &'static str,
+        value: i64,
+        min: i64,
+        max: i64,
+    },
+    /// Text of another length than the ASCII field's: it takes exactly `expected` bytes, as both
+    /// encoders do (neither pads).
+    TextLength {
+        field: &'static str,
+        expected: usize,
+        found: usize,
+    },
+    /// Text for a number field, or a number for an ASCII field; the field takes `expected`.
+    WrongKind {
+        field: &'static str,
+        expected: ValueKind,
+    },
+}
+
+impl fmt::Display for FieldError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            FieldError::UnknownMessage => f.write_str("no message of this direction has that name"),
+            FieldError::Missing { field } => write!(f, "no value given for field {field}"),
+            FieldError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(
+                f,
+                "{field} = {value} does not fit the field ({min}..={max})"
+            ),
+            FieldError::TextLength {
+                field,
+                expected,
+                found,
+            } => write!(
+                f,
+                "{field} takes exactly {expected} characters, got {found}"
+            ),
+            FieldError::WrongKind {
+                field,
+                expected: ValueKind::Int,
+            } => write!(f, "{field} takes a number"),
+            FieldError::WrongKind {
+                field,
+                expected: ValueKind::Text,
+            } => write!(f, "{field} takes text"),
+        }
+    }
+}
+
+impl core::error::Error for FieldError {}
+
+/// The raw value of integer field `field` from a [`Message::from_fields`] getter's answer,
+/// checked against the field's wire limits `min..=max`. Public only for generated code.
+#[doc(hidden)]
+#[inline]
+pub fn field_int(
+    field: &'static str,
+    value: Option<FieldValue<'_>>,
+    min: i64,
+    max: i64,
+) -> Result<i64, FieldError> {
+    match value {
+        Some(FieldValue::Int(value)) if (min..=max).contains(&value) => Ok(value),
+        Some(FieldValue::Int(value)) => Err(FieldError::OutOfRange {
+            field,
+            value,
+            min,
+            max,
+        }),
+        Some(FieldValue::Text(_)) => Err(FieldError::WrongKind {
+            field,
+            expected: ValueKind::Int,
+        }),
+        None => Err(FieldError::Missing { field }),
+    }
+}
+
+/// The bytes of ASCII field `field` (exactly `N`) from a [`Message::from_fields`] getter's
+/// answer. Public only for generated code.
+#[doc(hidden)]
+#[inline]
+pub fn field_text<const N: usize>(
+    field: &'static str,
+    value: Option<FieldValue<'_>>,
+) -> Result<[u8; N], FieldError> {
+    match value {
+        Some(FieldValue::Text(text)) => text.try_into().map_err(|_| FieldError::TextLength {
+            field,
+            expected: N,
+            found: text.len(),
+        }),
+        Some(FieldValue::Int(_)) => Err(FieldError::WrongKind {
+            field,
+            expected: ValueKind::Text,
+        }),
+        None => Err(FieldError::Missing { field }),
+    }
+}
+
 /// Why a frame did not decode, and where.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DecodeError {

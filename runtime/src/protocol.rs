@@ -9,7 +9,7 @@ use core::fmt::Debug;
 use core::ops::RangeInclusive;
 
 use crate::stream::Candidates;
-use crate::{Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldValue};
+use crate::{Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldError, FieldValue};
 
 /// One message type of a protocol (its `Request` or its `Response`): every variant is one
 /// message of the spec.
@@ -24,6 +24,19 @@ pub trait Message: Copy + Debug + PartialEq + 'static {
     fn visit<F: FnMut(&'static str, FieldValue<'_>)>(&self, f: F);
     /// Writes the frame to `address` into `buf` and returns its length.
     fn encode(&self, address: u8, buf: &mut [u8]) -> Result<usize, EncodeError>;
+    /// The message called `name` in the spec, from its field values: `field` is asked once for
+    /// each field [`Self::visit`] reports, by the same spec name, and answers with the same raw
+    /// wire value `visit` gives (an integer that fits the field's wire type, sign-extended
+    /// where it is signed; an ASCII field's bytes, exactly its length), or `None` if it has
+    /// none. Constant and repeated fields are not asked for: [`Self::encode`] writes them.
+    ///
+    /// For every message `m`, `from_fields(m.name(), |f| the value m.visit gave for f)` is
+    /// `Ok(m)`. Enums and flags take any raw value (unlisted ones as `Unknown`, unnamed bits
+    /// kept); a value is checked only against its wire type, as the encoders check it.
+    fn from_fields<'v, F: FnMut(&'static str) -> Option<FieldValue<'v>>>(
+        name: &str,
+        field: F,
+    ) -> Result<Self, FieldError>;
 }
 
 /// A protocol generated from a busspec spec: its line constants, its codec and its framing.

@@ -519,6 +519,54 @@ pub mod mini {
                 code,
             })
         }
+        /// The message called `name` in the spec, from each field's raw wire value by its spec
+        /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
+        /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
+        #[allow(clippy::unnecessary_cast)]
+        pub fn from_fields<'v>(
+            name: &str,
+            mut field: impl FnMut(
+                &'static str,
+            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            let _ = &mut field;
+            match name {
+                "go_to" => {
+                    let v_target = Capacitance::from_raw(
+                        ::busspec_runtime::field_int(
+                            "target",
+                            field("target"),
+                            0,
+                            4294967295,
+                        )? as u32,
+                    );
+                    ::core::result::Result::Ok(Self::GoTo { target: v_target })
+                }
+                "set_mode" => {
+                    let v_mode = Mode::from_raw(
+                        ::busspec_runtime::field_int("mode", field("mode"), 0, 255)?
+                            as u8,
+                    );
+                    ::core::result::Result::Ok(Self::SetMode { mode: v_mode })
+                }
+                "get_status" => {
+                    let v_channel = ::busspec_runtime::field_int(
+                        "channel",
+                        field("channel"),
+                        0,
+                        255,
+                    )? as u8;
+                    ::core::result::Result::Ok(Self::GetStatus {
+                        channel: v_channel,
+                    })
+                }
+                _ => {
+                    ::core::result::Result::Err(
+                        ::busspec_runtime::FieldError::UnknownMessage,
+                    )
+                }
+            }
+        }
     }
     impl ::busspec_runtime::Message for Request {
         #[inline]
@@ -547,6 +595,18 @@ pub mod mini {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             Request::encode(self, address, buf)
+        }
+        #[inline]
+        fn from_fields<
+            'v,
+            F: FnMut(
+                    &'static str,
+                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        >(
+            name: &str,
+            field: F,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            Request::from_fields(name, field)
         }
     }
     impl Request {
@@ -1094,6 +1154,70 @@ pub mod mini {
                 code,
             })
         }
+        /// The message called `name` in the spec, from each field's raw wire value by its spec
+        /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
+        /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
+        #[allow(clippy::unnecessary_cast)]
+        pub fn from_fields<'v>(
+            name: &str,
+            mut field: impl FnMut(
+                &'static str,
+            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            let _ = &mut field;
+            match name {
+                "started" => ::core::result::Result::Ok(Self::Started),
+                "nak" => ::core::result::Result::Ok(Self::Nak),
+                "set_mode_ack" => ::core::result::Result::Ok(Self::SetModeAck),
+                "status" => {
+                    let v_error_bits = StatusBits::from_raw(
+                        ::busspec_runtime::field_int(
+                            "error_bits",
+                            field("error_bits"),
+                            0,
+                            255,
+                        )? as u8,
+                    );
+                    let v_freshness = ::busspec_runtime::field_int(
+                        "freshness",
+                        field("freshness"),
+                        0,
+                        15,
+                    )? as u8;
+                    let v_position = Angle::from_raw(
+                        ::busspec_runtime::field_int(
+                            "position",
+                            field("position"),
+                            -2048,
+                            2047,
+                        )? as i16,
+                    );
+                    let v_firmware = ::busspec_runtime::field_text::<
+                        3,
+                    >("firmware", field("firmware"))?;
+                    let v_temperature = Celsius::from_raw(
+                        ::busspec_runtime::field_int(
+                            "temperature",
+                            field("temperature"),
+                            0,
+                            255,
+                        )? as u8,
+                    );
+                    ::core::result::Result::Ok(Self::Status {
+                        error_bits: v_error_bits,
+                        freshness: v_freshness,
+                        position: v_position,
+                        firmware: v_firmware,
+                        temperature: v_temperature,
+                    })
+                }
+                _ => {
+                    ::core::result::Result::Err(
+                        ::busspec_runtime::FieldError::UnknownMessage,
+                    )
+                }
+            }
+        }
     }
     impl ::busspec_runtime::Message for Response {
         #[inline]
@@ -1122,6 +1246,18 @@ pub mod mini {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             Response::encode(self, address, buf)
+        }
+        #[inline]
+        fn from_fields<
+            'v,
+            F: FnMut(
+                    &'static str,
+                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        >(
+            name: &str,
+            field: F,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            Response::from_fields(name, field)
         }
     }
     #[inline]

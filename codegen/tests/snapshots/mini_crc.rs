@@ -310,6 +310,42 @@ pub mod mini_crc {
                 code,
             })
         }
+        /// The message called `name` in the spec, from each field's raw wire value by its spec
+        /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
+        /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
+        #[allow(clippy::unnecessary_cast)]
+        pub fn from_fields<'v>(
+            name: &str,
+            mut field: impl FnMut(
+                &'static str,
+            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            let _ = &mut field;
+            match name {
+                "read_runtime_hours" => {
+                    ::core::result::Result::Ok(Self::ReadRuntimeHours)
+                }
+                "read_runtime_min_sec" => {
+                    ::core::result::Result::Ok(Self::ReadRuntimeMinSec)
+                }
+                "set_counter" => {
+                    let v_counter = ::busspec_runtime::field_int(
+                        "counter",
+                        field("counter"),
+                        0,
+                        65535,
+                    )? as u16;
+                    ::core::result::Result::Ok(Self::SetCounter {
+                        counter: v_counter,
+                    })
+                }
+                _ => {
+                    ::core::result::Result::Err(
+                        ::busspec_runtime::FieldError::UnknownMessage,
+                    )
+                }
+            }
+        }
     }
     impl ::busspec_runtime::Message for Request {
         #[inline]
@@ -338,6 +374,18 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             Request::encode(self, address, buf)
+        }
+        #[inline]
+        fn from_fields<
+            'v,
+            F: FnMut(
+                    &'static str,
+                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        >(
+            name: &str,
+            field: F,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            Request::from_fields(name, field)
         }
     }
     impl Request {
@@ -781,6 +829,65 @@ pub mod mini_crc {
                 code,
             })
         }
+        /// The message called `name` in the spec, from each field's raw wire value by its spec
+        /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
+        /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
+        #[allow(clippy::unnecessary_cast)]
+        pub fn from_fields<'v>(
+            name: &str,
+            mut field: impl FnMut(
+                &'static str,
+            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            let _ = &mut field;
+            match name {
+                "runtime_hours" => {
+                    let v_hours = ::busspec_runtime::field_int(
+                        "hours",
+                        field("hours"),
+                        0,
+                        65535,
+                    )? as u16;
+                    ::core::result::Result::Ok(Self::RuntimeHours {
+                        hours: v_hours,
+                    })
+                }
+                "runtime_min_sec" => {
+                    let v_minutes = ::busspec_runtime::field_int(
+                        "minutes",
+                        field("minutes"),
+                        0,
+                        255,
+                    )? as u8;
+                    let v_seconds = ::busspec_runtime::field_int(
+                        "seconds",
+                        field("seconds"),
+                        0,
+                        255,
+                    )? as u8;
+                    ::core::result::Result::Ok(Self::RuntimeMinSec {
+                        minutes: v_minutes,
+                        seconds: v_seconds,
+                    })
+                }
+                "counter_echo" => {
+                    let v_counter = ::busspec_runtime::field_int(
+                        "counter",
+                        field("counter"),
+                        0,
+                        65535,
+                    )? as u16;
+                    ::core::result::Result::Ok(Self::CounterEcho {
+                        counter: v_counter,
+                    })
+                }
+                _ => {
+                    ::core::result::Result::Err(
+                        ::busspec_runtime::FieldError::UnknownMessage,
+                    )
+                }
+            }
+        }
     }
     impl ::busspec_runtime::Message for Response {
         #[inline]
@@ -809,6 +916,18 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             Response::encode(self, address, buf)
+        }
+        #[inline]
+        fn from_fields<
+            'v,
+            F: FnMut(
+                    &'static str,
+                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
+        >(
+            name: &str,
+            field: F,
+        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            Response::from_fields(name, field)
         }
     }
     #[inline]
