@@ -31,12 +31,24 @@ pub fn parse_address(text: &str) -> Result<u8, String> {
 
 /// The request frame for `command` with `name=value` arguments, through the same JSON contract
 /// as `busspec encode`: values in the spec's units, enum and special values by name.
-pub fn request_frame(
+#[cfg(test)]
+fn request_frame(
     spec: &Spec,
     command: &str,
     address: u8,
     args: &[String],
 ) -> Result<Vec<u8>, String> {
+    let line = request_line(spec, command, address, args)?;
+    frames::encode_built_in(spec, &line).map_err(|e| format!("{command}: {e}"))
+}
+
+/// The `encode` JSON line for `command` with `name=value` arguments.
+fn request_line(
+    spec: &Spec,
+    command: &str,
+    address: u8,
+    args: &[String],
+) -> Result<String, String> {
     let Some(c) = spec.commands.iter().find(|c| c.name == command) else {
         return Err(format!(
             "unknown command `{command}` in {}; its commands: {}",
@@ -86,7 +98,7 @@ pub fn request_frame(
         "address": address,
         "fields": fields,
     });
-    frames::encode_built_in(spec, &line.to_string()).map_err(|e| format!("{command}: {e}"))
+    Ok(line.to_string())
 }
 
 fn field_list(c: &busspec_model::ir::Message) -> String {
@@ -174,14 +186,16 @@ pub fn talk(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
     }
 }
 
+/// The typed request `talk` sends, built from its arguments through the `encode` JSON contract.
 fn typed<P: Protocol>(spec: &Spec, o: &TalkOptions) -> Result<P::Request, String> {
-    let frame = request_frame(spec, o.command, o.address, o.args)?;
-    P::decode_request(&frame).map(|d| d.message).map_err(|e| {
-        format!(
-            "error: {} does not decode as a request: {e}",
-            frames::hex(&frame)
-        )
-    })
+    let line = request_line(spec, o.command, o.address, o.args)?;
+    let typed = busspec_json::parse_line(spec, &line)
+        .and_then(|parsed| parsed.to_typed::<P>(spec))
+        .map_err(|e| format!("{}: {e}", o.command))?;
+    match typed {
+        busspec_json::Typed::Request(d) => Ok(d.message),
+        busspec_json::Typed::Response(_) => Err(format!("{} is not a command", o.command)),
+    }
 }
 
 fn print(line: &str) -> Result<(), String> {
