@@ -348,8 +348,8 @@ fn faults_part(out: &mut Out) -> Result<(), String> {
         Ok(_) => return Err("demo failed: a silent line answered".to_owned()),
     }
     for (name, report) in [
-        ("ub2", soak::run::<Ub2>(soak_config())),
-        ("sd", soak::run::<Sd>(soak_config())),
+        (Ub2::NAME, soak::run::<Ub2>(soak_config())),
+        (Sd::NAME, soak::run::<Sd>(soak_config())),
     ] {
         out.say(format!(
             "   {name}: {} transactions: {} completed, {} after retries, {} failed with an error, {} refused, {} wrong values accepted (a checksum-only master: {})",

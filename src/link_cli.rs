@@ -177,11 +177,14 @@ fn open<P: Link>(o: &TalkOptions) -> Result<Master<P, SerialTransport, SystemClo
 
 /// `busspec talk`: one transaction (or one long operation) on a real port.
 pub fn talk(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
+    // UB2 and SD each have long operations of their own (movements, the C-curve, strings).
     match spec.name.as_str() {
-        "ub2" => talk_ub2(spec, o),
-        "sd" => talk_sd(spec, o),
+        n if n == Ub2::NAME => talk_ub2(spec, o),
+        n if n == Sd::NAME => talk_sd(spec, o),
         other => Err(format!(
-            "error: busspec cannot talk {other}: only ub2 and sd have a transaction layer"
+            "error: busspec cannot talk {other}: only {} and {} have a transaction layer",
+            Ub2::NAME,
+            Sd::NAME
         )),
     }
 }
@@ -311,7 +314,7 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
             .read_string(o.address, which, &mut |p| line.show("characters", p))
             .map_err(link_error)?;
         let line = serde_json::json!({
-            "protocol": "sd",
+            "protocol": Sd::NAME,
             "address": o.address,
             "message": o.command,
             "text": text.iter().map(|&b| char::from(b)).collect::<String>(),
@@ -347,7 +350,7 @@ pub fn sim(
     verbose: bool,
 ) -> Result<(), String> {
     match protocol {
-        "ub2" => {
+        p if p == Ub2::NAME => {
             let addresses = if addresses.is_empty() {
                 vec![0x21]
             } else {
@@ -357,7 +360,7 @@ pub fn sim(
             let devices: Vec<Ub2Sim> = addresses.iter().map(|&a| Ub2Sim::new(a)).collect();
             run_sim::<Ub2, _>(devices, pty, port, verbose)
         }
-        "sd" => {
+        p if p == Sd::NAME => {
             let addresses = if addresses.is_empty() {
                 vec![0x01]
             } else {
@@ -368,7 +371,9 @@ pub fn sim(
             run_sim::<Sd, _>(devices, pty, port, verbose)
         }
         other => Err(format!(
-            "error: no simulator for `{other}`: there are ub2 and sd"
+            "error: no simulator for `{other}`: there are {} and {}",
+            Ub2::NAME,
+            Sd::NAME
         )),
     }
 }
@@ -460,10 +465,11 @@ pub fn soak(protocols: &[&str], transactions: u64, rate: f64, seed: u64) -> Resu
     };
     for p in protocols {
         let started = Instant::now();
-        let report = match *p {
-            "ub2" => soak::run::<Ub2>(config),
-            "sd" => soak::run::<Sd>(config),
-            other => return Err(format!("error: no soak for `{other}`")),
+        let Some(report) = soak::run_named(p, config) else {
+            return Err(format!(
+                "error: no soak for `{p}`: there are {}",
+                soak::TARGETS.join(", ")
+            ));
         };
         print(&format!("{report}"))?;
         for e in &report.examples {

@@ -339,10 +339,9 @@ fn main() -> ExitCode {
             seed,
             protocol,
         } => {
-            let all = ["ub2", "sd"];
             let chosen: Vec<&str> = match protocol.as_deref() {
                 Some(p) => vec![p],
-                None => all.to_vec(),
+                None => busspec_link::soak::TARGETS.to_vec(),
             };
             link_cli::soak(&chosen, transactions, rate, seed)
         }

@@ -32,7 +32,7 @@ use std::time::Duration;
 
 use busspec_protocols::sd::{self, Sd};
 use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::Message;
+use busspec_protocols::{Message, Protocol};
 
 use crate::clock::{Clock, SimClock};
 use crate::fault::{FaultConfig, FaultCounts, Faulty};
@@ -281,6 +281,20 @@ impl fmt::Display for SoakReport {
             "  checksum-only master: accepted {}, of which wrong {}",
             self.checksum_only_accepted, self.checksum_only_silent_wrong
         )
+    }
+}
+
+/// The protocols [`run`] can soak, by spec name, in the order `busspec soak` runs them.
+pub const TARGETS: &[&str] = &[Ub2::NAME, Sd::NAME];
+
+/// [`run`] for the protocol a name from [`TARGETS`] stands for; `None` for any other name.
+pub fn run_named(name: &str, config: SoakConfig) -> Option<SoakReport> {
+    if name == Ub2::NAME {
+        Some(run::<Ub2>(config))
+    } else if name == Sd::NAME {
+        Some(run::<Sd>(config))
+    } else {
+        None
     }
 }
 
