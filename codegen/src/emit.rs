@@ -95,11 +95,27 @@ fn doc(text: &str) -> TokenStream {
     let lines: Vec<TokenStream> = text
         .lines()
         .map(|l| {
-            let l = format!(" {}", l.trim_end());
+            let l = format!(" {}", escape_brackets(l.trim_end()));
             quote!(#[doc = #l])
         })
         .collect();
     quote!(#(#lines)*)
+}
+
+/// Escapes the brackets of document text (`0.02 [A]`, `[pF]`), which rustdoc would read as
+/// links; the generator's own links, written ``[`Name`]``, stay links.
+fn escape_brackets(line: &str) -> String {
+    let chars: Vec<char> = line.chars().collect();
+    let mut out = String::with_capacity(line.len());
+    for (i, &c) in chars.iter().enumerate() {
+        let link_open = c == '[' && chars.get(i + 1) == Some(&'`');
+        let link_close = c == ']' && i > 0 && chars[i - 1] == '`';
+        if (c == '[' || c == ']') && !link_open && !link_close {
+            out.push('\\');
+        }
+        out.push(c);
+    }
+    out
 }
 
 fn inner_doc(text: &str) -> TokenStream {

@@ -254,7 +254,7 @@ pub mod mini {
         /// §4.1 Go to capacitance (code `0x2000`, 9 bytes).
         ///
         GoTo {
-            /// [pF] Valid raw range 0..=100000.
+            /// \[pF\] Valid raw range 0..=100000.
             target: Capacitance,
         },
         /// §4.2 Set mode (code `0x3000`, 6 bytes).
@@ -695,10 +695,10 @@ pub mod mini {
         Status {
             error_bits: StatusBits,
             freshness: u8,
-            /// [°]
+            /// \[°\]
             position: Angle,
             firmware: [u8; 3],
-            /// [°C]
+            /// \[°C\]
             temperature: Celsius,
         },
     }

@@ -491,15 +491,15 @@ pub mod mini_crc {
         /// §3.1 Run-time hours (code `0x22`, 6 bytes).
         ///
         RuntimeHours {
-            /// [h]
+            /// \[h\]
             hours: u16,
         },
         /// §3.2 Run-time minutes and seconds (code `0x22`, 6 bytes).
         ///
         RuntimeMinSec {
-            /// [min] Valid raw range 0..=59.
+            /// \[min\] Valid raw range 0..=59.
             minutes: u8,
-            /// [s] Valid raw range 0..=59.
+            /// \[s\] Valid raw range 0..=59.
             seconds: u8,
         },
         /// §3.3 Counter echo (code `0x70`, 6 bytes).
