@@ -43,6 +43,10 @@ pub mod mini {
     pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = 33u8..=64u8;
     /// The broadcast address, if the protocol has one.
     pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::None;
+    /// The host's own address, if the spec gives one.
+    pub const HOST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::Some(
+        32u8,
+    );
     pub use ::busspec_runtime::Decoded;
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
@@ -325,8 +329,24 @@ pub mod mini {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 9usize;
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
+                    address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             let len: usize = match *self {
                 Self::GoTo { target: v_target } => {
+                    let raw = v_target.raw() as i64;
+                    if !(0i64..=100000i64).contains(&raw) {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
+                            field: "target",
+                            value: raw,
+                            min: 0i64,
+                            max: 100000i64,
+                        });
+                    }
                     let available = buf.len();
                     let out: &mut [u8; 9usize] = buf
                         .get_mut(..9usize)
@@ -365,6 +385,15 @@ pub mod mini {
                     6usize
                 }
                 Self::GetStatus { channel: v_channel } => {
+                    let raw = v_channel as i64;
+                    if !(0i64..=3i64).contains(&raw) {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
+                            field: "channel",
+                            value: raw,
+                            min: 0i64,
+                            max: 3i64,
+                        });
+                    }
                     let available = buf.len();
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
@@ -391,6 +420,12 @@ pub mod mini {
         pub fn decode(
             frame: &[u8],
         ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+            if frame.len() > 9usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
+                    max: 9usize,
+                    found: frame.len(),
+                });
+            }
             if let ::core::option::Option::Some(&found) = frame.get(0usize) {
                 if found != 170u8 {
                     return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
@@ -402,12 +437,6 @@ pub mod mini {
             if frame.len() < 6usize {
                 return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 6usize,
-                    found: frame.len(),
-                });
-            }
-            if frame.len() > 9usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
-                    expected: 9usize,
                     found: frame.len(),
                 });
             }
@@ -424,6 +453,14 @@ pub mod mini {
                 });
             }
             let address = frame[1usize];
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
+                    offset: 1usize,
+                    found: address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             #[allow(unused_mut)]
             let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 5usize {
@@ -590,6 +627,16 @@ pub mod mini {
     ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u32 = u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]);
+        let raw = field_0 as i64;
+        if !(0i64..=100000i64).contains(&raw) {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
+                field: "target",
+                offset: 4usize,
+                found: raw,
+                min: 0i64,
+                max: 100000i64,
+            });
+        }
         let v_target = Capacitance::from_raw(field_0 as u32);
         ::core::result::Result::Ok(Request::GoTo { target: v_target })
     }
@@ -610,6 +657,16 @@ pub mod mini {
     ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_le_bytes([frame[4]]);
+        let raw = field_0 as i64;
+        if !(0i64..=3i64).contains(&raw) {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
+                field: "channel",
+                offset: 4usize,
+                found: raw,
+                min: 0i64,
+                max: 3i64,
+            });
+        }
         let v_channel = field_0 as u8;
         ::core::result::Result::Ok(Request::GetStatus {
             channel: v_channel,
@@ -737,6 +794,13 @@ pub mod mini {
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 13usize;
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
+                    address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             let len: usize = match *self {
                 Self::Started => {
                     let available = buf.len();
@@ -867,6 +931,12 @@ pub mod mini {
             frame: &[u8],
             request: ::core::option::Option<&Request>,
         ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+            if frame.len() > 13usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
+                    max: 13usize,
+                    found: frame.len(),
+                });
+            }
             if let ::core::option::Option::Some(&found) = frame.get(0usize) {
                 if found != 170u8 {
                     return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
@@ -878,12 +948,6 @@ pub mod mini {
             if frame.len() < 4usize {
                 return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 4usize,
-                    found: frame.len(),
-                });
-            }
-            if frame.len() > 13usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
-                    expected: 13usize,
                     found: frame.len(),
                 });
             }
@@ -900,6 +964,14 @@ pub mod mini {
                 });
             }
             let address = frame[1usize];
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
+                    offset: 1usize,
+                    found: address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             #[allow(unused_mut)]
             let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 4usize {
@@ -1218,6 +1290,7 @@ pub mod mini {
         const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
         const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
         const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
+        const HOST_ADDRESS: ::core::option::Option<u8> = HOST_ADDRESS;
         #[inline]
         fn decode_request(
             frame: &[u8],
