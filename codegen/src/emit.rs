@@ -834,7 +834,9 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #[allow(unused_variables)]
                 match self { #(#visit_arms)* }
             }
-            /// Encodes the frame for `address` into `buf`; returns the frame length.
+            /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+            /// decode refuses: an address no frame may carry, the broadcast address for a command
+            /// that does not accept it, a value outside its field's range.
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
                 let _ = #max;
                 if #addr_refused {
@@ -1462,8 +1464,9 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand { offset: #first_code_at, code })
     };
     let doc_decode = quote! {
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
     };
     if !replies {
         return quote! {

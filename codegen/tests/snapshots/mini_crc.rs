@@ -127,7 +127,9 @@ pub mod mini_crc {
                 }
             }
         }
-        /// Encodes the frame for `address` into `buf`; returns the frame length.
+        /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+        /// decode refuses: an address no frame may carry, the broadcast address for a command
+        /// that does not accept it, a value outside its field's range.
         pub fn encode(
             &self,
             address: u8,
@@ -216,8 +218,9 @@ pub mod mini_crc {
             frame[at..].copy_from_slice(&sum.to_be_bytes());
             ::core::result::Result::Ok(len)
         }
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
         pub fn decode(
             frame: &[u8],
         ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
@@ -552,7 +555,9 @@ pub mod mini_crc {
                 }
             }
         }
-        /// Encodes the frame for `address` into `buf`; returns the frame length.
+        /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+        /// decode refuses: an address no frame may carry, the broadcast address for a command
+        /// that does not accept it, a value outside its field's range.
         pub fn encode(
             &self,
             address: u8,
@@ -645,8 +650,9 @@ pub mod mini_crc {
             frame[at..].copy_from_slice(&sum.to_be_bytes());
             ::core::result::Result::Ok(len)
         }
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
         ///
         /// Responses that only their request tells apart are reported as
         /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
