@@ -377,6 +377,10 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         Some(b) => quote!(::core::option::Option::Some(#b)),
         None => quote!(::core::option::Option::None),
     };
+    let host = match p.framing.address.host {
+        Some(h) => quote!(::core::option::Option::Some(#h)),
+        None => quote!(::core::option::Option::None),
+    };
     let baud = p.serial.baud;
     let optional = |v: Option<u32>| match v {
         Some(v) => quote!(::core::option::Option::Some(#v)),
@@ -417,6 +421,8 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = #lo..=#hi;
         /// The broadcast address, if the protocol has one.
         pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = #broadcast;
+        /// The host's own address, if the spec gives one.
+        pub const HOST_ADDRESS: ::core::option::Option<u8> = #host;
         pub use ::busspec_runtime::Decoded;
     }
 }
@@ -796,6 +802,8 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         quote!()
     };
     let max = p.max_frame_len(d);
+    let addr_refused = address_refused(p, &quote!(address));
+    let (addr_lo, addr_hi) = (p.framing.address.min, p.framing.address.max);
     let sum_len = p.framing.checksum.len();
     let sum_conv = to_bytes(p.framing.checksum.byte_order);
     let sum_after = if checksum_in_arms(p) {
@@ -843,9 +851,14 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #[allow(unused_variables)]
                 match self { #(#visit_arms)* }
             }
-            /// Encodes the frame for `address` into `buf`; returns the frame length.
+            /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+            /// decode refuses: an address no frame may carry, the broadcast address for a command
+            /// that does not accept it, a value outside its field's range.
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
                 let _ = #max;
+                if #addr_refused {
+                    return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress { address, min: #addr_lo, max: #addr_hi });
+                }
                 let len: usize = match *self { #(#encode_arms)* };
                 #sum_after
                 ::core::result::Result::Ok(len)
@@ -1007,10 +1020,78 @@ fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident) -> TokenStream {
     }}
 }
 
+/// The condition that the `u8` expression `a` is none of the addresses a frame may carry: the
+/// device range, the broadcast address and the host address (where the spec has them).
+/// Compares against constants only.
+fn address_refused(p: &Protocol, a: &TokenStream) -> TokenStream {
+    let ad = &p.framing.address;
+    let (lo, hi) = (ad.min, ad.max);
+    let mut others = Vec::new();
+    for x in [ad.broadcast, ad.host].into_iter().flatten() {
+        others.push(quote!(&& #a != #x));
+    }
+    quote!(!(#lo..=#hi).contains(&#a) #(#others)*)
+}
+
+/// The spec range of a leaf (a whole field or a sub-field) and the special values that may lie
+/// outside it (whole fields only).
+fn leaf_range(f: &Field, b: Option<&BitField>) -> Option<((i64, i64), Vec<i64>)> {
+    match b {
+        Some(b) => b.range.map(|r| (r, Vec::new())),
+        None => f
+            .range
+            .map(|r| (r, f.special.iter().map(|s| s.value).collect())),
+    }
+}
+
+/// The condition that the `i64` local `raw` lies outside `range` and is none of `special`.
+fn outside(range: (i64, i64), special: &[i64]) -> TokenStream {
+    let (lo, hi) = (range.0, range.1);
+    let sp = special.iter().filter(|v| !(lo..=hi).contains(*v));
+    quote!(!(#lo..=#hi).contains(&raw) #(&& raw != #sp)*)
+}
+
+/// The broadcast address, if `m` is a request for a command that does not accept it: encode and
+/// decode refuse that address for it.
+fn refuses_broadcast(p: &Protocol, m: &Message) -> Option<u8> {
+    let b = p.framing.address.broadcast?;
+    let accepted = m.broadcast.as_ref().is_some_and(|x| x.accepted);
+    (m.direction == Direction::Request && !accepted).then_some(b)
+}
+
 fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -> TokenStream {
     let p = ctx.p;
     let len = p.frame_len(m);
     let o = m.layout;
+    let mut checks = Vec::new();
+    if let Some(b) = refuses_broadcast(p, m) {
+        let name = &m.name;
+        checks.push(quote! {
+            if address == #b {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BroadcastNotAccepted { message: #name, address });
+            }
+        });
+    }
+    for l in ls {
+        let Some((range, special)) = leaf_range(l.field, l.bits) else {
+            continue;
+        };
+        let v = local(l.name);
+        let raw = match ctx.kind(l) {
+            Kind::Int(_) => quote!(#v as i64),
+            Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => quote!(#v.raw() as i64),
+            Kind::Text(_) => continue,
+        };
+        let cond = outside(range, &special);
+        let (lo, hi) = range;
+        let name = l.name;
+        checks.push(quote! {
+            let raw = #raw;
+            if #cond {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange { field: #name, value: raw, min: #lo, max: #hi });
+            }
+        });
+    }
     let mut writes = Vec::new();
     if let (Some(at), Some(s)) = (o.start, p.framing.start) {
         writes.push(quote!(out[#at] = #s;));
@@ -1106,6 +1187,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
     }
     quote! {
         #pattern => {
+            #(#checks)*
             let available = buf.len();
             let out: &mut [u8; #len] = buf
                 .get_mut(..#len)
@@ -1146,6 +1228,16 @@ fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStrea
     let fname = decode_fn_name(m);
     let v = variant(m);
     let mut stmts = Vec::new();
+    if let Some(b) = refuses_broadcast(p, m) {
+        let name = &m.name;
+        let code = m.code.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b));
+        let at = o.address;
+        stmts.push(quote! {
+            if frame[#at] == #b {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BroadcastNotAccepted { message: #name, code: #code, address: #b });
+            }
+        });
+    }
     for (fi, f) in m.fields.iter().enumerate() {
         let n = format_ident!("field_{}", fi);
         let at = o.payload + f.offset;
@@ -1182,6 +1274,16 @@ fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStrea
             stmts.push(quote! {
                 if #n != #on {
                     return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue { field: #name, offset: #at, found: #n as u32 });
+                }
+            });
+        }
+        if let (true, Some((range, special))) = (f.bits.is_empty(), leaf_range(f, None)) {
+            let cond = outside(range, &special);
+            let (lo, hi) = range;
+            stmts.push(quote! {
+                let raw = #n as i64;
+                if #cond {
+                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange { field: #name, offset: #at, found: raw, min: #lo, max: #hi });
                 }
             });
         }
@@ -1242,6 +1344,16 @@ fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStrea
                     });
                 }
                 None => {
+                    if let Some((range, special)) = leaf_range(f, Some(b)) {
+                        let cond = outside(range, &special);
+                        let (lo, hi) = range;
+                        stmts.push(quote! {
+                            let raw = (#extract) as i64;
+                            if #cond {
+                                return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange { field: #bname, offset: #at, found: raw, min: #lo, max: #hi });
+                            }
+                        });
+                    }
                     let leaf = ls.iter().find(|l| l.name == b.name).expect("leaf");
                     let bid = local(&b.name);
                     let conv = from_wire(ctx, leaf, extract);
@@ -1407,13 +1519,15 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
     } else {
         p.framing.head(1).address
     };
+    let addr_refused = address_refused(p, &quote!(address));
+    let (addr_lo, addr_hi) = (p.framing.address.min, p.framing.address.max);
     let body = quote! {
+        if frame.len() > #max_len {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong { max: #max_len, found: frame.len() });
+        }
         #start_check
         if frame.len() < #min_len {
             return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated { needed: #min_len, found: frame.len() });
-        }
-        if frame.len() > #max_len {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength { expected: #max_len, found: frame.len() });
         }
         let at = frame.len() - #clen;
         let mut sum_bytes = [0u8; #clen];
@@ -1424,6 +1538,9 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
             return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch { offset: at, expected: expected as u32, found: found as u32 });
         }
         let address = frame[#addr_at];
+        if #addr_refused {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress { offset: #addr_at, found: address, min: #addr_lo, max: #addr_hi });
+        }
         #[allow(unused_mut)]
         let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
         #(#by_code_len)*
@@ -1434,8 +1551,9 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand { offset: #first_code_at, code })
     };
     let doc_decode = quote! {
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
     };
     if !replies {
         return quote! {
@@ -1649,6 +1767,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
             const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
             const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
+            const HOST_ADDRESS: ::core::option::Option<u8> = HOST_ADDRESS;
             #[inline]
             fn decode_request(frame: &[u8]) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
                 Request::decode(frame)

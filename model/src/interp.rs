@@ -83,6 +83,34 @@ pub enum DecodeError {
     Ambiguous {
         candidates: Vec<String>,
     },
+    /// More bytes than the protocol's longest frame (of the directions decoded), refused for
+    /// its length before anything else.
+    TooLong {
+        max: usize,
+        found: usize,
+    },
+    /// A field's raw value lies outside its spec `range` and is none of its special values.
+    OutOfRange {
+        message: String,
+        field: String,
+        offset: usize,
+        found: i64,
+        min: i64,
+        max: i64,
+    },
+    /// An address outside the device range that is neither the broadcast nor the host address.
+    BadAddress {
+        offset: usize,
+        found: u8,
+        min: u8,
+        max: u8,
+    },
+    /// A request to the broadcast address for a command that does not accept broadcast.
+    BroadcastNotAccepted {
+        message: String,
+        code: Vec<u8>,
+        address: u8,
+    },
 }
 
 fn hex(bytes: &[u8]) -> String {
@@ -133,6 +161,23 @@ impl fmt::Display for DecodeError {
                 "ambiguous frame: could be {}; decode it together with the request it answers",
                 candidates.join(" or ")
             ),
+            DecodeError::TooLong { max, found } => write!(
+                f,
+                "frame too long: {found} bytes, the longest frame has {max}"
+            ),
+            DecodeError::OutOfRange { message, field, offset, found, min, max } => write!(
+                f,
+                "{message}.{field} at offset {offset} is {found}, outside its range {min}..={max}"
+            ),
+            DecodeError::BadAddress { offset, found, min, max } => write!(
+                f,
+                "address 0x{found:02X} at offset {offset} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
+            ),
+            DecodeError::BroadcastNotAccepted { message, code, address } => write!(
+                f,
+                "{message} (code {}) does not accept the broadcast address 0x{address:02X}",
+                hex(code)
+            ),
         }
     }
 }
@@ -164,7 +209,22 @@ pub enum EncodeError {
     NotNumber {
         field: String,
     },
+    /// A value lies outside its field's spec `range` and is none of its special values.
+    NotInRange {
+        field: String,
+        value: i64,
+        min: i64,
+        max: i64,
+    },
+    /// An address outside the device range that is neither the broadcast nor the host address.
     BadAddress {
+        address: u8,
+        min: u8,
+        max: u8,
+    },
+    /// The command does not accept the broadcast address.
+    BroadcastNotAccepted {
+        message: String,
         address: u8,
     },
     /// A value was given for a constant or repeated field and differs from what it must be.
@@ -211,9 +271,19 @@ impl fmt::Display for EncodeError {
                 expected,
                 found,
             } => write!(f, "{field} is fixed at {expected} in this message, got {found}"),
-            EncodeError::BadAddress { address } => write!(
+            EncodeError::NotInRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(f, "{field} = {value} is outside its range {min}..={max}"),
+            EncodeError::BadAddress { address, min, max } => write!(
                 f,
-                "address 0x{address:02X} is outside the device range and is not the broadcast address of a request"
+                "address 0x{address:02X} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
+            ),
+            EncodeError::BroadcastNotAccepted { message, address } => write!(
+                f,
+                "{message} does not accept the broadcast address 0x{address:02X}"
             ),
         }
     }
@@ -272,6 +342,33 @@ pub fn raw_limits(bits: u32, signed: bool) -> (i64, i64) {
     }
 }
 
+/// Whether a frame may carry `address`: one in the device range, the broadcast address or the
+/// host address (where the spec has them). Whether a command accepts the broadcast address is
+/// [`broadcast_refused`].
+pub fn address_allowed(p: &Protocol, address: u8) -> bool {
+    let a = &p.framing.address;
+    (a.min..=a.max).contains(&address) || a.broadcast == Some(address) || a.host == Some(address)
+}
+
+/// Whether `m` is a request for a command that does not accept the broadcast address and
+/// `address` is that address.
+pub fn broadcast_refused(p: &Protocol, m: &Message, address: u8) -> bool {
+    m.direction == Direction::Request
+        && p.framing.address.broadcast == Some(address)
+        && !m.broadcast.as_ref().is_some_and(|b| b.accepted)
+}
+
+/// The spec range of a whole field (`bits` `None`) or a packed sub-field, and whether `raw`
+/// lies outside it and is none of the field's special values: `Some((min, max))` if so.
+pub fn range_violation(f: &Field, bits: Option<&BitField>, raw: i64) -> Option<(i64, i64)> {
+    let (range, special) = match bits {
+        Some(b) => (b.range, false),
+        None => (f.range, f.special.iter().any(|s| s.value == raw)),
+    };
+    let (min, max) = range?;
+    (!(min..=max).contains(&raw) && !special).then_some((min, max))
+}
+
 /// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
 /// responses that only the request they answer can tell apart.
 pub fn decode(
@@ -285,6 +382,17 @@ pub fn decode(
         Some(Direction::Response) => &[Direction::Response],
         None => &[Direction::Request, Direction::Response],
     };
+    let longest_frame = directions
+        .iter()
+        .map(|d| p.max_frame_len(*d))
+        .max()
+        .unwrap_or(0);
+    if wire.len() > longest_frame {
+        return Err(DecodeError::TooLong {
+            max: longest_frame,
+            found: wire.len(),
+        });
+    }
     let shortest = directions
         .iter()
         .flat_map(|d| p.messages(*d))
@@ -311,6 +419,7 @@ pub fn decode(
         });
     }
     check_checksum(p, wire)?;
+    check_address(p, first.address, wire)?;
 
     // Messages whose code matches the bytes where the code sits.
     let mut by_code: Vec<MessageRef> = Vec::new();
@@ -364,7 +473,7 @@ pub fn decode(
     let mut fitting = Vec::new();
     let mut first_err = None;
     for r in by_len {
-        match decode_fields(p.message(r), wire) {
+        match decode_fields(p, p.message(r), wire) {
             Ok(values) => fitting.push((r, values)),
             Err(e) => {
                 first_err.get_or_insert(e);
@@ -438,7 +547,8 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
         });
     }
     check_checksum(p, wire)?;
-    let values = decode_fields(m, wire)?;
+    check_address(p, o.address, wire)?;
+    let values = decode_fields(p, m, wire)?;
     Ok(Frame {
         message: r,
         address: wire[o.address],
@@ -467,9 +577,33 @@ fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
     Ok(())
 }
 
-/// Field values of a frame already known to have the message's length.
-fn decode_fields(m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
+/// Refuses an address no frame may carry ([`address_allowed`]).
+fn check_address(p: &Protocol, at: usize, wire: &[u8]) -> Result<(), DecodeError> {
+    let found = wire.get(at).copied().unwrap_or(0);
+    if address_allowed(p, found) {
+        return Ok(());
+    }
+    let a = &p.framing.address;
+    Err(DecodeError::BadAddress {
+        offset: at,
+        found,
+        min: a.min,
+        max: a.max,
+    })
+}
+
+/// Field values of a frame already known to have the message's length and an allowed address:
+/// constants, repeated fields, ranges and the broadcast rule checked.
+fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
     let o = m.layout;
+    let address = wire.get(o.address).copied().unwrap_or(0);
+    if broadcast_refused(p, m, address) {
+        return Err(DecodeError::BroadcastNotAccepted {
+            message: m.name.clone(),
+            code: m.code.clone(),
+            address,
+        });
+    }
     let payload = wire
         .get(o.payload..o.payload + m.payload_len)
         .unwrap_or(&[]);
@@ -522,6 +656,16 @@ fn decode_fields(m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
             }
         }
         if f.bits.is_empty() {
+            if let Some((min, max)) = range_violation(f, None, v) {
+                return Err(DecodeError::OutOfRange {
+                    message: m.name.clone(),
+                    field: f.name.clone(),
+                    offset: at,
+                    found: v,
+                    min,
+                    max,
+                });
+            }
             values.push(Value {
                 name: f.name.clone(),
                 raw: Raw::Int(v),
@@ -539,6 +683,16 @@ fn decode_fields(m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
                         found: bv as u64,
                     });
                 }
+            }
+            if let Some((min, max)) = range_violation(f, Some(b), bv) {
+                return Err(DecodeError::OutOfRange {
+                    message: m.name.clone(),
+                    field: b.name.clone(),
+                    offset: at,
+                    found: bv,
+                    min,
+                    max,
+                });
             }
             values.push(Value {
                 name: b.name.clone(),
@@ -559,9 +713,18 @@ pub fn encode(
 ) -> Result<Vec<u8>, EncodeError> {
     let m = p.message(r);
     let a = &p.framing.address;
-    let broadcast = r.direction == Direction::Request && a.broadcast == Some(address);
-    if !(a.min..=a.max).contains(&address) && !broadcast {
-        return Err(EncodeError::BadAddress { address });
+    if !address_allowed(p, address) {
+        return Err(EncodeError::BadAddress {
+            address,
+            min: a.min,
+            max: a.max,
+        });
+    }
+    if broadcast_refused(p, m, address) {
+        return Err(EncodeError::BroadcastNotAccepted {
+            message: m.name.clone(),
+            address,
+        });
     }
     for v in values {
         if !m.leaves().any(|l| l.name() == v.name) {
@@ -650,6 +813,14 @@ pub fn encode(
                     (Some(c), _) => c as i64,
                     (None, _) => int(&b.name)?,
                 };
+                if let Some((min, max)) = range_violation(f, Some(b), v) {
+                    return Err(EncodeError::NotInRange {
+                        field: b.name.clone(),
+                        value: v,
+                        min,
+                        max,
+                    });
+                }
                 let (min, max) = raw_limits(u32::from(b.width()), b.signed);
                 if v < min || v > max {
                     return Err(EncodeError::OutOfRange {
@@ -665,6 +836,14 @@ pub fn encode(
             word
         } else {
             let v = int(&f.name)?;
+            if let Some((min, max)) = range_violation(f, None, v) {
+                return Err(EncodeError::NotInRange {
+                    field: f.name.clone(),
+                    value: v,
+                    min,
+                    max,
+                });
+            }
             let (min, max) = raw_limits(8 * f.width as u32, f.signed);
             if v < min || v > max {
                 return Err(EncodeError::OutOfRange {

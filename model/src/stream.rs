@@ -15,7 +15,9 @@
 //!
 //! 1. A message is a *candidate* while every byte already buffered agrees with it: the start byte
 //!    (protocols that have one), its code, and a plausible address — one in the device range, or
-//!    the broadcast address for a request (the same rule [`crate::interp::encode`] applies).
+//!    the broadcast address for a request. (Strict decoding, [`crate::interp::address_allowed`],
+//!    also takes the host address and a response from the broadcast address; the stream keeps
+//!    the narrower rule, so such a frame is never recognised in a stream.)
 //!    Every message of the decoded directions is considered, whatever its direction: UB2 setter
 //!    requests and their echo ACKs share a code and differ only in length; SD codes are disjoint
 //!    per direction.
@@ -26,7 +28,7 @@
 //!    (unless flushing).
 //! 4. Then every candidate length that is complete is tried, **longest first**: the first length
 //!    whose bytes checksum and decode (through [`crate::interp::decode`]: code, length,
-//!    constants, repeated fields) is the frame, and that many bytes are consumed. A frame that
+//!    constants, repeated fields, ranges, address and broadcast rules) is the frame, and that many bytes are consumed. A frame that
 //!    checksums but fits several messages that only its request can tell apart (SD 0x22..0x28,
 //!    0x38) is paired with the request (see below) or else reported as [`Event::Ambiguous`],
 //!    still consuming its bytes. If no length works, the head byte is noise (rule 2).
@@ -48,8 +50,10 @@
 //! - A frame whose checksum passes by chance inside noise is reported as a frame: an 8-bit sum
 //!   makes this likelier than a 16-bit CRC does; the start byte, code and address checks
 //!   narrow it.
-//! - Frames from an address outside the spec's device range are never recognised in a stream
-//!   (decode such a frame on its own with [`crate::interp::decode`]).
+//! - Frames from an address outside the spec's device range are never recognised in a stream,
+//!   and neither is a frame that checksums but breaks a range or the broadcast rule: each is
+//!   skipped as noise, byte by byte (decode such a frame on its own with
+//!   [`crate::interp::decode`] to see why it is refused).
 //! - Decisions depend only on the bytes, never on how they were cut into chunks: the same capture
 //!   gives the same events however it is pushed, as long as `flush` is called only at its end.
 //!

@@ -223,6 +223,33 @@ pub enum DecodeError {
     Ambiguous { code: u32 },
     /// The frame is a valid response, but not one the given request may get.
     NotAReply { code: u32 },
+    /// More bytes than the protocol's longest frame (of the direction decoded): refused for
+    /// its length before anything else is looked at.
+    TooLong { max: usize, found: usize },
+    /// A field's raw value lies outside the `range` the spec gives it (and is none of its
+    /// special values); `offset` is where the field (or the word holding the sub-field) starts.
+    OutOfRange {
+        field: &'static str,
+        offset: usize,
+        found: i64,
+        min: i64,
+        max: i64,
+    },
+    /// The address at `offset` is outside the device range `min..=max` and is neither the
+    /// broadcast address nor the host address (where the protocol has them).
+    BadAddress {
+        offset: usize,
+        found: u8,
+        min: u8,
+        max: u8,
+    },
+    /// A request to the broadcast address `address` for a command the spec says does not
+    /// accept broadcast.
+    BroadcastNotAccepted {
+        message: &'static str,
+        code: u32,
+        address: u8,
+    },
 }
 
 fn hex(f: &mut fmt::Formatter<'_>, v: u32) -> fmt::Result {
@@ -284,6 +311,41 @@ impl fmt::Display for DecodeError {
                 hex(f, code)?;
                 f.write_str(" does not answer the given request")
             }
+            DecodeError::TooLong { max, found } => write!(
+                f,
+                "frame too long: {found} bytes, the longest frame has {max}"
+            ),
+            DecodeError::OutOfRange {
+                field,
+                offset,
+                found,
+                min,
+                max,
+            } => write!(
+                f,
+                "{field} at offset {offset} is {found}, outside its range {min}..={max}"
+            ),
+            DecodeError::BadAddress {
+                offset,
+                found,
+                min,
+                max,
+            } => write!(
+                f,
+                "address 0x{found:02X} at offset {offset} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
+            ),
+            DecodeError::BroadcastNotAccepted {
+                message,
+                code,
+                address,
+            } => {
+                write!(f, "{message} (code ")?;
+                hex(f, code)?;
+                write!(
+                    f,
+                    ") does not accept the broadcast address 0x{address:02X}"
+                )
+            }
         }
     }
 }
@@ -297,6 +359,19 @@ pub enum EncodeError {
     BufferTooSmall { needed: usize, available: usize },
     /// A typed value does not fit the wire field it goes into.
     OutOfRange { field: &'static str },
+    /// A value lies outside the `range` the spec gives its field (and is none of its special
+    /// values): the frame would be one the spec forbids.
+    NotInRange {
+        field: &'static str,
+        value: i64,
+        min: i64,
+        max: i64,
+    },
+    /// The address is outside the device range `min..=max` and is neither the broadcast
+    /// address nor the host address (where the protocol has them).
+    BadAddress { address: u8, min: u8, max: u8 },
+    /// The command does not accept the broadcast address `address`, says the spec.
+    BroadcastNotAccepted { message: &'static str, address: u8 },
 }
 
 impl fmt::Display for EncodeError {
@@ -311,6 +386,23 @@ impl fmt::Display for EncodeError {
             EncodeError::OutOfRange { field } => {
                 write!(f, "value of {field} does not fit its wire field")
             }
+            EncodeError::NotInRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(
+                f,
+                "{field} = {value} is outside its range {min}..={max}"
+            ),
+            EncodeError::BadAddress { address, min, max } => write!(
+                f,
+                "address 0x{address:02X} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
+            ),
+            EncodeError::BroadcastNotAccepted { message, address } => write!(
+                f,
+                "{message} does not accept the broadcast address 0x{address:02X}"
+            ),
         }
     }
 }

@@ -85,6 +85,9 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     const DEVICE_ADDRESSES: RangeInclusive<u8>;
     /// The broadcast address, if the protocol has one.
     const BROADCAST_ADDRESS: Option<u8>;
+    /// The host's own address, if the spec gives one: a frame may carry it besides the device
+    /// range and the broadcast address.
+    const HOST_ADDRESS: Option<u8> = None;
 
     /// Decodes a request frame.
     fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError>;

@@ -17,7 +17,9 @@
 //! consecutive dropped bytes are reported as one [`Event::Skipped`] (split every
 //! [`MAX_SKIPPED_RUN`] bytes). While a candidate is longer than what is buffered, the decoder
 //! waits. Then every complete candidate length is tried, **longest first**; the first that
-//! checksums and decodes is the frame. This is the rule of busspec's interpreter stream decoder
+//! checksums and decodes (strictly: ranges, address and broadcast rules included) is the frame;
+//! a frame that checksums but breaks one of those rules is, for now, skipped as noise. This is
+//! the rule of busspec's interpreter stream decoder
 //! (`busspec_model::stream`), whose module documentation gives the reasons and the limits; the
 //! two are tested against each other.
 //!

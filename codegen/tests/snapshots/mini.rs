@@ -43,6 +43,10 @@ pub mod mini {
     pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = 33u8..=64u8;
     /// The broadcast address, if the protocol has one.
     pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::None;
+    /// The host's own address, if the spec gives one.
+    pub const HOST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::Some(
+        32u8,
+    );
     pub use ::busspec_runtime::Decoded;
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
@@ -318,15 +322,33 @@ pub mod mini {
                 }
             }
         }
-        /// Encodes the frame for `address` into `buf`; returns the frame length.
+        /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+        /// decode refuses: an address no frame may carry, the broadcast address for a command
+        /// that does not accept it, a value outside its field's range.
         pub fn encode(
             &self,
             address: u8,
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 9usize;
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
+                    address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             let len: usize = match *self {
                 Self::GoTo { target: v_target } => {
+                    let raw = v_target.raw() as i64;
+                    if !(0i64..=100000i64).contains(&raw) {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
+                            field: "target",
+                            value: raw,
+                            min: 0i64,
+                            max: 100000i64,
+                        });
+                    }
                     let available = buf.len();
                     let out: &mut [u8; 9usize] = buf
                         .get_mut(..9usize)
@@ -365,6 +387,15 @@ pub mod mini {
                     6usize
                 }
                 Self::GetStatus { channel: v_channel } => {
+                    let raw = v_channel as i64;
+                    if !(0i64..=3i64).contains(&raw) {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
+                            field: "channel",
+                            value: raw,
+                            min: 0i64,
+                            max: 3i64,
+                        });
+                    }
                     let available = buf.len();
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
@@ -386,11 +417,18 @@ pub mod mini {
             };
             ::core::result::Result::Ok(len)
         }
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
         pub fn decode(
             frame: &[u8],
         ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+            if frame.len() > 9usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
+                    max: 9usize,
+                    found: frame.len(),
+                });
+            }
             if let ::core::option::Option::Some(&found) = frame.get(0usize) {
                 if found != 170u8 {
                     return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
@@ -402,12 +440,6 @@ pub mod mini {
             if frame.len() < 6usize {
                 return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 6usize,
-                    found: frame.len(),
-                });
-            }
-            if frame.len() > 9usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
-                    expected: 9usize,
                     found: frame.len(),
                 });
             }
@@ -424,6 +456,14 @@ pub mod mini {
                 });
             }
             let address = frame[1usize];
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
+                    offset: 1usize,
+                    found: address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             #[allow(unused_mut)]
             let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 5usize {
@@ -650,6 +690,16 @@ pub mod mini {
     ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u32 = u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]);
+        let raw = field_0 as i64;
+        if !(0i64..=100000i64).contains(&raw) {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
+                field: "target",
+                offset: 4usize,
+                found: raw,
+                min: 0i64,
+                max: 100000i64,
+            });
+        }
         let v_target = Capacitance::from_raw(field_0 as u32);
         ::core::result::Result::Ok(Request::GoTo { target: v_target })
     }
@@ -670,6 +720,16 @@ pub mod mini {
     ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_le_bytes([frame[4]]);
+        let raw = field_0 as i64;
+        if !(0i64..=3i64).contains(&raw) {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
+                field: "channel",
+                offset: 4usize,
+                found: raw,
+                min: 0i64,
+                max: 3i64,
+            });
+        }
         let v_channel = field_0 as u8;
         ::core::result::Result::Ok(Request::GetStatus {
             channel: v_channel,
@@ -790,13 +850,22 @@ pub mod mini {
                 }
             }
         }
-        /// Encodes the frame for `address` into `buf`; returns the frame length.
+        /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+        /// decode refuses: an address no frame may carry, the broadcast address for a command
+        /// that does not accept it, a value outside its field's range.
         pub fn encode(
             &self,
             address: u8,
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 13usize;
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
+                    address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             let len: usize = match *self {
                 Self::Started => {
                     let available = buf.len();
@@ -900,8 +969,9 @@ pub mod mini {
             };
             ::core::result::Result::Ok(len)
         }
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
         ///
         /// Responses that only their request tells apart are reported as
         /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
@@ -927,6 +997,12 @@ pub mod mini {
             frame: &[u8],
             request: ::core::option::Option<&Request>,
         ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+            if frame.len() > 13usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
+                    max: 13usize,
+                    found: frame.len(),
+                });
+            }
             if let ::core::option::Option::Some(&found) = frame.get(0usize) {
                 if found != 170u8 {
                     return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
@@ -938,12 +1014,6 @@ pub mod mini {
             if frame.len() < 4usize {
                 return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
                     needed: 4usize,
-                    found: frame.len(),
-                });
-            }
-            if frame.len() > 13usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
-                    expected: 13usize,
                     found: frame.len(),
                 });
             }
@@ -960,6 +1030,14 @@ pub mod mini {
                 });
             }
             let address = frame[1usize];
+            if !(33u8..=64u8).contains(&address) && address != 32u8 {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
+                    offset: 1usize,
+                    found: address,
+                    min: 33u8,
+                    max: 64u8,
+                });
+            }
             #[allow(unused_mut)]
             let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 4usize {
@@ -1354,6 +1432,7 @@ pub mod mini {
         const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
         const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
         const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
+        const HOST_ADDRESS: ::core::option::Option<u8> = HOST_ADDRESS;
         #[inline]
         fn decode_request(
             frame: &[u8],

@@ -45,6 +45,8 @@ pub mod mini_crc {
     pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::Some(
         31u8,
     );
+    /// The host's own address, if the spec gives one.
+    pub const HOST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::None;
     pub use ::busspec_runtime::Decoded;
     /// CRC-16/CMS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: ::busspec_runtime::crc::Algorithm<u16> = ::busspec_runtime::crc::Algorithm {
@@ -125,15 +127,30 @@ pub mod mini_crc {
                 }
             }
         }
-        /// Encodes the frame for `address` into `buf`; returns the frame length.
+        /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+        /// decode refuses: an address no frame may carry, the broadcast address for a command
+        /// that does not accept it, a value outside its field's range.
         pub fn encode(
             &self,
             address: u8,
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 6usize;
+            if !(1u8..=30u8).contains(&address) && address != 31u8 {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
+                    address,
+                    min: 1u8,
+                    max: 30u8,
+                });
+            }
             let len: usize = match *self {
                 Self::ReadRuntimeHours => {
+                    if address == 31u8 {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::BroadcastNotAccepted {
+                            message: "read_runtime_hours",
+                            address,
+                        });
+                    }
                     let available = buf.len();
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
@@ -151,6 +168,12 @@ pub mod mini_crc {
                     6usize
                 }
                 Self::ReadRuntimeMinSec => {
+                    if address == 31u8 {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::BroadcastNotAccepted {
+                            message: "read_runtime_min_sec",
+                            address,
+                        });
+                    }
                     let available = buf.len();
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
@@ -195,20 +218,21 @@ pub mod mini_crc {
             frame[at..].copy_from_slice(&sum.to_be_bytes());
             ::core::result::Result::Ok(len)
         }
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
         pub fn decode(
             frame: &[u8],
         ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
-            if frame.len() < 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
-                    needed: 6usize,
+            if frame.len() > 6usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
+                    max: 6usize,
                     found: frame.len(),
                 });
             }
-            if frame.len() > 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
-                    expected: 6usize,
+            if frame.len() < 6usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
+                    needed: 6usize,
                     found: frame.len(),
                 });
             }
@@ -225,6 +249,14 @@ pub mod mini_crc {
                 });
             }
             let address = frame[1usize];
+            if !(1u8..=30u8).contains(&address) && address != 31u8 {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
+                    offset: 1usize,
+                    found: address,
+                    min: 1u8,
+                    max: 30u8,
+                });
+            }
             #[allow(unused_mut)]
             let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 3usize {
@@ -428,6 +460,13 @@ pub mod mini_crc {
         frame: &[u8; 6usize],
     ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
+        if frame[1usize] == 31u8 {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::BroadcastNotAccepted {
+                message: "read_runtime_hours",
+                code: 105u32,
+                address: 31u8,
+            });
+        }
         let field_0: u8 = u8::from_be_bytes([frame[2]]);
         if field_0 as u64 != 0x1u8 as u64 {
             return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
@@ -452,6 +491,13 @@ pub mod mini_crc {
         frame: &[u8; 6usize],
     ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
         let _ = frame;
+        if frame[1usize] == 31u8 {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::BroadcastNotAccepted {
+                message: "read_runtime_min_sec",
+                code: 105u32,
+                address: 31u8,
+            });
+        }
         let field_0: u8 = u8::from_be_bytes([frame[2]]);
         if field_0 as u64 != 0x2u8 as u64 {
             return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
@@ -557,13 +603,22 @@ pub mod mini_crc {
                 }
             }
         }
-        /// Encodes the frame for `address` into `buf`; returns the frame length.
+        /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+        /// decode refuses: an address no frame may carry, the broadcast address for a command
+        /// that does not accept it, a value outside its field's range.
         pub fn encode(
             &self,
             address: u8,
             buf: &mut [u8],
         ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
             let _ = 6usize;
+            if !(1u8..=30u8).contains(&address) && address != 31u8 {
+                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
+                    address,
+                    min: 1u8,
+                    max: 30u8,
+                });
+            }
             let len: usize = match *self {
                 Self::RuntimeHours { hours: v_hours } => {
                     let available = buf.len();
@@ -581,6 +636,24 @@ pub mod mini_crc {
                     6usize
                 }
                 Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
+                    let raw = v_minutes as i64;
+                    if !(0i64..=59i64).contains(&raw) {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
+                            field: "minutes",
+                            value: raw,
+                            min: 0i64,
+                            max: 59i64,
+                        });
+                    }
+                    let raw = v_seconds as i64;
+                    if !(0i64..=59i64).contains(&raw) {
+                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
+                            field: "seconds",
+                            value: raw,
+                            min: 0i64,
+                            max: 59i64,
+                        });
+                    }
                     let available = buf.len();
                     let out: &mut [u8; 6usize] = buf
                         .get_mut(..6usize)
@@ -625,8 +698,9 @@ pub mod mini_crc {
             frame[at..].copy_from_slice(&sum.to_be_bytes());
             ::core::result::Result::Ok(len)
         }
-        /// Decodes one whole frame: checks its length, start byte and checksum, then its code,
-        /// constants and repeated fields.
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
         ///
         /// Responses that only their request tells apart are reported as
         /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
@@ -652,15 +726,15 @@ pub mod mini_crc {
             frame: &[u8],
             request: ::core::option::Option<&Request>,
         ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
-            if frame.len() < 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
-                    needed: 6usize,
+            if frame.len() > 6usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
+                    max: 6usize,
                     found: frame.len(),
                 });
             }
-            if frame.len() > 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::WrongLength {
-                    expected: 6usize,
+            if frame.len() < 6usize {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
+                    needed: 6usize,
                     found: frame.len(),
                 });
             }
@@ -677,6 +751,14 @@ pub mod mini_crc {
                 });
             }
             let address = frame[1usize];
+            if !(1u8..=30u8).contains(&address) && address != 31u8 {
+                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
+                    offset: 1usize,
+                    found: address,
+                    min: 1u8,
+                    max: 30u8,
+                });
+            }
             #[allow(unused_mut)]
             let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
             if frame.len() >= 3usize {
@@ -949,8 +1031,28 @@ pub mod mini_crc {
     ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
         let _ = frame;
         let field_0: u8 = u8::from_be_bytes([frame[2]]);
+        let raw = field_0 as i64;
+        if !(0i64..=59i64).contains(&raw) {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
+                field: "minutes",
+                offset: 2usize,
+                found: raw,
+                min: 0i64,
+                max: 59i64,
+            });
+        }
         let v_minutes = field_0 as u8;
         let field_1: u8 = u8::from_be_bytes([frame[3]]);
+        let raw = field_1 as i64;
+        if !(0i64..=59i64).contains(&raw) {
+            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
+                field: "seconds",
+                offset: 3usize,
+                found: raw,
+                min: 0i64,
+                max: 59i64,
+            });
+        }
         let v_seconds = field_1 as u8;
         ::core::result::Result::Ok(Response::RuntimeMinSec {
             minutes: v_minutes,
@@ -1007,6 +1109,7 @@ pub mod mini_crc {
         const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
         const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
         const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
+        const HOST_ADDRESS: ::core::option::Option<u8> = HOST_ADDRESS;
         #[inline]
         fn decode_request(
             frame: &[u8],

@@ -155,6 +155,11 @@ fn check_error(e: &DecodeError, len: usize) {
             assert!(found == len && expected != len, "{e}")
         }
         DecodeError::Ambiguous { .. } | DecodeError::NotAReply { .. } => {}
+        DecodeError::TooLong { max, found } => assert!(found == len && found > max, "{e}"),
+        DecodeError::OutOfRange { offset, .. } | DecodeError::BadAddress { offset, .. } => {
+            assert!(offset < len, "{e}")
+        }
+        DecodeError::BroadcastNotAccepted { .. } => {}
     }
 }
 
