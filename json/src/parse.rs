@@ -37,9 +37,14 @@ impl Parsed {
         let m = p.message(self.message);
         let direction = self.message.direction;
         let address = self.address;
-        let broadcast = direction == Direction::Request && P::BROADCAST_ADDRESS == Some(address);
-        if !P::DEVICE_ADDRESSES.contains(&address) && !broadcast {
-            return Err(EncodeError::BadAddress { address }.to_string());
+        if !busspec_model::interp::address_allowed(p, address) {
+            let a = &p.framing.address;
+            return Err(EncodeError::BadAddress {
+                address,
+                min: a.min,
+                max: a.max,
+            }
+            .to_string());
         }
         let field = |name: &'static str| {
             self.values
