@@ -11,6 +11,7 @@ use busspec_link::sim::ub2::{Ub2Sim, MICRO_STEPS};
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::{Master, SimClock, Ub2};
 use busspec_protocols::ub2::{self, Capacitance, Request, Response};
+use busspec_protocols::Protocol as _;
 
 type Bus = SimBus<Ub2Sim>;
 
@@ -187,37 +188,93 @@ fn step_loss_and_limit_clipping_are_surfaced() {
     }
 }
 
+/// A UB2 request frame built by hand: start byte, address, code, payload, 8-bit sum. Frames
+/// busspec's own encoder refuses to write (values outside the spec's ranges) are built this way.
+fn hand_frame(address: u8, code: [u8; 2], payload: &[u8]) -> Vec<u8> {
+    let mut f = vec![0xAA, address, code[0], code[1]];
+    f.extend_from_slice(payload);
+    f.push(busspec_runtime::sum8(&f));
+    f
+}
+
 #[test]
 fn naks_follow_the_document() {
-    let (_, mut m, _) = bus(&[0x21]);
+    let (bus, mut m, _) = bus(&[0x21]);
+    let sent = Rc::new(RefCell::new(0usize));
+    let s = Rc::clone(&sent);
+    m.observe(move |e| {
+        if let TraceEvent::Sent { .. } = e {
+            *s.borrow_mut() += 1;
+        }
+    });
+    // Out-of-range indices: busspec refuses to send them (the spec's ranges), naming the field
+    // and its range, and puts nothing on the bus ...
+    let refused = [
+        (
+            Request::GetStoredFullStepPosition { index: 10 },
+            ("index", 10, 0, 9),
+        ),
+        (
+            Request::GoToStoredPosition { index: 12 },
+            ("index", 12, 0, 9),
+        ),
+        (
+            Request::SetAccelerationSpeedIndex {
+                acceleration_index: 19,
+                speed_index: 3,
+            },
+            ("acceleration_index", 19, 0, 18),
+        ),
+        (
+            Request::SetSlaveAddress { address: 0x41 },
+            ("address", 0x41, 0x21, 0x40),
+        ),
+    ];
+    for (request, (field, value, min, max)) in refused {
+        match m.ask(0x21, request) {
+            Err(LinkError::Encode { source, .. }) => {
+                assert_eq!(
+                    source,
+                    busspec_protocols::EncodeError::NotInRange {
+                        field,
+                        value,
+                        min,
+                        max
+                    },
+                    "{request:?}"
+                );
+                let text = source.to_string();
+                assert!(text.contains(field), "{text}");
+                assert!(text.contains(&format!("{min}..={max}")), "{text}");
+            }
+            other => panic!("{request:?}: {other:?}"),
+        }
+    }
+    assert_eq!(*sent.borrow(), 0, "a refused request reached the bus");
+    // ... and a device that gets such a frame anyway (another master, a lenient tool) NAKs it
+    // as the document says.
+    let nak_index = Some(vec![0xAA, 0x21, 0x94, 0x5F]);
+    let frames = [
+        hand_frame(0x21, [0x40, 0x75], &[10]),
+        hand_frame(0x21, [0x27, 0x00], &[12]),
+        hand_frame(0x21, [0x43, 0x00], &[19, 3]),
+        hand_frame(0x21, [0x60, 0x00], &[0x41]),
+    ];
+    for f in &frames {
+        assert!(Ub2::checksum_ok(f), "{f:02X?}");
+        let t = bus.clock().now();
+        let got = bus.with_devices(|d| d[0].on_frame_bytes(f, t));
+        assert_eq!(got, nak_index, "{f:02X?}");
+    }
+    bus.with_devices(|d| assert_eq!(d[0].address, 0x21));
     let nak = |m: &mut Master<Ub2, Bus, SimClock>, r| m.ask(0x21, r).unwrap();
-    assert_eq!(
-        nak(&mut m, Request::GetStoredFullStepPosition { index: 10 }),
-        Response::NakIndexOutOfRange
-    );
-    assert_eq!(
-        nak(&mut m, Request::GoToStoredPosition { index: 12 }),
-        Response::NakIndexOutOfRange
-    );
+    // An index inside the spec's range that the device has no entry for (its C-curve table is
+    // shorter): the device's NAK, through the master.
     assert_eq!(
         nak(
             &mut m,
             Request::GetCCurveIndexedFullStepCapacitance { index: 499 }
         ),
-        Response::NakIndexOutOfRange
-    );
-    assert_eq!(
-        nak(
-            &mut m,
-            Request::SetAccelerationSpeedIndex {
-                acceleration_index: 19,
-                speed_index: 3
-            }
-        ),
-        Response::NakIndexOutOfRange
-    );
-    assert_eq!(
-        nak(&mut m, Request::SetSlaveAddress { address: 0x41 }),
         Response::NakIndexOutOfRange
     );
     assert_eq!(

@@ -624,7 +624,11 @@ impl Device for Ub2Sim {
         let response = match Ub2::decode_request(frame) {
             Ok(d) => self.respond(&d.message, now),
             Err(DecodeError::ChecksumMismatch { .. }) => Response::NakChecksumError,
-            Err(DecodeError::InvalidValue { .. }) => Response::NakIndexOutOfRange,
+            // A value the spec's ranges forbid (an index, an address past 0x40): §7.1's 0x94,
+            // "given index is outside of defined / allowed range".
+            Err(DecodeError::InvalidValue { .. } | DecodeError::OutOfRange { .. }) => {
+                Response::NakIndexOutOfRange
+            }
             Err(_) if !Ub2::checksum_ok(frame) => Response::NakChecksumError,
             Err(_) => Response::NakUnknownCommand,
         };
