@@ -398,7 +398,23 @@ fn encode_checks_values_alike_in_both_engines() {
         ),
         (
             r#"{"message":"reference_run","address":5}"#,
-            Err("address 0x05 is outside the device range and is not the broadcast address of a request"),
+            Err("address 0x05 is outside the device range 0x21..=0x40 and is not the broadcast or host address"),
+        ),
+        // Past the device range by one (the document's 0x41, erratum ub2-e02).
+        (
+            r#"{"message":"reference_run","address":65}"#,
+            Err("address 0x41 is outside the device range 0x21..=0x40 and is not the broadcast or host address"),
+        ),
+        // The host address (0x20) is one a frame may carry, as the strict decoders accept it.
+        (r#"{"message":"reference_run","address":32}"#, Ok(())),
+        // A value outside its field's spec range (the wire byte would hold it).
+        (
+            r#"{"message":"get_stored_full_step_position","address":33,"fields":{"index":10}}"#,
+            Err("index = 10 is outside its range 0..=9"),
+        ),
+        (
+            r#"{"message":"get_stored_full_step_position","address":33,"fields":{"index":9}}"#,
+            Ok(()),
         ),
     ] {
         let got = ub2.encode(line);
@@ -417,14 +433,34 @@ fn encode_checks_values_alike_in_both_engines() {
             r#"{"message":"set_servo_id","address":1,"fields":{"new_id":5,"new_id_repeat":5}}"#,
             Ok(()),
         ),
-        // The broadcast address takes requests only.
+        // The broadcast address: a command that accepts broadcast goes there, one that does not
+        // is refused. The strict rule lets any frame carry the broadcast address (a response
+        // too: the address check does not look at the direction), as the strict decoders do.
         (
             r#"{"message":"set_servo_id","address":31,"fields":{"new_id":5}}"#,
             Ok(()),
         ),
         (
+            r#"{"message":"read_temperatures","address":31}"#,
+            Err("read_temperatures does not accept the broadcast address 0x1F"),
+        ),
+        (
             r#"{"message":"set_servo_id_reply","address":31,"fields":{"new_id":5}}"#,
-            Err("address 0x1F is outside the device range and is not the broadcast address of a request"),
+            Ok(()),
+        ),
+        // Outside the device range 0x01..=0x1E and not the broadcast address.
+        (
+            r#"{"message":"set_servo_id_reply","address":32,"fields":{"new_id":5}}"#,
+            Err("address 0x20 is outside the device range 0x01..=0x1E and is not the broadcast or host address"),
+        ),
+        (
+            r#"{"message":"read_temperatures","address":0}"#,
+            Err("address 0x00 is outside the device range 0x01..=0x1E and is not the broadcast or host address"),
+        ),
+        // new_id is a device address: 0 is outside its spec range.
+        (
+            r#"{"message":"set_servo_id","address":1,"fields":{"new_id":0}}"#,
+            Err("new_id = 0 is outside its range 1..=30"),
         ),
     ] {
         let got = sd.encode(line);
