@@ -181,8 +181,22 @@ fn ub2_part(out: &mut Out, svg: Option<&Path>) -> Result<(), String> {
     )?;
     bus.with_devices(|d| d[0].lose_steps_next_move = 40);
     movement(out, &mut m, Q::GoToStoredPosition { index: 3 })?;
-    out.say("-- refusals: an index out of range, a mode change while moving");
-    out.step(&mut m, 0x21, Q::GetStoredFullStepPosition { index: 12 })?;
+    out.say("-- refusals: busspec refuses an index outside the spec's range before it reaches the bus; the device refuses an index past its table (0x94) and a mode change while moving (0x91)");
+    let out_of_range = Q::GetStoredFullStepPosition { index: 12 };
+    match m.transact(0x21, out_of_range) {
+        Err(e) => out.say(format!("→ 0x21 {:<40} (not sent) {e}", out_of_range.name())),
+        Ok(ex) => {
+            return Err(format!(
+                "demo failed: an index outside the spec's range was sent: {}",
+                hex(&ex.sent)
+            ))
+        }
+    }
+    out.step(
+        &mut m,
+        0x21,
+        Q::GetCCurveIndexedFullStepCapacitance { index: 499 },
+    )?;
     out.step(&mut m, 0x21, Q::GoToFullStepPosition { target: 1000 })?;
     out.step(
         &mut m,
