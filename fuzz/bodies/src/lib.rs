@@ -8,9 +8,14 @@
 //! * [`decode`]: arbitrary bytes through `decode_request`, `decode_response` and
 //!   `decode_reply`; errors point inside the frame, and every accepted frame
 //!   re-encodes to the same bytes;
-//! * [`roundtrip`]: `Arbitrary` messages → `encode` → `decode` → equal (a value that does not fit
-//!   its wire field may be refused with `OutOfRange`, nothing else); the encoded frame also
-//!   goes through [`oracle::agree`];
+//! * [`decode`]'s errors of the strict contract's kinds (address, broadcast, range) are the
+//!   interpreter's too, for the same reason;
+//! * [`roundtrip`]: `Arbitrary` messages → `encode` → `decode` → equal, and the interpreter's
+//!   encoder writes the same frame; the encoded frame also goes through [`oracle::agree`]. A
+//!   value that does not fit its wire field may be refused with `OutOfRange`; the strict
+//!   contract's refusals (`BadAddress`, `BroadcastNotAccepted`, `NotInRange`) must be the
+//!   interpreter's too, and the frame written anyway (by the interpreter of the spec stripped
+//!   of ranges and address rules) is refused by both decoders for the same reason;
 //! * [`stream`]: arbitrary bytes, cut into chunks the input chooses, through the `StreamDecoder`:
 //!   bounded buffer, every byte in exactly one event, every frame valid, the same events however
 //!   the bytes are cut and the same as the interpreter's stream decoder; then an example frame
@@ -35,6 +40,7 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 
 use arbitrary::{Arbitrary, Unstructured};
+use busspec_model::interp;
 use busspec_model::ir::Direction;
 use busspec_protocols::stream::{
     Direction as StreamDirection, Event, StreamDecoder, MAX_SKIPPED_RUN,
@@ -235,14 +241,20 @@ pub fn decode<P: Protocol>(data: &[u8]) {
         Ok(d) => {
             assert_eq!(reencode::<P, _>(&d), data, "{d:?} re-encodes differently");
         }
-        Err(e) => check_error(&e, data.len()),
+        Err(e) => {
+            check_error(&e, data.len());
+            interp_refuses_alike::<P>(data, Direction::Request, &e);
+        }
     }
     let alone = P::decode_response(data);
     match &alone {
         Ok(d) => {
             assert_eq!(reencode::<P, _>(d), data, "{d:?} re-encodes differently");
         }
-        Err(e) => check_error(e, data.len()),
+        Err(e) => {
+            check_error(e, data.len());
+            interp_refuses_alike::<P>(data, Direction::Response, e);
+        }
     }
     for (_, r) in example_requests::<P>() {
         match P::decode_reply(data, r) {
@@ -292,11 +304,209 @@ where
     }
 }
 
+/// What the strict contract refuses, in words both engines and both directions share: an
+/// address no frame may carry, the broadcast address for a command that does not accept it, a
+/// value outside its field's spec range.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Refusal {
+    Address(u8),
+    Broadcast {
+        message: String,
+        address: u8,
+    },
+    Range {
+        field: String,
+        value: i64,
+        min: i64,
+        max: i64,
+    },
+}
+
+impl Refusal {
+    fn of_encode(e: &EncodeError) -> Option<Refusal> {
+        Some(match *e {
+            EncodeError::BadAddress { address, .. } => Refusal::Address(address),
+            EncodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
+                message: message.to_owned(),
+                address,
+            },
+            EncodeError::NotInRange {
+                field,
+                value,
+                min,
+                max,
+            } => Refusal::Range {
+                field: field.to_owned(),
+                value,
+                min,
+                max,
+            },
+            _ => return None,
+        })
+    }
+
+    fn of_interp_encode(e: &interp::EncodeError) -> Option<Refusal> {
+        Some(match e {
+            interp::EncodeError::BadAddress { address, .. } => Refusal::Address(*address),
+            interp::EncodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
+                message: message.clone(),
+                address: *address,
+            },
+            interp::EncodeError::NotInRange {
+                field,
+                value,
+                min,
+                max,
+            } => Refusal::Range {
+                field: field.clone(),
+                value: *value,
+                min: *min,
+                max: *max,
+            },
+            _ => return None,
+        })
+    }
+
+    fn of_decode(e: &DecodeError) -> Option<Refusal> {
+        Some(match *e {
+            DecodeError::BadAddress { found, .. } => Refusal::Address(found),
+            DecodeError::BroadcastNotAccepted {
+                message, address, ..
+            } => Refusal::Broadcast {
+                message: message.to_owned(),
+                address,
+            },
+            DecodeError::OutOfRange {
+                field,
+                found,
+                min,
+                max,
+                ..
+            } => Refusal::Range {
+                field: field.to_owned(),
+                value: found,
+                min,
+                max,
+            },
+            _ => return None,
+        })
+    }
+
+    fn of_interp_decode(e: &interp::DecodeError) -> Option<Refusal> {
+        Some(match e {
+            interp::DecodeError::BadAddress { found, .. } => Refusal::Address(*found),
+            interp::DecodeError::BroadcastNotAccepted {
+                message, address, ..
+            } => Refusal::Broadcast {
+                message: message.clone(),
+                address: *address,
+            },
+            interp::DecodeError::OutOfRange {
+                field,
+                found,
+                min,
+                max,
+                ..
+            } => Refusal::Range {
+                field: field.clone(),
+                value: *found,
+                min: *min,
+                max: *max,
+            },
+            _ => return None,
+        })
+    }
+}
+
+/// A decode error of the strict contract's kinds (address, broadcast, range) from the generated
+/// decoder of `P`: the interpreter refuses the same frame in the same direction for the same
+/// reason.
+fn interp_refuses_alike<P: Protocol>(frame: &[u8], direction: Direction, e: &DecodeError) {
+    let Some(want) = Refusal::of_decode(e) else {
+        return;
+    };
+    let p = spec::<P>();
+    match interp::decode(p, Some(direction), None, frame) {
+        Ok(f) => panic!(
+            "the generated decoder says {e}, the interpreter accepts {}: {}",
+            p.message(f.message).name,
+            events::hex(frame)
+        ),
+        Err(i) => assert!(
+            same_refusal(p, Refusal::of_interp_decode(&i).as_ref(), &want),
+            "the generated decoder says {e}, the interpreter {i:?}: {}",
+            events::hex(frame)
+        ),
+    }
+}
+
+/// How many messages [`roundtrip`] checked on this thread, by outcome.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RoundtripCounts {
+    /// Encoded by both engines alike (and decoded back equal).
+    pub encoded: usize,
+    /// Refused by both encoders for the same strict-contract reason.
+    pub refused: usize,
+    /// Of those, written anyway by the lenient interpreter and refused by both decoders for
+    /// that reason.
+    pub refused_on_decode: usize,
+}
+
+thread_local! {
+    static COUNTS: std::cell::Cell<RoundtripCounts> = std::cell::Cell::new(RoundtripCounts::default());
+}
+
+/// What [`roundtrip`] has checked on this thread so far (tests use it to see that the strict
+/// refusals are exercised, not only possible).
+pub fn roundtrip_counts() -> RoundtripCounts {
+    COUNTS.with(|c| c.get())
+}
+
+fn count(f: impl FnOnce(&mut RoundtripCounts)) {
+    COUNTS.with(|c| {
+        let mut v = c.get();
+        f(&mut v);
+        c.set(v);
+    });
+}
+
+/// Whether decode refused for the reason encode gave. The broadcast check comes before the
+/// constant arguments that tell apart requests sharing a code (SD 0xA7: read or reset), so
+/// decode may name another request with the same code that refuses broadcast too.
+fn same_refusal(p: &busspec_model::ir::Protocol, decoded: Option<&Refusal>, why: &Refusal) -> bool {
+    match (decoded, why) {
+        (
+            Some(Refusal::Broadcast { message, address }),
+            Refusal::Broadcast {
+                message: encoded,
+                address: to,
+            },
+        ) => {
+            let code = |name: &str| {
+                p.find_in(name, Direction::Request)
+                    .map(|r| p.message(r).code.clone())
+            };
+            address == to && code(message).is_some() && code(message) == code(encoded)
+        }
+        (d, w) => d == Some(w),
+    }
+}
+
+/// What encoding one message gave.
+enum Encoded {
+    /// The frame, written alike into buffers of every size that holds it.
+    Frame(Vec<u8>),
+    /// A typed value does not fit its wire field (`EncodeError::OutOfRange`).
+    DoesNotFit,
+    /// The strict contract refuses the message.
+    Refused(Refusal),
+}
+
 /// Encodes `d` into a buffer of exactly its length and into one a byte short.
 fn encode_checked<P: Protocol>(
     encode: impl Fn(&mut [u8]) -> Result<usize, EncodeError>,
     frame_len: usize,
-) -> Option<Vec<u8>> {
+) -> Encoded {
     let mut buf = oracle::pattern_buffer::<P>();
     let buf = buf.as_mut();
     match encode(buf) {
@@ -313,17 +523,152 @@ fn encode_checked<P: Protocol>(
                     available: n - 1
                 })
             );
-            Some(exact)
+            Encoded::Frame(exact)
         }
-        Err(EncodeError::OutOfRange { .. }) => None,
-        Err(e) => panic!("encode into MAX_FRAME_LEN bytes: {e}"),
+        Err(EncodeError::OutOfRange { .. }) => Encoded::DoesNotFit,
+        Err(e) => match Refusal::of_encode(&e) {
+            Some(r) => Encoded::Refused(r),
+            None => panic!("encode into MAX_FRAME_LEN bytes: {e}"),
+        },
+    }
+}
+
+/// `P`'s spec with nothing of the strict contract: no ranges, every address allowed, no
+/// broadcast rule. Its interpreter writes the frames the strict encoders refuse.
+fn lenient<P: Protocol>() -> &'static busspec_model::ir::Protocol {
+    struct Lenient;
+    once::<(P, Lenient), _>(|| {
+        let mut p = spec::<P>().clone();
+        p.framing.address.min = 0;
+        p.framing.address.max = u8::MAX;
+        p.framing.address.broadcast = None;
+        p.framing.address.host = None;
+        for m in p.commands.iter_mut().chain(p.responses.iter_mut()) {
+            for f in &mut m.fields {
+                f.range = None;
+                for b in &mut f.bits {
+                    b.range = None;
+                }
+            }
+        }
+        p
+    })
+}
+
+/// The message `name` of `direction`, for `address` with `values`, through the interpreter of
+/// `p`.
+fn interp_encode(
+    p: &busspec_model::ir::Protocol,
+    direction: Direction,
+    name: &str,
+    address: u8,
+    values: &oracle::Values,
+) -> Result<Vec<u8>, interp::EncodeError> {
+    let r = p
+        .find_in(name, direction)
+        .unwrap_or_else(|| panic!("{name} is not a {direction:?} of the spec"));
+    let values: Vec<interp::Value> = values
+        .iter()
+        .map(|(name, raw)| interp::Value {
+            name: name.clone(),
+            raw: raw.clone(),
+        })
+        .collect();
+    interp::encode(p, r, address, &values)
+}
+
+/// The strict contract both ways for one typed message: the interpreter's encoder agrees with
+/// the generated one (the same frame, or the same refusal), and a refused message, written
+/// anyway by the interpreter of the [`lenient`] spec, is refused by both decoders for the same
+/// reason. Returns the frame if it encoded; if it was refused, the reason and the frame the
+/// lenient interpreter wrote (if a value did not also overflow its wire field).
+fn encode_both_ways<P: Protocol, M: Message>(
+    d: &Decoded<M>,
+    direction: Direction,
+    decode: impl Fn(&[u8]) -> Result<Decoded<M>, DecodeError>,
+) -> Result<Vec<u8>, Option<(Refusal, Vec<u8>)>> {
+    let p = spec::<P>();
+    let name = d.message.name();
+    let values = visit_values(|f| d.message.visit(f));
+    let encoded = encode_checked::<P>(|b| d.message.encode(d.address, b), d.message.frame_len());
+    let interp = interp_encode(p, direction, name, d.address, &values);
+    match encoded {
+        Encoded::Frame(frame) => {
+            assert_eq!(
+                interp.as_ref(),
+                Ok(&frame),
+                "{d:?}: the interpreter does not write the generated frame {}",
+                events::hex(&frame)
+            );
+            count(|c| c.encoded += 1);
+            Ok(frame)
+        }
+        Encoded::DoesNotFit => Err(None),
+        Encoded::Refused(why) => {
+            match &interp {
+                Ok(f) => panic!(
+                    "{d:?} refused ({why:?}), but the interpreter writes {}",
+                    events::hex(f)
+                ),
+                Err(e) => assert_eq!(
+                    Refusal::of_interp_encode(e).as_ref(),
+                    Some(&why),
+                    "{d:?}: the interpreter refuses with {e}"
+                ),
+            }
+            count(|c| c.refused += 1);
+            // The same bytes another way: the lenient spec's interpreter writes them (unless a
+            // value does not fit its wire field either); both strict decoders refuse them for
+            // the reason encode gave (both check address, broadcast, then fields in order).
+            let Ok(frame) = interp_encode(lenient::<P>(), direction, name, d.address, &values)
+            else {
+                return Err(None);
+            };
+            match decode(&frame) {
+                // Responses that share code and length (only their request tells them apart)
+                // may be another message, one whose values are in range: still not `d`. The
+                // reply to `d`'s requests is checked by the caller.
+                Ok(back) if direction == Direction::Response && back.message.name() != name => {
+                    assert!(
+                        agree::<P>(p, &frame, direction, None),
+                        "{}",
+                        events::hex(&frame)
+                    );
+                }
+                Ok(back) => panic!(
+                    "{d:?} refused ({why:?}), but {} decodes as {back:?}",
+                    events::hex(&frame)
+                ),
+                Err(e) => {
+                    match e {
+                        DecodeError::Ambiguous { .. } => {
+                            assert_eq!(direction, Direction::Response, "{}", events::hex(&frame));
+                        }
+                        e => {
+                            check_error(&e, frame.len());
+                            assert!(
+                                same_refusal(p, Refusal::of_decode(&e).as_ref(), &why),
+                                "{d:?} refused ({why:?}), {} decodes to {e}",
+                                events::hex(&frame)
+                            );
+                            interp_refuses_alike::<P>(&frame, direction, &e);
+                        }
+                    }
+                    assert!(
+                        !agree::<P>(p, &frame, direction, None),
+                        "{}",
+                        events::hex(&frame)
+                    );
+                }
+            }
+            count(|c| c.refused_on_decode += 1);
+            Err(Some((why, frame)))
+        }
     }
 }
 
 fn request_roundtrip<P: Protocol>(d: &Decoded<P::Request>) {
-    let Some(frame) =
-        encode_checked::<P>(|b| d.message.encode(d.address, b), d.message.frame_len())
-    else {
+    let Ok(frame) = encode_both_ways::<P, _>(d, Direction::Request, P::decode_request) else {
         return;
     };
     assert_eq!(P::decode_request(&frame), Ok(*d), "{}", events::hex(&frame));
@@ -335,10 +680,32 @@ fn request_roundtrip<P: Protocol>(d: &Decoded<P::Request>) {
 }
 
 fn response_roundtrip<P: Protocol>(d: &Decoded<P::Response>) {
-    let Some(frame) =
-        encode_checked::<P>(|b| d.message.encode(d.address, b), d.message.frame_len())
-    else {
-        return;
+    let frame = match encode_both_ways::<P, _>(d, Direction::Response, P::decode_response) {
+        Ok(frame) => frame,
+        Err(None) => return,
+        Err(Some((why, frame))) => {
+            // Refused: as the reply to every example request it answers, refused alike.
+            let p = spec::<P>();
+            for (c, r) in example_requests::<P>() {
+                if P::answers(r, &d.message) {
+                    match P::decode_reply(&frame, r) {
+                        Ok(back) => panic!(
+                            "{d:?} refused ({why:?}), but {} decodes as the reply to {r:?}: {back:?}",
+                            events::hex(&frame)
+                        ),
+                        Err(e) => {
+                            check_error(&e, frame.len());
+                            assert!(
+                                same_refusal(p, Refusal::of_decode(&e).as_ref(), &why),
+                                "{d:?} as the reply to {r:?}: {e}"
+                            );
+                        }
+                    }
+                    assert!(!agree::<P>(p, &frame, Direction::Response, Some(*c)));
+                }
+            }
+            return;
+        }
     };
     let p = spec::<P>();
     let needs_request = match P::decode_response(&frame) {
