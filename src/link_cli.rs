@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use busspec_link::clock::Clock;
 use busspec_link::master::{LinkError, Progress, SdString};
+use busspec_link::protocol::{byte_order_source, declared_byte_order};
 use busspec_link::sim::sd::SdSim;
 use busspec_link::sim::ub2::Ub2Sim;
 use busspec_link::sim::{serve, Device};
@@ -15,7 +16,7 @@ use busspec_link::{
 };
 use busspec_model::ir::Direction;
 use busspec_model::Protocol as Spec;
-use busspec_protocols::{sd, ub2};
+use busspec_protocols::{sd, ub2, CommandKind};
 
 use crate::{frames, svg};
 
@@ -247,6 +248,7 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         return Ok(());
     }
     let request = typed::<Ub2>(spec, o)?;
+    check_byte_order(&mut m, o.address, &request)?;
     if o.wait && busspec_link::master::ub2_completion_check(&request).is_some() {
         let mut line = ProgressLine::new();
         let report = m
@@ -268,6 +270,28 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         return Ok(());
     }
     one(spec, &mut m, o.address, request)
+}
+
+/// Before a movement: the byte-order check the master makes before the first movement to an
+/// address ([`Link::byte_order_probe`]), made here so `talk` can say what it read; the master
+/// then does not check again. A refusal is the command's error: nothing that moves is sent.
+fn check_byte_order<P: Link, T: Transport, C: Clock>(
+    m: &mut Master<P, T, C>,
+    address: u8,
+    request: &P::Request,
+) -> Result<(), String> {
+    if P::kind(request) != CommandKind::Movement {
+        return Ok(());
+    }
+    if let Some(check) = m.check_byte_order(address, request).map_err(link_error)? {
+        eprintln!(
+            "byte order checked: {} plausible {} ({})",
+            check.read,
+            declared_byte_order::<P>(),
+            byte_order_source::<P>()
+        );
+    }
+    Ok(())
 }
 
 /// Prints a movement's trigger reply and its final reply (to the completion check).
@@ -322,6 +346,7 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         return print(&line.to_string());
     }
     let request = typed::<Sd>(spec, o)?;
+    check_byte_order(&mut m, o.address, &request)?;
     if let (true, sd::Request::SetPoint { position, .. }) =
         (o.wait && Some(o.address) != sd::BROADCAST_ADDRESS, request)
     {
@@ -348,7 +373,14 @@ pub fn sim(
     pty: bool,
     port: Option<&str>,
     verbose: bool,
+    msb_first: bool,
 ) -> Result<(), String> {
+    if msb_first && protocol != Ub2::NAME {
+        return Err(format!(
+            "error: --msb-first is for the {} simulator (erratum ub2-e01)",
+            Ub2::NAME
+        ));
+    }
     match protocol {
         p if p == Ub2::NAME => {
             let addresses = if addresses.is_empty() {
@@ -357,7 +389,10 @@ pub fn sim(
                 addresses.to_vec()
             };
             check_addresses::<Ub2>(&addresses)?;
-            let devices: Vec<Ub2Sim> = addresses.iter().map(|&a| Ub2Sim::new(a)).collect();
+            let devices: Vec<Ub2Sim> = addresses
+                .iter()
+                .map(|&a| Ub2Sim::new(a).msb_first(msb_first))
+                .collect();
             run_sim::<Ub2, _>(devices, pty, port, verbose)
         }
         p if p == Sd::NAME => {

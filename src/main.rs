@@ -178,6 +178,10 @@ struct SimArgs {
     /// Log every frame on stderr.
     #[arg(long)]
     verbose: bool,
+    /// ub2: a device built to the document's examples, not its text: multi-byte numbers travel
+    /// most significant byte first (erratum ub2-e01). `talk` refuses to move it.
+    #[arg(long)]
+    msb_first: bool,
 }
 
 #[derive(Args)]
@@ -330,6 +334,7 @@ fn main() -> ExitCode {
             a.pty,
             a.port.as_deref(),
             a.verbose,
+            a.msb_first,
         ),
         Command::Talk(a) => talk(a),
         Command::Demo { svg } => demo(svg.as_deref()),

@@ -166,3 +166,84 @@ fn talk_to_simulated_actuators_through_a_pty() {
     assert!(out.status.success());
     assert!(out.stdout.is_empty());
 }
+
+/// UB2 byte-order safety (ub2-e01): a capacitor built to the document's examples (numbers MSB
+/// first) is not moved; one built to its text moves as before, and `talk` says it checked.
+#[test]
+fn an_msb_first_capacitor_is_refused_and_a_correct_one_moves() {
+    let sim = Sim::start(&["ub2", "--msb-first"]);
+    let out = sim.talk(&[
+        "ub2",
+        "--address",
+        "0x21",
+        "go_to_capacitance",
+        "target=150",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert!(out.stdout.is_empty());
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("error: ub2 go_to_capacitance to address 0x21: not sent: "),
+        "{stderr}"
+    );
+    for part in [
+        "implausible little-endian",
+        "spec/ub2.yaml:8: byte_order: little",
+        "read big-endian (most significant byte first) they are factory limits 50.00..=500.00 pF, plausible",
+        "erratum ub2-e01",
+    ] {
+        assert!(stderr.contains(part), "{part:?} not in {stderr}");
+    }
+    // It did not move: still at its preset position, 638 full steps, which it sends MSB first.
+    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "get_actual_full_step_position"]));
+    assert_eq!(r[0]["fields"]["full_steps"], 638u16.swap_bytes());
+    // --no-wait refuses the same way.
+    let out = sim.talk(&[
+        "ub2",
+        "--address",
+        "0x21",
+        "--no-wait",
+        "move_full_steps",
+        "steps=60",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("ub2-e01"));
+    drop(sim);
+
+    let sim = Sim::start(&["ub2"]);
+    let out = sim.talk(&[
+        "ub2",
+        "--address",
+        "0x21",
+        "go_to_capacitance",
+        "target=150",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    let r = lines(&out);
+    assert_eq!(r.len(), 2);
+    assert_eq!(r[0]["message"], "movement_started");
+    assert_eq!(r[1]["message"], "movement_completed");
+    assert_eq!(
+        stderr.lines().next(),
+        Some(
+            "byte order checked: factory limits 50.00..=500.00 pF plausible little-endian \
+             (spec/ub2.yaml:8: byte_order: little)"
+        ),
+        "{stderr}"
+    );
+    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "get_actual_capacitance"]));
+    let c = r[0]["fields"]["capacitance"].as_f64().expect("a number");
+    assert!((c - 150.0).abs() < 0.05, "{c}");
+    // Reads are not checked, and the simulator's switch is UB2's only.
+    assert!(
+        String::from_utf8_lossy(&sim.talk(&["ub2", "--address", "0x21", "get_status"]).stderr)
+            .is_empty()
+    );
+    let out = Command::new(BIN)
+        .args(["sim", "sd", "--msb-first", "--pty"])
+        .output()
+        .expect("busspec runs");
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--msb-first is for the ub2 simulator"));
+}

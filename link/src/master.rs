@@ -17,6 +17,12 @@
 //! put in it; the first one to an address starts from the device's own view of the counter
 //! ([`Link::freshness_readout`], SD §3.12).
 //!
+//! Before the first movement to an address, [`Master::run_movement`], [`Master::move_to`] and
+//! [`Master::start_movement`] read what [`Link::byte_order_probe`] names (UB2: the factory
+//! limits) and refuse to move a device whose numbers do not read plausibly in the byte order
+//! the spec declares ([`LinkError::ByteOrder`], erratum ub2-e01); the check is kept per address
+//! until a reset or a new slave address ([`Link::forgets_byte_order_checks`]).
+//!
 //! [`Master`] works for any protocol that implements [`Link`]; the long operations of one
 //! device family (UB2 movements and C-curve table, SD movements and string readouts) are
 //! methods of `Master<Ub2, _, _>` and `Master<Sd, _, _>`.
@@ -31,7 +37,8 @@ use busspec_protocols::ub2::{self, Ub2};
 use busspec_protocols::{CommandKind, EncodeError, Message, Protocol};
 
 use crate::clock::Clock;
-use crate::protocol::Link;
+use crate::protocol::{byte_order_source, declared_byte_order, swapped_byte_order};
+use crate::protocol::{ByteOrderCheck, Link};
 use crate::transport::Transport;
 
 /// Line timing of a master.
@@ -111,6 +118,19 @@ pub enum LinkError {
         response: &'static str,
         detail: String,
     },
+    /// The device's numbers do not read plausibly in the byte order the spec declares: the
+    /// movement was not sent ([`Link::byte_order_probe`]).
+    ByteOrder {
+        protocol: &'static str,
+        request: &'static str,
+        address: u8,
+        check: Box<ByteOrderCheck>,
+        /// The spec's `byte_order` line (`spec/ub2.yaml:8: byte_order: little`).
+        source: String,
+        /// The declared byte order and the other one, as words.
+        declared: &'static str,
+        other: &'static str,
+    },
     /// A movement did not finish within the time allowed.
     MovementTimeout {
         protocol: &'static str,
@@ -178,6 +198,39 @@ impl fmt::Display for LinkError {
                 f,
                 "{protocol} {request} to address 0x{address:02X}: device answered {response}: {detail}"
             ),
+            LinkError::ByteOrder {
+                protocol,
+                request,
+                address,
+                check,
+                source,
+                declared,
+                other,
+            } => {
+                write!(
+                    f,
+                    "{protocol} {request} to address 0x{address:02X}: not sent: the device read \
+                     {}, implausible {declared} ({}) as the spec declares ({source}); ",
+                    check.read, check.rule
+                )?;
+                if check.swapped_fits {
+                    write!(
+                        f,
+                        "read {other} they are {}, plausible: the device sends its numbers \
+                         {other}, as the document's examples print them, not as its text says \
+                         (erratum {}); it would read the target the wrong way round and run \
+                         elsewhere",
+                        check.swapped, check.erratum
+                    )
+                } else {
+                    write!(
+                        f,
+                        "read {other} they are {}, implausible too: neither byte order fits \
+                         (erratum {}); is this the device the spec describes?",
+                        check.swapped, check.erratum
+                    )
+                }
+            }
             LinkError::MovementTimeout {
                 protocol,
                 request,
@@ -250,6 +303,8 @@ pub struct Master<P: Link, T: Transport, C: Clock> {
     last_activity: Option<Duration>,
     /// Last freshness counter sent, per address.
     freshness: [Option<u8>; 256],
+    /// The byte-order check that passed, per address ([`Link::byte_order_probe`]).
+    byte_order: Vec<Option<ByteOrderCheck>>,
     observer: Option<Observer>,
     _protocol: PhantomData<P>,
 }
@@ -262,6 +317,7 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
             timing: Timing::for_protocol::<P>(),
             last_activity: None,
             freshness: [None; 256],
+            byte_order: vec![None; 256],
             observer: None,
             _protocol: PhantomData,
         }
@@ -345,6 +401,71 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         let next = Self::wrap(u16::from(last) + 1);
         self.freshness[usize::from(address)] = Some(next);
         Ok(next)
+    }
+
+    /// The byte-order check `address` passed, if it has been checked (and not forgotten since).
+    pub fn byte_order_checked(&self, address: u8) -> Option<&ByteOrderCheck> {
+        self.byte_order[usize::from(address)].as_ref()
+    }
+
+    /// Forgets every byte-order check, so the next movement to each address checks again.
+    pub fn forget_byte_order_checks(&mut self) {
+        self.byte_order.iter_mut().for_each(|c| *c = None);
+    }
+
+    /// Makes sure `address` sends its numbers in the byte order the spec declares, before a
+    /// movement `request` goes to it: reads [`Link::byte_order_probe`] once per address and
+    /// keeps the result. `Ok(None)` when the protocol has no probe or `address` is a broadcast
+    /// (which cannot be read back); `Ok(Some(check))` when the readings fit the declared byte
+    /// order; [`LinkError::ByteOrder`] when they do not (whether or not they fit swapped), or
+    /// [`LinkError::Refused`] when the device does not answer the probe as expected.
+    pub fn check_byte_order(
+        &mut self,
+        address: u8,
+        request: &P::Request,
+    ) -> Result<Option<&ByteOrderCheck>, LinkError> {
+        let probe = P::byte_order_probe();
+        if probe.is_empty() || Some(address) == P::BROADCAST_ADDRESS {
+            return Ok(None);
+        }
+        if self.byte_order[usize::from(address)].is_none() {
+            let mut replies = Vec::with_capacity(probe.len());
+            for q in &probe {
+                replies.push(self.ask(address, *q)?);
+            }
+            let Some(check) = P::byte_order_check(&replies) else {
+                let names: Vec<&str> = replies.iter().map(Message::name).collect();
+                return Err(LinkError::Refused {
+                    protocol: P::NAME,
+                    request: request.name(),
+                    address,
+                    response: replies.first().map_or("nothing", Message::name),
+                    detail: format!(
+                        "not sent: the byte-order check before the first movement read {} \
+                         to {}",
+                        names.join(", "),
+                        probe
+                            .iter()
+                            .map(Message::name)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                });
+            };
+            if !check.declared_fits {
+                return Err(LinkError::ByteOrder {
+                    protocol: P::NAME,
+                    request: request.name(),
+                    address,
+                    check: Box::new(check),
+                    source: byte_order_source::<P>(),
+                    declared: declared_byte_order::<P>(),
+                    other: swapped_byte_order::<P>(),
+                });
+            }
+            self.byte_order[usize::from(address)] = Some(check);
+        }
+        Ok(self.byte_order[usize::from(address)].as_ref())
     }
 
     fn check_address(&self, request: &P::Request, address: u8) -> Result<bool, LinkError> {
@@ -470,6 +591,9 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         request: P::Request,
     ) -> Result<Exchange<P::Response>, LinkError> {
         let broadcast = self.check_address(&request, address)?;
+        if P::forgets_byte_order_checks(&request) {
+            self.forget_byte_order_checks();
+        }
         let answered = P::broadcast(&request).answered;
         let mut request = request;
         if P::freshness_mut(&mut request).is_some() {
@@ -587,6 +711,19 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         }))
     }
 
+    /// Sends a movement trigger, after the byte-order check [`Master::check_byte_order`] makes
+    /// before the first movement to an address: the way to start a movement. (Plain
+    /// [`Master::transact`] sends what it is given: the transaction layer, which the soak
+    /// and the tests drive directly.)
+    pub fn start_movement(
+        &mut self,
+        address: u8,
+        trigger: P::Request,
+    ) -> Result<Exchange<P::Response>, LinkError> {
+        self.check_byte_order(address, &trigger)?;
+        self.transact(address, trigger)
+    }
+
     /// Like [`Master::transact`] for a request that must be answered: the response itself.
     pub fn ask(&mut self, address: u8, request: P::Request) -> Result<P::Response, LinkError> {
         let ex = self.transact(address, request)?;
@@ -684,6 +821,9 @@ impl<T: Transport, C: Clock> Master<Ub2, T, C> {
             response: "nothing",
             detail: "not a movement trigger with a completion check".to_owned(),
         })?;
+        // Before the first movement to this address: does the device read numbers as the
+        // spec says (ub2-e01)? Nothing moves if not.
+        self.check_byte_order(address, &trigger)?;
         let start = self.clock.now();
         let started = self.ask(address, trigger)?;
         let clipped = match started {
@@ -922,6 +1062,8 @@ impl<T: Transport, C: Clock> Master<Sd, T, C> {
             freshness: 0,
             position: target,
         };
+        // SD has no byte-order probe (`Link::byte_order_probe`): this checks nothing today.
+        self.check_byte_order(address, &request)?;
         let started = self.ask(address, request)?;
         let mut polls = 0;
         loop {

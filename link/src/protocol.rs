@@ -7,7 +7,8 @@
 //! implement. [`Link`] holds only what a master decides on top: which commands are safe to send
 //! twice, where a reply comes from, which NAK means "try again", the SD freshness counter, the
 //! quiet time between requests, and the one place the master reads a NAK differently from the
-//! spec ([`Link::nak_approves`]).
+//! spec ([`Link::nak_approves`]), and the readings that tell whether a device sends its numbers
+//! in the byte order the spec declares ([`Link::byte_order_probe`]).
 
 use std::time::Duration;
 
@@ -36,6 +37,60 @@ pub fn retry_safe_by_kind(kind: CommandKind) -> bool {
         kind,
         CommandKind::Getter | CommandKind::CompletionCheck | CommandKind::Setter
     )
+}
+
+/// What a byte-order probe read ([`Link::byte_order_probe`]), judged both ways: as the spec
+/// declares the numbers travel, and byte-swapped.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ByteOrderCheck {
+    /// What was read, in the declared byte order (`factory limits 50.00..=500.00 pF`).
+    pub read: String,
+    /// The same bytes read the other way round.
+    pub swapped: String,
+    /// What a plausible reading is (`inside 0.01..=10000.00 pF, lower below upper`).
+    pub rule: String,
+    /// The reading is plausible in the declared byte order.
+    pub declared_fits: bool,
+    /// The reading is plausible byte-swapped.
+    pub swapped_fits: bool,
+    /// The erratum of the spec that records the doubt about the byte order (`ub2-e01`).
+    pub erratum: &'static str,
+}
+
+/// The spec's `byte_order:` line: its line number (from 1) and its text without the comment
+/// (`byte_order: little`), if the spec has one at the top level.
+pub fn spec_byte_order_line<P: Protocol>() -> Option<(usize, &'static str)> {
+    P::SPEC_YAML.lines().enumerate().find_map(|(i, line)| {
+        line.starts_with("byte_order:")
+            .then(|| (i + 1, line.split('#').next().unwrap_or(line).trim_end()))
+    })
+}
+
+/// The byte order the spec declares, as a word (`little-endian`), from its `byte_order:` line.
+pub fn declared_byte_order<P: Protocol>() -> &'static str {
+    match spec_byte_order_line::<P>().map(|(_, l)| l.trim_start_matches("byte_order:").trim()) {
+        Some("big") => "big-endian",
+        Some("little") => "little-endian",
+        _ => "in the declared byte order",
+    }
+}
+
+/// The other byte order than the declared one, as a word.
+pub fn swapped_byte_order<P: Protocol>() -> &'static str {
+    match declared_byte_order::<P>() {
+        "big-endian" => "little-endian",
+        "little-endian" => "big-endian (most significant byte first)",
+        _ => "byte-swapped",
+    }
+}
+
+/// Where the spec declares its byte order, to quote in a message:
+/// `spec/ub2.yaml:8: byte_order: little`.
+pub fn byte_order_source<P: Protocol>() -> String {
+    match spec_byte_order_line::<P>() {
+        Some((n, line)) => format!("spec/{}.yaml:{n}: {line}", P::NAME),
+        None => format!("spec/{}.yaml: no byte_order line", P::NAME),
+    }
 }
 
 /// One protocol as a bus master sees it: the generated [`Protocol`] plus the master's own rules.
@@ -96,6 +151,44 @@ pub trait Link: Protocol {
     fn freshness_from_reply(_r: &Self::Response) -> Option<u8> {
         None
     }
+
+    /// Requests whose replies carry multi-byte numbers with a range the master knows, read
+    /// before the first movement to an address to make sure the device sends its numbers in
+    /// the byte order the spec declares: a device that reads the target the other way round
+    /// runs somewhere else entirely. None by default: no check.
+    fn byte_order_probe() -> Vec<Self::Request> {
+        Vec::new()
+    }
+
+    /// The replies to [`Link::byte_order_probe`], in its order, judged both ways; `None` if
+    /// they are not the replies the probe expects (a NAK, another reply).
+    fn byte_order_check(_replies: &[Self::Response]) -> Option<ByteOrderCheck> {
+        None
+    }
+
+    /// Whether sending `r` makes the master forget which addresses passed the byte-order check:
+    /// a reset, or a command that moves a device to another address (another device may then
+    /// answer where a checked one did). A reset by default.
+    fn forgets_byte_order_checks(r: &Self::Request) -> bool {
+        Self::kind(r) == CommandKind::Reset
+    }
+}
+
+/// What the master takes as a plausible UB2 capacitance, in 0.01 pF: 0.01 pF to 10,000.00 pF.
+/// The spec gives a capacitance no range of its own (a `u32` of 0.01 pF, §3.1); the document's
+/// examples run from 30.00 pF to 800 pF. A value in this range read one way
+/// reads, byte-swapped, as more than 10,000.00 pF unless its lowest byte is 0 and its second
+/// below 0x10, so a pair of limits rarely fits both ways.
+pub const UB2_PLAUSIBLE_CAPACITANCE: std::ops::RangeInclusive<u32> = 1..=1_000_000;
+
+fn ub2_limits_fit(lower: u32, upper: u32) -> bool {
+    UB2_PLAUSIBLE_CAPACITANCE.contains(&lower)
+        && UB2_PLAUSIBLE_CAPACITANCE.contains(&upper)
+        && lower < upper
+}
+
+fn ub2_pf(raw: u32) -> String {
+    format!("{}.{:02}", raw / 100, raw % 100)
 }
 
 impl Link for ub2::Ub2 {
@@ -123,6 +216,47 @@ impl Link for ub2::Ub2 {
     fn nak_approves(request: &ub2::Request, response: &ub2::Response) -> bool {
         matches!(response, ub2::Response::NakLimitReached)
             && Self::kind(request) == CommandKind::Movement
+    }
+
+    /// The factory limits (§6.16, §6.17): every capacitor has them, they travel as `u32` of
+    /// 0.01 pF, each must be a plausible capacitance ([`UB2_PLAUSIBLE_CAPACITANCE`]) and the
+    /// lower must lie below the upper. The 8-bit sum cannot tell the byte orders apart
+    /// (ub2-e01); these readings can.
+    fn byte_order_probe() -> Vec<ub2::Request> {
+        vec![
+            ub2::Request::GetLowerFactoryLimit,
+            ub2::Request::GetUpperFactoryLimit,
+        ]
+    }
+
+    fn byte_order_check(replies: &[ub2::Response]) -> Option<ByteOrderCheck> {
+        let [ub2::Response::LowerFactoryLimit {
+            capacitance: lower, ..
+        }, ub2::Response::UpperFactoryLimit {
+            capacitance: upper, ..
+        }] = replies
+        else {
+            return None;
+        };
+        let (lo, hi) = (lower.raw(), upper.raw());
+        let (slo, shi) = (lo.swap_bytes(), hi.swap_bytes());
+        Some(ByteOrderCheck {
+            read: format!("factory limits {}..={} pF", ub2_pf(lo), ub2_pf(hi)),
+            swapped: format!("factory limits {}..={} pF", ub2_pf(slo), ub2_pf(shi)),
+            rule: format!(
+                "each inside {}..={} pF, lower below upper",
+                ub2_pf(*UB2_PLAUSIBLE_CAPACITANCE.start()),
+                ub2_pf(*UB2_PLAUSIBLE_CAPACITANCE.end())
+            ),
+            declared_fits: ub2_limits_fit(lo, hi),
+            swapped_fits: ub2_limits_fit(slo, shi),
+            erratum: "ub2-e01",
+        })
+    }
+
+    /// A reset, and a new slave address (§5.3): the device answers elsewhere from then on.
+    fn forgets_byte_order_checks(r: &ub2::Request) -> bool {
+        matches!(r, ub2::Request::SetSlaveAddress { .. }) || Self::kind(r) == CommandKind::Reset
     }
 }
 

@@ -16,7 +16,7 @@ use std::io;
 use std::rc::Rc;
 use std::time::Duration;
 
-use busspec_protocols::{Message, Protocol};
+use busspec_protocols::{FieldValue, Message, Protocol};
 
 use crate::clock::{Clock, SimClock};
 use crate::transport::Transport;
@@ -253,4 +253,80 @@ fn reply<P: Protocol>(response: &P::Response, address: u8) -> Option<Vec<u8>> {
     let n = response.encode(address, &mut buf).ok()?;
     buf.truncate(n);
     Some(buf)
+}
+
+/// Where the multi-byte numbers of `m`'s frame to `address` lie: (offset, width) for each
+/// integer field of more than one byte, for a protocol whose numbers travel little-endian.
+///
+/// Found through the message's own codec: a field's width is the widest wire type
+/// [`Message::from_fields`] takes a value of (1, 2, 4 or 8 bytes), its offset the first byte
+/// that changes when the field's lowest bit does. A simulator uses it to act as a device that
+/// sends its numbers the other way round (swapping the bytes of each keeps an additive
+/// checksum).
+pub fn number_positions<M: Message>(m: &M, address: u8) -> Vec<(usize, usize)> {
+    enum Value {
+        Int(i64),
+        Text(Vec<u8>),
+    }
+    let mut fields: Vec<(&'static str, Value)> = Vec::new();
+    m.visit(|name, v| {
+        fields.push((
+            name,
+            match v {
+                FieldValue::Int(i) => Value::Int(i),
+                FieldValue::Text(t) => Value::Text(t.to_vec()),
+            },
+        ))
+    });
+    let with = |name: &str, value: i64| {
+        M::from_fields(m.name(), |f| {
+            fields.iter().find(|(n, _)| *n == f).map(|(n, v)| match v {
+                _ if *n == name => FieldValue::Int(value),
+                Value::Int(i) => FieldValue::Int(*i),
+                Value::Text(t) => FieldValue::Text(t),
+            })
+        })
+    };
+    let encode = |msg: &M| {
+        let mut buf = vec![0u8; msg.frame_len().max(1) + 8];
+        let n = msg.encode(address, &mut buf).ok()?;
+        buf.truncate(n);
+        Some(buf)
+    };
+    let Some(base) = encode(m) else {
+        return Vec::new();
+    };
+    let mut positions = Vec::new();
+    for (name, value) in &fields {
+        let Value::Int(v) = *value else { continue };
+        let width = [(1i64 << 32, 8), (1 << 16, 4), (1 << 8, 2)]
+            .into_iter()
+            .find(|&(probe, _)| with(name, probe).is_ok())
+            .map_or(1, |(_, w)| w);
+        if width == 1 {
+            continue;
+        }
+        let offset = [v ^ 1, v + 1, v - 1].into_iter().find_map(|alt| {
+            let other = encode(&with(name, alt).ok()?)?;
+            // The last byte is the checksum, which changes too.
+            let body = base.len().saturating_sub(1);
+            (0..body).find(|&i| base.get(i) != other.get(i))
+        });
+        if let Some(offset) = offset {
+            if offset + width < base.len() {
+                positions.push((offset, width));
+            }
+        }
+    }
+    positions
+}
+
+/// Reverses the bytes of each multi-byte number of `m`'s frame in `frame` (see
+/// [`number_positions`]).
+pub fn swap_numbers<M: Message>(m: &M, address: u8, frame: &mut [u8]) {
+    for (offset, width) in number_positions(m, address) {
+        if let Some(bytes) = frame.get_mut(offset..offset + width) {
+            bytes.reverse();
+        }
+    }
 }

@@ -13,6 +13,11 @@
 //! - a frame with a bad checksum addressed to this device gets 0x92; a frame that does not
 //!   start with 0xAA, or is for another address, is ignored (§2.1); one too short to hold a
 //!   code is ignored too.
+//!
+//! [`Ub2Sim::msb_first`] makes it a device built to the document's examples rather than its
+//! text (erratum ub2-e01): it reads and writes every multi-byte number most significant byte
+//! first, so a request it gets means to it what the bytes mean big-endian, and its replies
+//! carry its values big-endian. The 8-bit sum is the same either way.
 
 use std::time::Duration;
 
@@ -21,7 +26,7 @@ use busspec_protocols::ub2::{
 };
 use busspec_protocols::{DecodeError, Protocol};
 
-use super::{reply, Device};
+use super::{reply, swap_numbers, Device};
 
 /// Micro-steps per full step (§3.3).
 pub const MICRO_STEPS: u32 = 256;
@@ -200,6 +205,9 @@ pub struct Ub2Sim {
     pub movement: Option<Movement>,
     /// Micro-steps the next movement will lose (a fault to provoke 0x5400).
     pub lose_steps_next_move: u32,
+    /// Multi-byte numbers travel most significant byte first, as the document's examples print
+    /// them, not little-endian as its text and the spec say (ub2-e01).
+    pub msb_first: bool,
 }
 
 impl Ub2Sim {
@@ -224,10 +232,18 @@ impl Ub2Sim {
             position: u32::from(config.preset_full_steps) * MICRO_STEPS,
             movement: None,
             lose_steps_next_move: 0,
+            msb_first: false,
             config,
         };
         sim.upper_customer_limit = sim.upper_factory_limit();
         sim
+    }
+
+    /// The same device, sending and reading its multi-byte numbers most significant byte first
+    /// (`true`) or little-endian as the spec says (`false`, the default).
+    pub fn msb_first(mut self, msb_first: bool) -> Self {
+        self.msb_first = msb_first;
+        self
     }
 
     /// Capacitance at a micro-step position, interpolated linearly along the C-curve.
@@ -621,17 +637,30 @@ impl Device for Ub2Sim {
             return None;
         }
         let me = self.address;
-        let response = match Ub2::decode_request(frame) {
+        // An MSB-first device reads each number the other way round: what it understands is
+        // what the frame with those bytes reversed says little-endian.
+        let mut seen = frame.to_vec();
+        if self.msb_first {
+            if let Ok(d) = Ub2::decode_request(frame) {
+                swap_numbers(&d.message, me, &mut seen);
+            }
+        }
+        let response = match Ub2::decode_request(&seen) {
             Ok(d) => self.respond(&d.message, now),
             Err(DecodeError::ChecksumMismatch { .. }) => Response::NakChecksumError,
-            // A value the spec's ranges forbid (an index, an address past 0x40): §7.1's 0x94,
-            // "given index is outside of defined / allowed range".
+            // A value the spec's ranges forbid (an index, an address past 0x40, or a number an
+            // MSB-first device reads the other way round): §7.1's 0x94, "given index is outside
+            // of defined / allowed range".
             Err(DecodeError::InvalidValue { .. } | DecodeError::OutOfRange { .. }) => {
                 Response::NakIndexOutOfRange
             }
-            Err(_) if !Ub2::checksum_ok(frame) => Response::NakChecksumError,
+            Err(_) if !Ub2::checksum_ok(&seen) => Response::NakChecksumError,
             Err(_) => Response::NakUnknownCommand,
         };
-        reply::<Ub2>(&response, me)
+        let mut out = reply::<Ub2>(&response, me)?;
+        if self.msb_first {
+            swap_numbers(&response, me, &mut out);
+        }
+        Some(out)
     }
 }
