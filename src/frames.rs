@@ -156,6 +156,43 @@ impl Engine {
             .unwrap_or_else(|| Err(not_built_in(&self.spec.name)))
     }
 
+    /// Decodes one frame as [`Self::decode`] does; a frame that strict decoding refuses only
+    /// for rules of the spec (ranges, address, broadcast) decodes with those rules lifted and
+    /// prints with its `"violations"` ([`busspec_json::lenient_line`]). Lifting the rules is
+    /// the interpreter's (`busspec_model::stream::decode_lenient`), for built-in protocols too:
+    /// the generated code has no lenient entry point, so that a device build cannot accept
+    /// such a frame by mistake, and the interpreter decodes every spec the generated code does.
+    /// Any other failure is strict decoding's error.
+    pub fn decode_lenient(
+        &self,
+        direction: Option<Direction>,
+        reply_to: Option<usize>,
+        wire: &[u8],
+    ) -> Result<String, String> {
+        let strict = match self.decode(direction, reply_to, wire) {
+            Ok(line) => return Ok(line),
+            Err(e) => e,
+        };
+        let relaxed = busspec_model::stream::relaxed(&self.spec);
+        let lenient = |reply_to| {
+            busspec_model::stream::decode_lenient(&self.spec, &relaxed, direction, reply_to, wire)
+        };
+        // As `decode` settles a frame only its request tells apart: without the request first.
+        let found = match lenient(None) {
+            Err(busspec_model::interp::DecodeError::Ambiguous { .. }) if reply_to.is_some() => {
+                lenient(reply_to)
+            }
+            other => other,
+        };
+        match found {
+            Ok((frame, violations)) if !violations.is_empty() => {
+                let reasons: Vec<String> = violations.iter().map(|v| v.to_string()).collect();
+                Ok(busspec_json::lenient_line(&self.spec, &frame, &reasons))
+            }
+            _ => Err(strict),
+        }
+    }
+
     /// Encodes one JSON line to wire bytes.
     pub fn encode(&self, line: &str) -> Result<Vec<u8>, String> {
         if self.generated {

@@ -202,6 +202,19 @@ fn typed<P: Protocol>(spec: &Spec, o: &TalkOptions) -> Result<P::Request, String
     }
 }
 
+/// [`typed`], encoded once to `talk`'s address before any port is opened: a value outside its
+/// range, an address no frame may carry or a broadcast the command does not accept is the
+/// encoder's error (`EncodeError`, naming the field and the allowed range), and nothing is
+/// written.
+fn checked<P: Protocol>(spec: &Spec, o: &TalkOptions) -> Result<P::Request, String> {
+    let request = typed::<P>(spec, o)?;
+    let mut buf = P::EMPTY_BUFFER;
+    request
+        .encode(o.address, buf.as_mut())
+        .map_err(|e| format!("{}: {e}", o.command))?;
+    Ok(request)
+}
+
 fn print(line: &str) -> Result<(), String> {
     let mut out = std::io::stdout().lock();
     writeln!(out, "{line}").map_err(|e| format!("error: cannot write output: {e}"))
@@ -227,8 +240,8 @@ fn one<P: Link, T: Transport, C: Clock>(
 }
 
 fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
-    let mut m = open::<Ub2>(o)?;
     if o.command == "c-curve" {
+        let mut m = open::<Ub2>(o)?;
         let mut line = ProgressLine::new();
         let table = m
             .read_c_curve(o.address, &mut |p| line.show("entries", p))
@@ -247,7 +260,8 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         }
         return Ok(());
     }
-    let request = typed::<Ub2>(spec, o)?;
+    let request = checked::<Ub2>(spec, o)?;
+    let mut m = open::<Ub2>(o)?;
     check_byte_order(&mut m, o.address, &request)?;
     if o.wait && busspec_link::master::ub2_completion_check(&request).is_some() {
         let mut line = ProgressLine::new();
@@ -327,12 +341,12 @@ fn write_svg(
 }
 
 fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
-    let mut m = open::<Sd>(o)?;
     // A string readout without a byte number reads the whole string.
     let readout = SdString::ALL
         .into_iter()
         .find(|s| s.request(0).name() == o.command);
     if let (Some(which), true) = (readout, o.args.is_empty()) {
+        let mut m = open::<Sd>(o)?;
         let mut line = ProgressLine::new();
         let text = m
             .read_string(o.address, which, &mut |p| line.show("characters", p))
@@ -345,7 +359,8 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         });
         return print(&line.to_string());
     }
-    let request = typed::<Sd>(spec, o)?;
+    let request = checked::<Sd>(spec, o)?;
+    let mut m = open::<Sd>(o)?;
     check_byte_order(&mut m, o.address, &request)?;
     if let (true, sd::Request::SetPoint { position, .. }) =
         (o.wait && Some(o.address) != sd::BROADCAST_ADDRESS, request)
@@ -698,5 +713,82 @@ mod tests {
         assert_eq!(parse_address("0x21"), Ok(0x21));
         assert_eq!(parse_address("33"), Ok(33));
         assert!(parse_address("0x121").is_err());
+    }
+
+    /// What `busspec talk` does with a request the spec forbids: the encoder's error, before
+    /// the port is opened (the port here does not exist, so any attempt to open it, let alone
+    /// write, would say so instead).
+    #[test]
+    fn talk_refuses_what_the_spec_forbids_before_opening_the_port() {
+        let port = "/nonexistent/busspec-talk-test";
+        let cases: [(&str, u8, &str, &[&str], &str); 5] = [
+            (
+                "sd",
+                0x01,
+                "read_electronic_serial_number",
+                &["byte_number=37"],
+                "read_electronic_serial_number: byte_number = 37 is outside its range 0..=31",
+            ),
+            (
+                "sd",
+                0x1F,
+                "read_temperatures",
+                &[],
+                "read_temperatures: read_temperatures does not accept the broadcast address 0x1F",
+            ),
+            (
+                "sd",
+                0x20,
+                "set_point",
+                &["position=45"],
+                "set_point: address 0x20 is outside the device range 0x01..=0x1E and is not the broadcast or host address",
+            ),
+            (
+                "ub2",
+                0x41,
+                "get_actual_capacitance",
+                &[],
+                "get_actual_capacitance: address 0x41 is outside the device range 0x21..=0x40 and is not the broadcast or host address",
+            ),
+            (
+                "ub2",
+                0x21,
+                "go_to_stored_position",
+                &["index=12"],
+                "go_to_stored_position: index = 12 is outside its range 0..=9",
+            ),
+        ];
+        for (protocol, address, command, args, want) in cases {
+            let args: Vec<String> = args.iter().map(|a| (*a).to_owned()).collect();
+            let o = TalkOptions {
+                port,
+                baud: None,
+                address,
+                command,
+                args: &args,
+                wait: true,
+                svg: None,
+                timeout: None,
+            };
+            assert_eq!(
+                talk(&spec(protocol), &o).unwrap_err(),
+                want,
+                "{protocol} {command}"
+            );
+        }
+        // A request the spec allows gets as far as the port.
+        let args = vec!["byte_number=3".to_owned()];
+        let o = TalkOptions {
+            port,
+            baud: None,
+            address: 0x01,
+            command: "read_electronic_serial_number",
+            args: &args,
+            wait: true,
+            svg: None,
+            timeout: None,
+        };
+        let err = talk(&spec("sd"), &o).unwrap_err();
+        assert!(err.contains(port), "{err}");
     }
 }

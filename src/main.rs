@@ -37,15 +37,29 @@ unit-less numbers as raw numbers; text as a string, one character per byte.
 Without --direction the direction follows from code and length. Responses that only their
 request can tell apart (SD 0x22..0x28, 0x38) need --reply-to <command>.
 
+Decoding is strict: a frame whose values lie outside the ranges the spec gives, whose address
+is outside the device range (and is neither the broadcast nor the host address), or that sends
+a command to the broadcast address when the command does not accept it, is refused with the
+reason, as any bad frame. With --lenient such a frame prints instead, its values decoded with
+those rules lifted (by the interpreter, for built-in protocols too), followed by
+\"violations\": every rule it breaks, as strict decoding words it:
+
+  {\"protocol\":\"sd\",\"direction\":\"request\",\"address\":32,...,\"violations\":[\"address 0x20 at
+   offset 1 is outside the device range 0x01..=0x1E and is not the broadcast or host address\"]}
+
 Exit status: 0 when every frame decoded. Otherwise the frames that decoded still print, each
-failure prints one line on stderr, `frame N (TEXT): reason`, and the exit status is 1. Wrong
-arguments: 2.
+failure prints one line on stderr, `frame N (TEXT): reason`, and the exit status is 1. TEXT is
+the argument, or for a frame longer than 32 bytes its first 32 bytes and the total length
+(`AA...AA… (50000 bytes)`). Wrong arguments: 2.
 
 --stream FILE (- for stdin) reads raw bytes of a bus capture instead, both directions mixed,
 and prints one line per frame with \"offset\" (the byte offset of its first byte) as the first
 key; bytes that start no frame print as {\"offset\":N,\"skipped\":K,\"bytes\":\"A5FF\"}, and a frame
 only its request could identify, with no request before it, as
-{\"offset\":N,\"ambiguous\":[names],\"bytes\":\"...\"}. After noise the decoder drops one byte and
+{\"offset\":N,\"ambiguous\":[names],\"bytes\":\"...\"}. A frame that checksums but breaks a rule of the
+spec (range, address, broadcast) prints as {\"offset\":N,\"out_of_spec\":\"reason\", then the keys of
+a frame with its values decoded with the rules lifted (when they decode so), \"bytes\":\"...\"};
+its bytes are consumed, never skipped. After noise the decoder drops one byte and
 tries again; where messages share a code the longest complete frame that checksums wins; a
 response is paired with the request just before it (--reply-to gives the request to assume when
 there is none). Exit status 0 unless the capture cannot be read.";
@@ -58,17 +72,19 @@ Each input line is the object `busspec decode` prints (\"offset\" from --stream 
 the message name; \"code\" and \"protocol\", when present, must match. \"fields\" holds every field
 the message has, in the same form decode prints; constants and repeated fields may be left out.
 Physical values convert back exactly: a value that is not a whole number of the unit's steps
-is an error naming the field, the value and the step. A value must fit its field's width; the
-spec's `range`s are not enforced (a device may send such a frame, a test may provoke a NAK with
-one). The address must be a device address (or the broadcast address, on a request).
+is an error naming the field, the value and the step. A value must fit its field's width and
+lie in the `range` the spec gives it (or be one of its special values); the address must be a
+device address, the broadcast address or the host address, and the broadcast address only for
+a command that accepts it. A line that breaks one of these prints the reason, naming the
+field and the allowed range, and no frame.
 
 Output: each frame as uppercase hex digits in wire order, no spaces and no 0x prefix
 (AA2141013E1F00006A), so `busspec decode P X | busspec encode P` prints X back for any frame X
 written that way (from a device address).
 
 Empty lines are skipped. A line that cannot be encoded (bad JSON, unknown message or field,
-missing field, value out of range) prints `line N: reason` on stderr and the next line is
-read; the exit status is then 1.";
+missing field, value out of range, address or broadcast refused) prints `line N: reason` on
+stderr, nothing on stdout, and the next line is read; the exit status is then 1.";
 
 #[derive(Parser)]
 #[command(
@@ -294,6 +310,10 @@ struct DecodeArgs {
     /// Read a raw bus capture (binary) from FILE, `-` for stdin, instead of hex arguments.
     #[arg(long, value_name = "FILE")]
     stream: Option<PathBuf>,
+    /// Print a frame that breaks only the spec's ranges, address or broadcast rules, with its
+    /// "violations", instead of refusing it (a stream always reports such frames).
+    #[arg(long)]
+    lenient: bool,
 }
 
 #[derive(Args)]
@@ -545,14 +565,21 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
     }
     let mut failed = 0;
     for (i, text) in args.frames.iter().enumerate() {
-        let result = busspec_json::parse_hex(text)
-            .and_then(|wire| engine.decode(direction, reply_to, &wire));
+        let wire = busspec_json::parse_hex(text);
+        let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
+            if args.lenient {
+                engine.decode_lenient(direction, reply_to, wire)
+            } else {
+                engine.decode(direction, reply_to, wire)
+            }
+        });
         match result {
             Ok(line) => emit(&mut out, &line)?,
             Err(reason) => {
                 failed += 1;
                 let _ = out.flush();
-                eprintln!("frame {} ({text}): {reason}", i + 1);
+                let shown = quoted(text, wire.as_deref().ok());
+                eprintln!("frame {} ({shown}): {reason}", i + 1);
             }
         }
     }
@@ -560,6 +587,32 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
         Ok(())
     } else {
         Err(String::new())
+    }
+}
+
+/// The most bytes of a frame an error line quotes.
+const QUOTED_BYTES: usize = 32;
+
+/// A frame's argument as an error line quotes it: as given, or, for a frame longer than
+/// [`QUOTED_BYTES`], its first bytes in hex and the total length; text that is not hex and
+/// runs longer than twice that many characters, likewise by characters.
+fn quoted(text: &str, wire: Option<&[u8]>) -> String {
+    match wire {
+        Some(wire) if wire.len() > QUOTED_BYTES => format!(
+            "{}… ({} bytes)",
+            frames::hex(&wire[..QUOTED_BYTES]),
+            wire.len()
+        ),
+        Some(_) => text.to_owned(),
+        None => {
+            let n = text.chars().count();
+            if n > 4 * QUOTED_BYTES {
+                let head: String = text.chars().take(2 * QUOTED_BYTES).collect();
+                format!("{head}… ({n} characters)")
+            } else {
+                text.to_owned()
+            }
+        }
     }
 }
 

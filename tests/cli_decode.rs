@@ -176,6 +176,193 @@ fn encode_reports_each_bad_line_and_goes_on() {
     );
 }
 
+/// The frames of issue 12, as public code for these servos sends them: each breaks only a rule
+/// of the spec (an address, a range, a broadcast refusal). Strict decoding refuses each with
+/// the reason and exit 1; `--lenient` prints each with its violations and exits 0.
+const OUT_OF_SPEC: [(&str, &str, &str); 4] = [
+    (
+        "sd",
+        "76 20 00 00 BA B0",
+        "address 0x20 at offset 1 is outside the device range 0x01..=0x1E and is not the broadcast or host address",
+    ),
+    (
+        "sd",
+        "10 01 4B 4B FB 8A",
+        "string_length at offset 3 is 75, outside its range 0..=32",
+    ),
+    (
+        "sd",
+        "A01F00008198",
+        "read_temperatures (code 0xA0) does not accept the broadcast address 0x1F",
+    ),
+    (
+        "ub2",
+        "AA41 4001 2C",
+        "address 0x41 at offset 1 is outside the device range 0x21..=0x40 and is not the broadcast or host address",
+    ),
+];
+
+#[test]
+fn out_of_spec_frames_fail_strictly_with_the_reason() {
+    for (protocol, frame, reason) in OUT_OF_SPEC {
+        let out = busspec(&["decode", protocol, frame]);
+        assert_eq!(out.status.code(), Some(1), "{frame}");
+        assert!(out.stdout.is_empty(), "{frame}: {}", text(&out.stdout));
+        assert_eq!(
+            text(&out.stderr),
+            format!("frame 1 ({frame}): {reason}\n"),
+            "{frame}"
+        );
+    }
+}
+
+#[test]
+fn lenient_decode_prints_out_of_spec_frames_with_their_violations() {
+    let out = busspec(&["decode", "sd", "--lenient", "76 20 00 00 BA B0"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout),
+        "{\"protocol\":\"sd\",\"direction\":\"request\",\"address\":32,\"code\":\"0x76\",\"message\":\"set_point\",\"fields\":{\"freshness\":0,\"position\":0},\"violations\":[\"address 0x20 at offset 1 is outside the device range 0x01..=0x1E and is not the broadcast or host address\"]}\n"
+    );
+    assert!(out.stderr.is_empty());
+    for (protocol, frame, _) in OUT_OF_SPEC {
+        for spec in [None, Some(format!("spec/{protocol}.yaml"))] {
+            let mut args = vec!["decode", protocol, "--lenient", frame];
+            if let Some(s) = &spec {
+                args.extend(["--spec", s]);
+            }
+            let out = busspec(&args);
+            assert_eq!(
+                out.status.code(),
+                Some(0),
+                "{args:?}: {}",
+                text(&out.stderr)
+            );
+            let line: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+            let violations = line["violations"].as_array().expect("violations");
+            assert_eq!(violations.len(), 1, "{args:?}: {line}");
+        }
+    }
+    // A frame that decodes prints as ever, without violations; one that does not checksum is
+    // refused as ever, --lenient or not.
+    let out = busspec(&["decode", "ub2", "--lenient", "AA21 4101 3E1F 0000 6A"]);
+    assert_eq!(text(&out.stdout), format!("{ACTUAL_79_98}\n"));
+    let out = busspec(&["decode", "ub2", "--lenient", "AA41 4001 2D"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stderr),
+        "frame 1 (AA41 4001 2D): checksum mismatch at offset 4: expected 0x2C, found 0x2D\n"
+    );
+}
+
+#[test]
+fn a_stream_reports_out_of_spec_frames_where_they_are() {
+    let bytes: Vec<u8> = [
+        &[0x00u8][..],
+        &[0x76, 0x20, 0x00, 0x00, 0xBA, 0xB0],
+        &[0x76, 0x05, 0x32, 0x00, 0x14, 0x74],
+    ]
+    .concat();
+    for spec in [None, Some("spec/sd.yaml")] {
+        let mut args = vec!["decode", "sd", "--stream", "-"];
+        if let Some(s) = spec {
+            args.extend(["--spec", s]);
+        }
+        let out = run_in(root(), &args, &bytes);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        let stdout = text(&out.stdout);
+        let lines: Vec<&str> = stdout.lines().collect();
+        assert_eq!(lines.len(), 3, "{stdout}");
+        assert_eq!(lines[0], r#"{"offset":0,"skipped":1,"bytes":"00"}"#);
+        assert_eq!(
+            lines[1],
+            r#"{"offset":1,"out_of_spec":"address 0x20 at offset 1 is outside the device range 0x01..=0x1E and is not the broadcast or host address","protocol":"sd","direction":"request","address":32,"code":"0x76","message":"set_point","fields":{"freshness":0,"position":0},"bytes":"76200000BAB0"}"#
+        );
+        assert!(
+            lines[2].starts_with(r#"{"offset":7,"protocol":"sd""#),
+            "{}",
+            lines[2]
+        );
+    }
+}
+
+#[test]
+fn an_error_quotes_a_long_frame_in_proportion() {
+    let frame = "AA".repeat(50_000);
+    let out = busspec(&["decode", "ub2", &frame, "AA21 4101 3E1F 0000 6A"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(text(&out.stdout), format!("{ACTUAL_79_98}\n"));
+    let stderr = text(&out.stderr);
+    assert_eq!(
+        stderr,
+        format!(
+            "frame 1 ({}… (50000 bytes)): frame too long: 50000 bytes, the longest frame has 9\n",
+            "AA".repeat(32)
+        )
+    );
+    assert!(stderr.len() < 200, "{} bytes of stderr", stderr.len());
+    // Text that is not hex, likewise by characters.
+    let junk = "zz".repeat(1000);
+    let out = busspec(&["decode", "ub2", &junk]);
+    assert_eq!(
+        text(&out.stderr),
+        format!(
+            "frame 1 ({}… (2000 characters)): `z` at character 1 is not a hex digit\n",
+            "z".repeat(64)
+        )
+    );
+    // A frame of 32 bytes or fewer is quoted as given.
+    let frame = "AA ".repeat(32);
+    let out = busspec(&["decode", "ub2", frame.trim_end()]);
+    assert!(
+        text(&out.stderr).starts_with(&format!("frame 1 ({}): ", frame.trim_end())),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+#[test]
+fn encode_refuses_what_the_spec_forbids_and_writes_nothing() {
+    for (protocol, line, reason) in [
+        (
+            "sd",
+            r#"{"message":"read_electronic_serial_number","address":1,"fields":{"byte_number":37}}"#,
+            "byte_number = 37 is outside its range 0..=31",
+        ),
+        (
+            "sd",
+            r#"{"message":"read_temperatures","address":31}"#,
+            "read_temperatures does not accept the broadcast address 0x1F",
+        ),
+        (
+            "sd",
+            r#"{"message":"set_point","address":32,"fields":{"freshness":0,"position":0}}"#,
+            "address 0x20 is outside the device range 0x01..=0x1E and is not the broadcast or host address",
+        ),
+        (
+            "ub2",
+            r#"{"message":"get_actual_capacitance","address":65}"#,
+            "address 0x41 is outside the device range 0x21..=0x40 and is not the broadcast or host address",
+        ),
+        (
+            "ub2",
+            r#"{"message":"go_to_stored_position","address":33,"fields":{"index":12}}"#,
+            "index = 12 is outside its range 0..=9",
+        ),
+    ] {
+        for spec in [None, Some(format!("spec/{protocol}.yaml"))] {
+            let mut args = vec!["encode", protocol];
+            if let Some(s) = &spec {
+                args.extend(["--spec", s]);
+            }
+            let out = busspec_stdin(&args, line);
+            assert_eq!(out.status.code(), Some(1), "{args:?} {line}");
+            assert!(out.stdout.is_empty(), "{line}: {}", text(&out.stdout));
+            assert_eq!(text(&out.stderr), format!("line 1: {reason}\n"), "{args:?}");
+        }
+    }
+}
+
 /// A capture of example frames (those that decode without their request) with noise between
 /// some of them, and the JSON lines expected from `--stream`: each frame's `decode` line with
 /// its offset first.

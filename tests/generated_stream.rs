@@ -5,10 +5,11 @@
 
 mod common;
 
-use busspec_fuzz_bodies::events::{covers, interp_events, Seen};
+use busspec_fuzz_bodies::events::{covers, interp_events, Seen, Why};
 use busspec_fuzz_bodies::{seen, stream_events};
-use busspec_model::interp;
+use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{Direction, Protocol as Spec};
+use busspec_model::stream::{breaks_spec, relaxed};
 use busspec_protocols::sd::Sd;
 use busspec_protocols::ub2::Ub2;
 use busspec_protocols::Protocol;
@@ -71,6 +72,250 @@ fn ub2_generated_stream_matches_the_interpreter() {
 #[test]
 fn sd_generated_stream_matches_the_interpreter() {
     stream_agrees::<Sd>(8);
+}
+
+/// Frames that checksum but break a rule of the spec, each with the reason strict decoding
+/// gives: every example re-encoded (with the spec's rules lifted) to each address no frame may
+/// carry below and above the device range, every request that refuses broadcast sent to the
+/// broadcast address, and every ranged field of every example just outside its range. Only
+/// those strict decoding (both directions) refuses for such a rule are kept.
+fn out_of_spec_frames(p: &Spec) -> Vec<(Vec<u8>, interp::DecodeError)> {
+    let lifted = relaxed(p);
+    let a = &p.framing.address;
+    let bad: Vec<u8> = [
+        (0..a.min).rev().find(|&x| !interp::address_allowed(p, x)),
+        (a.max..=u8::MAX).find(|&x| !interp::address_allowed(p, x)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let mut out = Vec::new();
+    for e in &p.examples {
+        let Ok(frame) = interp::decode_as(p, e.message, &e.wire) else {
+            continue;
+        };
+        let m = p.message(e.message);
+        let mut variants: Vec<(u8, Vec<Value>)> = Vec::new();
+        for &x in &bad {
+            variants.push((x, frame.values.clone()));
+        }
+        if let Some(b) = a.broadcast.filter(|&b| interp::broadcast_refused(p, m, b)) {
+            variants.push((b, frame.values.clone()));
+        }
+        for (i, v) in frame.values.iter().enumerate() {
+            let Some((f, bits)) = interp::leaf_field(m, &v.name) else {
+                continue;
+            };
+            let Some((min, max)) = bits.map_or(f.range, |b| b.range) else {
+                continue;
+            };
+            for y in [min - 1, max + 1] {
+                if interp::range_violation(f, bits, y).is_some() {
+                    let mut values = frame.values.clone();
+                    values[i].raw = Raw::Int(y);
+                    variants.push((frame.address, values));
+                }
+            }
+        }
+        for (address, values) in variants {
+            let Ok(wire) = interp::encode(&lifted, e.message, address, &values) else {
+                continue;
+            };
+            if let Err(why) = interp::decode(p, None, None, &wire) {
+                if breaks_spec(&why) {
+                    out.push((wire, why));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A frame that checksums but breaks a range, address or broadcast rule is reported where it
+/// is, with its reason, by both decoders alike: never skipped as noise, never a frame; and the
+/// frame after it is found whole (resynchronisation does not step into it).
+fn out_of_spec_frames_are_reported<P: Protocol>(at_least: usize) {
+    let p = spec::<P>();
+    let frames = out_of_spec_frames(&p);
+    assert!(
+        frames.len() >= at_least,
+        "{}: only {} out-of-spec frames",
+        P::NAME,
+        frames.len()
+    );
+    let good: Vec<&Vec<u8>> = p
+        .examples
+        .iter()
+        .filter(|e| interp::decode_as(&p, e.message, &e.wire).is_ok())
+        .map(|e| &e.wire)
+        .collect();
+    let mut cap = Vec::new();
+    let mut bad_at = Vec::new();
+    let mut good_at = Vec::new();
+    for (i, (wire, why)) in frames.iter().enumerate() {
+        bad_at.push((cap.len() as u64, wire.len() as u64, Why::of_interp(why)));
+        cap.extend_from_slice(wire);
+        let g = good[i % good.len()];
+        good_at.push((cap.len() as u64, g.len() as u64));
+        cap.extend_from_slice(g);
+    }
+    let got = seen::<P>(&stream_events::<P>(None, &cap, &[]));
+    assert_eq!(
+        got,
+        interp_events(&p, None, &cap, &[]),
+        "capture {}",
+        interp::format_hex(&cap)
+    );
+    covers(&got, cap.len() as u64);
+    for (offset, len, reason) in bad_at {
+        let want = Seen::OutOfSpec {
+            offset,
+            len,
+            reason,
+        };
+        assert!(got.contains(&want), "{}: {want:?} not in {got:?}", P::NAME);
+    }
+    for (offset, len) in good_at {
+        assert!(
+            got.iter().any(|e| e.span() == (offset, len)
+                && matches!(e, Seen::Frame { .. } | Seen::Ambiguous { .. })),
+            "{}: the frame at {offset} after an out-of-spec one is lost: {got:?}",
+            P::NAME
+        );
+    }
+}
+
+#[test]
+fn ub2_out_of_spec_frames_are_reported() {
+    out_of_spec_frames_are_reported::<Ub2>(100);
+}
+
+#[test]
+fn sd_out_of_spec_frames_are_reported() {
+    out_of_spec_frames_are_reported::<Sd>(100);
+}
+
+/// The frames of the issue, sniffed: SD set point to 0x20 (outside 0x01..0x1E), a temperature
+/// reply of another Volz dialect read as an SD serial-number character with string length 75,
+/// read_temperatures to the broadcast ID, and UB2's address 0x41 (erratum ub2-e02).
+#[test]
+fn the_issues_frames_are_out_of_spec_in_a_stream() {
+    use busspec_protocols::stream::Event;
+    use busspec_protocols::DecodeError;
+    let cap = interp::parse_hex("76 20 00 00 BA B0 10 01 4B 4B FB 8A A0 1F 00 00 81 98").unwrap();
+    let got = stream_events::<Sd>(None, &cap, &[]);
+    assert!(
+        matches!(
+            got[..],
+            [
+                Event::OutOfSpec {
+                    offset: 0,
+                    len: 6,
+                    reason: DecodeError::BadAddress { found: 0x20, .. },
+                },
+                Event::OutOfSpec {
+                    offset: 6,
+                    len: 6,
+                    reason: DecodeError::OutOfRange {
+                        field: "string_length",
+                        found: 75,
+                        ..
+                    },
+                },
+                Event::OutOfSpec {
+                    offset: 12,
+                    len: 6,
+                    reason: DecodeError::BroadcastNotAccepted { address: 0x1F, .. },
+                },
+            ]
+        ),
+        "{got:?}"
+    );
+    let p = spec::<Sd>();
+    assert_eq!(seen::<Sd>(&got), interp_events(&p, None, &cap, &[]));
+    let cap = interp::parse_hex("AA41 4001 2C AA21 1000 DB").unwrap();
+    let got = stream_events::<Ub2>(None, &cap, &[]);
+    assert!(
+        matches!(
+            got[..],
+            [
+                Event::OutOfSpec {
+                    offset: 0,
+                    len: 5,
+                    reason: DecodeError::BadAddress { found: 0x41, .. },
+                },
+                Event::Request {
+                    offset: 5,
+                    len: 5,
+                    ..
+                },
+            ]
+        ),
+        "{got:?}"
+    );
+}
+
+/// Random frames that checksum (any address, payloads near zero: valid, out of spec, or with
+/// a wrong constant) mixed into captures of examples and noise: both decoders report the same
+/// events, however the capture is cut.
+fn stream_agrees_on_out_of_spec<P: Protocol>(seed: u64) {
+    let p = spec::<P>();
+    let messages = common::all_messages(&p);
+    let mut rng = fastrand::Rng::with_seed(seed);
+    let mut out_of_spec = 0;
+    for _ in 0..200 {
+        let mut cap = capture(&p, &mut rng, 10);
+        for _ in 0..10 {
+            let m = p.message(messages[rng.usize(..messages.len())]);
+            cap.extend_from_slice(&common::random_frame(&p, m, &mut rng));
+            cap.extend_from_slice(&capture(&p, &mut rng, 1));
+        }
+        let cuts = chunks(&mut rng, cap.len());
+        let want = interp_events(&p, None, &cap, &cuts);
+        let got = seen::<P>(&stream_events::<P>(None, &cap, &cuts));
+        assert_eq!(got, want, "capture {}", interp::format_hex(&cap));
+        covers(&got, cap.len() as u64);
+        out_of_spec += got
+            .iter()
+            .filter(|e| matches!(e, Seen::OutOfSpec { .. }))
+            .count();
+    }
+    assert!(out_of_spec > 200, "only {out_of_spec} out-of-spec frames");
+}
+
+#[test]
+fn ub2_streams_agree_on_out_of_spec_frames() {
+    stream_agrees_on_out_of_spec::<Ub2>(17);
+}
+
+#[test]
+fn sd_streams_agree_on_out_of_spec_frames() {
+    stream_agrees_on_out_of_spec::<Sd>(18);
+}
+
+/// Random bytes are noise: a random byte where the address sits does not make an out-of-spec
+/// frame, the checksum must pass too. Counted, and both decoders agree.
+#[test]
+fn noise_is_not_a_stream_of_out_of_spec_frames() {
+    fn count<P: Protocol>(seed: u64) -> (usize, usize) {
+        let p = spec::<P>();
+        let mut rng = fastrand::Rng::with_seed(seed);
+        let noise: Vec<u8> = (0..100_000).map(|_| rng.u8(..)).collect();
+        let got = seen::<P>(&stream_events::<P>(None, &noise, &[]));
+        assert_eq!(got, interp_events(&p, None, &noise, &[]));
+        let n = |f: fn(&Seen) -> bool| got.iter().filter(|e| f(e)).count();
+        (
+            n(|e| matches!(e, Seen::OutOfSpec { .. })),
+            n(|e| matches!(e, Seen::Frame { .. } | Seen::Ambiguous { .. })),
+        )
+    }
+    for (name, (out_of_spec, frames)) in [("ub2", count::<Ub2>(1)), ("sd", count::<Sd>(2))] {
+        eprintln!("{name}: 100000 random bytes: {out_of_spec} out of spec, {frames} frames");
+        assert!(
+            out_of_spec <= 20,
+            "{name}: {out_of_spec} out-of-spec frames in noise"
+        );
+    }
 }
 
 /// A valid frame placed after garbage of any length is found, whole, at its offset.

@@ -374,6 +374,8 @@ pub struct StreamCount {
     pub frames: u64,
     pub ambiguous: u64,
     pub skipped_bytes: u64,
+    /// Frames that checksum but break a rule of the spec.
+    pub out_of_spec: u64,
     /// Bytes accounted for by all events.
     pub bytes: u64,
 }
@@ -390,6 +392,7 @@ pub fn stream_generated<P: busspec_protocols::Protocol>(capture: &[u8]) -> Strea
         match ev {
             Event::Request { .. } | Event::Response { .. } => n.frames += 1,
             Event::Ambiguous { .. } => n.ambiguous += 1,
+            Event::OutOfSpec { .. } => n.out_of_spec += 1,
             Event::Skipped { len, .. } => n.skipped_bytes += len,
         }
     };
@@ -414,6 +417,7 @@ pub fn stream_interp(p: &Protocol, capture: &[u8]) -> StreamCount {
         match ev {
             Event::Frame { .. } => n.frames += 1,
             Event::Ambiguous { .. } => n.ambiguous += 1,
+            Event::OutOfSpec { .. } => n.out_of_spec += 1,
             Event::Skipped { bytes, .. } => n.skipped_bytes += bytes.len() as u64,
         }
     }

@@ -1666,8 +1666,9 @@ fn emit_candidate(
 }
 
 /// The stream decoder's view of the protocol: every distinct frame length (longest first) and a
-/// `candidates` function that narrows them by start byte, address and code, as a trie of matches
-/// on the code bytes.
+/// `candidates` function that narrows them by start byte and code, as a trie of matches on the
+/// code bytes. Not by address: a frame from an address the spec does not allow is still a frame,
+/// which the stream decoder reports as out of spec (strict decoding says why).
 fn emit_stream(p: &Protocol) -> TokenStream {
     let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
         .iter()
@@ -1687,16 +1688,8 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             shapes.push((&m.code, 1u128 << (i + shift)));
         }
     }
-    let all_requests = shapes
-        .iter()
-        .filter(|s| s.1 as u64 != 0)
-        .fold(0u128, |a, s| a | s.1);
     let first = p.framing.head(1);
     let code_at = first.code;
-    let addr_at = {
-        let l = p.framing.request.code_lengths.first().copied().unwrap_or(1);
-        p.framing.head(l).address
-    };
     let start_check = match (first.start, p.framing.start) {
         (Some(at), Some(s)) => quote! {
             if head.get(#at).is_some_and(|&b| b != #s) {
@@ -1705,14 +1698,8 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         },
         _ => quote!(),
     };
-    let (lo, hi) = (p.framing.address.min, p.framing.address.max);
-    let broadcast = match p.framing.address.broadcast {
-        Some(b) => quote!(a == #b),
-        None => quote!(false),
-    };
     let trie = code_trie(&shapes, code_at, 0);
     let lens = lengths.iter().map(|l| quote!(#l));
-    let all_requests = mask_lit(all_requests);
     let ty = type_ident(&p.name);
     let naks: Vec<TokenStream> = p
         .responses
@@ -1802,12 +1789,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             }
             fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
                 #start_check
-                let mut mask: u128 = #trie;
-                if let ::core::option::Option::Some(&a) = head.get(#addr_at) {
-                    if !(#lo..=#hi).contains(&a) {
-                        mask &= if #broadcast { #all_requests } else { 0 };
-                    }
-                }
+                let mask: u128 = #trie;
                 ::busspec_runtime::stream::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }
         }

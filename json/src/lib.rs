@@ -41,7 +41,9 @@ pub use busspec_model::ir::Protocol as Spec;
 pub use busspec_runtime::FieldValue;
 pub use decode::{decode_frame, decode_typed, request_for};
 pub use parse::{parse_line, Parsed};
-pub use print::{ambiguous_line, frame_line, message_line, skipped_line};
+pub use print::{
+    ambiguous_line, frame_line, lenient_line, message_line, out_of_spec_line, skipped_line,
+};
 pub use stream::{event_line, TypedStream};
 
 /// Uppercase hex, no separators: what `encode` prints and `decode` reads back.

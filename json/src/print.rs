@@ -142,6 +142,24 @@ fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, J
     (name.to_owned(), json)
 }
 
+/// A frame's keys, in the contract's order, after `"offset"` (if any).
+fn frame_keys(
+    p: &Spec,
+    r: MessageRef,
+    address: u8,
+    fields: Vec<(String, Json)>,
+) -> [(&'static str, Json); 6] {
+    let m = p.message(r);
+    [
+        ("protocol", Json::Str(p.name.clone())),
+        ("direction", Json::Str(r.direction.as_str().to_owned())),
+        ("address", num(address)),
+        ("code", Json::Str(m.code_hex())),
+        ("message", Json::Str(m.name.clone())),
+        ("fields", Json::Fields(fields)),
+    ]
+}
+
 fn line(
     p: &Spec,
     r: MessageRef,
@@ -149,26 +167,18 @@ fn line(
     fields: Vec<(String, Json)>,
     offset: Option<u64>,
 ) -> String {
-    let m = p.message(r);
     let mut obj = Vec::new();
     if let Some(o) = offset {
         obj.push(("offset", num(o)));
     }
-    obj.extend([
-        ("protocol", Json::Str(p.name.clone())),
-        ("direction", Json::Str(r.direction.as_str().to_owned())),
-        ("address", num(address)),
-        ("code", Json::Str(m.code_hex())),
-        ("message", Json::Str(m.name.clone())),
-        ("fields", Json::Fields(fields)),
-    ]);
+    obj.extend(frame_keys(p, r, address, fields));
     Json::Obj(obj).text()
 }
 
-/// The JSON line of a frame the interpreter decoded; `offset` (stream mode) goes first.
-pub fn frame_line(p: &Spec, frame: &Frame, offset: Option<u64>) -> String {
+/// The printed fields of a frame the interpreter decoded.
+fn frame_fields(p: &Spec, frame: &Frame) -> Vec<(String, Json)> {
     let m = p.message(frame.message);
-    let fields = frame
+    frame
         .values
         .iter()
         .map(|v| {
@@ -178,8 +188,59 @@ pub fn frame_line(p: &Spec, frame: &Frame, offset: Option<u64>) -> String {
             };
             field(p, m, &v.name, raw)
         })
-        .collect();
-    line(p, frame.message, frame.address, fields, offset)
+        .collect()
+}
+
+/// The JSON line of a frame the interpreter decoded; `offset` (stream mode) goes first.
+pub fn frame_line(p: &Spec, frame: &Frame, offset: Option<u64>) -> String {
+    line(
+        p,
+        frame.message,
+        frame.address,
+        frame_fields(p, frame),
+        offset,
+    )
+}
+
+/// The line `decode --lenient` prints for a frame strict decoding refuses only for rules of
+/// the spec (a value out of its range, an address outside the allowed ones, a broadcast the
+/// command does not accept): the frame's line, values as they decode with those rules lifted,
+/// then `"violations"`, each broken rule as strict decoding words it, in the order it checks
+/// them (`busspec_model::stream::decode_lenient`).
+pub fn lenient_line<S: AsRef<str>>(p: &Spec, frame: &Frame, violations: &[S]) -> String {
+    let mut obj: Vec<(&'static str, Json)> =
+        frame_keys(p, frame.message, frame.address, frame_fields(p, frame)).into();
+    obj.push((
+        "violations",
+        Json::List(
+            violations
+                .iter()
+                .map(|v| Json::Str(v.as_ref().to_owned()))
+                .collect(),
+        ),
+    ));
+    Json::Obj(obj).text()
+}
+
+/// The stream line of an out-of-spec frame at `offset` (the stream decoders'
+/// `Event::OutOfSpec`): `{"offset":N,"out_of_spec":"<reason>", the frame's keys as a frame's
+/// line has them when its values decode with the spec's rules lifted, "bytes":"<hex>"}`.
+pub fn out_of_spec_line(
+    p: &Spec,
+    offset: u64,
+    reason: &str,
+    frame: Option<&Frame>,
+    bytes: &[u8],
+) -> String {
+    let mut obj = vec![
+        ("offset", num(offset)),
+        ("out_of_spec", Json::Str(reason.to_owned())),
+    ];
+    if let Some(f) = frame {
+        obj.extend(frame_keys(p, f.message, f.address, frame_fields(p, f)));
+    }
+    obj.push(("bytes", Json::Str(hex(bytes))));
+    Json::Obj(obj).text()
 }
 
 /// The JSON line of a typed message of a generated protocol (a `Request` or `Response`, as

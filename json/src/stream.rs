@@ -1,12 +1,12 @@
 //! Raw bus captures: each event of a stream decoder as a JSON line.
 
 use busspec_model::ir::Direction;
-use busspec_model::stream::Event as InterpEvent;
+use busspec_model::stream::{decode_lenient, relaxed, Event as InterpEvent};
 use busspec_runtime::stream::{Direction as StreamDirection, Event, StreamDecoder};
 use busspec_runtime::Protocol;
 
 use crate::decode::{candidates, request_for};
-use crate::print::{ambiguous_line, frame_line, skipped_line};
+use crate::print::{ambiguous_line, frame_line, out_of_spec_line, skipped_line};
 use crate::{Spec, Typed};
 
 /// The JSON line of an event of the interpreter's stream decoder (`busspec_model::stream`).
@@ -19,6 +19,12 @@ pub fn event_line(p: &Spec, e: &InterpEvent) -> String {
             bytes,
             candidates,
         } => ambiguous_line(*offset, candidates, bytes),
+        InterpEvent::OutOfSpec {
+            offset,
+            bytes,
+            reason,
+            frame,
+        } => out_of_spec_line(p, *offset, &reason.to_string(), frame.as_ref(), bytes),
     }
 }
 
@@ -31,6 +37,9 @@ pub struct TypedStream<'s, P: Protocol> {
     /// Bytes pushed and not yet reported; `pending[0]` is at stream offset `base`.
     pending: Vec<u8>,
     base: u64,
+    direction: Option<Direction>,
+    /// `spec` with its rules lifted, made at the first out-of-spec frame.
+    relaxed: Option<Spec>,
 }
 
 impl<'s, P: Protocol> TypedStream<'s, P> {
@@ -38,6 +47,7 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
     /// apart, with no request before it, as the reply to command `reply_to` (an index into the
     /// spec's commands). `spec` is the spec `P` was generated from ([`crate::load_spec`]).
     pub fn new(spec: &'s Spec, direction: Option<Direction>, reply_to: Option<usize>) -> Self {
+        let along = direction;
         let direction = direction.map(|d| match d {
             Direction::Request => StreamDirection::Request,
             Direction::Response => StreamDirection::Response,
@@ -48,6 +58,8 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             decoder: StreamDecoder::new(direction).with_default_request(default),
             pending: Vec::new(),
             base: 0,
+            direction: along,
+            relaxed: None,
         }
     }
 
@@ -93,6 +105,20 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
                 &bytes,
             )),
             Event::Skipped { offset, .. } => Ok(skipped_line(offset, &bytes)),
+            // The values of a frame the generated code refuses come from the interpreter,
+            // with the spec's rules lifted; the reason, worded as the interpreter's stream
+            // words it, from the same decoding where there is one.
+            Event::OutOfSpec { offset, reason, .. } => {
+                let spec = self.spec;
+                let relaxed = self.relaxed.get_or_insert_with(|| relaxed(spec));
+                let lenient = decode_lenient(spec, relaxed, self.direction, None, &bytes).ok();
+                let why = lenient
+                    .as_ref()
+                    .and_then(|(_, v)| v.first())
+                    .map_or_else(|| reason.to_string(), |v| v.to_string());
+                let frame = lenient.as_ref().map(|(f, _)| f);
+                Ok(out_of_spec_line(spec, offset, &why, frame, &bytes))
+            }
         };
         // Only a protocol generated from another spec than `spec` gets here.
         printed.unwrap_or_else(|why| {

@@ -14,10 +14,10 @@
 //! there:
 //!
 //! 1. A message is a *candidate* while every byte already buffered agrees with it: the start byte
-//!    (protocols that have one), its code, and a plausible address — one in the device range, or
-//!    the broadcast address for a request. (Strict decoding, [`crate::interp::address_allowed`],
-//!    also takes the host address and a response from the broadcast address; the stream keeps
-//!    the narrower rule, so such a frame is never recognised in a stream.)
+//!    (protocols that have one) and its code. Not the address: strict decoding judges it
+//!    ([`crate::interp::address_allowed`]), so the stream accepts exactly the addresses
+//!    [`crate::interp::decode`] accepts, and reports a frame from any other as out of spec
+//!    (rule 4) instead of losing it in the noise.
 //!    Every message of the decoded directions is considered, whatever its direction: UB2 setter
 //!    requests and their echo ACKs share a code and differ only in length; SD codes are disjoint
 //!    per direction.
@@ -31,7 +31,13 @@
 //!    constants, repeated fields, ranges, address and broadcast rules) is the frame, and that many bytes are consumed. A frame that
 //!    checksums but fits several messages that only its request can tell apart (SD 0x22..0x28,
 //!    0x38) is paired with the request (see below) or else reported as [`Event::Ambiguous`],
-//!    still consuming its bytes. If no length works, the head byte is noise (rule 2).
+//!    still consuming its bytes. If no length decodes, the longest whose bytes checksum and
+//!    fail *only* a rule of the spec — strict decoding refuses them with
+//!    [`DecodeError::OutOfRange`], [`DecodeError::BadAddress`] or
+//!    [`DecodeError::BroadcastNotAccepted`] ([`breaks_spec`]) — is an [`Event::OutOfSpec`]: the
+//!    reason, the values as they decode with those rules lifted ([`decode_lenient`]), and its
+//!    bytes consumed, so the decoder never resynchronises inside it. If none, the head byte is
+//!    noise (rule 2).
 //!
 //! Why longest first: when a short and a long message share a code (a UB2 setter request
 //! `AA 21 43 00 a s cs` and its ACK `AA 21 43 00 cs`), preferring the short one would misread
@@ -50,10 +56,9 @@
 //! - A frame whose checksum passes by chance inside noise is reported as a frame: an 8-bit sum
 //!   makes this likelier than a 16-bit CRC does; the start byte, code and address checks
 //!   narrow it.
-//! - Frames from an address outside the spec's device range are never recognised in a stream,
-//!   and neither is a frame that checksums but breaks a range or the broadcast rule: each is
-//!   skipped as noise, byte by byte (decode such a frame on its own with
-//!   [`crate::interp::decode`] to see why it is refused).
+//! - An out-of-spec frame is never reported as a frame: only as [`Event::OutOfSpec`]. Noise whose
+//!   start byte and code fit and whose checksum passes by chance can be reported as out of spec
+//!   (a random address byte must still checksum), as it could be reported as a frame before.
 //! - Decisions depend only on the bytes, never on how they were cut into chunks: the same capture
 //!   gives the same events however it is pushed, as long as `flush` is called only at its end.
 //!
@@ -63,9 +68,10 @@
 //! seen since the previous response (a sniffer sees the request just before its reply). A
 //! response ends the pairing, since a request gets one reply; failing a current request, the
 //! default request given to [`StreamDecoder::with_default_request`] is used (for a capture of
-//! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`].
+//! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`]. An
+//! out-of-spec frame ends the pairing, as an ambiguous one does.
 
-use crate::interp::{self, DecodeError, Frame};
+use crate::interp::{self, DecodeError, Frame, Raw};
 use crate::ir::{Direction, FrameLayout, Message, MessageRef, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
@@ -89,6 +95,17 @@ pub enum Event {
     },
     /// Bytes that start no frame.
     Skipped { offset: u64, bytes: Vec<u8> },
+    /// A frame whose start byte, code, length and checksum fit, but that breaks a rule of the
+    /// spec: `reason` is the strict decoder's error ([`breaks_spec`]; the request's where the
+    /// frame could be either); `frame` its values with the spec's rules lifted, where they
+    /// decode so ([`decode_lenient`]; not when the frame is ambiguous without them). Its bytes
+    /// are consumed.
+    OutOfSpec {
+        offset: u64,
+        bytes: Vec<u8>,
+        reason: DecodeError,
+        frame: Option<Frame>,
+    },
 }
 
 impl Event {
@@ -97,6 +114,7 @@ impl Event {
         match self {
             Event::Frame { offset, .. }
             | Event::Ambiguous { offset, .. }
+            | Event::OutOfSpec { offset, .. }
             | Event::Skipped { offset, .. } => *offset,
         }
     }
@@ -106,6 +124,7 @@ impl Event {
         match self {
             Event::Frame { bytes, .. }
             | Event::Ambiguous { bytes, .. }
+            | Event::OutOfSpec { bytes, .. }
             | Event::Skipped { bytes, .. } => bytes,
         }
     }
@@ -114,7 +133,6 @@ impl Event {
 /// One message as the framing rule sees it.
 #[derive(Debug, Clone)]
 struct Shape {
-    direction: Direction,
     code: Vec<u8>,
     len: usize,
     at: FrameLayout,
@@ -142,6 +160,8 @@ pub struct StreamDecoder<'p> {
     /// Command index of the last request seen since the previous response.
     last_request: Option<usize>,
     default_request: Option<usize>,
+    /// The spec with its rules lifted ([`relaxed`]), made at the first out-of-spec frame.
+    relaxed: Option<Box<Protocol>>,
 }
 
 impl<'p> StreamDecoder<'p> {
@@ -168,6 +188,7 @@ impl<'p> StreamDecoder<'p> {
             noise_at: 0,
             last_request: None,
             default_request: None,
+            relaxed: None,
         }
     }
 
@@ -236,13 +257,37 @@ impl<'p> StreamDecoder<'p> {
             .collect();
         lens.sort_unstable_by(|a, b| b.cmp(a));
         lens.dedup();
+        let mut out_of_spec: Option<(usize, DecodeError)> = None;
         for len in lens {
-            if let Some(event) = self.try_frame(len) {
-                self.report_noise(out);
-                self.consume(len);
-                out.push(event);
-                return Step::Progress;
+            match self.try_frame(len) {
+                Ok(event) => {
+                    self.report_noise(out);
+                    self.consume(len);
+                    out.push(event);
+                    return Step::Progress;
+                }
+                Err(Some(reason)) if out_of_spec.is_none() => out_of_spec = Some((len, reason)),
+                Err(_) => {}
             }
+        }
+        if let Some((len, reason)) = out_of_spec {
+            let bytes = self.buf.get(..len).unwrap_or_default().to_vec();
+            let relaxed = self
+                .relaxed
+                .get_or_insert_with(|| Box::new(relaxed(self.p)));
+            let frame = decode_lenient(self.p, relaxed, self.direction, None, &bytes)
+                .ok()
+                .map(|(frame, _)| frame);
+            self.last_request = None;
+            self.report_noise(out);
+            out.push(Event::OutOfSpec {
+                offset: self.head,
+                bytes,
+                reason,
+                frame,
+            });
+            self.consume(len);
+            return Step::Progress;
         }
         self.drop_byte(out);
         Step::Progress
@@ -261,15 +306,16 @@ impl<'p> StreamDecoder<'p> {
                 return false;
             }
         }
-        match buf.get(s.at.address) {
-            Some(&a) => plausible_address(self.p, s.direction, a),
-            None => true,
-        }
+        true
     }
 
-    /// The event for the first `len` buffered bytes, if they are a frame.
-    fn try_frame(&mut self, len: usize) -> Option<Event> {
-        let bytes = self.buf.get(..len)?.to_vec();
+    /// The event for the first `len` buffered bytes if they are a frame; otherwise `Err` with
+    /// the reason if they break only a rule of the spec ([`breaks_spec`]), `Err(None)` if
+    /// they are no frame at all.
+    fn try_frame(&mut self, len: usize) -> Result<Event, Option<DecodeError>> {
+        let Some(bytes) = self.buf.get(..len).map(<[u8]>::to_vec) else {
+            return Err(None);
+        };
         let offset = self.head;
         let found = match interp::decode(self.p, self.direction, None, &bytes) {
             Ok(frame) => Ok(frame),
@@ -280,18 +326,12 @@ impl<'p> StreamDecoder<'p> {
                     _ => Err(candidates),
                 }
             }
-            Err(_) => return None,
+            Err(e) => return Err(Some(e).filter(breaks_spec)),
         };
         match found {
             Ok(frame) => {
-                let m = self.p.message(frame.message);
-                let at = m.layout;
-                let address = bytes.get(at.address).copied().unwrap_or(0);
-                if !plausible_address(self.p, frame.message.direction, address) {
-                    return None;
-                }
                 self.pair(frame.message);
-                Some(Event::Frame {
+                Ok(Event::Frame {
                     offset,
                     bytes,
                     frame,
@@ -299,7 +339,7 @@ impl<'p> StreamDecoder<'p> {
             }
             Err(candidates) => {
                 self.last_request = None;
-                Some(Event::Ambiguous {
+                Ok(Event::Ambiguous {
                     offset,
                     bytes,
                     candidates,
@@ -347,18 +387,109 @@ impl<'p> StreamDecoder<'p> {
 
 fn shape(p: &Protocol, m: &Message) -> Shape {
     Shape {
-        direction: m.direction,
         code: m.code.clone(),
         len: p.frame_len(m),
         at: m.layout,
     }
 }
 
-/// An address a frame of this direction can carry: a device's, or the broadcast address on a
-/// request.
-fn plausible_address(p: &Protocol, d: Direction, address: u8) -> bool {
+/// Whether `e` says a frame breaks a rule of the spec rather than its framing: a value outside
+/// its range, an address outside the allowed ones, a broadcast the command does not accept.
+/// The same errors as the runtime's `stream::breaks_spec`.
+pub fn breaks_spec(e: &DecodeError) -> bool {
+    matches!(
+        e,
+        DecodeError::OutOfRange { .. }
+            | DecodeError::BadAddress { .. }
+            | DecodeError::BroadcastNotAccepted { .. }
+    )
+}
+
+/// `p` with the rules strict decoding enforces beyond the framing lifted: no field or
+/// sub-field has a `range`, every address is a device address, and there is no broadcast
+/// address (so no command refuses it). For [`decode_lenient`]; make it once per spec.
+pub fn relaxed(p: &Protocol) -> Protocol {
+    let mut r = p.clone();
+    for m in r.commands.iter_mut().chain(r.responses.iter_mut()) {
+        for f in &mut m.fields {
+            f.range = None;
+            for b in &mut f.bits {
+                b.range = None;
+            }
+        }
+    }
+    let a = &mut r.framing.address;
+    a.min = u8::MIN;
+    a.max = u8::MAX;
+    a.broadcast = None;
+    a.host = None;
+    r
+}
+
+/// Decodes a frame as [`interp::decode`] does with the spec's ranges, address limits and
+/// broadcast rules lifted (`relaxed` is [`relaxed`]`(p)`), and lists every rule of `p` the
+/// frame breaks, in the order strict decoding checks them (address, broadcast, then fields in
+/// frame order): so the first is the error strict decoding gives, and the list is empty for a
+/// frame strict decoding accepts. Framing, codes, lengths, constants and repeated fields are
+/// checked as ever: their errors are returned.
+pub fn decode_lenient(
+    p: &Protocol,
+    relaxed: &Protocol,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    wire: &[u8],
+) -> Result<(Frame, Vec<DecodeError>), DecodeError> {
+    let frame = interp::decode(relaxed, direction, reply_to, wire)?;
+    let violations = violations(p, &frame);
+    Ok((frame, violations))
+}
+
+/// Every rule of `p` that `frame` (decoded with the rules lifted) breaks, as the errors strict
+/// decoding gives, in the order it checks them.
+pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
+    let m = p.message(frame.message);
+    let at = m.layout;
     let a = &p.framing.address;
-    (a.min..=a.max).contains(&address) || (d == Direction::Request && a.broadcast == Some(address))
+    let mut out = Vec::new();
+    if !interp::address_allowed(p, frame.address) {
+        out.push(DecodeError::BadAddress {
+            offset: at.address,
+            found: frame.address,
+            min: a.min,
+            max: a.max,
+        });
+    }
+    if interp::broadcast_refused(p, m, frame.address) {
+        out.push(DecodeError::BroadcastNotAccepted {
+            message: m.name.clone(),
+            code: m.code.clone(),
+            address: frame.address,
+        });
+    }
+    for f in &m.fields {
+        let offset = at.payload + f.offset;
+        let leaves: Vec<(&str, Option<&crate::ir::BitField>)> = if f.bits.is_empty() {
+            vec![(f.name.as_str(), None)]
+        } else {
+            f.bits.iter().map(|b| (b.name.as_str(), Some(b))).collect()
+        };
+        for (name, bits) in leaves {
+            let Some(Raw::Int(v)) = frame.get(name) else {
+                continue;
+            };
+            if let Some((min, max)) = interp::range_violation(f, bits, *v) {
+                out.push(DecodeError::OutOfRange {
+                    message: m.name.clone(),
+                    field: name.to_owned(),
+                    offset,
+                    found: *v,
+                    min,
+                    max,
+                });
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -415,6 +546,15 @@ mod tests {
                     (*offset, p.message(frame.message).name.clone())
                 }
                 Event::Skipped { offset, bytes } => (*offset, format!("skip {}", bytes.len())),
+                Event::OutOfSpec { offset, frame, .. } => (
+                    *offset,
+                    format!(
+                        "out of spec {}",
+                        frame
+                            .as_ref()
+                            .map_or("?", |f| p.message(f.message).name.as_str())
+                    ),
+                ),
                 Event::Ambiguous {
                     offset, candidates, ..
                 } => (*offset, format!("ambiguous {}", candidates.join("|"))),
@@ -556,6 +696,100 @@ mod tests {
             let total: usize = events.iter().map(|e| e.bytes().len()).sum();
             assert_eq!(total, junk.len());
         }
+    }
+
+    #[test]
+    fn out_of_spec_frames_are_reported_with_reason_and_values() {
+        let p = sd();
+        // Set point to 0x20 (outside 0x01..=0x1E), then a valid set point, then a serial-number
+        // character with string length 75 (0x00..=0x20), cut into two chunks mid-frame.
+        let bytes =
+            interp::parse_hex("76 20 00 00 BA B0 76 05 32 00 14 74 10 01 4B 4B FB 8A").unwrap();
+        let events = run(&p, &[&bytes[..8], &bytes[8..]]);
+        assert_eq!(
+            summary(&p, &events),
+            vec![
+                (0, "out of spec set_point".to_owned()),
+                (6, "set_point".to_owned()),
+                (
+                    12,
+                    "out of spec electronic_serial_number_character".to_owned()
+                ),
+            ]
+        );
+        let Event::OutOfSpec { reason, frame, .. } = &events[0] else {
+            panic!("{events:?}");
+        };
+        assert!(matches!(
+            reason,
+            DecodeError::BadAddress { found: 0x20, .. }
+        ));
+        assert_eq!(frame.as_ref().map(|f| f.address), Some(0x20));
+        let Event::OutOfSpec { reason, frame, .. } = &events[2] else {
+            panic!("{events:?}");
+        };
+        assert!(
+            matches!(reason, DecodeError::OutOfRange { field, found: 75, min: 0, max: 32, .. } if field == "string_length"),
+            "{reason}"
+        );
+        assert_eq!(
+            frame.as_ref().and_then(|f| f.get("string_length")),
+            Some(&Raw::Int(75))
+        );
+    }
+
+    #[test]
+    fn lenient_decoding_lists_every_broken_rule_in_strict_order() {
+        let p = sd();
+        let lifted = relaxed(&p);
+        let read = p
+            .commands
+            .iter()
+            .position(|c| c.name == "read_electronic_serial_number")
+            .unwrap();
+        let r = MessageRef {
+            direction: Direction::Request,
+            index: read,
+        };
+        let values = [interp::Value {
+            name: "byte_number".to_owned(),
+            raw: Raw::Int(37),
+        }];
+        // Strict encoding refuses both the address and the value; lifted, it writes the frame.
+        assert!(interp::encode(&p, r, 0x20, &values).is_err());
+        let wire = interp::encode(&lifted, r, 0x20, &values).unwrap();
+        let strict = interp::decode(&p, None, None, &wire).unwrap_err();
+        let (frame, violations) = decode_lenient(&p, &lifted, None, None, &wire).unwrap();
+        assert_eq!(frame.message, r);
+        assert_eq!(violations.first(), Some(&strict));
+        assert!(matches!(
+            violations[..],
+            [
+                DecodeError::BadAddress { found: 0x20, .. },
+                DecodeError::OutOfRange { found: 37, .. }
+            ]
+        ));
+        // A frame strict decoding accepts breaks nothing; one that does not checksum is refused.
+        let good = interp::encode(
+            &p,
+            r,
+            0x05,
+            &[interp::Value {
+                name: "byte_number".to_owned(),
+                raw: Raw::Int(3),
+            }],
+        )
+        .unwrap();
+        assert_eq!(
+            decode_lenient(&p, &lifted, None, None, &good).unwrap().1,
+            vec![]
+        );
+        let mut bad = wire.clone();
+        bad[5] ^= 1;
+        assert!(matches!(
+            decode_lenient(&p, &lifted, None, None, &bad),
+            Err(DecodeError::ChecksumMismatch { .. })
+        ));
     }
 
     #[test]

@@ -121,9 +121,10 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     /// weakest acceptance test (a frame shorter than a checksum fails it).
     fn checksum_ok(frame: &[u8]) -> bool;
 
-    /// The messages whose start byte, code and address agree with `head`, the bytes buffered
-    /// from a possible frame start (possibly fewer than a whole frame): the stream decoder's
-    /// framing rule.
+    /// The messages whose start byte and code agree with `head`, the bytes buffered from a
+    /// possible frame start (possibly fewer than a whole frame): the stream decoder's framing
+    /// rule. The address is not looked at: strict decoding judges it, and a frame from an
+    /// address the spec does not allow is reported as out of spec, not skipped.
     fn candidates(head: &[u8]) -> Candidates;
 }
 

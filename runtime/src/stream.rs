@@ -11,17 +11,23 @@
 //! # The framing rule
 //!
 //! The decoder looks at the earliest byte not yet accounted for and asks which messages could
-//! start there (their *candidates*): those whose start byte, code and address agree with every
-//! byte buffered so far (an address in the device range, or the broadcast address for a
-//! request). No candidate: the byte is noise; it is dropped and the next one tried, and
-//! consecutive dropped bytes are reported as one [`Event::Skipped`] (split every
-//! [`MAX_SKIPPED_RUN`] bytes). While a candidate is longer than what is buffered, the decoder
-//! waits. Then every complete candidate length is tried, **longest first**; the first that
-//! checksums and decodes (strictly: ranges, address and broadcast rules included) is the frame;
-//! a frame that checksums but breaks one of those rules is, for now, skipped as noise. This is
-//! the rule of busspec's interpreter stream decoder
-//! (`busspec_model::stream`), whose module documentation gives the reasons and the limits; the
-//! two are tested against each other.
+//! start there (their *candidates*, [`Protocol::candidates`]): those whose start byte and code
+//! agree with every byte buffered so far. The address is not part of it: a frame from an
+//! address the spec does not allow is still a frame on the wire, and a sniffer must see it.
+//! No candidate: the byte is noise; it is dropped and the next one tried, and consecutive
+//! dropped bytes are reported as one [`Event::Skipped`] (split every [`MAX_SKIPPED_RUN`]
+//! bytes). While a candidate is longer than what is buffered, the decoder waits. Then every
+//! complete candidate length is tried, **longest first**; the first that checksums and decodes
+//! strictly (ranges, address and broadcast rules included) is the frame. If none does, the
+//! longest that checksums and fails *only* a rule of the spec (its error is one that
+//! [`breaks_spec`] names: a value out of its range, an address outside the allowed ones, a
+//! broadcast the command does not accept) is an [`Event::OutOfSpec`]: reported at its offset
+//! with the reason, its bytes consumed, so resynchronisation never steps into it. A frame that
+//! checksums is never noise, and never a valid frame unless it is one. Noise whose checksum
+//! passes by chance with a start byte and code that fit can be reported as out of spec,
+//! exactly as it could before be reported as a frame. This is the rule of busspec's
+//! interpreter stream decoder (`busspec_model::stream`), whose module documentation gives the
+//! reasons and the limits; the two are tested against each other.
 //!
 //! A response only its request can identify (SD 0x22..0x28, 0x38) is decoded as the answer to
 //! the last request seen since the previous response, or else to the default request
@@ -72,6 +78,28 @@ pub enum Event<Q, R> {
     Ambiguous { offset: u64, len: usize, code: u32 },
     /// `len` bytes at `offset` that start no frame.
     Skipped { offset: u64, len: u64 },
+    /// A frame of `len` bytes at `offset` whose start byte, code, length and checksum fit, but
+    /// that breaks a rule of the spec: `reason` is the strict decoder's error, one that
+    /// [`breaks_spec`] names (the request's where the frame could be either). Its bytes are
+    /// consumed; it ends request pairing as an ambiguous frame does.
+    OutOfSpec {
+        offset: u64,
+        len: usize,
+        reason: DecodeError,
+    },
+}
+
+/// Whether `e` says a frame breaks a rule of the spec rather than its framing: a value outside
+/// its range, an address outside the allowed ones, a broadcast the command does not accept.
+/// A frame whose strict decoding fails with such an error (and whose checksum passed) is an
+/// [`Event::OutOfSpec`] in a stream.
+pub fn breaks_spec(e: &DecodeError) -> bool {
+    matches!(
+        e,
+        DecodeError::OutOfRange { .. }
+            | DecodeError::BadAddress { .. }
+            | DecodeError::BroadcastNotAccepted { .. }
+    )
 }
 
 impl<Q, R> Event<Q, R> {
@@ -81,6 +109,7 @@ impl<Q, R> Event<Q, R> {
             Event::Request { offset, .. }
             | Event::Response { offset, .. }
             | Event::Ambiguous { offset, .. }
+            | Event::OutOfSpec { offset, .. }
             | Event::Skipped { offset, .. } => offset,
         }
     }
@@ -90,7 +119,8 @@ impl<Q, R> Event<Q, R> {
         match *self {
             Event::Request { len, .. }
             | Event::Response { len, .. }
-            | Event::Ambiguous { len, .. } => len as u64,
+            | Event::Ambiguous { len, .. }
+            | Event::OutOfSpec { len, .. } => len as u64,
             Event::Skipped { len, .. } => len,
         }
     }
@@ -263,6 +293,9 @@ impl<C: Protocol> Core<C> {
                 return None;
             }
             let mut rest = live & !longer;
+            // The longest length that checksums and breaks only a rule of the spec, and why:
+            // reported if no length is a frame.
+            let mut out_of_spec: Option<(usize, DecodeError)> = None;
             while rest != 0 {
                 let i = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
@@ -273,14 +306,22 @@ impl<C: Protocol> Core<C> {
                     break;
                 };
                 let bit = 1u64 << i;
-                if let Some(ev) = self.try_frame(frame, requests & bit != 0, responses & bit != 0) {
-                    self.head += len as u64;
-                    if self.noise_len > 0 {
-                        self.pending = Some(ev);
-                        return Some((len, self.take_noise()));
+                match self.try_frame(frame, requests & bit != 0, responses & bit != 0) {
+                    Ok(ev) => return Some(self.settle(len, ev)),
+                    Err(Some(reason)) if out_of_spec.is_none() => {
+                        out_of_spec = Some((len, reason));
                     }
-                    return Some((len, Some(ev)));
+                    Err(_) => {}
                 }
+            }
+            if let Some((len, reason)) = out_of_spec {
+                self.last_request = None;
+                let ev = Event::OutOfSpec {
+                    offset: self.head,
+                    len,
+                    reason,
+                };
+                return Some(self.settle(len, ev));
             }
         }
         // The head byte starts no frame.
@@ -295,17 +336,37 @@ impl<C: Protocol> Core<C> {
         Some((1, None))
     }
 
-    /// The event for `frame` (the bytes at `head`), if it is a frame.
+    /// Reports `ev`, a frame of `len` bytes at `head`, after any noise before it.
+    fn settle(&mut self, len: usize, ev: Event<C::Request, C::Response>) -> Settled<C> {
+        self.head += len as u64;
+        if self.noise_len > 0 {
+            self.pending = Some(ev);
+            return (len, self.take_noise());
+        }
+        (len, Some(ev))
+    }
+
+    /// The event for `frame` (the bytes at `head`) if it is a frame; otherwise `Err` with the
+    /// reason if it breaks only a rule of the spec ([`breaks_spec`]: the request's error where
+    /// both directions are candidates, as the interpreter tries requests first), `Err(None)`
+    /// if it is no frame at all.
     fn try_frame(
         &mut self,
         frame: &[u8],
         request: bool,
         response: bool,
-    ) -> Option<Event<C::Request, C::Response>> {
+    ) -> Result<Event<C::Request, C::Response>, Option<DecodeError>> {
         let offset = self.head;
         let len = frame.len();
+        let mut why: Option<DecodeError> = None;
         let as_request = if request {
-            C::decode_request(frame).ok()
+            match C::decode_request(frame) {
+                Ok(d) => Some(d),
+                Err(e) => {
+                    why = Some(e);
+                    None
+                }
+            }
         } else {
             None
         };
@@ -319,7 +380,10 @@ impl<C: Protocol> Core<C> {
                         _ => Some(Err(code)),
                     }
                 }
-                Err(_) => None,
+                Err(e) => {
+                    why.get_or_insert(e);
+                    None
+                }
             }
         } else {
             None
@@ -344,9 +408,9 @@ impl<C: Protocol> Core<C> {
                     .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
                 Event::Ambiguous { offset, len, code }
             }
-            (None, None) => return None,
+            (None, None) => return Err(why.filter(breaks_spec)),
         };
-        Some(ev)
+        Ok(ev)
     }
 
     fn take_noise(&mut self) -> Option<Event<C::Request, C::Response>> {

@@ -1477,7 +1477,7 @@ pub mod mini {
                     responses: 0,
                 };
             }
-            let mut mask: u128 = match head.get(2usize) {
+            let mask: u128 = match head.get(2usize) {
                 ::core::option::Option::None => 0x190000000000000006,
                 ::core::option::Option::Some(&b) => {
                     match b {
@@ -1520,11 +1520,6 @@ pub mod mini {
                     }
                 }
             };
-            if let ::core::option::Option::Some(&a) = head.get(1usize) {
-                if !(33u8..=64u8).contains(&a) {
-                    mask &= if false { 0x6 } else { 0 };
-                }
-            }
             ::busspec_runtime::stream::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,

@@ -1151,7 +1151,7 @@ pub mod mini_crc {
             }
         }
         fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
-            let mut mask: u128 = match head.get(0usize) {
+            let mask: u128 = match head.get(0usize) {
                 ::core::option::Option::None => 0x10000000000000001,
                 ::core::option::Option::Some(&b) => {
                     match b {
@@ -1162,11 +1162,6 @@ pub mod mini_crc {
                     }
                 }
             };
-            if let ::core::option::Option::Some(&a) = head.get(1usize) {
-                if !(1u8..=30u8).contains(&a) {
-                    mask &= if a == 31u8 { 0x1 } else { 0 };
-                }
-            }
             ::busspec_runtime::stream::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,

@@ -227,7 +227,9 @@ fn exercise<P: Protocol>(requests: &[P::Request], responses: &[P::Response]) -> 
                 match event {
                     Event::Request { .. } | Event::Response { .. } => found += 1,
                     Event::Skipped { len, .. } => skipped += len,
-                    Event::Ambiguous { .. } => panic!("{}: ambiguous: {event:?}", P::NAME),
+                    Event::Ambiguous { .. } | Event::OutOfSpec { .. } => {
+                        panic!("{}: not a frame: {event:?}", P::NAME)
+                    }
                 }
             }
         }

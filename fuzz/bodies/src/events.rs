@@ -1,9 +1,10 @@
 //! Stream events reduced to what both stream decoders (generated and interpreter) report, so
 //! the two can be compared; and the checks every event list must pass.
 
-use busspec_model::interp;
+use busspec_model::interp::{self, DecodeError as InterpError};
 use busspec_model::ir::{Direction, Protocol};
 use busspec_model::stream::{Event as InterpEvent, StreamDecoder as InterpDecoder};
+use busspec_protocols::DecodeError;
 
 use crate::oracle::{interp_values, Values};
 
@@ -25,6 +26,106 @@ pub enum Seen {
         offset: u64,
         len: u64,
     },
+    OutOfSpec {
+        offset: u64,
+        len: u64,
+        reason: Why,
+    },
+}
+
+/// Why a frame is out of spec, reduced to what both decoders' errors say: which rule, where,
+/// and the value that breaks it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Why {
+    OutOfRange {
+        field: String,
+        offset: usize,
+        found: i64,
+        min: i64,
+        max: i64,
+    },
+    BadAddress {
+        offset: usize,
+        found: u8,
+        min: u8,
+        max: u8,
+    },
+    BroadcastNotAccepted {
+        address: u8,
+    },
+    /// Any other error: no stream decoder reports one as out of spec.
+    Other(String),
+}
+
+impl Why {
+    /// The generated decoder's reason.
+    pub fn of(e: &DecodeError) -> Why {
+        match *e {
+            DecodeError::OutOfRange {
+                field,
+                offset,
+                found,
+                min,
+                max,
+            } => Why::OutOfRange {
+                field: field.to_owned(),
+                offset,
+                found,
+                min,
+                max,
+            },
+            DecodeError::BadAddress {
+                offset,
+                found,
+                min,
+                max,
+            } => Why::BadAddress {
+                offset,
+                found,
+                min,
+                max,
+            },
+            DecodeError::BroadcastNotAccepted { address, .. } => {
+                Why::BroadcastNotAccepted { address }
+            }
+            ref e => Why::Other(e.to_string()),
+        }
+    }
+
+    /// The interpreter's reason.
+    pub fn of_interp(e: &InterpError) -> Why {
+        match e {
+            InterpError::OutOfRange {
+                field,
+                offset,
+                found,
+                min,
+                max,
+                ..
+            } => Why::OutOfRange {
+                field: field.clone(),
+                offset: *offset,
+                found: *found,
+                min: *min,
+                max: *max,
+            },
+            InterpError::BadAddress {
+                offset,
+                found,
+                min,
+                max,
+            } => Why::BadAddress {
+                offset: *offset,
+                found: *found,
+                min: *min,
+                max: *max,
+            },
+            InterpError::BroadcastNotAccepted { address, .. } => {
+                Why::BroadcastNotAccepted { address: *address }
+            }
+            e => Why::Other(e.to_string()),
+        }
+    }
 }
 
 impl Seen {
@@ -33,6 +134,7 @@ impl Seen {
         match self {
             Seen::Frame { offset, len, .. }
             | Seen::Ambiguous { offset, len }
+            | Seen::OutOfSpec { offset, len, .. }
             | Seen::Skipped { offset, len } => (*offset, *len),
         }
     }
@@ -109,6 +211,16 @@ pub fn interp_events(
         InterpEvent::Skipped { offset, bytes } => Seen::Skipped {
             offset,
             len: bytes.len() as u64,
+        },
+        InterpEvent::OutOfSpec {
+            offset,
+            bytes,
+            reason,
+            ..
+        } => Seen::OutOfSpec {
+            offset,
+            len: bytes.len() as u64,
+            reason: Why::of_interp(&reason),
         },
     }))
 }

@@ -43,7 +43,7 @@ use arbitrary::{Arbitrary, Unstructured};
 use busspec_model::interp;
 use busspec_model::ir::Direction;
 use busspec_protocols::stream::{
-    Direction as StreamDirection, Event, StreamDecoder, MAX_SKIPPED_RUN,
+    breaks_spec, Direction as StreamDirection, Event, StreamDecoder, MAX_SKIPPED_RUN,
 };
 use busspec_protocols::{DecodeError, Decoded, EncodeError, Message, Protocol, ProtocolVisitor};
 
@@ -812,6 +812,15 @@ pub fn seen<P: Protocol>(events: &[Event<P::Request, P::Response>]) -> Vec<Seen>
             len: len as u64,
         },
         Event::Skipped { offset, len } => Seen::Skipped { offset, len },
+        Event::OutOfSpec {
+            offset,
+            len,
+            reason,
+        } => Seen::OutOfSpec {
+            offset,
+            len: len as u64,
+            reason: events::Why::of(&reason),
+        },
     }))
 }
 
@@ -853,6 +862,21 @@ fn check_events<P: Protocol>(
             }
             Event::Skipped { len, .. } => {
                 assert!(len > 0 && len <= MAX_SKIPPED_RUN, "skipped {len}")
+            }
+            Event::OutOfSpec { reason, .. } => {
+                // It checksums, and strict decoding refuses it for a rule of the spec: that
+                // reason, in a direction the decoder decodes.
+                assert!(P::checksum_ok(bytes), "out of spec {}", events::hex(bytes));
+                assert!(breaks_spec(&reason), "out of spec for {reason}");
+                let as_request = direction != Some(StreamDirection::Response)
+                    && P::decode_request(bytes) == Err(reason);
+                let as_response = direction != Some(StreamDirection::Request)
+                    && P::decode_response(bytes) == Err(reason);
+                assert!(
+                    as_request || as_response,
+                    "out of spec for {reason}: {}",
+                    events::hex(bytes)
+                );
             }
         }
     }
