@@ -281,9 +281,9 @@ pub fn decode_response(
     Ok(Decoded { address, message })
 }
 
-/// Refuses an ID that is neither a device's nor the broadcast ID.
+/// Refuses an ID that is neither a device's nor the broadcast ID (once, before the match).
 #[inline]
-fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, EncodeError> {
+fn check_address(address: u8) -> Result<(), EncodeError> {
     if !(FIRST_ID..=BROADCAST).contains(&address) {
         return Err(EncodeError::BadAddress {
             address,
@@ -291,6 +291,13 @@ fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, E
             max: LAST_ID,
         });
     }
+    Ok(())
+}
+
+/// Writes code, ID and arguments and the CRC; called once, after the encoders' match, so the
+/// CRC is inlined once.
+#[inline]
+fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, EncodeError> {
     let available = buf.len();
     let out: &mut [u8; LEN] =
         buf.get_mut(..LEN)
@@ -305,20 +312,23 @@ fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, E
     Ok(LEN)
 }
 
-/// [`put`] for a command that does not accept the broadcast ID.
+/// Refuses the broadcast ID for a command that does not accept it.
 #[inline]
-fn put_unicast(
-    message: &'static str,
-    code: u8,
-    address: u8,
-    a1: u8,
-    a2: u8,
-    buf: &mut [u8],
-) -> Result<usize, EncodeError> {
+fn unicast_to(message: &'static str, address: u8) -> Result<(), EncodeError> {
     if address == BROADCAST {
         return Err(EncodeError::BroadcastNotAccepted { message, address });
     }
-    put(code, address, a1, a2, buf)
+    Ok(())
+}
+
+/// `?` for the subset encoders, which return `Option<Result<..>>`.
+macro_rules! tri {
+    ($e:expr) => {
+        match $e {
+            Ok(v) => v,
+            Err(e) => return Some(Err(e)),
+        }
+    };
 }
 
 /// Refuses `value` outside `min..=max`.
@@ -352,36 +362,52 @@ pub fn encode_request(
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
-    Some(match *m {
+    tri!(check_address(address));
+    let (code, a1, a2) = match *m {
         Request::SetPoint {
             freshness,
             position,
-        } => put_position_word(freshness, position)
-            .and_then(|[a1, a2]| put(0x76, address, a1, a2, buf)),
-        Request::ReadActualPosition => put(0x69, address, 0, 0, buf),
+        } => {
+            let [a1, a2] = tri!(put_position_word(freshness, position));
+            (0x76, a1, a2)
+        }
+        Request::ReadActualPosition => (0x69, 0, 0),
         Request::SetVelocity { set_velocity } => {
             let [a1, a2] = set_velocity.0.to_be_bytes();
-            put(0x77, address, a1, a2, buf)
+            (0x77, a1, a2)
         }
-        Request::ReadActualVelocity => put(0x68, address, 0, 0, buf),
-        Request::SetServoId { new_id } => in_range("new_id", new_id, FIRST_ID, LAST_ID)
-            .and_then(|id| put(0xAA, address, id, id, buf)),
-        Request::ReadTemperatures => put_unicast("read_temperatures", 0xA0, address, 0, 0, buf),
-        Request::ReadHumidity => put_unicast("read_humidity", 0xA1, address, 0, 0, buf),
+        Request::ReadActualVelocity => (0x68, 0, 0),
+        Request::SetServoId { new_id } => {
+            let id = tri!(in_range("new_id", new_id, FIRST_ID, LAST_ID));
+            (0xAA, id, id)
+        }
+        Request::ReadTemperatures => {
+            tri!(unicast_to("read_temperatures", address));
+            (0xA0, 0, 0)
+        }
+        Request::ReadHumidity => {
+            tri!(unicast_to("read_humidity", address));
+            (0xA1, 0, 0)
+        }
         Request::ReadActuatorStatusWord => {
-            put_unicast("read_actuator_status_word", 0x40, address, 0xAA, 0x02, buf)
+            tri!(unicast_to("read_actuator_status_word", address));
+            (0x40, 0xAA, 0x02)
         }
         Request::ResetActuatorStatusWord => {
-            put_unicast("reset_actuator_status_word", 0x40, address, 0xAA, 0x52, buf)
+            tri!(unicast_to("reset_actuator_status_word", address));
+            (0x40, 0xAA, 0x52)
         }
         Request::ReadTotalRuntimeHours => {
-            put_unicast("read_total_runtime_hours", 0xA2, address, 0, 0, buf)
+            tri!(unicast_to("read_total_runtime_hours", address));
+            (0xA2, 0, 0)
         }
         Request::ReadTotalRuntimeMinSec => {
-            put_unicast("read_total_runtime_min_sec", 0xA2, address, 0, 1, buf)
+            tri!(unicast_to("read_total_runtime_min_sec", address));
+            (0xA2, 0, 1)
         }
         _ => return None,
-    })
+    };
+    Some(put(code, address, a1, a2, buf))
 }
 
 /// Encodes a response of the subset; `None` for any other message.
@@ -390,46 +416,56 @@ pub fn encode_response(
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
-    Some(match *m {
+    tri!(check_address(address));
+    let (code, a1, a2) = match *m {
         Response::SetPointReply {
             freshness,
             position,
-        } => put_position_word(freshness, position)
-            .and_then(|[a1, a2]| put(0x56, address, a1, a2, buf)),
+        } => {
+            let [a1, a2] = tri!(put_position_word(freshness, position));
+            (0x56, a1, a2)
+        }
         Response::ActualPosition { position } => {
-            put_position_word(0, position).and_then(|[a1, a2]| put(0x49, address, a1, a2, buf))
+            let [a1, a2] = tri!(put_position_word(0, position));
+            (0x49, a1, a2)
         }
         Response::SetVelocityReply { actual_velocity } => {
             let [a1, a2] = actual_velocity.0.to_be_bytes();
-            put(0x57, address, a1, a2, buf)
+            (0x57, a1, a2)
         }
         Response::ActualVelocity { actual_velocity } => {
             let [a1, a2] = actual_velocity.0.to_be_bytes();
-            put(0x48, address, a1, a2, buf)
+            (0x48, a1, a2)
         }
-        Response::SetServoIdReply { new_id } => in_range("new_id", new_id, FIRST_ID, LAST_ID)
-            .and_then(|id| put(0x55, address, id, id, buf)),
+        Response::SetServoIdReply { new_id } => {
+            let id = tri!(in_range("new_id", new_id, FIRST_ID, LAST_ID));
+            (0x55, id, id)
+        }
         Response::Temperatures {
             motor_temperature,
             pcb_temperature,
-        } => put(0x20, address, motor_temperature.0, pcb_temperature.0, buf),
+        } => (0x20, motor_temperature.0, pcb_temperature.0),
         Response::Humidity { humidity } => {
-            in_range("humidity", humidity, 0, 100).and_then(|h| put(0x21, address, h, h, buf))
+            let h = tri!(in_range("humidity", humidity, 0, 100));
+            (0x21, h, h)
         }
         Response::ActuatorStatusWord {
             status_bits,
             status_arg2,
-        } => put(0x41, address, status_bits.0, status_arg2, buf),
+        } => (0x41, status_bits.0, status_arg2),
         Response::TotalRuntimeHours { runtime_hours } => {
             let [a1, a2] = runtime_hours.to_be_bytes();
-            put(0x22, address, a1, a2, buf)
+            (0x22, a1, a2)
         }
         Response::TotalRuntimeMinSec {
             runtime_minutes,
             runtime_seconds,
-        } => in_range("runtime_minutes", runtime_minutes, 0, 59)
-            .and_then(|m| Ok((m, in_range("runtime_seconds", runtime_seconds, 0, 59)?)))
-            .and_then(|(m, s)| put(0x22, address, m, s, buf)),
+        } => {
+            let m = tri!(in_range("runtime_minutes", runtime_minutes, 0, 59));
+            let s = tri!(in_range("runtime_seconds", runtime_seconds, 0, 59));
+            (0x22, m, s)
+        }
         _ => return None,
-    })
+    };
+    Some(put(code, address, a1, a2, buf))
 }

@@ -209,10 +209,9 @@ pub fn decode_response(
     Ok(Decoded { address, message })
 }
 
-/// Writes start, address, code and payload, then the checksum; returns the frame length.
-/// Refuses an address that is neither a device's nor the host's.
+/// Refuses an address that is neither a device's nor the host's (once, before the match).
 #[inline]
-fn put(address: u8, code: &[u8], payload: &[u8], buf: &mut [u8]) -> Result<usize, EncodeError> {
+fn check_address(address: u8) -> Result<(), EncodeError> {
     if !(HOST..=LAST_DEVICE).contains(&address) {
         return Err(EncodeError::BadAddress {
             address,
@@ -220,6 +219,11 @@ fn put(address: u8, code: &[u8], payload: &[u8], buf: &mut [u8]) -> Result<usize
             max: LAST_DEVICE,
         });
     }
+    Ok(())
+}
+
+/// Writes start, address, code and payload, then the checksum; returns the frame length.
+fn put(address: u8, code: &[u8], payload: &[u8], buf: &mut [u8]) -> Result<usize, EncodeError> {
     let len = 3 + code.len() + payload.len();
     let available = buf.len();
     let out = buf.get_mut(..len).ok_or(EncodeError::BufferTooSmall {
@@ -254,6 +258,9 @@ pub fn encode_request(
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
+    if let Err(e) = check_address(address) {
+        return Some(Err(e));
+    }
     Some(match *m {
         Request::ReferenceRun => put(address, &[0x10, 0x00], &[], buf),
         Request::GoToCapacitance { target } => {
@@ -284,6 +291,9 @@ pub fn encode_response(
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
+    if let Err(e) = check_address(address) {
+        return Some(Err(e));
+    }
     Some(match *m {
         Response::MovementStarted => put(address, &[0x50], &[], buf),
         Response::MovementCompleted => put(address, &[0x51], &[], buf),
