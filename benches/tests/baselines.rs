@@ -7,7 +7,7 @@ use busspec_benches::mixed::{capture, Mixed, Proto};
 use busspec_benches::peer;
 use busspec_benches::{
     decode_all, encode_all, jobs, messages, stream_generated, stream_interp, Contender, Deku,
-    Generated, Hand, Interp, Job,
+    Generated, Hand, Interp, Job, Message,
 };
 use busspec_protocols::sd::{self, Sd};
 use busspec_protocols::ub2::{self, Ub2};
@@ -434,4 +434,204 @@ fn jobs_carry_the_request_only_for_replies_that_need_it() {
             Job::Response(_, q) => assert_eq!(q.is_some(), e.reply_to.is_some()),
         }
     }
+}
+
+/// Encodes `g` with the generated code, `h` (the same message) by hand and `d` (the deku
+/// peer's) with deku: all three refuse it or all write the same bytes. Returns whether they
+/// wrote it.
+fn encodes_alike<G, H, D>(
+    (gc, hc, dc): (&G, &H, &D),
+    g: &Message<G::Request, G::Response>,
+    d: &Message<D::Request, D::Response>,
+    what: &str,
+) -> bool
+where
+    G: Contender,
+    H: Contender<Request = G::Request, Response = G::Response>,
+    D: Contender,
+{
+    fn enc<C: Contender>(c: &C, m: &Message<C::Request, C::Response>) -> Option<Vec<u8>> {
+        let mut buf = [0u8; 64];
+        let n = match m {
+            Message::Request(q) => c.encode_request(q, &mut buf),
+            Message::Response(r) => c.encode_response(r, &mut buf),
+        };
+        n.ok().map(|n| buf[..n].to_vec())
+    }
+    let generated = enc(gc, g);
+    assert_eq!(generated, enc(hc, g), "{what}: hand-written");
+    assert_eq!(generated, enc(dc, d), "{what}: deku");
+    generated.is_some()
+}
+
+fn sd_reply_address(r: &mut peer::sd::Reply) -> &mut u8 {
+    use peer::sd::Reply;
+    match r {
+        Reply::Frame(f) => &mut f.address,
+        Reply::TotalRuntimeHours { address, .. } | Reply::TotalRuntimeMinSec { address, .. } => {
+            address
+        }
+    }
+}
+
+#[test]
+fn the_hand_written_and_deku_encoders_refuse_what_the_generated_encoders_refuse() {
+    // Every message of both mixed streams to every address, and the ranged fields of the
+    // subset to values in and out of their ranges.
+    let (mut written, mut refused) = (0, 0);
+    let mut count = |ok: bool| if ok { written += 1 } else { refused += 1 };
+
+    let contenders = (
+        &Generated::<Ub2>::default(),
+        &Hand::<Ub2>::default(),
+        &Deku::<Ub2>::default(),
+    );
+    let mixed = Mixed::new(Proto::Ub2);
+    let gs = messages(contenders.0, &mixed);
+    let ds = messages(contenders.2, &mixed);
+    for (g, d) in gs.iter().zip(&ds) {
+        for a in 0..=255u8 {
+            let (mut g, mut d) = (g.clone(), d.clone());
+            match (&mut g, &mut d) {
+                (Message::Request(g), Message::Request(d)) => (g.address, d.address) = (a, a),
+                (Message::Response(g), Message::Response(d)) => (g.address, d.address) = (a, a),
+                _ => unreachable!(),
+            }
+            count(encodes_alike(
+                contenders,
+                &g,
+                &d,
+                &format!("ub2 {g:?} to {a:#04x}"),
+            ));
+        }
+        for v in [0u16, 1, 498, 499, 500, 501, 0x8000, 0xFFFF] {
+            let (mut g, mut d) = (g.clone(), d.clone());
+            match (&mut g, &mut d) {
+                (
+                    Message::Request(Decoded {
+                        message: ub2::Request::GetCCurveIndexedFullStepCapacitance { index },
+                        ..
+                    }),
+                    Message::Request(peer::ub2::RequestFrame {
+                        message:
+                            peer::ub2::Request::GetCCurveIndexedFullStepCapacitance { index: i },
+                        ..
+                    }),
+                )
+                | (
+                    Message::Response(Decoded {
+                        message: ub2::Response::CCurveEntry { index, .. },
+                        ..
+                    }),
+                    Message::Response(peer::ub2::ResponseFrame {
+                        message:
+                            peer::ub2::Response::Data(peer::ub2::Data::CCurveEntry { index: i, .. }),
+                        ..
+                    }),
+                ) => (*index, *i) = (v, v),
+                _ => break,
+            }
+            count(encodes_alike(contenders, &g, &d, &format!("ub2 {g:?}")));
+        }
+    }
+
+    let contenders = (
+        &Generated::<Sd>::default(),
+        &Hand::<Sd>::default(),
+        &Deku::<Sd>::default(),
+    );
+    let mixed = Mixed::new(Proto::Sd);
+    let gs = messages(contenders.0, &mixed);
+    let ds = messages(contenders.2, &mixed);
+    for (g, d) in gs.iter().zip(&ds) {
+        for a in 0..=255u8 {
+            let (mut g, mut d) = (g.clone(), d.clone());
+            match (&mut g, &mut d) {
+                (Message::Request(g), Message::Request(d)) => (g.address, d.address) = (a, a),
+                (Message::Response(g), Message::Response(d)) => {
+                    (g.address, *sd_reply_address(d)) = (a, a)
+                }
+                _ => unreachable!(),
+            }
+            count(encodes_alike(
+                contenders,
+                &g,
+                &d,
+                &format!("sd {g:?} to {a:#04x}"),
+            ));
+        }
+        for v in 0..=255u8 {
+            use peer::sd::{Reply, Request as DQ, RequestFrame, Response as DR, ResponseFrame};
+            let (mut g, mut d) = (g.clone(), d.clone());
+            match (&mut g, &mut d) {
+                (
+                    Message::Request(Decoded {
+                        message: sd::Request::SetServoId { new_id },
+                        ..
+                    }),
+                    Message::Request(RequestFrame {
+                        message:
+                            DQ::SetServoId {
+                                new_id: i,
+                                new_id_repeat: r,
+                            },
+                        ..
+                    }),
+                )
+                | (
+                    Message::Response(Decoded {
+                        message: sd::Response::SetServoIdReply { new_id },
+                        ..
+                    }),
+                    Message::Response(Reply::Frame(ResponseFrame {
+                        message:
+                            DR::SetServoIdReply {
+                                new_id: i,
+                                new_id_repeat: r,
+                            },
+                        ..
+                    })),
+                )
+                | (
+                    Message::Response(Decoded {
+                        message: sd::Response::Humidity { humidity: new_id },
+                        ..
+                    }),
+                    Message::Response(Reply::Frame(ResponseFrame {
+                        message:
+                            DR::Humidity {
+                                humidity: i,
+                                humidity_repeat: r,
+                            },
+                        ..
+                    })),
+                ) => (*new_id, *i, *r) = (v, v, v),
+                (
+                    Message::Response(Decoded {
+                        message:
+                            sd::Response::TotalRuntimeMinSec {
+                                runtime_minutes,
+                                runtime_seconds,
+                            },
+                        ..
+                    }),
+                    Message::Response(Reply::TotalRuntimeMinSec {
+                        minutes, seconds, ..
+                    }),
+                ) => {
+                    // Minutes and seconds out of range in turn.
+                    let (m, s) = if v % 2 == 0 { (v, 7) } else { (7, v) };
+                    (*runtime_minutes, *minutes) = (m, m);
+                    (*runtime_seconds, *seconds) = (s, s);
+                }
+                _ => break,
+            }
+            count(encodes_alike(contenders, &g, &d, &format!("sd {g:?}")));
+        }
+    }
+    // Both outcomes happen often, so neither side of the comparison is vacuous.
+    assert!(
+        written > 3000 && refused > 20000,
+        "{written} written, {refused} refused"
+    );
 }

@@ -1,6 +1,7 @@
 //! Decoders and encoders for the bench subset of each protocol, written by hand the way a
 //! careful engineer would: slice patterns on the code, every check the generated code makes
-//! (start byte, length, checksum, code, constants, repeated arguments), typed results. They
+//! (over-long frames first, start byte, length, checksum, address and broadcast rule, code,
+//! constants, repeated arguments, field ranges; the encoders refuse the same), typed results. They
 //! produce the generated crate's types, so the tests can compare the two value for value.
 
 pub mod sd;

@@ -1,25 +1,32 @@
 //! SD frames decoded and encoded by hand: code, ID, two argument bytes, CRC-16/CMS high byte
 //! first (the catalogue CRC from the `crc` crate, as an engineer would take it). Only the
-//! messages of the bench subset.
+//! messages of the bench subset. Strict as the spec: the ID is a device's (0x01..=0x1E) or the
+//! broadcast ID 0x1F, which only the commands that accept broadcast may be sent to; new IDs,
+//! humidity and run-time minutes and seconds lie in their ranges; a frame longer than 6 bytes
+//! is refused first.
 
 use busspec_protocols::sd::{ActuatorStatusBits, Angle, Request, Response, Temperature, Velocity};
 use busspec_protocols::{DecodeError, Decoded, EncodeError};
 
 const LEN: usize = 6;
+const FIRST_ID: u8 = 0x01;
+const LAST_ID: u8 = 0x1E;
+/// The broadcast ID (BID), right after the last device ID.
+const BROADCAST: u8 = 0x1F;
 const CRC: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_CMS);
 
-/// Length and CRC; returns code, address and the two argument bytes.
+/// Length, CRC and ID; returns code, address and the two argument bytes.
 #[inline]
 fn envelope(frame: &[u8]) -> Result<(u8, u8, u8, u8), DecodeError> {
     let f: &[u8; LEN] = frame.try_into().map_err(|_| {
-        if frame.len() < LEN {
-            DecodeError::Truncated {
-                needed: LEN,
+        if frame.len() > LEN {
+            DecodeError::TooLong {
+                max: LEN,
                 found: frame.len(),
             }
         } else {
-            DecodeError::WrongLength {
-                expected: LEN,
+            DecodeError::Truncated {
+                needed: LEN,
                 found: frame.len(),
             }
         }
@@ -33,7 +40,57 @@ fn envelope(frame: &[u8]) -> Result<(u8, u8, u8, u8), DecodeError> {
             found: found.into(),
         });
     }
+    if !(FIRST_ID..=BROADCAST).contains(&f[1]) {
+        return Err(DecodeError::BadAddress {
+            offset: 1,
+            found: f[1],
+            min: FIRST_ID,
+            max: LAST_ID,
+        });
+    }
     Ok((f[0], f[1], f[2], f[3]))
+}
+
+/// Refuses the broadcast ID for a command that does not accept it.
+#[inline]
+fn unicast(address: u8, message: &'static str, code: u8) -> Result<(), DecodeError> {
+    if address == BROADCAST {
+        return Err(DecodeError::BroadcastNotAccepted {
+            message,
+            code: code.into(),
+            address,
+        });
+    }
+    Ok(())
+}
+
+/// A byte repeated in argument 2, and in `min..=max`.
+#[inline]
+fn repeated(
+    a1: u8,
+    a2: u8,
+    field: &'static str,
+    repeat: &'static str,
+    min: u8,
+    max: u8,
+) -> Result<u8, DecodeError> {
+    if !(min..=max).contains(&a1) {
+        return Err(out_of_range(field, 2, a1, min, max));
+    }
+    if a2 != a1 {
+        return Err(invalid(repeat, 3, a2));
+    }
+    Ok(a1)
+}
+
+fn out_of_range(field: &'static str, offset: usize, found: u8, min: u8, max: u8) -> DecodeError {
+    DecodeError::OutOfRange {
+        field,
+        offset,
+        found: found.into(),
+        min: min.into(),
+        max: max.into(),
+    }
 }
 
 fn invalid(field: &'static str, offset: usize, found: u8) -> DecodeError {
@@ -78,23 +135,38 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
             set_velocity: Velocity(i16::from_be_bytes([a1, a2])),
         },
         0x68 => constants(a1, a2, 0, 0).map(|()| Request::ReadActualVelocity)?,
-        0xAA => {
-            if a2 != a1 {
-                return Err(invalid("new_id_repeat", 3, a2));
-            }
-            Request::SetServoId { new_id: a1 }
+        0xAA => Request::SetServoId {
+            new_id: repeated(a1, a2, "new_id", "new_id_repeat", FIRST_ID, LAST_ID)?,
+        },
+        0xA0 => {
+            unicast(address, "read_temperatures", code)?;
+            constants(a1, a2, 0, 0).map(|()| Request::ReadTemperatures)?
         }
-        0xA0 => constants(a1, a2, 0, 0).map(|()| Request::ReadTemperatures)?,
-        0xA1 => constants(a1, a2, 0, 0).map(|()| Request::ReadHumidity)?,
+        0xA1 => {
+            unicast(address, "read_humidity", code)?;
+            constants(a1, a2, 0, 0).map(|()| Request::ReadHumidity)?
+        }
         0x40 => match (a1, a2) {
-            (0xAA, 0x02) => Request::ReadActuatorStatusWord,
-            (0xAA, 0x52) => Request::ResetActuatorStatusWord,
+            (0xAA, 0x02) => {
+                unicast(address, "read_actuator_status_word", code)?;
+                Request::ReadActuatorStatusWord
+            }
+            (0xAA, 0x52) => {
+                unicast(address, "reset_actuator_status_word", code)?;
+                Request::ResetActuatorStatusWord
+            }
             (0xAA, _) => return Err(invalid("arg2", 3, a2)),
             _ => return Err(invalid("arg1", 2, a1)),
         },
         0xA2 => match (a1, a2) {
-            (0x00, 0x00) => Request::ReadTotalRuntimeHours,
-            (0x00, 0x01) => Request::ReadTotalRuntimeMinSec,
+            (0x00, 0x00) => {
+                unicast(address, "read_total_runtime_hours", code)?;
+                Request::ReadTotalRuntimeHours
+            }
+            (0x00, 0x01) => {
+                unicast(address, "read_total_runtime_min_sec", code)?;
+                Request::ReadTotalRuntimeMinSec
+            }
             (0x00, _) => return Err(invalid("arg2", 3, a2)),
             _ => return Err(invalid("arg1", 2, a1)),
         },
@@ -159,22 +231,18 @@ pub fn decode_response(
         0x48 => Response::ActualVelocity {
             actual_velocity: Velocity(i16::from_be_bytes([a1, a2])),
         },
-        0x55 => {
-            if a2 != a1 {
-                return Err(invalid("new_id_repeat", 3, a2));
-            }
-            Response::SetServoIdReply { new_id: a1 }
-        }
+        0x55 => Response::SetServoIdReply {
+            new_id: repeated(a1, a2, "new_id", "new_id_repeat", FIRST_ID, LAST_ID)?,
+        },
+        // 0x01..=0xFE, with 0x00 (no sensor) and 0xFF (defective) special: every byte.
         0x20 => Response::Temperatures {
             motor_temperature: Temperature(a1),
             pcb_temperature: Temperature(a2),
         },
-        0x21 => {
-            if a2 != a1 {
-                return Err(invalid("humidity_repeat", 3, a2));
-            }
-            Response::Humidity { humidity: a1 }
-        }
+        // 1..=100 %, with 0 (no sensor) special.
+        0x21 => Response::Humidity {
+            humidity: repeated(a1, a2, "humidity", "humidity_repeat", 0, 100)?,
+        },
         0x41 => Response::ActuatorStatusWord {
             status_bits: ActuatorStatusBits(a1),
             status_arg2: a2,
@@ -183,10 +251,18 @@ pub fn decode_response(
             Some(Request::ReadTotalRuntimeHours) => Response::TotalRuntimeHours {
                 runtime_hours: u16::from_be_bytes([a1, a2]),
             },
-            Some(Request::ReadTotalRuntimeMinSec) => Response::TotalRuntimeMinSec {
-                runtime_minutes: a1,
-                runtime_seconds: a2,
-            },
+            Some(Request::ReadTotalRuntimeMinSec) => {
+                if a1 > 59 {
+                    return Err(out_of_range("runtime_minutes", 2, a1, 0, 59));
+                }
+                if a2 > 59 {
+                    return Err(out_of_range("runtime_seconds", 3, a2, 0, 59));
+                }
+                Response::TotalRuntimeMinSec {
+                    runtime_minutes: a1,
+                    runtime_seconds: a2,
+                }
+            }
             Some(_) => return Err(DecodeError::NotAReply { code: 0x22 }),
             None => return Err(DecodeError::Ambiguous { code: 0x22 }),
         },
@@ -205,6 +281,22 @@ pub fn decode_response(
     Ok(Decoded { address, message })
 }
 
+/// Refuses an ID that is neither a device's nor the broadcast ID (once, before the match).
+#[inline]
+fn check_address(address: u8) -> Result<(), EncodeError> {
+    if !(FIRST_ID..=BROADCAST).contains(&address) {
+        return Err(EncodeError::BadAddress {
+            address,
+            min: FIRST_ID,
+            max: LAST_ID,
+        });
+    }
+    Ok(())
+}
+
+/// Writes code, ID and arguments and the CRC; called once, after the encoders' match, so the
+/// CRC is inlined once.
+#[inline]
 fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, EncodeError> {
     let available = buf.len();
     let out: &mut [u8; LEN] =
@@ -218,6 +310,39 @@ fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, E
     let crc = CRC.checksum(&out[..4]);
     out[4..].copy_from_slice(&crc.to_be_bytes());
     Ok(LEN)
+}
+
+/// Refuses the broadcast ID for a command that does not accept it.
+#[inline]
+fn unicast_to(message: &'static str, address: u8) -> Result<(), EncodeError> {
+    if address == BROADCAST {
+        return Err(EncodeError::BroadcastNotAccepted { message, address });
+    }
+    Ok(())
+}
+
+/// `?` for the subset encoders, which return `Option<Result<..>>`.
+macro_rules! tri {
+    ($e:expr) => {
+        match $e {
+            Ok(v) => v,
+            Err(e) => return Some(Err(e)),
+        }
+    };
+}
+
+/// Refuses `value` outside `min..=max`.
+#[inline]
+fn in_range(field: &'static str, value: u8, min: u8, max: u8) -> Result<u8, EncodeError> {
+    if !(min..=max).contains(&value) {
+        return Err(EncodeError::NotInRange {
+            field,
+            value: value.into(),
+            min: min.into(),
+            max: max.into(),
+        });
+    }
+    Ok(value)
 }
 
 /// A freshness nibble and a 12-bit position as the big-endian word's two bytes.
@@ -237,27 +362,52 @@ pub fn encode_request(
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
-    Some(match *m {
+    tri!(check_address(address));
+    let (code, a1, a2) = match *m {
         Request::SetPoint {
             freshness,
             position,
-        } => put_position_word(freshness, position)
-            .and_then(|[a1, a2]| put(0x76, address, a1, a2, buf)),
-        Request::ReadActualPosition => put(0x69, address, 0, 0, buf),
+        } => {
+            let [a1, a2] = tri!(put_position_word(freshness, position));
+            (0x76, a1, a2)
+        }
+        Request::ReadActualPosition => (0x69, 0, 0),
         Request::SetVelocity { set_velocity } => {
             let [a1, a2] = set_velocity.0.to_be_bytes();
-            put(0x77, address, a1, a2, buf)
+            (0x77, a1, a2)
         }
-        Request::ReadActualVelocity => put(0x68, address, 0, 0, buf),
-        Request::SetServoId { new_id } => put(0xAA, address, new_id, new_id, buf),
-        Request::ReadTemperatures => put(0xA0, address, 0, 0, buf),
-        Request::ReadHumidity => put(0xA1, address, 0, 0, buf),
-        Request::ReadActuatorStatusWord => put(0x40, address, 0xAA, 0x02, buf),
-        Request::ResetActuatorStatusWord => put(0x40, address, 0xAA, 0x52, buf),
-        Request::ReadTotalRuntimeHours => put(0xA2, address, 0, 0, buf),
-        Request::ReadTotalRuntimeMinSec => put(0xA2, address, 0, 1, buf),
+        Request::ReadActualVelocity => (0x68, 0, 0),
+        Request::SetServoId { new_id } => {
+            let id = tri!(in_range("new_id", new_id, FIRST_ID, LAST_ID));
+            (0xAA, id, id)
+        }
+        Request::ReadTemperatures => {
+            tri!(unicast_to("read_temperatures", address));
+            (0xA0, 0, 0)
+        }
+        Request::ReadHumidity => {
+            tri!(unicast_to("read_humidity", address));
+            (0xA1, 0, 0)
+        }
+        Request::ReadActuatorStatusWord => {
+            tri!(unicast_to("read_actuator_status_word", address));
+            (0x40, 0xAA, 0x02)
+        }
+        Request::ResetActuatorStatusWord => {
+            tri!(unicast_to("reset_actuator_status_word", address));
+            (0x40, 0xAA, 0x52)
+        }
+        Request::ReadTotalRuntimeHours => {
+            tri!(unicast_to("read_total_runtime_hours", address));
+            (0xA2, 0, 0)
+        }
+        Request::ReadTotalRuntimeMinSec => {
+            tri!(unicast_to("read_total_runtime_min_sec", address));
+            (0xA2, 0, 1)
+        }
         _ => return None,
-    })
+    };
+    Some(put(code, address, a1, a2, buf))
 }
 
 /// Encodes a response of the subset; `None` for any other message.
@@ -266,41 +416,56 @@ pub fn encode_response(
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
-    Some(match *m {
+    tri!(check_address(address));
+    let (code, a1, a2) = match *m {
         Response::SetPointReply {
             freshness,
             position,
-        } => put_position_word(freshness, position)
-            .and_then(|[a1, a2]| put(0x56, address, a1, a2, buf)),
+        } => {
+            let [a1, a2] = tri!(put_position_word(freshness, position));
+            (0x56, a1, a2)
+        }
         Response::ActualPosition { position } => {
-            put_position_word(0, position).and_then(|[a1, a2]| put(0x49, address, a1, a2, buf))
+            let [a1, a2] = tri!(put_position_word(0, position));
+            (0x49, a1, a2)
         }
         Response::SetVelocityReply { actual_velocity } => {
             let [a1, a2] = actual_velocity.0.to_be_bytes();
-            put(0x57, address, a1, a2, buf)
+            (0x57, a1, a2)
         }
         Response::ActualVelocity { actual_velocity } => {
             let [a1, a2] = actual_velocity.0.to_be_bytes();
-            put(0x48, address, a1, a2, buf)
+            (0x48, a1, a2)
         }
-        Response::SetServoIdReply { new_id } => put(0x55, address, new_id, new_id, buf),
+        Response::SetServoIdReply { new_id } => {
+            let id = tri!(in_range("new_id", new_id, FIRST_ID, LAST_ID));
+            (0x55, id, id)
+        }
         Response::Temperatures {
             motor_temperature,
             pcb_temperature,
-        } => put(0x20, address, motor_temperature.0, pcb_temperature.0, buf),
-        Response::Humidity { humidity } => put(0x21, address, humidity, humidity, buf),
+        } => (0x20, motor_temperature.0, pcb_temperature.0),
+        Response::Humidity { humidity } => {
+            let h = tri!(in_range("humidity", humidity, 0, 100));
+            (0x21, h, h)
+        }
         Response::ActuatorStatusWord {
             status_bits,
             status_arg2,
-        } => put(0x41, address, status_bits.0, status_arg2, buf),
+        } => (0x41, status_bits.0, status_arg2),
         Response::TotalRuntimeHours { runtime_hours } => {
             let [a1, a2] = runtime_hours.to_be_bytes();
-            put(0x22, address, a1, a2, buf)
+            (0x22, a1, a2)
         }
         Response::TotalRuntimeMinSec {
             runtime_minutes,
             runtime_seconds,
-        } => put(0x22, address, runtime_minutes, runtime_seconds, buf),
+        } => {
+            let m = tri!(in_range("runtime_minutes", runtime_minutes, 0, 59));
+            let s = tri!(in_range("runtime_seconds", runtime_seconds, 0, 59));
+            (0x22, m, s)
+        }
         _ => return None,
-    })
+    };
+    Some(put(code, address, a1, a2, buf))
 }

@@ -1,19 +1,33 @@
 //! UB2 frames decoded and encoded by hand: `0xAA`, address, 2-byte request code or 1/2-byte
 //! response code, little-endian payload, 8-bit sum. Only the messages of the bench subset.
+//! Strict as the spec: the address is a device's (0x21..=0x40) or the host's (0x20), the
+//! C-curve index lies in 0..=499, and a frame longer than the longest is refused first.
 
 use busspec_protocols::ub2::{Capacitance, ModeOfOperation, Request, Response};
 use busspec_protocols::{DecodeError, Decoded, EncodeError};
 
 const START: u8 = 0xAA;
+/// The host's address; the devices' follow it (§2.2, §2.3; erratum ub2-e02).
+const HOST: u8 = 0x20;
+const FIRST_DEVICE: u8 = 0x21;
+const LAST_DEVICE: u8 = 0x40;
+/// The C-curve table's last index (§6.7).
+const LAST_INDEX: u16 = 499;
 
 fn sum8(bytes: &[u8]) -> u8 {
     bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b))
 }
 
-/// Start byte, length bounds and checksum; returns address and the bytes between the address
-/// and the checksum (code and payload).
+/// Length bounds (too long first), start byte, checksum and address; returns the address and
+/// the bytes between it and the checksum (code and payload).
 #[inline]
 fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeError> {
+    if frame.len() > max {
+        return Err(DecodeError::TooLong {
+            max,
+            found: frame.len(),
+        });
+    }
     if let Some(&found) = frame.first() {
         if found != START {
             return Err(DecodeError::BadStart {
@@ -28,12 +42,6 @@ fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeE
             found: frame.len(),
         });
     }
-    if frame.len() > max {
-        return Err(DecodeError::WrongLength {
-            expected: max,
-            found: frame.len(),
-        });
-    }
     let (body, sum) = frame.split_at(frame.len() - 1);
     let expected = sum8(body);
     if sum[0] != expected {
@@ -43,7 +51,32 @@ fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeE
             found: sum[0].into(),
         });
     }
-    Ok((body[1], &body[2..]))
+    let address = body[1];
+    if !(HOST..=LAST_DEVICE).contains(&address) {
+        return Err(DecodeError::BadAddress {
+            offset: 1,
+            found: address,
+            min: FIRST_DEVICE,
+            max: LAST_DEVICE,
+        });
+    }
+    Ok((address, &body[2..]))
+}
+
+/// A C-curve index, refused beyond the table's last (the field starts at offset 4).
+#[inline]
+fn index(a: u8, b: u8) -> Result<u16, DecodeError> {
+    let index = u16le(a, b);
+    if index > LAST_INDEX {
+        return Err(DecodeError::OutOfRange {
+            field: "index",
+            offset: 4,
+            found: index.into(),
+            min: 0,
+            max: LAST_INDEX.into(),
+        });
+    }
+    Ok(index)
 }
 
 fn u16le(a: u8, b: u8) -> u16 {
@@ -80,7 +113,9 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
         },
         [0x40, 0x01] => Request::GetActualCapacitance,
         [0x40, 0x80] => Request::GetModeOfOperation,
-        [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance { index: u16le(a, b) },
+        [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance {
+            index: index(a, b)?,
+        },
         [0x40, 0x32] => Request::GetControllerTemperature,
         [0x40, 0x61] => Request::GetFirmwareVersion,
         [0x40, 0x72, index] => match index {
@@ -131,7 +166,7 @@ pub fn decode_response(
             mode: ModeOfOperation::from_raw(m),
         },
         [0x41, 0x30, i0, i1, f0, f1, c0, c1, c2, c3] => Response::CCurveEntry {
-            index: u16le(i0, i1),
+            index: index(i0, i1)?,
             full_steps: u16le(f0, f1),
             capacitance: Capacitance(u32le(c0, c1, c2, c3)),
         },
@@ -174,6 +209,19 @@ pub fn decode_response(
     Ok(Decoded { address, message })
 }
 
+/// Refuses an address that is neither a device's nor the host's (once, before the match).
+#[inline]
+fn check_address(address: u8) -> Result<(), EncodeError> {
+    if !(HOST..=LAST_DEVICE).contains(&address) {
+        return Err(EncodeError::BadAddress {
+            address,
+            min: FIRST_DEVICE,
+            max: LAST_DEVICE,
+        });
+    }
+    Ok(())
+}
+
 /// Writes start, address, code and payload, then the checksum; returns the frame length.
 fn put(address: u8, code: &[u8], payload: &[u8], buf: &mut [u8]) -> Result<usize, EncodeError> {
     let len = 3 + code.len() + payload.len();
@@ -190,12 +238,29 @@ fn put(address: u8, code: &[u8], payload: &[u8], buf: &mut [u8]) -> Result<usize
     Ok(len)
 }
 
+/// Refuses a C-curve index beyond the table's last.
+#[inline]
+fn put_index(index: u16) -> Result<(), EncodeError> {
+    if index > LAST_INDEX {
+        return Err(EncodeError::NotInRange {
+            field: "index",
+            value: index.into(),
+            min: 0,
+            max: LAST_INDEX.into(),
+        });
+    }
+    Ok(())
+}
+
 /// Encodes a request of the subset; `None` for any other message.
 pub fn encode_request(
     m: &Request,
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
+    if let Err(e) = check_address(address) {
+        return Some(Err(e));
+    }
     Some(match *m {
         Request::ReferenceRun => put(address, &[0x10, 0x00], &[], buf),
         Request::GoToCapacitance { target } => {
@@ -210,7 +275,7 @@ pub fn encode_request(
         Request::GetActualCapacitance => put(address, &[0x40, 0x01], &[], buf),
         Request::GetModeOfOperation => put(address, &[0x40, 0x80], &[], buf),
         Request::GetCCurveIndexedFullStepCapacitance { index } => {
-            put(address, &[0x40, 0x30], &index.to_le_bytes(), buf)
+            put_index(index).and_then(|()| put(address, &[0x40, 0x30], &index.to_le_bytes(), buf))
         }
         Request::GetControllerTemperature => put(address, &[0x40, 0x32], &[], buf),
         Request::GetFirmwareVersion => put(address, &[0x40, 0x61], &[], buf),
@@ -226,6 +291,9 @@ pub fn encode_response(
     address: u8,
     buf: &mut [u8],
 ) -> Option<Result<usize, EncodeError>> {
+    if let Err(e) = check_address(address) {
+        return Some(Err(e));
+    }
     Some(match *m {
         Response::MovementStarted => put(address, &[0x50], &[], buf),
         Response::MovementCompleted => put(address, &[0x51], &[], buf),
@@ -242,6 +310,9 @@ pub fn encode_response(
             full_steps,
             capacitance,
         } => {
+            if let Err(e) = put_index(index) {
+                return Some(Err(e));
+            }
             let mut p = [0u8; 8];
             p[..2].copy_from_slice(&index.to_le_bytes());
             p[2..4].copy_from_slice(&full_steps.to_le_bytes());

@@ -1,7 +1,9 @@
 //! The SD bench subset as a deku user would write it: a derived frame (code, ID, message chosen
 //! by the code) with the CRC-16/CMS checked and written around it. Replies only their request
 //! identifies (0x22) are read raw and interpreted by the request, as deku cannot choose a
-//! variant from something outside the frame.
+//! variant from something outside the frame. The ID (a device's, 0x01..=0x1E, or the
+//! broadcast ID 0x1F) and the ranged fields are asserted; which commands accept the broadcast ID
+//! is checked around the derived code.
 
 use deku::prelude::*;
 
@@ -26,6 +28,7 @@ fn write_i12<W: deku::no_std_io::Write + deku::no_std_io::Seek>(
 #[derive(Debug, Clone, Copy, PartialEq, Eq, DekuRead, DekuWrite)]
 pub struct RequestFrame {
     pub code: u8,
+    #[deku(assert = "(0x01..=0x1F).contains(address)")]
     pub address: u8,
     #[deku(ctx = "*code")]
     pub message: Request,
@@ -59,6 +62,7 @@ pub enum Request {
     },
     #[deku(id = 0xAA)]
     SetServoId {
+        #[deku(assert = "(0x01..=0x1E).contains(new_id)")]
         new_id: u8,
         #[deku(assert = "*new_id_repeat == *new_id")]
         new_id_repeat: u8,
@@ -114,6 +118,7 @@ pub enum RuntimePart {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, DekuRead, DekuWrite)]
 pub struct ResponseFrame {
     pub code: u8,
+    #[deku(assert = "(0x01..=0x1F).contains(address)")]
     pub address: u8,
     #[deku(ctx = "*code")]
     pub message: Response,
@@ -142,6 +147,7 @@ pub enum Response {
     ActualVelocity { actual_velocity: i16 },
     #[deku(id = 0x55)]
     SetServoIdReply {
+        #[deku(assert = "(0x01..=0x1E).contains(new_id)")]
         new_id: u8,
         #[deku(assert = "*new_id_repeat == *new_id")]
         new_id_repeat: u8,
@@ -153,6 +159,7 @@ pub enum Response {
     },
     #[deku(id = 0x21)]
     Humidity {
+        #[deku(assert = "*humidity <= 100")]
         humidity: u8,
         #[deku(assert = "*humidity_repeat == *humidity")]
         humidity_repeat: u8,
@@ -162,6 +169,45 @@ pub enum Response {
     /// Total run-time in hours or in minutes and seconds: which, only the request says.
     #[deku(id = 0x22)]
     TotalRuntime { args: [u8; 2] },
+}
+
+impl Request {
+    /// Whether the command may be sent to the broadcast ID.
+    pub fn accepts_broadcast(&self) -> bool {
+        matches!(
+            self,
+            Request::SetPoint { .. }
+                | Request::ReadActualPosition { .. }
+                | Request::SetVelocity { .. }
+                | Request::ReadActualVelocity { .. }
+                | Request::SetServoId { .. }
+        )
+    }
+}
+
+const BROADCAST: u8 = 0x1F;
+
+/// Refuses the broadcast ID for a command that does not accept it.
+fn unicast(f: &RequestFrame) -> Result<(), Error> {
+    if f.address == BROADCAST && !f.message.accepts_broadcast() {
+        return Err(Error::BroadcastNotAccepted);
+    }
+    Ok(())
+}
+
+/// Run-time minutes and seconds are 0..=59.
+fn min_sec(minutes: u8, seconds: u8) -> Result<(), Error> {
+    if minutes > 59 {
+        return Err(Error::OutOfRange {
+            field: "runtime_minutes",
+        });
+    }
+    if seconds > 59 {
+        return Err(Error::OutOfRange {
+            field: "runtime_seconds",
+        });
+    }
+    Ok(())
 }
 
 /// A response with the replies only their request identifies interpreted.
@@ -179,8 +225,11 @@ pub enum Reply {
     },
 }
 
-/// Checks length and CRC; returns the bytes before the CRC.
+/// Checks length (too long first) and CRC; returns the bytes before the CRC.
 fn checked(frame: &[u8]) -> Result<&[u8], Error> {
+    if frame.len() > 6 {
+        return Err(Error::TooLong { found: frame.len() });
+    }
     if frame.len() != 6 {
         return Err(Error::Truncated { found: frame.len() });
     }
@@ -202,6 +251,7 @@ pub fn decode_request(frame: &[u8]) -> Result<RequestFrame, Error> {
     if !rest.is_empty() {
         return Err(Error::Trailing { bytes: rest.len() });
     }
+    unicast(&f)?;
     Ok(f)
 }
 
@@ -246,7 +296,7 @@ pub fn decode_response(frame: &[u8], request: Option<&RequestFrame>) -> Result<R
         Some(Request::ReadTotalRuntime {
             part: RuntimePart::MinSec,
             ..
-        }) => Ok(Reply::TotalRuntimeMinSec {
+        }) => min_sec(args[0], args[1]).map(|()| Reply::TotalRuntimeMinSec {
             address,
             minutes: args[0],
             seconds: args[1],
@@ -266,6 +316,7 @@ fn seal(n: usize, buf: &mut [u8]) -> Result<usize, Error> {
 }
 
 pub fn encode_request(f: &RequestFrame, buf: &mut [u8]) -> Result<usize, Error> {
+    unicast(f)?;
     let n = f.to_slice(buf)?;
     seal(n, buf)
 }
@@ -284,13 +335,13 @@ pub fn encode_response(r: &Reply, buf: &mut [u8]) -> Result<usize, Error> {
             address,
             minutes,
             seconds,
-        } => ResponseFrame {
+        } => min_sec(minutes, seconds).map(|()| ResponseFrame {
             code: 0x22,
             address,
             message: Response::TotalRuntime {
                 args: [minutes, seconds],
             },
-        },
+        })?,
     };
     let n = f.to_slice(buf)?;
     seal(n, buf)

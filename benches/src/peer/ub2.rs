@@ -1,5 +1,6 @@
 //! The UB2 bench subset as a deku user would write it: derived readers and writers for the
-//! frame and its messages, the 8-bit sum checked and written around them.
+//! frame and its messages, the 8-bit sum checked and written around them. The address (a
+//! device's, 0x21..=0x40, or the host's, 0x20) and the C-curve index (0..=499) are asserted.
 
 use deku::prelude::*;
 
@@ -8,6 +9,7 @@ use super::Error;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, DekuRead, DekuWrite)]
 #[deku(magic = b"\xAA")]
 pub struct RequestFrame {
+    #[deku(assert = "(0x20..=0x40).contains(address)")]
     pub address: u8,
     pub message: Request,
 }
@@ -32,7 +34,10 @@ pub enum Request {
     #[deku(id = 0x4080)]
     GetModeOfOperation,
     #[deku(id = 0x4030)]
-    GetCCurveIndexedFullStepCapacitance { index: u16 },
+    GetCCurveIndexedFullStepCapacitance {
+        #[deku(assert = "*index <= 499")]
+        index: u16,
+    },
     #[deku(id = 0x4032)]
     GetControllerTemperature,
     #[deku(id = 0x4061)]
@@ -67,6 +72,7 @@ pub enum Limit {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, DekuRead, DekuWrite)]
 #[deku(magic = b"\xAA")]
 pub struct ResponseFrame {
+    #[deku(assert = "(0x20..=0x40).contains(address)")]
     pub address: u8,
     pub message: Response,
 }
@@ -108,6 +114,7 @@ pub enum Data {
     ActualModeOfOperation { mode: Mode },
     #[deku(id = 0x30)]
     CCurveEntry {
+        #[deku(assert = "*index <= 499")]
         index: u16,
         full_steps: u16,
         capacitance: u32,
@@ -124,8 +131,11 @@ fn sum8(bytes: &[u8]) -> u8 {
     bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b))
 }
 
-/// Checks the trailing sum; returns the bytes before it.
-fn checked(frame: &[u8], min: usize) -> Result<&[u8], Error> {
+/// Checks the length (too long first) and the trailing sum; returns the bytes before it.
+fn checked(frame: &[u8], min: usize, max: usize) -> Result<&[u8], Error> {
+    if frame.len() > max {
+        return Err(Error::TooLong { found: frame.len() });
+    }
     if frame.len() < min {
         return Err(Error::Truncated { found: frame.len() });
     }
@@ -141,7 +151,7 @@ fn checked(frame: &[u8], min: usize) -> Result<&[u8], Error> {
 }
 
 pub fn decode_request(frame: &[u8]) -> Result<RequestFrame, Error> {
-    let body = checked(frame, 5)?;
+    let body = checked(frame, 5, 9)?;
     let ((rest, _), f) = RequestFrame::from_bytes((body, 0))?;
     if !rest.is_empty() {
         return Err(Error::Trailing { bytes: rest.len() });
@@ -154,7 +164,7 @@ pub fn decode_response(
     frame: &[u8],
     _request: Option<&RequestFrame>,
 ) -> Result<ResponseFrame, Error> {
-    let body = checked(frame, 4)?;
+    let body = checked(frame, 4, 16)?;
     let ((rest, _), f) = ResponseFrame::from_bytes((body, 0))?;
     if !rest.is_empty() {
         return Err(Error::Trailing { bytes: rest.len() });
