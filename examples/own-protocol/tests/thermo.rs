@@ -32,27 +32,48 @@ fn response_index(r: &Response) -> usize {
 }
 const RESPONSES: usize = 5;
 
-/// Every request, each field over its whole spec range (enums over every raw byte, so
-/// `Unknown` values too).
+/// Every request, each field over its whole spec range (`set_mode`'s mode is limited to the
+/// four listed modes; responses carry `Unknown` modes too).
 fn requests() -> Vec<Request> {
     let mut all = vec![Request::ReadTemperature, Request::ReadStatus];
     all.extend((50..=350).map(|raw| Request::SetSetpoint {
         setpoint: DeciCelsius::from_raw(raw),
     }));
-    all.extend((0..=255u8).map(|raw| Request::SetMode {
+    all.extend((0..=3u8).map(|raw| Request::SetMode {
         mode: Mode::from_raw(raw),
     }));
     all
 }
 
-/// Every response, each field over its whole wire range (the firmware string over a few).
+/// What the spec's ranges forbid, encode refuses, naming the field and its range.
+#[test]
+fn values_outside_a_range_are_refused() {
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for raw in 4..=255u8 {
+        let request = Request::SetMode {
+            mode: Mode::from_raw(raw),
+        };
+        assert_eq!(
+            request.encode(0x01, &mut buf),
+            Err(busspec_runtime::EncodeError::NotInRange {
+                field: "mode",
+                value: i64::from(raw),
+                min: 0,
+                max: 3
+            })
+        );
+    }
+}
+
+/// Every response, each field over its whole wire range or spec range (the firmware string over
+/// a few).
 fn responses() -> Vec<Response> {
     let mut all = Vec::new();
     for measured in (-32768..=32767).step_by(97).chain([-32768, -1, 0, 32767]) {
         all.push(Response::Temperature {
             measured: DeciCelsius::from_raw(measured),
             setpoint: DeciCelsius::from_raw(measured + 32768),
-            humidity: Humidity::from_raw((measured & 0xFF) as u8),
+            humidity: Humidity::from_raw((measured & 0xFF) as u8 % 201),
         });
     }
     all.extend((0..=65535).step_by(13).map(|raw| Response::SetpointAck {
