@@ -13,7 +13,7 @@ use crate::{Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldErro
 
 /// One message type of a protocol (its `Request` or its `Response`): every variant is one
 /// message of the spec.
-pub trait Message: Copy + Debug + PartialEq + 'static {
+pub trait Message: Copy + Debug + PartialEq + Send + Sync + 'static {
     /// The message's name in the spec (`go_to_capacitance`).
     fn name(&self) -> &'static str;
     /// The message's code bytes, as they travel.

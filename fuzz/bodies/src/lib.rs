@@ -36,8 +36,8 @@
 //! * `spec_loader`: the spec text (invalid UTF-8 replaced).
 
 use std::any::{Any, TypeId};
-use std::cell::RefCell;
 use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock};
 
 use arbitrary::{Arbitrary, Unstructured};
 use busspec_model::interp;
@@ -102,20 +102,26 @@ pub const TARGETS: &[Target] = &[
     },
 ];
 
-/// A value made once per thread for the type `K` (leaked: a handful per protocol). Generic
-/// functions cannot have a `static` of their own per type; this is that.
-fn once<K: 'static, T: 'static>(init: impl FnOnce() -> T) -> &'static T {
-    thread_local! {
-        static MADE: RefCell<HashMap<TypeId, &'static dyn Any>> = RefCell::new(HashMap::new());
-    }
+/// A value made once per process for the type `K`. Generic functions cannot have a `static` of
+/// their own per type; this is that. The values are leaked (a handful per protocol) but stay
+/// reachable from a `static`, so LeakSanitizer, which the fuzz builds run, does not report them:
+/// a thread-local map is gone by the time it looks.
+fn once<K: 'static, T: Send + Sync + 'static>(init: impl FnOnce() -> T) -> &'static T {
+    type Made = Mutex<HashMap<TypeId, &'static (dyn Any + Send + Sync)>>;
+    static MADE: OnceLock<Made> = OnceLock::new();
+    let made = MADE.get_or_init(Default::default);
     let key = TypeId::of::<(K, T)>();
-    if let Some(v) = MADE.with(|m| m.borrow().get(&key).copied()) {
-        return v.downcast_ref().expect("keyed by its type");
-    }
-    // Not under the borrow: `init` may itself call `once`.
-    let v: &'static T = Box::leak(Box::new(init()));
-    MADE.with(|m| m.borrow_mut().insert(key, v));
-    v
+    let lock = || made.lock().unwrap_or_else(|e| e.into_inner());
+    let found = lock().get(&key).copied();
+    let v = match found {
+        Some(v) => v,
+        None => {
+            // Not under the lock: `init` may itself call `once`.
+            let v: &'static T = Box::leak(Box::new(init()));
+            *lock().entry(key).or_insert(v)
+        }
+    };
+    v.downcast_ref().expect("keyed by its type")
 }
 
 /// The spec of protocol `P`, as its code was generated from it
