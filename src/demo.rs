@@ -366,12 +366,13 @@ fn faults_part(out: &mut Out) -> Result<(), String> {
         (Sd::NAME, soak::run::<Sd>(soak_config())),
     ] {
         out.say(format!(
-            "   {name}: {} transactions: {} completed, {} after retries, {} failed with an error, {} refused, {} wrong values accepted (a checksum-only master: {})",
+            "   {name}: {} transactions: {} completed, {} after retries, {} failed with an error, {} refused, {} not sent (outside the spec), {} wrong values accepted (a checksum-only master: {})",
             report.transactions,
             report.completed,
             report.retried,
             report.failed,
             report.refused,
+            report.not_sent,
             report.silent_wrong,
             report.checksum_only_silent_wrong
         ));

@@ -8,6 +8,8 @@
 //! - **completed**: the master returned a reply equal to the reference's, and the device ended
 //!   in the reference's state; **retried** if that took more than one send;
 //! - **failed**: the master returned an error (no reply, no valid reply, ...);
+//! - **not sent**: the master refused the request itself, because the spec forbids it (a value
+//!   outside its range: the mixes include some on purpose, as a careless caller would send);
 //! - **silent wrong**: the master returned a reply, but it differs from the reference's or the
 //!   device's state does (a damaged request that still passed the device's checks).
 //!
@@ -36,7 +38,7 @@ use busspec_protocols::{Message, Protocol};
 
 use crate::clock::{Clock, SimClock};
 use crate::fault::{FaultConfig, FaultCounts, Faulty};
-use crate::master::{Master, Timing, TraceEvent};
+use crate::master::{LinkError, Master, Timing, TraceEvent};
 use crate::protocol::Link;
 use crate::sim::sd::SdSim;
 use crate::sim::ub2::Ub2Sim;
@@ -210,8 +212,10 @@ pub struct SoakReport {
     pub completed: u64,
     /// Completed correctly after one or more retries.
     pub retried: u64,
-    /// Ended with an error.
+    /// Ended with an error (not counting `not_sent`).
     pub failed: u64,
+    /// Refused by the master before anything was sent: the spec forbids the request.
+    pub not_sent: u64,
     /// Answered with a refusal (NAK) other than the reference's answer.
     pub refused: u64,
     /// Of failed and refused, those after which the device's state differs from the intended one.
@@ -274,6 +278,12 @@ impl fmt::Display for SoakReport {
             "  refused (unexpected NAK)  {:>8} ({:.2} %)",
             self.refused,
             pct(self.refused)
+        )?;
+        writeln!(
+            f,
+            "  not sent (outside spec)   {:>8} ({:.2} %)",
+            self.not_sent,
+            pct(self.not_sent)
         )?;
         writeln!(f, "  wrong, accepted silently  {:>8}", self.silent_wrong)?;
         write!(
@@ -390,6 +400,12 @@ pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
                             "; device state differs"
                         }
                     ));
+                }
+            }
+            Err(LinkError::Encode { .. }) => {
+                report.not_sent += 1;
+                if !state_ok {
+                    report.failed_with_device_changed += 1;
                 }
             }
             Err(_) => {
