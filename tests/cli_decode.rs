@@ -563,3 +563,33 @@ fn wrong_arguments_are_usage_errors() {
     let out = busspec(&["encode", "--help"]);
     assert!(text(&out.stdout).contains("uppercase hex"));
 }
+
+/// A frame decoded as a response whose code no response has is an unknown *response* code, in
+/// the generated code (built-in protocol) and the interpreter (`--spec`) alike; as a request,
+/// or in either direction, it stays an unknown command code.
+#[test]
+fn an_unknown_code_is_named_for_the_direction_it_was_decoded_as() {
+    let frame = "F5 01 00 00 04 1B"; // 0xF5: no SD command or response; CRC right
+    for spec in [None, Some("spec/sd.yaml")] {
+        let mut args = vec!["decode"];
+        if let Some(s) = spec {
+            args.extend(["--spec", s]);
+        }
+        args.push("sd");
+        for (direction, want) in [
+            (Some("response"), "unknown response code 0xF5"),
+            (Some("request"), "unknown command code 0xF5"),
+            (None, "unknown command code 0xF5"),
+        ] {
+            let mut a = args.clone();
+            if let Some(d) = direction {
+                a.extend(["--direction", d]);
+            }
+            a.push(frame);
+            let out = busspec(&a);
+            assert_eq!(out.status.code(), Some(1), "{a:?}");
+            let err = text(&out.stderr);
+            assert!(err.contains(want), "{a:?}: {err}");
+        }
+    }
+}

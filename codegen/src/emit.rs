@@ -1402,6 +1402,19 @@ fn from_wire(ctx: &Ctx, l: &Leaf, raw: TokenStream) -> TokenStream {
 /// `decode` (and, for responses, `decode_reply`): checks length, start byte and checksum, then
 /// dispatches on the code. Messages sharing a code are told apart by length, then constants.
 fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
+    let unknown = match d {
+        Direction::Request => ident("UnknownCommand"),
+        Direction::Response => ident("UnknownResponse"),
+    };
+    // An unknown code is quoted with as many bytes as this direction's longest code.
+    let longest_code = p
+        .framing
+        .direction(d)
+        .code_lengths
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(1);
     let msgs = p.messages(d);
     let c = &p.framing.checksum;
     let clen = c.len();
@@ -1545,10 +1558,10 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
         #(#by_code_len)*
         let mut code = 0u32;
-        for b in frame.iter().skip(#first_code_at).take(frame.len().saturating_sub(#first_code_at + #clen).min(2)) {
+        for b in frame.iter().skip(#first_code_at).take(frame.len().saturating_sub(#first_code_at + #clen).min(#longest_code)) {
             code = (code << 8) | *b as u32;
         }
-        ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand { offset: #first_code_at, code })
+        ::core::result::Result::Err(::busspec_runtime::DecodeError::#unknown { offset: #first_code_at, code })
     };
     let doc_decode = quote! {
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,

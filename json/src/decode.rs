@@ -113,7 +113,7 @@ pub(crate) fn candidates<P: Protocol>(p: &Spec, wire: &[u8]) -> Vec<String> {
 /// How telling an error is when a frame fails in both directions: the one that got further.
 fn rank(e: &DecodeError) -> u8 {
     match e {
-        DecodeError::UnknownCommand { .. } => 0,
+        DecodeError::UnknownCommand { .. } | DecodeError::UnknownResponse { .. } => 0,
         DecodeError::Truncated { .. } => 1,
         DecodeError::WrongLength { .. } => 2,
         _ => 3,

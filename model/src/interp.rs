@@ -58,6 +58,8 @@ pub enum DecodeError {
     UnknownCode {
         offset: usize,
         code: Vec<u8>,
+        /// The one direction the frame was decoded as, if only one.
+        direction: Option<Direction>,
     },
     WrongLength {
         message: String,
@@ -141,8 +143,16 @@ impl fmt::Display for DecodeError {
                 hex_width(*expected, *width),
                 hex_width(*found, *width)
             ),
-            DecodeError::UnknownCode { offset, code } => {
-                write!(f, "unknown command code {} at offset {offset}", hex(code))
+            DecodeError::UnknownCode {
+                offset,
+                code,
+                direction,
+            } => {
+                let what = match direction {
+                    Some(Direction::Response) => "response",
+                    _ => "command",
+                };
+                write!(f, "unknown {what} code {} at offset {offset}", hex(code))
             }
             DecodeError::WrongLength { message, expected, found } => {
                 let exp: Vec<String> = expected.iter().map(|n| n.to_string()).collect();
@@ -446,6 +456,10 @@ pub fn decode(
         return Err(DecodeError::UnknownCode {
             offset: o.code,
             code,
+            direction: match directions {
+                [d] => Some(*d),
+                _ => None,
+            },
         });
     }
     let by_len: Vec<MessageRef> = by_code
@@ -544,6 +558,7 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
         return Err(DecodeError::UnknownCode {
             offset: o.code,
             code: wire[o.code..o.code + m.code.len()].to_vec(),
+            direction: Some(m.direction),
         });
     }
     check_checksum(p, wire)?;

@@ -211,6 +211,8 @@ pub enum DecodeError {
     },
     /// No message of this direction has this code.
     UnknownCommand { offset: usize, code: u32 },
+    /// No response has this code (a frame decoded as a response only).
+    UnknownResponse { offset: usize, code: u32 },
     /// The code is known but the frame's length is not that of any message with it.
     WrongLength { expected: usize, found: usize },
     /// A constant or repeated field holds another value.
@@ -287,6 +289,11 @@ impl fmt::Display for DecodeError {
             }
             DecodeError::UnknownCommand { offset, code } => {
                 f.write_str("unknown command code ")?;
+                hex(f, code)?;
+                write!(f, " at offset {offset}")
+            }
+            DecodeError::UnknownResponse { offset, code } => {
+                f.write_str("unknown response code ")?;
                 hex(f, code)?;
                 write!(f, " at offset {offset}")
             }

@@ -267,7 +267,7 @@ pub fn decode_response(
             None => return Err(DecodeError::Ambiguous { code: 0x22 }),
         },
         _ => {
-            return Err(DecodeError::UnknownCommand {
+            return Err(DecodeError::UnknownResponse {
                 offset: 0,
                 code: code.into(),
             })

@@ -199,7 +199,7 @@ pub fn decode_response(
         [0x41, 0x61, ..] => return Err(wrong_length(16, frame)),
         [0x41, 0x72, ..] => return Err(wrong_length(10, frame)),
         [code, ..] => {
-            return Err(DecodeError::UnknownCommand {
+            return Err(DecodeError::UnknownResponse {
                 offset: 2,
                 code: code.into(),
             })

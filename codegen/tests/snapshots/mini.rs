@@ -550,7 +550,7 @@ pub mod mini {
             for b in frame
                 .iter()
                 .skip(2usize)
-                .take(frame.len().saturating_sub(2usize + 1usize).min(2))
+                .take(frame.len().saturating_sub(2usize + 1usize).min(2usize))
             {
                 code = (code << 8) | *b as u32;
             }
@@ -1223,11 +1223,11 @@ pub mod mini {
             for b in frame
                 .iter()
                 .skip(2usize)
-                .take(frame.len().saturating_sub(2usize + 1usize).min(2))
+                .take(frame.len().saturating_sub(2usize + 1usize).min(2usize))
             {
                 code = (code << 8) | *b as u32;
             }
-            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
+            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownResponse {
                 offset: 2usize,
                 code,
             })

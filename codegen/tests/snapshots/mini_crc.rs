@@ -333,7 +333,7 @@ pub mod mini_crc {
             for b in frame
                 .iter()
                 .skip(0usize)
-                .take(frame.len().saturating_sub(0usize + 2usize).min(2))
+                .take(frame.len().saturating_sub(0usize + 2usize).min(1usize))
             {
                 code = (code << 8) | *b as u32;
             }
@@ -902,11 +902,11 @@ pub mod mini_crc {
             for b in frame
                 .iter()
                 .skip(0usize)
-                .take(frame.len().saturating_sub(0usize + 2usize).min(2))
+                .take(frame.len().saturating_sub(0usize + 2usize).min(1usize))
             {
                 code = (code << 8) | *b as u32;
             }
-            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
+            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownResponse {
                 offset: 0usize,
                 code,
             })

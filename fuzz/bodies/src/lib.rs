@@ -160,7 +160,9 @@ fn check_error(e: &DecodeError, len: usize) {
             expected,
             found,
         } => assert!(offset < len && expected != found, "{e}"),
-        DecodeError::UnknownCommand { offset, .. } | DecodeError::InvalidValue { offset, .. } => {
+        DecodeError::UnknownCommand { offset, .. }
+        | DecodeError::UnknownResponse { offset, .. }
+        | DecodeError::InvalidValue { offset, .. } => {
             assert!(offset < len, "{e}")
         }
         DecodeError::WrongLength { expected, found } => {
