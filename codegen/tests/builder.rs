@@ -1,0 +1,108 @@
+//! The build-script API: what `Builder::generate` writes, and the errors it gives instead of
+//! panicking — every broken spec reported together, with its path; duplicate protocols; no
+//! specs; no output directory.
+
+use std::path::{Path, PathBuf};
+
+use busspec_codegen::{Builder, Error, INDEX_FILE};
+
+fn fixture(dir: &str, name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../model/tests/fixtures")
+        .join(dir)
+        .join(name)
+}
+
+fn out_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("busspec-builder-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn writes_one_module_per_spec_and_the_index_and_rewrites_nothing_unchanged() {
+    let out = out_dir("ok");
+    let builder = Builder::new()
+        .spec(fixture("valid", "minimal.yaml"))
+        .spec(fixture("valid", "minimal_crc.yaml"))
+        .out_dir(&out);
+    let g = builder.generate().unwrap_or_else(|e| panic!("{e:?}"));
+    assert_eq!(g.protocols, ["mini", "mini_crc"]);
+    assert_eq!(g.files.len(), 3);
+    assert_eq!(g.files[2], out.join(INDEX_FILE));
+    let index = std::fs::read_to_string(out.join(INDEX_FILE)).unwrap();
+    assert!(
+        index.contains("pub const PROTOCOLS: &[&str] = &[\"mini\", \"mini_crc\"];"),
+        "{index}"
+    );
+    assert!(
+        index.contains(
+            "\"mini_crc\" => ::core::option::Option::Some(visitor.visit::<mini_crc::MiniCrc>())"
+        ),
+        "{index}"
+    );
+    // A second run with nothing changed leaves every file as it was, to the modification time.
+    let times = |files: &[PathBuf]| -> Vec<_> {
+        files
+            .iter()
+            .map(|f| std::fs::metadata(f).unwrap().modified().unwrap())
+            .collect()
+    };
+    let before = times(&g.files);
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let again = builder.generate().unwrap_or_else(|e| panic!("{e:?}"));
+    assert_eq!(times(&again.files), before);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn every_broken_spec_is_reported_with_its_file_and_path_and_nothing_is_written() {
+    let out = out_dir("broken");
+    let errors = Builder::new()
+        .spec(fixture("broken", "undefined_unit.yaml"))
+        .spec(fixture("valid", "minimal.yaml"))
+        .spec(fixture("broken", "bits_overlap.yaml"))
+        .out_dir(&out)
+        .generate()
+        .expect_err("two broken specs");
+    assert_eq!(errors.len(), 2, "{errors:?}");
+    let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+    assert!(matches!(errors[0], Error::Spec(_)));
+    assert!(text[0].contains("undefined_unit.yaml: "), "{}", text[0]);
+    assert!(text[0].contains("is not defined in `units`"), "{}", text[0]);
+    assert!(text[1].contains("bits_overlap.yaml: "), "{}", text[1]);
+    assert!(!out.exists(), "nothing is written when a spec is broken");
+}
+
+#[test]
+fn a_missing_spec_file_two_specs_of_one_protocol_and_no_specs_are_errors() {
+    let out = out_dir("misc");
+    let missing = Builder::new()
+        .spec("no/such/spec.yaml")
+        .out_dir(&out)
+        .generate()
+        .expect_err("missing file");
+    assert!(
+        missing[0].to_string().starts_with("no/such/spec.yaml: "),
+        "{}",
+        missing[0]
+    );
+
+    let twice = Builder::new()
+        .spec(fixture("valid", "minimal.yaml"))
+        .spec(fixture("valid", "minimal.yaml"))
+        .out_dir(&out)
+        .generate()
+        .expect_err("the same protocol twice");
+    assert!(
+        matches!(&twice[0], Error::DuplicateProtocol { name, .. } if name == "mini"),
+        "{twice:?}"
+    );
+
+    let none = Builder::new()
+        .out_dir(&out)
+        .generate()
+        .expect_err("no specs");
+    assert!(matches!(none[0], Error::NoSpecs));
+    assert!(!out.exists());
+}
