@@ -590,6 +590,10 @@ mod tests {
                         StatedValue::Number(r) => r.to_string(),
                         StatedValue::Name(n) => n.clone(),
                         StatedValue::Names(ns) => serde_json::to_string(ns).unwrap_or_default(),
+                        StatedValue::Numbers(ns) => format!(
+                            "[{}]",
+                            ns.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(",")
+                        ),
                     };
                     format!("{name}={text}")
                 })

@@ -323,6 +323,14 @@ fn leaves(m: &Message) -> Vec<Leaf<'_>> {
 /// path `include_str!` takes the spec's text from for `SPEC_YAML` (absolute, or relative to
 /// the file the module is written to).
 pub fn emit_module(p: &Protocol, source: &str, spec_path: &str) -> Result<String, String> {
+    let gaps = p.generator_gaps();
+    if !gaps.is_empty() {
+        return Err(format!(
+            "{}: the code generator cannot emit yet: {} (decode it with the interpreter: `busspec decode --spec`)",
+            p.name,
+            gaps.join("; ")
+        ));
+    }
     let tokens = module_tokens(p, source, spec_path);
     let file: syn::File = syn::parse2(tokens)
         .map_err(|e| format!("generated code for {} does not parse: {e}", p.name))?;
@@ -436,6 +444,12 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
             pub fn checksum(bytes: &[u8]) -> u8 {
                 ::busspec_runtime::sum8(bytes)
             }
+        },
+        // Refused before emitting (`Protocol::generator_gaps`).
+        ChecksumAlgorithm::Sum8OnesComplement
+        | ChecksumAlgorithm::Sum8TwosComplement
+        | ChecksumAlgorithm::Xor8 => quote! {
+            compile_error!("checksum not supported by the generator");
         },
         ChecksumAlgorithm::Crc(k) => {
             let ty = format_ident!("u{}", c.width);

@@ -50,9 +50,11 @@ impl Parsed {
             self.values
                 .iter()
                 .find(|v| v.name == name)
-                .map(|v| match &v.raw {
-                    Raw::Int(i) => FieldValue::Int(*i),
-                    Raw::Text(t) => FieldValue::Text(t),
+                .and_then(|v| match &v.raw {
+                    Raw::Int(i) => Some(FieldValue::Int(*i)),
+                    Raw::Text(t) => Some(FieldValue::Text(t)),
+                    // Generated codecs have no repeated fields yet (`Protocol::generator_gaps`).
+                    Raw::List(_) => None,
                 })
         };
         let typed = match direction {
@@ -94,7 +96,7 @@ fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
             .find(|v| v.name == name)
             .and_then(|v| match v.raw {
                 Raw::Int(i) => Some(i),
-                Raw::Text(_) => None,
+                Raw::Text(_) | Raw::List(_) => None,
             })
     };
     let fixed = |field: &str, expected: i64| match int(field) {
@@ -351,6 +353,30 @@ fn field_value(
     name: &str,
     raw: &str,
 ) -> Result<Raw, String> {
+    if f.repeat.is_some() && bit.is_none() {
+        let Ok(items) = serde_json::from_str::<Vec<Box<RawValue>>>(raw.trim()) else {
+            return Err(format!("{name} takes a list of numbers, got {}", raw.trim()));
+        };
+        let mut scalar = f.clone();
+        scalar.repeat = None;
+        let mut list = Vec::with_capacity(items.len());
+        for (k, item) in items.iter().enumerate() {
+            let v = if f.ty == busspec_model::ir::FieldType::Bit {
+                match item.get().trim() {
+                    "0" | "false" => 0,
+                    "1" | "true" => 1,
+                    other => return Err(format!("{name}[{k}]: a bit is 0 or 1, got {other}")),
+                }
+            } else {
+                match field_value(p, &scalar, None, &format!("{name}[{k}]"), item.get())? {
+                    Raw::Int(i) => i,
+                    _ => return Err(format!("{name}[{k}] takes a number")),
+                }
+            };
+            list.push(v);
+        }
+        return Ok(Raw::List(list));
+    }
     let g = given(name, raw)?;
     let wrong = || format!("{name} takes {}, got {}", kind_of(f, bit), raw.trim());
     if let Some(b) = bit {

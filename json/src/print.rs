@@ -185,6 +185,13 @@ fn frame_fields(p: &Spec, frame: &Frame) -> Vec<(String, Json)> {
             let raw = match &v.raw {
                 Raw::Int(i) => FieldValue::Int(*i),
                 Raw::Text(t) => FieldValue::Text(t),
+                Raw::List(list) => {
+                    let items = list
+                        .iter()
+                        .map(|&i| field(p, m, &v.name, FieldValue::Int(i)).1)
+                        .collect();
+                    return (v.name.clone(), Json::List(items));
+                }
             };
             field(p, m, &v.name, raw)
         })

@@ -11,9 +11,16 @@ pub const CHECK_INPUT: &[u8] = b"123456789";
 
 pub fn compute(algorithm: &ChecksumAlgorithm, data: &[u8]) -> u64 {
     match algorithm {
-        ChecksumAlgorithm::Sum8 => u64::from(data.iter().fold(0u8, |s, b| s.wrapping_add(*b))),
+        ChecksumAlgorithm::Sum8 => u64::from(sum8(data)),
+        ChecksumAlgorithm::Sum8OnesComplement => u64::from(!sum8(data)),
+        ChecksumAlgorithm::Sum8TwosComplement => u64::from(sum8(data).wrapping_neg()),
+        ChecksumAlgorithm::Xor8 => u64::from(data.iter().fold(0u8, |s, b| s ^ b)),
         ChecksumAlgorithm::Crc(p) => crc(p, data),
     }
+}
+
+fn sum8(data: &[u8]) -> u8 {
+    data.iter().fold(0u8, |s, b| s.wrapping_add(*b))
 }
 
 fn reflect(mut v: u64, bits: u8) -> u64 {
@@ -94,6 +101,16 @@ mod tests {
             0xCBF4_3926
         );
         assert_eq!(crc(&params(8, 0x07, 0, false, false, 0), CHECK_INPUT), 0xF4);
+    }
+
+    #[test]
+    fn eight_bit_variants() {
+        // Dynamixel 1.0 manual, instruction packet example: FF FF 01 04 02 2B 01 CC.
+        let ping = [0x01, 0x04, 0x02, 0x2B, 0x01];
+        assert_eq!(compute(&ChecksumAlgorithm::Sum8OnesComplement, &ping), 0xCC);
+        assert_eq!(compute(&ChecksumAlgorithm::Sum8TwosComplement, &ping), 0xCD);
+        assert_eq!(compute(&ChecksumAlgorithm::Xor8, &[0x0F, 0xF0, 0x01]), 0xFE);
+        assert_eq!(compute(&ChecksumAlgorithm::Xor8, CHECK_INPUT), 0x31);
     }
 
     #[test]

@@ -390,8 +390,42 @@ fn range_text(r: Option<(i64, i64)>) -> String {
 fn type_name(f: &Field) -> String {
     if f.is_ascii() {
         format!("ascii[{}]", f.width)
+    } else if f.ty == crate::ir::FieldType::Bit {
+        "bit".to_owned()
     } else {
         format!("{}{}", if f.signed { "i" } else { "u" }, f.width * 8)
+    }
+}
+
+/// How a repeated field's count is found, with the count field named by its offset (a field
+/// keeps its place when renamed): for comparing two specs.
+fn repeat_shape(m: &Message, f: &Field) -> Option<String> {
+    let r = f.repeat.as_ref()?;
+    let at = |i: usize| m.fields.get(i).map_or(0, |c| c.offset);
+    let count = match r.count {
+        crate::ir::Count::Elements(i) => format!("elements counted by the field at payload offset {}", at(i)),
+        crate::ir::Count::Bytes(i) => format!("bytes counted by the field at payload offset {}", at(i)),
+        crate::ir::Count::ToEnd => "to the end of the frame".to_owned(),
+    };
+    Some(format!("{count}, {}..={} elements", r.min, r.max))
+}
+
+/// What a field's value follows from, for comparing two specs.
+fn follows_shape(m: &Message, f: &Field) -> Option<String> {
+    let reply_count = f.repeat.as_ref().and_then(|r| r.request.as_ref());
+    match (&f.follows, reply_count) {
+        (Some(crate::ir::Follows::Field(i, rel)), _) => Some(format!(
+            "{} of this frame",
+            rel.describe(&format!(
+                "the field at payload offset {}",
+                m.fields.get(*i).map_or(0, |c| c.offset)
+            ))
+        )),
+        (Some(crate::ir::Follows::Request(rel)), _) => {
+            Some(format!("{} of the request", rel.describe(&rel.field)))
+        }
+        (None, Some(rel)) => Some(format!("element count {} of the request", rel.describe(&rel.field))),
+        (None, None) => None,
     }
 }
 
@@ -597,13 +631,59 @@ impl<'a> Differ<'a> {
                 format!("start byte: {} → {}", show(o.start), show(n.start)),
             );
         }
+        if o.sync != n.sync && o.start == n.start {
+            let show = |s: &[u8]| {
+                if s.is_empty() {
+                    "none".to_owned()
+                } else {
+                    s.iter().map(|b| format!("{b:02X}")).collect::<Vec<_>>().join(" ")
+                }
+            };
+            self.wire(
+                "framing_changed",
+                "framing.start",
+                format!("sync bytes: {} → {}", show(&o.sync), show(&n.sync)),
+            );
+        }
+        if o.length != n.length {
+            let show = |l: &Option<crate::ir::LengthField>| match l {
+                None => "none".to_owned(),
+                Some(l) => format!(
+                    "{} byte(s) counting {:?}{:+}",
+                    l.width, l.counts, l.adjust
+                )
+                .to_lowercase(),
+            };
+            self.wire(
+                "framing_changed",
+                "framing.length",
+                format!("length field: {} → {}", show(&o.length), show(&n.length)),
+            );
+        }
         let (oc, nc) = (&o.checksum, &n.checksum);
+        if oc.covers_from != nc.covers_from {
+            self.wire(
+                "checksum_changed",
+                "framing.checksum.covers_from",
+                format!(
+                    "checksum covers from offset {} → {}",
+                    oc.covers_from, nc.covers_from
+                ),
+            );
+        }
         // The byte order of a one-byte checksum means nothing on the wire.
         let order_changed = oc.byte_order != nc.byte_order && oc.width.max(nc.width) > 8;
         if oc.algorithm != nc.algorithm || oc.width != nc.width || order_changed {
             let show = |c: &crate::ir::Checksum| {
                 let name = match &c.algorithm {
                     crate::ir::ChecksumAlgorithm::Sum8 => "sum8".to_owned(),
+                    crate::ir::ChecksumAlgorithm::Sum8OnesComplement => {
+                        "sum8_ones_complement".to_owned()
+                    }
+                    crate::ir::ChecksumAlgorithm::Sum8TwosComplement => {
+                        "sum8_twos_complement".to_owned()
+                    }
+                    crate::ir::ChecksumAlgorithm::Xor8 => "xor8".to_owned(),
                     crate::ir::ChecksumAlgorithm::Crc(_) => {
                         c.catalogue.clone().unwrap_or_else(|| "crc".to_owned())
                     }
@@ -979,6 +1059,30 @@ impl<'a> Differ<'a> {
                 path.to_owned(),
                 format!("{word} `{}`: frame length {ol} → {nl} bytes", x.name),
             );
+        } else if m.max_len != x.max_len {
+            self.wire(
+                "frame_length_changed",
+                path.to_owned(),
+                format!(
+                    "{word} `{}`: longest frame {} → {} bytes",
+                    x.name, m.max_len, x.max_len
+                ),
+            );
+        }
+        if m.code_from_request != x.code_from_request {
+            let show = |c: Option<u8>| {
+                c.map_or("its own".to_owned(), |c| format!("the request's | 0x{c:02X}"))
+            };
+            self.wire(
+                "code_from_request_changed",
+                format!("{path}.code_from_request"),
+                format!(
+                    "{word} `{}`: code is {} → {}",
+                    x.name,
+                    show(m.code_from_request),
+                    show(x.code_from_request)
+                ),
+            );
         }
         // A field keeps its name where it moved; otherwise what sits at its offset is it.
         let fmap = pair_named(
@@ -1108,7 +1212,7 @@ impl<'a> Differ<'a> {
                 path.to_owned(),
                 format!("field {what}: {} → {}", type_name(f), type_name(g)),
             );
-        } else if f.is_ascii() != g.is_ascii() {
+        } else if f.is_ascii() != g.is_ascii() || f.ty != g.ty {
             self.api(
                 "field_type_changed",
                 path.to_owned(),
@@ -1138,6 +1242,24 @@ impl<'a> Differ<'a> {
                 "field_equals_changed",
                 path.to_owned(),
                 format!("field {what}: which earlier field it repeats changed"),
+            );
+        }
+        let (or, nr) = (repeat_shape(m, f), repeat_shape(x, g));
+        if or != nr {
+            let show = |s: &Option<String>| s.clone().unwrap_or_else(|| "not repeated".to_owned());
+            self.wire(
+                "field_repeat_changed",
+                path.to_owned(),
+                format!("field {what}: {} → {}", show(&or), show(&nr)),
+            );
+        }
+        let (of, nf) = (follows_shape(m, f), follows_shape(x, g));
+        if of != nf {
+            let show = |s: &Option<String>| s.clone().unwrap_or_else(|| "free".to_owned());
+            self.wire(
+                "field_follows_changed",
+                path.to_owned(),
+                format!("field {what}: value follows {} → {}", show(&of), show(&nf)),
             );
         }
         self.field_meaning(

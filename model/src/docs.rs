@@ -22,6 +22,22 @@ fn cell(s: &str) -> String {
 }
 
 fn type_name(f: &Field) -> String {
+    let one = scalar_type_name(f);
+    match &f.repeat {
+        None => one,
+        Some(r) => {
+            let count = match r.count {
+                Count::Elements(_) | Count::Bytes(_) | Count::ToEnd if r.min == r.max => {
+                    r.max.to_string()
+                }
+                _ => format!("{}..={}", r.min, r.max),
+            };
+            format!("{one}[{count}]")
+        }
+    }
+}
+
+fn scalar_type_name(f: &Field) -> String {
     match f.ty {
         FieldType::Ascii => format!("ascii[{}]", f.width),
         FieldType::U8 => "u8".into(),
@@ -30,6 +46,9 @@ fn type_name(f: &Field) -> String {
         FieldType::I8 => "i8".into(),
         FieldType::I16 => "i16".into(),
         FieldType::I32 => "i32".into(),
+        FieldType::U24 => "u24".into(),
+        FieldType::I24 => "i24".into(),
+        FieldType::Bit => "bit".into(),
     }
 }
 
@@ -180,6 +199,10 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
                 StatedValue::Number(n) => format!("{k} = {n}"),
                 StatedValue::Name(s) => format!("{k} = {s}"),
                 StatedValue::Names(n) => format!("{k} = [{}]", n.join(", ")),
+                StatedValue::Numbers(n) => format!(
+                    "{k} = [{}]",
+                    n.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", ")
+                ),
             })
             .collect();
         let mut note = Vec::new();
@@ -306,9 +329,29 @@ pub fn render(p: &Protocol, source: &str) -> String {
         let row = match part {
             Part::Start => (
                 "start".to_owned(),
-                "1".to_owned(),
-                format!("0x{:02X}", f.start.unwrap_or(0)),
+                f.sync.len().to_string(),
+                f.sync
+                    .iter()
+                    .map(|b| format!("0x{b:02X}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
             ),
+            Part::Length => {
+                let l = f.length.as_ref();
+                let counts: Vec<String> = l
+                    .map(|l| l.counts.iter().map(|p| format!("{p:?}").to_lowercase()).collect())
+                    .unwrap_or_default();
+                let adjust = match l.map_or(0, |l| l.adjust) {
+                    0 => String::new(),
+                    a if a > 0 => format!(" + {a}"),
+                    a => format!(" − {}", -a),
+                };
+                (
+                    "length".to_owned(),
+                    l.map_or(0, |l| l.width).to_string(),
+                    format!("bytes of {}{adjust}", counts.join(", ")),
+                )
+            }
             Part::Address => ("address".to_owned(), "1".to_owned(), {
                 let mut t = format!("device 0x{:02X}..=0x{:02X}", f.address.min, f.address.max);
                 if let Some(h) = f.address.host {
@@ -344,7 +387,14 @@ pub fn render(p: &Protocol, source: &str) -> String {
             Part::Checksum => (
                 "checksum".to_owned(),
                 f.checksum.len().to_string(),
-                "over every byte before it".to_owned(),
+                if f.checksum.covers_from == 0 {
+                    "over every byte before it".to_owned()
+                } else {
+                    format!(
+                        "over the bytes from offset {} up to it",
+                        f.checksum.covers_from
+                    )
+                },
             ),
         };
         let _ = writeln!(o, "| {} | {} | {} |", row.0, row.1, row.2);
@@ -354,6 +404,15 @@ pub fn render(p: &Protocol, source: &str) -> String {
     match &c.algorithm {
         ChecksumAlgorithm::Sum8 => {
             let _ = writeln!(o, "Checksum: 8-bit sum of the bytes, modulo 256 (check value 0x{:02X} over \"123456789\").\n", c.check);
+        }
+        ChecksumAlgorithm::Sum8OnesComplement => {
+            let _ = writeln!(o, "Checksum: 8-bit sum of the bytes, inverted (ones' complement; check value 0x{:02X} over \"123456789\").\n", c.check);
+        }
+        ChecksumAlgorithm::Sum8TwosComplement => {
+            let _ = writeln!(o, "Checksum: 8-bit sum of the bytes, negated (two's complement; check value 0x{:02X} over \"123456789\").\n", c.check);
+        }
+        ChecksumAlgorithm::Xor8 => {
+            let _ = writeln!(o, "Checksum: XOR of the bytes (check value 0x{:02X} over \"123456789\").\n", c.check);
         }
         ChecksumAlgorithm::Crc(k) => {
             let _ = writeln!(

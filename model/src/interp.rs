@@ -9,13 +9,18 @@
 use std::fmt;
 
 use crate::checksum;
-use crate::ir::{BitField, ByteOrder, Direction, Field, Message, MessageRef, Protocol};
+use crate::ir::{
+    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, Message, MessageRef,
+    Protocol,
+};
 
 /// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Raw {
     Int(i64),
     Text(Vec<u8>),
+    /// The elements of a repeated field (bits as 0 or 1).
+    List(Vec<i64>),
 }
 
 /// One named value of a decoded frame; packed words appear as their sub-fields.
@@ -113,6 +118,35 @@ pub enum DecodeError {
         code: Vec<u8>,
         address: u8,
     },
+    /// The length field disagrees with the frame's length.
+    LengthMismatch {
+        offset: usize,
+        expected: i64,
+        found: i64,
+    },
+    /// A repeated field's count does not fit the frame: `found` elements where `expected`
+    /// says how many may stand.
+    BadCount {
+        message: String,
+        field: String,
+        offset: usize,
+        expected: String,
+        found: i64,
+    },
+    /// A field that follows from another (of the frame or of the request) does not.
+    NotFollowing {
+        message: String,
+        field: String,
+        offset: usize,
+        rule: String,
+        expected: i64,
+        found: i64,
+    },
+    /// A reply the request does not get.
+    NotAnAnswer {
+        message: String,
+        request: String,
+    },
 }
 
 fn hex(bytes: &[u8]) -> String {
@@ -188,6 +222,22 @@ impl fmt::Display for DecodeError {
                 "{message} (code {}) does not accept the broadcast address 0x{address:02X}",
                 hex(code)
             ),
+            DecodeError::LengthMismatch { offset, expected, found } => write!(
+                f,
+                "length field at offset {offset} says {found}, the frame's length gives {expected}"
+            ),
+            DecodeError::BadCount { message, field, offset, expected, found } => write!(
+                f,
+                "{message}.{field} at offset {offset}: {found} elements, expected {expected}"
+            ),
+            DecodeError::NotFollowing { message, field, offset, rule, expected, found } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: must be {rule} ({expected}), found {found}"
+            ),
+            DecodeError::NotAnAnswer { message, request } => write!(
+                f,
+                "{message} is not a reply {request} gets"
+            ),
         }
     }
 }
@@ -243,6 +293,22 @@ pub enum EncodeError {
         expected: i64,
         found: i64,
     },
+    /// A repeated field takes a list of numbers.
+    NotList {
+        field: String,
+    },
+    /// A repeated field's list is longer or shorter than the spec allows.
+    WrongCount {
+        field: String,
+        min: usize,
+        max: usize,
+        found: usize,
+    },
+    /// The values given do not make a frame the spec accepts (a count field that disagrees
+    /// with its list, a field that does not follow its rule): what decoding it says.
+    Inconsistent {
+        reason: String,
+    },
 }
 
 impl fmt::Display for EncodeError {
@@ -295,6 +361,14 @@ impl fmt::Display for EncodeError {
                 f,
                 "{message} does not accept the broadcast address 0x{address:02X}"
             ),
+            EncodeError::NotList { field } => write!(f, "{field} takes a list of numbers"),
+            EncodeError::WrongCount { field, min, max, found } => write!(
+                f,
+                "{field} takes {min}..={max} elements, got {found}"
+            ),
+            EncodeError::Inconsistent { reason } => {
+                write!(f, "the values do not make a valid frame: {reason}")
+            }
         }
     }
 }
@@ -415,13 +489,7 @@ pub fn decode(
         .min()
         .unwrap_or(1);
     let first = p.framing.head(min_code);
-    if let (Some(at), Some(expected)) = (first.start, p.framing.start) {
-        if let Some(&found) = wire.get(at) {
-            if found != expected {
-                return Err(DecodeError::BadStart { expected, found });
-            }
-        }
-    }
+    check_sync(p, first.start, wire)?;
     if wire.len() < shortest.max(first.len) {
         return Err(DecodeError::Truncated {
             needed: shortest,
@@ -430,6 +498,7 @@ pub fn decode(
     }
     check_checksum(p, wire)?;
     check_address(p, first.address, wire)?;
+    check_length_field(p, directions, wire)?;
 
     // Messages whose code matches the bytes where the code sits.
     let mut by_code: Vec<MessageRef> = Vec::new();
@@ -465,9 +534,21 @@ pub fn decode(
     let by_len: Vec<MessageRef> = by_code
         .iter()
         .copied()
-        .filter(|r| p.frame_len(p.message(*r)) == wire.len())
+        .filter(|r| fits_len(p, p.message(*r), wire))
         .collect();
     if by_len.is_empty() {
+        if let [r] = by_code[..] {
+            let m = p.message(r);
+            if m.is_variable() && wire.len() >= m.layout.len && wire.len() <= m.max_len {
+                return Err(element_count(p, m, wire).err().unwrap_or(
+                    DecodeError::WrongLength {
+                        message: m.name.clone(),
+                        expected: vec![m.layout.len],
+                        found: wire.len(),
+                    },
+                ));
+            }
+        }
         let mut expected: Vec<usize> = by_code.iter().map(|r| p.frame_len(p.message(*r))).collect();
         expected.sort_unstable();
         expected.dedup();
@@ -534,20 +615,14 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
     let m = p.message(r);
     let len = p.frame_len(m);
     let o = m.layout;
-    if let (Some(at), Some(expected)) = (o.start, p.framing.start) {
-        if let Some(&found) = wire.get(at) {
-            if found != expected {
-                return Err(DecodeError::BadStart { expected, found });
-            }
-        }
-    }
+    check_sync(p, o.start, wire)?;
     if wire.len() < len {
         return Err(DecodeError::Truncated {
             needed: len,
             found: wire.len(),
         });
     }
-    if wire.len() > len {
+    if wire.len() > m.max_len {
         return Err(DecodeError::WrongLength {
             message: m.name.clone(),
             expected: vec![len],
@@ -563,6 +638,8 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
     }
     check_checksum(p, wire)?;
     check_address(p, o.address, wire)?;
+    check_length_field(p, &[m.direction], wire)?;
+    element_count(p, m, wire)?;
     let values = decode_fields(p, m, wire)?;
     Ok(Frame {
         message: r,
@@ -579,7 +656,7 @@ fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
             found: wire.len(),
         });
     };
-    let expected = checksum::compute(&c.algorithm, &wire[..at]);
+    let expected = checksum::compute(&c.algorithm, wire.get(c.covers_from..at).unwrap_or(&[]));
     let found = read_uint(&wire[at..], c.byte_order);
     if expected != found {
         return Err(DecodeError::ChecksumMismatch {
@@ -590,6 +667,137 @@ fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
         });
     }
     Ok(())
+}
+
+/// Refuses a frame whose start bytes are not the sync sequence (from `at`).
+fn check_sync(p: &Protocol, at: Option<usize>, wire: &[u8]) -> Result<(), DecodeError> {
+    let Some(at) = at else {
+        return Ok(());
+    };
+    for (i, &expected) in p.framing.sync.iter().enumerate() {
+        if let Some(&found) = wire.get(at + i) {
+            if found != expected {
+                return Err(DecodeError::BadStart { expected, found });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The value the length field of a frame of `len` bytes must hold (every message of a
+/// protocol with a length field has its length field at the same offset and counts the same
+/// parts; only the payload varies, so the value follows from the frame's length).
+pub fn length_for(p: &Protocol, d: Direction, len: usize) -> Option<i64> {
+    let l = p.framing.length.as_ref()?;
+    let code_len = p.framing.direction(d).code_lengths.first().copied().unwrap_or(0);
+    let head = p.framing.head(code_len);
+    let payload = len.checked_sub(head.len)?;
+    Some(crate::validate::length_value(&p.framing, l, code_len, payload))
+}
+
+/// Refuses a frame whose length field disagrees with its length.
+fn check_length_field(p: &Protocol, directions: &[Direction], wire: &[u8]) -> Result<(), DecodeError> {
+    let Some(l) = &p.framing.length else {
+        return Ok(());
+    };
+    let Some(d) = directions.first() else {
+        return Ok(());
+    };
+    let code_len = p.framing.direction(*d).code_lengths.first().copied().unwrap_or(0);
+    let Some(at) = p.framing.head(code_len).length else {
+        return Ok(());
+    };
+    let found = read_uint(wire.get(at..at + l.width).unwrap_or(&[]), p.byte_order) as i64;
+    let expected = length_for(p, *d, wire.len()).unwrap_or(-1);
+    if found != expected {
+        return Err(DecodeError::LengthMismatch {
+            offset: at,
+            expected,
+            found,
+        });
+    }
+    Ok(())
+}
+
+/// Whether `wire` has a length message `m` can have: its fixed length, or for a message with
+/// a repeated field, a whole number of elements that its count (if any) agrees with.
+pub fn fits_len(p: &Protocol, m: &Message, wire: &[u8]) -> bool {
+    if m.is_variable() {
+        element_count(p, m, wire).is_ok()
+    } else {
+        wire.len() == m.layout.len
+    }
+}
+
+/// The number of elements of `m`'s repeated field in `wire` (0 if it has none), checked
+/// against its count field, its element size and its bounds.
+pub fn element_count(p: &Protocol, m: &Message, wire: &[u8]) -> Result<usize, DecodeError> {
+    let Some((f, r)) = m.repeat() else {
+        return Ok(0);
+    };
+    let _ = p;
+    let at = m.layout.payload + f.offset;
+    let bad = |expected: String, found: i64| DecodeError::BadCount {
+        message: m.name.clone(),
+        field: f.name.clone(),
+        offset: at,
+        expected,
+        found,
+    };
+    let extra = wire.len().checked_sub(m.layout.len).ok_or_else(|| bad(format!("at least {}", r.min), 0))?;
+    let bits = f.ty == FieldType::Bit;
+    let per_byte = |bytes: usize| if bits { bytes * 8 } else { bytes / f.width.max(1) };
+    let count_value = |i: usize| -> i64 {
+        let c = &m.fields[i];
+        let o = m.layout.payload + c.offset;
+        read_uint(wire.get(o..o + c.width).unwrap_or(&[]), c.byte_order) as i64
+    };
+    let n = match r.count {
+        Count::ToEnd => {
+            if !bits && extra % f.width.max(1) != 0 {
+                return Err(bad(
+                    format!("whole {}-byte elements", f.width),
+                    extra as i64,
+                ));
+            }
+            per_byte(extra)
+        }
+        Count::Elements(i) => {
+            let v = count_value(i);
+            let n = usize::try_from(v).unwrap_or(usize::MAX);
+            if f.elements_len(n) != extra {
+                return Err(bad(
+                    format!("{} by the frame's length", extra / f.width.max(1)),
+                    v,
+                ));
+            }
+            n
+        }
+        Count::Bytes(i) => {
+            let v = count_value(i);
+            if usize::try_from(v).ok() != Some(extra) || (!bits && extra % f.width.max(1) != 0) {
+                return Err(DecodeError::NotFollowing {
+                    message: m.name.clone(),
+                    field: m.fields[i].name.clone(),
+                    offset: m.layout.payload + m.fields[i].offset,
+                    rule: format!("the bytes of {}", f.name),
+                    expected: extra as i64,
+                    found: v,
+                });
+            }
+            per_byte(extra)
+        }
+    };
+    // Bits come eight to a byte: the bound applies to the bytes they fill.
+    let (lo, hi) = if bits {
+        (r.min.div_ceil(8) * 8, r.max.div_ceil(8) * 8)
+    } else {
+        (r.min, r.max)
+    };
+    if n < lo || n > hi {
+        return Err(bad(format!("{}..={}", r.min, r.max), n as i64));
+    }
+    Ok(n)
 }
 
 /// Refuses an address no frame may carry ([`address_allowed`]).
@@ -619,14 +827,34 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
             address,
         });
     }
-    let payload = wire
-        .get(o.payload..o.payload + m.payload_len)
-        .unwrap_or(&[]);
+    let end = wire.len().saturating_sub(p.framing.checksum.len());
+    let payload = wire.get(o.payload..end).unwrap_or(&[]);
     let mut values = Vec::new();
     let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
     for f in &m.fields {
         let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
         let at = o.payload + f.offset;
+        if f.repeat.is_some() {
+            let list = read_elements(f, payload.get(f.offset..).unwrap_or(&[]));
+            for &v in &list {
+                if let Some((min, max)) = range_violation(f, None, v) {
+                    return Err(DecodeError::OutOfRange {
+                        message: m.name.clone(),
+                        field: f.name.clone(),
+                        offset: at,
+                        found: v,
+                        min,
+                        max,
+                    });
+                }
+            }
+            ints.push(0);
+            values.push(Value {
+                name: f.name.clone(),
+                raw: Raw::List(list),
+            });
+            continue;
+        }
         if f.is_ascii() {
             ints.push(0);
             values.push(Value {
@@ -650,6 +878,19 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
                     offset: at,
                     expected: c,
                     found: unsigned,
+                });
+            }
+        }
+        if let Some(Follows::Field(other, rel)) = &f.follows {
+            let expected = rel.apply(ints.get(*other).copied().unwrap_or(0));
+            if v != expected {
+                return Err(DecodeError::NotFollowing {
+                    message: m.name.clone(),
+                    field: f.name.clone(),
+                    offset: at,
+                    rule: rel.describe(&rel.field),
+                    expected,
+                    found: v,
                 });
             }
         }
@@ -718,6 +959,98 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
     Ok(values)
 }
 
+/// The elements of a repeated field from the bytes where they start (to the payload's end).
+fn read_elements(f: &Field, bytes: &[u8]) -> Vec<i64> {
+    if f.ty == FieldType::Bit {
+        return bytes
+            .iter()
+            .flat_map(|b| (0..8).map(move |i| i64::from((b >> i) & 1)))
+            .collect();
+    }
+    let w = f.width.max(1);
+    bytes
+        .chunks_exact(w)
+        .map(|c| {
+            let u = read_uint(c, f.byte_order);
+            if f.signed {
+                sign_extend(u, 8 * w as u32)
+            } else {
+                u as i64
+            }
+        })
+        .collect()
+}
+
+/// Decodes a reply as the answer to `request` (a decoded request frame): the reply must be one
+/// the request gets, and every field that follows from the request (Modbus: byte count =
+/// 2 × quantity) and every element count taken from it must agree.
+pub fn decode_reply(p: &Protocol, request: &Frame, wire: &[u8]) -> Result<Frame, DecodeError> {
+    let frame = decode(p, Some(Direction::Response), Some(request.message.index), wire)?;
+    answers(p, request, &frame)?;
+    Ok(frame)
+}
+
+/// Whether `reply` answers `request`: a response the command lists, whose fields that follow
+/// from the request do.
+pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), DecodeError> {
+    let cmd = p.message(request.message);
+    let m = p.message(reply.message);
+    if request.message.direction != Direction::Request
+        || reply.message.direction != Direction::Response
+        || !cmd.responses.iter().any(|(i, _)| *i == reply.message.index)
+    {
+        return Err(DecodeError::NotAnAnswer {
+            message: m.name.clone(),
+            request: cmd.name.clone(),
+        });
+    }
+    let req_int = |name: &str| match request.get(name) {
+        Some(Raw::Int(v)) => Some(*v),
+        _ => None,
+    };
+    for f in &m.fields {
+        let at = m.layout.payload + f.offset;
+        if let Some(Follows::Request(rel)) = &f.follows {
+            let (Some(base), Some(Raw::Int(found))) = (req_int(&rel.field), reply.get(&f.name))
+            else {
+                continue;
+            };
+            let expected = rel.apply(base);
+            if *found != expected {
+                return Err(DecodeError::NotFollowing {
+                    message: m.name.clone(),
+                    field: f.name.clone(),
+                    offset: at,
+                    rule: format!("{} of the request", rel.describe(&rel.field)),
+                    expected,
+                    found: *found,
+                });
+            }
+        }
+        if let Some(rel) = f.repeat.as_ref().and_then(|r| r.request.as_ref()) {
+            let (Some(base), Some(Raw::List(list))) = (req_int(&rel.field), reply.get(&f.name))
+            else {
+                continue;
+            };
+            let expected = rel.apply(base);
+            let same = match usize::try_from(expected) {
+                Ok(n) => f.elements_len(n) == f.elements_len(list.len()),
+                Err(_) => false,
+            };
+            if !same {
+                return Err(DecodeError::BadCount {
+                    message: m.name.clone(),
+                    field: f.name.clone(),
+                    offset: at,
+                    expected: format!("{expected} ({} of the request)", rel.describe(&rel.field)),
+                    found: list.len() as i64,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Encodes a message for `address` from named raw values. Constants and repeated fields fill
 /// themselves in and need no value; every other leaf must be given exactly once.
 pub fn encode(
@@ -751,7 +1084,7 @@ pub fn encode(
     let lookup = |name: &str| values.iter().find(|v| v.name == name).map(|v| &v.raw);
     let int = |name: &str| match lookup(name) {
         Some(Raw::Int(i)) => Ok(*i),
-        Some(Raw::Text(_)) => Err(EncodeError::NotNumber {
+        Some(Raw::Text(_) | Raw::List(_)) => Err(EncodeError::NotNumber {
             field: name.to_owned(),
         }),
         None => Err(EncodeError::MissingValue {
@@ -759,20 +1092,126 @@ pub fn encode(
         }),
     };
     let o = m.layout;
-    let mut out = vec![0u8; p.frame_len(m)];
-    if let (Some(at), Some(s)) = (o.start, p.framing.start) {
-        out[at] = s;
+    // The repeated field's elements, checked against its bounds and its element type.
+    let mut list: &[i64] = &[];
+    let mut count_field: Option<(usize, i64)> = None;
+    if let Some((f, r)) = m.repeat() {
+        list = match lookup(&f.name) {
+            Some(Raw::List(l)) => l,
+            Some(_) => {
+                return Err(EncodeError::NotList {
+                    field: f.name.clone(),
+                })
+            }
+            None => {
+                return Err(EncodeError::MissingValue {
+                    field: f.name.clone(),
+                })
+            }
+        };
+        if list.len() < r.min || list.len() > r.max {
+            return Err(EncodeError::WrongCount {
+                field: f.name.clone(),
+                min: r.min,
+                max: r.max,
+                found: list.len(),
+            });
+        }
+        let (lo, hi) = if f.ty == FieldType::Bit {
+            (0, 1)
+        } else {
+            raw_limits(8 * f.width as u32, f.signed)
+        };
+        for &v in list {
+            if let Some((min, max)) = range_violation(f, None, v) {
+                return Err(EncodeError::NotInRange {
+                    field: f.name.clone(),
+                    value: v,
+                    min,
+                    max,
+                });
+            }
+            if v < lo || v > hi {
+                return Err(EncodeError::OutOfRange {
+                    field: f.name.clone(),
+                    value: v,
+                    min: lo,
+                    max: hi,
+                });
+            }
+        }
+        count_field = match r.count {
+            Count::Elements(i) => Some((i, list.len() as i64)),
+            Count::Bytes(i) => Some((i, f.elements_len(list.len()) as i64)),
+            Count::ToEnd => None,
+        };
+    }
+    let tail = m.repeat().map_or(0, |(f, _)| f.elements_len(list.len()));
+    let mut out = vec![0u8; p.frame_len(m) + tail];
+    if let Some(at) = o.start {
+        for (i, s) in p.framing.sync.iter().enumerate() {
+            out[at + i] = *s;
+        }
     }
     out[o.address] = address;
     out[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
+    if let (Some(l), Some(at)) = (&p.framing.length, o.length) {
+        let v = length_for(p, m.direction, out.len()).unwrap_or(0);
+        write_uint(v as u64, &mut out[at..at + l.width], p.byte_order);
+    }
     let mut ints: Vec<u64> = Vec::with_capacity(m.fields.len());
-    for f in &m.fields {
+    for (i, f) in m.fields.iter().enumerate() {
         let at = o.payload + f.offset;
+        if f.repeat.is_some() {
+            if f.ty == FieldType::Bit {
+                for (k, &v) in list.iter().enumerate() {
+                    out[at + k / 8] |= ((v & 1) as u8) << (k % 8);
+                }
+            } else {
+                for (k, &v) in list.iter().enumerate() {
+                    let s = at + k * f.width;
+                    write_uint(v as u64, &mut out[s..s + f.width], f.byte_order);
+                }
+            }
+            ints.push(0);
+            continue;
+        }
         let slot = &mut out[at..at + f.width];
+        let computed = match &f.follows {
+            Some(Follows::Field(other, rel)) => {
+                Some(rel.apply(ints.get(*other).map_or(0, |&v| v as i64)))
+            }
+            _ => count_field
+                .filter(|(c, _)| *c == i && lookup(&f.name).is_none())
+                .map(|(_, n)| n),
+        };
+        if let Some(v) = computed {
+            if let Some(Raw::Int(given)) = lookup(&f.name) {
+                if *given != v {
+                    return Err(EncodeError::Fixed {
+                        field: f.name.clone(),
+                        expected: v,
+                        found: *given,
+                    });
+                }
+            }
+            let (min, max) = raw_limits(8 * f.width as u32, f.signed);
+            if v < min || v > max {
+                return Err(EncodeError::OutOfRange {
+                    field: f.name.clone(),
+                    value: v,
+                    min,
+                    max,
+                });
+            }
+            write_uint(v as u64, slot, f.byte_order);
+            ints.push(v as u64);
+            continue;
+        }
         if f.is_ascii() {
             let text = match lookup(&f.name) {
                 Some(Raw::Text(t)) => t,
-                Some(Raw::Int(_)) => {
+                Some(Raw::Int(_) | Raw::List(_)) => {
                     return Err(EncodeError::NotText {
                         field: f.name.clone(),
                     })
@@ -880,12 +1319,16 @@ pub fn encode(
         ints.push(word);
     }
     let c = &p.framing.checksum;
-    let sum = checksum::compute(&c.algorithm, &out[..o.checksum]);
-    write_uint(
-        sum,
-        &mut out[o.checksum..o.checksum + c.len()],
-        c.byte_order,
-    );
+    let at = out.len() - c.len();
+    let sum = checksum::compute(&c.algorithm, out.get(c.covers_from..at).unwrap_or(&[]));
+    write_uint(sum, &mut out[at..], c.byte_order);
+    if m.is_variable() {
+        // A count field given a value, or one that follows another, may disagree with the
+        // list: what encode writes, decode must accept.
+        decode_as(p, r, &out).map_err(|e| EncodeError::Inconsistent {
+            reason: e.to_string(),
+        })?;
+    }
     Ok(out)
 }
 
@@ -896,19 +1339,35 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
     let mut wire = printed.to_vec();
     let o = m.layout;
     let flip = |order: ByteOrder| order != p.printed_byte_order;
+    let end = wire.len().saturating_sub(p.framing.checksum.len());
     for f in &m.fields {
         if f.is_ascii() || f.width < 2 || !flip(f.byte_order) {
             continue;
         }
         let at = o.payload + f.offset;
-        if let Some(s) = wire.get_mut(at..at + f.width) {
-            s.reverse();
+        let n = if f.repeat.is_some() {
+            end.saturating_sub(at) / f.width
+        } else {
+            1
+        };
+        for k in 0..n {
+            let s = at + k * f.width;
+            if let Some(s) = wire.get_mut(s..s + f.width) {
+                s.reverse();
+            }
         }
     }
     let c = &p.framing.checksum;
     if c.len() > 1 && flip(c.byte_order) {
-        if let Some(s) = wire.get_mut(o.checksum..o.checksum + c.len()) {
+        if let Some(s) = wire.get_mut(end..end + c.len()) {
             s.reverse();
+        }
+    }
+    if let (Some(l), Some(at)) = (&p.framing.length, o.length) {
+        if l.width > 1 && flip(p.byte_order) {
+            if let Some(s) = wire.get_mut(at..at + l.width) {
+                s.reverse();
+            }
         }
     }
     wire

@@ -53,7 +53,12 @@ pub struct Serial {
 pub struct Framing {
     pub section: Option<String>,
     pub layout: Vec<Part>,
+    /// The first start byte (the only one where the protocol has one).
     pub start: Option<u8>,
+    /// Every start byte, in order (empty without `start`): `FF FF` for Dynamixel.
+    pub sync: Vec<u8>,
+    /// The length field, where the framing has one.
+    pub length: Option<LengthField>,
     pub address: Address,
     pub request: DirectionFraming,
     pub response: DirectionFraming,
@@ -61,6 +66,15 @@ pub struct Framing {
     /// The layout of a frame with an empty payload, indexed by code length (0 to
     /// [`MAX_CODE_LEN`]); see [`Framing::head`].
     pub heads: Vec<FrameLayout>,
+}
+
+/// A length field: `width` bytes in the protocol's byte order, whose value is the number of
+/// bytes of the parts it `counts` plus `adjust`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LengthField {
+    pub width: usize,
+    pub counts: Vec<Part>,
+    pub adjust: i64,
 }
 
 /// The longest code a frame can have, in bytes.
@@ -71,6 +85,8 @@ pub const MAX_CODE_LEN: usize = 4;
 pub struct FrameLayout {
     /// `None` when the layout has no start byte.
     pub start: Option<usize>,
+    /// `None` when the framing has no length field.
+    pub length: Option<usize>,
     pub address: usize,
     pub code: usize,
     pub payload: usize,
@@ -93,7 +109,9 @@ impl Framing {
         self.layout
             .iter()
             .map(|p| match p {
-                Part::Start | Part::Address => 1,
+                Part::Start => self.sync.len(),
+                Part::Address => 1,
+                Part::Length => self.length.as_ref().map_or(0, |l| l.width),
                 Part::Checksum => self.checksum.len(),
                 Part::Code | Part::Payload => 0,
             })
@@ -128,6 +146,12 @@ pub struct DirectionFraming {
 pub enum ChecksumAlgorithm {
     /// 8-bit sum of every byte, modulo 256.
     Sum8,
+    /// The 8-bit sum inverted (ones' complement).
+    Sum8OnesComplement,
+    /// The 8-bit sum negated (two's complement).
+    Sum8TwosComplement,
+    /// 8-bit XOR of every byte.
+    Xor8,
     Crc(CrcParams),
 }
 
@@ -150,6 +174,9 @@ pub struct Checksum {
     pub byte_order: ByteOrder,
     pub catalogue: Option<String>,
     pub check: u64,
+    /// Offset of the first byte the checksum covers (it covers every byte from there up to
+    /// itself): 0 unless the spec says `covers_from`.
+    pub covers_from: usize,
 }
 
 impl Checksum {
@@ -262,9 +289,26 @@ pub struct Message {
     pub answers: Vec<usize>,
     pub broadcast: Option<Broadcast>,
     pub needs_request: bool,
+    /// Responses: the code is each answered command's code with these bits set.
+    pub code_from_request: Option<u8>,
+    /// The longest frame of this message: `layout.len` unless it has a repeated field, whose
+    /// elements `layout` leaves out (a frame with none).
+    pub max_len: usize,
 }
 
 impl Message {
+    /// The repeated field, if the message has one (always its last field).
+    pub fn repeat(&self) -> Option<(&Field, &Repeat)> {
+        self.fields
+            .last()
+            .and_then(|f| f.repeat.as_ref().map(|r| (f, r)))
+    }
+
+    /// Whether its frames vary in length.
+    pub fn is_variable(&self) -> bool {
+        self.repeat().is_some()
+    }
+
     /// The code as written in the spec: `0x2000`.
     pub fn code_hex(&self) -> String {
         let mut s = String::from("0x");
@@ -321,9 +365,80 @@ pub struct Field {
     pub equals: Option<usize>,
     pub special: Vec<Special>,
     pub bits: Vec<BitField>,
+    /// A repeated field: `width` is one element's (bytes; a bit element is 1 and packs eight to
+    /// a byte), `offset` where the first sits. Only the last field of a message repeats.
+    pub repeat: Option<Repeat>,
+    /// The value follows from another field (of this frame or of the request).
+    pub follows: Option<Follows>,
+}
+
+/// How many elements a repeated field has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Count {
+    /// The value of an earlier field (index) is the number of elements.
+    Elements(usize),
+    /// The value of an earlier field (index) is the number of bytes they take.
+    Bytes(usize),
+    /// As many as fit before the checksum.
+    ToEnd,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Repeat {
+    pub count: Count,
+    /// The fewest elements.
+    pub min: usize,
+    /// The most elements.
+    pub max: usize,
+    /// In a reply: the element count is this relation applied to a field of the request.
+    pub request: Option<Relation>,
+}
+
+/// `ceil(value × multiply / divide)` of a named field.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Relation {
+    pub field: String,
+    pub multiply: u64,
+    pub divide: u64,
+}
+
+impl Relation {
+    pub fn apply(&self, v: i64) -> i64 {
+        let n = i128::from(v) * i128::from(self.multiply);
+        let d = i128::from(self.divide.max(1));
+        let q = if n >= 0 { (n + d - 1) / d } else { n / d };
+        q.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
+    }
+
+    /// `value`, `2 × quantity`, `ceil(quantity / 8)`.
+    pub fn describe(&self, of: &str) -> String {
+        match (self.multiply, self.divide) {
+            (1, 1) => of.to_owned(),
+            (m, 1) => format!("{m} × {of}"),
+            (1, d) => format!("ceil({of} / {d})"),
+            (m, d) => format!("ceil({m} × {of} / {d})"),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Follows {
+    /// An earlier field of the same frame (index).
+    Field(usize, Relation),
+    /// A field of the request this frame answers (by name).
+    Request(Relation),
 }
 
 impl Field {
+    /// Bytes `n` elements of a repeated field take.
+    pub fn elements_len(&self, n: usize) -> usize {
+        if self.ty == FieldType::Bit {
+            n.div_ceil(8)
+        } else {
+            n.saturating_mul(self.width)
+        }
+    }
+
     pub fn is_ascii(&self) -> bool {
         self.ty == FieldType::Ascii
     }
@@ -386,6 +501,8 @@ pub enum StatedValue {
     Number(Rational),
     Name(String),
     Names(Vec<String>),
+    /// The elements of a repeated field.
+    Numbers(Vec<Rational>),
 }
 
 #[derive(Debug, Clone)]
@@ -398,6 +515,47 @@ pub struct Erratum {
 }
 
 impl Protocol {
+    /// What the code generator cannot emit yet, one line each (empty: it can emit all of it).
+    /// Generated code stays fixed-length: a spec using the variable-length language (length
+    /// field, repeated fields, replies computed from their request, sync sequences, the newer
+    /// checksums) is served by the interpreter (`--spec`) until the generator learns them.
+    pub fn generator_gaps(&self) -> Vec<String> {
+        let mut gaps = Vec::new();
+        let f = &self.framing;
+        if f.sync.len() > 1 {
+            gaps.push("a multi-byte sync sequence".to_owned());
+        }
+        if f.length.is_some() {
+            gaps.push("a length field".to_owned());
+        }
+        if f.checksum.covers_from != 0 {
+            gaps.push("a checksum that does not cover the whole frame".to_owned());
+        }
+        if !matches!(f.checksum.algorithm, ChecksumAlgorithm::Sum8 | ChecksumAlgorithm::Crc(_)) {
+            gaps.push("a checksum other than sum8 or a CRC".to_owned());
+        }
+        for m in self.commands.iter().chain(&self.responses) {
+            if m.code.is_empty() {
+                gaps.push(format!("`{}` has no code", m.name));
+            }
+            if m.code_from_request.is_some() {
+                gaps.push(format!("`{}`: a code derived from the request's", m.name));
+            }
+            for x in &m.fields {
+                if x.repeat.is_some() {
+                    gaps.push(format!("`{}.{}`: a repeated field", m.name, x.name));
+                }
+                if x.follows.is_some() {
+                    gaps.push(format!("`{}.{}`: a value that follows another", m.name, x.name));
+                }
+                if x.width == 3 {
+                    gaps.push(format!("`{}.{}`: a 24-bit integer", m.name, x.name));
+                }
+            }
+        }
+        gaps
+    }
+
     pub fn message(&self, r: MessageRef) -> &Message {
         match r.direction {
             Direction::Request => &self.commands[r.index],
@@ -421,7 +579,7 @@ impl Protocol {
     pub fn max_frame_len(&self, d: Direction) -> usize {
         self.messages(d)
             .iter()
-            .map(|m| self.frame_len(m))
+            .map(|m| m.max_len)
             .max()
             .unwrap_or(0)
     }

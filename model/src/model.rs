@@ -141,6 +141,38 @@ pub enum Part {
     Code,
     Payload,
     Checksum,
+    /// A length field (see [`LengthField`]).
+    Length,
+}
+
+/// The start of a frame: one byte (`0xAA`) or a sync sequence (`[0xFF, 0xFF]`).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(untagged)]
+pub enum StartBytes {
+    One(i64),
+    Many(Vec<i64>),
+}
+
+impl StartBytes {
+    pub fn bytes(&self) -> Vec<i64> {
+        match self {
+            StartBytes::One(b) => vec![*b],
+            StartBytes::Many(v) => v.clone(),
+        }
+    }
+}
+
+/// A length field in the framing: its width and which parts of the frame it counts.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LengthField {
+    /// Bytes: 1 or 2 (in the protocol's byte order).
+    pub width: i64,
+    /// The parts whose bytes it counts (`[code, payload, checksum]`).
+    pub counts: Vec<Part>,
+    /// Added to the count of those bytes (optional, default 0).
+    #[serde(default)]
+    pub adjust: Option<i64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -150,7 +182,9 @@ pub struct Framing {
     pub section: Option<String>,
     pub layout: Vec<Part>,
     #[serde(default)]
-    pub start: Option<i64>,
+    pub start: Option<StartBytes>,
+    #[serde(default)]
+    pub length: Option<LengthField>,
     pub address: Address,
     pub request: DirectionFraming,
     pub response: DirectionFraming,
@@ -187,6 +221,12 @@ pub struct DirectionFraming {
 #[serde(rename_all = "snake_case")]
 pub enum ChecksumAlgorithm {
     Sum8,
+    /// The 8-bit sum, inverted (ones' complement): `!sum`.
+    Sum8OnesComplement,
+    /// The 8-bit sum, negated (two's complement): `-sum`, so all bytes sum to zero.
+    Sum8TwosComplement,
+    /// 8-bit XOR of every byte.
+    Xor8,
     Crc,
 }
 
@@ -210,6 +250,10 @@ pub struct Checksum {
     #[serde(default)]
     pub catalogue: Option<String>,
     pub check: i64,
+    /// The first part of the frame the checksum covers (default: the first part); it covers
+    /// every byte from there up to itself.
+    #[serde(default)]
+    pub covers_from: Option<Part>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -324,6 +368,16 @@ pub struct Response {
     pub fields: Vec<Field>,
     #[serde(default)]
     pub needs_request: bool,
+    /// The reply's code derives from the request's: for every command that lists it, its
+    /// code is the command's code with these bits set (Modbus exceptions: `0x80`).
+    #[serde(default)]
+    pub code_from_request: Option<CodeFromRequest>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CodeFromRequest {
+    pub or: i64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -335,7 +389,11 @@ pub enum FieldType {
     I8,
     I16,
     I32,
+    U24,
+    I24,
     Ascii,
+    /// One bit; only as the element of a `repeat` (coils), packed least significant bit first.
+    Bit,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -363,7 +421,63 @@ pub struct Field {
     #[serde(default)]
     pub bits: Vec<BitField>,
     #[serde(default)]
+    pub repeat: Option<Repeat>,
+    #[serde(default)]
+    pub follows: Option<Follows>,
+    #[serde(default)]
     pub doc: Option<String>,
+}
+
+/// A repeated field: `count` elements of the field's type.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Repeat {
+    /// An earlier field of the message holding the count, or `end`: to the end of the payload.
+    pub count: String,
+    /// What `count` counts: `elements` (default) or `bytes`.
+    #[serde(default)]
+    pub of: Option<CountOf>,
+    /// The fewest elements a frame carries (default 0).
+    #[serde(default)]
+    pub min: Option<i64>,
+    /// The most elements a frame may carry.
+    pub max: i64,
+    /// In a reply: the element count follows from a field of the request.
+    #[serde(default)]
+    pub request: Option<Relation>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CountOf {
+    Elements,
+    Bytes,
+}
+
+/// `ceil(field × multiply / divide)`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Relation {
+    pub field: String,
+    #[serde(default)]
+    pub multiply: Option<i64>,
+    #[serde(default)]
+    pub divide: Option<i64>,
+}
+
+/// A field whose value follows from another: an earlier field of the same frame (`field`) or,
+/// in a reply, a field of the request (`request`); `ceil(value × multiply / divide)`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Follows {
+    #[serde(default)]
+    pub field: Option<String>,
+    #[serde(default)]
+    pub request: Option<String>,
+    #[serde(default)]
+    pub multiply: Option<i64>,
+    #[serde(default)]
+    pub divide: Option<i64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]

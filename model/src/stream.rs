@@ -72,7 +72,7 @@
 //! out-of-spec frame ends the pairing, as an ambiguous one does.
 
 use crate::interp::{self, DecodeError, Frame, Raw};
-use crate::ir::{Direction, FrameLayout, Message, MessageRef, Protocol};
+use crate::ir::{Count, Direction, FrameLayout, Message, MessageRef, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
 pub const MAX_SKIPPED_RUN: usize = 256;
@@ -133,9 +133,67 @@ impl Event {
 /// One message as the framing rule sees it.
 #[derive(Debug, Clone)]
 struct Shape {
+    message: MessageRef,
     code: Vec<u8>,
-    len: usize,
     at: FrameLayout,
+}
+
+/// The lengths a message's frame can have, as far as the buffered bytes tell.
+enum Lens {
+    /// The length depends on bytes not yet buffered (a length or count field).
+    Need,
+    /// Any of these (none: the bytes say the frame is longer than the message allows).
+    Are(Vec<usize>),
+}
+
+/// The frame lengths message `m` could have given the bytes at the head of the buffer: its
+/// fixed length; the length its length field or count field gives; for a repeat to the end of
+/// the frame, every whole number of elements between its bounds.
+fn lens(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
+    let Some((f, r)) = m.repeat() else {
+        return Lens::Are(vec![m.layout.len]);
+    };
+    let within = |len: i64| -> Lens {
+        let ok = usize::try_from(len)
+            .ok()
+            .filter(|l| (m.layout.len..=m.max_len).contains(l));
+        Lens::Are(ok.into_iter().collect())
+    };
+    if let (Some(l), Some(at)) = (&p.framing.length, m.layout.length) {
+        let Some(bytes) = buf.get(at..at + l.width) else {
+            return Lens::Need;
+        };
+        let v = interp::read_uint(bytes, p.byte_order) as i64;
+        let base = interp::length_for(p, m.direction, m.layout.len).unwrap_or(0);
+        return within(m.layout.len as i64 + (v - base));
+    }
+    let count_at = |i: usize| {
+        let c = &m.fields[i];
+        (m.layout.payload + c.offset, c)
+    };
+    match r.count {
+        Count::Elements(i) | Count::Bytes(i) => {
+            let (at, c) = count_at(i);
+            let Some(bytes) = buf.get(at..at + c.width) else {
+                return Lens::Need;
+            };
+            let v = interp::read_uint(bytes, c.byte_order);
+            let n = usize::try_from(v).unwrap_or(usize::MAX);
+            let tail = match r.count {
+                Count::Elements(_) => f.elements_len(n),
+                _ => n,
+            };
+            within(m.layout.len.saturating_add(tail) as i64)
+        }
+        Count::ToEnd => {
+            let step = if f.ty == crate::ir::FieldType::Bit { 1 } else { f.width.max(1) };
+            Lens::Are(
+                (m.layout.len..=m.max_len)
+                    .filter(|l| (l - m.layout.len) % step == 0)
+                    .collect(),
+            )
+        }
+    }
 }
 
 /// What one step of the framing rule did.
@@ -172,11 +230,23 @@ impl<'p> StreamDecoder<'p> {
             if direction.is_some_and(|want| want != d) {
                 continue;
             }
-            for m in p.messages(d) {
-                shapes.push(shape(p, m));
+            for (index, m) in p.messages(d).iter().enumerate() {
+                shapes.push(Shape {
+                    message: MessageRef {
+                        direction: d,
+                        index,
+                    },
+                    code: m.code.clone(),
+                    at: m.layout,
+                });
             }
         }
-        let capacity = shapes.iter().map(|s| s.len).max().unwrap_or(0).max(1);
+        let capacity = shapes
+            .iter()
+            .map(|s| p.message(s.message).max_len)
+            .max()
+            .unwrap_or(0)
+            .max(1);
         StreamDecoder {
             p,
             direction,
@@ -247,12 +317,19 @@ impl<'p> StreamDecoder<'p> {
             self.drop_byte(out);
             return Step::Progress;
         }
-        if !flushing && live.iter().any(|s| s.len > self.buf.len()) {
+        let mut all = Vec::new();
+        for s in &live {
+            match lens(self.p, self.p.message(s.message), &self.buf) {
+                Lens::Need if flushing => {}
+                Lens::Need => return Step::NeedMore,
+                Lens::Are(l) => all.extend(l),
+            }
+        }
+        if !flushing && all.iter().any(|&l| l > self.buf.len()) {
             return Step::NeedMore;
         }
-        let mut lens: Vec<usize> = live
-            .iter()
-            .map(|s| s.len)
+        let mut lens: Vec<usize> = all
+            .into_iter()
             .filter(|&l| l <= self.buf.len())
             .collect();
         lens.sort_unstable_by(|a, b| b.cmp(a));
@@ -296,9 +373,11 @@ impl<'p> StreamDecoder<'p> {
     /// Whether the buffered bytes agree with a message so far.
     fn agrees(&self, s: &Shape) -> bool {
         let buf = &self.buf;
-        if let (Some(at), Some(start)) = (s.at.start, self.p.framing.start) {
-            if buf.get(at).is_some_and(|&b| b != start) {
-                return false;
+        if let Some(at) = s.at.start {
+            for (i, &start) in self.p.framing.sync.iter().enumerate() {
+                if buf.get(at + i).is_some_and(|&b| b != start) {
+                    return false;
+                }
             }
         }
         for (i, &c) in s.code.iter().enumerate() {
@@ -382,14 +461,6 @@ impl<'p> StreamDecoder<'p> {
                 bytes: std::mem::take(&mut self.noise),
             });
         }
-    }
-}
-
-fn shape(p: &Protocol, m: &Message) -> Shape {
-    Shape {
-        code: m.code.clone(),
-        len: p.frame_len(m),
-        at: m.layout,
     }
 }
 
