@@ -228,7 +228,12 @@ pub fn parse_line(p: &Spec, line: &str) -> Result<Parsed, String> {
     let r = find_message(p, &input.message, direction)?;
     let m = p.message(r);
     if let Some(code) = &input.code {
-        let bytes = interp::parse_hex(code).map_err(|e| format!("code `{code}`: {e}"))?;
+        let bytes = if matches!(code.trim(), "" | "0x" | "0X") {
+            // A message without a code (a Dynamixel status packet) prints as "0x".
+            Vec::new()
+        } else {
+            interp::parse_hex(code).map_err(|e| format!("code `{code}`: {e}"))?
+        };
         if bytes != m.code {
             return Err(format!(
                 "code {code} does not match {} ({})",

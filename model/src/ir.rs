@@ -548,7 +548,7 @@ impl Protocol {
                 if x.follows.is_some() {
                     gaps.push(format!("`{}.{}`: a value that follows another", m.name, x.name));
                 }
-                if x.width == 3 {
+                if matches!(x.ty, FieldType::U24 | FieldType::I24) {
                     gaps.push(format!("`{}.{}`: a 24-bit integer", m.name, x.name));
                 }
             }
