@@ -307,6 +307,10 @@ struct DecodeArgs {
     /// The request (a command name) the frames answer: settles responses only it can tell apart.
     #[arg(long, value_name = "COMMAND")]
     reply_to: Option<String>,
+    /// The request frame (hex) the frames answer: each frame must be a reply it gets, and every
+    /// value that follows from the request must (Modbus: byte count = 2 × quantity).
+    #[arg(long, value_name = "HEX", conflicts_with_all = ["stream", "reply_to", "direction"])]
+    request: Option<String>,
     /// Read a raw bus capture (binary) from FILE, `-` for stdin, instead of hex arguments.
     #[arg(long, value_name = "FILE")]
     stream: Option<PathBuf>,
@@ -557,7 +561,22 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
                 )
             })
     });
-    let direction = args.direction.map(Direction::from);
+    let mut direction = args.direction.map(Direction::from);
+    let mut reply_to = reply_to;
+    let request = match &args.request {
+        None => None,
+        Some(text) => {
+            let frame = busspec_json::parse_hex(text)
+                .and_then(|wire| {
+                    busspec_model::interp::decode(p, Some(Direction::Request), None, &wire)
+                        .map_err(|e| e.to_string())
+                })
+                .unwrap_or_else(|e| usage_error("decode", format!("--request {text}: {e}")));
+            direction = Some(Direction::Response);
+            reply_to = Some(frame.message.index);
+            Some(frame)
+        }
+    };
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     if let Some(file) = &args.stream {
@@ -567,6 +586,9 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
     for (i, text) in args.frames.iter().enumerate() {
         let wire = busspec_json::parse_hex(text);
         let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
+            if let Some(req) = &request {
+                busspec_model::interp::decode_reply(p, req, wire).map_err(|e| e.to_string())?;
+            }
             if args.lenient {
                 engine.decode_lenient(direction, reply_to, wire)
             } else {

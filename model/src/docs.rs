@@ -87,6 +87,15 @@ fn range_text(r: Option<(i64, i64)>) -> String {
         .unwrap_or_else(|| "—".into())
 }
 
+/// A message's frame length: `8`, or `7..=259` for one with a repeated field.
+fn frame_bytes(p: &Protocol, m: &Message) -> String {
+    if let Some((f, r)) = m.repeat() {
+        format!("{}..={}", p.frame_len(m) + f.elements_len(r.min), m.max_len)
+    } else {
+        p.frame_len(m).to_string()
+    }
+}
+
 fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
     let mut notes = Vec::new();
     if let Some(c) = f.constant {
@@ -101,6 +110,36 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
     if let Some(o) = f.equals {
         notes.push(format!("repeats `{}`", m.fields[o].name));
     }
+    match &f.follows {
+        Some(Follows::Field(_, rel)) => {
+            notes.push(format!("always {}", rel.describe(&format!("`{}`", rel.field))))
+        }
+        Some(Follows::Request(rel)) => notes.push(format!(
+            "in a reply, {} of the request",
+            rel.describe(&format!("`{}`", rel.field))
+        )),
+        None => {}
+    }
+    if let Some(r) = &f.repeat {
+        let count = match r.count {
+            Count::Elements(i) => format!("as many as `{}` says", m.fields[i].name),
+            Count::Bytes(i) => format!("as many bytes as `{}` says", m.fields[i].name),
+            Count::ToEnd => "to the end of the frame".to_owned(),
+        };
+        let bits = if f.ty == FieldType::Bit {
+            ", eight to a byte, least significant bit first"
+        } else {
+            ""
+        };
+        notes.push(format!("{}..={} elements, {count}{bits}", r.min, r.max));
+        if let Some(rel) = &r.request {
+            notes.push(format!(
+                "in a reply, {} elements from the request",
+                rel.describe(&format!("`{}`", rel.field))
+            ));
+        }
+    }
+
     for s in &f.special {
         notes.push(format!(
             "{} = `{}`{}",
@@ -520,7 +559,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 anchor(&m.name),
                 kind_name(m),
                 m.section,
-                p.frame_len(m)
+                frame_bytes(p, m)
             );
         }
         o.push('\n');
@@ -535,10 +574,14 @@ pub fn render(p: &Protocol, source: &str) -> String {
             );
             let _ = writeln!(
                 o,
-                "Code `{}`, {}, {} bytes per frame.{}\n",
+                "Code `{}`, {}, {} bytes per frame.{}{}\n",
                 m.code_hex(),
                 kind_name(m),
-                p.frame_len(m),
+                frame_bytes(p, m),
+                match m.code_from_request {
+                    Some(or) => format!(" Its code is the request's with 0x{or:02X} set."),
+                    None => String::new(),
+                },
                 if m.needs_request {
                     " Shares its code and length with other responses: decode it together with the request it answers."
                 } else {
