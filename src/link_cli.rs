@@ -592,7 +592,10 @@ mod tests {
                         StatedValue::Names(ns) => serde_json::to_string(ns).unwrap_or_default(),
                         StatedValue::Numbers(ns) => format!(
                             "[{}]",
-                            ns.iter().map(|r| r.to_string()).collect::<Vec<_>>().join(",")
+                            ns.iter()
+                                .map(|r| r.to_string())
+                                .collect::<Vec<_>>()
+                                .join(",")
                         ),
                     };
                     format!("{name}={text}")

@@ -360,7 +360,10 @@ fn field_value(
 ) -> Result<Raw, String> {
     if f.repeat.is_some() && bit.is_none() {
         let Ok(items) = serde_json::from_str::<Vec<Box<RawValue>>>(raw.trim()) else {
-            return Err(format!("{name} takes a list of numbers, got {}", raw.trim()));
+            return Err(format!(
+                "{name} takes a list of numbers, got {}",
+                raw.trim()
+            ));
         };
         let mut scalar = f.clone();
         scalar.repeat = None;

@@ -403,8 +403,12 @@ fn repeat_shape(m: &Message, f: &Field) -> Option<String> {
     let r = f.repeat.as_ref()?;
     let at = |i: usize| m.fields.get(i).map_or(0, |c| c.offset);
     let count = match r.count {
-        crate::ir::Count::Elements(i) => format!("elements counted by the field at payload offset {}", at(i)),
-        crate::ir::Count::Bytes(i) => format!("bytes counted by the field at payload offset {}", at(i)),
+        crate::ir::Count::Elements(i) => {
+            format!("elements counted by the field at payload offset {}", at(i))
+        }
+        crate::ir::Count::Bytes(i) => {
+            format!("bytes counted by the field at payload offset {}", at(i))
+        }
         crate::ir::Count::ToEnd => "to the end of the frame".to_owned(),
     };
     Some(format!("{count}, {}..={} elements", r.min, r.max))
@@ -424,7 +428,10 @@ fn follows_shape(m: &Message, f: &Field) -> Option<String> {
         (Some(crate::ir::Follows::Request(rel)), _) => {
             Some(format!("{} of the request", rel.describe(&rel.field)))
         }
-        (None, Some(rel)) => Some(format!("element count {} of the request", rel.describe(&rel.field))),
+        (None, Some(rel)) => Some(format!(
+            "element count {} of the request",
+            rel.describe(&rel.field)
+        )),
         (None, None) => None,
     }
 }
@@ -636,7 +643,10 @@ impl<'a> Differ<'a> {
                 if s.is_empty() {
                     "none".to_owned()
                 } else {
-                    s.iter().map(|b| format!("{b:02X}")).collect::<Vec<_>>().join(" ")
+                    s.iter()
+                        .map(|b| format!("{b:02X}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
                 }
             };
             self.wire(
@@ -648,11 +658,8 @@ impl<'a> Differ<'a> {
         if o.length != n.length {
             let show = |l: &Option<crate::ir::LengthField>| match l {
                 None => "none".to_owned(),
-                Some(l) => format!(
-                    "{} byte(s) counting {:?}{:+}",
-                    l.width, l.counts, l.adjust
-                )
-                .to_lowercase(),
+                Some(l) => format!("{} byte(s) counting {:?}{:+}", l.width, l.counts, l.adjust)
+                    .to_lowercase(),
             };
             self.wire(
                 "framing_changed",
@@ -1071,7 +1078,9 @@ impl<'a> Differ<'a> {
         }
         if m.code_from_request != x.code_from_request {
             let show = |c: Option<u8>| {
-                c.map_or("its own".to_owned(), |c| format!("the request's | 0x{c:02X}"))
+                c.map_or("its own".to_owned(), |c| {
+                    format!("the request's | 0x{c:02X}")
+                })
             };
             self.wire(
                 "code_from_request_changed",

@@ -111,9 +111,10 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
         notes.push(format!("repeats `{}`", m.fields[o].name));
     }
     match &f.follows {
-        Some(Follows::Field(_, rel)) => {
-            notes.push(format!("always {}", rel.describe(&format!("`{}`", rel.field))))
-        }
+        Some(Follows::Field(_, rel)) => notes.push(format!(
+            "always {}",
+            rel.describe(&format!("`{}`", rel.field))
+        )),
         Some(Follows::Request(rel)) => notes.push(format!(
             "in a reply, {} of the request",
             rel.describe(&format!("`{}`", rel.field))
@@ -240,7 +241,10 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
                 StatedValue::Names(n) => format!("{k} = [{}]", n.join(", ")),
                 StatedValue::Numbers(n) => format!(
                     "{k} = [{}]",
-                    n.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", ")
+                    n.iter()
+                        .map(|x| x.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             })
             .collect();
@@ -378,7 +382,12 @@ pub fn render(p: &Protocol, source: &str) -> String {
             Part::Length => {
                 let l = f.length.as_ref();
                 let counts: Vec<String> = l
-                    .map(|l| l.counts.iter().map(|p| format!("{p:?}").to_lowercase()).collect())
+                    .map(|l| {
+                        l.counts
+                            .iter()
+                            .map(|p| format!("{p:?}").to_lowercase())
+                            .collect()
+                    })
                     .unwrap_or_default();
                 let adjust = match l.map_or(0, |l| l.adjust) {
                     0 => String::new(),
@@ -451,7 +460,11 @@ pub fn render(p: &Protocol, source: &str) -> String {
             let _ = writeln!(o, "Checksum: 8-bit sum of the bytes, negated (two's complement; check value 0x{:02X} over \"123456789\").\n", c.check);
         }
         ChecksumAlgorithm::Xor8 => {
-            let _ = writeln!(o, "Checksum: XOR of the bytes (check value 0x{:02X} over \"123456789\").\n", c.check);
+            let _ = writeln!(
+                o,
+                "Checksum: XOR of the bytes (check value 0x{:02X} over \"123456789\").\n",
+                c.check
+            );
         }
         ChecksumAlgorithm::Crc(k) => {
             let _ = writeln!(

@@ -10,8 +10,7 @@ use std::fmt;
 
 use crate::checksum;
 use crate::ir::{
-    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, Message, MessageRef,
-    Protocol,
+    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, Message, MessageRef, Protocol,
 };
 
 /// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
@@ -537,17 +536,14 @@ pub fn decode(
         .filter(|r| fits_len(p, p.message(*r), wire))
         .collect();
     if by_len.is_empty() {
-        if let [r] = by_code[..] {
-            let m = p.message(r);
-            if m.is_variable() && wire.len() >= m.layout.len && wire.len() <= m.max_len {
-                return Err(element_count(p, m, wire).err().unwrap_or(
-                    DecodeError::WrongLength {
-                        message: m.name.clone(),
-                        expected: vec![m.layout.len],
-                        found: wire.len(),
-                    },
-                ));
-            }
+        // A message with a repeated field that could be this long: say what in it disagrees.
+        let counted = by_code.iter().find_map(|r| {
+            let m = p.message(*r);
+            let fits = m.is_variable() && (m.layout.len..=m.max_len).contains(&wire.len());
+            fits.then(|| element_count(p, m, wire).err()).flatten()
+        });
+        if let Some(e) = counted {
+            return Err(e);
         }
         let mut expected: Vec<usize> = by_code.iter().map(|r| p.frame_len(p.message(*r))).collect();
         expected.sort_unstable();
@@ -689,21 +685,39 @@ fn check_sync(p: &Protocol, at: Option<usize>, wire: &[u8]) -> Result<(), Decode
 /// parts; only the payload varies, so the value follows from the frame's length).
 pub fn length_for(p: &Protocol, d: Direction, len: usize) -> Option<i64> {
     let l = p.framing.length.as_ref()?;
-    let code_len = p.framing.direction(d).code_lengths.first().copied().unwrap_or(0);
+    let code_len = p
+        .framing
+        .direction(d)
+        .code_lengths
+        .first()
+        .copied()
+        .unwrap_or(0);
     let head = p.framing.head(code_len);
     let payload = len.checked_sub(head.len)?;
-    Some(crate::validate::length_value(&p.framing, l, code_len, payload))
+    Some(crate::validate::length_value(
+        &p.framing, l, code_len, payload,
+    ))
 }
 
 /// Refuses a frame whose length field disagrees with its length.
-fn check_length_field(p: &Protocol, directions: &[Direction], wire: &[u8]) -> Result<(), DecodeError> {
+fn check_length_field(
+    p: &Protocol,
+    directions: &[Direction],
+    wire: &[u8],
+) -> Result<(), DecodeError> {
     let Some(l) = &p.framing.length else {
         return Ok(());
     };
     let Some(d) = directions.first() else {
         return Ok(());
     };
-    let code_len = p.framing.direction(*d).code_lengths.first().copied().unwrap_or(0);
+    let code_len = p
+        .framing
+        .direction(*d)
+        .code_lengths
+        .first()
+        .copied()
+        .unwrap_or(0);
     let Some(at) = p.framing.head(code_len).length else {
         return Ok(());
     };
@@ -744,9 +758,18 @@ pub fn element_count(p: &Protocol, m: &Message, wire: &[u8]) -> Result<usize, De
         expected,
         found,
     };
-    let extra = wire.len().checked_sub(m.layout.len).ok_or_else(|| bad(format!("at least {}", r.min), 0))?;
+    let extra = wire
+        .len()
+        .checked_sub(m.layout.len)
+        .ok_or_else(|| bad(format!("at least {}", r.min), 0))?;
     let bits = f.ty == FieldType::Bit;
-    let per_byte = |bytes: usize| if bits { bytes * 8 } else { bytes / f.width.max(1) };
+    let per_byte = |bytes: usize| {
+        if bits {
+            bytes * 8
+        } else {
+            bytes / f.width.max(1)
+        }
+    };
     let count_value = |i: usize| -> i64 {
         let c = &m.fields[i];
         let o = m.layout.payload + c.offset;
@@ -985,7 +1008,12 @@ fn read_elements(f: &Field, bytes: &[u8]) -> Vec<i64> {
 /// the request gets, and every field that follows from the request (Modbus: byte count =
 /// 2 × quantity) and every element count taken from it must agree.
 pub fn decode_reply(p: &Protocol, request: &Frame, wire: &[u8]) -> Result<Frame, DecodeError> {
-    let frame = decode(p, Some(Direction::Response), Some(request.message.index), wire)?;
+    let frame = decode(
+        p,
+        Some(Direction::Response),
+        Some(request.message.index),
+        wire,
+    )?;
     answers(p, request, &frame)?;
     Ok(frame)
 }

@@ -531,7 +531,10 @@ impl Protocol {
         if f.checksum.covers_from != 0 {
             gaps.push("a checksum that does not cover the whole frame".to_owned());
         }
-        if !matches!(f.checksum.algorithm, ChecksumAlgorithm::Sum8 | ChecksumAlgorithm::Crc(_)) {
+        if !matches!(
+            f.checksum.algorithm,
+            ChecksumAlgorithm::Sum8 | ChecksumAlgorithm::Crc(_)
+        ) {
             gaps.push("a checksum other than sum8 or a CRC".to_owned());
         }
         for m in self.commands.iter().chain(&self.responses) {
@@ -546,7 +549,10 @@ impl Protocol {
                     gaps.push(format!("`{}.{}`: a repeated field", m.name, x.name));
                 }
                 if x.follows.is_some() {
-                    gaps.push(format!("`{}.{}`: a value that follows another", m.name, x.name));
+                    gaps.push(format!(
+                        "`{}.{}`: a value that follows another",
+                        m.name, x.name
+                    ));
                 }
                 if matches!(x.ty, FieldType::U24 | FieldType::I24) {
                     gaps.push(format!("`{}.{}`: a 24-bit integer", m.name, x.name));

@@ -186,7 +186,11 @@ fn lens(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
             within(m.layout.len.saturating_add(tail) as i64)
         }
         Count::ToEnd => {
-            let step = if f.ty == crate::ir::FieldType::Bit { 1 } else { f.width.max(1) };
+            let step = if f.ty == crate::ir::FieldType::Bit {
+                1
+            } else {
+                f.width.max(1)
+            };
             Lens::Are(
                 (m.layout.len..=m.max_len)
                     .filter(|l| (l - m.layout.len) % step == 0)
@@ -328,10 +332,7 @@ impl<'p> StreamDecoder<'p> {
         if !flushing && all.iter().any(|&l| l > self.buf.len()) {
             return Step::NeedMore;
         }
-        let mut lens: Vec<usize> = all
-            .into_iter()
-            .filter(|&l| l <= self.buf.len())
-            .collect();
+        let mut lens: Vec<usize> = all.into_iter().filter(|&l| l <= self.buf.len()).collect();
         lens.sort_unstable_by(|a, b| b.cmp(a));
         lens.dedup();
         let mut out_of_spec: Option<(usize, DecodeError)> = None;

@@ -345,8 +345,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`)");
         }
         check_section(&r.section, &path, sink);
-        let code_from_request =
-            code_from_request(r, &code, &answers, &commands, &path, sink);
+        let code_from_request = code_from_request(r, &code, &answers, &commands, &path, sink);
         check_request_fields(&fields, &answers, &commands, &path, sink);
         let layout = frame_layout(&framing, code.len(), payload_len);
         check_length_fits(&framing, &path, code.len(), max_payload, sink);
@@ -486,7 +485,10 @@ fn check_request_fields(
     sink: &mut Sink,
 ) {
     for f in fields {
-        let (rel, key) = match (&f.follows, f.repeat.as_ref().and_then(|r| r.request.as_ref())) {
+        let (rel, key) = match (
+            &f.follows,
+            f.repeat.as_ref().and_then(|r| r.request.as_ref()),
+        ) {
             (Some(Follows::Request(rel)), _) => (rel, "follows"),
             (_, Some(rel)) => (rel, "repeat.request"),
             _ => continue,
@@ -695,6 +697,18 @@ fn flag_sets(spec: &model::Spec, sink: &mut Sink) -> Vec<FlagSet> {
     out
 }
 
+/// A layout part as the spec writes it.
+fn part_name(p: Part) -> &'static str {
+    match p {
+        Part::Start => "start",
+        Part::Address => "address",
+        Part::Length => "length",
+        Part::Code => "code",
+        Part::Payload => "payload",
+        Part::Checksum => "checksum",
+    }
+}
+
 fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framing {
     let path = "framing";
     let count = |p: Part| f.layout.iter().filter(|x| **x == p).count();
@@ -731,12 +745,18 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             }
             for (i, part) in l.counts.iter().enumerate() {
                 if l.counts[..i].contains(part) {
-                    sink.error(join(lpath, "counts"), format!("`{part:?}` listed twice"));
+                    sink.error(
+                        join(lpath, "counts"),
+                        format!("`{}` listed twice", part_name(*part)),
+                    );
                 }
                 if !f.layout.contains(part) {
                     sink.error(
                         join(lpath, "counts"),
-                        format!("counts `{part:?}`, which the layout does not have"),
+                        format!(
+                            "counts `{}`, which the layout does not have",
+                            part_name(*part)
+                        ),
                     );
                 }
             }
@@ -921,7 +941,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             Some(at) if f.layout.contains(&part) => framing.checksum.covers_from = at,
             _ => sink.error(
                 "framing.checksum.covers_from",
-                format!("the checksum cannot cover from `{part:?}`: name a part of the layout before the payload"),
+                format!("the checksum cannot cover from `{}`: name a part of the layout before the payload", part_name(part)),
             ),
         }
     }
@@ -1143,6 +1163,7 @@ fn message_body(
     let mut out: Vec<Field> = Vec::new();
     let mut offset = 0usize;
     let mut tail = 0usize;
+    let mut min_tail = 0usize;
     for (i, f) in fields.iter().enumerate() {
         let p = join(&fpath, &f.name);
         check_ident(&f.name, &p, "field", sink);
@@ -1165,12 +1186,15 @@ fn message_body(
             }
         }
         match &field.repeat {
-            Some(r) => tail = field.elements_len(r.max),
+            Some(r) => {
+                tail = field.elements_len(r.max);
+                min_tail = field.elements_len(r.min);
+            }
             None => offset += field.width,
         }
         out.push(field);
     }
-    if offset < dir.payload_min || offset + tail > dir.payload_max {
+    if offset + min_tail < dir.payload_min || offset + tail > dir.payload_max {
         let most = if tail > 0 {
             format!(" (and up to {} more in the repeated field)", tail)
         } else {
@@ -1527,7 +1551,10 @@ fn repeat(
     }
     let count = if r.count == "end" {
         if r.of.is_some() {
-            sink.error(join(p, "of"), "`of` says what a count field counts; `end` has none");
+            sink.error(
+                join(p, "of"),
+                "`of` says what a count field counts; `end` has none",
+            );
         }
         Count::ToEnd
     } else {
@@ -2058,7 +2085,9 @@ fn compare(
                 return Err("a repeated field; state its elements as a list of numbers".to_owned());
             };
             // Bits are decoded eight to a byte; the example may leave out the padding.
-            let padded = f.ty == FieldType::Bit && list.len() >= want.len() && list.len() - want.len() < 8
+            let padded = f.ty == FieldType::Bit
+                && list.len() >= want.len()
+                && list.len() - want.len() < 8
                 && list[want.len()..].iter().all(|&b| b == 0);
             if list.len() != want.len() && !padded {
                 return Err(format!(

@@ -17,6 +17,82 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- the variable-length language (fixtures made from valid/minimal_variable.yaml)
+    (
+        "length_width_too_wide",
+        &[("framing.length.width", "a length field is 1 or 2 bytes, not 3")],
+    ),
+    (
+        "length_without_layout_part",
+        &[("framing.length", "a length field is described but the layout has no `length`")],
+    ),
+    (
+        "length_counts_part_twice",
+        &[("framing.length.counts", "`start` listed twice")],
+    ),
+    (
+        "sync_too_long",
+        &[("framing.start", "a sync sequence is 1 to 4 bytes, found 5")],
+    ),
+    (
+        "covers_from_payload",
+        &[("framing.checksum.covers_from", "cannot cover from `payload`")],
+    ),
+    (
+        "xor8_with_crc_params",
+        &[("framing.checksum.poly", "`poly` is a CRC parameter; xor8 takes none")],
+    ),
+    (
+        "xor8_check_mismatch",
+        &[("framing.checksum.check", "check value 0x32 does not match the parameters, which give 0x31")],
+    ),
+    (
+        "repeat_not_last",
+        &[("commands.write.fields.values.repeat", "only the last field of a message may repeat")],
+    ),
+    (
+        "repeat_count_undefined",
+        &[("commands.write.fields.values.repeat.count", "refers to `bytecount`, which is not an earlier field")],
+    ),
+    (
+        "repeat_max_zero",
+        &[("responses.read_reply.fields.values.repeat.max", "a repeat's maximum is 1..=65535 elements, not 0")],
+    ),
+    (
+        "repeat_too_long_for_payload",
+        &[("commands.write.fields", "(and up to 60 more in the repeated field), but request payloads are 0..=40 bytes")],
+    ),
+    (
+        "bit_without_repeat",
+        &[("commands.stamp.fields.ticks.type", "a `bit` is only the element of a repeated field")],
+    ),
+    (
+        "follows_later_field",
+        &[("commands.write.fields.byte_count.follows.field", "refers to `values`, which is not an earlier field")],
+    ),
+    (
+        "follows_both_sources",
+        &[
+            ("commands.write.fields.byte_count.follows", "give exactly one of `field`"),
+            ("commands.write.fields.byte_count", "a number field needs a `unit`"),
+        ],
+    ),
+    (
+        "request_field_missing",
+        &[("responses.read_reply.fields.values.repeat.request", "`values` answers `read`, which has no number field `amount`")],
+    ),
+    (
+        "code_from_request_wrong",
+        &[("responses.read_error.code_from_request", "answers `read` (0x01), whose code with 0x80 set is not this reply's 0x82")],
+    ),
+    (
+        "example_length_field_lies",
+        &[("examples[0].derived", "length field at offset 3 says 6, the frame's length gives 5")],
+    ),
+    (
+        "example_count_wrong",
+        &[("examples[2].derived", "invalid value for write.byte_count at offset 6: must be the bytes of values (2), found 3")],
+    ),
     // ---- shape: the loader
     (
         "yaml_syntax_error",
@@ -49,7 +125,7 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "wrong_enum_variant",
         &[(
             "commands.get_status.fields.channel.type",
-            "unknown variant `u24`",
+            "unknown variant `u48`",
         )],
     ),
     (
