@@ -1137,11 +1137,17 @@ pub fn encode(
                 })
             }
         };
-        if list.len() < r.min || list.len() > r.max {
+        // Bits come eight to a byte: decode reads whole bytes, so a bound counts the bytes.
+        let (lo, hi) = if f.ty == FieldType::Bit {
+            (r.min, r.max.div_ceil(8) * 8)
+        } else {
+            (r.min, r.max)
+        };
+        if list.len() < lo || list.len() > hi {
             return Err(EncodeError::WrongCount {
                 field: f.name.clone(),
-                min: r.min,
-                max: r.max,
+                min: lo,
+                max: hi,
                 found: list.len(),
             });
         }

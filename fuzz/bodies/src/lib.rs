@@ -23,6 +23,9 @@
 //! * [`differential`]: the generated decoder and the interpreter agree on every input
 //!   ([`oracle::agree`]).
 //!
+//! For the protocols only the interpreter serves (Modbus, Dynamixel), [`interpreted`] has a
+//! decode and a stream body each.
+//!
 //! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
 //! the docs renderer and the code emitter): errors with messages, never a panic.
 //!
@@ -51,6 +54,7 @@ use crate::events::Seen;
 use crate::oracle::{agree, visit_values};
 
 pub mod events;
+pub mod interpreted;
 pub mod oracle;
 pub mod seeds;
 
@@ -100,7 +104,25 @@ pub const TARGETS: &[Target] = &[
         name: "spec_loader",
         body: spec_loader,
     },
+    Target {
+        name: "modbus_decode",
+        body: modbus::decode,
+    },
+    Target {
+        name: "modbus_stream",
+        body: modbus::stream,
+    },
+    Target {
+        name: "dynamixel_decode",
+        body: dynamixel::decode,
+    },
+    Target {
+        name: "dynamixel_stream",
+        body: dynamixel::stream,
+    },
 ];
+
+pub use interpreted::{dynamixel, modbus};
 
 /// A value made once per process for the type `K`. Generic functions cannot have a `static` of
 /// their own per type; this is that. The values are leaked (a handful per protocol) but stay

@@ -98,6 +98,71 @@ pub fn corpus() -> BTreeMap<&'static str, BTreeMap<String, Vec<u8>>> {
             put("stream", format!("capture-{n:02}-noisy"), noisy);
         }
     }
+    for (proto, p) in crate::interpreted::specs() {
+        let mut put = |kind: &str, name: String, bytes: Vec<u8>| {
+            let target: &'static str = crate::TARGETS
+                .iter()
+                .find(|t| t.name == format!("{proto}_{kind}"))
+                .expect("a target for every kind")
+                .name;
+            out.entry(target)
+                .or_insert_with(BTreeMap::new)
+                .insert(format!("{SEED_PREFIX}{name}"), bytes);
+        };
+        let requests: Vec<usize> = p
+            .examples
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.message.direction == Direction::Request)
+            .map(|(i, _)| i)
+            .collect();
+        for (i, e) in p.examples.iter().enumerate() {
+            // The request a reply answers is the example just before it, where there is one.
+            let pick = requests.iter().rposition(|&r| r < i).unwrap_or(0);
+            let pick = u8::try_from(pick).expect("fewer than 256 requests");
+            put(
+                "decode",
+                format!("example-{i:03}"),
+                [&[pick], &e.wire[..]].concat(),
+            );
+        }
+        let all: Vec<u8> = p.examples.iter().flat_map(|e| e.wire.clone()).collect();
+        put(
+            "stream",
+            "capture-both".to_owned(),
+            [&[0, 7], &all[..]].concat(),
+        );
+        for (mode, d, name) in [
+            (1, Direction::Request, "requests"),
+            (2, Direction::Response, "responses"),
+        ] {
+            let part: Vec<u8> = p
+                .examples
+                .iter()
+                .filter(|e| e.message.direction == d)
+                .flat_map(|e| e.wire.clone())
+                .collect();
+            put(
+                "stream",
+                format!("capture-{name}"),
+                [&[mode, 3], &part[..]].concat(),
+            );
+            let mut noisy = vec![mode, 11];
+            for (i, e) in p
+                .examples
+                .iter()
+                .filter(|e| e.message.direction == d)
+                .enumerate()
+            {
+                noisy.extend_from_slice(&[0x00, 0xFF, 0x55][..i % 4]);
+                if i % 3 == 0 {
+                    noisy.extend_from_slice(&e.wire[..e.wire.len() / 2]);
+                }
+                noisy.extend_from_slice(&e.wire);
+            }
+            put("stream", format!("capture-{name}-noisy"), noisy);
+        }
+    }
     out
 }
 
@@ -115,8 +180,10 @@ pub fn dictionary(p: &Protocol) -> String {
             let o = m.layout;
             let len = (o.code + m.code.len()).max(o.address + 1);
             let mut prefix = vec![0u8; len];
-            if let (Some(at), Some(s)) = (o.start, p.framing.start) {
-                prefix[at] = s;
+            if let Some(at) = o.start {
+                for (i, s) in p.framing.sync.iter().enumerate() {
+                    prefix[at + i] = *s;
+                }
             }
             prefix[o.address] = p.framing.address.min;
             prefix[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
@@ -139,7 +206,7 @@ pub fn files() -> BTreeMap<PathBuf, Vec<u8>> {
             out.insert(Path::new("corpus").join(target).join(name), bytes);
         }
     }
-    for (_, p) in specs() {
+    for (_, p) in specs().chain(crate::interpreted::specs()) {
         out.insert(
             Path::new("dict").join(format!("{}.dict", p.name)),
             dictionary(p).into_bytes(),

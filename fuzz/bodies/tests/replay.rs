@@ -110,6 +110,26 @@ fn spec_loader() {
 }
 
 #[test]
+fn modbus_decode() {
+    replay_target("modbus_decode");
+}
+
+#[test]
+fn modbus_stream() {
+    replay_target("modbus_stream");
+}
+
+#[test]
+fn dynamixel_decode() {
+    replay_target("dynamixel_decode");
+}
+
+#[test]
+fn dynamixel_stream() {
+    replay_target("dynamixel_stream");
+}
+
+#[test]
 fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
     let names = [
         "ub2_decode",
@@ -121,6 +141,10 @@ fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
         "sd_stream",
         "sd_differential",
         "spec_loader",
+        "modbus_decode",
+        "modbus_stream",
+        "dynamixel_decode",
+        "dynamixel_stream",
     ];
     let targets: Vec<&str> = TARGETS.iter().map(|t| t.name).collect();
     assert_eq!(targets, names);
