@@ -26,6 +26,15 @@ fn settling_requests(p: &Spec, candidates: &[String]) -> Vec<String> {
 /// The error of a frame that could be any of `candidates`, given `--reply-to` or not.
 fn ambiguous(p: &Spec, candidates: &[String], reply_to: Option<usize>) -> String {
     let listed = candidates.join(" or ");
+    let is_request = |n: &String| p.commands.iter().any(|c| &c.name == n);
+    if reply_to.is_none() && candidates.iter().any(is_request) && !candidates.iter().all(is_request)
+    {
+        // A request and a reply with the same bytes (a Modbus echo, a Dynamixel status packet
+        // that reads like an instruction): the direction settles it.
+        return format!(
+            "ambiguous frame: could be {listed}; a request and a response look alike here: give --direction request or --direction response"
+        );
+    }
     match reply_to {
         None => {
             let requests = settling_requests(p, candidates);
