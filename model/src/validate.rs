@@ -1317,21 +1317,8 @@ fn field(
     }
     if let Some(fo) = &f.follows {
         let fpath = join(p, "follows");
-        let relation = |name: &str, sink: &mut Sink| {
-            let mul = fo.multiply.unwrap_or(1);
-            let div = fo.divide.unwrap_or(1);
-            if !(1..=0xFFFF).contains(&mul) || !(1..=0xFFFF).contains(&div) {
-                sink.error(
-                    &fpath,
-                    format!("multiply {mul} and divide {div} must be 1..=65535"),
-                );
-            }
-            Relation {
-                field: name.to_owned(),
-                multiply: mul.clamp(1, 0xFFFF) as u64,
-                divide: div.clamp(1, 0xFFFF) as u64,
-            }
-        };
+        let relation =
+            |name: &str, sink: &mut Sink| relation(name, fo.multiply, fo.divide, &fpath, sink);
         match (&fo.field, &fo.request) {
             (Some(other), None) => {
                 for (k, given) in [
@@ -1525,6 +1512,28 @@ fn field(
     out
 }
 
+/// `ceil(name × multiply / divide)`, each factor 1..=65535 (default 1).
+fn relation(
+    name: &str,
+    multiply: Option<i64>,
+    divide: Option<i64>,
+    path: &str,
+    sink: &mut Sink,
+) -> Relation {
+    let (mul, div) = (multiply.unwrap_or(1), divide.unwrap_or(1));
+    if !(1..=0xFFFF).contains(&mul) || !(1..=0xFFFF).contains(&div) {
+        sink.error(
+            path,
+            format!("multiply {mul} and divide {div} must be 1..=65535"),
+        );
+    }
+    Relation {
+        field: name.to_owned(),
+        multiply: mul.clamp(1, 0xFFFF) as u64,
+        divide: div.clamp(1, 0xFFFF) as u64,
+    }
+}
+
 /// Resolves a field's `repeat`: its count against the earlier fields, its bounds.
 fn repeat(
     r: &model::Repeat,
@@ -1596,19 +1605,13 @@ fn repeat(
         );
     }
     let request = r.request.as_ref().map(|rel| {
-        let mul = rel.multiply.unwrap_or(1);
-        let div = rel.divide.unwrap_or(1);
-        if !(1..=0xFFFF).contains(&mul) || !(1..=0xFFFF).contains(&div) {
-            sink.error(
-                join(p, "request"),
-                format!("multiply {mul} and divide {div} must be 1..=65535"),
-            );
-        }
-        Relation {
-            field: rel.field.clone(),
-            multiply: mul.clamp(1, 0xFFFF) as u64,
-            divide: div.clamp(1, 0xFFFF) as u64,
-        }
+        relation(
+            &rel.field,
+            rel.multiply,
+            rel.divide,
+            &join(p, "request"),
+            sink,
+        )
     });
     Some(Repeat {
         count,
