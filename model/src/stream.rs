@@ -546,19 +546,26 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
             f.bits.iter().map(|b| (b.name.as_str(), Some(b))).collect()
         };
         for (name, bits) in leaves {
-            let Some(Raw::Int(v)) = frame.get(name) else {
+            let values: &[i64] = match frame.get(name) {
+                Some(Raw::Int(v)) => std::slice::from_ref(v),
+                Some(Raw::List(l)) => l,
+                _ => continue,
+            };
+            // The first element of a repeated field outside its range, as strict decoding says.
+            let Some((v, (min, max))) = values
+                .iter()
+                .find_map(|v| interp::range_violation(f, bits, *v).map(|r| (v, r)))
+            else {
                 continue;
             };
-            if let Some((min, max)) = interp::range_violation(f, bits, *v) {
-                out.push(DecodeError::OutOfRange {
-                    message: m.name.clone(),
-                    field: name.to_owned(),
-                    offset,
-                    found: *v,
-                    min,
-                    max,
-                });
-            }
+            out.push(DecodeError::OutOfRange {
+                message: m.name.clone(),
+                field: name.to_owned(),
+                offset,
+                found: *v,
+                min,
+                max,
+            });
         }
     }
     out

@@ -422,3 +422,37 @@ fn diff_classifies_changes_to_the_new_constructs_as_wire_breaking() {
         );
     }
 }
+
+#[test]
+fn an_element_out_of_its_range_is_refused_and_listed_by_lenient_decoding() {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/minimal_variable.yaml"),
+    )
+    .unwrap()
+    .replacen(
+        "{name: values, type: u16, unit: count, repeat: {count: byte_count",
+        "{name: values, type: u16, unit: count, range: {min: 0, max: 8192}, repeat: {count: byte_count",
+        1,
+    );
+    let p = load_str("ranged.yaml", &text).unwrap_or_else(|d| panic!("{d}"));
+    let relaxed = busspec_model::stream::relaxed(&p);
+    let wire = interp::encode(
+        &relaxed,
+        cmd(&p, "write"),
+        2,
+        &[
+            v("quantity", Raw::Int(2)),
+            v("values", Raw::List(vec![7, 12288])),
+        ],
+    )
+    .unwrap();
+    let strict = interp::decode(&p, None, None, &wire).unwrap_err();
+    assert!(
+        matches!(&strict, DecodeError::OutOfRange { field, found: 12288, .. } if field == "values"),
+        "{strict}"
+    );
+    let (frame, violations) =
+        busspec_model::stream::decode_lenient(&p, &relaxed, None, None, &wire).unwrap();
+    assert_eq!(frame.get("values"), Some(&Raw::List(vec![7, 12288])));
+    assert_eq!(violations, [strict]);
+}
