@@ -289,7 +289,7 @@ impl Gate {
 
 #[derive(Args)]
 struct DecodeArgs {
-    /// The protocol: ub2 or sd (built in), or the `protocol:` of the spec given with --spec.
+    /// The protocol: ub2, sd (generated), modbus, dynamixel (interpreted), or the `protocol:` of the spec given with --spec.
     protocol: String,
     /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed.
     #[arg(
@@ -322,7 +322,7 @@ struct DecodeArgs {
 
 #[derive(Args)]
 struct EncodeArgs {
-    /// The protocol: ub2 or sd (built in), or the `protocol:` of the spec given with --spec.
+    /// The protocol: ub2, sd (generated), modbus, dynamixel (interpreted), or the `protocol:` of the spec given with --spec.
     protocol: String,
     /// Load the spec from this file instead of the built-in one.
     #[arg(long, value_name = "FILE")]
@@ -518,7 +518,12 @@ fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Engine,
                 subcommand,
                 format!(
                     "unknown protocol `{name}`: the built-in ones are {} (or give --spec FILE)",
-                    busspec_protocols::PROTOCOLS.join(", ")
+                    busspec_protocols::PROTOCOLS
+                        .iter()
+                        .chain(frames::INTERPRETED.iter().map(|(n, _)| n))
+                        .copied()
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             ),
         },

@@ -630,6 +630,14 @@ fn variable_length_specs_decode_against_their_request_and_round_trip() {
         text(&out.stderr)
     );
 
+    // Built in (the embedded spec, interpreted): no --spec needed.
+    let out = busspec(&["decode", "modbus", reply]);
+    assert!(
+        text(&out.stdout).contains(r#""registers":[555,0,100]"#),
+        "{}",
+        text(&out.stderr)
+    );
+
     let status = "FF FF 01 03 00 20 DB";
     let out = busspec(&[
         "decode",
