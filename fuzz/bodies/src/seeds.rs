@@ -188,7 +188,9 @@ pub fn dictionary(p: &Protocol) -> String {
             prefix[o.address] = p.framing.address.min;
             prefix[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
             for (kind, bytes) in [("frame", prefix), ("code", m.code.clone())] {
-                if seen.insert(bytes.clone()) {
+                // A message without a code (a Dynamixel status packet) has no code entry:
+                // libFuzzer refuses an empty one.
+                if !bytes.is_empty() && seen.insert(bytes.clone()) {
                     let escaped: String = bytes.iter().map(|b| format!("\\x{b:02X}")).collect();
                     let _ = writeln!(text, "{}_{}_{kind}=\"{escaped}\"", d.as_str(), m.name);
                 }

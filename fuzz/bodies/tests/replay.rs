@@ -239,3 +239,17 @@ fn roundtrip_exercises_the_strict_refusals() {
         assert!(got.refused_on_decode >= 50, "{name}: {got:?}");
     }
 }
+
+/// libFuzzer refuses a dictionary with an empty entry (a message without a code once made one
+/// and stopped every Dynamixel target before it ran).
+#[test]
+fn no_dictionary_entry_is_empty() {
+    for (path, bytes) in seeds::files() {
+        if path.starts_with("dict") {
+            let text = String::from_utf8(bytes).unwrap();
+            for line in text.lines().filter(|l| !l.starts_with('#')) {
+                assert!(!line.ends_with("=\"\""), "{}: {line}", path.display());
+            }
+        }
+    }
+}
