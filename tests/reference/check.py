@@ -310,6 +310,14 @@ def check_modbus():
         if rc == 0 or reason not in err:
             fail(f"busspec accepted pymodbus's {q}-coil write: {err}")
         count("pymodbus", "peer -> busspec (refused: outside the document)")
+    # modbus-e02: a Write Single Coil value other than FF 00 / 00 00 is illegal; busspec reads
+    # it as its number, pymodbus as ON.
+    (odd,) = encode(MODBUS, "modbus", [{"message": "write_single_coil", "address": 1,
+                                        "fields": {"output_address": 5, "output_value": 0x1234}}])
+    (got,) = decode(MODBUS, "modbus", [odd], ["--direction", "request"])
+    if got["fields"]["output_value"] != 0x1234 or pymodbus_read(server, odd).bits != [True]:
+        fail(f"erratum modbus-e02 is out of date: busspec {got}, pymodbus {pymodbus_read(server, odd).bits}")
+    count("pymodbus", "busspec -> peer (read differently: erratum modbus-e02)")
 
 
 # ------------------------------------------------------- Dynamixel 1.0 (dynamixel-sdk)
@@ -428,8 +436,25 @@ def check_dynamixel():
                 fail(f"busspec reads {frame.hex()} as {g}")
 
 
+def check_dynamixel_erratum():
+    """dxl-e01: bit 7 of the error byte, and ID 254 in a status packet: busspec decodes them,
+    the SDK refuses them."""
+    ph = dxl.PacketHandler(1.0)
+    for obj in ({"message": "status", "address": 1, "fields": {"error": [128]}},
+                {"message": "status", "address": 254, "fields": {"error": []}}):
+        (frame,) = encode(DYNAMIXEL, "dynamixel", [obj])
+        decode(DYNAMIXEL, "dynamixel", [frame], ["--direction", "response"])
+        port = Port()
+        port.incoming = frame
+        _, result = ph.rxPacket(port)
+        if result == dxl.COMM_SUCCESS:
+            fail(f"the SDK now accepts {frame.hex()}: erratum dxl-e01 is out of date")
+        count("dynamixel-sdk", "busspec -> peer (refused by the peer: erratum dxl-e01)")
+
+
 check_modbus()
 check_dynamixel()
+check_dynamixel_erratum()
 for (peer, way), n in sorted(counts.items()):
     print(f"{peer}: {n} frames {way}")
 print("reference check: ok")
