@@ -25,6 +25,7 @@ pub mod sim;
 pub mod soak;
 pub mod transport;
 
+pub use busspec_link_core::{DriverEnable, Line};
 pub use busspec_protocols::sd::Sd;
 pub use busspec_protocols::ub2::Ub2;
 pub use busspec_runtime::{Message, Protocol};
