@@ -9,14 +9,22 @@
 //!   for the generated `Ub2` and `Sd`.
 //! - [`line::Line`]: baud rate, frame bits and the RS485 habits of a port (local echo,
 //!   driver-enable timing, turnaround).
-//! - Drivers, each behind a feature: `embedded-io` (`blocking`) and `embedded-io-async`
-//!   (`nonblocking`). The `std` and tokio drivers live in `busspec-link`.
+//! - Drivers, each behind a feature: `embedded-io` (`blocking::Driver`) and
+//!   `embedded-io-async` (`nonblocking::Driver`), sharing `driver` (the `Now` time source,
+//!   errors, `NoPin`). The `std` and tokio drivers live in `busspec-link`.
 #![no_std]
 #![forbid(unsafe_code)]
 
 pub mod line;
 pub mod link;
 pub mod master;
+
+#[cfg(feature = "embedded-io")]
+pub mod blocking;
+#[cfg(any(feature = "embedded-io", feature = "embedded-io-async"))]
+pub mod driver;
+#[cfg(feature = "embedded-io-async")]
+pub mod nonblocking;
 
 pub use busspec_protocols::sd::Sd;
 pub use busspec_protocols::ub2::Ub2;

@@ -166,11 +166,12 @@ pub enum Failure<P: Link> {
     /// ([`Link::byte_order_check`] gave `None`); the replies are [`MasterCore::probe_replies`].
     ProbeRefused { request: P::Request, address: u8 },
     /// The device's numbers do not read plausibly in the declared byte order: `request` was
-    /// not sent.
+    /// not sent. What was read is [`MasterCore::take_byte_order_check`].
     ByteOrder {
         request: P::Request,
         address: u8,
-        check: ByteOrderCheck,
+        /// They read plausibly the other way round.
+        swapped_fits: bool,
     },
 }
 
@@ -373,8 +374,9 @@ impl<P: Link> MasterCore<P> {
         &self.probe_replies
     }
 
-    /// The byte-order check the last operation passed, if it made one.
-    pub fn take_passed_check(&mut self) -> Option<ByteOrderCheck> {
+    /// What the byte-order check of the last operation read, if it made one: passed when the
+    /// operation went on, failed with [`Failure::ByteOrder`].
+    pub fn take_byte_order_check(&mut self) -> Option<ByteOrderCheck> {
         self.passed.take()
     }
 
@@ -601,11 +603,15 @@ impl<P: Link> MasterCore<P> {
                         request: target,
                         address,
                     })),
-                    Some(check) if !check.declared_fits => self.finish(Err(Failure::ByteOrder {
-                        request: target,
-                        address,
-                        check,
-                    })),
+                    Some(check) if !check.declared_fits => {
+                        let swapped_fits = check.swapped_fits;
+                        self.passed = Some(check);
+                        self.finish(Err(Failure::ByteOrder {
+                            request: target,
+                            address,
+                            swapped_fits,
+                        }))
+                    }
                     Some(check) => {
                         self.checked[usize::from(address / 32)] |= 1 << (address % 32);
                         self.passed = Some(check);

@@ -451,20 +451,17 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
             self.trace_events();
         }
         self.trace_events();
-        if let Some(check) = self.core.take_passed_check() {
-            if let Some((address, _)) = self.last_target() {
-                self.byte_order[usize::from(address)] = Some(check);
-            }
-        }
         match self.core.take_outcome() {
-            Some(Ok(reply)) => Ok(reply),
-            Some(Err(failure)) => Err(self.link_error(failure)),
+            Some(Ok(reply)) => {
+                let check = self.core.take_byte_order_check();
+                if let (Some(check), Some((address, _))) = (check, self.core.target()) {
+                    self.byte_order[usize::from(address)] = Some(check);
+                }
+                Ok(reply)
+            }
+            Some(Err(failure)) => Err(link_error(&mut self.core, failure)),
             None => unreachable!("the core says Done only with an outcome"),
         }
-    }
-
-    fn last_target(&self) -> Option<(u8, P::Request)> {
-        self.core.target()
     }
 
     fn trace_events(&mut self) {
@@ -497,127 +494,6 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         }
     }
 
-    /// The core's failure, with names and texts.
-    fn link_error(&self, failure: Failure<P>) -> LinkError {
-        let timeout = self.core.timing().reply_timeout;
-        match failure {
-            Failure::Encode { request, source } => LinkError::Encode {
-                request: request.name(),
-                source,
-            },
-            Failure::Address {
-                request,
-                address,
-                problem,
-            } => LinkError::Address {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                reason: match problem {
-                    AddressProblem::NoBroadcast => {
-                        "this command does not accept the broadcast address".to_owned()
-                    }
-                    AddressProblem::NotDevice => format!(
-                        "not a device address (0x{:02X}..=0x{:02X}{})",
-                        P::DEVICE_ADDRESSES.start(),
-                        P::DEVICE_ADDRESSES.end(),
-                        match P::BROADCAST_ADDRESS {
-                            Some(b) => format!(", or broadcast 0x{b:02X}"),
-                            None => String::new(),
-                        }
-                    ),
-                },
-            },
-            Failure::NoReply {
-                request,
-                address,
-                attempts,
-            } => LinkError::NoReply {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                attempts,
-                timeout,
-            },
-            Failure::BadReply {
-                request,
-                address,
-                attempts,
-                reason,
-            } => LinkError::BadReply {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                attempts,
-                reason: reason.to_string(),
-                bytes: self.core.reply().to_vec(),
-            },
-            Failure::Collision {
-                request,
-                address,
-                attempts,
-                offset,
-                expected,
-                received,
-            } => LinkError::Collision {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                attempts,
-                sent: self.core.sent().to_vec(),
-                offset,
-                expected,
-                received,
-            },
-            Failure::NoEcho {
-                request,
-                address,
-                attempts,
-                received,
-            } => LinkError::NoEcho {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                attempts,
-                sent: self.core.sent().to_vec(),
-                received,
-            },
-            Failure::ProbeRefused { request, address } => {
-                let replies = self.core.probe_replies();
-                let names: Vec<&str> = replies.iter().map(Message::name).collect();
-                LinkError::Refused {
-                    protocol: P::NAME,
-                    request: request.name(),
-                    address,
-                    response: replies.first().map_or("nothing", Message::name),
-                    detail: format!(
-                        "not sent: the byte-order check before the first movement read {} \
-                         to {}",
-                        names.join(", "),
-                        P::byte_order_probe()
-                            .iter()
-                            .map(Message::name)
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                }
-            }
-            Failure::ByteOrder {
-                request,
-                address,
-                check,
-            } => LinkError::ByteOrder {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                check: Box::new(check),
-                source: byte_order_source::<P>(),
-                declared: declared_byte_order::<P>(),
-                other: swapped_byte_order::<P>(),
-            },
-        }
-    }
-
     /// Sends `request` to `address` and returns the paired reply.
     pub fn transact(
         &mut self,
@@ -626,21 +502,7 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
     ) -> Result<Exchange<P::Response>, LinkError> {
         self.core.start(address, request);
         let reply = self.run()?;
-        Ok(self.exchange(reply))
-    }
-
-    fn exchange(&self, reply: Reply<P>) -> Exchange<P::Response> {
-        Exchange {
-            response: reply.response,
-            address: reply.address,
-            attempts: reply.attempts,
-            frame: if reply.response.is_some() {
-                self.core.reply().to_vec()
-            } else {
-                Vec::new()
-            },
-            sent: self.core.sent().to_vec(),
-        }
+        Ok(exchange(&self.core, reply))
     }
 
     /// Sends a movement trigger, after the byte-order check [`Master::check_byte_order`] makes
@@ -654,7 +516,7 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
     ) -> Result<Exchange<P::Response>, LinkError> {
         self.core.start_checked(address, trigger);
         let reply = self.run()?;
-        Ok(self.exchange(reply))
+        Ok(exchange(&self.core, reply))
     }
 
     /// Like [`Master::transact`] for a request that must be answered: the response itself.
@@ -682,6 +544,154 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
             response: response.name(),
             detail: detail.to_owned(),
         }
+    }
+}
+
+/// The core's failure as a [`LinkError`], with names and texts (every driver reports through it).
+pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>) -> LinkError {
+    let timeout = core.timing().reply_timeout;
+    match failure {
+        Failure::Encode { request, source } => LinkError::Encode {
+            request: request.name(),
+            source,
+        },
+        Failure::Address {
+            request,
+            address,
+            problem,
+        } => LinkError::Address {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            reason: match problem {
+                AddressProblem::NoBroadcast => {
+                    "this command does not accept the broadcast address".to_owned()
+                }
+                AddressProblem::NotDevice => format!(
+                    "not a device address (0x{:02X}..=0x{:02X}{})",
+                    P::DEVICE_ADDRESSES.start(),
+                    P::DEVICE_ADDRESSES.end(),
+                    match P::BROADCAST_ADDRESS {
+                        Some(b) => format!(", or broadcast 0x{b:02X}"),
+                        None => String::new(),
+                    }
+                ),
+            },
+        },
+        Failure::NoReply {
+            request,
+            address,
+            attempts,
+        } => LinkError::NoReply {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            timeout,
+        },
+        Failure::BadReply {
+            request,
+            address,
+            attempts,
+            reason,
+        } => LinkError::BadReply {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            reason: reason.to_string(),
+            bytes: core.reply().to_vec(),
+        },
+        Failure::Collision {
+            request,
+            address,
+            attempts,
+            offset,
+            expected,
+            received,
+        } => LinkError::Collision {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            sent: core.sent().to_vec(),
+            offset,
+            expected,
+            received,
+        },
+        Failure::NoEcho {
+            request,
+            address,
+            attempts,
+            received,
+        } => LinkError::NoEcho {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            sent: core.sent().to_vec(),
+            received,
+        },
+        Failure::ProbeRefused { request, address } => {
+            let replies = core.probe_replies();
+            let names: Vec<&str> = replies.iter().map(Message::name).collect();
+            LinkError::Refused {
+                protocol: P::NAME,
+                request: request.name(),
+                address,
+                response: replies.first().map_or("nothing", Message::name),
+                detail: format!(
+                    "not sent: the byte-order check before the first movement read {} \
+                     to {}",
+                    names.join(", "),
+                    P::byte_order_probe()
+                        .iter()
+                        .map(Message::name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            }
+        }
+        Failure::ByteOrder {
+            request,
+            address,
+            swapped_fits,
+        } => {
+            let check = core
+                .take_byte_order_check()
+                .unwrap_or_else(|| ByteOrderCheck {
+                    read: Default::default(),
+                    swapped: Default::default(),
+                    rule: Default::default(),
+                    declared_fits: false,
+                    swapped_fits,
+                    erratum: "",
+                });
+            LinkError::ByteOrder {
+                protocol: P::NAME,
+                request: request.name(),
+                address,
+                check: Box::new(check),
+                source: byte_order_source::<P>(),
+                declared: declared_byte_order::<P>(),
+                other: swapped_byte_order::<P>(),
+            }
+        }
+    }
+}
+
+/// A completed transaction of the core as an [`Exchange`].
+pub(crate) fn exchange<P: Link>(core: &MasterCore<P>, reply: Reply<P>) -> Exchange<P::Response> {
+    Exchange {
+        response: reply.response,
+        address: reply.address,
+        attempts: reply.attempts,
+        frame: if reply.response.is_some() {
+            core.reply().to_vec()
+        } else {
+            Vec::new()
+        },
+        sent: core.sent().to_vec(),
     }
 }
 

@@ -36,10 +36,12 @@ impl<T: Transport + ?Sized> Transport for Box<T> {
 }
 
 /// A serial port (or a pseudo-terminal) opened through the `serialport` crate.
+#[cfg(feature = "serial")]
 pub struct SerialTransport {
     port: Box<dyn serialport::SerialPort>,
 }
 
+#[cfg(feature = "serial")]
 impl SerialTransport {
     /// Opens `path` at `baud`, 8 data bits, no parity, 1 stop bit (both documents' defaults).
     pub fn open(path: &str, baud: u32) -> io::Result<Self> {
@@ -60,10 +62,12 @@ impl SerialTransport {
     }
 }
 
+#[cfg(feature = "serial")]
 fn serial_error(e: serialport::Error) -> io::Error {
     io::Error::other(e.to_string())
 }
 
+#[cfg(feature = "serial")]
 impl Transport for SerialTransport {
     fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.port.write_all(bytes)?;

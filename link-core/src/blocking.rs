@@ -1,0 +1,154 @@
+//! The blocking `embedded-io` driver (feature `embedded-io`): [`MasterCore`] over a UART that
+//! implements [`Read`] + [`Write`] + [`ReadReady`], timed by a [`Now`] and an
+//! `embedded-hal` [`DelayNs`], with an optional driver-enable [`OutputPin`].
+//!
+//! A read never blocks past its deadline: the driver looks at [`ReadReady`] and waits one byte
+//! time (or what is left) in between, so it needs no UART timeout support.
+
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{Error as _, OutputPin};
+use embedded_io::{Read, ReadReady, Write};
+
+use crate::driver::{nanos, tick, Error, NoPin, Now};
+use crate::line::Line;
+use crate::link::Link;
+use crate::master::{Action, MasterCore, Reply, Timing};
+
+/// A blocking master for protocol `P` on the UART `U`.
+pub struct Driver<P: Link, U, N, D, DE = NoPin> {
+    core: MasterCore<P>,
+    uart: U,
+    now: N,
+    delay: D,
+    de: DE,
+}
+
+impl<P: Link, U, N, D> Driver<P, U, N, D, NoPin>
+where
+    U: Read + Write + ReadReady,
+    N: Now,
+    D: DelayNs,
+{
+    /// A driver with the protocol's timing and line, and no driver-enable pin.
+    pub fn new(uart: U, now: N, delay: D) -> Self {
+        Driver {
+            core: MasterCore::new(),
+            uart,
+            now,
+            delay,
+            de: NoPin,
+        }
+    }
+}
+
+impl<P: Link, U, N, D, DE> Driver<P, U, N, D, DE>
+where
+    U: Read + Write + ReadReady,
+    N: Now,
+    D: DelayNs,
+    DE: OutputPin,
+{
+    /// Drives `pin` as the transceiver's driver-enable line; set [`Line::driver_enable`] too.
+    pub fn with_driver_enable<E: OutputPin>(self, pin: E) -> Driver<P, U, N, D, E> {
+        Driver {
+            core: self.core,
+            uart: self.uart,
+            now: self.now,
+            delay: self.delay,
+            de: pin,
+        }
+    }
+
+    pub fn with_timing(mut self, timing: Timing) -> Self {
+        self.core.set_timing(timing);
+        self
+    }
+
+    pub fn with_line(mut self, line: Line) -> Self {
+        self.core.set_line(line);
+        self
+    }
+
+    /// The sans-IO core: freshness counters, byte-order checks, the last frames.
+    pub fn core(&self) -> &MasterCore<P> {
+        &self.core
+    }
+
+    pub fn core_mut(&mut self) -> &mut MasterCore<P> {
+        &mut self.core
+    }
+
+    /// The UART, the time source, the delay and the pin back.
+    pub fn release(self) -> (U, N, D, DE) {
+        (self.uart, self.now, self.delay, self.de)
+    }
+
+    /// Sends `request` to `address` and returns the paired reply.
+    pub fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Reply<P>, Error<P, U::Error>> {
+        self.core.start(address, request);
+        self.run()
+    }
+
+    /// Sends a movement trigger after the byte-order check before a first movement.
+    pub fn start_movement(
+        &mut self,
+        address: u8,
+        trigger: P::Request,
+    ) -> Result<Reply<P>, Error<P, U::Error>> {
+        self.core.start_checked(address, trigger);
+        self.run()
+    }
+
+    fn run(&mut self) -> Result<Reply<P>, Error<P, U::Error>> {
+        let mut chunk = [0u8; 64];
+        loop {
+            let now = self.now.now();
+            let line = self.core.line();
+            match self.core.poll(now) {
+                Action::Done => break,
+                Action::Sleep(t) => {
+                    let mut now = now;
+                    while now < t {
+                        self.delay.delay_ns(nanos(t - now));
+                        now = self.now.now();
+                    }
+                }
+                Action::ClearInput => {
+                    while self.uart.read_ready().map_err(Error::Io)? {
+                        if self.uart.read(&mut chunk).map_err(Error::Io)? == 0 {
+                            break;
+                        }
+                    }
+                }
+                Action::EnableDriver => self.de.set_high().map_err(|e| Error::Pin(e.kind()))?,
+                Action::DisableDriver => self.de.set_low().map_err(|e| Error::Pin(e.kind()))?,
+                Action::Write(bytes) => {
+                    self.uart.write_all(bytes).map_err(Error::Io)?;
+                    self.uart.flush().map_err(Error::Io)?;
+                }
+                Action::Read { until } => loop {
+                    if self.uart.read_ready().map_err(Error::Io)? {
+                        let n = self.uart.read(&mut chunk).map_err(Error::Io)?;
+                        self.core.received(&chunk[..n], self.now.now());
+                        break;
+                    }
+                    let now = self.now.now();
+                    if now >= until {
+                        break;
+                    }
+                    self.delay.delay_ns(tick(&line, until - now));
+                },
+            }
+        }
+        while self.core.take_event().is_some() {}
+        match self.core.take_outcome() {
+            Some(Ok(reply)) => Ok(reply),
+            Some(Err(failure)) => Err(Error::Link(failure)),
+            None => unreachable!("the core says Done only with an outcome"),
+        }
+    }
+}
