@@ -10,6 +10,7 @@ use embedded_hal::digital::{ErrorKind, ErrorType, OutputPin};
 use crate::line::Line;
 use crate::link::Link;
 use crate::master::Failure;
+use crate::movement::MoveError;
 
 /// A monotonic time source: time since any fixed epoch (a free-running timer).
 pub trait Now {
@@ -48,6 +49,10 @@ pub enum Error<P: Link, E> {
     Pin(ErrorKind),
     /// The transaction failed by the master's rules.
     Link(Failure<P>),
+    /// A movement stopped: refused, or not done in time.
+    Move(MoveError<P>),
+    /// A movement's request went to the broadcast address, which does not answer.
+    Unanswered,
 }
 
 impl<P: Link, E: fmt::Debug> fmt::Display for Error<P, E> {
@@ -56,6 +61,8 @@ impl<P: Link, E: fmt::Debug> fmt::Display for Error<P, E> {
             Error::Io(e) => write!(f, "{} UART: {e:?}", P::NAME),
             Error::Pin(e) => write!(f, "{} driver-enable pin: {e:?}", P::NAME),
             Error::Link(e) => write!(f, "{} transaction: {e:?}", P::NAME),
+            Error::Move(e) => write!(f, "{} movement: {e:?}", P::NAME),
+            Error::Unanswered => write!(f, "{} movement: a broadcast is not answered", P::NAME),
         }
     }
 }

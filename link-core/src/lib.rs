@@ -7,6 +7,8 @@
 //!   No allocation, no clock, no I/O.
 //! - [`link::Link`]: what a master adds to a generated protocol beyond its spec, implemented
 //!   for the generated `Ub2` and `Sd`.
+//! - [`movement`]: movements polled to completion, as a sequence of transactions (UB2
+//!   completion checks, SD set point and position reads).
 //! - [`line::Line`]: baud rate, frame bits and the RS485 habits of a port (local echo,
 //!   driver-enable timing, turnaround).
 //! - Drivers, each behind a feature: `embedded-io` (`blocking::Driver`) and
@@ -18,6 +20,7 @@
 pub mod line;
 pub mod link;
 pub mod master;
+pub mod movement;
 
 #[cfg(feature = "embedded-io")]
 pub mod blocking;

@@ -15,6 +15,7 @@ use crate::driver::{nanos, tick, Error, NoPin, Now};
 use crate::line::Line;
 use crate::link::Link;
 use crate::master::{Action, MasterCore, Reply, Timing};
+use crate::movement::{MoveReport, Movement, Moving, Step};
 
 /// An async master for protocol `P` on the UART `U`.
 pub struct Driver<P: Link, U, N, D, DE = NoPin> {
@@ -103,6 +104,53 @@ where
     ) -> Result<Reply<P>, Error<P, U::Error>> {
         self.core.start_checked(address, trigger);
         self.run().await
+    }
+
+    /// Runs a movement to its end: the byte-order check before its trigger, then its
+    /// transactions and sleeps; `progress` hears where the device is in between.
+    pub async fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        mut movement: M,
+        mut progress: impl FnMut(Moving),
+    ) -> Result<MoveReport<P::Response>, Error<P, U::Error>> {
+        let trigger = movement.trigger().map_err(Error::Move)?;
+        self.core.start_byte_order_check(address, trigger);
+        self.run().await?;
+        let mut step = movement.next(self.now.now());
+        loop {
+            step = match step {
+                Step::Ask { request, optional } => {
+                    self.core.start(address, request);
+                    match self.run().await {
+                        Ok(Reply {
+                            response: Some(r), ..
+                        }) => movement.answered(self.now.now(), Some(r)),
+                        Ok(_) | Err(Error::Link(_)) if optional => {
+                            movement.answered(self.now.now(), None)
+                        }
+                        Ok(_) => return Err(Error::Unanswered),
+                        Err(e) => return Err(e),
+                    }
+                }
+                Step::Sleep {
+                    until,
+                    progress: moving,
+                } => {
+                    if let Some(m) = moving {
+                        progress(m);
+                    }
+                    let mut now = self.now.now();
+                    while now < until {
+                        self.delay.delay_ns(nanos(until - now)).await;
+                        now = self.now.now();
+                    }
+                    movement.next(now)
+                }
+                Step::Done(report) => return Ok(report),
+                Step::Failed(e) => return Err(Error::Move(e)),
+            }
+        }
     }
 
     async fn run(&mut self) -> Result<Reply<P>, Error<P, U::Error>> {

@@ -33,11 +33,13 @@ use std::time::Duration;
 
 use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply};
 pub use busspec_link_core::master::{Rejection, Timing};
+pub use busspec_link_core::movement::{ub2_completion_check, MoveReport};
+use busspec_link_core::movement::{MoveError, Movement, SdMove, Step, Ub2Movement};
 use busspec_link_core::Line;
 
 use busspec_protocols::sd::{self, Sd};
 use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::{CommandKind, EncodeError, Message, Protocol};
+use busspec_protocols::{EncodeError, Message, Protocol};
 
 use crate::clock::Clock;
 use crate::protocol::{byte_order_source, declared_byte_order, swapped_byte_order};
@@ -531,6 +533,68 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         })
     }
 
+    /// Runs a movement to its end ([`Movement`]): the byte-order check before its trigger
+    /// ([`Master::check_byte_order`]), then its transactions and sleeps, reporting progress.
+    pub fn run_to_end<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        mut movement: M,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<MoveReport<P::Response>, LinkError> {
+        let trigger = movement
+            .trigger()
+            .map_err(|e| Self::move_error(address, e))?;
+        self.check_byte_order(address, &trigger)?;
+        let mut step = movement.next(self.clock.now());
+        loop {
+            step = match step {
+                Step::Ask { request, optional } => match self.ask(address, request) {
+                    Ok(r) => movement.answered(self.clock.now(), Some(r)),
+                    Err(_) if optional => movement.answered(self.clock.now(), None),
+                    Err(e) => return Err(e),
+                },
+                Step::Sleep {
+                    until,
+                    progress: moving,
+                } => {
+                    if let Some(m) = moving {
+                        progress(Progress::Moving {
+                            elapsed: m.elapsed,
+                            position: m.position,
+                        });
+                    }
+                    self.clock.sleep_until(until);
+                    movement.next(self.clock.now())
+                }
+                Step::Done(report) => return Ok(report),
+                Step::Failed(e) => return Err(Self::move_error(address, e)),
+            }
+        }
+    }
+
+    fn move_error(address: u8, e: MoveError<P>) -> LinkError {
+        match e {
+            MoveError::NotATrigger { request } => LinkError::Refused {
+                protocol: P::NAME,
+                request: request.name(),
+                address,
+                response: "nothing",
+                detail: "not a movement trigger with a completion check".to_owned(),
+            },
+            MoveError::Refused {
+                request,
+                response,
+                detail,
+            } => Self::refused(&request, address, &response, detail),
+            MoveError::Timeout { request, waited } => LinkError::MovementTimeout {
+                protocol: P::NAME,
+                request: request.name(),
+                address,
+                waited,
+            },
+        }
+    }
+
     fn refused(
         request: &P::Request,
         address: u8,
@@ -705,44 +769,12 @@ pub enum Progress {
     Read { done: usize },
 }
 
-/// How a movement ended.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MoveReport<R> {
-    /// The trigger's reply.
-    pub started: R,
-    /// The final completion reply.
-    pub finished: Option<R>,
-    /// The target lay outside the customer limits; the device ran to the limit (UB2 0x93).
-    pub clipped: bool,
-    /// Micro-steps lost on the way (UB2 0x5400).
-    pub lost_micro_steps: Option<u32>,
-    /// Completion checks sent.
-    pub polls: u32,
-    pub elapsed: Duration,
-}
-
 /// One row of the UB2 C-curve table.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CCurvePoint {
     pub index: u16,
     pub full_steps: u16,
     pub capacitance: ub2::Capacitance,
-}
-
-/// The completion check that goes with a UB2 movement trigger: same first code byte, second
-/// byte 0x01 (§4.x.2). Built as a frame and decoded, so it is whatever the spec says it is.
-pub fn ub2_completion_check(trigger: &ub2::Request) -> Option<ub2::Request> {
-    let code = trigger.code();
-    if code.len() != 2 || code[1] != 0x00 {
-        return None;
-    }
-    let address = *Ub2::DEVICE_ADDRESSES.start();
-    let mut frame = [0xAA, address, code[0], 0x01, 0];
-    frame[4] = ub2::checksum(&frame[..4]);
-    match Ub2::decode_request(&frame) {
-        Ok(d) if Ub2::kind(&d.message) == CommandKind::CompletionCheck => Some(d.message),
-        _ => None,
-    }
 }
 
 impl<T: Transport, C: Clock> Master<Ub2, T, C> {
@@ -757,79 +789,11 @@ impl<T: Transport, C: Clock> Master<Ub2, T, C> {
         limit: Duration,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<MoveReport<ub2::Response>, LinkError> {
-        let check = ub2_completion_check(&trigger).ok_or_else(|| LinkError::Refused {
-            protocol: Ub2::NAME,
-            request: trigger.name(),
+        self.run_to_end(
             address,
-            response: "nothing",
-            detail: "not a movement trigger with a completion check".to_owned(),
-        })?;
-        // Before the first movement to this address: does the device read numbers as the
-        // spec says (ub2-e01)? Nothing moves if not.
-        self.check_byte_order(address, &trigger)?;
-        let start = self.clock.now();
-        let started = self.ask(address, trigger)?;
-        let clipped = match started {
-            ub2::Response::MovementStarted => false,
-            // 0x93: approved, the cap runs to the customer limit (§7.2; `Link::nak_approves`).
-            r if Ub2::nak_approves(&trigger, &r) => true,
-            other => {
-                return Err(Self::refused(
-                    &trigger,
-                    address,
-                    &other,
-                    "the movement did not start",
-                ))
-            }
-        };
-        let mut polls = 0;
-        loop {
-            let reply = self.ask(address, check)?;
-            polls += 1;
-            let elapsed = self.clock.now() - start;
-            let lost = match reply {
-                ub2::Response::MovementCompleted => None,
-                ub2::Response::MovementCompletedWithStepLoss { lost_micro_steps } => {
-                    Some(lost_micro_steps)
-                }
-                ub2::Response::MovementNotCompleted => {
-                    if elapsed >= limit {
-                        return Err(LinkError::MovementTimeout {
-                            protocol: Ub2::NAME,
-                            request: trigger.name(),
-                            address,
-                            waited: elapsed,
-                        });
-                    }
-                    if let Ok(ub2::Response::ActualFullStepPosition { full_steps }) =
-                        self.ask(address, ub2::Request::GetActualFullStepPosition)
-                    {
-                        progress(Progress::Moving {
-                            elapsed,
-                            position: f64::from(full_steps),
-                        });
-                    }
-                    self.clock.sleep(poll_every);
-                    continue;
-                }
-                other => {
-                    return Err(Self::refused(
-                        &check,
-                        address,
-                        &other,
-                        "while waiting for the movement to complete",
-                    ))
-                }
-            };
-            return Ok(MoveReport {
-                started,
-                finished: Some(reply),
-                clipped,
-                lost_micro_steps: lost,
-                polls,
-                elapsed,
-            });
-        }
+            Ub2Movement::new(trigger, poll_every, limit),
+            progress,
+        )
     }
 
     /// Reads the whole C-curve table (§6.7): entries from index 0 until the device answers
@@ -1000,51 +964,7 @@ impl<T: Transport, C: Clock> Master<Sd, T, C> {
         limit: Duration,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<MoveReport<sd::Response>, LinkError> {
-        let start = self.clock.now();
-        let request = sd::Request::SetPoint {
-            freshness: 0,
-            position: target,
-        };
-        // SD has no byte-order probe (`Link::byte_order_probe`): this checks nothing today.
-        self.check_byte_order(address, &request)?;
-        let started = self.ask(address, request)?;
-        let mut polls = 0;
-        loop {
-            let reply = self.ask(address, sd::Request::ReadActualPosition)?;
-            polls += 1;
-            let elapsed = self.clock.now() - start;
-            let sd::Response::ActualPosition { position } = reply else {
-                return Err(Self::refused(
-                    &sd::Request::ReadActualPosition,
-                    address,
-                    &reply,
-                    "expected the actual position",
-                ));
-            };
-            if position == target {
-                return Ok(MoveReport {
-                    started,
-                    finished: Some(reply),
-                    clipped: false,
-                    lost_micro_steps: None,
-                    polls,
-                    elapsed,
-                });
-            }
-            if elapsed >= limit {
-                return Err(LinkError::MovementTimeout {
-                    protocol: Sd::NAME,
-                    request: request.name(),
-                    address,
-                    waited: elapsed,
-                });
-            }
-            progress(Progress::Moving {
-                elapsed,
-                position: position.value(),
-            });
-            self.clock.sleep(poll_every);
-        }
+        self.run_to_end(address, SdMove::new(target, poll_every, limit), progress)
     }
 }
 
