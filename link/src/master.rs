@@ -541,9 +541,7 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         mut movement: M,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<MoveReport<P::Response>, LinkError> {
-        let trigger = movement
-            .trigger()
-            .map_err(|e| Self::move_error(address, e))?;
+        let trigger = movement.trigger().map_err(|e| move_error(address, e))?;
         self.check_byte_order(address, &trigger)?;
         let mut step = movement.next(self.clock.now());
         loop {
@@ -567,31 +565,8 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
                     movement.next(self.clock.now())
                 }
                 Step::Done(report) => return Ok(report),
-                Step::Failed(e) => return Err(Self::move_error(address, e)),
+                Step::Failed(e) => return Err(move_error(address, e)),
             }
-        }
-    }
-
-    fn move_error(address: u8, e: MoveError<P>) -> LinkError {
-        match e {
-            MoveError::NotATrigger { request } => LinkError::Refused {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                response: "nothing",
-                detail: "not a movement trigger with a completion check".to_owned(),
-            },
-            MoveError::Refused {
-                request,
-                response,
-                detail,
-            } => Self::refused(&request, address, &response, detail),
-            MoveError::Timeout { request, waited } => LinkError::MovementTimeout {
-                protocol: P::NAME,
-                request: request.name(),
-                address,
-                waited,
-            },
         }
     }
 
@@ -741,6 +716,36 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
                 other: swapped_byte_order::<P>(),
             }
         }
+    }
+}
+
+/// A movement's stop as a [`LinkError`] (every driver reports through it).
+pub(crate) fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
+    match e {
+        MoveError::NotATrigger { request } => LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: "nothing",
+            detail: "not a movement trigger with a completion check".to_owned(),
+        },
+        MoveError::Refused {
+            request,
+            response,
+            detail,
+        } => LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: response.name(),
+            detail: detail.to_owned(),
+        },
+        MoveError::Timeout { request, waited } => LinkError::MovementTimeout {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            waited,
+        },
     }
 }
 

@@ -14,7 +14,9 @@ use tokio::time::Instant;
 use busspec_link_core::master::{Action, MasterCore};
 use busspec_link_core::{Line, Link};
 
-use crate::master::{exchange, link_error, Exchange, LinkError, Timing};
+use busspec_link_core::movement::{MoveReport, Movement, Moving, Step};
+
+use crate::master::{exchange, link_error, move_error, Exchange, LinkError, Timing};
 
 /// A byte stream a tokio master drives: reads and writes, plus what a serial port does
 /// beyond them.
@@ -105,6 +107,41 @@ impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
             response: "nothing",
             detail: "a broadcast of this command is not answered".to_owned(),
         })
+    }
+
+    /// Runs a movement to its end: the byte-order check before its trigger, then its
+    /// transactions and sleeps; `progress` hears where the device is in between.
+    pub async fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        mut movement: M,
+        mut progress: impl FnMut(Moving),
+    ) -> Result<MoveReport<P::Response>, LinkError> {
+        let trigger = movement.trigger().map_err(|e| move_error(address, e))?;
+        self.core.start_byte_order_check(address, trigger);
+        self.run().await?;
+        let mut step = movement.next(self.epoch.elapsed());
+        loop {
+            step = match step {
+                Step::Ask { request, optional } => match self.ask(address, request).await {
+                    Ok(r) => movement.answered(self.epoch.elapsed(), Some(r)),
+                    Err(_) if optional => movement.answered(self.epoch.elapsed(), None),
+                    Err(e) => return Err(e),
+                },
+                Step::Sleep {
+                    until,
+                    progress: moving,
+                } => {
+                    if let Some(m) = moving {
+                        progress(m);
+                    }
+                    tokio::time::sleep_until(self.epoch + until).await;
+                    movement.next(self.epoch.elapsed())
+                }
+                Step::Done(report) => return Ok(report),
+                Step::Failed(e) => return Err(move_error(address, e)),
+            }
+        }
     }
 
     async fn run(&mut self) -> Result<Exchange<P::Response>, LinkError> {

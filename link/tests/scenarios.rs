@@ -12,6 +12,7 @@ use std::time::Duration;
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::transport::Transport;
 use busspec_link::{Link, Master, Sd, SimClock, Ub2};
+use busspec_link_core::movement::{MoveReport, Movement};
 use busspec_link_core::{blocking, nonblocking};
 use common::*;
 
@@ -37,10 +38,12 @@ fn run_suite<A: Drive<Ub2>, B: Drive<Sd>>(
 ) {
     ub2_getter(ub2);
     ub2_byte_order_before_first_movement(ub2);
+    ub2_movement_polled_to_completion(ub2);
     ub2_errors(ub2);
     ub2_faults_retried_only_where_safe(ub2);
     sd_freshness_and_broadcast(sd);
     sd_faults(sd);
+    sd_move_polled_to_target(sd);
 }
 
 /// The RS485 scenarios, for drivers on the simulated bus (which can echo, collide and
@@ -80,6 +83,15 @@ impl<P: Link> Drive<P> for StdDrive<P> {
             Ok(ex) => Outcome::Reply(ex.response),
             Err(e) => Outcome::from_link_error(&e),
         }
+    }
+    fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        movement: M,
+    ) -> Result<MoveReport<P::Response>, Outcome<P::Response>> {
+        self.0
+            .run_to_end(address, movement, &mut |_| {})
+            .map_err(|e| Outcome::from_link_error(&e))
     }
 }
 
@@ -135,6 +147,15 @@ impl<P: Link> Drive<P> for EmbeddedDrive<P> {
             Err(e) => Outcome::from_failure(&e),
         }
     }
+    fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        movement: M,
+    ) -> Result<MoveReport<P::Response>, Outcome<P::Response>> {
+        self.0
+            .run_movement(address, movement, |_| {})
+            .map_err(|e| Outcome::from_failure(&e))
+    }
 }
 
 #[test]
@@ -168,6 +189,14 @@ impl<P: Link> Drive<P> for AsyncEmbeddedDrive<P> {
             Ok(r) => Outcome::Reply(r.response),
             Err(e) => Outcome::from_failure(&e),
         }
+    }
+    fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        movement: M,
+    ) -> Result<MoveReport<P::Response>, Outcome<P::Response>> {
+        block_on(self.0.run_movement(address, movement, |_| {}))
+            .map_err(|e| Outcome::from_failure(&e))
     }
 }
 
@@ -285,6 +314,21 @@ mod pty {
         }
         fn start_movement(&mut self, address: u8, trigger: P::Request) -> Outcome<P::Response> {
             self.bounded(address, trigger, true)
+        }
+        fn run_movement<M: Movement<P>>(
+            &mut self,
+            address: u8,
+            movement: M,
+        ) -> Result<MoveReport<P::Response>, Outcome<P::Response>> {
+            let master = self.master.as_mut().expect("the master");
+            let work = master.run_movement(address, movement, |_| {});
+            match self
+                .rt
+                .block_on(async { tokio::time::timeout(BOUND, work).await })
+            {
+                Ok(r) => r.map_err(|e| Outcome::from_link_error(&e)),
+                Err(_) => Err(Outcome::Other(format!("no result within {BOUND:?}"))),
+            }
         }
     }
 

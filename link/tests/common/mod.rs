@@ -20,6 +20,7 @@ use busspec_link::sim::Device;
 use busspec_link::transport::Transport;
 use busspec_link::{Line, Link, Protocol, Sd, Timing, Ub2};
 use busspec_link_core::driver::{Error as DriverError, Now};
+use busspec_link_core::movement::{MoveError, MoveReport, Movement, SdMove, Ub2Movement};
 use busspec_link_core::Failure;
 use busspec_protocols::{sd, ub2};
 
@@ -33,6 +34,7 @@ pub enum Outcome<R> {
     NoEcho,
     ByteOrder,
     Address,
+    MoveTimeout,
     Other(String),
 }
 
@@ -45,6 +47,7 @@ impl<R> Outcome<R> {
             LinkError::NoEcho { .. } => Outcome::NoEcho,
             LinkError::ByteOrder { .. } => Outcome::ByteOrder,
             LinkError::Address { .. } => Outcome::Address,
+            LinkError::MovementTimeout { .. } => Outcome::MoveTimeout,
             other => Outcome::Other(other.to_string()),
         }
     }
@@ -59,6 +62,7 @@ impl<R> Outcome<R> {
             DriverError::Link(Failure::NoEcho { .. }) => Outcome::NoEcho,
             DriverError::Link(Failure::ByteOrder { .. }) => Outcome::ByteOrder,
             DriverError::Link(Failure::Address { .. }) => Outcome::Address,
+            DriverError::Move(MoveError::Timeout { .. }) => Outcome::MoveTimeout,
             other => Outcome::Other(format!("{other:?}")),
         }
     }
@@ -68,6 +72,11 @@ impl<R> Outcome<R> {
 pub trait Drive<P: Link> {
     fn transact(&mut self, address: u8, request: P::Request) -> Outcome<P::Response>;
     fn start_movement(&mut self, address: u8, trigger: P::Request) -> Outcome<P::Response>;
+    fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        movement: M,
+    ) -> Result<MoveReport<P::Response>, Outcome<P::Response>>;
 }
 
 /// A device several owners can reach (the bus or a serving thread, and the test).
@@ -201,6 +210,52 @@ pub fn ub2_byte_order_before_first_movement<D: Drive<Ub2>>(make: &mut dyn FnMut(
     assert!(good.with(|d| d.movement.is_some()));
     assert_eq!(m.start_movement(0x22, go), Outcome::ByteOrder);
     assert!(swapped.with(|d| d.movement.is_none()), "moved anyway");
+}
+
+pub fn ub2_movement_polled_to_completion<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
+    let dev = Shared::new(Ub2Sim::new(0x21));
+    let mut m = make(Setup::new::<Ub2>(vec![Box::new(dev.clone())]));
+    let go = ub2::Request::GoToFullStepPosition { target: 40 };
+    let poll = Duration::from_millis(20);
+    let report = m
+        .run_movement(0x21, Ub2Movement::new(go, poll, Duration::from_secs(20)))
+        .expect("the movement completes");
+    assert_eq!(report.started, ub2::Response::MovementStarted);
+    assert_eq!(report.finished, Some(ub2::Response::MovementCompleted));
+    assert!(report.polls >= 1);
+    assert_eq!(
+        m.transact(0x21, ub2::Request::GetActualFullStepPosition),
+        Outcome::Reply(Some(ub2::Response::ActualFullStepPosition {
+            full_steps: 40
+        }))
+    );
+    // Not a trigger: nothing is sent.
+    let not = Ub2Movement::new(ub2::Request::GetStatus, poll, Duration::ZERO);
+    assert!(m.run_movement(0x21, not).is_err());
+    // Not done in no time.
+    let far = ub2::Request::GoToFullStepPosition { target: 4000 };
+    assert_eq!(
+        m.run_movement(0x21, Ub2Movement::new(far, poll, Duration::ZERO))
+            .unwrap_err(),
+        Outcome::MoveTimeout
+    );
+}
+
+pub fn sd_move_polled_to_target<D: Drive<Sd>>(make: &mut dyn FnMut(Setup) -> D) {
+    let dev = Shared::new(SdSim::new(1));
+    let mut m = make(Setup::new::<Sd>(vec![Box::new(dev.clone())]));
+    let target = sd::Angle(300);
+    let report = m
+        .run_movement(
+            1,
+            SdMove::new(target, Duration::from_millis(20), Duration::from_secs(20)),
+        )
+        .expect("the actuator gets there");
+    assert_eq!(
+        report.finished,
+        Some(sd::Response::ActualPosition { position: target })
+    );
+    assert_eq!(dev.with(|d| d.target), 300);
 }
 
 pub fn ub2_errors<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
