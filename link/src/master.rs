@@ -233,7 +233,7 @@ impl fmt::Display for LinkError {
                 received,
             } => write!(
                 f,
-                "{protocol} {request} to address 0x{address:02X}: collision on the bus                  ({attempts} attempt{}): the echo of {} differs at offset {offset}: expected                  0x{expected:02X}, received 0x{received:02X}",
+                "{protocol} {request} to address 0x{address:02X}: collision on the bus ({attempts} attempt{}): the echo of {} differs at offset {offset}: expected 0x{expected:02X}, received 0x{received:02X}",
                 plural(*attempts),
                 hex(sent)
             ),
@@ -246,7 +246,7 @@ impl fmt::Display for LinkError {
                 received,
             } => write!(
                 f,
-                "{protocol} {request} to address 0x{address:02X}: the line echoes, but only                  {received} of the {} bytes of {} came back ({attempts} attempt{})",
+                "{protocol} {request} to address 0x{address:02X}: the line echoes, but only {received} of the {} bytes of {} came back ({attempts} attempt{})",
                 sent.len(),
                 hex(sent),
                 plural(*attempts)
