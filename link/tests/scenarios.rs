@@ -211,14 +211,8 @@ fn the_embedded_io_async_driver_runs_the_suite() {
 #[cfg(feature = "tokio")]
 mod pty {
     use super::*;
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
-    use std::thread::JoinHandle;
-
-    use busspec_link::clock::SystemClock;
-    use busspec_link::sim::serve;
+    use busspec_link::sim::pty::PtySim;
     use busspec_link::tokio_driver::AsyncMaster;
-    use busspec_link::SerialTransport;
     use tokio_serial::SerialStream;
 
     /// Longest any one transaction may take before the test calls it hung.
@@ -227,29 +221,14 @@ mod pty {
     pub struct PtyDrive<P: Link> {
         rt: tokio::runtime::Runtime,
         master: Option<AsyncMaster<P, SerialStream>>,
-        stop: Arc<AtomicBool>,
-        server: Option<JoinHandle<()>>,
+        // Dropped after the master: stops serving and waits for the thread.
+        _sim: PtySim,
     }
 
     /// A pseudo-terminal pair: the simulators serve one end in a thread (as `busspec sim
     /// --pty` does), the tokio master drives the other.
     pub fn tokio_pty<P: Link>(setup: Setup) -> PtyDrive<P> {
-        let (master_end, device_end) = serialport::TTYPort::pair().expect("a pseudo-terminal pair");
-        let stop = Arc::new(AtomicBool::new(false));
-        let keep = Arc::clone(&stop);
-        let mut devices = setup.devices;
-        let server = std::thread::spawn(move || {
-            let mut port = SerialTransport::from_port(Box::new(device_end));
-            let clock = SystemClock::new();
-            let _ = serve(
-                &mut port,
-                &clock,
-                &mut devices,
-                Duration::from_millis(3),
-                || !keep.load(Ordering::Relaxed),
-                |_, _| {},
-            );
-        });
+        let (master_end, sim) = PtySim::spawn(setup.devices).expect("a pseudo-terminal pair");
         let rt = tokio::runtime::Builder::new_current_thread()
             .enable_all()
             .build()
@@ -267,18 +246,7 @@ mod pty {
         PtyDrive {
             rt,
             master: Some(master),
-            stop,
-            server: Some(server),
-        }
-    }
-
-    impl<P: Link> Drop for PtyDrive<P> {
-        fn drop(&mut self) {
-            self.stop.store(true, Ordering::Relaxed);
-            drop(self.master.take());
-            if let Some(s) = self.server.take() {
-                let _ = s.join();
-            }
+            _sim: sim,
         }
     }
 

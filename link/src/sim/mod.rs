@@ -7,6 +7,8 @@
 //! the wire at the bus's baud rate, replies come after a short latency, and replies that overlap
 //! in time collide. [`serve`] runs simulators on a real transport (a pseudo-terminal) instead.
 
+#[cfg(all(unix, feature = "serial"))]
+pub mod pty;
 pub mod sd;
 pub mod ub2;
 
