@@ -807,8 +807,13 @@ impl<P: Link> MasterCore<P> {
     }
 
     fn judge(&mut self) {
+        let verdict = self.accept();
+        self.judge_verdict(verdict);
+    }
+
+    fn judge_verdict(&mut self, verdict: Result<(u8, P::Response), Rejection>) {
         let (request, address, attempt) = (self.current(), self.address, self.attempt);
-        match self.accept() {
+        match verdict {
             Ok((from, response)) => {
                 self.event(Event::Received {
                     attempt,
@@ -892,8 +897,9 @@ impl<P: Link> MasterCore<P> {
                     quiet_until: Some(now + self.timing.byte_gap),
                 };
                 // A babbling line cannot keep us here: a reply is never longer than this.
-                if self.rx_len >= 4 * P::MAX_FRAME_LEN || self.accept().is_ok() {
-                    self.judge();
+                let verdict = self.accept();
+                if verdict.is_ok() || self.rx_len >= 4 * P::MAX_FRAME_LEN {
+                    self.judge_verdict(verdict);
                 }
             }
             State::Settle { limit, .. } => {
