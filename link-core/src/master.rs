@@ -479,7 +479,15 @@ impl<P: Link> MasterCore<P> {
         if needs_check {
             self.phase = Phase::Probe(0);
             self.transact(address, probe[0]);
-        } else if probe_only {
+        } else {
+            self.checked_go_on(address, request);
+        }
+    }
+
+    /// The byte-order check passed or was not needed: send `request`, unless only the check
+    /// was asked for.
+    fn checked_go_on(&mut self, address: u8, request: P::Request) {
+        if self.probe_only {
             self.finish(Ok(Reply {
                 response: None,
                 address,
@@ -615,16 +623,7 @@ impl<P: Link> MasterCore<P> {
                     Some(check) => {
                         self.checked[usize::from(address / 32)] |= 1 << (address % 32);
                         self.passed = Some(check);
-                        if self.probe_only {
-                            self.finish(Ok(Reply {
-                                response: None,
-                                address,
-                                attempts: 0,
-                            }));
-                        } else {
-                            self.phase = Phase::Main;
-                            self.transact(address, target);
-                        }
+                        self.checked_go_on(address, target);
                     }
                 }
             }

@@ -11,38 +11,13 @@ use embedded_hal::digital::{Error as _, OutputPin};
 use embedded_hal_async::delay::DelayNs;
 use embedded_io_async::{Read, ReadReady, Write};
 
-use crate::driver::{nanos, tick, Error, NoPin, Now};
-use crate::line::Line;
+use crate::driver::{nanos, tick, Async, Error, NoPin, Now};
 use crate::link::Link;
-use crate::master::{Action, MasterCore, Reply, Timing};
+use crate::master::{Action, Reply};
 use crate::movement::{MoveReport, Movement, Moving, Step};
 
-/// An async master for protocol `P` on the UART `U`.
-pub struct Driver<P: Link, U, N, D, DE = NoPin> {
-    core: MasterCore<P>,
-    uart: U,
-    now: N,
-    delay: D,
-    de: DE,
-}
-
-impl<P: Link, U, N, D> Driver<P, U, N, D, NoPin>
-where
-    U: Read + Write + ReadReady,
-    N: Now,
-    D: DelayNs,
-{
-    /// A driver with the protocol's timing and line, and no driver-enable pin.
-    pub fn new(uart: U, now: N, delay: D) -> Self {
-        Driver {
-            core: MasterCore::new(),
-            uart,
-            now,
-            delay,
-            de: NoPin,
-        }
-    }
-}
+/// An async master for protocol `P` on the UART `U` (builders: [`crate::driver::Driver`]).
+pub type Driver<P, U, N, D, DE = NoPin> = crate::driver::Driver<P, U, N, D, DE, Async>;
 
 impl<P: Link, U, N, D, DE> Driver<P, U, N, D, DE>
 where
@@ -51,41 +26,6 @@ where
     D: DelayNs,
     DE: OutputPin,
 {
-    /// Drives `pin` as the transceiver's driver-enable line; set [`Line::driver_enable`] too.
-    pub fn with_driver_enable<E: OutputPin>(self, pin: E) -> Driver<P, U, N, D, E> {
-        Driver {
-            core: self.core,
-            uart: self.uart,
-            now: self.now,
-            delay: self.delay,
-            de: pin,
-        }
-    }
-
-    pub fn with_timing(mut self, timing: Timing) -> Self {
-        self.core.set_timing(timing);
-        self
-    }
-
-    pub fn with_line(mut self, line: Line) -> Self {
-        self.core.set_line(line);
-        self
-    }
-
-    /// The sans-IO core: freshness counters, byte-order checks, the last frames.
-    pub fn core(&self) -> &MasterCore<P> {
-        &self.core
-    }
-
-    pub fn core_mut(&mut self) -> &mut MasterCore<P> {
-        &mut self.core
-    }
-
-    /// The UART, the time source, the delay and the pin back.
-    pub fn release(self) -> (U, N, D, DE) {
-        (self.uart, self.now, self.delay, self.de)
-    }
-
     /// Sends `request` to `address` and returns the paired reply.
     pub async fn transact(
         &mut self,
