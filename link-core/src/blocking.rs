@@ -1,4 +1,4 @@
-//! The blocking `embedded-io` driver (feature `embedded-io`): [`MasterCore`] over a UART that
+//! The blocking `embedded-io` driver (feature `embedded-io`): [`MasterCore`](crate::MasterCore) over a UART that
 //! implements [`Read`] + [`Write`] + [`ReadReady`], timed by a [`Now`] and an
 //! `embedded-hal` [`DelayNs`], with an optional driver-enable [`OutputPin`].
 //!

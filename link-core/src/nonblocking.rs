@@ -1,4 +1,4 @@
-//! The async `embedded-io-async` driver (feature `embedded-io-async`): [`MasterCore`] over a
+//! The async `embedded-io-async` driver (feature `embedded-io-async`): [`MasterCore`](crate::MasterCore) over a
 //! UART that implements [`Read`] + [`Write`] + [`ReadReady`] (embassy's buffered UARTs do),
 //! timed by a [`Now`] and an `embedded-hal-async` [`DelayNs`], with an optional
 //! driver-enable [`OutputPin`].
