@@ -46,7 +46,20 @@ pub struct IntType {
 
 impl IntType {
     fn ident(self) -> Ident {
-        format_ident!("{}{}", if self.signed { "i" } else { "u" }, self.bits)
+        format_ident!(
+            "{}{}",
+            if self.signed { "i" } else { "u" },
+            self.rust_bits()
+        )
+    }
+
+    /// Bits of the Rust integer holding it: a 24-bit wire integer is held in 32 bits.
+    fn rust_bits(self) -> u32 {
+        if self.bits == 24 {
+            32
+        } else {
+            self.bits
+        }
     }
 
     fn limits(self) -> (i64, i64) {
@@ -487,11 +500,26 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                 rt::sum8(bytes)
             }
         },
-        // Refused before emitting (`Protocol::generator_gaps`).
-        ChecksumAlgorithm::Sum8OnesComplement
-        | ChecksumAlgorithm::Sum8TwosComplement
-        | ChecksumAlgorithm::Xor8 => quote! {
-            compile_error!("checksum not supported by the generator");
+        ChecksumAlgorithm::Sum8OnesComplement => quote! {
+            /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
+            #[inline]
+            pub fn checksum(bytes: &[u8]) -> u8 {
+                rt::sum8_ones(bytes)
+            }
+        },
+        ChecksumAlgorithm::Sum8TwosComplement => quote! {
+            /// The frame checksum: the 8-bit sum of the bytes it covers, negated.
+            #[inline]
+            pub fn checksum(bytes: &[u8]) -> u8 {
+                rt::sum8_twos(bytes)
+            }
+        },
+        ChecksumAlgorithm::Xor8 => quote! {
+            /// The frame checksum: 8-bit XOR of the bytes it covers.
+            #[inline]
+            pub fn checksum(bytes: &[u8]) -> u8 {
+                rt::xor8(bytes)
+            }
         },
         ChecksumAlgorithm::Crc(k) => {
             let ty = format_ident!("u{}", c.width);
@@ -811,6 +839,11 @@ fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
         let at = usize_lit(at + i);
         quote!(frame[#at])
     });
+    if f.width == 3 {
+        let read = if w.signed { ident("i24") } else { ident("u24") };
+        let le = f.byte_order == ByteOrder::Little;
+        return quote!(rt::#read([#(#idx),*], #le));
+    }
     let conv = match f.byte_order {
         ByteOrder::Little => format_ident!("from_le_bytes"),
         ByteOrder::Big => format_ident!("from_be_bytes"),
@@ -913,8 +946,9 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         let n = usize_lit(p.framing.checksum.len());
         let be = p.framing.checksum.byte_order == ByteOrder::Big;
+        let sum = frame_sum(p);
         quote! {
-            rt::seal(buf, len, |b| u32::from(checksum(b)), #n, #be);
+            rt::seal(buf, len, #sum, #n, #be);
             rt::Ok(len)
         }
     };
@@ -1015,7 +1049,7 @@ fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             let (n, f) = (l.name, ident(l.name));
             let value = match ctx.kind(l) {
                 Kind::Text(_) => quote!(rt::text(&mut field, #n)?),
-                _ if l.bits.is_none() => {
+                _ if l.bits.is_none() && l.wire.bits != 24 => {
                     let w = l.wire.ident();
                     let get = match raw_of(ctx, l, &ident("x")) {
                         Some((t, _)) if t == l.wire => quote!(rt::get(&mut field, #n)?),
@@ -1113,7 +1147,7 @@ fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident, as_type: Option<IntType>) -> TokenStr
     let bits_limits = l.bits.map(|b| raw_limits(u32::from(b.width()), b.signed));
     let (lo, hi) = bits_limits.unwrap_or(wt.limits());
     let (rlo, rhi) = raw_t.limits();
-    if lo <= rlo && rhi <= hi && raw_t == wt {
+    if lo <= rlo && rhi <= hi && raw_t == wt && wt.bits != 24 {
         if raw_t == target {
             return raw_expr;
         }
@@ -1188,8 +1222,10 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
     // write per contiguous run.
     let named = repeated(m);
     let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
-    if let (Some(at), Some(s)) = (o.start, p.framing.start) {
-        known[at] = Some(hex_u8(s));
+    if let Some(at) = o.start {
+        for (i, s) in p.framing.sync.iter().enumerate() {
+            known[at + i] = Some(hex_u8(*s));
+        }
     }
     known[o.address] = Some(quote!(address));
     for (i, b) in m.code.iter().enumerate() {
@@ -1264,7 +1300,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
                             continue;
                         };
                         let v = paren(to_wire(ctx, leaf, &local(&b.name), Some(unsigned)));
-                        if lsb + u32::from(b.width()) >= wt.bits {
+                        if lsb + u32::from(b.width()) >= wt.rust_bits() {
                             v
                         } else {
                             let mask = hex_lit((1u64 << b.width()) - 1);
@@ -1297,6 +1333,10 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
         let put = |v: TokenStream| {
             if f.width == 1 && !wt.signed {
                 quote!(out[#at] = #v;)
+            } else if f.width == 3 {
+                let le = f.byte_order == ByteOrder::Little;
+                let v = paren(v);
+                quote!(out[#at..#end].copy_from_slice(&rt::bytes24(#v as u32, #le));)
             } else {
                 let v = paren(v);
                 quote!(out[#at..#end].copy_from_slice(&#v.#conv());)
@@ -1336,6 +1376,19 @@ fn encode_end(p: &Protocol, out: TokenStream) -> TokenStream {
 /// one call site after the match, which it inlines (SD: 138 against 68).
 fn checksum_in_arms(p: &Protocol) -> bool {
     matches!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8)
+        && p.framing.checksum.covers_from == 0
+}
+
+/// The checksum of a frame's bytes before it, as the runtime's frame checks take it: over the
+/// bytes from `covers_from` on where the checksum skips the first (Dynamixel's sync bytes).
+fn frame_sum(p: &Protocol) -> TokenStream {
+    match p.framing.checksum.covers_from {
+        0 => quote!(|b| u32::from(checksum(b))),
+        from => {
+            let from = usize_lit(from);
+            quote!(|b| u32::from(checksum(rt::covered(b, #from))))
+        }
+    }
 }
 
 fn to_bytes(order: ByteOrder) -> Ident {
@@ -1447,7 +1500,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
                 let (lsb, bits) = (Literal::u32_unsuffixed(lsb), paren(bits.clone()));
                 quote!(#bits >> #lsb)
             };
-            let field = if lsb + width >= wt.bits {
+            let field = if lsb + width >= wt.rust_bits() {
                 shifted
             } else {
                 let shifted = paren(shifted);
@@ -1640,8 +1693,19 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     } else {
         (quote!(), quote!(), quote!())
     };
+    let sum = frame_sum(p);
+    // A sync sequence's first byte is `FRAME.start`'s; the others are checked first.
+    let sync = match (p.framing.head(1).start, p.framing.sync.as_slice()) {
+        (Some(at), sync @ [_, _, ..]) => {
+            let at = usize_lit(at);
+            let bytes = sync.iter().map(|b| hex_u8(*b));
+            quote!(rt::check_sync(frame, #at, &[#(#bytes),*])?;)
+        }
+        _ => quote!(),
+    };
     let checks = quote! {
-        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, |b| u32::from(checksum(b)))?;
+        #sync
+        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
         let message = Self::dispatch(frame #request_arg)?;
         rt::Ok(Decoded { address, message })
     };
@@ -1800,16 +1864,19 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     }
     let first = p.framing.head(1);
     let code_at = first.code;
-    let start_check = match (first.start, p.framing.start) {
-        (Some(at), Some(s)) => {
-            let (at, s) = (head_byte(at), hex_u8(s));
-            quote! {
-                if #at.is_some_and(|&b| b != #s) {
-                    return rt::Candidates { requests: 0, responses: 0 };
+    let start_check = match first.start {
+        Some(at) => {
+            let checks = p.framing.sync.iter().enumerate().map(|(i, s)| {
+                let (at, s) = (head_byte(at + i), hex_u8(*s));
+                quote! {
+                    if #at.is_some_and(|&b| b != #s) {
+                        return rt::Candidates { requests: 0, responses: 0 };
+                    }
                 }
-            }
+            });
+            quote!(#(#checks)*)
         }
-        _ => quote!(),
+        None => quote!(),
     };
     let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
     let mut arms = Vec::new();
@@ -1848,6 +1915,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         quote!(response)
     };
     let ck_len = usize_lit(p.framing.checksum.len());
+    let sum = frame_sum(p);
     let doc_text = format!(
         "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",
         p.name
@@ -1902,7 +1970,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             }
             fn checksum_ok(frame: &[u8]) -> bool {
                 match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b))),
+                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
                     _ => false,
                 }
             }

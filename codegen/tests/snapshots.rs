@@ -59,3 +59,30 @@ fn minimal_crc_spec_generates_its_snapshot() {
 fn spec_named_like_core_generates_its_snapshot() {
     check("codegen/tests/fixtures/core_names.yaml", "core_names.rs");
 }
+
+/// The fixed-length constructs of the newer language: a sync sequence, an inverted sum-8 that
+/// skips it, 24-bit integers (`snapshots_compile.rs` compiles and replays it).
+#[test]
+fn sync_sequence_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/minimal_sync.yaml", "syncy.rs");
+}
+
+/// What the generator cannot emit yet it refuses by name, pointing at the interpreter.
+#[test]
+fn variable_length_spec_is_refused_by_name() {
+    let spec = dir().join("../../model/tests/fixtures/valid/minimal_variable.yaml");
+    let p = busspec_model::load_file(&spec).unwrap_or_else(|d| panic!("{d}"));
+    let e = busspec_codegen::emit::emit_module(&p, "x", "x").unwrap_err();
+    for gap in [
+        "a length field",
+        "`write.values`: a repeated field",
+        "`write.byte_count`: a value that follows another",
+        "`read_error`: a code derived from the request's",
+        "busspec decode --spec",
+    ] {
+        assert!(e.contains(gap), "{gap:?} not in {e}");
+    }
+    for emitted in ["sync", "checksum", "24-bit"] {
+        assert!(!e.contains(emitted), "{emitted:?} refused: {e}");
+    }
+}

@@ -516,26 +516,14 @@ pub struct Erratum {
 
 impl Protocol {
     /// What the code generator cannot emit yet, one line each (empty: it can emit all of it).
-    /// Generated code stays fixed-length: a spec using the variable-length language (length
-    /// field, repeated fields, replies computed from their request, sync sequences, the newer
-    /// checksums) is served by the interpreter (`--spec`) until the generator learns them.
+    /// Generated code stays fixed-length: it emits sync sequences, every checksum and its
+    /// coverage and 24-bit integers, but a spec using the variable-length language (length
+    /// field, repeated fields, replies computed from their request, code-less messages) is
+    /// served by the interpreter (`--spec`) until the generator learns them.
     pub fn generator_gaps(&self) -> Vec<String> {
         let mut gaps = Vec::new();
-        let f = &self.framing;
-        if f.sync.len() > 1 {
-            gaps.push("a multi-byte sync sequence".to_owned());
-        }
-        if f.length.is_some() {
+        if self.framing.length.is_some() {
             gaps.push("a length field".to_owned());
-        }
-        if f.checksum.covers_from != 0 {
-            gaps.push("a checksum that does not cover the whole frame".to_owned());
-        }
-        if !matches!(
-            f.checksum.algorithm,
-            ChecksumAlgorithm::Sum8 | ChecksumAlgorithm::Crc(_)
-        ) {
-            gaps.push("a checksum other than sum8 or a CRC".to_owned());
         }
         for m in self.commands.iter().chain(&self.responses) {
             if m.code.is_empty() {
@@ -553,9 +541,6 @@ impl Protocol {
                         "`{}.{}`: a value that follows another",
                         m.name, x.name
                     ));
-                }
-                if matches!(x.ty, FieldType::U24 | FieldType::I24) {
-                    gaps.push(format!("`{}.{}`: a 24-bit integer", m.name, x.name));
                 }
             }
         }

@@ -541,3 +541,108 @@ pub fn seal(buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32, n: usize
         *b = (s >> shift) as u8;
     }
 }
+
+/// 8-bit XOR of `bytes` (the `xor8` checksum).
+#[inline]
+pub fn xor8(bytes: &[u8]) -> u8 {
+    bytes.iter().fold(0u8, |s, b| s ^ *b)
+}
+
+/// The 8-bit sum of `bytes` inverted (`sum8_ones_complement`: Dynamixel's checksum).
+#[inline]
+pub fn sum8_ones(bytes: &[u8]) -> u8 {
+    !sum8(bytes)
+}
+
+/// The 8-bit sum of `bytes` negated (`sum8_twos_complement`).
+#[inline]
+pub fn sum8_twos(bytes: &[u8]) -> u8 {
+    sum8(bytes).wrapping_neg()
+}
+
+/// The bytes of `frame` (the frame before its checksum) that a checksum covering from offset
+/// `from` on covers: none when the frame is that short.
+#[inline]
+pub fn covered(frame: &[u8], from: usize) -> &[u8] {
+    frame.get(from..).unwrap_or(&[])
+}
+
+/// Checks every byte of a multi-byte sync sequence `sync` at `at` that `frame` holds (the first
+/// is also [`Frame::start`]'s): the error names the first that differs.
+#[inline]
+pub fn check_sync(frame: &[u8], at: usize, sync: &[u8]) -> Result<(), DecodeError> {
+    for (i, &expected) in sync.iter().enumerate() {
+        if let Some(&found) = frame.get(at + i) {
+            if found != expected {
+                return Err(DecodeError::BadStart { expected, found });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A 24-bit unsigned integer from its three wire bytes (`le`: least significant first).
+#[inline(always)]
+pub fn u24(b: [u8; 3], le: bool) -> u32 {
+    if le {
+        u32::from_le_bytes([b[0], b[1], b[2], 0])
+    } else {
+        u32::from_be_bytes([0, b[0], b[1], b[2]])
+    }
+}
+
+/// A 24-bit signed integer from its three wire bytes, sign-extended.
+#[inline(always)]
+pub fn i24(b: [u8; 3], le: bool) -> i32 {
+    ((u24(b, le) << 8) as i32) >> 8
+}
+
+/// The three wire bytes of a 24-bit integer held in the low bits of `v` (two's complement for a
+/// negative one; the caller has checked its range).
+#[inline(always)]
+pub fn bytes24(v: u32, le: bool) -> [u8; 3] {
+    let b = v.to_le_bytes();
+    if le {
+        [b[0], b[1], b[2]]
+    } else {
+        [b[2], b[1], b[0]]
+    }
+}
+
+#[cfg(test)]
+mod lang_tests {
+    use super::*;
+
+    #[test]
+    fn sums_of_the_newer_checksums() {
+        // Dynamixel PING of ID 1: FF FF 01 02 01, checksum over 01 02 01 is !4 = 0xFB.
+        assert_eq!(sum8_ones(&[0x01, 0x02, 0x01]), 0xFB);
+        assert_eq!(sum8_twos(&[0x01, 0x02, 0x01]), 0xFC);
+        assert_eq!(xor8(&[0x0F, 0xF0, 0x01]), 0xFE);
+        assert_eq!(covered(&[1, 2, 3], 2), &[3]);
+        assert_eq!(covered(&[1], 2), &[] as &[u8]);
+    }
+
+    #[test]
+    fn twenty_four_bit_integers_round_trip_and_sign_extend() {
+        assert_eq!(u24([0x01, 0x02, 0x03], true), 0x030201);
+        assert_eq!(u24([0x01, 0x02, 0x03], false), 0x010203);
+        assert_eq!(i24([0xFF, 0xFF, 0xFF], true), -1);
+        assert_eq!(i24([0x80, 0x00, 0x00], false), -0x80_0000);
+        assert_eq!(bytes24((-2i32) as u32, true), [0xFE, 0xFF, 0xFF]);
+        assert_eq!(bytes24(0x010203, false), [0x01, 0x02, 0x03]);
+    }
+
+    #[test]
+    fn a_sync_sequence_names_the_byte_that_differs() {
+        assert_eq!(check_sync(&[0xFF, 0xFF, 1], 0, &[0xFF, 0xFF]), Ok(()));
+        assert_eq!(check_sync(&[0xFF], 0, &[0xFF, 0xFF]), Ok(()));
+        assert_eq!(
+            check_sync(&[0xFF, 0x01], 0, &[0xFF, 0xFF]),
+            Err(DecodeError::BadStart {
+                expected: 0xFF,
+                found: 0x01
+            })
+        );
+    }
+}
