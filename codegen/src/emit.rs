@@ -316,7 +316,7 @@ impl<'a> Ctx<'a> {
 fn leaves(m: &Message) -> Vec<Leaf<'_>> {
     let mut out = Vec::new();
     for f in &m.fields {
-        if f.constant.is_some() || f.equals.is_some() {
+        if f.constant.is_some() || f.equals.is_some() || follows_field(f).is_some() {
             continue;
         }
         if f.bits.is_empty() {
@@ -380,7 +380,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let checksum = emit_checksum(p);
     let requests = emit_messages(&ctx, Direction::Request);
     let responses = emit_messages(&ctx, Direction::Response);
-    let pairing = emit_pairing();
+    let pairing = emit_pairing(&ctx);
     let stream = emit_stream(p);
     let name = ident(&p.name);
     quote! {
@@ -1195,7 +1195,28 @@ fn constant_bytes(c: u64, width: usize, order: ByteOrder) -> Vec<u8> {
 
 /// Indices of the fields another field repeats (`equals`): their wire value gets a name.
 fn repeated(m: &Message) -> Vec<usize> {
-    m.fields.iter().filter_map(|f| f.equals).collect()
+    m.fields
+        .iter()
+        .filter_map(|f| f.equals.or(follows_field(f).map(|(i, _)| i)))
+        .collect()
+}
+
+/// The field of the same frame `f` follows, and how (`follows: {field}`): encode computes `f`,
+/// decode checks it, and it is not part of the typed message.
+fn follows_field(f: &Field) -> Option<(usize, &Relation)> {
+    match &f.follows {
+        Some(Follows::Field(i, rel)) => Some((*i, rel)),
+        _ => None,
+    }
+}
+
+/// `multiply, divide` of a relation, as the runtime's `follows` takes them.
+fn relation_args(rel: &Relation) -> TokenStream {
+    let (m, d) = (
+        Literal::u64_unsuffixed(rel.multiply),
+        Literal::u64_unsuffixed(rel.divide),
+    );
+    quote!(#m, #d)
 }
 
 fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -> TokenStream {
@@ -1288,6 +1309,15 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
         } else if let Some(other) = f.equals {
             let n = format_ident!("field_{}", other);
             quote!(#n)
+        } else if let Some((other, rel)) = follows_field(f) {
+            let (n, name, args) = (
+                format_ident!("field_{}", other),
+                &f.name,
+                relation_args(rel),
+            );
+            let (lo, hi) = wt.limits();
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            quote!(rt::fits(#name, rt::follows(#n as i64, #args), #lo, #hi)? as #w)
         } else if !f.bits.is_empty() {
             let mut parts = Vec::new();
             for b in &f.bits {
@@ -1447,14 +1477,19 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         // A field read more than once is read into a local (a one-byte read is as short as
         // its name).
         let uses = usize::from(f.constant.is_some())
-            + usize::from(f.equals.is_some())
+            + usize::from(f.equals.is_some() || f.follows.is_some())
             + usize::from(range.is_some())
             + usize::from(named.contains(&fi))
             + f.bits
                 .iter()
                 .map(|b| 1 + usize::from(b.constant.is_none() && b.range.is_some()))
                 .sum::<usize>()
-            + usize::from(f.bits.is_empty() && f.constant.is_none() && f.equals.is_none());
+            + usize::from(
+                f.bits.is_empty()
+                    && f.constant.is_none()
+                    && f.equals.is_none()
+                    && follows_field(f).is_none(),
+            );
         let wire = if f.width > 1 && uses > 1 {
             stmts.push(quote!(let #n: #w = #read;));
             quote!(#n)
@@ -1470,11 +1505,16 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
             let on = wires.get(other).cloned().unwrap_or_default();
             stmts.push(quote!(rt::same(#name, #at, #wire, #on)?;));
         }
+        if let Some((other, rel)) = follows_field(f) {
+            let on = wires.get(other).cloned().unwrap_or_default();
+            let args = relation_args(rel);
+            stmts.push(quote!(rt::following(#name, #at, #wire, #on as i64, #args)?;));
+        }
         if let Some(range) = range {
             stmts.push(quote!(rt::#range_fn(#name, #at, #wire, #range)?;));
         }
         if f.bits.is_empty() {
-            if f.constant.is_none() && f.equals.is_none() {
+            if f.constant.is_none() && f.equals.is_none() && follows_field(f).is_none() {
                 if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
                     values.push((ident(&f.name), from_wire(ctx, leaf, Some(wt), wire)));
                 }
@@ -1703,10 +1743,20 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         }
         _ => quote!(),
     };
+    let follows = if replies && has_follows_request(p) {
+        quote! {
+            if let rt::Some(request) = request {
+                message.follows_request(request)?;
+            }
+        }
+    } else {
+        quote!()
+    };
     let checks = quote! {
         #sync
         let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
         let message = Self::dispatch(frame #request_arg)?;
+        #follows
         rt::Ok(Decoded { address, message })
     };
     let dispatch = quote! {
@@ -2118,13 +2168,103 @@ fn any_of(ty: &Ident, m: &Message) -> TokenStream {
     }
 }
 
-fn emit_pairing() -> TokenStream {
+fn emit_pairing(ctx: &Ctx) -> TokenStream {
+    let Some(follows) = emit_follows_request(ctx) else {
+        return quote! {
+            impl Response {
+                /// Whether this response is one the document says `request` may get.
+                pub fn answers(&self, request: &Request) -> bool {
+                    request.replies() >> self.index() & 1 != 0
+                }
+            }
+        };
+    };
     quote! {
         impl Response {
-            /// Whether this response is one the document says `request` may get.
+            /// Whether this response is one the document says `request` may get, and every
+            /// field it takes from the request agrees with it.
             pub fn answers(&self, request: &Request) -> bool {
-                request.replies() >> self.index() & 1 != 0
+                request.replies() >> self.index() & 1 != 0 && self.follows_request(request).is_ok()
             }
+            #follows
         }
     }
+}
+
+/// Whether a response has a field that follows from its request (`follows: {request}`).
+fn has_follows_request(p: &Protocol) -> bool {
+    p.responses
+        .iter()
+        .flat_map(|m| &m.fields)
+        .any(|f| matches!(f.follows, Some(Follows::Request(_))))
+}
+
+/// `follows_request`: one arm per response and command it answers, checking each field the
+/// response takes from the request (`None` where no response has one).
+fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
+    let p = ctx.p;
+    if !has_follows_request(p) {
+        return None;
+    }
+    let mut arms = Vec::new();
+    for m in &p.responses {
+        let ls = leaves(m);
+        let follows: Vec<(&Leaf, &Relation)> = ls
+            .iter()
+            .filter_map(|l| match (&l.field.follows, l.bits) {
+                (Some(Follows::Request(rel)), None) => Some((l, rel)),
+                _ => None,
+            })
+            .collect();
+        if follows.is_empty() {
+            continue;
+        }
+        let v = variant(m);
+        for &c in &m.answers {
+            let cmd = &p.commands[c];
+            let cls = leaves(cmd);
+            let mut own = Vec::new();
+            let mut theirs = Vec::new();
+            let mut checks = Vec::new();
+            for (l, rel) in &follows {
+                let Some(cl) = cls.iter().find(|x| x.bits.is_none() && x.name == rel.field) else {
+                    continue;
+                };
+                let (n, mine) = (ident(l.name), local(l.name));
+                own.push(quote!(#n: #mine));
+                let (cn, their) = (ident(cl.name), format_ident!("r_{}", cl.name));
+                if !theirs
+                    .iter()
+                    .any(|t: &TokenStream| t.to_string() == quote!(#cn: #their).to_string())
+                {
+                    theirs.push(quote!(#cn: #their));
+                }
+                let (Some((_, a)), Some((_, b))) = (raw_of(ctx, l, &mine), raw_of(ctx, cl, &their))
+                else {
+                    continue;
+                };
+                let name = l.name;
+                let at = usize_lit(m.layout.payload + l.field.offset);
+                let args = relation_args(rel);
+                checks.push(quote!(rt::following(#name, #at, #a, #b as i64, #args)?;));
+            }
+            let cv = variant(cmd);
+            arms.push(quote! {
+                (&Self::#v { #(#own,)* .. }, &Request::#cv { #(#theirs,)* .. }) => {
+                    #(#checks)*
+                }
+            });
+        }
+    }
+    Some(quote! {
+        /// Checks every field this response takes from `request` (`follows: {request}` in the
+        /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
+        pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
+            match (self, request) {
+                #(#arms)*
+                _ => {}
+            }
+            rt::Ok(())
+        }
+    })
 }

@@ -144,3 +144,67 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
         "{events:?}"
     );
 }
+
+/// A field following another of its frame is computed by encode and checked by decode; reply
+/// fields following the request are checked by `decode_reply` and `answers`, as the
+/// interpreter checks them; the error reply's code is the request's with 0x80 set.
+#[test]
+fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
+    use busspec_runtime::DecodeError;
+    let p = fixture("model/tests/fixtures/valid/minimal_sync.yaml");
+    let req = syncy::Request::SetPair {
+        quantity: 10,
+        level: 0x0102,
+    };
+    let mut buf = [0u8; syncy::MAX_FRAME_LEN];
+    let n = req.encode(1, &mut buf).unwrap();
+    assert_eq!(&buf[..n], &[0xFF, 0xFF, 1, 5, 10, 20, 1, 2, 0xD8]);
+    // `doubled` is not 2 × quantity: both engines refuse it.
+    let mut bad = buf[..n].to_vec();
+    bad[5] = 21;
+    bad[8] = !bad[2..8].iter().fold(0u8, |s, b| s.wrapping_add(*b));
+    assert_eq!(
+        syncy::Request::decode(&bad),
+        Err(DecodeError::InvalidValue {
+            field: "doubled",
+            offset: 5,
+            found: 21
+        })
+    );
+    assert!(busspec_model::interp::decode(&p, Some(Direction::Request), None, &bad).is_err());
+    // 200 × 2 does not fit the byte `doubled` is: encode refuses.
+    let far = syncy::Request::SetPair {
+        quantity: 200,
+        level: 0,
+    };
+    assert!(far.encode(1, &mut buf).is_err());
+    let ireq = busspec_model::interp::decode(
+        &p,
+        Some(Direction::Request),
+        None,
+        &[0xFF, 0xFF, 1, 5, 10, 20, 1, 2, 0xD8],
+    )
+    .unwrap();
+    for (reply, ok) in [
+        (&[0xFF, 0xFF, 1, 5, 10, 2, 0xED][..], true),
+        (&[0xFF, 0xFF, 1, 5, 9, 2, 0xEE][..], false),
+        (&[0xFF, 0xFF, 1, 5, 10, 1, 0xEE][..], false),
+        (&[0xFF, 0xFF, 1, 0x85, 3, 0x76][..], true),
+    ] {
+        let g = syncy::Response::decode_reply(reply, &req);
+        let i = busspec_model::interp::decode_reply(&p, &ireq, reply);
+        assert_eq!(g.is_ok(), ok, "{reply:02X?}: {g:?}");
+        assert_eq!(i.is_ok(), ok, "{reply:02X?}: {i:?}");
+        let plain = syncy::Response::decode(reply).unwrap().message;
+        assert_eq!(plain.answers(&req), ok);
+    }
+    assert_eq!(
+        syncy::Response::decode_reply(&[0xFF, 0xFF, 1, 5, 9, 2, 0xEE], &req),
+        Err(DecodeError::InvalidValue {
+            field: "quantity",
+            offset: 4,
+            found: 9
+        })
+    );
+    assert_eq!(syncy::Response::SetPairError { reason: 3 }.code(), &[0x85]);
+}

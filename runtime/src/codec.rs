@@ -609,6 +609,37 @@ pub fn bytes24(v: u32, le: bool) -> [u8; 3] {
     }
 }
 
+/// `ceil(base × multiply / divide)`: the value of a field that follows another (`follows`),
+/// saturating at the ends of `i64`.
+#[inline(always)]
+pub fn follows(base: i64, multiply: u64, divide: u64) -> i64 {
+    let n = base as i128 * multiply as i128;
+    let d = divide.max(1) as i128;
+    let q = if n >= 0 { (n + d - 1) / d } else { n / d };
+    q.clamp(i64::MIN as i128, i64::MAX as i128) as i64
+}
+
+/// A decoded field that follows another (of its frame, or of the request a reply answers): it
+/// must be `ceil(base × multiply / divide)`.
+#[inline(always)]
+pub fn following<T: Wire>(
+    field: &'static str,
+    offset: usize,
+    found: T,
+    base: i64,
+    multiply: u64,
+    divide: u64,
+) -> Result<(), DecodeError> {
+    if found.to_i64() != follows(base, multiply, divide) {
+        return Err(DecodeError::InvalidValue {
+            field,
+            offset,
+            found: found.to_u64() as u32,
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod lang_tests {
     use super::*;
@@ -631,6 +662,23 @@ mod lang_tests {
         assert_eq!(i24([0x80, 0x00, 0x00], false), -0x80_0000);
         assert_eq!(bytes24((-2i32) as u32, true), [0xFE, 0xFF, 0xFF]);
         assert_eq!(bytes24(0x010203, false), [0x01, 0x02, 0x03]);
+    }
+
+    #[test]
+    fn a_following_value_is_the_rounded_up_relation() {
+        assert_eq!(follows(10, 2, 1), 20);
+        assert_eq!(follows(9, 1, 8), 2);
+        assert_eq!(follows(16, 1, 8), 2);
+        assert_eq!(follows(i64::MAX, 2, 1), i64::MAX);
+        assert_eq!(following("n", 3, 4u8, 2, 2, 1), Ok(()));
+        assert_eq!(
+            following("n", 3, 5u8, 2, 2, 1),
+            Err(DecodeError::InvalidValue {
+                field: "n",
+                offset: 3,
+                found: 5
+            })
+        );
     }
 
     #[test]

@@ -14,13 +14,13 @@ pub mod syncy {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2024-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "e670534318c1ee2aecef1c2b8df439c56ca532b25cb066c851c1fbccbc8b5942";
+    pub const SPEC_SHA256: &str = "cfb55c1e72755197e56adc8d77c0d7821de4ce43a49be9cf414f88a0c3857b63";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/minimal_sync.yaml"
     );
     /// The longest request frame, in bytes.
-    pub const MAX_REQUEST_LEN: usize = 8;
+    pub const MAX_REQUEST_LEN: usize = 9;
     /// The longest response frame, in bytes.
     pub const MAX_RESPONSE_LEN: usize = 11;
     /// The longest frame in either direction: a buffer this long holds any frame.
@@ -100,18 +100,26 @@ pub mod syncy {
         },
         /// §2 Get counter (code `0x04`, 5 bytes).
         GetCounter,
+        /// §5 Set pair (code `0x05`, 9 bytes).
+        SetPair {
+            /// Valid raw range 1..=100.
+            quantity: u8,
+            level: u16,
+        },
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 2] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
             ("move_to", &[0x03], 8),
             ("get_counter", &[0x04], 5),
+            ("set_pair", &[0x05], 9),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match self {
                 Self::MoveTo { .. } => 0,
                 Self::GetCounter => 1,
+                Self::SetPair { .. } => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -132,6 +140,10 @@ pub mod syncy {
             match self {
                 Self::MoveTo { target: v_target } => {
                     f("target", rt::Int(v_target.raw() as i64))
+                }
+                Self::SetPair { quantity: v_quantity, level: v_level } => {
+                    f("quantity", rt::Int(*v_quantity as i64));
+                    f("level", rt::Int(*v_level as i64));
                 }
                 _ => {}
             }
@@ -164,6 +176,21 @@ pub mod syncy {
                     rt::encode_broadcast(address, 0xFE, "get_counter")?;
                     rt::frame_mut::<5>(buf, &[0xFF, 0xFF, address, 0x04])?.len()
                 }
+                Self::SetPair { quantity: v_quantity, level: v_level } => {
+                    rt::encode_broadcast(address, 0xFE, "set_pair")?;
+                    rt::encode_in_range("quantity", v_quantity, 1, 100)?;
+                    let out = rt::frame_mut::<9>(buf, &[0xFF, 0xFF, address, 0x05])?;
+                    let field_0: u8 = v_quantity;
+                    out[4] = field_0;
+                    out[5] = rt::fits(
+                        "doubled",
+                        rt::follows(field_0 as i64, 2, 1),
+                        0,
+                        255,
+                    )? as u8;
+                    out[6..8].copy_from_slice(&v_level.to_be_bytes());
+                    out.len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
             rt::Ok(len)
@@ -176,7 +203,7 @@ pub mod syncy {
             let address = rt::check_frame(
                 frame,
                 5,
-                8,
+                9,
                 2,
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
@@ -202,6 +229,16 @@ pub mod syncy {
                     rt::no_broadcast(frame[2], 0xFE, "get_counter", 0x04)?;
                     rt::Ok(Self::GetCounter)
                 }
+                0x05 => {
+                    let frame = rt::fixed::<9>(frame)?;
+                    rt::no_broadcast(frame[2], 0xFE, "set_pair", 0x05)?;
+                    rt::in_range("quantity", 4, frame[4], 1, 100)?;
+                    rt::following("doubled", 5, frame[5], frame[4] as i64, 2, 1)?;
+                    rt::Ok(Self::SetPair {
+                        quantity: frame[4],
+                        level: u16::from_be_bytes([frame[6], frame[7]]),
+                    })
+                }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
         }
@@ -222,6 +259,12 @@ pub mod syncy {
                     })
                 }
                 "get_counter" => rt::Ok(Self::GetCounter),
+                "set_pair" => {
+                    rt::Ok(Self::SetPair {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        level: rt::get(&mut field, "level")?,
+                    })
+                }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -262,9 +305,10 @@ pub mod syncy {
     impl Request {
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
-        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
             (rt::Movement, false, false, 0x1),
             (rt::Getter, false, false, 0x2),
+            (rt::Setter, false, false, 0xc),
         ];
         /// What the command does, as the spec classifies it.
         pub const fn kind(&self) -> rt::CommandKind {
@@ -294,18 +338,26 @@ pub mod syncy {
         Moving,
         /// §4 Counter (code `0x01`, 11 bytes).
         Counter { total: u32, tag: u8, offset: i32 },
+        /// §6 Pair set (code `0x05`, 7 bytes).
+        SetPairReply { quantity: u8, groups: u8 },
+        /// §7 Pair not set (code `0x85`, 6 bytes).
+        SetPairError { reason: u8 },
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 2] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
             ("moving", &[0x00], 5),
             ("counter", &[0x01], 11),
+            ("set_pair_reply", &[0x05], 7),
+            ("set_pair_error", &[0x85], 6),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match self {
                 Self::Moving => 0,
                 Self::Counter { .. } => 1,
+                Self::SetPairReply { .. } => 2,
+                Self::SetPairError { .. } => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -328,6 +380,13 @@ pub mod syncy {
                     f("total", rt::Int(*v_total as i64));
                     f("tag", rt::Int(*v_tag as i64));
                     f("offset", rt::Int(*v_offset as i64));
+                }
+                Self::SetPairReply { quantity: v_quantity, groups: v_groups } => {
+                    f("quantity", rt::Int(*v_quantity as i64));
+                    f("groups", rt::Int(*v_groups as i64));
+                }
+                Self::SetPairError { reason: v_reason } => {
+                    f("reason", rt::Int(*v_reason as i64))
                 }
                 _ => {}
             }
@@ -359,6 +418,17 @@ pub mod syncy {
                         | ((rt::fits("offset", v_offset, -524288, 524287)? as u32)
                             & 0xFFFFF);
                     out[7..10].copy_from_slice(&rt::bytes24(field_1 as u32, false));
+                    out.len()
+                }
+                Self::SetPairReply { quantity: v_quantity, groups: v_groups } => {
+                    let out = rt::frame_mut::<7>(buf, &[0xFF, 0xFF, address, 0x05])?;
+                    out[4] = v_quantity;
+                    out[5] = v_groups;
+                    out.len()
+                }
+                Self::SetPairError { reason: v_reason } => {
+                    let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x85])?;
+                    out[4] = v_reason;
                     out.len()
                 }
             };
@@ -401,6 +471,9 @@ pub mod syncy {
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
             let message = Self::dispatch(frame, request)?;
+            if let rt::Some(request) = request {
+                message.follows_request(request)?;
+            }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
@@ -419,6 +492,19 @@ pub mod syncy {
                         total: rt::u24([frame[4], frame[5], frame[6]], false),
                         tag: ((field_1 >> 20) & 0xF) as u8,
                         offset: (((field_1 & 0xFFFFF) as u32) << 12) as i32 >> 12,
+                    })
+                }
+                0x05 => {
+                    let frame = rt::reply::<7>(frame, asked >> 2 & 1 != 0, 0x05)?;
+                    rt::Ok(Self::SetPairReply {
+                        quantity: frame[4],
+                        groups: frame[5],
+                    })
+                }
+                0x85 => {
+                    let frame = rt::reply::<6>(frame, asked >> 3 & 1 != 0, 0x85)?;
+                    rt::Ok(Self::SetPairError {
+                        reason: frame[4],
                     })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
@@ -444,6 +530,17 @@ pub mod syncy {
                             -524288,
                             524287,
                         )? as i32,
+                    })
+                }
+                "set_pair_reply" => {
+                    rt::Ok(Self::SetPairReply {
+                        quantity: rt::get(&mut field, "quantity")?,
+                        groups: rt::get(&mut field, "groups")?,
+                    })
+                }
+                "set_pair_error" => {
+                    rt::Ok(Self::SetPairError {
+                        reason: rt::get(&mut field, "reason")?,
                     })
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
@@ -484,9 +581,26 @@ pub mod syncy {
         }
     }
     impl Response {
-        /// Whether this response is one the document says `request` may get.
+        /// Whether this response is one the document says `request` may get, and every
+        /// field it takes from the request agrees with it.
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
+                && self.follows_request(request).is_ok()
+        }
+        /// Checks every field this response takes from `request` (`follows: {request}` in the
+        /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
+        pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
+            match (self, request) {
+                (
+                    &Self::SetPairReply { quantity: v_quantity, groups: v_groups, .. },
+                    &Request::SetPair { quantity: r_quantity, .. },
+                ) => {
+                    rt::following("quantity", 4, v_quantity, r_quantity as i64, 1, 1)?;
+                    rt::following("groups", 5, v_groups, r_quantity as i64, 1, 8)?;
+                }
+                _ => {}
+            }
+            rt::Ok(())
         }
     }
     /// The syncy protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
@@ -504,7 +618,7 @@ pub mod syncy {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[11, 8, 5];
+        const FRAME_LENGTHS: &'static [usize] = &[11, 9, 8, 7, 6, 5];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         const BAUD: u32 = BAUD;
         const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
@@ -537,8 +651,8 @@ pub mod syncy {
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
         }
-        fn is_nak(_response: &Response) -> bool {
-            false
+        fn is_nak(response: &Response) -> bool {
+            matches!(response, Response::SetPairError { .. })
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
@@ -567,11 +681,13 @@ pub mod syncy {
                 };
             }
             let mask: u128 = match head.get(3) {
-                rt::None => 0x50000000000000006,
-                rt::Some(0x00) => 0x40000000000000000,
+                rt::None => 0x390000000000000026,
+                rt::Some(0x00) => 0x200000000000000000,
                 rt::Some(0x01) => 0x10000000000000000,
-                rt::Some(0x03) => 0x2,
-                rt::Some(0x04) => 0x4,
+                rt::Some(0x03) => 0x4,
+                rt::Some(0x04) => 0x20,
+                rt::Some(0x05) => 0x80000000000000002,
+                rt::Some(0x85) => 0x100000000000000000,
                 _ => 0,
             };
             rt::Candidates {
