@@ -1249,6 +1249,15 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
         }
     }
     known[o.address] = Some(quote!(address));
+    if let (Some(at), Some(l)) = (o.length, &p.framing.length) {
+        let v = busspec_model::validate::length_value(&p.framing, l, m.code.len(), m.payload_len);
+        for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
+            .into_iter()
+            .enumerate()
+        {
+            known[at + i] = Some(hex_u8(b));
+        }
+    }
     for (i, b) in m.code.iter().enumerate() {
         known[o.code + i] = Some(hex_u8(*b));
     }
@@ -1752,9 +1761,11 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     } else {
         quote!()
     };
+    let length = length_check(p, d);
     let checks = quote! {
         #sync
         let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
+        #length
         let message = Self::dispatch(frame #request_arg)?;
         #follows
         rt::Ok(Decoded { address, message })
@@ -1804,6 +1815,36 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         }
         #dispatch
     }
+}
+
+/// The check of the length field of a frame of direction `d`, where the framing has one: it
+/// holds a constant plus the frame's length where it counts the payload (every message of the
+/// direction has it at the same offset, and only the payload varies).
+fn length_check(p: &Protocol, d: Direction) -> TokenStream {
+    let Some(l) = &p.framing.length else {
+        return quote!();
+    };
+    let code_len = p
+        .framing
+        .direction(d)
+        .code_lengths
+        .first()
+        .copied()
+        .unwrap_or(0);
+    let head = p.framing.head(code_len);
+    let Some(at) = head.length else {
+        return quote!();
+    };
+    let base = busspec_model::validate::length_value(&p.framing, l, code_len, 0);
+    let grows = l.counts.contains(&Part::Payload);
+    let k = if grows { base - head.len as i64 } else { base };
+    let (at, width, le, k) = (
+        usize_lit(at),
+        usize_lit(l.width),
+        p.byte_order == ByteOrder::Little,
+        i64_lit(k),
+    );
+    quote!(rt::length_field(frame, #at, #width, #le, #grows, #k)?;)
 }
 
 /// Whether `m` shares code and length with another `needs_request` message of `group` (its

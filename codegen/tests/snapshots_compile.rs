@@ -81,9 +81,19 @@ fn core_names_snapshot_replays_its_examples() {
     assert_eq!(clash::Request::decode(&buf[..n]).unwrap().message, rt);
 }
 
-/// A sync sequence, an inverted sum-8 over all but it, and 24-bit integers: the examples
-/// replay, and generated code agrees with the interpreter on every frame; a wrong second sync
-/// byte, a checksum over the sync bytes and a 24-bit value out of range are refused.
+/// A syncy frame: `body` (sync, address, length, code, payload) and its checksum, the inverted
+/// sum of every byte after the sync bytes.
+fn syncy_frame(body: &[u8]) -> Vec<u8> {
+    let sum = body[2..].iter().fold(0u8, |s, b| s.wrapping_add(*b));
+    let mut f = body.to_vec();
+    f.push(!sum);
+    f
+}
+
+/// A sync sequence, a length field, an inverted sum-8 over all but the sync bytes, and 24-bit
+/// integers: the examples replay, and generated code agrees with the interpreter on every
+/// frame; a wrong second sync byte, a lying length field, a wrong checksum and a 24-bit value
+/// out of range are refused.
 #[test]
 fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
     use busspec_runtime::DecodeError;
@@ -96,40 +106,57 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
     };
     let mut buf = [0u8; syncy::MAX_FRAME_LEN];
     let n = m.encode(3, &mut buf).unwrap();
-    assert_eq!(
-        &buf[..n],
-        &[0xFF, 0xFF, 3, 1, 0xFF, 0xFF, 0xFF, 0xF8, 0, 0, 0x06]
-    );
+    let want = syncy_frame(&[0xFF, 0xFF, 3, 8, 1, 0xFF, 0xFF, 0xFF, 0xF8, 0, 0]);
+    assert_eq!(&buf[..n], &want[..]);
     let d = syncy::Response::decode(&buf[..n]).unwrap();
     assert_eq!(d.message, m);
     let interp =
         busspec_model::interp::decode(&p, Some(Direction::Response), None, &buf[..n]).unwrap();
     assert_eq!(p.message(interp.message).name, "counter");
     assert_eq!(interp.address, 3);
+    let move_to = syncy_frame(&[0xFF, 0xFF, 1, 5, 3, 0xFF, 0xFF, 0x9C]);
+    let mut bad_sync = move_to.clone();
+    bad_sync[1] = 0xFE;
+    let mut bad_sum = move_to.clone();
+    bad_sum[8] ^= 1;
+    let lying = syncy_frame(&[0xFF, 0xFF, 1, 6, 3, 0xFF, 0xFF, 0x9C]);
+    let broadcast = syncy_frame(&[0xFF, 0xFF, 0xFE, 2, 4]);
     // Each frame: both engines decode it, or both refuse it.
-    for frame in [
-        &[0xFF, 0xFF, 1, 3, 0xFF, 0xFF, 0x9C, 0x61][..],
-        &[0xFF, 0xFE, 1, 3, 0xFF, 0xFF, 0x9C, 0x61],
-        &[0xFF, 0xFF, 1, 3, 0xFF, 0xFF, 0x9C, 0x5F],
-        &[0xFF, 0xFF, 0xFE, 4, 0xFD],
+    for (frame, ok) in [
+        (&move_to, true),
+        (&bad_sync, false),
+        (&bad_sum, false),
+        (&lying, false),
+        (&broadcast, false),
     ] {
         let g = syncy::Request::decode(frame);
         let i = busspec_model::interp::decode(&p, Some(Direction::Request), None, frame);
-        assert_eq!(g.is_ok(), i.is_ok(), "{frame:02X?}: {g:?} / {i:?}");
+        assert_eq!(g.is_ok(), ok, "{frame:02X?}: {g:?}");
+        assert_eq!(i.is_ok(), ok, "{frame:02X?}: {i:?}");
     }
     assert_eq!(
-        syncy::Request::decode(&[0xFF, 0xFE, 1, 3, 0xFF, 0xFF, 0x9C, 0x61]),
+        syncy::Request::decode(&bad_sync),
         Err(DecodeError::BadStart {
             expected: 0xFF,
             found: 0xFE
+        })
+    );
+    assert_eq!(
+        syncy::Request::decode(&lying),
+        Err(DecodeError::InvalidValue {
+            field: "length",
+            offset: 3,
+            found: 6
         })
     );
     let far = syncy::Request::MoveTo {
         target: syncy::Millimetre::from_raw(0x80_0000),
     };
     assert!(far.encode(1, &mut buf).is_err());
+    // In a stream: noise, a lone sync byte, then the frame.
     let mut s = syncy::StreamDecoder::new(None);
-    let bytes = [0x00, 0xFF, 0xFF, 0xFF, 1, 3, 0xFF, 0xFF, 0x9C, 0x61];
+    let mut bytes = vec![0x00, 0xFF];
+    bytes.extend_from_slice(&move_to);
     let mut events: Vec<_> = s.feed(&bytes).collect();
     events.extend(core::iter::from_fn(|| s.finish()));
     assert!(
@@ -137,7 +164,7 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
             e,
             syncy::Event::Request {
                 offset: 2,
-                len: 8,
+                len: 9,
                 ..
             }
         )),
@@ -158,16 +185,15 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
     };
     let mut buf = [0u8; syncy::MAX_FRAME_LEN];
     let n = req.encode(1, &mut buf).unwrap();
-    assert_eq!(&buf[..n], &[0xFF, 0xFF, 1, 5, 10, 20, 1, 2, 0xD8]);
+    let wire = syncy_frame(&[0xFF, 0xFF, 1, 6, 5, 10, 20, 1, 2]);
+    assert_eq!(&buf[..n], &wire[..]);
     // `doubled` is not 2 × quantity: both engines refuse it.
-    let mut bad = buf[..n].to_vec();
-    bad[5] = 21;
-    bad[8] = !bad[2..8].iter().fold(0u8, |s, b| s.wrapping_add(*b));
+    let bad = syncy_frame(&[0xFF, 0xFF, 1, 6, 5, 10, 21, 1, 2]);
     assert_eq!(
         syncy::Request::decode(&bad),
         Err(DecodeError::InvalidValue {
             field: "doubled",
-            offset: 5,
+            offset: 6,
             found: 21
         })
     );
@@ -178,31 +204,26 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
         level: 0,
     };
     assert!(far.encode(1, &mut buf).is_err());
-    let ireq = busspec_model::interp::decode(
-        &p,
-        Some(Direction::Request),
-        None,
-        &[0xFF, 0xFF, 1, 5, 10, 20, 1, 2, 0xD8],
-    )
-    .unwrap();
+    let ireq = busspec_model::interp::decode(&p, Some(Direction::Request), None, &wire).unwrap();
+    let wrong_quantity = syncy_frame(&[0xFF, 0xFF, 1, 4, 5, 9, 2]);
     for (reply, ok) in [
-        (&[0xFF, 0xFF, 1, 5, 10, 2, 0xED][..], true),
-        (&[0xFF, 0xFF, 1, 5, 9, 2, 0xEE][..], false),
-        (&[0xFF, 0xFF, 1, 5, 10, 1, 0xEE][..], false),
-        (&[0xFF, 0xFF, 1, 0x85, 3, 0x76][..], true),
+        (syncy_frame(&[0xFF, 0xFF, 1, 4, 5, 10, 2]), true),
+        (wrong_quantity.clone(), false),
+        (syncy_frame(&[0xFF, 0xFF, 1, 4, 5, 10, 1]), false),
+        (syncy_frame(&[0xFF, 0xFF, 1, 3, 0x85, 3]), true),
     ] {
-        let g = syncy::Response::decode_reply(reply, &req);
-        let i = busspec_model::interp::decode_reply(&p, &ireq, reply);
+        let g = syncy::Response::decode_reply(&reply, &req);
+        let i = busspec_model::interp::decode_reply(&p, &ireq, &reply);
         assert_eq!(g.is_ok(), ok, "{reply:02X?}: {g:?}");
         assert_eq!(i.is_ok(), ok, "{reply:02X?}: {i:?}");
-        let plain = syncy::Response::decode(reply).unwrap().message;
+        let plain = syncy::Response::decode(&reply).unwrap().message;
         assert_eq!(plain.answers(&req), ok);
     }
     assert_eq!(
-        syncy::Response::decode_reply(&[0xFF, 0xFF, 1, 5, 9, 2, 0xEE], &req),
+        syncy::Response::decode_reply(&wrong_quantity, &req),
         Err(DecodeError::InvalidValue {
             field: "quantity",
-            offset: 4,
+            offset: 5,
             found: 9
         })
     );

@@ -517,15 +517,13 @@ pub struct Erratum {
 impl Protocol {
     /// What the code generator cannot emit yet, one line each (empty: it can emit all of it).
     /// Generated code stays fixed-length: it emits sync sequences, every checksum and its
-    /// coverage, 24-bit integers, values that follow another field or the request, and codes
-    /// derived from the request's (each such response has its own constant code); a spec using
-    /// the variable-length language (length field, repeated fields) or code-less messages is
-    /// served by the interpreter (`--spec`) until the generator learns them.
+    /// coverage, 24-bit integers, a length field (constant per message, checked against the
+    /// frame's length), values that follow another field or the request, and codes derived from
+    /// the request's (each such response has its own constant code); a spec with repeated fields
+    /// (variable-length frames) or code-less messages is served by the interpreter (`--spec`)
+    /// until the generator learns them.
     pub fn generator_gaps(&self) -> Vec<String> {
         let mut gaps = Vec::new();
-        if self.framing.length.is_some() {
-            gaps.push("a length field".to_owned());
-        }
         for m in self.commands.iter().chain(&self.responses) {
             if m.code.is_empty() {
                 gaps.push(format!("`{}` has no code", m.name));

@@ -640,6 +640,38 @@ pub fn following<T: Wire>(
     Ok(())
 }
 
+/// Checks a length field of `width` bytes at `at` (`le`: least significant byte first): it must
+/// hold `frame.len() + k` where it counts the payload (`grows`), else `k`. A frame whose length
+/// field disagrees is refused with the field's offset and value.
+#[inline]
+pub fn length_field(
+    frame: &[u8],
+    at: usize,
+    width: usize,
+    le: bool,
+    grows: bool,
+    k: i64,
+) -> Result<(), DecodeError> {
+    let bytes = frame.get(at..at + width).unwrap_or(&[]);
+    let found = if le {
+        bytes
+            .iter()
+            .rev()
+            .fold(0u32, |a, b| (a << 8) | u32::from(*b))
+    } else {
+        bytes.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b))
+    };
+    let expected = if grows { frame.len() as i64 + k } else { k };
+    if i64::from(found) != expected {
+        return Err(DecodeError::InvalidValue {
+            field: "length",
+            offset: at,
+            found,
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod lang_tests {
     use super::*;
@@ -679,6 +711,30 @@ mod lang_tests {
                 found: 5
             })
         );
+    }
+
+    #[test]
+    fn a_length_field_must_count_the_frame() {
+        // FF FF id len code p p ck: len counts code, payload and checksum (4 = 8 - 4).
+        let f = [0xFF, 0xFF, 1, 4, 3, 9, 9, 0];
+        assert_eq!(length_field(&f, 3, 1, true, true, -4), Ok(()));
+        assert_eq!(
+            length_field(&f, 3, 1, true, true, -3),
+            Err(DecodeError::InvalidValue {
+                field: "length",
+                offset: 3,
+                found: 4
+            })
+        );
+        assert_eq!(
+            length_field(&[0, 1, 2, 0], 1, 2, false, false, 0x102),
+            Ok(())
+        );
+        assert_eq!(
+            length_field(&[0, 2, 1, 0], 1, 2, true, false, 0x102),
+            Ok(())
+        );
+        assert!(length_field(&[0, 2], 1, 2, true, false, 0x102).is_err());
     }
 
     #[test]

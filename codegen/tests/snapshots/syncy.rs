@@ -14,17 +14,17 @@ pub mod syncy {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2024-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "cfb55c1e72755197e56adc8d77c0d7821de4ce43a49be9cf414f88a0c3857b63";
+    pub const SPEC_SHA256: &str = "dc9699c49696f3e7769828e5bb9717a4c75c05db48ecd2ef3b667668d6eeb5dd";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/minimal_sync.yaml"
     );
     /// The longest request frame, in bytes.
-    pub const MAX_REQUEST_LEN: usize = 9;
+    pub const MAX_REQUEST_LEN: usize = 10;
     /// The longest response frame, in bytes.
-    pub const MAX_RESPONSE_LEN: usize = 11;
+    pub const MAX_RESPONSE_LEN: usize = 12;
     /// The longest frame in either direction: a buffer this long holds any frame.
-    pub const MAX_FRAME_LEN: usize = 11;
+    pub const MAX_FRAME_LEN: usize = 12;
     /// The document's baud rate.
     pub const BAUD: u32 = 9600u32;
     /// The quiet time the document demands between frames, in milliseconds, if it says.
@@ -93,14 +93,14 @@ pub mod syncy {
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Move to (code `0x03`, 8 bytes).
+        /// §1 Move to (code `0x03`, 9 bytes).
         MoveTo {
             /// \[mm\] Valid raw range -1000000..=1000000.
             target: Millimetre,
         },
-        /// §2 Get counter (code `0x04`, 5 bytes).
+        /// §2 Get counter (code `0x04`, 6 bytes).
         GetCounter,
-        /// §5 Set pair (code `0x05`, 9 bytes).
+        /// §5 Set pair (code `0x05`, 10 bytes).
         SetPair {
             /// Valid raw range 1..=100.
             quantity: u8,
@@ -110,9 +110,9 @@ pub mod syncy {
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
         const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
-            ("move_to", &[0x03], 8),
-            ("get_counter", &[0x04], 5),
-            ("set_pair", &[0x05], 9),
+            ("move_to", &[0x03], 9),
+            ("get_counter", &[0x04], 6),
+            ("set_pair", &[0x05], 10),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
@@ -161,8 +161,10 @@ pub mod syncy {
                 Self::MoveTo { target: v_target } => {
                     rt::encode_broadcast(address, 0xFE, "move_to")?;
                     rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
-                    let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x03])?;
-                    out[4..7]
+                    let out = rt::frame_mut::<
+                        9,
+                    >(buf, &[0xFF, 0xFF, address, 0x05, 0x03])?;
+                    out[5..8]
                         .copy_from_slice(
                             &rt::bytes24(
                                 (rt::fits("target", v_target.raw(), -8388608, 8388607)?
@@ -174,21 +176,23 @@ pub mod syncy {
                 }
                 Self::GetCounter => {
                     rt::encode_broadcast(address, 0xFE, "get_counter")?;
-                    rt::frame_mut::<5>(buf, &[0xFF, 0xFF, address, 0x04])?.len()
+                    rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
                 Self::SetPair { quantity: v_quantity, level: v_level } => {
                     rt::encode_broadcast(address, 0xFE, "set_pair")?;
                     rt::encode_in_range("quantity", v_quantity, 1, 100)?;
-                    let out = rt::frame_mut::<9>(buf, &[0xFF, 0xFF, address, 0x05])?;
+                    let out = rt::frame_mut::<
+                        10,
+                    >(buf, &[0xFF, 0xFF, address, 0x06, 0x05])?;
                     let field_0: u8 = v_quantity;
-                    out[4] = field_0;
-                    out[5] = rt::fits(
+                    out[5] = field_0;
+                    out[6] = rt::fits(
                         "doubled",
                         rt::follows(field_0 as i64, 2, 1),
                         0,
                         255,
                     )? as u8;
-                    out[6..8].copy_from_slice(&v_level.to_be_bytes());
+                    out[7..9].copy_from_slice(&v_level.to_be_bytes());
                     out.len()
                 }
             };
@@ -202,44 +206,45 @@ pub mod syncy {
             rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
-                5,
-                9,
+                6,
+                10,
                 2,
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
+            rt::length_field(frame, 3, 1, false, true, -4)?;
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
-            match rt::code(frame, 3, 1) {
+            match rt::code(frame, 4, 1) {
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame)?;
+                    let frame = rt::fixed::<9>(frame)?;
                     rt::no_broadcast(frame[2], 0xFE, "move_to", 0x03)?;
-                    let field_0: i32 = rt::i24([frame[4], frame[5], frame[6]], false);
-                    rt::in_range("target", 4, field_0, -1000000, 1000000)?;
+                    let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
+                    rt::in_range("target", 5, field_0, -1000000, 1000000)?;
                     rt::Ok(Self::MoveTo {
                         target: Millimetre::from_raw(field_0 as i32),
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<5>(frame)?;
+                    let frame = rt::fixed::<6>(frame)?;
                     rt::no_broadcast(frame[2], 0xFE, "get_counter", 0x04)?;
                     rt::Ok(Self::GetCounter)
                 }
                 0x05 => {
-                    let frame = rt::fixed::<9>(frame)?;
+                    let frame = rt::fixed::<10>(frame)?;
                     rt::no_broadcast(frame[2], 0xFE, "set_pair", 0x05)?;
-                    rt::in_range("quantity", 4, frame[4], 1, 100)?;
-                    rt::following("doubled", 5, frame[5], frame[4] as i64, 2, 1)?;
+                    rt::in_range("quantity", 5, frame[5], 1, 100)?;
+                    rt::following("doubled", 6, frame[6], frame[5] as i64, 2, 1)?;
                     rt::Ok(Self::SetPair {
-                        quantity: frame[4],
-                        level: u16::from_be_bytes([frame[6], frame[7]]),
+                        quantity: frame[5],
+                        level: u16::from_be_bytes([frame[7], frame[8]]),
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
+                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -334,22 +339,22 @@ pub mod syncy {
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 Moving (code `0x00`, 5 bytes).
+        /// §3 Moving (code `0x00`, 6 bytes).
         Moving,
-        /// §4 Counter (code `0x01`, 11 bytes).
+        /// §4 Counter (code `0x01`, 12 bytes).
         Counter { total: u32, tag: u8, offset: i32 },
-        /// §6 Pair set (code `0x05`, 7 bytes).
+        /// §6 Pair set (code `0x05`, 8 bytes).
         SetPairReply { quantity: u8, groups: u8 },
-        /// §7 Pair not set (code `0x85`, 6 bytes).
+        /// §7 Pair not set (code `0x85`, 7 bytes).
         SetPairError { reason: u8 },
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
         const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
-            ("moving", &[0x00], 5),
-            ("counter", &[0x01], 11),
-            ("set_pair_reply", &[0x05], 7),
-            ("set_pair_error", &[0x85], 6),
+            ("moving", &[0x00], 6),
+            ("counter", &[0x01], 12),
+            ("set_pair_reply", &[0x05], 8),
+            ("set_pair_error", &[0x85], 7),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
@@ -402,11 +407,13 @@ pub mod syncy {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Moving => {
-                    rt::frame_mut::<5>(buf, &[0xFF, 0xFF, address, 0x00])?.len()
+                    rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x00])?.len()
                 }
                 Self::Counter { total: v_total, tag: v_tag, offset: v_offset } => {
-                    let out = rt::frame_mut::<11>(buf, &[0xFF, 0xFF, address, 0x01])?;
-                    out[4..7]
+                    let out = rt::frame_mut::<
+                        12,
+                    >(buf, &[0xFF, 0xFF, address, 0x08, 0x01])?;
+                    out[5..8]
                         .copy_from_slice(
                             &rt::bytes24(
                                 (rt::fits("total", v_total, 0, 16777215)? as u32) as u32,
@@ -417,18 +424,22 @@ pub mod syncy {
                         << 20)
                         | ((rt::fits("offset", v_offset, -524288, 524287)? as u32)
                             & 0xFFFFF);
-                    out[7..10].copy_from_slice(&rt::bytes24(field_1 as u32, false));
+                    out[8..11].copy_from_slice(&rt::bytes24(field_1 as u32, false));
                     out.len()
                 }
                 Self::SetPairReply { quantity: v_quantity, groups: v_groups } => {
-                    let out = rt::frame_mut::<7>(buf, &[0xFF, 0xFF, address, 0x05])?;
-                    out[4] = v_quantity;
-                    out[5] = v_groups;
+                    let out = rt::frame_mut::<
+                        8,
+                    >(buf, &[0xFF, 0xFF, address, 0x04, 0x05])?;
+                    out[5] = v_quantity;
+                    out[6] = v_groups;
                     out.len()
                 }
                 Self::SetPairError { reason: v_reason } => {
-                    let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x85])?;
-                    out[4] = v_reason;
+                    let out = rt::frame_mut::<
+                        7,
+                    >(buf, &[0xFF, 0xFF, address, 0x03, 0x85])?;
+                    out[5] = v_reason;
                     out.len()
                 }
             };
@@ -464,12 +475,13 @@ pub mod syncy {
             rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
-                5,
-                11,
+                6,
+                12,
                 2,
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
+            rt::length_field(frame, 3, 1, false, true, -4)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 message.follows_request(request)?;
@@ -483,31 +495,31 @@ pub mod syncy {
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
-            match rt::code(frame, 3, 1) {
-                0x00 => rt::reply::<5>(frame, asked & 1 != 0, 0x00).map(|_| Self::Moving),
+            match rt::code(frame, 4, 1) {
+                0x00 => rt::reply::<6>(frame, asked & 1 != 0, 0x00).map(|_| Self::Moving),
                 0x01 => {
-                    let frame = rt::reply::<11>(frame, asked >> 1 & 1 != 0, 0x01)?;
-                    let field_1: u32 = rt::u24([frame[7], frame[8], frame[9]], false);
+                    let frame = rt::reply::<12>(frame, asked >> 1 & 1 != 0, 0x01)?;
+                    let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
                     rt::Ok(Self::Counter {
-                        total: rt::u24([frame[4], frame[5], frame[6]], false),
+                        total: rt::u24([frame[5], frame[6], frame[7]], false),
                         tag: ((field_1 >> 20) & 0xF) as u8,
                         offset: (((field_1 & 0xFFFFF) as u32) << 12) as i32 >> 12,
                     })
                 }
                 0x05 => {
-                    let frame = rt::reply::<7>(frame, asked >> 2 & 1 != 0, 0x05)?;
+                    let frame = rt::reply::<8>(frame, asked >> 2 & 1 != 0, 0x05)?;
                     rt::Ok(Self::SetPairReply {
-                        quantity: frame[4],
-                        groups: frame[5],
+                        quantity: frame[5],
+                        groups: frame[6],
                     })
                 }
                 0x85 => {
-                    let frame = rt::reply::<6>(frame, asked >> 3 & 1 != 0, 0x85)?;
+                    let frame = rt::reply::<7>(frame, asked >> 3 & 1 != 0, 0x85)?;
                     rt::Ok(Self::SetPairError {
-                        reason: frame[4],
+                        reason: frame[5],
                     })
                 }
-                _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
+                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
             }
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -595,8 +607,8 @@ pub mod syncy {
                     &Self::SetPairReply { quantity: v_quantity, groups: v_groups, .. },
                     &Request::SetPair { quantity: r_quantity, .. },
                 ) => {
-                    rt::following("quantity", 4, v_quantity, r_quantity as i64, 1, 1)?;
-                    rt::following("groups", 5, v_groups, r_quantity as i64, 1, 8)?;
+                    rt::following("quantity", 5, v_quantity, r_quantity as i64, 1, 1)?;
+                    rt::following("groups", 6, v_groups, r_quantity as i64, 1, 8)?;
                 }
                 _ => {}
             }
@@ -618,7 +630,7 @@ pub mod syncy {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[11, 9, 8, 7, 6, 5];
+        const FRAME_LENGTHS: &'static [usize] = &[12, 10, 9, 8, 7, 6];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         const BAUD: u32 = BAUD;
         const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
@@ -680,7 +692,7 @@ pub mod syncy {
                     responses: 0,
                 };
             }
-            let mask: u128 = match head.get(3) {
+            let mask: u128 = match head.get(4) {
                 rt::None => 0x390000000000000026,
                 rt::Some(0x00) => 0x200000000000000000,
                 rt::Some(0x01) => 0x10000000000000000,
