@@ -1972,6 +1972,11 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
     let mut arms = Vec::new();
     flat_trie(&shapes, 0, depth, &mut Vec::new(), 0, &mut arms);
+    // Where a code-less message matches any code byte, the trie ends in a wildcard arm already.
+    let open = arms
+        .last()
+        .is_some_and(|(pat, _)| pat.iter().all(|t| t.to_string() == "_"));
+    let other = if open { quote!() } else { quote!(_ => 0,) };
     let arms = arms.into_iter().map(|(pat, mask)| {
         let mask = mask_lit(mask);
         let pat = if pat.len() == 1 {
@@ -2069,7 +2074,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                 #start_check
                 let mask: u128 = match #scrutinee {
                     #(#arms)*
-                    _ => 0,
+                    #other
                 };
                 rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }

@@ -68,6 +68,16 @@ fn sync_sequence_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/minimal_sync.yaml", "syncy.rs");
 }
 
+/// Replies without a code, told apart by length and request (`snapshots_compile.rs` compiles
+/// and replays it).
+#[test]
+fn codeless_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/minimal_codeless.yaml",
+        "codeless.rs",
+    );
+}
+
 /// What the generator cannot emit yet it refuses by name, pointing at the interpreter.
 #[test]
 fn variable_length_spec_is_refused_by_name() {

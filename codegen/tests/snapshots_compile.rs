@@ -6,6 +6,7 @@ include!("snapshots/mini.rs");
 include!("snapshots/mini_crc.rs");
 include!("snapshots/core_names.rs");
 include!("snapshots/syncy.rs");
+include!("snapshots/codeless.rs");
 
 use busspec_model::ir::{self, Direction};
 use busspec_runtime::{Message, Protocol};
@@ -228,4 +229,56 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
         })
     );
     assert_eq!(syncy::Response::SetPairError { reason: 3 }.code(), &[0x85]);
+}
+
+/// Replies without a code are told apart by their length, and by the request where they share
+/// it; the stream decoder frames them; generated code and the interpreter agree.
+#[test]
+fn codeless_snapshot_replays_and_agrees_with_the_interpreter() {
+    use busspec_runtime::DecodeError;
+    replay::<codeless::Codeless>("model/tests/fixtures/valid/minimal_codeless.yaml");
+    let p = fixture("model/tests/fixtures/valid/minimal_codeless.yaml");
+    let status = syncy_frame(&[0xFF, 0xFF, 1, 2, 0x02]);
+    let read_status = syncy_frame(&[0xFF, 0xFF, 1, 4, 0x00, 0x34, 0x12]);
+    let long = syncy_frame(&[0xFF, 0xFF, 1, 3, 0x00, 0x34]);
+    let d = codeless::Response::decode(&status).unwrap();
+    assert_eq!(
+        d.message,
+        codeless::Response::Status {
+            error: codeless::Errors::ANGLE
+        }
+    );
+    let d = codeless::Response::decode(&read_status).unwrap();
+    assert_eq!(
+        d.message,
+        codeless::Response::ReadStatus {
+            error: codeless::Errors::from_raw(0),
+            value: 0x1234
+        }
+    );
+    // A ping gets a status, not a status with a value.
+    assert!(matches!(
+        codeless::Response::decode_reply(&read_status, &codeless::Request::Ping),
+        Err(DecodeError::NotAReply { .. } | DecodeError::WrongLength { .. })
+    ));
+    for frame in [&status, &read_status, &long] {
+        let g = codeless::Response::decode(frame);
+        let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, frame);
+        assert_eq!(g.is_ok(), i.is_ok(), "{frame:02X?}: {g:?} / {i:?}");
+    }
+    assert!(codeless::Response::decode(&long).is_err());
+    let mut s = codeless::StreamDecoder::new(Some(busspec_runtime::stream::Direction::Response));
+    let mut bytes = vec![0x55];
+    bytes.extend_from_slice(&status);
+    bytes.extend_from_slice(&read_status);
+    let mut events: Vec<_> = s.feed(&bytes).collect();
+    events.extend(core::iter::from_fn(|| s.finish()));
+    let frames: Vec<(u64, usize)> = events
+        .iter()
+        .filter_map(|e| match e {
+            codeless::Event::Response { offset, len, .. } => Some((*offset, *len)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(frames, [(1, 6), (7, 8)], "{events:?}");
 }
