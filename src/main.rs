@@ -532,19 +532,68 @@ fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Engine,
     Ok(loaded)
 }
 
-/// Writes one line of output; a closed pipe ends the run quietly.
-fn emit(out: &mut impl Write, line: &str) -> Result<(), String> {
-    writeln!(out, "{line}").map_err(|e| {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            String::new()
-        } else {
-            format!("error: cannot write output: {e}")
+/// Output gathered in a buffer and written in large chunks, not a system call per line: when
+/// it holds [`Out::CHUNK`] bytes, before a line goes to stderr (so the two interleave as they
+/// were printed), and at the end ([`Out::finish`]). A closed pipe (`| head`) ends the run
+/// quietly; any other write error is reported.
+struct Out<W: Write> {
+    w: W,
+    buf: Vec<u8>,
+}
+
+impl<W: Write> Out<W> {
+    /// Bytes gathered before they are written.
+    const CHUNK: usize = 64 * 1024;
+
+    fn new(w: W) -> Self {
+        Out {
+            w,
+            buf: Vec::with_capacity(Self::CHUNK + 4096),
         }
-    })
+    }
+
+    /// Writes one line.
+    fn line(&mut self, line: &str) -> Result<(), String> {
+        self.buf.extend_from_slice(line.as_bytes());
+        self.buf.push(b'\n');
+        self.written()
+    }
+
+    /// Writes what is gathered once it is a chunk's worth (after lines went to `self.buf`).
+    fn written(&mut self) -> Result<(), String> {
+        if self.buf.len() >= Self::CHUNK {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Writes everything gathered.
+    fn flush(&mut self) -> Result<(), String> {
+        let result = self.w.write_all(&self.buf).and_then(|()| self.w.flush());
+        self.buf.clear();
+        result.map_err(|e| {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                String::new()
+            } else {
+                format!("error: cannot write output: {e}")
+            }
+        })
+    }
+
+    /// Writes everything gathered, then `message` to stderr.
+    fn error(&mut self, message: std::fmt::Arguments) -> Result<(), String> {
+        self.flush()?;
+        eprintln!("{message}");
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<(), String> {
+        self.flush()
+    }
 }
 
 fn decode(args: DecodeArgs) -> Result<(), String> {
-    let engine = protocol("decode", &args.protocol, args.spec.as_deref())?;
+    let mut engine = protocol("decode", &args.protocol, args.spec.as_deref())?;
     let p = &engine.spec;
     let reply_to = args.reply_to.as_deref().map(|name| {
         p.commands
@@ -558,36 +607,112 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
             })
     });
     let direction = args.direction.map(Direction::from);
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    let mut out = Out::new(std::io::stdout().lock());
     if let Some(file) = &args.stream {
-        return decode_stream(&engine, direction, reply_to, file, &mut out);
+        decode_stream(&engine, direction, reply_to, file, &mut out)?;
+        return out.finish();
+    }
+    if args.frames.iter().any(|f| f == "-") {
+        if args.frames.len() > 1 {
+            usage_error(
+                "decode",
+                "`-` (hex frames from stdin, one per line) must be the only HEX argument".into(),
+            );
+        }
+        let failed = decode_lines(&mut engine, direction, reply_to, args.lenient, &mut out)?;
+        out.finish()?;
+        return if failed == 0 { Ok(()) } else { Err(String::new()) };
     }
     let mut failed = 0;
     for (i, text) in args.frames.iter().enumerate() {
         let wire = busspec_json::parse_hex(text);
         let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
             if args.lenient {
-                engine.decode_lenient(direction, reply_to, wire)
+                engine.decode_lenient_into(direction, reply_to, wire, &mut out.buf)
             } else {
-                engine.decode(direction, reply_to, wire)
+                engine.decode_into(direction, reply_to, wire, &mut out.buf)
             }
         });
         match result {
-            Ok(line) => emit(&mut out, &line)?,
+            Ok(()) => out.written()?,
             Err(reason) => {
                 failed += 1;
-                let _ = out.flush();
                 let shown = quoted(text, wire.as_deref().ok());
-                eprintln!("frame {} ({shown}): {reason}", i + 1);
+                out.error(format_args!("frame {} ({shown}): {reason}", i + 1))?;
             }
         }
     }
+    out.finish()?;
     if failed == 0 {
         Ok(())
     } else {
         Err(String::new())
     }
+}
+
+/// The frame on one line of `decode P -` input: the text before any `#` (a comment), trimmed;
+/// `None` for a line with no frame (empty, blank or only a comment).
+fn frame_text(line: &str) -> Option<&str> {
+    let text = line.split_once('#').map_or(line, |(frame, _)| frame).trim();
+    (!text.is_empty()).then_some(text)
+}
+
+/// `decode P -`: hex frames from stdin, one per line (see DECODE_HELP). Each frame's line goes
+/// to `out`; each line that fails prints `line N (TEXT): reason` on stderr and the next line is
+/// read. Returns how many lines failed; a read error ends the run with its reason.
+fn decode_lines(
+    engine: &mut Engine,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    lenient: bool,
+    out: &mut Out<impl Write>,
+) -> Result<usize, String> {
+    let stdin = std::io::stdin();
+    let mut input = std::io::BufReader::with_capacity(Out::<std::io::Sink>::CHUNK, stdin.lock());
+    let mut failed = 0;
+    let mut line = Vec::new();
+    for number in 1.. {
+        line.clear();
+        match input.read_until(b'\n', &mut line) {
+            Ok(0) => break,
+            Ok(_) => {}
+            Err(e) => {
+                out.flush()?;
+                return Err(format!("error: cannot read stdin (line {number}): {e}"));
+            }
+        }
+        let text = match std::str::from_utf8(&line) {
+            Ok(text) => text,
+            Err(e) => {
+                failed += 1;
+                out.error(format_args!(
+                    "line {number}: not UTF-8 text: invalid byte at offset {}",
+                    e.valid_up_to()
+                ))?;
+                continue;
+            }
+        };
+        let Some(text) = frame_text(text) else {
+            continue;
+        };
+        let wire = busspec_json::parse_hex(text);
+        let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
+            if lenient {
+                engine.decode_lenient_into(direction, reply_to, wire, &mut out.buf)
+            } else {
+                engine.decode_into(direction, reply_to, wire, &mut out.buf)
+            }
+        });
+        match result {
+            Ok(()) => out.written()?,
+            Err(reason) => {
+                failed += 1;
+                let shown = quoted(text, wire.as_deref().ok());
+                out.error(format_args!("line {number} ({shown}): {reason}"))?;
+            }
+        }
+    }
+    Ok(failed)
 }
 
 /// The most bytes of a frame an error line quotes.
@@ -621,7 +746,7 @@ fn decode_stream(
     direction: Option<Direction>,
     reply_to: Option<usize>,
     file: &Path,
-    out: &mut impl Write,
+    out: &mut Out<impl Write>,
 ) -> Result<(), String> {
     let name = file.display().to_string();
     let mut input: Box<dyn Read> = if name == "-" {
@@ -630,23 +755,26 @@ fn decode_stream(
         Box::new(std::fs::File::open(file).map_err(|e| format!("error: cannot read {name}: {e}"))?)
     };
     let mut decoder = engine.stream(direction, reply_to);
-    let mut chunk = vec![0u8; 4096];
+    let mut chunk = vec![0u8; Out::<std::io::Sink>::CHUNK];
+    let mut read = 0u64;
     loop {
         let n = match input.read(&mut chunk) {
             Ok(0) => break,
             Ok(n) => n,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(format!("error: cannot read {name}: {e}")),
+            Err(e) => {
+                // What was decoded before the error is printed, then the error.
+                out.flush()?;
+                return Err(format!(
+                    "error: cannot read {name} (after {read} bytes): {e}"
+                ));
+            }
         };
-        for line in decoder.push(&chunk[..n]) {
-            emit(out, &line)?;
-        }
-        out.flush()
-            .map_err(|e| format!("error: cannot write output: {e}"))?;
+        read += n as u64;
+        decoder.push(&chunk[..n], &mut out.buf);
+        out.written()?;
     }
-    for line in decoder.finish() {
-        emit(out, &line)?;
-    }
+    decoder.finish(&mut out.buf);
     Ok(())
 }
 
@@ -654,8 +782,7 @@ fn encode(args: EncodeArgs) -> Result<(), String> {
     let engine = protocol("encode", &args.protocol, args.spec.as_deref())?;
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    let mut out = Out::new(std::io::stdout().lock());
     let mut failed = 0;
     let mut line = Vec::new();
     for number in 1.. {
@@ -663,7 +790,10 @@ fn encode(args: EncodeArgs) -> Result<(), String> {
         match input.read_until(b'\n', &mut line) {
             Ok(0) => break,
             Ok(_) => {}
-            Err(e) => return Err(format!("error: cannot read stdin: {e}")),
+            Err(e) => {
+                out.flush()?;
+                return Err(format!("error: cannot read stdin: {e}"));
+            }
         }
         let result = match std::str::from_utf8(&line) {
             Ok(text) if text.trim().is_empty() => continue,
@@ -674,14 +804,14 @@ fn encode(args: EncodeArgs) -> Result<(), String> {
             )),
         };
         match result {
-            Ok(wire) => emit(&mut out, &frames::hex(&wire))?,
+            Ok(wire) => out.line(&frames::hex(&wire))?,
             Err(reason) => {
                 failed += 1;
-                let _ = out.flush();
-                eprintln!("line {number}: {reason}");
+                out.error(format_args!("line {number}: {reason}"))?;
             }
         }
     }
+    out.finish()?;
     if failed == 0 {
         Ok(())
     } else {

@@ -1,0 +1,406 @@
+//! The contract's lines written straight into a byte buffer, for captures of any size: what
+//! [`crate::print`] builds as a value tree and a `String` per line, [`Printer`] writes from a
+//! plan made once per spec (every key already quoted, each message's fixed keys already
+//! joined), with no allocation per frame once its buffers have grown. `print` stays the
+//! reference: the tests hold the two to byte-identical lines for every example of every
+//! built-in spec and for noisy captures through both engines (`tests/printer.rs`).
+
+use std::collections::HashMap;
+
+use busspec_model::interp::{Frame, Raw};
+use busspec_model::ir::{BitField, Direction, Field, MessageRef};
+use busspec_runtime::{FieldValue, Message};
+
+use crate::print::physical_text;
+use crate::Spec;
+
+/// A leaf of a message (a whole field, or a packed sub-field) as it prints.
+#[derive(Debug, Clone)]
+struct Leaf {
+    name: String,
+    /// `"name":`
+    key: String,
+    /// Index into the message's fields, and into that field's bits for a sub-field.
+    field: usize,
+    bit: Option<usize>,
+    /// What the spec fixes, for a typed message that leaves it out.
+    fixed: Fixed,
+}
+
+#[derive(Debug, Clone)]
+enum Fixed {
+    None,
+    Constant(i64),
+    /// The value of the field of this name (a repeated field).
+    Equals(String),
+}
+
+/// One message's line, less its address, offset and field values.
+#[derive(Debug, Clone)]
+struct Plan {
+    /// `"protocol":"…","direction":"…","address":`
+    head: String,
+    /// `,"code":"0x…","message":"…","fields":{`
+    tail: String,
+    leaves: Vec<Leaf>,
+    /// Leaf index by name.
+    by_name: HashMap<String, usize>,
+}
+
+/// A typed message's field value, held past [`Message::visit`]: text as a range of
+/// [`Printer::text`].
+#[derive(Debug, Clone)]
+enum Given {
+    Int(i64),
+    Text(std::ops::Range<usize>),
+}
+
+/// Writes JSON lines of one spec (see the module docs), each ended by `\n`, to a `Vec<u8>`.
+#[derive(Debug, Clone)]
+pub struct Printer {
+    /// Plans of the requests and of the responses, in spec order.
+    plans: [Vec<Plan>; 2],
+    /// Message index by name, per direction.
+    names: [HashMap<String, usize>; 2],
+    given: Vec<(&'static str, Given)>,
+    text: Vec<u8>,
+}
+
+fn quote(s: &str) -> String {
+    serde_json::to_string(s).unwrap_or_else(|_| "\"\"".to_owned())
+}
+
+fn side(d: Direction) -> usize {
+    match d {
+        Direction::Request => 0,
+        Direction::Response => 1,
+    }
+}
+
+fn push_quoted(out: &mut Vec<u8>, s: &str) {
+    if s
+        .bytes()
+        .all(|b| b >= 0x20 && b != b'"' && b != b'\\' && b < 0x7F)
+    {
+        out.push(b'"');
+        out.extend_from_slice(s.as_bytes());
+        out.push(b'"');
+    } else if serde_json::to_writer(&mut *out, s).is_err() {
+        out.extend_from_slice(b"\"\"");
+    }
+}
+
+fn push_int(out: &mut Vec<u8>, v: impl itoa::Integer) {
+    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+}
+
+/// Uppercase hex, no separators (as [`crate::hex`]).
+pub fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
+    const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
+    for &b in bytes {
+        out.push(DIGITS[usize::from(b >> 4)]);
+        out.push(DIGITS[usize::from(b & 0xF)]);
+    }
+}
+
+/// Text, one character per byte (bytes 0x80..0xFF as U+0080..U+00FF), quoted.
+fn push_text(out: &mut Vec<u8>, bytes: &[u8]) {
+    let s: String = bytes.iter().map(|&b| char::from(b)).collect();
+    push_quoted(out, &s);
+}
+
+/// A value no leaf of the message describes: the raw number or the text.
+fn push_plain(out: &mut Vec<u8>, raw: FieldValue<'_>) {
+    match raw {
+        FieldValue::Int(v) => push_int(out, v),
+        FieldValue::Text(t) => push_text(out, t),
+    }
+}
+
+/// One field value as [`crate::print`]'s `field_json` prints it.
+fn push_field(out: &mut Vec<u8>, p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue) {
+    let v = match raw {
+        FieldValue::Text(t) => return push_text(out, t),
+        FieldValue::Int(v) => v,
+    };
+    if let Some(b) = bit {
+        return match (b.constant, b.unit.and_then(|u| p.units.get(u))) {
+            (None, Some(unit)) => out.extend_from_slice(physical_text(unit, v).as_bytes()),
+            _ => push_int(out, v),
+        };
+    }
+    if f.constant.is_some() {
+        return push_int(out, v);
+    }
+    if let Some(s) = f.special.iter().find(|s| s.value == v) {
+        return push_quoted(out, &s.name);
+    }
+    if let Some(e) = f.enumeration.and_then(|e| p.enums.get(e)) {
+        return match e.values.iter().find(|x| x.value as i64 == v) {
+            Some(x) => push_quoted(out, &x.name),
+            None => push_int(out, v),
+        };
+    }
+    if let Some(set) = f.flags.and_then(|i| p.flags.get(i)) {
+        let bits = v as u64;
+        let mut named = 0u64;
+        let mut first = true;
+        let mut sep = |out: &mut Vec<u8>| {
+            if !std::mem::take(&mut first) {
+                out.push(b',');
+            }
+        };
+        out.push(b'[');
+        for flag in &set.bits {
+            let mask = 1u64.checked_shl(u32::from(flag.bit)).unwrap_or(0);
+            named |= mask;
+            if bits & mask != 0 {
+                sep(out);
+                push_quoted(out, &flag.name);
+            }
+        }
+        for bit in 0..64u32 {
+            let mask = 1u64 << bit;
+            if bits & mask != 0 && named & mask == 0 {
+                sep(out);
+                push_int(out, mask);
+            }
+        }
+        out.push(b']');
+        return;
+    }
+    match f.unit.and_then(|u| p.units.get(u)) {
+        Some(unit) => out.extend_from_slice(physical_text(unit, v).as_bytes()),
+        None => push_int(out, v),
+    }
+}
+
+impl Printer {
+    /// The plans of every message of `p`.
+    pub fn new(p: &Spec) -> Printer {
+        let protocol = quote(&p.name);
+        let mut plans: [Vec<Plan>; 2] = [Vec::new(), Vec::new()];
+        let mut names: [HashMap<String, usize>; 2] = [HashMap::new(), HashMap::new()];
+        for d in [Direction::Request, Direction::Response] {
+            for (index, m) in p.messages(d).iter().enumerate() {
+                let mut leaves = Vec::new();
+                for (fi, f) in m.fields.iter().enumerate() {
+                    if f.bits.is_empty() {
+                        let fixed = match (f.constant, f.equals) {
+                            (Some(c), _) => Fixed::Constant(c as i64),
+                            (None, Some(i)) => m
+                                .fields
+                                .get(i)
+                                .map_or(Fixed::None, |e| Fixed::Equals(e.name.clone())),
+                            (None, None) => Fixed::None,
+                        };
+                        leaves.push((f.name.clone(), fi, None, fixed));
+                    }
+                    for (bi, b) in f.bits.iter().enumerate() {
+                        let fixed = b.constant.map_or(Fixed::None, |c| Fixed::Constant(c as i64));
+                        leaves.push((b.name.clone(), fi, Some(bi), fixed));
+                    }
+                }
+                let mut by_name = HashMap::new();
+                let leaves: Vec<Leaf> = leaves
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, (name, field, bit, fixed))| {
+                        // The first leaf of a name, as `interp::leaf_field` finds it.
+                        by_name.entry(name.clone()).or_insert(i);
+                        Leaf {
+                            key: format!("{}:", quote(&name)),
+                            name,
+                            field,
+                            bit,
+                            fixed,
+                        }
+                    })
+                    .collect();
+                names[side(d)].entry(m.name.clone()).or_insert(index);
+                plans[side(d)].push(Plan {
+                    head: format!(
+                        "\"protocol\":{protocol},\"direction\":{},\"address\":",
+                        quote(d.as_str())
+                    ),
+                    tail: format!(
+                        ",\"code\":{},\"message\":{},\"fields\":{{",
+                        quote(&m.code_hex()),
+                        quote(&m.name)
+                    ),
+                    leaves,
+                    by_name,
+                });
+            }
+        }
+        Printer {
+            plans,
+            names,
+            given: Vec::new(),
+            text: Vec::new(),
+        }
+    }
+
+    fn plan(&self, r: MessageRef) -> Option<&Plan> {
+        self.plans[side(r.direction)].get(r.index)
+    }
+
+    /// `{` and `"offset":N,` in stream mode, the fixed keys and the address, up to the first
+    /// field.
+    fn open(out: &mut Vec<u8>, plan: &Plan, address: u8, offset: Option<u64>) {
+        out.push(b'{');
+        if let Some(o) = offset {
+            out.extend_from_slice(b"\"offset\":");
+            push_int(out, o);
+            out.push(b',');
+        }
+        out.extend_from_slice(plan.head.as_bytes());
+        push_int(out, address);
+        out.extend_from_slice(plan.tail.as_bytes());
+    }
+
+    /// The line of a frame the interpreter decoded, as [`crate::frame_line`] prints it.
+    pub fn frame(&self, out: &mut Vec<u8>, p: &Spec, frame: &Frame, offset: Option<u64>) {
+        let (Some(plan), Some(m)) = (
+            self.plan(frame.message),
+            p.messages(frame.message.direction).get(frame.message.index),
+        ) else {
+            // Another spec's frame: the reference prints what it can.
+            out.extend_from_slice(crate::frame_line(p, frame, offset).as_bytes());
+            out.push(b'\n');
+            return;
+        };
+        Self::open(out, plan, frame.address, offset);
+        for (i, v) in frame.values.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            let raw = match &v.raw {
+                Raw::Int(i) => FieldValue::Int(*i),
+                Raw::Text(t) => FieldValue::Text(t),
+            };
+            // Values come in leaf order; look the name up only where they do not.
+            let leaf = match plan.leaves.get(i) {
+                Some(l) if l.name == v.name => Some(l),
+                _ => plan.by_name.get(&v.name).and_then(|&k| plan.leaves.get(k)),
+            };
+            Self::value(out, p, m, leaf, &v.name, raw);
+        }
+        out.extend_from_slice(b"}}\n");
+    }
+
+    /// `"name":value`, by the leaf's plan where the message has one.
+    fn value(
+        out: &mut Vec<u8>,
+        p: &Spec,
+        m: &busspec_model::ir::Message,
+        leaf: Option<&Leaf>,
+        name: &str,
+        raw: FieldValue<'_>,
+    ) {
+        let found = leaf.and_then(|l| {
+            let f = m.fields.get(l.field)?;
+            let bit = match l.bit {
+                Some(b) => Some(f.bits.get(b)?),
+                None => None,
+            };
+            Some((l, f, bit))
+        });
+        match found {
+            Some((l, f, bit)) => {
+                out.extend_from_slice(l.key.as_bytes());
+                push_field(out, p, f, bit, raw);
+            }
+            None => {
+                push_quoted(out, name);
+                out.push(b':');
+                push_plain(out, raw);
+            }
+        }
+    }
+
+    /// The line of a typed message of a generated protocol, as [`crate::message_line`] prints
+    /// it (its error, for a message `p` does not have, too).
+    pub fn message<M: Message>(
+        &mut self,
+        out: &mut Vec<u8>,
+        p: &Spec,
+        direction: Direction,
+        address: u8,
+        message: &M,
+        offset: Option<u64>,
+    ) -> Result<(), String> {
+        let name = message.name();
+        let index = self.names[side(direction)].get(name).copied();
+        let (Some(plan), Some(m)) = (
+            index.and_then(|i| self.plans[side(direction)].get(i)),
+            index.and_then(|i| p.messages(direction).get(i)),
+        ) else {
+            return crate::message_line(p, direction, address, message, offset).map(|line| {
+                out.extend_from_slice(line.as_bytes());
+                out.push(b'\n');
+            });
+        };
+        let (given, text) = (&mut self.given, &mut self.text);
+        given.clear();
+        text.clear();
+        message.visit(|name, raw| {
+            let v = match raw {
+                FieldValue::Int(i) => Given::Int(i),
+                FieldValue::Text(t) => {
+                    let from = text.len();
+                    text.extend_from_slice(t);
+                    Given::Text(from..text.len())
+                }
+            };
+            given.push((name, v));
+        });
+        let as_field = |g: &Given| match g {
+            Given::Int(i) => FieldValue::Int(*i),
+            Given::Text(r) => FieldValue::Text(text.get(r.clone()).unwrap_or_default()),
+        };
+        let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
+        Self::open(out, plan, address, offset);
+        let mut first = true;
+        // Typed messages leave out what the spec fixes (constants, repeated fields); the
+        // contract prints every leaf of the message, as the frame carries it.
+        for leaf in &plan.leaves {
+            let value = match lookup(&leaf.name) {
+                Some(g) => as_field(g),
+                None => match &leaf.fixed {
+                    Fixed::Constant(c) => FieldValue::Int(*c),
+                    Fixed::Equals(of) => match lookup(of) {
+                        Some(g) => as_field(g),
+                        None => continue,
+                    },
+                    Fixed::None => continue,
+                },
+            };
+            if !std::mem::take(&mut first) {
+                out.push(b',');
+            }
+            Self::value(out, p, m, Some(leaf), &leaf.name, value);
+        }
+        for (name, g) in given.iter() {
+            if !plan.by_name.contains_key(*name) {
+                if !std::mem::take(&mut first) {
+                    out.push(b',');
+                }
+                Self::value(out, p, m, None, name, as_field(g));
+            }
+        }
+        out.extend_from_slice(b"}}\n");
+        Ok(())
+    }
+
+    /// The stream line of bytes that start no frame, as [`crate::skipped_line`] prints it.
+    pub fn skipped(out: &mut Vec<u8>, offset: u64, bytes: &[u8]) {
+        out.extend_from_slice(b"{\"offset\":");
+        push_int(out, offset);
+        out.extend_from_slice(b",\"skipped\":");
+        push_int(out, bytes.len());
+        out.extend_from_slice(b",\"bytes\":\"");
+        push_hex(out, bytes);
+        out.extend_from_slice(b"\"}\n");
+    }
+}
