@@ -62,8 +62,99 @@ pub struct Printer {
     plans: [Vec<Plan>; 2],
     /// Message index by name, per direction.
     names: [HashMap<String, usize>; 2],
+    /// Message index by the address and length of a generated message's `&'static str` name,
+    /// per direction: a direct-mapped cache in front of `names`.
+    seen: [[(usize, usize, usize); 64]; 2],
+    /// Unit index to its fast decimal form ([`Decimal`]), where it has one.
+    decimals: Vec<Option<Decimal>>,
     given: Vec<(&'static str, Given)>,
     text: Vec<u8>,
+}
+
+/// A unit whose physical values `raw * scale + offset` are all decimals with at most `places`
+/// digits after the point: the value is `(raw * mul + add) / 10^places`, exactly. Printed as
+/// [`Rational`]'s `Display` prints it (no trailing zeros, no point for a whole number), with
+/// integer arithmetic and no allocation.
+#[derive(Debug, Clone, Copy)]
+struct Decimal {
+    mul: i128,
+    add: i128,
+    places: u32,
+}
+
+impl Decimal {
+    fn new(unit: &busspec_model::ir::Unit) -> Option<Decimal> {
+        let (scale, offset) = (unit.scale, unit.offset);
+        let den = scale.den.checked_mul(offset.den)?;
+        if den <= 0 {
+            return None;
+        }
+        let (mut d, mut twos, mut fives) = (den, 0u32, 0u32);
+        while d % 2 == 0 {
+            d /= 2;
+            twos += 1;
+        }
+        while d % 5 == 0 {
+            d /= 5;
+            fives += 1;
+        }
+        if d != 1 {
+            return None;
+        }
+        let places = twos.max(fives);
+        let per = 10i128.checked_pow(places)? / den;
+        Some(Decimal {
+            mul: scale.num.checked_mul(offset.den)?.checked_mul(per)?,
+            add: offset.num.checked_mul(scale.den)?.checked_mul(per)?,
+            places,
+        })
+    }
+
+    /// Writes the physical value of `raw`; `false` (nothing written) where it does not fit.
+    fn write(&self, out: &mut Vec<u8>, raw: i64) -> bool {
+        let Some(n) = i128::from(raw)
+            .checked_mul(self.mul)
+            .and_then(|v| v.checked_add(self.add))
+        else {
+            return false;
+        };
+        let Ok(mut a) = u64::try_from(n.unsigned_abs()) else {
+            return false;
+        };
+        let mut places = self.places;
+        while places > 0 && a % 10 == 0 {
+            a /= 10;
+            places -= 1;
+        }
+        if n < 0 {
+            out.push(b'-');
+        }
+        let Some(p) = 10u64.checked_pow(places) else {
+            return false;
+        };
+        push_int(out, a / p);
+        if places > 0 {
+            out.push(b'.');
+            let frac = itoa::Buffer::new().format(a % p).len();
+            out.resize(out.len() + (places as usize).saturating_sub(frac), b'0');
+            push_int(out, a % p);
+        }
+        true
+    }
+}
+
+/// A physical value as [`physical_text`] prints it, through `decimal` where it fits.
+fn push_physical(
+    out: &mut Vec<u8>,
+    decimal: Option<&Decimal>,
+    unit: &busspec_model::ir::Unit,
+    raw: i64,
+) {
+    let at = out.len();
+    if !decimal.is_some_and(|d| d.write(out, raw)) {
+        out.truncate(at);
+        out.extend_from_slice(physical_text(unit, raw).as_bytes());
+    }
 }
 
 fn quote(s: &str) -> String {
@@ -117,15 +208,26 @@ fn push_plain(out: &mut Vec<u8>, raw: FieldValue<'_>) {
     }
 }
 
-/// One field value as [`crate::print`]'s `field_json` prints it.
-fn push_field(out: &mut Vec<u8>, p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue) {
+/// One field value as [`crate::print`]'s `field_json` prints it; `decimals` as in
+/// [`Printer`].
+fn push_field(
+    out: &mut Vec<u8>,
+    p: &Spec,
+    decimals: &[Option<Decimal>],
+    f: &Field,
+    bit: Option<&BitField>,
+    raw: FieldValue,
+) {
     let v = match raw {
         FieldValue::Text(t) => return push_text(out, t),
         FieldValue::Int(v) => v,
     };
+    let physical = |out: &mut Vec<u8>, u: usize, unit| {
+        push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
+    };
     if let Some(b) = bit {
-        return match (b.constant, b.unit.and_then(|u| p.units.get(u))) {
-            (None, Some(unit)) => out.extend_from_slice(physical_text(unit, v).as_bytes()),
+        return match (b.constant, b.unit.and_then(|u| Some((u, p.units.get(u)?)))) {
+            (None, Some((u, unit))) => physical(out, u, unit),
             _ => push_int(out, v),
         };
     }
@@ -169,8 +271,8 @@ fn push_field(out: &mut Vec<u8>, p: &Spec, f: &Field, bit: Option<&BitField>, ra
         out.push(b']');
         return;
     }
-    match f.unit.and_then(|u| p.units.get(u)) {
-        Some(unit) => out.extend_from_slice(physical_text(unit, v).as_bytes()),
+    match f.unit.and_then(|u| Some((u, p.units.get(u)?))) {
+        Some((u, unit)) => physical(out, u, unit),
         None => push_int(out, v),
     }
 }
@@ -236,6 +338,8 @@ impl Printer {
         Printer {
             plans,
             names,
+            seen: [[(0, 0, 0); 64]; 2],
+            decimals: p.units.iter().map(Decimal::new).collect(),
             given: Vec::new(),
             text: Vec::new(),
         }
@@ -284,7 +388,7 @@ impl Printer {
                 Some(l) if l.name == v.name => Some(l),
                 _ => plan.by_name.get(&v.name).and_then(|&k| plan.leaves.get(k)),
             };
-            Self::value(out, p, m, leaf, &v.name, raw);
+            Self::value(out, p, &self.decimals, m, leaf, &v.name, raw);
         }
         out.extend_from_slice(b"}}\n");
     }
@@ -293,6 +397,7 @@ impl Printer {
     fn value(
         out: &mut Vec<u8>,
         p: &Spec,
+        decimals: &[Option<Decimal>],
         m: &busspec_model::ir::Message,
         leaf: Option<&Leaf>,
         name: &str,
@@ -309,7 +414,7 @@ impl Printer {
         match found {
             Some((l, f, bit)) => {
                 out.extend_from_slice(l.key.as_bytes());
-                push_field(out, p, f, bit, raw);
+                push_field(out, p, decimals, f, bit, raw);
             }
             None => {
                 push_quoted(out, name);
@@ -331,7 +436,17 @@ impl Printer {
         offset: Option<u64>,
     ) -> Result<(), String> {
         let name = message.name();
-        let index = self.names[side(direction)].get(name).copied();
+        let key = (name.as_ptr() as usize, name.len());
+        let slot = &mut self.seen[side(direction)][(key.0 >> 3) % 64];
+        let index = if (slot.0, slot.1) == key && key.0 != 0 {
+            Some(slot.2)
+        } else {
+            let found = self.names[side(direction)].get(name).copied();
+            if let Some(i) = found {
+                *slot = (key.0, key.1, i);
+            }
+            found
+        };
         let (Some(plan), Some(m)) = (
             index.and_then(|i| self.plans[side(direction)].get(i)),
             index.and_then(|i| p.messages(direction).get(i)),
@@ -362,10 +477,20 @@ impl Printer {
         let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
         Self::open(out, plan, address, offset);
         let mut first = true;
+        // Given fields come in leaf order, less the fixed ones: try the next one first.
+        let (mut next, mut matched) = (0, 0);
         // Typed messages leave out what the spec fixes (constants, repeated fields); the
         // contract prints every leaf of the message, as the frame carries it.
         for leaf in &plan.leaves {
-            let value = match lookup(&leaf.name) {
+            let own = match given.get(next) {
+                Some((n, g)) if *n == leaf.name => {
+                    next += 1;
+                    Some(g)
+                }
+                _ => lookup(&leaf.name),
+            };
+            matched += usize::from(own.is_some());
+            let value = match own {
                 Some(g) => as_field(g),
                 None => match &leaf.fixed {
                     Fixed::Constant(c) => FieldValue::Int(*c),
@@ -379,14 +504,17 @@ impl Printer {
             if !std::mem::take(&mut first) {
                 out.push(b',');
             }
-            Self::value(out, p, m, Some(leaf), &leaf.name, value);
+            Self::value(out, p, &self.decimals, m, Some(leaf), &leaf.name, value);
         }
-        for (name, g) in given.iter() {
-            if !plan.by_name.contains_key(*name) {
-                if !std::mem::take(&mut first) {
-                    out.push(b',');
+        // Leaf names are unique, so each given field matched at most one leaf.
+        if matched < given.len() {
+            for (name, g) in given.iter() {
+                if !plan.by_name.contains_key(*name) {
+                    if !std::mem::take(&mut first) {
+                        out.push(b',');
+                    }
+                    Self::value(out, p, &self.decimals, m, None, name, as_field(g));
                 }
-                Self::value(out, p, m, None, name, as_field(g));
             }
         }
         out.extend_from_slice(b"}}\n");
