@@ -379,41 +379,116 @@ pub fn range_violation(f: &Field, bits: Option<&BitField>, raw: i64) -> Option<(
     (!(min..=max).contains(&raw) && !special).then_some((min, max))
 }
 
+/// What [`decode`] derives from the spec for the directions it decodes, before it looks at a
+/// frame: no allocation, so a single decode pays only a pass over the messages.
+#[derive(Debug, Clone, Copy)]
+struct Limits {
+    directions: &'static [Direction],
+    longest_frame: usize,
+    shortest: usize,
+    min_code: usize,
+}
+
+impl Limits {
+    fn of(p: &Protocol, direction: Option<Direction>) -> Limits {
+        let directions: &'static [Direction] = match direction {
+            Some(Direction::Request) => &[Direction::Request],
+            Some(Direction::Response) => &[Direction::Response],
+            None => &[Direction::Request, Direction::Response],
+        };
+        Limits {
+            directions,
+            longest_frame: directions
+                .iter()
+                .map(|d| p.max_frame_len(*d))
+                .max()
+                .unwrap_or(0),
+            shortest: directions
+                .iter()
+                .flat_map(|d| p.messages(*d))
+                .map(|m| p.frame_len(m))
+                .min()
+                .unwrap_or(0),
+            min_code: directions
+                .iter()
+                .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
+                .min()
+                .unwrap_or(1),
+        }
+    }
+}
+
+/// [`decode`] with everything it derives from the spec computed once, for decoding many
+/// frames of one protocol (the stream decoder): the limits, and the messages of each frame
+/// length in the order `decode` tries them. Decodes exactly as [`decode`] does, errors
+/// included; build it from the protocol it decodes.
+#[derive(Debug, Clone)]
+pub struct Lookup {
+    limits: Limits,
+    /// `by_len[n]`: the messages whose frames are `n` bytes long.
+    by_len: Vec<Vec<MessageRef>>,
+}
+
+impl Lookup {
+    /// The lookup of `p` for `direction` (`None`: both).
+    pub fn new(p: &Protocol, direction: Option<Direction>) -> Lookup {
+        let limits = Limits::of(p, direction);
+        let mut by_len: Vec<Vec<MessageRef>> = vec![Vec::new(); limits.longest_frame + 1];
+        for &d in limits.directions {
+            for (index, m) in p.messages(d).iter().enumerate() {
+                if let Some(list) = by_len.get_mut(p.frame_len(m)) {
+                    list.push(MessageRef {
+                        direction: d,
+                        index,
+                    });
+                }
+            }
+        }
+        Lookup { limits, by_len }
+    }
+
+    /// Decodes a frame of `p` (the protocol the lookup was built from) as [`decode`] does.
+    pub fn decode(
+        &self,
+        p: &Protocol,
+        reply_to: Option<usize>,
+        wire: &[u8],
+    ) -> Result<Frame, DecodeError> {
+        decode_in(p, self.limits, Some(self), reply_to, wire)
+    }
+}
+
 /// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
-/// responses that only the request they answer can tell apart.
+/// responses that only the request they answer can tell apart. To decode many frames of one
+/// protocol, build a [`Lookup`] once.
 pub fn decode(
     p: &Protocol,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     wire: &[u8],
 ) -> Result<Frame, DecodeError> {
-    let directions: &[Direction] = match direction {
-        Some(Direction::Request) => &[Direction::Request],
-        Some(Direction::Response) => &[Direction::Response],
-        None => &[Direction::Request, Direction::Response],
-    };
-    let longest_frame = directions
-        .iter()
-        .map(|d| p.max_frame_len(*d))
-        .max()
-        .unwrap_or(0);
+    decode_in(p, Limits::of(p, direction), None, reply_to, wire)
+}
+
+fn decode_in(
+    p: &Protocol,
+    limits: Limits,
+    lookup: Option<&Lookup>,
+    reply_to: Option<usize>,
+    wire: &[u8],
+) -> Result<Frame, DecodeError> {
+    let Limits {
+        directions,
+        longest_frame,
+        shortest,
+        min_code,
+    } = limits;
     if wire.len() > longest_frame {
         return Err(DecodeError::TooLong {
             max: longest_frame,
             found: wire.len(),
         });
     }
-    let shortest = directions
-        .iter()
-        .flat_map(|d| p.messages(*d))
-        .map(|m| p.frame_len(m))
-        .min()
-        .unwrap_or(0);
-    let min_code = directions
-        .iter()
-        .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
-        .min()
-        .unwrap_or(1);
     let first = p.framing.head(min_code);
     if let (Some(at), Some(expected)) = (first.start, p.framing.start) {
         if let Some(&found) = wire.get(at) {
@@ -431,16 +506,27 @@ pub fn decode(
     check_checksum(p, wire)?;
     check_address(p, first.address, wire)?;
 
+    let code_fits = |r: &MessageRef| {
+        let m = p.message(*r);
+        let o = m.layout;
+        wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..])
+    };
+    // The messages of this length whose code fits, in the order of the scan below: when
+    // there are any, they are what the scan would find.
+    if let Some(found) = lookup.and_then(|l| l.by_len.get(wire.len())) {
+        let by_len: Vec<MessageRef> = found.iter().copied().filter(code_fits).collect();
+        if !by_len.is_empty() {
+            return decide(p, by_len, shortest, reply_to, wire);
+        }
+    }
+
     // Messages whose code matches the bytes where the code sits.
     let mut by_code: Vec<MessageRef> = Vec::new();
-    for &d in directions {
-        for (index, m) in p.messages(d).iter().enumerate() {
-            let o = m.layout;
-            if wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..]) {
-                by_code.push(MessageRef {
-                    direction: d,
-                    index,
-                });
+    for &direction in directions {
+        for index in 0..p.messages(direction).len() {
+            let r = MessageRef { direction, index };
+            if code_fits(&r) {
+                by_code.push(r);
             }
         }
     }
@@ -484,6 +570,18 @@ pub fn decode(
             found: wire.len(),
         });
     }
+    decide(p, by_len, shortest, reply_to, wire)
+}
+
+/// The frame among the messages of the frame's code and length (`by_len`, not empty) whose
+/// fields decode, settled by `reply_to` where several do.
+fn decide(
+    p: &Protocol,
+    by_len: Vec<MessageRef>,
+    shortest: usize,
+    reply_to: Option<usize>,
+    wire: &[u8],
+) -> Result<Frame, DecodeError> {
     let mut fitting = Vec::new();
     let mut first_err = None;
     for r in by_len {
