@@ -425,22 +425,67 @@ impl Limits {
 #[derive(Debug, Clone)]
 pub struct Lookup {
     limits: Limits,
-    /// `by_len[n]`: the messages whose frames are `n` bytes long.
-    by_len: Vec<Vec<MessageRef>>,
+    /// `by_len[n]`: the messages whose frames are `n` bytes long, by where their code sits
+    /// and its first byte.
+    by_len: Vec<Vec<ByFirst>>,
+}
+
+/// Messages of one frame length whose code sits at `code_at`, by the code's first byte: those
+/// with first byte `b` are `refs[starts[b]..starts[b + 1]]`; `starts[256]` is `refs.len()`,
+/// and messages without a code are `refs[starts[256]..]`.
+#[derive(Debug, Clone)]
+struct ByFirst {
+    code_at: usize,
+    starts: Vec<usize>,
+    refs: Vec<MessageRef>,
+}
+
+impl ByFirst {
+    /// The messages whose code's first byte is the byte of `wire` where it sits.
+    fn get(&self, wire: &[u8]) -> &[MessageRef] {
+        let (from, to) = match wire.get(self.code_at) {
+            Some(&b) => (self.starts[usize::from(b)], self.starts[usize::from(b) + 1]),
+            None => (0, 0),
+        };
+        self.refs.get(from..to).unwrap_or_default()
+    }
+
+    fn codeless(&self) -> &[MessageRef] {
+        self.refs.get(self.starts[256]..).unwrap_or_default()
+    }
 }
 
 impl Lookup {
     /// The lookup of `p` for `direction` (`None`: both).
     pub fn new(p: &Protocol, direction: Option<Direction>) -> Lookup {
         let limits = Limits::of(p, direction);
-        let mut by_len: Vec<Vec<MessageRef>> = vec![Vec::new(); limits.longest_frame + 1];
-        for &d in limits.directions {
-            for (index, m) in p.messages(d).iter().enumerate() {
-                if let Some(list) = by_len.get_mut(p.frame_len(m)) {
-                    list.push(MessageRef {
-                        direction: d,
-                        index,
-                    });
+        // (frame length, code offset, first code byte or 256 for none, message), sorted.
+        let mut all = Vec::new();
+        for &direction in limits.directions {
+            for (index, m) in p.messages(direction).iter().enumerate() {
+                let first = m.code.first().map_or(256, |&b| usize::from(b));
+                let r = MessageRef { direction, index };
+                all.push((p.frame_len(m), m.layout.code, first, r));
+            }
+        }
+        all.sort_by_key(|&(len, at, first, r)| (len, at, first, r.direction as u8, r.index));
+        let mut by_len: Vec<Vec<ByFirst>> = vec![Vec::new(); limits.longest_frame + 1];
+        for (len, at, first, r) in all {
+            let Some(groups) = by_len.get_mut(len) else {
+                continue;
+            };
+            if groups.last().map_or(true, |g: &ByFirst| g.code_at != at) {
+                groups.push(ByFirst {
+                    code_at: at,
+                    starts: vec![0; 257],
+                    refs: Vec::new(),
+                });
+            }
+            if let Some(g) = groups.last_mut() {
+                g.refs.push(r);
+                // Messages sorted by first byte: every later byte starts after this one.
+                for s in g.starts.iter_mut().skip(first + 1) {
+                    *s = g.refs.len();
                 }
             }
         }
@@ -513,8 +558,14 @@ fn decode_in(
     };
     // The messages of this length whose code fits, in the order of the scan below: when
     // there are any, they are what the scan would find.
-    if let Some(found) = lookup.and_then(|l| l.by_len.get(wire.len())) {
-        let by_len: Vec<MessageRef> = found.iter().copied().filter(code_fits).collect();
+    if let Some(groups) = lookup.and_then(|l| l.by_len.get(wire.len())) {
+        let mut by_len: Vec<MessageRef> = Vec::new();
+        for g in groups {
+            by_len.extend(g.get(wire).iter().chain(g.codeless()).filter(|r| code_fits(r)));
+        }
+        if groups.len() > 1 {
+            by_len.sort_by_key(|r| (r.direction as u8, r.index));
+        }
         if !by_len.is_empty() {
             return decide(p, by_len, shortest, reply_to, wire);
         }
