@@ -499,7 +499,20 @@ impl Lookup {
         reply_to: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame, DecodeError> {
-        decode_in(p, self.limits, Some(self), reply_to, wire)
+        decode_in(p, self.limits, Some(self), (reply_to, false), wire)
+    }
+
+    /// Decodes a frame as the stream decoder pairs a response with the request before it:
+    /// as [`decode`] without `request`, and where that is [`DecodeError::Ambiguous`], as with
+    /// `request` if that settles it; otherwise the ambiguity without it. The same as decoding
+    /// twice, with the fields decoded once.
+    pub fn decode_paired(
+        &self,
+        p: &Protocol,
+        request: Option<usize>,
+        wire: &[u8],
+    ) -> Result<Frame, DecodeError> {
+        decode_in(p, self.limits, Some(self), (request, true), wire)
     }
 }
 
@@ -512,14 +525,14 @@ pub fn decode(
     reply_to: Option<usize>,
     wire: &[u8],
 ) -> Result<Frame, DecodeError> {
-    decode_in(p, Limits::of(p, direction), None, reply_to, wire)
+    decode_in(p, Limits::of(p, direction), None, (reply_to, false), wire)
 }
 
 fn decode_in(
     p: &Protocol,
     limits: Limits,
     lookup: Option<&Lookup>,
-    reply_to: Option<usize>,
+    reply_to: (Option<usize>, bool),
     wire: &[u8],
 ) -> Result<Frame, DecodeError> {
     let Limits {
@@ -626,11 +639,15 @@ fn decode_in(
 
 /// The frame among the messages of the frame's code and length (`by_len`, not empty) whose
 /// fields decode, settled by `reply_to` where several do.
+///
+/// `paired`: as the stream decoder pairs a response with the request before it, a `reply_to`
+/// that settles nothing leaves the frame ambiguous among every candidate (otherwise among
+/// those answering `reply_to`, or an error if none does).
 fn decide(
     p: &Protocol,
     by_len: Vec<MessageRef>,
     shortest: usize,
-    reply_to: Option<usize>,
+    (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
 ) -> Result<Frame, DecodeError> {
     let mut fitting = Vec::new();
@@ -651,6 +668,15 @@ fn decide(
                         .get(cmd)
                         .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
             };
+            if paired && fitting.iter().filter(|(r, _)| answers(r)).count() != 1 {
+                // Not settled by the request: the ambiguity without it.
+                return Err(DecodeError::Ambiguous {
+                    candidates: fitting
+                        .iter()
+                        .map(|(r, _)| p.message(*r).name.clone())
+                        .collect(),
+                });
+            }
             fitting.retain(|(r, _)| answers(r));
         }
     }

@@ -389,15 +389,10 @@ impl<'p> StreamDecoder<'p> {
             return Err(None);
         };
         let offset = self.head;
-        let found = match self.lookup.decode(self.p, None, wire) {
+        let request = self.last_request.or(self.default_request);
+        let found = match self.lookup.decode_paired(self.p, request, wire) {
             Ok(frame) => Ok(frame),
-            Err(DecodeError::Ambiguous { candidates }) => {
-                let request = self.last_request.or(self.default_request);
-                match request.map(|r| self.lookup.decode(self.p, Some(r), wire)) {
-                    Some(Ok(frame)) => Ok(frame),
-                    _ => Err(candidates),
-                }
-            }
+            Err(DecodeError::Ambiguous { candidates }) => Err(candidates),
             Err(e) => return Err(Some(e).filter(breaks_spec)),
         };
         let bytes = wire.to_vec();
