@@ -103,11 +103,8 @@ struct Interpreted<'a> {
 
 impl LineStream for Interpreted<'_> {
     fn push(&mut self, data: &[u8], out: &mut Vec<u8>) {
-        // In small pieces, so the events of one piece stay few.
-        for piece in data.chunks(4096) {
-            let events = self.decoder.push(piece);
-            busspec_json::write_events(self.spec, self.printer, &events, out);
-        }
+        let events = self.decoder.push(data);
+        busspec_json::write_events(self.spec, self.printer, &events, out);
     }
     fn finish(&mut self, out: &mut Vec<u8>) {
         let events = self.decoder.flush();

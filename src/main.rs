@@ -771,8 +771,11 @@ fn decode_stream(
             }
         };
         read += n as u64;
-        decoder.push(&chunk[..n], &mut out.buf);
-        out.written()?;
+        // In pieces whose lines fit the output buffer's chunk.
+        for piece in chunk[..n].chunks(1024) {
+            decoder.push(piece, &mut out.buf);
+            out.written()?;
+        }
     }
     decoder.finish(&mut out.buf);
     Ok(())

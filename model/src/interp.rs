@@ -572,6 +572,13 @@ fn decode_in(
     // The messages of this length whose code fits, in the order of the scan below: when
     // there are any, they are what the scan would find.
     if let Some(groups) = lookup.and_then(|l| l.by_len.get(wire.len())) {
+        if let [g] = groups.as_slice() {
+            let fits = |r: &MessageRef| code_fits(r);
+            let mut found = g.get(wire).iter().chain(g.codeless()).copied().filter(fits).peekable();
+            if found.peek().is_some() {
+                return decide(p, found, shortest, reply_to, wire);
+            }
+        }
         let mut by_len: Vec<MessageRef> = Vec::new();
         for g in groups {
             by_len.extend(g.get(wire).iter().chain(g.codeless()).filter(|r| code_fits(r)));
@@ -645,7 +652,7 @@ fn decode_in(
 /// those answering `reply_to`, or an error if none does).
 fn decide(
     p: &Protocol,
-    by_len: Vec<MessageRef>,
+    by_len: impl IntoIterator<Item = MessageRef>,
     shortest: usize,
     (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
@@ -653,13 +660,14 @@ fn decide(
     let mut fitting = Vec::new();
     let mut first_err = None;
     for r in by_len {
-        match decode_fields(p, p.message(r), wire) {
+        match fields_of(p, p.message(r), wire) {
             Ok(values) => fitting.push((r, values)),
-            Err(e) => {
-                first_err.get_or_insert(e);
+            Err(misfit) => {
+                first_err.get_or_insert((r, misfit));
             }
         }
     }
+    let first_err = first_err.map(|(r, misfit)| misfit.error(p.message(r)));
     if fitting.len() > 1 {
         if let Some(cmd) = reply_to {
             let answers = |r: &MessageRef| {
@@ -785,43 +793,140 @@ fn check_address(p: &Protocol, at: usize, wire: &[u8]) -> Result<(), DecodeError
 /// Field values of a frame already known to have the message's length and an allowed address:
 /// constants, repeated fields, ranges and the broadcast rule checked.
 fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
+    fields_of(p, m, wire).map_err(|misfit| misfit.error(m))
+}
+
+/// Why a frame's fields do not fit a message: what [`decode_fields`] reports, held without
+/// allocating until it is reported, since [`decide`] tries every message of a code and
+/// length and reports only the first failure.
+#[derive(Debug, Clone, Copy)]
+enum Misfit {
+    Broadcast {
+        address: u8,
+    },
+    Constant {
+        field: usize,
+        bit: Option<usize>,
+        offset: usize,
+        expected: u64,
+        found: u64,
+    },
+    NotEqual {
+        field: usize,
+        other: usize,
+        offset: usize,
+        expected: i64,
+        found: i64,
+    },
+    Range {
+        field: usize,
+        bit: Option<usize>,
+        offset: usize,
+        found: i64,
+        min: i64,
+        max: i64,
+    },
+}
+
+impl Misfit {
+    fn error(self, m: &Message) -> DecodeError {
+        let name = |field: usize, bit: Option<usize>| {
+            let f = m.fields.get(field);
+            match bit {
+                Some(b) => f.and_then(|f| f.bits.get(b)).map(|b| b.name.clone()),
+                None => f.map(|f| f.name.clone()),
+            }
+            .unwrap_or_default()
+        };
+        match self {
+            Misfit::Broadcast { address } => DecodeError::BroadcastNotAccepted {
+                message: m.name.clone(),
+                code: m.code.clone(),
+                address,
+            },
+            Misfit::Constant {
+                field,
+                bit,
+                offset,
+                expected,
+                found,
+            } => DecodeError::ConstantMismatch {
+                message: m.name.clone(),
+                field: name(field, bit),
+                offset,
+                expected,
+                found,
+            },
+            Misfit::NotEqual {
+                field,
+                other,
+                offset,
+                expected,
+                found,
+            } => DecodeError::NotEqual {
+                message: m.name.clone(),
+                field: name(field, None),
+                offset,
+                other: name(other, None),
+                expected,
+                found,
+            },
+            Misfit::Range {
+                field,
+                bit,
+                offset,
+                found,
+                min,
+                max,
+            } => DecodeError::OutOfRange {
+                message: m.name.clone(),
+                field: name(field, bit),
+                offset,
+                found,
+                min,
+                max,
+            },
+        }
+    }
+}
+
+/// A whole field's value: unsigned as read, and as the field's type reads it (0 for text).
+fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
+    if f.is_ascii() {
+        return (0, 0);
+    }
+    let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
+    let unsigned = read_uint(bytes, f.byte_order);
+    let v = if f.signed {
+        sign_extend(unsigned, 8 * f.width as u32)
+    } else {
+        unsigned as i64
+    };
+    (unsigned, v)
+}
+
+/// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first, and their
+/// values built only for a message they fit.
+fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfit> {
     let o = m.layout;
     let address = wire.get(o.address).copied().unwrap_or(0);
     if broadcast_refused(p, m, address) {
-        return Err(DecodeError::BroadcastNotAccepted {
-            message: m.name.clone(),
-            code: m.code.clone(),
-            address,
-        });
+        return Err(Misfit::Broadcast { address });
     }
     let payload = wire
         .get(o.payload..o.payload + m.payload_len)
         .unwrap_or(&[]);
-    let mut values = Vec::new();
-    let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
-    for f in &m.fields {
-        let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
-        let at = o.payload + f.offset;
+    for (i, f) in m.fields.iter().enumerate() {
         if f.is_ascii() {
-            ints.push(0);
-            values.push(Value {
-                name: f.name.clone(),
-                raw: Raw::Text(bytes.to_vec()),
-            });
             continue;
         }
-        let unsigned = read_uint(bytes, f.byte_order);
-        let v = if f.signed {
-            sign_extend(unsigned, 8 * f.width as u32)
-        } else {
-            unsigned as i64
-        };
-        ints.push(v);
+        let at = o.payload + f.offset;
+        let (unsigned, v) = int_of(f, payload);
         if let Some(c) = f.constant {
             if unsigned != c {
-                return Err(DecodeError::ConstantMismatch {
-                    message: m.name.clone(),
-                    field: f.name.clone(),
+                return Err(Misfit::Constant {
+                    field: i,
+                    bit: None,
                     offset: at,
                     expected: c,
                     found: unsigned,
@@ -829,17 +934,12 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
             }
         }
         if let Some(other) = f.equals {
-            let expected = ints.get(other).copied().unwrap_or(0);
+            let expected = m.fields.get(other).map_or(0, |e| int_of(e, payload).1);
             if v != expected {
-                return Err(DecodeError::NotEqual {
-                    message: m.name.clone(),
-                    field: f.name.clone(),
+                return Err(Misfit::NotEqual {
+                    field: i,
+                    other,
                     offset: at,
-                    other: m
-                        .fields
-                        .get(other)
-                        .map(|o| o.name.clone())
-                        .unwrap_or_default(),
                     expected,
                     found: v,
                 });
@@ -847,27 +947,23 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
         }
         if f.bits.is_empty() {
             if let Some((min, max)) = range_violation(f, None, v) {
-                return Err(DecodeError::OutOfRange {
-                    message: m.name.clone(),
-                    field: f.name.clone(),
+                return Err(Misfit::Range {
+                    field: i,
+                    bit: None,
                     offset: at,
                     found: v,
                     min,
                     max,
                 });
             }
-            values.push(Value {
-                name: f.name.clone(),
-                raw: Raw::Int(v),
-            });
         }
-        for b in &f.bits {
+        for (k, b) in f.bits.iter().enumerate() {
             let bv = bit_value(unsigned, b);
             if let Some(c) = b.constant {
                 if bv as u64 != c {
-                    return Err(DecodeError::ConstantMismatch {
-                        message: m.name.clone(),
-                        field: b.name.clone(),
+                    return Err(Misfit::Constant {
+                        field: i,
+                        bit: Some(k),
                         offset: at,
                         expected: c,
                         found: bv as u64,
@@ -875,18 +971,38 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
                 }
             }
             if let Some((min, max)) = range_violation(f, Some(b), bv) {
-                return Err(DecodeError::OutOfRange {
-                    message: m.name.clone(),
-                    field: b.name.clone(),
+                return Err(Misfit::Range {
+                    field: i,
+                    bit: Some(k),
                     offset: at,
                     found: bv,
                     min,
                     max,
                 });
             }
+        }
+    }
+    let mut values = Vec::with_capacity(m.fields.len());
+    for f in &m.fields {
+        if f.is_ascii() {
+            let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
+            values.push(Value {
+                name: f.name.clone(),
+                raw: Raw::Text(bytes.to_vec()),
+            });
+            continue;
+        }
+        let (unsigned, v) = int_of(f, payload);
+        if f.bits.is_empty() {
+            values.push(Value {
+                name: f.name.clone(),
+                raw: Raw::Int(v),
+            });
+        }
+        for b in &f.bits {
             values.push(Value {
                 name: b.name.clone(),
-                raw: Raw::Int(bv),
+                raw: Raw::Int(bit_value(unsigned, b)),
             });
         }
     }

@@ -168,6 +168,8 @@ pub struct StreamDecoder<'p> {
     lookup: Lookup,
     /// Candidate lengths of one step, kept for their memory.
     lens: Vec<usize>,
+    /// The shortest frame the decoder decodes.
+    shortest: usize,
     capacity: usize,
     /// Bytes not yet accounted for; `buf[0]` is at capture offset `head`.
     buf: Vec<u8>,
@@ -195,6 +197,7 @@ impl<'p> StreamDecoder<'p> {
             }
         }
         let capacity = shapes.iter().map(|s| s.len).max().unwrap_or(0).max(1);
+        let shortest = shapes.iter().map(|s| s.len).min().unwrap_or(1).max(1);
         let mut by_code: Vec<ByCode> = Vec::new();
         let mut codeless = Vec::new();
         for (i, s) in shapes.iter().enumerate() {
@@ -225,6 +228,7 @@ impl<'p> StreamDecoder<'p> {
             codeless,
             lookup: Lookup::new(p, direction),
             lens: Vec::new(),
+            shortest,
             capacity,
             buf: Vec::with_capacity(capacity),
             head: 0,
@@ -256,7 +260,8 @@ impl<'p> StreamDecoder<'p> {
     /// Feeds bytes; returns what they settled. Bytes that might still start a frame stay
     /// buffered until more arrive or [`StreamDecoder::flush`] is called.
     pub fn push(&mut self, mut data: &[u8]) -> Vec<Event> {
-        let mut out = Vec::new();
+        // As many events as frames of the shortest length fit (noise runs come between them).
+        let mut out = Vec::with_capacity(data.len() / self.shortest + 1);
         while !data.is_empty() {
             let room = self.capacity.saturating_sub(self.buf.len()).max(1);
             let n = room.min(data.len());
