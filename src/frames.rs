@@ -99,12 +99,15 @@ struct Interpreted<'a> {
     spec: &'a Spec,
     printer: &'a Printer,
     decoder: StreamDecoder<'a>,
+    /// The events of one piece, kept for their memory.
+    events: Vec<busspec_model::stream::Event>,
 }
 
 impl LineStream for Interpreted<'_> {
     fn push(&mut self, data: &[u8], out: &mut Vec<u8>) {
-        let events = self.decoder.push(data);
-        busspec_json::write_events(self.spec, self.printer, &events, out);
+        self.events.clear();
+        self.decoder.push_into(data, &mut self.events);
+        busspec_json::write_events(self.spec, self.printer, &self.events, out);
     }
     fn finish(&mut self, out: &mut Vec<u8>) {
         let events = self.decoder.flush();
@@ -262,6 +265,7 @@ impl Engine {
             _ => Box::new(Interpreted {
                 spec: &self.spec,
                 printer: &self.printer,
+                events: Vec::new(),
                 decoder: StreamDecoder::new(&self.spec, direction).with_default_request(reply_to),
             }),
         }

@@ -259,17 +259,23 @@ impl<'p> StreamDecoder<'p> {
 
     /// Feeds bytes; returns what they settled. Bytes that might still start a frame stay
     /// buffered until more arrive or [`StreamDecoder::flush`] is called.
-    pub fn push(&mut self, mut data: &[u8]) -> Vec<Event> {
+    pub fn push(&mut self, data: &[u8]) -> Vec<Event> {
+        let mut out = Vec::new();
+        self.push_into(data, &mut out);
+        out
+    }
+
+    /// [`Self::push`], appending the events to `out` (for a caller that reuses one list).
+    pub fn push_into(&mut self, mut data: &[u8], out: &mut Vec<Event>) {
         // As many events as frames of the shortest length fit (noise runs come between them).
-        let mut out = Vec::with_capacity(data.len() / self.shortest + 1);
+        out.reserve(data.len() / self.shortest + 1);
         while !data.is_empty() {
             let room = self.capacity.saturating_sub(self.buf.len()).max(1);
             let n = room.min(data.len());
             self.buf.extend_from_slice(&data[..n]);
             data = &data[n..];
-            self.drain(false, &mut out);
+            self.drain(false, out);
         }
-        out
     }
 
     /// Settles everything buffered, as at the end of a capture or after an idle gap: complete
