@@ -532,3 +532,69 @@ impl Printer {
         out.extend_from_slice(b"\"}\n");
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use busspec_model::ir::Unit;
+    use busspec_model::rational::Rational;
+
+    fn unit(scale: &str, offset: &str) -> Unit {
+        Unit {
+            name: "u".into(),
+            symbol: "u".into(),
+            scale: Rational::parse(scale).expect("scale"),
+            offset: Rational::parse(offset).expect("offset"),
+            doc: String::new(),
+        }
+    }
+
+    /// Every unit of the built-in specs and units chosen to be awkward print every raw value
+    /// as `physical_text` does: through [`Decimal`] where the unit has one, the reference
+    /// where it does not or the value does not fit.
+    #[test]
+    fn physical_values_print_as_the_reference_prints_them() {
+        let mut units: Vec<Unit> = Vec::new();
+        for (file, text) in [
+            ("ub2.yaml", include_str!("../../spec/ub2.yaml")),
+            ("sd.yaml", include_str!("../../spec/sd.yaml")),
+        ] {
+            let p = busspec_model::load_str(file, text).unwrap_or_else(|d| panic!("{d}"));
+            units.extend(p.units);
+        }
+        for (scale, offset) in [
+            ("1", "0"),
+            ("0.01", "0"),
+            ("0.5", "-40"),
+            ("360/4096", "0"),
+            ("1/3", "0"),
+            ("2.5", "0.125"),
+            ("-0.001", "273.15"),
+            ("1/1048576", "0"),
+            ("1/1099511627776", "0"),
+            ("123456789012345678", "0"),
+            ("0.00000000000000001", "-0.1"),
+        ] {
+            units.push(unit(scale, offset));
+        }
+        let mut raws: Vec<i64> = (-1100..=1100).collect();
+        raws.extend([i64::MIN, i64::MIN + 1, i64::MAX, i64::MAX - 1, 1 << 40, -(1 << 53)]);
+        let mut fast = 0;
+        for u in &units {
+            let decimal = Decimal::new(u);
+            fast += usize::from(decimal.is_some());
+            for &raw in &raws {
+                let mut out = Vec::new();
+                push_physical(&mut out, decimal.as_ref(), u, raw);
+                assert_eq!(
+                    std::str::from_utf8(&out).unwrap(),
+                    physical_text(u, raw),
+                    "scale {:?} offset {:?} raw {raw}",
+                    u.scale,
+                    u.offset
+                );
+            }
+        }
+        assert!(fast >= units.len() / 2, "{fast} of {} units", units.len());
+    }
+}
