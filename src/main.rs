@@ -52,6 +52,14 @@ failure prints one line on stderr, `frame N (TEXT): reason`, and the exit status
 the argument, or for a frame longer than 32 bytes its first 32 bytes and the total length
 (`AA...AA… (50000 bytes)`). Wrong arguments: 2.
 
+A single HEX argument `-` reads hex frames one per line from stdin instead, as
+loggers and terminals print them: each line is read as a HEX argument is (spaces and 0x
+prefixes allowed), `#` starts a comment that runs to the end of the line, and lines that are
+empty or only a comment are skipped. Each frame prints as above; a line that fails prints
+`line N (TEXT): reason` on stderr and the next line is read (exit status 1 at the end, as for
+arguments). Each line is decoded on its own: a response only its request tells apart needs
+--reply-to. Output is written in large chunks, so `decode P - < log` runs at disk speed.
+
 --stream FILE (- for stdin) reads raw bytes of a bus capture instead, both directions mixed,
 and prints one line per frame with \"offset\" (the byte offset of its first byte) as the first
 key; bytes that start no frame print as {\"offset\":N,\"skipped\":K,\"bytes\":\"A5FF\"}, and a frame
@@ -62,7 +70,10 @@ a frame with its values decoded with the rules lifted (when they decode so), \"b
 its bytes are consumed, never skipped. After noise the decoder drops one byte and
 tries again; where messages share a code the longest complete frame that checksums wins; a
 response is paired with the request just before it (--reply-to gives the request to assume when
-there is none). Exit status 0 unless the capture cannot be read.";
+there is none). Exit status 0 unless the capture cannot be read (the lines of what was read
+before the error print, then `error: cannot read FILE (after N bytes): reason`).
+
+Output closed early (`| head`) ends the run quietly.";
 
 const ENCODE_HELP: &str = "\
 Encode JSON lines from stdin to frames, one hex line per frame.
@@ -115,7 +126,8 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
-    /// Decode frames (hex arguments, or a raw capture with --stream) to JSON lines.
+    /// Decode frames (hex arguments, hex lines from stdin with `-`, or a raw capture with
+    /// --stream) to JSON lines.
     #[command(long_about = DECODE_HELP)]
     Decode(DecodeArgs),
     /// Encode JSON lines read from stdin to frames, one uppercase hex line each.
@@ -291,7 +303,8 @@ impl Gate {
 struct DecodeArgs {
     /// The protocol: ub2 or sd (built in), or the `protocol:` of the spec given with --spec.
     protocol: String,
-    /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed.
+    /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed. `-` alone:
+    /// hex frames from stdin, one per line (`#` starts a comment).
     #[arg(
         value_name = "HEX",
         required_unless_present = "stream",
@@ -938,4 +951,74 @@ fn demo(svg: Option<&Path>) -> Result<(), String> {
     let ub2 = busspec_json::load_spec::<ub2::Ub2>()?;
     let sd = busspec_json::load_spec::<sd::Sd>()?;
     link_cli::demo(&ub2, &sd, svg).map(|_| ())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Counts the writes it gets; fails them with `error` once set.
+    #[derive(Default)]
+    struct Counting {
+        writes: usize,
+        bytes: Vec<u8>,
+        error: Option<std::io::ErrorKind>,
+    }
+
+    impl Write for Counting {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if let Some(kind) = self.error {
+                return Err(std::io::Error::new(kind, "refused"));
+            }
+            self.writes += 1;
+            self.bytes.extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn output_is_written_in_chunks_not_per_line() {
+        let mut sink = Counting::default();
+        let mut want = String::new();
+        let mut out = Out::new(&mut sink);
+        for i in 0..100_000 {
+            let line = format!("{{\"offset\":{i}}}");
+            out.line(&line).unwrap();
+            want.push_str(&line);
+            want.push('\n');
+        }
+        out.finish().unwrap();
+        assert_eq!(sink.bytes, want.as_bytes());
+        let chunks = want.len() / Out::<std::io::Sink>::CHUNK + 1;
+        assert!(sink.writes <= chunks, "{} writes", sink.writes);
+        // An error line goes out after everything printed before it.
+        let mut sink = Counting::default();
+        let mut out = Out::new(&mut sink);
+        out.line("before").unwrap();
+        out.error(format_args!("test: an error line")).unwrap();
+        drop(out);
+        assert_eq!(sink.bytes, b"before\n");
+    }
+
+    #[test]
+    fn a_closed_pipe_ends_quietly_and_other_write_errors_are_reported() {
+        for (kind, want) in [
+            (std::io::ErrorKind::BrokenPipe, ""),
+            (
+                std::io::ErrorKind::PermissionDenied,
+                "error: cannot write output: refused",
+            ),
+        ] {
+            let mut sink = Counting {
+                error: Some(kind),
+                ..Counting::default()
+            };
+            let mut out = Out::new(&mut sink);
+            out.line("a line").unwrap();
+            assert_eq!(out.finish(), Err(want.to_owned()));
+        }
+    }
 }
