@@ -657,9 +657,25 @@ fn decide(
     (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
 ) -> Result<Frame, DecodeError> {
+    let mut by_len = by_len.into_iter();
+    let first = by_len.next();
+    let second = by_len.next();
+    // One message of this code and length (the common case): it fits or its misfit is the
+    // error, as below, without a list.
+    if let (Some(r), None) = (first, second) {
+        let m = p.message(r);
+        return match fields_of(p, m, wire) {
+            Ok(values) => Ok(Frame {
+                message: r,
+                address: wire.get(m.layout.address).copied().unwrap_or(0),
+                values,
+            }),
+            Err(misfit) => Err(misfit.error(m)),
+        };
+    }
     let mut fitting = Vec::new();
     let mut first_err = None;
-    for r in by_len {
+    for r in first.into_iter().chain(second).chain(by_len) {
         match fields_of(p, p.message(r), wire) {
             Ok(values) => fitting.push((r, values)),
             Err(misfit) => {
