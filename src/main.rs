@@ -634,7 +634,11 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
         }
         let failed = decode_lines(&mut engine, direction, reply_to, args.lenient, &mut out)?;
         out.finish()?;
-        return if failed == 0 { Ok(()) } else { Err(String::new()) };
+        return if failed == 0 {
+            Ok(())
+        } else {
+            Err(String::new())
+        };
     }
     let mut failed = 0;
     for (i, text) in args.frames.iter().enumerate() {

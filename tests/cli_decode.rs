@@ -614,8 +614,16 @@ fn hex_lines_from_stdin_decode_as_arguments_do() {
         for (i, f) in frames.iter().enumerate() {
             let line = match i % 4 {
                 0 => hex(f),
-                1 => f.iter().map(|b| format!("{b:02X}")).collect::<Vec<_>>().join(" "),
-                2 => f.iter().map(|b| format!("0x{b:02x}")).collect::<Vec<_>>().join(" "),
+                1 => f
+                    .iter()
+                    .map(|b| format!("{b:02X}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                2 => f
+                    .iter()
+                    .map(|b| format!("0x{b:02x}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
                 _ => format!("  {}\t# frame {i}\r", hex(f)),
             };
             input.push_str(&line);
@@ -656,8 +664,14 @@ fn a_bad_hex_line_is_named_by_its_number_and_the_rest_still_print() {
         lines[0].starts_with("line 2 (AA21 4101 3E1F 0000 6B): checksum"),
         "{stderr}"
     );
-    assert_eq!(lines[1], "line 4 (zz21): `z` at character 1 is not a hex digit");
-    assert!(lines[2].starts_with("line 6 (AA21): truncated frame"), "{stderr}");
+    assert_eq!(
+        lines[1],
+        "line 4 (zz21): `z` at character 1 is not a hex digit"
+    );
+    assert!(
+        lines[2].starts_with("line 6 (AA21): truncated frame"),
+        "{stderr}"
+    );
     // Not UTF-8: named by its line, and the next line is read.
     let out = run_in(
         root(),
@@ -684,7 +698,10 @@ fn a_capture_that_cannot_be_read_is_reported_with_what_was_read() {
     assert!(out.stdout.is_empty());
     let stderr = text(&out.stderr);
     assert!(
-        stderr.starts_with(&format!("error: cannot read {} (after 0 bytes): ", dir.display())),
+        stderr.starts_with(&format!(
+            "error: cannot read {} (after 0 bytes): ",
+            dir.display()
+        )),
         "{stderr}"
     );
     let out = busspec(&["decode", "ub2", "--stream", "/nonexistent/capture.bin"]);
@@ -717,7 +734,10 @@ fn output_closed_early_ends_the_run_quietly() {
     let lines_path = dir.join("ub2.hex");
     std::fs::write(&lines_path, &hex_lines).unwrap();
     for (args, input) in [
-        (vec!["decode", "ub2", "--stream", path.to_str().unwrap()], None),
+        (
+            vec!["decode", "ub2", "--stream", path.to_str().unwrap()],
+            None,
+        ),
         (vec!["decode", "ub2", "-"], Some(&lines_path)),
     ] {
         let mut child = Command::new(env!("CARGO_BIN_EXE_busspec"))

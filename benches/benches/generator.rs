@@ -21,7 +21,11 @@ use criterion::{criterion_group, criterion_main, Criterion};
 /// The built-in specs: name, the file the build script reads, its text.
 fn specs() -> [(&'static str, String, &'static str); 2] {
     [
-        (Ub2::NAME, format!("spec/{}.yaml", Ub2::NAME), Ub2::SPEC_YAML),
+        (
+            Ub2::NAME,
+            format!("spec/{}.yaml", Ub2::NAME),
+            Ub2::SPEC_YAML,
+        ),
         (Sd::NAME, format!("spec/{}.yaml", Sd::NAME), Sd::SPEC_YAML),
     ]
 }
@@ -47,7 +51,9 @@ fn generator(c: &mut Criterion) {
         });
     }
     let all = specs();
-    assert!(all.iter().all(|(_, file, text)| generate(file, text) > 1000));
+    assert!(all
+        .iter()
+        .all(|(_, file, text)| generate(file, text) > 1000));
     g.bench_function("both", |b| {
         b.iter(|| {
             all.iter()

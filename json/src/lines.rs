@@ -169,8 +169,7 @@ fn side(d: Direction) -> usize {
 }
 
 fn push_quoted(out: &mut Vec<u8>, s: &str) {
-    if s
-        .bytes()
+    if s.bytes()
         .all(|b| b >= 0x20 && b != b'"' && b != b'\\' && b < 0x7F)
     {
         out.push(b'"');
@@ -299,7 +298,9 @@ impl Printer {
                         leaves.push((f.name.clone(), fi, None, fixed));
                     }
                     for (bi, b) in f.bits.iter().enumerate() {
-                        let fixed = b.constant.map_or(Fixed::None, |c| Fixed::Constant(c as i64));
+                        let fixed = b
+                            .constant
+                            .map_or(Fixed::None, |c| Fixed::Constant(c as i64));
                         leaves.push((b.name.clone(), fi, Some(bi), fixed));
                     }
                 }
@@ -578,7 +579,14 @@ mod tests {
             units.push(unit(scale, offset));
         }
         let mut raws: Vec<i64> = (-1100..=1100).collect();
-        raws.extend([i64::MIN, i64::MIN + 1, i64::MAX, i64::MAX - 1, 1 << 40, -(1 << 53)]);
+        raws.extend([
+            i64::MIN,
+            i64::MIN + 1,
+            i64::MAX,
+            i64::MAX - 1,
+            1 << 40,
+            -(1 << 53),
+        ]);
         let mut fast = 0;
         for u in &units {
             let decimal = Decimal::new(u);

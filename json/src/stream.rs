@@ -131,14 +131,26 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             Event::Request { offset, frame, .. } => {
                 self.take_range(offset, e.len());
                 let d = Direction::Request;
-                self.printer
-                    .message(out, self.spec, d, frame.address, &frame.message, Some(offset))
+                self.printer.message(
+                    out,
+                    self.spec,
+                    d,
+                    frame.address,
+                    &frame.message,
+                    Some(offset),
+                )
             }
             Event::Response { offset, frame, .. } => {
                 self.take_range(offset, e.len());
                 let d = Direction::Response;
-                self.printer
-                    .message(out, self.spec, d, frame.address, &frame.message, Some(offset))
+                self.printer.message(
+                    out,
+                    self.spec,
+                    d,
+                    frame.address,
+                    &frame.message,
+                    Some(offset),
+                )
             }
             Event::Skipped { offset, len } => {
                 let r = self.take_range(offset, len);

@@ -138,10 +138,15 @@ impl ProtocolVisitor for Check {
             write_events(&spec, &printer, &settled, &mut interp_out);
             events.extend(settled);
             let reference = joined(&reference);
-            let interp_reference: Vec<String> = events.iter().map(|e| event_line(&spec, e)).collect();
+            let interp_reference: Vec<String> =
+                events.iter().map(|e| event_line(&spec, e)).collect();
             let at = format!("{} in chunks of {chunk}", spec.name);
             assert_eq!(text(&out), reference, "{at}: generated");
-            assert_eq!(text(&interp_out), joined(&interp_reference), "{at}: interpreter");
+            assert_eq!(
+                text(&interp_out),
+                joined(&interp_reference),
+                "{at}: interpreter"
+            );
             // The engines agree line for line, but for the reason of an out-of-spec frame whose
             // values do not decode even with the rules lifted: the generated decoder words it
             // with the field's name, the interpreter with the message's and the field's.

@@ -574,14 +574,25 @@ fn decode_in(
     if let Some(groups) = lookup.and_then(|l| l.by_len.get(wire.len())) {
         if let [g] = groups.as_slice() {
             let fits = |r: &MessageRef| code_fits(r);
-            let mut found = g.get(wire).iter().chain(g.codeless()).copied().filter(fits).peekable();
+            let mut found = g
+                .get(wire)
+                .iter()
+                .chain(g.codeless())
+                .copied()
+                .filter(fits)
+                .peekable();
             if found.peek().is_some() {
                 return decide(p, found, shortest, reply_to, wire);
             }
         }
         let mut by_len: Vec<MessageRef> = Vec::new();
         for g in groups {
-            by_len.extend(g.get(wire).iter().chain(g.codeless()).filter(|r| code_fits(r)));
+            by_len.extend(
+                g.get(wire)
+                    .iter()
+                    .chain(g.codeless())
+                    .filter(|r| code_fits(r)),
+            );
         }
         if groups.len() > 1 {
             by_len.sort_by_key(|r| (r.direction as u8, r.index));

@@ -369,10 +369,13 @@ impl<'p> StreamDecoder<'p> {
     /// first byte is the buffered byte where it sits, or all of a group when that byte is not
     /// buffered yet. [`Self::agrees`] decides.
     fn candidates(&self) -> impl Iterator<Item = usize> + '_ {
-        let grouped = self.by_code.iter().flat_map(|g| match self.buf.get(g.code_at) {
-            Some(&b) => &g.by_first[usize::from(b)],
-            None => &g.all,
-        });
+        let grouped = self
+            .by_code
+            .iter()
+            .flat_map(|g| match self.buf.get(g.code_at) {
+                Some(&b) => &g.by_first[usize::from(b)],
+                None => &g.all,
+            });
         grouped.chain(&self.codeless).copied()
     }
 

@@ -89,7 +89,11 @@ fn lookup_decodes_as_decode_does() {
                     interp::decode(&p, direction, None, &wire),
                     Err(DecodeError::Ambiguous { .. })
                 );
-                let tried = if ambiguous { &requests[..] } else { requests.get(..2).unwrap_or(&requests) };
+                let tried = if ambiguous {
+                    &requests[..]
+                } else {
+                    requests.get(..2).unwrap_or(&requests)
+                };
                 for &r in tried {
                     let want = interp::decode(&p, direction, r, &wire);
                     assert_eq!(
