@@ -674,18 +674,17 @@ fn frame_text(line: &str) -> Option<&str> {
     (!text.is_empty()).then_some(text)
 }
 
-/// `decode P -`: hex frames from stdin, one per line (see DECODE_HELP). Each frame's line goes
-/// to `out`; each line that fails prints `line N (TEXT): reason` on stderr and the next line is
-/// read. Returns how many lines failed; a read error ends the run with its reason.
-fn decode_lines(
-    engine: &mut Engine,
-    direction: Option<Direction>,
-    reply_to: Option<usize>,
-    lenient: bool,
-    out: &mut Out<impl Write>,
+/// Reads stdin line by line for `decode P -` and `encode`: `each` gets the line's number and
+/// text and writes its output to `out`, or says why the line failed (`Err`: the whole error
+/// line, printed on stderr after everything before it); a line that is not UTF-8 fails as
+/// `line N: not UTF-8 text: …`. Returns how many lines failed; a read error ends the run with
+/// its reason, after the output of the lines before it.
+fn stdin_lines<W: Write>(
+    out: &mut Out<W>,
+    mut each: impl FnMut(usize, &str, &mut Out<W>) -> Result<(), String>,
 ) -> Result<usize, String> {
     let stdin = std::io::stdin();
-    let mut input = std::io::BufReader::with_capacity(Out::<std::io::Sink>::CHUNK, stdin.lock());
+    let mut input = std::io::BufReader::with_capacity(Out::<W>::CHUNK, stdin.lock());
     let mut failed = 0;
     let mut line = Vec::new();
     for number in 1.. {
@@ -698,38 +697,53 @@ fn decode_lines(
                 return Err(format!("error: cannot read stdin (line {number}): {e}"));
             }
         }
-        let text = match std::str::from_utf8(&line) {
-            Ok(text) => text,
-            Err(e) => {
-                failed += 1;
-                out.error(format_args!(
-                    "line {number}: not UTF-8 text: invalid byte at offset {}",
-                    e.valid_up_to()
-                ))?;
-                continue;
-            }
+        let result = match std::str::from_utf8(&line) {
+            Ok(text) => each(number, text, out),
+            Err(e) => Err(format!(
+                "line {number}: not UTF-8 text: invalid byte at offset {}",
+                e.valid_up_to()
+            )),
         };
-        let Some(text) = frame_text(text) else {
-            continue;
-        };
-        let wire = busspec_json::parse_hex(text);
-        let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
-            if lenient {
-                engine.decode_lenient_into(direction, reply_to, wire, &mut out.buf)
-            } else {
-                engine.decode_into(direction, reply_to, wire, &mut out.buf)
-            }
-        });
         match result {
             Ok(()) => out.written()?,
             Err(reason) => {
                 failed += 1;
-                let shown = quoted(text, wire.as_deref().ok());
-                out.error(format_args!("line {number} ({shown}): {reason}"))?;
+                out.error(format_args!("{reason}"))?;
             }
         }
     }
     Ok(failed)
+}
+
+/// `decode P -`: hex frames from stdin, one per line (see DECODE_HELP). Each frame's line goes
+/// to `out`; each line that fails prints `line N (TEXT): reason` on stderr and the next line is
+/// read. Returns how many lines failed; a read error ends the run with its reason.
+fn decode_lines(
+    engine: &mut Engine,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    lenient: bool,
+    out: &mut Out<impl Write>,
+) -> Result<usize, String> {
+    stdin_lines(out, |number, line, out| {
+        let Some(text) = frame_text(line) else {
+            return Ok(());
+        };
+        let wire = busspec_json::parse_hex(text);
+        wire.as_ref()
+            .map_err(String::clone)
+            .and_then(|wire| {
+                if lenient {
+                    engine.decode_lenient_into(direction, reply_to, wire, &mut out.buf)
+                } else {
+                    engine.decode_into(direction, reply_to, wire, &mut out.buf)
+                }
+            })
+            .map_err(|reason| {
+                let shown = quoted(text, wire.as_deref().ok());
+                format!("line {number} ({shown}): {reason}")
+            })
+    })
 }
 
 /// The most bytes of a frame an error line quotes.
@@ -800,37 +814,16 @@ fn decode_stream(
 
 fn encode(args: EncodeArgs) -> Result<(), String> {
     let engine = protocol("encode", &args.protocol, args.spec.as_deref())?;
-    let stdin = std::io::stdin();
-    let mut input = stdin.lock();
     let mut out = Out::new(std::io::stdout().lock());
-    let mut failed = 0;
-    let mut line = Vec::new();
-    for number in 1.. {
-        line.clear();
-        match input.read_until(b'\n', &mut line) {
-            Ok(0) => break,
-            Ok(_) => {}
-            Err(e) => {
-                out.flush()?;
-                return Err(format!("error: cannot read stdin: {e}"));
-            }
+    let failed = stdin_lines(&mut out, |number, text, out| {
+        if text.trim().is_empty() {
+            return Ok(());
         }
-        let result = match std::str::from_utf8(&line) {
-            Ok(text) if text.trim().is_empty() => continue,
-            Ok(text) => engine.encode(text.trim()),
-            Err(e) => Err(format!(
-                "not UTF-8 text: invalid byte at offset {}",
-                e.valid_up_to()
-            )),
-        };
-        match result {
-            Ok(wire) => out.line(&frames::hex(&wire))?,
-            Err(reason) => {
-                failed += 1;
-                out.error(format_args!("line {number}: {reason}"))?;
-            }
-        }
-    }
+        let wire = engine
+            .encode(text.trim())
+            .map_err(|reason| format!("line {number}: {reason}"))?;
+        out.line(&frames::hex(&wire))
+    })?;
     out.finish()?;
     if failed == 0 {
         Ok(())

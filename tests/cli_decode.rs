@@ -363,10 +363,9 @@ fn encode_refuses_what_the_spec_forbids_and_writes_nothing() {
     }
 }
 
-/// A capture of example frames (those that decode without their request) with noise between
-/// some of them, and the JSON lines expected from `--stream`: each frame's `decode` line with
-/// its offset first.
-fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
+/// The example frames that decode without their request, and `busspec decode` of all of them
+/// as arguments.
+fn standalone(p: &Protocol) -> (Vec<&[u8]>, Output) {
     let frames: Vec<&[u8]> = p
         .examples
         .iter()
@@ -378,6 +377,14 @@ fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let out = busspec(&args);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    (frames, out)
+}
+
+/// A capture of example frames (those that decode without their request) with noise between
+/// some of them, and the JSON lines expected from `--stream`: each frame's `decode` line with
+/// its offset first.
+fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
+    let (frames, out) = standalone(p);
     let stdout = text(&out.stdout);
     let mut bytes = Vec::new();
     let mut expected = Vec::new();
@@ -598,17 +605,7 @@ fn an_unknown_code_is_named_for_the_direction_it_was_decoded_as() {
 fn hex_lines_from_stdin_decode_as_arguments_do() {
     for file in ["ub2.yaml", "sd.yaml"] {
         let p = spec(file);
-        let frames: Vec<&[u8]> = p
-            .examples
-            .iter()
-            .filter(|e| !p.message(e.message).needs_request)
-            .map(|e| e.wire.as_slice())
-            .collect();
-        let mut args = vec!["decode".to_owned(), p.name.clone()];
-        args.extend(frames.iter().map(|f| hex(f)));
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let want = busspec(&args);
-        assert_eq!(want.status.code(), Some(0), "{}", text(&want.stderr));
+        let (frames, want) = standalone(&p);
         // As loggers print them: spaced, 0x-prefixed, commented, CRLF, blank lines.
         let mut input = String::from("# a capture\n\n");
         for (i, f) in frames.iter().enumerate() {

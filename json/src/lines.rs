@@ -86,22 +86,7 @@ impl Decimal {
     fn new(unit: &busspec_model::ir::Unit) -> Option<Decimal> {
         let (scale, offset) = (unit.scale, unit.offset);
         let den = scale.den.checked_mul(offset.den)?;
-        if den <= 0 {
-            return None;
-        }
-        let (mut d, mut twos, mut fives) = (den, 0u32, 0u32);
-        while d % 2 == 0 {
-            d /= 2;
-            twos += 1;
-        }
-        while d % 5 == 0 {
-            d /= 5;
-            fives += 1;
-        }
-        if d != 1 {
-            return None;
-        }
-        let places = twos.max(fives);
+        let places = busspec_model::rational::decimal_places(den)?;
         let per = 10i128.checked_pow(places)? / den;
         Some(Decimal {
             mul: scale.num.checked_mul(offset.den)?.checked_mul(per)?,

@@ -3,7 +3,7 @@
 use busspec_model::ir::Direction;
 use busspec_model::stream::{decode_lenient, relaxed, Event as InterpEvent};
 use busspec_runtime::stream::{Direction as StreamDirection, Event, StreamDecoder};
-use busspec_runtime::Protocol;
+use busspec_runtime::{Decoded, Message, Protocol};
 
 use crate::decode::{candidates, request_for};
 use crate::print::{ambiguous_line, frame_line, out_of_spec_line, skipped_line};
@@ -129,28 +129,10 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
     fn write(&mut self, e: &Event<P::Request, P::Response>, out: &mut Vec<u8>) {
         let printed = match *e {
             Event::Request { offset, frame, .. } => {
-                self.take_range(offset, e.len());
-                let d = Direction::Request;
-                self.printer.message(
-                    out,
-                    self.spec,
-                    d,
-                    frame.address,
-                    &frame.message,
-                    Some(offset),
-                )
+                self.decoded(Direction::Request, offset, e.len(), &frame, out)
             }
             Event::Response { offset, frame, .. } => {
-                self.take_range(offset, e.len());
-                let d = Direction::Response;
-                self.printer.message(
-                    out,
-                    self.spec,
-                    d,
-                    frame.address,
-                    &frame.message,
-                    Some(offset),
-                )
+                self.decoded(Direction::Response, offset, e.len(), &frame, out)
             }
             Event::Skipped { offset, len } => {
                 let r = self.take_range(offset, len);
@@ -167,6 +149,20 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             out.extend_from_slice(error_line(e.offset(), &why).as_bytes());
             out.push(b'\n');
         }
+    }
+
+    /// Writes the line of a frame of `direction` of `len` bytes at `offset`.
+    fn decoded<M: Message>(
+        &mut self,
+        direction: Direction,
+        offset: u64,
+        len: u64,
+        d: &Decoded<M>,
+        out: &mut Vec<u8>,
+    ) -> Result<(), String> {
+        self.take_range(offset, len);
+        let (printer, spec) = (&mut self.printer, self.spec);
+        printer.message(out, spec, direction, d.address, &d.message, Some(offset))
     }
 
     /// Keeps pushed bytes until their event reports them.
