@@ -47,7 +47,7 @@ pub fn write_events(p: &Spec, printer: &Printer, events: &[InterpEvent], out: &m
 /// with `"offset"` first, noise and ambiguous frames with their bytes. It keeps the bytes not
 /// yet accounted for (at most a frame's worth and the noise of one run) to print them.
 ///
-/// [`TypedStream::push`] gives each line as a `String` (printed by [`crate::print`], the
+/// [`TypedStream::push`] gives each line as a `String` (printed by `print.rs`, the
 /// reference); [`TypedStream::push_into`] writes the same lines to a buffer ([`Printer`]),
 /// the way for captures of any size.
 pub struct TypedStream<'s, P: Protocol> {
