@@ -1,9 +1,22 @@
 //! Emits the typed `no_std` Rust module of one protocol from its IR.
 //!
 //! One `emit_*` function per generated item, iterating in spec order so the output is
-//! deterministic. Generated code refers to the shared runtime, `busspec-runtime`, through fully
-//! qualified `::busspec_runtime::` paths and to core through `::core::`, so no spec name
-//! can clash with them. Output is formatted with prettyplease.
+//! deterministic. Output is formatted with prettyplease.
+//!
+//! Shape (kept lean so a firmware engineer can read it, about 30–40 lines per message):
+//! - each module imports `::busspec_runtime::codec as rt` once and names everything from core
+//!   and the runtime through it (`rt::Some`, `rt::Result`, `rt::DecodeError`): a lowercase
+//!   module name no spec name can take, since spec names become `CamelCase` types, variants
+//!   or fields (`codegen/tests/fixtures/core_names.yaml` names its types `Option`, `Ok`, ...);
+//! - checks every frame or message shares are small `#[inline]` runtime helpers
+//!   (`rt::check_frame`, `rt::in_range`, `rt::frame_mut`, `rt::Group`, ...);
+//! - per-message constants are tables (`MESSAGES`: name, code, length; `COMMANDS`: kind,
+//!   broadcast rule, replies), indexed by one `match` (`index`);
+//! - `dispatch` has one arm per code, which decodes its message from the frame as a
+//!   fixed-size array; codes, start bytes and addresses are written in hex as the documents
+//!   print them;
+//! - encode writes the bytes known before any field in one `copy_from_slice`, and keeps a sum-8
+//!   in each arm, where it folds the constant header bytes.
 //!
 //! Typing rules:
 //! - a unit with scale 1 and offset 0 stays a plain integer of its field's width;
@@ -323,6 +336,14 @@ fn leaves(m: &Message) -> Vec<Leaf<'_>> {
 /// path `include_str!` takes the spec's text from for `SPEC_YAML` (absolute, or relative to
 /// the file the module is written to).
 pub fn emit_module(p: &Protocol, source: &str, spec_path: &str) -> Result<String, String> {
+    // A command's replies are a bit set of responses (`Request::COMMANDS`).
+    if p.responses.len() > 128 {
+        return Err(format!(
+            "{} has {} responses; the generated code handles at most 128",
+            p.name,
+            p.responses.len()
+        ));
+    }
     let tokens = module_tokens(p, source, spec_path);
     let file: syn::File = syn::parse2(tokens)
         .map_err(|e| format!("generated code for {} does not parse: {e}", p.name))?;
@@ -338,7 +359,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let checksum = emit_checksum(p);
     let requests = emit_messages(&ctx, Direction::Request);
     let responses = emit_messages(&ctx, Direction::Response);
-    let pairing = emit_pairing(p);
+    let pairing = emit_pairing();
     let stream = emit_stream(p);
     let name = ident(&p.name);
     quote! {
@@ -366,33 +387,44 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let max_req = p.max_frame_len(Direction::Request);
     let max_resp = p.max_frame_len(Direction::Response);
     let max = max_req.max(max_resp);
+    let (max_req, max_resp, max) = (usize_lit(max_req), usize_lit(max_resp), usize_lit(max));
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.",
         p.title,
         name,
         if p.byte_order == ByteOrder::Little { "little-endian" } else { "big-endian" }
     ));
-    let (lo, hi) = (p.framing.address.min, p.framing.address.max);
-    let broadcast = match p.framing.address.broadcast {
-        Some(b) => quote!(::core::option::Option::Some(#b)),
-        None => quote!(::core::option::Option::None),
+    let (lo, hi) = (hex_u8(p.framing.address.min), hex_u8(p.framing.address.max));
+    let byte = |v: Option<u8>| match v {
+        Some(b) => {
+            let b = hex_u8(b);
+            quote!(rt::Some(#b))
+        }
+        None => quote!(rt::None),
     };
-    let host = match p.framing.address.host {
-        Some(h) => quote!(::core::option::Option::Some(#h)),
-        None => quote!(::core::option::Option::None),
+    let broadcast = byte(p.framing.address.broadcast);
+    let host = byte(p.framing.address.host);
+    let start = match (p.framing.head(1).start, p.framing.start) {
+        (Some(at), Some(s)) => {
+            let (at, s) = (usize_lit(at), hex_u8(s));
+            quote!(rt::Some((#at, #s)))
+        }
+        _ => quote!(rt::None),
     };
+    let checksum_len = usize_lit(p.framing.checksum.len());
+    let checksum_be = p.framing.checksum.byte_order == ByteOrder::Big;
     let baud = p.serial.baud;
     let optional = |v: Option<u32>| match v {
-        Some(v) => quote!(::core::option::Option::Some(#v)),
-        None => quote!(::core::option::Option::None),
+        Some(v) => quote!(rt::Some(#v)),
+        None => quote!(rt::None),
     };
     let gap = optional(p.serial.inter_frame_gap_ms);
     let rate = optional(p.serial.frame_rate.as_ref().map(|r| r.max_per_s));
     quote! {
         #inner
-        // Generated arithmetic is uniform across fields: shifts by 0, casts to the same type and
-        // `0 | x` are kept so every field reads the same way.
-        #![allow(clippy::identity_op, clippy::unnecessary_cast, clippy::no_effect, clippy::erasing_op, clippy::eq_op, clippy::iter_skip_zero, clippy::get_first)]
+        // Generated code is uniform across specs: a cast that is the identity for one field
+        // width, a conversion to `u32` of a 32-bit checksum, a `match` with one message.
+        #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
         /// The protocol's name in the spec.
         pub const PROTOCOL: &str = #name;
         /// The vendor document this module was generated from.
@@ -414,16 +446,26 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         /// The document's baud rate.
         pub const BAUD: u32 = #baud;
         /// The quiet time the document demands between frames, in milliseconds, if it says.
-        pub const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = #gap;
+        pub const INTER_FRAME_GAP_MS: rt::Option<u32> = #gap;
         /// The most frames per second the document allows, if it says.
-        pub const MAX_FRAMES_PER_S: ::core::option::Option<u32> = #rate;
+        pub const MAX_FRAMES_PER_S: rt::Option<u32> = #rate;
         /// Device addresses, inclusive.
-        pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = #lo..=#hi;
+        pub const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = #lo..=#hi;
         /// The broadcast address, if the protocol has one.
-        pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = #broadcast;
+        pub const BROADCAST_ADDRESS: rt::Option<u8> = #broadcast;
         /// The host's own address, if the spec gives one.
-        pub const HOST_ADDRESS: ::core::option::Option<u8> = #host;
+        pub const HOST_ADDRESS: rt::Option<u8> = #host;
         pub use ::busspec_runtime::Decoded;
+        use ::busspec_runtime::codec as rt;
+        /// What every frame shares, for the runtime's frame checks.
+        const FRAME: rt::Frame = rt::Frame {
+            start: #start,
+            devices: (#lo, #hi),
+            broadcast: BROADCAST_ADDRESS,
+            host: HOST_ADDRESS,
+            checksum_len: #checksum_len,
+            checksum_be: #checksum_be,
+        };
     }
 }
 
@@ -434,7 +476,7 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
             /// The frame checksum: 8-bit sum of every byte before it.
             #[inline]
             pub fn checksum(bytes: &[u8]) -> u8 {
-                ::busspec_runtime::sum8(bytes)
+                rt::sum8(bytes)
             }
         },
         ChecksumAlgorithm::Crc(k) => {
@@ -462,7 +504,7 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
             let d = format!(" {name}: the frame checksum, over every byte before it.");
             quote! {
                 #[doc = #d]
-                pub const CRC_ALGORITHM: ::busspec_runtime::crc::Algorithm<#ty> = ::busspec_runtime::crc::Algorithm {
+                pub const CRC_ALGORITHM: rt::crc::Algorithm<#ty> = rt::crc::Algorithm {
                     width: #w as u8,
                     poly: #poly,
                     init: #init,
@@ -474,7 +516,7 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                 };
                 // A static, not a const: one table in memory. Where `checksum` was not inlined,
                 // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, sd/checksum).
-                static CRC: ::busspec_runtime::crc::Crc<#ty> = ::busspec_runtime::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
+                static CRC: rt::crc::Crc<#ty> = rt::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
                 /// The frame checksum over `bytes`.
                 #[inline]
                 pub fn checksum(bytes: &[u8]) -> #ty {
@@ -530,12 +572,12 @@ fn emit_units(ctx: &Ctx) -> TokenStream {
                     self.0 as f64 * #sn / #sd + #on / #od
                 }
                 /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
-                pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-                    let raw = ::busspec_runtime::round((value - #on / #od) * #sd / #sn)?;
+                pub fn from_value(value: f64) -> rt::Option<Self> {
+                    let raw = rt::round((value - #on / #od) * #sd / #sn)?;
                     if !(#lo..=#hi).contains(&raw) {
-                        return ::core::option::Option::None;
+                        return rt::None;
                     }
-                    ::core::option::Option::Some(Self(raw as #r))
+                    rt::Some(Self(raw as #r))
                 }
             }
         });
@@ -583,7 +625,7 @@ fn emit_enums(ctx: &Ctx) -> TokenStream {
             .map(|v| {
                 let n = type_ident(&v.name);
                 let s = &v.name;
-                quote!(Self::#n => ::core::option::Option::Some(#s))
+                quote!(Self::#n => rt::Some(#s))
             })
             .collect();
         out.extend(quote! {
@@ -600,9 +642,9 @@ fn emit_enums(ctx: &Ctx) -> TokenStream {
             #[cfg(feature = "arbitrary")]
             impl<'a> ::arbitrary::Arbitrary<'a> for #ty {
                 fn arbitrary(u: &mut ::arbitrary::Unstructured<'a>) -> ::arbitrary::Result<Self> {
-                    ::core::result::Result::Ok(Self::from_raw(<#r as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
+                    rt::Ok(Self::from_raw(<#r as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
                 }
-                fn size_hint(depth: usize) -> (usize, ::core::option::Option<usize>) {
+                fn size_hint(depth: usize) -> (usize, rt::Option<usize>) {
                     <#r as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
                 }
             }
@@ -622,10 +664,10 @@ fn emit_enums(ctx: &Ctx) -> TokenStream {
                     }
                 }
                 /// The spec's name of this value, `None` for `Unknown`.
-                pub const fn name(self) -> ::core::option::Option<&'static str> {
+                pub const fn name(self) -> rt::Option<&'static str> {
                     match self {
                         #(#names,)*
-                        Self::Unknown(_) => ::core::option::Option::None,
+                        Self::Unknown(_) => rt::None,
                     }
                 }
             }
@@ -705,17 +747,56 @@ fn variant(m: &Message) -> Ident {
     type_ident(&m.name)
 }
 
-/// Reads a leaf's raw integer from the payload array `p`, as an `i64`-free expression of the
-/// wire type.
+/// A byte as the documents print it: `0x2A`.
+fn hex_u8(b: u8) -> TokenStream {
+    format!("0x{b:02X}").parse().unwrap_or_else(|_| quote!(#b))
+}
+
+/// A code as the documents print it, one or more bytes as one hex number: `0x4072`.
+fn hex_code(code: &[u8]) -> TokenStream {
+    let digits: String = code.iter().map(|b| format!("{b:02X}")).collect();
+    let v = code_value(code);
+    format!("0x{digits}").parse().unwrap_or_else(|_| quote!(#v))
+}
+
+fn code_value(code: &[u8]) -> u32 {
+    code.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b))
+}
+
+/// An unsuffixed hex literal.
+fn hex_lit(v: u64) -> TokenStream {
+    format!("{v:#X}")
+        .replace("0X", "0x")
+        .parse()
+        .unwrap_or_else(|_| quote!(#v))
+}
+
+fn usize_lit(v: usize) -> Literal {
+    Literal::usize_unsuffixed(v)
+}
+
+fn i64_lit(v: i64) -> Literal {
+    Literal::i64_unsuffixed(v)
+}
+
+/// The wire integer of field `f`, read from `frame`: one byte as is (or reinterpreted as
+/// `i8`), wider fields through `from_le_bytes`/`from_be_bytes`.
 fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
     let w = wire_type(f);
     let t = w.ident();
-    let idx: Vec<TokenStream> = (0..f.width)
-        .map(|i| {
-            let at = Literal::usize_unsuffixed(payload_at + f.offset + i);
-            quote!(frame[#at])
-        })
-        .collect();
+    let at = payload_at + f.offset;
+    if f.width == 1 {
+        let i = usize_lit(at);
+        return if w.signed {
+            quote!((frame[#i] as i8))
+        } else {
+            quote!(frame[#i])
+        };
+    }
+    let idx = (0..f.width).map(|i| {
+        let at = usize_lit(at + i);
+        quote!(frame[#at])
+    });
     let conv = match f.byte_order {
         ByteOrder::Little => format_ident!("from_le_bytes"),
         ByteOrder::Big => format_ident!("from_be_bytes"),
@@ -723,100 +804,104 @@ fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
     quote!(#t::#conv([#(#idx),*]))
 }
 
+/// The pattern binding every field of `m` to its `v_<name>` local (so that no spec name can
+/// shadow the generated code's own variables), or `Self::Name` without fields.
+fn binding(m: &Message, ls: &[Leaf]) -> TokenStream {
+    let v = variant(m);
+    if ls.is_empty() {
+        return quote!(Self::#v);
+    }
+    let fields = ls.iter().map(|l| {
+        let (n, v) = (ident(l.name), local(l.name));
+        quote!(#n: #v)
+    });
+    quote!(Self::#v { #(#fields),* })
+}
+
 fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let p = ctx.p;
     let (ty, what) = direction_names(d);
     let msgs = p.messages(d);
     let mut variants = Vec::new();
-    let mut names = Vec::new();
-    let mut codes = Vec::new();
-    let mut lens = Vec::new();
+    let mut rows = Vec::new();
+    let mut index_arms = Vec::new();
     let mut encode_arms = Vec::new();
     let mut visit_arms = Vec::new();
-    let mut decoders = Vec::new();
-    for m in msgs {
+    for (i, m) in msgs.iter().enumerate() {
         let v = variant(m);
         let ls = leaves(m);
-        let fields: Vec<TokenStream> = ls
-            .iter()
-            .map(|l| {
-                let n = ident(l.name);
-                let t = ctx.rust_type(l);
-                let d = doc(&leaf_doc(p, l));
-                quote!(#d #n: #t)
-            })
-            .collect();
-        // Fields bind to `v_<name>` locals so that no spec name (`address`, `frame`, `buf`)
-        // can shadow the generated code's own variables.
-        let pat_fields: Vec<TokenStream> = ls
-            .iter()
-            .map(|l| {
-                let (n, v) = (ident(l.name), local(l.name));
-                quote!(#n: #v)
-            })
-            .collect();
+        let fields = ls.iter().map(|l| {
+            let n = ident(l.name);
+            let t = ctx.rust_type(l);
+            let d = doc(&leaf_doc(p, l));
+            quote!(#d #n: #t)
+        });
         let d = doc(&format!(
-            "§{} {} (code `{}`, {} bytes).\n\n{}",
+            "§{} {} (code `{}`, {} bytes). {}",
             m.section,
             m.title,
             m.code_hex(),
             p.frame_len(m),
             m.doc
         ));
-        let pattern = if ls.is_empty() {
-            quote!(Self::#v)
-        } else {
-            quote!(Self::#v { #(#pat_fields),* })
-        };
         if ls.is_empty() {
             variants.push(quote!(#d #v));
         } else {
             variants.push(quote!(#d #v { #(#fields),* }));
         }
         let name = &m.name;
-        let code_bytes: Vec<u8> = m.code.clone();
+        let code = m.code.iter().map(|b| hex_u8(*b));
         let len = p.frame_len(m);
-        names.push(quote!(#pattern => #name));
-        codes.push(quote!(#pattern => &[#(#code_bytes),*]));
-        lens.push(quote!(#pattern => #len));
+        let (len, i) = (usize_lit(len), usize_lit(i));
+        rows.push(quote!((#name, &[#(#code),*], #len)));
+        let any = any_of(&ident("Self"), m);
+        index_arms.push(quote!(#any => #i));
+        let pattern = binding(m, &ls);
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls));
-        let visits = ls.iter().map(|l| {
-            let (n, v) = (l.name, local(l.name));
-            let value = match ctx.kind(l) {
-                Kind::Int(_) => quote!(::busspec_runtime::FieldValue::Int(*#v as i64)),
-                Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
-                    quote!(::busspec_runtime::FieldValue::Int(#v.raw() as i64))
-                }
-                Kind::Text(_) => quote!(::busspec_runtime::FieldValue::Text(&#v[..])),
-            };
-            quote!(f(#n, #value);)
-        });
-        visit_arms.push(quote!(#pattern => { #(#visits)* }));
-        decoders.push(emit_decode_fn(ctx, m, &ty, &ls));
+        let visits: Vec<TokenStream> = ls
+            .iter()
+            .map(|l| {
+                let (n, v) = (l.name, local(l.name));
+                let value = match ctx.kind(l) {
+                    Kind::Int(_) => quote!(rt::Int(*#v as i64)),
+                    Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
+                        quote!(rt::Int(#v.raw() as i64))
+                    }
+                    Kind::Text(_) => quote!(rt::Text(&#v[..])),
+                };
+                quote!(f(#n, #value))
+            })
+            .collect();
+        match visits.as_slice() {
+            [] => {}
+            [one] => visit_arms.push(quote!(#pattern => #one,)),
+            many => visit_arms.push(quote!(#pattern => { #(#many;)* })),
+        }
     }
-    let dispatch = emit_dispatch(p, d, &ty);
+    let (visit_param, visit_body) = if visit_arms.is_empty() {
+        (quote!(_f), quote!())
+    } else {
+        if visit_arms.len() < msgs.len() {
+            visit_arms.push(quote!(_ => {}));
+        }
+        (quote!(mut f), quote!(match self { #(#visit_arms)* }))
+    };
+    let n = usize_lit(msgs.len());
+    let dispatch = emit_dispatch(ctx, d, &ty);
     let from_fields = emit_from_fields(ctx, d);
     let command_info = if d == Direction::Request {
         emit_command_info(p)
     } else {
         quote!()
     };
-    let max = p.max_frame_len(d);
-    let addr_refused = address_refused(p, &quote!(address));
-    let (addr_lo, addr_hi) = (p.framing.address.min, p.framing.address.max);
-    let sum_len = p.framing.checksum.len();
-    let sum_conv = to_bytes(p.framing.checksum.byte_order);
-    let sum_after = if checksum_in_arms(p) {
-        quote!()
+    let seal = if checksum_in_arms(p) {
+        quote!(rt::Ok(len))
     } else {
+        let n = usize_lit(p.framing.checksum.len());
+        let be = p.framing.checksum.byte_order == ByteOrder::Big;
         quote! {
-            let available = buf.len();
-            let frame = buf
-                .get_mut(..len)
-                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall { needed: len, available })?;
-            let at = len - #sum_len;
-            let sum = checksum(&frame[..at]);
-            frame[at..].copy_from_slice(&sum.#sum_conv());
+            rt::seal(buf, len, |b| u32::from(checksum(b)), #n, #be);
+            rt::Ok(len)
         }
     };
     quote! {
@@ -829,44 +914,41 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             #(#variants,)*
         }
         impl #ty {
+            /// Each message's spec name, code and frame length, in spec order.
+            const MESSAGES: [(&'static str, &'static [u8], usize); #n] = [#(#rows),*];
+            /// This message's row in [`Self::MESSAGES`].
+            const fn index(&self) -> usize {
+                match self { #(#index_arms,)* }
+            }
             /// The spec's snake_case name of this message.
             pub const fn name(&self) -> &'static str {
-                #[allow(unused_variables)]
-                match self { #(#names,)* }
+                Self::MESSAGES[self.index()].0
             }
             /// The command or response code, as sent.
             pub const fn code(&self) -> &'static [u8] {
-                #[allow(unused_variables)]
-                match self { #(#codes,)* }
+                Self::MESSAGES[self.index()].1
             }
             /// The length of this message's frame, in bytes.
             pub const fn frame_len(&self) -> usize {
-                #[allow(unused_variables)]
-                match self { #(#lens,)* }
+                Self::MESSAGES[self.index()].2
             }
             /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
             /// field is signed), in frame order; constant and repeated fields are not visited.
-            pub fn visit(&self, mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)) {
-                let _ = &mut f;
-                #[allow(unused_variables)]
-                match self { #(#visit_arms)* }
+            pub fn visit(&self, #visit_param: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+                #visit_body
             }
             /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
             /// decode refuses: an address no frame may carry, the broadcast address for a command
             /// that does not accept it, a value outside its field's range.
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
-                let _ = #max;
-                if #addr_refused {
-                    return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress { address, min: #addr_lo, max: #addr_hi });
-                }
-                let len: usize = match *self { #(#encode_arms)* };
-                #sum_after
-                ::core::result::Result::Ok(len)
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                let len = match *self { #(#encode_arms)* };
+                #seal
             }
             #dispatch
             #from_fields
         }
-        impl ::busspec_runtime::Message for #ty {
+        impl rt::Message for #ty {
             #[inline]
             fn name(&self) -> &'static str {
                 #ty::name(self)
@@ -880,83 +962,82 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #ty::frame_len(self)
             }
             #[inline]
-            fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(&self, f: F) {
+            fn visit<F: FnMut(&'static str, rt::FieldValue<'_>)>(&self, f: F) {
                 #ty::visit(self, f)
             }
             #[inline]
-            fn encode(&self, address: u8, buf: &mut [u8]) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+            fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
                 #ty::encode(self, address, buf)
             }
             #[inline]
-            fn from_fields<'v, F: FnMut(&'static str) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>>(
+            fn from_fields<'v, F: FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>>(
                 name: &str,
                 field: F,
-            ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+            ) -> rt::Result<Self, rt::FieldError> {
                 #ty::from_fields(name, field)
             }
         }
         #command_info
-        #(#decoders)*
     }
 }
 
 /// `from_fields`: one arm per message, building it from the getter's raw value of each field,
 /// each checked against its wire type as the encoder checks it (`to_wire`), then typed as the
-/// decoder types it (`from_wire`).
+/// decoder types it (`from_wire`). Fields are asked for in frame order.
 fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
+    let field_param = if ctx.p.messages(d).iter().all(|m| leaves(m).is_empty()) {
+        quote!(_field)
+    } else {
+        quote!(mut field)
+    };
     let arms = ctx.p.messages(d).iter().map(|m| {
         let name = &m.name;
         let v = variant(m);
         let ls = leaves(m);
         if ls.is_empty() {
-            return quote!(#name => ::core::result::Result::Ok(Self::#v));
+            return quote!(#name => rt::Ok(Self::#v));
         }
-        let gets = ls.iter().map(|l| {
-            let (n, local) = (l.name, local(l.name));
+        let fields = ls.iter().map(|l| {
+            let (n, f) = (l.name, ident(l.name));
             let value = match ctx.kind(l) {
-                Kind::Text(width) => {
-                    let width = Literal::usize_unsuffixed(width);
-                    quote!(::busspec_runtime::field_text::<#width>(#n, field(#n))?)
+                Kind::Text(_) => quote!(rt::text(&mut field, #n)?),
+                _ if l.bits.is_none() => {
+                    let w = l.wire.ident();
+                    let get = match raw_of(ctx, l, &ident("x")) {
+                        Some((t, _)) if t == l.wire => quote!(rt::get(&mut field, #n)?),
+                        _ => quote!(rt::get::<#w>(&mut field, #n)?),
+                    };
+                    from_wire(ctx, l, Some(l.wire), get)
                 }
                 _ => {
                     let (lo, hi) = l
                         .bits
                         .map(|b| raw_limits(u32::from(b.width()), b.signed))
                         .unwrap_or(l.wire.limits());
-                    let (lo, hi) = (Literal::i64_unsuffixed(lo), Literal::i64_unsuffixed(hi));
+                    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
                     from_wire(
                         ctx,
                         l,
-                        quote!(::busspec_runtime::field_int(#n, field(#n), #lo, #hi)?),
+                        None,
+                        quote!(rt::field_int(#n, field(#n), #lo, #hi)?),
                     )
                 }
             };
-            quote!(let #local = #value;)
+            quote!(#f: #value)
         });
-        let fields = ls.iter().map(|l| {
-            let (n, v) = (ident(l.name), local(l.name));
-            quote!(#n: #v)
-        });
-        quote! {
-            #name => {
-                #(#gets)*
-                ::core::result::Result::Ok(Self::#v { #(#fields),* })
-            }
-        }
+        quote!(#name => rt::Ok(Self::#v { #(#fields),* }))
     });
     quote! {
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
         /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
-        #[allow(clippy::unnecessary_cast)]
         pub fn from_fields<'v>(
             name: &str,
-            mut field: impl FnMut(&'static str) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
-            let _ = &mut field;
+            #field_param: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
+        ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 #(#arms,)*
-                _ => ::core::result::Result::Err(::busspec_runtime::FieldError::UnknownMessage),
+                _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
     }
@@ -991,64 +1072,60 @@ fn leaf_doc(p: &Protocol, l: &Leaf) -> String {
     s.trim().to_owned()
 }
 
+/// The raw value of a typed value bound to `v`, of the type the value holds.
+fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenStream)> {
+    match ctx.kind(l) {
+        Kind::Int(t) => Some((t, quote!(#v))),
+        Kind::Unit { raw, .. } | Kind::Enum { raw, .. } | Kind::Flags { raw, .. } => {
+            Some((raw, quote!(#v.raw())))
+        }
+        Kind::Text(_) => None,
+    }
+}
+
 /// Converts a typed value bound to `v` into the wire integer of its field, with a range check
 /// when the typed value can hold more than the field.
-fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident) -> TokenStream {
+///
+/// `as_type` is the type wanted (the field's wire type where `None`); a sub-field's value is
+/// wanted as the whole field's type, to be shifted into place.
+fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident, as_type: Option<IntType>) -> TokenStream {
     let field_name = l.name;
     let wt = l.wire;
-    let w = wt.ident();
-    let (raw_t, raw_expr) = match ctx.kind(l) {
-        Kind::Int(t) => (t, quote!(#v)),
-        Kind::Unit { raw, .. } | Kind::Enum { raw, .. } | Kind::Flags { raw, .. } => {
-            (raw, quote!(#v.raw()))
-        }
-        Kind::Text(_) => return quote!(#v),
+    let target = as_type.unwrap_or(wt);
+    let w = target.ident();
+    let Some((raw_t, raw_expr)) = raw_of(ctx, l, v) else {
+        return quote!(#v);
     };
     let bits_limits = l.bits.map(|b| raw_limits(u32::from(b.width()), b.signed));
     let (lo, hi) = bits_limits.unwrap_or(wt.limits());
     let (rlo, rhi) = raw_t.limits();
     if lo <= rlo && rhi <= hi && raw_t == wt {
-        return raw_expr;
-    }
-    let (lo, hi) = (Literal::i64_unsuffixed(lo), Literal::i64_unsuffixed(hi));
-    quote! {{
-        let raw = #raw_expr as i64;
-        if !(#lo..=#hi).contains(&raw) {
-            return ::core::result::Result::Err(::busspec_runtime::EncodeError::OutOfRange { field: #field_name });
+        if raw_t == target {
+            return raw_expr;
         }
-        raw as #w
-    }}
-}
-
-/// The condition that the `u8` expression `a` is none of the addresses a frame may carry: the
-/// device range, the broadcast address and the host address (where the spec has them).
-/// Compares against constants only.
-fn address_refused(p: &Protocol, a: &TokenStream) -> TokenStream {
-    let ad = &p.framing.address;
-    let (lo, hi) = (ad.min, ad.max);
-    let mut others = Vec::new();
-    for x in [ad.broadcast, ad.host].into_iter().flatten() {
-        others.push(quote!(&& #a != #x));
+        return quote!(#raw_expr as #w);
     }
-    quote!(!(#lo..=#hi).contains(&#a) #(#others)*)
+    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+    quote!(rt::fits(#field_name, #raw_expr, #lo, #hi)? as #w)
 }
 
 /// The spec range of a leaf (a whole field or a sub-field) and the special values that may lie
-/// outside it (whole fields only).
-fn leaf_range(f: &Field, b: Option<&BitField>) -> Option<((i64, i64), Vec<i64>)> {
-    match b {
-        Some(b) => b.range.map(|r| (r, Vec::new())),
-        None => f
-            .range
-            .map(|r| (r, f.special.iter().map(|s| s.value).collect())),
+/// outside it (whole fields only), as the arguments of the runtime's range checks.
+fn leaf_range(f: &Field, b: Option<&BitField>) -> Option<(Ident, TokenStream)> {
+    let (range, special): ((i64, i64), Vec<i64>) = match b {
+        Some(b) => (b.range?, Vec::new()),
+        None => (f.range?, f.special.iter().map(|s| s.value).collect()),
+    };
+    let (lo, hi) = (i64_lit(range.0), i64_lit(range.1));
+    let sp: Vec<Literal> = special
+        .iter()
+        .filter(|v| !(range.0..=range.1).contains(*v))
+        .map(|v| i64_lit(*v))
+        .collect();
+    if sp.is_empty() {
+        return Some((ident("in_range"), quote!(#lo, #hi)));
     }
-}
-
-/// The condition that the `i64` local `raw` lies outside `range` and is none of `special`.
-fn outside(range: (i64, i64), special: &[i64]) -> TokenStream {
-    let (lo, hi) = (range.0, range.1);
-    let sp = special.iter().filter(|v| !(lo..=hi).contains(*v));
-    quote!(!(#lo..=#hi).contains(&raw) #(&& raw != #sp)*)
+    Some((ident("in_range_or"), quote!(#lo, #hi, &[#(#sp),*])))
 }
 
 /// The broadcast address, if `m` is a request for a command that does not accept it: encode and
@@ -1059,66 +1136,104 @@ fn refuses_broadcast(p: &Protocol, m: &Message) -> Option<u8> {
     (m.direction == Direction::Request && !accepted).then_some(b)
 }
 
+/// The wire bytes of constant `c` in a field of `width` bytes.
+fn constant_bytes(c: u64, width: usize, order: ByteOrder) -> Vec<u8> {
+    let le: Vec<u8> = (0..width).map(|i| (c >> (8 * i)) as u8).collect();
+    match order {
+        ByteOrder::Little => le,
+        ByteOrder::Big => le.into_iter().rev().collect(),
+    }
+}
+
+/// Indices of the fields another field repeats (`equals`): their wire value gets a name.
+fn repeated(m: &Message) -> Vec<usize> {
+    m.fields.iter().filter_map(|f| f.equals).collect()
+}
+
 fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -> TokenStream {
     let p = ctx.p;
-    let len = p.frame_len(m);
+    let len = usize_lit(p.frame_len(m));
     let o = m.layout;
-    let mut checks = Vec::new();
+    let mut stmts = Vec::new();
     if let Some(b) = refuses_broadcast(p, m) {
-        let name = &m.name;
-        checks.push(quote! {
-            if address == #b {
-                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BroadcastNotAccepted { message: #name, address });
-            }
-        });
+        let (name, b) = (&m.name, hex_u8(b));
+        stmts.push(quote!(rt::encode_broadcast(address, #b, #name)?;));
     }
     for l in ls {
-        let Some((range, special)) = leaf_range(l.field, l.bits) else {
+        let Some((range_fn, range)) = leaf_range(l.field, l.bits) else {
             continue;
         };
-        let v = local(l.name);
-        let raw = match ctx.kind(l) {
-            Kind::Int(_) => quote!(#v as i64),
-            Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => quote!(#v.raw() as i64),
-            Kind::Text(_) => continue,
+        let Some((_, raw)) = raw_of(ctx, l, &local(l.name)) else {
+            continue;
         };
-        let cond = outside(range, &special);
-        let (lo, hi) = range;
         let name = l.name;
-        checks.push(quote! {
-            let raw = #raw;
-            if #cond {
-                return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange { field: #name, value: raw, min: #lo, max: #hi });
-            }
-        });
+        let range_fn = format_ident!("encode_{}", range_fn);
+        stmts.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
     }
-    let mut writes = Vec::new();
+    // The bytes known without a field value (start byte, address, code, constant fields), one
+    // write per contiguous run.
+    let named = repeated(m);
+    let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
     if let (Some(at), Some(s)) = (o.start, p.framing.start) {
-        writes.push(quote!(out[#at] = #s;));
+        known[at] = Some(hex_u8(s));
     }
-    let addr_at = o.address;
-    writes.push(quote!(out[#addr_at] = address;));
+    known[o.address] = Some(quote!(address));
     for (i, b) in m.code.iter().enumerate() {
-        let at = o.code + i;
-        writes.push(quote!(out[#at] = #b;));
+        known[o.code + i] = Some(hex_u8(*b));
     }
     for (fi, f) in m.fields.iter().enumerate() {
-        let at = o.payload + f.offset;
-        let end = at + f.width;
+        if let (Some(c), false) = (f.constant, named.contains(&fi)) {
+            let bytes = constant_bytes(c, f.width, f.byte_order);
+            for (i, b) in bytes.into_iter().enumerate() {
+                known[o.payload + f.offset + i] = Some(hex_u8(b));
+            }
+        }
+    }
+    // The run from the first byte is written as the frame is taken from `buf`.
+    let first: Vec<TokenStream> = known.iter().map_while(Clone::clone).collect();
+    let mut i = first.len();
+    let take = quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?);
+    if i == known.len() {
+        let (check, end) = (stmts, encode_end(p, take));
+        return quote!(#pattern => { #(#check)* #end });
+    }
+    stmts.push(quote!(let out = #take;));
+    while i < known.len() {
+        let run: Vec<TokenStream> = known[i..].iter().map_while(Clone::clone).collect();
+        match run.as_slice() {
+            [] => i += 1,
+            [b] => {
+                let at = usize_lit(i);
+                stmts.push(quote!(out[#at] = #b;));
+                i += 1;
+            }
+            bytes => {
+                let (from, to) = (usize_lit(i), usize_lit(i + bytes.len()));
+                let from = if i == 0 { quote!() } else { quote!(#from) };
+                stmts.push(quote!(out[#from..#to].copy_from_slice(&[#(#bytes),*]);));
+                i += bytes.len();
+            }
+        }
+    }
+    for (fi, f) in m.fields.iter().enumerate() {
+        let at = usize_lit(o.payload + f.offset);
+        let end = usize_lit(o.payload + f.offset + f.width);
         let wt = wire_type(f);
         let w = wt.ident();
-        let value: TokenStream = if f.is_ascii() {
+        let unsigned = IntType {
+            bits: wt.bits,
+            signed: false,
+        };
+        if f.is_ascii() {
             let n = local(&f.name);
-            writes.push(quote!(out[#at..#end].copy_from_slice(&#n);));
+            stmts.push(quote!(out[#at..#end].copy_from_slice(&#n);));
             continue;
-        } else if let Some(c) = f.constant {
-            let l = lit_u(
-                c,
-                IntType {
-                    bits: wt.bits,
-                    signed: false,
-                },
-            );
+        }
+        if f.constant.is_some() && !named.contains(&fi) {
+            continue;
+        }
+        let value: TokenStream = if let Some(c) = f.constant {
+            let l = lit_u(c, unsigned);
             quote!(#l as #w)
         } else if let Some(other) = f.equals {
             let n = format_ident!("field_{}", other);
@@ -1127,75 +1242,76 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             let mut parts = Vec::new();
             for b in &f.bits {
                 let lsb = u32::from(b.lsb);
-                let mask = lit_u(
-                    (1u64 << b.width()) - 1,
-                    IntType {
-                        bits: wt.bits,
-                        signed: false,
-                    },
-                );
                 let part = match b.constant {
-                    Some(c) => {
-                        let l = lit_u(
-                            c,
-                            IntType {
-                                bits: wt.bits,
-                                signed: false,
-                            },
-                        );
-                        quote!(#l)
-                    }
+                    Some(0) => continue,
+                    Some(c) => hex_lit(c),
                     None => {
-                        let leaf = ls
-                            .iter()
-                            .find(|l| l.name == b.name)
-                            .expect("a leaf per sub-field");
-                        let n = local(&b.name);
-                        let v = to_wire(ctx, leaf, &n);
-                        let bt = bits_type(b).ident();
-                        quote!(((#v as #bt) as #w & #mask))
+                        let Some(leaf) = ls.iter().find(|l| l.name == b.name) else {
+                            continue;
+                        };
+                        let v = paren(to_wire(ctx, leaf, &local(&b.name), Some(unsigned)));
+                        if lsb + u32::from(b.width()) >= wt.bits {
+                            v
+                        } else {
+                            let mask = hex_lit((1u64 << b.width()) - 1);
+                            quote!(#v & #mask)
+                        }
                     }
                 };
-                parts.push(quote!((#part << #lsb)));
+                parts.push(if lsb == 0 {
+                    part
+                } else {
+                    let (lsb, part) = (Literal::u32_unsuffixed(lsb), paren(part));
+                    quote!(#part << #lsb)
+                });
             }
-            quote!(0 #(| #parts)*)
+            match parts.as_slice() {
+                [] => quote!(0),
+                [one] => one.clone(),
+                many => {
+                    let many = many.iter().cloned().map(paren);
+                    quote!(#(#many)|*)
+                }
+            }
         } else {
-            let leaf = ls
-                .iter()
-                .find(|l| l.bits.is_none() && l.name == f.name)
-                .expect("a leaf per field");
-            to_wire(ctx, leaf, &local(&f.name))
+            let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) else {
+                continue;
+            };
+            to_wire(ctx, leaf, &local(&f.name), None)
         };
-        let conv = match f.byte_order {
-            ByteOrder::Little => format_ident!("to_le_bytes"),
-            ByteOrder::Big => format_ident!("to_be_bytes"),
+        let conv = to_bytes(f.byte_order);
+        let put = |v: TokenStream| {
+            if f.width == 1 && !wt.signed {
+                quote!(out[#at] = #v;)
+            } else {
+                let v = paren(v);
+                quote!(out[#at..#end].copy_from_slice(&#v.#conv());)
+            }
         };
-        let n = format_ident!("field_{}", fi);
-        writes.push(quote! {
-            let #n: #w = #value;
-            out[#at..#end].copy_from_slice(&#n.#conv());
-        });
+        if named.contains(&fi) || !f.bits.is_empty() || f.constant.is_some() {
+            let n = format_ident!("field_{}", fi);
+            stmts.push(quote!(let #n: #w = #value;));
+            stmts.push(put(quote!(#n)));
+        } else {
+            stmts.push(put(value));
+        }
     }
-    if checksum_in_arms(p) {
-        let cat = o.checksum;
-        let cend = cat + p.framing.checksum.len();
-        let conv = to_bytes(p.framing.checksum.byte_order);
-        writes.push(quote! {
-            let sum = checksum(&out[..#cat]);
-            out[#cat..#cend].copy_from_slice(&sum.#conv());
-        });
-    }
+    let end = encode_end(p, quote!(out));
     quote! {
         #pattern => {
-            #(#checks)*
-            let available = buf.len();
-            let out: &mut [u8; #len] = buf
-                .get_mut(..#len)
-                .and_then(|s| s.try_into().ok())
-                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall { needed: #len, available })?;
-            #(#writes)*
-            #len
+            #(#stmts)*
+            #end
         }
+    }
+}
+
+/// An encoder arm's value, the frame length, from `out`, its frame: with a sum-8, once it is
+/// written into the last byte (each arm seals its own frame).
+fn encode_end(p: &Protocol, out: TokenStream) -> TokenStream {
+    if checksum_in_arms(p) {
+        quote!(rt::seal_sum8(#out))
+    } else {
+        quote!(#out.len())
     }
 }
 
@@ -1215,310 +1331,193 @@ fn to_bytes(order: ByteOrder) -> Ident {
     }
 }
 
-fn decode_fn_name(m: &Message) -> Ident {
-    format_ident!("decode_{}_{}", m.direction.as_str(), m.name)
-}
-
-/// A private function decoding the payload of one message from a frame of exactly its length,
-/// checksum already verified. Checks constants and repeated fields.
-fn emit_decode_fn(ctx: &Ctx, m: &Message, ty: &Ident, ls: &[Leaf]) -> TokenStream {
+/// Decoding one message from `frame`, a fixed-size array of exactly its length whose checksum
+/// is verified: the statements that check its constants, repeated fields, ranges and
+/// broadcast rule, and the expression building it.
+fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
     let p = ctx.p;
-    let len = p.frame_len(m);
+    let ls = leaves(m);
+    let ls = ls.as_slice();
     let o = m.layout;
-    let fname = decode_fn_name(m);
     let v = variant(m);
     let mut stmts = Vec::new();
     if let Some(b) = refuses_broadcast(p, m) {
         let name = &m.name;
-        let code = m.code.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b));
-        let at = o.address;
-        stmts.push(quote! {
-            if frame[#at] == #b {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BroadcastNotAccepted { message: #name, code: #code, address: #b });
-            }
-        });
+        let code = hex_code(&m.code);
+        let (at, b) = (usize_lit(o.address), hex_u8(b));
+        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code)?;));
     }
+    let named = repeated(m);
+    // Each leaf's value: an expression over `frame` or over a named wire value.
+    let mut values: Vec<(Ident, TokenStream)> = Vec::new();
+    // Each field's wire value: its read from `frame`, or the name it is bound to.
+    let mut wires: Vec<TokenStream> = Vec::new();
     for (fi, f) in m.fields.iter().enumerate() {
         let n = format_ident!("field_{}", fi);
-        let at = o.payload + f.offset;
+        let at = usize_lit(o.payload + f.offset);
         let name = &f.name;
         if f.is_ascii() {
-            let end = at + f.width;
-            let width = f.width;
-            let fname_ident = local(&f.name);
-            stmts.push(quote! {
-                let mut #fname_ident = [0u8; #width];
-                #fname_ident.copy_from_slice(&frame[#at..#end]);
-            });
+            let end = usize_lit(o.payload + f.offset + f.width);
+            let width = usize_lit(f.width);
+            values.push((
+                ident(name),
+                quote!(frame[#at..#end].try_into().unwrap_or([0; #width])),
+            ));
+            wires.push(quote!());
             continue;
         }
         let read = read_wire(f, o.payload);
-        let w = wire_type(f).ident();
-        stmts.push(quote!(let #n: #w = #read;));
+        let wt = wire_type(f);
+        let w = wt.ident();
+        let unsigned = IntType {
+            bits: wt.bits,
+            signed: false,
+        };
+        let (range_fn, range) = match leaf_range(f, None) {
+            Some((range_fn, range)) if f.bits.is_empty() => (range_fn, Some(range)),
+            _ => (ident("in_range"), None),
+        };
+        // A field read more than once is read into a local (a one-byte read is as short as
+        // its name).
+        let uses = usize::from(f.constant.is_some())
+            + usize::from(f.equals.is_some())
+            + usize::from(range.is_some())
+            + usize::from(named.contains(&fi))
+            + f.bits
+                .iter()
+                .map(|b| 1 + usize::from(b.constant.is_none() && b.range.is_some()))
+                .sum::<usize>()
+            + usize::from(f.bits.is_empty() && f.constant.is_none() && f.equals.is_none());
+        let wire = if f.width > 1 && uses > 1 {
+            stmts.push(quote!(let #n: #w = #read;));
+            quote!(#n)
+        } else {
+            read
+        };
+        wires.push(wire.clone());
         if let Some(c) = f.constant {
-            let l = lit_u(
-                c,
-                IntType {
-                    bits: wire_type(f).bits,
-                    signed: false,
-                },
-            );
-            stmts.push(quote! {
-                if #n as u64 != #l as u64 {
-                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue { field: #name, offset: #at, found: #n as u32 });
-                }
-            });
+            let l = hex_lit(c);
+            stmts.push(quote!(rt::equal(#name, #at, #wire, #l)?;));
         }
         if let Some(other) = f.equals {
-            let on = format_ident!("field_{}", other);
-            stmts.push(quote! {
-                if #n != #on {
-                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue { field: #name, offset: #at, found: #n as u32 });
-                }
-            });
+            let on = wires.get(other).cloned().unwrap_or_default();
+            stmts.push(quote!(rt::same(#name, #at, #wire, #on)?;));
         }
-        if let (true, Some((range, special))) = (f.bits.is_empty(), leaf_range(f, None)) {
-            let cond = outside(range, &special);
-            let (lo, hi) = range;
-            stmts.push(quote! {
-                let raw = #n as i64;
-                if #cond {
-                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange { field: #name, offset: #at, found: raw, min: #lo, max: #hi });
-                }
-            });
+        if let Some(range) = range {
+            stmts.push(quote!(rt::#range_fn(#name, #at, #wire, #range)?;));
         }
         if f.bits.is_empty() {
             if f.constant.is_none() && f.equals.is_none() {
-                let leaf = ls
-                    .iter()
-                    .find(|l| l.bits.is_none() && l.name == f.name)
-                    .expect("leaf");
-                let fid = local(&f.name);
-                let conv = from_wire(ctx, leaf, quote!(#n));
-                stmts.push(quote!(let #fid = #conv;));
+                if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
+                    values.push((ident(&f.name), from_wire(ctx, leaf, Some(wt), wire)));
+                }
             }
             continue;
         }
-        let ut = IntType {
-            bits: wire_type(f).bits,
-            signed: false,
-        }
-        .ident();
+        let ut = unsigned.ident();
+        // The wire value as unsigned bits.
+        let bits = if wt.signed {
+            quote!(#wire as #ut)
+        } else {
+            wire.clone()
+        };
         for b in &f.bits {
             let lsb = u32::from(b.lsb);
             let width = u32::from(b.width());
-            let mask = lit_u(
-                (1u64 << width) - 1,
-                IntType {
-                    bits: wire_type(f).bits,
-                    signed: false,
-                },
-            );
+            let mask = hex_lit((1u64 << width) - 1);
             let bt = bits_type(b);
             let btid = bt.ident();
+            let shifted = if lsb == 0 {
+                bits.clone()
+            } else {
+                let (lsb, bits) = (Literal::u32_unsuffixed(lsb), paren(bits.clone()));
+                quote!(#bits >> #lsb)
+            };
+            let field = if lsb + width >= wt.bits {
+                shifted
+            } else {
+                let shifted = paren(shifted);
+                quote!(#shifted & #mask)
+            };
+            let field_p = paren(field.clone());
             let extract = if b.signed {
-                let shift = bt.bits - width;
+                let shift = Literal::u32_unsuffixed(bt.bits - width);
                 let ubt = IntType {
                     bits: bt.bits,
                     signed: false,
                 }
                 .ident();
-                quote!((((((#n as #ut) >> #lsb) & #mask) as #ubt) << #shift) as #btid >> #shift)
+                quote!(((#field_p as #ubt) << #shift) as #btid >> #shift)
             } else {
-                quote!((((#n as #ut) >> #lsb) & #mask) as #btid)
+                quote!(#field_p as #btid)
             };
             let bname = &b.name;
             match b.constant {
                 Some(c) => {
-                    let l = lit_u(
-                        c,
-                        IntType {
-                            bits: wire_type(f).bits,
-                            signed: false,
-                        },
-                    );
-                    stmts.push(quote! {
-                        if ((#n as #ut) >> #lsb) & #mask != #l {
-                            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue { field: #bname, offset: #at, found: (((#n as #ut) >> #lsb) & #mask) as u32 });
-                        }
-                    });
+                    let l = hex_lit(c);
+                    stmts.push(quote!(rt::equal(#bname, #at, #field, #l)?;));
                 }
                 None => {
-                    if let Some((range, special)) = leaf_range(f, Some(b)) {
-                        let cond = outside(range, &special);
-                        let (lo, hi) = range;
-                        stmts.push(quote! {
-                            let raw = (#extract) as i64;
-                            if #cond {
-                                return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange { field: #bname, offset: #at, found: raw, min: #lo, max: #hi });
-                            }
-                        });
+                    if let Some((range_fn, range)) = leaf_range(f, Some(b)) {
+                        stmts.push(quote!(rt::#range_fn(#bname, #at, #extract, #range)?;));
                     }
-                    let leaf = ls.iter().find(|l| l.name == b.name).expect("leaf");
-                    let bid = local(&b.name);
-                    let conv = from_wire(ctx, leaf, extract);
-                    stmts.push(quote!(let #bid = #conv;));
+                    if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
+                        values.push((ident(&b.name), from_wire(ctx, leaf, Some(bt), extract)));
+                    }
                 }
             }
         }
     }
-    let names: Vec<TokenStream> = ls
-        .iter()
-        .map(|l| {
-            let (n, v) = (ident(l.name), local(l.name));
-            quote!(#n: #v)
-        })
-        .collect();
+    let fields = values.iter().map(|(n, v)| quote!(#n: #v));
     let build = if ls.is_empty() {
-        quote!(#ty::#v)
+        quote!(Self::#v)
     } else {
-        quote!(#ty::#v { #(#names),* })
+        quote!(Self::#v { #(#fields),* })
     };
-    quote! {
-        #[inline]
-        #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-        fn #fname(frame: &[u8; #len]) -> ::core::result::Result<#ty, ::busspec_runtime::DecodeError> {
-            let _ = frame;
-            #(#stmts)*
-            ::core::result::Result::Ok(#build)
-        }
-    }
+    (stmts, build)
 }
 
-fn from_wire(ctx: &Ctx, l: &Leaf, raw: TokenStream) -> TokenStream {
+/// The typed value of leaf `l` from `raw`, an expression of type `wire` (`None`: an `i64`).
+fn from_wire(ctx: &Ctx, l: &Leaf, wire: Option<IntType>, raw: TokenStream) -> TokenStream {
     match ctx.kind(l) {
+        Kind::Int(t) if Some(t) == wire => raw,
         Kind::Int(t) => {
-            let t = t.ident();
+            let (t, raw) = (t.ident(), paren(raw));
             quote!(#raw as #t)
         }
+        Kind::Unit { ty, raw: r } | Kind::Enum { ty, raw: r } | Kind::Flags { ty, raw: r }
+            if Some(r) == wire =>
+        {
+            quote!(#ty::from_raw(#raw))
+        }
         Kind::Unit { ty, raw: r } | Kind::Enum { ty, raw: r } | Kind::Flags { ty, raw: r } => {
-            let r = r.ident();
+            let (r, raw) = (r.ident(), paren(raw));
             quote!(#ty::from_raw(#raw as #r))
         }
         Kind::Text(_) => raw,
     }
 }
 
-/// `decode` (and, for responses, `decode_reply`): checks length, start byte and checksum, then
-/// dispatches on the code. Messages sharing a code are told apart by length, then constants.
-fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
-    let unknown = match d {
-        Direction::Request => ident("UnknownCommand"),
-        Direction::Response => ident("UnknownResponse"),
-    };
-    // An unknown code is quoted with as many bytes as this direction's longest code.
-    let longest_code = p
-        .framing
-        .direction(d)
-        .code_lengths
-        .iter()
-        .copied()
-        .max()
-        .unwrap_or(1);
-    let msgs = p.messages(d);
-    let c = &p.framing.checksum;
-    let clen = c.len();
-    let min_len = msgs.iter().map(|m| p.frame_len(m)).min().unwrap_or(0);
-    let max_len = p.max_frame_len(d);
-    let code_len = |l: usize| p.framing.head(l).code;
-    let replies = d == Direction::Response;
-    let start_check = match (p.framing.head(1).start, p.framing.start) {
-        (Some(at), Some(s)) => quote! {
-            if let ::core::option::Option::Some(&found) = frame.get(#at) {
-                if found != #s {
-                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart { expected: #s, found });
-                }
-            }
-        },
-        _ => quote!(),
-    };
-    let conv = match c.byte_order {
-        ByteOrder::Little => format_ident!("from_le_bytes"),
-        ByteOrder::Big => format_ident!("from_be_bytes"),
-    };
-    let cty = format_ident!("u{}", c.width);
-    // One match per code length; codes are prefix-free within a direction (validated).
-    let mut lens: Vec<usize> = msgs.iter().map(|m| m.code.len()).collect();
-    lens.sort_unstable();
-    lens.dedup();
-    let mut by_code_len = Vec::new();
-    for l in lens {
-        let at = code_len(l);
-        let code_expr = (0..l).fold(quote!(0u32), |acc, i| {
-            let x = at + i;
-            let shift = 8 * (l - 1 - i) as u32;
-            quote!(#acc | ((frame[#x] as u32) << #shift))
-        });
-        let mut codes: Vec<&[u8]> = Vec::new();
-        for m in msgs.iter().filter(|m| m.code.len() == l) {
-            if !codes.contains(&m.code.as_slice()) {
-                codes.push(&m.code);
-            }
-        }
-        let mut arms = Vec::new();
-        for code in codes {
-            let value = code.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b));
-            let group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
-            let tries: Vec<TokenStream> = group
-                .iter()
-                .map(|m| emit_candidate(p, m, &group, value, replies))
-                .collect();
-            let expected = group.iter().map(|m| p.frame_len(m)).min().unwrap_or(0);
-            let lit = Literal::u32_unsuffixed(value);
-            let fallback = if replies {
-                quote! {
-                    if admitted {
-                        ::busspec_runtime::DecodeError::WrongLength { expected: #expected, found: frame.len() }
-                    } else {
-                        ::busspec_runtime::DecodeError::NotAReply { code: #value }
-                    }
-                }
-            } else {
-                quote!(::busspec_runtime::DecodeError::WrongLength { expected: #expected, found: frame.len() })
-            };
-            let admitted = if replies {
-                quote!(let mut admitted = false;)
-            } else {
-                quote!()
-            };
-            let (found, take_found) = if group.iter().any(|m| is_ambiguous(p, m, &group)) {
-                (
-                    quote!(let mut found: ::core::option::Option<#ty> = ::core::option::Option::None;),
-                    quote! {
-                        if let ::core::option::Option::Some(m) = found {
-                            return ::core::result::Result::Ok(Decoded { address, message: m });
-                        }
-                    },
-                )
-            } else {
-                (quote!(), quote!())
-            };
-            arms.push(quote! {
-                #lit => {
-                    #admitted
-                    #found
-                    #(#tries)*
-                    #take_found
-                    return ::core::result::Result::Err(last.unwrap_or(#fallback));
-                }
-            });
-        }
-        let need = at + l + clen;
-        by_code_len.push(quote! {
-            if frame.len() >= #need {
-                let code: u32 = #code_expr;
-                #[allow(unreachable_patterns)]
-                match code {
-                    #(#arms)*
-                    _ => {}
-                }
-            }
-        });
+/// `e` in parentheses if it has a binary operator or a cast at its top level, so it can take a
+/// cast or a method call.
+fn paren(e: TokenStream) -> TokenStream {
+    let bare = e.clone().into_iter().all(|t| match t {
+        proc_macro2::TokenTree::Punct(p) => !"<>&|+-*/%^".contains(p.as_char()),
+        proc_macro2::TokenTree::Ident(i) => i != "as",
+        _ => true,
+    });
+    if bare {
+        e
+    } else {
+        quote!((#e))
     }
-    let first_code_at = code_len(1);
-    // Where the code precedes the address, the address sits after a code of this direction's
-    // only length; the validator restricts such layouts to one code length.
-    let addr_at = if p.framing.layout.iter().position(|x| *x == Part::Code)
+}
+
+/// Where the address of a frame of direction `d` is. Where the code precedes the address, the
+/// address sits after a code of this direction's only length; the validator restricts such
+/// layouts to one code length.
+fn address_at(p: &Protocol, d: Direction) -> usize {
+    if p.framing.layout.iter().position(|x| *x == Part::Code)
         < p.framing.layout.iter().position(|x| *x == Part::Address)
     {
         let l = p
@@ -1531,37 +1530,114 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         p.framing.head(l).address
     } else {
         p.framing.head(1).address
+    }
+}
+
+/// `decode` (and, for responses, `decode_reply`): the frame checks shared by every message
+/// (`rt::check_frame`), then `dispatch`, one `match` on the code per code length, each arm
+/// decoding its message from the frame as a fixed-size array. Messages sharing a code are
+/// told apart by length, then constants (`rt::Group`).
+fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
+    let p = ctx.p;
+    // An unknown code is quoted with as many bytes as this direction's longest code.
+    let longest_code = p
+        .framing
+        .direction(d)
+        .code_lengths
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(1);
+    let msgs = p.messages(d);
+    let clen = p.framing.checksum.len();
+    let min_len = msgs.iter().map(|m| p.frame_len(m)).min().unwrap_or(0);
+    let max_len = p.max_frame_len(d);
+    let code_at = |l: usize| p.framing.head(l).code;
+    let replies = d == Direction::Response;
+    let first_code_at = usize_lit(code_at(1));
+    let unknown = {
+        let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
+        quote!(rt::Err(rt::unknown_code(frame, #first_code_at, #longest_code, #clen, #replies)))
     };
-    let addr_refused = address_refused(p, &quote!(address));
-    let (addr_lo, addr_hi) = (p.framing.address.min, p.framing.address.max);
-    let body = quote! {
-        if frame.len() > #max_len {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong { max: #max_len, found: frame.len() });
+    // One match per code length, shortest first; codes are prefix-free within a direction
+    // (validated). The last is the function's value.
+    let mut lens: Vec<usize> = msgs.iter().map(|m| m.code.len()).collect();
+    lens.sort_unstable();
+    lens.dedup();
+    let mut body = Vec::new();
+    for (li, &l) in lens.iter().enumerate() {
+        let last = li + 1 == lens.len();
+        let at = code_at(l);
+        let mut codes: Vec<&[u8]> = Vec::new();
+        for m in msgs.iter().filter(|m| m.code.len() == l) {
+            if !codes.contains(&m.code.as_slice()) {
+                codes.push(&m.code);
+            }
         }
-        #start_check
-        if frame.len() < #min_len {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated { needed: #min_len, found: frame.len() });
+        let arms = codes.into_iter().map(|code| {
+            let group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
+            let lit = hex_code(code);
+            let arm = emit_group(ctx, &group, replies);
+            if last {
+                quote!(#lit => #arm,)
+            } else {
+                quote!(#lit => return #arm,)
+            }
+        });
+        let need = at + l + clen;
+        let (at, l) = (usize_lit(at), usize_lit(l));
+        if !last {
+            let need = usize_lit(need);
+            body.push(quote! {
+                if frame.len() >= #need {
+                    match rt::code(frame, #at, #l) {
+                        #(#arms)*
+                        _ => {}
+                    }
+                }
+            });
+            continue;
         }
-        let at = frame.len() - #clen;
-        let mut sum_bytes = [0u8; #clen];
-        sum_bytes.copy_from_slice(&frame[at..]);
-        let found = #cty::#conv(sum_bytes);
-        let expected = checksum(&frame[..at]);
-        if found != expected {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch { offset: at, expected: expected as u32, found: found as u32 });
+        if need > min_len {
+            let need = usize_lit(need);
+            body.push(quote! {
+                if frame.len() < #need {
+                    return #unknown;
+                }
+            });
         }
-        let address = frame[#addr_at];
-        if #addr_refused {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress { offset: #addr_at, found: address, min: #addr_lo, max: #addr_hi });
+        body.push(quote! {
+            match rt::code(frame, #at, #l) {
+                #(#arms)*
+                _ => #unknown,
+            }
+        });
+    }
+    let addr_at = usize_lit(address_at(p, d));
+    let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
+    let mask = reply_mask(p);
+    let (request_param, request_arg, asked) = if replies {
+        (
+            quote!(, request: rt::Option<&Request>),
+            quote!(, request),
+            // The responses the request may get, bit i for row i of MESSAGES.
+            quote!(let asked: #mask = request.map_or(!0, Request::replies);),
+        )
+    } else {
+        (quote!(), quote!(), quote!())
+    };
+    let checks = quote! {
+        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, |b| u32::from(checksum(b)))?;
+        let message = Self::dispatch(frame #request_arg)?;
+        rt::Ok(Decoded { address, message })
+    };
+    let dispatch = quote! {
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &[u8] #request_param) -> rt::DecodeResult<Self> {
+            #asked
+            #(#body)*
         }
-        #[allow(unused_mut)]
-        let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
-        #(#by_code_len)*
-        let mut code = 0u32;
-        for b in frame.iter().skip(#first_code_at).take(frame.len().saturating_sub(#first_code_at + #clen).min(#longest_code)) {
-            code = (code << 8) | *b as u32;
-        }
-        ::core::result::Result::Err(::busspec_runtime::DecodeError::#unknown { offset: #first_code_at, code })
     };
     let doc_decode = quote! {
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -1571,9 +1647,10 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
     if !replies {
         return quote! {
             #doc_decode
-            pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
-                #body
+            pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                #checks
             }
+            #dispatch
         };
     }
     quote! {
@@ -1582,21 +1659,22 @@ fn emit_dispatch(p: &Protocol, d: Direction, ty: &Ident) -> TokenStream {
         /// Responses that only their request tells apart are reported as
         /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
         #[inline]
-        pub fn decode(frame: &[u8]) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
-            Self::decode_for(frame, ::core::option::Option::None)
+        pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
         }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
         /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
         #[inline]
-        pub fn decode_reply(frame: &[u8], request: &Request) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
-            Self::decode_for(frame, ::core::option::Option::Some(request))
+        pub fn decode_reply(frame: &[u8], request: &Request) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
         }
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
         /// [`Self::decode_reply`].
-        fn decode_for(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<#ty>, ::busspec_runtime::DecodeError> {
-            #body
+        fn decode_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+            #checks
         }
+        #dispatch
     }
 }
 
@@ -1612,76 +1690,81 @@ fn is_ambiguous(p: &Protocol, m: &Message, group: &[&Message]) -> bool {
             > 1
 }
 
-/// One candidate message for a frame whose code matched: try its decoder if the frame has its
-/// length (and, for a reply, if the request may get it).
-fn emit_candidate(
-    p: &Protocol,
-    m: &Message,
-    group: &[&Message],
-    value: u32,
-    replies: bool,
-) -> TokenStream {
-    let len = p.frame_len(m);
-    let f = decode_fn_name(m);
-    // Several `needs_request` responses with this code and length: without the request, a frame
-    // that decodes as one of them is ambiguous.
-    let ambiguous = is_ambiguous(p, m, group);
-    // Without the request, a frame that decodes as one of them is ambiguous only if it also
-    // decodes as another (their constants may tell them apart).
-    let on_ok = if ambiguous {
-        quote! {
-            if request.is_none() {
-                if found.is_some() {
-                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::Ambiguous { code: #value });
-                }
-                found = ::core::option::Option::Some(m);
-            } else {
-                return ::core::result::Result::Ok(Decoded { address, message: m });
+/// The dispatch arm for the messages of one code: a lone message is decoded in the arm (a
+/// reply once the request admits it); several are tried in spec order by `rt::Group`, each
+/// decoder a closure over the frame as an array of its length.
+fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
+    let p = ctx.p;
+    let admitted = |m: &Message| {
+        if replies {
+            let i = p
+                .responses
+                .iter()
+                .position(|r| r.name == m.name)
+                .unwrap_or(0) as u32;
+            if i == 0 {
+                return quote!(asked & 1 != 0);
             }
-        }
-    } else {
-        quote!(return ::core::result::Result::Ok(Decoded { address, message: m });)
-    };
-    let attempt = quote! {
-        if let ::core::result::Result::Ok(a) = <&[u8; #len]>::try_from(frame) {
-            match #f(a) {
-                ::core::result::Result::Ok(m) => { #on_ok }
-                ::core::result::Result::Err(e) => { last = ::core::option::Option::Some(e); }
-            }
+            let i = Literal::u32_unsuffixed(i);
+            quote!(asked >> #i & 1 != 0)
+        } else {
+            quote!(true)
         }
     };
-    if !replies {
-        return attempt;
+    let value = hex_code(&group[0].code);
+    if let [m] = group {
+        let len = usize_lit(p.frame_len(m));
+        let frame = if replies {
+            let a = admitted(m);
+            quote!(rt::reply::<#len>(frame, #a, #value))
+        } else {
+            quote!(rt::fixed::<#len>(frame))
+        };
+        let (stmts, build) = decode_body(ctx, m);
+        if stmts.is_empty() && !build.to_string().contains("frame") {
+            return quote!(#frame.map(|_| #build));
+        }
+        return quote! {{
+            let frame = #frame?;
+            #(#stmts)*
+            rt::Ok(#build)
+        }};
     }
-    let idx = p.responses.iter().position(|r| r.name == m.name);
-    let askers: Vec<TokenStream> = p
-        .commands
-        .iter()
-        .filter(|c| c.responses.iter().any(|(r, _)| Some(*r) == idx))
-        .map(|c| any_of(&ident("Request"), c))
-        .collect();
-    let admits = if askers.is_empty() {
+    let tries = group.iter().map(|m| {
+        let len = usize_lit(p.frame_len(m));
+        let (stmts, build) = decode_body(ctx, m);
+        let decode = if stmts.is_empty() && !build.to_string().contains("frame") {
+            quote!(|_: &[u8; #len]| rt::Ok(#build))
+        } else {
+            quote!(|frame: &[u8; #len]| {
+                #(#stmts)*
+                rt::Ok(#build)
+            })
+        };
+        let a = admitted(m);
+        if is_ambiguous(p, m, group) {
+            quote!(g.ambiguous(#a, #decode);)
+        } else {
+            quote!(g.attempt(#a, #decode);)
+        }
+    });
+    let expected = usize_lit(group.iter().map(|m| p.frame_len(m)).min().unwrap_or(0));
+    let alone = if replies {
         quote!(request.is_none())
     } else {
-        quote! {
-            match request {
-                ::core::option::Option::None => true,
-                ::core::option::Option::Some(r) => matches!(r, #(#askers)|*),
-            }
-        }
+        quote!(true)
     };
-    quote! {
-        if #admits {
-            admitted = true;
-            #attempt
-        }
-    }
+    quote! {{
+        let mut g = rt::Group::new(frame, #value, #alone);
+        #(#tries)*
+        g.end(#expected, #replies)
+    }}
 }
 
 /// The stream decoder's view of the protocol: every distinct frame length (longest first) and a
-/// `candidates` function that narrows them by start byte and code, as a trie of matches on the
-/// code bytes. Not by address: a frame from an address the spec does not allow is still a frame,
-/// which the stream decoder reports as out of spec (strict decoding says why).
+/// `candidates` function that narrows them by start byte and code, one `match` arm per code and
+/// per code prefix. Not by address: a frame from an address the spec does not allow is still a
+/// frame, which the stream decoder reports as out of spec (strict decoding says why).
 fn emit_stream(p: &Protocol) -> TokenStream {
     let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
         .iter()
@@ -1704,15 +1787,35 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     let first = p.framing.head(1);
     let code_at = first.code;
     let start_check = match (first.start, p.framing.start) {
-        (Some(at), Some(s)) => quote! {
-            if head.get(#at).is_some_and(|&b| b != #s) {
-                return ::busspec_runtime::stream::Candidates { requests: 0, responses: 0 };
+        (Some(at), Some(s)) => {
+            let (at, s) = (head_byte(at), hex_u8(s));
+            quote! {
+                if #at.is_some_and(|&b| b != #s) {
+                    return rt::Candidates { requests: 0, responses: 0 };
+                }
             }
-        },
+        }
         _ => quote!(),
     };
-    let trie = code_trie(&shapes, code_at, 0);
-    let lens = lengths.iter().map(|l| quote!(#l));
+    let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
+    let mut arms = Vec::new();
+    flat_trie(&shapes, 0, depth, &mut Vec::new(), 0, &mut arms);
+    let arms = arms.into_iter().map(|(pat, mask)| {
+        let mask = mask_lit(mask);
+        let pat = if pat.len() == 1 {
+            pat.into_iter().collect::<TokenStream>()
+        } else {
+            quote!((#(#pat),*))
+        };
+        quote!(#pat => #mask,)
+    });
+    let bytes: Vec<TokenStream> = (0..depth).map(|i| head_byte(code_at + i)).collect();
+    let scrutinee = if depth == 1 {
+        quote!(#(#bytes)*)
+    } else {
+        quote!((#(#bytes),*))
+    };
+    let lens = lengths.iter().map(|l| usize_lit(*l));
     let ty = type_ident(&p.name);
     let naks: Vec<TokenStream> = p
         .responses
@@ -1721,24 +1824,16 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         .map(|r| any_of(&ident("Response"), r))
         .collect();
     let is_nak = if naks.is_empty() {
-        quote!({
-            let _ = response;
-            false
-        })
+        quote!(false)
     } else {
         quote!(matches!(response, #(#naks)|*))
     };
-    let ck_len = p.framing.checksum.len();
-    let found = match (p.framing.checksum.width, p.framing.checksum.byte_order) {
-        (8, _) => quote!(tail[0]),
-        (_, ByteOrder::Big) => quote!(checksum(body).to_be_bytes() == *tail),
-        (_, ByteOrder::Little) => quote!(checksum(body).to_le_bytes() == *tail),
-    };
-    let checksum_ok = if p.framing.checksum.width == 8 {
-        quote!(checksum(body) == #found)
+    let nak_param = if naks.is_empty() {
+        quote!(_response)
     } else {
-        found
+        quote!(response)
     };
+    let ck_len = usize_lit(p.framing.checksum.len());
     let doc_text = format!(
         "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",
         p.name
@@ -1748,7 +1843,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         #type_doc
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
         pub struct #ty;
-        impl ::busspec_runtime::Protocol for #ty {
+        impl rt::Protocol for #ty {
             type Request = Request;
             type Response = Response;
             type Buffer = [u8; MAX_FRAME_LEN];
@@ -1763,17 +1858,17 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
             const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
             const BAUD: u32 = BAUD;
-            const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = INTER_FRAME_GAP_MS;
-            const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
-            const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
-            const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
-            const HOST_ADDRESS: ::core::option::Option<u8> = HOST_ADDRESS;
+            const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
+            const MAX_FRAMES_PER_S: rt::Option<u32> = MAX_FRAMES_PER_S;
+            const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
+            const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
+            const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
             #[inline]
-            fn decode_request(frame: &[u8]) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+            fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
                 Request::decode(frame)
             }
             #[inline]
-            fn decode_response_for(frame: &[u8], request: ::core::option::Option<&Request>) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+            fn decode_response_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
                 Response::decode_for(frame, request)
             }
             #[inline]
@@ -1781,29 +1876,29 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                 response.answers(request)
             }
             #[inline]
-            fn kind(request: &Request) -> ::busspec_runtime::CommandKind {
+            fn kind(request: &Request) -> rt::CommandKind {
                 request.kind()
             }
             #[inline]
-            fn broadcast(request: &Request) -> ::busspec_runtime::Broadcast {
+            fn broadcast(request: &Request) -> rt::Broadcast {
                 request.broadcast()
             }
-            fn is_nak(response: &Response) -> bool {
+            fn is_nak(#nak_param: &Response) -> bool {
                 #is_nak
             }
             fn checksum_ok(frame: &[u8]) -> bool {
                 match frame.len().checked_sub(#ck_len) {
-                    ::core::option::Option::Some(n) if n > 0 => {
-                        let (body, tail) = frame.split_at(n);
-                        #checksum_ok
-                    }
+                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b))),
                     _ => false,
                 }
             }
-            fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
+            fn candidates(head: &[u8]) -> rt::Candidates {
                 #start_check
-                let mask: u128 = #trie;
-                ::busspec_runtime::stream::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
+                let mask: u128 = match #scrutinee {
+                    #(#arms)*
+                    _ => 0,
+                };
+                rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
@@ -1813,49 +1908,59 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     }
 }
 
-/// The candidate mask for code bytes from `depth` on, among `shapes` whose first `depth` code
-/// bytes already matched: a byte not yet buffered leaves every shape below; a shape whose code
-/// ends here matches whatever follows.
-fn code_trie(shapes: &[(&[u8], u128)], code_at: usize, depth: usize) -> TokenStream {
-    let all = mask_lit(shapes.iter().fold(0, |a, s| a | s.1));
+/// The byte at `at` of the buffered head, if it is there.
+fn head_byte(at: usize) -> TokenStream {
+    if at == 0 {
+        return quote!(head.first());
+    }
+    let at = usize_lit(at);
+    quote!(head.get(#at))
+}
+
+/// The candidate masks by code bytes as flat `match` arms over the `depth` code bytes, most
+/// specific first: `None` where a byte is not yet buffered (every shape with the prefix so far
+/// remains), `Some(b)` per next code byte, and `Some(_)` for shapes whose code already ended
+/// (they match whatever follows). `extra` holds the shapes that ended above.
+fn flat_trie(
+    shapes: &[(&[u8], u128)],
+    at: usize,
+    depth: usize,
+    prefix: &mut Vec<TokenStream>,
+    extra: u128,
+    arms: &mut Vec<(Vec<TokenStream>, u128)>,
+) {
+    let all = shapes.iter().fold(extra, |a, s| a | s.1);
     let ended = shapes
         .iter()
-        .filter(|s| s.0.len() == depth)
-        .fold(0u128, |a, s| a | s.1);
-    let mut next: Vec<u8> = shapes
-        .iter()
-        .filter_map(|s| s.0.get(depth).copied())
-        .collect();
+        .filter(|s| s.0.len() == at)
+        .fold(extra, |a, s| a | s.1);
+    let mut next: Vec<u8> = shapes.iter().filter_map(|s| s.0.get(at).copied()).collect();
     next.sort_unstable();
     next.dedup();
+    let rest = |p: &[TokenStream], first: TokenStream| {
+        let mut v = p.to_vec();
+        v.push(first);
+        v.resize(depth, quote!(_));
+        v
+    };
     if next.is_empty() {
-        return quote!(#all);
+        arms.push((rest(prefix, quote!(_)), all));
+        return;
     }
-    let at = code_at + depth;
-    let arms = next.iter().map(|b| {
+    arms.push((rest(prefix, quote!(rt::None)), all));
+    for b in next {
         let below: Vec<(&[u8], u128)> = shapes
             .iter()
-            .filter(|s| s.0.get(depth) == Some(b))
+            .filter(|s| s.0.get(at) == Some(&b))
             .copied()
             .collect();
-        let sub = code_trie(&below, code_at, depth + 1);
-        let b: TokenStream = format!("{b:#04x}").parse().unwrap_or_else(|_| quote!(#b));
-        quote!(#b => #sub,)
-    });
-    let ended_expr = if ended == 0 {
-        quote!()
-    } else {
-        let e = mask_lit(ended);
-        quote!(#e |)
-    };
-    quote! {
-        match head.get(#at) {
-            ::core::option::Option::None => #all,
-            ::core::option::Option::Some(&b) => #ended_expr match b {
-                #(#arms)*
-                _ => 0,
-            },
-        }
+        let lit = hex_u8(b);
+        prefix.push(quote!(rt::Some(#lit)));
+        flat_trie(&below, at + 1, depth, prefix, ended, arms);
+        prefix.pop();
+    }
+    if ended != 0 {
+        arms.push((rest(prefix, quote!(_)), ended));
     }
 }
 
@@ -1865,44 +1970,59 @@ fn mask_lit(v: u128) -> TokenStream {
     format!("{v:#x}").parse().unwrap_or_else(|_| quote!(#lit))
 }
 
-/// What the spec says of each command beyond its frame: its kind and how it treats the
-/// broadcast address, for transaction layers (what may be retried, what expects no answer).
+/// What the spec says of each command beyond its frame, as a table: its kind, how it treats
+/// the broadcast address (for transaction layers: what may be retried, what expects no
+/// answer), and the responses it may get (bit `i`: row `i` of `Response::MESSAGES`).
 fn emit_command_info(p: &Protocol) -> TokenStream {
-    let mut kinds = Vec::new();
-    let mut broadcasts = Vec::new();
+    let n = usize_lit(p.commands.len());
+    let mut rows = Vec::new();
     for c in &p.commands {
-        let pat = any_of(&ident("Request"), c);
         // Every command has a command kind (the validator builds them so).
-        let MessageKind::Command(kind) = &c.kind else {
-            continue;
+        let kind = match &c.kind {
+            MessageKind::Command(CommandKind::Movement) => quote!(rt::Movement),
+            MessageKind::Command(CommandKind::CompletionCheck) => quote!(rt::CompletionCheck),
+            MessageKind::Command(CommandKind::Setter) => quote!(rt::Setter),
+            MessageKind::Command(CommandKind::Reset) => quote!(rt::Reset),
+            _ => quote!(rt::Getter),
         };
-        let kind = match kind {
-            CommandKind::Movement => quote!(Movement),
-            CommandKind::CompletionCheck => quote!(CompletionCheck),
-            CommandKind::Setter => quote!(Setter),
-            CommandKind::Getter => quote!(Getter),
-            CommandKind::Reset => quote!(Reset),
-        };
-        kinds.push(quote!(#pat => ::busspec_runtime::CommandKind::#kind));
         let (accepted, answered) = c
             .broadcast
             .as_ref()
             .map_or((false, false), |b| (b.accepted, b.answered));
-        broadcasts
-            .push(quote!(#pat => ::busspec_runtime::Broadcast { accepted: #accepted, answered: #answered }));
+        let replies = c.responses.iter().fold(0u128, |a, (r, _)| a | 1 << r);
+        let replies = mask_lit(replies);
+        rows.push(quote!((#kind, #accepted, #answered, #replies)));
     }
+    let mask = reply_mask(p);
     quote! {
         impl Request {
+            /// Each command's kind, whether it accepts and answers the broadcast address, and the
+            /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
+            const COMMANDS: [(rt::CommandKind, bool, bool, #mask); #n] = [#(#rows),*];
             /// What the command does, as the spec classifies it.
-            pub const fn kind(&self) -> ::busspec_runtime::CommandKind {
-                match self { #(#kinds,)* }
+            pub const fn kind(&self) -> rt::CommandKind {
+                Self::COMMANDS[self.index()].0
             }
             /// Whether the command may go to the broadcast address, and whether it is then
             /// answered.
-            pub const fn broadcast(&self) -> ::busspec_runtime::Broadcast {
-                match self { #(#broadcasts,)* }
+            pub const fn broadcast(&self) -> rt::Broadcast {
+                let c = Self::COMMANDS[self.index()];
+                rt::Broadcast { accepted: c.1, answered: c.2 }
+            }
+            /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
+            const fn replies(&self) -> #mask {
+                Self::COMMANDS[self.index()].3
             }
         }
+    }
+}
+
+/// The integer type of a set of responses, one bit each.
+fn reply_mask(p: &Protocol) -> Ident {
+    if p.responses.len() <= 64 {
+        ident("u64")
+    } else {
+        ident("u128")
     }
 }
 
@@ -1916,22 +2036,12 @@ fn any_of(ty: &Ident, m: &Message) -> TokenStream {
     }
 }
 
-fn emit_pairing(p: &Protocol) -> TokenStream {
-    let mut arms = Vec::new();
-    for c in &p.commands {
-        let cpat = any_of(&ident("Request"), c);
-        let rs: Vec<TokenStream> = c
-            .responses
-            .iter()
-            .map(|(r, _)| any_of(&ident("Response"), &p.responses[*r]))
-            .collect();
-        arms.push(quote!(#cpat => matches!(self, #(#rs)|*)));
-    }
+fn emit_pairing() -> TokenStream {
     quote! {
         impl Response {
             /// Whether this response is one the document says `request` may get.
             pub fn answers(&self, request: &Request) -> bool {
-                match request { #(#arms,)* }
+                request.replies() >> self.index() & 1 != 0
             }
         }
     }

@@ -8,7 +8,13 @@
 //!   rules (gap between commands, timeouts, safe retries, the freshness counter, broadcasts)
 //!   and the long operations built on them (UB2 movements and C-curve table, SD movements and
 //!   string readouts).
-//! - [`transport`]: serial ports (through `serialport`) and the trait the rest is written to.
+//! - [`transport`]: serial ports (through `serialport`, feature `serial`, on by default) and
+//!   the trait the rest is written to.
+//! - `tokio_driver` (feature `tokio`): the same master, async, over `tokio-serial`.
+//!
+//! Every rule of a transaction lives in the `no_std` sans-IO core, `busspec-link-core`
+//! ([`busspec_link_core::MasterCore`]); [`Master`] and the tokio driver only carry out what it
+//! says. Firmware uses the core's own `embedded-io` and `embedded-io-async` drivers.
 //! - [`sim`]: UB2 and SD device simulators on the generated codec, a simulated bus that holds
 //!   several of them, and a loop that serves them on a real port (a pseudo-terminal).
 //! - [`fault`]: a transport wrapper that damages traffic, seeded and replayable.
@@ -17,18 +23,25 @@
 //! - [`clock`]: real or simulated time; everything that waits asks a clock, so tests and soaks
 //!   run in CPU time.
 
+pub use busspec_link_core;
+
 pub mod clock;
 pub mod fault;
 pub mod master;
 pub mod protocol;
 pub mod sim;
 pub mod soak;
+#[cfg(feature = "tokio")]
+pub mod tokio_driver;
 pub mod transport;
 
+pub use busspec_link_core::{DriverEnable, Line};
 pub use busspec_protocols::sd::Sd;
 pub use busspec_protocols::ub2::Ub2;
 pub use busspec_runtime::{Message, Protocol};
 pub use clock::{Clock, SimClock, SystemClock};
 pub use master::{Exchange, LinkError, Master, Progress, Timing, TraceEvent};
 pub use protocol::Link;
-pub use transport::{SerialTransport, Transport};
+#[cfg(feature = "serial")]
+pub use transport::SerialTransport;
+pub use transport::Transport;

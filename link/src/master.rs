@@ -29,52 +29,22 @@
 
 use std::fmt;
 use std::io;
-use std::marker::PhantomData;
 use std::time::Duration;
+
+use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply};
+pub use busspec_link_core::master::{Rejection, Timing};
+pub use busspec_link_core::movement::{ub2_completion_check, MoveReport};
+use busspec_link_core::movement::{MoveError, Movement, SdMove, Step, Ub2Movement};
+use busspec_link_core::Line;
 
 use busspec_protocols::sd::{self, Sd};
 use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::{CommandKind, EncodeError, Message, Protocol};
+use busspec_protocols::{EncodeError, Message, Protocol};
 
 use crate::clock::Clock;
 use crate::protocol::{byte_order_source, declared_byte_order, swapped_byte_order};
 use crate::protocol::{ByteOrderCheck, Link};
 use crate::transport::Transport;
-
-/// Line timing of a master.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Timing {
-    /// How long to wait for the first byte of a reply.
-    pub reply_timeout: Duration,
-    /// Quiet time after a byte that ends a reply.
-    pub byte_gap: Duration,
-    /// Quiet time the line must have after a timeout before the next request goes out.
-    pub settle: Duration,
-    /// Minimum time between the end of one exchange and the next request.
-    pub inter_request_gap: Duration,
-    /// Sends of one request at most, where retrying is safe.
-    pub attempts: u32,
-}
-
-impl Timing {
-    /// Defaults for a protocol: its documented gap, and timeouts generous for its baud rate.
-    pub fn for_protocol<P: Link>() -> Timing {
-        // The documents give no reply time. UB2 runs at 19,200 baud with a 10 ms command gap;
-        // SD at 115,200 baud and 50 frames per second, i.e. one exchange every 20 ms.
-        let reply_timeout = if P::BAUD >= 100_000 {
-            Duration::from_millis(50)
-        } else {
-            Duration::from_millis(200)
-        };
-        Timing {
-            reply_timeout,
-            byte_gap: Duration::from_millis(5),
-            settle: reply_timeout,
-            inter_request_gap: P::INTER_REQUEST_GAP,
-            attempts: 3,
-        }
-    }
-}
 
 /// A transaction that did not produce a usable reply, with what and where.
 #[derive(Debug)]
@@ -130,6 +100,27 @@ pub enum LinkError {
         /// The declared byte order and the other one, as words.
         declared: &'static str,
         other: &'static str,
+    },
+    /// The line echoes what the master sends, and the echo differed from the request at
+    /// `offset`: another transmitter drove the bus at the same time.
+    Collision {
+        protocol: &'static str,
+        request: &'static str,
+        address: u8,
+        attempts: u32,
+        sent: Vec<u8>,
+        offset: usize,
+        expected: u8,
+        received: u8,
+    },
+    /// The line is set to echo, but only `received` bytes of the request came back.
+    NoEcho {
+        protocol: &'static str,
+        request: &'static str,
+        address: u8,
+        attempts: u32,
+        sent: Vec<u8>,
+        received: usize,
     },
     /// A movement did not finish within the time allowed.
     MovementTimeout {
@@ -231,6 +222,35 @@ impl fmt::Display for LinkError {
                     )
                 }
             }
+            LinkError::Collision {
+                protocol,
+                request,
+                address,
+                attempts,
+                sent,
+                offset,
+                expected,
+                received,
+            } => write!(
+                f,
+                "{protocol} {request} to address 0x{address:02X}: collision on the bus ({attempts} attempt{}): the echo of {} differs at offset {offset}: expected 0x{expected:02X}, received 0x{received:02X}",
+                plural(*attempts),
+                hex(sent)
+            ),
+            LinkError::NoEcho {
+                protocol,
+                request,
+                address,
+                attempts,
+                sent,
+                received,
+            } => write!(
+                f,
+                "{protocol} {request} to address 0x{address:02X}: the line echoes, but only {received} of the {} bytes of {} came back ({attempts} attempt{})",
+                sent.len(),
+                hex(sent),
+                plural(*attempts)
+            ),
             LinkError::MovementTimeout {
                 protocol,
                 request,
@@ -294,19 +314,16 @@ pub enum TraceEvent<'a> {
 
 type Observer = Box<dyn FnMut(&TraceEvent<'_>)>;
 
-/// A bus master for protocol `P` over transport `T`, timed by clock `C`.
+/// A bus master for protocol `P` over transport `T`, timed by clock `C`: the blocking `std`
+/// driver of [`MasterCore`], which keeps every rule; this loop only does what it says.
 pub struct Master<P: Link, T: Transport, C: Clock> {
     transport: T,
     clock: C,
-    timing: Timing,
-    /// When the line was last busy (our send or a received byte), if ever.
-    last_activity: Option<Duration>,
-    /// Last freshness counter sent, per address.
-    freshness: [Option<u8>; 256],
-    /// The byte-order check that passed, per address ([`Link::byte_order_probe`]).
+    core: MasterCore<P>,
+    /// The byte-order check that passed, per address ([`Link::byte_order_probe`]); valid while
+    /// the core still counts the address as checked.
     byte_order: Vec<Option<ByteOrderCheck>>,
     observer: Option<Observer>,
-    _protocol: PhantomData<P>,
 }
 
 impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
@@ -314,22 +331,26 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         Master {
             transport,
             clock,
-            timing: Timing::for_protocol::<P>(),
-            last_activity: None,
-            freshness: [None; 256],
+            core: MasterCore::new(),
             byte_order: vec![None; 256],
             observer: None,
-            _protocol: PhantomData,
         }
     }
 
     pub fn with_timing(mut self, timing: Timing) -> Self {
-        self.timing = timing;
+        self.core.set_timing(timing);
+        self
+    }
+
+    /// The port's line: baud rate, frame bits and RS485 habits (echo, driver enable,
+    /// turnaround).
+    pub fn with_line(mut self, line: Line) -> Self {
+        self.core.set_line(line);
         self
     }
 
     pub fn timing(&self) -> Timing {
-        self.timing
+        self.core.timing()
     }
 
     pub fn clock(&self) -> &C {
@@ -345,72 +366,34 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         self.observer = Some(Box::new(f));
     }
 
-    fn trace(&mut self, e: TraceEvent<'_>) {
-        if let Some(f) = self.observer.as_mut() {
-            f(&e);
-        }
-    }
-
-    fn io(&self, context: &str, source: io::Error) -> LinkError {
-        LinkError::Io {
-            context: format!("{} {context}", P::NAME),
-            source,
-        }
-    }
-
     /// Forgets the freshness counter of `address`, so the next request that carries one
     /// re-reads it.
     pub fn forget_freshness(&mut self, address: u8) {
-        self.freshness[usize::from(address)] = None;
+        self.core.forget_freshness(address);
     }
 
     /// Sets the last freshness counter sent to `address`, e.g. when another master sent before.
     pub fn set_freshness(&mut self, address: u8, last: u8) {
-        self.freshness[usize::from(address)] = Some(Self::wrap(u16::from(last)));
+        self.core.set_freshness(address, last);
     }
 
     /// The freshness counter the next request to `address` that carries one will carry, if known.
     pub fn next_freshness_value(&self, address: u8) -> Option<u8> {
-        self.freshness[usize::from(address)].map(|v| Self::wrap(u16::from(v) + 1))
-    }
-
-    /// `v` modulo [`Link::FRESHNESS_MODULUS`].
-    fn wrap(v: u16) -> u8 {
-        // The remainder is below the modulus, at most 256: it fits.
-        (v % P::FRESHNESS_MODULUS.max(1)) as u8
-    }
-
-    /// The freshness counter the next request to `address` that carries one carries.
-    fn next_freshness(&mut self, address: u8) -> Result<u8, LinkError> {
-        // The value before 0: with nothing known, counting starts at 0.
-        let before_zero = Self::wrap(P::FRESHNESS_MODULUS.max(1) - 1);
-        let last = match self.freshness[usize::from(address)] {
-            Some(v) => v,
-            None if Some(address) == P::BROADCAST_ADDRESS => before_zero,
-            None => match P::freshness_readout() {
-                Some(readout) => {
-                    let ex = self.transact(address, readout)?;
-                    ex.response
-                        .as_ref()
-                        .and_then(P::freshness_from_reply)
-                        .unwrap_or(before_zero)
-                }
-                None => before_zero,
-            },
-        };
-        let next = Self::wrap(u16::from(last) + 1);
-        self.freshness[usize::from(address)] = Some(next);
-        Ok(next)
+        self.core.next_freshness_value(address)
     }
 
     /// The byte-order check `address` passed, if it has been checked (and not forgotten since).
     pub fn byte_order_checked(&self, address: u8) -> Option<&ByteOrderCheck> {
-        self.byte_order[usize::from(address)].as_ref()
+        if self.core.byte_order_checked(address) {
+            self.byte_order[usize::from(address)].as_ref()
+        } else {
+            None
+        }
     }
 
     /// Forgets every byte-order check, so the next movement to each address checks again.
     pub fn forget_byte_order_checks(&mut self) {
-        self.byte_order.iter_mut().for_each(|c| *c = None);
+        self.core.forget_byte_order_checks();
     }
 
     /// Makes sure `address` sends its numbers in the byte order the spec declares, before a
@@ -424,164 +407,93 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         address: u8,
         request: &P::Request,
     ) -> Result<Option<&ByteOrderCheck>, LinkError> {
-        let probe = P::byte_order_probe();
-        if probe.is_empty() || Some(address) == P::BROADCAST_ADDRESS {
+        if P::byte_order_probe().is_empty() || Some(address) == P::BROADCAST_ADDRESS {
             return Ok(None);
         }
-        if self.byte_order[usize::from(address)].is_none() {
-            let mut replies = Vec::with_capacity(probe.len());
-            for q in &probe {
-                replies.push(self.ask(address, *q)?);
-            }
-            let Some(check) = P::byte_order_check(&replies) else {
-                let names: Vec<&str> = replies.iter().map(Message::name).collect();
-                return Err(LinkError::Refused {
-                    protocol: P::NAME,
-                    request: request.name(),
-                    address,
-                    response: replies.first().map_or("nothing", Message::name),
-                    detail: format!(
-                        "not sent: the byte-order check before the first movement read {} \
-                         to {}",
-                        names.join(", "),
-                        probe
-                            .iter()
-                            .map(Message::name)
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                });
-            };
-            if !check.declared_fits {
-                return Err(LinkError::ByteOrder {
-                    protocol: P::NAME,
-                    request: request.name(),
-                    address,
-                    check: Box::new(check),
-                    source: byte_order_source::<P>(),
-                    declared: declared_byte_order::<P>(),
-                    other: swapped_byte_order::<P>(),
-                });
-            }
-            self.byte_order[usize::from(address)] = Some(check);
-        }
-        Ok(self.byte_order[usize::from(address)].as_ref())
+        self.core.start_byte_order_check(address, *request);
+        self.run()?;
+        Ok(self.byte_order_checked(address))
     }
 
-    fn check_address(&self, request: &P::Request, address: u8) -> Result<bool, LinkError> {
-        let broadcast = P::broadcast(request);
-        let err = |reason: String| LinkError::Address {
-            protocol: P::NAME,
-            request: request.name(),
-            address,
-            reason,
-        };
-        if Some(address) == P::BROADCAST_ADDRESS {
-            if !broadcast.accepted {
-                return Err(err(
-                    "this command does not accept the broadcast address".to_owned()
-                ));
-            }
-            return Ok(true);
-        }
-        if !P::DEVICE_ADDRESSES.contains(&address) {
-            return Err(err(format!(
-                "not a device address (0x{:02X}..=0x{:02X}{})",
-                P::DEVICE_ADDRESSES.start(),
-                P::DEVICE_ADDRESSES.end(),
-                match P::BROADCAST_ADDRESS {
-                    Some(b) => format!(", or broadcast 0x{b:02X}"),
-                    None => String::new(),
-                }
-            )));
-        }
-        Ok(false)
-    }
-
-    /// Decodes `bytes` as the reply to `request` sent to `address`.
-    fn accept(
-        bytes: &[u8],
-        request: &P::Request,
-        address: u8,
-        broadcast: bool,
-    ) -> Result<P::Response, String> {
-        let reply = P::decode_reply(bytes, request).map_err(|e| e.to_string())?;
-        let (from, response) = (reply.address, reply.message);
-        if broadcast {
-            if !P::DEVICE_ADDRESSES.contains(&from) {
-                return Err(format!(
-                    "reply carries address 0x{from:02X}, not a device address"
-                ));
-            }
-        } else if from != P::reply_address(request, address) {
-            return Err(format!(
-                "reply comes from address 0x{from:02X}, expected 0x{:02X}",
-                P::reply_address(request, address)
-            ));
-        }
-        Ok(response)
-    }
-
-    /// Reads one reply: until it decodes, or the line goes quiet after some bytes, or the
-    /// reply timeout passes with none. Returns what arrived (empty on timeout).
-    fn read_reply(
-        &mut self,
-        request: &P::Request,
-        address: u8,
-        broadcast: bool,
-    ) -> Result<Vec<u8>, LinkError> {
-        let start = self.clock.now();
-        let deadline = start + self.timing.reply_timeout;
-        let mut got = Vec::new();
+    /// Runs the core's operation to its end: the blocking driver loop.
+    fn run(&mut self) -> Result<Reply<P>, LinkError> {
         let mut chunk = [0u8; 64];
-        // A babbling line cannot keep us here: a reply is never longer than this.
-        let cap = 4 * P::MAX_FRAME_LEN;
         loop {
             let now = self.clock.now();
-            let wait = if got.is_empty() {
-                if now >= deadline {
-                    break;
-                }
-                deadline - now
-            } else {
-                self.timing.byte_gap
+            let io = |context: &str, source: io::Error| LinkError::Io {
+                context: format!("{} {context}", P::NAME),
+                source,
             };
-            let n = self
-                .transport
-                .read(&mut chunk, wait)
-                .map_err(|e| self.io("read", e))?;
-            if n == 0 {
-                if !got.is_empty() {
-                    break;
+            match self.core.poll(now) {
+                Action::Done => break,
+                Action::Sleep(t) => self.clock.sleep_until(t),
+                Action::ClearInput => self
+                    .transport
+                    .clear_input()
+                    .map_err(|e| io("clear input", e))?,
+                Action::EnableDriver => self
+                    .transport
+                    .set_driver_enable(true)
+                    .map_err(|e| io("raise driver enable", e))?,
+                Action::DisableDriver => self
+                    .transport
+                    .set_driver_enable(false)
+                    .map_err(|e| io("lower driver enable", e))?,
+                Action::Write(bytes) => self.transport.write(bytes).map_err(|e| io("write", e))?,
+                Action::Read { until } => {
+                    let n = self
+                        .transport
+                        .read(&mut chunk, until.saturating_sub(now))
+                        .map_err(|e| io("read", e))?;
+                    if n > 0 {
+                        self.core.received(&chunk[..n], self.clock.now());
+                    }
                 }
-                continue;
             }
-            self.last_activity = Some(self.clock.now());
-            got.extend_from_slice(&chunk[..n]);
-            if got.len() >= cap || Self::accept(&got, request, address, broadcast).is_ok() {
-                break;
-            }
+            self.trace_events();
         }
-        Ok(got)
+        self.trace_events();
+        match self.core.take_outcome() {
+            Some(Ok(reply)) => {
+                let check = self.core.take_byte_order_check();
+                if let (Some(check), Some((address, _))) = (check, self.core.target()) {
+                    self.byte_order[usize::from(address)] = Some(check);
+                }
+                Ok(reply)
+            }
+            Some(Err(failure)) => Err(link_error(&mut self.core, failure)),
+            None => unreachable!("the core says Done only with an outcome"),
+        }
     }
 
-    /// Waits until the line has been quiet for `settle`, discarding what arrives (bounded).
-    fn settle(&mut self) -> Result<(), LinkError> {
-        let limit = self.clock.now() + 4 * self.timing.settle;
-        let mut chunk = [0u8; 64];
-        while self.clock.now() < limit {
-            let n = self
-                .transport
-                .read(&mut chunk, self.timing.settle)
-                .map_err(|e| self.io("read", e))?;
-            if n == 0 {
-                break;
-            }
-            self.last_activity = Some(self.clock.now());
-            let bytes = chunk[..n].to_vec();
-            self.trace(TraceEvent::Discarded { bytes: &bytes });
+    fn trace_events(&mut self) {
+        while let Some(event) = self.core.take_event() {
+            self.trace(event);
         }
-        Ok(())
+    }
+
+    fn trace(&mut self, event: Event) {
+        let Some(f) = self.observer.as_mut() else {
+            return;
+        };
+        match event {
+            Event::Sent { attempt } => f(&TraceEvent::Sent {
+                attempt,
+                bytes: self.core.sent(),
+            }),
+            Event::Received { attempt, rejected } => {
+                let reason = rejected.map(|r| r.to_string());
+                f(&TraceEvent::Received {
+                    attempt,
+                    bytes: self.core.reply(),
+                    rejected: reason.as_deref(),
+                })
+            }
+            Event::NoReply { attempt } => f(&TraceEvent::NoReply { attempt }),
+            Event::Discarded => f(&TraceEvent::Discarded {
+                bytes: self.core.reply(),
+            }),
+        }
     }
 
     /// Sends `request` to `address` and returns the paired reply.
@@ -590,125 +502,9 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         address: u8,
         request: P::Request,
     ) -> Result<Exchange<P::Response>, LinkError> {
-        let broadcast = self.check_address(&request, address)?;
-        if P::forgets_byte_order_checks(&request) {
-            self.forget_byte_order_checks();
-        }
-        let answered = P::broadcast(&request).answered;
-        let mut request = request;
-        if P::freshness_mut(&mut request).is_some() {
-            let next = self.next_freshness(address)?;
-            if let Some(f) = P::freshness_mut(&mut request) {
-                *f = next;
-            }
-        }
-        let name = request.name();
-        let mut frame = vec![0u8; P::MAX_FRAME_LEN];
-        let len = request
-            .encode(address, &mut frame)
-            .map_err(|source| LinkError::Encode {
-                request: name,
-                source,
-            })?;
-        frame.truncate(len);
-        let expects_reply = !broadcast || answered;
-        let allowed = if P::retry_safe(&request) {
-            self.timing.attempts.max(1)
-        } else {
-            1
-        };
-        let mut last_error = None;
-        for attempt in 1..=allowed {
-            if let Some(t) = self.last_activity {
-                self.clock.sleep_until(t + self.timing.inter_request_gap);
-            }
-            self.transport
-                .clear_input()
-                .map_err(|e| self.io("clear input", e))?;
-            self.transport
-                .write(&frame)
-                .map_err(|e| self.io("write", e))?;
-            self.last_activity = Some(self.clock.now());
-            self.trace(TraceEvent::Sent {
-                attempt,
-                bytes: &frame,
-            });
-            if !expects_reply {
-                return Ok(Exchange {
-                    response: None,
-                    address,
-                    attempts: attempt,
-                    frame: Vec::new(),
-                    sent: frame,
-                });
-            }
-            let got = self.read_reply(&request, address, broadcast)?;
-            if got.is_empty() {
-                self.trace(TraceEvent::NoReply { attempt });
-                last_error = Some(LinkError::NoReply {
-                    protocol: P::NAME,
-                    request: name,
-                    address,
-                    attempts: attempt,
-                    timeout: self.timing.reply_timeout,
-                });
-                self.settle()?;
-                continue;
-            }
-            match Self::accept(&got, &request, address, broadcast) {
-                Ok(response) => {
-                    self.trace(TraceEvent::Received {
-                        attempt,
-                        bytes: &got,
-                        rejected: None,
-                    });
-                    // The request arrived damaged: a line failure, not the device's answer.
-                    if P::is_checksum_nak(&response) {
-                        last_error = Some(LinkError::BadReply {
-                            protocol: P::NAME,
-                            request: name,
-                            address,
-                            attempts: attempt,
-                            reason: "the device reports a checksum error in the request".to_owned(),
-                            bytes: got,
-                        });
-                        continue;
-                    }
-                    let from = P::decode_reply(&got, &request)
-                        .map(|d| d.address)
-                        .unwrap_or(address);
-                    return Ok(Exchange {
-                        response: Some(response),
-                        address: from,
-                        attempts: attempt,
-                        frame: got,
-                        sent: frame,
-                    });
-                }
-                Err(reason) => {
-                    self.trace(TraceEvent::Received {
-                        attempt,
-                        bytes: &got,
-                        rejected: Some(&reason),
-                    });
-                    last_error = Some(LinkError::BadReply {
-                        protocol: P::NAME,
-                        request: name,
-                        address,
-                        attempts: attempt,
-                        reason,
-                        bytes: got,
-                    });
-                }
-            }
-        }
-        Err(last_error.unwrap_or(LinkError::NoReply {
-            protocol: P::NAME,
-            request: name,
-            address,
-            attempts: allowed,
-            timeout: self.timing.reply_timeout,
-        }))
+        self.core.start(address, request);
+        let reply = self.run()?;
+        Ok(exchange(&self.core, reply))
     }
 
     /// Sends a movement trigger, after the byte-order check [`Master::check_byte_order`] makes
@@ -720,8 +516,9 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         address: u8,
         trigger: P::Request,
     ) -> Result<Exchange<P::Response>, LinkError> {
-        self.check_byte_order(address, &trigger)?;
-        self.transact(address, trigger)
+        self.core.start_checked(address, trigger);
+        let reply = self.run()?;
+        Ok(exchange(&self.core, reply))
     }
 
     /// Like [`Master::transact`] for a request that must be answered: the response itself.
@@ -734,6 +531,43 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
             response: "nothing",
             detail: "a broadcast of this command is not answered".to_owned(),
         })
+    }
+
+    /// Runs a movement to its end ([`Movement`]): the byte-order check before its trigger
+    /// ([`Master::check_byte_order`]), then its transactions and sleeps, reporting progress.
+    pub fn run_to_end<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        mut movement: M,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<MoveReport<P::Response>, LinkError> {
+        let trigger = movement.trigger().map_err(|e| move_error(address, e))?;
+        self.check_byte_order(address, &trigger)?;
+        let mut step = movement.next(self.clock.now());
+        loop {
+            step = match step {
+                Step::Ask { request, optional } => match self.ask(address, request) {
+                    Ok(r) => movement.answered(self.clock.now(), Some(r)),
+                    Err(_) if optional => movement.answered(self.clock.now(), None),
+                    Err(e) => return Err(e),
+                },
+                Step::Sleep {
+                    until,
+                    progress: moving,
+                } => {
+                    if let Some(m) = moving {
+                        progress(Progress::Moving {
+                            elapsed: m.elapsed,
+                            position: m.position,
+                        });
+                    }
+                    self.clock.sleep_until(until);
+                    movement.next(self.clock.now())
+                }
+                Step::Done(report) => return Ok(report),
+                Step::Failed(e) => return Err(move_error(address, e)),
+            }
+        }
     }
 
     fn refused(
@@ -752,6 +586,184 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
     }
 }
 
+/// The core's failure as a [`LinkError`], with names and texts (every driver reports through it).
+pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>) -> LinkError {
+    let timeout = core.timing().reply_timeout;
+    match failure {
+        Failure::Encode { request, source } => LinkError::Encode {
+            request: request.name(),
+            source,
+        },
+        Failure::Address {
+            request,
+            address,
+            problem,
+        } => LinkError::Address {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            reason: match problem {
+                AddressProblem::NoBroadcast => {
+                    "this command does not accept the broadcast address".to_owned()
+                }
+                AddressProblem::NotDevice => format!(
+                    "not a device address (0x{:02X}..=0x{:02X}{})",
+                    P::DEVICE_ADDRESSES.start(),
+                    P::DEVICE_ADDRESSES.end(),
+                    match P::BROADCAST_ADDRESS {
+                        Some(b) => format!(", or broadcast 0x{b:02X}"),
+                        None => String::new(),
+                    }
+                ),
+            },
+        },
+        Failure::NoReply {
+            request,
+            address,
+            attempts,
+        } => LinkError::NoReply {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            timeout,
+        },
+        Failure::BadReply {
+            request,
+            address,
+            attempts,
+            reason,
+        } => LinkError::BadReply {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            reason: reason.to_string(),
+            bytes: core.reply().to_vec(),
+        },
+        Failure::Collision {
+            request,
+            address,
+            attempts,
+            offset,
+            expected,
+            received,
+        } => LinkError::Collision {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            sent: core.sent().to_vec(),
+            offset,
+            expected,
+            received,
+        },
+        Failure::NoEcho {
+            request,
+            address,
+            attempts,
+            received,
+        } => LinkError::NoEcho {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            attempts,
+            sent: core.sent().to_vec(),
+            received,
+        },
+        Failure::ProbeRefused { request, address } => {
+            let replies = core.probe_replies();
+            let names: Vec<&str> = replies.iter().map(Message::name).collect();
+            LinkError::Refused {
+                protocol: P::NAME,
+                request: request.name(),
+                address,
+                response: replies.first().map_or("nothing", Message::name),
+                detail: format!(
+                    "not sent: the byte-order check before the first movement read {} \
+                     to {}",
+                    names.join(", "),
+                    P::byte_order_probe()
+                        .iter()
+                        .map(Message::name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            }
+        }
+        Failure::ByteOrder {
+            request,
+            address,
+            swapped_fits,
+        } => {
+            let check = core
+                .take_byte_order_check()
+                .unwrap_or_else(|| ByteOrderCheck {
+                    read: Default::default(),
+                    swapped: Default::default(),
+                    rule: Default::default(),
+                    declared_fits: false,
+                    swapped_fits,
+                    erratum: "",
+                });
+            LinkError::ByteOrder {
+                protocol: P::NAME,
+                request: request.name(),
+                address,
+                check: Box::new(check),
+                source: byte_order_source::<P>(),
+                declared: declared_byte_order::<P>(),
+                other: swapped_byte_order::<P>(),
+            }
+        }
+    }
+}
+
+/// A movement's stop as a [`LinkError`] (every driver reports through it).
+pub(crate) fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
+    match e {
+        MoveError::NotATrigger { request } => LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: "nothing",
+            detail: "not a movement trigger with a completion check".to_owned(),
+        },
+        MoveError::Refused {
+            request,
+            response,
+            detail,
+        } => LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: response.name(),
+            detail: detail.to_owned(),
+        },
+        MoveError::Timeout { request, waited } => LinkError::MovementTimeout {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            waited,
+        },
+    }
+}
+
+/// A completed transaction of the core as an [`Exchange`].
+pub(crate) fn exchange<P: Link>(core: &MasterCore<P>, reply: Reply<P>) -> Exchange<P::Response> {
+    Exchange {
+        response: reply.response,
+        address: reply.address,
+        attempts: reply.attempts,
+        frame: if reply.response.is_some() {
+            core.reply().to_vec()
+        } else {
+            Vec::new()
+        },
+        sent: core.sent().to_vec(),
+    }
+}
+
 /// Progress of a long operation, for display.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Progress {
@@ -762,44 +774,12 @@ pub enum Progress {
     Read { done: usize },
 }
 
-/// How a movement ended.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MoveReport<R> {
-    /// The trigger's reply.
-    pub started: R,
-    /// The final completion reply.
-    pub finished: Option<R>,
-    /// The target lay outside the customer limits; the device ran to the limit (UB2 0x93).
-    pub clipped: bool,
-    /// Micro-steps lost on the way (UB2 0x5400).
-    pub lost_micro_steps: Option<u32>,
-    /// Completion checks sent.
-    pub polls: u32,
-    pub elapsed: Duration,
-}
-
 /// One row of the UB2 C-curve table.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CCurvePoint {
     pub index: u16,
     pub full_steps: u16,
     pub capacitance: ub2::Capacitance,
-}
-
-/// The completion check that goes with a UB2 movement trigger: same first code byte, second
-/// byte 0x01 (§4.x.2). Built as a frame and decoded, so it is whatever the spec says it is.
-pub fn ub2_completion_check(trigger: &ub2::Request) -> Option<ub2::Request> {
-    let code = trigger.code();
-    if code.len() != 2 || code[1] != 0x00 {
-        return None;
-    }
-    let address = *Ub2::DEVICE_ADDRESSES.start();
-    let mut frame = [0xAA, address, code[0], 0x01, 0];
-    frame[4] = ub2::checksum(&frame[..4]);
-    match Ub2::decode_request(&frame) {
-        Ok(d) if Ub2::kind(&d.message) == CommandKind::CompletionCheck => Some(d.message),
-        _ => None,
-    }
 }
 
 impl<T: Transport, C: Clock> Master<Ub2, T, C> {
@@ -814,79 +794,11 @@ impl<T: Transport, C: Clock> Master<Ub2, T, C> {
         limit: Duration,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<MoveReport<ub2::Response>, LinkError> {
-        let check = ub2_completion_check(&trigger).ok_or_else(|| LinkError::Refused {
-            protocol: Ub2::NAME,
-            request: trigger.name(),
+        self.run_to_end(
             address,
-            response: "nothing",
-            detail: "not a movement trigger with a completion check".to_owned(),
-        })?;
-        // Before the first movement to this address: does the device read numbers as the
-        // spec says (ub2-e01)? Nothing moves if not.
-        self.check_byte_order(address, &trigger)?;
-        let start = self.clock.now();
-        let started = self.ask(address, trigger)?;
-        let clipped = match started {
-            ub2::Response::MovementStarted => false,
-            // 0x93: approved, the cap runs to the customer limit (§7.2; `Link::nak_approves`).
-            r if Ub2::nak_approves(&trigger, &r) => true,
-            other => {
-                return Err(Self::refused(
-                    &trigger,
-                    address,
-                    &other,
-                    "the movement did not start",
-                ))
-            }
-        };
-        let mut polls = 0;
-        loop {
-            let reply = self.ask(address, check)?;
-            polls += 1;
-            let elapsed = self.clock.now() - start;
-            let lost = match reply {
-                ub2::Response::MovementCompleted => None,
-                ub2::Response::MovementCompletedWithStepLoss { lost_micro_steps } => {
-                    Some(lost_micro_steps)
-                }
-                ub2::Response::MovementNotCompleted => {
-                    if elapsed >= limit {
-                        return Err(LinkError::MovementTimeout {
-                            protocol: Ub2::NAME,
-                            request: trigger.name(),
-                            address,
-                            waited: elapsed,
-                        });
-                    }
-                    if let Ok(ub2::Response::ActualFullStepPosition { full_steps }) =
-                        self.ask(address, ub2::Request::GetActualFullStepPosition)
-                    {
-                        progress(Progress::Moving {
-                            elapsed,
-                            position: f64::from(full_steps),
-                        });
-                    }
-                    self.clock.sleep(poll_every);
-                    continue;
-                }
-                other => {
-                    return Err(Self::refused(
-                        &check,
-                        address,
-                        &other,
-                        "while waiting for the movement to complete",
-                    ))
-                }
-            };
-            return Ok(MoveReport {
-                started,
-                finished: Some(reply),
-                clipped,
-                lost_micro_steps: lost,
-                polls,
-                elapsed,
-            });
-        }
+            Ub2Movement::new(trigger, poll_every, limit),
+            progress,
+        )
     }
 
     /// Reads the whole C-curve table (§6.7): entries from index 0 until the device answers
@@ -1057,51 +969,7 @@ impl<T: Transport, C: Clock> Master<Sd, T, C> {
         limit: Duration,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<MoveReport<sd::Response>, LinkError> {
-        let start = self.clock.now();
-        let request = sd::Request::SetPoint {
-            freshness: 0,
-            position: target,
-        };
-        // SD has no byte-order probe (`Link::byte_order_probe`): this checks nothing today.
-        self.check_byte_order(address, &request)?;
-        let started = self.ask(address, request)?;
-        let mut polls = 0;
-        loop {
-            let reply = self.ask(address, sd::Request::ReadActualPosition)?;
-            polls += 1;
-            let elapsed = self.clock.now() - start;
-            let sd::Response::ActualPosition { position } = reply else {
-                return Err(Self::refused(
-                    &sd::Request::ReadActualPosition,
-                    address,
-                    &reply,
-                    "expected the actual position",
-                ));
-            };
-            if position == target {
-                return Ok(MoveReport {
-                    started,
-                    finished: Some(reply),
-                    clipped: false,
-                    lost_micro_steps: None,
-                    polls,
-                    elapsed,
-                });
-            }
-            if elapsed >= limit {
-                return Err(LinkError::MovementTimeout {
-                    protocol: Sd::NAME,
-                    request: request.name(),
-                    address,
-                    waited: elapsed,
-                });
-            }
-            progress(Progress::Moving {
-                elapsed,
-                position: position.value(),
-            });
-            self.clock.sleep(poll_every);
-        }
+        self.run_to_end(address, SdMove::new(target, poll_every, limit), progress)
     }
 }
 

@@ -13,6 +13,11 @@ pub trait Transport {
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize>;
     /// Discards bytes received but not yet read.
     fn clear_input(&mut self) -> io::Result<()>;
+    /// Drives the RS485 driver-enable line, where the port has one ([`crate::Line`]'s
+    /// `driver_enable`); nothing by default.
+    fn set_driver_enable(&mut self, _on: bool) -> io::Result<()> {
+        Ok(())
+    }
 }
 
 impl<T: Transport + ?Sized> Transport for Box<T> {
@@ -25,13 +30,18 @@ impl<T: Transport + ?Sized> Transport for Box<T> {
     fn clear_input(&mut self) -> io::Result<()> {
         (**self).clear_input()
     }
+    fn set_driver_enable(&mut self, on: bool) -> io::Result<()> {
+        (**self).set_driver_enable(on)
+    }
 }
 
 /// A serial port (or a pseudo-terminal) opened through the `serialport` crate.
+#[cfg(feature = "serial")]
 pub struct SerialTransport {
     port: Box<dyn serialport::SerialPort>,
 }
 
+#[cfg(feature = "serial")]
 impl SerialTransport {
     /// Opens `path` at `baud`, 8 data bits, no parity, 1 stop bit (both documents' defaults).
     pub fn open(path: &str, baud: u32) -> io::Result<Self> {
@@ -52,10 +62,12 @@ impl SerialTransport {
     }
 }
 
+#[cfg(feature = "serial")]
 fn serial_error(e: serialport::Error) -> io::Error {
     io::Error::other(e.to_string())
 }
 
+#[cfg(feature = "serial")]
 impl Transport for SerialTransport {
     fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.port.write_all(bytes)?;
@@ -81,5 +93,10 @@ impl Transport for SerialTransport {
         self.port
             .clear(serialport::ClearBuffer::Input)
             .map_err(serial_error)
+    }
+
+    /// RTS as the driver-enable line, as RS485 adapters without automatic direction wire it.
+    fn set_driver_enable(&mut self, on: bool) -> io::Result<()> {
+        self.port.write_request_to_send(on).map_err(serial_error)
     }
 }

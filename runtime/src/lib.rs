@@ -22,6 +22,7 @@ extern crate std;
 /// generated code needs no dependency of its own on it.
 pub use crc;
 
+pub mod codec;
 mod protocol;
 pub mod stream;
 

@@ -4,15 +4,7 @@ pub mod mini {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal.yaml`, transcribed from *Minimal protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel little-endian on the wire.
-    #![allow(
-        clippy::identity_op,
-        clippy::unnecessary_cast,
-        clippy::no_effect,
-        clippy::erasing_op,
-        clippy::eq_op,
-        clippy::iter_skip_zero,
-        clippy::get_first
-    )]
+    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "mini";
     /// The vendor document this module was generated from.
@@ -28,30 +20,38 @@ pub mod mini {
         "../../../model/tests/fixtures/valid/minimal.yaml"
     );
     /// The longest request frame, in bytes.
-    pub const MAX_REQUEST_LEN: usize = 9usize;
+    pub const MAX_REQUEST_LEN: usize = 9;
     /// The longest response frame, in bytes.
-    pub const MAX_RESPONSE_LEN: usize = 13usize;
+    pub const MAX_RESPONSE_LEN: usize = 13;
     /// The longest frame in either direction: a buffer this long holds any frame.
-    pub const MAX_FRAME_LEN: usize = 13usize;
+    pub const MAX_FRAME_LEN: usize = 13;
     /// The document's baud rate.
     pub const BAUD: u32 = 9600u32;
     /// The quiet time the document demands between frames, in milliseconds, if it says.
-    pub const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = ::core::option::Option::None;
+    pub const INTER_FRAME_GAP_MS: rt::Option<u32> = rt::None;
     /// The most frames per second the document allows, if it says.
-    pub const MAX_FRAMES_PER_S: ::core::option::Option<u32> = ::core::option::Option::None;
+    pub const MAX_FRAMES_PER_S: rt::Option<u32> = rt::None;
     /// Device addresses, inclusive.
-    pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = 33u8..=64u8;
+    pub const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = 0x21..=0x40;
     /// The broadcast address, if the protocol has one.
-    pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::None;
+    pub const BROADCAST_ADDRESS: rt::Option<u8> = rt::None;
     /// The host's own address, if the spec gives one.
-    pub const HOST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::Some(
-        32u8,
-    );
+    pub const HOST_ADDRESS: rt::Option<u8> = rt::Some(0x20);
     pub use ::busspec_runtime::Decoded;
+    use ::busspec_runtime::codec as rt;
+    /// What every frame shares, for the runtime's frame checks.
+    const FRAME: rt::Frame = rt::Frame {
+        start: rt::Some((0, 0xAA)),
+        devices: (0x21, 0x40),
+        broadcast: BROADCAST_ADDRESS,
+        host: HOST_ADDRESS,
+        checksum_len: 1,
+        checksum_be: false,
+    };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
-        ::busspec_runtime::sum8(bytes)
+        rt::sum8(bytes)
     }
     /// capacitance
     ///
@@ -79,12 +79,12 @@ pub mod mini {
             self.0 as f64 * 1f64 / 100f64 + 0f64 / 1f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
-        pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-            let raw = ::busspec_runtime::round((value - 0f64 / 1f64) * 100f64 / 1f64)?;
+        pub fn from_value(value: f64) -> rt::Option<Self> {
+            let raw = rt::round((value - 0f64 / 1f64) * 100f64 / 1f64)?;
             if !(0..=4294967295).contains(&raw) {
-                return ::core::option::Option::None;
+                return rt::None;
             }
-            ::core::option::Option::Some(Self(raw as u32))
+            rt::Some(Self(raw as u32))
         }
     }
     /// angle
@@ -113,12 +113,12 @@ pub mod mini {
             self.0 as f64 * 45f64 / 512f64 + 0f64 / 1f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
-        pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-            let raw = ::busspec_runtime::round((value - 0f64 / 1f64) * 512f64 / 45f64)?;
+        pub fn from_value(value: f64) -> rt::Option<Self> {
+            let raw = rt::round((value - 0f64 / 1f64) * 512f64 / 45f64)?;
             if !(-32768..=32767).contains(&raw) {
-                return ::core::option::Option::None;
+                return rt::None;
             }
-            ::core::option::Option::Some(Self(raw as i16))
+            rt::Some(Self(raw as i16))
         }
     }
     /// celsius
@@ -147,12 +147,12 @@ pub mod mini {
             self.0 as f64 * 1f64 / 1f64 + -50f64 / 1f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
-        pub fn from_value(value: f64) -> ::core::option::Option<Self> {
-            let raw = ::busspec_runtime::round((value - -50f64 / 1f64) * 1f64 / 1f64)?;
+        pub fn from_value(value: f64) -> rt::Option<Self> {
+            let raw = rt::round((value - -50f64 / 1f64) * 1f64 / 1f64)?;
             if !(0..=255).contains(&raw) {
-                return ::core::option::Option::None;
+                return rt::None;
             }
-            ::core::option::Option::Some(Self(raw as u8))
+            rt::Some(Self(raw as u8))
         }
     }
     ///  (§3.1)
@@ -177,11 +177,9 @@ pub mod mini {
         fn arbitrary(
             u: &mut ::arbitrary::Unstructured<'a>,
         ) -> ::arbitrary::Result<Self> {
-            ::core::result::Result::Ok(
-                Self::from_raw(<u8 as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?),
-            )
+            rt::Ok(Self::from_raw(<u8 as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
         }
-        fn size_hint(depth: usize) -> (usize, ::core::option::Option<usize>) {
+        fn size_hint(depth: usize) -> (usize, rt::Option<usize>) {
             <u8 as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
         }
     }
@@ -205,12 +203,12 @@ pub mod mini {
             }
         }
         /// The spec's name of this value, `None` for `Unknown`.
-        pub const fn name(self) -> ::core::option::Option<&'static str> {
+        pub const fn name(self) -> rt::Option<&'static str> {
             match self {
-                Self::Idle => ::core::option::Option::Some("idle"),
-                Self::Manual => ::core::option::Option::Some("manual"),
-                Self::Auto => ::core::option::Option::Some("auto"),
-                Self::Unknown(_) => ::core::option::Option::None,
+                Self::Idle => rt::Some("idle"),
+                Self::Manual => rt::Some("manual"),
+                Self::Auto => rt::Some("auto"),
+                Self::Unknown(_) => rt::None,
             }
         }
     }
@@ -256,69 +254,55 @@ pub mod mini {
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
         /// §4.1 Go to capacitance (code `0x2000`, 9 bytes).
-        ///
         GoTo {
             /// \[pF\] Valid raw range 0..=100000.
             target: Capacitance,
         },
         /// §4.2 Set mode (code `0x3000`, 6 bytes).
-        ///
         SetMode { mode: Mode },
         /// §4.3 Get status (code `0x4000`, 6 bytes).
-        ///
         GetStatus {
             /// Valid raw range 0..=3.
             channel: u8,
         },
     }
     impl Request {
+        /// Each message's spec name, code and frame length, in spec order.
+        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
+            ("go_to", &[0x20, 0x00], 9),
+            ("set_mode", &[0x30, 0x00], 6),
+            ("get_status", &[0x40, 0x00], 6),
+        ];
+        /// This message's row in [`Self::MESSAGES`].
+        const fn index(&self) -> usize {
+            match self {
+                Self::GoTo { .. } => 0,
+                Self::SetMode { .. } => 1,
+                Self::GetStatus { .. } => 2,
+            }
+        }
         /// The spec's snake_case name of this message.
         pub const fn name(&self) -> &'static str {
-            #[allow(unused_variables)]
-            match self {
-                Self::GoTo { target: v_target } => "go_to",
-                Self::SetMode { mode: v_mode } => "set_mode",
-                Self::GetStatus { channel: v_channel } => "get_status",
-            }
+            Self::MESSAGES[self.index()].0
         }
         /// The command or response code, as sent.
         pub const fn code(&self) -> &'static [u8] {
-            #[allow(unused_variables)]
-            match self {
-                Self::GoTo { target: v_target } => &[32u8, 0u8],
-                Self::SetMode { mode: v_mode } => &[48u8, 0u8],
-                Self::GetStatus { channel: v_channel } => &[64u8, 0u8],
-            }
+            Self::MESSAGES[self.index()].1
         }
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
-            #[allow(unused_variables)]
-            match self {
-                Self::GoTo { target: v_target } => 9usize,
-                Self::SetMode { mode: v_mode } => 6usize,
-                Self::GetStatus { channel: v_channel } => 6usize,
-            }
+            Self::MESSAGES[self.index()].2
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(
-            &self,
-            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
-        ) {
-            let _ = &mut f;
-            #[allow(unused_variables)]
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
                 Self::GoTo { target: v_target } => {
-                    f(
-                        "target",
-                        ::busspec_runtime::FieldValue::Int(v_target.raw() as i64),
-                    );
+                    f("target", rt::Int(v_target.raw() as i64))
                 }
-                Self::SetMode { mode: v_mode } => {
-                    f("mode", ::busspec_runtime::FieldValue::Int(v_mode.raw() as i64));
-                }
+                Self::SetMode { mode: v_mode } => f("mode", rt::Int(v_mode.raw() as i64)),
                 Self::GetStatus { channel: v_channel } => {
-                    f("channel", ::busspec_runtime::FieldValue::Int(*v_channel as i64));
+                    f("channel", rt::Int(*v_channel as i64))
                 }
             }
         }
@@ -329,286 +313,105 @@ pub mod mini {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
-            let _ = 9usize;
-            if !(33u8..=64u8).contains(&address) && address != 32u8 {
-                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
-                    address,
-                    min: 33u8,
-                    max: 64u8,
-                });
-            }
-            let len: usize = match *self {
+        ) -> rt::Result<usize, rt::EncodeError> {
+            rt::encode_address(address, &FRAME)?;
+            let len = match *self {
                 Self::GoTo { target: v_target } => {
-                    let raw = v_target.raw() as i64;
-                    if !(0i64..=100000i64).contains(&raw) {
-                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
-                            field: "target",
-                            value: raw,
-                            min: 0i64,
-                            max: 100000i64,
-                        });
-                    }
-                    let available = buf.len();
-                    let out: &mut [u8; 9usize] = buf
-                        .get_mut(..9usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 9usize,
-                            available,
-                        })?;
-                    out[0usize] = 170u8;
-                    out[1usize] = address;
-                    out[2usize] = 32u8;
-                    out[3usize] = 0u8;
-                    let field_0: u32 = v_target.raw();
-                    out[4usize..8usize].copy_from_slice(&field_0.to_le_bytes());
-                    let sum = checksum(&out[..8usize]);
-                    out[8usize..9usize].copy_from_slice(&sum.to_le_bytes());
-                    9usize
+                    rt::encode_in_range("target", v_target.raw(), 0, 100000)?;
+                    let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
+                    out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
+                    rt::seal_sum8(out)
                 }
                 Self::SetMode { mode: v_mode } => {
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[0usize] = 170u8;
-                    out[1usize] = address;
-                    out[2usize] = 48u8;
-                    out[3usize] = 0u8;
-                    let field_0: u8 = v_mode.raw();
-                    out[4usize..5usize].copy_from_slice(&field_0.to_le_bytes());
-                    let sum = checksum(&out[..5usize]);
-                    out[5usize..6usize].copy_from_slice(&sum.to_le_bytes());
-                    6usize
+                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x30, 0x00])?;
+                    out[4] = v_mode.raw();
+                    rt::seal_sum8(out)
                 }
                 Self::GetStatus { channel: v_channel } => {
-                    let raw = v_channel as i64;
-                    if !(0i64..=3i64).contains(&raw) {
-                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
-                            field: "channel",
-                            value: raw,
-                            min: 0i64,
-                            max: 3i64,
-                        });
-                    }
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[0usize] = 170u8;
-                    out[1usize] = address;
-                    out[2usize] = 64u8;
-                    out[3usize] = 0u8;
-                    let field_0: u8 = v_channel;
-                    out[4usize..5usize].copy_from_slice(&field_0.to_le_bytes());
-                    let sum = checksum(&out[..5usize]);
-                    out[5usize..6usize].copy_from_slice(&sum.to_le_bytes());
-                    6usize
+                    rt::encode_in_range("channel", v_channel, 0, 3)?;
+                    let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
+                    out[4] = v_channel;
+                    rt::seal_sum8(out)
                 }
             };
-            ::core::result::Result::Ok(len)
+            rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
-        pub fn decode(
-            frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
-            if frame.len() > 9usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
-                    max: 9usize,
-                    found: frame.len(),
-                });
-            }
-            if let ::core::option::Option::Some(&found) = frame.get(0usize) {
-                if found != 170u8 {
-                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
-                        expected: 170u8,
-                        found,
-                    });
+        pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                6,
+                9,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 2) {
+                0x2000 => {
+                    let frame = rt::fixed::<9>(frame)?;
+                    let field_0: u32 = u32::from_le_bytes([
+                        frame[4],
+                        frame[5],
+                        frame[6],
+                        frame[7],
+                    ]);
+                    rt::in_range("target", 4, field_0, 0, 100000)?;
+                    rt::Ok(Self::GoTo {
+                        target: Capacitance::from_raw(field_0),
+                    })
                 }
-            }
-            if frame.len() < 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
-                    needed: 6usize,
-                    found: frame.len(),
-                });
-            }
-            let at = frame.len() - 1usize;
-            let mut sum_bytes = [0u8; 1usize];
-            sum_bytes.copy_from_slice(&frame[at..]);
-            let found = u8::from_le_bytes(sum_bytes);
-            let expected = checksum(&frame[..at]);
-            if found != expected {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
-                    offset: at,
-                    expected: expected as u32,
-                    found: found as u32,
-                });
-            }
-            let address = frame[1usize];
-            if !(33u8..=64u8).contains(&address) && address != 32u8 {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
-                    offset: 1usize,
-                    found: address,
-                    min: 33u8,
-                    max: 64u8,
-                });
-            }
-            #[allow(unused_mut)]
-            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
-            if frame.len() >= 5usize {
-                let code: u32 = 0u32 | ((frame[2usize] as u32) << 8u32)
-                    | ((frame[3usize] as u32) << 0u32);
-                #[allow(unreachable_patterns)]
-                match code {
-                    8192 => {
-                        if let ::core::result::Result::Ok(a) = <&[u8; 9usize]>::try_from(
-                            frame,
-                        ) {
-                            match decode_request_go_to(a) {
-                                ::core::result::Result::Ok(m) => {
-                                    return ::core::result::Result::Ok(Decoded {
-                                        address,
-                                        message: m,
-                                    });
-                                }
-                                ::core::result::Result::Err(e) => {
-                                    last = ::core::option::Option::Some(e);
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
-                                    expected: 9usize,
-                                    found: frame.len(),
-                                }),
-                        );
-                    }
-                    12288 => {
-                        if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                            frame,
-                        ) {
-                            match decode_request_set_mode(a) {
-                                ::core::result::Result::Ok(m) => {
-                                    return ::core::result::Result::Ok(Decoded {
-                                        address,
-                                        message: m,
-                                    });
-                                }
-                                ::core::result::Result::Err(e) => {
-                                    last = ::core::option::Option::Some(e);
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
-                                    expected: 6usize,
-                                    found: frame.len(),
-                                }),
-                        );
-                    }
-                    16384 => {
-                        if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                            frame,
-                        ) {
-                            match decode_request_get_status(a) {
-                                ::core::result::Result::Ok(m) => {
-                                    return ::core::result::Result::Ok(Decoded {
-                                        address,
-                                        message: m,
-                                    });
-                                }
-                                ::core::result::Result::Err(e) => {
-                                    last = ::core::option::Option::Some(e);
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
-                                    expected: 6usize,
-                                    found: frame.len(),
-                                }),
-                        );
-                    }
-                    _ => {}
+                0x3000 => {
+                    let frame = rt::fixed::<6>(frame)?;
+                    rt::Ok(Self::SetMode {
+                        mode: Mode::from_raw(frame[4]),
+                    })
                 }
+                0x4000 => {
+                    let frame = rt::fixed::<6>(frame)?;
+                    rt::in_range("channel", 4, frame[4], 0, 3)?;
+                    rt::Ok(Self::GetStatus {
+                        channel: frame[4],
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, false)),
             }
-            let mut code = 0u32;
-            for b in frame
-                .iter()
-                .skip(2usize)
-                .take(frame.len().saturating_sub(2usize + 1usize).min(2usize))
-            {
-                code = (code << 8) | *b as u32;
-            }
-            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
-                offset: 2usize,
-                code,
-            })
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
         /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
-        #[allow(clippy::unnecessary_cast)]
         pub fn from_fields<'v>(
             name: &str,
-            mut field: impl FnMut(
-                &'static str,
-            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
-            let _ = &mut field;
+            mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
+        ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "go_to" => {
-                    let v_target = Capacitance::from_raw(
-                        ::busspec_runtime::field_int(
-                            "target",
-                            field("target"),
-                            0,
-                            4294967295,
-                        )? as u32,
-                    );
-                    ::core::result::Result::Ok(Self::GoTo { target: v_target })
-                }
-                "set_mode" => {
-                    let v_mode = Mode::from_raw(
-                        ::busspec_runtime::field_int("mode", field("mode"), 0, 255)?
-                            as u8,
-                    );
-                    ::core::result::Result::Ok(Self::SetMode { mode: v_mode })
-                }
-                "get_status" => {
-                    let v_channel = ::busspec_runtime::field_int(
-                        "channel",
-                        field("channel"),
-                        0,
-                        255,
-                    )? as u8;
-                    ::core::result::Result::Ok(Self::GetStatus {
-                        channel: v_channel,
+                    rt::Ok(Self::GoTo {
+                        target: Capacitance::from_raw(rt::get(&mut field, "target")?),
                     })
                 }
-                _ => {
-                    ::core::result::Result::Err(
-                        ::busspec_runtime::FieldError::UnknownMessage,
-                    )
+                "set_mode" => {
+                    rt::Ok(Self::SetMode {
+                        mode: Mode::from_raw(rt::get(&mut field, "mode")?),
+                    })
                 }
+                "get_status" => {
+                    rt::Ok(Self::GetStatus {
+                        channel: rt::get(&mut field, "channel")?,
+                    })
+                }
+                _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
     }
-    impl ::busspec_runtime::Message for Request {
+    impl rt::Message for Request {
         #[inline]
         fn name(&self) -> &'static str {
             Request::name(self)
@@ -622,10 +425,7 @@ pub mod mini {
             Request::frame_len(self)
         }
         #[inline]
-        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
-            &self,
-            f: F,
-        ) {
+        fn visit<F: FnMut(&'static str, rt::FieldValue<'_>)>(&self, f: F) {
             Request::visit(self, f)
         }
         #[inline]
@@ -633,107 +433,42 @@ pub mod mini {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+        ) -> rt::Result<usize, rt::EncodeError> {
             Request::encode(self, address, buf)
         }
         #[inline]
-        fn from_fields<
-            'v,
-            F: FnMut(
-                    &'static str,
-                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        >(
+        fn from_fields<'v, F: FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>>(
             name: &str,
             field: F,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+        ) -> rt::Result<Self, rt::FieldError> {
             Request::from_fields(name, field)
         }
     }
     impl Request {
+        /// Each command's kind, whether it accepts and answers the broadcast address, and the
+        /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
+            (rt::Movement, false, false, 0x3),
+            (rt::Setter, false, false, 0x6),
+            (rt::Getter, false, false, 0x8),
+        ];
         /// What the command does, as the spec classifies it.
-        pub const fn kind(&self) -> ::busspec_runtime::CommandKind {
-            match self {
-                Request::GoTo { .. } => ::busspec_runtime::CommandKind::Movement,
-                Request::SetMode { .. } => ::busspec_runtime::CommandKind::Setter,
-                Request::GetStatus { .. } => ::busspec_runtime::CommandKind::Getter,
-            }
+        pub const fn kind(&self) -> rt::CommandKind {
+            Self::COMMANDS[self.index()].0
         }
         /// Whether the command may go to the broadcast address, and whether it is then
         /// answered.
-        pub const fn broadcast(&self) -> ::busspec_runtime::Broadcast {
-            match self {
-                Request::GoTo { .. } => {
-                    ::busspec_runtime::Broadcast {
-                        accepted: false,
-                        answered: false,
-                    }
-                }
-                Request::SetMode { .. } => {
-                    ::busspec_runtime::Broadcast {
-                        accepted: false,
-                        answered: false,
-                    }
-                }
-                Request::GetStatus { .. } => {
-                    ::busspec_runtime::Broadcast {
-                        accepted: false,
-                        answered: false,
-                    }
-                }
+        pub const fn broadcast(&self) -> rt::Broadcast {
+            let c = Self::COMMANDS[self.index()];
+            rt::Broadcast {
+                accepted: c.1,
+                answered: c.2,
             }
         }
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_request_go_to(
-        frame: &[u8; 9usize],
-    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u32 = u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]);
-        let raw = field_0 as i64;
-        if !(0i64..=100000i64).contains(&raw) {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
-                field: "target",
-                offset: 4usize,
-                found: raw,
-                min: 0i64,
-                max: 100000i64,
-            });
+        /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
+        const fn replies(&self) -> u64 {
+            Self::COMMANDS[self.index()].3
         }
-        let v_target = Capacitance::from_raw(field_0 as u32);
-        ::core::result::Result::Ok(Request::GoTo { target: v_target })
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_request_set_mode(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u8 = u8::from_le_bytes([frame[4]]);
-        let v_mode = Mode::from_raw(field_0 as u8);
-        ::core::result::Result::Ok(Request::SetMode { mode: v_mode })
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_request_get_status(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u8 = u8::from_le_bytes([frame[4]]);
-        let raw = field_0 as i64;
-        if !(0i64..=3i64).contains(&raw) {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
-                field: "channel",
-                offset: 4usize,
-                found: raw,
-                min: 0i64,
-                max: 3i64,
-            });
-        }
-        let v_channel = field_0 as u8;
-        ::core::result::Result::Ok(Request::GetStatus {
-            channel: v_channel,
-        })
     }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -742,16 +477,12 @@ pub mod mini {
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
         /// §5.1 Movement started (code `0x50`, 4 bytes).
-        ///
         Started,
         /// §5.2 Not acknowledged (code `0x90`, 4 bytes).
-        ///
         Nak,
         /// §5.3 Mode set (code `0x3000`, 5 bytes).
-        ///
         SetModeAck,
         /// §5.4 Status (code `0x4000`, 13 bytes).
-        ///
         Status {
             error_bits: StatusBits,
             freshness: u8,
@@ -763,66 +494,38 @@ pub mod mini {
         },
     }
     impl Response {
+        /// Each message's spec name, code and frame length, in spec order.
+        const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
+            ("started", &[0x50], 4),
+            ("nak", &[0x90], 4),
+            ("set_mode_ack", &[0x30, 0x00], 5),
+            ("status", &[0x40, 0x00], 13),
+        ];
+        /// This message's row in [`Self::MESSAGES`].
+        const fn index(&self) -> usize {
+            match self {
+                Self::Started => 0,
+                Self::Nak => 1,
+                Self::SetModeAck => 2,
+                Self::Status { .. } => 3,
+            }
+        }
         /// The spec's snake_case name of this message.
         pub const fn name(&self) -> &'static str {
-            #[allow(unused_variables)]
-            match self {
-                Self::Started => "started",
-                Self::Nak => "nak",
-                Self::SetModeAck => "set_mode_ack",
-                Self::Status {
-                    error_bits: v_error_bits,
-                    freshness: v_freshness,
-                    position: v_position,
-                    firmware: v_firmware,
-                    temperature: v_temperature,
-                } => "status",
-            }
+            Self::MESSAGES[self.index()].0
         }
         /// The command or response code, as sent.
         pub const fn code(&self) -> &'static [u8] {
-            #[allow(unused_variables)]
-            match self {
-                Self::Started => &[80u8],
-                Self::Nak => &[144u8],
-                Self::SetModeAck => &[48u8, 0u8],
-                Self::Status {
-                    error_bits: v_error_bits,
-                    freshness: v_freshness,
-                    position: v_position,
-                    firmware: v_firmware,
-                    temperature: v_temperature,
-                } => &[64u8, 0u8],
-            }
+            Self::MESSAGES[self.index()].1
         }
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
-            #[allow(unused_variables)]
-            match self {
-                Self::Started => 4usize,
-                Self::Nak => 4usize,
-                Self::SetModeAck => 5usize,
-                Self::Status {
-                    error_bits: v_error_bits,
-                    freshness: v_freshness,
-                    position: v_position,
-                    firmware: v_firmware,
-                    temperature: v_temperature,
-                } => 13usize,
-            }
+            Self::MESSAGES[self.index()].2
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(
-            &self,
-            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
-        ) {
-            let _ = &mut f;
-            #[allow(unused_variables)]
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Started => {}
-                Self::Nak => {}
-                Self::SetModeAck => {}
                 Self::Status {
                     error_bits: v_error_bits,
                     freshness: v_freshness,
@@ -830,24 +533,13 @@ pub mod mini {
                     firmware: v_firmware,
                     temperature: v_temperature,
                 } => {
-                    f(
-                        "error_bits",
-                        ::busspec_runtime::FieldValue::Int(v_error_bits.raw() as i64),
-                    );
-                    f(
-                        "freshness",
-                        ::busspec_runtime::FieldValue::Int(*v_freshness as i64),
-                    );
-                    f(
-                        "position",
-                        ::busspec_runtime::FieldValue::Int(v_position.raw() as i64),
-                    );
-                    f("firmware", ::busspec_runtime::FieldValue::Text(&v_firmware[..]));
-                    f(
-                        "temperature",
-                        ::busspec_runtime::FieldValue::Int(v_temperature.raw() as i64),
-                    );
+                    f("error_bits", rt::Int(v_error_bits.raw() as i64));
+                    f("freshness", rt::Int(*v_freshness as i64));
+                    f("position", rt::Int(v_position.raw() as i64));
+                    f("firmware", rt::Text(&v_firmware[..]));
+                    f("temperature", rt::Int(v_temperature.raw() as i64));
                 }
+                _ => {}
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -857,64 +549,17 @@ pub mod mini {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
-            let _ = 13usize;
-            if !(33u8..=64u8).contains(&address) && address != 32u8 {
-                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
-                    address,
-                    min: 33u8,
-                    max: 64u8,
-                });
-            }
-            let len: usize = match *self {
+        ) -> rt::Result<usize, rt::EncodeError> {
+            rt::encode_address(address, &FRAME)?;
+            let len = match *self {
                 Self::Started => {
-                    let available = buf.len();
-                    let out: &mut [u8; 4usize] = buf
-                        .get_mut(..4usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 4usize,
-                            available,
-                        })?;
-                    out[0usize] = 170u8;
-                    out[1usize] = address;
-                    out[2usize] = 80u8;
-                    let sum = checksum(&out[..3usize]);
-                    out[3usize..4usize].copy_from_slice(&sum.to_le_bytes());
-                    4usize
+                    rt::seal_sum8(rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?)
                 }
                 Self::Nak => {
-                    let available = buf.len();
-                    let out: &mut [u8; 4usize] = buf
-                        .get_mut(..4usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 4usize,
-                            available,
-                        })?;
-                    out[0usize] = 170u8;
-                    out[1usize] = address;
-                    out[2usize] = 144u8;
-                    let sum = checksum(&out[..3usize]);
-                    out[3usize..4usize].copy_from_slice(&sum.to_le_bytes());
-                    4usize
+                    rt::seal_sum8(rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?)
                 }
                 Self::SetModeAck => {
-                    let available = buf.len();
-                    let out: &mut [u8; 5usize] = buf
-                        .get_mut(..5usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 5usize,
-                            available,
-                        })?;
-                    out[0usize] = 170u8;
-                    out[1usize] = address;
-                    out[2usize] = 48u8;
-                    out[3usize] = 0u8;
-                    let sum = checksum(&out[..4usize]);
-                    out[4usize..5usize].copy_from_slice(&sum.to_le_bytes());
-                    5usize
+                    rt::seal_sum8(rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?)
                 }
                 Self::Status {
                     error_bits: v_error_bits,
@@ -923,51 +568,20 @@ pub mod mini {
                     firmware: v_firmware,
                     temperature: v_temperature,
                 } => {
-                    let available = buf.len();
-                    let out: &mut [u8; 13usize] = buf
-                        .get_mut(..13usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 13usize,
-                            available,
-                        })?;
-                    out[0usize] = 170u8;
-                    out[1usize] = address;
-                    out[2usize] = 64u8;
-                    out[3usize] = 0u8;
-                    let field_0: u8 = v_error_bits.raw();
-                    out[4usize..5usize].copy_from_slice(&field_0.to_le_bytes());
-                    let field_1: u16 = 0
-                        | ((({
-                            let raw = v_freshness as i64;
-                            if !(0..=15).contains(&raw) {
-                                return ::core::result::Result::Err(::busspec_runtime::EncodeError::OutOfRange {
-                                    field: "freshness",
-                                });
-                            }
-                            raw as u8
-                        } as u8) as u16 & 0xFu16) << 12u32)
-                        | ((({
-                            let raw = v_position.raw() as i64;
-                            if !(-2048..=2047).contains(&raw) {
-                                return ::core::result::Result::Err(::busspec_runtime::EncodeError::OutOfRange {
-                                    field: "position",
-                                });
-                            }
-                            raw as i16
-                        } as i16) as u16 & 0xFFFu16) << 0u32);
-                    out[5usize..7usize].copy_from_slice(&field_1.to_le_bytes());
-                    out[7usize..10usize].copy_from_slice(&v_firmware);
-                    let field_3: u8 = v_temperature.raw();
-                    out[10usize..11usize].copy_from_slice(&field_3.to_le_bytes());
-                    let field_4: u8 = 0x0u8 as u8;
-                    out[11usize..12usize].copy_from_slice(&field_4.to_le_bytes());
-                    let sum = checksum(&out[..12usize]);
-                    out[12usize..13usize].copy_from_slice(&sum.to_le_bytes());
-                    13usize
+                    let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x40, 0x00])?;
+                    out[11] = 0x00;
+                    out[4] = v_error_bits.raw();
+                    let field_1: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
+                        as u16) << 12)
+                        | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
+                            & 0xFFF);
+                    out[5..7].copy_from_slice(&field_1.to_le_bytes());
+                    out[7..10].copy_from_slice(&v_firmware);
+                    out[10] = v_temperature.raw();
+                    rt::seal_sum8(out)
                 }
             };
-            ::core::result::Result::Ok(len)
+            rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
@@ -976,10 +590,8 @@ pub mod mini {
         /// Responses that only their request tells apart are reported as
         /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
         #[inline]
-        pub fn decode(
-            frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
-            Self::decode_for(frame, ::core::option::Option::None)
+        pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
         }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
@@ -988,316 +600,104 @@ pub mod mini {
         pub fn decode_reply(
             frame: &[u8],
             request: &Request,
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
-            Self::decode_for(frame, ::core::option::Option::Some(request))
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
         }
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
         /// [`Self::decode_reply`].
         fn decode_for(
             frame: &[u8],
-            request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
-            if frame.len() > 13usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
-                    max: 13usize,
-                    found: frame.len(),
-                });
-            }
-            if let ::core::option::Option::Some(&found) = frame.get(0usize) {
-                if found != 170u8 {
-                    return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadStart {
-                        expected: 170u8,
-                        found,
-                    });
-                }
-            }
-            if frame.len() < 4usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
-                    needed: 4usize,
-                    found: frame.len(),
-                });
-            }
-            let at = frame.len() - 1usize;
-            let mut sum_bytes = [0u8; 1usize];
-            sum_bytes.copy_from_slice(&frame[at..]);
-            let found = u8::from_le_bytes(sum_bytes);
-            let expected = checksum(&frame[..at]);
-            if found != expected {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
-                    offset: at,
-                    expected: expected as u32,
-                    found: found as u32,
-                });
-            }
-            let address = frame[1usize];
-            if !(33u8..=64u8).contains(&address) && address != 32u8 {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
-                    offset: 1usize,
-                    found: address,
-                    min: 33u8,
-                    max: 64u8,
-                });
-            }
-            #[allow(unused_mut)]
-            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
-            if frame.len() >= 4usize {
-                let code: u32 = 0u32 | ((frame[2usize] as u32) << 0u32);
-                #[allow(unreachable_patterns)]
-                match code {
-                    80 => {
-                        let mut admitted = false;
-                        if match request {
-                            ::core::option::Option::None => true,
-                            ::core::option::Option::Some(r) => {
-                                matches!(r, Request::GoTo { .. })
-                            }
-                        } {
-                            admitted = true;
-                            if let ::core::result::Result::Ok(a) = <&[u8; 4usize]>::try_from(
-                                frame,
-                            ) {
-                                match decode_response_started(a) {
-                                    ::core::result::Result::Ok(m) => {
-                                        return ::core::result::Result::Ok(Decoded {
-                                            address,
-                                            message: m,
-                                        });
-                                    }
-                                    ::core::result::Result::Err(e) => {
-                                        last = ::core::option::Option::Some(e);
-                                    }
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(
-                                    if admitted {
-                                        ::busspec_runtime::DecodeError::WrongLength {
-                                            expected: 4usize,
-                                            found: frame.len(),
-                                        }
-                                    } else {
-                                        ::busspec_runtime::DecodeError::NotAReply {
-                                            code: 80u32,
-                                        }
-                                    },
-                                ),
-                        );
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                4,
+                13,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
+            let message = Self::dispatch(frame, request)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::DecodeResult<Self> {
+            let asked: u64 = request.map_or(!0, Request::replies);
+            if frame.len() >= 4 {
+                match rt::code(frame, 2, 1) {
+                    0x50 => {
+                        return rt::reply::<4>(frame, asked & 1 != 0, 0x50)
+                            .map(|_| Self::Started);
                     }
-                    144 => {
-                        let mut admitted = false;
-                        if match request {
-                            ::core::option::Option::None => true,
-                            ::core::option::Option::Some(r) => {
-                                matches!(r, Request::GoTo { .. } | Request::SetMode { .. })
-                            }
-                        } {
-                            admitted = true;
-                            if let ::core::result::Result::Ok(a) = <&[u8; 4usize]>::try_from(
-                                frame,
-                            ) {
-                                match decode_response_nak(a) {
-                                    ::core::result::Result::Ok(m) => {
-                                        return ::core::result::Result::Ok(Decoded {
-                                            address,
-                                            message: m,
-                                        });
-                                    }
-                                    ::core::result::Result::Err(e) => {
-                                        last = ::core::option::Option::Some(e);
-                                    }
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(
-                                    if admitted {
-                                        ::busspec_runtime::DecodeError::WrongLength {
-                                            expected: 4usize,
-                                            found: frame.len(),
-                                        }
-                                    } else {
-                                        ::busspec_runtime::DecodeError::NotAReply {
-                                            code: 144u32,
-                                        }
-                                    },
-                                ),
-                        );
+                    0x90 => {
+                        return rt::reply::<4>(frame, asked >> 1 & 1 != 0, 0x90)
+                            .map(|_| Self::Nak);
                     }
                     _ => {}
                 }
             }
-            if frame.len() >= 5usize {
-                let code: u32 = 0u32 | ((frame[2usize] as u32) << 8u32)
-                    | ((frame[3usize] as u32) << 0u32);
-                #[allow(unreachable_patterns)]
-                match code {
-                    12288 => {
-                        let mut admitted = false;
-                        if match request {
-                            ::core::option::Option::None => true,
-                            ::core::option::Option::Some(r) => {
-                                matches!(r, Request::SetMode { .. })
-                            }
-                        } {
-                            admitted = true;
-                            if let ::core::result::Result::Ok(a) = <&[u8; 5usize]>::try_from(
-                                frame,
-                            ) {
-                                match decode_response_set_mode_ack(a) {
-                                    ::core::result::Result::Ok(m) => {
-                                        return ::core::result::Result::Ok(Decoded {
-                                            address,
-                                            message: m,
-                                        });
-                                    }
-                                    ::core::result::Result::Err(e) => {
-                                        last = ::core::option::Option::Some(e);
-                                    }
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(
-                                    if admitted {
-                                        ::busspec_runtime::DecodeError::WrongLength {
-                                            expected: 5usize,
-                                            found: frame.len(),
-                                        }
-                                    } else {
-                                        ::busspec_runtime::DecodeError::NotAReply {
-                                            code: 12288u32,
-                                        }
-                                    },
-                                ),
-                        );
-                    }
-                    16384 => {
-                        let mut admitted = false;
-                        if match request {
-                            ::core::option::Option::None => true,
-                            ::core::option::Option::Some(r) => {
-                                matches!(r, Request::GetStatus { .. })
-                            }
-                        } {
-                            admitted = true;
-                            if let ::core::result::Result::Ok(a) = <&[u8; 13usize]>::try_from(
-                                frame,
-                            ) {
-                                match decode_response_status(a) {
-                                    ::core::result::Result::Ok(m) => {
-                                        return ::core::result::Result::Ok(Decoded {
-                                            address,
-                                            message: m,
-                                        });
-                                    }
-                                    ::core::result::Result::Err(e) => {
-                                        last = ::core::option::Option::Some(e);
-                                    }
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(
-                                    if admitted {
-                                        ::busspec_runtime::DecodeError::WrongLength {
-                                            expected: 13usize,
-                                            found: frame.len(),
-                                        }
-                                    } else {
-                                        ::busspec_runtime::DecodeError::NotAReply {
-                                            code: 16384u32,
-                                        }
-                                    },
-                                ),
-                        );
-                    }
-                    _ => {}
+            if frame.len() < 5 {
+                return rt::Err(rt::unknown_code(frame, 2, 2, 1, true));
+            }
+            match rt::code(frame, 2, 2) {
+                0x3000 => {
+                    rt::reply::<5>(frame, asked >> 2 & 1 != 0, 0x3000)
+                        .map(|_| Self::SetModeAck)
                 }
+                0x4000 => {
+                    let frame = rt::reply::<13>(frame, asked >> 3 & 1 != 0, 0x4000)?;
+                    let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
+                    rt::equal("reserved", 11, frame[11], 0x0)?;
+                    rt::Ok(Self::Status {
+                        error_bits: StatusBits::from_raw(frame[4]),
+                        freshness: (field_1 >> 12) as u8,
+                        position: Angle::from_raw(
+                            (((field_1 & 0xFFF) as u16) << 4) as i16 >> 4,
+                        ),
+                        firmware: frame[7..10].try_into().unwrap_or([0; 3]),
+                        temperature: Celsius::from_raw(frame[10]),
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, true)),
             }
-            let mut code = 0u32;
-            for b in frame
-                .iter()
-                .skip(2usize)
-                .take(frame.len().saturating_sub(2usize + 1usize).min(2usize))
-            {
-                code = (code << 8) | *b as u32;
-            }
-            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownResponse {
-                offset: 2usize,
-                code,
-            })
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
         /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
-        #[allow(clippy::unnecessary_cast)]
         pub fn from_fields<'v>(
             name: &str,
-            mut field: impl FnMut(
-                &'static str,
-            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
-            let _ = &mut field;
+            mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
+        ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "started" => ::core::result::Result::Ok(Self::Started),
-                "nak" => ::core::result::Result::Ok(Self::Nak),
-                "set_mode_ack" => ::core::result::Result::Ok(Self::SetModeAck),
+                "started" => rt::Ok(Self::Started),
+                "nak" => rt::Ok(Self::Nak),
+                "set_mode_ack" => rt::Ok(Self::SetModeAck),
                 "status" => {
-                    let v_error_bits = StatusBits::from_raw(
-                        ::busspec_runtime::field_int(
-                            "error_bits",
-                            field("error_bits"),
-                            0,
-                            255,
-                        )? as u8,
-                    );
-                    let v_freshness = ::busspec_runtime::field_int(
-                        "freshness",
-                        field("freshness"),
-                        0,
-                        15,
-                    )? as u8;
-                    let v_position = Angle::from_raw(
-                        ::busspec_runtime::field_int(
-                            "position",
-                            field("position"),
-                            -2048,
-                            2047,
-                        )? as i16,
-                    );
-                    let v_firmware = ::busspec_runtime::field_text::<
-                        3,
-                    >("firmware", field("firmware"))?;
-                    let v_temperature = Celsius::from_raw(
-                        ::busspec_runtime::field_int(
-                            "temperature",
-                            field("temperature"),
-                            0,
-                            255,
-                        )? as u8,
-                    );
-                    ::core::result::Result::Ok(Self::Status {
-                        error_bits: v_error_bits,
-                        freshness: v_freshness,
-                        position: v_position,
-                        firmware: v_firmware,
-                        temperature: v_temperature,
+                    rt::Ok(Self::Status {
+                        error_bits: StatusBits::from_raw(
+                            rt::get(&mut field, "error_bits")?,
+                        ),
+                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
+                            as u8,
+                        position: Angle::from_raw(
+                            rt::field_int("position", field("position"), -2048, 2047)?
+                                as i16,
+                        ),
+                        firmware: rt::text(&mut field, "firmware")?,
+                        temperature: Celsius::from_raw(
+                            rt::get(&mut field, "temperature")?,
+                        ),
                     })
                 }
-                _ => {
-                    ::core::result::Result::Err(
-                        ::busspec_runtime::FieldError::UnknownMessage,
-                    )
-                }
+                _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
     }
-    impl ::busspec_runtime::Message for Response {
+    impl rt::Message for Response {
         #[inline]
         fn name(&self) -> &'static str {
             Response::name(self)
@@ -1311,10 +711,7 @@ pub mod mini {
             Response::frame_len(self)
         }
         #[inline]
-        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
-            &self,
-            f: F,
-        ) {
+        fn visit<F: FnMut(&'static str, rt::FieldValue<'_>)>(&self, f: F) {
             Response::visit(self, f)
         }
         #[inline]
@@ -1322,96 +719,27 @@ pub mod mini {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+        ) -> rt::Result<usize, rt::EncodeError> {
             Response::encode(self, address, buf)
         }
         #[inline]
-        fn from_fields<
-            'v,
-            F: FnMut(
-                    &'static str,
-                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        >(
+        fn from_fields<'v, F: FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>>(
             name: &str,
             field: F,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+        ) -> rt::Result<Self, rt::FieldError> {
             Response::from_fields(name, field)
         }
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_response_started(
-        frame: &[u8; 4usize],
-    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        ::core::result::Result::Ok(Response::Started)
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_response_nak(
-        frame: &[u8; 4usize],
-    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        ::core::result::Result::Ok(Response::Nak)
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_response_set_mode_ack(
-        frame: &[u8; 5usize],
-    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        ::core::result::Result::Ok(Response::SetModeAck)
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_response_status(
-        frame: &[u8; 13usize],
-    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u8 = u8::from_le_bytes([frame[4]]);
-        let v_error_bits = StatusBits::from_raw(field_0 as u8);
-        let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
-        let v_freshness = (((field_1 as u16) >> 12u32) & 0xFu16) as u8 as u8;
-        let v_position = Angle::from_raw(
-            (((((field_1 as u16) >> 0u32) & 0xFFFu16) as u16) << 4u32) as i16
-                >> 4u32 as i16,
-        );
-        let mut v_firmware = [0u8; 3usize];
-        v_firmware.copy_from_slice(&frame[7usize..10usize]);
-        let field_3: u8 = u8::from_le_bytes([frame[10]]);
-        let v_temperature = Celsius::from_raw(field_3 as u8);
-        let field_4: u8 = u8::from_le_bytes([frame[11]]);
-        if field_4 as u64 != 0x0u8 as u64 {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
-                field: "reserved",
-                offset: 11usize,
-                found: field_4 as u32,
-            });
-        }
-        ::core::result::Result::Ok(Response::Status {
-            error_bits: v_error_bits,
-            freshness: v_freshness,
-            position: v_position,
-            firmware: v_firmware,
-            temperature: v_temperature,
-        })
     }
     impl Response {
         /// Whether this response is one the document says `request` may get.
         pub fn answers(&self, request: &Request) -> bool {
-            match request {
-                Request::GoTo { .. } => matches!(self, Response::Started | Response::Nak),
-                Request::SetMode { .. } => {
-                    matches!(self, Response::SetModeAck | Response::Nak)
-                }
-                Request::GetStatus { .. } => matches!(self, Response::Status { .. }),
-            }
+            request.replies() >> self.index() & 1 != 0
         }
     }
     /// The mini protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct Mini;
-    impl ::busspec_runtime::Protocol for Mini {
+    impl rt::Protocol for Mini {
         type Request = Request;
         type Response = Response;
         type Buffer = [u8; MAX_FRAME_LEN];
@@ -1423,27 +751,25 @@ pub mod mini {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[
-            13usize, 9usize, 6usize, 5usize, 4usize,
-        ];
+        const FRAME_LENGTHS: &'static [usize] = &[13, 9, 6, 5, 4];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         const BAUD: u32 = BAUD;
-        const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = INTER_FRAME_GAP_MS;
-        const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
-        const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
-        const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
-        const HOST_ADDRESS: ::core::option::Option<u8> = HOST_ADDRESS;
+        const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
+        const MAX_FRAMES_PER_S: rt::Option<u32> = MAX_FRAMES_PER_S;
+        const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
+        const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
+        const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
         #[inline]
         fn decode_request(
             frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
         }
         #[inline]
         fn decode_response_for(
             frame: &[u8],
-            request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Response::decode_for(frame, request)
         }
         #[inline]
@@ -1451,76 +777,44 @@ pub mod mini {
             response.answers(request)
         }
         #[inline]
-        fn kind(request: &Request) -> ::busspec_runtime::CommandKind {
+        fn kind(request: &Request) -> rt::CommandKind {
             request.kind()
         }
         #[inline]
-        fn broadcast(request: &Request) -> ::busspec_runtime::Broadcast {
+        fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(response, Response::Nak)
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(1usize) {
-                ::core::option::Option::Some(n) if n > 0 => {
-                    let (body, tail) = frame.split_at(n);
-                    checksum(body) == tail[0]
+            match frame.len().checked_sub(1) {
+                rt::Some(n) if n > 0 => {
+                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
                 }
                 _ => false,
             }
         }
-        fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
-            if head.get(0usize).is_some_and(|&b| b != 170u8) {
-                return ::busspec_runtime::stream::Candidates {
+        fn candidates(head: &[u8]) -> rt::Candidates {
+            if head.first().is_some_and(|&b| b != 0xAA) {
+                return rt::Candidates {
                     requests: 0,
                     responses: 0,
                 };
             }
-            let mask: u128 = match head.get(2usize) {
-                ::core::option::Option::None => 0x190000000000000006,
-                ::core::option::Option::Some(&b) => {
-                    match b {
-                        0x20 => {
-                            match head.get(3usize) {
-                                ::core::option::Option::None => 0x2,
-                                ::core::option::Option::Some(&b) => {
-                                    match b {
-                                        0x00 => 0x2,
-                                        _ => 0,
-                                    }
-                                }
-                            }
-                        }
-                        0x30 => {
-                            match head.get(3usize) {
-                                ::core::option::Option::None => 0x80000000000000004,
-                                ::core::option::Option::Some(&b) => {
-                                    match b {
-                                        0x00 => 0x80000000000000004,
-                                        _ => 0,
-                                    }
-                                }
-                            }
-                        }
-                        0x40 => {
-                            match head.get(3usize) {
-                                ::core::option::Option::None => 0x10000000000000004,
-                                ::core::option::Option::Some(&b) => {
-                                    match b {
-                                        0x00 => 0x10000000000000004,
-                                        _ => 0,
-                                    }
-                                }
-                            }
-                        }
-                        0x50 => 0x100000000000000000,
-                        0x90 => 0x100000000000000000,
-                        _ => 0,
-                    }
-                }
+            let mask: u128 = match (head.get(2), head.get(3)) {
+                (rt::None, _) => 0x190000000000000006,
+                (rt::Some(0x20), rt::None) => 0x2,
+                (rt::Some(0x20), rt::Some(0x00)) => 0x2,
+                (rt::Some(0x30), rt::None) => 0x80000000000000004,
+                (rt::Some(0x30), rt::Some(0x00)) => 0x80000000000000004,
+                (rt::Some(0x40), rt::None) => 0x10000000000000004,
+                (rt::Some(0x40), rt::Some(0x00)) => 0x10000000000000004,
+                (rt::Some(0x50), _) => 0x100000000000000000,
+                (rt::Some(0x90), _) => 0x100000000000000000,
+                _ => 0,
             };
-            ::busspec_runtime::stream::Candidates {
+            rt::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
             }

@@ -4,15 +4,7 @@ pub mod mini_crc {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal_crc.yaml`, transcribed from *Minimal CRC protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel big-endian on the wire.
-    #![allow(
-        clippy::identity_op,
-        clippy::unnecessary_cast,
-        clippy::no_effect,
-        clippy::erasing_op,
-        clippy::eq_op,
-        clippy::iter_skip_zero,
-        clippy::get_first
-    )]
+    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "mini_crc";
     /// The vendor document this module was generated from.
@@ -28,28 +20,36 @@ pub mod mini_crc {
         "../../../model/tests/fixtures/valid/minimal_crc.yaml"
     );
     /// The longest request frame, in bytes.
-    pub const MAX_REQUEST_LEN: usize = 6usize;
+    pub const MAX_REQUEST_LEN: usize = 6;
     /// The longest response frame, in bytes.
-    pub const MAX_RESPONSE_LEN: usize = 6usize;
+    pub const MAX_RESPONSE_LEN: usize = 6;
     /// The longest frame in either direction: a buffer this long holds any frame.
-    pub const MAX_FRAME_LEN: usize = 6usize;
+    pub const MAX_FRAME_LEN: usize = 6;
     /// The document's baud rate.
     pub const BAUD: u32 = 115200u32;
     /// The quiet time the document demands between frames, in milliseconds, if it says.
-    pub const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = ::core::option::Option::None;
+    pub const INTER_FRAME_GAP_MS: rt::Option<u32> = rt::None;
     /// The most frames per second the document allows, if it says.
-    pub const MAX_FRAMES_PER_S: ::core::option::Option<u32> = ::core::option::Option::None;
+    pub const MAX_FRAMES_PER_S: rt::Option<u32> = rt::None;
     /// Device addresses, inclusive.
-    pub const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = 1u8..=30u8;
+    pub const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = 0x01..=0x1E;
     /// The broadcast address, if the protocol has one.
-    pub const BROADCAST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::Some(
-        31u8,
-    );
+    pub const BROADCAST_ADDRESS: rt::Option<u8> = rt::Some(0x1F);
     /// The host's own address, if the spec gives one.
-    pub const HOST_ADDRESS: ::core::option::Option<u8> = ::core::option::Option::None;
+    pub const HOST_ADDRESS: rt::Option<u8> = rt::None;
     pub use ::busspec_runtime::Decoded;
+    use ::busspec_runtime::codec as rt;
+    /// What every frame shares, for the runtime's frame checks.
+    const FRAME: rt::Frame = rt::Frame {
+        start: rt::None,
+        devices: (0x01, 0x1E),
+        broadcast: BROADCAST_ADDRESS,
+        host: HOST_ADDRESS,
+        checksum_len: 2,
+        checksum_be: true,
+    };
     /// CRC-16/CMS: the frame checksum, over every byte before it.
-    pub const CRC_ALGORITHM: ::busspec_runtime::crc::Algorithm<u16> = ::busspec_runtime::crc::Algorithm {
+    pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
         width: 16usize as u8,
         poly: 0x8005u16,
         init: 0xFFFFu16,
@@ -59,9 +59,7 @@ pub mod mini_crc {
         check: 0xAEE7u16,
         residue: 0,
     };
-    static CRC: ::busspec_runtime::crc::Crc<u16> = ::busspec_runtime::crc::Crc::<
-        u16,
-    >::new(&CRC_ALGORITHM);
+    static CRC: rt::crc::Crc<u16> = rt::crc::Crc::<u16>::new(&CRC_ALGORITHM);
     /// The frame checksum over `bytes`.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
@@ -74,57 +72,47 @@ pub mod mini_crc {
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
         /// §3.1 Read run-time hours (code `0x69`, 6 bytes).
-        ///
         ReadRuntimeHours,
         /// §3.2 Read run-time minutes and seconds (code `0x69`, 6 bytes).
-        ///
         ReadRuntimeMinSec,
         /// §3.3 Set counter (code `0x70`, 6 bytes).
-        ///
         SetCounter { counter: u16 },
     }
     impl Request {
+        /// Each message's spec name, code and frame length, in spec order.
+        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
+            ("read_runtime_hours", &[0x69], 6),
+            ("read_runtime_min_sec", &[0x69], 6),
+            ("set_counter", &[0x70], 6),
+        ];
+        /// This message's row in [`Self::MESSAGES`].
+        const fn index(&self) -> usize {
+            match self {
+                Self::ReadRuntimeHours => 0,
+                Self::ReadRuntimeMinSec => 1,
+                Self::SetCounter { .. } => 2,
+            }
+        }
         /// The spec's snake_case name of this message.
         pub const fn name(&self) -> &'static str {
-            #[allow(unused_variables)]
-            match self {
-                Self::ReadRuntimeHours => "read_runtime_hours",
-                Self::ReadRuntimeMinSec => "read_runtime_min_sec",
-                Self::SetCounter { counter: v_counter } => "set_counter",
-            }
+            Self::MESSAGES[self.index()].0
         }
         /// The command or response code, as sent.
         pub const fn code(&self) -> &'static [u8] {
-            #[allow(unused_variables)]
-            match self {
-                Self::ReadRuntimeHours => &[105u8],
-                Self::ReadRuntimeMinSec => &[105u8],
-                Self::SetCounter { counter: v_counter } => &[112u8],
-            }
+            Self::MESSAGES[self.index()].1
         }
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
-            #[allow(unused_variables)]
-            match self {
-                Self::ReadRuntimeHours => 6usize,
-                Self::ReadRuntimeMinSec => 6usize,
-                Self::SetCounter { counter: v_counter } => 6usize,
-            }
+            Self::MESSAGES[self.index()].2
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(
-            &self,
-            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
-        ) {
-            let _ = &mut f;
-            #[allow(unused_variables)]
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ReadRuntimeHours => {}
-                Self::ReadRuntimeMinSec => {}
                 Self::SetCounter { counter: v_counter } => {
-                    f("counter", ::busspec_runtime::FieldValue::Int(*v_counter as i64));
+                    f("counter", rt::Int(*v_counter as i64))
                 }
+                _ => {}
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -134,252 +122,106 @@ pub mod mini_crc {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
-            let _ = 6usize;
-            if !(1u8..=30u8).contains(&address) && address != 31u8 {
-                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
-                    address,
-                    min: 1u8,
-                    max: 30u8,
-                });
-            }
-            let len: usize = match *self {
+        ) -> rt::Result<usize, rt::EncodeError> {
+            rt::encode_address(address, &FRAME)?;
+            let len = match *self {
                 Self::ReadRuntimeHours => {
-                    if address == 31u8 {
-                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::BroadcastNotAccepted {
-                            message: "read_runtime_hours",
-                            address,
-                        });
-                    }
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[1usize] = address;
-                    out[0usize] = 105u8;
-                    let field_0: u8 = 0x1u8 as u8;
-                    out[2usize..3usize].copy_from_slice(&field_0.to_be_bytes());
-                    let field_1: u8 = 0x0u8 as u8;
-                    out[3usize..4usize].copy_from_slice(&field_1.to_be_bytes());
-                    6usize
+                    rt::encode_broadcast(address, 0x1F, "read_runtime_hours")?;
+                    rt::frame_mut::<6>(buf, &[0x69, address, 0x01, 0x00])?.len()
                 }
                 Self::ReadRuntimeMinSec => {
-                    if address == 31u8 {
-                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::BroadcastNotAccepted {
-                            message: "read_runtime_min_sec",
-                            address,
-                        });
-                    }
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[1usize] = address;
-                    out[0usize] = 105u8;
-                    let field_0: u8 = 0x2u8 as u8;
-                    out[2usize..3usize].copy_from_slice(&field_0.to_be_bytes());
-                    let field_1: u8 = 0x0u8 as u8;
-                    out[3usize..4usize].copy_from_slice(&field_1.to_be_bytes());
-                    6usize
+                    rt::encode_broadcast(address, 0x1F, "read_runtime_min_sec")?;
+                    rt::frame_mut::<6>(buf, &[0x69, address, 0x02, 0x00])?.len()
                 }
                 Self::SetCounter { counter: v_counter } => {
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[1usize] = address;
-                    out[0usize] = 112u8;
-                    let field_0: u16 = v_counter;
-                    out[2usize..4usize].copy_from_slice(&field_0.to_be_bytes());
-                    6usize
+                    let out = rt::frame_mut::<6>(buf, &[0x70, address])?;
+                    out[2..4].copy_from_slice(&v_counter.to_be_bytes());
+                    out.len()
                 }
             };
-            let available = buf.len();
-            let frame = buf
-                .get_mut(..len)
-                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                    needed: len,
-                    available,
-                })?;
-            let at = len - 2usize;
-            let sum = checksum(&frame[..at]);
-            frame[at..].copy_from_slice(&sum.to_be_bytes());
-            ::core::result::Result::Ok(len)
+            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
-        pub fn decode(
-            frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
-            if frame.len() > 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
-                    max: 6usize,
-                    found: frame.len(),
-                });
-            }
-            if frame.len() < 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
-                    needed: 6usize,
-                    found: frame.len(),
-                });
-            }
-            let at = frame.len() - 2usize;
-            let mut sum_bytes = [0u8; 2usize];
-            sum_bytes.copy_from_slice(&frame[at..]);
-            let found = u16::from_be_bytes(sum_bytes);
-            let expected = checksum(&frame[..at]);
-            if found != expected {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
-                    offset: at,
-                    expected: expected as u32,
-                    found: found as u32,
-                });
-            }
-            let address = frame[1usize];
-            if !(1u8..=30u8).contains(&address) && address != 31u8 {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
-                    offset: 1usize,
-                    found: address,
-                    min: 1u8,
-                    max: 30u8,
-                });
-            }
-            #[allow(unused_mut)]
-            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
-            if frame.len() >= 3usize {
-                let code: u32 = 0u32 | ((frame[0usize] as u32) << 0u32);
-                #[allow(unreachable_patterns)]
-                match code {
-                    105 => {
-                        if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                            frame,
-                        ) {
-                            match decode_request_read_runtime_hours(a) {
-                                ::core::result::Result::Ok(m) => {
-                                    return ::core::result::Result::Ok(Decoded {
-                                        address,
-                                        message: m,
-                                    });
-                                }
-                                ::core::result::Result::Err(e) => {
-                                    last = ::core::option::Option::Some(e);
-                                }
-                            }
-                        }
-                        if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                            frame,
-                        ) {
-                            match decode_request_read_runtime_min_sec(a) {
-                                ::core::result::Result::Ok(m) => {
-                                    return ::core::result::Result::Ok(Decoded {
-                                        address,
-                                        message: m,
-                                    });
-                                }
-                                ::core::result::Result::Err(e) => {
-                                    last = ::core::option::Option::Some(e);
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
-                                    expected: 6usize,
-                                    found: frame.len(),
-                                }),
-                        );
-                    }
-                    112 => {
-                        if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                            frame,
-                        ) {
-                            match decode_request_set_counter(a) {
-                                ::core::result::Result::Ok(m) => {
-                                    return ::core::result::Result::Ok(Decoded {
-                                        address,
-                                        message: m,
-                                    });
-                                }
-                                ::core::result::Result::Err(e) => {
-                                    last = ::core::option::Option::Some(e);
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(::busspec_runtime::DecodeError::WrongLength {
-                                    expected: 6usize,
-                                    found: frame.len(),
-                                }),
-                        );
-                    }
-                    _ => {}
+        pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                6,
+                6,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 0, 1) {
+                0x69 => {
+                    let mut g = rt::Group::new(frame, 0x69, true);
+                    g.attempt(
+                        true,
+                        |frame: &[u8; 6]| {
+                            rt::no_broadcast(
+                                frame[1],
+                                0x1F,
+                                "read_runtime_hours",
+                                0x69,
+                            )?;
+                            rt::equal("selector", 2, frame[2], 0x1)?;
+                            rt::equal("arg2", 3, frame[3], 0x0)?;
+                            rt::Ok(Self::ReadRuntimeHours)
+                        },
+                    );
+                    g.attempt(
+                        true,
+                        |frame: &[u8; 6]| {
+                            rt::no_broadcast(
+                                frame[1],
+                                0x1F,
+                                "read_runtime_min_sec",
+                                0x69,
+                            )?;
+                            rt::equal("selector", 2, frame[2], 0x2)?;
+                            rt::equal("arg2", 3, frame[3], 0x0)?;
+                            rt::Ok(Self::ReadRuntimeMinSec)
+                        },
+                    );
+                    g.end(6, false)
                 }
+                0x70 => {
+                    let frame = rt::fixed::<6>(frame)?;
+                    rt::Ok(Self::SetCounter {
+                        counter: u16::from_be_bytes([frame[2], frame[3]]),
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, false)),
             }
-            let mut code = 0u32;
-            for b in frame
-                .iter()
-                .skip(0usize)
-                .take(frame.len().saturating_sub(0usize + 2usize).min(1usize))
-            {
-                code = (code << 8) | *b as u32;
-            }
-            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownCommand {
-                offset: 0usize,
-                code,
-            })
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
         /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
-        #[allow(clippy::unnecessary_cast)]
         pub fn from_fields<'v>(
             name: &str,
-            mut field: impl FnMut(
-                &'static str,
-            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
-            let _ = &mut field;
+            mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
+        ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_runtime_hours" => {
-                    ::core::result::Result::Ok(Self::ReadRuntimeHours)
-                }
-                "read_runtime_min_sec" => {
-                    ::core::result::Result::Ok(Self::ReadRuntimeMinSec)
-                }
+                "read_runtime_hours" => rt::Ok(Self::ReadRuntimeHours),
+                "read_runtime_min_sec" => rt::Ok(Self::ReadRuntimeMinSec),
                 "set_counter" => {
-                    let v_counter = ::busspec_runtime::field_int(
-                        "counter",
-                        field("counter"),
-                        0,
-                        65535,
-                    )? as u16;
-                    ::core::result::Result::Ok(Self::SetCounter {
-                        counter: v_counter,
+                    rt::Ok(Self::SetCounter {
+                        counter: rt::get(&mut field, "counter")?,
                     })
                 }
-                _ => {
-                    ::core::result::Result::Err(
-                        ::busspec_runtime::FieldError::UnknownMessage,
-                    )
-                }
+                _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
     }
-    impl ::busspec_runtime::Message for Request {
+    impl rt::Message for Request {
         #[inline]
         fn name(&self) -> &'static str {
             Request::name(self)
@@ -393,10 +235,7 @@ pub mod mini_crc {
             Request::frame_len(self)
         }
         #[inline]
-        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
-            &self,
-            f: F,
-        ) {
+        fn visit<F: FnMut(&'static str, rt::FieldValue<'_>)>(&self, f: F) {
             Request::visit(self, f)
         }
         #[inline]
@@ -404,129 +243,42 @@ pub mod mini_crc {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+        ) -> rt::Result<usize, rt::EncodeError> {
             Request::encode(self, address, buf)
         }
         #[inline]
-        fn from_fields<
-            'v,
-            F: FnMut(
-                    &'static str,
-                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        >(
+        fn from_fields<'v, F: FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>>(
             name: &str,
             field: F,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+        ) -> rt::Result<Self, rt::FieldError> {
             Request::from_fields(name, field)
         }
     }
     impl Request {
+        /// Each command's kind, whether it accepts and answers the broadcast address, and the
+        /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
+            (rt::Getter, false, false, 0x1),
+            (rt::Getter, false, false, 0x2),
+            (rt::Setter, true, false, 0x4),
+        ];
         /// What the command does, as the spec classifies it.
-        pub const fn kind(&self) -> ::busspec_runtime::CommandKind {
-            match self {
-                Request::ReadRuntimeHours => ::busspec_runtime::CommandKind::Getter,
-                Request::ReadRuntimeMinSec => ::busspec_runtime::CommandKind::Getter,
-                Request::SetCounter { .. } => ::busspec_runtime::CommandKind::Setter,
-            }
+        pub const fn kind(&self) -> rt::CommandKind {
+            Self::COMMANDS[self.index()].0
         }
         /// Whether the command may go to the broadcast address, and whether it is then
         /// answered.
-        pub const fn broadcast(&self) -> ::busspec_runtime::Broadcast {
-            match self {
-                Request::ReadRuntimeHours => {
-                    ::busspec_runtime::Broadcast {
-                        accepted: false,
-                        answered: false,
-                    }
-                }
-                Request::ReadRuntimeMinSec => {
-                    ::busspec_runtime::Broadcast {
-                        accepted: false,
-                        answered: false,
-                    }
-                }
-                Request::SetCounter { .. } => {
-                    ::busspec_runtime::Broadcast {
-                        accepted: true,
-                        answered: false,
-                    }
-                }
+        pub const fn broadcast(&self) -> rt::Broadcast {
+            let c = Self::COMMANDS[self.index()];
+            rt::Broadcast {
+                accepted: c.1,
+                answered: c.2,
             }
         }
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_request_read_runtime_hours(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        if frame[1usize] == 31u8 {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::BroadcastNotAccepted {
-                message: "read_runtime_hours",
-                code: 105u32,
-                address: 31u8,
-            });
+        /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
+        const fn replies(&self) -> u64 {
+            Self::COMMANDS[self.index()].3
         }
-        let field_0: u8 = u8::from_be_bytes([frame[2]]);
-        if field_0 as u64 != 0x1u8 as u64 {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
-                field: "selector",
-                offset: 2usize,
-                found: field_0 as u32,
-            });
-        }
-        let field_1: u8 = u8::from_be_bytes([frame[3]]);
-        if field_1 as u64 != 0x0u8 as u64 {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
-                field: "arg2",
-                offset: 3usize,
-                found: field_1 as u32,
-            });
-        }
-        ::core::result::Result::Ok(Request::ReadRuntimeHours)
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_request_read_runtime_min_sec(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        if frame[1usize] == 31u8 {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::BroadcastNotAccepted {
-                message: "read_runtime_min_sec",
-                code: 105u32,
-                address: 31u8,
-            });
-        }
-        let field_0: u8 = u8::from_be_bytes([frame[2]]);
-        if field_0 as u64 != 0x2u8 as u64 {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
-                field: "selector",
-                offset: 2usize,
-                found: field_0 as u32,
-            });
-        }
-        let field_1: u8 = u8::from_be_bytes([frame[3]]);
-        if field_1 as u64 != 0x0u8 as u64 {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::InvalidValue {
-                field: "arg2",
-                offset: 3usize,
-                found: field_1 as u32,
-            });
-        }
-        ::core::result::Result::Ok(Request::ReadRuntimeMinSec)
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_request_set_counter(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Request, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-        let v_counter = field_0 as u16;
-        ::core::result::Result::Ok(Request::SetCounter {
-            counter: v_counter,
-        })
     }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -535,13 +287,11 @@ pub mod mini_crc {
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
         /// §3.1 Run-time hours (code `0x22`, 6 bytes).
-        ///
         RuntimeHours {
             /// \[h\]
             hours: u16,
         },
         /// §3.2 Run-time minutes and seconds (code `0x22`, 6 bytes).
-        ///
         RuntimeMinSec {
             /// \[min\] Valid raw range 0..=59.
             minutes: u8,
@@ -549,57 +299,48 @@ pub mod mini_crc {
             seconds: u8,
         },
         /// §3.3 Counter echo (code `0x70`, 6 bytes).
-        ///
         CounterEcho { counter: u16 },
     }
     impl Response {
+        /// Each message's spec name, code and frame length, in spec order.
+        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
+            ("runtime_hours", &[0x22], 6),
+            ("runtime_min_sec", &[0x22], 6),
+            ("counter_echo", &[0x70], 6),
+        ];
+        /// This message's row in [`Self::MESSAGES`].
+        const fn index(&self) -> usize {
+            match self {
+                Self::RuntimeHours { .. } => 0,
+                Self::RuntimeMinSec { .. } => 1,
+                Self::CounterEcho { .. } => 2,
+            }
+        }
         /// The spec's snake_case name of this message.
         pub const fn name(&self) -> &'static str {
-            #[allow(unused_variables)]
-            match self {
-                Self::RuntimeHours { hours: v_hours } => "runtime_hours",
-                Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
-                    "runtime_min_sec"
-                }
-                Self::CounterEcho { counter: v_counter } => "counter_echo",
-            }
+            Self::MESSAGES[self.index()].0
         }
         /// The command or response code, as sent.
         pub const fn code(&self) -> &'static [u8] {
-            #[allow(unused_variables)]
-            match self {
-                Self::RuntimeHours { hours: v_hours } => &[34u8],
-                Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => &[34u8],
-                Self::CounterEcho { counter: v_counter } => &[112u8],
-            }
+            Self::MESSAGES[self.index()].1
         }
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
-            #[allow(unused_variables)]
-            match self {
-                Self::RuntimeHours { hours: v_hours } => 6usize,
-                Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => 6usize,
-                Self::CounterEcho { counter: v_counter } => 6usize,
-            }
+            Self::MESSAGES[self.index()].2
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(
-            &self,
-            mut f: impl FnMut(&'static str, ::busspec_runtime::FieldValue<'_>),
-        ) {
-            let _ = &mut f;
-            #[allow(unused_variables)]
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
                 Self::RuntimeHours { hours: v_hours } => {
-                    f("hours", ::busspec_runtime::FieldValue::Int(*v_hours as i64));
+                    f("hours", rt::Int(*v_hours as i64))
                 }
                 Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
-                    f("minutes", ::busspec_runtime::FieldValue::Int(*v_minutes as i64));
-                    f("seconds", ::busspec_runtime::FieldValue::Int(*v_seconds as i64));
+                    f("minutes", rt::Int(*v_minutes as i64));
+                    f("seconds", rt::Int(*v_seconds as i64));
                 }
                 Self::CounterEcho { counter: v_counter } => {
-                    f("counter", ::busspec_runtime::FieldValue::Int(*v_counter as i64));
+                    f("counter", rt::Int(*v_counter as i64))
                 }
             }
         }
@@ -610,93 +351,30 @@ pub mod mini_crc {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
-            let _ = 6usize;
-            if !(1u8..=30u8).contains(&address) && address != 31u8 {
-                return ::core::result::Result::Err(::busspec_runtime::EncodeError::BadAddress {
-                    address,
-                    min: 1u8,
-                    max: 30u8,
-                });
-            }
-            let len: usize = match *self {
+        ) -> rt::Result<usize, rt::EncodeError> {
+            rt::encode_address(address, &FRAME)?;
+            let len = match *self {
                 Self::RuntimeHours { hours: v_hours } => {
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[1usize] = address;
-                    out[0usize] = 34u8;
-                    let field_0: u16 = v_hours;
-                    out[2usize..4usize].copy_from_slice(&field_0.to_be_bytes());
-                    6usize
+                    let out = rt::frame_mut::<6>(buf, &[0x22, address])?;
+                    out[2..4].copy_from_slice(&v_hours.to_be_bytes());
+                    out.len()
                 }
                 Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
-                    let raw = v_minutes as i64;
-                    if !(0i64..=59i64).contains(&raw) {
-                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
-                            field: "minutes",
-                            value: raw,
-                            min: 0i64,
-                            max: 59i64,
-                        });
-                    }
-                    let raw = v_seconds as i64;
-                    if !(0i64..=59i64).contains(&raw) {
-                        return ::core::result::Result::Err(::busspec_runtime::EncodeError::NotInRange {
-                            field: "seconds",
-                            value: raw,
-                            min: 0i64,
-                            max: 59i64,
-                        });
-                    }
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[1usize] = address;
-                    out[0usize] = 34u8;
-                    let field_0: u8 = v_minutes;
-                    out[2usize..3usize].copy_from_slice(&field_0.to_be_bytes());
-                    let field_1: u8 = v_seconds;
-                    out[3usize..4usize].copy_from_slice(&field_1.to_be_bytes());
-                    6usize
+                    rt::encode_in_range("minutes", v_minutes, 0, 59)?;
+                    rt::encode_in_range("seconds", v_seconds, 0, 59)?;
+                    let out = rt::frame_mut::<6>(buf, &[0x22, address])?;
+                    out[2] = v_minutes;
+                    out[3] = v_seconds;
+                    out.len()
                 }
                 Self::CounterEcho { counter: v_counter } => {
-                    let available = buf.len();
-                    let out: &mut [u8; 6usize] = buf
-                        .get_mut(..6usize)
-                        .and_then(|s| s.try_into().ok())
-                        .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                            needed: 6usize,
-                            available,
-                        })?;
-                    out[1usize] = address;
-                    out[0usize] = 112u8;
-                    let field_0: u16 = v_counter;
-                    out[2usize..4usize].copy_from_slice(&field_0.to_be_bytes());
-                    6usize
+                    let out = rt::frame_mut::<6>(buf, &[0x70, address])?;
+                    out[2..4].copy_from_slice(&v_counter.to_be_bytes());
+                    out.len()
                 }
             };
-            let available = buf.len();
-            let frame = buf
-                .get_mut(..len)
-                .ok_or(::busspec_runtime::EncodeError::BufferTooSmall {
-                    needed: len,
-                    available,
-                })?;
-            let at = len - 2usize;
-            let sum = checksum(&frame[..at]);
-            frame[at..].copy_from_slice(&sum.to_be_bytes());
-            ::core::result::Result::Ok(len)
+            rt::seal(buf, len, |b| u32::from(checksum(b)), 2, true);
+            rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
@@ -705,10 +383,8 @@ pub mod mini_crc {
         /// Responses that only their request tells apart are reported as
         /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
         #[inline]
-        pub fn decode(
-            frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
-            Self::decode_for(frame, ::core::option::Option::None)
+        pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
         }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
@@ -717,261 +393,95 @@ pub mod mini_crc {
         pub fn decode_reply(
             frame: &[u8],
             request: &Request,
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
-            Self::decode_for(frame, ::core::option::Option::Some(request))
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
         }
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
         /// [`Self::decode_reply`].
         fn decode_for(
             frame: &[u8],
-            request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
-            if frame.len() > 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::TooLong {
-                    max: 6usize,
-                    found: frame.len(),
-                });
-            }
-            if frame.len() < 6usize {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Truncated {
-                    needed: 6usize,
-                    found: frame.len(),
-                });
-            }
-            let at = frame.len() - 2usize;
-            let mut sum_bytes = [0u8; 2usize];
-            sum_bytes.copy_from_slice(&frame[at..]);
-            let found = u16::from_be_bytes(sum_bytes);
-            let expected = checksum(&frame[..at]);
-            if found != expected {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::ChecksumMismatch {
-                    offset: at,
-                    expected: expected as u32,
-                    found: found as u32,
-                });
-            }
-            let address = frame[1usize];
-            if !(1u8..=30u8).contains(&address) && address != 31u8 {
-                return ::core::result::Result::Err(::busspec_runtime::DecodeError::BadAddress {
-                    offset: 1usize,
-                    found: address,
-                    min: 1u8,
-                    max: 30u8,
-                });
-            }
-            #[allow(unused_mut)]
-            let mut last: ::core::option::Option<::busspec_runtime::DecodeError> = ::core::option::Option::None;
-            if frame.len() >= 3usize {
-                let code: u32 = 0u32 | ((frame[0usize] as u32) << 0u32);
-                #[allow(unreachable_patterns)]
-                match code {
-                    34 => {
-                        let mut admitted = false;
-                        let mut found: ::core::option::Option<Response> = ::core::option::Option::None;
-                        if match request {
-                            ::core::option::Option::None => true,
-                            ::core::option::Option::Some(r) => {
-                                matches!(r, Request::ReadRuntimeHours)
-                            }
-                        } {
-                            admitted = true;
-                            if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                                frame,
-                            ) {
-                                match decode_response_runtime_hours(a) {
-                                    ::core::result::Result::Ok(m) => {
-                                        if request.is_none() {
-                                            if found.is_some() {
-                                                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Ambiguous {
-                                                    code: 34u32,
-                                                });
-                                            }
-                                            found = ::core::option::Option::Some(m);
-                                        } else {
-                                            return ::core::result::Result::Ok(Decoded {
-                                                address,
-                                                message: m,
-                                            });
-                                        }
-                                    }
-                                    ::core::result::Result::Err(e) => {
-                                        last = ::core::option::Option::Some(e);
-                                    }
-                                }
-                            }
-                        }
-                        if match request {
-                            ::core::option::Option::None => true,
-                            ::core::option::Option::Some(r) => {
-                                matches!(r, Request::ReadRuntimeMinSec)
-                            }
-                        } {
-                            admitted = true;
-                            if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                                frame,
-                            ) {
-                                match decode_response_runtime_min_sec(a) {
-                                    ::core::result::Result::Ok(m) => {
-                                        if request.is_none() {
-                                            if found.is_some() {
-                                                return ::core::result::Result::Err(::busspec_runtime::DecodeError::Ambiguous {
-                                                    code: 34u32,
-                                                });
-                                            }
-                                            found = ::core::option::Option::Some(m);
-                                        } else {
-                                            return ::core::result::Result::Ok(Decoded {
-                                                address,
-                                                message: m,
-                                            });
-                                        }
-                                    }
-                                    ::core::result::Result::Err(e) => {
-                                        last = ::core::option::Option::Some(e);
-                                    }
-                                }
-                            }
-                        }
-                        if let ::core::option::Option::Some(m) = found {
-                            return ::core::result::Result::Ok(Decoded {
-                                address,
-                                message: m,
-                            });
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(
-                                    if admitted {
-                                        ::busspec_runtime::DecodeError::WrongLength {
-                                            expected: 6usize,
-                                            found: frame.len(),
-                                        }
-                                    } else {
-                                        ::busspec_runtime::DecodeError::NotAReply {
-                                            code: 34u32,
-                                        }
-                                    },
-                                ),
-                        );
-                    }
-                    112 => {
-                        let mut admitted = false;
-                        if match request {
-                            ::core::option::Option::None => true,
-                            ::core::option::Option::Some(r) => {
-                                matches!(r, Request::SetCounter { .. })
-                            }
-                        } {
-                            admitted = true;
-                            if let ::core::result::Result::Ok(a) = <&[u8; 6usize]>::try_from(
-                                frame,
-                            ) {
-                                match decode_response_counter_echo(a) {
-                                    ::core::result::Result::Ok(m) => {
-                                        return ::core::result::Result::Ok(Decoded {
-                                            address,
-                                            message: m,
-                                        });
-                                    }
-                                    ::core::result::Result::Err(e) => {
-                                        last = ::core::option::Option::Some(e);
-                                    }
-                                }
-                            }
-                        }
-                        return ::core::result::Result::Err(
-                            last
-                                .unwrap_or(
-                                    if admitted {
-                                        ::busspec_runtime::DecodeError::WrongLength {
-                                            expected: 6usize,
-                                            found: frame.len(),
-                                        }
-                                    } else {
-                                        ::busspec_runtime::DecodeError::NotAReply {
-                                            code: 112u32,
-                                        }
-                                    },
-                                ),
-                        );
-                    }
-                    _ => {}
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                6,
+                6,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
+            let message = Self::dispatch(frame, request)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(
+            frame: &[u8],
+            request: rt::Option<&Request>,
+        ) -> rt::DecodeResult<Self> {
+            let asked: u64 = request.map_or(!0, Request::replies);
+            match rt::code(frame, 0, 1) {
+                0x22 => {
+                    let mut g = rt::Group::new(frame, 0x22, request.is_none());
+                    g.ambiguous(
+                        asked & 1 != 0,
+                        |frame: &[u8; 6]| {
+                            rt::Ok(Self::RuntimeHours {
+                                hours: u16::from_be_bytes([frame[2], frame[3]]),
+                            })
+                        },
+                    );
+                    g.ambiguous(
+                        asked >> 1 & 1 != 0,
+                        |frame: &[u8; 6]| {
+                            rt::in_range("minutes", 2, frame[2], 0, 59)?;
+                            rt::in_range("seconds", 3, frame[3], 0, 59)?;
+                            rt::Ok(Self::RuntimeMinSec {
+                                minutes: frame[2],
+                                seconds: frame[3],
+                            })
+                        },
+                    );
+                    g.end(6, true)
                 }
+                0x70 => {
+                    let frame = rt::reply::<6>(frame, asked >> 2 & 1 != 0, 0x70)?;
+                    rt::Ok(Self::CounterEcho {
+                        counter: u16::from_be_bytes([frame[2], frame[3]]),
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, true)),
             }
-            let mut code = 0u32;
-            for b in frame
-                .iter()
-                .skip(0usize)
-                .take(frame.len().saturating_sub(0usize + 2usize).min(1usize))
-            {
-                code = (code << 8) | *b as u32;
-            }
-            ::core::result::Result::Err(::busspec_runtime::DecodeError::UnknownResponse {
-                offset: 0usize,
-                code,
-            })
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
         /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
-        #[allow(clippy::unnecessary_cast)]
         pub fn from_fields<'v>(
             name: &str,
-            mut field: impl FnMut(
-                &'static str,
-            ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
-            let _ = &mut field;
+            mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
+        ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "runtime_hours" => {
-                    let v_hours = ::busspec_runtime::field_int(
-                        "hours",
-                        field("hours"),
-                        0,
-                        65535,
-                    )? as u16;
-                    ::core::result::Result::Ok(Self::RuntimeHours {
-                        hours: v_hours,
+                    rt::Ok(Self::RuntimeHours {
+                        hours: rt::get(&mut field, "hours")?,
                     })
                 }
                 "runtime_min_sec" => {
-                    let v_minutes = ::busspec_runtime::field_int(
-                        "minutes",
-                        field("minutes"),
-                        0,
-                        255,
-                    )? as u8;
-                    let v_seconds = ::busspec_runtime::field_int(
-                        "seconds",
-                        field("seconds"),
-                        0,
-                        255,
-                    )? as u8;
-                    ::core::result::Result::Ok(Self::RuntimeMinSec {
-                        minutes: v_minutes,
-                        seconds: v_seconds,
+                    rt::Ok(Self::RuntimeMinSec {
+                        minutes: rt::get(&mut field, "minutes")?,
+                        seconds: rt::get(&mut field, "seconds")?,
                     })
                 }
                 "counter_echo" => {
-                    let v_counter = ::busspec_runtime::field_int(
-                        "counter",
-                        field("counter"),
-                        0,
-                        65535,
-                    )? as u16;
-                    ::core::result::Result::Ok(Self::CounterEcho {
-                        counter: v_counter,
+                    rt::Ok(Self::CounterEcho {
+                        counter: rt::get(&mut field, "counter")?,
                     })
                 }
-                _ => {
-                    ::core::result::Result::Err(
-                        ::busspec_runtime::FieldError::UnknownMessage,
-                    )
-                }
+                _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
     }
-    impl ::busspec_runtime::Message for Response {
+    impl rt::Message for Response {
         #[inline]
         fn name(&self) -> &'static str {
             Response::name(self)
@@ -985,10 +495,7 @@ pub mod mini_crc {
             Response::frame_len(self)
         }
         #[inline]
-        fn visit<F: FnMut(&'static str, ::busspec_runtime::FieldValue<'_>)>(
-            &self,
-            f: F,
-        ) {
+        fn visit<F: FnMut(&'static str, rt::FieldValue<'_>)>(&self, f: F) {
             Response::visit(self, f)
         }
         #[inline]
@@ -996,101 +503,27 @@ pub mod mini_crc {
             &self,
             address: u8,
             buf: &mut [u8],
-        ) -> ::core::result::Result<usize, ::busspec_runtime::EncodeError> {
+        ) -> rt::Result<usize, rt::EncodeError> {
             Response::encode(self, address, buf)
         }
         #[inline]
-        fn from_fields<
-            'v,
-            F: FnMut(
-                    &'static str,
-                ) -> ::core::option::Option<::busspec_runtime::FieldValue<'v>>,
-        >(
+        fn from_fields<'v, F: FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>>(
             name: &str,
             field: F,
-        ) -> ::core::result::Result<Self, ::busspec_runtime::FieldError> {
+        ) -> rt::Result<Self, rt::FieldError> {
             Response::from_fields(name, field)
         }
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_response_runtime_hours(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-        let v_hours = field_0 as u16;
-        ::core::result::Result::Ok(Response::RuntimeHours {
-            hours: v_hours,
-        })
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_response_runtime_min_sec(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u8 = u8::from_be_bytes([frame[2]]);
-        let raw = field_0 as i64;
-        if !(0i64..=59i64).contains(&raw) {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
-                field: "minutes",
-                offset: 2usize,
-                found: raw,
-                min: 0i64,
-                max: 59i64,
-            });
-        }
-        let v_minutes = field_0 as u8;
-        let field_1: u8 = u8::from_be_bytes([frame[3]]);
-        let raw = field_1 as i64;
-        if !(0i64..=59i64).contains(&raw) {
-            return ::core::result::Result::Err(::busspec_runtime::DecodeError::OutOfRange {
-                field: "seconds",
-                offset: 3usize,
-                found: raw,
-                min: 0i64,
-                max: 59i64,
-            });
-        }
-        let v_seconds = field_1 as u8;
-        ::core::result::Result::Ok(Response::RuntimeMinSec {
-            minutes: v_minutes,
-            seconds: v_seconds,
-        })
-    }
-    #[inline]
-    #[allow(clippy::unnecessary_cast, clippy::identity_op)]
-    fn decode_response_counter_echo(
-        frame: &[u8; 6usize],
-    ) -> ::core::result::Result<Response, ::busspec_runtime::DecodeError> {
-        let _ = frame;
-        let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-        let v_counter = field_0 as u16;
-        ::core::result::Result::Ok(Response::CounterEcho {
-            counter: v_counter,
-        })
     }
     impl Response {
         /// Whether this response is one the document says `request` may get.
         pub fn answers(&self, request: &Request) -> bool {
-            match request {
-                Request::ReadRuntimeHours => {
-                    matches!(self, Response::RuntimeHours { .. })
-                }
-                Request::ReadRuntimeMinSec => {
-                    matches!(self, Response::RuntimeMinSec { .. })
-                }
-                Request::SetCounter { .. } => {
-                    matches!(self, Response::CounterEcho { .. })
-                }
-            }
+            request.replies() >> self.index() & 1 != 0
         }
     }
     /// The mini_crc protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct MiniCrc;
-    impl ::busspec_runtime::Protocol for MiniCrc {
+    impl rt::Protocol for MiniCrc {
         type Request = Request;
         type Response = Response;
         type Buffer = [u8; MAX_FRAME_LEN];
@@ -1102,25 +535,25 @@ pub mod mini_crc {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[6usize];
+        const FRAME_LENGTHS: &'static [usize] = &[6];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         const BAUD: u32 = BAUD;
-        const INTER_FRAME_GAP_MS: ::core::option::Option<u32> = INTER_FRAME_GAP_MS;
-        const MAX_FRAMES_PER_S: ::core::option::Option<u32> = MAX_FRAMES_PER_S;
-        const DEVICE_ADDRESSES: ::core::ops::RangeInclusive<u8> = DEVICE_ADDRESSES;
-        const BROADCAST_ADDRESS: ::core::option::Option<u8> = BROADCAST_ADDRESS;
-        const HOST_ADDRESS: ::core::option::Option<u8> = HOST_ADDRESS;
+        const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
+        const MAX_FRAMES_PER_S: rt::Option<u32> = MAX_FRAMES_PER_S;
+        const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
+        const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
+        const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
         #[inline]
         fn decode_request(
             frame: &[u8],
-        ) -> ::core::result::Result<Decoded<Request>, ::busspec_runtime::DecodeError> {
+        ) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             Request::decode(frame)
         }
         #[inline]
         fn decode_response_for(
             frame: &[u8],
-            request: ::core::option::Option<&Request>,
-        ) -> ::core::result::Result<Decoded<Response>, ::busspec_runtime::DecodeError> {
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Response::decode_for(frame, request)
         }
         #[inline]
@@ -1128,41 +561,33 @@ pub mod mini_crc {
             response.answers(request)
         }
         #[inline]
-        fn kind(request: &Request) -> ::busspec_runtime::CommandKind {
+        fn kind(request: &Request) -> rt::CommandKind {
             request.kind()
         }
         #[inline]
-        fn broadcast(request: &Request) -> ::busspec_runtime::Broadcast {
+        fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
         }
-        fn is_nak(response: &Response) -> bool {
-            {
-                let _ = response;
-                false
-            }
+        fn is_nak(_response: &Response) -> bool {
+            false
         }
         fn checksum_ok(frame: &[u8]) -> bool {
-            match frame.len().checked_sub(2usize) {
-                ::core::option::Option::Some(n) if n > 0 => {
-                    let (body, tail) = frame.split_at(n);
-                    checksum(body).to_be_bytes() == *tail
+            match frame.len().checked_sub(2) {
+                rt::Some(n) if n > 0 => {
+                    rt::check_sum(frame, n, &FRAME, |b| u32::from(checksum(b)))
                 }
                 _ => false,
             }
         }
-        fn candidates(head: &[u8]) -> ::busspec_runtime::stream::Candidates {
-            let mask: u128 = match head.get(0usize) {
-                ::core::option::Option::None => 0x10000000000000001,
-                ::core::option::Option::Some(&b) => {
-                    match b {
-                        0x22 => 0x10000000000000000,
-                        0x69 => 0x1,
-                        0x70 => 0x10000000000000001,
-                        _ => 0,
-                    }
-                }
+        fn candidates(head: &[u8]) -> rt::Candidates {
+            let mask: u128 = match head.first() {
+                rt::None => 0x10000000000000001,
+                rt::Some(0x22) => 0x10000000000000000,
+                rt::Some(0x69) => 0x1,
+                rt::Some(0x70) => 0x10000000000000001,
+                _ => 0,
             };
-            ::busspec_runtime::stream::Candidates {
+            rt::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
             }

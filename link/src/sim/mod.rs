@@ -7,6 +7,8 @@
 //! the wire at the bus's baud rate, replies come after a short latency, and replies that overlap
 //! in time collide. [`serve`] runs simulators on a real transport (a pseudo-terminal) instead.
 
+#[cfg(all(unix, feature = "serial"))]
+pub mod pty;
 pub mod sd;
 pub mod ub2;
 
@@ -29,14 +31,33 @@ pub trait Device {
     fn address(&self) -> u8;
 }
 
+impl<D: Device + ?Sized> Device for Box<D> {
+    fn on_frame(&mut self, frame: &[u8], now: Duration) -> Option<Vec<u8>> {
+        (**self).on_frame(frame, now)
+    }
+    fn address(&self) -> u8 {
+        (**self).address()
+    }
+}
+
 /// Line parameters of a simulated bus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct BusConfig {
     pub baud: u32,
     /// Quiet time after which a device takes the bytes received so far as one frame.
     pub frame_gap: Duration,
-    /// Time a device takes between the end of a request and the first byte of its reply.
+    /// Time a device takes between the end of a request and the first byte of its reply (its
+    /// turnaround).
     pub reply_latency: Duration,
+    /// The master's adapter hears its own transmission: every byte written comes back to the
+    /// master as it leaves (a two-wire RS485 adapter without echo suppression).
+    pub echo: bool,
+    /// Another transmitter drives the bus during byte `n` of every request: that byte is
+    /// garbled (inverted) for the devices and in the echo alike. A collision.
+    pub collide_at: Option<usize>,
+    /// The master's transceiver drives the bus only while its driver-enable line is high
+    /// ([`Transport::set_driver_enable`]): bytes written while it is low reach nobody.
+    pub driver_enable_required: bool,
 }
 
 impl BusConfig {
@@ -45,6 +66,9 @@ impl BusConfig {
             baud,
             frame_gap: Duration::from_millis(2),
             reply_latency: Duration::from_millis(1),
+            echo: false,
+            collide_at: None,
+            driver_enable_required: false,
         }
     }
 
@@ -66,6 +90,8 @@ struct Inner<D> {
     /// When set, devices see this time instead of the bus clock (the soak holds time still
     /// within a transaction, so a reference copy of a device can answer the same question).
     frozen: Option<Duration>,
+    /// The master's driver-enable line.
+    driver_enabled: bool,
 }
 
 impl<D: Device> Inner<D> {
@@ -122,6 +148,7 @@ impl<D: Device> SimBus<D> {
                 pending_end: Duration::ZERO,
                 rx: VecDeque::new(),
                 frozen: None,
+                driver_enabled: false,
             })),
         }
     }
@@ -154,10 +181,35 @@ impl<D: Device> Transport for SimBus<D> {
         if !bus.pending.is_empty() && now >= bus.pending_end + bus.config.frame_gap {
             bus.deliver();
         }
-        bus.pending.extend_from_slice(bytes);
+        let start = bus.clock.now();
         let took = bus.config.byte_time() * bytes.len() as u32;
         bus.clock.advance(took);
+        if bus.config.driver_enable_required && !bus.driver_enabled {
+            // The transceiver is not driving: the bytes never reach the bus.
+            return Ok(());
+        }
+        let offset = bus.pending.len();
+        let mut on_bus = bytes.to_vec();
+        if let Some(n) = bus.config.collide_at {
+            if let Some(b) = n.checked_sub(offset).and_then(|i| on_bus.get_mut(i)) {
+                *b = !*b;
+            }
+        }
+        if bus.config.echo {
+            let byte = bus.config.byte_time();
+            let last = bus.rx.back().map(|(t, _)| *t);
+            for (i, &b) in on_bus.iter().enumerate() {
+                let t = start + byte * (i as u32 + 1);
+                bus.rx.push_back((last.map_or(t, |l| t.max(l)), b));
+            }
+        }
+        bus.pending.extend_from_slice(&on_bus);
         bus.pending_end = bus.clock.now();
+        Ok(())
+    }
+
+    fn set_driver_enable(&mut self, on: bool) -> io::Result<()> {
+        self.inner.borrow_mut().driver_enabled = on;
         Ok(())
     }
 

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The clean release build of a minimal consumer of busspec-protocols: a binary crate depending
+# on it by path and decoding one frame, built in a fresh target directory. Prints the machine
+# load before and after (other builds on the machine slow it down) and cargo's wall time.
+# Usage: bash benches/build-cost.sh [--timings]
+set -euo pipefail
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+mkdir -p "$tmp/consumer/src"
+cat >"$tmp/consumer/Cargo.toml" <<TOML
+[package]
+name = "consumer"
+version = "0.1.0"
+edition = "2021"
+publish = false
+
+[dependencies]
+busspec-protocols = { path = "$repo/generated" }
+
+[workspace]
+TOML
+cat >"$tmp/consumer/src/main.rs" <<'RS'
+use busspec_protocols::sd;
+
+fn main() {
+    let frame = [0x69u8, 0x01, 0x00, 0x00, 0x00, 0x00];
+    println!("{:?}", sd::Request::decode(&frame));
+}
+RS
+# The workspace's lock file, so the consumer builds the same dependency versions.
+cp "$repo/Cargo.lock" "$tmp/consumer/Cargo.lock"
+cd "$tmp/consumer"
+echo "load before: $(uptime)"
+start=$(date +%s.%N)
+cargo build --release --target-dir "$tmp/target" "$@"
+end=$(date +%s.%N)
+echo "load after: $(uptime)"
+awk -v s="$start" -v e="$end" 'BEGIN { printf "clean release build: %.1f s\n", e - s }'
+# With --timings, the slowest units (the report itself goes with the temporary directory).
+for html in "$tmp"/target/cargo-timings/cargo-timing.html; do
+  [[ -f $html ]] || continue
+  python3 - "$html" <<'PY'
+import json, re, sys
+units = json.loads(re.search(r"const UNIT_DATA = (\[.*?\]);", open(sys.argv[1]).read(), re.S).group(1))
+for u in sorted(units, key=lambda u: -u["duration"])[:8]:
+    print(f"{u['name']} {u['version']}: {u['duration']:.1f} s (from {u['start']:.1f} s)")
+PY
+done

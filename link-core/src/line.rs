@@ -1,0 +1,79 @@
+//! The wire a master sits on: baud rate and frame bits, and the habits of real RS485 wiring
+//! the documents never mention.
+//!
+//! - **Local echo**: many two-wire adapters hear their own transmission. With
+//!   [`Line::echo`] set, the master reads back exactly the bytes it just sent before it waits
+//!   for a reply; an echo that differs is a collision on the bus
+//!   ([`crate::master::Failure::Collision`], with the offset and both bytes).
+//! - **Driver enable**: a half-duplex transceiver drives the bus only while its DE line is
+//!   high. With [`Line::driver_enable`] set, the master raises it before the first byte and
+//!   lowers it once the last byte has left the shift register: when the UART's flush says so
+//!   ([`DriverEnable::Flushed`]), or at the time [`Line::tx_time`] computes from the baud rate
+//!   and the frame bits ([`DriverEnable::Computed`]) when the UART cannot say.
+//! - **Turnaround**: the time a device needs to switch its own transceiver before it can
+//!   answer; the reply timeout starts after it ([`Line::turnaround`]).
+
+use core::time::Duration;
+
+use busspec_runtime::Protocol;
+
+/// When the driver-enable line may drop after a transmission.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DriverEnable {
+    /// The UART's flush returns once the last stop bit is out: drop the line right after it.
+    Flushed,
+    /// The UART cannot say: drop the line [`Line::tx_time`] after the write began.
+    Computed,
+}
+
+/// The line parameters and RS485 habits of one port.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Line {
+    /// Bits per second.
+    pub baud: u32,
+    /// Bits one byte takes on the wire: start, data, parity and stop bits (10 for 8N1).
+    pub bits_per_byte: u32,
+    /// The adapter echoes every byte sent: read it back and compare before the reply.
+    pub echo: bool,
+    /// Drive a driver-enable line around each transmission, and how to time its end.
+    pub driver_enable: Option<DriverEnable>,
+    /// Time the device needs before its reply can start; added to the reply timeout.
+    pub turnaround: Duration,
+}
+
+impl Line {
+    /// The protocol's baud rate, 8N1, no echo, no driver-enable line, no turnaround: a plain
+    /// full-duplex port or a USB adapter that switches direction by itself.
+    pub const fn for_protocol<P: Protocol>() -> Line {
+        Line {
+            baud: P::BAUD,
+            bits_per_byte: 10,
+            echo: false,
+            driver_enable: None,
+            turnaround: Duration::ZERO,
+        }
+    }
+
+    /// How long `bytes` bytes take on the wire, rounded up to the nanosecond.
+    pub const fn tx_time(&self, bytes: usize) -> Duration {
+        let bits = bytes as u64 * self.bits_per_byte as u64;
+        let baud = if self.baud == 0 { 1 } else { self.baud as u64 };
+        Duration::from_nanos((bits * 1_000_000_000).div_ceil(baud))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transmission_time_follows_baud_and_frame_bits() {
+        let mut l = Line::for_protocol::<busspec_protocols::ub2::Ub2>();
+        assert_eq!(l.baud, 19_200);
+        // 5 bytes × 10 bits at 19,200 baud: 2.604166.. ms, rounded up.
+        assert_eq!(l.tx_time(5), Duration::from_nanos(2_604_167));
+        l.bits_per_byte = 11; // 8E1
+        assert_eq!(l.tx_time(5), Duration::from_nanos(2_864_584));
+        assert_eq!(l.tx_time(0), Duration::ZERO);
+    }
+}

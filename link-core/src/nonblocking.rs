@@ -1,0 +1,144 @@
+//! The async `embedded-io-async` driver (feature `embedded-io-async`): [`MasterCore`](crate::MasterCore) over a
+//! UART that implements [`Read`] + [`Write`] + [`ReadReady`] (embassy's buffered UARTs do),
+//! timed by a [`Now`] and an `embedded-hal-async` [`DelayNs`], with an optional
+//! driver-enable [`OutputPin`].
+//!
+//! A read never waits past its deadline: the driver looks at [`ReadReady`] and awaits the
+//! delay for one byte time (or what is left) in between, so the executor runs other tasks
+//! meanwhile and the UART needs no timeout support.
+
+use embedded_hal::digital::{Error as _, OutputPin};
+use embedded_hal_async::delay::DelayNs;
+use embedded_io_async::{Read, ReadReady, Write};
+
+use crate::driver::{nanos, tick, Async, Error, NoPin, Now};
+use crate::link::Link;
+use crate::master::{Action, Reply};
+use crate::movement::{MoveReport, Movement, Moving, Step};
+
+/// An async master for protocol `P` on the UART `U` (builders: [`crate::driver::Driver`]).
+pub type Driver<P, U, N, D, DE = NoPin> = crate::driver::Driver<P, U, N, D, DE, Async>;
+
+impl<P: Link, U, N, D, DE> Driver<P, U, N, D, DE>
+where
+    U: Read + Write + ReadReady,
+    N: Now,
+    D: DelayNs,
+    DE: OutputPin,
+{
+    /// Sends `request` to `address` and returns the paired reply.
+    pub async fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Reply<P>, Error<P, U::Error>> {
+        self.core.start(address, request);
+        self.run().await
+    }
+
+    /// Sends a movement trigger after the byte-order check before a first movement.
+    pub async fn start_movement(
+        &mut self,
+        address: u8,
+        trigger: P::Request,
+    ) -> Result<Reply<P>, Error<P, U::Error>> {
+        self.core.start_checked(address, trigger);
+        self.run().await
+    }
+
+    /// Runs a movement to its end: the byte-order check before its trigger, then its
+    /// transactions and sleeps; `progress` hears where the device is in between.
+    pub async fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        mut movement: M,
+        mut progress: impl FnMut(Moving),
+    ) -> Result<MoveReport<P::Response>, Error<P, U::Error>> {
+        let trigger = movement.trigger().map_err(Error::Move)?;
+        self.core.start_byte_order_check(address, trigger);
+        self.run().await?;
+        let mut step = movement.next(self.now.now());
+        loop {
+            step = match step {
+                Step::Ask { request, optional } => {
+                    self.core.start(address, request);
+                    match self.run().await {
+                        Ok(Reply {
+                            response: Some(r), ..
+                        }) => movement.answered(self.now.now(), Some(r)),
+                        Ok(_) | Err(Error::Link(_)) if optional => {
+                            movement.answered(self.now.now(), None)
+                        }
+                        Ok(_) => return Err(Error::Unanswered),
+                        Err(e) => return Err(e),
+                    }
+                }
+                Step::Sleep {
+                    until,
+                    progress: moving,
+                } => {
+                    if let Some(m) = moving {
+                        progress(m);
+                    }
+                    let mut now = self.now.now();
+                    while now < until {
+                        self.delay.delay_ns(nanos(until - now)).await;
+                        now = self.now.now();
+                    }
+                    movement.next(now)
+                }
+                Step::Done(report) => return Ok(report),
+                Step::Failed(e) => return Err(Error::Move(e)),
+            }
+        }
+    }
+
+    async fn run(&mut self) -> Result<Reply<P>, Error<P, U::Error>> {
+        let mut chunk = [0u8; 64];
+        loop {
+            let now = self.now.now();
+            let line = self.core.line();
+            match self.core.poll(now) {
+                Action::Done => break,
+                Action::Sleep(t) => {
+                    let mut now = now;
+                    while now < t {
+                        self.delay.delay_ns(nanos(t - now)).await;
+                        now = self.now.now();
+                    }
+                }
+                Action::ClearInput => {
+                    while self.uart.read_ready().map_err(Error::Io)? {
+                        if self.uart.read(&mut chunk).await.map_err(Error::Io)? == 0 {
+                            break;
+                        }
+                    }
+                }
+                Action::EnableDriver => self.de.set_high().map_err(|e| Error::Pin(e.kind()))?,
+                Action::DisableDriver => self.de.set_low().map_err(|e| Error::Pin(e.kind()))?,
+                Action::Write(bytes) => {
+                    self.uart.write_all(bytes).await.map_err(Error::Io)?;
+                    self.uart.flush().await.map_err(Error::Io)?;
+                }
+                Action::Read { until } => loop {
+                    if self.uart.read_ready().map_err(Error::Io)? {
+                        let n = self.uart.read(&mut chunk).await.map_err(Error::Io)?;
+                        self.core.received(&chunk[..n], self.now.now());
+                        break;
+                    }
+                    let now = self.now.now();
+                    if now >= until {
+                        break;
+                    }
+                    self.delay.delay_ns(tick(&line, until - now)).await;
+                },
+            }
+        }
+        while self.core.take_event().is_some() {}
+        match self.core.take_outcome() {
+            Some(Ok(reply)) => Ok(reply),
+            Some(Err(failure)) => Err(Error::Link(failure)),
+            None => unreachable!("the core says Done only with an outcome"),
+        }
+    }
+}

@@ -1,0 +1,198 @@
+//! The tokio driver of [`MasterCore`] (feature `tokio`): the same transactions as
+//! [`crate::Master`], awaited instead of blocked on, so a service can talk to its devices next
+//! to its other I/O and poll several ports concurrently.
+//!
+//! Any [`AsyncPort`] works: a `tokio_serial::SerialStream` (a serial port, or one end of a
+//! pseudo-terminal pair), or a stream of a test's own. Time is tokio's: [`tokio::time`]
+//! (so `tokio::time::pause` makes tests run in virtual time).
+
+use std::io;
+
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::time::Instant;
+
+use busspec_link_core::master::{Action, MasterCore};
+use busspec_link_core::{Line, Link};
+
+use busspec_link_core::movement::{MoveReport, Movement, Moving, Step};
+
+use crate::master::{exchange, link_error, move_error, Exchange, LinkError, Timing};
+
+/// A byte stream a tokio master drives: reads and writes, plus what a serial port does
+/// beyond them.
+pub trait AsyncPort: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin {
+    /// Discards bytes received but not yet read.
+    fn clear_input(&mut self) -> io::Result<()>;
+    /// Drives the RS485 driver-enable line, where the port has one; nothing by default.
+    fn set_driver_enable(&mut self, _on: bool) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+impl AsyncPort for tokio_serial::SerialStream {
+    fn clear_input(&mut self) -> io::Result<()> {
+        tokio_serial::SerialPort::clear(self, tokio_serial::ClearBuffer::Input)
+            .map_err(|e| io::Error::other(e.to_string()))
+    }
+
+    /// RTS as the driver-enable line.
+    fn set_driver_enable(&mut self, on: bool) -> io::Result<()> {
+        tokio_serial::SerialPort::write_request_to_send(self, on)
+            .map_err(|e| io::Error::other(e.to_string()))
+    }
+}
+
+/// A bus master for protocol `P` on the async port `S`.
+pub struct AsyncMaster<P: Link, S: AsyncPort> {
+    port: S,
+    core: MasterCore<P>,
+    epoch: Instant,
+}
+
+impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
+    pub fn new(port: S) -> Self {
+        AsyncMaster {
+            port,
+            core: MasterCore::new(),
+            epoch: Instant::now(),
+        }
+    }
+
+    pub fn with_timing(mut self, timing: Timing) -> Self {
+        self.core.set_timing(timing);
+        self
+    }
+
+    pub fn with_line(mut self, line: Line) -> Self {
+        self.core.set_line(line);
+        self
+    }
+
+    /// The sans-IO core: freshness counters, byte-order checks, timing.
+    pub fn core_mut(&mut self) -> &mut MasterCore<P> {
+        &mut self.core
+    }
+
+    /// Sends `request` to `address` and returns the paired reply.
+    pub async fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Exchange<P::Response>, LinkError> {
+        self.core.start(address, request);
+        self.run().await
+    }
+
+    /// Sends a movement trigger after the byte-order check before a first movement.
+    pub async fn start_movement(
+        &mut self,
+        address: u8,
+        trigger: P::Request,
+    ) -> Result<Exchange<P::Response>, LinkError> {
+        self.core.start_checked(address, trigger);
+        self.run().await
+    }
+
+    /// Like [`AsyncMaster::transact`] for a request that must be answered: the response.
+    pub async fn ask(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<P::Response, LinkError> {
+        let ex = self.transact(address, request).await?;
+        ex.response.ok_or(LinkError::Refused {
+            protocol: P::NAME,
+            request: busspec_runtime::Message::name(&request),
+            address,
+            response: "nothing",
+            detail: "a broadcast of this command is not answered".to_owned(),
+        })
+    }
+
+    /// Runs a movement to its end: the byte-order check before its trigger, then its
+    /// transactions and sleeps; `progress` hears where the device is in between.
+    pub async fn run_movement<M: Movement<P>>(
+        &mut self,
+        address: u8,
+        mut movement: M,
+        mut progress: impl FnMut(Moving),
+    ) -> Result<MoveReport<P::Response>, LinkError> {
+        let trigger = movement.trigger().map_err(|e| move_error(address, e))?;
+        self.core.start_byte_order_check(address, trigger);
+        self.run().await?;
+        let mut step = movement.next(self.epoch.elapsed());
+        loop {
+            step = match step {
+                Step::Ask { request, optional } => match self.ask(address, request).await {
+                    Ok(r) => movement.answered(self.epoch.elapsed(), Some(r)),
+                    Err(_) if optional => movement.answered(self.epoch.elapsed(), None),
+                    Err(e) => return Err(e),
+                },
+                Step::Sleep {
+                    until,
+                    progress: moving,
+                } => {
+                    if let Some(m) = moving {
+                        progress(m);
+                    }
+                    tokio::time::sleep_until(self.epoch + until).await;
+                    movement.next(self.epoch.elapsed())
+                }
+                Step::Done(report) => return Ok(report),
+                Step::Failed(e) => return Err(move_error(address, e)),
+            }
+        }
+    }
+
+    async fn run(&mut self) -> Result<Exchange<P::Response>, LinkError> {
+        let io = |context: &str, source: io::Error| LinkError::Io {
+            context: format!("{} {context}", P::NAME),
+            source,
+        };
+        let mut chunk = [0u8; 64];
+        loop {
+            let now = self.epoch.elapsed();
+            match self.core.poll(now) {
+                Action::Done => break,
+                Action::Sleep(t) => tokio::time::sleep_until(self.epoch + t).await,
+                Action::ClearInput => self.port.clear_input().map_err(|e| io("clear input", e))?,
+                Action::EnableDriver => self
+                    .port
+                    .set_driver_enable(true)
+                    .map_err(|e| io("raise driver enable", e))?,
+                Action::DisableDriver => self
+                    .port
+                    .set_driver_enable(false)
+                    .map_err(|e| io("lower driver enable", e))?,
+                Action::Write(bytes) => {
+                    self.port
+                        .write_all(bytes)
+                        .await
+                        .map_err(|e| io("write", e))?;
+                    self.port.flush().await.map_err(|e| io("write", e))?;
+                }
+                Action::Read { until } => {
+                    let read = self.port.read(&mut chunk);
+                    match tokio::time::timeout_at(self.epoch + until, read).await {
+                        Err(_elapsed) => {}
+                        Ok(Ok(0)) => {
+                            return Err(io(
+                                "read",
+                                io::Error::new(io::ErrorKind::UnexpectedEof, "the port closed"),
+                            ))
+                        }
+                        Ok(Ok(n)) => self.core.received(&chunk[..n], self.epoch.elapsed()),
+                        Ok(Err(e)) => return Err(io("read", e)),
+                    }
+                }
+            }
+            // Events are for observers; this driver has none.
+            while self.core.take_event().is_some() {}
+        }
+        match self.core.take_outcome() {
+            Some(Ok(reply)) => Ok(exchange(&self.core, reply)),
+            Some(Err(failure)) => Err(link_error(&mut self.core, failure)),
+            None => unreachable!("the core says Done only with an outcome"),
+        }
+    }
+}

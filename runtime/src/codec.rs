@@ -1,0 +1,543 @@
+//! What generated code uses, under one path: each generated module imports it once as
+//! `use ::busspec_runtime::codec as rt;`. A lowercase name cannot clash with a spec name (spec
+//! names become `CamelCase` types, variants of `Request`/`Response`, or fields), so a spec may
+//! name a unit `option` or a message `ok` and the generated `rt::Option`, `rt::Ok` still mean
+//! core's.
+//!
+//! Beside the re-exports are the small checks every message or frame would otherwise repeat
+//! in the generated text. Each is `#[inline]` and takes its constants as arguments, so after
+//! inlining it compiles to what was written out before. Public only for generated code; they
+//! are not part of the runtime's documented API and may change with the generator.
+
+pub use core::ops::RangeInclusive;
+pub use core::option::Option::{self, None, Some};
+pub use core::result::Result::{self, Err, Ok};
+
+pub use crate::stream::Candidates;
+pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
+pub use crate::FieldValue::{Int, Text};
+pub use crate::{
+    crc, field_int, field_text, round, sum8, Broadcast, CommandKind, DecodeError, Decoded,
+    EncodeError, FieldError, FieldValue, Message, Protocol,
+};
+
+/// A wire integer type: the raw values a whole field of it holds, as a `from_fields` getter
+/// gives them (`u64` up to `i64::MAX`, as `FieldValue::Int` holds).
+pub trait Wire: Copy {
+    const MIN: i64;
+    const MAX: i64;
+    /// `v`, which lies in `MIN..=MAX`.
+    fn from_i64(v: i64) -> Self;
+    /// The value as `i64` (`as i64`).
+    fn to_i64(self) -> i64;
+    /// The value as `u64` (`as u64`: sign-extended).
+    fn to_u64(self) -> u64;
+}
+
+macro_rules! wire {
+    ($($t:ty = $min:expr, $max:expr;)*) => {$(
+        impl Wire for $t {
+            const MIN: i64 = $min;
+            const MAX: i64 = $max;
+            #[inline(always)]
+            fn from_i64(v: i64) -> Self {
+                v as $t
+            }
+            #[inline(always)]
+            fn to_i64(self) -> i64 {
+                self as i64
+            }
+            #[inline(always)]
+            fn to_u64(self) -> u64 {
+                self as u64
+            }
+        }
+    )*};
+}
+wire! {
+    u8 = 0, u8::MAX as i64;
+    i8 = i8::MIN as i64, i8::MAX as i64;
+    u16 = 0, u16::MAX as i64;
+    i16 = i16::MIN as i64, i16::MAX as i64;
+    u32 = 0, u32::MAX as i64;
+    i32 = i32::MIN as i64, i32::MAX as i64;
+    u64 = 0, i64::MAX;
+    i64 = i64::MIN, i64::MAX;
+}
+
+/// The value of whole integer field `name` from a `from_fields` getter, checked against its
+/// wire type `T`.
+#[inline]
+pub fn get<'v, T: Wire>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<T, FieldError> {
+    field_int(name, field(name), T::MIN, T::MAX).map(T::from_i64)
+}
+
+/// The bytes of ASCII field `name` (exactly `N`) from a `from_fields` getter.
+#[inline]
+pub fn text<'v, const N: usize>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<[u8; N], FieldError> {
+    field_text(name, field(name))
+}
+
+/// What decoding one message gives.
+pub type DecodeResult<T> = Result<T, DecodeError>;
+
+/// The framing every frame of a protocol shares, for [`check_frame`].
+#[derive(Debug, Clone, Copy)]
+pub struct Frame {
+    /// Where the start byte is and what it must be, if the protocol has one.
+    pub start: Option<(usize, u8)>,
+    /// The device addresses, inclusive.
+    pub devices: (u8, u8),
+    /// Addresses a frame may carry besides the devices': broadcast and host.
+    pub broadcast: Option<u8>,
+    pub host: Option<u8>,
+    /// Checksum bytes at the end of the frame, and whether they travel big-endian.
+    pub checksum_len: usize,
+    pub checksum_be: bool,
+}
+
+impl Frame {
+    /// Whether a frame may carry `address`: a device's, the broadcast or the host address.
+    #[inline(always)]
+    pub const fn address_ok(&self, address: u8) -> bool {
+        (self.devices.0 <= address && address <= self.devices.1)
+            || matches!(self.broadcast, Some(b) if b == address)
+            || matches!(self.host, Some(h) if h == address)
+    }
+}
+
+/// The checksum at the end of `frame` (from `at`) and the one computed over the bytes before
+/// it: `(found, expected)`.
+#[inline(always)]
+fn sums(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> (u32, u32) {
+    let (body, tail) = frame.split_at(at);
+    let found = if f.checksum_be {
+        tail.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b))
+    } else {
+        tail.iter()
+            .rev()
+            .fold(0u32, |a, b| (a << 8) | u32::from(*b))
+    };
+    (found, checksum(body))
+}
+
+/// Whether `frame` ends in the checksum of its first `at` bytes, and nothing else.
+#[inline(always)]
+pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> bool {
+    if frame.len() != at + f.checksum_len {
+        return false;
+    }
+    let (found, expected) = sums(frame, at, f, checksum);
+    found == expected
+}
+
+/// The checks every frame of a direction passes before its code is looked at, in this order:
+/// no longer than `max`, the start byte, at least `min` bytes, the checksum (`checksum` of the
+/// bytes before it, compared as an unsigned integer), the address (at `address_at`). Returns
+/// the address.
+#[inline(always)]
+pub fn check_frame(
+    frame: &[u8],
+    min: usize,
+    max: usize,
+    address_at: usize,
+    f: &Frame,
+    checksum: impl FnOnce(&[u8]) -> u32,
+) -> Result<u8, DecodeError> {
+    let len = frame.len();
+    if len > max {
+        return Err(DecodeError::TooLong { max, found: len });
+    }
+    if let Some((at, expected)) = f.start {
+        if let Some(&found) = frame.get(at) {
+            if found != expected {
+                return Err(DecodeError::BadStart { expected, found });
+            }
+        }
+    }
+    if len < min || min <= address_at || min < f.checksum_len {
+        return Err(DecodeError::Truncated {
+            needed: min,
+            found: len,
+        });
+    }
+    let at = len - f.checksum_len;
+    let (found, expected) = sums(frame, at, f, checksum);
+    if found != expected {
+        return Err(DecodeError::ChecksumMismatch {
+            offset: at,
+            expected,
+            found,
+        });
+    }
+    let address = frame[address_at];
+    if !f.address_ok(address) {
+        return Err(DecodeError::BadAddress {
+            offset: address_at,
+            found: address,
+            min: f.devices.0,
+            max: f.devices.1,
+        });
+    }
+    Ok(address)
+}
+
+/// The code: `n` bytes from `at`, big-endian (as codes are written). The caller has checked
+/// that `frame` is long enough.
+#[inline(always)]
+pub fn code(frame: &[u8], at: usize, n: usize) -> u32 {
+    frame[at..at + n]
+        .iter()
+        .fold(0u32, |a, b| (a << 8) | u32::from(*b))
+}
+
+/// The frame as the fixed-size array of a message whose code matched, or why not.
+#[inline(always)]
+pub fn fixed<const N: usize>(frame: &[u8]) -> Result<&[u8; N], DecodeError> {
+    frame.try_into().map_err(|_| DecodeError::WrongLength {
+        expected: N,
+        found: frame.len(),
+    })
+}
+
+/// [`fixed`], for a reply: `Err(NotAReply)` first if the request does not admit it.
+#[inline(always)]
+pub fn reply<const N: usize>(
+    frame: &[u8],
+    admitted: bool,
+    code: u32,
+) -> Result<&[u8; N], DecodeError> {
+    if !admitted {
+        return Err(DecodeError::NotAReply { code });
+    }
+    fixed(frame)
+}
+
+/// The error for a code no message of the direction has: its `longest` bytes from `at`, or as
+/// many as lie before the checksum.
+#[inline]
+pub fn unknown_code(
+    frame: &[u8],
+    at: usize,
+    longest: usize,
+    checksum_len: usize,
+    response: bool,
+) -> DecodeError {
+    let n = frame.len().saturating_sub(at + checksum_len).min(longest);
+    let code = frame
+        .iter()
+        .skip(at)
+        .take(n)
+        .fold(0u32, |a, b| (a << 8) | u32::from(*b));
+    if response {
+        DecodeError::UnknownResponse { offset: at, code }
+    } else {
+        DecodeError::UnknownCommand { offset: at, code }
+    }
+}
+
+/// The messages sharing one code, tried in spec order: the first that has the frame's length,
+/// is admitted (for a reply, the request may get it) and decodes is the message. Where only
+/// the request tells some apart ([`Self::ambiguous`] candidates), decoding without a request
+/// must find exactly one of them. Each candidate is a no-op once one has settled the frame.
+#[derive(Debug)]
+pub struct Group<'f, T> {
+    frame: &'f [u8],
+    code: u32,
+    /// No request was given.
+    alone: bool,
+    admitted: bool,
+    found: Option<T>,
+    last: Option<DecodeError>,
+    done: Option<DecodeResult<T>>,
+}
+
+impl<'f, T> Group<'f, T> {
+    #[inline(always)]
+    pub fn new(frame: &'f [u8], code: u32, alone: bool) -> Self {
+        Group {
+            frame,
+            code,
+            alone,
+            admitted: false,
+            found: None,
+            last: None,
+            done: None,
+        }
+    }
+
+    /// The candidate's message if it is admitted, has the frame's length and decodes.
+    #[inline(always)]
+    fn try_one<const N: usize>(
+        &mut self,
+        admitted: bool,
+        decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
+    ) -> Option<T> {
+        self.admitted |= admitted;
+        if self.done.is_some() || !admitted {
+            return None;
+        }
+        let frame: &[u8; N] = self.frame.try_into().ok()?;
+        match decode(frame) {
+            Ok(m) => Some(m),
+            Err(e) => {
+                self.last = Some(e);
+                None
+            }
+        }
+    }
+
+    /// Tries one candidate; the first that decodes settles the frame.
+    #[inline(always)]
+    pub fn attempt<const N: usize>(
+        &mut self,
+        admitted: bool,
+        decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
+    ) {
+        if let Some(m) = self.try_one(admitted, decode) {
+            self.done = Some(Ok(m));
+        }
+    }
+
+    /// Tries a candidate that shares code and length with another only the request tells
+    /// apart: with a request as [`Self::attempt`]; without one it is kept, and a second that
+    /// decodes makes the frame ambiguous.
+    #[inline(always)]
+    pub fn ambiguous<const N: usize>(
+        &mut self,
+        admitted: bool,
+        decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
+    ) {
+        let Some(m) = self.try_one(admitted, decode) else {
+            return;
+        };
+        if !self.alone {
+            self.done = Some(Ok(m));
+        } else if self.found.is_some() {
+            self.done = Some(Err(DecodeError::Ambiguous { code: self.code }));
+        } else {
+            self.found = Some(m);
+        }
+    }
+
+    /// What the group decodes to: the candidate that settled it, else the one ambiguous
+    /// candidate that decoded, the last candidate's error, a wrong length (`expected`, the
+    /// shortest candidate's), or for a reply (`reply`) no candidate the request admits.
+    #[inline(always)]
+    pub fn end(self, expected: usize, reply: bool) -> DecodeResult<T> {
+        if let Some(r) = self.done {
+            return r;
+        }
+        if let Some(m) = self.found {
+            return Ok(m);
+        }
+        Err(match self.last {
+            Some(e) => e,
+            None if reply && !self.admitted => DecodeError::NotAReply { code: self.code },
+            None => DecodeError::WrongLength {
+                expected,
+                found: self.frame.len(),
+            },
+        })
+    }
+}
+
+/// A refusal of the broadcast address `b` by a command that does not accept it.
+#[inline(always)]
+pub fn no_broadcast(
+    address: u8,
+    b: u8,
+    message: &'static str,
+    code: u32,
+) -> Result<(), DecodeError> {
+    if address == b {
+        return Err(DecodeError::BroadcastNotAccepted {
+            message,
+            code,
+            address: b,
+        });
+    }
+    Ok(())
+}
+
+/// A decoded field checked against its spec range `min..=max`.
+#[inline(always)]
+pub fn in_range<T: Wire>(
+    field: &'static str,
+    offset: usize,
+    raw: T,
+    min: i64,
+    max: i64,
+) -> Result<(), DecodeError> {
+    in_range_or(field, offset, raw, min, max, &[])
+}
+
+/// [`in_range`], where `special` values outside the range are allowed too.
+#[inline(always)]
+pub fn in_range_or<T: Wire>(
+    field: &'static str,
+    offset: usize,
+    raw: T,
+    min: i64,
+    max: i64,
+    special: &[i64],
+) -> Result<(), DecodeError> {
+    let raw = raw.to_i64();
+    if (min..=max).contains(&raw) || special.contains(&raw) {
+        return Ok(());
+    }
+    Err(DecodeError::OutOfRange {
+        field,
+        offset,
+        found: raw,
+        min,
+        max,
+    })
+}
+
+/// A decoded constant field (or constant bits of one, `found` already shifted down) that must
+/// be `expected`.
+#[inline(always)]
+pub fn equal<T: Wire>(
+    field: &'static str,
+    offset: usize,
+    found: T,
+    expected: u64,
+) -> Result<(), DecodeError> {
+    let found = found.to_u64();
+    if found != expected {
+        return Err(DecodeError::InvalidValue {
+            field,
+            offset,
+            found: found as u32,
+        });
+    }
+    Ok(())
+}
+
+/// A decoded repeated field that must equal the field it repeats.
+#[inline(always)]
+pub fn same<T: Wire + PartialEq>(
+    field: &'static str,
+    offset: usize,
+    found: T,
+    repeated: T,
+) -> Result<(), DecodeError> {
+    if found != repeated {
+        return Err(DecodeError::InvalidValue {
+            field,
+            offset,
+            found: found.to_u64() as u32,
+        });
+    }
+    Ok(())
+}
+
+/// The address an encoder may write: a device's, the broadcast or the host address.
+#[inline(always)]
+pub fn encode_address(address: u8, f: &Frame) -> Result<(), EncodeError> {
+    if f.address_ok(address) {
+        return Ok(());
+    }
+    Err(EncodeError::BadAddress {
+        address,
+        min: f.devices.0,
+        max: f.devices.1,
+    })
+}
+
+/// [`no_broadcast`] for an encoder.
+#[inline(always)]
+pub fn encode_broadcast(address: u8, b: u8, message: &'static str) -> Result<(), EncodeError> {
+    if address == b {
+        return Err(EncodeError::BroadcastNotAccepted { message, address });
+    }
+    Ok(())
+}
+
+/// A value to encode checked against its field's spec range `min..=max`.
+#[inline(always)]
+pub fn encode_in_range<T: Wire>(
+    field: &'static str,
+    raw: T,
+    min: i64,
+    max: i64,
+) -> Result<(), EncodeError> {
+    encode_in_range_or(field, raw, min, max, &[])
+}
+
+/// [`encode_in_range`], where `special` values outside the range are allowed too.
+#[inline(always)]
+pub fn encode_in_range_or<T: Wire>(
+    field: &'static str,
+    raw: T,
+    min: i64,
+    max: i64,
+    special: &[i64],
+) -> Result<(), EncodeError> {
+    let raw = raw.to_i64();
+    if (min..=max).contains(&raw) || special.contains(&raw) {
+        return Ok(());
+    }
+    Err(EncodeError::NotInRange {
+        field,
+        value: raw,
+        min,
+        max,
+    })
+}
+
+/// A typed value that may hold more than its field's wire type, checked to fit it.
+#[inline(always)]
+pub fn fits<T: Wire>(field: &'static str, raw: T, min: i64, max: i64) -> Result<i64, EncodeError> {
+    let raw = raw.to_i64();
+    if (min..=max).contains(&raw) {
+        return Ok(raw);
+    }
+    Err(EncodeError::OutOfRange { field })
+}
+
+/// The first `N` bytes of `buf`, for a frame of `N` bytes, with `head` (the bytes known before
+/// any field: start, address, code, constants) written at its start.
+#[inline(always)]
+pub fn frame_mut<'b, const N: usize>(
+    buf: &'b mut [u8],
+    head: &[u8],
+) -> Result<&'b mut [u8; N], EncodeError> {
+    let available = buf.len();
+    let out: &mut [u8; N] =
+        buf.get_mut(..N)
+            .and_then(|s| s.try_into().ok())
+            .ok_or(EncodeError::BufferTooSmall {
+                needed: N,
+                available,
+            })?;
+    out[..head.len()].copy_from_slice(head);
+    Ok(out)
+}
+
+/// Writes a sum-8 into the last byte of `out`, over every byte before it; returns the frame
+/// length. Inlined into each message's encoder, where it folds the constant header bytes.
+#[inline(always)]
+pub fn seal_sum8<const N: usize>(out: &mut [u8; N]) -> usize {
+    let sum = sum8(&out[..N - 1]);
+    out[N - 1] = sum;
+    N
+}
+
+/// Writes the `checksum` of the first `len - n` bytes of `buf` into its last `n` bytes.
+#[inline(always)]
+pub fn seal(buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32, n: usize, be: bool) {
+    let at = len - n;
+    let s = sum(&buf[..at]);
+    for (i, b) in buf[at..len].iter_mut().enumerate() {
+        let shift = if be { 8 * (n - 1 - i) } else { 8 * i };
+        *b = (s >> shift) as u8;
+    }
+}
