@@ -174,3 +174,29 @@ fn the_printer_writes_the_reference_lines_byte_for_byte() {
         }
     }
 }
+
+/// The specs with repeated fields (served by the interpreter): the printer prints every
+/// example's frame as `frame_line` does, lists included.
+#[test]
+fn printer_prints_variable_length_frames_as_frame_line_does() {
+    let mut printed = 0;
+    for (file, yaml) in [
+        ("spec/modbus.yaml", include_str!("../../spec/modbus.yaml")),
+        (
+            "spec/dynamixel.yaml",
+            include_str!("../../spec/dynamixel.yaml"),
+        ),
+    ] {
+        let spec = busspec_model::load_str(file, yaml).unwrap_or_else(|d| panic!("{d}"));
+        let printer = Printer::new(&spec);
+        for e in &spec.examples {
+            let frame = interp::decode(&spec, Some(e.message.direction), e.reply_to, &e.wire)
+                .unwrap_or_else(|err| panic!("{file} {:02X?}: {err}", e.wire));
+            let mut out = Vec::new();
+            printer.frame(&mut out, &spec, &frame, Some(7));
+            assert_eq!(text(&out), frame_line(&spec, &frame, Some(7)) + "\n");
+            printed += 1;
+        }
+    }
+    assert!(printed > 20, "{printed}");
+}
