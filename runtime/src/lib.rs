@@ -446,9 +446,8 @@ fn sum8_upto8(bytes: &[u8]) -> u8 {
 
 /// [`sum8`] as a plain loop: for long inputs, and for a length known at compile time (the
 /// encoders' `seal_sum8`, where it folds into the bytes written before it).
-#[doc(hidden)]
 #[inline]
-pub fn sum8_bytes(bytes: &[u8]) -> u8 {
+pub(crate) fn sum8_bytes(bytes: &[u8]) -> u8 {
     bytes.iter().fold(0u8, |s, b| s.wrapping_add(*b))
 }
 
