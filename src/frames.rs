@@ -2,7 +2,7 @@
 //! built-in protocol (found by name in `busspec_protocols`), or the interpreter for a spec given
 //! at run time with `--spec FILE`. Both print and read the same lines.
 
-use busspec_json::{Spec, TypedStream};
+use busspec_json::{Printer, Spec, TypedStream};
 use busspec_model::ir::Direction;
 use busspec_model::stream::StreamDecoder;
 use busspec_protocols::{with_protocol, Protocol, ProtocolVisitor};
@@ -14,6 +14,8 @@ pub struct Engine {
     pub spec: Spec,
     /// Served by the generated code of the built-in protocol `spec.name`, else the interpreter.
     generated: bool,
+    /// Prints decoded frames ([`Self::decode_into`]).
+    printer: Printer,
 }
 
 /// Loads the spec a built-in protocol was generated from.
@@ -33,11 +35,31 @@ struct Decode<'a> {
     wire: &'a [u8],
 }
 
-impl ProtocolVisitor for Decode<'_> {
-    type Output = Result<String, String>;
+/// Decodes a frame with the generated code; its line written to `out` by `printer`.
+struct DecodeInto<'a> {
+    decode: Decode<'a>,
+    printer: &'a mut Printer,
+    out: &'a mut Vec<u8>,
+}
+
+impl ProtocolVisitor for DecodeInto<'_> {
+    type Output = Result<(), String>;
     fn visit<P: Protocol>(self) -> Self::Output {
-        busspec_json::decode_typed::<P>(self.spec, self.direction, self.reply_to, self.wire)?
-            .line(self.spec, None)
+        let Decode {
+            spec,
+            direction,
+            reply_to,
+            wire,
+        } = self.decode;
+        let (out, printer) = (self.out, self.printer);
+        match busspec_json::decode_typed::<P>(spec, direction, reply_to, wire)? {
+            busspec_json::Typed::Request(d) => {
+                printer.message(out, spec, Direction::Request, d.address, &d.message, None)
+            }
+            busspec_json::Typed::Response(d) => {
+                printer.message(out, spec, Direction::Response, d.address, &d.message, None)
+            }
+        }
     }
 }
 
@@ -58,40 +80,38 @@ impl ProtocolVisitor for Encode<'_> {
 
 /// A capture decoder that prints JSON lines.
 pub trait LineStream {
-    /// Feeds bytes; returns the lines of what they settled.
-    fn push(&mut self, data: &[u8]) -> Vec<String>;
-    /// Settles what is left, at the end of the capture.
-    fn finish(&mut self) -> Vec<String>;
+    /// Feeds bytes; writes the lines of what they settled to `out`, each ended by `\n`.
+    fn push(&mut self, data: &[u8], out: &mut Vec<u8>);
+    /// Settles what is left, at the end of the capture; writes the lines to `out`.
+    fn finish(&mut self, out: &mut Vec<u8>);
 }
 
 impl<P: Protocol> LineStream for TypedStream<'_, P> {
-    fn push(&mut self, data: &[u8]) -> Vec<String> {
-        TypedStream::push(self, data)
+    fn push(&mut self, data: &[u8], out: &mut Vec<u8>) {
+        self.push_into(data, out)
     }
-    fn finish(&mut self) -> Vec<String> {
-        TypedStream::finish(self)
+    fn finish(&mut self, out: &mut Vec<u8>) {
+        self.finish_into(out)
     }
 }
 
 struct Interpreted<'a> {
     spec: &'a Spec,
+    printer: &'a Printer,
     decoder: StreamDecoder<'a>,
+    /// The events of one piece, kept for their memory.
+    events: Vec<busspec_model::stream::Event>,
 }
 
 impl LineStream for Interpreted<'_> {
-    fn push(&mut self, data: &[u8]) -> Vec<String> {
-        let events = self.decoder.push(data);
-        events
-            .iter()
-            .map(|e| busspec_json::event_line(self.spec, e))
-            .collect()
+    fn push(&mut self, data: &[u8], out: &mut Vec<u8>) {
+        self.events.clear();
+        self.decoder.push_into(data, &mut self.events);
+        busspec_json::write_events(self.spec, self.printer, &self.events, out);
     }
-    fn finish(&mut self) -> Vec<String> {
+    fn finish(&mut self, out: &mut Vec<u8>) {
         let events = self.decoder.flush();
-        events
-            .iter()
-            .map(|e| busspec_json::event_line(self.spec, e))
-            .collect()
+        busspec_json::write_events(self.spec, self.printer, &events, out);
     }
 }
 
@@ -121,6 +141,7 @@ impl Engine {
     pub fn built_in(name: &str) -> Option<Result<Engine, String>> {
         with_protocol(name, Load).map(|r| {
             r.map(|spec| Engine {
+                printer: Printer::new(&spec),
                 spec,
                 generated: true,
             })
@@ -130,49 +151,72 @@ impl Engine {
     /// A spec loaded at run time, served by the interpreter.
     pub fn interpreted(spec: Spec) -> Engine {
         Engine {
+            printer: Printer::new(&spec),
             spec,
             generated: false,
         }
     }
 
-    /// Decodes one frame to its JSON line; `reply_to` is a command index.
-    pub fn decode(
-        &self,
+    /// Decodes one frame and writes its JSON line to `out`, ended by `\n`; `reply_to` is a
+    /// command index.
+    pub fn decode_into(
+        &mut self,
         direction: Option<Direction>,
         reply_to: Option<usize>,
         wire: &[u8],
-    ) -> Result<String, String> {
+        out: &mut Vec<u8>,
+    ) -> Result<(), String> {
         if !self.generated {
             let frame = busspec_json::decode_frame(&self.spec, direction, reply_to, wire)?;
-            return Ok(busspec_json::frame_line(&self.spec, &frame, None));
+            self.printer.frame(out, &self.spec, &frame, None);
+            return Ok(());
         }
-        let visitor = Decode {
-            spec: &self.spec,
-            direction,
-            reply_to,
-            wire,
+        let visitor = DecodeInto {
+            decode: Decode {
+                spec: &self.spec,
+                direction,
+                reply_to,
+                wire,
+            },
+            printer: &mut self.printer,
+            out,
         };
         with_protocol(&self.spec.name, visitor)
             .unwrap_or_else(|| Err(not_built_in(&self.spec.name)))
     }
 
-    /// Decodes one frame as [`Self::decode`] does; a frame that strict decoding refuses only
-    /// for rules of the spec (ranges, address, broadcast) decodes with those rules lifted and
-    /// prints with its `"violations"` ([`busspec_json::lenient_line`]). Lifting the rules is
-    /// the interpreter's (`busspec_model::stream::decode_lenient`), for built-in protocols too:
-    /// the generated code has no lenient entry point, so that a device build cannot accept
-    /// such a frame by mistake, and the interpreter decodes every spec the generated code does.
-    /// Any other failure is strict decoding's error.
-    pub fn decode_lenient(
+    /// Decodes one frame as [`Self::decode_into`] does; a frame that strict decoding refuses
+    /// only for rules of the spec (ranges, address, broadcast) decodes with those rules lifted
+    /// and prints with its `"violations"` ([`busspec_json::lenient_line`]). Lifting the rules
+    /// is the interpreter's (`busspec_model::stream::decode_lenient`), for built-in protocols
+    /// too: the generated code has no lenient entry point, so that a device build cannot
+    /// accept such a frame by mistake, and the interpreter decodes every spec the generated
+    /// code does. Any other failure is strict decoding's error.
+    pub fn decode_lenient_into(
+        &mut self,
+        direction: Option<Direction>,
+        reply_to: Option<usize>,
+        wire: &[u8],
+        out: &mut Vec<u8>,
+    ) -> Result<(), String> {
+        let strict = match self.decode_into(direction, reply_to, wire, out) {
+            Ok(()) => return Ok(()),
+            Err(e) => e,
+        };
+        let line = self.lenient(direction, reply_to, wire, strict)?;
+        out.extend_from_slice(line.as_bytes());
+        out.push(b'\n');
+        Ok(())
+    }
+
+    /// The lenient line of a frame strict decoding refused with `strict`, or that error.
+    fn lenient(
         &self,
         direction: Option<Direction>,
         reply_to: Option<usize>,
         wire: &[u8],
+        strict: String,
     ) -> Result<String, String> {
-        let strict = match self.decode(direction, reply_to, wire) {
-            Ok(line) => return Ok(line),
-            Err(e) => e,
-        };
         let relaxed = busspec_model::stream::relaxed(&self.spec);
         let lenient = |reply_to| {
             busspec_model::stream::decode_lenient(&self.spec, &relaxed, direction, reply_to, wire)
@@ -220,6 +264,8 @@ impl Engine {
             Some(Some(s)) => s,
             _ => Box::new(Interpreted {
                 spec: &self.spec,
+                printer: &self.printer,
+                events: Vec::new(),
                 decoder: StreamDecoder::new(&self.spec, direction).with_default_request(reply_to),
             }),
         }

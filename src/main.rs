@@ -52,6 +52,14 @@ failure prints one line on stderr, `frame N (TEXT): reason`, and the exit status
 the argument, or for a frame longer than 32 bytes its first 32 bytes and the total length
 (`AA...AA… (50000 bytes)`). Wrong arguments: 2.
 
+A single HEX argument `-` reads hex frames one per line from stdin instead, as
+loggers and terminals print them: each line is read as a HEX argument is (spaces and 0x
+prefixes allowed), `#` starts a comment that runs to the end of the line, and lines that are
+empty or only a comment are skipped. Each frame prints as above; a line that fails prints
+`line N (TEXT): reason` on stderr and the next line is read (exit status 1 at the end, as for
+arguments). Each line is decoded on its own: a response only its request tells apart needs
+--reply-to. Output is written in large chunks, so `decode P - < log` runs at disk speed.
+
 --stream FILE (- for stdin) reads raw bytes of a bus capture instead, both directions mixed,
 and prints one line per frame with \"offset\" (the byte offset of its first byte) as the first
 key; bytes that start no frame print as {\"offset\":N,\"skipped\":K,\"bytes\":\"A5FF\"}, and a frame
@@ -62,7 +70,10 @@ a frame with its values decoded with the rules lifted (when they decode so), \"b
 its bytes are consumed, never skipped. After noise the decoder drops one byte and
 tries again; where messages share a code the longest complete frame that checksums wins; a
 response is paired with the request just before it (--reply-to gives the request to assume when
-there is none). Exit status 0 unless the capture cannot be read.";
+there is none). Exit status 0 unless the capture cannot be read (the lines of what was read
+before the error print, then `error: cannot read FILE (after N bytes): reason`).
+
+Output closed early (`| head`) ends the run quietly.";
 
 const ENCODE_HELP: &str = "\
 Encode JSON lines from stdin to frames, one hex line per frame.
@@ -115,7 +126,8 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
-    /// Decode frames (hex arguments, or a raw capture with --stream) to JSON lines.
+    /// Decode frames (hex arguments, hex lines from stdin with `-`, or a raw capture with
+    /// --stream) to JSON lines.
     #[command(long_about = DECODE_HELP)]
     Decode(DecodeArgs),
     /// Encode JSON lines read from stdin to frames, one uppercase hex line each.
@@ -291,7 +303,8 @@ impl Gate {
 struct DecodeArgs {
     /// The protocol: ub2 or sd (built in), or the `protocol:` of the spec given with --spec.
     protocol: String,
-    /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed.
+    /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed. `-` alone:
+    /// hex frames from stdin, one per line (`#` starts a comment).
     #[arg(
         value_name = "HEX",
         required_unless_present = "stream",
@@ -532,19 +545,68 @@ fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Engine,
     Ok(loaded)
 }
 
-/// Writes one line of output; a closed pipe ends the run quietly.
-fn emit(out: &mut impl Write, line: &str) -> Result<(), String> {
-    writeln!(out, "{line}").map_err(|e| {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            String::new()
-        } else {
-            format!("error: cannot write output: {e}")
+/// Output gathered in a buffer and written in large chunks, not a system call per line: when
+/// it holds [`Out::CHUNK`] bytes, before a line goes to stderr (so the two interleave as they
+/// were printed), and at the end ([`Out::finish`]). A closed pipe (`| head`) ends the run
+/// quietly; any other write error is reported.
+struct Out<W: Write> {
+    w: W,
+    buf: Vec<u8>,
+}
+
+impl<W: Write> Out<W> {
+    /// Bytes gathered before they are written.
+    const CHUNK: usize = 64 * 1024;
+
+    fn new(w: W) -> Self {
+        Out {
+            w,
+            buf: Vec::with_capacity(Self::CHUNK + 4096),
         }
-    })
+    }
+
+    /// Writes one line.
+    fn line(&mut self, line: &str) -> Result<(), String> {
+        self.buf.extend_from_slice(line.as_bytes());
+        self.buf.push(b'\n');
+        self.written()
+    }
+
+    /// Writes what is gathered once it is a chunk's worth (after lines went to `self.buf`).
+    fn written(&mut self) -> Result<(), String> {
+        if self.buf.len() >= Self::CHUNK {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Writes everything gathered.
+    fn flush(&mut self) -> Result<(), String> {
+        let result = self.w.write_all(&self.buf).and_then(|()| self.w.flush());
+        self.buf.clear();
+        result.map_err(|e| {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                String::new()
+            } else {
+                format!("error: cannot write output: {e}")
+            }
+        })
+    }
+
+    /// Writes everything gathered, then `message` to stderr.
+    fn error(&mut self, message: std::fmt::Arguments) -> Result<(), String> {
+        self.flush()?;
+        eprintln!("{message}");
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<(), String> {
+        self.flush()
+    }
 }
 
 fn decode(args: DecodeArgs) -> Result<(), String> {
-    let engine = protocol("decode", &args.protocol, args.spec.as_deref())?;
+    let mut engine = protocol("decode", &args.protocol, args.spec.as_deref())?;
     let p = &engine.spec;
     let reply_to = args.reply_to.as_deref().map(|name| {
         p.commands
@@ -558,36 +620,130 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
             })
     });
     let direction = args.direction.map(Direction::from);
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    let mut out = Out::new(std::io::stdout().lock());
     if let Some(file) = &args.stream {
-        return decode_stream(&engine, direction, reply_to, file, &mut out);
+        decode_stream(&engine, direction, reply_to, file, &mut out)?;
+        return out.finish();
+    }
+    if args.frames.iter().any(|f| f == "-") {
+        if args.frames.len() > 1 {
+            usage_error(
+                "decode",
+                "`-` (hex frames from stdin, one per line) must be the only HEX argument".into(),
+            );
+        }
+        let failed = decode_lines(&mut engine, direction, reply_to, args.lenient, &mut out)?;
+        out.finish()?;
+        return if failed == 0 {
+            Ok(())
+        } else {
+            Err(String::new())
+        };
     }
     let mut failed = 0;
     for (i, text) in args.frames.iter().enumerate() {
         let wire = busspec_json::parse_hex(text);
         let result = wire.as_ref().map_err(String::clone).and_then(|wire| {
             if args.lenient {
-                engine.decode_lenient(direction, reply_to, wire)
+                engine.decode_lenient_into(direction, reply_to, wire, &mut out.buf)
             } else {
-                engine.decode(direction, reply_to, wire)
+                engine.decode_into(direction, reply_to, wire, &mut out.buf)
             }
         });
         match result {
-            Ok(line) => emit(&mut out, &line)?,
+            Ok(()) => out.written()?,
             Err(reason) => {
                 failed += 1;
-                let _ = out.flush();
                 let shown = quoted(text, wire.as_deref().ok());
-                eprintln!("frame {} ({shown}): {reason}", i + 1);
+                out.error(format_args!("frame {} ({shown}): {reason}", i + 1))?;
             }
         }
     }
+    out.finish()?;
     if failed == 0 {
         Ok(())
     } else {
         Err(String::new())
     }
+}
+
+/// The frame on one line of `decode P -` input: the text before any `#` (a comment), trimmed;
+/// `None` for a line with no frame (empty, blank or only a comment).
+fn frame_text(line: &str) -> Option<&str> {
+    let text = line.split_once('#').map_or(line, |(frame, _)| frame).trim();
+    (!text.is_empty()).then_some(text)
+}
+
+/// Reads stdin line by line for `decode P -` and `encode`: `each` gets the line's number and
+/// text and writes its output to `out`, or says why the line failed (`Err`: the whole error
+/// line, printed on stderr after everything before it); a line that is not UTF-8 fails as
+/// `line N: not UTF-8 text: …`. Returns how many lines failed; a read error ends the run with
+/// its reason, after the output of the lines before it.
+fn stdin_lines<W: Write>(
+    out: &mut Out<W>,
+    mut each: impl FnMut(usize, &str, &mut Out<W>) -> Result<(), String>,
+) -> Result<usize, String> {
+    let stdin = std::io::stdin();
+    let mut input = std::io::BufReader::with_capacity(Out::<W>::CHUNK, stdin.lock());
+    let mut failed = 0;
+    let mut line = Vec::new();
+    for number in 1.. {
+        line.clear();
+        match input.read_until(b'\n', &mut line) {
+            Ok(0) => break,
+            Ok(_) => {}
+            Err(e) => {
+                out.flush()?;
+                return Err(format!("error: cannot read stdin (line {number}): {e}"));
+            }
+        }
+        let result = match std::str::from_utf8(&line) {
+            Ok(text) => each(number, text, out),
+            Err(e) => Err(format!(
+                "line {number}: not UTF-8 text: invalid byte at offset {}",
+                e.valid_up_to()
+            )),
+        };
+        match result {
+            Ok(()) => out.written()?,
+            Err(reason) => {
+                failed += 1;
+                out.error(format_args!("{reason}"))?;
+            }
+        }
+    }
+    Ok(failed)
+}
+
+/// `decode P -`: hex frames from stdin, one per line (see DECODE_HELP). Each frame's line goes
+/// to `out`; each line that fails prints `line N (TEXT): reason` on stderr and the next line is
+/// read. Returns how many lines failed; a read error ends the run with its reason.
+fn decode_lines(
+    engine: &mut Engine,
+    direction: Option<Direction>,
+    reply_to: Option<usize>,
+    lenient: bool,
+    out: &mut Out<impl Write>,
+) -> Result<usize, String> {
+    stdin_lines(out, |number, line, out| {
+        let Some(text) = frame_text(line) else {
+            return Ok(());
+        };
+        let wire = busspec_json::parse_hex(text);
+        wire.as_ref()
+            .map_err(String::clone)
+            .and_then(|wire| {
+                if lenient {
+                    engine.decode_lenient_into(direction, reply_to, wire, &mut out.buf)
+                } else {
+                    engine.decode_into(direction, reply_to, wire, &mut out.buf)
+                }
+            })
+            .map_err(|reason| {
+                let shown = quoted(text, wire.as_deref().ok());
+                format!("line {number} ({shown}): {reason}")
+            })
+    })
 }
 
 /// The most bytes of a frame an error line quotes.
@@ -621,7 +777,7 @@ fn decode_stream(
     direction: Option<Direction>,
     reply_to: Option<usize>,
     file: &Path,
-    out: &mut impl Write,
+    out: &mut Out<impl Write>,
 ) -> Result<(), String> {
     let name = file.display().to_string();
     let mut input: Box<dyn Read> = if name == "-" {
@@ -630,58 +786,45 @@ fn decode_stream(
         Box::new(std::fs::File::open(file).map_err(|e| format!("error: cannot read {name}: {e}"))?)
     };
     let mut decoder = engine.stream(direction, reply_to);
-    let mut chunk = vec![0u8; 4096];
+    let mut chunk = vec![0u8; Out::<std::io::Sink>::CHUNK];
+    let mut read = 0u64;
     loop {
         let n = match input.read(&mut chunk) {
             Ok(0) => break,
             Ok(n) => n,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(format!("error: cannot read {name}: {e}")),
+            Err(e) => {
+                // What was decoded before the error is printed, then the error.
+                out.flush()?;
+                return Err(format!(
+                    "error: cannot read {name} (after {read} bytes): {e}"
+                ));
+            }
         };
-        for line in decoder.push(&chunk[..n]) {
-            emit(out, &line)?;
+        read += n as u64;
+        // In pieces whose lines fit the output buffer's chunk.
+        for piece in chunk[..n].chunks(1024) {
+            decoder.push(piece, &mut out.buf);
+            out.written()?;
         }
-        out.flush()
-            .map_err(|e| format!("error: cannot write output: {e}"))?;
     }
-    for line in decoder.finish() {
-        emit(out, &line)?;
-    }
+    decoder.finish(&mut out.buf);
     Ok(())
 }
 
 fn encode(args: EncodeArgs) -> Result<(), String> {
     let engine = protocol("encode", &args.protocol, args.spec.as_deref())?;
-    let stdin = std::io::stdin();
-    let mut input = stdin.lock();
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
-    let mut failed = 0;
-    let mut line = Vec::new();
-    for number in 1.. {
-        line.clear();
-        match input.read_until(b'\n', &mut line) {
-            Ok(0) => break,
-            Ok(_) => {}
-            Err(e) => return Err(format!("error: cannot read stdin: {e}")),
+    let mut out = Out::new(std::io::stdout().lock());
+    let failed = stdin_lines(&mut out, |number, text, out| {
+        if text.trim().is_empty() {
+            return Ok(());
         }
-        let result = match std::str::from_utf8(&line) {
-            Ok(text) if text.trim().is_empty() => continue,
-            Ok(text) => engine.encode(text.trim()),
-            Err(e) => Err(format!(
-                "not UTF-8 text: invalid byte at offset {}",
-                e.valid_up_to()
-            )),
-        };
-        match result {
-            Ok(wire) => emit(&mut out, &frames::hex(&wire))?,
-            Err(reason) => {
-                failed += 1;
-                let _ = out.flush();
-                eprintln!("line {number}: {reason}");
-            }
-        }
-    }
+        let wire = engine
+            .encode(text.trim())
+            .map_err(|reason| format!("line {number}: {reason}"))?;
+        out.line(&frames::hex(&wire))
+    })?;
+    out.finish()?;
     if failed == 0 {
         Ok(())
     } else {
@@ -805,4 +948,74 @@ fn demo(svg: Option<&Path>) -> Result<(), String> {
     let ub2 = busspec_json::load_spec::<ub2::Ub2>()?;
     let sd = busspec_json::load_spec::<sd::Sd>()?;
     link_cli::demo(&ub2, &sd, svg).map(|_| ())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Counts the writes it gets; fails them with `error` once set.
+    #[derive(Default)]
+    struct Counting {
+        writes: usize,
+        bytes: Vec<u8>,
+        error: Option<std::io::ErrorKind>,
+    }
+
+    impl Write for Counting {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if let Some(kind) = self.error {
+                return Err(std::io::Error::new(kind, "refused"));
+            }
+            self.writes += 1;
+            self.bytes.extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn output_is_written_in_chunks_not_per_line() {
+        let mut sink = Counting::default();
+        let mut want = String::new();
+        let mut out = Out::new(&mut sink);
+        for i in 0..100_000 {
+            let line = format!("{{\"offset\":{i}}}");
+            out.line(&line).unwrap();
+            want.push_str(&line);
+            want.push('\n');
+        }
+        out.finish().unwrap();
+        assert_eq!(sink.bytes, want.as_bytes());
+        let chunks = want.len() / Out::<std::io::Sink>::CHUNK + 1;
+        assert!(sink.writes <= chunks, "{} writes", sink.writes);
+        // An error line goes out after everything printed before it.
+        let mut sink = Counting::default();
+        let mut out = Out::new(&mut sink);
+        out.line("before").unwrap();
+        out.error(format_args!("test: an error line")).unwrap();
+        drop(out);
+        assert_eq!(sink.bytes, b"before\n");
+    }
+
+    #[test]
+    fn a_closed_pipe_ends_quietly_and_other_write_errors_are_reported() {
+        for (kind, want) in [
+            (std::io::ErrorKind::BrokenPipe, ""),
+            (
+                std::io::ErrorKind::PermissionDenied,
+                "error: cannot write output: refused",
+            ),
+        ] {
+            let mut sink = Counting {
+                error: Some(kind),
+                ..Counting::default()
+            };
+            let mut out = Out::new(&mut sink);
+            out.line("a line").unwrap();
+            assert_eq!(out.finish(), Err(want.to_owned()));
+        }
+    }
 }

@@ -363,10 +363,9 @@ fn encode_refuses_what_the_spec_forbids_and_writes_nothing() {
     }
 }
 
-/// A capture of example frames (those that decode without their request) with noise between
-/// some of them, and the JSON lines expected from `--stream`: each frame's `decode` line with
-/// its offset first.
-fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
+/// The example frames that decode without their request, and `busspec decode` of all of them
+/// as arguments.
+fn standalone(p: &Protocol) -> (Vec<&[u8]>, Output) {
     let frames: Vec<&[u8]> = p
         .examples
         .iter()
@@ -378,6 +377,14 @@ fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let out = busspec(&args);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    (frames, out)
+}
+
+/// A capture of example frames (those that decode without their request) with noise between
+/// some of them, and the JSON lines expected from `--stream`: each frame's `decode` line with
+/// its offset first.
+fn capture(p: &Protocol, noise: &[&[u8]]) -> (Vec<u8>, Vec<String>) {
+    let (frames, out) = standalone(p);
     let stdout = text(&out.stdout);
     let mut bytes = Vec::new();
     let mut expected = Vec::new();
@@ -591,5 +598,163 @@ fn an_unknown_code_is_named_for_the_direction_it_was_decoded_as() {
             let err = text(&out.stderr);
             assert!(err.contains(want), "{a:?}: {err}");
         }
+    }
+}
+
+#[test]
+fn hex_lines_from_stdin_decode_as_arguments_do() {
+    for file in ["ub2.yaml", "sd.yaml"] {
+        let p = spec(file);
+        let (frames, want) = standalone(&p);
+        // As loggers print them: spaced, 0x-prefixed, commented, CRLF, blank lines.
+        let mut input = String::from("# a capture\n\n");
+        for (i, f) in frames.iter().enumerate() {
+            let line = match i % 4 {
+                0 => hex(f),
+                1 => f
+                    .iter()
+                    .map(|b| format!("{b:02X}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                2 => f
+                    .iter()
+                    .map(|b| format!("0x{b:02x}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                _ => format!("  {}\t# frame {i}\r", hex(f)),
+            };
+            input.push_str(&line);
+            input.push('\n');
+        }
+        for engine in [vec![], vec!["--spec".to_owned(), format!("spec/{file}")]] {
+            let mut args = vec!["decode", p.name.as_str(), "-"];
+            args.extend(engine.iter().map(String::as_str));
+            let out = busspec_stdin(&args, &input);
+            assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+            assert!(out.stderr.is_empty(), "{}", text(&out.stderr));
+            assert_eq!(text(&out.stdout), text(&want.stdout), "{args:?}");
+        }
+    }
+}
+
+#[test]
+fn a_bad_hex_line_is_named_by_its_number_and_the_rest_still_print() {
+    let input = "AA21 4101 3E1F 0000 6A\n\
+                 AA21 4101 3E1F 0000 6B\n\
+                 # only a comment\n\
+                 zz21\n\
+                 \n\
+                 AA21\n\
+                 0xAA 0x21 0x41 0x01 0x3E 0x1F 0x00 0x00 0x6A # again\n";
+    let out = busspec_stdin(&["decode", "ub2", "-"], input);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stdout),
+        format!("{ACTUAL_79_98}\n{ACTUAL_79_98}\n"),
+        "{}",
+        text(&out.stderr)
+    );
+    let stderr = text(&out.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 3, "{stderr}");
+    assert!(
+        lines[0].starts_with("line 2 (AA21 4101 3E1F 0000 6B): checksum"),
+        "{stderr}"
+    );
+    assert_eq!(
+        lines[1],
+        "line 4 (zz21): `z` at character 1 is not a hex digit"
+    );
+    assert!(
+        lines[2].starts_with("line 6 (AA21): truncated frame"),
+        "{stderr}"
+    );
+    // Not UTF-8: named by its line, and the next line is read.
+    let out = run_in(
+        root(),
+        &["decode", "ub2", "-"],
+        b"\xFF\xFE\nAA2141013E1F00006A\n",
+    );
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(text(&out.stdout), format!("{ACTUAL_79_98}\n"));
+    assert_eq!(
+        text(&out.stderr),
+        "line 1: not UTF-8 text: invalid byte at offset 0\n"
+    );
+    // `-` is the only frame argument.
+    let out = busspec(&["decode", "ub2", "-", "AA2141013E1F00006A"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("`-`"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_capture_that_cannot_be_read_is_reported_with_what_was_read() {
+    let dir = temp_dir("unreadable");
+    let out = busspec(&["decode", "ub2", "--stream", dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.starts_with(&format!(
+            "error: cannot read {} (after 0 bytes): ",
+            dir.display()
+        )),
+        "{stderr}"
+    );
+    let out = busspec(&["decode", "ub2", "--stream", "/nonexistent/capture.bin"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).starts_with("error: cannot read /nonexistent/capture.bin: "),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+/// A reader that closes its end after the first bytes, as `| head -c` does.
+#[test]
+fn output_closed_early_ends_the_run_quietly() {
+    let p = spec("ub2.yaml");
+    let mut capture = Vec::new();
+    while capture.len() < 1 << 20 {
+        for e in &p.examples {
+            capture.extend_from_slice(&e.wire);
+        }
+    }
+    let dir = temp_dir("pipe");
+    let path = dir.join("ub2.bin");
+    std::fs::write(&path, &capture).unwrap();
+    let mut hex_lines = String::new();
+    for e in p.examples.iter().cycle().take(100_000) {
+        hex_lines.push_str(&hex(&e.wire));
+        hex_lines.push('\n');
+    }
+    let lines_path = dir.join("ub2.hex");
+    std::fs::write(&lines_path, &hex_lines).unwrap();
+    for (args, input) in [
+        (
+            vec!["decode", "ub2", "--stream", path.to_str().unwrap()],
+            None,
+        ),
+        (vec!["decode", "ub2", "-"], Some(&lines_path)),
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_busspec"))
+            .args(&args)
+            .current_dir(root())
+            .stdin(match input {
+                Some(f) => Stdio::from(std::fs::File::open(f).unwrap()),
+                None => Stdio::null(),
+            })
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run busspec");
+        let mut stdout = child.stdout.take().expect("stdout");
+        let mut first = [0u8; 100];
+        std::io::Read::read_exact(&mut stdout, &mut first).expect("some output");
+        drop(stdout);
+        let out = child.wait_with_output().expect("wait");
+        assert!(first.starts_with(b"{\""), "{args:?}");
+        assert!(out.stderr.is_empty(), "{args:?}: {}", text(&out.stderr));
+        assert!(out.status.code().is_some(), "{args:?}: killed by a signal");
     }
 }

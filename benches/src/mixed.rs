@@ -203,3 +203,39 @@ pub fn capture_with_noise(p: &Protocol, len: usize, per_mille: u32) -> Vec<u8> {
     out.truncate(len);
     out
 }
+
+/// Hex lines of at least `len` bytes of text, as a logger or terminal prints frames: every
+/// example frame of the protocol over and over (as [`capture`] has them, without the noise,
+/// and without the responses only their request identifies, which a line decoded on its own
+/// cannot settle), one per line, in turn as plain uppercase digits (`AA2141013E1F00006A`), as bytes separated
+/// by spaces (`AA 21 41 01 ...`), and as `0x`-prefixed bytes (`0xAA 0x21 ...`), with a
+/// `#` comment line every 64 frames. The input `busspec decode PROTO -` reads.
+pub fn hex_lines(p: &Protocol, len: usize) -> String {
+    use std::fmt::Write as _;
+    let frames: Vec<&[u8]> = p
+        .examples
+        .iter()
+        .filter(|e| !p.message(e.message).needs_request)
+        .map(|e| e.wire.as_slice())
+        .collect();
+    let mut out = String::with_capacity(len + 64);
+    let mut i = 0usize;
+    while out.len() < len {
+        let wire = frames[i % frames.len()];
+        if i % 64 == 0 {
+            let _ = writeln!(out, "# frame {i}");
+        }
+        for (k, b) in wire.iter().enumerate() {
+            let _ = match i % 3 {
+                0 => write!(out, "{b:02X}"),
+                1 if k > 0 => write!(out, " {b:02X}"),
+                1 => write!(out, "{b:02X}"),
+                _ if k > 0 => write!(out, " 0x{b:02X}"),
+                _ => write!(out, "0x{b:02X}"),
+            };
+        }
+        out.push('\n');
+        i += 1;
+    }
+    out
+}

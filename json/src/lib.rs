@@ -30,6 +30,7 @@
 //! Nothing here panics on any input: every failure is an error message saying what and where.
 
 mod decode;
+mod lines;
 mod parse;
 mod print;
 mod stream;
@@ -40,11 +41,12 @@ use busspec_runtime::{Decoded, EncodeError, Message, Protocol};
 pub use busspec_model::ir::Protocol as Spec;
 pub use busspec_runtime::FieldValue;
 pub use decode::{decode_frame, decode_typed, request_for};
+pub use lines::Printer;
 pub use parse::{parse_line, Parsed};
 pub use print::{
     ambiguous_line, frame_line, lenient_line, message_line, out_of_spec_line, skipped_line,
 };
-pub use stream::{event_line, TypedStream};
+pub use stream::{event_line, write_events, TypedStream};
 
 /// Uppercase hex, no separators: what `encode` prints and `decode` reads back.
 pub fn hex(bytes: &[u8]) -> String {

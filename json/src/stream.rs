@@ -3,11 +3,11 @@
 use busspec_model::ir::Direction;
 use busspec_model::stream::{decode_lenient, relaxed, Event as InterpEvent};
 use busspec_runtime::stream::{Direction as StreamDirection, Event, StreamDecoder};
-use busspec_runtime::Protocol;
+use busspec_runtime::{Decoded, Message, Protocol};
 
 use crate::decode::{candidates, request_for};
 use crate::print::{ambiguous_line, frame_line, out_of_spec_line, skipped_line};
-use crate::{Spec, Typed};
+use crate::{Printer, Spec, Typed};
 
 /// The JSON line of an event of the interpreter's stream decoder (`busspec_model::stream`).
 pub fn event_line(p: &Spec, e: &InterpEvent) -> String {
@@ -28,14 +28,37 @@ pub fn event_line(p: &Spec, e: &InterpEvent) -> String {
     }
 }
 
+/// The lines of the interpreter's stream events written to `out` (each ended by `\n`), as
+/// [`event_line`] prints them; `printer` is [`Printer::new`]`(p)`.
+pub fn write_events(p: &Spec, printer: &Printer, events: &[InterpEvent], out: &mut Vec<u8>) {
+    for e in events {
+        match e {
+            InterpEvent::Frame { offset, frame, .. } => printer.frame(out, p, frame, Some(*offset)),
+            InterpEvent::Skipped { offset, bytes } => Printer::skipped(out, *offset, bytes),
+            _ => {
+                out.extend_from_slice(event_line(p, e).as_bytes());
+                out.push(b'\n');
+            }
+        }
+    }
+}
+
 /// The generated [`StreamDecoder`] of protocol `P`, printing JSON lines: each frame's line
 /// with `"offset"` first, noise and ambiguous frames with their bytes. It keeps the bytes not
 /// yet accounted for (at most a frame's worth and the noise of one run) to print them.
+///
+/// [`TypedStream::push`] gives each line as a `String` (printed by `print.rs`, the
+/// reference); [`TypedStream::push_into`] writes the same lines to a buffer ([`Printer`]),
+/// the way for captures of any size.
 pub struct TypedStream<'s, P: Protocol> {
     spec: &'s Spec,
     decoder: StreamDecoder<P>,
-    /// Bytes pushed and not yet reported; `pending[0]` is at stream offset `base`.
+    printer: Printer,
+    /// The events of one [`Self::push_into`], kept for their memory.
+    events: Vec<Event<P::Request, P::Response>>,
+    /// Bytes pushed; `pending[done..]` not yet reported, `pending[0]` at stream offset `base`.
     pending: Vec<u8>,
+    done: usize,
     base: u64,
     direction: Option<Direction>,
     /// `spec` with its rules lifted, made at the first out-of-spec frame.
@@ -56,7 +79,10 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
         TypedStream {
             spec,
             decoder: StreamDecoder::new(direction).with_default_request(default),
+            printer: Printer::new(spec),
+            events: Vec::new(),
             pending: Vec::new(),
+            done: 0,
             base: 0,
             direction: along,
             relaxed: None,
@@ -65,7 +91,7 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
 
     /// Feeds bytes; returns the lines of what they settled.
     pub fn push(&mut self, data: &[u8]) -> Vec<String> {
-        self.pending.extend_from_slice(data);
+        self.keep(data);
         let events: Vec<_> = self.decoder.feed(data).collect();
         events.iter().map(|e| self.line(e)).collect()
     }
@@ -79,15 +105,96 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
         lines
     }
 
+    /// Feeds bytes; writes the lines of what they settled to `out`, each ended by `\n`: the
+    /// lines [`Self::push`] returns.
+    pub fn push_into(&mut self, data: &[u8], out: &mut Vec<u8>) {
+        self.keep(data);
+        let mut events = std::mem::take(&mut self.events);
+        events.clear();
+        events.extend(self.decoder.feed(data));
+        for e in &events {
+            self.write(e, out);
+        }
+        self.events = events;
+    }
+
+    /// Settles everything buffered, as at the end of a capture; writes the lines to `out`.
+    pub fn finish_into(&mut self, out: &mut Vec<u8>) {
+        while let Some(e) = self.decoder.finish() {
+            self.write(&e, out);
+        }
+    }
+
+    /// Writes the line of `e` as [`Self::line`] gives it.
+    fn write(&mut self, e: &Event<P::Request, P::Response>, out: &mut Vec<u8>) {
+        let printed = match *e {
+            Event::Request { offset, frame, .. } => {
+                self.decoded(Direction::Request, offset, e.len(), &frame, out)
+            }
+            Event::Response { offset, frame, .. } => {
+                self.decoded(Direction::Response, offset, e.len(), &frame, out)
+            }
+            Event::Skipped { offset, len } => {
+                let r = self.take_range(offset, len);
+                Printer::skipped(out, offset, self.pending.get(r).unwrap_or_default());
+                Ok(())
+            }
+            _ => {
+                out.extend_from_slice(self.line(e).as_bytes());
+                out.push(b'\n');
+                Ok(())
+            }
+        };
+        if let Err(why) = printed {
+            out.extend_from_slice(error_line(e.offset(), &why).as_bytes());
+            out.push(b'\n');
+        }
+    }
+
+    /// Writes the line of a frame of `direction` of `len` bytes at `offset`.
+    fn decoded<M: Message>(
+        &mut self,
+        direction: Direction,
+        offset: u64,
+        len: u64,
+        d: &Decoded<M>,
+        out: &mut Vec<u8>,
+    ) -> Result<(), String> {
+        self.take_range(offset, len);
+        let (printer, spec) = (&mut self.printer, self.spec);
+        printer.message(out, spec, direction, d.address, &d.message, Some(offset))
+    }
+
+    /// Keeps pushed bytes until their event reports them.
+    fn keep(&mut self, data: &[u8]) {
+        if self.done > 0 {
+            self.pending.drain(..self.done);
+            self.base += self.done as u64;
+            self.done = 0;
+        }
+        self.pending.extend_from_slice(data);
+    }
+
+    /// Where the bytes of `len` at stream offset `offset` are in `pending`; every byte before
+    /// their end counts as reported.
+    fn take_range(&mut self, offset: u64, len: u64) -> std::ops::Range<usize> {
+        let at = self.base + self.done as u64;
+        let index = |o: u64| {
+            usize::try_from(o.saturating_sub(at))
+                .ok()
+                .and_then(|i| i.checked_add(self.done))
+                .unwrap_or(usize::MAX)
+        };
+        let to = index(offset + len).min(self.pending.len());
+        let from = index(offset).min(to);
+        self.done = to;
+        from..to
+    }
+
     /// The bytes of `len` at stream offset `offset`, dropping every byte before their end.
     fn take(&mut self, offset: u64, len: u64) -> Vec<u8> {
-        let from = usize::try_from(offset.saturating_sub(self.base)).unwrap_or(usize::MAX);
-        let to = usize::try_from((offset + len).saturating_sub(self.base)).unwrap_or(usize::MAX);
-        let to = to.min(self.pending.len());
-        let bytes = self.pending.get(from.min(to)..to).unwrap_or(&[]).to_vec();
-        self.pending.drain(..to);
-        self.base += to as u64;
-        bytes
+        let r = self.take_range(offset, len);
+        self.pending.get(r).unwrap_or_default().to_vec()
     }
 
     fn line(&mut self, e: &Event<P::Request, P::Response>) -> String {
@@ -121,12 +228,14 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             }
         };
         // Only a protocol generated from another spec than `spec` gets here.
-        printed.unwrap_or_else(|why| {
-            format!(
-                "{{\"offset\":{},\"error\":{}}}",
-                e.offset(),
-                serde_json::to_string(&why).unwrap_or_default()
-            )
-        })
+        printed.unwrap_or_else(|why| error_line(e.offset(), &why))
     }
+}
+
+/// The line of a frame `spec` cannot print (a protocol generated from another spec).
+fn error_line(offset: u64, why: &str) -> String {
+    format!(
+        "{{\"offset\":{offset},\"error\":{}}}",
+        serde_json::to_string(why).unwrap_or_default()
+    )
 }

@@ -379,41 +379,174 @@ pub fn range_violation(f: &Field, bits: Option<&BitField>, raw: i64) -> Option<(
     (!(min..=max).contains(&raw) && !special).then_some((min, max))
 }
 
+/// What [`decode`] derives from the spec for the directions it decodes, before it looks at a
+/// frame: no allocation, so a single decode pays only a pass over the messages.
+#[derive(Debug, Clone, Copy)]
+struct Limits {
+    directions: &'static [Direction],
+    longest_frame: usize,
+    shortest: usize,
+    min_code: usize,
+}
+
+impl Limits {
+    fn of(p: &Protocol, direction: Option<Direction>) -> Limits {
+        let directions: &'static [Direction] = match direction {
+            Some(Direction::Request) => &[Direction::Request],
+            Some(Direction::Response) => &[Direction::Response],
+            None => &[Direction::Request, Direction::Response],
+        };
+        Limits {
+            directions,
+            longest_frame: directions
+                .iter()
+                .map(|d| p.max_frame_len(*d))
+                .max()
+                .unwrap_or(0),
+            shortest: directions
+                .iter()
+                .flat_map(|d| p.messages(*d))
+                .map(|m| p.frame_len(m))
+                .min()
+                .unwrap_or(0),
+            min_code: directions
+                .iter()
+                .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
+                .min()
+                .unwrap_or(1),
+        }
+    }
+}
+
+/// [`decode`] with everything it derives from the spec computed once, for decoding many
+/// frames of one protocol (the stream decoder): the limits, and the messages of each frame
+/// length in the order `decode` tries them. Decodes exactly as [`decode`] does, errors
+/// included; build it from the protocol it decodes.
+#[derive(Debug, Clone)]
+pub struct Lookup {
+    limits: Limits,
+    /// `by_len[n]`: the messages whose frames are `n` bytes long, by where their code sits
+    /// and its first byte.
+    by_len: Vec<Vec<ByFirst>>,
+}
+
+/// Messages of one frame length whose code sits at `code_at`, by the code's first byte: those
+/// with first byte `b` are `refs[starts[b]..starts[b + 1]]`; `starts[256]` is `refs.len()`,
+/// and messages without a code are `refs[starts[256]..]`.
+#[derive(Debug, Clone)]
+struct ByFirst {
+    code_at: usize,
+    starts: Vec<usize>,
+    refs: Vec<MessageRef>,
+}
+
+impl ByFirst {
+    /// The messages whose code's first byte is the byte of `wire` where it sits.
+    fn get(&self, wire: &[u8]) -> &[MessageRef] {
+        let (from, to) = match wire.get(self.code_at) {
+            Some(&b) => (self.starts[usize::from(b)], self.starts[usize::from(b) + 1]),
+            None => (0, 0),
+        };
+        self.refs.get(from..to).unwrap_or_default()
+    }
+
+    fn codeless(&self) -> &[MessageRef] {
+        self.refs.get(self.starts[256]..).unwrap_or_default()
+    }
+}
+
+impl Lookup {
+    /// The lookup of `p` for `direction` (`None`: both).
+    pub fn new(p: &Protocol, direction: Option<Direction>) -> Lookup {
+        let limits = Limits::of(p, direction);
+        // (frame length, code offset, first code byte or 256 for none, message), sorted.
+        let mut all = Vec::new();
+        for &direction in limits.directions {
+            for (index, m) in p.messages(direction).iter().enumerate() {
+                let first = m.code.first().map_or(256, |&b| usize::from(b));
+                let r = MessageRef { direction, index };
+                all.push((p.frame_len(m), m.layout.code, first, r));
+            }
+        }
+        all.sort_by_key(|&(len, at, first, r)| (len, at, first, r.direction as u8, r.index));
+        let mut by_len: Vec<Vec<ByFirst>> = vec![Vec::new(); limits.longest_frame + 1];
+        for (len, at, first, r) in all {
+            let Some(groups) = by_len.get_mut(len) else {
+                continue;
+            };
+            if groups.last().map_or(true, |g: &ByFirst| g.code_at != at) {
+                groups.push(ByFirst {
+                    code_at: at,
+                    starts: vec![0; 257],
+                    refs: Vec::new(),
+                });
+            }
+            if let Some(g) = groups.last_mut() {
+                g.refs.push(r);
+                // Messages sorted by first byte: every later byte starts after this one.
+                for s in g.starts.iter_mut().skip(first + 1) {
+                    *s = g.refs.len();
+                }
+            }
+        }
+        Lookup { limits, by_len }
+    }
+
+    /// Decodes a frame of `p` (the protocol the lookup was built from) as [`decode`] does.
+    pub fn decode(
+        &self,
+        p: &Protocol,
+        reply_to: Option<usize>,
+        wire: &[u8],
+    ) -> Result<Frame, DecodeError> {
+        decode_in(p, self.limits, Some(self), (reply_to, false), wire)
+    }
+
+    /// Decodes a frame as the stream decoder pairs a response with the request before it:
+    /// as [`decode`] without `request`, and where that is [`DecodeError::Ambiguous`], as with
+    /// `request` if that settles it; otherwise the ambiguity without it. The same as decoding
+    /// twice, with the fields decoded once.
+    pub fn decode_paired(
+        &self,
+        p: &Protocol,
+        request: Option<usize>,
+        wire: &[u8],
+    ) -> Result<Frame, DecodeError> {
+        decode_in(p, self.limits, Some(self), (request, true), wire)
+    }
+}
+
 /// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
-/// responses that only the request they answer can tell apart.
+/// responses that only the request they answer can tell apart. To decode many frames of one
+/// protocol, build a [`Lookup`] once.
 pub fn decode(
     p: &Protocol,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     wire: &[u8],
 ) -> Result<Frame, DecodeError> {
-    let directions: &[Direction] = match direction {
-        Some(Direction::Request) => &[Direction::Request],
-        Some(Direction::Response) => &[Direction::Response],
-        None => &[Direction::Request, Direction::Response],
-    };
-    let longest_frame = directions
-        .iter()
-        .map(|d| p.max_frame_len(*d))
-        .max()
-        .unwrap_or(0);
+    decode_in(p, Limits::of(p, direction), None, (reply_to, false), wire)
+}
+
+fn decode_in(
+    p: &Protocol,
+    limits: Limits,
+    lookup: Option<&Lookup>,
+    reply_to: (Option<usize>, bool),
+    wire: &[u8],
+) -> Result<Frame, DecodeError> {
+    let Limits {
+        directions,
+        longest_frame,
+        shortest,
+        min_code,
+    } = limits;
     if wire.len() > longest_frame {
         return Err(DecodeError::TooLong {
             max: longest_frame,
             found: wire.len(),
         });
     }
-    let shortest = directions
-        .iter()
-        .flat_map(|d| p.messages(*d))
-        .map(|m| p.frame_len(m))
-        .min()
-        .unwrap_or(0);
-    let min_code = directions
-        .iter()
-        .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
-        .min()
-        .unwrap_or(1);
     let first = p.framing.head(min_code);
     if let (Some(at), Some(expected)) = (first.start, p.framing.start) {
         if let Some(&found) = wire.get(at) {
@@ -431,16 +564,51 @@ pub fn decode(
     check_checksum(p, wire)?;
     check_address(p, first.address, wire)?;
 
+    let code_fits = |r: &MessageRef| {
+        let m = p.message(*r);
+        let o = m.layout;
+        wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..])
+    };
+    // The messages of this length whose code fits, in the order of the scan below: when
+    // there are any, they are what the scan would find.
+    if let Some(groups) = lookup.and_then(|l| l.by_len.get(wire.len())) {
+        if let [g] = groups.as_slice() {
+            let fits = |r: &MessageRef| code_fits(r);
+            let mut found = g
+                .get(wire)
+                .iter()
+                .chain(g.codeless())
+                .copied()
+                .filter(fits)
+                .peekable();
+            if found.peek().is_some() {
+                return decide(p, found, shortest, reply_to, wire);
+            }
+        }
+        let mut by_len: Vec<MessageRef> = Vec::new();
+        for g in groups {
+            by_len.extend(
+                g.get(wire)
+                    .iter()
+                    .chain(g.codeless())
+                    .filter(|r| code_fits(r)),
+            );
+        }
+        if groups.len() > 1 {
+            by_len.sort_by_key(|r| (r.direction as u8, r.index));
+        }
+        if !by_len.is_empty() {
+            return decide(p, by_len, shortest, reply_to, wire);
+        }
+    }
+
     // Messages whose code matches the bytes where the code sits.
     let mut by_code: Vec<MessageRef> = Vec::new();
-    for &d in directions {
-        for (index, m) in p.messages(d).iter().enumerate() {
-            let o = m.layout;
-            if wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..]) {
-                by_code.push(MessageRef {
-                    direction: d,
-                    index,
-                });
+    for &direction in directions {
+        for index in 0..p.messages(direction).len() {
+            let r = MessageRef { direction, index };
+            if code_fits(&r) {
+                by_code.push(r);
             }
         }
     }
@@ -484,16 +652,49 @@ pub fn decode(
             found: wire.len(),
         });
     }
+    decide(p, by_len, shortest, reply_to, wire)
+}
+
+/// The frame among the messages of the frame's code and length (`by_len`, not empty) whose
+/// fields decode, settled by `reply_to` where several do.
+///
+/// `paired`: as the stream decoder pairs a response with the request before it, a `reply_to`
+/// that settles nothing leaves the frame ambiguous among every candidate (otherwise among
+/// those answering `reply_to`, or an error if none does).
+fn decide(
+    p: &Protocol,
+    by_len: impl IntoIterator<Item = MessageRef>,
+    shortest: usize,
+    (reply_to, paired): (Option<usize>, bool),
+    wire: &[u8],
+) -> Result<Frame, DecodeError> {
+    let mut by_len = by_len.into_iter();
+    let first = by_len.next();
+    let second = by_len.next();
+    // One message of this code and length (the common case): it fits or its misfit is the
+    // error, as below, without a list.
+    if let (Some(r), None) = (first, second) {
+        let m = p.message(r);
+        return match fields_of(p, m, wire) {
+            Ok(values) => Ok(Frame {
+                message: r,
+                address: wire.get(m.layout.address).copied().unwrap_or(0),
+                values,
+            }),
+            Err(misfit) => Err(misfit.error(m)),
+        };
+    }
     let mut fitting = Vec::new();
     let mut first_err = None;
-    for r in by_len {
-        match decode_fields(p, p.message(r), wire) {
+    for r in first.into_iter().chain(second).chain(by_len) {
+        match fields_of(p, p.message(r), wire) {
             Ok(values) => fitting.push((r, values)),
-            Err(e) => {
-                first_err.get_or_insert(e);
+            Err(misfit) => {
+                first_err.get_or_insert((r, misfit));
             }
         }
     }
+    let first_err = first_err.map(|(r, misfit)| misfit.error(p.message(r)));
     if fitting.len() > 1 {
         if let Some(cmd) = reply_to {
             let answers = |r: &MessageRef| {
@@ -502,6 +703,15 @@ pub fn decode(
                         .get(cmd)
                         .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
             };
+            if paired && fitting.iter().filter(|(r, _)| answers(r)).count() != 1 {
+                // Not settled by the request: the ambiguity without it.
+                return Err(DecodeError::Ambiguous {
+                    candidates: fitting
+                        .iter()
+                        .map(|(r, _)| p.message(*r).name.clone())
+                        .collect(),
+                });
+            }
             fitting.retain(|(r, _)| answers(r));
         }
     }
@@ -610,43 +820,140 @@ fn check_address(p: &Protocol, at: usize, wire: &[u8]) -> Result<(), DecodeError
 /// Field values of a frame already known to have the message's length and an allowed address:
 /// constants, repeated fields, ranges and the broadcast rule checked.
 fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
+    fields_of(p, m, wire).map_err(|misfit| misfit.error(m))
+}
+
+/// Why a frame's fields do not fit a message: what [`decode_fields`] reports, held without
+/// allocating until it is reported, since [`decide`] tries every message of a code and
+/// length and reports only the first failure.
+#[derive(Debug, Clone, Copy)]
+enum Misfit {
+    Broadcast {
+        address: u8,
+    },
+    Constant {
+        field: usize,
+        bit: Option<usize>,
+        offset: usize,
+        expected: u64,
+        found: u64,
+    },
+    NotEqual {
+        field: usize,
+        other: usize,
+        offset: usize,
+        expected: i64,
+        found: i64,
+    },
+    Range {
+        field: usize,
+        bit: Option<usize>,
+        offset: usize,
+        found: i64,
+        min: i64,
+        max: i64,
+    },
+}
+
+impl Misfit {
+    fn error(self, m: &Message) -> DecodeError {
+        let name = |field: usize, bit: Option<usize>| {
+            let f = m.fields.get(field);
+            match bit {
+                Some(b) => f.and_then(|f| f.bits.get(b)).map(|b| b.name.clone()),
+                None => f.map(|f| f.name.clone()),
+            }
+            .unwrap_or_default()
+        };
+        match self {
+            Misfit::Broadcast { address } => DecodeError::BroadcastNotAccepted {
+                message: m.name.clone(),
+                code: m.code.clone(),
+                address,
+            },
+            Misfit::Constant {
+                field,
+                bit,
+                offset,
+                expected,
+                found,
+            } => DecodeError::ConstantMismatch {
+                message: m.name.clone(),
+                field: name(field, bit),
+                offset,
+                expected,
+                found,
+            },
+            Misfit::NotEqual {
+                field,
+                other,
+                offset,
+                expected,
+                found,
+            } => DecodeError::NotEqual {
+                message: m.name.clone(),
+                field: name(field, None),
+                offset,
+                other: name(other, None),
+                expected,
+                found,
+            },
+            Misfit::Range {
+                field,
+                bit,
+                offset,
+                found,
+                min,
+                max,
+            } => DecodeError::OutOfRange {
+                message: m.name.clone(),
+                field: name(field, bit),
+                offset,
+                found,
+                min,
+                max,
+            },
+        }
+    }
+}
+
+/// A whole field's value: unsigned as read, and as the field's type reads it (0 for text).
+fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
+    if f.is_ascii() {
+        return (0, 0);
+    }
+    let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
+    let unsigned = read_uint(bytes, f.byte_order);
+    let v = if f.signed {
+        sign_extend(unsigned, 8 * f.width as u32)
+    } else {
+        unsigned as i64
+    };
+    (unsigned, v)
+}
+
+/// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first, and their
+/// values built only for a message they fit.
+fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfit> {
     let o = m.layout;
     let address = wire.get(o.address).copied().unwrap_or(0);
     if broadcast_refused(p, m, address) {
-        return Err(DecodeError::BroadcastNotAccepted {
-            message: m.name.clone(),
-            code: m.code.clone(),
-            address,
-        });
+        return Err(Misfit::Broadcast { address });
     }
     let payload = wire
         .get(o.payload..o.payload + m.payload_len)
         .unwrap_or(&[]);
-    let mut values = Vec::new();
-    let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
-    for f in &m.fields {
-        let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
-        let at = o.payload + f.offset;
+    for (i, f) in m.fields.iter().enumerate() {
         if f.is_ascii() {
-            ints.push(0);
-            values.push(Value {
-                name: f.name.clone(),
-                raw: Raw::Text(bytes.to_vec()),
-            });
             continue;
         }
-        let unsigned = read_uint(bytes, f.byte_order);
-        let v = if f.signed {
-            sign_extend(unsigned, 8 * f.width as u32)
-        } else {
-            unsigned as i64
-        };
-        ints.push(v);
+        let at = o.payload + f.offset;
+        let (unsigned, v) = int_of(f, payload);
         if let Some(c) = f.constant {
             if unsigned != c {
-                return Err(DecodeError::ConstantMismatch {
-                    message: m.name.clone(),
-                    field: f.name.clone(),
+                return Err(Misfit::Constant {
+                    field: i,
+                    bit: None,
                     offset: at,
                     expected: c,
                     found: unsigned,
@@ -654,17 +961,12 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
             }
         }
         if let Some(other) = f.equals {
-            let expected = ints.get(other).copied().unwrap_or(0);
+            let expected = m.fields.get(other).map_or(0, |e| int_of(e, payload).1);
             if v != expected {
-                return Err(DecodeError::NotEqual {
-                    message: m.name.clone(),
-                    field: f.name.clone(),
+                return Err(Misfit::NotEqual {
+                    field: i,
+                    other,
                     offset: at,
-                    other: m
-                        .fields
-                        .get(other)
-                        .map(|o| o.name.clone())
-                        .unwrap_or_default(),
                     expected,
                     found: v,
                 });
@@ -672,27 +974,23 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
         }
         if f.bits.is_empty() {
             if let Some((min, max)) = range_violation(f, None, v) {
-                return Err(DecodeError::OutOfRange {
-                    message: m.name.clone(),
-                    field: f.name.clone(),
+                return Err(Misfit::Range {
+                    field: i,
+                    bit: None,
                     offset: at,
                     found: v,
                     min,
                     max,
                 });
             }
-            values.push(Value {
-                name: f.name.clone(),
-                raw: Raw::Int(v),
-            });
         }
-        for b in &f.bits {
+        for (k, b) in f.bits.iter().enumerate() {
             let bv = bit_value(unsigned, b);
             if let Some(c) = b.constant {
                 if bv as u64 != c {
-                    return Err(DecodeError::ConstantMismatch {
-                        message: m.name.clone(),
-                        field: b.name.clone(),
+                    return Err(Misfit::Constant {
+                        field: i,
+                        bit: Some(k),
                         offset: at,
                         expected: c,
                         found: bv as u64,
@@ -700,18 +998,38 @@ fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, D
                 }
             }
             if let Some((min, max)) = range_violation(f, Some(b), bv) {
-                return Err(DecodeError::OutOfRange {
-                    message: m.name.clone(),
-                    field: b.name.clone(),
+                return Err(Misfit::Range {
+                    field: i,
+                    bit: Some(k),
                     offset: at,
                     found: bv,
                     min,
                     max,
                 });
             }
+        }
+    }
+    let mut values = Vec::with_capacity(m.fields.len());
+    for f in &m.fields {
+        if f.is_ascii() {
+            let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
+            values.push(Value {
+                name: f.name.clone(),
+                raw: Raw::Text(bytes.to_vec()),
+            });
+            continue;
+        }
+        let (unsigned, v) = int_of(f, payload);
+        if f.bits.is_empty() {
+            values.push(Value {
+                name: f.name.clone(),
+                raw: Raw::Int(v),
+            });
+        }
+        for b in &f.bits {
             values.push(Value {
                 name: b.name.clone(),
-                raw: Raw::Int(bv),
+                raw: Raw::Int(bit_value(unsigned, b)),
             });
         }
     }

@@ -144,25 +144,34 @@ impl Ord for Rational {
     }
 }
 
+/// The decimal places a fraction with (positive) denominator `den` needs, if it has a finite
+/// decimal: the larger power of 2 and 5 in `den`, when `den` has no other factor.
+pub fn decimal_places(den: i128) -> Option<u32> {
+    if den <= 0 {
+        return None;
+    }
+    let (mut d, mut twos, mut fives) = (den, 0u32, 0u32);
+    while d % 2 == 0 {
+        d /= 2;
+        twos += 1;
+    }
+    while d % 5 == 0 {
+        d /= 5;
+        fives += 1;
+    }
+    (d == 1).then_some(twos.max(fives))
+}
+
 impl fmt::Display for Rational {
     /// Exact decimal where the denominator divides a power of ten, else `num/den`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let (mut d, mut twos, mut fives) = (self.den, 0u32, 0u32);
-        while d % 2 == 0 {
-            d /= 2;
-            twos += 1;
-        }
-        while d % 5 == 0 {
-            d /= 5;
-            fives += 1;
-        }
-        let places = twos.max(fives);
         // A denominator like 2^40 needs 40 decimal places, more than i128 holds: print such
         // values (and any other whose scaling would overflow) as a fraction.
-        let scaled = 10i128
-            .checked_pow(places)
+        let places = decimal_places(self.den);
+        let scaled = places
+            .and_then(|places| 10i128.checked_pow(places))
             .and_then(|p| Some((p, self.num.checked_mul(p / self.den)?)));
-        let Some((p, scaled)) = scaled.filter(|_| d == 1) else {
+        let (Some(places), Some((p, scaled))) = (places, scaled) else {
             return write!(f, "{}/{}", self.num, self.den);
         };
         if places == 0 {

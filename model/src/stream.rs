@@ -71,7 +71,7 @@
 //! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`]. An
 //! out-of-spec frame ends the pairing, as an ambiguous one does.
 
-use crate::interp::{self, DecodeError, Frame, Raw};
+use crate::interp::{self, DecodeError, Frame, Lookup, Raw};
 use crate::ir::{Direction, FrameLayout, Message, MessageRef, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
@@ -138,6 +138,16 @@ struct Shape {
     at: FrameLayout,
 }
 
+/// The messages whose code sits at one offset, by the first byte of their code: the only
+/// ones that can agree with a buffer holding that byte there.
+#[derive(Debug, Clone)]
+struct ByCode {
+    code_at: usize,
+    /// Indices into the decoder's shapes: all of them, and by the first code byte.
+    all: Vec<usize>,
+    by_first: Vec<Vec<usize>>,
+}
+
 /// What one step of the framing rule did.
 enum Step {
     Progress,
@@ -150,6 +160,16 @@ pub struct StreamDecoder<'p> {
     p: &'p Protocol,
     direction: Option<Direction>,
     shapes: Vec<Shape>,
+    /// The shapes grouped by where their code sits, then by its first byte; made once.
+    by_code: Vec<ByCode>,
+    /// Shapes without a code (none in a valid spec; kept so the rule still holds).
+    codeless: Vec<usize>,
+    /// The decoding `interp::decode` does for this protocol and direction, prepared once.
+    lookup: Lookup,
+    /// Candidate lengths of one step, kept for their memory.
+    lens: Vec<usize>,
+    /// The shortest frame the decoder decodes.
+    shortest: usize,
     capacity: usize,
     /// Bytes not yet accounted for; `buf[0]` is at capture offset `head`.
     buf: Vec<u8>,
@@ -177,10 +197,38 @@ impl<'p> StreamDecoder<'p> {
             }
         }
         let capacity = shapes.iter().map(|s| s.len).max().unwrap_or(0).max(1);
+        let shortest = shapes.iter().map(|s| s.len).min().unwrap_or(1).max(1);
+        let mut by_code: Vec<ByCode> = Vec::new();
+        let mut codeless = Vec::new();
+        for (i, s) in shapes.iter().enumerate() {
+            let Some(&first) = s.code.first() else {
+                codeless.push(i);
+                continue;
+            };
+            let group = match by_code.iter().position(|g| g.code_at == s.at.code) {
+                Some(g) => g,
+                None => {
+                    by_code.push(ByCode {
+                        code_at: s.at.code,
+                        all: Vec::new(),
+                        by_first: vec![Vec::new(); 256],
+                    });
+                    by_code.len() - 1
+                }
+            };
+            let g = &mut by_code[group];
+            g.all.push(i);
+            g.by_first[usize::from(first)].push(i);
+        }
         StreamDecoder {
             p,
             direction,
             shapes,
+            by_code,
+            codeless,
+            lookup: Lookup::new(p, direction),
+            lens: Vec::new(),
+            shortest,
             capacity,
             buf: Vec::with_capacity(capacity),
             head: 0,
@@ -211,16 +259,23 @@ impl<'p> StreamDecoder<'p> {
 
     /// Feeds bytes; returns what they settled. Bytes that might still start a frame stay
     /// buffered until more arrive or [`StreamDecoder::flush`] is called.
-    pub fn push(&mut self, mut data: &[u8]) -> Vec<Event> {
+    pub fn push(&mut self, data: &[u8]) -> Vec<Event> {
         let mut out = Vec::new();
+        self.push_into(data, &mut out);
+        out
+    }
+
+    /// [`Self::push`], appending the events to `out` (for a caller that reuses one list).
+    pub fn push_into(&mut self, mut data: &[u8], out: &mut Vec<Event>) {
+        // As many events as frames of the shortest length fit (noise runs come between them).
+        out.reserve(data.len() / self.shortest + 1);
         while !data.is_empty() {
             let room = self.capacity.saturating_sub(self.buf.len()).max(1);
             let n = room.min(data.len());
             self.buf.extend_from_slice(&data[..n]);
             data = &data[n..];
-            self.drain(false, &mut out);
+            self.drain(false, out);
         }
-        out
     }
 
     /// Settles everything buffered, as at the end of a capture or after an idle gap: complete
@@ -242,33 +297,50 @@ impl<'p> StreamDecoder<'p> {
         if self.buf.is_empty() {
             return Step::NeedMore;
         }
-        let live: Vec<&Shape> = self.shapes.iter().filter(|s| self.agrees(s)).collect();
-        if live.is_empty() {
-            self.drop_byte(out);
-            return Step::Progress;
+        // The lengths of the candidates (rule 1) that are complete; whether there is any
+        // candidate, and any longer than what is buffered.
+        let mut lens = std::mem::take(&mut self.lens);
+        lens.clear();
+        let (mut live, mut longer) = (false, false);
+        for i in self.candidates() {
+            let s = &self.shapes[i];
+            if self.agrees(s) {
+                live = true;
+                if s.len > self.buf.len() {
+                    longer = true;
+                } else {
+                    lens.push(s.len);
+                }
+            }
         }
-        if !flushing && live.iter().any(|s| s.len > self.buf.len()) {
+        if !live || (!flushing && longer) {
+            self.lens = lens;
+            if !live {
+                self.drop_byte(out);
+                return Step::Progress;
+            }
             return Step::NeedMore;
         }
-        let mut lens: Vec<usize> = live
-            .iter()
-            .map(|s| s.len)
-            .filter(|&l| l <= self.buf.len())
-            .collect();
         lens.sort_unstable_by(|a, b| b.cmp(a));
         lens.dedup();
         let mut out_of_spec: Option<(usize, DecodeError)> = None;
-        for len in lens {
+        let mut found = None;
+        for &len in &lens {
             match self.try_frame(len) {
                 Ok(event) => {
-                    self.report_noise(out);
-                    self.consume(len);
-                    out.push(event);
-                    return Step::Progress;
+                    found = Some((len, event));
+                    break;
                 }
                 Err(Some(reason)) if out_of_spec.is_none() => out_of_spec = Some((len, reason)),
                 Err(_) => {}
             }
+        }
+        self.lens = lens;
+        if let Some((len, event)) = found {
+            self.report_noise(out);
+            self.consume(len);
+            out.push(event);
+            return Step::Progress;
         }
         if let Some((len, reason)) = out_of_spec {
             let bytes = self.buf.get(..len).unwrap_or_default().to_vec();
@@ -293,6 +365,20 @@ impl<'p> StreamDecoder<'p> {
         Step::Progress
     }
 
+    /// The shapes that can agree with the buffer (indices into `shapes`): those whose code's
+    /// first byte is the buffered byte where it sits, or all of a group when that byte is not
+    /// buffered yet. [`Self::agrees`] decides.
+    fn candidates(&self) -> impl Iterator<Item = usize> + '_ {
+        let grouped = self
+            .by_code
+            .iter()
+            .flat_map(|g| match self.buf.get(g.code_at) {
+                Some(&b) => &g.by_first[usize::from(b)],
+                None => &g.all,
+            });
+        grouped.chain(&self.codeless).copied()
+    }
+
     /// Whether the buffered bytes agree with a message so far.
     fn agrees(&self, s: &Shape) -> bool {
         let buf = &self.buf;
@@ -313,21 +399,17 @@ impl<'p> StreamDecoder<'p> {
     /// the reason if they break only a rule of the spec ([`breaks_spec`]), `Err(None)` if
     /// they are no frame at all.
     fn try_frame(&mut self, len: usize) -> Result<Event, Option<DecodeError>> {
-        let Some(bytes) = self.buf.get(..len).map(<[u8]>::to_vec) else {
+        let Some(wire) = self.buf.get(..len) else {
             return Err(None);
         };
         let offset = self.head;
-        let found = match interp::decode(self.p, self.direction, None, &bytes) {
+        let request = self.last_request.or(self.default_request);
+        let found = match self.lookup.decode_paired(self.p, request, wire) {
             Ok(frame) => Ok(frame),
-            Err(DecodeError::Ambiguous { candidates }) => {
-                let request = self.last_request.or(self.default_request);
-                match request.map(|r| interp::decode(self.p, self.direction, Some(r), &bytes)) {
-                    Some(Ok(frame)) => Ok(frame),
-                    _ => Err(candidates),
-                }
-            }
+            Err(DecodeError::Ambiguous { candidates }) => Err(candidates),
             Err(e) => return Err(Some(e).filter(breaks_spec)),
         };
+        let bytes = wire.to_vec();
         match found {
             Ok(frame) => {
                 self.pair(frame.message);

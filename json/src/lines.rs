@@ -1,0 +1,593 @@
+//! The contract's lines written straight into a byte buffer, for captures of any size: what
+//! [`crate::print`] builds as a value tree and a `String` per line, [`Printer`] writes from a
+//! plan made once per spec (every key already quoted, each message's fixed keys already
+//! joined), with no allocation per frame once its buffers have grown. `print` stays the
+//! reference: the tests hold the two to byte-identical lines for every example of every
+//! built-in spec and for noisy captures through both engines (`tests/printer.rs`).
+
+use std::collections::HashMap;
+
+use busspec_model::interp::{Frame, Raw};
+use busspec_model::ir::{BitField, Direction, Field, MessageRef};
+use busspec_runtime::{FieldValue, Message};
+
+use crate::print::physical_text;
+use crate::Spec;
+
+/// A leaf of a message (a whole field, or a packed sub-field) as it prints.
+#[derive(Debug, Clone)]
+struct Leaf {
+    name: String,
+    /// `"name":`
+    key: String,
+    /// Index into the message's fields, and into that field's bits for a sub-field.
+    field: usize,
+    bit: Option<usize>,
+    /// What the spec fixes, for a typed message that leaves it out.
+    fixed: Fixed,
+}
+
+#[derive(Debug, Clone)]
+enum Fixed {
+    None,
+    Constant(i64),
+    /// The value of the field of this name (a repeated field).
+    Equals(String),
+}
+
+/// One message's line, less its address, offset and field values.
+#[derive(Debug, Clone)]
+struct Plan {
+    /// `"protocol":"…","direction":"…","address":`
+    head: String,
+    /// `,"code":"0x…","message":"…","fields":{`
+    tail: String,
+    leaves: Vec<Leaf>,
+    /// Leaf index by name.
+    by_name: HashMap<String, usize>,
+}
+
+/// A typed message's field value, held past [`Message::visit`]: text as a range of
+/// [`Printer::text`].
+#[derive(Debug, Clone)]
+enum Given {
+    Int(i64),
+    Text(std::ops::Range<usize>),
+}
+
+/// Writes JSON lines of one spec (see the module docs), each ended by `\n`, to a `Vec<u8>`.
+#[derive(Debug, Clone)]
+pub struct Printer {
+    /// Plans of the requests and of the responses, in spec order.
+    plans: [Vec<Plan>; 2],
+    /// Message index by name, per direction.
+    names: [HashMap<String, usize>; 2],
+    /// Message index by the address and length of a generated message's `&'static str` name,
+    /// per direction: a direct-mapped cache in front of `names`.
+    seen: [[(usize, usize, usize); 64]; 2],
+    /// Unit index to its fast decimal form ([`Decimal`]), where it has one.
+    decimals: Vec<Option<Decimal>>,
+    given: Vec<(&'static str, Given)>,
+    text: Vec<u8>,
+}
+
+/// A unit whose physical values `raw * scale + offset` are all decimals with at most `places`
+/// digits after the point: the value is `(raw * mul + add) / 10^places`, exactly. Printed as
+/// [`Rational`]'s `Display` prints it (no trailing zeros, no point for a whole number), with
+/// integer arithmetic and no allocation.
+#[derive(Debug, Clone, Copy)]
+struct Decimal {
+    mul: i128,
+    add: i128,
+    places: u32,
+}
+
+impl Decimal {
+    fn new(unit: &busspec_model::ir::Unit) -> Option<Decimal> {
+        let (scale, offset) = (unit.scale, unit.offset);
+        let den = scale.den.checked_mul(offset.den)?;
+        let places = busspec_model::rational::decimal_places(den)?;
+        let per = 10i128.checked_pow(places)? / den;
+        Some(Decimal {
+            mul: scale.num.checked_mul(offset.den)?.checked_mul(per)?,
+            add: offset.num.checked_mul(scale.den)?.checked_mul(per)?,
+            places,
+        })
+    }
+
+    /// Writes the physical value of `raw`; `false` (nothing written) where it does not fit.
+    fn write(&self, out: &mut Vec<u8>, raw: i64) -> bool {
+        let Some(n) = i128::from(raw)
+            .checked_mul(self.mul)
+            .and_then(|v| v.checked_add(self.add))
+        else {
+            return false;
+        };
+        let Ok(mut a) = u64::try_from(n.unsigned_abs()) else {
+            return false;
+        };
+        let mut places = self.places;
+        while places > 0 && a % 10 == 0 {
+            a /= 10;
+            places -= 1;
+        }
+        if n < 0 {
+            out.push(b'-');
+        }
+        let Some(p) = 10u64.checked_pow(places) else {
+            return false;
+        };
+        push_int(out, a / p);
+        if places > 0 {
+            out.push(b'.');
+            let frac = itoa::Buffer::new().format(a % p).len();
+            out.resize(out.len() + (places as usize).saturating_sub(frac), b'0');
+            push_int(out, a % p);
+        }
+        true
+    }
+}
+
+/// A physical value as [`physical_text`] prints it, through `decimal` where it fits.
+fn push_physical(
+    out: &mut Vec<u8>,
+    decimal: Option<&Decimal>,
+    unit: &busspec_model::ir::Unit,
+    raw: i64,
+) {
+    let at = out.len();
+    if !decimal.is_some_and(|d| d.write(out, raw)) {
+        out.truncate(at);
+        out.extend_from_slice(physical_text(unit, raw).as_bytes());
+    }
+}
+
+fn quote(s: &str) -> String {
+    serde_json::to_string(s).unwrap_or_else(|_| "\"\"".to_owned())
+}
+
+fn side(d: Direction) -> usize {
+    match d {
+        Direction::Request => 0,
+        Direction::Response => 1,
+    }
+}
+
+fn push_quoted(out: &mut Vec<u8>, s: &str) {
+    if s.bytes()
+        .all(|b| b >= 0x20 && b != b'"' && b != b'\\' && b < 0x7F)
+    {
+        out.push(b'"');
+        out.extend_from_slice(s.as_bytes());
+        out.push(b'"');
+    } else if serde_json::to_writer(&mut *out, s).is_err() {
+        out.extend_from_slice(b"\"\"");
+    }
+}
+
+fn push_int(out: &mut Vec<u8>, v: impl itoa::Integer) {
+    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+}
+
+/// Uppercase hex, no separators (as [`crate::hex`]).
+pub fn push_hex(out: &mut Vec<u8>, bytes: &[u8]) {
+    const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
+    for &b in bytes {
+        out.push(DIGITS[usize::from(b >> 4)]);
+        out.push(DIGITS[usize::from(b & 0xF)]);
+    }
+}
+
+/// Text, one character per byte (bytes 0x80..0xFF as U+0080..U+00FF), quoted.
+fn push_text(out: &mut Vec<u8>, bytes: &[u8]) {
+    let s: String = bytes.iter().map(|&b| char::from(b)).collect();
+    push_quoted(out, &s);
+}
+
+/// A value no leaf of the message describes: the raw number or the text.
+fn push_plain(out: &mut Vec<u8>, raw: FieldValue<'_>) {
+    match raw {
+        FieldValue::Int(v) => push_int(out, v),
+        FieldValue::Text(t) => push_text(out, t),
+    }
+}
+
+/// One field value as [`crate::print`]'s `field_json` prints it; `decimals` as in
+/// [`Printer`].
+fn push_field(
+    out: &mut Vec<u8>,
+    p: &Spec,
+    decimals: &[Option<Decimal>],
+    f: &Field,
+    bit: Option<&BitField>,
+    raw: FieldValue,
+) {
+    let v = match raw {
+        FieldValue::Text(t) => return push_text(out, t),
+        FieldValue::Int(v) => v,
+    };
+    let physical = |out: &mut Vec<u8>, u: usize, unit| {
+        push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
+    };
+    if let Some(b) = bit {
+        return match (b.constant, b.unit.and_then(|u| Some((u, p.units.get(u)?)))) {
+            (None, Some((u, unit))) => physical(out, u, unit),
+            _ => push_int(out, v),
+        };
+    }
+    if f.constant.is_some() {
+        return push_int(out, v);
+    }
+    if let Some(s) = f.special.iter().find(|s| s.value == v) {
+        return push_quoted(out, &s.name);
+    }
+    if let Some(e) = f.enumeration.and_then(|e| p.enums.get(e)) {
+        return match e.values.iter().find(|x| x.value as i64 == v) {
+            Some(x) => push_quoted(out, &x.name),
+            None => push_int(out, v),
+        };
+    }
+    if let Some(set) = f.flags.and_then(|i| p.flags.get(i)) {
+        let bits = v as u64;
+        let mut named = 0u64;
+        let mut first = true;
+        let mut sep = |out: &mut Vec<u8>| {
+            if !std::mem::take(&mut first) {
+                out.push(b',');
+            }
+        };
+        out.push(b'[');
+        for flag in &set.bits {
+            let mask = 1u64.checked_shl(u32::from(flag.bit)).unwrap_or(0);
+            named |= mask;
+            if bits & mask != 0 {
+                sep(out);
+                push_quoted(out, &flag.name);
+            }
+        }
+        for bit in 0..64u32 {
+            let mask = 1u64 << bit;
+            if bits & mask != 0 && named & mask == 0 {
+                sep(out);
+                push_int(out, mask);
+            }
+        }
+        out.push(b']');
+        return;
+    }
+    match f.unit.and_then(|u| Some((u, p.units.get(u)?))) {
+        Some((u, unit)) => physical(out, u, unit),
+        None => push_int(out, v),
+    }
+}
+
+impl Printer {
+    /// The plans of every message of `p`.
+    pub fn new(p: &Spec) -> Printer {
+        let protocol = quote(&p.name);
+        let mut plans: [Vec<Plan>; 2] = [Vec::new(), Vec::new()];
+        let mut names: [HashMap<String, usize>; 2] = [HashMap::new(), HashMap::new()];
+        for d in [Direction::Request, Direction::Response] {
+            for (index, m) in p.messages(d).iter().enumerate() {
+                let mut leaves = Vec::new();
+                for (fi, f) in m.fields.iter().enumerate() {
+                    if f.bits.is_empty() {
+                        let fixed = match (f.constant, f.equals) {
+                            (Some(c), _) => Fixed::Constant(c as i64),
+                            (None, Some(i)) => m
+                                .fields
+                                .get(i)
+                                .map_or(Fixed::None, |e| Fixed::Equals(e.name.clone())),
+                            (None, None) => Fixed::None,
+                        };
+                        leaves.push((f.name.clone(), fi, None, fixed));
+                    }
+                    for (bi, b) in f.bits.iter().enumerate() {
+                        let fixed = b
+                            .constant
+                            .map_or(Fixed::None, |c| Fixed::Constant(c as i64));
+                        leaves.push((b.name.clone(), fi, Some(bi), fixed));
+                    }
+                }
+                let mut by_name = HashMap::new();
+                let leaves: Vec<Leaf> = leaves
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, (name, field, bit, fixed))| {
+                        // The first leaf of a name, as `interp::leaf_field` finds it.
+                        by_name.entry(name.clone()).or_insert(i);
+                        Leaf {
+                            key: format!("{}:", quote(&name)),
+                            name,
+                            field,
+                            bit,
+                            fixed,
+                        }
+                    })
+                    .collect();
+                names[side(d)].entry(m.name.clone()).or_insert(index);
+                plans[side(d)].push(Plan {
+                    head: format!(
+                        "\"protocol\":{protocol},\"direction\":{},\"address\":",
+                        quote(d.as_str())
+                    ),
+                    tail: format!(
+                        ",\"code\":{},\"message\":{},\"fields\":{{",
+                        quote(&m.code_hex()),
+                        quote(&m.name)
+                    ),
+                    leaves,
+                    by_name,
+                });
+            }
+        }
+        Printer {
+            plans,
+            names,
+            seen: [[(0, 0, 0); 64]; 2],
+            decimals: p.units.iter().map(Decimal::new).collect(),
+            given: Vec::new(),
+            text: Vec::new(),
+        }
+    }
+
+    fn plan(&self, r: MessageRef) -> Option<&Plan> {
+        self.plans[side(r.direction)].get(r.index)
+    }
+
+    /// `{` and `"offset":N,` in stream mode, the fixed keys and the address, up to the first
+    /// field.
+    fn open(out: &mut Vec<u8>, plan: &Plan, address: u8, offset: Option<u64>) {
+        out.push(b'{');
+        if let Some(o) = offset {
+            out.extend_from_slice(b"\"offset\":");
+            push_int(out, o);
+            out.push(b',');
+        }
+        out.extend_from_slice(plan.head.as_bytes());
+        push_int(out, address);
+        out.extend_from_slice(plan.tail.as_bytes());
+    }
+
+    /// The line of a frame the interpreter decoded, as [`crate::frame_line`] prints it.
+    pub fn frame(&self, out: &mut Vec<u8>, p: &Spec, frame: &Frame, offset: Option<u64>) {
+        let (Some(plan), Some(m)) = (
+            self.plan(frame.message),
+            p.messages(frame.message.direction).get(frame.message.index),
+        ) else {
+            // Another spec's frame: the reference prints what it can.
+            out.extend_from_slice(crate::frame_line(p, frame, offset).as_bytes());
+            out.push(b'\n');
+            return;
+        };
+        Self::open(out, plan, frame.address, offset);
+        for (i, v) in frame.values.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            let raw = match &v.raw {
+                Raw::Int(i) => FieldValue::Int(*i),
+                Raw::Text(t) => FieldValue::Text(t),
+            };
+            // Values come in leaf order; look the name up only where they do not.
+            let leaf = match plan.leaves.get(i) {
+                Some(l) if l.name == v.name => Some(l),
+                _ => plan.by_name.get(&v.name).and_then(|&k| plan.leaves.get(k)),
+            };
+            Self::value(out, p, &self.decimals, m, leaf, &v.name, raw);
+        }
+        out.extend_from_slice(b"}}\n");
+    }
+
+    /// `"name":value`, by the leaf's plan where the message has one.
+    fn value(
+        out: &mut Vec<u8>,
+        p: &Spec,
+        decimals: &[Option<Decimal>],
+        m: &busspec_model::ir::Message,
+        leaf: Option<&Leaf>,
+        name: &str,
+        raw: FieldValue<'_>,
+    ) {
+        let found = leaf.and_then(|l| {
+            let f = m.fields.get(l.field)?;
+            let bit = match l.bit {
+                Some(b) => Some(f.bits.get(b)?),
+                None => None,
+            };
+            Some((l, f, bit))
+        });
+        match found {
+            Some((l, f, bit)) => {
+                out.extend_from_slice(l.key.as_bytes());
+                push_field(out, p, decimals, f, bit, raw);
+            }
+            None => {
+                push_quoted(out, name);
+                out.push(b':');
+                push_plain(out, raw);
+            }
+        }
+    }
+
+    /// The line of a typed message of a generated protocol, as [`crate::message_line`] prints
+    /// it (its error, for a message `p` does not have, too).
+    pub fn message<M: Message>(
+        &mut self,
+        out: &mut Vec<u8>,
+        p: &Spec,
+        direction: Direction,
+        address: u8,
+        message: &M,
+        offset: Option<u64>,
+    ) -> Result<(), String> {
+        let name = message.name();
+        let key = (name.as_ptr() as usize, name.len());
+        let slot = &mut self.seen[side(direction)][(key.0 >> 3) % 64];
+        let index = if (slot.0, slot.1) == key && key.0 != 0 {
+            Some(slot.2)
+        } else {
+            let found = self.names[side(direction)].get(name).copied();
+            if let Some(i) = found {
+                *slot = (key.0, key.1, i);
+            }
+            found
+        };
+        let (Some(plan), Some(m)) = (
+            index.and_then(|i| self.plans[side(direction)].get(i)),
+            index.and_then(|i| p.messages(direction).get(i)),
+        ) else {
+            return crate::message_line(p, direction, address, message, offset).map(|line| {
+                out.extend_from_slice(line.as_bytes());
+                out.push(b'\n');
+            });
+        };
+        let (given, text) = (&mut self.given, &mut self.text);
+        given.clear();
+        text.clear();
+        message.visit(|name, raw| {
+            let v = match raw {
+                FieldValue::Int(i) => Given::Int(i),
+                FieldValue::Text(t) => {
+                    let from = text.len();
+                    text.extend_from_slice(t);
+                    Given::Text(from..text.len())
+                }
+            };
+            given.push((name, v));
+        });
+        let as_field = |g: &Given| match g {
+            Given::Int(i) => FieldValue::Int(*i),
+            Given::Text(r) => FieldValue::Text(text.get(r.clone()).unwrap_or_default()),
+        };
+        let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
+        Self::open(out, plan, address, offset);
+        let mut first = true;
+        // Given fields come in leaf order, less the fixed ones: try the next one first.
+        let (mut next, mut matched) = (0, 0);
+        // Typed messages leave out what the spec fixes (constants, repeated fields); the
+        // contract prints every leaf of the message, as the frame carries it.
+        for leaf in &plan.leaves {
+            let own = match given.get(next) {
+                Some((n, g)) if *n == leaf.name => {
+                    next += 1;
+                    Some(g)
+                }
+                _ => lookup(&leaf.name),
+            };
+            matched += usize::from(own.is_some());
+            let value = match own {
+                Some(g) => as_field(g),
+                None => match &leaf.fixed {
+                    Fixed::Constant(c) => FieldValue::Int(*c),
+                    Fixed::Equals(of) => match lookup(of) {
+                        Some(g) => as_field(g),
+                        None => continue,
+                    },
+                    Fixed::None => continue,
+                },
+            };
+            if !std::mem::take(&mut first) {
+                out.push(b',');
+            }
+            Self::value(out, p, &self.decimals, m, Some(leaf), &leaf.name, value);
+        }
+        // Leaf names are unique, so each given field matched at most one leaf.
+        if matched < given.len() {
+            for (name, g) in given.iter() {
+                if !plan.by_name.contains_key(*name) {
+                    if !std::mem::take(&mut first) {
+                        out.push(b',');
+                    }
+                    Self::value(out, p, &self.decimals, m, None, name, as_field(g));
+                }
+            }
+        }
+        out.extend_from_slice(b"}}\n");
+        Ok(())
+    }
+
+    /// The stream line of bytes that start no frame, as [`crate::skipped_line`] prints it.
+    pub fn skipped(out: &mut Vec<u8>, offset: u64, bytes: &[u8]) {
+        out.extend_from_slice(b"{\"offset\":");
+        push_int(out, offset);
+        out.extend_from_slice(b",\"skipped\":");
+        push_int(out, bytes.len());
+        out.extend_from_slice(b",\"bytes\":\"");
+        push_hex(out, bytes);
+        out.extend_from_slice(b"\"}\n");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use busspec_model::ir::Unit;
+    use busspec_model::rational::Rational;
+
+    fn unit(scale: &str, offset: &str) -> Unit {
+        Unit {
+            name: "u".into(),
+            symbol: "u".into(),
+            scale: Rational::parse(scale).expect("scale"),
+            offset: Rational::parse(offset).expect("offset"),
+            doc: String::new(),
+        }
+    }
+
+    /// Every unit of the built-in specs and units chosen to be awkward print every raw value
+    /// as `physical_text` does: through [`Decimal`] where the unit has one, the reference
+    /// where it does not or the value does not fit.
+    #[test]
+    fn physical_values_print_as_the_reference_prints_them() {
+        let mut units: Vec<Unit> = Vec::new();
+        for (file, text) in [
+            ("ub2.yaml", include_str!("../../spec/ub2.yaml")),
+            ("sd.yaml", include_str!("../../spec/sd.yaml")),
+        ] {
+            let p = busspec_model::load_str(file, text).unwrap_or_else(|d| panic!("{d}"));
+            units.extend(p.units);
+        }
+        for (scale, offset) in [
+            ("1", "0"),
+            ("0.01", "0"),
+            ("0.5", "-40"),
+            ("360/4096", "0"),
+            ("1/3", "0"),
+            ("2.5", "0.125"),
+            ("-0.001", "273.15"),
+            ("1/1048576", "0"),
+            ("1/1099511627776", "0"),
+            ("123456789012345678", "0"),
+            ("0.00000000000000001", "-0.1"),
+        ] {
+            units.push(unit(scale, offset));
+        }
+        let mut raws: Vec<i64> = (-1100..=1100).collect();
+        raws.extend([
+            i64::MIN,
+            i64::MIN + 1,
+            i64::MAX,
+            i64::MAX - 1,
+            1 << 40,
+            -(1 << 53),
+        ]);
+        let mut fast = 0;
+        for u in &units {
+            let decimal = Decimal::new(u);
+            fast += usize::from(decimal.is_some());
+            for &raw in &raws {
+                let mut out = Vec::new();
+                push_physical(&mut out, decimal.as_ref(), u, raw);
+                assert_eq!(
+                    std::str::from_utf8(&out).unwrap(),
+                    physical_text(u, raw),
+                    "scale {:?} offset {:?} raw {raw}",
+                    u.scale,
+                    u.offset
+                );
+            }
+        }
+        assert!(fast >= units.len() / 2, "{fast} of {} units", units.len());
+    }
+}
