@@ -2,6 +2,8 @@
 # Instructions per frame (decode, encode) and per byte (stream), from callgrind: runs the
 # `icount` binary for two pass counts and divides the difference in instructions by the
 # difference in frames or bytes, so set-up (loading the spec, building the inputs) cancels out.
+# Stream rows: the 1 MiB capture with 1 % noise (`generated`) and without (`generated-clean`),
+# per byte and per frame decoded.
 # Prints Markdown table rows. Needs valgrind. Usage: bash benches/icount.sh [ub2|sd ...]
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -20,20 +22,26 @@ count() {
     echo "$out" >&2
     exit 1
   fi
-  echo "$ir $units"
+  # Stream runs also say how many frames a pass decodes.
+  local frames
+  frames=$(sed -n 's/^frames per pass: \([0-9]*\).*/\1/p' <<<"$out")
+  echo "$ir $units ${frames:-0}"
 }
 
 # per PROTO WHO OP LO HI UNIT -> one table row
 per() {
   local proto=$1 who=$2 op=$3 lo=$4 hi=$5 unit=$6
-  read -r a units < <(count "$proto" "$who" "$op" "$lo")
-  read -r b _ < <(count "$proto" "$who" "$op" "$hi")
+  read -r a units frames < <(count "$proto" "$who" "$op" "$lo")
+  read -r b _ _ < <(count "$proto" "$who" "$op" "$hi")
   # `icount PROTO stream CONTENDER` names the operation first.
   if [[ $who == stream ]]; then
     who=$op op=stream
   fi
-  awk -v a="$a" -v b="$b" -v n="$(((hi - lo) * units))" -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" \
-    'BEGIN { printf "| %s | %s | %s | %.1f per %s |\n", p, o, w, (b - a) / n, u }'
+  # For the stream decoders, also per frame decoded (the yardstick is decode's per frame).
+  awk -v a="$a" -v b="$b" -v n="$(((hi - lo) * units))" -v f="$(((hi - lo) * frames))" \
+    -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" \
+    'BEGIN { extra = (u == "byte" && f > 0) ? sprintf(" (%.1f per frame)", (b - a) / f) : ""
+             printf "| %s | %s | %s | %.1f per %s%s |\n", p, o, w, (b - a) / n, u, extra }'
 }
 
 protos=("$@")
@@ -48,5 +56,6 @@ for proto in "${protos[@]}"; do
     per "$proto" interpreter "$op" 2 12 frame
   done
   per "$proto" stream generated 1 3 byte
+  per "$proto" stream generated-clean 1 3 byte
   per "$proto" stream plain-sum 1 3 byte
 done

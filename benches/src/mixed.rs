@@ -179,12 +179,17 @@ pub const NOISE_PER_MILLE: u32 = 10;
 /// [`NOISE_PER_MILLE`] of the bytes random noise inserted between frames. The last frame is
 /// cut at `len`. Seeded, so every run decodes the same capture.
 pub fn capture(p: &Protocol, len: usize) -> Vec<u8> {
+    capture_with_noise(p, len, NOISE_PER_MILLE)
+}
+
+/// [`capture`] with `per_mille` of the bytes noise (0: the frames alone, back to back).
+pub fn capture_with_noise(p: &Protocol, len: usize, per_mille: u32) -> Vec<u8> {
     let mut rng = fastrand::Rng::with_seed(0x0062_7573_7370_6563);
     let frames: Vec<&[u8]> = p.examples.iter().map(|e| e.wire.as_slice()).collect();
     let mean = frames.iter().map(|f| f.len()).sum::<usize>() as f64 / frames.len() as f64;
     // Noise bytes between two frames: Bernoulli per frame with the probability that makes
     // noise / total = NOISE_PER_MILLE / 1000 on average.
-    let share = f64::from(NOISE_PER_MILLE) / 1000.0;
+    let share = f64::from(per_mille) / 1000.0;
     let per_frame = share * mean / (1.0 - share);
     let mut out = Vec::with_capacity(len + 32);
     let mut i = 0;

@@ -526,7 +526,7 @@ pub fn frame_mut<'b, const N: usize>(
 /// length. Inlined into each message's encoder, where it folds the constant header bytes.
 #[inline(always)]
 pub fn seal_sum8<const N: usize>(out: &mut [u8; N]) -> usize {
-    let sum = sum8(&out[..N - 1]);
+    let sum = crate::sum8_bytes(&out[..N - 1]);
     out[N - 1] = sum;
     N
 }

@@ -5,16 +5,17 @@
 //!
 //! ```text
 //! icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>
-//! icount <ub2|sd> stream <generated|plain-sum> <passes>
+//! icount <ub2|sd> stream <generated|generated-clean|plain-sum> <passes>
 //! ```
 //!
-//! A decode or encode pass is the 128-frame mixed stream; a stream pass is the 1 MiB capture.
+//! A decode or encode pass is the 128-frame mixed stream; a stream pass is the 1 MiB capture
+//! (1 % noise; `generated-clean`: none).
 //! Prints the units one pass stands for (frames or bytes) and a value computed from the work,
 //! so none of it can be optimised away.
 
 use std::process::ExitCode;
 
-use busspec_benches::mixed::{capture, Mixed, Proto, CAPTURE_BYTES};
+use busspec_benches::mixed::{capture_with_noise, Mixed, Proto, CAPTURE_BYTES, NOISE_PER_MILLE};
 use busspec_benches::{
     decode_all, encode_all, jobs, messages, plain_sum, stream_generated, Contender, Deku,
     Generated, Hand, Interp,
@@ -23,7 +24,7 @@ use busspec_protocols::sd::Sd;
 use busspec_protocols::ub2::Ub2;
 use busspec_protocols::Protocol;
 
-const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <ub2|sd> stream <generated|plain-sum> <passes>";
+const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <ub2|sd> stream <generated|generated-clean|plain-sum> <passes>";
 
 fn run<C: Contender>(c: &C, mixed: &Mixed, op: &str, passes: u64) -> Result<u64, String> {
     match op {
@@ -55,13 +56,20 @@ where
     let proto = Proto::of::<P>();
     let spec = proto.spec();
     if who == "stream" {
-        let cap = capture(&spec, CAPTURE_BYTES);
+        // `generated-clean`: the generated stream decoder over the capture without noise.
+        let noise = if op == "generated-clean" {
+            0
+        } else {
+            NOISE_PER_MILLE
+        };
+        let cap = capture_with_noise(&spec, CAPTURE_BYTES, noise);
         let f = match op {
-            "generated" => |c: &[u8]| stream_generated::<P>(c).frames,
+            "generated" | "generated-clean" => |c: &[u8]| stream_generated::<P>(c).frames,
             "plain-sum" => |c: &[u8]| u64::from(plain_sum(c)),
             other => return Err(format!("unknown stream contender `{other}`\n{USAGE}")),
         };
         println!("units per pass: {} bytes", cap.len());
+        println!("frames per pass: {}", stream_generated::<P>(&cap).frames);
         Ok((0..passes).map(|_| f(&cap)).sum())
     } else {
         let mixed = Mixed::from_spec(proto, &spec);
