@@ -13,12 +13,13 @@ pub use core::ops::RangeInclusive;
 pub use core::option::Option::{self, None, Some};
 pub use core::result::Result::{self, Err, Ok};
 
+pub use crate::repeated::{read_bits, read_elements, write_bits, write_elements};
 pub use crate::stream::Candidates;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, CommandKind, DecodeError, Decoded,
-    EncodeError, FieldError, FieldValue, Message, Protocol,
+    EncodeError, FieldError, FieldValue, Message, Protocol, Repeated,
 };
 
 /// A wire integer type: the raw values a whole field of it holds, as a `from_fields` getter

@@ -24,9 +24,11 @@ pub use crc;
 
 pub mod codec;
 mod protocol;
+mod repeated;
 pub mod stream;
 
 pub use protocol::{Message, Protocol, ProtocolVisitor};
+pub use repeated::{CapacityError, Repeated};
 
 use core::fmt;
 

@@ -1,0 +1,289 @@
+//! [`Repeated`]: the value of a repeated field (registers, coils) in generated code, a
+//! fixed-capacity array holding at most the spec's `max` elements.
+//!
+//! Why not `heapless::Vec`: every generated message is `Copy` (the [`crate::Message`] trait
+//! asks it, so a decoded frame can be kept, compared and passed around like the fixed-length
+//! messages), and `heapless::Vec` is not `Copy`. An array and a length are all it takes, with no
+//! dependency; the elements past the length are never read, compared or printed.
+
+use core::fmt;
+
+/// At most `N` elements of `T`, stored in place: no allocation, `Copy` when `T` is.
+///
+/// Equality, hashing and `Debug` look only at the elements held ([`Self::as_slice`]), never at
+/// the unused capacity.
+#[derive(Clone, Copy)]
+pub struct Repeated<T, const N: usize> {
+    len: usize,
+    items: [T; N],
+}
+
+/// More elements than a [`Repeated`] holds: `found` where the spec's `max` is `capacity`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct CapacityError {
+    pub capacity: usize,
+    pub found: usize,
+}
+
+impl fmt::Display for CapacityError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} elements, but the field holds at most {}",
+            self.found, self.capacity
+        )
+    }
+}
+
+impl core::error::Error for CapacityError {}
+
+impl<T: Copy + Default, const N: usize> Repeated<T, N> {
+    /// The most elements it holds: the spec's `max` (for bits, rounded up to whole bytes).
+    pub const CAPACITY: usize = N;
+
+    /// No elements.
+    pub fn new() -> Self {
+        Repeated {
+            len: 0,
+            items: [T::default(); N],
+        }
+    }
+
+    /// The elements of `items`, or an error if there are more than `N`.
+    pub fn from_slice(items: &[T]) -> Result<Self, CapacityError> {
+        let mut r = Self::new();
+        let dst = r.items.get_mut(..items.len()).ok_or(CapacityError {
+            capacity: N,
+            found: items.len(),
+        })?;
+        dst.copy_from_slice(items);
+        r.len = items.len();
+        Ok(r)
+    }
+
+    /// Appends `item`, or gives it back if it is full.
+    pub fn push(&mut self, item: T) -> Result<(), T> {
+        match self.items.get_mut(self.len) {
+            Some(slot) => {
+                *slot = item;
+                self.len += 1;
+                Ok(())
+            }
+            None => Err(item),
+        }
+    }
+}
+
+impl<T, const N: usize> Repeated<T, N> {
+    /// The elements held.
+    pub fn as_slice(&self) -> &[T] {
+        &self.items[..self.len]
+    }
+
+    /// How many elements it holds.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether it holds none.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+impl<T: Copy + Default, const N: usize> Default for Repeated<T, N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<T, const N: usize> core::ops::Deref for Repeated<T, N> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        self.as_slice()
+    }
+}
+
+impl<T: fmt::Debug, const N: usize> fmt::Debug for Repeated<T, N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.as_slice()).finish()
+    }
+}
+
+impl<T: PartialEq, const N: usize> PartialEq for Repeated<T, N> {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl<T: Eq, const N: usize> Eq for Repeated<T, N> {}
+
+impl<T: core::hash::Hash, const N: usize> core::hash::Hash for Repeated<T, N> {
+    fn hash<H: core::hash::Hasher>(&self, state: &mut H) {
+        self.as_slice().hash(state);
+    }
+}
+
+impl<'a, T, const N: usize> IntoIterator for &'a Repeated<T, N> {
+    type Item = &'a T;
+    type IntoIter = core::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.as_slice().iter()
+    }
+}
+
+/// The elements of `width` bytes each (`le`: least significant byte first; `signed`: sign-
+/// extended from `8 × width` bits) that `bytes` holds, which must be a whole number of them and
+/// at most `N`. Generated decoders call it after checking the count against the frame, so an
+/// error here means a count the frame's length does not give.
+#[inline]
+pub fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
+    bytes: &[u8],
+    width: usize,
+    le: bool,
+    signed: bool,
+) -> Result<Repeated<T, N>, CapacityError> {
+    let found = bytes.len() / width.max(1);
+    if width == 0 || width > 8 || bytes.len() % width != 0 || found > N {
+        return Err(CapacityError { capacity: N, found });
+    }
+    let mut r = Repeated::<T, N>::new();
+    for (slot, c) in r.items.iter_mut().zip(bytes.chunks_exact(width)) {
+        let u = if le {
+            c.iter().rev().fold(0u64, |a, b| (a << 8) | u64::from(*b))
+        } else {
+            c.iter().fold(0u64, |a, b| (a << 8) | u64::from(*b))
+        };
+        let bits = 8 * width as u32;
+        let v = if signed && bits < 64 {
+            ((u << (64 - bits)) as i64) >> (64 - bits)
+        } else {
+            u as i64
+        };
+        *slot = T::from_i64(v);
+    }
+    r.len = found;
+    Ok(r)
+}
+
+/// Writes `items` as elements of `width` bytes each into `out` (which must hold them), and
+/// returns the bytes written.
+#[inline]
+pub fn write_elements<T: crate::codec::Wire>(
+    items: &[T],
+    width: usize,
+    le: bool,
+    out: &mut [u8],
+) -> usize {
+    for (c, v) in out.chunks_exact_mut(width.max(1)).zip(items) {
+        let u = v.to_u64();
+        let n = c.len();
+        for (k, b) in c.iter_mut().enumerate() {
+            let shift = if le { 8 * k } else { 8 * (n - 1 - k) };
+            *b = (u >> shift) as u8;
+        }
+    }
+    items.len() * width
+}
+
+/// The bits `bytes` packs, eight to a byte, least significant bit first (Modbus coils): always
+/// `8 × bytes.len()` of them, the padding of the last byte included, at most `N`.
+#[inline]
+pub fn read_bits<const N: usize>(bytes: &[u8]) -> Result<Repeated<bool, N>, CapacityError> {
+    let found = bytes.len().saturating_mul(8);
+    if found > N {
+        return Err(CapacityError { capacity: N, found });
+    }
+    let mut r = Repeated::<bool, N>::new();
+    for (k, slot) in r.items.iter_mut().take(found).enumerate() {
+        *slot = bytes[k / 8] >> (k % 8) & 1 == 1;
+    }
+    r.len = found;
+    Ok(r)
+}
+
+/// Packs `bits` eight to a byte, least significant bit first, into `out` (which must hold
+/// `ceil(bits.len() / 8)` bytes; the padding bits are zero), and returns the bytes written.
+#[inline]
+pub fn write_bits(bits: &[bool], out: &mut [u8]) -> usize {
+    let n = bits.len().div_ceil(8);
+    for b in out.iter_mut().take(n) {
+        *b = 0;
+    }
+    for (k, &bit) in bits.iter().enumerate() {
+        if let Some(b) = out.get_mut(k / 8) {
+            *b |= u8::from(bit) << (k % 8);
+        }
+    }
+    n
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::format;
+
+    #[test]
+    fn holds_at_most_its_capacity_and_compares_only_what_it_holds() {
+        let mut a = Repeated::<u16, 3>::from_slice(&[1, 2]).unwrap();
+        assert_eq!(a.as_slice(), &[1, 2]);
+        assert_eq!(a.len(), 2);
+        assert_eq!(a.push(3), Ok(()));
+        assert_eq!(a.push(4), Err(4));
+        assert_eq!(
+            Repeated::<u16, 3>::from_slice(&[1, 2, 3, 4]),
+            Err(CapacityError {
+                capacity: 3,
+                found: 4
+            })
+        );
+        // Stale capacity behind the length is invisible to ==, Debug and iteration.
+        let mut b = Repeated::<u16, 3>::from_slice(&[9, 9, 9]).unwrap();
+        b.len = 1;
+        let c = Repeated::<u16, 3>::from_slice(&[9]).unwrap();
+        assert_eq!(b, c);
+        assert_ne!(b, Repeated::<u16, 3>::new());
+        assert_eq!(format!("{b:?}"), "[9]");
+        assert_eq!(b.iter().count(), 1);
+        assert!(Repeated::<u8, 0>::new().is_empty());
+    }
+
+    #[test]
+    fn elements_read_and_write_in_either_byte_order() {
+        let r = read_elements::<u16, 4>(&[0x00, 0x07, 0x01, 0x00], 2, false, false).unwrap();
+        assert_eq!(r.as_slice(), &[7, 256]);
+        let r = read_elements::<u16, 4>(&[0x00, 0x07, 0x01, 0x00], 2, true, false).unwrap();
+        assert_eq!(r.as_slice(), &[0x0700, 1]);
+        let r = read_elements::<i32, 2>(&[0xFF, 0xFF, 0xFE], 3, false, true).unwrap();
+        assert_eq!(r.as_slice(), &[-2]);
+        let mut out = [0u8; 6];
+        assert_eq!(write_elements(&[-2i32, 5], 3, true, &mut out), 6);
+        assert_eq!(out, [0xFE, 0xFF, 0xFF, 0x05, 0x00, 0x00]);
+        // Not a whole number of elements, or more than the capacity: refused, not truncated.
+        assert!(read_elements::<u16, 4>(&[1, 2, 3], 2, false, false).is_err());
+        assert_eq!(
+            read_elements::<u8, 2>(&[1, 2, 3], 1, false, false),
+            Err(CapacityError {
+                capacity: 2,
+                found: 3
+            })
+        );
+        assert!(read_elements::<u8, 2>(&[], 0, false, false).is_err());
+    }
+
+    #[test]
+    fn bits_pack_least_significant_first() {
+        // Modbus application protocol 6.1: coils 20..=38, status CD 6B 05.
+        let r = read_bits::<24>(&[0xCD, 0x6B, 0x05]).unwrap();
+        assert_eq!(r.len(), 24);
+        assert_eq!(
+            &r[..8],
+            &[true, false, true, true, false, false, true, true]
+        );
+        let mut out = [0xFFu8; 3];
+        assert_eq!(write_bits(&r[..19], &mut out), 3);
+        assert_eq!(out, [0xCD, 0x6B, 0x05]);
+        assert!(read_bits::<8>(&[0, 0]).is_err());
+    }
+}
