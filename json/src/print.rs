@@ -2,7 +2,7 @@
 
 use busspec_model::interp::{self, Frame, Raw};
 use busspec_model::ir::{BitField, Direction, Field, Leaf, Message as IrMessage, MessageRef, Unit};
-use busspec_runtime::{FieldValue, Message};
+use busspec_runtime::{Elements, FieldValue, Message};
 
 use crate::{hex, Spec};
 
@@ -85,6 +85,12 @@ fn text_of(bytes: &[u8]) -> String {
 fn field_json(p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue<'_>) -> Json {
     let v = match raw {
         FieldValue::Text(t) => return Json::Str(text_of(t)),
+        FieldValue::List(items) => {
+            let items = items
+                .iter()
+                .map(|i| field_json(p, f, bit, FieldValue::Int(i)));
+            return Json::List(items.collect());
+        }
         FieldValue::Int(v) => v,
     };
     if let Some(b) = bit {
@@ -137,6 +143,7 @@ fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, J
         None => match raw {
             FieldValue::Int(i) => num(i),
             FieldValue::Text(t) => Json::Str(text_of(t)),
+            FieldValue::List(items) => Json::List(items.iter().map(num).collect()),
         },
     };
     (name.to_owned(), json)
@@ -185,13 +192,7 @@ fn frame_fields(p: &Spec, frame: &Frame) -> Vec<(String, Json)> {
             let raw = match &v.raw {
                 Raw::Int(i) => FieldValue::Int(*i),
                 Raw::Text(t) => FieldValue::Text(t),
-                Raw::List(list) => {
-                    let items = list
-                        .iter()
-                        .map(|&i| field(p, m, &v.name, FieldValue::Int(i)).1)
-                        .collect();
-                    return (v.name.clone(), Json::List(items));
-                }
+                Raw::List(list) => FieldValue::List(Elements::I64(list)),
             };
             field(p, m, &v.name, raw)
         })
@@ -276,6 +277,7 @@ pub fn message_line<M: Message>(
             match raw {
                 FieldValue::Int(i) => Owned::Int(i),
                 FieldValue::Text(t) => Owned::Text(t.to_vec()),
+                FieldValue::List(items) => Owned::List(items.iter().collect()),
             },
         ))
     });
@@ -310,6 +312,7 @@ pub fn message_line<M: Message>(
 enum Owned {
     Int(i64),
     Text(Vec<u8>),
+    List(Vec<i64>),
 }
 
 impl Owned {
@@ -317,6 +320,7 @@ impl Owned {
         match self {
             Owned::Int(i) => FieldValue::Int(*i),
             Owned::Text(t) => FieldValue::Text(t),
+            Owned::List(l) => FieldValue::List(Elements::I64(l)),
         }
     }
 }

@@ -13,10 +13,12 @@ pub use core::ops::RangeInclusive;
 pub use core::option::Option::{self, None, Some};
 pub use core::result::Result::{self, Err, Ok};
 
-pub use crate::repeated::{read_bits, read_elements, write_bits, write_elements};
+pub use crate::repeated::{
+    list, list_bits, read_bits, read_elements, write_bits, write_elements, Element,
+};
 pub use crate::stream::Candidates;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
-pub use crate::FieldValue::{Int, Text};
+pub use crate::FieldValue::{Int, List, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, CommandKind, DecodeError, Decoded,
     EncodeError, FieldError, FieldValue, Message, Protocol, Repeated,

@@ -8,6 +8,8 @@
 
 use core::fmt;
 
+use crate::{Elements, FieldError, FieldValue, ValueKind};
+
 /// At most `N` elements of `T`, stored in place: no allocation, `Copy` when `T` is.
 ///
 /// Equality, hashing and `Debug` look only at the elements held ([`Self::as_slice`]), never at
@@ -130,6 +132,92 @@ impl<'a, T, const N: usize> IntoIterator for &'a Repeated<T, N> {
     fn into_iter(self) -> Self::IntoIter {
         self.as_slice().iter()
     }
+}
+
+/// An element type of a repeated field: how its slice is lent to [`crate::Message::visit`].
+pub trait Element: Copy + Default {
+    /// `items` as the [`Elements`] variant of this type.
+    fn elements(items: &[Self]) -> Elements<'_>;
+}
+
+macro_rules! element {
+    ($($t:ty => $v:ident,)*) => {$(
+        impl Element for $t {
+            #[inline]
+            fn elements(items: &[Self]) -> Elements<'_> {
+                Elements::$v(items)
+            }
+        }
+    )*};
+}
+element! {
+    u8 => U8, i8 => I8, u16 => U16, i16 => I16, u32 => U32, i32 => I32, i64 => I64, bool => Bits,
+}
+
+impl<T: Element, const N: usize> Repeated<T, N> {
+    /// The elements as [`crate::Message::visit`] reports them.
+    #[inline]
+    pub fn elements(&self) -> Elements<'_> {
+        T::elements(self.as_slice())
+    }
+}
+
+/// Repeated field `name` from a [`crate::Message::from_fields`] getter: a list of at most `N`
+/// elements, each within `min..=max` (its wire type's raw values; a bit takes 0 or 1, or a
+/// `bool`). Public only for generated code.
+#[inline]
+pub fn list<'v, T: crate::codec::Wire + Default, const N: usize>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+    min: i64,
+    max: i64,
+) -> Result<Repeated<T, N>, FieldError> {
+    let items = match field(name) {
+        Some(FieldValue::List(items)) => items,
+        Some(_) => {
+            return Err(FieldError::WrongKind {
+                field: name,
+                expected: ValueKind::List,
+            })
+        }
+        None => return Err(FieldError::Missing { field: name }),
+    };
+    if items.len() > N {
+        return Err(FieldError::TooMany {
+            field: name,
+            found: items.len(),
+            max: N,
+        });
+    }
+    let mut r = Repeated::<T, N>::new();
+    for (slot, value) in r.items.iter_mut().zip(items.iter()) {
+        if !(min..=max).contains(&value) {
+            return Err(FieldError::OutOfRange {
+                field: name,
+                value,
+                min,
+                max,
+            });
+        }
+        *slot = T::from_i64(value);
+    }
+    r.len = items.len();
+    Ok(r)
+}
+
+/// Repeated bit field `name` from a [`crate::Message::from_fields`] getter, as [`list`].
+#[inline]
+pub fn list_bits<'v, const N: usize>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<Repeated<bool, N>, FieldError> {
+    let raw = list::<u8, N>(field, name, 0, 1)?;
+    let mut r = Repeated::<bool, N>::new();
+    for (slot, &b) in r.items.iter_mut().zip(raw.as_slice()) {
+        *slot = b == 1;
+    }
+    r.len = raw.len;
+    Ok(r)
 }
 
 /// The elements of `width` bytes each (`le`: least significant byte first; `signed`: sign-
@@ -270,6 +358,61 @@ mod tests {
             })
         );
         assert!(read_elements::<u8, 2>(&[], 0, false, false).is_err());
+    }
+
+    #[test]
+    fn lists_come_from_fields_checked_and_go_to_visit() {
+        let values = [7i64, 256];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&values)));
+        let r = list::<u16, 4>(&mut ask, "values", 0, 0xFFFF).unwrap();
+        assert_eq!(r.as_slice(), &[7, 256]);
+        assert_eq!(r.elements(), Elements::U16(&[7, 256]));
+        assert_eq!(r.elements().iter().collect::<std::vec::Vec<_>>(), [7, 256]);
+        assert_eq!(
+            list::<u16, 1>(&mut ask, "values", 0, 0xFFFF),
+            Err(FieldError::TooMany {
+                field: "values",
+                found: 2,
+                max: 1
+            })
+        );
+        assert_eq!(
+            list::<u8, 4>(&mut ask, "values", 0, 255),
+            Err(FieldError::OutOfRange {
+                field: "values",
+                value: 256,
+                min: 0,
+                max: 255
+            })
+        );
+        let mut int = |_: &'static str| Some(FieldValue::Int(1));
+        assert_eq!(
+            list::<u8, 4>(&mut int, "values", 0, 255),
+            Err(FieldError::WrongKind {
+                field: "values",
+                expected: ValueKind::List
+            })
+        );
+        let mut none = |_: &'static str| None;
+        assert_eq!(
+            list_bits::<8>(&mut none, "coils"),
+            Err(FieldError::Missing { field: "coils" })
+        );
+        let bits = [true, false, true];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::Bits(&bits)));
+        let r = list_bits::<8>(&mut ask, "coils").unwrap();
+        assert_eq!(r.elements(), Elements::Bits(&bits));
+        assert_eq!(
+            format!(
+                "{}",
+                FieldError::TooMany {
+                    field: "x",
+                    found: 3,
+                    max: 2
+                }
+            ),
+            "x holds at most 2 elements, got 3"
+        );
     }
 
     #[test]

@@ -66,6 +66,7 @@ pub fn visit_values(visit: impl FnOnce(&mut dyn FnMut(&'static str, FieldValue<'
         let raw = match v {
             FieldValue::Int(i) => Raw::Int(i),
             FieldValue::Text(t) => Raw::Text(t.to_vec()),
+            FieldValue::List(items) => Raw::List(items.iter().collect()),
         };
         out.push((name.to_owned(), raw));
     });
