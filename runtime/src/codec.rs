@@ -14,7 +14,8 @@ pub use core::option::Option::{self, None, Some};
 pub use core::result::Result::{self, Err, Ok};
 
 pub use crate::repeated::{
-    list, list_bits, read_bits, read_elements, write_bits, write_elements, Element,
+    list, list_bits, read_bits, read_elements, write_bits, write_elements, CountBy, CountField,
+    Element, RepeatAt,
 };
 pub use crate::stream::Candidates;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};

@@ -328,6 +328,16 @@ pub enum DecodeError {
         code: u32,
         address: u8,
     },
+    /// The repeated field `field`, whose elements start at `offset`, cannot have what this
+    /// frame gives it: `found` elements by its count field that the frame's length disagrees
+    /// with, bytes that are not a whole number of elements, or a count outside `min..=max`.
+    BadCount {
+        field: &'static str,
+        offset: usize,
+        found: i64,
+        min: usize,
+        max: usize,
+    },
 }
 
 fn hex(f: &mut fmt::Formatter<'_>, v: u32) -> fmt::Result {
@@ -429,6 +439,16 @@ impl fmt::Display for DecodeError {
                     ") does not accept the broadcast address 0x{address:02X}"
                 )
             }
+            DecodeError::BadCount {
+                field,
+                offset,
+                found,
+                min,
+                max,
+            } => write!(
+                f,
+                "{field} at offset {offset}: {found} does not give {min}..={max} elements that fill the frame"
+            ),
         }
     }
 }

@@ -8,7 +8,7 @@
 
 use core::fmt;
 
-use crate::{Elements, FieldError, FieldValue, ValueKind};
+use crate::{DecodeError, Elements, FieldError, FieldValue, ValueKind};
 
 /// At most `N` elements of `T`, stored in place: no allocation, `Copy` when `T` is.
 ///
@@ -218,6 +218,151 @@ pub fn list_bits<'v, const N: usize>(
     }
     r.len = raw.len;
     Ok(r)
+}
+
+/// Where a message's repeated field sits and how its elements are counted: what generated
+/// decoders and the stream decoder need to tell how many elements a frame holds, and so how
+/// long the frame is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RepeatAt {
+    /// The field's spec name.
+    pub field: &'static str,
+    /// The length of the message's frame without any element.
+    pub base: usize,
+    /// Where the first element sits in the frame.
+    pub at: usize,
+    /// Bytes of one element; 0 for bits, packed eight to a byte.
+    pub width: usize,
+    pub count: CountBy,
+    /// The fewest and most elements the spec allows (bits: rounded to whole bytes).
+    pub min: usize,
+    pub max: usize,
+}
+
+/// What a repeated field's count is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CountBy {
+    /// As many elements as fit before the checksum.
+    End,
+    /// An earlier field holds the number of elements.
+    Elements(CountField),
+    /// An earlier field holds the number of bytes the elements take.
+    Bytes(CountField),
+}
+
+/// An unsigned field of the frame that counts a repeated field's elements or bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CountField {
+    pub name: &'static str,
+    /// Its offset in the frame.
+    pub at: usize,
+    /// Its width, bytes.
+    pub width: usize,
+    /// Least significant byte first.
+    pub le: bool,
+}
+
+impl CountField {
+    /// Its value in `frame` (`None` if the frame does not reach it).
+    #[inline]
+    pub fn read(&self, frame: &[u8]) -> Option<u64> {
+        let b = frame.get(self.at..self.at + self.width)?;
+        let fold = |a: u64, b: &u8| (a << 8) | u64::from(*b);
+        Some(if self.le {
+            b.iter().rev().fold(0, fold)
+        } else {
+            b.iter().fold(0, fold)
+        })
+    }
+}
+
+impl RepeatAt {
+    /// Bytes `n` elements take.
+    #[inline]
+    pub fn bytes_of(&self, n: usize) -> usize {
+        if self.width == 0 {
+            n.div_ceil(8)
+        } else {
+            n.saturating_mul(self.width)
+        }
+    }
+
+    /// The number of elements `frame` (a whole frame of the message) holds: its length less
+    /// [`Self::base`], which must be a whole number of elements agreeing with the count field
+    /// and within the bounds. Bits count eight to a byte, padding included, as the interpreter
+    /// counts them.
+    pub fn count(&self, frame: &[u8]) -> Result<usize, DecodeError> {
+        let bad = |found: i64| DecodeError::BadCount {
+            field: self.field,
+            offset: self.at,
+            found,
+            min: self.min,
+            max: self.max,
+        };
+        let extra = frame
+            .len()
+            .checked_sub(self.base)
+            .ok_or(DecodeError::Truncated {
+                needed: self.base + self.bytes_of(self.min),
+                found: frame.len(),
+            })?;
+        let whole = self.width == 0 || extra % self.width == 0;
+        let mut n = if self.width == 0 {
+            extra.saturating_mul(8)
+        } else {
+            extra / self.width
+        };
+        match self.count {
+            CountBy::End if !whole => return Err(bad(extra as i64)),
+            CountBy::End => {}
+            CountBy::Elements(c) => {
+                // Bits by count: as many as it says, the last byte's padding left out.
+                let v = c.read(frame).unwrap_or(0);
+                match usize::try_from(v) {
+                    Ok(v) if self.bytes_of(v) == extra => n = v,
+                    _ => return Err(bad(v as i64)),
+                }
+            }
+            CountBy::Bytes(c) => {
+                let v = c.read(frame).unwrap_or(0);
+                if !whole || usize::try_from(v) != Ok(extra) {
+                    return Err(DecodeError::InvalidValue {
+                        field: c.name,
+                        offset: c.at,
+                        found: v as u32,
+                    });
+                }
+            }
+        }
+        let (lo, hi) = if self.width == 0 {
+            (self.min.div_ceil(8) * 8, self.max.div_ceil(8) * 8)
+        } else {
+            (self.min, self.max)
+        };
+        if n < lo || n > hi {
+            return Err(bad(n as i64));
+        }
+        Ok(n)
+    }
+
+    /// The length of the frame that starts `head` (the bytes buffered so far), once its count
+    /// field has arrived: `None` for a count to the end (the frame's length comes from
+    /// elsewhere: a length field, or the candidates' lengths) or while the count field is still
+    /// missing. A count whose frame could not hold `min..=max` elements gives `Some(0)`, which
+    /// no frame has: the stream decoder then drops a byte and resynchronises.
+    pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        let (c, bytes) = match self.count {
+            CountBy::End => return None,
+            CountBy::Elements(c) => (c, false),
+            CountBy::Bytes(c) => (c, true),
+        };
+        let v = usize::try_from(c.read(head)?).unwrap_or(usize::MAX);
+        let extra = if bytes { v } else { self.bytes_of(v) };
+        let fits = extra >= self.bytes_of(self.min)
+            && extra <= self.bytes_of(self.max)
+            && (self.width == 0 || extra % self.width == 0);
+        Some(if fits { self.base + extra } else { 0 })
+    }
 }
 
 /// The elements of `width` bytes each (`le`: least significant byte first; `signed`: sign-
