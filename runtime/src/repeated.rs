@@ -307,11 +307,10 @@ impl RepeatAt {
                 found: frame.len(),
             })?;
         let whole = self.width == 0 || extra % self.width == 0;
-        let mut n = if self.width == 0 {
-            extra.saturating_mul(8)
-        } else {
-            extra / self.width
-        };
+        // Bits (width 0) come eight to a byte.
+        let mut n = extra
+            .checked_div(self.width)
+            .unwrap_or(extra.saturating_mul(8));
         match self.count {
             CountBy::End if !whole => return Err(bad(extra as i64)),
             CountBy::End => {}
