@@ -18,6 +18,7 @@ pub use crate::repeated::{
     Element, RepeatAt,
 };
 pub use crate::stream::Candidates;
+pub use crate::Bits;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Text};
 pub use crate::{

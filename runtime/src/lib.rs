@@ -28,7 +28,7 @@ mod repeated;
 pub mod stream;
 
 pub use protocol::{Message, Protocol, ProtocolVisitor};
-pub use repeated::{CapacityError, Element, Repeated};
+pub use repeated::{Bits, CapacityError, Element, Repeated};
 
 use core::fmt;
 
@@ -79,7 +79,8 @@ pub enum FieldValue<'a> {
 }
 
 /// The elements of a repeated field, as the message holds them: a slice of its element type
-/// (bits as `bool`; `I64` for callers holding raw values, as the interpreter does).
+/// (`I64` for callers holding raw values, as the interpreter does), or bits packed eight to a
+/// byte, least significant first (`len` of them; the padding bits are zero).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Elements<'a> {
     U8(&'a [u8]),
@@ -89,7 +90,7 @@ pub enum Elements<'a> {
     U32(&'a [u32]),
     I32(&'a [i32]),
     I64(&'a [i64]),
-    Bits(&'a [bool]),
+    Bits { packed: &'a [u8], len: usize },
 }
 
 impl Elements<'_> {
@@ -103,7 +104,7 @@ impl Elements<'_> {
             Elements::U32(s) => s.len(),
             Elements::I32(s) => s.len(),
             Elements::I64(s) => s.len(),
-            Elements::Bits(s) => s.len(),
+            Elements::Bits { len, .. } => *len,
         }
     }
 
@@ -122,7 +123,10 @@ impl Elements<'_> {
             Elements::U32(s) => s.get(i).map(|&v| i64::from(v)),
             Elements::I32(s) => s.get(i).map(|&v| i64::from(v)),
             Elements::I64(s) => s.get(i).copied(),
-            Elements::Bits(s) => s.get(i).map(|&v| i64::from(v)),
+            Elements::Bits { packed, len } if i < *len => {
+                packed.get(i / 8).map(|b| i64::from(b >> (i % 8) & 1))
+            }
+            Elements::Bits { .. } => None,
         }
     }
 

@@ -1,10 +1,15 @@
-//! [`Repeated`]: the value of a repeated field (registers, coils) in generated code, a
-//! fixed-capacity array holding at most the spec's `max` elements.
+//! [`Repeated`]: the value of a repeated field (registers) in generated code, a
+//! fixed-capacity array holding at most the spec's `max` elements; [`Bits`] for a repeated bit
+//! field (coils), packed eight to a byte as they travel.
 //!
 //! Why not `heapless::Vec`: every generated message is `Copy` (the [`crate::Message`] trait
 //! asks it, so a decoded frame can be kept, compared and passed around like the fixed-length
 //! messages), and `heapless::Vec` is not `Copy`. An array and a length are all it takes, with no
 //! dependency; the elements past the length are never read, compared or printed.
+//!
+//! Why bits are packed: a message enum is as large as its largest variant, and Modbus allows
+//! 2000 coils; as `bool`s every Modbus response would take 2 KB, packed it takes 250 bytes, no
+//! more than its 125 registers.
 
 use core::fmt;
 
@@ -151,7 +156,7 @@ macro_rules! element {
     )*};
 }
 element! {
-    u8 => U8, i8 => I8, u16 => U16, i16 => I16, u32 => U32, i32 => I32, i64 => I64, bool => Bits,
+    u8 => U8, i8 => I8, u16 => U16, i16 => I16, u32 => U32, i32 => I32, i64 => I64,
 }
 
 impl<T: Element, const N: usize> Repeated<T, N> {
@@ -205,19 +210,129 @@ pub fn list<'v, T: crate::codec::Wire + Default, const N: usize>(
     Ok(r)
 }
 
-/// Repeated bit field `name` from a [`crate::Message::from_fields`] getter, as [`list`].
+/// Repeated bit field `name` from a [`crate::Message::from_fields`] getter, as [`list`]: at
+/// most `8 × BYTES` elements, each 0 or 1. Public only for generated code.
 #[inline]
-pub fn list_bits<'v, const N: usize>(
+pub fn list_bits<'v, const BYTES: usize>(
     field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
     name: &'static str,
-) -> Result<Repeated<bool, N>, FieldError> {
-    let raw = list::<u8, N>(field, name, 0, 1)?;
-    let mut r = Repeated::<bool, N>::new();
-    for (slot, &b) in r.items.iter_mut().zip(raw.as_slice()) {
-        *slot = b == 1;
+) -> Result<Bits<BYTES>, FieldError> {
+    let items = match field(name) {
+        Some(FieldValue::List(items)) => items,
+        Some(_) => {
+            return Err(FieldError::WrongKind {
+                field: name,
+                expected: ValueKind::List,
+            })
+        }
+        None => return Err(FieldError::Missing { field: name }),
+    };
+    let mut r = Bits::<BYTES>::new();
+    for value in items.iter() {
+        if !(0..=1).contains(&value) {
+            return Err(FieldError::OutOfRange {
+                field: name,
+                value,
+                min: 0,
+                max: 1,
+            });
+        }
+        r.push(value == 1).map_err(|_| FieldError::TooMany {
+            field: name,
+            found: items.len(),
+            max: 8 * BYTES,
+        })?;
     }
-    r.len = raw.len;
     Ok(r)
+}
+
+/// At most `8 × BYTES` bits, packed eight to a byte, least significant first, as Modbus coils
+/// travel: no allocation, `Copy`. The bits past the length are always zero, so equality and
+/// hashing compare what it holds.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Bits<const BYTES: usize> {
+    len: usize,
+    packed: [u8; BYTES],
+}
+
+impl<const BYTES: usize> Bits<BYTES> {
+    /// The most bits it holds.
+    pub const CAPACITY: usize = 8 * BYTES;
+
+    /// No bits.
+    pub const fn new() -> Self {
+        Bits {
+            len: 0,
+            packed: [0; BYTES],
+        }
+    }
+
+    /// The bits of `items`, or an error if there are more than [`Self::CAPACITY`].
+    pub fn from_bools(items: &[bool]) -> Result<Self, CapacityError> {
+        let mut r = Self::new();
+        for &b in items {
+            r.push(b).map_err(|_| CapacityError {
+                capacity: Self::CAPACITY,
+                found: items.len(),
+            })?;
+        }
+        Ok(r)
+    }
+
+    /// Appends `bit`, or gives it back if it is full.
+    pub fn push(&mut self, bit: bool) -> Result<(), bool> {
+        let Some(byte) = self.packed.get_mut(self.len / 8) else {
+            return Err(bit);
+        };
+        *byte |= u8::from(bit) << (self.len % 8);
+        self.len += 1;
+        Ok(())
+    }
+
+    /// Bit `i`, if it holds that many.
+    pub fn get(&self, i: usize) -> Option<bool> {
+        (i < self.len).then(|| self.packed[i / 8] >> (i % 8) & 1 == 1)
+    }
+
+    /// How many bits it holds.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether it holds none.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The bytes the bits fill, as they travel (the last one's padding zero).
+    pub fn as_bytes(&self) -> &[u8] {
+        &self.packed[..self.len.div_ceil(8)]
+    }
+
+    /// The bits in order.
+    pub fn iter(&self) -> impl Iterator<Item = bool> + '_ {
+        (0..self.len).filter_map(move |i| self.get(i))
+    }
+
+    /// The bits as [`crate::Message::visit`] reports them.
+    pub fn elements(&self) -> Elements<'_> {
+        Elements::Bits {
+            packed: self.as_bytes(),
+            len: self.len,
+        }
+    }
+}
+
+impl<const BYTES: usize> Default for Bits<BYTES> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const BYTES: usize> fmt::Debug for Bits<BYTES> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.iter().map(u8::from)).finish()
+    }
 }
 
 /// Where a message's repeated field sits and how its elements are counted: what generated
@@ -419,35 +534,29 @@ pub fn write_elements<T: crate::codec::Wire>(
 }
 
 /// The bits `bytes` packs, eight to a byte, least significant bit first (Modbus coils): always
-/// `8 × bytes.len()` of them, the padding of the last byte included, at most `N`.
+/// `8 × bytes.len()` of them, the padding of the last byte included (as the interpreter reads
+/// them), at most `8 × BYTES`.
 #[inline]
-pub fn read_bits<const N: usize>(bytes: &[u8]) -> Result<Repeated<bool, N>, CapacityError> {
-    let found = bytes.len().saturating_mul(8);
-    if found > N {
-        return Err(CapacityError { capacity: N, found });
-    }
-    let mut r = Repeated::<bool, N>::new();
-    for (k, slot) in r.items.iter_mut().take(found).enumerate() {
-        *slot = bytes[k / 8] >> (k % 8) & 1 == 1;
-    }
-    r.len = found;
+pub fn read_bits<const BYTES: usize>(bytes: &[u8]) -> Result<Bits<BYTES>, CapacityError> {
+    let mut r = Bits::<BYTES>::new();
+    let dst = r.packed.get_mut(..bytes.len()).ok_or(CapacityError {
+        capacity: 8 * BYTES,
+        found: bytes.len().saturating_mul(8),
+    })?;
+    dst.copy_from_slice(bytes);
+    r.len = 8 * bytes.len();
     Ok(r)
 }
 
-/// Packs `bits` eight to a byte, least significant bit first, into `out` (which must hold
-/// `ceil(bits.len() / 8)` bytes; the padding bits are zero), and returns the bytes written.
+/// Writes `bits` as they travel into `out` (which must hold `ceil(len / 8)` bytes), and returns
+/// the bytes written.
 #[inline]
-pub fn write_bits(bits: &[bool], out: &mut [u8]) -> usize {
-    let n = bits.len().div_ceil(8);
-    for b in out.iter_mut().take(n) {
-        *b = 0;
+pub fn write_bits<const BYTES: usize>(bits: &Bits<BYTES>, out: &mut [u8]) -> usize {
+    let b = bits.as_bytes();
+    if let Some(dst) = out.get_mut(..b.len()) {
+        dst.copy_from_slice(b);
     }
-    for (k, &bit) in bits.iter().enumerate() {
-        if let Some(b) = out.get_mut(k / 8) {
-            *b |= u8::from(bit) << (k % 8);
-        }
-    }
-    n
+    b.len()
 }
 
 #[cfg(test)]
@@ -542,10 +651,32 @@ mod tests {
             list_bits::<8>(&mut none, "coils"),
             Err(FieldError::Missing { field: "coils" })
         );
-        let bits = [true, false, true];
-        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::Bits(&bits)));
-        let r = list_bits::<8>(&mut ask, "coils").unwrap();
-        assert_eq!(r.elements(), Elements::Bits(&bits));
+        let bits = [1i64, 0, 1];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&bits)));
+        let r = list_bits::<1>(&mut ask, "coils").unwrap();
+        let packed = Elements::Bits {
+            packed: &[0b101],
+            len: 3,
+        };
+        assert_eq!(r.elements(), packed);
+        assert_eq!(packed.iter().collect::<std::vec::Vec<_>>(), [1, 0, 1]);
+        assert_eq!(packed.get(3), None);
+        let nine = [0i64; 9];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&nine)));
+        assert_eq!(
+            list_bits::<1>(&mut ask, "coils"),
+            Err(FieldError::TooMany {
+                field: "coils",
+                found: 9,
+                max: 8
+            })
+        );
+        let two = [2i64];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&two)));
+        assert!(matches!(
+            list_bits::<1>(&mut ask, "coils"),
+            Err(FieldError::OutOfRange { value: 2, .. })
+        ));
         assert_eq!(
             format!(
                 "{}",
@@ -562,15 +693,33 @@ mod tests {
     #[test]
     fn bits_pack_least_significant_first() {
         // Modbus application protocol 6.1: coils 20..=38, status CD 6B 05.
-        let r = read_bits::<24>(&[0xCD, 0x6B, 0x05]).unwrap();
+        let r = read_bits::<3>(&[0xCD, 0x6B, 0x05]).unwrap();
         assert_eq!(r.len(), 24);
         assert_eq!(
-            &r[..8],
-            &[true, false, true, true, false, false, true, true]
+            r.iter().take(8).collect::<std::vec::Vec<_>>(),
+            [true, false, true, true, false, false, true, true]
         );
-        let mut out = [0xFFu8; 3];
-        assert_eq!(write_bits(&r[..19], &mut out), 3);
-        assert_eq!(out, [0xCD, 0x6B, 0x05]);
-        assert!(read_bits::<8>(&[0, 0]).is_err());
+        let mut out = [0xFFu8; 4];
+        assert_eq!(write_bits(&r, &mut out), 3);
+        assert_eq!(out, [0xCD, 0x6B, 0x05, 0xFF]);
+        assert!(read_bits::<1>(&[0, 0]).is_err());
+        // Built bit by bit: the padding stays zero, so equal bits are equal values.
+        let bools: std::vec::Vec<bool> = r.iter().take(19).collect();
+        let b = Bits::<3>::from_bools(&bools).unwrap();
+        assert_eq!(b.as_bytes(), &[0xCD, 0x6B, 0x05]);
+        assert_eq!(b.len(), 19);
+        assert_ne!(b, r);
+        assert_eq!(
+            format!("{:?}", Bits::<1>::from_bools(&[true, false]).unwrap()),
+            "[1, 0]"
+        );
+        assert_eq!(
+            Bits::<1>::from_bools(&[false; 9]),
+            Err(CapacityError {
+                capacity: 8,
+                found: 9
+            })
+        );
+        assert_eq!(Bits::<1>::new().get(0), None);
     }
 }
