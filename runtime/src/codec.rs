@@ -224,6 +224,15 @@ pub fn reply<const N: usize>(
     fixed(frame)
 }
 
+/// For a reply of variable length: `Err(NotAReply)` if the request does not admit it.
+#[inline(always)]
+pub fn admit(admitted: bool, code: u32) -> Result<(), DecodeError> {
+    if !admitted {
+        return Err(DecodeError::NotAReply { code });
+    }
+    Ok(())
+}
+
 /// The error for a code no message of the direction has: its `longest` bytes from `at`, or as
 /// many as lie before the checksum.
 #[inline]
@@ -284,12 +293,22 @@ impl<'f, T> Group<'f, T> {
         admitted: bool,
         decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
     ) -> Option<T> {
+        self.try_frame(admitted, |f| f.try_into().ok(), decode)
+    }
+
+    /// The candidate's message if it is admitted, `frame` takes the frame and it decodes.
+    #[inline(always)]
+    fn try_frame<A: ?Sized + 'f>(
+        &mut self,
+        admitted: bool,
+        frame: impl FnOnce(&'f [u8]) -> Option<&'f A>,
+        decode: impl FnOnce(&A) -> DecodeResult<T>,
+    ) -> Option<T> {
         self.admitted |= admitted;
         if self.done.is_some() || !admitted {
             return None;
         }
-        let frame: &[u8; N] = self.frame.try_into().ok()?;
-        match decode(frame) {
+        match decode(frame(self.frame)?) {
             Ok(m) => Some(m),
             Err(e) => {
                 self.last = Some(e);
@@ -310,6 +329,22 @@ impl<'f, T> Group<'f, T> {
         }
     }
 
+    /// [`Self::attempt`] for a message of variable length: `decode` takes the whole frame and
+    /// checks its length itself (an error is kept as any candidate's).
+    #[inline(always)]
+    pub fn attempt_any(&mut self, admitted: bool, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) {
+        if let Some(m) = self.try_frame(admitted, Some, decode) {
+            self.done = Some(Ok(m));
+        }
+    }
+
+    /// [`Self::ambiguous`] for a message of variable length, as [`Self::attempt_any`].
+    #[inline(always)]
+    pub fn ambiguous_any(&mut self, admitted: bool, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) {
+        let m = self.try_frame(admitted, Some, decode);
+        self.settle_ambiguous(m);
+    }
+
     /// Tries a candidate that shares code and length with another only the request tells
     /// apart: with a request as [`Self::attempt`]; without one it is kept, and a second that
     /// decodes makes the frame ambiguous.
@@ -319,7 +354,15 @@ impl<'f, T> Group<'f, T> {
         admitted: bool,
         decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
     ) {
-        let Some(m) = self.try_one(admitted, decode) else {
+        let m = self.try_one(admitted, decode);
+        self.settle_ambiguous(m);
+    }
+
+    /// An ambiguous candidate's message, if it decoded: settles the frame with a request, is
+    /// kept without one, or makes the frame ambiguous if another was kept.
+    #[inline(always)]
+    fn settle_ambiguous(&mut self, m: Option<T>) {
+        let Some(m) = m else {
             return;
         };
         if !self.alone {
@@ -525,6 +568,62 @@ pub fn frame_mut<'b, const N: usize>(
             })?;
     out[..head.len()].copy_from_slice(head);
     Ok(out)
+}
+
+/// The first `len` bytes of `buf`, for a frame of variable length, with `head` written at its
+/// start (as [`frame_mut`]).
+#[inline(always)]
+pub fn frame_mut_len<'b>(
+    buf: &'b mut [u8],
+    len: usize,
+    head: &[u8],
+) -> Result<&'b mut [u8], EncodeError> {
+    let available = buf.len();
+    let out = buf.get_mut(..len).ok_or(EncodeError::BufferTooSmall {
+        needed: len,
+        available,
+    })?;
+    out[..head.len()].copy_from_slice(head);
+    Ok(out)
+}
+
+/// Writes the length field of `width` bytes at `at` of `out`, a whole frame (`le`: least
+/// significant byte first): `out.len() + k` where it counts the payload (`grows`), else `k`;
+/// the inverse of [`length_field`].
+#[inline]
+pub fn put_length(
+    out: &mut [u8],
+    at: usize,
+    width: usize,
+    le: bool,
+    grows: bool,
+    k: i64,
+) -> Result<(), EncodeError> {
+    let v = if grows { out.len() as i64 + k } else { k };
+    let fits = u32::try_from(width)
+        .ok()
+        .and_then(|w| 1i64.checked_shl(8 * w))
+        .map_or(true, |limit| v < limit);
+    let slot = out.get_mut(at..at + width);
+    let (Some(slot), true, true) = (slot, v >= 0, fits) else {
+        return Err(EncodeError::OutOfRange { field: "length" });
+    };
+    let n = slot.len();
+    for (i, b) in slot.iter_mut().enumerate() {
+        let shift = if le { 8 * i } else { 8 * (n - 1 - i) };
+        *b = (v >> shift) as u8;
+    }
+    Ok(())
+}
+
+/// [`seal_sum8`] for a frame of variable length.
+#[inline(always)]
+pub fn seal_sum8_len(out: &mut [u8]) -> usize {
+    let n = out.len();
+    if let Some((last, body)) = out.split_last_mut() {
+        *last = crate::sum8_bytes(body);
+    }
+    n
 }
 
 /// Writes a sum-8 into the last byte of `out`, over every byte before it; returns the frame

@@ -13,7 +13,8 @@
 
 use core::fmt;
 
-use crate::{DecodeError, Elements, FieldError, FieldValue, ValueKind};
+use crate::codec::Wire;
+use crate::{DecodeError, Elements, EncodeError, FieldError, FieldValue, ValueKind};
 
 /// At most `N` elements of `T`, stored in place: no allocation, `Copy` when `T` is.
 ///
@@ -88,12 +89,12 @@ impl<T, const N: usize> Repeated<T, N> {
     }
 
     /// How many elements it holds.
-    pub fn len(&self) -> usize {
+    pub const fn len(&self) -> usize {
         self.len
     }
 
     /// Whether it holds none.
-    pub fn is_empty(&self) -> bool {
+    pub const fn is_empty(&self) -> bool {
         self.len == 0
     }
 }
@@ -295,12 +296,12 @@ impl<const BYTES: usize> Bits<BYTES> {
     }
 
     /// How many bits it holds.
-    pub fn len(&self) -> usize {
+    pub const fn len(&self) -> usize {
         self.len
     }
 
     /// Whether it holds none.
-    pub fn is_empty(&self) -> bool {
+    pub const fn is_empty(&self) -> bool {
         self.len == 0
     }
 
@@ -394,7 +395,7 @@ impl CountField {
 impl RepeatAt {
     /// Bytes `n` elements take.
     #[inline]
-    pub fn bytes_of(&self, n: usize) -> usize {
+    pub const fn bytes_of(&self, n: usize) -> usize {
         if self.width == 0 {
             n.div_ceil(8)
         } else {
@@ -476,6 +477,211 @@ impl RepeatAt {
             && extra <= self.bytes_of(self.max)
             && (self.width == 0 || extra % self.width == 0);
         Some(if fits { self.base + extra } else { 0 })
+    }
+}
+
+/// What generated decoders and encoders do with a message's repeated field.
+impl RepeatAt {
+    /// The elements a frame's count field stands for, `min..=max` inclusive: where it counts
+    /// bytes of bits, any number that fills that many bytes.
+    fn elements_for(&self, count: u64) -> (i64, i64) {
+        let v = i64::try_from(count).unwrap_or(i64::MAX);
+        match self.count {
+            CountBy::Bytes(_) if self.width == 0 => (
+                v.saturating_sub(1).saturating_mul(8).saturating_add(1),
+                v.saturating_mul(8),
+            ),
+            CountBy::Bytes(_) => {
+                let w = self.width as i64;
+                if v % w == 0 {
+                    (v / w, v / w)
+                } else {
+                    // No whole number of elements takes that many bytes.
+                    (v / w + 1, v / w)
+                }
+            }
+            CountBy::Elements(_) | CountBy::End => (v, v),
+        }
+    }
+
+    /// The frame checked for its element count ([`Self::count`]), split into its first `AT`
+    /// bytes (every fixed field; `AT` is [`Self::at`]) as an array, the bytes of its elements,
+    /// and their number.
+    #[inline]
+    pub fn split<'f, const AT: usize>(
+        &self,
+        frame: &'f [u8],
+    ) -> Result<(&'f [u8; AT], &'f [u8], usize), DecodeError> {
+        let n = self.count(frame)?;
+        let bytes = match self.count {
+            // Bits by bytes or to the end: every byte before the checksum.
+            CountBy::End | CountBy::Bytes(_) if self.width == 0 => n / 8,
+            _ => self.bytes_of(n),
+        };
+        let head = frame.first_chunk::<AT>();
+        let items = frame.get(self.at..self.at + bytes);
+        match (head, items) {
+            (Some(head), Some(items)) => Ok((head, items, n)),
+            _ => Err(DecodeError::Truncated {
+                needed: self.base + bytes,
+                found: frame.len(),
+            }),
+        }
+    }
+
+    fn bad_count(&self, found: usize) -> DecodeError {
+        DecodeError::BadCount {
+            field: self.field,
+            offset: self.at,
+            found: found as i64,
+            min: self.min,
+            max: self.max,
+        }
+    }
+
+    /// The elements `bytes` holds (`le`: least significant byte first; `signed`: sign-extended),
+    /// as [`read_elements`] reads them.
+    #[inline]
+    pub fn elements<T: Wire + Default, const N: usize>(
+        &self,
+        bytes: &[u8],
+        le: bool,
+        signed: bool,
+    ) -> Result<Repeated<T, N>, DecodeError> {
+        read_elements(bytes, self.width, le, signed).map_err(|e| self.bad_count(e.found))
+    }
+
+    /// The `n` bits `bytes` packs (every bit of every byte where the count is in bytes or to
+    /// the end, as the interpreter reads them).
+    #[inline]
+    pub fn bits<const BYTES: usize>(
+        &self,
+        bytes: &[u8],
+        n: usize,
+    ) -> Result<Bits<BYTES>, DecodeError> {
+        let mut r = read_bits::<BYTES>(bytes).map_err(|e| self.bad_count(e.found))?;
+        if n < r.len {
+            // The padding of the last byte is not part of a count of elements.
+            for i in n..r.len {
+                r.packed[i / 8] &= !(1 << (i % 8));
+            }
+            r.len = n;
+        }
+        Ok(r)
+    }
+
+    /// Every element of a decoded repeated field within its spec range `min..=max`; the error
+    /// names the offset of the first that is not.
+    #[inline]
+    pub fn in_range<T: Wire>(&self, items: &[T], min: i64, max: i64) -> Result<(), DecodeError> {
+        for (i, v) in items.iter().enumerate() {
+            let found = v.to_i64();
+            if !(min..=max).contains(&found) {
+                return Err(DecodeError::OutOfRange {
+                    field: self.field,
+                    offset: self.at + i * self.width,
+                    found,
+                    min,
+                    max,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The value of the count field of a frame holding `held` elements: their number or their
+    /// bytes (0 for a count to the end, which has no field).
+    #[inline]
+    pub const fn count_value(&self, held: usize) -> usize {
+        match self.count {
+            CountBy::Elements(_) => held,
+            CountBy::Bytes(_) if self.width == 0 => held.div_ceil(8),
+            CountBy::Bytes(_) => held * self.width,
+            CountBy::End => 0,
+        }
+    }
+
+    /// A reply holding `held` elements whose count follows the request
+    /// (`ceil(base × multiply / divide)` elements): it must take as many bytes as they would.
+    #[inline]
+    pub fn follows_request(
+        &self,
+        held: usize,
+        base: i64,
+        multiply: u64,
+        divide: u64,
+    ) -> Result<(), DecodeError> {
+        let expected = crate::codec::follows(base, multiply, divide);
+        match usize::try_from(expected) {
+            Ok(n) if self.bytes_of(n) == self.bytes_of(held) => Ok(()),
+            _ => Err(DecodeError::BadCount {
+                field: self.field,
+                offset: self.at,
+                found: held as i64,
+                min: usize::try_from(expected).unwrap_or(0),
+                max: usize::try_from(expected).unwrap_or(0),
+            }),
+        }
+    }
+
+    /// The length of the frame holding `held` elements, which must lie in the spec's bounds
+    /// (bits: up to the whole bytes `max` fills, as decode reads them):
+    /// [`EncodeError::NotInRange`] with the count otherwise.
+    #[inline]
+    pub fn encode_len(&self, held: usize) -> Result<usize, EncodeError> {
+        let hi = if self.width == 0 {
+            self.max.div_ceil(8) * 8
+        } else {
+            self.max
+        };
+        if held < self.min || held > hi {
+            return Err(EncodeError::NotInRange {
+                field: self.field,
+                value: held as i64,
+                min: self.min as i64,
+                max: hi as i64,
+            });
+        }
+        Ok(self.base + self.bytes_of(held))
+    }
+
+    /// A count field computed from another field (`follows`) agrees with the `held` elements
+    /// being encoded: [`EncodeError::NotInRange`] with the element count and the counts that
+    /// would agree otherwise.
+    #[inline]
+    pub fn encode_agrees(&self, held: usize, count: u64) -> Result<(), EncodeError> {
+        if u64::try_from(self.count_value(held)).ok() == Some(count) {
+            return Ok(());
+        }
+        let (min, max) = self.elements_for(count);
+        Err(EncodeError::NotInRange {
+            field: self.field,
+            value: held as i64,
+            min,
+            max,
+        })
+    }
+
+    /// Every element to encode within its spec range `min..=max`.
+    #[inline]
+    pub fn encode_in_range<T: Wire>(
+        &self,
+        items: &[T],
+        min: i64,
+        max: i64,
+    ) -> Result<(), EncodeError> {
+        for v in items {
+            let value = v.to_i64();
+            if !(min..=max).contains(&value) {
+                return Err(EncodeError::NotInRange {
+                    field: self.field,
+                    value,
+                    min,
+                    max,
+                });
+            }
+        }
+        Ok(())
     }
 }
 
