@@ -149,7 +149,7 @@ fn dynamixel_status_and_length_byte() {
     ));
     let mut lying = status;
     lying[3] = 4;
-    lying[6] = !(1u8 + 4 + 0 + 0x20);
+    lying[6] = !(1u8 + 4 + 0x20);
     assert_eq!(
         dynamixel::Response::decode(&lying),
         Err(DecodeError::InvalidValue {
