@@ -16,8 +16,13 @@
 //! address the spec does not allow is still a frame on the wire, and a sniffer must see it.
 //! No candidate: the byte is noise; it is dropped and the next one tried, and consecutive
 //! dropped bytes are reported as one [`Event::Skipped`] (split every [`MAX_SKIPPED_RUN`]
-//! bytes). While a candidate is longer than what is buffered, the decoder waits. Then every
-//! complete candidate length is tried, **longest first**; the first that checksums and decodes
+//! bytes). A candidate's length is fixed by its message (one of
+//! [`Protocol::FRAME_LENGTHS`]) or, for a variable-length message, given by its length or count
+//! field once that is buffered ([`Protocol::variable_candidates`]); a field that gives a length
+//! no frame of the message can have makes it no candidate, so a length that lies drops one
+//! byte and the decoder resynchronises. While a candidate is longer than what is buffered, or
+//! its length or count field has not arrived, the decoder waits. Then every complete candidate
+//! length is tried, **longest first**; the first that checksums and decodes
 //! strictly (ranges, address and broadcast rules included) is the frame. If none does, the
 //! longest that checksums and fails *only* a rule of the spec (its error is one that
 //! [`breaks_spec`] names: a value out of its range, an address outside the allowed ones, a
@@ -57,6 +62,127 @@ pub enum Direction {
 pub struct Candidates {
     pub requests: u64,
     pub responses: u64,
+}
+
+/// The length of a variable-length frame (one whose length a length field or a repeated
+/// field's count gives, so [`Protocol::FRAME_LENGTHS`] does not list it) that could start at
+/// the head of the buffer, for one direction: see [`Protocol::variable_candidates`].
+///
+/// A `u32` with two reserved values rather than an `Option<Option<usize>>`: it costs one
+/// register, and [`VarLens::NONE`] is one compare against zero on the decoder's path for
+/// protocols without variable frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct VarLen(u32);
+
+impl VarLen {
+    /// No variable-length candidate: no such message agrees with the head, or its length or
+    /// count field says a length no frame of it can have (the `Some(0)` of
+    /// [`crate::codec::RepeatAt::frame_len`] and [`LengthField::frame_len`]).
+    pub const NONE: VarLen = VarLen(0);
+    /// A variable-length message agrees with the head but its length or count field has not
+    /// been buffered yet: the decoder waits for more bytes (unless it is settling what is
+    /// buffered, when the candidate counts for nothing).
+    pub const NEED_MORE: VarLen = VarLen(u32::MAX);
+
+    /// A frame of `len` bytes (0: [`Self::NONE`]). A length the decoder's buffer cannot hold
+    /// (beyond [`Protocol::MAX_FRAME_LEN`]) is never complete, so it never becomes a frame: the
+    /// head byte is then dropped as noise once the buffer is full or settled.
+    #[inline]
+    pub const fn len(len: usize) -> VarLen {
+        if len >= u32::MAX as usize {
+            VarLen(u32::MAX - 1)
+        } else {
+            VarLen(len as u32)
+        }
+    }
+
+    /// From the answer of [`crate::codec::RepeatAt::frame_len`] or [`LengthField::frame_len`]:
+    /// `None` (the field not yet buffered) is [`Self::NEED_MORE`], `Some(0)` (a length no
+    /// frame of the message has) is [`Self::NONE`], `Some(n)` a frame of `n` bytes.
+    #[inline]
+    pub const fn of(frame_len: Option<usize>) -> VarLen {
+        match frame_len {
+            Some(n) => VarLen::len(n),
+            None => VarLen::NEED_MORE,
+        }
+    }
+
+    /// The candidate's length, once known (`None` for [`Self::NONE`] and [`Self::NEED_MORE`]).
+    #[inline]
+    pub const fn get(self) -> Option<usize> {
+        match self.0 {
+            0 | u32::MAX => None,
+            n => Some(n as usize),
+        }
+    }
+
+    /// Whether the decoder must wait for the candidate's length or count field.
+    #[inline]
+    pub const fn needs_more(self) -> bool {
+        self.0 == u32::MAX
+    }
+
+    /// Whether there is no variable-length candidate.
+    #[inline]
+    pub const fn is_none(self) -> bool {
+        self.0 == 0
+    }
+}
+
+/// The variable-length candidates at the head of the buffer: at most one per direction
+/// ([`Protocol::variable_candidates`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct VarLens {
+    pub requests: VarLen,
+    pub responses: VarLen,
+}
+
+impl VarLens {
+    /// Neither direction has one: what every protocol without variable-length frames says.
+    pub const NONE: VarLens = VarLens {
+        requests: VarLen::NONE,
+        responses: VarLen::NONE,
+    };
+}
+
+/// A frame's length field, as the stream decoder reads it from the bytes buffered from a
+/// possible frame start: where it sits and what a frame's length is from its value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LengthField {
+    /// Its offset in the frame.
+    pub at: usize,
+    /// Its width, bytes (1 or 2).
+    pub width: usize,
+    /// Least significant byte first.
+    pub le: bool,
+    /// The frame's length less the field's value: the bytes the field does not count, less
+    /// its adjustment (may be negative).
+    pub excess: isize,
+    /// The shortest and longest frame the messages that agree with the head can have.
+    pub min: usize,
+    pub max: usize,
+}
+
+impl LengthField {
+    /// The length of the frame that starts `head`, once its length field has arrived (`None`
+    /// before); a value that gives a length outside `min..=max` gives `Some(0)`, which no frame
+    /// has: the stream decoder then drops a byte and resynchronises. Feed it to [`VarLen::of`].
+    #[inline]
+    pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        let b = head.get(self.at..self.at.checked_add(self.width)?)?;
+        let fold = |a: usize, b: &u8| (a << 8) | usize::from(*b);
+        let v = if self.le {
+            b.iter().rev().fold(0, fold)
+        } else {
+            b.iter().fold(0, fold)
+        };
+        let len = isize::try_from(v)
+            .ok()
+            .and_then(|v| v.checked_add(self.excess))
+            .and_then(|l| usize::try_from(l).ok())
+            .filter(|l| (self.min..=self.max).contains(l));
+        Some(len.unwrap_or(0))
+    }
 }
 
 /// What the decoder found. Offsets count bytes from the first byte ever pushed.
@@ -274,10 +400,21 @@ impl<C: Protocol> Core<C> {
     /// many bytes it settled (a frame, or one byte of noise) and the event to report, if any.
     fn advance(&mut self, window: &[u8], flushing: bool) -> Option<Settled<C>> {
         let c = C::candidates(window);
+        let v = C::variable_candidates(window);
         let requests = if self.requests { c.requests } else { 0 };
         let responses = if self.responses { c.responses } else { 0 };
+        let var_q = if self.requests {
+            v.requests
+        } else {
+            VarLen::NONE
+        };
+        let var_r = if self.responses {
+            v.responses
+        } else {
+            VarLen::NONE
+        };
         let live = requests | responses;
-        if live != 0 {
+        if live != 0 || !var_q.is_none() || !var_r.is_none() {
             // Bit i is LENGTHS[i], longest first: a live candidate longer than the window is
             // one whose bit lies below the first length that fits.
             let fits = C::FRAME_LENGTHS
@@ -289,24 +426,41 @@ impl<C: Protocol> Core<C> {
             } else {
                 (1u64 << fits) - 1
             };
-            if !flushing && live & longer != 0 {
+            // A variable-length candidate whose length is known and complete; one still
+            // waiting for its length or count field, or longer than the window, waits.
+            let complete = |v: VarLen| v.get().filter(|&l| l <= window.len()).unwrap_or(0);
+            let (mut lq, mut lr) = (complete(var_q), complete(var_r));
+            let waits = |v: VarLen| v.needs_more() || v.get().is_some_and(|l| l > window.len());
+            if !flushing && (live & longer != 0 || waits(var_q) || waits(var_r)) {
                 return None;
             }
             let mut rest = live & !longer;
             // The longest length that checksums and breaks only a rule of the spec, and why:
             // reported if no length is a frame.
             let mut out_of_spec: Option<(usize, DecodeError)> = None;
-            while rest != 0 {
+            loop {
+                // The next length, longest first: the fixed ones of the mask and the variable
+                // ones, each length tried once with every direction that has it.
                 let i = rest.trailing_zeros() as usize;
-                rest &= rest - 1;
-                let Some(&len) = C::FRAME_LENGTHS.get(i) else {
+                let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
+                let len = fixed.max(lq).max(lr);
+                if len == 0 {
                     break;
-                };
+                }
                 let Some(frame) = window.get(..len) else {
                     break;
                 };
-                let bit = 1u64 << i;
-                match self.try_frame(frame, requests & bit != 0, responses & bit != 0) {
+                let bit = if fixed == len { 1u64 << i } else { 0 };
+                rest &= !bit;
+                let request = requests & bit != 0 || lq == len;
+                let response = responses & bit != 0 || lr == len;
+                if lq == len {
+                    lq = 0;
+                }
+                if lr == len {
+                    lr = 0;
+                }
+                match self.try_frame(frame, request, response) {
                     Ok(ev) => return Some(self.settle(len, ev)),
                     Err(Some(reason)) if out_of_spec.is_none() => {
                         out_of_spec = Some((len, reason));
