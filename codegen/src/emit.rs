@@ -353,13 +353,8 @@ impl<'a> Ctx<'a> {
 
 fn leaves(m: &Message) -> Vec<Leaf<'_>> {
     let mut out = Vec::new();
-    let counter = count_field(m);
     for (i, f) in m.fields.iter().enumerate() {
-        if f.constant.is_some()
-            || f.equals.is_some()
-            || follows_field(f).is_some()
-            || counter == Some(i)
-        {
+        if m.is_derived(i) {
             continue;
         }
         if f.bits.is_empty() {
@@ -384,17 +379,6 @@ fn leaves(m: &Message) -> Vec<Leaf<'_>> {
         }
     }
     out
-}
-
-/// The field that counts the elements or bytes of `m`'s repeated field (index), if it has one:
-/// encode computes it from the list (the list's length is the one source of truth, so no value
-/// can disagree with it), decode checks it against the frame's length, and it is not part of
-/// the typed message.
-fn count_field(m: &Message) -> Option<usize> {
-    match m.repeat()?.1.count {
-        Count::Elements(i) | Count::Bytes(i) => Some(i),
-        Count::ToEnd => None,
-    }
 }
 
 /// The name of the `rt::RepeatAt` constant of a message with a repeated field.
@@ -1474,7 +1458,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             }
         }
     }
-    let counter = count_field(m);
+    let counter = m.count_field();
     for (fi, f) in m.fields.iter().enumerate() {
         let at = usize_lit(o.payload + f.offset);
         let end = usize_lit(o.payload + f.offset + f.width);
@@ -1659,7 +1643,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code)?;));
     }
     let named = repeated(m);
-    let counter = count_field(m);
+    let counter = m.count_field();
     // Each leaf's value: an expression over `frame` or over a named wire value.
     let mut values: Vec<(Ident, TokenStream)> = Vec::new();
     // Each field's wire value: its read from `frame`, or the name it is bound to.
@@ -2231,9 +2215,16 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
 /// per code prefix. Not by address: a frame from an address the spec does not allow is still a
 /// frame, which the stream decoder reports as out of spec (strict decoding says why).
 fn emit_stream(p: &Protocol) -> TokenStream {
+    // A variable-length message whose length or count field gives its length lists none
+    // (`variable_candidates` reads it); a repeat to the end without a length field lists
+    // every length.
     let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
         .iter()
-        .flat_map(|d| p.messages(*d).iter().map(|m| p.frame_len(m)))
+        .flat_map(|d| {
+            p.messages(*d)
+                .iter()
+                .flat_map(|m| m.listed_lengths(&p.framing))
+        })
         .collect();
     lengths.sort_unstable_by(|a, b| b.cmp(a));
     lengths.dedup();
@@ -2242,22 +2233,24 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     let mut shapes: Vec<(&[u8], u128)> = Vec::new();
     for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
         for m in p.messages(d) {
-            let i = lengths
-                .iter()
-                .position(|&l| l == p.frame_len(m))
-                .unwrap_or(0) as u32;
-            shapes.push((&m.code, 1u128 << (i + shift)));
+            let mask = m.listed_lengths(&p.framing).iter().fold(0u128, |a, len| {
+                let i = lengths.iter().position(|l| l == len).unwrap_or(0) as u32;
+                a | 1u128 << (i + shift)
+            });
+            if mask != 0 {
+                shapes.push((&m.code, mask));
+            }
         }
     }
     let first = p.framing.head(1);
     let code_at = first.code;
-    let start_check = match first.start {
+    let start_check = |none: TokenStream| match first.start {
         Some(at) => {
             let checks = p.framing.sync.iter().enumerate().map(|(i, s)| {
                 let (at, s) = (head_byte(at + i), hex_u8(*s));
                 quote! {
                     if #at.is_some_and(|&b| b != #s) {
-                        return rt::Candidates { requests: 0, responses: 0 };
+                        return #none;
                     }
                 }
             });
@@ -2265,6 +2258,11 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         }
         None => quote!(),
     };
+    let variable = emit_variable_candidates(p, start_check(quote!(rt::VarLens::NONE)));
+    let start_check = start_check(quote!(rt::Candidates {
+        requests: 0,
+        responses: 0
+    }));
     let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
     let mut arms = Vec::new();
     flat_trie(&shapes, 0, depth, &mut Vec::new(), 0, &mut arms);
@@ -2374,11 +2372,83 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                 };
                 rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }
+            #variable
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
         pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;
         /// What [`StreamDecoder`] finds in a stream.
         pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    }
+}
+
+/// `variable_candidates`, where a message has a repeated field whose length a length field or
+/// a count field gives (none otherwise: the trait's default, which costs the stream decoder
+/// nothing): per direction, the length the head's field gives for the messages whose code
+/// agrees with it (`rt::var_by_length`, `rt::var_by_count`). `start_check` returns early
+/// where the head's start bytes are not the protocol's.
+fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStream {
+    let counted = |m: &&Message| m.repeat().is_some_and(|(_, r)| r.count != Count::ToEnd);
+    let mut any = false;
+    let mut per = Vec::new();
+    for d in [Direction::Request, Direction::Response] {
+        let code = |m: &Message| {
+            let (at, bytes) = (usize_lit(m.layout.code), m.code.iter().map(|b| hex_u8(*b)));
+            (at, quote!(&[#(#bytes),*]))
+        };
+        let rule = p.framing.length_rule(d).filter(|r| r.grows);
+        let value = match rule {
+            Some(rule) => {
+                let shapes: Vec<TokenStream> = p
+                    .messages(d)
+                    .iter()
+                    .filter(|m| m.is_variable())
+                    .map(|m| {
+                        let (at, c) = code(m);
+                        let (lo, hi) = (usize_lit(m.layout.len), usize_lit(m.max_len));
+                        quote!((#at, #c, #lo, #hi))
+                    })
+                    .collect();
+                if shapes.is_empty() {
+                    quote!(rt::VarLen::NONE)
+                } else {
+                    let (at, width) = (usize_lit(rule.at), usize_lit(rule.width));
+                    let le = p.byte_order == ByteOrder::Little;
+                    let excess = Literal::i64_unsuffixed(-rule.k);
+                    quote!(rt::var_by_length(head, &[#(#shapes),*], rt::LengthField {
+                        at: #at, width: #width, le: #le, excess: #excess, min: 0, max: 0
+                    }))
+                }
+            }
+            None => {
+                let shapes: Vec<TokenStream> = p
+                    .messages(d)
+                    .iter()
+                    .filter(counted)
+                    .map(|m| {
+                        let (at, c) = code(m);
+                        let r = repeat_const(m);
+                        quote!((#at, #c, #r))
+                    })
+                    .collect();
+                if shapes.is_empty() {
+                    quote!(rt::VarLen::NONE)
+                } else {
+                    quote!(rt::var_by_count(head, &[#(#shapes),*]))
+                }
+            }
+        };
+        any |= value.to_string() != quote!(rt::VarLen::NONE).to_string();
+        per.push(value);
+    }
+    if !any {
+        return quote!();
+    }
+    let (requests, responses) = (&per[0], &per[1]);
+    quote! {
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            #start_check
+            rt::VarLens { requests: #requests, responses: #responses }
+        }
     }
 }
 
@@ -2568,7 +2638,7 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             .iter()
             .enumerate()
             .filter_map(|(i, f)| match &f.follows {
-                Some(Follows::Request(rel)) if count_field(m) == Some(i) => Some((f, rel, true)),
+                Some(Follows::Request(rel)) if m.count_field() == Some(i) => Some((f, rel, true)),
                 _ => None,
             })
             .chain(

@@ -358,6 +358,48 @@ impl Message {
         self.repeat().is_some()
     }
 
+    /// The field (index) that counts the elements or bytes of the repeated field, if any.
+    pub fn count_field(&self) -> Option<usize> {
+        match self.repeat()?.1.count {
+            Count::Elements(i) | Count::Bytes(i) => Some(i),
+            Count::ToEnd => None,
+        }
+    }
+
+    /// Whether field `i` is filled in from the rest of the frame: a constant, a repeat of
+    /// another field (`equals`), a value following another field of the frame, or the count of
+    /// the repeated field (the list's length gives it). Encoders compute it, decoders check
+    /// it, and generated messages do not carry it.
+    pub fn is_derived(&self, i: usize) -> bool {
+        self.fields.get(i).is_some_and(|f| {
+            f.constant.is_some()
+                || f.equals.is_some()
+                || matches!(f.follows, Some(Follows::Field(..)))
+                || self.count_field() == Some(i)
+        })
+    }
+
+    /// The frame lengths a stream decoder lists for this message beforehand: its length, or
+    /// for a repeat to the end of the frame without a length field every length a whole number
+    /// of elements gives; none where a length or count field gives each frame's length (the
+    /// stream decoder reads it from the frame).
+    pub fn listed_lengths(&self, framing: &Framing) -> Vec<usize> {
+        let Some((f, r)) = self.repeat() else {
+            return vec![self.layout.len];
+        };
+        if framing.length.is_some() || r.count != Count::ToEnd {
+            return Vec::new();
+        }
+        let step = if f.ty == FieldType::Bit {
+            1
+        } else {
+            f.width.max(1)
+        };
+        (self.layout.len..=self.max_len)
+            .filter(|l| (l - self.layout.len) % step == 0)
+            .collect()
+    }
+
     /// The code as written in the spec: `0x2000`.
     pub fn code_hex(&self) -> String {
         let mut s = String::from("0x");
@@ -565,13 +607,37 @@ pub struct Erratum {
 
 impl Protocol {
     /// What the code generator cannot emit yet, one line each (empty: it can emit all of it).
-    /// It emits every construct of the language today: sync sequences, every checksum and its
+    /// It emits every construct of the language: sync sequences, every checksum and its
     /// coverage, 24-bit integers, a length field, values that follow another field or the
     /// request, codes derived from the request's, code-less messages and repeated fields
-    /// (variable-length frames); a construct the language gains before the generator learns it
-    /// is refused here by name, and served by the interpreter (`--spec`).
+    /// (variable-length frames). It refuses, by name, repeats to the end of the frame without a
+    /// length field whose frame lengths (every whole number of elements) would make more than
+    /// [`crate::validate::MAX_DISTINCT_LENGTHS`] in all: its stream decoder lists such lengths
+    /// beforehand. The interpreter (`--spec`) serves those.
     pub fn generator_gaps(&self) -> Vec<String> {
-        Vec::new()
+        let mut gaps = Vec::new();
+        let mut lengths: Vec<usize> = self
+            .commands
+            .iter()
+            .chain(&self.responses)
+            .flat_map(|m| m.listed_lengths(&self.framing))
+            .collect();
+        lengths.sort_unstable();
+        lengths.dedup();
+        let max = crate::validate::MAX_DISTINCT_LENGTHS;
+        if lengths.len() > max {
+            for m in self.commands.iter().chain(&self.responses) {
+                if m.listed_lengths(&self.framing).len() > 1 {
+                    let f = m.repeat().map_or("", |(f, _)| f.name.as_str());
+                    gaps.push(format!(
+                        "`{}.{f}`: a repeat to the end of the frame without a length field (the frame lengths to list, {} in all, are more than the {max} the generated stream decoder tracks)",
+                        m.name,
+                        lengths.len()
+                    ));
+                }
+            }
+        }
+        gaps
     }
 
     pub fn message(&self, r: MessageRef) -> &Message {

@@ -414,6 +414,65 @@ pub fn no_broadcast(
     Ok(())
 }
 
+/// Whether the code bytes `code` at `at` agree with `head` (the bytes buffered from a possible
+/// frame start): `None` while some are not buffered yet.
+#[inline]
+pub fn code_agrees(head: &[u8], at: usize, code: &[u8]) -> Option<bool> {
+    let mut all = true;
+    for (i, &c) in code.iter().enumerate() {
+        match head.get(at + i) {
+            Some(&b) if b != c => return Some(false),
+            Some(_) => {}
+            None => all = false,
+        }
+    }
+    all.then_some(true)
+}
+
+/// The variable-length candidate of one direction of a protocol whose length field gives
+/// every frame's length: the length `field` gives, within the shortest and longest frame of
+/// the variable-length messages (`(code offset, code, shortest, longest)`) whose code agrees
+/// with `head` or is not buffered yet; none if no such message agrees.
+#[inline]
+pub fn var_by_length(
+    head: &[u8],
+    shapes: &[(usize, &[u8], usize, usize)],
+    field: LengthField,
+) -> VarLen {
+    let (mut min, mut max) = (usize::MAX, 0);
+    for &(at, code, lo, hi) in shapes {
+        if code_agrees(head, at, code) != Some(false) {
+            min = min.min(lo);
+            max = max.max(hi);
+        }
+    }
+    if min > max {
+        return VarLen::NONE;
+    }
+    VarLen::of(LengthField { min, max, ..field }.frame_len(head))
+}
+
+/// The variable-length candidate of one direction whose variable-length messages are counted
+/// by a field (`(code offset, code, where the repeat sits)`): the length the count field of the
+/// first whose code agrees with `head` gives; [`VarLen::NEED_MORE`] while a code is not
+/// buffered yet.
+#[inline]
+pub fn var_by_count(head: &[u8], shapes: &[(usize, &[u8], RepeatAt)]) -> VarLen {
+    let mut wait = false;
+    for (at, code, r) in shapes {
+        match code_agrees(head, *at, code) {
+            Some(true) => return VarLen::of(r.frame_len(head)),
+            Some(false) => {}
+            None => wait = true,
+        }
+    }
+    if wait {
+        VarLen::NEED_MORE
+    } else {
+        VarLen::NONE
+    }
+}
+
 /// A decoded field checked against its spec range `min..=max`.
 #[inline(always)]
 pub fn in_range<T: Wire>(

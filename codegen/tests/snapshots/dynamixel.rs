@@ -744,7 +744,7 @@ pub mod dynamixel {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[8, 7, 6];
+        const FRAME_LENGTHS: &'static [usize] = &[8, 6];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         const BAUD: u32 = BAUD;
         const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
@@ -807,19 +807,50 @@ pub mod dynamixel {
                 };
             }
             let mask: u128 = match head.get(4) {
-                rt::None => 0x40000000000000007,
-                rt::Some(0x01) => 0x40000000000000004,
-                rt::Some(0x02) => 0x40000000000000001,
-                rt::Some(0x03) => 0x40000000000000002,
-                rt::Some(0x04) => 0x40000000000000002,
-                rt::Some(0x05) => 0x40000000000000004,
-                rt::Some(0x06) => 0x40000000000000004,
-                rt::Some(0x83) => 0x40000000000000001,
-                _ => 0x40000000000000000,
+                rt::None => 0x20000000000000003,
+                rt::Some(0x01) => 0x20000000000000002,
+                rt::Some(0x02) => 0x20000000000000001,
+                rt::Some(0x05) => 0x20000000000000002,
+                rt::Some(0x06) => 0x20000000000000002,
+                _ => 0x20000000000000000,
             };
             rt::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
+            }
+        }
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            if head.first().is_some_and(|&b| b != 0xFF) {
+                return rt::VarLens::NONE;
+            }
+            if head.get(1).is_some_and(|&b| b != 0xFF) {
+                return rt::VarLens::NONE;
+            }
+            rt::VarLens {
+                requests: rt::var_by_length(
+                    head,
+                    &[(4, &[0x03], 7, 259), (4, &[0x04], 7, 259), (4, &[0x83], 8, 259)],
+                    rt::LengthField {
+                        at: 3,
+                        width: 1,
+                        le: true,
+                        excess: 4,
+                        min: 0,
+                        max: 0,
+                    },
+                ),
+                responses: rt::var_by_length(
+                    head,
+                    &[(4, &[], 6, 259)],
+                    rt::LengthField {
+                        at: 3,
+                        width: 1,
+                        le: true,
+                        excess: 4,
+                        min: 0,
+                        max: 0,
+                    },
+                ),
             }
         }
     }

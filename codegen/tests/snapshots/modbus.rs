@@ -1681,7 +1681,7 @@ pub mod modbus {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[9, 8, 5];
+        const FRAME_LENGTHS: &'static [usize] = &[8, 5];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         const BAUD: u32 = BAUD;
         const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
@@ -1736,28 +1736,48 @@ pub mod modbus {
         }
         fn candidates(head: &[u8]) -> rt::Candidates {
             let mask: u128 = match head.get(1) {
-                rt::None => 0x60000000000000003,
-                rt::Some(0x01) => 0x40000000000000002,
-                rt::Some(0x02) => 0x40000000000000002,
-                rt::Some(0x03) => 0x40000000000000002,
-                rt::Some(0x04) => 0x40000000000000002,
-                rt::Some(0x05) => 0x20000000000000002,
-                rt::Some(0x06) => 0x20000000000000002,
-                rt::Some(0x0F) => 0x20000000000000001,
-                rt::Some(0x10) => 0x20000000000000001,
-                rt::Some(0x81) => 0x40000000000000000,
-                rt::Some(0x82) => 0x40000000000000000,
-                rt::Some(0x83) => 0x40000000000000000,
-                rt::Some(0x84) => 0x40000000000000000,
-                rt::Some(0x85) => 0x40000000000000000,
-                rt::Some(0x86) => 0x40000000000000000,
-                rt::Some(0x8F) => 0x40000000000000000,
-                rt::Some(0x90) => 0x40000000000000000,
+                rt::None => 0x30000000000000001,
+                rt::Some(0x01) => 0x1,
+                rt::Some(0x02) => 0x1,
+                rt::Some(0x03) => 0x1,
+                rt::Some(0x04) => 0x1,
+                rt::Some(0x05) => 0x10000000000000001,
+                rt::Some(0x06) => 0x10000000000000001,
+                rt::Some(0x0F) => 0x10000000000000000,
+                rt::Some(0x10) => 0x10000000000000000,
+                rt::Some(0x81) => 0x20000000000000000,
+                rt::Some(0x82) => 0x20000000000000000,
+                rt::Some(0x83) => 0x20000000000000000,
+                rt::Some(0x84) => 0x20000000000000000,
+                rt::Some(0x85) => 0x20000000000000000,
+                rt::Some(0x86) => 0x20000000000000000,
+                rt::Some(0x8F) => 0x20000000000000000,
+                rt::Some(0x90) => 0x20000000000000000,
                 _ => 0,
             };
             rt::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
+            }
+        }
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            rt::VarLens {
+                requests: rt::var_by_count(
+                    head,
+                    &[
+                        (1, &[0x0F], REPEAT_WRITE_MULTIPLE_COILS),
+                        (1, &[0x10], REPEAT_WRITE_MULTIPLE_REGISTERS),
+                    ],
+                ),
+                responses: rt::var_by_count(
+                    head,
+                    &[
+                        (1, &[0x01], REPEAT_READ_COILS_REPLY),
+                        (1, &[0x02], REPEAT_READ_DISCRETE_INPUTS_REPLY),
+                        (1, &[0x03], REPEAT_READ_HOLDING_REGISTERS_REPLY),
+                        (1, &[0x04], REPEAT_READ_INPUT_REGISTERS_REPLY),
+                    ],
+                ),
             }
         }
     }

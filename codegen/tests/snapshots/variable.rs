@@ -604,7 +604,7 @@ pub mod vario {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[9, 8, 7, 6];
+        const FRAME_LENGTHS: &'static [usize] = &[9, 7];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         const BAUD: u32 = BAUD;
         const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
@@ -667,16 +667,50 @@ pub mod vario {
                 };
             }
             let mask: u128 = match head.get(4) {
-                rt::None => 0xc0000000000000003,
-                rt::Some(0x01) => 0x80000000000000001,
-                rt::Some(0x02) => 0x40000000000000002,
+                rt::None => 0x20000000000000001,
+                rt::Some(0x01) => 0x1,
+                rt::Some(0x02) => 0x20000000000000000,
                 rt::Some(0x03) => 0x1,
-                rt::Some(0x81) => 0x40000000000000000,
+                rt::Some(0x81) => 0x20000000000000000,
                 _ => 0,
             };
             rt::Candidates {
                 requests: mask as u64,
                 responses: (mask >> 64) as u64,
+            }
+        }
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            if head.first().is_some_and(|&b| b != 0xA5) {
+                return rt::VarLens::NONE;
+            }
+            if head.get(1).is_some_and(|&b| b != 0x5A) {
+                return rt::VarLens::NONE;
+            }
+            rt::VarLens {
+                requests: rt::var_by_length(
+                    head,
+                    &[(4, &[0x02], 8, 40)],
+                    rt::LengthField {
+                        at: 3,
+                        width: 1,
+                        le: false,
+                        excess: 4,
+                        min: 0,
+                        max: 0,
+                    },
+                ),
+                responses: rt::var_by_length(
+                    head,
+                    &[(4, &[0x01], 6, 38)],
+                    rt::LengthField {
+                        at: 3,
+                        width: 1,
+                        le: false,
+                        excess: 4,
+                        min: 0,
+                        max: 0,
+                    },
+                ),
             }
         }
     }
