@@ -1,7 +1,9 @@
 //! Printing: a frame's JSON line from its message, address and fields (name and raw value).
 
 use busspec_model::interp::{self, Frame, Raw};
-use busspec_model::ir::{BitField, Direction, Field, Leaf, Message as IrMessage, MessageRef, Unit};
+use busspec_model::ir::{
+    BitField, Count, Direction, Field, Follows, Leaf, Message as IrMessage, MessageRef, Unit,
+};
 use busspec_runtime::{Elements, FieldValue, Message};
 
 use crate::{hex, Spec};
@@ -282,16 +284,35 @@ pub fn message_line<M: Message>(
         ))
     });
     let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
-    // Typed messages leave out what the spec fixes (constants, repeated fields); the contract
-    // prints every leaf of the message, as the frame carries it.
+    // Typed messages leave out what the spec fixes (constants, repeated fields) or what follows
+    // from the rest (a value following another field, a list's count); the contract prints
+    // every leaf of the message, as the frame carries it.
+    let derived = |i: usize| -> Option<Owned> {
+        let f = m.fields.get(i)?;
+        if let Some(Follows::Field(o, rel)) = &f.follows {
+            return match lookup(&m.fields.get(*o)?.name)? {
+                Owned::Int(v) => Some(Owned::Int(rel.apply(*v))),
+                _ => None,
+            };
+        }
+        let (rf, r) = m.repeat().filter(|_| m.count_field() == Some(i))?;
+        let Owned::List(l) = lookup(&rf.name)? else {
+            return None;
+        };
+        let n = match r.count {
+            Count::Bytes(_) => rf.elements_len(l.len()),
+            Count::Elements(_) | Count::ToEnd => l.len(),
+        };
+        Some(Owned::Int(n as i64))
+    };
     let mut fields = Vec::new();
     for leaf in m.leaves() {
         let name = leaf.name();
         let fixed = match leaf {
-            Leaf::Field(_, f) => match (f.constant, f.equals) {
+            Leaf::Field(i, f) => match (f.constant, f.equals) {
                 (Some(c), _) => Some(Owned::Int(c as i64)),
                 (None, Some(i)) => m.fields.get(i).and_then(|e| lookup(&e.name)).cloned(),
-                (None, None) => None,
+                (None, None) => derived(i),
             },
             Leaf::Bits(_, _, b) => b.constant.map(|c| Owned::Int(c as i64)),
         };
