@@ -50,10 +50,10 @@ impl Parsed {
             self.values
                 .iter()
                 .find(|v| v.name == name)
-                .and_then(|v| match &v.raw {
-                    Raw::Int(i) => Some(FieldValue::Int(*i)),
-                    Raw::Text(t) => Some(FieldValue::Text(t)),
-                    Raw::List(l) => Some(FieldValue::List(Elements::I64(l))),
+                .map(|v| match &v.raw {
+                    Raw::Int(i) => FieldValue::Int(*i),
+                    Raw::Text(t) => FieldValue::Text(t),
+                    Raw::List(l) => FieldValue::List(Elements::I64(l)),
                 })
         };
         let typed = match direction {
