@@ -15,7 +15,7 @@
 include!("../codegen/tests/snapshots/modbus.rs");
 include!("../codegen/tests/snapshots/dynamixel.rs");
 
-use busspec_fuzz_bodies::events::{covers, interp_events, Seen};
+use busspec_fuzz_bodies::events::{chunks, covers, interp_events, Seen};
 use busspec_fuzz_bodies::{seen, spec, stream_events};
 use busspec_model::checksum;
 use busspec_model::interp;
@@ -72,17 +72,6 @@ fn capture(p: &Spec, rng: &mut fastrand::Rng, frames: usize) -> Vec<u8> {
     out
 }
 
-fn chunks(rng: &mut fastrand::Rng, total: usize) -> Vec<usize> {
-    let mut out = Vec::new();
-    let mut n = 0;
-    while n < total {
-        let c = rng.usize(1..24);
-        out.push(c);
-        n += c;
-    }
-    out
-}
-
 /// `P`'s generated stream decoder agrees with the interpreter's on random captures of its
 /// examples, however they are cut, and accounts for every byte; returns the frames found and
 /// the bytes skipped.
@@ -92,7 +81,7 @@ fn stream_agrees<P: Protocol>(seed: u64) -> (usize, u64) {
     let (mut frames, mut skipped) = (0, 0);
     for _ in 0..200 {
         let cap = capture(p, &mut rng, 30);
-        let cuts = chunks(&mut rng, cap.len());
+        let cuts = chunks(rng.u8(..), cap.len(), 24);
         let want = interp_events(p, None, &cap, &cuts);
         let got = seen::<P>(&stream_events::<P>(None, &cap, &cuts));
         assert_eq!(got, want, "capture {}", interp::format_hex(&cap));
@@ -123,6 +112,18 @@ fn dynamixel_generated_stream_matches_the_interpreter() {
     assert!(frames > 200 * 25 && skipped > 1000, "{frames} {skipped}");
 }
 
+/// Where `P`'s stream decoder finds responses in `cap` (offset, length), read as responses.
+fn responses<P: Protocol>(cap: &[u8]) -> Vec<(u64, usize)> {
+    let direction = Some(busspec_runtime::stream::Direction::Response);
+    stream_events::<P>(direction, cap, &[])
+        .iter()
+        .filter_map(|e| match e {
+            busspec_runtime::stream::Event::Response { offset, len, .. } => Some((*offset, *len)),
+            _ => None,
+        })
+        .collect()
+}
+
 /// A Dynamixel length byte that lies drops one byte, and the frame behind it is found whole;
 /// Modbus's register reply whose byte count says more than the frame holds likewise.
 #[test]
@@ -132,15 +133,11 @@ fn a_lying_length_resynchronises() {
     lie[3] = 0x09;
     let mut cap = lie.to_vec();
     cap.extend_from_slice(&status);
-    let events = stream_events::<dynamixel::Dynamixel>(None, &cap, &[]);
-    let found: Vec<(u64, usize)> = events
-        .iter()
-        .filter_map(|e| match e {
-            dynamixel::Event::Response { offset, len, .. } => Some((*offset, *len)),
-            _ => None,
-        })
-        .collect();
-    assert_eq!(found, [(7, 7)], "{events:?}");
+    assert_eq!(
+        responses::<dynamixel::Dynamixel>(&cap),
+        [(7, 7)],
+        "{cap:02X?}"
+    );
     let p = spec::<modbus::Modbus>();
     let reply = &p
         .examples
@@ -152,17 +149,5 @@ fn a_lying_length_resynchronises() {
     lie[2] = 0x08;
     let mut cap = lie.clone();
     cap.extend_from_slice(reply);
-    let events = stream_events::<modbus::Modbus>(
-        Some(busspec_runtime::stream::Direction::Response),
-        &cap,
-        &[],
-    );
-    let found: Vec<(u64, usize)> = events
-        .iter()
-        .filter_map(|e| match e {
-            modbus::Event::Response { offset, len, .. } => Some((*offset, *len)),
-            _ => None,
-        })
-        .collect();
-    assert_eq!(found, [(11, 11)], "{events:?}");
+    assert_eq!(responses::<modbus::Modbus>(&cap), [(11, 11)], "{cap:02X?}");
 }

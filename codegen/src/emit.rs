@@ -1432,14 +1432,8 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
     stmts.push(quote!(let out = #take;));
     if let (Some(rule), Some(_)) = (p.framing.length_rule(m.direction), &repeat) {
         // The length field of a frame of variable length, from its length.
-        let (at, width, le, grows, k) = (
-            usize_lit(rule.at),
-            usize_lit(rule.width),
-            p.byte_order == ByteOrder::Little,
-            rule.grows,
-            i64_lit(rule.k),
-        );
-        stmts.push(quote!(rt::put_length(out, #at, #width, #le, #grows, #k)?;));
+        let args = length_args(p, rule);
+        stmts.push(quote!(rt::put_length(out, #args)?;));
     }
     while i < known.len() {
         let run: Vec<TokenStream> = known[i..].iter().map_while(Clone::clone).collect();
@@ -2085,6 +2079,13 @@ fn length_check(p: &Protocol, d: Direction) -> TokenStream {
     let Some(rule) = p.framing.length_rule(d) else {
         return quote!();
     };
+    let args = length_args(p, rule);
+    quote!(rt::length_field(frame, #args)?;)
+}
+
+/// A length field's offset, width, byte order, whether it counts the payload and its
+/// constant, as `rt::length_field` (decode) and `rt::put_length` (encode) take them.
+fn length_args(p: &Protocol, rule: LengthRule) -> TokenStream {
     let (at, width, le, grows, k) = (
         usize_lit(rule.at),
         usize_lit(rule.width),
@@ -2092,7 +2093,7 @@ fn length_check(p: &Protocol, d: Direction) -> TokenStream {
         rule.grows,
         i64_lit(rule.k),
     );
-    quote!(rt::length_field(frame, #at, #width, #le, #grows, #k)?;)
+    quote!(#at, #width, #le, #grows, #k)
 }
 
 /// Whether `m` shares code and length with another `needs_request` message of `group` (its
