@@ -480,6 +480,108 @@ impl RepeatAt {
     }
 }
 
+/// A list of its elements, as a generated message with the `serde` feature carries it.
+#[cfg(feature = "serde")]
+impl<T: serde::Serialize, const N: usize> serde::Serialize for Repeated<T, N> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.as_slice())
+    }
+}
+
+/// A list of at most `N` elements; a longer one is an error.
+#[cfg(feature = "serde")]
+impl<'de, T: serde::Deserialize<'de> + Copy + Default, const N: usize> serde::Deserialize<'de>
+    for Repeated<T, N>
+{
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Seq<T, const N: usize>(core::marker::PhantomData<T>);
+        impl<'de, T: serde::Deserialize<'de> + Copy + Default, const N: usize>
+            serde::de::Visitor<'de> for Seq<T, N>
+        {
+            type Value = Repeated<T, N>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "a list of at most {N} elements")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut r = Repeated::new();
+                while let Some(v) = a.next_element()? {
+                    if r.push(v).is_err() {
+                        return Err(serde::de::Error::invalid_length(N + 1, &self));
+                    }
+                }
+                Ok(r)
+            }
+        }
+        d.deserialize_seq(Seq::<T, N>(core::marker::PhantomData))
+    }
+}
+
+/// A list of its bits.
+#[cfg(feature = "serde")]
+impl<const BYTES: usize> serde::Serialize for Bits<BYTES> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.iter())
+    }
+}
+
+/// A list of at most `8 × BYTES` bits; a longer one is an error.
+#[cfg(feature = "serde")]
+impl<'de, const BYTES: usize> serde::Deserialize<'de> for Bits<BYTES> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Seq<const BYTES: usize>;
+        impl<'de, const BYTES: usize> serde::de::Visitor<'de> for Seq<BYTES> {
+            type Value = Bits<BYTES>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "a list of at most {} bits", 8 * BYTES)
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut r = Bits::new();
+                while let Some(v) = a.next_element()? {
+                    if r.push(v).is_err() {
+                        return Err(serde::de::Error::invalid_length(8 * BYTES + 1, &self));
+                    }
+                }
+                Ok(r)
+            }
+        }
+        d.deserialize_seq(Seq::<BYTES>)
+    }
+}
+
+/// Any number of elements up to `N`, each arbitrary.
+#[cfg(feature = "arbitrary")]
+impl<'a, T: arbitrary::Arbitrary<'a> + Copy + Default, const N: usize> arbitrary::Arbitrary<'a>
+    for Repeated<T, N>
+{
+    fn arbitrary(u: &mut arbitrary::Unstructured<'a>) -> arbitrary::Result<Self> {
+        let n = u.int_in_range(0..=N)?;
+        let mut r = Repeated::new();
+        for _ in 0..n {
+            let _ = r.push(T::arbitrary(u)?);
+        }
+        Ok(r)
+    }
+}
+
+/// Any number of bits up to `8 × BYTES`, each arbitrary.
+#[cfg(feature = "arbitrary")]
+impl<'a, const BYTES: usize> arbitrary::Arbitrary<'a> for Bits<BYTES> {
+    fn arbitrary(u: &mut arbitrary::Unstructured<'a>) -> arbitrary::Result<Self> {
+        let n = u.int_in_range(0..=8 * BYTES)?;
+        let mut r = Bits::new();
+        for _ in 0..n {
+            let _ = r.push(bool::arbitrary(u)?);
+        }
+        Ok(r)
+    }
+}
+
 /// What generated decoders and encoders do with a message's repeated field.
 impl RepeatAt {
     /// The elements a frame's count field stands for, `min..=max` inclusive: where it counts
