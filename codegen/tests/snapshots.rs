@@ -127,3 +127,55 @@ fn the_generator_has_no_gaps() {
             .unwrap_or_else(|e| panic!("{}: {e}", spec.display()));
     }
 }
+
+/// The one construct the generator refuses: a repeat to the end of the frame without a length
+/// field, whose every length the stream decoder must list beforehand, when that makes more
+/// than 64 frame lengths. Refused by name, pointing at the interpreter; with 16 elements at
+/// most it is generated, its lengths listed.
+#[test]
+fn a_repeat_to_the_end_without_a_length_field_lists_its_lengths_up_to_64() {
+    let path = dir().join("../../model/tests/fixtures/valid/minimal_variable.yaml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let head = &text[..text.find("examples:").unwrap()];
+    let without = head
+        .replace(
+            "layout: [start, address, length, code, payload, checksum]",
+            "layout: [start, address, code, payload, checksum]",
+        )
+        .replace(
+            "  length: {width: 1, counts: [code, payload, checksum]}\n",
+            "",
+        )
+        .replace("payload: {min: 1, max: 40}", "payload: {min: 1, max: 250}")
+        + "examples: []\n";
+    let many = without.replace(
+        "repeat: {count: end, min: 1, max: 16, request",
+        "repeat: {count: end, min: 1, max: 100, request",
+    );
+    assert_ne!(many, without);
+    let p = busspec_model::load_str("few", &without).unwrap_or_else(|d| panic!("{d}"));
+    let code = busspec_codegen::emit::emit_module(&p, "x", "x").unwrap();
+    // The reply's lengths, 5 to 37 bytes (none to 16 two-byte elements), longest first
+    // among the fixed ones (8 and 6).
+    let at = code.find("const FRAME_LENGTHS").unwrap();
+    let list: String = code[at..]
+        .chars()
+        .skip_while(|&c| c != '[')
+        .skip(1)
+        .skip_while(|&c| c != '[')
+        .take_while(|&c| c != ']')
+        .filter(|c| !c.is_whitespace())
+        .collect();
+    assert_eq!(
+        list,
+        "[37,35,33,31,29,27,25,23,21,19,17,15,13,11,9,8,7,6,5,"
+    );
+    let p = busspec_model::load_str("many", &many).unwrap_or_else(|d| panic!("{d}"));
+    let e = busspec_codegen::emit::emit_module(&p, "x", "x").unwrap_err();
+    for said in [
+        "`read_reply.values`: a repeat to the end of the frame without a length field",
+        "busspec decode --spec",
+    ] {
+        assert!(e.contains(said), "{said:?} not in {e}");
+    }
+}
