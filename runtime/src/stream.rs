@@ -276,6 +276,9 @@ struct Core<C: Protocol> {
     responses: bool,
     last_request: Option<C::Request>,
     default_request: Option<C::Request>,
+    /// `last_request`, else `default_request`: what a response is paired with, kept so the
+    /// decoder lends it without building it per frame.
+    pair: Option<C::Request>,
     noise_at: u64,
     noise_len: u64,
     pending: Option<Event<C::Request, C::Response>>,
@@ -300,6 +303,7 @@ impl<C: Protocol> StreamDecoder<C> {
                 responses: direction != Some(Direction::Request),
                 last_request: None,
                 default_request: None,
+                pair: None,
                 noise_at: 0,
                 noise_len: 0,
                 pending: None,
@@ -311,6 +315,7 @@ impl<C: Protocol> StreamDecoder<C> {
     /// no request precedes them in the stream (a capture of the device's side only).
     pub fn with_default_request(mut self, request: Option<C::Request>) -> Self {
         self.core.default_request = request;
+        self.core.pair = self.core.last_request.or(request);
         self
     }
 
@@ -493,7 +498,7 @@ impl<C: Protocol> Core<C> {
                 }
             }
             if let Some((len, reason)) = out_of_spec {
-                self.last_request = None;
+                self.pair_with(None);
                 self.pending = Some(Event::OutOfSpec {
                     offset: self.head,
                     len,
@@ -504,11 +509,7 @@ impl<C: Protocol> Core<C> {
             }
         }
         // The head byte starts no frame.
-        if self.noise_len == 0 {
-            self.noise_at = self.head;
-        }
-        self.noise_len += 1;
-        self.head += 1;
+        self.noise_byte();
         Step::Settled(1)
     }
 
@@ -571,42 +572,32 @@ impl<C: Protocol> Core<C> {
             None
         };
         let as_response = if response {
-            // The rule: decoded on its own, and where that is ambiguous, as the reply to the
-            // request. Asked with the request first, which settles it in one decoding where a
-            // reply follows its request: a response that decodes as the reply is the one
-            // message that decodes on its own too, or one of those that make it ambiguous,
-            // the one the request settles (messages sharing code and length differ in a
-            // constant unless only the request tells them apart).
-            let by = self.last_request.or(self.default_request);
-            match by.and_then(|r| C::decode_response_for(frame, Some(&r)).ok()) {
-                Some(d) => Some(Ok(d)),
-                None => match C::decode_response_for(frame, None) {
-                    Ok(d) => Some(Ok(d)),
-                    Err(DecodeError::Ambiguous { code }) => Some(Err(code)),
-                    Err(e) => {
-                        why.get_or_insert(e);
-                        None
-                    }
-                },
+            match self.response(frame) {
+                Ok(d) => Some(Ok(d)),
+                Err(DecodeError::Ambiguous { code }) => Some(Err(code)),
+                Err(e) => {
+                    why.get_or_insert(e);
+                    None
+                }
             }
         } else {
             None
         };
         let found = match (as_request, as_response) {
             (Some(frame), None) => {
-                self.last_request = Some(frame.message);
+                self.pair_with(Some(frame.message));
                 Found::Request(frame)
             }
             (None, Some(Ok(frame))) => {
-                self.last_request = None;
+                self.pair_with(None);
                 Found::Response(frame)
             }
             (None, Some(Err(code))) => {
-                self.last_request = None;
+                self.pair_with(None);
                 Found::Ambiguous(code)
             }
             (Some(_), Some(_)) => {
-                self.last_request = None;
+                self.pair_with(None);
                 let code = frame
                     .iter()
                     .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
@@ -622,6 +613,114 @@ impl<C: Protocol> Core<C> {
             }
         };
         Some(found)
+    }
+
+    /// `frame` decoded as a response by the rule: on its own, and where that is ambiguous, as
+    /// the reply to the request before it (or the default request). Asked as the reply first,
+    /// which settles it in one decoding where a reply follows its request: a response that
+    /// decodes as the reply is the one message that decodes on its own too, or one of those
+    /// that make it ambiguous, the one the request settles (messages sharing code and length
+    /// differ in a constant unless only the request tells them apart).
+    #[inline(always)]
+    fn response(&self, frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
+        if let Some(r) = &self.pair {
+            if let Ok(d) = C::decode_response_for(frame, Some(r)) {
+                return Ok(d);
+            }
+        }
+        C::decode_response_for(frame, None)
+    }
+
+    /// Records the last request since the previous response (`None`: a response, an ambiguous
+    /// or out-of-spec frame ended the pairing).
+    #[inline(always)]
+    fn pair_with(&mut self, request: Option<C::Request>) {
+        self.last_request = request;
+        self.pair = request.or(self.default_request);
+    }
+
+    /// The framing rule at the head of a whole window (`window.len()` the buffer's capacity,
+    /// settled as when flushing) where it is simple, which is almost always: no variable-length
+    /// candidate, each candidate length of one direction only, and the longest that decodes
+    /// before any breaks only a rule of the spec. Returns its event, or `None` with `head`
+    /// past a byte of noise (counted, not reported); sets `slow` and changes nothing where
+    /// the case is not simple, for [`Self::advance`] to decide.
+    #[inline(always)]
+    fn fast(&mut self, window: &[u8], slow: &mut bool) -> Option<Event<C::Request, C::Response>> {
+        let c = C::candidates(window);
+        let v = C::variable_candidates(window);
+        let requests = if self.requests { c.requests } else { 0 };
+        let responses = if self.responses { c.responses } else { 0 };
+        let var = (
+            if self.requests {
+                v.requests
+            } else {
+                VarLen::NONE
+            },
+            if self.responses {
+                v.responses
+            } else {
+                VarLen::NONE
+            },
+        );
+        if var != (VarLen::NONE, VarLen::NONE) || requests & responses != 0 {
+            *slow = true;
+            return None;
+        }
+        let mut rest = requests | responses;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let Some(frame) = C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)) else {
+                *slow = true;
+                return None;
+            };
+            let (offset, len) = (self.head, frame.len());
+            if requests & (1 << i) != 0 {
+                match C::decode_request(frame) {
+                    Ok(frame) => {
+                        self.pair_with(Some(frame.message));
+                        self.head += len as u64;
+                        return Some(Event::Request { offset, len, frame });
+                    }
+                    Err(e) if breaks_spec(&e) => {
+                        *slow = true;
+                        return None;
+                    }
+                    Err(_) => {}
+                }
+            } else {
+                match self.response(frame) {
+                    Ok(frame) => {
+                        self.pair_with(None);
+                        self.head += len as u64;
+                        return Some(Event::Response { offset, len, frame });
+                    }
+                    Err(DecodeError::Ambiguous { code }) => {
+                        self.pair_with(None);
+                        self.head += len as u64;
+                        return Some(Event::Ambiguous { offset, len, code });
+                    }
+                    Err(e) if breaks_spec(&e) => {
+                        *slow = true;
+                        return None;
+                    }
+                    Err(_) => {}
+                }
+            }
+        }
+        self.noise_byte();
+        None
+    }
+
+    /// The head byte starts no frame: one more byte of noise.
+    #[inline(always)]
+    fn noise_byte(&mut self) {
+        if self.noise_len == 0 {
+            self.noise_at = self.head;
+        }
+        self.noise_len += 1;
+        self.head += 1;
     }
 
     fn take_noise(&mut self) -> Option<Event<C::Request, C::Response>> {
@@ -666,8 +765,46 @@ impl<C: Protocol> Iterator for Feed<'_, '_, C> {
     fn next(&mut self) -> Option<Self::Item> {
         loop {
             let d = &mut *self.decoder;
+            let cap = d.buf.as_ref().len();
+            if d.len == 0 && d.core.pending.is_none() {
+                // Heads in place, while the simple case holds (`Core::fast`).
+                while let Some(window) = self.input.get(self.at..self.at + cap) {
+                    let mut slow = false;
+                    let head = d.core.head;
+                    let ev = d.core.fast(window, &mut slow);
+                    if slow {
+                        break;
+                    }
+                    self.at += (d.core.head - head) as usize;
+                    if let Some(ev) = ev {
+                        if d.core.noise_len > 0 {
+                            d.core.pending = Some(ev);
+                            return d.core.take_noise();
+                        }
+                        return Some(ev);
+                    }
+                    if d.core.noise_len >= MAX_SKIPPED_RUN {
+                        return d.core.take_noise();
+                    }
+                }
+            }
+            if let Some(ev) = self.next_slow() {
+                return ev;
+            }
+        }
+    }
+}
+
+impl<C: Protocol> Feed<'_, '_, C> {
+    /// [`Iterator::next`] where the simple case does not hold: the framing rule in full, until
+    /// it reports an event or the end of the input (`Some`), or has settled bytes in place
+    /// without one (`None`: the simple case may hold again).
+    #[inline(never)]
+    fn next_slow(&mut self) -> Option<Option<Event<C::Request, C::Response>>> {
+        loop {
+            let d = &mut *self.decoder;
             if d.core.pending.is_some() {
-                return d.core.pending.take();
+                return Some(d.core.pending.take());
             }
             // Buffered bytes that all came from this input are still there, right before
             // `at` (the buffer holds the last bytes pushed): give them back to the input.
@@ -678,28 +815,26 @@ impl<C: Protocol> Iterator for Feed<'_, '_, C> {
             }
             if d.len == 0 {
                 // A whole buffer's worth of bytes: as in `step`, a full window settles.
-                while let Some(window) = self.input.get(self.at..self.at + cap) {
+                if let Some(window) = self.input.get(self.at..self.at + cap) {
                     match d.core.advance(window, true) {
                         Step::Frame(n, found) => {
                             self.at += n;
-                            return Some(d.core.frame_event(n, found));
+                            return Some(Some(d.core.frame_event(n, found)));
                         }
                         Step::Settled(n) => {
                             self.at += n;
-                            if let Some(ev) = d.core.report() {
-                                return Some(ev);
-                            }
+                            return d.core.report().map(Some);
                         }
-                        Step::Wait => break,
+                        Step::Wait => {}
                     }
                 }
             }
             if let Some(ev) = d.poll() {
-                return Some(ev);
+                return Some(Some(ev));
             }
             let rest = self.input.get(self.at..).unwrap_or_default();
             if rest.is_empty() {
-                return None;
+                return Some(None);
             }
             self.at += d.push(rest);
         }
