@@ -272,13 +272,11 @@ pub struct StreamDecoder<C: Protocol> {
 struct Core<C: Protocol> {
     /// Stream offset of the first unsettled byte.
     head: u64,
-    requests: bool,
-    responses: bool,
+    /// All ones for a decoded direction, zero for the other: masks the candidates.
+    requests: u64,
+    responses: u64,
     last_request: Option<C::Request>,
     default_request: Option<C::Request>,
-    /// `last_request`, else `default_request`: what a response is paired with, kept so the
-    /// decoder lends it without building it per frame.
-    pair: Option<C::Request>,
     noise_at: u64,
     noise_len: u64,
     pending: Option<Event<C::Request, C::Response>>,
@@ -299,11 +297,18 @@ impl<C: Protocol> StreamDecoder<C> {
             len: 0,
             core: Core {
                 head: 0,
-                requests: direction != Some(Direction::Response),
-                responses: direction != Some(Direction::Request),
+                requests: if direction == Some(Direction::Response) {
+                    0
+                } else {
+                    u64::MAX
+                },
+                responses: if direction == Some(Direction::Request) {
+                    0
+                } else {
+                    u64::MAX
+                },
                 last_request: None,
                 default_request: None,
-                pair: None,
                 noise_at: 0,
                 noise_len: 0,
                 pending: None,
@@ -315,7 +320,6 @@ impl<C: Protocol> StreamDecoder<C> {
     /// no request precedes them in the stream (a capture of the device's side only).
     pub fn with_default_request(mut self, request: Option<C::Request>) -> Self {
         self.core.default_request = request;
-        self.core.pair = self.core.last_request.or(request);
         self
     }
 
@@ -428,14 +432,14 @@ impl<C: Protocol> Core<C> {
     fn advance(&mut self, window: &[u8], flushing: bool) -> Step<C::Request, C::Response> {
         let c = C::candidates(window);
         let v = C::variable_candidates(window);
-        let requests = if self.requests { c.requests } else { 0 };
-        let responses = if self.responses { c.responses } else { 0 };
-        let var_q = if self.requests {
+        let requests = c.requests & self.requests;
+        let responses = c.responses & self.responses;
+        let var_q = if self.requests != 0 {
             v.requests
         } else {
             VarLen::NONE
         };
-        let var_r = if self.responses {
+        let var_r = if self.responses != 0 {
             v.responses
         } else {
             VarLen::NONE
@@ -623,7 +627,7 @@ impl<C: Protocol> Core<C> {
     /// differ in a constant unless only the request tells them apart).
     #[inline(always)]
     fn response(&self, frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
-        if let Some(r) = &self.pair {
+        if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
             if let Ok(d) = C::decode_response_for(frame, Some(r)) {
                 return Ok(d);
             }
@@ -636,7 +640,6 @@ impl<C: Protocol> Core<C> {
     #[inline(always)]
     fn pair_with(&mut self, request: Option<C::Request>) {
         self.last_request = request;
-        self.pair = request.or(self.default_request);
     }
 
     /// The framing rule at the head of a whole window (`window.len()` the buffer's capacity,
@@ -649,15 +652,15 @@ impl<C: Protocol> Core<C> {
     fn fast(&mut self, window: &[u8], slow: &mut bool) -> Option<Event<C::Request, C::Response>> {
         let c = C::candidates(window);
         let v = C::variable_candidates(window);
-        let requests = if self.requests { c.requests } else { 0 };
-        let responses = if self.responses { c.responses } else { 0 };
+        let requests = c.requests & self.requests;
+        let responses = c.responses & self.responses;
         let var = (
-            if self.requests {
+            if self.requests != 0 {
                 v.requests
             } else {
                 VarLen::NONE
             },
-            if self.responses {
+            if self.responses != 0 {
                 v.responses
             } else {
                 VarLen::NONE
