@@ -186,7 +186,11 @@ impl LengthField {
 }
 
 /// What the decoder found. Offsets count bytes from the first byte ever pushed.
+///
+/// `repr(u8)`: every variant then has its offset and length at the same place, so
+/// [`Event::offset`] and [`Event::len`] are one load each rather than a jump on the variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Event<Q, R> {
     /// A request frame of `len` bytes at `offset`.
     Request {
