@@ -506,7 +506,7 @@ impl<C: Protocol> Core<C> {
                 }
             }
             if let Some((len, reason)) = out_of_spec {
-                self.pair_with(None);
+                self.last_request = None;
                 self.pending = Some(Event::OutOfSpec {
                     offset: self.head,
                     len,
@@ -593,19 +593,19 @@ impl<C: Protocol> Core<C> {
         };
         let found = match (as_request, as_response) {
             (Some(frame), None) => {
-                self.pair_with(Some(frame.message));
+                self.last_request = Some(frame.message);
                 Found::Request(frame)
             }
             (None, Some(Ok(frame))) => {
-                self.pair_with(None);
+                self.last_request = None;
                 Found::Response(frame)
             }
             (None, Some(Err(code))) => {
-                self.pair_with(None);
+                self.last_request = None;
                 Found::Ambiguous(code)
             }
             (Some(_), Some(_)) => {
-                self.pair_with(None);
+                self.last_request = None;
                 let code = frame
                     .iter()
                     .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
@@ -637,13 +637,6 @@ impl<C: Protocol> Core<C> {
             }
         }
         C::decode_response_for(frame, None)
-    }
-
-    /// Records the last request since the previous response (`None`: a response, an ambiguous
-    /// or out-of-spec frame ended the pairing).
-    #[inline(always)]
-    fn pair_with(&mut self, request: Option<C::Request>) {
-        self.last_request = request;
     }
 
     /// The framing rule at the head of a whole window (`window.len()` the buffer's capacity,
@@ -686,7 +679,7 @@ impl<C: Protocol> Core<C> {
             if requests & (1 << i) != 0 {
                 match C::decode_request(frame) {
                     Ok(frame) => {
-                        self.pair_with(Some(frame.message));
+                        self.last_request = Some(frame.message);
                         self.head += len as u64;
                         return Some(Event::Request { offset, len, frame });
                     }
@@ -699,12 +692,12 @@ impl<C: Protocol> Core<C> {
             } else {
                 match self.response(frame) {
                     Ok(frame) => {
-                        self.pair_with(None);
+                        self.last_request = None;
                         self.head += len as u64;
                         return Some(Event::Response { offset, len, frame });
                     }
                     Err(DecodeError::Ambiguous { code }) => {
-                        self.pair_with(None);
+                        self.last_request = None;
                         self.head += len as u64;
                         return Some(Event::Ambiguous { offset, len, code });
                     }
