@@ -2365,6 +2365,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                     _ => false,
                 }
             }
+            #[inline]
             fn candidates(head: &[u8]) -> rt::Candidates {
                 #start_check
                 let mask: u128 = match #scrutinee {
