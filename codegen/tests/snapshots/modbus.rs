@@ -1734,6 +1734,7 @@ pub mod modbus {
                 _ => false,
             }
         }
+        #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let mask: u128 = match head.get(1) {
                 rt::None => 0x30000000000000001,

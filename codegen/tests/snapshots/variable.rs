@@ -653,6 +653,7 @@ pub mod vario {
                 _ => false,
             }
         }
+        #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xA5) {
                 return rt::Candidates {
