@@ -3,7 +3,8 @@
 # `icount` binary for two pass counts and divides the difference in instructions by the
 # difference in frames or bytes, so set-up (loading the spec, building the inputs) cancels out.
 # Stream rows: the 1 MiB capture with 1 % noise (`generated`) and without (`generated-clean`),
-# per byte and per frame decoded.
+# per byte and per frame decoded, and their ratio to the yardstick: the clean capture's frames
+# decoded one by one, their boundaries known (`stream decode`).
 # Prints Markdown table rows. Needs valgrind. Usage: bash benches/icount.sh [ub2|sd ...]
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -28,6 +29,9 @@ count() {
   echo "$ir $units ${frames:-0}"
 }
 
+# Instructions per frame of `stream decode`, set by the first stream row of a protocol.
+yardstick=0
+
 # per PROTO WHO OP LO HI UNIT -> one table row
 per() {
   local proto=$1 who=$2 op=$3 lo=$4 hi=$5 unit=$6
@@ -38,9 +42,14 @@ per() {
     who=$op op=stream
   fi
   # For the stream decoders, also per frame decoded (the yardstick is decode's per frame).
+  if [[ $op == stream && $who == decode ]]; then
+    yardstick=$(awk -v a="$a" -v b="$b" -v f="$(((hi - lo) * frames))" 'BEGIN { print (b - a) / f }')
+  fi
   awk -v a="$a" -v b="$b" -v n="$(((hi - lo) * units))" -v f="$(((hi - lo) * frames))" \
-    -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" \
-    'BEGIN { extra = (u == "byte" && f > 0) ? sprintf(" (%.1f per frame)", (b - a) / f) : ""
+    -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" -v y="$yardstick" \
+    'BEGIN { per = (f > 0) ? (b - a) / f : 0
+             ratio = (o == "stream" && w != "decode" && w != "plain-sum" && y > 0) ? sprintf(", %.2f× decode", per / y) : ""
+             extra = (u == "byte" && f > 0) ? sprintf(" (%.1f per frame%s)", per, ratio) : ""
              printf "| %s | %s | %s | %.1f per %s%s |\n", p, o, w, (b - a) / n, u, extra }'
 }
 
@@ -55,6 +64,7 @@ for proto in "${protos[@]}"; do
     done
     per "$proto" interpreter "$op" 2 12 frame
   done
+  per "$proto" stream decode 1 3 byte
   per "$proto" stream generated 1 3 byte
   per "$proto" stream generated-clean 1 3 byte
   per "$proto" stream plain-sum 1 3 byte

@@ -131,6 +131,7 @@ fn generated_values<M: busspec_protocols::Message>(m: &M) -> Vec<(String, Raw)> 
         let raw = match v {
             FieldValue::Int(i) => Raw::Int(i),
             FieldValue::Text(t) => Raw::Text(t.to_vec()),
+            FieldValue::List(items) => Raw::List(items.iter().collect()),
         };
         out.push((name.to_owned(), raw));
     });

@@ -117,19 +117,7 @@ impl Mixed {
             if picked.iter().filter(|x| x.name == m.name).count() >= PER_MESSAGE {
                 continue;
             }
-            let reply_to = if m.needs_request {
-                let cmd = e
-                    .reply_to
-                    .unwrap_or_else(|| panic!("example of {} names no request", m.name));
-                let req = p
-                    .examples
-                    .iter()
-                    .find(|x| x.message.direction == Direction::Request && x.message.index == cmd)
-                    .unwrap_or_else(|| panic!("no example of request {}", p.commands[cmd].name));
-                Some(req.wire.clone())
-            } else {
-                None
-            };
+            let reply_to = reply_to(p, e);
             picked.push(Picked {
                 name: m.name.clone(),
                 direction: e.message.direction,
@@ -163,9 +151,53 @@ impl Mixed {
         }
     }
 
+    /// The frames of the capture without noise ([`capture_with_noise`] with `per_mille` 0),
+    /// each whole one an entry (the cut last one left out): the frames the stream decoder
+    /// finds, with their boundaries known, to decode them one by one (its yardstick).
+    pub fn capture(proto: Proto, p: &Protocol, len: usize) -> Mixed {
+        let bytes = capture_with_noise(p, len, 0);
+        let mut entries = Vec::new();
+        let mut start = 0;
+        for e in p.examples.iter().cycle() {
+            let end = start + e.wire.len();
+            if end > bytes.len() {
+                break;
+            }
+            entries.push(Entry {
+                message: p.message(e.message).name.clone(),
+                direction: e.message.direction,
+                range: start..end,
+                reply_to: reply_to(p, e),
+            });
+            start = end;
+        }
+        Mixed {
+            proto,
+            bytes,
+            entries,
+        }
+    }
+
     pub fn frame(&self, e: &Entry) -> &[u8] {
         &self.bytes[e.range.clone()]
     }
+}
+
+/// For an example of a response only its request identifies: an example of that request.
+fn reply_to(p: &Protocol, e: &busspec_model::ir::Example) -> Option<Vec<u8>> {
+    let m = p.message(e.message);
+    if !m.needs_request {
+        return None;
+    }
+    let cmd = e
+        .reply_to
+        .unwrap_or_else(|| panic!("example of {} names no request", m.name));
+    let req = p
+        .examples
+        .iter()
+        .find(|x| x.message.direction == Direction::Request && x.message.index == cmd)
+        .unwrap_or_else(|| panic!("no example of request {}", p.commands[cmd].name));
+    Some(req.wire.clone())
 }
 
 /// Size of the synthetic capture the stream benches decode.

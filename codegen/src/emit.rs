@@ -173,10 +173,28 @@ struct Leaf<'a> {
 /// The generated Rust type of a value, and how to turn raw integers into it and back.
 enum Kind {
     Int(IntType),
-    Unit { ty: Ident, raw: IntType },
-    Enum { ty: Ident, raw: IntType },
-    Flags { ty: Ident, raw: IntType },
+    Unit {
+        ty: Ident,
+        raw: IntType,
+    },
+    Enum {
+        ty: Ident,
+        raw: IntType,
+    },
+    Flags {
+        ty: Ident,
+        raw: IntType,
+    },
     Text(usize),
+    /// A repeated field: at most `max` elements, each its field's wire integer.
+    List {
+        elem: IntType,
+        max: usize,
+    },
+    /// A repeated bit field, packed into `bytes` bytes.
+    BitList {
+        bytes: usize,
+    },
 }
 
 struct Ctx<'a> {
@@ -273,6 +291,18 @@ impl<'a> Ctx<'a> {
             None => (leaf.field.unit, Some(leaf.field)),
         };
         if let Some(f) = field {
+            if let Some(r) = &f.repeat {
+                return if f.ty == FieldType::Bit {
+                    Kind::BitList {
+                        bytes: r.max.div_ceil(8),
+                    }
+                } else {
+                    Kind::List {
+                        elem: leaf.wire,
+                        max: r.max,
+                    }
+                };
+            }
             if f.is_ascii() {
                 return Kind::Text(f.width);
             }
@@ -309,14 +339,22 @@ impl<'a> Ctx<'a> {
                 let n = Literal::usize_unsuffixed(n);
                 quote!([u8; #n])
             }
+            Kind::List { elem, max } => {
+                let (e, max) = (elem.ident(), usize_lit(max));
+                quote!(rt::Repeated<#e, #max>)
+            }
+            Kind::BitList { bytes } => {
+                let bytes = usize_lit(bytes);
+                quote!(rt::Bits<#bytes>)
+            }
         }
     }
 }
 
 fn leaves(m: &Message) -> Vec<Leaf<'_>> {
     let mut out = Vec::new();
-    for f in &m.fields {
-        if f.constant.is_some() || f.equals.is_some() || follows_field(f).is_some() {
+    for (i, f) in m.fields.iter().enumerate() {
+        if m.is_derived(i) {
             continue;
         }
         if f.bits.is_empty() {
@@ -339,6 +377,72 @@ fn leaves(m: &Message) -> Vec<Leaf<'_>> {
                 });
             }
         }
+    }
+    out
+}
+
+/// The name of the `rt::RepeatAt` constant of a message with a repeated field.
+fn repeat_const(m: &Message) -> Ident {
+    format_ident!("REPEAT_{}", m.name.to_ascii_uppercase())
+}
+
+/// The shortest and longest frames of `m`.
+fn len_range(m: &Message) -> (usize, usize) {
+    match m.repeat() {
+        Some((f, r)) => (m.layout.len + f.elements_len(r.min), m.max_len),
+        None => (m.layout.len, m.layout.len),
+    }
+}
+
+/// The `rt::RepeatAt` constant of each message of direction `d` with a repeated field: where
+/// it sits, how it is counted and its bounds, for decode, encode and the stream's framing.
+fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
+    let mut out = TokenStream::new();
+    for m in p.messages(d) {
+        let Some((f, r)) = m.repeat() else { continue };
+        let c = repeat_const(m);
+        let name = &f.name;
+        let base = usize_lit(m.layout.len);
+        let at = usize_lit(m.layout.payload + f.offset);
+        let width = usize_lit(if f.ty == FieldType::Bit { 0 } else { f.width });
+        let counter = |i: usize| {
+            let cf = &m.fields[i];
+            let (cn, cat, cw) = (
+                &cf.name,
+                usize_lit(m.layout.payload + cf.offset),
+                usize_lit(cf.width),
+            );
+            let le = cf.byte_order == ByteOrder::Little;
+            quote!(rt::CountField { name: #cn, at: #cat, width: #cw, le: #le })
+        };
+        let count = match r.count {
+            Count::ToEnd => quote!(rt::CountBy::End),
+            Count::Elements(i) => {
+                let c = counter(i);
+                quote!(rt::CountBy::Elements(#c))
+            }
+            Count::Bytes(i) => {
+                let c = counter(i);
+                quote!(rt::CountBy::Bytes(#c))
+            }
+        };
+        let (min, max) = (usize_lit(r.min), usize_lit(r.max));
+        let d = format!(
+            " Where `{}.{name}` sits in the frame and how its elements are counted.",
+            m.name
+        );
+        out.extend(quote! {
+            #[doc = #d]
+            pub const #c: rt::RepeatAt = rt::RepeatAt {
+                field: #name,
+                base: #base,
+                at: #at,
+                width: #width,
+                count: #count,
+                min: #min,
+                max: #max,
+            };
+        });
     }
     out
 }
@@ -874,6 +978,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let mut index_arms = Vec::new();
     let mut encode_arms = Vec::new();
     let mut visit_arms = Vec::new();
+    let mut len_arms = Vec::new();
     for (i, m) in msgs.iter().enumerate() {
         let v = variant(m);
         let ls = leaves(m);
@@ -883,12 +988,15 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             let d = doc(&leaf_doc(p, l));
             quote!(#d #n: #t)
         });
+        let size = match len_range(m) {
+            (lo, hi) if lo == hi => format!("{lo} bytes"),
+            (lo, hi) => format!("{lo} to {hi} bytes"),
+        };
         let d = doc(&format!(
-            "§{} {} (code `{}`, {} bytes). {}",
+            "§{} {} (code `{}`, {size}). {}",
             m.section,
             m.title,
             m.code_hex(),
-            p.frame_len(m),
             m.doc
         ));
         if ls.is_empty() {
@@ -905,6 +1013,10 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         index_arms.push(quote!(#any => #i));
         let pattern = binding(m, &ls);
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls));
+        if let Some((f, _)) = m.repeat() {
+            let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
+            len_arms.push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len())));
+        }
         let visits: Vec<TokenStream> = ls
             .iter()
             .map(|l| {
@@ -915,6 +1027,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                         quote!(rt::Int(#v.raw() as i64))
                     }
                     Kind::Text(_) => quote!(rt::Text(&#v[..])),
+                    Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
                 };
                 quote!(f(#n, #value))
             })
@@ -934,6 +1047,17 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         (quote!(mut f), quote!(match self { #(#visit_arms)* }))
     };
     let n = usize_lit(msgs.len());
+    let frame_len = if len_arms.is_empty() {
+        quote!(Self::MESSAGES[self.index()].2)
+    } else {
+        quote! {
+            match self {
+                #(#len_arms,)*
+                _ => Self::MESSAGES[self.index()].2,
+            }
+        }
+    };
+    let repeats = emit_repeats(p, d);
     let dispatch = emit_dispatch(ctx, d, &ty);
     let from_fields = emit_from_fields(ctx, d);
     let command_info = if d == Direction::Request {
@@ -953,6 +1077,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         }
     };
     quote! {
+        #repeats
         #[doc = #what]
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -978,7 +1103,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
             /// The length of this message's frame, in bytes.
             pub const fn frame_len(&self) -> usize {
-                Self::MESSAGES[self.index()].2
+                #frame_len
             }
             /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
             /// field is signed), in frame order; constant and repeated fields are not visited.
@@ -1049,6 +1174,16 @@ fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             let (n, f) = (l.name, ident(l.name));
             let value = match ctx.kind(l) {
                 Kind::Text(_) => quote!(rt::text(&mut field, #n)?),
+                Kind::List { elem, max } => {
+                    let (e, max) = (elem.ident(), usize_lit(max));
+                    let (lo, hi) = elem.limits();
+                    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+                    quote!(rt::list::<#e, #max>(&mut field, #n, #lo, #hi)?)
+                }
+                Kind::BitList { bytes } => {
+                    let bytes = usize_lit(bytes);
+                    quote!(rt::list_bits::<#bytes>(&mut field, #n)?)
+                }
                 _ if l.bits.is_none() && l.wire.bits != 24 => {
                     let w = l.wire.ident();
                     let get = match raw_of(ctx, l, &ident("x")) {
@@ -1127,7 +1262,7 @@ fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenStream)> {
         Kind::Unit { raw, .. } | Kind::Enum { raw, .. } | Kind::Flags { raw, .. } => {
             Some((raw, quote!(#v.raw())))
         }
-        Kind::Text(_) => None,
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => None,
     }
 }
 
@@ -1239,6 +1374,19 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
         let range_fn = format_ident!("encode_{}", range_fn);
         stmts.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
     }
+    let repeat = m
+        .repeat()
+        .map(|(f, _)| (f, repeat_const(m), local(&f.name)));
+    if let Some((f, c, v)) = &repeat {
+        // Each element within the spec's range (a 24-bit one within its wire field too), then
+        // the count within its bounds, which gives the frame's length.
+        let limits = (f.ty != FieldType::Bit && f.width == 3).then(|| wire_type(f).limits());
+        if let Some((lo, hi)) = f.range.or(limits) {
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            stmts.push(quote!(#c.encode_in_range(#v.as_slice(), #lo, #hi)?;));
+        }
+        stmts.push(quote!(let frame_len = #c.encode_len(#v.len())?;));
+    }
     // The bytes known without a field value (start byte, address, code, constant fields), one
     // write per contiguous run.
     let named = repeated(m);
@@ -1249,7 +1397,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
         }
     }
     known[o.address] = Some(quote!(address));
-    if let (Some(at), Some(l)) = (o.length, &p.framing.length) {
+    if let (Some(at), Some(l), None) = (o.length, &p.framing.length, &repeat) {
         let v = busspec_model::validate::length_value(&p.framing, l, m.code.len(), m.payload_len);
         for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
             .into_iter()
@@ -1272,12 +1420,21 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
     // The run from the first byte is written as the frame is taken from `buf`.
     let first: Vec<TokenStream> = known.iter().map_while(Clone::clone).collect();
     let mut i = first.len();
-    let take = quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?);
-    if i == known.len() {
-        let (check, end) = (stmts, encode_end(p, take));
+    let take = if repeat.is_some() {
+        quote!(rt::frame_mut_len(buf, frame_len, &[#(#first),*])?)
+    } else {
+        quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
+    };
+    if i == known.len() && repeat.is_none() {
+        let (check, end) = (stmts, encode_end(p, take, false));
         return quote!(#pattern => { #(#check)* #end });
     }
     stmts.push(quote!(let out = #take;));
+    if let (Some(rule), Some(_)) = (p.framing.length_rule(m.direction), &repeat) {
+        // The length field of a frame of variable length, from its length.
+        let args = length_args(p, rule);
+        stmts.push(quote!(rt::put_length(out, #args)?;));
+    }
     while i < known.len() {
         let run: Vec<TokenStream> = known[i..].iter().map_while(Clone::clone).collect();
         match run.as_slice() {
@@ -1295,6 +1452,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             }
         }
     }
+    let counter = m.count_field();
     for (fi, f) in m.fields.iter().enumerate() {
         let at = usize_lit(o.payload + f.offset);
         let end = usize_lit(o.payload + f.offset + f.width);
@@ -1304,6 +1462,16 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             bits: wt.bits,
             signed: false,
         };
+        if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
+            if f.ty == FieldType::Bit {
+                stmts.push(quote!(rt::write_bits(&#v, &mut out[#at..]);));
+            } else {
+                let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
+                stmts
+                    .push(quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);));
+            }
+            continue;
+        }
         if f.is_ascii() {
             let n = local(&f.name);
             stmts.push(quote!(out[#at..#end].copy_from_slice(&#n);));
@@ -1327,6 +1495,11 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             let (lo, hi) = wt.limits();
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             quote!(rt::fits(#name, rt::follows(#n as i64, #args), #lo, #hi)? as #w)
+        } else if let (true, Some((_, c, v))) = (counter == Some(fi), &repeat) {
+            let name = &f.name;
+            let (lo, hi) = wt.limits();
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            quote!(rt::fits(#name, #c.count_value(#v.len()) as u64, #lo, #hi)? as #w)
         } else if !f.bits.is_empty() {
             let mut parts = Vec::new();
             for b in &f.bits {
@@ -1381,15 +1554,23 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
                 quote!(out[#at..#end].copy_from_slice(&#v.#conv());)
             }
         };
-        if named.contains(&fi) || !f.bits.is_empty() || f.constant.is_some() {
+        let agrees = match (&repeat, follows_field(f)) {
+            (Some((_, c, v)), Some(_)) if counter == Some(fi) => Some((c, v)),
+            _ => None,
+        };
+        if named.contains(&fi) || !f.bits.is_empty() || f.constant.is_some() || agrees.is_some() {
             let n = format_ident!("field_{}", fi);
             stmts.push(quote!(let #n: #w = #value;));
+            if let Some((c, v)) = agrees {
+                // A count computed from another field must count the list.
+                stmts.push(quote!(#c.encode_agrees(#v.len(), #n as u64)?;));
+            }
             stmts.push(put(quote!(#n)));
         } else {
             stmts.push(put(value));
         }
     }
-    let end = encode_end(p, quote!(out));
+    let end = encode_end(p, quote!(out), repeat.is_some());
     quote! {
         #pattern => {
             #(#stmts)*
@@ -1400,8 +1581,10 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
 
 /// An encoder arm's value, the frame length, from `out`, its frame: with a sum-8, once it is
 /// written into the last byte (each arm seals its own frame).
-fn encode_end(p: &Protocol, out: TokenStream) -> TokenStream {
-    if checksum_in_arms(p) {
+fn encode_end(p: &Protocol, out: TokenStream, variable: bool) -> TokenStream {
+    if checksum_in_arms(p) && variable {
+        quote!(rt::seal_sum8_len(#out))
+    } else if checksum_in_arms(p) {
         quote!(rt::seal_sum8(#out))
     } else {
         quote!(#out.len())
@@ -1454,6 +1637,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code)?;));
     }
     let named = repeated(m);
+    let counter = m.count_field();
     // Each leaf's value: an expression over `frame` or over a named wire value.
     let mut values: Vec<(Ident, TokenStream)> = Vec::new();
     // Each field's wire value: its read from `frame`, or the name it is bound to.
@@ -1462,6 +1646,13 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         let n = format_ident!("field_{}", fi);
         let at = usize_lit(o.payload + f.offset);
         let name = &f.name;
+        if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
+            if let Some(value) = decode_repeat(ctx, m, leaf, &mut stmts) {
+                values.push((ident(name), value));
+                wires.push(quote!());
+                continue;
+            }
+        }
         if f.is_ascii() {
             let end = usize_lit(o.payload + f.offset + f.width);
             let width = usize_lit(f.width);
@@ -1497,7 +1688,8 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
                 f.bits.is_empty()
                     && f.constant.is_none()
                     && f.equals.is_none()
-                    && follows_field(f).is_none(),
+                    && follows_field(f).is_none()
+                    && counter != Some(fi),
             );
         let wire = if f.width > 1 && uses > 1 {
             stmts.push(quote!(let #n: #w = #read;));
@@ -1593,6 +1785,69 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
     (stmts, build)
 }
 
+/// The value of repeated field `l` of `m` (`None` if it is not one), read from the bytes of
+/// its elements (`elements`, from the frame's `split`), with the check of its range pushed on
+/// `stmts`.
+fn decode_repeat(
+    ctx: &Ctx,
+    m: &Message,
+    l: &Leaf,
+    stmts: &mut Vec<TokenStream>,
+) -> Option<TokenStream> {
+    let f = l.field;
+    f.repeat.as_ref()?;
+    let c = repeat_const(m);
+    let value = match ctx.kind(l) {
+        Kind::List { elem, max } => {
+            let (e, max) = (elem.ident(), usize_lit(max));
+            let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
+            quote!(#c.elements::<#e, #max>(elements, #le, #signed)?)
+        }
+        Kind::BitList { bytes } => {
+            let bytes = usize_lit(bytes);
+            quote!(#c.bits::<#bytes>(elements, count)?)
+        }
+        _ => return None,
+    };
+    let Some((lo, hi)) = f.range.filter(|_| f.ty != FieldType::Bit) else {
+        return Some(value);
+    };
+    let (v, lo, hi) = (local(&f.name), i64_lit(lo), i64_lit(hi));
+    stmts.push(quote!(let #v = #value;));
+    stmts.push(quote!(#c.in_range(#v.as_slice(), #lo, #hi)?;));
+    Some(quote!(#v))
+}
+
+/// The statement splitting a frame of variable-length message `m` into its fixed part (as
+/// the array `frame`, so every fixed field's read is in bounds by type), the bytes of its
+/// elements and their number, once their count is checked.
+fn split_frame(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+    let Some((f, _)) = m.repeat() else {
+        return quote!();
+    };
+    let (c, at) = (repeat_const(m), usize_lit(m.layout.payload + f.offset));
+    let frame = if stmts.iter().chain([build]).any(mentions_frame) {
+        quote!(frame)
+    } else {
+        quote!(_)
+    };
+    let count = if f.ty == FieldType::Bit {
+        quote!(count)
+    } else {
+        quote!(_)
+    };
+    quote!(let (#frame, elements, #count) = #c.split::<#at>(frame)?;)
+}
+
+/// Whether `tokens` name the local `frame`.
+fn mentions_frame(tokens: &TokenStream) -> bool {
+    tokens.clone().into_iter().any(|t| match t {
+        proc_macro2::TokenTree::Ident(i) => i == "frame",
+        proc_macro2::TokenTree::Group(g) => mentions_frame(&g.stream()),
+        _ => false,
+    })
+}
+
 /// The typed value of leaf `l` from `raw`, an expression of type `wire` (`None`: an `i64`).
 fn from_wire(ctx: &Ctx, l: &Leaf, wire: Option<IntType>, raw: TokenStream) -> TokenStream {
     match ctx.kind(l) {
@@ -1610,7 +1865,7 @@ fn from_wire(ctx: &Ctx, l: &Leaf, wire: Option<IntType>, raw: TokenStream) -> To
             let (r, raw) = (r.ident(), paren(raw));
             quote!(#ty::from_raw(#raw as #r))
         }
-        Kind::Text(_) => raw,
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => raw,
     }
 }
 
@@ -1666,7 +1921,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         .unwrap_or(1);
     let msgs = p.messages(d);
     let clen = p.framing.checksum.len();
-    let min_len = msgs.iter().map(|m| p.frame_len(m)).min().unwrap_or(0);
+    let min_len = msgs.iter().map(|m| len_range(m).0).min().unwrap_or(0);
     let max_len = p.max_frame_len(d);
     let code_at = |l: usize| p.framing.head(l).code;
     let replies = d == Direction::Response;
@@ -1821,40 +2076,37 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
 /// holds a constant plus the frame's length where it counts the payload (every message of the
 /// direction has it at the same offset, and only the payload varies).
 fn length_check(p: &Protocol, d: Direction) -> TokenStream {
-    let Some(l) = &p.framing.length else {
+    let Some(rule) = p.framing.length_rule(d) else {
         return quote!();
     };
-    let code_len = p
-        .framing
-        .direction(d)
-        .code_lengths
-        .first()
-        .copied()
-        .unwrap_or(0);
-    let head = p.framing.head(code_len);
-    let Some(at) = head.length else {
-        return quote!();
-    };
-    let base = busspec_model::validate::length_value(&p.framing, l, code_len, 0);
-    let grows = l.counts.contains(&Part::Payload);
-    let k = if grows { base - head.len as i64 } else { base };
-    let (at, width, le, k) = (
-        usize_lit(at),
-        usize_lit(l.width),
+    let args = length_args(p, rule);
+    quote!(rt::length_field(frame, #args)?;)
+}
+
+/// A length field's offset, width, byte order, whether it counts the payload and its
+/// constant, as `rt::length_field` (decode) and `rt::put_length` (encode) take them.
+fn length_args(p: &Protocol, rule: LengthRule) -> TokenStream {
+    let (at, width, le, grows, k) = (
+        usize_lit(rule.at),
+        usize_lit(rule.width),
         p.byte_order == ByteOrder::Little,
-        i64_lit(k),
+        rule.grows,
+        i64_lit(rule.k),
     );
-    quote!(rt::length_field(frame, #at, #width, #le, #grows, #k)?;)
+    quote!(#at, #width, #le, #grows, #k)
 }
 
 /// Whether `m` shares code and length with another `needs_request` message of `group` (its
 /// code group), so that only the request can tell them apart.
-fn is_ambiguous(p: &Protocol, m: &Message, group: &[&Message]) -> bool {
-    let len = p.frame_len(m);
+fn is_ambiguous(m: &Message, group: &[&Message]) -> bool {
+    let (lo, hi) = len_range(m);
     m.needs_request
         && group
             .iter()
-            .filter(|o| o.needs_request && p.frame_len(o) == len)
+            .filter(|o| {
+                let (a, b) = len_range(o);
+                o.needs_request && a <= hi && lo <= b
+            })
             .count()
             > 1
 }
@@ -1882,6 +2134,22 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
     };
     let value = hex_code(&group[0].code);
     if let [m] = group {
+        if m.is_variable() {
+            let admit = if replies {
+                let a = admitted(m);
+                quote!(rt::admit(#a, #value)?;)
+            } else {
+                quote!()
+            };
+            let (stmts, build) = decode_body(ctx, m);
+            let split = split_frame(m, &stmts, &build);
+            return quote! {{
+                #admit
+                #split
+                #(#stmts)*
+                rt::Ok(#build)
+            }};
+        }
         let len = usize_lit(p.frame_len(m));
         let frame = if replies {
             let a = admitted(m);
@@ -1902,6 +2170,20 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
     let tries = group.iter().map(|m| {
         let len = usize_lit(p.frame_len(m));
         let (stmts, build) = decode_body(ctx, m);
+        let a = admitted(m);
+        if m.is_variable() {
+            let split = split_frame(m, &stmts, &build);
+            let decode = quote!(|frame: &[u8]| {
+                #split
+                #(#stmts)*
+                rt::Ok(#build)
+            });
+            return if is_ambiguous(m, group) {
+                quote!(g.ambiguous_any(#a, #decode);)
+            } else {
+                quote!(g.attempt_any(#a, #decode);)
+            };
+        }
         let decode = if stmts.is_empty() && !build.to_string().contains("frame") {
             quote!(|_: &[u8; #len]| rt::Ok(#build))
         } else {
@@ -1910,14 +2192,13 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
                 rt::Ok(#build)
             })
         };
-        let a = admitted(m);
-        if is_ambiguous(p, m, group) {
+        if is_ambiguous(m, group) {
             quote!(g.ambiguous(#a, #decode);)
         } else {
             quote!(g.attempt(#a, #decode);)
         }
     });
-    let expected = usize_lit(group.iter().map(|m| p.frame_len(m)).min().unwrap_or(0));
+    let expected = usize_lit(group.iter().map(|m| len_range(m).0).min().unwrap_or(0));
     let alone = if replies {
         quote!(request.is_none())
     } else {
@@ -1935,9 +2216,16 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
 /// per code prefix. Not by address: a frame from an address the spec does not allow is still a
 /// frame, which the stream decoder reports as out of spec (strict decoding says why).
 fn emit_stream(p: &Protocol) -> TokenStream {
+    // A variable-length message whose length or count field gives its length lists none
+    // (`variable_candidates` reads it); a repeat to the end without a length field lists
+    // every length.
     let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
         .iter()
-        .flat_map(|d| p.messages(*d).iter().map(|m| p.frame_len(m)))
+        .flat_map(|d| {
+            p.messages(*d)
+                .iter()
+                .flat_map(|m| m.listed_lengths(&p.framing))
+        })
         .collect();
     lengths.sort_unstable_by(|a, b| b.cmp(a));
     lengths.dedup();
@@ -1946,22 +2234,24 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     let mut shapes: Vec<(&[u8], u128)> = Vec::new();
     for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
         for m in p.messages(d) {
-            let i = lengths
-                .iter()
-                .position(|&l| l == p.frame_len(m))
-                .unwrap_or(0) as u32;
-            shapes.push((&m.code, 1u128 << (i + shift)));
+            let mask = m.listed_lengths(&p.framing).iter().fold(0u128, |a, len| {
+                let i = lengths.iter().position(|l| l == len).unwrap_or(0) as u32;
+                a | 1u128 << (i + shift)
+            });
+            if mask != 0 {
+                shapes.push((&m.code, mask));
+            }
         }
     }
     let first = p.framing.head(1);
     let code_at = first.code;
-    let start_check = match first.start {
+    let start_check = |none: TokenStream| match first.start {
         Some(at) => {
             let checks = p.framing.sync.iter().enumerate().map(|(i, s)| {
                 let (at, s) = (head_byte(at + i), hex_u8(*s));
                 quote! {
                     if #at.is_some_and(|&b| b != #s) {
-                        return rt::Candidates { requests: 0, responses: 0 };
+                        return #none;
                     }
                 }
             });
@@ -1969,6 +2259,11 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         }
         None => quote!(),
     };
+    let variable = emit_variable_candidates(p, start_check(quote!(rt::VarLens::NONE)));
+    let start_check = start_check(quote!(rt::Candidates {
+        requests: 0,
+        responses: 0
+    }));
     let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
     let mut arms = Vec::new();
     flat_trie(&shapes, 0, depth, &mut Vec::new(), 0, &mut arms);
@@ -2070,6 +2365,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                     _ => false,
                 }
             }
+            #[inline]
             fn candidates(head: &[u8]) -> rt::Candidates {
                 #start_check
                 let mask: u128 = match #scrutinee {
@@ -2078,11 +2374,83 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                 };
                 rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }
+            #variable
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
         pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;
         /// What [`StreamDecoder`] finds in a stream.
         pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    }
+}
+
+/// `variable_candidates`, where a message has a repeated field whose length a length field or
+/// a count field gives (none otherwise: the trait's default, which costs the stream decoder
+/// nothing): per direction, the length the head's field gives for the messages whose code
+/// agrees with it (`rt::var_by_length`, `rt::var_by_count`). `start_check` returns early
+/// where the head's start bytes are not the protocol's.
+fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStream {
+    let counted = |m: &&Message| m.repeat().is_some_and(|(_, r)| r.count != Count::ToEnd);
+    let mut any = false;
+    let mut per = Vec::new();
+    for d in [Direction::Request, Direction::Response] {
+        let code = |m: &Message| {
+            let (at, bytes) = (usize_lit(m.layout.code), m.code.iter().map(|b| hex_u8(*b)));
+            (at, quote!(&[#(#bytes),*]))
+        };
+        let rule = p.framing.length_rule(d).filter(|r| r.grows);
+        let value = match rule {
+            Some(rule) => {
+                let shapes: Vec<TokenStream> = p
+                    .messages(d)
+                    .iter()
+                    .filter(|m| m.is_variable())
+                    .map(|m| {
+                        let (at, c) = code(m);
+                        let (lo, hi) = (usize_lit(m.layout.len), usize_lit(m.max_len));
+                        quote!((#at, #c, #lo, #hi))
+                    })
+                    .collect();
+                if shapes.is_empty() {
+                    quote!(rt::VarLen::NONE)
+                } else {
+                    let (at, width) = (usize_lit(rule.at), usize_lit(rule.width));
+                    let le = p.byte_order == ByteOrder::Little;
+                    let excess = Literal::i64_unsuffixed(-rule.k);
+                    quote!(rt::var_by_length(head, &[#(#shapes),*], rt::LengthField {
+                        at: #at, width: #width, le: #le, excess: #excess, min: 0, max: 0
+                    }))
+                }
+            }
+            None => {
+                let shapes: Vec<TokenStream> = p
+                    .messages(d)
+                    .iter()
+                    .filter(counted)
+                    .map(|m| {
+                        let (at, c) = code(m);
+                        let r = repeat_const(m);
+                        quote!((#at, #c, #r))
+                    })
+                    .collect();
+                if shapes.is_empty() {
+                    quote!(rt::VarLen::NONE)
+                } else {
+                    quote!(rt::var_by_count(head, &[#(#shapes),*]))
+                }
+            }
+        };
+        any |= value.to_string() != quote!(rt::VarLen::NONE).to_string();
+        per.push(value);
+    }
+    if !any {
+        return quote!();
+    }
+    let (requests, responses) = (&per[0], &per[1]);
+    quote! {
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            #start_check
+            rt::VarLens { requests: #requests, responses: #responses }
+        }
     }
 }
 
@@ -2237,12 +2605,13 @@ fn emit_pairing(ctx: &Ctx) -> TokenStream {
     }
 }
 
-/// Whether a response has a field that follows from its request (`follows: {request}`).
+/// Whether a response has a field that follows from its request (`follows: {request}`, or a
+/// repeated field's count: `repeat.request`).
 fn has_follows_request(p: &Protocol) -> bool {
-    p.responses
-        .iter()
-        .flat_map(|m| &m.fields)
-        .any(|f| matches!(f.follows, Some(Follows::Request(_))))
+    p.responses.iter().flat_map(|m| &m.fields).any(|f| {
+        matches!(f.follows, Some(Follows::Request(_)))
+            || f.repeat.as_ref().is_some_and(|r| r.request.is_some())
+    })
 }
 
 /// `follows_request`: one arm per response and command it answers, checking each field the
@@ -2262,7 +2631,24 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 _ => None,
             })
             .collect();
-        if follows.is_empty() {
+        // The repeated field's list, where its count or its count field follows the request.
+        let list = m
+            .repeat()
+            .and_then(|(f, _)| ls.iter().find(|l| l.name == f.name));
+        let counted: Vec<(&Field, &Relation, bool)> = m
+            .fields
+            .iter()
+            .enumerate()
+            .filter_map(|(i, f)| match &f.follows {
+                Some(Follows::Request(rel)) if m.count_field() == Some(i) => Some((f, rel, true)),
+                _ => None,
+            })
+            .chain(
+                m.repeat()
+                    .and_then(|(f, r)| r.request.as_ref().map(|rel| (f, rel, false))),
+            )
+            .collect();
+        if follows.is_empty() && counted.is_empty() {
             continue;
         }
         let v = variant(m);
@@ -2272,12 +2658,7 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             let mut own = Vec::new();
             let mut theirs = Vec::new();
             let mut checks = Vec::new();
-            for (l, rel) in &follows {
-                let Some(cl) = cls.iter().find(|x| x.bits.is_none() && x.name == rel.field) else {
-                    continue;
-                };
-                let (n, mine) = (ident(l.name), local(l.name));
-                own.push(quote!(#n: #mine));
+            let theirs_push = |cl: &Leaf, theirs: &mut Vec<TokenStream>| {
                 let (cn, their) = (ident(cl.name), format_ident!("r_{}", cl.name));
                 if !theirs
                     .iter()
@@ -2285,6 +2666,15 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 {
                     theirs.push(quote!(#cn: #their));
                 }
+                their
+            };
+            for (l, rel) in &follows {
+                let Some(cl) = cls.iter().find(|x| x.bits.is_none() && x.name == rel.field) else {
+                    continue;
+                };
+                let (n, mine) = (ident(l.name), local(l.name));
+                own.push(quote!(#n: #mine));
+                let their = theirs_push(cl, &mut theirs);
                 let (Some((_, a)), Some((_, b))) = (raw_of(ctx, l, &mine), raw_of(ctx, cl, &their))
                 else {
                     continue;
@@ -2293,6 +2683,33 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 let at = usize_lit(m.layout.payload + l.field.offset);
                 let args = relation_args(rel);
                 checks.push(quote!(rt::following(#name, #at, #a, #b as i64, #args)?;));
+            }
+            if let Some(list) = list {
+                let rc = repeat_const(m);
+                let (n, mine) = (ident(list.name), local(list.name));
+                let mut bound = false;
+                for (f, rel, is_count) in &counted {
+                    let Some(cl) = cls.iter().find(|x| x.bits.is_none() && x.name == rel.field)
+                    else {
+                        continue;
+                    };
+                    let their = theirs_push(cl, &mut theirs);
+                    let Some((_, b)) = raw_of(ctx, cl, &their) else {
+                        continue;
+                    };
+                    if !bound {
+                        own.push(quote!(#n: #mine));
+                        bound = true;
+                    }
+                    let args = relation_args(rel);
+                    if *is_count {
+                        let name = &f.name;
+                        let at = usize_lit(m.layout.payload + f.offset);
+                        checks.push(quote!(rt::following(#name, #at, #rc.count_value(#mine.len()) as u64, #b as i64, #args)?;));
+                    } else {
+                        checks.push(quote!(#rc.follows_request(#mine.len(), #b as i64, #args)?;));
+                    }
+                }
             }
             let cv = variant(cmd);
             arms.push(quote! {

@@ -7,6 +7,9 @@ include!("snapshots/mini_crc.rs");
 include!("snapshots/core_names.rs");
 include!("snapshots/syncy.rs");
 include!("snapshots/codeless.rs");
+include!("snapshots/variable.rs");
+
+mod agree;
 
 use busspec_model::ir::{self, Direction};
 use busspec_runtime::{Message, Protocol};
@@ -281,4 +284,88 @@ fn codeless_snapshot_replays_and_agrees_with_the_interpreter() {
         })
         .collect();
     assert_eq!(frames, [(1, 6), (7, 8)], "{events:?}");
+}
+
+/// Repeated fields in generated code: the examples replay; every example, and frames made from
+/// them with counts and length fields that lie, decode as the interpreter decodes them, and
+/// lists of every length encode alike (too many or too few elements, and a count that does not
+/// count them, refused by both).
+#[test]
+fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
+    use busspec_runtime::{DecodeError, EncodeError};
+    replay::<vario::Vario>("model/tests/fixtures/valid/minimal_variable.yaml");
+    let p = fixture("model/tests/fixtures/valid/minimal_variable.yaml");
+    let t = agree::agree::<vario::Vario>(&p);
+    assert!(t.accepted > 4 && t.refused > 100, "{t:?}");
+    assert!(t.encoded > 4 && t.encode_refused > 4, "{t:?}");
+    // A write of two registers, by hand.
+    let values = busspec_runtime::Repeated::from_slice(&[0x1234u16, 0xABCD]).unwrap();
+    let w = vario::Request::Write {
+        quantity: 2,
+        values,
+    };
+    assert_eq!(w.frame_len(), 12);
+    let mut buf = [0u8; vario::MAX_FRAME_LEN];
+    let n = w.encode(3, &mut buf).unwrap();
+    let mut want = vec![0xA5, 0x5A, 3, 8, 2, 2, 4, 0x12, 0x34, 0xAB, 0xCD, 0];
+    agree::reseal(&p, &mut want);
+    assert_eq!(&buf[..n], &want[..]);
+    assert_eq!(vario::Request::decode(&want).unwrap().message, w);
+    // A quantity the list does not have: refused, naming the list and the count that fits.
+    let short = vario::Request::Write {
+        quantity: 3,
+        values,
+    };
+    assert_eq!(
+        short.encode(3, &mut buf),
+        Err(EncodeError::NotInRange {
+            field: "values",
+            value: 2,
+            min: 3,
+            max: 3
+        })
+    );
+    let empty = vario::Request::Write {
+        quantity: 1,
+        values: busspec_runtime::Repeated::new(),
+    };
+    assert_eq!(
+        empty.encode(3, &mut buf),
+        Err(EncodeError::NotInRange {
+            field: "values",
+            value: 0,
+            min: 1,
+            max: 16
+        })
+    );
+    // A byte count that lies about the frame's length.
+    let mut lying = want.clone();
+    lying[6] = 6;
+    agree::reseal(&p, &mut lying);
+    assert_eq!(
+        vario::Request::decode(&lying),
+        Err(DecodeError::InvalidValue {
+            field: "byte_count",
+            offset: 6,
+            found: 6
+        })
+    );
+    // The reply's count follows the request: two registers asked, three sent.
+    let read = vario::Request::Read {
+        first: 16,
+        quantity: 2,
+    };
+    let mut three = vec![0xA5, 0x5A, 1, 8, 1, 0, 7, 1, 0, 0, 9, 0];
+    agree::reseal(&p, &mut three);
+    assert!(vario::Response::decode(&three).is_ok());
+    assert!(matches!(
+        vario::Response::decode_reply(&three, &read),
+        Err(DecodeError::BadCount {
+            field: "values",
+            found: 3,
+            ..
+        })
+    ));
+    let reply = vario::Response::decode(&three).unwrap().message;
+    assert!(!reply.answers(&read));
 }

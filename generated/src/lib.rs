@@ -26,8 +26,8 @@
 extern crate std;
 
 pub use busspec_runtime::{
-    stream, Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldValue, Message,
-    Protocol, ProtocolVisitor,
+    stream, Broadcast, CommandKind, DecodeError, Decoded, Elements, EncodeError, FieldValue,
+    Message, Protocol, ProtocolVisitor, Repeated,
 };
 
 include!(concat!(env!("OUT_DIR"), "/protocols.rs"));

@@ -189,6 +189,16 @@ fn push_plain(out: &mut Vec<u8>, raw: FieldValue<'_>) {
     match raw {
         FieldValue::Int(v) => push_int(out, v),
         FieldValue::Text(t) => push_text(out, t),
+        FieldValue::List(items) => {
+            out.push(b'[');
+            for (k, v) in items.iter().enumerate() {
+                if k > 0 {
+                    out.push(b',');
+                }
+                push_int(out, v);
+            }
+            out.push(b']');
+        }
     }
 }
 
@@ -204,6 +214,17 @@ fn push_field(
 ) {
     let v = match raw {
         FieldValue::Text(t) => return push_text(out, t),
+        FieldValue::List(items) => {
+            out.push(b'[');
+            for (k, v) in items.iter().enumerate() {
+                if k > 0 {
+                    out.push(b',');
+                }
+                push_field(out, p, decimals, f, bit, FieldValue::Int(v));
+            }
+            out.push(b']');
+            return;
+        }
         FieldValue::Int(v) => v,
     };
     let physical = |out: &mut Vec<u8>, u: usize, unit| {
@@ -449,6 +470,7 @@ impl Printer {
         let (given, text) = (&mut self.given, &mut self.text);
         given.clear();
         text.clear();
+        let mut list = false;
         message.visit(|name, raw| {
             let v = match raw {
                 FieldValue::Int(i) => Given::Int(i),
@@ -457,9 +479,20 @@ impl Printer {
                     text.extend_from_slice(t);
                     Given::Text(from..text.len())
                 }
+                FieldValue::List(_) => {
+                    list = true;
+                    return;
+                }
             };
             given.push((name, v));
         });
+        if list {
+            // A repeated field's list: the reference prints it, as for the interpreter's frames.
+            return crate::message_line(p, direction, address, message, offset).map(|line| {
+                out.extend_from_slice(line.as_bytes());
+                out.push(b'\n');
+            });
+        }
         let as_field = |g: &Given| match g {
             Given::Int(i) => FieldValue::Int(*i),
             Given::Text(r) => FieldValue::Text(text.get(r.clone()).unwrap_or_default()),

@@ -3,9 +3,9 @@
 use std::collections::BTreeMap;
 
 use busspec_model::interp::{self, EncodeError, Raw, Value};
-use busspec_model::ir::{BitField, Direction, Field, Message, MessageRef, Unit};
+use busspec_model::ir::{BitField, Count, Direction, Field, Follows, Message, MessageRef, Unit};
 use busspec_model::rational::Rational;
-use busspec_runtime::{Decoded, FieldError, FieldValue, Message as _, Protocol};
+use busspec_runtime::{Decoded, Elements, FieldError, FieldValue, Message as _, Protocol};
 use serde::Deserialize;
 use serde_json::value::RawValue;
 
@@ -50,11 +50,10 @@ impl Parsed {
             self.values
                 .iter()
                 .find(|v| v.name == name)
-                .and_then(|v| match &v.raw {
-                    Raw::Int(i) => Some(FieldValue::Int(*i)),
-                    Raw::Text(t) => Some(FieldValue::Text(t)),
-                    // Generated codecs have no repeated fields yet (`Protocol::generator_gaps`).
-                    Raw::List(_) => None,
+                .map(|v| match &v.raw {
+                    Raw::Int(i) => FieldValue::Int(*i),
+                    Raw::Text(t) => FieldValue::Text(t),
+                    Raw::List(l) => FieldValue::List(Elements::I64(l)),
                 })
         };
         let typed = match direction {
@@ -88,7 +87,8 @@ fn sign_extend(v: u64, bits: u32) -> i64 {
 
 /// Checks the values `values` gives for constant and repeated fields (and constant sub-fields)
 /// of `m`: each must be what the frame carries, as the interpreter's encoder checks them. A
-/// repeated field repeats the wire word of the field it names.
+/// repeated field repeats the wire word of the field it names; a field following another is
+/// computed from it, and a list's count from the list (typed messages carry none of them).
 fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
     let int = |name: &str| {
         values
@@ -115,11 +115,28 @@ fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
             (1u64 << bits) - 1
         }
     };
+    let counted = m.repeat().and_then(|(rf, r)| {
+        let n = match values.iter().find(|v| v.name == rf.name)?.raw {
+            Raw::List(ref l) => l.len(),
+            _ => return None,
+        };
+        Some(match r.count {
+            Count::Bytes(_) => rf.elements_len(n),
+            Count::Elements(_) | Count::ToEnd => n,
+        } as i64)
+    });
     let mut words: Vec<u64> = Vec::with_capacity(m.fields.len());
-    for f in &m.fields {
+    for (i, f) in m.fields.iter().enumerate() {
         let bits = 8 * f.width as u32;
+        let derived = match &f.follows {
+            Some(Follows::Field(o, rel)) => words.get(*o).map(|&w| rel.apply(w as i64)),
+            _ => counted.filter(|_| m.count_field() == Some(i)),
+        };
         let word = if f.is_ascii() {
             0
+        } else if let Some(expected) = derived {
+            fixed(&f.name, expected)?;
+            expected as u64 & mask(bits)
         } else if let Some(c) = f
             .constant
             .or_else(|| f.equals.and_then(|o| words.get(o).copied()))

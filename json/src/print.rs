@@ -1,8 +1,10 @@
 //! Printing: a frame's JSON line from its message, address and fields (name and raw value).
 
 use busspec_model::interp::{self, Frame, Raw};
-use busspec_model::ir::{BitField, Direction, Field, Leaf, Message as IrMessage, MessageRef, Unit};
-use busspec_runtime::{FieldValue, Message};
+use busspec_model::ir::{
+    BitField, Count, Direction, Field, Follows, Leaf, Message as IrMessage, MessageRef, Unit,
+};
+use busspec_runtime::{Elements, FieldValue, Message};
 
 use crate::{hex, Spec};
 
@@ -85,6 +87,12 @@ fn text_of(bytes: &[u8]) -> String {
 fn field_json(p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue<'_>) -> Json {
     let v = match raw {
         FieldValue::Text(t) => return Json::Str(text_of(t)),
+        FieldValue::List(items) => {
+            let items = items
+                .iter()
+                .map(|i| field_json(p, f, bit, FieldValue::Int(i)));
+            return Json::List(items.collect());
+        }
         FieldValue::Int(v) => v,
     };
     if let Some(b) = bit {
@@ -137,6 +145,7 @@ fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, J
         None => match raw {
             FieldValue::Int(i) => num(i),
             FieldValue::Text(t) => Json::Str(text_of(t)),
+            FieldValue::List(items) => Json::List(items.iter().map(num).collect()),
         },
     };
     (name.to_owned(), json)
@@ -185,13 +194,7 @@ fn frame_fields(p: &Spec, frame: &Frame) -> Vec<(String, Json)> {
             let raw = match &v.raw {
                 Raw::Int(i) => FieldValue::Int(*i),
                 Raw::Text(t) => FieldValue::Text(t),
-                Raw::List(list) => {
-                    let items = list
-                        .iter()
-                        .map(|&i| field(p, m, &v.name, FieldValue::Int(i)).1)
-                        .collect();
-                    return (v.name.clone(), Json::List(items));
-                }
+                Raw::List(list) => FieldValue::List(Elements::I64(list)),
             };
             field(p, m, &v.name, raw)
         })
@@ -276,20 +279,40 @@ pub fn message_line<M: Message>(
             match raw {
                 FieldValue::Int(i) => Owned::Int(i),
                 FieldValue::Text(t) => Owned::Text(t.to_vec()),
+                FieldValue::List(items) => Owned::List(items.iter().collect()),
             },
         ))
     });
     let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
-    // Typed messages leave out what the spec fixes (constants, repeated fields); the contract
-    // prints every leaf of the message, as the frame carries it.
+    // Typed messages leave out what the spec fixes (constants, repeated fields) or what follows
+    // from the rest (a value following another field, a list's count); the contract prints
+    // every leaf of the message, as the frame carries it.
+    let derived = |i: usize| -> Option<Owned> {
+        let f = m.fields.get(i)?;
+        if let Some(Follows::Field(o, rel)) = &f.follows {
+            return match lookup(&m.fields.get(*o)?.name)? {
+                Owned::Int(v) => Some(Owned::Int(rel.apply(*v))),
+                _ => None,
+            };
+        }
+        let (rf, r) = m.repeat().filter(|_| m.count_field() == Some(i))?;
+        let Owned::List(l) = lookup(&rf.name)? else {
+            return None;
+        };
+        let n = match r.count {
+            Count::Bytes(_) => rf.elements_len(l.len()),
+            Count::Elements(_) | Count::ToEnd => l.len(),
+        };
+        Some(Owned::Int(n as i64))
+    };
     let mut fields = Vec::new();
     for leaf in m.leaves() {
         let name = leaf.name();
         let fixed = match leaf {
-            Leaf::Field(_, f) => match (f.constant, f.equals) {
+            Leaf::Field(i, f) => match (f.constant, f.equals) {
                 (Some(c), _) => Some(Owned::Int(c as i64)),
                 (None, Some(i)) => m.fields.get(i).and_then(|e| lookup(&e.name)).cloned(),
-                (None, None) => None,
+                (None, None) => derived(i),
             },
             Leaf::Bits(_, _, b) => b.constant.map(|c| Owned::Int(c as i64)),
         };
@@ -310,6 +333,7 @@ pub fn message_line<M: Message>(
 enum Owned {
     Int(i64),
     Text(Vec<u8>),
+    List(Vec<i64>),
 }
 
 impl Owned {
@@ -317,6 +341,7 @@ impl Owned {
         match self {
             Owned::Int(i) => FieldValue::Int(*i),
             Owned::Text(t) => FieldValue::Text(t),
+            Owned::List(l) => FieldValue::List(Elements::I64(l)),
         }
     }
 }

@@ -8,12 +8,13 @@ use busspec_json::{decode_frame, decode_typed, load_spec, Typed};
 use busspec_model::checksum;
 use busspec_model::interp::{self, write_uint};
 use busspec_protocols::{sd, ub2, FieldValue, Message, Protocol, ProtocolVisitor, PROTOCOLS};
-use busspec_runtime::{FieldError, ValueKind};
+use busspec_runtime::{Elements, FieldError, ValueKind};
 
 #[derive(Debug, Clone, PartialEq)]
 enum Owned {
     Int(i64),
     Text(Vec<u8>),
+    List(Vec<i64>),
 }
 
 impl Owned {
@@ -21,6 +22,7 @@ impl Owned {
         match v {
             FieldValue::Int(i) => Owned::Int(i),
             FieldValue::Text(t) => Owned::Text(t.to_vec()),
+            FieldValue::List(items) => Owned::List(items.iter().collect()),
         }
     }
 
@@ -28,6 +30,7 @@ impl Owned {
         match self {
             Owned::Int(i) => FieldValue::Int(*i),
             Owned::Text(t) => FieldValue::Text(t),
+            Owned::List(l) => FieldValue::List(Elements::I64(l)),
         }
     }
 }

@@ -910,19 +910,7 @@ fn check_sync(p: &Protocol, at: Option<usize>, wire: &[u8]) -> Result<(), Decode
 /// protocol with a length field has its length field at the same offset and counts the same
 /// parts; only the payload varies, so the value follows from the frame's length).
 pub fn length_for(p: &Protocol, d: Direction, len: usize) -> Option<i64> {
-    let l = p.framing.length.as_ref()?;
-    let code_len = p
-        .framing
-        .direction(d)
-        .code_lengths
-        .first()
-        .copied()
-        .unwrap_or(0);
-    let head = p.framing.head(code_len);
-    let payload = len.checked_sub(head.len)?;
-    Some(crate::validate::length_value(
-        &p.framing, l, code_len, payload,
-    ))
+    p.framing.length_rule(d)?.value(len)
 }
 
 /// Refuses a frame whose length field disagrees with its length.
@@ -931,24 +919,12 @@ fn check_length_field(
     directions: &[Direction],
     wire: &[u8],
 ) -> Result<(), DecodeError> {
-    let Some(l) = &p.framing.length else {
+    let Some(rule) = directions.first().and_then(|d| p.framing.length_rule(*d)) else {
         return Ok(());
     };
-    let Some(d) = directions.first() else {
-        return Ok(());
-    };
-    let code_len = p
-        .framing
-        .direction(*d)
-        .code_lengths
-        .first()
-        .copied()
-        .unwrap_or(0);
-    let Some(at) = p.framing.head(code_len).length else {
-        return Ok(());
-    };
-    let found = read_uint(wire.get(at..at + l.width).unwrap_or(&[]), p.byte_order) as i64;
-    let expected = length_for(p, *d, wire.len()).unwrap_or(-1);
+    let at = rule.at;
+    let found = read_uint(wire.get(at..at + rule.width).unwrap_or(&[]), p.byte_order) as i64;
+    let expected = rule.value(wire.len()).unwrap_or(-1);
     if found != expected {
         return Err(DecodeError::LengthMismatch {
             offset: at,

@@ -77,6 +77,34 @@ pub struct LengthField {
     pub adjust: i64,
 }
 
+/// The length field of the frames of one direction, resolved ([`Framing::length_rule`]): at
+/// `at`, `width` bytes, holding the frame's length plus `k` where it counts the payload
+/// (`grows`), else `k` alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LengthRule {
+    pub at: usize,
+    pub width: usize,
+    pub grows: bool,
+    pub k: i64,
+    /// The length of a frame with an empty payload: no frame is shorter.
+    pub head_len: usize,
+}
+
+impl LengthRule {
+    /// The value the length field of a frame of `len` bytes holds (`None` for a frame shorter
+    /// than any).
+    pub fn value(&self, len: usize) -> Option<i64> {
+        if len < self.head_len {
+            return None;
+        }
+        Some(if self.grows {
+            len as i64 + self.k
+        } else {
+            self.k
+        })
+    }
+}
+
 /// The longest code a frame can have, in bytes.
 pub const MAX_CODE_LEN: usize = 4;
 
@@ -116,6 +144,27 @@ impl Framing {
                 Part::Code | Part::Payload => 0,
             })
             .sum()
+    }
+
+    /// Where the length field of a frame of direction `d` sits and how its value follows from
+    /// the frame's length, if the framing has one: the one derivation the interpreter
+    /// ([`crate::interp::length_for`]) and the generated code (its check in `decode`, its value
+    /// in `encode`) share. Every message of a direction has the field at the same offset (its
+    /// code lengths are one, validated) and only the payload varies.
+    pub fn length_rule(&self, d: Direction) -> Option<LengthRule> {
+        let l = self.length.as_ref()?;
+        let code_len = self.direction(d).code_lengths.first().copied().unwrap_or(0);
+        let head = self.head(code_len);
+        let at = head.length?;
+        let base = crate::validate::length_value(self, l, code_len, 0);
+        let grows = l.counts.contains(&Part::Payload);
+        Some(LengthRule {
+            at,
+            width: l.width,
+            grows,
+            k: if grows { base - head.len as i64 } else { base },
+            head_len: head.len,
+        })
     }
 
     pub fn direction(&self, d: Direction) -> &DirectionFraming {
@@ -307,6 +356,48 @@ impl Message {
     /// Whether its frames vary in length.
     pub fn is_variable(&self) -> bool {
         self.repeat().is_some()
+    }
+
+    /// The field (index) that counts the elements or bytes of the repeated field, if any.
+    pub fn count_field(&self) -> Option<usize> {
+        match self.repeat()?.1.count {
+            Count::Elements(i) | Count::Bytes(i) => Some(i),
+            Count::ToEnd => None,
+        }
+    }
+
+    /// Whether field `i` is filled in from the rest of the frame: a constant, a repeat of
+    /// another field (`equals`), a value following another field of the frame, or the count of
+    /// the repeated field (the list's length gives it). Encoders compute it, decoders check
+    /// it, and generated messages do not carry it.
+    pub fn is_derived(&self, i: usize) -> bool {
+        self.fields.get(i).is_some_and(|f| {
+            f.constant.is_some()
+                || f.equals.is_some()
+                || matches!(f.follows, Some(Follows::Field(..)))
+                || self.count_field() == Some(i)
+        })
+    }
+
+    /// The frame lengths a stream decoder lists for this message beforehand: its length, or
+    /// for a repeat to the end of the frame without a length field every length a whole number
+    /// of elements gives; none where a length or count field gives each frame's length (the
+    /// stream decoder reads it from the frame).
+    pub fn listed_lengths(&self, framing: &Framing) -> Vec<usize> {
+        let Some((f, r)) = self.repeat() else {
+            return vec![self.layout.len];
+        };
+        if framing.length.is_some() || r.count != Count::ToEnd {
+            return Vec::new();
+        }
+        let step = if f.ty == FieldType::Bit {
+            1
+        } else {
+            f.width.max(1)
+        };
+        (self.layout.len..=self.max_len)
+            .filter(|l| (l - self.layout.len) % step == 0)
+            .collect()
     }
 
     /// The code as written in the spec: `0x2000`.
@@ -516,18 +607,33 @@ pub struct Erratum {
 
 impl Protocol {
     /// What the code generator cannot emit yet, one line each (empty: it can emit all of it).
-    /// Generated code stays fixed-length: it emits sync sequences, every checksum and its
-    /// coverage, 24-bit integers, a length field (constant per message, checked against the
-    /// frame's length), values that follow another field or the request, and codes derived from
-    /// the request's (each such response has its own constant code), code-less messages (told
-    /// apart by length and request); a spec with repeated fields (variable-length frames) is
-    /// served by the interpreter (`--spec`) until the generator learns them.
+    /// It emits every construct of the language: sync sequences, every checksum and its
+    /// coverage, 24-bit integers, a length field, values that follow another field or the
+    /// request, codes derived from the request's, code-less messages and repeated fields
+    /// (variable-length frames). It refuses, by name, repeats to the end of the frame without a
+    /// length field whose frame lengths (every whole number of elements) would make more than
+    /// [`crate::validate::MAX_DISTINCT_LENGTHS`] in all: its stream decoder lists such lengths
+    /// beforehand. The interpreter (`--spec`) serves those.
     pub fn generator_gaps(&self) -> Vec<String> {
         let mut gaps = Vec::new();
-        for m in self.commands.iter().chain(&self.responses) {
-            for x in &m.fields {
-                if x.repeat.is_some() {
-                    gaps.push(format!("`{}.{}`: a repeated field", m.name, x.name));
+        let mut lengths: Vec<usize> = self
+            .commands
+            .iter()
+            .chain(&self.responses)
+            .flat_map(|m| m.listed_lengths(&self.framing))
+            .collect();
+        lengths.sort_unstable();
+        lengths.dedup();
+        let max = crate::validate::MAX_DISTINCT_LENGTHS;
+        if lengths.len() > max {
+            for m in self.commands.iter().chain(&self.responses) {
+                if m.listed_lengths(&self.framing).len() > 1 {
+                    let f = m.repeat().map_or("", |(f, _)| f.name.as_str());
+                    gaps.push(format!(
+                        "`{}.{f}`: a repeat to the end of the frame without a length field (the frame lengths to list, {} in all, are more than the {max} the generated stream decoder tracks)",
+                        m.name,
+                        lengths.len()
+                    ));
                 }
             }
         }

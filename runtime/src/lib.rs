@@ -24,9 +24,11 @@ pub use crc;
 
 pub mod codec;
 mod protocol;
+mod repeated;
 pub mod stream;
 
 pub use protocol::{Message, Protocol, ProtocolVisitor};
+pub use repeated::{Bits, CapacityError, Element, Repeated};
 
 use core::fmt;
 
@@ -72,6 +74,66 @@ pub struct Broadcast {
 pub enum FieldValue<'a> {
     Int(i64),
     Text(&'a [u8]),
+    /// A repeated field's elements, borrowed from the message (or the caller).
+    List(Elements<'a>),
+}
+
+/// The elements of a repeated field, as the message holds them: a slice of its element type
+/// (`I64` for callers holding raw values, as the interpreter does), or bits packed eight to a
+/// byte, least significant first (`len` of them; the padding bits are zero).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Elements<'a> {
+    U8(&'a [u8]),
+    I8(&'a [i8]),
+    U16(&'a [u16]),
+    I16(&'a [i16]),
+    U32(&'a [u32]),
+    I32(&'a [i32]),
+    I64(&'a [i64]),
+    Bits { packed: &'a [u8], len: usize },
+}
+
+impl Elements<'_> {
+    /// How many elements.
+    pub fn len(&self) -> usize {
+        match self {
+            Elements::U8(s) => s.len(),
+            Elements::I8(s) => s.len(),
+            Elements::U16(s) => s.len(),
+            Elements::I16(s) => s.len(),
+            Elements::U32(s) => s.len(),
+            Elements::I32(s) => s.len(),
+            Elements::I64(s) => s.len(),
+            Elements::Bits { len, .. } => *len,
+        }
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Element `i` as a raw value (sign-extended; a bit as 0 or 1).
+    pub fn get(&self, i: usize) -> Option<i64> {
+        match self {
+            Elements::U8(s) => s.get(i).map(|&v| i64::from(v)),
+            Elements::I8(s) => s.get(i).map(|&v| i64::from(v)),
+            Elements::U16(s) => s.get(i).map(|&v| i64::from(v)),
+            Elements::I16(s) => s.get(i).map(|&v| i64::from(v)),
+            Elements::U32(s) => s.get(i).map(|&v| i64::from(v)),
+            Elements::I32(s) => s.get(i).map(|&v| i64::from(v)),
+            Elements::I64(s) => s.get(i).copied(),
+            Elements::Bits { packed, len } if i < *len => {
+                packed.get(i / 8).map(|b| i64::from(b >> (i % 8) & 1))
+            }
+            Elements::Bits { .. } => None,
+        }
+    }
+
+    /// The elements as raw values, in order.
+    pub fn iter(&self) -> impl Iterator<Item = i64> + '_ {
+        (0..self.len()).filter_map(move |i| self.get(i))
+    }
 }
 
 /// Which kind of [`FieldValue`] a field takes.
@@ -81,6 +143,8 @@ pub enum ValueKind {
     Int,
     /// [`FieldValue::Text`]: an ASCII field.
     Text,
+    /// [`FieldValue::List`]: a repeated field.
+    List,
 }
 
 /// Why a message could not be built from field values ([`Message::from_fields`]), and where.
@@ -106,7 +170,15 @@ pub enum FieldError {
         expected: usize,
         found: usize,
     },
-    /// Text for a number field, or a number for an ASCII field; the field takes `expected`.
+    /// More elements than the repeated field holds (the spec's `max`).
+    TooMany {
+        field: &'static str,
+        found: usize,
+        max: usize,
+    },
+    /// A value of the wrong kind (text for a number field, a number for an ASCII field, a
+    /// list for either, or anything but a list for a repeated field); the field takes
+    /// `expected`.
     WrongKind {
         field: &'static str,
         expected: ValueKind,
@@ -143,6 +215,13 @@ impl fmt::Display for FieldError {
                 field,
                 expected: ValueKind::Text,
             } => write!(f, "{field} takes text"),
+            FieldError::WrongKind {
+                field,
+                expected: ValueKind::List,
+            } => write!(f, "{field} takes a list of numbers"),
+            FieldError::TooMany { field, found, max } => {
+                write!(f, "{field} holds at most {max} elements, got {found}")
+            }
         }
     }
 }
@@ -167,7 +246,7 @@ pub fn field_int(
             min,
             max,
         }),
-        Some(FieldValue::Text(_)) => Err(FieldError::WrongKind {
+        Some(FieldValue::Text(_) | FieldValue::List(_)) => Err(FieldError::WrongKind {
             field,
             expected: ValueKind::Int,
         }),
@@ -189,7 +268,7 @@ pub fn field_text<const N: usize>(
             expected: N,
             found: text.len(),
         }),
-        Some(FieldValue::Int(_)) => Err(FieldError::WrongKind {
+        Some(FieldValue::Int(_) | FieldValue::List(_)) => Err(FieldError::WrongKind {
             field,
             expected: ValueKind::Text,
         }),
@@ -252,6 +331,16 @@ pub enum DecodeError {
         message: &'static str,
         code: u32,
         address: u8,
+    },
+    /// The repeated field `field`, whose elements start at `offset`, cannot have what this
+    /// frame gives it: `found` elements by its count field that the frame's length disagrees
+    /// with, bytes that are not a whole number of elements, or a count outside `min..=max`.
+    BadCount {
+        field: &'static str,
+        offset: usize,
+        found: i64,
+        min: usize,
+        max: usize,
     },
 }
 
@@ -354,6 +443,16 @@ impl fmt::Display for DecodeError {
                     ") does not accept the broadcast address 0x{address:02X}"
                 )
             }
+            DecodeError::BadCount {
+                field,
+                offset,
+                found,
+                min,
+                max,
+            } => write!(
+                f,
+                "{field} at offset {offset}: {found} does not give {min}..={max} elements that fill the frame"
+            ),
         }
     }
 }

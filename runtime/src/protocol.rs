@@ -8,7 +8,7 @@
 use core::fmt::Debug;
 use core::ops::RangeInclusive;
 
-use crate::stream::Candidates;
+use crate::stream::{Candidates, VarLens};
 use crate::{Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldError, FieldValue};
 
 /// One message type of a protocol (its `Request` or its `Response`): every variant is one
@@ -126,6 +126,27 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     /// rule. The address is not looked at: strict decoding judges it, and a frame from an
     /// address the spec does not allow is reported as out of spec, not skipped.
     fn candidates(head: &[u8]) -> Candidates;
+
+    /// The variable-length messages (a length field or a repeated field's count gives their
+    /// length, so [`Self::FRAME_LENGTHS`] does not list it) whose start byte and code agree
+    /// with `head`: for each direction, the length of the frame the head's length or count
+    /// field gives ([`VarLen::of`](crate::stream::VarLen::of) of [`crate::codec::RepeatAt::frame_len`] or
+    /// [`crate::stream::LengthField::frame_len`]), [`VarLen::NEED_MORE`](crate::stream::VarLen::NEED_MORE) while that field
+    /// has not been buffered, [`VarLen::NONE`](crate::stream::VarLen::NONE) if no such message agrees or the field gives a
+    /// length none of them can have (the decoder then drops the head byte unless a fixed-length
+    /// candidate is a frame: resynchronisation).
+    ///
+    /// At most one per direction: where several variable-length messages of one direction
+    /// agree with a head, their length must come from the same field (a length field does), or
+    /// the protocol lists those lengths in [`Self::FRAME_LENGTHS`] instead (so must a repeat
+    /// to the end of the frame without a length field: every whole number of elements is a
+    /// length). The default, for protocols whose every frame length is in
+    /// [`Self::FRAME_LENGTHS`], is [`VarLens::NONE`]; it costs the decoder nothing.
+    #[inline]
+    fn variable_candidates(head: &[u8]) -> VarLens {
+        let _ = head;
+        VarLens::NONE
+    }
 }
 
 /// Something to do with a protocol chosen at run time, by name: see each protocols crate's

@@ -16,8 +16,13 @@
 //! address the spec does not allow is still a frame on the wire, and a sniffer must see it.
 //! No candidate: the byte is noise; it is dropped and the next one tried, and consecutive
 //! dropped bytes are reported as one [`Event::Skipped`] (split every [`MAX_SKIPPED_RUN`]
-//! bytes). While a candidate is longer than what is buffered, the decoder waits. Then every
-//! complete candidate length is tried, **longest first**; the first that checksums and decodes
+//! bytes). A candidate's length is fixed by its message (one of
+//! [`Protocol::FRAME_LENGTHS`]) or, for a variable-length message, given by its length or count
+//! field once that is buffered ([`Protocol::variable_candidates`]); a field that gives a length
+//! no frame of the message can have makes it no candidate, so a length that lies drops one
+//! byte and the decoder resynchronises. While a candidate is longer than what is buffered, or
+//! its length or count field has not arrived, the decoder waits. Then every complete candidate
+//! length is tried, **longest first**; the first that checksums and decodes
 //! strictly (ranges, address and broadcast rules included) is the frame. If none does, the
 //! longest that checksums and fails *only* a rule of the spec (its error is one that
 //! [`breaks_spec`] names: a value out of its range, an address outside the allowed ones, a
@@ -59,8 +64,133 @@ pub struct Candidates {
     pub responses: u64,
 }
 
-/// What the decoder found. Offsets count bytes from the first byte ever pushed.
+/// The length of a variable-length frame (one whose length a length field or a repeated
+/// field's count gives, so [`Protocol::FRAME_LENGTHS`] does not list it) that could start at
+/// the head of the buffer, for one direction: see [`Protocol::variable_candidates`].
+///
+/// A `u32` with two reserved values rather than an `Option<Option<usize>>`: it costs one
+/// register, and [`VarLens::NONE`] is one compare against zero on the decoder's path for
+/// protocols without variable frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct VarLen(u32);
+
+impl VarLen {
+    /// No variable-length candidate: no such message agrees with the head, or its length or
+    /// count field says a length no frame of it can have (the `Some(0)` of
+    /// [`crate::codec::RepeatAt::frame_len`] and [`LengthField::frame_len`]).
+    pub const NONE: VarLen = VarLen(0);
+    /// A variable-length message agrees with the head but its length or count field has not
+    /// been buffered yet: the decoder waits for more bytes (unless it is settling what is
+    /// buffered, when the candidate counts for nothing).
+    pub const NEED_MORE: VarLen = VarLen(u32::MAX);
+
+    /// A frame of `len` bytes (0: [`Self::NONE`]). A length the decoder's buffer cannot hold
+    /// (beyond [`Protocol::MAX_FRAME_LEN`]) is never complete, so it never becomes a frame: the
+    /// head byte is then dropped as noise once the buffer is full or settled.
+    #[inline]
+    pub const fn len(len: usize) -> VarLen {
+        if len >= u32::MAX as usize {
+            VarLen(u32::MAX - 1)
+        } else {
+            VarLen(len as u32)
+        }
+    }
+
+    /// From the answer of [`crate::codec::RepeatAt::frame_len`] or [`LengthField::frame_len`]:
+    /// `None` (the field not yet buffered) is [`Self::NEED_MORE`], `Some(0)` (a length no
+    /// frame of the message has) is [`Self::NONE`], `Some(n)` a frame of `n` bytes.
+    #[inline]
+    pub const fn of(frame_len: Option<usize>) -> VarLen {
+        match frame_len {
+            Some(n) => VarLen::len(n),
+            None => VarLen::NEED_MORE,
+        }
+    }
+
+    /// The candidate's length, once known (`None` for [`Self::NONE`] and [`Self::NEED_MORE`]).
+    #[inline]
+    pub const fn get(self) -> Option<usize> {
+        match self.0 {
+            0 | u32::MAX => None,
+            n => Some(n as usize),
+        }
+    }
+
+    /// Whether the decoder must wait for the candidate's length or count field.
+    #[inline]
+    pub const fn needs_more(self) -> bool {
+        self.0 == u32::MAX
+    }
+
+    /// Whether there is no variable-length candidate.
+    #[inline]
+    pub const fn is_none(self) -> bool {
+        self.0 == 0
+    }
+}
+
+/// The variable-length candidates at the head of the buffer: at most one per direction
+/// ([`Protocol::variable_candidates`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct VarLens {
+    pub requests: VarLen,
+    pub responses: VarLen,
+}
+
+impl VarLens {
+    /// Neither direction has one: what every protocol without variable-length frames says.
+    pub const NONE: VarLens = VarLens {
+        requests: VarLen::NONE,
+        responses: VarLen::NONE,
+    };
+}
+
+/// A frame's length field, as the stream decoder reads it from the bytes buffered from a
+/// possible frame start: where it sits and what a frame's length is from its value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LengthField {
+    /// Its offset in the frame.
+    pub at: usize,
+    /// Its width, bytes (1 or 2).
+    pub width: usize,
+    /// Least significant byte first.
+    pub le: bool,
+    /// The frame's length less the field's value: the bytes the field does not count, less
+    /// its adjustment (may be negative).
+    pub excess: isize,
+    /// The shortest and longest frame the messages that agree with the head can have.
+    pub min: usize,
+    pub max: usize,
+}
+
+impl LengthField {
+    /// The length of the frame that starts `head`, once its length field has arrived (`None`
+    /// before); a value that gives a length outside `min..=max` gives `Some(0)`, which no frame
+    /// has: the stream decoder then drops a byte and resynchronises. Feed it to [`VarLen::of`].
+    #[inline]
+    pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        let b = head.get(self.at..self.at.checked_add(self.width)?)?;
+        let fold = |a: usize, b: &u8| (a << 8) | usize::from(*b);
+        let v = if self.le {
+            b.iter().rev().fold(0, fold)
+        } else {
+            b.iter().fold(0, fold)
+        };
+        let len = isize::try_from(v)
+            .ok()
+            .and_then(|v| v.checked_add(self.excess))
+            .and_then(|l| usize::try_from(l).ok())
+            .filter(|l| (self.min..=self.max).contains(l));
+        Some(len.unwrap_or(0))
+    }
+}
+
+/// What the decoder found. Offsets count bytes from the first byte ever pushed.
+///
+/// `repr(u8)`: every variant then has its offset and length at the same place, so
+/// [`Event::offset`] and [`Event::len`] are one load each rather than a jump on the variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Event<Q, R> {
     /// A request frame of `len` bytes at `offset`.
     Request {
@@ -146,8 +276,9 @@ pub struct StreamDecoder<C: Protocol> {
 struct Core<C: Protocol> {
     /// Stream offset of the first unsettled byte.
     head: u64,
-    requests: bool,
-    responses: bool,
+    /// All ones for a decoded direction, zero for the other: masks the candidates.
+    requests: u64,
+    responses: u64,
     last_request: Option<C::Request>,
     default_request: Option<C::Request>,
     noise_at: u64,
@@ -170,8 +301,16 @@ impl<C: Protocol> StreamDecoder<C> {
             len: 0,
             core: Core {
                 head: 0,
-                requests: direction != Some(Direction::Response),
-                responses: direction != Some(Direction::Request),
+                requests: if direction == Some(Direction::Response) {
+                    0
+                } else {
+                    u64::MAX
+                },
+                responses: if direction == Some(Direction::Request) {
+                    0
+                } else {
+                    u64::MAX
+                },
                 last_request: None,
                 default_request: None,
                 noise_at: 0,
@@ -231,8 +370,8 @@ impl<C: Protocol> StreamDecoder<C> {
 
     fn step(&mut self, flushing: bool) -> Option<Event<C::Request, C::Response>> {
         loop {
-            if let Some(ev) = self.core.pending.take() {
-                return Some(ev);
+            if self.core.pending.is_some() {
+                return self.core.pending.take();
             }
             if self.len == 0 {
                 return if flushing {
@@ -243,13 +382,22 @@ impl<C: Protocol> StreamDecoder<C> {
             }
             // A full buffer cannot wait for more (only a buffer shorter than the longest frame,
             // which no protocol module declares, fills up while waiting): settle what is there.
-            let (n, ev) = self.core.advance(
+            let step = self.core.advance(
                 &self.buf.as_ref()[..self.len],
                 flushing || self.len == self.buf.as_ref().len(),
-            )?;
-            self.consume(n);
-            if ev.is_some() {
-                return ev;
+            );
+            match step {
+                Step::Wait => return None,
+                Step::Frame(n, found) => {
+                    self.consume(n);
+                    return Some(self.core.frame_event(n, found));
+                }
+                Step::Settled(n) => {
+                    self.consume(n);
+                    if let Some(ev) = self.core.report() {
+                        return Some(ev);
+                    }
+                }
             }
         }
     }
@@ -261,103 +409,164 @@ impl<C: Protocol> StreamDecoder<C> {
     }
 }
 
-/// What one application of the framing rule settled: that many bytes, and the event to report.
-type Settled<C> = (
-    usize,
-    Option<Event<<C as Protocol>::Request, <C as Protocol>::Response>>,
-);
+/// What a frame decoded as, before it becomes an [`Event`]: small, so it travels in registers
+/// and the event is written once, where the caller returns it.
+enum Found<Q, R> {
+    Request(Decoded<Q>),
+    Response(Decoded<R>),
+    Ambiguous(u32),
+}
+
+/// What one application of the framing rule did.
+enum Step<Q, R> {
+    /// A candidate is longer than the window and more bytes may come.
+    Wait,
+    /// A frame of that many bytes (already settled: `head` is past it).
+    Frame(usize, Found<Q, R>),
+    /// That many bytes settled with what they report, if anything, left to
+    /// [`Core::report`]: a byte of noise, or an out-of-spec frame (in `pending`).
+    Settled(usize),
+}
 
 impl<C: Protocol> Core<C> {
     /// Applies the framing rule once to `window`, the unsettled bytes from `head` on (only the
-    /// first `MAX_FRAME_LEN` matter, and all of them are there unless the window ends the buffered bytes):
-    /// `None` when a candidate is longer than the window and more bytes may come; otherwise how
-    /// many bytes it settled (a frame, or one byte of noise) and the event to report, if any.
-    fn advance(&mut self, window: &[u8], flushing: bool) -> Option<Settled<C>> {
+    /// first `MAX_FRAME_LEN` matter, and all of them are there unless the window ends the
+    /// buffered bytes; `flushing`: no more will come before a decision).
+    #[inline(always)]
+    fn advance(&mut self, window: &[u8], flushing: bool) -> Step<C::Request, C::Response> {
         let c = C::candidates(window);
-        let requests = if self.requests { c.requests } else { 0 };
-        let responses = if self.responses { c.responses } else { 0 };
+        let v = C::variable_candidates(window);
+        let requests = c.requests & self.requests;
+        let responses = c.responses & self.responses;
+        let var_q = if self.requests != 0 {
+            v.requests
+        } else {
+            VarLen::NONE
+        };
+        let var_r = if self.responses != 0 {
+            v.responses
+        } else {
+            VarLen::NONE
+        };
         let live = requests | responses;
-        if live != 0 {
+        if live != 0 || !var_q.is_none() || !var_r.is_none() {
             // Bit i is LENGTHS[i], longest first: a live candidate longer than the window is
-            // one whose bit lies below the first length that fits.
-            let fits = C::FRAME_LENGTHS
-                .iter()
-                .position(|&l| l <= window.len())
-                .unwrap_or(64);
-            let longer = if fits >= 64 {
-                u64::MAX
+            // one whose bit lies below the first length that fits (none when the longest does,
+            // as in every whole window).
+            let longer = if C::FRAME_LENGTHS
+                .first()
+                .map_or(true, |&l| l <= window.len())
+            {
+                0
             } else {
-                (1u64 << fits) - 1
+                let fits = C::FRAME_LENGTHS
+                    .iter()
+                    .position(|&l| l <= window.len())
+                    .unwrap_or(64);
+                if fits >= 64 {
+                    u64::MAX
+                } else {
+                    (1u64 << fits) - 1
+                }
             };
-            if !flushing && live & longer != 0 {
-                return None;
+            // A variable-length candidate whose length is known and complete; one still
+            // waiting for its length or count field, or longer than the window, waits.
+            let complete = |v: VarLen| v.get().filter(|&l| l <= window.len()).unwrap_or(0);
+            let (mut lq, mut lr) = (complete(var_q), complete(var_r));
+            let waits = |v: VarLen| v.needs_more() || v.get().is_some_and(|l| l > window.len());
+            if !flushing && (live & longer != 0 || waits(var_q) || waits(var_r)) {
+                return Step::Wait;
             }
             let mut rest = live & !longer;
             // The longest length that checksums and breaks only a rule of the spec, and why:
             // reported if no length is a frame.
             let mut out_of_spec: Option<(usize, DecodeError)> = None;
-            while rest != 0 {
+            loop {
+                // The next length, longest first: the fixed ones of the mask and the variable
+                // ones, each length tried once with every direction that has it.
                 let i = rest.trailing_zeros() as usize;
-                rest &= rest - 1;
-                let Some(&len) = C::FRAME_LENGTHS.get(i) else {
+                let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
+                let len = fixed.max(lq).max(lr);
+                let Some(frame) = window.get(..len).filter(|_| len > 0) else {
                     break;
                 };
-                let Some(frame) = window.get(..len) else {
-                    break;
-                };
-                let bit = 1u64 << i;
-                match self.try_frame(frame, requests & bit != 0, responses & bit != 0) {
-                    Ok(ev) => return Some(self.settle(len, ev)),
-                    Err(Some(reason)) if out_of_spec.is_none() => {
-                        out_of_spec = Some((len, reason));
-                    }
-                    Err(_) => {}
+                let bit = if fixed == len { 1u64 << i } else { 0 };
+                rest &= !bit;
+                let request = requests & bit != 0 || lq == len;
+                let response = responses & bit != 0 || lr == len;
+                if lq == len {
+                    lq = 0;
+                }
+                if lr == len {
+                    lr = 0;
+                }
+                if let Some(found) = self.try_frame(frame, request, response, &mut out_of_spec) {
+                    self.head += len as u64;
+                    return Step::Frame(len, found);
                 }
             }
             if let Some((len, reason)) = out_of_spec {
                 self.last_request = None;
-                let ev = Event::OutOfSpec {
+                self.pending = Some(Event::OutOfSpec {
                     offset: self.head,
                     len,
                     reason,
-                };
-                return Some(self.settle(len, ev));
+                });
+                self.head += len as u64;
+                return Step::Settled(len);
             }
         }
         // The head byte starts no frame.
-        if self.noise_len == 0 {
-            self.noise_at = self.head;
-        }
-        self.noise_len += 1;
-        self.head += 1;
-        if self.noise_len >= MAX_SKIPPED_RUN {
-            return Some((1, self.take_noise()));
-        }
-        Some((1, None))
+        self.noise_byte();
+        Step::Settled(1)
     }
 
-    /// Reports `ev`, a frame of `len` bytes at `head`, after any noise before it.
-    fn settle(&mut self, len: usize, ev: Event<C::Request, C::Response>) -> Settled<C> {
-        self.head += len as u64;
+    /// The event of a frame of `len` bytes that [`Self::advance`] found and settled, after any
+    /// noise before it (then the frame waits in `pending`).
+    #[inline(always)]
+    fn frame_event(
+        &mut self,
+        len: usize,
+        found: Found<C::Request, C::Response>,
+    ) -> Event<C::Request, C::Response> {
+        let offset = self.head - len as u64;
+        let ev = match found {
+            Found::Request(frame) => Event::Request { offset, len, frame },
+            Found::Response(frame) => Event::Response { offset, len, frame },
+            Found::Ambiguous(code) => Event::Ambiguous { offset, len, code },
+        };
         if self.noise_len > 0 {
             self.pending = Some(ev);
-            return (len, self.take_noise());
+            return Event::Skipped {
+                offset: self.noise_at,
+                len: core::mem::take(&mut self.noise_len),
+            };
         }
-        (len, Some(ev))
+        ev
     }
 
-    /// The event for `frame` (the bytes at `head`) if it is a frame; otherwise `Err` with the
-    /// reason if it breaks only a rule of the spec ([`breaks_spec`]: the request's error where
-    /// both directions are candidates, as the interpreter tries requests first), `Err(None)`
-    /// if it is no frame at all.
+    /// What bytes settled as [`Step::Settled`] report: a run of noise once it is
+    /// [`MAX_SKIPPED_RUN`] long or a frame follows it, then the frame in `pending`.
+    #[inline(always)]
+    fn report(&mut self) -> Option<Event<C::Request, C::Response>> {
+        if self.noise_len >= MAX_SKIPPED_RUN || (self.noise_len > 0 && self.pending.is_some()) {
+            return self.take_noise();
+        }
+        self.pending.take()
+    }
+
+    /// What `frame` (the bytes at `head`) is if it is a frame (pairing updated); otherwise
+    /// `None`, and if it breaks only a rule of the spec ([`breaks_spec`]: the request's error
+    /// where both directions are candidates, as the interpreter tries requests first) and no
+    /// longer length did, its length and the reason in `out_of_spec`.
+    #[inline(always)]
     fn try_frame(
         &mut self,
         frame: &[u8],
         request: bool,
         response: bool,
-    ) -> Result<Event<C::Request, C::Response>, Option<DecodeError>> {
-        let offset = self.head;
-        let len = frame.len();
+        out_of_spec: &mut Option<(usize, DecodeError)>,
+    ) -> Option<Found<C::Request, C::Response>> {
         let mut why: Option<DecodeError> = None;
         let as_request = if request {
             match C::decode_request(frame) {
@@ -371,15 +580,9 @@ impl<C: Protocol> Core<C> {
             None
         };
         let as_response = if response {
-            match C::decode_response_for(frame, None) {
+            match self.response(frame) {
                 Ok(d) => Some(Ok(d)),
-                Err(DecodeError::Ambiguous { code }) => {
-                    let by = self.last_request.or(self.default_request);
-                    match by.map(|r| C::decode_response_for(frame, Some(&r))) {
-                        Some(Ok(d)) => Some(Ok(d)),
-                        _ => Some(Err(code)),
-                    }
-                }
+                Err(DecodeError::Ambiguous { code }) => Some(Err(code)),
                 Err(e) => {
                     why.get_or_insert(e);
                     None
@@ -388,29 +591,136 @@ impl<C: Protocol> Core<C> {
         } else {
             None
         };
-        let ev = match (as_request, as_response) {
+        let found = match (as_request, as_response) {
             (Some(frame), None) => {
                 self.last_request = Some(frame.message);
-                Event::Request { offset, len, frame }
+                Found::Request(frame)
             }
             (None, Some(Ok(frame))) => {
                 self.last_request = None;
-                Event::Response { offset, len, frame }
+                Found::Response(frame)
             }
             (None, Some(Err(code))) => {
                 self.last_request = None;
-                Event::Ambiguous { offset, len, code }
+                Found::Ambiguous(code)
             }
             (Some(_), Some(_)) => {
                 self.last_request = None;
                 let code = frame
                     .iter()
                     .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
-                Event::Ambiguous { offset, len, code }
+                Found::Ambiguous(code)
             }
-            (None, None) => return Err(why.filter(breaks_spec)),
+            (None, None) => {
+                if out_of_spec.is_none() {
+                    if let Some(e) = why.filter(breaks_spec) {
+                        *out_of_spec = Some((frame.len(), e));
+                    }
+                }
+                return None;
+            }
         };
-        Ok(ev)
+        Some(found)
+    }
+
+    /// `frame` decoded as a response by the rule: on its own, and where that is ambiguous, as
+    /// the reply to the request before it (or the default request). Asked as the reply first,
+    /// which settles it in one decoding where a reply follows its request: a response that
+    /// decodes as the reply is the one message that decodes on its own too, or one of those
+    /// that make it ambiguous, the one the request settles (messages sharing code and length
+    /// differ in a constant unless only the request tells them apart).
+    #[inline(always)]
+    fn response(&self, frame: &[u8]) -> Result<Decoded<C::Response>, DecodeError> {
+        if let Some(r) = self.last_request.as_ref().or(self.default_request.as_ref()) {
+            if let Ok(d) = C::decode_response_for(frame, Some(r)) {
+                return Ok(d);
+            }
+        }
+        C::decode_response_for(frame, None)
+    }
+
+    /// The framing rule at the head of a whole window (`window.len()` the buffer's capacity,
+    /// settled as when flushing) where it is simple, which is almost always: no variable-length
+    /// candidate, each candidate length of one direction only, and the longest that decodes
+    /// before any breaks only a rule of the spec. Returns its event, or `None` with `head`
+    /// past a byte of noise (counted, not reported); sets `slow` and changes nothing where
+    /// the case is not simple, for [`Self::advance`] to decide.
+    #[inline(always)]
+    fn fast(&mut self, window: &[u8], slow: &mut bool) -> Option<Event<C::Request, C::Response>> {
+        let c = C::candidates(window);
+        let v = C::variable_candidates(window);
+        let requests = c.requests & self.requests;
+        let responses = c.responses & self.responses;
+        let var = (
+            if self.requests != 0 {
+                v.requests
+            } else {
+                VarLen::NONE
+            },
+            if self.responses != 0 {
+                v.responses
+            } else {
+                VarLen::NONE
+            },
+        );
+        if var != (VarLen::NONE, VarLen::NONE) || requests & responses != 0 {
+            *slow = true;
+            return None;
+        }
+        let mut rest = requests | responses;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let Some(frame) = C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)) else {
+                *slow = true;
+                return None;
+            };
+            let (offset, len) = (self.head, frame.len());
+            if requests & (1 << i) != 0 {
+                match C::decode_request(frame) {
+                    Ok(frame) => {
+                        self.last_request = Some(frame.message);
+                        self.head += len as u64;
+                        return Some(Event::Request { offset, len, frame });
+                    }
+                    Err(e) if breaks_spec(&e) => {
+                        *slow = true;
+                        return None;
+                    }
+                    Err(_) => {}
+                }
+            } else {
+                match self.response(frame) {
+                    Ok(frame) => {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        return Some(Event::Response { offset, len, frame });
+                    }
+                    Err(DecodeError::Ambiguous { code }) => {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        return Some(Event::Ambiguous { offset, len, code });
+                    }
+                    Err(e) if breaks_spec(&e) => {
+                        *slow = true;
+                        return None;
+                    }
+                    Err(_) => {}
+                }
+            }
+        }
+        self.noise_byte();
+        None
+    }
+
+    /// The head byte starts no frame: one more byte of noise.
+    #[inline(always)]
+    fn noise_byte(&mut self) {
+        if self.noise_len == 0 {
+            self.noise_at = self.head;
+        }
+        self.noise_len += 1;
+        self.head += 1;
     }
 
     fn take_noise(&mut self) -> Option<Event<C::Request, C::Response>> {
@@ -430,8 +740,9 @@ impl<C: Protocol> Core<C> {
 ///
 /// Where nothing is buffered and a whole longest frame of the caller's bytes lies ahead, it
 /// applies the framing rule to those bytes in place instead of copying them through the
-/// buffer: the same decisions (the rule only ever looks at the next `MAX_FRAME_LEN` bytes), without copying
-/// every byte in and shifting it out again, which cost about as much as decoding the frame.
+/// buffer: the same decisions (the rule only ever looks at the next `MAX_FRAME_LEN` bytes),
+/// without copying every byte in and shifting it out again, which cost about as much as
+/// decoding the frame. A frame's event is written once, where `next` returns it.
 pub struct Feed<'a, 'd, C: Protocol> {
     decoder: &'a mut StreamDecoder<C>,
     input: &'d [u8],
@@ -449,11 +760,51 @@ impl<'d, C: Protocol> Feed<'_, 'd, C> {
 impl<C: Protocol> Iterator for Feed<'_, '_, C> {
     type Item = Event<C::Request, C::Response>;
 
+    // Inlined into the caller's loop, the event is built where the caller uses it.
+    #[inline]
     fn next(&mut self) -> Option<Self::Item> {
         loop {
             let d = &mut *self.decoder;
-            if let Some(ev) = d.core.pending.take() {
-                return Some(ev);
+            let cap = d.buf.as_ref().len();
+            if d.len == 0 && d.core.pending.is_none() {
+                // Heads in place, while the simple case holds (`Core::fast`).
+                while let Some(window) = self.input.get(self.at..self.at + cap) {
+                    let mut slow = false;
+                    let head = d.core.head;
+                    let ev = d.core.fast(window, &mut slow);
+                    if slow {
+                        break;
+                    }
+                    self.at += (d.core.head - head) as usize;
+                    if let Some(ev) = ev {
+                        if d.core.noise_len > 0 {
+                            d.core.pending = Some(ev);
+                            return d.core.take_noise();
+                        }
+                        return Some(ev);
+                    }
+                    if d.core.noise_len >= MAX_SKIPPED_RUN {
+                        return d.core.take_noise();
+                    }
+                }
+            }
+            if let Some(ev) = self.next_slow() {
+                return ev;
+            }
+        }
+    }
+}
+
+impl<C: Protocol> Feed<'_, '_, C> {
+    /// [`Iterator::next`] where the simple case does not hold: the framing rule in full, until
+    /// it reports an event or the end of the input (`Some`), or has settled bytes in place
+    /// without one (`None`: the simple case may hold again).
+    #[inline(never)]
+    fn next_slow(&mut self) -> Option<Option<Event<C::Request, C::Response>>> {
+        loop {
+            let d = &mut *self.decoder;
+            if d.core.pending.is_some() {
+                return Some(d.core.pending.take());
             }
             // Buffered bytes that all came from this input are still there, right before
             // `at` (the buffer holds the last bytes pushed): give them back to the input.
@@ -463,23 +814,27 @@ impl<C: Protocol> Iterator for Feed<'_, '_, C> {
                 d.len = 0;
             }
             if d.len == 0 {
+                // A whole buffer's worth of bytes: as in `step`, a full window settles.
                 if let Some(window) = self.input.get(self.at..self.at + cap) {
-                    // A whole buffer's worth of bytes: as in `step`, a full window settles.
-                    if let Some((n, ev)) = d.core.advance(window, true) {
-                        self.at += n;
-                        if ev.is_some() {
-                            return ev;
+                    match d.core.advance(window, true) {
+                        Step::Frame(n, found) => {
+                            self.at += n;
+                            return Some(Some(d.core.frame_event(n, found)));
                         }
-                        continue;
+                        Step::Settled(n) => {
+                            self.at += n;
+                            return d.core.report().map(Some);
+                        }
+                        Step::Wait => {}
                     }
                 }
             }
             if let Some(ev) = d.poll() {
-                return Some(ev);
+                return Some(Some(ev));
             }
             let rest = self.input.get(self.at..).unwrap_or_default();
             if rest.is_empty() {
-                return None;
+                return Some(None);
             }
             self.at += d.push(rest);
         }

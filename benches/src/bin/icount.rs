@@ -5,11 +5,12 @@
 //!
 //! ```text
 //! icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>
-//! icount <ub2|sd> stream <generated|generated-clean|plain-sum> <passes>
+//! icount <ub2|sd> stream <generated|generated-clean|plain-sum|decode> <passes>
 //! ```
 //!
 //! A decode or encode pass is the 128-frame mixed stream; a stream pass is the 1 MiB capture
-//! (1 % noise; `generated-clean`: none).
+//! (1 % noise; `generated-clean`: none; `decode`: the frames of the clean capture decoded one
+//! by one, their boundaries known, the stream rows' yardstick).
 //! Prints the units one pass stands for (frames or bytes) and a value computed from the work,
 //! so none of it can be optimised away.
 
@@ -24,7 +25,7 @@ use busspec_protocols::sd::Sd;
 use busspec_protocols::ub2::Ub2;
 use busspec_protocols::Protocol;
 
-const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <ub2|sd> stream <generated|generated-clean|plain-sum> <passes>";
+const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <ub2|sd> stream <generated|generated-clean|plain-sum|decode> <passes>";
 
 fn run<C: Contender>(c: &C, mixed: &Mixed, op: &str, passes: u64) -> Result<u64, String> {
     match op {
@@ -55,6 +56,17 @@ where
 {
     let proto = Proto::of::<P>();
     let spec = proto.spec();
+    if who == "stream" && op == "decode" {
+        // The yardstick of the stream rows: the clean capture's frames decoded one by one.
+        let mixed = Mixed::capture(proto, &spec, CAPTURE_BYTES);
+        let c = Generated::<P>::default();
+        let jobs = jobs(&c, &mixed);
+        println!("units per pass: {} bytes", mixed.bytes.len());
+        println!("frames per pass: {}", mixed.entries.len());
+        return Ok((0..passes)
+            .map(|_| decode_all(&c, &mixed.bytes, &jobs) as u64)
+            .sum());
+    }
     if who == "stream" {
         // `generated-clean`: the generated stream decoder over the capture without noise.
         let noise = if op == "generated-clean" {

@@ -4,6 +4,7 @@
 //! ranges are deku assertions (checked on read and on write); what deku cannot see from inside
 //! a field (a frame's length, the broadcast rule of a command) is checked around it.
 
+pub mod modbus_core;
 pub mod sd;
 pub mod ub2;
 

@@ -531,6 +531,7 @@ pub mod codeless {
                 _ => false,
             }
         }
+        #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xFF) {
                 return rt::Candidates {

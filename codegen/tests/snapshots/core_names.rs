@@ -765,6 +765,7 @@ pub mod clash {
                 _ => false,
             }
         }
+        #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0xAA) {
                 return rt::Candidates {

@@ -579,6 +579,7 @@ pub mod mini_crc {
                 _ => false,
             }
         }
+        #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let mask: u128 = match head.first() {
                 rt::None => 0x10000000000000001,

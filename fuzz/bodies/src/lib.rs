@@ -196,6 +196,9 @@ fn check_error(e: &DecodeError, len: usize) {
             assert!(offset < len, "{e}")
         }
         DecodeError::BroadcastNotAccepted { .. } => {}
+        DecodeError::BadCount {
+            offset, min, max, ..
+        } => assert!(offset < len && min <= max, "{e}"),
     }
 }
 

@@ -66,6 +66,7 @@ pub fn visit_values(visit: impl FnOnce(&mut dyn FnMut(&'static str, FieldValue<'
         let raw = match v {
             FieldValue::Int(i) => Raw::Int(i),
             FieldValue::Text(t) => Raw::Text(t.to_vec()),
+            FieldValue::List(items) => Raw::List(items.iter().collect()),
         };
         out.push((name.to_owned(), raw));
     });
@@ -73,16 +74,16 @@ pub fn visit_values(visit: impl FnOnce(&mut dyn FnMut(&'static str, FieldValue<'
 }
 
 /// The interpreter's values for the fields the generated types carry: constants, repeated
-/// fields and constant bits are checked by both decoders but are not values of the message.
+/// fields, values following another field, counts of a list and constant bits are checked by
+/// both decoders but are not values of the message.
 pub fn interp_values(p: &Spec, f: &Frame) -> Values {
     let m = p.message(f.message);
     f.values
         .iter()
         .filter(|v| match interp::leaf_field(m, &v.name) {
             Some((field, bits)) => {
-                field.constant.is_none()
-                    && field.equals.is_none()
-                    && bits.map_or(true, |b| b.constant.is_none())
+                let i = m.fields.iter().position(|f| f.name == field.name);
+                !i.is_some_and(|i| m.is_derived(i)) && bits.map_or(true, |b| b.constant.is_none())
             }
             None => false,
         })

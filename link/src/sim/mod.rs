@@ -18,7 +18,7 @@ use std::io;
 use std::rc::Rc;
 use std::time::Duration;
 
-use busspec_protocols::{FieldValue, Message, Protocol};
+use busspec_protocols::{Elements, FieldValue, Message, Protocol};
 
 use crate::clock::{Clock, SimClock};
 use crate::transport::Transport;
@@ -319,6 +319,7 @@ pub fn number_positions<M: Message>(m: &M, address: u8) -> Vec<(usize, usize)> {
     enum Value {
         Int(i64),
         Text(Vec<u8>),
+        List(Vec<i64>),
     }
     let mut fields: Vec<(&'static str, Value)> = Vec::new();
     m.visit(|name, v| {
@@ -327,6 +328,7 @@ pub fn number_positions<M: Message>(m: &M, address: u8) -> Vec<(usize, usize)> {
             match v {
                 FieldValue::Int(i) => Value::Int(i),
                 FieldValue::Text(t) => Value::Text(t.to_vec()),
+                FieldValue::List(items) => Value::List(items.iter().collect()),
             },
         ))
     });
@@ -336,6 +338,7 @@ pub fn number_positions<M: Message>(m: &M, address: u8) -> Vec<(usize, usize)> {
                 _ if *n == name => FieldValue::Int(value),
                 Value::Int(i) => FieldValue::Int(*i),
                 Value::Text(t) => FieldValue::Text(t),
+                Value::List(l) => FieldValue::List(Elements::I64(l)),
             })
         })
     };

@@ -1,0 +1,356 @@
+//! Generated code held to the interpreter (`busspec_model::interp`, the oracle) on frames of
+//! variable length: every example, frames mutated from them (bytes changed, counts and length
+//! fields that lie, frames cut and lengthened, with and without a good checksum), and messages
+//! encoded from the examples' values with lists of other lengths and values.
+//!
+//! Shared by the test files that include generated code with repeated fields.
+
+#![allow(dead_code)]
+
+use busspec_model::interp::{self, Raw, Value};
+use busspec_model::ir::{self, ByteOrder, Direction, MessageRef};
+use busspec_runtime::{Elements, FieldValue, Message, Protocol};
+
+/// `name`, a path from the repository's root.
+pub fn fixture(name: &str) -> ir::Protocol {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(name);
+    busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
+}
+
+/// What the two engines made of the frames checked.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Tally {
+    pub accepted: usize,
+    pub refused: usize,
+    /// Messages encoded from values (both engines wrote the same bytes, or both refused).
+    pub encoded: usize,
+    pub encode_refused: usize,
+}
+
+/// A visited value as the interpreter holds it.
+fn raw(v: FieldValue<'_>) -> Raw {
+    match v {
+        FieldValue::Int(i) => Raw::Int(i),
+        FieldValue::Text(t) => Raw::Text(t.to_vec()),
+        FieldValue::List(items) => Raw::List(items.iter().collect()),
+    }
+}
+
+/// The values a generated message visits, by name.
+pub fn visited<M: Message>(m: &M) -> Vec<(&'static str, Raw)> {
+    let mut out = Vec::new();
+    m.visit(|n, v| out.push((n, raw(v))));
+    out
+}
+
+/// The generated message has the interpreter's name and every value it visits is the
+/// interpreter's.
+fn same<M: Message>(p: &ir::Protocol, g: &M, i: &interp::Frame, wire: &[u8]) {
+    assert_eq!(g.name(), p.message(i.message).name, "{wire:02X?}");
+    for (n, v) in visited(g) {
+        assert_eq!(i.get(n), Some(&v), "{wire:02X?}: {n}");
+    }
+}
+
+/// Decodes `wire` with both engines (as the reply to `request` where given: the generated
+/// request and the interpreter's frame of it), asserts they agree on acceptance and values, and
+/// that the generated encoder writes an accepted frame back byte for byte; returns whether it
+/// was accepted.
+pub fn check<P: Protocol>(
+    p: &ir::Protocol,
+    d: Direction,
+    request: Option<(&P::Request, &interp::Frame)>,
+    wire: &[u8],
+) -> bool {
+    let mut buf = vec![0xA5u8; P::MAX_FRAME_LEN];
+    match d {
+        Direction::Request => {
+            let g = P::decode_request(wire);
+            let i = interp::decode(p, Some(d), None, wire);
+            assert_eq!(g.is_ok(), i.is_ok(), "{wire:02X?}: {g:?} / {i:?}");
+            let (Ok(g), Ok(i)) = (g, i) else { return false };
+            assert_eq!(g.address, i.address);
+            same(p, &g.message, &i, wire);
+            assert_eq!(g.message.frame_len(), wire.len());
+            let n = g.message.encode(g.address, &mut buf).unwrap();
+            assert_eq!(&buf[..n], wire, "written back");
+        }
+        Direction::Response => {
+            let g = P::decode_response_for(wire, request.map(|r| r.0));
+            let i = match request {
+                Some((_, f)) => interp::decode_reply(p, f, wire),
+                None => interp::decode(p, Some(d), None, wire),
+            };
+            assert_eq!(g.is_ok(), i.is_ok(), "{wire:02X?}: {g:?} / {i:?}");
+            let (Ok(g), Ok(i)) = (g, i) else { return false };
+            assert_eq!(g.address, i.address);
+            same(p, &g.message, &i, wire);
+            assert_eq!(g.message.frame_len(), wire.len());
+            if let Some((r, _)) = request {
+                assert!(P::answers(r, &g.message), "{wire:02X?}");
+            }
+            let n = g.message.encode(g.address, &mut buf).unwrap();
+            assert_eq!(&buf[..n], wire, "written back");
+        }
+    }
+    true
+}
+
+/// `frame` with its checksum recomputed over what it covers.
+pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
+    let c = &p.framing.checksum;
+    let at = frame.len() - c.len();
+    let sum =
+        busspec_model::checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
+    let n = c.len();
+    for (k, b) in frame[at..].iter_mut().enumerate() {
+        let shift = match c.byte_order {
+            ByteOrder::Big => 8 * (n - 1 - k),
+            ByteOrder::Little => 8 * k,
+        };
+        *b = (sum >> shift) as u8;
+    }
+}
+
+/// `frame` with its length field set to what its length gives, where the framing has one.
+pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
+    let Some(rule) = p.framing.length_rule(d) else {
+        return;
+    };
+    let Some(v) = rule.value(frame.len()) else {
+        return;
+    };
+    for k in 0..rule.width {
+        let shift = match p.byte_order {
+            ByteOrder::Big => 8 * (rule.width - 1 - k),
+            ByteOrder::Little => 8 * k,
+        };
+        frame[rule.at + k] = (v >> shift) as u8;
+    }
+}
+
+/// Frames made from `wire`: every byte changed four ways, the frame cut and lengthened by one
+/// to three bytes before its checksum (its length field kept, or made to agree), each with its
+/// checksum as it was and recomputed.
+pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
+    let clen = p.framing.checksum.len();
+    let mut out = Vec::new();
+    for i in 0..wire.len() {
+        for f in [|b: u8| b ^ 0x01, |b: u8| b ^ 0x80, |_| 0x00, |_| 0xFF] {
+            let mut m = wire.to_vec();
+            m[i] = f(m[i]);
+            out.push(m.clone());
+            if i < wire.len() - clen {
+                reseal(p, &mut m);
+                out.push(m);
+            }
+        }
+    }
+    let body = wire.len() - clen;
+    for k in 1..=3 {
+        let mut variants = Vec::new();
+        if body > k {
+            let mut cut = wire[..body - k].to_vec();
+            cut.extend_from_slice(&wire[body..]);
+            variants.push(cut);
+        }
+        let mut long = wire[..body].to_vec();
+        long.extend(vec![0x5Au8; k]);
+        long.extend_from_slice(&wire[body..]);
+        variants.push(long);
+        for v in variants {
+            let mut sealed = v.clone();
+            reseal(p, &mut sealed);
+            let mut agreed = v.clone();
+            fix_length(p, d, &mut agreed);
+            reseal(p, &mut agreed);
+            out.extend([v, sealed, agreed]);
+        }
+    }
+    out
+}
+
+/// A small deterministic generator (xorshift), so failures replay.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.0 = x;
+        x
+    }
+
+    pub fn below(&mut self, n: u64) -> u64 {
+        self.next() % n.max(1)
+    }
+}
+
+/// The message `name` of `P` from `values` through `from_fields`, encoded for `address`.
+fn encode_generated<M: Message>(
+    name: &str,
+    address: u8,
+    values: &[Value],
+    buf: &mut [u8],
+) -> Option<Vec<u8>> {
+    let m = M::from_fields(name, |n| {
+        values.iter().find(|v| v.name == n).map(|v| match &v.raw {
+            Raw::Int(i) => FieldValue::Int(*i),
+            Raw::Text(t) => FieldValue::Text(t),
+            Raw::List(l) => FieldValue::List(Elements::I64(l)),
+        })
+    })
+    .ok()?;
+    let n = m.encode(address, buf).ok()?;
+    Some(buf[..n].to_vec())
+}
+
+/// Both engines encode `values` as message `r` alike: the same bytes, or both refuse.
+/// Returns whether they encoded.
+pub fn encode_alike<P: Protocol>(
+    p: &ir::Protocol,
+    r: MessageRef,
+    address: u8,
+    values: &[Value],
+) -> bool {
+    let name = &p.message(r).name;
+    let mut buf = vec![0u8; P::MAX_FRAME_LEN];
+    let g = match r.direction {
+        Direction::Request => encode_generated::<P::Request>(name, address, values, &mut buf),
+        Direction::Response => encode_generated::<P::Response>(name, address, values, &mut buf),
+    };
+    let i = interp::encode(p, r, address, values);
+    assert_eq!(
+        g.is_some(),
+        i.is_ok(),
+        "{name} {values:?}: generated {g:02X?}, interpreter {i:?}"
+    );
+    if let (Some(g), Ok(i)) = (g, i) {
+        assert_eq!(g, i, "{name} {values:?}");
+        return true;
+    }
+    false
+}
+
+/// Every example of `p` and the frames mutated from it decode alike in both engines (replies
+/// both alone and as the reply to their example request), and every example with a repeated
+/// field encodes alike with its list made shorter, longer, emptied, filled to its bound and
+/// past it, with values at the ends of the element type, its count left as the example's or
+/// made to agree.
+pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
+    let mut t = Tally::default();
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    for e in &p.examples {
+        let d = e.message.direction;
+        let request = e.reply_to.and_then(|c| {
+            let w = &p
+                .examples
+                .iter()
+                .find(|x| x.message.direction == Direction::Request && x.message.index == c)?
+                .wire;
+            let g = P::decode_request(w).ok()?.message;
+            let i = interp::decode(p, Some(Direction::Request), None, w).ok()?;
+            Some((g, i))
+        });
+        let mut frames = vec![e.wire.clone()];
+        frames.extend(mutations(p, d, &e.wire));
+        for (k, f) in frames.iter().enumerate() {
+            let mut ok = check::<P>(p, d, None, f);
+            if let Some((g, i)) = &request {
+                ok |= check::<P>(p, d, Some((g, i)), f);
+            }
+            if k == 0 {
+                assert!(ok, "{}: example {:02X?} refused", p.name, e.wire);
+            }
+            if ok {
+                t.accepted += 1;
+            } else {
+                t.refused += 1;
+            }
+        }
+        // Encode from the example's values, as the generated message visits them (count fields
+        // and values following another are computed, not given).
+        let m = p.message(e.message);
+        let Some((rf, r)) = m.repeat() else { continue };
+        let decoded = interp::decode(p, Some(d), e.reply_to, &e.wire).unwrap();
+        let names: Vec<&str> = match d {
+            Direction::Request => visited(&P::decode_request(&e.wire).unwrap().message),
+            Direction::Response => visited(
+                &P::decode_response_for(&e.wire, request.as_ref().map(|r| &r.0))
+                    .unwrap()
+                    .message,
+            ),
+        }
+        .into_iter()
+        .map(|(n, _)| n)
+        .collect();
+        let given: Vec<Value> = decoded
+            .values
+            .iter()
+            .filter(|v| names.contains(&v.name.as_str()))
+            .cloned()
+            .collect();
+        assert!(encode_alike::<P>(p, e.message, decoded.address, &given));
+        let (lo, hi) = if rf.ty == ir::FieldType::Bit {
+            (0, 1)
+        } else {
+            busspec_model::interp::raw_limits(8 * rf.width as u32, rf.signed)
+        };
+        let bound = if rf.ty == ir::FieldType::Bit {
+            r.max.div_ceil(8) * 8
+        } else {
+            r.max
+        };
+        let mut lens = vec![
+            0,
+            1,
+            r.min,
+            r.max,
+            bound,
+            bound + 1,
+            r.min.saturating_sub(1),
+        ];
+        lens.extend((0..6).map(|_| rng.below(bound as u64 + 2) as usize));
+        for n in lens {
+            let list: Vec<i64> = (0..n)
+                .map(|k| match k % 4 {
+                    0 => lo,
+                    1 => hi,
+                    _ => lo + rng.below((hi - lo) as u64 + 1) as i64,
+                })
+                .collect();
+            let mut values = given.clone();
+            for v in &mut values {
+                if v.name == rf.name {
+                    v.raw = Raw::List(list.clone());
+                }
+            }
+            // As given (a count following another field may now disagree), then with every
+            // integer the count could follow from set to agree.
+            let mut tries = vec![values.clone()];
+            for v in &values {
+                if let Raw::Int(_) = v.raw {
+                    let mut w = values.clone();
+                    for x in &mut w {
+                        if x.name == v.name {
+                            x.raw = Raw::Int(n as i64);
+                        }
+                    }
+                    tries.push(w);
+                }
+            }
+            for values in tries {
+                if encode_alike::<P>(p, e.message, decoded.address, &values) {
+                    t.encoded += 1;
+                } else {
+                    t.encode_refused += 1;
+                }
+            }
+        }
+    }
+    t
+}

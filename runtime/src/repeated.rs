@@ -1,0 +1,1033 @@
+//! [`Repeated`]: the value of a repeated field (registers) in generated code, a
+//! fixed-capacity array holding at most the spec's `max` elements; [`Bits`] for a repeated bit
+//! field (coils), packed eight to a byte as they travel.
+//!
+//! Why not `heapless::Vec`: every generated message is `Copy` (the [`crate::Message`] trait
+//! asks it, so a decoded frame can be kept, compared and passed around like the fixed-length
+//! messages), and `heapless::Vec` is not `Copy`. An array and a length are all it takes, with no
+//! dependency; the elements past the length are never read, compared or printed.
+//!
+//! Why bits are packed: a message enum is as large as its largest variant, and Modbus allows
+//! 2000 coils; as `bool`s every Modbus response would take 2 KB, packed it takes 250 bytes, no
+//! more than its 125 registers.
+
+use core::fmt;
+
+use crate::codec::Wire;
+use crate::{DecodeError, Elements, EncodeError, FieldError, FieldValue, ValueKind};
+
+/// At most `N` elements of `T`, stored in place: no allocation, `Copy` when `T` is.
+///
+/// Equality, hashing and `Debug` look only at the elements held ([`Self::as_slice`]), never at
+/// the unused capacity.
+#[derive(Clone, Copy)]
+pub struct Repeated<T, const N: usize> {
+    len: usize,
+    items: [T; N],
+}
+
+/// More elements than a [`Repeated`] holds: `found` where the spec's `max` is `capacity`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct CapacityError {
+    pub capacity: usize,
+    pub found: usize,
+}
+
+impl fmt::Display for CapacityError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} elements, but the field holds at most {}",
+            self.found, self.capacity
+        )
+    }
+}
+
+impl core::error::Error for CapacityError {}
+
+impl<T: Copy + Default, const N: usize> Repeated<T, N> {
+    /// The most elements it holds: the spec's `max` (for bits, rounded up to whole bytes).
+    pub const CAPACITY: usize = N;
+
+    /// No elements.
+    pub fn new() -> Self {
+        Repeated {
+            len: 0,
+            items: [T::default(); N],
+        }
+    }
+
+    /// The elements of `items`, or an error if there are more than `N`.
+    pub fn from_slice(items: &[T]) -> Result<Self, CapacityError> {
+        let mut r = Self::new();
+        let dst = r.items.get_mut(..items.len()).ok_or(CapacityError {
+            capacity: N,
+            found: items.len(),
+        })?;
+        dst.copy_from_slice(items);
+        r.len = items.len();
+        Ok(r)
+    }
+
+    /// Appends `item`, or gives it back if it is full.
+    pub fn push(&mut self, item: T) -> Result<(), T> {
+        match self.items.get_mut(self.len) {
+            Some(slot) => {
+                *slot = item;
+                self.len += 1;
+                Ok(())
+            }
+            None => Err(item),
+        }
+    }
+}
+
+impl<T, const N: usize> Repeated<T, N> {
+    /// The elements held.
+    pub fn as_slice(&self) -> &[T] {
+        &self.items[..self.len]
+    }
+
+    /// How many elements it holds.
+    pub const fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether it holds none.
+    pub const fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+impl<T: Copy + Default, const N: usize> Default for Repeated<T, N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<T, const N: usize> core::ops::Deref for Repeated<T, N> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        self.as_slice()
+    }
+}
+
+impl<T: fmt::Debug, const N: usize> fmt::Debug for Repeated<T, N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.as_slice()).finish()
+    }
+}
+
+impl<T: PartialEq, const N: usize> PartialEq for Repeated<T, N> {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl<T: Eq, const N: usize> Eq for Repeated<T, N> {}
+
+impl<T: core::hash::Hash, const N: usize> core::hash::Hash for Repeated<T, N> {
+    fn hash<H: core::hash::Hasher>(&self, state: &mut H) {
+        self.as_slice().hash(state);
+    }
+}
+
+impl<'a, T, const N: usize> IntoIterator for &'a Repeated<T, N> {
+    type Item = &'a T;
+    type IntoIter = core::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.as_slice().iter()
+    }
+}
+
+/// An element type of a repeated field: how its slice is lent to [`crate::Message::visit`].
+pub trait Element: Copy + Default {
+    /// `items` as the [`Elements`] variant of this type.
+    fn elements(items: &[Self]) -> Elements<'_>;
+}
+
+macro_rules! element {
+    ($($t:ty => $v:ident,)*) => {$(
+        impl Element for $t {
+            #[inline]
+            fn elements(items: &[Self]) -> Elements<'_> {
+                Elements::$v(items)
+            }
+        }
+    )*};
+}
+element! {
+    u8 => U8, i8 => I8, u16 => U16, i16 => I16, u32 => U32, i32 => I32, i64 => I64,
+}
+
+impl<T: Element, const N: usize> Repeated<T, N> {
+    /// The elements as [`crate::Message::visit`] reports them.
+    #[inline]
+    pub fn elements(&self) -> Elements<'_> {
+        T::elements(self.as_slice())
+    }
+}
+
+/// Repeated field `name` from a [`crate::Message::from_fields`] getter: a list of at most `N`
+/// elements, each within `min..=max` (its wire type's raw values; a bit takes 0 or 1, or a
+/// `bool`). Public only for generated code.
+#[inline]
+pub fn list<'v, T: crate::codec::Wire + Default, const N: usize>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+    min: i64,
+    max: i64,
+) -> Result<Repeated<T, N>, FieldError> {
+    let items = match field(name) {
+        Some(FieldValue::List(items)) => items,
+        Some(_) => {
+            return Err(FieldError::WrongKind {
+                field: name,
+                expected: ValueKind::List,
+            })
+        }
+        None => return Err(FieldError::Missing { field: name }),
+    };
+    if items.len() > N {
+        return Err(FieldError::TooMany {
+            field: name,
+            found: items.len(),
+            max: N,
+        });
+    }
+    let mut r = Repeated::<T, N>::new();
+    for (slot, value) in r.items.iter_mut().zip(items.iter()) {
+        if !(min..=max).contains(&value) {
+            return Err(FieldError::OutOfRange {
+                field: name,
+                value,
+                min,
+                max,
+            });
+        }
+        *slot = T::from_i64(value);
+    }
+    r.len = items.len();
+    Ok(r)
+}
+
+/// Repeated bit field `name` from a [`crate::Message::from_fields`] getter, as [`list`]: at
+/// most `8 × BYTES` elements, each 0 or 1. Public only for generated code.
+#[inline]
+pub fn list_bits<'v, const BYTES: usize>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<Bits<BYTES>, FieldError> {
+    let items = match field(name) {
+        Some(FieldValue::List(items)) => items,
+        Some(_) => {
+            return Err(FieldError::WrongKind {
+                field: name,
+                expected: ValueKind::List,
+            })
+        }
+        None => return Err(FieldError::Missing { field: name }),
+    };
+    let mut r = Bits::<BYTES>::new();
+    for value in items.iter() {
+        if !(0..=1).contains(&value) {
+            return Err(FieldError::OutOfRange {
+                field: name,
+                value,
+                min: 0,
+                max: 1,
+            });
+        }
+        r.push(value == 1).map_err(|_| FieldError::TooMany {
+            field: name,
+            found: items.len(),
+            max: 8 * BYTES,
+        })?;
+    }
+    Ok(r)
+}
+
+/// At most `8 × BYTES` bits, packed eight to a byte, least significant first, as Modbus coils
+/// travel: no allocation, `Copy`. The bits past the length are always zero, so equality and
+/// hashing compare what it holds.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Bits<const BYTES: usize> {
+    len: usize,
+    packed: [u8; BYTES],
+}
+
+impl<const BYTES: usize> Bits<BYTES> {
+    /// The most bits it holds.
+    pub const CAPACITY: usize = 8 * BYTES;
+
+    /// No bits.
+    pub const fn new() -> Self {
+        Bits {
+            len: 0,
+            packed: [0; BYTES],
+        }
+    }
+
+    /// The bits of `items`, or an error if there are more than [`Self::CAPACITY`].
+    pub fn from_bools(items: &[bool]) -> Result<Self, CapacityError> {
+        let mut r = Self::new();
+        for &b in items {
+            r.push(b).map_err(|_| CapacityError {
+                capacity: Self::CAPACITY,
+                found: items.len(),
+            })?;
+        }
+        Ok(r)
+    }
+
+    /// Appends `bit`, or gives it back if it is full.
+    pub fn push(&mut self, bit: bool) -> Result<(), bool> {
+        let Some(byte) = self.packed.get_mut(self.len / 8) else {
+            return Err(bit);
+        };
+        *byte |= u8::from(bit) << (self.len % 8);
+        self.len += 1;
+        Ok(())
+    }
+
+    /// Bit `i`, if it holds that many.
+    pub fn get(&self, i: usize) -> Option<bool> {
+        (i < self.len).then(|| self.packed[i / 8] >> (i % 8) & 1 == 1)
+    }
+
+    /// How many bits it holds.
+    pub const fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether it holds none.
+    pub const fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The bytes the bits fill, as they travel (the last one's padding zero).
+    pub fn as_bytes(&self) -> &[u8] {
+        &self.packed[..self.len.div_ceil(8)]
+    }
+
+    /// The bits in order.
+    pub fn iter(&self) -> impl Iterator<Item = bool> + '_ {
+        (0..self.len).filter_map(move |i| self.get(i))
+    }
+
+    /// The bits as [`crate::Message::visit`] reports them.
+    pub fn elements(&self) -> Elements<'_> {
+        Elements::Bits {
+            packed: self.as_bytes(),
+            len: self.len,
+        }
+    }
+}
+
+impl<const BYTES: usize> Default for Bits<BYTES> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const BYTES: usize> fmt::Debug for Bits<BYTES> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.iter().map(u8::from)).finish()
+    }
+}
+
+/// Where a message's repeated field sits and how its elements are counted: what generated
+/// decoders and the stream decoder need to tell how many elements a frame holds, and so how
+/// long the frame is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RepeatAt {
+    /// The field's spec name.
+    pub field: &'static str,
+    /// The length of the message's frame without any element.
+    pub base: usize,
+    /// Where the first element sits in the frame.
+    pub at: usize,
+    /// Bytes of one element; 0 for bits, packed eight to a byte.
+    pub width: usize,
+    pub count: CountBy,
+    /// The fewest and most elements the spec allows (bits: rounded to whole bytes).
+    pub min: usize,
+    pub max: usize,
+}
+
+/// What a repeated field's count is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CountBy {
+    /// As many elements as fit before the checksum.
+    End,
+    /// An earlier field holds the number of elements.
+    Elements(CountField),
+    /// An earlier field holds the number of bytes the elements take.
+    Bytes(CountField),
+}
+
+/// An unsigned field of the frame that counts a repeated field's elements or bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CountField {
+    pub name: &'static str,
+    /// Its offset in the frame.
+    pub at: usize,
+    /// Its width, bytes.
+    pub width: usize,
+    /// Least significant byte first.
+    pub le: bool,
+}
+
+impl CountField {
+    /// Its value in `frame` (`None` if the frame does not reach it).
+    #[inline]
+    pub fn read(&self, frame: &[u8]) -> Option<u64> {
+        let b = frame.get(self.at..self.at + self.width)?;
+        let fold = |a: u64, b: &u8| (a << 8) | u64::from(*b);
+        Some(if self.le {
+            b.iter().rev().fold(0, fold)
+        } else {
+            b.iter().fold(0, fold)
+        })
+    }
+}
+
+impl RepeatAt {
+    /// Bytes `n` elements take.
+    #[inline]
+    pub const fn bytes_of(&self, n: usize) -> usize {
+        if self.width == 0 {
+            n.div_ceil(8)
+        } else {
+            n.saturating_mul(self.width)
+        }
+    }
+
+    /// The number of elements `frame` (a whole frame of the message) holds: its length less
+    /// [`Self::base`], which must be a whole number of elements agreeing with the count field
+    /// and within the bounds. Bits count eight to a byte, padding included, as the interpreter
+    /// counts them.
+    pub fn count(&self, frame: &[u8]) -> Result<usize, DecodeError> {
+        let bad = |found: i64| DecodeError::BadCount {
+            field: self.field,
+            offset: self.at,
+            found,
+            min: self.min,
+            max: self.max,
+        };
+        let extra = frame
+            .len()
+            .checked_sub(self.base)
+            .ok_or(DecodeError::Truncated {
+                needed: self.base + self.bytes_of(self.min),
+                found: frame.len(),
+            })?;
+        let whole = self.width == 0 || extra % self.width == 0;
+        // Bits (width 0) come eight to a byte.
+        let mut n = extra
+            .checked_div(self.width)
+            .unwrap_or(extra.saturating_mul(8));
+        match self.count {
+            CountBy::End if !whole => return Err(bad(extra as i64)),
+            CountBy::End => {}
+            CountBy::Elements(c) => {
+                // Bits by count: as many as it says, the last byte's padding left out.
+                let v = c.read(frame).unwrap_or(0);
+                match usize::try_from(v) {
+                    Ok(v) if self.bytes_of(v) == extra => n = v,
+                    _ => return Err(bad(v as i64)),
+                }
+            }
+            CountBy::Bytes(c) => {
+                let v = c.read(frame).unwrap_or(0);
+                if !whole || usize::try_from(v) != Ok(extra) {
+                    return Err(DecodeError::InvalidValue {
+                        field: c.name,
+                        offset: c.at,
+                        found: v as u32,
+                    });
+                }
+            }
+        }
+        let (lo, hi) = if self.width == 0 {
+            (self.min.div_ceil(8) * 8, self.max.div_ceil(8) * 8)
+        } else {
+            (self.min, self.max)
+        };
+        if n < lo || n > hi {
+            return Err(bad(n as i64));
+        }
+        Ok(n)
+    }
+
+    /// The length of the frame that starts `head` (the bytes buffered so far), once its count
+    /// field has arrived: `None` for a count to the end (the frame's length comes from
+    /// elsewhere: a length field, or the candidates' lengths) or while the count field is still
+    /// missing. A count whose frame could not hold `min..=max` elements gives `Some(0)`, which
+    /// no frame has: the stream decoder then drops a byte and resynchronises.
+    pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        let (c, bytes) = match self.count {
+            CountBy::End => return None,
+            CountBy::Elements(c) => (c, false),
+            CountBy::Bytes(c) => (c, true),
+        };
+        let v = usize::try_from(c.read(head)?).unwrap_or(usize::MAX);
+        let extra = if bytes { v } else { self.bytes_of(v) };
+        let fits = extra >= self.bytes_of(self.min)
+            && extra <= self.bytes_of(self.max)
+            && (self.width == 0 || extra % self.width == 0);
+        Some(if fits { self.base + extra } else { 0 })
+    }
+}
+
+/// A list of its elements, as a generated message with the `serde` feature carries it.
+#[cfg(feature = "serde")]
+impl<T: serde::Serialize, const N: usize> serde::Serialize for Repeated<T, N> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.as_slice())
+    }
+}
+
+/// A list of at most `N` elements; a longer one is an error.
+#[cfg(feature = "serde")]
+impl<'de, T: serde::Deserialize<'de> + Copy + Default, const N: usize> serde::Deserialize<'de>
+    for Repeated<T, N>
+{
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Seq<T, const N: usize>(core::marker::PhantomData<T>);
+        impl<'de, T: serde::Deserialize<'de> + Copy + Default, const N: usize>
+            serde::de::Visitor<'de> for Seq<T, N>
+        {
+            type Value = Repeated<T, N>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "a list of at most {N} elements")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut r = Repeated::new();
+                while let Some(v) = a.next_element()? {
+                    if r.push(v).is_err() {
+                        return Err(serde::de::Error::invalid_length(N + 1, &self));
+                    }
+                }
+                Ok(r)
+            }
+        }
+        d.deserialize_seq(Seq::<T, N>(core::marker::PhantomData))
+    }
+}
+
+/// A list of its bits.
+#[cfg(feature = "serde")]
+impl<const BYTES: usize> serde::Serialize for Bits<BYTES> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.iter())
+    }
+}
+
+/// A list of at most `8 × BYTES` bits; a longer one is an error.
+#[cfg(feature = "serde")]
+impl<'de, const BYTES: usize> serde::Deserialize<'de> for Bits<BYTES> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Seq<const BYTES: usize>;
+        impl<'de, const BYTES: usize> serde::de::Visitor<'de> for Seq<BYTES> {
+            type Value = Bits<BYTES>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "a list of at most {} bits", 8 * BYTES)
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut r = Bits::new();
+                while let Some(v) = a.next_element()? {
+                    if r.push(v).is_err() {
+                        return Err(serde::de::Error::invalid_length(8 * BYTES + 1, &self));
+                    }
+                }
+                Ok(r)
+            }
+        }
+        d.deserialize_seq(Seq::<BYTES>)
+    }
+}
+
+/// Any number of elements up to `N`, each arbitrary.
+#[cfg(feature = "arbitrary")]
+impl<'a, T: arbitrary::Arbitrary<'a> + Copy + Default, const N: usize> arbitrary::Arbitrary<'a>
+    for Repeated<T, N>
+{
+    fn arbitrary(u: &mut arbitrary::Unstructured<'a>) -> arbitrary::Result<Self> {
+        let n = u.int_in_range(0..=N)?;
+        let mut r = Repeated::new();
+        for _ in 0..n {
+            let _ = r.push(T::arbitrary(u)?);
+        }
+        Ok(r)
+    }
+}
+
+/// Any number of bits up to `8 × BYTES`, each arbitrary.
+#[cfg(feature = "arbitrary")]
+impl<'a, const BYTES: usize> arbitrary::Arbitrary<'a> for Bits<BYTES> {
+    fn arbitrary(u: &mut arbitrary::Unstructured<'a>) -> arbitrary::Result<Self> {
+        let n = u.int_in_range(0..=8 * BYTES)?;
+        let mut r = Bits::new();
+        for _ in 0..n {
+            let _ = r.push(bool::arbitrary(u)?);
+        }
+        Ok(r)
+    }
+}
+
+/// What generated decoders and encoders do with a message's repeated field.
+impl RepeatAt {
+    /// The elements a frame's count field stands for, `min..=max` inclusive: where it counts
+    /// bytes of bits, any number that fills that many bytes.
+    fn elements_for(&self, count: u64) -> (i64, i64) {
+        let v = i64::try_from(count).unwrap_or(i64::MAX);
+        match self.count {
+            CountBy::Bytes(_) if self.width == 0 => (
+                v.saturating_sub(1).saturating_mul(8).saturating_add(1),
+                v.saturating_mul(8),
+            ),
+            CountBy::Bytes(_) => {
+                let w = self.width as i64;
+                if v % w == 0 {
+                    (v / w, v / w)
+                } else {
+                    // No whole number of elements takes that many bytes.
+                    (v / w + 1, v / w)
+                }
+            }
+            CountBy::Elements(_) | CountBy::End => (v, v),
+        }
+    }
+
+    /// The frame checked for its element count ([`Self::count`]), split into its first `AT`
+    /// bytes (every fixed field; `AT` is [`Self::at`]) as an array, the bytes of its elements,
+    /// and their number.
+    #[inline]
+    pub fn split<'f, const AT: usize>(
+        &self,
+        frame: &'f [u8],
+    ) -> Result<(&'f [u8; AT], &'f [u8], usize), DecodeError> {
+        let n = self.count(frame)?;
+        let bytes = match self.count {
+            // Bits by bytes or to the end: every byte before the checksum.
+            CountBy::End | CountBy::Bytes(_) if self.width == 0 => n / 8,
+            _ => self.bytes_of(n),
+        };
+        let head = frame.first_chunk::<AT>();
+        let items = frame.get(self.at..self.at + bytes);
+        match (head, items) {
+            (Some(head), Some(items)) => Ok((head, items, n)),
+            _ => Err(DecodeError::Truncated {
+                needed: self.base + bytes,
+                found: frame.len(),
+            }),
+        }
+    }
+
+    fn bad_count(&self, found: usize) -> DecodeError {
+        DecodeError::BadCount {
+            field: self.field,
+            offset: self.at,
+            found: found as i64,
+            min: self.min,
+            max: self.max,
+        }
+    }
+
+    /// The elements `bytes` holds (`le`: least significant byte first; `signed`: sign-extended),
+    /// as [`read_elements`] reads them.
+    #[inline]
+    pub fn elements<T: Wire + Default, const N: usize>(
+        &self,
+        bytes: &[u8],
+        le: bool,
+        signed: bool,
+    ) -> Result<Repeated<T, N>, DecodeError> {
+        read_elements(bytes, self.width, le, signed).map_err(|e| self.bad_count(e.found))
+    }
+
+    /// The `n` bits `bytes` packs (every bit of every byte where the count is in bytes or to
+    /// the end, as the interpreter reads them).
+    #[inline]
+    pub fn bits<const BYTES: usize>(
+        &self,
+        bytes: &[u8],
+        n: usize,
+    ) -> Result<Bits<BYTES>, DecodeError> {
+        let mut r = read_bits::<BYTES>(bytes).map_err(|e| self.bad_count(e.found))?;
+        if n < r.len {
+            // The padding of the last byte is not part of a count of elements.
+            for i in n..r.len {
+                r.packed[i / 8] &= !(1 << (i % 8));
+            }
+            r.len = n;
+        }
+        Ok(r)
+    }
+
+    /// Every element of a decoded repeated field within its spec range `min..=max`; the error
+    /// names the offset of the first that is not.
+    #[inline]
+    pub fn in_range<T: Wire>(&self, items: &[T], min: i64, max: i64) -> Result<(), DecodeError> {
+        for (i, v) in items.iter().enumerate() {
+            let found = v.to_i64();
+            if !(min..=max).contains(&found) {
+                return Err(DecodeError::OutOfRange {
+                    field: self.field,
+                    offset: self.at + i * self.width,
+                    found,
+                    min,
+                    max,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The value of the count field of a frame holding `held` elements: their number or their
+    /// bytes (0 for a count to the end, which has no field).
+    #[inline]
+    pub const fn count_value(&self, held: usize) -> usize {
+        match self.count {
+            CountBy::Elements(_) => held,
+            CountBy::Bytes(_) if self.width == 0 => held.div_ceil(8),
+            CountBy::Bytes(_) => held * self.width,
+            CountBy::End => 0,
+        }
+    }
+
+    /// A reply holding `held` elements whose count follows the request
+    /// (`ceil(base × multiply / divide)` elements): it must take as many bytes as they would.
+    #[inline]
+    pub fn follows_request(
+        &self,
+        held: usize,
+        base: i64,
+        multiply: u64,
+        divide: u64,
+    ) -> Result<(), DecodeError> {
+        let expected = crate::codec::follows(base, multiply, divide);
+        match usize::try_from(expected) {
+            Ok(n) if self.bytes_of(n) == self.bytes_of(held) => Ok(()),
+            _ => Err(DecodeError::BadCount {
+                field: self.field,
+                offset: self.at,
+                found: held as i64,
+                min: usize::try_from(expected).unwrap_or(0),
+                max: usize::try_from(expected).unwrap_or(0),
+            }),
+        }
+    }
+
+    /// The length of the frame holding `held` elements, which must lie in the spec's bounds
+    /// (bits: up to the whole bytes `max` fills, as decode reads them):
+    /// [`EncodeError::NotInRange`] with the count otherwise.
+    #[inline]
+    pub fn encode_len(&self, held: usize) -> Result<usize, EncodeError> {
+        let hi = if self.width == 0 {
+            self.max.div_ceil(8) * 8
+        } else {
+            self.max
+        };
+        if held < self.min || held > hi {
+            return Err(EncodeError::NotInRange {
+                field: self.field,
+                value: held as i64,
+                min: self.min as i64,
+                max: hi as i64,
+            });
+        }
+        Ok(self.base + self.bytes_of(held))
+    }
+
+    /// A count field computed from another field (`follows`) agrees with the `held` elements
+    /// being encoded: [`EncodeError::NotInRange`] with the element count and the counts that
+    /// would agree otherwise.
+    #[inline]
+    pub fn encode_agrees(&self, held: usize, count: u64) -> Result<(), EncodeError> {
+        if u64::try_from(self.count_value(held)).ok() == Some(count) {
+            return Ok(());
+        }
+        let (min, max) = self.elements_for(count);
+        Err(EncodeError::NotInRange {
+            field: self.field,
+            value: held as i64,
+            min,
+            max,
+        })
+    }
+
+    /// Every element to encode within its spec range `min..=max`.
+    #[inline]
+    pub fn encode_in_range<T: Wire>(
+        &self,
+        items: &[T],
+        min: i64,
+        max: i64,
+    ) -> Result<(), EncodeError> {
+        for v in items {
+            let value = v.to_i64();
+            if !(min..=max).contains(&value) {
+                return Err(EncodeError::NotInRange {
+                    field: self.field,
+                    value,
+                    min,
+                    max,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The elements of `width` bytes each (`le`: least significant byte first; `signed`: sign-
+/// extended from `8 × width` bits) that `bytes` holds, which must be a whole number of them and
+/// at most `N`. Generated decoders call it after checking the count against the frame, so an
+/// error here means a count the frame's length does not give.
+#[inline]
+pub fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
+    bytes: &[u8],
+    width: usize,
+    le: bool,
+    signed: bool,
+) -> Result<Repeated<T, N>, CapacityError> {
+    let found = bytes.len() / width.max(1);
+    if width == 0 || width > 8 || bytes.len() % width != 0 || found > N {
+        return Err(CapacityError { capacity: N, found });
+    }
+    let mut r = Repeated::<T, N>::new();
+    for (slot, c) in r.items.iter_mut().zip(bytes.chunks_exact(width)) {
+        let u = if le {
+            c.iter().rev().fold(0u64, |a, b| (a << 8) | u64::from(*b))
+        } else {
+            c.iter().fold(0u64, |a, b| (a << 8) | u64::from(*b))
+        };
+        let bits = 8 * width as u32;
+        let v = if signed && bits < 64 {
+            ((u << (64 - bits)) as i64) >> (64 - bits)
+        } else {
+            u as i64
+        };
+        *slot = T::from_i64(v);
+    }
+    r.len = found;
+    Ok(r)
+}
+
+/// Writes `items` as elements of `width` bytes each into `out` (which must hold them), and
+/// returns the bytes written.
+#[inline]
+pub fn write_elements<T: crate::codec::Wire>(
+    items: &[T],
+    width: usize,
+    le: bool,
+    out: &mut [u8],
+) -> usize {
+    for (c, v) in out.chunks_exact_mut(width.max(1)).zip(items) {
+        let u = v.to_u64();
+        let n = c.len();
+        for (k, b) in c.iter_mut().enumerate() {
+            let shift = if le { 8 * k } else { 8 * (n - 1 - k) };
+            *b = (u >> shift) as u8;
+        }
+    }
+    items.len() * width
+}
+
+/// The bits `bytes` packs, eight to a byte, least significant bit first (Modbus coils): always
+/// `8 × bytes.len()` of them, the padding of the last byte included (as the interpreter reads
+/// them), at most `8 × BYTES`.
+#[inline]
+pub fn read_bits<const BYTES: usize>(bytes: &[u8]) -> Result<Bits<BYTES>, CapacityError> {
+    let mut r = Bits::<BYTES>::new();
+    let dst = r.packed.get_mut(..bytes.len()).ok_or(CapacityError {
+        capacity: 8 * BYTES,
+        found: bytes.len().saturating_mul(8),
+    })?;
+    dst.copy_from_slice(bytes);
+    r.len = 8 * bytes.len();
+    Ok(r)
+}
+
+/// Writes `bits` as they travel into `out` (which must hold `ceil(len / 8)` bytes), and returns
+/// the bytes written.
+#[inline]
+pub fn write_bits<const BYTES: usize>(bits: &Bits<BYTES>, out: &mut [u8]) -> usize {
+    let b = bits.as_bytes();
+    if let Some(dst) = out.get_mut(..b.len()) {
+        dst.copy_from_slice(b);
+    }
+    b.len()
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::format;
+
+    #[test]
+    fn holds_at_most_its_capacity_and_compares_only_what_it_holds() {
+        let mut a = Repeated::<u16, 3>::from_slice(&[1, 2]).unwrap();
+        assert_eq!(a.as_slice(), &[1, 2]);
+        assert_eq!(a.len(), 2);
+        assert_eq!(a.push(3), Ok(()));
+        assert_eq!(a.push(4), Err(4));
+        assert_eq!(
+            Repeated::<u16, 3>::from_slice(&[1, 2, 3, 4]),
+            Err(CapacityError {
+                capacity: 3,
+                found: 4
+            })
+        );
+        // Stale capacity behind the length is invisible to ==, Debug and iteration.
+        let mut b = Repeated::<u16, 3>::from_slice(&[9, 9, 9]).unwrap();
+        b.len = 1;
+        let c = Repeated::<u16, 3>::from_slice(&[9]).unwrap();
+        assert_eq!(b, c);
+        assert_ne!(b, Repeated::<u16, 3>::new());
+        assert_eq!(format!("{b:?}"), "[9]");
+        assert_eq!(b.iter().count(), 1);
+        assert!(Repeated::<u8, 0>::new().is_empty());
+    }
+
+    #[test]
+    fn elements_read_and_write_in_either_byte_order() {
+        let r = read_elements::<u16, 4>(&[0x00, 0x07, 0x01, 0x00], 2, false, false).unwrap();
+        assert_eq!(r.as_slice(), &[7, 256]);
+        let r = read_elements::<u16, 4>(&[0x00, 0x07, 0x01, 0x00], 2, true, false).unwrap();
+        assert_eq!(r.as_slice(), &[0x0700, 1]);
+        let r = read_elements::<i32, 2>(&[0xFF, 0xFF, 0xFE], 3, false, true).unwrap();
+        assert_eq!(r.as_slice(), &[-2]);
+        let mut out = [0u8; 6];
+        assert_eq!(write_elements(&[-2i32, 5], 3, true, &mut out), 6);
+        assert_eq!(out, [0xFE, 0xFF, 0xFF, 0x05, 0x00, 0x00]);
+        // Not a whole number of elements, or more than the capacity: refused, not truncated.
+        assert!(read_elements::<u16, 4>(&[1, 2, 3], 2, false, false).is_err());
+        assert_eq!(
+            read_elements::<u8, 2>(&[1, 2, 3], 1, false, false),
+            Err(CapacityError {
+                capacity: 2,
+                found: 3
+            })
+        );
+        assert!(read_elements::<u8, 2>(&[], 0, false, false).is_err());
+    }
+
+    #[test]
+    fn lists_come_from_fields_checked_and_go_to_visit() {
+        let values = [7i64, 256];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&values)));
+        let r = list::<u16, 4>(&mut ask, "values", 0, 0xFFFF).unwrap();
+        assert_eq!(r.as_slice(), &[7, 256]);
+        assert_eq!(r.elements(), Elements::U16(&[7, 256]));
+        assert_eq!(r.elements().iter().collect::<std::vec::Vec<_>>(), [7, 256]);
+        assert_eq!(
+            list::<u16, 1>(&mut ask, "values", 0, 0xFFFF),
+            Err(FieldError::TooMany {
+                field: "values",
+                found: 2,
+                max: 1
+            })
+        );
+        assert_eq!(
+            list::<u8, 4>(&mut ask, "values", 0, 255),
+            Err(FieldError::OutOfRange {
+                field: "values",
+                value: 256,
+                min: 0,
+                max: 255
+            })
+        );
+        let mut int = |_: &'static str| Some(FieldValue::Int(1));
+        assert_eq!(
+            list::<u8, 4>(&mut int, "values", 0, 255),
+            Err(FieldError::WrongKind {
+                field: "values",
+                expected: ValueKind::List
+            })
+        );
+        let mut none = |_: &'static str| None;
+        assert_eq!(
+            list_bits::<8>(&mut none, "coils"),
+            Err(FieldError::Missing { field: "coils" })
+        );
+        let bits = [1i64, 0, 1];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&bits)));
+        let r = list_bits::<1>(&mut ask, "coils").unwrap();
+        let packed = Elements::Bits {
+            packed: &[0b101],
+            len: 3,
+        };
+        assert_eq!(r.elements(), packed);
+        assert_eq!(packed.iter().collect::<std::vec::Vec<_>>(), [1, 0, 1]);
+        assert_eq!(packed.get(3), None);
+        let nine = [0i64; 9];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&nine)));
+        assert_eq!(
+            list_bits::<1>(&mut ask, "coils"),
+            Err(FieldError::TooMany {
+                field: "coils",
+                found: 9,
+                max: 8
+            })
+        );
+        let two = [2i64];
+        let mut ask = |_: &'static str| Some(FieldValue::List(Elements::I64(&two)));
+        assert!(matches!(
+            list_bits::<1>(&mut ask, "coils"),
+            Err(FieldError::OutOfRange { value: 2, .. })
+        ));
+        assert_eq!(
+            format!(
+                "{}",
+                FieldError::TooMany {
+                    field: "x",
+                    found: 3,
+                    max: 2
+                }
+            ),
+            "x holds at most 2 elements, got 3"
+        );
+    }
+
+    #[test]
+    fn bits_pack_least_significant_first() {
+        // Modbus application protocol 6.1: coils 20..=38, status CD 6B 05.
+        let r = read_bits::<3>(&[0xCD, 0x6B, 0x05]).unwrap();
+        assert_eq!(r.len(), 24);
+        assert_eq!(
+            r.iter().take(8).collect::<std::vec::Vec<_>>(),
+            [true, false, true, true, false, false, true, true]
+        );
+        let mut out = [0xFFu8; 4];
+        assert_eq!(write_bits(&r, &mut out), 3);
+        assert_eq!(out, [0xCD, 0x6B, 0x05, 0xFF]);
+        assert!(read_bits::<1>(&[0, 0]).is_err());
+        // Built bit by bit: the padding stays zero, so equal bits are equal values.
+        let bools: std::vec::Vec<bool> = r.iter().take(19).collect();
+        let b = Bits::<3>::from_bools(&bools).unwrap();
+        assert_eq!(b.as_bytes(), &[0xCD, 0x6B, 0x05]);
+        assert_eq!(b.len(), 19);
+        assert_ne!(b, r);
+        assert_eq!(
+            format!("{:?}", Bits::<1>::from_bools(&[true, false]).unwrap()),
+            "[1, 0]"
+        );
+        assert_eq!(
+            Bits::<1>::from_bools(&[false; 9]),
+            Err(CapacityError {
+                capacity: 8,
+                found: 9
+            })
+        );
+        assert_eq!(Bits::<1>::new().get(0), None);
+    }
+}
