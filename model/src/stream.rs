@@ -204,14 +204,53 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
     }
 }
 
-/// The messages whose code sits at one offset, by the first byte of their code: the only
-/// ones that can agree with a buffer holding that byte there.
+/// The messages whose code sits at one offset, by the bytes of their code: the only ones that
+/// can agree with the buffered bytes there.
 #[derive(Debug, Clone)]
 struct ByCode {
     code_at: usize,
-    /// Indices into the decoder's shapes: all of them, and by the first code byte.
+    codes: CodeNode,
+}
+
+/// Shapes (indices into the decoder's shapes) by their code, a byte per level: a node stands
+/// for the code bytes on the path to it.
+#[derive(Debug, Clone, Default)]
+struct CodeNode {
+    /// The shapes whose code is exactly the bytes on the path.
+    ends: Vec<usize>,
+    /// Every shape whose code starts with the bytes on the path (`ends` included).
     all: Vec<usize>,
-    by_first: Vec<Vec<usize>>,
+    /// The node after each next byte (256 of them), or empty where no code is longer.
+    next: Vec<CodeNode>,
+}
+
+impl CodeNode {
+    fn insert(&mut self, code: &[u8], shape: usize) {
+        self.all.push(shape);
+        let Some((&b, rest)) = code.split_first() else {
+            self.ends.push(shape);
+            return;
+        };
+        if self.next.is_empty() {
+            self.next = vec![CodeNode::default(); 256];
+        }
+        self.next[usize::from(b)].insert(rest, shape);
+    }
+
+    /// Appends to `out` the shapes whose code agrees with `bytes`, the buffered bytes from
+    /// where the code sits: those whose code the bytes start with, and those whose code starts
+    /// with all the bytes there are.
+    fn agreeing(&self, bytes: &[u8], out: &mut Vec<usize>) {
+        let mut node = self;
+        for &b in bytes {
+            out.extend_from_slice(&node.ends);
+            match node.next.get(usize::from(b)) {
+                Some(next) => node = next,
+                None => return,
+            }
+        }
+        out.extend_from_slice(&node.all);
+    }
 }
 
 /// What one step of the framing rule did.
@@ -232,7 +271,8 @@ pub struct StreamDecoder<'p> {
     codeless: Vec<usize>,
     /// The decoding `interp::decode` does for this protocol and direction, prepared once.
     lookup: Lookup,
-    /// Candidate lengths of one step, kept for their memory.
+    /// Candidate shapes and lengths of one step, kept for their memory.
+    candidates: Vec<usize>,
     lens: Vec<usize>,
     /// The shortest frame the decoder decodes.
     shortest: usize,
@@ -281,24 +321,21 @@ impl<'p> StreamDecoder<'p> {
         let mut by_code: Vec<ByCode> = Vec::new();
         let mut codeless = Vec::new();
         for (i, s) in shapes.iter().enumerate() {
-            let Some(&first) = s.code.first() else {
+            if s.code.is_empty() {
                 codeless.push(i);
                 continue;
-            };
+            }
             let group = match by_code.iter().position(|g| g.code_at == s.at.code) {
                 Some(g) => g,
                 None => {
                     by_code.push(ByCode {
                         code_at: s.at.code,
-                        all: Vec::new(),
-                        by_first: vec![Vec::new(); 256],
+                        codes: CodeNode::default(),
                     });
                     by_code.len() - 1
                 }
             };
-            let g = &mut by_code[group];
-            g.all.push(i);
-            g.by_first[usize::from(first)].push(i);
+            by_code[group].codes.insert(&s.code, i);
         }
         StreamDecoder {
             p,
@@ -307,6 +344,7 @@ impl<'p> StreamDecoder<'p> {
             by_code,
             codeless,
             lookup: Lookup::new(p, direction),
+            candidates: Vec::new(),
             lens: Vec::new(),
             shortest,
             capacity,
@@ -354,8 +392,16 @@ impl<'p> StreamDecoder<'p> {
             let n = room.min(data.len());
             self.buf.extend_from_slice(&data[..n]);
             data = &data[n..];
-            self.drain(false, out);
+            // A full buffer settles something at every step (no frame is longer), and settles
+            // it as the same bytes with fewer buffered would: so steps wait for a full buffer
+            // while bytes remain, instead of waiting at every shorter one.
+            while self.buf.len() >= self.capacity {
+                if let Step::NeedMore = self.step(false, out) {
+                    break;
+                }
+            }
         }
+        self.drain(false, out);
     }
 
     /// Settles everything buffered, as at the end of a capture or after an idle gap: complete
@@ -381,8 +427,10 @@ impl<'p> StreamDecoder<'p> {
         // candidate, and any longer than what is buffered.
         let mut lens = std::mem::take(&mut self.lens);
         lens.clear();
+        let mut candidates = std::mem::take(&mut self.candidates);
+        self.find_candidates(&mut candidates);
         let (mut live, mut longer) = (false, false);
-        for i in self.candidates() {
+        for &i in &candidates {
             let s = &self.shapes[i];
             if !self.agrees(s) {
                 continue;
@@ -408,6 +456,7 @@ impl<'p> StreamDecoder<'p> {
                 lens.push(s.len);
             }
         }
+        self.candidates = candidates;
         if !live || (!flushing && longer) {
             self.lens = lens;
             if !live {
@@ -460,18 +509,16 @@ impl<'p> StreamDecoder<'p> {
         Step::Progress
     }
 
-    /// The shapes that can agree with the buffer (indices into `shapes`): those whose code's
-    /// first byte is the buffered byte where it sits, or all of a group when that byte is not
-    /// buffered yet. [`Self::agrees`] decides.
-    fn candidates(&self) -> impl Iterator<Item = usize> + '_ {
-        let grouped = self
-            .by_code
-            .iter()
-            .flat_map(|g| match self.buf.get(g.code_at) {
-                Some(&b) => &g.by_first[usize::from(b)],
-                None => &g.all,
-            });
-        grouped.chain(&self.codeless).copied()
+    /// The shapes that can agree with the buffer (indices into `shapes`), in `out` (cleared
+    /// first): those whose code agrees with the bytes buffered where it sits, and the codeless
+    /// ones. [`Self::agrees`] decides.
+    fn find_candidates(&self, out: &mut Vec<usize>) {
+        out.clear();
+        for g in &self.by_code {
+            let bytes = self.buf.get(g.code_at..).unwrap_or_default();
+            g.codes.agreeing(bytes, out);
+        }
+        out.extend_from_slice(&self.codeless);
     }
 
     /// Whether the buffered bytes agree with a message so far.
