@@ -498,6 +498,8 @@ impl Limits {
 #[derive(Debug, Clone)]
 pub struct Lookup {
     limits: Limits,
+    /// The frame checksum, table-driven.
+    checksum: checksum::Prepared,
     /// `by_len[n]`: the messages whose frames are `n` bytes long, by where their code sits
     /// and its first byte.
     by_len: Vec<Vec<ByFirst>>,
@@ -572,7 +574,11 @@ impl Lookup {
                 }
             }
         }
-        Lookup { limits, by_len }
+        Lookup {
+            limits,
+            checksum: checksum::Prepared::new(&p.framing.checksum.algorithm),
+            by_len,
+        }
     }
 
     /// Decodes a frame of `p` (the protocol the lookup was built from) as [`decode`] does.
@@ -638,7 +644,7 @@ fn decode_in(
             found: wire.len(),
         });
     }
-    check_checksum(p, wire)?;
+    check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     check_address(p, first.address, wire)?;
     check_length_field(p, directions, wire)?;
 
@@ -787,7 +793,6 @@ fn decide(
             }
         }
     }
-    let first_err = first_err.map(|(r, misfit)| misfit.error(p.message(r)));
     if fitting.len() > 1 {
         if let Some(cmd) = reply_to {
             let answers = |r: &MessageRef| {
@@ -809,10 +814,13 @@ fn decide(
         }
     }
     match fitting.len() {
-        0 => Err(first_err.unwrap_or(DecodeError::Truncated {
-            needed: shortest,
-            found: wire.len(),
-        })),
+        // The first misfit's error, built only now that it is reported.
+        0 => Err(first_err
+            .map(|(r, misfit)| misfit.error(p.message(r)))
+            .unwrap_or(DecodeError::Truncated {
+                needed: shortest,
+                found: wire.len(),
+            })),
         1 => {
             let (message, values) = fitting.remove(0);
             let m = p.message(message);
@@ -858,7 +866,7 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
             direction: Some(m.direction),
         });
     }
-    check_checksum(p, wire)?;
+    check_checksum(p, None, wire)?;
     check_address(p, o.address, wire)?;
     check_length_field(p, &[m.direction], wire)?;
     element_count(p, m, wire)?;
@@ -870,7 +878,13 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
     })
 }
 
-fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
+/// Refuses a frame whose checksum is wrong; `prepared` is the protocol's checksum made once
+/// (else it is computed from its parameters).
+fn check_checksum(
+    p: &Protocol,
+    prepared: Option<&checksum::Prepared>,
+    wire: &[u8],
+) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
     let Some(at) = wire.len().checked_sub(c.len()) else {
         return Err(DecodeError::Truncated {
@@ -878,7 +892,11 @@ fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
             found: wire.len(),
         });
     };
-    let expected = checksum::compute(&c.algorithm, wire.get(c.covers_from..at).unwrap_or(&[]));
+    let covered = wire.get(c.covers_from..at).unwrap_or(&[]);
+    let expected = match prepared {
+        Some(prepared) => prepared.compute(covered),
+        None => checksum::compute(&c.algorithm, covered),
+    };
     let found = read_uint(&wire[at..], c.byte_order);
     if expected != found {
         return Err(DecodeError::ChecksumMismatch {
