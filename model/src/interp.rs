@@ -6,6 +6,7 @@
 //! Where each part of a frame sits is read from the IR ([`crate::ir::Message::layout`],
 //! [`crate::ir::Framing::head`]), resolved once by the validator; nothing here lays out a frame.
 
+use std::borrow::Cow;
 use std::fmt;
 
 use crate::checksum;
@@ -22,21 +23,38 @@ pub enum Raw {
     List(Vec<i64>),
 }
 
-/// One named value of a decoded frame; packed words appear as their sub-fields.
+/// One named value of a decoded frame; packed words appear as their sub-fields. A decoded
+/// frame borrows its names from the spec (`'p`); values given to [`encode`] may own theirs.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Value {
-    pub name: String,
+pub struct Value<'p> {
+    pub name: Cow<'p, str>,
     pub raw: Raw,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Frame {
+pub struct Frame<'p> {
     pub message: MessageRef,
     pub address: u8,
-    pub values: Vec<Value>,
+    pub values: Vec<Value<'p>>,
 }
 
-impl Frame {
+impl Frame<'_> {
+    /// The frame with names of its own, borrowing nothing.
+    pub fn into_owned(self) -> Frame<'static> {
+        Frame {
+            message: self.message,
+            address: self.address,
+            values: self
+                .values
+                .into_iter()
+                .map(|v| Value {
+                    name: Cow::Owned(v.name.into_owned()),
+                    raw: v.raw,
+                })
+                .collect(),
+        }
+    }
+
     pub fn get(&self, name: &str) -> Option<&Raw> {
         self.values.iter().find(|v| v.name == name).map(|v| &v.raw)
     }
@@ -582,12 +600,12 @@ impl Lookup {
     }
 
     /// Decodes a frame of `p` (the protocol the lookup was built from) as [`decode`] does.
-    pub fn decode(
+    pub fn decode<'p>(
         &self,
-        p: &Protocol,
+        p: &'p Protocol,
         reply_to: Option<usize>,
         wire: &[u8],
-    ) -> Result<Frame, DecodeError> {
+    ) -> Result<Frame<'p>, DecodeError> {
         decode_in(p, self.limits, Some(self), (reply_to, false), wire)
     }
 
@@ -595,12 +613,12 @@ impl Lookup {
     /// as [`decode`] without `request`, and where that is [`DecodeError::Ambiguous`], as with
     /// `request` if that settles it; otherwise the ambiguity without it. The same as decoding
     /// twice, with the fields decoded once.
-    pub fn decode_paired(
+    pub fn decode_paired<'p>(
         &self,
-        p: &Protocol,
+        p: &'p Protocol,
         request: Option<usize>,
         wire: &[u8],
-    ) -> Result<Frame, DecodeError> {
+    ) -> Result<Frame<'p>, DecodeError> {
         decode_in(p, self.limits, Some(self), (request, true), wire)
     }
 }
@@ -608,22 +626,22 @@ impl Lookup {
 /// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
 /// responses that only the request they answer can tell apart. To decode many frames of one
 /// protocol, build a [`Lookup`] once.
-pub fn decode(
-    p: &Protocol,
+pub fn decode<'p>(
+    p: &'p Protocol,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     wire: &[u8],
-) -> Result<Frame, DecodeError> {
+) -> Result<Frame<'p>, DecodeError> {
     decode_in(p, Limits::of(p, direction), None, (reply_to, false), wire)
 }
 
-fn decode_in(
-    p: &Protocol,
+fn decode_in<'p>(
+    p: &'p Protocol,
     limits: Limits,
     lookup: Option<&Lookup>,
     reply_to: (Option<usize>, bool),
     wire: &[u8],
-) -> Result<Frame, DecodeError> {
+) -> Result<Frame<'p>, DecodeError> {
     let Limits {
         directions,
         longest_frame,
@@ -760,13 +778,13 @@ fn decode_in(
 /// `paired`: as the stream decoder pairs a response with the request before it, a `reply_to`
 /// that settles nothing leaves the frame ambiguous among every candidate (otherwise among
 /// those answering `reply_to`, or an error if none does).
-fn decide(
-    p: &Protocol,
+fn decide<'p>(
+    p: &'p Protocol,
     by_len: impl IntoIterator<Item = MessageRef>,
     shortest: usize,
     (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
-) -> Result<Frame, DecodeError> {
+) -> Result<Frame<'p>, DecodeError> {
     let mut by_len = by_len.into_iter();
     let first = by_len.next();
     let second = by_len.next();
@@ -841,7 +859,11 @@ fn decide(
 }
 
 /// Decodes `wire` as the given message, reporting the first thing that does not fit it.
-pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, DecodeError> {
+pub fn decode_as<'p>(
+    p: &'p Protocol,
+    r: MessageRef,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
     let m = p.message(r);
     let len = p.frame_len(m);
     let o = m.layout;
@@ -1084,7 +1106,11 @@ fn check_address(p: &Protocol, at: usize, wire: &[u8]) -> Result<(), DecodeError
 
 /// Field values of a frame already known to have the message's length and an allowed address:
 /// constants, repeated fields, ranges and the broadcast rule checked.
-fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
+fn decode_fields<'p>(
+    p: &Protocol,
+    m: &'p Message,
+    wire: &[u8],
+) -> Result<Vec<Value<'p>>, DecodeError> {
     fields_of(p, m, wire).map_err(|misfit| misfit.error(m))
 }
 
@@ -1224,7 +1250,7 @@ fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
 
 /// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first, and their
 /// values built only for a message they fit.
-fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfit> {
+fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<'p>>, Misfit> {
     let o = m.layout;
     let address = wire.get(o.address).copied().unwrap_or(0);
     if broadcast_refused(p, m, address) {
@@ -1330,7 +1356,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
     for f in &m.fields {
         if f.repeat.is_some() {
             values.push(Value {
-                name: f.name.clone(),
+                name: Cow::Borrowed(&f.name),
                 raw: Raw::List(read_elements(f, payload.get(f.offset..).unwrap_or(&[]))),
             });
             continue;
@@ -1338,7 +1364,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         if f.is_ascii() {
             let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
             values.push(Value {
-                name: f.name.clone(),
+                name: Cow::Borrowed(&f.name),
                 raw: Raw::Text(bytes.to_vec()),
             });
             continue;
@@ -1346,13 +1372,13 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         let (unsigned, v) = int_of(f, payload);
         if f.bits.is_empty() {
             values.push(Value {
-                name: f.name.clone(),
+                name: Cow::Borrowed(&f.name),
                 raw: Raw::Int(v),
             });
         }
         for b in &f.bits {
             values.push(Value {
-                name: b.name.clone(),
+                name: Cow::Borrowed(&b.name),
                 raw: Raw::Int(bit_value(unsigned, b)),
             });
         }
@@ -1385,7 +1411,11 @@ fn read_elements(f: &Field, bytes: &[u8]) -> Vec<i64> {
 /// Decodes a reply as the answer to `request` (a decoded request frame): the reply must be one
 /// the request gets, and every field that follows from the request (Modbus: byte count =
 /// 2 × quantity) and every element count taken from it must agree.
-pub fn decode_reply(p: &Protocol, request: &Frame, wire: &[u8]) -> Result<Frame, DecodeError> {
+pub fn decode_reply<'p>(
+    p: &'p Protocol,
+    request: &Frame,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
     let frame = decode(
         p,
         Some(Direction::Response),
@@ -1483,7 +1513,7 @@ pub fn encode(
     for v in values {
         if !m.leaves().any(|l| l.name() == v.name) {
             return Err(EncodeError::UnknownValue {
-                field: v.name.clone(),
+                field: v.name.to_string(),
             });
         }
     }

@@ -79,12 +79,12 @@ pub const MAX_SKIPPED_RUN: usize = 256;
 
 /// What the decoder found in the capture. Offsets count bytes from the first byte ever pushed.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Event {
+pub enum Event<'p> {
     /// A frame that checksummed and decoded.
     Frame {
         offset: u64,
         bytes: Vec<u8>,
-        frame: Frame,
+        frame: Frame<'p>,
     },
     /// A frame that checksummed but fits several messages only its request could tell apart,
     /// with no request to pair it with. Its bytes are consumed.
@@ -104,11 +104,11 @@ pub enum Event {
         offset: u64,
         bytes: Vec<u8>,
         reason: DecodeError,
-        frame: Option<Frame>,
+        frame: Option<Frame<'p>>,
     },
 }
 
-impl Event {
+impl Event<'_> {
     /// Offset of the event's first byte in the capture.
     pub fn offset(&self) -> u64 {
         match self {
@@ -377,14 +377,14 @@ impl<'p> StreamDecoder<'p> {
 
     /// Feeds bytes; returns what they settled. Bytes that might still start a frame stay
     /// buffered until more arrive or [`StreamDecoder::flush`] is called.
-    pub fn push(&mut self, data: &[u8]) -> Vec<Event> {
+    pub fn push(&mut self, data: &[u8]) -> Vec<Event<'p>> {
         let mut out = Vec::new();
         self.push_into(data, &mut out);
         out
     }
 
     /// [`Self::push`], appending the events to `out` (for a caller that reuses one list).
-    pub fn push_into(&mut self, mut data: &[u8], out: &mut Vec<Event>) {
+    pub fn push_into(&mut self, mut data: &[u8], out: &mut Vec<Event<'p>>) {
         // As many events as frames of the shortest length fit (noise runs come between them).
         out.reserve(data.len() / self.shortest + 1);
         while !data.is_empty() {
@@ -407,19 +407,19 @@ impl<'p> StreamDecoder<'p> {
     /// Settles everything buffered, as at the end of a capture or after an idle gap: complete
     /// frames are decoded with the candidates that fit, the rest is noise. The decoder stays
     /// usable; offsets continue.
-    pub fn flush(&mut self) -> Vec<Event> {
+    pub fn flush(&mut self) -> Vec<Event<'p>> {
         let mut out = Vec::new();
         self.drain(true, &mut out);
         self.report_noise(&mut out);
         out
     }
 
-    fn drain(&mut self, flushing: bool, out: &mut Vec<Event>) {
+    fn drain(&mut self, flushing: bool, out: &mut Vec<Event<'p>>) {
         while let Step::Progress = self.step(flushing, out) {}
     }
 
     /// Applies the framing rule once at the head of the buffer.
-    fn step(&mut self, flushing: bool, out: &mut Vec<Event>) -> Step {
+    fn step(&mut self, flushing: bool, out: &mut Vec<Event<'p>>) -> Step {
         if self.buf.is_empty() {
             return Step::NeedMore;
         }
@@ -493,7 +493,7 @@ impl<'p> StreamDecoder<'p> {
                 .get_or_insert_with(|| Box::new(relaxed(self.p)));
             let frame = decode_lenient(self.p, relaxed, self.direction, None, &bytes)
                 .ok()
-                .map(|(frame, _)| frame);
+                .map(|(frame, _)| frame.into_owned());
             self.last_request = None;
             self.report_noise(out);
             out.push(Event::OutOfSpec {
@@ -542,7 +542,7 @@ impl<'p> StreamDecoder<'p> {
     /// The event for the first `len` buffered bytes if they are a frame; otherwise `Err` with
     /// the reason if they break only a rule of the spec ([`breaks_spec`]), `Err(None)` if
     /// they are no frame at all.
-    fn try_frame(&mut self, len: usize) -> Result<Event, Option<DecodeError>> {
+    fn try_frame(&mut self, len: usize) -> Result<Event<'p>, Option<DecodeError>> {
         let Some(wire) = self.buf.get(..len) else {
             return Err(None);
         };
@@ -587,7 +587,7 @@ impl<'p> StreamDecoder<'p> {
         self.head += n as u64;
     }
 
-    fn drop_byte(&mut self, out: &mut Vec<Event>) {
+    fn drop_byte(&mut self, out: &mut Vec<Event<'p>>) {
         let Some(&b) = self.buf.first() else {
             return;
         };
@@ -601,7 +601,7 @@ impl<'p> StreamDecoder<'p> {
         }
     }
 
-    fn report_noise(&mut self, out: &mut Vec<Event>) {
+    fn report_noise(&mut self, out: &mut Vec<Event<'p>>) {
         if !self.noise.is_empty() {
             out.push(Event::Skipped {
                 offset: self.noise_at,
@@ -650,13 +650,13 @@ pub fn relaxed(p: &Protocol) -> Protocol {
 /// frame order): so the first is the error strict decoding gives, and the list is empty for a
 /// frame strict decoding accepts. Framing, codes, lengths, constants and repeated fields are
 /// checked as ever: their errors are returned.
-pub fn decode_lenient(
+pub fn decode_lenient<'r>(
     p: &Protocol,
-    relaxed: &Protocol,
+    relaxed: &'r Protocol,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     wire: &[u8],
-) -> Result<(Frame, Vec<DecodeError>), DecodeError> {
+) -> Result<(Frame<'r>, Vec<DecodeError>), DecodeError> {
     let frame = interp::decode(relaxed, direction, reply_to, wire)?;
     let violations = violations(p, &frame);
     Ok((frame, violations))
@@ -731,7 +731,7 @@ mod tests {
         load_str("sd.yaml", include_str!("../../spec/sd.yaml")).unwrap_or_else(|d| panic!("{d}"))
     }
 
-    fn run(p: &Protocol, chunks: &[&[u8]]) -> Vec<Event> {
+    fn run<'p>(p: &'p Protocol, chunks: &[&[u8]]) -> Vec<Event<'p>> {
         let mut d = StreamDecoder::new(p, None);
         let mut events = Vec::new();
         for c in chunks {
@@ -977,7 +977,7 @@ mod tests {
             index: read,
         };
         let values = [interp::Value {
-            name: "byte_number".to_owned(),
+            name: "byte_number".into(),
             raw: Raw::Int(37),
         }];
         // Strict encoding refuses both the address and the value; lifted, it writes the frame.
@@ -1000,7 +1000,7 @@ mod tests {
             r,
             0x05,
             &[interp::Value {
-                name: "byte_number".to_owned(),
+                name: "byte_number".into(),
                 raw: Raw::Int(3),
             }],
         )
