@@ -801,12 +801,13 @@ fn decide<'p>(
             Err(misfit) => Err(misfit.error(m)),
         };
     }
-    let mut fitting = Vec::new();
+    // The messages whose fields fit; their values are built for the one chosen.
+    let mut fitting: Vec<MessageRef> = Vec::new();
     let mut first_err = None;
     for r in first.into_iter().chain(second).chain(by_len) {
-        match fields_of(p, p.message(r), wire) {
-            Ok(values) => fitting.push((r, values)),
-            Err(misfit) => {
+        match misfit(p, p.message(r), wire) {
+            None => fitting.push(r),
+            Some(misfit) => {
                 first_err.get_or_insert((r, misfit));
             }
         }
@@ -819,16 +820,13 @@ fn decide<'p>(
                         .get(cmd)
                         .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
             };
-            if paired && fitting.iter().filter(|(r, _)| answers(r)).count() != 1 {
+            if paired && fitting.iter().filter(|r| answers(r)).count() != 1 {
                 // Not settled by the request: the ambiguity without it.
                 return Err(DecodeError::Ambiguous {
-                    candidates: fitting
-                        .iter()
-                        .map(|(r, _)| p.message(*r).name.clone())
-                        .collect(),
+                    candidates: fitting.iter().map(|r| p.message(*r).name.clone()).collect(),
                 });
             }
-            fitting.retain(|(r, _)| answers(r));
+            fitting.retain(answers);
         }
     }
     match fitting.len() {
@@ -840,20 +838,17 @@ fn decide<'p>(
                 found: wire.len(),
             })),
         1 => {
-            let (message, values) = fitting.remove(0);
+            let message = fitting[0];
             let m = p.message(message);
             let o = m.layout;
             Ok(Frame {
                 message,
                 address: wire.get(o.address).copied().unwrap_or(0),
-                values,
+                values: values_of(p, m, wire),
             })
         }
         _ => Err(DecodeError::Ambiguous {
-            candidates: fitting
-                .iter()
-                .map(|(r, _)| p.message(*r).name.clone())
-                .collect(),
+            candidates: fitting.iter().map(|r| p.message(*r).name.clone()).collect(),
         }),
     }
 }
@@ -1248,23 +1243,36 @@ fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
     (unsigned, v)
 }
 
-/// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first, and their
-/// values built only for a message they fit.
+/// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first
+/// ([`misfit`]), and their values built only for a message they fit ([`values_of`]).
 fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<'p>>, Misfit> {
+    match misfit(p, m, wire) {
+        Some(misfit) => Err(misfit),
+        None => Ok(values_of(p, m, wire)),
+    }
+}
+
+/// A variable message's payload runs to the checksum.
+fn payload_of<'w>(p: &Protocol, m: &Message, wire: &'w [u8]) -> &'w [u8] {
+    let end = wire.len().saturating_sub(p.framing.checksum.len());
+    wire.get(m.layout.payload..end).unwrap_or(&[])
+}
+
+/// The first thing in the frame's fields that does not fit message `m`, if any: broadcast,
+/// constants, fields that follow or equal others, repeated elements and ranges.
+fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let o = m.layout;
     let address = wire.get(o.address).copied().unwrap_or(0);
     if broadcast_refused(p, m, address) {
-        return Err(Misfit::Broadcast { address });
+        return Some(Misfit::Broadcast { address });
     }
-    // A variable message's payload runs to the checksum.
-    let end = wire.len().saturating_sub(p.framing.checksum.len());
-    let payload = wire.get(o.payload..end).unwrap_or(&[]);
+    let payload = payload_of(p, m, wire);
     for (i, f) in m.fields.iter().enumerate() {
         if f.repeat.is_some() {
             let at = o.payload + f.offset;
             for v in read_elements(f, payload.get(f.offset..).unwrap_or(&[])) {
                 if let Some((min, max)) = range_violation(f, None, v) {
-                    return Err(Misfit::Range {
+                    return Some(Misfit::Range {
                         field: i,
                         bit: None,
                         offset: at,
@@ -1283,7 +1291,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
         let (unsigned, v) = int_of(f, payload);
         if let Some(c) = f.constant {
             if unsigned != c {
-                return Err(Misfit::Constant {
+                return Some(Misfit::Constant {
                     field: i,
                     bit: None,
                     offset: at,
@@ -1295,7 +1303,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
         if let Some(Follows::Field(other, rel)) = &f.follows {
             let expected = rel.apply(m.fields.get(*other).map_or(0, |e| int_of(e, payload).1));
             if v != expected {
-                return Err(Misfit::NotFollowing {
+                return Some(Misfit::NotFollowing {
                     field: i,
                     offset: at,
                     expected,
@@ -1306,7 +1314,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
         if let Some(other) = f.equals {
             let expected = m.fields.get(other).map_or(0, |e| int_of(e, payload).1);
             if v != expected {
-                return Err(Misfit::NotEqual {
+                return Some(Misfit::NotEqual {
                     field: i,
                     other,
                     offset: at,
@@ -1317,7 +1325,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
         }
         if f.bits.is_empty() {
             if let Some((min, max)) = range_violation(f, None, v) {
-                return Err(Misfit::Range {
+                return Some(Misfit::Range {
                     field: i,
                     bit: None,
                     offset: at,
@@ -1331,7 +1339,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
             let bv = bit_value(unsigned, b);
             if let Some(c) = b.constant {
                 if bv as u64 != c {
-                    return Err(Misfit::Constant {
+                    return Some(Misfit::Constant {
                         field: i,
                         bit: Some(k),
                         offset: at,
@@ -1341,7 +1349,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
                 }
             }
             if let Some((min, max)) = range_violation(f, Some(b), bv) {
-                return Err(Misfit::Range {
+                return Some(Misfit::Range {
                     field: i,
                     bit: Some(k),
                     offset: at,
@@ -1352,6 +1360,12 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
             }
         }
     }
+    None
+}
+
+/// The values of a frame that fits message `m` ([`misfit`] found nothing).
+fn values_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Vec<Value<'p>> {
+    let payload = payload_of(p, m, wire);
     let mut values = Vec::with_capacity(m.fields.len());
     for f in &m.fields {
         if f.repeat.is_some() {
@@ -1383,7 +1397,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
             });
         }
     }
-    Ok(values)
+    values
 }
 
 /// The elements of a repeated field from the bytes where they start (to the payload's end).
