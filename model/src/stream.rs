@@ -468,11 +468,11 @@ impl<'p> StreamDecoder<'p> {
         lens.sort_unstable_by(|a, b| b.cmp(a));
         lens.dedup();
         let mut out_of_spec: Option<(usize, DecodeError)> = None;
-        let mut found = None;
+        let mut found = false;
         for &len in &lens {
-            match self.try_frame(len) {
-                Ok(event) => {
-                    found = Some((len, event));
+            match self.try_frame(len, out) {
+                Ok(()) => {
+                    found = true;
                     break;
                 }
                 Err(Some(reason)) if out_of_spec.is_none() => out_of_spec = Some((len, reason)),
@@ -480,10 +480,7 @@ impl<'p> StreamDecoder<'p> {
             }
         }
         self.lens = lens;
-        if let Some((len, event)) = found {
-            self.report_noise(out);
-            self.consume(len);
-            out.push(event);
+        if found {
             return Step::Progress;
         }
         if let Some((len, reason)) = out_of_spec {
@@ -539,10 +536,14 @@ impl<'p> StreamDecoder<'p> {
         true
     }
 
-    /// The event for the first `len` buffered bytes if they are a frame; otherwise `Err` with
-    /// the reason if they break only a rule of the spec ([`breaks_spec`]), `Err(None)` if
-    /// they are no frame at all.
-    fn try_frame(&mut self, len: usize) -> Result<Event<'p>, Option<DecodeError>> {
+    /// If the first `len` buffered bytes are a frame, reports it (after the noise before it)
+    /// and consumes them; otherwise `Err` with the reason if they break only a rule of the
+    /// spec ([`breaks_spec`]), `Err(None)` if they are no frame at all.
+    fn try_frame(
+        &mut self,
+        len: usize,
+        out: &mut Vec<Event<'p>>,
+    ) -> Result<(), Option<DecodeError>> {
         let Some(wire) = self.buf.get(..len) else {
             return Err(None);
         };
@@ -554,24 +555,27 @@ impl<'p> StreamDecoder<'p> {
             Err(e) => return Err(Some(e).filter(breaks_spec)),
         };
         let bytes = wire.to_vec();
-        match found {
+        self.report_noise(out);
+        self.consume(len);
+        out.push(match found {
             Ok(frame) => {
                 self.pair(frame.message);
-                Ok(Event::Frame {
+                Event::Frame {
                     offset,
                     bytes,
                     frame,
-                })
+                }
             }
             Err(candidates) => {
                 self.last_request = None;
-                Ok(Event::Ambiguous {
+                Event::Ambiguous {
                     offset,
                     bytes,
                     candidates,
-                })
+                }
             }
-        }
+        });
+        Ok(())
     }
 
     fn pair(&mut self, r: MessageRef) {
