@@ -669,7 +669,9 @@ fn decode_in<'p>(
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
         let o = m.layout;
-        wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..])
+        // Byte by byte: a code is a byte or two, shorter than a call to compare slices.
+        o.code <= wire.len()
+            && (m.code.iter().enumerate()).all(|(i, c)| wire.get(o.code + i) == Some(c))
     };
     // In the lookup, a variable message stands under every length it can have: its frame
     // must have one its length or count field agrees with.
