@@ -1,10 +1,10 @@
 //! Checksums computed straight from their declared parameters.
 //!
-//! [`crc`] is a plain bit-by-bit implementation of the catalogue's parameter model, not the
+//! [`crc()`] is a plain bit-by-bit implementation of the catalogue's parameter model, not the
 //! table-driven `crc` crate the generated code uses: validation checks every declared check
 //! value with it, and a single decode ([`crate::interp::decode`]) uses it. [`Prepared`] is the
 //! `crc` crate's table-driven algorithm for the same parameters, made once for decoding many
-//! frames ([`crate::interp::Lookup`], the stream decoder); its tests hold it to [`crc`].
+//! frames ([`crate::interp::Lookup`], the stream decoder); its tests hold it to [`crc()`].
 
 use std::sync::{Mutex, OnceLock};
 
@@ -213,7 +213,7 @@ mod tests {
         for width in 1..=64u8 {
             for (refin, refout) in [(false, false), (true, true), (true, false), (false, true)] {
                 let p = params(width, next() | 1, next(), refin, refout, next());
-                let prepared = Prepared::new(&ChecksumAlgorithm::Crc(p.clone()));
+                let prepared = Prepared::new(&ChecksumAlgorithm::Crc(p));
                 for len in 0..=data.len() {
                     assert_eq!(
                         prepared.compute(&data[..len]),

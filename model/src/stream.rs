@@ -1022,6 +1022,43 @@ mod tests {
     }
 
     #[test]
+    fn code_trie_finds_exactly_the_codes_that_agree() {
+        // Codes of one and two bytes, one a prefix of others, as UB2 and Modbus have them.
+        let codes: [&[u8]; 5] = [
+            &[0x40],
+            &[0x40, 0x72],
+            &[0x40, 0x73],
+            &[0x41, 0x72],
+            &[0x07],
+        ];
+        let mut root = CodeNode::default();
+        for (i, c) in codes.iter().enumerate() {
+            root.insert(c, i);
+        }
+        // What `agrees` says of each code, for buffers cut anywhere.
+        let agrees = |bytes: &[u8], code: &[u8]| code.iter().zip(bytes).all(|(c, b)| c == b);
+        for bytes in [
+            &[][..],
+            &[0x40],
+            &[0x40, 0x72],
+            &[0x40, 0x72, 0x00],
+            &[0x40, 0x00],
+            &[0x41],
+            &[0x41, 0x73],
+            &[0x07, 0x40],
+            &[0x99, 0x40],
+        ] {
+            let mut found = Vec::new();
+            root.agreeing(bytes, &mut found);
+            found.sort_unstable();
+            let want: Vec<usize> = (0..codes.len())
+                .filter(|&i| agrees(bytes, codes[i]))
+                .collect();
+            assert_eq!(found, want, "bytes {bytes:02X?}");
+        }
+    }
+
+    #[test]
     fn truncated_frame_then_good_frame_resynchronises() {
         let p = ub2();
         // go_to_capacitance cut after 5 bytes, then a whole reference_run.
