@@ -1,6 +1,7 @@
 //! Writes the benches' synthetic capture of a protocol to stdout, for timing the CLI on it
-//! (`benches/cli.sh`): `raw` is [`capture`] (every example frame over and over, 1 % noise,
-//! seeded), `hex` is [`hex_lines`] (the same frames as hex text, one per line). The protocol is
+//! (`benches/cli.sh`): `raw` is [`capture`](busspec_benches::mixed::capture) (every example
+//! frame over and over, 1 % noise, seeded), `hex` is [`hex_lines`] (the same frames as hex
+//! text, one per line). The protocol is
 //! a built-in one's name or a spec file (`spec/modbus.yaml`), whose examples make the capture.
 //!
 //! ```text
