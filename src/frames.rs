@@ -107,7 +107,7 @@ struct Interpreted<'a> {
     printer: &'a Printer,
     decoder: StreamDecoder<'a>,
     /// The events of one piece, kept for their memory.
-    events: Vec<busspec_model::stream::Event>,
+    events: Vec<busspec_model::stream::Event<'a>>,
 }
 
 impl LineStream for Interpreted<'_> {

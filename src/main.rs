@@ -641,7 +641,8 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
                 .unwrap_or_else(|e| usage_error("decode", format!("--request {text}: {e}")));
             direction = Some(Direction::Response);
             reply_to = Some(frame.message.index);
-            Some(frame)
+            // Owned: `engine` is borrowed mutably below, while the request is still needed.
+            Some(frame.into_owned())
         }
     };
     let mut out = Out::new(std::io::stdout().lock());

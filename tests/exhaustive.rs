@@ -127,7 +127,7 @@ fn ub2_every_enum_value_round_trips() {
                     .into_iter()
                     .map(|(name, v)| Value {
                         raw: if name == f.name { Raw::Int(raw) } else { v },
-                        name,
+                        name: name.into(),
                     })
                     .collect();
                 let frame = interp::encode(&p, r, base.address, &values).unwrap();

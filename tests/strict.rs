@@ -88,7 +88,7 @@ fn leaf_rules(l: &Leaf) -> Rules {
 }
 
 /// Values for every free leaf: the low end of its range (0 where it has none), spaces for text.
-fn baseline(m: &Message) -> Vec<Value> {
+fn baseline(m: &Message) -> Vec<Value<'static>> {
     free_leaves(m)
         .iter()
         .map(|l| {
@@ -97,14 +97,14 @@ fn baseline(m: &Message) -> Vec<Value> {
                 _ => Raw::Int(leaf_rules(l).0.map_or(0, |r| r.0)),
             };
             Value {
-                name: l.name().to_owned(),
+                name: l.name().to_owned().into(),
                 raw,
             }
         })
         .collect()
 }
 
-fn with(values: &[Value], name: &str, raw: i64) -> Vec<Value> {
+fn with<'a>(values: &[Value<'a>], name: &str, raw: i64) -> Vec<Value<'a>> {
     let mut v = values.to_vec();
     for x in &mut v {
         if x.name == name {
@@ -225,8 +225,8 @@ where
         let values = f
             .values
             .iter()
-            .filter(|v| free.contains(&v.name))
-            .map(|v| (v.name.clone(), v.raw.clone()))
+            .filter(|v| free.iter().any(|n| *n == v.name))
+            .map(|v| (v.name.to_string(), v.raw.clone()))
             .collect();
         Ok((m.name.clone(), f.address, values))
     }
@@ -988,7 +988,7 @@ where
                     }
                 };
                 Value {
-                    name: l.name().to_owned(),
+                    name: l.name().to_owned().into(),
                     raw,
                 }
             })
@@ -997,7 +997,7 @@ where
             .unwrap_or_else(|err| panic!("{} to 0x{address:02X}: {err}", m.name));
         let want: Vec<(String, Raw)> = values
             .iter()
-            .map(|v| (v.name.clone(), v.raw.clone()))
+            .map(|v| (v.name.to_string(), v.raw.clone()))
             .collect();
         let seen = (m.name.clone(), address, want);
         let ctx = || format!("{} {}", m.name, interp::format_hex(&frame));

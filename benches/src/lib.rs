@@ -243,19 +243,19 @@ pub enum InterpEncodeError {
     BufferTooSmall { needed: usize },
 }
 
-impl Contender for Interp<'_> {
-    type Request = interp::Frame;
-    type Response = interp::Frame;
+impl<'p> Contender for Interp<'p> {
+    type Request = interp::Frame<'p>;
+    type Response = interp::Frame<'p>;
     type DecodeError = interp::DecodeError;
     type EncodeError = InterpEncodeError;
-    fn decode_request(&self, frame: &[u8]) -> Result<interp::Frame, interp::DecodeError> {
+    fn decode_request(&self, frame: &[u8]) -> Result<interp::Frame<'p>, interp::DecodeError> {
         interp::decode(self.0, Some(Direction::Request), None, frame)
     }
     fn decode_response(
         &self,
         frame: &[u8],
-        request: Option<&interp::Frame>,
-    ) -> Result<interp::Frame, interp::DecodeError> {
+        request: Option<&interp::Frame<'p>>,
+    ) -> Result<interp::Frame<'p>, interp::DecodeError> {
         let reply_to = request.map(|r| r.message.index);
         interp::decode(self.0, Some(Direction::Response), reply_to, frame)
     }

@@ -56,12 +56,12 @@ fn ambiguous(p: &Spec, candidates: &[String], reply_to: Option<usize>) -> String
 
 /// Decodes one frame with the interpreter: like [`interp::decode`], but an ambiguity says how
 /// to settle it, and a `reply_to` (a command index) that settles nothing says so.
-pub fn decode_frame(
-    p: &Spec,
+pub fn decode_frame<'p>(
+    p: &'p Spec,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     wire: &[u8],
-) -> Result<Frame, String> {
+) -> Result<Frame<'p>, String> {
     match interp::decode(p, direction, None, wire) {
         Ok(f) => Ok(f),
         Err(InterpError::Ambiguous { candidates }) => match reply_to {

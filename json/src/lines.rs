@@ -397,7 +397,7 @@ impl Printer {
             // Values come in leaf order; look the name up only where they do not.
             let leaf = match plan.leaves.get(i) {
                 Some(l) if l.name == v.name => Some(l),
-                _ => plan.by_name.get(&v.name).and_then(|&k| plan.leaves.get(k)),
+                _ => plan.by_name.get(&*v.name).and_then(|&k| plan.leaves.get(k)),
             };
             Self::value(out, p, &self.decimals, m, leaf, &v.name, raw);
         }

@@ -18,7 +18,7 @@ use crate::{Spec, Typed};
 pub struct Parsed {
     pub message: MessageRef,
     pub address: u8,
-    pub values: Vec<Value>,
+    pub values: Vec<Value<'static>>,
 }
 
 impl Parsed {
@@ -275,7 +275,7 @@ pub fn parse_line(p: &Spec, line: &str) -> Result<Parsed, String> {
         };
         let v = field_value(p, f, bit, name, raw.get())?;
         values.push(Value {
-            name: name.clone(),
+            name: name.clone().into(),
             raw: v,
         });
     }

@@ -1,8 +1,12 @@
 //! Checksums computed straight from their declared parameters.
 //!
-//! This is deliberately a plain bit-by-bit implementation of the catalogue's parameter model and
-//! not the table-driven `crc` crate the generated code uses: the interpreter is the independent
-//! oracle the generated code is tested against, so the two must not share an implementation.
+//! [`crc()`] is a plain bit-by-bit implementation of the catalogue's parameter model, not the
+//! table-driven `crc` crate the generated code uses: validation checks every declared check
+//! value with it, and a single decode ([`crate::interp::decode`]) uses it. [`Prepared`] is the
+//! `crc` crate's table-driven algorithm for the same parameters, made once for decoding many
+//! frames ([`crate::interp::Lookup`], the stream decoder); its tests hold it to [`crc()`].
+
+use std::sync::{Mutex, OnceLock};
 
 use crate::ir::{ChecksumAlgorithm, CrcParams};
 
@@ -17,6 +21,87 @@ pub fn compute(algorithm: &ChecksumAlgorithm, data: &[u8]) -> u64 {
         ChecksumAlgorithm::Xor8 => u64::from(data.iter().fold(0u8, |s, b| s ^ b)),
         ChecksumAlgorithm::Crc(p) => crc(p, data),
     }
+}
+
+/// A checksum prepared once for many frames: a CRC as the `crc` crate's table-driven
+/// algorithm for its parameters; the 8-bit sums as [`compute`] has them.
+#[derive(Clone)]
+pub struct Prepared {
+    algorithm: ChecksumAlgorithm,
+    table: Option<crc::Crc<u64, crc::Table<1>>>,
+}
+
+impl std::fmt::Debug for Prepared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Prepared")
+            .field("algorithm", &self.algorithm)
+            .field("table", &self.table.is_some())
+            .finish()
+    }
+}
+
+impl Prepared {
+    pub fn new(algorithm: &ChecksumAlgorithm) -> Prepared {
+        let table = match algorithm {
+            ChecksumAlgorithm::Crc(p) => Some(crc::Crc::<u64, crc::Table<1>>::new(interned(p))),
+            _ => None,
+        };
+        Prepared {
+            algorithm: algorithm.clone(),
+            table,
+        }
+    }
+
+    /// The checksum of `data`, as [`compute`] gives it.
+    pub fn compute(&self, data: &[u8]) -> u64 {
+        match &self.table {
+            Some(table) => table.checksum(data),
+            None => compute(&self.algorithm, data),
+        }
+    }
+}
+
+/// The `crc` crate's algorithm for `p`: the crate takes only `'static` ones, so each set of
+/// parameters a process meets is made once and kept (a spec has one; a process meets few).
+fn interned(p: &CrcParams) -> &'static crc::Algorithm<u64> {
+    static MADE: OnceLock<Mutex<Vec<&'static crc::Algorithm<u64>>>> = OnceLock::new();
+    let width = p.width.clamp(1, 64);
+    let mask = if width == 64 {
+        u64::MAX
+    } else {
+        (1u64 << width) - 1
+    };
+    let wanted = crc::Algorithm {
+        width,
+        poly: p.poly & mask,
+        init: p.init & mask,
+        refin: p.refin,
+        refout: p.refout,
+        xorout: p.xorout & mask,
+        check: crc(p, CHECK_INPUT),
+        residue: 0,
+    };
+    let same = |a: &crc::Algorithm<u64>| {
+        (a.width, a.poly, a.init, a.refin, a.refout, a.xorout)
+            == (
+                wanted.width,
+                wanted.poly,
+                wanted.init,
+                wanted.refin,
+                wanted.refout,
+                wanted.xorout,
+            )
+    };
+    let mut made = MADE
+        .get_or_init(Mutex::default)
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    if let Some(a) = made.iter().find(|a| same(a)) {
+        return a;
+    }
+    let a: &'static crc::Algorithm<u64> = Box::leak(Box::new(wanted));
+    made.push(a);
+    a
 }
 
 fn sum8(data: &[u8]) -> u8 {
@@ -111,6 +196,37 @@ mod tests {
         assert_eq!(compute(&ChecksumAlgorithm::Sum8TwosComplement, &ping), 0xCD);
         assert_eq!(compute(&ChecksumAlgorithm::Xor8, &[0x0F, 0xF0, 0x01]), 0xFE);
         assert_eq!(compute(&ChecksumAlgorithm::Xor8, CHECK_INPUT), 0x31);
+    }
+
+    #[test]
+    fn prepared_agrees_with_bit_by_bit() {
+        // Every width, both reflections, odd polynomials and assorted init/xorout, over data
+        // of every length up to 40 from a fixed generator.
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let data: Vec<u8> = (0..40).map(|_| next() as u8).collect();
+        for width in 1..=64u8 {
+            for (refin, refout) in [(false, false), (true, true), (true, false), (false, true)] {
+                let p = params(width, next() | 1, next(), refin, refout, next());
+                let prepared = Prepared::new(&ChecksumAlgorithm::Crc(p));
+                for len in 0..=data.len() {
+                    assert_eq!(
+                        prepared.compute(&data[..len]),
+                        crc(&p, &data[..len]),
+                        "width {width} refin {refin} refout {refout} len {len}"
+                    );
+                }
+            }
+        }
+        // The 8-bit sums as `compute` has them.
+        let ping = [0x01, 0x04, 0x02, 0x2B, 0x01];
+        let prepared = Prepared::new(&ChecksumAlgorithm::Sum8OnesComplement);
+        assert_eq!(prepared.compute(&ping), 0xCC);
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! Where each part of a frame sits is read from the IR ([`crate::ir::Message::layout`],
 //! [`crate::ir::Framing::head`]), resolved once by the validator; nothing here lays out a frame.
 
+use std::borrow::Cow;
 use std::fmt;
 
 use crate::checksum;
@@ -22,21 +23,38 @@ pub enum Raw {
     List(Vec<i64>),
 }
 
-/// One named value of a decoded frame; packed words appear as their sub-fields.
+/// One named value of a decoded frame; packed words appear as their sub-fields. A decoded
+/// frame borrows its names from the spec (`'p`); values given to [`encode`] may own theirs.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Value {
-    pub name: String,
+pub struct Value<'p> {
+    pub name: Cow<'p, str>,
     pub raw: Raw,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Frame {
+pub struct Frame<'p> {
     pub message: MessageRef,
     pub address: u8,
-    pub values: Vec<Value>,
+    pub values: Vec<Value<'p>>,
 }
 
-impl Frame {
+impl Frame<'_> {
+    /// The frame with names of its own, borrowing nothing.
+    pub fn into_owned(self) -> Frame<'static> {
+        Frame {
+            message: self.message,
+            address: self.address,
+            values: self
+                .values
+                .into_iter()
+                .map(|v| Value {
+                    name: Cow::Owned(v.name.into_owned()),
+                    raw: v.raw,
+                })
+                .collect(),
+        }
+    }
+
     pub fn get(&self, name: &str) -> Option<&Raw> {
         self.values.iter().find(|v| v.name == name).map(|v| &v.raw)
     }
@@ -498,6 +516,8 @@ impl Limits {
 #[derive(Debug, Clone)]
 pub struct Lookup {
     limits: Limits,
+    /// The frame checksum, table-driven.
+    checksum: checksum::Prepared,
     /// `by_len[n]`: the messages whose frames are `n` bytes long, by where their code sits
     /// and its first byte.
     by_len: Vec<Vec<ByFirst>>,
@@ -572,16 +592,20 @@ impl Lookup {
                 }
             }
         }
-        Lookup { limits, by_len }
+        Lookup {
+            limits,
+            checksum: checksum::Prepared::new(&p.framing.checksum.algorithm),
+            by_len,
+        }
     }
 
     /// Decodes a frame of `p` (the protocol the lookup was built from) as [`decode`] does.
-    pub fn decode(
+    pub fn decode<'p>(
         &self,
-        p: &Protocol,
+        p: &'p Protocol,
         reply_to: Option<usize>,
         wire: &[u8],
-    ) -> Result<Frame, DecodeError> {
+    ) -> Result<Frame<'p>, DecodeError> {
         decode_in(p, self.limits, Some(self), (reply_to, false), wire)
     }
 
@@ -589,12 +613,12 @@ impl Lookup {
     /// as [`decode`] without `request`, and where that is [`DecodeError::Ambiguous`], as with
     /// `request` if that settles it; otherwise the ambiguity without it. The same as decoding
     /// twice, with the fields decoded once.
-    pub fn decode_paired(
+    pub fn decode_paired<'p>(
         &self,
-        p: &Protocol,
+        p: &'p Protocol,
         request: Option<usize>,
         wire: &[u8],
-    ) -> Result<Frame, DecodeError> {
+    ) -> Result<Frame<'p>, DecodeError> {
         decode_in(p, self.limits, Some(self), (request, true), wire)
     }
 }
@@ -602,22 +626,22 @@ impl Lookup {
 /// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
 /// responses that only the request they answer can tell apart. To decode many frames of one
 /// protocol, build a [`Lookup`] once.
-pub fn decode(
-    p: &Protocol,
+pub fn decode<'p>(
+    p: &'p Protocol,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     wire: &[u8],
-) -> Result<Frame, DecodeError> {
+) -> Result<Frame<'p>, DecodeError> {
     decode_in(p, Limits::of(p, direction), None, (reply_to, false), wire)
 }
 
-fn decode_in(
-    p: &Protocol,
+fn decode_in<'p>(
+    p: &'p Protocol,
     limits: Limits,
     lookup: Option<&Lookup>,
     reply_to: (Option<usize>, bool),
     wire: &[u8],
-) -> Result<Frame, DecodeError> {
+) -> Result<Frame<'p>, DecodeError> {
     let Limits {
         directions,
         longest_frame,
@@ -638,14 +662,16 @@ fn decode_in(
             found: wire.len(),
         });
     }
-    check_checksum(p, wire)?;
+    check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     check_address(p, first.address, wire)?;
     check_length_field(p, directions, wire)?;
 
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
         let o = m.layout;
-        wire.get(o.code..o.code + m.code.len()) == Some(&m.code[..])
+        // Byte by byte: a code is a byte or two, shorter than a call to compare slices.
+        o.code <= wire.len()
+            && (m.code.iter().enumerate()).all(|(i, c)| wire.get(o.code + i) == Some(c))
     };
     // In the lookup, a variable message stands under every length it can have: its frame
     // must have one its length or count field agrees with.
@@ -754,13 +780,13 @@ fn decode_in(
 /// `paired`: as the stream decoder pairs a response with the request before it, a `reply_to`
 /// that settles nothing leaves the frame ambiguous among every candidate (otherwise among
 /// those answering `reply_to`, or an error if none does).
-fn decide(
-    p: &Protocol,
+fn decide<'p>(
+    p: &'p Protocol,
     by_len: impl IntoIterator<Item = MessageRef>,
     shortest: usize,
     (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
-) -> Result<Frame, DecodeError> {
+) -> Result<Frame<'p>, DecodeError> {
     let mut by_len = by_len.into_iter();
     let first = by_len.next();
     let second = by_len.next();
@@ -777,17 +803,17 @@ fn decide(
             Err(misfit) => Err(misfit.error(m)),
         };
     }
-    let mut fitting = Vec::new();
+    // The messages whose fields fit; their values are built for the one chosen.
+    let mut fitting: Vec<MessageRef> = Vec::new();
     let mut first_err = None;
     for r in first.into_iter().chain(second).chain(by_len) {
-        match fields_of(p, p.message(r), wire) {
-            Ok(values) => fitting.push((r, values)),
-            Err(misfit) => {
+        match misfit(p, p.message(r), wire) {
+            None => fitting.push(r),
+            Some(misfit) => {
                 first_err.get_or_insert((r, misfit));
             }
         }
     }
-    let first_err = first_err.map(|(r, misfit)| misfit.error(p.message(r)));
     if fitting.len() > 1 {
         if let Some(cmd) = reply_to {
             let answers = |r: &MessageRef| {
@@ -796,44 +822,45 @@ fn decide(
                         .get(cmd)
                         .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
             };
-            if paired && fitting.iter().filter(|(r, _)| answers(r)).count() != 1 {
+            if paired && fitting.iter().filter(|r| answers(r)).count() != 1 {
                 // Not settled by the request: the ambiguity without it.
                 return Err(DecodeError::Ambiguous {
-                    candidates: fitting
-                        .iter()
-                        .map(|(r, _)| p.message(*r).name.clone())
-                        .collect(),
+                    candidates: fitting.iter().map(|r| p.message(*r).name.clone()).collect(),
                 });
             }
-            fitting.retain(|(r, _)| answers(r));
+            fitting.retain(answers);
         }
     }
     match fitting.len() {
-        0 => Err(first_err.unwrap_or(DecodeError::Truncated {
-            needed: shortest,
-            found: wire.len(),
-        })),
+        // The first misfit's error, built only now that it is reported.
+        0 => Err(first_err
+            .map(|(r, misfit)| misfit.error(p.message(r)))
+            .unwrap_or(DecodeError::Truncated {
+                needed: shortest,
+                found: wire.len(),
+            })),
         1 => {
-            let (message, values) = fitting.remove(0);
+            let message = fitting[0];
             let m = p.message(message);
             let o = m.layout;
             Ok(Frame {
                 message,
                 address: wire.get(o.address).copied().unwrap_or(0),
-                values,
+                values: values_of(p, m, wire),
             })
         }
         _ => Err(DecodeError::Ambiguous {
-            candidates: fitting
-                .iter()
-                .map(|(r, _)| p.message(*r).name.clone())
-                .collect(),
+            candidates: fitting.iter().map(|r| p.message(*r).name.clone()).collect(),
         }),
     }
 }
 
 /// Decodes `wire` as the given message, reporting the first thing that does not fit it.
-pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, DecodeError> {
+pub fn decode_as<'p>(
+    p: &'p Protocol,
+    r: MessageRef,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
     let m = p.message(r);
     let len = p.frame_len(m);
     let o = m.layout;
@@ -858,7 +885,7 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
             direction: Some(m.direction),
         });
     }
-    check_checksum(p, wire)?;
+    check_checksum(p, None, wire)?;
     check_address(p, o.address, wire)?;
     check_length_field(p, &[m.direction], wire)?;
     element_count(p, m, wire)?;
@@ -870,7 +897,13 @@ pub fn decode_as(p: &Protocol, r: MessageRef, wire: &[u8]) -> Result<Frame, Deco
     })
 }
 
-fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
+/// Refuses a frame whose checksum is wrong; `prepared` is the protocol's checksum made once
+/// (else it is computed from its parameters).
+fn check_checksum(
+    p: &Protocol,
+    prepared: Option<&checksum::Prepared>,
+    wire: &[u8],
+) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
     let Some(at) = wire.len().checked_sub(c.len()) else {
         return Err(DecodeError::Truncated {
@@ -878,7 +911,11 @@ fn check_checksum(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
             found: wire.len(),
         });
     };
-    let expected = checksum::compute(&c.algorithm, wire.get(c.covers_from..at).unwrap_or(&[]));
+    let covered = wire.get(c.covers_from..at).unwrap_or(&[]);
+    let expected = match prepared {
+        Some(prepared) => prepared.compute(covered),
+        None => checksum::compute(&c.algorithm, covered),
+    };
     let found = read_uint(&wire[at..], c.byte_order);
     if expected != found {
         return Err(DecodeError::ChecksumMismatch {
@@ -1042,7 +1079,11 @@ fn check_address(p: &Protocol, at: usize, wire: &[u8]) -> Result<(), DecodeError
 
 /// Field values of a frame already known to have the message's length and an allowed address:
 /// constants, repeated fields, ranges and the broadcast rule checked.
-fn decode_fields(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, DecodeError> {
+fn decode_fields<'p>(
+    p: &Protocol,
+    m: &'p Message,
+    wire: &[u8],
+) -> Result<Vec<Value<'p>>, DecodeError> {
     fields_of(p, m, wire).map_err(|misfit| misfit.error(m))
 }
 
@@ -1180,23 +1221,36 @@ fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
     (unsigned, v)
 }
 
-/// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first, and their
-/// values built only for a message they fit.
-fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfit> {
+/// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first
+/// ([`misfit`]), and their values built only for a message they fit ([`values_of`]).
+fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<'p>>, Misfit> {
+    match misfit(p, m, wire) {
+        Some(misfit) => Err(misfit),
+        None => Ok(values_of(p, m, wire)),
+    }
+}
+
+/// A variable message's payload runs to the checksum.
+fn payload_of<'w>(p: &Protocol, m: &Message, wire: &'w [u8]) -> &'w [u8] {
+    let end = wire.len().saturating_sub(p.framing.checksum.len());
+    wire.get(m.layout.payload..end).unwrap_or(&[])
+}
+
+/// The first thing in the frame's fields that does not fit message `m`, if any: broadcast,
+/// constants, fields that follow or equal others, repeated elements and ranges.
+fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let o = m.layout;
     let address = wire.get(o.address).copied().unwrap_or(0);
     if broadcast_refused(p, m, address) {
-        return Err(Misfit::Broadcast { address });
+        return Some(Misfit::Broadcast { address });
     }
-    // A variable message's payload runs to the checksum.
-    let end = wire.len().saturating_sub(p.framing.checksum.len());
-    let payload = wire.get(o.payload..end).unwrap_or(&[]);
+    let payload = payload_of(p, m, wire);
     for (i, f) in m.fields.iter().enumerate() {
         if f.repeat.is_some() {
             let at = o.payload + f.offset;
             for v in read_elements(f, payload.get(f.offset..).unwrap_or(&[])) {
                 if let Some((min, max)) = range_violation(f, None, v) {
-                    return Err(Misfit::Range {
+                    return Some(Misfit::Range {
                         field: i,
                         bit: None,
                         offset: at,
@@ -1215,7 +1269,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         let (unsigned, v) = int_of(f, payload);
         if let Some(c) = f.constant {
             if unsigned != c {
-                return Err(Misfit::Constant {
+                return Some(Misfit::Constant {
                     field: i,
                     bit: None,
                     offset: at,
@@ -1227,7 +1281,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         if let Some(Follows::Field(other, rel)) = &f.follows {
             let expected = rel.apply(m.fields.get(*other).map_or(0, |e| int_of(e, payload).1));
             if v != expected {
-                return Err(Misfit::NotFollowing {
+                return Some(Misfit::NotFollowing {
                     field: i,
                     offset: at,
                     expected,
@@ -1238,7 +1292,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         if let Some(other) = f.equals {
             let expected = m.fields.get(other).map_or(0, |e| int_of(e, payload).1);
             if v != expected {
-                return Err(Misfit::NotEqual {
+                return Some(Misfit::NotEqual {
                     field: i,
                     other,
                     offset: at,
@@ -1249,7 +1303,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         }
         if f.bits.is_empty() {
             if let Some((min, max)) = range_violation(f, None, v) {
-                return Err(Misfit::Range {
+                return Some(Misfit::Range {
                     field: i,
                     bit: None,
                     offset: at,
@@ -1263,7 +1317,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
             let bv = bit_value(unsigned, b);
             if let Some(c) = b.constant {
                 if bv as u64 != c {
-                    return Err(Misfit::Constant {
+                    return Some(Misfit::Constant {
                         field: i,
                         bit: Some(k),
                         offset: at,
@@ -1273,7 +1327,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
                 }
             }
             if let Some((min, max)) = range_violation(f, Some(b), bv) {
-                return Err(Misfit::Range {
+                return Some(Misfit::Range {
                     field: i,
                     bit: Some(k),
                     offset: at,
@@ -1284,11 +1338,17 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
             }
         }
     }
+    None
+}
+
+/// The values of a frame that fits message `m` ([`misfit`] found nothing).
+fn values_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Vec<Value<'p>> {
+    let payload = payload_of(p, m, wire);
     let mut values = Vec::with_capacity(m.fields.len());
     for f in &m.fields {
         if f.repeat.is_some() {
             values.push(Value {
-                name: f.name.clone(),
+                name: Cow::Borrowed(&f.name),
                 raw: Raw::List(read_elements(f, payload.get(f.offset..).unwrap_or(&[]))),
             });
             continue;
@@ -1296,7 +1356,7 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         if f.is_ascii() {
             let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
             values.push(Value {
-                name: f.name.clone(),
+                name: Cow::Borrowed(&f.name),
                 raw: Raw::Text(bytes.to_vec()),
             });
             continue;
@@ -1304,18 +1364,18 @@ fn fields_of(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Vec<Value>, Misfi
         let (unsigned, v) = int_of(f, payload);
         if f.bits.is_empty() {
             values.push(Value {
-                name: f.name.clone(),
+                name: Cow::Borrowed(&f.name),
                 raw: Raw::Int(v),
             });
         }
         for b in &f.bits {
             values.push(Value {
-                name: b.name.clone(),
+                name: Cow::Borrowed(&b.name),
                 raw: Raw::Int(bit_value(unsigned, b)),
             });
         }
     }
-    Ok(values)
+    values
 }
 
 /// The elements of a repeated field from the bytes where they start (to the payload's end).
@@ -1343,7 +1403,11 @@ fn read_elements(f: &Field, bytes: &[u8]) -> Vec<i64> {
 /// Decodes a reply as the answer to `request` (a decoded request frame): the reply must be one
 /// the request gets, and every field that follows from the request (Modbus: byte count =
 /// 2 × quantity) and every element count taken from it must agree.
-pub fn decode_reply(p: &Protocol, request: &Frame, wire: &[u8]) -> Result<Frame, DecodeError> {
+pub fn decode_reply<'p>(
+    p: &'p Protocol,
+    request: &Frame,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
     let frame = decode(
         p,
         Some(Direction::Response),
@@ -1441,7 +1505,7 @@ pub fn encode(
     for v in values {
         if !m.leaves().any(|l| l.name() == v.name) {
             return Err(EncodeError::UnknownValue {
-                field: v.name.clone(),
+                field: v.name.to_string(),
             });
         }
     }

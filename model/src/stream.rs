@@ -79,12 +79,12 @@ pub const MAX_SKIPPED_RUN: usize = 256;
 
 /// What the decoder found in the capture. Offsets count bytes from the first byte ever pushed.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Event {
+pub enum Event<'p> {
     /// A frame that checksummed and decoded.
     Frame {
         offset: u64,
         bytes: Vec<u8>,
-        frame: Frame,
+        frame: Frame<'p>,
     },
     /// A frame that checksummed but fits several messages only its request could tell apart,
     /// with no request to pair it with. Its bytes are consumed.
@@ -104,11 +104,11 @@ pub enum Event {
         offset: u64,
         bytes: Vec<u8>,
         reason: DecodeError,
-        frame: Option<Frame>,
+        frame: Option<Frame<'p>>,
     },
 }
 
-impl Event {
+impl Event<'_> {
     /// Offset of the event's first byte in the capture.
     pub fn offset(&self) -> u64 {
         match self {
@@ -204,14 +204,53 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
     }
 }
 
-/// The messages whose code sits at one offset, by the first byte of their code: the only
-/// ones that can agree with a buffer holding that byte there.
+/// The messages whose code sits at one offset, by the bytes of their code: the only ones that
+/// can agree with the buffered bytes there.
 #[derive(Debug, Clone)]
 struct ByCode {
     code_at: usize,
-    /// Indices into the decoder's shapes: all of them, and by the first code byte.
+    codes: CodeNode,
+}
+
+/// Shapes (indices into the decoder's shapes) by their code, a byte per level: a node stands
+/// for the code bytes on the path to it.
+#[derive(Debug, Clone, Default)]
+struct CodeNode {
+    /// The shapes whose code is exactly the bytes on the path.
+    ends: Vec<usize>,
+    /// Every shape whose code starts with the bytes on the path (`ends` included).
     all: Vec<usize>,
-    by_first: Vec<Vec<usize>>,
+    /// The node after each next byte (256 of them), or empty where no code is longer.
+    next: Vec<CodeNode>,
+}
+
+impl CodeNode {
+    fn insert(&mut self, code: &[u8], shape: usize) {
+        self.all.push(shape);
+        let Some((&b, rest)) = code.split_first() else {
+            self.ends.push(shape);
+            return;
+        };
+        if self.next.is_empty() {
+            self.next = vec![CodeNode::default(); 256];
+        }
+        self.next[usize::from(b)].insert(rest, shape);
+    }
+
+    /// Appends to `out` the shapes whose code agrees with `bytes`, the buffered bytes from
+    /// where the code sits: those whose code the bytes start with, and those whose code starts
+    /// with all the bytes there are.
+    fn agreeing(&self, bytes: &[u8], out: &mut Vec<usize>) {
+        let mut node = self;
+        for &b in bytes {
+            out.extend_from_slice(&node.ends);
+            match node.next.get(usize::from(b)) {
+                Some(next) => node = next,
+                None => return,
+            }
+        }
+        out.extend_from_slice(&node.all);
+    }
 }
 
 /// What one step of the framing rule did.
@@ -232,7 +271,8 @@ pub struct StreamDecoder<'p> {
     codeless: Vec<usize>,
     /// The decoding `interp::decode` does for this protocol and direction, prepared once.
     lookup: Lookup,
-    /// Candidate lengths of one step, kept for their memory.
+    /// Candidate shapes and lengths of one step, kept for their memory.
+    candidates: Vec<usize>,
     lens: Vec<usize>,
     /// The shortest frame the decoder decodes.
     shortest: usize,
@@ -281,24 +321,21 @@ impl<'p> StreamDecoder<'p> {
         let mut by_code: Vec<ByCode> = Vec::new();
         let mut codeless = Vec::new();
         for (i, s) in shapes.iter().enumerate() {
-            let Some(&first) = s.code.first() else {
+            if s.code.is_empty() {
                 codeless.push(i);
                 continue;
-            };
+            }
             let group = match by_code.iter().position(|g| g.code_at == s.at.code) {
                 Some(g) => g,
                 None => {
                     by_code.push(ByCode {
                         code_at: s.at.code,
-                        all: Vec::new(),
-                        by_first: vec![Vec::new(); 256],
+                        codes: CodeNode::default(),
                     });
                     by_code.len() - 1
                 }
             };
-            let g = &mut by_code[group];
-            g.all.push(i);
-            g.by_first[usize::from(first)].push(i);
+            by_code[group].codes.insert(&s.code, i);
         }
         StreamDecoder {
             p,
@@ -307,6 +344,7 @@ impl<'p> StreamDecoder<'p> {
             by_code,
             codeless,
             lookup: Lookup::new(p, direction),
+            candidates: Vec::new(),
             lens: Vec::new(),
             shortest,
             capacity,
@@ -339,14 +377,14 @@ impl<'p> StreamDecoder<'p> {
 
     /// Feeds bytes; returns what they settled. Bytes that might still start a frame stay
     /// buffered until more arrive or [`StreamDecoder::flush`] is called.
-    pub fn push(&mut self, data: &[u8]) -> Vec<Event> {
+    pub fn push(&mut self, data: &[u8]) -> Vec<Event<'p>> {
         let mut out = Vec::new();
         self.push_into(data, &mut out);
         out
     }
 
     /// [`Self::push`], appending the events to `out` (for a caller that reuses one list).
-    pub fn push_into(&mut self, mut data: &[u8], out: &mut Vec<Event>) {
+    pub fn push_into(&mut self, mut data: &[u8], out: &mut Vec<Event<'p>>) {
         // As many events as frames of the shortest length fit (noise runs come between them).
         out.reserve(data.len() / self.shortest + 1);
         while !data.is_empty() {
@@ -354,26 +392,34 @@ impl<'p> StreamDecoder<'p> {
             let n = room.min(data.len());
             self.buf.extend_from_slice(&data[..n]);
             data = &data[n..];
-            self.drain(false, out);
+            // A full buffer settles something at every step (no frame is longer), and settles
+            // it as the same bytes with fewer buffered would: so steps wait for a full buffer
+            // while bytes remain, instead of waiting at every shorter one.
+            while self.buf.len() >= self.capacity {
+                if let Step::NeedMore = self.step(false, out) {
+                    break;
+                }
+            }
         }
+        self.drain(false, out);
     }
 
     /// Settles everything buffered, as at the end of a capture or after an idle gap: complete
     /// frames are decoded with the candidates that fit, the rest is noise. The decoder stays
     /// usable; offsets continue.
-    pub fn flush(&mut self) -> Vec<Event> {
+    pub fn flush(&mut self) -> Vec<Event<'p>> {
         let mut out = Vec::new();
         self.drain(true, &mut out);
         self.report_noise(&mut out);
         out
     }
 
-    fn drain(&mut self, flushing: bool, out: &mut Vec<Event>) {
+    fn drain(&mut self, flushing: bool, out: &mut Vec<Event<'p>>) {
         while let Step::Progress = self.step(flushing, out) {}
     }
 
     /// Applies the framing rule once at the head of the buffer.
-    fn step(&mut self, flushing: bool, out: &mut Vec<Event>) -> Step {
+    fn step(&mut self, flushing: bool, out: &mut Vec<Event<'p>>) -> Step {
         if self.buf.is_empty() {
             return Step::NeedMore;
         }
@@ -381,8 +427,10 @@ impl<'p> StreamDecoder<'p> {
         // candidate, and any longer than what is buffered.
         let mut lens = std::mem::take(&mut self.lens);
         lens.clear();
+        let mut candidates = std::mem::take(&mut self.candidates);
+        self.find_candidates(&mut candidates);
         let (mut live, mut longer) = (false, false);
-        for i in self.candidates() {
+        for &i in &candidates {
             let s = &self.shapes[i];
             if !self.agrees(s) {
                 continue;
@@ -408,6 +456,7 @@ impl<'p> StreamDecoder<'p> {
                 lens.push(s.len);
             }
         }
+        self.candidates = candidates;
         if !live || (!flushing && longer) {
             self.lens = lens;
             if !live {
@@ -419,11 +468,11 @@ impl<'p> StreamDecoder<'p> {
         lens.sort_unstable_by(|a, b| b.cmp(a));
         lens.dedup();
         let mut out_of_spec: Option<(usize, DecodeError)> = None;
-        let mut found = None;
+        let mut found = false;
         for &len in &lens {
-            match self.try_frame(len) {
-                Ok(event) => {
-                    found = Some((len, event));
+            match self.try_frame(len, out) {
+                Ok(()) => {
+                    found = true;
                     break;
                 }
                 Err(Some(reason)) if out_of_spec.is_none() => out_of_spec = Some((len, reason)),
@@ -431,10 +480,7 @@ impl<'p> StreamDecoder<'p> {
             }
         }
         self.lens = lens;
-        if let Some((len, event)) = found {
-            self.report_noise(out);
-            self.consume(len);
-            out.push(event);
+        if found {
             return Step::Progress;
         }
         if let Some((len, reason)) = out_of_spec {
@@ -444,7 +490,7 @@ impl<'p> StreamDecoder<'p> {
                 .get_or_insert_with(|| Box::new(relaxed(self.p)));
             let frame = decode_lenient(self.p, relaxed, self.direction, None, &bytes)
                 .ok()
-                .map(|(frame, _)| frame);
+                .map(|(frame, _)| frame.into_owned());
             self.last_request = None;
             self.report_noise(out);
             out.push(Event::OutOfSpec {
@@ -460,18 +506,16 @@ impl<'p> StreamDecoder<'p> {
         Step::Progress
     }
 
-    /// The shapes that can agree with the buffer (indices into `shapes`): those whose code's
-    /// first byte is the buffered byte where it sits, or all of a group when that byte is not
-    /// buffered yet. [`Self::agrees`] decides.
-    fn candidates(&self) -> impl Iterator<Item = usize> + '_ {
-        let grouped = self
-            .by_code
-            .iter()
-            .flat_map(|g| match self.buf.get(g.code_at) {
-                Some(&b) => &g.by_first[usize::from(b)],
-                None => &g.all,
-            });
-        grouped.chain(&self.codeless).copied()
+    /// The shapes that can agree with the buffer (indices into `shapes`), in `out` (cleared
+    /// first): those whose code agrees with the bytes buffered where it sits, and the codeless
+    /// ones. [`Self::agrees`] decides.
+    fn find_candidates(&self, out: &mut Vec<usize>) {
+        out.clear();
+        for g in &self.by_code {
+            let bytes = self.buf.get(g.code_at..).unwrap_or_default();
+            g.codes.agreeing(bytes, out);
+        }
+        out.extend_from_slice(&self.codeless);
     }
 
     /// Whether the buffered bytes agree with a message so far.
@@ -492,10 +536,14 @@ impl<'p> StreamDecoder<'p> {
         true
     }
 
-    /// The event for the first `len` buffered bytes if they are a frame; otherwise `Err` with
-    /// the reason if they break only a rule of the spec ([`breaks_spec`]), `Err(None)` if
-    /// they are no frame at all.
-    fn try_frame(&mut self, len: usize) -> Result<Event, Option<DecodeError>> {
+    /// If the first `len` buffered bytes are a frame, reports it (after the noise before it)
+    /// and consumes them; otherwise `Err` with the reason if they break only a rule of the
+    /// spec ([`breaks_spec`]), `Err(None)` if they are no frame at all.
+    fn try_frame(
+        &mut self,
+        len: usize,
+        out: &mut Vec<Event<'p>>,
+    ) -> Result<(), Option<DecodeError>> {
         let Some(wire) = self.buf.get(..len) else {
             return Err(None);
         };
@@ -507,24 +555,27 @@ impl<'p> StreamDecoder<'p> {
             Err(e) => return Err(Some(e).filter(breaks_spec)),
         };
         let bytes = wire.to_vec();
-        match found {
+        self.report_noise(out);
+        self.consume(len);
+        out.push(match found {
             Ok(frame) => {
                 self.pair(frame.message);
-                Ok(Event::Frame {
+                Event::Frame {
                     offset,
                     bytes,
                     frame,
-                })
+                }
             }
             Err(candidates) => {
                 self.last_request = None;
-                Ok(Event::Ambiguous {
+                Event::Ambiguous {
                     offset,
                     bytes,
                     candidates,
-                })
+                }
             }
-        }
+        });
+        Ok(())
     }
 
     fn pair(&mut self, r: MessageRef) {
@@ -540,7 +591,7 @@ impl<'p> StreamDecoder<'p> {
         self.head += n as u64;
     }
 
-    fn drop_byte(&mut self, out: &mut Vec<Event>) {
+    fn drop_byte(&mut self, out: &mut Vec<Event<'p>>) {
         let Some(&b) = self.buf.first() else {
             return;
         };
@@ -554,7 +605,7 @@ impl<'p> StreamDecoder<'p> {
         }
     }
 
-    fn report_noise(&mut self, out: &mut Vec<Event>) {
+    fn report_noise(&mut self, out: &mut Vec<Event<'p>>) {
         if !self.noise.is_empty() {
             out.push(Event::Skipped {
                 offset: self.noise_at,
@@ -603,13 +654,13 @@ pub fn relaxed(p: &Protocol) -> Protocol {
 /// frame order): so the first is the error strict decoding gives, and the list is empty for a
 /// frame strict decoding accepts. Framing, codes, lengths, constants and repeated fields are
 /// checked as ever: their errors are returned.
-pub fn decode_lenient(
+pub fn decode_lenient<'r>(
     p: &Protocol,
-    relaxed: &Protocol,
+    relaxed: &'r Protocol,
     direction: Option<Direction>,
     reply_to: Option<usize>,
     wire: &[u8],
-) -> Result<(Frame, Vec<DecodeError>), DecodeError> {
+) -> Result<(Frame<'r>, Vec<DecodeError>), DecodeError> {
     let frame = interp::decode(relaxed, direction, reply_to, wire)?;
     let violations = violations(p, &frame);
     Ok((frame, violations))
@@ -684,7 +735,7 @@ mod tests {
         load_str("sd.yaml", include_str!("../../spec/sd.yaml")).unwrap_or_else(|d| panic!("{d}"))
     }
 
-    fn run(p: &Protocol, chunks: &[&[u8]]) -> Vec<Event> {
+    fn run<'p>(p: &'p Protocol, chunks: &[&[u8]]) -> Vec<Event<'p>> {
         let mut d = StreamDecoder::new(p, None);
         let mut events = Vec::new();
         for c in chunks {
@@ -930,7 +981,7 @@ mod tests {
             index: read,
         };
         let values = [interp::Value {
-            name: "byte_number".to_owned(),
+            name: "byte_number".into(),
             raw: Raw::Int(37),
         }];
         // Strict encoding refuses both the address and the value; lifted, it writes the frame.
@@ -953,7 +1004,7 @@ mod tests {
             r,
             0x05,
             &[interp::Value {
-                name: "byte_number".to_owned(),
+                name: "byte_number".into(),
                 raw: Raw::Int(3),
             }],
         )
@@ -968,6 +1019,43 @@ mod tests {
             decode_lenient(&p, &lifted, None, None, &bad),
             Err(DecodeError::ChecksumMismatch { .. })
         ));
+    }
+
+    #[test]
+    fn code_trie_finds_exactly_the_codes_that_agree() {
+        // Codes of one and two bytes, one a prefix of others, as UB2 and Modbus have them.
+        let codes: [&[u8]; 5] = [
+            &[0x40],
+            &[0x40, 0x72],
+            &[0x40, 0x73],
+            &[0x41, 0x72],
+            &[0x07],
+        ];
+        let mut root = CodeNode::default();
+        for (i, c) in codes.iter().enumerate() {
+            root.insert(c, i);
+        }
+        // What `agrees` says of each code, for buffers cut anywhere.
+        let agrees = |bytes: &[u8], code: &[u8]| code.iter().zip(bytes).all(|(c, b)| c == b);
+        for bytes in [
+            &[][..],
+            &[0x40],
+            &[0x40, 0x72],
+            &[0x40, 0x72, 0x00],
+            &[0x40, 0x00],
+            &[0x41],
+            &[0x41, 0x73],
+            &[0x07, 0x40],
+            &[0x99, 0x40],
+        ] {
+            let mut found = Vec::new();
+            root.agreeing(bytes, &mut found);
+            found.sort_unstable();
+            let want: Vec<usize> = (0..codes.len())
+                .filter(|&i| agrees(bytes, codes[i]))
+                .collect();
+            assert_eq!(found, want, "bytes {bytes:02X?}");
+        }
     }
 
     #[test]

@@ -60,12 +60,12 @@ fn frames(p: &Protocol) -> Vec<Vec<u8>> {
 }
 
 /// The stream decoder's pairing as it was written: two decodes.
-fn paired_twice(
-    p: &Protocol,
+fn paired_twice<'p>(
+    p: &'p Protocol,
     direction: Option<Direction>,
     request: Option<usize>,
     wire: &[u8],
-) -> Result<interp::Frame, DecodeError> {
+) -> Result<interp::Frame<'p>, DecodeError> {
     match interp::decode(p, direction, None, wire) {
         Err(DecodeError::Ambiguous { candidates }) => {
             match request.map(|r| interp::decode(p, direction, Some(r), wire)) {

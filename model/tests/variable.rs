@@ -40,14 +40,14 @@ fn rsp(p: &Protocol, name: &str) -> MessageRef {
     p.find_in(name, Direction::Response).unwrap()
 }
 
-fn v(name: &str, raw: Raw) -> Value {
+fn v(name: &str, raw: Raw) -> Value<'_> {
     Value {
-        name: name.to_owned(),
+        name: name.into(),
         raw,
     }
 }
 
-fn request(p: &Protocol, wire: &[u8]) -> Frame {
+fn request<'p>(p: &'p Protocol, wire: &[u8]) -> Frame<'p> {
     interp::decode(p, Some(Direction::Request), None, wire).unwrap()
 }
 

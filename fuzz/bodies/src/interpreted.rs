@@ -44,7 +44,7 @@ pub fn specs() -> [(&'static str, &'static Protocol); 2] {
 }
 
 /// The example requests of `p`, decoded.
-fn requests(p: &Protocol) -> Vec<Frame> {
+fn requests(p: &Protocol) -> Vec<Frame<'_>> {
     p.examples
         .iter()
         .filter(|e| e.message.direction == Direction::Request)
@@ -103,12 +103,12 @@ pub fn decode(p: &Protocol, data: &[u8]) {
     }
 }
 
-fn events(
-    p: &Protocol,
+fn events<'p>(
+    p: &'p Protocol,
     d: Option<Direction>,
     capture: &[u8],
     sizes: &mut impl FnMut() -> usize,
-) -> Vec<Event> {
+) -> Vec<Event<'p>> {
     let mut s = StreamDecoder::new(p, d);
     let mut out = Vec::new();
     let mut rest = capture;

@@ -603,7 +603,7 @@ fn interp_encode(
     let values: Vec<interp::Value> = values
         .iter()
         .map(|(name, raw)| interp::Value {
-            name: name.clone(),
+            name: name.clone().into(),
             raw: raw.clone(),
         })
         .collect();

@@ -87,7 +87,7 @@ pub fn interp_values(p: &Spec, f: &Frame) -> Values {
             }
             None => false,
         })
-        .map(|v| (v.name.clone(), v.raw.clone()))
+        .map(|v| (v.name.to_string(), v.raw.clone()))
         .collect()
 }
 
