@@ -193,6 +193,103 @@ pub fn check_frame(
     Ok(address)
 }
 
+/// The first half of [`check_frame`]: no longer than `max`, the start byte, at least `min`
+/// bytes (more than `address_at` and the checksum). A decoder whose arms check the rest on the
+/// frame as an array of their message's length ([`checked`]) checks this before the code.
+#[inline(always)]
+pub fn check_head(
+    frame: &[u8],
+    min: usize,
+    max: usize,
+    address_at: usize,
+    f: &Frame,
+) -> Result<(), DecodeError> {
+    let len = frame.len();
+    if len > max {
+        return Err(DecodeError::TooLong { max, found: len });
+    }
+    if let Some((at, expected)) = f.start {
+        if let Some(&found) = frame.get(at) {
+            if found != expected {
+                return Err(DecodeError::BadStart { expected, found });
+            }
+        }
+    }
+    if len < min || min <= address_at || min < f.checksum_len {
+        return Err(DecodeError::Truncated {
+            needed: min,
+            found: len,
+        });
+    }
+    Ok(())
+}
+
+/// The second half of [`check_frame`], for a frame that passed [`check_head`] (so that it
+/// holds the checksum and the address): the checksum, then the address.
+#[inline(always)]
+pub fn check_tail(
+    frame: &[u8],
+    address_at: usize,
+    f: &Frame,
+    checksum: impl FnOnce(&[u8]) -> u32,
+) -> Result<(), DecodeError> {
+    // `check_head` (or the length of the array `checked` has) keeps both in bounds.
+    let at = frame.len() - f.checksum_len;
+    let (found, expected) = sums(frame, at, f, checksum);
+    if found != expected {
+        return Err(DecodeError::ChecksumMismatch {
+            offset: at,
+            expected,
+            found,
+        });
+    }
+    let address = frame[address_at];
+    if !f.address_ok(address) {
+        return Err(DecodeError::BadAddress {
+            offset: address_at,
+            found: address,
+            min: f.devices.0,
+            max: f.devices.1,
+        });
+    }
+    Ok(())
+}
+
+/// The dispatch arm of a message of one fixed length `N`, in a frame that passed
+/// [`check_head`]: the frame as an array of `N` with its checksum and address checked on the
+/// array (so the checksum's length is a constant and it compiles to a straight chain), then,
+/// for a reply, `Err(NotAReply)` if the request does not admit it. A frame of another length
+/// has its checksum and address checked by `tail` (out of line, shared by every arm), then
+/// gets `NotAReply` or `WrongLength`: the errors and their order are [`check_frame`]'s
+/// followed by [`reply`]'s.
+#[inline(always)]
+pub fn checked<'f, const N: usize>(
+    frame: &'f [u8],
+    admitted: bool,
+    code: u32,
+    address_at: usize,
+    f: &Frame,
+    checksum: impl FnOnce(&[u8]) -> u32,
+    tail: impl FnOnce(&[u8]) -> Result<(), DecodeError>,
+) -> Result<&'f [u8; N], DecodeError> {
+    let Ok(array) = <&[u8; N]>::try_from(frame) else {
+        tail(frame)?;
+        return Err(if admitted {
+            DecodeError::WrongLength {
+                expected: N,
+                found: frame.len(),
+            }
+        } else {
+            DecodeError::NotAReply { code }
+        });
+    };
+    check_tail(array, address_at, f, checksum)?;
+    if !admitted {
+        return Err(DecodeError::NotAReply { code });
+    }
+    Ok(array)
+}
+
 /// The code: `n` bytes from `at`, big-endian (as codes are written). The caller has checked
 /// that `frame` is long enough.
 #[inline(always)]
@@ -844,6 +941,54 @@ pub fn length_field(
 #[cfg(test)]
 mod lang_tests {
     use super::*;
+
+    /// `check_head`, then `checked::<5>` in the arm, gives what `check_frame`, then `reply::<5>`
+    /// gave: the same error first, whatever the frame's length, checksum, address and request.
+    #[test]
+    fn checks_in_the_arm_keep_the_order_of_errors() {
+        let f = Frame {
+            start: Some((0, 0xAA)),
+            devices: (0x21, 0x40),
+            broadcast: None,
+            host: Some(0x20),
+            checksum_len: 1,
+            checksum_be: false,
+        };
+        let sum = |b: &[u8]| u32::from(crate::sum8(b));
+        // Each frame, and whether its last byte is made its sum-8.
+        let frames: [(&[u8], bool); 10] = [
+            (&[0xAA, 0x21, 0x40, 0x72, 0], true),
+            (&[0xAA, 0x21, 0x40, 0x72, 0], false),
+            (&[0xAA, 0x10, 0x40, 0x72, 0], true),
+            (&[0xAA, 0x21, 0x40, 0x72, 1, 0], true),
+            (&[0xAA, 0x21, 0x40, 0x72, 1, 0], false),
+            (&[0xAA, 0x10, 0x40, 0x72, 1, 0], true),
+            (&[0xAA, 0x21, 0x40, 0], true),
+            (&[0xAA, 0x21, 0x40, 0x72, 1, 2, 3, 4, 5, 6], false),
+            (&[0xAB, 0x21, 0x40, 0x72, 0], false),
+            (&[0xAA, 0x21], false),
+        ];
+        for (bytes, seal) in frames {
+            let mut buf = [0u8; 16];
+            let frame = &mut buf[..bytes.len()];
+            frame.copy_from_slice(bytes);
+            if seal {
+                let n = frame.len() - 1;
+                frame[n] = crate::sum8(&frame[..n]);
+            }
+            let frame = &*frame;
+            for admitted in [true, false] {
+                let old = check_frame(frame, 4, 9, 1, &f, sum)
+                    .and_then(|_| reply::<5>(frame, admitted, 0x4072));
+                let new = check_head(frame, 4, 9, 1, &f).and_then(|()| {
+                    checked::<5>(frame, admitted, 0x4072, 1, &f, sum, |b| {
+                        check_tail(b, 1, &f, sum)
+                    })
+                });
+                assert_eq!(new, old, "{frame:02X?}, admitted {admitted}");
+            }
+        }
+    }
 
     #[test]
     fn sums_of_the_newer_checksums() {
