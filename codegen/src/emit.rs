@@ -1926,17 +1926,6 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     let code_at = |l: usize| p.framing.head(l).code;
     let replies = d == Direction::Response;
     let first_code_at = usize_lit(code_at(1));
-    // Where the direction has no length field (checked between the address and the code),
-    // the checksum and address are checked in the arms: a message of one fixed length on its
-    // frame as an array (`Self::checked`), anything else by `Self::check_tail` first.
-    // Only for a sum-8, which folds into a chain in each arm; a table CRC in each arm is a
-    // call the inliner refuses (`checksum_in_arms`).
-    let in_arm = p.framing.length_rule(d).is_none() && checksum_in_arms(p);
-    let tail = if in_arm {
-        quote!(Self::check_tail(frame)?;)
-    } else {
-        quote!()
-    };
     let unknown = {
         let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
         quote!(rt::Err(rt::unknown_code(frame, #first_code_at, #longest_code, #clen, #replies)))
@@ -1959,7 +1948,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         let arms = codes.into_iter().map(|code| {
             let group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
             let lit = hex_code(code);
-            let arm = emit_group(ctx, &group, replies, in_arm);
+            let arm = emit_group(ctx, &group, replies);
             if last {
                 quote!(#lit => #arm,)
             } else {
@@ -1984,7 +1973,6 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
             let need = usize_lit(need);
             body.push(quote! {
                 if frame.len() < #need {
-                    #tail
                     return #unknown;
                 }
             });
@@ -1992,10 +1980,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         body.push(quote! {
             match rt::code(frame, #at, #l) {
                 #(#arms)*
-                _ => {
-                    #tail
-                    #unknown
-                }
+                _ => #unknown,
             }
         });
     }
@@ -2032,71 +2017,20 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         quote!()
     };
     let length = length_check(p, d);
-    let checks = if in_arm {
-        quote! {
-            #sync
-            rt::check_head(frame, #min_len, #max_len, #addr_at, &FRAME)?;
-            let message = Self::dispatch(frame #request_arg)?;
-            #follows
-            rt::Ok(Decoded { address: frame[#addr_at], message })
-        }
-    } else {
-        quote! {
-            #sync
-            let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
-            #length
-            let message = Self::dispatch(frame #request_arg)?;
-            #follows
-            rt::Ok(Decoded { address, message })
-        }
+    let checks = quote! {
+        #sync
+        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
+        #length
+        let message = Self::dispatch(frame #request_arg)?;
+        #follows
+        rt::Ok(Decoded { address, message })
     };
-    let dispatch = if in_arm {
-        let fixed_arm = msgs
-            .iter()
-            .any(|m| !m.is_variable() && msgs.iter().filter(|o| o.code == m.code).count() == 1);
-        let checked = if !fixed_arm {
-            quote!()
-        } else if replies {
-            quote! {
-                /// A frame of a reply of `N` bytes, its checksum and address checked on it as an
-                /// array, if the request admits it.
-                #[inline(always)]
-                fn checked<const N: usize>(frame: &[u8], admitted: bool, code: u32) -> rt::DecodeResult<&[u8; N]> {
-                    rt::checked(frame, admitted, code, #addr_at, &FRAME, #sum, Self::check_tail)
-                }
-            }
-        } else {
-            quote! {
-                /// A frame of a message of `N` bytes, its checksum and address checked on it
-                /// as an array.
-                #[inline(always)]
-                fn checked<const N: usize>(frame: &[u8]) -> rt::DecodeResult<&[u8; N]> {
-                    rt::checked(frame, true, 0, #addr_at, &FRAME, #sum, Self::check_tail)
-                }
-            }
-        };
-        quote! {
-            /// The message of a frame that passed `rt::check_head`, by its code; each arm
-            /// checks the checksum and the address before anything else.
-            #[inline]
-            fn dispatch(frame: &[u8] #request_param) -> rt::DecodeResult<Self> {
-                #asked
-                #(#body)*
-            }
-            /// The checksum and address of a frame, where no arm takes it as an array.
-            fn check_tail(frame: &[u8]) -> rt::DecodeResult<()> {
-                rt::check_tail(frame, #addr_at, &FRAME, #sum)
-            }
-            #checked
-        }
-    } else {
-        quote! {
-            /// The message of a frame that passed the checks every frame passes, by its code.
-            #[inline]
-            fn dispatch(frame: &[u8] #request_param) -> rt::DecodeResult<Self> {
-                #asked
-                #(#body)*
-            }
+    let dispatch = quote! {
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &[u8] #request_param) -> rt::DecodeResult<Self> {
+            #asked
+            #(#body)*
         }
     };
     let doc_decode = quote! {
@@ -2180,15 +2114,7 @@ fn is_ambiguous(m: &Message, group: &[&Message]) -> bool {
 /// The dispatch arm for the messages of one code: a lone message is decoded in the arm (a
 /// reply once the request admits it); several are tried in spec order by `rt::Group`, each
 /// decoder a closure over the frame as an array of its length.
-///
-/// With `in_arm`, each arm checks the frame's checksum and address first (see
-/// `emit_dispatch`).
-fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, in_arm: bool) -> TokenStream {
-    let tail = if in_arm {
-        quote!(Self::check_tail(frame)?;)
-    } else {
-        quote!()
-    };
+fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
     let p = ctx.p;
     let admitted = |m: &Message| {
         if replies {
@@ -2218,7 +2144,6 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, in_arm: bool) -> Tok
             let (stmts, build) = decode_body(ctx, m);
             let split = split_frame(m, &stmts, &build);
             return quote! {{
-                #tail
                 #admit
                 #split
                 #(#stmts)*
@@ -2226,17 +2151,11 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, in_arm: bool) -> Tok
             }};
         }
         let len = usize_lit(p.frame_len(m));
-        let frame = match (replies, in_arm) {
-            (true, true) => {
-                let a = admitted(m);
-                quote!(Self::checked::<#len>(frame, #a, #value))
-            }
-            (false, true) => quote!(Self::checked::<#len>(frame)),
-            (true, false) => {
-                let a = admitted(m);
-                quote!(rt::reply::<#len>(frame, #a, #value))
-            }
-            (false, false) => quote!(rt::fixed::<#len>(frame)),
+        let frame = if replies {
+            let a = admitted(m);
+            quote!(rt::reply::<#len>(frame, #a, #value))
+        } else {
+            quote!(rt::fixed::<#len>(frame))
         };
         let (stmts, build) = decode_body(ctx, m);
         if stmts.is_empty() && !build.to_string().contains("frame") {
@@ -2286,7 +2205,6 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, in_arm: bool) -> Tok
         quote!(true)
     };
     quote! {{
-        #tail
         let mut g = rt::Group::new(frame, #value, #alone);
         #(#tries)*
         g.end(#expected, #replies)

@@ -322,20 +322,23 @@ pub mod clash {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_head(frame, 5, 7, 1, &FRAME)?;
+            let address = rt::check_frame(
+                frame,
+                5,
+                7,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
             let message = Self::dispatch(frame)?;
-            rt::Ok(Decoded {
-                address: frame[1],
-                message,
-            })
+            rt::Ok(Decoded { address, message })
         }
-        /// The message of a frame that passed `rt::check_head`, by its code; each arm
-        /// checks the checksum and the address before anything else.
+        /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = Self::checked::<7>(frame)?;
+                    let frame = rt::fixed::<7>(frame)?;
                     rt::no_broadcast(frame[1], 0x00, "option", 0x10)?;
                     let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range("core", 4, field_1, 0, 1000)?;
@@ -345,14 +348,14 @@ pub mod clash {
                     })
                 }
                 0x11 => {
-                    let frame = Self::checked::<5>(frame)?;
+                    let frame = rt::fixed::<5>(frame)?;
                     rt::no_broadcast(frame[1], 0x00, "u8", 0x11)?;
                     rt::Ok(Self::U8 {
                         frame: Some::from_raw(frame[3] as i16),
                     })
                 }
                 0x12 => {
-                    let frame = Self::checked::<7>(frame)?;
+                    let frame = rt::fixed::<7>(frame)?;
                     rt::equal("buf", 4, frame[4], 0x0)?;
                     rt::Ok(Self::Core {
                         address: frame[3],
@@ -360,34 +363,13 @@ pub mod clash {
                     })
                 }
                 0x13 => {
-                    let frame = Self::checked::<6>(frame)?;
+                    let frame = rt::fixed::<6>(frame)?;
                     rt::no_broadcast(frame[1], 0x00, "rt", 0x13)?;
                     rt::same("field", 4, frame[4], frame[3])?;
                     rt::Ok(Self::Rt { f: frame[3] })
                 }
-                _ => {
-                    Self::check_tail(frame)?;
-                    rt::Err(rt::unknown_code(frame, 2, 1, 1, false))
-                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
-        }
-        /// The checksum and address of a frame, where no arm takes it as an array.
-        fn check_tail(frame: &[u8]) -> rt::DecodeResult<()> {
-            rt::check_tail(frame, 1, &FRAME, |b| u32::from(checksum(b)))
-        }
-        /// A frame of a message of `N` bytes, its checksum and address checked on it
-        /// as an array.
-        #[inline(always)]
-        fn checked<const N: usize>(frame: &[u8]) -> rt::DecodeResult<&[u8; N]> {
-            rt::checked(
-                frame,
-                true,
-                0,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-                Self::check_tail,
-            )
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -613,15 +595,18 @@ pub mod clash {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_head(frame, 4, 7, 1, &FRAME)?;
+            let address = rt::check_frame(
+                frame,
+                4,
+                7,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
             let message = Self::dispatch(frame, request)?;
-            rt::Ok(Decoded {
-                address: frame[1],
-                message,
-            })
+            rt::Ok(Decoded { address, message })
         }
-        /// The message of a frame that passed `rt::check_head`, by its code; each arm
-        /// checks the checksum and the address before anything else.
+        /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(
             frame: &[u8],
@@ -629,20 +614,19 @@ pub mod clash {
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 2, 1) {
-                0x50 => Self::checked::<4>(frame, asked & 1 != 0, 0x50).map(|_| Self::Ok),
+                0x50 => rt::reply::<4>(frame, asked & 1 != 0, 0x50).map(|_| Self::Ok),
                 0x90 => {
-                    Self::checked::<4>(frame, asked >> 1 & 1 != 0, 0x90)
-                        .map(|_| Self::Err)
+                    rt::reply::<4>(frame, asked >> 1 & 1 != 0, 0x90).map(|_| Self::Err)
                 }
                 0x51 => {
-                    let frame = Self::checked::<7>(frame, asked >> 2 & 1 != 0, 0x51)?;
+                    let frame = rt::reply::<7>(frame, asked >> 2 & 1 != 0, 0x51)?;
                     rt::Ok(Self::Result {
                         g: Ok::from_raw(frame[3]),
                         usize: Option::from_raw(u16::from_le_bytes([frame[4], frame[5]])),
                     })
                 }
                 0x52 => {
-                    let frame = Self::checked::<7>(frame, asked >> 3 & 1 != 0, 0x52)?;
+                    let frame = rt::reply::<7>(frame, asked >> 3 & 1 != 0, 0x52)?;
                     rt::Ok(Self::Usize {
                         asked: frame[3..5].try_into().unwrap_or([0; 2]),
                         none: (frame[5] >> 4) as u8,
@@ -651,33 +635,8 @@ pub mod clash {
                         ),
                     })
                 }
-                _ => {
-                    Self::check_tail(frame)?;
-                    rt::Err(rt::unknown_code(frame, 2, 1, 1, true))
-                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
-        }
-        /// The checksum and address of a frame, where no arm takes it as an array.
-        fn check_tail(frame: &[u8]) -> rt::DecodeResult<()> {
-            rt::check_tail(frame, 1, &FRAME, |b| u32::from(checksum(b)))
-        }
-        /// A frame of a reply of `N` bytes, its checksum and address checked on it as an
-        /// array, if the request admits it.
-        #[inline(always)]
-        fn checked<const N: usize>(
-            frame: &[u8],
-            admitted: bool,
-            code: u32,
-        ) -> rt::DecodeResult<&[u8; N]> {
-            rt::checked(
-                frame,
-                admitted,
-                code,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-                Self::check_tail,
-            )
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields

@@ -340,20 +340,23 @@ pub mod mini {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_head(frame, 6, 9, 1, &FRAME)?;
+            let address = rt::check_frame(
+                frame,
+                6,
+                9,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
             let message = Self::dispatch(frame)?;
-            rt::Ok(Decoded {
-                address: frame[1],
-                message,
-            })
+            rt::Ok(Decoded { address, message })
         }
-        /// The message of a frame that passed `rt::check_head`, by its code; each arm
-        /// checks the checksum and the address before anything else.
+        /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x2000 => {
-                    let frame = Self::checked::<9>(frame)?;
+                    let frame = rt::fixed::<9>(frame)?;
                     let field_0: u32 = u32::from_le_bytes([
                         frame[4],
                         frame[5],
@@ -366,41 +369,20 @@ pub mod mini {
                     })
                 }
                 0x3000 => {
-                    let frame = Self::checked::<6>(frame)?;
+                    let frame = rt::fixed::<6>(frame)?;
                     rt::Ok(Self::SetMode {
                         mode: Mode::from_raw(frame[4]),
                     })
                 }
                 0x4000 => {
-                    let frame = Self::checked::<6>(frame)?;
+                    let frame = rt::fixed::<6>(frame)?;
                     rt::in_range("channel", 4, frame[4], 0, 3)?;
                     rt::Ok(Self::GetStatus {
                         channel: frame[4],
                     })
                 }
-                _ => {
-                    Self::check_tail(frame)?;
-                    rt::Err(rt::unknown_code(frame, 2, 2, 1, false))
-                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, false)),
             }
-        }
-        /// The checksum and address of a frame, where no arm takes it as an array.
-        fn check_tail(frame: &[u8]) -> rt::DecodeResult<()> {
-            rt::check_tail(frame, 1, &FRAME, |b| u32::from(checksum(b)))
-        }
-        /// A frame of a message of `N` bytes, its checksum and address checked on it
-        /// as an array.
-        #[inline(always)]
-        fn checked<const N: usize>(frame: &[u8]) -> rt::DecodeResult<&[u8; N]> {
-            rt::checked(
-                frame,
-                true,
-                0,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-                Self::check_tail,
-            )
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -627,15 +609,18 @@ pub mod mini {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_head(frame, 4, 13, 1, &FRAME)?;
+            let address = rt::check_frame(
+                frame,
+                4,
+                13,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
             let message = Self::dispatch(frame, request)?;
-            rt::Ok(Decoded {
-                address: frame[1],
-                message,
-            })
+            rt::Ok(Decoded { address, message })
         }
-        /// The message of a frame that passed `rt::check_head`, by its code; each arm
-        /// checks the checksum and the address before anything else.
+        /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(
             frame: &[u8],
@@ -645,27 +630,26 @@ pub mod mini {
             if frame.len() >= 4 {
                 match rt::code(frame, 2, 1) {
                     0x50 => {
-                        return Self::checked::<4>(frame, asked & 1 != 0, 0x50)
+                        return rt::reply::<4>(frame, asked & 1 != 0, 0x50)
                             .map(|_| Self::Started);
                     }
                     0x90 => {
-                        return Self::checked::<4>(frame, asked >> 1 & 1 != 0, 0x90)
+                        return rt::reply::<4>(frame, asked >> 1 & 1 != 0, 0x90)
                             .map(|_| Self::Nak);
                     }
                     _ => {}
                 }
             }
             if frame.len() < 5 {
-                Self::check_tail(frame)?;
                 return rt::Err(rt::unknown_code(frame, 2, 2, 1, true));
             }
             match rt::code(frame, 2, 2) {
                 0x3000 => {
-                    Self::checked::<5>(frame, asked >> 2 & 1 != 0, 0x3000)
+                    rt::reply::<5>(frame, asked >> 2 & 1 != 0, 0x3000)
                         .map(|_| Self::SetModeAck)
                 }
                 0x4000 => {
-                    let frame = Self::checked::<13>(frame, asked >> 3 & 1 != 0, 0x4000)?;
+                    let frame = rt::reply::<13>(frame, asked >> 3 & 1 != 0, 0x4000)?;
                     let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
                     rt::equal("reserved", 11, frame[11], 0x0)?;
                     rt::Ok(Self::Status {
@@ -678,33 +662,8 @@ pub mod mini {
                         temperature: Celsius::from_raw(frame[10]),
                     })
                 }
-                _ => {
-                    Self::check_tail(frame)?;
-                    rt::Err(rt::unknown_code(frame, 2, 2, 1, true))
-                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, true)),
             }
-        }
-        /// The checksum and address of a frame, where no arm takes it as an array.
-        fn check_tail(frame: &[u8]) -> rt::DecodeResult<()> {
-            rt::check_tail(frame, 1, &FRAME, |b| u32::from(checksum(b)))
-        }
-        /// A frame of a reply of `N` bytes, its checksum and address checked on it as an
-        /// array, if the request admits it.
-        #[inline(always)]
-        fn checked<const N: usize>(
-            frame: &[u8],
-            admitted: bool,
-            code: u32,
-        ) -> rt::DecodeResult<&[u8; N]> {
-            rt::checked(
-                frame,
-                admitted,
-                code,
-                1,
-                &FRAME,
-                |b| u32::from(checksum(b)),
-                Self::check_tail,
-            )
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
