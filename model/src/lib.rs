@@ -72,8 +72,7 @@ pub fn load_str(file: &str, text: &str) -> Result<Protocol, Diagnostics> {
 /// SHA-256 of a spec's text as lowercase hex: the same digest `sha256sum FILE` prints, so a
 /// generated artifact can be traced to the exact file it came from.
 pub fn spec_sha256(text: &str) -> String {
-    use sha2::{Digest, Sha256};
-    Sha256::digest(text.as_bytes())
+    hmac_sha256::Hash::hash(text.as_bytes())
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect()
