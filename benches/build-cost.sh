@@ -37,13 +37,20 @@ cargo build --release --target-dir "$tmp/target" "$@"
 end=$(date +%s.%N)
 echo "load after: $(uptime)"
 awk -v s="$start" -v e="$end" 'BEGIN { printf "clean release build: %.1f s\n", e - s }'
-# With --timings, the slowest units (the report itself goes with the temporary directory).
+# With --timings, the slowest units and the build script's run (the report itself goes with the
+# temporary directory).
 for html in "$tmp"/target/cargo-timings/cargo-timing.html; do
   [[ -f $html ]] || continue
   python3 - "$html" <<'PY'
 import json, re, sys
 units = json.loads(re.search(r"const UNIT_DATA = (\[.*?\]);", open(sys.argv[1]).read(), re.S).group(1))
-for u in sorted(units, key=lambda u: -u["duration"])[:8]:
-    print(f"{u['name']} {u['version']}: {u['duration']:.1f} s (from {u['start']:.1f} s)")
+def show(u):
+    print(f"{u['name']} {u['version']}{u.get('target', '')}: {u['duration']:.1f} s (from {u['start']:.1f} s)")
+top = sorted(units, key=lambda u: -u["duration"])[:10]
+for u in top:
+    show(u)
+for u in units:
+    if u not in top and u["name"] == "busspec-protocols":
+        show(u)
 PY
 done

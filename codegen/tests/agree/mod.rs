@@ -291,7 +291,7 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
         let given: Vec<Value> = decoded
             .values
             .iter()
-            .filter(|v| names.contains(&v.name.as_ref()))
+            .filter(|v| names.contains(&&*v.name))
             .cloned()
             .collect();
         assert!(encode_alike::<P>(p, e.message, decoded.address, &given));
