@@ -5,15 +5,9 @@
 //! a good checksum or not), pushed in random chunks: both report the same events at the same
 //! offsets with the same values, and every byte is accounted for once.
 //!
-//! The generated code is the generator's snapshot of each spec
-//! (`codegen/tests/snapshots/`), until the protocols crate builds them.
+//! The generated code is `busspec-protocols`' built-in `modbus` and `dynamixel`.
 
-// The generated code's derives sit behind features of the crate including it (`serde`,
-// `arbitrary`), which this one does not have.
-#![allow(unexpected_cfgs)]
-
-include!("../codegen/tests/snapshots/modbus.rs");
-include!("../codegen/tests/snapshots/dynamixel.rs");
+use busspec_protocols::{dynamixel, modbus};
 
 use busspec_fuzz_bodies::events::{chunks, covers, interp_events, Seen};
 use busspec_fuzz_bodies::{seen, spec, stream_events};
