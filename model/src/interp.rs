@@ -788,6 +788,22 @@ fn decide(
         }
     }
     let first_err = first_err.map(|(r, misfit)| misfit.error(p.message(r)));
+    // A stream's pairing says which response a frame is, never whether it is one: a frame that
+    // is a request and a response too (a Modbus echo, a read_coils request that reads as a
+    // 3-byte reply) stays ambiguous whatever request came before (it may be the master's
+    // retry). The rule of both stream decoders (their module docs).
+    let both_ways = |f: &[(MessageRef, _)]| {
+        f.iter().any(|(r, _)| r.direction == Direction::Request)
+            && f.iter().any(|(r, _)| r.direction == Direction::Response)
+    };
+    if paired && both_ways(&fitting) {
+        return Err(DecodeError::Ambiguous {
+            candidates: fitting
+                .iter()
+                .map(|(r, _)| p.message(*r).name.clone())
+                .collect(),
+        });
+    }
     if fitting.len() > 1 {
         if let Some(cmd) = reply_to {
             let answers = |r: &MessageRef| {
