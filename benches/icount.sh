@@ -5,7 +5,8 @@
 # Stream rows: the 1 MiB capture with 1 % noise (`generated`) and without (`generated-clean`),
 # per byte and per frame decoded, and their ratio to the yardstick: the clean capture's frames
 # decoded one by one, their boundaries known (`stream decode`).
-# Prints Markdown table rows. Needs valgrind. Usage: bash benches/icount.sh [ub2|sd ...]
+# Prints Markdown table rows. Needs valgrind.
+# Usage: bash benches/icount.sh [ub2|sd|modbus|dynamixel ...] (default: all four)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 cargo build --release --locked -q -p busspec-benches --bin icount
@@ -54,12 +55,19 @@ per() {
 }
 
 protos=("$@")
-[[ ${#protos[@]} -gt 0 ]] || protos=(ub2 sd)
+[[ ${#protos[@]} -gt 0 ]] || protos=(ub2 sd modbus dynamixel)
 echo "| protocol | operation | contender | instructions |"
 echo "|---|---|---|---|"
 for proto in "${protos[@]}"; do
+  # The contenders beside the generated code: UB2 and SD have hand-written and deku
+  # baselines, Modbus its peer modbus-core, Dynamixel none.
+  case $proto in
+    ub2 | sd) peers=(hand-written deku) ;;
+    modbus) peers=(modbus-core) ;;
+    *) peers=() ;;
+  esac
   for op in decode encode; do
-    for who in generated hand-written deku; do
+    for who in generated "${peers[@]}"; do
       per "$proto" "$who" "$op" 10 110 frame
     done
     per "$proto" interpreter "$op" 2 12 frame

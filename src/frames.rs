@@ -9,13 +9,6 @@ use busspec_protocols::{with_protocol, Protocol, ProtocolVisitor};
 
 pub use busspec_json::hex;
 
-/// Built-in protocols the code generator does not emit yet (they use the variable-length spec
-/// language): their specs, embedded, for the interpreter.
-pub const INTERPRETED: &[(&str, &str)] = &[
-    ("modbus", include_str!("../spec/modbus.yaml")),
-    ("dynamixel", include_str!("../spec/dynamixel.yaml")),
-];
-
 /// A protocol to decode and encode: its spec, and which engine serves it.
 pub struct Engine {
     pub spec: Spec,
@@ -144,25 +137,15 @@ fn not_built_in(name: &str) -> String {
 }
 
 impl Engine {
-    /// The built-in protocol called `name`, or `None` when there is none: a generated one, or
-    /// one of [`INTERPRETED`], served by the interpreter from its embedded spec.
+    /// The built-in protocol called `name` (its generated code), or `None` when there is none.
     pub fn built_in(name: &str) -> Option<Result<Engine, String>> {
-        if let Some(r) = with_protocol(name, Load) {
-            return Some(r.map(|spec| Engine {
+        with_protocol(name, Load).map(|r| {
+            r.map(|spec| Engine {
                 printer: Printer::new(&spec),
                 spec,
                 generated: true,
-            }));
-        }
-        let (file, text) = INTERPRETED
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|(n, t)| (format!("spec/{n}.yaml"), *t))?;
-        Some(
-            busspec_model::load_str(&file, text)
-                .map(Engine::interpreted)
-                .map_err(|d| d.to_string()),
-        )
+            })
+        })
     }
 
     /// A spec loaded at run time, served by the interpreter.

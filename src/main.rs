@@ -301,7 +301,7 @@ impl Gate {
 
 #[derive(Args)]
 struct DecodeArgs {
-    /// The protocol: ub2, sd (generated), modbus, dynamixel (interpreted), or the `protocol:` of the spec given with --spec.
+    /// The protocol: ub2, sd, modbus, dynamixel (built in: generated code), or the `protocol:` of the spec given with --spec.
     protocol: String,
     /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed. `-` alone:
     /// hex frames from stdin, one per line (`#` starts a comment).
@@ -335,7 +335,7 @@ struct DecodeArgs {
 
 #[derive(Args)]
 struct EncodeArgs {
-    /// The protocol: ub2, sd (generated), modbus, dynamixel (interpreted), or the `protocol:` of the spec given with --spec.
+    /// The protocol: ub2, sd, modbus, dynamixel (built in: generated code), or the `protocol:` of the spec given with --spec.
     protocol: String,
     /// Load the spec from this file instead of the built-in one.
     #[arg(long, value_name = "FILE")]
@@ -531,12 +531,7 @@ fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Engine,
                 subcommand,
                 format!(
                     "unknown protocol `{name}`: the built-in ones are {} (or give --spec FILE)",
-                    busspec_protocols::PROTOCOLS
-                        .iter()
-                        .chain(frames::INTERPRETED.iter().map(|(n, _)| n))
-                        .copied()
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    busspec_protocols::PROTOCOLS.join(", ")
                 ),
             ),
         },

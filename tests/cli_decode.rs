@@ -7,6 +7,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+use busspec_model::ir::Direction;
 use busspec_model::{load_file, Protocol};
 
 fn root() -> &'static Path {
@@ -637,7 +638,7 @@ fn variable_length_specs_decode_against_their_request_and_round_trip() {
         text(&out.stderr)
     );
 
-    // Built in (the embedded spec, interpreted): no --spec needed.
+    // Built in (generated code): no --spec needed.
     let out = busspec(&["decode", "modbus", reply]);
     assert!(
         text(&out.stdout).contains(r#""registers":[555,0,100]"#),
@@ -667,6 +668,79 @@ fn variable_length_specs_decode_against_their_request_and_round_trip() {
     );
     assert!(back.status.success(), "{}", text(&back.stderr));
     assert_eq!(text(&back.stdout), "FFFF01030020DB\n");
+}
+
+/// Modbus and Dynamixel are built in with generated code: every CLI path prints for them what
+/// the interpreter prints given the spec file (`--spec`), status and stderr included — each
+/// example as an argument (with its direction and the command it answers), each reply example
+/// against a request example with `--request`, all of them as hex lines on stdin and as a raw
+/// capture, and their lines encoded back to the same bytes.
+#[test]
+fn built_in_variable_length_protocols_print_what_the_interpreter_prints() {
+    for file in ["modbus.yaml", "dynamixel.yaml"] {
+        let p = spec(file);
+        let path = format!("spec/{file}");
+        let both = |args: &[&str], stdin: &[u8]| {
+            let built_in = run_in(root(), args, stdin);
+            let interpreted = run_in(root(), &[args, &["--spec", &path]].concat(), stdin);
+            let seen = |o: &Output| (o.status.code(), text(&o.stdout), text(&o.stderr));
+            assert_eq!(seen(&built_in), seen(&interpreted), "{args:?}");
+            built_in
+        };
+        let mut lines = String::new();
+        let mut wires = String::new();
+        let mut capture = Vec::new();
+        let mut replies = 0;
+        for e in &p.examples {
+            let frame = hex(&e.wire);
+            let direction = match e.message.direction {
+                Direction::Request => "request",
+                Direction::Response => "response",
+            };
+            let mut args = vec!["decode", &p.name, "--direction", direction];
+            if let Some(c) = e.reply_to {
+                args.extend(["--reply-to", &p.commands[c].name]);
+            }
+            args.push(&frame);
+            let out = both(&args, b"");
+            assert_eq!(
+                out.status.code(),
+                Some(0),
+                "{args:?}: {}",
+                text(&out.stderr)
+            );
+            lines.push_str(&text(&out.stdout));
+            wires.push_str(&frame);
+            wires.push('\n');
+            capture.extend_from_slice(&e.wire);
+            let request = e.reply_to.and_then(|c| {
+                p.examples
+                    .iter()
+                    .find(|r| r.message.direction == Direction::Request && r.message.index == c)
+            });
+            if let Some(request) = request {
+                let out = both(
+                    &["decode", &p.name, "--request", &hex(&request.wire), &frame],
+                    b"",
+                );
+                assert_eq!(out.status.code(), Some(0), "{frame}: {}", text(&out.stderr));
+                replies += 1;
+            }
+        }
+        assert!(
+            replies >= 3,
+            "{file}: {replies} replies against their request"
+        );
+        let out = both(&["encode", &p.name], lines.as_bytes());
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        assert_eq!(text(&out.stdout), wires);
+        // Without a direction some frames read both ways: the same lines and the same errors.
+        let out = both(&["decode", &p.name, "-"], wires.as_bytes());
+        assert!(!out.stdout.is_empty());
+        let out = both(&["decode", &p.name, "--stream", "-"], &capture);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        assert!(text(&out.stdout).lines().count() >= p.examples.len() / 2);
+    }
 }
 
 #[test]

@@ -11,6 +11,8 @@
 mod common;
 
 use busspec_model::ir::Direction;
+use busspec_protocols::dynamixel::Dynamixel;
+use busspec_protocols::modbus::Modbus;
 use busspec_protocols::sd::Sd;
 use busspec_protocols::ub2::Ub2;
 use busspec_protocols::Protocol;
@@ -83,5 +85,33 @@ fn sd_generated_and_interpreter_agree_on_random_inputs() {
     assert!(
         accepted * 8 > n,
         "only {accepted} of {n} random SD inputs decoded"
+    );
+}
+
+#[test]
+fn modbus_generated_and_interpreter_agree_on_every_example() {
+    every_example::<Modbus>();
+}
+
+#[test]
+fn dynamixel_generated_and_interpreter_agree_on_every_example() {
+    every_example::<Dynamixel>();
+}
+
+#[test]
+fn modbus_generated_and_interpreter_agree_on_random_inputs() {
+    let (accepted, n) = random::<Modbus>(0x3B);
+    assert!(
+        accepted * 8 > n,
+        "only {accepted} of {n} random Modbus inputs decoded"
+    );
+}
+
+#[test]
+fn dynamixel_generated_and_interpreter_agree_on_random_inputs() {
+    let (accepted, n) = random::<Dynamixel>(0xD1);
+    assert!(
+        accepted * 8 > n,
+        "only {accepted} of {n} random Dynamixel inputs decoded"
     );
 }

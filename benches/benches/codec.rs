@@ -6,7 +6,11 @@
 //! - `<p>/stream`: a 1 MiB synthetic capture with 1 % noise: the generated stream decoder, the
 //!   plain byte pass (the memory floor), the interpreter's stream decoder (on the first 64 KiB);
 //! - `<p>/checksum`: the checksum alone over the bytes it covers in each frame of the mixed
-//!   stream.
+//!   stream;
+//!
+//! and for Modbus and Dynamixel (no hand-written or deku contender) `<p>/decode` and
+//! `<p>/encode` with the generated code, the interpreter and for Modbus its peer modbus-core,
+//! and `<p>/stream` as above.
 //!
 //! `cargo bench -p busspec-benches -- ub2/decode` runs one group; `-- --test` runs each once.
 
@@ -14,11 +18,14 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use busspec_benches::mixed::{capture, Mixed, Proto, CAPTURE_BYTES};
+use busspec_benches::peer::modbus_core;
 use busspec_benches::{
     decode_all, encode_all, jobs, messages, plain_sum, stream_generated, stream_interp, Contender,
     Deku, Generated, Hand, Interp,
 };
-use busspec_model::ir::Protocol;
+use busspec_model::ir::{Direction, Protocol};
+use busspec_protocols::dynamixel::Dynamixel;
+use busspec_protocols::modbus::Modbus;
 use busspec_protocols::sd::Sd;
 use busspec_protocols::ub2::Ub2;
 use criterion::measurement::WallTime;
@@ -102,6 +109,61 @@ where
         encode_one(&mut g, "generated", unit, &generated, &mixed);
         encode_one(&mut g, "hand-written", unit, &hand, &mixed);
         encode_one(&mut g, "deku", unit, &deku, &mixed);
+        encode_one(&mut g, "interpreter", unit, &interp, &mixed);
+    }
+    g.finish();
+}
+
+/// The decode and encode groups of Modbus or Dynamixel (`P`): the generated code and the
+/// interpreter, and for Modbus modbus-core, on the mixed stream.
+fn variable<P: busspec_protocols::Protocol>(c: &mut Criterion, spec: &Protocol) {
+    let proto = Proto::of::<P>();
+    let generated = Generated::<P>::default();
+    let interp = Interp(spec);
+    let mixed = Mixed::from_spec(proto, spec);
+    let peer = (proto == Proto::Modbus).then(|| {
+        let frames: Vec<(Direction, std::ops::Range<usize>)> = mixed
+            .entries
+            .iter()
+            .map(|e| (e.direction, e.range.clone()))
+            .collect();
+        assert_eq!(
+            modbus_core::decode_all(&mixed.bytes, &frames),
+            frames.len(),
+            "modbus-core"
+        );
+        frames
+    });
+    let mut g = c.benchmark_group(format!("{}/decode", proto.name()));
+    for (unit, t) in throughputs(&mixed) {
+        g.throughput(t);
+        decode_one(&mut g, "generated", unit, &generated, &mixed);
+        if let Some(frames) = &peer {
+            g.bench_function(BenchmarkId::new("modbus-core", unit), |b| {
+                b.iter(|| modbus_core::decode_all(black_box(&mixed.bytes), black_box(frames)))
+            });
+        }
+        decode_one(&mut g, "interpreter", unit, &interp, &mixed);
+    }
+    g.finish();
+    let mut g = c.benchmark_group(format!("{}/encode", proto.name()));
+    for (unit, t) in throughputs(&mixed) {
+        g.throughput(t);
+        encode_one(&mut g, "generated", unit, &generated, &mixed);
+        if let Some(frames) = &peer {
+            let adus: Vec<_> = frames
+                .iter()
+                .map(|(d, r)| modbus_core::decode(*d, &mixed.bytes[r.clone()]).expect("decodes"))
+                .collect();
+            let mut out = vec![0u8; mixed.bytes.len()];
+            assert_eq!(
+                modbus_core::encode_all(&adus, &mut out),
+                Some(mixed.bytes.len())
+            );
+            g.bench_function(BenchmarkId::new("modbus-core", unit), |b| {
+                b.iter(|| modbus_core::encode_all(black_box(&adus), black_box(&mut out)))
+            });
+        }
         encode_one(&mut g, "interpreter", unit, &interp, &mixed);
     }
     g.finish();
@@ -212,6 +274,18 @@ fn sd(c: &mut Criterion) {
     g.finish();
 }
 
+fn modbus(c: &mut Criterion) {
+    let spec = Proto::Modbus.spec();
+    variable::<Modbus>(c, &spec);
+    stream::<Modbus>(c, &spec);
+}
+
+fn dynamixel(c: &mut Criterion) {
+    let spec = Proto::Dynamixel.spec();
+    variable::<Dynamixel>(c, &spec);
+    stream::<Dynamixel>(c, &spec);
+}
+
 fn config() -> Criterion {
     // Short runs: the machine is shared; ratios within one run are what BENCHMARKS.md reports.
     Criterion::default()
@@ -223,6 +297,6 @@ fn config() -> Criterion {
 criterion_group! {
     name = benches;
     config = config();
-    targets = ub2, sd
+    targets = ub2, sd, modbus, dynamixel
 }
 criterion_main!(benches);

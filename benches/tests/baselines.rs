@@ -382,6 +382,8 @@ fn the_hand_written_decoders_and_the_deku_peer_accept_and_reject_what_the_genera
                         peer::sd::decode_response(&f, dq.as_ref()).map(|d| deku_sd_response(&d));
                     [agree(g, h, inn, &what), agree(g, d, inn, &what)]
                 }
+                // Proto::ALL: the protocols with hand-written and deku baselines.
+                (Proto::Modbus | Proto::Dynamixel, _) => unreachable!("no baselines"),
             };
             assert_eq!(
                 outcomes[0], outcomes[1],

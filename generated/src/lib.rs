@@ -1,14 +1,16 @@
-//! Typed `no_std` encoders and decoders for the two RS485 protocols busspec transcribes,
+//! Typed `no_std` encoders and decoders for the RS485 protocols busspec transcribes,
 //! generated at build time from the specs in `spec/` by `busspec-codegen`:
 //!
 //! - [`ub2`]: the Comet motorized vacuum capacitor, Universal-ID UB2 (SB-70);
-//! - [`sd`]: the SD-01/02 servo actuator (RS485 ICD).
+//! - [`sd`]: the SD-01/02 servo actuator (RS485 ICD);
+//! - [`modbus`]: Modbus RTU (function codes 0x01–0x06, 0x0F, 0x10 and their exceptions);
+//! - [`dynamixel`]: ROBOTIS Dynamixel Protocol 1.0.
 //!
 //! Each module has `Request` and `Response` enums (one variant per command or response, named
 //! fields, physical units as types), `encode` into a caller's buffer, `decode` from a byte
 //! slice, `decode_reply` against the request, a `StreamDecoder` for raw captures, and a unit
-//! type ([`ub2::Ub2`], [`sd::Sd`]) implementing [`Protocol`], so code generic over protocols
-//! works with both. [`PROTOCOLS`] and [`with_protocol`] find a protocol by name.
+//! type ([`ub2::Ub2`], [`sd::Sd`], [`modbus::Modbus`], [`dynamixel::Dynamixel`]) implementing
+//! [`Protocol`], so code generic over protocols works with all of them. [`PROTOCOLS`] and [`with_protocol`] find a protocol by name.
 //!
 //! Everything protocol-independent (errors, [`Decoded`], [`FieldValue`], the stream decoder) is
 //! `busspec-runtime`'s, re-exported here.

@@ -1,15 +1,14 @@
 //! Generated messages with repeated fields under the crate's `serde` and `arbitrary` features:
-//! the Modbus and Dynamixel snapshots (`codegen/tests/snapshots/`, until this crate builds
-//! them) derive both, so `rt::Repeated` and `rt::Bits` implement them; arbitrary messages that
-//! encode decode to messages that encode to the same bytes.
+//! this crate's Modbus and Dynamixel modules derive both, so `rt::Repeated` and `rt::Bits`
+//! implement them; arbitrary messages that encode decode to messages that encode to the same
+//! bytes.
 //!
 //! `cargo test --workspace` builds this crate with both features (the root crate's tests ask
 //! for `serde`, the fuzz bodies for `arbitrary`).
 
 #![cfg(all(feature = "serde", feature = "arbitrary"))]
 
-include!("../../codegen/tests/snapshots/modbus.rs");
-include!("../../codegen/tests/snapshots/dynamixel.rs");
+use busspec_protocols::{dynamixel, modbus};
 
 use arbitrary::{Arbitrary, Unstructured};
 use busspec_runtime::{Message, Protocol};

@@ -3,7 +3,7 @@
 
 use busspec_model::interp::{self, DecodeError as InterpError, Frame};
 use busspec_model::ir::Direction;
-use busspec_runtime::{DecodeError, FieldValue, Message, Protocol};
+use busspec_runtime::{DecodeError, Decoded, FieldValue, Message, Protocol};
 
 use crate::{Spec, Typed};
 
@@ -73,6 +73,30 @@ pub fn decode_frame<'p>(
     }
 }
 
+/// A frame that decodes as the request `d`, no direction given: the request, unless it is a
+/// response too (a Modbus echo such as write_single_coil); then, as [`decode_frame`] says it,
+/// the reply to `reply_to` where that command gets one of those responses, else ambiguous
+/// between the request and the responses.
+fn request_or_both<P: Protocol>(
+    p: &Spec,
+    reply_to: Option<usize>,
+    wire: &[u8],
+    d: Decoded<P::Request>,
+) -> Result<Typed<P>, String> {
+    let Some(responses) = responses_of::<P>(p, wire) else {
+        return Ok(Typed::Request(d));
+    };
+    let settled = reply_to
+        .and_then(|cmd| request_for::<P>(p, cmd))
+        .and_then(|q| P::decode_reply(wire, &q).ok());
+    if let Some(r) = settled {
+        return Ok(Typed::Response(r));
+    }
+    let mut names = vec![d.message.name().to_owned()];
+    names.extend(responses);
+    Err(ambiguous(p, &names, reply_to))
+}
+
 /// Text to fill an ASCII field of a neutral request (widths are at most 255).
 const SPACES: [u8; 255] = [b' '; 255];
 
@@ -119,6 +143,39 @@ pub(crate) fn candidates<P: Protocol>(p: &Spec, wire: &[u8]) -> Vec<String> {
         .collect()
 }
 
+/// The messages of `P` an ambiguous frame could be, as the interpreter lists them: the
+/// request it decodes as (unless `direction` says it is a response: a Modbus echo reads both
+/// ways), then the response it decodes as, or those of [`candidates`] where only a request
+/// tells them apart.
+pub(crate) fn ambiguous_candidates<P: Protocol>(
+    p: &Spec,
+    direction: Option<Direction>,
+    wire: &[u8],
+) -> Vec<String> {
+    let request = match direction {
+        Some(Direction::Response) => None,
+        _ => P::decode_request(wire).ok(),
+    };
+    let mut names: Vec<String> = request
+        .map(|d| d.message.name().to_owned())
+        .into_iter()
+        .collect();
+    if direction != Some(Direction::Request) {
+        names.extend(responses_of::<P>(p, wire).unwrap_or_default());
+    }
+    names
+}
+
+/// The responses of `P` a frame decodes as without its request: the one it is, those of
+/// [`candidates`] where only a request tells them apart, or `None` when it is none.
+fn responses_of<P: Protocol>(p: &Spec, wire: &[u8]) -> Option<Vec<String>> {
+    match P::decode_response(wire) {
+        Ok(r) => Some(vec![r.message.name().to_owned()]),
+        Err(DecodeError::Ambiguous { .. }) => Some(candidates::<P>(p, wire)),
+        Err(_) => None,
+    }
+}
+
 /// How telling an error is when a frame fails in both directions: the one that got further.
 fn rank(e: &DecodeError) -> u8 {
     match e {
@@ -160,7 +217,8 @@ pub fn decode_typed<P: Protocol>(
     let request = match direction {
         Some(Direction::Response) => None,
         _ => match P::decode_request(wire) {
-            Ok(d) => return Ok(Typed::Request(d)),
+            Ok(d) if direction.is_some() => return Ok(Typed::Request(d)),
+            Ok(d) => return request_or_both::<P>(p, reply_to, wire, d),
             Err(e) => Some(e),
         },
     };

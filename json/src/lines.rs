@@ -55,6 +55,15 @@ enum Given {
     Text(std::ops::Range<usize>),
 }
 
+/// A value the printer writes itself: a frame or message with a repeated field's list goes
+/// whole to the reference printer ([`Printer::frame`], [`Printer::message`]), so no list
+/// reaches the writers below.
+#[derive(Debug, Clone, Copy)]
+enum Scalar<'a> {
+    Int(i64),
+    Text(&'a [u8]),
+}
+
 /// Writes JSON lines of one spec (see the module docs), each ended by `\n`, to a `Vec<u8>`.
 #[derive(Debug, Clone)]
 pub struct Printer {
@@ -185,20 +194,10 @@ fn push_text(out: &mut Vec<u8>, bytes: &[u8]) {
 }
 
 /// A value no leaf of the message describes: the raw number or the text.
-fn push_plain(out: &mut Vec<u8>, raw: FieldValue<'_>) {
+fn push_plain(out: &mut Vec<u8>, raw: Scalar<'_>) {
     match raw {
-        FieldValue::Int(v) => push_int(out, v),
-        FieldValue::Text(t) => push_text(out, t),
-        FieldValue::List(items) => {
-            out.push(b'[');
-            for (k, v) in items.iter().enumerate() {
-                if k > 0 {
-                    out.push(b',');
-                }
-                push_int(out, v);
-            }
-            out.push(b']');
-        }
+        Scalar::Int(v) => push_int(out, v),
+        Scalar::Text(t) => push_text(out, t),
     }
 }
 
@@ -210,22 +209,11 @@ fn push_field(
     decimals: &[Option<Decimal>],
     f: &Field,
     bit: Option<&BitField>,
-    raw: FieldValue,
+    raw: Scalar,
 ) {
     let v = match raw {
-        FieldValue::Text(t) => return push_text(out, t),
-        FieldValue::List(items) => {
-            out.push(b'[');
-            for (k, v) in items.iter().enumerate() {
-                if k > 0 {
-                    out.push(b',');
-                }
-                push_field(out, p, decimals, f, bit, FieldValue::Int(v));
-            }
-            out.push(b']');
-            return;
-        }
-        FieldValue::Int(v) => v,
+        Scalar::Text(t) => return push_text(out, t),
+        Scalar::Int(v) => v,
     };
     let physical = |out: &mut Vec<u8>, u: usize, unit| {
         push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
@@ -389,8 +377,8 @@ impl Printer {
                 out.push(b',');
             }
             let raw = match &v.raw {
-                Raw::Int(i) => FieldValue::Int(*i),
-                Raw::Text(t) => FieldValue::Text(t),
+                Raw::Int(i) => Scalar::Int(*i),
+                Raw::Text(t) => Scalar::Text(t),
                 // Printed by the reference above.
                 Raw::List(_) => continue,
             };
@@ -412,7 +400,7 @@ impl Printer {
         m: &busspec_model::ir::Message,
         leaf: Option<&Leaf>,
         name: &str,
-        raw: FieldValue<'_>,
+        raw: Scalar<'_>,
     ) {
         let found = leaf.and_then(|l| {
             let f = m.fields.get(l.field)?;
@@ -494,8 +482,8 @@ impl Printer {
             });
         }
         let as_field = |g: &Given| match g {
-            Given::Int(i) => FieldValue::Int(*i),
-            Given::Text(r) => FieldValue::Text(text.get(r.clone()).unwrap_or_default()),
+            Given::Int(i) => Scalar::Int(*i),
+            Given::Text(r) => Scalar::Text(text.get(r.clone()).unwrap_or_default()),
         };
         let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
         Self::open(out, plan, address, offset);
@@ -516,7 +504,7 @@ impl Printer {
             let value = match own {
                 Some(g) => as_field(g),
                 None => match &leaf.fixed {
-                    Fixed::Constant(c) => FieldValue::Int(*c),
+                    Fixed::Constant(c) => Scalar::Int(*c),
                     Fixed::Equals(of) => match lookup(of) {
                         Some(g) => as_field(g),
                         None => continue,

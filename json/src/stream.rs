@@ -5,7 +5,7 @@ use busspec_model::stream::{decode_lenient, relaxed, Event as InterpEvent};
 use busspec_runtime::stream::{Direction as StreamDirection, Event, StreamDecoder};
 use busspec_runtime::{Decoded, Message, Protocol};
 
-use crate::decode::{candidates, request_for};
+use crate::decode::{ambiguous_candidates, request_for};
 use crate::print::{ambiguous_line, frame_line, out_of_spec_line, skipped_line};
 use crate::{Printer, Spec, Typed};
 
@@ -208,7 +208,7 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             }
             Event::Ambiguous { offset, .. } => Ok(ambiguous_line(
                 offset,
-                &candidates::<P>(self.spec, &bytes),
+                &ambiguous_candidates::<P>(self.spec, self.direction, &bytes),
                 &bytes,
             )),
             Event::Skipped { offset, .. } => Ok(skipped_line(offset, &bytes)),

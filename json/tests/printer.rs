@@ -43,7 +43,7 @@ impl Rng {
 fn repaired(p: &Spec, mut wire: Vec<u8>) -> Vec<u8> {
     let c = &p.framing.checksum;
     if let Some(at) = wire.len().checked_sub(c.len()) {
-        let sum = checksum::compute(&c.algorithm, &wire[..at]);
+        let sum = checksum::compute(&c.algorithm, &wire[c.covers_from..at]);
         interp::write_uint(sum, &mut wire[at..], c.byte_order);
     }
     wire
@@ -53,7 +53,8 @@ fn repaired(p: &Spec, mut wire: Vec<u8>) -> Vec<u8> {
 fn noisy_capture(p: &Spec) -> Vec<u8> {
     let mut rng = Rng(0x6275_7373_7065_6301);
     let mut bytes = Vec::new();
-    for _ in 0..6 * p.examples.len() {
+    // Six frames per example, and at least 120 (Dynamixel has 10 examples).
+    for _ in 0..(6 * p.examples.len()).max(120) {
         let wire = &p.examples[rng.below(p.examples.len())].wire;
         match rng.below(10) {
             0 => (0..1 + rng.below(3)).for_each(|_| bytes.push(rng.next() as u8)),
@@ -81,8 +82,11 @@ impl ProtocolVisitor for Check {
         for e in &spec.examples {
             let m = spec.message(e.message);
             let reply_to = m.needs_request.then_some(e.reply_to).flatten();
+            // The direction given: a Modbus echo reads both ways.
+            let direction = Some(e.message.direction);
             for offset in [None, Some(0), Some(1_234_567)] {
-                let typed = decode_typed::<P>(&spec, None, reply_to, &e.wire).expect("decodes");
+                let typed =
+                    decode_typed::<P>(&spec, direction, reply_to, &e.wire).expect("decodes");
                 let reference = typed.line(&spec, offset).expect("prints");
                 let mut out = Vec::new();
                 match typed {
@@ -105,7 +109,7 @@ impl ProtocolVisitor for Check {
                 }
                 .expect("prints");
                 assert_eq!(text(&out), format!("{reference}\n"), "{}", m.name);
-                let frame = decode_frame(&spec, None, reply_to, &e.wire).expect("decodes");
+                let frame = decode_frame(&spec, direction, reply_to, &e.wire).expect("decodes");
                 let mut out = Vec::new();
                 printer.frame(&mut out, &spec, &frame, offset);
                 assert_eq!(
@@ -168,35 +172,14 @@ fn the_printer_writes_the_reference_lines_byte_for_byte() {
     for name in PROTOCOLS {
         let (len, lines) = busspec_protocols::with_protocol(name, Check).expect("built in");
         assert!(len > 1000, "{name}: {len} bytes");
-        // The capture reaches every kind of line.
+        // The capture reaches every kind of line; Dynamixel's spec has almost no rule a
+        // changed byte breaks with a good checksum (no ranges; IDs 0..=253, 254 broadcast), so
+        // this capture has no out-of-spec line.
         for key in ["\"skipped\"", "\"out_of_spec\"", "\"fields\""] {
+            if *name == "dynamixel" && key == "\"out_of_spec\"" {
+                continue;
+            }
             assert!(lines.contains(key), "{name}: no {key} line");
         }
     }
-}
-
-/// The specs with repeated fields (served by the interpreter): the printer prints every
-/// example's frame as `frame_line` does, lists included.
-#[test]
-fn printer_prints_variable_length_frames_as_frame_line_does() {
-    let mut printed = 0;
-    for (file, yaml) in [
-        ("spec/modbus.yaml", include_str!("../../spec/modbus.yaml")),
-        (
-            "spec/dynamixel.yaml",
-            include_str!("../../spec/dynamixel.yaml"),
-        ),
-    ] {
-        let spec = busspec_model::load_str(file, yaml).unwrap_or_else(|d| panic!("{d}"));
-        let printer = Printer::new(&spec);
-        for e in &spec.examples {
-            let frame = interp::decode(&spec, Some(e.message.direction), e.reply_to, &e.wire)
-                .unwrap_or_else(|err| panic!("{file} {:02X?}: {err}", e.wire));
-            let mut out = Vec::new();
-            printer.frame(&mut out, &spec, &frame, Some(7));
-            assert_eq!(text(&out), frame_line(&spec, &frame, Some(7)) + "\n");
-            printed += 1;
-        }
-    }
-    assert!(printed > 20, "{printed}");
 }

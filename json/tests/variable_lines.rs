@@ -2,14 +2,9 @@
 //! of Modbus RTU and Dynamixel 1.0 prints the same line from the generated message
 //! (`message_line`) as from the interpreter's frame (`frame_line`), the fields generated
 //! messages do not carry (a byte count that counts a list, a byte count following a quantity)
-//! included. The generated code is the generator's snapshot of each spec
-//! (`codegen/tests/snapshots/`).
+//! included. The generated code is `busspec-protocols`' built-in `modbus` and `dynamixel`.
 
-// The generated code's derives sit behind features of the crate including it.
-#![allow(unexpected_cfgs)]
-
-include!("../../codegen/tests/snapshots/modbus.rs");
-include!("../../codegen/tests/snapshots/dynamixel.rs");
+use busspec_protocols::{dynamixel, modbus};
 
 use busspec_json::{frame_line, message_line};
 use busspec_model::interp;

@@ -814,6 +814,17 @@ fn decide<'p>(
             }
         }
     }
+    // A stream's pairing says which response a frame is, never whether it is one: a frame that
+    // is a request and a response too (a Modbus echo, a read_coils request that reads as a
+    // 3-byte reply) stays ambiguous whatever request came before (it may be the master's
+    // retry). The rule of both stream decoders (their module docs).
+    let both_ways = fitting.iter().any(|r| r.direction == Direction::Request)
+        && fitting.iter().any(|r| r.direction == Direction::Response);
+    if paired && both_ways {
+        return Err(DecodeError::Ambiguous {
+            candidates: fitting.iter().map(|r| p.message(*r).name.clone()).collect(),
+        });
+    }
     if fitting.len() > 1 {
         if let Some(cmd) = reply_to {
             let answers = |r: &MessageRef| {

@@ -70,6 +70,14 @@
 //! default request given to [`StreamDecoder::with_default_request`] is used (for a capture of
 //! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`]. An
 //! out-of-spec frame ends the pairing, as an ambiguous one does.
+//!
+//! Pairing says which response a frame is, never whether it is one: a frame that decodes both
+//! as a request and as a response (a Modbus write_single_coil echo; a read_coils request whose
+//! starting address has the high byte 0x03, which also reads as a reply with 3 bytes of coils)
+//! is [`Event::Ambiguous`] whatever request came before it, since the bytes cannot tell a
+//! reply from the master's next request or retry. (`busspec decode --reply-to` on single
+//! frames does settle it: there the user says the frames are replies.) The generated stream
+//! decoder follows the same rule.
 
 use crate::interp::{self, DecodeError, Frame, Lookup, Raw};
 use crate::ir::{Count, Direction, FrameLayout, Message, MessageRef, Protocol};

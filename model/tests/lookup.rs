@@ -59,7 +59,8 @@ fn frames(p: &Protocol) -> Vec<Vec<u8>> {
     out
 }
 
-/// The stream decoder's pairing as it was written: two decodes.
+/// The stream decoder's pairing as it was written: two decodes; a frame that is a request and
+/// a response too stays ambiguous (pairing never decides a frame's direction).
 fn paired_twice<'p>(
     p: &'p Protocol,
     direction: Option<Direction>,
@@ -67,6 +68,13 @@ fn paired_twice<'p>(
     wire: &[u8],
 ) -> Result<interp::Frame<'p>, DecodeError> {
     match interp::decode(p, direction, None, wire) {
+        Err(DecodeError::Ambiguous { candidates })
+            if [Direction::Request, Direction::Response]
+                .iter()
+                .all(|&d| candidates.iter().any(|c| p.find_in(c, d).is_some())) =>
+        {
+            Err(DecodeError::Ambiguous { candidates })
+        }
         Err(DecodeError::Ambiguous { candidates }) => {
             match request.map(|r| interp::decode(p, direction, Some(r), wire)) {
                 Some(Ok(frame)) => Ok(frame),

@@ -37,6 +37,9 @@
 //! A response only its request can identify (SD 0x22..0x28, 0x38) is decoded as the answer to
 //! the last request seen since the previous response, or else to the default request
 //! ([`StreamDecoder::with_default_request`]); failing both it is an [`Event::Ambiguous`].
+//! Pairing says which response a frame is, never whether it is one: a frame that decodes as a
+//! request and as a response (a Modbus echo) is an [`Event::Ambiguous`] whatever request came
+//! before it (it may be the master's next request or retry), as in the interpreter's.
 //!
 //! Decisions depend only on the bytes, never on how they were cut into chunks, as long as
 //! `finish` is called only at the end.

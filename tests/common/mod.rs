@@ -18,7 +18,7 @@ pub fn spec<P: busspec_protocols::Protocol>() -> Protocol {
     busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
 }
 
-/// Writes the checksum of `frame`'s bytes before it into its last bytes.
+/// Writes the checksum of the bytes before it it covers into `frame`'s last bytes.
 pub fn fix_checksum(p: &Protocol, frame: &mut [u8]) {
     let c = &p.framing.checksum;
     let n = c.len();
@@ -26,18 +26,23 @@ pub fn fix_checksum(p: &Protocol, frame: &mut [u8]) {
         return;
     }
     let at = frame.len() - n;
-    let v = checksum::compute(&c.algorithm, &frame[..at]);
+    let v = checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
     interp::write_uint(v, &mut frame[at..], c.byte_order);
 }
 
-/// A frame shaped like message `m` (start byte, code, right length, valid checksum), with a
-/// random address (usually a device's) and random payload.
+/// A frame shaped like message `m` (start byte, code, right length and length byte, valid
+/// checksum; a repeated field without elements), with a random address (usually a device's)
+/// and random payload.
 pub fn random_frame(p: &Protocol, m: &Message, rng: &mut fastrand::Rng) -> Vec<u8> {
     let len = p.frame_len(m);
     let o = m.layout;
     let mut f: Vec<u8> = (0..len).map(|_| rng.u8(..)).collect();
     if let (Some(at), Some(s)) = (o.start, p.framing.start) {
         f[at] = s;
+        // A sync sequence, whole (Dynamixel's FF FF).
+        if let Some(to) = f.get_mut(at..at + p.framing.sync.len()) {
+            to.copy_from_slice(&p.framing.sync);
+        }
     }
     f[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
     if rng.u8(..) < 224 {
@@ -47,6 +52,13 @@ pub fn random_frame(p: &Protocol, m: &Message, rng: &mut fastrand::Rng) -> Vec<u
     for b in &mut f[o.payload..o.payload + m.payload_len] {
         if rng.bool() {
             *b = rng.u8(..4);
+        }
+    }
+    // A length byte that says the frame's length (a single byte: Dynamixel's).
+    let rule = p.framing.length_rule(m.direction);
+    if let Some((r, v)) = rule.and_then(|r| Some((r, r.value(len)?))) {
+        if r.width == 1 {
+            f[r.at] = v as u8;
         }
     }
     fix_checksum(p, &mut f);

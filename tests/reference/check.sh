@@ -2,8 +2,9 @@
 # Checks spec/modbus.yaml and spec/dynamixel.yaml against the reference implementations:
 # pymodbus and the ROBOTIS dynamixel-sdk, installed from PyPI into a virtual environment under
 # target/ that this script makes (rebuilt when missing). Frames each peer's encoders build must
-# decode through `busspec decode --spec` to the values they were built from, and frames
-# `busspec encode --spec` builds must be read identically by the peers (tests/reference/check.py).
+# decode through `busspec decode` to the values they were built from, and frames
+# `busspec encode` builds must be read identically by the peers (tests/reference/check.py);
+# every call runs with the built-in generated code and with `--spec` (the interpreter), alike.
 # Versions are pinned so a new release cannot change the result silently.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."

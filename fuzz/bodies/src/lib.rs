@@ -4,7 +4,7 @@
 //! returns normally otherwise.
 //!
 //! For each protocol, one generic body over [`Protocol`] per target, with a thin wrapper per
-//! protocol ([`ub2`], [`sd`]) that the fuzz targets call by name:
+//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`]) that the fuzz targets call by name:
 //! * [`decode`]: arbitrary bytes through `decode_request`, `decode_response` and
 //!   `decode_reply`; errors point inside the frame, and every accepted frame
 //!   re-encodes to the same bytes;
@@ -23,8 +23,10 @@
 //! * [`differential`]: the generated decoder and the interpreter agree on every input
 //!   ([`oracle::agree`]).
 //!
-//! For the protocols only the interpreter serves (Modbus, Dynamixel), [`interpreted`] has a
-//! decode and a stream body each.
+//! Modbus and Dynamixel have the generated `decode` and `stream` bodies
+//! (`modbus_generated_decode`, ...), and [`interpreted`] has a decode and a stream body each
+//! for the interpreter on its own (`modbus_decode`, ...), from before the generator emitted
+//! them.
 //!
 //! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
 //! the docs renderer and the code emitter): errors with messages, never a panic.
@@ -33,7 +35,7 @@
 //! * `decode`: the frame;
 //! * `differential`: one byte choosing the command whose example request a response answers,
 //!   then the frame;
-//! * `stream`: three bytes — direction (`% 3`: both, requests, responses), which example frame
+//! * `stream` (and `*_generated_stream`): three bytes — direction (`% 3`: both, requests, responses), which example frame
 //!   to place after the capture, the seed of the chunk sizes — then the capture;
 //! * [`roundtrip`]: raw material for `arbitrary::Unstructured`;
 //! * `spec_loader`: the spec text (invalid UTF-8 replaced).
@@ -120,9 +122,57 @@ pub const TARGETS: &[Target] = &[
         name: "dynamixel_stream",
         body: dynamixel::stream,
     },
+    Target {
+        name: "modbus_generated_decode",
+        body: modbus::generated_decode,
+    },
+    Target {
+        name: "modbus_generated_stream",
+        body: modbus::generated_stream,
+    },
+    Target {
+        name: "dynamixel_generated_decode",
+        body: dynamixel::generated_decode,
+    },
+    Target {
+        name: "dynamixel_generated_stream",
+        body: dynamixel::generated_stream,
+    },
 ];
 
-pub use interpreted::{dynamixel, modbus};
+/// The bodies for Modbus RTU, as the fuzz targets call them: the interpreter's own
+/// ([`interpreted`]) and the generated code's.
+pub mod modbus {
+    use busspec_protocols::modbus::Modbus;
+
+    pub use crate::interpreted::modbus::{decode, stream};
+
+    /// [`crate::decode`] for the generated Modbus.
+    pub fn generated_decode(data: &[u8]) {
+        crate::decode::<Modbus>(data)
+    }
+    /// [`crate::stream`] for the generated Modbus.
+    pub fn generated_stream(data: &[u8]) {
+        crate::stream::<Modbus>(data)
+    }
+}
+
+/// The bodies for Dynamixel 1.0, as the fuzz targets call them: the interpreter's own
+/// ([`interpreted`]) and the generated code's.
+pub mod dynamixel {
+    use busspec_protocols::dynamixel::Dynamixel;
+
+    pub use crate::interpreted::dynamixel::{decode, stream};
+
+    /// [`crate::decode`] for the generated Dynamixel.
+    pub fn generated_decode(data: &[u8]) {
+        crate::decode::<Dynamixel>(data)
+    }
+    /// [`crate::stream`] for the generated Dynamixel.
+    pub fn generated_stream(data: &[u8]) {
+        crate::stream::<Dynamixel>(data)
+    }
+}
 
 /// A value made once per process for the type `K`. Generic functions cannot have a `static` of
 /// their own per type; this is that. The values are leaked (a handful per protocol) but stay

@@ -45,13 +45,19 @@ pub fn repo_root() -> PathBuf {
 pub fn corpus() -> BTreeMap<&'static str, BTreeMap<String, Vec<u8>>> {
     let mut out = BTreeMap::new();
     for (proto, p) in specs() {
+        // A protocol with interpreter bodies of its own (Modbus, Dynamixel) has its generated
+        // ones as `<proto>_generated_<kind>`, and not every kind.
+        let interpreted = crate::interpreted::specs().iter().any(|(n, _)| *n == proto);
         let mut put = |kind: &str, name: String, bytes: Vec<u8>| {
-            let target: &'static str = crate::TARGETS
-                .iter()
-                .find(|t| t.name == format!("{proto}_{kind}"))
-                .expect("a target for every kind")
-                .name;
-            out.entry(target)
+            let target = match interpreted {
+                true => format!("{proto}_generated_{kind}"),
+                false => format!("{proto}_{kind}"),
+            };
+            let Some(t) = crate::TARGETS.iter().find(|t| t.name == target) else {
+                assert!(interpreted, "no target {target}");
+                return;
+            };
+            out.entry(t.name)
                 .or_insert_with(BTreeMap::new)
                 .insert(format!("{SEED_PREFIX}{name}"), bytes);
         };

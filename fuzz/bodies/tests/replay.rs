@@ -130,6 +130,26 @@ fn dynamixel_stream() {
 }
 
 #[test]
+fn modbus_generated_decode() {
+    replay_target("modbus_generated_decode");
+}
+
+#[test]
+fn modbus_generated_stream() {
+    replay_target("modbus_generated_stream");
+}
+
+#[test]
+fn dynamixel_generated_decode() {
+    replay_target("dynamixel_generated_decode");
+}
+
+#[test]
+fn dynamixel_generated_stream() {
+    replay_target("dynamixel_generated_stream");
+}
+
+#[test]
 fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
     let names = [
         "ub2_decode",
@@ -145,6 +165,10 @@ fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
         "modbus_stream",
         "dynamixel_decode",
         "dynamixel_stream",
+        "modbus_generated_decode",
+        "modbus_generated_stream",
+        "dynamixel_generated_decode",
+        "dynamixel_generated_stream",
     ];
     let targets: Vec<&str> = TARGETS.iter().map(|t| t.name).collect();
     assert_eq!(targets, names);
