@@ -71,11 +71,14 @@
 //! one direction only). If that still leaves it open, the frame is [`Event::Ambiguous`]. An
 //! out-of-spec frame ends the pairing, as an ambiguous one does.
 
-use crate::interp::{self, DecodeError, Frame, Lookup, Raw};
+use crate::interp::{self, DecodeError, Frame, Lookup, Raw, Value};
 use crate::ir::{Count, Direction, FrameLayout, Message, MessageRef, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
 pub const MAX_SKIPPED_RUN: usize = 256;
+
+/// The most buffers of each kind [`StreamDecoder::recycle`] keeps.
+const SPARE: usize = 4096;
 
 /// What the decoder found in the capture. Offsets count bytes from the first byte ever pushed.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -288,6 +291,10 @@ pub struct StreamDecoder<'p> {
     default_request: Option<usize>,
     /// The spec with its rules lifted ([`relaxed`]), made at the first out-of-spec frame.
     relaxed: Option<Box<Protocol>>,
+    /// Empty buffers of events given back ([`Self::recycle`]), for the next events' bytes and
+    /// values.
+    spare_bytes: Vec<Vec<u8>>,
+    spare_values: Vec<Vec<Value<'p>>>,
 }
 
 impl<'p> StreamDecoder<'p> {
@@ -355,6 +362,8 @@ impl<'p> StreamDecoder<'p> {
             last_request: None,
             default_request: None,
             relaxed: None,
+            spare_bytes: Vec::new(),
+            spare_values: Vec::new(),
         }
     }
 
@@ -381,6 +390,28 @@ impl<'p> StreamDecoder<'p> {
         let mut out = Vec::new();
         self.push_into(data, &mut out);
         out
+    }
+
+    /// Takes back events the caller is done with (leaving `events` empty), to build the next
+    /// ones in their memory: an event's bytes and a frame's values are otherwise allocated per
+    /// event and freed by the caller.
+    pub fn recycle(&mut self, events: &mut Vec<Event<'p>>) {
+        for e in events.drain(..) {
+            let (mut bytes, values) = match e {
+                Event::Frame { bytes, frame, .. } => (bytes, Some(frame.values)),
+                Event::Ambiguous { bytes, .. }
+                | Event::Skipped { bytes, .. }
+                | Event::OutOfSpec { bytes, .. } => (bytes, None),
+            };
+            if self.spare_bytes.len() < SPARE {
+                bytes.clear();
+                self.spare_bytes.push(bytes);
+            }
+            if let Some(mut values) = values.filter(|_| self.spare_values.len() < SPARE) {
+                values.clear();
+                self.spare_values.push(values);
+            }
+        }
     }
 
     /// [`Self::push`], appending the events to `out` (for a caller that reuses one list).
@@ -549,12 +580,21 @@ impl<'p> StreamDecoder<'p> {
         };
         let offset = self.head;
         let request = self.last_request.or(self.default_request);
-        let found = match self.lookup.decode_paired(self.p, request, wire) {
+        let mut spare = self.spare_values.pop().unwrap_or_default();
+        let decoded = self
+            .lookup
+            .decode_paired_reusing(self.p, request, wire, &mut spare);
+        if spare.capacity() > 0 {
+            // Not taken: no frame decoded.
+            self.spare_values.push(spare);
+        }
+        let found = match decoded {
             Ok(frame) => Ok(frame),
             Err(DecodeError::Ambiguous { candidates }) => Err(candidates),
             Err(e) => return Err(Some(e).filter(breaks_spec)),
         };
-        let bytes = wire.to_vec();
+        let mut bytes = self.spare_bytes.pop().unwrap_or_default();
+        bytes.extend_from_slice(wire);
         self.report_noise(out);
         self.consume(len);
         out.push(match found {
