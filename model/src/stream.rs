@@ -396,22 +396,26 @@ impl<'p> StreamDecoder<'p> {
     /// ones in their memory: an event's bytes and a frame's values are otherwise allocated per
     /// event and freed by the caller.
     pub fn recycle(&mut self, events: &mut Vec<Event<'p>>) {
-        for e in events.drain(..) {
-            let (mut bytes, values) = match e {
-                Event::Frame { bytes, frame, .. } => (bytes, Some(frame.values)),
+        // Taken out in place: an event is large (an out-of-spec one holds its error).
+        for e in events.iter_mut() {
+            let (bytes, values) = match e {
+                Event::Frame { bytes, frame, .. } => (bytes, Some(&mut frame.values)),
                 Event::Ambiguous { bytes, .. }
                 | Event::Skipped { bytes, .. }
                 | Event::OutOfSpec { bytes, .. } => (bytes, None),
             };
             if self.spare_bytes.len() < SPARE {
+                let mut bytes = std::mem::take(bytes);
                 bytes.clear();
                 self.spare_bytes.push(bytes);
             }
-            if let Some(mut values) = values.filter(|_| self.spare_values.len() < SPARE) {
+            if let Some(values) = values.filter(|_| self.spare_values.len() < SPARE) {
+                let mut values = std::mem::take(values);
                 values.clear();
                 self.spare_values.push(values);
             }
         }
+        events.clear();
     }
 
     /// [`Self::push`], appending the events to `out` (for a caller that reuses one list).
