@@ -105,7 +105,7 @@ struct Interpreted<'a> {
 
 impl LineStream for Interpreted<'_> {
     fn push(&mut self, data: &[u8], out: &mut Vec<u8>) {
-        self.events.clear();
+        self.decoder.recycle(&mut self.events);
         self.decoder.push_into(data, &mut self.events);
         busspec_json::write_events(self.spec, self.printer, &self.events, out);
     }

@@ -606,7 +606,14 @@ impl Lookup {
         reply_to: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame<'p>, DecodeError> {
-        decode_in(p, self.limits, Some(self), (reply_to, false), wire)
+        decode_in(
+            p,
+            self.limits,
+            Some(self),
+            (reply_to, false),
+            wire,
+            &mut Vec::new(),
+        )
     }
 
     /// Decodes a frame as the stream decoder pairs a response with the request before it:
@@ -619,7 +626,19 @@ impl Lookup {
         request: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame<'p>, DecodeError> {
-        decode_in(p, self.limits, Some(self), (request, true), wire)
+        self.decode_paired_reusing(p, request, wire, &mut Vec::new())
+    }
+
+    /// [`Self::decode_paired`], the frame's values built in `spare`'s memory (taken from it
+    /// only when a frame decodes): for a caller that gives back the frames it is done with.
+    pub fn decode_paired_reusing<'p>(
+        &self,
+        p: &'p Protocol,
+        request: Option<usize>,
+        wire: &[u8],
+        spare: &mut Vec<Value<'p>>,
+    ) -> Result<Frame<'p>, DecodeError> {
+        decode_in(p, self.limits, Some(self), (request, true), wire, spare)
     }
 }
 
@@ -632,7 +651,8 @@ pub fn decode<'p>(
     reply_to: Option<usize>,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
-    decode_in(p, Limits::of(p, direction), None, (reply_to, false), wire)
+    let limits = Limits::of(p, direction);
+    decode_in(p, limits, None, (reply_to, false), wire, &mut Vec::new())
 }
 
 fn decode_in<'p>(
@@ -641,6 +661,7 @@ fn decode_in<'p>(
     lookup: Option<&Lookup>,
     reply_to: (Option<usize>, bool),
     wire: &[u8],
+    spare: &mut Vec<Value<'p>>,
 ) -> Result<Frame<'p>, DecodeError> {
     let Limits {
         directions,
@@ -692,7 +713,7 @@ fn decode_in<'p>(
                 .filter(fits)
                 .peekable();
             if found.peek().is_some() {
-                return decide(p, found, shortest, reply_to, wire);
+                return decide(p, found, shortest, reply_to, wire, spare);
             }
         }
         let mut by_len: Vec<MessageRef> = Vec::new();
@@ -708,7 +729,7 @@ fn decode_in<'p>(
             by_len.sort_by_key(|r| (r.direction as u8, r.index));
         }
         if !by_len.is_empty() {
-            return decide(p, by_len, shortest, reply_to, wire);
+            return decide(p, by_len, shortest, reply_to, wire, spare);
         }
     }
 
@@ -771,7 +792,7 @@ fn decode_in<'p>(
             found: wire.len(),
         });
     }
-    decide(p, by_len, shortest, reply_to, wire)
+    decide(p, by_len, shortest, reply_to, wire, spare)
 }
 
 /// The frame among the messages of the frame's code and length (`by_len`, not empty) whose
@@ -786,6 +807,7 @@ fn decide<'p>(
     shortest: usize,
     (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
+    spare: &mut Vec<Value<'p>>,
 ) -> Result<Frame<'p>, DecodeError> {
     let mut by_len = by_len.into_iter();
     let first = by_len.next();
@@ -794,13 +816,13 @@ fn decide<'p>(
     // error, as below, without a list.
     if let (Some(r), None) = (first, second) {
         let m = p.message(r);
-        return match fields_of(p, m, wire) {
-            Ok(values) => Ok(Frame {
+        return match misfit(p, m, wire) {
+            None => Ok(Frame {
                 message: r,
                 address: wire.get(m.layout.address).copied().unwrap_or(0),
-                values,
+                values: values_of(p, m, wire, std::mem::take(spare)),
             }),
-            Err(misfit) => Err(misfit.error(m)),
+            Some(misfit) => Err(misfit.error(m)),
         };
     }
     // The messages whose fields fit; their values are built for the one chosen.
@@ -857,7 +879,7 @@ fn decide<'p>(
             Ok(Frame {
                 message,
                 address: wire.get(o.address).copied().unwrap_or(0),
-                values: values_of(p, m, wire),
+                values: values_of(p, m, wire, std::mem::take(spare)),
             })
         }
         _ => Err(DecodeError::Ambiguous {
@@ -1237,7 +1259,7 @@ fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
 fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<'p>>, Misfit> {
     match misfit(p, m, wire) {
         Some(misfit) => Err(misfit),
-        None => Ok(values_of(p, m, wire)),
+        None => Ok(values_of(p, m, wire, Vec::new())),
     }
 }
 
@@ -1352,10 +1374,17 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     None
 }
 
-/// The values of a frame that fits message `m` ([`misfit`] found nothing).
-fn values_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Vec<Value<'p>> {
+/// The values of a frame that fits message `m` ([`misfit`] found nothing), in `values`'s
+/// memory (emptied first).
+fn values_of<'p>(
+    p: &Protocol,
+    m: &'p Message,
+    wire: &[u8],
+    mut values: Vec<Value<'p>>,
+) -> Vec<Value<'p>> {
     let payload = payload_of(p, m, wire);
-    let mut values = Vec::with_capacity(m.fields.len());
+    values.clear();
+    values.reserve(m.fields.len());
     for f in &m.fields {
         if f.repeat.is_some() {
             values.push(Value {
