@@ -168,6 +168,23 @@ impl<T: Element, const N: usize> Repeated<T, N> {
     }
 }
 
+/// The elements the getter gives for repeated field `name`: a list, or the error that says
+/// it gave none or something else.
+#[inline]
+fn list_items<'v>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<Elements<'v>, FieldError> {
+    match field(name) {
+        Some(FieldValue::List(items)) => Ok(items),
+        Some(_) => Err(FieldError::WrongKind {
+            field: name,
+            expected: ValueKind::List,
+        }),
+        None => Err(FieldError::Missing { field: name }),
+    }
+}
+
 /// Repeated field `name` from a [`crate::Message::from_fields`] getter: a list of at most `N`
 /// elements, each within `min..=max` (its wire type's raw values; a bit takes 0 or 1, or a
 /// `bool`). Public only for generated code.
@@ -178,16 +195,7 @@ pub fn list<'v, T: crate::codec::Wire + Default, const N: usize>(
     min: i64,
     max: i64,
 ) -> Result<Repeated<T, N>, FieldError> {
-    let items = match field(name) {
-        Some(FieldValue::List(items)) => items,
-        Some(_) => {
-            return Err(FieldError::WrongKind {
-                field: name,
-                expected: ValueKind::List,
-            })
-        }
-        None => return Err(FieldError::Missing { field: name }),
-    };
+    let items = list_items(field, name)?;
     if items.len() > N {
         return Err(FieldError::TooMany {
             field: name,
@@ -218,16 +226,7 @@ pub fn list_bits<'v, const BYTES: usize>(
     field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
     name: &'static str,
 ) -> Result<Bits<BYTES>, FieldError> {
-    let items = match field(name) {
-        Some(FieldValue::List(items)) => items,
-        Some(_) => {
-            return Err(FieldError::WrongKind {
-                field: name,
-                expected: ValueKind::List,
-            })
-        }
-        None => return Err(FieldError::Missing { field: name }),
-    };
+    let items = list_items(field, name)?;
     let mut r = Bits::<BYTES>::new();
     for value in items.iter() {
         if !(0..=1).contains(&value) {
