@@ -809,6 +809,18 @@ pub fn following<T: Wire>(
     Ok(())
 }
 
+/// The unsigned integer `bytes` hold (`le`: least significant byte first): a length, count or
+/// element field of up to 8 bytes.
+#[inline(always)]
+pub fn uint(bytes: &[u8], le: bool) -> u64 {
+    let fold = |a: u64, b: &u8| (a << 8) | u64::from(*b);
+    if le {
+        bytes.iter().rev().fold(0, fold)
+    } else {
+        bytes.iter().fold(0, fold)
+    }
+}
+
 /// Checks a length field of `width` bytes at `at` (`le`: least significant byte first): it must
 /// hold `frame.len() + k` where it counts the payload (`grows`), else `k`. A frame whose length
 /// field disagrees is refused with the field's offset and value.
@@ -822,14 +834,7 @@ pub fn length_field(
     k: i64,
 ) -> Result<(), DecodeError> {
     let bytes = frame.get(at..at + width).unwrap_or(&[]);
-    let found = if le {
-        bytes
-            .iter()
-            .rev()
-            .fold(0u32, |a, b| (a << 8) | u32::from(*b))
-    } else {
-        bytes.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b))
-    };
+    let found = uint(bytes, le) as u32;
     let expected = if grows { frame.len() as i64 + k } else { k };
     if i64::from(found) != expected {
         return Err(DecodeError::InvalidValue {

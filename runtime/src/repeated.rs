@@ -382,12 +382,7 @@ impl CountField {
     #[inline]
     pub fn read(&self, frame: &[u8]) -> Option<u64> {
         let b = frame.get(self.at..self.at + self.width)?;
-        let fold = |a: u64, b: &u8| (a << 8) | u64::from(*b);
-        Some(if self.le {
-            b.iter().rev().fold(0, fold)
-        } else {
-            b.iter().fold(0, fold)
-        })
+        Some(crate::codec::uint(b, self.le))
     }
 }
 
@@ -803,11 +798,7 @@ pub fn read_elements<T: crate::codec::Wire + Default, const N: usize>(
     }
     let mut r = Repeated::<T, N>::new();
     for (slot, c) in r.items.iter_mut().zip(bytes.chunks_exact(width)) {
-        let u = if le {
-            c.iter().rev().fold(0u64, |a, b| (a << 8) | u64::from(*b))
-        } else {
-            c.iter().fold(0u64, |a, b| (a << 8) | u64::from(*b))
-        };
+        let u = crate::codec::uint(c, le);
         let bits = 8 * width as u32;
         let v = if signed && bits < 64 {
             ((u << (64 - bits)) as i64) >> (64 - bits)

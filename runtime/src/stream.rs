@@ -173,13 +173,7 @@ impl LengthField {
     #[inline]
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
         let b = head.get(self.at..self.at.checked_add(self.width)?)?;
-        let fold = |a: usize, b: &u8| (a << 8) | usize::from(*b);
-        let v = if self.le {
-            b.iter().rev().fold(0, fold)
-        } else {
-            b.iter().fold(0, fold)
-        };
-        let len = isize::try_from(v)
+        let len = isize::try_from(crate::codec::uint(b, self.le))
             .ok()
             .and_then(|v| v.checked_add(self.excess))
             .and_then(|l| usize::try_from(l).ok())
