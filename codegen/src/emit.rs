@@ -23,8 +23,10 @@
 //! - any other unit becomes a newtype over the smallest integer that holds every field using it,
 //!   with conversions to and from physical values;
 //! - enums are open (`Unknown(raw)`), flags are a bit-set newtype, ascii fields `[u8; N]`;
-//! - constants and repeated fields are not part of the typed message: encode writes them,
-//!   decode checks them.
+//! - constants (and a list's count field, computed from the list) are not part of the typed
+//!   message: encode writes them, decode checks them; a repeated field is an
+//!   `rt::Repeated<wire, max>` or `rt::Bits<bytes>` value, with a `REPEAT_<NAME>` const saying
+//!   where it sits and how it is counted.
 
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
