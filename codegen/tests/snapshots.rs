@@ -89,6 +89,14 @@ fn variable_length_spec_generates_its_snapshot() {
     );
 }
 
+/// A reply's list to the end of the frame with no length field: the stream decoder frames it
+/// by the lengths listed in `FRAME_LENGTHS` (`snapshots_compile.rs` compiles it and holds its
+/// stream decoder to the interpreter's).
+#[test]
+fn repeat_to_the_end_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/minimal_end.yaml", "ending.rs");
+}
+
 /// The two public protocols, generated whole (`snapshots_compile.rs` and
 /// `generated_public.rs` compile them, replay their examples and hold them to the
 /// interpreter).

@@ -8,6 +8,7 @@ include!("snapshots/core_names.rs");
 include!("snapshots/syncy.rs");
 include!("snapshots/codeless.rs");
 include!("snapshots/variable.rs");
+include!("snapshots/ending.rs");
 
 mod agree;
 
@@ -368,4 +369,147 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     ));
     let reply = vario::Response::decode(&three).unwrap().message;
     assert!(!reply.answers(&read));
+}
+
+/// What a stream decoder reported, in terms both engines share: a frame by its message's name
+/// (`?` for an ambiguous one, `!` for one out of spec), or skipped bytes (`-`, runs merged);
+/// offset and length.
+type Seen = (String, u64, u64);
+
+/// Appends `e`, merging skipped bytes with skipped bytes just before.
+fn note(out: &mut Vec<Seen>, e: Seen) {
+    if let Some(last) = out.last_mut() {
+        if last.0 == "-" && e.0 == "-" && last.1 + last.2 == e.1 {
+            last.2 += e.2;
+            return;
+        }
+    }
+    out.push(e);
+}
+
+/// `cap` through the generated stream decoder of `P`, pushed in pieces of the sizes in `cuts`
+/// (repeated), both directions.
+fn generated_seen<P: Protocol>(cap: &[u8], cuts: &[usize]) -> Vec<Seen> {
+    use busspec_runtime::stream::{Event, StreamDecoder};
+    let mut d = StreamDecoder::<P>::new(None);
+    let mut out = Vec::new();
+    let take = |e: Event<P::Request, P::Response>, out: &mut Vec<Seen>| {
+        let s = match e {
+            Event::Request { offset, len, frame } => {
+                (frame.message.name().to_owned(), offset, len as u64)
+            }
+            Event::Response { offset, len, frame } => {
+                (frame.message.name().to_owned(), offset, len as u64)
+            }
+            Event::Ambiguous { offset, len, .. } => ("?".to_owned(), offset, len as u64),
+            Event::OutOfSpec { offset, len, .. } => ("!".to_owned(), offset, len as u64),
+            Event::Skipped { offset, len } => ("-".to_owned(), offset, len),
+        };
+        note(out, s);
+    };
+    let mut rest = cap;
+    for &n in cuts.iter().cycle() {
+        if rest.is_empty() {
+            break;
+        }
+        let (chunk, r) = rest.split_at(n.min(rest.len()));
+        rest = r;
+        let mut chunk = chunk;
+        while !chunk.is_empty() {
+            let k = d.push(chunk);
+            chunk = &chunk[k..];
+            while let Some(e) = d.poll() {
+                take(e, &mut out);
+            }
+        }
+    }
+    while let Some(e) = d.finish() {
+        take(e, &mut out);
+    }
+    out
+}
+
+/// `cap` through the interpreter's stream decoder, pushed the same way.
+fn interp_seen(p: &ir::Protocol, cap: &[u8], cuts: &[usize]) -> Vec<Seen> {
+    use busspec_model::stream::{Event, StreamDecoder};
+    let mut d = StreamDecoder::new(p, None);
+    let mut events = Vec::new();
+    let mut rest = cap;
+    for &n in cuts.iter().cycle() {
+        if rest.is_empty() {
+            break;
+        }
+        let (chunk, r) = rest.split_at(n.min(rest.len()));
+        rest = r;
+        events.extend(d.push(chunk));
+    }
+    events.extend(d.flush());
+    let mut out = Vec::new();
+    for e in events {
+        let s = match e {
+            Event::Frame {
+                offset,
+                bytes,
+                frame,
+            } => (
+                p.message(frame.message).name.clone(),
+                offset,
+                bytes.len() as u64,
+            ),
+            Event::Ambiguous { offset, bytes, .. } => ("?".to_owned(), offset, bytes.len() as u64),
+            Event::OutOfSpec { offset, bytes, .. } => ("!".to_owned(), offset, bytes.len() as u64),
+            Event::Skipped { offset, bytes } => ("-".to_owned(), offset, bytes.len() as u64),
+        };
+        note(&mut out, s);
+    }
+    out
+}
+
+/// A reply's list runs to the end of the frame and no length field says where that is: the
+/// generated stream decoder frames it by the lengths `FRAME_LENGTHS` lists, as the interpreter's
+/// does, on captures of the examples with noise, cut frames and lists of every length, however
+/// they are cut; the examples replay and both engines agree frame by frame.
+#[test]
+fn repeat_to_the_end_snapshot_streams_as_the_interpreter_does() {
+    use busspec_runtime::Repeated;
+    replay::<ending::Ending>("model/tests/fixtures/valid/minimal_end.yaml");
+    let p = fixture("model/tests/fixtures/valid/minimal_end.yaml");
+    let t = agree::agree::<ending::Ending>(&p);
+    assert!(t.accepted > 5 && t.refused > 100, "{t:?}");
+    // Every length the reply can have, 1 to 16 registers, is one of the listed lengths.
+    let mut frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    let mut buf = [0u8; ending::MAX_FRAME_LEN];
+    for n in 1..=16u16 {
+        let values: Vec<u16> = (0..n).map(|k| k.wrapping_mul(0x1F3D)).collect();
+        let reply = ending::Response::ReadReply {
+            values: Repeated::from_slice(&values).unwrap(),
+        };
+        let len = reply.encode(2, &mut buf).unwrap();
+        assert!(ending::Ending::FRAME_LENGTHS.contains(&len), "{len}");
+        frames.push(buf[..len].to_vec());
+    }
+    let mut rng = agree::Rng(0x5EED);
+    let mut found = 0;
+    for _ in 0..200 {
+        let mut cap = Vec::new();
+        for _ in 0..30 {
+            let f = &frames[rng.below(frames.len() as u64) as usize];
+            match rng.below(12) {
+                0 => cap.extend((0..1 + rng.below(5)).map(|_| rng.below(256) as u8)),
+                1 => cap.extend_from_slice(&f[..1 + rng.below(f.len() as u64 - 1) as usize]),
+                _ => {}
+            }
+            cap.extend_from_slice(f);
+        }
+        let cuts: Vec<usize> = (0..8).map(|_| 1 + rng.below(40) as usize).collect();
+        let want = interp_seen(&p, &cap, &cuts);
+        let got = generated_seen::<ending::Ending>(&cap, &cuts);
+        assert_eq!(got, want, "capture {cap:02X?}");
+        assert_eq!(generated_seen::<ending::Ending>(&cap, &[cap.len()]), got);
+        found += got
+            .iter()
+            .filter(|s| !matches!(&*s.0, "-" | "?" | "!"))
+            .count();
+    }
+    assert!(found > 200 * 15, "only {found} frames found");
 }
