@@ -406,9 +406,9 @@ impl<C: Protocol> StreamDecoder<C> {
     /// reached when it is dropped are not consumed: see [`Feed::remaining`].
     pub fn feed<'a, 'd>(&'a mut self, data: &'d [u8]) -> Feed<'a, 'd, C> {
         Feed {
+            base: self.position(),
             decoder: self,
             input: data,
-            at: 0,
         }
     }
 
@@ -841,14 +841,22 @@ impl<C: Protocol> Core<C> {
 pub struct Feed<'a, 'd, C: Protocol> {
     decoder: &'a mut StreamDecoder<C>,
     input: &'d [u8],
-    /// `input[..at]` has been pushed or settled in place.
-    at: usize,
+    /// The stream offset of `input[0]`: `input[..at]`, `at` the decoder's
+    /// [`StreamDecoder::position`] less this, has been pushed or settled in place. Kept as
+    /// this rather than `at` so that settling a frame in place moves one count, `head`.
+    base: u64,
 }
 
 impl<'d, C: Protocol> Feed<'_, 'd, C> {
     /// The bytes not yet pushed into the decoder.
     pub fn remaining(&self) -> &'d [u8] {
-        self.input.get(self.at..).unwrap_or_default()
+        self.input.get(self.at()..).unwrap_or_default()
+    }
+
+    /// How many bytes of the input have been pushed or settled in place.
+    #[inline(always)]
+    fn at(&self) -> usize {
+        (self.decoder.position() - self.base) as usize
     }
 }
 
@@ -866,14 +874,16 @@ impl<C: Protocol> Iterator for Feed<'_, '_, C> {
                 // What `Core::fast_step` does, written out: returning the frame's event
                 // here and the noise's there keeps the event out of a merge (14 instructions
                 // a frame more).
-                while let Some(window) = self.input.get(self.at..self.at + cap) {
+                loop {
+                    let at = (d.core.head - self.base) as usize;
+                    let Some(window) = self.input.get(at..at + cap) else {
+                        break;
+                    };
                     let mut slow = false;
-                    let head = d.core.head;
                     let ev = d.core.fast(window, &mut slow);
                     if slow {
                         break;
                     }
-                    self.at += (d.core.head - head) as usize;
                     if let Some(ev) = ev {
                         if d.core.noise_len > 0 {
                             d.core.pending = Some(ev);
@@ -900,34 +910,33 @@ impl<C: Protocol> Feed<'_, '_, C> {
     #[inline(never)]
     fn next_slow(&mut self) -> Option<Option<Event<C::Request, C::Response>>> {
         loop {
+            let at = self.at();
             let d = &mut *self.decoder;
             if d.core.pending.is_some() {
                 return Some(d.core.pending.take());
             }
             // Buffered bytes that all came from this input are still there, right before
-            // `at` (the buffer holds the last bytes pushed): give them back to the input.
+            // `at` (the buffer holds the last bytes pushed): give them back to the input
+            // (`at` moves back with `len`).
             let cap = d.buf.as_ref().len();
-            if d.len > 0 && d.len <= self.at && self.input.len() - (self.at - d.len) >= cap {
-                self.at -= d.len;
+            if d.len > 0 && d.len <= at && self.input.len() - (at - d.len) >= cap {
                 d.len = 0;
+                continue;
             }
             if d.len == 0 {
                 // A whole buffer's worth of bytes: as in `step`, a full window settles.
-                if let Some(window) = self.input.get(self.at..self.at + cap) {
-                    let head = d.core.head;
-                    let ev = d.core.full_step(window);
-                    self.at += (d.core.head - head) as usize;
-                    return ev.map(Some);
+                if let Some(window) = self.input.get(at..at + cap) {
+                    return d.core.full_step(window).map(Some);
                 }
             }
             if let Some(ev) = d.poll() {
                 return Some(Some(ev));
             }
-            let rest = self.input.get(self.at..).unwrap_or_default();
+            let rest = self.input.get(at..).unwrap_or_default();
             if rest.is_empty() {
                 return Some(None);
             }
-            self.at += d.push(rest);
+            d.push(rest);
         }
     }
 }
