@@ -1,0 +1,222 @@
+//! The generated stream decoder's fast path (`Core::fast`, taken where a whole window of the
+//! caller's bytes lies ahead) against its full framing rule (`Core::advance`): nothing holds
+//! them equal by construction, so this runs both on the same heads from the same states and
+//! requires the same event and the same state after it wherever the fast path decides.
+//!
+//! Heads: every value of each of the first four bytes of every example frame (its checksum
+//! written again, and left as it was), every two-byte head before a frame and before zeros,
+//! random three-byte heads (all of them, 16.7 million a tail, at the 2–3 µs a comparison takes
+//! in a debug build, would be about 40 s a tail and protocol); states: a sniffer fresh and after a request, one direction only (with a default
+//! request for responses), each with no noise, one byte or one byte short of a whole run of
+//! it before the head (which of the three turns with the state and the head's first byte).
+//! Then whole random captures with noise, fed in chunks (the fast path where it can) and
+//! pushed byte by byte (the full rule only).
+
+mod common;
+
+use busspec_protocols::dynamixel::Dynamixel;
+use busspec_protocols::modbus::Modbus;
+use busspec_protocols::sd::Sd;
+use busspec_protocols::stream::{Direction, Event, StreamDecoder, MAX_SKIPPED_RUN};
+use busspec_protocols::ub2::Ub2;
+use busspec_protocols::Protocol;
+use common::{fix_checksum, spec};
+
+/// The decoder states the heads are tried from, with the noise before the head in each.
+fn states<P: Protocol>(wires: &[Vec<u8>]) -> Vec<StreamDecoder<P>> {
+    // A request of the spec's examples, decoded (pairing state comes from one).
+    let request = wires.iter().find_map(|w| {
+        let mut d = StreamDecoder::<P>::new(None);
+        let found = d.feed(w).find_map(|e| match e {
+            Event::Request { frame, .. } => Some(frame.message),
+            _ => None,
+        });
+        found.map(|q| (w, q))
+    });
+    let mut out = vec![StreamDecoder::<P>::new(None)];
+    if let Some((wire, q)) = request {
+        let mut after = StreamDecoder::<P>::new(None);
+        assert!(after.feed(wire).count() > 0);
+        out.push(after);
+        out.push(StreamDecoder::<P>::new(Some(Direction::Response)).with_default_request(Some(q)));
+    }
+    out.push(StreamDecoder::<P>::new(Some(Direction::Request)));
+    out
+}
+
+/// Runs both paths on `window` from every state; counts where the fast path decided.
+fn both<P: Protocol>(states: &[StreamDecoder<P>], window: &[u8], decided: &mut Tally) {
+    for (i, d) in states.iter().enumerate() {
+        let noise = [0, 1, MAX_SKIPPED_RUN - 1][(i + window[0] as usize) % 3];
+        match d.fast_and_full(window, noise) {
+            None => decided.deferred += 1,
+            Some([fast, full]) => {
+                assert_eq!(
+                    fast,
+                    full,
+                    "{}: the fast path and the full rule differ on {:02X?} (state {i}, {noise} bytes of noise before)",
+                    P::NAME,
+                    window
+                );
+                match fast.event.or(fast.pending) {
+                    Some(Event::Request { .. } | Event::Response { .. }) => decided.frames += 1,
+                    _ => decided.noise += 1,
+                }
+            }
+        }
+    }
+}
+
+#[derive(Default, Debug)]
+struct Tally {
+    frames: usize,
+    noise: usize,
+    deferred: usize,
+}
+
+/// `bytes` cut or padded with zeros to `len`.
+fn window(bytes: &[u8], len: usize) -> Vec<u8> {
+    let mut w: Vec<u8> = bytes.iter().copied().take(len).collect();
+    w.resize(len, 0);
+    w
+}
+
+fn fast_path_is_the_rule<P: Protocol>(frames: usize) {
+    let p = spec::<P>();
+    let mut wires: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    wires.sort();
+    wires.dedup();
+    let states = states::<P>(&wires);
+    let cap = P::MAX_FRAME_LEN;
+    let mut t = Tally::default();
+    for (k, wire) in wires.iter().enumerate() {
+        // The frame, then the next example's bytes, as in a capture.
+        let next = &wires[(k + 1) % wires.len()];
+        let bytes: Vec<u8> = wire.iter().chain(next).copied().collect();
+        for at in 0..4.min(wire.len()) {
+            for v in 0..=255u8 {
+                let mut b = bytes.clone();
+                b[at] = v;
+                both(&states, &window(&b, cap), &mut t);
+                fix_checksum(&p, &mut b[..wire.len()]);
+                both(&states, &window(&b, cap), &mut t);
+            }
+        }
+    }
+    // Every two-byte head, before the first example and before zeros.
+    for tail in [&wires[0][..], &[][..]] {
+        for h in 0..=u16::MAX {
+            let b: Vec<u8> = h.to_be_bytes().iter().chain(tail).copied().collect();
+            both(&states[..1], &window(&b, cap), &mut t);
+        }
+    }
+    // Random three-byte heads on every example, checksums written again.
+    let mut rng = fastrand::Rng::with_seed(13);
+    for wire in &wires {
+        for _ in 0..200 {
+            let mut b = window(wire, cap.max(wire.len()));
+            for x in b.iter_mut().take(3) {
+                *x = rng.u8(..);
+            }
+            fix_checksum(&p, &mut b[..wire.len()]);
+            both(&states, &window(&b, cap), &mut t);
+        }
+    }
+    // The comparison is not empty: the fast path decided frames and noise (all Dynamixel
+    // frames have a length field, which the fast path leaves to the full rule).
+    assert!(t.frames >= frames && t.noise > 10_000, "{}: {t:?}", P::NAME);
+}
+
+#[test]
+fn ub2_fast_path_is_the_rule() {
+    fast_path_is_the_rule::<Ub2>(1000);
+}
+
+#[test]
+fn sd_fast_path_is_the_rule() {
+    fast_path_is_the_rule::<Sd>(1000);
+}
+
+#[test]
+fn modbus_fast_path_is_the_rule() {
+    fast_path_is_the_rule::<Modbus>(1000);
+}
+
+#[test]
+fn dynamixel_fast_path_is_the_rule() {
+    fast_path_is_the_rule::<Dynamixel>(0);
+}
+
+/// Events of `capture` through `feed` in chunks of random size (the fast path wherever a whole
+/// window lies ahead in a chunk), then `finish`.
+fn fed<P: Protocol>(
+    capture: &[u8],
+    rng: &mut fastrand::Rng,
+) -> Vec<Event<P::Request, P::Response>> {
+    let mut d = StreamDecoder::<P>::new(None);
+    let mut out = Vec::new();
+    let mut rest = capture;
+    while !rest.is_empty() {
+        let (chunk, r) = rest.split_at(rng.usize(1..=rest.len().min(200)));
+        rest = r;
+        out.extend(d.feed(chunk));
+    }
+    out.extend(std::iter::from_fn(|| d.finish()));
+    out
+}
+
+/// The same through `push` a byte at a time and `poll`: the buffer is never a whole window
+/// of the caller's bytes, so only the full rule runs.
+fn pushed<P: Protocol>(capture: &[u8]) -> Vec<Event<P::Request, P::Response>> {
+    let mut d = StreamDecoder::<P>::new(None);
+    let mut out = Vec::new();
+    for b in capture {
+        assert_eq!(d.push(std::slice::from_ref(b)), 1);
+        out.extend(std::iter::from_fn(|| d.poll()));
+    }
+    out.extend(std::iter::from_fn(|| d.finish()));
+    out
+}
+
+fn captures_agree<P: Protocol>(seed: u64, at_least: usize) {
+    let p = spec::<P>();
+    let mut rng = fastrand::Rng::with_seed(seed);
+    let mut frames = 0;
+    for _ in 0..200 {
+        let mut cap = Vec::new();
+        for _ in 0..30 {
+            let e = &p.examples[rng.usize(..p.examples.len())];
+            let mut wire = e.wire.clone();
+            match rng.u8(..8) {
+                // Noise before it, a byte of it changed (checksum written again or not), or
+                // cut short.
+                0 => cap.extend((0..rng.usize(1..8)).map(|_| rng.u8(..))),
+                1 => {
+                    let at = rng.usize(..wire.len());
+                    wire[at] = rng.u8(..);
+                    if rng.bool() {
+                        fix_checksum(&p, &mut wire);
+                    }
+                }
+                2 => wire.truncate(rng.usize(1..wire.len())),
+                _ => {}
+            }
+            cap.extend_from_slice(&wire);
+        }
+        let got = fed::<P>(&cap, &mut rng);
+        assert_eq!(got, pushed::<P>(&cap), "{}: {:02X?}", P::NAME, cap);
+        frames += got
+            .iter()
+            .filter(|e| matches!(e, Event::Request { .. } | Event::Response { .. }))
+            .count();
+    }
+    assert!(frames > at_least, "{}: only {frames} frames", P::NAME);
+}
+
+#[test]
+fn captures_fed_and_pushed_agree() {
+    captures_agree::<Ub2>(1, 4000);
+    captures_agree::<Sd>(2, 3000);
+    captures_agree::<Modbus>(3, 3000);
+    captures_agree::<Dynamixel>(4, 1000);
+}
