@@ -1293,18 +1293,30 @@ fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident, as_type: Option<IntType>) -> TokenStr
 }
 
 /// The spec range of a leaf (a whole field or a sub-field) and the special values that may lie
-/// outside it (whole fields only), as the arguments of the runtime's range checks.
-fn leaf_range(f: &Field, b: Option<&BitField>) -> Option<(Ident, TokenStream)> {
+/// outside it (whole fields only), as the arguments of the runtime's range checks; `None`
+/// where there is no range, or where range and special values together admit every value of
+/// `limits` (the checked value's type), as SD's temperatures (1..=254, 0 and 255) do: such a
+/// check cannot fail, and at `opt-level = "s"` its special values stayed a loop.
+fn leaf_range(f: &Field, b: Option<&BitField>, limits: (i64, i64)) -> Option<(Ident, TokenStream)> {
     let (range, special): ((i64, i64), Vec<i64>) = match b {
         Some(b) => (b.range?, Vec::new()),
         None => (f.range?, f.special.iter().map(|s| s.value).collect()),
     };
-    let (lo, hi) = (i64_lit(range.0), i64_lit(range.1));
-    let sp: Vec<Literal> = special
+    let sp: Vec<i64> = special
         .iter()
-        .filter(|v| !(range.0..=range.1).contains(*v))
-        .map(|v| i64_lit(*v))
+        .copied()
+        .filter(|v| !(range.0..=range.1).contains(v))
         .collect();
+    // The admitted values grown from the range by the special values next to it.
+    let (mut lo, mut hi) = range;
+    while let Some(&v) = sp.iter().find(|&&v| v == lo - 1 || v == hi + 1) {
+        (lo, hi) = (lo.min(v), hi.max(v));
+    }
+    if lo <= limits.0 && limits.1 <= hi {
+        return None;
+    }
+    let (lo, hi) = (i64_lit(range.0), i64_lit(range.1));
+    let sp: Vec<Literal> = sp.iter().map(|v| i64_lit(*v)).collect();
     if sp.is_empty() {
         return Some((ident("in_range"), quote!(#lo, #hi)));
     }
@@ -1364,10 +1376,10 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
         stmts.push(quote!(rt::encode_broadcast(address, #b, #name)?;));
     }
     for l in ls {
-        let Some((range_fn, range)) = leaf_range(l.field, l.bits) else {
+        let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {
             continue;
         };
-        let Some((_, raw)) = raw_of(ctx, l, &local(l.name)) else {
+        let Some((range_fn, range)) = leaf_range(l.field, l.bits, raw_t.limits()) else {
             continue;
         };
         let name = l.name;
@@ -1391,42 +1403,51 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
     // write per contiguous run.
     let named = repeated(m);
     let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
+    // The same bytes' values, but the address's.
+    let mut consts: Vec<u8> = vec![0; o.checksum];
+    let mut set = |at: usize, b: u8| {
+        consts[at] = b;
+        known[at] = Some(hex_u8(b));
+    };
     if let Some(at) = o.start {
         for (i, s) in p.framing.sync.iter().enumerate() {
-            known[at + i] = Some(hex_u8(*s));
+            set(at + i, *s);
         }
     }
-    known[o.address] = Some(quote!(address));
     if let (Some(at), Some(l), None) = (o.length, &p.framing.length, &repeat) {
         let v = busspec_model::validate::length_value(&p.framing, l, m.code.len(), m.payload_len);
         for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
             .into_iter()
             .enumerate()
         {
-            known[at + i] = Some(hex_u8(b));
+            set(at + i, b);
         }
     }
     for (i, b) in m.code.iter().enumerate() {
-        known[o.code + i] = Some(hex_u8(*b));
+        set(o.code + i, *b);
     }
     for (fi, f) in m.fields.iter().enumerate() {
         if let (Some(c), false) = (f.constant, named.contains(&fi)) {
             let bytes = constant_bytes(c, f.width, f.byte_order);
             for (i, b) in bytes.into_iter().enumerate() {
-                known[o.payload + f.offset + i] = Some(hex_u8(b));
+                set(o.payload + f.offset + i, b);
             }
         }
     }
+    known[o.address] = Some(quote!(address));
     // The run from the first byte is written as the frame is taken from `buf`.
     let first: Vec<TokenStream> = known.iter().map_while(Clone::clone).collect();
     let mut i = first.len();
+    // Its sum, for a sum-8 sealed in the arm: the generator adds the constants.
+    let k = consts[..i].iter().fold(0u8, |a, b| a.wrapping_add(*b));
+    let head = (i, (o.address < i).then_some(k));
     let take = if repeat.is_some() {
         quote!(rt::frame_mut_len(buf, frame_len, &[#(#first),*])?)
     } else {
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
     };
     if i == known.len() && repeat.is_none() {
-        let (check, end) = (stmts, encode_end(p, take, false));
+        let (check, end) = (stmts, encode_end(p, take, false, head));
         return quote!(#pattern => { #(#check)* #end });
     }
     stmts.push(quote!(let out = #take;));
@@ -1570,7 +1591,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             stmts.push(put(value));
         }
     }
-    let end = encode_end(p, quote!(out), repeat.is_some());
+    let end = encode_end(p, quote!(out), repeat.is_some(), head);
     quote! {
         #pattern => {
             #(#stmts)*
@@ -1580,10 +1601,28 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
 }
 
 /// An encoder arm's value, the frame length, from `out`, its frame: with a sum-8, once it is
-/// written into the last byte (each arm seals its own frame).
-fn encode_end(p: &Protocol, out: TokenStream, variable: bool) -> TokenStream {
+/// written into the last byte (each arm seals its own frame). `head` is the length of the run
+/// of known bytes at the frame's start and, where the address lies in it, the sum of its
+/// constant bytes: the sum then adds only the address and the bytes after the run, which for
+/// a frame without fields is one add instead of a loop over the frame at `opt-level = "s"`.
+fn encode_end(
+    p: &Protocol,
+    out: TokenStream,
+    variable: bool,
+    head: (usize, Option<u8>),
+) -> TokenStream {
     if checksum_in_arms(p) && variable {
         quote!(rt::seal_sum8_len(#out))
+    } else if let (true, (from, Some(k))) = (checksum_in_arms(p), head) {
+        let from = usize_lit(from);
+        let sum = match k {
+            0 => quote!(address),
+            k => {
+                let k = hex_u8(k);
+                quote!(address.wrapping_add(#k))
+            }
+        };
+        quote!(rt::seal_sum8_head(#out, #from, #sum))
     } else if checksum_in_arms(p) {
         quote!(rt::seal_sum8(#out))
     } else {
@@ -1670,7 +1709,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
             bits: wt.bits,
             signed: false,
         };
-        let (range_fn, range) = match leaf_range(f, None) {
+        let (range_fn, range) = match leaf_range(f, None, wt.limits()) {
             Some((range_fn, range)) if f.bits.is_empty() => (range_fn, Some(range)),
             _ => (ident("in_range"), None),
         };
@@ -1766,7 +1805,8 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
                     stmts.push(quote!(rt::equal(#bname, #at, #field, #l)?;));
                 }
                 None => {
-                    if let Some((range_fn, range)) = leaf_range(f, Some(b)) {
+                    let limits = raw_limits(u32::from(b.width()), b.signed);
+                    if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
                         stmts.push(quote!(rt::#range_fn(#bname, #at, #extract, #range)?;));
                     }
                     if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
@@ -2730,4 +2770,55 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             rt::Ok(())
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field(range: (i64, i64), special: &[i64]) -> Field {
+        Field {
+            name: "t".into(),
+            doc: String::new(),
+            ty: FieldType::U8,
+            offset: 0,
+            width: 1,
+            signed: false,
+            byte_order: ByteOrder::Little,
+            unit: None,
+            range: Some(range),
+            constant: None,
+            enumeration: None,
+            flags: None,
+            equals: None,
+            special: special
+                .iter()
+                .map(|&value| Special {
+                    value,
+                    name: format!("s{value}"),
+                    doc: String::new(),
+                })
+                .collect(),
+            bits: Vec::new(),
+            repeat: None,
+            follows: None,
+        }
+    }
+
+    #[test]
+    fn a_range_check_that_cannot_fail_is_left_out() {
+        let u8_limits = (0, 255);
+        // SD's temperatures: 1..=254, with 0 and 255 special, is every byte.
+        assert!(leaf_range(&field((1, 254), &[0, 255]), None, u8_limits).is_none());
+        assert!(leaf_range(&field((0, 255), &[]), None, u8_limits).is_none());
+        // A wider typed value is checked, as is a byte that no value admits.
+        assert!(leaf_range(&field((0, 255), &[]), None, (0, 65535)).is_some());
+        let (f, args) = leaf_range(&field((1, 254), &[0]), None, u8_limits).unwrap();
+        assert_eq!(f, "in_range_or");
+        assert_eq!(args.to_string(), quote!(1, 254, &[0]).to_string());
+        let (f, _) = leaf_range(&field((1, 100), &[0, 50]), None, u8_limits).unwrap();
+        assert_eq!(f, "in_range_or");
+        let (f, _) = leaf_range(&field((1, 100), &[50]), None, u8_limits).unwrap();
+        assert_eq!(f, "in_range");
+    }
 }
