@@ -973,6 +973,19 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let p = ctx.p;
     let (ty, what) = direction_names(d);
     let msgs = p.messages(d);
+    // Where every frame of the direction has one length, `encode` takes the buffer's frame
+    // once before its match (one `BufferTooSmall` check instead of one per arm: SD's 21
+    // arms took 8 bytes each at opt-level s); the arms write into it.
+    let one_len = match msgs.first() {
+        Some(m)
+            if msgs
+                .iter()
+                .all(|x| !x.is_variable() && p.frame_len(x) == p.frame_len(m)) =>
+        {
+            Some(p.frame_len(m))
+        }
+        _ => None,
+    };
     let mut variants = Vec::new();
     let mut rows = Vec::new();
     let mut index_arms = Vec::new();
@@ -1012,7 +1025,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let any = any_of(&ident("Self"), m);
         index_arms.push(quote!(#any => #i));
         let pattern = binding(m, &ls);
-        encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls));
+        encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
         if let Some((f, _)) = m.repeat() {
             let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
             len_arms.push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len())));
@@ -1065,6 +1078,10 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!()
     };
+    let take_once = one_len.map(|n| {
+        let n = usize_lit(n);
+        quote!(let out = rt::frame_mut::<#n>(buf, &[])?;)
+    });
     let seal = if checksum_in_arms(p) {
         quote!(rt::Ok(len))
     } else {
@@ -1115,6 +1132,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             /// that does not accept it, a value outside its field's range.
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
                 rt::encode_address(address, &FRAME)?;
+                #take_once
                 let len = match *self { #(#encode_arms)* };
                 #seal
             }
@@ -1366,7 +1384,15 @@ fn relation_args(rel: &Relation) -> TokenStream {
     quote!(#m, #d)
 }
 
-fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -> TokenStream {
+/// One arm of `encode`'s match; `taken`: the frame was taken from the buffer before the match
+/// (as `out`), the arm writes its known bytes into it.
+fn emit_encode_arm(
+    ctx: &Ctx,
+    m: &Message,
+    pattern: &TokenStream,
+    ls: &[Leaf],
+    taken: bool,
+) -> TokenStream {
     let p = ctx.p;
     let len = usize_lit(p.frame_len(m));
     let o = m.layout;
@@ -1441,7 +1467,9 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
     // Its sum, for a sum-8 sealed in the arm: the generator adds the constants.
     let k = consts[..i].iter().fold(0u8, |a, b| a.wrapping_add(*b));
     let head = (i, (o.address < i).then_some(k));
-    let take = if repeat.is_some() {
+    let take = if taken {
+        quote!(rt::head(out, &[#(#first),*]))
+    } else if repeat.is_some() {
         quote!(rt::frame_mut_len(buf, frame_len, &[#(#first),*])?)
     } else {
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)

@@ -519,7 +519,7 @@ pub fn in_range_or<T: Wire>(
     special: &[i64],
 ) -> Result<(), DecodeError> {
     let raw = raw.to_i64();
-    if (min..=max).contains(&raw) || special.contains(&raw) {
+    if (min..=max).contains(&raw) || is_special(raw, special) {
         return Ok(());
     }
     Err(DecodeError::OutOfRange {
@@ -529,6 +529,18 @@ pub fn in_range_or<T: Wire>(
         min,
         max,
     })
+}
+
+/// Whether `raw` is one of the `special` values. One or two (the common case) are compared
+/// as such: `contains` stayed a loop over the table at `opt-level = "s"`.
+#[inline(always)]
+fn is_special(raw: i64, special: &[i64]) -> bool {
+    match *special {
+        [] => false,
+        [a] => raw == a,
+        [a, b] => raw == a || raw == b,
+        ref more => more.contains(&raw),
+    }
 }
 
 /// A decoded constant field (or constant bits of one, `found` already shifted down) that must
@@ -612,7 +624,7 @@ pub fn encode_in_range_or<T: Wire>(
     special: &[i64],
 ) -> Result<(), EncodeError> {
     let raw = raw.to_i64();
-    if (min..=max).contains(&raw) || special.contains(&raw) {
+    if (min..=max).contains(&raw) || is_special(raw, special) {
         return Ok(());
     }
     Err(EncodeError::NotInRange {
@@ -650,6 +662,14 @@ pub fn frame_mut<'b, const N: usize>(
             })?;
     out[..head.len()].copy_from_slice(head);
     Ok(out)
+}
+
+/// `out`, a frame [`frame_mut`] took before the encoder's match, with `head` written at its
+/// start.
+#[inline(always)]
+pub fn head<'b, const N: usize>(out: &'b mut [u8; N], head: &[u8]) -> &'b mut [u8; N] {
+    out[..head.len()].copy_from_slice(head);
+    out
 }
 
 /// The first `len` bytes of `buf`, for a frame of variable length, with `head` written at its

@@ -124,17 +124,18 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
+            let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
                 Self::ReadRuntimeHours => {
                     rt::encode_broadcast(address, 0x1F, "read_runtime_hours")?;
-                    rt::frame_mut::<6>(buf, &[0x69, address, 0x01, 0x00])?.len()
+                    rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
                 Self::ReadRuntimeMinSec => {
                     rt::encode_broadcast(address, 0x1F, "read_runtime_min_sec")?;
-                    rt::frame_mut::<6>(buf, &[0x69, address, 0x02, 0x00])?.len()
+                    rt::head(out, &[0x69, address, 0x02, 0x00]).len()
                 }
                 Self::SetCounter { counter: v_counter } => {
-                    let out = rt::frame_mut::<6>(buf, &[0x70, address])?;
+                    let out = rt::head(out, &[0x70, address]);
                     out[2..4].copy_from_slice(&v_counter.to_be_bytes());
                     out.len()
                 }
@@ -353,22 +354,23 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
+            let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
                 Self::RuntimeHours { hours: v_hours } => {
-                    let out = rt::frame_mut::<6>(buf, &[0x22, address])?;
+                    let out = rt::head(out, &[0x22, address]);
                     out[2..4].copy_from_slice(&v_hours.to_be_bytes());
                     out.len()
                 }
                 Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
                     rt::encode_in_range("minutes", v_minutes, 0, 59)?;
                     rt::encode_in_range("seconds", v_seconds, 0, 59)?;
-                    let out = rt::frame_mut::<6>(buf, &[0x22, address])?;
+                    let out = rt::head(out, &[0x22, address]);
                     out[2] = v_minutes;
                     out[3] = v_seconds;
                     out.len()
                 }
                 Self::CounterEcho { counter: v_counter } => {
-                    let out = rt::frame_mut::<6>(buf, &[0x70, address])?;
+                    let out = rt::head(out, &[0x70, address]);
                     out[2..4].copy_from_slice(&v_counter.to_be_bytes());
                     out.len()
                 }
