@@ -375,6 +375,11 @@ fn the_hand_written_decoders_and_the_deku_peer_accept_and_reject_what_the_genera
                         None => sd::Response::decode(&f),
                     };
                     let h = busspec_benches::hand::sd::decode_response(&f, q.as_ref());
+                    // A reply refused as not this request's is refused with its code.
+                    if let (Err(e), Err(busspec_protocols::DecodeError::NotAReply { .. })) = (g, h)
+                    {
+                        assert_eq!(h, Err(e), "{what}: not a reply");
+                    }
                     let dq = reply_to
                         .as_deref()
                         .map(|r| peer::sd::decode_request(r).unwrap());

@@ -241,6 +241,25 @@ pub fn reply<const N: usize>(
     fixed(frame)
 }
 
+/// [`reply`] whose `NotAReply` the caller completes with the frame's code ([`reply_code`]):
+/// every arm that refuses a reply then leaves with the same error.
+#[inline(always)]
+pub fn reply_of<const N: usize>(frame: &[u8], admitted: bool) -> Result<&[u8; N], DecodeError> {
+    reply(frame, admitted, 0)
+}
+
+/// `e`, with the code of `frame` (`n` bytes from `at`) where it is a `NotAReply`: for a
+/// direction whose codes have one length, where a refused reply's code is always the frame's.
+#[inline]
+pub fn reply_code(e: DecodeError, frame: &[u8], at: usize, n: usize) -> DecodeError {
+    match e {
+        DecodeError::NotAReply { .. } => DecodeError::NotAReply {
+            code: frame.get(at..at + n).map_or(0, be_uint),
+        },
+        e => e,
+    }
+}
+
 /// For a reply of variable length: `Err(NotAReply)` if the request does not admit it.
 #[inline(always)]
 pub fn admit(admitted: bool, code: u32) -> Result<(), DecodeError> {
@@ -1029,6 +1048,27 @@ mod lang_tests {
         sealed_alike::<5>();
         sealed_alike::<9>();
         sealed_alike::<16>();
+    }
+
+    #[test]
+    fn a_refused_reply_gets_the_code_of_its_frame() {
+        let f = [0x22, 0x01, 0, 0, 0, 0];
+        let refused = reply_of::<6>(&f, false).unwrap_err();
+        assert_eq!(
+            reply_code(refused, &f, 0, 1),
+            DecodeError::NotAReply { code: 0x22 }
+        );
+        assert_eq!(
+            reply_code(refused, &f, 1, 2),
+            DecodeError::NotAReply { code: 0x0100 }
+        );
+        // Other errors pass unchanged; a frame too short for the code gives 0, no panic.
+        let other = reply_of::<5>(&f, true).unwrap_err();
+        assert_eq!(reply_code(other, &f, 0, 1), other);
+        assert_eq!(
+            reply_code(refused, &f[..1], 0, 2),
+            DecodeError::NotAReply { code: 0 }
+        );
     }
 
     #[test]

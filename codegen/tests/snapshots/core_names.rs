@@ -611,7 +611,8 @@ pub mod clash {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 2, 1))?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
@@ -622,19 +623,17 @@ pub mod clash {
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 2, 1) {
-                0x50 => rt::reply::<4>(frame, asked & 1 != 0, 0x50).map(|_| Self::Ok),
-                0x90 => {
-                    rt::reply::<4>(frame, asked >> 1 & 1 != 0, 0x90).map(|_| Self::Err)
-                }
+                0x50 => rt::reply_of::<4>(frame, asked & 1 != 0).map(|_| Self::Ok),
+                0x90 => rt::reply_of::<4>(frame, asked >> 1 & 1 != 0).map(|_| Self::Err),
                 0x51 => {
-                    let frame = rt::reply::<7>(frame, asked >> 2 & 1 != 0, 0x51)?;
+                    let frame = rt::reply_of::<7>(frame, asked >> 2 & 1 != 0)?;
                     rt::Ok(Self::Result {
                         g: Ok::from_raw(frame[3]),
                         usize: Option::from_raw(u16::from_le_bytes([frame[4], frame[5]])),
                     })
                 }
                 0x52 => {
-                    let frame = rt::reply::<7>(frame, asked >> 3 & 1 != 0, 0x52)?;
+                    let frame = rt::reply_of::<7>(frame, asked >> 3 & 1 != 0)?;
                     rt::Ok(Self::Usize {
                         asked: frame[3..5].try_into().unwrap_or([0; 2]),
                         none: (frame[5] >> 4) as u8,

@@ -412,7 +412,8 @@ pub mod mini_crc {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 0, 1))?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
@@ -447,7 +448,7 @@ pub mod mini_crc {
                     g.end(6, true)
                 }
                 0x70 => {
-                    let frame = rt::reply::<6>(frame, asked >> 2 & 1 != 0, 0x70)?;
+                    let frame = rt::reply_of::<6>(frame, asked >> 2 & 1 != 0)?;
                     rt::Ok(Self::CounterEcho {
                         counter: u16::from_be_bytes([frame[2], frame[3]]),
                     })
