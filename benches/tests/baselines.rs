@@ -375,6 +375,11 @@ fn the_hand_written_decoders_and_the_deku_peer_accept_and_reject_what_the_genera
                         None => sd::Response::decode(&f),
                     };
                     let h = busspec_benches::hand::sd::decode_response(&f, q.as_ref());
+                    // A reply refused as not this request's is refused with its code.
+                    if let (Err(e), Err(busspec_protocols::DecodeError::NotAReply { .. })) = (g, h)
+                    {
+                        assert_eq!(h, Err(e), "{what}: not a reply");
+                    }
                     let dq = reply_to
                         .as_deref()
                         .map(|r| peer::sd::decode_request(r).unwrap());
@@ -401,6 +406,65 @@ fn the_hand_written_decoders_and_the_deku_peer_accept_and_reject_what_the_genera
             "{accepted} accepted, {rejected} rejected"
         );
     }
+}
+
+/// A UB2 reply decodes only after a request that may get it, in every contender: each response
+/// of the mixed stream (and its corrupted variants) after each request of the subset.
+#[test]
+fn the_ub2_baselines_refuse_a_reply_the_request_may_not_get_as_the_generated_code_does() {
+    let hex = busspec_model::interp::format_hex;
+    let p = Proto::Ub2.spec();
+    let mixed = Mixed::from_spec(Proto::Ub2, &p);
+    let subset = Proto::Ub2.subset();
+    let mut requests: Vec<&[u8]> = Vec::new();
+    let mut names = Vec::new();
+    for e in &mixed.entries {
+        if e.direction == busspec_model::ir::Direction::Request && !names.contains(&e.message) {
+            names.push(e.message.clone());
+            requests.push(mixed.frame(e));
+        }
+    }
+    assert_eq!(requests.len(), 13, "every request of the subset");
+    let (mut accepted, mut not_a_reply) = (0, 0);
+    for (is_request, f, _) in variants(&mixed, &p) {
+        if is_request {
+            continue;
+        }
+        for r in &requests {
+            let what = format!("ub2 {} after {}", hex(&f), hex(r));
+            let q = ub2::Request::decode(r).unwrap();
+            let dq = peer::ub2::decode_request(r).unwrap();
+            let inn = |d: &Decoded<ub2::Response>| subset.contains(&d.message.name());
+            let g = ub2::Response::decode_reply(&f, &q.message);
+            let h = busspec_benches::hand::ub2::decode_response(&f, Some(&q.message));
+            let d = peer::ub2::decode_response(&f, Some(&dq)).map(|d| deku_ub2_response(&d));
+            // A frame that decodes on its own but is refused as this request's reply: refused
+            // by each baseline as not a reply, with the code.
+            if let (Err(e @ busspec_protocols::DecodeError::NotAReply { .. }), Ok(alone)) =
+                (g, ub2::Response::decode(&f))
+            {
+                if inn(&alone) {
+                    assert_eq!(h, Err(e), "{what}: hand-written");
+                    assert!(
+                        matches!(d, Err(peer::Error::NotAReply)),
+                        "{what}: deku gives {d:?}"
+                    );
+                    not_a_reply += 1;
+                }
+            }
+            let outcomes = [agree(g, h, inn, &what), agree(g, d, inn, &what)];
+            assert_eq!(
+                outcomes[0], outcomes[1],
+                "{what}: hand-written and deku differ"
+            );
+            accepted += usize::from(outcomes[0]);
+        }
+    }
+    // Both outcomes happen often, so neither side of the comparison is vacuous.
+    assert!(
+        accepted > 200 && not_a_reply > 2000,
+        "{accepted} accepted, {not_a_reply} not a reply"
+    );
 }
 
 /// The synthetic capture of `P` is 1 % noise, and `P`'s generated stream decoder finds in it

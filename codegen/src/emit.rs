@@ -17,6 +17,11 @@
 //!   print them;
 //! - encode writes the bytes known before any field in one `copy_from_slice`, and keeps a sum-8
 //!   in each arm, where it folds the constant header bytes.
+//! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "Flash and decode, fifth
+//!   round"): no range check that cannot fail, one buffer check per `encode` where a direction
+//!   has one frame length (it then precedes the message's own checks), a sum-8 arm's constant
+//!   head summed here, and, where every reply code of a direction has one length, a refused
+//!   reply's code written once by `decode` (`rt::reply_of`/`rt::reply_code`).
 //!
 //! Typing rules:
 //! - a unit with scale 1 and offset 0 stays a plain integer of its field's width;
@@ -975,6 +980,19 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let p = ctx.p;
     let (ty, what) = direction_names(d);
     let msgs = p.messages(d);
+    // Where every frame of the direction has one length, `encode` takes the buffer's frame
+    // once before its match (one `BufferTooSmall` check instead of one per arm: SD's 21
+    // arms took 8 bytes each at opt-level s); the arms write into it.
+    let one_len = match msgs.first() {
+        Some(m)
+            if msgs
+                .iter()
+                .all(|x| !x.is_variable() && p.frame_len(x) == p.frame_len(m)) =>
+        {
+            Some(p.frame_len(m))
+        }
+        _ => None,
+    };
     let mut variants = Vec::new();
     let mut rows = Vec::new();
     let mut index_arms = Vec::new();
@@ -1014,7 +1032,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let any = any_of(&ident("Self"), m);
         index_arms.push(quote!(#any => #i));
         let pattern = binding(m, &ls);
-        encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls));
+        encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
         if let Some((f, _)) = m.repeat() {
             let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
             len_arms.push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len())));
@@ -1067,6 +1085,10 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!()
     };
+    let take_once = one_len.map(|n| {
+        let n = usize_lit(n);
+        quote!(let out = rt::frame_mut::<#n>(buf, &[])?;)
+    });
     let seal = if checksum_in_arms(p) {
         quote!(rt::Ok(len))
     } else {
@@ -1117,6 +1139,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             /// that does not accept it, a value outside its field's range.
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
                 rt::encode_address(address, &FRAME)?;
+                #take_once
                 let len = match *self { #(#encode_arms)* };
                 #seal
             }
@@ -1295,18 +1318,30 @@ fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident, as_type: Option<IntType>) -> TokenStr
 }
 
 /// The spec range of a leaf (a whole field or a sub-field) and the special values that may lie
-/// outside it (whole fields only), as the arguments of the runtime's range checks.
-fn leaf_range(f: &Field, b: Option<&BitField>) -> Option<(Ident, TokenStream)> {
+/// outside it (whole fields only), as the arguments of the runtime's range checks; `None`
+/// where there is no range, or where range and special values together admit every value of
+/// `limits` (the checked value's type), as SD's temperatures (1..=254, 0 and 255) do: such a
+/// check cannot fail, and at `opt-level = "s"` its special values stayed a loop.
+fn leaf_range(f: &Field, b: Option<&BitField>, limits: (i64, i64)) -> Option<(Ident, TokenStream)> {
     let (range, special): ((i64, i64), Vec<i64>) = match b {
         Some(b) => (b.range?, Vec::new()),
         None => (f.range?, f.special.iter().map(|s| s.value).collect()),
     };
-    let (lo, hi) = (i64_lit(range.0), i64_lit(range.1));
-    let sp: Vec<Literal> = special
+    let sp: Vec<i64> = special
         .iter()
-        .filter(|v| !(range.0..=range.1).contains(*v))
-        .map(|v| i64_lit(*v))
+        .copied()
+        .filter(|v| !(range.0..=range.1).contains(v))
         .collect();
+    // The admitted values grown from the range by the special values next to it.
+    let (mut lo, mut hi) = range;
+    while let Some(&v) = sp.iter().find(|&&v| v == lo - 1 || v == hi + 1) {
+        (lo, hi) = (lo.min(v), hi.max(v));
+    }
+    if lo <= limits.0 && limits.1 <= hi {
+        return None;
+    }
+    let (lo, hi) = (i64_lit(range.0), i64_lit(range.1));
+    let sp: Vec<Literal> = sp.iter().map(|v| i64_lit(*v)).collect();
     if sp.is_empty() {
         return Some((ident("in_range"), quote!(#lo, #hi)));
     }
@@ -1356,7 +1391,15 @@ fn relation_args(rel: &Relation) -> TokenStream {
     quote!(#m, #d)
 }
 
-fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -> TokenStream {
+/// One arm of `encode`'s match; `taken`: the frame was taken from the buffer before the match
+/// (as `out`), the arm writes its known bytes into it.
+fn emit_encode_arm(
+    ctx: &Ctx,
+    m: &Message,
+    pattern: &TokenStream,
+    ls: &[Leaf],
+    taken: bool,
+) -> TokenStream {
     let p = ctx.p;
     let len = usize_lit(p.frame_len(m));
     let o = m.layout;
@@ -1366,10 +1409,10 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
         stmts.push(quote!(rt::encode_broadcast(address, #b, #name)?;));
     }
     for l in ls {
-        let Some((range_fn, range)) = leaf_range(l.field, l.bits) else {
+        let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {
             continue;
         };
-        let Some((_, raw)) = raw_of(ctx, l, &local(l.name)) else {
+        let Some((range_fn, range)) = leaf_range(l.field, l.bits, raw_t.limits()) else {
             continue;
         };
         let name = l.name;
@@ -1393,42 +1436,53 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
     // write per contiguous run.
     let named = repeated(m);
     let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
+    // The same bytes' values, but the address's.
+    let mut consts: Vec<u8> = vec![0; o.checksum];
+    let mut set = |at: usize, b: u8| {
+        consts[at] = b;
+        known[at] = Some(hex_u8(b));
+    };
     if let Some(at) = o.start {
         for (i, s) in p.framing.sync.iter().enumerate() {
-            known[at + i] = Some(hex_u8(*s));
+            set(at + i, *s);
         }
     }
-    known[o.address] = Some(quote!(address));
     if let (Some(at), Some(l), None) = (o.length, &p.framing.length, &repeat) {
         let v = busspec_model::validate::length_value(&p.framing, l, m.code.len(), m.payload_len);
         for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
             .into_iter()
             .enumerate()
         {
-            known[at + i] = Some(hex_u8(b));
+            set(at + i, b);
         }
     }
     for (i, b) in m.code.iter().enumerate() {
-        known[o.code + i] = Some(hex_u8(*b));
+        set(o.code + i, *b);
     }
     for (fi, f) in m.fields.iter().enumerate() {
         if let (Some(c), false) = (f.constant, named.contains(&fi)) {
             let bytes = constant_bytes(c, f.width, f.byte_order);
             for (i, b) in bytes.into_iter().enumerate() {
-                known[o.payload + f.offset + i] = Some(hex_u8(b));
+                set(o.payload + f.offset + i, b);
             }
         }
     }
+    known[o.address] = Some(quote!(address));
     // The run from the first byte is written as the frame is taken from `buf`.
     let first: Vec<TokenStream> = known.iter().map_while(Clone::clone).collect();
     let mut i = first.len();
-    let take = if repeat.is_some() {
+    // Its sum, for a sum-8 sealed in the arm: the generator adds the constants.
+    let k = consts[..i].iter().fold(0u8, |a, b| a.wrapping_add(*b));
+    let head = (i, (o.address < i).then_some(k));
+    let take = if taken {
+        quote!(rt::head(out, &[#(#first),*]))
+    } else if repeat.is_some() {
         quote!(rt::frame_mut_len(buf, frame_len, &[#(#first),*])?)
     } else {
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
     };
     if i == known.len() && repeat.is_none() {
-        let (check, end) = (stmts, encode_end(p, take, false));
+        let (check, end) = (stmts, encode_end(p, take, false, head));
         return quote!(#pattern => { #(#check)* #end });
     }
     stmts.push(quote!(let out = #take;));
@@ -1572,7 +1626,7 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
             stmts.push(put(value));
         }
     }
-    let end = encode_end(p, quote!(out), repeat.is_some());
+    let end = encode_end(p, quote!(out), repeat.is_some(), head);
     quote! {
         #pattern => {
             #(#stmts)*
@@ -1582,10 +1636,28 @@ fn emit_encode_arm(ctx: &Ctx, m: &Message, pattern: &TokenStream, ls: &[Leaf]) -
 }
 
 /// An encoder arm's value, the frame length, from `out`, its frame: with a sum-8, once it is
-/// written into the last byte (each arm seals its own frame).
-fn encode_end(p: &Protocol, out: TokenStream, variable: bool) -> TokenStream {
+/// written into the last byte (each arm seals its own frame). `head` is the length of the run
+/// of known bytes at the frame's start and, where the address lies in it, the sum of its
+/// constant bytes: the sum then adds only the address and the bytes after the run, which for
+/// a frame without fields is one add instead of a loop over the frame at `opt-level = "s"`.
+fn encode_end(
+    p: &Protocol,
+    out: TokenStream,
+    variable: bool,
+    head: (usize, Option<u8>),
+) -> TokenStream {
     if checksum_in_arms(p) && variable {
         quote!(rt::seal_sum8_len(#out))
+    } else if let (true, (from, Some(k))) = (checksum_in_arms(p), head) {
+        let from = usize_lit(from);
+        let sum = match k {
+            0 => quote!(address),
+            k => {
+                let k = hex_u8(k);
+                quote!(address.wrapping_add(#k))
+            }
+        };
+        quote!(rt::seal_sum8_head(#out, #from, #sum))
     } else if checksum_in_arms(p) {
         quote!(rt::seal_sum8(#out))
     } else {
@@ -1672,7 +1744,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
             bits: wt.bits,
             signed: false,
         };
-        let (range_fn, range) = match leaf_range(f, None) {
+        let (range_fn, range) = match leaf_range(f, None, wt.limits()) {
             Some((range_fn, range)) if f.bits.is_empty() => (range_fn, Some(range)),
             _ => (ident("in_range"), None),
         };
@@ -1768,7 +1840,8 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
                     stmts.push(quote!(rt::equal(#bname, #at, #field, #l)?;));
                 }
                 None => {
-                    if let Some((range_fn, range)) = leaf_range(f, Some(b)) {
+                    let limits = raw_limits(u32::from(b.width()), b.signed);
+                    if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
                         stmts.push(quote!(rt::#range_fn(#bname, #at, #extract, #range)?;));
                     }
                     if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
@@ -1927,6 +2000,16 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     let max_len = p.max_frame_len(d);
     let code_at = |l: usize| p.framing.head(l).code;
     let replies = d == Direction::Response;
+    // Where every reply's code has one length, a reply the request does not admit leaves its
+    // arm with the same error and `decode` writes the frame's code into it (`rt::reply_code`):
+    // each arm writing its own code took 10 to 14 bytes at opt-level s.
+    let code_later = match msgs.first() {
+        Some(m) if replies && !m.code.is_empty() => msgs
+            .iter()
+            .all(|x| x.code.len() == m.code.len())
+            .then(|| (code_at(m.code.len()), m.code.len())),
+        _ => None,
+    };
     let first_code_at = usize_lit(code_at(1));
     let unknown = {
         let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
@@ -1950,7 +2033,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         let arms = codes.into_iter().map(|code| {
             let group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
             let lit = hex_code(code);
-            let arm = emit_group(ctx, &group, replies);
+            let arm = emit_group(ctx, &group, replies, code_later.is_some());
             if last {
                 quote!(#lit => #arm,)
             } else {
@@ -2019,11 +2102,15 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         quote!()
     };
     let length = length_check(p, d);
+    let fill_code = code_later.map(|(at, l)| {
+        let (at, l) = (usize_lit(at), usize_lit(l));
+        quote!(.map_err(|e| rt::reply_code(e, frame, #at, #l)))
+    });
     let checks = quote! {
         #sync
         let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
         #length
-        let message = Self::dispatch(frame #request_arg)?;
+        let message = Self::dispatch(frame #request_arg)#fill_code?;
         #follows
         rt::Ok(Decoded { address, message })
     };
@@ -2116,7 +2203,9 @@ fn is_ambiguous(m: &Message, group: &[&Message]) -> bool {
 /// The dispatch arm for the messages of one code: a lone message is decoded in the arm (a
 /// reply once the request admits it); several are tried in spec order by `rt::Group`, each
 /// decoder a closure over the frame as an array of its length.
-fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
+/// The value of one code's arm in `dispatch`; `code_later`: a single reply the request does
+/// not admit leaves its code for `decode` to write (`rt::reply_code`).
+fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, code_later: bool) -> TokenStream {
     let p = ctx.p;
     let admitted = |m: &Message| {
         if replies {
@@ -2155,7 +2244,11 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool) -> TokenStream {
         let len = usize_lit(p.frame_len(m));
         let frame = if replies {
             let a = admitted(m);
-            quote!(rt::reply::<#len>(frame, #a, #value))
+            if code_later {
+                quote!(rt::reply_of::<#len>(frame, #a))
+            } else {
+                quote!(rt::reply::<#len>(frame, #a, #value))
+            }
         } else {
             quote!(rt::fixed::<#len>(frame))
         };
@@ -2732,4 +2825,55 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             rt::Ok(())
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field(range: (i64, i64), special: &[i64]) -> Field {
+        Field {
+            name: "t".into(),
+            doc: String::new(),
+            ty: FieldType::U8,
+            offset: 0,
+            width: 1,
+            signed: false,
+            byte_order: ByteOrder::Little,
+            unit: None,
+            range: Some(range),
+            constant: None,
+            enumeration: None,
+            flags: None,
+            equals: None,
+            special: special
+                .iter()
+                .map(|&value| Special {
+                    value,
+                    name: format!("s{value}"),
+                    doc: String::new(),
+                })
+                .collect(),
+            bits: Vec::new(),
+            repeat: None,
+            follows: None,
+        }
+    }
+
+    #[test]
+    fn a_range_check_that_cannot_fail_is_left_out() {
+        let u8_limits = (0, 255);
+        // SD's temperatures: 1..=254, with 0 and 255 special, is every byte.
+        assert!(leaf_range(&field((1, 254), &[0, 255]), None, u8_limits).is_none());
+        assert!(leaf_range(&field((0, 255), &[]), None, u8_limits).is_none());
+        // A wider typed value is checked, as is a byte that no value admits.
+        assert!(leaf_range(&field((0, 255), &[]), None, (0, 65535)).is_some());
+        let (f, args) = leaf_range(&field((1, 254), &[0]), None, u8_limits).unwrap();
+        assert_eq!(f, "in_range_or");
+        assert_eq!(args.to_string(), quote!(1, 254, &[0]).to_string());
+        let (f, _) = leaf_range(&field((1, 100), &[0, 50]), None, u8_limits).unwrap();
+        assert_eq!(f, "in_range_or");
+        let (f, _) = leaf_range(&field((1, 100), &[50]), None, u8_limits).unwrap();
+        assert_eq!(f, "in_range");
+    }
 }

@@ -64,6 +64,36 @@ fn mini_crc_snapshot_replays_its_examples() {
     replay::<mini_crc::MiniCrc>("model/tests/fixtures/valid/minimal_crc.yaml");
 }
 
+/// Every frame of a direction with one frame length is taken from the buffer once, before the
+/// message's own checks: a short buffer is refused first, then a value out of its range.
+#[test]
+fn a_single_length_encoder_refuses_a_short_buffer_before_the_message() {
+    use busspec_runtime::EncodeError;
+    use mini_crc::Response;
+    let bad = Response::RuntimeMinSec {
+        minutes: 60,
+        seconds: 0,
+    };
+    let short = EncodeError::BufferTooSmall {
+        needed: 6,
+        available: 5,
+    };
+    assert_eq!(bad.encode(0x01, &mut [0; 5]), Err(short));
+    assert!(matches!(
+        bad.encode(0x01, &mut [0; 6]),
+        Err(EncodeError::NotInRange {
+            field: "minutes",
+            ..
+        })
+    ));
+    let good = Response::RuntimeMinSec {
+        minutes: 59,
+        seconds: 0,
+    };
+    assert_eq!(good.encode(0x01, &mut [0; 5]), Err(short));
+    assert_eq!(good.encode(0x01, &mut [0; 6]), Ok(6));
+}
+
 /// Names that clash with core's (`Option`, `Some`, `Ok`, ...), with primitives and with the
 /// generated code's own locals compile (this file would not otherwise) and round-trip; the
 /// types keep their spec names.

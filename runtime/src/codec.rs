@@ -123,13 +123,32 @@ impl Frame {
 fn sums(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> (u32, u32) {
     let (body, tail) = frame.split_at(at);
     let found = if f.checksum_be {
-        tail.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b))
+        be_uint(tail)
     } else {
-        tail.iter()
-            .rev()
-            .fold(0u32, |a, b| (a << 8) | u32::from(*b))
+        match *tail {
+            [a] => u32::from(a),
+            [a, b] => u32::from(u16::from_le_bytes([a, b])),
+            [a, b, c, d] => u32::from_le_bytes([a, b, c, d]),
+            _ => tail
+                .iter()
+                .rev()
+                .fold(0u32, |a, b| (a << 8) | u32::from(*b)),
+        }
     };
     (found, checksum(body))
+}
+
+/// `bytes` as one big-endian integer. The widths of codes and checksums (1, 2 and 4 bytes) are
+/// written out, so a constant width compiles to a load: at `opt-level = "s"` the fold alone
+/// stayed a loop in every decoder.
+#[inline(always)]
+fn be_uint(bytes: &[u8]) -> u32 {
+    match *bytes {
+        [a] => u32::from(a),
+        [a, b] => u32::from(u16::from_be_bytes([a, b])),
+        [a, b, c, d] => u32::from_be_bytes([a, b, c, d]),
+        _ => bytes.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b)),
+    }
 }
 
 /// Whether `frame` ends in the checksum of its first `at` bytes, and nothing else.
@@ -197,9 +216,7 @@ pub fn check_frame(
 /// that `frame` is long enough.
 #[inline(always)]
 pub fn code(frame: &[u8], at: usize, n: usize) -> u32 {
-    frame[at..at + n]
-        .iter()
-        .fold(0u32, |a, b| (a << 8) | u32::from(*b))
+    be_uint(&frame[at..at + n])
 }
 
 /// The frame as the fixed-size array of a message whose code matched, or why not.
@@ -222,6 +239,25 @@ pub fn reply<const N: usize>(
         return Err(DecodeError::NotAReply { code });
     }
     fixed(frame)
+}
+
+/// [`reply`] whose `NotAReply` the caller completes with the frame's code ([`reply_code`]):
+/// every arm that refuses a reply then leaves with the same error.
+#[inline(always)]
+pub fn reply_of<const N: usize>(frame: &[u8], admitted: bool) -> Result<&[u8; N], DecodeError> {
+    reply(frame, admitted, 0)
+}
+
+/// `e`, with the code of `frame` (`n` bytes from `at`) where it is a `NotAReply`: for a
+/// direction whose codes have one length, where a refused reply's code is always the frame's.
+#[inline]
+pub fn reply_code(e: DecodeError, frame: &[u8], at: usize, n: usize) -> DecodeError {
+    match e {
+        DecodeError::NotAReply { .. } => DecodeError::NotAReply {
+            code: frame.get(at..at + n).map_or(0, be_uint),
+        },
+        e => e,
+    }
 }
 
 /// For a reply of variable length: `Err(NotAReply)` if the request does not admit it.
@@ -502,7 +538,7 @@ pub fn in_range_or<T: Wire>(
     special: &[i64],
 ) -> Result<(), DecodeError> {
     let raw = raw.to_i64();
-    if (min..=max).contains(&raw) || special.contains(&raw) {
+    if (min..=max).contains(&raw) || is_special(raw, special) {
         return Ok(());
     }
     Err(DecodeError::OutOfRange {
@@ -512,6 +548,18 @@ pub fn in_range_or<T: Wire>(
         min,
         max,
     })
+}
+
+/// Whether `raw` is one of the `special` values. One or two (the common case) are compared
+/// as such: `contains` stayed a loop over the table at `opt-level = "s"`.
+#[inline(always)]
+fn is_special(raw: i64, special: &[i64]) -> bool {
+    match *special {
+        [] => false,
+        [a] => raw == a,
+        [a, b] => raw == a || raw == b,
+        ref more => more.contains(&raw),
+    }
 }
 
 /// A decoded constant field (or constant bits of one, `found` already shifted down) that must
@@ -595,7 +643,7 @@ pub fn encode_in_range_or<T: Wire>(
     special: &[i64],
 ) -> Result<(), EncodeError> {
     let raw = raw.to_i64();
-    if (min..=max).contains(&raw) || special.contains(&raw) {
+    if (min..=max).contains(&raw) || is_special(raw, special) {
         return Ok(());
     }
     Err(EncodeError::NotInRange {
@@ -633,6 +681,14 @@ pub fn frame_mut<'b, const N: usize>(
             })?;
     out[..head.len()].copy_from_slice(head);
     Ok(out)
+}
+
+/// `out`, a frame [`frame_mut`] took before the encoder's match, with `head` written at its
+/// start.
+#[inline(always)]
+pub fn head<'b, const N: usize>(out: &'b mut [u8; N], head: &[u8]) -> &'b mut [u8; N] {
+    out[..head.len()].copy_from_slice(head);
+    out
 }
 
 /// The first `len` bytes of `buf`, for a frame of variable length, with `head` written at its
@@ -700,14 +756,33 @@ pub fn seal_sum8<const N: usize>(out: &mut [u8; N]) -> usize {
     N
 }
 
+/// [`seal_sum8`] where the generator knows the sum of the first `from` bytes (`head`: its
+/// constants added to the address): only the bytes after them are summed here, none for a
+/// frame without fields.
+#[inline(always)]
+pub fn seal_sum8_head<const N: usize>(out: &mut [u8; N], from: usize, head: u8) -> usize {
+    // A field of one or two bytes is added as such rather than by a loop (`opt-level = "s"`).
+    let rest = match out[from..N - 1] {
+        [] => 0,
+        [a] => a,
+        [a, b] => a.wrapping_add(b),
+        ref rest => crate::sum8_bytes(rest),
+    };
+    let sum = head.wrapping_add(rest);
+    out[N - 1] = sum;
+    N
+}
+
 /// Writes the `checksum` of the first `len - n` bytes of `buf` into its last `n` bytes.
 #[inline(always)]
 pub fn seal(buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32, n: usize, be: bool) {
     let at = len - n;
     let s = sum(&buf[..at]);
-    for (i, b) in buf[at..len].iter_mut().enumerate() {
-        let shift = if be { 8 * (n - 1 - i) } else { 8 * i };
-        *b = (s >> shift) as u8;
+    // Copied rather than shifted a byte at a time, which stayed a loop at `opt-level = "s"`.
+    if be {
+        buf[at..len].copy_from_slice(&s.to_be_bytes()[4 - n..]);
+    } else {
+        buf[at..len].copy_from_slice(&s.to_le_bytes()[..n]);
     }
 }
 
@@ -909,6 +984,91 @@ mod lang_tests {
             Ok(())
         );
         assert!(length_field(&[0, 2], 1, 2, true, false, 0x102).is_err());
+    }
+
+    /// The frame's trailing checksum as `check_sum` reads it, for each width and order.
+    fn found(frame: &[u8], n: usize, be: bool) -> u32 {
+        let f = Frame {
+            start: None,
+            devices: (0, 0),
+            broadcast: None,
+            host: None,
+            checksum_len: n,
+            checksum_be: be,
+        };
+        sums(frame, frame.len() - n, &f, |_| 0).0
+    }
+
+    #[test]
+    fn codes_and_checksums_read_as_written_in_every_width_and_order() {
+        let f = [0x10, 0x21, 0x32, 0x43, 0x54, 0x65];
+        assert_eq!(code(&f, 1, 1), 0x21);
+        assert_eq!(code(&f, 1, 2), 0x2132);
+        assert_eq!(code(&f, 1, 3), 0x21_3243);
+        assert_eq!(code(&f, 1, 4), 0x2132_4354);
+        let widths = [
+            (1, 0x65, 0x65),
+            (2, 0x5465, 0x6554),
+            (3, 0x43_5465, 0x65_5443),
+        ];
+        for (n, be, le) in widths.into_iter().chain([(4, 0x3243_5465, 0x6554_4332)]) {
+            assert_eq!(found(&f, n, true), be, "{n} bytes, big-endian");
+            assert_eq!(found(&f, n, false), le, "{n} bytes, little-endian");
+            // `seal` writes what `sums` reads back.
+            for order in [true, false] {
+                let mut g = f;
+                seal(&mut g, f.len(), |_| if order { be } else { le }, n, order);
+                assert_eq!(g, f, "{n} bytes, big-endian {order}");
+            }
+        }
+    }
+
+    /// A frame of `N` bytes sealed by `seal_sum8` and by `seal_sum8_head` from each head
+    /// length, with the head's sum given.
+    fn sealed_alike<const N: usize>() {
+        let mut frame = [0u8; N];
+        for (i, b) in frame.iter_mut().enumerate() {
+            *b = 0x31u8.wrapping_mul(i as u8 + 7);
+        }
+        let mut whole = frame;
+        assert_eq!(seal_sum8(&mut whole), N);
+        for from in 0..N {
+            let mut sealed = frame;
+            let head = crate::sum8_bytes(&frame[..from]);
+            assert_eq!(seal_sum8_head(&mut sealed, from, head), N);
+            assert_eq!(sealed, whole, "{N} bytes from {from}");
+        }
+    }
+
+    #[test]
+    fn a_sum_8_sealed_from_a_known_head_is_the_sum_of_the_frame() {
+        // The rest after the head: none, one, two and more bytes.
+        sealed_alike::<2>();
+        sealed_alike::<4>();
+        sealed_alike::<5>();
+        sealed_alike::<9>();
+        sealed_alike::<16>();
+    }
+
+    #[test]
+    fn a_refused_reply_gets_the_code_of_its_frame() {
+        let f = [0x22, 0x01, 0, 0, 0, 0];
+        let refused = reply_of::<6>(&f, false).unwrap_err();
+        assert_eq!(
+            reply_code(refused, &f, 0, 1),
+            DecodeError::NotAReply { code: 0x22 }
+        );
+        assert_eq!(
+            reply_code(refused, &f, 1, 2),
+            DecodeError::NotAReply { code: 0x0100 }
+        );
+        // Other errors pass unchanged; a frame too short for the code gives 0, no panic.
+        let other = reply_of::<5>(&f, true).unwrap_err();
+        assert_eq!(reply_code(other, &f, 0, 1), other);
+        assert_eq!(
+            reply_code(refused, &f[..1], 0, 2),
+            DecodeError::NotAReply { code: 0 }
+        );
     }
 
     #[test]

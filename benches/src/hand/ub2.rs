@@ -146,10 +146,50 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
     Ok(Decoded { address, message })
 }
 
-/// UB2 responses need no request to be told apart; `_request` keeps the SD decoder's shape.
+/// Whether `r` is a reply `q` may get (within the subset): the replies the command lists, and
+/// 0x94, which every command may get (§7.1; the other common NAKs lie outside the subset).
+fn answers(q: &Request, r: &Response) -> bool {
+    use Request as Q;
+    use Response as R;
+    matches!(
+        (q, r),
+        (_, R::NakIndexOutOfRange)
+            | (
+                Q::ReferenceRun
+                    | Q::GoToCapacitance { .. }
+                    | Q::GoToFullStepPosition { .. }
+                    | Q::MoveFullSteps { .. },
+                R::MovementStarted
+            )
+            | (
+                Q::GoToCapacitance { .. }
+                    | Q::GoToFullStepPosition { .. }
+                    | Q::MoveFullSteps { .. },
+                R::NakLimitReached
+            )
+            | (
+                Q::GoToCapacitanceStatus,
+                R::MovementCompleted | R::MovementNotCompleted
+            )
+            | (Q::SetModeOfOperation { .. }, R::SetModeOfOperationAck)
+            | (Q::GetActualCapacitance, R::ActualCapacitance { .. })
+            | (Q::GetModeOfOperation, R::ActualModeOfOperation { .. })
+            | (
+                Q::GetCCurveIndexedFullStepCapacitance { .. },
+                R::CCurveEntry { .. }
+            )
+            | (Q::GetControllerTemperature, R::ControllerTemperature { .. })
+            | (Q::GetFirmwareVersion, R::FirmwareVersion { .. })
+            | (Q::GetLowerCustomerLimit, R::LowerCustomerLimit { .. })
+            | (Q::GetUpperCustomerLimit, R::UpperCustomerLimit { .. })
+    )
+}
+
+/// UB2 responses need no request to be told apart; with `request`, only replies it may get
+/// decode ([`DecodeError::NotAReply`] otherwise), as the SD decoder's.
 pub fn decode_response(
     frame: &[u8],
-    _request: Option<&Request>,
+    request: Option<&Request>,
 ) -> Result<Decoded<Response>, DecodeError> {
     let (address, rest) = envelope(frame, 4, 16)?;
     let message = match *rest {
@@ -206,6 +246,17 @@ pub fn decode_response(
         }
         [] => return Err(wrong_length(4, frame)),
     };
+    if let Some(q) = request {
+        if !answers(q, &message) {
+            // A message of a 1-byte code has nothing after it; the others have 2-byte codes.
+            let code = match *rest {
+                [hi, lo, ..] => u16::from_be_bytes([hi, lo]).into(),
+                [code] => code.into(),
+                [] => 0,
+            };
+            return Err(DecodeError::NotAReply { code });
+        }
+    }
     Ok(Decoded { address, message })
 }
 

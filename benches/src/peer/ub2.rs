@@ -159,17 +159,70 @@ pub fn decode_request(frame: &[u8]) -> Result<RequestFrame, Error> {
     Ok(f)
 }
 
-/// UB2 responses need no request to be told apart; `_request` keeps the SD peer's shape.
+/// Whether `r` is a reply `q` may get: the replies the command lists, and 0x94, which every
+/// command may get.
+fn answers(q: &Request, r: &Response) -> bool {
+    use Request as Q;
+    use Response as R;
+    matches!(
+        (q, r),
+        (_, R::NakIndexOutOfRange)
+            | (
+                Q::ReferenceRun
+                    | Q::GoToCapacitance { .. }
+                    | Q::GoToFullStepPosition { .. }
+                    | Q::MoveFullSteps { .. },
+                R::MovementStarted
+            )
+            | (
+                Q::GoToCapacitance { .. }
+                    | Q::GoToFullStepPosition { .. }
+                    | Q::MoveFullSteps { .. },
+                R::NakLimitReached
+            )
+            | (
+                Q::GoToCapacitanceStatus,
+                R::MovementCompleted | R::MovementNotCompleted
+            )
+            | (
+                Q::SetModeOfOperation { .. },
+                R::Echo(Echo::SetModeOfOperationAck)
+            )
+            | (
+                Q::GetActualCapacitance,
+                R::Data(Data::ActualCapacitance { .. })
+            )
+            | (
+                Q::GetModeOfOperation,
+                R::Data(Data::ActualModeOfOperation { .. })
+            )
+            | (
+                Q::GetCCurveIndexedFullStepCapacitance { .. },
+                R::Data(Data::CCurveEntry { .. })
+            )
+            | (
+                Q::GetControllerTemperature,
+                R::Data(Data::ControllerTemperature { .. })
+            )
+            | (Q::GetFirmwareVersion, R::Data(Data::FirmwareVersion { .. }))
+    ) || matches!((q, r), (Q::GetLimit { limit }, R::Data(Data::Limit { limit: l, .. })) if l == limit)
+}
+
+/// UB2 responses need no request to be told apart; with `request`, only replies it may get
+/// decode, as the SD peer's.
 pub fn decode_response(
     frame: &[u8],
-    _request: Option<&RequestFrame>,
+    request: Option<&RequestFrame>,
 ) -> Result<ResponseFrame, Error> {
     let body = checked(frame, 4, 16)?;
     let ((rest, _), f) = ResponseFrame::from_bytes((body, 0))?;
     if !rest.is_empty() {
         return Err(Error::Trailing { bytes: rest.len() });
     }
-    Ok(f)
+    match request {
+        Some(q) if !answers(&q.message, &f.message) => Err(Error::NotAReply),
+        _ => Ok(f),
+    }
 }
 
 /// Writes the derived body, then its sum.

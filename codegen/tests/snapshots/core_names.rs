@@ -292,20 +292,20 @@ pub mod clash {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
                     out[3] = v_some.raw();
                     out[4..6].copy_from_slice(&v_core.raw().to_le_bytes());
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBA))
                 }
                 Self::U8 { frame: v_frame } => {
                     rt::encode_broadcast(address, 0x00, "u8")?;
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
                     out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB))
                 }
                 Self::Core { address: v_address, out: v_out } => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x12])?;
                     out[4] = 0x00;
                     out[3] = v_address;
                     out[5..6].copy_from_slice(&v_out.to_le_bytes());
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBC))
                 }
                 Self::Rt { f: v_f } => {
                     rt::encode_broadcast(address, 0x00, "rt")?;
@@ -313,7 +313,7 @@ pub mod clash {
                     let field_0: u8 = v_f;
                     out[3] = field_0;
                     out[4] = field_0;
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xBD))
                 }
             };
             rt::Ok(len)
@@ -547,16 +547,24 @@ pub mod clash {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ok => {
-                    rt::seal_sum8(rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?)
+                    rt::seal_sum8_head(
+                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
+                        3,
+                        address.wrapping_add(0xFA),
+                    )
                 }
                 Self::Err => {
-                    rt::seal_sum8(rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?)
+                    rt::seal_sum8_head(
+                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
+                        3,
+                        address.wrapping_add(0x3A),
+                    )
                 }
                 Self::Result { g: v_g, usize: v_usize } => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x51])?;
                     out[3] = v_g.raw();
                     out[4..6].copy_from_slice(&v_usize.raw().to_le_bytes());
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFB))
                 }
                 Self::Usize { asked: v_asked, none: v_none, some: v_some } => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x52])?;
@@ -564,7 +572,7 @@ pub mod clash {
                     let field_1: u8 = ((rt::fits("none", v_none, 0, 15)? as u8) << 4)
                         | ((rt::fits("some", v_some.raw(), -8, 7)? as u8) & 0xF);
                     out[5] = field_1;
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFC))
                 }
             };
             rt::Ok(len)
@@ -603,7 +611,8 @@ pub mod clash {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 2, 1))?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
@@ -614,19 +623,17 @@ pub mod clash {
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 2, 1) {
-                0x50 => rt::reply::<4>(frame, asked & 1 != 0, 0x50).map(|_| Self::Ok),
-                0x90 => {
-                    rt::reply::<4>(frame, asked >> 1 & 1 != 0, 0x90).map(|_| Self::Err)
-                }
+                0x50 => rt::reply_of::<4>(frame, asked & 1 != 0).map(|_| Self::Ok),
+                0x90 => rt::reply_of::<4>(frame, asked >> 1 & 1 != 0).map(|_| Self::Err),
                 0x51 => {
-                    let frame = rt::reply::<7>(frame, asked >> 2 & 1 != 0, 0x51)?;
+                    let frame = rt::reply_of::<7>(frame, asked >> 2 & 1 != 0)?;
                     rt::Ok(Self::Result {
                         g: Ok::from_raw(frame[3]),
                         usize: Option::from_raw(u16::from_le_bytes([frame[4], frame[5]])),
                     })
                 }
                 0x52 => {
-                    let frame = rt::reply::<7>(frame, asked >> 3 & 1 != 0, 0x52)?;
+                    let frame = rt::reply_of::<7>(frame, asked >> 3 & 1 != 0)?;
                     rt::Ok(Self::Usize {
                         asked: frame[3..5].try_into().unwrap_or([0; 2]),
                         none: (frame[5] >> 4) as u8,

@@ -320,18 +320,18 @@ pub mod mini {
                     rt::encode_in_range("target", v_target.raw(), 0, 100000)?;
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
                     out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA))
                 }
                 Self::SetMode { mode: v_mode } => {
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x30, 0x00])?;
                     out[4] = v_mode.raw();
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xDA))
                 }
                 Self::GetStatus { channel: v_channel } => {
                     rt::encode_in_range("channel", v_channel, 0, 3)?;
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
                     out[4] = v_channel;
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA))
                 }
             };
             rt::Ok(len)
@@ -553,13 +553,25 @@ pub mod mini {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Started => {
-                    rt::seal_sum8(rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?)
+                    rt::seal_sum8_head(
+                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
+                        3,
+                        address.wrapping_add(0xFA),
+                    )
                 }
                 Self::Nak => {
-                    rt::seal_sum8(rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?)
+                    rt::seal_sum8_head(
+                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
+                        3,
+                        address.wrapping_add(0x3A),
+                    )
                 }
                 Self::SetModeAck => {
-                    rt::seal_sum8(rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?)
+                    rt::seal_sum8_head(
+                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?,
+                        4,
+                        address.wrapping_add(0xDA),
+                    )
                 }
                 Self::Status {
                     error_bits: v_error_bits,
@@ -578,7 +590,7 @@ pub mod mini {
                     out[5..7].copy_from_slice(&field_1.to_le_bytes());
                     out[7..10].copy_from_slice(&v_firmware);
                     out[10] = v_temperature.raw();
-                    rt::seal_sum8(out)
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA))
                 }
             };
             rt::Ok(len)

@@ -124,17 +124,18 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
+            let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
                 Self::ReadRuntimeHours => {
                     rt::encode_broadcast(address, 0x1F, "read_runtime_hours")?;
-                    rt::frame_mut::<6>(buf, &[0x69, address, 0x01, 0x00])?.len()
+                    rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
                 Self::ReadRuntimeMinSec => {
                     rt::encode_broadcast(address, 0x1F, "read_runtime_min_sec")?;
-                    rt::frame_mut::<6>(buf, &[0x69, address, 0x02, 0x00])?.len()
+                    rt::head(out, &[0x69, address, 0x02, 0x00]).len()
                 }
                 Self::SetCounter { counter: v_counter } => {
-                    let out = rt::frame_mut::<6>(buf, &[0x70, address])?;
+                    let out = rt::head(out, &[0x70, address]);
                     out[2..4].copy_from_slice(&v_counter.to_be_bytes());
                     out.len()
                 }
@@ -353,22 +354,23 @@ pub mod mini_crc {
             buf: &mut [u8],
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
+            let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
                 Self::RuntimeHours { hours: v_hours } => {
-                    let out = rt::frame_mut::<6>(buf, &[0x22, address])?;
+                    let out = rt::head(out, &[0x22, address]);
                     out[2..4].copy_from_slice(&v_hours.to_be_bytes());
                     out.len()
                 }
                 Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
                     rt::encode_in_range("minutes", v_minutes, 0, 59)?;
                     rt::encode_in_range("seconds", v_seconds, 0, 59)?;
-                    let out = rt::frame_mut::<6>(buf, &[0x22, address])?;
+                    let out = rt::head(out, &[0x22, address]);
                     out[2] = v_minutes;
                     out[3] = v_seconds;
                     out.len()
                 }
                 Self::CounterEcho { counter: v_counter } => {
-                    let out = rt::frame_mut::<6>(buf, &[0x70, address])?;
+                    let out = rt::head(out, &[0x70, address]);
                     out[2..4].copy_from_slice(&v_counter.to_be_bytes());
                     out.len()
                 }
@@ -410,7 +412,8 @@ pub mod mini_crc {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 0, 1))?;
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
@@ -445,7 +448,7 @@ pub mod mini_crc {
                     g.end(6, true)
                 }
                 0x70 => {
-                    let frame = rt::reply::<6>(frame, asked >> 2 & 1 != 0, 0x70)?;
+                    let frame = rt::reply_of::<6>(frame, asked >> 2 & 1 != 0)?;
                     rt::Ok(Self::CounterEcho {
                         counter: u16::from_be_bytes([frame[2], frame[3]]),
                     })

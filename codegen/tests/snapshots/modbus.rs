@@ -1196,7 +1196,8 @@ pub mod modbus {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 1, 1))?;
             if let rt::Some(request) = request {
                 message.follows_request(request)?;
             }
@@ -1219,7 +1220,7 @@ pub mod modbus {
                     })
                 }
                 0x81 => {
-                    let frame = rt::reply::<5>(frame, asked >> 1 & 1 != 0, 0x81)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 1 & 1 != 0)?;
                     rt::Ok(Self::ReadCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1234,7 +1235,7 @@ pub mod modbus {
                     })
                 }
                 0x82 => {
-                    let frame = rt::reply::<5>(frame, asked >> 3 & 1 != 0, 0x82)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 3 & 1 != 0)?;
                     rt::Ok(Self::ReadDiscreteInputsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1249,7 +1250,7 @@ pub mod modbus {
                     })
                 }
                 0x83 => {
-                    let frame = rt::reply::<5>(frame, asked >> 5 & 1 != 0, 0x83)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 5 & 1 != 0)?;
                     rt::Ok(Self::ReadHoldingRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1264,13 +1265,13 @@ pub mod modbus {
                     })
                 }
                 0x84 => {
-                    let frame = rt::reply::<5>(frame, asked >> 7 & 1 != 0, 0x84)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 7 & 1 != 0)?;
                     rt::Ok(Self::ReadInputRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x05 => {
-                    let frame = rt::reply::<8>(frame, asked >> 8 & 1 != 0, 0x05)?;
+                    let frame = rt::reply_of::<8>(frame, asked >> 8 & 1 != 0)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleCoilReply {
@@ -1279,13 +1280,13 @@ pub mod modbus {
                     })
                 }
                 0x85 => {
-                    let frame = rt::reply::<5>(frame, asked >> 9 & 1 != 0, 0x85)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 9 & 1 != 0)?;
                     rt::Ok(Self::WriteSingleCoilException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x06 => {
-                    let frame = rt::reply::<8>(frame, asked >> 10 & 1 != 0, 0x06)?;
+                    let frame = rt::reply_of::<8>(frame, asked >> 10 & 1 != 0)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleRegisterReply {
@@ -1294,13 +1295,13 @@ pub mod modbus {
                     })
                 }
                 0x86 => {
-                    let frame = rt::reply::<5>(frame, asked >> 11 & 1 != 0, 0x86)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 11 & 1 != 0)?;
                     rt::Ok(Self::WriteSingleRegisterException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x0F => {
-                    let frame = rt::reply::<8>(frame, asked >> 12 & 1 != 0, 0x0F)?;
+                    let frame = rt::reply_of::<8>(frame, asked >> 12 & 1 != 0)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleCoilsReply {
@@ -1309,13 +1310,13 @@ pub mod modbus {
                     })
                 }
                 0x8F => {
-                    let frame = rt::reply::<5>(frame, asked >> 13 & 1 != 0, 0x8F)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 13 & 1 != 0)?;
                     rt::Ok(Self::WriteMultipleCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x10 => {
-                    let frame = rt::reply::<8>(frame, asked >> 14 & 1 != 0, 0x10)?;
+                    let frame = rt::reply_of::<8>(frame, asked >> 14 & 1 != 0)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleRegistersReply {
@@ -1324,7 +1325,7 @@ pub mod modbus {
                     })
                 }
                 0x90 => {
-                    let frame = rt::reply::<5>(frame, asked >> 15 & 1 != 0, 0x90)?;
+                    let frame = rt::reply_of::<5>(frame, asked >> 15 & 1 != 0)?;
                     rt::Ok(Self::WriteMultipleRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })

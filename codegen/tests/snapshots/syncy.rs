@@ -482,7 +482,8 @@ pub mod syncy {
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
             rt::length_field(frame, 3, 1, false, true, -4)?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 4, 1))?;
             if let rt::Some(request) = request {
                 message.follows_request(request)?;
             }
@@ -496,9 +497,9 @@ pub mod syncy {
         ) -> rt::DecodeResult<Self> {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 4, 1) {
-                0x00 => rt::reply::<6>(frame, asked & 1 != 0, 0x00).map(|_| Self::Moving),
+                0x00 => rt::reply_of::<6>(frame, asked & 1 != 0).map(|_| Self::Moving),
                 0x01 => {
-                    let frame = rt::reply::<12>(frame, asked >> 1 & 1 != 0, 0x01)?;
+                    let frame = rt::reply_of::<12>(frame, asked >> 1 & 1 != 0)?;
                     let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
                     rt::Ok(Self::Counter {
                         total: rt::u24([frame[5], frame[6], frame[7]], false),
@@ -507,14 +508,14 @@ pub mod syncy {
                     })
                 }
                 0x05 => {
-                    let frame = rt::reply::<8>(frame, asked >> 2 & 1 != 0, 0x05)?;
+                    let frame = rt::reply_of::<8>(frame, asked >> 2 & 1 != 0)?;
                     rt::Ok(Self::SetPairReply {
                         quantity: frame[5],
                         groups: frame[6],
                     })
                 }
                 0x85 => {
-                    let frame = rt::reply::<7>(frame, asked >> 3 & 1 != 0, 0x85)?;
+                    let frame = rt::reply_of::<7>(frame, asked >> 3 & 1 != 0)?;
                     rt::Ok(Self::SetPairError {
                         reason: frame[5],
                     })

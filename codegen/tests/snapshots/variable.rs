@@ -469,7 +469,8 @@ pub mod vario {
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
             rt::length_field(frame, 3, 1, false, true, -4)?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 4, 1))?;
             if let rt::Some(request) = request {
                 message.follows_request(request)?;
             }
@@ -492,13 +493,13 @@ pub mod vario {
                     })
                 }
                 0x81 => {
-                    let frame = rt::reply::<7>(frame, asked >> 1 & 1 != 0, 0x81)?;
+                    let frame = rt::reply_of::<7>(frame, asked >> 1 & 1 != 0)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[5],
                     })
                 }
                 0x02 => {
-                    let frame = rt::reply::<7>(frame, asked >> 2 & 1 != 0, 0x02)?;
+                    let frame = rt::reply_of::<7>(frame, asked >> 2 & 1 != 0)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[5],
                     })
