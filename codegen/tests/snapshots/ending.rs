@@ -463,7 +463,8 @@ pub mod ending {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame, request)
+                .map_err(|e| rt::reply_code(e, frame, 3, 1))?;
             if let rt::Some(request) = request {
                 message.follows_request(request)?;
             }
@@ -486,13 +487,13 @@ pub mod ending {
                     })
                 }
                 0x81 => {
-                    let frame = rt::reply::<6>(frame, asked >> 1 & 1 != 0, 0x81)?;
+                    let frame = rt::reply_of::<6>(frame, asked >> 1 & 1 != 0)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[4],
                     })
                 }
                 0x02 => {
-                    let frame = rt::reply::<6>(frame, asked >> 2 & 1 != 0, 0x02)?;
+                    let frame = rt::reply_of::<6>(frame, asked >> 2 & 1 != 0)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[4],
                     })
