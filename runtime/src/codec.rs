@@ -122,33 +122,8 @@ impl Frame {
 #[inline(always)]
 fn sums(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> (u32, u32) {
     let (body, tail) = frame.split_at(at);
-    let found = if f.checksum_be {
-        be_uint(tail)
-    } else {
-        match *tail {
-            [a] => u32::from(a),
-            [a, b] => u32::from(u16::from_le_bytes([a, b])),
-            [a, b, c, d] => u32::from_le_bytes([a, b, c, d]),
-            _ => tail
-                .iter()
-                .rev()
-                .fold(0u32, |a, b| (a << 8) | u32::from(*b)),
-        }
-    };
+    let found = uint(tail, !f.checksum_be) as u32;
     (found, checksum(body))
-}
-
-/// `bytes` as one big-endian integer. The widths of codes and checksums (1, 2 and 4 bytes) are
-/// written out, so a constant width compiles to a load: at `opt-level = "s"` the fold alone
-/// stayed a loop in every decoder.
-#[inline(always)]
-fn be_uint(bytes: &[u8]) -> u32 {
-    match *bytes {
-        [a] => u32::from(a),
-        [a, b] => u32::from(u16::from_be_bytes([a, b])),
-        [a, b, c, d] => u32::from_be_bytes([a, b, c, d]),
-        _ => bytes.iter().fold(0u32, |a, b| (a << 8) | u32::from(*b)),
-    }
 }
 
 /// Whether `frame` ends in the checksum of its first `at` bytes, and nothing else.
@@ -216,7 +191,7 @@ pub fn check_frame(
 /// that `frame` is long enough.
 #[inline(always)]
 pub fn code(frame: &[u8], at: usize, n: usize) -> u32 {
-    be_uint(&frame[at..at + n])
+    uint(&frame[at..at + n], false) as u32
 }
 
 /// The frame as the fixed-size array of a message whose code matched, or why not.
@@ -254,7 +229,7 @@ pub fn reply_of<const N: usize>(frame: &[u8], admitted: bool) -> Result<&[u8; N]
 pub fn reply_code(e: DecodeError, frame: &[u8], at: usize, n: usize) -> DecodeError {
     match e {
         DecodeError::NotAReply { .. } => DecodeError::NotAReply {
-            code: frame.get(at..at + n).map_or(0, be_uint),
+            code: frame.get(at..at + n).map_or(0, |c| uint(c, false) as u32),
         },
         e => e,
     }
@@ -884,15 +859,21 @@ pub fn following<T: Wire>(
     Ok(())
 }
 
-/// The unsigned integer `bytes` hold (`le`: least significant byte first): a length, count or
-/// element field of up to 8 bytes.
+/// The unsigned integer `bytes` hold (`le`: least significant byte first): a code, checksum,
+/// length, count or element field of up to 8 bytes. The common widths (1, 2 and 4 bytes) are
+/// written out, so a constant width compiles to one load: at `opt-level = "s"` a fold alone
+/// stayed a loop in every decoder.
 #[inline(always)]
 pub fn uint(bytes: &[u8], le: bool) -> u64 {
     let fold = |a: u64, b: &u8| (a << 8) | u64::from(*b);
-    if le {
-        bytes.iter().rev().fold(0, fold)
-    } else {
-        bytes.iter().fold(0, fold)
+    match *bytes {
+        [a] => u64::from(a),
+        [a, b] if le => u64::from(u16::from_le_bytes([a, b])),
+        [a, b] => u64::from(u16::from_be_bytes([a, b])),
+        [a, b, c, d] if le => u64::from(u32::from_le_bytes([a, b, c, d])),
+        [a, b, c, d] => u64::from(u32::from_be_bytes([a, b, c, d])),
+        _ if le => bytes.iter().rev().fold(0, fold),
+        _ => bytes.iter().fold(0, fold),
     }
 }
 
