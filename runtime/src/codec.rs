@@ -279,7 +279,8 @@ pub struct Group<'f, T> {
     alone: bool,
     admitted: bool,
     found: Option<T>,
-    last: Option<DecodeError>,
+    /// The first refused candidate's error, in spec order (the interpreter reports the same).
+    first: Option<DecodeError>,
     done: Option<DecodeResult<T>>,
 }
 
@@ -292,7 +293,7 @@ impl<'f, T> Group<'f, T> {
             alone,
             admitted: false,
             found: None,
-            last: None,
+            first: None,
             done: None,
         }
     }
@@ -312,7 +313,7 @@ impl<'f, T> Group<'f, T> {
         match decode(frame) {
             Ok(m) => Some(m),
             Err(e) => {
-                self.last = Some(e);
+                self.first.get_or_insert(e);
                 None
             }
         }
@@ -360,7 +361,11 @@ impl<'f, T> Group<'f, T> {
         if self.done.is_some() || !admitted {
             return None;
         }
-        decode(self.frame).map_err(|e| self.last = Some(e)).ok()
+        decode(self.frame)
+            .map_err(|e| {
+                self.first.get_or_insert(e);
+            })
+            .ok()
     }
 
     /// Tries a candidate that shares code and length with another only the request tells
@@ -392,7 +397,7 @@ impl<'f, T> Group<'f, T> {
     }
 
     /// What the group decodes to: the candidate that settled it, else the one ambiguous
-    /// candidate that decoded, the last candidate's error, a wrong length (`expected`, the
+    /// candidate that decoded, the first refused candidate's error, a wrong length (`expected`, the
     /// shortest candidate's), or for a reply (`reply`) no candidate the request admits.
     #[inline(always)]
     pub fn end(self, expected: usize, reply: bool) -> DecodeResult<T> {
@@ -402,7 +407,7 @@ impl<'f, T> Group<'f, T> {
         if let Some(m) = self.found {
             return Ok(m);
         }
-        Err(match self.last {
+        Err(match self.first {
             Some(e) => e,
             None if reply && !self.admitted => DecodeError::NotAReply { code: self.code },
             None => DecodeError::WrongLength {

@@ -189,7 +189,14 @@ pub fn agree<P: Protocol>(
             );
             false
         }
-        (Err(_), Err(_)) => false,
+        (Err(Some(e)), Err(g)) => {
+            // Where both name the field that broke the frame, it is the same field.
+            if let (Some(i), Some(g)) = (field_of_interp(&e), field_of(&g)) {
+                assert_eq!(g, i, "generated: {g:?}, interpreter: {e:?}: {}", ctx());
+            }
+            false
+        }
+        (Err(None), Err(_)) => false,
         (Ok(f), Err(g)) => panic!(
             "only the interpreter accepts ({}), generated: {g}: {}",
             p.message(f.message).name,
@@ -200,5 +207,27 @@ pub fn agree<P: Protocol>(
             g.name,
             ctx()
         ),
+    }
+}
+
+/// The field (name and offset) a generated decoder's error names, if it names one.
+fn field_of(e: &DecodeError) -> Option<(&str, usize)> {
+    match *e {
+        DecodeError::InvalidValue { field, offset, .. }
+        | DecodeError::OutOfRange { field, offset, .. }
+        | DecodeError::BadCount { field, offset, .. } => Some((field, offset)),
+        _ => None,
+    }
+}
+
+/// The field (name and offset) the interpreter's error names, if it names one.
+fn field_of_interp(e: &InterpError) -> Option<(&str, usize)> {
+    match e {
+        InterpError::ConstantMismatch { field, offset, .. }
+        | InterpError::NotEqual { field, offset, .. }
+        | InterpError::OutOfRange { field, offset, .. }
+        | InterpError::BadCount { field, offset, .. }
+        | InterpError::NotFollowing { field, offset, .. } => Some((field, *offset)),
+        _ => None,
     }
 }
