@@ -25,6 +25,38 @@ struct Leaf {
     bit: Option<usize>,
     /// What the spec fixes, for a typed message that leaves it out.
     fixed: Fixed,
+    /// How its integer values print.
+    form: Form,
+    /// The address of the spec's name: an interpreted frame's value borrows it, so a value
+    /// is matched to its leaf without comparing the text.
+    name_at: usize,
+}
+
+/// How a leaf's integer values print, decided once from the spec: what [`push_field`] does
+/// with them, where that needs no look at the value.
+#[derive(Debug, Clone, Copy)]
+enum Form {
+    /// The number as it is.
+    Int,
+    /// Its physical value in the spec's unit of this index.
+    Physical(usize),
+    /// Special values, an enumeration or flags: [`push_field`] decides.
+    Field,
+}
+
+impl Form {
+    fn of(f: &Field, bit: Option<&BitField>) -> Form {
+        let unit = match bit {
+            Some(b) if b.constant.is_none() => b.unit,
+            Some(_) => None,
+            None if f.constant.is_some() => None,
+            None if !f.special.is_empty() || f.enumeration.is_some() || f.flags.is_some() => {
+                return Form::Field
+            }
+            None => f.unit,
+        };
+        unit.map_or(Form::Int, Form::Physical)
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -38,7 +70,7 @@ enum Fixed {
 /// One message's line, less its address, offset and field values.
 #[derive(Debug, Clone)]
 struct Plan {
-    /// `"protocol":"…","direction":"…","address":`
+    /// `,"protocol":"…","direction":"…","address":` (the comma for after the offset)
     head: String,
     /// `,"code":"0x…","message":"…","fields":{`
     tail: String,
@@ -88,6 +120,8 @@ pub struct Printer {
 struct Decimal {
     mul: i128,
     add: i128,
+    /// `mul` and `add` where both fit an `i64`: most values then need no 128-bit arithmetic.
+    small: Option<(i64, i64)>,
     places: u32,
 }
 
@@ -97,19 +131,32 @@ impl Decimal {
         let den = scale.den.checked_mul(offset.den)?;
         let places = busspec_model::rational::decimal_places(den)?;
         let per = 10i128.checked_pow(places)? / den;
+        let mul = scale.num.checked_mul(offset.den)?.checked_mul(per)?;
+        let add = offset.num.checked_mul(scale.den)?.checked_mul(per)?;
         Some(Decimal {
-            mul: scale.num.checked_mul(offset.den)?.checked_mul(per)?,
-            add: offset.num.checked_mul(scale.den)?.checked_mul(per)?,
+            mul,
+            add,
+            small: i64::try_from(mul).ok().zip(i64::try_from(add).ok()),
             places,
         })
     }
 
+    /// `raw * mul + add`, in 64 bits where it fits.
+    fn scaled(&self, raw: i64) -> Option<i128> {
+        let small = self
+            .small
+            .and_then(|(mul, add)| raw.checked_mul(mul)?.checked_add(add));
+        match small {
+            Some(n) => Some(i128::from(n)),
+            None => i128::from(raw)
+                .checked_mul(self.mul)
+                .and_then(|v| v.checked_add(self.add)),
+        }
+    }
+
     /// Writes the physical value of `raw`; `false` (nothing written) where it does not fit.
     fn write(&self, out: &mut Vec<u8>, raw: i64) -> bool {
-        let Some(n) = i128::from(raw)
-            .checked_mul(self.mul)
-            .and_then(|v| v.checked_add(self.add))
-        else {
+        let Some(n) = self.scaled(raw) else {
             return false;
         };
         let Ok(mut a) = u64::try_from(n.unsigned_abs()) else {
@@ -120,18 +167,29 @@ impl Decimal {
             a /= 10;
             places -= 1;
         }
+        if 10u64.checked_pow(places).is_none() {
+            return false;
+        }
         if n < 0 {
             out.push(b'-');
         }
-        let Some(p) = 10u64.checked_pow(places) else {
-            return false;
-        };
-        push_int(out, a / p);
-        if places > 0 {
-            out.push(b'.');
-            let frac = itoa::Buffer::new().format(a % p).len();
-            out.resize(out.len() + (places as usize).saturating_sub(frac), b'0');
-            push_int(out, a % p);
+        // The digits once, the point put in among them (after a `0.` and zeros where they
+        // are fewer than the places).
+        let mut digits = itoa::Buffer::new();
+        let digits = digits.format(a).as_bytes();
+        let places = places as usize;
+        match digits.len().checked_sub(places) {
+            Some(0) | None if places > 0 => {
+                out.extend_from_slice(b"0.");
+                out.resize(out.len() + (places - digits.len()), b'0');
+                out.extend_from_slice(digits);
+            }
+            Some(whole) if places > 0 => {
+                out.extend_from_slice(&digits[..whole]);
+                out.push(b'.');
+                out.extend_from_slice(&digits[whole..]);
+            }
+            _ => out.extend_from_slice(digits),
         }
         true
     }
@@ -289,35 +347,37 @@ impl Printer {
                                 .map_or(Fixed::None, |e| Fixed::Equals(e.name.clone())),
                             (None, None) => Fixed::None,
                         };
-                        leaves.push((f.name.clone(), fi, None, fixed));
+                        leaves.push((&f.name, fi, None, fixed, Form::of(f, None)));
                     }
                     for (bi, b) in f.bits.iter().enumerate() {
                         let fixed = b
                             .constant
                             .map_or(Fixed::None, |c| Fixed::Constant(c as i64));
-                        leaves.push((b.name.clone(), fi, Some(bi), fixed));
+                        leaves.push((&b.name, fi, Some(bi), fixed, Form::of(f, Some(b))));
                     }
                 }
                 let mut by_name = HashMap::new();
                 let leaves: Vec<Leaf> = leaves
                     .into_iter()
                     .enumerate()
-                    .map(|(i, (name, field, bit, fixed))| {
+                    .map(|(i, (name, field, bit, fixed, form))| {
                         // The first leaf of a name, as `interp::leaf_field` finds it.
                         by_name.entry(name.clone()).or_insert(i);
                         Leaf {
-                            key: format!("{}:", quote(&name)),
-                            name,
+                            key: format!("{}:", quote(name)),
+                            name: name.clone(),
                             field,
                             bit,
                             fixed,
+                            form,
+                            name_at: name.as_ptr() as usize,
                         }
                     })
                     .collect();
                 names[side(d)].entry(m.name.clone()).or_insert(index);
                 plans[side(d)].push(Plan {
                     head: format!(
-                        "\"protocol\":{protocol},\"direction\":{},\"address\":",
+                        ",\"protocol\":{protocol},\"direction\":{},\"address\":",
                         quote(d.as_str())
                     ),
                     tail: format!(
@@ -347,13 +407,20 @@ impl Printer {
     /// `{` and `"offset":N,` in stream mode, the fixed keys and the address, up to the first
     /// field.
     fn open(out: &mut Vec<u8>, plan: &Plan, address: u8, offset: Option<u64>) {
-        out.push(b'{');
-        if let Some(o) = offset {
-            out.extend_from_slice(b"\"offset\":");
-            push_int(out, o);
-            out.push(b',');
+        // The digits of the offset and the address, and the braces after the fields.
+        out.reserve(plan.head.len() + plan.tail.len() + 40);
+        let head = plan.head.as_bytes();
+        match offset {
+            Some(o) => {
+                out.extend_from_slice(b"{\"offset\":");
+                push_int(out, o);
+                out.extend_from_slice(head);
+            }
+            None => {
+                out.push(b'{');
+                out.extend_from_slice(head.get(1..).unwrap_or_default());
+            }
         }
-        out.extend_from_slice(plan.head.as_bytes());
         push_int(out, address);
         out.extend_from_slice(plan.tail.as_bytes());
     }
@@ -382,9 +449,14 @@ impl Printer {
                 // Printed by the reference above.
                 Raw::List(_) => continue,
             };
-            // Values come in leaf order; look the name up only where they do not.
+            // Values come in leaf order, their names borrowed from the spec the plan was made
+            // from; look the name up only where they do not.
+            let same = |l: &Leaf| {
+                (l.name_at == v.name.as_ptr() as usize && l.name.len() == v.name.len())
+                    || l.name == v.name
+            };
             let leaf = match plan.leaves.get(i) {
-                Some(l) if l.name == v.name => Some(l),
+                Some(l) if same(l) => Some(l),
                 _ => plan.by_name.get(&*v.name).and_then(|&k| plan.leaves.get(k)),
             };
             Self::value(out, p, &self.decimals, m, leaf, &v.name, raw);
@@ -413,7 +485,17 @@ impl Printer {
         match found {
             Some((l, f, bit)) => {
                 out.extend_from_slice(l.key.as_bytes());
-                push_field(out, p, decimals, f, bit, raw);
+                match (l.form, raw) {
+                    (Form::Int, Scalar::Int(v)) => push_int(out, v),
+                    // A unit the spec does not have prints the number, as in `push_field`.
+                    (Form::Physical(u), Scalar::Int(v)) => match p.units.get(u) {
+                        Some(unit) => {
+                            push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
+                        }
+                        None => push_int(out, v),
+                    },
+                    _ => push_field(out, p, decimals, f, bit, raw),
+                }
             }
             None => {
                 push_quoted(out, name);
