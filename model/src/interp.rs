@@ -612,7 +612,7 @@ impl Lookup {
             Some(self),
             (reply_to, false),
             wire,
-            &mut Vec::new(),
+            &mut Spare::default(),
         )
     }
 
@@ -626,20 +626,32 @@ impl Lookup {
         request: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame<'p>, DecodeError> {
-        self.decode_paired_reusing(p, request, wire, &mut Vec::new())
+        self.decode_paired_reusing(p, request, wire, &mut Spare::default())
     }
 
-    /// [`Self::decode_paired`], the frame's values built in `spare`'s memory (taken from it
-    /// only when a frame decodes): for a caller that gives back the frames it is done with.
+    /// [`Self::decode_paired`] in `spare`'s memory: the frame's values built in
+    /// [`Spare::values`] (taken from it only when a frame decodes), for a caller that gives
+    /// back the frames it is done with, and the decode's own lists kept there.
     pub fn decode_paired_reusing<'p>(
         &self,
         p: &'p Protocol,
         request: Option<usize>,
         wire: &[u8],
-        spare: &mut Vec<Value<'p>>,
+        spare: &mut Spare<'p>,
     ) -> Result<Frame<'p>, DecodeError> {
         decode_in(p, self.limits, Some(self), (request, true), wire, spare)
     }
+}
+
+/// Memory a caller decoding many frames lends to [`Lookup::decode_paired_reusing`], so that a
+/// decode allocates nothing once it has grown.
+#[derive(Debug, Clone, Default)]
+pub struct Spare<'p> {
+    /// Where the next decoded frame's values are built; taken by the frame (left empty,
+    /// without capacity) when one decodes.
+    pub values: Vec<Value<'p>>,
+    /// The messages whose fields a frame fits, where several share its code and length.
+    fitting: Vec<MessageRef>,
 }
 
 /// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
@@ -652,7 +664,7 @@ pub fn decode<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let limits = Limits::of(p, direction);
-    decode_in(p, limits, None, (reply_to, false), wire, &mut Vec::new())
+    decode_in(p, limits, None, (reply_to, false), wire, &mut Spare::default())
 }
 
 fn decode_in<'p>(
@@ -661,7 +673,7 @@ fn decode_in<'p>(
     lookup: Option<&Lookup>,
     reply_to: (Option<usize>, bool),
     wire: &[u8],
-    spare: &mut Vec<Value<'p>>,
+    spare: &mut Spare<'p>,
 ) -> Result<Frame<'p>, DecodeError> {
     let Limits {
         directions,
@@ -807,7 +819,7 @@ fn decide<'p>(
     shortest: usize,
     (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
-    spare: &mut Vec<Value<'p>>,
+    spare: &mut Spare<'p>,
 ) -> Result<Frame<'p>, DecodeError> {
     let mut by_len = by_len.into_iter();
     let first = by_len.next();
@@ -820,13 +832,14 @@ fn decide<'p>(
             None => Ok(Frame {
                 message: r,
                 address: wire.get(m.layout.address).copied().unwrap_or(0),
-                values: values_of(p, m, wire, std::mem::take(spare)),
+                values: values_of(p, m, wire, std::mem::take(&mut spare.values)),
             }),
             Some(misfit) => Err(misfit.error(m)),
         };
     }
     // The messages whose fields fit; their values are built for the one chosen.
-    let mut fitting: Vec<MessageRef> = Vec::new();
+    let fitting = &mut spare.fitting;
+    fitting.clear();
     let mut first_err = None;
     for r in first.into_iter().chain(second).chain(by_len) {
         match misfit(p, p.message(r), wire) {
@@ -879,7 +892,7 @@ fn decide<'p>(
             Ok(Frame {
                 message,
                 address: wire.get(o.address).copied().unwrap_or(0),
-                values: values_of(p, m, wire, std::mem::take(spare)),
+                values: values_of(p, m, wire, std::mem::take(&mut spare.values)),
             })
         }
         _ => Err(DecodeError::Ambiguous {

@@ -79,7 +79,7 @@
 //! frames does settle it: there the user says the frames are replies.) The generated stream
 //! decoder follows the same rule.
 
-use crate::interp::{self, DecodeError, Frame, Lookup, Raw, Value};
+use crate::interp::{self, DecodeError, Frame, Lookup, Raw, Spare, Value};
 use crate::ir::{Count, Direction, FrameLayout, Message, MessageRef, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
@@ -303,6 +303,8 @@ pub struct StreamDecoder<'p> {
     /// values.
     spare_bytes: Vec<Vec<u8>>,
     spare_values: Vec<Vec<Value<'p>>>,
+    /// The memory the lookup decodes in.
+    spare: Spare<'p>,
 }
 
 impl<'p> StreamDecoder<'p> {
@@ -372,6 +374,7 @@ impl<'p> StreamDecoder<'p> {
             relaxed: None,
             spare_bytes: Vec::new(),
             spare_values: Vec::new(),
+            spare: Spare::default(),
         }
     }
 
@@ -592,13 +595,14 @@ impl<'p> StreamDecoder<'p> {
         };
         let offset = self.head;
         let request = self.last_request.or(self.default_request);
-        let mut spare = self.spare_values.pop().unwrap_or_default();
+        self.spare.values = self.spare_values.pop().unwrap_or_default();
         let decoded = self
             .lookup
-            .decode_paired_reusing(self.p, request, wire, &mut spare);
-        if spare.capacity() > 0 {
+            .decode_paired_reusing(self.p, request, wire, &mut self.spare);
+        let values = std::mem::take(&mut self.spare.values);
+        if values.capacity() > 0 {
             // Not taken: no frame decoded.
-            self.spare_values.push(spare);
+            self.spare_values.push(values);
         }
         let found = match decoded {
             Ok(frame) => Ok(frame),
