@@ -254,7 +254,10 @@ impl CodeNode {
     fn agreeing(&self, bytes: &[u8], out: &mut Vec<usize>) {
         let mut node = self;
         for &b in bytes {
-            out.extend_from_slice(&node.ends);
+            // Most nodes end no code (and the copy of an empty list is a call all the same).
+            if !node.ends.is_empty() {
+                out.extend_from_slice(&node.ends);
+            }
             match node.next.get(usize::from(b)) {
                 Some(next) => node = next,
                 None => return,
@@ -511,8 +514,10 @@ impl<'p> StreamDecoder<'p> {
             }
             return Step::NeedMore;
         }
-        lens.sort_unstable_by(|a, b| b.cmp(a));
-        lens.dedup();
+        if lens.len() > 1 {
+            lens.sort_unstable_by(|a, b| b.cmp(a));
+            lens.dedup();
+        }
         let mut out_of_spec: Option<(usize, DecodeError)> = None;
         let mut found = false;
         for &len in &lens {
@@ -561,10 +566,13 @@ impl<'p> StreamDecoder<'p> {
             let bytes = self.buf.get(g.code_at..).unwrap_or_default();
             g.codes.agreeing(bytes, out);
         }
-        out.extend_from_slice(&self.codeless);
+        if !self.codeless.is_empty() {
+            out.extend_from_slice(&self.codeless);
+        }
     }
 
-    /// Whether the buffered bytes agree with a message so far.
+    /// Whether the buffered bytes agree with a message so far, for a shape
+    /// [`Self::find_candidates`] found (whose code agrees): its start bytes.
     fn agrees(&self, s: &Shape) -> bool {
         let buf = &self.buf;
         if let Some(at) = s.at.start {
@@ -572,11 +580,6 @@ impl<'p> StreamDecoder<'p> {
                 if buf.get(at + i).is_some_and(|&b| b != start) {
                     return false;
                 }
-            }
-        }
-        for (i, &c) in s.code.iter().enumerate() {
-            if buf.get(s.at.code + i).is_some_and(|&b| b != c) {
-                return false;
             }
         }
         true
