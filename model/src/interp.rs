@@ -462,12 +462,13 @@ pub fn broadcast_refused(p: &Protocol, m: &Message, address: u8) -> bool {
 /// The spec range of a whole field (`bits` `None`) or a packed sub-field, and whether `raw`
 /// lies outside it and is none of the field's special values: `Some((min, max))` if so.
 pub fn range_violation(f: &Field, bits: Option<&BitField>, raw: i64) -> Option<(i64, i64)> {
-    let (range, special) = match bits {
-        Some(b) => (b.range, false),
-        None => (f.range, f.special.iter().any(|s| s.value == raw)),
-    };
-    let (min, max) = range?;
-    (!(min..=max).contains(&raw) && !special).then_some((min, max))
+    let (min, max) = match bits {
+        Some(b) => b.range,
+        None => f.range,
+    }?;
+    // The special values only for a value outside the range: most are inside.
+    let special = || bits.is_none() && f.special.iter().any(|s| s.value == raw);
+    (!(min..=max).contains(&raw) && !special()).then_some((min, max))
 }
 
 /// What [`decode`] derives from the spec for the directions it decodes, before it looks at a
