@@ -11,7 +11,8 @@ use std::fmt;
 
 use crate::checksum;
 use crate::ir::{
-    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, Message, MessageRef, Protocol,
+    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, LengthRule, Message,
+    MessageRef, Protocol,
 };
 
 /// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
@@ -479,6 +480,8 @@ struct Limits {
     longest_frame: usize,
     shortest: usize,
     min_code: usize,
+    /// The length field of the first direction decoded, where the framing has one.
+    length_rule: Option<LengthRule>,
 }
 
 impl Limits {
@@ -506,6 +509,9 @@ impl Limits {
                 .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
                 .min()
                 .unwrap_or(1),
+            length_rule: directions
+                .first()
+                .and_then(|d| p.framing.length_rule(*d)),
         }
     }
 }
@@ -681,6 +687,7 @@ fn decode_in<'p>(
         longest_frame,
         shortest,
         min_code,
+        length_rule,
     } = limits;
     if wire.len() > longest_frame {
         return Err(DecodeError::TooLong {
@@ -698,7 +705,7 @@ fn decode_in<'p>(
     }
     check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     check_address(p, first.address, wire)?;
-    check_length_field(p, directions, wire)?;
+    check_length_rule(p, length_rule, wire)?;
 
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
@@ -1003,7 +1010,17 @@ fn check_length_field(
     directions: &[Direction],
     wire: &[u8],
 ) -> Result<(), DecodeError> {
-    let Some(rule) = directions.first().and_then(|d| p.framing.length_rule(*d)) else {
+    let rule = directions.first().and_then(|d| p.framing.length_rule(*d));
+    check_length_rule(p, rule, wire)
+}
+
+/// [`check_length_field`] with the rule of the first direction decoded already found.
+fn check_length_rule(
+    p: &Protocol,
+    rule: Option<LengthRule>,
+    wire: &[u8],
+) -> Result<(), DecodeError> {
+    let Some(rule) = rule else {
         return Ok(());
     };
     let at = rule.at;
