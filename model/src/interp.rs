@@ -531,13 +531,14 @@ pub struct Lookup {
 }
 
 /// Messages of one frame length whose code sits at `code_at`, by the code's first byte: those
-/// with first byte `b` are `refs[starts[b]..starts[b + 1]]`; `starts[256]` is `refs.len()`,
-/// and messages without a code are `refs[starts[256]..]`.
+/// with first byte `b` are `refs[starts[b]..starts[b + 1]]`; `starts[256]` is `refs.len()`.
+/// Messages without a code are `codeless`.
 #[derive(Debug, Clone)]
 struct ByFirst {
     code_at: usize,
     starts: Vec<usize>,
     refs: Vec<MessageRef>,
+    codeless: Vec<MessageRef>,
 }
 
 impl ByFirst {
@@ -551,7 +552,7 @@ impl ByFirst {
     }
 
     fn codeless(&self) -> &[MessageRef] {
-        self.refs.get(self.starts[256]..).unwrap_or_default()
+        &self.codeless
     }
 }
 
@@ -589,9 +590,14 @@ impl Lookup {
                     code_at: at,
                     starts: vec![0; 257],
                     refs: Vec::new(),
+                    codeless: Vec::new(),
                 });
             }
             if let Some(g) = groups.last_mut() {
+                if first == 256 {
+                    g.codeless.push(r);
+                    continue;
+                }
                 g.refs.push(r);
                 // Messages sorted by first byte: every later byte starts after this one.
                 for s in g.starts.iter_mut().skip(first + 1) {
