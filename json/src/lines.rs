@@ -70,8 +70,8 @@ enum Fixed {
 /// One message's line, less its address, offset and field values.
 #[derive(Debug, Clone)]
 struct Plan {
-    /// `,"protocol":"…","direction":"…","address":` (the comma for after the offset)
-    head: String,
+    /// The message's direction ([`side`]), for its line's head ([`Printer::heads`]).
+    side: usize,
     /// `,"code":"0x…","message":"…","fields":{`
     tail: String,
     leaves: Vec<Leaf>,
@@ -103,6 +103,10 @@ pub struct Printer {
     plans: [Vec<Plan>; 2],
     /// Message index by name, per direction.
     names: [HashMap<String, usize>; 2],
+    /// Per direction and address (256 of them), the line's keys and values from the
+    /// protocol to the address: `,"protocol":"…","direction":"…","address":N` (the comma for
+    /// after the offset).
+    heads: [Vec<String>; 2],
     /// Message index by the address and length of a generated message's `&'static str` name,
     /// per direction: a direct-mapped cache in front of `names`.
     seen: [[(usize, usize, usize); 64]; 2],
@@ -376,10 +380,7 @@ impl Printer {
                     .collect();
                 names[side(d)].entry(m.name.clone()).or_insert(index);
                 plans[side(d)].push(Plan {
-                    head: format!(
-                        ",\"protocol\":{protocol},\"direction\":{},\"address\":",
-                        quote(d.as_str())
-                    ),
+                    side: side(d),
                     tail: format!(
                         ",\"code\":{},\"message\":{},\"fields\":{{",
                         quote(&m.code_hex()),
@@ -390,8 +391,19 @@ impl Printer {
                 });
             }
         }
+        let heads = [Direction::Request, Direction::Response].map(|d| {
+            (0..=u8::MAX)
+                .map(|address| {
+                    format!(
+                        ",\"protocol\":{protocol},\"direction\":{},\"address\":{address}",
+                        quote(d.as_str())
+                    )
+                })
+                .collect()
+        });
         Printer {
             plans,
+            heads,
             names,
             seen: [[(0, 0, 0); 64]; 2],
             decimals: p.units.iter().map(Decimal::new).collect(),
@@ -406,10 +418,19 @@ impl Printer {
 
     /// `{` and `"offset":N,` in stream mode, the fixed keys and the address, up to the first
     /// field.
-    fn open(out: &mut Vec<u8>, plan: &Plan, address: u8, offset: Option<u64>) {
-        // The digits of the offset and the address, and the braces after the fields.
-        out.reserve(plan.head.len() + plan.tail.len() + 40);
-        let head = plan.head.as_bytes();
+    fn open(
+        out: &mut Vec<u8>,
+        heads: &[Vec<String>; 2],
+        plan: &Plan,
+        address: u8,
+        offset: Option<u64>,
+    ) {
+        let head = heads
+            .get(plan.side)
+            .and_then(|h| h.get(usize::from(address)))
+            .map_or(&[][..], |h| h.as_bytes());
+        // The digits of the offset, and the braces after the fields.
+        out.reserve(head.len() + plan.tail.len() + 32);
         match offset {
             Some(o) => {
                 out.extend_from_slice(b"{\"offset\":");
@@ -421,7 +442,6 @@ impl Printer {
                 out.extend_from_slice(head.get(1..).unwrap_or_default());
             }
         }
-        push_int(out, address);
         out.extend_from_slice(plan.tail.as_bytes());
     }
 
@@ -438,7 +458,7 @@ impl Printer {
             out.push(b'\n');
             return;
         };
-        Self::open(out, plan, frame.address, offset);
+        Self::open(out, &self.heads, plan, frame.address, offset);
         for (i, v) in frame.values.iter().enumerate() {
             if i > 0 {
                 out.push(b',');
@@ -568,7 +588,7 @@ impl Printer {
             Given::Text(r) => Scalar::Text(text.get(r.clone()).unwrap_or_default()),
         };
         let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
-        Self::open(out, plan, address, offset);
+        Self::open(out, &self.heads, plan, address, offset);
         let mut first = true;
         // Given fields come in leaf order, less the fixed ones: try the next one first.
         let (mut next, mut matched) = (0, 0);
