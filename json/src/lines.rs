@@ -171,29 +171,34 @@ impl Decimal {
             a /= 10;
             places -= 1;
         }
-        if 10u64.checked_pow(places).is_none() {
+        // 10^19 is the largest power of ten a `u64` holds.
+        if places > 19 {
             return false;
-        }
-        if n < 0 {
-            out.push(b'-');
         }
         // The digits once, the point put in among them (after a `0.` and zeros where they
         // are fewer than the places).
         let mut digits = itoa::Buffer::new();
         let digits = digits.format(a).as_bytes();
         let places = places as usize;
+        out.reserve(digits.len() + places + 3);
+        if n < 0 {
+            out.push(b'-');
+        }
+        // Byte by byte: a call to copy a few bytes costs more than they do.
+        let put = |out: &mut Vec<u8>, bytes: &[u8]| bytes.iter().for_each(|&b| out.push(b));
         match digits.len().checked_sub(places) {
-            Some(0) | None if places > 0 => {
-                out.extend_from_slice(b"0.");
-                out.resize(out.len() + (places - digits.len()), b'0');
-                out.extend_from_slice(digits);
-            }
-            Some(whole) if places > 0 => {
-                out.extend_from_slice(&digits[..whole]);
+            _ if places == 0 => put(out, digits),
+            Some(whole) if whole > 0 => {
+                put(out, &digits[..whole]);
                 out.push(b'.');
-                out.extend_from_slice(&digits[whole..]);
+                put(out, &digits[whole..]);
             }
-            _ => out.extend_from_slice(digits),
+            _ => {
+                out.push(b'0');
+                out.push(b'.');
+                (digits.len()..places).for_each(|_| out.push(b'0'));
+                put(out, digits);
+            }
         }
         true
     }
