@@ -452,17 +452,18 @@ impl Printer {
 
     /// The line of a frame the interpreter decoded, as [`crate::frame_line`] prints it.
     pub fn frame(&self, out: &mut Vec<u8>, p: &Spec, frame: &Frame, offset: Option<u64>) {
-        let lists = frame.values.iter().any(|v| matches!(v.raw, Raw::List(_)));
-        let (Some(plan), Some(m), false) = (
-            self.plan(frame.message),
-            p.messages(frame.message.direction).get(frame.message.index),
-            lists,
-        ) else {
-            // Another spec's frame, or a repeated field's list: the reference prints it.
+        // Another spec's frame, or a repeated field's list: the reference prints it.
+        let reference = |out: &mut Vec<u8>| {
             out.extend_from_slice(crate::frame_line(p, frame, offset).as_bytes());
             out.push(b'\n');
-            return;
         };
+        let (Some(plan), Some(m)) = (
+            self.plan(frame.message),
+            p.messages(frame.message.direction).get(frame.message.index),
+        ) else {
+            return reference(out);
+        };
+        let start = out.len();
         Self::open(out, &self.heads, plan, frame.address, offset);
         for (i, v) in frame.values.iter().enumerate() {
             if i > 0 {
@@ -471,8 +472,11 @@ impl Printer {
             let raw = match &v.raw {
                 Raw::Int(i) => Scalar::Int(*i),
                 Raw::Text(t) => Scalar::Text(t),
-                // Printed by the reference above.
-                Raw::List(_) => continue,
+                Raw::List(_) => {
+                    // Found only now, so the line so far is taken back.
+                    out.truncate(start);
+                    return reference(out);
+                }
             };
             // Values come in leaf order, their names borrowed from the spec the plan was made
             // from; look the name up only where they do not.
