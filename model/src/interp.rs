@@ -513,9 +513,7 @@ impl Limits {
                 .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
                 .min()
                 .unwrap_or(1),
-            length_rule: directions
-                .first()
-                .and_then(|d| p.framing.length_rule(*d)),
+            length_rule: directions.first().and_then(|d| p.framing.length_rule(*d)),
         }
     }
 }
@@ -681,7 +679,14 @@ pub fn decode<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let limits = Limits::of(p, direction);
-    decode_in(p, limits, None, (reply_to, false), wire, &mut Spare::default())
+    decode_in(
+        p,
+        limits,
+        None,
+        (reply_to, false),
+        wire,
+        &mut Spare::default(),
+    )
 }
 
 fn decode_in<'p>(
@@ -1947,13 +1952,22 @@ mod tests {
     /// does (widths 1 and 2 have a path of their own).
     #[test]
     fn read_uint_reads_every_width_in_both_orders() {
-        let bytes: Vec<u8> = (0..8u8).map(|i| 0x81u8.wrapping_mul(i + 3) ^ 0x5A).collect();
+        let bytes: Vec<u8> = (0..8u8)
+            .map(|i| 0x81u8.wrapping_mul(i + 3) ^ 0x5A)
+            .collect();
         for width in 0..=8 {
             let b = &bytes[..width];
             let big = b.iter().fold(0u64, |acc, &x| (acc << 8) | u64::from(x));
-            let little = b.iter().rev().fold(0u64, |acc, &x| (acc << 8) | u64::from(x));
+            let little = b
+                .iter()
+                .rev()
+                .fold(0u64, |acc, &x| (acc << 8) | u64::from(x));
             assert_eq!(read_uint(b, ByteOrder::Big), big, "width {width}, big");
-            assert_eq!(read_uint(b, ByteOrder::Little), little, "width {width}, little");
+            assert_eq!(
+                read_uint(b, ByteOrder::Little),
+                little,
+                "width {width}, little"
+            );
         }
         assert_eq!(read_uint(&[0x12, 0x34], ByteOrder::Big), 0x1234);
         assert_eq!(read_uint(&[0x12, 0x34], ByteOrder::Little), 0x3412);
