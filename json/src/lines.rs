@@ -25,6 +25,38 @@ struct Leaf {
     bit: Option<usize>,
     /// What the spec fixes, for a typed message that leaves it out.
     fixed: Fixed,
+    /// How its integer values print.
+    form: Form,
+    /// The address of the spec's name: an interpreted frame's value borrows it, so a value
+    /// is matched to its leaf without comparing the text.
+    name_at: usize,
+}
+
+/// How a leaf's integer values print, decided once from the spec: what [`push_field`] does
+/// with them, where that needs no look at the value.
+#[derive(Debug, Clone, Copy)]
+enum Form {
+    /// The number as it is.
+    Int,
+    /// Its physical value in the spec's unit of this index.
+    Physical(usize),
+    /// Special values, an enumeration or flags: [`push_field`] decides.
+    Field,
+}
+
+impl Form {
+    fn of(f: &Field, bit: Option<&BitField>) -> Form {
+        let unit = match bit {
+            Some(b) if b.constant.is_none() => b.unit,
+            Some(_) => None,
+            None if f.constant.is_some() => None,
+            None if !f.special.is_empty() || f.enumeration.is_some() || f.flags.is_some() => {
+                return Form::Field
+            }
+            None => f.unit,
+        };
+        unit.map_or(Form::Int, Form::Physical)
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -38,8 +70,8 @@ enum Fixed {
 /// One message's line, less its address, offset and field values.
 #[derive(Debug, Clone)]
 struct Plan {
-    /// `"protocol":"…","direction":"…","address":`
-    head: String,
+    /// The message's direction ([`side`]), for its line's head ([`Printer::heads`]).
+    side: usize,
     /// `,"code":"0x…","message":"…","fields":{`
     tail: String,
     leaves: Vec<Leaf>,
@@ -71,6 +103,10 @@ pub struct Printer {
     plans: [Vec<Plan>; 2],
     /// Message index by name, per direction.
     names: [HashMap<String, usize>; 2],
+    /// Per direction and address (256 of them), the line's keys and values from the
+    /// protocol to the address: `,"protocol":"…","direction":"…","address":N` (the comma for
+    /// after the offset).
+    heads: [Vec<String>; 2],
     /// Message index by the address and length of a generated message's `&'static str` name,
     /// per direction: a direct-mapped cache in front of `names`.
     seen: [[(usize, usize, usize); 64]; 2],
@@ -88,6 +124,8 @@ pub struct Printer {
 struct Decimal {
     mul: i128,
     add: i128,
+    /// `mul` and `add` where both fit an `i64`: most values then need no 128-bit arithmetic.
+    small: Option<(i64, i64)>,
     places: u32,
 }
 
@@ -97,19 +135,32 @@ impl Decimal {
         let den = scale.den.checked_mul(offset.den)?;
         let places = busspec_model::rational::decimal_places(den)?;
         let per = 10i128.checked_pow(places)? / den;
+        let mul = scale.num.checked_mul(offset.den)?.checked_mul(per)?;
+        let add = offset.num.checked_mul(scale.den)?.checked_mul(per)?;
         Some(Decimal {
-            mul: scale.num.checked_mul(offset.den)?.checked_mul(per)?,
-            add: offset.num.checked_mul(scale.den)?.checked_mul(per)?,
+            mul,
+            add,
+            small: i64::try_from(mul).ok().zip(i64::try_from(add).ok()),
             places,
         })
     }
 
+    /// `raw * mul + add`, in 64 bits where it fits.
+    fn scaled(&self, raw: i64) -> Option<i128> {
+        let small = self
+            .small
+            .and_then(|(mul, add)| raw.checked_mul(mul)?.checked_add(add));
+        match small {
+            Some(n) => Some(i128::from(n)),
+            None => i128::from(raw)
+                .checked_mul(self.mul)
+                .and_then(|v| v.checked_add(self.add)),
+        }
+    }
+
     /// Writes the physical value of `raw`; `false` (nothing written) where it does not fit.
     fn write(&self, out: &mut Vec<u8>, raw: i64) -> bool {
-        let Some(n) = i128::from(raw)
-            .checked_mul(self.mul)
-            .and_then(|v| v.checked_add(self.add))
-        else {
+        let Some(n) = self.scaled(raw) else {
             return false;
         };
         let Ok(mut a) = u64::try_from(n.unsigned_abs()) else {
@@ -120,18 +171,34 @@ impl Decimal {
             a /= 10;
             places -= 1;
         }
+        // 10^19 is the largest power of ten a `u64` holds.
+        if places > 19 {
+            return false;
+        }
+        // The digits once, the point put in among them (after a `0.` and zeros where they
+        // are fewer than the places).
+        let mut digits = itoa::Buffer::new();
+        let digits = digits.format(a).as_bytes();
+        let places = places as usize;
+        out.reserve(digits.len() + places + 3);
         if n < 0 {
             out.push(b'-');
         }
-        let Some(p) = 10u64.checked_pow(places) else {
-            return false;
-        };
-        push_int(out, a / p);
-        if places > 0 {
-            out.push(b'.');
-            let frac = itoa::Buffer::new().format(a % p).len();
-            out.resize(out.len() + (places as usize).saturating_sub(frac), b'0');
-            push_int(out, a % p);
+        // Byte by byte: a call to copy a few bytes costs more than they do.
+        let put = |out: &mut Vec<u8>, bytes: &[u8]| bytes.iter().for_each(|&b| out.push(b));
+        match digits.len().checked_sub(places) {
+            _ if places == 0 => put(out, digits),
+            Some(whole) if whole > 0 => {
+                put(out, &digits[..whole]);
+                out.push(b'.');
+                put(out, &digits[whole..]);
+            }
+            _ => {
+                out.push(b'0');
+                out.push(b'.');
+                (digits.len()..places).for_each(|_| out.push(b'0'));
+                put(out, digits);
+            }
         }
         true
     }
@@ -289,37 +356,36 @@ impl Printer {
                                 .map_or(Fixed::None, |e| Fixed::Equals(e.name.clone())),
                             (None, None) => Fixed::None,
                         };
-                        leaves.push((f.name.clone(), fi, None, fixed));
+                        leaves.push((&f.name, fi, None, fixed, Form::of(f, None)));
                     }
                     for (bi, b) in f.bits.iter().enumerate() {
                         let fixed = b
                             .constant
                             .map_or(Fixed::None, |c| Fixed::Constant(c as i64));
-                        leaves.push((b.name.clone(), fi, Some(bi), fixed));
+                        leaves.push((&b.name, fi, Some(bi), fixed, Form::of(f, Some(b))));
                     }
                 }
                 let mut by_name = HashMap::new();
                 let leaves: Vec<Leaf> = leaves
                     .into_iter()
                     .enumerate()
-                    .map(|(i, (name, field, bit, fixed))| {
+                    .map(|(i, (name, field, bit, fixed, form))| {
                         // The first leaf of a name, as `interp::leaf_field` finds it.
                         by_name.entry(name.clone()).or_insert(i);
                         Leaf {
-                            key: format!("{}:", quote(&name)),
-                            name,
+                            key: format!("{}:", quote(name)),
+                            name: name.clone(),
                             field,
                             bit,
                             fixed,
+                            form,
+                            name_at: name.as_ptr() as usize,
                         }
                     })
                     .collect();
                 names[side(d)].entry(m.name.clone()).or_insert(index);
                 plans[side(d)].push(Plan {
-                    head: format!(
-                        "\"protocol\":{protocol},\"direction\":{},\"address\":",
-                        quote(d.as_str())
-                    ),
+                    side: side(d),
                     tail: format!(
                         ",\"code\":{},\"message\":{},\"fields\":{{",
                         quote(&m.code_hex()),
@@ -330,8 +396,19 @@ impl Printer {
                 });
             }
         }
+        let heads = [Direction::Request, Direction::Response].map(|d| {
+            (0..=u8::MAX)
+                .map(|address| {
+                    format!(
+                        ",\"protocol\":{protocol},\"direction\":{},\"address\":{address}",
+                        quote(d.as_str())
+                    )
+                })
+                .collect()
+        });
         Printer {
             plans,
+            heads,
             names,
             seen: [[(0, 0, 0); 64]; 2],
             decimals: p.units.iter().map(Decimal::new).collect(),
@@ -346,32 +423,48 @@ impl Printer {
 
     /// `{` and `"offset":N,` in stream mode, the fixed keys and the address, up to the first
     /// field.
-    fn open(out: &mut Vec<u8>, plan: &Plan, address: u8, offset: Option<u64>) {
-        out.push(b'{');
-        if let Some(o) = offset {
-            out.extend_from_slice(b"\"offset\":");
-            push_int(out, o);
-            out.push(b',');
+    fn open(
+        out: &mut Vec<u8>,
+        heads: &[Vec<String>; 2],
+        plan: &Plan,
+        address: u8,
+        offset: Option<u64>,
+    ) {
+        let head = heads
+            .get(plan.side)
+            .and_then(|h| h.get(usize::from(address)))
+            .map_or(&[][..], |h| h.as_bytes());
+        // The digits of the offset, and the braces after the fields.
+        out.reserve(head.len() + plan.tail.len() + 32);
+        match offset {
+            Some(o) => {
+                out.extend_from_slice(b"{\"offset\":");
+                push_int(out, o);
+                out.extend_from_slice(head);
+            }
+            None => {
+                out.push(b'{');
+                out.extend_from_slice(head.get(1..).unwrap_or_default());
+            }
         }
-        out.extend_from_slice(plan.head.as_bytes());
-        push_int(out, address);
         out.extend_from_slice(plan.tail.as_bytes());
     }
 
     /// The line of a frame the interpreter decoded, as [`crate::frame_line`] prints it.
     pub fn frame(&self, out: &mut Vec<u8>, p: &Spec, frame: &Frame, offset: Option<u64>) {
-        let lists = frame.values.iter().any(|v| matches!(v.raw, Raw::List(_)));
-        let (Some(plan), Some(m), false) = (
-            self.plan(frame.message),
-            p.messages(frame.message.direction).get(frame.message.index),
-            lists,
-        ) else {
-            // Another spec's frame, or a repeated field's list: the reference prints it.
+        // Another spec's frame, or a repeated field's list: the reference prints it.
+        let reference = |out: &mut Vec<u8>| {
             out.extend_from_slice(crate::frame_line(p, frame, offset).as_bytes());
             out.push(b'\n');
-            return;
         };
-        Self::open(out, plan, frame.address, offset);
+        let (Some(plan), Some(m)) = (
+            self.plan(frame.message),
+            p.messages(frame.message.direction).get(frame.message.index),
+        ) else {
+            return reference(out);
+        };
+        let start = out.len();
+        Self::open(out, &self.heads, plan, frame.address, offset);
         for (i, v) in frame.values.iter().enumerate() {
             if i > 0 {
                 out.push(b',');
@@ -379,12 +472,20 @@ impl Printer {
             let raw = match &v.raw {
                 Raw::Int(i) => Scalar::Int(*i),
                 Raw::Text(t) => Scalar::Text(t),
-                // Printed by the reference above.
-                Raw::List(_) => continue,
+                Raw::List(_) => {
+                    // Found only now, so the line so far is taken back.
+                    out.truncate(start);
+                    return reference(out);
+                }
             };
-            // Values come in leaf order; look the name up only where they do not.
+            // Values come in leaf order, their names borrowed from the spec the plan was made
+            // from; look the name up only where they do not.
+            let same = |l: &Leaf| {
+                (l.name_at == v.name.as_ptr() as usize && l.name.len() == v.name.len())
+                    || l.name == v.name
+            };
             let leaf = match plan.leaves.get(i) {
-                Some(l) if l.name == v.name => Some(l),
+                Some(l) if same(l) => Some(l),
                 _ => plan.by_name.get(&*v.name).and_then(|&k| plan.leaves.get(k)),
             };
             Self::value(out, p, &self.decimals, m, leaf, &v.name, raw);
@@ -413,7 +514,17 @@ impl Printer {
         match found {
             Some((l, f, bit)) => {
                 out.extend_from_slice(l.key.as_bytes());
-                push_field(out, p, decimals, f, bit, raw);
+                match (l.form, raw) {
+                    (Form::Int, Scalar::Int(v)) => push_int(out, v),
+                    // A unit the spec does not have prints the number, as in `push_field`.
+                    (Form::Physical(u), Scalar::Int(v)) => match p.units.get(u) {
+                        Some(unit) => {
+                            push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
+                        }
+                        None => push_int(out, v),
+                    },
+                    _ => push_field(out, p, decimals, f, bit, raw),
+                }
             }
             None => {
                 push_quoted(out, name);
@@ -486,7 +597,7 @@ impl Printer {
             Given::Text(r) => Scalar::Text(text.get(r.clone()).unwrap_or_default()),
         };
         let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
-        Self::open(out, plan, address, offset);
+        Self::open(out, &self.heads, plan, address, offset);
         let mut first = true;
         // Given fields come in leaf order, less the fixed ones: try the next one first.
         let (mut next, mut matched) = (0, 0);

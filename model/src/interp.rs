@@ -11,7 +11,8 @@ use std::fmt;
 
 use crate::checksum;
 use crate::ir::{
-    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, Message, MessageRef, Protocol,
+    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, LengthRule, Message,
+    MessageRef, Protocol,
 };
 
 /// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
@@ -395,9 +396,13 @@ impl std::error::Error for EncodeError {}
 /// Reads an unsigned integer of `bytes.len()` bytes.
 pub fn read_uint(bytes: &[u8], order: ByteOrder) -> u64 {
     let fold = |acc: u64, b: &u8| (acc << 8) | u64::from(*b);
-    match order {
-        ByteOrder::Big => bytes.iter().fold(0, fold),
-        ByteOrder::Little => bytes.iter().rev().fold(0, fold),
+    // The widths most fields have without a loop.
+    match (bytes, order) {
+        (&[b], _) => u64::from(b),
+        (&[a, b], ByteOrder::Big) => u64::from(u16::from_be_bytes([a, b])),
+        (&[a, b], ByteOrder::Little) => u64::from(u16::from_le_bytes([a, b])),
+        (_, ByteOrder::Big) => bytes.iter().fold(0, fold),
+        (_, ByteOrder::Little) => bytes.iter().rev().fold(0, fold),
     }
 }
 
@@ -462,12 +467,13 @@ pub fn broadcast_refused(p: &Protocol, m: &Message, address: u8) -> bool {
 /// The spec range of a whole field (`bits` `None`) or a packed sub-field, and whether `raw`
 /// lies outside it and is none of the field's special values: `Some((min, max))` if so.
 pub fn range_violation(f: &Field, bits: Option<&BitField>, raw: i64) -> Option<(i64, i64)> {
-    let (range, special) = match bits {
-        Some(b) => (b.range, false),
-        None => (f.range, f.special.iter().any(|s| s.value == raw)),
-    };
-    let (min, max) = range?;
-    (!(min..=max).contains(&raw) && !special).then_some((min, max))
+    let (min, max) = match bits {
+        Some(b) => b.range,
+        None => f.range,
+    }?;
+    // The special values only for a value outside the range: most are inside.
+    let special = || bits.is_none() && f.special.iter().any(|s| s.value == raw);
+    (!(min..=max).contains(&raw) && !special()).then_some((min, max))
 }
 
 /// What [`decode`] derives from the spec for the directions it decodes, before it looks at a
@@ -478,6 +484,8 @@ struct Limits {
     longest_frame: usize,
     shortest: usize,
     min_code: usize,
+    /// The length field of the first direction decoded, where the framing has one.
+    length_rule: Option<LengthRule>,
 }
 
 impl Limits {
@@ -505,6 +513,7 @@ impl Limits {
                 .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
                 .min()
                 .unwrap_or(1),
+            length_rule: directions.first().and_then(|d| p.framing.length_rule(*d)),
         }
     }
 }
@@ -524,13 +533,14 @@ pub struct Lookup {
 }
 
 /// Messages of one frame length whose code sits at `code_at`, by the code's first byte: those
-/// with first byte `b` are `refs[starts[b]..starts[b + 1]]`; `starts[256]` is `refs.len()`,
-/// and messages without a code are `refs[starts[256]..]`.
+/// with first byte `b` are `refs[starts[b]..starts[b + 1]]`; `starts[256]` is `refs.len()`.
+/// Messages without a code are `codeless`.
 #[derive(Debug, Clone)]
 struct ByFirst {
     code_at: usize,
     starts: Vec<usize>,
     refs: Vec<MessageRef>,
+    codeless: Vec<MessageRef>,
 }
 
 impl ByFirst {
@@ -544,7 +554,7 @@ impl ByFirst {
     }
 
     fn codeless(&self) -> &[MessageRef] {
-        self.refs.get(self.starts[256]..).unwrap_or_default()
+        &self.codeless
     }
 }
 
@@ -582,9 +592,14 @@ impl Lookup {
                     code_at: at,
                     starts: vec![0; 257],
                     refs: Vec::new(),
+                    codeless: Vec::new(),
                 });
             }
             if let Some(g) = groups.last_mut() {
+                if first == 256 {
+                    g.codeless.push(r);
+                    continue;
+                }
                 g.refs.push(r);
                 // Messages sorted by first byte: every later byte starts after this one.
                 for s in g.starts.iter_mut().skip(first + 1) {
@@ -612,7 +627,7 @@ impl Lookup {
             Some(self),
             (reply_to, false),
             wire,
-            &mut Vec::new(),
+            &mut Spare::default(),
         )
     }
 
@@ -626,20 +641,32 @@ impl Lookup {
         request: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame<'p>, DecodeError> {
-        self.decode_paired_reusing(p, request, wire, &mut Vec::new())
+        self.decode_paired_reusing(p, request, wire, &mut Spare::default())
     }
 
-    /// [`Self::decode_paired`], the frame's values built in `spare`'s memory (taken from it
-    /// only when a frame decodes): for a caller that gives back the frames it is done with.
+    /// [`Self::decode_paired`] in `spare`'s memory: the frame's values built in
+    /// [`Spare::values`] (taken from it only when a frame decodes), for a caller that gives
+    /// back the frames it is done with, and the decode's own lists kept there.
     pub fn decode_paired_reusing<'p>(
         &self,
         p: &'p Protocol,
         request: Option<usize>,
         wire: &[u8],
-        spare: &mut Vec<Value<'p>>,
+        spare: &mut Spare<'p>,
     ) -> Result<Frame<'p>, DecodeError> {
         decode_in(p, self.limits, Some(self), (request, true), wire, spare)
     }
+}
+
+/// Memory a caller decoding many frames lends to [`Lookup::decode_paired_reusing`], so that a
+/// decode allocates nothing once it has grown.
+#[derive(Debug, Clone, Default)]
+pub struct Spare<'p> {
+    /// Where the next decoded frame's values are built; taken by the frame (left empty,
+    /// without capacity) when one decodes.
+    pub values: Vec<Value<'p>>,
+    /// The messages whose fields a frame fits, where several share its code and length.
+    fitting: Vec<MessageRef>,
 }
 
 /// Decodes a frame. `direction` limits the search; `reply_to` (a command index) settles
@@ -652,7 +679,14 @@ pub fn decode<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let limits = Limits::of(p, direction);
-    decode_in(p, limits, None, (reply_to, false), wire, &mut Vec::new())
+    decode_in(
+        p,
+        limits,
+        None,
+        (reply_to, false),
+        wire,
+        &mut Spare::default(),
+    )
 }
 
 fn decode_in<'p>(
@@ -661,13 +695,14 @@ fn decode_in<'p>(
     lookup: Option<&Lookup>,
     reply_to: (Option<usize>, bool),
     wire: &[u8],
-    spare: &mut Vec<Value<'p>>,
+    spare: &mut Spare<'p>,
 ) -> Result<Frame<'p>, DecodeError> {
     let Limits {
         directions,
         longest_frame,
         shortest,
         min_code,
+        length_rule,
     } = limits;
     if wire.len() > longest_frame {
         return Err(DecodeError::TooLong {
@@ -685,7 +720,7 @@ fn decode_in<'p>(
     }
     check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     check_address(p, first.address, wire)?;
-    check_length_field(p, directions, wire)?;
+    check_length_rule(p, length_rule, wire)?;
 
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
@@ -807,7 +842,7 @@ fn decide<'p>(
     shortest: usize,
     (reply_to, paired): (Option<usize>, bool),
     wire: &[u8],
-    spare: &mut Vec<Value<'p>>,
+    spare: &mut Spare<'p>,
 ) -> Result<Frame<'p>, DecodeError> {
     let mut by_len = by_len.into_iter();
     let first = by_len.next();
@@ -820,13 +855,14 @@ fn decide<'p>(
             None => Ok(Frame {
                 message: r,
                 address: wire.get(m.layout.address).copied().unwrap_or(0),
-                values: values_of(p, m, wire, std::mem::take(spare)),
+                values: values_of(p, m, wire, std::mem::take(&mut spare.values)),
             }),
             Some(misfit) => Err(misfit.error(m)),
         };
     }
     // The messages whose fields fit; their values are built for the one chosen.
-    let mut fitting: Vec<MessageRef> = Vec::new();
+    let fitting = &mut spare.fitting;
+    fitting.clear();
     let mut first_err = None;
     for r in first.into_iter().chain(second).chain(by_len) {
         match misfit(p, p.message(r), wire) {
@@ -879,7 +915,7 @@ fn decide<'p>(
             Ok(Frame {
                 message,
                 address: wire.get(o.address).copied().unwrap_or(0),
-                values: values_of(p, m, wire, std::mem::take(spare)),
+                values: values_of(p, m, wire, std::mem::take(&mut spare.values)),
             })
         }
         _ => Err(DecodeError::Ambiguous {
@@ -989,7 +1025,17 @@ fn check_length_field(
     directions: &[Direction],
     wire: &[u8],
 ) -> Result<(), DecodeError> {
-    let Some(rule) = directions.first().and_then(|d| p.framing.length_rule(*d)) else {
+    let rule = directions.first().and_then(|d| p.framing.length_rule(*d));
+    check_length_rule(p, rule, wire)
+}
+
+/// [`check_length_field`] with the rule of the first direction decoded already found.
+fn check_length_rule(
+    p: &Protocol,
+    rule: Option<LengthRule>,
+    wire: &[u8],
+) -> Result<(), DecodeError> {
+    let Some(rule) = rule else {
         return Ok(());
     };
     let at = rule.at;
@@ -1896,4 +1942,35 @@ pub fn leaf_field<'a>(m: &'a Message, name: &str) -> Option<(&'a Field, Option<&
             f.bits.iter().find(|b| b.name == name).map(|b| (f, Some(b)))
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `read_uint` reads every width of either byte order as the plain loop over its bytes
+    /// does (widths 1 and 2 have a path of their own).
+    #[test]
+    fn read_uint_reads_every_width_in_both_orders() {
+        let bytes: Vec<u8> = (0..8u8)
+            .map(|i| 0x81u8.wrapping_mul(i + 3) ^ 0x5A)
+            .collect();
+        for width in 0..=8 {
+            let b = &bytes[..width];
+            let big = b.iter().fold(0u64, |acc, &x| (acc << 8) | u64::from(x));
+            let little = b
+                .iter()
+                .rev()
+                .fold(0u64, |acc, &x| (acc << 8) | u64::from(x));
+            assert_eq!(read_uint(b, ByteOrder::Big), big, "width {width}, big");
+            assert_eq!(
+                read_uint(b, ByteOrder::Little),
+                little,
+                "width {width}, little"
+            );
+        }
+        assert_eq!(read_uint(&[0x12, 0x34], ByteOrder::Big), 0x1234);
+        assert_eq!(read_uint(&[0x12, 0x34], ByteOrder::Little), 0x3412);
+        assert_eq!(read_uint(&[0xFE], ByteOrder::Little), 0xFE);
+    }
 }

@@ -79,7 +79,7 @@
 //! frames does settle it: there the user says the frames are replies.) The generated stream
 //! decoder follows the same rule.
 
-use crate::interp::{self, DecodeError, Frame, Lookup, Raw, Value};
+use crate::interp::{self, DecodeError, Frame, Lookup, Raw, Spare, Value};
 use crate::ir::{Count, Direction, FrameLayout, Message, MessageRef, Protocol};
 
 /// Consecutive noise bytes beyond this many are reported in more than one [`Event::Skipped`].
@@ -254,7 +254,10 @@ impl CodeNode {
     fn agreeing(&self, bytes: &[u8], out: &mut Vec<usize>) {
         let mut node = self;
         for &b in bytes {
-            out.extend_from_slice(&node.ends);
+            // Most nodes end no code (and the copy of an empty list is a call all the same).
+            if !node.ends.is_empty() {
+                out.extend_from_slice(&node.ends);
+            }
             match node.next.get(usize::from(b)) {
                 Some(next) => node = next,
                 None => return,
@@ -303,6 +306,8 @@ pub struct StreamDecoder<'p> {
     /// values.
     spare_bytes: Vec<Vec<u8>>,
     spare_values: Vec<Vec<Value<'p>>>,
+    /// The memory the lookup decodes in.
+    spare: Spare<'p>,
 }
 
 impl<'p> StreamDecoder<'p> {
@@ -372,6 +377,7 @@ impl<'p> StreamDecoder<'p> {
             relaxed: None,
             spare_bytes: Vec::new(),
             spare_values: Vec::new(),
+            spare: Spare::default(),
         }
     }
 
@@ -508,8 +514,10 @@ impl<'p> StreamDecoder<'p> {
             }
             return Step::NeedMore;
         }
-        lens.sort_unstable_by(|a, b| b.cmp(a));
-        lens.dedup();
+        if lens.len() > 1 {
+            lens.sort_unstable_by(|a, b| b.cmp(a));
+            lens.dedup();
+        }
         let mut out_of_spec: Option<(usize, DecodeError)> = None;
         let mut found = false;
         for &len in &lens {
@@ -558,10 +566,13 @@ impl<'p> StreamDecoder<'p> {
             let bytes = self.buf.get(g.code_at..).unwrap_or_default();
             g.codes.agreeing(bytes, out);
         }
-        out.extend_from_slice(&self.codeless);
+        if !self.codeless.is_empty() {
+            out.extend_from_slice(&self.codeless);
+        }
     }
 
-    /// Whether the buffered bytes agree with a message so far.
+    /// Whether the buffered bytes agree with a message so far, for a shape
+    /// [`Self::find_candidates`] found (whose code agrees): its start bytes.
     fn agrees(&self, s: &Shape) -> bool {
         let buf = &self.buf;
         if let Some(at) = s.at.start {
@@ -569,11 +580,6 @@ impl<'p> StreamDecoder<'p> {
                 if buf.get(at + i).is_some_and(|&b| b != start) {
                     return false;
                 }
-            }
-        }
-        for (i, &c) in s.code.iter().enumerate() {
-            if buf.get(s.at.code + i).is_some_and(|&b| b != c) {
-                return false;
             }
         }
         true
@@ -592,13 +598,14 @@ impl<'p> StreamDecoder<'p> {
         };
         let offset = self.head;
         let request = self.last_request.or(self.default_request);
-        let mut spare = self.spare_values.pop().unwrap_or_default();
+        self.spare.values = self.spare_values.pop().unwrap_or_default();
         let decoded = self
             .lookup
-            .decode_paired_reusing(self.p, request, wire, &mut spare);
-        if spare.capacity() > 0 {
+            .decode_paired_reusing(self.p, request, wire, &mut self.spare);
+        let values = std::mem::take(&mut self.spare.values);
+        if values.capacity() > 0 {
             // Not taken: no frame decoded.
-            self.spare_values.push(spare);
+            self.spare_values.push(values);
         }
         let found = match decoded {
             Ok(frame) => Ok(frame),
