@@ -691,6 +691,21 @@ impl<C: Protocol> Core<C> {
     /// the case is not simple, for [`Self::advance`] to decide.
     #[inline(always)]
     fn fast(&mut self, window: &[u8], slow: &mut bool) -> Option<Event<C::Request, C::Response>> {
+        self.fast_with(window, slow, None, |_, _, ev| Some(ev))
+    }
+
+    /// [`Self::fast`] with its frame's event handed to `emit` (with this state and `acc`)
+    /// where it is made, rather than returned: [`Feed`]'s `fold` passes each event straight
+    /// to its caller's closure this way, with no merge of the three kinds of event into one
+    /// value. Returns what `emit` returned, or `acc` where there was no frame.
+    #[inline(always)]
+    fn fast_with<T>(
+        &mut self,
+        window: &[u8],
+        slow: &mut bool,
+        acc: T,
+        emit: impl FnOnce(&mut Self, T, Event<C::Request, C::Response>) -> T,
+    ) -> T {
         let c = C::candidates(window);
         let v = C::variable_candidates(window);
         let requests = c.requests & self.requests;
@@ -709,7 +724,7 @@ impl<C: Protocol> Core<C> {
         );
         if var != (VarLen::NONE, VarLen::NONE) || requests & responses != 0 {
             *slow = true;
-            return None;
+            return acc;
         }
         let mut rest = requests | responses;
         while rest != 0 {
@@ -717,7 +732,7 @@ impl<C: Protocol> Core<C> {
             rest &= rest - 1;
             let Some(frame) = C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)) else {
                 *slow = true;
-                return None;
+                return acc;
             };
             let (offset, len) = (self.head, frame.len());
             if requests & (1 << i) != 0 {
@@ -725,11 +740,11 @@ impl<C: Protocol> Core<C> {
                     Ok(frame) => {
                         self.last_request = Some(frame.message);
                         self.head += len as u64;
-                        return Some(Event::Request { offset, len, frame });
+                        return emit(self, acc, Event::Request { offset, len, frame });
                     }
                     Err(e) if breaks_spec(&e) => {
                         *slow = true;
-                        return None;
+                        return acc;
                     }
                     Err(_) => {}
                 }
@@ -738,23 +753,23 @@ impl<C: Protocol> Core<C> {
                     Ok(frame) => {
                         self.last_request = None;
                         self.head += len as u64;
-                        return Some(Event::Response { offset, len, frame });
+                        return emit(self, acc, Event::Response { offset, len, frame });
                     }
                     Err(DecodeError::Ambiguous { code }) => {
                         self.last_request = None;
                         self.head += len as u64;
-                        return Some(Event::Ambiguous { offset, len, code });
+                        return emit(self, acc, Event::Ambiguous { offset, len, code });
                     }
                     Err(e) if breaks_spec(&e) => {
                         *slow = true;
-                        return None;
+                        return acc;
                     }
                     Err(_) => {}
                 }
             }
         }
         self.noise_byte();
-        None
+        acc
     }
 
     /// [`Self::fast`] and what it leaves to report: its frame, after the noise before it (then
@@ -898,6 +913,53 @@ impl<C: Protocol> Iterator for Feed<'_, '_, C> {
             }
             if let Some(ev) = self.next_slow() {
                 return ev;
+            }
+        }
+    }
+
+    /// The events one by one to `f`, as [`Self::next`] returns them, without going through
+    /// `next` for each: the fast step runs in this loop and hands each frame's event straight
+    /// to `f` where it is made (and the noise before it first, rather than holding the frame
+    /// in `pending`), so the decoder's state stays in this loop and no event is merged with
+    /// another kind before `f` gets it. What `for_each` and `count` use; as fast as the
+    /// decoder gets.
+    #[inline]
+    fn fold<B, F>(mut self, init: B, mut f: F) -> B
+    where
+        F: FnMut(B, Self::Item) -> B,
+    {
+        let mut acc = init;
+        loop {
+            let d = &mut *self.decoder;
+            let cap = d.buf.as_ref().len();
+            if d.len == 0 && d.core.pending.is_none() {
+                loop {
+                    let at = (d.core.head - self.base) as usize;
+                    let Some(window) = self.input.get(at..at + cap) else {
+                        break;
+                    };
+                    let mut slow = false;
+                    acc = d.core.fast_with(window, &mut slow, acc, |core, acc, ev| {
+                        let acc = match core.take_noise() {
+                            Some(noise) => f(acc, noise),
+                            None => acc,
+                        };
+                        f(acc, ev)
+                    });
+                    if slow {
+                        break;
+                    }
+                    if d.core.noise_len >= MAX_SKIPPED_RUN {
+                        if let Some(noise) = d.core.take_noise() {
+                            acc = f(acc, noise);
+                        }
+                    }
+                }
+            }
+            match self.next_slow() {
+                Some(Some(ev)) => acc = f(acc, ev),
+                Some(None) => return acc,
+                None => {}
             }
         }
     }
