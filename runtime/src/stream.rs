@@ -461,6 +461,17 @@ enum Found<Q, R> {
     Ambiguous(u32),
 }
 
+/// How [`Core::fast_with`] ended where it did not hand a frame's event on.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum FastEnd {
+    /// A frame: its event went to `emit`.
+    Frame,
+    /// A byte of noise, counted.
+    Noise,
+    /// Not the simple case: nothing changed, the full rule decides.
+    Slow,
+}
+
 /// What one application of the framing rule did.
 enum Step<Q, R> {
     /// A candidate is longer than the window and more bytes may come.
@@ -691,7 +702,10 @@ impl<C: Protocol> Core<C> {
     /// the case is not simple, for [`Self::advance`] to decide.
     #[inline(always)]
     fn fast(&mut self, window: &[u8], slow: &mut bool) -> Option<Event<C::Request, C::Response>> {
-        self.fast_with(window, slow, None, |_, _, ev| Some(ev))
+        let mut end = FastEnd::Frame;
+        let ev = self.fast_with(window, &mut end, None, |_, _, ev| Some(ev));
+        *slow = end == FastEnd::Slow;
+        ev
     }
 
     /// [`Self::fast`] with its frame's event handed to `emit` (with this state and `acc`)
@@ -702,7 +716,7 @@ impl<C: Protocol> Core<C> {
     fn fast_with<T>(
         &mut self,
         window: &[u8],
-        slow: &mut bool,
+        end: &mut FastEnd,
         acc: T,
         emit: impl FnOnce(&mut Self, T, Event<C::Request, C::Response>) -> T,
     ) -> T {
@@ -723,7 +737,7 @@ impl<C: Protocol> Core<C> {
             },
         );
         if var != (VarLen::NONE, VarLen::NONE) || requests & responses != 0 {
-            *slow = true;
+            *end = FastEnd::Slow;
             return acc;
         }
         let mut rest = requests | responses;
@@ -731,7 +745,7 @@ impl<C: Protocol> Core<C> {
             let i = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let Some(frame) = C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)) else {
-                *slow = true;
+                *end = FastEnd::Slow;
                 return acc;
             };
             let (offset, len) = (self.head, frame.len());
@@ -743,7 +757,7 @@ impl<C: Protocol> Core<C> {
                         return emit(self, acc, Event::Request { offset, len, frame });
                     }
                     Err(e) if breaks_spec(&e) => {
-                        *slow = true;
+                        *end = FastEnd::Slow;
                         return acc;
                     }
                     Err(_) => {}
@@ -761,7 +775,7 @@ impl<C: Protocol> Core<C> {
                         return emit(self, acc, Event::Ambiguous { offset, len, code });
                     }
                     Err(e) if breaks_spec(&e) => {
-                        *slow = true;
+                        *end = FastEnd::Slow;
                         return acc;
                     }
                     Err(_) => {}
@@ -769,6 +783,7 @@ impl<C: Protocol> Core<C> {
             }
         }
         self.noise_byte();
+        *end = FastEnd::Noise;
         acc
     }
 
@@ -938,21 +953,24 @@ impl<C: Protocol> Iterator for Feed<'_, '_, C> {
                     let Some(window) = self.input.get(at..at + cap) else {
                         break;
                     };
-                    let mut slow = false;
-                    acc = d.core.fast_with(window, &mut slow, acc, |core, acc, ev| {
+                    let mut end = FastEnd::Frame;
+                    acc = d.core.fast_with(window, &mut end, acc, |core, acc, ev| {
                         let acc = match core.take_noise() {
                             Some(noise) => f(acc, noise),
                             None => acc,
                         };
                         f(acc, ev)
                     });
-                    if slow {
-                        break;
-                    }
-                    if d.core.noise_len >= MAX_SKIPPED_RUN {
-                        if let Some(noise) = d.core.take_noise() {
-                            acc = f(acc, noise);
+                    match end {
+                        FastEnd::Frame => {}
+                        FastEnd::Noise => {
+                            if d.core.noise_len >= MAX_SKIPPED_RUN {
+                                if let Some(noise) = d.core.take_noise() {
+                                    acc = f(acc, noise);
+                                }
+                            }
                         }
+                        FastEnd::Slow => break,
                     }
                 }
             }
