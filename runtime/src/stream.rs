@@ -736,11 +736,27 @@ impl<C: Protocol> Core<C> {
                 VarLen::NONE
             },
         );
-        if var != (VarLen::NONE, VarLen::NONE) || requests & responses != 0 {
+        // With one frame length (a constant), the candidates say only which direction a frame
+        // is, and candidates of both are the case left to the full rule: decided here once.
+        let single = C::FRAME_LENGTHS.len() == 1;
+        let (mut rest, all_requests) = if single {
+            match (requests, responses) {
+                (0, r) => (r, false),
+                (q, 0) => (q, true),
+                _ => (0, false),
+            }
+        } else {
+            (requests | responses, false)
+        };
+        let both = if single {
+            rest == 0 && requests | responses != 0
+        } else {
+            requests & responses != 0
+        };
+        if var != (VarLen::NONE, VarLen::NONE) || both {
             *end = FastEnd::Slow;
             return acc;
         }
-        let mut rest = requests | responses;
         while rest != 0 {
             let i = rest.trailing_zeros() as usize;
             rest &= rest - 1;
@@ -749,7 +765,12 @@ impl<C: Protocol> Core<C> {
                 return acc;
             };
             let (offset, len) = (self.head, frame.len());
-            if requests & (1 << i) != 0 {
+            let request = if single {
+                all_requests
+            } else {
+                requests & (1 << i) != 0
+            };
+            if request {
                 match C::decode_request(frame) {
                     Ok(frame) => {
                         self.last_request = Some(frame.message);
