@@ -889,6 +889,10 @@ impl<C: Protocol> Core<C> {
 /// buffer: the same decisions (the rule only ever looks at the next `MAX_FRAME_LEN` bytes),
 /// without copying every byte in and shifting it out again, which cost about as much as
 /// decoding the frame. A frame's event is written once, where `next` returns it.
+///
+/// `for_each` (and `fold`, `count`) is the faster way to take the events: the fast step then
+/// runs in the iterator's own loop and hands each event to the closure where it is made,
+/// without re-entering `next` for every event.
 pub struct Feed<'a, 'd, C: Protocol> {
     decoder: &'a mut StreamDecoder<C>,
     input: &'d [u8],
