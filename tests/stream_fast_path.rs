@@ -162,8 +162,8 @@ fn fed<P: Protocol>(
         let (chunk, r) = rest.split_at(rng.usize(1..=rest.len().min(200)));
         rest = r;
         if by_next {
-            let mut feed = d.feed(chunk);
-            while let Some(e) = feed.next() {
+            // A `for` loop calls `next` for each event.
+            for e in d.feed(chunk) {
                 out.push(e);
             }
         } else {
