@@ -148,10 +148,12 @@ fn dynamixel_fast_path_is_the_rule() {
 }
 
 /// Events of `capture` through `feed` in chunks of random size (the fast path wherever a whole
-/// window lies ahead in a chunk), then `finish`.
+/// window lies ahead in a chunk), then `finish`: taken with `next` (`by_next`) or with
+/// `for_each`, which runs `Feed`'s own loop (`fold`).
 fn fed<P: Protocol>(
     capture: &[u8],
     rng: &mut fastrand::Rng,
+    by_next: bool,
 ) -> Vec<Event<P::Request, P::Response>> {
     let mut d = StreamDecoder::<P>::new(None);
     let mut out = Vec::new();
@@ -159,7 +161,14 @@ fn fed<P: Protocol>(
     while !rest.is_empty() {
         let (chunk, r) = rest.split_at(rng.usize(1..=rest.len().min(200)));
         rest = r;
-        out.extend(d.feed(chunk));
+        if by_next {
+            // A `for` loop calls `next` for each event.
+            for e in d.feed(chunk) {
+                out.push(e);
+            }
+        } else {
+            d.feed(chunk).for_each(|e| out.push(e));
+        }
     }
     out.extend(std::iter::from_fn(|| d.finish()));
     out
@@ -188,9 +197,16 @@ fn captures_agree<P: Protocol>(seed: u64, at_least: usize) {
             let e = &p.examples[rng.usize(..p.examples.len())];
             let mut wire = e.wire.clone();
             match rng.u8(..8) {
-                // Noise before it, a byte of it changed (checksum written again or not), or
-                // cut short.
-                0 => cap.extend((0..rng.usize(1..8)).map(|_| rng.u8(..))),
+                // Noise before it (now and then more than a run of it), a byte of it
+                // changed (checksum written again or not), or cut short.
+                0 => {
+                    let n = if rng.u8(..8) == 0 {
+                        300
+                    } else {
+                        rng.usize(1..8)
+                    };
+                    cap.extend((0..n).map(|_| rng.u8(..)));
+                }
                 1 => {
                     let at = rng.usize(..wire.len());
                     wire[at] = rng.u8(..);
@@ -203,8 +219,11 @@ fn captures_agree<P: Protocol>(seed: u64, at_least: usize) {
             }
             cap.extend_from_slice(&wire);
         }
-        let got = fed::<P>(&cap, &mut rng);
-        assert_eq!(got, pushed::<P>(&cap), "{}: {:02X?}", P::NAME, cap);
+        let want = pushed::<P>(&cap);
+        let got = fed::<P>(&cap, &mut rng, true);
+        assert_eq!(got, want, "{}: {:02X?}", P::NAME, cap);
+        let folded = fed::<P>(&cap, &mut rng, false);
+        assert_eq!(folded, want, "{}: {:02X?} (for_each)", P::NAME, cap);
         frames += got
             .iter()
             .filter(|e| matches!(e, Event::Request { .. } | Event::Response { .. }))

@@ -398,9 +398,7 @@ pub fn stream_generated<P: busspec_protocols::Protocol>(capture: &[u8]) -> Strea
             Event::Skipped { len, .. } => n.skipped_bytes += len,
         }
     };
-    for ev in d.feed(capture) {
-        count(black_box(ev));
-    }
+    d.feed(capture).for_each(|ev| count(black_box(ev)));
     while let Some(ev) = d.finish() {
         count(black_box(ev));
     }

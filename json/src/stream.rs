@@ -92,7 +92,8 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
     /// Feeds bytes; returns the lines of what they settled.
     pub fn push(&mut self, data: &[u8]) -> Vec<String> {
         self.keep(data);
-        let events: Vec<_> = self.decoder.feed(data).collect();
+        let mut events = Vec::new();
+        self.decoder.feed(data).for_each(|e| events.push(e));
         events.iter().map(|e| self.line(e)).collect()
     }
 
@@ -111,7 +112,8 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
         self.keep(data);
         let mut events = std::mem::take(&mut self.events);
         events.clear();
-        events.extend(self.decoder.feed(data));
+        // `for_each` rather than `extend`: the decoder's own loop (`Feed::fold`).
+        self.decoder.feed(data).for_each(|e| events.push(e));
         for e in &events {
             self.write(e, out);
         }

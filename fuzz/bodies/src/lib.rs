@@ -873,6 +873,27 @@ pub fn stream_events<P: Protocol>(
     out
 }
 
+/// `capture` through [`StreamDecoder::feed`] in `chunks` (the rest in one piece), each chunk's
+/// events taken with `for_each` (the iterator's own loop, which runs the fast path), then
+/// finished: the same events as [`stream_events`] must give.
+pub fn fed_events<P: Protocol>(
+    direction: Option<StreamDirection>,
+    capture: &[u8],
+    chunks: &[usize],
+) -> Events<P> {
+    let mut d = StreamDecoder::<P>::new(direction);
+    let mut out = Vec::new();
+    let mut rest = capture;
+    let mut cuts = chunks.iter().copied().chain(std::iter::once(usize::MAX));
+    while !rest.is_empty() {
+        let (chunk, r) = rest.split_at(cuts.next().unwrap_or(1).min(rest.len()));
+        rest = r;
+        d.feed(chunk).for_each(|e| out.push(e));
+    }
+    out.extend(std::iter::from_fn(|| d.finish()));
+    out
+}
+
 /// The generated decoder's events, for comparing with the interpreter's.
 pub fn seen<P: Protocol>(events: &[Event<P::Request, P::Response>]) -> Vec<Seen> {
     events::merge(events.iter().map(|e| match *e {
@@ -985,6 +1006,11 @@ pub fn stream<P: Protocol>(data: &[u8]) {
         stream_events::<P>(direction, capture, &[]),
         evs,
         "events depend on how the bytes are cut"
+    );
+    assert_eq!(
+        fed_events::<P>(direction, capture, &chunks),
+        evs,
+        "feed and push/poll differ"
     );
     let want = events::interp_events(p, events::direction(direction), capture, &chunks);
     assert_eq!(got, want, "capture {}", events::hex(capture));
