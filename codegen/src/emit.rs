@@ -2553,8 +2553,11 @@ fn emit_candidate(
                 })
                 .collect();
             let classes = usize_lit(columns.len());
-            let cells = rows.concat();
-            let n = usize_lit(2 * cells.len());
+            // Padded (with MANY) to a power of two, so the index is masked, not checked.
+            let mut cells = rows.concat();
+            let size = cells.len().next_power_of_two();
+            cells.resize(size, 0xFFFF);
+            let (n, last) = (usize_lit(2 * size), usize_lit(size - 1));
             let cells = bytes(&cells);
             let (row, class) = (Literal::byte_string(&row), Literal::byte_string(&class));
             quote! {
@@ -2563,11 +2566,8 @@ fn emit_candidate(
                 static CELLS: [u8; #n] = *#cells;
                 match (head.get(#at), head.get(#next)) {
                     (rt::Some(&a), rt::Some(&b)) => {
-                        let i = ROW[a as usize] as usize * #classes + CLASS[b as usize] as usize;
-                        match CELLS.get(2 * i..2 * i + 2) {
-                            rt::Some(&[lo, hi]) => rt::Candidate(u16::from_le_bytes([lo, hi])),
-                            _ => rt::Candidate::MANY,
-                        }
+                        let i = (ROW[a as usize] as usize * #classes + CLASS[b as usize] as usize) & #last;
+                        rt::Candidate(u16::from_le_bytes([CELLS[2 * i], CELLS[2 * i + 1]]))
                     }
                     _ => rt::Candidate::MANY,
                 }
