@@ -809,9 +809,9 @@ impl<C: Protocol> Core<C> {
         {
             let mut slots = one.0;
             while slots != 0 {
-                let s = slots as u8;
+                let (len, request) = (usize::from(slots & 0x7F), slots & 0x80 == 0);
                 slots >>= 8;
-                try_frame!(window.get(..usize::from(s & 0x7F)), s & 0x80 == 0);
+                try_frame!(window.get(..len), request);
             }
             self.noise_byte();
             *end = FastEnd::Noise;
