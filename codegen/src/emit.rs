@@ -2355,12 +2355,18 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         None => quote!(),
     };
     let variable = emit_variable_candidates(p, start_check(quote!(rt::VarLens::NONE)));
-    let candidate = emit_candidate(
-        &shapes,
-        &lengths,
-        code_at,
-        start_check(quote!(rt::Candidate::NONE)),
-    );
+    // Not where a variable-length message exists: the route would ask `variable_candidates`
+    // too, and the mask's route pays for both (Modbus 1254.6 -> 1280.5 a frame with it).
+    let candidate = if variable.is_empty() {
+        emit_candidate(
+            &shapes,
+            &lengths,
+            code_at,
+            start_check(quote!(rt::Candidate::NONE)),
+        )
+    } else {
+        quote!()
+    };
     let start_check = start_check(quote!(rt::Candidates {
         requests: 0,
         responses: 0
@@ -2485,8 +2491,8 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     }
 }
 
-/// `candidate`, where the code is one or two bytes and there is more than one frame length (the
-/// trait's default, which says "ask `candidates`", otherwise): the frames a whole head's start byte and code fix, as
+/// `candidate`, where the code is one or two bytes, there is more than one frame length and no
+/// variable-length message (the trait's default, which says "ask `candidates`", otherwise): the frames a whole head's start byte and code fix, as
 /// [`candidate_cell`] says it, by table lookup. One code byte: a table of 256 cells. Two: the
 /// first byte's row and the second byte's class (bytes whose column is the same for every
 /// first byte share one), rows and classes deduplicated, so the cells are few. Byte strings
