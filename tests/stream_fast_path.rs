@@ -10,14 +10,16 @@
 //! request for responses), each with no noise, one byte or one byte short of a whole run of
 //! it before the head (which of the three turns with the state and the head's first byte).
 //! Then whole random captures with noise, fed in chunks (the fast path where it can) and
-//! pushed byte by byte (the full rule only).
+//! pushed byte by byte (the full rule only). The fast path asks `Protocol::candidate` (UB2's
+//! generated table) before the candidates' mask, so these comparisons run that route; its
+//! answers are also held to the candidates' on every two-byte code.
 
 mod common;
 
 use busspec_protocols::dynamixel::Dynamixel;
 use busspec_protocols::modbus::Modbus;
 use busspec_protocols::sd::Sd;
-use busspec_protocols::stream::{Direction, Event, StreamDecoder, MAX_SKIPPED_RUN};
+use busspec_protocols::stream::{Candidate, Direction, Event, StreamDecoder, MAX_SKIPPED_RUN};
 use busspec_protocols::ub2::Ub2;
 use busspec_protocols::Protocol;
 use common::{fix_checksum, spec};
@@ -125,6 +127,44 @@ fn fast_path_is_the_rule<P: Protocol>(frames: usize) {
     // The comparison is not empty: the fast path decided frames and noise (all Dynamixel
     // frames have a length field, which the fast path leaves to the full rule).
     assert!(t.frames >= frames && t.noise > 10_000, "{}: {t:?}", P::NAME);
+}
+
+/// `candidate` (the fast path's one lookup, which it asks before `candidates`) against
+/// `candidates`, on every value of each pair of neighbouring bytes among the first four of
+/// every example, in a whole window: the frames the candidates hold where it fixes them
+/// (`Candidate::of`), none where they hold none, else `MANY`. Returns how many heads it
+/// fixed the frames for.
+fn candidate_is_the_candidates<P: Protocol>() -> usize {
+    let p = spec::<P>();
+    let mut fixed = 0;
+    for e in &p.examples {
+        let mut b = window(&e.wire, P::MAX_FRAME_LEN);
+        for at in 0..3 {
+            let was = [b[at], b[at + 1]];
+            for h in 0..=u16::MAX {
+                b[at..at + 2].copy_from_slice(&h.to_be_bytes());
+                let got = P::candidate(&b);
+                if got != Candidate::MANY {
+                    let want = Candidate::of(P::candidates(&b), P::FRAME_LENGTHS);
+                    assert_eq!(got, want, "{}: {:02X?}", P::NAME, &b);
+                    fixed += 1;
+                }
+            }
+            b[at..at + 2].copy_from_slice(&was);
+        }
+    }
+    fixed
+}
+
+#[test]
+fn candidate_is_one_lookup_of_the_candidates() {
+    // UB2 has more than one frame length and a table. SD has one length, and Modbus and
+    // Dynamixel variable-length messages: their decoders walk the candidates' mask, which
+    // costs less there (no table: `MANY`).
+    assert!(candidate_is_the_candidates::<Ub2>() > 100_000);
+    assert_eq!(candidate_is_the_candidates::<Sd>(), 0);
+    assert_eq!(candidate_is_the_candidates::<Modbus>(), 0);
+    assert_eq!(candidate_is_the_candidates::<Dynamixel>(), 0);
 }
 
 #[test]

@@ -17,7 +17,7 @@ pub use crate::repeated::{
     list, list_bits, read_bits, read_elements, write_bits, write_elements, CountBy, CountField,
     Element, RepeatAt,
 };
-pub use crate::stream::{Candidates, LengthField, VarLen, VarLens};
+pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Text};

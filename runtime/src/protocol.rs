@@ -8,7 +8,7 @@
 use core::fmt::Debug;
 use core::ops::RangeInclusive;
 
-use crate::stream::{Candidates, VarLens};
+use crate::stream::{Candidate, Candidates, VarLens};
 use crate::{Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldError, FieldValue};
 
 /// One message type of a protocol (its `Request` or its `Response`): every variant is one
@@ -126,6 +126,16 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     /// rule. The address is not looked at: strict decoding judges it, and a frame from an
     /// address the spec does not allow is reported as out of spec, not skipped.
     fn candidates(head: &[u8]) -> Candidates;
+
+    /// [`Self::candidates`] for a head of at least [`Self::MAX_FRAME_LEN`] bytes, where its
+    /// start byte and code leave at most two frames ([`Candidate::of`] of the candidates):
+    /// the same decision in one table lookup, which the stream decoder's fast path takes
+    /// first. [`Candidate::MANY`] (the default) wherever the candidates must be asked.
+    #[inline]
+    fn candidate(head: &[u8]) -> Candidate {
+        let _ = head;
+        Candidate::MANY
+    }
 
     /// The variable-length messages (a length field or a repeated field's count gives their
     /// length, so [`Self::FRAME_LENGTHS`] does not list it) whose start byte and code agree

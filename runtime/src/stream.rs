@@ -67,6 +67,43 @@ pub struct Candidates {
     pub responses: u64,
 }
 
+/// The frames that could start at the head of a whole window, where the start byte and code
+/// fix at most two of them (one length of each direction, or two lengths of one):
+/// [`Protocol::candidate`], a faster route to the decision [`Protocol::candidates`] gives (the
+/// stream decoder's fast path asks it first, and the candidates only where it says
+/// [`Candidate::MANY`]).
+///
+/// Two bytes, the longer frame in the low one: each 0 for none, else the frame's length
+/// (below 127) with bit 7 set for a response. `0xFFFF`: not fixed, ask the candidates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Candidate(pub u16);
+
+impl Candidate {
+    /// No message agrees with the head: its byte is noise.
+    pub const NONE: Candidate = Candidate(0);
+    /// Not fixed by the head's start byte and code (more than two frames, a length of both
+    /// directions, or a head too short): [`Protocol::candidates`] says which.
+    pub const MANY: Candidate = Candidate(0xFFFF);
+
+    /// From a [`Candidates`] mask over `lengths` (the protocol's [`Protocol::FRAME_LENGTHS`],
+    /// longest first): what the generated tables hold, computed when they are generated.
+    pub fn of(c: Candidates, lengths: &[usize]) -> Candidate {
+        let mut slots = 0u16;
+        let mut n = 0;
+        for (i, &len) in lengths.iter().enumerate().take(64) {
+            let (q, r) = (c.requests >> i & 1 != 0, c.responses >> i & 1 != 0);
+            if q && r || (q || r) && (n == 2 || len == 0 || len >= 127) {
+                return Candidate::MANY;
+            }
+            if q || r {
+                slots |= u16::from(len as u8 | if r { 0x80 } else { 0 }) << (8 * n);
+                n += 1;
+            }
+        }
+        Candidate(slots)
+    }
+}
+
 /// The length of a variable-length frame (one whose length a length field or a repeated
 /// field's count gives, so [`Protocol::FRAME_LENGTHS`] does not list it) that could start at
 /// the head of the buffer, for one direction: see [`Protocol::variable_candidates`].
@@ -720,6 +757,66 @@ impl<C: Protocol> Core<C> {
         acc: T,
         emit: impl FnOnce(&mut Self, T, Event<C::Request, C::Response>) -> T,
     ) -> T {
+        // One frame tried: returns with its event, or where it leaves the case to the full
+        // rule; goes on where it is not a frame.
+        macro_rules! try_frame {
+            ($frame:expr, $request:expr) => {
+                let Some(frame) = $frame else {
+                    *end = FastEnd::Slow;
+                    return acc;
+                };
+                let (offset, len) = (self.head, frame.len());
+                if $request {
+                    match C::decode_request(frame) {
+                        Ok(frame) => {
+                            self.last_request = Some(frame.message);
+                            self.head += len as u64;
+                            return emit(self, acc, Event::Request { offset, len, frame });
+                        }
+                        Err(e) if breaks_spec(&e) => {
+                            *end = FastEnd::Slow;
+                            return acc;
+                        }
+                        Err(_) => {}
+                    }
+                } else {
+                    match self.response(frame) {
+                        Ok(frame) => {
+                            self.last_request = None;
+                            self.head += len as u64;
+                            return emit(self, acc, Event::Response { offset, len, frame });
+                        }
+                        Err(DecodeError::Ambiguous { code }) => {
+                            self.last_request = None;
+                            self.head += len as u64;
+                            return emit(self, acc, Event::Ambiguous { offset, len, code });
+                        }
+                        Err(e) if breaks_spec(&e) => {
+                            *end = FastEnd::Slow;
+                            return acc;
+                        }
+                        Err(_) => {}
+                    }
+                }
+            };
+        }
+        // Where the head fixes its frames (and the decoder looks for both directions, with no
+        // variable-length candidate), they are tried in turn: no mask to build or walk.
+        let one = C::candidate(window);
+        if one != Candidate::MANY
+            && self.requests & self.responses != 0
+            && C::variable_candidates(window) == VarLens::NONE
+        {
+            let mut slots = one.0;
+            while slots != 0 {
+                let (len, request) = (usize::from(slots & 0x7F), slots & 0x80 == 0);
+                slots >>= 8;
+                try_frame!(window.get(..len), request);
+            }
+            self.noise_byte();
+            *end = FastEnd::Noise;
+            return acc;
+        }
         let c = C::candidates(window);
         let v = C::variable_candidates(window);
         let requests = c.requests & self.requests;
@@ -760,48 +857,15 @@ impl<C: Protocol> Core<C> {
         while rest != 0 {
             let i = rest.trailing_zeros() as usize;
             rest &= rest - 1;
-            let Some(frame) = C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)) else {
-                *end = FastEnd::Slow;
-                return acc;
-            };
-            let (offset, len) = (self.head, frame.len());
             let request = if single {
                 all_requests
             } else {
                 requests & (1 << i) != 0
             };
-            if request {
-                match C::decode_request(frame) {
-                    Ok(frame) => {
-                        self.last_request = Some(frame.message);
-                        self.head += len as u64;
-                        return emit(self, acc, Event::Request { offset, len, frame });
-                    }
-                    Err(e) if breaks_spec(&e) => {
-                        *end = FastEnd::Slow;
-                        return acc;
-                    }
-                    Err(_) => {}
-                }
-            } else {
-                match self.response(frame) {
-                    Ok(frame) => {
-                        self.last_request = None;
-                        self.head += len as u64;
-                        return emit(self, acc, Event::Response { offset, len, frame });
-                    }
-                    Err(DecodeError::Ambiguous { code }) => {
-                        self.last_request = None;
-                        self.head += len as u64;
-                        return emit(self, acc, Event::Ambiguous { offset, len, code });
-                    }
-                    Err(e) if breaks_spec(&e) => {
-                        *end = FastEnd::Slow;
-                        return acc;
-                    }
-                    Err(_) => {}
-                }
-            }
+            try_frame!(
+                C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)),
+                request
+            );
         }
         self.noise_byte();
         *end = FastEnd::Noise;
