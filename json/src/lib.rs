@@ -50,7 +50,10 @@ pub use stream::{event_line, write_events, TypedStream};
 
 /// Uppercase hex, no separators: what `encode` prints and `decode` reads back.
 pub fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02X}")).collect()
+    let mut out = Vec::with_capacity(2 * bytes.len());
+    lines::push_hex(&mut out, bytes);
+    // Hex digits are ASCII.
+    String::from_utf8(out).unwrap_or_default()
 }
 
 /// Hex text to bytes: digits in wire order, spaces and `0x` prefixes allowed

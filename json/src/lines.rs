@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 
 use busspec_model::interp::{Frame, Raw};
-use busspec_model::ir::{BitField, Direction, Field, MessageRef};
+use busspec_model::ir::{BitField, Count, Direction, Field, Follows, MessageRef, Relation};
 use busspec_runtime::{FieldValue, Message};
 
 use crate::print::physical_text;
@@ -59,12 +59,22 @@ impl Form {
     }
 }
 
+/// What a typed message leaves out of a leaf and the line still prints, as
+/// [`crate::message_line`] derives it.
 #[derive(Debug, Clone)]
 enum Fixed {
     None,
     Constant(i64),
     /// The value of the field of this name (a repeated field).
     Equals(String),
+    /// A value following the field of this name (`follows: {field: …}`).
+    Follows(String, Relation),
+    /// A list's count: its elements (`bytes: false`) or the bytes they take, of the message's
+    /// repeated field at this index.
+    Count {
+        list: usize,
+        bytes: bool,
+    },
 }
 
 /// One message's line, less its address, offset and field values.
@@ -80,20 +90,21 @@ struct Plan {
 }
 
 /// A typed message's field value, held past [`Message::visit`]: text as a range of
-/// [`Printer::text`].
+/// [`Printer::text`], a list's elements as a range of [`Printer::ints`].
 #[derive(Debug, Clone)]
 enum Given {
     Int(i64),
     Text(std::ops::Range<usize>),
+    List(std::ops::Range<usize>),
 }
 
-/// A value the printer writes itself: a frame or message with a repeated field's list goes
-/// whole to the reference printer ([`Printer::frame`], [`Printer::message`]), so no list
-/// reaches the writers below.
+/// A value the printer writes: a number, text, or a repeated field's elements (each printed
+/// as the field's single value would be, as [`crate::print`] does).
 #[derive(Debug, Clone, Copy)]
 enum Scalar<'a> {
     Int(i64),
     Text(&'a [u8]),
+    List(&'a [i64]),
 }
 
 /// Writes JSON lines of one spec (see the module docs), each ended by `\n`, to a `Vec<u8>`.
@@ -114,6 +125,7 @@ pub struct Printer {
     decimals: Vec<Option<Decimal>>,
     given: Vec<(&'static str, Given)>,
     text: Vec<u8>,
+    ints: Vec<i64>,
 }
 
 /// A unit whose physical values `raw * scale + offset` are all decimals with at most `places`
@@ -260,11 +272,24 @@ fn push_text(out: &mut Vec<u8>, bytes: &[u8]) {
     push_quoted(out, &s);
 }
 
-/// A value no leaf of the message describes: the raw number or the text.
+/// `[a,b,…]`, each element written by `item`.
+fn push_list(out: &mut Vec<u8>, items: &[i64], mut item: impl FnMut(&mut Vec<u8>, i64)) {
+    out.push(b'[');
+    for (i, &v) in items.iter().enumerate() {
+        if i > 0 {
+            out.push(b',');
+        }
+        item(out, v);
+    }
+    out.push(b']');
+}
+
+/// A value no leaf of the message describes: the raw number, the text or the numbers.
 fn push_plain(out: &mut Vec<u8>, raw: Scalar<'_>) {
     match raw {
         Scalar::Int(v) => push_int(out, v),
         Scalar::Text(t) => push_text(out, t),
+        Scalar::List(items) => push_list(out, items, push_int),
     }
 }
 
@@ -280,6 +305,11 @@ fn push_field(
 ) {
     let v = match raw {
         Scalar::Text(t) => return push_text(out, t),
+        Scalar::List(items) => {
+            return push_list(out, items, |out, v| {
+                push_field(out, p, decimals, f, bit, Scalar::Int(v))
+            })
+        }
         Scalar::Int(v) => v,
     };
     let physical = |out: &mut Vec<u8>, u: usize, unit| {
@@ -348,13 +378,24 @@ impl Printer {
                 let mut leaves = Vec::new();
                 for (fi, f) in m.fields.iter().enumerate() {
                     if f.bits.is_empty() {
-                        let fixed = match (f.constant, f.equals) {
-                            (Some(c), _) => Fixed::Constant(c as i64),
-                            (None, Some(i)) => m
+                        let fixed = match (f.constant, f.equals, &f.follows) {
+                            (Some(c), _, _) => Fixed::Constant(c as i64),
+                            (None, Some(i), _) => m
                                 .fields
                                 .get(i)
                                 .map_or(Fixed::None, |e| Fixed::Equals(e.name.clone())),
-                            (None, None) => Fixed::None,
+                            (None, None, Some(Follows::Field(o, rel))) => {
+                                m.fields.get(*o).map_or(Fixed::None, |o| {
+                                    Fixed::Follows(o.name.clone(), rel.clone())
+                                })
+                            }
+                            _ => match m.repeat() {
+                                Some((_, r)) if m.count_field() == Some(fi) => Fixed::Count {
+                                    list: m.fields.len() - 1,
+                                    bytes: matches!(r.count, Count::Bytes(_)),
+                                },
+                                _ => Fixed::None,
+                            },
                         };
                         leaves.push((&f.name, fi, None, fixed, Form::of(f, None)));
                     }
@@ -414,6 +455,7 @@ impl Printer {
             decimals: p.units.iter().map(Decimal::new).collect(),
             given: Vec::new(),
             text: Vec::new(),
+            ints: Vec::new(),
         }
     }
 
@@ -452,7 +494,7 @@ impl Printer {
 
     /// The line of a frame the interpreter decoded, as [`crate::frame_line`] prints it.
     pub fn frame(&self, out: &mut Vec<u8>, p: &Spec, frame: &Frame, offset: Option<u64>) {
-        // Another spec's frame, or a repeated field's list: the reference prints it.
+        // Another spec's frame: the reference prints it.
         let reference = |out: &mut Vec<u8>| {
             out.extend_from_slice(crate::frame_line(p, frame, offset).as_bytes());
             out.push(b'\n');
@@ -463,7 +505,6 @@ impl Printer {
         ) else {
             return reference(out);
         };
-        let start = out.len();
         Self::open(out, &self.heads, plan, frame.address, offset);
         for (i, v) in frame.values.iter().enumerate() {
             if i > 0 {
@@ -472,11 +513,7 @@ impl Printer {
             let raw = match &v.raw {
                 Raw::Int(i) => Scalar::Int(*i),
                 Raw::Text(t) => Scalar::Text(t),
-                Raw::List(_) => {
-                    // Found only now, so the line so far is taken back.
-                    out.truncate(start);
-                    return reference(out);
-                }
+                Raw::List(items) => Scalar::List(items),
             };
             // Values come in leaf order, their names borrowed from the spec the plan was made
             // from; look the name up only where they do not.
@@ -566,10 +603,10 @@ impl Printer {
                 out.push(b'\n');
             });
         };
-        let (given, text) = (&mut self.given, &mut self.text);
+        let (given, text, ints) = (&mut self.given, &mut self.text, &mut self.ints);
         given.clear();
         text.clear();
-        let mut list = false;
+        ints.clear();
         message.visit(|name, raw| {
             let v = match raw {
                 FieldValue::Int(i) => Given::Int(i),
@@ -578,23 +615,18 @@ impl Printer {
                     text.extend_from_slice(t);
                     Given::Text(from..text.len())
                 }
-                FieldValue::List(_) => {
-                    list = true;
-                    return;
+                FieldValue::List(items) => {
+                    let from = ints.len();
+                    ints.extend(items.iter());
+                    Given::List(from..ints.len())
                 }
             };
             given.push((name, v));
         });
-        if list {
-            // A repeated field's list: the reference prints it, as for the interpreter's frames.
-            return crate::message_line(p, direction, address, message, offset).map(|line| {
-                out.extend_from_slice(line.as_bytes());
-                out.push(b'\n');
-            });
-        }
         let as_field = |g: &Given| match g {
             Given::Int(i) => Scalar::Int(*i),
             Given::Text(r) => Scalar::Text(text.get(r.clone()).unwrap_or_default()),
+            Given::List(r) => Scalar::List(ints.get(r.clone()).unwrap_or_default()),
         };
         let lookup = |name: &str| given.iter().find(|(n, _)| *n == name).map(|(_, v)| v);
         Self::open(out, &self.heads, plan, address, offset);
@@ -620,6 +652,24 @@ impl Printer {
                         Some(g) => as_field(g),
                         None => continue,
                     },
+                    Fixed::Follows(of, rel) => match lookup(of) {
+                        Some(Given::Int(v)) => Scalar::Int(rel.apply(*v)),
+                        _ => continue,
+                    },
+                    Fixed::Count { list, bytes } => {
+                        let (Some(f), Some(Given::List(r))) = (
+                            m.fields.get(*list),
+                            m.fields.get(*list).and_then(|f| lookup(&f.name)),
+                        ) else {
+                            continue;
+                        };
+                        let n = if *bytes {
+                            f.elements_len(r.len())
+                        } else {
+                            r.len()
+                        };
+                        Scalar::Int(n as i64)
+                    }
                     Fixed::None => continue,
                 },
             };
@@ -641,6 +691,28 @@ impl Printer {
         }
         out.extend_from_slice(b"}}\n");
         Ok(())
+    }
+
+    /// The stream line of a frame that could be any of `candidates`, as
+    /// [`crate::ambiguous_line`] prints it.
+    pub fn ambiguous<S: AsRef<str>>(
+        out: &mut Vec<u8>,
+        offset: u64,
+        candidates: &[S],
+        bytes: &[u8],
+    ) {
+        out.extend_from_slice(b"{\"offset\":");
+        push_int(out, offset);
+        out.extend_from_slice(b",\"ambiguous\":[");
+        for (i, c) in candidates.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            push_quoted(out, c.as_ref());
+        }
+        out.extend_from_slice(b"],\"bytes\":\"");
+        push_hex(out, bytes);
+        out.extend_from_slice(b"\"}\n");
     }
 
     /// The stream line of bytes that start no frame, as [`crate::skipped_line`] prints it.

@@ -35,7 +35,12 @@ pub fn write_events(p: &Spec, printer: &Printer, events: &[InterpEvent], out: &m
         match e {
             InterpEvent::Frame { offset, frame, .. } => printer.frame(out, p, frame, Some(*offset)),
             InterpEvent::Skipped { offset, bytes } => Printer::skipped(out, *offset, bytes),
-            _ => {
+            InterpEvent::Ambiguous {
+                offset,
+                bytes,
+                candidates,
+            } => Printer::ambiguous(out, *offset, candidates, bytes),
+            InterpEvent::OutOfSpec { .. } => {
                 out.extend_from_slice(event_line(p, e).as_bytes());
                 out.push(b'\n');
             }
@@ -141,7 +146,14 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
                 Printer::skipped(out, offset, self.pending.get(r).unwrap_or_default());
                 Ok(())
             }
-            _ => {
+            Event::Ambiguous { offset, .. } => {
+                let r = self.take_range(offset, e.len());
+                let bytes = self.pending.get(r).unwrap_or_default();
+                let candidates = ambiguous_candidates::<P>(self.spec, self.direction, bytes);
+                Printer::ambiguous(out, offset, &candidates, bytes);
+                Ok(())
+            }
+            Event::OutOfSpec { .. } => {
                 out.extend_from_slice(self.line(e).as_bytes());
                 out.push(b'\n');
                 Ok(())

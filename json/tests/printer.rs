@@ -181,5 +181,75 @@ fn the_printer_writes_the_reference_lines_byte_for_byte() {
             }
             assert!(lines.contains(key), "{name}: no {key} line");
         }
+        // A Modbus echo reads both ways, and a Dynamixel instruction also as a status packet.
+        if matches!(*name, "modbus" | "dynamixel") {
+            assert!(lines.contains("\"ambiguous\""), "{name}: no ambiguous line");
+        }
     }
+}
+
+/// A list prints element by element as the field's single value would, on both paths: the
+/// built-in Modbus spec with its register unit scaled after loading (it is 1 there, so its
+/// lists print the same either way), its examples decoded by the generated code and by the interpreter, each
+/// line against the reference printer. Lists of the built-in specs are covered above.
+#[test]
+fn lists_print_each_element_in_its_fields_unit() {
+    use busspec_model::rational::Rational;
+    use busspec_protocols::modbus::Modbus;
+    let mut spec = load_spec::<Modbus>().unwrap_or_else(|e| panic!("{e}"));
+    // Changed after loading: the examples state physical values in the unit as it is.
+    let unit = spec.units.iter_mut().find(|u| u.name == "register");
+    let unit = unit.expect("modbus has a register unit");
+    unit.scale = Rational::parse("0.25").expect("scale");
+    unit.offset = Rational::parse("-1").expect("offset");
+    let mut printer = Printer::new(&spec);
+    let mut scaled = 0;
+    for e in &spec.examples {
+        let m = spec.message(e.message);
+        if m.repeat().is_none() {
+            continue;
+        }
+        let reply_to = m.needs_request.then_some(e.reply_to).flatten();
+        let direction = Some(e.message.direction);
+        let typed = decode_typed::<Modbus>(&spec, direction, reply_to, &e.wire).expect("decodes");
+        let reference = typed.line(&spec, Some(7)).expect("prints");
+        let mut out = Vec::new();
+        match typed {
+            Typed::Request(d) => printer.message(
+                &mut out,
+                &spec,
+                Direction::Request,
+                d.address,
+                &d.message,
+                Some(7),
+            ),
+            Typed::Response(d) => printer.message(
+                &mut out,
+                &spec,
+                Direction::Response,
+                d.address,
+                &d.message,
+                Some(7),
+            ),
+        }
+        .expect("prints");
+        assert_eq!(text(&out), format!("{reference}\n"), "{}", m.name);
+        let frame = decode_frame(&spec, direction, reply_to, &e.wire).expect("decodes");
+        let mut out = Vec::new();
+        printer.frame(&mut out, &spec, &frame, None);
+        assert_eq!(
+            text(&out),
+            format!("{}\n", frame_line(&spec, &frame, None)),
+            "{}",
+            m.name
+        );
+        // A list with an element that is not a whole number.
+        let list = reference
+            .split('[')
+            .nth(1)
+            .and_then(|l| l.split(']').next());
+        scaled += usize::from(list.is_some_and(|l| l.contains('.')));
+    }
+    // The scaled unit reached list elements (a raw value not a multiple of 4 has a point).
+    assert!(scaled >= 2, "{scaled} lines with scaled elements");
 }
