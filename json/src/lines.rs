@@ -551,16 +551,22 @@ impl Printer {
         match found {
             Some((l, f, bit)) => {
                 out.extend_from_slice(l.key.as_bytes());
-                match (l.form, raw) {
-                    (Form::Int, Scalar::Int(v)) => push_int(out, v),
+                // A number, or each element of a list, as the leaf's form says.
+                let one = |out: &mut Vec<u8>, v: i64| match l.form {
+                    Form::Int => push_int(out, v),
                     // A unit the spec does not have prints the number, as in `push_field`.
-                    (Form::Physical(u), Scalar::Int(v)) => match p.units.get(u) {
+                    Form::Physical(u) => match p.units.get(u) {
                         Some(unit) => {
                             push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
                         }
                         None => push_int(out, v),
                     },
-                    _ => push_field(out, p, decimals, f, bit, raw),
+                    Form::Field => push_field(out, p, decimals, f, bit, Scalar::Int(v)),
+                };
+                match raw {
+                    Scalar::Int(v) => one(out, v),
+                    Scalar::List(items) => push_list(out, items, one),
+                    Scalar::Text(_) => push_field(out, p, decimals, f, bit, raw),
                 }
             }
             None => {
