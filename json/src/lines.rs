@@ -367,6 +367,29 @@ fn push_field(
     }
 }
 
+/// A number as a leaf of form `form` prints: as [`push_field`] prints it, without its look
+/// at the field where the form already says what that finds.
+#[inline(always)]
+fn push_form(
+    out: &mut Vec<u8>,
+    p: &Spec,
+    decimals: &[Option<Decimal>],
+    form: Form,
+    f: &Field,
+    bit: Option<&BitField>,
+    v: i64,
+) {
+    match form {
+        Form::Int => push_int(out, v),
+        // A unit the spec does not have prints the number, as in `push_field`.
+        Form::Physical(u) => match p.units.get(u) {
+            Some(unit) => push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v),
+            None => push_int(out, v),
+        },
+        Form::Field => push_field(out, p, decimals, f, bit, Scalar::Int(v)),
+    }
+}
+
 impl Printer {
     /// The plans of every message of `p`.
     pub fn new(p: &Spec) -> Printer {
@@ -552,20 +575,11 @@ impl Printer {
             Some((l, f, bit)) => {
                 out.extend_from_slice(l.key.as_bytes());
                 // A number, or each element of a list, as the leaf's form says.
-                let one = |out: &mut Vec<u8>, v: i64| match l.form {
-                    Form::Int => push_int(out, v),
-                    // A unit the spec does not have prints the number, as in `push_field`.
-                    Form::Physical(u) => match p.units.get(u) {
-                        Some(unit) => {
-                            push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
-                        }
-                        None => push_int(out, v),
-                    },
-                    Form::Field => push_field(out, p, decimals, f, bit, Scalar::Int(v)),
-                };
                 match raw {
-                    Scalar::Int(v) => one(out, v),
-                    Scalar::List(items) => push_list(out, items, one),
+                    Scalar::Int(v) => push_form(out, p, decimals, l.form, f, bit, v),
+                    Scalar::List(items) => push_list(out, items, |out, v| {
+                        push_form(out, p, decimals, l.form, f, bit, v)
+                    }),
                     Scalar::Text(_) => push_field(out, p, decimals, f, bit, raw),
                 }
             }
