@@ -97,141 +97,98 @@ impl<P: busspec_protocols::Protocol> Contender for Generated<P> {
     }
 }
 
-impl Contender for Hand<Ub2> {
-    type Request = Decoded<ub2::Request>;
-    type Response = Decoded<ub2::Response>;
-    type DecodeError = busspec_protocols::DecodeError;
-    type EncodeError = hand::EncodeError;
-    #[inline]
-    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, Self::DecodeError> {
-        hand::ub2::decode_request(frame)
-    }
-    #[inline]
-    fn decode_response(
-        &self,
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<Self::Response, Self::DecodeError> {
-        hand::ub2::decode_response(frame, request.map(|r| &r.message))
-    }
-    #[inline]
-    fn encode_request(
-        &self,
-        m: &Self::Request,
-        buf: &mut [u8],
-    ) -> Result<usize, Self::EncodeError> {
-        hand::subset(
-            m.message.name(),
-            hand::ub2::encode_request(&m.message, m.address, buf),
-        )
-    }
-    #[inline]
-    fn encode_response(
-        &self,
-        m: &Self::Response,
-        buf: &mut [u8],
-    ) -> Result<usize, Self::EncodeError> {
-        hand::subset(
-            m.message.name(),
-            hand::ub2::encode_response(&m.message, m.address, buf),
-        )
-    }
+/// The hand-written contender of one protocol: its module in [`hand`] and its generated crate
+/// module (the typed values it produces).
+macro_rules! hand_contender {
+    ($p:ty, $m:ident) => {
+        impl Contender for Hand<$p> {
+            type Request = Decoded<$m::Request>;
+            type Response = Decoded<$m::Response>;
+            type DecodeError = busspec_protocols::DecodeError;
+            type EncodeError = hand::EncodeError;
+            #[inline]
+            fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, Self::DecodeError> {
+                hand::$m::decode_request(frame)
+            }
+            #[inline]
+            fn decode_response(
+                &self,
+                frame: &[u8],
+                request: Option<&Self::Request>,
+            ) -> Result<Self::Response, Self::DecodeError> {
+                hand::$m::decode_response(frame, request.map(|r| &r.message))
+            }
+            #[inline]
+            fn encode_request(
+                &self,
+                m: &Self::Request,
+                buf: &mut [u8],
+            ) -> Result<usize, Self::EncodeError> {
+                hand::subset(
+                    m.message.name(),
+                    hand::$m::encode_request(&m.message, m.address, buf),
+                )
+            }
+            #[inline]
+            fn encode_response(
+                &self,
+                m: &Self::Response,
+                buf: &mut [u8],
+            ) -> Result<usize, Self::EncodeError> {
+                hand::subset(
+                    m.message.name(),
+                    hand::$m::encode_response(&m.message, m.address, buf),
+                )
+            }
+        }
+    };
 }
 
-impl Contender for Hand<Sd> {
-    type Request = Decoded<sd::Request>;
-    type Response = Decoded<sd::Response>;
-    type DecodeError = busspec_protocols::DecodeError;
-    type EncodeError = hand::EncodeError;
-    #[inline]
-    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, Self::DecodeError> {
-        hand::sd::decode_request(frame)
-    }
-    #[inline]
-    fn decode_response(
-        &self,
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<Self::Response, Self::DecodeError> {
-        hand::sd::decode_response(frame, request.map(|r| &r.message))
-    }
-    #[inline]
-    fn encode_request(
-        &self,
-        m: &Self::Request,
-        buf: &mut [u8],
-    ) -> Result<usize, Self::EncodeError> {
-        hand::subset(
-            m.message.name(),
-            hand::sd::encode_request(&m.message, m.address, buf),
-        )
-    }
-    #[inline]
-    fn encode_response(
-        &self,
-        m: &Self::Response,
-        buf: &mut [u8],
-    ) -> Result<usize, Self::EncodeError> {
-        hand::subset(
-            m.message.name(),
-            hand::sd::encode_response(&m.message, m.address, buf),
-        )
-    }
+hand_contender!(Ub2, ub2);
+hand_contender!(Sd, sd);
+
+/// The deku-derived contender of one protocol: its module in [`peer`] and its response type.
+macro_rules! deku_contender {
+    ($p:ty, $m:ident, $response:ident) => {
+        impl Contender for Deku<$p> {
+            type Request = peer::$m::RequestFrame;
+            type Response = peer::$m::$response;
+            type DecodeError = peer::Error;
+            type EncodeError = peer::Error;
+            #[inline]
+            fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, peer::Error> {
+                peer::$m::decode_request(frame)
+            }
+            #[inline]
+            fn decode_response(
+                &self,
+                frame: &[u8],
+                request: Option<&Self::Request>,
+            ) -> Result<Self::Response, peer::Error> {
+                peer::$m::decode_response(frame, request)
+            }
+            #[inline]
+            fn encode_request(
+                &self,
+                m: &Self::Request,
+                buf: &mut [u8],
+            ) -> Result<usize, peer::Error> {
+                peer::$m::encode_request(m, buf)
+            }
+            #[inline]
+            fn encode_response(
+                &self,
+                m: &Self::Response,
+                buf: &mut [u8],
+            ) -> Result<usize, peer::Error> {
+                peer::$m::encode_response(m, buf)
+            }
+        }
+    };
 }
 
-impl Contender for Deku<Ub2> {
-    type Request = peer::ub2::RequestFrame;
-    type Response = peer::ub2::ResponseFrame;
-    type DecodeError = peer::Error;
-    type EncodeError = peer::Error;
-    #[inline]
-    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, peer::Error> {
-        peer::ub2::decode_request(frame)
-    }
-    #[inline]
-    fn decode_response(
-        &self,
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<Self::Response, peer::Error> {
-        peer::ub2::decode_response(frame, request)
-    }
-    #[inline]
-    fn encode_request(&self, m: &Self::Request, buf: &mut [u8]) -> Result<usize, peer::Error> {
-        peer::ub2::encode_request(m, buf)
-    }
-    #[inline]
-    fn encode_response(&self, m: &Self::Response, buf: &mut [u8]) -> Result<usize, peer::Error> {
-        peer::ub2::encode_response(m, buf)
-    }
-}
-
-impl Contender for Deku<Sd> {
-    type Request = peer::sd::RequestFrame;
-    type Response = peer::sd::Reply;
-    type DecodeError = peer::Error;
-    type EncodeError = peer::Error;
-    #[inline]
-    fn decode_request(&self, frame: &[u8]) -> Result<Self::Request, peer::Error> {
-        peer::sd::decode_request(frame)
-    }
-    #[inline]
-    fn decode_response(
-        &self,
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Result<Self::Response, peer::Error> {
-        peer::sd::decode_response(frame, request)
-    }
-    #[inline]
-    fn encode_request(&self, m: &Self::Request, buf: &mut [u8]) -> Result<usize, peer::Error> {
-        peer::sd::encode_request(m, buf)
-    }
-    #[inline]
-    fn encode_response(&self, m: &Self::Response, buf: &mut [u8]) -> Result<usize, peer::Error> {
-        peer::sd::encode_response(m, buf)
-    }
-}
+deku_contender!(Ub2, ub2, ResponseFrame);
+deku_contender!(Sd, sd, Reply);
 
 /// busspec's interpreter over a loaded spec.
 pub struct Interp<'p>(pub &'p Protocol);
