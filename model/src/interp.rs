@@ -1899,29 +1899,39 @@ pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
 }
 
 /// Parses frame text as people write it: hex digits with optional `0x` prefixes, spaces,
-/// commas, colons, dashes. `"0x AA21 2000 0000 3A98 BD"` is nine bytes.
+/// commas, colons, dashes. `"0x AA21 2000 0000 3A98 BD"` is nine bytes. An error names the
+/// first character that is none of these by its place in `text`, counted in characters
+/// from 1.
 pub fn parse_hex(text: &str) -> Result<Vec<u8>, String> {
-    let mut digits = Vec::new();
-    let cleaned = text.replace("0x", " ").replace("0X", " ");
-    for (i, ch) in cleaned.chars().enumerate() {
-        match ch {
-            c if c.is_ascii_hexdigit() => digits.push(c.to_digit(16).unwrap_or(0) as u8),
-            ' ' | '\t' | ',' | ':' | '-' | '_' | '\n' | '\r' => {}
-            other => {
-                return Err(format!(
-                    "`{other}` at character {} is not a hex digit",
-                    i + 1
-                ))
+    let mut bytes = Vec::with_capacity(text.len() / 2);
+    // The first digit of a byte, until its second comes.
+    let mut high: Option<u8> = None;
+    let mut digits = 0usize;
+    let mut chars = text.chars().enumerate().peekable();
+    while let Some((i, ch)) = chars.next() {
+        if ch == '0' && matches!(chars.peek(), Some((_, 'x' | 'X'))) {
+            chars.next();
+            continue;
+        }
+        match ch.to_digit(16) {
+            Some(d) => {
+                digits += 1;
+                match high.take() {
+                    Some(h) => bytes.push((h << 4) | d as u8),
+                    None => high = Some(d as u8),
+                }
             }
+            None if matches!(ch, ' ' | '\t' | ',' | ':' | '-' | '_' | '\n' | '\r') => {}
+            None => return Err(format!("`{ch}` at character {} is not a hex digit", i + 1)),
         }
     }
-    if digits.is_empty() {
+    if digits == 0 {
         return Err("no hex digits".to_owned());
     }
-    if digits.len() % 2 != 0 {
-        return Err(format!("odd number of hex digits ({})", digits.len()));
+    if high.is_some() {
+        return Err(format!("odd number of hex digits ({digits})"));
     }
-    Ok(digits.chunks(2).map(|d| (d[0] << 4) | d[1]).collect())
+    Ok(bytes)
 }
 
 /// Uppercase hex, bytes separated by spaces: `AA 21 50 1B`.
@@ -1972,5 +1982,35 @@ mod tests {
         assert_eq!(read_uint(&[0x12, 0x34], ByteOrder::Big), 0x1234);
         assert_eq!(read_uint(&[0x12, 0x34], ByteOrder::Little), 0x3412);
         assert_eq!(read_uint(&[0xFE], ByteOrder::Little), 0xFE);
+    }
+
+    /// A character that is not a hex digit is named with its place in the text as given,
+    /// counted in characters from 1, also after `0x` prefixes.
+    #[test]
+    fn parse_hex_names_the_place_in_the_text_as_given() {
+        for (text, at) in [
+            ("AA2G", 4),
+            ("0xAA 0xZZ", 8),
+            ("0XAA,0xBB;", 10),
+            ("0x0x0xA?", 8),
+            ("é0xAA", 1),
+            ("0xAA é", 6),
+        ] {
+            let err = parse_hex(text).expect_err(text);
+            assert!(
+                err.ends_with(&format!("at character {at} is not a hex digit")),
+                "{text}: {err}"
+            );
+        }
+        assert_eq!(
+            parse_hex("0xAA 0X21, 50:1b-0x0F"),
+            Ok(vec![0xAA, 0x21, 0x50, 0x1B, 0x0F])
+        );
+        assert_eq!(parse_hex("A0xB"), Ok(vec![0xAB]));
+        assert_eq!(parse_hex(" 0x "), Err("no hex digits".to_owned()));
+        assert_eq!(
+            parse_hex("AA 2"),
+            Err("odd number of hex digits (3)".to_owned())
+        );
     }
 }
