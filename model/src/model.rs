@@ -4,6 +4,7 @@
 //! `spec/SCHEMA.md` documents the format for the people who edit it; keep the two in step.
 
 use serde::{Deserialize, Deserializer};
+use serde_derive::Deserialize;
 
 /// A number written as decimal text (`"0.01"`, `"360/4096"`) or as a YAML number.
 ///
