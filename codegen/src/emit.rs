@@ -2506,12 +2506,16 @@ fn emit_candidate(
     let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(0);
     // With one frame length the stream decoder's mask walk is one test already, which the
     // lookup does not beat (SD: 132.6 instructions a frame with the mask, 146.1 with it).
-    // Codes of more than two bytes get no table.
-    if lengths.len() < 2 || !(1..=2).contains(&depth) {
+    if lengths.len() < 2 {
         return quote!();
     }
-    let masks = code_masks(shapes, depth);
-    let cell = |code: &[u8]| candidate_cell(masks[code_index(code)], lengths);
+    let cell = |code: &[u8]| {
+        let mask = shapes
+            .iter()
+            .filter(|s| s.0.iter().zip(code).all(|(a, b)| a == b))
+            .fold(0u128, |a, s| a | s.1);
+        candidate_cell(mask, lengths)
+    };
     let bytes = |v: &[u16]| {
         let b: Vec<u8> = v.iter().flat_map(|c| c.to_le_bytes()).collect();
         Literal::byte_string(&b)
@@ -2584,27 +2588,6 @@ fn emit_candidate(
             #lookup
         }
     }
-}
-
-/// For every code of `depth` bytes (1 or 2; every shape at most that long), the masks of the
-/// shapes it starts with, ORed, indexed by [`code_index`]: one pass over the shapes, each
-/// marking the codes it is a prefix of, rather than every shape tested against every code
-/// (65,536 codes of two bytes, in a build script compiled without optimisation).
-fn code_masks(shapes: &[(&[u8], u128)], depth: usize) -> Vec<u128> {
-    let mut masks = vec![0u128; 1 << (8 * depth)];
-    for &(code, mask) in shapes {
-        let free = 8 * (depth - code.len());
-        let first = code_index(code) << free;
-        for m in &mut masks[first..first + (1 << free)] {
-            *m |= mask;
-        }
-    }
-    masks
-}
-
-/// A code's bytes read as a big-endian number.
-fn code_index(code: &[u8]) -> usize {
-    code.iter().fold(0, |a, &b| a << 8 | usize::from(b))
 }
 
 /// The index of `v` in `all`, added if new (at most 256 distinct: one per byte value).
@@ -2988,38 +2971,6 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The candidate tables' masks are those of the shapes whose code is a prefix of the cell's
-    /// code, for shapes of every length up to the table's depth.
-    #[test]
-    fn code_masks_are_the_shapes_each_code_starts_with() {
-        let shapes: Vec<(&[u8], u128)> = vec![
-            (&[], 1),
-            (&[0x03], 2),
-            (&[0x03, 0x10], 4),
-            (&[0x83, 0x10], 8),
-            (&[0xFF], 16),
-            (&[0x03, 0x10], 32),
-        ];
-        for depth in 1..=2 {
-            let within: Vec<_> = shapes.iter().filter(|s| s.0.len() <= depth).collect();
-            let masks = code_masks(&within.iter().map(|s| **s).collect::<Vec<_>>(), depth);
-            assert_eq!(masks.len(), 1 << (8 * depth));
-            for (i, &mask) in masks.iter().enumerate() {
-                let code = &i.to_be_bytes()[size_of::<usize>() - depth..];
-                let expected = within
-                    .iter()
-                    .filter(|s| code.starts_with(s.0))
-                    .fold(0, |a, s| a | s.1);
-                assert_eq!(mask, expected, "code {code:02X?}");
-            }
-        }
-        let two = code_masks(&shapes, 2);
-        assert_eq!(two[0x0310], 1 | 2 | 4 | 32);
-        assert_eq!(two[0x0311], 1 | 2);
-        assert_eq!(two[0xFF00], 1 | 16);
-        assert_eq!(two[0x0000], 1);
-    }
 
     fn field(range: (i64, i64), special: &[i64]) -> Field {
         Field {
