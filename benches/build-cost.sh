@@ -1,12 +1,37 @@
 #!/usr/bin/env bash
 # The clean release build of a minimal consumer of busspec-protocols: a binary crate depending
 # on it by path and decoding one frame, built in a fresh target directory. Prints the machine
-# load before and after (other builds on the machine slow it down) and cargo's wall time.
-# Usage: bash benches/build-cost.sh [--timings]
+# load before and after (other builds on the machine slow it down), cargo's wall time and the
+# CPU time of the build (user + sys, cargo and every process it starts), which other builds on
+# the machine change much less than the wall time. With --cpu, also each rustc's CPU time
+# (through a RUSTC_WRAPPER; needs /usr/bin/time). Other arguments go to cargo.
+# Usage: bash benches/build-cost.sh [--cpu] [--timings]
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+if [[ ${1:-} == --cpu ]]; then
+  shift
+  cat >"$tmp/rustc-cpu" <<'SH'
+#!/usr/bin/env bash
+# Runs rustc, appending "crate user sys" to $BUILD_COST_CPU_LOG.
+name=?
+prev=
+for a in "$@"; do
+  [[ $prev == --crate-name ]] && name=$a
+  prev=$a
+done
+[[ $name == "?" ]] && exec "$@"
+out=$(mktemp)
+rc=0
+/usr/bin/time -f "%U %S" -o "$out" "$@" || rc=$?
+echo "$name $(cat "$out")" >>"$BUILD_COST_CPU_LOG"
+rm -f "$out"
+exit "$rc"
+SH
+  chmod +x "$tmp/rustc-cpu"
+  export RUSTC_WRAPPER="$tmp/rustc-cpu" BUILD_COST_CPU_LOG="$tmp/cpu.log"
+fi
 mkdir -p "$tmp/consumer/src"
 cat >"$tmp/consumer/Cargo.toml" <<TOML
 [package]
@@ -33,10 +58,16 @@ cp "$repo/Cargo.lock" "$tmp/consumer/Cargo.lock"
 cd "$tmp/consumer"
 echo "load before: $(uptime)"
 start=$(date +%s.%N)
-cargo build --release --target-dir "$tmp/target" "$@"
+TIMEFORMAT="cpu: user %U s, sys %S s"
+time cargo build --release --target-dir "$tmp/target" "$@"
 end=$(date +%s.%N)
 echo "load after: $(uptime)"
 awk -v s="$start" -v e="$end" 'BEGIN { printf "clean release build: %.1f s\n", e - s }'
+if [[ -f $tmp/cpu.log ]]; then
+  echo "rustc CPU (user + sys) by crate, the ten largest:"
+  awk '{ cpu[$1] += $2 + $3 } END { for (c in cpu) printf "%s %.2f s\n", c, cpu[c] }' "$tmp/cpu.log" |
+    sort -k2 -rn | head -10
+fi
 # With --timings, the slowest units and the build script's run (the report itself goes with the
 # temporary directory).
 for html in "$tmp"/target/cargo-timings/cargo-timing.html; do

@@ -23,7 +23,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
-use serde::Serialize;
+use serde_derive::Serialize;
 
 use crate::ir::{Direction, Enum, Field, FlagSet, Message, Protocol, Unit};
 use crate::rational::Rational;

@@ -262,6 +262,7 @@ impl fmt::Display for DecodeError {
 
 impl std::error::Error for DecodeError {}
 
+#[cfg(feature = "tools")]
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum EncodeError {
     MissingValue {
@@ -329,6 +330,7 @@ pub enum EncodeError {
     },
 }
 
+#[cfg(feature = "tools")]
 impl fmt::Display for EncodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -391,6 +393,7 @@ impl fmt::Display for EncodeError {
     }
 }
 
+#[cfg(feature = "tools")]
 impl std::error::Error for EncodeError {}
 
 /// Reads an unsigned integer of `bytes.len()` bytes.
@@ -1489,6 +1492,7 @@ fn read_elements(f: &Field, bytes: &[u8]) -> Vec<i64> {
 /// Decodes a reply as the answer to `request` (a decoded request frame): the reply must be one
 /// the request gets, and every field that follows from the request (Modbus: byte count =
 /// 2 × quantity) and every element count taken from it must agree.
+#[cfg(feature = "tools")]
 pub fn decode_reply<'p>(
     p: &'p Protocol,
     request: &Frame,
@@ -1567,6 +1571,7 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
 
 /// Encodes a message for `address` from named raw values. Constants and repeated fields fill
 /// themselves in and need no value; every other leaf must be given exactly once.
+#[cfg(feature = "tools")]
 pub fn encode(
     p: &Protocol,
     r: MessageRef,
@@ -1894,6 +1899,7 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
 }
 
 /// The same reordering the other way; it is its own inverse.
+#[cfg(feature = "tools")]
 pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
     printed_to_wire(p, m, wire)
 }
@@ -1935,6 +1941,7 @@ pub fn parse_hex(text: &str) -> Result<Vec<u8>, String> {
 }
 
 /// Uppercase hex, bytes separated by spaces: `AA 21 50 1B`.
+#[cfg(feature = "tools")]
 pub fn format_hex(bytes: &[u8]) -> String {
     bytes
         .iter()

@@ -10,9 +10,10 @@
 //!                                                └─ (busspec-codegen: Rust modules)
 //! ```
 //!
-//! `stream`, `docs` and `diff` are behind the default feature `tools`; a build script that only
-//! generates code (`busspec-codegen`) turns it off and compiles load, validate, the IR and the
-//! interpreter that validation replays every example through.
+//! `stream`, `docs`, `diff` and the interpreter's encoding (`interp::encode`, `decode_reply`)
+//! are behind the default feature `tools`; a build script that only generates code
+//! (`busspec-codegen`) turns it off and compiles load, validate, the IR and the interpreter's
+//! decoding, which validation replays every example through.
 //!
 //! Every stage is a pure function of its input; file I/O happens only in [`load_file`] and in
 //! the callers (build scripts, the CLI).

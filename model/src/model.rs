@@ -3,7 +3,10 @@
 //! Every struct rejects unknown keys, so a misspelt key is an error and never silently ignored.
 //! `spec/SCHEMA.md` documents the format for the people who edit it; keep the two in step.
 
-use serde::{Deserialize, Deserializer};
+// The trait from `serde::de`: serde's root also exports the derive when another crate of the
+// build turns on its `derive` feature, and the derive here is serde_derive's.
+use serde::de::{Deserialize, Deserializer};
+use serde_derive::Deserialize;
 
 /// A number written as decimal text (`"0.01"`, `"360/4096"`) or as a YAML number.
 ///
