@@ -128,11 +128,27 @@ fn doc(text: &str) -> TokenStream {
     let lines: Vec<TokenStream> = text
         .lines()
         .map(|l| {
-            let l = format!(" {}", escape_brackets(l.trim_end()));
+            let l = doc_lit(&format!(" {}", escape_brackets(l.trim_end())));
             quote!(#[doc = #l])
         })
         .collect();
     quote!(#(#lines)*)
+}
+
+/// A doc attribute's text as a raw string literal where prettyplease prints the attribute as a
+/// `///` or `//!` line (one line, not starting with `/`), escaped otherwise: the line printed
+/// is the same, and syn reads a raw string back without unescaping it a character at a time.
+fn doc_lit(text: &str) -> Literal {
+    if text.contains(['\n', '\r']) || text.starts_with('/') {
+        return Literal::string(text);
+    }
+    let mut fence = String::new();
+    while text.contains('"') && text.contains(&format!("\"{fence}")) {
+        fence.push('#');
+    }
+    format!("r{fence}\"{text}\"{fence}")
+        .parse()
+        .unwrap_or_else(|_| Literal::string(text))
 }
 
 /// Escapes the brackets of document text (`0.02 [A]`, `[pF]`), which rustdoc would read as
@@ -155,7 +171,7 @@ fn inner_doc(text: &str) -> TokenStream {
     let lines: Vec<TokenStream> = text
         .lines()
         .map(|l| {
-            let l = format!(" {}", l.trim_end());
+            let l = doc_lit(&format!(" {}", l.trim_end()));
             quote!(#![doc = #l])
         })
         .collect();
@@ -3070,5 +3086,32 @@ mod tests {
         assert_eq!(cells[0x20], 0xFFFF);
         assert_eq!(cells[0x30], candidate_cell(1 << 66, &lengths));
         assert_ne!(cells[0x10], cells[0x30]);
+    }
+
+    /// A doc line written as `doc_lit` writes it prints as the escaped string does, whatever
+    /// the text holds: quotes, a quote and hashes, backslashes, non-ASCII, a line break.
+    #[test]
+    fn doc_literals_print_as_escaped_strings_do() {
+        let print = |lit: Literal| {
+            let file: syn::File = syn::parse2(quote!(#[doc = #lit] pub struct S;)).unwrap();
+            prettyplease::unparse(&file)
+        };
+        for text in [
+            " plain",
+            " say \"hi\"",
+            " a \"# and \"## in it",
+            " back\\slash \\n and \\\\",
+            " 25 \u{b0}C, \u{a7}4.2, \u{b5}s, tab\there",
+            " two\nlines",
+            "/ starts with a slash",
+            " carriage\rreturn",
+        ] {
+            assert_eq!(
+                print(doc_lit(text)),
+                print(Literal::string(text)),
+                "{text:?}"
+            );
+        }
+        assert!(doc_lit(" a \"# b").to_string().starts_with("r##\""));
     }
 }
