@@ -154,15 +154,19 @@ fn doc_lit(text: &str) -> Literal {
 /// Escapes the brackets of document text (`0.02 [A]`, `[pF]`), which rustdoc would read as
 /// links; the generator's own links, written ``[`Name`]``, stay links.
 fn escape_brackets(line: &str) -> String {
-    let chars: Vec<char> = line.chars().collect();
-    let mut out = String::with_capacity(line.len());
-    for (i, &c) in chars.iter().enumerate() {
-        let link_open = c == '[' && chars.get(i + 1) == Some(&'`');
-        let link_close = c == ']' && i > 0 && chars[i - 1] == '`';
+    if !line.contains(['[', ']']) {
+        return line.to_owned();
+    }
+    let mut out = String::with_capacity(line.len() + 8);
+    let (mut prev, mut chars) = (None, line.chars().peekable());
+    while let Some(c) = chars.next() {
+        let link_open = c == '[' && chars.peek() == Some(&'`');
+        let link_close = c == ']' && prev == Some('`');
         if (c == '[' || c == ']') && !link_open && !link_close {
             out.push('\\');
         }
         out.push(c);
+        prev = Some(c);
     }
     out
 }
@@ -3113,5 +3117,15 @@ mod tests {
             );
         }
         assert!(doc_lit(" a \"# b").to_string().starts_with("r##\""));
+    }
+
+    /// Brackets of document text are escaped, the generator's own ``[`Name`]`` links are not.
+    #[test]
+    fn brackets_are_escaped_but_links_kept() {
+        assert_eq!(escape_brackets("no brackets"), "no brackets");
+        assert_eq!(escape_brackets("0.02 [A]"), "0.02 \\[A\\]");
+        assert_eq!(escape_brackets("see [`Name`]"), "see [`Name`]");
+        assert_eq!(escape_brackets("[`a` b]`[x]"), "[`a` b\\]`\\[x\\]");
+        assert_eq!(escape_brackets("]["), "\\]\\[");
     }
 }
