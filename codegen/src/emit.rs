@@ -128,25 +128,45 @@ fn doc(text: &str) -> TokenStream {
     let lines: Vec<TokenStream> = text
         .lines()
         .map(|l| {
-            let l = format!(" {}", escape_brackets(l.trim_end()));
+            let l = doc_lit(&format!(" {}", escape_brackets(l.trim_end())));
             quote!(#[doc = #l])
         })
         .collect();
     quote!(#(#lines)*)
 }
 
+/// A doc attribute's text as a raw string literal where prettyplease prints the attribute as a
+/// `///` or `//!` line (one line, not starting with `/`), escaped otherwise: the line printed
+/// is the same, and syn reads a raw string back without unescaping it a character at a time.
+fn doc_lit(text: &str) -> Literal {
+    if text.contains(['\n', '\r']) || text.starts_with('/') {
+        return Literal::string(text);
+    }
+    let mut fence = String::new();
+    while text.contains('"') && text.contains(&format!("\"{fence}")) {
+        fence.push('#');
+    }
+    format!("r{fence}\"{text}\"{fence}")
+        .parse()
+        .unwrap_or_else(|_| Literal::string(text))
+}
+
 /// Escapes the brackets of document text (`0.02 [A]`, `[pF]`), which rustdoc would read as
 /// links; the generator's own links, written ``[`Name`]``, stay links.
 fn escape_brackets(line: &str) -> String {
-    let chars: Vec<char> = line.chars().collect();
-    let mut out = String::with_capacity(line.len());
-    for (i, &c) in chars.iter().enumerate() {
-        let link_open = c == '[' && chars.get(i + 1) == Some(&'`');
-        let link_close = c == ']' && i > 0 && chars[i - 1] == '`';
+    if !line.contains(['[', ']']) {
+        return line.to_owned();
+    }
+    let mut out = String::with_capacity(line.len() + 8);
+    let (mut prev, mut chars) = (None, line.chars().peekable());
+    while let Some(c) = chars.next() {
+        let link_open = c == '[' && chars.peek() == Some(&'`');
+        let link_close = c == ']' && prev == Some('`');
         if (c == '[' || c == ']') && !link_open && !link_close {
             out.push('\\');
         }
         out.push(c);
+        prev = Some(c);
     }
     out
 }
@@ -155,7 +175,7 @@ fn inner_doc(text: &str) -> TokenStream {
     let lines: Vec<TokenStream> = text
         .lines()
         .map(|l| {
-            let l = format!(" {}", l.trim_end());
+            let l = doc_lit(&format!(" {}", l.trim_end()));
             quote!(#![doc = #l])
         })
         .collect();
@@ -2509,13 +2529,10 @@ fn emit_candidate(
     if lengths.len() < 2 {
         return quote!();
     }
-    let cell = |code: &[u8]| {
-        let mask = shapes
-            .iter()
-            .filter(|s| s.0.iter().zip(code).all(|(a, b)| a == b))
-            .fold(0u128, |a, s| a | s.1);
-        candidate_cell(mask, lengths)
-    };
+    if !(1..=2).contains(&depth) {
+        return quote!();
+    }
+    let cells = head_cells(shapes, depth, lengths);
     let bytes = |v: &[u16]| {
         let b: Vec<u8> = v.iter().flat_map(|c| c.to_le_bytes()).collect();
         Literal::byte_string(&b)
@@ -2523,8 +2540,7 @@ fn emit_candidate(
     let (at, next) = (usize_lit(code_at), usize_lit(code_at + 1));
     let lookup = match depth {
         1 => {
-            let table: Vec<u16> = (0..=255u8).map(|b| cell(&[b])).collect();
-            let table = bytes(&table);
+            let table = bytes(&cells);
             quote! {
                 static CELLS: [u8; 512] = *#table;
                 match head.get(#at) {
@@ -2537,9 +2553,7 @@ fn emit_candidate(
             }
         }
         2 => {
-            let grid: Vec<Vec<u16>> = (0..=255u8)
-                .map(|a| (0..=255u8).map(|b| cell(&[a, b])).collect())
-                .collect();
+            let grid: Vec<&[u16]> = cells.chunks(256).collect();
             let mut columns: Vec<Vec<u16>> = Vec::new();
             let class: Vec<u8> = (0..256)
                 .map(|b| {
@@ -2588,6 +2602,32 @@ fn emit_candidate(
             #lookup
         }
     }
+}
+
+/// The cell ([`candidate_cell`]) of every value of the `depth` (1 or 2) code bytes, the first
+/// byte most significant: the masks of the shapes whose code is a prefix of those bytes. Each
+/// shape marks its block of cells, so the work is the shapes plus the cells, not their product.
+fn head_cells(shapes: &[(&[u8], u128)], depth: usize, lengths: &[usize]) -> Vec<u16> {
+    let mut masks = vec![0u128; 1 << (8 * depth)];
+    for (code, mask) in shapes {
+        let code = &code[..code.len().min(depth)];
+        let block = 1usize << (8 * (depth - code.len()));
+        let start = code.iter().fold(0usize, |a, &b| a << 8 | usize::from(b)) * block;
+        for m in &mut masks[start..start + block] {
+            *m |= mask;
+        }
+    }
+    // Neighbouring cells mostly share their mask (none at all, above all): worked out once.
+    let mut last = (0u128, candidate_cell(0, lengths));
+    masks
+        .into_iter()
+        .map(|mask| {
+            if mask != last.0 {
+                last = (mask, candidate_cell(mask, lengths));
+            }
+            last.1
+        })
+        .collect()
 }
 
 /// The index of `v` in `all`, added if new (at most 256 distinct: one per byte value).
@@ -3016,5 +3056,76 @@ mod tests {
         assert_eq!(f, "in_range_or");
         let (f, _) = leaf_range(&field((1, 100), &[50]), None, u8_limits).unwrap();
         assert_eq!(f, "in_range");
+    }
+
+    /// The block-marking `head_cells` gives every cell what the mask of every shape whose code
+    /// is a prefix of the cell's bytes gives, for codes of zero, one and two bytes.
+    #[test]
+    fn head_cells_agree_with_each_cells_shapes() {
+        let lengths = [12, 9, 7, 5];
+        let shapes: Vec<(&[u8], u128)> = vec![
+            (&[0x01, 0x02], 1),
+            (&[0x01, 0x02], 1 << 64),
+            (&[0x01, 0x7F], 1 << 1),
+            (&[0x01], 1 << 2),
+            (&[0xFF, 0x00], 1 << 65),
+            (&[0xFF, 0xFF], 1 << 3 | 1 << 2),
+            (&[], 1 << 67),
+        ];
+        let cells = head_cells(&shapes, 2, &lengths);
+        assert_eq!(cells.len(), 65536);
+        for (i, &got) in cells.iter().enumerate() {
+            let code = [(i >> 8) as u8, i as u8];
+            let mask = shapes
+                .iter()
+                .filter(|s| s.0.iter().zip(&code).all(|(a, b)| a == b))
+                .fold(0u128, |a, s| a | s.1);
+            assert_eq!(got, candidate_cell(mask, &lengths), "cell {code:02X?}");
+        }
+        let one: Vec<(&[u8], u128)> =
+            vec![(&[0x10], 1), (&[0x20], 1 << 1 | 1 << 64), (&[], 1 << 66)];
+        let cells = head_cells(&one, 1, &lengths);
+        assert_eq!(cells.len(), 256);
+        assert_eq!(cells[0x10], candidate_cell(1 | 1 << 66, &lengths));
+        assert_eq!(cells[0x20], 0xFFFF);
+        assert_eq!(cells[0x30], candidate_cell(1 << 66, &lengths));
+        assert_ne!(cells[0x10], cells[0x30]);
+    }
+
+    /// A doc line written as `doc_lit` writes it prints as the escaped string does, whatever
+    /// the text holds: quotes, a quote and hashes, backslashes, non-ASCII, a line break.
+    #[test]
+    fn doc_literals_print_as_escaped_strings_do() {
+        let print = |lit: Literal| {
+            let file: syn::File = syn::parse2(quote!(#[doc = #lit] pub struct S;)).unwrap();
+            prettyplease::unparse(&file)
+        };
+        for text in [
+            " plain",
+            " say \"hi\"",
+            " a \"# and \"## in it",
+            " back\\slash \\n and \\\\",
+            " 25 \u{b0}C, \u{a7}4.2, \u{b5}s, tab\there",
+            " two\nlines",
+            "/ starts with a slash",
+            " carriage\rreturn",
+        ] {
+            assert_eq!(
+                print(doc_lit(text)),
+                print(Literal::string(text)),
+                "{text:?}"
+            );
+        }
+        assert!(doc_lit(" a \"# b").to_string().starts_with("r##\""));
+    }
+
+    /// Brackets of document text are escaped, the generator's own ``[`Name`]`` links are not.
+    #[test]
+    fn brackets_are_escaped_but_links_kept() {
+        assert_eq!(escape_brackets("no brackets"), "no brackets");
+        assert_eq!(escape_brackets("0.02 [A]"), "0.02 \\[A\\]");
+        assert_eq!(escape_brackets("see [`Name`]"), "see [`Name`]");
+        assert_eq!(escape_brackets("[`a` b]`[x]"), "[`a` b\\]`\\[x\\]");
+        assert_eq!(escape_brackets("]["), "\\]\\[");
     }
 }

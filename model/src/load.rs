@@ -97,7 +97,7 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
         }
     }
     let head: Option<Spec> = if sink.items.len() == errors_before {
-        deserialize_at(&Value::Mapping(map), "", sink)
+        deserialize_at(&Value::Mapping(map), String::new, sink)
     } else {
         None
     };
@@ -131,7 +131,7 @@ fn required(key: &str) -> bool {
 /// Reads one top-level key that is not a list, reporting its shape errors.
 fn read_key(key: &str, value: &Value, sink: &mut Sink) {
     fn check<T: DeserializeOwned>(value: &Value, key: &str, sink: &mut Sink) {
-        let _: Option<T> = deserialize_at(value, key, sink);
+        let _: Option<T> = deserialize_at(value, || key.to_owned(), sink);
     }
     match key {
         "protocol" | "title" => check::<String>(value, key, sink),
@@ -160,8 +160,13 @@ fn unreachable_key(key: &str, sink: &mut Sink) {
 fn elements<T: DeserializeOwned>(key: &str, items: &[Value], sink: &mut Sink) -> Vec<T> {
     let mut out = Vec::with_capacity(items.len());
     for (i, item) in items.iter().enumerate() {
-        let label = element_label(item).unwrap_or_else(|| format!("[{i}]"));
-        if let Some(v) = deserialize_at(item, &join(key, &label), sink) {
+        let path = || {
+            join(
+                key,
+                &element_label(item).unwrap_or_else(|| format!("[{i}]")),
+            )
+        };
+        if let Some(v) = deserialize_at(item, path, sink) {
             out.push(v);
         }
     }
@@ -181,15 +186,26 @@ pub fn element_label(item: &Value) -> Option<String> {
     None
 }
 
-fn deserialize_at<T: DeserializeOwned>(value: &Value, path: &str, sink: &mut Sink) -> Option<T> {
+/// Deserializes `value`, or reports its error at `path` (worked out only then) and the path
+/// inside it. The value is read without tracking the path first: the path inside is needed
+/// only for an error, and the same value gives the same error when read again tracking it.
+fn deserialize_at<T: DeserializeOwned>(
+    value: &Value,
+    path: impl FnOnce() -> String,
+    sink: &mut Sink,
+) -> Option<T> {
+    if let Ok(v) = T::deserialize(value) {
+        return Some(v);
+    }
     match serde_path_to_error::deserialize::<_, T>(value) {
         Ok(v) => Some(v),
         Err(e) => {
             let inner = named_path(value, e.path());
+            let path = path();
             let at = if inner.is_empty() {
-                path.to_owned()
+                path
             } else {
-                join(path, &inner)
+                join(&path, &inner)
             };
             sink.error(at, strip_location(&e.into_inner().to_string()));
             None

@@ -1750,12 +1750,14 @@ fn template(framing: &Framing, m: &Message) -> Vec<Option<u8>> {
 }
 
 fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Sink) {
+    // Every pair is compared: each message's template is worked out once, not once a pair.
+    let templates: Vec<Vec<Option<u8>>> = msgs.iter().map(|m| template(framing, m)).collect();
     for (i, a) in msgs.iter().enumerate() {
-        for b in &msgs[i + 1..] {
+        for (j, b) in msgs.iter().enumerate().skip(i + 1) {
             if a.code.is_empty() || b.code.is_empty() {
                 continue;
             }
-            let path = join(list, &b.name);
+            let path = || join(list, &b.name);
             let (short, long) = if a.code.len() <= b.code.len() {
                 (a, b)
             } else {
@@ -1763,7 +1765,7 @@ fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Si
             };
             if short.code.len() < long.code.len() && long.code.starts_with(&short.code) {
                 sink.error(
-                    &path,
+                    path(),
                     format!(
                         "code {} of `{}` is a prefix of code {} of `{}`: a receiver could not tell where the code ends",
                         short.code_hex(), short.name, long.code_hex(), long.name
@@ -1771,11 +1773,11 @@ fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Si
                 );
                 continue;
             }
-            let (ta, tb) = (template(framing, a), template(framing, b));
+            let (ta, tb) = (&templates[i], &templates[j]);
             if ta.len() != tb.len() {
                 continue;
             }
-            let clash = ta.iter().zip(&tb).all(|(x, y)| match (x, y) {
+            let clash = ta.iter().zip(tb).all(|(x, y)| match (x, y) {
                 (Some(x), Some(y)) => x == y,
                 _ => true,
             });
@@ -1786,7 +1788,7 @@ fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Si
                     "overlapping codes"
                 };
                 sink.error(
-                    path,
+                    path(),
                     format!(
                         "{how}: `{}` ({}) and `{}` ({}) have the same length and no constant field tells them apart{}",
                         a.name,
@@ -1803,13 +1805,13 @@ fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Si
         if !m.needs_request {
             continue;
         }
-        let t = template(framing, m);
+        let t = &templates[i];
         let shared = msgs.iter().enumerate().any(|(j, o)| {
             j != i && o.code == m.code && {
-                let u = template(framing, o);
+                let u = &templates[j];
                 u.len() == t.len()
                     && u.iter()
-                        .zip(&t)
+                        .zip(t)
                         .all(|(x, y)| x.is_none() || y.is_none() || x == y)
             }
         });
