@@ -3127,28 +3127,39 @@ mod tests {
     /// Brackets of document text are escaped, the generator's own ``[`Name`]`` links are not.
     #[test]
     fn brackets_are_escaped_but_links_kept() {
-        assert_eq!(escape_brackets("no brackets"), "no brackets");
-        assert_eq!(escape_brackets("0.02 [A]"), "0.02 \\[A\\]");
-        assert_eq!(escape_brackets("see [`Name`]"), "see [`Name`]");
-        assert_eq!(escape_brackets("[`a` b]`[x]"), "[`a` b\\]`\\[x\\]");
-        assert_eq!(escape_brackets("]["), "\\]\\[");
+        for (line, escaped) in [
+            ("no brackets", "no brackets"),
+            ("0.02 [A]", "0.02 \\[A\\]"),
+            ("see [`Name`]", "see [`Name`]"),
+            ("[`a` b]`[x]", "[`a` b\\]`\\[x\\]"),
+            ("][", "\\]\\["),
+        ] {
+            assert_eq!(escape_brackets(line), escaped, "{line:?}");
+        }
     }
 
     /// Type names: snake_case words joined capitalised, empty words skipped; integer types by
     /// width and sign, a 24-bit one held in 32 bits.
     #[test]
     fn type_names() {
-        assert_eq!(camel("read_status"), "ReadStatus");
-        assert_eq!(camel("_a__b_"), "AB");
-        assert_eq!(camel("x"), "X");
-        assert_eq!(camel(""), "");
-        assert_eq!(camel("set_2nd_µs"), "Set2ndµs");
-        let name = |bits, signed| IntType { bits, signed }.ident().to_string();
-        assert_eq!(name(8, false), "u8");
-        assert_eq!(name(16, true), "i16");
-        assert_eq!(name(24, false), "u32");
-        assert_eq!(name(24, true), "i32");
-        assert_eq!(name(64, true), "i64");
-        assert_eq!(name(128, false), "u128");
+        for (snake, name) in [
+            ("read_status", "ReadStatus"),
+            ("_a__b_", "AB"),
+            ("x", "X"),
+            ("", ""),
+            ("set_2nd_µs", "Set2ndµs"),
+        ] {
+            assert_eq!(camel(snake), name, "{snake:?}");
+        }
+        for (bits, signed, name) in [
+            (8, false, "u8"),
+            (16, true, "i16"),
+            (24, false, "u32"),
+            (24, true, "i32"),
+            (64, true, "i64"),
+            (128, false, "u128"),
+        ] {
+            assert_eq!(IntType { bits, signed }.ident().to_string(), name);
+        }
     }
 }
