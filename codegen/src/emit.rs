@@ -53,11 +53,18 @@ pub struct IntType {
 
 impl IntType {
     fn ident(self) -> Ident {
-        format_ident!(
-            "{}{}",
-            if self.signed { "i" } else { "u" },
-            self.rust_bits()
-        )
+        let name = match (self.signed, self.rust_bits()) {
+            (false, 8) => "u8",
+            (true, 8) => "i8",
+            (false, 16) => "u16",
+            (true, 16) => "i16",
+            (false, 32) => "u32",
+            (true, 32) => "i32",
+            (false, 64) => "u64",
+            (true, 64) => "i64",
+            (signed, bits) => return format_ident!("{}{bits}", if signed { "i" } else { "u" }),
+        };
+        ident(name)
     }
 
     /// Bits of the Rust integer holding it: a 24-bit wire integer is held in 32 bits.
@@ -92,17 +99,15 @@ impl IntType {
 
 /// `snake_case` to `CamelCase`, as generated type names are spelled.
 pub fn camel(snake: &str) -> String {
-    snake
-        .split('_')
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            let mut c = s.chars();
-            match c.next() {
-                Some(f) => f.to_ascii_uppercase().to_string() + c.as_str(),
-                None => String::new(),
-            }
-        })
-        .collect()
+    let mut out = String::with_capacity(snake.len());
+    for part in snake.split('_') {
+        let mut c = part.chars();
+        if let Some(f) = c.next() {
+            out.push(f.to_ascii_uppercase());
+            out.push_str(c.as_str());
+        }
+    }
+    out
 }
 
 fn ident(s: &str) -> Ident {
@@ -3122,10 +3127,39 @@ mod tests {
     /// Brackets of document text are escaped, the generator's own ``[`Name`]`` links are not.
     #[test]
     fn brackets_are_escaped_but_links_kept() {
-        assert_eq!(escape_brackets("no brackets"), "no brackets");
-        assert_eq!(escape_brackets("0.02 [A]"), "0.02 \\[A\\]");
-        assert_eq!(escape_brackets("see [`Name`]"), "see [`Name`]");
-        assert_eq!(escape_brackets("[`a` b]`[x]"), "[`a` b\\]`\\[x\\]");
-        assert_eq!(escape_brackets("]["), "\\]\\[");
+        for (line, escaped) in [
+            ("no brackets", "no brackets"),
+            ("0.02 [A]", "0.02 \\[A\\]"),
+            ("see [`Name`]", "see [`Name`]"),
+            ("[`a` b]`[x]", "[`a` b\\]`\\[x\\]"),
+            ("][", "\\]\\["),
+        ] {
+            assert_eq!(escape_brackets(line), escaped, "{line:?}");
+        }
+    }
+
+    /// Type names: snake_case words joined capitalised, empty words skipped; integer types by
+    /// width and sign, a 24-bit one held in 32 bits.
+    #[test]
+    fn type_names() {
+        for (snake, name) in [
+            ("read_status", "ReadStatus"),
+            ("_a__b_", "AB"),
+            ("x", "X"),
+            ("", ""),
+            ("set_2nd_µs", "Set2ndµs"),
+        ] {
+            assert_eq!(camel(snake), name, "{snake:?}");
+        }
+        for (bits, signed, name) in [
+            (8, false, "u8"),
+            (16, true, "i16"),
+            (24, false, "u32"),
+            (24, true, "i32"),
+            (64, true, "i64"),
+            (128, false, "u128"),
+        ] {
+            assert_eq!(IntType { bits, signed }.ident().to_string(), name);
+        }
     }
 }
