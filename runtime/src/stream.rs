@@ -751,7 +751,8 @@ impl<C: Protocol> Core<C> {
     #[inline(always)]
     fn fast(&mut self, window: &[u8], slow: &mut bool) -> Option<Event<C::Request, C::Response>> {
         let mut end = FastEnd::Frame;
-        let ev = self.fast_with(window, &mut end, None, |_, _, ev| Some(ev));
+        let both_ways = self.requests & self.responses != 0;
+        let ev = self.fast_with(window, both_ways, &mut end, None, |_, _, ev| Some(ev));
         *slow = end == FastEnd::Slow;
         ev
     }
@@ -759,11 +760,14 @@ impl<C: Protocol> Core<C> {
     /// [`Self::fast`] with its frame's event handed to `emit` (with this state and `acc`)
     /// where it is made, rather than returned: [`Feed`]'s `fold` passes each event straight
     /// to its caller's closure this way, with no merge of the three kinds of event into one
-    /// value. Returns what `emit` returned, or `acc` where there was no frame.
+    /// value. Returns what `emit` returned, or `acc` where there was no frame. `both_ways`:
+    /// whether the decoder looks for both directions (`requests & responses != 0`, fixed when
+    /// it is made), which a loop can read once (UB2: 146.4 -> 145.4 instructions a frame).
     #[inline(always)]
     fn fast_with<T>(
         &mut self,
         window: &[u8],
+        both_ways: bool,
         end: &mut FastEnd,
         acc: T,
         emit: impl FnOnce(&mut Self, T, Event<C::Request, C::Response>) -> T,
@@ -833,10 +837,7 @@ impl<C: Protocol> Core<C> {
         // Where the head fixes its frames (and the decoder looks for both directions, with no
         // variable-length candidate), they are tried in turn: no mask to build or walk.
         let one = C::candidate(window);
-        if one != Candidate::MANY
-            && self.requests & self.responses != 0
-            && C::variable_candidates(window) == VarLens::NONE
-        {
+        if one != Candidate::MANY && both_ways && C::variable_candidates(window) == VarLens::NONE {
             let mut slots = one.0;
             while slots != 0 {
                 let (len, request) = (usize::from(slots & 0x7F), slots & 0x80 == 0);
@@ -1063,19 +1064,22 @@ impl<C: Protocol> Iterator for Feed<'_, '_, C> {
             let d = &mut *self.decoder;
             let cap = d.buf.as_ref().len();
             if d.len == 0 && d.core.pending.is_none() {
+                let both_ways = d.core.requests & d.core.responses != 0;
                 loop {
                     let at = (d.core.head - self.base) as usize;
                     let Some(window) = self.input.get(at..at + cap) else {
                         break;
                     };
                     let mut end = FastEnd::Frame;
-                    acc = d.core.fast_with(window, &mut end, acc, |core, acc, ev| {
-                        let acc = match core.take_noise() {
-                            Some(noise) => f(acc, noise),
-                            None => acc,
-                        };
-                        f(acc, ev)
-                    });
+                    acc = d
+                        .core
+                        .fast_with(window, both_ways, &mut end, acc, |core, acc, ev| {
+                            let acc = match core.take_noise() {
+                                Some(noise) => f(acc, noise),
+                                None => acc,
+                            };
+                            f(acc, ev)
+                        });
                     match end {
                         FastEnd::Frame => {}
                         FastEnd::Noise => {
