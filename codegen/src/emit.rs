@@ -2409,26 +2409,34 @@ fn emit_stream(p: &Protocol) -> TokenStream {
                 index_of(&mut masks, vec![m])
             })
             .collect();
-        // Padded to a power of two, so the index is masked, not checked. One table, the
-        // classes then the masks (16 bytes each, low first), so one base address.
+        // One table, the classes then the masks (16 bytes each, low first), so one base
+        // address. Up to 16 masks, a class is its mask's offset and the table is padded past
+        // the largest, so the index is neither scaled nor checked (SD: 127.6 -> 125.6
+        // instructions a frame); more, the class is masked to a power of two.
         let size = masks.len().next_power_of_two();
-        let last = usize_lit(size - 1);
-        let mut table = class;
-        for m in masks
-            .iter()
-            .map(|m| m[0])
-            .chain(core::iter::repeat(0))
-            .take(size)
-        {
+        let (mut table, index) = if size <= 16 {
+            let offsets = class.iter().map(|c| 16 * c).collect();
+            (offsets, quote!(TABLE[b as usize] as usize))
+        } else {
+            let last = usize_lit(size - 1);
+            (class, quote!(16 * (TABLE[b as usize] as usize & #last)))
+        };
+        for m in masks.iter().map(|m| m[0]) {
             table.extend_from_slice(&m.to_le_bytes());
         }
+        let end = if size <= 16 {
+            256 + 256 + 16
+        } else {
+            256 + 16 * size
+        };
+        table.resize(end, 0);
         let (n, table) = (usize_lit(table.len()), Literal::byte_string(&table));
         let (all, byte) = (mask_lit(all), &bytes[0]);
         quote! {
             static TABLE: [u8; #n] = *#table;
             let mask = match #byte {
                 rt::Some(&b) => {
-                    let i = 256 + 16 * (TABLE[b as usize] as usize & #last);
+                    let i = 256 + #index;
                     let mut m = [0; 16];
                     m.copy_from_slice(&TABLE[i..i + 16]);
                     u128::from_le_bytes(m)
