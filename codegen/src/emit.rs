@@ -2613,14 +2613,28 @@ fn emit_candidate(
                     index_of(&mut rows, by_class)
                 })
                 .collect();
-            let classes = usize_lit(columns.len());
-            // Padded (with MANY) to a power of two, so the index is masked, not checked.
-            let mut cells = rows.concat();
-            let size = cells.len().next_power_of_two();
-            cells.resize(size, 0xFFFF);
             // One table (rows by first byte, classes by second, then the cells), so the
-            // stream decoder's loop loads one address, not three (UB2: 148.4 -> 146.4 instructions a frame).
-            let last = usize_lit(size - 1);
+            // stream decoder's loop loads one address, not three (UB2: 148.4 -> 146.4
+            // instructions a frame). Where every row starts below 256, a row is its first
+            // cell's index and the cells are padded (with MANY) past the largest sum of two
+            // bytes, so the index is neither scaled nor checked (146.4 -> 143.4); else
+            // padded to a power of two, and the index masked.
+            let classes = columns.len();
+            let mut cells = rows.concat();
+            let (row, index) = if (rows.len() - 1) * classes < 256 {
+                cells.resize(511, 0xFFFF);
+                let starts = row.iter().map(|&r| r * classes as u8).collect();
+                (
+                    starts,
+                    quote!(TABLE[a as usize] as usize + TABLE[256 + b as usize] as usize),
+                )
+            } else {
+                let size = cells.len().next_power_of_two();
+                cells.resize(size, 0xFFFF);
+                let (classes, last) = (usize_lit(classes), usize_lit(size - 1));
+                let index = quote!((TABLE[a as usize] as usize * #classes + TABLE[256 + b as usize] as usize) & #last);
+                (row, index)
+            };
             let mut table = row;
             table.extend_from_slice(&class);
             table.extend(cells.iter().flat_map(|c| c.to_le_bytes()));
@@ -2630,7 +2644,7 @@ fn emit_candidate(
                 static TABLE: [u8; #n] = *#table;
                 match (head.get(#at), head.get(#next)) {
                     (rt::Some(&a), rt::Some(&b)) => {
-                        let i = (TABLE[a as usize] as usize * #classes + TABLE[256 + b as usize] as usize) & #last;
+                        let i = #index;
                         rt::Candidate(u16::from_le_bytes([TABLE[512 + 2 * i], TABLE[513 + 2 * i]]))
                     }
                     _ => rt::Candidate::MANY,
