@@ -10,7 +10,7 @@ use busspec_json::{
     decode_frame, decode_typed, event_line, frame_line, load_spec, write_events, Printer, Spec,
     Typed, TypedStream,
 };
-use busspec_model::ir::Direction;
+use busspec_model::ir::{Direction, Example};
 use busspec_model::stream::StreamDecoder;
 use busspec_model::{checksum, interp};
 use busspec_protocols::{Protocol, ProtocolVisitor, PROTOCOLS};
@@ -72,6 +72,54 @@ fn noisy_capture(p: &Spec) -> Vec<u8> {
     bytes
 }
 
+/// Decodes example `e` with the generated code of `P` and with the interpreter, and holds
+/// `printer`'s line of each to the reference printer's; gives the reference line of the
+/// generated code's message.
+fn example_lines<P: Protocol>(
+    spec: &Spec,
+    printer: &mut Printer,
+    e: &Example,
+    offset: Option<u64>,
+) -> String {
+    let m = spec.message(e.message);
+    let reply_to = m.needs_request.then_some(e.reply_to).flatten();
+    // The direction given: a Modbus echo reads both ways.
+    let direction = Some(e.message.direction);
+    let typed = decode_typed::<P>(spec, direction, reply_to, &e.wire).expect("decodes");
+    let reference = typed.line(spec, offset).expect("prints");
+    let mut out = Vec::new();
+    match typed {
+        Typed::Request(d) => printer.message(
+            &mut out,
+            spec,
+            Direction::Request,
+            d.address,
+            &d.message,
+            offset,
+        ),
+        Typed::Response(d) => printer.message(
+            &mut out,
+            spec,
+            Direction::Response,
+            d.address,
+            &d.message,
+            offset,
+        ),
+    }
+    .expect("prints");
+    assert_eq!(text(&out), format!("{reference}\n"), "{}", m.name);
+    let frame = decode_frame(spec, direction, reply_to, &e.wire).expect("decodes");
+    let mut out = Vec::new();
+    printer.frame(&mut out, spec, &frame, offset);
+    assert_eq!(
+        text(&out),
+        format!("{}\n", frame_line(spec, &frame, offset)),
+        "{}",
+        m.name
+    );
+    reference
+}
+
 struct Check;
 
 impl ProtocolVisitor for Check {
@@ -80,44 +128,8 @@ impl ProtocolVisitor for Check {
         let spec = load_spec::<P>().unwrap_or_else(|e| panic!("{e}"));
         let mut printer = Printer::new(&spec);
         for e in &spec.examples {
-            let m = spec.message(e.message);
-            let reply_to = m.needs_request.then_some(e.reply_to).flatten();
-            // The direction given: a Modbus echo reads both ways.
-            let direction = Some(e.message.direction);
             for offset in [None, Some(0), Some(1_234_567)] {
-                let typed =
-                    decode_typed::<P>(&spec, direction, reply_to, &e.wire).expect("decodes");
-                let reference = typed.line(&spec, offset).expect("prints");
-                let mut out = Vec::new();
-                match typed {
-                    Typed::Request(d) => printer.message(
-                        &mut out,
-                        &spec,
-                        Direction::Request,
-                        d.address,
-                        &d.message,
-                        offset,
-                    ),
-                    Typed::Response(d) => printer.message(
-                        &mut out,
-                        &spec,
-                        Direction::Response,
-                        d.address,
-                        &d.message,
-                        offset,
-                    ),
-                }
-                .expect("prints");
-                assert_eq!(text(&out), format!("{reference}\n"), "{}", m.name);
-                let frame = decode_frame(&spec, direction, reply_to, &e.wire).expect("decodes");
-                let mut out = Vec::new();
-                printer.frame(&mut out, &spec, &frame, offset);
-                assert_eq!(
-                    text(&out),
-                    format!("{}\n", frame_line(&spec, &frame, offset)),
-                    "{}",
-                    m.name
-                );
+                example_lines::<P>(&spec, &mut printer, e, offset);
             }
         }
 
@@ -205,44 +217,10 @@ fn lists_print_each_element_in_its_fields_unit() {
     let mut printer = Printer::new(&spec);
     let mut scaled = 0;
     for e in &spec.examples {
-        let m = spec.message(e.message);
-        if m.repeat().is_none() {
+        if spec.message(e.message).repeat().is_none() {
             continue;
         }
-        let reply_to = m.needs_request.then_some(e.reply_to).flatten();
-        let direction = Some(e.message.direction);
-        let typed = decode_typed::<Modbus>(&spec, direction, reply_to, &e.wire).expect("decodes");
-        let reference = typed.line(&spec, Some(7)).expect("prints");
-        let mut out = Vec::new();
-        match typed {
-            Typed::Request(d) => printer.message(
-                &mut out,
-                &spec,
-                Direction::Request,
-                d.address,
-                &d.message,
-                Some(7),
-            ),
-            Typed::Response(d) => printer.message(
-                &mut out,
-                &spec,
-                Direction::Response,
-                d.address,
-                &d.message,
-                Some(7),
-            ),
-        }
-        .expect("prints");
-        assert_eq!(text(&out), format!("{reference}\n"), "{}", m.name);
-        let frame = decode_frame(&spec, direction, reply_to, &e.wire).expect("decodes");
-        let mut out = Vec::new();
-        printer.frame(&mut out, &spec, &frame, None);
-        assert_eq!(
-            text(&out),
-            format!("{}\n", frame_line(&spec, &frame, None)),
-            "{}",
-            m.name
-        );
+        let reference = example_lines::<Modbus>(&spec, &mut printer, e, Some(7));
         // A list with an element that is not a whole number.
         let list = reference
             .split('[')
