@@ -2572,11 +2572,12 @@ fn emit_stream(p: &Protocol) -> TokenStream {
 }
 
 /// `candidate`, where the code is one or two bytes, there is more than one frame length and no
-/// variable-length message (the trait's default, which says "ask `candidates`", otherwise): the frames a whole head's start byte and code fix, as
-/// [`candidate_cell`] says it, by table lookup. One code byte: a table of 256 cells. Two: the
-/// first byte's row and the second byte's class (bytes whose column is the same for every
-/// first byte share one), rows and classes deduplicated, so the cells are few. Byte strings
-/// (a cell is two bytes, low first), so the tables take one line each in the generated code.
+/// variable-length message (otherwise the trait's default, which says "ask `candidates`"): the
+/// frames a whole head's start byte and code fix, as [`candidate_cell`] says it, by table
+/// lookup. One code byte: a table of 256 cells. Two: one table of the first byte's row, the
+/// second byte's class (bytes whose column is the same for every first byte share one) and the
+/// cells, rows and classes deduplicated, so the cells are few. Byte strings (a cell is two
+/// bytes, low first), so a table takes one line in the generated code.
 fn emit_candidate(
     shapes: &[(&[u8], u128)],
     lengths: &[usize],

@@ -30,9 +30,9 @@ impl Parsed {
 
     /// The frame as a typed message of generated protocol `P` (`p` its spec, from
     /// [`crate::load_spec`]), built directly from the line's raw values with
-    /// [`busspec_runtime::Message::from_fields`]. Checked as [`Parsed::encode`] checks it, with the same
-    /// reasons: the address against `P`'s, every value against its field's wire type, and a
-    /// value the line gives for a constant or repeated field against what it must be.
+    /// [`busspec_runtime::Message::from_fields`]. Checked as [`Parsed::encode`] checks it, with
+    /// the same reasons: the address against `P`'s, every value against its field's wire type,
+    /// and a value the line gives for a constant or repeated field against what it must be.
     pub fn to_typed<P: Protocol>(&self, p: &Spec) -> Result<Typed<P>, String> {
         let m = p.message(self.message);
         let direction = self.message.direction;
