@@ -833,6 +833,20 @@ fn code_of<P: Protocol>(frame: &[u8], len: usize) -> &[u8] {
 /// The events of `P`'s stream decoder.
 pub type Events<P> = Vec<Event<<P as Protocol>::Request, <P as Protocol>::Response>>;
 
+/// `capture` cut into pieces of the lengths in `chunks` (the last up to the end), none empty.
+fn pieces<'c>(capture: &'c [u8], chunks: &'c [usize]) -> impl Iterator<Item = &'c [u8]> + 'c {
+    let mut rest = capture;
+    let mut cuts = chunks.iter().copied().chain(std::iter::once(usize::MAX));
+    std::iter::from_fn(move || {
+        if rest.is_empty() {
+            return None;
+        }
+        let (chunk, r) = rest.split_at(cuts.next().unwrap_or(1).min(rest.len()));
+        rest = r;
+        Some(chunk)
+    })
+}
+
 /// `capture` through the generated stream decoder of `P` for `direction`, pushed in `chunks`
 /// (the rest in one piece) with push/poll, then finished. Asserts the buffer never grows past
 /// the longest frame and the decoder never stalls.
@@ -843,11 +857,7 @@ pub fn stream_events<P: Protocol>(
 ) -> Events<P> {
     let mut d = StreamDecoder::<P>::new(direction);
     let mut out = Vec::new();
-    let mut rest = capture;
-    let mut cuts = chunks.iter().copied().chain(std::iter::once(usize::MAX));
-    while !rest.is_empty() {
-        let (mut chunk, r) = rest.split_at(cuts.next().unwrap_or(1).min(rest.len()));
-        rest = r;
+    for mut chunk in pieces(capture, chunks) {
         while !chunk.is_empty() {
             let n = d.push(chunk);
             chunk = &chunk[n..];
@@ -883,11 +893,7 @@ pub fn fed_events<P: Protocol>(
 ) -> Events<P> {
     let mut d = StreamDecoder::<P>::new(direction);
     let mut out = Vec::new();
-    let mut rest = capture;
-    let mut cuts = chunks.iter().copied().chain(std::iter::once(usize::MAX));
-    while !rest.is_empty() {
-        let (chunk, r) = rest.split_at(cuts.next().unwrap_or(1).min(rest.len()));
-        rest = r;
+    for chunk in pieces(capture, chunks) {
         d.feed(chunk).for_each(|e| out.push(e));
     }
     out.extend(std::iter::from_fn(|| d.finish()));
