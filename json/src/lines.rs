@@ -677,10 +677,10 @@ impl Printer {
                         _ => continue,
                     },
                     Fixed::Count { list, bytes } => {
-                        let (Some(f), Some(Given::List(r))) = (
-                            m.fields.get(*list),
-                            m.fields.get(*list).and_then(|f| lookup(&f.name)),
-                        ) else {
+                        let Some(f) = m.fields.get(*list) else {
+                            continue;
+                        };
+                        let Some(Given::List(r)) = lookup(&f.name) else {
                             continue;
                         };
                         let n = if *bytes {
