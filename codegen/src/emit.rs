@@ -2040,14 +2040,25 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
         quote!(rt::Err(rt::unknown_code(frame, #first_code_at, #longest_code, #clen, #replies)))
     };
-    // One match per code length, shortest first; codes are prefix-free within a direction
-    // (validated). The last is the function's value.
-    let mut lens: Vec<usize> = msgs.iter().map(|m| m.code.len()).collect();
+    // Code-less messages beside coded ones: the empty code is a prefix of every code, so a
+    // frame whose code is known is tried as its coded messages first, then as each code-less
+    // one (the interpreter's order: the longest code that matches first), and a frame whose
+    // code is unknown as the code-less messages alone.
+    let codeless: Vec<&Message> = msgs.iter().filter(|m| m.code.is_empty()).collect();
+    let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
+    // One match per code length, shortest first; non-empty codes are prefix-free within a
+    // direction (validated). The last is the function's value, or with code-less messages
+    // beside coded ones, theirs is.
+    let mut lens: Vec<usize> = msgs
+        .iter()
+        .map(|m| m.code.len())
+        .filter(|&l| !mixed || l > 0)
+        .collect();
     lens.sort_unstable();
     lens.dedup();
     let mut body = Vec::new();
     for (li, &l) in lens.iter().enumerate() {
-        let last = li + 1 == lens.len();
+        let last = li + 1 == lens.len() && !mixed;
         let at = code_at(l);
         let mut codes: Vec<&[u8]> = Vec::new();
         for m in msgs.iter().filter(|m| m.code.len() == l) {
@@ -2056,9 +2067,12 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
             }
         }
         let arms = codes.into_iter().map(|code| {
-            let group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
+            let mut group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
+            if mixed {
+                group.extend(&codeless);
+            }
             let lit = hex_code(code);
-            let arm = emit_group(ctx, &group, replies, code_later.is_some());
+            let arm = emit_group(ctx, &group, replies, code_later.is_some(), mixed);
             if last {
                 quote!(#lit => #arm,)
             } else {
@@ -2093,6 +2107,9 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
                 _ => #unknown,
             }
         });
+    }
+    if mixed {
+        body.push(emit_group(ctx, &codeless, replies, false, true));
     }
     let addr_at = usize_lit(address_at(p, d));
     let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
@@ -2139,6 +2156,11 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         #follows
         rt::Ok(Decoded { address, message })
     };
+    let codeless_fns = if mixed {
+        emit_codeless_fns(ctx, &codeless)
+    } else {
+        quote!()
+    };
     let dispatch = quote! {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
@@ -2146,6 +2168,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
             #asked
             #(#body)*
         }
+        #codeless_fns
     };
     let doc_decode = quote! {
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -2225,13 +2248,67 @@ fn is_ambiguous(m: &Message, group: &[&Message]) -> bool {
             > 1
 }
 
+/// The name of the function decoding code-less message `m` where coded messages sit beside it.
+fn codeless_fn(m: &Message) -> Ident {
+    format_ident!("codeless_{}", m.name)
+}
+
+/// One function per code-less message of a direction that has coded ones too: every arm of
+/// `dispatch` tries them after its own code's messages, so each is written once. A fixed
+/// message takes the frame as an array of its length, a variable one the whole frame.
+fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream {
+    let fns = codeless.iter().map(|m| {
+        let f = codeless_fn(m);
+        let (stmts, build) = decode_body(ctx, m);
+        let doc = doc(&format!(
+            "`{}` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.",
+            m.name
+        ));
+        if m.is_variable() {
+            let split = split_frame(m, &stmts, &build);
+            return quote! {
+                #doc
+                #[inline]
+                fn #f(frame: &[u8]) -> rt::DecodeResult<Self> {
+                    #split
+                    #(#stmts)*
+                    rt::Ok(#build)
+                }
+            };
+        }
+        let len = usize_lit(ctx.p.frame_len(m));
+        let param = if stmts.is_empty() && !mentions_frame(&build) {
+            quote!(_: &[u8; #len])
+        } else {
+            quote!(frame: &[u8; #len])
+        };
+        quote! {
+            #doc
+            #[inline]
+            fn #f(#param) -> rt::DecodeResult<Self> {
+                #(#stmts)*
+                rt::Ok(#build)
+            }
+        }
+    });
+    quote!(#(#fns)*)
+}
+
 /// The dispatch arm for the messages of one code: a lone message is decoded in the arm (a
 /// reply once the request admits it); several are tried in spec order by `rt::Group`, each
 /// decoder a closure over the frame as an array of its length.
 /// The value of one code's arm in `dispatch`; `code_later`: a single reply the request does
-/// not admit leaves its code for `decode` to write (`rt::reply_code`).
-fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, code_later: bool) -> TokenStream {
+/// not admit leaves its code for `decode` to write (`rt::reply_code`); `shared`: code-less
+/// messages are decoded by their own function ([`emit_codeless_fns`]), as every arm tries them.
+fn emit_group(
+    ctx: &Ctx,
+    group: &[&Message],
+    replies: bool,
+    code_later: bool,
+    shared: bool,
+) -> TokenStream {
     let p = ctx.p;
+    let by_fn = |m: &Message| (shared && m.code.is_empty()).then(|| codeless_fn(m));
     let admitted = |m: &Message| {
         if replies {
             let i = p
@@ -2257,6 +2334,12 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, code_later: bool) ->
             } else {
                 quote!()
             };
+            if let Some(f) = by_fn(m) {
+                return quote! {{
+                    #admit
+                    Self::#f(frame)
+                }};
+            }
             let (stmts, build) = decode_body(ctx, m);
             let split = split_frame(m, &stmts, &build);
             return quote! {{
@@ -2277,6 +2360,9 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, code_later: bool) ->
         } else {
             quote!(rt::fixed::<#len>(frame))
         };
+        if let Some(f) = by_fn(m) {
+            return quote!(#frame.and_then(Self::#f));
+        }
         let (stmts, build) = decode_body(ctx, m);
         if stmts.is_empty() && !build.to_string().contains("frame") {
             return quote!(#frame.map(|_| #build));
@@ -2289,8 +2375,16 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, code_later: bool) ->
     }
     let tries = group.iter().map(|m| {
         let len = usize_lit(p.frame_len(m));
-        let (stmts, build) = decode_body(ctx, m);
         let a = admitted(m);
+        if let Some(f) = by_fn(m) {
+            return match (m.is_variable(), is_ambiguous(m, group)) {
+                (false, false) => quote!(g.attempt(#a, Self::#f);),
+                (false, true) => quote!(g.ambiguous(#a, Self::#f);),
+                (true, false) => quote!(g.attempt_any(#a, Self::#f);),
+                (true, true) => quote!(g.ambiguous_any(#a, Self::#f);),
+            };
+        }
+        let (stmts, build) = decode_body(ctx, m);
         if m.is_variable() {
             let split = split_frame(m, &stmts, &build);
             let decode = quote!(|frame: &[u8]| {

@@ -78,6 +78,17 @@ fn codeless_spec_generates_its_snapshot() {
     );
 }
 
+/// A code-less message beside 2-byte coded ones (Pelco-D), told apart by a constant
+/// sub-field: every code length is tried before a frame is refused (`snapshots_compile.rs`
+/// compiles it and holds it to the interpreter).
+#[test]
+fn codeless_beside_coded_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/pelco_d_codeless.yaml",
+        "pelco_d.rs",
+    );
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

@@ -9,6 +9,7 @@ include!("snapshots/syncy.rs");
 include!("snapshots/codeless.rs");
 include!("snapshots/variable.rs");
 include!("snapshots/ending.rs");
+include!("snapshots/pelco_d.rs");
 
 mod agree;
 
@@ -542,4 +543,64 @@ fn repeat_to_the_end_snapshot_streams_as_the_interpreter_does() {
             .count();
     }
     assert!(found > 200 * 15, "only {found} frames found");
+}
+
+/// A code-less message beside 2-byte coded ones, told apart by a constant sub-field (Pelco-D,
+/// as a user wrote it): the coded frames are not refused with the code-less message's error,
+/// the examples replay, and both engines agree on every example, the frames mutated from it
+/// and captures of them, however they are cut.
+#[test]
+fn codeless_beside_coded_snapshot_agrees_with_the_interpreter() {
+    use pelco_d2::{PelcoD2, Request};
+    let file = "model/tests/fixtures/valid/pelco_d_codeless.yaml";
+    let go_to = [0xFF, 0x01, 0x00, 0x07, 0x00, 0x01, 0x09];
+    assert_eq!(
+        Request::decode(&go_to).map(|d| d.message),
+        Ok(Request::GoToPreset { preset: 1 })
+    );
+    replay::<PelcoD2>(file);
+    let p = fixture(file);
+    let t = agree::agree::<PelcoD2>(&p);
+    assert!(t.accepted >= 3 && t.refused > 100, "{t:?}");
+    // A coded frame whose own field is out of range is refused for it, as by the interpreter.
+    let mut zero = go_to;
+    zero[5] = 0;
+    agree::reseal(&p, &mut zero);
+    assert!(matches!(
+        Request::decode(&zero),
+        Err(busspec_runtime::DecodeError::OutOfRange {
+            field: "preset",
+            ..
+        })
+    ));
+    for lookup in [false, true] {
+        let i = if lookup {
+            busspec_model::interp::Lookup::new(&p, Some(Direction::Request)).decode(&p, None, &zero)
+        } else {
+            busspec_model::interp::decode(&p, Some(Direction::Request), None, &zero)
+        };
+        assert!(
+            matches!(&i, Err(busspec_model::interp::DecodeError::OutOfRange { field, .. }) if field == "preset"),
+            "{i:?}"
+        );
+    }
+    let frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    let mut rng = agree::Rng(0x9E1C0);
+    let mut found = 0;
+    for _ in 0..100 {
+        let mut cap = Vec::new();
+        for _ in 0..20 {
+            let f = &frames[rng.below(frames.len() as u64) as usize];
+            if rng.below(8) == 0 {
+                cap.extend((0..1 + rng.below(4)).map(|_| rng.below(256) as u8));
+            }
+            cap.extend_from_slice(f);
+        }
+        let cuts: Vec<usize> = (0..6).map(|_| 1 + rng.below(20) as usize).collect();
+        let want = interp_seen(&p, &cap, &cuts);
+        let got = generated_seen::<PelcoD2>(&cap, &cuts);
+        assert_eq!(got, want, "capture {cap:02X?}");
+        found += got.iter().filter(|s| s.0 == "go_to_preset").count();
+    }
+    assert!(found > 100, "only {found} go_to_preset frames found");
 }

@@ -741,17 +741,22 @@ fn decode_in<'p>(
     // The messages of this length whose code fits, in the order of the scan below: when
     // there are any, they are what the scan would find.
     if let Some(groups) = lookup.and_then(|l| l.by_len.get(wire.len())) {
+        // One group holds the coded messages (by direction) before the code-less ones: the
+        // order of `coded_first` where the frame is decoded one way or nothing is code-less.
+        let one_way = directions.len() == 1;
         if let [g] = groups.as_slice() {
-            let fits = |r: &MessageRef| looked_up(r);
-            let mut found = g
-                .get(wire)
-                .iter()
-                .chain(g.codeless())
-                .copied()
-                .filter(fits)
-                .peekable();
-            if found.peek().is_some() {
-                return decide(p, found, shortest, reply_to, wire, spare);
+            if one_way || g.codeless.is_empty() {
+                let fits = |r: &MessageRef| looked_up(r);
+                let mut found = g
+                    .get(wire)
+                    .iter()
+                    .chain(g.codeless())
+                    .copied()
+                    .filter(fits)
+                    .peekable();
+                if found.peek().is_some() {
+                    return decide(p, found, shortest, reply_to, wire, spare);
+                }
             }
         }
         let mut by_len: Vec<MessageRef> = Vec::new();
@@ -763,15 +768,15 @@ fn decode_in<'p>(
                     .filter(|r| looked_up(r)),
             );
         }
-        if groups.len() > 1 {
-            by_len.sort_by_key(|r| (r.direction as u8, r.index));
+        if groups.len() > 1 || !one_way {
+            by_len.sort_by_key(|r| coded_first(p, r));
         }
         if !by_len.is_empty() {
             return decide(p, by_len, shortest, reply_to, wire, spare);
         }
     }
 
-    // Messages whose code matches the bytes where the code sits.
+    // Messages whose code matches the bytes where the code sits, in the order they are tried.
     let mut by_code: Vec<MessageRef> = Vec::new();
     for &direction in directions {
         for index in 0..p.messages(direction).len() {
@@ -781,6 +786,7 @@ fn decode_in<'p>(
             }
         }
     }
+    by_code.sort_by_key(|r| coded_first(p, r));
     if by_code.is_empty() {
         let o = p.framing.head(min_code);
         let longest = directions
@@ -831,6 +837,14 @@ fn decode_in<'p>(
         });
     }
     decide(p, by_len, shortest, reply_to, wire, spare)
+}
+
+/// The order messages whose code fits a frame are tried in, and the first refusal among them
+/// reported: by direction, then the messages the frame's code names before the code-less ones
+/// (the empty code fits every frame, so a coded message's refusal says more), then spec order.
+/// The generated `dispatch` tries them in this order too.
+fn coded_first(p: &Protocol, r: &MessageRef) -> (u8, bool, usize) {
+    (r.direction as u8, p.message(*r).code.is_empty(), r.index)
 }
 
 /// The frame among the messages of the frame's code and length (`by_len`, not empty) whose
