@@ -189,7 +189,7 @@ const OUT_OF_SPEC: [(&str, &str, &str); 4] = [
     (
         "sd",
         "10 01 4B 4B FB 8A",
-        "string_length at offset 3 is 75, outside its range 0..=32",
+        "electronic_serial_number_character.string_length at offset 3 is 75, outside its range 0..=32",
     ),
     (
         "sd",

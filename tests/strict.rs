@@ -406,6 +406,7 @@ fn sd_string_length_75_is_refused() {
         assert_eq!(
             e,
             DecodeError::OutOfRange {
+                message: "electronic_serial_number_character",
                 field: "string_length",
                 offset: 3,
                 found: 75,
@@ -587,6 +588,7 @@ fn sd_read_temperatures_to_broadcast_is_refused() {
         Err(DecodeError::BroadcastNotAccepted {
             message: "read_temperatures",
             code: 0xA0,
+            len: 1,
             address: 0x1F
         })
     );

@@ -420,10 +420,7 @@ fn repeat_const(m: &Message) -> Ident {
 
 /// The shortest and longest frames of `m`.
 fn len_range(m: &Message) -> (usize, usize) {
-    match m.repeat() {
-        Some((f, r)) => (m.layout.len + f.elements_len(r.min), m.max_len),
-        None => (m.layout.len, m.layout.len),
-    }
+    (m.min_len(), m.max_len)
 }
 
 /// The `rt::RepeatAt` constant of each message of direction `d` with a repeated field: where
@@ -433,7 +430,7 @@ fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
     for m in p.messages(d) {
         let Some((f, r)) = m.repeat() else { continue };
         let c = repeat_const(m);
-        let name = &f.name;
+        let (message, name) = (&m.name, &f.name);
         let base = usize_lit(m.layout.len);
         let at = usize_lit(m.layout.payload + f.offset);
         let width = usize_lit(if f.ty == FieldType::Bit { 0 } else { f.width });
@@ -445,7 +442,9 @@ fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
                 usize_lit(cf.width),
             );
             let le = cf.byte_order == ByteOrder::Little;
-            quote!(rt::CountField { name: #cn, at: #cat, width: #cw, le: #le })
+            // The words of the interpreter's refusal of a byte count that disagrees.
+            let rule = format!("the bytes of {name}");
+            quote!(rt::CountField { name: #cn, rule: #rule, at: #cat, width: #cw, le: #le })
         };
         let count = match r.count {
             Count::ToEnd => quote!(rt::CountBy::End),
@@ -466,6 +465,7 @@ fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
         out.extend(quote! {
             #[doc = #d]
             pub const #c: rt::RepeatAt = rt::RepeatAt {
+                message: #message,
                 field: #name,
                 base: #base,
                 at: #at,
@@ -1728,12 +1728,14 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
     let ls = ls.as_slice();
     let o = m.layout;
     let v = variant(m);
+    let message = m.name.as_str();
     let mut stmts = Vec::new();
     if let Some(b) = refuses_broadcast(p, m) {
         let name = &m.name;
         let code = hex_code(&m.code);
         let (at, b) = (usize_lit(o.address), hex_u8(b));
-        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code)?;));
+        let len = Literal::u8_unsuffixed(m.code.len() as u8);
+        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code, #len)?;));
     }
     let named = repeated(m);
     let counter = m.count_field();
@@ -1799,19 +1801,23 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         wires.push(wire.clone());
         if let Some(c) = f.constant {
             let l = hex_lit(c);
-            stmts.push(quote!(rt::equal(#name, #at, #wire, #l)?;));
+            stmts.push(quote!(rt::equal(#message, #name, #at, #wire, #l)?;));
         }
         if let Some(other) = f.equals {
             let on = wires.get(other).cloned().unwrap_or_default();
-            stmts.push(quote!(rt::same(#name, #at, #wire, #on)?;));
+            let other_name = m.fields.get(other).map_or("", |o| o.name.as_str());
+            stmts.push(quote!(rt::same(#message, #name, #at, #wire, #other_name, #on)?;));
         }
         if let Some((other, rel)) = follows_field(f) {
             let on = wires.get(other).cloned().unwrap_or_default();
             let args = relation_args(rel);
-            stmts.push(quote!(rt::following(#name, #at, #wire, #on as i64, #args)?;));
+            let rule = rel.describe(&rel.field);
+            stmts.push(
+                quote!(rt::following(#message, #name, #at, #wire, #on as i64, (#args), #rule)?;),
+            );
         }
         if let Some(range) = range {
-            stmts.push(quote!(rt::#range_fn(#name, #at, #wire, #range)?;));
+            stmts.push(quote!(rt::#range_fn(#message, #name, #at, #wire, #range)?;));
         }
         if f.bits.is_empty() {
             if f.constant.is_none() && f.equals.is_none() && follows_field(f).is_none() {
@@ -1862,12 +1868,13 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
             match b.constant {
                 Some(c) => {
                     let l = hex_lit(c);
-                    stmts.push(quote!(rt::equal(#bname, #at, #field, #l)?;));
+                    stmts.push(quote!(rt::equal(#message, #bname, #at, #field, #l)?;));
                 }
                 None => {
                     let limits = raw_limits(u32::from(b.width()), b.signed);
                     if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
-                        stmts.push(quote!(rt::#range_fn(#bname, #at, #extract, #range)?;));
+                        stmts
+                            .push(quote!(rt::#range_fn(#message, #bname, #at, #extract, #range)?;));
                     }
                     if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
                         values.push((ident(&b.name), from_wire(ctx, leaf, Some(bt), extract)));
@@ -2025,16 +2032,6 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     let max_len = p.max_frame_len(d);
     let code_at = |l: usize| p.framing.head(l).code;
     let replies = d == Direction::Response;
-    // Where every reply's code has one length, a reply the request does not admit leaves its
-    // arm with the same error and `decode` writes the frame's code into it (`rt::reply_code`):
-    // each arm writing its own code took 10 to 14 bytes at opt-level s.
-    let code_later = match msgs.first() {
-        Some(m) if replies && !m.code.is_empty() => msgs
-            .iter()
-            .all(|x| x.code.len() == m.code.len())
-            .then(|| (code_at(m.code.len()), m.code.len())),
-        _ => None,
-    };
     let first_code_at = usize_lit(code_at(1));
     let unknown = {
         let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
@@ -2072,7 +2069,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
                 group.extend(&codeless);
             }
             let lit = hex_code(code);
-            let arm = emit_group(ctx, &group, replies, code_later.is_some(), mixed);
+            let arm = emit_group(ctx, &group, replies, mixed);
             if last {
                 quote!(#lit => #arm,)
             } else {
@@ -2109,20 +2106,37 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         });
     }
     if mixed {
-        body.push(emit_group(ctx, &codeless, replies, false, true));
+        body.push(emit_group(ctx, &codeless, replies, true));
     }
     let addr_at = usize_lit(address_at(p, d));
     let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
     let mask = reply_mask(p);
-    let (request_param, request_arg, asked) = if replies {
-        (
-            quote!(, request: rt::Option<&Request>),
-            quote!(, request),
-            // The responses the request may get, bit i for row i of MESSAGES.
-            quote!(let asked: #mask = request.map_or(!0, Request::replies);),
-        )
+    // The groups `dispatch` tries (`rt::Group`, several messages of one code): the request
+    // names the reply in its refusal, and settles replies only the request tells apart.
+    let groups: Vec<Vec<&Message>> = msgs
+        .iter()
+        .filter(|m| !m.code.is_empty() || !mixed)
+        .map(|m| {
+            let mut g: Vec<&Message> = msgs.iter().filter(|x| x.code == m.code).collect();
+            if mixed {
+                g.extend(&codeless);
+            }
+            g
+        })
+        .chain(mixed.then(|| codeless.clone()))
+        .filter(|g| g.len() > 1)
+        .collect();
+    let (request_param, request_arg) = if replies && !groups.is_empty() {
+        (quote!(, request: rt::Option<&Request>), quote!(, request))
     } else {
-        (quote!(), quote!(), quote!())
+        (quote!(), quote!())
+    };
+    let settles = groups.iter().any(|g| g.iter().any(|m| is_ambiguous(m, g)));
+    let asked = if replies && settles {
+        // The responses the request may get, bit i for row i of MESSAGES.
+        quote!(let asked: #mask = request.map_or(!0, Request::replies);)
+    } else {
+        quote!()
     };
     let sum = frame_sum(p);
     // A sync sequence's first byte is `FRAME.start`'s; the others are checked first.
@@ -2130,30 +2144,36 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         (Some(at), sync @ [_, _, ..]) => {
             let at = usize_lit(at);
             let bytes = sync.iter().map(|b| hex_u8(*b));
-            quote!(rt::check_sync(frame, #at, &[#(#bytes),*])?;)
+            quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
         }
         _ => quote!(),
     };
-    let follows = if replies && has_follows_request(p) {
+    // A reply the request does not get is refused once decoded, then one whose fields do
+    // not follow the request's: the interpreter's order.
+    let follows = if has_follows_request(p) {
+        quote!(message.follows_request(request)?;)
+    } else {
+        quote!()
+    };
+    let answered = if replies {
         quote! {
             if let rt::Some(request) = request {
-                message.follows_request(request)?;
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+                #follows
             }
         }
     } else {
         quote!()
     };
     let length = length_check(p, d);
-    let fill_code = code_later.map(|(at, l)| {
-        let (at, l) = (usize_lit(at), usize_lit(l));
-        quote!(.map_err(|e| rt::reply_code(e, frame, #at, #l)))
-    });
     let checks = quote! {
         #sync
         let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
         #length
-        let message = Self::dispatch(frame #request_arg)#fill_code?;
-        #follows
+        let message = Self::dispatch(frame #request_arg)?;
+        #answered
         rt::Ok(Decoded { address, message })
     };
     let codeless_fns = if mixed {
@@ -2294,72 +2314,44 @@ fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream {
     quote!(#(#fns)*)
 }
 
-/// The dispatch arm for the messages of one code: a lone message is decoded in the arm (a
-/// reply once the request admits it); several are tried in spec order by `rt::Group`, each
-/// decoder a closure over the frame as an array of its length.
-/// The value of one code's arm in `dispatch`; `code_later`: a single reply the request does
-/// not admit leaves its code for `decode` to write (`rt::reply_code`); `shared`: code-less
-/// messages are decoded by their own function ([`emit_codeless_fns`]), as every arm tries them.
-fn emit_group(
-    ctx: &Ctx,
-    group: &[&Message],
-    replies: bool,
-    code_later: bool,
-    shared: bool,
-) -> TokenStream {
+/// The dispatch arm for the messages of one code: a lone message is decoded in the arm;
+/// several are tried in spec order by `rt::Group`, each decoder a closure over the frame as an
+/// array of its length. `shared`: code-less messages are decoded by their own function
+/// ([`emit_codeless_fns`]), as every arm tries them.
+fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, shared: bool) -> TokenStream {
     let p = ctx.p;
     let by_fn = |m: &Message| (shared && m.code.is_empty()).then(|| codeless_fn(m));
+    // Whether the request gets a reply decides between candidates only the request tells
+    // apart; every other reply is checked once it is decoded (`decode_for`).
     let admitted = |m: &Message| {
-        if replies {
-            let i = p
-                .responses
-                .iter()
-                .position(|r| r.name == m.name)
-                .unwrap_or(0) as u32;
-            if i == 0 {
-                return quote!(asked & 1 != 0);
-            }
-            let i = Literal::u32_unsuffixed(i);
-            quote!(asked >> #i & 1 != 0)
-        } else {
-            quote!(true)
+        let i = p
+            .responses
+            .iter()
+            .position(|r| r.name == m.name)
+            .unwrap_or(0) as u32;
+        if i == 0 {
+            return quote!(asked & 1 != 0);
         }
+        let i = Literal::u32_unsuffixed(i);
+        quote!(asked >> #i & 1 != 0)
     };
     let value = hex_code(&group[0].code);
     if let [m] = group {
         if m.is_variable() {
-            let admit = if replies {
-                let a = admitted(m);
-                quote!(rt::admit(#a, #value)?;)
-            } else {
-                quote!()
-            };
             if let Some(f) = by_fn(m) {
-                return quote! {{
-                    #admit
-                    Self::#f(frame)
-                }};
+                return quote!(Self::#f(frame));
             }
             let (stmts, build) = decode_body(ctx, m);
             let split = split_frame(m, &stmts, &build);
             return quote! {{
-                #admit
                 #split
                 #(#stmts)*
                 rt::Ok(#build)
             }};
         }
         let len = usize_lit(p.frame_len(m));
-        let frame = if replies {
-            let a = admitted(m);
-            if code_later {
-                quote!(rt::reply_of::<#len>(frame, #a))
-            } else {
-                quote!(rt::reply::<#len>(frame, #a, #value))
-            }
-        } else {
-            quote!(rt::fixed::<#len>(frame))
-        };
+        let name = &m.name;
+        let frame = quote!(rt::fixed::<#len>(frame, #name, &[#len]));
         if let Some(f) = by_fn(m) {
             return quote!(#frame.and_then(Self::#f));
         }
@@ -2375,53 +2367,53 @@ fn emit_group(
     }
     let tries = group.iter().map(|m| {
         let len = usize_lit(p.frame_len(m));
-        let a = admitted(m);
-        if let Some(f) = by_fn(m) {
-            return match (m.is_variable(), is_ambiguous(m, group)) {
-                (false, false) => quote!(g.attempt(#a, Self::#f);),
-                (false, true) => quote!(g.ambiguous(#a, Self::#f);),
-                (true, false) => quote!(g.attempt_any(#a, Self::#f);),
-                (true, true) => quote!(g.ambiguous_any(#a, Self::#f);),
-            };
-        }
-        let (stmts, build) = decode_body(ctx, m);
-        if m.is_variable() {
-            let split = split_frame(m, &stmts, &build);
-            let decode = quote!(|frame: &[u8]| {
-                #split
-                #(#stmts)*
-                rt::Ok(#build)
-            });
-            return if is_ambiguous(m, group) {
-                quote!(g.ambiguous_any(#a, #decode);)
-            } else {
-                quote!(g.attempt_any(#a, #decode);)
-            };
-        }
-        let decode = if stmts.is_empty() && !build.to_string().contains("frame") {
-            quote!(|_: &[u8; #len]| rt::Ok(#build))
-        } else {
-            quote!(|frame: &[u8; #len]| {
-                #(#stmts)*
-                rt::Ok(#build)
-            })
+        let name = &m.name;
+        let ambiguous = is_ambiguous(m, group);
+        let a = if ambiguous { admitted(m) } else { quote!() };
+        let decode = match by_fn(m) {
+            Some(f) => quote!(Self::#f),
+            None => {
+                let (stmts, build) = decode_body(ctx, m);
+                if m.is_variable() {
+                    let split = split_frame(m, &stmts, &build);
+                    quote!(|frame: &[u8]| {
+                        #split
+                        #(#stmts)*
+                        rt::Ok(#build)
+                    })
+                } else if stmts.is_empty() && !build.to_string().contains("frame") {
+                    quote!(|_: &[u8; #len]| rt::Ok(#build))
+                } else {
+                    quote!(|frame: &[u8; #len]| {
+                        #(#stmts)*
+                        rt::Ok(#build)
+                    })
+                }
+            }
         };
-        if is_ambiguous(m, group) {
-            quote!(g.ambiguous(#a, #decode);)
-        } else {
-            quote!(g.attempt(#a, #decode);)
+        match (m.is_variable(), ambiguous) {
+            (false, false) => quote!(g.attempt(#decode);),
+            (false, true) => quote!(g.ambiguous(#a, #name, #decode);),
+            (true, false) => quote!(g.attempt_any(#decode);),
+            (true, true) => quote!(g.ambiguous_any(#a, #name, #decode);),
         }
     });
-    let expected = usize_lit(group.iter().map(|m| len_range(m).0).min().unwrap_or(0));
-    let alone = if replies {
-        quote!(request.is_none())
+    // A frame of none of the group's lengths is refused naming the first and every length,
+    // as the interpreter refuses it.
+    let first = &group[0].name;
+    let mut lengths: Vec<usize> = group.iter().map(|m| p.frame_len(m)).collect();
+    lengths.sort_unstable();
+    lengths.dedup();
+    let lengths = lengths.into_iter().map(usize_lit);
+    let request = if replies {
+        quote!(request.map(Request::name))
     } else {
-        quote!(true)
+        quote!(rt::None)
     };
     quote! {{
-        let mut g = rt::Group::new(frame, #value, #alone);
+        let mut g = rt::Group::new(frame, #value, #request);
         #(#tries)*
-        g.end(#expected, #replies)
+        g.end(#first, &[#(#lengths),*])
     }}
 }
 
@@ -3127,10 +3119,13 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 else {
                     continue;
                 };
-                let name = l.name;
+                let (message, name) = (&m.name, l.name);
                 let at = usize_lit(m.layout.payload + l.field.offset);
                 let args = relation_args(rel);
-                checks.push(quote!(rt::following(#name, #at, #a, #b as i64, #args)?;));
+                let rule = format!("{} of the request", rel.describe(&rel.field));
+                checks.push(
+                    quote!(rt::following(#message, #name, #at, #a, #b as i64, (#args), #rule)?;),
+                );
             }
             if let Some(list) = list {
                 let rc = repeat_const(m);
@@ -3151,11 +3146,15 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                     }
                     let args = relation_args(rel);
                     if *is_count {
-                        let name = &f.name;
+                        let (message, name) = (&m.name, &f.name);
                         let at = usize_lit(m.layout.payload + f.offset);
-                        checks.push(quote!(rt::following(#name, #at, #rc.count_value(#mine.len()) as u64, #b as i64, #args)?;));
+                        let rule = format!("{} of the request", rel.describe(&rel.field));
+                        checks.push(quote!(rt::following(#message, #name, #at, #rc.count_value(#mine.len()) as u64, #b as i64, (#args), #rule)?;));
                     } else {
-                        checks.push(quote!(#rc.follows_request(#mine.len(), #b as i64, #args)?;));
+                        let rule = rel.describe(&rel.field);
+                        checks.push(
+                            quote!(#rc.follows_request(#mine.len(), #b as i64, (#args), #rule)?;),
+                        );
                     }
                 }
             }

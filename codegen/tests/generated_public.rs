@@ -64,10 +64,13 @@ fn modbus_coils_and_registers() {
     };
     assert!(matches!(
         modbus::Response::decode_reply(&wire("read_coils_reply"), &more),
-        Err(DecodeError::InvalidValue {
+        Err(DecodeError::NotFollowing {
+            message: "read_coils_reply",
             field: "byte_count",
             offset: 2,
-            found: 3
+            expected: 4,
+            found: 3,
+            ..
         })
     ));
     assert!(!reply.answers(&more) && reply.answers(&read));
@@ -129,9 +132,9 @@ fn dynamixel_status_and_length_byte() {
     lying[6] = !(1u8 + 4 + 0x20);
     assert_eq!(
         dynamixel::Response::decode(&lying),
-        Err(DecodeError::InvalidValue {
-            field: "length",
+        Err(DecodeError::LengthMismatch {
             offset: 3,
+            expected: 3,
             found: 4
         })
     );

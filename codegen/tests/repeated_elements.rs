@@ -71,6 +71,7 @@ fn repeat_at(p: &ir::Protocol, m: &ir::Message) -> rt::RepeatAt {
         let c = &m.fields[i];
         rt::CountField {
             name: leak(&c.name),
+            rule: leak(&format!("the bytes of {}", f.name)),
             at: m.layout.payload + c.offset,
             width: c.width,
             le: c.byte_order == ByteOrder::Little,
@@ -78,6 +79,7 @@ fn repeat_at(p: &ir::Protocol, m: &ir::Message) -> rt::RepeatAt {
     };
     let _ = p;
     rt::RepeatAt {
+        message: leak(&m.name),
         field: leak(&f.name),
         base: m.layout.len,
         at: m.layout.payload + f.offset,
@@ -166,12 +168,14 @@ fn element_counts_agree_with_the_interpreter() {
 fn a_count_that_lies_gives_no_frame_length() {
     // Modbus read holding registers reply: address, code 0x03, byte count, registers.
     let ra = rt::RepeatAt {
+        message: "read_holding_registers_reply",
         field: "values",
         base: 5,
         at: 3,
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of values",
             at: 2,
             width: 1,
             le: false,
@@ -195,9 +199,12 @@ fn a_count_that_lies_gives_no_frame_length() {
     assert_eq!(ra.count(&[0x01, 0x03, 0x04, 0, 1, 0, 2, 0xAA, 0xBB]), Ok(2));
     assert_eq!(
         ra.count(&[0x01, 0x03, 0x06, 0, 1, 0, 2, 0xAA, 0xBB]),
-        Err(busspec_runtime::DecodeError::InvalidValue {
+        Err(busspec_runtime::DecodeError::NotFollowing {
+            message: "read_holding_registers_reply",
             field: "byte_count",
             offset: 2,
+            rule: "the bytes of values",
+            expected: 4,
             found: 6
         })
     );

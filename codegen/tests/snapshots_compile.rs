@@ -24,6 +24,17 @@ fn fixture(name: &str) -> ir::Protocol {
     busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
 }
 
+/// Both engines refused a frame, and in the same words.
+fn same_text(
+    generated: Result<(), busspec_runtime::DecodeError>,
+    interpreted: Result<(), busspec_model::interp::DecodeError>,
+) {
+    match (generated, interpreted) {
+        (Err(g), Err(i)) => assert_eq!(g.to_string(), i.to_string()),
+        (g, i) => panic!("both engines must refuse: {g:?} / {i:?}"),
+    }
+}
+
 fn replay<P: Protocol>(file: &str) {
     let p = fixture(file);
     assert_eq!(P::NAME, p.name);
@@ -179,11 +190,15 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
     );
     assert_eq!(
         syncy::Request::decode(&lying),
-        Err(DecodeError::InvalidValue {
-            field: "length",
+        Err(DecodeError::LengthMismatch {
             offset: 3,
+            expected: 5,
             found: 6
         })
+    );
+    same_text(
+        syncy::Request::decode(&lying).map(|_| ()),
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &lying).map(|_| ()),
     );
     let far = syncy::Request::MoveTo {
         target: syncy::Millimetre::from_raw(0x80_0000),
@@ -225,15 +240,21 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
     assert_eq!(&buf[..n], &wire[..]);
     // `doubled` is not 2 × quantity: both engines refuse it.
     let bad = syncy_frame(&[0xFF, 0xFF, 1, 6, 5, 10, 21, 1, 2]);
-    assert_eq!(
+    assert!(matches!(
         syncy::Request::decode(&bad),
-        Err(DecodeError::InvalidValue {
+        Err(DecodeError::NotFollowing {
+            message: "set_pair",
             field: "doubled",
             offset: 6,
-            found: 21
+            expected: 20,
+            found: 21,
+            ..
         })
+    ));
+    same_text(
+        syncy::Request::decode(&bad).map(|_| ()),
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &bad).map(|_| ()),
     );
-    assert!(busspec_model::interp::decode(&p, Some(Direction::Request), None, &bad).is_err());
     // 200 × 2 does not fit the byte `doubled` is: encode refuses.
     let far = syncy::Request::SetPair {
         quantity: 200,
@@ -255,13 +276,19 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
         let plain = syncy::Response::decode(&reply).unwrap().message;
         assert_eq!(plain.answers(&req), ok);
     }
-    assert_eq!(
+    assert!(matches!(
         syncy::Response::decode_reply(&wrong_quantity, &req),
-        Err(DecodeError::InvalidValue {
+        Err(DecodeError::NotFollowing {
             field: "quantity",
             offset: 5,
-            found: 9
+            expected: 10,
+            found: 9,
+            ..
         })
+    ));
+    same_text(
+        syncy::Response::decode_reply(&wrong_quantity, &req).map(|_| ()),
+        busspec_model::interp::decode_reply(&p, &ireq, &wrong_quantity).map(|_| ()),
     );
     assert_eq!(syncy::Response::SetPairError { reason: 3 }.code(), &[0x85]);
 }
@@ -374,13 +401,18 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     let mut lying = want.clone();
     lying[6] = 6;
     agree::reseal(&p, &mut lying);
-    assert_eq!(
+    assert!(matches!(
         vario::Request::decode(&lying),
-        Err(DecodeError::InvalidValue {
+        Err(DecodeError::NotFollowing {
             field: "byte_count",
             offset: 6,
-            found: 6
+            found: 6,
+            ..
         })
+    ));
+    same_text(
+        vario::Request::decode(&lying).map(|_| ()),
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &lying).map(|_| ()),
     );
     // The reply's count follows the request: two registers asked, three sent.
     let read = vario::Request::Read {

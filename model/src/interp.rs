@@ -508,7 +508,7 @@ impl Limits {
             shortest: directions
                 .iter()
                 .flat_map(|d| p.messages(*d))
-                .map(|m| p.frame_len(m))
+                .map(Message::min_len)
                 .min()
                 .unwrap_or(0),
             min_code: directions
@@ -877,15 +877,36 @@ fn decide<'p>(
             Some(misfit) => Err(misfit.error(m)),
         };
     }
+    let answers = |cmd: usize, r: &MessageRef| {
+        r.direction == Direction::Response
+            && p.commands
+                .get(cmd)
+                .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
+    };
+    // Decoded as the reply to a request, the responses only the request tells apart that it
+    // does not get are set aside: one that fits is not the request's reply, and one that does
+    // not fit is reported only where nothing else is.
+    let aside = |r: &MessageRef| match reply_to {
+        Some(cmd) if !paired => p.message(*r).needs_request && !answers(cmd, r),
+        _ => false,
+    };
     // The messages whose fields fit; their values are built for the one chosen.
     let fitting = &mut spare.fitting;
     fitting.clear();
     let mut first_err = None;
+    let (mut refused, mut aside_err) = (None, None);
     for r in first.into_iter().chain(second).chain(by_len) {
-        match misfit(p, p.message(r), wire) {
-            None => fitting.push(r),
-            Some(misfit) => {
+        let misfit = misfit(p, p.message(r), wire);
+        match (misfit, aside(&r)) {
+            (None, false) => fitting.push(r),
+            (Some(misfit), false) => {
                 first_err.get_or_insert((r, misfit));
+            }
+            (None, true) => {
+                refused.get_or_insert(r);
+            }
+            (Some(misfit), true) => {
+                aside_err.get_or_insert((r, misfit));
             }
         }
     }
@@ -902,29 +923,45 @@ fn decide<'p>(
     }
     if fitting.len() > 1 {
         if let Some(cmd) = reply_to {
-            let answers = |r: &MessageRef| {
-                r.direction == Direction::Response
-                    && p.commands
-                        .get(cmd)
-                        .is_some_and(|c| c.responses.iter().any(|(i, _)| *i == r.index))
-            };
+            let answers = |r: &MessageRef| answers(cmd, r);
             if paired && fitting.iter().filter(|r| answers(r)).count() != 1 {
                 // Not settled by the request: the ambiguity without it.
                 return Err(DecodeError::Ambiguous {
                     candidates: fitting.iter().map(|r| p.message(*r).name.clone()).collect(),
                 });
             }
+            if !fitting.iter().any(answers) {
+                // The frame is one of several replies, none of them the request's.
+                return Err(DecodeError::NotAnAnswer {
+                    message: p.message(fitting[0]).name.clone(),
+                    request: p
+                        .commands
+                        .get(cmd)
+                        .map(|c| c.name.clone())
+                        .unwrap_or_default(),
+                });
+            }
             fitting.retain(answers);
         }
     }
     match fitting.len() {
-        // The first misfit's error, built only now that it is reported.
-        0 => Err(first_err
-            .map(|(r, misfit)| misfit.error(p.message(r)))
-            .unwrap_or(DecodeError::Truncated {
+        // The first misfit's error, built only now that it is reported; else a set-aside
+        // response that fits (not the request's), else a set-aside one's misfit.
+        0 => Err(match (first_err, refused, aside_err) {
+            (Some((r, misfit)), _, _) => misfit.error(p.message(r)),
+            (None, Some(r), _) => DecodeError::NotAnAnswer {
+                message: p.message(r).name.clone(),
+                request: reply_to
+                    .and_then(|c| p.commands.get(c))
+                    .map(|c| c.name.clone())
+                    .unwrap_or_default(),
+            },
+            (None, None, Some((r, misfit))) => misfit.error(p.message(r)),
+            (None, None, None) => DecodeError::Truncated {
                 needed: shortest,
                 found: wire.len(),
-            })),
+            },
+        }),
         1 => {
             let message = fitting[0];
             let m = p.message(message);

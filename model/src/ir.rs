@@ -353,6 +353,14 @@ impl Message {
             .and_then(|f| f.repeat.as_ref().map(|r| (f, r)))
     }
 
+    /// Its shortest frame: with the fewest elements its repeated field may have.
+    pub fn min_len(&self) -> usize {
+        match self.repeat() {
+            Some((f, r)) => self.layout.len + f.elements_len(r.min),
+            None => self.layout.len,
+        }
+    }
+
     /// Whether its frames vary in length.
     pub fn is_variable(&self) -> bool {
         self.repeat().is_some()

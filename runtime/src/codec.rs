@@ -173,6 +173,7 @@ pub fn check_frame(
             offset: at,
             expected,
             found,
+            width: f.checksum_len as u8,
         });
     }
     let address = frame[address_at];
@@ -194,54 +195,43 @@ pub fn code(frame: &[u8], at: usize, n: usize) -> u32 {
     uint(&frame[at..at + n], false) as u32
 }
 
-/// The frame as the fixed-size array of a message whose code matched, or why not.
+/// The frame as the fixed-size array of `message`, whose code matched, or why not: too short
+/// for it, or another length (`lengths`: every length of a message with this code, `[N]`
+/// where it is the only one).
 #[inline(always)]
-pub fn fixed<const N: usize>(frame: &[u8]) -> Result<&[u8; N], DecodeError> {
-    frame.try_into().map_err(|_| DecodeError::WrongLength {
-        expected: N,
-        found: frame.len(),
-    })
+pub fn fixed<'f, const N: usize>(
+    frame: &'f [u8],
+    message: &'static str,
+    lengths: &'static [usize],
+) -> Result<&'f [u8; N], DecodeError> {
+    frame
+        .try_into()
+        .map_err(|_| wrong_length(frame, message, lengths))
 }
 
-/// [`fixed`], for a reply: `Err(NotAReply)` first if the request does not admit it.
-#[inline(always)]
-pub fn reply<const N: usize>(
-    frame: &[u8],
-    admitted: bool,
-    code: u32,
-) -> Result<&[u8; N], DecodeError> {
-    if !admitted {
-        return Err(DecodeError::NotAReply { code });
-    }
-    fixed(frame)
-}
-
-/// [`reply`] whose `NotAReply` the caller completes with the frame's code ([`reply_code`]):
-/// every arm that refuses a reply then leaves with the same error.
-#[inline(always)]
-pub fn reply_of<const N: usize>(frame: &[u8], admitted: bool) -> Result<&[u8; N], DecodeError> {
-    reply(frame, admitted, 0)
-}
-
-/// `e`, with the code of `frame` (`n` bytes from `at`) where it is a `NotAReply`: for a
-/// direction whose codes have one length, where a refused reply's code is always the frame's.
-#[inline]
-pub fn reply_code(e: DecodeError, frame: &[u8], at: usize, n: usize) -> DecodeError {
-    match e {
-        DecodeError::NotAReply { .. } => DecodeError::NotAReply {
-            code: frame.get(at..at + n).map_or(0, |c| uint(c, false) as u32),
+/// The refusal of a frame whose code is known but whose length is none of `lengths` (sorted,
+/// the lengths of the messages with its code, `message` the first tried): truncated where
+/// every one is longer, as the interpreter reports it.
+#[cold]
+pub fn wrong_length(frame: &[u8], message: &'static str, lengths: &'static [usize]) -> DecodeError {
+    match lengths.first() {
+        Some(&needed) if needed > frame.len() => DecodeError::Truncated {
+            needed,
+            found: frame.len(),
         },
-        e => e,
+        _ => DecodeError::WrongLength {
+            message,
+            expected: lengths,
+            found: frame.len(),
+        },
     }
 }
 
-/// For a reply of variable length: `Err(NotAReply)` if the request does not admit it.
-#[inline(always)]
-pub fn admit(admitted: bool, code: u32) -> Result<(), DecodeError> {
-    if !admitted {
-        return Err(DecodeError::NotAReply { code });
-    }
-    Ok(())
+/// The refusal of a reply `request` does not get: `message` decoded from the frame, but the
+/// spec does not list it among the request's responses.
+#[cold]
+pub fn not_a_reply(message: &'static str, request: &'static str) -> DecodeError {
+    DecodeError::NotAReply { message, request }
 }
 
 /// The error for a code no message of the direction has: its `longest` bytes from `at`, or as
@@ -260,25 +250,41 @@ pub fn unknown_code(
         .skip(at)
         .take(n)
         .fold(0u32, |a, b| (a << 8) | u32::from(*b));
+    let len = n as u8;
     if response {
-        DecodeError::UnknownResponse { offset: at, code }
+        DecodeError::UnknownResponse {
+            offset: at,
+            code,
+            len,
+        }
     } else {
-        DecodeError::UnknownCommand { offset: at, code }
+        DecodeError::UnknownCommand {
+            offset: at,
+            code,
+            len,
+        }
     }
 }
 
-/// The messages sharing one code, tried in spec order: the first that has the frame's length,
-/// is admitted (for a reply, the request may get it) and decodes is the message. Where only
-/// the request tells some apart ([`Self::ambiguous`] candidates), decoding without a request
-/// must find exactly one of them. Each candidate is a no-op once one has settled the frame.
+/// The messages sharing one code, tried in spec order: the first that has the frame's length
+/// and decodes is the message. Where only the request tells some apart ([`Self::ambiguous`]
+/// candidates), a request settles which one the frame is, and decoding without one must find
+/// exactly one of them. Each candidate is a no-op once one has settled the frame. Whether a
+/// request gets the message is checked after, as the interpreter checks it.
 #[derive(Debug)]
 pub struct Group<'f, T> {
     frame: &'f [u8],
     code: u32,
-    /// No request was given.
-    alone: bool,
-    admitted: bool,
+    /// The name of the request the frame answers, where one was given.
+    request: Option<&'static str>,
     found: Option<T>,
+    /// The ambiguous candidates that decoded, without a request: two or more make the frame
+    /// ambiguous.
+    decoded: crate::Candidates,
+    /// The first ambiguous candidate that decoded but the request does not get.
+    refused: Option<&'static str>,
+    /// The first error of an ambiguous candidate the request does not get.
+    aside: Option<DecodeError>,
     /// The first refused candidate's error, in spec order (the interpreter reports the same).
     first: Option<DecodeError>,
     done: Option<DecodeResult<T>>,
@@ -286,27 +292,27 @@ pub struct Group<'f, T> {
 
 impl<'f, T> Group<'f, T> {
     #[inline(always)]
-    pub fn new(frame: &'f [u8], code: u32, alone: bool) -> Self {
+    pub fn new(frame: &'f [u8], code: u32, request: Option<&'static str>) -> Self {
         Group {
             frame,
             code,
-            alone,
-            admitted: false,
+            request,
             found: None,
+            decoded: crate::Candidates::default(),
+            refused: None,
+            aside: None,
             first: None,
             done: None,
         }
     }
 
-    /// The candidate's message if it is admitted, has the frame's length and decodes.
+    /// The candidate's message if it has the frame's length and decodes.
     #[inline(always)]
     fn try_one<const N: usize>(
         &mut self,
-        admitted: bool,
         decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
     ) -> Option<T> {
-        self.admitted |= admitted;
-        if self.done.is_some() || !admitted {
+        if self.done.is_some() {
             return None;
         }
         let frame: &[u8; N] = self.frame.try_into().ok()?;
@@ -321,12 +327,8 @@ impl<'f, T> Group<'f, T> {
 
     /// Tries one candidate; the first that decodes settles the frame.
     #[inline(always)]
-    pub fn attempt<const N: usize>(
-        &mut self,
-        admitted: bool,
-        decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
-    ) {
-        if let Some(m) = self.try_one(admitted, decode) {
+    pub fn attempt<const N: usize>(&mut self, decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>) {
+        if let Some(m) = self.try_one(decode) {
             self.done = Some(Ok(m));
         }
     }
@@ -334,17 +336,45 @@ impl<'f, T> Group<'f, T> {
     /// [`Self::attempt`] for a message of variable length: `decode` takes the whole frame and
     /// checks its length itself (an error is kept as any candidate's).
     #[inline(always)]
-    pub fn attempt_any(&mut self, admitted: bool, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) {
-        if let Some(m) = self.try_any(admitted, decode) {
+    pub fn attempt_any(&mut self, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) {
+        if let Some(m) = self.try_any(decode) {
             self.done = Some(Ok(m));
         }
     }
 
     /// [`Self::ambiguous`] for a message of variable length, as [`Self::attempt_any`].
     #[inline(always)]
-    pub fn ambiguous_any(&mut self, admitted: bool, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) {
-        if let Some(m) = self.try_any(admitted, decode) {
-            self.settle_ambiguous(m);
+    pub fn ambiguous_any(
+        &mut self,
+        admitted: bool,
+        name: &'static str,
+        decode: impl FnOnce(&[u8]) -> DecodeResult<T>,
+    ) {
+        if self.set_aside(admitted) {
+            let r = decode(self.frame);
+            self.aside(r.map(|_| ()), name);
+        } else if let Some(m) = self.try_any(decode) {
+            self.settle_ambiguous(m, name);
+        }
+    }
+
+    /// Whether a candidate only the request tells apart is set aside: the request does not
+    /// get it. It is still decoded, to say so where nothing else fits.
+    #[inline(always)]
+    fn set_aside(&self, admitted: bool) -> bool {
+        self.request.is_some() && !admitted && self.done.is_none()
+    }
+
+    /// A set-aside candidate `name` decoded to `r`.
+    #[inline(always)]
+    fn aside(&mut self, r: DecodeResult<()>, name: &'static str) {
+        match r {
+            Ok(()) => {
+                self.refused.get_or_insert(name);
+            }
+            Err(e) => {
+                self.aside.get_or_insert(e);
+            }
         }
     }
 
@@ -352,13 +382,8 @@ impl<'f, T> Group<'f, T> {
     /// both: SD's decoder, whose replies go through `Group`, took 2 % more instructions per
     /// frame that way (callgrind, `benches/icount.sh`).
     #[inline(always)]
-    fn try_any(
-        &mut self,
-        admitted: bool,
-        decode: impl FnOnce(&[u8]) -> DecodeResult<T>,
-    ) -> Option<T> {
-        self.admitted |= admitted;
-        if self.done.is_some() || !admitted {
+    fn try_any(&mut self, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) -> Option<T> {
+        if self.done.is_some() {
             return None;
         }
         decode(self.frame)
@@ -368,52 +393,66 @@ impl<'f, T> Group<'f, T> {
             .ok()
     }
 
-    /// Tries a candidate that shares code and length with another only the request tells
-    /// apart: with a request as [`Self::attempt`]; without one it is kept, and a second that
-    /// decodes makes the frame ambiguous.
+    /// Tries a candidate `name` that shares code and length with another only the request
+    /// tells apart (`admitted`: the request gets it).
     #[inline(always)]
     pub fn ambiguous<const N: usize>(
         &mut self,
         admitted: bool,
+        name: &'static str,
         decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
     ) {
-        let Some(m) = self.try_one(admitted, decode) else {
+        if self.set_aside(admitted) {
+            if let Ok(frame) = <&[u8; N]>::try_from(self.frame) {
+                let r = decode(frame);
+                self.aside(r.map(|_| ()), name);
+            }
+            return;
+        }
+        let Some(m) = self.try_one(decode) else {
             return;
         };
-        self.settle_ambiguous(m);
+        self.settle_ambiguous(m, name);
     }
 
-    /// An ambiguous candidate's message that decoded: settles the frame with a request, is
-    /// kept without one, or makes the frame ambiguous if another was kept.
+    /// An ambiguous candidate's message that decoded (one the request gets, where there is a
+    /// request): a request settles the frame; without one it is kept and named, and the others
+    /// are still tried, so that an ambiguous frame names every message it decodes as.
     #[inline(always)]
-    fn settle_ambiguous(&mut self, m: T) {
-        if !self.alone {
+    fn settle_ambiguous(&mut self, m: T, name: &'static str) {
+        if self.request.is_some() {
             self.done = Some(Ok(m));
-        } else if self.found.is_some() {
-            self.done = Some(Err(DecodeError::Ambiguous { code: self.code }));
-        } else {
+            return;
+        }
+        self.decoded.push(name);
+        if self.found.is_none() {
             self.found = Some(m);
         }
     }
 
     /// What the group decodes to: the candidate that settled it, else the one ambiguous
-    /// candidate that decoded, the first refused candidate's error, a wrong length (`expected`, the
-    /// shortest candidate's), or for a reply (`reply`) no candidate the request admits.
+    /// candidate that decoded, the first refused candidate's error, a set-aside candidate that
+    /// decoded (not the request's reply), a set-aside candidate's error, or a wrong length ([`wrong_length`]: `message`, the first
+    /// candidate, and `lengths`, every candidate's, sorted).
     #[inline(always)]
-    pub fn end(self, expected: usize, reply: bool) -> DecodeResult<T> {
+    pub fn end(self, message: &'static str, lengths: &'static [usize]) -> DecodeResult<T> {
+        if self.decoded.names().len() > 1 {
+            return Err(DecodeError::Ambiguous {
+                code: self.code,
+                candidates: self.decoded,
+            });
+        }
         if let Some(r) = self.done {
             return r;
         }
         if let Some(m) = self.found {
             return Ok(m);
         }
-        Err(match self.first {
-            Some(e) => e,
-            None if reply && !self.admitted => DecodeError::NotAReply { code: self.code },
-            None => DecodeError::WrongLength {
-                expected,
-                found: self.frame.len(),
-            },
+        Err(match (self.first, self.refused, self.request, self.aside) {
+            (Some(e), ..) => e,
+            (None, Some(refused), Some(request), _) => not_a_reply(refused, request),
+            (None, _, _, Some(e)) => e,
+            _ => wrong_length(self.frame, message, lengths),
         })
     }
 }
@@ -425,9 +464,11 @@ pub fn no_broadcast(
     b: u8,
     message: &'static str,
     code: u32,
+    len: u8,
 ) -> Result<(), DecodeError> {
     if address == b {
         return Err(DecodeError::BroadcastNotAccepted {
+            len,
             message,
             code,
             address: b,
@@ -498,18 +539,20 @@ pub fn var_by_count(head: &[u8], shapes: &[(usize, &[u8], RepeatAt)]) -> VarLen 
 /// A decoded field checked against its spec range `min..=max`.
 #[inline(always)]
 pub fn in_range<T: Wire>(
+    message: &'static str,
     field: &'static str,
     offset: usize,
     raw: T,
     min: i64,
     max: i64,
 ) -> Result<(), DecodeError> {
-    in_range_or(field, offset, raw, min, max, &[])
+    in_range_or(message, field, offset, raw, min, max, &[])
 }
 
 /// [`in_range`], where `special` values outside the range are allowed too.
 #[inline(always)]
 pub fn in_range_or<T: Wire>(
+    message: &'static str,
     field: &'static str,
     offset: usize,
     raw: T,
@@ -522,6 +565,7 @@ pub fn in_range_or<T: Wire>(
         return Ok(());
     }
     Err(DecodeError::OutOfRange {
+        message,
         field,
         offset,
         found: raw,
@@ -546,6 +590,7 @@ fn is_special(raw: i64, special: &[i64]) -> bool {
 /// be `expected`.
 #[inline(always)]
 pub fn equal<T: Wire>(
+    message: &'static str,
     field: &'static str,
     offset: usize,
     found: T,
@@ -554,27 +599,34 @@ pub fn equal<T: Wire>(
     let found = found.to_u64();
     if found != expected {
         return Err(DecodeError::InvalidValue {
+            message,
             field,
             offset,
-            found: found as u32,
+            expected,
+            found,
         });
     }
     Ok(())
 }
 
-/// A decoded repeated field that must equal the field it repeats.
+/// A decoded field that must repeat field `other` of its frame (`equals`).
 #[inline(always)]
 pub fn same<T: Wire + PartialEq>(
+    message: &'static str,
     field: &'static str,
     offset: usize,
     found: T,
+    other: &'static str,
     repeated: T,
 ) -> Result<(), DecodeError> {
     if found != repeated {
-        return Err(DecodeError::InvalidValue {
+        return Err(DecodeError::NotEqual {
+            message,
             field,
             offset,
-            found: found.to_u64() as u32,
+            other,
+            expected: repeated.to_i64(),
+            found: found.to_i64(),
         });
     }
     Ok(())
@@ -794,7 +846,15 @@ pub fn covered(frame: &[u8], from: usize) -> &[u8] {
 /// Checks every byte of a multi-byte sync sequence `sync` at `at` that `frame` holds (the first
 /// is also [`Frame::start`]'s): the error names the first that differs.
 #[inline]
-pub fn check_sync(frame: &[u8], at: usize, sync: &[u8]) -> Result<(), DecodeError> {
+pub fn check_sync(frame: &[u8], max: usize, at: usize, sync: &[u8]) -> Result<(), DecodeError> {
+    // A frame too long for the protocol is refused for its length before its bytes are read,
+    // as `check_frame` and the interpreter refuse it.
+    if frame.len() > max {
+        return Err(DecodeError::TooLong {
+            max,
+            found: frame.len(),
+        });
+    }
     for (i, &expected) in sync.iter().enumerate() {
         if let Some(&found) = frame.get(at + i) {
             if found != expected {
@@ -844,21 +904,27 @@ pub fn follows(base: i64, multiply: u64, divide: u64) -> i64 {
 }
 
 /// A decoded field that follows another (of its frame, or of the request a reply answers): it
-/// must be `ceil(base × multiply / divide)`.
+/// must be `ceil(base × multiply / divide)`, the relation `rule` describes.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub fn following<T: Wire>(
+    message: &'static str,
     field: &'static str,
     offset: usize,
     found: T,
     base: i64,
-    multiply: u64,
-    divide: u64,
+    (multiply, divide): (u64, u64),
+    rule: &'static str,
 ) -> Result<(), DecodeError> {
-    if found.to_i64() != follows(base, multiply, divide) {
-        return Err(DecodeError::InvalidValue {
+    let expected = follows(base, multiply, divide);
+    if found.to_i64() != expected {
+        return Err(DecodeError::NotFollowing {
+            message,
             field,
             offset,
-            found: found.to_u64() as u32,
+            rule,
+            expected,
+            found: found.to_i64(),
         });
     }
     Ok(())
@@ -895,12 +961,12 @@ pub fn length_field(
     k: i64,
 ) -> Result<(), DecodeError> {
     let bytes = frame.get(at..at + width).unwrap_or(&[]);
-    let found = uint(bytes, le) as u32;
+    let found = uint(bytes, le) as i64;
     let expected = if grows { frame.len() as i64 + k } else { k };
-    if i64::from(found) != expected {
-        return Err(DecodeError::InvalidValue {
-            field: "length",
+    if found != expected {
+        return Err(DecodeError::LengthMismatch {
             offset: at,
+            expected,
             found,
         });
     }
@@ -937,14 +1003,18 @@ mod lang_tests {
         assert_eq!(follows(9, 1, 8), 2);
         assert_eq!(follows(16, 1, 8), 2);
         assert_eq!(follows(i64::MAX, 2, 1), i64::MAX);
-        assert_eq!(following("n", 3, 4u8, 2, 2, 1), Ok(()));
+        assert_eq!(following("m", "n", 3, 4u8, 2, (2, 1), "2 × k"), Ok(()));
+        let e = following("m", "n", 3, 5u8, 2, (2, 1), "2 × k").unwrap_err();
         assert_eq!(
-            following("n", 3, 5u8, 2, 2, 1),
-            Err(DecodeError::InvalidValue {
+            e,
+            DecodeError::NotFollowing {
+                message: "m",
                 field: "n",
                 offset: 3,
+                rule: "2 × k",
+                expected: 4,
                 found: 5
-            })
+            }
         );
     }
 
@@ -955,9 +1025,9 @@ mod lang_tests {
         assert_eq!(length_field(&f, 3, 1, true, true, -4), Ok(()));
         assert_eq!(
             length_field(&f, 3, 1, true, true, -3),
-            Err(DecodeError::InvalidValue {
-                field: "length",
+            Err(DecodeError::LengthMismatch {
                 offset: 3,
+                expected: 5,
                 found: 4
             })
         );
@@ -1037,32 +1107,15 @@ mod lang_tests {
     }
 
     #[test]
-    fn a_refused_reply_gets_the_code_of_its_frame() {
-        let f = [0x22, 0x01, 0, 0, 0, 0];
-        let refused = reply_of::<6>(&f, false).unwrap_err();
-        assert_eq!(
-            reply_code(refused, &f, 0, 1),
-            DecodeError::NotAReply { code: 0x22 }
-        );
-        assert_eq!(
-            reply_code(refused, &f, 1, 2),
-            DecodeError::NotAReply { code: 0x0100 }
-        );
-        // Other errors pass unchanged; a frame too short for the code gives 0, no panic.
-        let other = reply_of::<5>(&f, true).unwrap_err();
-        assert_eq!(reply_code(other, &f, 0, 1), other);
-        assert_eq!(
-            reply_code(refused, &f[..1], 0, 2),
-            DecodeError::NotAReply { code: 0 }
-        );
-    }
-
-    #[test]
     fn a_sync_sequence_names_the_byte_that_differs() {
-        assert_eq!(check_sync(&[0xFF, 0xFF, 1], 0, &[0xFF, 0xFF]), Ok(()));
-        assert_eq!(check_sync(&[0xFF], 0, &[0xFF, 0xFF]), Ok(()));
+        assert_eq!(check_sync(&[0xFF, 0xFF, 1], 9, 0, &[0xFF, 0xFF]), Ok(()));
+        assert_eq!(check_sync(&[0xFF], 9, 0, &[0xFF, 0xFF]), Ok(()));
         assert_eq!(
-            check_sync(&[0xFF, 0x01], 0, &[0xFF, 0xFF]),
+            check_sync(&[0xFF, 0x01, 0, 0], 3, 0, &[0xFF, 0xFF]),
+            Err(DecodeError::TooLong { max: 3, found: 4 })
+        );
+        assert_eq!(
+            check_sync(&[0xFF, 0x01], 9, 0, &[0xFF, 0xFF]),
             Err(DecodeError::BadStart {
                 expected: 0xFF,
                 found: 0x01

@@ -279,38 +279,77 @@ pub fn field_text<const N: usize>(
 /// Why a frame did not decode, and where.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DecodeError {
-    /// Fewer bytes than the shortest frame.
+    /// Fewer bytes than the shortest frame that could start like this one.
     Truncated { needed: usize, found: usize },
     /// The first byte is not the protocol's start byte.
     BadStart { expected: u8, found: u8 },
-    /// The checksum at `offset` is not what the bytes before it give.
+    /// The checksum at `offset` is not what the bytes before it give; `width` is its length in
+    /// bytes (both values are printed at that width, as the frame holds them).
     ChecksumMismatch {
         offset: usize,
         expected: u32,
         found: u32,
+        width: u8,
     },
-    /// No message of this direction has this code.
-    UnknownCommand { offset: usize, code: u32 },
+    /// No message of this direction has this code: the `len` bytes at `offset`.
+    UnknownCommand { offset: usize, code: u32, len: u8 },
     /// No response has this code (a frame decoded as a response only).
-    UnknownResponse { offset: usize, code: u32 },
-    /// The code is known but the frame's length is not that of any message with it.
-    WrongLength { expected: usize, found: usize },
-    /// A constant or repeated field holds another value.
+    UnknownResponse { offset: usize, code: u32, len: u8 },
+    /// The code is known but the frame's length is none of the lengths its messages have
+    /// (`message`: the first of them).
+    WrongLength {
+        message: &'static str,
+        expected: &'static [usize],
+        found: usize,
+    },
+    /// A constant field (or constant bits of one) holds another value.
     InvalidValue {
+        message: &'static str,
         field: &'static str,
         offset: usize,
-        found: u32,
+        expected: u64,
+        found: u64,
     },
-    /// Several responses share this code and length; decode it with `decode_reply`.
-    Ambiguous { code: u32 },
-    /// The frame is a valid response, but not one the given request may get.
-    NotAReply { code: u32 },
+    /// A field that repeats another (`equals`) holds another value than that field.
+    NotEqual {
+        message: &'static str,
+        field: &'static str,
+        offset: usize,
+        other: &'static str,
+        expected: i64,
+        found: i64,
+    },
+    /// A field that follows from another (of the frame or of the request) does not: it must
+    /// be `expected`, by `rule`.
+    NotFollowing {
+        message: &'static str,
+        field: &'static str,
+        offset: usize,
+        rule: &'static str,
+        expected: i64,
+        found: i64,
+    },
+    /// The length field at `offset` says `found`; the frame's length gives `expected`.
+    LengthMismatch {
+        offset: usize,
+        expected: i64,
+        found: i64,
+    },
+    /// Several responses share this code and length, and `candidates` all decode from the
+    /// frame; decode it with `decode_reply`.
+    Ambiguous { code: u32, candidates: Candidates },
+    /// The frame is a valid response `message`, but not one the spec lists for `request`.
+    NotAReply {
+        message: &'static str,
+        request: &'static str,
+    },
     /// More bytes than the protocol's longest frame (of the direction decoded): refused for
     /// its length before anything else is looked at.
     TooLong { max: usize, found: usize },
     /// A field's raw value lies outside the `range` the spec gives it (and is none of its
     /// special values); `offset` is where the field (or the word holding the sub-field) starts.
     OutOfRange {
+        message: &'static str,
         field: &'static str,
         offset: usize,
         found: i64,
@@ -326,34 +365,102 @@ pub enum DecodeError {
         max: u8,
     },
     /// A request to the broadcast address `address` for a command the spec says does not
-    /// accept broadcast.
+    /// accept broadcast; `len`: the code's length in bytes.
     BroadcastNotAccepted {
         message: &'static str,
         code: u32,
+        len: u8,
         address: u8,
     },
     /// The repeated field `field`, whose elements start at `offset`, cannot have what this
-    /// frame gives it: `found` elements by its count field that the frame's length disagrees
-    /// with, bytes that are not a whole number of elements, or a count outside `min..=max`.
+    /// frame gives it: `found` (elements, or bytes where they are not whole elements) against
+    /// what it must be.
     BadCount {
+        message: &'static str,
         field: &'static str,
         offset: usize,
         found: i64,
-        min: usize,
-        max: usize,
+        expected: CountRule,
     },
 }
 
-fn hex(f: &mut fmt::Formatter<'_>, v: u32) -> fmt::Result {
-    if v <= 0xFF {
-        write!(f, "0x{v:02X}")
-    } else if v <= 0xFFFF {
-        write!(f, "0x{v:04X}")
-    } else {
-        write!(f, "0x{v:08X}")
+/// The messages an ambiguous frame decodes as, in spec order (the first four: no spec has more
+/// than two responses only the request tells apart).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Candidates {
+    names: [&'static str; 4],
+    len: u8,
+}
+
+impl Candidates {
+    /// `names`, the first four of them.
+    pub fn from_slice(names: &[&'static str]) -> Self {
+        let mut c = Candidates::default();
+        for n in names {
+            c.push(n);
+        }
+        c
+    }
+
+    /// Adds `name` (dropped past the fourth).
+    pub fn push(&mut self, name: &'static str) {
+        if let Some(slot) = self.names.get_mut(usize::from(self.len)) {
+            *slot = name;
+            self.len += 1;
+        }
+    }
+
+    /// The names, in spec order.
+    pub fn names(&self) -> &[&'static str] {
+        &self.names[..usize::from(self.len)]
     }
 }
 
+impl fmt::Display for Candidates {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, n) in self.names().iter().enumerate() {
+            if i > 0 {
+                f.write_str(" or ")?;
+            }
+            f.write_str(n)?;
+        }
+        Ok(())
+    }
+}
+
+/// What a repeated field's count must be, as [`DecodeError::BadCount`] says it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CountRule {
+    /// Whole elements of this many bytes.
+    Whole(usize),
+    /// This many, as the frame's length gives them (the count field says otherwise).
+    ByLength(usize),
+    /// Between the spec's bounds.
+    Between(usize, usize),
+    /// As many as follow from the request (`rule`, the relation's words).
+    Request(i64, &'static str),
+}
+
+impl fmt::Display for CountRule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            CountRule::Whole(w) => write!(f, "whole {w}-byte elements"),
+            CountRule::ByLength(n) => write!(f, "{n} by the frame's length"),
+            CountRule::Between(min, max) => write!(f, "{min}..={max}"),
+            CountRule::Request(n, rule) => write!(f, "{n} ({rule} of the request)"),
+        }
+    }
+}
+
+/// `v` in hex as `len` bytes (`0x0009` for a two-byte code), as the frame holds it; at least
+/// one byte.
+fn hex(f: &mut fmt::Formatter<'_>, v: u32, len: u8) -> fmt::Result {
+    let digits = 2 * usize::from(len.max(1));
+    write!(f, "0x{v:0digits$X}")
+}
+
+/// The wording of every error is the interpreter's (`busspec_model::interp::DecodeError`):
+/// the CLI prints the same line for the same refusal whichever engine decoded the frame.
 impl fmt::Display for DecodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
@@ -371,48 +478,90 @@ impl fmt::Display for DecodeError {
                 offset,
                 expected,
                 found,
+                width,
             } => {
                 write!(f, "checksum mismatch at offset {offset}: expected ")?;
-                hex(f, expected)?;
+                hex(f, expected, width)?;
                 f.write_str(", found ")?;
-                hex(f, found)
+                hex(f, found, width)
             }
-            DecodeError::UnknownCommand { offset, code } => {
+            DecodeError::UnknownCommand { offset, code, len } => {
                 f.write_str("unknown command code ")?;
-                hex(f, code)?;
+                hex(f, code, len)?;
                 write!(f, " at offset {offset}")
             }
-            DecodeError::UnknownResponse { offset, code } => {
+            DecodeError::UnknownResponse { offset, code, len } => {
                 f.write_str("unknown response code ")?;
-                hex(f, code)?;
+                hex(f, code, len)?;
                 write!(f, " at offset {offset}")
             }
-            DecodeError::WrongLength { expected, found } => {
-                write!(f, "wrong length: expected {expected} bytes, found {found}")
-            }
-            DecodeError::InvalidValue {
-                field,
-                offset,
+            DecodeError::WrongLength {
+                message,
+                expected,
                 found,
             } => {
-                write!(f, "invalid value for {field} at offset {offset}: found ")?;
-                hex(f, found)
+                write!(f, "wrong length for {message}: expected ")?;
+                for (i, n) in expected.iter().enumerate() {
+                    if i > 0 {
+                        f.write_str(" or ")?;
+                    }
+                    write!(f, "{n}")?;
+                }
+                write!(f, " bytes, found {found}")
             }
-            DecodeError::Ambiguous { code } => {
-                f.write_str("ambiguous response code ")?;
-                hex(f, code)?;
-                f.write_str(": decode it together with the request it answers")
-            }
-            DecodeError::NotAReply { code } => {
-                f.write_str("response code ")?;
-                hex(f, code)?;
-                f.write_str(" does not answer the given request")
+            DecodeError::InvalidValue {
+                message,
+                field,
+                offset,
+                expected,
+                found,
+            } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
+            ),
+            DecodeError::NotEqual {
+                message,
+                field,
+                offset,
+                other,
+                expected,
+                found,
+            } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: must repeat {other} ({expected}), found {found}"
+            ),
+            DecodeError::NotFollowing {
+                message,
+                field,
+                offset,
+                rule,
+                expected,
+                found,
+            } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: must be {rule} ({expected}), found {found}"
+            ),
+            DecodeError::LengthMismatch {
+                offset,
+                expected,
+                found,
+            } => write!(
+                f,
+                "length field at offset {offset} says {found}, the frame's length gives {expected}"
+            ),
+            DecodeError::Ambiguous { candidates, .. } => write!(
+                f,
+                "ambiguous frame: could be {candidates}; decode it together with the request it answers"
+            ),
+            DecodeError::NotAReply { message, request } => {
+                write!(f, "{message} is not a reply {request} gets")
             }
             DecodeError::TooLong { max, found } => write!(
                 f,
                 "frame too long: {found} bytes, the longest frame has {max}"
             ),
             DecodeError::OutOfRange {
+                message,
                 field,
                 offset,
                 found,
@@ -420,7 +569,7 @@ impl fmt::Display for DecodeError {
                 max,
             } => write!(
                 f,
-                "{field} at offset {offset} is {found}, outside its range {min}..={max}"
+                "{message}.{field} at offset {offset} is {found}, outside its range {min}..={max}"
             ),
             DecodeError::BadAddress {
                 offset,
@@ -434,24 +583,25 @@ impl fmt::Display for DecodeError {
             DecodeError::BroadcastNotAccepted {
                 message,
                 code,
+                len,
                 address,
             } => {
                 write!(f, "{message} (code ")?;
-                hex(f, code)?;
+                hex(f, code, len)?;
                 write!(
                     f,
                     ") does not accept the broadcast address 0x{address:02X}"
                 )
             }
             DecodeError::BadCount {
+                message,
                 field,
                 offset,
                 found,
-                min,
-                max,
+                expected,
             } => write!(
                 f,
-                "{field} at offset {offset}: {found} does not give {min}..={max} elements that fill the frame"
+                "{message}.{field} at offset {offset}: {found} elements, expected {expected}"
             ),
         }
     }

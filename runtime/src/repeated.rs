@@ -14,7 +14,7 @@
 use core::fmt;
 
 use crate::codec::Wire;
-use crate::{DecodeError, Elements, EncodeError, FieldError, FieldValue, ValueKind};
+use crate::{CountRule, DecodeError, Elements, EncodeError, FieldError, FieldValue, ValueKind};
 
 /// At most `N` elements of `T`, stored in place: no allocation, `Copy` when `T` is.
 ///
@@ -340,6 +340,8 @@ impl<const BYTES: usize> fmt::Debug for Bits<BYTES> {
 /// long the frame is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RepeatAt {
+    /// The spec name of the message holding it.
+    pub message: &'static str,
     /// The field's spec name.
     pub field: &'static str,
     /// The length of the message's frame without any element.
@@ -369,6 +371,8 @@ pub enum CountBy {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CountField {
     pub name: &'static str,
+    /// What it must hold, as a refusal words it (`the bytes of values`).
+    pub rule: &'static str,
     /// Its offset in the frame.
     pub at: usize,
     /// Its width, bytes.
@@ -402,18 +406,18 @@ impl RepeatAt {
     /// and within the bounds. Bits count eight to a byte, padding included, as the interpreter
     /// counts them.
     pub fn count(&self, frame: &[u8]) -> Result<usize, DecodeError> {
-        let bad = |found: i64| DecodeError::BadCount {
+        let bad = |found: i64, expected: CountRule| DecodeError::BadCount {
+            message: self.message,
             field: self.field,
             offset: self.at,
             found,
-            min: self.min,
-            max: self.max,
+            expected,
         };
         let extra = frame
             .len()
             .checked_sub(self.base)
             .ok_or(DecodeError::Truncated {
-                needed: self.base + self.bytes_of(self.min),
+                needed: self.base,
                 found: frame.len(),
             })?;
         let whole = self.width == 0 || extra % self.width == 0;
@@ -422,23 +426,29 @@ impl RepeatAt {
             .checked_div(self.width)
             .unwrap_or(extra.saturating_mul(8));
         match self.count {
-            CountBy::End if !whole => return Err(bad(extra as i64)),
+            CountBy::End if !whole => return Err(bad(extra as i64, CountRule::Whole(self.width))),
             CountBy::End => {}
             CountBy::Elements(c) => {
                 // Bits by count: as many as it says, the last byte's padding left out.
                 let v = c.read(frame).unwrap_or(0);
                 match usize::try_from(v) {
                     Ok(v) if self.bytes_of(v) == extra => n = v,
-                    _ => return Err(bad(v as i64)),
+                    _ => {
+                        let by_length = CountRule::ByLength(extra / self.width.max(1));
+                        return Err(bad(v as i64, by_length));
+                    }
                 }
             }
             CountBy::Bytes(c) => {
                 let v = c.read(frame).unwrap_or(0);
                 if !whole || usize::try_from(v) != Ok(extra) {
-                    return Err(DecodeError::InvalidValue {
+                    return Err(DecodeError::NotFollowing {
+                        message: self.message,
                         field: c.name,
                         offset: c.at,
-                        found: v as u32,
+                        rule: c.rule,
+                        expected: extra as i64,
+                        found: v as i64,
                     });
                 }
             }
@@ -449,7 +459,7 @@ impl RepeatAt {
             (self.min, self.max)
         };
         if n < lo || n > hi {
-            return Err(bad(n as i64));
+            return Err(bad(n as i64, CountRule::Between(self.min, self.max)));
         }
         Ok(n)
     }
@@ -627,11 +637,11 @@ impl RepeatAt {
 
     fn bad_count(&self, found: usize) -> DecodeError {
         DecodeError::BadCount {
+            message: self.message,
             field: self.field,
             offset: self.at,
             found: found as i64,
-            min: self.min,
-            max: self.max,
+            expected: CountRule::Between(self.min, self.max),
         }
     }
 
@@ -674,6 +684,7 @@ impl RepeatAt {
             let found = v.to_i64();
             if !(min..=max).contains(&found) {
                 return Err(DecodeError::OutOfRange {
+                    message: self.message,
                     field: self.field,
                     offset: self.at + i * self.width,
                     found,
@@ -704,18 +715,18 @@ impl RepeatAt {
         &self,
         held: usize,
         base: i64,
-        multiply: u64,
-        divide: u64,
+        (multiply, divide): (u64, u64),
+        rule: &'static str,
     ) -> Result<(), DecodeError> {
         let expected = crate::codec::follows(base, multiply, divide);
         match usize::try_from(expected) {
             Ok(n) if self.bytes_of(n) == self.bytes_of(held) => Ok(()),
             _ => Err(DecodeError::BadCount {
+                message: self.message,
                 field: self.field,
                 offset: self.at,
                 found: held as i64,
-                min: usize::try_from(expected).unwrap_or(0),
-                max: usize::try_from(expected).unwrap_or(0),
+                expected: CountRule::Request(expected, rule),
             }),
         }
     }

@@ -674,7 +674,7 @@ impl<C: Protocol> Core<C> {
         let as_response = if response {
             match self.response(frame) {
                 Ok(d) => Some(Ok(d)),
-                Err(DecodeError::Ambiguous { code }) => Some(Err(code)),
+                Err(DecodeError::Ambiguous { code, .. }) => Some(Err(code)),
                 Err(e) => {
                     why.get_or_insert(e);
                     None
@@ -820,7 +820,7 @@ impl<C: Protocol> Core<C> {
                             self.head += len as u64;
                             return emit(self, acc, Event::Response { offset, len, frame });
                         }
-                        Err(DecodeError::Ambiguous { code }) => {
+                        Err(DecodeError::Ambiguous { code, .. }) => {
                             self.last_request = None;
                             self.head += len as u64;
                             return emit(self, acc, Event::Ambiguous { offset, len, code });

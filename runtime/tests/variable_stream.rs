@@ -218,6 +218,7 @@ fn check(frame: &[u8]) -> Result<u8, DecodeError> {
             offset: n,
             expected: u32::from(sum),
             found: u32::from(frame[n]),
+            width: 1,
         });
     }
     if !(1..=16).contains(&frame[1]) {
@@ -229,18 +230,19 @@ fn check(frame: &[u8]) -> Result<u8, DecodeError> {
         });
     }
     if usize::from(frame[2]) + 3 != frame.len() {
-        return Err(DecodeError::InvalidValue {
-            field: "length",
+        return Err(DecodeError::LengthMismatch {
             offset: 2,
-            found: u32::from(frame[2]),
+            expected: frame.len() as i64 - 3,
+            found: i64::from(frame[2]),
         });
     }
     Ok(frame[3])
 }
 
-fn byte(field: &'static str, v: u8, max: u8) -> Result<u8, DecodeError> {
+fn byte(message: &'static str, field: &'static str, v: u8, max: u8) -> Result<u8, DecodeError> {
     if v > max {
         return Err(DecodeError::OutOfRange {
+            message,
             field,
             offset: 4,
             found: i64::from(v),
@@ -253,7 +255,8 @@ fn byte(field: &'static str, v: u8, max: u8) -> Result<u8, DecodeError> {
 
 fn values(frame: &[u8]) -> Result<Repeated<u8, 6>, DecodeError> {
     Repeated::from_slice(&frame[4..frame.len() - 1]).map_err(|_| DecodeError::WrongLength {
-        expected: 11,
+        message: "values",
+        expected: &[11],
         found: frame.len(),
     })
 }
@@ -294,13 +297,14 @@ impl Protocol for Toy {
         let code = check(frame)?;
         let message = match (code, frame.len()) {
             (0x01, 6) => Req::Read {
-                reg: byte("reg", frame[4], 0x7F)?,
+                reg: byte("read", "reg", frame[4], 0x7F)?,
             },
             (0x02, 6..) => {
                 let values = values(frame)?;
                 for v in values.iter() {
                     if *v < 0x10 {
                         return Err(DecodeError::OutOfRange {
+                            message: "write",
                             field: "values",
                             offset: 4,
                             found: i64::from(*v),
@@ -313,7 +317,8 @@ impl Protocol for Toy {
             }
             (0x01 | 0x02, _) => {
                 return Err(DecodeError::WrongLength {
-                    expected: 6,
+                    message: "read",
+                    expected: &[6],
                     found: frame.len(),
                 })
             }
@@ -321,6 +326,7 @@ impl Protocol for Toy {
                 return Err(DecodeError::UnknownCommand {
                     offset: 3,
                     code: u32::from(code),
+                    len: 1,
                 })
             }
         };
@@ -340,11 +346,12 @@ impl Protocol for Toy {
                 values: values(frame)?,
             },
             (0x02, 6) => Resp::Ack {
-                status: byte("status", frame[4], 3)?,
+                status: byte("ack", "status", frame[4], 3)?,
             },
             (0x81 | 0x02, _) => {
                 return Err(DecodeError::WrongLength {
-                    expected: 6,
+                    message: "read",
+                    expected: &[6],
                     found: frame.len(),
                 })
             }
@@ -352,6 +359,7 @@ impl Protocol for Toy {
                 return Err(DecodeError::UnknownResponse {
                     offset: 3,
                     code: u32::from(code),
+                    len: 1,
                 })
             }
         };

@@ -6,7 +6,7 @@
 //! is refused first.
 
 use busspec_protocols::sd::{ActuatorStatusBits, Angle, Request, Response, Temperature, Velocity};
-use busspec_protocols::{DecodeError, Decoded, EncodeError};
+use busspec_protocols::{Candidates, DecodeError, Decoded, EncodeError};
 
 const LEN: usize = 6;
 const FIRST_ID: u8 = 0x01;
@@ -38,6 +38,7 @@ fn envelope(frame: &[u8]) -> Result<(u8, u8, u8, u8), DecodeError> {
             offset: 4,
             expected: expected.into(),
             found: found.into(),
+            width: 2,
         });
     }
     if !(FIRST_ID..=BROADCAST).contains(&f[1]) {
@@ -58,6 +59,7 @@ fn unicast(address: u8, message: &'static str, code: u8) -> Result<(), DecodeErr
         return Err(DecodeError::BroadcastNotAccepted {
             message,
             code: code.into(),
+            len: 1,
             address,
         });
     }
@@ -67,6 +69,7 @@ fn unicast(address: u8, message: &'static str, code: u8) -> Result<(), DecodeErr
 /// A byte repeated in argument 2, and in `min..=max`.
 #[inline]
 fn repeated(
+    message: &'static str,
     a1: u8,
     a2: u8,
     field: &'static str,
@@ -75,16 +78,31 @@ fn repeated(
     max: u8,
 ) -> Result<u8, DecodeError> {
     if !(min..=max).contains(&a1) {
-        return Err(out_of_range(field, 2, a1, min, max));
+        return Err(out_of_range(message, field, 2, a1, min, max));
     }
     if a2 != a1 {
-        return Err(invalid(repeat, 3, a2));
+        return Err(DecodeError::NotEqual {
+            message,
+            field: repeat,
+            offset: 3,
+            other: field,
+            expected: a1.into(),
+            found: a2.into(),
+        });
     }
     Ok(a1)
 }
 
-fn out_of_range(field: &'static str, offset: usize, found: u8, min: u8, max: u8) -> DecodeError {
+fn out_of_range(
+    message: &'static str,
+    field: &'static str,
+    offset: usize,
+    found: u8,
+    min: u8,
+    max: u8,
+) -> DecodeError {
     DecodeError::OutOfRange {
+        message,
         field,
         offset,
         found: found.into(),
@@ -93,22 +111,26 @@ fn out_of_range(field: &'static str, offset: usize, found: u8, min: u8, max: u8)
     }
 }
 
-fn invalid(field: &'static str, offset: usize, found: u8) -> DecodeError {
+/// A constant argument byte that holds another value. The commands sharing a code here are
+/// told apart by their argument bytes, so the error names the code's first message.
+fn invalid(message: &'static str, field: &'static str, offset: usize, found: u8) -> DecodeError {
     DecodeError::InvalidValue {
+        message,
         field,
         offset,
+        expected: 0,
         found: found.into(),
     }
 }
 
 /// Both argument bytes must be these constants.
 #[inline]
-fn constants(a1: u8, a2: u8, want1: u8, want2: u8) -> Result<(), DecodeError> {
-    if a1 != want1 {
-        return Err(invalid("arg1", 2, a1));
+fn constants(message: &'static str, a1: u8, a2: u8) -> Result<(), DecodeError> {
+    if a1 != 0 {
+        return Err(invalid(message, "arg1", 2, a1));
     }
-    if a2 != want2 {
-        return Err(invalid("arg2", 3, a2));
+    if a2 != 0 {
+        return Err(invalid(message, "arg2", 3, a2));
     }
     Ok(())
 }
@@ -130,21 +152,29 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 position,
             }
         }
-        0x69 => constants(a1, a2, 0, 0).map(|()| Request::ReadActualPosition)?,
+        0x69 => constants("read_actual_position", a1, a2).map(|()| Request::ReadActualPosition)?,
         0x77 => Request::SetVelocity {
             set_velocity: Velocity(i16::from_be_bytes([a1, a2])),
         },
-        0x68 => constants(a1, a2, 0, 0).map(|()| Request::ReadActualVelocity)?,
+        0x68 => constants("read_actual_velocity", a1, a2).map(|()| Request::ReadActualVelocity)?,
         0xAA => Request::SetServoId {
-            new_id: repeated(a1, a2, "new_id", "new_id_repeat", FIRST_ID, LAST_ID)?,
+            new_id: repeated(
+                "set_servo_id",
+                a1,
+                a2,
+                "new_id",
+                "new_id_repeat",
+                FIRST_ID,
+                LAST_ID,
+            )?,
         },
         0xA0 => {
             unicast(address, "read_temperatures", code)?;
-            constants(a1, a2, 0, 0).map(|()| Request::ReadTemperatures)?
+            constants("read_temperatures", a1, a2).map(|()| Request::ReadTemperatures)?
         }
         0xA1 => {
             unicast(address, "read_humidity", code)?;
-            constants(a1, a2, 0, 0).map(|()| Request::ReadHumidity)?
+            constants("read_humidity", a1, a2).map(|()| Request::ReadHumidity)?
         }
         0x40 => match (a1, a2) {
             (0xAA, 0x02) => {
@@ -155,8 +185,8 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 unicast(address, "reset_actuator_status_word", code)?;
                 Request::ResetActuatorStatusWord
             }
-            (0xAA, _) => return Err(invalid("arg2", 3, a2)),
-            _ => return Err(invalid("arg1", 2, a1)),
+            (0xAA, _) => return Err(invalid("read_actuator_status_word", "arg2", 3, a2)),
+            _ => return Err(invalid("read_actuator_status_word", "arg1", 2, a1)),
         },
         0xA2 => match (a1, a2) {
             (0x00, 0x00) => {
@@ -167,13 +197,14 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 unicast(address, "read_total_runtime_min_sec", code)?;
                 Request::ReadTotalRuntimeMinSec
             }
-            (0x00, _) => return Err(invalid("arg2", 3, a2)),
-            _ => return Err(invalid("arg1", 2, a1)),
+            (0x00, _) => return Err(invalid("read_total_runtime_hours", "arg2", 3, a2)),
+            _ => return Err(invalid("read_total_runtime_hours", "arg1", 2, a1)),
         },
         _ => {
             return Err(DecodeError::UnknownCommand {
                 offset: 0,
                 code: code.into(),
+                len: 1,
             })
         }
     };
@@ -221,7 +252,7 @@ pub fn decode_response(
         0x49 => {
             let (zero, position) = position_word(a1, a2);
             if zero != 0 {
-                return Err(invalid("zero", 2, zero));
+                return Err(invalid("actual_position", "zero", 2, zero));
             }
             Response::ActualPosition { position }
         }
@@ -232,7 +263,15 @@ pub fn decode_response(
             actual_velocity: Velocity(i16::from_be_bytes([a1, a2])),
         },
         0x55 => Response::SetServoIdReply {
-            new_id: repeated(a1, a2, "new_id", "new_id_repeat", FIRST_ID, LAST_ID)?,
+            new_id: repeated(
+                "set_servo_id_reply",
+                a1,
+                a2,
+                "new_id",
+                "new_id_repeat",
+                FIRST_ID,
+                LAST_ID,
+            )?,
         },
         // 0x01..=0xFE, with 0x00 (no sensor) and 0xFF (defective) special: every byte.
         0x20 => Response::Temperatures {
@@ -241,7 +280,7 @@ pub fn decode_response(
         },
         // 1..=100 %, with 0 (no sensor) special.
         0x21 => Response::Humidity {
-            humidity: repeated(a1, a2, "humidity", "humidity_repeat", 0, 100)?,
+            humidity: repeated("humidity", a1, a2, "humidity", "humidity_repeat", 0, 100)?,
         },
         0x41 => Response::ActuatorStatusWord {
             status_bits: ActuatorStatusBits(a1),
@@ -253,29 +292,60 @@ pub fn decode_response(
             },
             Some(Request::ReadTotalRuntimeMinSec) => {
                 if a1 > 59 {
-                    return Err(out_of_range("runtime_minutes", 2, a1, 0, 59));
+                    return Err(out_of_range(
+                        "total_runtime_min_sec",
+                        "runtime_minutes",
+                        2,
+                        a1,
+                        0,
+                        59,
+                    ));
                 }
                 if a2 > 59 {
-                    return Err(out_of_range("runtime_seconds", 3, a2, 0, 59));
+                    return Err(out_of_range(
+                        "total_runtime_min_sec",
+                        "runtime_seconds",
+                        3,
+                        a2,
+                        0,
+                        59,
+                    ));
                 }
                 Response::TotalRuntimeMinSec {
                     runtime_minutes: a1,
                     runtime_seconds: a2,
                 }
             }
-            Some(_) => return Err(DecodeError::NotAReply { code: 0x22 }),
-            None => return Err(DecodeError::Ambiguous { code: 0x22 }),
+            Some(q) => {
+                return Err(DecodeError::NotAReply {
+                    message: "total_runtime_hours",
+                    request: q.name(),
+                })
+            }
+            None => {
+                return Err(DecodeError::Ambiguous {
+                    code: 0x22,
+                    candidates: Candidates::from_slice(&[
+                        "total_runtime_hours",
+                        "total_runtime_min_sec",
+                    ]),
+                })
+            }
         },
         _ => {
             return Err(DecodeError::UnknownResponse {
                 offset: 0,
                 code: code.into(),
+                len: 1,
             })
         }
     };
     if let Some(q) = request {
         if !answers(q, &message) {
-            return Err(DecodeError::NotAReply { code: code.into() });
+            return Err(DecodeError::NotAReply {
+                message: message.name(),
+                request: q.name(),
+            });
         }
     }
     Ok(Decoded { address, message })

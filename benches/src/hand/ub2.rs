@@ -49,6 +49,7 @@ fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeE
             offset: body.len(),
             expected: expected.into(),
             found: sum[0].into(),
+            width: 1,
         });
     }
     let address = body[1];
@@ -65,10 +66,11 @@ fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeE
 
 /// A C-curve index, refused beyond the table's last (the field starts at offset 4).
 #[inline]
-fn index(a: u8, b: u8) -> Result<u16, DecodeError> {
+fn index(message: &'static str, a: u8, b: u8) -> Result<u16, DecodeError> {
     let index = u16le(a, b);
     if index > LAST_INDEX {
         return Err(DecodeError::OutOfRange {
+            message,
             field: "index",
             offset: 4,
             found: index.into(),
@@ -87,8 +89,11 @@ fn u32le(a: u8, b: u8, c: u8, d: u8) -> u32 {
     u32::from_le_bytes([a, b, c, d])
 }
 
-fn wrong_length(expected: usize, frame: &[u8]) -> DecodeError {
+/// A frame of a known code and another length. One arm stands for several codes here, so the
+/// error names the first message of the code range, not each.
+fn wrong_length(message: &'static str, expected: &'static [usize], frame: &[u8]) -> DecodeError {
     DecodeError::WrongLength {
+        message,
         expected,
         found: frame.len(),
     }
@@ -114,7 +119,7 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
         [0x40, 0x01] => Request::GetActualCapacitance,
         [0x40, 0x80] => Request::GetModeOfOperation,
         [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance {
-            index: index(a, b)?,
+            index: index("get_c_curve_indexed_full_step_capacitance", a, b)?,
         },
         [0x40, 0x32] => Request::GetControllerTemperature,
         [0x40, 0x61] => Request::GetFirmwareVersion,
@@ -123,25 +128,28 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
             0x02 => Request::GetUpperCustomerLimit,
             found => {
                 return Err(DecodeError::InvalidValue {
+                    message: "get_lower_customer_limit",
                     field: "index",
                     offset: 4,
+                    expected: 1,
                     found: found.into(),
                 })
             }
         },
-        [0x20, 0x00, ..] => return Err(wrong_length(9, frame)),
-        [0x21 | 0x22, 0x00, ..] | [0x40, 0x30, ..] => return Err(wrong_length(7, frame)),
-        [0x80, 0x00, ..] | [0x40, 0x72, ..] => return Err(wrong_length(6, frame)),
+        [0x20, 0x00, ..] => return Err(wrong_length("ub2", &[9], frame)),
+        [0x21 | 0x22, 0x00, ..] | [0x40, 0x30, ..] => return Err(wrong_length("ub2", &[7], frame)),
+        [0x80, 0x00, ..] | [0x40, 0x72, ..] => return Err(wrong_length("ub2", &[6], frame)),
         [0x10, 0x00, ..] | [0x20, 0x01, ..] | [0x40, 0x01 | 0x32 | 0x61 | 0x80, ..] => {
-            return Err(wrong_length(5, frame))
+            return Err(wrong_length("ub2", &[5], frame))
         }
         [hi, lo, ..] => {
             return Err(DecodeError::UnknownCommand {
                 offset: 2,
                 code: u32::from(u16::from_be_bytes([hi, lo])),
+                len: 2,
             })
         }
-        _ => return Err(wrong_length(5, frame)),
+        _ => return Err(wrong_length("ub2", &[5], frame)),
     };
     Ok(Decoded { address, message })
 }
@@ -206,7 +214,7 @@ pub fn decode_response(
             mode: ModeOfOperation::from_raw(m),
         },
         [0x41, 0x30, i0, i1, f0, f1, c0, c1, c2, c3] => Response::CCurveEntry {
-            index: index(i0, i1)?,
+            index: index("c_curve_entry", i0, i1)?,
             full_steps: u16le(f0, f1),
             capacitance: Capacitance(u32le(c0, c1, c2, c3)),
         },
@@ -223,38 +231,38 @@ pub fn decode_response(
                 0x02 => Response::UpperCustomerLimit { capacitance },
                 found => {
                     return Err(DecodeError::InvalidValue {
+                        message: "lower_customer_limit",
                         field: "index",
                         offset: 4,
+                        expected: 1,
                         found: found.into(),
                     })
                 }
             }
         }
-        [0x50..=0x52 | 0x93 | 0x94, ..] => return Err(wrong_length(4, frame)),
-        [0x80, 0x00, ..] => return Err(wrong_length(5, frame)),
-        [0x41, 0x01, ..] => return Err(wrong_length(9, frame)),
-        [0x41, 0x80, ..] => return Err(wrong_length(6, frame)),
-        [0x41, 0x30, ..] => return Err(wrong_length(13, frame)),
-        [0x41, 0x32, ..] => return Err(wrong_length(6, frame)),
-        [0x41, 0x61, ..] => return Err(wrong_length(16, frame)),
-        [0x41, 0x72, ..] => return Err(wrong_length(10, frame)),
+        [0x50..=0x52 | 0x93 | 0x94, ..] => return Err(wrong_length("ub2", &[4], frame)),
+        [0x80, 0x00, ..] => return Err(wrong_length("ub2", &[5], frame)),
+        [0x41, 0x01, ..] => return Err(wrong_length("ub2", &[9], frame)),
+        [0x41, 0x80, ..] => return Err(wrong_length("ub2", &[6], frame)),
+        [0x41, 0x30, ..] => return Err(wrong_length("ub2", &[13], frame)),
+        [0x41, 0x32, ..] => return Err(wrong_length("ub2", &[6], frame)),
+        [0x41, 0x61, ..] => return Err(wrong_length("ub2", &[16], frame)),
+        [0x41, 0x72, ..] => return Err(wrong_length("ub2", &[10], frame)),
         [code, ..] => {
             return Err(DecodeError::UnknownResponse {
                 offset: 2,
                 code: code.into(),
+                len: 1,
             })
         }
-        [] => return Err(wrong_length(4, frame)),
+        [] => return Err(wrong_length("ub2", &[4], frame)),
     };
     if let Some(q) = request {
         if !answers(q, &message) {
-            // A message of a 1-byte code has nothing after it; the others have 2-byte codes.
-            let code = match *rest {
-                [hi, lo, ..] => u16::from_be_bytes([hi, lo]).into(),
-                [code] => code.into(),
-                [] => 0,
-            };
-            return Err(DecodeError::NotAReply { code });
+            return Err(DecodeError::NotAReply {
+                message: message.name(),
+                request: q.name(),
+            });
         }
     }
     Ok(Decoded { address, message })

@@ -70,7 +70,10 @@ pub fn check<P: Protocol>(
             let g = P::decode_request(wire);
             let i = interp::decode(p, Some(d), None, wire);
             assert_eq!(g.is_ok(), i.is_ok(), "{wire:02X?}: {g:?} / {i:?}");
-            let (Ok(g), Ok(i)) = (g, i) else { return false };
+            let (g, i) = match (g, i) {
+                (Ok(g), Ok(i)) => (g, i),
+                (g, i) => return same_words(g.err(), i.err(), wire),
+            };
             assert_eq!(g.address, i.address);
             same(p, &g.message, &i, wire);
             assert_eq!(g.message.frame_len(), wire.len());
@@ -84,7 +87,10 @@ pub fn check<P: Protocol>(
                 None => interp::decode(p, Some(d), None, wire),
             };
             assert_eq!(g.is_ok(), i.is_ok(), "{wire:02X?}: {g:?} / {i:?}");
-            let (Ok(g), Ok(i)) = (g, i) else { return false };
+            let (g, i) = match (g, i) {
+                (Ok(g), Ok(i)) => (g, i),
+                (g, i) => return same_words(g.err(), i.err(), wire),
+            };
             assert_eq!(g.address, i.address);
             same(p, &g.message, &i, wire);
             assert_eq!(g.message.frame_len(), wire.len());
@@ -96,6 +102,18 @@ pub fn check<P: Protocol>(
         }
     }
     true
+}
+
+/// Both engines refused a frame: they say so in the same words. Returns false (refused).
+fn same_words(
+    g: Option<busspec_runtime::DecodeError>,
+    i: Option<interp::DecodeError>,
+    wire: &[u8],
+) -> bool {
+    if let (Some(g), Some(i)) = (g, i) {
+        assert_eq!(g.to_string(), i.to_string(), "{wire:02X?}");
+    }
+    false
 }
 
 /// `frame` with its checksum recomputed over what it covers.

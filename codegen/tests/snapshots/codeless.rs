@@ -159,7 +159,7 @@ pub mod codeless {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
+            rt::check_sync(frame, 7, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
                 6,
@@ -176,9 +176,9 @@ pub mod codeless {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
-                0x01 => rt::fixed::<6>(frame).map(|_| Self::Ping),
+                0x01 => rt::fixed::<6>(frame, "ping", &[6]).map(|_| Self::Ping),
                 0x02 => {
-                    let frame = rt::fixed::<7>(frame)?;
+                    let frame = rt::fixed::<7>(frame, "read", &[7])?;
                     rt::Ok(Self::Read { register: frame[5] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
@@ -360,7 +360,7 @@ pub mod codeless {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
+            rt::check_sync(frame, 8, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
                 6,
@@ -371,6 +371,11 @@ pub mod codeless {
             )?;
             rt::length_field(frame, 3, 1, true, true, -4)?;
             let message = Self::dispatch(frame, request)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
@@ -379,28 +384,21 @@ pub mod codeless {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 4, 0) {
                 0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, request.is_none());
-                    g.attempt(
-                        asked & 1 != 0,
-                        |frame: &[u8; 6]| {
-                            rt::Ok(Self::Status {
-                                error: Errors::from_raw(frame[4]),
-                            })
-                        },
-                    );
-                    g.attempt(
-                        asked >> 1 & 1 != 0,
-                        |frame: &[u8; 8]| {
-                            rt::Ok(Self::ReadStatus {
-                                error: Errors::from_raw(frame[4]),
-                                value: u16::from_le_bytes([frame[5], frame[6]]),
-                            })
-                        },
-                    );
-                    g.end(6, true)
+                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                    g.attempt(|frame: &[u8; 6]| {
+                        rt::Ok(Self::Status {
+                            error: Errors::from_raw(frame[4]),
+                        })
+                    });
+                    g.attempt(|frame: &[u8; 8]| {
+                        rt::Ok(Self::ReadStatus {
+                            error: Errors::from_raw(frame[4]),
+                            value: u16::from_le_bytes([frame[5], frame[6]]),
+                        })
+                    });
+                    g.end("status", &[6, 8])
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }

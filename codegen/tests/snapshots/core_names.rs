@@ -338,34 +338,34 @@ pub mod clash {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<7>(frame)?;
-                    rt::no_broadcast(frame[1], 0x00, "option", 0x10)?;
+                    let frame = rt::fixed::<7>(frame, "option", &[7])?;
+                    rt::no_broadcast(frame[1], 0x00, "option", 0x10, 1)?;
                     let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range("core", 4, field_1, 0, 1000)?;
+                    rt::in_range("option", "core", 4, field_1, 0, 1000)?;
                     rt::Ok(Self::Option {
                         some: Result::from_raw(frame[3]),
                         core: Option::from_raw(field_1),
                     })
                 }
                 0x11 => {
-                    let frame = rt::fixed::<5>(frame)?;
-                    rt::no_broadcast(frame[1], 0x00, "u8", 0x11)?;
+                    let frame = rt::fixed::<5>(frame, "u8", &[5])?;
+                    rt::no_broadcast(frame[1], 0x00, "u8", 0x11, 1)?;
                     rt::Ok(Self::U8 {
                         frame: Some::from_raw(frame[3] as i16),
                     })
                 }
                 0x12 => {
-                    let frame = rt::fixed::<7>(frame)?;
-                    rt::equal("buf", 4, frame[4], 0x0)?;
+                    let frame = rt::fixed::<7>(frame, "core", &[7])?;
+                    rt::equal("core", "buf", 4, frame[4], 0x0)?;
                     rt::Ok(Self::Core {
                         address: frame[3],
                         out: (frame[5] as i8),
                     })
                 }
                 0x13 => {
-                    let frame = rt::fixed::<6>(frame)?;
-                    rt::no_broadcast(frame[1], 0x00, "rt", 0x13)?;
-                    rt::same("field", 4, frame[4], frame[3])?;
+                    let frame = rt::fixed::<6>(frame, "rt", &[6])?;
+                    rt::no_broadcast(frame[1], 0x00, "rt", 0x13, 1)?;
+                    rt::same("rt", "field", 4, frame[4], "f", frame[3])?;
                     rt::Ok(Self::Rt { f: frame[3] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
@@ -611,29 +611,29 @@ pub mod clash {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)
-                .map_err(|e| rt::reply_code(e, frame, 2, 1))?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
-                0x50 => rt::reply_of::<4>(frame, asked & 1 != 0).map(|_| Self::Ok),
-                0x90 => rt::reply_of::<4>(frame, asked >> 1 & 1 != 0).map(|_| Self::Err),
+                0x50 => rt::fixed::<4>(frame, "ok", &[4]).map(|_| Self::Ok),
+                0x90 => rt::fixed::<4>(frame, "err", &[4]).map(|_| Self::Err),
                 0x51 => {
-                    let frame = rt::reply_of::<7>(frame, asked >> 2 & 1 != 0)?;
+                    let frame = rt::fixed::<7>(frame, "result", &[7])?;
                     rt::Ok(Self::Result {
                         g: Ok::from_raw(frame[3]),
                         usize: Option::from_raw(u16::from_le_bytes([frame[4], frame[5]])),
                     })
                 }
                 0x52 => {
-                    let frame = rt::reply_of::<7>(frame, asked >> 3 & 1 != 0)?;
+                    let frame = rt::fixed::<7>(frame, "usize", &[7])?;
                     rt::Ok(Self::Usize {
                         asked: frame[3..5].try_into().unwrap_or([0; 2]),
                         none: (frame[5] >> 4) as u8,

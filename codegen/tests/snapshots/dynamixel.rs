@@ -100,6 +100,7 @@ pub mod dynamixel {
     }
     /// Where `write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
+        message: "write",
         field: "data",
         base: 7,
         at: 6,
@@ -110,6 +111,7 @@ pub mod dynamixel {
     };
     /// Where `reg_write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_REG_WRITE: rt::RepeatAt = rt::RepeatAt {
+        message: "reg_write",
         field: "data",
         base: 7,
         at: 6,
@@ -120,6 +122,7 @@ pub mod dynamixel {
     };
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
+        message: "sync_write",
         field: "blocks",
         base: 8,
         at: 7,
@@ -315,7 +318,7 @@ pub mod dynamixel {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
+            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
                 6,
@@ -333,14 +336,14 @@ pub mod dynamixel {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<6>(frame)?;
-                    rt::no_broadcast(frame[2], 0xFE, "ping", 0x01)?;
+                    let frame = rt::fixed::<6>(frame, "ping", &[6])?;
+                    rt::no_broadcast(frame[2], 0xFE, "ping", 0x01, 1)?;
                     rt::Ok(Self::Ping)
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame)?;
-                    rt::no_broadcast(frame[2], 0xFE, "read", 0x02)?;
-                    rt::in_range("length", 6, frame[6], 1, 253)?;
+                    let frame = rt::fixed::<8>(frame, "read", &[8])?;
+                    rt::no_broadcast(frame[2], 0xFE, "read", 0x02, 1)?;
+                    rt::in_range("read", "length", 6, frame[6], 1, 253)?;
                     rt::Ok(Self::Read {
                         address: frame[5],
                         length: frame[6],
@@ -361,8 +364,8 @@ pub mod dynamixel {
                             .elements::<u8, 252>(elements, true, false)?,
                     })
                 }
-                0x05 => rt::fixed::<6>(frame).map(|_| Self::Action),
-                0x06 => rt::fixed::<6>(frame).map(|_| Self::Reset),
+                0x05 => rt::fixed::<6>(frame, "action", &[6]).map(|_| Self::Action),
+                0x06 => rt::fixed::<6>(frame, "reset", &[6]).map(|_| Self::Reset),
                 0x83 => {
                     let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
                     rt::Ok(Self::SyncWrite {
@@ -480,6 +483,7 @@ pub mod dynamixel {
     }
     /// Where `read_status.data` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_STATUS: rt::RepeatAt = rt::RepeatAt {
+        message: "read_status",
         field: "data",
         base: 6,
         at: 5,
@@ -599,7 +603,7 @@ pub mod dynamixel {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
+            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
                 6,
@@ -611,6 +615,9 @@ pub mod dynamixel {
             rt::length_field(frame, 3, 1, true, true, -4)?;
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
                 message.follows_request(request)?;
             }
             rt::Ok(Decoded { address, message })
@@ -621,31 +628,23 @@ pub mod dynamixel {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 4, 0) {
                 0u32 => {
-                    let mut g = rt::Group::new(frame, 0u32, request.is_none());
-                    g.attempt(
-                        asked & 1 != 0,
-                        |frame: &[u8; 6]| {
-                            rt::Ok(Self::Status {
-                                error: StatusError::from_raw(frame[4]),
-                            })
-                        },
-                    );
-                    g.attempt_any(
-                        asked >> 1 & 1 != 0,
-                        |frame: &[u8]| {
-                            let (frame, elements, _) = REPEAT_READ_STATUS
-                                .split::<5>(frame)?;
-                            rt::Ok(Self::ReadStatus {
-                                error: StatusError::from_raw(frame[4]),
-                                data: REPEAT_READ_STATUS
-                                    .elements::<u8, 253>(elements, true, false)?,
-                            })
-                        },
-                    );
-                    g.end(6, true)
+                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                    g.attempt(|frame: &[u8; 6]| {
+                        rt::Ok(Self::Status {
+                            error: StatusError::from_raw(frame[4]),
+                        })
+                    });
+                    g.attempt_any(|frame: &[u8]| {
+                        let (frame, elements, _) = REPEAT_READ_STATUS.split::<5>(frame)?;
+                        rt::Ok(Self::ReadStatus {
+                            error: StatusError::from_raw(frame[4]),
+                            data: REPEAT_READ_STATUS
+                                .elements::<u8, 253>(elements, true, false)?,
+                        })
+                    });
+                    g.end("status", &[6])
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }
@@ -722,7 +721,12 @@ pub mod dynamixel {
                     &Request::Read { length: r_length, .. },
                 ) => {
                     REPEAT_READ_STATUS
-                        .follows_request(v_data.len(), r_length as i64, 1, 1)?;
+                        .follows_request(
+                            v_data.len(),
+                            r_length as i64,
+                            (1, 1),
+                            "length",
+                        )?;
                 }
                 _ => {}
             }

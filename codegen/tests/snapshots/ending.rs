@@ -55,12 +55,14 @@ pub mod ending {
     }
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
+        message: "write",
         field: "values",
         base: 7,
         at: 6,
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of values",
             at: 5,
             width: 1,
             le: false,
@@ -193,7 +195,7 @@ pub mod ending {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xA5, 0x5A])?;
+            rt::check_sync(frame, 39, 0, &[0xA5, 0x5A])?;
             let address = rt::check_frame(
                 frame,
                 8,
@@ -210,8 +212,8 @@ pub mod ending {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame)?;
-                    rt::in_range("quantity", 6, frame[6], 1, 16)?;
+                    let frame = rt::fixed::<8>(frame, "read", &[8])?;
+                    rt::in_range("read", "quantity", 6, frame[6], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[4], frame[5]]),
                         quantity: frame[6],
@@ -219,15 +221,23 @@ pub mod ending {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range("quantity", 4, frame[4], 1, 16)?;
-                    rt::following("byte_count", 5, frame[5], frame[4] as i64, 2, 1)?;
+                    rt::in_range("write", "quantity", 4, frame[4], 1, 16)?;
+                    rt::following(
+                        "write",
+                        "byte_count",
+                        5,
+                        frame[5],
+                        frame[4] as i64,
+                        (2, 1),
+                        "2 × quantity",
+                    )?;
                     rt::Ok(Self::Write {
                         quantity: frame[4],
                         values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame)?;
+                    let frame = rt::fixed::<8>(frame, "stamp", &[8])?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[4], frame[5], frame[6]], false),
                     })
@@ -326,6 +336,7 @@ pub mod ending {
     }
     /// Where `read_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_REPLY: rt::RepeatAt = rt::RepeatAt {
+        message: "read_reply",
         field: "values",
         base: 5,
         at: 4,
@@ -454,7 +465,7 @@ pub mod ending {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xA5, 0x5A])?;
+            rt::check_sync(frame, 37, 0, &[0xA5, 0x5A])?;
             let address = rt::check_frame(
                 frame,
                 6,
@@ -463,23 +474,20 @@ pub mod ending {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
-            let message = Self::dispatch(frame, request)
-                .map_err(|e| rt::reply_code(e, frame, 3, 1))?;
+            let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
                 message.follows_request(request)?;
             }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x01 => {
-                    rt::admit(asked & 1 != 0, 0x01)?;
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
                     rt::Ok(Self::ReadReply {
                         values: REPEAT_READ_REPLY
@@ -487,13 +495,13 @@ pub mod ending {
                     })
                 }
                 0x81 => {
-                    let frame = rt::reply_of::<6>(frame, asked >> 1 & 1 != 0)?;
+                    let frame = rt::fixed::<6>(frame, "read_error", &[6])?;
                     rt::Ok(Self::ReadError {
                         reason: frame[4],
                     })
                 }
                 0x02 => {
-                    let frame = rt::reply_of::<6>(frame, asked >> 2 & 1 != 0)?;
+                    let frame = rt::fixed::<6>(frame, "write_reply", &[6])?;
                     rt::Ok(Self::WriteReply {
                         status: frame[4],
                     })
@@ -577,7 +585,12 @@ pub mod ending {
                     &Request::Read { quantity: r_quantity, .. },
                 ) => {
                     REPEAT_READ_REPLY
-                        .follows_request(v_values.len(), r_quantity as i64, 1, 1)?;
+                        .follows_request(
+                            v_values.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
                 }
                 _ => {}
             }

@@ -356,27 +356,27 @@ pub mod mini {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x2000 => {
-                    let frame = rt::fixed::<9>(frame)?;
+                    let frame = rt::fixed::<9>(frame, "go_to", &[9])?;
                     let field_0: u32 = u32::from_le_bytes([
                         frame[4],
                         frame[5],
                         frame[6],
                         frame[7],
                     ]);
-                    rt::in_range("target", 4, field_0, 0, 100000)?;
+                    rt::in_range("go_to", "target", 4, field_0, 0, 100000)?;
                     rt::Ok(Self::GoTo {
                         target: Capacitance::from_raw(field_0),
                     })
                 }
                 0x3000 => {
-                    let frame = rt::fixed::<6>(frame)?;
+                    let frame = rt::fixed::<6>(frame, "set_mode", &[6])?;
                     rt::Ok(Self::SetMode {
                         mode: Mode::from_raw(frame[4]),
                     })
                 }
                 0x4000 => {
-                    let frame = rt::fixed::<6>(frame)?;
-                    rt::in_range("channel", 4, frame[4], 0, 3)?;
+                    let frame = rt::fixed::<6>(frame, "get_status", &[6])?;
+                    rt::in_range("get_status", "channel", 4, frame[4], 0, 3)?;
                     rt::Ok(Self::GetStatus {
                         channel: frame[4],
                     })
@@ -629,26 +629,24 @@ pub mod mini {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             if frame.len() >= 4 {
                 match rt::code(frame, 2, 1) {
                     0x50 => {
-                        return rt::reply::<4>(frame, asked & 1 != 0, 0x50)
+                        return rt::fixed::<4>(frame, "started", &[4])
                             .map(|_| Self::Started);
                     }
-                    0x90 => {
-                        return rt::reply::<4>(frame, asked >> 1 & 1 != 0, 0x90)
-                            .map(|_| Self::Nak);
-                    }
+                    0x90 => return rt::fixed::<4>(frame, "nak", &[4]).map(|_| Self::Nak),
                     _ => {}
                 }
             }
@@ -657,13 +655,12 @@ pub mod mini {
             }
             match rt::code(frame, 2, 2) {
                 0x3000 => {
-                    rt::reply::<5>(frame, asked >> 2 & 1 != 0, 0x3000)
-                        .map(|_| Self::SetModeAck)
+                    rt::fixed::<5>(frame, "set_mode_ack", &[5]).map(|_| Self::SetModeAck)
                 }
                 0x4000 => {
-                    let frame = rt::reply::<13>(frame, asked >> 3 & 1 != 0, 0x4000)?;
+                    let frame = rt::fixed::<13>(frame, "status", &[13])?;
                     let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
-                    rt::equal("reserved", 11, frame[11], 0x0)?;
+                    rt::equal("status", "reserved", 11, frame[11], 0x0)?;
                     rt::Ok(Self::Status {
                         error_bits: StatusBits::from_raw(frame[4]),
                         freshness: (field_1 >> 12) as u8,

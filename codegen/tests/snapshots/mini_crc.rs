@@ -163,39 +163,29 @@ pub mod mini_crc {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x69 => {
-                    let mut g = rt::Group::new(frame, 0x69, true);
-                    g.attempt(
-                        true,
-                        |frame: &[u8; 6]| {
-                            rt::no_broadcast(
-                                frame[1],
-                                0x1F,
-                                "read_runtime_hours",
-                                0x69,
-                            )?;
-                            rt::equal("selector", 2, frame[2], 0x1)?;
-                            rt::equal("arg2", 3, frame[3], 0x0)?;
-                            rt::Ok(Self::ReadRuntimeHours)
-                        },
-                    );
-                    g.attempt(
-                        true,
-                        |frame: &[u8; 6]| {
-                            rt::no_broadcast(
-                                frame[1],
-                                0x1F,
-                                "read_runtime_min_sec",
-                                0x69,
-                            )?;
-                            rt::equal("selector", 2, frame[2], 0x2)?;
-                            rt::equal("arg2", 3, frame[3], 0x0)?;
-                            rt::Ok(Self::ReadRuntimeMinSec)
-                        },
-                    );
-                    g.end(6, false)
+                    let mut g = rt::Group::new(frame, 0x69, rt::None);
+                    g.attempt(|frame: &[u8; 6]| {
+                        rt::no_broadcast(frame[1], 0x1F, "read_runtime_hours", 0x69, 1)?;
+                        rt::equal("read_runtime_hours", "selector", 2, frame[2], 0x1)?;
+                        rt::equal("read_runtime_hours", "arg2", 3, frame[3], 0x0)?;
+                        rt::Ok(Self::ReadRuntimeHours)
+                    });
+                    g.attempt(|frame: &[u8; 6]| {
+                        rt::no_broadcast(
+                            frame[1],
+                            0x1F,
+                            "read_runtime_min_sec",
+                            0x69,
+                            1,
+                        )?;
+                        rt::equal("read_runtime_min_sec", "selector", 2, frame[2], 0x2)?;
+                        rt::equal("read_runtime_min_sec", "arg2", 3, frame[3], 0x0)?;
+                        rt::Ok(Self::ReadRuntimeMinSec)
+                    });
+                    g.end("read_runtime_hours", &[6])
                 }
                 0x70 => {
-                    let frame = rt::fixed::<6>(frame)?;
+                    let frame = rt::fixed::<6>(frame, "set_counter", &[6])?;
                     rt::Ok(Self::SetCounter {
                         counter: u16::from_be_bytes([frame[2], frame[3]]),
                     })
@@ -412,8 +402,12 @@ pub mod mini_crc {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)
-                .map_err(|e| rt::reply_code(e, frame, 0, 1))?;
+            let message = Self::dispatch(frame, request)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
@@ -425,9 +419,10 @@ pub mod mini_crc {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 0, 1) {
                 0x22 => {
-                    let mut g = rt::Group::new(frame, 0x22, request.is_none());
+                    let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
                     g.ambiguous(
                         asked & 1 != 0,
+                        "runtime_hours",
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::RuntimeHours {
                                 hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -436,19 +431,34 @@ pub mod mini_crc {
                     );
                     g.ambiguous(
                         asked >> 1 & 1 != 0,
+                        "runtime_min_sec",
                         |frame: &[u8; 6]| {
-                            rt::in_range("minutes", 2, frame[2], 0, 59)?;
-                            rt::in_range("seconds", 3, frame[3], 0, 59)?;
+                            rt::in_range(
+                                "runtime_min_sec",
+                                "minutes",
+                                2,
+                                frame[2],
+                                0,
+                                59,
+                            )?;
+                            rt::in_range(
+                                "runtime_min_sec",
+                                "seconds",
+                                3,
+                                frame[3],
+                                0,
+                                59,
+                            )?;
                             rt::Ok(Self::RuntimeMinSec {
                                 minutes: frame[2],
                                 seconds: frame[3],
                             })
                         },
                     );
-                    g.end(6, true)
+                    g.end("runtime_hours", &[6])
                 }
                 0x70 => {
-                    let frame = rt::reply_of::<6>(frame, asked >> 2 & 1 != 0)?;
+                    let frame = rt::fixed::<6>(frame, "counter_echo", &[6])?;
                     rt::Ok(Self::CounterEcho {
                         counter: u16::from_be_bytes([frame[2], frame[3]]),
                     })

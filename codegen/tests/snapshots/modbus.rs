@@ -206,12 +206,14 @@ pub mod modbus {
     }
     /// Where `write_multiple_coils.outputs` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_COILS: rt::RepeatAt = rt::RepeatAt {
+        message: "write_multiple_coils",
         field: "outputs",
         base: 9,
         at: 7,
         width: 0,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of outputs",
             at: 6,
             width: 1,
             le: false,
@@ -221,12 +223,14 @@ pub mod modbus {
     };
     /// Where `write_multiple_registers.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_REGISTERS: rt::RepeatAt = rt::RepeatAt {
+        message: "write_multiple_registers",
         field: "values",
         base: 9,
         at: 7,
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of values",
             at: 6,
             width: 1,
             le: false,
@@ -542,47 +546,68 @@ pub mod modbus {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame)?;
-                    rt::no_broadcast(frame[0], 0x00, "read_coils", 0x01)?;
+                    let frame = rt::fixed::<8>(frame, "read_coils", &[8])?;
+                    rt::no_broadcast(frame[0], 0x00, "read_coils", 0x01, 1)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("quantity", 4, field_1, 1, 2000)?;
+                    rt::in_range("read_coils", "quantity", 4, field_1, 1, 2000)?;
                     rt::Ok(Self::ReadCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame)?;
-                    rt::no_broadcast(frame[0], 0x00, "read_discrete_inputs", 0x02)?;
+                    let frame = rt::fixed::<8>(frame, "read_discrete_inputs", &[8])?;
+                    rt::no_broadcast(frame[0], 0x00, "read_discrete_inputs", 0x02, 1)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("quantity", 4, field_1, 1, 2000)?;
+                    rt::in_range(
+                        "read_discrete_inputs",
+                        "quantity",
+                        4,
+                        field_1,
+                        1,
+                        2000,
+                    )?;
                     rt::Ok(Self::ReadDiscreteInputs {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame)?;
-                    rt::no_broadcast(frame[0], 0x00, "read_holding_registers", 0x03)?;
+                    let frame = rt::fixed::<8>(frame, "read_holding_registers", &[8])?;
+                    rt::no_broadcast(frame[0], 0x00, "read_holding_registers", 0x03, 1)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("quantity", 4, field_1, 1, 125)?;
+                    rt::in_range(
+                        "read_holding_registers",
+                        "quantity",
+                        4,
+                        field_1,
+                        1,
+                        125,
+                    )?;
                     rt::Ok(Self::ReadHoldingRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<8>(frame)?;
-                    rt::no_broadcast(frame[0], 0x00, "read_input_registers", 0x04)?;
+                    let frame = rt::fixed::<8>(frame, "read_input_registers", &[8])?;
+                    rt::no_broadcast(frame[0], 0x00, "read_input_registers", 0x04, 1)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("quantity", 4, field_1, 1, 125)?;
+                    rt::in_range(
+                        "read_input_registers",
+                        "quantity",
+                        4,
+                        field_1,
+                        1,
+                        125,
+                    )?;
                     rt::Ok(Self::ReadInputRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
                     })
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame)?;
+                    let frame = rt::fixed::<8>(frame, "write_single_coil", &[8])?;
                     rt::Ok(Self::WriteSingleCoil {
                         output_address: u16::from_be_bytes([frame[2], frame[3]]),
                         output_value: CoilState::from_raw(
@@ -591,7 +616,7 @@ pub mod modbus {
                     })
                 }
                 0x06 => {
-                    let frame = rt::fixed::<8>(frame)?;
+                    let frame = rt::fixed::<8>(frame, "write_single_register", &[8])?;
                     rt::Ok(Self::WriteSingleRegister {
                         register_address: u16::from_be_bytes([frame[2], frame[3]]),
                         register_value: u16::from_be_bytes([frame[4], frame[5]]),
@@ -601,8 +626,23 @@ pub mod modbus {
                     let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("quantity", 4, field_1, 1, 1968)?;
-                    rt::following("byte_count", 6, frame[6], field_1 as i64, 1, 8)?;
+                    rt::in_range(
+                        "write_multiple_coils",
+                        "quantity",
+                        4,
+                        field_1,
+                        1,
+                        1968,
+                    )?;
+                    rt::following(
+                        "write_multiple_coils",
+                        "byte_count",
+                        6,
+                        frame[6],
+                        field_1 as i64,
+                        (1, 8),
+                        "ceil(quantity / 8)",
+                    )?;
                     rt::Ok(Self::WriteMultipleCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
@@ -614,8 +654,23 @@ pub mod modbus {
                     let (frame, elements, _) = REPEAT_WRITE_MULTIPLE_REGISTERS
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("quantity", 4, field_1, 1, 123)?;
-                    rt::following("byte_count", 6, frame[6], field_1 as i64, 2, 1)?;
+                    rt::in_range(
+                        "write_multiple_registers",
+                        "quantity",
+                        4,
+                        field_1,
+                        1,
+                        123,
+                    )?;
+                    rt::following(
+                        "write_multiple_registers",
+                        "byte_count",
+                        6,
+                        frame[6],
+                        field_1 as i64,
+                        (2, 1),
+                        "2 × quantity",
+                    )?;
                     rt::Ok(Self::WriteMultipleRegisters {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
@@ -756,12 +811,14 @@ pub mod modbus {
     }
     /// Where `read_coils_reply.coils` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_COILS_REPLY: rt::RepeatAt = rt::RepeatAt {
+        message: "read_coils_reply",
         field: "coils",
         base: 5,
         at: 3,
         width: 0,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of coils",
             at: 2,
             width: 1,
             le: false,
@@ -771,12 +828,14 @@ pub mod modbus {
     };
     /// Where `read_discrete_inputs_reply.inputs` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_DISCRETE_INPUTS_REPLY: rt::RepeatAt = rt::RepeatAt {
+        message: "read_discrete_inputs_reply",
         field: "inputs",
         base: 5,
         at: 3,
         width: 0,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of inputs",
             at: 2,
             width: 1,
             le: false,
@@ -786,12 +845,14 @@ pub mod modbus {
     };
     /// Where `read_holding_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_HOLDING_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
+        message: "read_holding_registers_reply",
         field: "registers",
         base: 5,
         at: 3,
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of registers",
             at: 2,
             width: 1,
             le: false,
@@ -801,12 +862,14 @@ pub mod modbus {
     };
     /// Where `read_input_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_INPUT_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
+        message: "read_input_registers_reply",
         field: "registers",
         base: 5,
         at: 3,
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of registers",
             at: 2,
             width: 1,
             le: false,
@@ -1196,23 +1259,20 @@ pub mod modbus {
                 &FRAME,
                 |b| u32::from(checksum(b)),
             )?;
-            let message = Self::dispatch(frame, request)
-                .map_err(|e| rt::reply_code(e, frame, 1, 1))?;
+            let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
                 message.follows_request(request)?;
             }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x01 => {
-                    rt::admit(asked & 1 != 0, 0x01)?;
                     let (_, elements, count) = REPEAT_READ_COILS_REPLY
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadCoilsReply {
@@ -1220,13 +1280,12 @@ pub mod modbus {
                     })
                 }
                 0x81 => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 1 & 1 != 0)?;
+                    let frame = rt::fixed::<5>(frame, "read_coils_exception", &[5])?;
                     rt::Ok(Self::ReadCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x02 => {
-                    rt::admit(asked >> 2 & 1 != 0, 0x02)?;
                     let (_, elements, count) = REPEAT_READ_DISCRETE_INPUTS_REPLY
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadDiscreteInputsReply {
@@ -1235,13 +1294,14 @@ pub mod modbus {
                     })
                 }
                 0x82 => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 3 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, "read_discrete_inputs_exception", &[5])?;
                     rt::Ok(Self::ReadDiscreteInputsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x03 => {
-                    rt::admit(asked >> 4 & 1 != 0, 0x03)?;
                     let (_, elements, _) = REPEAT_READ_HOLDING_REGISTERS_REPLY
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadHoldingRegistersReply {
@@ -1250,13 +1310,14 @@ pub mod modbus {
                     })
                 }
                 0x83 => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 5 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, "read_holding_registers_exception", &[5])?;
                     rt::Ok(Self::ReadHoldingRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x04 => {
-                    rt::admit(asked >> 6 & 1 != 0, 0x04)?;
                     let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY
                         .split::<3>(frame)?;
                     rt::Ok(Self::ReadInputRegistersReply {
@@ -1265,13 +1326,15 @@ pub mod modbus {
                     })
                 }
                 0x84 => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 7 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, "read_input_registers_exception", &[5])?;
                     rt::Ok(Self::ReadInputRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x05 => {
-                    let frame = rt::reply_of::<8>(frame, asked >> 8 & 1 != 0)?;
+                    let frame = rt::fixed::<8>(frame, "write_single_coil_reply", &[8])?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleCoilReply {
@@ -1280,13 +1343,17 @@ pub mod modbus {
                     })
                 }
                 0x85 => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 9 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, "write_single_coil_exception", &[5])?;
                     rt::Ok(Self::WriteSingleCoilException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x06 => {
-                    let frame = rt::reply_of::<8>(frame, asked >> 10 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, "write_single_register_reply", &[8])?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleRegisterReply {
@@ -1295,13 +1362,17 @@ pub mod modbus {
                     })
                 }
                 0x86 => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 11 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, "write_single_register_exception", &[5])?;
                     rt::Ok(Self::WriteSingleRegisterException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x0F => {
-                    let frame = rt::reply_of::<8>(frame, asked >> 12 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, "write_multiple_coils_reply", &[8])?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleCoilsReply {
@@ -1310,13 +1381,17 @@ pub mod modbus {
                     })
                 }
                 0x8F => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 13 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, "write_multiple_coils_exception", &[5])?;
                     rt::Ok(Self::WriteMultipleCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x10 => {
-                    let frame = rt::reply_of::<8>(frame, asked >> 14 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, "write_multiple_registers_reply", &[8])?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleRegistersReply {
@@ -1325,7 +1400,9 @@ pub mod modbus {
                     })
                 }
                 0x90 => {
-                    let frame = rt::reply_of::<5>(frame, asked >> 15 & 1 != 0)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, "write_multiple_registers_exception", &[5])?;
                     rt::Ok(Self::WriteMultipleRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1502,63 +1579,87 @@ pub mod modbus {
                     &Request::ReadCoils { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
+                        "read_coils_reply",
                         "byte_count",
                         2,
                         REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
                         r_quantity as i64,
-                        1,
-                        8,
+                        (1, 8),
+                        "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_COILS_REPLY
-                        .follows_request(v_coils.len(), r_quantity as i64, 1, 1)?;
+                        .follows_request(
+                            v_coils.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
                 }
                 (
                     &Self::ReadDiscreteInputsReply { inputs: v_inputs, .. },
                     &Request::ReadDiscreteInputs { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
+                        "read_discrete_inputs_reply",
                         "byte_count",
                         2,
                         REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
                             as u64,
                         r_quantity as i64,
-                        1,
-                        8,
+                        (1, 8),
+                        "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_DISCRETE_INPUTS_REPLY
-                        .follows_request(v_inputs.len(), r_quantity as i64, 1, 1)?;
+                        .follows_request(
+                            v_inputs.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
                 }
                 (
                     &Self::ReadHoldingRegistersReply { registers: v_registers, .. },
                     &Request::ReadHoldingRegisters { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
+                        "read_holding_registers_reply",
                         "byte_count",
                         2,
                         REPEAT_READ_HOLDING_REGISTERS_REPLY
                             .count_value(v_registers.len()) as u64,
                         r_quantity as i64,
-                        2,
-                        1,
+                        (2, 1),
+                        "2 × quantity of the request",
                     )?;
                     REPEAT_READ_HOLDING_REGISTERS_REPLY
-                        .follows_request(v_registers.len(), r_quantity as i64, 1, 1)?;
+                        .follows_request(
+                            v_registers.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
                 }
                 (
                     &Self::ReadInputRegistersReply { registers: v_registers, .. },
                     &Request::ReadInputRegisters { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
+                        "read_input_registers_reply",
                         "byte_count",
                         2,
                         REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
                             as u64,
                         r_quantity as i64,
-                        2,
-                        1,
+                        (2, 1),
+                        "2 × quantity of the request",
                     )?;
                     REPEAT_READ_INPUT_REGISTERS_REPLY
-                        .follows_request(v_registers.len(), r_quantity as i64, 1, 1)?;
+                        .follows_request(
+                            v_registers.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
                 }
                 (
                     &Self::WriteSingleCoilReply {
@@ -1573,20 +1674,22 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
+                        "write_single_coil_reply",
                         "output_address",
                         2,
                         v_output_address,
                         r_output_address as i64,
-                        1,
-                        1,
+                        (1, 1),
+                        "output_address of the request",
                     )?;
                     rt::following(
+                        "write_single_coil_reply",
                         "output_value",
                         4,
                         v_output_value.raw(),
                         r_output_value.raw() as i64,
-                        1,
-                        1,
+                        (1, 1),
+                        "output_value of the request",
                     )?;
                 }
                 (
@@ -1602,20 +1705,22 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
+                        "write_single_register_reply",
                         "register_address",
                         2,
                         v_register_address,
                         r_register_address as i64,
-                        1,
-                        1,
+                        (1, 1),
+                        "register_address of the request",
                     )?;
                     rt::following(
+                        "write_single_register_reply",
                         "register_value",
                         4,
                         v_register_value,
                         r_register_value as i64,
-                        1,
-                        1,
+                        (1, 1),
+                        "register_value of the request",
                     )?;
                 }
                 (
@@ -1631,14 +1736,23 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
+                        "write_multiple_coils_reply",
                         "starting_address",
                         2,
                         v_starting_address,
                         r_starting_address as i64,
-                        1,
-                        1,
+                        (1, 1),
+                        "starting_address of the request",
                     )?;
-                    rt::following("quantity", 4, v_quantity, r_quantity as i64, 1, 1)?;
+                    rt::following(
+                        "write_multiple_coils_reply",
+                        "quantity",
+                        4,
+                        v_quantity,
+                        r_quantity as i64,
+                        (1, 1),
+                        "quantity of the request",
+                    )?;
                 }
                 (
                     &Self::WriteMultipleRegistersReply {
@@ -1653,14 +1767,23 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
+                        "write_multiple_registers_reply",
                         "starting_address",
                         2,
                         v_starting_address,
                         r_starting_address as i64,
-                        1,
-                        1,
+                        (1, 1),
+                        "starting_address of the request",
                     )?;
-                    rt::following("quantity", 4, v_quantity, r_quantity as i64, 1, 1)?;
+                    rt::following(
+                        "write_multiple_registers_reply",
+                        "quantity",
+                        4,
+                        v_quantity,
+                        r_quantity as i64,
+                        (1, 1),
+                        "quantity of the request",
+                    )?;
                 }
                 _ => {}
             }

@@ -319,51 +319,52 @@ pub mod pelco_d2 {
                 match rt::code(frame, 2, 2) {
                     0x0003 => {
                         return {
-                            let mut g = rt::Group::new(frame, 0x0003, true);
-                            g.attempt(
-                                true,
-                                |frame: &[u8; 7]| {
-                                    rt::equal("data1", 4, frame[4], 0x0)?;
-                                    rt::in_range("preset", 5, frame[5], 1, 255)?;
-                                    rt::Ok(Self::SetPreset {
-                                        preset: frame[5],
-                                    })
-                                },
-                            );
-                            g.attempt(true, Self::codeless_ptz);
-                            g.end(7, false)
+                            let mut g = rt::Group::new(frame, 0x0003, rt::None);
+                            g.attempt(|frame: &[u8; 7]| {
+                                rt::equal("set_preset", "data1", 4, frame[4], 0x0)?;
+                                rt::in_range("set_preset", "preset", 5, frame[5], 1, 255)?;
+                                rt::Ok(Self::SetPreset {
+                                    preset: frame[5],
+                                })
+                            });
+                            g.attempt(Self::codeless_ptz);
+                            g.end("set_preset", &[7])
                         };
                     }
                     0x0007 => {
                         return {
-                            let mut g = rt::Group::new(frame, 0x0007, true);
-                            g.attempt(
-                                true,
-                                |frame: &[u8; 7]| {
-                                    rt::equal("data1", 4, frame[4], 0x0)?;
-                                    rt::in_range("preset", 5, frame[5], 1, 255)?;
-                                    rt::Ok(Self::GoToPreset {
-                                        preset: frame[5],
-                                    })
-                                },
-                            );
-                            g.attempt(true, Self::codeless_ptz);
-                            g.end(7, false)
+                            let mut g = rt::Group::new(frame, 0x0007, rt::None);
+                            g.attempt(|frame: &[u8; 7]| {
+                                rt::equal("go_to_preset", "data1", 4, frame[4], 0x0)?;
+                                rt::in_range(
+                                    "go_to_preset",
+                                    "preset",
+                                    5,
+                                    frame[5],
+                                    1,
+                                    255,
+                                )?;
+                                rt::Ok(Self::GoToPreset {
+                                    preset: frame[5],
+                                })
+                            });
+                            g.attempt(Self::codeless_ptz);
+                            g.end("go_to_preset", &[7])
                         };
                     }
                     _ => {}
                 }
             }
-            rt::fixed::<7>(frame).and_then(Self::codeless_ptz)
+            rt::fixed::<7>(frame, "ptz", &[7]).and_then(Self::codeless_ptz)
         }
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
         fn codeless_ptz(frame: &[u8; 7]) -> rt::DecodeResult<Self> {
             let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal("reserved", 2, (field_0 >> 13) & 0x3, 0x0)?;
-            rt::equal("extended", 2, field_0 & 0x1, 0x0)?;
-            rt::in_range_or("pan_speed", 4, frame[4], 0, 63, &[255])?;
-            rt::in_range("tilt_speed", 5, frame[5], 0, 63)?;
+            rt::equal("ptz", "reserved", 2, (field_0 >> 13) & 0x3, 0x0)?;
+            rt::equal("ptz", "extended", 2, field_0 & 0x1, 0x0)?;
+            rt::in_range_or("ptz", "pan_speed", 4, frame[4], 0, 63, &[255])?;
+            rt::in_range("ptz", "tilt_speed", 5, frame[5], 0, 63)?;
             rt::Ok(Self::Ptz {
                 sense: (field_0 >> 15) as u8,
                 auto_scan: ((field_0 >> 12) & 0x1) as u8,
@@ -596,19 +597,20 @@ pub mod pelco_d2 {
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 1))),
             )?;
-            let message = Self::dispatch(frame, request)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 0) {
                 0u32 => {
-                    let frame = rt::reply::<4>(frame, asked & 1 != 0, 0u32)?;
+                    let frame = rt::fixed::<4>(frame, "general_response", &[4])?;
                     rt::Ok(Self::GeneralResponse {
                         alarms: Alarms::from_raw(frame[2]),
                     })

@@ -203,7 +203,7 @@ pub mod syncy {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
+            rt::check_sync(frame, 10, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
                 6,
@@ -221,24 +221,32 @@ pub mod syncy {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame)?;
-                    rt::no_broadcast(frame[2], 0xFE, "move_to", 0x03)?;
+                    let frame = rt::fixed::<9>(frame, "move_to", &[9])?;
+                    rt::no_broadcast(frame[2], 0xFE, "move_to", 0x03, 1)?;
                     let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
-                    rt::in_range("target", 5, field_0, -1000000, 1000000)?;
+                    rt::in_range("move_to", "target", 5, field_0, -1000000, 1000000)?;
                     rt::Ok(Self::MoveTo {
                         target: Millimetre::from_raw(field_0 as i32),
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<6>(frame)?;
-                    rt::no_broadcast(frame[2], 0xFE, "get_counter", 0x04)?;
+                    let frame = rt::fixed::<6>(frame, "get_counter", &[6])?;
+                    rt::no_broadcast(frame[2], 0xFE, "get_counter", 0x04, 1)?;
                     rt::Ok(Self::GetCounter)
                 }
                 0x05 => {
-                    let frame = rt::fixed::<10>(frame)?;
-                    rt::no_broadcast(frame[2], 0xFE, "set_pair", 0x05)?;
-                    rt::in_range("quantity", 5, frame[5], 1, 100)?;
-                    rt::following("doubled", 6, frame[6], frame[5] as i64, 2, 1)?;
+                    let frame = rt::fixed::<10>(frame, "set_pair", &[10])?;
+                    rt::no_broadcast(frame[2], 0xFE, "set_pair", 0x05, 1)?;
+                    rt::in_range("set_pair", "quantity", 5, frame[5], 1, 100)?;
+                    rt::following(
+                        "set_pair",
+                        "doubled",
+                        6,
+                        frame[6],
+                        frame[5] as i64,
+                        (2, 1),
+                        "2 × quantity",
+                    )?;
                     rt::Ok(Self::SetPair {
                         quantity: frame[5],
                         level: u16::from_be_bytes([frame[7], frame[8]]),
@@ -472,7 +480,7 @@ pub mod syncy {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xFF, 0xFF])?;
+            rt::check_sync(frame, 12, 0, &[0xFF, 0xFF])?;
             let address = rt::check_frame(
                 frame,
                 6,
@@ -482,24 +490,22 @@ pub mod syncy {
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
             rt::length_field(frame, 3, 1, false, true, -4)?;
-            let message = Self::dispatch(frame, request)
-                .map_err(|e| rt::reply_code(e, frame, 4, 1))?;
+            let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
                 message.follows_request(request)?;
             }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
-                0x00 => rt::reply_of::<6>(frame, asked & 1 != 0).map(|_| Self::Moving),
+                0x00 => rt::fixed::<6>(frame, "moving", &[6]).map(|_| Self::Moving),
                 0x01 => {
-                    let frame = rt::reply_of::<12>(frame, asked >> 1 & 1 != 0)?;
+                    let frame = rt::fixed::<12>(frame, "counter", &[12])?;
                     let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
                     rt::Ok(Self::Counter {
                         total: rt::u24([frame[5], frame[6], frame[7]], false),
@@ -508,14 +514,14 @@ pub mod syncy {
                     })
                 }
                 0x05 => {
-                    let frame = rt::reply_of::<8>(frame, asked >> 2 & 1 != 0)?;
+                    let frame = rt::fixed::<8>(frame, "set_pair_reply", &[8])?;
                     rt::Ok(Self::SetPairReply {
                         quantity: frame[5],
                         groups: frame[6],
                     })
                 }
                 0x85 => {
-                    let frame = rt::reply_of::<7>(frame, asked >> 3 & 1 != 0)?;
+                    let frame = rt::fixed::<7>(frame, "set_pair_error", &[7])?;
                     rt::Ok(Self::SetPairError {
                         reason: frame[5],
                     })
@@ -608,8 +614,24 @@ pub mod syncy {
                     &Self::SetPairReply { quantity: v_quantity, groups: v_groups, .. },
                     &Request::SetPair { quantity: r_quantity, .. },
                 ) => {
-                    rt::following("quantity", 5, v_quantity, r_quantity as i64, 1, 1)?;
-                    rt::following("groups", 6, v_groups, r_quantity as i64, 1, 8)?;
+                    rt::following(
+                        "set_pair_reply",
+                        "quantity",
+                        5,
+                        v_quantity,
+                        r_quantity as i64,
+                        (1, 1),
+                        "quantity of the request",
+                    )?;
+                    rt::following(
+                        "set_pair_reply",
+                        "groups",
+                        6,
+                        v_groups,
+                        r_quantity as i64,
+                        (1, 8),
+                        "ceil(quantity / 8) of the request",
+                    )?;
                 }
                 _ => {}
             }

@@ -55,12 +55,14 @@ pub mod vario {
     }
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
+        message: "write",
         field: "values",
         base: 8,
         at: 7,
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
+            rule: "the bytes of values",
             at: 6,
             width: 1,
             le: false,
@@ -195,7 +197,7 @@ pub mod vario {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xA5, 0x5A])?;
+            rt::check_sync(frame, 40, 0, &[0xA5, 0x5A])?;
             let address = rt::check_frame(
                 frame,
                 9,
@@ -213,8 +215,8 @@ pub mod vario {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame)?;
-                    rt::in_range("quantity", 7, frame[7], 1, 16)?;
+                    let frame = rt::fixed::<9>(frame, "read", &[9])?;
+                    rt::in_range("read", "quantity", 7, frame[7], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[5], frame[6]]),
                         quantity: frame[7],
@@ -222,15 +224,23 @@ pub mod vario {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<7>(frame)?;
-                    rt::in_range("quantity", 5, frame[5], 1, 16)?;
-                    rt::following("byte_count", 6, frame[6], frame[5] as i64, 2, 1)?;
+                    rt::in_range("write", "quantity", 5, frame[5], 1, 16)?;
+                    rt::following(
+                        "write",
+                        "byte_count",
+                        6,
+                        frame[6],
+                        frame[5] as i64,
+                        (2, 1),
+                        "2 × quantity",
+                    )?;
                     rt::Ok(Self::Write {
                         quantity: frame[5],
                         values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame)?;
+                    let frame = rt::fixed::<9>(frame, "stamp", &[9])?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[5], frame[6], frame[7]], false),
                     })
@@ -329,6 +339,7 @@ pub mod vario {
     }
     /// Where `read_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_REPLY: rt::RepeatAt = rt::RepeatAt {
+        message: "read_reply",
         field: "values",
         base: 6,
         at: 5,
@@ -459,7 +470,7 @@ pub mod vario {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 0, &[0xA5, 0x5A])?;
+            rt::check_sync(frame, 38, 0, &[0xA5, 0x5A])?;
             let address = rt::check_frame(
                 frame,
                 7,
@@ -469,23 +480,20 @@ pub mod vario {
                 |b| u32::from(checksum(rt::covered(b, 2))),
             )?;
             rt::length_field(frame, 3, 1, false, true, -4)?;
-            let message = Self::dispatch(frame, request)
-                .map_err(|e| rt::reply_code(e, frame, 4, 1))?;
+            let message = Self::dispatch(frame)?;
             if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
                 message.follows_request(request)?;
             }
             rt::Ok(Decoded { address, message })
         }
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(
-            frame: &[u8],
-            request: rt::Option<&Request>,
-        ) -> rt::DecodeResult<Self> {
-            let asked: u64 = request.map_or(!0, Request::replies);
+        fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    rt::admit(asked & 1 != 0, 0x01)?;
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
                     rt::Ok(Self::ReadReply {
                         values: REPEAT_READ_REPLY
@@ -493,13 +501,13 @@ pub mod vario {
                     })
                 }
                 0x81 => {
-                    let frame = rt::reply_of::<7>(frame, asked >> 1 & 1 != 0)?;
+                    let frame = rt::fixed::<7>(frame, "read_error", &[7])?;
                     rt::Ok(Self::ReadError {
                         reason: frame[5],
                     })
                 }
                 0x02 => {
-                    let frame = rt::reply_of::<7>(frame, asked >> 2 & 1 != 0)?;
+                    let frame = rt::fixed::<7>(frame, "write_reply", &[7])?;
                     rt::Ok(Self::WriteReply {
                         status: frame[5],
                     })
@@ -583,7 +591,12 @@ pub mod vario {
                     &Request::Read { quantity: r_quantity, .. },
                 ) => {
                     REPEAT_READ_REPLY
-                        .follows_request(v_values.len(), r_quantity as i64, 1, 1)?;
+                        .follows_request(
+                            v_values.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
                 }
                 _ => {}
             }

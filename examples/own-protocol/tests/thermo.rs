@@ -190,7 +190,10 @@ fn documented_frames_decode_as_documented() {
     // ... but is no answer to a read.
     assert_eq!(
         Response::decode_reply(&nak, &Request::ReadTemperature),
-        Err(DecodeError::NotAReply { code: 0xEE })
+        Err(DecodeError::NotAReply {
+            message: "nak",
+            request: "read_temperature"
+        })
     );
 
     // The CRC is checked: one flipped bit is a mismatch.

@@ -64,6 +64,7 @@ impl Why {
             DecodeError::OutOfRange {
                 field,
                 offset,
+                message: _,
                 found,
                 min,
                 max,
