@@ -89,18 +89,21 @@ pub struct Totals {
     pub captures: usize,
     pub disagreements: usize,
     pub specs_disagreeing: usize,
+    /// Disagreements where both engines refuse, for different reasons.
+    pub class_only: usize,
 }
 
 impl Totals {
     pub fn line(&self) -> String {
         format!(
-            "totals: specs {} frames {} encodes {} captures {} disagreements {} specs_disagreeing {}",
+            "totals: specs {} frames {} encodes {} captures {} disagreements {} specs_disagreeing {} class_only {}",
             self.specs,
             self.frames,
             self.encodes,
             self.captures,
             self.disagreements,
-            self.specs_disagreeing
+            self.specs_disagreeing,
+            self.class_only
         )
     }
 
@@ -118,6 +121,7 @@ impl Totals {
             captures: get("captures")?,
             disagreements: get("disagreements")?,
             specs_disagreeing: get("specs_disagreeing")?,
+            class_only: get("class_only")?,
         })
     }
 
@@ -128,6 +132,7 @@ impl Totals {
         self.captures += o.captures;
         self.disagreements += o.disagreements;
         self.specs_disagreeing += o.specs_disagreeing;
+        self.class_only += o.class_only;
     }
 }
 
@@ -168,6 +173,10 @@ pub fn main(specs: &[Entry]) {
         t.encodes += r.encodes;
         t.captures += r.captures;
         t.disagreements += r.disagreements;
+        t.class_only += r.class_only;
+        for (sig, n) in &r.signatures {
+            println!("SIGNATURE {n} {sig}");
+        }
         if r.disagreements == 0 {
             continue;
         }
@@ -178,8 +187,8 @@ pub fn main(specs: &[Entry]) {
             let path = found.join(format!("{seed}-{n}.yaml"));
             let _ = std::fs::write(&path, &text);
             println!(
-                "DISAGREEMENT {name} (spec seed {seed}) [{}] {}\n  input:       {}\n  generated:   {}\n  interpreter: {}\n  written to {}",
-                d.kind,
+                "DISAGREEMENT {name} (spec seed {seed}) {}\n  how:         {}\n  input:       {}\n  generated:   {}\n  interpreter: {}\n  written to {}",
+                d.signature,
                 d.how,
                 d.input,
                 d.generated,

@@ -51,6 +51,11 @@ impl Default for Budget {
 pub struct Disagreement {
     /// decode, encode, stream, or panic.
     pub kind: &'static str,
+    /// What differs, in a few words that repeat across frames (`decode: generated refuses
+    /// (wrong length), interpreter accepts`): disagreements are grouped by it.
+    pub signature: String,
+    /// Both engines refuse, for different reasons (see [`same_error`]).
+    pub class_only: bool,
     /// Direction, request, address, values: how the input was given.
     pub how: String,
     /// The frame or capture (hex), or the values encoded.
@@ -69,21 +74,35 @@ pub struct Report {
     pub found: Vec<Disagreement>,
     /// Every disagreement, kept or not.
     pub disagreements: usize,
+    /// Of those, where both refuse for different reasons.
+    pub class_only: usize,
+    /// How many of each signature.
+    pub signatures: std::collections::BTreeMap<String, usize>,
 }
 
-/// Disagreements kept per spec (one of each kind first); the rest are counted.
-pub const MAX_KEPT: usize = 4;
+/// Disagreements kept per spec: the first of each signature, up to this many.
+pub const MAX_KEPT: usize = 6;
 
 impl Report {
     fn record(&mut self, d: Disagreement) {
         self.disagreements += 1;
-        let new_kind = !self
-            .found
-            .iter()
-            .any(|f| f.kind == d.kind && f.how == d.how);
-        if self.found.len() < MAX_KEPT && (new_kind || self.found.len() < 2) {
+        if d.class_only {
+            self.class_only += 1;
+        }
+        let n = self.signatures.entry(d.signature.clone()).or_default();
+        *n += 1;
+        if *n == 1 && self.found.len() < MAX_KEPT {
             self.found.push(d);
         }
+    }
+}
+
+/// A few words for what an engine said, for signatures.
+fn gist<E: fmt::Debug>(s: &Said<E>, class: impl Fn(&E) -> &'static str) -> String {
+    match s {
+        Said::Accepted(_) => "accepts".into(),
+        Said::Refused(e) => format!("refuses ({})", class(e)),
+        Said::Panicked(_) => "panics".into(),
     }
 }
 
@@ -454,8 +473,31 @@ impl<'p, P: Protocol> Run<'p, P> {
         if !agree {
             let panicked = matches!(g, Said::Panicked(_)) || matches!(i, Said::Panicked(_));
             let how = self.mode_text(mode);
+            let kind = if panicked { "panic" } else { "decode" };
+            let mut signature = format!(
+                "{kind}: generated {}, interpreter {}",
+                gist(&g, class),
+                gist(&i, interp_class)
+            );
+            if let (Said::Accepted(a), Said::Accepted(b)) = (&g, &i) {
+                let what = if a.name != b.name {
+                    "another message"
+                } else if a.address != b.address {
+                    "another address"
+                } else if a.values != b.values {
+                    "other values"
+                } else if a.reencoded.as_deref() != Ok(frame) {
+                    "the generated encoder writes it back otherwise"
+                } else {
+                    "the interpreter's encoder writes it back otherwise"
+                };
+                signature.push_str(&format!(": {what}"));
+            }
+            let class_only = matches!((&g, &i), (Said::Refused(_), Said::Refused(_)));
             self.report.record(Disagreement {
-                kind: if panicked { "panic" } else { "decode" },
+                kind,
+                signature,
+                class_only,
                 how,
                 input: interp::format_hex(frame),
                 generated: g.to_string(),
@@ -528,12 +570,43 @@ impl<'p, P: Protocol> Run<'p, P> {
                 .iter()
                 .map(|v| format!("{}: {:?}", v.name, v.raw))
                 .collect();
+            let kind = if g.is_err() || i.is_err() {
+                "panic"
+            } else {
+                "encode"
+            };
+            let word = |r: &Result<Result<Vec<u8>, String>, String>| match r {
+                Ok(Ok(_)) => "writes".to_owned(),
+                Ok(Err(c)) => format!("refuses ({c})"),
+                Err(_) => "panics".to_owned(),
+            };
+            let gw = word(
+                &g.as_ref()
+                    .map(|r| {
+                        r.as_ref()
+                            .map(|_| Vec::new())
+                            .map_err(|e| encode_class(e).to_owned())
+                    })
+                    .map_err(|e| e.clone()),
+            );
+            let iw = word(
+                &i.as_ref()
+                    .map(|r| {
+                        r.as_ref()
+                            .map(|_| Vec::new())
+                            .map_err(|e| interp_encode_class(e).to_owned())
+                    })
+                    .map_err(|e| e.clone()),
+            );
+            let mut signature = format!("{kind}: generated {gw}, interpreter {iw}");
+            if gw == "writes" && iw == "writes" {
+                signature.push_str(": other bytes");
+            }
+            let class_only = matches!((&g, &i), (Ok(Err(_)), Ok(Err(_))));
             self.report.record(Disagreement {
-                kind: if g.is_err() || i.is_err() {
-                    "panic"
-                } else {
-                    "encode"
-                },
+                kind,
+                signature,
+                class_only,
                 how: format!("{name} encoded for address 0x{address:02X}"),
                 input: format!("{{{}}}", input.join(", ")),
                 generated: show_g,
@@ -574,12 +647,33 @@ impl<'p, P: Protocol> Run<'p, P> {
             _ => String::new(),
         };
         let cut: Vec<String> = chunks.iter().map(|c| c.to_string()).collect();
+        let kind = if g.is_err() || i.is_err() {
+            "panic"
+        } else {
+            "stream"
+        };
+        let signature = match (&g, &i) {
+            (Ok(a), Ok(b)) => {
+                let k = a.iter().zip(b).take_while(|(x, y)| x == y).count();
+                let word = |e: Option<&Seen>| match e {
+                    Some(Seen::Frame { .. }) => "a frame",
+                    Some(Seen::Ambiguous { .. }) => "an ambiguous frame",
+                    Some(Seen::Skipped { .. }) => "skipped bytes",
+                    Some(Seen::OutOfSpec { .. }) => "an out-of-spec frame",
+                    None => "nothing",
+                };
+                format!(
+                    "stream: generated sees {}, interpreter {}",
+                    word(a.get(k)),
+                    word(b.get(k))
+                )
+            }
+            _ => "panic: in a stream decoder".to_owned(),
+        };
         self.report.record(Disagreement {
-            kind: if g.is_err() || i.is_err() {
-                "panic"
-            } else {
-                "stream"
-            },
+            kind,
+            signature,
+            class_only: false,
             how: format!(
                 "stream of {}, pushed in chunks [{}]{first}",
                 direction.map_or("both directions", |d| d.as_str()),
@@ -850,6 +944,8 @@ pub fn compare<P: Protocol>(seed: u64, budget: Budget) -> Report {
             let mut r = Report::default();
             r.record(Disagreement {
                 kind: "panic",
+                signature: "panic: the spec does not load".into(),
+                class_only: false,
                 how: "loading the spec".into(),
                 input: String::new(),
                 generated: String::new(),
@@ -873,6 +969,8 @@ pub fn compare<P: Protocol>(seed: u64, budget: Budget) -> Report {
             let mut r = Report::default();
             r.record(Disagreement {
                 kind: "panic",
+                signature: "panic: in the comparison itself".into(),
+                class_only: false,
                 how: "the comparison itself".into(),
                 input: String::new(),
                 generated: m,
@@ -897,8 +995,8 @@ pub fn reproduction(spec_yaml: &str, seed: u64, d: &Disagreement) -> String {
         }
     };
     out.push_str(&format!(
-        "# busspec-difftest disagreement ({}), spec seed {seed}\n",
-        d.kind
+        "# busspec-difftest disagreement, spec seed {seed}\n# {}\n",
+        d.signature
     ));
     comment(&mut out, "how:", &d.how);
     comment(&mut out, "input:", &d.input);

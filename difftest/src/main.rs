@@ -25,7 +25,10 @@ const USAGE: &str = "usage: busspec-difftest [--seed N|random] [--specs N] [--se
   --budget F,E,C    per spec: random frames, encodes per message, captures (default 400,24,12)
   --spec-seed S     compare exactly the spec of seed S (repeatable), one round
   --print S         print the spec of seed S and exit
-  --generate-only   generate, validate and emit the specs, without compiling or comparing";
+  --generate-only   generate, validate and emit the specs, without compiling or comparing
+  --error-class warn|fail
+                    where both engines refuse a frame or an encode for different reasons:
+                    report it and exit 0 (warn), or count it as a disagreement (fail, default)";
 
 struct Args {
     seed: u64,
@@ -37,6 +40,8 @@ struct Args {
     spec_seeds: Vec<u64>,
     /// Generate, validate and emit only: no batch crate.
     generate_only: bool,
+    /// Where both engines refuse a frame for different reasons: report, do not fail.
+    error_class_warn: bool,
 }
 
 fn fail(msg: &str) -> ! {
@@ -66,6 +71,7 @@ fn parse_args() -> Args {
         budget: None,
         spec_seeds: Vec::new(),
         generate_only: false,
+        error_class_warn: false,
     };
     let mut i = 0;
     while i < argv.len() {
@@ -92,6 +98,11 @@ fn parse_args() -> Args {
                 a.budget = Some(b.clone());
             }
             "--spec-seed" => a.spec_seeds.push(number(flag, v)),
+            "--error-class" => match v.map(String::as_str) {
+                Some("warn") => a.error_class_warn = true,
+                Some("fail") => a.error_class_warn = false,
+                _ => fail("--error-class takes `warn` or `fail`"),
+            },
             "--generate-only" => {
                 a.generate_only = true;
                 i += 1;
@@ -146,6 +157,7 @@ struct Figures {
     totals: Totals,
     rounds: usize,
     failed_builds: usize,
+    signatures: BTreeMap<String, usize>,
 }
 
 fn main() {
@@ -198,7 +210,25 @@ fn main() {
         t.specs_disagreeing,
         f.failed_builds
     );
-    if t.disagreements > 0 || f.refused > 0 || f.failed_builds > 0 {
+    if !f.signatures.is_empty() {
+        println!("disagreements by what differs (count, what):");
+        for (sig, n) in &f.signatures {
+            println!("  {n:>8}  {sig}");
+        }
+    }
+    let serious = t.disagreements
+        - if args.error_class_warn {
+            t.class_only
+        } else {
+            0
+        };
+    if args.error_class_warn && t.class_only > 0 {
+        println!(
+            "({} disagreements on the error class only, not counted: --error-class warn)",
+            t.class_only
+        );
+    }
+    if serious > 0 || f.refused > 0 || f.failed_builds > 0 {
         if t.disagreements > 0 {
             println!("reproductions: {}", args.found.display());
         }
@@ -318,6 +348,12 @@ fn run_round(args: &Args, dir: &std::path::Path, round: u64, seeds: &[u64], f: &
     let stdout = String::from_utf8_lossy(&out.stdout);
     let mut totals = None;
     for line in stdout.lines() {
+        if let Some(rest) = line.strip_prefix("SIGNATURE ") {
+            if let Some((n, sig)) = rest.split_once(' ') {
+                *f.signatures.entry(sig.to_owned()).or_default() += n.parse::<usize>().unwrap_or(0);
+            }
+            continue;
+        }
         match Totals::parse(line) {
             Some(t) => totals = Some(t),
             None => println!("  {line}"),
