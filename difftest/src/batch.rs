@@ -53,6 +53,10 @@ debug = false
 incremental = false
 [profile.dev.package."*"]
 opt-level = 2
+
+# Generated derives sit behind features named `serde` and `arbitrary`, which the batch has not.
+[lints.rust]
+unexpected_cfgs = {{ level = "allow" }}
 "#,
         repo = repo.display()
     );

@@ -1003,6 +1003,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         .filter_map(|r| r.name[1..].parse().ok())
         .filter(|k| !common.contains(k))
         .collect();
+    #[allow(clippy::needless_range_loop)]
     for c in 0..n_cmd {
         if lists[c].is_empty() && common.is_empty() {
             if plain.is_empty() {
