@@ -1,0 +1,215 @@
+//! A batch of specs as one crate: one rustc run serves them all. [`write`] lays the crate out
+//! (its own workspace, path dependencies on this repository, a copy of its lock file, the
+//! generated modules and a `main` that `include!`s them); the batch's `main` calls [`main`]
+//! with one entry per spec, which runs [`crate::compare::compare`] on each and writes every
+//! disagreement as a reproduction file.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::compare::{self, Budget, Report};
+
+/// One spec of a batch: the seed that generated it, and its protocol type's comparison.
+/// And its spec text (the module's `SPEC_YAML`).
+pub type Entry = (u64, &'static str, fn(u64, Budget) -> Report, &'static str);
+
+/// The repository this crate belongs to.
+pub fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("difftest/ sits in the repository")
+        .to_path_buf()
+}
+
+/// The comparison for protocol `P`, as a batch entry calls it.
+pub fn entry<P: busspec_runtime::Protocol>(seed: u64, budget: Budget) -> Report {
+    compare::compare::<P>(seed, budget)
+}
+
+/// Writes the batch crate into `dir` for `specs` (seed, protocol name, emitted module), so
+/// that `cargo build` there builds one binary comparing them all. Files are rewritten only
+/// when they change.
+pub fn write(dir: &Path, specs: &[(u64, String, String)]) -> std::io::Result<()> {
+    let repo = repository();
+    let src = dir.join("src");
+    std::fs::create_dir_all(src.join("gen"))?;
+    let manifest = format!(
+        r#"# Written by busspec-difftest: a batch of random specs, compiled together.
+[package]
+name = "busspec-difftest-batch"
+version = "0.0.0"
+edition = "2021"
+publish = false
+
+[workspace]
+
+[dependencies]
+busspec-difftest = {{ path = "{repo}/difftest" }}
+busspec-runtime = {{ path = "{repo}/runtime" }}
+
+# The dependencies compile once, optimised; the batch's own code, new every round, quickly.
+[profile.dev]
+debug = false
+incremental = false
+[profile.dev.package."*"]
+opt-level = 2
+
+# Generated derives sit behind features named `serde` and `arbitrary`, which the batch has not.
+[lints.rust]
+unexpected_cfgs = {{ level = "allow" }}
+"#,
+        repo = repo.display()
+    );
+    busspec_codegen::write_if_changed(&dir.join("Cargo.toml"), &manifest)?;
+    let lock = std::fs::read_to_string(repo.join("Cargo.lock"))?;
+    if !dir.join("Cargo.lock").exists() {
+        std::fs::write(dir.join("Cargo.lock"), lock)?;
+    }
+    let mut main = String::from(
+        "// Written by busspec-difftest: every module of the batch and one entry each.\n\
+         #![allow(clippy::all, dead_code, unused)]\n",
+    );
+    for (_, name, code) in specs {
+        busspec_codegen::write_if_changed(&src.join("gen").join(format!("{name}.rs")), code)?;
+        main.push_str(&format!("include!(\"gen/{name}.rs\");\n"));
+    }
+    main.push_str("\nconst SPECS: &[busspec_difftest::batch::Entry] = &[\n");
+    for (seed, name, _) in specs {
+        let ty = busspec_codegen::emit::camel(name);
+        main.push_str(&format!(
+            "    ({seed}, \"{name}\", busspec_difftest::batch::entry::<{name}::{ty}>, {name}::SPEC_YAML),\n"
+        ));
+    }
+    main.push_str("];\n\nfn main() {\n    busspec_difftest::batch::main(SPECS);\n}\n");
+    busspec_codegen::write_if_changed(&src.join("main.rs"), &main)
+}
+
+/// Figures of one batch run, printed as one `totals:` line for the driver to read.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Totals {
+    pub specs: usize,
+    pub frames: usize,
+    pub encodes: usize,
+    pub captures: usize,
+    pub disagreements: usize,
+    pub specs_disagreeing: usize,
+    /// Disagreements where both engines refuse, for different reasons.
+    pub class_only: usize,
+}
+
+impl Totals {
+    pub fn line(&self) -> String {
+        format!(
+            "totals: specs {} frames {} encodes {} captures {} disagreements {} specs_disagreeing {} class_only {}",
+            self.specs,
+            self.frames,
+            self.encodes,
+            self.captures,
+            self.disagreements,
+            self.specs_disagreeing,
+            self.class_only
+        )
+    }
+
+    pub fn parse(line: &str) -> Option<Totals> {
+        let rest = line.strip_prefix("totals: ")?;
+        let w: Vec<&str> = rest.split_whitespace().collect();
+        let get = |k: &str| -> Option<usize> {
+            let i = w.iter().position(|x| *x == k)?;
+            w.get(i + 1)?.parse().ok()
+        };
+        Some(Totals {
+            specs: get("specs")?,
+            frames: get("frames")?,
+            encodes: get("encodes")?,
+            captures: get("captures")?,
+            disagreements: get("disagreements")?,
+            specs_disagreeing: get("specs_disagreeing")?,
+            class_only: get("class_only")?,
+        })
+    }
+
+    pub fn add(&mut self, o: &Totals) {
+        self.specs += o.specs;
+        self.frames += o.frames;
+        self.encodes += o.encodes;
+        self.captures += o.captures;
+        self.disagreements += o.disagreements;
+        self.specs_disagreeing += o.specs_disagreeing;
+        self.class_only += o.class_only;
+    }
+}
+
+/// The batch binary's `main`: compares every entry (arguments: `--found DIR`, where the
+/// reproductions go, and `--budget FRAMES,ENCODES,CAPTURES`), prints each disagreement and
+/// the totals, and exits with status 1 if any.
+pub fn main(specs: &[Entry]) {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut found = repository().join("difftest").join("found");
+    let mut budget = Budget::default();
+    let mut i = 0;
+    while i < args.len() {
+        match (args[i].as_str(), args.get(i + 1)) {
+            ("--found", Some(v)) => found = PathBuf::from(v),
+            ("--budget", Some(v)) => {
+                let n: Vec<usize> = v.split(',').filter_map(|x| x.parse().ok()).collect();
+                if let [a, b, c] = n[..] {
+                    budget = Budget {
+                        random_frames: a,
+                        encodes_per_message: b,
+                        captures: c,
+                    };
+                }
+            }
+            (a, _) => {
+                eprintln!("batch: unknown argument {a}");
+                std::process::exit(2);
+            }
+        }
+        i += 2;
+    }
+    compare::quiet_panics();
+    let mut t = Totals::default();
+    for &(seed, name, run, yaml) in specs {
+        let r = run(seed, budget);
+        t.specs += 1;
+        t.frames += r.frames;
+        t.encodes += r.encodes;
+        t.captures += r.captures;
+        t.disagreements += r.disagreements;
+        t.class_only += r.class_only;
+        for (sig, n) in &r.signatures {
+            println!("SIGNATURE {n} {sig}");
+        }
+        if r.disagreements == 0 {
+            continue;
+        }
+        t.specs_disagreeing += 1;
+        let _ = std::fs::create_dir_all(&found);
+        for (n, d) in r.found.iter().enumerate() {
+            let text = compare::reproduction(yaml, seed, d);
+            let path = found.join(format!("{seed}-{n}.yaml"));
+            let _ = std::fs::write(&path, &text);
+            println!(
+                "DISAGREEMENT {name} (spec seed {seed}) {}\n  how:         {}\n  input:       {}\n  generated:   {}\n  interpreter: {}\n  written to {}",
+                d.signature,
+                d.how,
+                d.input,
+                d.generated,
+                d.interpreter,
+                path.display()
+            );
+        }
+        if r.disagreements > r.found.len() {
+            println!(
+                "  ({} more disagreements on {name} not written)",
+                r.disagreements - r.found.len()
+            );
+        }
+    }
+    println!("{}", t.line());
+    let _ = std::io::stdout().flush();
+    if t.disagreements > 0 {
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,1008 @@
+//! The two engines on one generated protocol: decode (examples, random frames, mutated,
+//! truncated and lengthened frames, noise; as request, response and reply to each command),
+//! encode (example and random values) and stream events (captures cut into random chunks, in
+//! both directions). Every disagreement is recorded with what each engine said, and the run
+//! goes on; a panic in either engine is one.
+//!
+//! The decoded values and stream events are reduced to what both engines report by
+//! `busspec_fuzz_bodies` (`oracle::interp_values`, `visit_values`, `events::interp_events`,
+//! `seen`, `stream_events`), the same reductions the fuzz targets compare. Refusals are compared
+//! by [`same_error`] and [`same_encode_error`]: today their class, one place to change for the
+//! full text.
+
+use std::cell::RefCell;
+use std::fmt;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use busspec_fuzz_bodies::events::{self, Seen};
+use busspec_fuzz_bodies::oracle::{interp_values, visit_values, Values};
+use busspec_fuzz_bodies::{seen, stream_events};
+use busspec_model::checksum;
+use busspec_model::interp::{self, DecodeError as InterpError, Raw, Value};
+use busspec_model::ir::{self, Count, Direction, MessageRef};
+use busspec_runtime::stream::Direction as StreamDirection;
+use busspec_runtime::{DecodeError, Elements, EncodeError, FieldValue, Message, Protocol};
+
+use crate::values::random_values;
+
+/// How much to compare per spec.
+#[derive(Debug, Clone, Copy)]
+pub struct Budget {
+    /// Random inputs (random frames, noise, mutations of random frames) per spec.
+    pub random_frames: usize,
+    /// Random value sets per message for encoding.
+    pub encodes_per_message: usize,
+    /// Random captures per direction.
+    pub captures: usize,
+}
+
+impl Default for Budget {
+    fn default() -> Self {
+        Budget {
+            random_frames: 400,
+            encodes_per_message: 24,
+            captures: 12,
+        }
+    }
+}
+
+/// One disagreement, self-contained: what was compared and what each engine said.
+#[derive(Debug, Clone)]
+pub struct Disagreement {
+    /// decode, encode, stream, or panic.
+    pub kind: &'static str,
+    /// What differs, in a few words that repeat across frames (`decode: generated refuses
+    /// (wrong length), interpreter accepts`): disagreements are grouped by it.
+    pub signature: String,
+    /// Both engines refuse, for different reasons (see [`same_error`]).
+    pub class_only: bool,
+    /// Direction, request, address, values: how the input was given.
+    pub how: String,
+    /// The frame or capture (hex), or the values encoded.
+    pub input: String,
+    pub generated: String,
+    pub interpreter: String,
+}
+
+/// What was compared on one spec, and what disagreed.
+#[derive(Debug, Default)]
+pub struct Report {
+    pub frames: usize,
+    pub encodes: usize,
+    pub captures: usize,
+    /// The first few disagreements (see [`MAX_KEPT`]).
+    pub found: Vec<Disagreement>,
+    /// Every disagreement, kept or not.
+    pub disagreements: usize,
+    /// Of those, where both refuse for different reasons.
+    pub class_only: usize,
+    /// How many of each signature.
+    pub signatures: std::collections::BTreeMap<String, usize>,
+}
+
+/// Disagreements kept per spec: the first of each signature, up to this many.
+pub const MAX_KEPT: usize = 6;
+
+impl Report {
+    fn record(&mut self, d: Disagreement) {
+        self.disagreements += 1;
+        if d.class_only {
+            self.class_only += 1;
+        }
+        let n = self.signatures.entry(d.signature.clone()).or_default();
+        *n += 1;
+        if *n == 1 && self.found.len() < MAX_KEPT {
+            self.found.push(d);
+        }
+    }
+}
+
+/// A few words for what an engine said, for signatures.
+fn gist<E: fmt::Debug>(s: &Said<E>, class: impl Fn(&E) -> &'static str) -> String {
+    match s {
+        Said::Accepted(_) => "accepts".into(),
+        Said::Refused(e) => format!("refuses ({})", class(e)),
+        Said::Panicked(_) => "panics".into(),
+    }
+}
+
+thread_local! {
+    static PANIC: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+/// Panics are caught and recorded, not printed: install once per process.
+pub fn quiet_panics() {
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info.to_string();
+        PANIC.with(|p| *p.borrow_mut() = msg);
+    }));
+}
+
+/// `f`'s value, or the message it panicked with.
+pub fn caught<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(|_| PANIC.with(|p| p.borrow().clone()))
+}
+
+/// A frame one engine accepted.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Accepted {
+    pub name: String,
+    pub address: u8,
+    pub values: Values,
+    /// What that engine's encoder writes back for it.
+    pub reencoded: Result<Vec<u8>, String>,
+}
+
+/// What one engine made of a frame.
+#[derive(Debug, Clone)]
+pub enum Said<E> {
+    Accepted(Accepted),
+    Refused(E),
+    Panicked(String),
+}
+
+/// The interpreter's refusal: its error, or `None` where it decoded a response the command
+/// does not list (`decode_reply` in generated code refuses it as not a reply).
+pub type InterpRefusal = Option<InterpError>;
+
+/// A refusal's class, shared by both engines' errors.
+fn class(g: &DecodeError) -> &'static str {
+    match g {
+        DecodeError::Truncated { .. } => "truncated",
+        DecodeError::BadStart { .. } => "bad start",
+        DecodeError::ChecksumMismatch { .. } => "checksum",
+        DecodeError::UnknownCommand { .. } | DecodeError::UnknownResponse { .. } => "unknown code",
+        DecodeError::WrongLength { .. } => "wrong length",
+        DecodeError::InvalidValue {
+            field: "length", ..
+        } => "length field",
+        DecodeError::InvalidValue { .. } => "invalid value",
+        DecodeError::Ambiguous { .. } => "ambiguous",
+        DecodeError::NotAReply { .. } => "not a reply",
+        DecodeError::TooLong { .. } => "too long",
+        DecodeError::OutOfRange { .. } => "out of range",
+        DecodeError::BadAddress { .. } => "bad address",
+        DecodeError::BroadcastNotAccepted { .. } => "broadcast",
+        DecodeError::BadCount { .. } => "bad count",
+    }
+}
+
+fn interp_class(i: &InterpRefusal) -> &'static str {
+    match i {
+        None => "not a reply",
+        Some(e) => match e {
+            InterpError::Truncated { .. } => "truncated",
+            InterpError::BadStart { .. } => "bad start",
+            InterpError::ChecksumMismatch { .. } => "checksum",
+            InterpError::UnknownCode { .. } => "unknown code",
+            InterpError::WrongLength { .. } => "wrong length",
+            InterpError::LengthMismatch { .. } => "length field",
+            InterpError::ConstantMismatch { .. }
+            | InterpError::NotEqual { .. }
+            | InterpError::NotFollowing { .. } => "invalid value",
+            InterpError::Ambiguous { .. } => "ambiguous",
+            InterpError::NotAnAnswer { .. } => "not a reply",
+            InterpError::TooLong { .. } => "too long",
+            InterpError::OutOfRange { .. } => "out of range",
+            InterpError::BadAddress { .. } => "bad address",
+            InterpError::BroadcastNotAccepted { .. } => "broadcast",
+            InterpError::BadCount { .. } => "bad count",
+        },
+    }
+}
+
+/// Whether the two engines refuse a frame alike. Today: the same class of error. When both
+/// engines word their errors identically, compare `g.to_string()` with the interpreter's text
+/// here, and nowhere else.
+pub fn same_error(g: &DecodeError, i: &InterpRefusal) -> bool {
+    class(g) == interp_class(i)
+}
+
+/// A generated encoder's refusal: from `from_fields` (a value the typed message cannot hold)
+/// or from `encode`.
+#[derive(Debug, Clone)]
+pub enum GenEncodeError {
+    Fields(busspec_runtime::FieldError),
+    Encode(EncodeError),
+}
+
+fn encode_class(g: &GenEncodeError) -> &'static str {
+    use busspec_runtime::FieldError as F;
+    match g {
+        GenEncodeError::Fields(F::OutOfRange { .. }) => "out of range",
+        GenEncodeError::Fields(F::TooMany { .. }) => "count",
+        GenEncodeError::Fields(F::TextLength { .. }) => "text length",
+        GenEncodeError::Fields(F::Missing { .. }) => "missing",
+        GenEncodeError::Fields(F::WrongKind { .. }) => "kind",
+        GenEncodeError::Fields(F::UnknownMessage) => "unknown message",
+        GenEncodeError::Encode(EncodeError::OutOfRange { .. }) => "out of range",
+        GenEncodeError::Encode(EncodeError::NotInRange { .. }) => "not in range",
+        GenEncodeError::Encode(EncodeError::BadAddress { .. }) => "bad address",
+        GenEncodeError::Encode(EncodeError::BroadcastNotAccepted { .. }) => "broadcast",
+        GenEncodeError::Encode(EncodeError::BufferTooSmall { .. }) => "buffer",
+        #[allow(unreachable_patterns)]
+        GenEncodeError::Encode(_) => "other",
+    }
+}
+
+fn interp_encode_class(i: &interp::EncodeError) -> &'static str {
+    use interp::EncodeError as E;
+    match i {
+        E::OutOfRange { .. } => "out of range",
+        E::NotInRange { .. } => "not in range",
+        E::WrongCount { .. } => "count",
+        E::WrongTextLength { .. } => "text length",
+        E::MissingValue { .. } => "missing",
+        E::NotText { .. } | E::NotNumber { .. } | E::NotList { .. } => "kind",
+        E::UnknownValue { .. } => "unknown value",
+        E::BadAddress { .. } => "bad address",
+        E::BroadcastNotAccepted { .. } => "broadcast",
+        E::Fixed { .. } => "fixed",
+        E::Inconsistent { .. } => "inconsistent",
+    }
+}
+
+/// Whether the two encoders refuse alike: the same class (see [`same_error`]).
+pub fn same_encode_error(g: &GenEncodeError, i: &interp::EncodeError) -> bool {
+    encode_class(g) == interp_encode_class(i)
+}
+
+/// How a frame is decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Request,
+    Response,
+    /// As the reply to the request `asks[i]`.
+    Reply(usize),
+}
+
+/// A request frame both engines decode, for decoding replies to it.
+struct Ask<P: Protocol> {
+    command: usize,
+    wire: Vec<u8>,
+    generated: P::Request,
+    interp: interp::Frame<'static>,
+}
+
+/// Everything one spec's comparison needs.
+pub struct Run<'p, P: Protocol> {
+    p: &'p ir::Protocol,
+    asks: Vec<Ask<P>>,
+    rng: fastrand::Rng,
+    pub report: Report,
+}
+
+impl<E: fmt::Debug> fmt::Display for Said<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Said::Accepted(a) => {
+                write!(
+                    f,
+                    "accepted {} from 0x{:02X} {:?}",
+                    a.name, a.address, a.values
+                )?;
+                match &a.reencoded {
+                    Ok(w) => write!(f, ", writes back {}", interp::format_hex(w)),
+                    Err(e) => write!(f, ", does not write back: {e}"),
+                }
+            }
+            Said::Refused(e) => write!(f, "refused: {e:?}"),
+            Said::Panicked(m) => write!(f, "panicked: {m}"),
+        }
+    }
+}
+
+fn pattern_encode<M: Message>(m: &M, address: u8, max: usize) -> Result<Vec<u8>, String> {
+    let mut buf = vec![0xA5u8; max];
+    m.encode(address, &mut buf)
+        .map(|n| buf[..n].to_vec())
+        .map_err(|e| e.to_string())
+}
+
+fn field_value(raw: &Raw) -> FieldValue<'_> {
+    match raw {
+        Raw::Int(i) => FieldValue::Int(*i),
+        Raw::Text(t) => FieldValue::Text(t),
+        Raw::List(l) => FieldValue::List(Elements::I64(l)),
+    }
+}
+
+/// The values the interpreter decoded that an encoder takes back.
+fn carried_values(p: &ir::Protocol, f: &interp::Frame) -> Vec<Value<'static>> {
+    interp_values(p, f)
+        .into_iter()
+        .map(|(name, raw)| Value {
+            name: name.into(),
+            raw,
+        })
+        .collect()
+}
+
+impl<'p, P: Protocol> Run<'p, P> {
+    pub fn new(p: &'p ir::Protocol, seed: u64) -> Self {
+        let mut run = Run {
+            p,
+            asks: Vec::new(),
+            rng: fastrand::Rng::with_seed(seed),
+            report: Report::default(),
+        };
+        // A request per command both engines decode: its first example, else encoded from
+        // random values.
+        for c in 0..p.commands.len() {
+            let r = MessageRef {
+                direction: Direction::Request,
+                index: c,
+            };
+            let mut tries: Vec<Vec<u8>> = p
+                .examples
+                .iter()
+                .filter(|e| e.message == r)
+                .map(|e| e.wire.clone())
+                .collect();
+            for _ in 0..4 {
+                let v = random_values(p, &p.commands[c], &mut run.rng, true);
+                let a = run.rng.u8(p.framing.address.min..=p.framing.address.max);
+                if let Ok(w) = interp::encode(p, r, a, &v) {
+                    tries.push(w);
+                }
+            }
+            for wire in tries {
+                let g = caught(|| P::decode_request(&wire))
+                    .ok()
+                    .and_then(|x| x.ok());
+                let i = interp::decode(p, Some(Direction::Request), None, &wire).ok();
+                if let (Some(g), Some(i)) = (g, i) {
+                    if i.message == r {
+                        run.asks.push(Ask {
+                            command: c,
+                            wire,
+                            generated: g.message,
+                            interp: i.into_owned(),
+                        });
+                        break;
+                    }
+                }
+            }
+        }
+        run
+    }
+
+    fn generated(&self, frame: &[u8], mode: Mode) -> Said<DecodeError> {
+        let max = P::MAX_FRAME_LEN.max(frame.len());
+        let got = caught(|| match mode {
+            Mode::Request => P::decode_request(frame).map(|d| Accepted {
+                name: d.message.name().to_owned(),
+                address: d.address,
+                values: visit_values(|f| d.message.visit(f)),
+                reencoded: pattern_encode(&d.message, d.address, max),
+            }),
+            Mode::Response | Mode::Reply(_) => {
+                let d = match mode {
+                    Mode::Reply(k) => {
+                        let ask = &self.asks[k];
+                        P::decode_reply(frame, &ask.generated).inspect(|d| {
+                            assert!(
+                                P::answers(&ask.generated, &d.message),
+                                "decode_reply gave a response that does not answer"
+                            )
+                        })
+                    }
+                    _ => P::decode_response(frame),
+                };
+                d.map(|d| Accepted {
+                    name: d.message.name().to_owned(),
+                    address: d.address,
+                    values: visit_values(|f| d.message.visit(f)),
+                    reencoded: pattern_encode(&d.message, d.address, max),
+                })
+            }
+        });
+        match got {
+            Ok(Ok(a)) => Said::Accepted(a),
+            Ok(Err(e)) => Said::Refused(e),
+            Err(m) => Said::Panicked(m),
+        }
+    }
+
+    fn interpreted(&self, frame: &[u8], mode: Mode) -> Said<InterpRefusal> {
+        let p = self.p;
+        let got = caught(|| {
+            let decoded = match mode {
+                Mode::Request => interp::decode(p, Some(Direction::Request), None, frame),
+                Mode::Response => interp::decode(p, Some(Direction::Response), None, frame),
+                Mode::Reply(k) => interp::decode_reply(p, &self.asks[k].interp, frame),
+            };
+            let decoded = match (decoded, mode) {
+                (Ok(f), Mode::Reply(k))
+                    if !p.commands[self.asks[k].command]
+                        .responses
+                        .iter()
+                        .any(|(r, _)| *r == f.message.index) =>
+                {
+                    Err(None)
+                }
+                (Ok(f), _) => Ok(f),
+                (Err(e), _) => Err(Some(e)),
+            };
+            decoded.map(|f| Accepted {
+                name: p.message(f.message).name.clone(),
+                address: f.address,
+                values: interp_values(p, &f),
+                reencoded: interp::encode(p, f.message, f.address, &carried_values(p, &f))
+                    .map_err(|e| e.to_string()),
+            })
+        });
+        match got {
+            Ok(Ok(a)) => Said::Accepted(a),
+            Ok(Err(e)) => Said::Refused(e),
+            Err(m) => Said::Panicked(m),
+        }
+    }
+
+    fn mode_text(&self, mode: Mode) -> String {
+        match mode {
+            Mode::Request => "decoded as a request".into(),
+            Mode::Response => "decoded as a response".into(),
+            Mode::Reply(k) => {
+                let a = &self.asks[k];
+                format!(
+                    "decoded as the reply to {} ({})",
+                    self.p.commands[a.command].name,
+                    interp::format_hex(&a.wire)
+                )
+            }
+        }
+    }
+
+    /// One frame, one way, through both engines.
+    fn decode(&mut self, frame: &[u8], mode: Mode) {
+        self.report.frames += 1;
+        let g = self.generated(frame, mode);
+        let i = self.interpreted(frame, mode);
+        let agree = match (&g, &i) {
+            (Said::Accepted(a), Said::Accepted(b)) => {
+                a.name == b.name
+                    && a.address == b.address
+                    && a.values == b.values
+                    && a.reencoded.as_deref() == Ok(frame)
+                    && b.reencoded.as_deref() == Ok(frame)
+            }
+            (Said::Refused(a), Said::Refused(b)) => same_error(a, b),
+            _ => false,
+        };
+        if !agree {
+            let panicked = matches!(g, Said::Panicked(_)) || matches!(i, Said::Panicked(_));
+            let how = self.mode_text(mode);
+            let kind = if panicked { "panic" } else { "decode" };
+            let mut signature = format!(
+                "{kind}: generated {}, interpreter {}",
+                gist(&g, class),
+                gist(&i, interp_class)
+            );
+            if let (Said::Accepted(a), Said::Accepted(b)) = (&g, &i) {
+                let what = if a.name != b.name {
+                    "another message"
+                } else if a.address != b.address {
+                    "another address"
+                } else if a.values != b.values {
+                    "other values"
+                } else if a.reencoded.as_deref() != Ok(frame) {
+                    "the generated encoder writes it back otherwise"
+                } else {
+                    "the interpreter's encoder writes it back otherwise"
+                };
+                signature.push_str(&format!(": {what}"));
+            }
+            let class_only = matches!((&g, &i), (Said::Refused(_), Said::Refused(_)));
+            self.report.record(Disagreement {
+                kind,
+                signature,
+                class_only,
+                how,
+                input: interp::format_hex(frame),
+                generated: g.to_string(),
+                interpreter: i.to_string(),
+            });
+        }
+    }
+
+    /// One frame every way: as request, as response, and as the reply to each request (all
+    /// of them, or `replies` drawn at random).
+    fn decode_all_ways(&mut self, frame: &[u8], replies: Option<usize>) {
+        self.decode(frame, Mode::Request);
+        self.decode(frame, Mode::Response);
+        let n = self.asks.len();
+        match replies {
+            None => (0..n).for_each(|k| self.decode(frame, Mode::Reply(k))),
+            Some(r) if n > 0 => {
+                for _ in 0..r {
+                    let k = self.rng.usize(..n);
+                    self.decode(frame, Mode::Reply(k));
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// `values` as message `r` for `address`, through both encoders.
+    fn encode(&mut self, r: MessageRef, address: u8, values: &[Value]) {
+        self.report.encodes += 1;
+        let p = self.p;
+        let name = p.message(r).name.as_str();
+        let lookup = |n: &str| {
+            values
+                .iter()
+                .find(|v| v.name == n)
+                .map(|v| field_value(&v.raw))
+        };
+        let max = P::MAX_FRAME_LEN;
+        let g = caught(|| -> Result<Vec<u8>, GenEncodeError> {
+            let mut buf = vec![0u8; max];
+            let n = match r.direction {
+                Direction::Request => P::Request::from_fields(name, lookup)
+                    .map_err(GenEncodeError::Fields)?
+                    .encode(address, &mut buf),
+                Direction::Response => P::Response::from_fields(name, lookup)
+                    .map_err(GenEncodeError::Fields)?
+                    .encode(address, &mut buf),
+            }
+            .map_err(GenEncodeError::Encode)?;
+            Ok(buf[..n].to_vec())
+        });
+        let i = caught(|| interp::encode(p, r, address, values));
+        let agree = match (&g, &i) {
+            (Ok(Ok(a)), Ok(Ok(b))) => a == b,
+            (Ok(Err(a)), Ok(Err(b))) => same_encode_error(a, b),
+            _ => false,
+        };
+        if !agree {
+            let show_g = match &g {
+                Ok(Ok(w)) => format!("writes {}", interp::format_hex(w)),
+                Ok(Err(e)) => format!("refuses: {e:?}"),
+                Err(m) => format!("panicked: {m}"),
+            };
+            let show_i = match &i {
+                Ok(Ok(w)) => format!("writes {}", interp::format_hex(w)),
+                Ok(Err(e)) => format!("refuses: {e:?}"),
+                Err(m) => format!("panicked: {m}"),
+            };
+            let input: Vec<String> = values
+                .iter()
+                .map(|v| format!("{}: {:?}", v.name, v.raw))
+                .collect();
+            let kind = if g.is_err() || i.is_err() {
+                "panic"
+            } else {
+                "encode"
+            };
+            let word = |r: &Result<Result<Vec<u8>, String>, String>| match r {
+                Ok(Ok(_)) => "writes".to_owned(),
+                Ok(Err(c)) => format!("refuses ({c})"),
+                Err(_) => "panics".to_owned(),
+            };
+            let gw = word(
+                &g.as_ref()
+                    .map(|r| {
+                        r.as_ref()
+                            .map(|_| Vec::new())
+                            .map_err(|e| encode_class(e).to_owned())
+                    })
+                    .map_err(|e| e.clone()),
+            );
+            let iw = word(
+                &i.as_ref()
+                    .map(|r| {
+                        r.as_ref()
+                            .map(|_| Vec::new())
+                            .map_err(|e| interp_encode_class(e).to_owned())
+                    })
+                    .map_err(|e| e.clone()),
+            );
+            let mut signature = format!("{kind}: generated {gw}, interpreter {iw}");
+            if gw == "writes" && iw == "writes" {
+                signature.push_str(": other bytes");
+            }
+            let class_only = matches!((&g, &i), (Ok(Err(_)), Ok(Err(_))));
+            self.report.record(Disagreement {
+                kind,
+                signature,
+                class_only,
+                how: format!("{name} encoded for address 0x{address:02X}"),
+                input: format!("{{{}}}", input.join(", ")),
+                generated: show_g,
+                interpreter: show_i,
+            });
+        }
+    }
+
+    /// `capture` through both stream decoders in `direction`, cut into `chunks`.
+    fn stream(&mut self, capture: &[u8], direction: Option<Direction>) {
+        self.report.captures += 1;
+        let p = self.p;
+        let chunks = events::chunks(self.rng.u8(..), capture.len(), 2 * P::MAX_FRAME_LEN);
+        let sd = direction.map(|d| match d {
+            Direction::Request => StreamDirection::Request,
+            Direction::Response => StreamDirection::Response,
+        });
+        let g = caught(|| seen::<P>(&stream_events::<P>(sd, capture, &chunks)));
+        let i = caught(|| events::interp_events(p, direction, capture, &chunks));
+        if let (Ok(a), Ok(b)) = (&g, &i) {
+            if a == b {
+                return;
+            }
+        }
+        let show = |r: &Result<Vec<Seen>, String>| match r {
+            Ok(ev) => {
+                let all: Vec<String> = ev.iter().map(|e| format!("{e:?}")).collect();
+                all.join("; ")
+            }
+            Err(m) => format!("panicked: {m}"),
+        };
+        // The first event that differs, for a readable report.
+        let first = match (&g, &i) {
+            (Ok(a), Ok(b)) => {
+                let k = a.iter().zip(b).take_while(|(x, y)| x == y).count();
+                format!(" (events differ from #{k})")
+            }
+            _ => String::new(),
+        };
+        let cut: Vec<String> = chunks.iter().map(|c| c.to_string()).collect();
+        let kind = if g.is_err() || i.is_err() {
+            "panic"
+        } else {
+            "stream"
+        };
+        let signature = match (&g, &i) {
+            (Ok(a), Ok(b)) => {
+                let k = a.iter().zip(b).take_while(|(x, y)| x == y).count();
+                let word = |e: Option<&Seen>| match e {
+                    Some(Seen::Frame { .. }) => "a frame",
+                    Some(Seen::Ambiguous { .. }) => "an ambiguous frame",
+                    Some(Seen::Skipped { .. }) => "skipped bytes",
+                    Some(Seen::OutOfSpec { .. }) => "an out-of-spec frame",
+                    None => "nothing",
+                };
+                format!(
+                    "stream: generated sees {}, interpreter {}",
+                    word(a.get(k)),
+                    word(b.get(k))
+                )
+            }
+            _ => "panic: in a stream decoder".to_owned(),
+        };
+        self.report.record(Disagreement {
+            kind,
+            signature,
+            class_only: false,
+            how: format!(
+                "stream of {}, pushed in chunks [{}]{first}",
+                direction.map_or("both directions", |d| d.as_str()),
+                cut.join(", ")
+            ),
+            input: interp::format_hex(capture),
+            generated: show(&g),
+            interpreter: show(&i),
+        });
+    }
+
+    fn random_address(&mut self) -> u8 {
+        let a = &self.p.framing.address;
+        match self.rng.u8(..10) {
+            0 => a.broadcast.unwrap_or(a.min),
+            1 => a.host.unwrap_or(a.max),
+            2 => self.rng.u8(..),
+            _ => self.rng.u8(a.min..=a.max),
+        }
+    }
+
+    /// A frame of message `r` from random values, through the interpreter of the spec
+    /// without ranges or address rules, so it may break them.
+    fn random_frame(&mut self, lenient: &ir::Protocol, r: MessageRef) -> Option<Vec<u8>> {
+        let m = self.p.message(r);
+        let strict = self.rng.bool();
+        let values = random_values(self.p, m, &mut self.rng, strict);
+        let a = self.random_address();
+        interp::encode(lenient, r, a, &values).ok()
+    }
+
+    /// Runs every comparison.
+    pub fn all(&mut self, budget: Budget) {
+        let p = self.p;
+        let lenient = lenient(p);
+        let all: Vec<MessageRef> = [Direction::Request, Direction::Response]
+            .into_iter()
+            .flat_map(|d| {
+                (0..p.messages(d).len()).map(move |index| MessageRef {
+                    direction: d,
+                    index,
+                })
+            })
+            .collect();
+
+        // Examples, their mutations and every prefix.
+        let mut valid: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+        for e in &p.examples {
+            let d = e.message.direction;
+            self.decode_all_ways(&e.wire, None);
+            for m in mutations(p, d, &e.wire) {
+                self.decode_all_ways(&m, Some(2));
+            }
+            for n in 0..e.wire.len() {
+                let f = e.wire[..n].to_vec();
+                self.decode(
+                    &f,
+                    if d == Direction::Request {
+                        Mode::Request
+                    } else {
+                        Mode::Response
+                    },
+                );
+            }
+        }
+        // Random frames of every message, mutated too.
+        for k in 0..budget.random_frames {
+            let input = match self.rng.u8(..10) {
+                0 => {
+                    let max = P::MAX_FRAME_LEN + 2;
+                    let n = self.rng.usize(..=max);
+                    let mut f: Vec<u8> = (0..n).map(|_| self.rng.u8(..)).collect();
+                    if self.rng.bool() {
+                        reseal(p, &mut f);
+                    }
+                    f
+                }
+                _ => {
+                    let r = all[k % all.len()];
+                    let Some(mut f) = self.random_frame(&lenient, r) else {
+                        continue;
+                    };
+                    valid.push(f.clone());
+                    if self.rng.u8(..3) == 0 {
+                        let ms = mutations(p, r.direction, &f);
+                        f = ms[self.rng.usize(..ms.len())].clone();
+                    } else if self.rng.u8(..4) == 0 {
+                        lie_about_count(p, r, &mut f, &mut self.rng);
+                    }
+                    f
+                }
+            };
+            self.decode_all_ways(&input, Some(1));
+        }
+        // Encodes: the examples' values, then random ones.
+        for e in &p.examples {
+            let decoded = interp::decode(p, Some(e.message.direction), e.reply_to, &e.wire);
+            if let Ok(f) = decoded {
+                let values = carried_values(p, &f);
+                self.encode(e.message, f.address, &values);
+                let a = self.random_address();
+                self.encode(e.message, a, &values);
+            }
+        }
+        for &r in &all {
+            for _ in 0..budget.encodes_per_message {
+                let strict = self.rng.bool();
+                let mut values = random_values(p, p.message(r), &mut self.rng, strict);
+                if self.rng.u8(..12) == 0 && !values.is_empty() {
+                    let k = self.rng.usize(..values.len());
+                    values.remove(k);
+                }
+                let a = self.random_address();
+                self.encode(r, a, &values);
+            }
+        }
+        // Streams: valid frames and noise, in both directions and each alone.
+        for _ in 0..budget.captures {
+            let mut capture = Vec::new();
+            for _ in 0..self.rng.usize(1..=8) {
+                match self.rng.u8(..6) {
+                    0 => capture.extend((0..self.rng.usize(1..6)).map(|_| self.rng.u8(..))),
+                    1 if !valid.is_empty() => {
+                        let f = &valid[self.rng.usize(..valid.len())];
+                        capture.extend_from_slice(&f[..self.rng.usize(..f.len())]);
+                    }
+                    _ if !valid.is_empty() => {
+                        capture.extend_from_slice(&valid[self.rng.usize(..valid.len())])
+                    }
+                    _ => {}
+                }
+            }
+            for d in [None, Some(Direction::Request), Some(Direction::Response)] {
+                self.stream(&capture, d);
+            }
+        }
+    }
+}
+
+/// `p` with nothing of the strict contract: no ranges, every address allowed, no broadcast
+/// rule. Its interpreter writes the frames the strict encoders refuse.
+pub fn lenient(p: &ir::Protocol) -> ir::Protocol {
+    let mut p = p.clone();
+    p.framing.address.min = 0;
+    p.framing.address.max = u8::MAX;
+    p.framing.address.broadcast = None;
+    p.framing.address.host = None;
+    for m in p.commands.iter_mut().chain(p.responses.iter_mut()) {
+        for f in &mut m.fields {
+            f.range = None;
+            for b in &mut f.bits {
+                b.range = None;
+            }
+        }
+    }
+    p
+}
+
+/// `frame` with its checksum recomputed over what it covers.
+pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
+    let c = &p.framing.checksum;
+    let n = c.len();
+    if frame.len() < n {
+        return;
+    }
+    let at = frame.len() - n;
+    let v = checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
+    interp::write_uint(v, &mut frame[at..], c.byte_order);
+}
+
+/// `frame` with its length field set to what its length gives, where the framing has one.
+pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
+    let Some(rule) = p.framing.length_rule(d) else {
+        return;
+    };
+    let Some(v) = rule.value(frame.len()) else {
+        return;
+    };
+    if let Some(at) = frame.get_mut(rule.at..rule.at + rule.width) {
+        interp::write_uint(v as u64, at, p.byte_order);
+    }
+}
+
+/// The repeated field's count field set to a nearby or random value (the checksum repaired
+/// or not): a count that lies about the frame.
+fn lie_about_count(p: &ir::Protocol, r: MessageRef, frame: &mut [u8], rng: &mut fastrand::Rng) {
+    let m = p.message(r);
+    if let Some((_, rep)) = m.repeat() {
+        if let Count::Elements(i) | Count::Bytes(i) = rep.count {
+            let f = &m.fields[i];
+            let at = m.layout.payload + f.offset;
+            if let Some(bytes) = frame.get_mut(at..at + f.width) {
+                let old = interp::read_uint(bytes, f.byte_order);
+                let new = match rng.u8(..3) {
+                    0 => old.wrapping_add(1),
+                    1 => old.wrapping_sub(1),
+                    _ => rng.u64(..),
+                };
+                interp::write_uint(new, bytes, f.byte_order);
+            }
+        }
+    }
+    if p.framing.length.is_some() && rng.bool() {
+        // A length field that lies too, or is made to agree with the frame's length.
+        let rule = p.framing.length_rule(r.direction);
+        if let Some(rule) = rule {
+            if let Some(b) = frame.get_mut(rule.at) {
+                *b = b.wrapping_add(1);
+            }
+        }
+    }
+    if rng.u8(..4) != 0 {
+        reseal(p, frame);
+    }
+}
+
+/// Frames made from `wire`: every byte changed four ways, the frame cut and lengthened by one
+/// to three bytes before its checksum (its length field kept, or made to agree), each with its
+/// checksum as it was and recomputed.
+pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
+    let clen = p.framing.checksum.len();
+    let mut out = Vec::new();
+    for i in 0..wire.len() {
+        for f in [|b: u8| b ^ 0x01, |b: u8| b ^ 0x80, |_| 0x00, |_| 0xFF] {
+            let mut m = wire.to_vec();
+            m[i] = f(m[i]);
+            if m == wire {
+                continue;
+            }
+            out.push(m.clone());
+            if i + clen < wire.len() {
+                reseal(p, &mut m);
+                out.push(m);
+            }
+        }
+    }
+    let body = wire.len().saturating_sub(clen);
+    for k in 1..=3 {
+        let mut variants = Vec::new();
+        if body > k {
+            let mut cut = wire[..body - k].to_vec();
+            cut.extend_from_slice(&wire[body..]);
+            variants.push(cut);
+        }
+        let mut long = wire[..body].to_vec();
+        long.extend(vec![0x5Au8; k]);
+        long.extend_from_slice(&wire[body..]);
+        variants.push(long);
+        for v in variants {
+            let mut sealed = v.clone();
+            reseal(p, &mut sealed);
+            let mut agreed = v.clone();
+            fix_length(p, d, &mut agreed);
+            reseal(p, &mut agreed);
+            out.extend([v, sealed, agreed]);
+        }
+    }
+    out
+}
+
+/// Compares the engines on generated protocol `P` with `seed`, within `budget`. The spec is
+/// `P`'s own text (`Protocol::SPEC_YAML`), loaded here; a panic anywhere outside the engines
+/// (a bug of this harness or a spec that does not load) is reported as a disagreement too.
+pub fn compare<P: Protocol>(seed: u64, budget: Budget) -> Report {
+    let p = match caught(|| busspec_model::load_str(P::NAME, P::SPEC_YAML)) {
+        Ok(Ok(p)) => p,
+        other => {
+            let mut r = Report::default();
+            r.record(Disagreement {
+                kind: "panic",
+                signature: "panic: the spec does not load".into(),
+                class_only: false,
+                how: "loading the spec".into(),
+                input: String::new(),
+                generated: String::new(),
+                interpreter: match other {
+                    Ok(Err(d)) => d.to_string(),
+                    Err(m) => m,
+                    Ok(Ok(_)) => String::new(),
+                },
+            });
+            return r;
+        }
+    };
+    let outcome = caught(|| {
+        let mut r = Run::<P>::new(&p, seed);
+        r.all(budget);
+        r.report
+    });
+    match outcome {
+        Ok(r) => r,
+        Err(m) => {
+            let mut r = Report::default();
+            r.record(Disagreement {
+                kind: "panic",
+                signature: "panic: in the comparison itself".into(),
+                class_only: false,
+                how: "the comparison itself".into(),
+                input: String::new(),
+                generated: m,
+                interpreter: String::new(),
+            });
+            r
+        }
+    }
+}
+
+/// The reproduction text for one disagreement: a leading comment with the input and both
+/// answers, then the spec.
+pub fn reproduction(spec_yaml: &str, seed: u64, d: &Disagreement) -> String {
+    let mut out = String::new();
+    let comment = |out: &mut String, label: &str, text: &str| {
+        for (k, line) in text.lines().enumerate() {
+            let l = if k == 0 { label } else { "" };
+            out.push_str(&format!("# {l:<12}{line}\n"));
+        }
+        if text.is_empty() {
+            out.push_str(&format!("# {label}\n"));
+        }
+    };
+    out.push_str(&format!(
+        "# busspec-difftest disagreement, spec seed {seed}\n# {}\n",
+        d.signature
+    ));
+    comment(&mut out, "how:", &d.how);
+    comment(&mut out, "input:", &d.input);
+    comment(&mut out, "generated:", &d.generated);
+    comment(&mut out, "interpreter:", &d.interpreter);
+    out.push_str("#\n");
+    out.push_str(spec_yaml);
+    out
+}

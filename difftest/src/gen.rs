@@ -1,0 +1,1321 @@
+//! Random valid specs, covering the spec language as `spec/SCHEMA.md` describes it.
+//!
+//! A spec is built valid by construction in two passes: the spec without examples (framing,
+//! units, enums, flags, commands, responses), loaded and validated; then its examples, each
+//! derived by encoding random values with the interpreter and kept only where the frame decodes
+//! on its own (or as the reply to its `reply_to`) as the message it shows, as the validator
+//! replays it. [`random_spec`] is deterministic in its seed.
+
+use std::fmt::Write as _;
+
+use busspec_model::checksum;
+use busspec_model::interp::{self, Raw};
+use busspec_model::ir::{self, ChecksumAlgorithm, CrcParams, Direction, MessageRef};
+
+use crate::values::random_values;
+
+const INT_TYPES: [(&str, usize, bool); 8] = [
+    ("u8", 1, false),
+    ("u16", 2, false),
+    ("u24", 3, false),
+    ("u32", 4, false),
+    ("i8", 1, true),
+    ("i16", 2, true),
+    ("i24", 3, true),
+    ("i32", 4, true),
+];
+
+const UNITS: [(&str, &str, Option<&str>); 5] = [
+    ("count", "1", None),
+    ("centi", "0.01", None),
+    ("angle", "360/4096", None),
+    ("celsius", "0.5", Some("-40")),
+    ("double", "2", None),
+];
+
+/// A field as generated: its YAML and what later fields may do with it.
+#[derive(Clone)]
+struct Gf {
+    name: String,
+    ty: &'static str,
+    width: usize,
+    yaml: String,
+    /// No bits, not ascii, not repeated: a `follows` source, or an `equals` target.
+    plain: bool,
+    /// A plain unsigned number with a unit: a count field, a request field a reply follows.
+    countable: bool,
+    repeat_tail: usize,
+}
+
+struct Gm {
+    name: String,
+    code: Vec<u8>,
+    fields: Vec<Gf>,
+    extra: String,
+}
+
+impl Gm {
+    fn fixed(&self) -> usize {
+        self.fields
+            .iter()
+            .filter(|f| f.repeat_tail == 0 && !f.yaml.contains("repeat:"))
+            .map(|f| f.width)
+            .sum()
+    }
+    fn tail(&self) -> usize {
+        self.fields.iter().map(|f| f.repeat_tail).sum()
+    }
+}
+
+struct G {
+    rng: fastrand::Rng,
+    n_enums: usize,
+    n_flags: usize,
+}
+
+fn limits(width: usize, signed: bool) -> (i64, i64) {
+    interp::raw_limits(8 * width as u32, signed)
+}
+
+fn code_text(code: &[u8]) -> String {
+    let mut s = String::from("0x");
+    for b in code {
+        let _ = write!(s, "{b:02X}");
+    }
+    if code.is_empty() {
+        s.clear();
+    }
+    s
+}
+
+impl G {
+    fn pick<'a, T>(&mut self, xs: &'a [T]) -> &'a T {
+        &xs[self.rng.usize(..xs.len())]
+    }
+
+    fn chance(&mut self, percent: u8) -> bool {
+        self.rng.u8(..100) < percent
+    }
+
+    fn unit(&mut self) -> &'static str {
+        self.pick(&UNITS).0
+    }
+
+    fn range_yaml(&mut self, lo: i64, hi: i64) -> String {
+        let a = self.rng.i64(lo..=hi);
+        let b = self.rng.i64(a..=hi);
+        // Often a narrow range near zero, where random values land outside it.
+        if self.chance(50) && lo <= 0 && hi >= 10 {
+            let a = self.rng.i64(lo.max(-5)..=3);
+            return format!(
+                "range: {{min: {a}, max: {}}}",
+                (a + self.rng.i64(0..=20)).min(hi)
+            );
+        }
+        format!("range: {{min: {a}, max: {b}}}")
+    }
+
+    /// One field that is not repeated. `earlier`: the fields before it.
+    fn field(&mut self, name: String, earlier: &[Gf]) -> Gf {
+        let &(ty, width, signed) = self.pick(&INT_TYPES);
+        let (lo, hi) = limits(width, signed);
+        let plain_unsigned = |ty: &'static str, width, yaml: String, name: String| Gf {
+            name,
+            ty,
+            width,
+            yaml,
+            plain: true,
+            countable: false,
+            repeat_tail: 0,
+        };
+        match self.rng.u8(..100) {
+            // A plain number: unit, maybe a range and special values.
+            0..=29 => {
+                let mut y = format!("{{name: {name}, type: {ty}, unit: {}", self.unit());
+                if self.chance(50) {
+                    let r = self.range_yaml(lo, hi);
+                    let _ = write!(y, ", {r}");
+                }
+                if self.chance(25) {
+                    let v = self.rng.i64(lo..=hi);
+                    let _ = write!(y, ", special: [{{value: {v}, name: sp_{name}}}]");
+                }
+                y.push('}');
+                let mut g = plain_unsigned(ty, width, y, name);
+                g.countable = !signed && !g.yaml.contains("range") && width <= 2;
+                g
+            }
+            // A constant.
+            30..=41 => {
+                let (_, top) = limits(width, false);
+                let v = if self.chance(50) {
+                    self.rng.i64(0..=3)
+                } else {
+                    self.rng.i64(0..=top)
+                };
+                plain_unsigned(
+                    ty,
+                    width,
+                    format!("{{name: {name}, type: {ty}, value: {v}}}"),
+                    name,
+                )
+            }
+            // An enum, maybe with a range.
+            42..=51 if self.n_enums > 0 => {
+                let (ty, width) = *self.pick(&[("u8", 1), ("u16", 2)]);
+                let e = self.rng.usize(..self.n_enums);
+                let mut y = format!("{{name: {name}, type: {ty}, enum: e{e}");
+                if self.chance(30) {
+                    let _ = write!(y, ", range: {{min: 0, max: {}}}", self.rng.u8(1..8));
+                }
+                y.push('}');
+                plain_unsigned(ty, width, y, name)
+            }
+            // Flags.
+            52..=59 if self.n_flags > 0 => {
+                let (ty, width) = *self.pick(&[("u8", 1), ("u16", 2)]);
+                let fl = self.rng.usize(..self.n_flags);
+                plain_unsigned(
+                    ty,
+                    width,
+                    format!("{{name: {name}, type: {ty}, flags: fl{fl}}}"),
+                    name,
+                )
+            }
+            // Packed bits.
+            60..=71 => {
+                let (ty, width) = *self.pick(&[("u8", 1), ("u16", 2), ("u24", 3), ("u32", 4)]);
+                let total = 8 * width as i64;
+                let mut msb = total - 1;
+                let mut subs = Vec::new();
+                let mut k = 0;
+                while msb >= 0 {
+                    let w = self.rng.i64(1..=(msb + 1).min(12));
+                    let lsb = msb - w + 1;
+                    let sub = format!("{name}_b{k}");
+                    k += 1;
+                    let s = if self.chance(25) {
+                        let v = self.rng.i64(0..=(1i64 << w) - 1);
+                        format!("{{name: {sub}, msb: {msb}, lsb: {lsb}, value: {v}}}")
+                    } else {
+                        let signed = w >= 2 && self.chance(30);
+                        let mut s = format!(
+                            "{{name: {sub}, msb: {msb}, lsb: {lsb}, unit: {}",
+                            self.unit()
+                        );
+                        if signed {
+                            s.push_str(", signed: true");
+                        }
+                        if self.chance(25) {
+                            let (a, b) = interp::raw_limits(w as u32, signed);
+                            let r = self.range_yaml(a, b);
+                            let _ = write!(s, ", {r}");
+                        }
+                        s.push('}');
+                        s
+                    };
+                    subs.push(s);
+                    msb = lsb - 1;
+                }
+                Gf {
+                    name: name.clone(),
+                    ty,
+                    width,
+                    yaml: format!("{{name: {name}, type: {ty}, bits: [{}]}}", subs.join(", ")),
+                    plain: false,
+                    countable: false,
+                    repeat_tail: 0,
+                }
+            }
+            // A repeat of an earlier field.
+            72..=77 if earlier.iter().any(|f| f.ty != "ascii") => {
+                let cands: Vec<&Gf> = earlier.iter().filter(|f| f.ty != "ascii").collect();
+                let o = *self.pick(&cands);
+                Gf {
+                    name: name.clone(),
+                    ty: o.ty,
+                    width: o.width,
+                    yaml: format!("{{name: {name}, type: {}, equals: {}}}", o.ty, o.name),
+                    plain: false,
+                    countable: false,
+                    repeat_tail: 0,
+                }
+            }
+            // A value following an earlier field.
+            78..=85 if earlier.iter().any(|f| f.plain) => {
+                let cands: Vec<&Gf> = earlier.iter().filter(|f| f.plain).collect();
+                let o = *self.pick(&cands);
+                let (ty, width) = *self.pick(&[("u8", 1), ("u16", 2), ("u32", 4)]);
+                let m = self.rng.u8(1..=4);
+                let d = self.rng.u8(1..=8);
+                Gf {
+                    name: name.clone(),
+                    ty,
+                    width,
+                    yaml: format!(
+                        "{{name: {name}, type: {ty}, follows: {{field: {}, multiply: {m}, divide: {d}}}}}",
+                        o.name
+                    ),
+                    plain: false,
+                    countable: false,
+                    repeat_tail: 0,
+                }
+            }
+            // Text.
+            86..=90 => {
+                let n = self.rng.usize(1..=4);
+                Gf {
+                    name: name.clone(),
+                    ty: "ascii",
+                    width: n,
+                    yaml: format!("{{name: {name}, type: ascii, length: {n}}}"),
+                    plain: false,
+                    countable: false,
+                    repeat_tail: 0,
+                }
+            }
+            // A count-like number (a plain unsigned byte with a unit).
+            _ => {
+                let y = format!("{{name: {name}, type: u8, unit: count}}");
+                let mut g = plain_unsigned("u8", 1, y, name);
+                g.countable = true;
+                g
+            }
+        }
+    }
+
+    /// The repeated last field; may first add a count field to `fields`.
+    fn repeated(&mut self, fields: &mut Vec<Gf>, request_field: Option<&str>) {
+        let k = fields.len();
+        let bit = self.chance(20);
+        let (ty, width, signed) = if bit {
+            ("bit", 1, false)
+        } else {
+            *self.pick(&[
+                ("u8", 1, false),
+                ("u16", 2, false),
+                ("i16", 2, true),
+                ("u24", 3, false),
+                ("i32", 4, true),
+            ])
+        };
+        let min = self.rng.usize(0..=2);
+        let max = if bit {
+            self.rng.usize(min.max(1)..=20)
+        } else {
+            self.rng.usize(min.max(1)..=6)
+        };
+        let count = if self.chance(40) {
+            "end".to_owned()
+        } else {
+            let existing: Vec<String> = fields
+                .iter()
+                .filter(|f| f.countable)
+                .map(|f| f.name.clone())
+                .collect();
+            if !existing.is_empty() && self.chance(50) {
+                self.pick(&existing).clone()
+            } else {
+                let name = format!("f{k}");
+                fields.push(Gf {
+                    name: name.clone(),
+                    ty: "u8",
+                    width: 1,
+                    yaml: format!("{{name: {name}, type: u8, unit: count}}"),
+                    plain: true,
+                    countable: true,
+                    repeat_tail: 0,
+                });
+                name
+            }
+        };
+        let name = format!("f{}", fields.len());
+        let mut r = format!("count: {count}");
+        if count != "end" && (bit || self.chance(40)) {
+            r.push_str(", of: bytes");
+        } else if count != "end" && self.chance(30) {
+            r.push_str(", of: elements");
+        }
+        if min > 0 || self.chance(30) {
+            let _ = write!(r, ", min: {min}");
+        }
+        let _ = write!(r, ", max: {max}");
+        if let Some(q) = request_field {
+            let _ = write!(
+                r,
+                ", request: {{field: {q}, multiply: {}, divide: {}}}",
+                self.rng.u8(1..=2),
+                self.rng.u8(1..=2)
+            );
+        }
+        let mut y = if bit {
+            format!("{{name: {name}, type: bit")
+        } else {
+            format!("{{name: {name}, type: {ty}, unit: {}", self.unit())
+        };
+        if !bit && self.chance(30) {
+            let (lo, hi) = limits(width, signed);
+            let rr = self.range_yaml(lo, hi);
+            let _ = write!(y, ", {rr}");
+        }
+        let _ = write!(y, ", repeat: {{{r}}}}}");
+        let tail = if bit { max.div_ceil(8) } else { max * width };
+        fields.push(Gf {
+            name,
+            ty,
+            width,
+            yaml: y,
+            plain: false,
+            countable: false,
+            repeat_tail: tail.max(1),
+        });
+    }
+
+    fn fields(&mut self, request_field: Option<&str>, follows_request: Option<&str>) -> Vec<Gf> {
+        let n = self.rng.usize(0..=4);
+        let mut out: Vec<Gf> = Vec::new();
+        for k in 0..n {
+            let f = self.field(format!("f{k}"), &out);
+            out.push(f);
+        }
+        if let Some(q) = follows_request {
+            let name = format!("f{}", out.len());
+            out.push(Gf {
+                name: name.clone(),
+                ty: "u16",
+                width: 2,
+                yaml: format!(
+                    "{{name: {name}, type: u16, unit: count, follows: {{request: {q}, multiply: {}, divide: {}}}}}",
+                    self.rng.u8(1..=3),
+                    self.rng.u8(1..=3)
+                ),
+                plain: false,
+                countable: false,
+                repeat_tail: 0,
+            });
+        }
+        if self.chance(30) || request_field.is_some() {
+            self.repeated(&mut out, request_field);
+        }
+        out
+    }
+}
+
+/// A random checksum: its YAML lines (without `covers_from`) and its width in bytes.
+fn checksum_yaml(g: &mut G) -> (String, usize) {
+    let check = |a: &ChecksumAlgorithm| checksum::compute(a, b"123456789");
+    match g.rng.u8(..10) {
+        0 => ("algorithm: sum8, width: 8, check: 0xDD".into(), 1),
+        1 => (
+            format!(
+                "algorithm: sum8_ones_complement, width: 8, check: {}",
+                check(&ChecksumAlgorithm::Sum8OnesComplement)
+            ),
+            1,
+        ),
+        2 => (
+            format!(
+                "algorithm: sum8_twos_complement, width: 8, check: {}",
+                check(&ChecksumAlgorithm::Sum8TwosComplement)
+            ),
+            1,
+        ),
+        3 => (
+            format!(
+                "algorithm: xor8, width: 8, check: {}",
+                check(&ChecksumAlgorithm::Xor8)
+            ),
+            1,
+        ),
+        _ => {
+            let width: u8 = *g.pick(&[8, 16, 16, 32]);
+            let mask = if width == 64 {
+                u64::MAX
+            } else {
+                (1u64 << width) - 1
+            };
+            let catalogue: [(u8, u64, u64, bool, bool, u64); 6] = [
+                (8, 0x07, 0, false, false, 0),
+                (8, 0x31, 0, true, true, 0),
+                (16, 0x8005, 0xFFFF, true, true, 0),
+                (16, 0x1021, 0, false, false, 0),
+                (16, 0x8005, 0xFFFF, false, false, 0),
+                (32, 0x04C1_1DB7, 0xFFFF_FFFF, true, true, 0xFFFF_FFFF),
+            ];
+            let params = if g.chance(50) {
+                let c: Vec<_> = catalogue.iter().filter(|c| c.0 == width).collect();
+                let c = **g.pick(&c);
+                CrcParams {
+                    width: c.0,
+                    poly: c.1,
+                    init: c.2,
+                    refin: c.3,
+                    refout: c.4,
+                    xorout: c.5,
+                }
+            } else {
+                CrcParams {
+                    width,
+                    poly: (g.rng.u64(..) & mask) | 1,
+                    init: if g.rng.bool() {
+                        0
+                    } else {
+                        g.rng.u64(..) & mask
+                    },
+                    refin: g.rng.bool(),
+                    refout: g.rng.bool(),
+                    xorout: if g.rng.bool() {
+                        0
+                    } else {
+                        g.rng.u64(..) & mask
+                    },
+                }
+            };
+            let c = check(&ChecksumAlgorithm::Crc(params));
+            let mut y = format!(
+                "algorithm: crc, width: {width}, poly: {:#X}, init: {:#X}, refin: {}, refout: {}, xorout: {:#X}, check: {c:#X}",
+                params.poly, params.init, params.refin, params.refout, params.xorout
+            );
+            if width > 8 {
+                let o = *g.pick(&["big", "little"]);
+                let _ = write!(y, ", byte_order: {o}");
+            }
+            (y, usize::from(width / 8))
+        }
+    }
+}
+
+/// A random spec that the validator accepts, as YAML text; the same text for the same seed.
+pub fn random_spec(seed: u64) -> String {
+    let (text, _) = random_spec_without_examples(seed);
+    let p = match busspec_model::load_str("generated.yaml", &text) {
+        Ok(p) => p,
+        // A generator bug: the caller validates the text and reports it.
+        Err(_) => return text,
+    };
+    let mut rng = fastrand::Rng::with_seed(seed ^ 0x5EED_E8A3_71E5);
+    match examples(&p, &mut rng) {
+        Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
+        None => format!("{text}examples: []\nerrata: []\n"),
+    }
+}
+
+/// The examples of `p`: for each message up to two frames the interpreter encodes from random
+/// allowed values, kept where the validator would replay them.
+fn examples(p: &ir::Protocol, rng: &mut fastrand::Rng) -> Option<String> {
+    let mut out = String::new();
+    let mut any = false;
+    for d in [Direction::Request, Direction::Response] {
+        for (index, m) in p.messages(d).iter().enumerate() {
+            let r = MessageRef {
+                direction: d,
+                index,
+            };
+            let answering: Vec<usize> = (0..p.commands.len())
+                .filter(|&c| p.commands[c].responses.iter().any(|(x, _)| *x == index))
+                .collect();
+            let mut kept = 0;
+            for _ in 0..6 {
+                if kept == 2 {
+                    break;
+                }
+                let values = random_values(p, m, rng, true);
+                let a = &p.framing.address;
+                let address = match a.default {
+                    Some(x) if rng.bool() => x,
+                    _ => rng.u8(a.min..=a.max),
+                };
+                let Ok(wire) = interp::encode(p, r, address, &values) else {
+                    continue;
+                };
+                let reply_to = match d {
+                    Direction::Response
+                        if !answering.is_empty() && (m.needs_request || rng.u8(..3) == 0) =>
+                    {
+                        Some(answering[rng.usize(..answering.len())])
+                    }
+                    _ => None,
+                };
+                match interp::decode(p, Some(d), reply_to, &wire) {
+                    Ok(f) if f.message == r => {}
+                    _ => continue,
+                }
+                if interp::decode_as(p, r, &wire).is_err() {
+                    continue;
+                }
+                kept += 1;
+                any = true;
+                let printed = interp::format_hex(&interp::wire_to_printed(p, m, &wire));
+                let _ = write!(
+                    out,
+                    "  - {{section: \"9\", message: {}, derived: \"{printed}\"",
+                    m.name
+                );
+                if let Some(c) = reply_to {
+                    let _ = write!(out, ", reply_to: {}", p.commands[c].name);
+                }
+                let stated = stated_values(p, m, &values);
+                let _ = writeln!(out, ", values: {{{stated}}}}}");
+            }
+        }
+    }
+    // None where no frame of any message decodes on its own: a spec without examples, which
+    // the harness reports (it needs at least one).
+    any.then_some(out)
+}
+
+/// Values an example can state in its own words: numbers of fields whose unit is `count`
+/// (scale 1) without special values, enum values by name.
+fn stated_values(p: &ir::Protocol, m: &ir::Message, values: &[interp::Value]) -> String {
+    let mut out = Vec::new();
+    for v in values {
+        let Some((f, bits)) = interp::leaf_field(m, &v.name) else {
+            continue;
+        };
+        let unit = bits.map_or(f.unit, |b| b.unit);
+        let plain = unit.is_some_and(|u| p.units[u].name == "count") && f.special.is_empty();
+        match &v.raw {
+            Raw::Int(i) if plain => out.push(format!("{}: {i}", v.name)),
+            Raw::Int(i) if bits.is_none() && f.enumeration.is_some() && f.range.is_none() => {
+                let e = &p.enums[f.enumeration.unwrap_or(0)];
+                if let Some(x) = e.values.iter().find(|x| x.value as i64 == *i) {
+                    out.push(format!("{}: {}", v.name, x.name));
+                }
+            }
+            Raw::List(l) if plain && f.range.is_none() && !l.is_empty() => {
+                let items: Vec<String> = l.iter().map(|x| x.to_string()).collect();
+                out.push(format!("{}: [{}]", v.name, items.join(", ")));
+            }
+            _ => {}
+        }
+    }
+    out.join(", ")
+}
+
+/// The spec text up to its examples, and the number of messages.
+fn random_spec_without_examples(seed: u64) -> (String, usize) {
+    let mut g = G {
+        rng: fastrand::Rng::with_seed(seed),
+        n_enums: 0,
+        n_flags: 0,
+    };
+    let mut y = String::new();
+    let _ = writeln!(y, "# busspec-difftest random spec, seed {seed}");
+    let _ = writeln!(y, "protocol: s{seed}");
+    let _ = writeln!(y, "title: \"Random spec {seed}\"");
+    let _ = writeln!(
+        y,
+        "document: {{title: \"generated\", revision: \"1\", date: \"2024-01-01\"}}"
+    );
+    let bo = *g.pick(&["big", "little"]);
+    let pbo = *g.pick(&["big", "little"]);
+    let _ = writeln!(y, "byte_order: {bo}\nprinted_byte_order: {pbo}");
+
+    g.n_enums = g.rng.usize(0..=2);
+    g.n_flags = g.rng.usize(0..=1);
+
+    // Serial.
+    let baud = *g.pick(&[2400, 9600, 19200, 115_200]);
+    let parity = *g.pick(&["none", "even", "odd"]);
+    let _ = write!(
+        y,
+        "serial: {{section: \"1\", baud: {baud}, data_bits: 8, parity: {parity}, stop_bits: {}",
+        g.rng.u8(1..=2)
+    );
+    if g.chance(30) {
+        let _ = write!(y, ", inter_frame_gap_ms: {}", g.rng.u32(1..20));
+    }
+    if g.chance(20) {
+        let _ = write!(y, ", frame_rate: {{typical_per_s: 10, max_per_s: 50}}");
+    }
+    if g.n_enums > 0 && g.chance(20) {
+        y.push_str(", baud_rates: e0");
+    }
+    y.push_str("}\n");
+
+    // Framing.
+    let has_start = g.chance(70);
+    let sync: Vec<u8> = if has_start {
+        let n = *g.pick(&[1, 1, 1, 2, 3, 4]);
+        (0..n).map(|_| g.rng.u8(..)).collect()
+    } else {
+        Vec::new()
+    };
+    let has_length = g.chance(30);
+    let code_first = g.chance(12);
+    let lens_of = |g: &mut G| -> Vec<usize> {
+        let sets: [&[usize]; 9] = [
+            &[0],
+            &[1],
+            &[2],
+            &[0, 1],
+            &[0, 2],
+            &[1, 2],
+            &[0, 1, 2],
+            &[1],
+            &[0, 2],
+        ];
+        g.pick(&sets).to_vec()
+    };
+    let (req_lens, resp_lens) = if code_first {
+        let l = *g.pick(&[0usize, 1, 2]);
+        (vec![l], vec![l])
+    } else if has_length && g.chance(60) {
+        let a = *g.pick(&[0usize, 1, 2]);
+        let b = *g.pick(&[0usize, 1, 2]);
+        (vec![a], vec![b])
+    } else {
+        (lens_of(&mut g), lens_of(&mut g))
+    };
+    let mut layout: Vec<&str> = Vec::new();
+    if has_start {
+        layout.push("start");
+    }
+    if code_first {
+        layout.extend(["code", "address"]);
+    } else {
+        layout.extend(["address", "code"]);
+    }
+    if has_length {
+        let at = g.rng.usize(usize::from(has_start)..=layout.len());
+        layout.insert(at, "length");
+    }
+    layout.extend(["payload", "checksum"]);
+    let (csum, csum_len) = checksum_yaml(&mut g);
+
+    // Address.
+    let full = g.chance(10);
+    let (dmin, dmax) = if full {
+        (0u8, 255u8)
+    } else {
+        let a = g.rng.u8(0..=0x30);
+        (a, g.rng.u8(a..=0xF0))
+    };
+    let outside: Vec<u8> = (0..=255u8).filter(|v| *v < dmin || *v > dmax).collect();
+    let mut addr = format!("devices: {{min: {dmin}, max: {dmax}}}");
+    let mut broadcast = None;
+    if !outside.is_empty() && g.chance(50) {
+        let b = *g.pick(&outside);
+        broadcast = Some(b);
+        let _ = write!(addr, ", broadcast: {b}");
+    }
+    let hosts: Vec<u8> = outside
+        .iter()
+        .copied()
+        .filter(|v| Some(*v) != broadcast)
+        .collect();
+    if !hosts.is_empty() && g.chance(35) {
+        let _ = write!(addr, ", host: {}", g.pick(&hosts));
+    }
+    if g.chance(40) {
+        let _ = write!(addr, ", default: {}", g.rng.u8(dmin..=dmax));
+    }
+
+    // Units, enums, flags.
+    let mut units = String::from("units:\n");
+    for (name, scale, offset) in UNITS {
+        let _ = write!(
+            units,
+            "  - {{name: {name}, symbol: \"{name}\", scale: \"{scale}\""
+        );
+        if let Some(o) = offset {
+            let _ = write!(units, ", offset: \"{o}\"");
+        }
+        units.push_str("}\n");
+    }
+    let mut enums = String::new();
+    if g.n_enums > 0 {
+        enums.push_str("enums:\n");
+        for e in 0..g.n_enums {
+            let n = g.rng.usize(1..=4);
+            let mut vals: Vec<u8> = Vec::new();
+            while vals.len() < n {
+                let v = if g.rng.bool() {
+                    g.rng.u8(..6)
+                } else {
+                    g.rng.u8(..)
+                };
+                if !vals.contains(&v) {
+                    vals.push(v);
+                }
+            }
+            let items: Vec<String> = vals
+                .iter()
+                .enumerate()
+                .map(|(k, v)| format!("{{value: {v}, name: e{e}_v{k}}}"))
+                .collect();
+            let _ = writeln!(
+                enums,
+                "  - {{name: e{e}, section: \"2\", values: [{}]}}",
+                items.join(", ")
+            );
+        }
+    }
+    let mut flags = String::new();
+    if g.n_flags > 0 {
+        flags.push_str("flags:\n");
+        let bits: Vec<String> = (0..g.rng.u8(1..=5))
+            .map(|k| format!("{{bit: {k}, name: fl0_b{k}}}"))
+            .collect();
+        let _ = writeln!(
+            flags,
+            "  - {{name: fl0, section: \"2\", bits: [{}]}}",
+            bits.join(", ")
+        );
+    }
+
+    // Commands.
+    let n_cmd = g.rng.usize(1..=5);
+    let mut used1: Vec<u8> = Vec::new();
+    let mut used2: Vec<[u8; 2]> = Vec::new();
+    let code_for =
+        |g: &mut G, lens: &[usize], used1: &mut Vec<u8>, used2: &mut Vec<[u8; 2]>, resp: bool| {
+            let l = *g.pick(lens);
+            match l {
+                0 => Vec::new(),
+                1 => loop {
+                    let b = if resp {
+                        g.rng.u8(0x01..=0x3F) | 0x40
+                    } else {
+                        g.rng.u8(0x01..=0x3F)
+                    };
+                    if !used1.contains(&b) {
+                        used1.push(b);
+                        break vec![b];
+                    }
+                },
+                _ => loop {
+                    let low = g.rng.u8(..);
+                    let c = [g.rng.u8(0xC0..=0xFF), *g.pick(&[0u8, 1, 2, 3, low])];
+                    if !used2.contains(&c) {
+                        used2.push(c);
+                        break c.to_vec();
+                    }
+                },
+            }
+        };
+    let mut commands: Vec<Gm> = Vec::new();
+    for k in 0..n_cmd {
+        let code = if k > 0 && g.chance(10) {
+            // A code shared with another command (told apart by payload length or constants).
+            commands[k - 1].code.clone()
+        } else {
+            code_for(&mut g, &req_lens, &mut used1, &mut used2, false)
+        };
+        let fields = g.fields(None, None);
+        let kind = *g.pick(&["movement", "completion_check", "setter", "getter", "reset"]);
+        let mut extra = format!(", kind: {kind}");
+        if broadcast.is_some() && g.chance(70) {
+            let accepted = g.rng.bool();
+            let _ = write!(
+                extra,
+                ", broadcast: {{accepted: {}, answered: {}}}",
+                accepted,
+                accepted && g.rng.bool()
+            );
+        }
+        commands.push(Gm {
+            name: format!("c{k}"),
+            code,
+            fields,
+            extra,
+        });
+    }
+    // Shared codes must differ in payload length or a constant: make them differ in length.
+    for k in 1..commands.len() {
+        let same: Vec<usize> = (0..k)
+            .filter(|&j| commands[j].code == commands[k].code && !commands[k].code.is_empty())
+            .collect();
+        for j in same {
+            let clash = commands[j].fixed() == commands[k].fixed()
+                || commands[j].tail() > 0
+                || commands[k].tail() > 0;
+            if clash {
+                let n = commands[k].fields.len();
+                let filler = Gf {
+                    name: format!("f{n}"),
+                    ty: "u8",
+                    width: 1,
+                    yaml: format!("{{name: f{n}, type: u8, value: 1}}"),
+                    plain: true,
+                    countable: false,
+                    repeat_tail: 0,
+                };
+                // Distinct lengths: drop the repeat, pad to one more byte than the other.
+                commands[k].fields.retain(|f| f.repeat_tail == 0);
+                commands[k].fields.retain(|f| !f.yaml.contains("repeat:"));
+                let target = commands[j].fixed() + commands[j].tail() + 1;
+                let mut i = 0;
+                while commands[k].fixed() < target {
+                    let mut f = filler.clone();
+                    f.name = format!("pad{j}_{i}");
+                    f.yaml = format!("{{name: pad{j}_{i}, type: u8, value: 1}}");
+                    commands[k].fields.push(f);
+                    i += 1;
+                }
+            }
+        }
+    }
+
+    // Responses: who answers each, then their fields (a reply may follow its request).
+    let n_resp = g.rng.usize(1..=5);
+    let mut responses: Vec<Gm> = Vec::new();
+    let mut lists: Vec<Vec<usize>> = vec![Vec::new(); n_cmd];
+    let mut common: Vec<usize> = Vec::new();
+    let mut needs_request: Vec<usize> = Vec::new();
+    let mut resp_used1: Vec<u8> = Vec::new();
+    let mut resp_used2: Vec<[u8; 2]> = Vec::new();
+    let mut k = 0;
+    while k < n_resp {
+        let mut extra = format!(", kind: {}", g.pick(&["ack", "nak", "data", "echo"]));
+        let roll = g.rng.u8(..100);
+        // A reply whose code is its request's with bits set.
+        let one_byte_cmds: Vec<usize> = (0..n_cmd)
+            .filter(|&c| commands[c].code.len() == 1 && resp_lens.contains(&1))
+            .collect();
+        if roll < 15 && !one_byte_cmds.is_empty() {
+            let c = *g.pick(&one_byte_cmds);
+            let code = vec![commands[c].code[0] | 0x80];
+            let answered: Vec<usize> = (0..n_cmd)
+                .filter(|&x| commands[x].code.len() == 1 && commands[x].code[0] | 0x80 == code[0])
+                .collect();
+            if resp_used1.contains(&code[0]) {
+                k += 1;
+                continue;
+            }
+            resp_used1.push(code[0]);
+            let _ = write!(extra, ", code_from_request: {{or: 0x80}}");
+            for &x in &answered {
+                lists[x].push(k);
+            }
+            let fields = g.fields(None, None);
+            responses.push(Gm {
+                name: format!("r{k}"),
+                code,
+                fields,
+                extra,
+            });
+            k += 1;
+            continue;
+        }
+        // Two replies only their requests tell apart.
+        if roll < 30 && n_cmd >= 2 && k + 1 < n_resp {
+            let code = code_for(&mut g, &resp_lens, &mut resp_used1, &mut resp_used2, true);
+            let n = g.rng.usize(1..=3);
+            let mk = |g: &mut G, signed: bool| -> Vec<Gf> {
+                (0..n)
+                    .map(|i| {
+                        let ty = if signed { "i8" } else { "u8" };
+                        let _ = g;
+                        Gf {
+                            name: format!("f{i}"),
+                            ty,
+                            width: 1,
+                            yaml: format!("{{name: f{i}, type: {ty}, unit: count}}"),
+                            plain: true,
+                            countable: !signed,
+                            repeat_tail: 0,
+                        }
+                    })
+                    .collect()
+            };
+            let a = g.rng.usize(..n_cmd);
+            let b = (a + g.rng.usize(1..n_cmd)) % n_cmd;
+            for (j, c, signed) in [(k, a, false), (k + 1, b, true)] {
+                lists[c].push(j);
+                needs_request.push(j);
+                let fields = mk(&mut g, signed);
+                responses.push(Gm {
+                    name: format!("r{j}"),
+                    code: code.clone(),
+                    fields,
+                    extra: format!("{extra}, needs_request: true"),
+                });
+            }
+            k += 2;
+            continue;
+        }
+        let code = code_for(&mut g, &resp_lens, &mut resp_used1, &mut resp_used2, true);
+        let is_common = g.chance(25);
+        let answered: Vec<usize> = if is_common {
+            common.push(k);
+            (0..n_cmd).collect()
+        } else {
+            let mut v: Vec<usize> = (0..n_cmd).filter(|_| g.chance(50)).collect();
+            if v.is_empty() {
+                v.push(g.rng.usize(..n_cmd));
+            }
+            for &c in &v {
+                lists[c].push(k);
+            }
+            v
+        };
+        // A field every answered command has, for `follows: {request}` and `repeat.request`.
+        let shared: Vec<String> = commands[answered[0]]
+            .fields
+            .iter()
+            .filter(|f| f.plain && f.ty != "ascii")
+            .map(|f| f.name.clone())
+            .filter(|n| {
+                answered.iter().all(|&c| {
+                    commands[c]
+                        .fields
+                        .iter()
+                        .any(|f| &f.name == n && f.plain && f.ty != "ascii")
+                })
+            })
+            .collect();
+        let (rf, ff) = if !shared.is_empty() && g.chance(50) {
+            let q = g.pick(&shared).clone();
+            if g.rng.bool() {
+                (Some(q), None)
+            } else {
+                (None, Some(q))
+            }
+        } else {
+            (None, None)
+        };
+        let fields = g.fields(rf.as_deref(), ff.as_deref());
+        responses.push(Gm {
+            name: format!("r{k}"),
+            code,
+            fields,
+            extra,
+        });
+        k += 1;
+    }
+    // Responses sharing a code that are not a needs_request pair must not clash: the codes
+    // were drawn distinct, so only code-less ones share one, which the validator allows.
+    // Every response is listed by some command (or is common).
+    for (j, r) in responses.iter().enumerate() {
+        let idx: usize = r.name[1..].parse().unwrap_or(0);
+        let listed = common.contains(&idx) || lists.iter().any(|l| l.contains(&idx));
+        if !listed {
+            lists[j % n_cmd].push(idx);
+        }
+    }
+
+    // Every command lists a response of its own: one that any command may get.
+    let plain: Vec<usize> = responses
+        .iter()
+        .filter(|r| !r.extra.contains("code_from_request") && !r.extra.contains("needs_request"))
+        .filter(|r| !r.fields.iter().any(|f| f.yaml.contains("request:")))
+        .filter_map(|r| r.name[1..].parse().ok())
+        .filter(|k| !common.contains(k))
+        .collect();
+    #[allow(clippy::needless_range_loop)]
+    for c in 0..n_cmd {
+        if lists[c].is_empty() && common.is_empty() {
+            if plain.is_empty() {
+                let k = responses.len().max(n_resp) + c;
+                let code = code_for(&mut g, &resp_lens, &mut resp_used1, &mut resp_used2, true);
+                responses.push(Gm {
+                    name: format!("r{k}"),
+                    code,
+                    fields: Vec::new(),
+                    extra: ", kind: ack".into(),
+                });
+                lists[c].push(k);
+            } else {
+                lists[c].push(*g.pick(&plain));
+            }
+        }
+    }
+
+    // Payload bounds per direction.
+    let bounds = |ms: &[Gm]| {
+        let lo = ms
+            .iter()
+            .map(|m| m.fixed() + min_tail(m))
+            .min()
+            .unwrap_or(0);
+        let hi = ms.iter().map(|m| m.fixed() + m.tail()).max().unwrap_or(0);
+        (lo, hi)
+    };
+    fn min_tail(m: &Gm) -> usize {
+        // The repeat's minimum is small (at most 2 elements of at most 4 bytes): take 0, and
+        // widen the lower bound to it (a payload minimum below every message is allowed).
+        let _ = m;
+        0
+    }
+    let (qlo, qhi) = bounds(&commands);
+    let (slo, shi) = bounds(&responses);
+    let qlo = g.rng.usize(0..=qlo);
+    let slo = g.rng.usize(0..=slo);
+    let qhi = qhi + g.rng.usize(0..=2);
+    let shi = shi + g.rng.usize(0..=2);
+
+    let mut framing = String::from("framing:\n  section: \"2\"\n");
+    let _ = writeln!(framing, "  layout: [{}]", layout.join(", "));
+    match sync.len() {
+        0 => {}
+        1 => {
+            let _ = writeln!(framing, "  start: {:#04X}", sync[0]);
+        }
+        _ => {
+            let items: Vec<String> = sync.iter().map(|b| format!("{b:#04X}")).collect();
+            let _ = writeln!(framing, "  start: [{}]", items.join(", "));
+        }
+    }
+    if has_length {
+        let width = if g.chance(70) { 1 } else { 2 };
+        let mut parts: Vec<&str> = Vec::new();
+        for p in layout.iter().copied() {
+            if (p != "length" || g.chance(20)) && g.chance(70) {
+                parts.push(p);
+            }
+        }
+        if parts.is_empty() {
+            parts.push("payload");
+        }
+        g.rng.shuffle(&mut parts);
+        // The smallest count, so the adjustment keeps every value at or above zero.
+        let size = |p: &str| match p {
+            "start" => sync.len(),
+            "address" => 1,
+            "length" => width,
+            "code" => req_lens
+                .iter()
+                .chain(&resp_lens)
+                .copied()
+                .min()
+                .unwrap_or(0),
+            "payload" => qlo.min(slo),
+            _ => csum_len,
+        };
+        let least: usize = parts.iter().map(|p| size(p)).sum();
+        let adjust = g.rng.i64(-(least.min(2) as i64)..=2);
+        let _ = write!(
+            framing,
+            "  length: {{width: {width}, counts: [{}]",
+            parts.join(", ")
+        );
+        if adjust != 0 || g.chance(30) {
+            let _ = write!(framing, ", adjust: {adjust}");
+        }
+        framing.push_str("}\n");
+    }
+    let _ = writeln!(framing, "  address: {{{addr}}}");
+    let lens = |l: &[usize]| {
+        l.iter()
+            .map(|x| x.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let _ = writeln!(
+        framing,
+        "  request: {{code_lengths: [{}], payload: {{min: {qlo}, max: {qhi}}}}}",
+        lens(&req_lens)
+    );
+    let _ = writeln!(
+        framing,
+        "  response: {{code_lengths: [{}], payload: {{min: {slo}, max: {shi}}}}}",
+        lens(&resp_lens)
+    );
+    let mut cs = csum;
+    // What the checksum may cover from: a part of the layout before the payload.
+    let before: Vec<&str> = layout
+        .iter()
+        .copied()
+        .take_while(|p| *p != "payload")
+        .collect();
+    if g.chance(40) {
+        let _ = write!(cs, ", covers_from: {}", g.pick(&before));
+    }
+    let _ = writeln!(framing, "  checksum: {{{cs}}}");
+
+    y.push_str(&framing);
+    y.push_str(&units);
+    y.push_str(&enums);
+    y.push_str(&flags);
+    y.push_str("commands:\n");
+    for (c, m) in commands.iter().enumerate() {
+        let resp: Vec<String> = lists[c].iter().map(|r| format!("r{r}")).collect();
+        let fields: Vec<&str> = m.fields.iter().map(|f| f.yaml.as_str()).collect();
+        let _ = writeln!(
+            y,
+            "  - {{name: {}, title: \"{}\", section: \"3\", code: \"{}\"{}, fields: [{}], responses: [{}]}}",
+            m.name,
+            m.name,
+            code_text(&m.code),
+            m.extra,
+            fields.join(", "),
+            resp.join(", ")
+        );
+    }
+    y.push_str("responses:\n");
+    for m in &responses {
+        let fields: Vec<&str> = m.fields.iter().map(|f| f.yaml.as_str()).collect();
+        let _ = writeln!(
+            y,
+            "  - {{name: {}, title: \"{}\", section: \"4\", code: \"{}\"{}, fields: [{}]}}",
+            m.name,
+            m.name,
+            code_text(&m.code),
+            m.extra,
+            fields.join(", ")
+        );
+    }
+    if !common.is_empty() {
+        let c: Vec<String> = common.iter().map(|r| format!("r{r}")).collect();
+        let _ = writeln!(y, "common_responses: [{}]", c.join(", "));
+    }
+    let _ = needs_request;
+    (y, n_cmd + responses.len())
+}
+
+/// The constructs `p` uses, by name: the coverage tally counts specs per construct.
+pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
+    use ir::{Count, FieldType, Follows, Part};
+    let mut c = Vec::new();
+    let mut add = |cond: bool, name: &'static str| {
+        if cond {
+            c.push(name)
+        }
+    };
+    let f = &p.framing;
+    let msgs: Vec<&ir::Message> = p.commands.iter().chain(&p.responses).collect();
+    let fields: Vec<&ir::Field> = msgs.iter().flat_map(|m| &m.fields).collect();
+    add(f.sync.len() == 1, "start byte");
+    add(f.sync.len() > 1, "sync sequence");
+    add(f.length.is_some(), "length field");
+    add(
+        f.length.as_ref().is_some_and(|l| l.adjust != 0),
+        "length adjust",
+    );
+    add(
+        f.length.is_some()
+            && (f.request.code_lengths.len() > 1 || f.response.code_lengths.len() > 1),
+        "length + several code lengths",
+    );
+    let pos = |x: Part| f.layout.iter().position(|y| *y == x);
+    add(pos(Part::Code) < pos(Part::Address), "code before address");
+    add(f.address.host.is_some(), "host address");
+    add(f.address.broadcast.is_some(), "broadcast address");
+    add(
+        f.address.min == 0 && f.address.max == 255,
+        "every address a device",
+    );
+    for d in [Direction::Request, Direction::Response] {
+        let lens: Vec<usize> = p.messages(d).iter().map(|m| m.code.len()).collect();
+        add(lens.contains(&0), "code length 0");
+        add(lens.contains(&1), "code length 1");
+        add(lens.contains(&2), "code length 2");
+        add(
+            lens.contains(&0) && lens.iter().any(|l| *l > 0),
+            "code-less beside coded",
+        );
+    }
+    add(
+        p.commands.iter().enumerate().any(|(i, a)| {
+            p.commands[..i]
+                .iter()
+                .any(|b| !a.code.is_empty() && b.code == a.code)
+        }),
+        "shared command code",
+    );
+    add(fields.iter().any(|x| x.constant.is_some()), "constant");
+    add(fields.iter().any(|x| !x.bits.is_empty()), "bits");
+    add(
+        fields
+            .iter()
+            .any(|x| x.bits.iter().any(|b| b.constant.is_some())),
+        "constant sub-field",
+    );
+    add(
+        fields.iter().any(|x| x.bits.iter().any(|b| b.signed)),
+        "signed sub-field",
+    );
+    add(fields.iter().any(|x| x.enumeration.is_some()), "enum");
+    add(fields.iter().any(|x| x.flags.is_some()), "flags");
+    add(fields.iter().any(|x| x.range.is_some()), "range");
+    add(fields.iter().any(|x| !x.special.is_empty()), "special");
+    add(
+        fields.iter().any(|x| {
+            x.unit.is_some_and(|u| {
+                let u = &p.units[u];
+                u.scale != busspec_model::rational::Rational::int(1)
+            })
+        }),
+        "scaled unit",
+    );
+    add(fields.iter().any(|x| x.width == 3), "24-bit");
+    add(fields.iter().any(|x| x.width == 4), "32-bit");
+    add(fields.iter().any(|x| x.signed), "signed");
+    add(fields.iter().any(|x| x.ty == FieldType::Ascii), "ascii");
+    add(fields.iter().any(|x| x.equals.is_some()), "equals");
+    add(
+        fields
+            .iter()
+            .any(|x| matches!(x.follows, Some(Follows::Field(..)))),
+        "follows field",
+    );
+    add(
+        fields
+            .iter()
+            .any(|x| matches!(x.follows, Some(Follows::Request(..)))),
+        "follows request",
+    );
+    let repeats: Vec<(&ir::Field, &ir::Repeat)> = msgs.iter().filter_map(|m| m.repeat()).collect();
+    add(
+        repeats
+            .iter()
+            .any(|(_, r)| matches!(r.count, Count::Elements(_))),
+        "repeat counted",
+    );
+    add(
+        repeats
+            .iter()
+            .any(|(_, r)| matches!(r.count, Count::Bytes(_))),
+        "repeat length-given",
+    );
+    add(
+        repeats.iter().any(|(_, r)| r.count == Count::ToEnd),
+        "repeat to end",
+    );
+    add(
+        repeats.iter().any(|(f, _)| f.ty == FieldType::Bit),
+        "repeat of bits",
+    );
+    add(
+        repeats.iter().any(|(_, r)| r.request.is_some()),
+        "repeat from request",
+    );
+    add(
+        p.responses.iter().any(|m| m.code_from_request.is_some()),
+        "code_from_request",
+    );
+    add(p.responses.iter().any(|m| m.needs_request), "needs_request");
+    add(!p.common_responses.is_empty(), "common responses");
+    add(
+        p.commands.iter().any(|m| m.broadcast.is_some()),
+        "broadcast rule",
+    );
+    let alg = match &f.checksum.algorithm {
+        ChecksumAlgorithm::Sum8 => "sum8",
+        ChecksumAlgorithm::Sum8OnesComplement => "sum8_ones_complement",
+        ChecksumAlgorithm::Sum8TwosComplement => "sum8_twos_complement",
+        ChecksumAlgorithm::Xor8 => "xor8",
+        ChecksumAlgorithm::Crc(c) => match c.width {
+            8 => "crc8",
+            16 => "crc16",
+            _ => "crc32",
+        },
+    };
+    add(true, alg);
+    add(f.checksum.covers_from > 0, "covers_from");
+    add(
+        f.checksum.len() > 1 && f.checksum.byte_order == ir::ByteOrder::Little,
+        "checksum little-endian",
+    );
+    add(p.byte_order == ir::ByteOrder::Little, "byte_order little");
+    add(
+        p.byte_order != p.printed_byte_order,
+        "printed order differs",
+    );
+    add(
+        p.examples.iter().any(|e| e.reply_to.is_some()),
+        "example reply_to",
+    );
+    c
+}

@@ -1,0 +1,132 @@
+//! Random values for a message's leaves (the ones a generated message carries), for the
+//! examples the generator derives and the encodes the comparison makes.
+
+use busspec_model::interp::{raw_limits, Raw, Value};
+use busspec_model::ir::{FieldType, Leaf, Message, Protocol};
+
+/// Whether leaf `l` of `m` is a value the generated message carries (and both encoders take):
+/// not a constant, not a copy of or a value following another field, not a repeat's count, not
+/// a constant sub-field. The same rule as `busspec_fuzz_bodies::oracle::interp_values`.
+pub fn carried(m: &Message, l: &Leaf<'_>) -> bool {
+    match l {
+        Leaf::Field(i, _) => !m.is_derived(*i),
+        Leaf::Bits(i, _, b) => !m.is_derived(*i) && b.constant.is_none(),
+    }
+}
+
+/// A raw value in `lo..=hi`, often one of its ends.
+fn within(rng: &mut fastrand::Rng, lo: i64, hi: i64) -> i64 {
+    match rng.u8(..8) {
+        0 => lo,
+        1 => hi,
+        _ => rng.i64(lo..=hi),
+    }
+}
+
+/// Values for every carried leaf of `m`. `strict`: values the spec allows (in range, a named
+/// enum value most of the time, printable text); otherwise anything the wire type holds, now
+/// and then outside it, and lists of any length.
+pub fn random_values(
+    p: &Protocol,
+    m: &Message,
+    rng: &mut fastrand::Rng,
+    strict: bool,
+) -> Vec<Value<'static>> {
+    let mut out = Vec::new();
+    for l in m.leaves() {
+        if !carried(m, &l) {
+            continue;
+        }
+        let raw = match l {
+            Leaf::Bits(_, _, b) => {
+                let (lo, hi) = raw_limits(u32::from(b.width()), b.signed);
+                let (lo, hi) = match b.range {
+                    Some(r) if strict || rng.u8(..4) != 0 => r,
+                    _ => (lo, hi),
+                };
+                let mut v = within(rng, lo, hi);
+                if !strict && rng.u8(..16) == 0 {
+                    v = hi.saturating_add(1);
+                }
+                Raw::Int(v)
+            }
+            Leaf::Field(_, f) => {
+                if f.ty == FieldType::Ascii {
+                    let t: Vec<u8> = (0..f.width)
+                        .map(|_| {
+                            if strict || rng.bool() {
+                                rng.u8(0x20..0x7F)
+                            } else {
+                                rng.u8(..)
+                            }
+                        })
+                        .collect();
+                    Raw::Text(t)
+                } else if let Some(r) = &f.repeat {
+                    let bit = f.ty == FieldType::Bit;
+                    let (lo, hi) = if bit {
+                        (0, 1)
+                    } else {
+                        raw_limits(8 * f.width as u32, f.signed)
+                    };
+                    let (elo, ehi) = match f.range {
+                        Some(rg) if strict || rng.u8(..4) != 0 => rg,
+                        _ => (lo, hi),
+                    };
+                    let bound = if bit { r.max.div_ceil(8) * 8 } else { r.max };
+                    let n = if strict {
+                        let (a, b) = if bit {
+                            (r.min.div_ceil(8) * 8, bound)
+                        } else {
+                            (r.min, r.max)
+                        };
+                        let mut n = rng.usize(a..=b.max(a));
+                        if bit {
+                            n = n / 8 * 8;
+                            if n < r.min {
+                                n = a;
+                            }
+                        }
+                        n
+                    } else {
+                        rng.usize(..=bound + 1)
+                    };
+                    Raw::List((0..n).map(|_| within(rng, elo, ehi)).collect())
+                } else {
+                    let (lo, hi) = raw_limits(8 * f.width as u32, f.signed);
+                    let e = f.enumeration.map(|e| &p.enums[e]);
+                    let v = if let (Some(e), true) = (e, rng.u8(..4) != 0) {
+                        e.values[rng.usize(..e.values.len())].value as i64
+                    } else if !f.special.is_empty() && rng.u8(..4) == 0 {
+                        f.special[rng.usize(..f.special.len())].value
+                    } else if let (Some((a, b)), true) = (f.range, strict || rng.u8(..4) != 0) {
+                        within(rng, a, b)
+                    } else {
+                        within(rng, lo, hi)
+                    };
+                    let v = match f.range {
+                        Some((a, b))
+                            if strict
+                                && !(a..=b).contains(&v)
+                                && !f.special.iter().any(|s| s.value == v) =>
+                        {
+                            within(rng, a, b)
+                        }
+                        _ => v,
+                    };
+                    let v = if !strict && rng.u8(..32) == 0 {
+                        hi.saturating_add(1)
+                    } else {
+                        v
+                    };
+                    Raw::Int(v)
+                }
+            }
+        };
+        out.push(Value {
+            name: l.name().to_owned().into(),
+            raw,
+        });
+    }
+    out
+}
