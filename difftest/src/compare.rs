@@ -153,10 +153,10 @@ fn class(g: &DecodeError) -> &'static str {
         DecodeError::ChecksumMismatch { .. } => "checksum",
         DecodeError::UnknownCommand { .. } | DecodeError::UnknownResponse { .. } => "unknown code",
         DecodeError::WrongLength { .. } => "wrong length",
-        DecodeError::InvalidValue {
-            field: "length", ..
-        } => "length field",
-        DecodeError::InvalidValue { .. } => "invalid value",
+        DecodeError::LengthMismatch { .. } => "length field",
+        DecodeError::InvalidValue { .. }
+        | DecodeError::NotEqual { .. }
+        | DecodeError::NotFollowing { .. } => "invalid value",
         DecodeError::Ambiguous { .. } => "ambiguous",
         DecodeError::NotAReply { .. } => "not a reply",
         DecodeError::TooLong { .. } => "too long",
@@ -191,11 +191,13 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
     }
 }
 
-/// Whether the two engines refuse a frame alike. Today: the same class of error. When both
-/// engines word their errors identically, compare `g.to_string()` with the interpreter's text
-/// here, and nowhere else.
+/// Whether the two engines refuse a frame alike: in the same words (the CLI prints the same
+/// line whichever engine decoded the frame).
 pub fn same_error(g: &DecodeError, i: &InterpRefusal) -> bool {
-    class(g) == interp_class(i)
+    match i {
+        Some(e) => g.to_string() == e.to_string(),
+        None => matches!(g, DecodeError::NotAReply { .. }),
+    }
 }
 
 /// A generated encoder's refusal: from `from_fields` (a value the typed message cannot hold)
