@@ -580,8 +580,20 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     quote! {
         #inner
         // Generated code is uniform across specs: a cast that is the identity for one field
-        // width, a conversion to `u32` of a 32-bit checksum, a `match` with one message.
-        #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
+        // width, a conversion to `u32` of a 32-bit checksum, a `match` with one message (or
+        // one that binds one), a `_` arm after arms that happen to cover every message, an
+        // identity in a scale, a head a protocol without codes does not look at, `{ .. }` on
+        // a message without fields.
+        #![allow(
+            clippy::unnecessary_cast,
+            clippy::useless_conversion,
+            clippy::single_match,
+            clippy::match_single_binding,
+            clippy::identity_op,
+            clippy::unneeded_struct_pattern,
+            unreachable_patterns,
+            unused_variables
+        )]
         /// The protocol's name in the spec.
         pub const PROTOCOL: &str = #name;
         /// The vendor document this module was generated from.
@@ -966,7 +978,7 @@ fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
     if f.width == 1 {
         let i = usize_lit(at);
         return if w.signed {
-            quote!((frame[#i] as i8))
+            quote!(frame[#i] as i8)
         } else {
             quote!(frame[#i])
         };
@@ -1800,8 +1812,15 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         };
         wires.push(wire.clone());
         if let Some(c) = f.constant {
+            // A constant is its wire bits: a signed field's value is compared unsigned.
             let l = hex_lit(c);
-            stmts.push(quote!(rt::equal(#message, #name, #at, #wire, #l)?;));
+            let ut = unsigned.ident();
+            let bits = match (wt.signed, wt.bits) {
+                (false, _) => wire.clone(),
+                (true, 24) => quote!(#wire as u32 & 0xFF_FFFF),
+                (true, _) => quote!(#wire as #ut),
+            };
+            stmts.push(quote!(rt::equal(#message, #name, #at, #bits, #l)?;));
         }
         if let Some(other) = f.equals {
             let on = wires.get(other).cloned().unwrap_or_default();
@@ -1944,6 +1963,24 @@ fn split_frame(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> Token
         quote!(_)
     };
     quote!(let (#frame, elements, #count) = #c.split::<#at>(frame)?;)
+}
+
+/// The parameters a variable-length message's decoder takes from `rt::Group::attempt_split`
+/// (its fixed part as an array, the elements' bytes, their number), `_` where unused.
+fn split_params(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+    let at = m.repeat().map_or(0, |(f, _)| m.layout.payload + f.offset);
+    let at = usize_lit(at);
+    let frame = if stmts.iter().chain([build]).any(mentions_frame) {
+        quote!(frame)
+    } else {
+        quote!(_)
+    };
+    let count = if m.repeat().is_some_and(|(f, _)| f.ty == FieldType::Bit) {
+        quote!(count)
+    } else {
+        quote!(_)
+    };
+    quote!(#frame: &[u8; #at], elements: &[u8], #count: usize)
 }
 
 /// Whether `tokens` name the local `frame`.
@@ -2285,12 +2322,11 @@ fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream {
             m.name
         ));
         if m.is_variable() {
-            let split = split_frame(m, &stmts, &build);
+            let params = split_params(m, &stmts, &build);
             return quote! {
                 #doc
                 #[inline]
-                fn #f(frame: &[u8]) -> rt::DecodeResult<Self> {
-                    #split
+                fn #f(#params) -> rt::DecodeResult<Self> {
                     #(#stmts)*
                     rt::Ok(#build)
                 }
@@ -2339,7 +2375,14 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, shared: bool) -> Tok
     if let [m] = group {
         if m.is_variable() {
             if let Some(f) = by_fn(m) {
-                return quote!(Self::#f(frame));
+                let (rc, at) = (
+                    repeat_const(m),
+                    usize_lit(m.layout.payload + m.repeat().map_or(0, |(f, _)| f.offset)),
+                );
+                return quote! {{
+                    let (frame, elements, count) = #rc.split::<#at>(frame)?;
+                    Self::#f(frame, elements, count)
+                }};
             }
             let (stmts, build) = decode_body(ctx, m);
             let split = split_frame(m, &stmts, &build);
@@ -2375,9 +2418,8 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, shared: bool) -> Tok
             None => {
                 let (stmts, build) = decode_body(ctx, m);
                 if m.is_variable() {
-                    let split = split_frame(m, &stmts, &build);
-                    quote!(|frame: &[u8]| {
-                        #split
+                    let params = split_params(m, &stmts, &build);
+                    quote!(|#params| {
                         #(#stmts)*
                         rt::Ok(#build)
                     })
@@ -2391,11 +2433,12 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, shared: bool) -> Tok
                 }
             }
         };
+        let rc = repeat_const(m);
         match (m.is_variable(), ambiguous) {
             (false, false) => quote!(g.attempt(#decode);),
             (false, true) => quote!(g.ambiguous(#a, #name, #decode);),
-            (true, false) => quote!(g.attempt_any(#decode);),
-            (true, true) => quote!(g.ambiguous_any(#a, #name, #decode);),
+            (true, false) => quote!(g.attempt_split(&#rc, #decode);),
+            (true, true) => quote!(g.ambiguous_split(#a, #name, &#rc, #decode);),
         }
     });
     // A frame of none of the group's lengths is refused naming the first and every length,
@@ -3056,6 +3099,55 @@ fn has_follows_request(p: &Protocol) -> bool {
 
 /// `follows_request`: one arm per response and command it answers, checking each field the
 /// response takes from the request (`None` where no response has one).
+/// The value of field `name` of request `cmd` as the relations of `follows: {request}` take it:
+/// its constant (sign-extended where the field is signed, as the interpreter reads it), or its
+/// raw value bound in the arm's pattern (`r_<name>`, pushed on `theirs` once). `None` where the
+/// request has no such integer.
+fn request_value(
+    ctx: &Ctx,
+    cmd: &Message,
+    cls: &[Leaf],
+    name: &str,
+    theirs: &mut Vec<TokenStream>,
+) -> Option<TokenStream> {
+    if let Some(c) = cmd.fields.iter().find(|f| f.name == name).and_then(|f| {
+        let bits = 8 * f.width as u32;
+        let c = f.constant? as i64;
+        Some(if f.signed && bits < 64 && c >= 1 << (bits - 1) {
+            c - (1 << bits)
+        } else {
+            c
+        })
+    }) {
+        let c = i64_lit(c);
+        return Some(quote!(#c));
+    }
+    // A count field is not carried: the request's list gives it.
+    let counter = cmd.count_field().and_then(|i| cmd.fields.get(i));
+    let list = cmd.repeat().map(|(f, _)| f.name.as_str());
+    let (cl, counted) = match (counter, list) {
+        (Some(c), Some(list)) if c.name == name => (cls.iter().find(|x| x.name == list)?, true),
+        _ => (
+            cls.iter().find(|x| x.bits.is_none() && x.name == name)?,
+            false,
+        ),
+    };
+    let (cn, their) = (ident(cl.name), format_ident!("r_{}", cl.name));
+    let b = if counted {
+        let rc = repeat_const(cmd);
+        quote!(#rc.count_value(#their.len()))
+    } else {
+        raw_of(ctx, cl, &their)?.1
+    };
+    if !theirs
+        .iter()
+        .any(|t: &TokenStream| t.to_string() == quote!(#cn: #their).to_string())
+    {
+        theirs.push(quote!(#cn: #their));
+    }
+    Some(b)
+}
+
 fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
     let p = ctx.p;
     if !has_follows_request(p) {
@@ -3098,27 +3190,15 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
             let mut own = Vec::new();
             let mut theirs = Vec::new();
             let mut checks = Vec::new();
-            let theirs_push = |cl: &Leaf, theirs: &mut Vec<TokenStream>| {
-                let (cn, their) = (ident(cl.name), format_ident!("r_{}", cl.name));
-                if !theirs
-                    .iter()
-                    .any(|t: &TokenStream| t.to_string() == quote!(#cn: #their).to_string())
-                {
-                    theirs.push(quote!(#cn: #their));
-                }
-                their
-            };
             for (l, rel) in &follows {
-                let Some(cl) = cls.iter().find(|x| x.bits.is_none() && x.name == rel.field) else {
-                    continue;
-                };
                 let (n, mine) = (ident(l.name), local(l.name));
-                own.push(quote!(#n: #mine));
-                let their = theirs_push(cl, &mut theirs);
-                let (Some((_, a)), Some((_, b))) = (raw_of(ctx, l, &mine), raw_of(ctx, cl, &their))
-                else {
+                let (Some((_, a)), Some(b)) = (
+                    raw_of(ctx, l, &mine),
+                    request_value(ctx, cmd, &cls, &rel.field, &mut theirs),
+                ) else {
                     continue;
                 };
+                own.push(quote!(#n: #mine));
                 let (message, name) = (&m.name, l.name);
                 let at = usize_lit(m.layout.payload + l.field.offset);
                 let args = relation_args(rel);
@@ -3132,12 +3212,7 @@ fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 let (n, mine) = (ident(list.name), local(list.name));
                 let mut bound = false;
                 for (f, rel, is_count) in &counted {
-                    let Some(cl) = cls.iter().find(|x| x.bits.is_none() && x.name == rel.field)
-                    else {
-                        continue;
-                    };
-                    let their = theirs_push(cl, &mut theirs);
-                    let Some((_, b)) = raw_of(ctx, cl, &their) else {
+                    let Some(b) = request_value(ctx, cmd, &cls, &rel.field, &mut theirs) else {
                         continue;
                     };
                     if !bound {

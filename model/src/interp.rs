@@ -235,11 +235,14 @@ impl fmt::Display for DecodeError {
                 f,
                 "address 0x{found:02X} at offset {offset} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
             ),
-            DecodeError::BroadcastNotAccepted { message, code, address } => write!(
-                f,
-                "{message} (code {}) does not accept the broadcast address 0x{address:02X}",
-                hex(code)
-            ),
+            DecodeError::BroadcastNotAccepted { message, code, address } => {
+                if code.is_empty() {
+                    write!(f, "{message} (no code)")?;
+                } else {
+                    write!(f, "{message} (code {})", hex(code))?;
+                }
+                write!(f, " does not accept the broadcast address 0x{address:02X}")
+            }
             DecodeError::LengthMismatch { offset, expected, found } => write!(
                 f,
                 "length field at offset {offset} says {found}, the frame's length gives {expected}"
@@ -814,7 +817,8 @@ fn decode_in<'p>(
         // A message with a repeated field that could be this long: say what in it disagrees.
         let counted = by_code.iter().find_map(|r| {
             let m = p.message(*r);
-            let fits = m.is_variable() && (m.layout.len..=m.max_len).contains(&wire.len());
+            // Too long for its bounds too: the count says what is wrong.
+            let fits = m.is_variable() && wire.len() >= m.layout.len;
             fits.then(|| element_count(p, m, wire).err()).flatten()
         });
         if let Some(e) = counted {
@@ -1381,12 +1385,15 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     for (i, f) in m.fields.iter().enumerate() {
         if f.repeat.is_some() {
             let at = o.payload + f.offset;
-            for v in read_elements(f, payload.get(f.offset..).unwrap_or(&[])) {
+            // The offset of the element out of range (bits: of the field).
+            let step = if f.ty == FieldType::Bit { 0 } else { f.width };
+            let elements = read_elements(f, payload.get(f.offset..).unwrap_or(&[]));
+            for (k, v) in elements.into_iter().enumerate() {
                 if let Some((min, max)) = range_violation(f, None, v) {
                     return Some(Misfit::Range {
                         field: i,
                         bit: None,
-                        offset: at,
+                        offset: at + k * step,
                         found: v,
                         min,
                         max,

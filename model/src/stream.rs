@@ -760,17 +760,24 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
                 Some(Raw::List(l)) => l,
                 _ => continue,
             };
-            // The first element of a repeated field outside its range, as strict decoding says.
-            let Some((v, (min, max))) = values
+            // The first element of a repeated field outside its range, at its own offset, as
+            // strict decoding says.
+            let Some((k, v, (min, max))) = values
                 .iter()
-                .find_map(|v| interp::range_violation(f, bits, *v).map(|r| (v, r)))
+                .enumerate()
+                .find_map(|(k, v)| interp::range_violation(f, bits, *v).map(|r| (k, v, r)))
             else {
                 continue;
+            };
+            let step = if f.repeat.is_some() && f.ty != crate::ir::FieldType::Bit {
+                f.width
+            } else {
+                0
             };
             out.push(DecodeError::OutOfRange {
                 message: m.name.clone(),
                 field: name.to_owned(),
-                offset,
+                offset: offset + k * step,
                 found: *v,
                 min,
                 max,

@@ -285,6 +285,8 @@ pub struct Group<'f, T> {
     refused: Option<&'static str>,
     /// The first error of an ambiguous candidate the request does not get.
     aside: Option<DecodeError>,
+    /// The first error of a variable-length candidate whose count does not fit the frame.
+    count: Option<DecodeError>,
     /// The first refused candidate's error, in spec order (the interpreter reports the same).
     first: Option<DecodeError>,
     done: Option<DecodeResult<T>>,
@@ -301,6 +303,7 @@ impl<'f, T> Group<'f, T> {
             decoded: crate::Candidates::default(),
             refused: None,
             aside: None,
+            count: None,
             first: None,
             done: None,
         }
@@ -333,29 +336,71 @@ impl<'f, T> Group<'f, T> {
         }
     }
 
-    /// [`Self::attempt`] for a message of variable length: `decode` takes the whole frame and
-    /// checks its length itself (an error is kept as any candidate's).
+    /// [`Self::attempt`] for a message of variable length whose repeated field `repeat` is:
+    /// the frame is split into its fixed part, the elements' bytes and their number, which
+    /// `decode` takes. A frame whose count does not fit is not one of its lengths: its error
+    /// is said only where no candidate has the frame's length (as the interpreter says it).
     #[inline(always)]
-    pub fn attempt_any(&mut self, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) {
-        if let Some(m) = self.try_any(decode) {
+    pub fn attempt_split<const AT: usize>(
+        &mut self,
+        repeat: &RepeatAt,
+        decode: impl FnOnce(&'f [u8; AT], &'f [u8], usize) -> DecodeResult<T>,
+    ) {
+        if let Some(m) = self.try_split(repeat, decode) {
             self.done = Some(Ok(m));
         }
     }
 
-    /// [`Self::ambiguous`] for a message of variable length, as [`Self::attempt_any`].
+    /// [`Self::ambiguous`] for a message of variable length, as [`Self::attempt_split`].
     #[inline(always)]
-    pub fn ambiguous_any(
+    pub fn ambiguous_split<const AT: usize>(
         &mut self,
         admitted: bool,
         name: &'static str,
-        decode: impl FnOnce(&[u8]) -> DecodeResult<T>,
+        repeat: &RepeatAt,
+        decode: impl FnOnce(&'f [u8; AT], &'f [u8], usize) -> DecodeResult<T>,
     ) {
         if self.set_aside(admitted) {
-            let r = decode(self.frame);
-            self.aside(r.map(|_| ()), name);
-        } else if let Some(m) = self.try_any(decode) {
+            if let Some((frame, elements, n)) = self.split(repeat) {
+                let r = decode(frame, elements, n);
+                self.aside(r.map(|_| ()), name);
+            }
+        } else if let Some(m) = self.try_split(repeat, decode) {
             self.settle_ambiguous(m, name);
         }
+    }
+
+    /// The frame split by `repeat` ([`RepeatAt::split`]); `None` where it is shorter than the
+    /// message's shortest frame, or its count does not fit (kept as the count's error).
+    #[inline(always)]
+    fn split<const AT: usize>(
+        &mut self,
+        repeat: &RepeatAt,
+    ) -> Option<(&'f [u8; AT], &'f [u8], usize)> {
+        if self.done.is_some() || self.frame.len() < repeat.base {
+            return None;
+        }
+        repeat
+            .split::<AT>(self.frame)
+            .map_err(|e| {
+                self.count.get_or_insert(e);
+            })
+            .ok()
+    }
+
+    /// [`Self::try_one`] for a message of variable length.
+    #[inline(always)]
+    fn try_split<const AT: usize>(
+        &mut self,
+        repeat: &RepeatAt,
+        decode: impl FnOnce(&'f [u8; AT], &'f [u8], usize) -> DecodeResult<T>,
+    ) -> Option<T> {
+        let (frame, elements, n) = self.split(repeat)?;
+        decode(frame, elements, n)
+            .map_err(|e| {
+                self.first.get_or_insert(e);
+            })
+            .ok()
     }
 
     /// Whether a candidate only the request tells apart is set aside: the request does not
@@ -376,21 +421,6 @@ impl<'f, T> Group<'f, T> {
                 self.aside.get_or_insert(e);
             }
         }
-    }
-
-    /// [`Self::try_one`] for a message of variable length. Not one generic function over
-    /// both: SD's decoder, whose replies go through `Group`, took 2 % more instructions per
-    /// frame that way (callgrind, `benches/icount.sh`).
-    #[inline(always)]
-    fn try_any(&mut self, decode: impl FnOnce(&[u8]) -> DecodeResult<T>) -> Option<T> {
-        if self.done.is_some() {
-            return None;
-        }
-        decode(self.frame)
-            .map_err(|e| {
-                self.first.get_or_insert(e);
-            })
-            .ok()
     }
 
     /// Tries a candidate `name` that shares code and length with another only the request
@@ -432,7 +462,8 @@ impl<'f, T> Group<'f, T> {
 
     /// What the group decodes to: the candidate that settled it, else the one ambiguous
     /// candidate that decoded, the first refused candidate's error, a set-aside candidate that
-    /// decoded (not the request's reply), a set-aside candidate's error, or a wrong length ([`wrong_length`]: `message`, the first
+    /// decoded (not the request's reply), a set-aside candidate's error, a count that does not
+    /// fit, or a wrong length ([`wrong_length`]: `message`, the first
     /// candidate, and `lengths`, every candidate's, sorted).
     #[inline(always)]
     pub fn end(self, message: &'static str, lengths: &'static [usize]) -> DecodeResult<T> {
@@ -452,7 +483,10 @@ impl<'f, T> Group<'f, T> {
             (Some(e), ..) => e,
             (None, Some(refused), Some(request), _) => not_a_reply(refused, request),
             (None, _, _, Some(e)) => e,
-            _ => wrong_length(self.frame, message, lengths),
+            _ => match self.count {
+                Some(e) => e,
+                None => wrong_length(self.frame, message, lengths),
+            },
         })
     }
 }

@@ -452,10 +452,13 @@ impl fmt::Display for CountRule {
     }
 }
 
-/// `v` in hex as `len` bytes (`0x0009` for a two-byte code), as the frame holds it; at least
-/// one byte.
+/// `v` in hex as `len` bytes (`0x0009` for a two-byte code), as the frame holds them (`0x`
+/// where it holds none).
 fn hex(f: &mut fmt::Formatter<'_>, v: u32, len: u8) -> fmt::Result {
-    let digits = 2 * usize::from(len.max(1));
+    if len == 0 {
+        return f.write_str("0x");
+    }
+    let digits = 2 * usize::from(len);
     write!(f, "0x{v:0digits$X}")
 }
 
@@ -586,12 +589,14 @@ impl fmt::Display for DecodeError {
                 len,
                 address,
             } => {
-                write!(f, "{message} (code ")?;
-                hex(f, code, len)?;
-                write!(
-                    f,
-                    ") does not accept the broadcast address 0x{address:02X}"
-                )
+                if len == 0 {
+                    write!(f, "{message} (no code)")?;
+                } else {
+                    write!(f, "{message} (code ")?;
+                    hex(f, code, len)?;
+                    f.write_str(")")?;
+                }
+                write!(f, " does not accept the broadcast address 0x{address:02X}")
             }
             DecodeError::BadCount {
                 message,

@@ -4,7 +4,16 @@ pub mod clash {
     //!
     //! Generated from `codegen/tests/fixtures/core_names.yaml`, transcribed from *Clash reference*, revision 1.0 (2024-01-01).
     //! Numbers travel little-endian on the wire.
-    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
+    #![allow(
+        clippy::unnecessary_cast,
+        clippy::useless_conversion,
+        clippy::single_match,
+        clippy::match_single_binding,
+        clippy::identity_op,
+        clippy::unneeded_struct_pattern,
+        unreachable_patterns,
+        unused_variables
+    )]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "clash";
     /// The vendor document this module was generated from.
@@ -359,7 +368,7 @@ pub mod clash {
                     rt::equal("core", "buf", 4, frame[4], 0x0)?;
                     rt::Ok(Self::Core {
                         address: frame[3],
-                        out: (frame[5] as i8),
+                        out: frame[5] as i8,
                     })
                 }
                 0x13 => {

@@ -4,7 +4,16 @@ pub mod dynamixel {
     //!
     //! Generated from `spec/dynamixel.yaml`, transcribed from *ROBOTIS e-Manual: DYNAMIXEL Protocol 1.0*, revision Protocol 1.0 (2019-01-01).
     //! Numbers travel little-endian on the wire.
-    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
+    #![allow(
+        clippy::unnecessary_cast,
+        clippy::useless_conversion,
+        clippy::single_match,
+        clippy::match_single_binding,
+        clippy::identity_op,
+        clippy::unneeded_struct_pattern,
+        unreachable_patterns,
+        unused_variables
+    )]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "dynamixel";
     /// The vendor document this module was generated from.
@@ -636,14 +645,16 @@ pub mod dynamixel {
                             error: StatusError::from_raw(frame[4]),
                         })
                     });
-                    g.attempt_any(|frame: &[u8]| {
-                        let (frame, elements, _) = REPEAT_READ_STATUS.split::<5>(frame)?;
-                        rt::Ok(Self::ReadStatus {
-                            error: StatusError::from_raw(frame[4]),
-                            data: REPEAT_READ_STATUS
-                                .elements::<u8, 253>(elements, true, false)?,
-                        })
-                    });
+                    g.attempt_split(
+                        &REPEAT_READ_STATUS,
+                        |frame: &[u8; 5], elements: &[u8], _: usize| {
+                            rt::Ok(Self::ReadStatus {
+                                error: StatusError::from_raw(frame[4]),
+                                data: REPEAT_READ_STATUS
+                                    .elements::<u8, 253>(elements, true, false)?,
+                            })
+                        },
+                    );
                     g.end("status", &[6])
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),

@@ -4,7 +4,16 @@ pub mod mini {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal.yaml`, transcribed from *Minimal protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel little-endian on the wire.
-    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
+    #![allow(
+        clippy::unnecessary_cast,
+        clippy::useless_conversion,
+        clippy::single_match,
+        clippy::match_single_binding,
+        clippy::identity_op,
+        clippy::unneeded_struct_pattern,
+        unreachable_patterns,
+        unused_variables
+    )]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "mini";
     /// The vendor document this module was generated from.

@@ -4,7 +4,16 @@ pub mod modbus {
     //!
     //! Generated from `spec/modbus.yaml`, transcribed from *MODBUS Application Protocol Specification V1.1b3; MODBUS over Serial Line Specification and Implementation Guide V1.02*, revision V1.1b3 / V1.02 (2012-04-26).
     //! Numbers travel big-endian on the wire.
-    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
+    #![allow(
+        clippy::unnecessary_cast,
+        clippy::useless_conversion,
+        clippy::single_match,
+        clippy::match_single_binding,
+        clippy::identity_op,
+        clippy::unneeded_struct_pattern,
+        unreachable_patterns,
+        unused_variables
+    )]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "modbus";
     /// The vendor document this module was generated from.

@@ -4,7 +4,16 @@ pub mod pelco_d2 {
     //!
     //! Generated from `model/tests/fixtures/valid/pelco_d_codeless.yaml`, transcribed from *Pelco D protocol manual (transcribed from its public description)*, revision 1999 (1999-01-01).
     //! Numbers travel big-endian on the wire.
-    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
+    #![allow(
+        clippy::unnecessary_cast,
+        clippy::useless_conversion,
+        clippy::single_match,
+        clippy::match_single_binding,
+        clippy::identity_op,
+        clippy::unneeded_struct_pattern,
+        unreachable_patterns,
+        unused_variables
+    )]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "pelco_d2";
     /// The vendor document this module was generated from.

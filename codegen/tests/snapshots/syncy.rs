@@ -4,7 +4,16 @@ pub mod syncy {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal_sync.yaml`, transcribed from *Sync test document*, revision 1 (2024-01-01).
     //! Numbers travel big-endian on the wire.
-    #![allow(clippy::unnecessary_cast, clippy::useless_conversion, clippy::single_match)]
+    #![allow(
+        clippy::unnecessary_cast,
+        clippy::useless_conversion,
+        clippy::single_match,
+        clippy::match_single_binding,
+        clippy::identity_op,
+        clippy::unneeded_struct_pattern,
+        unreachable_patterns,
+        unused_variables
+    )]
     /// The protocol's name in the spec.
     pub const PROTOCOL: &str = "syncy";
     /// The vendor document this module was generated from.
