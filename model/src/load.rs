@@ -660,16 +660,15 @@ impl<'t> Scanner<'t> {
             // Inside a flow collection indentation means nothing.
             return Ok(());
         }
-        if ind == 0 && (b[j..].starts_with(b"---") || b[j..].starts_with(b"...")) {
-            if self.separated(j + 3) {
-                // A document marker: every node is closed.
-                self.block.clear();
-                while !self.open.is_empty() {
-                    self.close();
-                }
-                self.i = j + 3;
-                return Ok(());
+        let marker = b[j..].starts_with(b"---") || b[j..].starts_with(b"...");
+        if ind == 0 && marker && self.separated(j + 3) {
+            // A document marker: every node is closed.
+            self.block.clear();
+            while !self.open.is_empty() {
+                self.close();
             }
+            self.i = j + 3;
+            return Ok(());
         }
         if ind == 0 && b[j] == b'%' {
             // A directive.
