@@ -38,8 +38,7 @@ use std::path::Path;
 pub use diag::{Diagnostic, Diagnostics};
 pub use ir::Protocol;
 
-/// Specs larger than this are refused before parsing: a real one is a few hundred KiB.
-pub const MAX_SPEC_BYTES: usize = 16 << 20;
+pub use load::MAX_SPEC_BYTES;
 
 /// Loads and validates spec text. `file` names it in diagnostics.
 pub fn load_str(file: &str, text: &str) -> Result<Protocol, Diagnostics> {
@@ -48,16 +47,7 @@ pub fn load_str(file: &str, text: &str) -> Result<Protocol, Diagnostics> {
         file: file.to_owned(),
         items: sink.items,
     };
-    if text.len() > MAX_SPEC_BYTES {
-        sink.error(
-            "",
-            format!(
-                "file is {} bytes; specs are limited to {MAX_SPEC_BYTES}",
-                text.len()
-            ),
-        );
-        return Err(fail(sink));
-    }
+    // The text's size, depth, aliases and characters are checked first (`load::prescan`).
     let Some(spec) = load::parse(text, &mut sink) else {
         return Err(fail(sink));
     };
@@ -79,23 +69,42 @@ pub fn spec_sha256(text: &str) -> String {
         .collect()
 }
 
-/// Reads and validates a spec file.
+/// Reads and validates a spec file. At most [`MAX_SPEC_BYTES`] (and one more) are read.
 pub fn load_file(path: &Path) -> Result<Protocol, Diagnostics> {
+    use std::io::Read;
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| Diagnostics {
+    let refuse = |path: String, message: String| Diagnostics {
         file: file.clone(),
-        items: vec![Diagnostic::new("", format!("cannot read: {e}"))],
-    })?;
-    let text = String::from_utf8(bytes).map_err(|e| Diagnostics {
-        file: file.clone(),
-        items: vec![Diagnostic::new(
-            "",
-            format!(
-                "not UTF-8 text: invalid byte at offset {}",
-                e.utf8_error().valid_up_to()
-            ),
-        )],
-    })?;
+        items: vec![Diagnostic::new(path, message)],
+    };
+    let cannot = |e: std::io::Error| refuse(String::new(), format!("cannot read: {e}"));
+    let f = std::fs::File::open(path).map_err(cannot)?;
+    let declared = f.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut bytes = Vec::new();
+    f.take(MAX_SPEC_BYTES as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    if bytes.len() > MAX_SPEC_BYTES {
+        let len = declared.max(bytes.len() as u64) as usize;
+        let r = load::too_large(&bytes, len);
+        return Err(refuse(r.path(), r.message));
+    }
+    let text = match String::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(e) => {
+            let bytes = e.as_bytes();
+            let at = e.utf8_error().valid_up_to();
+            let r = load::Refusal::at(
+                bytes,
+                at,
+                format!(
+                    "not UTF-8 text: invalid byte 0x{:02X} at offset {at}",
+                    bytes.get(at).copied().unwrap_or(0)
+                ),
+            );
+            return Err(refuse(r.path(), r.message));
+        }
+    };
     load_str(&file, &text)
 }
 

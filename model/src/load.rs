@@ -2,7 +2,18 @@
 //!
 //! The file is parsed to a YAML tree first, then each top-level key and each element of each
 //! list is deserialized on its own, so one misspelt key in one command does not hide the errors
-//! in the next. Nothing here panics on any input: serde_yaml bounds recursion and alias expansion.
+//! in the next.
+//!
+//! Nothing here panics or runs long on any input. Before serde_yaml sees the text, [`prescan`]
+//! reads it once, in linear time, and refuses what would make libyaml or the YAML tree costly:
+//! more than [`MAX_SPEC_BYTES`], control characters, collections nested deeper than
+//! [`MAX_DEPTH`] (flow brackets and indentation together: libyaml's scanner is quadratic in flow
+//! depth, and serde_yaml's recursion limit fires only after the whole text is scanned), more
+//! than [`MAX_ANCHORS`] anchors or [`MAX_ALIASES`] aliases, aliases that would add more than
+//! [`MAX_ALIAS_NODES`] nodes to the tree (a "billion laughs"), and scalars longer than
+//! [`MAX_SCALAR_BYTES`]. It lexes enough YAML (quoted scalars, comments, block scalars, plain
+//! scalars) not to count what only looks like structure. What passes it is small and shallow, and
+//! serde_yaml's own bounds (recursion depth 128, alias repetitions) stay behind it.
 
 use serde::de::DeserializeOwned;
 use serde_yaml::{Mapping, Value};
@@ -21,8 +32,13 @@ const LIST_KEYS: &[&str] = &[
     "errata",
 ];
 
-/// Parses spec text. On failure returns every shape error found.
+/// Parses spec text. On failure returns every shape error found (or the one limit [`prescan`]
+/// found exceeded).
 pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
+    if let Err(refusal) = prescan(text) {
+        sink.error(refusal.path(), refusal.message);
+        return None;
+    }
     let root: Value = match serde_yaml::from_str(text) {
         Ok(v) => v,
         Err(e) => {
@@ -296,6 +312,562 @@ pub fn named_entries<'a>(
 
 pub fn describe(v: &Value) -> &'static str {
     kind(v)
+}
+
+// ---- the pre-scan: limits checked in one linear pass before serde_yaml sees the text
+
+/// Specs larger than this are refused before parsing: real ones are under 100 KiB.
+pub const MAX_SPEC_BYTES: usize = 4 << 20;
+
+/// Collections nested deeper than this (flow brackets and indentation levels together) are
+/// refused. A real spec nests under 10 (`commands`, a command, `fields`, a field, `bits`, ...).
+pub const MAX_DEPTH: usize = 64;
+
+/// Anchors (`&name`) a spec may define. Specs need none; a few are allowed for shared lists.
+pub const MAX_ANCHORS: usize = 256;
+
+/// Aliases (`*name`) a spec may use.
+pub const MAX_ALIASES: usize = 256;
+
+/// Nodes (scalars and collections) that aliases may add to the YAML tree, counted as expanded:
+/// an alias of an anchored list of nine aliases of lists of nine scalars adds 91. This is what
+/// stops a "billion laughs", where few aliases expand to billions of nodes.
+pub const MAX_ALIAS_NODES: u64 = 100_000;
+
+/// Bytes one scalar may hold (quoted, plain or a block scalar's content). A real spec's
+/// longest is a doc text of a few KiB.
+pub const MAX_SCALAR_BYTES: usize = 64 << 10;
+
+/// A limit [`prescan`] found exceeded, and where: 1-based line and column (in characters).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Refusal {
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
+}
+
+impl Refusal {
+    /// A refusal at byte `offset` of `text`.
+    pub fn at(text: &[u8], offset: usize, message: String) -> Refusal {
+        let (line, column) = line_column(text, offset);
+        Refusal {
+            line,
+            column,
+            message,
+        }
+    }
+
+    /// The diagnostic path: `line L column C`, as for serde_yaml's errors.
+    pub fn path(&self) -> String {
+        format!("line {} column {}", self.line, self.column)
+    }
+}
+
+/// 1-based line and column (in characters, counting a byte that is not UTF-8 as one) of byte
+/// `offset` of `text`.
+pub fn line_column(text: &[u8], offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+    // Every byte but a UTF-8 continuation byte starts a character.
+    let column = 1 + before[line_start..]
+        .iter()
+        .filter(|&&b| b & 0xC0 != 0x80)
+        .count();
+    (line, column)
+}
+
+/// Checks the limits above in one pass over `text`, linear in its length, and returns the first
+/// one exceeded. Brackets, `&`, `*` and `#` inside quoted scalars, plain scalars, comments and
+/// block scalars are not counted.
+pub fn prescan(text: &str) -> Result<(), Refusal> {
+    let b = text.as_bytes();
+    if b.len() > MAX_SPEC_BYTES {
+        return Err(too_large(b, b.len()));
+    }
+    control_characters(text)?;
+    Scanner::new(b).run()
+}
+
+/// The refusal of a text of `len` bytes, located at its first byte past the limit.
+pub fn too_large(text: &[u8], len: usize) -> Refusal {
+    Refusal::at(
+        text,
+        MAX_SPEC_BYTES,
+        format!(
+            "the file is {len} bytes; specs are limited to {MAX_SPEC_BYTES} bytes ({} MiB)",
+            MAX_SPEC_BYTES >> 20
+        ),
+    )
+}
+
+/// YAML text holds printable characters, tab, line feed and carriage return only (YAML 1.2
+/// `c-printable`); libyaml refuses the rest too, but only once it reaches them.
+fn control_characters(text: &str) -> Result<(), Refusal> {
+    let bad = |c: char| match c {
+        '\t' | '\n' | '\r' | '\u{85}' => false,
+        '\0'..='\u{1F}' | '\u{7F}'..='\u{9F}' | '\u{FFFE}' | '\u{FFFF}' => true,
+        _ => false,
+    };
+    match text.char_indices().find(|&(_, c)| bad(c)) {
+        None => Ok(()),
+        Some((i, c)) => Err(Refusal::at(
+            text.as_bytes(),
+            i,
+            format!(
+                "control character U+{:04X}{} is not allowed: a spec holds printable text, tabs and line breaks only",
+                c as u32,
+                if c == '\0' { " (NUL)" } else { "" }
+            ),
+        )),
+    }
+}
+
+/// A block scalar (`|` or `>`) whose content lines are being skipped.
+struct BlockScalar {
+    /// Content lines are indented more than this (the column of the key or `-` owning it).
+    above: usize,
+    /// The content's indentation, set by its first non-blank line.
+    indent: Option<usize>,
+    /// Where its header is, and its content's length so far.
+    start: usize,
+    len: usize,
+}
+
+/// Where an anchored collection ends.
+#[derive(Clone, Copy)]
+enum End {
+    /// When the flow depth falls back to this.
+    Flow(usize),
+    /// At the first line indented at most this.
+    Block(usize),
+}
+
+/// An anchored collection not yet closed: its size is the nodes counted while it is open.
+struct Open<'t> {
+    name: &'t [u8],
+    nodes_before: u64,
+    end: End,
+}
+
+struct Scanner<'t> {
+    b: &'t [u8],
+    i: usize,
+    line_start: usize,
+    /// Flow depth (`[` and `{` open).
+    flow: usize,
+    /// The indentation of each open block level.
+    block: Vec<usize>,
+    /// Column of the key or `-` whose value comes next on this line.
+    node_col: usize,
+    /// Column of the last scalar on this line: the key, if a `:` follows.
+    key_col: usize,
+    block_scalar: Option<BlockScalar>,
+    anchors: usize,
+    aliases: usize,
+    /// Nodes so far, aliases counted as what they expand to.
+    nodes: u64,
+    alias_nodes: u64,
+    /// The size in nodes of each anchored node.
+    defined: std::collections::HashMap<&'t [u8], u64>,
+    open: Vec<Open<'t>>,
+    /// An anchor whose node has not started yet.
+    pending: Option<&'t [u8]>,
+}
+
+fn is_space(c: u8) -> bool {
+    matches!(c, b' ' | b'\t' | b'\r' | b'\n')
+}
+
+fn is_flow_indicator(c: u8) -> bool {
+    matches!(c, b',' | b'[' | b']' | b'{' | b'}')
+}
+
+impl<'t> Scanner<'t> {
+    fn new(b: &'t [u8]) -> Self {
+        Scanner {
+            b,
+            // A byte order mark is not content.
+            i: if b.starts_with("\u{FEFF}".as_bytes()) {
+                3
+            } else {
+                0
+            },
+            line_start: 0,
+            flow: 0,
+            block: Vec::new(),
+            node_col: 0,
+            key_col: 0,
+            block_scalar: None,
+            anchors: 0,
+            aliases: 0,
+            nodes: 0,
+            alias_nodes: 0,
+            defined: std::collections::HashMap::new(),
+            open: Vec::new(),
+            pending: None,
+        }
+    }
+
+    fn run(mut self) -> Result<(), Refusal> {
+        let mut at_line_start = true;
+        while self.i < self.b.len() {
+            if at_line_start {
+                at_line_start = false;
+                self.line()?;
+                continue;
+            }
+            let c = self.b[self.i];
+            match c {
+                b'\n' => {
+                    if self.flow == 0 {
+                        if let Some(name) = self.pending.take() {
+                            // `key: &a` and the node on the lines below.
+                            self.open.push(Open {
+                                name,
+                                nodes_before: self.nodes,
+                                end: End::Block(self.node_col),
+                            });
+                        }
+                    }
+                    self.i += 1;
+                    self.line_start = self.i;
+                    at_line_start = true;
+                }
+                b' ' | b'\t' | b'\r' => self.i += 1,
+                b'#' => self.i = self.eol(self.i),
+                b'\'' | b'"' => self.quoted(c)?,
+                b'[' | b'{' => {
+                    if let Some(name) = self.pending.take() {
+                        self.open.push(Open {
+                            name,
+                            nodes_before: self.nodes,
+                            end: End::Flow(self.flow),
+                        });
+                    }
+                    self.flow += 1;
+                    self.nodes += 1;
+                    self.deeper(self.i)?;
+                    self.i += 1;
+                }
+                b']' | b'}' => {
+                    self.flow = self.flow.saturating_sub(1);
+                    while let Some(o) = self.open.last() {
+                        match o.end {
+                            End::Flow(d) if d >= self.flow => self.close(),
+                            _ => break,
+                        }
+                    }
+                    self.i += 1;
+                }
+                b',' if self.flow > 0 => self.i += 1,
+                b'&' => self.anchor()?,
+                b'*' => self.alias()?,
+                // A tag: it says what the node is, not what it holds.
+                b'!' => self.i = self.word_end(self.i),
+                b'|' | b'>' if self.flow == 0 => self.block_scalar_header(),
+                b'-' | b'?' | b':' if self.separated(self.i + 1) => self.indicator(c)?,
+                _ => self.plain()?,
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the byte at `j` ends a token: the end, white space, or a flow indicator in flow.
+    fn separated(&self, j: usize) -> bool {
+        match self.b.get(j) {
+            None => true,
+            Some(&c) => is_space(c) || (self.flow > 0 && is_flow_indicator(c)),
+        }
+    }
+
+    /// The end of the line holding `j`: the offset of its line feed, or of the text's end.
+    fn eol(&self, j: usize) -> usize {
+        self.b[j.min(self.b.len())..]
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(self.b.len(), |k| j + k)
+    }
+
+    /// The end of an anchor's, alias's or tag's name starting at `j`.
+    fn word_end(&self, j: usize) -> usize {
+        let mut k = j + 1;
+        while k < self.b.len() && !is_space(self.b[k]) && !is_flow_indicator(self.b[k]) {
+            k += 1;
+        }
+        k
+    }
+
+    fn col(&self, j: usize) -> usize {
+        j - self.line_start
+    }
+
+    fn deeper(&self, at: usize) -> Result<(), Refusal> {
+        if self.block.len() + self.flow <= MAX_DEPTH {
+            return Ok(());
+        }
+        Err(Refusal::at(
+            self.b,
+            at,
+            format!(
+                "collections nested more than {MAX_DEPTH} levels deep ({} by brackets, {} by indentation); specs are limited to {MAX_DEPTH}",
+                self.flow,
+                self.block.len()
+            ),
+        ))
+    }
+
+    /// A line's start: block scalar content, or indentation opening and closing block levels.
+    fn line(&mut self) -> Result<(), Refusal> {
+        let b = self.b;
+        let start = self.i;
+        let mut j = start;
+        while j < b.len() && b[j] == b' ' {
+            j += 1;
+        }
+        let ind = j - start;
+        let mut k = j;
+        while k < b.len() && matches!(b[k], b' ' | b'\t' | b'\r') {
+            k += 1;
+        }
+        let blank = k >= b.len() || b[k] == b'\n';
+        let end = self.eol(start);
+        if let Some(bs) = &mut self.block_scalar {
+            let content = blank
+                || match bs.indent {
+                    Some(n) => ind >= n,
+                    None => ind > bs.above,
+                };
+            if content {
+                if !blank && bs.indent.is_none() {
+                    bs.indent = Some(ind);
+                }
+                bs.len += end - start + 1;
+                if bs.len > MAX_SCALAR_BYTES {
+                    let at = bs.start;
+                    return Err(self.long_scalar(at));
+                }
+                self.i = end;
+                return Ok(());
+            }
+            self.block_scalar = None;
+        }
+        self.i = j;
+        if blank || b[k] == b'#' || self.flow > 0 {
+            // Inside a flow collection indentation means nothing.
+            return Ok(());
+        }
+        let marker = b[j..].starts_with(b"---") || b[j..].starts_with(b"...");
+        if ind == 0 && marker && self.separated(j + 3) {
+            // A document marker: every node is closed.
+            self.block.clear();
+            while !self.open.is_empty() {
+                self.close();
+            }
+            self.i = j + 3;
+            return Ok(());
+        }
+        if ind == 0 && b[j] == b'%' {
+            // A directive.
+            self.i = self.eol(j);
+            return Ok(());
+        }
+        while let Some(o) = self.open.last() {
+            match o.end {
+                End::Block(above) if ind <= above => self.close(),
+                _ => break,
+            }
+        }
+        while self.block.last().is_some_and(|&top| top > ind) {
+            self.block.pop();
+        }
+        if self.block.last().map_or(true, |&top| top < ind) {
+            self.block.push(ind);
+            self.deeper(j)?;
+        }
+        self.node_col = ind;
+        self.key_col = ind;
+        Ok(())
+    }
+
+    /// `-`, `?` or `:` followed by white space.
+    fn indicator(&mut self, c: u8) -> Result<(), Refusal> {
+        let col = self.col(self.i);
+        match c {
+            b'-' | b'?' if self.flow == 0 => {
+                // A block sequence entry (or complex key): what follows nests inside it.
+                self.node_col = col;
+                self.key_col = col + 2;
+                if self.block.last().map_or(true, |&top| top <= col) {
+                    self.block.push(col + 1);
+                    self.deeper(self.i)?;
+                }
+            }
+            b':' => self.node_col = self.key_col,
+            _ => {}
+        }
+        self.i += 1;
+        Ok(())
+    }
+
+    /// A node of `size` nodes (1, or an alias's expansion) starts and ends here.
+    fn node(&mut self, size: u64) {
+        self.nodes = self.nodes.saturating_add(size);
+        if let Some(name) = self.pending.take() {
+            self.defined.insert(name, size);
+        }
+    }
+
+    /// Closes the innermost open anchored collection, recording its size.
+    fn close(&mut self) {
+        if let Some(o) = self.open.pop() {
+            self.defined
+                .insert(o.name, self.nodes.saturating_sub(o.nodes_before).max(1));
+        }
+    }
+
+    fn long_scalar(&self, start: usize) -> Refusal {
+        Refusal::at(
+            self.b,
+            start,
+            format!(
+                "a scalar longer than {MAX_SCALAR_BYTES} bytes starts here; specs are limited to {MAX_SCALAR_BYTES} bytes a scalar"
+            ),
+        )
+    }
+
+    fn quoted(&mut self, q: u8) -> Result<(), Refusal> {
+        let b = self.b;
+        let start = self.i;
+        let mut j = start + 1;
+        while j < b.len() {
+            let c = b[j];
+            if q == b'\'' && c == b'\'' {
+                if b.get(j + 1) == Some(&b'\'') {
+                    j += 2;
+                    continue;
+                }
+                j += 1;
+                break;
+            }
+            if q == b'"' && c == b'\\' {
+                j += 2;
+                continue;
+            }
+            if q == b'"' && c == b'"' {
+                j += 1;
+                break;
+            }
+            j += 1;
+        }
+        let j = j.min(b.len());
+        if j - start > MAX_SCALAR_BYTES + 2 {
+            return Err(self.long_scalar(start));
+        }
+        self.key_col = self.col(start);
+        if let Some(k) = b[start..j].iter().rposition(|&c| c == b'\n') {
+            self.line_start = start + k + 1;
+        }
+        self.node(1);
+        self.i = j;
+        Ok(())
+    }
+
+    fn plain(&mut self) -> Result<(), Refusal> {
+        let b = self.b;
+        let start = self.i;
+        let mut j = start;
+        while j < b.len() {
+            let c = b[j];
+            let ends = c == b'\n'
+                || (c == b':' && self.separated(j + 1))
+                || (c == b'#' && j > start && matches!(b[j - 1], b' ' | b'\t'))
+                || (self.flow > 0 && is_flow_indicator(c));
+            if ends {
+                break;
+            }
+            j += 1;
+        }
+        let j = j.max(start + 1);
+        if j - start > MAX_SCALAR_BYTES {
+            return Err(self.long_scalar(start));
+        }
+        self.key_col = self.col(start);
+        self.node(1);
+        self.i = j;
+        Ok(())
+    }
+
+    fn anchor(&mut self) -> Result<(), Refusal> {
+        self.anchors += 1;
+        if self.anchors > MAX_ANCHORS {
+            return Err(Refusal::at(
+                self.b,
+                self.i,
+                format!(
+                    "more than {MAX_ANCHORS} anchors (`&name`); specs are limited to {MAX_ANCHORS}"
+                ),
+            ));
+        }
+        let end = self.word_end(self.i);
+        self.pending = Some(&self.b[self.i + 1..end]);
+        self.i = end;
+        Ok(())
+    }
+
+    fn alias(&mut self) -> Result<(), Refusal> {
+        self.aliases += 1;
+        if self.aliases > MAX_ALIASES {
+            return Err(Refusal::at(
+                self.b,
+                self.i,
+                format!(
+                    "more than {MAX_ALIASES} aliases (`*name`); specs are limited to {MAX_ALIASES}"
+                ),
+            ));
+        }
+        let end = self.word_end(self.i);
+        let size = self
+            .defined
+            .get(&self.b[self.i + 1..end])
+            .copied()
+            .unwrap_or(1);
+        self.alias_nodes = self.alias_nodes.saturating_add(size);
+        if self.alias_nodes > MAX_ALIAS_NODES {
+            return Err(Refusal::at(
+                self.b,
+                self.i,
+                format!(
+                    "aliases expand to more than {MAX_ALIAS_NODES} nodes by here (a \"billion laughs\"?); specs are limited to {MAX_ALIAS_NODES}"
+                ),
+            ));
+        }
+        self.node(size);
+        self.i = end;
+        Ok(())
+    }
+
+    /// `|` or `>`: the header's line is skipped, then the content lines (see [`Self::line`]).
+    fn block_scalar_header(&mut self) {
+        let above =
+            if self.col(self.i) == self.node_col && self.block.last() == Some(&self.node_col) {
+                // The first thing on its line: its parent is less indented.
+                self.node_col.saturating_sub(1)
+            } else {
+                self.node_col
+            };
+        self.node(1);
+        self.block_scalar = Some(BlockScalar {
+            above,
+            indent: None,
+            start: self.i,
+            len: 0,
+        });
+        self.i = self.eol(self.i);
+    }
 }
 
 #[cfg(test)]

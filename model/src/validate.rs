@@ -226,13 +226,15 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     };
 
     let mut common = Vec::new();
+    let mut is_common = vec![false; spec.responses.len()];
     for (i, name) in spec.common_responses.iter().enumerate() {
         let path = format!("common_responses[{i}]");
         match response_names.get(name) {
-            Some(r) if common.contains(&r) => {
-                sink.error(path, format!("response `{name}` listed twice"))
+            Some(r) if is_common[r] => sink.error(path, format!("response `{name}` listed twice")),
+            Some(r) => {
+                is_common[r] = true;
+                common.push(r);
             }
-            Some(r) => common.push(r),
             None => sink.error(path, missing_response(name, &command_names)),
         }
     }
@@ -251,17 +253,27 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             sink,
         );
         let mut responses: Vec<(usize, Option<String>)> = Vec::new();
+        // Where each response sits in `responses`: a list may be long, and is looked up often.
+        let mut slot_of: std::collections::HashMap<usize, usize> = Default::default();
         for (i, name) in c.responses.iter().enumerate() {
             let rpath = format!("{path}.responses[{i}]");
             match response_names.get(name) {
-                Some(r) if responses.iter().any(|(x, _)| *x == r) || common.contains(&r) => {
+                Some(r) if slot_of.contains_key(&r) || is_common[r] => {
                     sink.error(rpath, format!("response `{name}` listed twice (common responses apply to every command already)"))
                 }
-                Some(r) => responses.push((r, None)),
+                Some(r) => {
+                    slot_of.insert(r, responses.len());
+                    responses.push((r, None));
+                }
                 None => sink.error(rpath, missing_response(name, &command_names)),
             }
         }
-        responses.extend(common.iter().map(|&r| (r, None)));
+        for &r in &common {
+            if !c.response_meanings.is_empty() {
+                slot_of.insert(r, responses.len());
+            }
+            responses.push((r, None));
+        }
         for (k, v) in &c.response_meanings {
             let mpath = join(&path, "response_meanings");
             let (Some(k), Some(v)) = (k.as_str(), v.as_str()) else {
@@ -270,7 +282,8 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             };
             match response_names
                 .get(k)
-                .and_then(|r| responses.iter_mut().find(|(x, _)| *x == r))
+                .and_then(|r| slot_of.get(&r))
+                .and_then(|&at| responses.get_mut(at))
             {
                 Some(slot) => slot.1 = Some(v.to_owned()),
                 None => sink.error(
@@ -322,6 +335,17 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         });
     }
 
+    // The commands answered by each response, in command order: one pass over the commands.
+    let mut answered_by: Vec<Vec<usize>> = vec![Vec::new(); spec.responses.len()];
+    for (ci, c) in commands.iter().enumerate() {
+        for &(r, _) in &c.responses {
+            if let Some(list) = answered_by.get_mut(r) {
+                if list.last() != Some(&ci) {
+                    list.push(ci);
+                }
+            }
+        }
+    }
     let mut responses = Vec::new();
     for (ri, r) in spec.responses.iter().enumerate() {
         let path = join("responses", &r.name);
@@ -335,12 +359,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             &refs,
             sink,
         );
-        let answers: Vec<usize> = commands
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.responses.iter().any(|(x, _)| *x == ri))
-            .map(|(i, _)| i)
-            .collect();
+        let answers = std::mem::take(&mut answered_by[ri]);
         if answers.is_empty() {
             sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`)");
         }
@@ -369,8 +388,8 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         });
     }
 
-    check_overlaps(&framing, &commands, "commands", sink);
-    check_overlaps(&framing, &responses, "responses", sink);
+    check_overlaps(&commands, "commands", sink);
+    check_overlaps(&responses, "responses", sink);
     let mut lengths: Vec<usize> = commands
         .iter()
         .chain(&responses)
@@ -1730,97 +1749,349 @@ fn bit_fields(
     out
 }
 
-/// The fixed bytes of a frame (code and constants) with `None` where any byte may stand.
-fn template(framing: &Framing, m: &Message) -> Vec<Option<u8>> {
-    let mut t = vec![None; m.code.len() + m.payload_len];
-    for (i, b) in m.code.iter().enumerate() {
-        t[i] = Some(*b);
+/// The fixed bits of a frame from its code on (the code, then the payload without a repeated
+/// field's elements): for each byte, a mask of the bits fixed by the code, a constant field or a
+/// constant sub-field, and their values. A code-less message's template starts where a coded
+/// one's code does, so templates of one direction line up byte for byte.
+fn template(m: &Message) -> Vec<(u8, u8)> {
+    let mut t = vec![(0u8, 0u8); m.code.len() + m.payload_len];
+    for (slot, b) in t.iter_mut().zip(&m.code) {
+        *slot = (0xFF, *b);
     }
     for f in &m.fields {
-        if let Some(c) = f.constant {
-            let mut bytes = vec![0u8; f.width];
-            interp::write_uint(c, &mut bytes, f.byte_order);
-            for (i, b) in bytes.into_iter().enumerate() {
-                t[m.code.len() + f.offset + i] = Some(b);
+        if f.repeat.is_some() || f.width == 0 || f.width > 8 {
+            continue;
+        }
+        let ones = |bits: u32| {
+            if bits >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << bits) - 1
             }
+        };
+        let (mask, value) = match f.constant {
+            Some(c) => (ones(8 * f.width as u32), c),
+            None => f.bits.iter().filter_map(|b| Some((b, b.constant?))).fold(
+                (0u64, 0u64),
+                |(mask, value), (b, c)| {
+                    let m = ones(u32::from(b.width()))
+                        .checked_shl(u32::from(b.lsb))
+                        .unwrap_or(0);
+                    (
+                        mask | m,
+                        value | (c.checked_shl(u32::from(b.lsb)).unwrap_or(0) & m),
+                    )
+                },
+            ),
+        };
+        if mask == 0 {
+            continue;
+        }
+        let (mut mb, mut vb) = ([0u8; 8], [0u8; 8]);
+        interp::write_uint(mask, &mut mb[..f.width], f.byte_order);
+        interp::write_uint(value & mask, &mut vb[..f.width], f.byte_order);
+        let at = m.code.len() + f.offset;
+        for (k, slot) in t.iter_mut().skip(at).take(f.width).enumerate() {
+            *slot = (mb[k], vb[k]);
         }
     }
-    let _ = framing;
     t
 }
 
-fn check_overlaps(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Sink) {
-    // Every pair is compared: each message's template is worked out once, not once a pair.
-    let templates: Vec<Vec<Option<u8>>> = msgs.iter().map(|m| template(framing, m)).collect();
-    for (i, a) in msgs.iter().enumerate() {
-        for (j, b) in msgs.iter().enumerate().skip(i + 1) {
-            if a.code.is_empty() || b.code.is_empty() {
+/// Whether some frame fits both templates: no bit both fix differs.
+fn compatible(a: &[(u8, u8)], b: &[(u8, u8)]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(&(ma, va), &(mb, vb))| (va ^ vb) & ma & mb == 0)
+}
+
+/// Whether some frame fits both templates where they overlap (a variable message's template is
+/// followed by its repeated elements, which fit anything).
+fn compatible_prefix(a: &[(u8, u8)], b: &[(u8, u8)]) -> bool {
+    a.iter()
+        .zip(b)
+        .all(|(&(ma, va), &(mb, vb))| (va ^ vb) & ma & mb == 0)
+}
+
+/// The shortest and longest frame of a message.
+fn len_range(m: &Message) -> (usize, usize) {
+    match m.repeat() {
+        Some((f, r)) => (m.layout.len + f.elements_len(r.min), m.max_len),
+        None => (m.layout.len, m.layout.len),
+    }
+}
+
+/// Clash errors reported for one list at most; past this the spec is hostile or generated
+/// wrong, and listing every pair of thousands of messages would take quadratic time and memory.
+pub const MAX_CLASH_ERRORS: usize = 1000;
+
+/// Two messages of one direction clash when a frame of the same length fits both templates
+/// (code-less messages included: their template lines up with a coded one's code and payload),
+/// unless both are `needs_request`; a code that is a proper prefix of another is an error of
+/// its own.
+///
+/// Close to linear: only messages of one template length are compared, identical templates are
+/// grouped (every pair within a group clashes), and distinct templates are split by a byte every
+/// one of them fixes ([`compatible_templates`]); prefixes are looked up in a map of codes.
+///
+/// A message with a repeated field (variable length) is compared with every message whose frame
+/// lengths overlap its own (`len_range`) and that has its code or none, over the bytes both
+/// templates cover: its elements may hold anything. That is quadratic only in code-less
+/// variable messages, of which a real spec has one or two.
+fn check_overlaps(msgs: &[Message], list: &str, sink: &mut Sink) {
+    use std::collections::HashMap;
+    let templates: Vec<Vec<(u8, u8)>> = msgs.iter().map(template).collect();
+
+    // Identical templates, by template length (first appearance order, for determinism).
+    let mut class_of: HashMap<&[(u8, u8)], usize> = HashMap::new();
+    let mut classes: Vec<Vec<usize>> = Vec::new();
+    for (i, t) in templates.iter().enumerate() {
+        if msgs[i].is_variable() {
+            continue;
+        }
+        let c = *class_of.entry(t.as_slice()).or_insert_with(|| {
+            classes.push(Vec::new());
+            classes.len() - 1
+        });
+        classes[c].push(i);
+    }
+    let mut by_len: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for (c, members) in classes.iter().enumerate() {
+        by_len
+            .entry(templates[members[0]].len())
+            .or_default()
+            .push(c);
+    }
+    let rep = |c: usize| templates[classes[c][0]].as_slice();
+    let mut class_pairs: Vec<(usize, usize)> = (0..classes.len()).map(|c| (c, c)).collect();
+    for group in by_len.into_values() {
+        compatible_templates(&rep, group, &mut class_pairs);
+    }
+
+    // The message pairs that clash, and `needs_request` messages another of their code fits.
+    let mut clashes: Vec<(usize, usize)> = Vec::new();
+    let mut capped = false;
+    let mut shared = vec![false; msgs.len()];
+    let prefix = |a: &Message, b: &Message| {
+        let (short, long) = if a.code.len() <= b.code.len() {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        !short.code.is_empty()
+            && short.code.len() < long.code.len()
+            && long.code.starts_with(&short.code)
+    };
+    // Looks at one pair of messages that a frame of one length may fit both of; false once
+    // capped.
+    let mut consider = |i: usize, j: usize| {
+        let (a, b) = (&msgs[i], &msgs[j]);
+        if a.code == b.code {
+            shared[i] = true;
+            shared[j] = true;
+        }
+        if (a.needs_request && b.needs_request) || prefix(a, b) {
+            return true;
+        }
+        if clashes.len() == MAX_CLASH_ERRORS {
+            capped = true;
+            return false;
+        }
+        clashes.push((i.min(j), i.max(j)));
+        true
+    };
+    'pairs: for (ca, cb) in class_pairs {
+        for (x, &i) in classes[ca].iter().enumerate() {
+            let from = if ca == cb { x + 1 } else { 0 };
+            for &j in &classes[cb][from..] {
+                if !consider(i, j) {
+                    break 'pairs;
+                }
+            }
+        }
+    }
+    // Variable messages, against those of their code and the code-less.
+    let mut coded: HashMap<&[u8], Vec<usize>> = HashMap::new();
+    let mut codeless: Vec<usize> = Vec::new();
+    for (i, m) in msgs.iter().enumerate() {
+        if m.code.is_empty() {
+            codeless.push(i);
+        } else {
+            coded.entry(m.code.as_slice()).or_default().push(i);
+        }
+    }
+    'variable: for (j, v) in msgs.iter().enumerate().filter(|(_, m)| m.is_variable()) {
+        let (lo, hi) = len_range(v);
+        let others: &[usize] = if v.code.is_empty() {
+            &[]
+        } else {
+            coded.get(v.code.as_slice()).map_or(&[][..], Vec::as_slice)
+        };
+        let all: Vec<usize>;
+        let candidates: Box<dyn Iterator<Item = usize> + '_> = if v.code.is_empty() {
+            all = (0..msgs.len()).collect();
+            Box::new(all.iter().copied())
+        } else {
+            Box::new(others.iter().chain(&codeless).copied())
+        };
+        for i in candidates {
+            let o = &msgs[i];
+            // Each pair once: a variable pair from its later message.
+            if i == j || (o.is_variable() && i > j) {
                 continue;
             }
-            let path = || join(list, &b.name);
+            let (olo, ohi) = len_range(o);
+            if olo > hi || lo > ohi || !compatible_prefix(&templates[i], &templates[j]) {
+                continue;
+            }
+            if !consider(i, j) {
+                break 'variable;
+            }
+        }
+    }
+    // Proper prefixes of every code, looked up among the codes.
+    let mut by_code: HashMap<&[u8], Vec<usize>> = HashMap::new();
+    for (i, m) in msgs.iter().enumerate() {
+        if !m.code.is_empty() {
+            by_code.entry(m.code.as_slice()).or_default().push(i);
+        }
+    }
+    let mut prefixes: Vec<(usize, usize)> = Vec::new();
+    'prefix: for (j, m) in msgs.iter().enumerate() {
+        for k in 1..m.code.len() {
+            for &i in by_code.get(&m.code[..k]).map_or(&[][..], Vec::as_slice) {
+                if prefixes.len() == MAX_CLASH_ERRORS {
+                    capped = true;
+                    break 'prefix;
+                }
+                prefixes.push((i.min(j), i.max(j)));
+            }
+        }
+    }
+
+    // Reported in the order of the pairs, as comparing every pair in order would.
+    let mut pairs: Vec<(usize, usize, bool)> = clashes
+        .into_iter()
+        .map(|(i, j)| (i, j, false))
+        .chain(prefixes.into_iter().map(|(i, j)| (i, j, true)))
+        .collect();
+    pairs.sort_unstable();
+    for (i, j, is_prefix) in pairs {
+        let (a, b) = (&msgs[i], &msgs[j]);
+        let path = join(list, &b.name);
+        if is_prefix {
             let (short, long) = if a.code.len() <= b.code.len() {
                 (a, b)
             } else {
                 (b, a)
             };
-            if short.code.len() < long.code.len() && long.code.starts_with(&short.code) {
-                sink.error(
-                    path(),
-                    format!(
-                        "code {} of `{}` is a prefix of code {} of `{}`: a receiver could not tell where the code ends",
-                        short.code_hex(), short.name, long.code_hex(), long.name
-                    ),
-                );
-                continue;
-            }
-            let (ta, tb) = (&templates[i], &templates[j]);
-            if ta.len() != tb.len() {
-                continue;
-            }
-            let clash = ta.iter().zip(tb).all(|(x, y)| match (x, y) {
-                (Some(x), Some(y)) => x == y,
-                _ => true,
-            });
-            if clash && !(a.needs_request && b.needs_request) {
-                let how = if a.code == b.code {
-                    "duplicate code"
-                } else {
-                    "overlapping codes"
-                };
-                sink.error(
-                    path(),
-                    format!(
-                        "{how}: `{}` ({}) and `{}` ({}) have the same length and no constant field tells them apart{}",
-                        a.name,
-                        a.code_hex(),
-                        b.name,
-                        b.code_hex(),
-                        if list == "responses" { " (if only the request can tell them apart, mark both `needs_request: true`)" } else { "" }
-                    ),
-                );
-            }
-        }
-    }
-    for (i, m) in msgs.iter().enumerate() {
-        if !m.needs_request {
+            sink.error(
+                path,
+                format!(
+                    "code {} of `{}` is a prefix of code {} of `{}`: a receiver could not tell where the code ends",
+                    short.code_hex(), short.name, long.code_hex(), long.name
+                ),
+            );
             continue;
         }
-        let t = &templates[i];
-        let shared = msgs.iter().enumerate().any(|(j, o)| {
-            j != i && o.code == m.code && {
-                let u = &templates[j];
-                u.len() == t.len()
-                    && u.iter()
-                        .zip(t)
-                        .all(|(x, y)| x.is_none() || y.is_none() || x == y)
-            }
-        });
-        if !shared {
+        let how = if a.code == b.code {
+            "duplicate code"
+        } else {
+            "overlapping codes"
+        };
+        sink.error(
+            path,
+            format!(
+                "{how}: `{}` ({}) and `{}` ({}) have the same length and no constant field tells them apart{}",
+                a.name,
+                a.code_hex(),
+                b.name,
+                b.code_hex(),
+                if list == "responses" { " (if only the request can tell them apart, mark both `needs_request: true`)" } else { "" }
+            ),
+        );
+    }
+    if capped {
+        sink.error(
+            list,
+            format!(
+                "more than {MAX_CLASH_ERRORS} pairs of messages clash; the rest are not listed"
+            ),
+        );
+    }
+    // Once capped, not every pair was looked at: a lone `needs_request` may have a partner.
+    for (i, m) in msgs.iter().enumerate() {
+        if m.needs_request && !shared[i] && !capped {
             sink.error(
                 join(list, &m.name),
                 "`needs_request` is set, but no other response shares its code and length",
             );
         }
+    }
+}
+
+/// Adds to `out` every pair `(a, b)`, `a < b`, of the distinct templates `group` (all of one
+/// length, each named by `rep`) that some frame fits. A byte that most of them fix fully (with
+/// at least two values) splits them: those fixing it are compared only with those fixing the
+/// same value, and the others with all. What no byte splits is compared pair by pair.
+fn compatible_templates<'t>(
+    rep: &impl Fn(usize) -> &'t [(u8, u8)],
+    group: Vec<usize>,
+    out: &mut Vec<(usize, usize)>,
+) {
+    let pairwise = |group: &[usize], out: &mut Vec<(usize, usize)>| {
+        for (x, &a) in group.iter().enumerate() {
+            for &b in &group[x + 1..] {
+                if compatible(rep(a), rep(b)) {
+                    out.push((a.min(b), a.max(b)));
+                }
+            }
+        }
+    };
+    if group.len() < 8 {
+        pairwise(&group, out);
+        return;
+    }
+    let len = rep(group[0]).len();
+    // The byte fixed in the most templates, among those fixed to at least two values.
+    let mut best: Option<(usize, usize)> = None;
+    for p in 0..len {
+        let mut fixed = 0;
+        let mut first: Option<u8> = None;
+        let mut two = false;
+        for &c in &group {
+            let (m, v) = rep(c)[p];
+            if m == 0xFF {
+                fixed += 1;
+                match first {
+                    None => first = Some(v),
+                    Some(f) => two |= f != v,
+                }
+            }
+        }
+        if two && best.map_or(true, |(_, n)| fixed > n) {
+            best = Some((p, fixed));
+        }
+    }
+    let Some((p, _)) = best else {
+        pairwise(&group, out);
+        return;
+    };
+    let (fixed, wild): (Vec<usize>, Vec<usize>) = group.iter().partition(|&&c| rep(c)[p].0 == 0xFF);
+    for (x, &w) in wild.iter().enumerate() {
+        for &c in wild[x + 1..].iter().chain(&fixed) {
+            if compatible(rep(w), rep(c)) {
+                out.push((w.min(c), w.max(c)));
+            }
+        }
+    }
+    let mut buckets: BTreeMap<u8, Vec<usize>> = BTreeMap::new();
+    for c in fixed {
+        buckets.entry(rep(c)[p].1).or_default().push(c);
+    }
+    for bucket in buckets.into_values() {
+        compatible_templates(rep, bucket, out);
     }
 }
 
@@ -1854,10 +2125,32 @@ fn stated(v: &model::OpenValue) -> Result<StatedValue, String> {
 }
 
 fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
+    use std::collections::HashMap;
     let mut out = Vec::new();
+    if spec.examples.is_empty() {
+        return out;
+    }
+    // Names looked up once, not once an example: a spec may have thousands of each.
+    let mut messages: HashMap<&str, MessageRef> = HashMap::new();
+    for direction in [Direction::Response, Direction::Request] {
+        for (index, m) in p.messages(direction).iter().enumerate().rev() {
+            messages.insert(&m.name, MessageRef { direction, index });
+        }
+    }
+    let commands: HashMap<&str, usize> = (p.commands.iter().enumerate().rev())
+        .map(|(i, c)| (c.name.as_str(), i))
+        .collect();
+    let errata: HashMap<&str, usize> = (p.errata.iter().enumerate().rev())
+        .map(|(i, x)| (x.id.as_str(), i))
+        .collect();
+    // Each direction's lookup, for decoding a frame without being told what it is.
+    let lookups = [
+        interp::Lookup::new(p, Some(Direction::Request)),
+        interp::Lookup::new(p, Some(Direction::Response)),
+    ];
     for (i, e) in spec.examples.iter().enumerate() {
         let path = format!("examples[{i}]");
-        let Some(r) = p.find(&e.message) else {
+        let Some(&r) = messages.get(e.message.as_str()) else {
             sink.error(
                 join(&path, "message"),
                 format!("refers to message `{}`, which is not defined", e.message),
@@ -1865,6 +2158,10 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
             continue;
         };
         let m = p.message(r);
+        let lookup = match r.direction {
+            Direction::Request => &lookups[0],
+            Direction::Response => &lookups[1],
+        };
         let at = format!("§{} {}", e.section, m.name);
         let reply_to = match (&e.reply_to, r.direction) {
             (None, _) => {
@@ -1880,30 +2177,26 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
                 );
                 None
             }
-            (Some(name), Direction::Response) => {
-                match p.commands.iter().position(|c| &c.name == name) {
-                    Some(c) if p.commands[c].responses.iter().any(|(x, _)| *x == r.index) => {
-                        Some(c)
-                    }
-                    Some(_) => {
-                        sink.error(
-                            join(&path, "reply_to"),
-                            format!(
-                                "{at}: command `{name}` does not list `{}` among its responses",
-                                m.name
-                            ),
-                        );
-                        None
-                    }
-                    None => {
-                        sink.error(
-                            join(&path, "reply_to"),
-                            format!("{at}: refers to command `{name}`, which is not defined"),
-                        );
-                        None
-                    }
+            (Some(name), Direction::Response) => match commands.get(name.as_str()).copied() {
+                Some(c) if p.commands[c].responses.iter().any(|(x, _)| *x == r.index) => Some(c),
+                Some(_) => {
+                    sink.error(
+                        join(&path, "reply_to"),
+                        format!(
+                            "{at}: command `{name}` does not list `{}` among its responses",
+                            m.name
+                        ),
+                    );
+                    None
                 }
-            }
+                None => {
+                    sink.error(
+                        join(&path, "reply_to"),
+                        format!("{at}: refers to command `{name}`, which is not defined"),
+                    );
+                    None
+                }
+            },
         };
         if m.needs_request && reply_to.is_none() {
             // Already reported above; without its request the frame would only add "ambiguous".
@@ -1912,7 +2205,7 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
         let erratum = match &e.erratum {
             None => None,
             Some(id) => {
-                let found = p.errata.iter().position(|x| &x.id == id);
+                let found = errata.get(id.as_str()).copied();
                 if found.is_none() {
                     sink.error(
                         join(&path, "erratum"),
@@ -1964,7 +2257,8 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
             }
         }
         // The printed frame must replay as it stands, or be excused by an erratum and corrected.
-        let printed_check = frame_problems(p, r, reply_to, source, &values, e.erratum.is_some());
+        let printed_check =
+            frame_problems(p, lookup, r, reply_to, source, &values, e.erratum.is_some());
         let wire = match (printed_check, &e.corrected) {
             (Ok(wire), None) => wire,
             (Ok(_), Some(_)) => {
@@ -1981,7 +2275,7 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
                 continue;
             }
             (Err(_), Some(fixed)) if erratum.is_some() => {
-                match frame_problems(p, r, reply_to, fixed, &values, true) {
+                match frame_problems(p, lookup, r, reply_to, fixed, &values, true) {
                     Ok(wire) => wire,
                     Err(problem) => {
                         sink.error(join(&path, "corrected"), format!("{at}: {problem}"));
@@ -2011,6 +2305,7 @@ fn examples(spec: &model::Spec, p: &Protocol, sink: &mut Sink) -> Vec<Example> {
 /// values. Returns the wire bytes, or the first problem.
 fn frame_problems(
     p: &Protocol,
+    lookup: &interp::Lookup,
     r: MessageRef,
     reply_to: Option<usize>,
     frame_text: &str,
@@ -2037,7 +2332,7 @@ fn frame_problems(
     let frame = interp::decode_as(p, r, &wire).map_err(|e| e.to_string())?;
     // The frame must also decode on its own, without being told what it is (as a sniffer would),
     // unless only its request can tell it apart.
-    match interp::decode(p, Some(r.direction), reply_to, &wire) {
+    match lookup.decode(p, reply_to, &wire) {
         Ok(f) if f.message == r => {}
         Ok(f) => {
             return Err(format!(

@@ -176,6 +176,21 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
             "duplicate code: `started` (0x50) and `nak` (0x50) have the same length",
         )],
     ),
+    // ---- code-less messages are compared too (made from valid/minimal_codeless.yaml)
+    (
+        "codeless_responses_clash",
+        &[(
+            "responses.read_status",
+            "duplicate code: `status` (0x) and `read_status` (0x) have the same length and no constant field tells them apart",
+        )],
+    ),
+    (
+        "codeless_command_clashes_with_coded",
+        &[(
+            "commands.raw",
+            "overlapping codes: `read` (0x02) and `raw` (0x) have the same length and no constant field tells them apart",
+        )],
+    ),
     (
         "needs_request_alone",
         &[(
@@ -812,4 +827,35 @@ fn more_than_64_distinct_frame_lengths_is_refused() {
         1,
         "only the length limit is wrong:\n{all}"
     );
+}
+
+/// A constant tells a code-less message from a coded one of the same length, whether it is a
+/// whole field or a sub-field's bits: the fixture's clash goes away.
+#[test]
+fn a_constant_tells_a_codeless_message_from_a_coded_one() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/broken");
+    let text = std::fs::read_to_string(dir.join("codeless_command_clashes_with_coded.yaml"))
+        .expect("fixture");
+    let field = "- {name: op, type: u8, unit: count}";
+    assert!(text.contains(field));
+    for (what, op) in [
+        // `read`'s code is 0x02.
+        ("a constant field", "- {name: op, type: u8, value: 0x03}"),
+        (
+            "a constant bit",
+            "- {name: op, type: u8, bits: [{name: high, msb: 7, lsb: 1, unit: count}, {name: odd, msb: 0, lsb: 0, value: 1}]}",
+        ),
+    ] {
+        let fixed = text.replace(field, op);
+        if let Err(d) = load_str("codeless_told_apart.yaml", &fixed) {
+            panic!("{what}: {d}");
+        }
+    }
+    // The same bit, equal to the code's, tells nothing apart.
+    let same = text.replace(
+        field,
+        "- {name: op, type: u8, bits: [{name: high, msb: 7, lsb: 1, unit: count}, {name: odd, msb: 0, lsb: 0, value: 0}]}",
+    );
+    let d = load_str("codeless_not_told_apart.yaml", &same).expect_err("a clash");
+    assert!(d.items[0].message.starts_with("overlapping codes"), "{d}");
 }
