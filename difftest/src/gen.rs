@@ -67,6 +67,44 @@ impl Gm {
     }
 }
 
+/// Code-less messages beside others of their direction are told apart by a constant first
+/// byte, as Pelco-D's `ptz` is by a constant bit (the validator refuses them otherwise): a
+/// value no code of the direction starts with, one per code-less message, shared by the two
+/// responses of a `needs_request` pair.
+fn tag_codeless(ms: &mut [Gm]) {
+    if ms.len() < 2 || !ms.iter().any(|m| m.code.is_empty()) {
+        return;
+    }
+    let mut taken: Vec<u8> = ms.iter().filter_map(|m| m.code.first().copied()).collect();
+    let mut paired: Option<u8> = None;
+    for m in ms.iter_mut().filter(|m| m.code.is_empty()) {
+        let pair = m.extra.contains("needs_request");
+        let v = match paired.take() {
+            Some(v) if pair => v,
+            _ => {
+                let v = (0..=255u8).rev().find(|b| !taken.contains(b)).unwrap_or(0);
+                taken.push(v);
+                if pair {
+                    paired = Some(v);
+                }
+                v
+            }
+        };
+        m.fields.insert(
+            0,
+            Gf {
+                name: "tag".into(),
+                ty: "u8",
+                width: 1,
+                yaml: format!("{{name: tag, type: u8, value: {v}}}"),
+                plain: false,
+                countable: false,
+                repeat_tail: 0,
+            },
+        );
+    }
+}
+
 struct G {
     rng: fastrand::Rng,
     n_enums: usize,
@@ -1021,6 +1059,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             }
         }
     }
+
+    tag_codeless(&mut commands);
+    tag_codeless(&mut responses);
 
     // Payload bounds per direction.
     let bounds = |ms: &[Gm]| {

@@ -2000,14 +2000,22 @@ fn check_overlaps(msgs: &[Message], list: &str, sink: &mut Sink) {
         } else {
             "overlapping codes"
         };
+        // A code-less message fits every code: say so, not `0x`.
+        let code = |m: &Message| {
+            if m.code.is_empty() {
+                "no code".to_owned()
+            } else {
+                m.code_hex()
+            }
+        };
         sink.error(
             path,
             format!(
                 "{how}: `{}` ({}) and `{}` ({}) have the same length and no constant field tells them apart{}",
                 a.name,
-                a.code_hex(),
+                code(a),
                 b.name,
-                b.code_hex(),
+                code(b),
                 if list == "responses" { " (if only the request can tell them apart, mark both `needs_request: true`)" } else { "" }
             ),
         );

@@ -181,14 +181,14 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "codeless_responses_clash",
         &[(
             "responses.read_status",
-            "duplicate code: `status` (0x) and `read_status` (0x) have the same length and no constant field tells them apart",
+            "duplicate code: `status` (no code) and `read_status` (no code) have the same length and no constant field tells them apart",
         )],
     ),
     (
         "codeless_command_clashes_with_coded",
         &[(
             "commands.raw",
-            "overlapping codes: `read` (0x02) and `raw` (0x) have the same length and no constant field tells them apart",
+            "overlapping codes: `read` (0x02) and `raw` (no code) have the same length and no constant field tells them apart",
         )],
     ),
     (
