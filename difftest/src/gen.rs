@@ -698,7 +698,8 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     let (req_lens, resp_lens) = if code_first {
         let l = *g.pick(&[0usize, 1, 2]);
         (vec![l], vec![l])
-    } else if has_length && g.chance(60) {
+    } else if has_length {
+        // A length field holds one rule per direction: codes of one length each.
         let a = *g.pick(&[0usize, 1, 2]);
         let b = *g.pick(&[0usize, 1, 2]);
         (vec![a], vec![b])

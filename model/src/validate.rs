@@ -925,6 +925,22 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             );
         }
     }
+    // A length field sits at one offset and holds one rule per direction: where a direction's
+    // codes had several lengths, the field after the code would move and one that counts the
+    // code would hold another constant per code (`ir::Framing::length_rule`).
+    if f.length.is_some() {
+        for (name, d) in [("request", &request), ("response", &response)] {
+            if d.code_lengths.len() > 1 {
+                sink.error(
+                    format!("framing.{name}.code_lengths"),
+                    format!(
+                        "a frame with a length field has codes of one length per direction; code_lengths give {:?}",
+                        d.code_lengths
+                    ),
+                );
+            }
+        }
+    }
     let checksum = checksum_params(&f.checksum, byte_order, sink);
     let mut framing = Framing {
         section: f.section.clone(),

@@ -185,6 +185,13 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         )],
     ),
     (
+        "length_field_with_two_code_lengths",
+        &[(
+            "framing.request.code_lengths",
+            "a frame with a length field has codes of one length per direction; code_lengths give [1, 2]",
+        )],
+    ),
+    (
         "codeless_command_clashes_with_coded",
         &[(
             "commands.raw",
