@@ -490,8 +490,9 @@ struct Limits {
     longest_frame: usize,
     shortest: usize,
     min_code: usize,
-    /// The length field of the first direction decoded, where the framing has one.
-    length_rule: Option<LengthRule>,
+    /// The length field of each direction decoded (in the order of `directions`), where the
+    /// framing has one.
+    length_rules: [Option<LengthRule>; 2],
 }
 
 impl Limits {
@@ -519,7 +520,10 @@ impl Limits {
                 .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
                 .min()
                 .unwrap_or(1),
-            length_rule: directions.first().and_then(|d| p.framing.length_rule(*d)),
+            length_rules: [
+                directions.first().and_then(|d| p.framing.length_rule(*d)),
+                directions.get(1).and_then(|d| p.framing.length_rule(*d)),
+            ],
         }
     }
 }
@@ -708,7 +712,7 @@ fn decode_in<'p>(
         longest_frame,
         shortest,
         min_code,
-        length_rule,
+        length_rules: [rule0, rule1],
     } = limits;
     if wire.len() > longest_frame {
         return Err(DecodeError::TooLong {
@@ -726,13 +730,38 @@ fn decode_in<'p>(
     }
     check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     check_address(p, first.address, wire)?;
-    check_length_rule(p, length_rule, wire)?;
+    // Decoded both ways where the directions' length fields differ (each after a code of its
+    // own length), the frame is of a direction whose length field it agrees with.
+    let (keep0, keep1) = match directions {
+        [_, _] if rule0 != rule1 => {
+            let (a, b) = (
+                check_length_rule(p, rule0, wire),
+                check_length_rule(p, rule1, wire),
+            );
+            if let (Err(e), Err(_)) = (&a, &b) {
+                return Err(e.clone());
+            }
+            (a.is_ok(), b.is_ok())
+        }
+        _ => {
+            check_length_rule(p, rule0, wire)?;
+            (true, true)
+        }
+    };
+    let kept = |d: Direction| {
+        if Some(&d) == directions.first() {
+            keep0
+        } else {
+            keep1
+        }
+    };
 
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
         let o = m.layout;
         // Byte by byte: a code is a byte or two, shorter than a call to compare slices.
-        o.code <= wire.len()
+        kept(r.direction)
+            && o.code <= wire.len()
             && (m.code.iter().enumerate()).all(|(i, c)| wire.get(o.code + i) == Some(c))
     };
     // In the lookup, a variable message stands under every length it can have: its frame

@@ -761,6 +761,13 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             }
             if l.counts.is_empty() {
                 sink.error(join(lpath, "counts"), "say which parts the length counts");
+            } else if !l.counts.contains(&Part::Payload) {
+                // A count without the payload is one number whatever the frame holds: the
+                // frame's length does not follow from it, which stream framing relies on.
+                sink.error(
+                    join(lpath, "counts"),
+                    "a length field counts the payload (a number that does not is a constant field of the payload)",
+                );
             }
             for (i, part) in l.counts.iter().enumerate() {
                 if l.counts[..i].contains(part) {
