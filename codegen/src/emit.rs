@@ -2876,8 +2876,20 @@ fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStre
     let mut any = false;
     let mut per = Vec::new();
     for d in [Direction::Request, Direction::Response] {
+        // A message's code and the constants that lead its payload: what tells code-less
+        // messages (and messages sharing a code) apart before their count is read.
         let code = |m: &Message| {
-            let (at, bytes) = (usize_lit(m.layout.code), m.code.iter().map(|b| hex_u8(*b)));
+            let mut fixed = m.code.clone();
+            for f in &m.fields {
+                let whole = f.bits.is_empty() && f.repeat.is_none();
+                match f.constant {
+                    Some(c) if whole && fixed.len() == m.code.len() + f.offset => {
+                        fixed.extend(constant_bytes(c, f.width, f.byte_order));
+                    }
+                    _ => break,
+                }
+            }
+            let (at, bytes) = (usize_lit(m.layout.code), fixed.into_iter().map(hex_u8));
             (at, quote!(&[#(#bytes),*]))
         };
         let rule = p.framing.length_rule(d).filter(|r| r.grows);
