@@ -1574,8 +1574,22 @@ fn emit_encode_arm(
             continue;
         }
         let value: TokenStream = if let Some(c) = f.constant {
-            let l = lit_u(c, unsigned);
-            quote!(#l as #w)
+            if wt.signed {
+                // Its value as decode reads it (a 24-bit one held in 32 bits sign-extended
+                // too): what a field that follows it is computed from.
+                let bits = wt.bits;
+                let c = c as i64;
+                let v = if bits < 64 && c >= 1 << (bits - 1) {
+                    c - (1 << bits)
+                } else {
+                    c
+                };
+                let l = i64_lit(v);
+                quote!(#l as #w)
+            } else {
+                let l = lit_u(c, unsigned);
+                quote!(#l as #w)
+            }
         } else if let Some(other) = f.equals {
             let n = format_ident!("field_{}", other);
             quote!(#n)
@@ -2879,18 +2893,20 @@ fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStre
         // A message's code and the constants that lead its payload: what tells code-less
         // messages (and messages sharing a code) apart before their count is read.
         let code = |m: &Message| {
-            let mut fixed = m.code.clone();
+            let mut lead = Vec::new();
             for f in &m.fields {
                 let whole = f.bits.is_empty() && f.repeat.is_none();
                 match f.constant {
-                    Some(c) if whole && fixed.len() == m.code.len() + f.offset => {
-                        fixed.extend(constant_bytes(c, f.width, f.byte_order));
+                    Some(c) if whole && lead.len() == f.offset => {
+                        lead.extend(constant_bytes(c, f.width, f.byte_order));
                     }
                     _ => break,
                 }
             }
-            let (at, bytes) = (usize_lit(m.layout.code), fixed.into_iter().map(hex_u8));
-            (at, quote!(&[#(#bytes),*]))
+            let (at, lead_at) = (usize_lit(m.layout.code), usize_lit(m.layout.payload));
+            let code = m.code.iter().map(|b| hex_u8(*b));
+            let lead = lead.into_iter().map(hex_u8);
+            quote!(rt::Fixed { code_at: #at, code: &[#(#code),*], lead_at: #lead_at, lead: &[#(#lead),*] })
         };
         let rule = p.framing.length_rule(d).filter(|r| r.grows);
         let value = match rule {
@@ -2900,9 +2916,9 @@ fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStre
                     .iter()
                     .filter(|m| m.is_variable())
                     .map(|m| {
-                        let (at, c) = code(m);
+                        let fixed = code(m);
                         let (lo, hi) = (usize_lit(m.layout.len), usize_lit(m.max_len));
-                        quote!((#at, #c, #lo, #hi))
+                        quote!((#fixed, #lo, #hi))
                     })
                     .collect();
                 if shapes.is_empty() {
@@ -2922,9 +2938,9 @@ fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStre
                     .iter()
                     .filter(counted)
                     .map(|m| {
-                        let (at, c) = code(m);
+                        let fixed = code(m);
                         let r = repeat_const(m);
-                        quote!((#at, #c, #r))
+                        quote!((#fixed, #r))
                     })
                     .collect();
                 if shapes.is_empty() {

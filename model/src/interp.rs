@@ -1771,7 +1771,9 @@ pub fn encode(
         let v = length_for(p, m.direction, out.len()).unwrap_or(0);
         write_uint(v as u64, &mut out[at..at + l.width], p.byte_order);
     }
-    let mut ints: Vec<u64> = Vec::with_capacity(m.fields.len());
+    // Each field's value as decode reads it (signed fields sign-extended): what a field that
+    // follows it is computed from.
+    let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
     for (i, f) in m.fields.iter().enumerate() {
         let at = o.payload + f.offset;
         if f.repeat.is_some() {
@@ -1791,7 +1793,7 @@ pub fn encode(
         let slot = &mut out[at..at + f.width];
         let computed = match &f.follows {
             Some(Follows::Field(other, rel)) => {
-                Some(rel.apply(ints.get(*other).map_or(0, |&v| v as i64)))
+                Some(rel.apply(ints.get(*other).copied().unwrap_or(0)))
             }
             _ => count_field
                 .filter(|(c, _)| *c == i && lookup(&f.name).is_none())
@@ -1817,7 +1819,7 @@ pub fn encode(
                 });
             }
             write_uint(v as u64, slot, f.byte_order);
-            ints.push(v as u64);
+            ints.push(v);
             continue;
         }
         if f.is_ascii() {
@@ -1847,7 +1849,7 @@ pub fn encode(
         }
         let word: u64 = if let Some(c) = f
             .constant
-            .or_else(|| f.equals.and_then(|o| ints.get(o).copied()))
+            .or_else(|| f.equals.and_then(|o| ints.get(o).map(|&v| v as u64)))
         {
             // Constants and repeats fill themselves in; a value given for one must agree.
             let expected = if f.signed {
@@ -1928,7 +1930,12 @@ pub fn encode(
                 }
         };
         write_uint(word, slot, f.byte_order);
-        ints.push(word);
+        let bits = 8 * f.width as u32;
+        ints.push(if f.signed {
+            sign_extend(word, bits)
+        } else {
+            word as i64
+        });
     }
     let c = &p.framing.checksum;
     let at = out.len() - c.len();

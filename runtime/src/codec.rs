@@ -511,6 +511,32 @@ pub fn no_broadcast(
     Ok(())
 }
 
+/// The bytes a message fixes at its start, as the stream decoder tells its variable-length
+/// messages apart: its code at `code_at`, and the constants that lead its payload at `lead_at`
+/// (what tells code-less messages apart).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fixed {
+    pub code_at: usize,
+    pub code: &'static [u8],
+    pub lead_at: usize,
+    pub lead: &'static [u8],
+}
+
+impl Fixed {
+    /// Whether `head` agrees with every byte fixed: `None` while some are not buffered yet.
+    #[inline]
+    pub fn agrees(&self, head: &[u8]) -> Option<bool> {
+        match (
+            code_agrees(head, self.code_at, self.code),
+            code_agrees(head, self.lead_at, self.lead),
+        ) {
+            (Some(false), _) | (_, Some(false)) => Some(false),
+            (Some(true), Some(true)) => Some(true),
+            _ => None,
+        }
+    }
+}
+
 /// Whether the code bytes `code` at `at` agree with `head` (the bytes buffered from a possible
 /// frame start): `None` while some are not buffered yet.
 #[inline]
@@ -531,14 +557,10 @@ pub fn code_agrees(head: &[u8], at: usize, code: &[u8]) -> Option<bool> {
 /// the variable-length messages (`(code offset, code, shortest, longest)`) whose code agrees
 /// with `head` or is not buffered yet; none if no such message agrees.
 #[inline]
-pub fn var_by_length(
-    head: &[u8],
-    shapes: &[(usize, &[u8], usize, usize)],
-    field: LengthField,
-) -> VarLen {
+pub fn var_by_length(head: &[u8], shapes: &[(Fixed, usize, usize)], field: LengthField) -> VarLen {
     let (mut min, mut max) = (usize::MAX, 0);
-    for &(at, code, lo, hi) in shapes {
-        if code_agrees(head, at, code) != Some(false) {
+    for &(fixed, lo, hi) in shapes {
+        if fixed.agrees(head) != Some(false) {
             min = min.min(lo);
             max = max.max(hi);
         }
@@ -550,14 +572,14 @@ pub fn var_by_length(
 }
 
 /// The variable-length candidate of one direction whose variable-length messages are counted
-/// by a field (`(code offset, code, where the repeat sits)`): the length the count field of the
-/// first whose code agrees with `head` gives; [`VarLen::NEED_MORE`] while a code is not
-/// buffered yet.
+/// by a field (`(the bytes it fixes, where the repeat sits)`): the length the count field of
+/// the first whose fixed bytes agree with `head` gives; [`VarLen::NEED_MORE`] while some are
+/// not buffered yet.
 #[inline]
-pub fn var_by_count(head: &[u8], shapes: &[(usize, &[u8], RepeatAt)]) -> VarLen {
+pub fn var_by_count(head: &[u8], shapes: &[(Fixed, RepeatAt)]) -> VarLen {
     let mut wait = false;
-    for (at, code, r) in shapes {
-        match code_agrees(head, *at, code) {
+    for (fixed, r) in shapes {
+        match fixed.agrees(head) {
             Some(true) => return VarLen::of(r.frame_len(head)),
             Some(false) => {}
             None => wait = true,

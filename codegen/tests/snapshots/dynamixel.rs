@@ -847,7 +847,38 @@ pub mod dynamixel {
             rt::VarLens {
                 requests: rt::var_by_length(
                     head,
-                    &[(4, &[0x03], 7, 259), (4, &[0x04], 7, 259), (4, &[0x83], 8, 259)],
+                    &[
+                        (
+                            rt::Fixed {
+                                code_at: 4,
+                                code: &[0x03],
+                                lead_at: 5,
+                                lead: &[],
+                            },
+                            7,
+                            259,
+                        ),
+                        (
+                            rt::Fixed {
+                                code_at: 4,
+                                code: &[0x04],
+                                lead_at: 5,
+                                lead: &[],
+                            },
+                            7,
+                            259,
+                        ),
+                        (
+                            rt::Fixed {
+                                code_at: 4,
+                                code: &[0x83],
+                                lead_at: 5,
+                                lead: &[],
+                            },
+                            8,
+                            259,
+                        ),
+                    ],
                     rt::LengthField {
                         at: 3,
                         width: 1,
@@ -859,7 +890,18 @@ pub mod dynamixel {
                 ),
                 responses: rt::var_by_length(
                     head,
-                    &[(4, &[], 6, 259)],
+                    &[
+                        (
+                            rt::Fixed {
+                                code_at: 4,
+                                code: &[],
+                                lead_at: 4,
+                                lead: &[],
+                            },
+                            6,
+                            259,
+                        ),
+                    ],
                     rt::LengthField {
                         at: 3,
                         width: 1,

@@ -709,7 +709,20 @@ pub mod ending {
                 return rt::VarLens::NONE;
             }
             rt::VarLens {
-                requests: rt::var_by_count(head, &[(3, &[0x02], REPEAT_WRITE)]),
+                requests: rt::var_by_count(
+                    head,
+                    &[
+                        (
+                            rt::Fixed {
+                                code_at: 3,
+                                code: &[0x02],
+                                lead_at: 4,
+                                lead: &[],
+                            },
+                            REPEAT_WRITE,
+                        ),
+                    ],
+                ),
                 responses: rt::VarLen::NONE,
             }
         }

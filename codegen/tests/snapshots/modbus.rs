@@ -1889,17 +1889,65 @@ pub mod modbus {
                 requests: rt::var_by_count(
                     head,
                     &[
-                        (1, &[0x0F], REPEAT_WRITE_MULTIPLE_COILS),
-                        (1, &[0x10], REPEAT_WRITE_MULTIPLE_REGISTERS),
+                        (
+                            rt::Fixed {
+                                code_at: 1,
+                                code: &[0x0F],
+                                lead_at: 2,
+                                lead: &[],
+                            },
+                            REPEAT_WRITE_MULTIPLE_COILS,
+                        ),
+                        (
+                            rt::Fixed {
+                                code_at: 1,
+                                code: &[0x10],
+                                lead_at: 2,
+                                lead: &[],
+                            },
+                            REPEAT_WRITE_MULTIPLE_REGISTERS,
+                        ),
                     ],
                 ),
                 responses: rt::var_by_count(
                     head,
                     &[
-                        (1, &[0x01], REPEAT_READ_COILS_REPLY),
-                        (1, &[0x02], REPEAT_READ_DISCRETE_INPUTS_REPLY),
-                        (1, &[0x03], REPEAT_READ_HOLDING_REGISTERS_REPLY),
-                        (1, &[0x04], REPEAT_READ_INPUT_REGISTERS_REPLY),
+                        (
+                            rt::Fixed {
+                                code_at: 1,
+                                code: &[0x01],
+                                lead_at: 2,
+                                lead: &[],
+                            },
+                            REPEAT_READ_COILS_REPLY,
+                        ),
+                        (
+                            rt::Fixed {
+                                code_at: 1,
+                                code: &[0x02],
+                                lead_at: 2,
+                                lead: &[],
+                            },
+                            REPEAT_READ_DISCRETE_INPUTS_REPLY,
+                        ),
+                        (
+                            rt::Fixed {
+                                code_at: 1,
+                                code: &[0x03],
+                                lead_at: 2,
+                                lead: &[],
+                            },
+                            REPEAT_READ_HOLDING_REGISTERS_REPLY,
+                        ),
+                        (
+                            rt::Fixed {
+                                code_at: 1,
+                                code: &[0x04],
+                                lead_at: 2,
+                                lead: &[],
+                            },
+                            REPEAT_READ_INPUT_REGISTERS_REPLY,
+                        ),
                     ],
                 ),
             }

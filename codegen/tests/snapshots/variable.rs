@@ -715,7 +715,18 @@ pub mod vario {
             rt::VarLens {
                 requests: rt::var_by_length(
                     head,
-                    &[(4, &[0x02], 8, 40)],
+                    &[
+                        (
+                            rt::Fixed {
+                                code_at: 4,
+                                code: &[0x02],
+                                lead_at: 5,
+                                lead: &[],
+                            },
+                            8,
+                            40,
+                        ),
+                    ],
                     rt::LengthField {
                         at: 3,
                         width: 1,
@@ -727,7 +738,18 @@ pub mod vario {
                 ),
                 responses: rt::var_by_length(
                     head,
-                    &[(4, &[0x01], 6, 38)],
+                    &[
+                        (
+                            rt::Fixed {
+                                code_at: 4,
+                                code: &[0x01],
+                                lead_at: 5,
+                                lead: &[],
+                            },
+                            6,
+                            38,
+                        ),
+                    ],
                     rt::LengthField {
                         at: 3,
                         width: 1,
