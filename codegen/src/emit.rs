@@ -2893,16 +2893,7 @@ fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStre
         // A message's code and the constants that lead its payload: what tells code-less
         // messages (and messages sharing a code) apart before their count is read.
         let code = |m: &Message| {
-            let mut lead = Vec::new();
-            for f in &m.fields {
-                let whole = f.bits.is_empty() && f.repeat.is_none();
-                match f.constant {
-                    Some(c) if whole && lead.len() == f.offset => {
-                        lead.extend(constant_bytes(c, f.width, f.byte_order));
-                    }
-                    _ => break,
-                }
-            }
+            let lead = m.leading_constants();
             let (at, lead_at) = (usize_lit(m.layout.code), usize_lit(m.layout.payload));
             let code = m.code.iter().map(|b| hex_u8(*b));
             let lead = lead.into_iter().map(hex_u8);

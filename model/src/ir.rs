@@ -353,6 +353,24 @@ impl Message {
             .and_then(|f| f.repeat.as_ref().map(|r| (f, r)))
     }
 
+    /// The bytes of the constants that lead its payload (whole fields, one after the other from
+    /// the payload's first byte): with its code, what tells a variable-length message apart in
+    /// a stream before its length or count is read (both stream decoders).
+    pub fn leading_constants(&self) -> Vec<u8> {
+        let mut lead = Vec::new();
+        for f in &self.fields {
+            match f.constant {
+                Some(c) if f.bits.is_empty() && f.repeat.is_none() && lead.len() == f.offset => {
+                    let mut bytes = vec![0u8; f.width];
+                    crate::interp::write_uint(c, &mut bytes, f.byte_order);
+                    lead.extend(bytes);
+                }
+                _ => break,
+            }
+        }
+        lead
+    }
+
     /// Its shortest frame: with the fewest elements its repeated field may have.
     pub fn min_len(&self) -> usize {
         match self.repeat() {

@@ -168,6 +168,17 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
     let Some((f, r)) = m.repeat() else {
         return Lens::Are(vec![m.layout.len]);
     };
+    // A variable-length message is told apart by the constants that lead its payload too, as
+    // by its code (`Message::leading_constants`): wait for them, and none where one differs.
+    let lead = m.leading_constants();
+    let at = m.layout.payload;
+    for (i, &b) in lead.iter().enumerate() {
+        match buf.get(at + i) {
+            Some(&x) if x != b => return Lens::Are(Vec::new()),
+            Some(_) => {}
+            None => return Lens::Need,
+        }
+    }
     let within = |len: i64| -> Lens {
         let ok = usize::try_from(len)
             .ok()
@@ -281,7 +292,7 @@ pub struct StreamDecoder<'p> {
     shapes: Vec<Shape>,
     /// The shapes grouped by where their code sits, then by its first byte; made once.
     by_code: Vec<ByCode>,
-    /// Shapes without a code (none in a valid spec; kept so the rule still holds).
+    /// Shapes without a code: candidates wherever their start byte agrees.
     codeless: Vec<usize>,
     /// The decoding `interp::decode` does for this protocol and direction, prepared once.
     lookup: Lookup,
