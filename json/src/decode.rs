@@ -176,16 +176,6 @@ fn responses_of<P: Protocol>(p: &Spec, wire: &[u8]) -> Option<Vec<String>> {
     }
 }
 
-/// How telling an error is when a frame fails in both directions: the one that got further.
-fn rank(e: &DecodeError) -> u8 {
-    match e {
-        DecodeError::UnknownCommand { .. } | DecodeError::UnknownResponse { .. } => 0,
-        DecodeError::Truncated { .. } => 1,
-        DecodeError::WrongLength { .. } => 2,
-        _ => 3,
-    }
-}
-
 /// The error of a frame that is neither a request nor a response.
 fn either(request: DecodeError, response: DecodeError) -> DecodeError {
     match (request, response) {
@@ -199,7 +189,7 @@ fn either(request: DecodeError, response: DecodeError) -> DecodeError {
             needed: a.min(b),
             found: n,
         },
-        (q, r) if rank(&r) > rank(&q) => r,
+        (q, r) if r.progress() > q.progress() => r,
         (q, _) => q,
     }
 }

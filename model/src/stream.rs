@@ -168,9 +168,17 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
     let Some((f, r)) = m.repeat() else {
         return Lens::Are(vec![m.layout.len]);
     };
-    // A variable-length message is told apart by the constants that lead its payload too, as
-    // by its code (`Message::leading_constants`): wait for them, and none where one differs.
-    let lead = m.leading_constants();
+    // A variable-length message whose length or count field gives its length is told apart
+    // by the constants that lead its payload too, as by its code
+    // (`Message::leading_constants`): wait for them, and none where one differs. One whose
+    // elements run to the end without a length field has its lengths listed, as a fixed
+    // message's, by its code alone.
+    let listed = p.framing.length.is_none() && r.count == Count::ToEnd;
+    let lead = if listed {
+        Vec::new()
+    } else {
+        m.leading_constants()
+    };
     let at = m.layout.payload;
     for (i, &b) in lead.iter().enumerate() {
         match buf.get(at + i) {

@@ -452,6 +452,24 @@ impl fmt::Display for CountRule {
     }
 }
 
+impl DecodeError {
+    /// How far a frame decoded as one direction got before this error: 0, no message of the
+    /// direction has its code or its length field (the direction's own); 1, too short; 2, a
+    /// code whose messages have other lengths or counts; 3, a message's own refusal. A frame
+    /// decoded both ways is refused for the reason that got further (the request's on a tie),
+    /// as the interpreter, which decodes both ways at once, refuses it.
+    pub fn progress(&self) -> u8 {
+        match self {
+            DecodeError::UnknownCommand { .. }
+            | DecodeError::UnknownResponse { .. }
+            | DecodeError::LengthMismatch { .. } => 0,
+            DecodeError::Truncated { .. } => 1,
+            DecodeError::WrongLength { .. } | DecodeError::BadCount { .. } => 2,
+            _ => 3,
+        }
+    }
+}
+
 /// `v` in hex as `len` bytes (`0x0009` for a two-byte code), as the frame holds them (`0x`
 /// where it holds none).
 fn hex(f: &mut fmt::Formatter<'_>, v: u32, len: u8) -> fmt::Result {

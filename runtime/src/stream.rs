@@ -676,7 +676,10 @@ impl<C: Protocol> Core<C> {
                 Ok(d) => Some(Ok(d)),
                 Err(DecodeError::Ambiguous { code, .. }) => Some(Err(code)),
                 Err(e) => {
-                    why.get_or_insert(e);
+                    // The reason that got further ([`DecodeError::progress`]).
+                    if why.as_ref().map_or(true, |q| e.progress() > q.progress()) {
+                        why = Some(e);
+                    }
                     None
                 }
             }
