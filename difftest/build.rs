@@ -23,9 +23,22 @@ fn main() {
             .map(|n| n.trim().to_owned())
             .expect("a fixture names its protocol");
         let ty = busspec_codegen::emit::camel(&name);
+        // A spec a run found is compared with the seed it was found with (`spec seed N` in its
+        // header), so the test replays that very run; others with seed 1.
+        let seed: u64 = text
+            .lines()
+            .take_while(|l| l.starts_with('#'))
+            .find_map(|l| l.split("spec seed ").nth(1))
+            .and_then(|rest| {
+                rest.split(|c: char| !c.is_ascii_digit())
+                    .next()?
+                    .parse()
+                    .ok()
+            })
+            .unwrap_or(1);
         let _ = writeln!(
             tests,
-            "/// `{}`\n#[test]\nfn {name}() {{\n    check::<{name}::{ty}>();\n}}\n",
+            "/// `{}`\n#[test]\nfn {name}() {{\n    check::<{name}::{ty}>({seed});\n}}\n",
             spec.display()
         );
     }

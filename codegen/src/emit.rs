@@ -2908,7 +2908,7 @@ fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStre
                     .filter(|m| m.is_variable())
                     .map(|m| {
                         let fixed = code(m);
-                        let (lo, hi) = (usize_lit(m.layout.len), usize_lit(m.max_len));
+                        let (lo, hi) = (usize_lit(m.min_len()), usize_lit(m.max_len));
                         quote!((#fixed, #lo, #hi))
                     })
                     .collect();

@@ -187,10 +187,11 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
             None => return Lens::Need,
         }
     }
+    // Within the frames the message can have: with the fewest elements to the most.
     let within = |len: i64| -> Lens {
         let ok = usize::try_from(len)
             .ok()
-            .filter(|l| (m.layout.len..=m.max_len).contains(l));
+            .filter(|l| (m.min_len()..=m.max_len).contains(l));
         Lens::Are(ok.into_iter().collect())
     };
     if let (Some(l), Some(at)) = (&p.framing.length, m.layout.length) {
