@@ -442,9 +442,7 @@ fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
                 usize_lit(cf.width),
             );
             let le = cf.byte_order == ByteOrder::Little;
-            // The words of the interpreter's refusal of a byte count that disagrees.
-            let rule = format!("the bytes of {name}");
-            quote!(rt::CountField { name: #cn, rule: #rule, at: #cat, width: #cw, le: #le })
+            quote!(rt::CountField { name: #cn, at: #cat, width: #cw, le: #le })
         };
         let count = match r.count {
             Count::ToEnd => quote!(rt::CountBy::End),

@@ -71,7 +71,6 @@ fn repeat_at(p: &ir::Protocol, m: &ir::Message) -> rt::RepeatAt {
         let c = &m.fields[i];
         rt::CountField {
             name: leak(&c.name),
-            rule: leak(&format!("the bytes of {}", f.name)),
             at: m.layout.payload + c.offset,
             width: c.width,
             le: c.byte_order == ByteOrder::Little,
@@ -175,7 +174,6 @@ fn a_count_that_lies_gives_no_frame_length() {
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of values",
             at: 2,
             width: 1,
             le: false,
@@ -199,11 +197,11 @@ fn a_count_that_lies_gives_no_frame_length() {
     assert_eq!(ra.count(&[0x01, 0x03, 0x04, 0, 1, 0, 2, 0xAA, 0xBB]), Ok(2));
     assert_eq!(
         ra.count(&[0x01, 0x03, 0x06, 0, 1, 0, 2, 0xAA, 0xBB]),
-        Err(busspec_runtime::DecodeError::NotFollowing {
+        Err(busspec_runtime::DecodeError::ByteCount {
             message: "read_holding_registers_reply",
             field: "byte_count",
             offset: 2,
-            rule: "the bytes of values",
+            list: "values",
             expected: 4,
             found: 6
         })

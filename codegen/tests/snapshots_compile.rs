@@ -403,7 +403,7 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     agree::reseal(&p, &mut lying);
     assert!(matches!(
         vario::Request::decode(&lying),
-        Err(DecodeError::NotFollowing {
+        Err(DecodeError::ByteCount {
             field: "byte_count",
             offset: 6,
             found: 6,

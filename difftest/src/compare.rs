@@ -165,7 +165,7 @@ fn class(g: &DecodeError) -> &'static str {
         DecodeError::OutOfRange { .. } => "out of range",
         DecodeError::BadAddress { .. } => "bad address",
         DecodeError::BroadcastNotAccepted { .. } => "broadcast",
-        DecodeError::BadCount { .. } => "bad count",
+        DecodeError::BadCount { .. } | DecodeError::ByteCount { .. } => "bad count",
     }
 }
 
@@ -188,7 +188,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             InterpError::OutOfRange { .. } => "out of range",
             InterpError::BadAddress { .. } => "bad address",
             InterpError::BroadcastNotAccepted { .. } => "broadcast",
-            InterpError::BadCount { .. } => "bad count",
+            InterpError::BadCount { .. } | InterpError::ByteCount { .. } => "bad count",
         },
     }
 }

@@ -151,6 +151,16 @@ pub enum DecodeError {
         expected: String,
         found: i64,
     },
+    /// A count field says the elements of `list` take `found` bytes; the frame's length gives
+    /// them `expected`.
+    ByteCount {
+        message: String,
+        field: String,
+        offset: usize,
+        list: String,
+        expected: i64,
+        found: i64,
+    },
     /// A field that follows from another (of the frame or of the request) does not.
     NotFollowing {
         message: String,
@@ -250,6 +260,10 @@ impl fmt::Display for DecodeError {
             DecodeError::BadCount { message, field, offset, expected, found } => write!(
                 f,
                 "{message}.{field} at offset {offset}: {found} elements, expected {expected}"
+            ),
+            DecodeError::ByteCount { message, field, offset, list, expected, found } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: must be the bytes of {list} ({expected}), found {found}"
             ),
             DecodeError::NotFollowing { message, field, offset, rule, expected, found } => write!(
                 f,
@@ -1204,11 +1218,11 @@ pub fn element_count(p: &Protocol, m: &Message, wire: &[u8]) -> Result<usize, De
         Count::Bytes(i) => {
             let v = count_value(i);
             if usize::try_from(v).ok() != Some(extra) || (!bits && extra % f.width.max(1) != 0) {
-                return Err(DecodeError::NotFollowing {
+                return Err(DecodeError::ByteCount {
                     message: m.name.clone(),
                     field: m.fields[i].name.clone(),
                     offset: m.layout.payload + m.fields[i].offset,
-                    rule: format!("the bytes of {}", f.name),
+                    list: f.name.clone(),
                     expected: extra as i64,
                     found: v,
                 });

@@ -305,6 +305,13 @@ pub struct StreamDecoder<'p> {
     codeless: Vec<usize>,
     /// The decoding `interp::decode` does for this protocol and direction, prepared once.
     lookup: Lookup,
+    /// Decoding both ways, the lookups of one direction each: a length only one direction's
+    /// candidates have is decoded as that direction alone, as the generated stream decoder
+    /// decodes it.
+    one_way: Option<[Lookup; 2]>,
+    /// Per length in `lens`, the directions whose candidates have it (bit 0 requests, bit 1
+    /// responses).
+    dirs: Vec<u8>,
     /// Candidate shapes and lengths of one step, kept for their memory.
     candidates: Vec<usize>,
     lens: Vec<usize>,
@@ -384,6 +391,13 @@ impl<'p> StreamDecoder<'p> {
             by_code,
             codeless,
             lookup: Lookup::new(p, direction),
+            one_way: direction.is_none().then(|| {
+                [
+                    Lookup::new(p, Some(Direction::Request)),
+                    Lookup::new(p, Some(Direction::Response)),
+                ]
+            }),
+            dirs: Vec::new(),
             candidates: Vec::new(),
             lens: Vec::new(),
             shortest,
@@ -496,6 +510,8 @@ impl<'p> StreamDecoder<'p> {
         // candidate, and any longer than what is buffered.
         let mut lens = std::mem::take(&mut self.lens);
         lens.clear();
+        let mut dirs = std::mem::take(&mut self.dirs);
+        dirs.clear();
         let mut candidates = std::mem::take(&mut self.candidates);
         self.find_candidates(&mut candidates);
         let (mut live, mut longer) = (false, false);
@@ -505,6 +521,10 @@ impl<'p> StreamDecoder<'p> {
                 continue;
             }
             live = true;
+            let dir = match s.message.direction {
+                Direction::Request => 1,
+                Direction::Response => 2,
+            };
             if s.variable {
                 // Its lengths, as far as the buffered length or count field tells.
                 match lens_of(self.p, self.p.message(s.message), &self.buf) {
@@ -515,6 +535,7 @@ impl<'p> StreamDecoder<'p> {
                                 longer = true;
                             } else {
                                 lens.push(l);
+                                dirs.push(dir);
                             }
                         }
                     }
@@ -523,11 +544,13 @@ impl<'p> StreamDecoder<'p> {
                 longer = true;
             } else {
                 lens.push(s.len);
+                dirs.push(dir);
             }
         }
         self.candidates = candidates;
         if !live || (!flushing && longer) {
             self.lens = lens;
+            self.dirs = dirs;
             if !live {
                 self.drop_byte(out);
                 return Step::Progress;
@@ -535,13 +558,30 @@ impl<'p> StreamDecoder<'p> {
             return Step::NeedMore;
         }
         if lens.len() > 1 {
-            lens.sort_unstable_by(|a, b| b.cmp(a));
-            lens.dedup();
+            // Longest first, each with the directions of every candidate that has it.
+            let mut by_len: Vec<(usize, u8)> =
+                lens.iter().copied().zip(dirs.iter().copied()).collect();
+            by_len.sort_unstable_by_key(|&(l, _)| std::cmp::Reverse(l));
+            lens.clear();
+            dirs.clear();
+            for (l, d) in by_len {
+                match lens.last() {
+                    Some(&last) if last == l => {
+                        if let Some(m) = dirs.last_mut() {
+                            *m |= d;
+                        }
+                    }
+                    _ => {
+                        lens.push(l);
+                        dirs.push(d);
+                    }
+                }
+            }
         }
         let mut out_of_spec: Option<(usize, DecodeError)> = None;
         let mut found = false;
-        for &len in &lens {
-            match self.try_frame(len, out) {
+        for (&len, &dir) in lens.iter().zip(&dirs) {
+            match self.try_frame(len, dir, out) {
                 Ok(()) => {
                     found = true;
                     break;
@@ -551,6 +591,7 @@ impl<'p> StreamDecoder<'p> {
             }
         }
         self.lens = lens;
+        self.dirs = dirs;
         if found {
             return Step::Progress;
         }
@@ -611,6 +652,7 @@ impl<'p> StreamDecoder<'p> {
     fn try_frame(
         &mut self,
         len: usize,
+        dir: u8,
         out: &mut Vec<Event<'p>>,
     ) -> Result<(), Option<DecodeError>> {
         let Some(wire) = self.buf.get(..len) else {
@@ -619,9 +661,12 @@ impl<'p> StreamDecoder<'p> {
         let offset = self.head;
         let request = self.last_request.or(self.default_request);
         self.spare.values = self.spare_values.pop().unwrap_or_default();
-        let decoded = self
-            .lookup
-            .decode_paired_reusing(self.p, request, wire, &mut self.spare);
+        let lookup = match (&self.one_way, dir) {
+            (Some([requests, _]), 1) => requests,
+            (Some([_, responses]), 2) => responses,
+            _ => &self.lookup,
+        };
+        let decoded = lookup.decode_paired_reusing(self.p, request, wire, &mut self.spare);
         let values = std::mem::take(&mut self.spare.values);
         if values.capacity() > 0 {
             // Not taken: no frame decoded.

@@ -329,6 +329,16 @@ pub enum DecodeError {
         expected: i64,
         found: i64,
     },
+    /// The count field `field` at `offset` says the elements of `list` take `found` bytes; the
+    /// frame's length gives them `expected`.
+    ByteCount {
+        message: &'static str,
+        field: &'static str,
+        offset: usize,
+        list: &'static str,
+        expected: i64,
+        found: i64,
+    },
     /// The length field at `offset` says `found`; the frame's length gives `expected`.
     LengthMismatch {
         offset: usize,
@@ -464,7 +474,9 @@ impl DecodeError {
             | DecodeError::UnknownResponse { .. }
             | DecodeError::LengthMismatch { .. } => 0,
             DecodeError::Truncated { .. } => 1,
-            DecodeError::WrongLength { .. } | DecodeError::BadCount { .. } => 2,
+            DecodeError::WrongLength { .. }
+            | DecodeError::BadCount { .. }
+            | DecodeError::ByteCount { .. } => 2,
             _ => 3,
         }
     }
@@ -561,6 +573,17 @@ impl fmt::Display for DecodeError {
             } => write!(
                 f,
                 "invalid value for {message}.{field} at offset {offset}: must be {rule} ({expected}), found {found}"
+            ),
+            DecodeError::ByteCount {
+                message,
+                field,
+                offset,
+                list,
+                expected,
+                found,
+            } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: must be the bytes of {list} ({expected}), found {found}"
             ),
             DecodeError::LengthMismatch {
                 offset,

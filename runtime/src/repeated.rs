@@ -371,8 +371,6 @@ pub enum CountBy {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CountField {
     pub name: &'static str,
-    /// What it must hold, as a refusal words it (`the bytes of values`).
-    pub rule: &'static str,
     /// Its offset in the frame.
     pub at: usize,
     /// Its width, bytes.
@@ -442,11 +440,11 @@ impl RepeatAt {
             CountBy::Bytes(c) => {
                 let v = c.read(frame).unwrap_or(0);
                 if !whole || usize::try_from(v) != Ok(extra) {
-                    return Err(DecodeError::NotFollowing {
+                    return Err(DecodeError::ByteCount {
                         message: self.message,
                         field: c.name,
                         offset: c.at,
-                        rule: c.rule,
+                        list: self.field,
                         expected: extra as i64,
                         found: v as i64,
                     });

@@ -71,7 +71,6 @@ pub mod ending {
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of values",
             at: 5,
             width: 1,
             le: false,

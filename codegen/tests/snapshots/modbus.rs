@@ -222,7 +222,6 @@ pub mod modbus {
         width: 0,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of outputs",
             at: 6,
             width: 1,
             le: false,
@@ -239,7 +238,6 @@ pub mod modbus {
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of values",
             at: 6,
             width: 1,
             le: false,
@@ -827,7 +825,6 @@ pub mod modbus {
         width: 0,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of coils",
             at: 2,
             width: 1,
             le: false,
@@ -844,7 +841,6 @@ pub mod modbus {
         width: 0,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of inputs",
             at: 2,
             width: 1,
             le: false,
@@ -861,7 +857,6 @@ pub mod modbus {
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of registers",
             at: 2,
             width: 1,
             le: false,
@@ -878,7 +873,6 @@ pub mod modbus {
         width: 2,
         count: rt::CountBy::Bytes(rt::CountField {
             name: "byte_count",
-            rule: "the bytes of registers",
             at: 2,
             width: 1,
             le: false,

@@ -54,7 +54,8 @@ fn check_error(e: &DecodeError, len: usize) {
         | DecodeError::BadAddress { offset, .. }
         | DecodeError::LengthMismatch { offset, .. }
         | DecodeError::BadCount { offset, .. }
-        | DecodeError::NotFollowing { offset, .. } => Some(*offset),
+        | DecodeError::NotFollowing { offset, .. }
+        | DecodeError::ByteCount { offset, .. } => Some(*offset),
         _ => None,
     };
     if let Some(o) = offset {

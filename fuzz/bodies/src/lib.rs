@@ -237,7 +237,8 @@ fn check_error(e: &DecodeError, len: usize) {
         | DecodeError::UnknownResponse { offset, .. }
         | DecodeError::InvalidValue { offset, .. }
         | DecodeError::NotEqual { offset, .. }
-        | DecodeError::NotFollowing { offset, .. } => {
+        | DecodeError::NotFollowing { offset, .. }
+        | DecodeError::ByteCount { offset, .. } => {
             assert!(offset < len, "{e}")
         }
         DecodeError::LengthMismatch {
