@@ -107,8 +107,8 @@ pub enum Event<'p> {
     /// Bytes that start no frame.
     Skipped { offset: u64, bytes: Vec<u8> },
     /// A frame whose start byte, code, length and checksum fit, but that breaks a rule of the
-    /// spec: `reason` is the strict decoder's error ([`breaks_spec`]; the request's where the
-    /// frame could be either); `frame` its values with the spec's rules lifted, where they
+    /// spec: `reason` is the strict decoder's error ([`breaks_spec`]; where the frame could be
+    /// either, the first refusal both ways, as `interp::decode` says it); `frame` its values with the spec's rules lifted, where they
     /// decode so ([`decode_lenient`]; not when the frame is ambiguous without them). Its bytes
     /// are consumed.
     OutOfSpec {

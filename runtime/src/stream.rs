@@ -244,7 +244,8 @@ pub enum Event<Q, R> {
     Skipped { offset: u64, len: u64 },
     /// A frame of `len` bytes at `offset` whose start byte, code, length and checksum fit, but
     /// that breaks a rule of the spec: `reason` is the strict decoder's error, one that
-    /// [`breaks_spec`] names (the request's where the frame could be either). Its bytes are
+    /// [`breaks_spec`] names (where the frame could be either, the one that got further,
+    /// [`DecodeError::progress`], the request's on a tie). Its bytes are
     /// consumed; it ends request pairing as an ambiguous frame does.
     OutOfSpec {
         offset: u64,
@@ -648,9 +649,10 @@ impl<C: Protocol> Core<C> {
     }
 
     /// What `frame` (the bytes at `head`) is if it is a frame (pairing updated); otherwise
-    /// `None`, and if it breaks only a rule of the spec ([`breaks_spec`]: the request's error
-    /// where both directions are candidates, as the interpreter tries requests first) and no
-    /// longer length did, its length and the reason in `out_of_spec`.
+    /// `None`, and if it breaks only a rule of the spec ([`breaks_spec`]: where both directions
+    /// are candidates, the error that got further, [`DecodeError::progress`], the request's on
+    /// a tie, as the interpreter decoding both ways at once refuses it) and no longer length
+    /// did, its length and the reason in `out_of_spec`.
     #[inline(always)]
     fn try_frame(
         &mut self,
