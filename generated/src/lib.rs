@@ -28,8 +28,8 @@
 extern crate std;
 
 pub use busspec_runtime::{
-    stream, Broadcast, Candidates, CommandKind, CountRule, DecodeError, Decoded, Elements,
-    EncodeError, FieldValue, Message, Protocol, ProtocolVisitor, Repeated,
+    stream, Broadcast, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
+    FieldValue, Message, MessageNames, Protocol, ProtocolVisitor, Repeated,
 };
 
 include!(concat!(env!("OUT_DIR"), "/protocols.rs"));

@@ -280,7 +280,7 @@ pub struct Group<'f, T> {
     found: Option<T>,
     /// The ambiguous candidates that decoded, without a request: two or more make the frame
     /// ambiguous.
-    decoded: crate::Candidates,
+    decoded: crate::MessageNames,
     /// The first ambiguous candidate that decoded but the request does not get.
     refused: Option<&'static str>,
     /// The first error of an ambiguous candidate the request does not get.
@@ -300,7 +300,7 @@ impl<'f, T> Group<'f, T> {
             code,
             request,
             found: None,
-            decoded: crate::Candidates::default(),
+            decoded: crate::MessageNames::default(),
             refused: None,
             aside: None,
             count: None,

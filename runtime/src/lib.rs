@@ -347,7 +347,7 @@ pub enum DecodeError {
     },
     /// Several responses share this code and length, and `candidates` all decode from the
     /// frame; decode it with `decode_reply`.
-    Ambiguous { code: u32, candidates: Candidates },
+    Ambiguous { code: u32, candidates: MessageNames },
     /// The frame is a valid response `message`, but not one the spec lists for `request`.
     NotAReply {
         message: &'static str,
@@ -397,15 +397,15 @@ pub enum DecodeError {
 /// The messages an ambiguous frame decodes as, in spec order (the first four: no spec has more
 /// than two responses only the request tells apart).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct Candidates {
+pub struct MessageNames {
     names: [&'static str; 4],
     len: u8,
 }
 
-impl Candidates {
+impl MessageNames {
     /// `names`, the first four of them.
     pub fn from_slice(names: &[&'static str]) -> Self {
-        let mut c = Candidates::default();
+        let mut c = MessageNames::default();
         for n in names {
             c.push(n);
         }
@@ -426,7 +426,7 @@ impl Candidates {
     }
 }
 
-impl fmt::Display for Candidates {
+impl fmt::Display for MessageNames {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for (i, n) in self.names().iter().enumerate() {
             if i > 0 {

@@ -6,7 +6,7 @@
 //! is refused first.
 
 use busspec_protocols::sd::{ActuatorStatusBits, Angle, Request, Response, Temperature, Velocity};
-use busspec_protocols::{Candidates, DecodeError, Decoded, EncodeError};
+use busspec_protocols::{DecodeError, Decoded, EncodeError, MessageNames};
 
 const LEN: usize = 6;
 const FIRST_ID: u8 = 0x01;
@@ -325,7 +325,7 @@ pub fn decode_response(
             None => {
                 return Err(DecodeError::Ambiguous {
                     code: 0x22,
-                    candidates: Candidates::from_slice(&[
+                    candidates: MessageNames::from_slice(&[
                         "total_runtime_hours",
                         "total_runtime_min_sec",
                     ]),
