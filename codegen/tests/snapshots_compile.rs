@@ -636,3 +636,22 @@ fn codeless_beside_coded_snapshot_agrees_with_the_interpreter() {
     }
     assert!(found > 100, "only {found} go_to_preset frames found");
 }
+
+/// Every fixture whose snapshot compiles here, held to the interpreter on its examples and the
+/// frames mutated from them: the same acceptance, values and re-encoding, and every refusal in
+/// the same words (`agree::check`).
+#[test]
+fn every_snapshot_refuses_as_the_interpreter_words_it() {
+    let t = [
+        agree::agree::<mini::Mini>(&fixture("model/tests/fixtures/valid/minimal.yaml")),
+        agree::agree::<mini_crc::MiniCrc>(&fixture("model/tests/fixtures/valid/minimal_crc.yaml")),
+        agree::agree::<clash::Clash>(&fixture("codegen/tests/fixtures/core_names.yaml")),
+        agree::agree::<syncy::Syncy>(&fixture("model/tests/fixtures/valid/minimal_sync.yaml")),
+        agree::agree::<codeless::Codeless>(&fixture(
+            "model/tests/fixtures/valid/minimal_codeless.yaml",
+        )),
+    ];
+    for t in t {
+        assert!(t.accepted > 0 && t.refused > 50, "{t:?}");
+    }
+}
