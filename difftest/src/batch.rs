@@ -1,4 +1,4 @@
-//! A batch of specs as one crate: one rustc run serves them all. [`write`] lays the crate out
+//! A batch of specs as one crate: one rustc run serves them all. [`write()`] lays the crate out
 //! (its own workspace, path dependencies on this repository, a copy of its lock file, the
 //! generated modules and a `main` that `include!`s them); the batch's `main` calls [`main`]
 //! with one entry per spec, which runs [`crate::compare::compare`] on each and writes every
