@@ -1572,16 +1572,9 @@ fn emit_encode_arm(
             continue;
         }
         let value: TokenStream = if let Some(c) = f.constant {
-            if wt.signed {
+            if let (true, Some(v)) = (wt.signed, f.constant_value()) {
                 // Its value as decode reads it (a 24-bit one held in 32 bits sign-extended
                 // too): what a field that follows it is computed from.
-                let bits = wt.bits;
-                let c = c as i64;
-                let v = if bits < 64 && c >= 1 << (bits - 1) {
-                    c - (1 << bits)
-                } else {
-                    c
-                };
                 let l = i64_lit(v);
                 quote!(#l as #w)
             } else {
@@ -3127,15 +3120,8 @@ fn request_value(
     name: &str,
     theirs: &mut Vec<TokenStream>,
 ) -> Option<TokenStream> {
-    if let Some(c) = cmd.fields.iter().find(|f| f.name == name).and_then(|f| {
-        let bits = 8 * f.width as u32;
-        let c = f.constant? as i64;
-        Some(if f.signed && bits < 64 && c >= 1 << (bits - 1) {
-            c - (1 << bits)
-        } else {
-            c
-        })
-    }) {
+    let field = cmd.fields.iter().find(|f| f.name == name);
+    if let Some(c) = field.and_then(Field::constant_value) {
         let c = i64_lit(c);
         return Some(quote!(#c));
     }

@@ -547,6 +547,17 @@ pub enum Follows {
 }
 
 impl Field {
+    /// Its constant as decode reads it: sign-extended where the field is signed.
+    pub fn constant_value(&self) -> Option<i64> {
+        let c = self.constant?;
+        let bits = 8 * self.width as u32;
+        Some(if self.signed && bits < 64 && c >> (bits - 1) & 1 == 1 {
+            (c as i64) - (1i64 << bits)
+        } else {
+            c as i64
+        })
+    }
+
     /// Bytes `n` elements of a repeated field take.
     pub fn elements_len(&self, n: usize) -> usize {
         if self.ty == FieldType::Bit {
