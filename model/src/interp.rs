@@ -770,12 +770,14 @@ fn decode_in<'p>(
         }
     };
 
+    let clen = p.framing.checksum.len();
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
         let o = m.layout;
-        // Byte by byte: a code is a byte or two, shorter than a call to compare slices.
+        // Byte by byte: a code is a byte or two, shorter than a call to compare slices. It
+        // lies before the checksum: a checksum byte is no code byte.
         kept(r.direction)
-            && o.code <= wire.len()
+            && o.code + m.code.len() + clen <= wire.len()
             && (m.code.iter().enumerate()).all(|(i, c)| wire.get(o.code + i) == Some(c))
     };
     // In the lookup, a variable message stands under every length it can have: its frame
