@@ -567,6 +567,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         _ => quote!(rt::None),
     };
     let checksum_len = usize_lit(p.framing.checksum.len());
+    let addressed = p.framing.has_address();
     let checksum_be = p.framing.checksum.byte_order == ByteOrder::Big;
     let baud = p.serial.baud;
     let optional = |v: Option<u32>| match v {
@@ -627,6 +628,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         /// What every frame shares, for the runtime's frame checks.
         const FRAME: rt::Frame = rt::Frame {
             start: #start,
+            addressed: #addressed,
             devices: (#lo, #hi),
             broadcast: BROADCAST_ADDRESS,
             host: HOST_ADDRESS,
@@ -1502,13 +1504,15 @@ fn emit_encode_arm(
             }
         }
     }
-    known[o.address] = Some(quote!(address));
+    if let Some(at) = o.address {
+        known[at] = Some(quote!(address));
+    }
     // The run from the first byte is written as the frame is taken from `buf`.
     let first: Vec<TokenStream> = known.iter().map_while(Clone::clone).collect();
     let mut i = first.len();
     // Its sum, for a sum-8 sealed in the arm: the generator adds the constants.
     let k = consts[..i].iter().fold(0u8, |a, b| a.wrapping_add(*b));
-    let head = (i, (o.address < i).then_some(k));
+    let head = (i, o.address.is_some_and(|a| a < i).then_some(k));
     let take = if taken {
         quote!(rt::head(out, &[#(#first),*]))
     } else if repeat.is_some() {
@@ -1747,10 +1751,10 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
     let v = variant(m);
     let message = m.name.as_str();
     let mut stmts = Vec::new();
-    if let Some(b) = refuses_broadcast(p, m) {
+    if let (Some(b), Some(at)) = (refuses_broadcast(p, m), o.address) {
         let name = &m.name;
         let code = hex_code(&m.code);
-        let (at, b) = (usize_lit(o.address), hex_u8(b));
+        let (at, b) = (usize_lit(at), hex_u8(b));
         let len = Literal::u8_unsuffixed(m.code.len() as u8);
         stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code, #len)?;));
     }
@@ -2035,7 +2039,8 @@ fn paren(e: TokenStream) -> TokenStream {
 
 /// Where the address of a frame of direction `d` is. Where the code precedes the address, the
 /// address sits after a code of this direction's only length; the validator restricts such
-/// layouts to one code length.
+/// layouts to one code length. 0 where frames carry no address (the frame checks then do not
+/// look at it).
 fn address_at(p: &Protocol, d: Direction) -> usize {
     if p.framing.layout.iter().position(|x| *x == Part::Code)
         < p.framing.layout.iter().position(|x| *x == Part::Address)
@@ -2047,9 +2052,9 @@ fn address_at(p: &Protocol, d: Direction) -> usize {
             .first()
             .copied()
             .unwrap_or(1);
-        p.framing.head(l).address
+        p.framing.head(l).address.unwrap_or(0)
     } else {
-        p.framing.head(1).address
+        p.framing.head(1).address.unwrap_or(0)
     }
 }
 

@@ -89,6 +89,16 @@ fn codeless_beside_coded_spec_generates_its_snapshot() {
     );
 }
 
+/// Frames that carry no address (a point-to-point link): nothing reads or writes one, encode
+/// takes address 0 alone (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn unaddressed_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/unaddressed.yaml",
+        "unaddressed.rs",
+    );
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

@@ -222,6 +222,7 @@ fn encode_class(g: &GenEncodeError) -> &'static str {
         GenEncodeError::Encode(EncodeError::OutOfRange { .. }) => "out of range",
         GenEncodeError::Encode(EncodeError::NotInRange { .. }) => "not in range",
         GenEncodeError::Encode(EncodeError::BadAddress { .. }) => "bad address",
+        GenEncodeError::Encode(EncodeError::Unaddressed { .. }) => "unaddressed",
         GenEncodeError::Encode(EncodeError::BroadcastNotAccepted { .. }) => "broadcast",
         GenEncodeError::Encode(EncodeError::BufferTooSmall { .. }) => "buffer",
         #[allow(unreachable_patterns)]
@@ -240,6 +241,7 @@ fn interp_encode_class(i: &interp::EncodeError) -> &'static str {
         E::NotText { .. } | E::NotNumber { .. } | E::NotList { .. } => "kind",
         E::UnknownValue { .. } => "unknown value",
         E::BadAddress { .. } => "bad address",
+        E::Unaddressed { .. } => "unaddressed",
         E::BroadcastNotAccepted { .. } => "broadcast",
         E::Fixed { .. } => "fixed",
         E::Inconsistent { .. } => "inconsistent",

@@ -680,7 +680,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         Vec::new()
     };
     let has_length = g.chance(30);
-    let code_first = g.chance(12);
+    // Frames without an address (a point-to-point link).
+    let addressed = !g.chance(15);
+    let code_first = addressed && g.chance(12);
     let lens_of = |g: &mut G| -> Vec<usize> {
         let sets: [&[usize]; 9] = [
             &[0],
@@ -710,7 +712,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     if has_start {
         layout.push("start");
     }
-    if code_first {
+    if !addressed {
+        layout.push("code");
+    } else if code_first {
         layout.extend(["code", "address"]);
     } else {
         layout.extend(["address", "code"]);
@@ -748,6 +752,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     }
     if g.chance(40) {
         let _ = write!(addr, ", default: {}", g.rng.u8(dmin..=dmax));
+    }
+    if !addressed {
+        broadcast = None;
     }
 
     // Units, enums, flags.
@@ -1138,7 +1145,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
         framing.push_str("}\n");
     }
-    let _ = writeln!(framing, "  address: {{{addr}}}");
+    if addressed {
+        let _ = writeln!(framing, "  address: {{{addr}}}");
+    }
     let lens = |l: &[usize]| {
         l.iter()
             .map(|x| x.to_string())
@@ -1233,6 +1242,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     let pos = |x: Part| f.layout.iter().position(|y| *y == x);
     add(pos(Part::Code) < pos(Part::Address), "code before address");
+    add(!f.has_address(), "no address");
     add(f.address.host.is_some(), "host address");
     add(f.address.broadcast.is_some(), "broadcast address");
     add(

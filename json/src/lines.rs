@@ -460,13 +460,19 @@ impl Printer {
                 });
             }
         }
+        let addressed = p.framing.has_address();
         let heads = [Direction::Request, Direction::Response].map(|d| {
             (0..=u8::MAX)
                 .map(|address| {
-                    format!(
-                        ",\"protocol\":{protocol},\"direction\":{},\"address\":{address}",
+                    let head = format!(
+                        ",\"protocol\":{protocol},\"direction\":{}",
                         quote(d.as_str())
-                    )
+                    );
+                    if addressed {
+                        format!("{head},\"address\":{address}")
+                    } else {
+                        head
+                    }
                 })
                 .collect()
         });

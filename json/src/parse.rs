@@ -37,6 +37,9 @@ impl Parsed {
         let m = p.message(self.message);
         let direction = self.message.direction;
         let address = self.address;
+        if !p.framing.has_address() && address != 0 {
+            return Err(EncodeError::Unaddressed { address }.to_string());
+        }
         if !busspec_model::interp::address_allowed(p, address) {
             let a = &p.framing.address;
             return Err(EncodeError::BadAddress {
@@ -180,7 +183,8 @@ struct Input {
     protocol: Option<String>,
     #[serde(default)]
     direction: Option<String>,
-    address: serde_json::Number,
+    #[serde(default)]
+    address: Option<serde_json::Number>,
     #[serde(default)]
     code: Option<String>,
     message: String,
@@ -238,9 +242,14 @@ pub fn parse_line(p: &Spec, line: &str) -> Result<Parsed, String> {
             ))
         }
     };
-    let address = match input.address.as_u64().map(u8::try_from) {
-        Some(Ok(a)) => a,
-        _ => return Err(format!("address {} is not a byte (0..=255)", input.address)),
+    // A protocol whose frames carry no address prints none; a line may still give 0.
+    let address = match (&input.address, p.framing.has_address()) {
+        (Some(n), _) => match n.as_u64().map(u8::try_from) {
+            Some(Ok(a)) => a,
+            _ => return Err(format!("address {n} is not a byte (0..=255)")),
+        },
+        (None, false) => 0,
+        (None, true) => return Err("missing field `address`".to_owned()),
     };
     let r = find_message(p, &input.message, direction)?;
     let m = p.message(r);

@@ -151,22 +151,28 @@ fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, J
     (name.to_owned(), json)
 }
 
-/// A frame's keys, in the contract's order, after `"offset"` (if any).
+/// A frame's keys, in the contract's order, after `"offset"` (if any); no `"address"` where
+/// the protocol's frames carry none.
 fn frame_keys(
     p: &Spec,
     r: MessageRef,
     address: u8,
     fields: Vec<(String, Json)>,
-) -> [(&'static str, Json); 6] {
+) -> Vec<(&'static str, Json)> {
     let m = p.message(r);
-    [
+    let mut keys = vec![
         ("protocol", Json::Str(p.name.clone())),
         ("direction", Json::Str(r.direction.as_str().to_owned())),
-        ("address", num(address)),
+    ];
+    if p.framing.has_address() {
+        keys.push(("address", num(address)));
+    }
+    keys.extend([
         ("code", Json::Str(m.code_hex())),
         ("message", Json::Str(m.name.clone())),
         ("fields", Json::Fields(fields)),
-    ]
+    ]);
+    keys
 }
 
 fn line(
@@ -219,7 +225,7 @@ pub fn frame_line(p: &Spec, frame: &Frame, offset: Option<u64>) -> String {
 /// them (`busspec_model::stream::decode_lenient`).
 pub fn lenient_line<S: AsRef<str>>(p: &Spec, frame: &Frame, violations: &[S]) -> String {
     let mut obj: Vec<(&'static str, Json)> =
-        frame_keys(p, frame.message, frame.address, frame_fields(p, frame)).into();
+        frame_keys(p, frame.message, frame.address, frame_fields(p, frame));
     obj.push((
         "violations",
         Json::List(

@@ -715,7 +715,9 @@ impl<'a> Differ<'a> {
             );
         }
         let (oa, na) = (&o.address, &n.address);
-        if (oa.min, oa.max) != (na.min, na.max) {
+        // Addresses that appear or vanish are a change of layout, reported above.
+        let both = o.has_address() && n.has_address();
+        if both && (oa.min, oa.max) != (na.min, na.max) {
             let text = format!(
                 "device addresses: 0x{:02X}..=0x{:02X} → 0x{:02X}..=0x{:02X}",
                 oa.min, oa.max, na.min, na.max
@@ -732,7 +734,7 @@ impl<'a> Differ<'a> {
             ("broadcast", oa.broadcast, na.broadcast),
             ("default", oa.default, na.default),
         ] {
-            if a == b {
+            if a == b || !both {
                 continue;
             }
             let text = format!("{k} address: {} → {}", show(a), show(b));

@@ -318,6 +318,10 @@ pub enum EncodeError {
         min: u8,
         max: u8,
     },
+    /// An address other than 0 for a protocol whose frames carry none.
+    Unaddressed {
+        address: u8,
+    },
     /// The command does not accept the broadcast address.
     BroadcastNotAccepted {
         message: String,
@@ -393,6 +397,10 @@ impl fmt::Display for EncodeError {
             EncodeError::BadAddress { address, min, max } => write!(
                 f,
                 "address 0x{address:02X} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
+            ),
+            EncodeError::Unaddressed { address } => write!(
+                f,
+                "the protocol's frames carry no address: give address 0, not 0x{address:02X}"
             ),
             EncodeError::BroadcastNotAccepted { message, address } => write!(
                 f,
@@ -920,7 +928,7 @@ fn decide<'p>(
         return match misfit(p, m, wire) {
             None => Ok(Frame {
                 message: r,
-                address: wire.get(m.layout.address).copied().unwrap_or(0),
+                address: address_in(m.layout, wire),
                 values: values_of(p, m, wire, std::mem::take(&mut spare.values)),
             }),
             Some(misfit) => Err(misfit.error(m)),
@@ -1017,7 +1025,7 @@ fn decide<'p>(
             let o = m.layout;
             Ok(Frame {
                 message,
-                address: wire.get(o.address).copied().unwrap_or(0),
+                address: address_in(o, wire),
                 values: values_of(p, m, wire, std::mem::take(&mut spare.values)),
             })
         }
@@ -1064,7 +1072,7 @@ pub fn decode_as<'p>(
     let values = decode_fields(p, m, wire)?;
     Ok(Frame {
         message: r,
-        address: wire[o.address],
+        address: address_in(o, wire),
         values,
     })
 }
@@ -1244,8 +1252,16 @@ pub fn element_count(p: &Protocol, m: &Message, wire: &[u8]) -> Result<usize, De
     Ok(n)
 }
 
-/// Refuses an address no frame may carry ([`address_allowed`]).
-fn check_address(p: &Protocol, at: usize, wire: &[u8]) -> Result<(), DecodeError> {
+/// The address a frame carries at `o.address`: 0 where frames carry none (or the frame is too
+/// short to hold it).
+fn address_in(o: crate::ir::FrameLayout, wire: &[u8]) -> u8 {
+    o.address.and_then(|at| wire.get(at).copied()).unwrap_or(0)
+}
+
+/// Refuses an address no frame may carry ([`address_allowed`]); nothing where frames carry
+/// none.
+fn check_address(p: &Protocol, at: Option<usize>, wire: &[u8]) -> Result<(), DecodeError> {
+    let Some(at) = at else { return Ok(()) };
     let found = wire.get(at).copied().unwrap_or(0);
     if address_allowed(p, found) {
         return Ok(());
@@ -1422,7 +1438,7 @@ fn payload_of<'w>(p: &Protocol, m: &Message, wire: &'w [u8]) -> &'w [u8] {
 /// constants, fields that follow or equal others, repeated elements and ranges.
 fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let o = m.layout;
-    let address = wire.get(o.address).copied().unwrap_or(0);
+    let address = address_in(o, wire);
     if broadcast_refused(p, m, address) {
         return Some(Misfit::Broadcast { address });
     }
@@ -1683,6 +1699,9 @@ pub fn encode(
 ) -> Result<Vec<u8>, EncodeError> {
     let m = p.message(r);
     let a = &p.framing.address;
+    if !p.framing.has_address() && address != 0 {
+        return Err(EncodeError::Unaddressed { address });
+    }
     if !address_allowed(p, address) {
         return Err(EncodeError::BadAddress {
             address,
@@ -1781,7 +1800,9 @@ pub fn encode(
             out[at + i] = *s;
         }
     }
-    out[o.address] = address;
+    if let Some(at) = o.address {
+        out[at] = address;
+    }
     out[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
     if let (Some(l), Some(at)) = (&p.framing.length, o.length) {
         let v = length_for(p, m.direction, out.len()).unwrap_or(0);

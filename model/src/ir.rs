@@ -59,6 +59,9 @@ pub struct Framing {
     pub sync: Vec<u8>,
     /// The length field, where the framing has one.
     pub length: Option<LengthField>,
+    /// The addresses a frame may carry. A protocol whose frames carry none (the layout has no
+    /// `address`) has the one device address 0, which no frame shows: see
+    /// [`Framing::has_address`].
     pub address: Address,
     pub request: DirectionFraming,
     pub response: DirectionFraming,
@@ -115,7 +118,8 @@ pub struct FrameLayout {
     pub start: Option<usize>,
     /// `None` when the framing has no length field.
     pub length: Option<usize>,
-    pub address: usize,
+    /// `None` when the layout has no address.
+    pub address: Option<usize>,
     pub code: usize,
     pub payload: usize,
     pub checksum: usize,
@@ -130,6 +134,11 @@ impl Framing {
     /// the longest.
     pub fn head(&self, code_len: usize) -> FrameLayout {
         self.heads[code_len.min(self.heads.len() - 1)]
+    }
+
+    /// Whether frames carry an address (the layout has `address`).
+    pub fn has_address(&self) -> bool {
+        self.layout.contains(&Part::Address)
     }
 
     /// Bytes in a frame besides code and payload: start, address, checksum.

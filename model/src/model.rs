@@ -188,7 +188,9 @@ pub struct Framing {
     pub start: Option<StartBytes>,
     #[serde(default)]
     pub length: Option<LengthField>,
-    pub address: Address,
+    /// Required iff the layout has `address`.
+    #[serde(default)]
+    pub address: Option<Address>,
     pub request: DirectionFraming,
     pub response: DirectionFraming,
     pub checksum: Checksum,

@@ -799,7 +799,7 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
     let mut out = Vec::new();
     if !interp::address_allowed(p, frame.address) {
         out.push(DecodeError::BadAddress {
-            offset: at.address,
+            offset: at.address.unwrap_or(0),
             found: frame.address,
             min: a.min,
             max: a.max,

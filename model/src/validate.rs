@@ -732,7 +732,6 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     let path = "framing";
     let count = |p: Part| f.layout.iter().filter(|x| **x == p).count();
     for (p, name) in [
-        (Part::Address, "address"),
         (Part::Code, "code"),
         (Part::Payload, "payload"),
         (Part::Checksum, "checksum"),
@@ -749,6 +748,9 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     }
     if count(Part::Length) > 1 {
         sink.error("framing.layout", "layout holds `length` more than once");
+    }
+    if count(Part::Address) > 1 {
+        sink.error("framing.layout", "layout holds `address` more than once");
     }
     let length = match (count(Part::Length), &f.length) {
         (1, Some(l)) => {
@@ -846,8 +848,38 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         }
         _ => None,
     };
-    let a = &f.address;
     let apath = join(path, "address");
+    let a = match (count(Part::Address), &f.address) {
+        (0, None) => {
+            // Frames carry no address: the one device is 0, which no frame shows.
+            &model::Address {
+                host: None,
+                devices: model::Range { min: 0, max: 0 },
+                broadcast: None,
+                default: None,
+            }
+        }
+        (0, Some(a)) => {
+            sink.error(
+                apath.clone(),
+                "addresses are described but the layout has no `address`",
+            );
+            a
+        }
+        (_, Some(a)) => a,
+        (_, None) => {
+            sink.error(
+                apath.clone(),
+                "layout has `address` but no `address` section describes the device addresses",
+            );
+            &model::Address {
+                host: None,
+                devices: model::Range { min: 0, max: 0 },
+                broadcast: None,
+                default: None,
+            }
+        }
+    };
     let min = u8_of(a.devices.min, &join(&apath, "devices.min"), "address", sink);
     let max = u8_of(a.devices.max, &join(&apath, "devices.max"), "address", sink);
     if min > max {
@@ -974,7 +1006,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         let head = framing.head(0);
         let at = match part {
             Part::Start => head.start,
-            Part::Address => Some(head.address),
+            Part::Address => head.address,
             Part::Length => head.length,
             Part::Code => Some(head.code),
             Part::Payload | Part::Checksum => None,
@@ -997,7 +1029,7 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
     let mut o = FrameLayout {
         start: None,
         length: None,
-        address: 0,
+        address: None,
         code: 0,
         payload: 0,
         checksum: 0,
@@ -1015,7 +1047,7 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
                 at += framing.length.as_ref().map_or(0, |l| l.width);
             }
             Part::Address => {
-                o.address = at;
+                o.address = Some(at);
                 at += 1;
             }
             Part::Code => {

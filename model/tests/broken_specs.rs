@@ -17,6 +17,19 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- frames without an address (made from valid/minimal.yaml)
+    (
+        "address_without_layout_part",
+        &[("framing.address", "addresses are described but the layout has no `address`")],
+    ),
+    (
+        "address_part_without_addresses",
+        &[("framing.address", "layout has `address` but no `address` section")],
+    ),
+    (
+        "address_twice",
+        &[("framing.layout", "layout holds `address` more than once")],
+    ),
     // ---- the variable-length language (fixtures made from valid/minimal_variable.yaml)
     (
         "length_width_too_wide",

@@ -283,3 +283,43 @@ fn any_two_specs_diff_without_panicking_and_each_against_itself_is_empty() {
         }
     }
 }
+
+/// Frames that stop carrying an address (or start to) change the layout (and so every frame's
+/// length), not also a device range and a host address.
+#[test]
+fn an_address_dropped_from_the_layout_is_one_layout_change() {
+    let (path, base) = fixture("base.yaml");
+    let text = std::fs::read_to_string(&path).expect("base.yaml");
+    let without = text
+        .replace(
+            "layout: [start, address, code, payload, checksum]",
+            "layout: [start, code, payload, checksum]",
+        )
+        .replace(
+            "  address:\n    host: 0x20\n    devices: {min: 0x21, max: 0x40}\n",
+            "",
+        );
+    assert_ne!(without, text);
+    let unaddressed =
+        busspec_model::load_str("unaddressed.yaml", &without).unwrap_or_else(|d| panic!("{d}"));
+    assert!(!unaddressed.framing.has_address());
+    for (a, b) in [(&base, &unaddressed), (&unaddressed, &base)] {
+        let got = diff::diff(a, b);
+        let s = summary(&got);
+        assert_eq!(
+            s[0],
+            (Wire, "framing_changed", "framing.layout"),
+            "{got:#?}"
+        );
+        assert!(
+            s[1..]
+                .iter()
+                .all(
+                    |c| *c == (Wire, "frame_length_changed", c.2) && c.2.starts_with("commands.")
+                        || c.2.starts_with("responses.")
+                ),
+            "{got:#?}"
+        );
+        assert!(!s.iter().any(|c| c.2.contains("address")), "{got:#?}");
+    }
+}

@@ -97,6 +97,8 @@ pub type DecodeResult<T> = Result<T, DecodeError>;
 pub struct Frame {
     /// Where the start byte is and what it must be, if the protocol has one.
     pub start: Option<(usize, u8)>,
+    /// Whether frames carry an address. Where they do not, the one device address is 0.
+    pub addressed: bool,
     /// The device addresses, inclusive.
     pub devices: (u8, u8),
     /// Addresses a frame may carry besides the devices': broadcast and host.
@@ -139,7 +141,7 @@ pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]
 /// The checks every frame of a direction passes before its code is looked at, in this order:
 /// no longer than `max`, the start byte, at least `min` bytes, the checksum (`checksum` of the
 /// bytes before it, compared as an unsigned integer), the address (at `address_at`). Returns
-/// the address.
+/// the address (0 where frames carry none; `address_at` is then not looked at).
 #[inline(always)]
 pub fn check_frame(
     frame: &[u8],
@@ -160,7 +162,7 @@ pub fn check_frame(
             }
         }
     }
-    if len < min || min <= address_at || min < f.checksum_len {
+    if len < min || (f.addressed && min <= address_at) || min < f.checksum_len {
         return Err(DecodeError::Truncated {
             needed: min,
             found: len,
@@ -175,6 +177,9 @@ pub fn check_frame(
             found,
             width: f.checksum_len as u8,
         });
+    }
+    if !f.addressed {
+        return Ok(0);
     }
     let address = frame[address_at];
     if !f.address_ok(address) {
@@ -688,9 +693,13 @@ pub fn same<T: Wire + PartialEq>(
     Ok(())
 }
 
-/// The address an encoder may write: a device's, the broadcast or the host address.
+/// The address an encoder may write: a device's, the broadcast or the host address; 0 alone
+/// where frames carry none.
 #[inline(always)]
 pub fn encode_address(address: u8, f: &Frame) -> Result<(), EncodeError> {
+    if !f.addressed && address != 0 {
+        return Err(EncodeError::Unaddressed { address });
+    }
     if f.address_ok(address) {
         return Ok(());
     }
@@ -1102,6 +1111,7 @@ mod lang_tests {
     fn found(frame: &[u8], n: usize, be: bool) -> u32 {
         let f = Frame {
             start: None,
+            addressed: true,
             devices: (0, 0),
             broadcast: None,
             host: None,

@@ -673,6 +673,8 @@ pub enum EncodeError {
     /// The address is outside the device range `min..=max` and is neither the broadcast
     /// address nor the host address (where the protocol has them).
     BadAddress { address: u8, min: u8, max: u8 },
+    /// An address other than 0 for a protocol whose frames carry none.
+    Unaddressed { address: u8 },
     /// The command does not accept the broadcast address `address`, says the spec.
     BroadcastNotAccepted { message: &'static str, address: u8 },
 }
@@ -701,6 +703,10 @@ impl fmt::Display for EncodeError {
             EncodeError::BadAddress { address, min, max } => write!(
                 f,
                 "address 0x{address:02X} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
+            ),
+            EncodeError::Unaddressed { address } => write!(
+                f,
+                "the protocol's frames carry no address: give address 0, not 0x{address:02X}"
             ),
             EncodeError::BroadcastNotAccepted { message, address } => write!(
                 f,

@@ -45,8 +45,8 @@ pub fn random_frame(p: &Protocol, m: &Message, rng: &mut fastrand::Rng) -> Vec<u
         }
     }
     f[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
-    if rng.u8(..) < 224 {
-        f[o.address] = rng.u8(p.framing.address.min..=p.framing.address.max);
+    if let (Some(at), true) = (o.address, rng.u8(..) < 224) {
+        f[at] = rng.u8(p.framing.address.min..=p.framing.address.max);
     }
     // Small payload values are where constants, enums and specials live.
     for b in &mut f[o.payload..o.payload + m.payload_len] {

@@ -51,6 +51,7 @@ pub mod mini {
     /// What every frame shares, for the runtime's frame checks.
     const FRAME: rt::Frame = rt::Frame {
         start: rt::Some((0, 0xAA)),
+        addressed: true,
         devices: (0x21, 0x40),
         broadcast: BROADCAST_ADDRESS,
         host: HOST_ADDRESS,

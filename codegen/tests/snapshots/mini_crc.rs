@@ -51,6 +51,7 @@ pub mod mini_crc {
     /// What every frame shares, for the runtime's frame checks.
     const FRAME: rt::Frame = rt::Frame {
         start: rt::None,
+        addressed: true,
         devices: (0x01, 0x1E),
         broadcast: BROADCAST_ADDRESS,
         host: HOST_ADDRESS,

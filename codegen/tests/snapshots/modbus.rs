@@ -49,6 +49,7 @@ pub mod modbus {
     /// What every frame shares, for the runtime's frame checks.
     const FRAME: rt::Frame = rt::Frame {
         start: rt::None,
+        addressed: true,
         devices: (0x01, 0xF7),
         broadcast: BROADCAST_ADDRESS,
         host: HOST_ADDRESS,

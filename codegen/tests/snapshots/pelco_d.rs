@@ -51,6 +51,7 @@ pub mod pelco_d2 {
     /// What every frame shares, for the runtime's frame checks.
     const FRAME: rt::Frame = rt::Frame {
         start: rt::Some((0, 0xFF)),
+        addressed: true,
         devices: (0x01, 0xFF),
         broadcast: BROADCAST_ADDRESS,
         host: HOST_ADDRESS,

@@ -51,6 +51,7 @@ pub mod syncy {
     /// What every frame shares, for the runtime's frame checks.
     const FRAME: rt::Frame = rt::Frame {
         start: rt::Some((0, 0xFF)),
+        addressed: true,
         devices: (0x00, 0xFD),
         broadcast: BROADCAST_ADDRESS,
         host: HOST_ADDRESS,

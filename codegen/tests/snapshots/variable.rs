@@ -51,6 +51,7 @@ pub mod vario {
     /// What every frame shares, for the runtime's frame checks.
     const FRAME: rt::Frame = rt::Frame {
         start: rt::Some((0, 0xA5)),
+        addressed: true,
         devices: (0x01, 0x10),
         broadcast: BROADCAST_ADDRESS,
         host: HOST_ADDRESS,

@@ -424,7 +424,9 @@ enum Refusal {
 impl Refusal {
     fn of_encode(e: &EncodeError) -> Option<Refusal> {
         Some(match *e {
-            EncodeError::BadAddress { address, .. } => Refusal::Address(address),
+            EncodeError::BadAddress { address, .. } | EncodeError::Unaddressed { address } => {
+                Refusal::Address(address)
+            }
             EncodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
                 message: message.to_owned(),
                 address,
@@ -446,7 +448,8 @@ impl Refusal {
 
     fn of_interp_encode(e: &interp::EncodeError) -> Option<Refusal> {
         Some(match e {
-            interp::EncodeError::BadAddress { address, .. } => Refusal::Address(*address),
+            interp::EncodeError::BadAddress { address, .. }
+            | interp::EncodeError::Unaddressed { address } => Refusal::Address(*address),
             interp::EncodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
                 message: message.clone(),
                 address: *address,

@@ -184,14 +184,16 @@ pub fn dictionary(p: &Protocol) -> String {
     for d in [Direction::Request, Direction::Response] {
         for m in p.messages(d) {
             let o = m.layout;
-            let len = (o.code + m.code.len()).max(o.address + 1);
+            let len = (o.code + m.code.len()).max(o.address.map_or(0, |a| a + 1));
             let mut prefix = vec![0u8; len];
             if let Some(at) = o.start {
                 for (i, s) in p.framing.sync.iter().enumerate() {
                     prefix[at + i] = *s;
                 }
             }
-            prefix[o.address] = p.framing.address.min;
+            if let Some(at) = o.address {
+                prefix[at] = p.framing.address.min;
+            }
             prefix[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
             for (kind, bytes) in [("frame", prefix), ("code", m.code.clone())] {
                 // A message without a code (a Dynamixel status packet) has no code entry:
