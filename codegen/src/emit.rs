@@ -567,6 +567,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         _ => quote!(rt::None),
     };
     let checksum_len = usize_lit(p.framing.checksum.len());
+    let end = p.framing.end.iter().map(|b| hex_u8(*b));
     let addressed = p.framing.has_address();
     let checksum_be = p.framing.checksum.byte_order == ByteOrder::Big;
     let baud = p.serial.baud;
@@ -634,6 +635,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
             host: HOST_ADDRESS,
             checksum_len: #checksum_len,
             checksum_be: #checksum_be,
+            end: &[#(#end),*],
         };
     }
 }
@@ -1132,9 +1134,16 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let n = usize_lit(p.framing.checksum.len());
         let be = p.framing.checksum.byte_order == ByteOrder::Big;
         let sum = frame_sum(p);
-        quote! {
-            rt::seal(buf, len, #sum, #n, #be);
-            rt::Ok(len)
+        if p.framing.end.is_empty() {
+            quote! {
+                rt::seal(buf, len, #sum, #n, #be);
+                rt::Ok(len)
+            }
+        } else {
+            quote! {
+                rt::seal_end(buf, len, #sum, #n, #be, FRAME.end);
+                rt::Ok(len)
+            }
         }
     };
     quote! {
@@ -1715,10 +1724,12 @@ fn encode_end(
 /// fixed-size array, or once after it. A sum-8 in each arm is inlined and folds the constant
 /// header bytes (UB2: 36 instructions per frame against 58 after the match); a table CRC in
 /// each arm is a call the inliner refuses in a match this large, and costs twice as much as
-/// one call site after the match, which it inlines (SD: 138 against 68).
+/// one call site after the match, which it inlines (SD: 138 against 68). Only where the frame
+/// ends in its checksum (no end bytes after it).
 fn checksum_in_arms(p: &Protocol) -> bool {
     matches!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8)
         && p.framing.checksum.covers_from == 0
+        && p.framing.end.is_empty()
 }
 
 /// The checksum of a frame's bytes before it, as the runtime's frame checks take it: over the
@@ -2074,7 +2085,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         .max()
         .unwrap_or(1);
     let msgs = p.messages(d);
-    let clen = p.framing.checksum.len();
+    let clen = p.framing.trailer_len();
     let min_len = msgs.iter().map(|m| len_range(m).0).min().unwrap_or(0);
     let max_len = p.max_frame_len(d);
     let code_at = |l: usize| p.framing.head(l).code;
@@ -2634,7 +2645,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     } else {
         quote!(response)
     };
-    let ck_len = usize_lit(p.framing.checksum.len());
+    let ck_len = usize_lit(p.framing.trailer_len());
     let sum = frame_sum(p);
     let doc_text = format!(
         "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",

@@ -99,6 +99,17 @@ fn unaddressed_spec_generates_its_snapshot() {
     );
 }
 
+/// Fixed-length frames that end in a stop byte after the checksum (FT1.2, M-Bus short frames):
+/// the encoder writes the checksum and then the end byte, decode checks the end byte before the
+/// checksum (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn end_byte_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/ft12_fixed.yaml",
+        "ft12_fixed.rs",
+    );
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

@@ -19,7 +19,6 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use busspec_fuzz_bodies::events::{self, Seen};
 use busspec_fuzz_bodies::oracle::{interp_values, visit_values, Values};
 use busspec_fuzz_bodies::{seen, stream_events};
-use busspec_model::checksum;
 use busspec_model::interp::{self, DecodeError as InterpError, Raw, Value};
 use busspec_model::ir::{self, Count, Direction, MessageRef};
 use busspec_runtime::stream::Direction as StreamDirection;
@@ -152,6 +151,7 @@ fn class(g: &DecodeError) -> &'static str {
     match g {
         DecodeError::Truncated { .. } => "truncated",
         DecodeError::BadStart { .. } => "bad start",
+        DecodeError::BadEnd { .. } => "bad end",
         DecodeError::ChecksumMismatch { .. } => "checksum",
         DecodeError::UnknownCommand { .. } | DecodeError::UnknownResponse { .. } => "unknown code",
         DecodeError::WrongLength { .. } => "wrong length",
@@ -175,6 +175,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
         Some(e) => match e {
             InterpError::Truncated { .. } => "truncated",
             InterpError::BadStart { .. } => "bad start",
+            InterpError::BadEnd { .. } => "bad end",
             InterpError::ChecksumMismatch { .. } => "checksum",
             InterpError::UnknownCode { .. } => "unknown code",
             InterpError::WrongLength { .. } => "wrong length",
@@ -839,16 +840,9 @@ pub fn lenient(p: &ir::Protocol) -> ir::Protocol {
     p
 }
 
-/// `frame` with its checksum recomputed over what it covers.
+/// `frame` with its checksum recomputed over what it covers (and its end bytes).
 pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
-    let c = &p.framing.checksum;
-    let n = c.len();
-    if frame.len() < n {
-        return;
-    }
-    let at = frame.len() - n;
-    let v = checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
-    interp::write_uint(v, &mut frame[at..], c.byte_order);
+    interp::reseal(p, frame);
 }
 
 /// `frame` with its length field set to what its length gives, where the framing has one.
@@ -901,7 +895,7 @@ fn lie_about_count(p: &ir::Protocol, r: MessageRef, frame: &mut [u8], rng: &mut 
 /// to three bytes before its checksum (its length field kept, or made to agree), each with its
 /// checksum as it was and recomputed.
 pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
-    let clen = p.framing.checksum.len();
+    let clen = p.framing.trailer_len();
     let mut out = Vec::new();
     for i in 0..wire.len() {
         for f in [|b: u8| b ^ 0x01, |b: u8| b ^ 0x80, |_| 0x00, |_| 0xFF] {

@@ -724,6 +724,16 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         layout.insert(at, "length");
     }
     layout.extend(["payload", "checksum"]);
+    // Constant bytes after the checksum (M-Bus's 16, a line end).
+    let end: Vec<u8> = if g.chance(15) {
+        let n = *g.pick(&[1, 1, 2, 3]);
+        (0..n).map(|_| g.rng.u8(..)).collect()
+    } else {
+        Vec::new()
+    };
+    if !end.is_empty() {
+        layout.push("end");
+    }
     let (csum, csum_len) = checksum_yaml(&mut g);
 
     // Address.
@@ -1131,6 +1141,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
                 .min()
                 .unwrap_or(0),
             "payload" => qlo.min(slo),
+            "end" => end.len(),
             _ => csum_len,
         };
         let least: usize = parts.iter().map(|p| size(p)).sum();
@@ -1144,6 +1155,16 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             let _ = write!(framing, ", adjust: {adjust}");
         }
         framing.push_str("}\n");
+    }
+    match end.len() {
+        0 => {}
+        1 => {
+            let _ = writeln!(framing, "  end: {:#04X}", end[0]);
+        }
+        _ => {
+            let items: Vec<String> = end.iter().map(|b| format!("{b:#04X}")).collect();
+            let _ = writeln!(framing, "  end: [{}]", items.join(", "));
+        }
     }
     if addressed {
         let _ = writeln!(framing, "  address: {{{addr}}}");
@@ -1243,6 +1264,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     let pos = |x: Part| f.layout.iter().position(|y| *y == x);
     add(pos(Part::Code) < pos(Part::Address), "code before address");
     add(!f.has_address(), "no address");
+    add(!f.end.is_empty(), "end bytes");
     add(f.address.host.is_some(), "host address");
     add(f.address.broadcast.is_some(), "broadcast address");
     add(

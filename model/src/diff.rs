@@ -639,20 +639,17 @@ impl<'a> Differ<'a> {
             );
         }
         if o.sync != n.sync && o.start == n.start {
-            let show = |s: &[u8]| {
-                if s.is_empty() {
-                    "none".to_owned()
-                } else {
-                    s.iter()
-                        .map(|b| format!("{b:02X}"))
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                }
-            };
             self.wire(
                 "framing_changed",
                 "framing.start",
-                format!("sync bytes: {} → {}", show(&o.sync), show(&n.sync)),
+                format!("sync bytes: {} → {}", bytes(&o.sync), bytes(&n.sync)),
+            );
+        }
+        if o.end != n.end {
+            self.wire(
+                "framing_changed",
+                "framing.end",
+                format!("end bytes: {} → {}", bytes(&o.end), bytes(&n.end)),
             );
         }
         if o.length != n.length {
@@ -1658,6 +1655,17 @@ fn key(m: &Message) -> (Vec<u8>, Vec<(usize, u64)>) {
         .filter_map(|f| f.constant.map(|c| (f.offset, c)))
         .collect();
     (m.code.clone(), constants)
+}
+
+/// Bytes in hex, `none` for none (sync and end bytes).
+fn bytes(s: &[u8]) -> String {
+    if s.is_empty() {
+        return "none".to_owned();
+    }
+    s.iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 #[cfg(test)]

@@ -444,6 +444,15 @@ pub fn render(p: &Protocol, source: &str) -> String {
                     )
                 },
             ),
+            Part::End => (
+                "end".to_owned(),
+                f.end.len().to_string(),
+                f.end
+                    .iter()
+                    .map(|b| format!("0x{b:02X}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+            ),
         };
         let _ = writeln!(o, "| {} | {} | {} |", row.0, row.1, row.2);
     }

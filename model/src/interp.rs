@@ -72,6 +72,12 @@ pub enum DecodeError {
         expected: u8,
         found: u8,
     },
+    /// A byte of the end bytes after the checksum is not what the spec says.
+    BadEnd {
+        offset: usize,
+        expected: u8,
+        found: u8,
+    },
     ChecksumMismatch {
         offset: usize,
         expected: u64,
@@ -198,6 +204,9 @@ impl fmt::Display for DecodeError {
             }
             DecodeError::BadStart { expected, found } => {
                 write!(f, "bad start byte at offset 0: expected 0x{expected:02X}, found 0x{found:02X}")
+            }
+            DecodeError::BadEnd { offset, expected, found } => {
+                write!(f, "bad end byte at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}")
             }
             DecodeError::ChecksumMismatch { offset, expected, found, width } => write!(
                 f,
@@ -750,6 +759,7 @@ fn decode_in<'p>(
             found: wire.len(),
         });
     }
+    check_end(p, wire)?;
     check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     check_address(p, first.address, wire)?;
     // Decoded both ways where the directions' length fields differ (each after a code of its
@@ -778,7 +788,7 @@ fn decode_in<'p>(
         }
     };
 
-    let clen = p.framing.checksum.len();
+    let clen = p.framing.trailer_len();
     let code_fits = |r: &MessageRef| {
         let m = p.message(*r);
         let o = m.layout;
@@ -850,7 +860,7 @@ fn decode_in<'p>(
             .flat_map(|d| p.framing.direction(*d).code_lengths.iter().copied())
             .max()
             .unwrap_or(1);
-        let end = (o.code + longest).min(wire.len().saturating_sub(p.framing.checksum.len()));
+        let end = (o.code + longest).min(wire.len().saturating_sub(p.framing.trailer_len()));
         let code = wire.get(o.code..end.max(o.code)).unwrap_or(&[]).to_vec();
         return Err(DecodeError::UnknownCode {
             offset: o.code,
@@ -1065,6 +1075,7 @@ pub fn decode_as<'p>(
             direction: Some(m.direction),
         });
     }
+    check_end(p, wire)?;
     check_checksum(p, None, wire)?;
     check_address(p, o.address, wire)?;
     check_length_field(p, &[m.direction], wire)?;
@@ -1085,9 +1096,9 @@ fn check_checksum(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    let Some(at) = wire.len().checked_sub(c.len()) else {
+    let Some(at) = wire.len().checked_sub(p.framing.trailer_len()) else {
         return Err(DecodeError::Truncated {
-            needed: c.len(),
+            needed: p.framing.trailer_len(),
             found: wire.len(),
         });
     };
@@ -1096,7 +1107,7 @@ fn check_checksum(
         Some(prepared) => prepared.compute(covered),
         None => checksum::compute(&c.algorithm, covered),
     };
-    let found = read_uint(&wire[at..], c.byte_order);
+    let found = read_uint(&wire[at..at + c.len()], c.byte_order);
     if expected != found {
         return Err(DecodeError::ChecksumMismatch {
             offset: at,
@@ -1104,6 +1115,36 @@ fn check_checksum(
             found,
             width: c.width,
         });
+    }
+    Ok(())
+}
+
+/// Writes into `frame` (of any message's length) its checksum, over the bytes it covers, and
+/// the end bytes after it; nothing into a frame shorter than those.
+pub fn reseal(p: &Protocol, frame: &mut [u8]) {
+    let c = &p.framing.checksum;
+    let Some(at) = frame.len().checked_sub(p.framing.trailer_len()) else {
+        return;
+    };
+    let sum = checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
+    let (sum_at, end) = frame[at..].split_at_mut(c.len());
+    write_uint(sum, sum_at, c.byte_order);
+    end.copy_from_slice(&p.framing.end);
+}
+
+/// Refuses a frame that does not end in the end bytes (the first that differs); the frame is
+/// at least as long as the shortest.
+fn check_end(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
+    let end = &p.framing.end;
+    let from = wire.len().saturating_sub(end.len());
+    for (i, (&found, &expected)) in wire[from..].iter().zip(end).enumerate() {
+        if found != expected {
+            return Err(DecodeError::BadEnd {
+                offset: from + i,
+                expected,
+                found,
+            });
+        }
     }
     Ok(())
 }
@@ -1430,7 +1471,7 @@ fn fields_of<'p>(p: &Protocol, m: &'p Message, wire: &[u8]) -> Result<Vec<Value<
 
 /// A variable message's payload runs to the checksum.
 fn payload_of<'w>(p: &Protocol, m: &Message, wire: &'w [u8]) -> &'w [u8] {
-    let end = wire.len().saturating_sub(p.framing.checksum.len());
+    let end = wire.len().saturating_sub(p.framing.trailer_len());
     wire.get(m.layout.payload..end).unwrap_or(&[])
 }
 
@@ -1974,10 +2015,7 @@ pub fn encode(
             word as i64
         });
     }
-    let c = &p.framing.checksum;
-    let at = out.len() - c.len();
-    let sum = checksum::compute(&c.algorithm, out.get(c.covers_from..at).unwrap_or(&[]));
-    write_uint(sum, &mut out[at..], c.byte_order);
+    reseal(p, &mut out);
     if m.is_variable() {
         // A count field given a value, or one that follows another, may disagree with the
         // list: what encode writes, decode must accept.
@@ -1995,7 +2033,7 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
     let mut wire = printed.to_vec();
     let o = m.layout;
     let flip = |order: ByteOrder| order != p.printed_byte_order;
-    let end = wire.len().saturating_sub(p.framing.checksum.len());
+    let end = wire.len().saturating_sub(p.framing.trailer_len());
     for f in &m.fields {
         if f.is_ascii() || f.width < 2 || !flip(f.byte_order) {
             continue;

@@ -57,6 +57,9 @@ pub struct Framing {
     pub start: Option<u8>,
     /// Every start byte, in order (empty without `start`): `FF FF` for Dynamixel.
     pub sync: Vec<u8>,
+    /// The bytes that end every frame after its checksum, in order (empty without `end`):
+    /// `16` for an M-Bus frame.
+    pub end: Vec<u8>,
     /// The length field, where the framing has one.
     pub length: Option<LengthField>,
     /// The addresses a frame may carry. A protocol whose frames carry none (the layout has no
@@ -136,6 +139,11 @@ impl Framing {
         self.heads[code_len.min(self.heads.len() - 1)]
     }
 
+    /// Bytes after the payload: the checksum and the end bytes.
+    pub fn trailer_len(&self) -> usize {
+        self.checksum.len() + self.end.len()
+    }
+
     /// Whether frames carry an address (the layout has `address`).
     pub fn has_address(&self) -> bool {
         self.layout.contains(&Part::Address)
@@ -150,6 +158,7 @@ impl Framing {
                 Part::Address => 1,
                 Part::Length => self.length.as_ref().map_or(0, |l| l.width),
                 Part::Checksum => self.checksum.len(),
+                Part::End => self.end.len(),
                 Part::Code | Part::Payload => 0,
             })
             .sum()

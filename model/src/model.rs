@@ -146,6 +146,8 @@ pub enum Part {
     Checksum,
     /// A length field (see [`LengthField`]).
     Length,
+    /// Constant bytes after the checksum that end every frame (`framing.end`).
+    End,
 }
 
 /// The start of a frame: one byte (`0xAA`) or a sync sequence (`[0xFF, 0xFF]`).
@@ -188,6 +190,9 @@ pub struct Framing {
     pub start: Option<StartBytes>,
     #[serde(default)]
     pub length: Option<LengthField>,
+    /// The bytes that end every frame, after the checksum; required iff the layout has `end`.
+    #[serde(default)]
+    pub end: Option<StartBytes>,
     /// Required iff the layout has `address`.
     #[serde(default)]
     pub address: Option<Address>,

@@ -566,6 +566,7 @@ pub fn length_value(framing: &Framing, l: &LengthField, code_len: usize, payload
             Part::Code => code_len,
             Part::Payload => payload,
             Part::Checksum => framing.checksum.len(),
+            Part::End => framing.end.len(),
         })
         .sum();
     bytes as i64 + l.adjust
@@ -725,6 +726,7 @@ fn part_name(p: Part) -> &'static str {
         Part::Code => "code",
         Part::Payload => "payload",
         Part::Checksum => "checksum",
+        Part::End => "end",
     }
 }
 
@@ -751,6 +753,9 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     }
     if count(Part::Address) > 1 {
         sink.error("framing.layout", "layout holds `address` more than once");
+    }
+    if count(Part::End) > 1 {
+        sink.error("framing.layout", "layout holds `end` more than once");
     }
     let length = match (count(Part::Length), &f.length) {
         (1, Some(l)) => {
@@ -810,12 +815,48 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         }
         _ => None,
     };
-    if f.layout.last() != Some(&Part::Checksum) {
+    let body = match f.layout.split_last() {
+        Some((Part::End, body)) => body,
+        _ => &f.layout[..],
+    };
+    if count(Part::End) == 1 && f.layout.last() != Some(&Part::End) {
         sink.error(
             "framing.layout",
-            "the checksum must be the last part of the frame: it covers every byte before it",
+            "`end` must be the last part of the frame: the bytes after the checksum",
+        );
+    } else if body.last() != Some(&Part::Checksum) {
+        sink.error(
+            "framing.layout",
+            "the checksum must be the last part of the frame, or come just before `end`: it covers every byte before it",
         );
     }
+    let end = match (count(Part::End), &f.end) {
+        (1, Some(e)) => {
+            let bytes = e.bytes();
+            if !(1..=4).contains(&bytes.len()) {
+                sink.error(
+                    "framing.end",
+                    format!("end bytes are 1 to 4 bytes, found {}", bytes.len()),
+                );
+            }
+            bytes
+                .iter()
+                .map(|&b| u8_of(b, "framing.end", "end byte", sink))
+                .collect()
+        }
+        (1, None) => {
+            sink.error("framing.end", "layout has `end` but no end byte is given");
+            Vec::new()
+        }
+        (_, Some(_)) => {
+            sink.error(
+                "framing.end",
+                "an end byte is given but the layout has no `end`",
+            );
+            Vec::new()
+        }
+        _ => Vec::new(),
+    };
     let mut sync = Vec::new();
     let start = match (count(Part::Start), &f.start) {
         (1, Some(s)) => {
@@ -986,6 +1027,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         layout: f.layout.clone(),
         start,
         sync,
+        end,
         length,
         address: Address {
             host,
@@ -1009,7 +1051,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             Part::Address => head.address,
             Part::Length => head.length,
             Part::Code => Some(head.code),
-            Part::Payload | Part::Checksum => None,
+            Part::Payload | Part::Checksum | Part::End => None,
         };
         match at {
             Some(at) if f.layout.contains(&part) => framing.checksum.covers_from = at,
@@ -1062,6 +1104,7 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
                 o.checksum = at;
                 at += framing.checksum.len();
             }
+            Part::End => at += framing.end.len(),
         }
     }
     o.len = at;

@@ -17,6 +17,23 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- end bytes after the checksum (made from valid/minimal.yaml)
+    (
+        "end_before_checksum",
+        &[("framing.layout", "`end` must be the last part of the frame")],
+    ),
+    (
+        "end_without_bytes",
+        &[("framing.end", "layout has `end` but no end byte is given")],
+    ),
+    (
+        "end_bytes_without_layout_part",
+        &[("framing.end", "an end byte is given but the layout has no `end`")],
+    ),
+    (
+        "end_too_long",
+        &[("framing.end", "end bytes are 1 to 4 bytes, found 5")],
+    ),
     // ---- frames without an address (made from valid/minimal.yaml)
     (
         "address_without_layout_part",

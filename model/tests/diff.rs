@@ -323,3 +323,32 @@ fn an_address_dropped_from_the_layout_is_one_layout_change() {
         assert!(!s.iter().any(|c| c.2.contains("address")), "{got:#?}");
     }
 }
+
+/// Another end byte is a wire-breaking change of `framing.end`, and nothing else.
+#[test]
+fn another_end_byte_is_a_framing_change() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/ft12_fixed.yaml");
+    let text = std::fs::read_to_string(&path).expect("ft12_fixed.yaml");
+    // The examples end in 16 alone: keep them out of both.
+    let head = &text[..text.find("examples:").expect("examples")];
+    let old = busspec_model::load_str("x.yaml", head).unwrap_or_else(|d| panic!("{d}"));
+    let new = busspec_model::load_str("x.yaml", &head.replace("end: 0x16", "end: [0x16, 0x0D]"))
+        .unwrap_or_else(|d| panic!("{d}"));
+    let got = diff::diff(&old, &new);
+    assert_eq!(
+        got.iter()
+            .map(|c| (c.category, c.kind, c.path.as_str(), c.text.as_str()))
+            .collect::<Vec<_>>()[0],
+        (
+            Wire,
+            "framing_changed",
+            "framing.end",
+            "end bytes: 16 → 16 0D"
+        ),
+        "{got:#?}"
+    );
+    assert!(
+        got[1..].iter().all(|c| c.kind == "frame_length_changed"),
+        "{got:#?}"
+    );
+}

@@ -104,9 +104,12 @@ pub struct Frame {
     /// Addresses a frame may carry besides the devices': broadcast and host.
     pub broadcast: Option<u8>,
     pub host: Option<u8>,
-    /// Checksum bytes at the end of the frame, and whether they travel big-endian.
+    /// Checksum bytes at the end of the frame (before [`Self::end`]), and whether they travel
+    /// big-endian.
     pub checksum_len: usize,
     pub checksum_be: bool,
+    /// The bytes that end every frame after its checksum (none for most protocols).
+    pub end: &'static [u8],
 }
 
 impl Frame {
@@ -124,14 +127,16 @@ impl Frame {
 #[inline(always)]
 fn sums(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> (u32, u32) {
     let (body, tail) = frame.split_at(at);
+    let tail = tail.get(..f.checksum_len).unwrap_or(tail);
     let found = uint(tail, !f.checksum_be) as u32;
     (found, checksum(body))
 }
 
-/// Whether `frame` ends in the checksum of its first `at` bytes, and nothing else.
+/// Whether `frame` ends in the checksum of its first `at` bytes and the end bytes, and nothing
+/// else.
 #[inline(always)]
 pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> bool {
-    if frame.len() != at + f.checksum_len {
+    if frame.len() != at + f.checksum_len + f.end.len() || !frame.ends_with(f.end) {
         return false;
     }
     let (found, expected) = sums(frame, at, f, checksum);
@@ -139,8 +144,9 @@ pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]
 }
 
 /// The checks every frame of a direction passes before its code is looked at, in this order:
-/// no longer than `max`, the start byte, at least `min` bytes, the checksum (`checksum` of the
-/// bytes before it, compared as an unsigned integer), the address (at `address_at`). Returns
+/// no longer than `max`, the start byte, at least `min` bytes, the end bytes, the checksum
+/// (`checksum` of the bytes before it, compared as an unsigned integer), the address (at
+/// `address_at`). Returns
 /// the address (0 where frames carry none; `address_at` is then not looked at).
 #[inline(always)]
 pub fn check_frame(
@@ -162,13 +168,16 @@ pub fn check_frame(
             }
         }
     }
-    if len < min || (f.addressed && min <= address_at) || min < f.checksum_len {
+    if len < min || (f.addressed && min <= address_at) || min < f.checksum_len + f.end.len() {
         return Err(DecodeError::Truncated {
             needed: min,
             found: len,
         });
     }
-    let at = len - f.checksum_len;
+    let at = len - f.checksum_len - f.end.len();
+    if let Some(e) = check_end(frame, f.end) {
+        return Err(e);
+    }
     let (found, expected) = sums(frame, at, f, checksum);
     if found != expected {
         return Err(DecodeError::ChecksumMismatch {
@@ -870,6 +879,38 @@ pub fn seal_sum8_head<const N: usize>(out: &mut [u8; N], from: usize, head: u8) 
     N
 }
 
+/// The first byte of the frame's last `end.len()` bytes that is not `end`'s, as an error.
+#[inline(always)]
+fn check_end(frame: &[u8], end: &[u8]) -> Option<DecodeError> {
+    let from = frame.len().checked_sub(end.len())?;
+    let (i, (&found, &expected)) = frame[from..]
+        .iter()
+        .zip(end)
+        .enumerate()
+        .find(|(_, (a, b))| a != b)?;
+    Some(DecodeError::BadEnd {
+        offset: from + i,
+        expected,
+        found,
+    })
+}
+
+/// [`seal`] for a protocol whose frames end in `end` after the checksum: the checksum of the
+/// first `len - n - end.len()` bytes of `buf`, then `end`.
+#[inline(always)]
+pub fn seal_end(
+    buf: &mut [u8],
+    len: usize,
+    sum: impl FnOnce(&[u8]) -> u32,
+    n: usize,
+    be: bool,
+    end: &[u8],
+) {
+    let body = len - end.len();
+    seal(buf, body, sum, n, be);
+    buf[body..len].copy_from_slice(end);
+}
+
 /// Writes the `checksum` of the first `len - n` bytes of `buf` into its last `n` bytes.
 #[inline(always)]
 pub fn seal(buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32, n: usize, be: bool) {
@@ -1117,6 +1158,7 @@ mod lang_tests {
             host: None,
             checksum_len: n,
             checksum_be: be,
+            end: &[],
         };
         sums(frame, frame.len() - n, &f, |_| 0).0
     }

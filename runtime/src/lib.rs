@@ -283,6 +283,12 @@ pub enum DecodeError {
     Truncated { needed: usize, found: usize },
     /// The first byte is not the protocol's start byte.
     BadStart { expected: u8, found: u8 },
+    /// A byte of the end bytes after the checksum (at `offset`) is not the protocol's.
+    BadEnd {
+        offset: usize,
+        expected: u8,
+        found: u8,
+    },
     /// The checksum at `offset` is not what the bytes before it give; `width` is its length in
     /// bytes (both values are printed at that width, as the frame holds them).
     ChecksumMismatch {
@@ -501,6 +507,16 @@ impl fmt::Display for DecodeError {
                 f,
                 "truncated frame: need at least {needed} bytes, found {found}"
             ),
+            DecodeError::BadEnd {
+                offset,
+                expected,
+                found,
+            } => {
+                write!(
+                    f,
+                    "bad end byte at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
+                )
+            }
             DecodeError::BadStart { expected, found } => {
                 write!(
                     f,

@@ -18,16 +18,10 @@ pub fn spec<P: busspec_protocols::Protocol>() -> Protocol {
     busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
 }
 
-/// Writes the checksum of the bytes before it it covers into `frame`'s last bytes.
+/// Writes the checksum of the bytes before it it covers into `frame`'s last bytes (before
+/// the end bytes).
 pub fn fix_checksum(p: &Protocol, frame: &mut [u8]) {
-    let c = &p.framing.checksum;
-    let n = c.len();
-    if frame.len() < n {
-        return;
-    }
-    let at = frame.len() - n;
-    let v = checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
-    interp::write_uint(v, &mut frame[at..], c.byte_order);
+    interp::reseal(p, frame);
 }
 
 /// A frame shaped like message `m` (start byte, code, right length and length byte, valid

@@ -116,20 +116,9 @@ fn same_words(
     false
 }
 
-/// `frame` with its checksum recomputed over what it covers.
+/// `frame` with its checksum recomputed over what it covers (and its end bytes).
 pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
-    let c = &p.framing.checksum;
-    let at = frame.len() - c.len();
-    let sum =
-        busspec_model::checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
-    let n = c.len();
-    for (k, b) in frame[at..].iter_mut().enumerate() {
-        let shift = match c.byte_order {
-            ByteOrder::Big => 8 * (n - 1 - k),
-            ByteOrder::Little => 8 * k,
-        };
-        *b = (sum >> shift) as u8;
-    }
+    busspec_model::interp::reseal(p, frame);
 }
 
 /// `frame` with its length field set to what its length gives, where the framing has one.
@@ -153,7 +142,7 @@ pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
 /// to three bytes before its checksum (its length field kept, or made to agree), each with its
 /// checksum as it was and recomputed.
 pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
-    let clen = p.framing.checksum.len();
+    let clen = p.framing.trailer_len();
     let mut out = Vec::new();
     for i in 0..wire.len() {
         for f in [|b: u8| b ^ 0x01, |b: u8| b ^ 0x80, |_| 0x00, |_| 0xFF] {

@@ -57,6 +57,7 @@ pub mod codeless {
         host: HOST_ADDRESS,
         checksum_len: 1,
         checksum_be: false,
+        end: &[],
     };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]

@@ -57,6 +57,7 @@ pub mod clash {
         host: HOST_ADDRESS,
         checksum_len: 1,
         checksum_be: false,
+        end: &[],
     };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]

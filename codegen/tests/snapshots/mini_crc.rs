@@ -57,6 +57,7 @@ pub mod mini_crc {
         host: HOST_ADDRESS,
         checksum_len: 2,
         checksum_be: true,
+        end: &[],
     };
     /// CRC-16/CMS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {

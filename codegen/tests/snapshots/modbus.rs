@@ -55,6 +55,7 @@ pub mod modbus {
         host: HOST_ADDRESS,
         checksum_len: 2,
         checksum_be: false,
+        end: &[],
     };
     /// CRC-16/MODBUS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {

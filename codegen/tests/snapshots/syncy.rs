@@ -57,6 +57,7 @@ pub mod syncy {
         host: HOST_ADDRESS,
         checksum_len: 1,
         checksum_be: true,
+        end: &[],
     };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]

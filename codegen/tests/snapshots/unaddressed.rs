@@ -57,6 +57,7 @@ pub mod unaddressed {
         host: HOST_ADDRESS,
         checksum_len: 1,
         checksum_be: false,
+        end: &[],
     };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]

@@ -227,6 +227,11 @@ fn check_error(e: &DecodeError, len: usize) {
         DecodeError::BadStart { expected, found } => {
             assert!(len > 0 && expected != found, "{e}")
         }
+        DecodeError::BadEnd {
+            offset,
+            expected,
+            found,
+        } => assert!(offset < len && expected != found, "{e}"),
         DecodeError::ChecksumMismatch {
             offset,
             expected,
