@@ -583,8 +583,9 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         // width, a conversion to `u32` of a 32-bit checksum, a `match` with one message (or
         // one that binds one), a `_` arm after arms that happen to cover every message, an
         // identity in a scale, a head a protocol without codes does not look at, `{ .. }` on
-        // a message without fields.
+        // a message without fields, a code at offset 0 read as `get(0)` like any other offset.
         #![allow(
+            clippy::get_first,
             clippy::unnecessary_cast,
             clippy::useless_conversion,
             clippy::single_match,
@@ -640,35 +641,76 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     }
 }
 
+/// A sum, XOR or Fletcher checksum (masked or not): its doc line, type and expression over
+/// `bytes`; `None` for a CRC, and for no checksum.
+fn sum_checksum(a: &ChecksumAlgorithm) -> Option<(String, TokenStream, TokenStream)> {
+    let (doc, ty, e) = match a {
+        ChecksumAlgorithm::Sum8 => (
+            "8-bit sum of every byte before it",
+            quote!(u8),
+            quote!(rt::sum8(bytes)),
+        ),
+        ChecksumAlgorithm::Sum8OnesComplement => (
+            "the 8-bit sum of the bytes it covers, inverted",
+            quote!(u8),
+            quote!(rt::sum8_ones(bytes)),
+        ),
+        ChecksumAlgorithm::Sum8TwosComplement => (
+            "the 8-bit sum of the bytes it covers, negated",
+            quote!(u8),
+            quote!(rt::sum8_twos(bytes)),
+        ),
+        ChecksumAlgorithm::Xor8 => (
+            "8-bit XOR of the bytes it covers",
+            quote!(u8),
+            quote!(rt::xor8(bytes)),
+        ),
+        ChecksumAlgorithm::Sum16 => (
+            "16-bit sum of the bytes it covers",
+            quote!(u16),
+            quote!(rt::sum16(bytes)),
+        ),
+        ChecksumAlgorithm::Fletcher8 => (
+            "8-bit Fletcher (modulo 256) of the bytes it covers",
+            quote!(u16),
+            quote!(rt::fletcher8(bytes)),
+        ),
+        ChecksumAlgorithm::Fletcher16 => (
+            "Fletcher-16 of the bytes it covers",
+            quote!(u16),
+            quote!(rt::fletcher16(bytes)),
+        ),
+        ChecksumAlgorithm::Masked(inner, mask) => {
+            let (doc, ty, e) = sum_checksum(inner)?;
+            let m = Literal::u64_unsuffixed(*mask);
+            let doc = format!("{doc}, kept to the bits of 0x{mask:X}");
+            return Some((doc, ty.clone(), quote!(#e & (#m as #ty))));
+        }
+        ChecksumAlgorithm::Crc(_) | ChecksumAlgorithm::None => return None,
+    };
+    Some((doc.to_owned(), ty, e))
+}
+
 fn emit_checksum(p: &Protocol) -> TokenStream {
     let c = &p.framing.checksum;
+    if let Some((doc, ty, e)) = sum_checksum(&c.algorithm) {
+        // The doc lines of the four 8-bit sums are those of the generated code before masks
+        // and 16-bit sums came.
+        let d = format!(" The frame checksum: {doc}.");
+        return quote! {
+            #[doc = #d]
+            #[inline]
+            pub fn checksum(bytes: &[u8]) -> #ty {
+                #e
+            }
+        };
+    }
     match &c.algorithm {
-        ChecksumAlgorithm::Sum8 => quote! {
-            /// The frame checksum: 8-bit sum of every byte before it.
+        ChecksumAlgorithm::None => quote! {
+            /// Frames carry no checksum: nothing to compute.
             #[inline]
-            pub fn checksum(bytes: &[u8]) -> u8 {
-                rt::sum8(bytes)
-            }
-        },
-        ChecksumAlgorithm::Sum8OnesComplement => quote! {
-            /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
-            #[inline]
-            pub fn checksum(bytes: &[u8]) -> u8 {
-                rt::sum8_ones(bytes)
-            }
-        },
-        ChecksumAlgorithm::Sum8TwosComplement => quote! {
-            /// The frame checksum: the 8-bit sum of the bytes it covers, negated.
-            #[inline]
-            pub fn checksum(bytes: &[u8]) -> u8 {
-                rt::sum8_twos(bytes)
-            }
-        },
-        ChecksumAlgorithm::Xor8 => quote! {
-            /// The frame checksum: 8-bit XOR of the bytes it covers.
-            #[inline]
-            pub fn checksum(bytes: &[u8]) -> u8 {
-                rt::xor8(bytes)
+            pub fn checksum(_bytes: &[u8]) -> u8 {
+                0
             }
         },
         ChecksumAlgorithm::Crc(k) => {
@@ -716,6 +758,8 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                 }
             }
         }
+        // Every sum took the path above.
+        _ => TokenStream::new(),
     }
 }
 

@@ -110,6 +110,23 @@ fn end_byte_spec_generates_its_snapshot() {
     );
 }
 
+/// The 8-bit Fletcher checksum of UBX-shaped frames, over code, a 16-bit length and payload
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn fletcher_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/ubx_like.yaml", "ubx_like.rs");
+}
+
+/// Frames with no start byte, no address and no checksum (Maestro's compact protocol)
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn no_checksum_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/maestro_compact.yaml",
+        "maestro_compact.rs",
+    );
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

@@ -12,6 +12,8 @@ include!("snapshots/ending.rs");
 include!("snapshots/pelco_d.rs");
 include!("snapshots/unaddressed.rs");
 include!("snapshots/ft12_fixed.rs");
+include!("snapshots/ubx_like.rs");
+include!("snapshots/maestro_compact.rs");
 
 mod agree;
 
@@ -650,6 +652,51 @@ fn end_byte_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<Ft12Fixed>(&p, 0xF712, "reset_remote_link");
     assert!(found > 100, "only {found} reset_remote_link frames found");
+}
+
+/// The 8-bit Fletcher checksum (UBX): the examples replay, a frame with its two checksum bytes
+/// swapped is refused in both engines' words, and both agree on every frame mutated from the
+/// examples and on captures of them.
+#[test]
+fn fletcher_snapshot_agrees_with_the_interpreter() {
+    use ubx_like::{Request, UbxLike};
+    let file = "model/tests/fixtures/valid/ubx_like.yaml";
+    replay::<UbxLike>(file);
+    let p = fixture(file);
+    assert_eq!(ubx_like::checksum(&[0x06, 0x08, 0x00, 0x00]), 0x300E);
+    let swapped = [0xB5, 0x62, 0x06, 0x08, 0x00, 0x00, 0x30, 0x0E];
+    let g = Request::decode(&swapped).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 6: expected 0x300E, found 0x0E30"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Request), None, &swapped);
+    same_text(g, i.map(|_| ()));
+    let t = agree::agree::<UbxLike>(&p);
+    assert!(t.accepted >= 5 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<UbxLike>(&p, 0xF1E7, "ack");
+    assert!(found > 50, "only {found} ack frames found");
+}
+
+/// No start byte, no address, no checksum (Maestro's compact protocol): the examples replay,
+/// both engines agree on every frame mutated from them and on captures, where only the codes
+/// and lengths frame the stream.
+#[test]
+fn no_checksum_snapshot_agrees_with_the_interpreter() {
+    use maestro_compact::{MaestroCompact, Request};
+    let file = "model/tests/fixtures/valid/maestro_compact.yaml";
+    replay::<MaestroCompact>(file);
+    let p = fixture(file);
+    assert_eq!(
+        Request::decode(&[0x90, 0x05]).map(|d| d.message),
+        Ok(Request::GetPosition { channel: 5 })
+    );
+    let t = agree::agree::<MaestroCompact>(&p);
+    assert!(t.accepted >= 3 && t.refused > 10, "{t:?}");
+    // Any two bytes are also a position reply: Get Position is ambiguous in a stream of both
+    // directions, Set Target's four bytes are not.
+    let found = examples_stream_alike::<MaestroCompact>(&p, 0x3A35, "set_target");
+    assert!(found > 50, "only {found} set_target frames found");
 }
 
 /// Both stream decoders on 100 captures of `p`'s examples with noise between them, each cut

@@ -440,9 +440,61 @@ impl G {
 }
 
 /// A random checksum: its YAML lines (without `covers_from`) and its width in bytes.
+/// A checksum section's keys and the checksum's bytes; `("", 0)` for frames without one.
 fn checksum_yaml(g: &mut G) -> (String, usize) {
     let check = |a: &ChecksumAlgorithm| checksum::compute(a, b"123456789");
-    match g.rng.u8(..10) {
+    let order = |g: &mut G| *g.pick(&["big", "little"]);
+    match g.rng.u8(..16) {
+        10 => (String::new(), 0),
+        11 => (
+            format!(
+                "algorithm: sum16, width: 16, byte_order: {}, check: {}",
+                order(g),
+                check(&ChecksumAlgorithm::Sum16)
+            ),
+            2,
+        ),
+        12 => (
+            format!(
+                "algorithm: fletcher8, width: 16, byte_order: {}, check: {}",
+                order(g),
+                check(&ChecksumAlgorithm::Fletcher8)
+            ),
+            2,
+        ),
+        13 => (
+            format!(
+                "algorithm: fletcher16, width: 16, byte_order: {}, check: {}",
+                order(g),
+                check(&ChecksumAlgorithm::Fletcher16)
+            ),
+            2,
+        ),
+        14 => {
+            let (name, a, width) = g
+                .pick(&[
+                    ("sum8", ChecksumAlgorithm::Sum8, 8u32),
+                    ("lrc", ChecksumAlgorithm::Sum8TwosComplement, 8),
+                    ("xor8", ChecksumAlgorithm::Xor8, 8),
+                    ("sum16", ChecksumAlgorithm::Sum16, 16),
+                ])
+                .clone();
+            let mask = g.rng.u64(1..1 << width);
+            let c = check(&ChecksumAlgorithm::Masked(Box::new(a), mask));
+            let mut y =
+                format!("algorithm: {name}, width: {width}, mask: {mask:#X}, check: {c:#X}");
+            if width > 8 {
+                let _ = write!(y, ", byte_order: {}", order(g));
+            }
+            (y, width as usize / 8)
+        }
+        15 => (
+            format!(
+                "algorithm: lrc, width: 8, check: {}",
+                check(&ChecksumAlgorithm::Sum8TwosComplement)
+            ),
+            1,
+        ),
         0 => ("algorithm: sum8, width: 8, check: 0xDD".into(), 1),
         1 => (
             format!(
@@ -723,7 +775,11 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         let at = g.rng.usize(usize::from(has_start)..=layout.len());
         layout.insert(at, "length");
     }
-    layout.extend(["payload", "checksum"]);
+    let (csum, csum_len) = checksum_yaml(&mut g);
+    layout.push("payload");
+    if !csum.is_empty() {
+        layout.push("checksum");
+    }
     // Constant bytes after the checksum (M-Bus's 16, a line end).
     let end: Vec<u8> = if g.chance(15) {
         let n = *g.pick(&[1, 1, 2, 3]);
@@ -734,7 +790,6 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     if !end.is_empty() {
         layout.push("end");
     }
-    let (csum, csum_len) = checksum_yaml(&mut g);
 
     // Address.
     let full = g.chance(10);
@@ -1192,10 +1247,12 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         .copied()
         .take_while(|p| *p != "payload")
         .collect();
-    if g.chance(40) {
+    if !cs.is_empty() && g.chance(40) {
         let _ = write!(cs, ", covers_from: {}", g.pick(&before));
     }
-    let _ = writeln!(framing, "  checksum: {{{cs}}}");
+    if !cs.is_empty() {
+        let _ = writeln!(framing, "  checksum: {{{cs}}}");
+    }
 
     y.push_str(&framing);
     y.push_str(&units);
@@ -1371,6 +1428,11 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         ChecksumAlgorithm::Sum8OnesComplement => "sum8_ones_complement",
         ChecksumAlgorithm::Sum8TwosComplement => "sum8_twos_complement",
         ChecksumAlgorithm::Xor8 => "xor8",
+        ChecksumAlgorithm::Sum16 => "sum16",
+        ChecksumAlgorithm::Fletcher8 => "fletcher8",
+        ChecksumAlgorithm::Fletcher16 => "fletcher16",
+        ChecksumAlgorithm::Masked(..) => "masked sum",
+        ChecksumAlgorithm::None => "no checksum",
         ChecksumAlgorithm::Crc(c) => match c.width {
             8 => "crc8",
             16 => "crc16",

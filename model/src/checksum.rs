@@ -19,7 +19,24 @@ pub fn compute(algorithm: &ChecksumAlgorithm, data: &[u8]) -> u64 {
         ChecksumAlgorithm::Sum8OnesComplement => u64::from(!sum8(data)),
         ChecksumAlgorithm::Sum8TwosComplement => u64::from(sum8(data).wrapping_neg()),
         ChecksumAlgorithm::Xor8 => u64::from(data.iter().fold(0u8, |s, b| s ^ b)),
+        ChecksumAlgorithm::Sum16 => data.iter().fold(0u64, |s, b| (s + u64::from(*b)) & 0xFFFF),
+        ChecksumAlgorithm::Fletcher8 => {
+            let (a, b) = data.iter().fold((0u8, 0u8), |(a, b), x| {
+                let a = a.wrapping_add(*x);
+                (a, b.wrapping_add(a))
+            });
+            u64::from(b) << 8 | u64::from(a)
+        }
+        ChecksumAlgorithm::Fletcher16 => {
+            let (a, b) = data.iter().fold((0u64, 0u64), |(a, b), x| {
+                let a = (a + u64::from(*x)) % 255;
+                (a, (b + a) % 255)
+            });
+            b << 8 | a
+        }
         ChecksumAlgorithm::Crc(p) => crc(p, data),
+        ChecksumAlgorithm::Masked(a, mask) => compute(a, data) & mask,
+        ChecksumAlgorithm::None => 0,
     }
 }
 

@@ -680,20 +680,13 @@ impl<'a> Differ<'a> {
         if oc.algorithm != nc.algorithm || oc.width != nc.width || order_changed {
             let show = |c: &crate::ir::Checksum| {
                 let name = match &c.algorithm {
-                    crate::ir::ChecksumAlgorithm::Sum8 => "sum8".to_owned(),
-                    crate::ir::ChecksumAlgorithm::Sum8OnesComplement => {
-                        "sum8_ones_complement".to_owned()
-                    }
-                    crate::ir::ChecksumAlgorithm::Sum8TwosComplement => {
-                        "sum8_twos_complement".to_owned()
-                    }
-                    crate::ir::ChecksumAlgorithm::Xor8 => "xor8".to_owned(),
                     crate::ir::ChecksumAlgorithm::Crc(_) => {
                         c.catalogue.clone().unwrap_or_else(|| "crc".to_owned())
                     }
+                    a => a.name(),
                 };
                 let order = match (c.width, c.byte_order) {
-                    (8, _) => "",
+                    (0 | 8, _) => "",
                     (_, crate::ir::ByteOrder::Big) => ", high byte first",
                     (_, crate::ir::ByteOrder::Little) => ", low byte first",
                 };

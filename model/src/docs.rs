@@ -459,22 +459,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
     o.push('\n');
     let c = &f.checksum;
     match &c.algorithm {
-        ChecksumAlgorithm::Sum8 => {
-            let _ = writeln!(o, "Checksum: 8-bit sum of the bytes, modulo 256 (check value 0x{:02X} over \"123456789\").\n", c.check);
-        }
-        ChecksumAlgorithm::Sum8OnesComplement => {
-            let _ = writeln!(o, "Checksum: 8-bit sum of the bytes, inverted (ones' complement; check value 0x{:02X} over \"123456789\").\n", c.check);
-        }
-        ChecksumAlgorithm::Sum8TwosComplement => {
-            let _ = writeln!(o, "Checksum: 8-bit sum of the bytes, negated (two's complement; check value 0x{:02X} over \"123456789\").\n", c.check);
-        }
-        ChecksumAlgorithm::Xor8 => {
-            let _ = writeln!(
-                o,
-                "Checksum: XOR of the bytes (check value 0x{:02X} over \"123456789\").\n",
-                c.check
-            );
-        }
+        ChecksumAlgorithm::None => o.push_str("Frames carry no checksum.\n\n"),
         ChecksumAlgorithm::Crc(k) => {
             let _ = writeln!(
                 o,
@@ -488,6 +473,20 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 k.xorout,
                 c.check,
                 if c.byte_order == ByteOrder::Big { "high byte first" } else { "low byte first" }
+            );
+        }
+        a => {
+            let (what, aside) = sum_text(a);
+            let digits = usize::from(c.width / 4);
+            let sent = match (c.width, c.byte_order) {
+                (8, _) => "",
+                (_, ByteOrder::Big) => "; sent high byte first",
+                (_, ByteOrder::Little) => "; sent low byte first",
+            };
+            let _ = writeln!(
+                o,
+                "Checksum: {what} ({aside}check value 0x{:0digits$X} over \"123456789\"{sent}).\n",
+                c.check
             );
         }
     }
@@ -693,4 +692,34 @@ pub fn render(p: &Protocol, source: &str) -> String {
         }
     }
     o
+}
+
+/// A sum, XOR or Fletcher checksum in words, and what its parenthesis says before the check
+/// value (`ones' complement; `).
+fn sum_text(a: &ChecksumAlgorithm) -> (String, &'static str) {
+    match a {
+        ChecksumAlgorithm::Sum8OnesComplement => (
+            "8-bit sum of the bytes, inverted".to_owned(),
+            "ones' complement; ",
+        ),
+        ChecksumAlgorithm::Sum8TwosComplement => (
+            "8-bit sum of the bytes, negated".to_owned(),
+            "two's complement; ",
+        ),
+        ChecksumAlgorithm::Xor8 => ("XOR of the bytes".to_owned(), ""),
+        ChecksumAlgorithm::Sum16 => ("16-bit sum of the bytes, modulo 65536".to_owned(), ""),
+        ChecksumAlgorithm::Fletcher8 => (
+            "8-bit Fletcher: a += byte, b += a, modulo 256; the value b × 256 + a".to_owned(),
+            "",
+        ),
+        ChecksumAlgorithm::Fletcher16 => (
+            "Fletcher-16: a += byte, b += a, modulo 255; the value b × 256 + a".to_owned(),
+            "",
+        ),
+        ChecksumAlgorithm::Masked(inner, mask) => {
+            let (what, aside) = sum_text(inner);
+            (format!("{what}, kept to the bits of 0x{mask:X}"), aside)
+        }
+        _ => ("8-bit sum of the bytes, modulo 256".to_owned(), ""),
+    }
 }

@@ -125,6 +125,7 @@ pub struct FrameLayout {
     pub address: Option<usize>,
     pub code: usize,
     pub payload: usize,
+    /// Where the checksum is: the payload's end (also where frames have none).
     pub checksum: usize,
     /// Bytes in the whole frame.
     pub len: usize,
@@ -219,7 +220,35 @@ pub enum ChecksumAlgorithm {
     Sum8TwosComplement,
     /// 8-bit XOR of every byte.
     Xor8,
+    /// 16-bit sum of every byte, modulo 65536.
+    Sum16,
+    /// Two 8-bit running sums modulo 256 (u-blox UBX): `b << 8 | a`.
+    Fletcher8,
+    /// Fletcher-16: two running sums modulo 255, `b << 8 | a`.
+    Fletcher16,
     Crc(CrcParams),
+    /// Another algorithm's value kept to the bits of a mask (`sum8` & 0x7F).
+    Masked(Box<ChecksumAlgorithm>, u64),
+    /// No checksum: the layout has none (width 0).
+    None,
+}
+
+impl ChecksumAlgorithm {
+    /// The algorithm as the spec names it (`sum8`, `sum16 & 0x7F`, `crc`; `none`).
+    pub fn name(&self) -> String {
+        match self {
+            ChecksumAlgorithm::Sum8 => "sum8".to_owned(),
+            ChecksumAlgorithm::Sum8OnesComplement => "sum8_ones_complement".to_owned(),
+            ChecksumAlgorithm::Sum8TwosComplement => "sum8_twos_complement".to_owned(),
+            ChecksumAlgorithm::Xor8 => "xor8".to_owned(),
+            ChecksumAlgorithm::Sum16 => "sum16".to_owned(),
+            ChecksumAlgorithm::Fletcher8 => "fletcher8".to_owned(),
+            ChecksumAlgorithm::Fletcher16 => "fletcher16".to_owned(),
+            ChecksumAlgorithm::Crc(_) => "crc".to_owned(),
+            ChecksumAlgorithm::Masked(a, mask) => format!("{} & 0x{mask:X}", a.name()),
+            ChecksumAlgorithm::None => "none".to_owned(),
+        }
+    }
 }
 
 /// A CRC in the catalogue's (Rocksoft) parameter model.
@@ -236,7 +265,7 @@ pub struct CrcParams {
 #[derive(Debug, Clone)]
 pub struct Checksum {
     pub algorithm: ChecksumAlgorithm,
-    /// Width in bits: 8, 16 or 32.
+    /// Width in bits: 8, 16 or 32; 0 where the frames carry no checksum.
     pub width: u8,
     pub byte_order: ByteOrder,
     pub catalogue: Option<String>,
@@ -252,7 +281,7 @@ impl Checksum {
         usize::from(self.width / 8)
     }
 
-    /// Never true: every checksum takes at least one byte.
+    /// Whether the frames carry no checksum.
     pub fn is_empty(&self) -> bool {
         self.width == 0
     }

@@ -198,7 +198,9 @@ pub struct Framing {
     pub address: Option<Address>,
     pub request: DirectionFraming,
     pub response: DirectionFraming,
-    pub checksum: Checksum,
+    /// Required iff the layout has `checksum`.
+    #[serde(default)]
+    pub checksum: Option<Checksum>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -237,6 +239,16 @@ pub enum ChecksumAlgorithm {
     Sum8TwosComplement,
     /// 8-bit XOR of every byte.
     Xor8,
+    /// Modbus ASCII's longitudinal redundancy check: the 8-bit sum negated, the same as
+    /// `sum8_twos_complement` (which the IR, docs and diff call it).
+    Lrc,
+    /// 16-bit sum of every byte, modulo 65536.
+    Sum16,
+    /// Two 8-bit running sums modulo 256 (`a += byte; b += a`), u-blox UBX's 8-bit Fletcher:
+    /// the value `b << 8 | a`, so `byte_order: little` sends `a` first.
+    Fletcher8,
+    /// Fletcher-16: two running sums modulo 255, the value `b << 8 | a`.
+    Fletcher16,
     Crc,
 }
 
@@ -260,6 +272,9 @@ pub struct Checksum {
     #[serde(default)]
     pub catalogue: Option<String>,
     pub check: i64,
+    /// A sum or XOR kept to these bits (`0x7F`: the sum's low seven bits).
+    #[serde(default)]
+    pub mask: Option<i64>,
     /// The first part of the frame the checksum covers (default: the first part); it covers
     /// every byte from there up to itself.
     #[serde(default)]

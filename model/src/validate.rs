@@ -733,11 +733,7 @@ fn part_name(p: Part) -> &'static str {
 fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framing {
     let path = "framing";
     let count = |p: Part| f.layout.iter().filter(|x| **x == p).count();
-    for (p, name) in [
-        (Part::Code, "code"),
-        (Part::Payload, "payload"),
-        (Part::Checksum, "checksum"),
-    ] {
+    for (p, name) in [(Part::Code, "code"), (Part::Payload, "payload")] {
         if count(p) != 1 {
             sink.error(
                 "framing.layout",
@@ -756,6 +752,9 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     }
     if count(Part::End) > 1 {
         sink.error("framing.layout", "layout holds `end` more than once");
+    }
+    if count(Part::Checksum) > 1 {
+        sink.error("framing.layout", "layout holds `checksum` more than once");
     }
     let length = match (count(Part::Length), &f.length) {
         (1, Some(l)) => {
@@ -824,7 +823,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             "framing.layout",
             "`end` must be the last part of the frame: the bytes after the checksum",
         );
-    } else if body.last() != Some(&Part::Checksum) {
+    } else if count(Part::Checksum) == 1 && body.last() != Some(&Part::Checksum) {
         sink.error(
             "framing.layout",
             "the checksum must be the last part of the frame, or come just before `end`: it covers every byte before it",
@@ -1021,7 +1020,38 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             }
         }
     }
-    let checksum = checksum_params(&f.checksum, byte_order, sink);
+    let checksum = match (count(Part::Checksum), &f.checksum) {
+        (0, None) => Checksum {
+            algorithm: ChecksumAlgorithm::None,
+            width: 0,
+            byte_order,
+            catalogue: None,
+            check: 0,
+            covers_from: 0,
+        },
+        (0, Some(c)) => {
+            sink.error(
+                "framing.checksum",
+                "a checksum is described but the layout has no `checksum`",
+            );
+            checksum_params(c, byte_order, sink)
+        }
+        (_, Some(c)) => checksum_params(c, byte_order, sink),
+        (_, None) => {
+            sink.error(
+                "framing.checksum",
+                "layout has `checksum` but no `checksum` section describes it",
+            );
+            Checksum {
+                algorithm: ChecksumAlgorithm::None,
+                width: 0,
+                byte_order,
+                catalogue: None,
+                check: 0,
+                covers_from: 0,
+            }
+        }
+    };
     let mut framing = Framing {
         section: f.section.clone(),
         layout: f.layout.clone(),
@@ -1044,7 +1074,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
         .collect();
-    if let Some(part) = f.checksum.covers_from {
+    if let Some(part) = f.checksum.as_ref().and_then(|c| c.covers_from) {
         let head = framing.head(0);
         let at = match part {
             Part::Start => head.start,
@@ -1099,6 +1129,9 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
             Part::Payload => {
                 o.payload = at;
                 at += payload_len;
+                // Where the checksum is, or would be: the payload's end (a layout without a
+                // checksum keeps this).
+                o.checksum = at;
             }
             Part::Checksum => {
                 o.checksum = at;
@@ -1144,21 +1177,34 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
     ];
     use model::ChecksumAlgorithm as A;
     let algorithm = match c.algorithm {
-        A::Sum8 | A::Sum8OnesComplement | A::Sum8TwosComplement | A::Xor8 => {
-            let (name, algorithm) = match c.algorithm {
+        A::Sum8
+        | A::Sum8OnesComplement
+        | A::Sum8TwosComplement
+        | A::Lrc
+        | A::Xor8
+        | A::Sum16
+        | A::Fletcher8
+        | A::Fletcher16 => {
+            let (name, bits, algorithm) = match c.algorithm {
                 A::Sum8OnesComplement => (
                     "sum8_ones_complement",
+                    8,
                     ChecksumAlgorithm::Sum8OnesComplement,
                 ),
                 A::Sum8TwosComplement => (
                     "sum8_twos_complement",
+                    8,
                     ChecksumAlgorithm::Sum8TwosComplement,
                 ),
-                A::Xor8 => ("xor8", ChecksumAlgorithm::Xor8),
-                _ => ("sum8", ChecksumAlgorithm::Sum8),
+                A::Lrc => ("lrc", 8, ChecksumAlgorithm::Sum8TwosComplement),
+                A::Xor8 => ("xor8", 8, ChecksumAlgorithm::Xor8),
+                A::Sum16 => ("sum16", 16, ChecksumAlgorithm::Sum16),
+                A::Fletcher8 => ("fletcher8", 16, ChecksumAlgorithm::Fletcher8),
+                A::Fletcher16 => ("fletcher16", 16, ChecksumAlgorithm::Fletcher16),
+                _ => ("sum8", 8, ChecksumAlgorithm::Sum8),
             };
-            if width != 8 {
-                sink.error(join(path, "width"), format!("{name} is 8 bits wide"));
+            if width != bits {
+                sink.error(join(path, "width"), format!("{name} is {bits} bits wide"));
             }
             for (k, given) in crc_keys {
                 if given {
@@ -1193,6 +1239,30 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
                 refout: c.refout.unwrap_or(false),
                 xorout: fits(c.xorout.unwrap_or(0), "xorout", sink),
             })
+        }
+    };
+    let algorithm = match c.mask {
+        None => algorithm,
+        Some(m) => {
+            let sum = matches!(
+                algorithm,
+                ChecksumAlgorithm::Sum8
+                    | ChecksumAlgorithm::Sum8OnesComplement
+                    | ChecksumAlgorithm::Sum8TwosComplement
+                    | ChecksumAlgorithm::Xor8
+                    | ChecksumAlgorithm::Sum16
+            );
+            if !sum {
+                sink.error(
+                    join(path, "mask"),
+                    "a mask keeps some bits of a sum or XOR (sum8, sum8_ones_complement, sum8_twos_complement, lrc, xor8, sum16), not of this algorithm",
+                );
+            }
+            let mask = fits(m, "mask", sink);
+            if mask == 0 {
+                sink.error(join(path, "mask"), "a mask of 0 keeps no bit");
+            }
+            ChecksumAlgorithm::Masked(Box::new(algorithm), mask)
         }
     };
     let check = fits(c.check, "check", sink);

@@ -17,6 +17,27 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- checksums: none, masks, Fletcher (made from valid/minimal.yaml)
+    (
+        "checksum_without_layout_part",
+        &[("framing.checksum", "a checksum is described but the layout has no `checksum`")],
+    ),
+    (
+        "checksum_part_without_section",
+        &[("framing.checksum", "layout has `checksum` but no `checksum` section describes it")],
+    ),
+    (
+        "mask_on_a_crc",
+        &[("framing.checksum.mask", "a mask keeps some bits of a sum or XOR")],
+    ),
+    (
+        "fletcher8_eight_bits",
+        &[("framing.checksum.width", "fletcher8 is 16 bits wide")],
+    ),
+    (
+        "mask_zero",
+        &[("framing.checksum.mask", "a mask of 0 keeps no bit")],
+    ),
     // ---- end bytes after the checksum (made from valid/minimal.yaml)
     (
         "end_before_checksum",

@@ -930,6 +930,35 @@ pub fn xor8(bytes: &[u8]) -> u8 {
     bytes.iter().fold(0u8, |s, b| s ^ *b)
 }
 
+/// The 16-bit sum of `bytes`, modulo 65536 (`sum16`).
+#[inline]
+pub fn sum16(bytes: &[u8]) -> u16 {
+    bytes
+        .iter()
+        .fold(0u16, |s, b| s.wrapping_add(u16::from(*b)))
+}
+
+/// Two 8-bit running sums modulo 256, `b << 8 | a` (`fletcher8`: u-blox UBX's checksum, sent
+/// low byte first: `a`, then `b`).
+#[inline]
+pub fn fletcher8(bytes: &[u8]) -> u16 {
+    let (a, b) = bytes.iter().fold((0u8, 0u8), |(a, b), x| {
+        let a = a.wrapping_add(*x);
+        (a, b.wrapping_add(a))
+    });
+    u16::from(b) << 8 | u16::from(a)
+}
+
+/// Fletcher-16: two running sums modulo 255, `b << 8 | a` (`fletcher16`).
+#[inline]
+pub fn fletcher16(bytes: &[u8]) -> u16 {
+    let (a, b) = bytes.iter().fold((0u16, 0u16), |(a, b), x| {
+        let a = (a + u16::from(*x)) % 255;
+        (a, (b + a) % 255)
+    });
+    b << 8 | a
+}
+
 /// The 8-bit sum of `bytes` inverted (`sum8_ones_complement`: Dynamixel's checksum).
 #[inline]
 pub fn sum8_ones(bytes: &[u8]) -> u8 {

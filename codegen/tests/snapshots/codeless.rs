@@ -5,6 +5,7 @@ pub mod codeless {
     //! Generated from `model/tests/fixtures/valid/minimal_codeless.yaml`, transcribed from *Code-less test document*, revision 1 (2024-01-01).
     //! Numbers travel little-endian on the wire.
     #![allow(
+        clippy::get_first,
         clippy::unnecessary_cast,
         clippy::useless_conversion,
         clippy::single_match,

@@ -5,6 +5,7 @@ pub mod ending {
     //! Generated from `model/tests/fixtures/valid/minimal_end.yaml`, transcribed from *Variable-length test document*, revision 1 (2024-01-01).
     //! Numbers travel big-endian on the wire.
     #![allow(
+        clippy::get_first,
         clippy::unnecessary_cast,
         clippy::useless_conversion,
         clippy::single_match,

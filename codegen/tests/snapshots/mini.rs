@@ -5,6 +5,7 @@ pub mod mini {
     //! Generated from `model/tests/fixtures/valid/minimal.yaml`, transcribed from *Minimal protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel little-endian on the wire.
     #![allow(
+        clippy::get_first,
         clippy::unnecessary_cast,
         clippy::useless_conversion,
         clippy::single_match,

@@ -5,6 +5,7 @@ pub mod mini_crc {
     //! Generated from `model/tests/fixtures/valid/minimal_crc.yaml`, transcribed from *Minimal CRC protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel big-endian on the wire.
     #![allow(
+        clippy::get_first,
         clippy::unnecessary_cast,
         clippy::useless_conversion,
         clippy::single_match,

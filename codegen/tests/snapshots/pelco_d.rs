@@ -5,6 +5,7 @@ pub mod pelco_d2 {
     //! Generated from `model/tests/fixtures/valid/pelco_d_codeless.yaml`, transcribed from *Pelco D protocol manual (transcribed from its public description)*, revision 1999 (1999-01-01).
     //! Numbers travel big-endian on the wire.
     #![allow(
+        clippy::get_first,
         clippy::unnecessary_cast,
         clippy::useless_conversion,
         clippy::single_match,

@@ -5,6 +5,7 @@ pub mod syncy {
     //! Generated from `model/tests/fixtures/valid/minimal_sync.yaml`, transcribed from *Sync test document*, revision 1 (2024-01-01).
     //! Numbers travel big-endian on the wire.
     #![allow(
+        clippy::get_first,
         clippy::unnecessary_cast,
         clippy::useless_conversion,
         clippy::single_match,

@@ -5,6 +5,7 @@ pub mod unaddressed {
     //! Generated from `model/tests/fixtures/valid/unaddressed.yaml`, transcribed from *busspec test fixture: a point-to-point sensor link*, revision 1 (2026-11-26).
     //! Numbers travel little-endian on the wire.
     #![allow(
+        clippy::get_first,
         clippy::unnecessary_cast,
         clippy::useless_conversion,
         clippy::single_match,
