@@ -276,6 +276,18 @@ pub struct Checksum {
 }
 
 impl Checksum {
+    /// No checksum: frames whose layout has none.
+    pub fn none(byte_order: ByteOrder) -> Checksum {
+        Checksum {
+            algorithm: ChecksumAlgorithm::None,
+            width: 0,
+            byte_order,
+            catalogue: None,
+            check: 0,
+            covers_from: 0,
+        }
+    }
+
     /// Bytes the checksum takes in the frame.
     pub fn len(&self) -> usize {
         usize::from(self.width / 8)

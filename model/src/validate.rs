@@ -1021,14 +1021,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         }
     }
     let checksum = match (count(Part::Checksum), &f.checksum) {
-        (0, None) => Checksum {
-            algorithm: ChecksumAlgorithm::None,
-            width: 0,
-            byte_order,
-            catalogue: None,
-            check: 0,
-            covers_from: 0,
-        },
+        (0, None) => Checksum::none(byte_order),
         (0, Some(c)) => {
             sink.error(
                 "framing.checksum",
@@ -1042,14 +1035,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
                 "framing.checksum",
                 "layout has `checksum` but no `checksum` section describes it",
             );
-            Checksum {
-                algorithm: ChecksumAlgorithm::None,
-                width: 0,
-                byte_order,
-                catalogue: None,
-                check: 0,
-                covers_from: 0,
-            }
+            Checksum::none(byte_order)
         }
     };
     let mut framing = Framing {
