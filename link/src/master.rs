@@ -23,9 +23,9 @@
 //! the spec declares ([`LinkError::ByteOrder`], erratum ub2-e01); the check is kept per address
 //! until a reset or a new slave address ([`Link::forgets_byte_order_checks`]).
 //!
-//! [`Master`] works for any protocol that implements [`Link`]; the long operations of one
-//! device family (UB2 movements and C-curve table, SD movements and string readouts) are
-//! methods of `Master<Ub2, _, _>` and `Master<Sd, _, _>`.
+//! [`Master`] works for any protocol that implements [`Link`] and names none; the long
+//! operations of one device family (UB2 movements and C-curve table, SD movements and string
+//! readouts) are `busspec-devices`', on top of [`Master::ask`] and [`Master::run_to_end`].
 
 use std::fmt;
 use std::io;
@@ -33,13 +33,11 @@ use std::time::Duration;
 
 use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply};
 pub use busspec_link_core::master::{Rejection, Timing};
-pub use busspec_link_core::movement::{ub2_completion_check, MoveReport};
-use busspec_link_core::movement::{MoveError, Movement, SdMove, Step, Ub2Movement};
+pub use busspec_link_core::movement::MoveReport;
+use busspec_link_core::movement::{MoveError, Movement, Step};
 use busspec_link_core::Line;
 
-use busspec_protocols::sd::{self, Sd};
-use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::{EncodeError, Message, Protocol};
+use busspec_runtime::{EncodeError, Message, Protocol};
 
 use crate::clock::Clock;
 use crate::protocol::{byte_order_source, declared_byte_order, swapped_byte_order};
@@ -261,6 +259,25 @@ impl fmt::Display for LinkError {
                 "{protocol} {request} at address 0x{address:02X}: movement not completed after {:.1} s",
                 waited.as_secs_f64()
             ),
+        }
+    }
+}
+
+impl LinkError {
+    /// [`LinkError::Refused`]: the device answered `request` to `address` with `response`,
+    /// which the operation cannot go on with, and `detail` says why.
+    pub fn refused<P: Protocol>(
+        request: &P::Request,
+        address: u8,
+        response: &P::Response,
+        detail: &str,
+    ) -> LinkError {
+        LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: response.name(),
+            detail: detail.to_owned(),
         }
     }
 }
@@ -569,21 +586,6 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
             }
         }
     }
-
-    fn refused(
-        request: &P::Request,
-        address: u8,
-        response: &P::Response,
-        detail: &str,
-    ) -> LinkError {
-        LinkError::Refused {
-            protocol: P::NAME,
-            request: request.name(),
-            address,
-            response: response.name(),
-            detail: detail.to_owned(),
-        }
-    }
 }
 
 /// The core's failure as a [`LinkError`], with names and texts (every driver reports through it).
@@ -772,236 +774,4 @@ pub enum Progress {
     Moving { elapsed: Duration, position: f64 },
     /// `done` items of a table or string read so far.
     Read { done: usize },
-}
-
-/// One row of the UB2 C-curve table.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CCurvePoint {
-    pub index: u16,
-    pub full_steps: u16,
-    pub capacitance: ub2::Capacitance,
-}
-
-impl<T: Transport, C: Clock> Master<Ub2, T, C> {
-    /// Triggers a movement and polls its completion check every `poll_every` until it is done,
-    /// reporting the full-step position in between. Fails if the device refuses the trigger,
-    /// says the movement was not triggered, or is not done within `limit`.
-    pub fn run_movement(
-        &mut self,
-        address: u8,
-        trigger: ub2::Request,
-        poll_every: Duration,
-        limit: Duration,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<MoveReport<ub2::Response>, LinkError> {
-        self.run_to_end(
-            address,
-            Ub2Movement::new(trigger, poll_every, limit),
-            progress,
-        )
-    }
-
-    /// Reads the whole C-curve table (§6.7): entries from index 0 until the device answers
-    /// "index out of range" (0x94), at most 500.
-    pub fn read_c_curve(
-        &mut self,
-        address: u8,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Vec<CCurvePoint>, LinkError> {
-        const MAX_ENTRIES: u16 = 500;
-        let mut table = Vec::new();
-        for index in 0..MAX_ENTRIES {
-            let request = ub2::Request::GetCCurveIndexedFullStepCapacitance { index };
-            match self.ask(address, request)? {
-                ub2::Response::CCurveEntry {
-                    index: got,
-                    full_steps,
-                    capacitance,
-                } if got == index => table.push(CCurvePoint {
-                    index,
-                    full_steps,
-                    capacitance,
-                }),
-                ub2::Response::CCurveEntry { index: got, .. } => {
-                    return Err(LinkError::BadReply {
-                        protocol: Ub2::NAME,
-                        request: request.name(),
-                        address,
-                        attempts: 1,
-                        reason: format!("entry {got} came back for index {index}"),
-                        bytes: Vec::new(),
-                    })
-                }
-                ub2::Response::NakIndexOutOfRange => break,
-                other => {
-                    return Err(Self::refused(
-                        &request,
-                        address,
-                        &other,
-                        "reading the C-curve table",
-                    ))
-                }
-            }
-            progress(Progress::Read { done: table.len() });
-        }
-        Ok(table)
-    }
-}
-
-/// The four SD string readouts (§3.20-§3.23).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SdString {
-    SerialNumber,
-    ProductDescription,
-    SoftwareRevision,
-    HardwareRevision,
-}
-
-impl SdString {
-    pub const ALL: [SdString; 4] = [
-        SdString::SerialNumber,
-        SdString::ProductDescription,
-        SdString::SoftwareRevision,
-        SdString::HardwareRevision,
-    ];
-
-    /// The request for byte `byte_number` of this string.
-    pub fn request(self, byte_number: u8) -> sd::Request {
-        match self {
-            SdString::SerialNumber => sd::Request::ReadElectronicSerialNumber { byte_number },
-            SdString::ProductDescription => sd::Request::ReadProductDescription { byte_number },
-            SdString::SoftwareRevision => sd::Request::ReadSoftwareRevision { byte_number },
-            SdString::HardwareRevision => sd::Request::ReadHardwareRevision { byte_number },
-        }
-    }
-
-    /// The character and the string length a reply carries.
-    pub fn character(response: &sd::Response) -> Option<(u8, u8)> {
-        match *response {
-            sd::Response::ElectronicSerialNumberCharacter {
-                character,
-                string_length,
-            }
-            | sd::Response::ProductDescriptionCharacter {
-                character,
-                string_length,
-            }
-            | sd::Response::SoftwareRevisionCharacter {
-                character,
-                string_length,
-            }
-            | sd::Response::HardwareRevisionCharacter {
-                character,
-                string_length,
-            } => Some((character, string_length)),
-            _ => None,
-        }
-    }
-
-    /// The readout this request belongs to.
-    pub fn of(request: &sd::Request) -> Option<SdString> {
-        SdString::ALL
-            .into_iter()
-            .find(|s| s.request(0).name() == request.name())
-    }
-}
-
-impl<T: Transport, C: Clock> Master<Sd, T, C> {
-    /// Reads a whole string, one character per transaction: byte 0 gives the length, then the
-    /// rest. Every reply must agree on the length.
-    pub fn read_string(
-        &mut self,
-        address: u8,
-        which: SdString,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Vec<u8>, LinkError> {
-        let mut text = Vec::new();
-        let mut length = None;
-        let mut byte = 0u8;
-        while length.map_or(true, |n| usize::from(byte) < usize::from(n)) && byte < 0x20 {
-            let request = which.request(byte);
-            let response = self.ask(address, request)?;
-            let Some((c, n)) = SdString::character(&response) else {
-                return Err(Self::refused(
-                    &request,
-                    address,
-                    &response,
-                    "expected a string character",
-                ));
-            };
-            if n > 0x20 {
-                return Err(Self::refused(
-                    &request,
-                    address,
-                    &response,
-                    &format!("string length {n} exceeds 32"),
-                ));
-            }
-            match length {
-                None => length = Some(n),
-                Some(l) if l != n => {
-                    return Err(Self::refused(
-                        &request,
-                        address,
-                        &response,
-                        &format!("string length changed from {l} to {n} while reading"),
-                    ))
-                }
-                Some(_) => {}
-            }
-            if n == 0 {
-                break;
-            }
-            text.push(c);
-            byte += 1;
-            progress(Progress::Read { done: text.len() });
-        }
-        Ok(text)
-    }
-
-    /// Sends a set point and polls the actual position every `poll_every` until it equals the
-    /// target, or `limit` passes.
-    pub fn move_to(
-        &mut self,
-        address: u8,
-        target: sd::Angle,
-        poll_every: Duration,
-        limit: Duration,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<MoveReport<sd::Response>, LinkError> {
-        self.run_to_end(address, SdMove::new(target, poll_every, limit), progress)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::clock::SimClock;
-    use crate::sim::sd::SdSim;
-    use crate::sim::ub2::Ub2Sim;
-    use crate::sim::{BusConfig, SimBus};
-
-    /// The freshness counter wraps at the protocol's modulus: SD's 4 bits, a whole byte where a
-    /// protocol does not say.
-    #[test]
-    fn the_freshness_counter_wraps_at_the_protocols_modulus() {
-        let clock = SimClock::new();
-        let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![SdSim::new(1)]);
-        let mut m: Master<Sd, _, _> = Master::new(bus, clock);
-        m.set_freshness(1, 0x0F);
-        assert_eq!(m.next_freshness_value(1), Some(0));
-        m.set_freshness(1, 0x1E);
-        assert_eq!(m.next_freshness_value(1), Some(0x0F));
-        let clock = SimClock::new();
-        let bus = SimBus::new(
-            clock.clone(),
-            BusConfig::new(Ub2::BAUD),
-            vec![Ub2Sim::new(0x21)],
-        );
-        let mut m: Master<Ub2, _, _> = Master::new(bus, clock);
-        m.set_freshness(0x21, 0x0F);
-        assert_eq!(m.next_freshness_value(0x21), Some(0x10));
-        m.set_freshness(0x21, 0xFF);
-        assert_eq!(m.next_freshness_value(0x21), Some(0));
-    }
 }
