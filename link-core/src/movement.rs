@@ -84,3 +84,140 @@ pub trait Movement<P: Link> {
     /// The response to the last [`Step::Ask`] (`None`: an optional one failed).
     fn answered(&mut self, now: Duration, response: Option<P::Response>) -> Step<P>;
 }
+
+/// What a blocking driver lends [`run`]: its transactions, its time and its waits, and how it
+/// words a movement's stop. Each driver implements it once (the embedded-io driver here,
+/// `busspec-link`'s `std` master), and its `run_movement` is [`run`].
+pub trait Drive<P: Link> {
+    /// What the driver's movement ends in besides a report.
+    type Error;
+    /// Time since the driver's epoch.
+    fn now(&mut self) -> Duration;
+    /// The byte-order check before the first movement to `address`, for `trigger`
+    /// ([`crate::MasterCore::start_byte_order_check`]).
+    fn check_byte_order(&mut self, address: u8, trigger: P::Request) -> Result<(), Self::Error>;
+    /// One transaction: the reply, or `None` where the request went unanswered (a broadcast).
+    fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Option<P::Response>, Self::Error>;
+    /// Waits until `until` (driver time).
+    fn sleep_until(&mut self, until: Duration);
+    /// Whether an optional request that failed with `e` may be passed over: a failure of the
+    /// line, not of the port.
+    fn skippable(e: &Self::Error) -> bool;
+    /// `request`, whose answer the movement needs, went to `address` and nothing answers there.
+    fn unanswered(address: u8, request: P::Request) -> Self::Error;
+    /// The movement stopped: refused, or not done in time.
+    fn stopped(address: u8, e: MoveError<P>) -> Self::Error;
+}
+
+/// [`Drive`] for an async driver: the same, with the transactions and waits awaited. Each
+/// async driver implements it once (the embedded-io-async driver here, `busspec-link`'s tokio
+/// driver), and its `run_movement` is [`run_async`].
+// The futures are the drivers' own: a tokio driver's are `Send`, an embedded one's need not be,
+// and a caller that names a concrete driver sees which.
+#[allow(async_fn_in_trait)]
+pub trait DriveAsync<P: Link> {
+    /// See [`Drive::Error`].
+    type Error;
+    /// See [`Drive::now`].
+    fn now(&mut self) -> Duration;
+    /// See [`Drive::check_byte_order`].
+    async fn check_byte_order(
+        &mut self,
+        address: u8,
+        trigger: P::Request,
+    ) -> Result<(), Self::Error>;
+    /// See [`Drive::transact`].
+    async fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Option<P::Response>, Self::Error>;
+    /// See [`Drive::sleep_until`].
+    async fn sleep_until(&mut self, until: Duration);
+    /// See [`Drive::skippable`].
+    fn skippable(e: &Self::Error) -> bool;
+    /// See [`Drive::unanswered`].
+    fn unanswered(address: u8, request: P::Request) -> Self::Error;
+    /// See [`Drive::stopped`].
+    fn stopped(address: u8, e: MoveError<P>) -> Self::Error;
+}
+
+/// Runs `movement` to its end on a blocking driver: the byte-order check before its trigger,
+/// then its transactions and sleeps; `progress` hears where the device is in between. The
+/// movement loop of every blocking driver.
+///
+/// [`run_async`] is the same loop with `.await` after each transaction and wait: Rust has no
+/// way yet to write one body for both (`async` closures and keyword generics are not in the
+/// crate's Rust 1.81), so the two are kept line for line alike.
+pub fn run<P: Link, D: Drive<P>, M: Movement<P>>(
+    driver: &mut D,
+    address: u8,
+    mut movement: M,
+    mut progress: impl FnMut(Moving),
+) -> Result<MoveReport<P::Response>, D::Error> {
+    let trigger = movement.trigger().map_err(|e| D::stopped(address, e))?;
+    driver.check_byte_order(address, trigger)?;
+    let mut step = movement.next(driver.now());
+    loop {
+        step = match step {
+            Step::Ask { request, optional } => match driver.transact(address, request) {
+                Ok(Some(r)) => movement.answered(driver.now(), Some(r)),
+                Ok(None) if optional => movement.answered(driver.now(), None),
+                Ok(None) => return Err(D::unanswered(address, request)),
+                Err(e) if optional && D::skippable(&e) => movement.answered(driver.now(), None),
+                Err(e) => return Err(e),
+            },
+            Step::Sleep {
+                until,
+                progress: moving,
+            } => {
+                if let Some(m) = moving {
+                    progress(m);
+                }
+                driver.sleep_until(until);
+                movement.next(driver.now())
+            }
+            Step::Done(report) => return Ok(report),
+            Step::Failed(e) => return Err(D::stopped(address, e)),
+        }
+    }
+}
+
+/// [`run`] on an async driver.
+pub async fn run_async<P: Link, D: DriveAsync<P>, M: Movement<P>>(
+    driver: &mut D,
+    address: u8,
+    mut movement: M,
+    mut progress: impl FnMut(Moving),
+) -> Result<MoveReport<P::Response>, D::Error> {
+    let trigger = movement.trigger().map_err(|e| D::stopped(address, e))?;
+    driver.check_byte_order(address, trigger).await?;
+    let mut step = movement.next(driver.now());
+    loop {
+        step = match step {
+            Step::Ask { request, optional } => match driver.transact(address, request).await {
+                Ok(Some(r)) => movement.answered(driver.now(), Some(r)),
+                Ok(None) if optional => movement.answered(driver.now(), None),
+                Ok(None) => return Err(D::unanswered(address, request)),
+                Err(e) if optional && D::skippable(&e) => movement.answered(driver.now(), None),
+                Err(e) => return Err(e),
+            },
+            Step::Sleep {
+                until,
+                progress: moving,
+            } => {
+                if let Some(m) = moving {
+                    progress(m);
+                }
+                driver.sleep_until(until).await;
+                movement.next(driver.now())
+            }
+            Step::Done(report) => return Ok(report),
+            Step::Failed(e) => return Err(D::stopped(address, e)),
+        }
+    }
+}

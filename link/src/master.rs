@@ -34,7 +34,7 @@ use std::time::Duration;
 use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply};
 pub use busspec_link_core::master::{Rejection, Timing};
 pub use busspec_link_core::movement::MoveReport;
-use busspec_link_core::movement::{MoveError, Movement, Step};
+use busspec_link_core::movement::{self, Drive, MoveError, Movement};
 use busspec_link_core::Line;
 
 use busspec_runtime::{EncodeError, Message, Protocol};
@@ -264,6 +264,18 @@ impl fmt::Display for LinkError {
 }
 
 impl LinkError {
+    /// [`LinkError::Refused`] for a request whose answer is needed, sent where nothing answers
+    /// it (a broadcast the spec leaves unanswered).
+    pub fn unanswered<P: Protocol>(request: &P::Request, address: u8) -> LinkError {
+        LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: "nothing",
+            detail: "a broadcast of this command is not answered".to_owned(),
+        }
+    }
+
     /// [`LinkError::Refused`]: the device answered `request` to `address` with `response`,
     /// which the operation cannot go on with, and `detail` says why.
     pub fn refused<P: Protocol>(
@@ -541,50 +553,65 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
     /// Like [`Master::transact`] for a request that must be answered: the response itself.
     pub fn ask(&mut self, address: u8, request: P::Request) -> Result<P::Response, LinkError> {
         let ex = self.transact(address, request)?;
-        ex.response.ok_or(LinkError::Refused {
-            protocol: P::NAME,
-            request: request.name(),
-            address,
-            response: "nothing",
-            detail: "a broadcast of this command is not answered".to_owned(),
-        })
+        ex.response
+            .ok_or_else(|| LinkError::unanswered::<P>(&request, address))
     }
 
     /// Runs a movement to its end ([`Movement`]): the byte-order check before its trigger
-    /// ([`Master::check_byte_order`]), then its transactions and sleeps, reporting progress.
+    /// ([`Master::check_byte_order`]), then its transactions and sleeps, reporting progress
+    /// (the core's movement loop, [`movement::run`]).
     pub fn run_to_end<M: Movement<P>>(
         &mut self,
         address: u8,
-        mut movement: M,
+        movement: M,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<MoveReport<P::Response>, LinkError> {
-        let trigger = movement.trigger().map_err(|e| move_error(address, e))?;
-        self.check_byte_order(address, &trigger)?;
-        let mut step = movement.next(self.clock.now());
-        loop {
-            step = match step {
-                Step::Ask { request, optional } => match self.ask(address, request) {
-                    Ok(r) => movement.answered(self.clock.now(), Some(r)),
-                    Err(_) if optional => movement.answered(self.clock.now(), None),
-                    Err(e) => return Err(e),
-                },
-                Step::Sleep {
-                    until,
-                    progress: moving,
-                } => {
-                    if let Some(m) = moving {
-                        progress(Progress::Moving {
-                            elapsed: m.elapsed,
-                            position: m.position,
-                        });
-                    }
-                    self.clock.sleep_until(until);
-                    movement.next(self.clock.now())
-                }
-                Step::Done(report) => return Ok(report),
-                Step::Failed(e) => return Err(move_error(address, e)),
-            }
-        }
+        movement::run(&mut Steps(self), address, movement, |m| {
+            progress(Progress::Moving {
+                elapsed: m.elapsed,
+                position: m.position,
+            })
+        })
+    }
+}
+
+/// The master as the movement loop borrows it ([`Drive`]).
+struct Steps<'a, P: Link, T: Transport, C: Clock>(&'a mut Master<P, T, C>);
+
+impl<P: Link, T: Transport, C: Clock> Drive<P> for Steps<'_, P, T, C> {
+    type Error = LinkError;
+
+    fn now(&mut self) -> Duration {
+        self.0.clock.now()
+    }
+
+    fn check_byte_order(&mut self, address: u8, trigger: P::Request) -> Result<(), LinkError> {
+        self.0.check_byte_order(address, &trigger).map(|_| ())
+    }
+
+    fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Option<P::Response>, LinkError> {
+        Ok(self.0.transact(address, request)?.response)
+    }
+
+    fn sleep_until(&mut self, until: Duration) {
+        self.0.clock.sleep_until(until)
+    }
+
+    /// Any failure: a position read that fails is only a position not shown.
+    fn skippable(_: &LinkError) -> bool {
+        true
+    }
+
+    fn unanswered(address: u8, request: P::Request) -> LinkError {
+        LinkError::unanswered::<P>(&request, address)
+    }
+
+    fn stopped(address: u8, e: MoveError<P>) -> LinkError {
+        move_error(address, e)
     }
 }
 
