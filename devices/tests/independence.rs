@@ -13,7 +13,14 @@ fn dependencies(package: &str) -> Vec<String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
     let manifest = concat!(env!("CARGO_MANIFEST_DIR"), "/../Cargo.toml");
     let out = Command::new(cargo)
-        .args(["tree", "--manifest-path", manifest, "--locked", "-p", package])
+        .args([
+            "tree",
+            "--manifest-path",
+            manifest,
+            "--locked",
+            "-p",
+            package,
+        ])
         .args(["-e", "normal,build", "--all-features"])
         .args(["--prefix", "none", "--format", "{p}"])
         .output()
@@ -26,7 +33,9 @@ fn dependencies(package: &str) -> Vec<String> {
     let text = String::from_utf8(out.stdout).expect("cargo tree prints UTF-8");
     let lines: Vec<String> = text.lines().map(str::to_owned).collect();
     assert!(
-        lines.first().is_some_and(|l| l.starts_with(&format!("{package} "))),
+        lines
+            .first()
+            .is_some_and(|l| l.starts_with(&format!("{package} "))),
         "cargo tree -p {package} printed:\n{text}"
     );
     lines

@@ -58,15 +58,6 @@ where
         run(&mut Steps(self), address, movement, progress)
     }
 
-    /// Waits until `until` (driver time), in delays of at most `u32::MAX` nanoseconds.
-    fn wait_until(&mut self, until: Duration) {
-        let mut now = self.now.now();
-        while now < until {
-            self.delay.delay_ns(nanos(until - now));
-            now = self.now.now();
-        }
-    }
-
     fn run(&mut self) -> Result<Reply<P>, Error<P, U::Error>> {
         let mut chunk = [0u8; 64];
         loop {
@@ -74,7 +65,13 @@ where
             let line = self.core.line();
             match self.core.poll(now) {
                 Action::Done => break,
-                Action::Sleep(t) => self.wait_until(t),
+                Action::Sleep(t) => {
+                    let mut now = now;
+                    while now < t {
+                        self.delay.delay_ns(nanos(t - now));
+                        now = self.now.now();
+                    }
+                }
                 Action::ClearInput => {
                     while self.uart.read_ready().map_err(Error::Io)? {
                         if self.uart.read(&mut chunk).map_err(Error::Io)? == 0 {
@@ -141,7 +138,13 @@ where
     }
 
     fn sleep_until(&mut self, until: Duration) {
-        self.0.wait_until(until)
+        // The same wait as `run`'s for `Action::Sleep`, which keeps its own copy inline, as the
+        // async driver's does (there a shared helper costs the firmware example flash).
+        let mut now = self.0.now.now();
+        while now < until {
+            self.0.delay.delay_ns(nanos(until - now));
+            now = self.0.now.now();
+        }
     }
 
     /// A transaction the master's rules failed (no reply, a bad one); not the UART's or the pin's.
