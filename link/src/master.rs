@@ -436,9 +436,8 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         address: u8,
         request: &P::Request,
     ) -> Result<Option<&ByteOrderCheck>, LinkError> {
-        if P::byte_order_probe().is_empty() || Some(address) == P::BROADCAST_ADDRESS {
-            return Ok(None);
-        }
+        // The core decides whether a check is due (a probe, not a broadcast, not yet checked)
+        // and finishes at once when it is not.
         self.core.start_byte_order_check(address, *request);
         self.run()?;
         Ok(self.byte_order_checked(address))
