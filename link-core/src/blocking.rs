@@ -14,7 +14,7 @@ use embedded_io::{Read, ReadReady, Write};
 use crate::driver::{nanos, tick, Blocking, Error, NoPin, Now};
 use crate::link::Link;
 use crate::master::{Action, Reply};
-use crate::movement::{run, Drive, MoveError, MoveReport, Movement, Moving};
+use crate::movement::{run, Drive, MoveReport, Movement, Moving};
 
 /// A blocking master for protocol `P` on the UART `U` (builders: [`crate::driver::Driver`]).
 pub type Driver<P, U, N, D, DE = NoPin> = crate::driver::Driver<P, U, N, D, DE, Blocking>;
@@ -145,18 +145,5 @@ where
             self.0.delay.delay_ns(nanos(until - now));
             now = self.0.now.now();
         }
-    }
-
-    /// A transaction the master's rules failed (no reply, a bad one); not the UART's or the pin's.
-    fn skippable(e: &Self::Error) -> bool {
-        matches!(e, Error::Link(_))
-    }
-
-    fn unanswered(_address: u8, _request: P::Request) -> Self::Error {
-        Error::Unanswered
-    }
-
-    fn stopped(_address: u8, e: MoveError<P>) -> Self::Error {
-        Error::Move(e)
     }
 }

@@ -85,12 +85,24 @@ pub trait Movement<P: Link> {
     fn answered(&mut self, now: Duration, response: Option<P::Response>) -> Step<P>;
 }
 
-/// What a blocking driver lends [`run`]: its transactions, its time and its waits, and how it
-/// words a movement's stop. Each driver implements it once (the embedded-io driver here,
+/// A driver's error as the movement loop words and weighs it: shared by a driver's blocking
+/// and async kinds ([`Drive::Error`], [`DriveAsync::Error`]).
+pub trait MovementError<P: Link>: Sized {
+    /// Whether an optional request that failed with this may be passed over: a failure of the
+    /// line, not of the port.
+    fn skippable(&self) -> bool;
+    /// `request`, whose answer the movement needs, went to `address` and nothing answers there.
+    fn unanswered(address: u8, request: P::Request) -> Self;
+    /// The movement stopped: refused, or not done in time.
+    fn stopped(address: u8, e: MoveError<P>) -> Self;
+}
+
+/// What a blocking driver lends [`run`]: its transactions, its time and its waits, and its
+/// error ([`MovementError`]). Each driver implements it once (the embedded-io driver here,
 /// `busspec-link`'s `std` master), and its `run_movement` is [`run`].
 pub trait Drive<P: Link> {
     /// What the driver's movement ends in besides a report.
-    type Error;
+    type Error: MovementError<P>;
     /// Time since the driver's epoch.
     fn now(&mut self) -> Duration;
     /// The byte-order check before the first movement to `address`, for `trigger`
@@ -104,13 +116,6 @@ pub trait Drive<P: Link> {
     ) -> Result<Option<P::Response>, Self::Error>;
     /// Waits until `until` (driver time).
     fn sleep_until(&mut self, until: Duration);
-    /// Whether an optional request that failed with `e` may be passed over: a failure of the
-    /// line, not of the port.
-    fn skippable(e: &Self::Error) -> bool;
-    /// `request`, whose answer the movement needs, went to `address` and nothing answers there.
-    fn unanswered(address: u8, request: P::Request) -> Self::Error;
-    /// The movement stopped: refused, or not done in time.
-    fn stopped(address: u8, e: MoveError<P>) -> Self::Error;
 }
 
 /// [`Drive`] for an async driver: the same, with the transactions and waits awaited. Each
@@ -121,7 +126,7 @@ pub trait Drive<P: Link> {
 #[allow(async_fn_in_trait)]
 pub trait DriveAsync<P: Link> {
     /// See [`Drive::Error`].
-    type Error;
+    type Error: MovementError<P>;
     /// See [`Drive::now`].
     fn now(&mut self) -> Duration;
     /// See [`Drive::check_byte_order`].
@@ -138,12 +143,6 @@ pub trait DriveAsync<P: Link> {
     ) -> Result<Option<P::Response>, Self::Error>;
     /// See [`Drive::sleep_until`].
     async fn sleep_until(&mut self, until: Duration);
-    /// See [`Drive::skippable`].
-    fn skippable(e: &Self::Error) -> bool;
-    /// See [`Drive::unanswered`].
-    fn unanswered(address: u8, request: P::Request) -> Self::Error;
-    /// See [`Drive::stopped`].
-    fn stopped(address: u8, e: MoveError<P>) -> Self::Error;
 }
 
 /// Runs `movement` to its end on a blocking driver: the byte-order check before its trigger,
@@ -159,7 +158,9 @@ pub fn run<P: Link, D: Drive<P>, M: Movement<P>>(
     mut movement: M,
     mut progress: impl FnMut(Moving),
 ) -> Result<MoveReport<P::Response>, D::Error> {
-    let trigger = movement.trigger().map_err(|e| D::stopped(address, e))?;
+    let trigger = movement
+        .trigger()
+        .map_err(|e| D::Error::stopped(address, e))?;
     driver.check_byte_order(address, trigger)?;
     let mut step = movement.next(driver.now());
     loop {
@@ -167,8 +168,8 @@ pub fn run<P: Link, D: Drive<P>, M: Movement<P>>(
             Step::Ask { request, optional } => match driver.transact(address, request) {
                 Ok(Some(r)) => movement.answered(driver.now(), Some(r)),
                 Ok(None) if optional => movement.answered(driver.now(), None),
-                Ok(None) => return Err(D::unanswered(address, request)),
-                Err(e) if optional && D::skippable(&e) => movement.answered(driver.now(), None),
+                Ok(None) => return Err(D::Error::unanswered(address, request)),
+                Err(e) if optional && e.skippable() => movement.answered(driver.now(), None),
                 Err(e) => return Err(e),
             },
             Step::Sleep {
@@ -182,7 +183,7 @@ pub fn run<P: Link, D: Drive<P>, M: Movement<P>>(
                 movement.next(driver.now())
             }
             Step::Done(report) => return Ok(report),
-            Step::Failed(e) => return Err(D::stopped(address, e)),
+            Step::Failed(e) => return Err(D::Error::stopped(address, e)),
         }
     }
 }
@@ -194,7 +195,9 @@ pub async fn run_async<P: Link, D: DriveAsync<P>, M: Movement<P>>(
     mut movement: M,
     mut progress: impl FnMut(Moving),
 ) -> Result<MoveReport<P::Response>, D::Error> {
-    let trigger = movement.trigger().map_err(|e| D::stopped(address, e))?;
+    let trigger = movement
+        .trigger()
+        .map_err(|e| D::Error::stopped(address, e))?;
     driver.check_byte_order(address, trigger).await?;
     let mut step = movement.next(driver.now());
     loop {
@@ -202,8 +205,8 @@ pub async fn run_async<P: Link, D: DriveAsync<P>, M: Movement<P>>(
             Step::Ask { request, optional } => match driver.transact(address, request).await {
                 Ok(Some(r)) => movement.answered(driver.now(), Some(r)),
                 Ok(None) if optional => movement.answered(driver.now(), None),
-                Ok(None) => return Err(D::unanswered(address, request)),
-                Err(e) if optional && D::skippable(&e) => movement.answered(driver.now(), None),
+                Ok(None) => return Err(D::Error::unanswered(address, request)),
+                Err(e) if optional && e.skippable() => movement.answered(driver.now(), None),
                 Err(e) => return Err(e),
             },
             Step::Sleep {
@@ -217,7 +220,7 @@ pub async fn run_async<P: Link, D: DriveAsync<P>, M: Movement<P>>(
                 movement.next(driver.now())
             }
             Step::Done(report) => return Ok(report),
-            Step::Failed(e) => return Err(D::stopped(address, e)),
+            Step::Failed(e) => return Err(D::Error::stopped(address, e)),
         }
     }
 }

@@ -34,7 +34,7 @@ use std::time::Duration;
 use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply};
 pub use busspec_link_core::master::{Rejection, Timing};
 pub use busspec_link_core::movement::MoveReport;
-use busspec_link_core::movement::{self, Drive, MoveError, Movement};
+use busspec_link_core::movement::{self, Drive, MoveError, Movement, MovementError};
 use busspec_link_core::Line;
 
 use busspec_runtime::{EncodeError, Message, Protocol};
@@ -599,9 +599,11 @@ impl<P: Link, T: Transport, C: Clock> Drive<P> for Steps<'_, P, T, C> {
     fn sleep_until(&mut self, until: Duration) {
         self.0.clock.sleep_until(until)
     }
+}
 
+impl<P: Link> MovementError<P> for LinkError {
     /// Any failure: a position read that fails is only a position not shown.
-    fn skippable(_: &LinkError) -> bool {
+    fn skippable(&self) -> bool {
         true
     }
 
@@ -748,7 +750,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
 }
 
 /// A movement's stop as a [`LinkError`] (every driver reports through it).
-pub(crate) fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
+fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
     match e {
         MoveError::NotATrigger { request } => LinkError::Refused {
             protocol: P::NAME,

@@ -15,9 +15,9 @@ use tokio::time::Instant;
 use busspec_link_core::master::{Action, MasterCore};
 use busspec_link_core::{Line, Link};
 
-use busspec_link_core::movement::{run_async, DriveAsync, MoveError, MoveReport, Movement, Moving};
+use busspec_link_core::movement::{run_async, DriveAsync, MoveReport, Movement, Moving};
 
-use crate::master::{exchange, link_error, move_error, Exchange, LinkError, Timing};
+use crate::master::{exchange, link_error, Exchange, LinkError, Timing};
 
 /// A byte stream a tokio master drives: reads and writes, plus what a serial port does
 /// beyond them.
@@ -199,18 +199,5 @@ impl<P: Link, S: AsyncPort> DriveAsync<P> for Steps<'_, P, S> {
 
     async fn sleep_until(&mut self, until: Duration) {
         tokio::time::sleep_until(self.0.epoch + until).await
-    }
-
-    /// Any failure: a position read that fails is only a position not shown.
-    fn skippable(_: &LinkError) -> bool {
-        true
-    }
-
-    fn unanswered(address: u8, request: P::Request) -> LinkError {
-        LinkError::unanswered::<P>(&request, address)
-    }
-
-    fn stopped(address: u8, e: MoveError<P>) -> LinkError {
-        move_error(address, e)
     }
 }
