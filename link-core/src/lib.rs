@@ -10,7 +10,8 @@
 //!   own.
 //! - [`movement`]: movements polled to completion, as a sequence of transactions: the
 //!   [`movement::Movement`] trait (`busspec-devices` has the UB2 movement and the SD move),
-//!   and [`movement::Run`], the loop every driver of a movement goes through.
+//!   and the movement loop every driver runs them through, once per kind of driver:
+//!   [`movement::run`] (blocking) and [`movement::run_async`].
 //! - [`line::Line`]: baud rate, frame bits and the RS485 habits of a port (local echo,
 //!   driver-enable timing, turnaround).
 //! - Drivers, each behind a feature: `embedded-io` (`blocking::Driver`) and

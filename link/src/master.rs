@@ -17,8 +17,8 @@
 //! put in it; the first one to an address starts from the device's own view of the counter
 //! ([`Link::freshness_readout`], SD §3.12).
 //!
-//! Before the first movement to an address, [`Master::run_movement`], [`Master::move_to`] and
-//! [`Master::start_movement`] read what [`Link::byte_order_probe`] names (UB2: the factory
+//! Before the first movement to an address, [`Master::run_to_end`] (and so the device
+//! movements of `busspec-devices`) and [`Master::start_movement`] read what [`Link::byte_order_probe`] names (UB2: the factory
 //! limits) and refuse to move a device whose numbers do not read plausibly in the byte order
 //! the spec declares ([`LinkError::ByteOrder`], erratum ub2-e01); the check is kept per address
 //! until a reset or a new slave address ([`Link::forgets_byte_order_checks`]).
