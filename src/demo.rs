@@ -4,14 +4,16 @@
 use std::path::Path;
 use std::time::Duration;
 
+use busspec_devices::master::{SdMaster, SdString, Ub2Master};
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::sim::ub2::Ub2Sim;
+use busspec_devices::{Sd, Ub2};
 use busspec_link::clock::Clock;
 use busspec_link::fault::{FaultConfig, Faulty};
-use busspec_link::master::{Progress, SdString};
-use busspec_link::sim::sd::SdSim;
-use busspec_link::sim::ub2::Ub2Sim;
+use busspec_link::master::Progress;
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::soak::{self, SoakConfig};
-use busspec_link::{Link, Master, Message, Protocol, Sd, SimClock, Transport, Ub2};
+use busspec_link::{Link, Master, Message, Protocol, SimClock, Transport};
 use busspec_model::Protocol as Spec;
 use busspec_protocols::sd::{self, Angle};
 use busspec_protocols::ub2::{self, Capacitance};

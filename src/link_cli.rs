@@ -4,16 +4,17 @@ use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use busspec_devices::master::{CCurvePoint, SdMaster, SdString, Ub2Master};
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::sim::ub2::Ub2Sim;
+use busspec_devices::soak;
+use busspec_devices::{Sd, Ub2};
 use busspec_link::clock::Clock;
-use busspec_link::master::{LinkError, Progress, SdString};
+use busspec_link::master::{LinkError, Progress};
 use busspec_link::protocol::{byte_order_source, declared_byte_order};
-use busspec_link::sim::sd::SdSim;
-use busspec_link::sim::ub2::Ub2Sim;
 use busspec_link::sim::{serve, Device};
-use busspec_link::soak::{self, SoakConfig};
-use busspec_link::{
-    Link, Master, Message, Protocol, Sd, SerialTransport, SystemClock, Transport, Ub2,
-};
+use busspec_link::soak::SoakConfig;
+use busspec_link::{Link, Master, Message, Protocol, SerialTransport, SystemClock, Transport};
 use busspec_model::ir::Direction;
 use busspec_model::Protocol as Spec;
 use busspec_protocols::{sd, ub2, CommandKind};
@@ -263,7 +264,7 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
     let request = checked::<Ub2>(spec, o)?;
     let mut m = open::<Ub2>(o)?;
     check_byte_order(&mut m, o.address, &request)?;
-    if o.wait && busspec_link::master::ub2_completion_check(&request).is_some() {
+    if o.wait && busspec_devices::movement::ub2_completion_check(&request).is_some() {
         let mut line = ProgressLine::new();
         let report = m
             .run_movement(
@@ -321,11 +322,7 @@ fn print_move<P: Protocol>(
     }
 }
 
-fn write_svg(
-    path: &Path,
-    table: &[busspec_link::master::CCurvePoint],
-    address: u8,
-) -> Result<(), String> {
+fn write_svg(path: &Path, table: &[CCurvePoint], address: u8) -> Result<(), String> {
     let points: Vec<(f64, f64)> = table
         .iter()
         .map(|p| (f64::from(p.full_steps), p.capacitance.value()))
@@ -537,11 +534,7 @@ pub(crate) fn reply_json<P: Protocol>(spec: &Spec, response: &P::Response, addre
     reply_line::<P>(spec, response, address)
 }
 
-pub(crate) fn svg_file(
-    path: &Path,
-    table: &[busspec_link::master::CCurvePoint],
-    address: u8,
-) -> Result<(), String> {
+pub(crate) fn svg_file(path: &Path, table: &[CCurvePoint], address: u8) -> Result<(), String> {
     write_svg(path, table, address)
 }
 

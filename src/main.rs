@@ -383,7 +383,7 @@ fn main() -> ExitCode {
         } => {
             let chosen: Vec<&str> = match protocol.as_deref() {
                 Some(p) => vec![p],
-                None => busspec_link::soak::TARGETS.to_vec(),
+                None => busspec_devices::soak::TARGETS.to_vec(),
             };
             link_cli::soak(&chosen, transactions, rate, seed)
         }

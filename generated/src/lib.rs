@@ -12,6 +12,10 @@
 //! type ([`ub2::Ub2`], [`sd::Sd`], [`modbus::Modbus`], [`dynamixel::Dynamixel`]) implementing
 //! [`Protocol`], so code generic over protocols works with all of them. [`PROTOCOLS`] and [`with_protocol`] find a protocol by name.
 //!
+//! Each module is behind the cargo feature of its name (`ub2`, `sd`, `modbus`, `dynamixel`; all
+//! four by default): a firmware build turns the default off and names the protocols it speaks,
+//! so it compiles only those; [`PROTOCOLS`] lists the ones built.
+//!
 //! Everything protocol-independent (errors, [`Decoded`], [`FieldValue`], the stream decoder) is
 //! `busspec-runtime`'s, re-exported here.
 //!

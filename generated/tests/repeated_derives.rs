@@ -6,7 +6,12 @@
 //! `cargo test --workspace` builds this crate with both features (the root crate's tests ask
 //! for `serde`, the fuzz bodies for `arbitrary`).
 
-#![cfg(all(feature = "serde", feature = "arbitrary"))]
+#![cfg(all(
+    feature = "serde",
+    feature = "arbitrary",
+    feature = "modbus",
+    feature = "dynamixel"
+))]
 
 use busspec_protocols::{dynamixel, modbus};
 

@@ -12,7 +12,7 @@ use embedded_hal::digital::{ErrorKind, ErrorType, OutputPin};
 use crate::line::Line;
 use crate::link::Link;
 use crate::master::{Failure, MasterCore, Timing};
-use crate::movement::MoveError;
+use crate::movement::{MoveError, MovementError};
 
 /// A monotonic time source: time since any fixed epoch (a free-running timer).
 pub trait Now {
@@ -66,6 +66,21 @@ impl<P: Link, E: fmt::Debug> fmt::Display for Error<P, E> {
             Error::Move(e) => write!(f, "{} movement: {e:?}", P::NAME),
             Error::Unanswered => write!(f, "{} movement: a broadcast is not answered", P::NAME),
         }
+    }
+}
+
+impl<P: Link, E> MovementError<P> for Error<P, E> {
+    /// A transaction the master's rules failed (no reply, a bad one); not the UART's or the pin's.
+    fn skippable(&self) -> bool {
+        matches!(self, Error::Link(_))
+    }
+
+    fn unanswered(_address: u8, _request: P::Request) -> Self {
+        Error::Unanswered
+    }
+
+    fn stopped(_address: u8, e: MoveError<P>) -> Self {
+        Error::Move(e)
     }
 }
 

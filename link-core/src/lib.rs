@@ -5,10 +5,13 @@
 //!   settle, pairing, safe retries, freshness counters, broadcasts, the byte-order check before
 //!   a first movement) as a state machine that says what to do next and takes bytes and time.
 //!   No allocation, no clock, no I/O.
-//! - [`link::Link`]: what a master adds to a generated protocol beyond its spec, implemented
-//!   for the generated `Ub2` and `Sd`.
-//! - [`movement`]: movements polled to completion, as a sequence of transactions (UB2
-//!   completion checks, SD set point and position reads).
+//! - [`link::Link`]: what a master adds to a generated protocol beyond its spec. The crate
+//!   names no protocol: `busspec-devices` implements it for UB2 and SD, a user's crate for its
+//!   own.
+//! - [`movement`]: movements polled to completion, as a sequence of transactions: the
+//!   [`movement::Movement`] trait (`busspec-devices` has the UB2 movement and the SD move),
+//!   and the movement loop every driver runs them through, once per kind of driver:
+//!   [`movement::run`] (blocking) and [`movement::run_async`].
 //! - [`line::Line`]: baud rate, frame bits and the RS485 habits of a port (local echo,
 //!   driver-enable timing, turnaround).
 //! - Drivers, each behind a feature: `embedded-io` (`blocking::Driver`) and
@@ -29,8 +32,6 @@ pub mod driver;
 #[cfg(feature = "embedded-io-async")]
 pub mod nonblocking;
 
-pub use busspec_protocols::sd::Sd;
-pub use busspec_protocols::ub2::Ub2;
 pub use busspec_runtime::{Message, Protocol};
 pub use line::{DriverEnable, Line};
 pub use link::Link;

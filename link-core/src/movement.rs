@@ -2,9 +2,9 @@
 //!
 //! A movement says what to do next ([`Step`]): ask a request (one transaction of the
 //! master; a driver runs it and hands back the response), sleep until a time, or stop with a
-//! report or a refusal. [`Ub2Movement`] triggers a UB2 movement and polls its completion check
-//! (§4.x.2), reading the position in between; [`SdMove`] sends an SD set point and reads the
-//! actual position until it equals the target.
+//! report or a refusal. The movements of particular devices are theirs: `busspec-devices` has
+//! the UB2 movement (trigger, completion check, position reads) and the SD move (set point,
+//! position reads).
 //!
 //! A driver runs one so: [`Movement::trigger`] names the trigger, for the byte-order check
 //! the master makes before a first movement ([`crate::MasterCore::start_byte_order_check`]);
@@ -12,10 +12,6 @@
 //! [`Step::Failed`].
 
 use core::time::Duration;
-
-use busspec_protocols::sd::{self, Sd};
-use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::{CommandKind, Protocol};
 
 use crate::link::Link;
 
@@ -89,271 +85,142 @@ pub trait Movement<P: Link> {
     fn answered(&mut self, now: Duration, response: Option<P::Response>) -> Step<P>;
 }
 
-/// The completion check that goes with a UB2 movement trigger: same first code byte, second
-/// byte 0x01 (§4.x.2). Built as a frame and decoded, so it is whatever the spec says it is.
-pub fn ub2_completion_check(trigger: &ub2::Request) -> Option<ub2::Request> {
-    let code = trigger.code();
-    if code.len() != 2 || code[1] != 0x00 {
-        return None;
-    }
-    let address = *Ub2::DEVICE_ADDRESSES.start();
-    let mut frame = [0xAA, address, code[0], 0x01, 0];
-    frame[4] = ub2::checksum(&frame[..4]);
-    match Ub2::decode_request(&frame) {
-        Ok(d) if Ub2::kind(&d.message) == CommandKind::CompletionCheck => Some(d.message),
-        _ => None,
-    }
+/// A driver's error as the movement loop words and weighs it: shared by a driver's blocking
+/// and async kinds ([`Drive::Error`], [`DriveAsync::Error`]).
+pub trait MovementError<P: Link>: Sized {
+    /// Whether an optional request that failed with this may be passed over: a failure of the
+    /// line, not of the port.
+    fn skippable(&self) -> bool;
+    /// `request`, whose answer the movement needs, went to `address` and nothing answers there.
+    fn unanswered(address: u8, request: P::Request) -> Self;
+    /// The movement stopped: refused, or not done in time.
+    fn stopped(address: u8, e: MoveError<P>) -> Self;
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Ub2Phase {
-    Trigger,
-    Check,
-    Position { elapsed: Duration },
+/// What a blocking driver lends [`run`]: its transactions, its time and its waits, and its
+/// error ([`MovementError`]). Each driver implements it once (the embedded-io driver here,
+/// `busspec-link`'s `std` master), and its `run_movement` is [`run`].
+pub trait Drive<P: Link> {
+    /// What the driver's movement ends in besides a report.
+    type Error: MovementError<P>;
+    /// Time since the driver's epoch.
+    fn now(&mut self) -> Duration;
+    /// The byte-order check before the first movement to `address`, for `trigger`
+    /// ([`crate::MasterCore::start_byte_order_check`]).
+    fn check_byte_order(&mut self, address: u8, trigger: P::Request) -> Result<(), Self::Error>;
+    /// One transaction: the reply, or `None` where the request went unanswered (a broadcast).
+    fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Option<P::Response>, Self::Error>;
+    /// Waits until `until` (driver time).
+    fn sleep_until(&mut self, until: Duration);
 }
 
-/// A UB2 movement: the trigger, then the completion check every `poll_every`, reading the
-/// full-step position while it is not done, until done or `limit` has passed.
-#[derive(Debug, Clone)]
-pub struct Ub2Movement {
-    trigger: ub2::Request,
-    check: Option<ub2::Request>,
-    poll_every: Duration,
-    limit: Duration,
-    start: Duration,
-    started: Option<ub2::Response>,
-    clipped: bool,
-    polls: u32,
-    phase: Ub2Phase,
+/// [`Drive`] for an async driver: the same, with the transactions and waits awaited. Each
+/// async driver implements it once (the embedded-io-async driver here, `busspec-link`'s tokio
+/// driver), and its `run_movement` is [`run_async`].
+// The futures are the drivers' own: a tokio driver's are `Send`, an embedded one's need not be,
+// and a caller that names a concrete driver sees which.
+#[allow(async_fn_in_trait)]
+pub trait DriveAsync<P: Link> {
+    /// See [`Drive::Error`].
+    type Error: MovementError<P>;
+    /// See [`Drive::now`].
+    fn now(&mut self) -> Duration;
+    /// See [`Drive::check_byte_order`].
+    async fn check_byte_order(
+        &mut self,
+        address: u8,
+        trigger: P::Request,
+    ) -> Result<(), Self::Error>;
+    /// See [`Drive::transact`].
+    async fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Option<P::Response>, Self::Error>;
+    /// See [`Drive::sleep_until`].
+    async fn sleep_until(&mut self, until: Duration);
 }
 
-impl Ub2Movement {
-    pub fn new(trigger: ub2::Request, poll_every: Duration, limit: Duration) -> Self {
-        Ub2Movement {
-            trigger,
-            check: ub2_completion_check(&trigger),
-            poll_every,
-            limit,
-            start: Duration::ZERO,
-            started: None,
-            clipped: false,
-            polls: 0,
-            phase: Ub2Phase::Trigger,
-        }
-    }
-
-    fn refused(request: ub2::Request, response: ub2::Response, detail: &'static str) -> Step<Ub2> {
-        Step::Failed(MoveError::Refused {
-            request,
-            response,
-            detail,
-        })
-    }
-
-    fn ask(request: ub2::Request) -> Step<Ub2> {
-        Step::Ask {
-            request,
-            optional: false,
-        }
-    }
-}
-
-impl Movement<Ub2> for Ub2Movement {
-    fn trigger(&self) -> Result<ub2::Request, MoveError<Ub2>> {
-        match self.check {
-            Some(_) => Ok(self.trigger),
-            None => Err(MoveError::NotATrigger {
-                request: self.trigger,
-            }),
-        }
-    }
-
-    fn next(&mut self, now: Duration) -> Step<Ub2> {
-        let Some(check) = self.check else {
-            return Step::Failed(MoveError::NotATrigger {
-                request: self.trigger,
-            });
-        };
-        match self.phase {
-            Ub2Phase::Trigger => {
-                self.start = now;
-                Step::Ask {
-                    request: self.trigger,
-                    optional: false,
+/// Runs `movement` to its end on a blocking driver: the byte-order check before its trigger,
+/// then its transactions and sleeps; `progress` hears where the device is in between. The
+/// movement loop of every blocking driver.
+///
+/// [`run_async`] is the same loop with `.await` after each transaction and wait: Rust has no
+/// way yet to write one body for both (`async` closures and keyword generics are not in the
+/// crate's Rust 1.81), so the two are kept line for line alike.
+pub fn run<P: Link, D: Drive<P>, M: Movement<P>>(
+    driver: &mut D,
+    address: u8,
+    mut movement: M,
+    mut progress: impl FnMut(Moving),
+) -> Result<MoveReport<P::Response>, D::Error> {
+    let trigger = movement
+        .trigger()
+        .map_err(|e| D::Error::stopped(address, e))?;
+    driver.check_byte_order(address, trigger)?;
+    let mut step = movement.next(driver.now());
+    loop {
+        step = match step {
+            Step::Ask { request, optional } => match driver.transact(address, request) {
+                Ok(Some(r)) => movement.answered(driver.now(), Some(r)),
+                Ok(None) if optional => movement.answered(driver.now(), None),
+                Ok(None) => return Err(D::Error::unanswered(address, request)),
+                Err(e) if optional && e.skippable() => movement.answered(driver.now(), None),
+                Err(e) => return Err(e),
+            },
+            Step::Sleep {
+                until,
+                progress: moving,
+            } => {
+                if let Some(m) = moving {
+                    progress(m);
                 }
+                driver.sleep_until(until);
+                movement.next(driver.now())
             }
-            _ => {
-                self.phase = Ub2Phase::Check;
-                Self::ask(check)
-            }
+            Step::Done(report) => return Ok(report),
+            Step::Failed(e) => return Err(D::Error::stopped(address, e)),
         }
     }
+}
 
-    fn answered(&mut self, now: Duration, response: Option<ub2::Response>) -> Step<Ub2> {
-        let Some(check) = self.check else {
-            return self.next(now);
-        };
-        match (self.phase, response) {
-            (Ub2Phase::Trigger, Some(r)) => {
-                self.clipped = match r {
-                    ub2::Response::MovementStarted => false,
-                    // 0x93: approved, the cap runs to the customer limit (§7.2).
-                    r if Ub2::nak_approves(&self.trigger, &r) => true,
-                    other => {
-                        return Self::refused(self.trigger, other, "the movement did not start")
-                    }
-                };
-                self.started = Some(r);
-                self.phase = Ub2Phase::Check;
-                Self::ask(check)
-            }
-            (Ub2Phase::Check, Some(reply)) => {
-                self.polls += 1;
-                let elapsed = now.saturating_sub(self.start);
-                let lost = match reply {
-                    ub2::Response::MovementCompleted => None,
-                    ub2::Response::MovementCompletedWithStepLoss { lost_micro_steps } => {
-                        Some(lost_micro_steps)
-                    }
-                    ub2::Response::MovementNotCompleted => {
-                        if elapsed >= self.limit {
-                            return Step::Failed(MoveError::Timeout {
-                                request: self.trigger,
-                                waited: elapsed,
-                            });
-                        }
-                        self.phase = Ub2Phase::Position { elapsed };
-                        return Step::Ask {
-                            request: ub2::Request::GetActualFullStepPosition,
-                            optional: true,
-                        };
-                    }
-                    other => {
-                        return Self::refused(
-                            check,
-                            other,
-                            "while waiting for the movement to complete",
-                        )
-                    }
-                };
-                Step::Done(MoveReport {
-                    started: self.started.unwrap_or(ub2::Response::MovementStarted),
-                    finished: Some(reply),
-                    clipped: self.clipped,
-                    lost_micro_steps: lost,
-                    polls: self.polls,
-                    elapsed,
-                })
-            }
-            (Ub2Phase::Position { elapsed }, r) => {
-                let progress = match r {
-                    Some(ub2::Response::ActualFullStepPosition { full_steps }) => Some(Moving {
-                        elapsed,
-                        position: f64::from(full_steps),
-                    }),
-                    _ => None,
-                };
-                Step::Sleep {
-                    until: now + self.poll_every,
-                    progress,
+/// [`run`] on an async driver.
+pub async fn run_async<P: Link, D: DriveAsync<P>, M: Movement<P>>(
+    driver: &mut D,
+    address: u8,
+    mut movement: M,
+    mut progress: impl FnMut(Moving),
+) -> Result<MoveReport<P::Response>, D::Error> {
+    let trigger = movement
+        .trigger()
+        .map_err(|e| D::Error::stopped(address, e))?;
+    driver.check_byte_order(address, trigger).await?;
+    let mut step = movement.next(driver.now());
+    loop {
+        step = match step {
+            Step::Ask { request, optional } => match driver.transact(address, request).await {
+                Ok(Some(r)) => movement.answered(driver.now(), Some(r)),
+                Ok(None) if optional => movement.answered(driver.now(), None),
+                Ok(None) => return Err(D::Error::unanswered(address, request)),
+                Err(e) if optional && e.skippable() => movement.answered(driver.now(), None),
+                Err(e) => return Err(e),
+            },
+            Step::Sleep {
+                until,
+                progress: moving,
+            } => {
+                if let Some(m) = moving {
+                    progress(m);
                 }
+                driver.sleep_until(until).await;
+                movement.next(driver.now())
             }
-            // Only the position read is optional: a driver hands back `None` for nothing else.
-            (_, None) => self.next(now),
-        }
-    }
-}
-
-/// An SD move: a set point to `target`, then the actual position every `poll_every` until it
-/// equals the target or `limit` has passed.
-#[derive(Debug, Clone)]
-pub struct SdMove {
-    target: sd::Angle,
-    poll_every: Duration,
-    limit: Duration,
-    start: Duration,
-    started: Option<sd::Response>,
-    polls: u32,
-}
-
-impl SdMove {
-    pub fn new(target: sd::Angle, poll_every: Duration, limit: Duration) -> Self {
-        SdMove {
-            target,
-            poll_every,
-            limit,
-            start: Duration::ZERO,
-            started: None,
-            polls: 0,
-        }
-    }
-
-    fn set_point(&self) -> sd::Request {
-        sd::Request::SetPoint {
-            freshness: 0,
-            position: self.target,
-        }
-    }
-}
-
-impl Movement<Sd> for SdMove {
-    fn trigger(&self) -> Result<sd::Request, MoveError<Sd>> {
-        Ok(self.set_point())
-    }
-
-    fn next(&mut self, now: Duration) -> Step<Sd> {
-        if self.started.is_none() {
-            self.start = now;
-            return Step::Ask {
-                request: self.set_point(),
-                optional: false,
-            };
-        }
-        Step::Ask {
-            request: sd::Request::ReadActualPosition,
-            optional: false,
-        }
-    }
-
-    fn answered(&mut self, now: Duration, response: Option<sd::Response>) -> Step<Sd> {
-        let Some(reply) = response else {
-            return self.next(now);
-        };
-        let Some(started) = self.started else {
-            self.started = Some(reply);
-            return self.next(now);
-        };
-        self.polls += 1;
-        let elapsed = now.saturating_sub(self.start);
-        let sd::Response::ActualPosition { position } = reply else {
-            return Step::Failed(MoveError::Refused {
-                request: sd::Request::ReadActualPosition,
-                response: reply,
-                detail: "expected the actual position",
-            });
-        };
-        if position == self.target {
-            return Step::Done(MoveReport {
-                started,
-                finished: Some(reply),
-                clipped: false,
-                lost_micro_steps: None,
-                polls: self.polls,
-                elapsed,
-            });
-        }
-        if elapsed >= self.limit {
-            return Step::Failed(MoveError::Timeout {
-                request: self.set_point(),
-                waited: elapsed,
-            });
-        }
-        Step::Sleep {
-            until: now + self.poll_every,
-            progress: Some(Moving {
-                elapsed,
-                position: position.value(),
-            }),
+            Step::Done(report) => return Ok(report),
+            Step::Failed(e) => return Err(D::Error::stopped(address, e)),
         }
     }
 }

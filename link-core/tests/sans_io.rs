@@ -2,9 +2,10 @@
 
 use core::time::Duration;
 
+use busspec_devices::protocols::{sd, ub2};
+use busspec_devices::{Sd, Ub2};
 use busspec_link_core::master::{Action, Event, Failure, MasterCore};
-use busspec_link_core::{Message, Sd, Ub2};
-use busspec_protocols::{sd, ub2};
+use busspec_link_core::Message;
 
 fn ms(n: u64) -> Duration {
     Duration::from_millis(n)

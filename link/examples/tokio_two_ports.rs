@@ -8,11 +8,12 @@
 
 use std::time::{Duration, Instant};
 
-use busspec_link::busspec_link_core::movement::SdMove;
+use busspec_devices::movement::SdMove;
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::Sd;
 use busspec_link::sim::pty::PtySim;
-use busspec_link::sim::sd::SdSim;
 use busspec_link::tokio_driver::AsyncMaster;
-use busspec_link::{LinkError, Sd};
+use busspec_link::LinkError;
 use busspec_protocols::sd;
 use tokio_serial::SerialStream;
 

@@ -2,12 +2,13 @@
 //!
 //! - [`protocol::Link`]: what a master adds to a generated protocol beyond its spec (safe
 //!   retries, reply address, checksum NAK, freshness counter, gap between requests), an
-//!   extension of [`busspec_runtime::Protocol`] implemented on the generated [`Ub2`] and [`Sd`].
+//!   extension of [`busspec_runtime::Protocol`]. This crate names no protocol:
+//!   `busspec-devices` implements it for UB2 and SD, with their movements, readouts,
+//!   simulators and soak mixes.
 //! - [`master::Master`]: the transaction layer for any [`Link`] protocol over any
 //!   [`transport::Transport`] — typed request out, paired typed response back, with the bus's
 //!   rules (gap between commands, timeouts, safe retries, the freshness counter, broadcasts)
-//!   and the long operations built on them (UB2 movements and C-curve table, SD movements and
-//!   string readouts).
+//!   and movements run to their end ([`Master::run_to_end`]).
 //! - [`transport`]: serial ports (through `serialport`, feature `serial`, on by default) and
 //!   the trait the rest is written to.
 //! - `tokio_driver` (feature `tokio`): the same master, async, over `tokio-serial`.
@@ -15,8 +16,8 @@
 //! Every rule of a transaction lives in the `no_std` sans-IO core, `busspec-link-core`
 //! ([`busspec_link_core::MasterCore`]); [`Master`] and the tokio driver only carry out what it
 //! says. Firmware uses the core's own `embedded-io` and `embedded-io-async` drivers.
-//! - [`sim`]: UB2 and SD device simulators on the generated codec, a simulated bus that holds
-//!   several of them, and a loop that serves them on a real port (a pseudo-terminal).
+//! - [`sim`]: the simulated bus that holds device simulators (any [`sim::Device`]), and a loop
+//!   that serves them on a real port (a pseudo-terminal).
 //! - [`fault`]: a transport wrapper that damages traffic, seeded and replayable.
 //! - [`soak`]: many transactions through faults, counting what got through and what did not,
 //!   for any protocol with a simulator and a request mix ([`soak::SoakTarget`]).
@@ -36,8 +37,6 @@ pub mod tokio_driver;
 pub mod transport;
 
 pub use busspec_link_core::{DriverEnable, Line};
-pub use busspec_protocols::sd::Sd;
-pub use busspec_protocols::ub2::Ub2;
 pub use busspec_runtime::{Message, Protocol};
 pub use clock::{Clock, SimClock, SystemClock};
 pub use master::{Exchange, LinkError, Master, Progress, Timing, TraceEvent};

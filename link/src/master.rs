@@ -17,15 +17,15 @@
 //! put in it; the first one to an address starts from the device's own view of the counter
 //! ([`Link::freshness_readout`], SD §3.12).
 //!
-//! Before the first movement to an address, [`Master::run_movement`], [`Master::move_to`] and
-//! [`Master::start_movement`] read what [`Link::byte_order_probe`] names (UB2: the factory
+//! Before the first movement to an address, [`Master::run_to_end`] (and so the device
+//! movements of `busspec-devices`) and [`Master::start_movement`] read what [`Link::byte_order_probe`] names (UB2: the factory
 //! limits) and refuse to move a device whose numbers do not read plausibly in the byte order
 //! the spec declares ([`LinkError::ByteOrder`], erratum ub2-e01); the check is kept per address
 //! until a reset or a new slave address ([`Link::forgets_byte_order_checks`]).
 //!
-//! [`Master`] works for any protocol that implements [`Link`]; the long operations of one
-//! device family (UB2 movements and C-curve table, SD movements and string readouts) are
-//! methods of `Master<Ub2, _, _>` and `Master<Sd, _, _>`.
+//! [`Master`] works for any protocol that implements [`Link`] and names none; the long
+//! operations of one device family (UB2 movements and C-curve table, SD movements and string
+//! readouts) are `busspec-devices`', on top of [`Master::ask`] and [`Master::run_to_end`].
 
 use std::fmt;
 use std::io;
@@ -33,13 +33,11 @@ use std::time::Duration;
 
 use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply};
 pub use busspec_link_core::master::{Rejection, Timing};
-pub use busspec_link_core::movement::{ub2_completion_check, MoveReport};
-use busspec_link_core::movement::{MoveError, Movement, SdMove, Step, Ub2Movement};
+pub use busspec_link_core::movement::MoveReport;
+use busspec_link_core::movement::{self, Drive, MoveError, Movement, MovementError};
 use busspec_link_core::Line;
 
-use busspec_protocols::sd::{self, Sd};
-use busspec_protocols::ub2::{self, Ub2};
-use busspec_protocols::{EncodeError, Message, Protocol};
+use busspec_runtime::{EncodeError, Message, Protocol};
 
 use crate::clock::Clock;
 use crate::protocol::{byte_order_source, declared_byte_order, swapped_byte_order};
@@ -265,6 +263,37 @@ impl fmt::Display for LinkError {
     }
 }
 
+impl LinkError {
+    /// [`LinkError::Refused`] for a request whose answer is needed, sent where nothing answers
+    /// it (a broadcast the spec leaves unanswered).
+    pub fn unanswered<P: Protocol>(request: &P::Request, address: u8) -> LinkError {
+        LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: "nothing",
+            detail: "a broadcast of this command is not answered".to_owned(),
+        }
+    }
+
+    /// [`LinkError::Refused`]: the device answered `request` to `address` with `response`,
+    /// which the operation cannot go on with, and `detail` says why.
+    pub fn refused<P: Protocol>(
+        request: &P::Request,
+        address: u8,
+        response: &P::Response,
+        detail: &str,
+    ) -> LinkError {
+        LinkError::Refused {
+            protocol: P::NAME,
+            request: request.name(),
+            address,
+            response: response.name(),
+            detail: detail.to_owned(),
+        }
+    }
+}
+
 impl std::error::Error for LinkError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
@@ -407,9 +436,8 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         address: u8,
         request: &P::Request,
     ) -> Result<Option<&ByteOrderCheck>, LinkError> {
-        if P::byte_order_probe().is_empty() || Some(address) == P::BROADCAST_ADDRESS {
-            return Ok(None);
-        }
+        // The core decides whether a check is due (a probe, not a broadcast, not yet checked)
+        // and finishes at once when it is not.
         self.core.start_byte_order_check(address, *request);
         self.run()?;
         Ok(self.byte_order_checked(address))
@@ -524,65 +552,67 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
     /// Like [`Master::transact`] for a request that must be answered: the response itself.
     pub fn ask(&mut self, address: u8, request: P::Request) -> Result<P::Response, LinkError> {
         let ex = self.transact(address, request)?;
-        ex.response.ok_or(LinkError::Refused {
-            protocol: P::NAME,
-            request: request.name(),
-            address,
-            response: "nothing",
-            detail: "a broadcast of this command is not answered".to_owned(),
-        })
+        ex.response
+            .ok_or_else(|| LinkError::unanswered::<P>(&request, address))
     }
 
     /// Runs a movement to its end ([`Movement`]): the byte-order check before its trigger
-    /// ([`Master::check_byte_order`]), then its transactions and sleeps, reporting progress.
+    /// ([`Master::check_byte_order`]), then its transactions and sleeps, reporting progress
+    /// (the core's movement loop, [`movement::run`]).
     pub fn run_to_end<M: Movement<P>>(
         &mut self,
         address: u8,
-        mut movement: M,
+        movement: M,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<MoveReport<P::Response>, LinkError> {
-        let trigger = movement.trigger().map_err(|e| move_error(address, e))?;
-        self.check_byte_order(address, &trigger)?;
-        let mut step = movement.next(self.clock.now());
-        loop {
-            step = match step {
-                Step::Ask { request, optional } => match self.ask(address, request) {
-                    Ok(r) => movement.answered(self.clock.now(), Some(r)),
-                    Err(_) if optional => movement.answered(self.clock.now(), None),
-                    Err(e) => return Err(e),
-                },
-                Step::Sleep {
-                    until,
-                    progress: moving,
-                } => {
-                    if let Some(m) = moving {
-                        progress(Progress::Moving {
-                            elapsed: m.elapsed,
-                            position: m.position,
-                        });
-                    }
-                    self.clock.sleep_until(until);
-                    movement.next(self.clock.now())
-                }
-                Step::Done(report) => return Ok(report),
-                Step::Failed(e) => return Err(move_error(address, e)),
-            }
-        }
+        movement::run(&mut Steps(self), address, movement, |m| {
+            progress(Progress::Moving {
+                elapsed: m.elapsed,
+                position: m.position,
+            })
+        })
+    }
+}
+
+/// The master as the movement loop borrows it ([`Drive`]).
+struct Steps<'a, P: Link, T: Transport, C: Clock>(&'a mut Master<P, T, C>);
+
+impl<P: Link, T: Transport, C: Clock> Drive<P> for Steps<'_, P, T, C> {
+    type Error = LinkError;
+
+    fn now(&mut self) -> Duration {
+        self.0.clock.now()
     }
 
-    fn refused(
-        request: &P::Request,
+    fn check_byte_order(&mut self, address: u8, trigger: P::Request) -> Result<(), LinkError> {
+        self.0.check_byte_order(address, &trigger).map(|_| ())
+    }
+
+    fn transact(
+        &mut self,
         address: u8,
-        response: &P::Response,
-        detail: &str,
-    ) -> LinkError {
-        LinkError::Refused {
-            protocol: P::NAME,
-            request: request.name(),
-            address,
-            response: response.name(),
-            detail: detail.to_owned(),
-        }
+        request: P::Request,
+    ) -> Result<Option<P::Response>, LinkError> {
+        Ok(self.0.transact(address, request)?.response)
+    }
+
+    fn sleep_until(&mut self, until: Duration) {
+        self.0.clock.sleep_until(until)
+    }
+}
+
+impl<P: Link> MovementError<P> for LinkError {
+    /// Any failure: a position read that fails is only a position not shown.
+    fn skippable(&self) -> bool {
+        true
+    }
+
+    fn unanswered(address: u8, request: P::Request) -> LinkError {
+        LinkError::unanswered::<P>(&request, address)
+    }
+
+    fn stopped(address: u8, e: MoveError<P>) -> LinkError {
+        move_error(address, e)
     }
 }
 
@@ -720,7 +750,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
 }
 
 /// A movement's stop as a [`LinkError`] (every driver reports through it).
-pub(crate) fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
+fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
     match e {
         MoveError::NotATrigger { request } => LinkError::Refused {
             protocol: P::NAME,
@@ -772,236 +802,4 @@ pub enum Progress {
     Moving { elapsed: Duration, position: f64 },
     /// `done` items of a table or string read so far.
     Read { done: usize },
-}
-
-/// One row of the UB2 C-curve table.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CCurvePoint {
-    pub index: u16,
-    pub full_steps: u16,
-    pub capacitance: ub2::Capacitance,
-}
-
-impl<T: Transport, C: Clock> Master<Ub2, T, C> {
-    /// Triggers a movement and polls its completion check every `poll_every` until it is done,
-    /// reporting the full-step position in between. Fails if the device refuses the trigger,
-    /// says the movement was not triggered, or is not done within `limit`.
-    pub fn run_movement(
-        &mut self,
-        address: u8,
-        trigger: ub2::Request,
-        poll_every: Duration,
-        limit: Duration,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<MoveReport<ub2::Response>, LinkError> {
-        self.run_to_end(
-            address,
-            Ub2Movement::new(trigger, poll_every, limit),
-            progress,
-        )
-    }
-
-    /// Reads the whole C-curve table (§6.7): entries from index 0 until the device answers
-    /// "index out of range" (0x94), at most 500.
-    pub fn read_c_curve(
-        &mut self,
-        address: u8,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Vec<CCurvePoint>, LinkError> {
-        const MAX_ENTRIES: u16 = 500;
-        let mut table = Vec::new();
-        for index in 0..MAX_ENTRIES {
-            let request = ub2::Request::GetCCurveIndexedFullStepCapacitance { index };
-            match self.ask(address, request)? {
-                ub2::Response::CCurveEntry {
-                    index: got,
-                    full_steps,
-                    capacitance,
-                } if got == index => table.push(CCurvePoint {
-                    index,
-                    full_steps,
-                    capacitance,
-                }),
-                ub2::Response::CCurveEntry { index: got, .. } => {
-                    return Err(LinkError::BadReply {
-                        protocol: Ub2::NAME,
-                        request: request.name(),
-                        address,
-                        attempts: 1,
-                        reason: format!("entry {got} came back for index {index}"),
-                        bytes: Vec::new(),
-                    })
-                }
-                ub2::Response::NakIndexOutOfRange => break,
-                other => {
-                    return Err(Self::refused(
-                        &request,
-                        address,
-                        &other,
-                        "reading the C-curve table",
-                    ))
-                }
-            }
-            progress(Progress::Read { done: table.len() });
-        }
-        Ok(table)
-    }
-}
-
-/// The four SD string readouts (§3.20-§3.23).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SdString {
-    SerialNumber,
-    ProductDescription,
-    SoftwareRevision,
-    HardwareRevision,
-}
-
-impl SdString {
-    pub const ALL: [SdString; 4] = [
-        SdString::SerialNumber,
-        SdString::ProductDescription,
-        SdString::SoftwareRevision,
-        SdString::HardwareRevision,
-    ];
-
-    /// The request for byte `byte_number` of this string.
-    pub fn request(self, byte_number: u8) -> sd::Request {
-        match self {
-            SdString::SerialNumber => sd::Request::ReadElectronicSerialNumber { byte_number },
-            SdString::ProductDescription => sd::Request::ReadProductDescription { byte_number },
-            SdString::SoftwareRevision => sd::Request::ReadSoftwareRevision { byte_number },
-            SdString::HardwareRevision => sd::Request::ReadHardwareRevision { byte_number },
-        }
-    }
-
-    /// The character and the string length a reply carries.
-    pub fn character(response: &sd::Response) -> Option<(u8, u8)> {
-        match *response {
-            sd::Response::ElectronicSerialNumberCharacter {
-                character,
-                string_length,
-            }
-            | sd::Response::ProductDescriptionCharacter {
-                character,
-                string_length,
-            }
-            | sd::Response::SoftwareRevisionCharacter {
-                character,
-                string_length,
-            }
-            | sd::Response::HardwareRevisionCharacter {
-                character,
-                string_length,
-            } => Some((character, string_length)),
-            _ => None,
-        }
-    }
-
-    /// The readout this request belongs to.
-    pub fn of(request: &sd::Request) -> Option<SdString> {
-        SdString::ALL
-            .into_iter()
-            .find(|s| s.request(0).name() == request.name())
-    }
-}
-
-impl<T: Transport, C: Clock> Master<Sd, T, C> {
-    /// Reads a whole string, one character per transaction: byte 0 gives the length, then the
-    /// rest. Every reply must agree on the length.
-    pub fn read_string(
-        &mut self,
-        address: u8,
-        which: SdString,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Vec<u8>, LinkError> {
-        let mut text = Vec::new();
-        let mut length = None;
-        let mut byte = 0u8;
-        while length.map_or(true, |n| usize::from(byte) < usize::from(n)) && byte < 0x20 {
-            let request = which.request(byte);
-            let response = self.ask(address, request)?;
-            let Some((c, n)) = SdString::character(&response) else {
-                return Err(Self::refused(
-                    &request,
-                    address,
-                    &response,
-                    "expected a string character",
-                ));
-            };
-            if n > 0x20 {
-                return Err(Self::refused(
-                    &request,
-                    address,
-                    &response,
-                    &format!("string length {n} exceeds 32"),
-                ));
-            }
-            match length {
-                None => length = Some(n),
-                Some(l) if l != n => {
-                    return Err(Self::refused(
-                        &request,
-                        address,
-                        &response,
-                        &format!("string length changed from {l} to {n} while reading"),
-                    ))
-                }
-                Some(_) => {}
-            }
-            if n == 0 {
-                break;
-            }
-            text.push(c);
-            byte += 1;
-            progress(Progress::Read { done: text.len() });
-        }
-        Ok(text)
-    }
-
-    /// Sends a set point and polls the actual position every `poll_every` until it equals the
-    /// target, or `limit` passes.
-    pub fn move_to(
-        &mut self,
-        address: u8,
-        target: sd::Angle,
-        poll_every: Duration,
-        limit: Duration,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<MoveReport<sd::Response>, LinkError> {
-        self.run_to_end(address, SdMove::new(target, poll_every, limit), progress)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::clock::SimClock;
-    use crate::sim::sd::SdSim;
-    use crate::sim::ub2::Ub2Sim;
-    use crate::sim::{BusConfig, SimBus};
-
-    /// The freshness counter wraps at the protocol's modulus: SD's 4 bits, a whole byte where a
-    /// protocol does not say.
-    #[test]
-    fn the_freshness_counter_wraps_at_the_protocols_modulus() {
-        let clock = SimClock::new();
-        let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![SdSim::new(1)]);
-        let mut m: Master<Sd, _, _> = Master::new(bus, clock);
-        m.set_freshness(1, 0x0F);
-        assert_eq!(m.next_freshness_value(1), Some(0));
-        m.set_freshness(1, 0x1E);
-        assert_eq!(m.next_freshness_value(1), Some(0x0F));
-        let clock = SimClock::new();
-        let bus = SimBus::new(
-            clock.clone(),
-            BusConfig::new(Ub2::BAUD),
-            vec![Ub2Sim::new(0x21)],
-        );
-        let mut m: Master<Ub2, _, _> = Master::new(bus, clock);
-        m.set_freshness(0x21, 0x0F);
-        assert_eq!(m.next_freshness_value(0x21), Some(0x10));
-        m.set_freshness(0x21, 0xFF);
-        assert_eq!(m.next_freshness_value(0x21), Some(0));
-    }
 }

@@ -4,7 +4,7 @@
 
 pub use busspec_link_core::link::*;
 
-use busspec_protocols::Protocol;
+use busspec_runtime::Protocol;
 
 /// Where the spec declares its byte order, to quote in a message:
 /// `spec/ub2.yaml:8: byte_order: little`.

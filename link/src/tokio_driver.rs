@@ -7,6 +7,7 @@
 //! (so `tokio::time::pause` makes tests run in virtual time).
 
 use std::io;
+use std::time::Duration;
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::time::Instant;
@@ -14,9 +15,9 @@ use tokio::time::Instant;
 use busspec_link_core::master::{Action, MasterCore};
 use busspec_link_core::{Line, Link};
 
-use busspec_link_core::movement::{MoveReport, Movement, Moving, Step};
+use busspec_link_core::movement::{run_async, DriveAsync, MoveReport, Movement, Moving};
 
-use crate::master::{exchange, link_error, move_error, Exchange, LinkError, Timing};
+use crate::master::{exchange, link_error, Exchange, LinkError, Timing};
 
 /// A byte stream a tokio master drives: reads and writes, plus what a serial port does
 /// beyond them.
@@ -100,48 +101,20 @@ impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
         request: P::Request,
     ) -> Result<P::Response, LinkError> {
         let ex = self.transact(address, request).await?;
-        ex.response.ok_or(LinkError::Refused {
-            protocol: P::NAME,
-            request: busspec_runtime::Message::name(&request),
-            address,
-            response: "nothing",
-            detail: "a broadcast of this command is not answered".to_owned(),
-        })
+        ex.response
+            .ok_or_else(|| LinkError::unanswered::<P>(&request, address))
     }
 
     /// Runs a movement to its end: the byte-order check before its trigger, then its
-    /// transactions and sleeps; `progress` hears where the device is in between.
+    /// transactions and sleeps; `progress` hears where the device is in between (the core's
+    /// movement loop, [`run_async`]).
     pub async fn run_movement<M: Movement<P>>(
         &mut self,
         address: u8,
-        mut movement: M,
-        mut progress: impl FnMut(Moving),
+        movement: M,
+        progress: impl FnMut(Moving),
     ) -> Result<MoveReport<P::Response>, LinkError> {
-        let trigger = movement.trigger().map_err(|e| move_error(address, e))?;
-        self.core.start_byte_order_check(address, trigger);
-        self.run().await?;
-        let mut step = movement.next(self.epoch.elapsed());
-        loop {
-            step = match step {
-                Step::Ask { request, optional } => match self.ask(address, request).await {
-                    Ok(r) => movement.answered(self.epoch.elapsed(), Some(r)),
-                    Err(_) if optional => movement.answered(self.epoch.elapsed(), None),
-                    Err(e) => return Err(e),
-                },
-                Step::Sleep {
-                    until,
-                    progress: moving,
-                } => {
-                    if let Some(m) = moving {
-                        progress(m);
-                    }
-                    tokio::time::sleep_until(self.epoch + until).await;
-                    movement.next(self.epoch.elapsed())
-                }
-                Step::Done(report) => return Ok(report),
-                Step::Failed(e) => return Err(move_error(address, e)),
-            }
-        }
+        run_async(&mut Steps(self), address, movement, progress).await
     }
 
     async fn run(&mut self) -> Result<Exchange<P::Response>, LinkError> {
@@ -194,5 +167,37 @@ impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
             Some(Err(failure)) => Err(link_error(&mut self.core, failure)),
             None => unreachable!("the core says Done only with an outcome"),
         }
+    }
+}
+
+/// The driver as the movement loop borrows it ([`DriveAsync`]).
+struct Steps<'a, P: Link, S: AsyncPort>(&'a mut AsyncMaster<P, S>);
+
+impl<P: Link, S: AsyncPort> DriveAsync<P> for Steps<'_, P, S> {
+    type Error = LinkError;
+
+    fn now(&mut self) -> Duration {
+        self.0.epoch.elapsed()
+    }
+
+    async fn check_byte_order(
+        &mut self,
+        address: u8,
+        trigger: P::Request,
+    ) -> Result<(), LinkError> {
+        self.0.core.start_byte_order_check(address, trigger);
+        self.0.run().await.map(|_| ())
+    }
+
+    async fn transact(
+        &mut self,
+        address: u8,
+        request: P::Request,
+    ) -> Result<Option<P::Response>, LinkError> {
+        Ok(self.0.transact(address, request).await?.response)
+    }
+
+    async fn sleep_until(&mut self, until: Duration) {
+        tokio::time::sleep_until(self.0.epoch + until).await
     }
 }

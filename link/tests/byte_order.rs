@@ -6,12 +6,14 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Duration;
 
+use busspec_devices::master::Ub2Master;
+use busspec_devices::sim::ub2::{Ub2Config, Ub2Sim};
+use busspec_devices::Ub2;
 use busspec_link::clock::Clock;
 use busspec_link::master::{LinkError, TraceEvent};
-use busspec_link::sim::ub2::{Ub2Config, Ub2Sim};
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::transport::Transport;
-use busspec_link::{Master, SimClock, Ub2};
+use busspec_link::{Master, SimClock};
 use busspec_protocols::ub2::{Capacitance, Request, Response};
 use busspec_protocols::{CommandKind, Protocol};
 

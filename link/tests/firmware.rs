@@ -3,10 +3,11 @@
 
 mod common;
 
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::Sd;
 use busspec_firmware_example::set_point_loop;
-use busspec_link::sim::sd::SdSim;
 use busspec_link::sim::{BusConfig, SimBus};
-use busspec_link::{Protocol, Sd, SimClock};
+use busspec_link::{Protocol, SimClock};
 use busspec_link_core::nonblocking::Driver;
 use common::{block_on, Port, SimTime};
 

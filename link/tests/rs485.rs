@@ -6,9 +6,10 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Duration;
 
-use busspec_link::sim::sd::SdSim;
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::{Sd, Ub2};
 use busspec_link::sim::{BusConfig, SimBus};
-use busspec_link::{DriverEnable, Line, Master, Protocol, Sd, SimClock, Ub2};
+use busspec_link::{DriverEnable, Line, Master, Protocol, SimClock};
 use busspec_link_core::blocking::Driver;
 use busspec_link_core::driver::{Error, Now};
 use busspec_link_core::Failure;

@@ -9,9 +9,10 @@ mod common;
 #[cfg(feature = "tokio")]
 use std::time::Duration;
 
+use busspec_devices::{Sd, Ub2};
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::transport::Transport;
-use busspec_link::{Link, Master, Sd, SimClock, Ub2};
+use busspec_link::{Link, Master, SimClock};
 use busspec_link_core::movement::{MoveReport, Movement};
 use busspec_link_core::{blocking, nonblocking};
 use common::*;

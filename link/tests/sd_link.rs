@@ -4,11 +4,13 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Duration;
 
+use busspec_devices::master::{SdMaster, SdString};
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::Sd;
 use busspec_link::clock::Clock;
-use busspec_link::master::{LinkError, SdString, TraceEvent};
-use busspec_link::sim::sd::SdSim;
+use busspec_link::master::{LinkError, TraceEvent};
 use busspec_link::sim::{BusConfig, Device, SimBus};
-use busspec_link::{Master, Sd, SimClock};
+use busspec_link::{Master, SimClock};
 use busspec_protocols::sd::{self, ActuatorStatusBits, Angle, Request, Response};
 
 type Bus = SimBus<SdSim>;
@@ -288,4 +290,30 @@ fn frames_that_do_not_decode_get_no_reply() {
     frame[5] ^= 1;
     assert_eq!(a.on_frame(&frame, Duration::ZERO), None);
     assert_eq!(a.on_frame(&frame[..5], Duration::ZERO), None);
+}
+
+/// The freshness counter wraps at the protocol's modulus: SD's 4 bits, a whole byte where a
+/// protocol does not say.
+#[test]
+fn the_freshness_counter_wraps_at_the_protocols_modulus() {
+    use busspec_devices::sim::ub2::Ub2Sim;
+    use busspec_devices::{Protocol, Ub2};
+    let clock = SimClock::new();
+    let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![SdSim::new(1)]);
+    let mut m: Master<Sd, _, _> = Master::new(bus, clock);
+    m.set_freshness(1, 0x0F);
+    assert_eq!(m.next_freshness_value(1), Some(0));
+    m.set_freshness(1, 0x1E);
+    assert_eq!(m.next_freshness_value(1), Some(0x0F));
+    let clock = SimClock::new();
+    let bus = SimBus::new(
+        clock.clone(),
+        BusConfig::new(Ub2::BAUD),
+        vec![Ub2Sim::new(0x21)],
+    );
+    let mut m: Master<Ub2, _, _> = Master::new(bus, clock);
+    m.set_freshness(0x21, 0x0F);
+    assert_eq!(m.next_freshness_value(0x21), Some(0x10));
+    m.set_freshness(0x21, 0xFF);
+    assert_eq!(m.next_freshness_value(0x21), Some(0));
 }

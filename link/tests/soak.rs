@@ -2,8 +2,8 @@
 //! `BUSSPEC_SOAK=N` runs N transactions per protocol instead (the README's figures use 100,000
 //! with `cargo run --release -- soak`).
 
+use busspec_devices::{Sd, Ub2};
 use busspec_link::soak::{run, SoakConfig};
-use busspec_link::{Sd, Ub2};
 
 fn size() -> u64 {
     std::env::var("BUSSPEC_SOAK")

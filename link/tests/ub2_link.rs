@@ -4,12 +4,15 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::Duration;
 
+use busspec_devices::master::Ub2Master;
+use busspec_devices::movement::ub2_completion_check;
+use busspec_devices::sim::ub2::{Ub2Sim, MICRO_STEPS};
+use busspec_devices::Ub2;
 use busspec_link::clock::Clock;
 use busspec_link::fault::{FaultConfig, Faulty};
-use busspec_link::master::{ub2_completion_check, LinkError, Progress, TraceEvent};
-use busspec_link::sim::ub2::{Ub2Sim, MICRO_STEPS};
+use busspec_link::master::{LinkError, Progress, TraceEvent};
 use busspec_link::sim::{BusConfig, SimBus};
-use busspec_link::{Master, SimClock, Ub2};
+use busspec_link::{Master, SimClock};
 use busspec_protocols::ub2::{self, Capacitance, Request, Response};
 use busspec_protocols::Protocol as _;
 

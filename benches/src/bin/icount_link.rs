@@ -14,8 +14,8 @@
 use std::process::ExitCode;
 use std::time::Duration;
 
-use busspec_link::sim::sd::SdSim;
-use busspec_link::sim::ub2::Ub2Sim;
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::sim::ub2::Ub2Sim;
 use busspec_link::sim::Device;
 use busspec_link::Link;
 use busspec_link_core::master::{Action, MasterCore};
@@ -92,7 +92,7 @@ fn main() -> ExitCode {
     };
     let (units, total) = match proto {
         "ub2" => {
-            let mut core: MasterCore<ub2::Ub2> = MasterCore::new();
+            let mut core: MasterCore<busspec_devices::Ub2> = MasterCore::new();
             let mix = answered(
                 Ub2Sim::new(0x21),
                 &core,
@@ -110,7 +110,7 @@ fn main() -> ExitCode {
             (mix.len(), run(&mut core, 0x21, &mix, passes))
         }
         "sd" => {
-            let mut core: MasterCore<sd::Sd> = MasterCore::new();
+            let mut core: MasterCore<busspec_devices::Sd> = MasterCore::new();
             // The counter is known, so no set point reads it first: every pass is alike.
             core.set_freshness(1, 0);
             let set_point = sd::Request::SetPoint {

@@ -9,10 +9,10 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+use busspec_devices::protocols::sd;
+use busspec_devices::Sd;
 use busspec_link_core::driver::{Error, Now};
 use busspec_link_core::nonblocking::Driver;
-use busspec_link_core::Sd;
-use busspec_protocols::sd;
 use embedded_hal_async::delay::DelayNs;
 use embedded_io_async::{Read, ReadReady, Write};
 

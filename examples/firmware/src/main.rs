@@ -11,9 +11,10 @@ mod board;
 
 #[cfg(target_os = "none")]
 mod firmware {
+    use busspec_devices::Sd;
     use busspec_firmware_example::set_point_loop;
     use busspec_link_core::nonblocking::Driver;
-    use busspec_link_core::{DriverEnable, Line, Sd};
+    use busspec_link_core::{DriverEnable, Line};
 
     use crate::board::{block_on, DePin, Timer, Uart};
 

@@ -6,11 +6,11 @@
 //! them (distinct addresses) behind a [`Transport`] on a [`SimClock`]: bytes take their time on
 //! the wire at the bus's baud rate, replies come after a short latency, and replies that overlap
 //! in time collide. [`serve`] runs simulators on a real transport (a pseudo-terminal) instead.
+//! The simulators of particular devices (UB2, SD) are `busspec-devices`'; [`reply`],
+//! [`number_positions`] and [`swap_numbers`] are what they build on.
 
 #[cfg(all(unix, feature = "serial"))]
 pub mod pty;
-pub mod sd;
-pub mod ub2;
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -18,7 +18,7 @@ use std::io;
 use std::rc::Rc;
 use std::time::Duration;
 
-use busspec_protocols::{Elements, FieldValue, Message, Protocol};
+use busspec_runtime::{Elements, FieldValue, Message, Protocol};
 
 use crate::clock::{Clock, SimClock};
 use crate::transport::Transport;
@@ -300,7 +300,7 @@ pub fn serve<D: Device, T: Transport, C: Clock>(
 
 /// Encodes a reply frame of protocol `P`; `None` (no reply) if the value does not fit, which a
 /// simulator bug would cause and a test then sees as a timeout.
-fn reply<P: Protocol>(response: &P::Response, address: u8) -> Option<Vec<u8>> {
+pub fn reply<P: Protocol>(response: &P::Response, address: u8) -> Option<Vec<u8>> {
     let mut buf = vec![0u8; P::MAX_FRAME_LEN];
     let n = response.encode(address, &mut buf).ok()?;
     buf.truncate(n);

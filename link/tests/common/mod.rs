@@ -12,15 +12,17 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use busspec_devices::movement::{SdMove, Ub2Movement};
+use busspec_devices::sim::sd::SdSim;
+use busspec_devices::sim::ub2::Ub2Sim;
+use busspec_devices::{Sd, Ub2};
 use busspec_link::clock::{Clock, SimClock};
 use busspec_link::master::LinkError;
-use busspec_link::sim::sd::SdSim;
-use busspec_link::sim::ub2::Ub2Sim;
 use busspec_link::sim::Device;
 use busspec_link::transport::Transport;
-use busspec_link::{Line, Link, Protocol, Sd, Timing, Ub2};
+use busspec_link::{Line, Link, Protocol, Timing};
 use busspec_link_core::driver::{Error as DriverError, Now};
-use busspec_link_core::movement::{MoveError, MoveReport, Movement, SdMove, Ub2Movement};
+use busspec_link_core::movement::{MoveError, MoveReport, Movement};
 use busspec_link_core::Failure;
 use busspec_protocols::{sd, ub2};
 

@@ -5,7 +5,7 @@
 
 #[cfg(target_os = "none")]
 mod probe {
-    use busspec_link_core::{Protocol, Sd};
+    use busspec_devices::{Protocol, Sd};
 
     #[no_mangle]
     pub extern "C" fn _start() -> ! {

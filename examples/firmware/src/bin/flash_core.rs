@@ -9,8 +9,8 @@ mod probe {
     use core::hint::black_box;
     use core::time::Duration;
 
+    use busspec_devices::{Protocol, Sd};
     use busspec_link_core::master::{Action, MasterCore};
-    use busspec_link_core::{Protocol, Sd};
 
     #[no_mangle]
     pub extern "C" fn _start() -> ! {

@@ -26,7 +26,7 @@ use busspec_protocols::ub2::{
 };
 use busspec_protocols::{DecodeError, Protocol};
 
-use super::{reply, swap_numbers, Device};
+use busspec_link::sim::{reply, swap_numbers, Device};
 
 /// Micro-steps per full step (§3.3).
 pub const MICRO_STEPS: u32 = 256;

@@ -21,7 +21,7 @@ use std::time::Duration;
 use busspec_protocols::sd::{self, ActuatorStatusBits, Angle, Request, Response, Sd, Velocity};
 use busspec_protocols::Protocol;
 
-use super::{reply, Device};
+use busspec_link::sim::{reply, Device};
 
 /// Fixed parameters of a simulated actuator.
 #[derive(Debug, Clone, PartialEq)]
