@@ -568,6 +568,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     };
     let checksum_len = usize_lit(p.framing.checksum.len());
     let end = p.framing.end.iter().map(|b| hex_u8(*b));
+    let end_first = p.framing.end_first();
     let addressed = p.framing.has_address();
     let checksum_be = p.framing.checksum.byte_order == ByteOrder::Big;
     let baud = p.serial.baud;
@@ -583,7 +584,8 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         // width, a conversion to `u32` of a 32-bit checksum, a `match` with one message (or
         // one that binds one), a `_` arm after arms that happen to cover every message, an
         // identity in a scale, a head a protocol without codes does not look at, `{ .. }` on
-        // a message without fields, a code at offset 0 read as `get(0)` like any other offset.
+        // a message without fields, a code at offset 0 read as `get(0)` like any other offset,
+        // the code after a `match` on a direction without messages (no reply to any command).
         #![allow(
             clippy::get_first,
             clippy::unnecessary_cast,
@@ -593,6 +595,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
             clippy::identity_op,
             clippy::unneeded_struct_pattern,
             unreachable_patterns,
+            unreachable_code,
             unused_variables
         )]
         /// The protocol's name in the spec.
@@ -637,6 +640,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
             checksum_len: #checksum_len,
             checksum_be: #checksum_be,
             end: &[#(#end),*],
+            end_first: #end_first,
         };
     }
 }
@@ -1185,7 +1189,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
         } else {
             quote! {
-                rt::seal_end(buf, len, #sum, #n, #be, FRAME.end);
+                rt::seal_end(buf, len, #sum, &FRAME);
                 rt::Ok(len)
             }
         }
@@ -1205,7 +1209,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             const MESSAGES: [(&'static str, &'static [u8], usize); #n] = [#(#rows),*];
             /// This message's row in [`Self::MESSAGES`].
             const fn index(&self) -> usize {
-                match self { #(#index_arms,)* }
+                match *self { #(#index_arms,)* }
             }
             /// The spec's snake_case name of this message.
             pub const fn name(&self) -> &'static str {
@@ -2283,12 +2287,20 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     } else {
         quote!()
     };
+    // A direction without messages (commands that get no reply: no response at all) knows no
+    // code; the frame checks refuse every frame before this is reached.
+    let no_message = if msgs.is_empty() {
+        unknown.clone()
+    } else {
+        quote!()
+    };
     let dispatch = quote! {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
         fn dispatch(frame: &[u8] #request_param) -> rt::DecodeResult<Self> {
             #asked
             #(#body)*
+            #no_message
         }
         #codeless_fns
     };
@@ -2740,6 +2752,10 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             fn broadcast(request: &Request) -> rt::Broadcast {
                 request.broadcast()
             }
+            #[inline]
+            fn reply(request: &Request) -> rt::Reply {
+                request.reply()
+            }
             fn is_nak(#nak_param: &Response) -> bool {
                 #is_nak
             }
@@ -3093,8 +3109,31 @@ fn emit_command_info(p: &Protocol) -> TokenStream {
         rows.push(quote!((#kind, #accepted, #answered, #replies)));
     }
     let mask = reply_mask(p);
+    // Commands whose reply is not required, by pattern; the rest are.
+    let arms: Vec<TokenStream> = p
+        .commands
+        .iter()
+        .filter_map(|c| {
+            let r = match c.reply {
+                busspec_model::ir::Reply::Required => return None,
+                busspec_model::ir::Reply::Optional => quote!(rt::Reply::Optional),
+                busspec_model::ir::Reply::None => quote!(rt::Reply::None),
+            };
+            let pat = any_of(&ident("Request"), c);
+            Some(quote!(#pat => #r,))
+        })
+        .collect();
+    let reply = if arms.is_empty() {
+        quote!(rt::Reply::Required)
+    } else {
+        quote!(match self { #(#arms)* _ => rt::Reply::Required })
+    };
     quote! {
         impl Request {
+            /// Whether the command gets a reply, as the spec says.
+            pub const fn reply(&self) -> rt::Reply {
+                #reply
+            }
             /// Each command's kind, whether it accepts and answers the broadcast address, and the
             /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
             const COMMANDS: [(rt::CommandKind, bool, bool, #mask); #n] = [#(#rows),*];

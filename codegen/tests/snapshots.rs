@@ -127,6 +127,14 @@ fn no_checksum_spec_generates_its_snapshot() {
     );
 }
 
+/// Pelco-P: an end byte (ETX) before the checksum, which covers it and the start byte, and
+/// commands that get no reply, so no response at all (`snapshots_compile.rs` compiles it and
+/// holds it to the interpreter).
+#[test]
+fn pelco_p_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/pelco_p.yaml", "pelco_p.rs");
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

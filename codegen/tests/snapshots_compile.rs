@@ -14,6 +14,7 @@ include!("snapshots/unaddressed.rs");
 include!("snapshots/ft12_fixed.rs");
 include!("snapshots/ubx_like.rs");
 include!("snapshots/maestro_compact.rs");
+include!("snapshots/pelco_p.rs");
 
 mod agree;
 
@@ -697,6 +698,45 @@ fn no_checksum_snapshot_agrees_with_the_interpreter() {
     // directions, Set Target's four bytes are not.
     let found = examples_stream_alike::<MaestroCompact>(&p, 0x3A35, "set_target");
     assert!(found > 50, "only {found} set_target frames found");
+}
+
+/// Pelco-P: the ETX end byte before the checksum, which covers it; commands with no reply and
+/// so no response at all. The examples replay, a wrong ETX is named before the checksum in
+/// both engines' words, every frame is refused as a response, and both engines agree on every
+/// frame mutated from the examples and on captures of them.
+#[test]
+fn pelco_p_snapshot_agrees_with_the_interpreter() {
+    use pelco_p::{PelcoP, Request};
+    let file = "model/tests/fixtures/valid/pelco_p.yaml";
+    replay::<PelcoP>(file);
+    let p = fixture(file);
+    let go_to = [0xA0, 0x00, 0x00, 0x07, 0x00, 0x01, 0xAF, 0x09];
+    let d = Request::decode(&go_to).unwrap();
+    assert_eq!(d.message, Request::GoToPreset { preset: 1 });
+    assert_eq!(d.message.reply(), busspec_runtime::Reply::None);
+    assert_eq!(PelcoP::reply(&d.message), busspec_runtime::Reply::None);
+    let mut etx = go_to;
+    etx[6] = 0xAE;
+    let g = Request::decode(&etx).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "bad end byte at offset 6: expected 0xAF, found 0xAE"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Request), None, &etx);
+    same_text(g, i.map(|_| ()));
+    // The checksum covers the ETX: another ETX with its checksum resealed is still refused
+    // for the ETX, and the resealed frame's checksum differs from the original's.
+    let mut resealed = etx;
+    agree::reseal(&p, &mut resealed);
+    assert_eq!(
+        resealed, go_to,
+        "reseal writes the ETX back and the checksum over it"
+    );
+    assert!(pelco_p::Response::decode(&go_to).is_err());
+    let t = agree::agree::<PelcoP>(&p);
+    assert!(t.accepted >= 2 && t.refused > 50, "{t:?}");
+    let found = examples_stream_alike::<PelcoP>(&p, 0x9E1C0, "go_to_preset");
+    assert!(found > 100, "only {found} go_to_preset frames found");
 }
 
 /// Both stream decoders on 100 captures of `p`'s examples with noise between them, each cut

@@ -788,7 +788,13 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         Vec::new()
     };
     if !end.is_empty() {
-        layout.push("end");
+        // After the checksum (FT1.2's 16) or just before it, covered by it (Pelco-P's ETX).
+        if !csum.is_empty() && g.chance(40) {
+            let at = layout.len() - 1;
+            layout.insert(at, "end");
+        } else {
+            layout.push("end");
+        }
     }
 
     // Address.
@@ -1133,6 +1139,26 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
+    // Commands that get no reply (each response they list is listed by another command too,
+    // or common) and commands whose reply is optional.
+    let mut reply: Vec<&str> = vec![""; n_cmd];
+    for c in 0..n_cmd {
+        if g.chance(10) && !commands[c].extra.contains("answered: true") {
+            let elsewhere = lists[c].iter().all(|r| {
+                common.contains(r)
+                    || (0..n_cmd)
+                        .any(|o| o != c && reply[o] != ", reply: none" && lists[o].contains(r))
+            });
+            let others_reply = (0..n_cmd).any(|o| o != c && reply[o] != ", reply: none");
+            if elsewhere && others_reply {
+                reply[c] = ", reply: none";
+                lists[c].clear();
+            }
+        } else if g.chance(10) {
+            reply[c] = ", reply: optional";
+        }
+    }
+
     tag_codeless(&mut commands);
     tag_codeless(&mut responses);
 
@@ -1264,11 +1290,12 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         let fields: Vec<&str> = m.fields.iter().map(|f| f.yaml.as_str()).collect();
         let _ = writeln!(
             y,
-            "  - {{name: {}, title: \"{}\", section: \"3\", code: \"{}\"{}, fields: [{}], responses: [{}]}}",
+            "  - {{name: {}, title: \"{}\", section: \"3\", code: \"{}\"{}{}, fields: [{}], responses: [{}]}}",
             m.name,
             m.name,
             code_text(&m.code),
             m.extra,
+            reply[c],
             fields.join(", "),
             resp.join(", ")
         );
@@ -1322,6 +1349,15 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(pos(Part::Code) < pos(Part::Address), "code before address");
     add(!f.has_address(), "no address");
     add(!f.end.is_empty(), "end bytes");
+    add(f.end_first(), "end bytes before the checksum");
+    add(
+        p.commands.iter().any(|m| m.reply == ir::Reply::None),
+        "reply none",
+    );
+    add(
+        p.commands.iter().any(|m| m.reply == ir::Reply::Optional),
+        "reply optional",
+    );
     add(f.address.host.is_some(), "host address");
     add(f.address.broadcast.is_some(), "broadcast address");
     add(

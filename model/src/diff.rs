@@ -1150,6 +1150,19 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
+        if m.reply != x.reply {
+            let word = |r: crate::ir::Reply| format!("{r:?}").to_lowercase();
+            self.wire(
+                "reply_changed",
+                format!("{path}.reply"),
+                format!(
+                    "command `{}`: reply {} → {}",
+                    x.name,
+                    word(m.reply),
+                    word(x.reply)
+                ),
+            );
+        }
         let bc = |b: &Option<crate::ir::Broadcast>| {
             b.as_ref()
                 .map_or((false, false), |b| (b.accepted, b.answered))

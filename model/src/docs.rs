@@ -624,7 +624,14 @@ pub fn render(p: &Protocol, source: &str) -> String {
                     }
                 );
             }
-            if d == Direction::Request {
+            if d == Direction::Request && m.reply == crate::ir::Reply::None {
+                o.push_str("No reply: devices do not answer this command.\n\n");
+            } else if d == Direction::Request {
+                if m.reply == crate::ir::Reply::Optional {
+                    o.push_str(
+                        "The reply is optional: one of these responses may come, or none.\n\n",
+                    );
+                }
                 o.push_str("Responses:\n\n");
                 for (r, meaning) in &m.responses {
                     let resp = &p.responses[*r];

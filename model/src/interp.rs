@@ -1096,12 +1096,13 @@ fn check_checksum(
     wire: &[u8],
 ) -> Result<(), DecodeError> {
     let c = &p.framing.checksum;
-    let Some(at) = wire.len().checked_sub(p.framing.trailer_len()) else {
+    if wire.len() < p.framing.trailer_len() {
         return Err(DecodeError::Truncated {
             needed: p.framing.trailer_len(),
             found: wire.len(),
         });
-    };
+    }
+    let at = p.framing.checksum_at(wire.len());
     let covered = wire.get(c.covers_from..at).unwrap_or(&[]);
     let expected = match prepared {
         Some(prepared) => prepared.compute(covered),
@@ -1122,21 +1123,21 @@ fn check_checksum(
 /// Writes into `frame` (of any message's length) its checksum, over the bytes it covers, and
 /// the end bytes after it; nothing into a frame shorter than those.
 pub fn reseal(p: &Protocol, frame: &mut [u8]) {
-    let c = &p.framing.checksum;
-    let Some(at) = frame.len().checked_sub(p.framing.trailer_len()) else {
+    let (c, f) = (&p.framing.checksum, &p.framing);
+    if frame.len() < f.trailer_len() {
         return;
-    };
+    }
+    let (at, end) = (f.checksum_at(frame.len()), f.end_at(frame.len()));
+    frame[end..end + f.end.len()].copy_from_slice(&f.end);
     let sum = checksum::compute(&c.algorithm, frame.get(c.covers_from..at).unwrap_or(&[]));
-    let (sum_at, end) = frame[at..].split_at_mut(c.len());
-    write_uint(sum, sum_at, c.byte_order);
-    end.copy_from_slice(&p.framing.end);
+    write_uint(sum, &mut frame[at..at + c.len()], c.byte_order);
 }
 
 /// Refuses a frame that does not end in the end bytes (the first that differs); the frame is
 /// at least as long as the shortest.
 fn check_end(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
     let end = &p.framing.end;
-    let from = wire.len().saturating_sub(end.len());
+    let from = p.framing.end_at(wire.len());
     for (i, (&found, &expected)) in wire[from..].iter().zip(end).enumerate() {
         if found != expected {
             return Err(DecodeError::BadEnd {
@@ -2052,8 +2053,9 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
         }
     }
     let c = &p.framing.checksum;
+    let at = p.framing.checksum_at(wire.len());
     if c.len() > 1 && flip(c.byte_order) {
-        if let Some(s) = wire.get_mut(end..end + c.len()) {
+        if let Some(s) = wire.get_mut(at..at + c.len()) {
             s.reverse();
         }
     }

@@ -9,7 +9,8 @@
 //! validator checks holds (references resolve, widths add up, values fit, examples replay).
 
 pub use crate::model::{
-    Broadcast, ByteOrder, CommandKind, Document, FieldType, FrameRate, Parity, Part, ResponseKind,
+    Broadcast, ByteOrder, CommandKind, Document, FieldType, FrameRate, Parity, Part, Reply,
+    ResponseKind,
 };
 use crate::rational::Rational;
 
@@ -57,8 +58,9 @@ pub struct Framing {
     pub start: Option<u8>,
     /// Every start byte, in order (empty without `start`): `FF FF` for Dynamixel.
     pub sync: Vec<u8>,
-    /// The bytes that end every frame after its checksum, in order (empty without `end`):
-    /// `16` for an M-Bus frame.
+    /// The bytes that end every frame after its checksum (or just before it, where the layout
+    /// says so: [`Framing::end_first`]), in order (empty without `end`): `16` for an M-Bus
+    /// frame, `AF` (before the checksum) for Pelco-P.
     pub end: Vec<u8>,
     /// The length field, where the framing has one.
     pub length: Option<LengthField>,
@@ -143,6 +145,29 @@ impl Framing {
     /// Bytes after the payload: the checksum and the end bytes.
     pub fn trailer_len(&self) -> usize {
         self.checksum.len() + self.end.len()
+    }
+
+    /// Whether the end bytes come before the checksum (which then covers them: Pelco-P's
+    /// ETX), rather than after it.
+    pub fn end_first(&self) -> bool {
+        let at = |p: Part| self.layout.iter().position(|x| *x == p);
+        matches!((at(Part::End), at(Part::Checksum)), (Some(e), Some(c)) if e < c)
+    }
+
+    /// Where the checksum of a frame of `len` bytes starts; its end bytes start at
+    /// [`Self::end_at`].
+    pub fn checksum_at(&self, len: usize) -> usize {
+        let after = if self.end_first() { 0 } else { self.end.len() };
+        len.saturating_sub(self.checksum.len() + after)
+    }
+
+    /// Where the end bytes of a frame of `len` bytes start.
+    pub fn end_at(&self, len: usize) -> usize {
+        if self.end_first() {
+            len.saturating_sub(self.trailer_len())
+        } else {
+            len.saturating_sub(self.end.len())
+        }
     }
 
     /// Whether frames carry an address (the layout has `address`).
@@ -393,6 +418,8 @@ pub struct Message {
     /// Commands: every response it may get (its own, then the common ones), as indices into
     /// `Protocol::responses`, each with what it means for this command where the spec says.
     pub responses: Vec<(usize, Option<String>)>,
+    /// Whether a command gets a reply (`Required` for a response).
+    pub reply: Reply,
     /// Responses: the commands that may get it, as indices into `Protocol::commands`.
     pub answers: Vec<usize>,
     pub broadcast: Option<Broadcast>,

@@ -343,6 +343,19 @@ pub enum CommandKind {
     Reset,
 }
 
+/// Whether a command gets a reply.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Reply {
+    /// One of its `responses` always comes (the default).
+    #[default]
+    Required,
+    /// One of its `responses` may come, or none.
+    Optional,
+    /// None ever comes: it lists no `responses` (Pelco-P, a broadcast-only command).
+    None,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ResponseKind {
@@ -373,6 +386,9 @@ pub struct Command {
     pub fields: Vec<Field>,
     #[serde(default)]
     pub responses: Vec<String>,
+    /// Whether a reply comes: `required` (default), `optional` or `none`.
+    #[serde(default)]
+    pub reply: Reply,
     #[serde(default)]
     pub response_meanings: OpenMap,
     #[serde(default)]

@@ -268,7 +268,13 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
                 None => sink.error(rpath, missing_response(name, &command_names)),
             }
         }
-        for &r in &common {
+        // A command that gets no reply gets no common response either.
+        let common: &[usize] = if c.reply == model::Reply::None {
+            &[]
+        } else {
+            &common
+        };
+        for &r in common {
             if !c.response_meanings.is_empty() {
                 slot_of.insert(r, responses.len());
             }
@@ -292,11 +298,21 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
                 ),
             }
         }
-        if c.responses.is_empty() && common.is_empty() {
-            sink.error(
+        match c.reply {
+            model::Reply::None if !c.responses.is_empty() => sink.error(
                 join(&path, "responses"),
-                "a command must list the responses it may get",
-            );
+                "a command with `reply: none` gets no response: list none",
+            ),
+            model::Reply::None if c.broadcast.as_ref().is_some_and(|b| b.answered) => sink.error(
+                join(&path, "broadcast"),
+                "a command with `reply: none` is not answered on broadcast either",
+            ),
+            model::Reply::None => {}
+            _ if c.responses.is_empty() && common.is_empty() => sink.error(
+                join(&path, "responses"),
+                "a command must list the responses it may get (or say `reply: none`)",
+            ),
+            _ => {}
         }
         if c.broadcast.is_some() && framing.address.broadcast.is_none() {
             sink.error(
@@ -327,6 +343,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             payload_len,
             layout,
             responses,
+            reply: c.reply,
             answers: Vec::new(),
             broadcast: c.broadcast.clone(),
             needs_request: false,
@@ -380,6 +397,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             payload_len,
             layout,
             responses: Vec::new(),
+            reply: model::Reply::Required,
             answers,
             broadcast: None,
             needs_request: r.needs_request,
@@ -814,16 +832,21 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         }
         _ => None,
     };
-    let body = match f.layout.split_last() {
-        Some((Part::End, body)) => body,
-        _ => &f.layout[..],
+    // The frame ends in its checksum and end bytes, in either order: each is last, or just
+    // before the other.
+    let n = f.layout.len();
+    let tail = |p: Part, other: Part| {
+        let at = f.layout.iter().position(|x| *x == p);
+        at.map_or(true, |at| {
+            at + 1 == n || (at + 2 == n && f.layout[n - 1] == other)
+        })
     };
-    if count(Part::End) == 1 && f.layout.last() != Some(&Part::End) {
+    if !tail(Part::End, Part::Checksum) {
         sink.error(
             "framing.layout",
-            "`end` must be the last part of the frame: the bytes after the checksum",
+            "`end` must be the last part of the frame, or come just before the checksum",
         );
-    } else if count(Part::Checksum) == 1 && body.last() != Some(&Part::Checksum) {
+    } else if !tail(Part::Checksum, Part::End) {
         sink.error(
             "framing.layout",
             "the checksum must be the last part of the frame, or come just before `end`: it covers every byte before it",

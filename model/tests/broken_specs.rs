@@ -17,6 +17,18 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- commands that get no reply (made from valid/minimal.yaml)
+    (
+        "reply_none_with_responses",
+        &[("commands.go_to.responses", "a command with `reply: none` gets no response: list none")],
+    ),
+    (
+        "reply_none_answered_on_broadcast",
+        &[
+            ("commands.get_status.broadcast", "a command with `reply: none` is not answered on broadcast either"),
+            ("responses.status", "no command lists this response"),
+        ],
+    ),
     // ---- checksums: none, masks, Fletcher (made from valid/minimal.yaml)
     (
         "checksum_without_layout_part",
@@ -40,8 +52,8 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     // ---- end bytes after the checksum (made from valid/minimal.yaml)
     (
-        "end_before_checksum",
-        &[("framing.layout", "`end` must be the last part of the frame")],
+        "end_before_payload",
+        &[("framing.layout", "`end` must be the last part of the frame, or come just before the checksum")],
     ),
     (
         "end_without_bytes",

@@ -23,7 +23,7 @@ pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, CommandKind, DecodeError, Decoded,
-    EncodeError, FieldError, FieldValue, Message, Protocol, Repeated,
+    EncodeError, FieldError, FieldValue, Message, Protocol, Repeated, Reply,
 };
 
 /// A wire integer type: the raw values a whole field of it holds, as a `from_fields` getter
@@ -108,8 +108,24 @@ pub struct Frame {
     /// big-endian.
     pub checksum_len: usize,
     pub checksum_be: bool,
-    /// The bytes that end every frame after its checksum (none for most protocols).
+    /// The bytes that end every frame after its checksum (none for most protocols), or just
+    /// before it where `end_first` (the checksum then covers them).
     pub end: &'static [u8],
+    pub end_first: bool,
+}
+
+impl Frame {
+    /// Where the checksum and the end bytes of a frame of `len` bytes start, for a frame at
+    /// least as long as both.
+    #[inline(always)]
+    const fn trailer(&self, len: usize) -> (usize, usize) {
+        let at = len - self.checksum_len - self.end.len();
+        if self.end_first {
+            (at + self.end.len(), at)
+        } else {
+            (at, at + self.checksum_len)
+        }
+    }
 }
 
 impl Frame {
@@ -136,10 +152,14 @@ fn sums(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32)
 /// else.
 #[inline(always)]
 pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]) -> u32) -> bool {
-    if frame.len() != at + f.checksum_len + f.end.len() || !frame.ends_with(f.end) {
+    if frame.len() != at + f.checksum_len + f.end.len() {
         return false;
     }
-    let (found, expected) = sums(frame, at, f, checksum);
+    let (sum_at, end_at) = f.trailer(frame.len());
+    if frame.get(end_at..end_at + f.end.len()) != Some(f.end) {
+        return false;
+    }
+    let (found, expected) = sums(frame, sum_at, f, checksum);
     found == expected
 }
 
@@ -174,8 +194,8 @@ pub fn check_frame(
             found: len,
         });
     }
-    let at = len - f.checksum_len - f.end.len();
-    if let Some(e) = check_end(frame, f.end) {
+    let (at, end_at) = f.trailer(len);
+    if let Some(e) = check_end(frame, end_at, f.end) {
         return Err(e);
     }
     let (found, expected) = sums(frame, at, f, checksum);
@@ -879,11 +899,12 @@ pub fn seal_sum8_head<const N: usize>(out: &mut [u8; N], from: usize, head: u8) 
     N
 }
 
-/// The first byte of the frame's last `end.len()` bytes that is not `end`'s, as an error.
+/// The first byte of the frame's `end.len()` bytes from `from` that is not `end`'s, as an
+/// error.
 #[inline(always)]
-fn check_end(frame: &[u8], end: &[u8]) -> Option<DecodeError> {
-    let from = frame.len().checked_sub(end.len())?;
-    let (i, (&found, &expected)) = frame[from..]
+fn check_end(frame: &[u8], from: usize, end: &[u8]) -> Option<DecodeError> {
+    let (i, (&found, &expected)) = frame
+        .get(from..)?
         .iter()
         .zip(end)
         .enumerate()
@@ -895,20 +916,14 @@ fn check_end(frame: &[u8], end: &[u8]) -> Option<DecodeError> {
     })
 }
 
-/// [`seal`] for a protocol whose frames end in `end` after the checksum: the checksum of the
-/// first `len - n - end.len()` bytes of `buf`, then `end`.
+/// [`seal`] for a protocol whose frames have end bytes: the end bytes and the checksum of the
+/// `len`-byte frame in `buf`, in the order `f` has them (the checksum covers end bytes before
+/// it).
 #[inline(always)]
-pub fn seal_end(
-    buf: &mut [u8],
-    len: usize,
-    sum: impl FnOnce(&[u8]) -> u32,
-    n: usize,
-    be: bool,
-    end: &[u8],
-) {
-    let body = len - end.len();
-    seal(buf, body, sum, n, be);
-    buf[body..len].copy_from_slice(end);
+pub fn seal_end(buf: &mut [u8], len: usize, sum: impl FnOnce(&[u8]) -> u32, f: &Frame) {
+    let (at, end_at) = f.trailer(len);
+    buf[end_at..end_at + f.end.len()].copy_from_slice(f.end);
+    seal(buf, at + f.checksum_len, sum, f.checksum_len, f.checksum_be);
 }
 
 /// Writes the `checksum` of the first `len - n` bytes of `buf` into its last `n` bytes.
@@ -1188,6 +1203,7 @@ mod lang_tests {
             checksum_len: n,
             checksum_be: be,
             end: &[],
+            end_first: false,
         };
         sums(frame, frame.len() - n, &f, |_| 0).0
     }

@@ -57,6 +57,18 @@ pub enum CommandKind {
     Reset,
 }
 
+/// Whether a command gets a reply, as its spec says (each protocol's `Request::reply`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Reply {
+    /// One of its responses always comes.
+    Required,
+    /// One of its responses may come, or none.
+    Optional,
+    /// None ever comes.
+    None,
+}
+
 /// How a command treats the broadcast address (each protocol's `Request::broadcast`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]

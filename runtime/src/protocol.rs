@@ -9,7 +9,9 @@ use core::fmt::Debug;
 use core::ops::RangeInclusive;
 
 use crate::stream::{Candidate, Candidates, VarLens};
-use crate::{Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldError, FieldValue};
+use crate::{
+    Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldError, FieldValue, Reply,
+};
 
 /// One message type of a protocol (its `Request` or its `Response`): every variant is one
 /// message of the spec.
@@ -115,6 +117,12 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     fn kind(request: &Self::Request) -> CommandKind;
     /// How `request` treats the broadcast address, from the spec.
     fn broadcast(request: &Self::Request) -> Broadcast;
+    /// Whether `request` gets a reply, from the spec (`reply`; required unless it says).
+    #[inline]
+    fn reply(request: &Self::Request) -> Reply {
+        let _ = request;
+        Reply::Required
+    }
     /// Whether `response` is a refusal: the spec marks it `kind: nak`.
     fn is_nak(response: &Self::Response) -> bool;
     /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the

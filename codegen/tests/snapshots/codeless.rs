@@ -13,6 +13,7 @@ pub mod codeless {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod codeless {
         checksum_len: 1,
         checksum_be: false,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
@@ -116,7 +118,7 @@ pub mod codeless {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Ping => 0,
                 Self::Read { .. } => 1,
             }
@@ -248,6 +250,10 @@ pub mod codeless {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
@@ -291,7 +297,7 @@ pub mod codeless {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Status { .. } => 0,
                 Self::ReadStatus { .. } => 1,
             }
@@ -524,6 +530,10 @@ pub mod codeless {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(_response: &Response) -> bool {
             false

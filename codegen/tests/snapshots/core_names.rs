@@ -13,6 +13,7 @@ pub mod clash {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod clash {
         checksum_len: 1,
         checksum_be: false,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
@@ -253,7 +255,7 @@ pub mod clash {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Option { .. } => 0,
                 Self::U8 { .. } => 1,
                 Self::Core { .. } => 2,
@@ -453,6 +455,10 @@ pub mod clash {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 4] = [
@@ -513,7 +519,7 @@ pub mod clash {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Ok => 0,
                 Self::Err => 1,
                 Self::Result { .. } => 2,
@@ -772,6 +778,10 @@ pub mod clash {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(response, Response::Err)

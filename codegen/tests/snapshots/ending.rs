@@ -13,6 +13,7 @@ pub mod ending {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod ending {
         checksum_len: 1,
         checksum_be: true,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
@@ -111,7 +113,7 @@ pub mod ending {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Read { .. } => 0,
                 Self::Write { .. } => 1,
                 Self::Stamp { .. } => 2,
@@ -320,6 +322,10 @@ pub mod ending {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
@@ -378,7 +384,7 @@ pub mod ending {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::ReadReply { .. } => 0,
                 Self::ReadError { .. } => 1,
                 Self::WriteReply { .. } => 2,
@@ -657,6 +663,10 @@ pub mod ending {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(response, Response::ReadError { .. })

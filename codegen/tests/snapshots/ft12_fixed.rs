@@ -13,6 +13,7 @@ pub mod ft12_fixed {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod ft12_fixed {
         checksum_len: 1,
         checksum_be: false,
         end: &[0x16],
+        end_first: false,
     };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
@@ -90,7 +92,7 @@ pub mod ft12_fixed {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::ResetRemoteLink => 0,
                 Self::RequestStatusOfLink => 1,
                 Self::RequestClass2 => 2,
@@ -137,14 +139,7 @@ pub mod ft12_fixed {
                     rt::head(out, &[0x10, 0x7B, address]).len()
                 }
             };
-            rt::seal_end(
-                buf,
-                len,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-                1,
-                false,
-                FRAME.end,
-            );
+            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -238,6 +233,10 @@ pub mod ft12_fixed {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 4] = [
@@ -286,7 +285,7 @@ pub mod ft12_fixed {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Ack => 0,
                 Self::Nack => 1,
                 Self::StatusOfLink => 2,
@@ -322,14 +321,7 @@ pub mod ft12_fixed {
                 Self::Nack => rt::head(out, &[0x10, 0x01, address]).len(),
                 Self::StatusOfLink => rt::head(out, &[0x10, 0x0B, address]).len(),
             };
-            rt::seal_end(
-                buf,
-                len,
-                |b| u32::from(checksum(rt::covered(b, 1))),
-                1,
-                false,
-                FRAME.end,
-            );
+            rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)
         }
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
@@ -488,6 +480,10 @@ pub mod ft12_fixed {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(response, Response::Nack)

@@ -13,6 +13,7 @@ pub mod maestro_compact {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -24,7 +25,7 @@ pub mod maestro_compact {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2019-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "5ee47b9f37d6da383766465f3ce3f0ba9df9b1e0246a8319155731068738840c";
+    pub const SPEC_SHA256: &str = "31064c615c18c0f95b813a8ccaac45d9b0d02cd311f24443bb90a08b3d211f62";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/maestro_compact.yaml"
@@ -59,6 +60,7 @@ pub mod maestro_compact {
         checksum_len: 0,
         checksum_be: false,
         end: &[],
+        end_first: false,
     };
     /// Frames carry no checksum: nothing to compute.
     #[inline]
@@ -128,7 +130,7 @@ pub mod maestro_compact {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::SetTarget { .. } => 0,
                 Self::GetPosition { .. } => 1,
             }
@@ -311,10 +313,17 @@ pub mod maestro_compact {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            match self {
+                Request::SetTarget { .. } => rt::Reply::None,
+                _ => rt::Reply::Required,
+            }
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
-            (rt::Movement, false, false, 0x1),
+            (rt::Movement, false, false, 0x0),
             (rt::Getter, false, false, 0x1),
         ];
         /// What the command does, as the spec classifies it.
@@ -354,7 +363,7 @@ pub mod maestro_compact {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Position { .. } => 0,
             }
         }
@@ -561,6 +570,10 @@ pub mod maestro_compact {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(_response: &Response) -> bool {
             false

@@ -13,6 +13,7 @@ pub mod mini {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod mini {
         checksum_len: 1,
         checksum_be: false,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
@@ -287,7 +289,7 @@ pub mod mini {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::GoTo { .. } => 0,
                 Self::SetMode { .. } => 1,
                 Self::GetStatus { .. } => 2,
@@ -457,6 +459,10 @@ pub mod mini {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
@@ -515,7 +521,7 @@ pub mod mini {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Started => 0,
                 Self::Nak => 1,
                 Self::SetModeAck => 2,
@@ -804,6 +810,10 @@ pub mod mini {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(response, Response::Nak)

@@ -13,6 +13,7 @@ pub mod mini_crc {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod mini_crc {
         checksum_len: 2,
         checksum_be: true,
         end: &[],
+        end_first: false,
     };
     /// CRC-16/CMS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
@@ -99,7 +101,7 @@ pub mod mini_crc {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::ReadRuntimeHours => 0,
                 Self::ReadRuntimeMinSec => 1,
                 Self::SetCounter { .. } => 2,
@@ -258,6 +260,10 @@ pub mod mini_crc {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
@@ -313,7 +319,7 @@ pub mod mini_crc {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::RuntimeHours { .. } => 0,
                 Self::RuntimeMinSec { .. } => 1,
                 Self::CounterEcho { .. } => 2,
@@ -592,6 +598,10 @@ pub mod mini_crc {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(_response: &Response) -> bool {
             false

@@ -13,6 +13,7 @@ pub mod modbus {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -57,6 +58,7 @@ pub mod modbus {
         checksum_len: 2,
         checksum_be: false,
         end: &[],
+        end_first: false,
     };
     /// CRC-16/MODBUS: the frame checksum, over every byte before it.
     pub const CRC_ALGORITHM: rt::crc::Algorithm<u16> = rt::crc::Algorithm {
@@ -313,7 +315,7 @@ pub mod modbus {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::ReadCoils { .. } => 0,
                 Self::ReadDiscreteInputs { .. } => 1,
                 Self::ReadHoldingRegisters { .. } => 2,
@@ -789,6 +791,10 @@ pub mod modbus {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 8] = [
@@ -956,7 +962,7 @@ pub mod modbus {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::ReadCoilsReply { .. } => 0,
                 Self::ReadCoilsException { .. } => 1,
                 Self::ReadDiscreteInputsReply { .. } => 2,
@@ -1843,6 +1849,10 @@ pub mod modbus {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(

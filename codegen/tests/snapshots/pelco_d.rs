@@ -13,6 +13,7 @@ pub mod pelco_d2 {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod pelco_d2 {
         checksum_len: 1,
         checksum_be: true,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
@@ -171,7 +173,7 @@ pub mod pelco_d2 {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Ptz { .. } => 0,
                 Self::SetPreset { .. } => 1,
                 Self::GoToPreset { .. } => 2,
@@ -489,6 +491,10 @@ pub mod pelco_d2 {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
@@ -530,7 +536,7 @@ pub mod pelco_d2 {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::GeneralResponse { .. } => 0,
             }
         }
@@ -733,6 +739,10 @@ pub mod pelco_d2 {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(_response: &Response) -> bool {
             false

@@ -13,6 +13,7 @@ pub mod syncy {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod syncy {
         checksum_len: 1,
         checksum_be: true,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: the 8-bit sum of the bytes it covers, inverted.
     #[inline]
@@ -128,7 +130,7 @@ pub mod syncy {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::MoveTo { .. } => 0,
                 Self::GetCounter => 1,
                 Self::SetPair { .. } => 2,
@@ -328,6 +330,10 @@ pub mod syncy {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
@@ -378,7 +384,7 @@ pub mod syncy {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Moving => 0,
                 Self::Counter { .. } => 1,
                 Self::SetPairReply { .. } => 2,
@@ -697,6 +703,10 @@ pub mod syncy {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(response, Response::SetPairError { .. })

@@ -13,6 +13,7 @@ pub mod ubx_like {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod ubx_like {
         checksum_len: 2,
         checksum_be: false,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: 8-bit Fletcher (modulo 256) of the bytes it covers.
     #[inline]
@@ -142,7 +144,7 @@ pub mod ubx_like {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::PollRate => 0,
                 Self::SetRate { .. } => 1,
             }
@@ -303,6 +305,10 @@ pub mod ubx_like {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
@@ -365,7 +371,7 @@ pub mod ubx_like {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Rate { .. } => 0,
                 Self::Ack { .. } => 1,
                 Self::Nak { .. } => 2,
@@ -641,6 +647,10 @@ pub mod ubx_like {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(response: &Response) -> bool {
             matches!(response, Response::Nak { .. })

@@ -13,6 +13,7 @@ pub mod unaddressed {
         clippy::identity_op,
         clippy::unneeded_struct_pattern,
         unreachable_patterns,
+        unreachable_code,
         unused_variables
     )]
     /// The protocol's name in the spec.
@@ -59,6 +60,7 @@ pub mod unaddressed {
         checksum_len: 1,
         checksum_be: false,
         end: &[],
+        end_first: false,
     };
     /// The frame checksum: 8-bit XOR of the bytes it covers.
     #[inline]
@@ -124,7 +126,7 @@ pub mod unaddressed {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::ReadTemperature => 0,
                 Self::SetRate { .. } => 1,
                 Self::ReadVersion => 2,
@@ -267,6 +269,10 @@ pub mod unaddressed {
         }
     }
     impl Request {
+        /// Whether the command gets a reply, as the spec says.
+        pub const fn reply(&self) -> rt::Reply {
+            rt::Reply::Required
+        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
@@ -317,7 +323,7 @@ pub mod unaddressed {
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
-            match self {
+            match *self {
                 Self::Temperature { .. } => 0,
                 Self::Ack => 1,
                 Self::Version { .. } => 2,
@@ -563,6 +569,10 @@ pub mod unaddressed {
         #[inline]
         fn broadcast(request: &Request) -> rt::Broadcast {
             request.broadcast()
+        }
+        #[inline]
+        fn reply(request: &Request) -> rt::Reply {
+            request.reply()
         }
         fn is_nak(_response: &Response) -> bool {
             false
