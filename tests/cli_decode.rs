@@ -900,3 +900,86 @@ fn output_closed_early_ends_the_run_quietly() {
         assert!(out.status.code().is_some(), "{args:?}: killed by a signal");
     }
 }
+
+/// A spec of the new frame shapes through the CLI (`--spec`, the interpreter): frames without
+/// an address print without one and encode back from lines without one; an end byte and a
+/// command that gets no reply are said in the errors' words; a capture of such frames streams.
+#[test]
+fn frames_of_other_shapes_decode_and_encode_through_the_cli() {
+    let ft12 = "model/tests/fixtures/valid/ft12_fixed.yaml";
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        ft12,
+        "ft12_fixed",
+        "10 40 01 41 16",
+        "10 40 01 41 17",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout),
+        "{\"protocol\":\"ft12_fixed\",\"direction\":\"request\",\"address\":1,\"code\":\"0x40\",\"message\":\"reset_remote_link\",\"fields\":{}}\n"
+    );
+    assert!(
+        text(&out.stderr).contains(
+            "frame 2 (10 40 01 41 17): bad end byte at offset 4: expected 0x16, found 0x17"
+        ),
+        "{}",
+        text(&out.stderr)
+    );
+
+    let ubx = "model/tests/fixtures/valid/ubx_like.yaml";
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        ubx,
+        "ubx_like",
+        "B5 62 05 01 02 00 06 08 16 3F",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line = text(&out.stdout);
+    assert!(!line.contains("\"address\""), "{line}");
+    let back = busspec_stdin(&["encode", "--spec", ubx, "ubx_like"], &line);
+    assert!(back.status.success(), "{}", text(&back.stderr));
+    assert_eq!(
+        text(&back.stdout).trim(),
+        "B56205010200060816 3F".replace(' ', "")
+    );
+
+    let pelco = "model/tests/fixtures/valid/pelco_p.yaml";
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        pelco,
+        "pelco_p",
+        "--direction",
+        "response",
+        "A0 00 00 07 00 01 AF 09",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    let stream = temp_dir("shapes").join("pelco.bin");
+    let frame = [0xA0, 0x00, 0x00, 0x07, 0x00, 0x01, 0xAF, 0x09];
+    let mut capture = frame.to_vec();
+    capture.extend([0x55, 0x00]);
+    capture.extend(frame);
+    std::fs::write(&stream, &capture).unwrap();
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        pelco,
+        "pelco_p",
+        "--stream",
+        stream.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let lines = text(&out.stdout);
+    assert_eq!(
+        lines.matches("\"message\":\"go_to_preset\"").count(),
+        2,
+        "{lines}"
+    );
+    assert!(
+        lines.contains("{\"offset\":8,\"skipped\":2,\"bytes\":\"5500\"}"),
+        "{lines}"
+    );
+}
