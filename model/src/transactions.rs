@@ -429,19 +429,25 @@ fn names(lead: &str, list: &[String]) -> String {
 pub fn diff(old: &Transactions, new: &Transactions) -> Vec<(bool, String, String)> {
     let mut out = Vec::new();
     let show = |v: Option<u32>| v.map_or("not declared".to_owned(), ms_text);
-    for (key, o, n) in [
+    for (key, label, o, n) in [
         (
             "response_timeout_ms",
+            "response timeout",
             old.response_timeout_us,
             new.response_timeout_us,
         ),
-        ("turnaround_ms", old.turnaround_us, new.turnaround_us),
+        (
+            "turnaround_ms",
+            "turnaround",
+            old.turnaround_us,
+            new.turnaround_us,
+        ),
     ] {
         if o != n {
             out.push((
                 n.unwrap_or(0) > o.unwrap_or(0),
                 format!("transactions.{key}"),
-                format!("{}: {} → {}", key.replace('_', " "), show(o), show(n)),
+                format!("{label}: {} → {}", show(o), show(n)),
             ));
         }
     }
