@@ -125,10 +125,10 @@ impl Transactions {
         let MessageKind::Command(kind) = command.kind else {
             return false;
         };
-        if self.not_safe.iter().any(|n| *n == command.name) {
+        if self.not_safe.contains(&command.name) {
             return false;
         }
-        self.safe.iter().any(|n| *n == command.name) || self.safe_kinds.contains(&kind)
+        self.safe.contains(&command.name) || self.safe_kinds.contains(&kind)
     }
 
     /// The inter-frame gap at `baud`, in microseconds (rounded up), if declared in characters.
