@@ -165,9 +165,24 @@ fn link_error(e: LinkError) -> String {
 }
 
 fn open<P: Link>(o: &TalkOptions) -> Result<Master<P, SerialTransport, SystemClock>, String> {
-    let t = SerialTransport::open(o.port, o.baud.unwrap_or(P::BAUD))
-        .map_err(|e| format!("error: {e}"))?;
+    let baud = o.baud.unwrap_or(P::BAUD);
+    if baud == 0 {
+        return Err("error: --baud 0: a baud rate is positive".to_owned());
+    }
+    let t = SerialTransport::open(o.port, baud).map_err(|e| format!("error: {e}"))?;
     let mut m = Master::new(t, SystemClock::new());
+    if baud != P::BAUD {
+        // The gap in character times, and the driver-enable timing, follow the line's rate.
+        let line = busspec_link::Line {
+            baud,
+            ..busspec_link::Line::for_protocol::<P>()
+        };
+        let timing = busspec_link::Timing {
+            inter_request_gap: busspec_link::Timing::for_line::<P>(&line).inter_request_gap,
+            ..m.timing()
+        };
+        m = m.with_line(line).with_timing(timing);
+    }
     if let Some(timeout) = o.timeout {
         let mut timing = m.timing();
         timing.reply_timeout = timeout;
@@ -183,11 +198,32 @@ pub fn talk(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
     match spec.name.as_str() {
         n if n == Ub2::NAME => talk_ub2(spec, o),
         n if n == Sd::NAME => talk_sd(spec, o),
-        other => Err(format!(
-            "error: busspec cannot talk {other}: only {} and {} have a transaction layer",
-            Ub2::NAME,
-            Sd::NAME
-        )),
+        // Every other protocol by its spec alone: timing, retries, broadcasts and refusals
+        // from its `transactions:` section, its commands' `broadcast` and its `kind: nak`.
+        name => {
+            busspec_protocols::with_protocol(name, TalkPlain { spec, o }).unwrap_or_else(|| {
+                Err(format!(
+                    "error: busspec cannot talk {name}: it is not a built-in protocol"
+                ))
+            })
+        }
+    }
+}
+
+/// `talk` for a built-in protocol without rules of its own: one transaction, through
+/// [`busspec_link::Plain`].
+struct TalkPlain<'a> {
+    spec: &'a Spec,
+    o: &'a TalkOptions<'a>,
+}
+
+impl busspec_protocols::ProtocolVisitor for TalkPlain<'_> {
+    type Output = Result<(), String>;
+    fn visit<P: Protocol>(self) -> Self::Output {
+        let (spec, o) = (self.spec, self.o);
+        let request = checked::<busspec_link::Plain<P>>(spec, o)?;
+        let mut m = open::<busspec_link::Plain<P>>(o)?;
+        one(spec, &mut m, o.address, request)
     }
 }
 
@@ -229,7 +265,17 @@ fn one<P: Link, T: Transport, C: Clock>(
 ) -> Result<(), String> {
     let ex = m.transact(address, request).map_err(link_error)?;
     match ex.response {
-        Some(r) => print(&reply_line::<P>(spec, &r, ex.address)),
+        Some(r) => {
+            print(&reply_line::<P>(spec, &r, ex.address))?;
+            // A refusal is the device's answer, printed like any other; say what it is.
+            if P::is_refusal(&request, &r) {
+                std::io::stdout()
+                    .flush()
+                    .map_err(|e| format!("error: cannot write output: {e}"))?;
+                eprintln!("{} refused {} ({})", P::NAME, request.name(), r.name());
+            }
+            Ok(())
+        }
         None => {
             eprintln!(
                 "sent {} to broadcast address 0x{address:02X}; it is not answered",

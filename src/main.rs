@@ -220,10 +220,11 @@ struct TalkArgs {
     /// Baud rate (default: the document's: ub2 19200, sd 115200).
     #[arg(long)]
     baud: Option<u32>,
-    /// Reply timeout in milliseconds (default: ub2 200, sd 50).
+    /// Reply timeout in milliseconds (default: the spec's `transactions.response_timeout_ms`,
+    /// else 200 below 100,000 baud and 50 from it: ub2 200, sd 50, modbus 1000, dynamixel 50).
     #[arg(long, value_name = "MS")]
     timeout: Option<u64>,
-    /// ub2 or sd.
+    /// A built-in protocol: ub2, sd, modbus or dynamixel.
     protocol: String,
     /// The device address (decimal or 0x..); the SD broadcast ID 0x1F where the command takes it.
     #[arg(long, value_parser = link_cli::parse_address)]

@@ -320,6 +320,26 @@ fn command_info<P: Generated>() {
             .as_ref()
             .map_or((false, false), |b| (b.accepted, b.answered));
         assert_eq!((b.accepted, b.answered), (accepted, answered), "{}", c.name);
+        assert_eq!(P::may_retry(&q), p.transactions.retry_safe(c), "{}", c.name);
+    }
+    let t = &p.transactions;
+    assert_eq!(
+        P::TRANSACTIONS.response_timeout_us,
+        t.response_timeout_us,
+        "{}",
+        p.name
+    );
+    assert_eq!(P::TRANSACTIONS.turnaround_us, t.turnaround_us);
+    assert_eq!(
+        P::TRANSACTIONS.gap_tenths_of_character,
+        t.gap.map(|g| g.tenths)
+    );
+    if t.declared {
+        assert_eq!(P::TRANSACTIONS.character_bits, t.character_bits);
+        assert_eq!(
+            P::TRANSACTIONS.gap_us_at(p.serial.baud, t.character_bits),
+            t.gap_us_at(p.serial.baud)
+        );
     }
     assert_eq!(P::BAUD, p.serial.baud);
     assert_eq!(P::INTER_FRAME_GAP_MS, p.serial.inter_frame_gap_ms);
@@ -334,4 +354,6 @@ fn command_info<P: Generated>() {
 fn generated_command_info_is_the_spec() {
     command_info::<Ub2>();
     command_info::<Sd>();
+    command_info::<busspec_protocols::modbus::Modbus>();
+    command_info::<busspec_protocols::dynamixel::Dynamixel>();
 }

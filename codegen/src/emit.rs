@@ -2708,6 +2708,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
         p.name
     );
     let type_doc = doc(&doc_text);
+    let transactions = crate::transactions::protocol_items(p, |c| any_of(&ident("Request"), c));
     quote! {
         #type_doc
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -2732,6 +2733,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
             const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
             const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
+            #transactions
             #[inline]
             fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
                 Request::decode(frame)

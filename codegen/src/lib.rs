@@ -27,6 +27,7 @@
 //! Every spec error becomes one cargo diagnostic line, `file: path: message`.
 
 pub mod emit;
+mod transactions;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

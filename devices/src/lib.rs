@@ -67,6 +67,13 @@ macro_rules! protocol_as {
             const BROADCAST_ADDRESS: Option<u8> =
                 <$codec as busspec_runtime::Protocol>::BROADCAST_ADDRESS;
             const HOST_ADDRESS: Option<u8> = <$codec as busspec_runtime::Protocol>::HOST_ADDRESS;
+            const TRANSACTIONS: busspec_runtime::Transactions =
+                <$codec as busspec_runtime::Protocol>::TRANSACTIONS;
+
+            #[inline]
+            fn may_retry(request: &Self::Request) -> bool {
+                <$codec as busspec_runtime::Protocol>::may_retry(request)
+            }
 
             #[inline]
             fn decode_request(

@@ -1,13 +1,14 @@
 //! The master's rules for UB2 and SD: [`Link`] for [`crate::Ub2`] and [`crate::Sd`].
 //!
-//! Everything the spec says comes from the codec's [`Protocol`]; these impls hold only what a
-//! master decides on top (see [`Link`]): UB2's unsafe retries (a new address or baud rate, the
-//! status read that clears its RESET flag), its checksum NAK 0x92, its 0x93 to a movement read
-//! as the answer, and its byte-order probe (the factory limits, erratum ub2-e01); SD's unsafe
-//! retries, the reply from the new ID, and its 4-bit freshness counter.
+//! Everything the spec says comes from the codec's [`Protocol`], the commands unsafe to retry
+//! included (each spec's `transactions.retry`: UB2's new address or baud rate and the status
+//! read that clears its RESET flag; SD's new ID and new zero); these impls hold only what a
+//! master decides on top (see [`Link`]): UB2's checksum NAK 0x92, its 0x93 to a movement read
+//! as the answer, and its byte-order probe (the factory limits, erratum ub2-e01); SD's reply
+//! from the new ID, and its 4-bit freshness counter.
 
 #[cfg(any(feature = "ub2", feature = "sd"))]
-use busspec_link_core::link::{retry_safe_by_kind, Link};
+use busspec_link_core::link::Link;
 #[cfg(feature = "ub2")]
 use busspec_link_core::link::{text, ByteOrderCheck};
 #[cfg(feature = "ub2")]
@@ -46,16 +47,6 @@ impl core::fmt::Display for Pf {
 
 #[cfg(feature = "ub2")]
 impl Link for crate::Ub2 {
-    fn retry_safe(r: &ub2::Request) -> bool {
-        match r {
-            // The device answers from the old address or at the old rate, then moves on.
-            ub2::Request::SetSlaveAddress { .. } | ub2::Request::SetBaudRate { .. } => false,
-            // §6.6.1: the RESET flag "will be reset after reading".
-            ub2::Request::GetStatus => false,
-            _ => retry_safe_by_kind(Self::kind(r)),
-        }
-    }
-
     fn is_checksum_nak(r: &ub2::Response) -> bool {
         matches!(r, ub2::Response::NakChecksumError)
     }
@@ -119,16 +110,6 @@ use busspec_protocols::sd;
 
 #[cfg(feature = "sd")]
 impl Link for crate::Sd {
-    fn retry_safe(r: &sd::Request) -> bool {
-        match r {
-            // After the first one lands the actuator answers to the new ID only.
-            sd::Request::SetServoId { .. } => false,
-            // Takes the position at the moment it lands: a second one, later, sets another zero.
-            sd::Request::SetCurrentPositionAsZero => false,
-            _ => retry_safe_by_kind(Self::kind(r)),
-        }
-    }
-
     fn reply_address(r: &sd::Request, address: u8) -> u8 {
         match r {
             // The actuator answers with its new ID (sd-e04).

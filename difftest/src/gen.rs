@@ -712,7 +712,8 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         "serial: {{section: \"1\", baud: {baud}, data_bits: 8, parity: {parity}, stop_bits: {}",
         g.rng.u8(1..=2)
     );
-    if g.chance(30) {
+    let gap_ms = g.chance(30);
+    if gap_ms {
         let _ = write!(y, ", inter_frame_gap_ms: {}", g.rng.u32(1..20));
     }
     if g.chance(20) {
@@ -722,6 +723,37 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         y.push_str(", baud_rates: e0");
     }
     y.push_str("}\n");
+
+    // What a master needs: no effect on the codec, but the generated `Protocol` items
+    // (`TRANSACTIONS`, and `may_retry` where the kinds differ from the default) must compile.
+    if g.chance(25) {
+        y.push_str("transactions: {section: \"1\"");
+        if g.chance(50) {
+            let _ = write!(y, ", response_timeout_ms: {}", g.rng.u32(1..2000));
+        }
+        if g.chance(50) {
+            let _ = write!(
+                y,
+                ", turnaround_ms: \"{}.{}\"",
+                g.rng.u32(0..5),
+                g.rng.u32(0..10)
+            );
+        }
+        // A gap in characters must agree with a gap in milliseconds: only without one.
+        if !gap_ms && g.chance(50) {
+            let _ = write!(
+                y,
+                ", inter_frame_gap: {{characters: \"{}.5\", at_least_ms: 1}}",
+                g.rng.u32(1..5)
+            );
+        }
+        if g.chance(60) {
+            let kinds = ["movement", "completion_check", "setter", "getter", "reset"];
+            let picked: Vec<&str> = kinds.iter().copied().filter(|_| g.chance(40)).collect();
+            let _ = write!(y, ", retry: {{safe_kinds: [{}]}}", picked.join(", "));
+        }
+        y.push_str("}\n");
+    }
 
     // Framing.
     let has_start = g.chance(70);

@@ -34,5 +34,5 @@ pub mod nonblocking;
 
 pub use busspec_runtime::{Message, Protocol};
 pub use line::{DriverEnable, Line};
-pub use link::Link;
+pub use link::{Link, Plain};
 pub use master::{Action, Event, Failure, MasterCore, Reply, Timing};

@@ -37,20 +37,26 @@ pub struct Line {
     pub echo: bool,
     /// Drive a driver-enable line around each transmission, and how to time its end.
     pub driver_enable: Option<DriverEnable>,
-    /// Time the device needs before its reply can start; added to the reply timeout.
+    /// Time the device needs before its reply can start, added to the reply timeout; after a
+    /// broadcast it does not answer, the quiet time before the next request.
     pub turnaround: Duration,
 }
 
 impl Line {
-    /// The protocol's baud rate, 8N1, no echo, no driver-enable line, no turnaround: a plain
-    /// full-duplex port or a USB adapter that switches direction by itself.
+    /// The protocol's baud rate and character bits (8N1 unless its `transactions:` section
+    /// says), its declared turnaround (none unless it says), no echo, no driver-enable line: a
+    /// plain full-duplex port or a USB adapter that switches direction by itself.
     pub const fn for_protocol<P: Protocol>() -> Line {
+        let turnaround = match P::TRANSACTIONS.turnaround_us {
+            Some(us) => Duration::from_micros(us as u64),
+            None => Duration::ZERO,
+        };
         Line {
             baud: P::BAUD,
-            bits_per_byte: 10,
+            bits_per_byte: P::TRANSACTIONS.character_bits,
             echo: false,
             driver_enable: None,
-            turnaround: Duration::ZERO,
+            turnaround,
         }
     }
 

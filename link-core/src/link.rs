@@ -15,29 +15,29 @@ use core::time::Duration;
 
 use busspec_runtime::{CommandKind, Protocol};
 
-/// The quiet time between two requests: the document's gap between frames, or the period of its
-/// highest frame rate, whichever is longer.
-const fn inter_request_gap(gap_ms: Option<u32>, max_frames_per_s: Option<u32>) -> Duration {
-    let gap = match gap_ms {
-        Some(g) => g as u64,
-        None => 0,
+/// The quiet time between two requests of protocol `P` on a line of `baud` and
+/// `character_bits` a character: the longest of the document's gap between frames
+/// ([`Protocol::INTER_FRAME_GAP_MS`]), the gap its `transactions:` section declares in
+/// character times at this baud rate ([`busspec_runtime::Transactions::gap_us_at`]; it replaces
+/// the millisecond gap, which is the same gap at the document's baud rate), and the period of
+/// its highest frame rate.
+pub const fn inter_request_gap<P: Protocol>(baud: u32, character_bits: u32) -> Duration {
+    let gap_us = match P::TRANSACTIONS.gap_us_at(baud, character_bits) {
+        Some(us) => us,
+        None => match P::INTER_FRAME_GAP_MS {
+            Some(g) => g as u64 * 1000,
+            None => 0,
+        },
     };
-    let period = match max_frames_per_s {
-        Some(r) if r > 0 => 1000u64.div_ceil(r as u64),
+    let period_us = match P::MAX_FRAMES_PER_S {
+        Some(r) if r > 0 => 1000u64.div_ceil(r as u64) * 1000,
         _ => 0,
     };
-    Duration::from_millis(if gap > period { gap } else { period })
-}
-
-/// Whether a command of this kind may be sent again when its reply is lost or garbled, with
-/// nothing else known about it: reads, completion checks and setters (sending the same value
-/// twice sets it once); never movements (a second trigger restarts or extends the move) or
-/// resets (the second reply reports the reset state, not the value before it).
-pub fn retry_safe_by_kind(kind: CommandKind) -> bool {
-    matches!(
-        kind,
-        CommandKind::Getter | CommandKind::CompletionCheck | CommandKind::Setter
-    )
+    Duration::from_micros(if gap_us > period_us {
+        gap_us
+    } else {
+        period_us
+    })
 }
 
 /// What a byte-order probe read ([`Link::byte_order_probe`]), judged both ways: as the spec
@@ -109,22 +109,120 @@ pub fn swapped_byte_order<P: Protocol>() -> &'static str {
     }
 }
 
+/// Any generated protocol `P` with the master's rules of its spec alone: its [`Protocol`] is
+/// `P`'s, item for item (the same `Request` and `Response` types), and its [`Link`] takes every
+/// default, which the spec drives (timing, retries, broadcasts, refusals). How a master talks
+/// to a protocol no crate has written rules for: `Master<Plain<modbus::Modbus>, ..>`.
+///
+/// A protocol with rules of its own (UB2's byte-order probe, SD's freshness counter) is a type
+/// of its own in the crate that holds them, as `busspec-devices` does.
+pub struct Plain<P>(core::marker::PhantomData<P>);
+
+impl<P> Clone for Plain<P> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<P> Copy for Plain<P> {}
+impl<P> Default for Plain<P> {
+    fn default() -> Self {
+        Plain(core::marker::PhantomData)
+    }
+}
+impl<P: Protocol> core::fmt::Debug for Plain<P> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "Plain<{}>", P::NAME)
+    }
+}
+
+impl<P: Protocol> Protocol for Plain<P> {
+    type Request = P::Request;
+    type Response = P::Response;
+    type Buffer = P::Buffer;
+    const NAME: &'static str = P::NAME;
+    const DOCUMENT: &'static str = P::DOCUMENT;
+    const DOCUMENT_REVISION: &'static str = P::DOCUMENT_REVISION;
+    const SPEC_SHA256: &'static str = P::SPEC_SHA256;
+    const SPEC_YAML: &'static str = P::SPEC_YAML;
+    const MAX_REQUEST_LEN: usize = P::MAX_REQUEST_LEN;
+    const MAX_RESPONSE_LEN: usize = P::MAX_RESPONSE_LEN;
+    const MAX_FRAME_LEN: usize = P::MAX_FRAME_LEN;
+    const FRAME_LENGTHS: &'static [usize] = P::FRAME_LENGTHS;
+    const EMPTY_BUFFER: Self::Buffer = P::EMPTY_BUFFER;
+    const BAUD: u32 = P::BAUD;
+    const INTER_FRAME_GAP_MS: Option<u32> = P::INTER_FRAME_GAP_MS;
+    const MAX_FRAMES_PER_S: Option<u32> = P::MAX_FRAMES_PER_S;
+    const DEVICE_ADDRESSES: core::ops::RangeInclusive<u8> = P::DEVICE_ADDRESSES;
+    const BROADCAST_ADDRESS: Option<u8> = P::BROADCAST_ADDRESS;
+    const HOST_ADDRESS: Option<u8> = P::HOST_ADDRESS;
+    const TRANSACTIONS: busspec_runtime::Transactions = P::TRANSACTIONS;
+    fn may_retry(request: &Self::Request) -> bool {
+        P::may_retry(request)
+    }
+    fn decode_request(
+        frame: &[u8],
+    ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
+        P::decode_request(frame)
+    }
+    fn decode_response(
+        frame: &[u8],
+    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
+        P::decode_response(frame)
+    }
+    fn decode_reply(
+        frame: &[u8],
+        request: &Self::Request,
+    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
+        P::decode_reply(frame, request)
+    }
+    fn decode_response_for(
+        frame: &[u8],
+        request: Option<&Self::Request>,
+    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
+        P::decode_response_for(frame, request)
+    }
+    fn answers(request: &Self::Request, response: &Self::Response) -> bool {
+        P::answers(request, response)
+    }
+    fn kind(request: &Self::Request) -> CommandKind {
+        P::kind(request)
+    }
+    fn broadcast(request: &Self::Request) -> busspec_runtime::Broadcast {
+        P::broadcast(request)
+    }
+    fn is_nak(response: &Self::Response) -> bool {
+        P::is_nak(response)
+    }
+    fn checksum_ok(frame: &[u8]) -> bool {
+        P::checksum_ok(frame)
+    }
+    fn candidates(head: &[u8]) -> busspec_runtime::stream::Candidates {
+        P::candidates(head)
+    }
+    fn candidate(head: &[u8]) -> busspec_runtime::stream::Candidate {
+        P::candidate(head)
+    }
+    fn variable_candidates(head: &[u8]) -> busspec_runtime::stream::VarLens {
+        P::variable_candidates(head)
+    }
+}
+
+impl<P: Protocol> Link for Plain<P> {}
+
 /// One protocol as a bus master sees it: the generated [`Protocol`] plus the master's own rules.
 pub trait Link: Protocol {
-    /// The quiet time between two requests, from the spec's [`Protocol::INTER_FRAME_GAP_MS`]
-    /// and [`Protocol::MAX_FRAMES_PER_S`]: the gap, or the period of the highest frame rate,
-    /// whichever is longer (UB2 §2.1 demands 10 ms; SD §1 allows at most 100 frames per second,
-    /// i.e. one every 10 ms).
+    /// The quiet time between two requests at the document's baud rate and character bits
+    /// ([`inter_request_gap`]): UB2 §2.1 demands 10 ms; SD §1 allows at most 100 frames per
+    /// second, i.e. one every 10 ms; Modbus t3.5 is 2.005 ms at 19,200 baud, 8E1.
     const INTER_REQUEST_GAP: Duration =
-        inter_request_gap(Self::INTER_FRAME_GAP_MS, Self::MAX_FRAMES_PER_S);
+        inter_request_gap::<Self>(Self::BAUD, Self::TRANSACTIONS.character_bits);
 
     /// Whether sending `r` twice does no more than sending it once, so a lost or garbled reply
-    /// may be answered by sending it again. By default what [`retry_safe_by_kind`] says of the
-    /// spec's [`Protocol::kind`]; a protocol adds the commands its kind does not tell about:
-    /// commands that change how the device is reached, reads that clear what they report,
-    /// setters whose effect depends on when they land.
+    /// may be answered by sending it again: what the spec declares ([`Protocol::may_retry`]:
+    /// its `transactions.retry`, by default by kind). A protocol's rules may add commands the
+    /// spec cannot tell about.
     fn retry_safe(r: &Self::Request) -> bool {
-        retry_safe_by_kind(Self::kind(r))
+        Self::may_retry(r)
     }
 
     /// The address the reply to `r`, sent to `address`, comes from.

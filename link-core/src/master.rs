@@ -54,20 +54,27 @@ pub struct Timing {
 }
 
 impl Timing {
-    /// Defaults for a protocol: its documented gap, and timeouts generous for its baud rate.
+    /// Defaults for a protocol on its document's line ([`Line::for_protocol`]).
     pub fn for_protocol<P: Link>() -> Timing {
-        // The documents give no reply time. UB2 runs at 19,200 baud with a 10 ms command gap;
-        // SD at 115,200 baud and 50 frames per second, i.e. one exchange every 20 ms.
-        let reply_timeout = if P::BAUD >= 100_000 {
-            Duration::from_millis(50)
-        } else {
-            Duration::from_millis(200)
+        Timing::for_line::<P>(&Line::for_protocol::<P>())
+    }
+
+    /// Defaults for a protocol on `line`: the response timeout its spec declares
+    /// (`transactions.response_timeout_ms`), else one generous for its baud rate; its gap
+    /// between frames at the line's baud rate ([`crate::link::inter_request_gap`]).
+    pub fn for_line<P: Link>(line: &Line) -> Timing {
+        // Where the spec gives no reply time (UB2, SD): UB2 runs at 19,200 baud with a 10 ms
+        // command gap; SD at 115,200 baud and 50 frames per second, one exchange every 20 ms.
+        let reply_timeout = match P::TRANSACTIONS.response_timeout_us {
+            Some(us) => Duration::from_micros(u64::from(us)),
+            None if P::BAUD >= 100_000 => Duration::from_millis(50),
+            None => Duration::from_millis(200),
         };
         Timing {
             reply_timeout,
             byte_gap: Duration::from_millis(5),
             settle: reply_timeout,
-            inter_request_gap: P::INTER_REQUEST_GAP,
+            inter_request_gap: crate::link::inter_request_gap::<P>(line.baud, line.bits_per_byte),
             attempts: 3,
         }
     }
@@ -751,6 +758,9 @@ impl<P: Link> MasterCore<P> {
 
     fn await_reply(&mut self, now: Duration) {
         if !self.expects_reply {
+            // The devices turn around before they take the next request (Modbus serial
+            // 2.4.1's turnaround delay): the line counts as busy until then.
+            self.last_activity = Some(now + self.line.turnaround);
             let reply = Reply {
                 response: None,
                 address: self.address,

@@ -40,7 +40,7 @@ pub use busspec_link_core::{DriverEnable, Line};
 pub use busspec_runtime::{Message, Protocol};
 pub use clock::{Clock, SimClock, SystemClock};
 pub use master::{Exchange, LinkError, Master, Progress, Timing, TraceEvent};
-pub use protocol::Link;
+pub use protocol::{Link, Plain};
 #[cfg(feature = "serial")]
 pub use transport::SerialTransport;
 pub use transport::Transport;

@@ -32,11 +32,13 @@ fn sim_bus<P: Link>(setup: &mut Setup) -> (Bus, SimClock) {
     (SimBus::new(clock.clone(), config, devices), clock)
 }
 
-/// Every scenario, for drivers built by `ub2` and `sd`.
-fn run_suite<A: Drive<Ub2>, B: Drive<Sd>>(
+/// Every scenario, for drivers built by `ub2`, `sd` and `modbus` (Modbus by its spec alone).
+fn run_suite<A: Drive<Ub2>, B: Drive<Sd>, C: Drive<Modbus>>(
     ub2: &mut dyn FnMut(Setup) -> A,
     sd: &mut dyn FnMut(Setup) -> B,
+    modbus: &mut dyn FnMut(Setup) -> C,
 ) {
+    modbus_by_its_spec(modbus);
     ub2_getter(ub2);
     ub2_byte_order_before_first_movement(ub2);
     ub2_movement_polled_to_completion(ub2);
@@ -98,7 +100,11 @@ impl<P: Link> Drive<P> for StdDrive<P> {
 
 #[test]
 fn the_std_master_runs_the_suite() {
-    run_suite(&mut std_master::<Ub2>, &mut std_master::<Sd>);
+    run_suite(
+        &mut std_master::<Ub2>,
+        &mut std_master::<Sd>,
+        &mut std_master::<Modbus>,
+    );
     run_rs485_suite(&mut std_master::<Ub2>, &mut std_master::<Sd>);
 }
 
@@ -161,7 +167,11 @@ impl<P: Link> Drive<P> for EmbeddedDrive<P> {
 
 #[test]
 fn the_embedded_io_driver_runs_the_suite() {
-    run_suite(&mut embedded_io::<Ub2>, &mut embedded_io::<Sd>);
+    run_suite(
+        &mut embedded_io::<Ub2>,
+        &mut embedded_io::<Sd>,
+        &mut embedded_io::<Modbus>,
+    );
     run_rs485_suite(&mut embedded_io::<Ub2>, &mut embedded_io::<Sd>);
 }
 
@@ -203,7 +213,11 @@ impl<P: Link> Drive<P> for AsyncEmbeddedDrive<P> {
 
 #[test]
 fn the_embedded_io_async_driver_runs_the_suite() {
-    run_suite(&mut embedded_io_async::<Ub2>, &mut embedded_io_async::<Sd>);
+    run_suite(
+        &mut embedded_io_async::<Ub2>,
+        &mut embedded_io_async::<Sd>,
+        &mut embedded_io_async::<Modbus>,
+    );
     run_rs485_suite(&mut embedded_io_async::<Ub2>, &mut embedded_io_async::<Sd>);
 }
 
@@ -303,6 +317,10 @@ mod pty {
 
     #[test]
     fn the_tokio_driver_runs_the_suite_through_a_pseudo_terminal() {
-        run_suite(&mut tokio_pty::<Ub2>, &mut tokio_pty::<Sd>);
+        run_suite(
+            &mut tokio_pty::<Ub2>,
+            &mut tokio_pty::<Sd>,
+            &mut tokio_pty::<Modbus>,
+        );
     }
 }

@@ -83,6 +83,7 @@ pub fn diff(old: &Protocol, new: &Protocol) -> Vec<Change> {
     };
     d.protocol();
     d.serial();
+    d.transactions();
     d.framing();
     let units = d.units();
     let enums = d.enums();
@@ -619,6 +620,29 @@ impl<'a> Differ<'a> {
             "serial",
             &[("section", &sec(&o.section), &sec(&n.section))],
         );
+    }
+
+    /// The `transactions:` section ([`crate::transactions::diff`]) and each command's retry
+    /// safety: a command no longer safe to send twice breaks a master that would.
+    fn transactions(&mut self) {
+        let (o, n) = (&self.old.transactions, &self.new.transactions);
+        for (breaks, path, text) in crate::transactions::diff(o, n) {
+            if breaks {
+                self.wire("timing_changed", path, text);
+            } else {
+                self.compatible("timing_changed", path, text);
+            }
+        }
+        for (name, was, now) in crate::transactions::retry_changes(self.old, self.new) {
+            let safe = |s: bool| if s { "safe" } else { "not safe" };
+            let path = format!("commands.{name}");
+            let text = format!("{name} to retry: {} → {}", safe(was), safe(now));
+            if was {
+                self.wire("retry_changed", path, text);
+            } else {
+                self.compatible("retry_changed", path, text);
+            }
+        }
     }
 
     fn framing(&mut self) {

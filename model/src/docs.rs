@@ -357,6 +357,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
         );
     }
     o.push('\n');
+    o.push_str(&crate::transactions::render(p));
 
     let f = &p.framing;
     let _ = writeln!(

@@ -32,6 +32,8 @@ pub struct Protocol {
     pub common_responses: Vec<usize>,
     pub examples: Vec<Example>,
     pub errata: Vec<Erratum>,
+    /// What a bus master needs (`transactions:`, resolved with its defaults).
+    pub transactions: crate::transactions::Transactions,
     /// SHA-256 of the spec text this was loaded from, lowercase hex (what `sha256sum` prints);
     /// empty when the protocol was validated from a model rather than loaded from text.
     pub spec_sha256: String,

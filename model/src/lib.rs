@@ -31,6 +31,7 @@ pub mod model;
 pub mod rational;
 #[cfg(feature = "tools")]
 pub mod stream;
+pub mod transactions;
 pub mod validate;
 
 use std::path::Path;

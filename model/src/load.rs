@@ -136,8 +136,8 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
     spec.filter(|_| sink.is_empty())
 }
 
-/// Top-level keys with a default when absent: the lists, and `common_responses`.
-const DEFAULTED_KEYS: &[&str] = &["common_responses"];
+/// Top-level keys with a default when absent: the lists, `common_responses` and `transactions`.
+const DEFAULTED_KEYS: &[&str] = &["common_responses", "transactions"];
 
 /// Whether a top-level key must be present: [`Spec`]'s fields without a default.
 fn required(key: &str) -> bool {
@@ -156,6 +156,7 @@ fn read_key(key: &str, value: &Value, sink: &mut Sink) {
         "serial" => check::<model::Serial>(value, key, sink),
         "framing" => check::<model::Framing>(value, key, sink),
         "common_responses" => check::<Vec<String>>(value, key, sink),
+        "transactions" => check::<crate::transactions::Section>(value, key, sink),
         // Lists (emptied above: read element by element) and keys reported as unknown.
         _ => {}
     }

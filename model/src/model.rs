@@ -66,6 +66,9 @@ pub struct Spec {
     pub examples: Vec<Example>,
     #[serde(default)]
     pub errata: Vec<Erratum>,
+    /// What a bus master needs: see [`crate::transactions`].
+    #[serde(default)]
+    pub transactions: Option<crate::transactions::Section>,
 }
 
 /// The keys of [`Spec`], in file order; the loader checks top-level keys against it.
@@ -85,6 +88,7 @@ pub const SPEC_KEYS: &[&str] = &[
     "common_responses",
     "examples",
     "errata",
+    "transactions",
 ];
 
 #[derive(Debug, Clone, Deserialize)]

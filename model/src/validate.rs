@@ -452,6 +452,12 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         });
     }
 
+    let transactions = crate::transactions::validate(
+        spec.transactions.as_ref(),
+        &spec.serial,
+        &spec.commands,
+        sink,
+    );
     if !sink.is_empty() {
         return None;
     }
@@ -471,6 +477,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         common_responses: common,
         examples: Vec::new(),
         errata,
+        transactions,
         spec_sha256: String::new(),
     };
     proto.examples = examples(spec, &proto, sink);

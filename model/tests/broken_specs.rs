@@ -29,6 +29,44 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
             ("responses.status", "no command lists this response"),
         ],
     ),
+    // ---- the `transactions:` section (made from valid/minimal.yaml)
+    (
+        "transactions_unknown_command",
+        &[("transactions.retry.unsafe[0]", "unknown command `get_statuz`")],
+    ),
+    (
+        "transactions_retry_redundant",
+        &[
+            ("transactions.retry.safe[0]", "`get_status` is a getter command, which is safe by its kind already"),
+            ("transactions.retry.unsafe[0]", "`go_to` is a movement command, which is unsafe by its kind already"),
+        ],
+    ),
+    (
+        "transactions_timeout_zero",
+        &[
+            ("transactions.response_timeout_ms", "0 ms: must be positive"),
+            ("transactions.turnaround_ms", "0.0005 ms is not a whole number of microseconds"),
+        ],
+    ),
+    (
+        "transactions_gap_disagrees",
+        &[(
+            "transactions.inter_frame_gap.characters",
+            "3.5 character times at 9600 baud (10 bits each) are 3.646 ms, but serial.inter_frame_gap_ms says 10 ms",
+        )],
+    ),
+    (
+        "transactions_gap_characters_bad",
+        &[
+            ("transactions.inter_frame_gap.characters", "3.25 character times: give tenths at most"),
+            ("transactions.inter_frame_gap.at_least_ms", "-1 ms: must be 0 or more"),
+            ("transactions.retry.safe_kinds[1]", "getter is listed twice"),
+        ],
+    ),
+    (
+        "transactions_unknown_key",
+        &[("transactions.response_timeout", "unknown field `response_timeout`")],
+    ),
     // ---- checksums: none, masks, Fletcher (made from valid/minimal.yaml)
     (
         "checksum_without_layout_part",

@@ -352,3 +352,47 @@ fn another_end_byte_is_a_framing_change() {
         "{got:#?}"
     );
 }
+
+/// `base.yaml` with a `transactions:` section (empty text: none).
+fn with_transactions(section: &str) -> Protocol {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/diff/base.yaml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let text = text.replacen("\nframing:\n", &format!("\n{section}\nframing:\n"), 1);
+    busspec_model::load_str("base.yaml", &text).unwrap_or_else(|d| panic!("{d}"))
+}
+
+#[test]
+fn transactions_changes_are_classified() {
+    let none = with_transactions("");
+    let old = with_transactions(
+        "transactions:\n  response_timeout_ms: 100\n  turnaround_ms: 1\n  inter_frame_gap: {characters: 3.5}\n",
+    );
+    // Added: a longer timeout and gap than none at all are wire-breaking for a master built
+    // without them; the section alone changes no command's retry safety.
+    assert_eq!(
+        summary(&diff::diff(&none, &old)),
+        [
+            (Wire, "timing_changed", "transactions.response_timeout_ms"),
+            (Wire, "timing_changed", "transactions.turnaround_ms"),
+            (Wire, "timing_changed", "transactions.inter_frame_gap"),
+        ]
+    );
+    // Shorter timeout and gap: compatible; set_mode no longer safe to retry: breaking;
+    // go_to (a movement) now safe: compatible.
+    let new = with_transactions(
+        "transactions:\n  response_timeout_ms: 50\n  turnaround_ms: 1\n  inter_frame_gap: {characters: 1.5}\n  retry:\n    safe: [go_to]\n    unsafe: [set_mode]\n",
+    );
+    let got = diff::diff(&old, &new);
+    assert_eq!(
+        summary(&got),
+        [
+            (Compat, "timing_changed", "transactions.response_timeout_ms"),
+            (Compat, "timing_changed", "transactions.inter_frame_gap"),
+            (Compat, "retry_changed", "commands.go_to"),
+            (Wire, "retry_changed", "commands.set_mode"),
+        ]
+    );
+    assert_eq!(got[0].text, "response timeout: 100 ms → 50 ms");
+    assert_eq!(got[3].text, "set_mode to retry: safe → not safe");
+    assert_eq!(diff::diff(&new, &new), []);
+}

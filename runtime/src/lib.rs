@@ -27,7 +27,7 @@ mod protocol;
 mod repeated;
 pub mod stream;
 
-pub use protocol::{Message, Protocol, ProtocolVisitor};
+pub use protocol::{Message, Protocol, ProtocolVisitor, Transactions};
 pub use repeated::{Bits, CapacityError, Element, Repeated};
 
 use core::fmt;
@@ -67,6 +67,20 @@ pub enum Reply {
     Optional,
     /// None ever comes.
     None,
+}
+
+impl CommandKind {
+    /// Whether a command of this kind may be sent again when its reply is lost or garbled,
+    /// with nothing else known about it: reads, completion checks and setters (the same value
+    /// set twice is set once); never movements (a second trigger restarts or extends the move)
+    /// or resets (the second reply reports the reset state, not the value before it). A spec
+    /// says otherwise in `transactions.retry` ([`Protocol::may_retry`]).
+    pub const fn safe_to_repeat(self) -> bool {
+        matches!(
+            self,
+            CommandKind::Getter | CommandKind::CompletionCheck | CommandKind::Setter
+        )
+    }
 }
 
 /// How a command treats the broadcast address (each protocol's `Request::broadcast`).

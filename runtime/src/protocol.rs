@@ -90,6 +90,16 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     /// The host's own address, if the spec gives one: a frame may carry it besides the device
     /// range and the broadcast address.
     const HOST_ADDRESS: Option<u8> = None;
+    /// What a bus master needs that the spec declares in its `transactions:` section
+    /// ([`Transactions::UNDECLARED`] for a spec without one).
+    const TRANSACTIONS: Transactions = Transactions::UNDECLARED;
+
+    /// Whether a master may send `request` again when its reply is lost or garbled: the spec's
+    /// `transactions.retry`, by default [`CommandKind::safe_to_repeat`] of its kind.
+    #[inline]
+    fn may_retry(request: &Self::Request) -> bool {
+        Self::kind(request).safe_to_repeat()
+    }
 
     /// Decodes a request frame.
     fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError>;
@@ -164,6 +174,48 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     fn variable_candidates(head: &[u8]) -> VarLens {
         let _ = head;
         VarLens::NONE
+    }
+}
+
+/// The timing a spec's `transactions:` section declares for a bus master. Durations are in
+/// microseconds; `None` where the spec does not say (the master keeps its own default).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Transactions {
+    /// How long a device may take to start its reply.
+    pub response_timeout_us: Option<u32>,
+    /// A device's turnaround: the time before its reply may start, and after a broadcast it
+    /// does not answer, before it takes the next request.
+    pub turnaround_us: Option<u32>,
+    /// The quiet time between frames in tenths of a character time (35 for Modbus's t3.5), at
+    /// the line's baud rate; [`Protocol::INTER_FRAME_GAP_MS`] is the same gap at the document's.
+    pub gap_tenths_of_character: Option<u32>,
+    /// The gap is never shorter than this (Modbus: 1750 µs above 19,200 baud).
+    pub gap_at_least_us: u32,
+    /// Bits one character takes on the line: start, data, parity and stop bits.
+    pub character_bits: u32,
+}
+
+impl Transactions {
+    /// A spec without the section: nothing declared, 8N1 characters.
+    pub const UNDECLARED: Transactions = Transactions {
+        response_timeout_us: None,
+        turnaround_us: None,
+        gap_tenths_of_character: None,
+        gap_at_least_us: 0,
+        character_bits: 10,
+    };
+
+    /// The declared gap in character times at `baud` (and `character_bits` a character),
+    /// rounded up to the microsecond and never below [`Self::gap_at_least_us`]; `None` where
+    /// the gap is not declared in character times.
+    pub const fn gap_us_at(&self, baud: u32, character_bits: u32) -> Option<u64> {
+        let Some(tenths) = self.gap_tenths_of_character else {
+            return None;
+        };
+        let baud = if baud == 0 { 1 } else { baud as u64 };
+        let us = (tenths as u64 * character_bits as u64 * 1_000_000).div_ceil(10 * baud);
+        let floor = self.gap_at_least_us as u64;
+        Some(if us > floor { us } else { floor })
     }
 }
 

@@ -25,7 +25,7 @@ pub mod dynamixel {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2019-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "9e15813431bd419dac0a2652a42002c813400b3d70e1410fb96e6ab179d0626a";
+    pub const SPEC_SHA256: &str = "37557586f6f7344c79b13357cd7c63c821cf940be4a5da05c0e5ea4ed207bbe2";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!("../../../spec/dynamixel.yaml");
     /// The longest request frame, in bytes.
@@ -776,6 +776,13 @@ pub mod dynamixel {
         const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
         const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
         const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
+        const TRANSACTIONS: ::busspec_runtime::Transactions = ::busspec_runtime::Transactions {
+            response_timeout_us: rt::None,
+            turnaround_us: rt::Some(500u32),
+            gap_tenths_of_character: rt::None,
+            gap_at_least_us: 0u32,
+            character_bits: 10u32,
+        };
         #[inline]
         fn decode_request(
             frame: &[u8],

@@ -25,7 +25,7 @@ pub mod modbus {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2012-04-26";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "a741f569688122af7c46deee340142d9b8c53522526f5e6eabfa6fa407ad0b12";
+    pub const SPEC_SHA256: &str = "3cc5def17f831fae65c5b7ce49b5f191f30dda50472e2c0918dee275e58a7654";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!("../../../spec/modbus.yaml");
     /// The longest request frame, in bytes.
@@ -1825,6 +1825,20 @@ pub mod modbus {
         const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
         const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
         const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
+        const TRANSACTIONS: ::busspec_runtime::Transactions = ::busspec_runtime::Transactions {
+            response_timeout_us: rt::Some(1000000u32),
+            turnaround_us: rt::Some(100000u32),
+            gap_tenths_of_character: rt::Some(35u32),
+            gap_at_least_us: 1750u32,
+            character_bits: 11u32,
+        };
+        #[inline]
+        fn may_retry(request: &Request) -> bool {
+            matches!(
+                request, Request::ReadCoils { .. } | Request::ReadDiscreteInputs { .. } |
+                Request::ReadHoldingRegisters { .. } | Request::ReadInputRegisters { .. }
+            )
+        }
         #[inline]
         fn decode_request(
             frame: &[u8],

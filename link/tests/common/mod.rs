@@ -559,3 +559,142 @@ pub fn block_on<F: std::future::Future>(f: F) -> F::Output {
     }
     panic!("the future did not finish: it waits on something besides simulated time");
 }
+
+// Any protocol, by its spec alone: Modbus RTU through `Plain`, no rules of its own.
+
+/// The generic master's view of Modbus: the codec's `Protocol` with the spec-driven `Link`.
+pub type Modbus = busspec_link_core::link::Plain<busspec_protocols::modbus::Modbus>;
+
+/// A Modbus server of ten holding registers (0..=9) at `address`: reads of them are answered,
+/// reads beyond are refused with exception 2 (illegal data address), writes land and are
+/// echoed; a broadcast write lands unanswered. Counts the frames it took.
+pub struct ModbusRegisters {
+    pub address: u8,
+    pub registers: [u16; 10],
+    pub frames: u32,
+}
+
+impl ModbusRegisters {
+    pub fn new(address: u8) -> Self {
+        ModbusRegisters {
+            address,
+            registers: core::array::from_fn(|i| 100 + i as u16),
+            frames: 0,
+        }
+    }
+}
+
+impl Device for ModbusRegisters {
+    fn on_frame(&mut self, frame: &[u8], _now: Duration) -> Option<Vec<u8>> {
+        use busspec_protocols::modbus::{ExceptionCode, Request as Q, Response as R};
+        let d = Modbus::decode_request(frame).ok()?;
+        let broadcast = Some(d.address) == Modbus::BROADCAST_ADDRESS;
+        if d.address != self.address && !broadcast {
+            return None;
+        }
+        self.frames += 1;
+        let response = match d.message {
+            Q::ReadHoldingRegisters {
+                starting_address,
+                quantity,
+            } => {
+                let (start, n) = (usize::from(starting_address), usize::from(quantity));
+                match self.registers.get(start..start + n) {
+                    Some(regs) => R::ReadHoldingRegistersReply {
+                        registers: busspec_protocols::Repeated::from_slice(regs).ok()?,
+                    },
+                    None => R::ReadHoldingRegistersException {
+                        exception_code: ExceptionCode::IllegalDataAddress,
+                    },
+                }
+            }
+            Q::WriteSingleRegister {
+                register_address,
+                register_value,
+            } => match self.registers.get_mut(usize::from(register_address)) {
+                Some(r) => {
+                    *r = register_value;
+                    R::WriteSingleRegisterReply {
+                        register_address,
+                        register_value,
+                    }
+                }
+                None => R::WriteSingleRegisterException {
+                    exception_code: ExceptionCode::IllegalDataAddress,
+                },
+            },
+            _ => return None,
+        };
+        if broadcast {
+            return None;
+        }
+        busspec_link::sim::reply::<Modbus>(&response, self.address)
+    }
+    fn address(&self) -> u8 {
+        self.address
+    }
+}
+
+/// The master runs Modbus from its spec alone: a read is answered, a refusal (exception reply,
+/// `kind: nak`) is the device's answer and not retried, a read whose replies are lost is sent
+/// again (reads are `retry.safe_kinds`), a write whose reply is lost is not, and a broadcast
+/// write lands unanswered.
+pub fn modbus_by_its_spec<D: Drive<Modbus>>(make: &mut dyn FnMut(Setup) -> D) {
+    use busspec_protocols::modbus::{ExceptionCode, Request as Q, Response as R};
+    let dev = Shared::new(Flaky {
+        inner: ModbusRegisters::new(7),
+        mute: 0,
+        corrupt: 0,
+    });
+    let mut m = make(Setup::new::<Modbus>(vec![Box::new(dev.clone())]));
+    let read = |start: u16, quantity: u16| Q::ReadHoldingRegisters {
+        starting_address: start,
+        quantity,
+    };
+    let regs = |v: &[u16]| R::ReadHoldingRegistersReply {
+        registers: busspec_protocols::Repeated::from_slice(v).unwrap(),
+    };
+    assert_eq!(
+        m.transact(7, read(2, 3)),
+        Outcome::Reply(Some(regs(&[102, 103, 104])))
+    );
+    // A refusal is an answer: once, no retry.
+    let frames = dev.with(|d| d.inner.frames);
+    let refused = m.transact(7, read(9, 2));
+    let exception = R::ReadHoldingRegistersException {
+        exception_code: ExceptionCode::IllegalDataAddress,
+    };
+    assert_eq!(refused, Outcome::Reply(Some(exception)));
+    assert!(Modbus::is_refusal(&read(9, 2), &exception));
+    assert_eq!(dev.with(|d| d.inner.frames), frames + 1);
+    // A read whose first two replies are lost: sent three times, answered the third.
+    dev.with(|d| d.mute = 2);
+    let frames = dev.with(|d| d.inner.frames);
+    assert_eq!(
+        m.transact(7, read(0, 1)),
+        Outcome::Reply(Some(regs(&[100])))
+    );
+    assert_eq!(dev.with(|d| d.inner.frames), frames + 3);
+    // A write whose reply is lost: sent once, the write landed, the master says no reply.
+    dev.with(|d| d.mute = 1);
+    let frames = dev.with(|d| d.inner.frames);
+    let write = Q::WriteSingleRegister {
+        register_address: 4,
+        register_value: 0xBEEF,
+    };
+    assert_eq!(m.transact(7, write), Outcome::NoReply);
+    assert_eq!(
+        dev.with(|d| (d.inner.frames, d.inner.registers[4])),
+        (frames + 1, 0xBEEF)
+    );
+    // A broadcast write (address 0): not answered, carried out.
+    let write = Q::WriteSingleRegister {
+        register_address: 5,
+        register_value: 55,
+    };
+    assert_eq!(m.transact(0, write), Outcome::Reply(None));
+    // The next request, after the turnaround, reads what it wrote.
+    assert_eq!(m.transact(7, read(5, 1)), Outcome::Reply(Some(regs(&[55]))));
+    // A read does not accept the broadcast address.
+    assert_eq!(m.transact(0, read(0, 1)), Outcome::Address);
+}
