@@ -114,6 +114,10 @@ macro_rules! protocol_as {
                 <$codec as busspec_runtime::Protocol>::broadcast(request)
             }
             #[inline]
+            fn reply(request: &Self::Request) -> busspec_runtime::Reply {
+                <$codec as busspec_runtime::Protocol>::reply(request)
+            }
+            #[inline]
             fn is_nak(response: &Self::Response) -> bool {
                 <$codec as busspec_runtime::Protocol>::is_nak(response)
             }

@@ -190,6 +190,9 @@ impl<P: Protocol> Protocol for Plain<P> {
     fn broadcast(request: &Self::Request) -> busspec_runtime::Broadcast {
         P::broadcast(request)
     }
+    fn reply(request: &Self::Request) -> busspec_runtime::Reply {
+        P::reply(request)
+    }
     fn is_nak(response: &Self::Response) -> bool {
         P::is_nak(response)
     }

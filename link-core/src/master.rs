@@ -22,6 +22,9 @@
 //!   [`Timing::settle`] (at most four times that) before the next send, so a late reply is
 //!   discarded instead of taken for the next request's answer.
 //! - **Broadcasts** the spec leaves unanswered ([`Protocol::broadcast`](crate::Protocol::broadcast)) finish when sent.
+//! - **Commands without a reply** ([`Protocol::reply`](crate::Protocol::reply): `reply: none`)
+//!   finish when sent; where the reply is optional, silence until the timeout finishes the
+//!   transaction with no response, and is not retried.
 //! - **Freshness counters** ([`Link::freshness_mut`], SD §3.1) are kept per address: every
 //!   request that carries one carries the next value; the first one to an address starts from
 //!   the device's own view ([`Link::freshness_readout`]), read in a transaction of its own.
@@ -33,7 +36,7 @@
 use core::fmt;
 use core::time::Duration;
 
-use busspec_runtime::{DecodeError, EncodeError, Message};
+use busspec_runtime::{DecodeError, EncodeError, Message, Reply as ReplyRule};
 
 use crate::line::{DriverEnable, Line};
 use crate::link::{ByteOrderCheck, Link};
@@ -292,6 +295,9 @@ pub struct MasterCore<P: Link> {
     request: Option<P::Request>,
     broadcast: bool,
     expects_reply: bool,
+    /// The spec says the reply may not come (`reply: optional`): silence ends the transaction
+    /// with no response, not with a failure.
+    reply_optional: bool,
     allowed: u32,
     attempt: u32,
     frame: P::Buffer,
@@ -328,6 +334,7 @@ impl<P: Link> MasterCore<P> {
             request: None,
             broadcast: false,
             expects_reply: true,
+            reply_optional: false,
             allowed: 1,
             attempt: 0,
             frame: P::EMPTY_BUFFER,
@@ -555,7 +562,12 @@ impl<P: Link> MasterCore<P> {
         self.address = address;
         self.request = Some(request);
         self.broadcast = broadcast;
-        self.expects_reply = !broadcast || P::broadcast(&request).answered;
+        // A command the spec says gets no reply is done once sent, like a broadcast nobody
+        // answers; one whose reply is optional is done when none comes.
+        let rule = P::reply(&request);
+        self.expects_reply =
+            rule != ReplyRule::None && (!broadcast || P::broadcast(&request).answered);
+        self.reply_optional = rule == ReplyRule::Optional;
         self.allowed = if P::retry_safe(&request) {
             self.timing.attempts.max(1)
         } else {
@@ -706,6 +718,17 @@ impl<P: Link> MasterCore<P> {
                     quiet_until,
                 } => match quiet_until {
                     None if now < deadline => return Action::Read { until: deadline },
+                    None if self.reply_optional => {
+                        self.event(Event::NoReply {
+                            attempt: self.attempt,
+                        });
+                        let reply = Reply {
+                            response: None,
+                            address: self.address,
+                            attempts: self.attempt,
+                        };
+                        self.transaction_done(Ok(reply));
+                    }
                     None => {
                         self.event(Event::NoReply {
                             attempt: self.attempt,

@@ -25,7 +25,7 @@ pub mod ft12_fixed {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "1992-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "6c2fcb25f3f41c220a5888db3c45909e49f682a11960e6e754aebc6f92e3a07d";
+    pub const SPEC_SHA256: &str = "8fb477ad79c5d9c8bb8ae84c4ba447e2816db6030da4f099a3b8670cb0fffbcb";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/ft12_fixed.yaml"
@@ -235,7 +235,10 @@ pub mod ft12_fixed {
     impl Request {
         /// Whether the command gets a reply, as the spec says.
         pub const fn reply(&self) -> rt::Reply {
-            rt::Reply::Required
+            match self {
+                Request::RequestClass2 => rt::Reply::Optional,
+                _ => rt::Reply::Required,
+            }
         }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
