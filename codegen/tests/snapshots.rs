@@ -135,6 +135,14 @@ fn pelco_p_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/pelco_p.yaml", "pelco_p.rs");
 }
 
+/// MSP v1: the direction byte as the code, the command as a constant first field, a length
+/// that leaves it out, an XOR from the length field on, an error reply common to every command
+/// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn msp_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/msp_v1.yaml", "msp_v1.rs");
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

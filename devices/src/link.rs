@@ -1,6 +1,6 @@
 //! The master's rules for UB2 and SD: [`Link`] for [`crate::Ub2`] and [`crate::Sd`].
 //!
-//! Everything the spec says comes from the codec's [`Protocol`], the commands unsafe to retry
+//! Everything the spec says comes from the codec's [`Protocol`](busspec_runtime::Protocol), the commands unsafe to retry
 //! included (each spec's `transactions.retry`: UB2's new address or baud rate and the status
 //! read that clears its RESET flag; SD's new ID and new zero); these impls hold only what a
 //! master decides on top (see [`Link`]): UB2's checksum NAK 0x92, its 0x93 to a movement read
@@ -13,7 +13,7 @@ use busspec_link_core::link::Link;
 use busspec_link_core::link::{text, ByteOrderCheck};
 #[cfg(feature = "ub2")]
 use busspec_runtime::CommandKind;
-#[cfg(any(feature = "ub2", feature = "sd"))]
+#[cfg(feature = "ub2")]
 use busspec_runtime::Protocol;
 
 #[cfg(feature = "ub2")]

@@ -1300,10 +1300,18 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     );
     let mut cs = csum;
     // What the checksum may cover from: a part of the layout before the payload.
+    // A part after the code moves with the code's length: only where every code has one.
+    let mut lens: Vec<usize> = req_lens.iter().chain(&resp_lens).copied().collect();
+    lens.sort_unstable();
+    lens.dedup();
+    let code_at = layout.iter().position(|p| *p == "code");
     let before: Vec<&str> = layout
         .iter()
         .copied()
-        .take_while(|p| *p != "payload")
+        .enumerate()
+        .take_while(|(_, p)| *p != "payload")
+        .filter(|(i, _)| lens.len() == 1 || code_at.map_or(true, |c| *i <= c))
+        .map(|(_, p)| p)
         .collect();
     if !cs.is_empty() && g.chance(40) {
         let _ = write!(cs, ", covers_from: {}", g.pick(&before));

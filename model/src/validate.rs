@@ -1091,7 +1091,25 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         .map(|l| frame_layout(&framing, l, 0))
         .collect();
     if let Some(part) = f.checksum.as_ref().and_then(|c| c.covers_from) {
-        let head = framing.head(0);
+        // A part after the code sits after as many bytes as the code has: one offset only
+        // where every code has one length.
+        let mut lens: Vec<usize> = (framing.request.code_lengths.iter())
+            .chain(&framing.response.code_lengths)
+            .copied()
+            .collect();
+        lens.sort_unstable();
+        lens.dedup();
+        let pos = |p: Part| f.layout.iter().position(|x| *x == p);
+        if pos(Part::Code) < pos(part) && lens.len() > 1 {
+            sink.error(
+                "framing.checksum.covers_from",
+                format!(
+                    "the checksum cannot cover from `{}`: it comes after the code, whose lengths {lens:?} would move it",
+                    part_name(part)
+                ),
+            );
+        }
+        let head = framing.head(lens.first().copied().unwrap_or(0));
         let at = match part {
             Part::Start => head.start,
             Part::Address => head.address,

@@ -17,6 +17,11 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- checksum coverage from a part after codes of two lengths (made from valid/msp_v1.yaml)
+    (
+        "covers_from_after_codes_of_two_lengths",
+        &[("framing.checksum.covers_from", "the checksum cannot cover from `length`: it comes after the code, whose lengths [1, 2] would move it")],
+    ),
     // ---- commands that get no reply (made from valid/minimal.yaml)
     (
         "reply_none_with_responses",
