@@ -74,6 +74,19 @@ response is paired with the request just before it (--reply-to gives the request
 there is none). Exit status 0 unless the capture cannot be read (the lines of what was read
 before the error print, then `error: cannot read FILE (after N bytes): reason`).
 
+A pcapng file (told by its Section Header Block: 0A0D0D0A, then the byte-order magic) is read
+as the capture its packets make, concatenated in file order; offsets count in that
+concatenation. Only user link types (147-162) are read. A truncated or damaged file ends the
+run with `error: pcapng FILE: block N at byte B: reason`, after the lines of what came before.
+
+--pcapng OUT also writes the stream to OUT as pcapng: one Enhanced Packet Block per line
+printed (frames, and skipped, ambiguous and out-of-spec bytes, so the packets concatenated are
+the capture), link type LINKTYPE_USER0 (147), the frame's wire bytes as the packet, the
+direction in epb_flags (request outbound, response inbound, none for noise), a comment with the
+message or the reason, and as timestamp the time the event's first byte starts on the line at
+the spec's serial settings (start, data, parity and stop bits at its baud rate), counted from
+the epoch in nanoseconds; the interface names the protocol (`busspec NAME`) and the capture.
+
 Output closed early (`| head`) ends the run quietly.";
 
 const ENCODE_HELP: &str = "\
