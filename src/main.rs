@@ -4,6 +4,7 @@
 mod demo;
 mod frames;
 mod link_cli;
+mod pcapng;
 mod svg;
 
 use std::io::{BufRead, Read, Write};
@@ -72,6 +73,19 @@ tries again; where messages share a code the longest complete frame that checksu
 response is paired with the request just before it (--reply-to gives the request to assume when
 there is none). Exit status 0 unless the capture cannot be read (the lines of what was read
 before the error print, then `error: cannot read FILE (after N bytes): reason`).
+
+A pcapng file (told by its Section Header Block: 0A0D0D0A, then the byte-order magic) is read
+as the capture its packets make, concatenated in file order; offsets count in that
+concatenation. Only user link types (147-162) are read. A truncated or damaged file ends the
+run with `error: pcapng FILE: block N at byte B: reason`, after the lines of what came before.
+
+--pcapng OUT also writes the stream to OUT as pcapng: one Enhanced Packet Block per line
+printed (frames, and skipped, ambiguous and out-of-spec bytes, so the packets concatenated are
+the capture), link type LINKTYPE_USER0 (147), the frame's wire bytes as the packet, the
+direction in epb_flags (request outbound, response inbound, none for noise), a comment with the
+message or the reason, and as timestamp the time the event's first byte starts on the line at
+the spec's serial settings (start, data, parity and stop bits at its baud rate), counted from
+the epoch in nanoseconds; the interface names the protocol (`busspec NAME`) and the capture.
 
 Output closed early (`| head`) ends the run quietly.";
 
@@ -325,9 +339,15 @@ struct DecodeArgs {
     /// value that follows from the request must (Modbus: byte count = 2 × quantity).
     #[arg(long, value_name = "HEX", conflicts_with_all = ["stream", "reply_to", "direction"])]
     request: Option<String>,
-    /// Read a raw bus capture (binary) from FILE, `-` for stdin, instead of hex arguments.
+    /// Read a bus capture from FILE, `-` for stdin, instead of hex arguments: raw bytes, or a
+    /// pcapng file (told by its first bytes) whose packets' bytes, in order, are the capture.
     #[arg(long, value_name = "FILE")]
     stream: Option<PathBuf>,
+    /// With --stream: also write every event (frames, and the bytes that start none) to FILE as
+    /// pcapng, one packet each, link type USER0 (147), direction in epb_flags, timestamps at
+    /// the spec's baud rate from the capture's first byte.
+    #[arg(long, value_name = "FILE", requires = "stream")]
+    pcapng: Option<PathBuf>,
     /// Print a frame that breaks only the spec's ranges, address or broadcast rules, with its
     /// "violations", instead of refusing it (a stream always reports such frames).
     #[arg(long)]
@@ -643,7 +663,14 @@ fn decode(args: DecodeArgs) -> Result<(), String> {
     };
     let mut out = Out::new(std::io::stdout().lock());
     if let Some(file) = &args.stream {
-        decode_stream(&engine, direction, reply_to, file, &mut out)?;
+        if args.pcapng.as_deref() == Some(Path::new("-")) {
+            usage_error(
+                "decode",
+                "--pcapng needs a file: stdout carries the JSON lines".into(),
+            );
+        }
+        let pcapng = args.pcapng.as_deref();
+        decode_stream(&engine, direction, reply_to, file, pcapng, &mut out)?;
         return out.finish();
     }
     if args.frames.iter().any(|f| f == "-") {
@@ -802,6 +829,7 @@ fn decode_stream(
     direction: Option<Direction>,
     reply_to: Option<usize>,
     file: &Path,
+    pcapng: Option<&Path>,
     out: &mut Out<impl Write>,
 ) -> Result<(), String> {
     let name = file.display().to_string();
@@ -810,14 +838,27 @@ fn decode_stream(
     } else {
         Box::new(std::fs::File::open(file).map_err(|e| format!("error: cannot read {name}: {e}"))?)
     };
-    let mut decoder = engine.stream(direction, reply_to);
+    let mut writer = match pcapng {
+        None => None,
+        Some(path) => {
+            let to = path.display().to_string();
+            let f = std::fs::File::create(path)
+                .map_err(|e| format!("error: cannot write {to}: {e}"))?;
+            let w = std::io::BufWriter::new(f);
+            Some(pcapng::Writer::new(w, &to, &engine.spec, &name)?)
+        }
+    };
+    let mut stream = Feed {
+        decoder: engine.stream(direction, reply_to),
+        writer: writer.as_mut(),
+    };
     let mut chunk = vec![0u8; Out::<std::io::Sink>::CHUNK];
     let mut read = 0u64;
+    // The first bytes tell a pcapng file from a raw capture.
+    let mut head = Vec::new();
     loop {
-        let n = match input.read(&mut chunk) {
-            Ok(0) => break,
+        let n = match read_some(&mut input, &mut chunk) {
             Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
             Err(e) => {
                 // What was decoded before the error is printed, then the error.
                 out.flush()?;
@@ -827,14 +868,72 @@ fn decode_stream(
             }
         };
         read += n as u64;
-        // In pieces whose lines fit the output buffer's chunk.
-        for piece in chunk[..n].chunks(1024) {
-            decoder.push(piece, &mut out.buf);
-            out.written()?;
+        if n == 0 {
+            break;
+        }
+        if head.len() < 12 {
+            head.extend_from_slice(&chunk[..n]);
+            if head.len() < 12 {
+                continue;
+            }
+            if pcapng::is_pcapng(&head) {
+                let captured = pcapng::read(&name, std::mem::take(&mut head), &mut input, |p| {
+                    stream.push(p, out)
+                });
+                if let Err(e) = captured {
+                    out.flush()?;
+                    return Err(e);
+                }
+                break;
+            }
+            stream.push(&std::mem::take(&mut head), out)?;
+            continue;
+        }
+        stream.push(&chunk[..n], out)?;
+    }
+    // A capture shorter than a pcapng header is raw bytes.
+    stream.push(&head, out)?;
+    let before = out.buf.len();
+    stream.decoder.finish(&mut out.buf);
+    if let Some(w) = stream.writer {
+        w.lines(&out.buf[before..])?;
+    }
+    if let Some(w) = writer {
+        w.finish()?;
+    }
+    Ok(())
+}
+
+/// Reads what `input` has, retrying where a signal interrupted it.
+fn read_some(input: &mut dyn Read, chunk: &mut [u8]) -> std::io::Result<usize> {
+    loop {
+        match input.read(chunk) {
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            other => return other,
         }
     }
-    decoder.finish(&mut out.buf);
-    Ok(())
+}
+
+/// A capture's bytes on their way to the stream decoder and, with --pcapng, the file.
+struct Feed<'a, 'w> {
+    decoder: Box<dyn frames::LineStream + 'a>,
+    writer: Option<&'w mut pcapng::Writer<std::io::BufWriter<std::fs::File>>>,
+}
+
+impl Feed<'_, '_> {
+    fn push(&mut self, data: &[u8], out: &mut Out<impl Write>) -> Result<(), String> {
+        // In pieces whose lines fit the output buffer's chunk.
+        for piece in data.chunks(1024) {
+            let before = out.buf.len();
+            self.decoder.push(piece, &mut out.buf);
+            if let Some(w) = self.writer.as_mut() {
+                w.bytes(piece);
+                w.lines(&out.buf[before..])?;
+            }
+            out.written()?;
+        }
+        Ok(())
+    }
 }
 
 fn encode(args: EncodeArgs) -> Result<(), String> {
