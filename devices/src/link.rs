@@ -1,7 +1,7 @@
 //! The master's rules for UB2 and SD: [`Link`] for [`crate::Ub2`] and [`crate::Sd`].
 //!
-//! Everything the spec says comes from the codec's [`Protocol`](busspec_runtime::Protocol), the commands unsafe to retry
-//! included (each spec's `transactions.retry`: UB2's new address or baud rate and the status
+//! Everything the spec says comes from the codec's [`busspec_runtime::Protocol`], the commands
+//! unsafe to retry included (each spec's `transactions.retry`: UB2's new address or baud rate and the status
 //! read that clears its RESET flag; SD's new ID and new zero); these impls hold only what a
 //! master decides on top (see [`Link`]): UB2's checksum NAK 0x92, its 0x93 to a movement read
 //! as the answer, and its byte-order probe (the factory limits, erratum ub2-e01); SD's reply
