@@ -158,19 +158,27 @@ pub struct TalkOptions<'a> {
     pub wait: bool,
     pub svg: Option<&'a Path>,
     pub timeout: Option<Duration>,
+    /// Every frame sent and received also goes to this pcapng file.
+    pub pcapng: Option<&'a Path>,
 }
 
 fn link_error(e: LinkError) -> String {
     format!("error: {e}")
 }
 
-fn open<P: Link>(o: &TalkOptions) -> Result<Master<P, SerialTransport, SystemClock>, String> {
+fn open<P: Link>(
+    spec: &Spec,
+    o: &TalkOptions,
+) -> Result<Master<P, SerialTransport, SystemClock>, String> {
     let baud = o.baud.unwrap_or(P::BAUD);
     if baud == 0 {
         return Err("error: --baud 0: a baud rate is positive".to_owned());
     }
     let t = SerialTransport::open(o.port, baud).map_err(|e| format!("error: {e}"))?;
     let mut m = Master::new(t, SystemClock::new());
+    if let Some(path) = o.pcapng {
+        record(&mut m, spec, o.port, path)?;
+    }
     if baud != P::BAUD {
         // The gap in character times, and the driver-enable timing, follow the line's rate.
         let line = busspec_link::Line {
@@ -190,6 +198,55 @@ fn open<P: Link>(o: &TalkOptions) -> Result<Master<P, SerialTransport, SystemClo
         m = m.with_timing(timing);
     }
     Ok(m)
+}
+
+/// Writes every frame `m` sends or receives to the pcapng file at `path`, as it goes: a request
+/// outbound, what comes back inbound (with why the master rejected it, if it did), each at the
+/// wall-clock time the master saw it. A write that fails is said on stderr once; the
+/// transactions go on.
+fn record<P: Link>(
+    m: &mut Master<P, SerialTransport, SystemClock>,
+    spec: &Spec,
+    port: &str,
+    path: &Path,
+) -> Result<(), String> {
+    use busspec_link::master::TraceEvent;
+    let name = path.display().to_string();
+    let file =
+        std::fs::File::create(path).map_err(|e| format!("error: cannot create {name}: {e}"))?;
+    let mut out = crate::pcapng::Writer::new(file, &name, spec, port)?;
+    let mut failed = false;
+    m.observe(move |e| {
+        let (bytes, flags, comment) = match e {
+            TraceEvent::Sent { attempt, bytes } => (
+                *bytes,
+                crate::pcapng::OUTBOUND,
+                format!("request, attempt {attempt}"),
+            ),
+            TraceEvent::Received {
+                attempt,
+                bytes,
+                rejected,
+            } => (
+                *bytes,
+                crate::pcapng::INBOUND,
+                match rejected {
+                    None => format!("reply, attempt {attempt}"),
+                    Some(why) => format!("rejected, attempt {attempt}: {why}"),
+                },
+            ),
+            _ => return,
+        };
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        if let Err(e) = out.packet(now, bytes, flags, comment) {
+            if !std::mem::replace(&mut failed, true) {
+                eprintln!("{e}");
+            }
+        }
+    });
+    Ok(())
 }
 
 /// `busspec talk`: one transaction (or one long operation) on a real port.
@@ -222,7 +279,7 @@ impl busspec_protocols::ProtocolVisitor for TalkPlain<'_> {
     fn visit<P: Protocol>(self) -> Self::Output {
         let (spec, o) = (self.spec, self.o);
         let request = checked::<busspec_link::Plain<P>>(spec, o)?;
-        let mut m = open::<busspec_link::Plain<P>>(o)?;
+        let mut m = open::<busspec_link::Plain<P>>(spec, o)?;
         one(spec, &mut m, o.address, request)
     }
 }
@@ -288,7 +345,7 @@ fn one<P: Link, T: Transport, C: Clock>(
 
 fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
     if o.command == "c-curve" {
-        let mut m = open::<Ub2>(o)?;
+        let mut m = open::<Ub2>(spec, o)?;
         let mut line = ProgressLine::new();
         let table = m
             .read_c_curve(o.address, &mut |p| line.show("entries", p))
@@ -308,7 +365,7 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         return Ok(());
     }
     let request = checked::<Ub2>(spec, o)?;
-    let mut m = open::<Ub2>(o)?;
+    let mut m = open::<Ub2>(spec, o)?;
     check_byte_order(&mut m, o.address, &request)?;
     if o.wait && busspec_devices::movement::ub2_completion_check(&request).is_some() {
         let mut line = ProgressLine::new();
@@ -389,7 +446,7 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         .into_iter()
         .find(|s| s.request(0).name() == o.command);
     if let (Some(which), true) = (readout, o.args.is_empty()) {
-        let mut m = open::<Sd>(o)?;
+        let mut m = open::<Sd>(spec, o)?;
         let mut line = ProgressLine::new();
         let text = m
             .read_string(o.address, which, &mut |p| line.show("characters", p))
@@ -403,7 +460,7 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
         return print(&line.to_string());
     }
     let request = checked::<Sd>(spec, o)?;
-    let mut m = open::<Sd>(o)?;
+    let mut m = open::<Sd>(spec, o)?;
     check_byte_order(&mut m, o.address, &request)?;
     if let (true, sd::Request::SetPoint { position, .. }) =
         (o.wait && Some(o.address) != sd::BROADCAST_ADDRESS, request)
@@ -815,6 +872,7 @@ mod tests {
                 wait: true,
                 svg: None,
                 timeout: None,
+                pcapng: None,
             };
             assert_eq!(
                 talk(&spec(protocol), &o).unwrap_err(),
@@ -833,6 +891,7 @@ mod tests {
             wait: true,
             svg: None,
             timeout: None,
+            pcapng: None,
         };
         let err = talk(&spec("sd"), &o).unwrap_err();
         assert!(err.contains(port), "{err}");

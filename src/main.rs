@@ -253,6 +253,10 @@ struct TalkArgs {
     /// With c-curve: draw the table into this SVG file.
     #[arg(long, value_name = "FILE")]
     svg: Option<PathBuf>,
+    /// Also write every frame sent and received to this pcapng file (link type USER0, 147):
+    /// requests outbound, replies inbound, at the time the master saw them.
+    #[arg(long, value_name = "FILE")]
+    pcapng: Option<PathBuf>,
 }
 
 const DIFF_HELP: &str = "\
@@ -1058,6 +1062,7 @@ fn talk(a: TalkArgs) -> Result<(), String> {
         wait: !a.no_wait,
         svg: a.svg.as_deref(),
         timeout: a.timeout.map(std::time::Duration::from_millis),
+        pcapng: a.pcapng.as_deref(),
     };
     link_cli::talk(&p, &options).map_err(|e| {
         if e.starts_with("error: ") {

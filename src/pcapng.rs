@@ -46,8 +46,8 @@ pub const LINKTYPE: u32 = 147;
 const USER_LINKTYPES: std::ops::RangeInclusive<u32> = 147..=162;
 
 /// `epb_flags` direction bits: inbound (a response), outbound (a request).
-const INBOUND: u32 = 0b01;
-const OUTBOUND: u32 = 0b10;
+pub const INBOUND: u32 = 0b01;
+pub const OUTBOUND: u32 = 0b10;
 
 /// Whether `head` (a capture's first bytes, at least 12 where the capture has them) is a
 /// pcapng file: a Section Header Block's type, then its byte-order magic in either order, so
@@ -166,6 +166,32 @@ impl<W: Write> Writer<W> {
         Ok(out)
     }
 
+    /// Writes one packet: `data` at `timestamp` (since the epoch), direction `flags`
+    /// ([`OUTBOUND`], [`INBOUND`] or 0), with `comment`.
+    pub fn packet(
+        &mut self,
+        timestamp: Duration,
+        data: &[u8],
+        flags: u32,
+        comment: String,
+    ) -> Result<(), String> {
+        let mut options = vec![EnhancedPacketOption::Comment(Cow::Owned(comment))];
+        if flags != 0 {
+            options.push(EnhancedPacketOption::Flags(flags));
+        }
+        let packet = EnhancedPacketBlock {
+            interface_id: 0,
+            timestamp,
+            original_len: data.len() as u32,
+            data: Cow::Borrowed(data),
+            options,
+        };
+        self.out
+            .write_pcapng_block(packet)
+            .map_err(|e| format!("error: cannot write {}: {e}", self.name))?;
+        Ok(())
+    }
+
     /// Writes the pending event, whose bytes end at capture offset `end`.
     fn write_to(&mut self, end: u64) -> Result<(), String> {
         let Some(last) = self.last.take() else {
@@ -184,21 +210,10 @@ impl<W: Write> Writer<W> {
             let nanos = u128::from(last.offset) * u128::from(self.bits) * 1_000_000_000
                 / u128::from(self.baud);
             let timestamp = Duration::from_nanos(u64::try_from(nanos).unwrap_or(u64::MAX));
-            let mut options = vec![EnhancedPacketOption::Comment(Cow::Owned(last.comment))];
-            if last.flags != 0 {
-                options.push(EnhancedPacketOption::Flags(last.flags));
-            }
-            let data = &self.bytes[from..to];
-            let packet = EnhancedPacketBlock {
-                interface_id: 0,
-                timestamp,
-                original_len: data.len() as u32,
-                data: Cow::Borrowed(data),
-                options,
-            };
-            self.out
-                .write_pcapng_block(packet)
-                .map_err(|e| format!("error: cannot write {}: {e}", self.name))?;
+            let data = std::mem::take(&mut self.bytes);
+            let written = self.packet(timestamp, &data[from..to], last.flags, last.comment);
+            self.bytes = data;
+            written?;
         }
         self.bytes.drain(..to);
         self.base = end;

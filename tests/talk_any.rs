@@ -323,3 +323,70 @@ fn talk_errors_are_clear_and_nothing_is_sent() {
         stderr(&o)
     );
 }
+
+/// `talk --pcapng FILE` writes every frame sent and received: a read retried after a lost reply
+/// is two requests (outbound) and one reply (inbound), in that order, with rising timestamps;
+/// `decode --stream` reads the file back to those frames.
+#[test]
+fn talk_writes_the_frames_it_sends_and_receives_to_pcapng() {
+    let bus = Bus::start();
+    let dir = std::env::temp_dir().join(format!("busspec-talk-pcapng-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("talk.pcapng");
+    bus.mute(1);
+    let o = bus.talk(&[
+        "modbus",
+        "--address",
+        "7",
+        "--timeout",
+        "100",
+        "--pcapng",
+        file.to_str().unwrap(),
+        "read_holding_registers",
+        "starting_address=1",
+        "quantity=2",
+    ]);
+    let r = line(&o);
+    assert_eq!(r["fields"]["registers"], serde_json::json!([101, 102]));
+    let bytes = std::fs::read(&file).expect("the pcapng file");
+    let mut reader = pcap_file::pcapng::PcapNgReader::new(&bytes[..]).expect("pcapng");
+    let mut packets = Vec::new();
+    while let Some(block) = reader.next_block() {
+        if let pcap_file::pcapng::Block::EnhancedPacket(p) = block.expect("a block") {
+            let flags = p.options.iter().find_map(|o| match o {
+                pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketOption::Flags(f) => {
+                    Some(*f)
+                }
+                _ => None,
+            });
+            packets.push((p.timestamp, flags, p.data.to_vec()));
+        }
+    }
+    let flags: Vec<Option<u32>> = packets.iter().map(|p| p.1).collect();
+    assert_eq!(
+        flags,
+        [Some(0b10), Some(0b10), Some(0b01)],
+        "{packets:02X?}"
+    );
+    assert_eq!(packets[0].2, packets[1].2, "the same request sent again");
+    assert!(packets[0].0 <= packets[1].0 && packets[1].0 <= packets[2].0);
+    let out = Command::new(BIN)
+        .args(["decode", "modbus", "--stream", file.to_str().unwrap()])
+        .output()
+        .expect("busspec runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", stderr(&out));
+    assert_eq!(
+        text.matches("\"message\":\"read_holding_registers\"")
+            .count(),
+        2,
+        "{text}"
+    );
+    assert_eq!(
+        text.matches("\"message\":\"read_holding_registers_reply\"")
+            .count(),
+        1,
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
