@@ -39,8 +39,9 @@ fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
 
-fn temp_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("busspec-pcapng-{}", std::process::id()));
+/// A directory of this test's own: the tests run at once and write files of the same names.
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("busspec-pcapng-{}-{test}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
@@ -153,7 +154,7 @@ fn written(p: &Protocol, protocol: &[String], dir: &Path) -> (Vec<u8>, String, P
 
 #[test]
 fn a_capture_written_to_pcapng_reads_back_to_the_same_events() {
-    let dir = temp_dir();
+    let dir = temp_dir("a_capture_written_to_pcapng_reads_back_to_the_same_events");
     for (p, protocol) in cases() {
         let (bytes, lines, file) = written(&p, &protocol, &dir);
         let events: Vec<serde_json::Value> = lines
@@ -230,7 +231,7 @@ fn block_starts(bytes: &[u8]) -> Vec<usize> {
 
 #[test]
 fn a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte() {
-    let dir = temp_dir();
+    let dir = temp_dir("a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte");
     let (p, protocol) = cases().swap_remove(0);
     let (_, lines, file) = written(&p, &protocol, &dir);
     let bytes = std::fs::read(&file).unwrap();
@@ -317,7 +318,7 @@ fn tshark_reads_every_packet() {
         eprintln!("tshark is not installed: skipping the check that it reads busspec's pcapng");
         return;
     }
-    let dir = temp_dir();
+    let dir = temp_dir("tshark_reads_every_packet");
     for (p, protocol) in cases() {
         let (_, lines, file) = written(&p, &protocol, &dir);
         let out = Command::new("tshark")
