@@ -11,7 +11,8 @@ read) or what was written (a write), and after every write the datastore, read b
 from the server's own store, must hold the new values. Requests outside the datastore must be
 answered with the exception reply, printed, with `modbus refused ...` on stderr, and must
 change nothing. Writes to broadcast address 0 must change the datastore and get no reply (the
-relay sees no byte come back).
+relay sees no byte come back). The relay also counts busspec's bytes: each call must put exactly
+one request on the line (no retry after a late reply).
 
 Every `talk` call has a timeout and so has the whole script (nothing can hang CI). Prints
 `talk modbus against pymodbus: N transactions, 0 mismatches`; exits 1 on any mismatch.
@@ -72,6 +73,7 @@ class Line:
         self.server_master, self.server_slave, self.server_path = raw_pty()
         self.talk_master, self.talk_slave, self.talk_path = raw_pty()
         self.from_server = 0  # bytes the server sent
+        self.from_talk = 0  # bytes busspec sent
         self.lock = threading.Lock()
         self.stop = False
         self.thread = threading.Thread(target=self.run, daemon=True)
@@ -86,18 +88,20 @@ class Line:
                     data = os.read(fd, 4096)
                 except OSError:  # EIO while no process holds the slave side open
                     continue
-                if fd == self.server_master:
-                    with self.lock:
+                with self.lock:
+                    if fd == self.server_master:
                         self.from_server += len(data)
+                    else:
+                        self.from_talk += len(data)
                 os.write(peer[fd], data)
 
-    def server_bytes(self):
+    def counts(self):
         with self.lock:
-            return self.from_server
+            return self.from_talk, self.from_server
 
     def flush(self):
         """Drops whatever is waiting on busspec's side (a late reply must not meet the next call)."""
-        termios.tcflush(self.talk_slave, termios.TCIOFLUSH)
+        termios.tcflush(self.talk_slave, termios.TCIFLUSH)
 
 
 # ---------------------------------------------------------------- the pymodbus server
@@ -135,8 +139,8 @@ class Server:
                 framer=FramerType.RTU,
                 port=self.port,
                 baudrate=19200,
-                # spec/modbus.yaml says even parity; a pseudo-terminal has no parity bit and
-                # pyserial's request for one is refused (EINVAL), so the server asks for none.
+                # spec/modbus.yaml says even parity; a pseudo-terminal has no parity bit, and
+                # pyserial's request for one was refused (EINVAL, Linux 6.18): ask for none.
                 parity="N",
                 broadcast_enable=True,
                 trace_connect=lambda up: up and self.connected.set(),
@@ -169,12 +173,24 @@ def talk(line, address, command, **fields):
             value = "[" + ",".join(str(v) for v in value) + "]"
         args.append(f"{name}={value}")
     line.flush()
-    before = line.server_bytes()
+    sent_before, replied_before = line.counts()
     try:
         r = subprocess.run(args, capture_output=True, text=True, timeout=TALK_TIMEOUT_S)
     except subprocess.TimeoutExpired:
         return None, "", f"timed out after {TALK_TIMEOUT_S} s", 0, args
-    replied = line.server_bytes() - before
+    # One request on the line, no retry: address, code, 4 bytes, [count, data], CRC.
+    one = 8 if "byte_count" not in fields else 9 + fields["byte_count"]
+    # busspec may exit before the relay has carried its last bytes (a broadcast waits for no
+    # reply): wait for them, then, after a broadcast, give the server time to answer wrongly.
+    deadline = time.monotonic() + 2
+    while line.counts()[0] - sent_before < one and time.monotonic() < deadline:
+        time.sleep(0.01)
+    if address == 0:
+        time.sleep(0.2)
+    sent, replied = line.counts()
+    sent, replied = sent - sent_before, replied - replied_before
+    if sent != one:
+        mismatch(f"{' '.join(args[3:])}: {sent} bytes on the line from busspec, one request is {one}")
     return r.returncode, r.stdout, r.stderr, replied, args
 
 
