@@ -5,15 +5,24 @@
 # decode through `busspec decode` to the values they were built from, and frames
 # `busspec encode` builds must be read identically by the peers (tests/reference/check.py);
 # every call runs with the built-in generated code and with `--spec` (the interpreter), alike.
+# Then live: `busspec talk modbus` against pymodbus's RTU serial server over pseudo-terminals
+# (tests/reference/live_modbus.py; pyserial is what the server opens its port with).
 # Versions are pinned so a new release cannot change the result silently.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 venv=target/reference-venv
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import pymodbus, dynamixel_sdk' 2>/dev/null; then
+pins=(pymodbus==3.16.1 dynamixel-sdk==4.1.0 pyserial==3.5)
+# Rebuilt unless exactly the pinned versions are there (dynamixel-sdk alone pulls any pyserial).
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c '
+import importlib.metadata as m, sys
+sys.exit(any(m.version(p) != v for p, v in (a.split("==") for a in sys.argv[1:])))
+' "${pins[@]}" 2>/dev/null; then
   rm -rf "$venv"
   python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet --disable-pip-version-check 'pymodbus==3.16.1' 'dynamixel-sdk==4.1.0'
+  "$venv/bin/pip" install --quiet --disable-pip-version-check "${pins[@]}"
 fi
-"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"))'
+"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"), "/ pyserial", m.version("pyserial"))'
 cargo build --locked --quiet --bin busspec
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/check.py
+# Bounded twice: each talk call and the script time out on their own; this is the last resort.
+BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_modbus.py
