@@ -79,10 +79,12 @@ fn request_line(
     if c.leaves().any(|l| l.name() == "freshness") && !fields.contains_key("freshness") {
         fields.insert("freshness".to_owned(), serde_json::Value::from(0));
     }
+    // What encode fills in itself (constants, repeats, values following another field, a
+    // list's count: Modbus's `byte_count`) need not be given.
     let missing: Vec<String> = c
         .leaves()
         .filter(|l| match l {
-            busspec_model::ir::Leaf::Field(_, f) => f.constant.is_none() && f.equals.is_none(),
+            busspec_model::ir::Leaf::Field(i, _) => !c.is_derived(*i),
             busspec_model::ir::Leaf::Bits(_, _, b) => b.constant.is_none(),
         })
         .map(|l| l.name().to_owned())
@@ -654,6 +656,29 @@ mod tests {
 
     fn spec(name: &str) -> Spec {
         frames::built_in_spec(name)
+    }
+
+    /// A list's count field (Modbus's `byte_count`) is computed as `encode` computes it: `talk`
+    /// does not ask for it, and the frame is the one given the count by hand.
+    #[test]
+    fn talk_computes_a_list_count_as_encode_does() {
+        let modbus = spec("modbus");
+        let args = |extra: &[&str]| -> Vec<String> {
+            ["starting_address=1", "quantity=2", "values=[7,9]"]
+                .iter()
+                .chain(extra)
+                .map(|a| a.to_string())
+                .collect()
+        };
+        let encode = |args: &[String]| {
+            let line = request_line(&modbus, "write_multiple_registers", 1, args)?;
+            busspec_json::parse_line(&modbus, &line)?.encode(&modbus)
+        };
+        let without = encode(&args(&[])).expect("no byte_count needed");
+        assert_eq!(without, encode(&args(&["byte_count=4"])).unwrap());
+        assert_eq!(without[..7], [0x01, 0x10, 0x00, 0x01, 0x00, 0x02, 0x04]);
+        // A count that contradicts the list is still refused.
+        assert!(encode(&args(&["byte_count=6"])).is_err());
     }
 
     /// name=value arguments for command `i`: the values of its first example the document does

@@ -167,7 +167,9 @@ def talk(line, address, command, **fields):
     transactions += 1
     args = [BUSSPEC, "talk", "--port", line.talk_path, "modbus", "--address", str(address)]
     args += ["--timeout", REPLY_TIMEOUT_MS, command]
-    # `talk` wants every field, byte_count included (`encode` derives it from `follows`).
+    # A list's byte count: given as byte_count (talk checks it against the list) or as _bytes
+    # (talk computes it, as encode does; only the line's length check here uses it).
+    data_bytes = fields.pop("_bytes", fields.get("byte_count"))
     for name, value in fields.items():
         if isinstance(value, list):
             value = "[" + ",".join(str(v) for v in value) + "]"
@@ -179,7 +181,7 @@ def talk(line, address, command, **fields):
     except subprocess.TimeoutExpired:
         return None, "", f"timed out after {TALK_TIMEOUT_S} s", 0, args
     # One request on the line, no retry: address, code, 4 bytes, [count, data], CRC.
-    one = 8 if "byte_count" not in fields else 9 + fields["byte_count"]
+    one = 8 if data_bytes is None else 9 + data_bytes
     # busspec may exit before the relay has carried its last bytes (a broadcast waits for no
     # reply): wait for them, then, after a broadcast, give the server time to answer wrongly.
     deadline = time.monotonic() + 2
@@ -285,7 +287,7 @@ def write_all(line, server, address):
         n = rng.randint(1, SIZE - a)
         bits = [rng.randint(0, 1) for _ in range(n)]
         sent(talk(line, address, "write_multiple_coils", starting_address=a, quantity=n,
-                  byte_count=(n + 7) // 8, outputs=bits),
+                  _bytes=(n + 7) // 8, outputs=bits),
              "write_multiple_coils_reply", {"starting_address": a, "quantity": n})
         store("coils", a, bits, f"write_multiple_coils {a}+{n}")
 
@@ -293,7 +295,7 @@ def write_all(line, server, address):
         n = rng.randint(1, SIZE - a)
         regs = [rng.randrange(0x10000) for _ in range(n)]
         sent(talk(line, address, "write_multiple_registers", starting_address=a, quantity=n,
-                  byte_count=2 * n, values=regs),
+                  _bytes=2 * n, values=regs),
              "write_multiple_registers_reply", {"starting_address": a, "quantity": n})
         store("holding", a, regs, f"write_multiple_registers {a}+{n}")
 
