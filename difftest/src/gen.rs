@@ -446,30 +446,21 @@ fn checksum_yaml(g: &mut G) -> (String, usize) {
     let order = |g: &mut G| *g.pick(&["big", "little"]);
     match g.rng.u8(..16) {
         10 => (String::new(), 0),
-        11 => (
-            format!(
-                "algorithm: sum16, width: 16, byte_order: {}, check: {}",
+        // The 16-bit sums.
+        k @ 11..=13 => {
+            let (name, a) = [
+                ("sum16", ChecksumAlgorithm::Sum16),
+                ("fletcher8", ChecksumAlgorithm::Fletcher8),
+                ("fletcher16", ChecksumAlgorithm::Fletcher16),
+            ][usize::from(k - 11)]
+            .clone();
+            let y = format!(
+                "algorithm: {name}, width: 16, byte_order: {}, check: {}",
                 order(g),
-                check(&ChecksumAlgorithm::Sum16)
-            ),
-            2,
-        ),
-        12 => (
-            format!(
-                "algorithm: fletcher8, width: 16, byte_order: {}, check: {}",
-                order(g),
-                check(&ChecksumAlgorithm::Fletcher8)
-            ),
-            2,
-        ),
-        13 => (
-            format!(
-                "algorithm: fletcher16, width: 16, byte_order: {}, check: {}",
-                order(g),
-                check(&ChecksumAlgorithm::Fletcher16)
-            ),
-            2,
-        ),
+                check(&a)
+            );
+            (y, 2)
+        }
         14 => {
             let (name, a, width) = g
                 .pick(&[
