@@ -126,9 +126,7 @@ impl Frame {
             (at, at + self.checksum_len)
         }
     }
-}
 
-impl Frame {
     /// Whether a frame may carry `address`: a device's, the broadcast or the host address.
     #[inline(always)]
     pub const fn address_ok(&self, address: u8) -> bool {
@@ -166,8 +164,8 @@ pub fn check_sum(frame: &[u8], at: usize, f: &Frame, checksum: impl FnOnce(&[u8]
 /// The checks every frame of a direction passes before its code is looked at, in this order:
 /// no longer than `max`, the start byte, at least `min` bytes, the end bytes, the checksum
 /// (`checksum` of the bytes before it, compared as an unsigned integer), the address (at
-/// `address_at`). Returns
-/// the address (0 where frames carry none; `address_at` is then not looked at).
+/// `address_at`). Returns the address (0 where frames carry none; `address_at` is then not
+/// looked at).
 #[inline(always)]
 pub fn check_frame(
     frame: &[u8],
