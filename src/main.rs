@@ -6,6 +6,7 @@ mod frames;
 mod link_cli;
 mod pcapng;
 mod svg;
+mod timing;
 
 use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
@@ -78,6 +79,12 @@ A pcapng file (told by its Section Header Block: 0A0D0D0A, then the byte-order m
 as the capture its packets make, concatenated in file order; offsets count in that
 concatenation. Only user link types (147-162) are read. A truncated or damaged file ends the
 run with `error: pcapng FILE: block N at byte B: reason`, after the lines of what came before.
+Its packets' timestamps (each packet's first byte) time the events: every line gains \"time\"
+after \"offset\" (when the event's first byte started, in seconds since the epoch), and where
+the spec declares an inter-frame gap (`transactions.inter_frame_gap` at its baud rate, else
+`serial.inter_frame_gap_ms`) a silence that long between packets closes a frame, as `busspec
+sniff` does live, and \"decided_by\" says what settled the event: \"bytes\", \"timing\" or
+\"both\" (see `busspec sniff --help`).
 
 --pcapng OUT also writes the stream to OUT as pcapng: one Enhanced Packet Block per line
 printed (frames, and skipped, ambiguous and out-of-spec bytes, so the packets concatenated are
@@ -853,7 +860,7 @@ fn decode_stream(
         }
     };
     let mut stream = Feed {
-        decoder: engine.stream(direction, reply_to),
+        lines: Lines::Plain(engine.stream(direction, reply_to)),
         writer: writer.as_mut(),
     };
     let mut chunk = vec![0u8; Out::<std::io::Sink>::CHUNK];
@@ -881,8 +888,17 @@ fn decode_stream(
                 continue;
             }
             if pcapng::is_pcapng(&head) {
-                let captured = pcapng::read(&name, std::mem::take(&mut head), &mut input, |p| {
-                    stream.push(p, out)
+                // A capture with timestamps: framed by silence too, where the spec has a gap.
+                let baud = engine.spec.serial.baud;
+                let char_ns = timing::char_ns(engine.spec.transactions.character_bits, baud);
+                stream.timed(char_ns, timing::spec_gap_ns(&engine.spec, baud));
+                let mut end_ns = 0u64;
+                let head = std::mem::take(&mut head);
+                let captured = pcapng::read(&name, head, &mut input, |p, time| {
+                    // A packet's time is its first byte's; without one it follows the last.
+                    let start = time.unwrap_or(end_ns);
+                    end_ns = start.saturating_add((p.len() as u64).saturating_mul(char_ns));
+                    stream.push_timed(p, start, char_ns, out)
                 });
                 if let Err(e) = captured {
                     out.flush()?;
@@ -898,7 +914,7 @@ fn decode_stream(
     // A capture shorter than a pcapng header is raw bytes.
     stream.push(&head, out)?;
     let before = out.buf.len();
-    stream.decoder.finish(&mut out.buf);
+    stream.lines.finish(&mut out.buf);
     if let Some(w) = stream.writer {
         w.lines(&out.buf[before..])?;
     }
@@ -920,16 +936,70 @@ fn read_some(input: &mut dyn Read, chunk: &mut [u8]) -> std::io::Result<usize> {
 
 /// A capture's bytes on their way to the stream decoder and, with --pcapng, the file.
 struct Feed<'a, 'w> {
-    decoder: Box<dyn frames::LineStream + 'a>,
+    lines: Lines<'a>,
     writer: Option<&'w mut pcapng::Writer<std::io::BufWriter<std::fs::File>>>,
 }
 
+/// A stream decoder's lines, as they are (a raw capture) or timed ([`timing::Timed`]).
+enum Lines<'a> {
+    Plain(Box<dyn frames::LineStream + 'a>),
+    Timed(timing::Timed<'a>),
+    /// Only while one becomes the other.
+    Moving,
+}
+
+impl Lines<'_> {
+    fn finish(&mut self, out: &mut Vec<u8>) {
+        match self {
+            Lines::Plain(s) => s.finish(out),
+            Lines::Timed(t) => t.finish(out),
+            Lines::Moving => {}
+        }
+    }
+}
+
 impl Feed<'_, '_> {
+    /// From now on the bytes come with times: lines are timed, and closed by gaps of `gap_ns`.
+    fn timed(&mut self, char_ns: u64, gap_ns: Option<u64>) {
+        if let Lines::Plain(s) = std::mem::replace(&mut self.lines, Lines::Moving) {
+            self.lines = Lines::Timed(timing::Timed::new(s, char_ns, gap_ns));
+        }
+    }
+
     fn push(&mut self, data: &[u8], out: &mut Out<impl Write>) -> Result<(), String> {
+        self.push_at(data, None, out)
+    }
+
+    /// `data` whose first byte started at `start_ns`, one character every `char_ns`.
+    fn push_timed(
+        &mut self,
+        data: &[u8],
+        start_ns: u64,
+        char_ns: u64,
+        out: &mut Out<impl Write>,
+    ) -> Result<(), String> {
+        self.push_at(data, Some((start_ns, char_ns)), out)
+    }
+
+    fn push_at(
+        &mut self,
+        data: &[u8],
+        time: Option<(u64, u64)>,
+        out: &mut Out<impl Write>,
+    ) -> Result<(), String> {
         // In pieces whose lines fit the output buffer's chunk.
+        let mut done = 0u64;
         for piece in data.chunks(1024) {
+            done += piece.len() as u64;
             let before = out.buf.len();
-            self.decoder.push(piece, &mut out.buf);
+            match (&mut self.lines, time) {
+                (Lines::Timed(t), Some((start, char_ns))) => {
+                    t.push(piece, start.saturating_add(done * char_ns), &mut out.buf)
+                }
+                (Lines::Timed(t), None) => t.push_following(piece, &mut out.buf),
+                (Lines::Plain(s), _) => s.push(piece, &mut out.buf),
+                (Lines::Moving, _) => {}
+            }
             if let Some(w) = self.writer.as_mut() {
                 w.bytes(piece);
                 w.lines(&out.buf[before..])?;

@@ -80,6 +80,8 @@ struct Head {
     ambiguous: Option<Vec<String>>,
     out_of_spec: Option<String>,
     error: Option<String>,
+    /// When the event's first byte started (`sniff`, a timed capture), in seconds.
+    time: Option<Box<serde_json::value::RawValue>>,
 }
 
 /// An event whose bytes are not all known yet.
@@ -87,6 +89,8 @@ struct Pending {
     offset: u64,
     flags: u32,
     comment: String,
+    /// Its line's `"time"`, in ns since the epoch.
+    time_ns: Option<u64>,
 }
 
 /// Writes the events of one stream to a pcapng file.
@@ -207,8 +211,13 @@ impl<W: Write> Writer<W> {
         let from = (last.offset - self.base) as usize;
         let to = (end - self.base) as usize;
         if to > from {
-            let nanos = u128::from(last.offset) * u128::from(self.bits) * 1_000_000_000
-                / u128::from(self.baud);
+            let nanos = match last.time_ns {
+                Some(ns) => u128::from(ns),
+                None => {
+                    u128::from(last.offset) * u128::from(self.bits) * 1_000_000_000
+                        / u128::from(self.baud)
+                }
+            };
             let timestamp = Duration::from_nanos(u64::try_from(nanos).unwrap_or(u64::MAX));
             let data = std::mem::take(&mut self.bytes);
             let written = self.packet(timestamp, &data[from..to], last.flags, last.comment);
@@ -245,17 +254,63 @@ fn pending(head: Head) -> Pending {
         offset: head.offset,
         flags,
         comment,
+        time_ns: head.time.as_deref().and_then(|t| seconds_ns(t.get())),
     }
 }
 
+/// A packet's timestamp in nanoseconds since the epoch. `pcap-file` hands the block's raw
+/// 64-bit count over as nanoseconds whatever the interface's resolution; it is counted here in
+/// units of `if_tsresol` (10^-6 s when absent, 2^-n s where the top bit is set), from
+/// `if_tsoffset` seconds.
+fn timestamp_ns(interface: &InterfaceDescriptionBlock, raw: Duration) -> u64 {
+    let (mut resol, mut offset) = (6u8, 0u64);
+    for o in &interface.options {
+        match o {
+            InterfaceDescriptionOption::IfTsResol(r) => resol = *r,
+            InterfaceDescriptionOption::IfTsOffset(s) => offset = *s,
+            _ => {}
+        }
+    }
+    let ticks = raw.as_nanos();
+    let ns = if resol & 0x80 == 0 {
+        let exp = u32::from(resol.min(30));
+        if exp <= 9 {
+            ticks * 10u128.pow(9 - exp)
+        } else {
+            ticks / 10u128.pow(exp - 9)
+        }
+    } else {
+        (ticks * 1_000_000_000) >> u32::from((resol & 0x7F).min(100))
+    };
+    let ns = ns.saturating_add(u128::from(offset) * 1_000_000_000);
+    u64::try_from(ns).unwrap_or(u64::MAX)
+}
+
+/// `"1795660000.123456"` (seconds, up to nine decimals) as nanoseconds, exactly.
+fn seconds_ns(text: &str) -> Option<u64> {
+    let (secs, frac) = text.split_once('.').unwrap_or((text, ""));
+    if frac.len() > 9 || !frac.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let secs: u64 = secs.parse().ok()?;
+    let frac: u64 = if frac.is_empty() {
+        0
+    } else {
+        frac.parse::<u64>().ok()? * 10u64.pow(9 - frac.len() as u32)
+    };
+    secs.checked_mul(1_000_000_000)?.checked_add(frac)
+}
+
 /// Reads a pcapng file from `input` (called `name`), whose first bytes `head` were already
-/// read, and gives each packet's bytes to `packet`, in file order. An error names the block
-/// (counted from 0) and the byte offset in the file where it starts.
+/// read, and gives each packet's bytes to `packet`, in file order, with its timestamp in
+/// nanoseconds since the epoch (its interface's `if_tsresol` and `if_tsoffset` applied; `None`
+/// for a Simple Packet Block, which has none). An error names the block (counted from 0) and
+/// the byte offset in the file where it starts.
 pub fn read(
     name: &str,
     head: Vec<u8>,
     input: &mut dyn Read,
-    mut packet: impl FnMut(&[u8]) -> Result<(), String>,
+    mut packet: impl FnMut(&[u8], Option<u64>) -> Result<(), String>,
 ) -> Result<(), String> {
     let mut buf = head;
     // `buf[0]` is at file offset `at`; `buf[pos..]` not parsed yet.
@@ -311,14 +366,15 @@ pub fn read(
                                     e.interface_id
                                 ));
                             }
-                            Some(&e.data)
+                            let interface = p.packet_interface(e);
+                            Some((&e.data, interface.map(|i| timestamp_ns(i, e.timestamp))))
                         }
-                        Block::SimplePacket(s) => Some(&s.data),
-                        Block::Packet(s) => Some(&s.data),
+                        Block::SimplePacket(s) => Some((&s.data, None)),
+                        Block::Packet(s) => Some((&s.data, None)),
                         _ => None,
                     };
-                    if let Some(data) = data {
-                        packet(data)?;
+                    if let Some((data, time)) = data {
+                        packet(data, time)?;
                     }
                 }
                 block += 1;
