@@ -179,7 +179,7 @@ fn open<P: Link>(
     let t = SerialTransport::open(o.port, baud).map_err(|e| format!("error: {e}"))?;
     let mut m = Master::new(t, SystemClock::new());
     if let Some(path) = o.pcapng {
-        record(&mut m, spec, o.port, path)?;
+        record(&mut m, spec, o.port, baud, path)?;
     }
     if baud != P::BAUD {
         // The gap in character times, and the driver-enable timing, follow the line's rate.
@@ -210,13 +210,14 @@ fn record<P: Link>(
     m: &mut Master<P, SerialTransport, SystemClock>,
     spec: &Spec,
     port: &str,
+    baud: u32,
     path: &Path,
 ) -> Result<(), String> {
     use busspec_link::master::TraceEvent;
     let name = path.display().to_string();
     let file =
         std::fs::File::create(path).map_err(|e| format!("error: cannot create {name}: {e}"))?;
-    let mut out = crate::pcapng::Writer::new(file, &name, spec, port)?;
+    let mut out = crate::pcapng::Writer::new(file, &name, spec, port, baud)?;
     let mut failed = false;
     m.observe(move |e| {
         let (bytes, flags, comment) = match e {

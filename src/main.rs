@@ -5,6 +5,7 @@ mod demo;
 mod frames;
 mod link_cli;
 mod pcapng;
+mod sniff;
 mod svg;
 mod timing;
 
@@ -163,6 +164,10 @@ enum Command {
     /// Run one transaction with a device on a serial port and print the reply as JSON.
     #[command(long_about = TALK_HELP)]
     Talk(TalkArgs),
+    /// Listen to a bus on a serial port or pseudo-terminal: every frame as a JSON line, timed,
+    /// closed by the line's silence as the spec says; optionally written to pcapng.
+    #[command(long_about = sniff::SNIFF_HELP)]
+    Sniff(sniff::SniffArgs),
     /// A scripted session against simulated devices: no hardware needed.
     Demo {
         /// Also draw the simulated capacitor's C-curve into this SVG file.
@@ -406,6 +411,7 @@ fn main() -> ExitCode {
             a.msb_first,
         ),
         Command::Talk(a) => talk(a),
+        Command::Sniff(a) => sniff::sniff(a),
         Command::Demo { svg } => demo(svg.as_deref()),
         Command::Soak {
             transactions,
@@ -856,7 +862,8 @@ fn decode_stream(
             let f = std::fs::File::create(path)
                 .map_err(|e| format!("error: cannot write {to}: {e}"))?;
             let w = std::io::BufWriter::new(f);
-            Some(pcapng::Writer::new(w, &to, &engine.spec, &name)?)
+            let baud = engine.spec.serial.baud;
+            Some(pcapng::Writer::new(w, &to, &engine.spec, &name, baud)?)
         }
     };
     let mut stream = Feed {

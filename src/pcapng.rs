@@ -109,8 +109,9 @@ pub struct Writer<W: Write> {
 
 impl<W: Write> Writer<W> {
     /// A pcapng file of `spec`'s frames on `out` (called `name` in errors), the capture called
-    /// `capture` in its interface's name. Writes the section header and the interface.
-    pub fn new(out: W, name: &str, spec: &Spec, capture: &str) -> Result<Self, String> {
+    /// `capture` in its interface's name, heard at `baud`. Writes the section header and the
+    /// interface.
+    pub fn new(out: W, name: &str, spec: &Spec, capture: &str, baud: u32) -> Result<Self, String> {
         let fail = |e: PcapError| format!("error: cannot write {name}: {e}");
         let mut out = PcapNgWriter::new(out).map_err(fail)?;
         let interface = InterfaceDescriptionBlock {
@@ -122,7 +123,7 @@ impl<W: Write> Writer<W> {
                     "busspec {}",
                     spec.name
                 ))),
-                InterfaceDescriptionOption::IfSpeed(u64::from(spec.serial.baud)),
+                InterfaceDescriptionOption::IfSpeed(u64::from(baud)),
                 InterfaceDescriptionOption::IfTsResol(9),
             ],
         };
@@ -131,7 +132,7 @@ impl<W: Write> Writer<W> {
             out,
             name: name.to_owned(),
             bits: bits_per_char(spec),
-            baud: u64::from(spec.serial.baud).max(1),
+            baud: u64::from(baud).max(1),
             bytes: Vec::new(),
             base: 0,
             last: None,

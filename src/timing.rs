@@ -58,7 +58,11 @@ pub fn char_ns(bits: u32, baud: u32) -> u64 {
 pub fn spec_gap_ns(spec: &busspec_json::Spec, baud: u32) -> Option<u64> {
     spec.transactions
         .gap_us_at(baud)
-        .or_else(|| spec.serial.inter_frame_gap_ms.map(|ms| u64::from(ms) * 1000))
+        .or_else(|| {
+            spec.serial
+                .inter_frame_gap_ms
+                .map(|ms| u64::from(ms) * 1000)
+        })
         .map(|us| us * 1000)
 }
 
@@ -371,10 +375,7 @@ mod tests {
         t.push(&[0xBB, 3, 0xAA, 5], 100 * MS, &mut out);
         t.push(&[0xBB, 4], 200 * MS, &mut out);
         t.finish(&mut out);
-        assert_eq!(
-            decided(&out),
-            ["bytes", "both", "bytes", "timing", "bytes"]
-        );
+        assert_eq!(decided(&out), ["bytes", "both", "bytes", "timing", "bytes"]);
     }
 
     #[test]

@@ -223,7 +223,9 @@ fn untimed(lines: &str, char_ns: u128) -> String {
     for line in lines.lines() {
         let v: serde_json::Value = serde_json::from_str(line).unwrap();
         let offset = u128::from(v["offset"].as_u64().unwrap());
-        let time = v["time"].as_f64().unwrap_or_else(|| panic!("no time: {line}"));
+        let time = v["time"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("no time: {line}"));
         let want = (offset * char_ns) as f64 / 1e9;
         assert!(
             (time - want).abs() * 1e9 <= char_ns as f64 + 1000.0,
