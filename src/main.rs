@@ -2,6 +2,7 @@
 //! encode frames.
 
 mod demo;
+mod dissector_cli;
 mod frames;
 mod link_cli;
 mod pcapng;
@@ -156,6 +157,9 @@ enum Command {
     /// Run one transaction with a device on a serial port and print the reply as JSON.
     #[command(long_about = TALK_HELP)]
     Talk(TalkArgs),
+    /// Write a Wireshark Lua dissector for built-in protocols and spec files.
+    #[command(long_about = dissector_cli::DISSECTOR_HELP)]
+    Dissector(dissector_cli::DissectorArgs),
     /// A scripted session against simulated devices: no hardware needed.
     Demo {
         /// Also draw the simulated capacitor's C-curve into this SVG file.
@@ -399,6 +403,7 @@ fn main() -> ExitCode {
             a.msb_first,
         ),
         Command::Talk(a) => talk(a),
+        Command::Dissector(a) => dissector_cli::run(a),
         Command::Demo { svg } => demo(svg.as_deref()),
         Command::Soak {
             transactions,

@@ -23,6 +23,8 @@ pub mod diag;
 #[cfg(feature = "tools")]
 pub mod diff;
 #[cfg(feature = "tools")]
+pub mod dissector;
+#[cfg(feature = "tools")]
 pub mod docs;
 pub mod interp;
 pub mod ir;
