@@ -617,9 +617,20 @@ local function setup(P)
     local rec = state.frames[num]
     local first = false
     if not rec then
-      rec = { prev = state.last, time = field_value(f_time) }
+      rec = { prev = state.last }
       state.frames[num] = rec
       first = true
+    end
+    -- The frame's time: exact where the frame's fields are built (a pass with a tree), else
+    -- from the double Wireshark gives Lua.
+    local t = field_value(f_time)
+    if t then
+      rec.time = t
+    elseif not rec.time then
+      local secs = floor(pinfo.abs_ts)
+      local ns = floor((pinfo.abs_ts - secs) * 1e9 + 0.5)
+      if ns >= 1e9 then secs, ns = secs + 1, ns - 1e9 end
+      rec.time = NSTime.new(secs, ns)
     end
     if n == 0 then
       tree:add(proto):set_text("busspec " .. P.name .. ": empty packet")
@@ -670,6 +681,19 @@ local function setup(P)
       ck_good = (ck_expected == ck_found)
     end
 
+    local function show_checksum()
+      if not ck_at then return end
+      local r = tvb:range(ck_at, ck.len)
+      local c = root:add(F.checksum, r, ck_found)
+      c:append_text(" [" .. ck.name .. "]")
+      c:add(F.checksum_expected, r, ck_expected):set_generated()
+      c:add(F.checksum_status, r, ck_good and 1 or 0):set_generated()
+      if not ck_good then
+        c:add_proto_expert_info(E.checksum, fmt("checksum mismatch at offset %d: expected %s, found %s",
+          ck_at, hexw(ck_expected, ck.width), hexw(ck_found, ck.width)))
+      end
+    end
+
     -- Several messages fit: a request and a response are ambiguous; responses only the
     -- request before this frame tells apart are settled by it (as busspec's stream pairs).
     local chosen
@@ -695,10 +719,7 @@ local function setup(P)
       root:set_text(fmt("busspec %s: ambiguous frame: %s", P.name, text))
       root:add(F.ambiguous, whole, text)
       root:add_proto_expert_info(E.ambiguous, "ambiguous frame: could be " .. text .. "; decode it together with the request it answers")
-      if ck_at then
-        root:add(F.checksum, tvb:range(ck_at, ck.len), ck_found)
-        root:add(F.checksum_status, tvb:range(ck_at, ck.len), ck_good and 1 or 0):set_generated()
-      end
+      show_checksum()
       if first and ck_good then state.last = nil end
       pinfo.cols.info = "ambiguous: " .. text
       return n
@@ -710,7 +731,7 @@ local function setup(P)
       if out_of_spec then
         state.last = nil
       elseif m.dir == "request" then
-        state.last = { num = num, idx = m.idx, time = rec.time }
+        state.last = { num = num, idx = m.idx }
       else
         if prev then
           rec.response_to = prev
@@ -732,8 +753,9 @@ local function setup(P)
     root:add(F.section, whole, m.section):set_generated()
     if rec.response_to then
       root:add(F.response_to, whole, rec.response_to.num):set_generated()
-      if rec.time and rec.response_to.time then
-        root:add(F.time, whole, rec.time - rec.response_to.time):set_generated()
+      local req = state.frames[rec.response_to.num]
+      if rec.time and req and req.time then
+        root:add(F.time, whole, rec.time - req.time):set_generated()
       end
     end
     if m.dir == "request" and state.response_in[num] then
@@ -750,17 +772,7 @@ local function setup(P)
     if plen > 0 then fields_node = root:add(F.payload, tvb:range(m.payload_at, plen)) end
     local info = show_leaves(m, b, n, tvb, fields_node)
     if #P.ends > 0 then root:add(F.ends, tvb:range(end_at(P, n), #P.ends)) end
-    if ck_at then
-      local r = tvb:range(ck_at, ck.len)
-      local c = root:add(F.checksum, r, ck_found)
-      c:append_text(" [" .. ck.name .. "]")
-      c:add(F.checksum_expected, r, ck_expected):set_generated()
-      c:add(F.checksum_status, r, ck_good and 1 or 0):set_generated()
-      if not ck_good then
-        c:add_proto_expert_info(E.checksum, fmt("checksum mismatch at offset %d: expected %s, found %s",
-          ck_at, hexw(ck_expected, ck.width), hexw(ck_found, ck.width)))
-      end
-    end
+    show_checksum()
     for _, why in ipairs(chosen.soft) do
       root:add(F.out_of_spec, whole, why):set_generated()
       root:add_proto_expert_info(E.out_of_spec, why)
