@@ -149,7 +149,11 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
         }
         bytes.extend_from_slice(&e.wire);
     }
-    let good = p.examples.first().map(|e| e.wire.clone()).unwrap_or_default();
+    let good = p
+        .examples
+        .first()
+        .map(|e| e.wire.clone())
+        .unwrap_or_default();
     for e in &p.examples {
         for f in out_of_spec(p, &e.wire, e.message) {
             bytes.extend_from_slice(&f);
@@ -222,12 +226,18 @@ fn tshark(pcapng: &Path, lua: &Path) -> Vec<BTreeMap<String, Vec<String>>> {
 /// tshark reports a script that does not load on stderr, and an error a dissector raises in
 /// the packet's tree (`_ws.lua.error`, "Lua Error").
 fn assert_no_lua_error(stderr: &str, stdout: &str) {
-    assert!(!stderr.to_lowercase().contains("lua"), "a Lua error: {stderr}");
+    assert!(
+        !stderr.to_lowercase().contains("lua"),
+        "a Lua error: {stderr}"
+    );
     let at = ["Lua Error", "_ws.lua.error", "_ws.malformed"]
         .iter()
         .find_map(|e| stdout.find(e));
     if let Some(at) = at {
-        panic!("a Lua error: {}", &stdout[at.saturating_sub(2000)..(at + 2000).min(stdout.len())]);
+        panic!(
+            "a Lua error: {}",
+            &stdout[at.saturating_sub(2000)..(at + 2000).min(stdout.len())]
+        );
     }
 }
 
@@ -251,7 +261,10 @@ fn raw_text(raw: &Raw) -> String {
         Raw::Int(i) => i.to_string(),
         Raw::List(l) => format!(
             "[{}]",
-            l.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
+            l.iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
         ),
         Raw::Text(t) => t.iter().map(|b| format!("{b:02x}")).collect(),
     }
@@ -351,10 +364,26 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 } else {
                     Direction::Response
                 };
-                assert_eq!(one(packet, &key("message")), Some(message.as_str()), "{what}");
-                assert_eq!(one(packet, &key("direction")), Some(direction.as_str()), "{what}");
-                assert_eq!(one(packet, &key("code")), get("code").map(unquote).as_deref(), "{what}");
-                assert_eq!(one(packet, &key("address")), get("address").as_deref(), "{what}");
+                assert_eq!(
+                    one(packet, &key("message")),
+                    Some(message.as_str()),
+                    "{what}"
+                );
+                assert_eq!(
+                    one(packet, &key("direction")),
+                    Some(direction.as_str()),
+                    "{what}"
+                );
+                assert_eq!(
+                    one(packet, &key("code")),
+                    get("code").map(unquote).as_deref(),
+                    "{what}"
+                );
+                assert_eq!(
+                    one(packet, &key("address")),
+                    get("address").as_deref(),
+                    "{what}"
+                );
                 let r = p.find_in(&message, d).unwrap();
                 assert_eq!(
                     one(packet, &key("section")),
@@ -396,9 +425,14 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 let fields: BTreeMap<String, Box<RawValue>> =
                     serde_json::from_str(e["fields"].get()).unwrap();
                 assert_eq!(fields.len(), decoded.values.len(), "{what}");
-                let mname = p.message(r).name.replace(|c: char| !c.is_alphanumeric() && c != '_', "_");
+                let mname = p
+                    .message(r)
+                    .name
+                    .replace(|c: char| !c.is_alphanumeric() && c != '_', "_");
                 for v in &decoded.values {
-                    let leaf = v.name.replace(|c: char| !c.is_alphanumeric() && c != '_', "_");
+                    let leaf = v
+                        .name
+                        .replace(|c: char| !c.is_alphanumeric() && c != '_', "_");
                     let k = key(&format!("field.{mname}.{leaf}"));
                     let printed = fields[v.name.as_ref()].get();
                     assert_eq!(one(packet, &k), Some(printed), "{k}: {what}");
@@ -466,9 +500,14 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
                 );
                 if let Some((_, message)) = bad.iter().find(|(b, _)| *b == frame) {
                     assert_eq!(status, Some("0"), "{what}");
-                    let why = interp::decode(p, None, None, &frame).unwrap_err().to_string();
+                    let why = interp::decode(p, None, None, &frame)
+                        .unwrap_err()
+                        .to_string();
                     assert!(why.starts_with("checksum mismatch"), "{why}");
-                    let experts = packet.get("_ws.expert.message").cloned().unwrap_or_default();
+                    let experts = packet
+                        .get("_ws.expert.message")
+                        .cloned()
+                        .unwrap_or_default();
                     assert!(experts.contains(&why), "{why}: {what}");
                     if let Some(shown) = one(packet, &key("message")) {
                         assert_eq!(shown, message, "{what}");
@@ -497,7 +536,11 @@ fn tshark_shows_every_packet_as_busspec_decodes_it() {
             "{:>12}: {} frames, {} fields, {} out of spec, {} bad checksums, {} pairs, {} noise packets compared with tshark",
             p.name, c.frames, c.fields, c.out_of_spec, c.bad_checksum, c.paired, c.noise
         );
-        let has_fields = p.commands.iter().chain(&p.responses).any(|m| !m.fields.is_empty());
+        let has_fields = p
+            .commands
+            .iter()
+            .chain(&p.responses)
+            .any(|m| !m.fields.is_empty());
         if c.frames == 0 || (has_fields && c.fields == 0) {
             failures.push(format!("{}: nothing compared", p.name));
         }
@@ -571,7 +614,12 @@ fn every_fixture_dissector_loads_and_survives_random_bytes() {
         ]);
         assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
         let packets = tshark(&pcapng, &lua);
-        assert_eq!(packets.len(), text(&out.stdout).lines().count(), "{}", p.name);
+        assert_eq!(
+            packets.len(),
+            text(&out.stdout).lines().count(),
+            "{}",
+            p.name
+        );
         // Packets no stream cut: examples with bytes changed (resealed or not), cut short or
         // grown, random bytes, in either direction or none.
         let fuzzed = dir.join(format!("{}-fuzzed.pcapng", p.name));
@@ -600,10 +648,9 @@ fn fuzzed_capture(p: &Protocol, rng: &mut fastrand::Rng) -> Vec<u8> {
     w.write_pcapng_block(InterfaceDescriptionBlock {
         linktype: DataLink::from(147u32),
         snaplen: 0,
-        options: vec![InterfaceDescriptionOption::IfDescription(Cow::Owned(format!(
-            "busspec {}",
-            p.name
-        )))],
+        options: vec![InterfaceDescriptionOption::IfDescription(Cow::Owned(
+            format!("busspec {}", p.name),
+        ))],
     })
     .unwrap();
     for n in 0..FUZZED {
@@ -672,6 +719,9 @@ fn one_file_of_every_protocol_picks_each_capture_by_its_interface() {
             .lines()
             .filter(|l| l.contains("\"message\""))
             .count();
-        assert!(messages > 0 && messages >= events, "{name}: {messages} of {events}");
+        assert!(
+            messages > 0 && messages >= events,
+            "{name}: {messages} of {events}"
+        );
     }
 }

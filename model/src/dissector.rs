@@ -116,7 +116,8 @@ fn unit(u: &Unit) -> String {
         Some((a, b, d))
     })();
     let Some((a, b, d)) = parts else {
-        // Beyond i128: the nearest doubles (no spec comes near).
+        // Beyond i128: unreachable for scales and offsets of at most 18 digits, whose
+        // denominators multiply to at most 10^36.
         return format!(
             "{{ symbol = {}, A = \"0\", B = \"0\", M = \"1\", Df = 1, r = nil, k = 0 }}",
             lua_str(&u.symbol)
@@ -253,7 +254,7 @@ fn field(f: &Field) -> String {
     o
 }
 
-fn message(p: &Protocol, m: &Message, index: usize) -> String {
+fn message(m: &Message, index: usize) -> String {
     let o = m.layout;
     let mut s = String::new();
     let _ = writeln!(
@@ -289,7 +290,6 @@ fn message(p: &Protocol, m: &Message, index: usize) -> String {
         lua_bool(broadcast_ok),
         gets.join(", ")
     );
-    let _ = p;
     s.push_str("      fields = {\n");
     for f in &m.fields {
         let _ = writeln!(s, "        {},", field(f));
@@ -299,7 +299,7 @@ fn message(p: &Protocol, m: &Message, index: usize) -> String {
 }
 
 /// The checksum of `algorithm` as a Lua function `(b, from, to)` over bytes `b[from..to)`.
-fn checksum_fn(algorithm: &ChecksumAlgorithm, width: u8) -> String {
+fn checksum_fn(algorithm: &ChecksumAlgorithm) -> String {
     let sum = |body: &str, ret: &str| {
         format!(
             "function(b, from, to) local s = 0 for i = from, to - 1 do {body} end return {ret} end"
@@ -337,7 +337,7 @@ fn checksum_fn(algorithm: &ChecksumAlgorithm, width: u8) -> String {
         ChecksumAlgorithm::Masked(inner, m) => format!(
             "(function(inner) return function(b, from, to) return bit32.band(inner(b, from, to), {}) end end)({})",
             m & 0xFFFF_FFFF,
-            checksum_fn(inner, width)
+            checksum_fn(inner)
         ),
         ChecksumAlgorithm::None => "function() return 0 end".to_owned(),
     }
@@ -416,7 +416,7 @@ fn protocol(p: &Protocol) -> String {
         order(c.byte_order),
         c.covers_from,
         c.check,
-        checksum_fn(&c.algorithm, c.width)
+        checksum_fn(&c.algorithm)
     );
     s.push_str("  units = {\n");
     for u in &p.units {
@@ -448,10 +448,10 @@ fn protocol(p: &Protocol) -> String {
     }
     s.push_str("  },\n  messages = {\n");
     for (i, m) in p.commands.iter().enumerate() {
-        s.push_str(&message(p, m, i));
+        s.push_str(&message(m, i));
     }
     for (i, m) in p.responses.iter().enumerate() {
-        s.push_str(&message(p, m, i));
+        s.push_str(&message(m, i));
     }
     s.push_str("  },\n}\n");
     s
@@ -481,7 +481,9 @@ pub fn render(protocols: &[&Protocol]) -> String {
         );
     }
     o.push_str("--\n-- Load it with `wireshark -X lua_script:THIS_FILE` (or `tshark -X lua_script:THIS_FILE`),\n");
-    o.push_str("-- or copy it into Wireshark's personal Lua plugins folder (Help > About > Folders).\n\n");
+    o.push_str(
+        "-- or copy it into Wireshark's personal Lua plugins folder (Help > About > Folders).\n\n",
+    );
     o.push_str("local SPECS = {}\n\n");
     for p in protocols {
         o.push_str(&protocol(p));
@@ -523,9 +525,17 @@ mod tests {
         let p = load("spec/modbus.yaml");
         let lua = render(&[&p]);
         for m in p.commands.iter().chain(&p.responses) {
-            assert!(lua.contains(&format!("name = {},", lua_str(&m.name))), "{}", m.name);
+            assert!(
+                lua.contains(&format!("name = {},", lua_str(&m.name))),
+                "{}",
+                m.name
+            );
             for f in &m.fields {
-                assert!(lua.contains(&format!("{{ name = {}, offset = {},", lua_str(&f.name), f.offset)));
+                assert!(lua.contains(&format!(
+                    "{{ name = {}, offset = {},",
+                    lua_str(&f.name),
+                    f.offset
+                )));
             }
         }
         // Modbus's CRC-16 from its parameters, reflected both ways.
