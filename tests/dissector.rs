@@ -90,7 +90,46 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/ft12_fixed.yaml"),
         spec("model/tests/fixtures/valid/msp_v1.yaml"),
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),
+        derived_units(),
     ]
+}
+
+/// `minimal.yaml` with units whose values have no finite decimal (1/3, busspec prints the
+/// nearest double) or need many places and an offset, its examples' stated values left out.
+fn derived_units() -> Case {
+    let text = std::fs::read_to_string(root().join("model/tests/fixtures/valid/minimal.yaml"))
+        .unwrap()
+        .replace("scale: \"0.01\"", "scale: \"1/3\"")
+        .replace(
+            "scale: \"360/4096\"",
+            "scale: \"7/1048576\"\n    offset: \"-0.000123\"",
+        );
+    let mut out = Vec::new();
+    let (mut skipping, mut examples) = (false, false);
+    for line in text.lines() {
+        examples |= line.starts_with("examples:");
+        let indent = line.len() - line.trim_start().len();
+        if skipping && indent > 4 {
+            continue;
+        }
+        skipping = false;
+        if examples && line.trim_start().starts_with("values:") {
+            skipping = !line.contains('{');
+            continue;
+        }
+        out.push(line);
+    }
+    let file = std::env::temp_dir().join(format!(
+        "busspec-dissector-{}-units.yaml",
+        std::process::id()
+    ));
+    std::fs::write(&file, out.join("\n")).unwrap();
+    let file: &'static str = Box::leak(file.display().to_string().into_boxed_str());
+    let p = load(file);
+    Case {
+        args: vec![p.name.clone(), "--spec".into(), file.into()],
+        file,
+    }
 }
 
 fn load(file: &str) -> Protocol {
@@ -157,6 +196,25 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
     for e in &p.examples {
         for f in out_of_spec(p, &e.wire, e.message) {
             bytes.extend_from_slice(&f);
+            bytes.extend_from_slice(&good);
+        }
+    }
+    // Each example with random payload bytes, resealed: values all over their range (and
+    // past it), whatever busspec makes of them.
+    let mut rng = fastrand::Rng::with_seed(p.examples.len() as u64);
+    for e in &p.examples {
+        let m = p.message(e.message);
+        let end = e.wire.len().saturating_sub(p.framing.trailer_len());
+        if end <= m.layout.payload {
+            continue;
+        }
+        for _ in 0..3 {
+            let mut w = e.wire.clone();
+            w[m.layout.payload..end]
+                .iter_mut()
+                .for_each(|b| *b = rng.u8(..));
+            interp::reseal(p, &mut w);
+            bytes.extend_from_slice(&w);
             bytes.extend_from_slice(&good);
         }
     }
@@ -722,6 +780,63 @@ fn one_file_of_every_protocol_picks_each_capture_by_its_interface() {
         assert!(
             messages > 0 && messages >= events,
             "{name}: {messages} of {events}"
+        );
+    }
+}
+
+/// The command line: all four built-in protocols by default, a spec file's protocol with
+/// --spec, the same text each time; wrong arguments refused with exit status 2.
+#[test]
+fn the_command_names_its_protocols_and_refuses_wrong_arguments() {
+    let all = run(&["dissector"]);
+    assert_eq!(all.status.code(), Some(0), "{}", text(&all.stderr));
+    let lua = text(&all.stdout);
+    for name in ["ub2", "sd", "modbus", "dynamixel"] {
+        let p = load(&format!("spec/{name}.yaml"));
+        assert!(lua.contains(&format!("  name = \"{name}\", ")), "{name}");
+        assert!(lua.contains(&p.spec_sha256), "{name}");
+    }
+    assert_eq!(text(&run(&["dissector"]).stdout), lua);
+
+    let fixture = "model/tests/fixtures/valid/pelco_p.yaml";
+    let one = text(&run(&["dissector", "--spec", fixture]).stdout);
+    assert_eq!(one.matches("SPECS[#SPECS + 1] = {").count(), 1);
+    assert!(one.contains(&load(fixture).spec_sha256));
+    let two = text(&run(&["dissector", "sd", "--spec", fixture]).stdout);
+    assert_eq!(two.matches("SPECS[#SPECS + 1] = {").count(), 2);
+
+    for (args, says) in [
+        (vec!["dissector", "nope"], "unknown protocol `nope`"),
+        (
+            vec!["dissector", "ub2", "ub2"],
+            "protocol `ub2` is named twice",
+        ),
+        (
+            vec![
+                "dissector",
+                "--spec",
+                "spec/ub2.yaml",
+                "--spec",
+                "spec/ub2.yaml",
+            ],
+            "protocol `ub2` is given twice",
+        ),
+        (
+            vec![
+                "dissector",
+                "--spec",
+                "model/tests/fixtures/broken/address_twice.yaml",
+            ],
+            "address_twice.yaml",
+        ),
+    ] {
+        let out = run(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(out.stdout.is_empty(), "{args:?}");
+        assert!(
+            text(&out.stderr).contains(says),
+            "{args:?}: {}",
+            text(&out.stderr)
         );
     }
 }
