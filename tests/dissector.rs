@@ -624,8 +624,9 @@ fn every_fixture_dissector_loads_and_survives_random_bytes() {
         return;
     }
     let dir = temp_dir("fixtures");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(root().join("model/tests/fixtures/valid"))
-        .unwrap()
+    let mut files: Vec<PathBuf> = ["model/tests/fixtures/valid", "difftest/fixtures"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root().join(d)).unwrap())
         .map(|e| e.unwrap().path())
         .chain([
             root().join("codegen/tests/fixtures/core_names.yaml"),
@@ -687,7 +688,7 @@ fn every_fixture_dissector_loads_and_survives_random_bytes() {
         loaded += 1;
     }
     eprintln!("{loaded} fixture dissectors loaded and read random bytes without a Lua error");
-    assert!(loaded >= 10, "{loaded}");
+    assert!(loaded >= 18, "{loaded}");
 }
 
 const FUZZED: usize = 600;
