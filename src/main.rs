@@ -2,6 +2,7 @@
 //! encode frames.
 
 mod demo;
+mod dissector_cli;
 mod frames;
 mod link_cli;
 mod pcapng;
@@ -168,6 +169,9 @@ enum Command {
     /// closed by the line's silence as the spec says; optionally written to pcapng.
     #[command(long_about = sniff::SNIFF_HELP)]
     Sniff(sniff::SniffArgs),
+    /// Write a Wireshark Lua dissector for built-in protocols and spec files.
+    #[command(long_about = dissector_cli::DISSECTOR_HELP)]
+    Dissector(dissector_cli::DissectorArgs),
     /// A scripted session against simulated devices: no hardware needed.
     Demo {
         /// Also draw the simulated capacitor's C-curve into this SVG file.
@@ -412,6 +416,7 @@ fn main() -> ExitCode {
         ),
         Command::Talk(a) => talk(a),
         Command::Sniff(a) => sniff::sniff(a),
+        Command::Dissector(a) => dissector_cli::run(a),
         Command::Demo { svg } => demo(svg.as_deref()),
         Command::Soak {
             transactions,

@@ -4,13 +4,14 @@
 //!
 //! ```text
 //! spec/*.yaml ──load──▶ model ──validate──▶ IR ──┬─ docs      (Markdown reference)
+//!                                                ├─ dissector (Wireshark Lua)
 //!                                                ├─ interp    (decode/encode at run time)
 //!                                                │    └─ stream   (frames out of a bus capture)
 //!                                                ├─ diff      (what a revision breaks)
 //!                                                └─ (busspec-codegen: Rust modules)
 //! ```
 //!
-//! `stream`, `docs`, `diff` and the interpreter's encoding (`interp::encode`, `decode_reply`)
+//! `stream`, `docs`, `dissector`, `diff` and the interpreter's encoding (`interp::encode`, `decode_reply`)
 //! are behind the default feature `tools`; a build script that only generates code
 //! (`busspec-codegen`) turns it off and compiles load, validate, the IR and the interpreter's
 //! decoding, which validation replays every example through.
@@ -22,6 +23,8 @@ pub mod checksum;
 pub mod diag;
 #[cfg(feature = "tools")]
 pub mod diff;
+#[cfg(feature = "tools")]
+pub mod dissector;
 #[cfg(feature = "tools")]
 pub mod docs;
 pub mod interp;

@@ -1,0 +1,831 @@
+-- The dissector's engine: the same for every spec. It reads the SPECS tables above, which
+-- `busspec dissector` generated from each spec's IR, and follows busspec's own decoder
+-- (`busspec_model::interp`) and JSON printer (`busspec_json::print`).
+
+local floor, huge = math.floor, math.huge
+local fmt, concat = string.format, table.concat
+
+-- Integers of any size, for exact physical values: limbs of 10^7, least significant first,
+-- `n` true when negative. Every limb product stays below 2^53.
+local BASE = 10000000
+
+local function bn_norm(a)
+  while #a > 0 and a[#a] == 0 do a[#a] = nil end
+  if #a == 0 then a.n = false end
+  return a
+end
+
+local function bn_int(x)
+  local a = { n = x < 0 }
+  x = math.abs(x)
+  while x > 0 do
+    local r = x % BASE
+    a[#a + 1] = r
+    x = (x - r) / BASE
+  end
+  return bn_norm(a)
+end
+
+local function bn_parse(s)
+  local a = { n = false }
+  if s:sub(1, 1) == "-" then a.n = true; s = s:sub(2) end
+  local i = #s
+  while i >= 1 do
+    local j = i - 6
+    if j < 1 then j = 1 end
+    a[#a + 1] = tonumber(s:sub(j, i))
+    i = j - 1
+  end
+  return bn_norm(a)
+end
+
+local function bn_cmpabs(a, b)
+  if #a ~= #b then return (#a < #b) and -1 or 1 end
+  for i = #a, 1, -1 do
+    if a[i] ~= b[i] then return (a[i] < b[i]) and -1 or 1 end
+  end
+  return 0
+end
+
+local function bn_add(a, b)
+  local r = {}
+  if a.n == b.n then
+    local c = 0
+    for i = 1, math.max(#a, #b) do
+      local s = (a[i] or 0) + (b[i] or 0) + c
+      if s >= BASE then r[i] = s - BASE; c = 1 else r[i] = s; c = 0 end
+    end
+    if c > 0 then r[#r + 1] = c end
+    r.n = a.n
+  else
+    local x, y = a, b
+    if bn_cmpabs(a, b) < 0 then x, y = b, a end
+    local c = 0
+    for i = 1, #x do
+      local s = x[i] - (y[i] or 0) - c
+      if s < 0 then r[i] = s + BASE; c = 1 else r[i] = s; c = 0 end
+    end
+    r.n = x.n
+  end
+  return bn_norm(r)
+end
+
+local function bn_mul(a, b)
+  local r = {}
+  for i = 1, #a + #b do r[i] = 0 end
+  for i = 1, #a do
+    local c, ai = 0, a[i]
+    for j = 1, #b do
+      local s = r[i + j - 1] + ai * b[j] + c
+      c = floor(s / BASE)
+      r[i + j - 1] = s - c * BASE
+    end
+    local k = i + #b
+    while c > 0 do
+      local s = r[k] + c
+      c = floor(s / BASE)
+      r[k] = s - c * BASE
+      k = k + 1
+    end
+  end
+  r.n = (a.n ~= b.n)
+  return bn_norm(r)
+end
+
+-- Quotient and remainder (of the magnitude) by a positive integer below 9 * 10^8.
+local function bn_divsmall(a, d)
+  local q, rem = { n = a.n }, 0
+  for i = #a, 1, -1 do
+    local cur = rem * BASE + a[i]
+    local qi = floor(cur / d)
+    q[i] = qi
+    rem = cur - qi * d
+  end
+  return bn_norm(q), rem
+end
+
+local function bn_str(a)
+  if #a == 0 then return "0" end
+  local parts = { fmt("%d", a[#a]) }
+  for i = #a - 1, 1, -1 do parts[#parts + 1] = fmt("%07d", a[i]) end
+  return (a.n and "-" or "") .. concat(parts)
+end
+
+local I128_MAX = "170141183460469231731687303715884105727"
+
+-- A double as Rust's `{}` prints it: the shortest digits that read back, never an exponent.
+local function rust_f64(x)
+  if x ~= x then return "NaN" end
+  if x == huge then return "inf" end
+  if x == -huge then return "-inf" end
+  if x == 0 then return (1 / x < 0) and "-0" or "0" end
+  local s
+  for p = 0, 16 do
+    s = fmt("%." .. p .. "e", x)
+    if tonumber(s) == x then break end
+  end
+  local sign, m, e = s:match("^(-?)([%d%.]+)e([-+]%d+)$")
+  local digits = m:gsub("%.", ""):gsub("0+$", "")
+  if digits == "" then digits = "0" end
+  e = tonumber(e)
+  local out
+  if e >= 0 then
+    if #digits <= e + 1 then
+      out = digits .. string.rep("0", e + 1 - #digits)
+    else
+      out = digits:sub(1, e + 1) .. "." .. digits:sub(e + 2)
+    end
+  else
+    out = "0." .. string.rep("0", -e - 1) .. digits
+  end
+  return sign .. out
+end
+
+-- `digits` (an integer's text) divided by 10^k, as Rust's `Rational` prints it: no trailing
+-- zeros; nil where Rust's i128 arithmetic would not hold it (it then prints the double).
+local function decimal(digits, k)
+  local sign = ""
+  if digits:sub(1, 1) == "-" then sign = "-"; digits = digits:sub(2) end
+  if #digits <= k then digits = string.rep("0", k + 1 - #digits) .. digits end
+  local int, frac = digits:sub(1, #digits - k), digits:sub(#digits - k + 1)
+  frac = frac:gsub("0+$", "")
+  local scaled = (int .. frac):gsub("^0+", "")
+  if #frac > 38 or #scaled > #I128_MAX or (#scaled == #I128_MAX and scaled > I128_MAX) then
+    return nil
+  end
+  if frac == "" then
+    if int == "0" then sign = "" end
+    return sign .. int
+  end
+  return sign .. int .. "." .. frac
+end
+
+-- A raw value's physical value in its unit, as busspec's JSON prints it (`physical_text`).
+local function physical(u, raw)
+  local N = bn_add(bn_mul(bn_int(raw), u.A), u.B)
+  if u.r then
+    local q, rem = N, 0
+    if u.r ~= 1 then q, rem = bn_divsmall(N, u.r) end
+    if rem == 0 then
+      local text = decimal(bn_str(bn_mul(q, u.M)), u.k)
+      if text then return text end
+    end
+  end
+  return rust_f64(tonumber(bn_str(N)) / u.Df)
+end
+
+local function numtext(v)
+  return fmt("%d", v)
+end
+
+-- A JSON string of text whose bytes are characters U+0000..U+00FF (a field's ASCII bytes).
+local function json_bytes(s)
+  local out = { '"' }
+  for i = 1, #s do
+    local c = s:byte(i)
+    if c == 34 then out[#out + 1] = '\\"'
+    elseif c == 92 then out[#out + 1] = "\\\\"
+    elseif c == 8 then out[#out + 1] = "\\b"
+    elseif c == 12 then out[#out + 1] = "\\f"
+    elseif c == 10 then out[#out + 1] = "\\n"
+    elseif c == 13 then out[#out + 1] = "\\r"
+    elseif c == 9 then out[#out + 1] = "\\t"
+    elseif c < 32 then out[#out + 1] = fmt("\\u%04x", c)
+    elseif c >= 128 then out[#out + 1] = string.char(192 + floor(c / 64), 128 + c % 64)
+    else out[#out + 1] = string.char(c) end
+  end
+  out[#out + 1] = '"'
+  return concat(out)
+end
+
+-- A JSON string of UTF-8 text (names from the spec).
+local function json_name(s)
+  local out = s:gsub('[%c"\\]', function(ch)
+    local c = ch:byte()
+    if c == 34 then return '\\"' elseif c == 92 then return "\\\\"
+    elseif c == 8 then return "\\b" elseif c == 12 then return "\\f"
+    elseif c == 10 then return "\\n" elseif c == 13 then return "\\r"
+    elseif c == 9 then return "\\t" elseif c < 32 then return fmt("\\u%04x", c) end
+    return ch
+  end)
+  return '"' .. out .. '"'
+end
+
+local function read_uint(b, at, width, order)
+  local v = 0
+  if order == "big" then
+    for i = 0, width - 1 do v = v * 256 + (b[at + i] or 0) end
+  else
+    for i = width - 1, 0, -1 do v = v * 256 + (b[at + i] or 0) end
+  end
+  return v
+end
+
+local function sign_extend(v, bits)
+  if bits > 0 and v >= 2 ^ (bits - 1) then return v - 2 ^ bits end
+  return v
+end
+
+-- A whole field's value: unsigned as read, and as its type reads it.
+local function int_of(f, b, at)
+  if f.ascii then return 0, 0 end
+  local u = read_uint(b, at, f.width, f.order)
+  if f.signed then return u, sign_extend(u, 8 * f.width) end
+  return u, u
+end
+
+local function bit_value(container, bf)
+  local w = bf.msb - bf.lsb + 1
+  local v = floor(container / 2 ^ bf.lsb) % 2 ^ w
+  if bf.signed then return sign_extend(v, w) end
+  return v
+end
+
+local function has_bit(v, bit)
+  if v < 0 then
+    if bit >= 32 then return true end
+    v = v + 2 ^ 32
+  end
+  return floor(v / 2 ^ bit) % 2 == 1
+end
+
+local function apply(rel, v)
+  local n, d = v * rel.mul, rel.div
+  if d < 1 then d = 1 end
+  if n >= 0 then return math.ceil(n / d) end
+  return -floor(-n / d)
+end
+
+local function read_elements(f, b, from, to)
+  local out = {}
+  if f.rep.bit then
+    for i = from, to - 1 do
+      local x = b[i]
+      for k = 0, 7 do out[#out + 1] = floor(x / 2 ^ k) % 2 end
+    end
+    return out
+  end
+  local w = f.width
+  if w < 1 then w = 1 end
+  local i = from
+  while i + w <= to do
+    local _, v = int_of(f, b, i)
+    out[#out + 1] = v
+    i = i + w
+  end
+  return out
+end
+
+local function elements_len(f, n)
+  if f.rep.bit then return math.ceil(n / 8) end
+  return n * f.width
+end
+
+-- The number of elements of a variable message's repeated field, or nil where the frame's
+-- length, the count field and the bounds disagree (`interp::element_count`).
+local function element_count(m, b, n)
+  local f = m.fields[#m.fields]
+  local r = f.rep
+  local extra = n - m.len
+  if extra < 0 then return nil end
+  local w = f.width
+  if w < 1 then w = 1 end
+  local count
+  if r.count == "to_end" then
+    if not r.bit and extra % w ~= 0 then return nil end
+    count = r.bit and extra * 8 or extra / w
+  else
+    local c = m.fields[r.by]
+    local v = read_uint(b, m.payload_at + c.offset, c.width, c.order)
+    if r.count == "elements" then
+      if elements_len(f, v) ~= extra then return nil end
+      count = v
+    else
+      if v ~= extra or (not r.bit and extra % w ~= 0) then return nil end
+      count = r.bit and extra * 8 or extra / w
+    end
+  end
+  local lo, hi = r.min, r.max
+  if r.bit then lo, hi = math.ceil(lo / 8) * 8, math.ceil(hi / 8) * 8 end
+  if count < lo or count > hi then return nil end
+  return count
+end
+
+local function end_at(P, n)
+  if P.end_first then return n - P.trailer end
+  return n - #P.ends
+end
+
+local function checksum_at(P, n)
+  if P.end_first then return n - P.checksum.len end
+  return n - P.checksum.len - #P.ends
+end
+
+-- Whether the frame has message m's shape: start, code, end bytes, length field and length.
+local function structural(P, m, b, n)
+  if n < m.len or n > m.max_len then return false end
+  if m.start_at then
+    for i, s in ipairs(P.sync) do
+      if b[m.start_at + i - 1] ~= s then return false end
+    end
+  end
+  if m.code_at + #m.code + P.trailer > n then return false end
+  for i, c in ipairs(m.code) do
+    if b[m.code_at + i - 1] ~= c then return false end
+  end
+  local e = end_at(P, n)
+  for i, x in ipairs(P.ends) do
+    if b[e + i - 1] ~= x then return false end
+  end
+  local rule = P.rules[m.dir]
+  if rule then
+    local want = -1
+    if n >= rule.head_len then want = rule.grows and (n + rule.k) or rule.k end
+    if read_uint(b, rule.at, rule.width, P.order) ~= want then return false end
+  end
+  if m.variable and not element_count(m, b, n) then return false end
+  return true
+end
+
+local function range_violation(f, bf, v)
+  local range
+  if bf then range = bf.range else range = f.range end
+  if not range then return nil end
+  if v >= range[1] and v <= range[2] then return nil end
+  if not bf and f.special and f.special[v] then return nil end
+  return range
+end
+
+local function out_of_range(m, name, at, v, range)
+  return fmt("%s.%s at offset %d is %s, outside its range %s..=%s", m.name, name, at, numtext(v),
+    numtext(range[1]), numtext(range[2]))
+end
+
+-- The rules of the spec the frame breaks as message m, worded as busspec's strict decoding
+-- words them and in its order (address, broadcast, each field), into `soft`; returns true
+-- where the frame is not message m at all (a constant, or a value that must follow or repeat
+-- another field, differs).
+local function misfit(P, m, b, n, soft)
+  local A = P.address
+  local address = m.address_at and b[m.address_at] or 0
+  if m.address_at and A then
+    local ok = (address >= A.min and address <= A.max) or address == A.broadcast or address == A.host
+    if not ok then
+      soft[#soft + 1] = fmt("address 0x%02X at offset %d is outside the device range 0x%02X..=0x%02X and is not the broadcast or host address",
+        address, m.address_at, A.min, A.max)
+    end
+  end
+  if m.dir == "request" and A and A.broadcast == address and not m.broadcast_ok then
+    local code = (#m.code == 0) and " (no code)" or (" (code " .. m.code_hex .. ")")
+    soft[#soft + 1] = fmt("%s%s does not accept the broadcast address 0x%02X", m.name, code, address)
+  end
+  local pay, pend = m.payload_at, n - P.trailer
+  for _, f in ipairs(m.fields) do
+    local at = pay + f.offset
+    if f.rep then
+      local step = f.rep.bit and 0 or f.width
+      for k, v in ipairs(read_elements(f, b, at, pend)) do
+        local range = range_violation(f, nil, v)
+        if range then soft[#soft + 1] = out_of_range(m, f.name, at + (k - 1) * step, v, range) end
+      end
+    elseif not f.ascii then
+      local u, v = int_of(f, b, at)
+      if f.constant and u ~= f.constant then return true end
+      if f.follows then
+        local o = m.fields[f.follows.field]
+        local _, ov = int_of(o, b, pay + o.offset)
+        if v ~= apply(f.follows, ov) then return true end
+      end
+      if f.equals then
+        local o = m.fields[f.equals]
+        local _, ov = int_of(o, b, pay + o.offset)
+        if v ~= ov then return true end
+      end
+      if #f.bits == 0 then
+        local range = range_violation(f, nil, v)
+        if range then soft[#soft + 1] = out_of_range(m, f.name, at, v, range) end
+      end
+      for _, bf in ipairs(f.bits) do
+        local bv = bit_value(u, bf)
+        if bf.constant and bv ~= bf.constant then return true end
+        local range = range_violation(f, bf, bv)
+        if range then soft[#soft + 1] = out_of_range(m, bf.name, at, bv, range) end
+      end
+    end
+  end
+  return false
+end
+
+-- A value as busspec's JSON prints it (`field_json`): physical values, special values, enum
+-- and flag names.
+local function value_json(P, f, bf, v)
+  if bf then
+    if bf.constant == nil and bf.unit then return physical(P.units[bf.unit], v) end
+    return numtext(v)
+  end
+  if f.constant then return numtext(v) end
+  if f.special and f.special[v] then return json_name(f.special[v]) end
+  if f.enum then
+    local name = P.enums[f.enum][v]
+    if name then return json_name(name) end
+    return numtext(v)
+  end
+  if f.flags then
+    local items, named = {}, {}
+    for _, fl in ipairs(P.flags[f.flags]) do
+      named[fl.bit] = true
+      if has_bit(v, fl.bit) then items[#items + 1] = json_name(fl.name) end
+    end
+    for bit = 0, 63 do
+      if not named[bit] and has_bit(v, bit) then items[#items + 1] = numtext(2 ^ bit) end
+    end
+    return "[" .. concat(items, ",") .. "]"
+  end
+  if f.unit then return physical(P.units[f.unit], v) end
+  return numtext(v)
+end
+
+local function unit_of(P, f, bf)
+  local u
+  if bf then
+    if bf.constant == nil and bf.unit then u = P.units[bf.unit] end
+  elseif not (f.constant or f.enum or f.flags) and f.unit then
+    u = P.units[f.unit]
+  end
+  if u and u.symbol ~= "" then return " " .. u.symbol end
+  return ""
+end
+
+local function hexw(v, bits)
+  local digits = math.ceil(bits / 4)
+  if digits < 2 then digits = 2 end
+  return fmt("0x%0" .. digits .. "X", v)
+end
+
+local f_direction = Field.new("frame.packet_flags_direction")
+local f_description = Field.new("frame.interface_description")
+local f_time = Field.new("frame.time_epoch")
+
+local function field_value(f)
+  local fi = f()
+  if fi == nil then return nil end
+  return fi.value
+end
+
+local function abbrev_part(s)
+  return (s:gsub("[^%w_]", "_"))
+end
+
+-- One protocol's Proto, fields, expert infos and dissector function.
+local function setup(P)
+  local abbr = "busspec_" .. abbrev_part(P.name)
+  local proto = Proto(abbr, "busspec " .. P.name .. ": " .. P.title)
+  local ck_field = ProtoField.uint32
+  if P.checksum.width == 8 then ck_field = ProtoField.uint8 elseif P.checksum.width == 16 then ck_field = ProtoField.uint16 end
+  local F = {
+    message = ProtoField.string(abbr .. ".message", "Message"),
+    direction = ProtoField.string(abbr .. ".direction", "Direction"),
+    address = ProtoField.uint8(abbr .. ".address", "Address", base.DEC_HEX),
+    code = ProtoField.string(abbr .. ".code", "Code"),
+    start = ProtoField.bytes(abbr .. ".start", "Start"),
+    length = ProtoField.uint32(abbr .. ".length", "Length field"),
+    payload = ProtoField.bytes(abbr .. ".payload", "Payload"),
+    ends = ProtoField.bytes(abbr .. ".end", "End"),
+    checksum = ck_field(abbr .. ".checksum", "Checksum", base.HEX),
+    checksum_expected = ck_field(abbr .. ".checksum.expected", "Checksum expected", base.HEX),
+    checksum_status = ProtoField.uint8(abbr .. ".checksum.status", "Checksum status", base.DEC,
+      { [0] = "Bad", [1] = "Good" }),
+    document = ProtoField.string(abbr .. ".document", "Document"),
+    section = ProtoField.string(abbr .. ".section", "Section"),
+    out_of_spec = ProtoField.string(abbr .. ".out_of_spec", "Out of spec"),
+    skipped = ProtoField.uint32(abbr .. ".skipped", "Bytes that start no frame"),
+    ambiguous = ProtoField.string(abbr .. ".ambiguous", "Ambiguous"),
+    response_to = ProtoField.framenum(abbr .. ".response_to", "Response to frame", base.NONE, frametype.REQUEST),
+    response_in = ProtoField.framenum(abbr .. ".response_in", "Response in frame", base.NONE, frametype.RESPONSE),
+    time = ProtoField.relative_time(abbr .. ".time", "Time since request"),
+  }
+  local list = {
+    F.message, F.direction, F.address, F.code, F.start, F.length, F.payload, F.ends, F.checksum,
+    F.checksum_expected, F.checksum_status, F.document, F.section, F.out_of_spec, F.skipped,
+    F.ambiguous, F.response_to, F.response_in, F.time,
+  }
+  -- Each named value of each message: its value as busspec prints it, and its raw value.
+  for _, m in ipairs(P.messages) do
+    m.pf = {}
+    local leaves = {}
+    for _, f in ipairs(m.fields) do
+      if #f.bits == 0 then leaves[#leaves + 1] = f.name end
+      for _, bf in ipairs(f.bits) do leaves[#leaves + 1] = bf.name end
+    end
+    for _, leaf in ipairs(leaves) do
+      local key = abbr .. ".field." .. abbrev_part(m.name) .. "." .. abbrev_part(leaf)
+      local pf = {
+        value = ProtoField.string(key, leaf),
+        raw = ProtoField.string(key .. ".raw", leaf .. " (raw)"),
+      }
+      m.pf[leaf] = pf
+      list[#list + 1] = pf.value
+      list[#list + 1] = pf.raw
+    end
+  end
+  proto.fields = list
+  local E = {
+    checksum = ProtoExpert.new(abbr .. ".checksum.bad", "Bad checksum", expert.group.CHECKSUM, expert.severity.ERROR),
+    out_of_spec = ProtoExpert.new(abbr .. ".out_of_spec.warning", "Out of spec", expert.group.PROTOCOL, expert.severity.WARN),
+    skipped = ProtoExpert.new(abbr .. ".skipped.note", "Bytes that start no frame", expert.group.UNDECODED, expert.severity.NOTE),
+    ambiguous = ProtoExpert.new(abbr .. ".ambiguous.note", "Ambiguous frame", expert.group.PROTOCOL, expert.severity.NOTE),
+  }
+  proto.experts = { E.checksum, E.out_of_spec, E.skipped, E.ambiguous }
+
+  local by_dir = { request = {}, response = {} }
+  P.commands, P.longest = {}, 0
+  for _, m in ipairs(P.messages) do
+    local l = by_dir[m.dir]
+    l[#l + 1] = m
+    if m.dir == "request" then P.commands[m.idx + 1] = m end
+    if m.max_len > P.longest then P.longest = m.max_len end
+  end
+  -- The order busspec tries them in: messages the frame's code names before code-less ones.
+  for _, l in pairs(by_dir) do
+    table.sort(l, function(x, y)
+      local cx, cy = (#x.code == 0) and 1 or 0, (#y.code == 0) and 1 or 0
+      if cx ~= cy then return cx < cy end
+      return x.idx < y.idx
+    end)
+  end
+
+  local state
+  local function reset()
+    state = { last = nil, frames = {}, response_in = {} }
+  end
+  reset()
+  proto.init = reset
+
+  local function show_leaves(m, b, n, tvb, node)
+    local pay, pend = m.payload_at, n - P.trailer
+    local info = {}
+    for _, f in ipairs(m.fields) do
+      local at = pay + f.offset
+      if f.rep then
+        local els = read_elements(f, b, at, pend)
+        local vals, raws = {}, {}
+        for k, v in ipairs(els) do
+          vals[k] = value_json(P, f, nil, v)
+          raws[k] = numtext(v)
+        end
+        local value = "[" .. concat(vals, ",") .. "]"
+        local range = tvb:range(0, n)
+        if pend > at then range = tvb:range(at, pend - at) end
+        local item = node:add(m.pf[f.name].value, range, value)
+        item:set_text(fmt("%s: %s%s (%d elements; raw [%s])", f.name, value, unit_of(P, f, nil), #els, concat(raws, ",")))
+        item:add(m.pf[f.name].raw, range, "[" .. concat(raws, ",") .. "]")
+        info[#info + 1] = f.name .. "=" .. value
+      elseif f.ascii then
+        local chars = {}
+        for i = 0, f.width - 1 do chars[#chars + 1] = string.char(b[at + i]) end
+        local text = json_bytes(concat(chars))
+        local range = tvb:range(at, f.width)
+        local item = node:add(m.pf[f.name].value, range, text)
+        item:set_text(f.name .. ": " .. text)
+        item:add(m.pf[f.name].raw, range, tostring(range:bytes()))
+        info[#info + 1] = f.name .. "=" .. text
+      else
+        local u, v = int_of(f, b, at)
+        local range = tvb:range(at, f.width)
+        local leaves = f.bits
+        if #leaves == 0 then leaves = { false } end
+        for _, bf in ipairs(leaves) do
+          local name, raw = f.name, v
+          if bf then name, raw = bf.name, bit_value(u, bf) end
+          local value = value_json(P, f, bf or nil, raw)
+          local item = node:add(m.pf[name].value, range, value)
+          local bits = ""
+          if bf then bits = fmt(", bits %d..%d", bf.lsb, bf.msb) end
+          item:set_text(fmt("%s: %s%s (raw %s%s)", name, value, unit_of(P, f, bf or nil), numtext(raw), bits))
+          item:add(m.pf[name].raw, range, numtext(raw))
+          info[#info + 1] = name .. "=" .. value
+        end
+      end
+    end
+    return info
+  end
+
+  local function dissect(tvb, pinfo, tree)
+    local n = tvb:len()
+    pinfo.cols.protocol = P.name
+    local num = pinfo.number
+    local rec = state.frames[num]
+    local first = false
+    if not rec then
+      rec = { prev = state.last }
+      state.frames[num] = rec
+      first = true
+    end
+    -- The frame's time: exact where the frame's fields are built (a pass with a tree), else
+    -- from the double Wireshark gives Lua.
+    local t = field_value(f_time)
+    if t then
+      rec.time = t
+    elseif not rec.time then
+      local secs = floor(pinfo.abs_ts)
+      local ns = floor((pinfo.abs_ts - secs) * 1e9 + 0.5)
+      if ns >= 1e9 then secs, ns = secs + 1, ns - 1e9 end
+      rec.time = NSTime.new(secs, ns)
+    end
+    if n == 0 then
+      tree:add(proto):set_text("busspec " .. P.name .. ": empty packet")
+      return 0
+    end
+    local whole = tvb:range(0, n)
+    local root = tree:add(proto, whole)
+    local flags = field_value(f_direction) or 0
+    local dirs
+    if flags == 2 then dirs = { "request" } elseif flags == 1 then dirs = { "response" } else dirs = { "request", "response" } end
+
+    local strict, lenient = {}, {}
+    local b = {}
+    if n <= P.longest then
+      local ba = whole:bytes()
+      for i = 0, n - 1 do b[i] = ba:get_index(i) end
+      for _, d in ipairs(dirs) do
+        for _, m in ipairs(by_dir[d]) do
+          if structural(P, m, b, n) then
+            local soft = {}
+            if not misfit(P, m, b, n, soft) then
+              local c = { m = m, soft = soft }
+              lenient[#lenient + 1] = c
+              if #soft == 0 then strict[#strict + 1] = c end
+            end
+          end
+        end
+      end
+    end
+    if #lenient == 0 then
+      root:set_text(fmt("busspec %s: %d bytes that start no frame", P.name, n))
+      root:add(F.skipped, whole, n)
+      root:add_proto_expert_info(E.skipped, fmt("%d bytes that start no frame", n))
+      pinfo.cols.info = fmt("%d bytes that start no frame", n)
+      return n
+    end
+    local pool = strict
+    local out_of_spec = (#strict == 0)
+    if out_of_spec then pool = lenient end
+
+    -- The checksum: over the bytes it covers, up to itself.
+    local ck = P.checksum
+    local ck_good, ck_at, ck_found, ck_expected = true, nil, nil, nil
+    if ck.len > 0 then
+      ck_at = checksum_at(P, n)
+      ck_expected = ck.fn(b, ck.covers_from, ck_at)
+      ck_found = read_uint(b, ck_at, ck.len, ck.order)
+      ck_good = (ck_expected == ck_found)
+    end
+
+    local function show_checksum()
+      if not ck_at then return end
+      local r = tvb:range(ck_at, ck.len)
+      local c = root:add(F.checksum, r, ck_found)
+      c:append_text(" [" .. ck.name .. "]")
+      c:add(F.checksum_expected, r, ck_expected):set_generated()
+      c:add(F.checksum_status, r, ck_good and 1 or 0):set_generated()
+      if not ck_good then
+        c:add_proto_expert_info(E.checksum, fmt("checksum mismatch at offset %d: expected %s, found %s",
+          ck_at, hexw(ck_expected, ck.width), hexw(ck_found, ck.width)))
+      end
+    end
+
+    -- Several messages fit: a request and a response are ambiguous; responses only the
+    -- request before this frame tells apart are settled by it (as busspec's stream pairs).
+    local chosen
+    local has = { request = false, response = false }
+    for _, c in ipairs(pool) do has[c.m.dir] = true end
+    local prev = rec.prev
+    if #pool == 1 then
+      chosen = pool[1]
+    elseif not (has.request and has.response) and prev then
+      local answering = {}
+      for _, c in ipairs(pool) do
+        if c.m.dir == "response" and P.commands[prev.idx + 1].gets[c.m.idx] then
+          answering[#answering + 1] = c
+        end
+      end
+      if #answering == 1 then chosen = answering[1] end
+    end
+
+    if not chosen then
+      local names = {}
+      for _, c in ipairs(pool) do names[#names + 1] = c.m.name end
+      local text = concat(names, " or ")
+      root:set_text(fmt("busspec %s: ambiguous frame: %s", P.name, text))
+      root:add(F.ambiguous, whole, text)
+      root:add_proto_expert_info(E.ambiguous, "ambiguous frame: could be " .. text .. "; decode it together with the request it answers")
+      show_checksum()
+      if first and ck_good then state.last = nil end
+      pinfo.cols.info = "ambiguous: " .. text
+      return n
+    end
+
+    local m = chosen.m
+    local address = m.address_at and b[m.address_at] or nil
+    if first and ck_good then
+      if out_of_spec then
+        state.last = nil
+      elseif m.dir == "request" then
+        state.last = { num = num, idx = m.idx }
+      else
+        if prev then
+          rec.response_to = prev
+          state.response_in[prev.num] = num
+        end
+        state.last = nil
+      end
+    end
+
+    local head = fmt("busspec %s: %s %s", P.name, m.dir, m.name)
+    if address then head = head .. fmt(", address %d", address) end
+    if not ck_good then head = head .. " [bad checksum]" end
+    if out_of_spec then head = head .. " [out of spec]" end
+    root:set_text(head)
+    local item = root:add(F.message, whole, m.name)
+    if m.title ~= "" then item:append_text(" (" .. m.title .. ")") end
+    root:add(F.direction, whole, m.dir):set_generated()
+    root:add(F.document, whole, P.document):set_generated()
+    root:add(F.section, whole, m.section):set_generated()
+    if rec.response_to then
+      root:add(F.response_to, whole, rec.response_to.num):set_generated()
+      local req = state.frames[rec.response_to.num]
+      if rec.time and req and req.time then
+        root:add(F.time, whole, rec.time - req.time):set_generated()
+      end
+    end
+    if m.dir == "request" and state.response_in[num] then
+      root:add(F.response_in, whole, state.response_in[num]):set_generated()
+    end
+    if m.start_at and #P.sync > 0 then root:add(F.start, tvb:range(m.start_at, #P.sync)) end
+    if address then root:add(F.address, tvb:range(m.address_at, 1), address) end
+    local rule = P.rules[m.dir]
+    if rule then root:add(F.length, tvb:range(rule.at, rule.width), read_uint(b, rule.at, rule.width, P.order)) end
+    root:add(F.code, (#m.code > 0) and tvb:range(m.code_at, #m.code) or whole, m.code_hex)
+    local pend = n - P.trailer
+    local plen = pend - m.payload_at
+    local fields_node = root
+    if plen > 0 then fields_node = root:add(F.payload, tvb:range(m.payload_at, plen)) end
+    local info = show_leaves(m, b, n, tvb, fields_node)
+    if #P.ends > 0 then root:add(F.ends, tvb:range(end_at(P, n), #P.ends)) end
+    show_checksum()
+    for _, why in ipairs(chosen.soft) do
+      root:add(F.out_of_spec, whole, why):set_generated()
+      root:add_proto_expert_info(E.out_of_spec, why)
+    end
+    local cols = m.dir .. " " .. m.name
+    if address then cols = cols .. fmt(" @%d", address) end
+    if #info > 0 then cols = cols .. " " .. concat(info, " ") end
+    if not ck_good then cols = cols .. " [bad checksum]" end
+    if out_of_spec then cols = cols .. " [out of spec]" end
+    pinfo.cols.info = cols
+    return n
+  end
+
+  -- The checksum as the spec declares it, checked against the spec's check value.
+  if P.checksum.len > 0 then
+    local check = {}
+    local input = "123456789"
+    for i = 1, #input do check[i - 1] = input:byte(i) end
+    local got = P.checksum.fn(check, 0, #input)
+    if got ~= P.checksum.check then
+      error(fmt("busspec %s: the checksum gives 0x%X over \"123456789\", the spec says 0x%X", P.name, got, P.checksum.check))
+    end
+  end
+  return proto, dissect
+end
+
+local by_name, only = {}, nil
+for _, P in ipairs(SPECS) do
+  for i, u in ipairs(P.units) do
+    u.A, u.B, u.M = bn_parse(u.A), bn_parse(u.B), bn_parse(u.M)
+  end
+  local proto, dissect = setup(P)
+  by_name[P.name] = { proto = proto, dissect = dissect }
+  only = by_name[P.name]
+end
+
+local encap = DissectorTable.get("wtap_encap")
+if #SPECS == 1 then
+  only.proto.dissector = only.dissect
+  encap:add(wtap.USER0, only.proto)
+else
+  local names = {}
+  for _, P in ipairs(SPECS) do names[#names + 1] = P.name end
+  local dispatch = Proto("busspec", "busspec: " .. concat(names, ", "))
+  function dispatch.dissector(tvb, pinfo, tree)
+    local d = field_value(f_description)
+    local name = d and tostring(d):match("^busspec (.+)$")
+    local s = name and by_name[name]
+    if not s then
+      tree:add(dispatch, tvb:range(0, tvb:len())):set_text(fmt("busspec: the interface (%q) names none of %s", tostring(d), concat(names, ", ")))
+      return tvb:len()
+    end
+    return s.dissect(tvb, pinfo, tree)
+  end
+  encap:add(wtap.USER0, dispatch)
+end
