@@ -841,3 +841,126 @@ fn the_command_names_its_protocols_and_refuses_wrong_arguments() {
         );
     }
 }
+
+/// The README's picture, `docs/wireshark/ub2.svg`: what tshark shows of a short UB2 capture
+/// with the generated dissector (`-V -O busspec_ub2`: the busspec tree of every packet), drawn
+/// as a terminal. The test runs tshark again and draws the picture from what it prints; the
+/// committed file must be that drawing (`BUSSPEC_UPDATE_SNAPSHOTS=1` writes it), so the
+/// picture cannot drift from what the dissector shows.
+#[test]
+fn the_readme_picture_is_what_tshark_shows() {
+    if !tshark_present("the README picture") {
+        return;
+    }
+    // A read and its reply, a stored-position move with an index past the spec's 0..9 (out of
+    // spec, checksum good), the device's refusal, and a reply with a bad checksum.
+    const CAPTURE: &str = "AA2140010C AA2141013E1F00006A AA2127000CFE AA21945F AA2141013E1F00006B";
+    let dir = temp_dir("picture");
+    let raw = dir.join("ub2.bin");
+    let bytes: Vec<u8> = busspec_json::parse_hex(CAPTURE).unwrap();
+    std::fs::write(&raw, bytes).unwrap();
+    let pcapng = dir.join("ub2.pcapng");
+    let lua = dir.join("ub2.lua");
+    let out = run(&[
+        "decode",
+        "ub2",
+        "--stream",
+        raw.to_str().unwrap(),
+        "--pcapng",
+        pcapng.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let out = run(&["dissector", "ub2", "-o", lua.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let shown = Command::new("tshark")
+        .args(["-r", pcapng.to_str().unwrap(), "-X"])
+        .arg(format!("lua_script:{}", lua.display()))
+        .args(["-2", "-V", "-O", "busspec_ub2"])
+        .env("TZ", "UTC")
+        .output()
+        .expect("run tshark");
+    assert!(shown.status.success(), "{}", text(&shown.stderr));
+    let shown = text(&shown.stdout);
+    assert_no_lua_error("", &shown);
+    // What the picture must show, so that a change that loses it fails here and not only in
+    // the picture.
+    for must in [
+        "capacitance: 79.98 pF (raw 7998)",
+        "[Response to frame: 1]",
+        "[Expert Info (Warning/Protocol): go_to_stored_position.index at offset 4 is 12, outside its range 0..=9]",
+        "[Checksum status: Bad (0)]",
+    ] {
+        assert!(shown.contains(must), "tshark does not show {must:?}:\n{shown}");
+    }
+    let command = "tshark -r ub2.pcapng -X lua_script:ub2.lua -2 -V -O busspec_ub2";
+    // The capture's name in the interface is where the test wrote it: shown as `ub2.bin`.
+    let shown = shown.replace(raw.to_str().unwrap(), "ub2.bin");
+    let svg = terminal_svg(command, &shown);
+    let path = root().join("docs/wireshark/ub2.svg");
+    if std::env::var_os("BUSSPEC_UPDATE_SNAPSHOTS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, &svg).unwrap();
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        committed == svg,
+        "{} is not what tshark shows now (BUSSPEC_UPDATE_SNAPSHOTS=1 cargo test --test dissector \
+         the_readme_picture rewrites it); tshark shows:\n{shown}",
+        path.display()
+    );
+}
+
+/// `text` drawn as a terminal window running `command`: monospace lines, a frame's summary
+/// line and the protocol's line in their own colours, errors in red, warnings in yellow.
+fn terminal_svg(command: &str, text: &str) -> String {
+    const LINE: usize = 16;
+    const CHAR: f64 = 7.2;
+    const TOP: usize = 44;
+    let lines: Vec<&str> = text.lines().filter(|l| *l != "Packet comments").collect();
+    let widest = lines
+        .iter()
+        .map(|l| l.chars().count())
+        .chain([command.chars().count() + 2])
+        .max()
+        .unwrap_or(0);
+    let width = (widest as f64 * CHAR).ceil() as usize + 48;
+    let height = TOP + LINE * lines.len() + 16;
+    let escape = |s: &str| {
+        s.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" \
+         viewBox=\"0 0 {width} {height}\" font-family=\"DejaVu Sans Mono, Menlo, Consolas, monospace\" \
+         font-size=\"12\">\n\
+         <!-- Drawn by tests/dissector.rs from what tshark printed; do not edit. -->\n\
+         <rect width=\"{width}\" height=\"{height}\" rx=\"8\" fill=\"#1e1e1e\"/>\n\
+         <rect width=\"{width}\" height=\"24\" rx=\"8\" fill=\"#3c3c3c\"/>\n\
+         <circle cx=\"16\" cy=\"12\" r=\"5\" fill=\"#ff5f56\"/><circle cx=\"32\" cy=\"12\" r=\"5\" \
+         fill=\"#ffbd2e\"/><circle cx=\"48\" cy=\"12\" r=\"5\" fill=\"#27c93f\"/>\n\
+         <text x=\"16\" y=\"{}\" fill=\"#9cdcfe\" xml:space=\"preserve\">$ {}</text>\n",
+        TOP - 4,
+        escape(command)
+    );
+    for (n, line) in lines.iter().enumerate() {
+        let colour = if line.starts_with("Frame ") {
+            "#808080"
+        } else if line.starts_with("busspec ") {
+            "#4ec9b0"
+        } else if line.contains("Expert Info (Error") || line.contains("Bad (0)") {
+            "#f48771"
+        } else if line.contains("Expert Info (Warning") || line.contains("[Out of spec") {
+            "#dcdcaa"
+        } else {
+            "#d4d4d4"
+        };
+        svg.push_str(&format!(
+            "<text x=\"16\" y=\"{}\" fill=\"{colour}\" xml:space=\"preserve\">{}</text>\n",
+            TOP + LINE * (n + 1),
+            escape(line)
+        ));
+    }
+    svg.push_str("</svg>\n");
+    svg
+}
