@@ -84,6 +84,7 @@ pub fn diff(old: &Protocol, new: &Protocol) -> Vec<Change> {
     d.protocol();
     d.serial();
     d.transactions();
+    d.device();
     d.framing();
     let units = d.units();
     let enums = d.enums();
@@ -642,6 +643,14 @@ impl<'a> Differ<'a> {
             } else {
                 self.compatible("retry_changed", path, text);
             }
+        }
+    }
+
+    /// The `device:` section: what the simulator holds and answers. No frame changes, so
+    /// nothing breaks a peer.
+    fn device(&mut self) {
+        for (path, text) in crate::device::diff(self.old, self.new) {
+            self.compatible("device_changed", path, text);
         }
     }
 

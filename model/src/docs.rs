@@ -358,6 +358,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
     }
     o.push('\n');
     o.push_str(&crate::transactions::render(p));
+    o.push_str(&crate::device::render(p));
 
     let f = &p.framing;
     let _ = writeln!(

@@ -34,6 +34,9 @@ pub struct Protocol {
     pub errata: Vec<Erratum>,
     /// What a bus master needs (`transactions:`, resolved with its defaults).
     pub transactions: crate::transactions::Transactions,
+    /// What a device holds and what its commands do (`device:`; every command answers and
+    /// changes nothing without it).
+    pub device: crate::device::Device,
     /// SHA-256 of the spec text this was loaded from, lowercase hex (what `sha256sum` prints);
     /// empty when the protocol was validated from a model rather than loaded from text.
     pub spec_sha256: String,

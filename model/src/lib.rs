@@ -20,6 +20,7 @@
 //! the callers (build scripts, the CLI).
 
 pub mod checksum;
+pub mod device;
 pub mod diag;
 #[cfg(feature = "tools")]
 pub mod diff;
@@ -32,6 +33,8 @@ pub mod ir;
 pub mod load;
 pub mod model;
 pub mod rational;
+#[cfg(feature = "tools")]
+pub mod sim;
 #[cfg(feature = "tools")]
 pub mod stream;
 pub mod transactions;

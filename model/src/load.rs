@@ -136,8 +136,9 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
     spec.filter(|_| sink.is_empty())
 }
 
-/// Top-level keys with a default when absent: the lists, `common_responses` and `transactions`.
-const DEFAULTED_KEYS: &[&str] = &["common_responses", "transactions"];
+/// Top-level keys with a default when absent: the lists, `common_responses`, `transactions` and
+/// `device`.
+const DEFAULTED_KEYS: &[&str] = &["common_responses", "transactions", "device"];
 
 /// Whether a top-level key must be present: [`Spec`]'s fields without a default.
 fn required(key: &str) -> bool {
@@ -157,6 +158,7 @@ fn read_key(key: &str, value: &Value, sink: &mut Sink) {
         "framing" => check::<model::Framing>(value, key, sink),
         "common_responses" => check::<Vec<String>>(value, key, sink),
         "transactions" => check::<crate::transactions::Section>(value, key, sink),
+        "device" => check::<crate::device::Section>(value, key, sink),
         // Lists (emptied above: read element by element) and keys reported as unknown.
         _ => {}
     }

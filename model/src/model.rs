@@ -69,6 +69,9 @@ pub struct Spec {
     /// What a bus master needs: see [`crate::transactions`].
     #[serde(default)]
     pub transactions: Option<crate::transactions::Section>,
+    /// What a device holds and what its commands do to it: see [`crate::device`].
+    #[serde(default)]
+    pub device: Option<crate::device::Section>,
 }
 
 /// The keys of [`Spec`], in file order; the loader checks top-level keys against it.
@@ -89,6 +92,7 @@ pub const SPEC_KEYS: &[&str] = &[
     "examples",
     "errata",
     "transactions",
+    "device",
 ];
 
 #[derive(Debug, Clone, Deserialize)]

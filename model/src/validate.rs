@@ -478,9 +478,11 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         examples: Vec::new(),
         errata,
         transactions,
+        device: crate::device::Device::default(),
         spec_sha256: String::new(),
     };
     proto.examples = examples(spec, &proto, sink);
+    proto.device = crate::device::validate(spec.device.as_ref(), &proto, sink);
     sink.is_empty().then_some(proto)
 }
 

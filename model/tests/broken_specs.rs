@@ -34,6 +34,20 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
             ("responses.status", "no command lists this response"),
         ],
     ),
+    // ---- the `device:` section (made from valid/minimal.yaml)
+    (
+        "device_defects",
+        &[
+            ("device.spaces[0].size", "size 0: a space holds 1 to 1048576 elements"),
+            ("device.spaces[1].type", "a space holds integers or bits"),
+            ("device.spaces[2].initial[0].values", "3 values from element 6 run past the space's 8 elements"),
+            ("device.commands[0].command", "unknown command `go_too`"),
+            ("device.refuse.outside.fields.nope", "`nak` has no field `nope`"),
+            ("device.commands[2].command", "`go_to` is listed twice"),
+            ("device.commands[3].reads", "unknown space `nowhere`"),
+            ("device.commands[4]", "a command reads, writes, commits or resets: one of them"),
+        ],
+    ),
     // ---- the `transactions:` section (made from valid/minimal.yaml)
     (
         "transactions_unknown_command",

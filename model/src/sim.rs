@@ -1,0 +1,432 @@
+//! A device simulator for any spec, by its `device:` section ([`crate::device`]): the
+//! interpreter decodes each request, the device's spaces answer it or change, and the
+//! interpreter encodes the reply. Sans-IO and clock-free: [`Sim::answer`] takes one request
+//! frame and returns the reply to send, if any (`busspec sim` puts it on a line, the soak on a
+//! simulated bus).
+//!
+//! What the device does is the section's rules, stated there; this module decides only what
+//! the section leaves open:
+//! - a frame that does not decode strictly is answered only when it fails a rule of the spec
+//!   alone (a value out of its range, the broadcast rule) and comes to this device's address:
+//!   with the command's `invalid` refusal, if it has one; anything else (noise, a checksum
+//!   error, a frame for another address) gets silence, as on a real bus;
+//! - a broadcast is carried out by every device and answered by none unless the command's
+//!   `broadcast.answered` says so, refusals included;
+//! - a write whose values do not fit the space's elements is refused as `outside`, and a
+//!   staged write is checked when it is staged, so a commit never fails half-way.
+
+use std::sync::Arc;
+
+use crate::device::{Action, Refusal, Rule, Source, Space};
+use crate::interp::{self, Raw, Value};
+use crate::ir::{Count, Direction, FieldType, Follows, Leaf, MessageRef, Protocol};
+
+/// Elements per page: a write copies one page where a clone of the device shares it.
+const PAGE: usize = 256;
+
+/// A space's elements, in pages shared between clones until written.
+#[derive(Debug, Clone)]
+struct Store {
+    pages: Vec<Arc<[i64; PAGE]>>,
+    size: u32,
+}
+
+impl PartialEq for Store {
+    fn eq(&self, other: &Store) -> bool {
+        self.size == other.size
+            && self
+                .pages
+                .iter()
+                .zip(&other.pages)
+                .all(|(a, b)| Arc::ptr_eq(a, b) || a == b)
+    }
+}
+
+impl Store {
+    fn new(s: &Space) -> Store {
+        let zero = Arc::new([0i64; PAGE]);
+        let n = (s.size as usize).div_ceil(PAGE);
+        let mut store = Store {
+            pages: vec![zero; n],
+            size: s.size,
+        };
+        for &(at, v) in &s.initial {
+            store.set(at, v);
+        }
+        store
+    }
+
+    fn get(&self, i: u32) -> i64 {
+        let i = i as usize;
+        self.pages.get(i / PAGE).map_or(0, |p| p[i % PAGE])
+    }
+
+    fn set(&mut self, i: u32, v: i64) {
+        let i = i as usize;
+        if let Some(p) = self.pages.get_mut(i / PAGE) {
+            Arc::make_mut(p)[i % PAGE] = v;
+        }
+    }
+}
+
+/// A write that waits for a commit: space, first element, values.
+type Staged = (usize, u32, Vec<i64>);
+
+/// One simulated device of a protocol.
+#[derive(Debug, Clone)]
+pub struct Sim {
+    p: Arc<Protocol>,
+    address: u8,
+    spaces: Vec<Store>,
+    staged: Vec<Staged>,
+}
+
+impl PartialEq for Sim {
+    /// Two devices are alike when their address, data and staged writes are (of one protocol).
+    fn eq(&self, other: &Sim) -> bool {
+        self.address == other.address && self.spaces == other.spaces && self.staged == other.staged
+    }
+}
+
+/// Why a request is refused.
+enum Refused {
+    Outside,
+}
+
+impl Sim {
+    /// A device of `p` at `address` (0 for a protocol without addresses), its spaces at their
+    /// initial values.
+    pub fn new(p: Arc<Protocol>, address: u8) -> Sim {
+        let spaces = p.device.spaces.iter().map(Store::new).collect();
+        Sim {
+            p,
+            address,
+            spaces,
+            staged: Vec::new(),
+        }
+    }
+
+    pub fn address(&self) -> u8 {
+        self.address
+    }
+
+    pub fn protocol(&self) -> &Protocol {
+        &self.p
+    }
+
+    /// Element `at` of the space called `space`, if there is one.
+    pub fn element(&self, space: &str, at: u32) -> Option<i64> {
+        let i = self.p.device.space(space)?;
+        (at < self.spaces[i].size).then(|| self.spaces[i].get(at))
+    }
+
+    /// Sets element `at` of `space` (for tests and set-up); false where there is none or the
+    /// value does not fit.
+    pub fn set_element(&mut self, space: &str, at: u32, value: i64) -> bool {
+        let Some(i) = self.p.device.space(space) else {
+            return false;
+        };
+        let s = &self.p.device.spaces[i];
+        if at >= s.size || !(s.min..=s.max).contains(&value) {
+            return false;
+        }
+        self.spaces[i].set(at, value);
+        true
+    }
+
+    /// Handles one request frame; returns the reply to send, if any.
+    pub fn answer(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+        let p = Arc::clone(&self.p);
+        let p = &*p;
+        let addressed = p.framing.has_address();
+        let request = match interp::decode(p, Some(Direction::Request), None, frame) {
+            Ok(f) => f,
+            Err(e) if crate::stream::breaks_spec(&e) => {
+                let relaxed = crate::stream::relaxed(p);
+                let (f, _) = crate::stream::decode_lenient(
+                    p,
+                    &relaxed,
+                    Some(Direction::Request),
+                    None,
+                    frame,
+                )
+                .ok()?;
+                if f.message.direction != Direction::Request
+                    || (addressed && f.address != self.address)
+                {
+                    return None;
+                }
+                let f = f.into_owned();
+                let r = p.device.rules[f.message.index].invalid.clone()?;
+                return self.refuse(p, &f, &r);
+            }
+            Err(_) => return None,
+        };
+        let broadcast = addressed && p.framing.address.broadcast == Some(request.address);
+        if addressed && request.address != self.address && !broadcast {
+            return None;
+        }
+        let command = p.message(request.message);
+        let answered = !broadcast || command.broadcast.as_ref().is_some_and(|b| b.answered);
+        let rule = p.device.rules[request.message.index].clone();
+        match self.act(p, &rule, &request) {
+            Err(Refused::Outside) => {
+                let r = rule.outside.as_ref()?;
+                if !answered {
+                    return None;
+                }
+                self.refuse(p, &request, r)
+            }
+            Ok(into) => {
+                if !answered {
+                    return None;
+                }
+                let reply = rule.reply?;
+                let given = into
+                    .map(|(name, list)| Value {
+                        name: name.into(),
+                        raw: Raw::List(list),
+                    })
+                    .into_iter()
+                    .collect();
+                self.reply(p, &request, reply, given)
+            }
+        }
+    }
+
+    /// Carries out `rule` for `request`: the list a read fills, or nothing.
+    fn act(
+        &mut self,
+        p: &Protocol,
+        rule: &Rule,
+        request: &interp::Frame,
+    ) -> Result<Option<(String, Vec<i64>)>, Refused> {
+        let int = |name: &str| match request.get(name) {
+            Some(Raw::Int(i)) => *i,
+            _ => 0,
+        };
+        let list = |name: &str| match request.get(name) {
+            Some(Raw::List(l)) => l.clone(),
+            _ => Vec::new(),
+        };
+        match &rule.action {
+            Action::Nothing => Ok(None),
+            Action::Read {
+                space,
+                start,
+                count,
+                into,
+            } => {
+                let n = count.as_deref().map_or(1, int);
+                let at = self.span(*space, int(start), n)?;
+                let store = &self.spaces[*space];
+                let values = (at..at + n as u32).map(|i| store.get(i)).collect();
+                Ok(Some((into.clone(), values)))
+            }
+            Action::Write {
+                space,
+                start,
+                count,
+                source,
+                staged,
+            } => {
+                let values = match source {
+                    Source::Value(f) => vec![int(f)],
+                    Source::List(f) => {
+                        let mut l = list(f);
+                        if let Some(c) = count {
+                            let n = usize::try_from(int(c)).map_err(|_| Refused::Outside)?;
+                            if n > l.len() {
+                                return Err(Refused::Outside);
+                            }
+                            l.truncate(n);
+                        }
+                        l
+                    }
+                    Source::Records { list: l, length } => {
+                        let len = usize::try_from(int(length)).map_err(|_| Refused::Outside)?;
+                        let records = list(l);
+                        let mine = records
+                            .chunks(len + 1)
+                            .find(|r| r.len() == len + 1 && r[0] == i64::from(self.address));
+                        match mine {
+                            Some(r) => r[1..].to_vec(),
+                            // No record for this device: nothing to do.
+                            None => return Ok(None),
+                        }
+                    }
+                };
+                let s = &p.device.spaces[*space];
+                let values: Vec<i64> = if s.ty == FieldType::Bit {
+                    values.into_iter().map(|v| i64::from(v != 0)).collect()
+                } else {
+                    values
+                };
+                if values.iter().any(|v| !(s.min..=s.max).contains(v)) {
+                    return Err(Refused::Outside);
+                }
+                let at = self.span(*space, int(start), values.len() as i64)?;
+                if *staged {
+                    self.staged.push((*space, at, values));
+                } else {
+                    self.write(*space, at, &values);
+                }
+                Ok(None)
+            }
+            Action::Commit => {
+                for (space, at, values) in std::mem::take(&mut self.staged) {
+                    self.write(space, at, &values);
+                }
+                Ok(None)
+            }
+            Action::Reset => {
+                self.spaces = p.device.spaces.iter().map(Store::new).collect();
+                self.staged.clear();
+                Ok(None)
+            }
+        }
+    }
+
+    /// The first element of `n` from `start` in `space`, if they all lie in it.
+    fn span(&self, space: usize, start: i64, n: i64) -> Result<u32, Refused> {
+        let size = i64::from(self.spaces[space].size);
+        if start < 0 || n < 0 || start.saturating_add(n) > size {
+            return Err(Refused::Outside);
+        }
+        Ok(start as u32)
+    }
+
+    fn write(&mut self, space: usize, at: u32, values: &[i64]) {
+        for (k, &v) in values.iter().enumerate() {
+            self.spaces[space].set(at + k as u32, v);
+        }
+    }
+
+    fn refuse(&self, p: &Protocol, request: &interp::Frame, r: &Refusal) -> Option<Vec<u8>> {
+        let given = r
+            .values
+            .iter()
+            .map(|(n, v)| Value {
+                name: n.clone().into(),
+                raw: Raw::Int(*v),
+            })
+            .collect();
+        self.reply(p, request, r.reply, given)
+    }
+
+    /// Encodes response `reply` to `request`: the values given, then those of the request's
+    /// fields of the same names, then those that follow from the request, then each field's
+    /// first valid value.
+    fn reply(
+        &self,
+        p: &Protocol,
+        request: &interp::Frame,
+        reply: usize,
+        mut values: Vec<Value>,
+    ) -> Option<Vec<u8>> {
+        let m = &p.responses[reply];
+        // Fields encode computes: a list's count, and values that follow another field.
+        let counts: Vec<usize> = m
+            .repeat()
+            .and_then(|(_, r)| match r.count {
+                Count::Elements(i) | Count::Bytes(i) => Some(i),
+                Count::ToEnd => None,
+            })
+            .into_iter()
+            .collect();
+        let request_int = |name: &str| match request.get(name) {
+            Some(Raw::Int(i)) => Some(*i),
+            _ => None,
+        };
+        for leaf in m.leaves() {
+            let name = leaf.name().to_owned();
+            if values.iter().any(|v| v.name == name) {
+                continue;
+            }
+            let raw = match leaf {
+                Leaf::Bits(_, _, b) => {
+                    if b.constant.is_some() {
+                        continue;
+                    }
+                    match request.get(&name) {
+                        Some(r @ Raw::Int(_)) => r.clone(),
+                        _ => Raw::Int(first_valid(b.range, None)),
+                    }
+                }
+                Leaf::Field(i, f) => {
+                    if f.constant.is_some()
+                        || f.equals.is_some()
+                        || counts.contains(&i)
+                        || matches!(f.follows, Some(Follows::Field(..)))
+                    {
+                        continue;
+                    }
+                    if let Some(r) = request.get(&name) {
+                        let fits = match r {
+                            Raw::List(_) => f.repeat.is_some(),
+                            Raw::Text(_) => f.is_ascii(),
+                            Raw::Int(_) => f.repeat.is_none() && !f.is_ascii(),
+                        };
+                        if fits {
+                            values.push(Value {
+                                name: name.into(),
+                                raw: r.clone(),
+                            });
+                            continue;
+                        }
+                    }
+                    if let Some(Follows::Request(rel)) = &f.follows {
+                        if let Some(v) = request_int(&rel.field) {
+                            values.push(Value {
+                                name: name.into(),
+                                raw: Raw::Int(rel.apply(v)),
+                            });
+                            continue;
+                        }
+                    }
+                    if let Some(r) = &f.repeat {
+                        let n = r
+                            .request
+                            .as_ref()
+                            .and_then(|rel| request_int(&rel.field).map(|v| rel.apply(v)))
+                            .and_then(|n| usize::try_from(n).ok())
+                            .unwrap_or(r.min);
+                        Raw::List(vec![first_valid(f.range, None); n])
+                    } else if f.is_ascii() {
+                        Raw::Text(vec![b' '; f.width])
+                    } else {
+                        let first_enum = f
+                            .enumeration
+                            .and_then(|e| p.enums[e].values.first().map(|v| v.value as i64));
+                        Raw::Int(first_valid(f.range, first_enum))
+                    }
+                }
+            };
+            values.push(Value {
+                name: name.into(),
+                raw,
+            });
+        }
+        let address = if p.framing.has_address() {
+            self.address
+        } else {
+            0
+        };
+        let r = MessageRef {
+            direction: Direction::Response,
+            index: reply,
+        };
+        interp::encode(p, r, address, &values).ok()
+    }
+}
+
+/// 0 where the range (and enum) allow it, else the range's minimum or the enum's first value.
+fn first_valid(range: Option<(i64, i64)>, first_enum: Option<i64>) -> i64 {
+    if let Some(e) = first_enum {
+        return e;
+    }
+    match range {
+        Some((lo, hi)) if !(lo..=hi).contains(&0) => lo,
+        _ => 0,
+    }
+}
