@@ -25,7 +25,7 @@ pub mod dynamixel {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2019-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "37557586f6f7344c79b13357cd7c63c821cf940be4a5da05c0e5ea4ed207bbe2";
+    pub const SPEC_SHA256: &str = "72c29dfa6eaf138dcb0384b462ae13858693cf1616b2ea27a4a42371553ca46d";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!("../../../spec/dynamixel.yaml");
     /// The longest request frame, in bytes.
