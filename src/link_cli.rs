@@ -19,7 +19,7 @@ use busspec_model::ir::Direction;
 use busspec_model::Protocol as Spec;
 use busspec_protocols::{sd, ub2, CommandKind};
 
-use crate::{frames, svg};
+use crate::{frames, spec_sim, svg};
 
 /// An address as `33`, `0x21` or `0X21`.
 pub fn parse_address(text: &str) -> Result<u8, String> {
@@ -487,20 +487,21 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
 /// `busspec sim`: serves simulated devices on a pseudo-terminal (printing its path) or a port.
 pub fn sim(
     protocol: &str,
+    spec_file: Option<&Path>,
     addresses: &[u8],
     pty: bool,
     port: Option<&str>,
     verbose: bool,
     msb_first: bool,
 ) -> Result<(), String> {
-    if msb_first && protocol != Ub2::NAME {
+    if msb_first && (protocol != Ub2::NAME || spec_file.is_some()) {
         return Err(format!(
             "error: --msb-first is for the {} simulator (erratum ub2-e01)",
             Ub2::NAME
         ));
     }
     match protocol {
-        p if p == Ub2::NAME => {
+        p if p == Ub2::NAME && spec_file.is_none() => {
             let addresses = if addresses.is_empty() {
                 vec![0x21]
             } else {
@@ -511,9 +512,9 @@ pub fn sim(
                 .iter()
                 .map(|&a| Ub2Sim::new(a).msb_first(msb_first))
                 .collect();
-            run_sim::<Ub2, _>(devices, pty, port, verbose)
+            run_sim(Ub2::NAME, Ub2::BAUD, devices, pty, port, verbose)
         }
-        p if p == Sd::NAME => {
+        p if p == Sd::NAME && spec_file.is_none() => {
             let addresses = if addresses.is_empty() {
                 vec![0x01]
             } else {
@@ -521,14 +522,57 @@ pub fn sim(
             };
             check_addresses::<Sd>(&addresses)?;
             let devices: Vec<SdSim> = addresses.iter().map(|&a| SdSim::new(a)).collect();
-            run_sim::<Sd, _>(devices, pty, port, verbose)
+            run_sim(Sd::NAME, Sd::BAUD, devices, pty, port, verbose)
         }
-        other => Err(format!(
-            "error: no simulator for `{other}`: there are {} and {}",
-            Ub2::NAME,
-            Sd::NAME
-        )),
+        // Every other protocol, built in or a spec file: its `device:` section.
+        name => {
+            let spec = crate::protocol("sim", name, spec_file)?.spec;
+            let spec = std::sync::Arc::new(spec);
+            let addresses = if addresses.is_empty() {
+                vec![spec_sim::first_address(&spec)]
+            } else {
+                addresses.to_vec()
+            };
+            check_spec_addresses(&spec, &addresses)?;
+            if !spec.device.declared {
+                eprintln!(
+                    "{}: the spec has no `device:` section: each command is answered with its reply, and nothing is stored",
+                    spec.name
+                );
+            }
+            let devices = spec_sim::devices(&spec, &addresses);
+            run_sim(&spec.name, spec.serial.baud, devices, pty, port, verbose)
+        }
     }
+}
+
+/// Addresses for simulated devices of a spec: device addresses, each once (0 alone for a
+/// protocol without addresses).
+fn check_spec_addresses(spec: &Spec, addresses: &[u8]) -> Result<(), String> {
+    let a = &spec.framing.address;
+    for (i, &x) in addresses.iter().enumerate() {
+        if !spec.framing.has_address() {
+            if x != 0 || addresses.len() > 1 {
+                return Err(format!(
+                    "error: {} frames carry no address: one simulated device, address 0",
+                    spec.name
+                ));
+            }
+            continue;
+        }
+        if !(a.min..=a.max).contains(&x) {
+            return Err(format!(
+                "error: address 0x{x:02X} is not a {} device address (0x{:02X}..=0x{:02X})",
+                spec.name, a.min, a.max
+            ));
+        }
+        if addresses[..i].contains(&x) {
+            return Err(format!(
+                "error: address 0x{x:02X} given twice: devices on one bus need distinct addresses"
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn check_addresses<P: Protocol>(addresses: &[u8]) -> Result<(), String> {
@@ -550,7 +594,9 @@ fn check_addresses<P: Protocol>(addresses: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-fn run_sim<P: Protocol, D: Device>(
+fn run_sim<D: Device>(
+    name: &str,
+    baud: u32,
     mut devices: Vec<D>,
     pty: bool,
     port: Option<&str>,
@@ -568,7 +614,7 @@ fn run_sim<P: Protocol, D: Device>(
             SerialTransport::from_port(Box::new(ours))
         }
         (false, Some(path)) => {
-            SerialTransport::open(path, P::BAUD).map_err(|e| format!("error: {e}"))?
+            SerialTransport::open(path, baud).map_err(|e| format!("error: {e}"))?
         }
         (false, None) => return Err("error: give --pty or --port PATH".to_owned()),
     };
@@ -579,7 +625,7 @@ fn run_sim<P: Protocol, D: Device>(
         .collect();
     eprintln!(
         "{} simulator serving address{} {}",
-        P::NAME,
+        name,
         if addresses.len() == 1 { "" } else { "es" },
         addresses.join(", ")
     );
@@ -618,11 +664,16 @@ pub fn soak(protocols: &[&str], transactions: u64, rate: f64, seed: u64) -> Resu
     };
     for p in protocols {
         let started = Instant::now();
-        let Some(report) = soak::run_named(p, config) else {
-            return Err(format!(
-                "error: no soak for `{p}`: there are {}",
-                soak::TARGETS.join(", ")
-            ));
+        let report = match soak::run_named(p, config) {
+            Some(r) => r,
+            None => {
+                busspec_protocols::with_protocol(p, SoakSpec { config }).ok_or_else(|| {
+                    format!(
+                        "error: no soak for `{p}`: there are {}",
+                        soak_targets().join(", ")
+                    )
+                })??
+            }
         };
         print(&format!("{report}"))?;
         for e in &report.examples {
@@ -631,6 +682,53 @@ pub fn soak(protocols: &[&str], transactions: u64, rate: f64, seed: u64) -> Resu
         eprintln!("({} took {:.1} s)", p, started.elapsed().as_secs_f64());
     }
     Ok(())
+}
+
+/// Every protocol `soak` runs: UB2 and SD with their devices' own simulators and request
+/// mixes, every other built-in one by its spec's `device:` section.
+pub fn soak_targets() -> Vec<&'static str> {
+    let mut all: Vec<&'static str> = soak::TARGETS.to_vec();
+    for &name in busspec_protocols::PROTOCOLS {
+        if !all.contains(&name) {
+            all.push(name);
+        }
+    }
+    all
+}
+
+/// The soak of a built-in protocol through [`busspec_link::Plain`], against devices of its
+/// spec's `device:` section, with a request mix drawn from the spec.
+struct SoakSpec {
+    config: SoakConfig,
+}
+
+impl busspec_protocols::ProtocolVisitor for SoakSpec {
+    type Output = Result<busspec_link::soak::SoakReport, String>;
+    fn visit<P: Protocol>(self) -> Self::Output {
+        let spec = std::sync::Arc::new(busspec_json::load_spec::<P>()?);
+        let for_devices = std::sync::Arc::clone(&spec);
+        let mix = std::sync::Arc::clone(&spec);
+        let mut report = busspec_link::soak::run_with::<busspec_link::Plain<P>, _>(
+            self.config,
+            move |i| {
+                let a = spec_sim::nth_address(&for_devices, i);
+                spec_sim::SpecDevice(busspec_model::sim::Sim::new(
+                    std::sync::Arc::clone(&for_devices),
+                    a,
+                ))
+            },
+            move |rng, d| loop {
+                // The mix draws valid requests; a draw the codec would refuse is drawn again.
+                if let Some(frame) = spec_sim::random_request(&mix, rng, d.address()) {
+                    if let Ok(r) = P::decode_request(&frame) {
+                        break r.message;
+                    }
+                }
+            },
+        );
+        report.protocol = P::NAME;
+        Ok(report)
+    }
 }
 
 pub use crate::demo::demo;

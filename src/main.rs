@@ -7,6 +7,7 @@ mod frames;
 mod link_cli;
 mod pcapng;
 mod sniff;
+mod spec_sim;
 mod svg;
 mod timing;
 
@@ -189,7 +190,7 @@ enum Command {
         rate: f64,
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Only this protocol (default: both).
+        /// Only this protocol (default: all four built-in ones).
         protocol: Option<String>,
     },
 }
@@ -200,7 +201,19 @@ Run simulated devices on a line until killed.
 With --pty, opens a pseudo-terminal pair and prints the path of the end to talk to (one line on
 stdout), e.g. /dev/pts/5; `busspec talk --port /dev/pts/5 ...` then talks to the simulators.
 With --port PATH, serves on that serial port instead. Several --address options put several
-devices on the one line (default: ub2 0x21, sd 0x01). --verbose logs every frame on stderr.";
+devices on the one line (default: ub2 0x21, sd 0x01, otherwise the spec's default address or
+its first from 1). --verbose logs every frame on stderr.
+
+UB2 and SD devices are behavioural models of the documents (movements, C-curve, strings).
+Every other protocol, built in (modbus, dynamixel) or a spec file given with --spec, is
+simulated from its spec's `device:` section (spec/SCHEMA.md): the spaces it declares (Modbus's
+coils, discrete inputs, holding and input registers; Dynamixel's control table) start at their
+initial values, writes change what later reads return, values a reply takes from its request
+come from it, and requests past the end of a space or breaking the spec's rules get the
+refusal it names (Modbus exceptions 2 and 3, Dynamixel's range error). Broadcasts are carried
+out and answered only where the spec says so; frames that do not decode, or are for another
+address, get no reply. A spec without the section answers each command with its reply and
+stores nothing.";
 
 const TALK_HELP: &str = "\
 Run one transaction with a device and print its reply as one JSON line, in the shape `busspec
@@ -222,8 +235,12 @@ Exit status 1 with `error: ...` on stderr when no valid reply comes.";
 
 #[derive(Args)]
 struct SimArgs {
-    /// ub2 or sd.
+    /// The protocol: ub2, sd, modbus, dynamixel, or the `protocol:` of the spec given with
+    /// --spec.
     protocol: String,
+    /// Simulate devices of this spec file (by its `device:` section).
+    #[arg(long, value_name = "FILE")]
+    spec: Option<PathBuf>,
     /// A device address (decimal or 0x..); repeat for several devices.
     #[arg(long = "address", value_name = "A", value_parser = link_cli::parse_address)]
     addresses: Vec<u8>,
@@ -408,6 +425,7 @@ fn main() -> ExitCode {
         Command::Diff(args) => return diff(args),
         Command::Sim(a) => link_cli::sim(
             &a.protocol,
+            a.spec.as_deref(),
             &a.addresses,
             a.pty,
             a.port.as_deref(),
@@ -426,7 +444,7 @@ fn main() -> ExitCode {
         } => {
             let chosen: Vec<&str> = match protocol.as_deref() {
                 Some(p) => vec![p],
-                None => busspec_devices::soak::TARGETS.to_vec(),
+                None => link_cli::soak_targets(),
             };
             link_cli::soak(&chosen, transactions, rate, seed)
         }

@@ -153,8 +153,19 @@ impl fmt::Display for SoakReport {
 
 /// Runs the soak for protocol `P`.
 pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
+    run_with::<P, P::Device>(config, P::device, P::request)
+}
+
+/// [`run`] with the devices and the request mix given, for a protocol whose simulator is not
+/// its own type's (any spec's, by its `device:` section): `device(i)` makes the `i`-th device
+/// on the bus, `request` draws a request for a device as it is now.
+pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
+    config: SoakConfig,
+    device: impl FnMut(u8) -> D,
+    mut request: impl FnMut(&mut fastrand::Rng, &D) -> P::Request,
+) -> SoakReport {
     let clock = SimClock::new();
-    let devices: Vec<P::Device> = (0..config.devices.max(1)).map(P::device).collect();
+    let devices: Vec<D> = (0..config.devices.max(1)).map(device).collect();
     let addresses: Vec<u8> = devices.iter().map(Device::address).collect();
     let bus = SimBus::new(clock.clone(), BusConfig::new(P::BAUD), devices);
     let timing = Timing::for_protocol::<P>();
@@ -186,7 +197,7 @@ pub fn run<P: SoakTarget>(config: SoakConfig) -> SoakReport {
         let which = rng.usize(0..addresses.len());
         let address = addresses[which];
         let device = bus.with_devices(|d| d[which].clone());
-        let mut request = P::request(&mut rng, &device);
+        let mut request = request(&mut rng, &device);
         if let Some(f) = P::freshness_mut(&mut request) {
             *f = master.next_freshness_value(address).unwrap_or(0);
         }

@@ -16,7 +16,7 @@
 //!     - {command: write_single_register, writes: holding_registers, start: register_address, value: register_value}
 //!     - {command: write_multiple_registers, writes: holding_registers, start: starting_address, count: quantity, from: values}
 //!     - {command: reg_write, writes: control_table, start: address, from: data, staged: true}
-//!     - {command: action, commit: true}    # applies the staged writes
+//!     - {command: action, commit: true}    # applies the staged write
 //!     - {command: reset, reset: true}      # every space back to its initial values
 //!     - {command: sync_write, writes: control_table, start: address, from: blocks, records: {length: data_length}}
 //! ```
@@ -27,7 +27,9 @@
 //! `count`), there. With `records`, `from` is a list of records, each the device's address
 //! then `length` elements (`length` a field of the command): a device writes the record that
 //! carries its own address, and ignores a request without one. `staged` keeps a write until a
-//! command with `commit` applies every staged write in order; `reset` restores every space.
+//! command with `commit` applies it (one staged write at a time: a later one replaces it, as
+//! Dynamixel's REG_WRITE does, so a request sent twice stages once); `reset` restores every
+//! space and drops a staged write.
 //! A bit space stores 1 for any non-zero value written.
 //!
 //! The reply is `reply` where given, else the command's first response that is not a refusal
@@ -302,7 +304,10 @@ pub fn validate(section: Option<&Section>, p: &Protocol, sink: &mut Sink) -> Dev
     for (i, sp) in s.spaces.iter().enumerate() {
         let path = join(&join(root, "spaces"), &format!("[{i}]"));
         if s.spaces[..i].iter().any(|o| o.name == sp.name) {
-            sink.error(join(&path, "name"), format!("space `{}` is declared twice", sp.name));
+            sink.error(
+                join(&path, "name"),
+                format!("space `{}` is declared twice", sp.name),
+            );
         }
         let Some((min, max)) = element_range(sp.ty) else {
             sink.error(
@@ -415,15 +420,10 @@ fn command_rule(
 ) -> Option<Rule> {
     let m = &p.commands[ci];
     let before = sink.items.len();
-    let kinds = [
-        c.reads.is_some(),
-        c.writes.is_some(),
-        c.commit,
-        c.reset,
-    ]
-    .iter()
-    .filter(|&&b| b)
-    .count();
+    let kinds = [c.reads.is_some(), c.writes.is_some(), c.commit, c.reset]
+        .iter()
+        .filter(|&&b| b)
+        .count();
     if kinds > 1 {
         sink.error(
             path,
@@ -475,7 +475,10 @@ fn command_rule(
     let value = scalar("value", &c.value, sink)?;
     let stray = |key: &str, present: bool, sink: &mut Sink| {
         if present {
-            sink.error(join(path, key), format!("`{key}` belongs to a read or a write"));
+            sink.error(
+                join(path, key),
+                format!("`{key}` belongs to a read or a write"),
+            );
         }
     };
     let action = if let Some(sp) = &c.reads {
@@ -779,7 +782,9 @@ fn does(d: &Device, r: &Rule) -> Option<String> {
             into,
         } => format!(
             "reads {} of `{}` from `{start}` into `{into}`",
-            count.as_deref().map_or("1".to_owned(), |c| format!("`{c}`")),
+            count
+                .as_deref()
+                .map_or("1".to_owned(), |c| format!("`{c}`")),
             d.spaces[*space].name
         ),
         Action::Write {
@@ -800,7 +805,7 @@ fn does(d: &Device, r: &Rule) -> Option<String> {
                 d.spaces[*space].name
             )
         }
-        Action::Commit => "applies the staged writes".to_owned(),
+        Action::Commit => "applies the staged write".to_owned(),
         Action::Reset => "restores every space".to_owned(),
     })
 }
@@ -842,7 +847,10 @@ pub fn diff(old_p: &Protocol, new_p: &Protocol) -> Vec<(String, String)> {
     }
     for s in &old.spaces {
         match new.spaces.iter().find(|n| n.name == s.name) {
-            None => out.push((format!("device.spaces.{}", s.name), "space removed".to_owned())),
+            None => out.push((
+                format!("device.spaces.{}", s.name),
+                "space removed".to_owned(),
+            )),
             Some(n) if n != s => out.push((
                 format!("device.spaces.{}", s.name),
                 format!(
@@ -855,7 +863,10 @@ pub fn diff(old_p: &Protocol, new_p: &Protocol) -> Vec<(String, String)> {
     }
     for n in &new.spaces {
         if !old.spaces.iter().any(|s| s.name == n.name) {
-            out.push((format!("device.spaces.{}", n.name), "space added".to_owned()));
+            out.push((
+                format!("device.spaces.{}", n.name),
+                "space added".to_owned(),
+            ));
         }
     }
     for (i, c) in new_p.commands.iter().enumerate() {

@@ -267,7 +267,9 @@ impl Sim {
                 }
                 let at = self.span(*space, int(start), values.len() as i64)?;
                 if *staged {
-                    self.staged.push((*space, at, values));
+                    // One staged write at a time: a second replaces the first (Dynamixel's
+                    // REG_WRITE), so a request sent again stages the same write once.
+                    self.staged = vec![(*space, at, values)];
                 } else {
                     self.write(*space, at, &values);
                 }

@@ -65,7 +65,11 @@ fn modbus_writes_change_what_reads_return() {
         &p,
         "write_multiple_registers",
         0x11,
-        &[int("starting_address", 100), int("quantity", 3), list("values", &[7, 8, 9])],
+        &[
+            int("starting_address", 100),
+            int("quantity", 3),
+            list("values", &[7, 8, 9]),
+        ],
     );
     let (name, v) = reply(&p, &w, &d.answer(&w).expect("a reply"));
     assert_eq!(name, "write_multiple_registers_reply");
@@ -90,7 +94,11 @@ fn modbus_writes_change_what_reads_return() {
         0x11,
         &[int("register_address", 5), int("register_value", 0xBEEF)],
     );
-    assert_eq!(d.answer(&w).as_deref(), Some(&w[..]), "the echo is the request");
+    assert_eq!(
+        d.answer(&w).as_deref(),
+        Some(&w[..]),
+        "the echo is the request"
+    );
     let w = request(
         &p,
         "write_multiple_coils",
@@ -132,7 +140,11 @@ fn modbus_refusals_are_the_exceptions_the_spec_names() {
         &p,
         "write_multiple_registers",
         0x11,
-        &[int("starting_address", 9999), int("quantity", 2), list("values", &[1, 2])],
+        &[
+            int("starting_address", 9999),
+            int("quantity", 2),
+            list("values", &[1, 2]),
+        ],
     );
     let (name, v) = reply(&p, &w, &d.answer(&w).unwrap());
     assert_eq!(name, "write_multiple_registers_exception");
@@ -142,13 +154,32 @@ fn modbus_refusals_are_the_exceptions_the_spec_names() {
     // refuses it.
     let mut q = vec![0x11, 0x03, 0x00, 0x00, 0x00, 0x00, 0, 0];
     interp::reseal(&p, &mut q);
-    let (name, v) = reply(&p, &request(&p, "read_holding_registers", 0x11, &[int("starting_address", 0), int("quantity", 1)]), &d.answer(&q).unwrap());
+    let (name, v) = reply(
+        &p,
+        &request(
+            &p,
+            "read_holding_registers",
+            0x11,
+            &[int("starting_address", 0), int("quantity", 1)],
+        ),
+        &d.answer(&q).unwrap(),
+    );
     assert_eq!(name, "read_holding_registers_exception");
     assert_eq!(get(&v, "exception_code"), &Raw::Int(3));
     // Another address, a bad checksum: silence.
-    let r = request(&p, "read_coils", 0x12, &[int("starting_address", 0), int("quantity", 1)]);
+    let r = request(
+        &p,
+        "read_coils",
+        0x12,
+        &[int("starting_address", 0), int("quantity", 1)],
+    );
     assert_eq!(d.answer(&r), None);
-    let mut bad = request(&p, "read_coils", 0x11, &[int("starting_address", 0), int("quantity", 1)]);
+    let mut bad = request(
+        &p,
+        "read_coils",
+        0x11,
+        &[int("starting_address", 0), int("quantity", 1)],
+    );
     *bad.last_mut().unwrap() ^= 1;
     assert_eq!(d.answer(&bad), None);
 }
@@ -184,22 +215,46 @@ fn dynamixel_control_table_staged_writes_records_and_reset() {
     assert_eq!(name, "read_status");
     assert_eq!(get(&v, "data"), &Raw::List(vec![29, 0]));
     // Write then read back.
-    let w = request(&p, "write", 1, &[int("address", 30), list("data", &[0x00, 0x02])]);
+    let w = request(
+        &p,
+        "write",
+        1,
+        &[int("address", 30), list("data", &[0x00, 0x02])],
+    );
     assert!(d.answer(&w).is_some());
     assert_eq!(d.element("control_table", 31), Some(2));
     // A staged write waits for ACTION (broadcast: no reply from anyone).
-    let w = request(&p, "reg_write", 1, &[int("address", 32), list("data", &[5])]);
+    let w = request(
+        &p,
+        "reg_write",
+        1,
+        &[int("address", 32), list("data", &[5])],
+    );
     assert!(d.answer(&w).is_some());
     assert_eq!(d.element("control_table", 32), Some(0));
+    // A second staged write replaces the first (as REG_WRITE does): only it is applied.
+    let w2 = request(
+        &p,
+        "reg_write",
+        1,
+        &[int("address", 33), list("data", &[6])],
+    );
+    assert!(d.answer(&w2).is_some());
+    assert!(d.answer(&w).is_some());
     let action = request(&p, "action", 254, &[]);
     assert_eq!(d.answer(&action), None);
     assert_eq!(d.element("control_table", 32), Some(5));
+    assert_eq!(d.element("control_table", 33), Some(0));
     // SYNC_WRITE: each device its own record.
     let s = request(
         &p,
         "sync_write",
         254,
-        &[int("address", 24), int("data_length", 2), list("blocks", &[1, 10, 11, 2, 20, 21])],
+        &[
+            int("address", 24),
+            int("data_length", 2),
+            list("blocks", &[1, 10, 11, 2, 20, 21]),
+        ],
     );
     assert_eq!(d.answer(&s), None);
     assert_eq!(other.answer(&s), None);

@@ -1,0 +1,255 @@
+//! Simulated devices of any spec, by its `device:` section (`busspec_model::sim`): on a line
+//! (`busspec sim`) and on the soak's simulated bus, with a random request mix drawn from the
+//! spec itself.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use busspec_link::sim::Device;
+use busspec_model::device::{Action, Source};
+use busspec_model::interp::{self, Raw, Value};
+use busspec_model::ir::{Count, Direction, FieldType, Follows, Leaf, MessageRef};
+use busspec_model::sim::Sim;
+use busspec_model::Protocol;
+
+/// A device of any spec on a simulated or real line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpecDevice(pub Sim);
+
+impl Device for SpecDevice {
+    fn on_frame(&mut self, frame: &[u8], _now: Duration) -> Option<Vec<u8>> {
+        self.0.answer(frame)
+    }
+    fn address(&self) -> u8 {
+        self.0.address()
+    }
+}
+
+/// The address a protocol's first simulated device takes: the spec's default address, else
+/// the first device address from 1 (0 where that is the only one, or the protocol has none).
+pub fn first_address(p: &Protocol) -> u8 {
+    let a = &p.framing.address;
+    if !p.framing.has_address() {
+        return 0;
+    }
+    a.default.unwrap_or(if (a.min..=a.max).contains(&1) {
+        1
+    } else {
+        a.min
+    })
+}
+
+/// The `i`-th device's address on a soak bus: consecutive from [`first_address`].
+pub fn nth_address(p: &Protocol, i: u8) -> u8 {
+    if !p.framing.has_address() {
+        return 0;
+    }
+    first_address(p)
+        .saturating_add(i)
+        .min(p.framing.address.max)
+}
+
+/// The most elements a random list gets, so frames stay short and the soak quick.
+const MAX_ELEMENTS: i64 = 16;
+
+/// A random request frame of `p` for the device at `address`, from the soak's mix: any command,
+/// every value within its range, and where the command reads or writes a space, mostly within
+/// it and one time in eight past its end (for the refusal). `None` where the draw does not
+/// encode (a spec whose rules the draw does not meet); the caller draws again.
+pub fn random_request(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Option<Vec<u8>> {
+    if p.commands.is_empty() {
+        return None;
+    }
+    let ci = rng.usize(0..p.commands.len());
+    let m = &p.commands[ci];
+    let rule = &p.device.rules[ci];
+    // Fields a space rule sets: start, count, and the list's length.
+    let mut fixed: Vec<(String, Raw)> = Vec::new();
+    let space_of = |space: usize| &p.device.spaces[space];
+    let limits = |name: &str| -> (i64, i64) {
+        m.fields
+            .iter()
+            .find(|f| f.name == name)
+            .map_or((0, 0), |f| {
+                f.range
+                    .unwrap_or_else(|| interp::raw_limits(8 * f.width as u32, f.signed))
+            })
+    };
+    let span = |rng: &mut fastrand::Rng, size: u32, n: i64, start: &str| -> i64 {
+        let (lo, hi) = limits(start);
+        let size = i64::from(size);
+        let s = if rng.u8(0..8) == 0 {
+            (size - n + 1).max(0)
+        } else {
+            rng.i64(0..=(size - n).max(0))
+        };
+        s.clamp(lo, hi)
+    };
+    match &rule.action {
+        Action::Read {
+            space,
+            start,
+            count,
+            ..
+        } => {
+            let n = match count {
+                Some(c) => {
+                    let (lo, hi) = limits(c.as_str());
+                    let n = rng.i64(lo.max(1)..=hi.min(MAX_ELEMENTS).max(lo.max(1)));
+                    fixed.push((c.clone(), Raw::Int(n)));
+                    n
+                }
+                None => 1,
+            };
+            let s = span(rng, space_of(*space).size, n, start);
+            fixed.push((start.clone(), Raw::Int(s)));
+        }
+        Action::Write {
+            space,
+            start,
+            count,
+            source,
+            ..
+        } => {
+            let sp = space_of(*space);
+            let element = |rng: &mut fastrand::Rng| {
+                if sp.ty == FieldType::Bit {
+                    rng.i64(0..=1)
+                } else {
+                    rng.i64(sp.min.max(0)..=sp.max.min(0xFFFF))
+                }
+            };
+            let n = match count {
+                Some(c) => {
+                    let (lo, hi) = limits(c.as_str());
+                    let n = rng.i64(lo.max(1)..=hi.min(MAX_ELEMENTS).max(lo.max(1)));
+                    fixed.push((c.clone(), Raw::Int(n)));
+                    n
+                }
+                None => rng.i64(1..=4),
+            };
+            match source {
+                Source::Value(v) => {
+                    // A value field with an enum (a Modbus coil) keeps its enum values.
+                    let n = 1;
+                    let s = span(rng, sp.size, n, start);
+                    fixed.push((start.clone(), Raw::Int(s)));
+                    if m.fields
+                        .iter()
+                        .any(|f| f.name == *v && f.enumeration.is_none())
+                    {
+                        fixed.push((v.clone(), Raw::Int(element(rng))));
+                    }
+                }
+                Source::List(l) => {
+                    let s = span(rng, sp.size, n, start);
+                    fixed.push((start.clone(), Raw::Int(s)));
+                    let mut list: Vec<i64> = (0..n).map(|_| element(rng)).collect();
+                    if sp.ty == FieldType::Bit {
+                        list.resize(list.len().div_ceil(8) * 8, 0);
+                    }
+                    fixed.push((l.clone(), Raw::List(list)));
+                }
+                Source::Records { list, length } => {
+                    let s = span(rng, sp.size, n, start);
+                    fixed.push((start.clone(), Raw::Int(s)));
+                    fixed.push((length.clone(), Raw::Int(n)));
+                    let mut records = vec![i64::from(address)];
+                    records.extend((0..n).map(|_| element(rng)));
+                    fixed.push((list.clone(), Raw::List(records)));
+                }
+            }
+        }
+        _ => {}
+    }
+    let counts: Vec<usize> = m
+        .repeat()
+        .and_then(|(_, r)| match r.count {
+            Count::Elements(i) | Count::Bytes(i) => Some(i),
+            Count::ToEnd => None,
+        })
+        .into_iter()
+        .collect();
+    let mut values: Vec<Value> = Vec::new();
+    for leaf in m.leaves() {
+        let name = leaf.name().to_owned();
+        if let Some((_, raw)) = fixed.iter().find(|(n, _)| *n == name) {
+            values.push(Value {
+                name: name.into(),
+                raw: raw.clone(),
+            });
+            continue;
+        }
+        let raw = match leaf {
+            Leaf::Bits(_, _, b) => {
+                if b.constant.is_some() {
+                    continue;
+                }
+                let (lo, hi) = b
+                    .range
+                    .unwrap_or_else(|| interp::raw_limits(u32::from(b.width()), b.signed));
+                Raw::Int(rng.i64(lo..=hi))
+            }
+            Leaf::Field(i, f) => {
+                if f.constant.is_some()
+                    || f.equals.is_some()
+                    || counts.contains(&i)
+                    || matches!(f.follows, Some(Follows::Field(..)))
+                {
+                    continue;
+                }
+                let one = |rng: &mut fastrand::Rng| -> i64 {
+                    if f.ty == FieldType::Bit {
+                        return rng.i64(0..=1);
+                    }
+                    if let Some(e) = f.enumeration.map(|e| &p.enums[e]) {
+                        if !e.values.is_empty() {
+                            return e.values[rng.usize(0..e.values.len())].value as i64;
+                        }
+                    }
+                    if let Some(fs) = f.flags.map(|x| &p.flags[x]) {
+                        return fs
+                            .bits
+                            .iter()
+                            .filter(|_| rng.bool())
+                            .fold(0, |acc, b| acc | (1 << b.bit));
+                    }
+                    let (lo, hi) = f
+                        .range
+                        .unwrap_or_else(|| interp::raw_limits(8 * f.width as u32, f.signed));
+                    rng.i64(lo..=hi)
+                };
+                if let Some(r) = &f.repeat {
+                    let hi = (r.max as i64).min(MAX_ELEMENTS).max(r.min as i64);
+                    let n = rng.i64(r.min as i64..=hi);
+                    let mut list: Vec<i64> = (0..n).map(|_| one(rng)).collect();
+                    if f.ty == FieldType::Bit {
+                        list.resize(list.len().div_ceil(8).max(1) * 8, 0);
+                    }
+                    Raw::List(list)
+                } else if f.is_ascii() {
+                    Raw::Text((0..f.width).map(|_| rng.u8(b'0'..=b'z')).collect())
+                } else {
+                    Raw::Int(one(rng))
+                }
+            }
+        };
+        values.push(Value {
+            name: name.into(),
+            raw,
+        });
+    }
+    let r = MessageRef {
+        direction: Direction::Request,
+        index: ci,
+    };
+    interp::encode(p, r, address, &values).ok()
+}
+
+/// Devices of `p` at `addresses`.
+pub fn devices(p: &Arc<Protocol>, addresses: &[u8]) -> Vec<SpecDevice> {
+    addresses
+        .iter()
+        .map(|&a| SpecDevice(Sim::new(Arc::clone(p), a)))
+        .collect()
+}
