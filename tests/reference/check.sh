@@ -5,8 +5,10 @@
 # decode through `busspec decode` to the values they were built from, and frames
 # `busspec encode` builds must be read identically by the peers (tests/reference/check.py);
 # every call runs with the built-in generated code and with `--spec` (the interpreter), alike.
-# Then live: `busspec talk modbus` against pymodbus's RTU serial server over pseudo-terminals
-# (tests/reference/live_modbus.py; pyserial is what the server opens its port with).
+# Then live, over pseudo-terminals, both ways: `busspec talk modbus` against pymodbus's RTU serial
+# server (tests/reference/live_modbus.py; pyserial is what the server opens its port with),
+# pymodbus's serial client against `busspec sim modbus` (live_sim_modbus.py), and dynamixel-sdk's
+# protocol 1.0 packet handler against `busspec sim dynamixel` (live_sim_dynamixel.py).
 # Versions are pinned so a new release cannot change the result silently.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
@@ -26,3 +28,5 @@ cargo build --locked --quiet --bin busspec
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/check.py
 # Bounded twice: each talk call and the script time out on their own; this is the last resort.
 BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_modbus.py
+BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_sim_modbus.py
+BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_sim_dynamixel.py
