@@ -6,8 +6,12 @@
 //! actuator's skipped-frames counter: zero when every set point carried the next counter.
 //! `src/main.rs` is the same loop on a thumbv7em board shape (CI builds it for the target);
 //! `busspec-link`'s `tests/firmware.rs` runs it against the SD simulator on the host.
+//!
+//! [`modbus`] is the Modbus RTU master variant: any protocol's master from its spec alone.
 #![no_std]
 #![forbid(unsafe_code)]
+
+pub mod modbus;
 
 use busspec_devices::protocols::sd;
 use busspec_devices::Sd;

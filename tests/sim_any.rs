@@ -1,0 +1,244 @@
+//! `sim` and `soak` for every protocol: Modbus and Dynamixel soaked against devices of their
+//! specs' `device:` sections (no wrong value accepted); `sim --spec FILE` serving a spec file's
+//! devices on a pseudo-terminal, to the generated master (`talk`) and to raw frames of a spec
+//! with no `device:` section; wrong arguments refused with the reason.
+
+#![cfg(unix)]
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::Duration;
+
+use busspec_model::interp;
+use busspec_model::ir::{Direction, MessageRef};
+use busspec_model::load_file;
+
+const BIN: &str = env!("CARGO_BIN_EXE_busspec");
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("busspec runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// A figure from a soak report line: the number after `label`.
+fn figure(report: &str, label: &str) -> u64 {
+    let line = report
+        .lines()
+        .find(|l| l.contains(label))
+        .unwrap_or_else(|| panic!("no `{label}` in {report}"));
+    let after = &line[line.find(label).unwrap() + label.len()..];
+    after
+        .split(|c: char| !c.is_ascii_digit())
+        .find(|s| !s.is_empty())
+        .unwrap()
+        .parse()
+        .unwrap()
+}
+
+#[test]
+fn modbus_and_dynamixel_soak_against_their_device_sections() {
+    for protocol in ["modbus", "dynamixel"] {
+        let out = run(&["soak", "--transactions", "3000", "--seed", "7", protocol]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let report = text(&out.stdout);
+        assert!(
+            report.starts_with(&format!("{protocol}: 3000 transactions")),
+            "{report}"
+        );
+        // Faults were injected, most transactions completed, and none accepted a wrong value.
+        assert!(figure(&report, "faults injected: ") > 0, "{report}");
+        let completed =
+            figure(&report, "completed first time") + figure(&report, "completed after retries");
+        assert!(completed > 2500, "{report}");
+        assert_eq!(figure(&report, "wrong, accepted silently"), 0, "{report}");
+        assert!(
+            report.contains("checksum-only master: accepted"),
+            "{report}"
+        );
+    }
+    // Without a protocol: all four, UB2 and SD with their own models.
+    let out = run(&["soak", "--transactions", "200"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report = text(&out.stdout);
+    for p in ["ub2", "sd", "modbus", "dynamixel"] {
+        assert!(
+            report.contains(&format!("{p}: 200 transactions")),
+            "{report}"
+        );
+    }
+    let out = run(&["soak", "--transactions", "10", "nosuch"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("no soak for `nosuch`: there are ub2, sd"),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+/// A simulator on a pseudo-terminal, killed when dropped.
+struct Sim {
+    child: Child,
+    path: String,
+}
+
+impl Sim {
+    fn start(args: &[&str]) -> Sim {
+        let mut child = Command::new(BIN)
+            .arg("sim")
+            .args(args)
+            .arg("--pty")
+            .current_dir(root())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("busspec runs");
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let path = line.trim().to_owned();
+        assert!(path.starts_with("/dev/"), "sim printed {line:?}");
+        Sim { child, path }
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[test]
+fn a_spec_files_devices_answer_the_generated_master() {
+    // The interpreter's simulator of spec/modbus.yaml, talked to by the generated master.
+    let sim = Sim::start(&["modbus", "--spec", "spec/modbus.yaml", "--address", "7"]);
+    let talk = |args: &[&str]| {
+        let mut all = vec![
+            "talk",
+            "--port",
+            &sim.path,
+            "--timeout",
+            "2000",
+            "modbus",
+            "--address",
+            "7",
+        ];
+        all.extend_from_slice(args);
+        run(&all)
+    };
+    let out = talk(&[
+        "write_multiple_registers",
+        "starting_address=20",
+        "quantity=3",
+        "values=[11,12,13]",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = talk(&[
+        "read_holding_registers",
+        "starting_address=19",
+        "quantity=5",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        line["fields"]["registers"],
+        serde_json::json!([0, 11, 12, 13, 0])
+    );
+    // The spec's start values of the input registers.
+    let out = talk(&["read_input_registers", "starting_address=0", "quantity=2"]);
+    let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(line["fields"]["registers"], serde_json::json!([1000, 2000]));
+    // Past the end of the table: exception 2, shown as the refusal it is.
+    let out = talk(&["read_coils", "starting_address=9999", "quantity=2"]);
+    let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(line["fields"]["exception_code"], "illegal_data_address");
+}
+
+#[test]
+fn a_spec_without_a_device_section_answers_each_command_with_its_reply() {
+    let file = root().join("model/tests/fixtures/valid/minimal.yaml");
+    let p = load_file(&file).unwrap();
+    let sim = Sim::start(&[
+        "mini",
+        "--spec",
+        file.to_str().unwrap(),
+        "--address",
+        "0x21",
+    ]);
+    let mut port = serialport::new(&sim.path, 9600)
+        .timeout(Duration::from_millis(200))
+        .open()
+        .expect("the pseudo-terminal opens");
+    let index = p
+        .commands
+        .iter()
+        .position(|c| c.name == "set_mode")
+        .unwrap();
+    let r = MessageRef {
+        direction: Direction::Request,
+        index,
+    };
+    let value = interp::Value {
+        name: "mode".into(),
+        raw: interp::Raw::Int(2),
+    };
+    let frame = interp::encode(&p, r, 0x21, &[value]).unwrap();
+    port.write_all(&frame).unwrap();
+    let mut reply = Vec::new();
+    let mut buf = [0u8; 64];
+    let deadline = std::time::Instant::now() + Duration::from_secs(5);
+    while std::time::Instant::now() < deadline {
+        match port.read(&mut buf) {
+            Ok(n) if n > 0 => reply.extend_from_slice(&buf[..n]),
+            _ if !reply.is_empty() => break,
+            _ => {}
+        }
+    }
+    let request = interp::decode(&p, Some(Direction::Request), None, &frame).unwrap();
+    let got = interp::decode_reply(&p, &request, &reply)
+        .unwrap_or_else(|e| panic!("{}: {e}", interp::format_hex(&reply)));
+    assert_eq!(p.message(got.message).name, "set_mode_ack");
+    assert_eq!(got.address, 0x21);
+}
+
+#[test]
+fn wrong_sim_arguments_are_refused_with_the_reason() {
+    for (args, says) in [
+        (
+            &["sim", "modbus", "--pty", "--address", "0"][..],
+            "address 0x00 is not a modbus device address (0x01..=0xF7)",
+        ),
+        (
+            &["sim", "modbus", "--pty", "--address", "3", "--address", "3"][..],
+            "address 0x03 given twice",
+        ),
+        (&["sim", "nosuch", "--pty"][..], "nosuch"),
+        (
+            &["sim", "modbus", "--pty", "--msb-first"][..],
+            "--msb-first is for the ub2 simulator",
+        ),
+        (
+            &["sim", "x", "--spec", "/nonexistent.yaml", "--pty"][..],
+            "/nonexistent.yaml",
+        ),
+    ] {
+        let out = run(args);
+        assert_ne!(out.status.code(), Some(0), "{args:?}");
+        let err = text(&out.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?}: nothing served");
+    }
+}
