@@ -880,14 +880,12 @@ fn decode_stream(
     };
     let mut writer = match pcapng {
         None => None,
-        Some(path) => {
-            let to = path.display().to_string();
-            let f = std::fs::File::create(path)
-                .map_err(|e| format!("error: cannot write {to}: {e}"))?;
-            let w = std::io::BufWriter::new(f);
-            let baud = engine.spec.serial.baud;
-            Some(pcapng::Writer::new(w, &to, &engine.spec, &name, baud)?)
-        }
+        Some(path) => Some(pcapng::create(
+            path,
+            &engine.spec,
+            &name,
+            engine.spec.serial.baud,
+        )?),
     };
     let mut stream = Feed {
         lines: Lines::Plain(engine.stream(direction, reply_to)),

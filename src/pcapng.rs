@@ -107,6 +107,18 @@ pub struct Writer<W: Write> {
     last: Option<Pending>,
 }
 
+/// A pcapng file at `path` for `spec`'s frames (see [`Writer::new`]), created now.
+pub fn create(
+    path: &std::path::Path,
+    spec: &Spec,
+    capture: &str,
+    baud: u32,
+) -> Result<Writer<std::io::BufWriter<std::fs::File>>, String> {
+    let to = path.display().to_string();
+    let f = std::fs::File::create(path).map_err(|e| format!("error: cannot write {to}: {e}"))?;
+    Writer::new(std::io::BufWriter::new(f), &to, spec, capture, baud)
+}
+
 impl<W: Write> Writer<W> {
     /// A pcapng file of `spec`'s frames on `out` (called `name` in errors), the capture called
     /// `capture` in its interface's name, heard at `baud`. Writes the section header and the

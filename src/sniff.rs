@@ -194,13 +194,7 @@ pub fn sniff(args: SniffArgs) -> Result<(), String> {
 
     let mut writer = match &args.pcapng {
         None => None,
-        Some(path) => {
-            let to = path.display().to_string();
-            let f = std::fs::File::create(path)
-                .map_err(|e| format!("error: cannot write {to}: {e}"))?;
-            let w = std::io::BufWriter::new(f);
-            Some(pcapng::Writer::new(w, &to, spec, &args.port, baud)?)
-        }
+        Some(path) => Some(pcapng::create(path, spec, &args.port, baud)?),
     };
     let gap_text = match gap_ns {
         Some(ns) => format!("frames closed by {} µs of silence", ns.div_ceil(1000)),

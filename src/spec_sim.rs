@@ -8,7 +8,7 @@ use std::time::Duration;
 use busspec_link::sim::Device;
 use busspec_model::device::{Action, Source};
 use busspec_model::interp::{self, Raw, Value};
-use busspec_model::ir::{Count, Direction, FieldType, Follows, Leaf, MessageRef};
+use busspec_model::ir::{Direction, FieldType, Leaf, MessageRef};
 use busspec_model::sim::Sim;
 use busspec_model::Protocol;
 
@@ -162,14 +162,6 @@ pub fn random_request(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Opt
         }
         _ => {}
     }
-    let counts: Vec<usize> = m
-        .repeat()
-        .and_then(|(_, r)| match r.count {
-            Count::Elements(i) | Count::Bytes(i) => Some(i),
-            Count::ToEnd => None,
-        })
-        .into_iter()
-        .collect();
     let mut values: Vec<Value> = Vec::new();
     for leaf in m.leaves() {
         let name = leaf.name().to_owned();
@@ -191,11 +183,8 @@ pub fn random_request(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Opt
                 Raw::Int(rng.i64(lo..=hi))
             }
             Leaf::Field(i, f) => {
-                if f.constant.is_some()
-                    || f.equals.is_some()
-                    || counts.contains(&i)
-                    || matches!(f.follows, Some(Follows::Field(..)))
-                {
+                // Encoding computes it (a constant, a count, a value that follows another).
+                if m.is_derived(i) {
                     continue;
                 }
                 let one = |rng: &mut fastrand::Rng| -> i64 {

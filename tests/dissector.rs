@@ -22,6 +22,9 @@ use busspec_model::{load_file, stream};
 use serde_json::value::RawValue;
 use serde_json::Value;
 
+#[path = "common/cli.rs"]
+mod cli;
+
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
@@ -42,23 +45,6 @@ fn temp_dir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("busspec-dissector-{}-{test}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-/// Whether tshark runs here; where it does not, the check must not be required.
-fn tshark_present(what: &str) -> bool {
-    let present = Command::new("sh")
-        .args(["-c", "command -v tshark"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !present {
-        assert!(
-            std::env::var_os("BUSSPEC_REQUIRE_TSHARK").is_none(),
-            "BUSSPEC_REQUIRE_TSHARK is set but tshark is not installed"
-        );
-        eprintln!("tshark is not installed: skipping {what}");
-    }
-    present
 }
 
 /// A protocol to check: how `decode` and `dissector` name it, and its spec file.
@@ -582,7 +568,7 @@ fn compare(p: &Protocol, case: &Case, dir: &Path) -> Counts {
 
 #[test]
 fn tshark_shows_every_packet_as_busspec_decodes_it() {
-    if !tshark_present("the dissector against busspec") {
+    if !cli::tshark_present("the dissector against busspec") {
         return;
     }
     let dir = temp_dir("every_packet");
@@ -620,7 +606,7 @@ fn tshark_shows_every_packet_as_busspec_decodes_it() {
 /// examples, and random bytes, without one.
 #[test]
 fn every_fixture_dissector_loads_and_survives_random_bytes() {
-    if !tshark_present("loading the fixtures' dissectors") {
+    if !cli::tshark_present("loading the fixtures' dissectors") {
         return;
     }
     let dir = temp_dir("fixtures");
@@ -748,7 +734,7 @@ fn fuzzed_capture(p: &Protocol, rng: &mut fastrand::Rng) -> Vec<u8> {
 /// A file of several protocols picks each packet's protocol by its interface description.
 #[test]
 fn one_file_of_every_protocol_picks_each_capture_by_its_interface() {
-    if !tshark_present("the dissector of several protocols") {
+    if !cli::tshark_present("the dissector of several protocols") {
         return;
     }
     let dir = temp_dir("several");
@@ -849,7 +835,7 @@ fn the_command_names_its_protocols_and_refuses_wrong_arguments() {
 /// picture cannot drift from what the dissector shows.
 #[test]
 fn the_readme_picture_is_what_tshark_shows() {
-    if !tshark_present("the README picture") {
+    if !cli::tshark_present("the README picture") {
         return;
     }
     // A read and its reply, a stored-position move with an index past the spec's 0..9 (out of

@@ -14,6 +14,9 @@ use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketOption;
 use pcap_file::pcapng::blocks::interface_description::InterfaceDescriptionOption;
 use pcap_file::pcapng::{Block, PcapNgParser};
 
+#[path = "common/cli.rs"]
+mod cli;
+
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
@@ -352,18 +355,7 @@ fn a_truncated_or_corrupt_pcapng_is_refused_naming_block_and_byte() {
 
 #[test]
 fn tshark_reads_every_packet() {
-    let tshark = Command::new("sh")
-        .args(["-c", "command -v tshark"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !tshark {
-        // CI installs tshark and says so: there the check must run.
-        assert!(
-            std::env::var_os("BUSSPEC_REQUIRE_TSHARK").is_none(),
-            "BUSSPEC_REQUIRE_TSHARK is set but tshark is not installed"
-        );
-        eprintln!("tshark is not installed: skipping the check that it reads busspec's pcapng");
+    if !cli::tshark_present("the check that it reads busspec's pcapng") {
         return;
     }
     let dir = temp_dir("tshark_reads_every_packet");

@@ -3,49 +3,21 @@
 
 #![cfg(unix)]
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output};
 
 const BIN: &str = env!("CARGO_BIN_EXE_busspec");
 
-/// A running simulator, killed when dropped.
-struct Sim {
-    child: Child,
-    path: String,
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::Sim;
 
-impl Sim {
-    fn start(args: &[&str]) -> Sim {
-        let mut child = Command::new(BIN)
-            .arg("sim")
-            .args(args)
-            .arg("--pty")
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("busspec runs");
-        let mut line = String::new();
-        let stdout = child.stdout.take().expect("piped");
-        BufReader::new(stdout).read_line(&mut line).expect("reads");
-        let path = line.trim().to_owned();
-        assert!(path.starts_with("/dev/"), "sim printed {line:?}");
-        Sim { child, path }
-    }
-
-    fn talk(&self, args: &[&str]) -> Output {
-        Command::new(BIN)
-            .args(["talk", "--port", &self.path])
-            .args(args)
-            .output()
-            .expect("busspec runs")
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
+/// `busspec talk --port SIM ARGS`.
+fn talk(sim: &Sim, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(["talk", "--port", &sim.path])
+        .args(args)
+        .output()
+        .expect("busspec runs")
 }
 
 fn lines(o: &Output) -> Vec<serde_json::Value> {
@@ -63,55 +35,76 @@ fn lines(o: &Output) -> Vec<serde_json::Value> {
 #[test]
 fn talk_to_simulated_capacitors_through_a_pty() {
     let sim = Sim::start(&["ub2", "--address", "0x21", "--address", "0x22"]);
-    let out = sim.talk(&["ub2", "--address", "0x21", "get_firmware_version"]);
+    let out = talk(&sim, &["ub2", "--address", "0x21", "get_firmware_version"]);
     assert_eq!(
         String::from_utf8_lossy(&out.stdout),
         "{\"protocol\":\"ub2\",\"direction\":\"response\",\"address\":33,\"code\":\"0x4161\",\"message\":\"firmware_version\",\"fields\":{\"firmware_version\":\"20100433.00\"}}\n"
     );
     // Writes land in the device and read back, on the second capacitor only.
-    let r = lines(&sim.talk(&[
-        "ub2",
-        "--address",
-        "0x22",
-        "store_indexed_position",
-        "index=2",
-        "position=532",
-    ]));
+    let r = lines(&talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x22",
+            "store_indexed_position",
+            "index=2",
+            "position=532",
+        ],
+    ));
     assert_eq!(r[0]["message"], "store_indexed_position_ack");
-    let r = lines(&sim.talk(&[
-        "ub2",
-        "--address",
-        "0x22",
-        "get_stored_full_step_position",
-        "index=2",
-    ]));
+    let r = lines(&talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x22",
+            "get_stored_full_step_position",
+            "index=2",
+        ],
+    ));
     assert_eq!(r[0]["fields"]["full_steps"], 532);
-    let r = lines(&sim.talk(&[
-        "ub2",
-        "--address",
-        "0x21",
-        "get_stored_full_step_position",
-        "index=2",
-    ]));
+    let r = lines(&talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x21",
+            "get_stored_full_step_position",
+            "index=2",
+        ],
+    ));
     assert_eq!(r[0]["fields"]["full_steps"], 0);
     // A short movement, waited for: the trigger's reply, then the completion.
-    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "move_full_steps", "steps=60"]));
+    let r = lines(&talk(
+        &sim,
+        &["ub2", "--address", "0x21", "move_full_steps", "steps=60"],
+    ));
     assert_eq!(r.len(), 2);
     assert_eq!(r[0]["message"], "movement_started");
     assert_eq!(r[1]["message"], "movement_completed");
-    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "get_actual_full_step_position"]));
+    let r = lines(&talk(
+        &sim,
+        &["ub2", "--address", "0x21", "get_actual_full_step_position"],
+    ));
     assert_eq!(r[0]["fields"]["full_steps"], 638 + 60);
     // A refusal is a reply, printed like any other.
-    let r = lines(&sim.talk(&[
-        "ub2",
-        "--address",
-        "0x21",
-        "get_c_curve_indexed_full_step_capacitance",
-        "index=499",
-    ]));
+    let r = lines(&talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x21",
+            "get_c_curve_indexed_full_step_capacitance",
+            "index=499",
+        ],
+    ));
     assert_eq!(r[0]["message"], "nak_index_out_of_range");
     // Nobody at 0x30: a clear error and exit status 1.
-    let out = sim.talk(&["ub2", "--address", "0x30", "--timeout", "50", "get_status"]);
+    let out = talk(
+        &sim,
+        &["ub2", "--address", "0x30", "--timeout", "50", "get_status"],
+    );
     assert_eq!(out.status.code(), Some(1));
     assert_eq!(
         String::from_utf8_lossy(&out.stderr),
@@ -125,14 +118,17 @@ fn the_c_curve_reads_through_a_pty_and_draws() {
     let dir = std::env::temp_dir().join(format!("busspec-pty-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let svg = dir.join("c-curve.svg");
-    let out = sim.talk(&[
-        "ub2",
-        "--address",
-        "0x21",
-        "c-curve",
-        "--svg",
-        svg.to_str().expect("utf-8 path"),
-    ]);
+    let out = talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x21",
+            "c-curve",
+            "--svg",
+            svg.to_str().expect("utf-8 path"),
+        ],
+    );
     let r = lines(&out);
     assert_eq!(r.len(), 200);
     assert_eq!(r[3]["message"], "c_curve_entry");
@@ -146,23 +142,44 @@ fn the_c_curve_reads_through_a_pty_and_draws() {
 #[test]
 fn talk_to_simulated_actuators_through_a_pty() {
     let sim = Sim::start(&["sd", "--address", "1"]);
-    let r = lines(&sim.talk(&["sd", "--address", "1", "read_product_description"]));
+    let r = lines(&talk(
+        &sim,
+        &["sd", "--address", "1", "read_product_description"],
+    ));
     assert_eq!(r[0]["text"], "SD-02 servo actuator (busspec si");
-    let r = lines(&sim.talk(&["sd", "--address", "1", "set_velocity", "set_velocity=360"]));
+    let r = lines(&talk(
+        &sim,
+        &["sd", "--address", "1", "set_velocity", "set_velocity=360"],
+    ));
     assert_eq!(r[0]["message"], "set_velocity_reply");
-    let r = lines(&sim.talk(&["sd", "--address", "1", "set_point", "position=22.5"]));
+    let r = lines(&talk(
+        &sim,
+        &["sd", "--address", "1", "set_point", "position=22.5"],
+    ));
     assert_eq!(r[0]["message"], "set_point_reply");
     assert_eq!(r[1]["message"], "actual_position");
     assert_eq!(r[1]["fields"]["position"], 22.5);
     // The next process starts its freshness counter from the actuator's (read with 0x37), so
     // no frame counts as dropped.
-    let _ = lines(&sim.talk(&["sd", "--address", "1", "set_point", "position=-22.5"]));
-    let r = lines(&sim.talk(&["sd", "--address", "1", "read_skipped_frames_counter"]));
+    let _ = lines(&talk(
+        &sim,
+        &["sd", "--address", "1", "set_point", "position=-22.5"],
+    ));
+    let r = lines(&talk(
+        &sim,
+        &["sd", "--address", "1", "read_skipped_frames_counter"],
+    ));
     assert_eq!(r[0]["fields"]["dropped_frames"], 0);
-    let r = lines(&sim.talk(&["sd", "--address", "1", "read_actuator_status_word"]));
+    let r = lines(&talk(
+        &sim,
+        &["sd", "--address", "1", "read_actuator_status_word"],
+    ));
     assert_eq!(r[0]["fields"]["status_bits"], serde_json::json!([]));
     // A broadcast set point is not answered: nothing on stdout, a note on stderr.
-    let out = sim.talk(&["sd", "--address", "0x1F", "set_point", "position=0"]);
+    let out = talk(
+        &sim,
+        &["sd", "--address", "0x1F", "set_point", "position=0"],
+    );
     assert!(out.status.success());
     assert!(out.stdout.is_empty());
 }
@@ -172,13 +189,16 @@ fn talk_to_simulated_actuators_through_a_pty() {
 #[test]
 fn an_msb_first_capacitor_is_refused_and_a_correct_one_moves() {
     let sim = Sim::start(&["ub2", "--msb-first"]);
-    let out = sim.talk(&[
-        "ub2",
-        "--address",
-        "0x21",
-        "go_to_capacitance",
-        "target=150",
-    ]);
+    let out = talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x21",
+            "go_to_capacitance",
+            "target=150",
+        ],
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
     assert!(out.stdout.is_empty());
@@ -196,29 +216,38 @@ fn an_msb_first_capacitor_is_refused_and_a_correct_one_moves() {
         assert!(stderr.contains(part), "{part:?} not in {stderr}");
     }
     // It did not move: still at its preset position, 638 full steps, which it sends MSB first.
-    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "get_actual_full_step_position"]));
+    let r = lines(&talk(
+        &sim,
+        &["ub2", "--address", "0x21", "get_actual_full_step_position"],
+    ));
     assert_eq!(r[0]["fields"]["full_steps"], 638u16.swap_bytes());
     // --no-wait refuses the same way.
-    let out = sim.talk(&[
-        "ub2",
-        "--address",
-        "0x21",
-        "--no-wait",
-        "move_full_steps",
-        "steps=60",
-    ]);
+    let out = talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x21",
+            "--no-wait",
+            "move_full_steps",
+            "steps=60",
+        ],
+    );
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("ub2-e01"));
     drop(sim);
 
     let sim = Sim::start(&["ub2"]);
-    let out = sim.talk(&[
-        "ub2",
-        "--address",
-        "0x21",
-        "go_to_capacitance",
-        "target=150",
-    ]);
+    let out = talk(
+        &sim,
+        &[
+            "ub2",
+            "--address",
+            "0x21",
+            "go_to_capacitance",
+            "target=150",
+        ],
+    );
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     let r = lines(&out);
     assert_eq!(r.len(), 2);
@@ -232,14 +261,17 @@ fn an_msb_first_capacitor_is_refused_and_a_correct_one_moves() {
         ),
         "{stderr}"
     );
-    let r = lines(&sim.talk(&["ub2", "--address", "0x21", "get_actual_capacitance"]));
+    let r = lines(&talk(
+        &sim,
+        &["ub2", "--address", "0x21", "get_actual_capacitance"],
+    ));
     let c = r[0]["fields"]["capacitance"].as_f64().expect("a number");
     assert!((c - 150.0).abs() < 0.05, "{c}");
     // Reads are not checked, and the simulator's switch is UB2's only.
-    assert!(
-        String::from_utf8_lossy(&sim.talk(&["ub2", "--address", "0x21", "get_status"]).stderr)
-            .is_empty()
-    );
+    assert!(String::from_utf8_lossy(
+        &talk(&sim, &["ub2", "--address", "0x21", "get_status"]).stderr
+    )
+    .is_empty());
     let out = Command::new(BIN)
         .args(["sim", "sd", "--msb-first", "--pty"])
         .output()

@@ -5,9 +5,9 @@
 
 #![cfg(unix)]
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::path::Path;
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::time::Duration;
 
 use busspec_model::interp;
@@ -15,6 +15,10 @@ use busspec_model::ir::{Direction, MessageRef};
 use busspec_model::load_file;
 
 const BIN: &str = env!("CARGO_BIN_EXE_busspec");
+
+#[path = "common/cli.rs"]
+mod cli;
+use cli::Sim;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -85,40 +89,6 @@ fn modbus_and_dynamixel_soak_against_their_device_sections() {
         "{}",
         text(&out.stderr)
     );
-}
-
-/// A simulator on a pseudo-terminal, killed when dropped.
-struct Sim {
-    child: Child,
-    path: String,
-}
-
-impl Sim {
-    fn start(args: &[&str]) -> Sim {
-        let mut child = Command::new(BIN)
-            .arg("sim")
-            .args(args)
-            .arg("--pty")
-            .current_dir(root())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("busspec runs");
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        let path = line.trim().to_owned();
-        assert!(path.starts_with("/dev/"), "sim printed {line:?}");
-        Sim { child, path }
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 #[test]

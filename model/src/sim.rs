@@ -19,7 +19,7 @@ use std::sync::Arc;
 
 use crate::device::{Action, Refusal, Rule, Source, Space};
 use crate::interp::{self, Raw, Value};
-use crate::ir::{Count, Direction, FieldType, Follows, Leaf, MessageRef, Protocol};
+use crate::ir::{Direction, FieldType, Follows, Leaf, MessageRef, Protocol};
 
 /// Elements per page: a write copies one page where a clone of the device shares it.
 const PAGE: usize = 256;
@@ -328,14 +328,6 @@ impl Sim {
     ) -> Option<Vec<u8>> {
         let m = &p.responses[reply];
         // Fields encode computes: a list's count, and values that follow another field.
-        let counts: Vec<usize> = m
-            .repeat()
-            .and_then(|(_, r)| match r.count {
-                Count::Elements(i) | Count::Bytes(i) => Some(i),
-                Count::ToEnd => None,
-            })
-            .into_iter()
-            .collect();
         let request_int = |name: &str| match request.get(name) {
             Some(Raw::Int(i)) => Some(*i),
             _ => None,
@@ -356,11 +348,8 @@ impl Sim {
                     }
                 }
                 Leaf::Field(i, f) => {
-                    if f.constant.is_some()
-                        || f.equals.is_some()
-                        || counts.contains(&i)
-                        || matches!(f.follows, Some(Follows::Field(..)))
-                    {
+                    // Encoding computes it (a constant, a count, a value that follows another).
+                    if m.is_derived(i) {
                         continue;
                     }
                     if let Some(r) = request.get(&name) {

@@ -1,0 +1,59 @@
+//! Shared by the tests that run the `busspec` binary against other processes: whether tshark
+//! is here (and must be), and a simulator on a pseudo-terminal.
+
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+
+/// Whether tshark runs here. Where it does not, the check is skipped with a word on stderr,
+/// except where CI says tshark is installed (`BUSSPEC_REQUIRE_TSHARK`): there it fails.
+pub fn tshark_present(what: &str) -> bool {
+    let present = Command::new("sh")
+        .args(["-c", "command -v tshark"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !present {
+        assert!(
+            std::env::var_os("BUSSPEC_REQUIRE_TSHARK").is_none(),
+            "BUSSPEC_REQUIRE_TSHARK is set but tshark is not installed"
+        );
+        eprintln!("tshark is not installed: skipping {what}");
+    }
+    present
+}
+
+/// `busspec sim ARGS --pty` running, killed when dropped; `path` is the pseudo-terminal it
+/// printed.
+pub struct Sim {
+    child: Child,
+    pub path: String,
+}
+
+impl Sim {
+    pub fn start(args: &[&str]) -> Sim {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_busspec"))
+            .arg("sim")
+            .args(args)
+            .arg("--pty")
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("busspec runs");
+        let mut line = String::new();
+        let stdout = child.stdout.take().expect("piped");
+        BufReader::new(stdout).read_line(&mut line).expect("reads");
+        let path = line.trim().to_owned();
+        assert!(path.starts_with("/dev/"), "sim printed {line:?}");
+        Sim { child, path }
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
