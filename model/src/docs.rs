@@ -252,6 +252,7 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
             .map(|(k, v)| match v {
                 StatedValue::Number(n) => format!("{k} = {n}"),
                 StatedValue::Name(s) => format!("{k} = {s}"),
+                StatedValue::Exact { text, .. } => format!("{k} = {text}"),
                 StatedValue::Names(n) => format!("{k} = [{}]", n.join(", ")),
                 StatedValue::Numbers(n) => format!(
                     "{k} = [{}]",

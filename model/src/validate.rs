@@ -2460,7 +2460,13 @@ fn compatible_templates<'t>(
 fn stated(v: &model::OpenValue) -> Result<StatedValue, String> {
     use model::OpenValue as V;
     match v {
-        V::Number(t) => Rational::parse(t).map(StatedValue::Number),
+        V::Number(t) => Ok(match Rational::parse(t) {
+            Ok(n) => StatedValue::Number(n),
+            Err(why) => StatedValue::Exact {
+                text: t.clone(),
+                why,
+            },
+        }),
         V::String(s) => Ok(StatedValue::Name(s.clone())),
         V::List(items) if items.iter().any(|i| matches!(i, V::Number(_))) => items
             .iter()
@@ -2748,6 +2754,7 @@ fn compare(
             let (stated, text) = match want {
                 StatedValue::Number(n) => (k.parse(&n.to_string()), n.to_string()),
                 StatedValue::Name(s) if f.is_float() => (k.parse(s), s.clone()),
+                StatedValue::Exact { text, .. } => (k.parse(text), text.clone()),
                 _ => return Err(format!("a number field; state a number (the frame carries {})", k.text(*i))),
             };
             return match stated {
@@ -2804,6 +2811,7 @@ fn compare(
         }
     }
     match want {
+        StatedValue::Exact { why, .. } => Err(why.clone()),
         StatedValue::Numbers(_) => Err("not a repeated field; state one value".to_owned()),
         StatedValue::Number(n) => {
             let (got, sym) = match unit.map(|u| &p.units[u]) {
