@@ -91,7 +91,11 @@ impl IntType {
             for signed in [false, true] {
                 let (a, b) = raw_limits(bits, signed);
                 if a <= lo && hi <= b {
-                    return IntType { bits, signed, float: false };
+                    return IntType {
+                        bits,
+                        signed,
+                        float: false,
+                    };
                 }
             }
         }
@@ -1214,7 +1218,12 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     };
     // A float has no `Eq` or `Hash`: a direction with a float field derives `PartialEq`
     // alone (every other direction, and every spec without floats, keeps both).
-    let derives = if ctx.p.messages(d).iter().any(|m| m.fields.iter().any(Field::is_float)) {
+    let derives = if ctx
+        .p
+        .messages(d)
+        .iter()
+        .any(|m| m.fields.iter().any(Field::is_float))
+    {
         quote!(#[derive(Debug, Clone, Copy, PartialEq)])
     } else {
         quote!(#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)])
@@ -1767,9 +1776,8 @@ fn emit_encode_arm(
             } else if f.word_swapped {
                 // The number's bytes in the field's byte order, its 16-bit words swapped.
                 let v = paren(v);
-                let idx = (0..f.width).map(|i| {
-                    usize_lit(busspec_model::number::swap_index(i, f.width))
-                });
+                let idx =
+                    (0..f.width).map(|i| usize_lit(busspec_model::number::swap_index(i, f.width)));
                 quote!({ let b = #v.#conv(); out[#at..#end].copy_from_slice(&[#(b[#idx]),*]); })
             } else {
                 let v = paren(v);
@@ -3569,7 +3577,16 @@ mod tests {
             (64, true, "i64"),
             (128, false, "u128"),
         ] {
-            assert_eq!(IntType { bits, signed, float: false }.ident().to_string(), name);
+            assert_eq!(
+                IntType {
+                    bits,
+                    signed,
+                    float: false
+                }
+                .ident()
+                .to_string(),
+                name
+            );
         }
     }
 }

@@ -10,11 +10,11 @@ use std::borrow::Cow;
 use std::fmt;
 
 use crate::checksum;
-use crate::number::{swap_index, Num, NumKind};
 use crate::ir::{
     BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, LengthRule, Message,
     MessageRef, Protocol,
 };
+use crate::number::{swap_index, Num, NumKind};
 
 /// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -755,7 +755,10 @@ pub enum StatedValue {
     Numbers(Vec<Rational>),
     /// A number with more digits than a rational holds, as written: a 64-bit integer or a
     /// float reads it as its type; any other field refuses it for `why`.
-    Exact { text: String, why: String },
+    Exact {
+        text: String,
+        why: String,
+    },
 }
 
 #[derive(Debug, Clone)]

@@ -93,9 +93,14 @@ impl NumKind {
             NumKind::Int => text.parse().ok(),
             NumKind::U64 => text.parse::<u64>().ok().map(|v| v as i64),
             NumKind::F32 => match special_float(text, 8) {
-                Some(Special::Infinite(neg)) => {
-                    Some(i64::from(if neg { f32::NEG_INFINITY } else { f32::INFINITY }.to_bits()))
-                }
+                Some(Special::Infinite(neg)) => Some(i64::from(
+                    if neg {
+                        f32::NEG_INFINITY
+                    } else {
+                        f32::INFINITY
+                    }
+                    .to_bits(),
+                )),
                 Some(Special::Nan(bits)) => bits
                     .or(Some(0x7FC0_0000))
                     .filter(|b| *b <= u64::from(u32::MAX) && f32::from_bits(*b as u32).is_nan())
@@ -107,9 +112,14 @@ impl NumKind {
                     .map(|f| i64::from(f.to_bits())),
             },
             NumKind::F64 => match special_float(text, 16) {
-                Some(Special::Infinite(neg)) => {
-                    Some(if neg { f64::NEG_INFINITY } else { f64::INFINITY }.to_bits() as i64)
-                }
+                Some(Special::Infinite(neg)) => Some(
+                    if neg {
+                        f64::NEG_INFINITY
+                    } else {
+                        f64::INFINITY
+                    }
+                    .to_bits() as i64,
+                ),
                 Some(Special::Nan(bits)) => bits
                     .or(Some(0x7FF8_0000_0000_0000))
                     .filter(|b| f64::from_bits(*b).is_nan())
@@ -150,7 +160,10 @@ fn special_float(text: &str, digits: usize) -> Option<Special> {
         t => {
             let h = t.strip_prefix("NaN:")?;
             match h.strip_prefix("0x") {
-                Some(h) if (1..=digits).contains(&h.len()) && h.bytes().all(|b| b.is_ascii_hexdigit()) => {
+                Some(h)
+                    if (1..=digits).contains(&h.len())
+                        && h.bytes().all(|b| b.is_ascii_hexdigit()) =>
+                {
                     u64::from_str_radix(h, 16).map_or(Special::Bad, |b| Special::Nan(Some(b)))
                 }
                 _ => Special::Bad,
@@ -172,9 +185,18 @@ impl fmt::Display for Num {
             NumKind::F32 => {
                 let v = f32::from_bits(raw as u32);
                 if v.is_nan() {
-                    nan(f, raw as u32 == 0x7FC0_0000, format_args!("{:08X}", raw as u32))
+                    nan(
+                        f,
+                        raw as u32 == 0x7FC0_0000,
+                        format_args!("{:08X}", raw as u32),
+                    )
                 } else {
-                    float(f, v.is_infinite(), v.is_sign_negative(), format_args!("{v:?}"))
+                    float(
+                        f,
+                        v.is_infinite(),
+                        v.is_sign_negative(),
+                        format_args!("{v:?}"),
+                    )
                 }
             }
             NumKind::F64 => {
@@ -186,7 +208,12 @@ impl fmt::Display for Num {
                         format_args!("{:016X}", raw as u64),
                     )
                 } else {
-                    float(f, v.is_infinite(), v.is_sign_negative(), format_args!("{v:?}"))
+                    float(
+                        f,
+                        v.is_infinite(),
+                        v.is_sign_negative(),
+                        format_args!("{v:?}"),
+                    )
                 }
             }
         }
@@ -227,25 +254,52 @@ mod tests {
     #[test]
     fn texts_read_back_to_the_same_bits() {
         let f32s = [
-            0.0f32, -0.0, 1.0, 230.1, 1e-7, 3.4028235e38, f32::MIN_POSITIVE, 1e-45, -2.5,
+            0.0f32,
+            -0.0,
+            1.0,
+            230.1,
+            1e-7,
+            3.4028235e38,
+            f32::MIN_POSITIVE,
+            1e-45,
+            -2.5,
         ];
         for v in f32s {
             let raw = i64::from(v.to_bits());
             let t = NumKind::F32.text(raw);
             assert_eq!(NumKind::F32.parse(&t), Some(raw), "{t}");
         }
-        for bits in [0x7FC0_0000u32, 0x7FC0_0001, 0xFF80_0001, 0x7F80_0000, 0xFF80_0000] {
+        for bits in [
+            0x7FC0_0000u32,
+            0x7FC0_0001,
+            0xFF80_0001,
+            0x7F80_0000,
+            0xFF80_0000,
+        ] {
             let raw = i64::from(bits);
             let t = NumKind::F32.text(raw);
             assert_eq!(NumKind::F32.parse(&t), Some(raw), "{t}");
         }
-        let f64s = [0.0f64, -0.0, 0.1, 1e300, 1e-300, f64::MAX, 5e-324, 123456789.125];
+        let f64s = [
+            0.0f64,
+            -0.0,
+            0.1,
+            1e300,
+            1e-300,
+            f64::MAX,
+            5e-324,
+            123456789.125,
+        ];
         for v in f64s {
             let raw = v.to_bits() as i64;
             let t = NumKind::F64.text(raw);
             assert_eq!(NumKind::F64.parse(&t), Some(raw), "{t}");
         }
-        for bits in [0x7FF8_0000_0000_0000u64, 0xFFF0_0000_0000_0001, 0x7FF0_0000_0000_0000] {
+        for bits in [
+            0x7FF8_0000_0000_0000u64,
+            0xFFF0_0000_0000_0001,
+            0x7FF0_0000_0000_0000,
+        ] {
             let raw = bits as i64;
             let t = NumKind::F64.text(raw);
             assert_eq!(NumKind::F64.parse(&t), Some(raw), "{t}");
@@ -259,7 +313,17 @@ mod tests {
 
     #[test]
     fn bad_texts_are_refused() {
-        for t in ["", "nan", "infinity", "NaN:0x", "NaN:0x0", "NaN:0x3F800000", "NaN:0xZZ", "1.0.0", "e"] {
+        for t in [
+            "",
+            "nan",
+            "infinity",
+            "NaN:0x",
+            "NaN:0x0",
+            "NaN:0x3F800000",
+            "NaN:0xZZ",
+            "1.0.0",
+            "e",
+        ] {
             assert_eq!(NumKind::F32.parse(t), None, "{t:?}");
         }
         assert_eq!(NumKind::F32.parse("NaN:0x123456789"), None);
@@ -278,7 +342,10 @@ mod tests {
 
     #[test]
     fn swap_index_reverses_words() {
-        assert_eq!((0..4).map(|i| swap_index(i, 4)).collect::<Vec<_>>(), [2, 3, 0, 1]);
+        assert_eq!(
+            (0..4).map(|i| swap_index(i, 4)).collect::<Vec<_>>(),
+            [2, 3, 0, 1]
+        );
         assert_eq!(
             (0..8).map(|i| swap_index(i, 8)).collect::<Vec<_>>(),
             [6, 7, 4, 5, 2, 3, 0, 1]

@@ -1507,7 +1507,9 @@ fn field(
         repeat: None,
         follows: None,
     };
-    if f.word_order.is_some() && !matches!(f.ty, T::U32 | T::I32 | T::F32 | T::U64 | T::I64 | T::F64) {
+    if f.word_order.is_some()
+        && !matches!(f.ty, T::U32 | T::I32 | T::F32 | T::U64 | T::I64 | T::F64)
+    {
         sink.error(
             join(p, "word_order"),
             "`word_order` is for 32- and 64-bit numbers (u32 i32 f32 u64 i64 f64), whose 16-bit words it orders",
@@ -1952,7 +1954,8 @@ fn wide_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut
             (T::F32, model::Bound::Int(v)) => Some(i64::from((v as f32).to_bits())),
             (T::F32, model::Bound::Uint(v)) => Some(i64::from((v as f32).to_bits())),
             (T::F32, model::Bound::Float(v)) if v.is_finite() => {
-                Some(i64::from((v as f32).to_bits())).filter(|r| kind.float(*r).is_some_and(f64::is_finite))
+                Some(i64::from((v as f32).to_bits()))
+                    .filter(|r| kind.float(*r).is_some_and(f64::is_finite))
             }
             (T::F64, model::Bound::Int(v)) => Some((v as f64).to_bits() as i64),
             (T::F64, model::Bound::Uint(v)) => Some((v as f64).to_bits() as i64),
@@ -1970,7 +1973,10 @@ fn wide_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut
             } else {
                 "a 64-bit integer's range is integers of its type"
             };
-            sink.error(join(&rp, k), format!("{k} {shown} does not fit the field: {why}"));
+            sink.error(
+                join(&rp, k),
+                format!("{k} {shown} does not fit the field: {why}"),
+            );
             ok = false;
             0
         })
@@ -2755,7 +2761,12 @@ fn compare(
                 StatedValue::Number(n) => (k.parse(&n.to_string()), n.to_string()),
                 StatedValue::Name(s) if f.is_float() => (k.parse(s), s.clone()),
                 StatedValue::Exact { text, .. } => (k.parse(text), text.clone()),
-                _ => return Err(format!("a number field; state a number (the frame carries {})", k.text(*i))),
+                _ => {
+                    return Err(format!(
+                        "a number field; state a number (the frame carries {})",
+                        k.text(*i)
+                    ))
+                }
             };
             return match stated {
                 Some(w) if w == *i => Ok(()),

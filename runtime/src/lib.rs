@@ -120,7 +120,12 @@ impl fmt::Display for Num {
             NumKind::U64 => return write!(f, "{}", raw as u64),
             NumKind::F32 => {
                 let v = f32::from_bits(raw as u32);
-                (v.is_nan(), raw as u32 == 0x7FC0_0000, v.is_infinite(), v.is_sign_negative())
+                (
+                    v.is_nan(),
+                    raw as u32 == 0x7FC0_0000,
+                    v.is_infinite(),
+                    v.is_sign_negative(),
+                )
             }
             NumKind::F64 => {
                 let v = f64::from_bits(raw as u64);
