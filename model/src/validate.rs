@@ -2467,6 +2467,11 @@ fn stated(v: &model::OpenValue) -> Result<StatedValue, String> {
     use model::OpenValue as V;
     match v {
         V::Number(t) => Ok(match Rational::parse(t) {
+            // A negative zero keeps its sign for a float field.
+            Ok(n) if n == Rational::ZERO && t.trim_start().starts_with('-') => StatedValue::Exact {
+                text: t.clone(),
+                why: String::new(),
+            },
             Ok(n) => StatedValue::Number(n),
             Err(why) => StatedValue::Exact {
                 text: t.clone(),
@@ -2822,7 +2827,10 @@ fn compare(
         }
     }
     match want {
-        StatedValue::Exact { why, .. } => Err(why.clone()),
+        StatedValue::Exact { text, why } => match Rational::parse(text) {
+            Ok(n) => compare(p, f, bits, raw, &StatedValue::Number(n), excused),
+            Err(_) => Err(why.clone()),
+        },
         StatedValue::Numbers(_) => Err("not a repeated field; state one value".to_owned()),
         StatedValue::Number(n) => {
             let (got, sym) = match unit.map(|u| &p.units[u]) {
