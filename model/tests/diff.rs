@@ -424,10 +424,26 @@ fn word_order_and_number_kind_changes_are_classified() {
     assert_eq!(
         summary(&diff::diff(&old, &new)),
         [
-            (Wire, "field_word_order_changed", "responses.readings.fields.voltage"),
-            (Api, "range_narrowed", "responses.readings.fields.frequency.range"),
-            (Wire, "field_number_kind_changed", "responses.readings.fields.counter"),
-            (Compat, "range_widened", "responses.limits_set.fields.serial.range"),
+            (
+                Wire,
+                "field_word_order_changed",
+                "responses.readings.fields.voltage"
+            ),
+            (
+                Api,
+                "range_narrowed",
+                "responses.readings.fields.frequency.range"
+            ),
+            (
+                Wire,
+                "field_number_kind_changed",
+                "responses.readings.fields.counter"
+            ),
+            (
+                Compat,
+                "range_widened",
+                "responses.limits_set.fields.serial.range"
+            ),
             (Compat, "example_removed", "examples"),
             (Compat, "example_added", "examples"),
         ]
@@ -447,7 +463,11 @@ fn fix_crc(text: &str) -> String {
     for b in &bytes {
         crc ^= u16::from(*b);
         for _ in 0..8 {
-            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xA001 } else { crc >> 1 };
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xA001
+            } else {
+                crc >> 1
+            };
         }
     }
     // Printed high byte first (printed_byte_order big).
