@@ -1334,7 +1334,9 @@ impl<'a> Differ<'a> {
         } else if f.range != g.range || f.range.is_some() {
             let (ka, kb) = (f.num_kind(), g.num_kind());
             let show = |k: NumKind, r: Option<(i64, i64)>| {
-                r.map_or("any".to_owned(), |(a, b)| format!("{}..={}", k.text(a), k.text(b)))
+                r.map_or("any".to_owned(), |(a, b)| {
+                    format!("{}..={}", k.text(a), k.text(b))
+                })
             };
             let text = format!(
                 "field {what}: range {} → {}",
