@@ -3444,6 +3444,7 @@ mod tests {
             width: 1,
             signed: false,
             byte_order: ByteOrder::Little,
+            word_swapped: false,
             unit: None,
             range: Some(range),
             constant: None,
