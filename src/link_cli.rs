@@ -809,6 +809,7 @@ mod tests {
                         }
                         StatedValue::Number(r) => r.to_string(),
                         StatedValue::Name(n) => n.clone(),
+                        StatedValue::Exact { text, .. } => text.clone(),
                         StatedValue::Names(ns) => serde_json::to_string(ns).unwrap_or_default(),
                         StatedValue::Numbers(ns) => format!(
                             "[{}]",

@@ -411,7 +411,8 @@ fn sd_string_length_75_is_refused() {
                 offset: 3,
                 found: 75,
                 min: 0,
-                max: 0x20
+                max: 0x20,
+                kind: busspec_runtime::NumKind::Int,
             }
         );
         assert!(e.to_string().contains("string_length"), "{e}");
@@ -473,7 +474,8 @@ fn sd_humidity_101_and_new_id_0_are_refused() {
             field: "humidity",
             value: 101,
             min: 1,
-            max: 100
+            max: 100,
+            kind: busspec_runtime::NumKind::Int,
         })
     );
 
@@ -508,7 +510,8 @@ fn sd_humidity_101_and_new_id_0_are_refused() {
             field: "new_id",
             value: 0,
             min: 1,
-            max: 0x1E
+            max: 0x1E,
+            kind: busspec_runtime::NumKind::Int,
         })
     );
 }
@@ -525,7 +528,8 @@ fn sd_encode_byte_number_37_is_refused() {
             field: "byte_number",
             value: 37,
             min: 0,
-            max: 0x1F
+            max: 0x1F,
+            kind: busspec_runtime::NumKind::Int,
         }
     );
     assert_eq!(
@@ -548,7 +552,8 @@ fn sd_encode_byte_number_37_is_refused() {
             field: "byte_number".into(),
             value: 37,
             min: 0,
-            max: 31
+            max: 31,
+            kind: busspec_model::number::NumKind::Int,
         })
     );
     // The frame the issue quotes (`F0010025C0C6`) is refused by decode too.
@@ -728,7 +733,7 @@ where
                         m.name
                     );
                     assert!(
-                        matches!(gen_enc, Err(EncodeError::NotInRange { field, value, min: a, max: b })
+                        matches!(gen_enc, Err(EncodeError::NotInRange { field, value, min: a, max: b, .. })
                             if field == name && value == raw && (a, b) == (min, max)),
                         "{}.{name} = {raw}: {gen_enc:?}",
                         m.name

@@ -49,10 +49,15 @@ pub const PREAMBLE: &str =
 pub struct IntType {
     pub bits: u32,
     pub signed: bool,
+    /// An IEEE-754 float of `bits` bits (`f32`, `f64`), its raw value its bits.
+    pub float: bool,
 }
 
 impl IntType {
     fn ident(self) -> Ident {
+        if self.float {
+            return format_ident!("f{}", self.bits);
+        }
         let name = match (self.signed, self.rust_bits()) {
             (false, 8) => "u8",
             (true, 8) => "i8",
@@ -86,13 +91,18 @@ impl IntType {
             for signed in [false, true] {
                 let (a, b) = raw_limits(bits, signed);
                 if a <= lo && hi <= b {
-                    return IntType { bits, signed };
+                    return IntType {
+                        bits,
+                        signed,
+                        float: false,
+                    };
                 }
             }
         }
         IntType {
             bits: 64,
             signed: true,
+            float: false,
         }
     }
 }
@@ -240,6 +250,7 @@ fn wire_type(f: &Field) -> IntType {
     IntType {
         bits: 8 * f.width as u32,
         signed: f.signed,
+        float: f.is_float(),
     }
 }
 
@@ -256,14 +267,16 @@ impl<'a> Ctx<'a> {
         let mut enum_raw = vec![
             IntType {
                 bits: 8,
-                signed: false
+                signed: false,
+                float: false
             };
             p.enums.len()
         ];
         let mut flag_raw = vec![
             IntType {
                 bits: 8,
-                signed: false
+                signed: false,
+                float: false
             };
             p.flags.len()
         ];
@@ -284,6 +297,7 @@ impl<'a> Ctx<'a> {
                         enum_raw[e] = IntType {
                             bits: w.bits,
                             signed: false,
+                            float: false,
                         };
                     }
                 }
@@ -292,6 +306,7 @@ impl<'a> Ctx<'a> {
                         flag_raw[fl] = IntType {
                             bits: w.bits,
                             signed: false,
+                            float: false,
                         };
                     }
                 }
@@ -734,6 +749,7 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                     IntType {
                         bits: u32::from(c.width),
                         signed: false,
+                        float: false,
                     },
                 )
             };
@@ -1034,6 +1050,11 @@ fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
         };
     }
     let idx = (0..f.width).map(|i| {
+        let i = if f.word_swapped {
+            busspec_model::number::swap_index(i, f.width)
+        } else {
+            i
+        };
         let at = usize_lit(at + i);
         quote!(frame[#at])
     });
@@ -1129,6 +1150,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             .map(|l| {
                 let (n, v) = (l.name, local(l.name));
                 let value = match ctx.kind(l) {
+                    Kind::Int(t) if t.float => quote!(rt::Int(rt::raw(*#v))),
                     Kind::Int(_) => quote!(rt::Int(*#v as i64)),
                     Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
                         quote!(rt::Int(#v.raw() as i64))
@@ -1194,10 +1216,22 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
         }
     };
+    // A float has no `Eq` or `Hash`: a direction with a float field derives `PartialEq`
+    // alone (every other direction, and every spec without floats, keeps both).
+    let derives = if ctx
+        .p
+        .messages(d)
+        .iter()
+        .any(|m| m.fields.iter().any(Field::is_float))
+    {
+        quote!(#[derive(Debug, Clone, Copy, PartialEq)])
+    } else {
+        quote!(#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)])
+    };
     quote! {
         #repeats
         #[doc = #what]
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #derives
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         #[allow(clippy::large_enum_variant)]
@@ -1355,7 +1389,14 @@ fn leaf_doc(p: &Protocol, l: &Leaf) -> String {
     }
     let range = l.bits.map(|b| b.range).unwrap_or(l.field.range);
     if let Some((a, b)) = range {
-        s.push_str(&format!(" Valid raw range {a}..={b}."));
+        let k = match l.bits {
+            Some(_) => busspec_model::number::NumKind::Int,
+            None => l.field.num_kind(),
+        };
+        s.push_str(&format!(" Valid raw range {}..={}.", k.text(a), k.text(b)));
+    }
+    if l.bits.is_none() && l.field.word_swapped {
+        s.push_str(" Its 16-bit words travel swapped.");
     }
     if l.bits.is_none() {
         for sp in &l.field.special {
@@ -1430,6 +1471,29 @@ fn leaf_range(f: &Field, b: Option<&BitField>, limits: (i64, i64)) -> Option<(Id
     let (mut lo, mut hi) = range;
     while let Some(&v) = sp.iter().find(|&&v| v == lo - 1 || v == hi + 1) {
         (lo, hi) = (lo.min(v), hi.max(v));
+    }
+    if b.is_none() && f.is_wide() {
+        // Raw values are bits: no check is left out, and the bounds are written as numbers.
+        let bound = |raw: i64| match f.ty {
+            FieldType::F32 => {
+                let v = Literal::f32_suffixed(f32::from_bits(raw as u32));
+                quote!(rt::f32_raw(#v))
+            }
+            FieldType::F64 => {
+                let v = Literal::f64_suffixed(f64::from_bits(raw as u64));
+                quote!(rt::f64_raw(#v))
+            }
+            FieldType::U64 => {
+                let v = Literal::u64_suffixed(raw as u64);
+                quote!(rt::u64_raw(#v))
+            }
+            _ => {
+                let v = i64_lit(raw);
+                quote!(#v)
+            }
+        };
+        let (lo, hi) = (bound(range.0), bound(range.1));
+        return Some((ident("in_range"), quote!(#lo, #hi)));
     }
     if lo <= limits.0 && limits.1 <= hi {
         return None;
@@ -1613,6 +1677,7 @@ fn emit_encode_arm(
         let unsigned = IntType {
             bits: wt.bits,
             signed: false,
+            float: false,
         };
         if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
             if f.ty == FieldType::Bit {
@@ -1708,6 +1773,12 @@ fn emit_encode_arm(
                 let le = f.byte_order == ByteOrder::Little;
                 let v = paren(v);
                 quote!(out[#at..#end].copy_from_slice(&rt::bytes24(#v as u32, #le));)
+            } else if f.word_swapped {
+                // The number's bytes in the field's byte order, its 16-bit words swapped.
+                let v = paren(v);
+                let idx =
+                    (0..f.width).map(|i| usize_lit(busspec_model::number::swap_index(i, f.width)));
+                quote!({ let b = #v.#conv(); out[#at..#end].copy_from_slice(&[#(b[#idx]),*]); })
             } else {
                 let v = paren(v);
                 quote!(out[#at..#end].copy_from_slice(&#v.#conv());)
@@ -1850,6 +1921,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         let unsigned = IntType {
             bits: wt.bits,
             signed: false,
+            float: false,
         };
         let (range_fn, range) = match leaf_range(f, None, wt.limits()) {
             Some((range_fn, range)) if f.bits.is_empty() => (range_fn, Some(range)),
@@ -1945,6 +2017,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
                 let ubt = IntType {
                     bits: bt.bits,
                     signed: false,
+                    float: false,
                 }
                 .ident();
                 quote!(((#field_p as #ubt) << #shift) as #btid >> #shift)
@@ -3371,6 +3444,7 @@ mod tests {
             width: 1,
             signed: false,
             byte_order: ByteOrder::Little,
+            word_swapped: false,
             unit: None,
             range: Some(range),
             constant: None,
@@ -3504,7 +3578,16 @@ mod tests {
             (64, true, "i64"),
             (128, false, "u128"),
         ] {
-            assert_eq!(IntType { bits, signed }.ident().to_string(), name);
+            assert_eq!(
+                IntType {
+                    bits,
+                    signed,
+                    float: false
+                }
+                .ident()
+                .to_string(),
+                name
+            );
         }
     }
 }

@@ -100,7 +100,8 @@ fn modbus_coils_and_registers() {
             field: "values",
             value: 2,
             min: 3,
-            max: 3
+            max: 3,
+            kind: busspec_runtime::NumKind::Int,
         })
     ));
 }

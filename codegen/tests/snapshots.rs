@@ -252,3 +252,18 @@ fn a_repeat_to_the_end_without_a_length_field_lists_its_lengths_up_to_64() {
         assert!(e.contains(said), "{said:?} not in {e}");
     }
 }
+
+/// IEEE-754 floats and 64-bit integers, big-endian with word-swapped registers as a Modbus
+/// energy meter sends them, and little-endian telemetry (`snapshots_compile.rs` compiles both
+/// and holds them to the interpreter).
+#[test]
+fn float_and_64_bit_specs_generate_their_snapshots() {
+    check(
+        "model/tests/fixtures/valid/meter_floats.yaml",
+        "meter_floats.rs",
+    );
+    check(
+        "model/tests/fixtures/valid/telemetry_le.yaml",
+        "telemetry_le.rs",
+    );
+}

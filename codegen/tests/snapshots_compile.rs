@@ -16,6 +16,8 @@ include!("snapshots/ubx_like.rs");
 include!("snapshots/maestro_compact.rs");
 include!("snapshots/pelco_p.rs");
 include!("snapshots/msp_v1.rs");
+include!("snapshots/meter_floats.rs");
+include!("snapshots/telemetry_le.rs");
 
 mod agree;
 
@@ -387,7 +389,8 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
             field: "values",
             value: 2,
             min: 3,
-            max: 3
+            max: 3,
+            kind: busspec_runtime::NumKind::Int,
         })
     );
     let empty = vario::Request::Write {
@@ -400,7 +403,8 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
             field: "values",
             value: 0,
             min: 1,
-            max: 16
+            max: 16,
+            kind: busspec_runtime::NumKind::Int,
         })
     );
     // A byte count that lies about the frame's length.
@@ -838,5 +842,98 @@ fn every_snapshot_refuses_as_the_interpreter_words_it() {
     ];
     for t in t {
         assert!(t.accepted > 0 && t.refused > 50, "{t:?}");
+    }
+}
+
+/// Floats and 64-bit integers: the examples replay (a word-swapped f32 as a Modbus meter sends
+/// it, a u64 above `i64::MAX`, a negative i64), the typed values are the numbers the spec
+/// states, NaN and out-of-range floats are refused alike by both engines in the same words,
+/// and both engines agree on every frame mutated from the examples and on captures of them.
+#[test]
+fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
+    use meter_floats::{MeterFloats, Response};
+    let file = "model/tests/fixtures/valid/meter_floats.yaml";
+    replay::<MeterFloats>(file);
+    let p = fixture(file);
+    let readings = busspec_model::interp::parse_hex(
+        "01 04 19 9A 43 66 42 48 00 00 40 C8 1C D6 C8 B4 39 58 99 9A 99 99 99 99 3F B9 FF FF FF FF FF FF FD 98 FF FF FE E0 8E 04 FB 35 56 78 12 34 FF FB FF FF 58 77",
+    )
+    .unwrap();
+    let d = Response::decode(&readings).unwrap();
+    let Response::Readings {
+        voltage,
+        frequency,
+        energy,
+        energy_swapped,
+        pulses,
+        drift,
+        counter,
+        temperature,
+    } = d.message
+    else {
+        panic!("{d:?}")
+    };
+    assert_eq!(voltage, 230.1f32);
+    assert_eq!(frequency, 50.0f32);
+    assert_eq!(energy, 12345.678f64);
+    assert_eq!(energy_swapped, 0.1f64);
+    assert_eq!(pulses, 18446744073709551000u64);
+    assert_eq!(drift, -1234567890123i64);
+    assert_eq!(counter, 305419896u32);
+    assert_eq!(temperature, -5i32);
+    let mut buf = [0u8; 64];
+    let n = d.message.encode(1, &mut buf).unwrap();
+    assert_eq!(&buf[..n], &readings[..]);
+    // A NaN, an infinity and a value just past the range: refused by both, in the same words.
+    let r = p.find("readings").unwrap();
+    for bits in [
+        0x7FC0_0001u32,
+        0x7F80_0000,
+        65.01f32.to_bits(),
+        44.99f32.to_bits(),
+    ] {
+        let mut frame = readings.clone();
+        frame[6..10].copy_from_slice(&bits.to_be_bytes());
+        agree::reseal(&p, &mut frame);
+        let g = Response::decode(&frame).map(|_| ());
+        let i = busspec_model::interp::decode_as(&p, r, &frame).map(|_| ());
+        same_text(g, i);
+    }
+    let t = agree::agree::<MeterFloats>(&p);
+    assert!(t.accepted >= 4 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<MeterFloats>(&p, 0xF10A7, "readings");
+    assert!(found > 100, "only {found} readings frames found");
+
+    use telemetry_le::{Request, TelemetryLe};
+    let file = "model/tests/fixtures/valid/telemetry_le.yaml";
+    replay::<TelemetryLe>(file);
+    let p = fixture(file);
+    let t = agree::agree::<TelemetryLe>(&p);
+    assert!(t.accepted >= 4 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<TelemetryLe>(&p, 0x7E1E, "state");
+    assert!(found > 100, "only {found} state frames found");
+    // Encode refuses a NaN where the field has a range, as the interpreter does.
+    let m = Request::SetHome {
+        lat: f64::NAN,
+        lon: 0.0,
+    };
+    let g = m.encode(0, &mut buf).map(|_| ());
+    let values = [
+        busspec_model::interp::Value {
+            name: "lat".into(),
+            raw: busspec_model::interp::Raw::Int(f64::NAN.to_bits() as i64),
+        },
+        busspec_model::interp::Value {
+            name: "lon".into(),
+            raw: busspec_model::interp::Raw::Int(0),
+        },
+    ];
+    let i = busspec_model::interp::encode(&p, p.find("set_home").unwrap(), 0, &values).map(|_| ());
+    match (g, i) {
+        (Err(g), Err(i)) => {
+            assert_eq!(g.to_string(), i.to_string());
+            assert_eq!(g.to_string(), "lat = NaN is outside its range -90.0..=90.0");
+        }
+        other => panic!("both encoders must refuse a NaN latitude: {other:?}"),
     }
 }

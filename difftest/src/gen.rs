@@ -126,6 +126,12 @@ fn code_text(code: &[u8]) -> String {
     s
 }
 
+/// A type whose raw value is its bits (64-bit integers, floats): never copied, counted or
+/// followed.
+fn is_wide(ty: &str) -> bool {
+    matches!(ty, "u64" | "i64" | "f32" | "f64")
+}
+
 impl G {
     fn pick<'a, T>(&mut self, xs: &'a [T]) -> &'a T {
         &xs[self.rng.usize(..xs.len())]
@@ -166,10 +172,16 @@ impl G {
             countable: false,
             repeat_tail: 0,
         };
+        if self.chance(10) {
+            return self.wide_field(name);
+        }
         match self.rng.u8(..100) {
             // A plain number: unit, maybe a range and special values.
             0..=29 => {
                 let mut y = format!("{{name: {name}, type: {ty}, unit: {}", self.unit());
+                if width == 4 && self.chance(30) {
+                    y.push_str(", word_order: swapped");
+                }
                 if self.chance(50) {
                     let r = self.range_yaml(lo, hi);
                     let _ = write!(y, ", {r}");
@@ -266,8 +278,11 @@ impl G {
                 }
             }
             // A repeat of an earlier field.
-            72..=77 if earlier.iter().any(|f| f.ty != "ascii") => {
-                let cands: Vec<&Gf> = earlier.iter().filter(|f| f.ty != "ascii").collect();
+            72..=77 if earlier.iter().any(|f| f.ty != "ascii" && !is_wide(f.ty)) => {
+                let cands: Vec<&Gf> = earlier
+                    .iter()
+                    .filter(|f| f.ty != "ascii" && !is_wide(f.ty))
+                    .collect();
                 let o = *self.pick(&cands);
                 Gf {
                     name: name.clone(),
@@ -319,6 +334,66 @@ impl G {
                 g.countable = true;
                 g
             }
+        }
+    }
+
+    /// A 64-bit integer or float: a unit of scale 1, maybe a range and its words swapped.
+    fn wide_field(&mut self, name: String) -> Gf {
+        let &(ty, width) = self.pick(&[("u64", 8), ("i64", 8), ("f32", 4), ("f64", 8)]);
+        let mut y = format!("{{name: {name}, type: {ty}, unit: count");
+        if self.chance(40) {
+            y.push_str(", word_order: swapped");
+        }
+        if self.chance(50) {
+            let r = match ty {
+                "u64" => {
+                    let a = if self.chance(50) {
+                        self.rng.u64(..4)
+                    } else {
+                        self.rng.u64(..)
+                    };
+                    let b = if self.chance(50) {
+                        a.saturating_add(self.rng.u64(..100))
+                    } else {
+                        self.rng.u64(a..)
+                    };
+                    format!("{{min: {a}, max: {b}}}")
+                }
+                "i64" => {
+                    let a = if self.chance(50) {
+                        self.rng.i64(-5..4)
+                    } else {
+                        self.rng.i64(..)
+                    };
+                    let b = if self.chance(50) {
+                        a.saturating_add(self.rng.i64(0..100))
+                    } else {
+                        self.rng.i64(a..)
+                    };
+                    format!("{{min: {a}, max: {b}}}")
+                }
+                _ => {
+                    // Decimals (quarters: exact in both widths) and now and then an integer.
+                    let a = f64::from(self.rng.i32(-400..400)) / 4.0;
+                    let b = a + f64::from(self.rng.i32(0..400)) / 4.0;
+                    if self.chance(30) {
+                        format!("{{min: {}, max: {}}}", a.floor(), b.ceil())
+                    } else {
+                        format!("{{min: {a:?}, max: {b:?}}}")
+                    }
+                }
+            };
+            let _ = write!(y, ", range: {r}");
+        }
+        y.push('}');
+        Gf {
+            name,
+            ty,
+            width,
+            yaml: y,
+            plain: false,
+            countable: false,
+            repeat_tail: 0,
         }
     }
 
@@ -656,6 +731,16 @@ fn stated_values(p: &ir::Protocol, m: &ir::Message, values: &[interp::Value]) ->
         let unit = bits.map_or(f.unit, |b| b.unit);
         let plain = unit.is_some_and(|u| p.units[u].name == "count") && f.special.is_empty();
         match &v.raw {
+            // A 64-bit integer or a float as its type reads its bits: the text JSON prints,
+            // quoted where it is not a number (NaN, infinities).
+            Raw::Int(i) if bits.is_none() && f.is_wide() => {
+                let k = f.num_kind();
+                if k.is_non_finite(*i) {
+                    out.push(format!("{}: \"{}\"", v.name, k.text(*i)));
+                } else {
+                    out.push(format!("{}: {}", v.name, k.text(*i)));
+                }
+            }
             Raw::Int(i) if plain => out.push(format!("{}: {i}", v.name)),
             Raw::Int(i) if bits.is_none() && f.enumeration.is_some() && f.range.is_none() => {
                 let e = &p.enums[f.enumeration.unwrap_or(0)];
@@ -1439,6 +1524,22 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         "scaled unit",
     );
     add(fields.iter().any(|x| x.width == 3), "24-bit");
+    add(fields.iter().any(|x| x.ty == FieldType::F32), "f32");
+    add(fields.iter().any(|x| x.ty == FieldType::F64), "f64");
+    add(fields.iter().any(|x| x.ty == FieldType::U64), "u64");
+    add(fields.iter().any(|x| x.ty == FieldType::I64), "i64");
+    add(
+        fields.iter().any(|x| x.is_float() && x.range.is_some()),
+        "float range",
+    );
+    add(
+        fields.iter().any(|x| x.word_swapped && x.is_float()),
+        "word-swapped float",
+    );
+    add(
+        fields.iter().any(|x| x.word_swapped && !x.is_float()),
+        "word-swapped integer",
+    );
     add(fields.iter().any(|x| x.width == 4), "32-bit");
     add(fields.iter().any(|x| x.signed), "signed");
     add(fields.iter().any(|x| x.ty == FieldType::Ascii), "ascii");

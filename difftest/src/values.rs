@@ -3,6 +3,7 @@
 
 use busspec_model::interp::{raw_limits, Raw, Value};
 use busspec_model::ir::{FieldType, Leaf, Message, Protocol};
+use busspec_model::number::NumKind;
 
 /// Whether leaf `l` of `m` is a value the generated message carries (and both encoders take):
 /// not a constant, not a copy of or a value following another field, not a repeat's count, not
@@ -20,6 +21,71 @@ fn within(rng: &mut fastrand::Rng, lo: i64, hi: i64) -> i64 {
         0 => lo,
         1 => hi,
         _ => rng.i64(lo..=hi),
+    }
+}
+
+/// A 64-bit integer's or a float's raw value (its bits): strict, one in its range (ends
+/// included); otherwise often NaN (canonical and with a payload), an infinity, a signed zero,
+/// a range's end or any bits, and now and then more bits than an `f32` has.
+fn wide(rng: &mut fastrand::Rng, f: &busspec_model::ir::Field, strict: bool) -> i64 {
+    let k = f.num_kind();
+    let in_range = |rng: &mut fastrand::Rng, (a, b): (i64, i64)| -> i64 {
+        match k {
+            NumKind::Int => within(rng, a, b),
+            NumKind::U64 => match rng.u8(..8) {
+                0 => a,
+                1 => b,
+                _ => rng.u64(a as u64..=b as u64) as i64,
+            },
+            _ => {
+                let (x, y) = (k.float(a).unwrap_or(0.0), k.float(b).unwrap_or(0.0));
+                let v = match rng.u8(..8) {
+                    0 => x,
+                    1 => y,
+                    _ => x + (y - x) * rng.f64(),
+                };
+                let raw = if k == NumKind::F32 {
+                    i64::from((v as f32).to_bits())
+                } else {
+                    v.to_bits() as i64
+                };
+                // Rounding to an f32 may step just outside: fall back to an end.
+                if k.within(raw, a, b) {
+                    raw
+                } else {
+                    a
+                }
+            }
+        }
+    };
+    if let (Some(r), true) = (f.range, strict || rng.u8(..3) != 0) {
+        return in_range(rng, r);
+    }
+    if strict {
+        return any_bits(rng, k);
+    }
+    match (k, rng.u8(..12)) {
+        (NumKind::F32, 0) => 0x7FC0_0000,
+        (NumKind::F32, 1) => i64::from(0x7F80_0000u32 | rng.u32(1..0x0080_0000)),
+        (NumKind::F32, 2) => i64::from(f32::INFINITY.to_bits()),
+        (NumKind::F32, 3) => i64::from(f32::NEG_INFINITY.to_bits()),
+        (NumKind::F32, 4) => i64::from((-0.0f32).to_bits()),
+        (NumKind::F32, 5) => i64::from(u32::MAX) + 1,
+        (NumKind::F64, 0) => 0x7FF8_0000_0000_0000,
+        (NumKind::F64, 1) => (0xFFF0_0000_0000_0000u64 | rng.u64(1..1 << 52)) as i64,
+        (NumKind::F64, 2) => f64::INFINITY.to_bits() as i64,
+        (NumKind::F64, 3) => f64::NEG_INFINITY.to_bits() as i64,
+        (NumKind::F64, 4) => (-0.0f64).to_bits() as i64,
+        (NumKind::U64 | NumKind::Int, 0) => i64::MIN,
+        (NumKind::U64 | NumKind::Int, 1) => -1,
+        _ => any_bits(rng, k),
+    }
+}
+
+fn any_bits(rng: &mut fastrand::Rng, k: NumKind) -> i64 {
+    match k {
+        NumKind::F32 => i64::from(rng.u32(..)),
+        _ => rng.i64(..),
     }
 }
 
@@ -92,6 +158,8 @@ pub fn random_values(
                         rng.usize(..=bound + 1)
                     };
                     Raw::List((0..n).map(|_| within(rng, elo, ehi)).collect())
+                } else if f.is_wide() {
+                    Raw::Int(wide(rng, f, strict))
                 } else {
                     let (lo, hi) = raw_limits(8 * f.width as u32, f.signed);
                     let e = f.enumeration.map(|e| &p.enums[e]);

@@ -33,7 +33,7 @@ extern crate std;
 
 pub use busspec_runtime::{
     stream, Broadcast, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
-    FieldValue, Message, MessageNames, Protocol, ProtocolVisitor, Repeated,
+    FieldValue, Message, MessageNames, NumKind, Protocol, ProtocolVisitor, Repeated,
 };
 
 include!(concat!(env!("OUT_DIR"), "/protocols.rs"));

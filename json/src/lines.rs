@@ -9,6 +9,7 @@ use std::collections::HashMap;
 
 use busspec_model::interp::{Frame, Raw};
 use busspec_model::ir::{BitField, Count, Direction, Field, Follows, MessageRef, Relation};
+use busspec_model::number::{Num, NumKind};
 use busspec_runtime::{FieldValue, Message};
 
 use crate::print::physical_text;
@@ -42,10 +43,15 @@ enum Form {
     Physical(usize),
     /// Special values, an enumeration or flags: [`push_field`] decides.
     Field,
+    /// A 64-bit integer or a float: [`push_wide`].
+    Wide,
 }
 
 impl Form {
     fn of(f: &Field, bit: Option<&BitField>) -> Form {
+        if bit.is_none() && f.is_wide() {
+            return Form::Wide;
+        }
         let unit = match bit {
             Some(b) if b.constant.is_none() => b.unit,
             Some(_) => None,
@@ -312,6 +318,9 @@ fn push_field(
         }
         Scalar::Int(v) => v,
     };
+    if bit.is_none() && f.is_wide() {
+        return push_wide(out, f, v);
+    }
     let physical = |out: &mut Vec<u8>, u: usize, unit| {
         push_physical(out, decimals.get(u).and_then(Option::as_ref), unit, v)
     };
@@ -387,6 +396,21 @@ fn push_form(
             None => push_int(out, v),
         },
         Form::Field => push_field(out, p, decimals, f, bit, Scalar::Int(v)),
+        Form::Wide => push_wide(out, f, v),
+    }
+}
+
+/// A 64-bit integer or float field's value as [`crate::print`]'s `wide_json` prints it.
+fn push_wide(out: &mut Vec<u8>, f: &Field, v: i64) {
+    let k = f.num_kind();
+    match k {
+        NumKind::Int => push_int(out, v),
+        NumKind::U64 => push_int(out, v as u64),
+        _ if k.is_non_finite(v) => push_quoted(out, &k.text(v)),
+        _ => {
+            use std::io::Write as _;
+            let _ = write!(out, "{}", Num(k, v));
+        }
     }
 }
 

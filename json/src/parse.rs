@@ -411,6 +411,9 @@ fn field_value(
         }
         return Ok(Raw::List(list));
     }
+    if bit.is_none() && f.is_wide() {
+        return wide_value(f, name, raw.trim()).map(Raw::Int);
+    }
     let g = given(name, raw)?;
     let wrong = || format!("{name} takes {}, got {}", kind_of(f, bit), raw.trim());
     if let Some(b) = bit {
@@ -513,6 +516,46 @@ fn field_value(
             physical_to_raw(unit, name, &text, r, 8 * f.width as u32, f.signed).map(Raw::Int)
         }
         None => integer(name, &text, r).map(Raw::Int),
+    }
+}
+
+/// A 64-bit integer or float field's raw value (its bits) from its JSON text: a whole number
+/// of its type; for a float any JSON number (the nearest value of its type, so the text the
+/// printer writes reads back to the same bits) or the string of a value JSON has no number
+/// for (`"inf"`, `"-inf"`, `"NaN"`, `"NaN:0x7FC00001"`).
+fn wide_value(f: &Field, name: &str, t: &str) -> Result<i64, String> {
+    let k = f.num_kind();
+    let ty = match f.ty {
+        busspec_model::ir::FieldType::U64 => "u64",
+        busspec_model::ir::FieldType::I64 => "i64",
+        busspec_model::ir::FieldType::F32 => "f32",
+        _ => "f64",
+    };
+    if t.starts_with('"') {
+        let s =
+            serde_json::from_str::<String>(t).map_err(|e| format!("{name}: {}", json_error(&e)))?;
+        return match k.parse(&s) {
+            Some(v) if k.is_non_finite(v) => Ok(v),
+            _ if k.is_float() => Err(format!(
+                "{name}: \"{s}\" is not a number; a {ty} field takes a number, or \"inf\", \"-inf\", \"NaN\" or \"NaN:0x…\" (its bits)"
+            )),
+            _ => Err(format!("{name} takes a number, got {t}")),
+        };
+    }
+    let numeric = t.bytes().all(|b| b.is_ascii_digit() || b == b'-')
+        || (k.is_float()
+            && t.bytes()
+                .all(|b| b.is_ascii_digit() || b"-+.eE".contains(&b)));
+    match k.parse(t) {
+        Some(v) if numeric && !t.is_empty() => Ok(v),
+        _ if t
+            .bytes()
+            .next()
+            .is_some_and(|b| b == b'-' || b.is_ascii_digit()) =>
+        {
+            Err(format!("{name}: {t} is not a value of a {ty} field"))
+        }
+        _ => Err(format!("{name} takes a number, got {t}")),
     }
 }
 

@@ -80,6 +80,19 @@ pub(crate) fn physical_text(unit: &Unit, raw: i64) -> String {
     }
 }
 
+/// A 64-bit integer or float field's value (its raw value is its bits, its unit's scale 1):
+/// the number as [`busspec_model::number`] prints it; NaN and the infinities, which JSON has
+/// no number for, as that text in a string.
+pub(crate) fn wide_json(f: &Field, raw: i64) -> Json {
+    let k = f.num_kind();
+    let text = k.text(raw);
+    if k.is_non_finite(raw) {
+        Json::Str(text)
+    } else {
+        Json::Num(text)
+    }
+}
+
 fn text_of(bytes: &[u8]) -> String {
     bytes.iter().map(|&b| char::from(b)).collect()
 }
@@ -95,6 +108,9 @@ fn field_json(p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue<'_>) 
         }
         FieldValue::Int(v) => v,
     };
+    if bit.is_none() && f.is_wide() {
+        return wide_json(f, v);
+    }
     if let Some(b) = bit {
         return match (b.constant, b.unit.and_then(|u| p.units.get(u))) {
             (None, Some(unit)) => Json::Num(physical_text(unit, v)),

@@ -242,7 +242,8 @@ fn naks_follow_the_document() {
                         field,
                         value,
                         min,
-                        max
+                        max,
+                        kind: busspec_runtime::NumKind::Int,
                     },
                     "{request:?}"
                 );

@@ -26,6 +26,7 @@ use std::fmt::Write as _;
 use serde_derive::Serialize;
 
 use crate::ir::{Direction, Enum, Field, FlagSet, Message, Protocol, Unit};
+use crate::number::NumKind;
 use crate::rational::Rational;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -394,6 +395,8 @@ fn type_name(f: &Field) -> String {
         format!("ascii[{}]", f.width)
     } else if f.ty == crate::ir::FieldType::Bit {
         "bit".to_owned()
+    } else if f.is_float() {
+        format!("f{}", f.width * 8)
     } else {
         format!("{}{}", if f.signed { "i" } else { "u" }, f.width * 8)
     }
@@ -1259,11 +1262,30 @@ impl<'a> Differ<'a> {
                 path.to_owned(),
                 format!("field {what}: {} → {}", type_name(f), type_name(g)),
             );
+        } else if f.is_float() != g.is_float() {
+            // The same bits read as another kind of number (`u32` ↔ `f32`, `u64` ↔ `f64`).
+            self.wire(
+                "field_number_kind_changed",
+                path.to_owned(),
+                format!("field {what}: {} → {}", type_name(f), type_name(g)),
+            );
         } else if f.is_ascii() != g.is_ascii() || f.ty != g.ty {
             self.api(
                 "field_type_changed",
                 path.to_owned(),
                 format!("field {what}: {} → {}", type_name(f), type_name(g)),
+            );
+        }
+        if f.word_swapped != g.word_swapped {
+            let show = |swapped: bool| if swapped { "swapped" } else { "normal" };
+            self.wire(
+                "field_word_order_changed",
+                path.to_owned(),
+                format!(
+                    "field {what}: word order {} → {}",
+                    show(f.word_swapped),
+                    show(g.word_swapped)
+                ),
             );
         }
         if f.constant != g.constant {
@@ -1316,7 +1338,30 @@ impl<'a> Differ<'a> {
             &what,
             maps,
         );
-        self.range(f.range, g.range, path, &what);
+        if f.num_kind() == g.num_kind() {
+            self.range_of(f.num_kind(), f.range, g.range, path, &what);
+        } else if f.range != g.range || f.range.is_some() {
+            let (ka, kb) = (f.num_kind(), g.num_kind());
+            let show = |k: NumKind, r: Option<(i64, i64)>| {
+                r.map_or("any".to_owned(), |(a, b)| {
+                    format!("{}..={}", k.text(a), k.text(b))
+                })
+            };
+            let text = format!(
+                "field {what}: range {} → {}",
+                show(ka, f.range),
+                show(kb, g.range)
+            );
+            if g.range.is_none() {
+                self.compatible("range_widened", format!("{path}.range"), text);
+            } else {
+                self.api(
+                    "range_narrowed",
+                    format!("{path}.range"),
+                    format!("{text}; values valid before are now out of range"),
+                );
+            }
+        }
         let changes = value_changes(&specials(f), &specials(g));
         self.values(
             &format!("{path}.special"),
@@ -1502,10 +1547,31 @@ impl<'a> Differ<'a> {
     }
 
     fn range(&mut self, a: Option<(i64, i64)>, b: Option<(i64, i64)>, path: &str, what: &str) {
-        let Some(wider) = widened(a, b) else {
+        self.range_of(NumKind::Int, a, b, path, what);
+    }
+
+    /// A range change, its raw values read as `k` reads them (a `u64`'s or a float's bits).
+    fn range_of(
+        &mut self,
+        k: NumKind,
+        a: Option<(i64, i64)>,
+        b: Option<(i64, i64)>,
+        path: &str,
+        what: &str,
+    ) {
+        let wider = match (a, b) {
+            _ if a == b => None,
+            (Some((lo, hi)), Some((c, d))) => Some(k.within(lo, c, d) && k.within(hi, c, d)),
+            _ => widened(a, b),
+        };
+        let Some(wider) = wider else {
             return;
         };
-        let text = format!("field {what}: range {} → {}", range_text(a), range_text(b));
+        let show = |r: Option<(i64, i64)>| match r {
+            Some((x, y)) => format!("{}..={}", k.text(x), k.text(y)),
+            None => range_text(None),
+        };
+        let text = format!("field {what}: range {} → {}", show(a), show(b));
         if wider {
             self.compatible("range_widened", format!("{path}.range"), text);
         } else {

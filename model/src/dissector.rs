@@ -169,6 +169,12 @@ fn field(f: &Field) -> String {
         order(f.byte_order),
         lua_bool(f.is_ascii())
     );
+    if f.is_wide() {
+        // Floats and 64-bit integers: shown as their wire bytes (a Lua number holds neither
+        // exactly), with no unit or range.
+        o.push_str(", wide = true, bits = {} }");
+        return o;
+    }
     if let Some(u) = f.unit {
         let _ = write!(o, ", unit = {}", u + 1);
     }

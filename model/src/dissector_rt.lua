@@ -388,7 +388,7 @@ local function misfit(P, m, b, n, soft)
         local range = range_violation(f, nil, v)
         if range then soft[#soft + 1] = out_of_range(m, f.name, at + (k - 1) * step, v, range) end
       end
-    elseif not f.ascii then
+    elseif not f.ascii and not f.wide then
       local u, v = int_of(f, b, at)
       if f.constant and u ~= f.constant then return true end
       if f.follows then
@@ -580,6 +580,13 @@ local function setup(P)
         item:set_text(fmt("%s: %s%s (%d elements; raw [%s])", f.name, value, unit_of(P, f, nil), #els, concat(raws, ",")))
         item:add(m.pf[f.name].raw, range, "[" .. concat(raws, ",") .. "]")
         info[#info + 1] = f.name .. "=" .. value
+      elseif f.wide then
+        local range = tvb:range(at, f.width)
+        local text = "0x" .. tostring(range:bytes())
+        local item = node:add(m.pf[f.name].value, range, text)
+        item:set_text(f.name .. ": " .. text .. " (wire bytes: floats and 64-bit numbers are not decoded here)")
+        item:add(m.pf[f.name].raw, range, tostring(range:bytes()))
+        info[#info + 1] = f.name .. "=" .. text
       elseif f.ascii then
         local chars = {}
         for i = 0, f.width - 1 do chars[#chars + 1] = string.char(b[at + i]) end

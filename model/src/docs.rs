@@ -48,6 +48,10 @@ fn scalar_type_name(f: &Field) -> String {
         FieldType::I32 => "i32".into(),
         FieldType::U24 => "u24".into(),
         FieldType::I24 => "i24".into(),
+        FieldType::U64 => "u64".into(),
+        FieldType::I64 => "i64".into(),
+        FieldType::F32 => "f32".into(),
+        FieldType::F64 => "f64".into(),
         FieldType::Bit => "bit".into(),
     }
 }
@@ -174,6 +178,11 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
         } else {
             "—"
         };
+        let order_cell = if f.word_swapped {
+            format!("{order_cell}, words swapped")
+        } else {
+            order_cell.to_owned()
+        };
         let _ = writeln!(
             out,
             "| {} | `{}` | {} | {} | {} | {} | {} | {} |",
@@ -183,7 +192,12 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
             f.width,
             order_cell,
             cell(&unit_text(p, f.unit)),
-            range_text(f.range),
+            f.range
+                .map(|(a, b)| {
+                    let k = f.num_kind();
+                    format!("{}..={}", k.text(a), k.text(b))
+                })
+                .unwrap_or_else(|| "—".into()),
             field_notes(p, m, f)
         );
         for b in &f.bits {
@@ -238,6 +252,7 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
             .map(|(k, v)| match v {
                 StatedValue::Number(n) => format!("{k} = {n}"),
                 StatedValue::Name(s) => format!("{k} = {s}"),
+                StatedValue::Exact { text, .. } => format!("{k} = {text}"),
                 StatedValue::Names(n) => format!("{k} = [{}]", n.join(", ")),
                 StatedValue::Numbers(n) => format!(
                     "{k} = [{}]",

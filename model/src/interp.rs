@@ -14,6 +14,7 @@ use crate::ir::{
     BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, LengthRule, Message,
     MessageRef, Protocol,
 };
+use crate::number::{swap_index, Num, NumKind};
 
 /// A field's raw wire value: an integer (sign-extended where the field is signed) or text bytes.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -128,6 +129,8 @@ pub enum DecodeError {
         found: i64,
         min: i64,
         max: i64,
+        /// How the three raw values read as numbers (the bits of a `u64` or a float).
+        kind: NumKind,
     },
     /// An address outside the device range that is neither the broadcast nor the host address.
     BadAddress {
@@ -246,9 +249,12 @@ impl fmt::Display for DecodeError {
                 f,
                 "frame too long: {found} bytes, the longest frame has {max}"
             ),
-            DecodeError::OutOfRange { message, field, offset, found, min, max } => write!(
+            DecodeError::OutOfRange { message, field, offset, found, min, max, kind } => write!(
                 f,
-                "{message}.{field} at offset {offset} is {found}, outside its range {min}..={max}"
+                "{message}.{field} at offset {offset} is {}, outside its range {}..={}",
+                Num(*kind, *found),
+                Num(*kind, *min),
+                Num(*kind, *max)
             ),
             DecodeError::BadAddress { offset, found, min, max } => write!(
                 f,
@@ -320,6 +326,8 @@ pub enum EncodeError {
         value: i64,
         min: i64,
         max: i64,
+        /// How the three raw values read as numbers.
+        kind: NumKind,
     },
     /// An address outside the device range that is neither the broadcast nor the host address.
     BadAddress {
@@ -402,7 +410,14 @@ impl fmt::Display for EncodeError {
                 value,
                 min,
                 max,
-            } => write!(f, "{field} = {value} is outside its range {min}..={max}"),
+                kind,
+            } => write!(
+                f,
+                "{field} = {} is outside its range {}..={}",
+                Num(*kind, *value),
+                Num(*kind, *min),
+                Num(*kind, *max)
+            ),
             EncodeError::BadAddress { address, min, max } => write!(
                 f,
                 "address 0x{address:02X} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
@@ -452,6 +467,34 @@ pub fn write_uint(v: u64, out: &mut [u8], order: ByteOrder) {
             ByteOrder::Little => i,
         };
         *slot = if shift < 64 { (v >> shift) as u8 } else { 0 };
+    }
+}
+
+/// A whole number field's bits from its bytes: [`read_uint`], its 16-bit words put back in
+/// order first where they travel swapped.
+pub fn read_number(f: &Field, bytes: &[u8]) -> u64 {
+    let n = bytes.len();
+    if !f.word_swapped || !(n == 4 || n == 8) {
+        return read_uint(bytes, f.byte_order);
+    }
+    let mut b = [0u8; 8];
+    for (i, slot) in b[..n].iter_mut().enumerate() {
+        *slot = bytes[swap_index(i, n)];
+    }
+    read_uint(&b[..n], f.byte_order)
+}
+
+/// Writes a whole number field's bits: [`write_uint`], then its 16-bit words swapped where
+/// the field says.
+pub fn write_number(f: &Field, v: u64, out: &mut [u8]) {
+    let n = out.len();
+    if !f.word_swapped || !(n == 4 || n == 8) {
+        return write_uint(v, out, f.byte_order);
+    }
+    let mut b = [0u8; 8];
+    write_uint(v, &mut b[..n], f.byte_order);
+    for (i, byte) in b[..n].iter().enumerate() {
+        out[swap_index(i, n)] = *byte;
     }
 }
 
@@ -510,7 +553,11 @@ pub fn range_violation(f: &Field, bits: Option<&BitField>, raw: i64) -> Option<(
     }?;
     // The special values only for a value outside the range: most are inside.
     let special = || bits.is_none() && f.special.iter().any(|s| s.value == raw);
-    (!(min..=max).contains(&raw) && !special()).then_some((min, max))
+    let outside = match bits {
+        Some(_) => !(min..=max).contains(&raw),
+        None => f.outside(raw, (min, max)),
+    };
+    (outside && !special()).then_some((min, max))
 }
 
 /// What [`decode`] derives from the spec for the directions it decodes, before it looks at a
@@ -1356,6 +1403,7 @@ enum Misfit {
         found: i64,
         min: i64,
         max: i64,
+        kind: NumKind,
     },
     /// A field that follows another of its frame (`follows: {field}`) does not.
     NotFollowing {
@@ -1416,6 +1464,7 @@ impl Misfit {
                 found,
                 min,
                 max,
+                kind,
             } => DecodeError::OutOfRange {
                 message: m.name.clone(),
                 field: name(field, bit),
@@ -1423,6 +1472,7 @@ impl Misfit {
                 found,
                 min,
                 max,
+                kind,
             },
             Misfit::NotFollowing {
                 field,
@@ -1452,7 +1502,7 @@ fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
         return (0, 0);
     }
     let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
-    let unsigned = read_uint(bytes, f.byte_order);
+    let unsigned = read_number(f, bytes);
     let v = if f.signed {
         sign_extend(unsigned, 8 * f.width as u32)
     } else {
@@ -1500,6 +1550,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
                         found: v,
                         min,
                         max,
+                        kind: NumKind::Int,
                     });
                 }
             }
@@ -1553,6 +1604,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
                     found: v,
                     min,
                     max,
+                    kind: f.num_kind(),
                 });
             }
         }
@@ -1577,6 +1629,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
                     found: bv,
                     min,
                     max,
+                    kind: NumKind::Int,
                 });
             }
         }
@@ -1809,7 +1862,7 @@ pub fn encode(
         let (lo, hi) = if f.ty == FieldType::Bit {
             (0, 1)
         } else {
-            raw_limits(8 * f.width as u32, f.signed)
+            f.raw_span()
         };
         for &v in list {
             if let Some((min, max)) = range_violation(f, None, v) {
@@ -1818,6 +1871,7 @@ pub fn encode(
                     value: v,
                     min,
                     max,
+                    kind: f.num_kind(),
                 });
             }
             if v < lo || v > hi {
@@ -1888,7 +1942,7 @@ pub fn encode(
                     });
                 }
             }
-            let (min, max) = raw_limits(8 * f.width as u32, f.signed);
+            let (min, max) = f.raw_span();
             if v < min || v > max {
                 return Err(EncodeError::OutOfRange {
                     field: f.name.clone(),
@@ -1966,6 +2020,7 @@ pub fn encode(
                         value: v,
                         min,
                         max,
+                        kind: NumKind::Int,
                     });
                 }
                 let (min, max) = raw_limits(u32::from(b.width()), b.signed);
@@ -1989,9 +2044,10 @@ pub fn encode(
                     value: v,
                     min,
                     max,
+                    kind: f.num_kind(),
                 });
             }
-            let (min, max) = raw_limits(8 * f.width as u32, f.signed);
+            let (min, max) = f.raw_span();
             if v < min || v > max {
                 return Err(EncodeError::OutOfRange {
                     field: f.name.clone(),
@@ -2008,7 +2064,7 @@ pub fn encode(
                     (1u64 << bits) - 1
                 }
         };
-        write_uint(word, slot, f.byte_order);
+        write_number(f, word, slot);
         let bits = 8 * f.width as u32;
         ints.push(if f.signed {
             sign_extend(word, bits)

@@ -564,6 +564,9 @@ pub struct Field {
     pub signed: bool,
     /// The protocol's byte order, resolved here so emitters need not look it up.
     pub byte_order: ByteOrder,
+    /// `word_order: swapped` (32- and 64-bit numbers only): the 16-bit words travel in the
+    /// opposite order, byte `i` of the number in `byte_order` at [`crate::number::swap_index`].
+    pub word_swapped: bool,
     pub unit: Option<usize>,
     pub range: Option<(i64, i64)>,
     pub constant: Option<u64>,
@@ -661,6 +664,37 @@ impl Field {
     pub fn is_ascii(&self) -> bool {
         self.ty == FieldType::Ascii
     }
+
+    /// How its raw value reads as a number.
+    pub fn num_kind(&self) -> crate::number::NumKind {
+        crate::number::NumKind::of(self.ty)
+    }
+
+    pub fn is_float(&self) -> bool {
+        matches!(self.ty, FieldType::F32 | FieldType::F64)
+    }
+
+    /// A 64-bit integer or a float: never a count, a length or a value another follows.
+    pub fn is_wide(&self) -> bool {
+        matches!(
+            self.ty,
+            FieldType::U64 | FieldType::I64 | FieldType::F32 | FieldType::F64
+        )
+    }
+
+    /// The raw values the field's type holds (all of `i64` for 64-bit types, whose raw value
+    /// is their bits; an `f32`'s bits zero-extended).
+    pub fn raw_span(&self) -> (i64, i64) {
+        match self.width {
+            8 => (i64::MIN, i64::MAX),
+            w => crate::interp::raw_limits(8 * w as u32, self.signed),
+        }
+    }
+
+    /// Whether `raw` lies outside the field's spec range, compared as its type compares.
+    pub fn outside(&self, raw: i64, (min, max): (i64, i64)) -> bool {
+        !self.num_kind().within(raw, min, max)
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -722,6 +756,12 @@ pub enum StatedValue {
     Names(Vec<String>),
     /// The elements of a repeated field.
     Numbers(Vec<Rational>),
+    /// A number with more digits than a rational holds, as written: a 64-bit integer or a
+    /// float reads it as its type; any other field refuses it for `why`.
+    Exact {
+        text: String,
+        why: String,
+    },
 }
 
 #[derive(Debug, Clone)]

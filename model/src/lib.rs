@@ -32,6 +32,7 @@ pub mod interp;
 pub mod ir;
 pub mod load;
 pub mod model;
+pub mod number;
 pub mod rational;
 #[cfg(feature = "tools")]
 pub mod sim;

@@ -429,6 +429,33 @@ pub struct CodeFromRequest {
     pub or: i64,
 }
 
+/// A number field's 16-bit word order (`word_order`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WordOrder {
+    /// As the protocol's `byte_order` puts the whole number (the default).
+    Normal,
+    /// The 16-bit words in the opposite order, each word's bytes in the protocol's byte order.
+    Swapped,
+}
+
+/// A field's `range`: raw wire integers, or numbers (decimals allowed) for a float field.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldRange {
+    pub min: Bound,
+    pub max: Bound,
+}
+
+/// One end of a field's range as written: an integer (up to `u64::MAX`) or a decimal.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Bound {
+    Int(i64),
+    Uint(u64),
+    Float(f64),
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FieldType {
@@ -440,6 +467,13 @@ pub enum FieldType {
     I32,
     U24,
     I24,
+    /// 64-bit integers: a `u64` travels as its bits in an `i64` (`FieldValue::Int`, the
+    /// interpreter's `Raw::Int`), so values above `i64::MAX` read as negative there.
+    U64,
+    I64,
+    /// IEEE-754 binary32 and binary64; their raw value is their bits.
+    F32,
+    F64,
     Ascii,
     /// One bit; only as the element of a `repeat` (coils), packed least significant bit first.
     Bit,
@@ -453,10 +487,14 @@ pub struct Field {
     pub ty: FieldType,
     #[serde(default)]
     pub length: Option<i64>,
+    /// The order of a 32- or 64-bit number's 16-bit words (Modbus registers): `swapped` sends
+    /// them in the opposite order to the protocol's `byte_order`, each word's bytes in it.
+    #[serde(default)]
+    pub word_order: Option<WordOrder>,
     #[serde(default)]
     pub unit: Option<String>,
     #[serde(default)]
-    pub range: Option<Range>,
+    pub range: Option<FieldRange>,
     #[serde(default)]
     pub value: Option<i64>,
     #[serde(default, rename = "enum")]

@@ -846,6 +846,11 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
                 found: *v,
                 min,
                 max,
+                kind: if bits.is_some() {
+                    crate::number::NumKind::Int
+                } else {
+                    f.num_kind()
+                },
             });
         }
     }

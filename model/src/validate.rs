@@ -207,6 +207,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         flags: &flag_names,
         enum_defs: &enums,
         flag_defs: &flags,
+        unit_defs: &units,
     };
     let response_names = Names {
         map: spec
@@ -542,7 +543,11 @@ fn check_request_fields(
         for &i in answers {
             let cmd = &commands[i];
             let ok = cmd.fields.iter().any(|g| {
-                g.name == rel.field && g.bits.is_empty() && !g.is_ascii() && g.repeat.is_none()
+                g.name == rel.field
+                    && g.bits.is_empty()
+                    && !g.is_ascii()
+                    && !g.is_wide()
+                    && g.repeat.is_none()
             });
             if !ok {
                 sink.error(
@@ -1332,6 +1337,7 @@ struct Refs<'a> {
     flags: &'a Names,
     enum_defs: &'a [Enum],
     flag_defs: &'a [FlagSet],
+    unit_defs: &'a [Unit],
 }
 
 /// Parses `"0x2000"`: the number of hex digits gives the code's width.
@@ -1456,6 +1462,10 @@ fn field(
         T::I32 => (4, true),
         T::U24 => (3, false),
         T::I24 => (3, true),
+        T::U64 => (8, false),
+        T::I64 => (8, true),
+        T::F32 => (4, false),
+        T::F64 => (8, false),
         T::Bit => (1, false),
         T::Ascii => match f.length {
             Some(n) if (1..=255).contains(&n) => (n as usize, false),
@@ -1487,6 +1497,7 @@ fn field(
         width,
         signed,
         byte_order,
+        word_swapped: f.word_order == Some(model::WordOrder::Swapped),
         unit: None,
         range: None,
         constant: None,
@@ -1498,6 +1509,17 @@ fn field(
         repeat: None,
         follows: None,
     };
+    if f.word_order.is_some()
+        && !matches!(f.ty, T::U32 | T::I32 | T::F32 | T::U64 | T::I64 | T::F64)
+    {
+        sink.error(
+            join(p, "word_order"),
+            "`word_order` is for 32- and 64-bit numbers (u32 i32 f32 u64 i64 f64), whose 16-bit words it orders",
+        );
+    }
+    if matches!(f.ty, T::U64 | T::I64 | T::F32 | T::F64) {
+        return wide_field(f, p, out, refs, sink);
+    }
     if let Some(r) = &f.repeat {
         out.repeat = repeat(r, f, &join(p, "repeat"), earlier, sink);
         for (k, given) in [
@@ -1562,7 +1584,7 @@ fn field(
                     }
                 }
                 match earlier.iter().position(|e| &e.name == other) {
-                    Some(i) if earlier[i].bits.is_empty() && !earlier[i].is_ascii() && earlier[i].repeat.is_none() => {
+                    Some(i) if earlier[i].bits.is_empty() && !earlier[i].is_ascii() && !earlier[i].is_wide() && earlier[i].repeat.is_none() => {
                         out.follows = Some(Follows::Field(i, relation(other, sink)));
                     }
                     Some(_) => sink.error(
@@ -1708,6 +1730,7 @@ fn field(
     }
     out.range = f
         .range
+        .and_then(|r| int_range(r, &join(p, "range"), sink))
         .and_then(|r| range(r, bits, signed, &join(p, "range"), sink));
     let mut names = BTreeSet::new();
     for s in &f.special {
@@ -1793,6 +1816,7 @@ fn repeat(
         match earlier.iter().position(|e| e.name == r.count) {
             Some(i)
                 if !earlier[i].signed
+                    && !earlier[i].is_wide()
                     && !earlier[i].is_ascii()
                     && earlier[i].bits.is_empty()
                     && earlier[i].repeat.is_none() =>
@@ -1842,6 +1866,140 @@ fn repeat(
         max: r.max as usize,
         request,
     })
+}
+
+/// A range of an integer field as integers (up to `i64::MAX`; a `u64` field's may go higher,
+/// see [`wide_field`]).
+fn int_range(r: model::FieldRange, p: &str, sink: &mut Sink) -> Option<model::Range> {
+    let mut ok = true;
+    let mut end = |k: &str, b: model::Bound| match b {
+        model::Bound::Int(v) => v,
+        model::Bound::Uint(v) => {
+            sink.error(join(p, k), format!("{k} {v} does not fit the field's type"));
+            ok = false;
+            0
+        }
+        model::Bound::Float(v) => {
+            sink.error(
+                join(p, k),
+                format!("{k} {v} is not an integer: a range is raw wire integers (decimals only for f32 and f64)"),
+            );
+            ok = false;
+            0
+        }
+    };
+    let r = model::Range {
+        min: end("min", r.min),
+        max: end("max", r.max),
+    };
+    ok.then_some(r)
+}
+
+/// A 64-bit integer or float field: a plain number, with a `unit` whose scale is 1 and offset
+/// 0 (the raw value is the physical one), a `range` and a `word_order`; nothing else yet.
+fn wide_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut Sink) -> Field {
+    use model::FieldType as T;
+    let what = match f.ty {
+        T::F32 | T::F64 => "a float",
+        _ => "a 64-bit integer",
+    };
+    for (k, given) in [
+        ("value", f.value.is_some()),
+        ("enum", f.enum_.is_some()),
+        ("flags", f.flags.is_some()),
+        ("equals", f.equals.is_some()),
+        ("special", !f.special.is_empty()),
+        ("bits", !f.bits.is_empty()),
+        ("repeat", f.repeat.is_some()),
+        ("follows", f.follows.is_some()),
+    ] {
+        if given {
+            sink.error(
+                join(p, k),
+                format!("`{k}` cannot be combined with {what} field (not expressible yet)"),
+            );
+        }
+    }
+    match &f.unit {
+        Some(u) => match refs.units.get(u) {
+            Some(i) => {
+                let unit = &refs.unit_defs[i];
+                if unit.scale != Rational::int(1) || unit.offset != Rational::ZERO {
+                    sink.error(
+                        join(p, "unit"),
+                        format!(
+                            "unit `{u}` has scale {} and offset {}: {what} field takes a unit of scale 1 and offset 0 (its value as it travels is the physical value)",
+                            unit.scale, unit.offset
+                        ),
+                    );
+                }
+                out.unit = Some(i);
+            }
+            None => sink.error(
+                join(p, "unit"),
+                format!("refers to unit `{u}`, which is not defined in `units`"),
+            ),
+        },
+        None => sink.error(p, format!("{what} field needs a `unit`")),
+    }
+    let Some(r) = f.range else {
+        return out;
+    };
+    let rp = join(p, "range");
+    let kind = out.num_kind();
+    let mut ok = true;
+    let mut end = |k: &str, b: model::Bound| -> i64 {
+        let raw = match (f.ty, b) {
+            (T::I64, model::Bound::Int(v)) => Some(v),
+            (T::U64, model::Bound::Int(v)) if v >= 0 => Some(v),
+            (T::U64, model::Bound::Uint(v)) => Some(v as i64),
+            (T::F32, model::Bound::Int(v)) => Some(i64::from((v as f32).to_bits())),
+            (T::F32, model::Bound::Uint(v)) => Some(i64::from((v as f32).to_bits())),
+            (T::F32, model::Bound::Float(v)) if v.is_finite() => {
+                Some(i64::from((v as f32).to_bits()))
+                    .filter(|r| kind.float(*r).is_some_and(f64::is_finite))
+            }
+            (T::F64, model::Bound::Int(v)) => Some((v as f64).to_bits() as i64),
+            (T::F64, model::Bound::Uint(v)) => Some((v as f64).to_bits() as i64),
+            (T::F64, model::Bound::Float(v)) if v.is_finite() => Some(v.to_bits() as i64),
+            _ => None,
+        };
+        raw.unwrap_or_else(|| {
+            let shown = match b {
+                model::Bound::Int(v) => v.to_string(),
+                model::Bound::Uint(v) => v.to_string(),
+                model::Bound::Float(v) => v.to_string(),
+            };
+            let why = if out.is_float() {
+                "a float's range is finite numbers of its type"
+            } else {
+                "a 64-bit integer's range is integers of its type"
+            };
+            sink.error(
+                join(&rp, k),
+                format!("{k} {shown} does not fit the field: {why}"),
+            );
+            ok = false;
+            0
+        })
+    };
+    let (min, max) = (end("min", r.min), end("max", r.max));
+    if !ok {
+        return out;
+    }
+    if !kind.within(min, min, max) {
+        sink.error(
+            &rp,
+            format!(
+                "range is empty: min {} > max {}",
+                kind.text(min),
+                kind.text(max)
+            ),
+        );
+        return out;
+    }
+    out.range = Some((min, max));
+    out
 }
 
 fn range(r: model::Range, bits: u32, signed: bool, p: &str, sink: &mut Sink) -> Option<(i64, i64)> {
@@ -2310,7 +2468,18 @@ fn compatible_templates<'t>(
 fn stated(v: &model::OpenValue) -> Result<StatedValue, String> {
     use model::OpenValue as V;
     match v {
-        V::Number(t) => Rational::parse(t).map(StatedValue::Number),
+        V::Number(t) => Ok(match Rational::parse(t) {
+            // A negative zero keeps its sign for a float field.
+            Ok(n) if n == Rational::ZERO && t.trim_start().starts_with('-') => StatedValue::Exact {
+                text: t.clone(),
+                why: String::new(),
+            },
+            Ok(n) => StatedValue::Number(n),
+            Err(why) => StatedValue::Exact {
+                text: t.clone(),
+                why,
+            },
+        }),
         V::String(s) => Ok(StatedValue::Name(s.clone())),
         V::List(items) if items.iter().any(|i| matches!(i, V::Number(_))) => items
             .iter()
@@ -2591,6 +2760,30 @@ fn compare(
                 )),
             };
         }
+        Raw::Int(i) if bits.is_none() && f.is_wide() => {
+            // Read as the field's type: a decimal stated for a float is its nearest value (the
+            // frame's bits must be exactly those), `inf`, `-inf`, `NaN` by name.
+            let k = f.num_kind();
+            let (stated, text) = match want {
+                StatedValue::Number(n) => (k.parse(&n.to_string()), n.to_string()),
+                StatedValue::Name(s) if f.is_float() => (k.parse(s), s.clone()),
+                StatedValue::Exact { text, .. } => (k.parse(text), text.clone()),
+                _ => {
+                    return Err(format!(
+                        "a number field; state a number (the frame carries {})",
+                        k.text(*i)
+                    ))
+                }
+            };
+            return match stated {
+                Some(w) if w == *i => Ok(()),
+                Some(_) => Err(format!(
+                    "the frame carries {}, the example states {text}",
+                    k.text(*i)
+                )),
+                None => Err(format!("{text} is not a value of the field's type")),
+            };
+        }
         Raw::Int(i) => *i,
         Raw::List(list) => {
             let StatedValue::Numbers(want) = want else {
@@ -2636,6 +2829,10 @@ fn compare(
         }
     }
     match want {
+        StatedValue::Exact { text, why } => match Rational::parse(text) {
+            Ok(n) => compare(p, f, bits, raw, &StatedValue::Number(n), excused),
+            Err(_) => Err(why.clone()),
+        },
         StatedValue::Numbers(_) => Err("not a repeated field; state one value".to_owned()),
         StatedValue::Number(n) => {
             let (got, sym) = match unit.map(|u| &p.units[u]) {

@@ -375,6 +375,68 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         )],
     ),
     (
+        "float_scaled_unit",
+        &[
+            (
+                "commands.set_limits.fields.voltage_limit.unit",
+                "unit `volts` has scale 0.1 and offset 0: a float field takes a unit of scale 1 and offset 0",
+            ),
+            (
+                "responses.readings.fields.voltage.unit",
+                "unit `volts` has scale 0.1 and offset 0: a float field takes a unit of scale 1 and offset 0",
+            ),
+        ],
+    ),
+    (
+        "float_range_not_finite",
+        &[(
+            "responses.readings.fields.frequency.range.max",
+            "max inf does not fit the field: a float's range is finite numbers of its type",
+        )],
+    ),
+    (
+        "float_range_empty",
+        &[(
+            "responses.readings.fields.frequency.range",
+            "range is empty: min 65.5 > max 45.0",
+        )],
+    ),
+    (
+        "float_with_special",
+        &[(
+            "responses.readings.fields.frequency.special",
+            "`special` cannot be combined with a float field (not expressible yet)",
+        )],
+    ),
+    (
+        "u64_range_negative",
+        &[(
+            "responses.limits_set.fields.serial.range.min",
+            "min -1 does not fit the field: a 64-bit integer's range is integers of its type",
+        )],
+    ),
+    (
+        "i64_range_too_large",
+        &[(
+            "responses.readings.fields.drift.range.max",
+            "max 9223372036854775808 does not fit the field",
+        )],
+    ),
+    (
+        "example_wrong_float_value",
+        &[(
+            "examples[1].derived",
+            "voltage: the frame carries 230.1, the example states 230.2",
+        )],
+    ),
+    (
+        "word_order_on_u8",
+        &[(
+            "commands.get_status.fields.channel.word_order",
+            "`word_order` is for 32- and 64-bit numbers",
+        )],
+    ),
+    (
         "range_too_wide",
         &[(
             "commands.get_status.fields.channel.range.max",

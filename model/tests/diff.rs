@@ -396,3 +396,82 @@ fn transactions_changes_are_classified() {
     assert_eq!(got[3].text, "set_mode to retry: safe → not safe");
     assert_eq!(diff::diff(&new, &new), []);
 }
+
+/// Floats and 64-bit integers: a word order flipped, the same bits read as a float, a float's
+/// range narrowed and a u64's widened above `i64::MAX` are each classified as their bits say.
+#[test]
+fn word_order_and_number_kind_changes_are_classified() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/meter_floats.yaml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let old = busspec_model::load_str("old", &text).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(diff::diff(&old, &old), []);
+    let edited = text
+        .replace(
+            "{name: voltage, type: f32, word_order: swapped,",
+            "{name: voltage, type: f32,",
+        )
+        .replace(
+            "{name: counter, type: u32, word_order: swapped, unit: count}",
+            "{name: counter, type: f32, word_order: swapped, unit: count}",
+        )
+        .replace("range: {min: 45, max: 65}", "range: {min: 45.5, max: 65}")
+        .replace("range: {min: 1, max: 18446744073709551615}", "range: {min: 0, max: 18446744073709551615}")
+        // The examples no longer replay: give the counter and voltage the new reading's bytes.
+        .replace("values: {voltage: 230.1, frequency: 50, energy: 12345.678, energy_swapped: 0.1, pulses: 18446744073709551000, drift: -1234567890123, counter: 305419896, temperature: -5}", "values: {}")
+        .replace("19 9A 43 66 42 48", "43 66 19 9A 42 48");
+    let edited = fix_crc(&edited);
+    let new = busspec_model::load_str("new", &edited).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(
+        summary(&diff::diff(&old, &new)),
+        [
+            (
+                Wire,
+                "field_word_order_changed",
+                "responses.readings.fields.voltage"
+            ),
+            (
+                Api,
+                "range_narrowed",
+                "responses.readings.fields.frequency.range"
+            ),
+            (
+                Wire,
+                "field_number_kind_changed",
+                "responses.readings.fields.counter"
+            ),
+            (
+                Compat,
+                "range_widened",
+                "responses.limits_set.fields.serial.range"
+            ),
+            (Compat, "example_removed", "examples"),
+            (Compat, "example_added", "examples"),
+        ]
+    );
+}
+
+/// The meter fixture's readings example with its CRC-16/MODBUS recomputed.
+fn fix_crc(text: &str) -> String {
+    let at = text.find("derived: \"01 04 43").unwrap() + "derived: \"".len();
+    let end = at + text[at..].find('"').unwrap();
+    let mut bytes: Vec<u8> = text[at..end]
+        .split(' ')
+        .map(|b| u8::from_str_radix(b, 16).unwrap())
+        .collect();
+    bytes.truncate(bytes.len() - 2);
+    let mut crc = 0xFFFFu16;
+    for b in &bytes {
+        crc ^= u16::from(*b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xA001
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    // Printed high byte first (printed_byte_order big).
+    bytes.extend([(crc >> 8) as u8, crc as u8]);
+    let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    format!("{}{}{}", &text[..at], hex.join(" "), &text[end..])
+}

@@ -23,20 +23,121 @@ pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, CommandKind, DecodeError, Decoded,
-    EncodeError, FieldError, FieldValue, Message, Protocol, Repeated, Reply,
+    EncodeError, FieldError, FieldValue, Message, NumKind, Protocol, Repeated, Reply,
 };
 
-/// A wire integer type: the raw values a whole field of it holds, as a `from_fields` getter
-/// gives them (`u64` up to `i64::MAX`, as `FieldValue::Int` holds).
+/// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter
+/// gives them (a `u64`'s bits, an `f32`'s zero-extended, an `f64`'s: see `NumKind`).
 pub trait Wire: Copy {
     const MIN: i64;
     const MAX: i64;
+    /// How its raw value reads as a number.
+    const KIND: NumKind = NumKind::Int;
     /// `v`, which lies in `MIN..=MAX`.
     fn from_i64(v: i64) -> Self;
-    /// The value as `i64` (`as i64`).
+    /// The raw value as `i64` (`as i64`; a float's bits).
     fn to_i64(self) -> i64;
     /// The value as `u64` (`as u64`: sign-extended).
     fn to_u64(self) -> u64;
+    /// Whether raw value `raw` lies in `min..=max` (raw values), as the type orders numbers.
+    #[inline(always)]
+    fn within(raw: i64, min: i64, max: i64) -> bool {
+        min <= raw && raw <= max
+    }
+}
+
+/// A field's raw value as it travels in `FieldValue::Int` (a float's bits).
+#[inline(always)]
+pub fn raw<T: Wire>(v: T) -> i64 {
+    v.to_i64()
+}
+
+/// The raw value of an `f32` range bound in generated code.
+#[inline(always)]
+pub fn f32_raw(v: f32) -> i64 {
+    i64::from(v.to_bits())
+}
+
+/// The raw value of an `f64` range bound in generated code.
+#[inline(always)]
+pub fn f64_raw(v: f64) -> i64 {
+    v.to_bits() as i64
+}
+
+/// The raw value of a `u64` range bound in generated code (its bits).
+#[inline(always)]
+pub const fn u64_raw(v: u64) -> i64 {
+    v as i64
+}
+
+impl Wire for u64 {
+    const MIN: i64 = i64::MIN;
+    const MAX: i64 = i64::MAX;
+    const KIND: NumKind = NumKind::U64;
+    #[inline(always)]
+    fn from_i64(v: i64) -> Self {
+        v as u64
+    }
+    #[inline(always)]
+    fn to_i64(self) -> i64 {
+        self as i64
+    }
+    #[inline(always)]
+    fn to_u64(self) -> u64 {
+        self
+    }
+    #[inline(always)]
+    fn within(raw: i64, min: i64, max: i64) -> bool {
+        (min as u64) <= (raw as u64) && (raw as u64) <= (max as u64)
+    }
+}
+
+impl Wire for f32 {
+    const MIN: i64 = 0;
+    const MAX: i64 = u32::MAX as i64;
+    const KIND: NumKind = NumKind::F32;
+    #[inline(always)]
+    fn from_i64(v: i64) -> Self {
+        f32::from_bits(v as u32)
+    }
+    #[inline(always)]
+    fn to_i64(self) -> i64 {
+        i64::from(self.to_bits())
+    }
+    #[inline(always)]
+    fn to_u64(self) -> u64 {
+        u64::from(self.to_bits())
+    }
+    /// A NaN lies in no range.
+    #[inline(always)]
+    fn within(raw: i64, min: i64, max: i64) -> bool {
+        let f = |r: i64| f32::from_bits(r as u32);
+        f(min) <= f(raw) && f(raw) <= f(max)
+    }
+}
+
+impl Wire for f64 {
+    const MIN: i64 = i64::MIN;
+    const MAX: i64 = i64::MAX;
+    const KIND: NumKind = NumKind::F64;
+    #[inline(always)]
+    fn from_i64(v: i64) -> Self {
+        f64::from_bits(v as u64)
+    }
+    #[inline(always)]
+    fn to_i64(self) -> i64 {
+        self.to_bits() as i64
+    }
+    #[inline(always)]
+    fn to_u64(self) -> u64 {
+        self.to_bits()
+    }
+    /// A NaN lies in no range.
+    #[inline(always)]
+    fn within(raw: i64, min: i64, max: i64) -> bool {
+        let f = |r: i64| f64::from_bits(r as u64);
+        f(min) <= f(raw) && f(raw) <= f(max)
+    }
 }
 
 macro_rules! wire {
@@ -66,7 +167,6 @@ wire! {
     i16 = i16::MIN as i64, i16::MAX as i64;
     u32 = 0, u32::MAX as i64;
     i32 = i32::MIN as i64, i32::MAX as i64;
-    u64 = 0, i64::MAX;
     i64 = i64::MIN, i64::MAX;
 }
 
@@ -649,7 +749,7 @@ pub fn in_range_or<T: Wire>(
     special: &[i64],
 ) -> Result<(), DecodeError> {
     let raw = raw.to_i64();
-    if (min..=max).contains(&raw) || is_special(raw, special) {
+    if T::within(raw, min, max) || is_special(raw, special) {
         return Ok(());
     }
     Err(DecodeError::OutOfRange {
@@ -659,6 +759,7 @@ pub fn in_range_or<T: Wire>(
         found: raw,
         min,
         max,
+        kind: T::KIND,
     })
 }
 
@@ -767,7 +868,7 @@ pub fn encode_in_range_or<T: Wire>(
     special: &[i64],
 ) -> Result<(), EncodeError> {
     let raw = raw.to_i64();
-    if (min..=max).contains(&raw) || is_special(raw, special) {
+    if T::within(raw, min, max) || is_special(raw, special) {
         return Ok(());
     }
     Err(EncodeError::NotInRange {
@@ -775,6 +876,7 @@ pub fn encode_in_range_or<T: Wire>(
         value: raw,
         min,
         max,
+        kind: T::KIND,
     })
 }
 

@@ -93,8 +93,61 @@ pub struct Broadcast {
     pub answered: bool,
 }
 
+/// How a raw value (an `i64`, as [`FieldValue::Int`] carries it) reads as a number: the value
+/// itself for every integer type but `u64`, whose bits it carries (`v as u64`), as it carries
+/// an `f32`'s bits zero-extended (`f32::from_bits(v as u32)`) and an `f64`'s
+/// (`f64::from_bits(v as u64)`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum NumKind {
+    Int,
+    U64,
+    F32,
+    F64,
+}
+
+/// A raw value displayed as its [`NumKind`] reads it, as the JSON contract prints it: an
+/// integer in decimal; a finite float as `{:?}` prints it (the shortest text that reads back
+/// to the same bits); `inf`, `-inf`; `NaN` for the canonical quiet NaN and `NaN:0x…` (every
+/// bit) for any other.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Num(pub NumKind, pub i64);
+
+impl fmt::Display for Num {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Num(kind, raw) = *self;
+        let (nan, canonical, infinite, negative) = match kind {
+            NumKind::Int => return write!(f, "{raw}"),
+            NumKind::U64 => return write!(f, "{}", raw as u64),
+            NumKind::F32 => {
+                let v = f32::from_bits(raw as u32);
+                (
+                    v.is_nan(),
+                    raw as u32 == 0x7FC0_0000,
+                    v.is_infinite(),
+                    v.is_sign_negative(),
+                )
+            }
+            NumKind::F64 => {
+                let v = f64::from_bits(raw as u64);
+                let canonical = raw as u64 == 0x7FF8_0000_0000_0000;
+                (v.is_nan(), canonical, v.is_infinite(), v.is_sign_negative())
+            }
+        };
+        match (nan, canonical, infinite, negative, kind) {
+            (true, true, ..) => f.write_str("NaN"),
+            (true, false, .., NumKind::F32) => write!(f, "NaN:0x{:08X}", raw as u32),
+            (true, false, ..) => write!(f, "NaN:0x{:016X}", raw as u64),
+            (_, _, true, false, _) => f.write_str("inf"),
+            (_, _, true, true, _) => f.write_str("-inf"),
+            (.., NumKind::F32) => write!(f, "{:?}", f32::from_bits(raw as u32)),
+            _ => write!(f, "{:?}", f64::from_bits(raw as u64)),
+        }
+    }
+}
+
 /// One field's value as it travels: the raw wire integer (sign-extended where the field is
-/// signed; enums, flags and units by their raw value) or an ASCII field's bytes.
+/// signed; enums, flags and units by their raw value; a `u64`'s or a float's bits, see
+/// [`NumKind`]) or an ASCII field's bytes.
 /// See each message type's `visit`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum FieldValue<'a> {
@@ -397,6 +450,8 @@ pub enum DecodeError {
         found: i64,
         min: i64,
         max: i64,
+        /// How the three raw values read as numbers (the bits of a `u64` or a float).
+        kind: NumKind,
     },
     /// The address at `offset` is outside the device range `min..=max` and is neither the
     /// broadcast address nor the host address (where the protocol has them).
@@ -653,9 +708,13 @@ impl fmt::Display for DecodeError {
                 found,
                 min,
                 max,
+                kind,
             } => write!(
                 f,
-                "{message}.{field} at offset {offset} is {found}, outside its range {min}..={max}"
+                "{message}.{field} at offset {offset} is {}, outside its range {}..={}",
+                Num(kind, found),
+                Num(kind, min),
+                Num(kind, max)
             ),
             DecodeError::BadAddress {
                 offset,
@@ -711,6 +770,8 @@ pub enum EncodeError {
         value: i64,
         min: i64,
         max: i64,
+        /// How the three raw values read as numbers.
+        kind: NumKind,
     },
     /// The address is outside the device range `min..=max` and is neither the broadcast
     /// address nor the host address (where the protocol has them).
@@ -738,9 +799,13 @@ impl fmt::Display for EncodeError {
                 value,
                 min,
                 max,
+                kind,
             } => write!(
                 f,
-                "{field} = {value} is outside its range {min}..={max}"
+                "{field} = {} is outside its range {}..={}",
+                Num(kind, value),
+                Num(kind, min),
+                Num(kind, max)
             ),
             EncodeError::BadAddress { address, min, max } => write!(
                 f,

@@ -688,6 +688,7 @@ impl RepeatAt {
                     found,
                     min,
                     max,
+                    kind: crate::NumKind::Int,
                 });
             }
         }
@@ -745,6 +746,7 @@ impl RepeatAt {
                 value: held as i64,
                 min: self.min as i64,
                 max: hi as i64,
+                kind: crate::NumKind::Int,
             });
         }
         Ok(self.base + self.bytes_of(held))
@@ -764,6 +766,7 @@ impl RepeatAt {
             value: held as i64,
             min,
             max,
+            kind: crate::NumKind::Int,
         })
     }
 
@@ -783,6 +786,7 @@ impl RepeatAt {
                     value,
                     min,
                     max,
+                    kind: crate::NumKind::Int,
                 });
             }
         }

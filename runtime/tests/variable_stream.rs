@@ -248,6 +248,7 @@ fn byte(message: &'static str, field: &'static str, v: u8, max: u8) -> Result<u8
             found: i64::from(v),
             min: 0,
             max: i64::from(max),
+            kind: busspec_runtime::NumKind::Int,
         });
     }
     Ok(v)
@@ -310,6 +311,7 @@ impl Protocol for Toy {
                             found: i64::from(*v),
                             min: 0x10,
                             max: 0xFF,
+                            kind: busspec_runtime::NumKind::Int,
                         });
                     }
                 }

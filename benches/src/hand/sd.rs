@@ -108,6 +108,7 @@ fn out_of_range(
         found: found.into(),
         min: min.into(),
         max: max.into(),
+        kind: busspec_runtime::NumKind::Int,
     }
 }
 
@@ -410,6 +411,7 @@ fn in_range(field: &'static str, value: u8, min: u8, max: u8) -> Result<u8, Enco
             value: value.into(),
             min: min.into(),
             max: max.into(),
+            kind: busspec_runtime::NumKind::Int,
         });
     }
     Ok(value)

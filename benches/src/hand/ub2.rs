@@ -76,6 +76,7 @@ fn index(message: &'static str, a: u8, b: u8) -> Result<u16, DecodeError> {
             found: index.into(),
             min: 0,
             max: LAST_INDEX.into(),
+            kind: busspec_runtime::NumKind::Int,
         });
     }
     Ok(index)
@@ -306,6 +307,7 @@ fn put_index(index: u16) -> Result<(), EncodeError> {
             value: index.into(),
             min: 0,
             max: LAST_INDEX.into(),
+            kind: busspec_runtime::NumKind::Int,
         });
     }
     Ok(())

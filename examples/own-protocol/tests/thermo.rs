@@ -59,7 +59,8 @@ fn values_outside_a_range_are_refused() {
                 field: "mode",
                 value: i64::from(raw),
                 min: 0,
-                max: 3
+                max: 3,
+                kind: busspec_runtime::NumKind::Int,
             })
         );
     }

@@ -68,6 +68,7 @@ impl Why {
                 found,
                 min,
                 max,
+                kind: _,
             } => Why::OutOfRange {
                 field: field.to_owned(),
                 offset,

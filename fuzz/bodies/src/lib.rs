@@ -441,6 +441,7 @@ impl Refusal {
                 value,
                 min,
                 max,
+                ..
             } => Refusal::Range {
                 field: field.to_owned(),
                 value,
@@ -464,6 +465,7 @@ impl Refusal {
                 value,
                 min,
                 max,
+                ..
             } => Refusal::Range {
                 field: field.clone(),
                 value: *value,
