@@ -1,6 +1,6 @@
 //! The Modbus master variant as firmware for a Cortex-M4F (thumbv7em-none-eabihf): the board's
 //! UART, timer and driver-enable pin (`board.rs`) under the `embedded-io-async` driver, polling
-//! device 1 with [`poll_and_count`] through link-core's `Plain<Modbus>`. Built for the target in
+//! device 1 with `modbus::poll_and_count` through link-core's `Plain<Modbus>`. Built for the target in
 //! CI with the other firmware binaries (BENCHMARKS.md: flash). On a host it only says so.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
