@@ -13,7 +13,10 @@
 //! - a broadcast is carried out by every device and answered by none unless the command's
 //!   `broadcast.answered` says so, refusals included;
 //! - a write whose values do not fit the space's elements is refused as `outside`, and a
-//!   staged write is checked when it is staged, so a commit never fails half-way.
+//!   staged write is checked when it is staged, so a commit never fails half-way;
+//! - a reply the spec's rules cannot carry is not sent: Dynamixel's status packet to a READ
+//!   must hold as many bytes as the READ asked for, so a READ of 0 bytes (out of the spec's
+//!   range) gets silence, not a range error.
 
 use std::sync::Arc;
 
