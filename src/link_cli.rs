@@ -172,7 +172,7 @@ fn open<P: Link>(
     spec: &Spec,
     o: &TalkOptions,
 ) -> Result<Master<P, SerialTransport, SystemClock>, String> {
-    let baud = o.baud.unwrap_or(P::BAUD);
+    let baud = o.baud.unwrap_or(P::baud());
     if baud == 0 {
         return Err("error: --baud 0: a baud rate is positive".to_owned());
     }
@@ -181,11 +181,11 @@ fn open<P: Link>(
     if let Some(path) = o.pcapng {
         record(&mut m, spec, o.port, baud, path)?;
     }
-    if baud != P::BAUD {
+    if baud != P::baud() {
         // The gap in character times, and the driver-enable timing, follow the line's rate.
         let line = busspec_link::Line {
             baud,
-            ..busspec_link::Line::for_protocol::<P>()
+            ..busspec_link::Line::for_link::<P>()
         };
         let timing = busspec_link::Timing {
             inter_request_gap: busspec_link::Timing::for_line::<P>(&line).inter_request_gap,
@@ -332,7 +332,7 @@ fn one<P: Link, T: Transport, C: Clock>(
                 std::io::stdout()
                     .flush()
                     .map_err(|e| format!("error: cannot write output: {e}"))?;
-                eprintln!("{} refused {} ({})", P::NAME, request.name(), r.name());
+                eprintln!("{} refused {} ({})", P::name(), request.name(), r.name());
             }
             Ok(())
         }

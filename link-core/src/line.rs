@@ -60,6 +60,24 @@ impl Line {
         }
     }
 
+    /// [`Line::for_protocol`] from what the master reads of the spec ([`crate::Link`]'s
+    /// `baud` and `transactions`): the same line for a generated protocol, and the spec's for one
+    /// read at run time.
+    pub fn for_link<P: crate::Link>() -> Line {
+        let t = P::transactions();
+        let turnaround = match t.turnaround_us {
+            Some(us) => Duration::from_micros(us as u64),
+            None => Duration::ZERO,
+        };
+        Line {
+            baud: P::baud(),
+            bits_per_byte: t.character_bits,
+            echo: false,
+            driver_enable: None,
+            turnaround,
+        }
+    }
+
     /// How long `bytes` bytes take on the wire, rounded up to the nanosecond.
     pub const fn tx_time(&self, bytes: usize) -> Duration {
         let bits = bytes as u64 * self.bits_per_byte as u64;

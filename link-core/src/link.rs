@@ -220,6 +220,35 @@ pub trait Link: Protocol {
     const INTER_REQUEST_GAP: Duration =
         inter_request_gap::<Self>(Self::BAUD, Self::TRANSACTIONS.character_bits);
 
+    /// The protocol's name, its document's baud rate, its `transactions:` section, its device
+    /// and broadcast addresses: what the master reads of the spec's line constants. The
+    /// [`Protocol`] constants by default; a protocol whose spec is read at run time (the CLI's
+    /// `talk --spec`) answers from it instead, its constants being placeholders.
+    fn name() -> &'static str {
+        Self::NAME
+    }
+    /// See [`Link::name`].
+    fn baud() -> u32 {
+        Self::BAUD
+    }
+    /// See [`Link::name`].
+    fn transactions() -> busspec_runtime::Transactions {
+        Self::TRANSACTIONS
+    }
+    /// See [`Link::name`].
+    fn device_addresses() -> core::ops::RangeInclusive<u8> {
+        Self::DEVICE_ADDRESSES
+    }
+    /// See [`Link::name`].
+    fn broadcast_address() -> Option<u8> {
+        Self::BROADCAST_ADDRESS
+    }
+    /// The quiet time between two requests on a line of `baud` and `character_bits`
+    /// ([`inter_request_gap`] by default).
+    fn request_gap(baud: u32, character_bits: u32) -> Duration {
+        inter_request_gap::<Self>(baud, character_bits)
+    }
+
     /// Whether sending `r` twice does no more than sending it once, so a lost or garbled reply
     /// may be answered by sending it again: what the spec declares ([`Protocol::may_retry`]:
     /// its `transactions.retry`, by default by kind). A protocol's rules may add commands the

@@ -59,7 +59,7 @@ pub struct Timing {
 impl Timing {
     /// Defaults for a protocol on its document's line ([`Line::for_protocol`]).
     pub fn for_protocol<P: Link>() -> Timing {
-        Timing::for_line::<P>(&Line::for_protocol::<P>())
+        Timing::for_line::<P>(&Line::for_link::<P>())
     }
 
     /// Defaults for a protocol on `line`: the response timeout its spec declares
@@ -68,16 +68,16 @@ impl Timing {
     pub fn for_line<P: Link>(line: &Line) -> Timing {
         // Where the spec gives no reply time (UB2, SD): UB2 runs at 19,200 baud with a 10 ms
         // command gap; SD at 115,200 baud and 50 frames per second, one exchange every 20 ms.
-        let reply_timeout = match P::TRANSACTIONS.response_timeout_us {
+        let reply_timeout = match P::transactions().response_timeout_us {
             Some(us) => Duration::from_micros(u64::from(us)),
-            None if P::BAUD >= 100_000 => Duration::from_millis(50),
+            None if P::baud() >= 100_000 => Duration::from_millis(50),
             None => Duration::from_millis(200),
         };
         Timing {
             reply_timeout,
             byte_gap: Duration::from_millis(5),
             settle: reply_timeout,
-            inter_request_gap: crate::link::inter_request_gap::<P>(line.baud, line.bits_per_byte),
+            inter_request_gap: P::request_gap(line.baud, line.bits_per_byte),
             attempts: 3,
         }
     }
@@ -320,7 +320,7 @@ impl<P: Link> MasterCore<P> {
     pub fn new() -> Self {
         MasterCore {
             timing: Timing::for_protocol::<P>(),
-            line: Line::for_protocol::<P>(),
+            line: Line::for_link::<P>(),
             last_activity: None,
             freshness: [None; 256],
             checked: [0; 8],
@@ -488,7 +488,7 @@ impl<P: Link> MasterCore<P> {
         let probe = P::byte_order_probe();
         let needs_check = check
             && !probe.is_empty()
-            && Some(address) != P::BROADCAST_ADDRESS
+            && Some(address) != P::broadcast_address()
             && !self.byte_order_checked(address);
         if needs_check {
             self.phase = Phase::Probe(0);
@@ -536,7 +536,7 @@ impl<P: Link> MasterCore<P> {
         if P::freshness_mut(&mut request).is_some() {
             let last = match self.freshness[usize::from(address)] {
                 Some(v) => Some(v),
-                None if Some(address) == P::BROADCAST_ADDRESS => Some(Self::before_zero()),
+                None if Some(address) == P::broadcast_address() => Some(Self::before_zero()),
                 None => match P::freshness_readout() {
                     Some(readout) => {
                         // Read the device's view first; `request` waits in `target`.
@@ -580,14 +580,14 @@ impl<P: Link> MasterCore<P> {
     }
 
     fn check_address(request: &P::Request, address: u8) -> Result<bool, AddressProblem> {
-        if Some(address) == P::BROADCAST_ADDRESS {
+        if Some(address) == P::broadcast_address() {
             return if P::broadcast(request).accepted {
                 Ok(true)
             } else {
                 Err(AddressProblem::NoBroadcast)
             };
         }
-        if !P::DEVICE_ADDRESSES.contains(&address) {
+        if !P::device_addresses().contains(&address) {
             return Err(AddressProblem::NotDevice);
         }
         Ok(false)
@@ -826,7 +826,7 @@ impl<P: Link> MasterCore<P> {
         let reply = P::decode_reply(self.reply(), &request).map_err(Rejection::Decode)?;
         let (from, response) = (reply.address, reply.message);
         if self.broadcast {
-            if !P::DEVICE_ADDRESSES.contains(&from) {
+            if !P::device_addresses().contains(&from) {
                 return Err(Rejection::NotDevice { from });
             }
         } else {

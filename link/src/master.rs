@@ -37,7 +37,7 @@ pub use busspec_link_core::movement::MoveReport;
 use busspec_link_core::movement::{self, Drive, MoveError, Movement, MovementError};
 use busspec_link_core::Line;
 
-use busspec_runtime::{EncodeError, Message, Protocol};
+use busspec_runtime::{EncodeError, Message};
 
 use crate::clock::Clock;
 use crate::protocol::{byte_order_source, declared_byte_order, swapped_byte_order};
@@ -266,9 +266,9 @@ impl fmt::Display for LinkError {
 impl LinkError {
     /// [`LinkError::Refused`] for a request whose answer is needed, sent where nothing answers
     /// it (a broadcast the spec leaves unanswered).
-    pub fn unanswered<P: Protocol>(request: &P::Request, address: u8) -> LinkError {
+    pub fn unanswered<P: Link>(request: &P::Request, address: u8) -> LinkError {
         LinkError::Refused {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             response: "nothing",
@@ -278,14 +278,14 @@ impl LinkError {
 
     /// [`LinkError::Refused`]: the device answered `request` to `address` with `response`,
     /// which the operation cannot go on with, and `detail` says why.
-    pub fn refused<P: Protocol>(
+    pub fn refused<P: Link>(
         request: &P::Request,
         address: u8,
         response: &P::Response,
         detail: &str,
     ) -> LinkError {
         LinkError::Refused {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             response: response.name(),
@@ -449,7 +449,7 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
         loop {
             let now = self.clock.now();
             let io = |context: &str, source: io::Error| LinkError::Io {
-                context: format!("{} {context}", P::NAME),
+                context: format!("{} {context}", P::name()),
                 source,
             };
             match self.core.poll(now) {
@@ -629,7 +629,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
             address,
             problem,
         } => LinkError::Address {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             reason: match problem {
@@ -638,9 +638,9 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
                 }
                 AddressProblem::NotDevice => format!(
                     "not a device address (0x{:02X}..=0x{:02X}{})",
-                    P::DEVICE_ADDRESSES.start(),
-                    P::DEVICE_ADDRESSES.end(),
-                    match P::BROADCAST_ADDRESS {
+                    P::device_addresses().start(),
+                    P::device_addresses().end(),
+                    match P::broadcast_address() {
                         Some(b) => format!(", or broadcast 0x{b:02X}"),
                         None => String::new(),
                     }
@@ -652,7 +652,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
             address,
             attempts,
         } => LinkError::NoReply {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             attempts,
@@ -664,7 +664,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
             attempts,
             reason,
         } => LinkError::BadReply {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             attempts,
@@ -679,7 +679,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
             expected,
             received,
         } => LinkError::Collision {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             attempts,
@@ -694,7 +694,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
             attempts,
             received,
         } => LinkError::NoEcho {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             attempts,
@@ -705,7 +705,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
             let replies = core.probe_replies();
             let names: Vec<&str> = replies.iter().map(Message::name).collect();
             LinkError::Refused {
-                protocol: P::NAME,
+                protocol: P::name(),
                 request: request.name(),
                 address,
                 response: replies.first().map_or("nothing", Message::name),
@@ -737,7 +737,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
                     erratum: "",
                 });
             LinkError::ByteOrder {
-                protocol: P::NAME,
+                protocol: P::name(),
                 request: request.name(),
                 address,
                 check: Box::new(check),
@@ -753,7 +753,7 @@ pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>)
 fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
     match e {
         MoveError::NotATrigger { request } => LinkError::Refused {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             response: "nothing",
@@ -764,14 +764,14 @@ fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
             response,
             detail,
         } => LinkError::Refused {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             response: response.name(),
             detail: detail.to_owned(),
         },
         MoveError::Timeout { request, waited } => LinkError::MovementTimeout {
-            protocol: P::NAME,
+            protocol: P::name(),
             request: request.name(),
             address,
             waited,

@@ -167,7 +167,7 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
     let clock = SimClock::new();
     let devices: Vec<D> = (0..config.devices.max(1)).map(device).collect();
     let addresses: Vec<u8> = devices.iter().map(Device::address).collect();
-    let bus = SimBus::new(clock.clone(), BusConfig::new(P::BAUD), devices);
+    let bus = SimBus::new(clock.clone(), BusConfig::new(P::baud()), devices);
     let timing = Timing::for_protocol::<P>();
     let faults = FaultConfig::byte_error_rate(config.byte_error_rate, timing.reply_timeout);
     let line = Faulty::new(bus.clone(), clock.clone(), faults, config.seed);
@@ -189,7 +189,7 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
     }
     let mut rng = fastrand::Rng::with_seed(config.seed ^ 0x5EED);
     let mut report = SoakReport {
-        protocol: P::NAME,
+        protocol: P::name(),
         transactions: config.transactions,
         ..SoakReport::default()
     };

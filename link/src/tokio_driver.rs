@@ -119,7 +119,7 @@ impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
 
     async fn run(&mut self) -> Result<Exchange<P::Response>, LinkError> {
         let io = |context: &str, source: io::Error| LinkError::Io {
-            context: format!("{} {context}", P::NAME),
+            context: format!("{} {context}", P::name()),
             source,
         };
         let mut chunk = [0u8; 64];
