@@ -270,6 +270,75 @@ pub fn talk(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
     }
 }
 
+/// `talk --spec FILE`: one transaction in the protocol of a spec read at run time, through the
+/// same master ([`crate::interpreted::Interpreted`]).
+pub fn talk_spec(spec: Spec, o: &TalkOptions) -> Result<(), String> {
+    use crate::interpreted::Interpreted;
+    let spec = crate::interpreted::install(spec)?;
+    // The request as `encode` builds it from the arguments, by the interpreter.
+    let line = request_line(spec, o.command, o.address, o.args)?;
+    let wire = frames::Engine::interpreted(spec.clone())
+        .encode(&line)
+        .map_err(|e| format!("{}: {e}", o.command))?;
+    let request = Interpreted::decode_request(&wire)
+        .map_err(|e| format!("{}: {e}", o.command))?
+        .message;
+    if request.name() != o.command {
+        return Err(format!("{} is not a command", o.command));
+    }
+    let mut m = open::<Interpreted>(spec, o)?;
+    one(spec, &mut m, o.address, request)
+}
+
+/// `soak --spec FILE`: the master in the protocol of a spec read at run time against devices
+/// of its `device:` section, through a faulty line.
+pub fn soak_spec(spec: Spec, transactions: u64, rate: f64, seed: u64) -> Result<(), String> {
+    use crate::interpreted::Interpreted;
+    if !(0.0..=1.0).contains(&rate) {
+        return Err(format!("error: --rate {rate} is not a probability (0..=1)"));
+    }
+    let spec = crate::interpreted::install(spec)?;
+    if spec.commands.is_empty() {
+        return Err(format!("error: {} has no command to soak", spec.name));
+    }
+    let config = SoakConfig {
+        transactions,
+        byte_error_rate: rate,
+        seed,
+        devices: 2,
+    };
+    let shared = std::sync::Arc::new(spec.clone());
+    let for_devices = std::sync::Arc::clone(&shared);
+    let started = Instant::now();
+    let report = busspec_link::soak::run_with::<Interpreted, _>(
+        config,
+        move |i| {
+            let a = spec_sim::nth_address(&for_devices, i);
+            spec_sim::SpecDevice(busspec_model::sim::Sim::new(
+                std::sync::Arc::clone(&for_devices),
+                a,
+            ))
+        },
+        move |rng, d| loop {
+            if let Some(frame) = spec_sim::random_request(&shared, rng, d.address()) {
+                if let Ok(r) = Interpreted::decode_request(&frame) {
+                    break r.message;
+                }
+            }
+        },
+    );
+    print(&format!("{report}"))?;
+    for e in &report.examples {
+        print(&format!("  e.g. {e}"))?;
+    }
+    eprintln!(
+        "({} took {:.1} s)",
+        spec.name,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 /// `talk` for a built-in protocol without rules of its own: one transaction, through
 /// [`busspec_link::Plain`].
 struct TalkPlain<'a> {

@@ -4,6 +4,7 @@
 mod demo;
 mod dissector_cli;
 mod frames;
+mod interpreted;
 mod link_cli;
 mod pcapng;
 mod sniff;
@@ -192,6 +193,9 @@ enum Command {
         seed: u64,
         /// Only this protocol (default: all four built-in ones).
         protocol: Option<String>,
+        /// Soak the protocol of this spec file against devices of its `device:` section.
+        #[arg(long, value_name = "FILE", requires = "protocol")]
+        spec: Option<PathBuf>,
     },
 }
 
@@ -231,6 +235,10 @@ C-curve table, one line per entry, and with --svg FILE draws it. An SD string re
 byte_number reads the whole string and prints {\"protocol\",\"address\",\"message\",\"text\"}.
 
 Reads and setters are retried on a garbled reply or a timeout; movements and resets never.
+
+--spec FILE talks the protocol of a spec file read at run time (frames of up to 1,024 bytes):
+the same master, its timing, retries, broadcasts and refusals from the spec, with the
+interpreter encoding the request and decoding the reply.
 Exit status 1 with `error: ...` on stderr when no valid reply comes.";
 
 #[derive(Args)]
@@ -264,6 +272,9 @@ struct TalkArgs {
     /// The serial port (or pseudo-terminal) the device is on.
     #[arg(long, value_name = "PATH")]
     port: String,
+    /// Talk the protocol of this spec file (read at run time, by the interpreter).
+    #[arg(long, value_name = "FILE")]
+    spec: Option<PathBuf>,
     /// Baud rate (default: the document's: ub2 19200, sd 115200).
     #[arg(long)]
     baud: Option<u32>,
@@ -271,7 +282,7 @@ struct TalkArgs {
     /// else 200 below 100,000 baud and 50 from it: ub2 200, sd 50, modbus 1000, dynamixel 50).
     #[arg(long, value_name = "MS")]
     timeout: Option<u64>,
-    /// A built-in protocol: ub2, sd, modbus or dynamixel.
+    /// A built-in protocol: ub2, sd, modbus or dynamixel; or the `protocol:` of --spec.
     protocol: String,
     /// The device address (decimal or 0x..); the SD broadcast ID 0x1F where the command takes it.
     #[arg(long, value_parser = link_cli::parse_address)]
@@ -441,6 +452,18 @@ fn main() -> ExitCode {
             rate,
             seed,
             protocol,
+            spec: Some(file),
+        } => {
+            let name = protocol.unwrap_or_default();
+            protocol_spec("soak", &name, &file)
+                .and_then(|p| link_cli::soak_spec(p, transactions, rate, seed))
+        }
+        Command::Soak {
+            transactions,
+            rate,
+            seed,
+            protocol,
+            spec: None,
         } => {
             let chosen: Vec<&str> = match protocol.as_deref() {
                 Some(p) => vec![p],
@@ -583,6 +606,11 @@ fn usage_error(subcommand: &str, msg: String) -> ! {
 
 /// The protocol to work with: a built-in one (its generated code, embedded so the binary works
 /// from any directory), or the spec in `--spec FILE` (the interpreter), whose name must match.
+/// The spec file `file`, which must define protocol `name`.
+fn protocol_spec(subcommand: &str, name: &str, file: &Path) -> Result<Protocol, String> {
+    protocol(subcommand, name, Some(file)).map(|e| e.spec)
+}
+
 fn protocol(subcommand: &str, name: &str, spec: Option<&Path>) -> Result<Engine, String> {
     let loaded = match spec {
         Some(file) => Engine::interpreted(load_file(file).map_err(|d| load_errors(&d))?),
@@ -1150,7 +1178,7 @@ fn diff(args: DiffArgs) -> ExitCode {
 }
 
 fn talk(a: TalkArgs) -> Result<(), String> {
-    let p = protocol("talk", &a.protocol, None)?.spec;
+    let p = protocol("talk", &a.protocol, a.spec.as_deref())?.spec;
     let options = link_cli::TalkOptions {
         port: &a.port,
         baud: a.baud,
@@ -1162,7 +1190,12 @@ fn talk(a: TalkArgs) -> Result<(), String> {
         timeout: a.timeout.map(std::time::Duration::from_millis),
         pcapng: a.pcapng.as_deref(),
     };
-    link_cli::talk(&p, &options).map_err(|e| {
+    let talked = if a.spec.is_some() {
+        link_cli::talk_spec(p, &options)
+    } else {
+        link_cli::talk(&p, &options)
+    };
+    talked.map_err(|e| {
         if e.starts_with("error: ") {
             e
         } else {
