@@ -307,26 +307,8 @@ pub fn soak_spec(spec: Spec, transactions: u64, rate: f64, seed: u64) -> Result<
         seed,
         devices: 2,
     };
-    let shared = std::sync::Arc::new(spec.clone());
-    let for_devices = std::sync::Arc::clone(&shared);
     let started = Instant::now();
-    let report = busspec_link::soak::run_with::<Interpreted, _>(
-        config,
-        move |i| {
-            let a = spec_sim::nth_address(&for_devices, i);
-            spec_sim::SpecDevice(busspec_model::sim::Sim::new(
-                std::sync::Arc::clone(&for_devices),
-                a,
-            ))
-        },
-        move |rng, d| loop {
-            if let Some(frame) = spec_sim::random_request(&shared, rng, d.address()) {
-                if let Ok(r) = Interpreted::decode_request(&frame) {
-                    break r.message;
-                }
-            }
-        },
-    );
+    let report = spec_sim::soak::<Interpreted>(std::sync::Arc::new(spec.clone()), config)?;
     print(&format!("{report}"))?;
     for e in &report.examples {
         print(&format!("  e.g. {e}"))?;
@@ -775,26 +757,7 @@ impl busspec_protocols::ProtocolVisitor for SoakSpec {
     type Output = Result<busspec_link::soak::SoakReport, String>;
     fn visit<P: Protocol>(self) -> Self::Output {
         let spec = std::sync::Arc::new(busspec_json::load_spec::<P>()?);
-        let for_devices = std::sync::Arc::clone(&spec);
-        let mix = std::sync::Arc::clone(&spec);
-        let mut report = busspec_link::soak::run_with::<busspec_link::Plain<P>, _>(
-            self.config,
-            move |i| {
-                let a = spec_sim::nth_address(&for_devices, i);
-                spec_sim::SpecDevice(busspec_model::sim::Sim::new(
-                    std::sync::Arc::clone(&for_devices),
-                    a,
-                ))
-            },
-            move |rng, d| loop {
-                // The mix draws valid requests; a draw the codec would refuse is drawn again.
-                if let Some(frame) = spec_sim::random_request(&mix, rng, d.address()) {
-                    if let Ok(r) = P::decode_request(&frame) {
-                        break r.message;
-                    }
-                }
-            },
-        );
+        let mut report = spec_sim::soak::<busspec_link::Plain<P>>(spec, self.config)?;
         report.protocol = P::NAME;
         Ok(report)
     }

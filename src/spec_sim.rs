@@ -6,6 +6,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use busspec_link::sim::Device;
+use busspec_link::soak::{SoakConfig, SoakReport};
+use busspec_link::Link;
 use busspec_model::device::{Action, Source};
 use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{Direction, FieldType, Leaf, MessageRef};
@@ -241,4 +243,54 @@ pub fn devices(p: &Arc<Protocol>, addresses: &[u8]) -> Vec<SpecDevice> {
         .iter()
         .map(|&a| SpecDevice(Sim::new(Arc::clone(p), a)))
         .collect()
+}
+
+/// Draws the soak's mix makes for one request before it takes the fallback (below).
+const MAX_DRAWS: usize = 10_000;
+
+/// A request of the mix for the device at `address`, through `P`'s codec: drawn again while
+/// the codec refuses the draw, at most [`MAX_DRAWS`] times.
+fn draw<P: Link>(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Option<P::Request> {
+    (0..MAX_DRAWS).find_map(|_| {
+        let frame = random_request(p, rng, address)?;
+        P::decode_request(&frame).ok().map(|d| d.message)
+    })
+}
+
+/// The soak of `P` (a generated protocol, or one read at run time) against devices of `spec`'s
+/// `device:` section, with the request mix drawn from the spec. Each device's first request is
+/// drawn before the soak, with a generator of its own: a spec where no draw meets its rules is
+/// refused, and a request the mix cannot draw in [`MAX_DRAWS`] tries is that one, so no spec
+/// can hang the soak.
+pub fn soak<P: Link>(spec: Arc<Protocol>, config: SoakConfig) -> Result<SoakReport, String> {
+    let mut first = fastrand::Rng::with_seed(config.seed);
+    let fallback: Vec<(u8, P::Request)> = (0..config.devices.max(1))
+        .map(|i| {
+            let a = nth_address(&spec, i);
+            draw::<P>(&spec, &mut first, a).map(|r| (a, r)).ok_or_else(|| {
+                format!(
+                    "error: {}: no request drawn from the spec encodes ({MAX_DRAWS} draws): nothing to soak",
+                    spec.name
+                )
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    let for_devices = Arc::clone(&spec);
+    Ok(busspec_link::soak::run_with::<P, _>(
+        config,
+        move |i| {
+            SpecDevice(Sim::new(
+                Arc::clone(&for_devices),
+                nth_address(&for_devices, i),
+            ))
+        },
+        move |rng, d| {
+            draw::<P>(&spec, rng, d.address()).unwrap_or_else(|| {
+                fallback
+                    .iter()
+                    .find(|(a, _)| *a == d.address())
+                    .map_or(fallback[0].1, |(_, r)| *r)
+            })
+        },
+    ))
 }
