@@ -261,8 +261,12 @@ fn draw<P: Link>(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Option<P
 /// `device:` section, with the request mix drawn from the spec. Each device's first request is
 /// drawn before the soak, with a generator of its own: a spec where no draw meets its rules is
 /// refused, and a request the mix cannot draw in [`MAX_DRAWS`] tries is that one, so no spec
-/// can hang the soak.
-pub fn soak<P: Link>(spec: Arc<Protocol>, config: SoakConfig) -> Result<SoakReport, String> {
+/// can hang the soak. A protocol without addresses gets one device.
+pub fn soak<P: Link>(spec: Arc<Protocol>, mut config: SoakConfig) -> Result<SoakReport, String> {
+    // Frames without an address reach every device and each answers: one device on such a bus.
+    if !spec.framing.has_address() {
+        config.devices = 1;
+    }
     let mut first = fastrand::Rng::with_seed(config.seed);
     let fallback: Vec<(u8, P::Request)> = (0..config.devices.max(1))
         .map(|i| {

@@ -252,6 +252,22 @@ fn a_spec_read_at_run_time_soaks_as_its_generated_code_does() {
     let report = text(&out.stdout);
     assert!(report.starts_with("mini: 2000 transactions"), "{report}");
     assert_eq!(figure(&report, "wrong, accepted silently"), 0, "{report}");
+    // A protocol without addresses: one device on the bus (two would both answer every
+    // request, and every transaction would fail in the collision).
+    let out = run(&[
+        "soak",
+        "--transactions",
+        "2000",
+        "--spec",
+        "model/tests/fixtures/valid/telemetry_le.yaml",
+        "telemetry_le",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report = text(&out.stdout);
+    let completed =
+        figure(&report, "completed first time") + figure(&report, "completed after retries");
+    assert!(completed > 1800, "{report}");
+    assert_eq!(figure(&report, "wrong, accepted silently"), 0, "{report}");
 }
 
 #[test]
