@@ -1606,7 +1606,7 @@ fn emit_encode_arm(
         }
     }
     if let (Some(at), Some(l), None) = (o.length, &p.framing.length, &repeat) {
-        let v = busspec_model::validate::length_value(&p.framing, l, m.code.len(), m.payload_len);
+        let v = p.framing.length_value(l, m.code.len(), m.payload_len);
         for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
             .into_iter()
             .enumerate()
