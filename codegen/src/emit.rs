@@ -17,9 +17,9 @@
 //!   print them;
 //! - encode writes the bytes known before any field in one `copy_from_slice`, and keeps a sum-8
 //!   in each arm, where it folds the constant header bytes.
-//! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "Flash and decode, fifth
-//!   round"): no range check that cannot fail, one buffer check per `encode` where a direction
-//!   has one frame length (it then precedes the message's own checks), a sum-8 arm's constant
+//! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "What the benches taught
+//!   the generator"; the rounds in its history): no range check that cannot fail, one buffer
+//!   check per `encode` where a direction has one frame length (it then precedes the message's own checks), a sum-8 arm's constant
 //!   head summed here, and, where every reply code of a direction has one length, a refused
 //!   reply's code written once by `decode` (`rt::reply_of`/`rt::reply_code`).
 //!
@@ -769,7 +769,8 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                     residue: 0,
                 };
                 // A static, not a const: one table in memory. Where `checksum` was not inlined,
-                // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, sd/checksum).
+                // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, "What the benches
+                // taught the generator").
                 static CRC: rt::crc::Crc<#ty> = rt::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
                 /// The frame checksum over `bytes`.
                 #[inline]
