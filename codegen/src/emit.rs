@@ -19,8 +19,8 @@
 //!   in each arm, where it folds the constant header bytes.
 //! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "What the benches taught
 //!   the generator"; the rounds in its history): no range check that cannot fail, one buffer
-//!   check per `encode` where a direction has one frame length (it then precedes the message's own checks), a sum-8 arm's constant
-//!   head summed here, and, where every reply code of a direction has one length, a refused
+//!   check per `encode` where a direction has one frame length (it then precedes the message's
+//!   own checks), a sum-8 arm's constant head summed here, and, where every reply code of a direction has one length, a refused
 //!   reply's code written once by `decode` (`rt::reply_of`/`rt::reply_code`).
 //!
 //! Typing rules:
