@@ -20,8 +20,9 @@
 //! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "What the benches taught
 //!   the generator"; the rounds in its history): no range check that cannot fail, one buffer
 //!   check per `encode` where a direction has one frame length (it then precedes the message's
-//!   own checks), a sum-8 arm's constant head summed here, and, where every reply code of a direction has one length, a refused
-//!   reply's code written once by `decode` (`rt::reply_of`/`rt::reply_code`).
+//!   own checks), a sum-8 arm's constant head summed here, and, where every reply code of a
+//!   direction has one length, a refused reply's code written once by `decode`
+//!   (`rt::reply_of`/`rt::reply_code`).
 //!
 //! Typing rules:
 //! - a unit with scale 1 and offset 0 stays a plain integer of its field's width;
