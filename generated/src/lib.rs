@@ -4,16 +4,19 @@
 //! - [`ub2`]: the Comet motorized vacuum capacitor, Universal-ID UB2 (SB-70);
 //! - [`sd`]: the SD-01/02 servo actuator (RS485 ICD);
 //! - [`modbus`]: Modbus RTU (function codes 0x01–0x06, 0x0F, 0x10 and their exceptions);
-//! - [`dynamixel`]: ROBOTIS Dynamixel Protocol 1.0.
+//! - [`dynamixel`]: ROBOTIS Dynamixel Protocol 1.0;
+//! - [`pelco_d`]: Pelco D, PTZ camera receivers (pan, tilt, lens, presets, position queries);
+//! - [`pelco_p`]: Pelco P, PTZ camera receivers (commands only: receivers do not answer).
 //!
 //! Each module has `Request` and `Response` enums (one variant per command or response, named
 //! fields, physical units as types), `encode` into a caller's buffer, `decode` from a byte
 //! slice, `decode_reply` against the request, a `StreamDecoder` for raw captures, and a unit
-//! type ([`ub2::Ub2`], [`sd::Sd`], [`modbus::Modbus`], [`dynamixel::Dynamixel`]) implementing
+//! type ([`ub2::Ub2`], [`sd::Sd`], [`modbus::Modbus`], [`dynamixel::Dynamixel`],
+//! [`pelco_d::PelcoD`], [`pelco_p::PelcoP`]) implementing
 //! [`Protocol`], so code generic over protocols works with all of them. [`PROTOCOLS`] and [`with_protocol`] find a protocol by name.
 //!
-//! Each module is behind the cargo feature of its name (`ub2`, `sd`, `modbus`, `dynamixel`; all
-//! four by default): a firmware build turns the default off and names the protocols it speaks,
+//! Each module is behind the cargo feature of its name (`ub2`, `sd`, `modbus`, `dynamixel`,
+//! `pelco_d`, `pelco_p`; all six by default): a firmware build turns the default off and names the protocols it speaks,
 //! so it compiles only those; [`PROTOCOLS`] lists the ones built.
 //!
 //! Everything protocol-independent (errors, [`Decoded`], [`FieldValue`], the stream decoder) is
