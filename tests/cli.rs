@@ -21,17 +21,16 @@ fn check_passes_on_every_spec_and_summarises_them() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let stdout = text(&out.stdout);
     let lines: Vec<&str> = stdout.lines().collect();
-    assert_eq!(lines.len(), 4, "{stdout}");
-    assert!(
-        lines[0].starts_with("spec/dynamixel.yaml: dynamixel ("),
-        "{stdout}"
-    );
-    assert!(
-        lines[1].starts_with("spec/modbus.yaml: modbus ("),
-        "{stdout}"
-    );
-    assert!(lines[2].starts_with("spec/sd.yaml: sd ("), "{stdout}");
-    assert!(lines[3].starts_with("spec/ub2.yaml: ub2 ("), "{stdout}");
+    assert_eq!(lines.len(), 6, "{stdout}");
+    for (line, name) in lines
+        .iter()
+        .zip(["dynamixel", "modbus", "pelco_d", "pelco_p", "sd", "ub2"])
+    {
+        assert!(
+            line.starts_with(&format!("spec/{name}.yaml: {name} (")),
+            "{stdout}"
+        );
+    }
     for l in lines {
         assert!(
             l.ends_with(": ok")

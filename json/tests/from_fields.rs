@@ -96,8 +96,10 @@ impl ProtocolVisitor for Property {
                 .unwrap_or_else(|err| panic!("{at}: {err}"));
             round_trip_typed(&typed, &at);
 
-            // The payload, elements of a repeated field included.
-            let (from, to) = (m.layout.payload, e.wire.len() - c.len());
+            // The payload, elements of a repeated field included (not the end bytes, which
+            // Pelco-P sends before its checksum).
+            let (from, to) = (m.layout.payload, e.wire.len() - spec.framing.trailer_len());
+            let sum_at = spec.framing.checksum_at(e.wire.len());
             if from >= to {
                 continue;
             }
@@ -112,8 +114,8 @@ impl ProtocolVisitor for Property {
                         let at = from + rng.next() as usize % (to - from);
                         wire[at] = rng.next() as u8;
                     }
-                    let sum = checksum::compute(&c.algorithm, &wire[c.covers_from..to]);
-                    write_uint(sum, &mut wire[to..to + c.len()], c.byte_order);
+                    let sum = checksum::compute(&c.algorithm, &wire[c.covers_from..sum_at]);
+                    write_uint(sum, &mut wire[sum_at..sum_at + c.len()], c.byte_order);
                     match decode_typed::<P>(&spec, direction, reply_to, &wire) {
                         Ok(t) => {
                             round_trip_typed(&t, &format!("{at}, derived frame {k} {wire:02X?}"));
@@ -175,8 +177,12 @@ fn from_fields_of_what_visit_gives_is_the_message() {
         assert!(examples >= least, "{name}: {examples} examples");
         // Most derived frames decode (constants and repeats aside): the property is checked
         // on thousands of field values, not only the documented ones.
+        // Pelco P's examples are mostly constants: its PTZ command word holds three fixed bits
+        // (a random byte there breaks one half the time or more) and a third of its examples
+        // carry only constant data bytes, so a fifth of its draws decode rather than a quarter.
+        let share = if *name == "pelco_p" { 5 } else { 4 };
         assert!(
-            derived >= examples * MUTATIONS / 4,
+            derived >= examples * MUTATIONS / share,
             "{name}: only {derived} derived frames decode"
         );
     }

@@ -4,7 +4,8 @@
 //! returns normally otherwise.
 //!
 //! For each protocol, one generic body over [`Protocol`] per target, with a thin wrapper per
-//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`]) that the fuzz targets call by name:
+//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`], [`pelco_d`], [`pelco_p`]) that the fuzz
+//! targets call by name:
 //! * [`decode`]: arbitrary bytes through `decode_request`, `decode_response` and
 //!   `decode_reply`; errors point inside the frame, and every accepted frame
 //!   re-encodes to the same bytes;
@@ -26,7 +27,8 @@
 //! Modbus and Dynamixel have the generated `decode` and `stream` bodies
 //! (`modbus_generated_decode`, ...), and [`interpreted`] has a decode and a stream body each
 //! for the interpreter on its own (`modbus_decode`, ...), from before the generator emitted
-//! them.
+//! them. Pelco D and Pelco P have the generated `decode` and `stream` bodies alone
+//! (`pelco_d_generated_decode`, ...).
 //!
 //! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
 //! the docs renderer and the code emitter): errors with messages, never a panic.
@@ -138,6 +140,22 @@ pub const TARGETS: &[Target] = &[
         name: "dynamixel_generated_stream",
         body: dynamixel::generated_stream,
     },
+    Target {
+        name: "pelco_d_generated_decode",
+        body: pelco_d::generated_decode,
+    },
+    Target {
+        name: "pelco_d_generated_stream",
+        body: pelco_d::generated_stream,
+    },
+    Target {
+        name: "pelco_p_generated_decode",
+        body: pelco_p::generated_decode,
+    },
+    Target {
+        name: "pelco_p_generated_stream",
+        body: pelco_p::generated_stream,
+    },
 ];
 
 /// The bodies for Modbus RTU, as the fuzz targets call them: the interpreter's own
@@ -171,6 +189,35 @@ pub mod dynamixel {
     /// [`crate::stream`] for the generated Dynamixel.
     pub fn generated_stream(data: &[u8]) {
         crate::stream::<Dynamixel>(data)
+    }
+}
+
+/// The bodies for Pelco D, as the fuzz targets call them: the generated code's (no interpreter
+/// bodies of its own: [`crate::decode`] and [`crate::stream`] hold it to the interpreter).
+pub mod pelco_d {
+    use busspec_protocols::pelco_d::PelcoD;
+
+    /// [`crate::decode`] for the generated Pelco D.
+    pub fn generated_decode(data: &[u8]) {
+        crate::decode::<PelcoD>(data)
+    }
+    /// [`crate::stream`] for the generated Pelco D.
+    pub fn generated_stream(data: &[u8]) {
+        crate::stream::<PelcoD>(data)
+    }
+}
+
+/// The bodies for Pelco P, as the fuzz targets call them: the generated code's.
+pub mod pelco_p {
+    use busspec_protocols::pelco_p::PelcoP;
+
+    /// [`crate::decode`] for the generated Pelco P.
+    pub fn generated_decode(data: &[u8]) {
+        crate::decode::<PelcoP>(data)
+    }
+    /// [`crate::stream`] for the generated Pelco P.
+    pub fn generated_stream(data: &[u8]) {
+        crate::stream::<PelcoP>(data)
     }
 }
 

@@ -45,9 +45,14 @@ pub fn repo_root() -> PathBuf {
 pub fn corpus() -> BTreeMap<&'static str, BTreeMap<String, Vec<u8>>> {
     let mut out = BTreeMap::new();
     for (proto, p) in specs() {
-        // A protocol with interpreter bodies of its own (Modbus, Dynamixel) has its generated
-        // ones as `<proto>_generated_<kind>`, and not every kind.
-        let interpreted = crate::interpreted::specs().iter().any(|(n, _)| *n == proto);
+        // A protocol with interpreter bodies of its own (Modbus, Dynamixel), or with generated
+        // targets alone (Pelco D and P), has its generated ones as `<proto>_generated_<kind>`,
+        // and not every kind.
+        let generated = format!("{proto}_generated_");
+        let interpreted = crate::interpreted::specs().iter().any(|(n, _)| *n == proto)
+            || crate::TARGETS
+                .iter()
+                .any(|t| t.name.starts_with(&generated));
         let mut put = |kind: &str, name: String, bytes: Vec<u8>| {
             let target = match interpreted {
                 true => format!("{proto}_generated_{kind}"),
