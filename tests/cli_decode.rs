@@ -980,3 +980,110 @@ fn frames_of_other_shapes_decode_and_encode_through_the_cli() {
         "{lines}"
     );
 }
+
+/// Pelco D and Pelco P are built in: their frames decode and encode by name, with the generated
+/// code, as the interpreter reads the specs; Pelco D's code-less standard command beside its
+/// coded extended commands, a query's reply checked against its request, Pelco P's end byte
+/// before its check byte, and its commands that get no reply.
+#[test]
+fn pelco_d_and_pelco_p_decode_and_encode_as_built_in_protocols() {
+    let right = "{\"protocol\":\"pelco_d\",\"direction\":\"request\",\"address\":1,\"code\":\"0x\",\"message\":\"standard\",\"fields\":{\"sense\":0,\"reserved\":0,\"auto_manual_scan\":0,\"camera_on_off\":0,\"iris_close\":0,\"iris_open\":0,\"focus_near\":0,\"focus_far\":0,\"zoom_wide\":0,\"zoom_tele\":0,\"tilt_down\":0,\"tilt_up\":0,\"pan_left\":0,\"pan_right\":1,\"extended\":0,\"pan_speed\":32,\"tilt_speed\":0}}\n";
+    let out = busspec(&["decode", "pelco_d", "FF 01 00 02 20 00 23"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout), right);
+    let interpreted = busspec(&[
+        "decode",
+        "--spec",
+        "spec/pelco_d.yaml",
+        "pelco_d",
+        "FF 01 00 02 20 00 23",
+    ]);
+    assert_eq!(text(&interpreted.stdout), right);
+    let back = busspec_stdin(&["encode", "pelco_d"], right);
+    assert!(back.status.success(), "{}", text(&back.stderr));
+    assert_eq!(text(&back.stdout), "FF010002200023\n");
+
+    // An extended command, a preset number with a meaning of its own, and the sum checked.
+    let out = busspec(&[
+        "decode",
+        "pelco_d",
+        "FF 01 00 07 00 21 29",
+        "FF 01 00 07 00 21 2A",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stdout),
+        "{\"protocol\":\"pelco_d\",\"direction\":\"request\",\"address\":1,\"code\":\"0x0007\",\"message\":\"go_to_preset\",\"fields\":{\"data1\":0,\"preset\":\"flip\"}}\n"
+    );
+    assert!(
+        text(&out.stderr).starts_with("frame 2 (FF 01 00 07 00 21 2A): "),
+        "{}",
+        text(&out.stderr)
+    );
+
+    // A query's extended response, as the reply to its request; the general response (four
+    // bytes) as the reply to a standard command.
+    let out = busspec(&[
+        "decode",
+        "pelco_d",
+        "--request",
+        "FF 01 00 51 00 00 52",
+        "FF 01 00 59 46 50 F0",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout),
+        "{\"protocol\":\"pelco_d\",\"direction\":\"response\",\"address\":1,\"code\":\"0x0059\",\"message\":\"pan_position_response\",\"fields\":{\"position\":180}}\n"
+    );
+    let out = busspec(&[
+        "decode",
+        "pelco_d",
+        "--request",
+        "FF 01 00 51 00 00 52",
+        "FF 01 05 06",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    let out = busspec(&[
+        "decode",
+        "pelco_d",
+        "--request",
+        "FF 01 00 02 20 00 23",
+        "FF 01 05 06",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains(
+            "\"message\":\"general_response\",\"fields\":{\"alarms\":[\"alarm_1\",\"alarm_3\"]}"
+        ),
+        "{}",
+        text(&out.stdout)
+    );
+
+    // Pelco P: address 0 is camera 1, the ETX before the XOR, which covers it.
+    let out = busspec(&["decode", "pelco_p", "A0 00 00 07 00 01 AF 09"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line = text(&out.stdout);
+    assert_eq!(
+        line,
+        "{\"protocol\":\"pelco_p\",\"direction\":\"request\",\"address\":0,\"code\":\"0x0007\",\"message\":\"go_to_preset\",\"fields\":{\"data1\":0,\"preset\":1}}\n"
+    );
+    let back = busspec_stdin(&["encode", "pelco_p"], &line);
+    assert_eq!(text(&back.stdout), "A00000070001AF09\n");
+    let out = busspec(&["decode", "pelco_p", "A0 00 00 07 00 01 AE 08"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("bad end byte at offset 6: expected 0xAF, found 0xAE"),
+        "{}",
+        text(&out.stderr)
+    );
+    // Its commands get no reply: nothing decodes as the reply to one.
+    let out = busspec(&[
+        "decode",
+        "pelco_p",
+        "--request",
+        "A0 00 00 07 00 01 AF 09",
+        "A0 00 00 59 46 50 AF 40",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    assert!(out.stdout.is_empty());
+}

@@ -1,4 +1,4 @@
-"""busspec's Modbus RTU and Dynamixel 1.0 specs against the reference implementations.
+"""busspec's Modbus RTU, Dynamixel 1.0 and Pelco D specs against the reference implementations.
 
 Each way, for every function code / instruction:
 - peer -> busspec: the peer's own encoder builds a frame; `busspec decode --spec` must decode it
@@ -468,9 +468,199 @@ def check_dynamixel_erratum():
         count("dynamixel-sdk", "busspec -> peer (refused by the peer: erratum dxl-e01)")
 
 
+# --------------------------------------------------------------- Pelco D (pyptzcontroller)
+#
+# pyptzcontroller 0.1.2's PtzControl writes its frames to a serial port and reads a position
+# query's 7-byte answer from it; here the port is an object that keeps what is written and
+# hands back what busspec encoded. Its public methods (stop, move, set_preset, go_to_preset,
+# move_to_pan_tilt, get_position) and, for the commands it has no method for (clear_preset,
+# aux_on, aux_off, reboot, the queries, move_to_zoom), its frame builder `_create_command`.
+# (libpelco 1.1, the other Pelco D package there, is Python 2 only: it does not import.)
+
+PELCO_D = os.path.join(ROOT, "spec", "pelco_d.yaml")
+BITS = ["sense", "auto_manual_scan", "camera_on_off", "iris_close", "iris_open", "focus_near",
+        "focus_far", "zoom_wide", "zoom_tele", "tilt_down", "tilt_up", "pan_left", "pan_right"]
+SPECIAL_PRESETS = {0x21: "flip", 0x22: "zero_pan"}
+
+
+class PeerPort:
+    """What PtzControl takes for a serial port: keeps the frames written, answers reads."""
+
+    def __init__(self):
+        self.is_open = True
+        self.written = []
+        self.answers = []
+
+    def reset_input_buffer(self):
+        pass
+
+    def write(self, frame):
+        self.written.append(bytes(frame))
+
+    def read(self, n):
+        return self.answers.pop(0)[:n] if self.answers else b""
+
+
+def pelco_peer(address):
+    import contextlib
+    import io
+
+    from ptz_control_lib import PtzControl
+
+    with contextlib.redirect_stdout(io.StringIO()):  # it reports every step on stdout
+        ptz = PtzControl(port="unused", address=address)
+    ptz.serial_port = PeerPort()
+    return ptz
+
+
+def peer_call(ptz, method, *args, **kwargs):
+    """Calls the peer, returns the frames it wrote and what the method returned."""
+    import contextlib
+    import io
+
+    ptz.serial_port.written = []
+    with contextlib.redirect_stdout(io.StringIO()):
+        result = getattr(ptz, method)(*args, **kwargs)
+    return ptz.serial_port.written, result
+
+
+def standard(**set_bits):
+    fields = {b: 0 for b in BITS}
+    fields.update({"pan_speed": 0, "tilt_speed": 0})
+    fields.update(set_bits)
+    return fields
+
+
+def pelco_cases():
+    """(address, peer method, args, kwargs, [(busspec message, fields)] it should write)."""
+    cases = []
+    for address in (1, 2, 0x7F, 0xFE, 0xFF):
+        cases.append((address, "stop", (), {}, [("standard", standard())]))
+        speeds = range(64) if address == 1 else rng.sample(range(64), 8)
+        for speed in speeds:
+            cases.append((address, "move", ("up", speed), {}, [("standard", standard(tilt_up=1, tilt_speed=speed))]))
+            cases.append((address, "move", ("down", speed), {}, [("standard", standard(tilt_down=1, tilt_speed=speed))]))
+            cases.append((address, "move", ("left", speed), {}, [("standard", standard(pan_left=1, pan_speed=speed))]))
+            cases.append((address, "move", ("right", speed), {}, [("standard", standard(pan_right=1, pan_speed=speed))]))
+        presets = range(1, 256) if address == 1 else rng.sample(range(1, 256), 8) + [0x21, 0x22]
+        for preset in presets:
+            value = SPECIAL_PRESETS.get(preset, preset)
+            cases.append((address, "set_preset", (preset,), {}, [("set_preset", {"preset": preset})]))
+            cases.append((address, "go_to_preset", (preset,), {}, [("go_to_preset", {"preset": value})]))
+            cases.append((address, "_create_command", ("clear_preset",), {"preset_id": preset},
+                          [("clear_preset", {"preset": preset})]))
+        for aux in range(1, 9):
+            cases.append((address, "_create_command", ("aux_on",), {"switch_id": aux}, [("set_auxiliary", {"auxiliary": aux})]))
+            cases.append((address, "_create_command", ("aux_off",), {"switch_id": aux}, [("clear_auxiliary", {"auxiliary": aux})]))
+        cases.append((address, "_create_command", ("reboot",), {}, [("remote_reset", {})]))
+        for q in ("pan", "tilt", "zoom"):
+            cases.append((address, "_create_command", (f"query_{q}",), {}, [(f"query_{q}_position", {})]))
+        for zoom in [0, 1, 0x1234, 0xFFFF] + rng.sample(range(0x10000), 4):
+            cases.append((address, "_create_command", ("move_to_zoom",), {"d1": zoom >> 8, "d2": zoom & 0xFF},
+                          [("set_zoom_position", {"position": zoom})]))
+        for _ in range(16 if address == 1 else 4):
+            pan = rng.randrange(36000) / 100
+            tilt = rng.randrange(-8500, 2001) / 100
+            pan_raw = int(pan * 100)
+            tilt_raw = int(36000 - tilt * 100) if tilt >= 0 else int(abs(tilt * 100))
+            cases.append((address, "move_to_pan_tilt", (pan, tilt), {},
+                          [("set_pan_position", {"position": pan_raw}), ("set_tilt_position", {"position": tilt_raw})]))
+    return cases
+
+
+# Fields busspec gives in degrees (the `centidegrees` unit, raw hundredths): compared as the raw
+# numbers the peer wrote.
+SCALED = {("set_pan_position", "position"): 100, ("set_tilt_position", "position"): 100,
+          ("pan_position_response", "position"): 100, ("tilt_position_response", "position"): 100}
+
+
+def raw_fields(message, fields):
+    out = {}
+    for k, v in fields.items():
+        scale = SCALED.get((message, k))
+        if scale is not None:
+            out[k] = round(v * scale)
+        else:
+            out[k] = v
+    return out
+
+
+def json_fields(message, fields):
+    """The raw numbers as `busspec encode` takes them (physical units)."""
+    out = {}
+    for k, v in fields.items():
+        scale = SCALED.get((message, k))
+        if scale is not None:
+            out[k] = v / scale
+        else:
+            out[k] = v
+    return out
+
+
+def check_pelco_d():
+    peer = "pyptzcontroller (Pelco D)"
+    peers = {}
+    cases = pelco_cases()
+    frames, wants = [], []
+    for address, method, args, kwargs, want in cases:
+        ptz = peers.setdefault(address, pelco_peer(address))
+        if method == "_create_command":
+            # The frame builder returns the frame rather than writing it.
+            _, frame = peer_call(ptz, method, *args, **kwargs)
+            written = [frame]
+        else:
+            written, _ = peer_call(ptz, method, *args, **kwargs)
+        if len(written) != len(want):
+            fail(f"{peer} {method}{args}: wrote {len(written)} frames, expected {len(want)}")
+        for frame, (message, fields) in zip(written, want):
+            frames.append(frame)
+            wants.append((address, message, fields))
+    # peer -> busspec: every frame decodes to what the peer built it from.
+    for frame, got, (address, message, fields) in zip(frames, decode(PELCO_D, "pelco_d", frames), wants):
+        if got["address"] != address:
+            fail(f"{peer} frame {frame.hex()}: busspec reads address {got['address']}, the peer wrote {address}")
+        expect(frame, {"message": got["message"], "fields": raw_fields(got["message"], got["fields"])},
+               {"message": message, **fields}, peer)
+        count(peer, "peer -> busspec")
+    # busspec -> peer: busspec encodes the same values to the peer's bytes.
+    objs = [{"message": m, "address": a, "fields": json_fields(m, f)} for a, m, f in wants]
+    for frame, ours, obj in zip(frames, encode(PELCO_D, "pelco_d", objs), objs):
+        if ours != frame:
+            fail(f"busspec encodes {obj} as {ours.hex()}, the peer as {frame.hex()}")
+        count(peer, "busspec -> peer")
+    # Position replies: busspec encodes them, the peer's get_position reads them (its queries
+    # decode in busspec, above and here).
+    for address in (1, 0x7F, 0xFF):
+        ptz = peers[address]
+        for _ in range(40):
+            pan_raw = rng.randrange(36000)
+            tilt_raw = rng.choice([rng.randrange(0, 8501), rng.randrange(34000, 36001)])
+            replies = encode(PELCO_D, "pelco_d", [
+                {"message": "pan_position_response", "address": address, "fields": {"position": pan_raw / 100}},
+                {"message": "tilt_position_response", "address": address, "fields": {"position": tilt_raw / 100}},
+            ])
+            ptz.serial_port.answers = list(replies)
+            written, (pan, tilt) = peer_call(ptz, "get_position")
+            want_tilt = (36000 - tilt_raw) / 100 if tilt_raw > 18000 else -tilt_raw / 100
+            if pan != pan_raw / 100 or tilt != want_tilt:
+                fail(f"the peer reads {[r.hex() for r in replies]} as pan {pan}, tilt {tilt}; busspec wrote {pan_raw}, {tilt_raw}")
+            count(peer, "busspec -> peer")
+            count(peer, "busspec -> peer")
+            queries = decode(PELCO_D, "pelco_d", written)
+            if [q["message"] for q in queries] != ["query_pan_position", "query_tilt_position"]:
+                fail(f"the peer's get_position wrote {[w.hex() for w in written]}, busspec reads {queries}")
+            for reply, query in zip(replies, written):
+                (g,) = decode(PELCO_D, "pelco_d", [reply], ["--request", query.hex()])
+                if g["message"] not in ("pan_position_response", "tilt_position_response"):
+                    fail(f"busspec reads {reply.hex()} as the reply to {query.hex()}: {g}")
+            count(peer, "peer -> busspec")
+            count(peer, "peer -> busspec")
+
+
 check_modbus()
 check_dynamixel()
 check_dynamixel_erratum()
+check_pelco_d()
 for (peer, way), n in sorted(counts.items()):
     print(f"{peer}: {n} frames {way}")
 print("reference check: ok")

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Checks spec/modbus.yaml and spec/dynamixel.yaml against the reference implementations:
-# pymodbus and the ROBOTIS dynamixel-sdk, installed from PyPI into a virtual environment under
+# Checks spec/modbus.yaml, spec/dynamixel.yaml and spec/pelco_d.yaml against the reference
+# implementations: pymodbus, the ROBOTIS dynamixel-sdk and pyptzcontroller (a Pelco D camera
+# controller), installed from PyPI into a virtual environment under
 # target/ that this script makes (rebuilt when missing). Frames each peer's encoders build must
 # decode through `busspec decode` to the values they were built from, and frames
 # `busspec encode` builds must be read identically by the peers (tests/reference/check.py);
@@ -13,7 +14,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 venv=target/reference-venv
-pins=(pymodbus==3.16.1 dynamixel-sdk==4.1.0 pyserial==3.5)
+pins=(pymodbus==3.16.1 dynamixel-sdk==4.1.0 pyserial==3.5 pyptzcontroller==0.1.2)
 # Rebuilt unless exactly the pinned versions are there (dynamixel-sdk alone pulls any pyserial).
 if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c '
 import importlib.metadata as m, sys
@@ -23,7 +24,7 @@ sys.exit(any(m.version(p) != v for p, v in (a.split("==") for a in sys.argv[1:])
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check "${pins[@]}"
 fi
-"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"), "/ pyserial", m.version("pyserial"))'
+"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"), "/ pyserial", m.version("pyserial"), "/ pyptzcontroller", m.version("pyptzcontroller"))'
 cargo build --locked --quiet --bin busspec
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/check.py
 # Bounded twice: each talk call and the script time out on their own; this is the last resort.
