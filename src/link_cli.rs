@@ -388,10 +388,18 @@ fn one<P: Link, T: Transport, C: Clock>(
             Ok(())
         }
         None => {
-            eprintln!(
-                "sent {} to broadcast address 0x{address:02X}; it is not answered",
-                request.name()
-            );
+            // Not answered: a broadcast, or a command that gets no reply (Pelco P's).
+            if spec.framing.address.broadcast == Some(address) {
+                eprintln!(
+                    "sent {} to broadcast address 0x{address:02X}; it is not answered",
+                    request.name()
+                );
+            } else {
+                eprintln!(
+                    "sent {} to 0x{address:02X}; it gets no reply",
+                    request.name()
+                );
+            }
             Ok(())
         }
     }

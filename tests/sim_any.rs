@@ -391,3 +391,46 @@ fn talk_by_spec_reads_back_what_it_wrote_to_a_modbus_device() {
     let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(line["fields"]["registers"], serde_json::json!([7]));
 }
+
+/// `sim pelco_d` and `sim pelco_p` serve the built-in Pelco protocols: Pelco D answers every
+/// command (the general response, a query's extended response); a Pelco P command gets no
+/// reply, which talk says without calling the receiver's address a broadcast.
+#[test]
+fn talk_and_sim_speak_pelco_d_and_pelco_p() {
+    let sim = Sim::start(&["pelco_d"]);
+    let talk = |args: &[&str]| {
+        let mut all = vec!["talk", "--port", &sim.path, "--timeout", "2000", "pelco_d"];
+        all.extend_from_slice(args);
+        run(&all)
+    };
+    let out = talk(&["--address", "1", "set_zoom_speed", "speed=2"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(line["message"], "general_response", "{line}");
+    assert_eq!(line["fields"]["alarms"], serde_json::json!([]), "{line}");
+    let out = talk(&["--address", "1", "query_pan_position"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(line["message"], "pan_position_response", "{line}");
+    drop(sim);
+
+    let sim = Sim::start(&["pelco_p"]);
+    let out = run(&[
+        "talk",
+        "--port",
+        &sim.path,
+        "--timeout",
+        "2000",
+        "pelco_p",
+        "--address",
+        "0",
+        "go_to_preset",
+        "preset=5",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    assert_eq!(
+        text(&out.stderr),
+        "sent go_to_preset to 0x00; it gets no reply\n"
+    );
+}
