@@ -1059,6 +1059,22 @@ fn pelco_d_and_pelco_p_decode_and_encode_as_built_in_protocols() {
         text(&out.stdout)
     );
 
+    // A receiver that sums its reply as the older manuals say (the request's checksum plus the
+    // alarm byte: erratum pelco-d-e02, as a camera manual prints it) is refused.
+    let out = busspec(&[
+        "decode",
+        "pelco_d",
+        "--request",
+        "FF 01 00 20 00 00 21",
+        "FF 01 00 21",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    assert!(
+        text(&out.stderr).contains("checksum"),
+        "{}",
+        text(&out.stderr)
+    );
+
     // Pelco P: address 0 is camera 1, the ETX before the XOR, which covers it.
     let out = busspec(&["decode", "pelco_p", "A0 00 00 07 00 01 AF 09"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
