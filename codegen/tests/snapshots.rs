@@ -190,6 +190,12 @@ fn the_generator_has_no_gaps() {
     assert!(specs.len() > 8, "{specs:?}");
     for spec in specs {
         let p = busspec_model::load_file(&spec).unwrap_or_else(|d| panic!("{d}"));
+        // The one gap left (issue 23): escaping is served by the interpreter alone so far.
+        if p.framing.escaping.is_some() {
+            assert_eq!(p.generator_gaps().len(), 1, "{}", spec.display());
+            assert!(busspec_codegen::emit::emit_module(&p, "x", "x").is_err());
+            continue;
+        }
         assert_eq!(
             p.generator_gaps(),
             Vec::<String>::new(),
