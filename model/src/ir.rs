@@ -877,12 +877,6 @@ impl Protocol {
             .collect();
         lengths.sort_unstable();
         lengths.dedup();
-        if self.framing.escaping.is_some() {
-            gaps.push(
-                "escaping (`framing.escaping`): generated codecs do not escape or unescape yet"
-                    .to_owned(),
-            );
-        }
         let max = crate::validate::MAX_DISTINCT_LENGTHS;
         if lengths.len() > max {
             for m in self.commands.iter().chain(&self.responses) {

@@ -528,11 +528,8 @@ impl<'p> StreamDecoder<'p> {
         let mut dirs = std::mem::take(&mut self.dirs);
         dirs.clear();
         if self.p.framing.escaping.is_some() {
-            return match self.escaped_lens(flushing, &mut lens) {
-                Escaped::Try => {
-                    dirs.resize(lens.len(), 3);
-                    self.try_lens(lens, dirs, out)
-                }
+            return match self.escaped_lens(flushing, &mut lens, &mut dirs) {
+                Escaped::Try => self.try_lens(lens, dirs, out),
                 Escaped::Drop => {
                     (self.lens, self.dirs) = (lens, dirs);
                     self.drop_byte(out);
@@ -664,7 +661,7 @@ impl<'p> StreamDecoder<'p> {
     /// The frame lengths at the head of the buffer of a protocol with escaping (see the
     /// module docs, "Escaped frames"), in `lens`: up to the first end byte after the start
     /// bytes (byte escaping, COBS), or as the length field of stuffed frames says.
-    fn escaped_lens(&self, flushing: bool, lens: &mut Vec<usize>) -> Escaped {
+    fn escaped_lens(&self, flushing: bool, lens: &mut Vec<usize>, dirs: &mut Vec<u8>) -> Escaped {
         let (p, buf) = (self.p, &self.buf);
         let f = &p.framing;
         let head = f.head(0);
@@ -695,6 +692,7 @@ impl<'p> StreamDecoder<'p> {
             return match buf.iter().skip(lead).position(|&b| b == end) {
                 Some(i) => {
                     lens.push(lead + i + 1);
+                    dirs.push(3);
                     Escaped::Try
                 }
                 None => wait,
@@ -719,24 +717,36 @@ impl<'p> StreamDecoder<'p> {
             let ok = usize::try_from(len)
                 .ok()
                 .filter(|&n| n >= rule.head_len && n <= self.capacity);
-            if let Some(n) = ok.filter(|n| !lens.contains(n)) {
+            if let Some(n) = ok {
+                // Each length with the directions whose rule gives it (try_lens merges them).
                 lens.push(n);
+                dirs.push(match d {
+                    Direction::Request => 1,
+                    Direction::Response => 2,
+                });
             }
         }
         if lens.is_empty() {
             return Escaped::Drop;
         }
         if lens.iter().any(|&n| !complete(n)) {
-            if flushing {
-                lens.retain(|&n| complete(n));
-                return if lens.is_empty() {
-                    Escaped::Drop
-                } else {
-                    Escaped::Try
-                };
+            if !flushing {
+                lens.clear();
+                dirs.clear();
+                return Escaped::NeedMore;
             }
+            let keep: Vec<(usize, u8)> = (lens.iter().copied().zip(dirs.iter().copied()))
+                .filter(|&(n, _)| complete(n))
+                .collect();
             lens.clear();
-            return Escaped::NeedMore;
+            dirs.clear();
+            for (n, d) in keep {
+                lens.push(n);
+                dirs.push(d);
+            }
+            if lens.is_empty() {
+                return Escaped::Drop;
+            }
         }
         Escaped::Try
     }

@@ -23,6 +23,7 @@ extern crate std;
 pub use crc;
 
 pub mod codec;
+pub mod escape;
 mod protocol;
 mod repeated;
 pub mod stream;
