@@ -1898,10 +1898,8 @@ fn emit_escaping(p: &Protocol) -> TokenStream {
         }
         EscapeKind::Cobs => quote!(rt::EscapeKind::Cobs),
     };
-    // Where the escaped bytes lie, measured on a frame of any length.
-    let probe = f.head(0).len + 64;
-    let (from, to) = f.escaped_region(probe).unwrap_or((0, probe));
-    let (from_l, tail) = (usize_lit(from), usize_lit(probe - to));
+    let (from, tail) = f.escaped_bounds().unwrap_or((0, 0));
+    let (from_l, tail) = (usize_lit(from), usize_lit(tail));
     let head = f.head(0);
     let (sync_at, sync) = match head.start {
         Some(at) => (at, f.sync.clone()),
@@ -1929,12 +1927,20 @@ fn emit_escaping(p: &Protocol) -> TokenStream {
         None => quote!(rt::None),
     };
     let (rq, rs) = (rule(Direction::Request), rule(Direction::Response));
+    let bounds = |d: Direction| match p.frame_len_bounds(d) {
+        Some((lo, hi)) => {
+            let (lo, hi) = (usize_lit(lo), usize_lit(hi));
+            quote!((#lo, #hi))
+        }
+        None => quote!((usize::MAX, 0)),
+    };
+    let (bq, bs) = (bounds(Direction::Request), bounds(Direction::Response));
     let computed = e.computed == busspec_model::ir::Computed::Escaped;
     let c = &f.checksum;
     let covers = usize_lit(c.covers_from);
     let ck_len = usize_lit(c.len());
     let ck_be = c.byte_order == ByteOrder::Big;
-    let from_end = usize_lit(probe - f.checksum_at(probe));
+    let from_end = usize_lit(f.checksum_from_end());
     quote! {
         /// The longest frame before escaping: what generated code unescapes into.
         const UNESCAPED_LEN: usize = #unescaped;
@@ -1948,6 +1954,7 @@ fn emit_escaping(p: &Protocol) -> TokenStream {
             end: #end,
             length: #length,
             rules: [#rq, #rs],
+            lens: [#bq, #bs],
             computed_escaped: #computed,
             covers_from: #covers,
             checksum_len: #ck_len,

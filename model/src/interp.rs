@@ -2207,10 +2207,17 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
     wire
 }
 
-/// The same reordering the other way; it is its own inverse.
+/// The same reordering the other way; it is its own inverse. An escaped frame
+/// (`framing.escaping`) is reordered unescaped and escaped again, byte for byte, as example
+/// text is read back.
 #[cfg(feature = "tools")]
 pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
-    printed_to_wire(p, m, wire)
+    match escape::unescape_bytes(&p.framing, wire) {
+        Ok(plain) if p.framing.escaping.is_some() => {
+            escape::escape_bytes(&p.framing, &printed_to_wire(p, m, &plain))
+        }
+        _ => printed_to_wire(p, m, wire),
+    }
 }
 
 /// Parses frame text as people write it: hex digits with optional `0x` prefixes, spaces,

@@ -293,6 +293,20 @@ impl Framing {
         (from <= to).then_some((from, to))
     }
 
+    /// Where the escaped bytes of any frame lie: from this offset to this many bytes before
+    /// the frame's end (`None` without escaping).
+    pub fn escaped_bounds(&self) -> Option<(usize, usize)> {
+        let probe = self.head(0).len + 64;
+        let (from, to) = self.escaped_region(probe)?;
+        Some((from, probe - to))
+    }
+
+    /// How far before a frame's end its checksum starts.
+    pub fn checksum_from_end(&self) -> usize {
+        let probe = self.trailer_len();
+        probe - self.checksum_at(probe)
+    }
+
     /// The longest a frame of `len` unescaped bytes can be on the wire.
     pub fn wire_len(&self, len: usize) -> usize {
         match (&self.escaping, self.escaped_region(len)) {
@@ -919,6 +933,14 @@ impl Protocol {
             .map(|m| m.max_len)
             .max()
             .unwrap_or(0)
+    }
+
+    /// The shortest and longest frame of a direction (`None`: it has no message). An escaped
+    /// stream decodes a frame as a direction only where its unescaped length lies between them.
+    pub fn frame_len_bounds(&self, d: Direction) -> Option<(usize, usize)> {
+        let ms = self.messages(d);
+        let lo = ms.iter().map(|m| m.min_len()).min()?;
+        Some((lo, self.max_frame_len(d)))
     }
 
     /// The longest frame in a direction as it travels: escaped at worst.

@@ -689,14 +689,30 @@ impl<'p> StreamDecoder<'p> {
                 0
             };
             let end = f.end.first().copied().unwrap_or(0);
-            return match buf.iter().skip(lead).position(|&b| b == end) {
-                Some(i) => {
-                    lens.push(lead + i + 1);
-                    dirs.push(3);
-                    Escaped::Try
-                }
-                None => wait,
+            let Some(i) = buf.iter().skip(lead).position(|&b| b == end) else {
+                return wait;
             };
+            // Each direction whose frames can be as long unescaped (none where the escapes
+            // are bad): the generated stream decoder's candidates (`rt::escaped_lens`).
+            let len = lead + i + 1;
+            let Ok(plain) = crate::escape::unescape_bytes(f, &buf[..len]) else {
+                return Escaped::Drop;
+            };
+            let mut dir = 0;
+            for (d, bit) in [(Direction::Request, 1), (Direction::Response, 2)] {
+                let fits = p
+                    .frame_len_bounds(d)
+                    .is_some_and(|(lo, hi)| (lo..=hi).contains(&plain.len()));
+                if fits && self.direction.map_or(true, |want| want == d) {
+                    dir |= bit;
+                }
+            }
+            if dir == 0 {
+                return Escaped::Drop;
+            }
+            lens.push(len);
+            dirs.push(dir);
+            return Escaped::Try;
         }
         // Stuffed frames: the length field counts the stuffed bytes.
         let (Some(l), Some(at)) = (&f.length, head.length) else {

@@ -43,6 +43,10 @@ pub struct Escaping {
     /// length is the field's value less `k`) and the shortest frame, where stuffed frames are
     /// framed by their length field.
     pub rules: [Option<(i64, usize)>; 2],
+    /// Per direction (requests, responses): the shortest and longest frame unescaped
+    /// (`(usize::MAX, 0)` for a direction without messages); an escaped stream decodes a
+    /// frame as a direction only where its unescaped length lies between them.
+    pub lens: [(usize, usize); 2],
     /// Whether the length field and checksum are computed on the escaped bytes.
     pub computed_escaped: bool,
     /// The checksum: where its coverage starts, its length, high byte first, and its
@@ -406,13 +410,24 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
     }
     if let EscapeKind::Bytes { .. } | EscapeKind::Cobs = e.kind {
         let lead = e.sync.len();
-        let len = match head.iter().skip(lead).position(|&b| b == e.end) {
-            Some(i) => VarLen::len(lead + i + 1),
-            None => VarLen::NEED_MORE,
+        let Some(i) = head.iter().skip(lead).position(|&b| b == e.end) else {
+            return VarLens {
+                requests: VarLen::NEED_MORE,
+                responses: VarLen::NEED_MORE,
+            };
+        };
+        let len = lead + i + 1;
+        // Unescaped without a buffer: its length, or none where the escapes are bad.
+        let plain = unescape(e, &head[..len], &mut [], |_| 0)
+            .ok()
+            .map(|u| u.len);
+        let of = |(lo, hi): (usize, usize)| match plain {
+            Some(n) if lo <= n && n <= hi => VarLen::len(len),
+            _ => VarLen::NONE,
         };
         return VarLens {
-            requests: len,
-            responses: len,
+            requests: of(e.lens[0]),
+            responses: of(e.lens[1]),
         };
     }
     let Some((at, width, le)) = e.length else {

@@ -601,7 +601,8 @@ impl fmt::Display for CountRule {
 
 impl DecodeError {
     /// How far a frame decoded as one direction got before this error: 0, no message of the
-    /// direction has its code or its length field (the direction's own); 1, too short; 2, a
+    /// direction has its code, its length field (the direction's own) or its length (longer
+    /// than the direction's longest: an escaped stream tries every frame both ways); 1, too short; 2, a
     /// code whose messages have other lengths or counts; 3, a message's own refusal. A frame
     /// decoded both ways is refused for the reason that got further (the request's on a tie),
     /// as the interpreter, which decodes both ways at once, refuses it.
@@ -609,7 +610,8 @@ impl DecodeError {
         match self {
             DecodeError::UnknownCommand { .. }
             | DecodeError::UnknownResponse { .. }
-            | DecodeError::LengthMismatch { .. } => 0,
+            | DecodeError::LengthMismatch { .. }
+            | DecodeError::TooLong { .. } => 0,
             DecodeError::Truncated { .. } => 1,
             DecodeError::WrongLength { .. }
             | DecodeError::BadCount { .. }

@@ -74,6 +74,7 @@ pub mod cobs_link {
         end: 0x00,
         length: rt::Some((0, 1, true)),
         rules: [rt::Some((-4, 4)), rt::Some((-4, 4))],
+        lens: [(4, 6), (4, 258)],
         computed_escaped: false,
         covers_from: 0,
         checksum_len: 1,

@@ -77,6 +77,7 @@ pub mod dynamixel2_stuffed {
         end: 0x00,
         length: rt::Some((5, 2, true)),
         rules: [rt::Some((-7, 10)), rt::Some((-7, 10))],
+        lens: [(10, 16), (11, 14)],
         computed_escaped: true,
         covers_from: 0,
         checksum_len: 2,

@@ -77,6 +77,7 @@ pub mod hdlc_like {
         end: 0x7E,
         length: rt::None,
         rules: [rt::None, rt::None],
+        lens: [(6, 10), (6, 8)],
         computed_escaped: false,
         covers_from: 1,
         checksum_len: 2,

@@ -77,6 +77,7 @@ pub mod slip_sensor {
         end: 0xC0,
         length: rt::None,
         rules: [rt::None, rt::None],
+        lens: [(4, 6), (4, 12)],
         computed_escaped: false,
         covers_from: 0,
         checksum_len: 2,
