@@ -2507,8 +2507,9 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
     };
-    if p.framing.escaping.is_some() {
-        // Unescaped into a buffer of the longest frame, then decoded as any frame.
+    // Escaped frames (`framing.escaping`): unescaped into a buffer of the longest frame, then
+    // checked as any frame by a function of its own.
+    let (checks, unescaped_fn) = if p.framing.escaping.is_some() {
         let sum = frame_sum(p);
         let max = usize_lit(p.max_frame_len(d));
         let unescape = quote! {
@@ -2518,55 +2519,43 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
                 return rt::Err(rt::DecodeError::TooLong { max: #max, found: un.len });
             };
         };
-        if !replies {
-            return quote! {
-                #doc_decode
-                ///
-                /// The frame is unescaped first (`framing.escaping`).
-                pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+        if replies {
+            (
+                quote! {
+                    #unescape
+                    Self::decode_for_unescaped(plain, request).map_err(|e| un.locate(e))
+                },
+                quote! {
+                    /// [`Self::decode_for`] of the frame unescaped.
+                    fn decode_for_unescaped(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        } else {
+            (
+                quote! {
                     #unescape
                     Self::decode_unescaped(plain).map_err(|e| un.locate(e))
-                }
-                /// [`Self::decode`] of the frame unescaped.
-                fn decode_unescaped(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                    #checks
-                }
-                #dispatch
-            };
+                },
+                quote! {
+                    /// [`Self::decode`] of the frame unescaped.
+                    fn decode_unescaped(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
         }
-        return quote! {
-            #doc_decode
-            ///
-            /// Responses that only their request tells apart are reported as
-            /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
-            #[inline]
-            pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                Self::decode_for(frame, rt::None)
-            }
-            /// Decodes a frame as the reply to `request`.
-            #[inline]
-            pub fn decode_reply(frame: &[u8], request: &Request) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                Self::decode_for(frame, rt::Some(request))
-            }
-            /// The one decoder behind [`Self::decode`] and [`Self::decode_reply`]: the frame
-            /// unescaped first (`framing.escaping`).
-            fn decode_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                #unescape
-                Self::decode_for_unescaped(plain, request).map_err(|e| un.locate(e))
-            }
-            /// [`Self::decode_for`] of the frame unescaped.
-            fn decode_for_unescaped(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
-                #checks
-            }
-            #dispatch
-        };
-    }
+    } else {
+        (checks, quote!())
+    };
     if !replies {
         return quote! {
             #doc_decode
             pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
                 #checks
             }
+            #unescaped_fn
             #dispatch
         };
     }
@@ -2591,6 +2580,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         fn decode_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
             #checks
         }
+        #unescaped_fn
         #dispatch
     }
 }

@@ -4,6 +4,8 @@
 
 #![cfg(feature = "tools")]
 
+mod common;
+
 use busspec_model::escape::{escape_bytes, unescape_bytes};
 use busspec_model::interp::{self, parse_hex, Frame, Raw, Value};
 use busspec_model::ir::Direction;
@@ -175,25 +177,13 @@ fn stuffing_is_checked_and_counted_on_the_stuffed_bytes() {
     assert_eq!(interp::decode(&p, None, None, &wire).unwrap().message, r);
 }
 
-/// A small deterministic generator (xorshift), so failures replay.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-
-    /// A byte, drawn often from the bytes escaping treats specially.
-    fn byte(&mut self, special: &[u8]) -> u8 {
-        let v = self.next();
-        if v % 3 == 0 && !special.is_empty() {
-            special[(v >> 8) as usize % special.len()]
-        } else {
-            (v >> 16) as u8
-        }
+/// A byte, drawn often from the bytes escaping treats specially.
+fn byte(rng: &mut common::Rng, special: &[u8]) -> u8 {
+    let v = rng.next();
+    if v % 3 == 0 && !special.is_empty() {
+        special[(v >> 8) as usize % special.len()]
+    } else {
+        (v >> 16) as u8
     }
 }
 
@@ -202,7 +192,7 @@ impl Rng {
 /// Decoding random bytes never panics.
 #[test]
 fn escaping_is_one_to_one_on_random_bytes() {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = common::Rng(0x9E37_79B9_7F4A_7C15);
     for name in ESCAPED {
         let p = fixture(name);
         let f = &p.framing;
@@ -211,8 +201,8 @@ fn escaping_is_one_to_one_on_random_bytes() {
         ];
         let (mut round, mut accepted) = (0, 0);
         for _ in 0..20_000 {
-            let len = (rng.next() % 300) as usize;
-            let mut bytes: Vec<u8> = (0..len).map(|_| rng.byte(&special)).collect();
+            let len = rng.below(300);
+            let mut bytes: Vec<u8> = (0..len).map(|_| byte(&mut rng, &special)).collect();
             // Keep the fixed bytes around the escaped ones, so most frames reach the escaping.
             let start = f.sync.clone();
             if bytes.len() > start.len() + f.end.len() {

@@ -222,8 +222,6 @@ pub mod slip_sensor {
         /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
-        ///
-        /// The frame is unescaped first (`framing.escaping`).
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
             let mut plain = [0u8; UNESCAPED_LEN];
             let un = rt::unescape_frame(
@@ -479,7 +477,9 @@ pub mod slip_sensor {
         pub fn decode(frame: &[u8]) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Self::decode_for(frame, rt::None)
         }
-        /// Decodes a frame as the reply to `request`.
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
         #[inline]
         pub fn decode_reply(
             frame: &[u8],
@@ -487,8 +487,8 @@ pub mod slip_sensor {
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
             Self::decode_for(frame, rt::Some(request))
         }
-        /// The one decoder behind [`Self::decode`] and [`Self::decode_reply`]: the frame
-        /// unescaped first (`framing.escaping`).
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
         fn decode_for(
             frame: &[u8],
             request: rt::Option<&Request>,
