@@ -22,8 +22,8 @@ use busspec_model::ir::{Direction, MessageKind, MessageRef};
 use busspec_model::Protocol as Spec;
 use busspec_runtime::stream::{Candidate, Candidates, VarLens};
 use busspec_runtime::{
-    Broadcast, CommandKind, DecodeError, Decoded, Elements, EncodeError, FieldError, FieldValue,
-    Message, MessageNames, NumKind, Protocol, Reply, Transactions,
+    Broadcast, CommandKind, DecodeError, Decoded, Elements, EncodeError, EscapeFault, FieldError,
+    FieldValue, Message, MessageNames, NumKind, Protocol, Reply, Transactions,
 };
 
 /// The most bytes a frame of a spec read at run time may take.
@@ -421,6 +421,10 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             message: keep(&message),
             request: keep(&request),
         },
+        I::BadEscape { offset, fault } => DecodeError::BadEscape {
+            offset,
+            fault: escape_fault(fault),
+        },
         // The runtime words a bad count with a rule of its own; the interpreter's text is the
         // element count found against what may stand.
         I::BadCount { message, found, .. } => DecodeError::WrongLength {
@@ -428,6 +432,20 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected: &[],
             found: usize::try_from(found).unwrap_or(0),
         },
+    }
+}
+
+/// The interpreter's escaping fault as the runtime's (the same words).
+fn escape_fault(f: interp::EscapeFault) -> EscapeFault {
+    use interp::EscapeFault as I;
+    match f {
+        I::Escape { escape, found } => EscapeFault::Escape { escape, found },
+        I::Unescaped { found } => EscapeFault::Unescaped { found },
+        I::Stuffing { expected, found } => EscapeFault::Stuffing { expected, found },
+        I::CobsZero => EscapeFault::CobsZero,
+        I::CobsOverrun { code } => EscapeFault::CobsOverrun { code },
+        I::CobsEmpty => EscapeFault::CobsEmpty,
+        I::CobsTrailing => EscapeFault::CobsTrailing,
     }
 }
 

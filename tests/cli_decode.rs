@@ -1103,3 +1103,63 @@ fn pelco_d_and_pelco_p_decode_and_encode_as_built_in_protocols() {
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
     assert!(out.stdout.is_empty());
 }
+
+/// Escaped frames (`framing.escaping`) through the CLI with a spec read at run time: decode,
+/// encode back to the same bytes, a stream with noise and a bad escape, and the refusal's
+/// words on stderr.
+#[test]
+fn escaped_frames_decode_encode_and_stream() {
+    let spec = "model/tests/fixtures/valid/slip_sensor.yaml";
+    let wire = "81DBDCDBDD6028C0";
+    let out = busspec(&["decode", "--spec", spec, "slip_sensor", wire]);
+    assert!(out.status.success(), "{out:?}");
+    let line = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(
+        line,
+        "{\"protocol\":\"slip_sensor\",\"direction\":\"response\",\"code\":\"0x81\",\"message\":\"temperature\",\"fields\":{\"temperature\":-161.65}}\n"
+    );
+    let out = busspec_stdin(&["encode", "--spec", spec, "slip_sensor"], &line);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(String::from_utf8(out.stdout).unwrap().trim(), wire);
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        spec,
+        "slip_sensor",
+        "81 DB 41 DB DD 60 28 C0",
+    ]);
+    assert!(!out.status.success());
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        "frame 1 (81 DB 41 DB DD 60 28 C0): bad escape at offset 1: 0xDB followed by 0x41\n"
+    );
+    let capture = std::env::temp_dir().join(format!("busspec-slip-{}.bin", std::process::id()));
+    let bytes =
+        busspec_model::interp::parse_hex("3344 81DBDCDBDD6028C0 81DB41C0 82B1CAC0").unwrap();
+    std::fs::write(&capture, bytes).unwrap();
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        spec,
+        "slip_sensor",
+        "--stream",
+        capture.to_str().unwrap(),
+    ]);
+    let _ = std::fs::remove_file(&capture);
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 4, "{text}");
+    assert!(
+        lines[1].starts_with("{\"offset\":2,") && lines[1].contains("\"temperature\""),
+        "{text}"
+    );
+    assert_eq!(
+        lines[2],
+        "{\"offset\":10,\"skipped\":4,\"bytes\":\"81DB41C0\"}"
+    );
+    assert!(
+        lines[3].starts_with("{\"offset\":14,") && lines[3].contains("\"ack\""),
+        "{text}"
+    );
+}

@@ -18,7 +18,7 @@ use std::process::{Command, Output};
 
 use busspec_model::interp::{self, Raw};
 use busspec_model::ir::{Direction, Protocol};
-use busspec_model::{load_file, stream};
+use busspec_model::{escape, load_file, stream};
 use serde_json::value::RawValue;
 use serde_json::Value;
 
@@ -76,6 +76,11 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/ft12_fixed.yaml"),
         spec("model/tests/fixtures/valid/msp_v1.yaml"),
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),
+        // Escaped frames: the dissector unescapes them into a tvb of their own.
+        spec("model/tests/fixtures/valid/slip_sensor.yaml"),
+        spec("model/tests/fixtures/valid/hdlc_like.yaml"),
+        spec("model/tests/fixtures/valid/cobs_link.yaml"),
+        spec("model/tests/fixtures/valid/dynamixel2_stuffed.yaml"),
         derived_units(),
     ]
 }
@@ -143,23 +148,29 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
         if f.special.iter().any(|s| s.value == v) {
             continue;
         }
-        let mut w = wire.to_vec();
+        let mut w = plain(p, wire);
         let at = m.layout.payload + f.offset;
         interp::write_uint(v as u64, &mut w[at..at + f.width], f.byte_order);
         interp::reseal(p, &mut w);
-        frames.push(w);
+        frames.push(escape::escape(p, &w));
         break;
     }
     if let Some(at) = m.layout.address {
         let bad = (0..=255u8).rev().find(|a| !interp::address_allowed(p, *a));
         if let Some(a) = bad {
-            let mut w = wire.to_vec();
+            let mut w = plain(p, wire);
             w[at] = a;
             interp::reseal(p, &mut w);
-            frames.push(w);
+            frames.push(escape::escape(p, &w));
         }
     }
     frames
+}
+
+/// `wire` unescaped (`framing.escaping`; as it is without): frames are changed unescaped and
+/// escaped again ([`escape::escape`]).
+fn plain(p: &Protocol, wire: &[u8]) -> Vec<u8> {
+    escape::unescape_bytes(&p.framing, wire).unwrap()
 }
 
 /// The capture of `p`: every example with noise before every third, then out-of-spec frames
@@ -195,21 +206,36 @@ fn capture(p: &Protocol) -> (Vec<u8>, Vec<(Vec<u8>, String)>) {
             continue;
         }
         for _ in 0..3 {
-            let mut w = e.wire.clone();
+            let mut w = plain(p, &e.wire);
+            let end = w.len().saturating_sub(p.framing.trailer_len());
             w[m.layout.payload..end]
                 .iter_mut()
                 .for_each(|b| *b = rng.u8(..));
             interp::reseal(p, &mut w);
-            bytes.extend_from_slice(&w);
+            bytes.extend_from_slice(&escape::escape(p, &w));
             bytes.extend_from_slice(&good);
         }
     }
     let mut bad = Vec::new();
     if !p.framing.checksum.is_empty() {
         for e in &p.examples {
-            let mut w = e.wire.clone();
+            // The checksum changed where the spec computes it: before escaping, or on the
+            // bytes as they travel.
+            let escaped = p
+                .framing
+                .escaping
+                .as_ref()
+                .is_some_and(|x| x.computed == busspec_model::ir::Computed::Escaped);
+            let mut w = if escaped {
+                e.wire.clone()
+            } else {
+                plain(p, &e.wire)
+            };
             let at = p.framing.checksum_at(w.len());
             w[at] ^= 0x01;
+            if !escaped {
+                w = escape::escape_bytes(&p.framing, &w);
+            }
             bytes.extend_from_slice(&good);
             bytes.extend_from_slice(&w);
             bad.push((w, p.message(e.message).name.clone()));

@@ -555,10 +555,12 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let date = &d.date;
     let spec_sha256 = &p.spec_sha256;
     let name = &p.name;
-    let max_req = p.max_frame_len(Direction::Request);
-    let max_resp = p.max_frame_len(Direction::Response);
+    // Escaped frames: buffers hold the worst case on the wire.
+    let max_req = p.max_wire_len(Direction::Request);
+    let max_resp = p.max_wire_len(Direction::Response);
     let max = max_req.max(max_resp);
     let (max_req, max_resp, max) = (usize_lit(max_req), usize_lit(max_resp), usize_lit(max));
+    let escaping = emit_escaping(p);
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.",
         p.title,
@@ -658,6 +660,7 @@ fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
             end: &[#(#end),*],
             end_first: #end_first,
         };
+        #escaping
     }
 }
 
@@ -959,7 +962,13 @@ fn emit_flags(ctx: &Ctx) -> TokenStream {
             })
             .collect();
         let all: u64 = f.bits.iter().map(|b| 1u64 << b.bit).sum();
-        let all = lit_u(all, raw);
+        // Every bit named: none is unnamed (`x & !0xFF` is always 0, which clippy refuses).
+        let unnamed = if raw.bits < 64 && all == (1u64 << raw.bits) - 1 {
+            quote!(0)
+        } else {
+            let all = lit_u(all, raw);
+            quote!(self.0 & !#all)
+        };
         let names: Vec<TokenStream> = f
             .bits
             .iter()
@@ -981,7 +990,7 @@ fn emit_flags(ctx: &Ctx) -> TokenStream {
                 /// Every named flag, with its spec name.
                 pub const NAMED: [(Self, &'static str); #count] = [#(#names),*];
                 /// The bits no name is given to; a newer firmware may set them.
-                pub const fn unnamed(self) -> #r { self.0 & !#all }
+                pub const fn unnamed(self) -> #r { #unnamed }
                 /// Whether every bit of `other` is set.
                 pub const fn contains(self, other: Self) -> bool { self.0 & other.0 == other.0 }
                 /// The raw wire value.
@@ -1230,6 +1239,35 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!(#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)])
     };
+    let encode_fn = if p.framing.escaping.is_none() {
+        quote! {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #seal
+            }
+        }
+    } else {
+        let sum = frame_sum(p);
+        quote! {
+            ///
+            /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
+            /// bytes holds any.
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                let mut plain = [0u8; UNESCAPED_LEN];
+                let len = self.encode_unescaped(address, &mut plain)?;
+                rt::escape_frame(&ESCAPING, &plain[..len], buf, #sum)
+            }
+            /// The frame before escaping, into `buf`.
+            fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #seal
+            }
+        }
+    };
     quote! {
         #repeats
         #[doc = #what]
@@ -1267,12 +1305,7 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
             /// decode refuses: an address no frame may carry, the broadcast address for a command
             /// that does not accept it, a value outside its field's range.
-            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
-                rt::encode_address(address, &FRAME)?;
-                #take_once
-                let len = match *self { #(#encode_arms)* };
-                #seal
-            }
+            #encode_fn
             #dispatch
             #from_fields
         }
@@ -1841,6 +1874,98 @@ fn encode_end(
     }
 }
 
+/// `UNESCAPED_LEN` and `ESCAPING` for a protocol with `framing.escaping` (nothing without).
+fn emit_escaping(p: &Protocol) -> TokenStream {
+    let f = &p.framing;
+    let Some(e) = &f.escaping else {
+        return quote!();
+    };
+    let unescaped = usize_lit(
+        p.max_frame_len(Direction::Request)
+            .max(p.max_frame_len(Direction::Response)),
+    );
+    let kind = match &e.kind {
+        EscapeKind::Bytes { escape, map, .. } => {
+            let escape = hex_u8(*escape);
+            let pairs = map.iter().map(|(b, r)| {
+                let (b, r) = (hex_u8(*b), hex_u8(*r));
+                quote!((#b, #r))
+            });
+            quote!(rt::EscapeKind::Bytes { escape: #escape, map: &[#(#pairs),*] })
+        }
+        EscapeKind::Insert { after, byte, .. } => {
+            let after = after.iter().map(|b| hex_u8(*b));
+            let byte = hex_u8(*byte);
+            quote!(rt::EscapeKind::Insert { after: &[#(#after),*], byte: #byte })
+        }
+        EscapeKind::Cobs => quote!(rt::EscapeKind::Cobs),
+    };
+    let (from, tail) = f.escaped_bounds().unwrap_or((0, 0));
+    let (from_l, tail) = (usize_lit(from), usize_lit(tail));
+    let head = f.head(0);
+    let (sync_at, sync) = match head.start {
+        Some(at) => (at, f.sync.clone()),
+        None => (0, Vec::new()),
+    };
+    let sync_at = usize_lit(sync_at);
+    let sync = sync.iter().map(|b| hex_u8(*b));
+    let end = hex_u8(f.end.first().copied().unwrap_or(0));
+    let length = match (&f.length, head.length) {
+        (Some(l), Some(at)) => {
+            let (at, w, le) = (
+                usize_lit(at),
+                usize_lit(l.width),
+                p.byte_order == ByteOrder::Little,
+            );
+            quote!(rt::Some((#at, #w, #le)))
+        }
+        _ => quote!(rt::None),
+    };
+    let rule = |d: Direction| match f.length_rule(d).filter(|r| r.grows) {
+        Some(r) => {
+            let (k, h) = (i64_lit(r.k), usize_lit(r.head_len));
+            quote!(rt::Some((#k, #h)))
+        }
+        None => quote!(rt::None),
+    };
+    let (rq, rs) = (rule(Direction::Request), rule(Direction::Response));
+    let bounds = |d: Direction| match p.frame_len_bounds(d) {
+        Some((lo, hi)) => {
+            let (lo, hi) = (usize_lit(lo), usize_lit(hi));
+            quote!((#lo, #hi))
+        }
+        None => quote!((usize::MAX, 0)),
+    };
+    let (bq, bs) = (bounds(Direction::Request), bounds(Direction::Response));
+    let computed = e.computed == busspec_model::ir::Computed::Escaped;
+    let c = &f.checksum;
+    let covers = usize_lit(c.covers_from);
+    let ck_len = usize_lit(c.len());
+    let ck_be = c.byte_order == ByteOrder::Big;
+    let from_end = usize_lit(f.checksum_from_end());
+    quote! {
+        /// The longest frame before escaping: what generated code unescapes into.
+        const UNESCAPED_LEN: usize = #unescaped;
+        /// How frames are escaped on the wire (`framing.escaping`).
+        const ESCAPING: rt::Escaping = rt::Escaping {
+            kind: #kind,
+            from: #from_l,
+            tail: #tail,
+            sync_at: #sync_at,
+            sync: &[#(#sync),*],
+            end: #end,
+            length: #length,
+            rules: [#rq, #rs],
+            lens: [#bq, #bs],
+            computed_escaped: #computed,
+            covers_from: #covers,
+            checksum_len: #ck_len,
+            checksum_be: #ck_be,
+            checksum_from_end: #from_end,
+        };
+    }
+}
+
 /// Whether `encode` computes the checksum in each arm of its match, over the frame as a
 /// fixed-size array, or once after it. A sum-8 in each arm is inlined and folds the constant
 /// header bytes (UB2: 36 instructions per frame against 58 after the match); a table CRC in
@@ -2395,12 +2520,55 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         /// checksum and address, then its code, constants, repeated fields, the ranges the
         /// spec gives its fields and the command's broadcast rule.
     };
+    // Escaped frames (`framing.escaping`): unescaped into a buffer of the longest frame, then
+    // checked as any frame by a function of its own.
+    let (checks, unescaped_fn) = if p.framing.escaping.is_some() {
+        let sum = frame_sum(p);
+        let max = usize_lit(p.max_frame_len(d));
+        let unescape = quote! {
+            let mut plain = [0u8; UNESCAPED_LEN];
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, #sum)?;
+            let rt::Some(plain) = plain.get(..un.len) else {
+                return rt::Err(rt::DecodeError::TooLong { max: #max, found: un.len });
+            };
+        };
+        if replies {
+            (
+                quote! {
+                    #unescape
+                    Self::decode_for_unescaped(plain, request).map_err(|e| un.locate(e))
+                },
+                quote! {
+                    /// [`Self::decode_for`] of the frame unescaped.
+                    fn decode_for_unescaped(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        } else {
+            (
+                quote! {
+                    #unescape
+                    Self::decode_unescaped(plain).map_err(|e| un.locate(e))
+                },
+                quote! {
+                    /// [`Self::decode`] of the frame unescaped.
+                    fn decode_unescaped(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        }
+    } else {
+        (checks, quote!())
+    };
     if !replies {
         return quote! {
             #doc_decode
             pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
                 #checks
             }
+            #unescaped_fn
             #dispatch
         };
     }
@@ -2425,6 +2593,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
         fn decode_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
             #checks
         }
+        #unescaped_fn
         #dispatch
     }
 }
@@ -2795,6 +2964,55 @@ fn emit_stream(p: &Protocol) -> TokenStream {
     );
     let type_doc = doc(&doc_text);
     let transactions = crate::transactions::protocol_items(p, |c| any_of(&ident("Request"), c));
+    let framing_fns = if p.framing.escaping.is_none() {
+        quote! {
+            fn checksum_ok(frame: &[u8]) -> bool {
+                match frame.len().checked_sub(#ck_len) {
+                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    _ => false,
+                }
+            }
+            #[inline]
+            fn candidates(head: &[u8]) -> rt::Candidates {
+                #start_check
+                #mask
+                rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
+            }
+            #candidate
+            #variable
+        }
+    } else {
+        // Escaped frames are framed by their end byte or their length field alone.
+        quote! {
+            fn checksum_ok(frame: &[u8]) -> bool {
+                let mut plain = [0u8; UNESCAPED_LEN];
+                let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, #sum) {
+                    rt::Ok(un) => un,
+                    rt::Err(_) => return false,
+                };
+                let rt::Some(frame) = plain.get(..un.len) else {
+                    return false;
+                };
+                match frame.len().checked_sub(#ck_len) {
+                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    _ => false,
+                }
+            }
+            #[inline]
+            fn candidates(_head: &[u8]) -> rt::Candidates {
+                rt::Candidates { requests: 0, responses: 0 }
+            }
+            #[inline]
+            fn variable_candidates(head: &[u8]) -> rt::VarLens {
+                rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN)
+            }
+        }
+    };
+    let lens: Vec<Literal> = if p.framing.escaping.is_some() {
+        Vec::new()
+    } else {
+        lens.collect()
+    };
     quote! {
         #type_doc
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -2847,20 +3065,7 @@ fn emit_stream(p: &Protocol) -> TokenStream {
             fn is_nak(#nak_param: &Response) -> bool {
                 #is_nak
             }
-            fn checksum_ok(frame: &[u8]) -> bool {
-                match frame.len().checked_sub(#ck_len) {
-                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
-                    _ => false,
-                }
-            }
-            #[inline]
-            fn candidates(head: &[u8]) -> rt::Candidates {
-                #start_check
-                #mask
-                rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
-            }
-            #candidate
-            #variable
+            #framing_fns
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
         pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;

@@ -279,3 +279,19 @@ fn float_and_64_bit_specs_generate_their_snapshots() {
         "telemetry_le.rs",
     );
 }
+
+/// Escaping and stuffing (`framing.escaping`): SLIP, HDLC, COBS and Dynamixel 2.0's stuffing
+/// (`snapshots_compile.rs` compiles them and holds them to the interpreter).
+#[test]
+fn escaped_specs_generate_their_snapshots() {
+    check(
+        "model/tests/fixtures/valid/slip_sensor.yaml",
+        "slip_sensor.rs",
+    );
+    check("model/tests/fixtures/valid/hdlc_like.yaml", "hdlc_like.rs");
+    check("model/tests/fixtures/valid/cobs_link.yaml", "cobs_link.rs");
+    check(
+        "model/tests/fixtures/valid/dynamixel2_stuffed.yaml",
+        "dynamixel2_stuffed.rs",
+    );
+}

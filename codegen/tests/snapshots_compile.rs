@@ -18,6 +18,10 @@ include!("snapshots/pelco_p.rs");
 include!("snapshots/msp_v1.rs");
 include!("snapshots/meter_floats.rs");
 include!("snapshots/telemetry_le.rs");
+include!("snapshots/slip_sensor.rs");
+include!("snapshots/hdlc_like.rs");
+include!("snapshots/cobs_link.rs");
+include!("snapshots/dynamixel2_stuffed.rs");
 
 mod agree;
 
@@ -936,4 +940,105 @@ fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
         }
         other => panic!("both encoders must refuse a NaN latitude: {other:?}"),
     }
+}
+
+/// Frames mutated before escaping: each example unescaped, a byte changed or the frame cut or
+/// grown, resealed (and its length field made to agree), escaped again; so that most reach the
+/// checks after the escapes, where the wire's own mutations mostly break an escape.
+fn escaped_mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
+    let plain = busspec_model::escape::unescape_bytes(&p.framing, wire).unwrap();
+    let mut out = Vec::new();
+    for m in agree::mutations(p, d, &plain) {
+        out.push(busspec_model::escape::escape(p, &m));
+        out.push(busspec_model::escape::escape_bytes(&p.framing, &m));
+    }
+    out
+}
+
+/// Both engines on one escaped protocol: the examples replay, every frame mutated from them
+/// (escaped or not) and random bytes decode alike, refusals in the same words, and captures of
+/// the examples with noise frame alike however they are cut. Returns the frames each engine
+/// accepted and refused.
+fn escaped_agree<P: Protocol>(file: &str, seed: u64, message: &str) -> (usize, usize, usize) {
+    replay::<P>(file);
+    let p = fixture(file);
+    let t = agree::agree::<P>(&p);
+    assert!(t.accepted >= p.examples.len(), "{t:?}");
+    let (mut accepted, mut refused) = (0, 0);
+    for e in &p.examples {
+        let d = e.message.direction;
+        for f in escaped_mutations(&p, d, &e.wire) {
+            if agree::check::<P>(&p, d, None, &f) {
+                accepted += 1;
+            } else {
+                refused += 1;
+            }
+        }
+    }
+    let mut rng = agree::Rng(seed);
+    for _ in 0..3000 {
+        let n = rng.below(40) as usize;
+        let f: Vec<u8> = (0..n).map(|_| rng.below(256) as u8).collect();
+        for d in [Direction::Request, Direction::Response] {
+            agree::check::<P>(&p, d, None, &f);
+        }
+    }
+    let found = examples_stream_alike::<P>(&p, seed, message);
+    (accepted, refused, found)
+}
+
+/// Escaping and stuffing: SLIP (a map), HDLC (XOR), COBS (a block of 254 bytes in an example)
+/// and Dynamixel 2.0's stuffing (the length and CRC over the stuffed bytes), each held to the
+/// interpreter by [`escaped_agree`]; a bad escape is refused by both in the same words.
+#[test]
+fn escaped_snapshots_agree_with_the_interpreter() {
+    let slip = escaped_agree::<slip_sensor::SlipSensor>(
+        "model/tests/fixtures/valid/slip_sensor.yaml",
+        0x511F,
+        "temperature",
+    );
+    let hdlc = escaped_agree::<hdlc_like::HdlcLike>(
+        "model/tests/fixtures/valid/hdlc_like.yaml",
+        0x7E7D,
+        "write_register",
+    );
+    let cobs = escaped_agree::<cobs_link::CobsLink>(
+        "model/tests/fixtures/valid/cobs_link.yaml",
+        0xC0B5,
+        "log",
+    );
+    let dxl = escaped_agree::<dynamixel2_stuffed::Dynamixel2Stuffed>(
+        "model/tests/fixtures/valid/dynamixel2_stuffed.yaml",
+        0xFFFD,
+        "write4",
+    );
+    for (name, (accepted, refused, found)) in
+        [("slip", slip), ("hdlc", hdlc), ("cobs", cobs), ("dxl", dxl)]
+    {
+        assert!(
+            accepted > 5 && refused > 100 && found > 50,
+            "{name}: {accepted} {refused} {found}"
+        );
+    }
+    let p = fixture("model/tests/fixtures/valid/slip_sensor.yaml");
+    let bad = busspec_model::interp::parse_hex("81 DB 41 DB DD 60 28 C0").unwrap();
+    let g = slip_sensor::Response::decode(&bad).unwrap_err();
+    let i = busspec_model::interp::decode(&p, Some(Direction::Response), None, &bad).unwrap_err();
+    assert_eq!(
+        g.to_string(),
+        "bad escape at offset 1: 0xDB followed by 0x41"
+    );
+    assert_eq!(g.to_string(), i.to_string());
+    // The stuffed write: the generated encoder stuffs FD after FF FF FD and counts it.
+    let w = dynamixel2_stuffed::Request::Write4 {
+        address: 0x74,
+        value: 0x00FD_FFFF,
+    };
+    let mut buf = [0u8; dynamixel2_stuffed::MAX_FRAME_LEN];
+    let n = w.encode(1, &mut buf).unwrap();
+    assert_eq!(
+        &buf[..n],
+        &busspec_model::interp::parse_hex("FF FF FD 00 01 0A 00 03 74 00 FF FF FD FD 00 21 E7")
+            .unwrap()[..]
+    );
 }

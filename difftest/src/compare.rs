@@ -166,6 +166,7 @@ fn class(g: &DecodeError) -> &'static str {
         DecodeError::BadAddress { .. } => "bad address",
         DecodeError::BroadcastNotAccepted { .. } => "broadcast",
         DecodeError::BadCount { .. } | DecodeError::ByteCount { .. } => "bad count",
+        DecodeError::BadEscape { .. } => "bad escape",
     }
 }
 
@@ -190,6 +191,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             InterpError::BadAddress { .. } => "bad address",
             InterpError::BroadcastNotAccepted { .. } => "broadcast",
             InterpError::BadCount { .. } | InterpError::ByteCount { .. } => "bad count",
+            InterpError::BadEscape { .. } => "bad escape",
         },
     }
 }

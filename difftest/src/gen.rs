@@ -839,7 +839,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     } else {
         Vec::new()
     };
-    let has_length = g.chance(30);
+    // Stuffing (Dynamixel 2.0's) needs a length field before the code.
+    let want_insert = g.chance(8);
+    let has_length = want_insert || g.chance(30);
     // Frames without an address (a point-to-point link).
     let addressed = !g.chance(15);
     let code_first = addressed && g.chance(12);
@@ -880,7 +882,15 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         layout.extend(["address", "code"]);
     }
     if has_length {
-        let at = g.rng.usize(usize::from(has_start)..=layout.len());
+        let last = if want_insert {
+            layout
+                .iter()
+                .position(|p| *p == "code")
+                .unwrap_or(layout.len())
+        } else {
+            layout.len()
+        };
+        let at = g.rng.usize(usize::from(has_start)..=last);
         layout.insert(at, "length");
     }
     let (csum, csum_len) = checksum_yaml(&mut g);
@@ -889,7 +899,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         layout.push("checksum");
     }
     // Constant bytes after the checksum (M-Bus's 16, a line end).
-    let end: Vec<u8> = if g.chance(15) {
+    let mut end: Vec<u8> = if g.chance(15) {
         let n = *g.pick(&[1, 1, 2, 3]);
         (0..n).map(|_| g.rng.u8(..)).collect()
     } else {
@@ -903,6 +913,99 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         } else {
             layout.push("end");
         }
+    }
+    // Escaping (`framing.escaping`): byte escaping and COBS end every frame in one end byte
+    // (last); stuffing needs a length field before the code, which counts the stuffed bytes.
+    let pos = |layout: &[&str], x: &str| layout.iter().position(|p| *p == x);
+    let stuffable = has_length && pos(&layout, "length") < pos(&layout, "code");
+    let escaping = match g.rng.u8(0..100) {
+        _ if want_insert && stuffable => Escaping::Insert,
+        0..=9 => Escaping::Bytes,
+        10..=17 => Escaping::Cobs,
+        _ => Escaping::None,
+    };
+    let mut escaping_yaml = String::new();
+    match escaping {
+        Escaping::Bytes | Escaping::Cobs => {
+            layout.retain(|p| *p != "end");
+            layout.push("end");
+            let e = if escaping == Escaping::Cobs {
+                0
+            } else {
+                g.rng.u8(..)
+            };
+            end = vec![e];
+            if escaping == Escaping::Cobs {
+                escaping_yaml = "  escaping: {cobs: true, computed: unescaped}\n".to_owned();
+            } else {
+                // The escape byte and the end byte travel escaped, and perhaps more bytes; by
+                // a mask or a map whose replacements are none of them.
+                let x = loop {
+                    let x = g.rng.u8(..);
+                    if x != e {
+                        break x;
+                    }
+                };
+                let mut raw = vec![e, x];
+                for _ in 0..g.rng.usize(0..=2) {
+                    let b = g.rng.u8(..);
+                    if !raw.contains(&b) {
+                        raw.push(b);
+                    }
+                }
+                let items = |v: &[String]| v.join(", ");
+                if g.chance(50) {
+                    let mask = loop {
+                        let m = g.rng.u8(1..);
+                        if raw.iter().all(|b| !raw.contains(&(b ^ m))) {
+                            break Some(m);
+                        }
+                        if g.chance(5) {
+                            break None;
+                        }
+                    };
+                    if let Some(m) = mask {
+                        let bytes: Vec<String> = raw.iter().map(|b| format!("{b:#04X}")).collect();
+                        escaping_yaml = format!(
+                            "  escaping: {{escape: {x:#04X}, xor: {m:#04X}, bytes: [{}], computed: unescaped}}\n",
+                            items(&bytes)
+                        );
+                    }
+                }
+                if escaping_yaml.is_empty() {
+                    let mut used = raw.clone();
+                    let pairs: Vec<String> = raw
+                        .iter()
+                        .map(|b| {
+                            let r = loop {
+                                let r = g.rng.u8(..);
+                                if !used.contains(&r) {
+                                    break r;
+                                }
+                            };
+                            used.push(r);
+                            format!("{{byte: {b:#04X}, as: {r:#04X}}}")
+                        })
+                        .collect();
+                    escaping_yaml = format!(
+                        "  escaping: {{escape: {x:#04X}, map: [{}], computed: unescaped}}\n",
+                        items(&pairs)
+                    );
+                }
+            }
+        }
+        Escaping::Insert => {
+            // A short pattern of few distinct bytes, so that random values hold it.
+            let n = *g.pick(&[1usize, 2, 2, 3]);
+            let pool = [g.rng.u8(..), g.rng.u8(..)];
+            let after: Vec<String> = (0..n).map(|_| format!("{:#04X}", g.pick(&pool))).collect();
+            escaping_yaml = format!(
+                "  escaping: {{insert: {:#04X}, after: [{}], from: code, computed: escaped}}\n",
+                g.rng.u8(..),
+                after.join(", ")
+            );
+        }
+        Escaping::None => {}
     }
 
     // Address.
@@ -1306,16 +1409,26 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
     if has_length {
-        let width = if g.chance(70) { 1 } else { 2 };
+        // Stuffed frames count their stuffed bytes, at worst one in every pattern's length.
+        let stuffed = escaping == Escaping::Insert;
+        let width = if g.chance(70) && !stuffed { 1 } else { 2 };
         let mut parts: Vec<&str> = Vec::new();
         for p in layout.iter().copied() {
             if (p != "length" || g.chance(20)) && g.chance(70) {
                 parts.push(p);
             }
         }
-        // It counts the payload, as the validator requires.
+        // It counts the payload, as the validator requires (and the code where it is stuffed).
         if !parts.contains(&"payload") {
             parts.push("payload");
+        }
+        if stuffed {
+            let code_at = pos(&layout, "code");
+            for part in ["code", "address"] {
+                if pos(&layout, part) >= code_at && !parts.contains(&part) {
+                    parts.push(part);
+                }
+            }
         }
         g.rng.shuffle(&mut parts);
         // The smallest count, so the adjustment keeps every value at or above zero.
@@ -1395,6 +1508,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     if !cs.is_empty() {
         let _ = writeln!(framing, "  checksum: {{{cs}}}");
     }
+    framing.push_str(&escaping_yaml);
 
     y.push_str(&framing);
     y.push_str(&units);
@@ -1437,6 +1551,15 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     (y, n_cmd + responses.len())
 }
 
+/// The escaping a random spec takes, if any.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Escaping {
+    None,
+    Bytes,
+    Insert,
+    Cobs,
+}
+
 /// The constructs `p` uses, by name: the coverage tally counts specs per construct.
 pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     use ir::{Count, FieldType, Follows, Part};
@@ -1449,6 +1572,20 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     let f = &p.framing;
     let msgs: Vec<&ir::Message> = p.commands.iter().chain(&p.responses).collect();
     let fields: Vec<&ir::Field> = msgs.iter().flat_map(|m| &m.fields).collect();
+    let esc = f.escaping.as_ref().map(|e| &e.kind);
+    add(
+        matches!(esc, Some(ir::EscapeKind::Bytes { xor: Some(_), .. })),
+        "byte escaping (xor)",
+    );
+    add(
+        matches!(esc, Some(ir::EscapeKind::Bytes { xor: None, .. })),
+        "byte escaping (map)",
+    );
+    add(
+        matches!(esc, Some(ir::EscapeKind::Insert { .. })),
+        "stuffing (insert)",
+    );
+    add(matches!(esc, Some(ir::EscapeKind::Cobs)), "cobs");
     add(f.sync.len() == 1, "start byte");
     add(f.sync.len() > 1, "sync sequence");
     add(f.length.is_some(), "length field");

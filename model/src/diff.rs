@@ -688,6 +688,20 @@ impl<'a> Differ<'a> {
                 format!("end bytes: {} → {}", bytes(&o.end), bytes(&n.end)),
             );
         }
+        // Escaping added, removed or changed (its kind, bytes, or where the checksum and
+        // length are computed): every frame with a byte it touches travels otherwise.
+        let (oe, ne) = (o.escaping.as_ref(), n.escaping.as_ref());
+        if oe.map(|e| (&e.kind, e.computed)) != ne.map(|e| (&e.kind, e.computed)) {
+            self.wire(
+                "escaping_changed",
+                "framing.escaping",
+                format!(
+                    "escaping: {} → {}",
+                    crate::escape::describe(oe),
+                    crate::escape::describe(ne)
+                ),
+            );
+        }
         if o.length != n.length {
             let show = |l: &Option<crate::ir::LengthField>| match l {
                 None => "none".to_owned(),

@@ -81,6 +81,39 @@ fn order(o: ByteOrder) -> &'static str {
     }
 }
 
+/// `framing.escaping` as the engine's table (`false` without), for `unescape` in
+/// `dissector_rt.lua`.
+fn escaping(p: &Protocol) -> String {
+    let f = &p.framing;
+    let (Some(e), Some((from, tail))) = (&f.escaping, f.escaped_bounds()) else {
+        return "false".to_owned();
+    };
+    let kind = match &e.kind {
+        crate::ir::EscapeKind::Bytes { escape, map, .. } => {
+            let raw: Vec<u8> = map.iter().map(|(b, _)| *b).collect();
+            let rep: Vec<u8> = map.iter().map(|(_, r)| *r).collect();
+            format!(
+                "kind = \"bytes\", escape = {escape}, raw = {}, rep = {}",
+                bytes(&raw),
+                bytes(&rep)
+            )
+        }
+        crate::ir::EscapeKind::Insert { after, byte, .. } => {
+            format!("kind = \"insert\", after = {}, byte = {byte}", bytes(after))
+        }
+        crate::ir::EscapeKind::Cobs => "kind = \"cobs\"".to_owned(),
+    };
+    let (length_at, length_width) = match (&f.length, f.head(0).length) {
+        (Some(l), Some(at)) => (at.to_string(), l.width),
+        _ => ("false".to_owned(), 0),
+    };
+    format!(
+        "{{ {kind}, from = {from}, tail = {tail}, computed_escaped = {}, length_at = {length_at}, length_width = {length_width}, checksum_from_end = {} }}",
+        lua_bool(e.computed == crate::ir::Computed::Escaped),
+        f.checksum_from_end()
+    )
+}
+
 fn lua_bool(b: bool) -> &'static str {
     if b {
         "true"
@@ -407,6 +440,7 @@ fn protocol(p: &Protocol) -> String {
         "false".to_owned()
     };
     let _ = writeln!(s, "  address = {address},");
+    let _ = writeln!(s, "  escaping = {},", escaping(p));
     let _ = writeln!(
         s,
         "  rules = {{ request = {}, response = {} }},",

@@ -221,6 +221,112 @@ local function read_uint(b, at, width, order)
   return v
 end
 
+local function write_uint(b, at, width, order, v)
+  for i = 0, width - 1 do
+    local byte = floor(v / 2 ^ (8 * i)) % 256
+    if order == "big" then b[at + width - 1 - i] = byte else b[at + i] = byte end
+  end
+end
+
+-- The frame unescaped (`framing.escaping`), as busspec unescapes it: a table of bytes from 0,
+-- its length and how many bytes escaping added; or nil, the offset and the words of a bad
+-- escape. Where the spec computes the length field and checksum on the escaped bytes, they are
+-- rewritten so that they are right for the unescaped frame exactly where the escaped ones are.
+local function unescape(P, w, n)
+  local e = P.escaping
+  local from, to = e.from, n - e.tail
+  if to < from then return w, n, 0 end
+  local out, k = {}, 0
+  local function push(x) out[k] = x; k = k + 1 end
+  for i = 0, from - 1 do push(w[i]) end
+  if e.kind == "bytes" then
+    local i = from
+    while i < to do
+      local x = w[i]
+      if x == e.escape then
+        local nx = w[i + 1] or 0
+        local raw
+        for j, r in ipairs(e.rep) do if r == nx then raw = e.raw[j] end end
+        if raw == nil or i + 1 >= to then
+          return nil, i, fmt("0x%02X followed by 0x%02X", x, nx)
+        end
+        push(raw)
+        i = i + 2
+      else
+        for _, r in ipairs(e.raw) do
+          if r == x then return nil, i, fmt("0x%02X not escaped", x) end
+        end
+        push(x)
+        i = i + 1
+      end
+    end
+  elseif e.kind == "insert" then
+    local i, since, pl = from, k, #e.after
+    while i < to do
+      push(w[i])
+      i = i + 1
+      if k - since >= pl then
+        local match = true
+        for j = 1, pl do
+          if out[k - pl + j - 1] ~= e.after[j] then match = false end
+        end
+        if match then
+          local f = w[i]
+          if f == nil then
+            return nil, i, fmt("expected inserted byte 0x%02X, found the frame's end", e.byte)
+          end
+          if f ~= e.byte or i >= to then
+            return nil, i, fmt("expected inserted byte 0x%02X, found 0x%02X", e.byte, f)
+          end
+          i = i + 1
+          since = k
+        end
+      end
+    end
+  else
+    if from == to then return nil, from, "no COBS block before the end byte" end
+    local i, full = from, false
+    while i < to do
+      local code = w[i]
+      if code == 0 then return nil, i, "COBS block holds 0x00" end
+      if i + code > to then return nil, i, fmt("COBS block 0x%02X runs past the end byte", code) end
+      if full and code == 1 and i + 1 == to then
+        return nil, i, "COBS block 0x01 after a full block ends the frame"
+      end
+      for j = i + 1, i + code - 1 do
+        if w[j] == 0 then return nil, j, "COBS block holds 0x00" end
+        push(w[j])
+      end
+      i = i + code
+      full = (code == 255)
+      if i < to and not full then push(0) end
+    end
+  end
+  for i = to, n - 1 do push(w[i]) end
+  local added = n - k
+  if e.computed_escaped and added > 0 then
+    if e.length_at then
+      local v = read_uint(w, e.length_at, e.length_width, P.order)
+      write_uint(out, e.length_at, e.length_width, P.order, (v - added) % 2 ^ (8 * e.length_width))
+    end
+    local ck = P.checksum
+    if ck.len > 0 then
+      local at = n - e.checksum_from_end
+      local good = ck.fn(w, ck.covers_from, at) == read_uint(w, at, ck.len, ck.order)
+      local own_at = k - e.checksum_from_end
+      local own = ck.fn(out, ck.covers_from, own_at)
+      if not good then
+        if own % 2 == 0 then own = own + 1 else own = own - 1 end
+      end
+      write_uint(out, own_at, ck.len, ck.order, own)
+      -- Shown and checked as the escaped bytes carry it.
+      local wire_ck = { at = at, expected = ck.fn(w, ck.covers_from, at), found = read_uint(w, at, ck.len, ck.order) }
+      return out, k, added, wire_ck
+    end
+  end
+  return out, k, added
+end
+
 local function sign_extend(v, bits)
   if bits > 0 and v >= 2 ^ (bits - 1) then return v - 2 ^ bits end
   return v
@@ -617,7 +723,36 @@ local function setup(P)
     return info
   end
 
+  local dissect_frame
+
+  -- Escaped frames (`framing.escaping`) are unescaped into a tvb of their own ("Unescaped
+  -- frame") and dissected from it; a bad escape is shown as busspec refuses it.
   local function dissect(tvb, pinfo, tree)
+    local n = tvb:len()
+    if not P.escaping or n == 0 then return dissect_frame(tvb, pinfo, tree) end
+    local w = {}
+    local wa = tvb:range(0, n):bytes()
+    for i = 0, n - 1 do w[i] = wa:get_index(i) end
+    local out, k, added, wire_ck = unescape(P, w, n)
+    if not out then
+      pinfo.cols.protocol = P.name
+      local text = fmt("bad escape at offset %d: %s", k, added)
+      local root = tree:add(proto, tvb:range(0, n))
+      root:set_text(fmt("busspec %s: %s", P.name, text))
+      root:add_proto_expert_info(E.skipped, text)
+      pinfo.cols.info = text
+      return n
+    end
+    if added == 0 or k == 0 then return dissect_frame(tvb, pinfo, tree) end
+    local ba = ByteArray.new()
+    ba:set_size(k)
+    for i = 0, k - 1 do ba:set_index(i, out[i]) end
+    if wire_ck then wire_ck.tvb = tvb end
+    dissect_frame(ba:tvb("Unescaped frame"), pinfo, tree, wire_ck)
+    return n
+  end
+
+  function dissect_frame(tvb, pinfo, tree, wire_ck)
     local n = tvb:len()
     pinfo.cols.protocol = P.name
     local num = pinfo.number
@@ -681,7 +816,12 @@ local function setup(P)
     -- The checksum: over the bytes it covers, up to itself.
     local ck = P.checksum
     local ck_good, ck_at, ck_found, ck_expected = true, nil, nil, nil
-    if ck.len > 0 then
+    local ck_tvb = tvb
+    if wire_ck then
+      -- Computed on the escaped bytes (`computed: escaped`): as they carry it.
+      ck_at, ck_expected, ck_found, ck_tvb = wire_ck.at, wire_ck.expected, wire_ck.found, wire_ck.tvb
+      ck_good = (ck_expected == ck_found)
+    elseif ck.len > 0 then
       ck_at = checksum_at(P, n)
       ck_expected = ck.fn(b, ck.covers_from, ck_at)
       ck_found = read_uint(b, ck_at, ck.len, ck.order)
@@ -690,7 +830,7 @@ local function setup(P)
 
     local function show_checksum()
       if not ck_at then return end
-      local r = tvb:range(ck_at, ck.len)
+      local r = ck_tvb:range(ck_at, ck.len)
       local c = root:add(F.checksum, r, ck_found)
       c:append_text(" [" .. ck.name .. "]")
       c:add(F.checksum_expected, r, ck_expected):set_generated()

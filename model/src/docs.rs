@@ -508,6 +508,18 @@ pub fn render(p: &Protocol, source: &str) -> String {
         }
     }
 
+    if let Some(e) = &f.escaping {
+        let _ = writeln!(
+            o,
+            "Escaping{}: {}. The layout above is the frame before escaping; examples show the bytes as they travel. Offsets in errors count the unescaped frame, except in escape errors and where the checksum and length are computed on the escaped bytes.\n",
+            e.section
+                .as_ref()
+                .map(|s| format!(" (§{s})"))
+                .unwrap_or_default(),
+            crate::escape::describe(Some(e))
+        );
+    }
+
     if !p.units.is_empty() {
         o.push_str("## Units\n\nPhysical value = raw × scale + offset.\n\n| Unit | Symbol | Scale | Offset | Notes |\n|---|---|---|---|---|\n");
         for u in &p.units {

@@ -10,6 +10,7 @@ use std::borrow::Cow;
 use std::fmt;
 
 use crate::checksum;
+use crate::escape;
 use crate::ir::{
     BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, LengthRule, Message,
     MessageRef, Protocol,
@@ -184,6 +185,58 @@ pub enum DecodeError {
         message: String,
         request: String,
     },
+    /// The escaped bytes break the protocol's escaping (`framing.escaping`); `offset` counts
+    /// the bytes as they travel.
+    BadEscape {
+        offset: usize,
+        fault: EscapeFault,
+    },
+}
+
+/// What is wrong with escaped bytes ([`DecodeError::BadEscape`]); the runtime's
+/// `EscapeFault` is the same.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EscapeFault {
+    /// The escape byte followed by a byte that stands for none (the end byte included).
+    Escape { escape: u8, found: u8 },
+    /// A byte that travels escaped, found as it is.
+    Unescaped { found: u8 },
+    /// A stuffing pattern not followed by its inserted byte (`None`: the frame ends).
+    Stuffing { expected: u8, found: Option<u8> },
+    /// COBS: a 0x00 among the encoded bytes.
+    CobsZero,
+    /// COBS: a block longer than the bytes before the end byte.
+    CobsOverrun { code: u8 },
+    /// COBS: no block before the end byte.
+    CobsEmpty,
+    /// COBS: a 0x01 block ending the frame after a full block (encoding ends with the full one).
+    CobsTrailing,
+}
+
+impl fmt::Display for EscapeFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EscapeFault::Escape { escape, found } => {
+                write!(f, "0x{escape:02X} followed by 0x{found:02X}")
+            }
+            EscapeFault::Unescaped { found } => write!(f, "0x{found:02X} not escaped"),
+            EscapeFault::Stuffing { expected, found } => {
+                write!(f, "expected inserted byte 0x{expected:02X}, found ")?;
+                match found {
+                    Some(b) => write!(f, "0x{b:02X}"),
+                    None => write!(f, "the frame's end"),
+                }
+            }
+            EscapeFault::CobsZero => write!(f, "COBS block holds 0x00"),
+            EscapeFault::CobsOverrun { code } => {
+                write!(f, "COBS block 0x{code:02X} runs past the end byte")
+            }
+            EscapeFault::CobsEmpty => write!(f, "no COBS block before the end byte"),
+            EscapeFault::CobsTrailing => {
+                write!(f, "COBS block 0x01 after a full block ends the frame")
+            }
+        }
+    }
 }
 
 fn hex(bytes: &[u8]) -> String {
@@ -288,6 +341,9 @@ impl fmt::Display for DecodeError {
                 f,
                 "{message} is not a reply {request} gets"
             ),
+            DecodeError::BadEscape { offset, fault } => {
+                write!(f, "bad escape at offset {offset}: {fault}")
+            }
         }
     }
 }
@@ -709,14 +765,16 @@ impl Lookup {
         reply_to: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame<'p>, DecodeError> {
+        let un = escape::unescape(p, wire)?;
         decode_in(
             p,
             self.limits,
             Some(self),
             (reply_to, false),
-            wire,
+            &un.frame,
             &mut Spare::default(),
         )
+        .map_err(|e| un.locate(e))
     }
 
     /// Decodes a frame as the stream decoder pairs a response with the request before it:
@@ -742,7 +800,16 @@ impl Lookup {
         wire: &[u8],
         spare: &mut Spare<'p>,
     ) -> Result<Frame<'p>, DecodeError> {
-        decode_in(p, self.limits, Some(self), (request, true), wire, spare)
+        let un = escape::unescape(p, wire)?;
+        decode_in(
+            p,
+            self.limits,
+            Some(self),
+            (request, true),
+            &un.frame,
+            spare,
+        )
+        .map_err(|e| un.locate(e))
     }
 }
 
@@ -767,14 +834,16 @@ pub fn decode<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let limits = Limits::of(p, direction);
+    let un = escape::unescape(p, wire)?;
     decode_in(
         p,
         limits,
         None,
         (reply_to, false),
-        wire,
+        &un.frame,
         &mut Spare::default(),
     )
+    .map_err(|e| un.locate(e))
 }
 
 fn decode_in<'p>(
@@ -1094,6 +1163,16 @@ fn decide<'p>(
 
 /// Decodes `wire` as the given message, reporting the first thing that does not fit it.
 pub fn decode_as<'p>(
+    p: &'p Protocol,
+    r: MessageRef,
+    wire: &[u8],
+) -> Result<Frame<'p>, DecodeError> {
+    let un = escape::unescape(p, wire)?;
+    decode_as_unescaped(p, r, &un.frame).map_err(|e| un.locate(e))
+}
+
+/// [`decode_as`] of an unescaped frame.
+fn decode_as_unescaped<'p>(
     p: &'p Protocol,
     r: MessageRef,
     wire: &[u8],
@@ -2076,9 +2155,12 @@ pub fn encode(
     if m.is_variable() {
         // A count field given a value, or one that follows another, may disagree with the
         // list: what encode writes, decode must accept.
-        decode_as(p, r, &out).map_err(|e| EncodeError::Inconsistent {
+        decode_as_unescaped(p, r, &out).map_err(|e| EncodeError::Inconsistent {
             reason: e.to_string(),
         })?;
+    }
+    if p.framing.escaping.is_some() {
+        return Ok(escape::escape(p, &out));
     }
     Ok(out)
 }
@@ -2125,10 +2207,17 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
     wire
 }
 
-/// The same reordering the other way; it is its own inverse.
+/// The same reordering the other way; it is its own inverse. An escaped frame
+/// (`framing.escaping`) is reordered unescaped and escaped again, byte for byte, as example
+/// text is read back.
 #[cfg(feature = "tools")]
 pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
-    printed_to_wire(p, m, wire)
+    match escape::unescape_bytes(&p.framing, wire) {
+        Ok(plain) if p.framing.escaping.is_some() => {
+            escape::escape_bytes(&p.framing, &printed_to_wire(p, m, &plain))
+        }
+        _ => printed_to_wire(p, m, wire),
+    }
 }
 
 /// Parses frame text as people write it: hex digits with optional `0x` prefixes, spaces,

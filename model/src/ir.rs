@@ -9,8 +9,8 @@
 //! validator checks holds (references resolve, widths add up, values fit, examples replay).
 
 pub use crate::model::{
-    Broadcast, ByteOrder, CommandKind, Document, FieldType, FrameRate, Parity, Part, Reply,
-    ResponseKind,
+    Broadcast, ByteOrder, CommandKind, Computed, Document, FieldType, FrameRate, Parity, Part,
+    Reply, ResponseKind,
 };
 use crate::rational::Rational;
 
@@ -82,6 +82,53 @@ pub struct Framing {
     /// The layout of a frame with an empty payload, indexed by code length (0 to
     /// [`MAX_CODE_LEN`]); see [`Framing::head`].
     pub heads: Vec<FrameLayout>,
+    /// How frames are escaped or stuffed on the wire (`None`: they travel as laid out). Every
+    /// offset and length of the IR is the unescaped frame's; [`crate::escape`] turns one into
+    /// the other.
+    pub escaping: Option<Escaping>,
+}
+
+/// Escaping or stuffing, declared once in `framing.escaping`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Escaping {
+    pub section: Option<String>,
+    /// Where the checksum and the length field are computed.
+    pub computed: Computed,
+    pub kind: EscapeKind,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum EscapeKind {
+    /// Between the leading start bytes and the end byte, each byte of `map` travels as
+    /// `escape` followed by its replacement (SLIP, KISS, HDLC). `xor`: the mask the spec
+    /// gave the replacements by, if it did.
+    Bytes {
+        escape: u8,
+        /// (byte, replacement), in spec order.
+        map: Vec<(u8, u8)>,
+        xor: Option<u8>,
+    },
+    /// From `from` through the payload, `byte` is inserted after every occurrence of `after`
+    /// (matched left to right on the unstuffed bytes, starting afresh after each one).
+    Insert {
+        after: Vec<u8>,
+        byte: u8,
+        from: Part,
+    },
+    /// Consistent overhead byte stuffing of the bytes between the leading start bytes and the
+    /// end byte 0x00.
+    Cobs,
+}
+
+impl EscapeKind {
+    /// The most bytes `n` unescaped bytes of the escaped region can take on the wire.
+    pub fn worst_len(&self, n: usize) -> usize {
+        match self {
+            EscapeKind::Bytes { .. } => 2 * n,
+            EscapeKind::Insert { after, .. } => n + n / after.len().max(1),
+            EscapeKind::Cobs => n + 1 + n / 254,
+        }
+    }
 }
 
 /// A length field: `width` bytes in the protocol's byte order, whose value is the number of
@@ -236,6 +283,58 @@ impl Framing {
             })
             .sum();
         bytes as i64 + l.adjust
+    }
+
+    /// The bytes of a frame of `len` bytes (escaped or not) that escaping applies to,
+    /// `from..to`; `None` where there is no escaping or the frame is too short to hold its
+    /// fixed bytes around them.
+    pub fn escaped_region(&self, len: usize) -> Option<(usize, usize)> {
+        let e = self.escaping.as_ref()?;
+        let (from, tail) = match &e.kind {
+            EscapeKind::Bytes { .. } | EscapeKind::Cobs => {
+                let lead = if self.layout.first() == Some(&Part::Start) {
+                    self.sync.len()
+                } else {
+                    0
+                };
+                (lead, self.end.len())
+            }
+            EscapeKind::Insert { from, .. } => {
+                let h = self.head(0);
+                let at = match from {
+                    Part::Start => h.start,
+                    Part::Address => h.address,
+                    Part::Length => h.length,
+                    Part::Code => Some(h.code),
+                    _ => None,
+                };
+                (at?, self.trailer_len())
+            }
+        };
+        let to = len.checked_sub(tail)?;
+        (from <= to).then_some((from, to))
+    }
+
+    /// Where the escaped bytes of any frame lie: from this offset to this many bytes before
+    /// the frame's end (`None` without escaping).
+    pub fn escaped_bounds(&self) -> Option<(usize, usize)> {
+        let probe = self.head(0).len + 64;
+        let (from, to) = self.escaped_region(probe)?;
+        Some((from, probe - to))
+    }
+
+    /// How far before a frame's end its checksum starts.
+    pub fn checksum_from_end(&self) -> usize {
+        let probe = self.trailer_len();
+        probe - self.checksum_at(probe)
+    }
+
+    /// The longest a frame of `len` unescaped bytes can be on the wire.
+    pub fn wire_len(&self, len: usize) -> usize {
+        match (&self.escaping, self.escaped_region(len)) {
+            (Some(e), Some((from, to))) => len - (to - from) + e.kind.worst_len(to - from),
+            _ => len,
+        }
     }
 
     pub fn direction(&self, d: Direction) -> &DirectionFraming {
@@ -856,6 +955,19 @@ impl Protocol {
             .map(|m| m.max_len)
             .max()
             .unwrap_or(0)
+    }
+
+    /// The shortest and longest frame of a direction (`None`: it has no message). An escaped
+    /// stream decodes a frame as a direction only where its unescaped length lies between them.
+    pub fn frame_len_bounds(&self, d: Direction) -> Option<(usize, usize)> {
+        let ms = self.messages(d);
+        let lo = ms.iter().map(|m| m.min_len()).min()?;
+        Some((lo, self.max_frame_len(d)))
+    }
+
+    /// The longest frame in a direction as it travels: escaped at worst.
+    pub fn max_wire_len(&self, d: Direction) -> usize {
+        self.framing.wire_len(self.max_frame_len(d))
     }
 
     /// Finds a command or response by name.

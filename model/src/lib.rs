@@ -28,6 +28,7 @@ pub mod diff;
 pub mod dissector;
 #[cfg(feature = "tools")]
 pub mod docs;
+pub mod escape;
 pub mod interp;
 pub mod ir;
 pub mod load;

@@ -209,6 +209,63 @@ pub struct Framing {
     /// Required iff the layout has `checksum`.
     #[serde(default)]
     pub checksum: Option<Checksum>,
+    /// Escaping or stuffing applied to every frame on the wire (optional).
+    #[serde(default)]
+    pub escaping: Option<Escaping>,
+}
+
+/// How frames are escaped or stuffed on the wire: exactly one of `escape` (with `xor` and
+/// `bytes`, or `map`), `insert` (with `after` and `from`) or `cobs`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Escaping {
+    #[serde(default)]
+    pub section: Option<String>,
+    /// Where the checksum and the length field are computed: on the frame before escaping or
+    /// on the bytes as they travel.
+    pub computed: Computed,
+    /// The escape byte (SLIP, KISS, HDLC): each byte of `bytes` (or `map`) travels as the
+    /// escape byte followed by its replacement.
+    #[serde(default)]
+    pub escape: Option<i64>,
+    /// With `escape` and `bytes`: the replacement is the byte XOR this mask (HDLC: 0x20).
+    #[serde(default)]
+    pub xor: Option<i64>,
+    #[serde(default)]
+    pub bytes: Option<Vec<i64>>,
+    /// With `escape`: each escaped byte and the byte that stands for it (SLIP: C0 as DC).
+    #[serde(default)]
+    pub map: Option<Vec<EscapeMap>>,
+    /// The byte inserted after every occurrence of `after` (Dynamixel 2.0: FD after FF FF FD).
+    #[serde(default)]
+    pub insert: Option<i64>,
+    #[serde(default)]
+    pub after: Option<StartBytes>,
+    /// With `insert`: the first part stuffed; stuffing runs through the payload.
+    #[serde(default)]
+    pub from: Option<Part>,
+    /// Consistent overhead byte stuffing (`cobs: true`).
+    #[serde(default)]
+    pub cobs: Option<bool>,
+}
+
+/// Where a checksum and a length field are computed, relative to escaping.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Computed {
+    /// On the frame before escaping (SLIP, KISS, HDLC, COBS).
+    Unescaped,
+    /// On the bytes as they travel (Dynamixel 2.0: the length counts the stuffed bytes and the
+    /// CRC covers them).
+    Escaped,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EscapeMap {
+    pub byte: i64,
+    #[serde(rename = "as")]
+    pub replacement: i64,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -287,6 +287,16 @@ impl CodeNode {
     }
 }
 
+/// What the head of the buffer holds, for a protocol with escaping.
+enum Escaped {
+    /// Frame lengths to try (complete).
+    Try,
+    /// The head byte starts no frame.
+    Drop,
+    /// A frame may start here, not yet complete.
+    NeedMore,
+}
+
 /// What one step of the framing rule did.
 enum Step {
     Progress,
@@ -358,11 +368,16 @@ impl<'p> StreamDecoder<'p> {
                 });
             }
         }
-        let capacity = shapes
-            .iter()
-            .map(|s| p.message(s.message).max_len)
-            .max()
-            .unwrap_or(0)
+        // Escaped frames take up to their worst case on the wire.
+        let capacity = p
+            .framing
+            .wire_len(
+                shapes
+                    .iter()
+                    .map(|s| p.message(s.message).max_len)
+                    .max()
+                    .unwrap_or(0),
+            )
             .max(1);
         let shortest = shapes.iter().map(|s| s.len).min().unwrap_or(1).max(1);
         let mut by_code: Vec<ByCode> = Vec::new();
@@ -512,6 +527,20 @@ impl<'p> StreamDecoder<'p> {
         lens.clear();
         let mut dirs = std::mem::take(&mut self.dirs);
         dirs.clear();
+        if self.p.framing.escaping.is_some() {
+            return match self.escaped_lens(flushing, &mut lens, &mut dirs) {
+                Escaped::Try => self.try_lens(lens, dirs, out),
+                Escaped::Drop => {
+                    (self.lens, self.dirs) = (lens, dirs);
+                    self.drop_byte(out);
+                    Step::Progress
+                }
+                Escaped::NeedMore => {
+                    (self.lens, self.dirs) = (lens, dirs);
+                    Step::NeedMore
+                }
+            };
+        }
         let mut candidates = std::mem::take(&mut self.candidates);
         self.find_candidates(&mut candidates);
         let (mut live, mut longer) = (false, false);
@@ -557,6 +586,17 @@ impl<'p> StreamDecoder<'p> {
             }
             return Step::NeedMore;
         }
+        self.try_lens(lens, dirs, out)
+    }
+
+    /// Rule 4: tries the complete candidate lengths `lens` (each with the directions in
+    /// `dirs` that have it), longest first.
+    fn try_lens(
+        &mut self,
+        mut lens: Vec<usize>,
+        mut dirs: Vec<u8>,
+        out: &mut Vec<Event<'p>>,
+    ) -> Step {
         if lens.len() > 1 {
             // Longest first, each with the directions of every candidate that has it.
             let mut by_len: Vec<(usize, u8)> =
@@ -616,6 +656,115 @@ impl<'p> StreamDecoder<'p> {
         }
         self.drop_byte(out);
         Step::Progress
+    }
+
+    /// The frame lengths at the head of the buffer of a protocol with escaping (see the
+    /// module docs, "Escaped frames"), in `lens`: up to the first end byte after the start
+    /// bytes (byte escaping, COBS), or as the length field of stuffed frames says.
+    fn escaped_lens(&self, flushing: bool, lens: &mut Vec<usize>, dirs: &mut Vec<u8>) -> Escaped {
+        let (p, buf) = (self.p, &self.buf);
+        let f = &p.framing;
+        let head = f.head(0);
+        if let Some(at) = head.start {
+            for (i, &b) in f.sync.iter().enumerate() {
+                if buf.get(at + i).is_some_and(|&x| x != b) {
+                    return Escaped::Drop;
+                }
+            }
+        }
+        let complete = |len: usize| len <= buf.len();
+        let wait = if flushing || buf.len() >= self.capacity {
+            Escaped::Drop
+        } else {
+            Escaped::NeedMore
+        };
+        let insert = matches!(
+            f.escaping.as_ref().map(|e| &e.kind),
+            Some(crate::ir::EscapeKind::Insert { .. })
+        );
+        if !insert {
+            let lead = if f.layout.first() == Some(&crate::ir::Part::Start) {
+                f.sync.len()
+            } else {
+                0
+            };
+            let end = f.end.first().copied().unwrap_or(0);
+            let Some(i) = buf.iter().skip(lead).position(|&b| b == end) else {
+                return wait;
+            };
+            // Each direction whose frames can be as long unescaped (none where the escapes
+            // are bad): the generated stream decoder's candidates (`rt::escaped_lens`).
+            let len = lead + i + 1;
+            let Ok(plain) = crate::escape::unescape_bytes(f, &buf[..len]) else {
+                return Escaped::Drop;
+            };
+            let mut dir = 0;
+            for (d, bit) in [(Direction::Request, 1), (Direction::Response, 2)] {
+                let fits = p
+                    .frame_len_bounds(d)
+                    .is_some_and(|(lo, hi)| (lo..=hi).contains(&plain.len()));
+                if fits && self.direction.map_or(true, |want| want == d) {
+                    dir |= bit;
+                }
+            }
+            if dir == 0 {
+                return Escaped::Drop;
+            }
+            lens.push(len);
+            dirs.push(dir);
+            return Escaped::Try;
+        }
+        // Stuffed frames: the length field counts the stuffed bytes.
+        let (Some(l), Some(at)) = (&f.length, head.length) else {
+            return Escaped::Drop;
+        };
+        let Some(bytes) = buf.get(at..at + l.width) else {
+            return wait;
+        };
+        let v = interp::read_uint(bytes, p.byte_order) as i64;
+        for d in [Direction::Request, Direction::Response] {
+            if self.direction.is_some_and(|want| want != d) {
+                continue;
+            }
+            let Some(rule) = f.length_rule(d) else {
+                continue;
+            };
+            let len = if rule.grows { v - rule.k } else { continue };
+            let ok = usize::try_from(len)
+                .ok()
+                .filter(|&n| n >= rule.head_len && n <= self.capacity);
+            if let Some(n) = ok {
+                // Each length with the directions whose rule gives it (try_lens merges them).
+                lens.push(n);
+                dirs.push(match d {
+                    Direction::Request => 1,
+                    Direction::Response => 2,
+                });
+            }
+        }
+        if lens.is_empty() {
+            return Escaped::Drop;
+        }
+        if lens.iter().any(|&n| !complete(n)) {
+            if !flushing {
+                lens.clear();
+                dirs.clear();
+                return Escaped::NeedMore;
+            }
+            let keep: Vec<(usize, u8)> = (lens.iter().copied().zip(dirs.iter().copied()))
+                .filter(|&(n, _)| complete(n))
+                .collect();
+            lens.clear();
+            dirs.clear();
+            for (n, d) in keep {
+                lens.push(n);
+                dirs.push(d);
+            }
+            if lens.is_empty() {
+                return Escaped::Drop;
+            }
+        }
+        Escaped::Try
     }
 
     /// The shapes that can agree with the buffer (indices into `shapes`), in `out` (cleared

@@ -1072,10 +1072,14 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         response,
         checksum,
         heads: Vec::new(),
+        escaping: None,
     };
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
         .collect();
+    if let Some(e) = &f.escaping {
+        framing.escaping = escaping(e, &framing, sink);
+    }
     if let Some(part) = f.checksum.as_ref().and_then(|c| c.covers_from) {
         // A part after the code sits after as many bytes as the code has: one offset only
         // where every code has one length.
@@ -1112,6 +1116,255 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         }
     }
     framing
+}
+
+/// `framing.escaping`, checked against the rest of the framing (resolved but for it).
+fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escaping> {
+    let path = "framing.escaping";
+    let errors_before = sink.items.len();
+    let byte =
+        |v: i64, key: &str, what: &str, sink: &mut Sink| u8_of(v, &join(path, key), what, sink);
+    let kinds = [e.escape.is_some(), e.insert.is_some(), e.cobs.is_some()];
+    if kinds.iter().filter(|k| **k).count() != 1 {
+        sink.error(
+            path,
+            "give exactly one kind: `escape` (SLIP, KISS, HDLC), `insert` (Dynamixel 2.0) or `cobs`",
+        );
+        return None;
+    }
+    let misplaced = |keys: &[(&str, bool)], kind: &str, sink: &mut Sink| {
+        for (key, given) in keys {
+            if *given {
+                sink.error(
+                    join(path, key),
+                    format!("`{key}` does not belong to `{kind}`"),
+                );
+            }
+        }
+    };
+    let last_is_end = f.layout.last() == Some(&Part::End);
+    let start_first = !f.layout.contains(&Part::Start) || f.layout.first() == Some(&Part::Start);
+    let kind = if let Some(esc) = e.escape {
+        misplaced(
+            &[("after", e.after.is_some()), ("from", e.from.is_some())],
+            "escape",
+            sink,
+        );
+        let escape = byte(esc, "escape", "escape byte", sink);
+        let map: Vec<(u8, u8)> = match (&e.bytes, e.xor, &e.map) {
+            (Some(bytes), Some(mask), None) => {
+                let mask = byte(mask, "xor", "mask", sink);
+                if mask == 0 {
+                    sink.error(join(path, "xor"), "a mask of 0 leaves every byte as it is");
+                }
+                bytes
+                    .iter()
+                    .map(|&b| {
+                        let b = byte(b, "bytes", "escaped byte", sink);
+                        (b, b ^ mask)
+                    })
+                    .collect()
+            }
+            (None, None, Some(map)) => map
+                .iter()
+                .map(|m| {
+                    (
+                        byte(m.byte, "map", "escaped byte", sink),
+                        byte(m.replacement, "map", "replacement", sink),
+                    )
+                })
+                .collect(),
+            _ => {
+                sink.error(
+                    path,
+                    "`escape` takes `xor` with `bytes`, or `map` alone: how each escaped byte travels",
+                );
+                Vec::new()
+            }
+        };
+        let key = if e.map.is_some() { "map" } else { "bytes" };
+        if map.is_empty() && errors_before == sink.items.len() {
+            sink.error(join(path, key), "list the bytes that travel escaped");
+        }
+        for (i, (raw, rep)) in map.iter().enumerate() {
+            if map[..i].iter().any(|(r, _)| r == raw) {
+                sink.error(join(path, key), format!("0x{raw:02X} listed twice"));
+            }
+            if map[..i].iter().any(|(_, r)| r == rep) {
+                sink.error(
+                    join(path, key),
+                    format!("two bytes travel as 0x{escape:02X} 0x{rep:02X}"),
+                );
+            }
+            if map.iter().any(|(r, _)| r == rep) {
+                sink.error(
+                    join(path, key),
+                    format!("0x{raw:02X} travels as 0x{rep:02X}, a byte that is itself escaped"),
+                );
+            }
+        }
+        if !map.is_empty() && !map.iter().any(|(r, _)| *r == escape) {
+            sink.error(
+                join(path, "escape"),
+                format!("the escape byte 0x{escape:02X} must itself travel escaped: list it"),
+            );
+        }
+        if !last_is_end || f.end.len() != 1 || !map.iter().any(|(r, _)| Some(r) == f.end.first()) {
+            sink.error(
+                path,
+                "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them: it is how a frame's end is found",
+            );
+        }
+        EscapeKind::Bytes {
+            escape,
+            map,
+            xor: e.xor.map(|m| m.clamp(0, 255) as u8),
+        }
+    } else if let Some(ins) = e.insert {
+        misplaced(
+            &[
+                ("xor", e.xor.is_some()),
+                ("bytes", e.bytes.is_some()),
+                ("map", e.map.is_some()),
+            ],
+            "insert",
+            sink,
+        );
+        let inserted = byte(ins, "insert", "inserted byte", sink);
+        let after: Vec<u8> = match &e.after {
+            Some(a) => a
+                .bytes()
+                .iter()
+                .map(|&b| byte(b, "after", "pattern byte", sink))
+                .collect(),
+            None => {
+                sink.error(join(path, "after"), "say after which bytes `insert` goes");
+                Vec::new()
+            }
+        };
+        if !(1..=4).contains(&after.len()) && e.after.is_some() {
+            sink.error(
+                join(path, "after"),
+                format!("a pattern is 1 to 4 bytes, found {}", after.len()),
+            );
+        }
+        let from = e.from.unwrap_or(Part::Code);
+        let pos = |p: Part| f.layout.iter().position(|x| *x == p);
+        let (pf, pc, pl) = (pos(from), pos(Part::Code), pos(Part::Length));
+        let ok = matches!(from, Part::Address | Part::Code)
+            && pf.is_some()
+            && pf <= pc
+            && pl.is_some_and(|l| Some(l) < pf);
+        if !ok {
+            sink.error(
+                join(path, "from"),
+                format!(
+                    "stuffing from `{}`: name the address or the code, after the length field (stuffing runs from it through the payload)",
+                    part_name(from)
+                ),
+            );
+        }
+        if e.computed != Computed::Escaped {
+            sink.error(
+                join(path, "computed"),
+                "stuffed frames are framed by their length field: it and the checksum count the stuffed bytes (`computed: escaped`, as Dynamixel 2.0)",
+            );
+        }
+        if let (Some(l), true) = (&f.length, ok) {
+            let region = [Part::Address, Part::Code, Part::Payload];
+            let stuffed = region
+                .iter()
+                .filter(|p| pos(**p) >= pf && pos(**p).is_some());
+            if let Some(p) = stuffed.clone().find(|p| !l.counts.contains(p)) {
+                sink.error(
+                    "framing.length.counts",
+                    format!(
+                        "the length field counts the stuffed bytes: it must count `{}`",
+                        part_name(*p)
+                    ),
+                );
+            }
+        }
+        EscapeKind::Insert {
+            after,
+            byte: inserted,
+            from,
+        }
+    } else {
+        misplaced(
+            &[
+                ("xor", e.xor.is_some()),
+                ("bytes", e.bytes.is_some()),
+                ("map", e.map.is_some()),
+                ("after", e.after.is_some()),
+                ("from", e.from.is_some()),
+            ],
+            "cobs",
+            sink,
+        );
+        if e.cobs == Some(false) {
+            sink.error(
+                join(path, "cobs"),
+                "`cobs: false` is no escaping: leave `escaping` out",
+            );
+        }
+        if !last_is_end || f.end != [0] {
+            sink.error(
+                path,
+                "COBS frames end in the end byte 0x00 (`end: 0x00`, the last part of the layout)",
+            );
+        }
+        EscapeKind::Cobs
+    };
+    if !matches!(kind, EscapeKind::Insert { .. }) {
+        if !start_first {
+            sink.error(
+                "framing.layout",
+                "with escaping, `start` is the first part of the layout: the escaped bytes lie between it and `end`",
+            );
+        }
+        if e.computed != Computed::Unescaped {
+            sink.error(
+                join(path, "computed"),
+                "the checksum and length travel escaped themselves: they are computed on the frame before escaping (`computed: unescaped`)",
+            );
+        }
+    }
+    let escaping = Escaping {
+        section: e.section.clone(),
+        computed: e.computed,
+        kind,
+    };
+    // The longest frame stuffed must still fit its length field.
+    if let (Some(l), EscapeKind::Insert { .. }) = (&f.length, &escaping.kind) {
+        let longest = (f
+            .request
+            .code_lengths
+            .iter()
+            .map(|&c| (c, f.request.payload_max)))
+        .chain(
+            f.response
+                .code_lengths
+                .iter()
+                .map(|&c| (c, f.response.payload_max)),
+        )
+        .map(|(c, pl)| f.head(c).len + pl)
+        .max()
+        .unwrap_or(0);
+        let probe = Framing {
+            escaping: Some(escaping.clone()),
+            ..f.clone()
+        };
+        let most = probe.wire_len(longest) as i64 + l.adjust;
+        let limit = (1i64 << (8 * l.width)) - 1;
+        if most > limit {
+            sink.error(
+                "framing.length.width",
+                format!("the longest frame stuffed takes {most} bytes, more than a {}-byte length field holds", l.width),
+            );
+        }
+    }
+    (errors_before == sink.items.len()).then_some(escaping)
 }
 
 /// Where each part of a frame sits when its code has `code_len` bytes and its payload
@@ -2675,6 +2928,9 @@ fn frame_problems(
     let m = p.message(r);
     let printed =
         interp::parse_hex(frame_text).map_err(|e| format!("frame text `{frame_text}`: {e}"))?;
+    // An escaped frame is read unescaped, reordered, and escaped again.
+    let printed = crate::escape::unescape_bytes(&p.framing, &printed)
+        .map_err(|e| format!("frame `{frame_text}`: {e}"))?;
     let len = p.frame_len(m);
     if m.is_variable() && (len..=m.max_len).contains(&printed.len()) {
         // Its repeated field's count is checked by decoding it.
@@ -2688,7 +2944,7 @@ fn frame_problems(
             m.payload_len
         ));
     }
-    let wire = interp::printed_to_wire(p, m, &printed);
+    let wire = crate::escape::escape_bytes(&p.framing, &interp::printed_to_wire(p, m, &printed));
     let frame = interp::decode_as(p, r, &wire).map_err(|e| e.to_string())?;
     // The frame must also decode on its own, without being told what it is (as a sniffer would),
     // unless only its request can tell it apart.

@@ -17,6 +17,44 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- escaping and stuffing (made from valid/slip_sensor, hdlc_like, cobs_link and
+    // dynamixel2_stuffed, without their examples)
+    (
+        "escaping_two_kinds",
+        &[("framing.escaping", "give exactly one kind: `escape` (SLIP, KISS, HDLC), `insert` (Dynamixel 2.0) or `cobs`")],
+    ),
+    (
+        "escaping_escape_not_listed",
+        &[("framing.escaping.escape", "the escape byte 0x7D must itself travel escaped: list it")],
+    ),
+    (
+        "escaping_replacement_escaped",
+        &[("framing.escaping.map", "0xC0 travels as 0xDB, a byte that is itself escaped")],
+    ),
+    (
+        "escaping_without_end",
+        &[("framing.escaping", "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them")],
+    ),
+    (
+        "escaping_computed_escaped",
+        &[("framing.escaping.computed", "they are computed on the frame before escaping (`computed: unescaped`)")],
+    ),
+    (
+        "stuffing_computed_unescaped",
+        &[("framing.escaping.computed", "stuffed frames are framed by their length field: it and the checksum count the stuffed bytes")],
+    ),
+    (
+        "stuffing_from_payload",
+        &[("framing.escaping.from", "stuffing from `payload`: name the address or the code, after the length field")],
+    ),
+    (
+        "stuffing_length_not_counting_code",
+        &[("framing.length.counts", "the length field counts the stuffed bytes: it must count `code`")],
+    ),
+    (
+        "cobs_end_not_zero",
+        &[("framing.escaping", "COBS frames end in the end byte 0x00 (`end: 0x00`, the last part of the layout)")],
+    ),
     // ---- checksum coverage from a part after codes of two lengths (made from valid/msp_v1.yaml)
     (
         "covers_from_after_codes_of_two_lengths",

@@ -353,6 +353,40 @@ fn another_end_byte_is_a_framing_change() {
     );
 }
 
+/// Adding escaping, changing it, or changing where the checksum is computed is a
+/// wire-breaking change of `framing.escaping`.
+#[test]
+fn escaping_changes_are_wire_breaking() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/hdlc_like.yaml");
+    let text = std::fs::read_to_string(&path).expect("hdlc_like.yaml");
+    let head = &text[..text.find("examples:").expect("examples")];
+    let load = |t: &str| busspec_model::load_str("x.yaml", t).unwrap_or_else(|d| panic!("{d}"));
+    let escaped = load(head);
+    let block = &head[head.find("  escaping:").unwrap()..head.find("\nunits:").unwrap()];
+    let plain = load(&head.replace(block, ""));
+    let more = load(&head.replace("bytes: [0x7E, 0x7D]", "bytes: [0x7E, 0x7D, 0x11, 0x13]"));
+    let summary_of = |a: &Protocol, b: &Protocol| {
+        diff::diff(a, b)
+            .into_iter()
+            .map(|c| (c.category, c.kind, c.path, c.text))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        summary_of(&plain, &escaped),
+        [(
+            Wire,
+            "escaping_changed",
+            "framing.escaping".to_owned(),
+            "escaping: none → escape byte 7D: 7E as 7D 5E, 7D as 7D 5D (checksum and length computed before escaping)".to_owned()
+        )]
+    );
+    assert_eq!(summary_of(&escaped, &plain)[0].1, "escaping_changed");
+    let got = summary_of(&escaped, &more);
+    assert_eq!(got.len(), 1, "{got:?}");
+    assert_eq!((got[0].0, got[0].1), (Wire, "escaping_changed"));
+    assert_eq!(summary_of(&escaped, &escaped), []);
+}
+
 /// `base.yaml` with a `transactions:` section (empty text: none).
 fn with_transactions(section: &str) -> Protocol {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/diff/base.yaml");

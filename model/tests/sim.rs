@@ -4,6 +4,8 @@
 //! refusal the section names, broadcasts are carried out and not answered, staged writes wait
 //! for their commit, records go to the device they name.
 
+mod common;
+
 use std::path::Path;
 use std::sync::Arc;
 
@@ -298,24 +300,9 @@ fn diff_says_what_a_command_does_now_and_breaks_no_peer() {
     assert_eq!(got[0].text, "device model removed");
 }
 
-/// A small xorshift generator: the test needs no dependency for its random frames.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
 /// Frames a device may meet on a line: the spec's example requests to this device or to the
 /// broadcast address, changed (bytes flipped, cut short, grown), resealed or not, and noise.
-fn damaged(p: &Protocol, rng: &mut Rng, address: u8) -> Vec<u8> {
+fn damaged(p: &Protocol, rng: &mut common::Rng, address: u8) -> Vec<u8> {
     let requests: Vec<&Vec<u8>> = p
         .examples
         .iter()
@@ -362,7 +349,7 @@ fn a_device_answers_every_frame_it_meets_with_a_reply_the_spec_allows_or_not_at_
     for name in ["modbus", "dynamixel"] {
         let p = spec(name);
         let mut d = Sim::new(Arc::clone(&p), 1);
-        let mut rng = Rng(0x5EED_0000 + name.len() as u64);
+        let mut rng = common::Rng(0x5EED_0000 + name.len() as u64);
         let (mut answered, mut refused) = (0, 0);
         for _ in 0..20_000 {
             let f = damaged(&p, &mut rng, 1);

@@ -13,6 +13,10 @@ pub use core::ops::RangeInclusive;
 pub use core::option::Option::{self, None, Some};
 pub use core::result::Result::{self, Err, Ok};
 
+pub use crate::escape::{
+    escape as escape_frame, frame_lens as escaped_lens, unescape as unescape_frame, EscapeKind,
+    Escaping,
+};
 pub use crate::repeated::{
     list, list_bits, read_bits, read_elements, write_bits, write_elements, CountBy, CountField,
     Element, RepeatAt,

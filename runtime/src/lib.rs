@@ -23,6 +23,7 @@ extern crate std;
 pub use crc;
 
 pub mod codec;
+pub mod escape;
 mod protocol;
 mod repeated;
 pub mod stream;
@@ -479,6 +480,55 @@ pub enum DecodeError {
         found: i64,
         expected: CountRule,
     },
+    /// The bytes as they travel break the protocol's escaping (`framing.escaping`) at
+    /// `offset` (counted in the escaped bytes).
+    BadEscape { offset: usize, fault: EscapeFault },
+}
+
+/// What is wrong with escaped bytes ([`DecodeError::BadEscape`]), as the interpreter's
+/// `EscapeFault` says it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EscapeFault {
+    /// The escape byte followed by a byte that stands for none (the end byte included).
+    Escape { escape: u8, found: u8 },
+    /// A byte that travels escaped, found as it is.
+    Unescaped { found: u8 },
+    /// A stuffing pattern not followed by its inserted byte (`None`: the frame ends).
+    Stuffing { expected: u8, found: Option<u8> },
+    /// COBS: a 0x00 among the encoded bytes.
+    CobsZero,
+    /// COBS: a block longer than the bytes before the end byte.
+    CobsOverrun { code: u8 },
+    /// COBS: no block before the end byte.
+    CobsEmpty,
+    /// COBS: a 0x01 block ending the frame after a full block.
+    CobsTrailing,
+}
+
+impl fmt::Display for EscapeFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            EscapeFault::Escape { escape, found } => {
+                write!(f, "0x{escape:02X} followed by 0x{found:02X}")
+            }
+            EscapeFault::Unescaped { found } => write!(f, "0x{found:02X} not escaped"),
+            EscapeFault::Stuffing { expected, found } => {
+                write!(f, "expected inserted byte 0x{expected:02X}, found ")?;
+                match found {
+                    Some(b) => write!(f, "0x{b:02X}"),
+                    None => f.write_str("the frame's end"),
+                }
+            }
+            EscapeFault::CobsZero => f.write_str("COBS block holds 0x00"),
+            EscapeFault::CobsOverrun { code } => {
+                write!(f, "COBS block 0x{code:02X} runs past the end byte")
+            }
+            EscapeFault::CobsEmpty => f.write_str("no COBS block before the end byte"),
+            EscapeFault::CobsTrailing => {
+                f.write_str("COBS block 0x01 after a full block ends the frame")
+            }
+        }
+    }
 }
 
 /// The messages an ambiguous frame decodes as, in spec order (the first four: no spec has more
@@ -551,7 +601,8 @@ impl fmt::Display for CountRule {
 
 impl DecodeError {
     /// How far a frame decoded as one direction got before this error: 0, no message of the
-    /// direction has its code or its length field (the direction's own); 1, too short; 2, a
+    /// direction has its code, its length field (the direction's own) or its length (longer
+    /// than the direction's longest: an escaped stream tries every frame both ways); 1, too short; 2, a
     /// code whose messages have other lengths or counts; 3, a message's own refusal. A frame
     /// decoded both ways is refused for the reason that got further (the request's on a tie),
     /// as the interpreter, which decodes both ways at once, refuses it.
@@ -559,7 +610,8 @@ impl DecodeError {
         match self {
             DecodeError::UnknownCommand { .. }
             | DecodeError::UnknownResponse { .. }
-            | DecodeError::LengthMismatch { .. } => 0,
+            | DecodeError::LengthMismatch { .. }
+            | DecodeError::TooLong { .. } => 0,
             DecodeError::Truncated { .. } => 1,
             DecodeError::WrongLength { .. }
             | DecodeError::BadCount { .. }
@@ -750,6 +802,9 @@ impl fmt::Display for DecodeError {
                 f,
                 "{message}.{field} at offset {offset}: {found} elements, expected {expected}"
             ),
+            DecodeError::BadEscape { offset, fault } => {
+                write!(f, "bad escape at offset {offset}: {fault}")
+            }
         }
     }
 }

@@ -76,7 +76,7 @@ pub fn check<P: Protocol>(
             };
             assert_eq!(g.address, i.address);
             same(p, &g.message, &i, wire);
-            assert_eq!(g.message.frame_len(), wire.len());
+            assert_eq!(g.message.frame_len(), unescaped_len(p, wire));
             let n = g.message.encode(g.address, &mut buf).unwrap();
             assert_eq!(&buf[..n], wire, "written back");
         }
@@ -93,7 +93,7 @@ pub fn check<P: Protocol>(
             };
             assert_eq!(g.address, i.address);
             same(p, &g.message, &i, wire);
-            assert_eq!(g.message.frame_len(), wire.len());
+            assert_eq!(g.message.frame_len(), unescaped_len(p, wire));
             if let Some((r, _)) = request {
                 assert!(P::answers(r, &g.message), "{wire:02X?}");
             }
@@ -102,6 +102,11 @@ pub fn check<P: Protocol>(
         }
     }
     true
+}
+
+/// The length of `wire` unescaped (`framing.escaping`): a message's `frame_len`.
+fn unescaped_len(p: &ir::Protocol, wire: &[u8]) -> usize {
+    busspec_model::escape::unescape_bytes(&p.framing, wire).map_or(wire.len(), |f| f.len())
 }
 
 /// Both engines refused a frame: they say so in the same words. Returns false (refused).

@@ -290,7 +290,8 @@ fn check_error(e: &DecodeError, len: usize) {
         | DecodeError::InvalidValue { offset, .. }
         | DecodeError::NotEqual { offset, .. }
         | DecodeError::NotFollowing { offset, .. }
-        | DecodeError::ByteCount { offset, .. } => {
+        | DecodeError::ByteCount { offset, .. }
+        | DecodeError::BadEscape { offset, .. } => {
             assert!(offset < len, "{e}")
         }
         DecodeError::LengthMismatch {

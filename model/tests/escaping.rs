@@ -1,0 +1,289 @@
+//! Escaping and stuffing (`framing.escaping`) in the interpreter: the fixtures' examples both
+//! ways, each refusal in its words and at its offset, and on random bytes that decoding accepts
+//! exactly what encoding writes.
+
+#![cfg(feature = "tools")]
+
+mod common;
+
+use busspec_model::escape::{escape_bytes, unescape_bytes};
+use busspec_model::interp::{self, parse_hex, Frame, Raw, Value};
+use busspec_model::ir::Direction;
+use busspec_model::stream::{Event, StreamDecoder};
+use busspec_model::Protocol;
+
+fn fixture(name: &str) -> Protocol {
+    let path = format!(
+        "{}/tests/fixtures/valid/{name}.yaml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    busspec_model::load_file(std::path::Path::new(&path)).unwrap_or_else(|d| panic!("{d}"))
+}
+
+const ESCAPED: [&str; 4] = [
+    "slip_sensor",
+    "hdlc_like",
+    "cobs_link",
+    "dynamixel2_stuffed",
+];
+
+fn values(frame: &Frame) -> Vec<Value<'static>> {
+    frame.clone().into_owned().values
+}
+
+fn refusal(p: &Protocol, hex: &str) -> String {
+    let wire = parse_hex(hex).unwrap();
+    interp::decode(p, None, None, &wire)
+        .map(|f| format!("decoded as {}", p.message(f.message).name))
+        .unwrap_or_else(|e| e.to_string())
+}
+
+/// Every example decodes from its escaped bytes and encodes back to them, and at least one
+/// example of each fixture is longer on the wire than unescaped (it exercises the escaping).
+#[test]
+fn examples_decode_and_encode_back_escaped() {
+    for name in ESCAPED {
+        let p = fixture(name);
+        let mut escaped = 0;
+        for e in &p.examples {
+            let frame = interp::decode(&p, None, e.reply_to, &e.wire)
+                .unwrap_or_else(|err| panic!("{name}: {err}"));
+            assert_eq!(frame.message, e.message, "{name}");
+            let again = interp::encode(&p, frame.message, frame.address, &values(&frame))
+                .unwrap_or_else(|err| panic!("{name}: {err}"));
+            assert_eq!(again, e.wire, "{name}: {}", p.message(e.message).name);
+            let plain = unescape_bytes(&p.framing, &e.wire).unwrap();
+            if plain.len() < e.wire.len() {
+                escaped += 1;
+            }
+        }
+        assert!(escaped > 0, "{name}: no example exercises the escaping");
+    }
+}
+
+#[test]
+fn byte_escaping_refusals_are_located() {
+    let slip = fixture("slip_sensor");
+    // 81 DB DC DB DD 60 28 C0 is the temperature example.
+    assert_eq!(
+        refusal(&slip, "81 DB 41 DB DD 60 28 C0"),
+        "bad escape at offset 1: 0xDB followed by 0x41"
+    );
+    assert_eq!(
+        refusal(&slip, "81 C0 DB DD 60 28 C0"),
+        "bad escape at offset 1: 0xC0 not escaped"
+    );
+    assert_eq!(
+        refusal(&slip, "81 DB DC DB DD 60 DB C0"),
+        "bad escape at offset 6: 0xDB followed by 0xC0"
+    );
+    // The escapes pass; the checksum is computed on the unescaped frame.
+    assert_eq!(
+        refusal(&slip, "81 DB DC DB DD 60 29 C0"),
+        "checksum mismatch at offset 3: expected 0x6028, found 0x6029"
+    );
+    let hdlc = fixture("hdlc_like");
+    assert_eq!(
+        refusal(&hdlc, "7E 01 90 7D 5E 7D 41 00 00 7E"),
+        "bad escape at offset 5: 0x7D followed by 0x41"
+    );
+}
+
+#[test]
+fn cobs_refusals_are_located() {
+    let p = fixture("cobs_link");
+    let ex = |i: usize| interp::format_hex(&p.examples[i].wire);
+    // read_position: 00 10 crc, stuffed 01 03 10 crc 00.
+    assert_eq!(ex(0).replace(' ', "")[..6].to_owned(), "010310");
+    assert_eq!(
+        refusal(&p, "01 04 10 07 00"),
+        "bad escape at offset 1: COBS block 0x04 runs past the end byte"
+    );
+    assert_eq!(
+        refusal(&p, "01 03 00 07 00"),
+        "bad escape at offset 2: COBS block holds 0x00"
+    );
+    assert_eq!(
+        refusal(&p, "00"),
+        "bad escape at offset 0: no COBS block before the end byte"
+    );
+    // A full block then an empty one at the end: the same bytes as the full block alone, which
+    // is how encoding ends; refused so that decoding accepts only what encoding writes.
+    let mut long = parse_hex("FF").unwrap();
+    long.extend(std::iter::repeat(0x11).take(254));
+    long.extend([0x01, 0x00]);
+    let e = interp::decode(&p, None, None, &long).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "bad escape at offset 255: COBS block 0x01 after a full block ends the frame"
+    );
+}
+
+#[test]
+fn stuffing_is_checked_and_counted_on_the_stuffed_bytes() {
+    let p = fixture("dynamixel2_stuffed");
+    let good = "FF FF FD 00 01 0A 00 03 74 00 FF FF FD FD 00 21 E7";
+    assert_eq!(refusal(&p, good), "decoded as write4");
+    assert_eq!(
+        refusal(&p, "FF FF FD 00 01 0A 00 03 74 00 FF FF FD 41 00 21 E7"),
+        "bad escape at offset 13: expected inserted byte 0xFD, found 0x41"
+    );
+    // The CRC covers the stuffed packet: its error names the stuffed frame's offset and values.
+    assert_eq!(
+        refusal(&p, "FF FF FD 00 01 0A 00 03 74 00 FF FF FD FD 00 21 E8"),
+        "checksum mismatch at offset 15: expected 0xE721, found 0xE821"
+    );
+    // A length field one short, resealed: the length counts the stuffed bytes (10).
+    let mut wire = parse_hex("FF FF FD 00 01 09 00 03 74 00 FF FF FD FD 00 00 00").unwrap();
+    let n = wire.len();
+    let crc = busspec_model::checksum::compute(&p.framing.checksum.algorithm, &wire[..n - 2]);
+    wire[n - 2] = crc as u8;
+    wire[n - 1] = (crc >> 8) as u8;
+    assert_eq!(
+        interp::decode(&p, None, None, &wire)
+            .unwrap_err()
+            .to_string(),
+        "length field at offset 5 says 9, the frame's length gives 10"
+    );
+    // The e-manual's PING and its status packet (no stuffing in them).
+    assert_eq!(
+        refusal(&p, "FF FF FD 00 01 03 00 01 19 4E"),
+        "decoded as ping"
+    );
+    assert_eq!(
+        refusal(&p, "FF FF FD 00 01 07 00 55 00 06 04 26 65 5D"),
+        "decoded as ping_status"
+    );
+    // A value whose bytes end in the pattern is stuffed after it, before the CRC.
+    let r = p.find("write4").unwrap();
+    let vals = [
+        Value {
+            name: "address".into(),
+            raw: Raw::Int(0xFDFF),
+        },
+        Value {
+            name: "value".into(),
+            raw: Raw::Int(0xFDFF_FF00u32 as i64),
+        },
+    ];
+    let wire = interp::encode(&p, r, 1, &vals).unwrap();
+    // The pattern ends the parameters: FD is inserted before the CRC, and the length (10)
+    // counts it.
+    assert_eq!(
+        wire[..15],
+        parse_hex("FF FF FD 00 01 0A 00 03 FF FD 00 FF FF FD FD").unwrap()[..]
+    );
+    assert_eq!(wire.len(), 17);
+    assert_eq!(interp::decode(&p, None, None, &wire).unwrap().message, r);
+}
+
+/// A byte, drawn often from the bytes escaping treats specially.
+fn byte(rng: &mut common::Rng, special: &[u8]) -> u8 {
+    let v = rng.next();
+    if v % 3 == 0 && !special.is_empty() {
+        special[(v >> 8) as usize % special.len()]
+    } else {
+        (v >> 16) as u8
+    }
+}
+
+/// On random frames: unescaping what escaping wrote gives the frame back, and whatever random
+/// bytes unescape, escaping them again gives the same bytes (one way to write each frame).
+/// Decoding random bytes never panics.
+#[test]
+fn escaping_is_one_to_one_on_random_bytes() {
+    let mut rng = common::Rng(0x9E37_79B9_7F4A_7C15);
+    for name in ESCAPED {
+        let p = fixture(name);
+        let f = &p.framing;
+        let special: Vec<u8> = vec![
+            0x00, 0xC0, 0xDB, 0xDC, 0xDD, 0x7E, 0x7D, 0x5E, 0x5D, 0xFF, 0xFD,
+        ];
+        let (mut round, mut accepted) = (0, 0);
+        for _ in 0..20_000 {
+            let len = rng.below(300);
+            let mut bytes: Vec<u8> = (0..len).map(|_| byte(&mut rng, &special)).collect();
+            // Keep the fixed bytes around the escaped ones, so most frames reach the escaping.
+            let start = f.sync.clone();
+            if bytes.len() > start.len() + f.end.len() {
+                bytes[..start.len()].copy_from_slice(&start);
+                let n = bytes.len();
+                bytes[n - f.end.len()..].copy_from_slice(&f.end);
+            }
+            let wire = escape_bytes(f, &bytes);
+            if wire.len() != bytes.len() || f.escaped_region(bytes.len()).is_some() {
+                assert_eq!(
+                    unescape_bytes(f, &wire).as_deref(),
+                    Ok(&bytes[..]),
+                    "{name}"
+                );
+                round += 1;
+            }
+            if let Ok(plain) = unescape_bytes(f, &bytes) {
+                assert_eq!(escape_bytes(f, &plain), bytes, "{name}");
+                accepted += 1;
+            }
+            let _ = interp::decode(&p, None, None, &bytes);
+            let _ = interp::decode(&p, Some(Direction::Response), None, &wire);
+        }
+        assert!(
+            round > 10_000 && accepted > 50,
+            "{name}: {round} {accepted}"
+        );
+    }
+}
+
+/// A stream of escaped frames with noise between them frames exactly (the escaped fixtures'
+/// examples), and every cut into two chunks gives the same events.
+#[test]
+fn streams_of_escaped_frames() {
+    for name in ESCAPED {
+        let p = fixture(name);
+        // Noise, then the first example damaged (a byte flipped before its checksum), then
+        // every example.
+        let mut capture = vec![0x33, 0x44];
+        let mut damaged = p.examples[0].wire.clone();
+        let mid = damaged.len() - 2;
+        damaged[mid] ^= 0x01;
+        capture.extend_from_slice(&damaged);
+        let mut at = Vec::new();
+        for e in &p.examples {
+            at.push(capture.len() as u64);
+            capture.extend_from_slice(&e.wire);
+        }
+        let run = |chunks: &[&[u8]]| {
+            let mut d = StreamDecoder::new(&p, None);
+            let mut events = Vec::new();
+            for c in chunks {
+                events.extend(d.push(c));
+            }
+            events.extend(d.flush());
+            events
+                .into_iter()
+                .map(|e| match e {
+                    Event::Frame { offset, frame, .. } => {
+                        (offset, p.message(frame.message).name.clone())
+                    }
+                    Event::Ambiguous { offset, .. } => (offset, "ambiguous".to_owned()),
+                    Event::Skipped { offset, bytes } => {
+                        (offset, format!("skipped {}", bytes.len()))
+                    }
+                    Event::OutOfSpec { offset, reason, .. } => {
+                        (offset, format!("out of spec: {reason}"))
+                    }
+                })
+                .collect::<Vec<_>>()
+        };
+        let whole = run(&[&capture]);
+        let frames: Vec<u64> = whole
+            .iter()
+            .filter(|(_, what)| !what.starts_with("skipped"))
+            .map(|(o, _)| *o)
+            .collect();
+        assert_eq!(frames, at, "{name}: {whole:?}");
+        for cut in 0..capture.len() {
+            let (a, b) = capture.split_at(cut);
+            assert_eq!(run(&[a, b]), whole, "{name}: cut at {cut}");
+        }
+    }
+}
