@@ -76,6 +76,9 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/ft12_fixed.yaml"),
         spec("model/tests/fixtures/valid/msp_v1.yaml"),
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),
+        // Fields after lists, and several lists (with and without a length field).
+        spec("model/tests/fixtures/valid/lists_after.yaml"),
+        spec("model/tests/fixtures/valid/lists_length.yaml"),
         derived_units(),
     ]
 }

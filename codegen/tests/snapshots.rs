@@ -190,6 +190,19 @@ fn the_generator_has_no_gaps() {
     assert!(specs.len() > 8, "{specs:?}");
     for spec in specs {
         let p = busspec_model::load_file(&spec).unwrap_or_else(|d| panic!("{d}"));
+        // Fields after a list and several lists: the interpreter serves them, the generator
+        // refuses them by name.
+        if spec
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with("lists_"))
+        {
+            let e = busspec_codegen::emit::emit_module(&p, "x", "x").unwrap_err();
+            assert!(
+                e.contains("a field after a repeated field, or several repeated fields"),
+                "{e}"
+            );
+            continue;
+        }
         assert_eq!(
             p.generator_gaps(),
             Vec::<String>::new(),

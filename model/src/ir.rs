@@ -437,11 +437,47 @@ pub struct Message {
 }
 
 impl Message {
-    /// The repeated field, if the message has one (always its last field).
+    /// Its first repeated field, if it has one (the only one where [`Self::tail_repeat`]).
     pub fn repeat(&self) -> Option<(&Field, &Repeat)> {
+        self.repeats().next().map(|(_, f, r)| (f, r))
+    }
+
+    /// Every repeated field (index, field, repeat), in wire order.
+    pub fn repeats(&self) -> impl Iterator<Item = (usize, &Field, &Repeat)> {
         self.fields
-            .last()
-            .and_then(|f| f.repeat.as_ref().map(|r| (f, r)))
+            .iter()
+            .enumerate()
+            .filter_map(|(i, f)| f.repeat.as_ref().map(|r| (i, f, r)))
+    }
+
+    /// Whether its one variable part, if any, is a single repeated field ending the payload:
+    /// every field keeps a fixed offset. A message with fields after a list, or with several
+    /// lists, places each field after a list by the lists before it.
+    pub fn tail_repeat(&self) -> bool {
+        match self.repeats().count() {
+            0 => true,
+            1 => self.fields.last().is_some_and(|f| f.repeat.is_some()),
+            _ => false,
+        }
+    }
+
+    /// Where field `i` sits, as docs and diff print it: its payload offset (`5`), or for a
+    /// field after a list, its distance from the end of the last list before it
+    /// (`` `values` + 2 ``).
+    pub fn place(&self, i: usize) -> String {
+        let Some(f) = self.fields.get(i) else {
+            return String::new();
+        };
+        match self.fields[..i].iter().rev().find(|g| g.repeat.is_some()) {
+            Some(l) => format!("`{}` + {}", l.name, f.offset - l.offset),
+            None => f.offset.to_string(),
+        }
+    }
+
+    /// The repeated field (index) whose elements or bytes field `i` counts, if any.
+    pub fn counted_by(&self, i: usize) -> Option<(usize, &Field, &Repeat)> {
+        self.repeats()
+            .find(|(_, _, r)| matches!(r.count, Count::Elements(c) | Count::Bytes(c) if c == i))
     }
 
     /// The bytes of the constants that lead its payload (whole fields, one after the other from
@@ -462,12 +498,13 @@ impl Message {
         lead
     }
 
-    /// Its shortest frame: with the fewest elements its repeated field may have.
+    /// Its shortest frame: with the fewest elements its repeated fields may have.
     pub fn min_len(&self) -> usize {
-        match self.repeat() {
-            Some((f, r)) => self.layout.len + f.elements_len(r.min),
-            None => self.layout.len,
-        }
+        self.layout.len
+            + self
+                .repeats()
+                .map(|(_, f, r)| f.elements_len(r.min))
+                .sum::<usize>()
     }
 
     /// Whether its frames vary in length.
@@ -475,7 +512,7 @@ impl Message {
         self.repeat().is_some()
     }
 
-    /// The field (index) that counts the elements or bytes of the repeated field, if any.
+    /// The field (index) that counts the elements or bytes of its first repeated field, if any.
     pub fn count_field(&self) -> Option<usize> {
         match self.repeat()?.1.count {
             Count::Elements(i) | Count::Bytes(i) => Some(i),
@@ -492,7 +529,7 @@ impl Message {
             f.constant.is_some()
                 || f.equals.is_some()
                 || matches!(f.follows, Some(Follows::Field(..)))
-                || self.count_field() == Some(i)
+                || self.counted_by(i).is_some()
         })
     }
 
@@ -577,7 +614,9 @@ pub struct Field {
     pub special: Vec<Special>,
     pub bits: Vec<BitField>,
     /// A repeated field: `width` is one element's (bytes; a bit element is 1 and packs eight to
-    /// a byte), `offset` where the first sits. Only the last field of a message repeats.
+    /// a byte), `offset` where the first sits when every earlier list is empty. Every field's
+    /// `offset` is so counted: a field after lists sits further by the bytes their elements
+    /// take (`interp::Shape`).
     pub repeat: Option<Repeat>,
     /// The value follows from another field (of this frame or of the request).
     pub follows: Option<Follows>,
@@ -658,6 +697,15 @@ impl Field {
             n.div_ceil(8)
         } else {
             n.saturating_mul(self.width)
+        }
+    }
+
+    /// The whole elements of a repeated field that `bytes` bytes hold.
+    pub fn elements_from(&self, bytes: usize) -> usize {
+        if self.ty == FieldType::Bit {
+            bytes.saturating_mul(8)
+        } else {
+            bytes / self.width.max(1)
         }
     }
 
@@ -792,6 +840,14 @@ impl Protocol {
             .collect();
         lengths.sort_unstable();
         lengths.dedup();
+        for m in self.commands.iter().chain(&self.responses) {
+            if !m.tail_repeat() {
+                gaps.push(format!(
+                    "`{}`: a field after a repeated field, or several repeated fields (the interpreter serves it: `busspec decode --spec`)",
+                    m.name
+                ));
+            }
+        }
         let max = crate::validate::MAX_DISTINCT_LENGTHS;
         if lengths.len() > max {
             for m in self.commands.iter().chain(&self.responses) {
