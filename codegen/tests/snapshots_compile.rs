@@ -18,6 +18,8 @@ include!("snapshots/pelco_p.rs");
 include!("snapshots/msp_v1.rs");
 include!("snapshots/meter_floats.rs");
 include!("snapshots/telemetry_le.rs");
+include!("snapshots/lists_after.rs");
+include!("snapshots/lists_length.rs");
 
 mod agree;
 
@@ -936,4 +938,66 @@ fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
         }
         other => panic!("both encoders must refuse a NaN latitude: {other:?}"),
     }
+}
+
+/// Fields after a list and several lists: the examples replay, and every frame mutated from
+/// them decodes alike in both engines (the same values, the same refusals in the same words);
+/// lists of other lengths encode alike.
+#[test]
+fn lists_snapshots_agree_with_the_interpreter() {
+    replay::<lists_after::ListsAfter>("model/tests/fixtures/valid/lists_after.yaml");
+    let p = fixture("model/tests/fixtures/valid/lists_after.yaml");
+    let t = agree::agree::<lists_after::ListsAfter>(&p);
+    assert!(t.accepted > 5 && t.refused > 100 && t.encoded > 10, "{t:?}");
+    replay::<lists_length::ListsLength>("model/tests/fixtures/valid/lists_length.yaml");
+    let p = fixture("model/tests/fixtures/valid/lists_length.yaml");
+    let t = agree::agree::<lists_length::ListsLength>(&p);
+    assert!(t.accepted > 3 && t.refused > 50 && t.encoded > 10, "{t:?}");
+}
+
+/// Captures of the lists fixtures' examples (and frames mutated from them) with noise and cut
+/// frames between them, cut into chunks anywhere: the generated stream decoder finds what the
+/// interpreter's finds, framing each message by its count fields (read after the lists
+/// before them) or its length field.
+#[test]
+fn lists_snapshots_stream_as_the_interpreter_does() {
+    fn run<P: Protocol>(file: &str) -> usize {
+        let p = fixture(file);
+        let mut frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+        for e in &p.examples {
+            let d = e.message.direction;
+            frames.extend(
+                agree::mutations(&p, d, &e.wire)
+                    .into_iter()
+                    .filter(|w| busspec_model::interp::decode(&p, Some(d), None, w).is_ok()),
+            );
+        }
+        let mut rng = agree::Rng(0x11575);
+        let mut found = 0;
+        for _ in 0..200 {
+            let mut cap = Vec::new();
+            for _ in 0..20 {
+                let f = &frames[rng.below(frames.len() as u64) as usize];
+                match rng.below(10) {
+                    0 => cap.extend((0..1 + rng.below(5)).map(|_| rng.below(256) as u8)),
+                    1 => cap.extend_from_slice(&f[..1 + rng.below(f.len() as u64 - 1) as usize]),
+                    _ => {}
+                }
+                cap.extend_from_slice(f);
+            }
+            let cuts: Vec<usize> = (0..8).map(|_| 1 + rng.below(40) as usize).collect();
+            let want = interp_seen(&p, &cap, &cuts);
+            let got = generated_seen::<P>(&cap, &cuts);
+            assert_eq!(got, want, "{file}: capture {cap:02X?}");
+            found += got
+                .iter()
+                .filter(|s| !matches!(&*s.0, "-" | "?" | "!"))
+                .count();
+        }
+        found
+    }
+    let found = run::<lists_after::ListsAfter>("model/tests/fixtures/valid/lists_after.yaml");
+    assert!(found > 200 * 10, "only {found} frames found");
+    let found = run::<lists_length::ListsLength>("model/tests/fixtures/valid/lists_length.yaml");
+    assert!(found > 200 * 10, "only {found} frames found");
 }

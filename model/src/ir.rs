@@ -840,12 +840,49 @@ impl Protocol {
             .collect();
         lengths.sort_unstable();
         lengths.dedup();
+        // With several lists, or fields after one, what a reply takes from its request is
+        // emitted for the first list and the fields before it.
         for m in self.commands.iter().chain(&self.responses) {
-            if !m.tail_repeat() {
-                gaps.push(format!(
-                    "`{}`: a field after a repeated field, or several repeated fields (the interpreter serves it: `busspec decode --spec`)",
-                    m.name
-                ));
+            if m.tail_repeat() {
+                continue;
+            }
+            let first = m.repeats().next().map(|(i, _, _)| i);
+            for (i, f) in m.fields.iter().enumerate() {
+                let later = |l: usize| first.is_some_and(|first| l > first);
+                let by_request = matches!(f.follows, Some(Follows::Request(_)))
+                    && (later(i) || m.counted_by(i).is_some_and(|(l, _, _)| later(l)));
+                let list_by_request =
+                    f.repeat.as_ref().is_some_and(|r| r.request.is_some()) && later(i);
+                if by_request || list_by_request {
+                    gaps.push(format!(
+                        "`{}.{}`: a value taken from the request after the message's first repeated field (the interpreter serves it: `busspec decode --spec`)",
+                        m.name, f.name
+                    ));
+                }
+            }
+        }
+        for r in &self.responses {
+            let rels = r
+                .fields
+                .iter()
+                .filter_map(|f| match (&f.follows, &f.repeat) {
+                    (Some(Follows::Request(rel)), _) => Some(rel),
+                    (_, Some(rep)) => rep.request.as_ref(),
+                    _ => None,
+                });
+            for rel in rels {
+                for cmd in r.answers.iter().filter_map(|&c| self.commands.get(c)) {
+                    let Some(i) = cmd.fields.iter().position(|f| f.name == rel.field) else {
+                        continue;
+                    };
+                    let first = cmd.repeats().next().map(|(l, _, _)| l);
+                    if cmd.counted_by(i).is_some_and(|(l, _, _)| Some(l) != first) {
+                        gaps.push(format!(
+                            "`{}`: a reply's count taken from `{}.{}`, the count of a repeated field after the first (the interpreter serves it: `busspec decode --spec`)",
+                            r.name, cmd.name, rel.field
+                        ));
+                    }
+                }
             }
         }
         let max = crate::validate::MAX_DISTINCT_LENGTHS;

@@ -229,6 +229,14 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
                     Count::Elements(_) => lf.elements_len(n),
                     _ => n,
                 };
+                // Several lists, or fields after one: each list's count must fit its own
+                // bounds in whole elements (as the generated `Lists::frame_len` checks).
+                let whole = lf.ty == crate::ir::FieldType::Bit || len % lf.width.max(1) == 0;
+                if !m.tail_repeat()
+                    && (len < lf.elements_len(lr.min) || len > lf.elements_len(lr.max) || !whole)
+                {
+                    return Lens::Are(Vec::new());
+                }
                 tail = tail.saturating_add(len);
                 if m.layout.len.saturating_add(tail) > m.max_len {
                     return Lens::Are(Vec::new());
