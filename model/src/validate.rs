@@ -1356,6 +1356,10 @@ fn parse_code(code: &str, path: &str, sink: &mut Sink) -> Option<Vec<u8>> {
     interp::parse_hex(digits).ok()
 }
 
+/// The most repeated fields one message may have (the generated stream decoder reads their
+/// count fields into an array of this many).
+pub const MAX_LISTS: usize = 64;
+
 /// What [`message_body`] resolves: code, fields, fixed payload bytes, most payload bytes.
 type Body = (Vec<u8>, Vec<Field>, usize, usize);
 
@@ -1451,6 +1455,13 @@ fn message_body(
             None => offset += field.width,
         }
         out.push(field);
+    }
+    let lists = out.iter().filter(|f| f.repeat.is_some()).count();
+    if lists > MAX_LISTS {
+        sink.error(
+            &fpath,
+            format!("{lists} repeated fields; a message has at most {MAX_LISTS}"),
+        );
     }
     if offset + min_tail < dir.payload_min || offset + tail > dir.payload_max {
         let most = if tail > 0 {
@@ -1683,6 +1694,10 @@ fn field(
     if let Some(other) = &f.equals {
         allow(&["equals"], "`equals`", sink);
         match earlier.iter().position(|e| &e.name == other) {
+            Some(i) if earlier[i].repeat.is_some() => sink.error(
+                join(p, "equals"),
+                format!("`{other}` is a repeated field; a field repeats one earlier value"),
+            ),
             Some(i) if earlier[i].ty == f.ty => out.equals = Some(i),
             Some(_) => sink.error(join(p, "equals"), format!("`{other}` has a different type")),
             None => sink.error(

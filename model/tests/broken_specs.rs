@@ -176,6 +176,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("commands.copy.fields.targets.repeat.count", "a repeat to the `end` beside another repeated field needs a length field (framing.length): without one a stream decoder cannot tell where the frame ends")],
     ),
     (
+        "equals_repeated_field",
+        &[("commands.write_block.fields.flags.equals", "`values` is a repeated field; a field repeats one earlier value")],
+    ),
+    (
         "repeat_count_shared",
         &[("commands.copy.fields.targets.repeat.count", "`na` already counts another repeated field; each list has a count field of its own")],
     ),

@@ -208,6 +208,7 @@ impl Lists {
     /// comes from a length field) or while a count field is missing; `Some(0)`, which no frame
     /// has, where a list's count could not hold `min..=max` whole elements.
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
+        // The validator allows at most 64 lists in a message (`MAX_LISTS`).
         let mut bytes = [0usize; 64];
         let mut total = self.base;
         for (k, r) in self.lists.iter().enumerate().take(64) {
