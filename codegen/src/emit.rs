@@ -1767,13 +1767,7 @@ fn emit_encode_arm(
             continue;
         }
         if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
-            if f.ty == FieldType::Bit {
-                stmts.push(quote!(rt::write_bits(&#v, &mut out[#at..]);));
-            } else {
-                let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
-                stmts
-                    .push(quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);));
-            }
+            stmts.push(write_list(f, v, quote!(#at)));
             continue;
         }
         if f.is_ascii() {
@@ -1899,13 +1893,7 @@ fn emit_encode_arm(
             let at = usize_lit(m.layout.payload + f.offset);
             let before = &list_bytes[..*k];
             let at = quote!(#at #(+ #before)*);
-            if f.ty == FieldType::Bit {
-                stmts.push(quote!(rt::write_bits(&#v, &mut out[#at..]);));
-            } else {
-                let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
-                stmts
-                    .push(quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);));
-            }
+            stmts.push(write_list(f, v, at));
         }
         if let Some(rule) = p.framing.length_rule(m.direction) {
             let args = length_args(p, rule);
@@ -1918,6 +1906,16 @@ fn emit_encode_arm(
             #(#stmts)*
             #end
         }
+    }
+}
+
+/// The statement writing repeated field `f`'s elements (the local `v`) into `out` from `at`.
+fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
+    if f.ty == FieldType::Bit {
+        quote!(rt::write_bits(&#v, &mut out[#at..]);)
+    } else {
+        let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
+        quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);)
     }
 }
 

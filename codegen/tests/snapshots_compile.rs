@@ -566,16 +566,7 @@ fn repeat_to_the_end_snapshot_streams_as_the_interpreter_does() {
     let mut rng = agree::Rng(0x5EED);
     let mut found = 0;
     for _ in 0..200 {
-        let mut cap = Vec::new();
-        for _ in 0..30 {
-            let f = &frames[rng.below(frames.len() as u64) as usize];
-            match rng.below(12) {
-                0 => cap.extend((0..1 + rng.below(5)).map(|_| rng.below(256) as u8)),
-                1 => cap.extend_from_slice(&f[..1 + rng.below(f.len() as u64 - 1) as usize]),
-                _ => {}
-            }
-            cap.extend_from_slice(f);
-        }
+        let cap = random_capture(&frames, &mut rng, 30, 12);
         let cuts: Vec<usize> = (0..8).map(|_| 1 + rng.below(40) as usize).collect();
         let want = interp_seen(&p, &cap, &cuts);
         let got = generated_seen::<ending::Ending>(&cap, &cuts);
@@ -975,16 +966,7 @@ fn lists_snapshots_stream_as_the_interpreter_does() {
         let mut rng = agree::Rng(0x11575);
         let mut found = 0;
         for _ in 0..200 {
-            let mut cap = Vec::new();
-            for _ in 0..20 {
-                let f = &frames[rng.below(frames.len() as u64) as usize];
-                match rng.below(10) {
-                    0 => cap.extend((0..1 + rng.below(5)).map(|_| rng.below(256) as u8)),
-                    1 => cap.extend_from_slice(&f[..1 + rng.below(f.len() as u64 - 1) as usize]),
-                    _ => {}
-                }
-                cap.extend_from_slice(f);
-            }
+            let cap = random_capture(&frames, &mut rng, 20, 10);
             let cuts: Vec<usize> = (0..8).map(|_| 1 + rng.below(40) as usize).collect();
             let want = interp_seen(&p, &cap, &cuts);
             let got = generated_seen::<P>(&cap, &cuts);
@@ -1000,4 +982,20 @@ fn lists_snapshots_stream_as_the_interpreter_does() {
     assert!(found > 200 * 10, "only {found} frames found");
     let found = run::<lists_length::ListsLength>("model/tests/fixtures/valid/lists_length.yaml");
     assert!(found > 200 * 10, "only {found} frames found");
+}
+
+/// `parts` frames drawn from `frames`, one in `one_in` led by noise (one to five random bytes)
+/// and one in `one_in` by a frame cut short.
+fn random_capture(frames: &[Vec<u8>], rng: &mut agree::Rng, parts: usize, one_in: u64) -> Vec<u8> {
+    let mut cap = Vec::new();
+    for _ in 0..parts {
+        let f = &frames[rng.below(frames.len() as u64) as usize];
+        match rng.below(one_in) {
+            0 => cap.extend((0..1 + rng.below(5)).map(|_| rng.below(256) as u8)),
+            1 => cap.extend_from_slice(&f[..1 + rng.below(f.len() as u64 - 1) as usize]),
+            _ => {}
+        }
+        cap.extend_from_slice(f);
+    }
+    cap
 }

@@ -775,19 +775,7 @@ pub fn var_by_length(head: &[u8], shapes: &[(Fixed, usize, usize)], field: Lengt
 /// not buffered yet.
 #[inline]
 pub fn var_by_count(head: &[u8], shapes: &[(Fixed, RepeatAt)]) -> VarLen {
-    let mut wait = false;
-    for (fixed, r) in shapes {
-        match fixed.agrees(head) {
-            Some(true) => return VarLen::of(r.frame_len(head)),
-            Some(false) => {}
-            None => wait = true,
-        }
-    }
-    if wait {
-        VarLen::NEED_MORE
-    } else {
-        VarLen::NONE
-    }
+    first_agreeing(head, shapes, |r| r.frame_len(head))
 }
 
 /// How a variable-length message counted by fields gives its frame's length: one repeated
@@ -801,15 +789,24 @@ pub enum Counted {
 /// [`var_by_count`] for a direction with messages counted by several fields ([`Counted`]).
 #[inline]
 pub fn var_by_counts(head: &[u8], shapes: &[(Fixed, Counted)]) -> VarLen {
+    first_agreeing(head, shapes, |c| match c {
+        Counted::One(r) => r.frame_len(head),
+        Counted::Many(l) => l.frame_len(head),
+    })
+}
+
+/// The length `len` gives for the first shape whose fixed bytes agree with `head`;
+/// [`VarLen::NEED_MORE`] while some are not buffered yet.
+#[inline(always)]
+fn first_agreeing<S>(
+    head: &[u8],
+    shapes: &[(Fixed, S)],
+    len: impl Fn(&S) -> Option<usize>,
+) -> VarLen {
     let mut wait = false;
-    for (fixed, c) in shapes {
+    for (fixed, s) in shapes {
         match fixed.agrees(head) {
-            Some(true) => {
-                return VarLen::of(match c {
-                    Counted::One(r) => r.frame_len(head),
-                    Counted::Many(l) => l.frame_len(head),
-                })
-            }
+            Some(true) => return VarLen::of(len(s)),
             Some(false) => {}
             None => wait = true,
         }

@@ -94,13 +94,7 @@ impl Lists {
         &self,
         frame: &'f [u8],
     ) -> Result<Split<'f, BASE, K>, DecodeError> {
-        let mut rest = frame
-            .len()
-            .checked_sub(self.base)
-            .ok_or(DecodeError::Truncated {
-                needed: self.base,
-                found: frame.len(),
-            })?;
+        let mut rest = crate::repeated::beyond(frame, self.base)?;
         let mut lists = [NONE; K];
         let mut n = [0usize; K];
         let mut bytes = [0usize; K];
