@@ -5,6 +5,10 @@
 //!   generated here from a template, about 2.4 MB of YAML. Target: under 2 s in release;
 //!   every pass over messages is close to linear.
 //! - `large_spec/10000_commands/prescan`: the loader's pre-scan of the same text alone.
+//! - `large_spec/1000_commands/emit` and `2000_commands/emit`: the generator
+//!   (`busspec_codegen::emit::emit_module`) over the first 1,000 and 2,000 of those commands;
+//!   the second takes about twice the first, as every pass of the generator over messages is
+//!   linear (it grouped messages by code with a scan per code before).
 //!
 //! `cargo bench -p busspec-benches --bench large_spec` runs it; `-- --test` runs each once.
 
@@ -70,6 +74,12 @@ fn large_spec(c: &mut Criterion) {
     g.bench_function("10000_commands/prescan", |b| {
         b.iter(|| busspec_model::load::prescan(black_box(&text)).is_ok())
     });
+    for n in [1_000, 2_000] {
+        let p = busspec_model::load_str("many.yaml", &spec(n)).unwrap_or_else(|d| panic!("{d}"));
+        g.bench_function(format!("{n}_commands/emit"), |b| {
+            b.iter(|| busspec_codegen::emit::emit_module(black_box(&p), "many.yaml", "many.yaml"))
+        });
+    }
     g.finish();
 }
 

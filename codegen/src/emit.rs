@@ -17,11 +17,12 @@
 //!   print them;
 //! - encode writes the bytes known before any field in one `copy_from_slice`, and keeps a sum-8
 //!   in each arm, where it folds the constant header bytes.
-//! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "Flash and decode, fifth
-//!   round"): no range check that cannot fail, one buffer check per `encode` where a direction
-//!   has one frame length (it then precedes the message's own checks), a sum-8 arm's constant
-//!   head summed here, and, where every reply code of a direction has one length, a refused
-//!   reply's code written once by `decode` (`rt::reply_of`/`rt::reply_code`).
+//! - sized for `opt-level = "s"` as well as for speed (BENCHMARKS.md, "What the benches taught
+//!   the generator"; the rounds in its history): no range check that cannot fail, one buffer
+//!   check per `encode` where a direction has one frame length (it then precedes the message's
+//!   own checks), a sum-8 arm's constant head summed here, and, where every reply code of a
+//!   direction has one length, a refused reply's code written once by `decode`
+//!   (`rt::reply_of`/`rt::reply_code`).
 //!
 //! Typing rules:
 //! - a unit with scale 1 and offset 0 stays a plain integer of its field's width;
@@ -804,7 +805,8 @@ fn emit_checksum(p: &Protocol) -> TokenStream {
                     residue: 0,
                 };
                 // A static, not a const: one table in memory. Where `checksum` was not inlined,
-                // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, sd/checksum).
+                // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, "What the benches
+                // taught the generator").
                 static CRC: rt::crc::Crc<#ty> = rt::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
                 /// The frame checksum over `bytes`.
                 #[inline]
@@ -1685,7 +1687,7 @@ fn emit_encode_arm(
         }
     }
     if let (Some(at), Some(l), false) = (o.length, &p.framing.length, m.is_variable()) {
-        let v = busspec_model::validate::length_value(&p.framing, l, m.code.len(), m.payload_len);
+        let v = p.framing.length_value(l, m.code.len(), m.payload_len);
         for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
             .into_iter()
             .enumerate()
@@ -2342,6 +2344,21 @@ fn address_at(p: &Protocol, d: Direction) -> usize {
     }
 }
 
+/// The messages of each code, codes in the order their first message comes (spec order), each
+/// code's messages in spec order: one pass, so a spec of many codes costs no scan per code.
+fn messages_by_code(msgs: &[Message]) -> Vec<(&[u8], Vec<&Message>)> {
+    let mut index: std::collections::HashMap<&[u8], usize> = std::collections::HashMap::new();
+    let mut out: Vec<(&[u8], Vec<&Message>)> = Vec::new();
+    for m in msgs {
+        let i = *index.entry(m.code.as_slice()).or_insert_with(|| {
+            out.push((m.code.as_slice(), Vec::new()));
+            out.len() - 1
+        });
+        out[i].1.push(m);
+    }
+    out
+}
+
 /// `decode` (and, for responses, `decode_reply`): the frame checks shared by every message
 /// (`rt::check_frame`), then `dispatch`, one `match` on the code per code length, each arm
 /// decoding its message from the frame as a fixed-size array. Messages sharing a code are
@@ -2374,6 +2391,7 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     // code is unknown as the code-less messages alone.
     let codeless: Vec<&Message> = msgs.iter().filter(|m| m.code.is_empty()).collect();
     let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
+    let by_code = messages_by_code(msgs);
     // One match per code length, shortest first; non-empty codes are prefix-free within a
     // direction (validated). The last is the function's value, or with code-less messages
     // beside coded ones, theirs is.
@@ -2388,14 +2406,9 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     for (li, &l) in lens.iter().enumerate() {
         let last = li + 1 == lens.len() && !mixed;
         let at = code_at(l);
-        let mut codes: Vec<&[u8]> = Vec::new();
-        for m in msgs.iter().filter(|m| m.code.len() == l) {
-            if !codes.contains(&m.code.as_slice()) {
-                codes.push(&m.code);
-            }
-        }
-        let arms = codes.into_iter().map(|code| {
-            let mut group: Vec<&Message> = msgs.iter().filter(|m| m.code == code).collect();
+        let codes = by_code.iter().filter(|(code, _)| code.len() == l);
+        let arms = codes.map(|(code, group)| {
+            let mut group = group.clone();
             if mixed {
                 group.extend(&codeless);
             }
@@ -2444,11 +2457,11 @@ fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
     let mask = reply_mask(p);
     // The groups `dispatch` tries (`rt::Group`, several messages of one code): the request
     // names the reply in its refusal, and settles replies only the request tells apart.
-    let groups: Vec<Vec<&Message>> = msgs
+    let groups: Vec<Vec<&Message>> = by_code
         .iter()
-        .filter(|m| !m.code.is_empty() || !mixed)
-        .map(|m| {
-            let mut g: Vec<&Message> = msgs.iter().filter(|x| x.code == m.code).collect();
+        .filter(|(code, _)| !code.is_empty() || !mixed)
+        .map(|(_, g)| {
+            let mut g = g.clone();
             if mixed {
                 g.extend(&codeless);
             }

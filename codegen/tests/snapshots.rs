@@ -189,6 +189,18 @@ fn dynamixel_spec_generates_its_snapshot() {
     check("spec/dynamixel.yaml", "dynamixel.rs");
 }
 
+/// The two document protocols the project began with (`flagships.rs` compiles them, replays
+/// their examples and holds them to the interpreter), so a review of their shape needs no build.
+#[test]
+fn ub2_spec_generates_its_snapshot() {
+    check("spec/ub2.yaml", "ub2.rs");
+}
+
+#[test]
+fn sd_spec_generates_its_snapshot() {
+    check("spec/sd.yaml", "sd.rs");
+}
+
 /// Nothing the spec language says is left to the interpreter alone: every valid fixture and
 /// spec generates.
 #[test]

@@ -14,6 +14,9 @@ pub use crate::model::{
 };
 use crate::rational::Rational;
 
+/// The generated stream decoder keeps its candidate frame lengths in a 64-bit set.
+pub const MAX_DISTINCT_LENGTHS: usize = 64;
+
 #[derive(Debug, Clone)]
 pub struct Protocol {
     pub name: String,
@@ -205,7 +208,7 @@ impl Framing {
         let code_len = self.direction(d).code_lengths.first().copied().unwrap_or(0);
         let head = self.head(code_len);
         let at = head.length?;
-        let base = crate::validate::length_value(self, l, code_len, 0);
+        let base = self.length_value(l, code_len, 0);
         let grows = l.counts.contains(&Part::Payload);
         Some(LengthRule {
             at,
@@ -214,6 +217,25 @@ impl Framing {
             k: if grows { base - head.len as i64 } else { base },
             head_len: head.len,
         })
+    }
+
+    /// The value a length field holds for a frame with this code length and payload: every
+    /// part it counts, plus its adjustment.
+    pub fn length_value(&self, l: &LengthField, code_len: usize, payload: usize) -> i64 {
+        let bytes: usize = l
+            .counts
+            .iter()
+            .map(|p| match p {
+                Part::Start => self.sync.len(),
+                Part::Address => 1,
+                Part::Length => l.width,
+                Part::Code => code_len,
+                Part::Payload => payload,
+                Part::Checksum => self.checksum.len(),
+                Part::End => self.end.len(),
+            })
+            .sum();
+        bytes as i64 + l.adjust
     }
 
     pub fn direction(&self, d: Direction) -> &DirectionFraming {
@@ -828,7 +850,7 @@ impl Protocol {
     /// request, codes derived from the request's, code-less messages and repeated fields
     /// (variable-length frames). It refuses, by name, repeats to the end of the frame without a
     /// length field whose frame lengths (every whole number of elements) would make more than
-    /// [`crate::validate::MAX_DISTINCT_LENGTHS`] in all: its stream decoder lists such lengths
+    /// [`MAX_DISTINCT_LENGTHS`] in all: its stream decoder lists such lengths
     /// beforehand. The interpreter (`--spec`) serves those.
     pub fn generator_gaps(&self) -> Vec<String> {
         let mut gaps = Vec::new();
@@ -885,7 +907,7 @@ impl Protocol {
                 }
             }
         }
-        let max = crate::validate::MAX_DISTINCT_LENGTHS;
+        let max = MAX_DISTINCT_LENGTHS;
         if lengths.len() > max {
             for m in self.commands.iter().chain(&self.responses) {
                 if m.listed_lengths(&self.framing).len() > 1 {

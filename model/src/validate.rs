@@ -100,9 +100,6 @@ impl Names {
     }
 }
 
-/// The generated stream decoder keeps its candidate frame lengths in a 64-bit set.
-pub const MAX_DISTINCT_LENGTHS: usize = 64;
-
 pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     check_ident(&spec.protocol, "protocol", "protocol name", sink);
     if spec.title.trim().is_empty() {
@@ -573,7 +570,7 @@ fn check_length_fits(
     let Some(l) = &framing.length else {
         return;
     };
-    let most = length_value(framing, l, code_len, max_payload);
+    let most = framing.length_value(l, code_len, max_payload);
     let limit = (1i64 << (8 * l.width)) - 1;
     if most < 0 || most > limit {
         sink.error(
@@ -584,24 +581,6 @@ fn check_length_fits(
             ),
         );
     }
-}
-
-/// The value a length field holds for a frame with this code length and payload.
-pub fn length_value(framing: &Framing, l: &LengthField, code_len: usize, payload: usize) -> i64 {
-    let bytes: usize = l
-        .counts
-        .iter()
-        .map(|p| match p {
-            Part::Start => framing.sync.len(),
-            Part::Address => 1,
-            Part::Length => l.width,
-            Part::Code => code_len,
-            Part::Payload => payload,
-            Part::Checksum => framing.checksum.len(),
-            Part::End => framing.end.len(),
-        })
-        .sum();
-    bytes as i64 + l.adjust
 }
 
 fn missing_response(name: &str, commands: &Names) -> String {

@@ -1,5 +1,5 @@
 //! What a microcontroller's flash holds of a busspec codec: built as a `staticlib` for
-//! `thumbv7em-none-eabihf` at `opt-level = "s"` (see `BENCHMARKS.md`, "Flash size"). Each
+//! `thumbv7em-none-eabihf` at `opt-level = "s"` (see `BENCHMARKS.md`, "Flash"). Each
 //! feature exports `busspec_ub2` and `busspec_sd`, which decode a request, or a response as the
 //! reply to a request, and encode it back: with `generated`, every message of both protocols;
 //! with `hand`, the benches' hand-written codec of the bench subset; with `subset`, the
