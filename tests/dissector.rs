@@ -81,6 +81,9 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/hdlc_like.yaml"),
         spec("model/tests/fixtures/valid/cobs_link.yaml"),
         spec("model/tests/fixtures/valid/dynamixel2_stuffed.yaml"),
+        // Fields after lists, and several lists (with and without a length field).
+        spec("model/tests/fixtures/valid/lists_after.yaml"),
+        spec("model/tests/fixtures/valid/lists_length.yaml"),
         derived_units(),
     ]
 }

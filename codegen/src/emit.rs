@@ -439,56 +439,91 @@ fn len_range(m: &Message) -> (usize, usize) {
     (m.min_len(), m.max_len)
 }
 
-/// The `rt::RepeatAt` constant of each message of direction `d` with a repeated field: where
-/// it sits, how it is counted and its bounds, for decode, encode and the stream's framing.
+/// The name of the `rt::Lists` constant of a message with several repeated fields, or fields
+/// after one.
+fn lists_const(m: &Message) -> Ident {
+    format_ident!("LISTS_{}", m.name.to_ascii_uppercase())
+}
+
+/// Whether `m`'s fields do not all keep a fixed offset: it is decoded through `rt::Lists`.
+fn has_lists(m: &Message) -> bool {
+    !m.tail_repeat()
+}
+
+/// The `rt::RepeatAt` of repeated field `f` of `m`: its offset (and its count field's) with
+/// every earlier list empty, how it is counted and its bounds.
+fn repeat_at(m: &Message, f: &Field, r: &busspec_model::ir::Repeat) -> TokenStream {
+    let (message, name) = (&m.name, &f.name);
+    let base = usize_lit(m.layout.len);
+    let at = usize_lit(m.layout.payload + f.offset);
+    let width = usize_lit(if f.ty == FieldType::Bit { 0 } else { f.width });
+    let counter = |i: usize| {
+        let cf = &m.fields[i];
+        let (cn, cat, cw) = (
+            &cf.name,
+            usize_lit(m.layout.payload + cf.offset),
+            usize_lit(cf.width),
+        );
+        let le = cf.byte_order == ByteOrder::Little;
+        quote!(rt::CountField { name: #cn, at: #cat, width: #cw, le: #le })
+    };
+    let count = match r.count {
+        Count::ToEnd => quote!(rt::CountBy::End),
+        Count::Elements(i) => {
+            let c = counter(i);
+            quote!(rt::CountBy::Elements(#c))
+        }
+        Count::Bytes(i) => {
+            let c = counter(i);
+            quote!(rt::CountBy::Bytes(#c))
+        }
+    };
+    let (min, max) = (usize_lit(r.min), usize_lit(r.max));
+    quote! {
+        rt::RepeatAt {
+            message: #message,
+            field: #name,
+            base: #base,
+            at: #at,
+            width: #width,
+            count: #count,
+            min: #min,
+            max: #max,
+        }
+    }
+}
+
+/// The `rt::RepeatAt` constant of each message of direction `d` with a repeated field (its
+/// first): where it sits, how it is counted and its bounds, for decode, encode and the
+/// stream's framing; and the `rt::Lists` constant of each message with several lists or
+/// fields after one.
 fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
     let mut out = TokenStream::new();
     for m in p.messages(d) {
         let Some((f, r)) = m.repeat() else { continue };
         let c = repeat_const(m);
-        let (message, name) = (&m.name, &f.name);
-        let base = usize_lit(m.layout.len);
-        let at = usize_lit(m.layout.payload + f.offset);
-        let width = usize_lit(if f.ty == FieldType::Bit { 0 } else { f.width });
-        let counter = |i: usize| {
-            let cf = &m.fields[i];
-            let (cn, cat, cw) = (
-                &cf.name,
-                usize_lit(m.layout.payload + cf.offset),
-                usize_lit(cf.width),
-            );
-            let le = cf.byte_order == ByteOrder::Little;
-            quote!(rt::CountField { name: #cn, at: #cat, width: #cw, le: #le })
-        };
-        let count = match r.count {
-            Count::ToEnd => quote!(rt::CountBy::End),
-            Count::Elements(i) => {
-                let c = counter(i);
-                quote!(rt::CountBy::Elements(#c))
-            }
-            Count::Bytes(i) => {
-                let c = counter(i);
-                quote!(rt::CountBy::Bytes(#c))
-            }
-        };
-        let (min, max) = (usize_lit(r.min), usize_lit(r.max));
+        let value = repeat_at(m, f, r);
         let d = format!(
-            " Where `{}.{name}` sits in the frame and how its elements are counted.",
-            m.name
+            " Where `{}.{}` sits in the frame and how its elements are counted.",
+            m.name, f.name
         );
         out.extend(quote! {
             #[doc = #d]
-            pub const #c: rt::RepeatAt = rt::RepeatAt {
-                message: #message,
-                field: #name,
-                base: #base,
-                at: #at,
-                width: #width,
-                count: #count,
-                min: #min,
-                max: #max,
-            };
+            pub const #c: rt::RepeatAt = #value;
         });
+        if has_lists(m) {
+            let c = lists_const(m);
+            let base = usize_lit(m.layout.len);
+            let lists = m.repeats().map(|(_, f, r)| repeat_at(m, f, r));
+            let d = format!(
+                " Every repeated field of `{}`, in wire order, each where it sits with every earlier list empty.",
+                m.name
+            );
+            out.extend(quote! {
+                #[doc = #d]
+                pub const #c: rt::Lists = rt::Lists { base: #base, lists: &[#(#lists),*] };
+            });
+        }
     }
     out
 }
@@ -1152,7 +1187,18 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         index_arms.push(quote!(#any => #i));
         let pattern = binding(m, &ls);
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
-        if let Some((f, _)) = m.repeat() {
+        if has_lists(m) {
+            let c = lists_const(m);
+            let (names, sum): (Vec<TokenStream>, Vec<TokenStream>) = m
+                .repeats()
+                .enumerate()
+                .map(|(k, (_, f, _))| {
+                    let (n, l, k) = (ident(&f.name), local(&f.name), usize_lit(k));
+                    (quote!(#n: #l), quote!(#c.lists[#k].bytes_of(#l.len())))
+                })
+                .unzip();
+            len_arms.push(quote!(Self::#v { #(#names,)* .. } => #c.base #(+ #sum)*));
+        } else if let Some((f, _)) = m.repeat() {
             let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
             len_arms.push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len())));
         }
@@ -1614,7 +1660,40 @@ fn emit_encode_arm(
     }
     let repeat = m
         .repeat()
+        .filter(|_| !has_lists(m))
         .map(|(f, _)| (f, repeat_const(m), local(&f.name)));
+    // Several lists, or fields after one: the fixed fields are written at their offsets with
+    // every list empty (`compact`), then spread around the lists (`rt::Lists::expand`).
+    let lc = lists_const(m);
+    let lists: Vec<(usize, usize, &Field, Ident)> = if has_lists(m) {
+        m.repeats()
+            .enumerate()
+            .map(|(k, (fi, f, _))| (k, fi, f, local(&f.name)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let list_bytes: Vec<Ident> = lists
+        .iter()
+        .map(|(k, ..)| format_ident!("bytes_{}", k))
+        .collect();
+    for ((k, _, f, v), b) in lists.iter().zip(&list_bytes) {
+        let k = usize_lit(*k);
+        let limits = (f.ty != FieldType::Bit && f.width == 3).then(|| wire_type(f).limits());
+        if let Some((lo, hi)) = f.range.or(limits) {
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            stmts.push(quote!(#lc.lists[#k].encode_in_range(#v.as_slice(), #lo, #hi)?;));
+        }
+        stmts.push(quote!(let #b: usize = #lc.lists[#k].encode_len(#v.len())? - #lc.base;));
+    }
+    // The list (its index among the lists, its value) whose count field is field `fi`.
+    let list_counted = |fi: usize| {
+        let (li, _, _) = m.counted_by(fi)?;
+        lists
+            .iter()
+            .find(|(_, lfi, ..)| *lfi == li)
+            .map(|(k, _, _, v)| (usize_lit(*k), v.clone()))
+    };
     if let Some((f, c, v)) = &repeat {
         // Each element within the spec's range (a 24-bit one within its wire field too), then
         // the count within its bounds, which gives the frame's length.
@@ -1640,7 +1719,7 @@ fn emit_encode_arm(
             set(at + i, *s);
         }
     }
-    if let (Some(at), Some(l), None) = (o.length, &p.framing.length, &repeat) {
+    if let (Some(at), Some(l), false) = (o.length, &p.framing.length, m.is_variable()) {
         let v = p.framing.length_value(l, m.code.len(), m.payload_len);
         for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
             .into_iter()
@@ -1671,12 +1750,16 @@ fn emit_encode_arm(
     let head = (i, o.address.is_some_and(|a| a < i).then_some(k));
     let take = if taken {
         quote!(rt::head(out, &[#(#first),*]))
+    } else if !lists.is_empty() {
+        let (base, n) = (usize_lit(m.layout.len), usize_lit(first.len()));
+        stmts.push(quote!(let mut compact = [0u8; #base];));
+        quote!({ compact[..#n].copy_from_slice(&[#(#first),*]); &mut compact })
     } else if repeat.is_some() {
         quote!(rt::frame_mut_len(buf, frame_len, &[#(#first),*])?)
     } else {
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
     };
-    if i == known.len() && repeat.is_none() {
+    if i == known.len() && repeat.is_none() && lists.is_empty() {
         let (check, end) = (stmts, encode_end(p, take, false, head));
         return quote!(#pattern => { #(#check)* #end });
     }
@@ -1714,14 +1797,12 @@ fn emit_encode_arm(
             signed: false,
             float: false,
         };
+        if f.repeat.is_some() && !lists.is_empty() {
+            // Written once the frame is spread around the lists.
+            continue;
+        }
         if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
-            if f.ty == FieldType::Bit {
-                stmts.push(quote!(rt::write_bits(&#v, &mut out[#at..]);));
-            } else {
-                let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
-                stmts
-                    .push(quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);));
-            }
+            stmts.push(write_list(f, v, quote!(#at)));
             continue;
         }
         if f.is_ascii() {
@@ -1759,6 +1840,11 @@ fn emit_encode_arm(
             let (lo, hi) = wt.limits();
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             quote!(rt::fits(#name, #c.count_value(#v.len()) as u64, #lo, #hi)? as #w)
+        } else if let Some((k, v)) = list_counted(fi) {
+            let name = &f.name;
+            let (lo, hi) = wt.limits();
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            quote!(rt::fits(#name, #lc.lists[#k].count_value(#v.len()) as u64, #lo, #hi)? as #w)
         } else if !f.bits.is_empty() {
             let mut parts = Vec::new();
             for b in &f.bits {
@@ -1820,7 +1906,8 @@ fn emit_encode_arm(
             }
         };
         let agrees = match (&repeat, follows_field(f)) {
-            (Some((_, c, v)), Some(_)) if counter == Some(fi) => Some((c, v)),
+            (Some((_, c, v)), Some(_)) if counter == Some(fi) => Some((quote!(#c), v.clone())),
+            (None, Some(_)) => list_counted(fi).map(|(k, v)| (quote!(#lc.lists[#k]), v)),
             _ => None,
         };
         if named.contains(&fi) || !f.bits.is_empty() || f.constant.is_some() || agrees.is_some() {
@@ -1835,12 +1922,35 @@ fn emit_encode_arm(
             stmts.push(put(value));
         }
     }
-    let end = encode_end(p, quote!(out), repeat.is_some(), head);
+    if !lists.is_empty() {
+        stmts.push(quote!(let out = #lc.expand(&compact, &[#(#list_bytes),*], buf)?;));
+        for ((k, _, f, v), _) in lists.iter().zip(&list_bytes) {
+            let at = usize_lit(m.layout.payload + f.offset);
+            let before = &list_bytes[..*k];
+            let at = quote!(#at #(+ #before)*);
+            stmts.push(write_list(f, v, at));
+        }
+        if let Some(rule) = p.framing.length_rule(m.direction) {
+            let args = length_args(p, rule);
+            stmts.push(quote!(rt::put_length(out, #args)?;));
+        }
+    }
+    let end = encode_end(p, quote!(out), repeat.is_some() || !lists.is_empty(), head);
     quote! {
         #pattern => {
             #(#stmts)*
             #end
         }
+    }
+}
+
+/// The statement writing repeated field `f`'s elements (the local `v`) into `out` from `at`.
+fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
+    if f.ty == FieldType::Bit {
+        quote!(rt::write_bits(&#v, &mut out[#at..]);)
+    } else {
+        let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
+        quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);)
     }
 }
 
@@ -2016,14 +2126,22 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
         stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code, #len)?;));
     }
     let named = repeated(m);
-    let counter = m.count_field();
     // Each leaf's value: an expression over `frame` or over a named wire value.
     let mut values: Vec<(Ident, TokenStream)> = Vec::new();
     // Each field's wire value: its read from `frame`, or the name it is bound to.
     let mut wires: Vec<TokenStream> = Vec::new();
     for (fi, f) in m.fields.iter().enumerate() {
         let n = format_ident!("field_{}", fi);
-        let at = usize_lit(o.payload + f.offset);
+        let read_at = usize_lit(o.payload + f.offset);
+        // Where the field sits in this frame, as errors say it: after `j` lists, further by
+        // their bytes (`s`, the frame taken apart by `rt::Lists`).
+        let j = m.fields[..fi].iter().filter(|g| g.repeat.is_some()).count();
+        let at = if has_lists(m) && j > 0 {
+            let j = usize_lit(j);
+            quote!(#read_at + s.shift(#j))
+        } else {
+            quote!(#read_at)
+        };
         let name = &f.name;
         if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
             if let Some(value) = decode_repeat(ctx, m, leaf, &mut stmts) {
@@ -2037,7 +2155,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
             let width = usize_lit(f.width);
             values.push((
                 ident(name),
-                quote!(frame[#at..#end].try_into().unwrap_or([0; #width])),
+                quote!(frame[#read_at..#end].try_into().unwrap_or([0; #width])),
             ));
             wires.push(quote!());
             continue;
@@ -2069,7 +2187,7 @@ fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
                     && f.constant.is_none()
                     && f.equals.is_none()
                     && follows_field(f).is_none()
-                    && counter != Some(fi),
+                    && m.counted_by(fi).is_none(),
             );
         let wire = if f.width > 1 && uses > 1 {
             stmts.push(quote!(let #n: #w = #read;));
@@ -2190,16 +2308,26 @@ fn decode_repeat(
 ) -> Option<TokenStream> {
     let f = l.field;
     f.repeat.as_ref()?;
-    let c = repeat_const(m);
+    // With several lists (`rt::Lists`), each as the frame places it, from the split `s`.
+    let (c, elements, count) = match m.repeats().position(|(_, g, _)| std::ptr::eq(g, f)) {
+        Some(k) if has_lists(m) => {
+            let k = usize_lit(k);
+            (quote!(s.lists[#k]), quote!(s.elements(#k)), quote!(s.n[#k]))
+        }
+        _ => {
+            let c = repeat_const(m);
+            (quote!(#c), quote!(elements), quote!(count))
+        }
+    };
     let value = match ctx.kind(l) {
         Kind::List { elem, max } => {
             let (e, max) = (elem.ident(), usize_lit(max));
             let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
-            quote!(#c.elements::<#e, #max>(elements, #le, #signed)?)
+            quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?)
         }
         Kind::BitList { bytes } => {
             let bytes = usize_lit(bytes);
-            quote!(#c.bits::<#bytes>(elements, count)?)
+            quote!(#c.bits::<#bytes>(#elements, #count)?)
         }
         _ => return None,
     };
@@ -2216,6 +2344,10 @@ fn decode_repeat(
 /// the array `frame`, so every fixed field's read is in bounds by type), the bytes of its
 /// elements and their number, once their count is checked.
 fn split_frame(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+    if has_lists(m) {
+        let (c, (base, k)) = (lists_const(m), lists_dims(m));
+        return quote!(let s = #c.split::<#base, #k>(frame)?; let frame = &s.frame;);
+    }
     let Some((f, _)) = m.repeat() else {
         return quote!();
     };
@@ -2236,6 +2368,10 @@ fn split_frame(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> Token
 /// The parameters a variable-length message's decoder takes from `rt::Group::attempt_split`
 /// (its fixed part as an array, the elements' bytes, their number), `_` where unused.
 fn split_params(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+    if has_lists(m) {
+        let (base, k) = lists_dims(m);
+        return quote!(s: &rt::Split<'_, #base, #k>);
+    }
     let at = m.repeat().map_or(0, |(f, _)| m.layout.payload + f.offset);
     let at = usize_lit(at);
     let frame = if stmts.iter().chain([build]).any(mentions_frame) {
@@ -2249,6 +2385,22 @@ fn split_params(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> Toke
         quote!(_)
     };
     quote!(#frame: &[u8; #at], elements: &[u8], #count: usize)
+}
+
+/// The const parameters of `rt::Lists::split` for `m`: its frame's length with every list
+/// empty, and its number of lists.
+fn lists_dims(m: &Message) -> (Literal, Literal) {
+    (usize_lit(m.layout.len), usize_lit(m.repeats().count()))
+}
+
+/// What a decoder taking a frame split by `rt::Lists` (`s`) starts with: its fixed fields as
+/// the array `frame`.
+fn lists_prelude(m: &Message) -> TokenStream {
+    if has_lists(m) {
+        quote!(let frame = &s.frame;)
+    } else {
+        quote!()
+    }
 }
 
 /// Whether `tokens` name the local `frame`.
@@ -2655,10 +2807,12 @@ fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream {
         ));
         if m.is_variable() {
             let params = split_params(m, &stmts, &build);
+            let prelude = lists_prelude(m);
             return quote! {
                 #doc
                 #[inline]
                 fn #f(#params) -> rt::DecodeResult<Self> {
+                    #prelude
                     #(#stmts)*
                     rt::Ok(#build)
                 }
@@ -2706,6 +2860,13 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, shared: bool) -> Tok
     let value = hex_code(&group[0].code);
     if let [m] = group {
         if m.is_variable() {
+            if let (Some(f), true) = (by_fn(m), has_lists(m)) {
+                let (c, (base, k)) = (lists_const(m), lists_dims(m));
+                return quote! {{
+                    let s = #c.split::<#base, #k>(frame)?;
+                    Self::#f(&s)
+                }};
+            }
             if let Some(f) = by_fn(m) {
                 let (rc, at) = (
                     repeat_const(m),
@@ -2751,7 +2912,9 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, shared: bool) -> Tok
                 let (stmts, build) = decode_body(ctx, m);
                 if m.is_variable() {
                     let params = split_params(m, &stmts, &build);
+                    let prelude = lists_prelude(m);
                     quote!(|#params| {
+                        #prelude
                         #(#stmts)*
                         rt::Ok(#build)
                     })
@@ -2766,6 +2929,14 @@ fn emit_group(ctx: &Ctx, group: &[&Message], replies: bool, shared: bool) -> Tok
             }
         };
         let rc = repeat_const(m);
+        if has_lists(m) {
+            let (c, (base, k)) = (lists_const(m), lists_dims(m));
+            return if ambiguous {
+                quote!(g.ambiguous_lists::<#base, #k>(#a, #name, &#c, #decode);)
+            } else {
+                quote!(g.attempt_lists::<#base, #k>(&#c, #decode);)
+            };
+        }
         match (m.is_variable(), ambiguous) {
             (false, false) => quote!(g.attempt(#decode);),
             (false, true) => quote!(g.ambiguous(#a, #name, #decode);),
@@ -3246,7 +3417,8 @@ fn candidate_cell(mask: u128, lengths: &[usize]) -> u16 {
 /// agrees with it (`rt::var_by_length`, `rt::var_by_count`). `start_check` returns early
 /// where the head's start bytes are not the protocol's.
 fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStream {
-    let counted = |m: &&Message| m.repeat().is_some_and(|(_, r)| r.count != Count::ToEnd);
+    let counted =
+        |m: &&Message| m.is_variable() && m.repeats().all(|(_, _, r)| r.count != Count::ToEnd);
     let mut any = false;
     let mut per = Vec::new();
     for d in [Direction::Request, Direction::Response] {
@@ -3284,18 +3456,35 @@ fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStre
                 }
             }
             None => {
+                // Messages with several lists or fields after one (`rt::Lists`) need
+                // `var_by_counts`; a direction without them keeps `var_by_count`.
+                let many = p.messages(d).iter().filter(counted).any(has_lists);
                 let shapes: Vec<TokenStream> = p
                     .messages(d)
                     .iter()
                     .filter(counted)
                     .map(|m| {
                         let fixed = code(m);
-                        let r = repeat_const(m);
-                        quote!((#fixed, #r))
+                        match (many, has_lists(m)) {
+                            (false, _) => {
+                                let r = repeat_const(m);
+                                quote!((#fixed, #r))
+                            }
+                            (true, false) => {
+                                let r = repeat_const(m);
+                                quote!((#fixed, rt::Counted::One(#r)))
+                            }
+                            (true, true) => {
+                                let c = lists_const(m);
+                                quote!((#fixed, rt::Counted::Many(#c)))
+                            }
+                        }
                     })
                     .collect();
                 if shapes.is_empty() {
                     quote!(rt::VarLen::NONE)
+                } else if many {
+                    quote!(rt::var_by_counts(head, &[#(#shapes),*]))
                 } else {
                     quote!(rt::var_by_count(head, &[#(#shapes),*]))
                 }

@@ -162,6 +162,20 @@ fn repeat_to_the_end_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/minimal_end.yaml", "ending.rs");
 }
 
+/// Fields after a list and several lists, without and with a length field
+/// (`snapshots_compile.rs` compiles them and holds them to the interpreter).
+#[test]
+fn lists_specs_generate_their_snapshots() {
+    check(
+        "model/tests/fixtures/valid/lists_after.yaml",
+        "lists_after.rs",
+    );
+    check(
+        "model/tests/fixtures/valid/lists_length.yaml",
+        "lists_length.rs",
+    );
+}
+
 /// The two public protocols, generated whole (`snapshots_compile.rs` and
 /// `generated_public.rs` compile them, replay their examples and hold them to the
 /// interpreter).

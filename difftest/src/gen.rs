@@ -128,6 +128,11 @@ fn code_text(code: &[u8]) -> String {
 
 /// A type whose raw value is its bits (64-bit integers, floats): never copied, counted or
 /// followed.
+/// A field another may repeat (`equals`): one value, neither text, wide nor a list.
+fn equals_target(f: &Gf) -> bool {
+    f.ty != "ascii" && !is_wide(f.ty) && f.repeat_tail == 0
+}
+
 fn is_wide(ty: &str) -> bool {
     matches!(ty, "u64" | "i64" | "f32" | "f64")
 }
@@ -278,11 +283,8 @@ impl G {
                 }
             }
             // A repeat of an earlier field.
-            72..=77 if earlier.iter().any(|f| f.ty != "ascii" && !is_wide(f.ty)) => {
-                let cands: Vec<&Gf> = earlier
-                    .iter()
-                    .filter(|f| f.ty != "ascii" && !is_wide(f.ty))
-                    .collect();
+            72..=77 if earlier.iter().any(equals_target) => {
+                let cands: Vec<&Gf> = earlier.iter().filter(|f| equals_target(f)).collect();
                 let o = *self.pick(&cands);
                 Gf {
                     name: name.clone(),
@@ -397,8 +399,11 @@ impl G {
         }
     }
 
-    /// The repeated last field; may first add a count field to `fields`.
-    fn repeated(&mut self, fields: &mut Vec<Gf>, request_field: Option<&str>) {
+    /// A repeated field; may first add a count field to `fields`. `later`: another list comes
+    /// before or after it in the message, so it is counted (never to the `end`, which the
+    /// validator allows only for the last list and, without a length field, the only one) by a
+    /// count field of its own (a new one, not one an earlier list uses).
+    fn repeated(&mut self, fields: &mut Vec<Gf>, request_field: Option<&str>, later: bool) {
         let k = fields.len();
         let bit = self.chance(20);
         let (ty, width, signed) = if bit {
@@ -418,7 +423,7 @@ impl G {
         } else {
             self.rng.usize(min.max(1)..=6)
         };
-        let count = if self.chance(40) {
+        let count = if !later && self.chance(40) {
             "end".to_owned()
         } else {
             let existing: Vec<String> = fields
@@ -426,17 +431,19 @@ impl G {
                 .filter(|f| f.countable)
                 .map(|f| f.name.clone())
                 .collect();
-            if !existing.is_empty() && self.chance(50) {
+            if !later && !existing.is_empty() && self.chance(50) {
                 self.pick(&existing).clone()
             } else {
                 let name = format!("f{k}");
+                // A later list's count is no field a reply takes from its request (the
+                // generator emits those for the first list only).
                 fields.push(Gf {
                     name: name.clone(),
                     ty: "u8",
                     width: 1,
                     yaml: format!("{{name: {name}, type: u8, unit: count}}"),
-                    plain: true,
-                    countable: true,
+                    plain: !later,
+                    countable: !later,
                     repeat_tail: 0,
                 });
                 name
@@ -508,7 +515,19 @@ impl G {
             });
         }
         if self.chance(30) || request_field.is_some() {
-            self.repeated(&mut out, request_field);
+            // One list, or two (each counted by its own field, the second's count possibly
+            // after the first list), each possibly followed by fixed fields.
+            let lists = if self.chance(30) { 2 } else { 1 };
+            for l in 0..lists {
+                let request = if l == 0 { request_field } else { None };
+                self.repeated(&mut out, request, lists > 1);
+                if self.chance(35) {
+                    for _ in 0..self.rng.usize(1..=2) {
+                        let f = self.field(format!("f{}", out.len()), &out);
+                        out.push(f);
+                    }
+                }
+            }
         }
         out
     }
@@ -1717,6 +1736,15 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         repeats.iter().any(|(_, r)| r.request.is_some()),
         "repeat from request",
+    );
+    add(
+        msgs.iter()
+            .any(|m| m.repeat().is_some() && m.fields.last().is_some_and(|f| f.repeat.is_none())),
+        "fields after a list",
+    );
+    add(
+        msgs.iter().any(|m| m.repeats().count() > 1),
+        "several lists",
     );
     add(
         p.responses.iter().any(|m| m.code_from_request.is_some()),

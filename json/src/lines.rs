@@ -436,12 +436,12 @@ impl Printer {
                                     Fixed::Follows(o.name.clone(), rel.clone())
                                 })
                             }
-                            _ => match m.repeat() {
-                                Some((_, r)) if m.count_field() == Some(fi) => Fixed::Count {
-                                    list: m.fields.len() - 1,
+                            _ => match m.counted_by(fi) {
+                                Some((list, _, r)) => Fixed::Count {
+                                    list,
                                     bytes: matches!(r.count, Count::Bytes(_)),
                                 },
-                                _ => Fixed::None,
+                                None => Fixed::None,
                             },
                         };
                         leaves.push((&f.name, fi, None, fixed, Form::of(f, None)));

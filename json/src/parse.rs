@@ -118,7 +118,9 @@ fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
             (1u64 << bits) - 1
         }
     };
-    let counted = m.repeat().and_then(|(rf, r)| {
+    // The value of count field `i`: the number of elements or bytes of the list it counts.
+    let counted = |i: usize| {
+        let (_, rf, r) = m.counted_by(i)?;
         let n = match values.iter().find(|v| v.name == rf.name)?.raw {
             Raw::List(ref l) => l.len(),
             _ => return None,
@@ -127,13 +129,13 @@ fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
             Count::Bytes(_) => rf.elements_len(n),
             Count::Elements(_) | Count::ToEnd => n,
         } as i64)
-    });
+    };
     let mut words: Vec<u64> = Vec::with_capacity(m.fields.len());
     for (i, f) in m.fields.iter().enumerate() {
         let bits = 8 * f.width as u32;
         let derived = match &f.follows {
             Some(Follows::Field(o, rel)) => words.get(*o).map(|&w| rel.apply(w as i64)),
-            _ => counted.filter(|_| m.count_field() == Some(i)),
+            _ => counted(i),
         };
         let word = if f.is_ascii() {
             0

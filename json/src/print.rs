@@ -317,7 +317,7 @@ pub fn message_line<M: Message>(
                 _ => None,
             };
         }
-        let (rf, r) = m.repeat().filter(|_| m.count_field() == Some(i))?;
+        let (_, rf, r) = m.counted_by(i)?;
         let Owned::List(l) = lookup(&rf.name)? else {
             return None;
         };

@@ -406,7 +406,7 @@ fn type_name(f: &Field) -> String {
 /// keeps its place when renamed): for comparing two specs.
 fn repeat_shape(m: &Message, f: &Field) -> Option<String> {
     let r = f.repeat.as_ref()?;
-    let at = |i: usize| m.fields.get(i).map_or(0, |c| c.offset);
+    let at = |i: usize| m.place(i);
     let count = match r.count {
         crate::ir::Count::Elements(i) => {
             format!("elements counted by the field at payload offset {}", at(i))
@@ -425,10 +425,7 @@ fn follows_shape(m: &Message, f: &Field) -> Option<String> {
     match (&f.follows, reply_count) {
         (Some(crate::ir::Follows::Field(i, rel)), _) => Some(format!(
             "{} of this frame",
-            rel.describe(&format!(
-                "the field at payload offset {}",
-                m.fields.get(*i).map_or(0, |c| c.offset)
-            ))
+            rel.describe(&format!("the field at payload offset {}", m.place(*i)))
         )),
         (Some(crate::ir::Follows::Request(rel)), _) => {
             Some(format!("{} of the request", rel.describe(&rel.field)))
@@ -1142,6 +1139,12 @@ impl<'a> Differ<'a> {
             |f| &f.name,
             |f, g| f.offset == g.offset,
         );
+        let place = |m: &Message, f: &Field| {
+            m.fields
+                .iter()
+                .position(|g| std::ptr::eq(g, f))
+                .map_or_else(String::new, |i| m.place(i))
+        };
         for (i, f) in m.fields.iter().enumerate() {
             let Some(g) = fmap[i].map(|j| &x.fields[j]) else {
                 self.wire(
@@ -1152,20 +1155,18 @@ impl<'a> Differ<'a> {
                         x.name,
                         f.name,
                         type_name(f),
-                        f.offset
+                        place(m, f)
                     ),
                 );
                 continue;
             };
             let fpath = format!("{path}.fields.{}", g.name);
-            if f.offset != g.offset {
+            let (fp, gp) = (place(m, f), place(x, g));
+            if fp != gp {
                 self.wire(
                     "field_offset_changed",
                     fpath.clone(),
-                    format!(
-                        "field `{}.{}`: offset {} → {}",
-                        x.name, g.name, f.offset, g.offset
-                    ),
+                    format!("field `{}.{}`: offset {fp} → {gp}", x.name, g.name),
                 );
             }
             self.field((m, f), (x, g), &fpath, maps);
@@ -1180,7 +1181,7 @@ impl<'a> Differ<'a> {
                         x.name,
                         g.name,
                         type_name(g),
-                        g.offset
+                        place(x, g)
                     ),
                 );
             }

@@ -387,34 +387,64 @@ local function elements_len(f, n)
   return n * f.width
 end
 
--- The number of elements of a variable message's repeated field, or nil where the frame's
--- length, the count field and the bounds disagree (`interp::element_count`).
-local function element_count(m, b, n)
-  local f = m.fields[#m.fields]
-  local r = f.rep
-  local extra = n - m.len
-  if extra < 0 then return nil end
-  local w = f.width
-  if w < 1 then w = 1 end
-  local count
-  if r.count == "to_end" then
-    if not r.bit and extra % w ~= 0 then return nil end
-    count = r.bit and extra * 8 or extra / w
-  else
-    local c = m.fields[r.by]
-    local v = read_uint(b, m.payload_at + c.offset, c.width, c.order)
-    if r.count == "elements" then
-      if elements_len(f, v) ~= extra then return nil end
-      count = v
-    else
-      if v ~= extra or (not r.bit and extra % w ~= 0) then return nil end
-      count = r.bit and extra * 8 or extra / w
+-- Where each field of message m sits in the frame (`at[i]`, byte offsets as `b` indexes them)
+-- and the bytes each repeated field's elements take (`len[i]`), the lists counted in wire
+-- order; nil where the frame's length, a count field and the bounds disagree (`interp::shape`).
+-- The last list takes exactly what the frame's length leaves.
+local function shape(m, b, n)
+  local at, len = {}, {}
+  local rest = n - m.len
+  if rest < 0 then return nil end
+  local lists, seen, shift = 0, 0, 0
+  for _, f in ipairs(m.fields) do
+    if f.rep then lists = lists + 1 end
+  end
+  for i, f in ipairs(m.fields) do
+    at[i] = m.payload_at + f.offset + shift
+    local r = f.rep
+    if r then
+      seen = seen + 1
+      local last = seen == lists
+      local w = f.width
+      if w < 1 then w = 1 end
+      local count
+      if r.count == "to_end" then
+        if not r.bit and rest % w ~= 0 then return nil end
+        count = r.bit and rest * 8 or floor(rest / w)
+      else
+        local c = m.fields[r.by]
+        local v = read_uint(b, at[r.by], c.width, c.order)
+        if r.count == "elements" then
+          local bytes = elements_len(f, v)
+          if (last and bytes ~= rest) or bytes > rest then return nil end
+          count = v
+        else
+          if (not r.bit and v % w ~= 0) or (last and v ~= rest) or v > rest then return nil end
+          count = r.bit and v * 8 or floor(v / w)
+        end
+      end
+      local lo, hi = r.min, r.max
+      if r.bit then lo, hi = math.ceil(lo / 8) * 8, math.ceil(hi / 8) * 8 end
+      if count < lo or count > hi then return nil end
+      len[i] = elements_len(f, count)
+      rest = rest - len[i]
+      shift = shift + len[i]
     end
   end
-  local lo, hi = r.min, r.max
-  if r.bit then lo, hi = math.ceil(lo / 8) * 8, math.ceil(hi / 8) * 8 end
-  if count < lo or count > hi then return nil end
-  return count
+  return at, len
+end
+
+-- `shape`, or for a frame it does not fit, every field at its offset and a list to the
+-- payload's end `pend`.
+local function places(m, b, n, pend)
+  local at, len = shape(m, b, n)
+  if at then return at, len end
+  at, len = {}, {}
+  for i, f in ipairs(m.fields) do
+    at[i] = m.payload_at + f.offset
+    if f.rep then len[i] = math.max(pend - at[i], 0) end
+  end
+  return at, len
 end
 
 local function end_at(P, n)
@@ -449,7 +479,7 @@ local function structural(P, m, b, n)
     if n >= rule.head_len then want = rule.grows and (n + rule.k) or rule.k end
     if read_uint(b, rule.at, rule.width, P.order) ~= want then return false end
   end
-  if m.variable and not element_count(m, b, n) then return false end
+  if m.variable and not shape(m, b, n) then return false end
   return true
 end
 
@@ -485,12 +515,13 @@ local function misfit(P, m, b, n, soft)
     local code = (#m.code == 0) and " (no code)" or (" (code " .. m.code_hex .. ")")
     soft[#soft + 1] = fmt("%s%s does not accept the broadcast address 0x%02X", m.name, code, address)
   end
-  local pay, pend = m.payload_at, n - P.trailer
-  for _, f in ipairs(m.fields) do
-    local at = pay + f.offset
+  local pend = n - P.trailer
+  local pos, lens = places(m, b, n, pend)
+  for i, f in ipairs(m.fields) do
+    local at = pos[i]
     if f.rep then
       local step = f.rep.bit and 0 or f.width
-      for k, v in ipairs(read_elements(f, b, at, pend)) do
+      for k, v in ipairs(read_elements(f, b, at, at + lens[i])) do
         local range = range_violation(f, nil, v)
         if range then soft[#soft + 1] = out_of_range(m, f.name, at + (k - 1) * step, v, range) end
       end
@@ -499,12 +530,12 @@ local function misfit(P, m, b, n, soft)
       if f.constant and u ~= f.constant then return true end
       if f.follows then
         local o = m.fields[f.follows.field]
-        local _, ov = int_of(o, b, pay + o.offset)
+        local _, ov = int_of(o, b, pos[f.follows.field])
         if v ~= apply(f.follows, ov) then return true end
       end
       if f.equals then
         local o = m.fields[f.equals]
-        local _, ov = int_of(o, b, pay + o.offset)
+        local _, ov = int_of(o, b, pos[f.equals])
         if v ~= ov then return true end
       end
       if #f.bits == 0 then
@@ -668,12 +699,14 @@ local function setup(P)
   proto.init = reset
 
   local function show_leaves(m, b, n, tvb, node)
-    local pay, pend = m.payload_at, n - P.trailer
+    local pend = n - P.trailer
+    local pos, lens = places(m, b, n, pend)
     local info = {}
-    for _, f in ipairs(m.fields) do
-      local at = pay + f.offset
+    for i, f in ipairs(m.fields) do
+      local at = pos[i]
       if f.rep then
-        local els = read_elements(f, b, at, pend)
+        local stop = at + lens[i]
+        local els = read_elements(f, b, at, stop)
         local vals, raws = {}, {}
         for k, v in ipairs(els) do
           vals[k] = value_json(P, f, nil, v)
@@ -681,7 +714,7 @@ local function setup(P)
         end
         local value = "[" .. concat(vals, ",") .. "]"
         local range = tvb:range(0, n)
-        if pend > at then range = tvb:range(at, pend - at) end
+        if stop > at then range = tvb:range(at, stop - at) end
         local item = node:add(m.pf[f.name].value, range, value)
         item:set_text(fmt("%s: %s%s (%d elements; raw [%s])", f.name, value, unit_of(P, f, nil), #els, concat(raws, ",")))
         item:add(m.pf[f.name].raw, range, "[" .. concat(raws, ",") .. "]")

@@ -93,8 +93,8 @@ fn range_text(r: Option<(i64, i64)>) -> String {
 
 /// A message's frame length: `8`, or `7..=259` for one with a repeated field.
 fn frame_bytes(p: &Protocol, m: &Message) -> String {
-    if let Some((f, r)) = m.repeat() {
-        format!("{}..={}", p.frame_len(m) + f.elements_len(r.min), m.max_len)
+    if m.is_variable() {
+        format!("{}..={}", m.min_len(), m.max_len)
     } else {
         p.frame_len(m).to_string()
     }
@@ -172,7 +172,7 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
         "| Offset | Field | Type | Bytes | Byte order | Unit (scale) | Range (raw) | Notes |\n",
     );
     out.push_str("|---|---|---|---|---|---|---|---|\n");
-    for f in &m.fields {
+    for (i, f) in m.fields.iter().enumerate() {
         let order_cell = if f.width > 1 && !f.is_ascii() {
             order(f.byte_order)
         } else {
@@ -186,7 +186,7 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
         let _ = writeln!(
             out,
             "| {} | `{}` | {} | {} | {} | {} | {} | {} |",
-            f.offset,
+            m.place(i),
             f.name,
             type_name(f),
             f.width,

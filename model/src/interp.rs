@@ -1340,84 +1340,153 @@ pub fn fits_len(p: &Protocol, m: &Message, wire: &[u8]) -> bool {
     }
 }
 
-/// The number of elements of `m`'s repeated field in `wire` (0 if it has none), checked
-/// against its count field, its element size and its bounds.
+/// The number of elements of `m`'s first repeated field in `wire` (0 if it has none), every
+/// list checked as [`shape`] checks them.
 pub fn element_count(p: &Protocol, m: &Message, wire: &[u8]) -> Result<usize, DecodeError> {
-    let Some((f, r)) = m.repeat() else {
-        return Ok(0);
-    };
+    Ok(shape(p, m, wire)?.lists.first().map_or(0, |l| l.1))
+}
+
+/// Where the parts of a variable message sit in one frame: each repeated field's element
+/// count and the bytes its elements take, in wire order. A field sits at its `offset` plus
+/// the bytes of the lists before it ([`Shape::shift`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Shape {
+    /// (field index, elements, bytes) of each repeated field.
+    pub lists: Vec<(usize, usize, usize)>,
+}
+
+impl Shape {
+    /// How much further than its `offset` field `i` sits: the bytes of the lists before it.
+    pub fn shift(&self, i: usize) -> usize {
+        self.lists.iter().filter(|l| l.0 < i).map(|l| l.2).sum()
+    }
+
+    /// The payload offset of field `i` of `m` in this frame.
+    pub fn at(&self, m: &Message, i: usize) -> usize {
+        m.fields.get(i).map_or(0, |f| f.offset) + self.shift(i)
+    }
+
+    /// The number of elements of repeated field `i` (0 for any other).
+    pub fn count(&self, i: usize) -> usize {
+        self.lists.iter().find(|l| l.0 == i).map_or(0, |l| l.1)
+    }
+}
+
+/// The [`Shape`] of `wire` as a frame of `m`: each list's elements, in wire order, from its
+/// count field (read where the lists before it put it) or, for a list to the end, from what
+/// the frame's length leaves; each checked against its element size, the bytes the frame has
+/// left and its bounds. The last list takes exactly what is left.
+pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeError> {
     let _ = p;
-    let at = m.layout.payload + f.offset;
-    let bad = |expected: String, found: i64| DecodeError::BadCount {
-        message: m.name.clone(),
-        field: f.name.clone(),
-        offset: at,
-        expected,
-        found,
+    let mut out = Shape::default();
+    let lists: Vec<(usize, &Field, &crate::ir::Repeat)> = m.repeats().collect();
+    let Some(&(_, first, first_r)) = lists.first() else {
+        return Ok(out);
     };
-    let extra = wire
+    let mut rest = wire
         .len()
         .checked_sub(m.layout.len)
-        .ok_or_else(|| bad(format!("at least {}", r.min), 0))?;
-    let bits = f.ty == FieldType::Bit;
-    let per_byte = |bytes: usize| {
-        if bits {
-            bytes * 8
+        .ok_or_else(|| DecodeError::BadCount {
+            message: m.name.clone(),
+            field: first.name.clone(),
+            offset: m.layout.payload + first.offset,
+            expected: format!("at least {}", first_r.min),
+            found: 0,
+        })?;
+    let mut shift = 0usize;
+    for (k, &(fi, f, r)) in lists.iter().enumerate() {
+        let last = k + 1 == lists.len();
+        let at = m.layout.payload + f.offset + shift;
+        let bad = |expected: String, found: i64| DecodeError::BadCount {
+            message: m.name.clone(),
+            field: f.name.clone(),
+            offset: at,
+            expected,
+            found,
+        };
+        let bits = f.ty == FieldType::Bit;
+        let per_byte = |bytes: usize| {
+            if bits {
+                bytes * 8
+            } else {
+                bytes / f.width.max(1)
+            }
+        };
+        let count_value = |i: usize| -> i64 {
+            let c = &m.fields[i];
+            let o = m.layout.payload + c.offset + out.shift(i);
+            read_uint(wire.get(o..o + c.width).unwrap_or(&[]), c.byte_order) as i64
+        };
+        let n = match r.count {
+            Count::ToEnd => {
+                if !bits && rest % f.width.max(1) != 0 {
+                    return Err(bad(format!("whole {}-byte elements", f.width), rest as i64));
+                }
+                per_byte(rest)
+            }
+            Count::Elements(i) => {
+                let v = count_value(i);
+                let n = usize::try_from(v).unwrap_or(usize::MAX);
+                if last && f.elements_len(n) != rest {
+                    return Err(bad(
+                        format!("{} by the frame's length", rest / f.width.max(1)),
+                        v,
+                    ));
+                }
+                if !last && f.elements_len(n) > rest {
+                    return Err(bad(
+                        format!("at most {} by the frame's length", rest / f.width.max(1)),
+                        v,
+                    ));
+                }
+                n
+            }
+            Count::Bytes(i) => {
+                let v = count_value(i);
+                if last {
+                    if usize::try_from(v).ok() != Some(rest)
+                        || (!bits && rest % f.width.max(1) != 0)
+                    {
+                        return Err(DecodeError::ByteCount {
+                            message: m.name.clone(),
+                            field: m.fields[i].name.clone(),
+                            offset: m.layout.payload + m.fields[i].offset + out.shift(i),
+                            list: f.name.clone(),
+                            expected: rest as i64,
+                            found: v,
+                        });
+                    }
+                    per_byte(rest)
+                } else {
+                    let bytes = usize::try_from(v).unwrap_or(usize::MAX);
+                    if !bits && bytes % f.width.max(1) != 0 {
+                        return Err(bad(format!("whole {}-byte elements", f.width), v));
+                    }
+                    if bytes > rest {
+                        return Err(bad(
+                            format!("at most {} by the frame's length", per_byte(rest)),
+                            per_byte(bytes) as i64,
+                        ));
+                    }
+                    per_byte(bytes)
+                }
+            }
+        };
+        // Bits come eight to a byte: the bound applies to the bytes they fill.
+        let (lo, hi) = if bits {
+            (r.min.div_ceil(8) * 8, r.max.div_ceil(8) * 8)
         } else {
-            bytes / f.width.max(1)
+            (r.min, r.max)
+        };
+        if n < lo || n > hi {
+            return Err(bad(format!("{}..={}", r.min, r.max), n as i64));
         }
-    };
-    let count_value = |i: usize| -> i64 {
-        let c = &m.fields[i];
-        let o = m.layout.payload + c.offset;
-        read_uint(wire.get(o..o + c.width).unwrap_or(&[]), c.byte_order) as i64
-    };
-    let n = match r.count {
-        Count::ToEnd => {
-            if !bits && extra % f.width.max(1) != 0 {
-                return Err(bad(
-                    format!("whole {}-byte elements", f.width),
-                    extra as i64,
-                ));
-            }
-            per_byte(extra)
-        }
-        Count::Elements(i) => {
-            let v = count_value(i);
-            let n = usize::try_from(v).unwrap_or(usize::MAX);
-            if f.elements_len(n) != extra {
-                return Err(bad(
-                    format!("{} by the frame's length", extra / f.width.max(1)),
-                    v,
-                ));
-            }
-            n
-        }
-        Count::Bytes(i) => {
-            let v = count_value(i);
-            if usize::try_from(v).ok() != Some(extra) || (!bits && extra % f.width.max(1) != 0) {
-                return Err(DecodeError::ByteCount {
-                    message: m.name.clone(),
-                    field: m.fields[i].name.clone(),
-                    offset: m.layout.payload + m.fields[i].offset,
-                    list: f.name.clone(),
-                    expected: extra as i64,
-                    found: v,
-                });
-            }
-            per_byte(extra)
-        }
-    };
-    // Bits come eight to a byte: the bound applies to the bytes they fill.
-    let (lo, hi) = if bits {
-        (r.min.div_ceil(8) * 8, r.max.div_ceil(8) * 8)
-    } else {
-        (r.min, r.max)
-    };
-    if n < lo || n > hi {
-        return Err(bad(format!("{}..={}", r.min, r.max), n as i64));
+        let bytes = f.elements_len(n);
+        rest -= bytes;
+        shift += bytes;
+        out.lists.push((fi, n, bytes));
     }
-    Ok(n)
+    Ok(out)
 }
 
 /// The address a frame carries at `o.address`: 0 where frames carry none (or the frame is too
@@ -1576,11 +1645,11 @@ impl Misfit {
 }
 
 /// A whole field's value: unsigned as read, and as the field's type reads it (0 for text).
-fn int_of(f: &Field, payload: &[u8]) -> (u64, i64) {
+fn int_of(f: &Field, payload: &[u8], at: usize) -> (u64, i64) {
     if f.is_ascii() {
         return (0, 0);
     }
-    let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
+    let bytes = payload.get(at..at + f.width).unwrap_or(&[]);
     let unsigned = read_number(f, bytes);
     let v = if f.signed {
         sign_extend(unsigned, 8 * f.width as u32)
@@ -1614,12 +1683,14 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
         return Some(Misfit::Broadcast { address });
     }
     let payload = payload_of(p, m, wire);
+    let sh = shape(p, m, wire).unwrap_or_default();
+    let pos = |i: usize| sh.at(m, i);
     for (i, f) in m.fields.iter().enumerate() {
         if f.repeat.is_some() {
-            let at = o.payload + f.offset;
+            let at = o.payload + pos(i);
             // The offset of the element out of range (bits: of the field).
             let step = if f.ty == FieldType::Bit { 0 } else { f.width };
-            let elements = read_elements(f, payload.get(f.offset..).unwrap_or(&[]));
+            let elements = list_at(f, payload, pos(i), &sh, i);
             for (k, v) in elements.into_iter().enumerate() {
                 if let Some((min, max)) = range_violation(f, None, v) {
                     return Some(Misfit::Range {
@@ -1638,8 +1709,8 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
         if f.is_ascii() {
             continue;
         }
-        let at = o.payload + f.offset;
-        let (unsigned, v) = int_of(f, payload);
+        let at = o.payload + pos(i);
+        let (unsigned, v) = int_of(f, payload, pos(i));
         if let Some(c) = f.constant {
             if unsigned != c {
                 return Some(Misfit::Constant {
@@ -1652,7 +1723,11 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             }
         }
         if let Some(Follows::Field(other, rel)) = &f.follows {
-            let expected = rel.apply(m.fields.get(*other).map_or(0, |e| int_of(e, payload).1));
+            let expected = rel.apply(
+                m.fields
+                    .get(*other)
+                    .map_or(0, |e| int_of(e, payload, pos(*other)).1),
+            );
             if v != expected {
                 return Some(Misfit::NotFollowing {
                     field: i,
@@ -1663,7 +1738,10 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             }
         }
         if let Some(other) = f.equals {
-            let expected = m.fields.get(other).map_or(0, |e| int_of(e, payload).1);
+            let expected = m
+                .fields
+                .get(other)
+                .map_or(0, |e| int_of(e, payload, pos(other)).1);
             if v != expected {
                 return Some(Misfit::NotEqual {
                     field: i,
@@ -1725,25 +1803,27 @@ fn values_of<'p>(
     mut values: Vec<Value<'p>>,
 ) -> Vec<Value<'p>> {
     let payload = payload_of(p, m, wire);
+    let sh = shape(p, m, wire).unwrap_or_default();
     values.clear();
     values.reserve(m.fields.len());
-    for f in &m.fields {
+    for (i, f) in m.fields.iter().enumerate() {
+        let at = sh.at(m, i);
         if f.repeat.is_some() {
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
-                raw: Raw::List(read_elements(f, payload.get(f.offset..).unwrap_or(&[]))),
+                raw: Raw::List(list_at(f, payload, at, &sh, i)),
             });
             continue;
         }
         if f.is_ascii() {
-            let bytes = payload.get(f.offset..f.offset + f.width).unwrap_or(&[]);
+            let bytes = payload.get(at..at + f.width).unwrap_or(&[]);
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
                 raw: Raw::Text(bytes.to_vec()),
             });
             continue;
         }
-        let (unsigned, v) = int_of(f, payload);
+        let (unsigned, v) = int_of(f, payload, at);
         if f.bits.is_empty() {
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
@@ -1758,6 +1838,17 @@ fn values_of<'p>(
         }
     }
     values
+}
+
+/// The elements of repeated field `i` (`f`), from payload offset `at`, as many bytes as the
+/// frame's [`Shape`] gives it (to the payload's end for a message that has none).
+fn list_at(f: &Field, payload: &[u8], at: usize, sh: &Shape, i: usize) -> Vec<i64> {
+    let bytes = payload.get(at..).unwrap_or(&[]);
+    let bytes = match sh.lists.iter().find(|l| l.0 == i) {
+        Some(l) => bytes.get(..l.2).unwrap_or(bytes),
+        None => bytes,
+    };
+    read_elements(f, bytes)
 }
 
 /// The elements of a repeated field from the bytes where they start (to the payload's end).
@@ -1819,8 +1910,13 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
         Some(Raw::Int(v)) => Some(*v),
         _ => None,
     };
+    // A field sits further than its offset by the bytes of the lists before it.
+    let mut shift = 0usize;
     for f in &m.fields {
-        let at = m.layout.payload + f.offset;
+        let at = m.layout.payload + f.offset + shift;
+        if let (Some(_), Some(Raw::List(l))) = (&f.repeat, reply.get(&f.name)) {
+            shift += f.elements_len(l.len());
+        }
         if let Some(Follows::Request(rel)) = &f.follows {
             let (Some(base), Some(Raw::Int(found))) = (req_int(&rel.field), reply.get(&f.name))
             else {
@@ -1907,11 +2003,12 @@ pub fn encode(
         }),
     };
     let o = m.layout;
-    // The repeated field's elements, checked against its bounds and its element type.
-    let mut list: &[i64] = &[];
-    let mut count_field: Option<(usize, i64)> = None;
-    if let Some((f, r)) = m.repeat() {
-        list = match lookup(&f.name) {
+    // The repeated fields' elements, checked against their bounds and their element type, and
+    // the value of each count field.
+    let mut lists: Vec<(usize, &[i64])> = Vec::new();
+    let mut counts: Vec<(usize, i64)> = Vec::new();
+    for (fi, f, r) in m.repeats() {
+        let list: &[i64] = match lookup(&f.name) {
             Some(Raw::List(l)) => l,
             Some(_) => {
                 return Err(EncodeError::NotList {
@@ -1962,13 +2059,18 @@ pub fn encode(
                 });
             }
         }
-        count_field = match r.count {
-            Count::Elements(i) => Some((i, list.len() as i64)),
-            Count::Bytes(i) => Some((i, f.elements_len(list.len()) as i64)),
-            Count::ToEnd => None,
-        };
+        match r.count {
+            Count::Elements(i) => counts.push((i, list.len() as i64)),
+            Count::Bytes(i) => counts.push((i, f.elements_len(list.len()) as i64)),
+            Count::ToEnd => {}
+        }
+        lists.push((fi, list));
     }
-    let tail = m.repeat().map_or(0, |(f, _)| f.elements_len(list.len()));
+    let list_of = |i: usize| lists.iter().find(|l| l.0 == i).map_or(&[][..], |l| l.1);
+    let tail: usize = lists
+        .iter()
+        .map(|&(i, l)| m.fields[i].elements_len(l.len()))
+        .sum();
     let mut out = vec![0u8; p.frame_len(m) + tail];
     if let Some(at) = o.start {
         for (i, s) in p.framing.sync.iter().enumerate() {
@@ -1986,9 +2088,12 @@ pub fn encode(
     // Each field's value as decode reads it (signed fields sign-extended): what a field that
     // follows it is computed from.
     let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
+    let mut shift = 0usize;
     for (i, f) in m.fields.iter().enumerate() {
-        let at = o.payload + f.offset;
+        let at = o.payload + f.offset + shift;
         if f.repeat.is_some() {
+            let list = list_of(i);
+            shift += f.elements_len(list.len());
             if f.ty == FieldType::Bit {
                 for (k, &v) in list.iter().enumerate() {
                     out[at + k / 8] |= ((v & 1) as u8) << (k % 8);
@@ -2007,9 +2112,10 @@ pub fn encode(
             Some(Follows::Field(other, rel)) => {
                 Some(rel.apply(ints.get(*other).copied().unwrap_or(0)))
             }
-            _ => count_field
-                .filter(|(c, _)| *c == i && lookup(&f.name).is_none())
-                .map(|(_, n)| n),
+            _ => counts
+                .iter()
+                .find(|(c, _)| *c == i && lookup(&f.name).is_none())
+                .map(|&(_, n)| n),
         };
         if let Some(v) = computed {
             if let Some(Raw::Int(given)) = lookup(&f.name) {
@@ -2169,20 +2275,55 @@ pub fn encode(
 /// number field (and the checksum) is reversed when the two orders differ. `text` must already
 /// have the message's frame length.
 pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
-    let mut wire = printed.to_vec();
+    reorder(p, m, printed, p.printed_byte_order)
+}
+
+/// The reordering of [`printed_to_wire`] (and back), `order` the order `text`'s count fields
+/// are read in.
+fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> {
+    let mut wire = text.to_vec();
     let o = m.layout;
     let flip = |order: ByteOrder| order != p.printed_byte_order;
     let end = wire.len().saturating_sub(p.framing.trailer_len());
-    for f in &m.fields {
+    // Fields in wire order, each list's elements counted as decode counts them: by its count
+    // field, already reordered, or to what the fixed fields after it leave.
+    let mut shifts: Vec<usize> = Vec::with_capacity(m.fields.len());
+    let mut shift = 0usize;
+    for (i, f) in m.fields.iter().enumerate() {
+        shifts.push(shift);
+        let at = o.payload + f.offset + shift;
+        let n = match &f.repeat {
+            Some(r) => {
+                let fixed_after: usize = m.fields[i + 1..]
+                    .iter()
+                    .filter(|g| g.repeat.is_none())
+                    .map(|g| g.width)
+                    .sum();
+                let fit = f.elements_from(end.saturating_sub(at).saturating_sub(fixed_after));
+                let n = match r.count {
+                    Count::ToEnd => fit,
+                    Count::Elements(c) | Count::Bytes(c) => {
+                        let cf = &m.fields[c];
+                        let cat = o.payload + cf.offset + shifts.get(c).copied().unwrap_or(0);
+                        let v = text
+                            .get(cat..cat + cf.width)
+                            .map_or(0, |b| read_uint(b, order));
+                        let v = usize::try_from(v).unwrap_or(usize::MAX);
+                        match r.count {
+                            Count::Bytes(_) => f.elements_from(v),
+                            _ => v,
+                        }
+                        .min(fit)
+                    }
+                };
+                shift += f.elements_len(n);
+                n
+            }
+            None => 1,
+        };
         if f.is_ascii() || f.width < 2 || !flip(f.byte_order) {
             continue;
         }
-        let at = o.payload + f.offset;
-        let n = if f.repeat.is_some() {
-            end.saturating_sub(at) / f.width
-        } else {
-            1
-        };
         for k in 0..n {
             let s = at + k * f.width;
             if let Some(s) = wire.get_mut(s..s + f.width) {
@@ -2207,16 +2348,15 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
     wire
 }
 
-/// The same reordering the other way; it is its own inverse. An escaped frame
-/// (`framing.escaping`) is reordered unescaped and escaped again, byte for byte, as example
-/// text is read back.
+/// The same reordering the other way. An escaped frame (`framing.escaping`) is reordered
+/// unescaped and escaped again, byte for byte, as example text is read back.
 #[cfg(feature = "tools")]
 pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
     match escape::unescape_bytes(&p.framing, wire) {
         Ok(plain) if p.framing.escaping.is_some() => {
-            escape::escape_bytes(&p.framing, &printed_to_wire(p, m, &plain))
+            escape::escape_bytes(&p.framing, &reorder(p, m, &plain, p.byte_order))
         }
-        _ => printed_to_wire(p, m, wire),
+        _ => reorder(p, m, wire, p.byte_order),
     }
 }
 

@@ -558,11 +558,47 @@ pub struct Message {
 }
 
 impl Message {
-    /// The repeated field, if the message has one (always its last field).
+    /// Its first repeated field, if it has one (the only one where [`Self::tail_repeat`]).
     pub fn repeat(&self) -> Option<(&Field, &Repeat)> {
+        self.repeats().next().map(|(_, f, r)| (f, r))
+    }
+
+    /// Every repeated field (index, field, repeat), in wire order.
+    pub fn repeats(&self) -> impl Iterator<Item = (usize, &Field, &Repeat)> {
         self.fields
-            .last()
-            .and_then(|f| f.repeat.as_ref().map(|r| (f, r)))
+            .iter()
+            .enumerate()
+            .filter_map(|(i, f)| f.repeat.as_ref().map(|r| (i, f, r)))
+    }
+
+    /// Whether its one variable part, if any, is a single repeated field ending the payload:
+    /// every field keeps a fixed offset. A message with fields after a list, or with several
+    /// lists, places each field after a list by the lists before it.
+    pub fn tail_repeat(&self) -> bool {
+        match self.repeats().count() {
+            0 => true,
+            1 => self.fields.last().is_some_and(|f| f.repeat.is_some()),
+            _ => false,
+        }
+    }
+
+    /// Where field `i` sits, as docs and diff print it: its payload offset (`5`), or for a
+    /// field after a list, its distance from the end of the last list before it
+    /// (`` `values` + 2 ``).
+    pub fn place(&self, i: usize) -> String {
+        let Some(f) = self.fields.get(i) else {
+            return String::new();
+        };
+        match self.fields[..i].iter().rev().find(|g| g.repeat.is_some()) {
+            Some(l) => format!("`{}` + {}", l.name, f.offset - l.offset),
+            None => f.offset.to_string(),
+        }
+    }
+
+    /// The repeated field (index) whose elements or bytes field `i` counts, if any.
+    pub fn counted_by(&self, i: usize) -> Option<(usize, &Field, &Repeat)> {
+        self.repeats()
+            .find(|(_, _, r)| matches!(r.count, Count::Elements(c) | Count::Bytes(c) if c == i))
     }
 
     /// The bytes of the constants that lead its payload (whole fields, one after the other from
@@ -583,12 +619,13 @@ impl Message {
         lead
     }
 
-    /// Its shortest frame: with the fewest elements its repeated field may have.
+    /// Its shortest frame: with the fewest elements its repeated fields may have.
     pub fn min_len(&self) -> usize {
-        match self.repeat() {
-            Some((f, r)) => self.layout.len + f.elements_len(r.min),
-            None => self.layout.len,
-        }
+        self.layout.len
+            + self
+                .repeats()
+                .map(|(_, f, r)| f.elements_len(r.min))
+                .sum::<usize>()
     }
 
     /// Whether its frames vary in length.
@@ -596,7 +633,7 @@ impl Message {
         self.repeat().is_some()
     }
 
-    /// The field (index) that counts the elements or bytes of the repeated field, if any.
+    /// The field (index) that counts the elements or bytes of its first repeated field, if any.
     pub fn count_field(&self) -> Option<usize> {
         match self.repeat()?.1.count {
             Count::Elements(i) | Count::Bytes(i) => Some(i),
@@ -613,7 +650,7 @@ impl Message {
             f.constant.is_some()
                 || f.equals.is_some()
                 || matches!(f.follows, Some(Follows::Field(..)))
-                || self.count_field() == Some(i)
+                || self.counted_by(i).is_some()
         })
     }
 
@@ -698,7 +735,9 @@ pub struct Field {
     pub special: Vec<Special>,
     pub bits: Vec<BitField>,
     /// A repeated field: `width` is one element's (bytes; a bit element is 1 and packs eight to
-    /// a byte), `offset` where the first sits. Only the last field of a message repeats.
+    /// a byte), `offset` where the first sits when every earlier list is empty. Every field's
+    /// `offset` is so counted: a field after lists sits further by the bytes their elements
+    /// take (`interp::Shape`).
     pub repeat: Option<Repeat>,
     /// The value follows from another field (of this frame or of the request).
     pub follows: Option<Follows>,
@@ -779,6 +818,15 @@ impl Field {
             n.div_ceil(8)
         } else {
             n.saturating_mul(self.width)
+        }
+    }
+
+    /// The whole elements of a repeated field that `bytes` bytes hold.
+    pub fn elements_from(&self, bytes: usize) -> usize {
+        if self.ty == FieldType::Bit {
+            bytes.saturating_mul(8)
+        } else {
+            bytes / self.width.max(1)
         }
     }
 
@@ -913,6 +961,51 @@ impl Protocol {
             .collect();
         lengths.sort_unstable();
         lengths.dedup();
+        // With several lists, or fields after one, what a reply takes from its request is
+        // emitted for the first list and the fields before it.
+        for m in self.commands.iter().chain(&self.responses) {
+            if m.tail_repeat() {
+                continue;
+            }
+            let first = m.repeats().next().map(|(i, _, _)| i);
+            for (i, f) in m.fields.iter().enumerate() {
+                let later = |l: usize| first.is_some_and(|first| l > first);
+                let by_request = matches!(f.follows, Some(Follows::Request(_)))
+                    && (later(i) || m.counted_by(i).is_some_and(|(l, _, _)| later(l)));
+                let list_by_request =
+                    f.repeat.as_ref().is_some_and(|r| r.request.is_some()) && later(i);
+                if by_request || list_by_request {
+                    gaps.push(format!(
+                        "`{}.{}`: a value taken from the request after the message's first repeated field (the interpreter serves it: `busspec decode --spec`)",
+                        m.name, f.name
+                    ));
+                }
+            }
+        }
+        for r in &self.responses {
+            let rels = r
+                .fields
+                .iter()
+                .filter_map(|f| match (&f.follows, &f.repeat) {
+                    (Some(Follows::Request(rel)), _) => Some(rel),
+                    (_, Some(rep)) => rep.request.as_ref(),
+                    _ => None,
+                });
+            for rel in rels {
+                for cmd in r.answers.iter().filter_map(|&c| self.commands.get(c)) {
+                    let Some(i) = cmd.fields.iter().position(|f| f.name == rel.field) else {
+                        continue;
+                    };
+                    let first = cmd.repeats().next().map(|(l, _, _)| l);
+                    if cmd.counted_by(i).is_some_and(|(l, _, _)| Some(l) != first) {
+                        gaps.push(format!(
+                            "`{}`: a reply's count taken from `{}.{}`, the count of a repeated field after the first (the interpreter serves it: `busspec decode --spec`)",
+                            r.name, cmd.name, rel.field
+                        ));
+                    }
+                }
+            }
+        }
         let max = MAX_DISTINCT_LENGTHS;
         if lengths.len() > max {
             for m in self.commands.iter().chain(&self.responses) {

@@ -202,22 +202,47 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
         let base = interp::length_for(p, m.direction, m.layout.len).unwrap_or(0);
         return within(m.layout.len as i64 + (v - base));
     }
-    let count_at = |i: usize| {
-        let c = &m.fields[i];
-        (m.layout.payload + c.offset, c)
-    };
     match r.count {
-        Count::Elements(i) | Count::Bytes(i) => {
-            let (at, c) = count_at(i);
-            let Some(bytes) = buf.get(at..at + c.width) else {
-                return Lens::Need;
-            };
-            let v = interp::read_uint(bytes, c.byte_order);
-            let n = usize::try_from(v).unwrap_or(usize::MAX);
-            let tail = match r.count {
-                Count::Elements(_) => f.elements_len(n),
-                _ => n,
-            };
+        Count::Elements(_) | Count::Bytes(_) => {
+            // Each list's count field, read where the lists before it put it (a list to the
+            // end beside others has a length field: validated).
+            let mut tail = 0usize;
+            let mut lists: Vec<(usize, usize)> = Vec::new();
+            for (li, lf, lr) in m.repeats() {
+                let c = match lr.count {
+                    Count::Elements(c) | Count::Bytes(c) => c,
+                    Count::ToEnd => continue,
+                };
+                let cf = &m.fields[c];
+                let shift: usize = lists.iter().filter(|l| l.0 < c).map(|l| l.1).sum();
+                let at = m
+                    .layout
+                    .payload
+                    .saturating_add(cf.offset)
+                    .saturating_add(shift);
+                let Some(bytes) = buf.get(at..at.saturating_add(cf.width)) else {
+                    return Lens::Need;
+                };
+                let v = interp::read_uint(bytes, cf.byte_order);
+                let n = usize::try_from(v).unwrap_or(usize::MAX);
+                let len = match lr.count {
+                    Count::Elements(_) => lf.elements_len(n),
+                    _ => n,
+                };
+                // Several lists, or fields after one: each list's count must fit its own
+                // bounds in whole elements (as the generated `Lists::frame_len` checks).
+                let whole = lf.ty == crate::ir::FieldType::Bit || len % lf.width.max(1) == 0;
+                if !m.tail_repeat()
+                    && (len < lf.elements_len(lr.min) || len > lf.elements_len(lr.max) || !whole)
+                {
+                    return Lens::Are(Vec::new());
+                }
+                tail = tail.saturating_add(len);
+                if m.layout.len.saturating_add(tail) > m.max_len {
+                    return Lens::Are(Vec::new());
+                }
+                lists.push((li, len));
+            }
             within(m.layout.len.saturating_add(tail) as i64)
         }
         Count::ToEnd => {
@@ -961,8 +986,13 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
             address: frame.address,
         });
     }
+    // A field sits further than its offset by the bytes of the lists before it.
+    let mut shift = 0usize;
     for f in &m.fields {
-        let offset = at.payload + f.offset;
+        let offset = at.payload + f.offset + shift;
+        if let (Some(_), Some(Raw::List(l))) = (&f.repeat, frame.get(&f.name)) {
+            shift += f.elements_len(l.len());
+        }
         let leaves: Vec<(&str, Option<&crate::ir::BitField>)> = if f.bits.is_empty() {
             vec![(f.name.as_str(), None)]
         } else {

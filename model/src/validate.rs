@@ -1588,6 +1588,10 @@ fn parse_code(code: &str, path: &str, sink: &mut Sink) -> Option<Vec<u8>> {
     interp::parse_hex(digits).ok()
 }
 
+/// The most repeated fields one message may have (the generated stream decoder reads their
+/// count fields into an array of this many).
+pub const MAX_LISTS: usize = 64;
+
 /// What [`message_body`] resolves: code, fields, fixed payload bytes, most payload bytes.
 type Body = (Vec<u8>, Vec<Field>, usize, usize);
 
@@ -1625,14 +1629,29 @@ fn message_body(
     let mut offset = 0usize;
     let mut tail = 0usize;
     let mut min_tail = 0usize;
+    let mut counters = BTreeSet::new();
     for (i, f) in fields.iter().enumerate() {
         let p = join(&fpath, &f.name);
         check_ident(&f.name, &p, "field", sink);
-        if f.repeat.is_some() && i + 1 != fields.len() {
-            sink.error(
-                join(&p, "repeat"),
-                "only the last field of a message may repeat (the fields after it would have no fixed offset)",
-            );
+        if let Some(r) = &f.repeat {
+            // A list to the end takes what the fields after it leave: none of them may vary.
+            if r.count == "end" && fields[i + 1..].iter().any(|g| g.repeat.is_some()) {
+                sink.error(
+                    join(&join(&p, "repeat"), "count"),
+                    "a repeat to the `end` must be the last repeated field (the fields after it must have a fixed size); count this one by an earlier field",
+                );
+            }
+            // A stream without a length field lists a list to the end's lengths beforehand,
+            // which another list in the frame would multiply.
+            if r.count == "end"
+                && framing.length.is_none()
+                && fields.iter().filter(|g| g.repeat.is_some()).count() > 1
+            {
+                sink.error(
+                    join(&join(&p, "repeat"), "count"),
+                    "a repeat to the `end` beside another repeated field needs a length field (framing.length): without one a stream decoder cannot tell where the frame ends",
+                );
+            }
         }
         if f.bits.is_empty() && !leaf_names.insert(f.name.clone()) {
             sink.error(&p, format!("duplicate field name `{}`", f.name));
@@ -1646,18 +1665,44 @@ fn message_body(
                 );
             }
         }
+        if let Some(c) = field.repeat.as_ref().and_then(|r| match r.count {
+            Count::Elements(c) | Count::Bytes(c) => Some(c),
+            Count::ToEnd => None,
+        }) {
+            if !counters.insert(c) {
+                sink.error(
+                    join(&join(&p, "repeat"), "count"),
+                    format!(
+                        "`{}` already counts another repeated field; each list has a count field of its own",
+                        out[c].name
+                    ),
+                );
+            }
+        }
         match &field.repeat {
             Some(r) => {
-                tail = field.elements_len(r.max);
-                min_tail = field.elements_len(r.min);
+                tail += field.elements_len(r.max);
+                min_tail += field.elements_len(r.min);
             }
             None => offset += field.width,
         }
         out.push(field);
     }
+    let lists = out.iter().filter(|f| f.repeat.is_some()).count();
+    if lists > MAX_LISTS {
+        sink.error(
+            &fpath,
+            format!("{lists} repeated fields; a message has at most {MAX_LISTS}"),
+        );
+    }
     if offset + min_tail < dir.payload_min || offset + tail > dir.payload_max {
         let most = if tail > 0 {
-            format!(" (and up to {} more in the repeated field)", tail)
+            let which = if fields.iter().filter(|f| f.repeat.is_some()).count() > 1 {
+                "fields"
+            } else {
+                "field"
+            };
+            format!(" (and up to {tail} more in the repeated {which})")
         } else {
             String::new()
         };
@@ -1881,6 +1926,10 @@ fn field(
     if let Some(other) = &f.equals {
         allow(&["equals"], "`equals`", sink);
         match earlier.iter().position(|e| &e.name == other) {
+            Some(i) if earlier[i].repeat.is_some() => sink.error(
+                join(p, "equals"),
+                format!("`{other}` is a repeated field; a field repeats one earlier value"),
+            ),
             Some(i) if earlier[i].ty == f.ty => out.equals = Some(i),
             Some(_) => sink.error(join(p, "equals"), format!("`{other}` has a different type")),
             None => sink.error(
@@ -2348,12 +2397,17 @@ fn bit_fields(
 /// constant sub-field, and their values. A code-less message's template starts where a coded
 /// one's code does, so templates of one direction line up byte for byte.
 fn template(m: &Message) -> Vec<(u8, u8)> {
-    let mut t = vec![(0u8, 0u8); m.code.len() + m.payload_len];
+    // Fields after a list sit where its elements end: the template stops at the first list.
+    let fixed = m.repeat().map_or(m.payload_len, |(f, _)| f.offset);
+    let mut t = vec![(0u8, 0u8); m.code.len() + fixed];
     for (slot, b) in t.iter_mut().zip(&m.code) {
         *slot = (0xFF, *b);
     }
     for f in &m.fields {
-        if f.repeat.is_some() || f.width == 0 || f.width > 8 {
+        if f.repeat.is_some() {
+            break;
+        }
+        if f.width == 0 || f.width > 8 {
             continue;
         }
         let ones = |bits: u32| {
@@ -2410,10 +2464,7 @@ fn compatible_prefix(a: &[(u8, u8)], b: &[(u8, u8)]) -> bool {
 
 /// The shortest and longest frame of a message.
 fn len_range(m: &Message) -> (usize, usize) {
-    match m.repeat() {
-        Some((f, r)) => (m.layout.len + f.elements_len(r.min), m.max_len),
-        None => (m.layout.len, m.layout.len),
-    }
+    (m.min_len(), m.max_len)
 }
 
 /// Clash errors reported for one list at most; past this the spec is hostile or generated

@@ -205,8 +205,21 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.checksum.check", "check value 0x32 does not match the parameters, which give 0x31")],
     ),
     (
-        "repeat_not_last",
-        &[("commands.write.fields.values.repeat", "only the last field of a message may repeat")],
+        "repeat_end_not_last",
+        &[("commands.write.fields.values.repeat.count", "a repeat to the `end` must be the last repeated field (the fields after it must have a fixed size)")],
+    ),
+    // ---- several lists (made from valid/lists_after.yaml)
+    (
+        "repeat_end_beside_list_without_length",
+        &[("commands.copy.fields.targets.repeat.count", "a repeat to the `end` beside another repeated field needs a length field (framing.length): without one a stream decoder cannot tell where the frame ends")],
+    ),
+    (
+        "equals_repeated_field",
+        &[("commands.write_block.fields.flags.equals", "`values` is a repeated field; a field repeats one earlier value")],
+    ),
+    (
+        "repeat_count_shared",
+        &[("commands.copy.fields.targets.repeat.count", "`na` already counts another repeated field; each list has a count field of its own")],
     ),
     (
         "repeat_count_undefined",

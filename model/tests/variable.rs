@@ -456,3 +456,241 @@ fn an_element_out_of_its_range_is_refused_and_listed_by_lenient_decoding() {
     assert_eq!(frame.get("values"), Some(&Raw::List(vec![7, 12288])));
     assert_eq!(violations, [strict]);
 }
+
+fn lists_after() -> Protocol {
+    load("tests/fixtures/valid/lists_after.yaml")
+}
+
+fn lists_length() -> Protocol {
+    load("tests/fixtures/valid/lists_length.yaml")
+}
+
+/// `wire` with its XOR-8 (from the address on) recomputed: lists_after's frames.
+fn xor_sealed(mut wire: Vec<u8>) -> Vec<u8> {
+    let n = wire.len();
+    wire[n - 1] = wire[1..n - 1].iter().fold(0, |a, b| a ^ b);
+    wire
+}
+
+#[test]
+fn fields_after_a_list_sit_where_its_elements_end() {
+    let p = lists_after();
+    let wire = hex("7E 03 11 02 1234 5678 0005 1D");
+    let f = request(&p, &wire);
+    assert_eq!(f.get("values"), Some(&Raw::List(vec![0x1234, 0x5678])));
+    assert_eq!(f.get("flags"), Some(&Raw::Int(5)));
+    // With one value the flags move two bytes closer.
+    let one = xor_sealed(hex("7E 03 11 01 1234 0007 00"));
+    let f = request(&p, &one);
+    assert_eq!(f.get("values"), Some(&Raw::List(vec![0x1234])));
+    assert_eq!(f.get("flags"), Some(&Raw::Int(7)));
+    // The flags' range is checked where they sit, and said at that offset.
+    let bad = xor_sealed(hex("7E 03 11 02 1234 5678 0100 00"));
+    assert_eq!(
+        interp::decode(&p, None, None, &bad)
+            .unwrap_err()
+            .to_string(),
+        "write_block.flags at offset 8 is 256, outside its range 0..=255"
+    );
+    // Encode writes what decode reads.
+    let encoded = interp::encode(
+        &p,
+        cmd(&p, "write_block"),
+        3,
+        &[
+            v("values", Raw::List(vec![0x1234, 0x5678])),
+            v("flags", Raw::Int(5)),
+        ],
+    )
+    .unwrap();
+    assert_eq!(encoded, wire);
+}
+
+#[test]
+fn two_lists_each_take_their_own_count_even_after_the_first() {
+    let p = lists_after();
+    let wire = hex("7E 03 12 03 01 02 03 04 000A 03E8 01 F6");
+    let f = request(&p, &wire);
+    assert_eq!(f.get("sources"), Some(&Raw::List(vec![1, 2, 3])));
+    assert_eq!(f.get("nb"), Some(&Raw::Int(4)));
+    assert_eq!(f.get("targets"), Some(&Raw::List(vec![10, 1000])));
+    assert_eq!(f.get("mode"), Some(&Raw::Int(1)));
+    // No sources: nb moves to offset 4.
+    let none = xor_sealed(hex("7E 03 12 00 02 0001 01 00"));
+    let f = request(&p, &none);
+    assert_eq!(f.get("sources"), Some(&Raw::List(vec![])));
+    assert_eq!(f.get("targets"), Some(&Raw::List(vec![1])));
+    let encoded = interp::encode(
+        &p,
+        cmd(&p, "copy"),
+        3,
+        &[
+            v("sources", Raw::List(vec![])),
+            v("targets", Raw::List(vec![1])),
+        ],
+    )
+    .unwrap();
+    assert_eq!(encoded, none);
+    // Hostile counts, each refused at the offset of what disagrees.
+    for (frame, said) in [
+        // The first list claims more bytes than the frame has.
+        (
+            "7E 03 12 09 01 02 03 04 000A 03E8 01 00",
+            "copy.sources at offset 4: 9 elements, expected at most 7 by the frame's length",
+        ),
+        // Too many for its bounds.
+        (
+            "7E 03 12 05 01 02 03 04 05 02 000A 01 00",
+            "copy.sources at offset 4: 5 elements, expected 0..=4",
+        ),
+        // The second count (after the first list) disagrees with the frame's length.
+        (
+            "7E 03 12 03 01 02 03 06 000A 03E8 01 00",
+            "invalid value for copy.nb at offset 7: must be the bytes of targets (4), found 6",
+        ),
+        // The constant after both lists.
+        (
+            "7E 03 12 03 01 02 03 04 000A 03E8 02 00",
+            "invalid value for copy.mode at offset 12: expected 0x01, found 0x02",
+        ),
+        // A target out of its range, at its own offset after the sources.
+        (
+            "7E 03 12 01 05 04 000A 0000 01 00",
+            "copy.targets at offset 8 is 0, outside its range 1..=1000",
+        ),
+    ] {
+        let wire = xor_sealed(hex(frame));
+        let e = interp::decode(&p, Some(Direction::Request), None, &wire).unwrap_err();
+        assert_eq!(e.to_string(), said, "{frame}");
+    }
+    // Encode refuses a list outside its bounds by name.
+    let e = interp::encode(
+        &p,
+        cmd(&p, "copy"),
+        3,
+        &[
+            v("sources", Raw::List(vec![1, 2, 3, 4, 5])),
+            v("targets", Raw::List(vec![1])),
+        ],
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("sources"), "{e}");
+}
+
+#[test]
+fn a_list_to_the_end_leaves_the_fields_after_it_their_bytes() {
+    let p = lists_after();
+    let read = request(&p, &hex("7E 03 10 0100 02 10"));
+    let reply = interp::decode_reply(&p, &read, &hex("7E 03 10 0007 0008 0201 1F")).unwrap();
+    assert_eq!(reply.get("values"), Some(&Raw::List(vec![7, 8])));
+    assert_eq!(reply.get("status"), Some(&Raw::Int(0x0201)));
+    // One value where the request asked for two: refused against the request.
+    let short = xor_sealed(hex("7E 03 10 0007 0201 00"));
+    let e = interp::decode_reply(&p, &read, &short).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "block_reply.values at offset 3: 1 elements, expected 2 (quantity of the request)"
+    );
+    // An odd number of bytes before the status word.
+    let odd = xor_sealed(hex("7E 03 10 0007 08 0201 00"));
+    let e = interp::decode(&p, Some(Direction::Response), None, &odd).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "block_reply.values at offset 3: 3 elements, expected whole 2-byte elements"
+    );
+}
+
+#[test]
+fn several_lists_under_a_length_field_and_printed_in_the_other_byte_order() {
+    let p = lists_length();
+    // The example's printed text (big-endian) replays to little-endian wire bytes.
+    let e = &p.examples[0];
+    assert_eq!(e.wire, hex("C5 0C 20 02 01 02 FBFF C800 0100 0201 F7"));
+    let m = p.message(e.message);
+    assert_eq!(
+        interp::wire_to_printed(&p, m, &e.wire),
+        hex("C5 0C 20 02 01 02 FFFB 00C8 0001 0102 F7")
+    );
+    let f = request(&p, &e.wire);
+    assert_eq!(f.get("channels"), Some(&Raw::List(vec![1, 2])));
+    assert_eq!(f.get("samples"), Some(&Raw::List(vec![-5, 200, 1])));
+    assert_eq!(f.get("seq"), Some(&Raw::Int(0x0102)));
+    // Bits counted in bytes, then a field after them.
+    let f = request(&p, &p.examples[1].wire);
+    assert_eq!(f.get("mask"), Some(&Raw::Int(0x1234)));
+    // Docs place a field after a list by that list.
+    assert_eq!(m.place(3), "`samples` + 0");
+    assert_eq!(m.place(2), "`channels` + 0");
+    assert_eq!(m.place(0), "0");
+}
+
+#[test]
+fn the_stream_frames_lists_followed_by_fields_by_their_count_fields() {
+    for p in [lists_after(), lists_length()] {
+        let (bytes, frames) = capture(&p);
+        assert_eq!(frames.len(), p.examples.len(), "{}", p.name);
+        for chunk in [1, 2, 5, bytes.len()] {
+            assert_eq!(
+                stream_frames(&p, Some(Direction::Request), &bytes, chunk)
+                    .iter()
+                    .filter(|f| frames.contains(f))
+                    .count(),
+                p.examples
+                    .iter()
+                    .filter(|e| e.message.direction == Direction::Request)
+                    .count(),
+                "{} in chunks of {chunk}",
+                p.name
+            );
+        }
+    }
+    // Without a length field, a count after the first list: the stream reads it there.
+    let p = lists_after();
+    let copy = hex("7E 03 12 03 01 02 03 04 000A 03E8 01 F6");
+    let mut bytes = hex("00 7E");
+    bytes.extend(&copy);
+    bytes.extend(&copy);
+    assert_eq!(
+        stream_frames(&p, Some(Direction::Request), &bytes, 1),
+        [copy.clone(), copy]
+    );
+}
+
+#[test]
+fn lenient_decoding_says_a_field_after_a_list_at_its_own_offset() {
+    let p = lists_after();
+    let relaxed = busspec_model::stream::relaxed(&p);
+    let wire = xor_sealed(hex("7E 03 11 02 1234 5678 0100 00"));
+    let strict = interp::decode(&p, None, None, &wire).unwrap_err();
+    let (_, violations) =
+        busspec_model::stream::decode_lenient(&p, &relaxed, None, None, &wire).unwrap();
+    assert_eq!(violations, [strict]);
+}
+
+#[test]
+fn diff_sees_a_field_moved_across_a_list() {
+    let p = lists_after();
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/lists_after.yaml"),
+    )
+    .unwrap();
+    let head = &text[..text.find("examples:").unwrap()];
+    let moved = head.replace(
+        "      - {name: n, type: u8, unit: count}\n      - {name: values, type: u16, unit: count, repeat: {count: n, min: 1, max: 8}}\n      - {name: flags, type: u16, unit: count, range: {min: 0, max: 0x00FF}}",
+        "      - {name: n, type: u8, unit: count}\n      - {name: flags, type: u16, unit: count, range: {min: 0, max: 0x00FF}}\n      - {name: values, type: u16, unit: count, repeat: {count: n, min: 1, max: 8}}",
+    ) + "examples: []\n";
+    assert_ne!(moved, head.to_owned() + "examples: []\n");
+    let q = load_str("moved.yaml", &moved).unwrap_or_else(|d| panic!("{d}"));
+    let d = diff::diff(&p, &q);
+    let moved = d
+        .iter()
+        .find(|c| c.path == "commands.write_block.fields.flags")
+        .unwrap_or_else(|| panic!("{d:#?}"));
+    assert_eq!(moved.kind, "field_offset_changed");
+    assert_eq!(moved.category, Category::WireBreaking);
+    assert_eq!(
+        moved.text,
+        "field `write_block.flags`: offset `values` + 0 → 1"
+    );
+    assert_eq!(diff::diff(&p, &p), []);
+}

@@ -17,6 +17,7 @@ pub use crate::escape::{
     escape as escape_frame, frame_lens as escaped_lens, unescape as unescape_frame, EscapeKind,
     Escaping,
 };
+pub use crate::lists::{Lists, Split};
 pub use crate::repeated::{
     list, list_bits, read_bits, read_elements, write_bits, write_elements, CountBy, CountField,
     Element, RepeatAt,
@@ -524,6 +525,71 @@ impl<'f, T> Group<'f, T> {
             .ok()
     }
 
+    /// [`Self::attempt`] for a message with several lists or fields after one ([`Lists`]):
+    /// `decode` takes the frame taken apart ([`Lists::split`]).
+    #[inline(always)]
+    pub fn attempt_lists<const BASE: usize, const K: usize>(
+        &mut self,
+        lists: &Lists,
+        decode: impl FnOnce(&Split<'f, BASE, K>) -> DecodeResult<T>,
+    ) {
+        if let Some(m) = self.try_lists(lists, decode) {
+            self.done = Some(Ok(m));
+        }
+    }
+
+    /// [`Self::ambiguous`] for a message with [`Lists`], as [`Self::attempt_lists`].
+    #[inline(always)]
+    pub fn ambiguous_lists<const BASE: usize, const K: usize>(
+        &mut self,
+        admitted: bool,
+        name: &'static str,
+        lists: &Lists,
+        decode: impl FnOnce(&Split<'f, BASE, K>) -> DecodeResult<T>,
+    ) {
+        if self.set_aside(admitted) {
+            if let Some(s) = self.split_lists::<BASE, K>(lists) {
+                let r = decode(&s);
+                self.aside(r.map(|_| ()), name);
+            }
+        } else if let Some(m) = self.try_lists(lists, decode) {
+            self.settle_ambiguous(m, name);
+        }
+    }
+
+    /// The frame taken apart by `lists`; `None` where it is shorter than the message's
+    /// shortest frame, or a count does not fit (kept as the count's error).
+    #[inline(always)]
+    fn split_lists<const BASE: usize, const K: usize>(
+        &mut self,
+        lists: &Lists,
+    ) -> Option<Split<'f, BASE, K>> {
+        if self.done.is_some() || self.frame.len() < lists.base {
+            return None;
+        }
+        lists
+            .split::<BASE, K>(self.frame)
+            .map_err(|e| {
+                self.count.get_or_insert(e);
+            })
+            .ok()
+    }
+
+    /// [`Self::try_one`] for a message with [`Lists`].
+    #[inline(always)]
+    fn try_lists<const BASE: usize, const K: usize>(
+        &mut self,
+        lists: &Lists,
+        decode: impl FnOnce(&Split<'f, BASE, K>) -> DecodeResult<T>,
+    ) -> Option<T> {
+        let s = self.split_lists::<BASE, K>(lists)?;
+        decode(&s)
+            .map_err(|e| {
+                self.first.get_or_insert(e);
+            })
+            .ok()
+    }
+
     /// [`Self::try_one`] for a message of variable length.
     #[inline(always)]
     fn try_split<const AT: usize>(
@@ -713,10 +779,38 @@ pub fn var_by_length(head: &[u8], shapes: &[(Fixed, usize, usize)], field: Lengt
 /// not buffered yet.
 #[inline]
 pub fn var_by_count(head: &[u8], shapes: &[(Fixed, RepeatAt)]) -> VarLen {
+    first_agreeing(head, shapes, |r| r.frame_len(head))
+}
+
+/// How a variable-length message counted by fields gives its frame's length: one repeated
+/// field, or [`Lists`].
+#[derive(Debug, Clone, Copy)]
+pub enum Counted {
+    One(RepeatAt),
+    Many(Lists),
+}
+
+/// [`var_by_count`] for a direction with messages counted by several fields ([`Counted`]).
+#[inline]
+pub fn var_by_counts(head: &[u8], shapes: &[(Fixed, Counted)]) -> VarLen {
+    first_agreeing(head, shapes, |c| match c {
+        Counted::One(r) => r.frame_len(head),
+        Counted::Many(l) => l.frame_len(head),
+    })
+}
+
+/// The length `len` gives for the first shape whose fixed bytes agree with `head`;
+/// [`VarLen::NEED_MORE`] while some are not buffered yet.
+#[inline(always)]
+fn first_agreeing<S>(
+    head: &[u8],
+    shapes: &[(Fixed, S)],
+    len: impl Fn(&S) -> Option<usize>,
+) -> VarLen {
     let mut wait = false;
-    for (fixed, r) in shapes {
+    for (fixed, s) in shapes {
         match fixed.agrees(head) {
-            Some(true) => return VarLen::of(r.frame_len(head)),
+            Some(true) => return VarLen::of(len(s)),
             Some(false) => {}
             None => wait = true,
         }

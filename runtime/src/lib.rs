@@ -24,6 +24,7 @@ pub use crc;
 
 pub mod codec;
 pub mod escape;
+mod lists;
 mod protocol;
 mod repeated;
 pub mod stream;
@@ -582,6 +583,8 @@ pub enum CountRule {
     Whole(usize),
     /// This many, as the frame's length gives them (the count field says otherwise).
     ByLength(usize),
+    /// At most this many, as the bytes the frame's length leaves a list before another.
+    AtMost(usize),
     /// Between the spec's bounds.
     Between(usize, usize),
     /// As many as follow from the request (`rule`, the relation's words).
@@ -593,6 +596,7 @@ impl fmt::Display for CountRule {
         match *self {
             CountRule::Whole(w) => write!(f, "whole {w}-byte elements"),
             CountRule::ByLength(n) => write!(f, "{n} by the frame's length"),
+            CountRule::AtMost(n) => write!(f, "at most {n} by the frame's length"),
             CountRule::Between(min, max) => write!(f, "{min}..={max}"),
             CountRule::Request(n, rule) => write!(f, "{n} ({rule} of the request)"),
         }

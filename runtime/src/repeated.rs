@@ -388,6 +388,15 @@ impl CountField {
     }
 }
 
+/// The bytes of `frame` past `base`, the length of its message's frame with every list empty:
+/// what its lists take ([`DecodeError::Truncated`] where it is shorter).
+pub(crate) fn beyond(frame: &[u8], base: usize) -> Result<usize, DecodeError> {
+    frame.len().checked_sub(base).ok_or(DecodeError::Truncated {
+        needed: base,
+        found: frame.len(),
+    })
+}
+
 impl RepeatAt {
     /// Bytes `n` elements take.
     #[inline]
@@ -411,13 +420,7 @@ impl RepeatAt {
             found,
             expected,
         };
-        let extra = frame
-            .len()
-            .checked_sub(self.base)
-            .ok_or(DecodeError::Truncated {
-                needed: self.base,
-                found: frame.len(),
-            })?;
+        let extra = beyond(frame, self.base)?;
         let whole = self.width == 0 || extra % self.width == 0;
         // Bits (width 0) come eight to a byte.
         let mut n = extra

@@ -287,7 +287,9 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
         // Encode from the example's values, as the generated message visits them (count fields
         // and values following another are computed, not given).
         let m = p.message(e.message);
-        let Some((rf, r)) = m.repeat() else { continue };
+        if !m.is_variable() {
+            continue;
+        }
         let decoded = interp::decode(p, Some(d), e.reply_to, &e.wire).unwrap();
         let names: Vec<&str> = match d {
             Direction::Request => visited(&P::decode_request(&e.wire).unwrap().message),
@@ -307,59 +309,62 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
             .cloned()
             .collect();
         assert!(encode_alike::<P>(p, e.message, decoded.address, &given));
-        let (lo, hi) = if rf.ty == ir::FieldType::Bit {
-            (0, 1)
-        } else {
-            busspec_model::interp::raw_limits(8 * rf.width as u32, rf.signed)
-        };
-        let bound = if rf.ty == ir::FieldType::Bit {
-            r.max.div_ceil(8) * 8
-        } else {
-            r.max
-        };
-        let mut lens = vec![
-            0,
-            1,
-            r.min,
-            r.max,
-            bound,
-            bound + 1,
-            r.min.saturating_sub(1),
-        ];
-        lens.extend((0..6).map(|_| rng.below(bound as u64 + 2) as usize));
-        for n in lens {
-            let list: Vec<i64> = (0..n)
-                .map(|k| match k % 4 {
-                    0 => lo,
-                    1 => hi,
-                    _ => lo + rng.below((hi - lo) as u64 + 1) as i64,
-                })
-                .collect();
-            let mut values = given.clone();
-            for v in &mut values {
-                if v.name == rf.name {
-                    v.raw = Raw::List(list.clone());
-                }
-            }
-            // As given (a count following another field may now disagree), then with every
-            // integer the count could follow from set to agree.
-            let mut tries = vec![values.clone()];
-            for v in &values {
-                if let Raw::Int(_) = v.raw {
-                    let mut w = values.clone();
-                    for x in &mut w {
-                        if x.name == v.name {
-                            x.raw = Raw::Int(n as i64);
-                        }
+        // Each list in turn (a message may have several), the others as the example has them.
+        for (_, rf, r) in m.repeats() {
+            let (lo, hi) = if rf.ty == ir::FieldType::Bit {
+                (0, 1)
+            } else {
+                busspec_model::interp::raw_limits(8 * rf.width as u32, rf.signed)
+            };
+            let bound = if rf.ty == ir::FieldType::Bit {
+                r.max.div_ceil(8) * 8
+            } else {
+                r.max
+            };
+            let mut lens = vec![
+                0,
+                1,
+                r.min,
+                r.max,
+                bound,
+                bound + 1,
+                r.min.saturating_sub(1),
+            ];
+            lens.extend((0..6).map(|_| rng.below(bound as u64 + 2) as usize));
+            for n in lens {
+                let list: Vec<i64> = (0..n)
+                    .map(|k| match k % 4 {
+                        0 => lo,
+                        1 => hi,
+                        _ => lo + rng.below((hi - lo) as u64 + 1) as i64,
+                    })
+                    .collect();
+                let mut values = given.clone();
+                for v in &mut values {
+                    if v.name == rf.name {
+                        v.raw = Raw::List(list.clone());
                     }
-                    tries.push(w);
                 }
-            }
-            for values in tries {
-                if encode_alike::<P>(p, e.message, decoded.address, &values) {
-                    t.encoded += 1;
-                } else {
-                    t.encode_refused += 1;
+                // As given (a count following another field may now disagree), then with every
+                // integer the count could follow from set to agree.
+                let mut tries = vec![values.clone()];
+                for v in &values {
+                    if let Raw::Int(_) = v.raw {
+                        let mut w = values.clone();
+                        for x in &mut w {
+                            if x.name == v.name {
+                                x.raw = Raw::Int(n as i64);
+                            }
+                        }
+                        tries.push(w);
+                    }
+                }
+                for values in tries {
+                    if encode_alike::<P>(p, e.message, decoded.address, &values) {
+                        t.encoded += 1;
+                    } else {
+                        t.encode_refused += 1;
+                    }
                 }
             }
         }
