@@ -1314,16 +1314,37 @@ fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             }
         }
     };
+    // `arbitrary`'s derive refuses an enum without variants (a protocol whose commands get no
+    // reply has no responses): such a type has no value to make.
+    let (derive_arbitrary, no_arbitrary) = if msgs.is_empty() {
+        (
+            quote!(),
+            quote! {
+                #[cfg(feature = "arbitrary")]
+                impl<'a> ::arbitrary::Arbitrary<'a> for #ty {
+                    fn arbitrary(_: &mut ::arbitrary::Unstructured<'a>) -> ::arbitrary::Result<Self> {
+                        rt::Err(::arbitrary::Error::IncorrectFormat)
+                    }
+                }
+            },
+        )
+    } else {
+        (
+            quote!(#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]),
+            quote!(),
+        )
+    };
     quote! {
         #repeats
         #[doc = #what]
         #derives
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #derive_arbitrary
         #[allow(clippy::large_enum_variant)]
         pub enum #ty {
             #(#variants,)*
         }
+        #no_arbitrary
         impl #ty {
             /// Each message's spec name, code and frame length, in spec order.
             const MESSAGES: [(&'static str, &'static [u8], usize); #n] = [#(#rows),*];

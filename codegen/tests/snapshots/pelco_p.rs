@@ -488,9 +488,16 @@ pub mod pelco_p {
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-    #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {}
+    #[cfg(feature = "arbitrary")]
+    impl<'a> ::arbitrary::Arbitrary<'a> for Response {
+        fn arbitrary(
+            _: &mut ::arbitrary::Unstructured<'a>,
+        ) -> ::arbitrary::Result<Self> {
+            rt::Err(::arbitrary::Error::IncorrectFormat)
+        }
+    }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
         const MESSAGES: [(&'static str, &'static [u8], usize); 0] = [];
