@@ -765,16 +765,14 @@ impl Lookup {
         reply_to: Option<usize>,
         wire: &[u8],
     ) -> Result<Frame<'p>, DecodeError> {
-        let un = escape::unescape(p, wire)?;
         decode_in(
             p,
             self.limits,
             Some(self),
             (reply_to, false),
-            &un.frame,
+            wire,
             &mut Spare::default(),
         )
-        .map_err(|e| un.locate(e))
     }
 
     /// Decodes a frame as the stream decoder pairs a response with the request before it:
@@ -800,16 +798,7 @@ impl Lookup {
         wire: &[u8],
         spare: &mut Spare<'p>,
     ) -> Result<Frame<'p>, DecodeError> {
-        let un = escape::unescape(p, wire)?;
-        decode_in(
-            p,
-            self.limits,
-            Some(self),
-            (request, true),
-            &un.frame,
-            spare,
-        )
-        .map_err(|e| un.locate(e))
+        decode_in(p, self.limits, Some(self), (request, true), wire, spare)
     }
 }
 
@@ -834,19 +823,32 @@ pub fn decode<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let limits = Limits::of(p, direction);
-    let un = escape::unescape(p, wire)?;
     decode_in(
         p,
         limits,
         None,
         (reply_to, false),
-        &un.frame,
+        wire,
         &mut Spare::default(),
     )
-    .map_err(|e| un.locate(e))
 }
 
+/// The decode every entry point shares: `wire` unescaped (where the framing escapes), decoded
+/// by [`decode_plain`], and an error located on the bytes as they travelled.
 fn decode_in<'p>(
+    p: &'p Protocol,
+    limits: Limits,
+    lookup: Option<&Lookup>,
+    reply_to: (Option<usize>, bool),
+    wire: &[u8],
+    spare: &mut Spare<'p>,
+) -> Result<Frame<'p>, DecodeError> {
+    let un = escape::unescape(p, wire)?;
+    decode_plain(p, limits, lookup, reply_to, &un.frame, spare).map_err(|e| un.locate(e))
+}
+
+/// Decodes an unescaped frame.
+fn decode_plain<'p>(
     p: &'p Protocol,
     limits: Limits,
     lookup: Option<&Lookup>,
