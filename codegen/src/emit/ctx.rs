@@ -1,0 +1,496 @@
+use super::*;
+
+/// A Rust integer type and the raw values it holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct IntType {
+    pub bits: u32,
+    pub signed: bool,
+    /// An IEEE-754 float of `bits` bits (`f32`, `f64`), its raw value its bits.
+    pub float: bool,
+}
+
+impl IntType {
+    pub(super) fn ident(self) -> Ident {
+        if self.float {
+            return format_ident!("f{}", self.bits);
+        }
+        let name = match (self.signed, self.rust_bits()) {
+            (false, 8) => "u8",
+            (true, 8) => "i8",
+            (false, 16) => "u16",
+            (true, 16) => "i16",
+            (false, 32) => "u32",
+            (true, 32) => "i32",
+            (false, 64) => "u64",
+            (true, 64) => "i64",
+            (signed, bits) => return format_ident!("{}{bits}", if signed { "i" } else { "u" }),
+        };
+        ident(name)
+    }
+
+    /// Bits of the Rust integer holding it: a 24-bit wire integer is held in 32 bits.
+    pub(super) fn rust_bits(self) -> u32 {
+        if self.bits == 24 {
+            32
+        } else {
+            self.bits
+        }
+    }
+
+    pub(super) fn limits(self) -> (i64, i64) {
+        raw_limits(self.bits, self.signed)
+    }
+
+    /// The smallest Rust integer type holding `lo..=hi`.
+    pub(super) fn covering(lo: i64, hi: i64) -> IntType {
+        for bits in [8, 16, 32, 64] {
+            for signed in [false, true] {
+                let (a, b) = raw_limits(bits, signed);
+                if a <= lo && hi <= b {
+                    return IntType {
+                        bits,
+                        signed,
+                        float: false,
+                    };
+                }
+            }
+        }
+        IntType {
+            bits: 64,
+            signed: true,
+            float: false,
+        }
+    }
+}
+
+/// Where a typed value comes from: a whole field or a packed sub-field.
+pub(super) struct Leaf<'a> {
+    pub(super) name: &'a str,
+    pub(super) doc: String,
+    /// Raw wire limits.
+    pub(super) wire: IntType,
+    pub(super) bits: Option<&'a BitField>,
+    pub(super) field: &'a Field,
+}
+
+/// The generated Rust type of a value, and how to turn raw integers into it and back.
+pub(super) enum Kind {
+    Int(IntType),
+    Unit {
+        ty: Ident,
+        raw: IntType,
+    },
+    Enum {
+        ty: Ident,
+        raw: IntType,
+    },
+    Flags {
+        ty: Ident,
+        raw: IntType,
+    },
+    Text(usize),
+    /// A repeated field: at most `max` elements, each its field's wire integer.
+    List {
+        elem: IntType,
+        max: usize,
+    },
+    /// A repeated bit field, packed into `bytes` bytes.
+    BitList {
+        bytes: usize,
+    },
+}
+
+pub(super) struct Ctx<'a> {
+    pub(super) p: &'a Protocol,
+    pub(super) unit_raw: Vec<Option<IntType>>,
+    pub(super) enum_raw: Vec<IntType>,
+    pub(super) flag_raw: Vec<IntType>,
+}
+
+impl<'a> Ctx<'a> {
+    pub(super) fn new(p: &'a Protocol) -> Self {
+        let mut unit_span: Vec<Option<(i64, i64)>> = vec![None; p.units.len()];
+        let mut enum_raw = vec![
+            IntType {
+                bits: 8,
+                signed: false,
+                float: false
+            };
+            p.enums.len()
+        ];
+        let mut flag_raw = vec![
+            IntType {
+                bits: 8,
+                signed: false,
+                float: false
+            };
+            p.flags.len()
+        ];
+        let widen = |slot: &mut Option<(i64, i64)>, (lo, hi): (i64, i64)| {
+            *slot = Some(match *slot {
+                None => (lo, hi),
+                Some((a, b)) => (a.min(lo), b.max(hi)),
+            });
+        };
+        for m in p.commands.iter().chain(&p.responses) {
+            for f in &m.fields {
+                let w = wire_type(f);
+                if let Some(u) = f.unit {
+                    widen(&mut unit_span[u], w.limits());
+                }
+                if let Some(e) = f.enumeration {
+                    if w.bits > enum_raw[e].bits {
+                        enum_raw[e] = IntType {
+                            bits: w.bits,
+                            signed: false,
+                            float: false,
+                        };
+                    }
+                }
+                if let Some(fl) = f.flags {
+                    if w.bits > flag_raw[fl].bits {
+                        flag_raw[fl] = IntType {
+                            bits: w.bits,
+                            signed: false,
+                            float: false,
+                        };
+                    }
+                }
+                for b in &f.bits {
+                    if let Some(u) = b.unit {
+                        widen(
+                            &mut unit_span[u],
+                            raw_limits(u32::from(b.width()), b.signed),
+                        );
+                    }
+                }
+            }
+        }
+        let unit_raw = unit_span
+            .into_iter()
+            .map(|s| s.map(|(lo, hi)| IntType::covering(lo, hi)))
+            .collect();
+        Ctx {
+            p,
+            unit_raw,
+            enum_raw,
+            flag_raw,
+        }
+    }
+
+    pub(super) fn kind(&self, leaf: &Leaf) -> Kind {
+        let (unit, field) = match leaf.bits {
+            Some(b) => (b.unit, None),
+            None => (leaf.field.unit, Some(leaf.field)),
+        };
+        if let Some(f) = field {
+            if let Some(r) = &f.repeat {
+                return if f.ty == FieldType::Bit {
+                    Kind::BitList {
+                        bytes: r.max.div_ceil(8),
+                    }
+                } else {
+                    Kind::List {
+                        elem: leaf.wire,
+                        max: r.max,
+                    }
+                };
+            }
+            if f.is_ascii() {
+                return Kind::Text(f.width);
+            }
+            if let Some(e) = f.enumeration {
+                return Kind::Enum {
+                    ty: type_ident(&self.p.enums[e].name),
+                    raw: self.enum_raw[e],
+                };
+            }
+            if let Some(fl) = f.flags {
+                return Kind::Flags {
+                    ty: type_ident(&self.p.flags[fl].name),
+                    raw: self.flag_raw[fl],
+                };
+            }
+        }
+        match unit {
+            Some(u) if !is_identity(&self.p.units[u]) => Kind::Unit {
+                ty: type_ident(&self.p.units[u].name),
+                raw: self.unit_raw[u].unwrap_or(leaf.wire),
+            },
+            _ => Kind::Int(leaf.wire),
+        }
+    }
+
+    pub(super) fn rust_type(&self, leaf: &Leaf) -> TokenStream {
+        match self.kind(leaf) {
+            Kind::Int(t) => {
+                let i = t.ident();
+                quote!(#i)
+            }
+            Kind::Unit { ty, .. } | Kind::Enum { ty, .. } | Kind::Flags { ty, .. } => quote!(#ty),
+            Kind::Text(n) => {
+                let n = Literal::usize_unsuffixed(n);
+                quote!([u8; #n])
+            }
+            Kind::List { elem, max } => {
+                let (e, max) = (elem.ident(), usize_lit(max));
+                quote!(rt::Repeated<#e, #max>)
+            }
+            Kind::BitList { bytes } => {
+                let bytes = usize_lit(bytes);
+                quote!(rt::Bits<#bytes>)
+            }
+        }
+    }
+}
+
+pub(super) fn wire_type(f: &Field) -> IntType {
+    IntType {
+        bits: 8 * f.width as u32,
+        signed: f.signed,
+        float: f.is_float(),
+    }
+}
+
+pub(super) fn bits_type(b: &BitField) -> IntType {
+    let (lo, hi) = raw_limits(u32::from(b.width()), b.signed);
+    let mut t = IntType::covering(lo, hi);
+    t.signed = b.signed;
+    t
+}
+
+pub(super) fn leaves(m: &Message) -> Vec<Leaf<'_>> {
+    let mut out = Vec::new();
+    for (i, f) in m.fields.iter().enumerate() {
+        if m.is_derived(i) {
+            continue;
+        }
+        if f.bits.is_empty() {
+            out.push(Leaf {
+                name: &f.name,
+                doc: f.doc.clone(),
+                wire: wire_type(f),
+                bits: None,
+                field: f,
+            });
+        }
+        for b in &f.bits {
+            if b.constant.is_none() {
+                out.push(Leaf {
+                    name: &b.name,
+                    doc: b.doc.clone(),
+                    wire: bits_type(b),
+                    bits: Some(b),
+                    field: f,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The wire integer of field `f`, read from `frame`: one byte as is (or reinterpreted as
+/// `i8`), wider fields through `from_le_bytes`/`from_be_bytes`.
+pub(super) fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
+    let w = wire_type(f);
+    let t = w.ident();
+    let at = payload_at + f.offset;
+    if f.width == 1 {
+        let i = usize_lit(at);
+        return if w.signed {
+            quote!(frame[#i] as i8)
+        } else {
+            quote!(frame[#i])
+        };
+    }
+    let idx = (0..f.width).map(|i| {
+        let i = if f.word_swapped {
+            busspec_model::number::swap_index(i, f.width)
+        } else {
+            i
+        };
+        let at = usize_lit(at + i);
+        quote!(frame[#at])
+    });
+    if f.width == 3 {
+        let read = if w.signed { ident("i24") } else { ident("u24") };
+        let le = f.byte_order == ByteOrder::Little;
+        return quote!(rt::#read([#(#idx),*], #le));
+    }
+    let conv = match f.byte_order {
+        ByteOrder::Little => format_ident!("from_le_bytes"),
+        ByteOrder::Big => format_ident!("from_be_bytes"),
+    };
+    quote!(#t::#conv([#(#idx),*]))
+}
+
+/// The pattern binding every field of `m` to its `v_<name>` local (so that no spec name can
+/// shadow the generated code's own variables), or `Self::Name` without fields.
+pub(super) fn binding(m: &Message, ls: &[Leaf]) -> TokenStream {
+    let v = variant(m);
+    if ls.is_empty() {
+        return quote!(Self::#v);
+    }
+    let fields = ls.iter().map(|l| {
+        let (n, v) = (ident(l.name), local(l.name));
+        quote!(#n: #v)
+    });
+    quote!(Self::#v { #(#fields),* })
+}
+
+pub(super) fn leaf_doc(p: &Protocol, l: &Leaf) -> String {
+    let mut s = l.doc.clone();
+    let unit = l.bits.map(|b| b.unit).unwrap_or(l.field.unit);
+    if let Some(u) = unit.map(|u| &p.units[u]) {
+        if !u.symbol.is_empty() {
+            s.push_str(&format!(" [{}]", u.symbol));
+        }
+    }
+    let range = l.bits.map(|b| b.range).unwrap_or(l.field.range);
+    if let Some((a, b)) = range {
+        let k = match l.bits {
+            Some(_) => busspec_model::number::NumKind::Int,
+            None => l.field.num_kind(),
+        };
+        s.push_str(&format!(" Valid raw range {}..={}.", k.text(a), k.text(b)));
+    }
+    if l.bits.is_none() && l.field.word_swapped {
+        s.push_str(" Its 16-bit words travel swapped.");
+    }
+    if l.bits.is_none() {
+        for sp in &l.field.special {
+            s.push_str(&format!(
+                " Raw {} = {}{}.",
+                sp.value,
+                sp.name,
+                if sp.doc.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", sp.doc)
+                }
+            ));
+        }
+    }
+    s.trim().to_owned()
+}
+
+/// The raw value of a typed value bound to `v`, of the type the value holds.
+pub(super) fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenStream)> {
+    match ctx.kind(l) {
+        Kind::Int(t) => Some((t, quote!(#v))),
+        Kind::Unit { raw, .. } | Kind::Enum { raw, .. } | Kind::Flags { raw, .. } => {
+            Some((raw, quote!(#v.raw())))
+        }
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => None,
+    }
+}
+
+/// Converts a typed value bound to `v` into the wire integer of its field, with a range check
+/// when the typed value can hold more than the field.
+///
+/// `as_type` is the type wanted (the field's wire type where `None`); a sub-field's value is
+/// wanted as the whole field's type, to be shifted into place.
+pub(super) fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident, as_type: Option<IntType>) -> TokenStream {
+    let field_name = l.name;
+    let wt = l.wire;
+    let target = as_type.unwrap_or(wt);
+    let w = target.ident();
+    let Some((raw_t, raw_expr)) = raw_of(ctx, l, v) else {
+        return quote!(#v);
+    };
+    let bits_limits = l.bits.map(|b| raw_limits(u32::from(b.width()), b.signed));
+    let (lo, hi) = bits_limits.unwrap_or(wt.limits());
+    let (rlo, rhi) = raw_t.limits();
+    if lo <= rlo && rhi <= hi && raw_t == wt && wt.bits != 24 {
+        if raw_t == target {
+            return raw_expr;
+        }
+        return quote!(#raw_expr as #w);
+    }
+    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+    quote!(rt::fits(#field_name, #raw_expr, #lo, #hi)? as #w)
+}
+
+/// The spec range of a leaf (a whole field or a sub-field) and the special values that may lie
+/// outside it (whole fields only), as the arguments of the runtime's range checks; `None`
+/// where there is no range, or where range and special values together admit every value of
+/// `limits` (the checked value's type), as SD's temperatures (1..=254, 0 and 255) do: such a
+/// check cannot fail, and at `opt-level = "s"` its special values stayed a loop.
+pub(super) fn leaf_range(
+    f: &Field,
+    b: Option<&BitField>,
+    limits: (i64, i64),
+) -> Option<(Ident, TokenStream)> {
+    let (range, special): ((i64, i64), Vec<i64>) = match b {
+        Some(b) => (b.range?, Vec::new()),
+        None => (f.range?, f.special.iter().map(|s| s.value).collect()),
+    };
+    let sp: Vec<i64> = special
+        .iter()
+        .copied()
+        .filter(|v| !(range.0..=range.1).contains(v))
+        .collect();
+    // The admitted values grown from the range by the special values next to it.
+    let (mut lo, mut hi) = range;
+    while let Some(&v) = sp.iter().find(|&&v| v == lo - 1 || v == hi + 1) {
+        (lo, hi) = (lo.min(v), hi.max(v));
+    }
+    if b.is_none() && f.is_wide() {
+        // Raw values are bits: no check is left out, and the bounds are written as numbers.
+        let bound = |raw: i64| match f.ty {
+            FieldType::F32 => {
+                let v = Literal::f32_suffixed(f32::from_bits(raw as u32));
+                quote!(rt::f32_raw(#v))
+            }
+            FieldType::F64 => {
+                let v = Literal::f64_suffixed(f64::from_bits(raw as u64));
+                quote!(rt::f64_raw(#v))
+            }
+            FieldType::U64 => {
+                let v = Literal::u64_suffixed(raw as u64);
+                quote!(rt::u64_raw(#v))
+            }
+            _ => {
+                let v = i64_lit(raw);
+                quote!(#v)
+            }
+        };
+        let (lo, hi) = (bound(range.0), bound(range.1));
+        return Some((ident("in_range"), quote!(#lo, #hi)));
+    }
+    if lo <= limits.0 && limits.1 <= hi {
+        return None;
+    }
+    let (lo, hi) = (i64_lit(range.0), i64_lit(range.1));
+    let sp: Vec<Literal> = sp.iter().map(|v| i64_lit(*v)).collect();
+    if sp.is_empty() {
+        return Some((ident("in_range"), quote!(#lo, #hi)));
+    }
+    Some((ident("in_range_or"), quote!(#lo, #hi, &[#(#sp),*])))
+}
+
+/// The typed value of leaf `l` from `raw`, an expression of type `wire` (`None`: an `i64`).
+pub(super) fn from_wire(
+    ctx: &Ctx,
+    l: &Leaf,
+    wire: Option<IntType>,
+    raw: TokenStream,
+) -> TokenStream {
+    match ctx.kind(l) {
+        Kind::Int(t) if Some(t) == wire => raw,
+        Kind::Int(t) => {
+            let (t, raw) = (t.ident(), paren(raw));
+            quote!(#raw as #t)
+        }
+        Kind::Unit { ty, raw: r } | Kind::Enum { ty, raw: r } | Kind::Flags { ty, raw: r }
+            if Some(r) == wire =>
+        {
+            quote!(#ty::from_raw(#raw))
+        }
+        Kind::Unit { ty, raw: r } | Kind::Enum { ty, raw: r } | Kind::Flags { ty, raw: r } => {
+            let (r, raw) = (r.ident(), paren(raw));
+            quote!(#ty::from_raw(#raw as #r))
+        }
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => raw,
+    }
+}

@@ -1,0 +1,191 @@
+use super::*;
+
+/// Decoding one message from `frame`, a fixed-size array of exactly its length whose checksum
+/// is verified: the statements that check its constants, repeated fields, ranges and
+/// broadcast rule, and the expression building it.
+pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStream) {
+    let p = ctx.p;
+    let ls = leaves(m);
+    let ls = ls.as_slice();
+    let o = m.layout;
+    let v = variant(m);
+    let message = m.name.as_str();
+    let mut stmts = Vec::new();
+    if let (Some(b), Some(at)) = (refuses_broadcast(p, m), o.address) {
+        let name = &m.name;
+        let code = hex_code(&m.code);
+        let (at, b) = (usize_lit(at), hex_u8(b));
+        let len = Literal::u8_unsuffixed(m.code.len() as u8);
+        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code, #len)?;));
+    }
+    let named = repeated(m);
+    // Each leaf's value: an expression over `frame` or over a named wire value.
+    let mut values: Vec<(Ident, TokenStream)> = Vec::new();
+    // Each field's wire value: its read from `frame`, or the name it is bound to.
+    let mut wires: Vec<TokenStream> = Vec::new();
+    for (fi, f) in m.fields.iter().enumerate() {
+        let n = format_ident!("field_{}", fi);
+        let read_at = usize_lit(o.payload + f.offset);
+        // Where the field sits in this frame, as errors say it: after `j` lists, further by
+        // their bytes (`s`, the frame taken apart by `rt::Lists`).
+        let j = m.fields[..fi].iter().filter(|g| g.repeat.is_some()).count();
+        let at = if has_lists(m) && j > 0 {
+            let j = usize_lit(j);
+            quote!(#read_at + s.shift(#j))
+        } else {
+            quote!(#read_at)
+        };
+        let name = &f.name;
+        if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
+            if let Some(value) = decode_repeat(ctx, m, leaf, &mut stmts) {
+                values.push((ident(name), value));
+                wires.push(quote!());
+                continue;
+            }
+        }
+        if f.is_ascii() {
+            let end = usize_lit(o.payload + f.offset + f.width);
+            let width = usize_lit(f.width);
+            values.push((
+                ident(name),
+                quote!(frame[#read_at..#end].try_into().unwrap_or([0; #width])),
+            ));
+            wires.push(quote!());
+            continue;
+        }
+        let read = read_wire(f, o.payload);
+        let wt = wire_type(f);
+        let w = wt.ident();
+        let unsigned = IntType {
+            bits: wt.bits,
+            signed: false,
+            float: false,
+        };
+        let (range_fn, range) = match leaf_range(f, None, wt.limits()) {
+            Some((range_fn, range)) if f.bits.is_empty() => (range_fn, Some(range)),
+            _ => (ident("in_range"), None),
+        };
+        // A field read more than once is read into a local (a one-byte read is as short as
+        // its name).
+        let uses = usize::from(f.constant.is_some())
+            + usize::from(f.equals.is_some() || f.follows.is_some())
+            + usize::from(range.is_some())
+            + usize::from(named.contains(&fi))
+            + f.bits
+                .iter()
+                .map(|b| 1 + usize::from(b.constant.is_none() && b.range.is_some()))
+                .sum::<usize>()
+            + usize::from(
+                f.bits.is_empty()
+                    && f.constant.is_none()
+                    && f.equals.is_none()
+                    && follows_field(f).is_none()
+                    && m.counted_by(fi).is_none(),
+            );
+        let wire = if f.width > 1 && uses > 1 {
+            stmts.push(quote!(let #n: #w = #read;));
+            quote!(#n)
+        } else {
+            read
+        };
+        wires.push(wire.clone());
+        if let Some(c) = f.constant {
+            // A constant is its wire bits: a signed field's value is compared unsigned.
+            let l = hex_lit(c);
+            let ut = unsigned.ident();
+            let bits = match (wt.signed, wt.bits) {
+                (false, _) => wire.clone(),
+                (true, 24) => quote!(#wire as u32 & 0xFF_FFFF),
+                (true, _) => quote!(#wire as #ut),
+            };
+            stmts.push(quote!(rt::equal(#message, #name, #at, #bits, #l)?;));
+        }
+        if let Some(other) = f.equals {
+            let on = wires.get(other).cloned().unwrap_or_default();
+            let other_name = m.fields.get(other).map_or("", |o| o.name.as_str());
+            stmts.push(quote!(rt::same(#message, #name, #at, #wire, #other_name, #on)?;));
+        }
+        if let Some((other, rel)) = follows_field(f) {
+            let on = wires.get(other).cloned().unwrap_or_default();
+            let args = relation_args(rel);
+            let rule = rel.describe(&rel.field);
+            stmts.push(
+                quote!(rt::following(#message, #name, #at, #wire, #on as i64, (#args), #rule)?;),
+            );
+        }
+        if let Some(range) = range {
+            stmts.push(quote!(rt::#range_fn(#message, #name, #at, #wire, #range)?;));
+        }
+        if f.bits.is_empty() {
+            if f.constant.is_none() && f.equals.is_none() && follows_field(f).is_none() {
+                if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
+                    values.push((ident(&f.name), from_wire(ctx, leaf, Some(wt), wire)));
+                }
+            }
+            continue;
+        }
+        let ut = unsigned.ident();
+        // The wire value as unsigned bits.
+        let bits = if wt.signed {
+            quote!(#wire as #ut)
+        } else {
+            wire.clone()
+        };
+        for b in &f.bits {
+            let lsb = u32::from(b.lsb);
+            let width = u32::from(b.width());
+            let mask = hex_lit((1u64 << width) - 1);
+            let bt = bits_type(b);
+            let btid = bt.ident();
+            let shifted = if lsb == 0 {
+                bits.clone()
+            } else {
+                let (lsb, bits) = (Literal::u32_unsuffixed(lsb), paren(bits.clone()));
+                quote!(#bits >> #lsb)
+            };
+            let field = if lsb + width >= wt.rust_bits() {
+                shifted
+            } else {
+                let shifted = paren(shifted);
+                quote!(#shifted & #mask)
+            };
+            let field_p = paren(field.clone());
+            let extract = if b.signed {
+                let shift = Literal::u32_unsuffixed(bt.bits - width);
+                let ubt = IntType {
+                    bits: bt.bits,
+                    signed: false,
+                    float: false,
+                }
+                .ident();
+                quote!(((#field_p as #ubt) << #shift) as #btid >> #shift)
+            } else {
+                quote!(#field_p as #btid)
+            };
+            let bname = &b.name;
+            match b.constant {
+                Some(c) => {
+                    let l = hex_lit(c);
+                    stmts.push(quote!(rt::equal(#message, #bname, #at, #field, #l)?;));
+                }
+                None => {
+                    let limits = raw_limits(u32::from(b.width()), b.signed);
+                    if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
+                        stmts
+                            .push(quote!(rt::#range_fn(#message, #bname, #at, #extract, #range)?;));
+                    }
+                    if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
+                        values.push((ident(&b.name), from_wire(ctx, leaf, Some(bt), extract)));
+                    }
+                }
+            }
+        }
+    }
+    let fields = values.iter().map(|(n, v)| quote!(#n: #v));
+    let build = if ls.is_empty() {
+        quote!(Self::#v)
+    } else {
+        quote!(Self::#v { #(#fields),* })
+    };
+    (stmts, build)
+}

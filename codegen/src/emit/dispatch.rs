@@ -1,0 +1,521 @@
+use super::*;
+
+/// Where the address of a frame of direction `d` is. Where the code precedes the address, the
+/// address sits after a code of this direction's only length; the validator restricts such
+/// layouts to one code length. 0 where frames carry no address (the frame checks then do not
+/// look at it).
+pub(super) fn address_at(p: &Protocol, d: Direction) -> usize {
+    if p.framing.layout.iter().position(|x| *x == Part::Code)
+        < p.framing.layout.iter().position(|x| *x == Part::Address)
+    {
+        let l = p
+            .framing
+            .direction(d)
+            .code_lengths
+            .first()
+            .copied()
+            .unwrap_or(1);
+        p.framing.head(l).address.unwrap_or(0)
+    } else {
+        p.framing.head(1).address.unwrap_or(0)
+    }
+}
+
+/// The messages of each code, codes in the order their first message comes (spec order), each
+/// code's messages in spec order: one pass, so a spec of many codes costs no scan per code.
+pub(super) fn messages_by_code(msgs: &[Message]) -> Vec<(&[u8], Vec<&Message>)> {
+    let mut index: std::collections::HashMap<&[u8], usize> = std::collections::HashMap::new();
+    let mut out: Vec<(&[u8], Vec<&Message>)> = Vec::new();
+    for m in msgs {
+        let i = *index.entry(m.code.as_slice()).or_insert_with(|| {
+            out.push((m.code.as_slice(), Vec::new()));
+            out.len() - 1
+        });
+        out[i].1.push(m);
+    }
+    out
+}
+
+/// `decode` (and, for responses, `decode_reply`): the frame checks shared by every message
+/// (`rt::check_frame`), then `dispatch`, one `match` on the code per code length, each arm
+/// decoding its message from the frame as a fixed-size array. Messages sharing a code are
+/// told apart by length, then constants (`rt::Group`).
+pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
+    let p = ctx.p;
+    // An unknown code is quoted with as many bytes as this direction's longest code.
+    let longest_code = p
+        .framing
+        .direction(d)
+        .code_lengths
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(1);
+    let msgs = p.messages(d);
+    let clen = p.framing.trailer_len();
+    let min_len = msgs.iter().map(|m| len_range(m).0).min().unwrap_or(0);
+    let max_len = p.max_frame_len(d);
+    let code_at = |l: usize| p.framing.head(l).code;
+    let replies = d == Direction::Response;
+    let first_code_at = usize_lit(code_at(1));
+    let unknown = {
+        let (clen, longest_code) = (usize_lit(clen), usize_lit(longest_code));
+        quote!(rt::Err(rt::unknown_code(frame, #first_code_at, #longest_code, #clen, #replies)))
+    };
+    // Code-less messages beside coded ones: the empty code is a prefix of every code, so a
+    // frame whose code is known is tried as its coded messages first, then as each code-less
+    // one (the interpreter's order: the longest code that matches first), and a frame whose
+    // code is unknown as the code-less messages alone.
+    let codeless: Vec<&Message> = msgs.iter().filter(|m| m.code.is_empty()).collect();
+    let mixed = !codeless.is_empty() && codeless.len() < msgs.len();
+    let by_code = messages_by_code(msgs);
+    // One match per code length, shortest first; non-empty codes are prefix-free within a
+    // direction (validated). The last is the function's value, or with code-less messages
+    // beside coded ones, theirs is.
+    let mut lens: Vec<usize> = msgs
+        .iter()
+        .map(|m| m.code.len())
+        .filter(|&l| !mixed || l > 0)
+        .collect();
+    lens.sort_unstable();
+    lens.dedup();
+    let mut body = Vec::new();
+    for (li, &l) in lens.iter().enumerate() {
+        let last = li + 1 == lens.len() && !mixed;
+        let at = code_at(l);
+        let codes = by_code.iter().filter(|(code, _)| code.len() == l);
+        let arms = codes.map(|(code, group)| {
+            let mut group = group.clone();
+            if mixed {
+                group.extend(&codeless);
+            }
+            let lit = hex_code(code);
+            let arm = emit_group(ctx, &group, replies, mixed);
+            if last {
+                quote!(#lit => #arm,)
+            } else {
+                quote!(#lit => return #arm,)
+            }
+        });
+        let need = at + l + clen;
+        let (at, l) = (usize_lit(at), usize_lit(l));
+        if !last {
+            let need = usize_lit(need);
+            body.push(quote! {
+                if frame.len() >= #need {
+                    match rt::code(frame, #at, #l) {
+                        #(#arms)*
+                        _ => {}
+                    }
+                }
+            });
+            continue;
+        }
+        if need > min_len {
+            let need = usize_lit(need);
+            body.push(quote! {
+                if frame.len() < #need {
+                    return #unknown;
+                }
+            });
+        }
+        body.push(quote! {
+            match rt::code(frame, #at, #l) {
+                #(#arms)*
+                _ => #unknown,
+            }
+        });
+    }
+    if mixed {
+        body.push(emit_group(ctx, &codeless, replies, true));
+    }
+    let addr_at = usize_lit(address_at(p, d));
+    let (min_len, max_len) = (usize_lit(min_len), usize_lit(max_len));
+    let mask = reply_mask(p);
+    // The groups `dispatch` tries (`rt::Group`, several messages of one code): the request
+    // names the reply in its refusal, and settles replies only the request tells apart.
+    let groups: Vec<Vec<&Message>> = by_code
+        .iter()
+        .filter(|(code, _)| !code.is_empty() || !mixed)
+        .map(|(_, g)| {
+            let mut g = g.clone();
+            if mixed {
+                g.extend(&codeless);
+            }
+            g
+        })
+        .chain(mixed.then(|| codeless.clone()))
+        .filter(|g| g.len() > 1)
+        .collect();
+    let (request_param, request_arg) = if replies && !groups.is_empty() {
+        (quote!(, request: rt::Option<&Request>), quote!(, request))
+    } else {
+        (quote!(), quote!())
+    };
+    let settles = groups.iter().any(|g| g.iter().any(|m| is_ambiguous(m, g)));
+    let asked = if replies && settles {
+        // The responses the request may get, bit i for row i of MESSAGES.
+        quote!(let asked: #mask = request.map_or(!0, Request::replies);)
+    } else {
+        quote!()
+    };
+    let sum = frame_sum(p);
+    // A sync sequence's first byte is `FRAME.start`'s; the others are checked first.
+    let sync = match (p.framing.head(1).start, p.framing.sync.as_slice()) {
+        (Some(at), sync @ [_, _, ..]) => {
+            let at = usize_lit(at);
+            let bytes = sync.iter().map(|b| hex_u8(*b));
+            quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
+        }
+        _ => quote!(),
+    };
+    // A reply the request does not get is refused once decoded, then one whose fields do
+    // not follow the request's: the interpreter's order.
+    let follows = if has_follows_request(p) {
+        quote!(message.follows_request(request)?;)
+    } else {
+        quote!()
+    };
+    let answered = if replies {
+        quote! {
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+                #follows
+            }
+        }
+    } else {
+        quote!()
+    };
+    let length = length_check(p, d);
+    let checks = quote! {
+        #sync
+        let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
+        #length
+        let message = Self::dispatch(frame #request_arg)?;
+        #answered
+        rt::Ok(Decoded { address, message })
+    };
+    let codeless_fns = if mixed {
+        emit_codeless_fns(ctx, &codeless)
+    } else {
+        quote!()
+    };
+    // A direction without messages (commands that get no reply: no response at all) knows no
+    // code; the frame checks refuse every frame before this is reached.
+    let no_message = if msgs.is_empty() {
+        unknown.clone()
+    } else {
+        quote!()
+    };
+    let dispatch = quote! {
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &[u8] #request_param) -> rt::DecodeResult<Self> {
+            #asked
+            #(#body)*
+            #no_message
+        }
+        #codeless_fns
+    };
+    let doc_decode = quote! {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+    };
+    // Escaped frames (`framing.escaping`): unescaped into a buffer of the longest frame, then
+    // checked as any frame by a function of its own.
+    let (checks, unescaped_fn) = if p.framing.escaping.is_some() {
+        let sum = frame_sum(p);
+        let max = usize_lit(p.max_frame_len(d));
+        let unescape = quote! {
+            let mut plain = [0u8; UNESCAPED_LEN];
+            let un = rt::unescape_frame(&ESCAPING, frame, &mut plain, #sum)?;
+            let rt::Some(plain) = plain.get(..un.len) else {
+                return rt::Err(rt::DecodeError::TooLong { max: #max, found: un.len });
+            };
+        };
+        if replies {
+            (
+                quote! {
+                    #unescape
+                    Self::decode_for_unescaped(plain, request).map_err(|e| un.locate(e))
+                },
+                quote! {
+                    /// [`Self::decode_for`] of the frame unescaped.
+                    fn decode_for_unescaped(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        } else {
+            (
+                quote! {
+                    #unescape
+                    Self::decode_unescaped(plain).map_err(|e| un.locate(e))
+                },
+                quote! {
+                    /// [`Self::decode`] of the frame unescaped.
+                    fn decode_unescaped(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        }
+    } else {
+        (checks, quote!())
+    };
+    if !replies {
+        return quote! {
+            #doc_decode
+            pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                #checks
+            }
+            #unescaped_fn
+            #dispatch
+        };
+    }
+    quote! {
+        #doc_decode
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(frame: &[u8], request: &Request) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+            #checks
+        }
+        #unescaped_fn
+        #dispatch
+    }
+}
+
+/// The check of the length field of a frame of direction `d`, where the framing has one: it
+/// holds a constant plus the frame's length where it counts the payload (every message of the
+/// direction has it at the same offset, and only the payload varies).
+pub(super) fn length_check(p: &Protocol, d: Direction) -> TokenStream {
+    let Some(rule) = p.framing.length_rule(d) else {
+        return quote!();
+    };
+    let args = length_args(p, rule);
+    quote!(rt::length_field(frame, #args)?;)
+}
+
+/// A length field's offset, width, byte order, whether it counts the payload and its
+/// constant, as `rt::length_field` (decode) and `rt::put_length` (encode) take them.
+pub(super) fn length_args(p: &Protocol, rule: LengthRule) -> TokenStream {
+    let (at, width, le, grows, k) = (
+        usize_lit(rule.at),
+        usize_lit(rule.width),
+        p.byte_order == ByteOrder::Little,
+        rule.grows,
+        i64_lit(rule.k),
+    );
+    quote!(#at, #width, #le, #grows, #k)
+}
+
+/// Whether `m` shares code and length with another `needs_request` message of `group` (its
+/// code group), so that only the request can tell them apart.
+pub(super) fn is_ambiguous(m: &Message, group: &[&Message]) -> bool {
+    let (lo, hi) = len_range(m);
+    m.needs_request
+        && group
+            .iter()
+            .filter(|o| {
+                let (a, b) = len_range(o);
+                o.needs_request && a <= hi && lo <= b
+            })
+            .count()
+            > 1
+}
+
+/// The name of the function decoding code-less message `m` where coded messages sit beside it.
+pub(super) fn codeless_fn(m: &Message) -> Ident {
+    format_ident!("codeless_{}", m.name)
+}
+
+/// One function per code-less message of a direction that has coded ones too: every arm of
+/// `dispatch` tries them after its own code's messages, so each is written once. A fixed
+/// message takes the frame as an array of its length, a variable one the whole frame.
+pub(super) fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream {
+    let fns = codeless.iter().map(|m| {
+        let f = codeless_fn(m);
+        let (stmts, build) = decode_body(ctx, m);
+        let doc = doc(&format!(
+            "`{}` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.",
+            m.name
+        ));
+        if m.is_variable() {
+            let params = split_params(m, &stmts, &build);
+            let prelude = lists_prelude(m);
+            return quote! {
+                #doc
+                #[inline]
+                fn #f(#params) -> rt::DecodeResult<Self> {
+                    #prelude
+                    #(#stmts)*
+                    rt::Ok(#build)
+                }
+            };
+        }
+        let len = usize_lit(ctx.p.frame_len(m));
+        let param = if stmts.is_empty() && !mentions_frame(&build) {
+            quote!(_: &[u8; #len])
+        } else {
+            quote!(frame: &[u8; #len])
+        };
+        quote! {
+            #doc
+            #[inline]
+            fn #f(#param) -> rt::DecodeResult<Self> {
+                #(#stmts)*
+                rt::Ok(#build)
+            }
+        }
+    });
+    quote!(#(#fns)*)
+}
+
+/// The dispatch arm for the messages of one code: a lone message is decoded in the arm;
+/// several are tried in spec order by `rt::Group`, each decoder a closure over the frame as an
+/// array of its length. `shared`: code-less messages are decoded by their own function
+/// ([`emit_codeless_fns`]), as every arm tries them.
+pub(super) fn emit_group(
+    ctx: &Ctx,
+    group: &[&Message],
+    replies: bool,
+    shared: bool,
+) -> TokenStream {
+    let p = ctx.p;
+    let by_fn = |m: &Message| (shared && m.code.is_empty()).then(|| codeless_fn(m));
+    // Whether the request gets a reply decides between candidates only the request tells
+    // apart; every other reply is checked once it is decoded (`decode_for`).
+    let admitted = |m: &Message| {
+        let i = p
+            .responses
+            .iter()
+            .position(|r| r.name == m.name)
+            .unwrap_or(0) as u32;
+        if i == 0 {
+            return quote!(asked & 1 != 0);
+        }
+        let i = Literal::u32_unsuffixed(i);
+        quote!(asked >> #i & 1 != 0)
+    };
+    let value = hex_code(&group[0].code);
+    if let [m] = group {
+        if m.is_variable() {
+            if let (Some(f), true) = (by_fn(m), has_lists(m)) {
+                let (c, (base, k)) = (lists_const(m), lists_dims(m));
+                return quote! {{
+                    let s = #c.split::<#base, #k>(frame)?;
+                    Self::#f(&s)
+                }};
+            }
+            if let Some(f) = by_fn(m) {
+                let (rc, at) = (
+                    repeat_const(m),
+                    usize_lit(m.layout.payload + m.repeat().map_or(0, |(f, _)| f.offset)),
+                );
+                return quote! {{
+                    let (frame, elements, count) = #rc.split::<#at>(frame)?;
+                    Self::#f(frame, elements, count)
+                }};
+            }
+            let (stmts, build) = decode_body(ctx, m);
+            let split = split_frame(m, &stmts, &build);
+            return quote! {{
+                #split
+                #(#stmts)*
+                rt::Ok(#build)
+            }};
+        }
+        let len = usize_lit(p.frame_len(m));
+        let name = &m.name;
+        let frame = quote!(rt::fixed::<#len>(frame, #name, &[#len]));
+        if let Some(f) = by_fn(m) {
+            return quote!(#frame.and_then(Self::#f));
+        }
+        let (stmts, build) = decode_body(ctx, m);
+        if stmts.is_empty() && !build.to_string().contains("frame") {
+            return quote!(#frame.map(|_| #build));
+        }
+        return quote! {{
+            let frame = #frame?;
+            #(#stmts)*
+            rt::Ok(#build)
+        }};
+    }
+    let tries = group.iter().map(|m| {
+        let len = usize_lit(p.frame_len(m));
+        let name = &m.name;
+        let ambiguous = is_ambiguous(m, group);
+        let a = if ambiguous { admitted(m) } else { quote!() };
+        let decode = match by_fn(m) {
+            Some(f) => quote!(Self::#f),
+            None => {
+                let (stmts, build) = decode_body(ctx, m);
+                if m.is_variable() {
+                    let params = split_params(m, &stmts, &build);
+                    let prelude = lists_prelude(m);
+                    quote!(|#params| {
+                        #prelude
+                        #(#stmts)*
+                        rt::Ok(#build)
+                    })
+                } else if stmts.is_empty() && !build.to_string().contains("frame") {
+                    quote!(|_: &[u8; #len]| rt::Ok(#build))
+                } else {
+                    quote!(|frame: &[u8; #len]| {
+                        #(#stmts)*
+                        rt::Ok(#build)
+                    })
+                }
+            }
+        };
+        let rc = repeat_const(m);
+        if has_lists(m) {
+            let (c, (base, k)) = (lists_const(m), lists_dims(m));
+            return if ambiguous {
+                quote!(g.ambiguous_lists::<#base, #k>(#a, #name, &#c, #decode);)
+            } else {
+                quote!(g.attempt_lists::<#base, #k>(&#c, #decode);)
+            };
+        }
+        match (m.is_variable(), ambiguous) {
+            (false, false) => quote!(g.attempt(#decode);),
+            (false, true) => quote!(g.ambiguous(#a, #name, #decode);),
+            (true, false) => quote!(g.attempt_split(&#rc, #decode);),
+            (true, true) => quote!(g.ambiguous_split(#a, #name, &#rc, #decode);),
+        }
+    });
+    // A frame of none of the group's lengths is refused naming the first and every length,
+    // as the interpreter refuses it.
+    let first = &group[0].name;
+    let mut lengths: Vec<usize> = group.iter().map(|m| p.frame_len(m)).collect();
+    lengths.sort_unstable();
+    lengths.dedup();
+    let lengths = lengths.into_iter().map(usize_lit);
+    let request = if replies {
+        quote!(request.map(Request::name))
+    } else {
+        quote!(rt::None)
+    };
+    quote! {{
+        let mut g = rt::Group::new(frame, #value, #request);
+        #(#tries)*
+        g.end(#first, &[#(#lengths),*])
+    }}
+}

@@ -1,0 +1,371 @@
+use super::*;
+
+/// The broadcast address, if `m` is a request for a command that does not accept it: encode and
+/// decode refuse that address for it.
+pub(super) fn refuses_broadcast(p: &Protocol, m: &Message) -> Option<u8> {
+    let b = p.framing.address.broadcast?;
+    let accepted = m.broadcast.as_ref().is_some_and(|x| x.accepted);
+    (m.direction == Direction::Request && !accepted).then_some(b)
+}
+
+/// The field of the same frame `f` follows, and how (`follows: {field}`): encode computes `f`,
+/// decode checks it, and it is not part of the typed message.
+pub(super) fn follows_field(f: &Field) -> Option<(usize, &Relation)> {
+    match &f.follows {
+        Some(Follows::Field(i, rel)) => Some((*i, rel)),
+        _ => None,
+    }
+}
+
+/// `multiply, divide` of a relation, as the runtime's `follows` takes them.
+pub(super) fn relation_args(rel: &Relation) -> TokenStream {
+    let (m, d) = (
+        Literal::u64_unsuffixed(rel.multiply),
+        Literal::u64_unsuffixed(rel.divide),
+    );
+    quote!(#m, #d)
+}
+
+/// One arm of `encode`'s match; `taken`: the frame was taken from the buffer before the match
+/// (as `out`), the arm writes its known bytes into it.
+pub(super) fn emit_encode_arm(
+    ctx: &Ctx,
+    m: &Message,
+    pattern: &TokenStream,
+    ls: &[Leaf],
+    taken: bool,
+) -> TokenStream {
+    let p = ctx.p;
+    let len = usize_lit(p.frame_len(m));
+    let o = m.layout;
+    let mut stmts = Vec::new();
+    if let Some(b) = refuses_broadcast(p, m) {
+        let (name, b) = (&m.name, hex_u8(b));
+        stmts.push(quote!(rt::encode_broadcast(address, #b, #name)?;));
+    }
+    for l in ls {
+        let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {
+            continue;
+        };
+        let Some((range_fn, range)) = leaf_range(l.field, l.bits, raw_t.limits()) else {
+            continue;
+        };
+        let name = l.name;
+        let range_fn = format_ident!("encode_{}", range_fn);
+        stmts.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
+    }
+    let repeat = m
+        .repeat()
+        .filter(|_| !has_lists(m))
+        .map(|(f, _)| (f, repeat_const(m), local(&f.name)));
+    // Several lists, or fields after one: the fixed fields are written at their offsets with
+    // every list empty (`compact`), then spread around the lists (`rt::Lists::expand`).
+    let lc = lists_const(m);
+    let lists: Vec<(usize, usize, &Field, Ident)> = if has_lists(m) {
+        m.repeats()
+            .enumerate()
+            .map(|(k, (fi, f, _))| (k, fi, f, local(&f.name)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let list_bytes: Vec<Ident> = lists
+        .iter()
+        .map(|(k, ..)| format_ident!("bytes_{}", k))
+        .collect();
+    for ((k, _, f, v), b) in lists.iter().zip(&list_bytes) {
+        let k = usize_lit(*k);
+        let limits = (f.ty != FieldType::Bit && f.width == 3).then(|| wire_type(f).limits());
+        if let Some((lo, hi)) = f.range.or(limits) {
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            stmts.push(quote!(#lc.lists[#k].encode_in_range(#v.as_slice(), #lo, #hi)?;));
+        }
+        stmts.push(quote!(let #b: usize = #lc.lists[#k].encode_len(#v.len())? - #lc.base;));
+    }
+    // The list (its index among the lists, its value) whose count field is field `fi`.
+    let list_counted = |fi: usize| {
+        let (li, _, _) = m.counted_by(fi)?;
+        lists
+            .iter()
+            .find(|(_, lfi, ..)| *lfi == li)
+            .map(|(k, _, _, v)| (usize_lit(*k), v.clone()))
+    };
+    if let Some((f, c, v)) = &repeat {
+        // Each element within the spec's range (a 24-bit one within its wire field too), then
+        // the count within its bounds, which gives the frame's length.
+        let limits = (f.ty != FieldType::Bit && f.width == 3).then(|| wire_type(f).limits());
+        if let Some((lo, hi)) = f.range.or(limits) {
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            stmts.push(quote!(#c.encode_in_range(#v.as_slice(), #lo, #hi)?;));
+        }
+        stmts.push(quote!(let frame_len = #c.encode_len(#v.len())?;));
+    }
+    // The bytes known without a field value (start byte, address, code, constant fields), one
+    // write per contiguous run.
+    let named = repeated(m);
+    let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
+    // The same bytes' values, but the address's.
+    let mut consts: Vec<u8> = vec![0; o.checksum];
+    let mut set = |at: usize, b: u8| {
+        consts[at] = b;
+        known[at] = Some(hex_u8(b));
+    };
+    if let Some(at) = o.start {
+        for (i, s) in p.framing.sync.iter().enumerate() {
+            set(at + i, *s);
+        }
+    }
+    if let (Some(at), Some(l), false) = (o.length, &p.framing.length, m.is_variable()) {
+        let v = p.framing.length_value(l, m.code.len(), m.payload_len);
+        for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
+            .into_iter()
+            .enumerate()
+        {
+            set(at + i, b);
+        }
+    }
+    for (i, b) in m.code.iter().enumerate() {
+        set(o.code + i, *b);
+    }
+    for (fi, f) in m.fields.iter().enumerate() {
+        if let (Some(c), false) = (f.constant, named.contains(&fi)) {
+            let bytes = constant_bytes(c, f.width, f.byte_order);
+            for (i, b) in bytes.into_iter().enumerate() {
+                set(o.payload + f.offset + i, b);
+            }
+        }
+    }
+    if let Some(at) = o.address {
+        known[at] = Some(quote!(address));
+    }
+    // The run from the first byte is written as the frame is taken from `buf`.
+    let first: Vec<TokenStream> = known.iter().map_while(Clone::clone).collect();
+    let mut i = first.len();
+    // Its sum, for a sum-8 sealed in the arm: the generator adds the constants.
+    let k = consts[..i].iter().fold(0u8, |a, b| a.wrapping_add(*b));
+    let head = (i, o.address.is_some_and(|a| a < i).then_some(k));
+    let take = if taken {
+        quote!(rt::head(out, &[#(#first),*]))
+    } else if !lists.is_empty() {
+        let (base, n) = (usize_lit(m.layout.len), usize_lit(first.len()));
+        stmts.push(quote!(let mut compact = [0u8; #base];));
+        quote!({ compact[..#n].copy_from_slice(&[#(#first),*]); &mut compact })
+    } else if repeat.is_some() {
+        quote!(rt::frame_mut_len(buf, frame_len, &[#(#first),*])?)
+    } else {
+        quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
+    };
+    if i == known.len() && repeat.is_none() && lists.is_empty() {
+        let (check, end) = (stmts, encode_end(p, take, false, head));
+        return quote!(#pattern => { #(#check)* #end });
+    }
+    stmts.push(quote!(let out = #take;));
+    if let (Some(rule), Some(_)) = (p.framing.length_rule(m.direction), &repeat) {
+        // The length field of a frame of variable length, from its length.
+        let args = length_args(p, rule);
+        stmts.push(quote!(rt::put_length(out, #args)?;));
+    }
+    while i < known.len() {
+        let run: Vec<TokenStream> = known[i..].iter().map_while(Clone::clone).collect();
+        match run.as_slice() {
+            [] => i += 1,
+            [b] => {
+                let at = usize_lit(i);
+                stmts.push(quote!(out[#at] = #b;));
+                i += 1;
+            }
+            bytes => {
+                let (from, to) = (usize_lit(i), usize_lit(i + bytes.len()));
+                let from = if i == 0 { quote!() } else { quote!(#from) };
+                stmts.push(quote!(out[#from..#to].copy_from_slice(&[#(#bytes),*]);));
+                i += bytes.len();
+            }
+        }
+    }
+    let counter = m.count_field();
+    for (fi, f) in m.fields.iter().enumerate() {
+        let at = usize_lit(o.payload + f.offset);
+        let end = usize_lit(o.payload + f.offset + f.width);
+        let wt = wire_type(f);
+        let w = wt.ident();
+        let unsigned = IntType {
+            bits: wt.bits,
+            signed: false,
+            float: false,
+        };
+        if f.repeat.is_some() && !lists.is_empty() {
+            // Written once the frame is spread around the lists.
+            continue;
+        }
+        if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
+            stmts.push(write_list(f, v, quote!(#at)));
+            continue;
+        }
+        if f.is_ascii() {
+            let n = local(&f.name);
+            stmts.push(quote!(out[#at..#end].copy_from_slice(&#n);));
+            continue;
+        }
+        if f.constant.is_some() && !named.contains(&fi) {
+            continue;
+        }
+        let value: TokenStream = if let Some(c) = f.constant {
+            if let (true, Some(v)) = (wt.signed, f.constant_value()) {
+                // Its value as decode reads it (a 24-bit one held in 32 bits sign-extended
+                // too): what a field that follows it is computed from.
+                let l = i64_lit(v);
+                quote!(#l as #w)
+            } else {
+                let l = lit_u(c, unsigned);
+                quote!(#l as #w)
+            }
+        } else if let Some(other) = f.equals {
+            let n = format_ident!("field_{}", other);
+            quote!(#n)
+        } else if let Some((other, rel)) = follows_field(f) {
+            let (n, name, args) = (
+                format_ident!("field_{}", other),
+                &f.name,
+                relation_args(rel),
+            );
+            let (lo, hi) = wt.limits();
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            quote!(rt::fits(#name, rt::follows(#n as i64, #args), #lo, #hi)? as #w)
+        } else if let (true, Some((_, c, v))) = (counter == Some(fi), &repeat) {
+            let name = &f.name;
+            let (lo, hi) = wt.limits();
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            quote!(rt::fits(#name, #c.count_value(#v.len()) as u64, #lo, #hi)? as #w)
+        } else if let Some((k, v)) = list_counted(fi) {
+            let name = &f.name;
+            let (lo, hi) = wt.limits();
+            let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+            quote!(rt::fits(#name, #lc.lists[#k].count_value(#v.len()) as u64, #lo, #hi)? as #w)
+        } else if !f.bits.is_empty() {
+            let mut parts = Vec::new();
+            for b in &f.bits {
+                let lsb = u32::from(b.lsb);
+                let part = match b.constant {
+                    Some(0) => continue,
+                    Some(c) => hex_lit(c),
+                    None => {
+                        let Some(leaf) = ls.iter().find(|l| l.name == b.name) else {
+                            continue;
+                        };
+                        let v = paren(to_wire(ctx, leaf, &local(&b.name), Some(unsigned)));
+                        if lsb + u32::from(b.width()) >= wt.rust_bits() {
+                            v
+                        } else {
+                            let mask = hex_lit((1u64 << b.width()) - 1);
+                            quote!(#v & #mask)
+                        }
+                    }
+                };
+                parts.push(if lsb == 0 {
+                    part
+                } else {
+                    let (lsb, part) = (Literal::u32_unsuffixed(lsb), paren(part));
+                    quote!(#part << #lsb)
+                });
+            }
+            match parts.as_slice() {
+                [] => quote!(0),
+                [one] => one.clone(),
+                many => {
+                    let many = many.iter().cloned().map(paren);
+                    quote!(#(#many)|*)
+                }
+            }
+        } else {
+            let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) else {
+                continue;
+            };
+            to_wire(ctx, leaf, &local(&f.name), None)
+        };
+        let conv = to_bytes(f.byte_order);
+        let put = |v: TokenStream| {
+            if f.width == 1 && !wt.signed {
+                quote!(out[#at] = #v;)
+            } else if f.width == 3 {
+                let le = f.byte_order == ByteOrder::Little;
+                let v = paren(v);
+                quote!(out[#at..#end].copy_from_slice(&rt::bytes24(#v as u32, #le));)
+            } else if f.word_swapped {
+                // The number's bytes in the field's byte order, its 16-bit words swapped.
+                let v = paren(v);
+                let idx =
+                    (0..f.width).map(|i| usize_lit(busspec_model::number::swap_index(i, f.width)));
+                quote!({ let b = #v.#conv(); out[#at..#end].copy_from_slice(&[#(b[#idx]),*]); })
+            } else {
+                let v = paren(v);
+                quote!(out[#at..#end].copy_from_slice(&#v.#conv());)
+            }
+        };
+        let agrees = match (&repeat, follows_field(f)) {
+            (Some((_, c, v)), Some(_)) if counter == Some(fi) => Some((quote!(#c), v.clone())),
+            (None, Some(_)) => list_counted(fi).map(|(k, v)| (quote!(#lc.lists[#k]), v)),
+            _ => None,
+        };
+        if named.contains(&fi) || !f.bits.is_empty() || f.constant.is_some() || agrees.is_some() {
+            let n = format_ident!("field_{}", fi);
+            stmts.push(quote!(let #n: #w = #value;));
+            if let Some((c, v)) = agrees {
+                // A count computed from another field must count the list.
+                stmts.push(quote!(#c.encode_agrees(#v.len(), #n as u64)?;));
+            }
+            stmts.push(put(quote!(#n)));
+        } else {
+            stmts.push(put(value));
+        }
+    }
+    if !lists.is_empty() {
+        stmts.push(quote!(let out = #lc.expand(&compact, &[#(#list_bytes),*], buf)?;));
+        for ((k, _, f, v), _) in lists.iter().zip(&list_bytes) {
+            let at = usize_lit(m.layout.payload + f.offset);
+            let before = &list_bytes[..*k];
+            let at = quote!(#at #(+ #before)*);
+            stmts.push(write_list(f, v, at));
+        }
+        if let Some(rule) = p.framing.length_rule(m.direction) {
+            let args = length_args(p, rule);
+            stmts.push(quote!(rt::put_length(out, #args)?;));
+        }
+    }
+    let end = encode_end(p, quote!(out), repeat.is_some() || !lists.is_empty(), head);
+    quote! {
+        #pattern => {
+            #(#stmts)*
+            #end
+        }
+    }
+}
+
+/// An encoder arm's value, the frame length, from `out`, its frame: with a sum-8, once it is
+/// written into the last byte (each arm seals its own frame). `head` is the length of the run
+/// of known bytes at the frame's start and, where the address lies in it, the sum of its
+/// constant bytes: the sum then adds only the address and the bytes after the run, which for
+/// a frame without fields is one add instead of a loop over the frame at `opt-level = "s"`.
+pub(super) fn encode_end(
+    p: &Protocol,
+    out: TokenStream,
+    variable: bool,
+    head: (usize, Option<u8>),
+) -> TokenStream {
+    if checksum_in_arms(p) && variable {
+        quote!(rt::seal_sum8_len(#out))
+    } else if let (true, (from, Some(k))) = (checksum_in_arms(p), head) {
+        let from = usize_lit(from);
+        let sum = match k {
+            0 => quote!(address),
+            k => {
+                let k = hex_u8(k);
+                quote!(address.wrapping_add(#k))
+            }
+        };
+        quote!(rt::seal_sum8_head(#out, #from, #sum))
+    } else if checksum_in_arms(p) {
+        quote!(rt::seal_sum8(#out))
+    } else {
+        quote!(#out.len())
+    }
+}

@@ -1,0 +1,357 @@
+use super::*;
+
+pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
+    let d = &p.document;
+    let title = &d.title;
+    let revision = &d.revision;
+    let date = &d.date;
+    let spec_sha256 = &p.spec_sha256;
+    let name = &p.name;
+    // Escaped frames: buffers hold the worst case on the wire.
+    let max_req = p.max_wire_len(Direction::Request);
+    let max_resp = p.max_wire_len(Direction::Response);
+    let max = max_req.max(max_resp);
+    let (max_req, max_resp, max) = (usize_lit(max_req), usize_lit(max_resp), usize_lit(max));
+    let escaping = emit_escaping(p);
+    let inner = inner_doc(&format!(
+        "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.",
+        p.title,
+        name,
+        if p.byte_order == ByteOrder::Little { "little-endian" } else { "big-endian" }
+    ));
+    let (lo, hi) = (hex_u8(p.framing.address.min), hex_u8(p.framing.address.max));
+    let byte = |v: Option<u8>| match v {
+        Some(b) => {
+            let b = hex_u8(b);
+            quote!(rt::Some(#b))
+        }
+        None => quote!(rt::None),
+    };
+    let broadcast = byte(p.framing.address.broadcast);
+    let host = byte(p.framing.address.host);
+    let start = match (p.framing.head(1).start, p.framing.start) {
+        (Some(at), Some(s)) => {
+            let (at, s) = (usize_lit(at), hex_u8(s));
+            quote!(rt::Some((#at, #s)))
+        }
+        _ => quote!(rt::None),
+    };
+    let checksum_len = usize_lit(p.framing.checksum.len());
+    let end = p.framing.end.iter().map(|b| hex_u8(*b));
+    let end_first = p.framing.end_first();
+    let addressed = p.framing.has_address();
+    let checksum_be = p.framing.checksum.byte_order == ByteOrder::Big;
+    let baud = p.serial.baud;
+    let optional = |v: Option<u32>| match v {
+        Some(v) => quote!(rt::Some(#v)),
+        None => quote!(rt::None),
+    };
+    let gap = optional(p.serial.inter_frame_gap_ms);
+    let rate = optional(p.serial.frame_rate.as_ref().map(|r| r.max_per_s));
+    quote! {
+        #inner
+        // Generated code is uniform across specs: a cast that is the identity for one field
+        // width, a conversion to `u32` of a 32-bit checksum, a `match` with one message (or
+        // one that binds one), a `_` arm after arms that happen to cover every message, an
+        // identity in a scale, a head a protocol without codes does not look at, `{ .. }` on
+        // a message without fields, a code at offset 0 read as `get(0)` like any other offset,
+        // the code after a `match` on a direction without messages (no reply to any command).
+        #![allow(
+            clippy::get_first,
+            clippy::unnecessary_cast,
+            clippy::useless_conversion,
+            clippy::single_match,
+            clippy::match_single_binding,
+            clippy::identity_op,
+            clippy::unneeded_struct_pattern,
+            unreachable_patterns,
+            unreachable_code,
+            unused_variables
+        )]
+        /// The protocol's name in the spec.
+        pub const PROTOCOL: &str = #name;
+        /// The vendor document this module was generated from.
+        pub const DOCUMENT: &str = #title;
+        /// The document's revision.
+        pub const DOCUMENT_REVISION: &str = #revision;
+        /// The document's date.
+        pub const DOCUMENT_DATE: &str = #date;
+        /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
+        pub const SPEC_SHA256: &str = #spec_sha256;
+        /// The spec's text, exactly as this module was generated from it.
+        pub const SPEC_YAML: &str = include_str!(#spec_path);
+        /// The longest request frame, in bytes.
+        pub const MAX_REQUEST_LEN: usize = #max_req;
+        /// The longest response frame, in bytes.
+        pub const MAX_RESPONSE_LEN: usize = #max_resp;
+        /// The longest frame in either direction: a buffer this long holds any frame.
+        pub const MAX_FRAME_LEN: usize = #max;
+        /// The document's baud rate.
+        pub const BAUD: u32 = #baud;
+        /// The quiet time the document demands between frames, in milliseconds, if it says.
+        pub const INTER_FRAME_GAP_MS: rt::Option<u32> = #gap;
+        /// The most frames per second the document allows, if it says.
+        pub const MAX_FRAMES_PER_S: rt::Option<u32> = #rate;
+        /// Device addresses, inclusive.
+        pub const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = #lo..=#hi;
+        /// The broadcast address, if the protocol has one.
+        pub const BROADCAST_ADDRESS: rt::Option<u8> = #broadcast;
+        /// The host's own address, if the spec gives one.
+        pub const HOST_ADDRESS: rt::Option<u8> = #host;
+        pub use ::busspec_runtime::Decoded;
+        use ::busspec_runtime::codec as rt;
+        /// What every frame shares, for the runtime's frame checks.
+        const FRAME: rt::Frame = rt::Frame {
+            start: #start,
+            addressed: #addressed,
+            devices: (#lo, #hi),
+            broadcast: BROADCAST_ADDRESS,
+            host: HOST_ADDRESS,
+            checksum_len: #checksum_len,
+            checksum_be: #checksum_be,
+            end: &[#(#end),*],
+            end_first: #end_first,
+        };
+        #escaping
+    }
+}
+
+/// A sum, XOR or Fletcher checksum (masked or not): its doc line, type and expression over
+/// `bytes`; `None` for a CRC, and for no checksum.
+pub(super) fn sum_checksum(a: &ChecksumAlgorithm) -> Option<(String, TokenStream, TokenStream)> {
+    let (doc, ty, e) = match a {
+        ChecksumAlgorithm::Sum8 => (
+            "8-bit sum of every byte before it",
+            quote!(u8),
+            quote!(rt::sum8(bytes)),
+        ),
+        ChecksumAlgorithm::Sum8OnesComplement => (
+            "the 8-bit sum of the bytes it covers, inverted",
+            quote!(u8),
+            quote!(rt::sum8_ones(bytes)),
+        ),
+        ChecksumAlgorithm::Sum8TwosComplement => (
+            "the 8-bit sum of the bytes it covers, negated",
+            quote!(u8),
+            quote!(rt::sum8_twos(bytes)),
+        ),
+        ChecksumAlgorithm::Xor8 => (
+            "8-bit XOR of the bytes it covers",
+            quote!(u8),
+            quote!(rt::xor8(bytes)),
+        ),
+        ChecksumAlgorithm::Sum16 => (
+            "16-bit sum of the bytes it covers",
+            quote!(u16),
+            quote!(rt::sum16(bytes)),
+        ),
+        ChecksumAlgorithm::Fletcher8 => (
+            "8-bit Fletcher (modulo 256) of the bytes it covers",
+            quote!(u16),
+            quote!(rt::fletcher8(bytes)),
+        ),
+        ChecksumAlgorithm::Fletcher16 => (
+            "Fletcher-16 of the bytes it covers",
+            quote!(u16),
+            quote!(rt::fletcher16(bytes)),
+        ),
+        ChecksumAlgorithm::Masked(inner, mask) => {
+            let (doc, ty, e) = sum_checksum(inner)?;
+            let m = Literal::u64_unsuffixed(*mask);
+            let doc = format!("{doc}, kept to the bits of 0x{mask:X}");
+            return Some((doc, ty.clone(), quote!(#e & (#m as #ty))));
+        }
+        ChecksumAlgorithm::Crc(_) | ChecksumAlgorithm::None => return None,
+    };
+    Some((doc.to_owned(), ty, e))
+}
+
+pub(super) fn emit_checksum(p: &Protocol) -> TokenStream {
+    let c = &p.framing.checksum;
+    if let Some((doc, ty, e)) = sum_checksum(&c.algorithm) {
+        // The doc lines of the four 8-bit sums are those of the generated code before masks
+        // and 16-bit sums came.
+        let d = format!(" The frame checksum: {doc}.");
+        return quote! {
+            #[doc = #d]
+            #[inline]
+            pub fn checksum(bytes: &[u8]) -> #ty {
+                #e
+            }
+        };
+    }
+    match &c.algorithm {
+        ChecksumAlgorithm::None => quote! {
+            /// Frames carry no checksum: nothing to compute.
+            #[inline]
+            pub fn checksum(_bytes: &[u8]) -> u8 {
+                0
+            }
+        },
+        ChecksumAlgorithm::Crc(k) => {
+            let ty = format_ident!("u{}", c.width);
+            let (w, poly, init, refin, refout, xorout, check) = (
+                k.width as usize,
+                k.poly,
+                k.init,
+                k.refin,
+                k.refout,
+                k.xorout,
+                c.check,
+            );
+            let lit = |v: u64| {
+                lit_u(
+                    v,
+                    IntType {
+                        bits: u32::from(c.width),
+                        signed: false,
+                        float: false,
+                    },
+                )
+            };
+            let (poly, init, xorout, check) = (lit(poly), lit(init), lit(xorout), lit(check));
+            let name = c.catalogue.clone().unwrap_or_else(|| "CRC".into());
+            let d = format!(" {name}: the frame checksum, over every byte before it.");
+            quote! {
+                #[doc = #d]
+                pub const CRC_ALGORITHM: rt::crc::Algorithm<#ty> = rt::crc::Algorithm {
+                    width: #w as u8,
+                    poly: #poly,
+                    init: #init,
+                    refin: #refin,
+                    refout: #refout,
+                    xorout: #xorout,
+                    check: #check,
+                    residue: 0,
+                };
+                // A static, not a const: one table in memory. Where `checksum` was not inlined,
+                // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, "What the benches
+                // taught the generator").
+                static CRC: rt::crc::Crc<#ty> = rt::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
+                /// The frame checksum over `bytes`.
+                #[inline]
+                pub fn checksum(bytes: &[u8]) -> #ty {
+                    CRC.checksum(bytes)
+                }
+            }
+        }
+        // Every sum took the path above.
+        _ => TokenStream::new(),
+    }
+}
+
+/// `UNESCAPED_LEN` and `ESCAPING` for a protocol with `framing.escaping` (nothing without).
+pub(super) fn emit_escaping(p: &Protocol) -> TokenStream {
+    let f = &p.framing;
+    let Some(e) = &f.escaping else {
+        return quote!();
+    };
+    let unescaped = usize_lit(
+        p.max_frame_len(Direction::Request)
+            .max(p.max_frame_len(Direction::Response)),
+    );
+    let kind = match &e.kind {
+        EscapeKind::Bytes { escape, map, .. } => {
+            let escape = hex_u8(*escape);
+            let pairs = map.iter().map(|(b, r)| {
+                let (b, r) = (hex_u8(*b), hex_u8(*r));
+                quote!((#b, #r))
+            });
+            quote!(rt::EscapeKind::Bytes { escape: #escape, map: &[#(#pairs),*] })
+        }
+        EscapeKind::Insert { after, byte, .. } => {
+            let after = after.iter().map(|b| hex_u8(*b));
+            let byte = hex_u8(*byte);
+            quote!(rt::EscapeKind::Insert { after: &[#(#after),*], byte: #byte })
+        }
+        EscapeKind::Cobs => quote!(rt::EscapeKind::Cobs),
+    };
+    let (from, tail) = f.escaped_bounds().unwrap_or((0, 0));
+    let (from_l, tail) = (usize_lit(from), usize_lit(tail));
+    let head = f.head(0);
+    let (sync_at, sync) = match head.start {
+        Some(at) => (at, f.sync.clone()),
+        None => (0, Vec::new()),
+    };
+    let sync_at = usize_lit(sync_at);
+    let sync = sync.iter().map(|b| hex_u8(*b));
+    let end = hex_u8(f.end.first().copied().unwrap_or(0));
+    let length = match (&f.length, head.length) {
+        (Some(l), Some(at)) => {
+            let (at, w, le) = (
+                usize_lit(at),
+                usize_lit(l.width),
+                p.byte_order == ByteOrder::Little,
+            );
+            quote!(rt::Some((#at, #w, #le)))
+        }
+        _ => quote!(rt::None),
+    };
+    let rule = |d: Direction| match f.length_rule(d).filter(|r| r.grows) {
+        Some(r) => {
+            let (k, h) = (i64_lit(r.k), usize_lit(r.head_len));
+            quote!(rt::Some((#k, #h)))
+        }
+        None => quote!(rt::None),
+    };
+    let (rq, rs) = (rule(Direction::Request), rule(Direction::Response));
+    let bounds = |d: Direction| match p.frame_len_bounds(d) {
+        Some((lo, hi)) => {
+            let (lo, hi) = (usize_lit(lo), usize_lit(hi));
+            quote!((#lo, #hi))
+        }
+        None => quote!((usize::MAX, 0)),
+    };
+    let (bq, bs) = (bounds(Direction::Request), bounds(Direction::Response));
+    let computed = e.computed == busspec_model::ir::Computed::Escaped;
+    let c = &f.checksum;
+    let covers = usize_lit(c.covers_from);
+    let ck_len = usize_lit(c.len());
+    let ck_be = c.byte_order == ByteOrder::Big;
+    let from_end = usize_lit(f.checksum_from_end());
+    quote! {
+        /// The longest frame before escaping: what generated code unescapes into.
+        const UNESCAPED_LEN: usize = #unescaped;
+        /// How frames are escaped on the wire (`framing.escaping`).
+        const ESCAPING: rt::Escaping = rt::Escaping {
+            kind: #kind,
+            from: #from_l,
+            tail: #tail,
+            sync_at: #sync_at,
+            sync: &[#(#sync),*],
+            end: #end,
+            length: #length,
+            rules: [#rq, #rs],
+            lens: [#bq, #bs],
+            computed_escaped: #computed,
+            covers_from: #covers,
+            checksum_len: #ck_len,
+            checksum_be: #ck_be,
+            checksum_from_end: #from_end,
+        };
+    }
+}
+
+/// Whether `encode` computes the checksum in each arm of its match, over the frame as a
+/// fixed-size array, or once after it. A sum-8 in each arm is inlined and folds the constant
+/// header bytes (UB2: 36 instructions per frame against 58 after the match); a table CRC in
+/// each arm is a call the inliner refuses in a match this large, and costs twice as much as
+/// one call site after the match, which it inlines (SD: 138 against 68). Only where the frame
+/// ends in its checksum (no end bytes after it).
+pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
+    matches!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8)
+        && p.framing.checksum.covers_from == 0
+        && p.framing.end.is_empty()
+}
+
+/// The checksum of a frame's bytes before it, as the runtime's frame checks take it: over the
+/// bytes from `covers_from` on where the checksum skips the first (Dynamixel's sync bytes).
+pub(super) fn frame_sum(p: &Protocol) -> TokenStream {
+    match p.framing.checksum.covers_from {
+        0 => quote!(|b| u32::from(checksum(b))),
+        from => {
+            let from = usize_lit(from);
+            quote!(|b| u32::from(checksum(rt::covered(b, #from))))
+        }
+    }
+}

@@ -1,0 +1,224 @@
+use super::*;
+
+/// The name of the `rt::RepeatAt` constant of a message with a repeated field.
+pub(super) fn repeat_const(m: &Message) -> Ident {
+    format_ident!("REPEAT_{}", m.name.to_ascii_uppercase())
+}
+
+/// The shortest and longest frames of `m`.
+pub(super) fn len_range(m: &Message) -> (usize, usize) {
+    (m.min_len(), m.max_len)
+}
+
+/// The name of the `rt::Lists` constant of a message with several repeated fields, or fields
+/// after one.
+pub(super) fn lists_const(m: &Message) -> Ident {
+    format_ident!("LISTS_{}", m.name.to_ascii_uppercase())
+}
+
+/// Whether `m`'s fields do not all keep a fixed offset: it is decoded through `rt::Lists`.
+pub(super) fn has_lists(m: &Message) -> bool {
+    !m.tail_repeat()
+}
+
+/// The `rt::RepeatAt` of repeated field `f` of `m`: its offset (and its count field's) with
+/// every earlier list empty, how it is counted and its bounds.
+pub(super) fn repeat_at(m: &Message, f: &Field, r: &busspec_model::ir::Repeat) -> TokenStream {
+    let (message, name) = (&m.name, &f.name);
+    let base = usize_lit(m.layout.len);
+    let at = usize_lit(m.layout.payload + f.offset);
+    let width = usize_lit(if f.ty == FieldType::Bit { 0 } else { f.width });
+    let counter = |i: usize| {
+        let cf = &m.fields[i];
+        let (cn, cat, cw) = (
+            &cf.name,
+            usize_lit(m.layout.payload + cf.offset),
+            usize_lit(cf.width),
+        );
+        let le = cf.byte_order == ByteOrder::Little;
+        quote!(rt::CountField { name: #cn, at: #cat, width: #cw, le: #le })
+    };
+    let count = match r.count {
+        Count::ToEnd => quote!(rt::CountBy::End),
+        Count::Elements(i) => {
+            let c = counter(i);
+            quote!(rt::CountBy::Elements(#c))
+        }
+        Count::Bytes(i) => {
+            let c = counter(i);
+            quote!(rt::CountBy::Bytes(#c))
+        }
+    };
+    let (min, max) = (usize_lit(r.min), usize_lit(r.max));
+    quote! {
+        rt::RepeatAt {
+            message: #message,
+            field: #name,
+            base: #base,
+            at: #at,
+            width: #width,
+            count: #count,
+            min: #min,
+            max: #max,
+        }
+    }
+}
+
+/// The `rt::RepeatAt` constant of each message of direction `d` with a repeated field (its
+/// first): where it sits, how it is counted and its bounds, for decode, encode and the
+/// stream's framing; and the `rt::Lists` constant of each message with several lists or
+/// fields after one.
+pub(super) fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
+    let mut out = TokenStream::new();
+    for m in p.messages(d) {
+        let Some((f, r)) = m.repeat() else { continue };
+        let c = repeat_const(m);
+        let value = repeat_at(m, f, r);
+        let d = format!(
+            " Where `{}.{}` sits in the frame and how its elements are counted.",
+            m.name, f.name
+        );
+        out.extend(quote! {
+            #[doc = #d]
+            pub const #c: rt::RepeatAt = #value;
+        });
+        if has_lists(m) {
+            let c = lists_const(m);
+            let base = usize_lit(m.layout.len);
+            let lists = m.repeats().map(|(_, f, r)| repeat_at(m, f, r));
+            let d = format!(
+                " Every repeated field of `{}`, in wire order, each where it sits with every earlier list empty.",
+                m.name
+            );
+            out.extend(quote! {
+                #[doc = #d]
+                pub const #c: rt::Lists = rt::Lists { base: #base, lists: &[#(#lists),*] };
+            });
+        }
+    }
+    out
+}
+
+/// Indices of the fields another field repeats (`equals`): their wire value gets a name.
+pub(super) fn repeated(m: &Message) -> Vec<usize> {
+    m.fields
+        .iter()
+        .filter_map(|f| f.equals.or(follows_field(f).map(|(i, _)| i)))
+        .collect()
+}
+
+/// The statement writing repeated field `f`'s elements (the local `v`) into `out` from `at`.
+pub(super) fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
+    if f.ty == FieldType::Bit {
+        quote!(rt::write_bits(&#v, &mut out[#at..]);)
+    } else {
+        let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
+        quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);)
+    }
+}
+
+/// The value of repeated field `l` of `m` (`None` if it is not one), read from the bytes of
+/// its elements (`elements`, from the frame's `split`), with the check of its range pushed on
+/// `stmts`.
+pub(super) fn decode_repeat(
+    ctx: &Ctx,
+    m: &Message,
+    l: &Leaf,
+    stmts: &mut Vec<TokenStream>,
+) -> Option<TokenStream> {
+    let f = l.field;
+    f.repeat.as_ref()?;
+    // With several lists (`rt::Lists`), each as the frame places it, from the split `s`.
+    let (c, elements, count) = match m.repeats().position(|(_, g, _)| std::ptr::eq(g, f)) {
+        Some(k) if has_lists(m) => {
+            let k = usize_lit(k);
+            (quote!(s.lists[#k]), quote!(s.elements(#k)), quote!(s.n[#k]))
+        }
+        _ => {
+            let c = repeat_const(m);
+            (quote!(#c), quote!(elements), quote!(count))
+        }
+    };
+    let value = match ctx.kind(l) {
+        Kind::List { elem, max } => {
+            let (e, max) = (elem.ident(), usize_lit(max));
+            let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
+            quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?)
+        }
+        Kind::BitList { bytes } => {
+            let bytes = usize_lit(bytes);
+            quote!(#c.bits::<#bytes>(#elements, #count)?)
+        }
+        _ => return None,
+    };
+    let Some((lo, hi)) = f.range.filter(|_| f.ty != FieldType::Bit) else {
+        return Some(value);
+    };
+    let (v, lo, hi) = (local(&f.name), i64_lit(lo), i64_lit(hi));
+    stmts.push(quote!(let #v = #value;));
+    stmts.push(quote!(#c.in_range(#v.as_slice(), #lo, #hi)?;));
+    Some(quote!(#v))
+}
+
+/// The statement splitting a frame of variable-length message `m` into its fixed part (as
+/// the array `frame`, so every fixed field's read is in bounds by type), the bytes of its
+/// elements and their number, once their count is checked.
+pub(super) fn split_frame(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+    if has_lists(m) {
+        let (c, (base, k)) = (lists_const(m), lists_dims(m));
+        return quote!(let s = #c.split::<#base, #k>(frame)?; let frame = &s.frame;);
+    }
+    let Some((f, _)) = m.repeat() else {
+        return quote!();
+    };
+    let (c, at) = (repeat_const(m), usize_lit(m.layout.payload + f.offset));
+    let frame = if stmts.iter().chain([build]).any(mentions_frame) {
+        quote!(frame)
+    } else {
+        quote!(_)
+    };
+    let count = if f.ty == FieldType::Bit {
+        quote!(count)
+    } else {
+        quote!(_)
+    };
+    quote!(let (#frame, elements, #count) = #c.split::<#at>(frame)?;)
+}
+
+/// The parameters a variable-length message's decoder takes from `rt::Group::attempt_split`
+/// (its fixed part as an array, the elements' bytes, their number), `_` where unused.
+pub(super) fn split_params(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+    if has_lists(m) {
+        let (base, k) = lists_dims(m);
+        return quote!(s: &rt::Split<'_, #base, #k>);
+    }
+    let at = m.repeat().map_or(0, |(f, _)| m.layout.payload + f.offset);
+    let at = usize_lit(at);
+    let frame = if stmts.iter().chain([build]).any(mentions_frame) {
+        quote!(frame)
+    } else {
+        quote!(_)
+    };
+    let count = if m.repeat().is_some_and(|(f, _)| f.ty == FieldType::Bit) {
+        quote!(count)
+    } else {
+        quote!(_)
+    };
+    quote!(#frame: &[u8; #at], elements: &[u8], #count: usize)
+}
+
+/// The const parameters of `rt::Lists::split` for `m`: its frame's length with every list
+/// empty, and its number of lists.
+pub(super) fn lists_dims(m: &Message) -> (Literal, Literal) {
+    (usize_lit(m.layout.len), usize_lit(m.repeats().count()))
+}
+
+/// What a decoder taking a frame split by `rt::Lists` (`s`) starts with: its fixed fields as
+/// the array `frame`.
+pub(super) fn lists_prelude(m: &Message) -> TokenStream {
+    if has_lists(m) {
+        quote!(let frame = &s.frame;)
+    } else {
+        quote!()
+    }
+}

@@ -1,0 +1,352 @@
+use super::*;
+
+pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
+    let p = ctx.p;
+    let (ty, what) = direction_names(d);
+    let msgs = p.messages(d);
+    // Where every frame of the direction has one length, `encode` takes the buffer's frame
+    // once before its match (one `BufferTooSmall` check instead of one per arm: SD's 21
+    // arms took 8 bytes each at opt-level s); the arms write into it.
+    let one_len = match msgs.first() {
+        Some(m)
+            if msgs
+                .iter()
+                .all(|x| !x.is_variable() && p.frame_len(x) == p.frame_len(m)) =>
+        {
+            Some(p.frame_len(m))
+        }
+        _ => None,
+    };
+    let mut variants = Vec::new();
+    let mut rows = Vec::new();
+    let mut index_arms = Vec::new();
+    let mut encode_arms = Vec::new();
+    let mut visit_arms = Vec::new();
+    let mut len_arms = Vec::new();
+    for (i, m) in msgs.iter().enumerate() {
+        let v = variant(m);
+        let ls = leaves(m);
+        let fields = ls.iter().map(|l| {
+            let n = ident(l.name);
+            let t = ctx.rust_type(l);
+            let d = doc(&leaf_doc(p, l));
+            quote!(#d #n: #t)
+        });
+        let size = match len_range(m) {
+            (lo, hi) if lo == hi => format!("{lo} bytes"),
+            (lo, hi) => format!("{lo} to {hi} bytes"),
+        };
+        let d = doc(&format!(
+            "§{} {} (code `{}`, {size}). {}",
+            m.section,
+            m.title,
+            m.code_hex(),
+            m.doc
+        ));
+        if ls.is_empty() {
+            variants.push(quote!(#d #v));
+        } else {
+            variants.push(quote!(#d #v { #(#fields),* }));
+        }
+        let name = &m.name;
+        let code = m.code.iter().map(|b| hex_u8(*b));
+        let len = p.frame_len(m);
+        let (len, i) = (usize_lit(len), usize_lit(i));
+        rows.push(quote!((#name, &[#(#code),*], #len)));
+        let any = any_of(&ident("Self"), m);
+        index_arms.push(quote!(#any => #i));
+        let pattern = binding(m, &ls);
+        encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
+        if has_lists(m) {
+            let c = lists_const(m);
+            let (names, sum): (Vec<TokenStream>, Vec<TokenStream>) = m
+                .repeats()
+                .enumerate()
+                .map(|(k, (_, f, _))| {
+                    let (n, l, k) = (ident(&f.name), local(&f.name), usize_lit(k));
+                    (quote!(#n: #l), quote!(#c.lists[#k].bytes_of(#l.len())))
+                })
+                .unzip();
+            len_arms.push(quote!(Self::#v { #(#names,)* .. } => #c.base #(+ #sum)*));
+        } else if let Some((f, _)) = m.repeat() {
+            let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
+            len_arms.push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len())));
+        }
+        let visits: Vec<TokenStream> = ls
+            .iter()
+            .map(|l| {
+                let (n, v) = (l.name, local(l.name));
+                let value = match ctx.kind(l) {
+                    Kind::Int(t) if t.float => quote!(rt::Int(rt::raw(*#v))),
+                    Kind::Int(_) => quote!(rt::Int(*#v as i64)),
+                    Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
+                        quote!(rt::Int(#v.raw() as i64))
+                    }
+                    Kind::Text(_) => quote!(rt::Text(&#v[..])),
+                    Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
+                };
+                quote!(f(#n, #value))
+            })
+            .collect();
+        match visits.as_slice() {
+            [] => {}
+            [one] => visit_arms.push(quote!(#pattern => #one,)),
+            many => visit_arms.push(quote!(#pattern => { #(#many;)* })),
+        }
+    }
+    let (visit_param, visit_body) = if visit_arms.is_empty() {
+        (quote!(_f), quote!())
+    } else {
+        if visit_arms.len() < msgs.len() {
+            visit_arms.push(quote!(_ => {}));
+        }
+        (quote!(mut f), quote!(match self { #(#visit_arms)* }))
+    };
+    let n = usize_lit(msgs.len());
+    let frame_len = if len_arms.is_empty() {
+        quote!(Self::MESSAGES[self.index()].2)
+    } else {
+        quote! {
+            match self {
+                #(#len_arms,)*
+                _ => Self::MESSAGES[self.index()].2,
+            }
+        }
+    };
+    let repeats = emit_repeats(p, d);
+    let dispatch = emit_dispatch(ctx, d, &ty);
+    let from_fields = emit_from_fields(ctx, d);
+    let command_info = if d == Direction::Request {
+        emit_command_info(p)
+    } else {
+        quote!()
+    };
+    let take_once = one_len.map(|n| {
+        let n = usize_lit(n);
+        quote!(let out = rt::frame_mut::<#n>(buf, &[])?;)
+    });
+    let seal = if checksum_in_arms(p) {
+        quote!(rt::Ok(len))
+    } else {
+        let n = usize_lit(p.framing.checksum.len());
+        let be = p.framing.checksum.byte_order == ByteOrder::Big;
+        let sum = frame_sum(p);
+        if p.framing.end.is_empty() {
+            quote! {
+                rt::seal(buf, len, #sum, #n, #be);
+                rt::Ok(len)
+            }
+        } else {
+            quote! {
+                rt::seal_end(buf, len, #sum, &FRAME);
+                rt::Ok(len)
+            }
+        }
+    };
+    // A float has no `Eq` or `Hash`: a direction with a float field derives `PartialEq`
+    // alone (every other direction, and every spec without floats, keeps both).
+    let derives = if ctx
+        .p
+        .messages(d)
+        .iter()
+        .any(|m| m.fields.iter().any(Field::is_float))
+    {
+        quote!(#[derive(Debug, Clone, Copy, PartialEq)])
+    } else {
+        quote!(#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)])
+    };
+    let encode_fn = if p.framing.escaping.is_none() {
+        quote! {
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #seal
+            }
+        }
+    } else {
+        let sum = frame_sum(p);
+        quote! {
+            ///
+            /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
+            /// bytes holds any.
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                let mut plain = [0u8; UNESCAPED_LEN];
+                let len = self.encode_unescaped(address, &mut plain)?;
+                rt::escape_frame(&ESCAPING, &plain[..len], buf, #sum)
+            }
+            /// The frame before escaping, into `buf`.
+            fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #seal
+            }
+        }
+    };
+    // `arbitrary`'s derive refuses an enum without variants (a protocol whose commands get no
+    // reply has no responses): such a type has no value to make.
+    let (derive_arbitrary, no_arbitrary) = if msgs.is_empty() {
+        (
+            quote!(),
+            quote! {
+                #[cfg(feature = "arbitrary")]
+                impl<'a> ::arbitrary::Arbitrary<'a> for #ty {
+                    fn arbitrary(_: &mut ::arbitrary::Unstructured<'a>) -> ::arbitrary::Result<Self> {
+                        rt::Err(::arbitrary::Error::IncorrectFormat)
+                    }
+                }
+            },
+        )
+    } else {
+        (
+            quote!(#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]),
+            quote!(),
+        )
+    };
+    quote! {
+        #repeats
+        #[doc = #what]
+        #derives
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #derive_arbitrary
+        #[allow(clippy::large_enum_variant)]
+        pub enum #ty {
+            #(#variants,)*
+        }
+        #no_arbitrary
+        impl #ty {
+            /// Each message's spec name, code and frame length, in spec order.
+            const MESSAGES: [(&'static str, &'static [u8], usize); #n] = [#(#rows),*];
+            /// This message's row in [`Self::MESSAGES`].
+            const fn index(&self) -> usize {
+                match *self { #(#index_arms,)* }
+            }
+            /// The spec's snake_case name of this message.
+            pub const fn name(&self) -> &'static str {
+                Self::MESSAGES[self.index()].0
+            }
+            /// The command or response code, as sent.
+            pub const fn code(&self) -> &'static [u8] {
+                Self::MESSAGES[self.index()].1
+            }
+            /// The length of this message's frame, in bytes.
+            pub const fn frame_len(&self) -> usize {
+                #frame_len
+            }
+            /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
+            /// field is signed), in frame order; constant and repeated fields are not visited.
+            pub fn visit(&self, #visit_param: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+                #visit_body
+            }
+            /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
+            /// decode refuses: an address no frame may carry, the broadcast address for a command
+            /// that does not accept it, a value outside its field's range.
+            #encode_fn
+            #dispatch
+            #from_fields
+        }
+        impl rt::Message for #ty {
+            #[inline]
+            fn name(&self) -> &'static str {
+                #ty::name(self)
+            }
+            #[inline]
+            fn code(&self) -> &'static [u8] {
+                #ty::code(self)
+            }
+            #[inline]
+            fn frame_len(&self) -> usize {
+                #ty::frame_len(self)
+            }
+            #[inline]
+            fn visit<F: FnMut(&'static str, rt::FieldValue<'_>)>(&self, f: F) {
+                #ty::visit(self, f)
+            }
+            #[inline]
+            fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                #ty::encode(self, address, buf)
+            }
+            #[inline]
+            fn from_fields<'v, F: FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>>(
+                name: &str,
+                field: F,
+            ) -> rt::Result<Self, rt::FieldError> {
+                #ty::from_fields(name, field)
+            }
+        }
+        #command_info
+    }
+}
+
+/// `from_fields`: one arm per message, building it from the getter's raw value of each field,
+/// each checked against its wire type as the encoder checks it (`to_wire`), then typed as the
+/// decoder types it (`from_wire`). Fields are asked for in frame order.
+pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
+    let field_param = if ctx.p.messages(d).iter().all(|m| leaves(m).is_empty()) {
+        quote!(_field)
+    } else {
+        quote!(mut field)
+    };
+    let arms = ctx.p.messages(d).iter().map(|m| {
+        let name = &m.name;
+        let v = variant(m);
+        let ls = leaves(m);
+        if ls.is_empty() {
+            return quote!(#name => rt::Ok(Self::#v));
+        }
+        let fields = ls.iter().map(|l| {
+            let (n, f) = (l.name, ident(l.name));
+            let value = match ctx.kind(l) {
+                Kind::Text(_) => quote!(rt::text(&mut field, #n)?),
+                Kind::List { elem, max } => {
+                    let (e, max) = (elem.ident(), usize_lit(max));
+                    let (lo, hi) = elem.limits();
+                    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+                    quote!(rt::list::<#e, #max>(&mut field, #n, #lo, #hi)?)
+                }
+                Kind::BitList { bytes } => {
+                    let bytes = usize_lit(bytes);
+                    quote!(rt::list_bits::<#bytes>(&mut field, #n)?)
+                }
+                _ if l.bits.is_none() && l.wire.bits != 24 => {
+                    let w = l.wire.ident();
+                    let get = match raw_of(ctx, l, &ident("x")) {
+                        Some((t, _)) if t == l.wire => quote!(rt::get(&mut field, #n)?),
+                        _ => quote!(rt::get::<#w>(&mut field, #n)?),
+                    };
+                    from_wire(ctx, l, Some(l.wire), get)
+                }
+                _ => {
+                    let (lo, hi) = l
+                        .bits
+                        .map(|b| raw_limits(u32::from(b.width()), b.signed))
+                        .unwrap_or(l.wire.limits());
+                    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+                    from_wire(
+                        ctx,
+                        l,
+                        None,
+                        quote!(rt::field_int(#n, field(#n), #lo, #hi)?),
+                    )
+                }
+            };
+            quote!(#f: #value)
+        });
+        quote!(#name => rt::Ok(Self::#v { #(#fields),* }))
+    });
+    quote! {
+        /// The message called `name` in the spec, from each field's raw wire value by its spec
+        /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
+        /// are not asked for. See [`::busspec_runtime::Message::from_fields`].
+        pub fn from_fields<'v>(
+            name: &str,
+            #field_param: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
+        ) -> rt::Result<Self, rt::FieldError> {
+            match name {
+                #(#arms,)*
+                _ => rt::Err(rt::FieldError::UnknownMessage),
+            }
+        }
+    }
+}

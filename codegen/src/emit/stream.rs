@@ -1,0 +1,605 @@
+use super::*;
+
+/// The stream decoder's view of the protocol: every distinct frame length (longest first) and a
+/// `candidates` function that narrows them by start byte and code, one `match` arm per code and
+/// per code prefix. Not by address: a frame from an address the spec does not allow is still a
+/// frame, which the stream decoder reports as out of spec (strict decoding says why).
+pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
+    // A variable-length message whose length or count field gives its length lists none
+    // (`variable_candidates` reads it); a repeat to the end without a length field lists
+    // every length.
+    let mut lengths: Vec<usize> = [Direction::Request, Direction::Response]
+        .iter()
+        .flat_map(|d| {
+            p.messages(*d)
+                .iter()
+                .flat_map(|m| m.listed_lengths(&p.framing))
+        })
+        .collect();
+    lengths.sort_unstable_by(|a, b| b.cmp(a));
+    lengths.dedup();
+    // Shapes: (code, mask) where the mask has bit i (requests) or 64 + i (responses) for
+    // LENGTHS[i]. The validator keeps distinct lengths to at most 64.
+    let mut shapes: Vec<(&[u8], u128)> = Vec::new();
+    for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
+        for m in p.messages(d) {
+            let mask = m.listed_lengths(&p.framing).iter().fold(0u128, |a, len| {
+                let i = lengths.iter().position(|l| l == len).unwrap_or(0) as u32;
+                a | 1u128 << (i + shift)
+            });
+            if mask != 0 {
+                shapes.push((&m.code, mask));
+            }
+        }
+    }
+    let first = p.framing.head(1);
+    let code_at = first.code;
+    let start_check = |none: TokenStream| match first.start {
+        Some(at) => {
+            let checks = p.framing.sync.iter().enumerate().map(|(i, s)| {
+                let (at, s) = (head_byte(at + i), hex_u8(*s));
+                quote! {
+                    if #at.is_some_and(|&b| b != #s) {
+                        return #none;
+                    }
+                }
+            });
+            quote!(#(#checks)*)
+        }
+        None => quote!(),
+    };
+    let variable = emit_variable_candidates(p, start_check(quote!(rt::VarLens::NONE)));
+    // Not where a variable-length message exists: the route would ask `variable_candidates`
+    // too, and the mask's route pays for both (Modbus 1254.6 -> 1280.5 a frame with it).
+    let candidate = if variable.is_empty() {
+        emit_candidate(
+            &shapes,
+            &lengths,
+            code_at,
+            start_check(quote!(rt::Candidate::NONE)),
+        )
+    } else {
+        quote!()
+    };
+    let start_check = start_check(quote!(rt::Candidates {
+        requests: 0,
+        responses: 0
+    }));
+    let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
+    let mut arms = Vec::new();
+    flat_trie(&shapes, 0, depth, &mut Vec::new(), 0, &mut arms);
+    // Where a code-less message matches any code byte, the trie ends in a wildcard arm already.
+    let open = arms
+        .last()
+        .is_some_and(|(pat, _)| pat.iter().all(|t| t.to_string() == "_"));
+    let other = if open { quote!() } else { quote!(_ => 0,) };
+    let arms = arms.into_iter().map(|(pat, mask)| {
+        let mask = mask_lit(mask);
+        let pat = if pat.len() == 1 {
+            pat.into_iter().collect::<TokenStream>()
+        } else {
+            quote!((#(#pat),*))
+        };
+        quote!(#pat => #mask,)
+    });
+    let bytes: Vec<TokenStream> = (0..depth).map(|i| head_byte(code_at + i)).collect();
+    let scrutinee = if depth == 1 {
+        quote!(#(#bytes)*)
+    } else {
+        quote!((#(#bytes),*))
+    };
+    // One code byte: the masks by table, a class per byte and the distinct masks (SD: three),
+    // where the `match` compiled to a jump table (SD's stream: 132.6 instructions a frame
+    // with it, 131.4 with the table and the one-length route of `Core::fast_with`).
+    let mask = if depth == 1 {
+        let all = shapes.iter().fold(0u128, |a, s| a | s.1);
+        let mut masks: Vec<Vec<u128>> = Vec::new();
+        let class: Vec<u8> = (0..=255u8)
+            .map(|b| {
+                let m = shapes
+                    .iter()
+                    .filter(|s| s.0.first().map_or(true, |&c| c == b))
+                    .fold(0u128, |a, s| a | s.1);
+                index_of(&mut masks, vec![m])
+            })
+            .collect();
+        // One table, the classes then the masks (16 bytes each, low first), so one base
+        // address. Up to 16 masks, a class is its mask's offset and the table is padded past
+        // the largest, so the index is neither scaled nor checked (SD: 127.6 -> 125.6
+        // instructions a frame); more, the class is masked to a power of two.
+        let size = masks.len().next_power_of_two();
+        let (mut table, index) = if size <= 16 {
+            let offsets = class.iter().map(|c| 16 * c).collect();
+            (offsets, quote!(TABLE[b as usize] as usize))
+        } else {
+            let last = usize_lit(size - 1);
+            (class, quote!(16 * (TABLE[b as usize] as usize & #last)))
+        };
+        for m in masks.iter().map(|m| m[0]) {
+            table.extend_from_slice(&m.to_le_bytes());
+        }
+        let end = if size <= 16 {
+            256 + 256 + 16
+        } else {
+            256 + 16 * size
+        };
+        table.resize(end, 0);
+        let (n, table) = (usize_lit(table.len()), Literal::byte_string(&table));
+        let (all, byte) = (mask_lit(all), &bytes[0]);
+        quote! {
+            static TABLE: [u8; #n] = *#table;
+            let mask = match #byte {
+                rt::Some(&b) => {
+                    let i = 256 + #index;
+                    let mut m = [0; 16];
+                    m.copy_from_slice(&TABLE[i..i + 16]);
+                    u128::from_le_bytes(m)
+                }
+                rt::None => #all,
+            };
+        }
+    } else {
+        quote! {
+            let mask: u128 = match #scrutinee {
+                #(#arms)*
+                #other
+            };
+        }
+    };
+    let lens = lengths.iter().map(|l| usize_lit(*l));
+    let ty = type_ident(&p.name);
+    let naks: Vec<TokenStream> = p
+        .responses
+        .iter()
+        .filter(|r| matches!(r.kind, MessageKind::Response(ResponseKind::Nak)))
+        .map(|r| any_of(&ident("Response"), r))
+        .collect();
+    let is_nak = if naks.is_empty() {
+        quote!(false)
+    } else {
+        quote!(matches!(response, #(#naks)|*))
+    };
+    let nak_param = if naks.is_empty() {
+        quote!(_response)
+    } else {
+        quote!(response)
+    };
+    let ck_len = usize_lit(p.framing.trailer_len());
+    let sum = frame_sum(p);
+    let doc_text = format!(
+        "The {} protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.",
+        p.name
+    );
+    let type_doc = doc(&doc_text);
+    let transactions = crate::transactions::protocol_items(p, |c| any_of(&ident("Request"), c));
+    let framing_fns = if p.framing.escaping.is_none() {
+        quote! {
+            fn checksum_ok(frame: &[u8]) -> bool {
+                match frame.len().checked_sub(#ck_len) {
+                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    _ => false,
+                }
+            }
+            #[inline]
+            fn candidates(head: &[u8]) -> rt::Candidates {
+                #start_check
+                #mask
+                rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
+            }
+            #candidate
+            #variable
+        }
+    } else {
+        // Escaped frames are framed by their end byte or their length field alone.
+        quote! {
+            fn checksum_ok(frame: &[u8]) -> bool {
+                let mut plain = [0u8; UNESCAPED_LEN];
+                let un = match rt::unescape_frame(&ESCAPING, frame, &mut plain, #sum) {
+                    rt::Ok(un) => un,
+                    rt::Err(_) => return false,
+                };
+                let rt::Some(frame) = plain.get(..un.len) else {
+                    return false;
+                };
+                match frame.len().checked_sub(#ck_len) {
+                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    _ => false,
+                }
+            }
+            #[inline]
+            fn candidates(_head: &[u8]) -> rt::Candidates {
+                rt::Candidates { requests: 0, responses: 0 }
+            }
+            #[inline]
+            fn variable_candidates(head: &[u8]) -> rt::VarLens {
+                rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN)
+            }
+        }
+    };
+    let lens: Vec<Literal> = if p.framing.escaping.is_some() {
+        Vec::new()
+    } else {
+        lens.collect()
+    };
+    quote! {
+        #type_doc
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+        pub struct #ty;
+        impl rt::Protocol for #ty {
+            type Request = Request;
+            type Response = Response;
+            type Buffer = [u8; MAX_FRAME_LEN];
+            const NAME: &'static str = PROTOCOL;
+            const DOCUMENT: &'static str = DOCUMENT;
+            const DOCUMENT_REVISION: &'static str = DOCUMENT_REVISION;
+            const SPEC_SHA256: &'static str = SPEC_SHA256;
+            const SPEC_YAML: &'static str = SPEC_YAML;
+            const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+            const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+            const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+            const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
+            const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
+            const BAUD: u32 = BAUD;
+            const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
+            const MAX_FRAMES_PER_S: rt::Option<u32> = MAX_FRAMES_PER_S;
+            const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
+            const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
+            const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
+            #transactions
+            #[inline]
+            fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
+                Request::decode(frame)
+            }
+            #[inline]
+            fn decode_response_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<Response>, rt::DecodeError> {
+                Response::decode_for(frame, request)
+            }
+            #[inline]
+            fn answers(request: &Request, response: &Response) -> bool {
+                response.answers(request)
+            }
+            #[inline]
+            fn kind(request: &Request) -> rt::CommandKind {
+                request.kind()
+            }
+            #[inline]
+            fn broadcast(request: &Request) -> rt::Broadcast {
+                request.broadcast()
+            }
+            #[inline]
+            fn reply(request: &Request) -> rt::Reply {
+                request.reply()
+            }
+            fn is_nak(#nak_param: &Response) -> bool {
+                #is_nak
+            }
+            #framing_fns
+        }
+        /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].
+        pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<#ty>;
+        /// What [`StreamDecoder`] finds in a stream.
+        pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    }
+}
+
+/// `candidate`, where the code is one or two bytes, there is more than one frame length and no
+/// variable-length message (otherwise the trait's default, which says "ask `candidates`"): the
+/// frames a whole head's start byte and code fix, as [`candidate_cell`] says it, by table
+/// lookup. One code byte: a table of 256 cells. Two: one table of the first byte's row, the
+/// second byte's class (bytes whose column is the same for every first byte share one) and the
+/// cells, rows and classes deduplicated, so the cells are few. Byte strings (a cell is two
+/// bytes, low first), so a table takes one line in the generated code.
+pub(super) fn emit_candidate(
+    shapes: &[(&[u8], u128)],
+    lengths: &[usize],
+    code_at: usize,
+    start_check: TokenStream,
+) -> TokenStream {
+    let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(0);
+    // With one frame length the stream decoder's mask walk is one test already, which the
+    // lookup does not beat (SD: 132.6 instructions a frame with the mask, 146.1 with it).
+    if lengths.len() < 2 {
+        return quote!();
+    }
+    if !(1..=2).contains(&depth) {
+        return quote!();
+    }
+    let cells = head_cells(shapes, depth, lengths);
+    let bytes = |v: &[u16]| {
+        let b: Vec<u8> = v.iter().flat_map(|c| c.to_le_bytes()).collect();
+        Literal::byte_string(&b)
+    };
+    let (at, next) = (usize_lit(code_at), usize_lit(code_at + 1));
+    let lookup = match depth {
+        1 => {
+            let table = bytes(&cells);
+            quote! {
+                static CELLS: [u8; 512] = *#table;
+                match head.get(#at) {
+                    rt::Some(&b) => {
+                        let i = 2 * b as usize;
+                        rt::Candidate(u16::from_le_bytes([CELLS[i], CELLS[i + 1]]))
+                    }
+                    rt::None => rt::Candidate::MANY,
+                }
+            }
+        }
+        2 => {
+            let grid: Vec<&[u16]> = cells.chunks(256).collect();
+            let mut columns: Vec<Vec<u16>> = Vec::new();
+            let class: Vec<u8> = (0..256)
+                .map(|b| {
+                    let col: Vec<u16> = grid.iter().map(|row| row[b]).collect();
+                    index_of(&mut columns, col)
+                })
+                .collect();
+            let mut rows: Vec<Vec<u16>> = Vec::new();
+            let row: Vec<u8> = grid
+                .iter()
+                .map(|r| {
+                    let mut by_class = vec![0u16; columns.len()];
+                    for (b, &k) in class.iter().enumerate() {
+                        by_class[k as usize] = r[b];
+                    }
+                    index_of(&mut rows, by_class)
+                })
+                .collect();
+            // One table (rows by first byte, classes by second, then the cells), so the
+            // stream decoder's loop loads one address, not three (UB2: 148.4 -> 146.4
+            // instructions a frame). Where every row starts below 256, a row is its first
+            // cell's index and the cells are padded (with MANY) past the largest sum of two
+            // bytes, so the index is neither scaled nor checked (146.4 -> 143.4); else
+            // padded to a power of two, and the index masked.
+            let classes = columns.len();
+            let mut cells = rows.concat();
+            let (row, index) = if (rows.len() - 1) * classes < 256 {
+                cells.resize(511, 0xFFFF);
+                let starts = row.iter().map(|&r| r * classes as u8).collect();
+                (
+                    starts,
+                    quote!(TABLE[a as usize] as usize + TABLE[256 + b as usize] as usize),
+                )
+            } else {
+                let size = cells.len().next_power_of_two();
+                cells.resize(size, 0xFFFF);
+                let (classes, last) = (usize_lit(classes), usize_lit(size - 1));
+                let index = quote!((TABLE[a as usize] as usize * #classes + TABLE[256 + b as usize] as usize) & #last);
+                (row, index)
+            };
+            let mut table = row;
+            table.extend_from_slice(&class);
+            table.extend(cells.iter().flat_map(|c| c.to_le_bytes()));
+            let n = usize_lit(table.len());
+            let table = Literal::byte_string(&table);
+            quote! {
+                static TABLE: [u8; #n] = *#table;
+                match (head.get(#at), head.get(#next)) {
+                    (rt::Some(&a), rt::Some(&b)) => {
+                        let i = #index;
+                        rt::Candidate(u16::from_le_bytes([TABLE[512 + 2 * i], TABLE[513 + 2 * i]]))
+                    }
+                    _ => rt::Candidate::MANY,
+                }
+            }
+        }
+        _ => return quote!(),
+    };
+    quote! {
+        #[inline]
+        fn candidate(head: &[u8]) -> rt::Candidate {
+            #start_check
+            #lookup
+        }
+    }
+}
+
+/// The cell ([`candidate_cell`]) of every value of the `depth` (1 or 2) code bytes, the first
+/// byte most significant: the masks of the shapes whose code is a prefix of those bytes. Each
+/// shape marks its block of cells, so the work is the shapes plus the cells, not their product.
+pub(super) fn head_cells(shapes: &[(&[u8], u128)], depth: usize, lengths: &[usize]) -> Vec<u16> {
+    let mut masks = vec![0u128; 1 << (8 * depth)];
+    for (code, mask) in shapes {
+        let code = &code[..code.len().min(depth)];
+        let block = 1usize << (8 * (depth - code.len()));
+        let start = code.iter().fold(0usize, |a, &b| a << 8 | usize::from(b)) * block;
+        for m in &mut masks[start..start + block] {
+            *m |= mask;
+        }
+    }
+    // Neighbouring cells mostly share their mask (none at all, above all): worked out once.
+    let mut last = (0u128, candidate_cell(0, lengths));
+    masks
+        .into_iter()
+        .map(|mask| {
+            if mask != last.0 {
+                last = (mask, candidate_cell(mask, lengths));
+            }
+            last.1
+        })
+        .collect()
+}
+
+/// The index of `v` in `all`, added if new (at most 256 distinct: one per byte value).
+pub(super) fn index_of<T: PartialEq>(all: &mut Vec<Vec<T>>, v: Vec<T>) -> u8 {
+    let i = all.iter().position(|x| *x == v).unwrap_or_else(|| {
+        all.push(v);
+        all.len() - 1
+    });
+    i as u8
+}
+
+/// A candidate mask (bit i requests, 64 + i responses, of `lengths[i]`, longest first) as the
+/// runtime's `Candidate`: up to two frames, the longer in the low byte, each its length (below
+/// 127) with bit 7 for a response; 0 for none; 0xFFFF for more, or a length of both
+/// directions. The rule of `Candidate::of`.
+pub(super) fn candidate_cell(mask: u128, lengths: &[usize]) -> u16 {
+    let mut slots = 0u16;
+    let mut n = 0;
+    for (i, &len) in lengths.iter().enumerate().take(64) {
+        let (q, r) = (mask >> i & 1 != 0, mask >> (64 + i) & 1 != 0);
+        if q && r || (q || r) && (n == 2 || len == 0 || len >= 127) {
+            return 0xFFFF;
+        }
+        if q || r {
+            slots |= u16::from(len as u8 | if r { 0x80 } else { 0 }) << (8 * n);
+            n += 1;
+        }
+    }
+    slots
+}
+
+/// `variable_candidates`, where a message has a repeated field whose length a length field or
+/// a count field gives (none otherwise: the trait's default, which costs the stream decoder
+/// nothing): per direction, the length the head's field gives for the messages whose code
+/// agrees with it (`rt::var_by_length`, `rt::var_by_count`). `start_check` returns early
+/// where the head's start bytes are not the protocol's.
+pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -> TokenStream {
+    let counted =
+        |m: &&Message| m.is_variable() && m.repeats().all(|(_, _, r)| r.count != Count::ToEnd);
+    let mut any = false;
+    let mut per = Vec::new();
+    for d in [Direction::Request, Direction::Response] {
+        // A message's code and the constants that lead its payload: what tells code-less
+        // messages (and messages sharing a code) apart before their count is read.
+        let code = |m: &Message| {
+            let lead = m.leading_constants();
+            let (at, lead_at) = (usize_lit(m.layout.code), usize_lit(m.layout.payload));
+            let code = m.code.iter().map(|b| hex_u8(*b));
+            let lead = lead.into_iter().map(hex_u8);
+            quote!(rt::Fixed { code_at: #at, code: &[#(#code),*], lead_at: #lead_at, lead: &[#(#lead),*] })
+        };
+        let rule = p.framing.length_rule(d).filter(|r| r.grows);
+        let value = match rule {
+            Some(rule) => {
+                let shapes: Vec<TokenStream> = p
+                    .messages(d)
+                    .iter()
+                    .filter(|m| m.is_variable())
+                    .map(|m| {
+                        let fixed = code(m);
+                        let (lo, hi) = (usize_lit(m.min_len()), usize_lit(m.max_len));
+                        quote!((#fixed, #lo, #hi))
+                    })
+                    .collect();
+                if shapes.is_empty() {
+                    quote!(rt::VarLen::NONE)
+                } else {
+                    let (at, width) = (usize_lit(rule.at), usize_lit(rule.width));
+                    let le = p.byte_order == ByteOrder::Little;
+                    let excess = Literal::i64_unsuffixed(-rule.k);
+                    quote!(rt::var_by_length(head, &[#(#shapes),*], rt::LengthField {
+                        at: #at, width: #width, le: #le, excess: #excess, min: 0, max: 0
+                    }))
+                }
+            }
+            None => {
+                // Messages with several lists or fields after one (`rt::Lists`) need
+                // `var_by_counts`; a direction without them keeps `var_by_count`.
+                let many = p.messages(d).iter().filter(counted).any(has_lists);
+                let shapes: Vec<TokenStream> = p
+                    .messages(d)
+                    .iter()
+                    .filter(counted)
+                    .map(|m| {
+                        let fixed = code(m);
+                        match (many, has_lists(m)) {
+                            (false, _) => {
+                                let r = repeat_const(m);
+                                quote!((#fixed, #r))
+                            }
+                            (true, false) => {
+                                let r = repeat_const(m);
+                                quote!((#fixed, rt::Counted::One(#r)))
+                            }
+                            (true, true) => {
+                                let c = lists_const(m);
+                                quote!((#fixed, rt::Counted::Many(#c)))
+                            }
+                        }
+                    })
+                    .collect();
+                if shapes.is_empty() {
+                    quote!(rt::VarLen::NONE)
+                } else if many {
+                    quote!(rt::var_by_counts(head, &[#(#shapes),*]))
+                } else {
+                    quote!(rt::var_by_count(head, &[#(#shapes),*]))
+                }
+            }
+        };
+        any |= value.to_string() != quote!(rt::VarLen::NONE).to_string();
+        per.push(value);
+    }
+    if !any {
+        return quote!();
+    }
+    let (requests, responses) = (&per[0], &per[1]);
+    quote! {
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
+            #start_check
+            rt::VarLens { requests: #requests, responses: #responses }
+        }
+    }
+}
+
+/// The byte at `at` of the buffered head, if it is there.
+pub(super) fn head_byte(at: usize) -> TokenStream {
+    if at == 0 {
+        return quote!(head.first());
+    }
+    let at = usize_lit(at);
+    quote!(head.get(#at))
+}
+
+/// The candidate masks by code bytes as flat `match` arms over the `depth` code bytes, most
+/// specific first: `None` where a byte is not yet buffered (every shape with the prefix so far
+/// remains), `Some(b)` per next code byte, and `Some(_)` for shapes whose code already ended
+/// (they match whatever follows). `extra` holds the shapes that ended above.
+pub(super) fn flat_trie(
+    shapes: &[(&[u8], u128)],
+    at: usize,
+    depth: usize,
+    prefix: &mut Vec<TokenStream>,
+    extra: u128,
+    arms: &mut Vec<(Vec<TokenStream>, u128)>,
+) {
+    let all = shapes.iter().fold(extra, |a, s| a | s.1);
+    let ended = shapes
+        .iter()
+        .filter(|s| s.0.len() == at)
+        .fold(extra, |a, s| a | s.1);
+    let mut next: Vec<u8> = shapes.iter().filter_map(|s| s.0.get(at).copied()).collect();
+    next.sort_unstable();
+    next.dedup();
+    let rest = |p: &[TokenStream], first: TokenStream| {
+        let mut v = p.to_vec();
+        v.push(first);
+        v.resize(depth, quote!(_));
+        v
+    };
+    if next.is_empty() {
+        arms.push((rest(prefix, quote!(_)), all));
+        return;
+    }
+    arms.push((rest(prefix, quote!(rt::None)), all));
+    for b in next {
+        let below: Vec<(&[u8], u128)> = shapes
+            .iter()
+            .filter(|s| s.0.get(at) == Some(&b))
+            .copied()
+            .collect();
+        let lit = hex_u8(b);
+        prefix.push(quote!(rt::Some(#lit)));
+        flat_trie(&below, at + 1, depth, prefix, ended, arms);
+        prefix.pop();
+    }
+    if ended != 0 {
+        arms.push((rest(prefix, quote!(_)), ended));
+    }
+}
+
+/// A candidate mask as a hex literal, so its bits can be read.
+pub(super) fn mask_lit(v: u128) -> TokenStream {
+    let lit = Literal::u128_unsuffixed(v);
+    format!("{v:#x}").parse().unwrap_or_else(|_| quote!(#lit))
+}

@@ -1,0 +1,220 @@
+use super::*;
+
+pub(super) fn is_identity(u: &Unit) -> bool {
+    u.scale == Rational::ONE && u.offset == Rational::ZERO
+}
+
+pub(super) fn emit_units(ctx: &Ctx) -> TokenStream {
+    let mut out = TokenStream::new();
+    for (i, u) in ctx.p.units.iter().enumerate() {
+        let Some(raw) = ctx.unit_raw[i] else { continue };
+        if is_identity(u) {
+            continue;
+        }
+        let ty = type_ident(&u.name);
+        let r = raw.ident();
+        let sym = &u.symbol;
+        let (sn, sd) = (u.scale.num as f64, u.scale.den as f64);
+        let (on, od) = (u.offset.num as f64, u.offset.den as f64);
+        let d = doc(&format!(
+            "{}\n\nPhysical value = raw × {} {}{}.",
+            if u.doc.is_empty() { &u.name } else { &u.doc },
+            u.scale,
+            if u.offset.num < 0 { "− " } else { "+ " },
+            Rational {
+                num: u.offset.num.abs(),
+                den: u.offset.den
+            }
+        ));
+        let (lo, hi) = raw.limits();
+        let (lo, hi) = (Literal::i64_unsuffixed(lo), Literal::i64_unsuffixed(hi));
+        out.extend(quote! {
+            #d
+            #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+            #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+            #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+            pub struct #ty(pub #r);
+            impl #ty {
+                /// The unit's symbol.
+                pub const SYMBOL: &'static str = #sym;
+                /// The raw wire value.
+                #[inline]
+                pub const fn raw(self) -> #r { self.0 }
+                /// From a raw wire value.
+                #[inline]
+                pub const fn from_raw(raw: #r) -> Self { Self(raw) }
+                /// The physical value, in [`Self::SYMBOL`].
+                #[inline]
+                pub fn value(self) -> f64 {
+                    self.0 as f64 * #sn / #sd + #on / #od
+                }
+                /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
+                pub fn from_value(value: f64) -> rt::Option<Self> {
+                    let raw = rt::round((value - #on / #od) * #sd / #sn)?;
+                    if !(#lo..=#hi).contains(&raw) {
+                        return rt::None;
+                    }
+                    rt::Some(Self(raw as #r))
+                }
+            }
+        });
+    }
+    out
+}
+
+pub(super) fn emit_enums(ctx: &Ctx) -> TokenStream {
+    let mut out = TokenStream::new();
+    for (i, e) in ctx.p.enums.iter().enumerate() {
+        let ty = type_ident(&e.name);
+        let raw = ctx.enum_raw[i];
+        let r = raw.ident();
+        let d = doc(&format!("{}{}\n\nOpen: a value this revision does not list decodes as `Unknown(raw)` and re-encodes unchanged.", e.doc, e.section.as_ref().map(|s| format!(" (§{s})")).unwrap_or_default()));
+        let variants: Vec<TokenStream> = e
+            .values
+            .iter()
+            .map(|v| {
+                let n = type_ident(&v.name);
+                let d = doc(&format!("{} ({})", v.doc, v.value));
+                quote!(#d #n)
+            })
+            .collect();
+        let from: Vec<TokenStream> = e
+            .values
+            .iter()
+            .map(|v| {
+                let n = type_ident(&v.name);
+                let l = lit_u(v.value, raw);
+                quote!(#l => Self::#n)
+            })
+            .collect();
+        let to: Vec<TokenStream> = e
+            .values
+            .iter()
+            .map(|v| {
+                let n = type_ident(&v.name);
+                let l = lit_u(v.value, raw);
+                quote!(Self::#n => #l)
+            })
+            .collect();
+        let names: Vec<TokenStream> = e
+            .values
+            .iter()
+            .map(|v| {
+                let n = type_ident(&v.name);
+                let s = &v.name;
+                quote!(Self::#n => rt::Some(#s))
+            })
+            .collect();
+        out.extend(quote! {
+            #d
+            #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+            #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+            pub enum #ty {
+                #(#variants,)*
+                /// A value this revision of the document does not list.
+                Unknown(#r),
+            }
+            /// Not derived: an arbitrary value goes through `from_raw`, so `Unknown` never holds
+            /// a listed value (which would encode as that value and decode as its variant).
+            #[cfg(feature = "arbitrary")]
+            impl<'a> ::arbitrary::Arbitrary<'a> for #ty {
+                fn arbitrary(u: &mut ::arbitrary::Unstructured<'a>) -> ::arbitrary::Result<Self> {
+                    rt::Ok(Self::from_raw(<#r as ::arbitrary::Arbitrary<'a>>::arbitrary(u)?))
+                }
+                fn size_hint(depth: usize) -> (usize, rt::Option<usize>) {
+                    <#r as ::arbitrary::Arbitrary<'a>>::size_hint(depth)
+                }
+            }
+            impl #ty {
+                /// From a raw wire value; never fails.
+                pub const fn from_raw(raw: #r) -> Self {
+                    match raw {
+                        #(#from,)*
+                        other => Self::Unknown(other),
+                    }
+                }
+                /// The raw wire value.
+                pub const fn raw(self) -> #r {
+                    match self {
+                        #(#to,)*
+                        Self::Unknown(raw) => raw,
+                    }
+                }
+                /// The spec's name of this value, `None` for `Unknown`.
+                pub const fn name(self) -> rt::Option<&'static str> {
+                    match self {
+                        #(#names,)*
+                        Self::Unknown(_) => rt::None,
+                    }
+                }
+            }
+        });
+    }
+    out
+}
+
+pub(super) fn emit_flags(ctx: &Ctx) -> TokenStream {
+    let mut out = TokenStream::new();
+    for (i, f) in ctx.p.flags.iter().enumerate() {
+        let ty = type_ident(&f.name);
+        let raw = ctx.flag_raw[i];
+        let r = raw.ident();
+        let d = doc(&format!(
+            "{}{}",
+            f.doc,
+            f.section
+                .as_ref()
+                .map(|s| format!(" (§{s})"))
+                .unwrap_or_default()
+        ));
+        let consts: Vec<TokenStream> = f
+            .bits
+            .iter()
+            .map(|b| {
+                let n = format_ident!("{}", b.name.to_ascii_uppercase());
+                let d = doc(&format!("Bit {}: {}", b.bit, b.doc));
+                let l = lit_u(1u64 << b.bit, raw);
+                quote!(#d pub const #n: Self = Self(#l);)
+            })
+            .collect();
+        let all: u64 = f.bits.iter().map(|b| 1u64 << b.bit).sum();
+        // Every bit named: none is unnamed (`x & !0xFF` is always 0, which clippy refuses).
+        let unnamed = if raw.bits < 64 && all == (1u64 << raw.bits) - 1 {
+            quote!(0)
+        } else {
+            let all = lit_u(all, raw);
+            quote!(self.0 & !#all)
+        };
+        let names: Vec<TokenStream> = f
+            .bits
+            .iter()
+            .map(|b| {
+                let n = format_ident!("{}", b.name.to_ascii_uppercase());
+                let s = &b.name;
+                quote!((Self::#n, #s))
+            })
+            .collect();
+        let count = f.bits.len();
+        out.extend(quote! {
+            #d
+            #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+            #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+            #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+            pub struct #ty(pub #r);
+            impl #ty {
+                #(#consts)*
+                /// Every named flag, with its spec name.
+                pub const NAMED: [(Self, &'static str); #count] = [#(#names),*];
+                /// The bits no name is given to; a newer firmware may set them.
+                pub const fn unnamed(self) -> #r { #unnamed }
+                /// Whether every bit of `other` is set.
+                pub const fn contains(self, other: Self) -> bool { self.0 & other.0 == other.0 }
+                /// The raw wire value.
+                pub const fn raw(self) -> #r { self.0 }
+                /// From a raw wire value; every bit is kept.
+                pub const fn from_raw(raw: #r) -> Self { Self(raw) }
+            }
+        });
+    }
+    out
+}
