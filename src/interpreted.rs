@@ -267,7 +267,15 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
     };
     match e {
         I::Truncated { needed, found } => DecodeError::Truncated { needed, found },
-        I::BadStart { expected, found } => DecodeError::BadStart { expected, found },
+        I::BadStart {
+            offset,
+            expected,
+            found,
+        } => DecodeError::BadStart {
+            offset,
+            expected,
+            found,
+        },
         I::BadEnd {
             offset,
             expected,

@@ -143,6 +143,18 @@ fn msp_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/msp_v1.yaml", "msp_v1.rs");
 }
 
+/// MSP v1 with start bytes that differ by direction (`$M<`, `$M>`): the command is the code of
+/// a request and of its reply alike; `FRAME.start` is `None` and each direction's `decode`
+/// checks its own start bytes; the stream tables keep the candidates of the directions whose
+/// start bytes agree with the head.
+#[test]
+fn start_by_direction_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/msp_by_direction.yaml",
+        "msp_by_direction.rs",
+    );
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

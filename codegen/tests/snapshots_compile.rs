@@ -16,6 +16,7 @@ include!("snapshots/ubx_like.rs");
 include!("snapshots/maestro_compact.rs");
 include!("snapshots/pelco_p.rs");
 include!("snapshots/msp_v1.rs");
+include!("snapshots/msp_by_direction.rs");
 include!("snapshots/meter_floats.rs");
 include!("snapshots/telemetry_le.rs");
 include!("snapshots/slip_sensor.rs");
@@ -198,6 +199,7 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
     assert_eq!(
         syncy::Request::decode(&bad_sync),
         Err(DecodeError::BadStart {
+            offset: 1,
             expected: 0xFF,
             found: 0xFE
         })
@@ -764,6 +766,47 @@ fn msp_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 4 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<MspV1>(&p, 0x3517, "attitude_reply");
     assert!(found > 50, "only {found} attitude_reply frames found");
+}
+
+/// Start bytes that differ by direction: a request and its reply share a code, and the start
+/// bytes tell them apart in both engines, in `decode` and in a stream of both; a frame with the
+/// other direction's start bytes is refused at the byte that differs.
+#[test]
+fn start_by_direction_snapshot_agrees_with_the_interpreter() {
+    use busspec_runtime::DecodeError;
+    use msp_by_direction::{MspByDirection, Request, Response};
+    let file = "model/tests/fixtures/valid/msp_by_direction.yaml";
+    replay::<MspByDirection>(file);
+    let p = fixture(file);
+    let request = [0x24, 0x4D, 0x3C, 0x00, 0x01, 0x01];
+    let reply = [0x24, 0x4D, 0x3E, 0x03, 0x01, 0x00, 0x01, 0x2C, 0x2F];
+    assert_eq!(
+        Request::decode(&request).map(|d| d.message),
+        Ok(Request::ApiVersion)
+    );
+    let wrong = DecodeError::BadStart {
+        offset: 2,
+        expected: 0x3E,
+        found: 0x3C,
+    };
+    assert_eq!(Response::decode(&request), Err(wrong));
+    assert_eq!(
+        Response::decode(&reply).map(|d| d.message),
+        Ok(Response::ApiVersionReply {
+            protocol_version: 0,
+            api_major: 1,
+            api_minor: 44
+        })
+    );
+    let mut buf = [0u8; 16];
+    let n = Request::ApiVersion.encode(0, &mut buf).unwrap();
+    assert_eq!(&buf[..n], &request);
+    let t = agree::agree::<MspByDirection>(&p);
+    assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
+    for (seed, message) in [(0x24D3, "api_version_reply"), (0x24D4, "api_version")] {
+        let found = examples_stream_alike::<MspByDirection>(&p, seed, message);
+        assert!(found > 30, "only {found} {message} frames found");
+    }
 }
 
 /// Both stream decoders on 100 captures of `p`'s examples with noise between them, each cut

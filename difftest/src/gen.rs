@@ -1417,14 +1417,36 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
 
     let mut framing = String::from("framing:\n  section: \"2\"\n");
     let _ = writeln!(framing, "  layout: [{}]", layout.join(", "));
+    // Start bytes that differ by direction (MSP's `$M<` and `$M>`): one byte of the
+    // response's differs.
+    let response_sync = if !sync.is_empty() && escaping == Escaping::None && g.chance(15) {
+        let mut r = sync.clone();
+        let i = g.rng.usize(0..r.len());
+        r[i] = r[i].wrapping_add(g.rng.u8(1..=255));
+        Some(r)
+    } else {
+        None
+    };
+    let list = |s: &[u8]| {
+        let items: Vec<String> = s.iter().map(|b| format!("{b:#04X}")).collect();
+        format!("[{}]", items.join(", "))
+    };
     match sync.len() {
         0 => {}
+        _ if response_sync.is_some() => {
+            let r = response_sync.as_deref().unwrap_or_default();
+            let _ = writeln!(
+                framing,
+                "  start: {{request: {}, response: {}}}",
+                list(&sync),
+                list(r)
+            );
+        }
         1 => {
             let _ = writeln!(framing, "  start: {:#04X}", sync[0]);
         }
         _ => {
-            let items: Vec<String> = sync.iter().map(|b| format!("{b:#04X}")).collect();
-            let _ = writeln!(framing, "  start: [{}]", items.join(", "));
+            let _ = writeln!(framing, "  start: {}", list(&sync));
         }
     }
     if has_length {
@@ -1607,6 +1629,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(matches!(esc, Some(ir::EscapeKind::Cobs)), "cobs");
     add(f.sync.len() == 1, "start byte");
     add(f.sync.len() > 1, "sync sequence");
+    add(f.sync_by_direction(), "start bytes by direction");
     add(f.length.is_some(), "length field");
     add(
         f.length.as_ref().is_some_and(|l| l.adjust != 0),

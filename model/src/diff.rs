@@ -678,6 +678,17 @@ impl<'a> Differ<'a> {
                 format!("sync bytes: {} → {}", bytes(&o.sync), bytes(&n.sync)),
             );
         }
+        if o.response_sync != n.response_sync && o.sync == n.sync {
+            self.wire(
+                "framing_changed",
+                "framing.start.response",
+                format!(
+                    "a response's sync bytes: {} → {}",
+                    bytes(&o.response_sync),
+                    bytes(&n.response_sync)
+                ),
+            );
+        }
         if o.end != n.end {
             self.wire(
                 "framing_changed",

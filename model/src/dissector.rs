@@ -420,9 +420,10 @@ fn protocol(p: &Protocol) -> String {
     );
     let _ = writeln!(
         s,
-        "  order = {}, sync = {}, ends = {}, end_first = {}, trailer = {},",
+        "  order = {}, sync = {}, response_sync = {}, ends = {}, end_first = {}, trailer = {},",
         order(p.byte_order),
         bytes(&f.sync),
+        bytes(&f.response_sync),
         bytes(&f.end),
         lua_bool(f.end_first()),
         f.trailer_len()

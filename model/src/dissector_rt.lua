@@ -461,7 +461,8 @@ end
 local function structural(P, m, b, n)
   if n < m.len or n > m.max_len then return false end
   if m.start_at then
-    for i, s in ipairs(P.sync) do
+    local sync = (m.dir == "response") and P.response_sync or P.sync
+    for i, s in ipairs(sync) do
       if b[m.start_at + i - 1] ~= s then return false end
     end
   end

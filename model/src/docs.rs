@@ -387,15 +387,24 @@ pub fn render(p: &Protocol, source: &str) -> String {
     o.push_str("| Part | Bytes | Content |\n|---|---|---|\n");
     for part in &f.layout {
         let row = match part {
-            Part::Start => (
-                "start".to_owned(),
-                f.sync.len().to_string(),
-                f.sync
-                    .iter()
-                    .map(|b| format!("0x{b:02X}"))
-                    .collect::<Vec<_>>()
-                    .join(" "),
-            ),
+            Part::Start => {
+                let hex = |s: &[u8]| {
+                    s.iter()
+                        .map(|b| format!("0x{b:02X}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                };
+                let content = if f.sync_by_direction() {
+                    format!(
+                        "requests {}, responses {}",
+                        hex(&f.sync),
+                        hex(&f.response_sync)
+                    )
+                } else {
+                    hex(&f.sync)
+                };
+                ("start".to_owned(), f.sync.len().to_string(), content)
+            }
             Part::Length => {
                 let l = f.length.as_ref();
                 let counts: Vec<String> = l

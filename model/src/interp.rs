@@ -66,11 +66,9 @@ impl Frame<'_> {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum DecodeError {
     /// Fewer bytes than the shortest frame that could start like this one.
-    Truncated {
-        needed: usize,
-        found: usize,
-    },
+    Truncated { needed: usize, found: usize },
     BadStart {
+        offset: usize,
         expected: u8,
         found: u8,
     },
@@ -113,15 +111,10 @@ pub enum DecodeError {
         found: i64,
     },
     /// Several messages fit the bytes; only the request they answer can tell them apart.
-    Ambiguous {
-        candidates: Vec<String>,
-    },
+    Ambiguous { candidates: Vec<String> },
     /// More bytes than the protocol's longest frame (of the directions decoded), refused for
     /// its length before anything else.
-    TooLong {
-        max: usize,
-        found: usize,
-    },
+    TooLong { max: usize, found: usize },
     /// A field's raw value lies outside its spec `range` and is none of its special values.
     OutOfRange {
         message: String,
@@ -181,16 +174,10 @@ pub enum DecodeError {
         found: i64,
     },
     /// A reply the request does not get.
-    NotAnAnswer {
-        message: String,
-        request: String,
-    },
+    NotAnAnswer { message: String, request: String },
     /// The escaped bytes break the protocol's escaping (`framing.escaping`); `offset` counts
     /// the bytes as they travel.
-    BadEscape {
-        offset: usize,
-        fault: EscapeFault,
-    },
+    BadEscape { offset: usize, fault: EscapeFault },
 }
 
 /// What is wrong with escaped bytes ([`DecodeError::BadEscape`]); the runtime's
@@ -258,8 +245,8 @@ impl fmt::Display for DecodeError {
             DecodeError::Truncated { needed, found } => {
                 write!(f, "truncated frame: need at least {needed} bytes, found {found}")
             }
-            DecodeError::BadStart { expected, found } => {
-                write!(f, "bad start byte at offset 0: expected 0x{expected:02X}, found 0x{found:02X}")
+            DecodeError::BadStart { offset, expected, found } => {
+                write!(f, "bad start byte at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}")
             }
             DecodeError::BadEnd { offset, expected, found } => {
                 write!(f, "bad end byte at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}")
@@ -870,7 +857,24 @@ fn decode_plain<'p>(
         });
     }
     let first = p.framing.head(min_code);
-    check_sync(p, first.start, wire)?;
+    // Start bytes that differ by direction tell the frame's direction.
+    let (sync0, sync1) = match directions {
+        [a, b] if p.framing.sync_by_direction() => {
+            let (x, y) = (
+                check_sync(p, *a, first.start, wire),
+                check_sync(p, *b, first.start, wire),
+            );
+            if let (Err(e), Err(_)) = (&x, &y) {
+                return Err(e.clone());
+            }
+            (x.is_ok(), y.is_ok())
+        }
+        _ => {
+            let d = directions.first().copied().unwrap_or(Direction::Request);
+            check_sync(p, d, first.start, wire)?;
+            (true, true)
+        }
+    };
     if wire.len() < shortest.max(first.len) {
         return Err(DecodeError::Truncated {
             needed: shortest,
@@ -898,6 +902,7 @@ fn decode_plain<'p>(
             (true, true)
         }
     };
+    let (keep0, keep1) = (keep0 && sync0, keep1 && sync1);
     let kept = |d: Direction| {
         if Some(&d) == directions.first() {
             keep0
@@ -1182,7 +1187,7 @@ fn decode_as_unescaped<'p>(
     let m = p.message(r);
     let len = p.frame_len(m);
     let o = m.layout;
-    check_sync(p, o.start, wire)?;
+    check_sync(p, r.direction, o.start, wire)?;
     if wire.len() < len {
         return Err(DecodeError::Truncated {
             needed: len,
@@ -1278,15 +1283,24 @@ fn check_end(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
     Ok(())
 }
 
-/// Refuses a frame whose start bytes are not the sync sequence (from `at`).
-fn check_sync(p: &Protocol, at: Option<usize>, wire: &[u8]) -> Result<(), DecodeError> {
+/// Refuses a frame whose start bytes are not the sync sequence of direction `d` (from `at`).
+fn check_sync(
+    p: &Protocol,
+    d: Direction,
+    at: Option<usize>,
+    wire: &[u8],
+) -> Result<(), DecodeError> {
     let Some(at) = at else {
         return Ok(());
     };
-    for (i, &expected) in p.framing.sync.iter().enumerate() {
+    for (i, &expected) in p.framing.sync_of(d).iter().enumerate() {
         if let Some(&found) = wire.get(at + i) {
             if found != expected {
-                return Err(DecodeError::BadStart { expected, found });
+                return Err(DecodeError::BadStart {
+                    offset: at + i,
+                    expected,
+                    found,
+                });
             }
         }
     }
@@ -2075,7 +2089,7 @@ pub fn encode(
         .sum();
     let mut out = vec![0u8; p.frame_len(m) + tail];
     if let Some(at) = o.start {
-        for (i, s) in p.framing.sync.iter().enumerate() {
+        for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
             out[at + i] = *s;
         }
     }

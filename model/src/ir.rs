@@ -62,10 +62,13 @@ pub struct Serial {
 pub struct Framing {
     pub section: Option<String>,
     pub layout: Vec<Part>,
-    /// The first start byte (the only one where the protocol has one).
+    /// The first start byte of a request (the only one where the protocol has one).
     pub start: Option<u8>,
-    /// Every start byte, in order (empty without `start`): `FF FF` for Dynamixel.
+    /// Every start byte of a request, in order (empty without `start`): `FF FF` for Dynamixel.
     pub sync: Vec<u8>,
+    /// Every start byte of a response: the same as [`Self::sync`] unless the protocol's start
+    /// bytes differ by direction (MSP: `$M<` and `$M>`), then as many; see [`Self::sync_of`].
+    pub response_sync: Vec<u8>,
     /// The bytes that end every frame after its checksum (or just before it, where the layout
     /// says so: [`Framing::end_first`]), in order (empty without `end`): `16` for an M-Bus
     /// frame, `AF` (before the checksum) for Pelco-P.
@@ -195,6 +198,19 @@ impl Framing {
     /// the longest.
     pub fn head(&self, code_len: usize) -> FrameLayout {
         self.heads[code_len.min(self.heads.len() - 1)]
+    }
+
+    /// The start bytes of a frame of direction `d`.
+    pub fn sync_of(&self, d: Direction) -> &[u8] {
+        match d {
+            Direction::Request => &self.sync,
+            Direction::Response => &self.response_sync,
+        }
+    }
+
+    /// Whether the start bytes tell a request from a response (they differ by direction).
+    pub fn sync_by_direction(&self) -> bool {
+        self.sync != self.response_sync
     }
 
     /// Bytes after the payload: the checksum and the end bytes.

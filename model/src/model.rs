@@ -175,6 +175,40 @@ impl StartBytes {
     }
 }
 
+/// `framing.start`: the start bytes every frame begins with, or (MSP's `$M<` and `$M>`) the
+/// bytes of each direction, of the same length.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Start {
+    Same(StartBytes),
+    ByDirection(DirectionStart),
+}
+
+/// A mapping is the start bytes by direction (so a misspelt key is named), anything else the
+/// bytes of both.
+impl<'de> Deserialize<'de> for Start {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let v = serde_yaml::Value::deserialize(d)?;
+        if v.is_mapping() {
+            DirectionStart::deserialize(v)
+                .map(Start::ByDirection)
+                .map_err(D::Error::custom)
+        } else {
+            StartBytes::deserialize(v)
+                .map(Start::Same)
+                .map_err(|_| D::Error::custom("expected a start byte, a list of start bytes, or `{request: [...], response: [...]}`"))
+        }
+    }
+}
+
+/// `framing.start: {request: ..., response: ...}`.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionStart {
+    pub request: StartBytes,
+    pub response: StartBytes,
+}
+
 /// A length field in the framing: its width and which parts of the frame it counts.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -195,7 +229,7 @@ pub struct Framing {
     pub section: Option<String>,
     pub layout: Vec<Part>,
     #[serde(default)]
-    pub start: Option<StartBytes>,
+    pub start: Option<Start>,
     #[serde(default)]
     pub length: Option<LengthField>,
     /// The bytes that end every frame, after the checksum; required iff the layout has `end`.

@@ -811,7 +811,8 @@ impl<'p> StreamDecoder<'p> {
     fn agrees(&self, s: &Shape) -> bool {
         let buf = &self.buf;
         if let Some(at) = s.at.start {
-            for (i, &start) in self.p.framing.sync.iter().enumerate() {
+            let sync = self.p.framing.sync_of(s.message.direction);
+            for (i, &start) in sync.iter().enumerate() {
                 if buf.get(at + i).is_some_and(|&b| b != start) {
                     return false;
                 }

@@ -873,19 +873,53 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         _ => Vec::new(),
     };
     let mut sync = Vec::new();
+    let mut response_sync = Vec::new();
     let start = match (count(Part::Start), &f.start) {
         (1, Some(s)) => {
-            let bytes = s.bytes();
-            if !(1..=4).contains(&bytes.len()) {
-                sink.error(
-                    "framing.start",
-                    format!("a sync sequence is 1 to 4 bytes, found {}", bytes.len()),
-                );
+            let sequence = |s: &model::StartBytes, path: &str, sink: &mut Sink| -> Vec<u8> {
+                let bytes = s.bytes();
+                if !(1..=4).contains(&bytes.len()) {
+                    sink.error(
+                        path,
+                        format!("a sync sequence is 1 to 4 bytes, found {}", bytes.len()),
+                    );
+                }
+                bytes
+                    .iter()
+                    .map(|&b| u8_of(b, path, "start byte", sink))
+                    .collect()
+            };
+            match s {
+                model::Start::Same(s) => {
+                    sync = sequence(s, "framing.start", sink);
+                    response_sync = sync.clone();
+                }
+                model::Start::ByDirection(d) => {
+                    sync = sequence(&d.request, "framing.start.request", sink);
+                    response_sync = sequence(&d.response, "framing.start.response", sink);
+                    if sync.len() != response_sync.len() {
+                        sink.error(
+                            "framing.start",
+                            format!(
+                                "the start bytes of both directions must be as many (every offset after them is shared), found {} for requests and {} for responses",
+                                sync.len(),
+                                response_sync.len()
+                            ),
+                        );
+                    } else if sync == response_sync {
+                        sink.error(
+                            "framing.start",
+                            "the start bytes of both directions are the same: give them once (`start: [...]`)",
+                        );
+                    }
+                    if f.escaping.is_some() {
+                        sink.error(
+                            "framing.start",
+                            "start bytes that differ by direction are not expressible with `escaping` yet",
+                        );
+                    }
+                }
             }
-            sync = bytes
-                .iter()
-                .map(|&b| u8_of(b, "framing.start", "start byte", sink))
-                .collect();
             sync.first().copied()
         }
         (1, None) => {
@@ -1059,6 +1093,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         layout: f.layout.clone(),
         start,
         sync,
+        response_sync,
         end,
         length,
         address: Address {

@@ -192,6 +192,27 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "sync_too_long",
         &[("framing.start", "a sync sequence is 1 to 4 bytes, found 5")],
     ),
+    // ---- start bytes by direction (made from valid/msp_by_direction.yaml)
+    (
+        "start_by_direction_lengths_differ",
+        &[("framing.start", "the start bytes of both directions must be as many (every offset after them is shared), found 3 for requests and 2 for responses")],
+    ),
+    (
+        "start_by_direction_same",
+        &[("framing.start", "the start bytes of both directions are the same: give them once")],
+    ),
+    (
+        "start_by_direction_escaped",
+        &[("framing.start", "start bytes that differ by direction are not expressible with `escaping` yet")],
+    ),
+    (
+        "start_by_direction_misspelt",
+        &[("framing.start", "unknown field `reply`, expected `request` or `response`")],
+    ),
+    (
+        "start_not_bytes",
+        &[("framing.start", "expected a start byte, a list of start bytes, or `{request: [...], response: [...]}`")],
+    ),
     (
         "covers_from_payload",
         &[("framing.checksum.covers_from", "cannot cover from `payload`")],

@@ -157,6 +157,7 @@ fn a_lying_length_field_or_count_is_refused_with_its_offset() {
     assert_eq!(
         interp::decode(&p, None, None, &hex("A5 5B 01 05 01 00 10 02 17")),
         Err(DecodeError::BadStart {
+            offset: 1,
             expected: 0x5A,
             found: 0x5B
         })

@@ -287,7 +287,11 @@ pub fn check_frame(
     if let Some((at, expected)) = f.start {
         if let Some(&found) = frame.get(at) {
             if found != expected {
-                return Err(DecodeError::BadStart { expected, found });
+                return Err(DecodeError::BadStart {
+                    offset: at,
+                    expected,
+                    found,
+                });
             }
         }
     }
@@ -1206,7 +1210,11 @@ pub fn check_sync(frame: &[u8], max: usize, at: usize, sync: &[u8]) -> Result<()
     for (i, &expected) in sync.iter().enumerate() {
         if let Some(&found) = frame.get(at + i) {
             if found != expected {
-                return Err(DecodeError::BadStart { expected, found });
+                return Err(DecodeError::BadStart {
+                    offset: at + i,
+                    expected,
+                    found,
+                });
             }
         }
     }
@@ -1468,6 +1476,7 @@ mod lang_tests {
         assert_eq!(
             check_sync(&[0xFF, 0x01], 9, 0, &[0xFF, 0xFF]),
             Err(DecodeError::BadStart {
+                offset: 1,
                 expected: 0xFF,
                 found: 0x01
             })

@@ -362,8 +362,12 @@ pub fn field_text<const N: usize>(
 pub enum DecodeError {
     /// Fewer bytes than the shortest frame that could start like this one.
     Truncated { needed: usize, found: usize },
-    /// The first byte is not the protocol's start byte.
-    BadStart { expected: u8, found: u8 },
+    /// A start byte (at `offset`, within the sync sequence) is not the protocol's.
+    BadStart {
+        offset: usize,
+        expected: u8,
+        found: u8,
+    },
     /// A byte of the end bytes after the checksum (at `offset`) is not the protocol's.
     BadEnd {
         offset: usize,
@@ -654,10 +658,14 @@ impl fmt::Display for DecodeError {
                     "bad end byte at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
                 )
             }
-            DecodeError::BadStart { expected, found } => {
+            DecodeError::BadStart {
+                offset,
+                expected,
+                found,
+            } => {
                 write!(
                     f,
-                    "bad start byte at offset 0: expected 0x{expected:02X}, found 0x{found:02X}"
+                    "bad start byte at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
                 )
             }
             DecodeError::ChecksumMismatch {

@@ -201,6 +201,7 @@ fn check(frame: &[u8]) -> Result<u8, DecodeError> {
     }
     if let Some(&b) = frame.first().filter(|&&b| b != 0x7E) {
         return Err(DecodeError::BadStart {
+            offset: 0,
             expected: 0x7E,
             found: b,
         });

@@ -31,11 +31,11 @@ pub fn random_frame(p: &Protocol, m: &Message, rng: &mut fastrand::Rng) -> Vec<u
     let len = p.frame_len(m);
     let o = m.layout;
     let mut f: Vec<u8> = (0..len).map(|_| rng.u8(..)).collect();
-    if let (Some(at), Some(s)) = (o.start, p.framing.start) {
-        f[at] = s;
-        // A sync sequence, whole (Dynamixel's FF FF).
-        if let Some(to) = f.get_mut(at..at + p.framing.sync.len()) {
-            to.copy_from_slice(&p.framing.sync);
+    if let Some(at) = o.start {
+        // A sync sequence, whole (Dynamixel's FF FF), the message's direction's.
+        let sync = p.framing.sync_of(m.direction);
+        if let Some(to) = f.get_mut(at..at + sync.len()) {
+            to.copy_from_slice(sync);
         }
     }
     f[o.code..o.code + m.code.len()].copy_from_slice(&m.code);

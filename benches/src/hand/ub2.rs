@@ -31,6 +31,7 @@ fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeE
     if let Some(&found) = frame.first() {
         if found != START {
             return Err(DecodeError::BadStart {
+                offset: 0,
                 expected: START,
                 found,
             });

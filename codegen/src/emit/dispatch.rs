@@ -160,9 +160,11 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
         quote!()
     };
     let sum = frame_sum(p);
-    // A sync sequence's first byte is `FRAME.start`'s; the others are checked first.
-    let sync = match (p.framing.head(1).start, p.framing.sync.as_slice()) {
-        (Some(at), sync @ [_, _, ..]) => {
+    // A sync sequence's first byte is `FRAME.start`'s; the others are checked first. Start
+    // bytes that differ by direction are all checked here (`FRAME.start` is `None`).
+    let by_direction = p.framing.sync_by_direction();
+    let sync = match (p.framing.head(1).start, p.framing.sync_of(d)) {
+        (Some(at), sync) if sync.len() > 1 || (by_direction && !sync.is_empty()) => {
             let at = usize_lit(at);
             let bytes = sync.iter().map(|b| hex_u8(*b));
             quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)

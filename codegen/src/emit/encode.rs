@@ -111,7 +111,7 @@ pub(super) fn emit_encode_arm(
         known[at] = Some(hex_u8(b));
     };
     if let Some(at) = o.start {
-        for (i, s) in p.framing.sync.iter().enumerate() {
+        for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
             set(at + i, *s);
         }
     }

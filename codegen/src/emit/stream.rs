@@ -34,7 +34,29 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     }
     let first = p.framing.head(1);
     let code_at = first.code;
+    // Start bytes that differ by direction say which direction's messages the head may start.
+    let by_direction = p.framing.sync_by_direction();
+    let agree = |at: usize, sync: &[u8]| {
+        let each = sync.iter().enumerate().map(|(i, s)| {
+            let (at, s) = (head_byte(at + i), hex_u8(*s));
+            quote!(#at.map_or(true, |&b| b == #s))
+        });
+        quote!(#(#each)&&*)
+    };
     let start_check = |none: TokenStream| match first.start {
+        Some(at) if by_direction => {
+            let (requests, responses) = (
+                agree(at, &p.framing.sync),
+                agree(at, &p.framing.response_sync),
+            );
+            quote! {
+                let requests_agree = #requests;
+                let responses_agree = #responses;
+                if !requests_agree && !responses_agree {
+                    return #none;
+                }
+            }
+        }
         Some(at) => {
             let checks = p.framing.sync.iter().enumerate().map(|(i, s)| {
                 let (at, s) = (head_byte(at + i), hex_u8(*s));
@@ -51,7 +73,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     let variable = emit_variable_candidates(p, start_check(quote!(rt::VarLens::NONE)));
     // Not where a variable-length message exists: the route would ask `variable_candidates`
     // too, and the mask's route pays for both (Modbus 1254.6 -> 1280.5 a frame with it).
-    let candidate = if variable.is_empty() {
+    let candidate = if variable.is_empty() && !by_direction {
         emit_candidate(
             &shapes,
             &lengths,
@@ -164,6 +186,15 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     } else {
         quote!(response)
     };
+    let by_sync = if by_direction && first.start.is_some() {
+        quote! {
+            let keep: u128 = (if requests_agree { u64::MAX as u128 } else { 0 })
+                | (if responses_agree { (u64::MAX as u128) << 64 } else { 0 });
+            let mask = mask & keep;
+        }
+    } else {
+        quote!()
+    };
     let ck_len = usize_lit(p.framing.trailer_len());
     let sum = frame_sum(p);
     let doc_text = format!(
@@ -184,6 +215,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             fn candidates(head: &[u8]) -> rt::Candidates {
                 #start_check
                 #mask
+                #by_sync
                 rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }
             #candidate
@@ -534,6 +566,21 @@ pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -
         return quote!();
     }
     let (requests, responses) = (&per[0], &per[1]);
+    // Start bytes by direction: a direction whose start bytes the head does not have has no
+    // candidate (`start_check`'s early return reads both flags).
+    let by_direction = p.framing.sync_by_direction() && p.framing.head(1).start.is_some();
+    let none = quote!(rt::VarLen::NONE).to_string();
+    let only_if = |agree: TokenStream, v: &TokenStream| {
+        if by_direction && v.to_string() != none {
+            quote!(if #agree { #v } else { rt::VarLen::NONE })
+        } else {
+            quote!(#v)
+        }
+    };
+    let (requests, responses) = (
+        only_if(quote!(requests_agree), requests),
+        only_if(quote!(responses_agree), responses),
+    );
     quote! {
         fn variable_candidates(head: &[u8]) -> rt::VarLens {
             #start_check

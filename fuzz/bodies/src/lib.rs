@@ -271,8 +271,12 @@ fn check_error(e: &DecodeError, len: usize) {
             assert_eq!(found, len, "{e}");
             assert!(needed > found, "{e}");
         }
-        DecodeError::BadStart { expected, found } => {
-            assert!(len > 0 && expected != found, "{e}")
+        DecodeError::BadStart {
+            offset,
+            expected,
+            found,
+        } => {
+            assert!(offset < len && expected != found, "{e}")
         }
         DecodeError::BadEnd {
             offset,

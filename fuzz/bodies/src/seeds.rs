@@ -192,7 +192,7 @@ pub fn dictionary(p: &Protocol) -> String {
             let len = (o.code + m.code.len()).max(o.address.map_or(0, |a| a + 1));
             let mut prefix = vec![0u8; len];
             if let Some(at) = o.start {
-                for (i, s) in p.framing.sync.iter().enumerate() {
+                for (i, s) in p.framing.sync_of(d).iter().enumerate() {
                     prefix[at + i] = *s;
                 }
             }
