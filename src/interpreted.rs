@@ -326,6 +326,17 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         },
+        I::NotBcd {
+            message,
+            field,
+            offset,
+            found,
+        } => DecodeError::NotBcd {
+            message: keep(&message),
+            field: keep(&field),
+            offset,
+            found,
+        },
         I::NotEqual {
             message,
             field,

@@ -155,6 +155,13 @@ fn start_by_direction_spec_generates_its_snapshot() {
     );
 }
 
+/// BCD fields (`encoding: bcd`): decode checks each digit (`rt::bcd`) and reads the decimal
+/// number, encode writes its digits (`rt::to_bcd`) after the range check.
+#[test]
+fn bcd_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/bcd_meter.yaml", "bcd_meter.rs");
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

@@ -158,6 +158,7 @@ fn class(g: &DecodeError) -> &'static str {
         DecodeError::LengthMismatch { .. } => "length field",
         DecodeError::InvalidValue { .. }
         | DecodeError::NotEqual { .. }
+        | DecodeError::NotBcd { .. }
         | DecodeError::NotFollowing { .. } => "invalid value",
         DecodeError::Ambiguous { .. } => "ambiguous",
         DecodeError::NotAReply { .. } => "not a reply",
@@ -183,6 +184,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             InterpError::LengthMismatch { .. } => "length field",
             InterpError::ConstantMismatch { .. }
             | InterpError::NotEqual { .. }
+            | InterpError::NotBcd { .. }
             | InterpError::NotFollowing { .. } => "invalid value",
             InterpError::Ambiguous { .. } => "ambiguous",
             InterpError::NotAnAnswer { .. } => "not a reply",

@@ -130,7 +130,7 @@ fn code_text(code: &[u8]) -> String {
 /// followed.
 /// A field another may repeat (`equals`): one value, neither text, wide nor a list.
 fn equals_target(f: &Gf) -> bool {
-    f.ty != "ascii" && !is_wide(f.ty) && f.repeat_tail == 0
+    f.ty != "ascii" && !is_wide(f.ty) && f.repeat_tail == 0 && !f.yaml.contains("encoding: bcd")
 }
 
 fn is_wide(ty: &str) -> bool {
@@ -179,6 +179,9 @@ impl G {
         };
         if self.chance(10) {
             return self.wide_field(name);
+        }
+        if self.chance(6) {
+            return self.bcd_field(name);
         }
         match self.rng.u8(..100) {
             // A plain number: unit, maybe a range and special values.
@@ -336,6 +339,34 @@ impl G {
                 g.countable = true;
                 g
             }
+        }
+    }
+
+    /// A BCD number (`encoding: bcd`) of 1 to 4 bytes: any unit, maybe a range within its
+    /// digits and its words swapped.
+    fn bcd_field(&mut self, name: String) -> Gf {
+        let &(ty, width) = self.pick(&[("u8", 1), ("u16", 2), ("u24", 3), ("u32", 4)]);
+        let most = 10i64.pow(2 * width as u32) - 1;
+        let mut y = format!(
+            "{{name: {name}, type: {ty}, encoding: bcd, unit: {}",
+            self.unit()
+        );
+        if width == 4 && self.chance(30) {
+            y.push_str(", word_order: swapped");
+        }
+        if self.chance(50) {
+            let r = self.range_yaml(0, most);
+            let _ = write!(y, ", {r}");
+        }
+        y.push('}');
+        Gf {
+            name,
+            ty,
+            width,
+            yaml: y,
+            plain: false,
+            countable: false,
+            repeat_tail: 0,
         }
     }
 
@@ -1704,6 +1735,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     add(fields.iter().any(|x| x.width == 3), "24-bit");
     add(fields.iter().any(|x| x.ty == FieldType::F32), "f32");
+    add(fields.iter().any(|x| x.bcd), "bcd");
     add(fields.iter().any(|x| x.ty == FieldType::F64), "f64");
     add(fields.iter().any(|x| x.ty == FieldType::U64), "u64");
     add(fields.iter().any(|x| x.ty == FieldType::I64), "i64");

@@ -1302,6 +1302,14 @@ impl<'a> Differ<'a> {
                 format!("field {what}: {} → {}", type_name(f), type_name(g)),
             );
         }
+        if f.bcd != g.bcd {
+            let show = |bcd: bool| if bcd { "bcd" } else { "binary" };
+            self.wire(
+                "field_encoding_changed",
+                path.to_owned(),
+                format!("field {what}: encoding {} → {}", show(f.bcd), show(g.bcd)),
+            );
+        }
         if f.word_swapped != g.word_swapped {
             let show = |swapped: bool| if swapped { "swapped" } else { "normal" };
             self.wire(

@@ -208,6 +208,9 @@ fn field(f: &Field) -> String {
         o.push_str(", wide = true, bits = {} }");
         return o;
     }
+    if f.bcd {
+        o.push_str(", bcd = true");
+    }
     if let Some(u) = f.unit {
         let _ = write!(o, ", unit = {}", u + 1);
     }

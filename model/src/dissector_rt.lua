@@ -332,10 +332,28 @@ local function sign_extend(v, bits)
   return v
 end
 
--- A whole field's value: unsigned as read, and as its type reads it.
+-- The number binary-coded decimal `u` stands for; nil where a digit is above 9.
+local function from_bcd(u)
+  local v, scale = 0, 1
+  while u > 0 do
+    local d = u % 16
+    if d > 9 then return nil end
+    v = v + d * scale
+    scale = scale * 10
+    u = floor(u / 16)
+  end
+  return v
+end
+
+-- A whole field's value: unsigned as read, and as its type reads it (a BCD field's decimal
+-- number, both).
 local function int_of(f, b, at)
   if f.ascii then return 0, 0 end
   local u = read_uint(b, at, f.width, f.order)
+  if f.bcd then
+    local v = from_bcd(u) or 0
+    return v, v
+  end
   if f.signed then return u, sign_extend(u, 8 * f.width) end
   return u, u
 end
@@ -527,6 +545,7 @@ local function misfit(P, m, b, n, soft)
         if range then soft[#soft + 1] = out_of_range(m, f.name, at + (k - 1) * step, v, range) end
       end
     elseif not f.ascii and not f.wide then
+      if f.bcd and from_bcd(read_uint(b, at, f.width, f.order)) == nil then return true end
       local u, v = int_of(f, b, at)
       if f.constant and u ~= f.constant then return true end
       if f.follows then

@@ -38,7 +38,7 @@ fn type_name(f: &Field) -> String {
 }
 
 fn scalar_type_name(f: &Field) -> String {
-    match f.ty {
+    let base: String = match f.ty {
         FieldType::Ascii => format!("ascii[{}]", f.width),
         FieldType::U8 => "u8".into(),
         FieldType::U16 => "u16".into(),
@@ -53,6 +53,11 @@ fn scalar_type_name(f: &Field) -> String {
         FieldType::F32 => "f32".into(),
         FieldType::F64 => "f64".into(),
         FieldType::Bit => "bit".into(),
+    };
+    if f.bcd {
+        format!("{base} BCD")
+    } else {
+        base
     }
 }
 

@@ -102,6 +102,13 @@ pub enum DecodeError {
         expected: u64,
         found: u64,
     },
+    /// A BCD field holds a nibble above 9: its bytes as read, `found`.
+    NotBcd {
+        message: String,
+        field: String,
+        offset: usize,
+        found: u64,
+    },
     NotEqual {
         message: String,
         field: String,
@@ -275,6 +282,10 @@ impl fmt::Display for DecodeError {
             DecodeError::ConstantMismatch { message, field, offset, expected, found } => write!(
                 f,
                 "invalid value for {message}.{field} at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
+            ),
+            DecodeError::NotBcd { message, field, offset, found } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: 0x{found:02X} is not BCD (a digit above 9)"
             ),
             DecodeError::NotEqual { message, field, offset, other, expected, found } => write!(
                 f,
@@ -1546,6 +1557,11 @@ enum Misfit {
     Broadcast {
         address: u8,
     },
+    NotBcd {
+        field: usize,
+        offset: usize,
+        found: u64,
+    },
     Constant {
         field: usize,
         bit: Option<usize>,
@@ -1605,6 +1621,16 @@ impl Misfit {
                 field: name(field, bit),
                 offset,
                 expected,
+                found,
+            },
+            Misfit::NotBcd {
+                field,
+                offset,
+                found,
+            } => DecodeError::NotBcd {
+                message: m.name.clone(),
+                field: name(field, None),
+                offset,
                 found,
             },
             Misfit::NotEqual {
@@ -1667,6 +1693,11 @@ fn int_of(f: &Field, payload: &[u8], at: usize) -> (u64, i64) {
     }
     let bytes = payload.get(at..at + f.width).unwrap_or(&[]);
     let unsigned = read_number(f, bytes);
+    if f.bcd {
+        // Checked by `misfit` before any value is taken.
+        let v = crate::number::from_bcd(unsigned).unwrap_or(0);
+        return (v, v as i64);
+    }
     let v = if f.signed {
         sign_extend(unsigned, 8 * f.width as u32)
     } else {
@@ -1726,6 +1757,17 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             continue;
         }
         let at = o.payload + pos(i);
+        if f.bcd {
+            let bytes = payload.get(pos(i)..pos(i) + f.width).unwrap_or(&[]);
+            let found = read_number(f, bytes);
+            if crate::number::from_bcd(found).is_none() {
+                return Some(Misfit::NotBcd {
+                    field: i,
+                    offset: at,
+                    found,
+                });
+            }
+        }
         let (unsigned, v) = int_of(f, payload, pos(i));
         if let Some(c) = f.constant {
             if unsigned != c {
@@ -2265,8 +2307,15 @@ pub fn encode(
                     (1u64 << bits) - 1
                 }
         };
-        write_number(f, word, slot);
         let bits = 8 * f.width as u32;
+        if f.bcd {
+            // In range (0..=10^(2 × width) - 1, checked above): its digits, and its value as
+            // decode reads it.
+            write_number(f, crate::number::to_bcd(word), slot);
+            ints.push(word as i64);
+            continue;
+        }
+        write_number(f, word, slot);
         ints.push(if f.signed {
             sign_extend(word, bits)
         } else {

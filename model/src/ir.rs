@@ -741,6 +741,10 @@ pub struct Field {
     /// `word_order: swapped` (32- and 64-bit numbers only): the 16-bit words travel in the
     /// opposite order, byte `i` of the number in `byte_order` at [`crate::number::swap_index`].
     pub word_swapped: bool,
+    /// `encoding: bcd` (unsigned fields of 1 to 4 bytes): two decimal digits a byte; the raw
+    /// value is the decimal number (bytes `12 34` read big-endian are 1234), within
+    /// `0..=10^(2 × width) - 1`, which [`Self::range`] always holds.
+    pub bcd: bool,
     pub unit: Option<usize>,
     pub range: Option<(i64, i64)>,
     pub constant: Option<u64>,

@@ -530,6 +530,17 @@ pub enum WordOrder {
     Swapped,
 }
 
+/// A number field's `encoding`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Encoding {
+    /// Binary (the default).
+    Binary,
+    /// Binary-coded decimal: each byte two decimal digits, the high nibble the more
+    /// significant; the bytes in the field's byte order. Its raw value is the decimal number.
+    Bcd,
+}
+
 /// A field's `range`: raw wire integers, or numbers (decimals allowed) for a float field.
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -582,6 +593,10 @@ pub struct Field {
     /// them in the opposite order to the protocol's `byte_order`, each word's bytes in it.
     #[serde(default)]
     pub word_order: Option<WordOrder>,
+    /// How the number's bytes hold it: `bcd` (two decimal digits a byte, as meters send
+    /// readings and addresses). The default is binary.
+    #[serde(default)]
+    pub encoding: Option<Encoding>,
     #[serde(default)]
     pub unit: Option<String>,
     #[serde(default)]

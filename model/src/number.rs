@@ -352,3 +352,44 @@ mod tests {
         );
     }
 }
+
+/// The number binary-coded decimal `bcd` stands for (each 4 bits a digit, the high ones the
+/// more significant): `None` where a digit is above 9.
+pub fn from_bcd(bcd: u64) -> Option<u64> {
+    let mut v = 0u64;
+    for i in (0..16).rev() {
+        let d = (bcd >> (4 * i)) & 0xF;
+        if d > 9 {
+            return None;
+        }
+        v = v * 10 + d;
+    }
+    Some(v)
+}
+
+/// `v` (at most 16 decimal digits) in binary-coded decimal: [`from_bcd`]'s inverse.
+pub fn to_bcd(mut v: u64) -> u64 {
+    let mut bcd = 0u64;
+    for i in 0..16 {
+        bcd |= (v % 10) << (4 * i);
+        v /= 10;
+    }
+    bcd
+}
+
+#[cfg(test)]
+mod bcd_tests {
+    use super::*;
+
+    #[test]
+    fn bcd_round_trips_and_refuses_a_digit_above_nine() {
+        assert_eq!(from_bcd(0x1234), Some(1234));
+        assert_eq!(from_bcd(0x9999_9999), Some(99_999_999));
+        assert_eq!(from_bcd(0x12A4), None);
+        assert_eq!(from_bcd(0xF0), None);
+        for v in [0, 7, 10, 99, 1234, 99_999_999] {
+            assert_eq!(from_bcd(to_bcd(v)), Some(v));
+        }
+        assert_eq!(to_bcd(1234), 0x1234);
+    }
+}

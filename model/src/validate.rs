@@ -544,6 +544,7 @@ fn check_request_fields(
                     && g.bits.is_empty()
                     && !g.is_ascii()
                     && !g.is_wide()
+                    && !g.bcd
                     && g.repeat.is_none()
             });
             if !ok {
@@ -1810,6 +1811,7 @@ fn field(
         signed,
         byte_order,
         word_swapped: f.word_order == Some(model::WordOrder::Swapped),
+        bcd: f.encoding == Some(model::Encoding::Bcd),
         unit: None,
         range: None,
         constant: None,
@@ -1830,7 +1832,16 @@ fn field(
         );
     }
     if matches!(f.ty, T::U64 | T::I64 | T::F32 | T::F64) {
+        if out.bcd {
+            sink.error(
+                join(p, "encoding"),
+                "`encoding: bcd` is for unsigned fields of 1 to 4 bytes (u8 u16 u24 u32)",
+            );
+        }
         return wide_field(f, p, out, refs, sink);
+    }
+    if out.bcd {
+        return bcd_field(f, p, out, refs, sink);
     }
     if let Some(r) = &f.repeat {
         out.repeat = repeat(r, f, &join(p, "repeat"), earlier, sink);
@@ -1896,7 +1907,7 @@ fn field(
                     }
                 }
                 match earlier.iter().position(|e| &e.name == other) {
-                    Some(i) if earlier[i].bits.is_empty() && !earlier[i].is_ascii() && !earlier[i].is_wide() && earlier[i].repeat.is_none() => {
+                    Some(i) if earlier[i].bits.is_empty() && !earlier[i].is_ascii() && !earlier[i].is_wide() && !earlier[i].bcd && earlier[i].repeat.is_none() => {
                         out.follows = Some(Follows::Field(i, relation(other, sink)));
                     }
                     Some(_) => sink.error(
@@ -2133,6 +2144,7 @@ fn repeat(
             Some(i)
                 if !earlier[i].signed
                     && !earlier[i].is_wide()
+                    && !earlier[i].bcd
                     && !earlier[i].is_ascii()
                     && earlier[i].bits.is_empty()
                     && earlier[i].repeat.is_none() =>
@@ -2209,6 +2221,81 @@ fn int_range(r: model::FieldRange, p: &str, sink: &mut Sink) -> Option<model::Ra
         max: end("max", r.max),
     };
     ok.then_some(r)
+}
+
+/// A BCD field (`encoding: bcd`): an unsigned number of 1 to 4 bytes with a `unit` and a
+/// `range` within what its digits hold (that range when none is given); nothing else yet.
+fn bcd_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut Sink) -> Field {
+    use model::FieldType as T;
+    if !matches!(f.ty, T::U8 | T::U16 | T::U24 | T::U32) {
+        sink.error(
+            join(p, "encoding"),
+            "`encoding: bcd` is for unsigned fields of 1 to 4 bytes (u8 u16 u24 u32)",
+        );
+        return out;
+    }
+    for (k, given) in [
+        ("value", f.value.is_some()),
+        ("enum", f.enum_.is_some()),
+        ("flags", f.flags.is_some()),
+        ("equals", f.equals.is_some()),
+        ("special", !f.special.is_empty()),
+        ("bits", !f.bits.is_empty()),
+        ("repeat", f.repeat.is_some()),
+        ("follows", f.follows.is_some()),
+    ] {
+        if given {
+            sink.error(
+                join(p, k),
+                format!("`{k}` cannot be combined with `encoding: bcd` (not expressible yet)"),
+            );
+        }
+    }
+    let most = 10i64.pow(2 * out.width as u32) - 1;
+    match &f.unit {
+        Some(u) => match refs.units.get(u) {
+            Some(i) => out.unit = Some(i),
+            None => sink.error(
+                join(p, "unit"),
+                format!("refers to unit `{u}`, which is not defined in `units`"),
+            ),
+        },
+        None => sink.error(p, "a BCD field needs a `unit`"),
+    }
+    let Some(r) = f.range else {
+        out.range = Some((0, most));
+        return out;
+    };
+    let rp = join(p, "range");
+    let mut ok = true;
+    let mut end = |k: &str, b: model::Bound| -> i64 {
+        match b {
+            model::Bound::Int(v) if (0..=most).contains(&v) => v,
+            _ => {
+                let shown = match b {
+                    model::Bound::Int(v) => v.to_string(),
+                    model::Bound::Uint(v) => v.to_string(),
+                    model::Bound::Float(v) => v.to_string(),
+                };
+                sink.error(
+                    join(&rp, k),
+                    format!(
+                        "{k} {shown} does not fit the field: its {} BCD digits hold 0..={most}",
+                        2 * out.width
+                    ),
+                );
+                ok = false;
+                0
+            }
+        }
+    };
+    let (min, max) = (end("min", r.min), end("max", r.max));
+    if ok && min > max {
+        sink.error(&rp, format!("range is empty: min {min} > max {max}"));
+    } else if ok {
+        out.range = Some((min, max));
+    }
+    out
 }
 
 /// A 64-bit integer or float field: a plain number, with a `unit` whose scale is 1 and offset

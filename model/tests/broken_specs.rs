@@ -192,6 +192,23 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "sync_too_long",
         &[("framing.start", "a sync sequence is 1 to 4 bytes, found 5")],
     ),
+    // ---- BCD fields (made from valid/bcd_meter.yaml, without its examples)
+    (
+        "bcd_signed",
+        &[("commands.set_clock.fields.year.encoding", "`encoding: bcd` is for unsigned fields of 1 to 4 bytes (u8 u16 u24 u32)")],
+    ),
+    (
+        "bcd_range_past_digits",
+        &[("commands.set_clock.fields.minute.range.max", "max 100 does not fit the field: its 2 BCD digits hold 0..=99")],
+    ),
+    (
+        "bcd_with_special",
+        &[("responses.energy.fields.tariff.special", "`special` cannot be combined with `encoding: bcd` (not expressible yet)")],
+    ),
+    (
+        "bcd_without_unit",
+        &[("commands.set_clock.fields.year", "a BCD field needs a `unit`")],
+    ),
     // ---- start bytes by direction (made from valid/msp_by_direction.yaml)
     (
         "start_by_direction_lengths_differ",

@@ -1221,6 +1221,46 @@ pub fn check_sync(frame: &[u8], max: usize, at: usize, sync: &[u8]) -> Result<()
     Ok(())
 }
 
+/// A BCD field's value (`encoding: bcd`) from its bytes as read, `raw` (each 4 bits a digit,
+/// the high ones the more significant): refused where a digit is above 9.
+#[inline]
+pub fn bcd(
+    message: &'static str,
+    field: &'static str,
+    offset: usize,
+    raw: u64,
+) -> Result<u64, DecodeError> {
+    let mut v = 0u64;
+    let mut i = 16;
+    while i > 0 {
+        i -= 1;
+        let d = (raw >> (4 * i)) & 0xF;
+        if d > 9 {
+            return Err(DecodeError::NotBcd {
+                message,
+                field,
+                offset,
+                found: raw,
+            });
+        }
+        v = v * 10 + d;
+    }
+    Ok(v)
+}
+
+/// `v` (at most 16 decimal digits) as binary-coded decimal: [`bcd`]'s inverse.
+#[inline]
+pub fn to_bcd(mut v: u64) -> u64 {
+    let mut out = 0u64;
+    let mut i = 0;
+    while i < 16 {
+        out |= (v % 10) << (4 * i);
+        v /= 10;
+        i += 1;
+    }
+    out
+}
+
 /// A 24-bit unsigned integer from its three wire bytes (`le`: least significant first).
 #[inline(always)]
 pub fn u24(b: [u8; 3], le: bool) -> u32 {

@@ -401,6 +401,13 @@ pub enum DecodeError {
         expected: u64,
         found: u64,
     },
+    /// A BCD field (`encoding: bcd`) holds a nibble above 9: its bytes as read, `found`.
+    NotBcd {
+        message: &'static str,
+        field: &'static str,
+        offset: usize,
+        found: u64,
+    },
     /// A field that repeats another (`equals`) holds another value than that field.
     NotEqual {
         message: &'static str,
@@ -712,6 +719,15 @@ impl fmt::Display for DecodeError {
             } => write!(
                 f,
                 "invalid value for {message}.{field} at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
+            ),
+            DecodeError::NotBcd {
+                message,
+                field,
+                offset,
+                found,
+            } => write!(
+                f,
+                "invalid value for {message}.{field} at offset {offset}: 0x{found:02X} is not BCD (a digit above 9)"
             ),
             DecodeError::NotEqual {
                 message,

@@ -82,7 +82,11 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
                     && follows_field(f).is_none()
                     && m.counted_by(fi).is_none(),
             );
-        let wire = if f.width > 1 && uses > 1 {
+        let wire = if f.bcd {
+            // Its digits checked, the decimal number they give (what every check below reads).
+            stmts.push(quote!(let #n: #w = rt::bcd(#message, #name, #at, #read as u64)? as #w;));
+            quote!(#n)
+        } else if f.width > 1 && uses > 1 {
             stmts.push(quote!(let #n: #w = #read;));
             quote!(#n)
         } else {

@@ -283,7 +283,16 @@ pub(super) fn emit_encode_arm(
             to_wire(ctx, leaf, &local(&f.name), None)
         };
         let conv = to_bytes(f.byte_order);
+        let bcd = f.bcd;
+        let wt_ident = wt.ident();
         let put = |v: TokenStream| {
+            // A BCD field's digits (its value is in range, checked above).
+            let v = if bcd {
+                let v = paren(v);
+                quote!(rt::to_bcd(#v as u64) as #wt_ident)
+            } else {
+                v
+            };
             if f.width == 1 && !wt.signed {
                 quote!(out[#at] = #v;)
             } else if f.width == 3 {

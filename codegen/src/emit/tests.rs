@@ -10,6 +10,7 @@ fn field(range: (i64, i64), special: &[i64]) -> Field {
         signed: false,
         byte_order: ByteOrder::Little,
         word_swapped: false,
+        bcd: false,
         unit: None,
         range: Some(range),
         constant: None,

@@ -50,6 +50,7 @@ fn check_error(e: &DecodeError, len: usize) {
         | DecodeError::UnknownCode { offset, .. }
         | DecodeError::ConstantMismatch { offset, .. }
         | DecodeError::NotEqual { offset, .. }
+        | DecodeError::NotBcd { offset, .. }
         | DecodeError::OutOfRange { offset, .. }
         | DecodeError::BadAddress { offset, .. }
         | DecodeError::LengthMismatch { offset, .. }

@@ -293,6 +293,7 @@ fn check_error(e: &DecodeError, len: usize) {
         | DecodeError::UnknownResponse { offset, .. }
         | DecodeError::InvalidValue { offset, .. }
         | DecodeError::NotEqual { offset, .. }
+        | DecodeError::NotBcd { offset, .. }
         | DecodeError::NotFollowing { offset, .. }
         | DecodeError::ByteCount { offset, .. }
         | DecodeError::BadEscape { offset, .. } => {
