@@ -79,6 +79,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/msp_by_direction.yaml"),
         // BCD fields: the dissector shows their decimal numbers.
         spec("model/tests/fixtures/valid/bcd_meter.yaml"),
+        // A start and a length field sent twice.
+        spec("model/tests/fixtures/valid/ft12_variable.yaml"),
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),
         // Escaped frames: the dissector unescapes them into a tvb of their own.
         spec("model/tests/fixtures/valid/slip_sensor.yaml"),

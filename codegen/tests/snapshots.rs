@@ -155,6 +155,16 @@ fn start_by_direction_spec_generates_its_snapshot() {
     );
 }
 
+/// The start byte and the length field sent twice (FT1.2's and M-Bus's `68 L L 68`): decode
+/// checks both copies in the interpreter's order, encode writes both.
+#[test]
+fn repeated_start_and_length_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/ft12_variable.yaml",
+        "ft12_variable.rs",
+    );
+}
+
 /// BCD fields (`encoding: bcd`): decode checks each digit (`rt::bcd`) and reads the decimal
 /// number, encode writes its digits (`rt::to_bcd`) after the range check.
 #[test]

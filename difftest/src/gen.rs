@@ -974,6 +974,17 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         10..=17 => Escaping::Cobs,
         _ => Escaping::None,
     };
+    // The start bytes or the length field sent twice (FT1.2's and M-Bus's `68 L L 68`),
+    // anywhere after the first and before the payload.
+    if escaping == Escaping::None {
+        for part in ["start", "length"] {
+            if let (Some(first), true) = (pos(&layout, part), g.chance(20)) {
+                let payload = pos(&layout, "payload").unwrap_or(layout.len());
+                let at = g.rng.usize(first + 1..=payload);
+                layout.insert(at, part);
+            }
+        }
+    }
     let mut escaping_yaml = String::new();
     match escaping {
         Escaping::Bytes | Escaping::Cobs => {
@@ -1661,6 +1672,9 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(f.sync.len() == 1, "start byte");
     add(f.sync.len() > 1, "sync sequence");
     add(f.sync_by_direction(), "start bytes by direction");
+    let twice = |x: Part| f.layout.iter().filter(|y| **y == x).count() == 2;
+    add(twice(Part::Start), "start twice");
+    add(twice(Part::Length), "length twice");
     add(f.length.is_some(), "length field");
     add(
         f.length.as_ref().is_some_and(|l| l.adjust != 0),

@@ -309,12 +309,13 @@ fn message(m: &Message, index: usize) -> String {
     );
     let _ = writeln!(
         s,
-        "      code = {}, code_hex = {}, code_at = {}, payload_at = {}, start_at = {}, address_at = {},",
+        "      code = {}, code_hex = {}, code_at = {}, payload_at = {}, start_at = {}, start_again = {}, address_at = {},",
         bytes(&m.code),
         lua_str(&m.code_hex()),
         o.code,
         o.payload,
         opt_num(o.start.map(|x| x as i64)),
+        opt_num(o.start_again.map(|x| x as i64)),
         opt_num(o.address.map(|x| x as i64))
     );
     let broadcast_ok = m.broadcast.as_ref().is_some_and(|b| b.accepted);
@@ -390,8 +391,9 @@ fn length_rule(r: Option<LengthRule>) -> String {
         || "false".to_owned(),
         |r| {
             format!(
-                "{{ at = {}, width = {}, grows = {}, k = {}, head_len = {} }}",
+                "{{ at = {}, again = {}, width = {}, grows = {}, k = {}, head_len = {} }}",
                 r.at,
+                opt_num(r.again.map(|x| x as i64)),
                 r.width,
                 lua_bool(r.grows),
                 num(r.k),

@@ -480,8 +480,12 @@ local function structural(P, m, b, n)
   if n < m.len or n > m.max_len then return false end
   if m.start_at then
     local sync = (m.dir == "response") and P.response_sync or P.sync
-    for i, s in ipairs(sync) do
-      if b[m.start_at + i - 1] ~= s then return false end
+    for _, at in ipairs({ m.start_at, m.start_again or false }) do
+      if at then
+        for i, s in ipairs(sync) do
+          if b[at + i - 1] ~= s then return false end
+        end
+      end
     end
   end
   if m.code_at + #m.code + P.trailer > n then return false end
@@ -497,6 +501,7 @@ local function structural(P, m, b, n)
     local want = -1
     if n >= rule.head_len then want = rule.grows and (n + rule.k) or rule.k end
     if read_uint(b, rule.at, rule.width, P.order) ~= want then return false end
+    if rule.again and read_uint(b, rule.again, rule.width, P.order) ~= want then return false end
   end
   if m.variable and not shape(m, b, n) then return false end
   return true

@@ -871,10 +871,11 @@ fn decode_plain<'p>(
     // Start bytes that differ by direction tell the frame's direction.
     let (sync0, sync1) = match directions {
         [a, b] if p.framing.sync_by_direction() => {
-            let (x, y) = (
-                check_sync(p, *a, first.start, wire),
-                check_sync(p, *b, first.start, wire),
-            );
+            let both = |d: Direction| {
+                check_sync(p, d, first.start, wire)?;
+                check_sync(p, d, first.start_again, wire)
+            };
+            let (x, y) = (both(*a), both(*b));
             if let (Err(e), Err(_)) = (&x, &y) {
                 return Err(e.clone());
             }
@@ -883,6 +884,7 @@ fn decode_plain<'p>(
         _ => {
             let d = directions.first().copied().unwrap_or(Direction::Request);
             check_sync(p, d, first.start, wire)?;
+            check_sync(p, d, first.start_again, wire)?;
             (true, true)
         }
     };
@@ -1199,6 +1201,7 @@ fn decode_as_unescaped<'p>(
     let len = p.frame_len(m);
     let o = m.layout;
     check_sync(p, r.direction, o.start, wire)?;
+    check_sync(p, r.direction, o.start_again, wire)?;
     if wire.len() < len {
         return Err(DecodeError::Truncated {
             needed: len,
@@ -1344,15 +1347,16 @@ fn check_length_rule(
     let Some(rule) = rule else {
         return Ok(());
     };
-    let at = rule.at;
-    let found = read_uint(wire.get(at..at + rule.width).unwrap_or(&[]), p.byte_order) as i64;
     let expected = rule.value(wire.len()).unwrap_or(-1);
-    if found != expected {
-        return Err(DecodeError::LengthMismatch {
-            offset: at,
-            expected,
-            found,
-        });
+    for at in [Some(rule.at), rule.again].into_iter().flatten() {
+        let found = read_uint(wire.get(at..at + rule.width).unwrap_or(&[]), p.byte_order) as i64;
+        if found != expected {
+            return Err(DecodeError::LengthMismatch {
+                offset: at,
+                expected,
+                found,
+            });
+        }
     }
     Ok(())
 }
@@ -2130,7 +2134,7 @@ pub fn encode(
         .map(|&(i, l)| m.fields[i].elements_len(l.len()))
         .sum();
     let mut out = vec![0u8; p.frame_len(m) + tail];
-    if let Some(at) = o.start {
+    for at in [o.start, o.start_again].into_iter().flatten() {
         for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
             out[at + i] = *s;
         }
@@ -2139,9 +2143,11 @@ pub fn encode(
         out[at] = address;
     }
     out[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
-    if let (Some(l), Some(at)) = (&p.framing.length, o.length) {
+    if let Some(l) = &p.framing.length {
         let v = length_for(p, m.direction, out.len()).unwrap_or(0);
-        write_uint(v as u64, &mut out[at..at + l.width], p.byte_order);
+        for at in [o.length, o.length_again].into_iter().flatten() {
+            write_uint(v as u64, &mut out[at..at + l.width], p.byte_order);
+        }
     }
     // Each field's value as decode reads it (signed fields sign-extended): what a field that
     // follows it is computed from.
@@ -2403,10 +2409,12 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
             s.reverse();
         }
     }
-    if let (Some(l), Some(at)) = (&p.framing.length, o.length) {
-        if l.width > 1 && flip(p.byte_order) {
-            if let Some(s) = wire.get_mut(at..at + l.width) {
-                s.reverse();
+    if let Some(l) = &p.framing.length {
+        for at in [o.length, o.length_again].into_iter().flatten() {
+            if l.width > 1 && flip(p.byte_order) {
+                if let Some(s) = wire.get_mut(at..at + l.width) {
+                    s.reverse();
+                }
             }
         }
     }

@@ -149,6 +149,8 @@ pub struct LengthField {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LengthRule {
     pub at: usize,
+    /// Where the length field comes again, if the layout repeats it: the same value.
+    pub again: Option<usize>,
     pub width: usize,
     pub grows: bool,
     pub k: i64,
@@ -179,8 +181,14 @@ pub const MAX_CODE_LEN: usize = 4;
 pub struct FrameLayout {
     /// `None` when the layout has no start byte.
     pub start: Option<usize>,
+    /// Where the start bytes come again, where the layout has a second `start` (M-Bus's long
+    /// frame `68 L L 68`).
+    pub start_again: Option<usize>,
     /// `None` when the framing has no length field.
     pub length: Option<usize>,
+    /// Where the length field comes again (it must agree), where the layout has a second
+    /// `length`.
+    pub length_again: Option<usize>,
     /// `None` when the layout has no address.
     pub address: Option<usize>,
     pub code: usize,
@@ -275,6 +283,7 @@ impl Framing {
         let grows = l.counts.contains(&Part::Payload);
         Some(LengthRule {
             at,
+            again: head.length_again,
             width: l.width,
             grows,
             k: if grows { base - head.len as i64 } else { base },
@@ -283,19 +292,23 @@ impl Framing {
     }
 
     /// The value a length field holds for a frame with this code length and payload: every
-    /// part it counts, plus its adjustment.
+    /// part it counts (each time the layout holds it), plus its adjustment.
     pub fn length_value(&self, l: &LengthField, code_len: usize, payload: usize) -> i64 {
         let bytes: usize = l
             .counts
             .iter()
-            .map(|p| match p {
-                Part::Start => self.sync.len(),
-                Part::Address => 1,
-                Part::Length => l.width,
-                Part::Code => code_len,
-                Part::Payload => payload,
-                Part::Checksum => self.checksum.len(),
-                Part::End => self.end.len(),
+            .map(|p| {
+                let times = self.layout.iter().filter(|x| *x == p).count();
+                times
+                    * match p {
+                        Part::Start => self.sync.len(),
+                        Part::Address => 1,
+                        Part::Length => l.width,
+                        Part::Code => code_len,
+                        Part::Payload => payload,
+                        Part::Checksum => self.checksum.len(),
+                        Part::End => self.end.len(),
+                    }
             })
             .sum();
         bytes as i64 + l.adjust

@@ -753,11 +753,30 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             );
         }
     }
-    if count(Part::Start) > 1 {
-        sink.error("framing.layout", "layout holds `start` more than once");
-    }
-    if count(Part::Length) > 1 {
-        sink.error("framing.layout", "layout holds `length` more than once");
+    // A second `start` repeats the start bytes, a second `length` the length field (M-Bus's
+    // long frame `68 L L 68`): both before the payload, and not a third.
+    let payload_at = f.layout.iter().position(|p| *p == Part::Payload);
+    for (part, name) in [(Part::Start, "start"), (Part::Length, "length")] {
+        if count(part) > 2 {
+            sink.error(
+                "framing.layout",
+                format!("layout holds `{name}` more than twice"),
+            );
+        } else if count(part) == 2 {
+            let last = f.layout.iter().rposition(|p| *p == part);
+            if last > payload_at {
+                sink.error(
+                    "framing.layout",
+                    format!("a second `{name}` must come before the payload"),
+                );
+            }
+            if f.escaping.is_some() {
+                sink.error(
+                    "framing.layout",
+                    format!("a second `{name}` is not expressible with `escaping` yet"),
+                );
+            }
+        }
     }
     if count(Part::Address) > 1 {
         sink.error("framing.layout", "layout holds `address` more than once");
@@ -769,7 +788,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         sink.error("framing.layout", "layout holds `checksum` more than once");
     }
     let length = match (count(Part::Length), &f.length) {
-        (1, Some(l)) => {
+        (1.., Some(l)) => {
             let lpath = "framing.length";
             if !(1..=2).contains(&l.width) {
                 sink.error(
@@ -810,7 +829,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
                 adjust: l.adjust.unwrap_or(0),
             })
         }
-        (1, None) => {
+        (1.., None) => {
             sink.error(
                 "framing.length",
                 "layout has `length` but no `length` field is described",
@@ -876,7 +895,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     let mut sync = Vec::new();
     let mut response_sync = Vec::new();
     let start = match (count(Part::Start), &f.start) {
-        (1, Some(s)) => {
+        (1.., Some(s)) => {
             let sequence = |s: &model::StartBytes, path: &str, sink: &mut Sink| -> Vec<u8> {
                 let bytes = s.bytes();
                 if !(1..=4).contains(&bytes.len()) {
@@ -923,7 +942,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             }
             sync.first().copied()
         }
-        (1, None) => {
+        (1.., None) => {
             sink.error(
                 "framing.start",
                 "layout has `start` but no start byte is given",
@@ -1409,7 +1428,9 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
 fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> FrameLayout {
     let mut o = FrameLayout {
         start: None,
+        start_again: None,
         length: None,
+        length_again: None,
         address: None,
         code: 0,
         payload: 0,
@@ -1420,11 +1441,17 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
     for part in &framing.layout {
         match part {
             Part::Start => {
-                o.start = Some(at);
+                match o.start {
+                    None => o.start = Some(at),
+                    Some(_) => o.start_again = Some(at),
+                }
                 at += framing.sync.len();
             }
             Part::Length => {
-                o.length = Some(at);
+                match o.length {
+                    None => o.length = Some(at),
+                    Some(_) => o.length_again = Some(at),
+                }
                 at += framing.length.as_ref().map_or(0, |l| l.width);
             }
             Part::Address => {

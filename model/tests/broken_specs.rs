@@ -192,6 +192,22 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "sync_too_long",
         &[("framing.start", "a sync sequence is 1 to 4 bytes, found 5")],
     ),
+    // ---- a start and a length sent twice (made from valid/ft12_variable.yaml)
+    (
+        "length_three_times",
+        &[("framing.layout", "layout holds `length` more than twice")],
+    ),
+    (
+        "second_start_after_payload",
+        &[("framing.layout", "a second `start` must come before the payload")],
+    ),
+    (
+        "repeated_with_escaping",
+        &[
+            ("framing.layout", "a second `start` is not expressible with `escaping` yet"),
+            ("framing.layout", "a second `length` is not expressible with `escaping` yet"),
+        ],
+    ),
     // ---- BCD fields (made from valid/bcd_meter.yaml, without its examples)
     (
         "bcd_signed",

@@ -161,13 +161,24 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
     };
     let sum = frame_sum(p);
     // A sync sequence's first byte is `FRAME.start`'s; the others are checked first. Start
-    // bytes that differ by direction are all checked here (`FRAME.start` is `None`).
+    // bytes that differ by direction, or come twice, are all checked here (`FRAME.start` is
+    // `None`), in the order the interpreter checks them.
     let by_direction = p.framing.sync_by_direction();
-    let sync = match (p.framing.head(1).start, p.framing.sync_of(d)) {
-        (Some(at), sync) if sync.len() > 1 || (by_direction && !sync.is_empty()) => {
-            let at = usize_lit(at);
-            let bytes = sync.iter().map(|b| hex_u8(*b));
-            quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
+    let head = p.framing.head(1);
+    let sync = match (head.start, p.framing.sync_of(d)) {
+        (Some(at), sync)
+            if sync.len() > 1
+                || ((by_direction || head.start_again.is_some()) && !sync.is_empty()) =>
+        {
+            let checks = [Some(at), head.start_again]
+                .into_iter()
+                .flatten()
+                .map(|at| {
+                    let at = usize_lit(at);
+                    let bytes = sync.iter().map(|b| hex_u8(*b));
+                    quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
+                });
+            quote!(#(#checks)*)
         }
         _ => quote!(),
     };
@@ -311,8 +322,17 @@ pub(super) fn length_check(p: &Protocol, d: Direction) -> TokenStream {
     let Some(rule) = p.framing.length_rule(d) else {
         return quote!();
     };
-    let args = length_args(p, rule);
-    quote!(rt::length_field(frame, #args)?;)
+    let checks = length_copies(rule).into_iter().map(|r| {
+        let args = length_args(p, r);
+        quote!(rt::length_field(frame, #args)?;)
+    });
+    quote!(#(#checks)*)
+}
+
+/// The length field where it sits, and again where the layout repeats it (the same value).
+pub(super) fn length_copies(rule: LengthRule) -> Vec<LengthRule> {
+    let again = rule.again.map(|at| LengthRule { at, ..rule });
+    [Some(rule), again].into_iter().flatten().collect()
 }
 
 /// A length field's offset, width, byte order, whether it counts the payload and its

@@ -110,18 +110,20 @@ pub(super) fn emit_encode_arm(
         consts[at] = b;
         known[at] = Some(hex_u8(b));
     };
-    if let Some(at) = o.start {
+    for at in [o.start, o.start_again].into_iter().flatten() {
         for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
             set(at + i, *s);
         }
     }
-    if let (Some(at), Some(l), false) = (o.length, &p.framing.length, m.is_variable()) {
+    if let (Some(l), false) = (&p.framing.length, m.is_variable()) {
         let v = p.framing.length_value(l, m.code.len(), m.payload_len);
-        for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
-            .into_iter()
-            .enumerate()
-        {
-            set(at + i, b);
+        for at in [o.length, o.length_again].into_iter().flatten() {
+            for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
+                .into_iter()
+                .enumerate()
+            {
+                set(at + i, b);
+            }
         }
     }
     for (i, b) in m.code.iter().enumerate() {
@@ -162,8 +164,10 @@ pub(super) fn emit_encode_arm(
     stmts.push(quote!(let out = #take;));
     if let (Some(rule), Some(_)) = (p.framing.length_rule(m.direction), &repeat) {
         // The length field of a frame of variable length, from its length.
-        let args = length_args(p, rule);
-        stmts.push(quote!(rt::put_length(out, #args)?;));
+        for r in length_copies(rule) {
+            let args = length_args(p, r);
+            stmts.push(quote!(rt::put_length(out, #args)?;));
+        }
     }
     while i < known.len() {
         let run: Vec<TokenStream> = known[i..].iter().map_while(Clone::clone).collect();
@@ -336,8 +340,10 @@ pub(super) fn emit_encode_arm(
             stmts.push(write_list(f, v, at));
         }
         if let Some(rule) = p.framing.length_rule(m.direction) {
-            let args = length_args(p, rule);
-            stmts.push(quote!(rt::put_length(out, #args)?;));
+            for r in length_copies(rule) {
+                let args = length_args(p, r);
+                stmts.push(quote!(rt::put_length(out, #args)?;));
+            }
         }
     }
     let end = encode_end(p, quote!(out), repeat.is_some() || !lists.is_empty(), head);

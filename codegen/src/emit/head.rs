@@ -31,7 +31,9 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     let host = byte(p.framing.address.host);
     // Start bytes that differ by direction are checked by each direction's `decode` alone.
     let start = match (p.framing.head(1).start, p.framing.start) {
-        _ if p.framing.sync_by_direction() => quote!(rt::None),
+        _ if p.framing.sync_by_direction() || p.framing.head(1).start_again.is_some() => {
+            quote!(rt::None)
+        }
         (Some(at), Some(s)) => {
             let (at, s) = (usize_lit(at), hex_u8(s));
             quote!(rt::Some((#at, #s)))
