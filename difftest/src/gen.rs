@@ -976,12 +976,23 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     };
     // The start bytes or the length field sent twice (FT1.2's and M-Bus's `68 L L 68`),
     // anywhere after the first and before the payload.
+    // After the code only where every code has one length (it would move it).
     if escaping == Escaping::None {
+        let mut lens: Vec<usize> = req_lens.iter().chain(&resp_lens).copied().collect();
+        lens.sort_unstable();
+        lens.dedup();
         for part in ["start", "length"] {
             if let (Some(first), true) = (pos(&layout, part), g.chance(20)) {
-                let payload = pos(&layout, "payload").unwrap_or(layout.len());
-                let at = g.rng.usize(first + 1..=payload);
-                layout.insert(at, part);
+                let last = if lens.len() == 1 {
+                    pos(&layout, "payload")
+                } else {
+                    pos(&layout, "code")
+                };
+                let last = last.unwrap_or(layout.len());
+                if first < last {
+                    let at = g.rng.usize(first + 1..=last);
+                    layout.insert(at, part);
+                }
             }
         }
     }

@@ -1135,6 +1135,29 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     if let Some(e) = &f.escaping {
         framing.escaping = escaping(e, &framing, sink);
     }
+    // A second start or length after the code sits after as many bytes as the code has: one
+    // offset only where every code has one length.
+    {
+        let mut lens: Vec<usize> = (framing.request.code_lengths.iter())
+            .chain(&framing.response.code_lengths)
+            .copied()
+            .collect();
+        lens.sort_unstable();
+        lens.dedup();
+        let code_at = f.layout.iter().position(|x| *x == Part::Code);
+        for (part, name) in [(Part::Start, "start"), (Part::Length, "length")] {
+            let second = f.layout.iter().rposition(|x| *x == part);
+            let twice = f.layout.iter().filter(|x| **x == part).count() == 2;
+            if twice && second > code_at && lens.len() > 1 {
+                sink.error(
+                    "framing.layout",
+                    format!(
+                        "a second `{name}` after the code needs every code to have one length, not {lens:?}: the code's length would move it"
+                    ),
+                );
+            }
+        }
+    }
     if let Some(part) = f.checksum.as_ref().and_then(|c| c.covers_from) {
         // A part after the code sits after as many bytes as the code has: one offset only
         // where every code has one length.

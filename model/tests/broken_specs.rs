@@ -198,6 +198,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.layout", "layout holds `length` more than twice")],
     ),
     (
+        "second_length_after_code",
+        &[("framing.layout", "a second `length` after the code needs every code to have one length, not [1, 2]: the code's length would move it")],
+    ),
+    (
         "second_start_after_payload",
         &[("framing.layout", "a second `start` must come before the payload")],
     ),

@@ -164,7 +164,15 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
     // bytes that differ by direction, or come twice, are all checked here (`FRAME.start` is
     // `None`), in the order the interpreter checks them.
     let by_direction = p.framing.sync_by_direction();
-    let head = p.framing.head(1);
+    // The direction's own layout: a second start after the code sits after its one length.
+    let code_len = p
+        .framing
+        .direction(d)
+        .code_lengths
+        .first()
+        .copied()
+        .unwrap_or(0);
+    let head = p.framing.head(code_len);
     let sync = match (head.start, p.framing.sync_of(d)) {
         (Some(at), sync)
             if sync.len() > 1
