@@ -23,3 +23,24 @@ fn sd_snapshot_replays_and_agrees_with_the_interpreter() {
     eprintln!("sd: {t:?}");
     assert!(t.accepted >= p.examples.len() && t.refused > 1000, "{t:?}");
 }
+
+/// A unit's newtype shows its physical value beside the raw one, and converts without
+/// identity arithmetic (`value` and `from_value` agree with the unit's scale and offset).
+#[test]
+fn units_debug_print_the_physical_value_beside_the_raw_one() {
+    assert_eq!(
+        format!("{:?}", ub2::Capacitance(15000)),
+        "Capacitance(15000 = 150 pF)"
+    );
+    assert_eq!(
+        format!("{:?}", sd::Temperature(0)),
+        "Temperature(0 = -50 °C)"
+    );
+    assert_eq!(ub2::Capacitance(15000).value(), 150.0);
+    assert_eq!(
+        ub2::Capacitance::from_value(150.0),
+        Some(ub2::Capacitance(15000))
+    );
+    assert_eq!(sd::Temperature(75).value(), 25.0);
+    assert_eq!(sd::Temperature::from_value(25.0), Some(sd::Temperature(75)));
+}

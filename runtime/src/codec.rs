@@ -9,6 +9,7 @@
 //! inlining it compiles to what was written out before. Public only for generated code; they
 //! are not part of the runtime's documented API and may change with the generator.
 
+pub use core::fmt::{Debug, Formatter, Result as FmtResult};
 pub use core::ops::RangeInclusive;
 pub use core::option::Option::{self, None, Some};
 pub use core::result::Result::{self, Err, Ok};

@@ -16,24 +16,78 @@ pub(super) fn emit_units(ctx: &Ctx) -> TokenStream {
         let sym = &u.symbol;
         let (sn, sd) = (u.scale.num as f64, u.scale.den as f64);
         let (on, od) = (u.offset.num as f64, u.offset.den as f64);
+        // raw × num / den + offset, and back, without the factors that are 1 or the offset
+        // that is 0 (each an identity in f64: a raw integer is never -0).
+        let times = |x: TokenStream, num: f64, den: f64| {
+            let x = if num == 1.0 { x } else { quote!(#x * #num) };
+            if den == 1.0 {
+                x
+            } else {
+                quote!(#x / #den)
+            }
+        };
+        // The offset as a magnitude added or taken away (x + (−m) is x − m exactly).
+        let magnitude = on.abs();
+        let offset = match (on == 0.0, od == 1.0) {
+            (true, _) => None,
+            (false, true) => Some(quote!(#magnitude)),
+            (false, false) => Some(quote!((#magnitude / #od))),
+        };
+        let negative = on < 0.0;
+        let value = times(quote!(self.0 as f64), sn, sd);
+        let value = match (&offset, negative) {
+            (Some(o), true) => quote!(#value - #o),
+            (Some(o), false) => quote!(#value + #o),
+            (None, _) => value,
+        };
+        let unshifted = match (&offset, negative) {
+            (Some(o), true) => quote!(value + #o),
+            (Some(o), false) => quote!(value - #o),
+            (None, _) => quote!(value),
+        };
+        let scaled = sn != 1.0 || sd != 1.0;
+        let unshifted = if offset.is_some() && scaled {
+            quote!((#unshifted))
+        } else {
+            unshifted
+        };
+        let raw_of = times(unshifted, sd, sn);
+        let debug = format!(
+            "{}({{}} = {{}}{}{})",
+            ty,
+            if sym.is_empty() { "" } else { " " },
+            sym.replace('{', "{{").replace('}', "}}")
+        );
         let d = doc(&format!(
-            "{}\n\nPhysical value = raw × {} {}{}.",
+            "{}\n\nPhysical value = raw × {}{}.",
             if u.doc.is_empty() { &u.name } else { &u.doc },
             u.scale,
-            if u.offset.num < 0 { "− " } else { "+ " },
-            Rational {
-                num: u.offset.num.abs(),
-                den: u.offset.den
+            match u.offset.num {
+                0 => String::new(),
+                n => format!(
+                    " {} {}",
+                    if n < 0 { "−" } else { "+" },
+                    Rational {
+                        num: n.abs(),
+                        den: u.offset.den
+                    }
+                ),
             }
         ));
         let (lo, hi) = raw.limits();
         let (lo, hi) = (Literal::i64_unsuffixed(lo), Literal::i64_unsuffixed(hi));
         out.extend(quote! {
             #d
-            #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+            #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
             #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
             #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
             pub struct #ty(pub #r);
+            /// Shows the raw value and the physical one.
+            impl rt::Debug for #ty {
+                fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+                    write!(f, #debug, self.0, self.value())
+                }
+            }
             impl #ty {
                 /// The unit's symbol.
                 pub const SYMBOL: &'static str = #sym;
@@ -46,11 +100,11 @@ pub(super) fn emit_units(ctx: &Ctx) -> TokenStream {
                 /// The physical value, in [`Self::SYMBOL`].
                 #[inline]
                 pub fn value(self) -> f64 {
-                    self.0 as f64 * #sn / #sd + #on / #od
+                    #value
                 }
                 /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
                 pub fn from_value(value: f64) -> rt::Option<Self> {
-                    let raw = rt::round((value - #on / #od) * #sd / #sn)?;
+                    let raw = rt::round(#raw_of)?;
                     if !(#lo..=#hi).contains(&raw) {
                         return rt::None;
                     }

@@ -69,11 +69,17 @@ pub mod bcd_meter {
     }
     /// Energy in hundredths of a kWh.
     ///
-    /// Physical value = raw × 0.01 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.01.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct KilowattHours(pub u32);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for KilowattHours {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "KilowattHours({} = {} kWh)", self.0, self.value())
+        }
+    }
     impl KilowattHours {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "kWh";
@@ -90,11 +96,11 @@ pub mod bcd_meter {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 100f64 + 0f64 / 1f64
+            self.0 as f64 / 100f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 100f64 / 1f64)?;
+            let raw = rt::round(value * 100f64)?;
             if !(0..=4294967295).contains(&raw) {
                 return rt::None;
             }

@@ -69,11 +69,17 @@ pub mod clash {
     }
     /// option
     ///
-    /// Physical value = raw × 0.5 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.5.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Option(pub u16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Option {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Option({} = {} O)", self.0, self.value())
+        }
+    }
     impl Option {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "O";
@@ -90,11 +96,11 @@ pub mod clash {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 2f64 + 0f64 / 1f64
+            self.0 as f64 / 2f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 2f64 / 1f64)?;
+            let raw = rt::round(value * 2f64)?;
             if !(0..=65535).contains(&raw) {
                 return rt::None;
             }
@@ -104,10 +110,16 @@ pub mod clash {
     /// some
     ///
     /// Physical value = raw × 2 − 1.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Some(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Some {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Some({} = {} S)", self.0, self.value())
+        }
+    }
     impl Some {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "S";
@@ -124,11 +136,11 @@ pub mod clash {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 2f64 / 1f64 + -1f64 / 1f64
+            self.0 as f64 * 2f64 - 1f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - -1f64 / 1f64) * 1f64 / 2f64)?;
+            let raw = rt::round((value + 1f64) / 2f64)?;
             if !(-32768..=32767).contains(&raw) {
                 return rt::None;
             }

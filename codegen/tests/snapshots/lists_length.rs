@@ -69,11 +69,17 @@ pub mod lists_length {
     }
     /// millivolts
     ///
-    /// Physical value = raw × 0.5 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.5.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Millivolts(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Millivolts {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Millivolts({} = {} mV)", self.0, self.value())
+        }
+    }
     impl Millivolts {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "mV";
@@ -90,11 +96,11 @@ pub mod lists_length {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 2f64 + 0f64 / 1f64
+            self.0 as f64 / 2f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 2f64 / 1f64)?;
+            let raw = rt::round(value * 2f64)?;
             if !(-32768..=32767).contains(&raw) {
                 return rt::None;
             }

@@ -69,11 +69,17 @@ pub mod mini {
     }
     /// capacitance
     ///
-    /// Physical value = raw × 0.01 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.01.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Capacitance(pub u32);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Capacitance {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Capacitance({} = {} pF)", self.0, self.value())
+        }
+    }
     impl Capacitance {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "pF";
@@ -90,11 +96,11 @@ pub mod mini {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 100f64 + 0f64 / 1f64
+            self.0 as f64 / 100f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 100f64 / 1f64)?;
+            let raw = rt::round(value * 100f64)?;
             if !(0..=4294967295).contains(&raw) {
                 return rt::None;
             }
@@ -103,11 +109,17 @@ pub mod mini {
     }
     /// angle
     ///
-    /// Physical value = raw × 0.087890625 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.087890625.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Angle(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Angle {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Angle({} = {} °)", self.0, self.value())
+        }
+    }
     impl Angle {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "°";
@@ -124,11 +136,11 @@ pub mod mini {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 45f64 / 512f64 + 0f64 / 1f64
+            self.0 as f64 * 45f64 / 512f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 512f64 / 45f64)?;
+            let raw = rt::round(value * 512f64 / 45f64)?;
             if !(-32768..=32767).contains(&raw) {
                 return rt::None;
             }
@@ -138,10 +150,16 @@ pub mod mini {
     /// celsius
     ///
     /// Physical value = raw × 1 − 50.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Celsius(pub u8);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Celsius {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Celsius({} = {} °C)", self.0, self.value())
+        }
+    }
     impl Celsius {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "°C";
@@ -158,11 +176,11 @@ pub mod mini {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 1f64 + -50f64 / 1f64
+            self.0 as f64 - 50f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - -50f64 / 1f64) * 1f64 / 1f64)?;
+            let raw = rt::round(value + 50f64)?;
             if !(0..=255).contains(&raw) {
                 return rt::None;
             }

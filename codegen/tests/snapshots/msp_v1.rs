@@ -69,11 +69,17 @@ pub mod msp_v1 {
     }
     /// decidegrees
     ///
-    /// Physical value = raw × 0.1 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.1.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Decidegrees(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Decidegrees {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Decidegrees({} = {} °)", self.0, self.value())
+        }
+    }
     impl Decidegrees {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "°";
@@ -90,11 +96,11 @@ pub mod msp_v1 {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 10f64 + 0f64 / 1f64
+            self.0 as f64 / 10f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 10f64 / 1f64)?;
+            let raw = rt::round(value * 10f64)?;
             if !(-32768..=32767).contains(&raw) {
                 return rt::None;
             }

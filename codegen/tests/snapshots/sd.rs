@@ -79,11 +79,17 @@ pub mod sd {
     }
     /// 12-bit two's-complement position, one digit = 360/4096 = 0.087890625° (the document rounds this to 0.088°); 0 = centre, positive = counter-clockwise, negative = clockwise (§3.1).
     ///
-    /// Physical value = raw × 0.087890625 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.087890625.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Angle(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Angle {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Angle({} = {} °)", self.0, self.value())
+        }
+    }
     impl Angle {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "°";
@@ -100,11 +106,11 @@ pub mod sd {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 45f64 / 512f64 + 0f64 / 1f64
+            self.0 as f64 * 45f64 / 512f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 512f64 / 45f64)?;
+            let raw = rt::round(value * 512f64 / 45f64)?;
             if !(-32768..=32767).contains(&raw) {
                 return rt::None;
             }
@@ -113,11 +119,17 @@ pub mod sd {
     }
     /// Angular velocity in 0.1 °/s: raw = velocity \[Deg/sec\] * 10 (§3.3).
     ///
-    /// Physical value = raw × 0.1 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.1.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Velocity(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Velocity {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Velocity({} = {} °/s)", self.0, self.value())
+        }
+    }
     impl Velocity {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "°/s";
@@ -134,11 +146,11 @@ pub mod sd {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 10f64 + 0f64 / 1f64
+            self.0 as f64 / 10f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 10f64 / 1f64)?;
+            let raw = rt::round(value * 10f64)?;
             if !(-32768..=32767).contains(&raw) {
                 return rt::None;
             }
@@ -147,11 +159,17 @@ pub mod sd {
     }
     /// Current consumption in 0.02 A steps (§3.7, §3.9).
     ///
-    /// Physical value = raw × 0.02 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.02.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Current(pub u16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Current {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Current({} = {} A)", self.0, self.value())
+        }
+    }
     impl Current {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "A";
@@ -168,11 +186,11 @@ pub mod sd {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 50f64 + 0f64 / 1f64
+            self.0 as f64 / 50f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 50f64 / 1f64)?;
+            let raw = rt::round(value * 50f64)?;
             if !(0..=65535).contains(&raw) {
                 return rt::None;
             }
@@ -181,11 +199,17 @@ pub mod sd {
     }
     /// Power bus voltage in 0.2 V steps (§3.8).
     ///
-    /// Physical value = raw × 0.2 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.2.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Voltage(pub u8);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Voltage {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Voltage({} = {} V)", self.0, self.value())
+        }
+    }
     impl Voltage {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "V";
@@ -202,11 +226,11 @@ pub mod sd {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 5f64 + 0f64 / 1f64
+            self.0 as f64 / 5f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 5f64 / 1f64)?;
+            let raw = rt::round(value * 5f64)?;
             if !(0..=255).contains(&raw) {
                 return rt::None;
             }
@@ -216,10 +240,16 @@ pub mod sd {
     /// Temperature in °C = raw - 50 (§3.10); valid -49..+204 °C.
     ///
     /// Physical value = raw × 1 − 50.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Temperature(pub u8);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Temperature {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Temperature({} = {} °C)", self.0, self.value())
+        }
+    }
     impl Temperature {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "°C";
@@ -236,11 +266,11 @@ pub mod sd {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 1f64 + -50f64 / 1f64
+            self.0 as f64 - 50f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - -50f64 / 1f64) * 1f64 / 1f64)?;
+            let raw = rt::round(value + 50f64)?;
             if !(0..=255).contains(&raw) {
                 return rt::None;
             }

@@ -67,11 +67,17 @@ pub mod ub2 {
     }
     /// Capacitance, transmitted multiplied by 100 as U32 (§3.1): raw 15000 = 150.00 pF.
     ///
-    /// Physical value = raw × 0.01 + 0.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    /// Physical value = raw × 0.01.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct Capacitance(pub u32);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Capacitance {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Capacitance({} = {} pF)", self.0, self.value())
+        }
+    }
     impl Capacitance {
         /// The unit's symbol.
         pub const SYMBOL: &'static str = "pF";
@@ -88,11 +94,11 @@ pub mod ub2 {
         /// The physical value, in [`Self::SYMBOL`].
         #[inline]
         pub fn value(self) -> f64 {
-            self.0 as f64 * 1f64 / 100f64 + 0f64 / 1f64
+            self.0 as f64 / 100f64
         }
         /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
         pub fn from_value(value: f64) -> rt::Option<Self> {
-            let raw = rt::round((value - 0f64 / 1f64) * 100f64 / 1f64)?;
+            let raw = rt::round(value * 100f64)?;
             if !(0..=4294967295).contains(&raw) {
                 return rt::None;
             }
