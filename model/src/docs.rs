@@ -23,6 +23,9 @@ fn cell(s: &str) -> String {
 
 fn type_name(f: &Field) -> String {
     let one = scalar_type_name(f);
+    if let Some(pk) = &f.packed {
+        return format!("{one}[{}] × {} bits", pk.count, pk.bits);
+    }
     match &f.repeat {
         None => one,
         Some(r) => {
@@ -124,6 +127,19 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
             rel.describe(&format!("`{}`", rel.field))
         )),
         None => {}
+    }
+    if let Some(pk) = &f.packed {
+        notes.push(format!(
+            "{} elements of {} bits packed into {} bytes, {}",
+            pk.count,
+            pk.bits,
+            pk.bytes(),
+            if pk.lsb_first {
+                "least significant bit first: element 0 starts at bit 0 of the first byte"
+            } else {
+                "most significant bit first: element 0 starts at bit 7 of the first byte"
+            }
+        ));
     }
     if let Some(r) = &f.repeat {
         let count = match r.count {
