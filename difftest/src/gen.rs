@@ -180,6 +180,9 @@ impl G {
         if self.chance(10) {
             return self.wide_field(name);
         }
+        if self.chance(6) {
+            return self.packed_field(name);
+        }
         match self.rng.u8(..100) {
             // A plain number: unit, maybe a range and special values.
             0..=29 => {
@@ -336,6 +339,41 @@ impl G {
                 g.countable = true;
                 g
             }
+        }
+    }
+
+    /// Packed elements: 1 to 6 elements of 2 bits up to their type's width, least or most
+    /// significant bit first, maybe with a range.
+    fn packed_field(&mut self, name: String) -> Gf {
+        let &(ty, tw) = self.pick(&[("u8", 8i64), ("u16", 16), ("u32", 32)]);
+        let bits = if self.chance(30) {
+            tw
+        } else {
+            self.rng.i64(2..=tw)
+        };
+        let count = self.rng.i64(1..=6);
+        let order = if self.chance(50) {
+            "lsb_first"
+        } else {
+            "msb_first"
+        };
+        let mut y = format!(
+            "{{name: {name}, type: {ty}, unit: {}, packed: {{count: {count}, bits: {bits}, bit_order: {order}}}",
+            self.unit()
+        );
+        if self.chance(40) {
+            let r = self.range_yaml(0, (1i64 << bits) - 1);
+            let _ = write!(y, ", {r}");
+        }
+        y.push('}');
+        Gf {
+            name: name.clone(),
+            ty,
+            width: ((count * bits) as usize).div_ceil(8),
+            yaml: y,
+            plain: false,
+            countable: false,
+            repeat_tail: 0,
         }
     }
 
@@ -1733,6 +1771,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         repeats.iter().any(|(f, _)| f.ty == FieldType::Bit),
         "repeat of bits",
     );
+    add(fields.iter().any(|f| f.packed.is_some()), "packed elements");
     add(
         repeats.iter().any(|(_, r)| r.request.is_some()),
         "repeat from request",
