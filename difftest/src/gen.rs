@@ -130,7 +130,7 @@ fn code_text(code: &[u8]) -> String {
 /// followed.
 /// A field another may repeat (`equals`): one value, neither text, wide nor a list.
 fn equals_target(f: &Gf) -> bool {
-    f.ty != "ascii" && !is_wide(f.ty) && f.repeat_tail == 0
+    f.ty != "ascii" && !is_wide(f.ty) && f.repeat_tail == 0 && !f.yaml.contains("packed:")
 }
 
 fn is_wide(ty: &str) -> bool {

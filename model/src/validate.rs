@@ -2228,11 +2228,21 @@ fn packed_field(
         }
     }
     let type_bits = 8 * elem_width as i64;
+    // Its bytes as written, even where a rule below refuses it: the errors about the payload's
+    // size then follow from what the spec says, not from a placeholder.
+    if (1..=MAX_PACKED).contains(&pk.count) && (1..=64).contains(&pk.bits) {
+        out.width = ((pk.count * pk.bits) as usize).div_ceil(8);
+    }
     if !(2..=type_bits).contains(&pk.bits) {
         sink.error(
             join(&pp, "bits"),
             format!(
-                "a packed element is 2..={type_bits} bits wide in a {type_bits}-bit type, not {} (1-bit elements are `type: bit` with a `repeat`)",
+                "a packed {} element is 2..={type_bits} bits wide, not {} (1-bit elements are `type: bit` with a `repeat`)",
+                match elem_width {
+                    1 => "u8",
+                    2 => "u16",
+                    _ => "u32",
+                },
                 pk.bits
             ),
         );
