@@ -1104,8 +1104,8 @@ fn packed_snapshot_agrees_with_the_interpreter() {
     // the ends of their range and of their bits: encoded alike, or refused by both.
     let mut encoded = 0;
     for e in &p.examples {
-        let decoded = busspec_model::interp::decode(&p, Some(e.message.direction), None, &e.wire)
-            .unwrap();
+        let decoded =
+            busspec_model::interp::decode(&p, Some(e.message.direction), None, &e.wire).unwrap();
         let m = p.message(e.message);
         for f in m.fields.iter().filter(|f| f.packed.is_some()) {
             let pk = f.packed.unwrap();

@@ -189,7 +189,13 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
     );
     out.push_str("|---|---|---|---|---|---|---|---|\n");
     for (i, f) in m.fields.iter().enumerate() {
-        let order_cell = if f.width > 1 && !f.is_ascii() {
+        let order_cell = if let Some(pk) = &f.packed {
+            if pk.lsb_first {
+                "bit stream, LSB first"
+            } else {
+                "bit stream, MSB first"
+            }
+        } else if f.width > 1 && !f.is_ascii() {
             order(f.byte_order)
         } else {
             "—"

@@ -2251,10 +2251,7 @@ fn packed_field(
     if !(1..=MAX_PACKED).contains(&pk.count) {
         sink.error(
             join(&pp, "count"),
-            format!(
-                "packed elements number 1..={MAX_PACKED}, not {}",
-                pk.count
-            ),
+            format!("packed elements number 1..={MAX_PACKED}, not {}", pk.count),
         );
         return out;
     }

@@ -40,7 +40,11 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             // Packed elements: the padding bits 0, then each element within its range.
             let mname = &m.name;
             let e = wire_type(f).ident();
-            let (count, bits, lsb) = (usize_lit(pk.count), usize_lit(pk.bits as usize), pk.lsb_first);
+            let (count, bits, lsb) = (
+                usize_lit(pk.count),
+                usize_lit(pk.bits as usize),
+                pk.lsb_first,
+            );
             let end = usize_lit(o.payload + f.offset + f.width);
             let last = usize_lit(f.width - 1);
             let v = local(name);

@@ -208,8 +208,14 @@ pub(super) fn emit_encode_arm(
         }
         if let Some(pk) = &f.packed {
             let (name, n) = (&f.name, local(&f.name));
-            let (count, bits, lsb) = (usize_lit(pk.count), usize_lit(pk.bits as usize), pk.lsb_first);
-            stmts.push(quote!(rt::pack(#name, #n.as_slice(), #count, #bits, #lsb, &mut out[#at..#end])?;));
+            let (count, bits, lsb) = (
+                usize_lit(pk.count),
+                usize_lit(pk.bits as usize),
+                pk.lsb_first,
+            );
+            stmts.push(
+                quote!(rt::pack(#name, #n.as_slice(), #count, #bits, #lsb, &mut out[#at..#end])?;),
+            );
             continue;
         }
         if f.is_ascii() {
