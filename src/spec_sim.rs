@@ -205,12 +205,16 @@ pub fn random_request(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Opt
                             .filter(|_| rng.bool())
                             .fold(0, |acc, b| acc | (1 << b.bit));
                     }
+                    // Packed elements: each within its bits.
+                    let bits = f.packed.map_or(8 * f.width as u32, |pk| pk.bits);
                     let (lo, hi) = f
                         .range
-                        .unwrap_or_else(|| interp::raw_limits(8 * f.width as u32, f.signed));
+                        .unwrap_or_else(|| interp::raw_limits(bits, f.signed));
                     rng.i64(lo..=hi)
                 };
-                if let Some(r) = &f.repeat {
+                if let Some(pk) = &f.packed {
+                    Raw::List((0..pk.count).map(|_| one(rng)).collect())
+                } else if let Some(r) = &f.repeat {
                     let hi = (r.max as i64).min(MAX_ELEMENTS).max(r.min as i64);
                     let n = rng.i64(r.min as i64..=hi);
                     let mut list: Vec<i64> = (0..n).map(|_| one(rng)).collect();

@@ -21,11 +21,16 @@ fn check_passes_on_every_spec_and_summarises_them() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let stdout = text(&out.stdout);
     let lines: Vec<&str> = stdout.lines().collect();
-    assert_eq!(lines.len(), 6, "{stdout}");
-    for (line, name) in lines
-        .iter()
-        .zip(["dynamixel", "modbus", "pelco_d", "pelco_p", "sd", "ub2"])
-    {
+    assert_eq!(lines.len(), 7, "{stdout}");
+    for (line, name) in lines.iter().zip([
+        "crsf",
+        "dynamixel",
+        "modbus",
+        "pelco_d",
+        "pelco_p",
+        "sd",
+        "ub2",
+    ]) {
         assert!(
             line.starts_with(&format!("spec/{name}.yaml: {name} (")),
             "{stdout}"

@@ -11,6 +11,7 @@
 mod common;
 
 use busspec_model::ir::Direction;
+use busspec_protocols::crsf::Crsf;
 use busspec_protocols::dynamixel::Dynamixel;
 use busspec_protocols::modbus::Modbus;
 use busspec_protocols::sd::Sd;
@@ -113,5 +114,20 @@ fn dynamixel_generated_and_interpreter_agree_on_random_inputs() {
     assert!(
         accepted * 8 > n,
         "only {accepted} of {n} random Dynamixel inputs decoded"
+    );
+}
+
+/// CRSF: its packed RC channels, telemetry and extended frames, both engines alike.
+#[test]
+fn crsf_generated_and_interpreter_agree_on_every_example() {
+    every_example::<Crsf>();
+}
+
+#[test]
+fn crsf_generated_and_interpreter_agree_on_random_inputs() {
+    let (accepted, n) = random::<Crsf>(0xC5);
+    assert!(
+        accepted * 8 > n,
+        "only {accepted} of {n} random CRSF inputs decoded"
     );
 }

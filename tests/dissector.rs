@@ -90,6 +90,9 @@ fn cases() -> Vec<Case> {
         // Fields after lists, and several lists (with and without a length field).
         spec("model/tests/fixtures/valid/lists_after.yaml"),
         spec("model/tests/fixtures/valid/lists_length.yaml"),
+        // Packed elements (CRSF's 16 × 11-bit channels), least and most significant bit first.
+        built_in("crsf", "spec/crsf.yaml"),
+        spec("model/tests/fixtures/valid/packed_channels.yaml"),
         derived_units(),
     ]
 }

@@ -10,6 +10,7 @@ use busspec_fuzz_bodies::{seen, stream_events};
 use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{Direction, Protocol as Spec};
 use busspec_model::stream::{breaks_spec, relaxed};
+use busspec_protocols::crsf::Crsf;
 use busspec_protocols::dynamixel::Dynamixel;
 use busspec_protocols::modbus::Modbus;
 use busspec_protocols::sd::Sd;
@@ -80,6 +81,12 @@ fn sd_generated_stream_matches_the_interpreter() {
 #[test]
 fn modbus_generated_stream_matches_the_interpreter() {
     stream_agrees::<Modbus>(9, 30);
+}
+
+/// CRSF: any first byte is an address, so its streams resynchronise by type, length and CRC.
+#[test]
+fn crsf_generated_stream_matches_the_interpreter() {
+    stream_agrees::<Crsf>(11, 30);
 }
 
 /// Most Dynamixel examples are status packets, which read as instructions too: ambiguous in a

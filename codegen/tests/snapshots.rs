@@ -205,6 +205,16 @@ fn lists_specs_generate_their_snapshots() {
     );
 }
 
+/// Packed elements (`packed:`), least and most significant bit first, with padding bits and
+/// fields after them (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn packed_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/packed_channels.yaml",
+        "packed_channels.rs",
+    );
+}
+
 /// The two public protocols, generated whole (`snapshots_compile.rs` and
 /// `generated_public.rs` compile them, replay their examples and hold them to the
 /// interpreter).

@@ -130,7 +130,11 @@ fn code_text(code: &[u8]) -> String {
 /// followed.
 /// A field another may repeat (`equals`): one value, neither text, wide nor a list.
 fn equals_target(f: &Gf) -> bool {
-    f.ty != "ascii" && !is_wide(f.ty) && f.repeat_tail == 0 && !f.yaml.contains("encoding: bcd")
+    f.ty != "ascii"
+        && !is_wide(f.ty)
+        && f.repeat_tail == 0
+        && !f.yaml.contains("packed:")
+        && !f.yaml.contains("encoding: bcd")
 }
 
 fn is_wide(ty: &str) -> bool {
@@ -179,6 +183,9 @@ impl G {
         };
         if self.chance(10) {
             return self.wide_field(name);
+        }
+        if self.chance(6) {
+            return self.packed_field(name);
         }
         if self.chance(6) {
             return self.bcd_field(name);
@@ -363,6 +370,41 @@ impl G {
             name,
             ty,
             width,
+            yaml: y,
+            plain: false,
+            countable: false,
+            repeat_tail: 0,
+        }
+    }
+
+    /// Packed elements: 1 to 6 elements of 2 bits up to their type's width, least or most
+    /// significant bit first, maybe with a range.
+    fn packed_field(&mut self, name: String) -> Gf {
+        let &(ty, tw) = self.pick(&[("u8", 8i64), ("u16", 16), ("u32", 32)]);
+        let bits = if self.chance(30) {
+            tw
+        } else {
+            self.rng.i64(2..=tw)
+        };
+        let count = self.rng.i64(1..=6);
+        let order = if self.chance(50) {
+            "lsb_first"
+        } else {
+            "msb_first"
+        };
+        let mut y = format!(
+            "{{name: {name}, type: {ty}, unit: {}, packed: {{count: {count}, bits: {bits}, bit_order: {order}}}",
+            self.unit()
+        );
+        if self.chance(40) {
+            let r = self.range_yaml(0, (1i64 << bits) - 1);
+            let _ = write!(y, ", {r}");
+        }
+        y.push('}');
+        Gf {
+            name: name.clone(),
+            ty,
+            width: ((count * bits) as usize).div_ceil(8),
             yaml: y,
             plain: false,
             countable: false,
@@ -1813,6 +1855,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         repeats.iter().any(|(f, _)| f.ty == FieldType::Bit),
         "repeat of bits",
     );
+    add(fields.iter().any(|f| f.packed.is_some()), "packed elements");
     add(
         repeats.iter().any(|(_, r)| r.request.is_some()),
         "repeat from request",

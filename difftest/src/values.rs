@@ -128,6 +128,20 @@ pub fn random_values(
                         })
                         .collect();
                     Raw::Text(t)
+                } else if let Some(pk) = &f.packed {
+                    // Packed elements: their count (now and then one more or fewer), each
+                    // within the range or the element's bits (now and then one past them).
+                    let (elo, ehi) = match f.range {
+                        Some(rg) if strict || rng.u8(..4) != 0 => rg,
+                        _ if strict => (0, pk.max()),
+                        _ => (0, pk.max() + 1),
+                    };
+                    let n = if strict || rng.u8(..8) != 0 {
+                        pk.count
+                    } else {
+                        rng.usize(pk.count.saturating_sub(1)..=pk.count + 1)
+                    };
+                    Raw::List((0..n).map(|_| within(rng, elo, ehi)).collect())
                 } else if let Some(r) = &f.repeat {
                     let bit = f.ty == FieldType::Bit;
                     let (lo, hi) = if bit {

@@ -386,7 +386,7 @@ fn field_value(
     name: &str,
     raw: &str,
 ) -> Result<Raw, String> {
-    if f.repeat.is_some() && bit.is_none() {
+    if f.is_list() && bit.is_none() {
         let Ok(items) = serde_json::from_str::<Vec<Box<RawValue>>>(raw.trim()) else {
             return Err(format!(
                 "{name} takes a list of numbers, got {}",
@@ -395,6 +395,9 @@ fn field_value(
         };
         let mut scalar = f.clone();
         scalar.repeat = None;
+        if let Some(pk) = scalar.packed.take() {
+            scalar.width = pk.elem_width;
+        }
         let mut list = Vec::with_capacity(items.len());
         for (k, item) in items.iter().enumerate() {
             let v = if f.ty == busspec_model::ir::FieldType::Bit {

@@ -391,7 +391,15 @@ fn range_text(r: Option<(i64, i64)>) -> String {
 }
 
 fn type_name(f: &Field) -> String {
-    if f.is_ascii() {
+    if let Some(pk) = &f.packed {
+        let order = if pk.lsb_first { "lsb" } else { "msb" };
+        format!(
+            "u{}[{}] × {} bits {order} first",
+            8 * pk.elem_width,
+            pk.count,
+            pk.bits
+        )
+    } else if f.is_ascii() {
         format!("ascii[{}]", f.width)
     } else if f.ty == crate::ir::FieldType::Bit {
         "bit".to_owned()
@@ -1281,6 +1289,13 @@ impl<'a> Differ<'a> {
                     f.width,
                     g.width
                 ),
+            );
+        } else if f.packed != g.packed {
+            // Packed elements regrouped (their count, width or bit order; the bytes unchanged).
+            self.wire(
+                "field_packing_changed",
+                path.to_owned(),
+                format!("field {what}: {} → {}", type_name(f), type_name(g)),
             );
         } else if f.signed != g.signed {
             self.wire(

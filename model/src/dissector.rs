@@ -278,6 +278,15 @@ fn field(f: &Field) -> String {
         })
         .collect();
     let _ = write!(o, ", bits = {{{}}}", bits.join(", "));
+    if let Some(pk) = &f.packed {
+        let _ = write!(
+            o,
+            ", pk = {{ count = {}, bits = {}, lsb = {} }}",
+            pk.count,
+            pk.bits,
+            lua_bool(pk.lsb_first)
+        );
+    }
     if let Some(r) = &f.repeat {
         let (count, by) = match r.count {
             Count::Elements(i) => ("elements", i + 1),

@@ -400,6 +400,38 @@ local function read_elements(f, b, from, to)
   return out
 end
 
+-- The elements of a packed field (`f.pk`) from byte `at`, and whether the bits after its last
+-- element are all 0 (`ir::Packed::read`, `padding_clear`).
+local function read_packed(f, b, at)
+  local out, p = {}, f.pk
+  for k = 0, p.count - 1 do
+    local v, weight = 0, 1
+    for j = 0, p.bits - 1 do
+      local s = k * p.bits + j
+      local x = b[at + floor(s / 8)] or 0
+      if p.lsb then
+        v = v + (floor(x / 2 ^ (s % 8)) % 2) * weight
+        weight = weight * 2
+      else
+        v = v * 2 + floor(x / 2 ^ (7 - s % 8)) % 2
+      end
+    end
+    out[#out + 1] = floor(v)
+  end
+  return out
+end
+
+local function packed_padding_clear(f, b, at)
+  local p = f.pk
+  for s = p.count * p.bits, f.width * 8 - 1 do
+    local x = b[at + floor(s / 8)] or 0
+    local sh = 7 - s % 8
+    if p.lsb then sh = s % 8 end
+    if floor(x / 2 ^ sh) % 2 == 1 then return false end
+  end
+  return true
+end
+
 local function elements_len(f, n)
   if f.rep.bit then return math.ceil(n / 8) end
   return n * f.width
@@ -548,6 +580,12 @@ local function misfit(P, m, b, n, soft)
       for k, v in ipairs(read_elements(f, b, at, at + lens[i])) do
         local range = range_violation(f, nil, v)
         if range then soft[#soft + 1] = out_of_range(m, f.name, at + (k - 1) * step, v, range) end
+      end
+    elseif f.pk then
+      if not packed_padding_clear(f, b, at) then return true end
+      for k, v in ipairs(read_packed(f, b, at)) do
+        local range = range_violation(f, nil, v)
+        if range then soft[#soft + 1] = out_of_range(m, f.name, at + floor((k - 1) * f.pk.bits / 8), v, range) end
       end
     elseif not f.ascii and not f.wide then
       if f.bcd and from_bcd(read_uint(b, at, f.width, f.order)) == nil then return true end
@@ -729,9 +767,15 @@ local function setup(P)
     local info = {}
     for i, f in ipairs(m.fields) do
       local at = pos[i]
-      if f.rep then
-        local stop = at + lens[i]
-        local els = read_elements(f, b, at, stop)
+      if f.rep or f.pk then
+        local stop, els
+        if f.pk then
+          stop = at + f.width
+          els = read_packed(f, b, at)
+        else
+          stop = at + lens[i]
+          els = read_elements(f, b, at, stop)
+        end
         local vals, raws = {}, {}
         for k, v in ipairs(els) do
           vals[k] = value_json(P, f, nil, v)

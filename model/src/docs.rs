@@ -23,6 +23,9 @@ fn cell(s: &str) -> String {
 
 fn type_name(f: &Field) -> String {
     let one = scalar_type_name(f);
+    if let Some(pk) = &f.packed {
+        return format!("{one}[{}] × {} bits", pk.count, pk.bits);
+    }
     match &f.repeat {
         None => one,
         Some(r) => {
@@ -130,6 +133,19 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
         )),
         None => {}
     }
+    if let Some(pk) = &f.packed {
+        notes.push(format!(
+            "{} elements of {} bits packed into {} bytes, {}",
+            pk.count,
+            pk.bits,
+            pk.bytes(),
+            if pk.lsb_first {
+                "least significant bit first: element 0 starts at bit 0 of the first byte"
+            } else {
+                "most significant bit first: element 0 starts at bit 7 of the first byte"
+            }
+        ));
+    }
     if let Some(r) = &f.repeat {
         let count = match r.count {
             Count::Elements(i) => format!("as many as `{}` says", m.fields[i].name),
@@ -178,7 +194,13 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
     );
     out.push_str("|---|---|---|---|---|---|---|---|\n");
     for (i, f) in m.fields.iter().enumerate() {
-        let order_cell = if f.width > 1 && !f.is_ascii() {
+        let order_cell = if let Some(pk) = &f.packed {
+            if pk.lsb_first {
+                "bit stream, LSB first"
+            } else {
+                "bit stream, MSB first"
+            }
+        } else if f.width > 1 && !f.is_ascii() {
             order(f.byte_order)
         } else {
             "—"

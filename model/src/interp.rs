@@ -13,7 +13,7 @@ use crate::checksum;
 use crate::escape;
 use crate::ir::{
     BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, LengthRule, Message,
-    MessageRef, Protocol,
+    MessageRef, Packed, Protocol,
 };
 use crate::number::{swap_index, Num, NumKind};
 
@@ -1761,6 +1761,32 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             continue;
         }
         let at = o.payload + pos(i);
+        if let Some(pk) = &f.packed {
+            let bytes = payload.get(pos(i)..pos(i) + f.width).unwrap_or(&[]);
+            if !pk.padding_clear(bytes) {
+                return Some(Misfit::Constant {
+                    field: i,
+                    bit: None,
+                    offset: at + f.width - 1,
+                    expected: 0,
+                    found: u64::from(packed_padding(pk, bytes)),
+                });
+            }
+            for (k, v) in pk.read(bytes).into_iter().enumerate() {
+                if let Some((min, max)) = range_violation(f, None, v) {
+                    return Some(Misfit::Range {
+                        field: i,
+                        bit: None,
+                        offset: at + k * pk.bits as usize / 8,
+                        found: v,
+                        min,
+                        max,
+                        kind: NumKind::Int,
+                    });
+                }
+            }
+            continue;
+        }
         if f.bcd {
             let bytes = payload.get(pos(i)..pos(i) + f.width).unwrap_or(&[]);
             let found = read_number(f, bytes);
@@ -1885,6 +1911,14 @@ fn values_of<'p>(
             });
             continue;
         }
+        if let Some(pk) = &f.packed {
+            let bytes = payload.get(at..at + f.width).unwrap_or(&[]);
+            values.push(Value {
+                name: Cow::Borrowed(&f.name),
+                raw: Raw::List(pk.read(bytes)),
+            });
+            continue;
+        }
         let (unsigned, v) = int_of(f, payload, at);
         if f.bits.is_empty() {
             values.push(Value {
@@ -1911,6 +1945,20 @@ fn list_at(f: &Field, payload: &[u8], at: usize, sh: &Shape, i: usize) -> Vec<i6
         None => bytes,
     };
     read_elements(f, bytes)
+}
+
+/// The bits of a packed field's last byte that no element takes (0 in a valid frame).
+fn packed_padding(pk: &Packed, bytes: &[u8]) -> u8 {
+    let pad = 8 * pk.bytes() - pk.count * pk.bits as usize;
+    let last = bytes.get(pk.bytes().wrapping_sub(1)).copied().unwrap_or(0);
+    let mask = if pad == 0 {
+        0
+    } else if pk.lsb_first {
+        0xFFu8 << (8 - pad)
+    } else {
+        0xFFu8 >> (8 - pad)
+    };
+    last & mask
 }
 
 /// The elements of a repeated field from the bytes where they start (to the payload's end).
@@ -2204,6 +2252,51 @@ pub fn encode(
             ints.push(v);
             continue;
         }
+        if let Some(pk) = &f.packed {
+            let list = match lookup(&f.name) {
+                Some(Raw::List(l)) => l,
+                Some(_) => {
+                    return Err(EncodeError::NotList {
+                        field: f.name.clone(),
+                    })
+                }
+                None => {
+                    return Err(EncodeError::MissingValue {
+                        field: f.name.clone(),
+                    })
+                }
+            };
+            if list.len() != pk.count {
+                return Err(EncodeError::WrongCount {
+                    field: f.name.clone(),
+                    min: pk.count,
+                    max: pk.count,
+                    found: list.len(),
+                });
+            }
+            for &v in list {
+                if let Some((min, max)) = range_violation(f, None, v) {
+                    return Err(EncodeError::NotInRange {
+                        field: f.name.clone(),
+                        value: v,
+                        min,
+                        max,
+                        kind: f.num_kind(),
+                    });
+                }
+                if v < 0 || v > pk.max() {
+                    return Err(EncodeError::OutOfRange {
+                        field: f.name.clone(),
+                        value: v,
+                        min: 0,
+                        max: pk.max(),
+                    });
+                }
+            }
+            pk.write(list, slot);
+            ints.push(0);
+            continue;
+        }
         if f.is_ascii() {
             let text = match lookup(&f.name) {
                 Some(Raw::Text(t)) => t,
@@ -2392,7 +2485,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
             }
             None => 1,
         };
-        if f.is_ascii() || f.width < 2 || !flip(f.byte_order) {
+        if f.is_ascii() || f.packed.is_some() || f.width < 2 || !flip(f.byte_order) {
             continue;
         }
         for k in 0..n {

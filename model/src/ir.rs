@@ -772,8 +772,97 @@ pub struct Field {
     /// `offset` is so counted: a field after lists sits further by the bytes their elements
     /// take (`interp::Shape`).
     pub repeat: Option<Repeat>,
+    /// Packed elements (`packed:`): `width` is the bytes they take together; the elements
+    /// have the field's type (`elem_width` bytes, unsigned), each `bits` wide.
+    pub packed: Option<Packed>,
     /// The value follows from another field (of this frame or of the request).
     pub follows: Option<Follows>,
+}
+
+/// A fixed number of elements, each `bits` wide, packed into one bit stream (CRSF's 16 × 11-bit
+/// RC channels in 22 bytes). The bits after the last element, up to the byte's end, are 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Packed {
+    pub count: usize,
+    pub bits: u32,
+    /// `bit_order: lsb_first` (else `msb_first`).
+    pub lsb_first: bool,
+    /// The element type's width, bytes (1, 2 or 4).
+    pub elem_width: usize,
+}
+
+impl Packed {
+    /// The bytes `count` elements take.
+    pub fn bytes(&self) -> usize {
+        (self.count * self.bits as usize).div_ceil(8)
+    }
+
+    /// The largest element.
+    pub fn max(&self) -> i64 {
+        (1i64 << self.bits) - 1
+    }
+
+    /// The elements packed in `bytes` (at most [`Self::bytes`] of them are read; missing ones
+    /// read as 0).
+    pub fn read(&self, bytes: &[u8]) -> Vec<i64> {
+        (0..self.count)
+            .map(|k| {
+                let mut v = 0i64;
+                for j in 0..self.bits as usize {
+                    let (bit, at) = if self.lsb_first {
+                        (j, k * self.bits as usize + j)
+                    } else {
+                        (self.bits as usize - 1 - j, k * self.bits as usize + j)
+                    };
+                    let b = bytes.get(at / 8).copied().unwrap_or(0);
+                    let set = if self.lsb_first {
+                        b >> (at % 8) & 1
+                    } else {
+                        b >> (7 - at % 8) & 1
+                    };
+                    v |= i64::from(set) << bit;
+                }
+                v
+            })
+            .collect()
+    }
+
+    /// Whether the padding bits after the last element are all 0.
+    pub fn padding_clear(&self, bytes: &[u8]) -> bool {
+        let used = self.count * self.bits as usize;
+        (used..8 * self.bytes()).all(|at| {
+            let b = bytes.get(at / 8).copied().unwrap_or(0);
+            let set = if self.lsb_first {
+                b >> (at % 8) & 1
+            } else {
+                b >> (7 - at % 8) & 1
+            };
+            set == 0
+        })
+    }
+
+    /// Writes `items` (each within `0..=max`, at most `count`) into `out` (zeroed, at least
+    /// [`Self::bytes`] long).
+    pub fn write(&self, items: &[i64], out: &mut [u8]) {
+        for (k, &v) in items.iter().enumerate().take(self.count) {
+            for j in 0..self.bits as usize {
+                let (bit, at) = if self.lsb_first {
+                    (j, k * self.bits as usize + j)
+                } else {
+                    (self.bits as usize - 1 - j, k * self.bits as usize + j)
+                };
+                if v >> bit & 1 == 1 {
+                    if let Some(b) = out.get_mut(at / 8) {
+                        *b |= if self.lsb_first {
+                            1 << (at % 8)
+                        } else {
+                            0x80 >> (at % 8)
+                        };
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// How many elements a repeated field has.
@@ -865,6 +954,11 @@ impl Field {
 
     pub fn is_ascii(&self) -> bool {
         self.ty == FieldType::Ascii
+    }
+
+    /// Whether its value is a list: a repeated field or packed elements.
+    pub fn is_list(&self) -> bool {
+        self.repeat.is_some() || self.packed.is_some()
     }
 
     /// How its raw value reads as a number.

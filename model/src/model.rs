@@ -615,10 +615,35 @@ pub struct Field {
     pub bits: Vec<BitField>,
     #[serde(default)]
     pub repeat: Option<Repeat>,
+    /// A fixed number of elements of the field's type, each `bits` wide, packed across bytes.
+    #[serde(default)]
+    pub packed: Option<Packed>,
     #[serde(default)]
     pub follows: Option<Follows>,
     #[serde(default)]
     pub doc: Option<String>,
+}
+
+/// `packed: {count: 16, bits: 11, bit_order: lsb_first}`: `count` elements of `bits` bits each,
+/// one after the other in a bit stream that fills bytes in `bit_order` (CRSF's RC channels).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Packed {
+    pub count: i64,
+    pub bits: i64,
+    pub bit_order: BitOrder,
+}
+
+/// How a packed bit stream fills its bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BitOrder {
+    /// Bit 0 of the stream is bit 0 (least significant) of the first byte, and each element's
+    /// least significant bit comes first (a little-endian integer of all the bytes).
+    LsbFirst,
+    /// Bit 0 of the stream is bit 7 of the first byte, and each element's most significant bit
+    /// comes first (a big-endian integer of all the bytes).
+    MsbFirst,
 }
 
 /// A repeated field: `count` elements of the field's type.

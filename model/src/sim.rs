@@ -357,9 +357,9 @@ impl Sim {
                     }
                     if let Some(r) = request.get(&name) {
                         let fits = match r {
-                            Raw::List(_) => f.repeat.is_some(),
+                            Raw::List(_) => f.is_list(),
                             Raw::Text(_) => f.is_ascii(),
-                            Raw::Int(_) => f.repeat.is_none() && !f.is_ascii(),
+                            Raw::Int(_) => !f.is_list() && !f.is_ascii(),
                         };
                         if fits {
                             values.push(Value {
@@ -378,7 +378,9 @@ impl Sim {
                             continue;
                         }
                     }
-                    if let Some(r) = &f.repeat {
+                    if let Some(pk) = &f.packed {
+                        Raw::List(vec![first_valid(f.range, None); pk.count])
+                    } else if let Some(r) = &f.repeat {
                         let n = r
                             .request
                             .as_ref()

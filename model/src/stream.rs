@@ -1019,10 +1019,12 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
             } else {
                 0
             };
+            // A packed element sits in the byte where its first bit does.
+            let step_bits = f.packed.map_or(8 * step, |pk| pk.bits as usize);
             out.push(DecodeError::OutOfRange {
                 message: m.name.clone(),
                 field: name.to_owned(),
-                offset: offset + k * step,
+                offset: offset + k * step_bits / 8,
                 found: *v,
                 min,
                 max,

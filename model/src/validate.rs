@@ -545,7 +545,7 @@ fn check_request_fields(
                     && !g.is_ascii()
                     && !g.is_wide()
                     && !g.bcd
-                    && g.repeat.is_none()
+                    && !g.is_list()
             });
             if !ok {
                 sink.error(
@@ -1678,6 +1678,9 @@ fn parse_code(code: &str, path: &str, sink: &mut Sink) -> Option<Vec<u8>> {
 /// count fields into an array of this many).
 pub const MAX_LISTS: usize = 64;
 
+/// The most packed elements one field may hold.
+pub const MAX_PACKED: i64 = 256;
+
 /// What [`message_body`] resolves: code, fields, fixed payload bytes, most payload bytes.
 type Body = (Vec<u8>, Vec<Field>, usize, usize);
 
@@ -1871,6 +1874,7 @@ fn field(
         special: Vec::new(),
         bits: Vec::new(),
         repeat: None,
+        packed: None,
         follows: None,
     };
     if f.word_order.is_some()
@@ -1880,6 +1884,9 @@ fn field(
             join(p, "word_order"),
             "`word_order` is for 32- and 64-bit numbers (u32 i32 f32 u64 i64 f64), whose 16-bit words it orders",
         );
+    }
+    if let Some(pk) = &f.packed {
+        return packed_field(f, pk, p, out, refs, sink);
     }
     if matches!(f.ty, T::U64 | T::I64 | T::F32 | T::F64) {
         if out.bcd {
@@ -1957,7 +1964,7 @@ fn field(
                     }
                 }
                 match earlier.iter().position(|e| &e.name == other) {
-                    Some(i) if earlier[i].bits.is_empty() && !earlier[i].is_ascii() && !earlier[i].is_wide() && !earlier[i].bcd && earlier[i].repeat.is_none() => {
+                    Some(i) if earlier[i].bits.is_empty() && !earlier[i].is_ascii() && !earlier[i].is_wide() && !earlier[i].bcd && !earlier[i].is_list() => {
                         out.follows = Some(Follows::Field(i, relation(other, sink)));
                     }
                     Some(_) => sink.error(
@@ -2022,7 +2029,7 @@ fn field(
     if let Some(other) = &f.equals {
         allow(&["equals"], "`equals`", sink);
         match earlier.iter().position(|e| &e.name == other) {
-            Some(i) if earlier[i].repeat.is_some() => sink.error(
+            Some(i) if earlier[i].is_list() => sink.error(
                 join(p, "equals"),
                 format!("`{other}` is a repeated field; a field repeats one earlier value"),
             ),
@@ -2197,7 +2204,7 @@ fn repeat(
                     && !earlier[i].bcd
                     && !earlier[i].is_ascii()
                     && earlier[i].bits.is_empty()
-                    && earlier[i].repeat.is_none() =>
+                    && !earlier[i].is_list() =>
             {
                 match of {
                     model::CountOf::Elements => Count::Elements(i),
@@ -2345,6 +2352,104 @@ fn bcd_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut 
     } else if ok {
         out.range = Some((min, max));
     }
+    out
+}
+
+/// Packed elements (`packed: {count, bits, bit_order}`): `count` unsigned elements of the
+/// field's type (u8, u16, u32), each `bits` wide (2 up to the type's width), packed into one
+/// bit stream of `ceil(count × bits / 8)` bytes; a `unit` and a `range` (within `bits`) apply to
+/// every element. Nothing else combines with it yet.
+fn packed_field(
+    f: &model::Field,
+    pk: &model::Packed,
+    p: &str,
+    mut out: Field,
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Field {
+    use model::FieldType as T;
+    let pp = join(p, "packed");
+    let elem_width = match f.ty {
+        T::U8 => 1,
+        T::U16 => 2,
+        T::U32 => 4,
+        _ => {
+            sink.error(
+                join(p, "type"),
+                "packed elements are unsigned integers: u8, u16 or u32 (the element type holds one element)",
+            );
+            return out;
+        }
+    };
+    for (k, given) in [
+        ("repeat", f.repeat.is_some()),
+        ("value", f.value.is_some()),
+        ("enum", f.enum_.is_some()),
+        ("flags", f.flags.is_some()),
+        ("equals", f.equals.is_some()),
+        ("bits", !f.bits.is_empty()),
+        ("special", !f.special.is_empty()),
+        ("follows", f.follows.is_some()),
+        ("word_order", f.word_order.is_some()),
+        ("encoding", out.bcd),
+    ] {
+        if given {
+            sink.error(
+                join(p, k),
+                format!("`{k}` cannot be combined with `packed`"),
+            );
+        }
+    }
+    let type_bits = 8 * elem_width as i64;
+    // Its bytes as written, even where a rule below refuses it: the errors about the payload's
+    // size then follow from what the spec says, not from a placeholder.
+    if (1..=MAX_PACKED).contains(&pk.count) && (1..=64).contains(&pk.bits) {
+        out.width = ((pk.count * pk.bits) as usize).div_ceil(8);
+    }
+    if !(2..=type_bits).contains(&pk.bits) {
+        sink.error(
+            join(&pp, "bits"),
+            format!(
+                "a packed {} element is 2..={type_bits} bits wide, not {} (1-bit elements are `type: bit` with a `repeat`)",
+                match elem_width {
+                    1 => "u8",
+                    2 => "u16",
+                    _ => "u32",
+                },
+                pk.bits
+            ),
+        );
+        return out;
+    }
+    if !(1..=MAX_PACKED).contains(&pk.count) {
+        sink.error(
+            join(&pp, "count"),
+            format!("packed elements number 1..={MAX_PACKED}, not {}", pk.count),
+        );
+        return out;
+    }
+    let packed = Packed {
+        count: pk.count as usize,
+        bits: pk.bits as u32,
+        lsb_first: pk.bit_order == model::BitOrder::LsbFirst,
+        elem_width,
+    };
+    out.width = packed.bytes();
+    out.packed = Some(packed);
+    match &f.unit {
+        Some(u) => match refs.units.get(u) {
+            Some(i) => out.unit = Some(i),
+            None => sink.error(
+                join(p, "unit"),
+                format!("refers to unit `{u}`, which is not defined in `units`"),
+            ),
+        },
+        None => sink.error(join(p, "unit"), "packed elements need a `unit`"),
+    }
+    out.range = f
+        .range
+        .and_then(|r| int_range(r, &join(p, "range"), sink))
+        .and_then(|r| range(r, pk.bits as u32, false, &join(p, "range"), sink));
     out
 }
 

@@ -291,6 +291,37 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "repeat_too_long_for_payload",
         &[("commands.write.fields", "(and up to 60 more in the repeated field), but request payloads are 0..=40 bytes")],
     ),
+    // ---- packed elements (made from valid/packed_channels, without its examples)
+    (
+        "packed_bits_too_wide",
+        &[("commands.levels.fields.levels.packed.bits", "a packed u8 element is 2..=8 bits wide, not 9")],
+    ),
+    (
+        "packed_signed_type",
+        &[("commands.channels.fields.channels.type", "packed elements are unsigned integers: u8, u16 or u32")],
+    ),
+    (
+        "packed_with_repeat",
+        &[
+            ("commands.channels.fields.channels.repeat", "`repeat` cannot be combined with `packed`"),
+            ("commands.channels.fields.channels.range.max", "max 2048 does not fit in a 11-bit field (0..=2047)"),
+        ],
+    ),
+    (
+        "packed_count_zero",
+        &[
+            ("responses.readings.fields.readings.packed.count", "packed elements number 1..=256, not 0"),
+            ("responses.readings.fields", "fields add up to 4 payload bytes, but response payloads are 8..=8 bytes"),
+        ],
+    ),
+    (
+        "packed_as_count",
+        &[("commands.channels.fields.flags.repeat.count", "`channels` is not an unsigned number field")],
+    ),
+    (
+        "packed_without_order",
+        &[("commands.levels.fields.levels.packed", "missing field `bit_order`")],
+    ),
     (
         "bit_without_repeat",
         &[("commands.stamp.fields.ticks.type", "a `bit` is only the element of a repeated field")],

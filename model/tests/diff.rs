@@ -509,3 +509,53 @@ fn fix_crc(text: &str) -> String {
     let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
     format!("{}{}{}", &text[..at], hex.join(" "), &text[end..])
 }
+
+/// Packed elements regrouped in the same bytes (another bit order, another width that keeps
+/// the bytes) are wire-breaking; so is another count that changes the bytes.
+#[test]
+fn packed_element_changes_are_wire_breaking() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/packed_channels.yaml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let head = &text[..text.find("examples:").unwrap()];
+    let old = busspec_model::load_str("old", head).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(diff::diff(&old, &old), []);
+    let edited = head
+        .replace(
+            "packed: {count: 4, bits: 11, bit_order: lsb_first}",
+            "packed: {count: 4, bits: 11, bit_order: msb_first}",
+        )
+        .replace(
+            "packed: {count: 5, bits: 3, bit_order: msb_first}",
+            "packed: {count: 5, bits: 2, bit_order: msb_first}",
+        )
+        .replace("range: {min: 0, max: 6}", "range: {min: 0, max: 3}");
+    let new = busspec_model::load_str("new", &edited).unwrap_or_else(|d| panic!("{d}"));
+    let found = diff::diff(&old, &new);
+    let kinds: Vec<(Category, &str, &str)> = summary(&found);
+    assert!(
+        kinds.contains(&(
+            Wire,
+            "field_packing_changed",
+            "commands.channels.fields.channels"
+        )),
+        "{kinds:?}"
+    );
+    assert!(
+        kinds.contains(&(
+            Wire,
+            "field_packing_changed",
+            "commands.levels.fields.levels"
+        )),
+        "{kinds:?}"
+    );
+    let text = found
+        .iter()
+        .find(|c| c.path == "commands.channels.fields.channels")
+        .map(|c| c.text.clone())
+        .unwrap_or_default();
+    assert!(
+        text.contains("u16[4] × 11 bits lsb first → u16[4] × 11 bits msb first"),
+        "{text}"
+    );
+}

@@ -20,8 +20,8 @@ pub use crate::escape::{
 };
 pub use crate::lists::{Lists, Split};
 pub use crate::repeated::{
-    list, list_bits, read_bits, read_elements, write_bits, write_elements, CountBy, CountField,
-    Element, RepeatAt,
+    encode_packed_in_range, list, list_bits, pack, packed_in_range, packed_padding, read_bits,
+    read_elements, unpack, write_bits, write_elements, CountBy, CountField, Element, RepeatAt,
 };
 pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;

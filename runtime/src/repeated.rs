@@ -873,6 +873,145 @@ pub fn write_bits<const BYTES: usize>(bits: &Bits<BYTES>, out: &mut [u8]) -> usi
     b.len()
 }
 
+/// The stream position of bit `j` of element `k` of `bits`-bit packed elements, and which bit
+/// of the byte at `s / 8` holds it (`lsb`: element 0 from bit 0 of the first byte, each element
+/// least significant bit first; else from bit 7, most significant bit first).
+#[inline(always)]
+fn packed_bit(k: usize, j: usize, bits: usize, lsb: bool) -> (usize, usize, u32) {
+    let s = k * bits + j;
+    let weight = if lsb { j } else { bits - 1 - j };
+    let shift = if lsb { s % 8 } else { 7 - s % 8 };
+    (s / 8, weight, shift as u32)
+}
+
+/// `N` elements of `bits` bits each (at most 32) packed in `bytes` (a packed field,
+/// `packed: {count: N, bits, bit_order}`), as the interpreter's `ir::Packed::read` reads them.
+#[inline]
+pub fn unpack<T: crate::codec::Wire + Default, const N: usize>(
+    bytes: &[u8],
+    bits: usize,
+    lsb: bool,
+) -> Repeated<T, N> {
+    let mut r = Repeated::<T, N>::new();
+    for k in 0..N {
+        let mut v = 0u64;
+        for j in 0..bits {
+            let (at, weight, shift) = packed_bit(k, j, bits, lsb);
+            let b = bytes.get(at).copied().unwrap_or(0);
+            v |= u64::from(b >> shift & 1) << weight;
+        }
+        r.items[k] = T::from_i64(v as i64);
+    }
+    r.len = N;
+    r
+}
+
+/// The bits of the last byte of `count` packed `bits`-bit elements that no element takes
+/// (0 in a valid frame).
+#[inline]
+pub fn packed_padding(bytes: &[u8], count: usize, bits: usize, lsb: bool) -> u8 {
+    let used = count * bits;
+    let len = used.div_ceil(8);
+    let pad = 8 * len - used;
+    let last = bytes.get(len.wrapping_sub(1)).copied().unwrap_or(0);
+    if pad == 0 {
+        0
+    } else if lsb {
+        last & (0xFFu8 << (8 - pad))
+    } else {
+        last & (0xFFu8 >> (8 - pad))
+    }
+}
+
+/// Writes `items` as `count` packed elements of `bits` bits each into `out` (at least
+/// `ceil(count × bits / 8)` bytes, which it zeroes first). A list of another length than `count`, or an element wider
+/// than `bits`, is refused for `field`.
+#[inline]
+pub fn pack<T: crate::codec::Wire>(
+    field: &'static str,
+    items: &[T],
+    count: usize,
+    bits: usize,
+    lsb: bool,
+    out: &mut [u8],
+) -> Result<(), EncodeError> {
+    if items.len() != count {
+        return Err(EncodeError::OutOfRange { field });
+    }
+    let max = (1u64 << bits) - 1;
+    let len = (count * bits).div_ceil(8);
+    if let Some(o) = out.get_mut(..len) {
+        o.fill(0);
+    }
+    for (k, v) in items.iter().enumerate() {
+        let v = v.to_u64();
+        if v > max {
+            return Err(EncodeError::OutOfRange { field });
+        }
+        for j in 0..bits {
+            let (at, weight, shift) = packed_bit(k, j, bits, lsb);
+            if v >> weight & 1 == 1 {
+                if let Some(b) = out.get_mut(at) {
+                    *b |= 1 << shift;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every decoded packed element within its spec range `min..=max`; the error names the byte
+/// where the first that is not starts (`at`: where the field does).
+#[inline]
+pub fn packed_in_range<T: crate::codec::Wire>(
+    message: &'static str,
+    field: &'static str,
+    at: usize,
+    bits: usize,
+    items: &[T],
+    min: i64,
+    max: i64,
+) -> Result<(), DecodeError> {
+    for (k, v) in items.iter().enumerate() {
+        let found = v.to_i64();
+        if !(min..=max).contains(&found) {
+            return Err(DecodeError::OutOfRange {
+                message,
+                field,
+                offset: at + k * bits / 8,
+                found,
+                min,
+                max,
+                kind: crate::NumKind::Int,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Every packed element to encode within its spec range `min..=max`.
+#[inline]
+pub fn encode_packed_in_range<T: crate::codec::Wire>(
+    field: &'static str,
+    items: &[T],
+    min: i64,
+    max: i64,
+) -> Result<(), EncodeError> {
+    for v in items {
+        let value = v.to_i64();
+        if !(min..=max).contains(&value) {
+            return Err(EncodeError::NotInRange {
+                field,
+                value,
+                min,
+                max,
+                kind: crate::NumKind::Int,
+            });
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -1035,5 +1174,31 @@ mod tests {
             })
         );
         assert_eq!(Bits::<1>::new().get(0), None);
+    }
+
+    /// CRSF's RC channels: 16 × 11 bits, channel 1 from bit 0 of the first byte; and 5 × 3
+    /// bits most significant bit first, with its padding bit; each read back as written, a
+    /// wrong count or an element past its bits refused.
+    #[test]
+    fn packed_elements_read_back_as_written() {
+        let ch: [u16; 16] = [
+            992, 992, 992, 992, 172, 1811, 992, 992, 992, 992, 992, 992, 992, 992, 992, 992,
+        ];
+        let mut out = [0xFFu8; 22];
+        pack("channels", &ch, 16, 11, true, &mut out).unwrap();
+        assert_eq!(&out[..4], &[0xE0, 0x03, 0x1F, 0xF8]);
+        let back = unpack::<u16, 16>(&out, 11, true);
+        assert_eq!(back.as_slice(), &ch);
+        assert_eq!(packed_padding(&out, 16, 11, true), 0);
+
+        let levels: [u8; 5] = [1, 2, 3, 4, 5];
+        let mut out = [0u8; 2];
+        pack("levels", &levels, 5, 3, false, &mut out).unwrap();
+        assert_eq!(out, [0x29, 0xCA]);
+        assert_eq!(unpack::<u8, 5>(&out, 3, false).as_slice(), &levels);
+        assert_eq!(packed_padding(&[0x29, 0xCB], 5, 3, false), 1);
+
+        assert!(pack("levels", &levels[..4], 5, 3, false, &mut out).is_err());
+        assert!(pack("levels", &[1u8, 2, 3, 4, 8], 5, 3, false, &mut out).is_err());
     }
 }

@@ -1,4 +1,4 @@
-"""busspec's Modbus RTU, Dynamixel 1.0 and Pelco D specs against the reference implementations.
+"""busspec's Modbus RTU, Dynamixel 1.0, Pelco D and CRSF specs against the reference implementations.
 
 Each way, for every function code / instruction:
 - peer -> busspec: the peer's own encoder builds a frame; `busspec decode --spec` must decode it
@@ -657,10 +657,233 @@ def check_pelco_d():
             count(peer, "peer -> busspec")
 
 
+# ----------------------------------------------------------------------- CRSF (crsf-parser)
+#
+# crsf-parser 0.3.2 builds (crsf_build_frame) and parses (crsf_frame, CRSFParser.parse_stream)
+# frames that start with the sync byte 0xC8, with payload structures for RC channels, battery,
+# link statistics and heartbeat; it lists GPS and attitude sizes and parses extended headers
+# (destination, origin for types above 0x27) but builds and parses neither whole (erratum
+# crsf-e07): those frames are held to its CRC, its sizes and its header structure.
+
+from crsf_parser import CRSFParser, PacketValidationStatus
+from crsf_parser.frames import crsf_header
+from crsf_parser.handling import crsf_build_frame, crsf_crc, crsf_frame_crc
+from crsf_parser.payloads import PAYLOADS_SIZE, PacketsTypes
+
+CRSF = os.path.join(ROOT, "spec", "crsf.yaml")
+CRSF_PEER = "crsf-parser"
+RF_PROFILE = ["fps_4", "fps_50", "fps_150"]
+RF_POWER = ["mw_0", "mw_10", "mw_25", "mw_100", "mw_500", "mw_1000", "mw_2000"]
+ANTENNA = ["ANTENNA_1", "ANTENNA_2"]
+PEER_RF_MODE = ["RF_4_FPS", "RF_50_FPS", "RF_150_FPS"]
+PEER_TX_POWER = ["TX_POWER_0_MW", "TX_POWER_10_MW", "TX_POWER_25_MW", "TX_POWER_100_MW",
+                 "TX_POWER_500_MW", "TX_POWER_1000_MW", "TX_POWER_2000_MW"]
+
+
+def tenths(x):
+    return round(x * 10)
+
+
+def peer_stream(frames):
+    """What crsf-parser's stream parser reports for these frames in one buffer: (status,
+    container) per frame, and its statistics."""
+    got = []
+    parser = CRSFParser(lambda content, status: got.append((status, content)))
+    parser.parse_stream(bytearray(b"".join(frames)))
+    return got, parser.get_stats()
+
+
+def crsf_cases():
+    """(message, raw values as the peer names and builds them) for the four payloads it
+    builds."""
+    cases = []
+    for _ in range(150):
+        cases.append(("rc_channels_packed", {"channels": [rng.randrange(2048) for _ in range(16)]}))
+    for ch in ([0] * 16, [2047] * 16, [172, 992, 1811, 191] * 4):
+        cases.append(("rc_channels_packed", {"channels": ch}))
+    for _ in range(60):
+        cases.append(("battery_sensor", {
+            "voltage": rng.randrange(65536), "current": rng.randrange(65536),
+            "capacity": rng.choice([0, 0xFFFFFF, rng.randrange(1 << 24)]), "remaining": rng.randrange(101),
+        }))
+    for _ in range(60):
+        cases.append(("link_statistics", {
+            "uplink_rssi_ant_1": rng.randrange(256), "uplink_rssi_ant_2": rng.randrange(256),
+            "uplink_link_quality": rng.randrange(101), "uplink_snr": rng.randrange(-128, 128),
+            "diversity_active_antenna": rng.randrange(2), "rf_mode": rng.randrange(3),
+            "uplink_tx_power": rng.randrange(7), "downlink_rssi": rng.randrange(256),
+            "downlink_link_quality": rng.randrange(101), "downlink_snr": rng.randrange(-128, 128),
+        }))
+    return cases
+
+
+def crsf_peer_build(message, raw):
+    if message == "rc_channels_packed":
+        # The peer's list starts with channel 16 (erratum crsf-e01).
+        return crsf_build_frame(PacketsTypes.RC_CHANNELS_PACKED, {"channels": raw["channels"][::-1]})
+    if message == "battery_sensor":
+        return crsf_build_frame(PacketsTypes.BATTERY_SENSOR, raw)
+    peer = dict(raw)
+    peer["diversity_active_antenna"] = ANTENNA[raw["diversity_active_antenna"]]
+    peer["rf_mode"] = PEER_RF_MODE[raw["rf_mode"]]
+    peer["uplink_tx_power"] = PEER_TX_POWER[raw["uplink_tx_power"]]
+    return crsf_build_frame(PacketsTypes.LINK_STATISTICS, peer)
+
+
+def crsf_json(message, raw):
+    """busspec's JSON fields for the peer's raw values."""
+    if message == "rc_channels_packed":
+        return {"channels": raw["channels"]}
+    if message == "battery_sensor":
+        return {"voltage": raw["voltage"] / 10, "current": raw["current"] / 10,
+                "capacity_used": raw["capacity"], "remaining": raw["remaining"]}
+    return {
+        "up_rssi_ant1": raw["uplink_rssi_ant_1"], "up_rssi_ant2": raw["uplink_rssi_ant_2"],
+        "up_link_quality": raw["uplink_link_quality"], "up_snr": raw["uplink_snr"],
+        "active_antenna": raw["diversity_active_antenna"], "rf_profile": RF_PROFILE[raw["rf_mode"]],
+        "up_rf_power": RF_POWER[raw["uplink_tx_power"]], "down_rssi": raw["downlink_rssi"],
+        "down_link_quality": raw["downlink_link_quality"], "down_snr": raw["downlink_snr"],
+    }
+
+
+def crsf_peer_values(message, content):
+    """The raw values the peer parsed, named as it builds them."""
+    p = content.payload
+    if message == "rc_channels_packed":
+        return {"channels": list(p.channels)[::-1]}
+    if message == "battery_sensor":
+        return {k: p[k] for k in ("voltage", "current", "capacity", "remaining")}
+    out = {k: p[k] for k in ("uplink_rssi_ant_1", "uplink_rssi_ant_2", "uplink_link_quality",
+                              "uplink_snr", "downlink_rssi", "downlink_link_quality", "downlink_snr")}
+    out["diversity_active_antenna"] = ANTENNA.index(str(p.diversity_active_antenna))
+    out["rf_mode"] = PEER_RF_MODE.index(str(p.rf_mode))
+    out["uplink_tx_power"] = PEER_TX_POWER.index(str(p.uplink_tx_power))
+    return out
+
+
+def check_crsf():
+    peer = f"{CRSF_PEER} (CRSF)"
+    cases = crsf_cases()
+    frames = [bytes(crsf_peer_build(m, raw)) for m, raw in cases]
+    # peer -> busspec: each frame decodes to the message and values the peer built it from.
+    for frame, got, (message, raw) in zip(frames, decode(CRSF, "crsf", frames), cases):
+        if got["address"] != 0xC8:
+            fail(f"{peer} frame {frame.hex()}: busspec reads address {got['address']}")
+        expect(frame, got, {"message": message, **crsf_json(message, raw)}, peer)
+        count(peer, "peer -> busspec")
+    # The same frames as one capture: busspec's stream finds each, in order, with no noise.
+    # (The built-in protocol and `--spec`, alike.)
+    streams = [subprocess.run([BUSSPEC, "decode", *spec, "crsf", "--stream", "-"], input=b"".join(frames),
+                              capture_output=True) for spec in ([], ["--spec", CRSF])]
+    if streams[0].stdout != streams[1].stdout:
+        fail("busspec's stream of the peer's frames: the generated code and the interpreter differ")
+    lines = [json.loads(l) for l in streams[0].stdout.decode().splitlines()]
+    if streams[0].returncode != 0 or [l.get("message") for l in lines] != [m for m, _ in cases]:
+        fail(f"busspec's stream of the peer's {len(frames)} frames: {streams[0].stderr.decode()[:300]} / {[l.get('message') for l in lines][:10]}")
+    for _ in lines:
+        count(peer, "peer -> busspec (as one stream)")
+    # busspec -> peer: busspec encodes the same values to the peer's bytes, and the peer's stream
+    # parser reads them back, every frame valid, to the same values.
+    objs = [{"message": m, "address": 0xC8, "fields": crsf_json(m, raw)} for m, raw in cases]
+    ours = encode(CRSF, "crsf", objs)
+    for frame, mine, obj in zip(frames, ours, objs):
+        if mine != frame:
+            fail(f"busspec encodes {obj} as {mine.hex()}, the peer as {frame.hex()}")
+    parsed, stats = peer_stream(ours)
+    if len(parsed) != len(ours) or stats.valid_frames != len(ours) or stats.crc_errors or stats.framing_errors:
+        fail(f"the peer's stream parser read {len(parsed)} of busspec's {len(ours)} frames: {stats}")
+    for (status, content), (message, raw), mine in zip(parsed, cases, ours):
+        if status != PacketValidationStatus.VALID or crsf_peer_values(message, content) != raw:
+            fail(f"the peer reads busspec's {mine.hex()} as {status} {crsf_peer_values(message, content)}, busspec wrote {raw}")
+        count(peer, "busspec -> peer")
+
+    # GPS and attitude: busspec encodes random values; the peer's CRC and payload sizes agree.
+    # The other way, frames of the peer's size sealed with its CRC decode and encode back.
+    def sealed(kind, payload, address=0xC8):
+        body = bytes([kind]) + payload
+        frame = bytes([address, len(body) + 1]) + body
+        return frame + bytes([crsf_crc(frame[2:])])
+
+    telemetry = []
+    for _ in range(40):
+        telemetry.append({"message": "gps", "address": 0xC8, "fields": {
+            "latitude": rng.randrange(-900000000, 900000001) / 1e7,
+            "longitude": rng.randrange(-1800000000, 1800000001) / 1e7,
+            "groundspeed": rng.randrange(65536) / 10, "heading": rng.randrange(36000) / 100,
+            "altitude": rng.randrange(65536) - 1000, "satellites": rng.randrange(256)}})
+        telemetry.append({"message": "attitude", "address": 0xC8, "fields": {
+            k: rng.randrange(-31416, 31417) / 10000 for k in ("pitch", "roll", "yaw")}})
+    kinds = {"gps": PacketsTypes.GPS, "attitude": PacketsTypes.ATTITUDE}
+    for obj, frame in zip(telemetry, encode(CRSF, "crsf", telemetry)):
+        kind = kinds[obj["message"]]
+        if frame[2] != kind or frame[1] - 2 != PAYLOADS_SIZE[kind] or crsf_frame_crc(frame) != frame[-1]:
+            fail(f"busspec's {obj['message']} {frame.hex()}: the peer's size {PAYLOADS_SIZE[kind]} or CRC {crsf_frame_crc(frame):#04x} differ")
+        count(peer, "busspec -> peer (CRC and size only: erratum crsf-e07)")
+    sealed_frames = []
+    for _ in range(40):
+        lat = rng.randrange(-900000000, 900000001).to_bytes(4, "big", signed=True)
+        lon = rng.randrange(-1800000000, 1800000001).to_bytes(4, "big", signed=True)
+        sealed_frames.append(sealed(PacketsTypes.GPS, lat + lon + bytes(rng.randrange(256) for _ in range(7))))
+        sealed_frames.append(sealed(PacketsTypes.ATTITUDE, b"".join(
+            rng.randrange(-31416, 31417).to_bytes(2, "big", signed=True) for _ in range(3))))
+    decoded = decode(CRSF, "crsf", sealed_frames)
+    back = encode(CRSF, "crsf", [{"message": d["message"], "address": d["address"], "fields": d["fields"]} for d in decoded])
+    for frame, d, b in zip(sealed_frames, decoded, back):
+        if d["message"] not in kinds or b != frame:
+            fail(f"a frame sealed with the peer's CRC, {frame.hex()}, reads {d} and encodes back as {b.hex()}")
+        count(peer, "peer -> busspec (CRC and size only: erratum crsf-e07)")
+
+    # Extended frames: the peer's header structure (destination, origin after the type) both ways.
+    addresses = [0x00, 0xC8, 0xEA, 0xEC, 0xEE, 0x10]
+    names = {0x00: "broadcast", 0xC8: "flight_controller", 0xEA: "remote_control", 0xEC: "receiver",
+             0xEE: "transmitter_module", 0x10: "usb"}
+    extended = []
+    for _ in range(20):
+        d, o = rng.choice(addresses), rng.choice(addresses)
+        extended.append(("device_ping", 0x28, d, o, b"", {}))
+        n, c = rng.randrange(256), rng.randrange(256)
+        extended.append(("parameter_read", 0x2C, d, o, bytes([n, c]), {"parameter_number": n, "chunk_number": c}))
+        i, off = rng.randrange(1 << 32), rng.randrange(-(1 << 31), 1 << 31)
+        extended.append(("timing_correction", 0x3A, d, o,
+                         bytes([0x10]) + i.to_bytes(4, "big") + off.to_bytes(4, "big", signed=True),
+                         {"update_interval": i / 10, "offset": off / 10}))
+    peer_frames = []
+    for message, kind, d, o, payload, _ in extended:
+        head = crsf_header.build({"frame_length": 4 + len(payload), "type": kind,
+                                  "destination_address": d, "origin_address": o})
+        frame = head + payload
+        peer_frames.append(frame + bytes([crsf_crc(frame[2:])]))
+    for frame, got, (message, kind, d, o, _, fields) in zip(peer_frames, decode(CRSF, "crsf", peer_frames), extended):
+        want = {"message": message, "destination": names[d], "origin": names[o], **fields}
+        expect(frame, got, want, peer)
+        count(peer, "peer -> busspec (extended header: erratum crsf-e07)")
+    objs = [{"message": m, "address": 0xC8,
+             "fields": {"destination": names[d], "origin": names[o], **f}} for m, _, d, o, _, f in extended]
+    for frame, mine in zip(peer_frames, encode(CRSF, "crsf", objs)):
+        h = crsf_header.parse(mine)
+        if mine != frame or (h.type, h.destination_address, h.origin_address) != (frame[2], frame[3], frame[4]) \
+                or crsf_frame_crc(mine) != mine[-1]:
+            fail(f"busspec's extended frame {mine.hex()}: the peer's header reads {h}, built {frame.hex()}")
+        count(peer, "busspec -> peer (extended header: erratum crsf-e07)")
+
+    # Heartbeat (erratum crsf-e04): the peer's is one byte, the document's two; each refuses the other's.
+    hb = bytes(crsf_build_frame(PacketsTypes.HEARTBEAT, {"origin_device_address": 0xC8}))
+    rc, out, err = both_engines("decode", CRSF, "crsf", [hb.hex()])
+    if rc != 1 or out:
+        fail(f"busspec decodes the peer's one-byte heartbeat {hb.hex()}: {out}")
+    count(peer, "peer -> busspec refused (one-byte heartbeat: erratum crsf-e04)")
+    (ours_hb,) = encode(CRSF, "crsf", [{"message": "heartbeat", "address": 0xC8, "fields": {"origin_address": "flight_controller"}}])
+    parsed, stats = peer_stream([ours_hb])
+    if parsed or stats.invalid_frames != 1:
+        fail(f"the peer's stream parser takes busspec's two-byte heartbeat {ours_hb.hex()}: {parsed} {stats}")
+    count(peer, "busspec -> peer refused (two-byte heartbeat: erratum crsf-e04)")
+
+
 check_modbus()
 check_dynamixel()
 check_dynamixel_erratum()
 check_pelco_d()
+check_crsf()
 for (peer, way), n in sorted(counts.items()):
     print(f"{peer}: {n} frames {way}")
 print("reference check: ok")

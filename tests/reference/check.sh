@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Checks spec/modbus.yaml, spec/dynamixel.yaml and spec/pelco_d.yaml against the reference
-# implementations: pymodbus, the ROBOTIS dynamixel-sdk and pyptzcontroller (a Pelco D camera
-# controller), installed from PyPI into a virtual environment under
+# Checks spec/modbus.yaml, spec/dynamixel.yaml, spec/pelco_d.yaml and spec/crsf.yaml against the
+# reference implementations: pymodbus, the ROBOTIS dynamixel-sdk, pyptzcontroller (a Pelco D camera
+# controller) and crsf-parser (CRSF, with construct, which it parses with), installed from PyPI
+# into a virtual environment under
 # target/ that this script makes (rebuilt when missing). Frames each peer's encoders build must
 # decode through `busspec decode` to the values they were built from, and frames
 # `busspec encode` builds must be read identically by the peers (tests/reference/check.py);
@@ -14,7 +15,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
 venv=target/reference-venv
-pins=(pymodbus==3.16.1 dynamixel-sdk==4.1.0 pyserial==3.5 pyptzcontroller==0.1.2)
+pins=(pymodbus==3.16.1 dynamixel-sdk==4.1.0 pyserial==3.5 pyptzcontroller==0.1.2 crsf-parser==0.3.2 construct==2.10.68 construct-typing==0.5.6)
 # Rebuilt unless exactly the pinned versions are there (dynamixel-sdk alone pulls any pyserial).
 if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c '
 import importlib.metadata as m, sys
@@ -24,7 +25,7 @@ sys.exit(any(m.version(p) != v for p, v in (a.split("==") for a in sys.argv[1:])
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check "${pins[@]}"
 fi
-"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"), "/ pyserial", m.version("pyserial"), "/ pyptzcontroller", m.version("pyptzcontroller"))'
+"$venv/bin/python" -c 'import importlib.metadata as m; print("pymodbus", m.version("pymodbus"), "/ dynamixel-sdk", m.version("dynamixel-sdk"), "/ pyserial", m.version("pyserial"), "/ pyptzcontroller", m.version("pyptzcontroller"), "/ crsf-parser", m.version("crsf-parser"), "/ construct", m.version("construct"))'
 cargo build --locked --quiet --bin busspec
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/check.py
 # Bounded twice: each talk call and the script time out on their own; this is the last resort.

@@ -184,6 +184,12 @@ impl<'a> Ctx<'a> {
             None => (leaf.field.unit, Some(leaf.field)),
         };
         if let Some(f) = field {
+            if let Some(pk) = &f.packed {
+                return Kind::List {
+                    elem: leaf.wire,
+                    max: pk.count,
+                };
+            }
             if let Some(r) = &f.repeat {
                 return if f.ty == FieldType::Bit {
                     Kind::BitList {
@@ -245,8 +251,10 @@ impl<'a> Ctx<'a> {
 }
 
 pub(super) fn wire_type(f: &Field) -> IntType {
+    // Packed elements: the element type's.
+    let width = f.packed.map_or(f.width, |pk| pk.elem_width);
     IntType {
-        bits: 8 * f.width as u32,
+        bits: 8 * width as u32,
         signed: f.signed,
         float: f.is_float(),
     }

@@ -36,6 +36,29 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             quote!(#read_at)
         };
         let name = &f.name;
+        if let Some(pk) = &f.packed {
+            // Packed elements: the padding bits 0, then each element within its range.
+            let mname = &m.name;
+            let e = wire_type(f).ident();
+            let (count, bits, lsb) = (
+                usize_lit(pk.count),
+                usize_lit(pk.bits as usize),
+                pk.lsb_first,
+            );
+            let end = usize_lit(o.payload + f.offset + f.width);
+            let last = usize_lit(f.width - 1);
+            let v = local(name);
+            let bytes = quote!(&frame[#read_at..#end]);
+            stmts.push(quote!(rt::equal(#mname, #name, #at + #last, rt::packed_padding(#bytes, #count, #bits, #lsb), 0)?;));
+            stmts.push(quote!(let #v = rt::unpack::<#e, #count>(#bytes, #bits, #lsb);));
+            if let Some((lo, hi)) = f.range {
+                let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+                stmts.push(quote!(rt::packed_in_range(#mname, #name, #at, #bits, #v.as_slice(), #lo, #hi)?;));
+            }
+            values.push((ident(name), quote!(#v)));
+            wires.push(quote!());
+            continue;
+        }
         if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
             if let Some(value) = decode_repeat(ctx, m, leaf, &mut stmts) {
                 values.push((ident(name), value));

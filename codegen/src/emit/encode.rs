@@ -44,6 +44,11 @@ pub(super) fn emit_encode_arm(
         stmts.push(quote!(rt::encode_broadcast(address, #b, #name)?;));
     }
     for l in ls {
+        if let (Some(_), Some((lo, hi)), None) = (l.field.packed, l.field.range, l.bits) {
+            let (name, v, lo, hi) = (l.name, local(l.name), i64_lit(lo), i64_lit(hi));
+            stmts.push(quote!(rt::encode_packed_in_range(#name, #v.as_slice(), #lo, #hi)?;));
+            continue;
+        }
         let Some((raw_t, raw)) = raw_of(ctx, l, &local(l.name)) else {
             continue;
         };
@@ -203,6 +208,18 @@ pub(super) fn emit_encode_arm(
         }
         if let (Some(_), Some((_, _, v))) = (&f.repeat, &repeat) {
             stmts.push(write_list(f, v, quote!(#at)));
+            continue;
+        }
+        if let Some(pk) = &f.packed {
+            let (name, n) = (&f.name, local(&f.name));
+            let (count, bits, lsb) = (
+                usize_lit(pk.count),
+                usize_lit(pk.bits as usize),
+                pk.lsb_first,
+            );
+            stmts.push(
+                quote!(rt::pack(#name, #n.as_slice(), #count, #bits, #lsb, &mut out[#at..#end])?;),
+            );
             continue;
         }
         if f.is_ascii() {

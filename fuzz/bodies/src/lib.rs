@@ -4,7 +4,7 @@
 //! returns normally otherwise.
 //!
 //! For each protocol, one generic body over [`Protocol`] per target, with a thin wrapper per
-//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`], [`pelco_d`], [`pelco_p`]) that the fuzz
+//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`], [`pelco_d`], [`pelco_p`], [`crsf`]) that the fuzz
 //! targets call by name:
 //! * [`decode`]: arbitrary bytes through `decode_request`, `decode_response` and
 //!   `decode_reply`; errors point inside the frame, and every accepted frame
@@ -27,7 +27,7 @@
 //! Modbus and Dynamixel have the generated `decode` and `stream` bodies
 //! (`modbus_generated_decode`, ...), and [`interpreted`] has a decode and a stream body each
 //! for the interpreter on its own (`modbus_decode`, ...), from before the generator emitted
-//! them. Pelco D and Pelco P have the generated `decode` and `stream` bodies alone
+//! them. Pelco D, Pelco P and CRSF have the generated `decode` and `stream` bodies alone
 //! (`pelco_d_generated_decode`, ...).
 //!
 //! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
@@ -156,6 +156,14 @@ pub const TARGETS: &[Target] = &[
         name: "pelco_p_generated_stream",
         body: pelco_p::generated_stream,
     },
+    Target {
+        name: "crsf_generated_decode",
+        body: crsf::generated_decode,
+    },
+    Target {
+        name: "crsf_generated_stream",
+        body: crsf::generated_stream,
+    },
 ];
 
 /// The bodies for Modbus RTU, as the fuzz targets call them: the interpreter's own
@@ -218,6 +226,22 @@ pub mod pelco_p {
     /// [`crate::stream`] for the generated Pelco P.
     pub fn generated_stream(data: &[u8]) {
         crate::stream::<PelcoP>(data)
+    }
+}
+
+/// The bodies for CRSF, as the fuzz targets call them: the generated code's (its packed RC
+/// channels, telemetry and extended frames; [`crate::decode`] and [`crate::stream`] hold it to
+/// the interpreter).
+pub mod crsf {
+    use busspec_protocols::crsf::Crsf;
+
+    /// [`crate::decode`] for the generated CRSF.
+    pub fn generated_decode(data: &[u8]) {
+        crate::decode::<Crsf>(data)
+    }
+    /// [`crate::stream`] for the generated CRSF.
+    pub fn generated_stream(data: &[u8]) {
+        crate::stream::<Crsf>(data)
     }
 }
 

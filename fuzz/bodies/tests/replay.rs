@@ -170,6 +170,16 @@ fn pelco_p_generated_stream() {
 }
 
 #[test]
+fn crsf_generated_decode() {
+    replay_target("crsf_generated_decode");
+}
+
+#[test]
+fn crsf_generated_stream() {
+    replay_target("crsf_generated_stream");
+}
+
+#[test]
 fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
     let names = [
         "ub2_decode",
@@ -193,6 +203,8 @@ fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
         "pelco_d_generated_stream",
         "pelco_p_generated_decode",
         "pelco_p_generated_stream",
+        "crsf_generated_decode",
+        "crsf_generated_stream",
     ];
     let targets: Vec<&str> = TARGETS.iter().map(|t| t.name).collect();
     assert_eq!(targets, names);
