@@ -1549,8 +1549,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         let stuffed = escaping == Escaping::Insert;
         let width = if g.chance(70) && !stuffed { 1 } else { 2 };
         let mut parts: Vec<&str> = Vec::new();
+        // Each part once, though the layout may hold a start or the length twice.
         for p in layout.iter().copied() {
-            if (p != "length" || g.chance(20)) && g.chance(70) {
+            if !parts.contains(&p) && (p != "length" || g.chance(20)) && g.chance(70) {
                 parts.push(p);
             }
         }
