@@ -27,6 +27,7 @@ fn field(range: (i64, i64), special: &[i64]) -> Field {
         bits: Vec::new(),
         repeat: None,
         follows: None,
+        record: Vec::new(),
     }
 }
 
