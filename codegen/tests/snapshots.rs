@@ -176,6 +176,12 @@ fn lists_specs_generate_their_snapshots() {
     );
 }
 
+/// Repeated records (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn records_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/records.yaml", "records.rs");
+}
+
 /// The two public protocols, generated whole (`snapshots_compile.rs` and
 /// `generated_public.rs` compile them, replay their examples and hold them to the
 /// interpreter).

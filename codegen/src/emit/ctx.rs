@@ -71,6 +71,8 @@ pub(super) struct Leaf<'a> {
     pub(super) wire: IntType,
     pub(super) bits: Option<&'a BitField>,
     pub(super) field: &'a Field,
+    /// The message it belongs to (a repeated record's struct is named by it).
+    pub(super) message: &'a str,
 }
 
 /// The generated Rust type of a value, and how to turn raw integers into it and back.
@@ -97,6 +99,11 @@ pub(super) enum Kind {
     /// A repeated bit field, packed into `bytes` bytes.
     BitList {
         bytes: usize,
+    },
+    /// A repeated record: at most `max` records, each the generated struct `ty`.
+    Records {
+        ty: Ident,
+        max: usize,
     },
 }
 
@@ -133,7 +140,15 @@ impl<'a> Ctx<'a> {
             });
         };
         for m in p.commands.iter().chain(&p.responses) {
-            for f in &m.fields {
+            // A record's fields are typed as fields are.
+            for f in m
+                .fields
+                .iter()
+                .flat_map(|f| std::iter::once(f).chain(&f.record))
+            {
+                if f.is_record() {
+                    continue;
+                }
                 let w = wire_type(f);
                 if let Some(u) = f.unit {
                     widen(&mut unit_span[u], w.limits());
@@ -184,6 +199,12 @@ impl<'a> Ctx<'a> {
             None => (leaf.field.unit, Some(leaf.field)),
         };
         if let Some(f) = field {
+            if let (Some(r), true) = (&f.repeat, f.is_record()) {
+                return Kind::Records {
+                    ty: record_type(leaf.message, f),
+                    max: r.max,
+                };
+            }
             if let Some(r) = &f.repeat {
                 return if f.ty == FieldType::Bit {
                     Kind::BitList {
@@ -240,8 +261,18 @@ impl<'a> Ctx<'a> {
                 let bytes = usize_lit(bytes);
                 quote!(rt::Bits<#bytes>)
             }
+            Kind::Records { ty, max } => {
+                let max = usize_lit(max);
+                quote!(rt::Repeated<#ty, #max>)
+            }
         }
     }
+}
+
+/// The struct generated for repeated record `f` of message `m` (its name is the message's
+/// and the field's: `SyncWriteBlocks`).
+pub(super) fn record_type(m: &str, f: &Field) -> Ident {
+    type_ident(&format!("{m}_{}", f.name))
 }
 
 pub(super) fn wire_type(f: &Field) -> IntType {
@@ -272,6 +303,7 @@ pub(super) fn leaves(m: &Message) -> Vec<Leaf<'_>> {
                 wire: wire_type(f),
                 bits: None,
                 field: f,
+                message: &m.name,
             });
         }
         for b in &f.bits {
@@ -282,6 +314,7 @@ pub(super) fn leaves(m: &Message) -> Vec<Leaf<'_>> {
                     wire: bits_type(b),
                     bits: Some(b),
                     field: f,
+                    message: &m.name,
                 });
             }
         }
@@ -381,7 +414,7 @@ pub(super) fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenSt
         Kind::Unit { raw, .. } | Kind::Enum { raw, .. } | Kind::Flags { raw, .. } => {
             Some((raw, quote!(#v.raw())))
         }
-        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => None,
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } | Kind::Records { .. } => None,
     }
 }
 
@@ -491,6 +524,6 @@ pub(super) fn from_wire(
             let (r, raw) = (r.ident(), paren(raw));
             quote!(#ty::from_raw(#raw as #r))
         }
-        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => raw,
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } | Kind::Records { .. } => raw,
     }
 }

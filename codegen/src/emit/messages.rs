@@ -84,6 +84,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                     }
                     Kind::Text(_) => quote!(rt::Text(&#v[..])),
                     Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
+                    Kind::Records { .. } => quote!(rt::Records(#v.records())),
                 };
                 quote!(f(#n, #value))
             })
@@ -114,6 +115,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         }
     };
     let repeats = emit_repeats(p, d);
+    let records = emit_records(ctx, d);
     let dispatch = emit_dispatch(ctx, d, &ty);
     let from_fields = emit_from_fields(ctx, d);
     let command_info = if d == Direction::Request {
@@ -206,6 +208,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     };
     quote! {
         #repeats
+        #records
         #[doc = #what]
         #derives
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -308,6 +311,10 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
                 Kind::BitList { bytes } => {
                     let bytes = usize_lit(bytes);
                     quote!(rt::list_bits::<#bytes>(&mut field, #n)?)
+                }
+                Kind::Records { ty, max } => {
+                    let max = usize_lit(max);
+                    quote!(rt::records::<#ty, #max>(&mut field, #n)?)
                 }
                 _ if l.bits.is_none() && l.wire.bits != 24 => {
                     let w = l.wire.ident();

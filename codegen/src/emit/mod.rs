@@ -51,6 +51,7 @@ mod head;
 mod lists;
 mod messages;
 mod protocol;
+mod records;
 mod stream;
 #[cfg(test)]
 mod tests;
@@ -66,6 +67,7 @@ use head::*;
 use lists::*;
 use messages::*;
 use protocol::*;
+use records::*;
 use stream::*;
 pub use tokens::camel;
 use tokens::*;
