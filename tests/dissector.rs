@@ -340,6 +340,19 @@ fn raw_text(raw: &Raw) -> String {
                 .join(",")
         ),
         Raw::Text(t) => t.iter().map(|b| format!("{b:02x}")).collect(),
+        Raw::Records(r) => format!(
+            "[{}]",
+            r.iter()
+                .map(|rec| format!(
+                    "[{}]",
+                    rec.iter()
+                        .map(|v| v.to_string())
+                        .collect::<Vec<_>>()
+                        .join(",")
+                ))
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
     }
 }
 
