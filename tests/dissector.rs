@@ -84,6 +84,8 @@ fn cases() -> Vec<Case> {
         // Fields after lists, and several lists (with and without a length field).
         spec("model/tests/fixtures/valid/lists_after.yaml"),
         spec("model/tests/fixtures/valid/lists_length.yaml"),
+        // Repeated records: a list of objects, each field as a field of its own prints.
+        spec("model/tests/fixtures/valid/records.yaml"),
         derived_units(),
     ]
 }
