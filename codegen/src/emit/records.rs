@@ -105,6 +105,22 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
         defaults.push(quote!(#gn: #zero));
     }
     let n = usize_lit(f.record.len());
+    // Plain integers derive their zero; a unit, enum or flag set is made from raw 0.
+    let plain = leaves.iter().all(|l| matches!(ctx.kind(l), Kind::Int(_)));
+    let (derive_default, default_impl) = if plain {
+        (quote!(, Default), quote!())
+    } else {
+        (
+            quote!(),
+            quote! {
+                impl ::core::default::Default for #ty {
+                    fn default() -> Self {
+                        Self { #(#defaults,)* }
+                    }
+                }
+            },
+        )
+    };
     let d = doc(&format!(
         "One record of `{}.{}` ({} bytes). {}",
         m.name, f.name, f.width, f.doc
@@ -112,7 +128,7 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
     let read_doc = " Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.";
     quote! {
         #d
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash #derive_default)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct #ty {
@@ -132,11 +148,7 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
                 rt::Ok(())
             }
         }
-        impl ::core::default::Default for #ty {
-            fn default() -> Self {
-                Self { #(#defaults,)* }
-            }
-        }
+        #default_impl
         impl rt::Record for #ty {
             const FIELDS: usize = #n;
             fn raw(&self, field: usize) -> i64 {

@@ -330,7 +330,7 @@ pub mod records {
         }
     }
     /// One record of `write_pairs.pairs` (5 bytes).
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     pub struct WritePairsPairs {
@@ -364,15 +364,6 @@ pub mod records {
             rt::encode_in_range("pairs.bank", v_bank, 1, 4)?;
             out[4] = v_bank;
             rt::Ok(())
-        }
-    }
-    impl ::core::default::Default for WritePairsPairs {
-        fn default() -> Self {
-            Self {
-                register: 0,
-                value: 0,
-                bank: 0,
-            }
         }
     }
     impl rt::Record for WritePairsPairs {
