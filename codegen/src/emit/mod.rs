@@ -7,6 +7,7 @@
 //! - `types`: units, enums and flags;
 //! - `messages`: the `Request`/`Response` enums and their per-message tables; `encode` and
 //!   `decode` the arms of one message; `lists` where repeated fields sit and how they are split;
+//!   `records` the struct of each repeated record;
 //! - `dispatch`: code → message, the decode entry point;
 //! - `stream`: the stream decoder's tables and the `Protocol` impl;
 //! - `protocol`: pairing (`COMMANDS`, `follows_request`);
@@ -41,7 +42,8 @@
 //! - constants (and a list's count field, computed from the list) are not part of the typed
 //!   message: encode writes them, decode checks them; a repeated field is an
 //!   `rt::Repeated<wire, max>` or `rt::Bits<bytes>` value, with a `REPEAT_<NAME>` const saying
-//!   where it sits and how it is counted.
+//!   where it sits and how it is counted; a repeated record is an `rt::Repeated<Struct, max>` of
+//!   a struct named by its message and field, its fields typed by these rules.
 
 mod ctx;
 mod decode;
