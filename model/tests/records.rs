@@ -301,3 +301,16 @@ fn diff_compares_each_record_field() {
         "{changes:#?}"
     );
 }
+
+#[test]
+fn a_device_space_refuses_a_record_list() {
+    let spec = format!(
+        "{}\ndevice:\n  spaces:\n    - {{name: table, type: u8, size: 16}}\n  commands:\n    - {{command: sync_write, writes: table, start: flags, from: blocks}}\n",
+        text()
+    );
+    let e = load_str("records.yaml", &spec).unwrap_err().to_string();
+    assert!(
+        e.contains("`sync_write.blocks` is a repeated record; a space's elements are numbers"),
+        "{e}"
+    );
+}
