@@ -1090,6 +1090,32 @@ fn lists_snapshots_stream_as_the_interpreter_does() {
     assert!(found > 200 * 10, "only {found} frames found");
 }
 
+/// A list whose unit is scaled holds the unit's type (`rt::Repeated<Millivolts, 6>`), its
+/// elements lent to `visit` by their raw values, as the interpreter holds them.
+#[test]
+fn a_scaled_list_holds_its_units_type() {
+    let p = fixture("model/tests/fixtures/valid/lists_length.yaml");
+    let mut seen = 0;
+    for e in p
+        .examples
+        .iter()
+        .filter(|e| e.message.direction == Direction::Request)
+    {
+        let d = lists_length::Request::decode(&e.wire).unwrap();
+        if let lists_length::Request::Log { samples, .. } = d.message {
+            let typed: &busspec_runtime::Repeated<lists_length::Millivolts, 6> = &samples;
+            let i = busspec_model::interp::decode_as(&p, e.message, &e.wire).unwrap();
+            let raws: Vec<i64> = typed.iter().map(|m| i64::from(m.raw())).collect();
+            assert_eq!(
+                i.get("samples"),
+                Some(&busspec_model::interp::Raw::List(raws))
+            );
+            seen += 1;
+        }
+    }
+    assert!(seen > 0);
+}
+
 /// Repeated records: the examples replay; every frame mutated from them decodes alike in both
 /// engines (records, refusals of a record's field out of range at its offset) and random
 /// messages encode alike; captures stream alike.

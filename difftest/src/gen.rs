@@ -474,6 +474,10 @@ impl G {
         let (mut y, width) = if record {
             let (fs, w) = self.record_fields();
             (format!("{{name: {name}, type: record, fields: [{fs}]"), w)
+        } else if !bit && !signed && width <= 2 && self.n_enums > 0 && self.chance(20) {
+            // Enum elements (a list of the enum's type in generated code).
+            let e = self.rng.usize(..self.n_enums);
+            (format!("{{name: {name}, type: {ty}, enum: e{e}"), width)
         } else if bit {
             (format!("{{name: {name}, type: bit"), width)
         } else {
@@ -1816,6 +1820,22 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         msgs.iter().any(|m| m.fields.iter().any(|f| f.is_record())),
         "records",
+    );
+    add(
+        msgs.iter().any(|m| {
+            m.fields.iter().any(|f| {
+                f.repeat.is_some()
+                    && f.ty != FieldType::Bit
+                    && !f.is_record()
+                    && (f.enumeration.is_some()
+                        || f.unit.is_some_and(|u| {
+                            let u = &p.units[u];
+                            u.scale != busspec_model::rational::Rational::ONE
+                                || u.offset != busspec_model::rational::Rational::ZERO
+                        }))
+            })
+        }),
+        "list of a unit or enum type",
     );
     add(
         repeats.iter().any(|(_, r)| r.request.is_some()),

@@ -28,8 +28,8 @@ pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, CommandKind, DecodeError, Decoded,
-    EncodeError, FieldError, FieldValue, Message, NumKind, Protocol, Record, RecordList, Repeated,
-    Reply,
+    Elements, EncodeError, FieldError, FieldValue, Message, NumKind, Protocol, Record, RecordList,
+    Repeated, Reply,
 };
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter

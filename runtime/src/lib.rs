@@ -283,7 +283,55 @@ pub enum Elements<'a> {
     U32(&'a [u32]),
     I32(&'a [i32]),
     I64(&'a [i64]),
-    Bits { packed: &'a [u8], len: usize },
+    Bits {
+        packed: &'a [u8],
+        len: usize,
+    },
+    /// Elements of a type of the spec's (a unit's newtype, an enum), each lent as its raw
+    /// value.
+    Table(ElementRef<'a>),
+}
+
+/// A list whose elements lend their raw values: how [`Elements::Table`] reads them.
+pub trait ElementTable {
+    /// How many elements.
+    fn count(&self) -> usize;
+    /// The raw value of element `i` (0 past the last).
+    fn raw(&self, i: usize) -> i64;
+}
+
+/// An [`ElementTable`] lent to [`Elements::Table`]: compared, hashed and printed by its raw
+/// values.
+#[derive(Clone, Copy)]
+pub struct ElementRef<'a>(pub &'a dyn ElementTable);
+
+impl ElementRef<'_> {
+    fn values(&self) -> impl Iterator<Item = i64> + '_ {
+        (0..self.0.count()).map(|i| self.0.raw(i))
+    }
+}
+
+impl PartialEq for ElementRef<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.count() == other.0.count() && self.values().eq(other.values())
+    }
+}
+
+impl Eq for ElementRef<'_> {}
+
+impl core::hash::Hash for ElementRef<'_> {
+    fn hash<H: core::hash::Hasher>(&self, state: &mut H) {
+        self.0.count().hash(state);
+        for v in self.values() {
+            v.hash(state);
+        }
+    }
+}
+
+impl fmt::Debug for ElementRef<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.values()).finish()
+    }
 }
 
 impl Elements<'_> {
@@ -298,6 +346,7 @@ impl Elements<'_> {
             Elements::I32(s) => s.len(),
             Elements::I64(s) => s.len(),
             Elements::Bits { len, .. } => *len,
+            Elements::Table(t) => t.0.count(),
         }
     }
 
@@ -320,6 +369,7 @@ impl Elements<'_> {
                 packed.get(i / 8).map(|b| i64::from(b >> (i % 8) & 1))
             }
             Elements::Bits { .. } => None,
+            Elements::Table(t) => (i < t.0.count()).then(|| t.0.raw(i)),
         }
     }
 

@@ -168,6 +168,24 @@ impl<T: Element, const N: usize> Repeated<T, N> {
     }
 }
 
+impl<T: Wire, const N: usize> crate::ElementTable for Repeated<T, N> {
+    fn count(&self) -> usize {
+        self.len
+    }
+    fn raw(&self, i: usize) -> i64 {
+        self.as_slice().get(i).map_or(0, |v| v.to_i64())
+    }
+}
+
+impl<T: Wire, const N: usize> Repeated<T, N> {
+    /// Elements of a type of the spec's (a unit's newtype, an enum) as
+    /// [`crate::Message::visit`] reports them: by their raw values.
+    #[inline]
+    pub fn table(&self) -> Elements<'_> {
+        Elements::Table(crate::ElementRef(self))
+    }
+}
+
 impl<R: crate::Record, const N: usize> crate::RecordTable for Repeated<R, N> {
     fn records(&self) -> usize {
         self.len

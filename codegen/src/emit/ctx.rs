@@ -91,10 +91,12 @@ pub(super) enum Kind {
         raw: IntType,
     },
     Text(usize),
-    /// A repeated field: at most `max` elements, each its field's wire integer.
+    /// A repeated field: at most `max` elements, each its field's wire integer, or the type
+    /// of its enum or (scaled) unit where it has one (`typed`).
     List {
         elem: IntType,
         max: usize,
+        typed: Option<Ident>,
     },
     /// A repeated bit field, packed into `bytes` bytes.
     BitList {
@@ -214,6 +216,7 @@ impl<'a> Ctx<'a> {
                     Kind::List {
                         elem: leaf.wire,
                         max: r.max,
+                        typed: self.element_type(f),
                     }
                 };
             }
@@ -242,6 +245,21 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// The type of a repeated field's elements where it is one of the spec's: its enum's, or
+    /// its unit's newtype (a unit of scale 1 and offset 0 leaves them integers).
+    pub(super) fn element_type(&self, f: &Field) -> Option<Ident> {
+        if f.repeat.is_none() || f.ty == FieldType::Bit || f.is_record() {
+            return None;
+        }
+        if let Some(e) = f.enumeration {
+            return Some(type_ident(&self.p.enums[e].name));
+        }
+        match f.unit {
+            Some(u) if !is_identity(&self.p.units[u]) => Some(type_ident(&self.p.units[u].name)),
+            _ => None,
+        }
+    }
+
     pub(super) fn rust_type(&self, leaf: &Leaf) -> TokenStream {
         match self.kind(leaf) {
             Kind::Int(t) => {
@@ -253,8 +271,9 @@ impl<'a> Ctx<'a> {
                 let n = Literal::usize_unsuffixed(n);
                 quote!([u8; #n])
             }
-            Kind::List { elem, max } => {
-                let (e, max) = (elem.ident(), usize_lit(max));
+            Kind::List { elem, max, typed } => {
+                let e = typed.unwrap_or_else(|| elem.ident());
+                let max = usize_lit(max);
                 quote!(rt::Repeated<#e, #max>)
             }
             Kind::BitList { bytes } => {
