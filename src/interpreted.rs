@@ -178,6 +178,13 @@ impl<const R: bool> Message for Frame<R> {
                 Raw::Int(i) => f(name, FieldValue::Int(*i)),
                 Raw::Text(t) => f(name, FieldValue::Text(t)),
                 Raw::List(l) => f(name, FieldValue::List(Elements::I64(l))),
+                Raw::Records(r) => f(
+                    name,
+                    FieldValue::Records(busspec_runtime::RecordList::Flat {
+                        values: &r.concat(),
+                        fields: r.first().map_or(0, Vec::len),
+                    }),
+                ),
             }
         }
     }
@@ -229,6 +236,11 @@ impl<const R: bool> Message for Frame<R> {
                 FieldValue::Int(i) => Raw::Int(i),
                 FieldValue::Text(t) => Raw::Text(t.to_vec()),
                 FieldValue::List(e) => Raw::List((0..e.len()).filter_map(|k| e.get(k)).collect()),
+                FieldValue::Records(l) => Raw::Records(
+                    (0..l.len())
+                        .map(|k| (0..l.fields()).map(|j| l.get(k, j).unwrap_or(0)).collect())
+                        .collect(),
+                ),
             };
             values.push(Value {
                 name: Cow::Borrowed(n),

@@ -858,6 +858,30 @@ mod tests {
                                 .collect::<Vec<_>>()
                                 .join(",")
                         ),
+                        // Records as the JSON contract writes them: a list of objects.
+                        StatedValue::Records(rs) => format!(
+                            "[{}]",
+                            rs.iter()
+                                .map(|r| format!(
+                                    "{{{}}}",
+                                    r.iter()
+                                        .map(|(k, v)| match v {
+                                            StatedValue::Number(x) => format!("\"{k}\":{x}"),
+                                            StatedValue::Name(x)
+                                            | StatedValue::Exact { text: x, .. } => {
+                                                format!(
+                                                    "\"{k}\":{}",
+                                                    serde_json::to_string(x).unwrap_or_default()
+                                                )
+                                            }
+                                            _ => format!("\"{k}\":null"),
+                                        })
+                                        .collect::<Vec<_>>()
+                                        .join(",")
+                                ))
+                                .collect::<Vec<_>>()
+                                .join(",")
+                        ),
                     };
                     format!("{name}={text}")
                 })

@@ -1175,6 +1175,8 @@ fn lists_followed_by_fields_round_trip_through_the_cli() {
             "model/tests/fixtures/valid/lists_length.yaml",
             "lists_length",
         ),
+        // Repeated records: lists of objects.
+        ("model/tests/fixtures/valid/records.yaml", "records"),
     ] {
         let p =
             busspec_model::load_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(spec))
@@ -1225,6 +1227,21 @@ fn lists_followed_by_fields_round_trip_through_the_cli() {
         "7E 03 11 02 1234 5678 0005 1D",
     ]);
     assert!(text(&out.stdout).contains("\"fields\":{\"n\":2,\"values\":[4660,22136],\"flags\":5}"));
+    // The records of records' sync_write, each an object, then the flags after them.
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        "model/tests/fixtures/valid/records.yaml",
+        "records",
+        "7E 01 83 02 01 0002 00 05 FF03 01 07 7C",
+    ]);
+    assert!(
+        text(&out.stdout).contains(
+            "\"blocks\":[{\"id\":1,\"position\":51.2,\"mode\":\"velocity\"},{\"id\":5,\"position\":102.3,\"mode\":\"position\"}],\"flags\":7"
+        ),
+        "{}",
+        text(&out.stdout)
+    );
 }
 
 /// CRSF, built in: its RC channels (16 × 11 bits packed, channel 1 first) decode to the same

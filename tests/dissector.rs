@@ -93,6 +93,8 @@ fn cases() -> Vec<Case> {
         // Packed elements (CRSF's 16 × 11-bit channels), least and most significant bit first.
         built_in("crsf", "spec/crsf.yaml"),
         spec("model/tests/fixtures/valid/packed_channels.yaml"),
+        // Repeated records: a list of objects, each field as a field of its own prints.
+        spec("model/tests/fixtures/valid/records.yaml"),
         derived_units(),
     ]
 }
@@ -349,6 +351,19 @@ fn raw_text(raw: &Raw) -> String {
                 .join(",")
         ),
         Raw::Text(t) => t.iter().map(|b| format!("{b:02x}")).collect(),
+        Raw::Records(r) => format!(
+            "[{}]",
+            r.iter()
+                .map(|rec| format!(
+                    "[{}]",
+                    rec.iter()
+                        .map(|v| v.to_string())
+                        .collect::<Vec<_>>()
+                        .join(",")
+                ))
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
     }
 }
 

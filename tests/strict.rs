@@ -132,6 +132,11 @@ fn generated_values<M: busspec_protocols::Message>(m: &M) -> Vec<(String, Raw)> 
             FieldValue::Int(i) => Raw::Int(i),
             FieldValue::Text(t) => Raw::Text(t.to_vec()),
             FieldValue::List(items) => Raw::List(items.iter().collect()),
+            FieldValue::Records(l) => Raw::Records(
+                (0..l.len())
+                    .map(|k| (0..l.fields()).map(|j| l.get(k, j).unwrap_or(0)).collect())
+                    .collect(),
+            ),
         };
         out.push((name.to_owned(), raw));
     });

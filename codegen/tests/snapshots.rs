@@ -215,6 +215,12 @@ fn packed_spec_generates_its_snapshot() {
     );
 }
 
+/// Repeated records (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn records_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/records.yaml", "records.rs");
+}
+
 /// The two public protocols, generated whole (`snapshots_compile.rs` and
 /// `generated_public.rs` compile them, replay their examples and hold them to the
 /// interpreter).

@@ -311,11 +311,17 @@ fn pattern_encode<M: Message>(m: &M, address: u8, max: usize) -> Result<Vec<u8>,
         .map_err(|e| e.to_string())
 }
 
-fn field_value(raw: &Raw) -> FieldValue<'_> {
+/// `raw` as a field value; records lent from `flat`, their raw values record after record
+/// (`fields` to a record).
+fn field_value<'a>(raw: &'a Raw, flat: &'a [i64], fields: usize) -> FieldValue<'a> {
     match raw {
         Raw::Int(i) => FieldValue::Int(*i),
         Raw::Text(t) => FieldValue::Text(t),
         Raw::List(l) => FieldValue::List(Elements::I64(l)),
+        Raw::Records(_) => FieldValue::Records(busspec_runtime::RecordList::Flat {
+            values: flat,
+            fields,
+        }),
     }
 }
 
@@ -541,11 +547,27 @@ impl<'p, P: Protocol> Run<'p, P> {
         self.report.encodes += 1;
         let p = self.p;
         let name = p.message(r).name.as_str();
+        let flats: Vec<Vec<i64>> = values
+            .iter()
+            .map(|v| match &v.raw {
+                Raw::Records(r) => r.concat(),
+                _ => Vec::new(),
+            })
+            .collect();
+        let m = p.message(r);
         let lookup = |n: &str| {
             values
                 .iter()
-                .find(|v| v.name == n)
-                .map(|v| field_value(&v.raw))
+                .zip(&flats)
+                .find(|(v, _)| v.name == n)
+                .map(|(v, flat)| {
+                    let fields = m
+                        .fields
+                        .iter()
+                        .find(|f| f.name == n)
+                        .map_or(0, |f| f.record.len());
+                    field_value(&v.raw, flat, fields)
+                })
         };
         let max = P::MAX_FRAME_LEN;
         let g = caught(|| -> Result<Vec<u8>, GenEncodeError> {

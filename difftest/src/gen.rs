@@ -479,6 +479,9 @@ impl G {
     fn repeated(&mut self, fields: &mut Vec<Gf>, request_field: Option<&str>, later: bool) {
         let k = fields.len();
         let bit = self.chance(20);
+        // A repeated record: one to three fixed-width fields, each with a unit (maybe a range
+        // and a special value) or an enum (maybe a range) or flags.
+        let record = !bit && self.chance(30);
         let (ty, width, signed) = if bit {
             ("bit", 1, false)
         } else {
@@ -541,12 +544,22 @@ impl G {
                 self.rng.u8(1..=2)
             );
         }
-        let mut y = if bit {
-            format!("{{name: {name}, type: bit")
+        let (mut y, width) = if record {
+            let (fs, w) = self.record_fields();
+            (format!("{{name: {name}, type: record, fields: [{fs}]"), w)
+        } else if !bit && !signed && width <= 2 && self.n_enums > 0 && self.chance(20) {
+            // Enum elements (a list of the enum's type in generated code).
+            let e = self.rng.usize(..self.n_enums);
+            (format!("{{name: {name}, type: {ty}, enum: e{e}"), width)
+        } else if bit {
+            (format!("{{name: {name}, type: bit"), width)
         } else {
-            format!("{{name: {name}, type: {ty}, unit: {}", self.unit())
+            (
+                format!("{{name: {name}, type: {ty}, unit: {}", self.unit()),
+                width,
+            )
         };
-        if !bit && self.chance(30) {
+        if !bit && !record && self.chance(30) {
             let (lo, hi) = limits(width, signed);
             let rr = self.range_yaml(lo, hi);
             let _ = write!(y, ", {rr}");
@@ -562,6 +575,56 @@ impl G {
             countable: false,
             repeat_tail: tail.max(1),
         });
+    }
+
+    /// A record's fields (YAML flow items) and its width.
+    fn record_fields(&mut self) -> (String, usize) {
+        let mut items = Vec::new();
+        let mut width = 0;
+        for j in 0..self.rng.usize(1..=3) {
+            let &(ty, w, signed) = self.pick(&[
+                ("u8", 1, false),
+                ("i8", 1, true),
+                ("u16", 2, false),
+                ("i16", 2, true),
+                ("u24", 3, false),
+                ("i24", 3, true),
+                ("u32", 4, false),
+                ("i32", 4, true),
+            ]);
+            width += w;
+            let name = format!("r{j}");
+            let mut y = match self.rng.u8(..10) {
+                0..=1 if self.n_enums > 0 && !signed && w <= 2 => {
+                    let e = self.rng.usize(..self.n_enums);
+                    let mut y = format!("{{name: {name}, type: {ty}, enum: e{e}");
+                    if self.chance(30) {
+                        let _ = write!(y, ", range: {{min: 0, max: {}}}", self.rng.u8(1..8));
+                    }
+                    y
+                }
+                2 if self.n_flags > 0 && !signed && w <= 2 => {
+                    let fl = self.rng.usize(..self.n_flags);
+                    format!("{{name: {name}, type: {ty}, flags: fl{fl}")
+                }
+                _ => {
+                    let mut y = format!("{{name: {name}, type: {ty}, unit: {}", self.unit());
+                    let (lo, hi) = limits(w, signed);
+                    if self.chance(40) {
+                        let r = self.range_yaml(lo, hi);
+                        let _ = write!(y, ", {r}");
+                    }
+                    if self.chance(15) {
+                        let v = self.rng.i64(lo..=hi);
+                        let _ = write!(y, ", special: [{{value: {v}, name: sp_{name}}}]");
+                    }
+                    y
+                }
+            };
+            y.push('}');
+            items.push(y);
+        }
+        (items.join(", "), width)
     }
 
     fn fields(&mut self, request_field: Option<&str>, follows_request: Option<&str>) -> Vec<Gf> {
@@ -839,6 +902,27 @@ fn stated_values(p: &ir::Protocol, m: &ir::Message, values: &[interp::Value]) ->
                 if let Some(x) = e.values.iter().find(|x| x.value as i64 == *i) {
                     out.push(format!("{}: {}", v.name, x.name));
                 }
+            }
+            // Records whose fields are all plain counts, as a list of mappings.
+            Raw::Records(rs)
+                if !rs.is_empty()
+                    && f.record.iter().all(|g| {
+                        g.unit.is_some_and(|u| p.units[u].name == "count") && g.special.is_empty()
+                    }) =>
+            {
+                let items: Vec<String> = rs
+                    .iter()
+                    .map(|r| {
+                        let kv: Vec<String> = f
+                            .record
+                            .iter()
+                            .zip(r)
+                            .map(|(g, x)| format!("{}: {x}", g.name))
+                            .collect();
+                        format!("{{{}}}", kv.join(", "))
+                    })
+                    .collect();
+                out.push(format!("{}: [{}]", v.name, items.join(", ")));
             }
             Raw::List(l) if plain && f.range.is_none() && !l.is_empty() => {
                 let items: Vec<String> = l.iter().map(|x| x.to_string()).collect();
@@ -1857,6 +1941,26 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         "repeat of bits",
     );
     add(fields.iter().any(|f| f.packed.is_some()), "packed elements");
+    add(
+        msgs.iter().any(|m| m.fields.iter().any(|f| f.is_record())),
+        "records",
+    );
+    add(
+        msgs.iter().any(|m| {
+            m.fields.iter().any(|f| {
+                f.repeat.is_some()
+                    && f.ty != FieldType::Bit
+                    && !f.is_record()
+                    && (f.enumeration.is_some()
+                        || f.unit.is_some_and(|u| {
+                            let u = &p.units[u];
+                            u.scale != busspec_model::rational::Rational::ONE
+                                || u.offset != busspec_model::rational::Rational::ZERO
+                        }))
+            })
+        }),
+        "list of a unit or enum type",
+    );
     add(
         repeats.iter().any(|(_, r)| r.request.is_some()),
         "repeat from request",

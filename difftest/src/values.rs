@@ -2,7 +2,7 @@
 //! examples the generator derives and the encodes the comparison makes.
 
 use busspec_model::interp::{raw_limits, Raw, Value};
-use busspec_model::ir::{FieldType, Leaf, Message, Protocol};
+use busspec_model::ir::{Field, FieldType, Leaf, Message, Protocol};
 use busspec_model::number::NumKind;
 
 /// Whether leaf `l` of `m` is a value the generated message carries (and both encoders take):
@@ -142,6 +142,17 @@ pub fn random_values(
                         rng.usize(pk.count.saturating_sub(1)..=pk.count + 1)
                     };
                     Raw::List((0..n).map(|_| within(rng, elo, ehi)).collect())
+                } else if let (Some(r), true) = (&f.repeat, f.is_record()) {
+                    let n = if strict {
+                        rng.usize(r.min..=r.max)
+                    } else {
+                        rng.usize(..=r.max + 1)
+                    };
+                    Raw::Records(
+                        (0..n)
+                            .map(|_| f.record.iter().map(|g| scalar(p, g, rng, strict)).collect())
+                            .collect(),
+                    )
                 } else if let Some(r) = &f.repeat {
                     let bit = f.ty == FieldType::Bit;
                     let (lo, hi) = if bit {
@@ -175,33 +186,7 @@ pub fn random_values(
                 } else if f.is_wide() {
                     Raw::Int(wide(rng, f, strict))
                 } else {
-                    let (lo, hi) = raw_limits(8 * f.width as u32, f.signed);
-                    let e = f.enumeration.map(|e| &p.enums[e]);
-                    let v = if let (Some(e), true) = (e, rng.u8(..4) != 0) {
-                        e.values[rng.usize(..e.values.len())].value as i64
-                    } else if !f.special.is_empty() && rng.u8(..4) == 0 {
-                        f.special[rng.usize(..f.special.len())].value
-                    } else if let (Some((a, b)), true) = (f.range, strict || rng.u8(..4) != 0) {
-                        within(rng, a, b)
-                    } else {
-                        within(rng, lo, hi)
-                    };
-                    let v = match f.range {
-                        Some((a, b))
-                            if strict
-                                && !(a..=b).contains(&v)
-                                && !f.special.iter().any(|s| s.value == v) =>
-                        {
-                            within(rng, a, b)
-                        }
-                        _ => v,
-                    };
-                    let v = if !strict && rng.u8(..32) == 0 {
-                        hi.saturating_add(1)
-                    } else {
-                        v
-                    };
-                    Raw::Int(v)
+                    Raw::Int(scalar(p, f, rng, strict))
                 }
             }
         };
@@ -211,4 +196,33 @@ pub fn random_values(
         });
     }
     out
+}
+
+/// A value of a whole integer field (a record's field too): a named enum value, a special
+/// value or one in range most of the time; strict, always what the spec allows.
+fn scalar(p: &Protocol, f: &Field, rng: &mut fastrand::Rng, strict: bool) -> i64 {
+    let (lo, hi) = raw_limits(8 * f.width as u32, f.signed);
+    let e = f.enumeration.map(|e| &p.enums[e]);
+    let v = if let (Some(e), true) = (e, rng.u8(..4) != 0) {
+        e.values[rng.usize(..e.values.len())].value as i64
+    } else if !f.special.is_empty() && rng.u8(..4) == 0 {
+        f.special[rng.usize(..f.special.len())].value
+    } else if let (Some((a, b)), true) = (f.range, strict || rng.u8(..4) != 0) {
+        within(rng, a, b)
+    } else {
+        within(rng, lo, hi)
+    };
+    let v = match f.range {
+        Some((a, b))
+            if strict && !(a..=b).contains(&v) && !f.special.iter().any(|s| s.value == v) =>
+        {
+            within(rng, a, b)
+        }
+        _ => v,
+    };
+    if !strict && rng.u8(..32) == 0 {
+        hi.saturating_add(1)
+    } else {
+        v
+    }
 }

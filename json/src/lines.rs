@@ -558,6 +558,10 @@ impl Printer {
         ) else {
             return reference(out);
         };
+        // Records (a list of objects) are printed by the reference printer.
+        if m.fields.iter().any(|f| f.is_record()) {
+            return reference(out);
+        }
         Self::open(out, &self.heads, plan, frame.address, offset);
         for (i, v) in frame.values.iter().enumerate() {
             if i > 0 {
@@ -567,6 +571,7 @@ impl Printer {
                 Raw::Int(i) => Scalar::Int(*i),
                 Raw::Text(t) => Scalar::Text(t),
                 Raw::List(items) => Scalar::List(items),
+                Raw::Records(_) => Scalar::List(&[]),
             };
             // Values come in leaf order, their names borrowed from the spec the plan was made
             // from; look the name up only where they do not.
@@ -653,6 +658,13 @@ impl Printer {
                 out.push(b'\n');
             });
         };
+        // Records (a list of objects) are printed by the reference printer.
+        if m.fields.iter().any(|f| f.is_record()) {
+            return crate::message_line(p, direction, address, message, offset).map(|line| {
+                out.extend_from_slice(line.as_bytes());
+                out.push(b'\n');
+            });
+        }
         let (given, text, ints) = (&mut self.given, &mut self.text, &mut self.ints);
         given.clear();
         text.clear();
@@ -670,6 +682,8 @@ impl Printer {
                     ints.extend(items.iter());
                     Given::List(from..ints.len())
                 }
+                // Not reached: a message with records is printed by the reference printer.
+                FieldValue::Records(_) => Given::List(0..0),
             };
             given.push((name, v));
         });

@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 use busspec_model::interp::{self, EncodeError, Raw, Value};
 use busspec_model::ir::{BitField, Count, Direction, Field, Follows, Message, MessageRef, Unit};
 use busspec_model::rational::Rational;
-use busspec_runtime::{Decoded, Elements, FieldError, FieldValue, Message as _, Protocol};
+use busspec_runtime::{
+    Decoded, Elements, FieldError, FieldValue, Message as _, Protocol, RecordList,
+};
 use serde::Deserialize;
 use serde_json::value::RawValue;
 
@@ -49,14 +51,32 @@ impl Parsed {
             }
             .to_string());
         }
+        // Records lent flat, record after record.
+        let flats: Vec<Vec<i64>> = self
+            .values
+            .iter()
+            .map(|v| match &v.raw {
+                Raw::Records(r) => r.concat(),
+                _ => Vec::new(),
+            })
+            .collect();
         let field = |name: &'static str| {
             self.values
                 .iter()
-                .find(|v| v.name == name)
-                .map(|v| match &v.raw {
+                .zip(&flats)
+                .find(|(v, _)| v.name == name)
+                .map(|(v, flat)| match &v.raw {
                     Raw::Int(i) => FieldValue::Int(*i),
                     Raw::Text(t) => FieldValue::Text(t),
                     Raw::List(l) => FieldValue::List(Elements::I64(l)),
+                    Raw::Records(_) => FieldValue::Records(RecordList::Flat {
+                        values: flat,
+                        fields: m
+                            .fields
+                            .iter()
+                            .find(|f| f.name == name)
+                            .map_or(0, |f| f.record.len()),
+                    }),
                 })
         };
         let typed = match direction {
@@ -99,7 +119,7 @@ fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
             .find(|v| v.name == name)
             .and_then(|v| match v.raw {
                 Raw::Int(i) => Some(i),
-                Raw::Text(_) | Raw::List(_) => None,
+                Raw::Text(_) | Raw::List(_) | Raw::Records(_) => None,
             })
     };
     let fixed = |field: &str, expected: i64| match int(field) {
@@ -121,10 +141,7 @@ fn check_fixed(m: &Message, values: &[Value]) -> Result<(), String> {
     // The value of count field `i`: the number of elements or bytes of the list it counts.
     let counted = |i: usize| {
         let (_, rf, r) = m.counted_by(i)?;
-        let n = match values.iter().find(|v| v.name == rf.name)?.raw {
-            Raw::List(ref l) => l.len(),
-            _ => return None,
-        };
+        let n = values.iter().find(|v| v.name == rf.name)?.raw.elements()?;
         Some(match r.count {
             Count::Bytes(_) => rf.elements_len(n),
             Count::Elements(_) | Count::ToEnd => n,
@@ -386,6 +403,9 @@ fn field_value(
     name: &str,
     raw: &str,
 ) -> Result<Raw, String> {
+    if f.is_record() && bit.is_none() {
+        return records_value(p, f, name, raw);
+    }
     if f.is_list() && bit.is_none() {
         let Ok(items) = serde_json::from_str::<Vec<Box<RawValue>>>(raw.trim()) else {
             return Err(format!(
@@ -522,6 +542,45 @@ fn field_value(
         }
         None => integer(name, &text, r).map(Raw::Int),
     }
+}
+
+/// A repeated record's raw values from its JSON text: a list of objects, each giving every
+/// field of the record by name, as the printer writes them (`blocks[1].position`: where a
+/// value is wrong).
+fn records_value(p: &Spec, f: &Field, name: &str, raw: &str) -> Result<Raw, String> {
+    let Ok(items) = serde_json::from_str::<Vec<BTreeMap<String, Box<RawValue>>>>(raw.trim()) else {
+        return Err(format!(
+            "{name} takes a list of records (objects of {}), got {}",
+            f.record
+                .iter()
+                .map(|g| g.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            raw.trim()
+        ));
+    };
+    let mut out = Vec::with_capacity(items.len());
+    for (k, item) in items.iter().enumerate() {
+        if let Some(extra) = item
+            .keys()
+            .find(|key| !f.record.iter().any(|g| &g.name == *key))
+        {
+            return Err(format!("{name}[{k}]: the record has no field `{extra}`"));
+        }
+        let mut rec = Vec::with_capacity(f.record.len());
+        for g in &f.record {
+            let label = format!("{name}[{k}].{}", g.name);
+            let Some(text) = item.get(&g.name) else {
+                return Err(format!("{label}: missing"));
+            };
+            match field_value(p, g, None, &label, text.get())? {
+                Raw::Int(i) => rec.push(i),
+                _ => return Err(format!("{label} takes a number")),
+            }
+        }
+        out.push(rec);
+    }
+    Ok(Raw::Records(out))
 }
 
 /// A 64-bit integer or float field's raw value (its bits) from its JSON text: a whole number

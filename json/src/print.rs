@@ -4,7 +4,7 @@ use busspec_model::interp::{self, Frame, Raw};
 use busspec_model::ir::{
     BitField, Count, Direction, Field, Follows, Leaf, Message as IrMessage, MessageRef, Unit,
 };
-use busspec_runtime::{Elements, FieldValue, Message};
+use busspec_runtime::{Elements, FieldValue, Message, RecordList};
 
 use crate::{hex, Spec};
 
@@ -106,6 +106,7 @@ fn field_json(p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue<'_>) 
                 .map(|i| field_json(p, f, bit, FieldValue::Int(i)));
             return Json::List(items.collect());
         }
+        FieldValue::Records(list) => return records_json(p, f, list),
         FieldValue::Int(v) => v,
     };
     if bit.is_none() && f.is_wide() {
@@ -154,6 +155,27 @@ fn field_json(p: &Spec, f: &Field, bit: Option<&BitField>, raw: FieldValue<'_>) 
     }
 }
 
+/// A repeated record's records: a list of objects, each field by its name as a field of its
+/// own prints (units as physical values, enums by name).
+fn records_json(p: &Spec, f: &Field, list: RecordList<'_>) -> Json {
+    Json::List(
+        (0..list.len())
+            .map(|k| {
+                Json::Fields(
+                    f.record
+                        .iter()
+                        .enumerate()
+                        .map(|(j, g)| {
+                            let v = list.get(k, j).unwrap_or(0);
+                            (g.name.clone(), field_json(p, g, None, FieldValue::Int(v)))
+                        })
+                        .collect(),
+                )
+            })
+            .collect(),
+    )
+}
+
 /// One field of message `m`, by its spec name and raw value: the engine-neutral core.
 fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, Json) {
     let json = match interp::leaf_field(m, name) {
@@ -162,6 +184,17 @@ fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, J
             FieldValue::Int(i) => num(i),
             FieldValue::Text(t) => Json::Str(text_of(t)),
             FieldValue::List(items) => Json::List(items.iter().map(num).collect()),
+            FieldValue::Records(list) => Json::List(
+                (0..list.len())
+                    .map(|k| {
+                        Json::List(
+                            (0..list.fields())
+                                .map(|j| num(list.get(k, j).unwrap_or(0)))
+                                .collect(),
+                        )
+                    })
+                    .collect(),
+            ),
         },
     };
     (name.to_owned(), json)
@@ -213,10 +246,22 @@ fn frame_fields(p: &Spec, frame: &Frame) -> Vec<(String, Json)> {
         .values
         .iter()
         .map(|v| {
+            let flat;
             let raw = match &v.raw {
                 Raw::Int(i) => FieldValue::Int(*i),
                 Raw::Text(t) => FieldValue::Text(t),
                 Raw::List(list) => FieldValue::List(Elements::I64(list)),
+                Raw::Records(recs) => {
+                    flat = recs.concat();
+                    FieldValue::Records(RecordList::Flat {
+                        values: &flat,
+                        fields: m
+                            .fields
+                            .iter()
+                            .find(|f| f.name == v.name)
+                            .map_or(0, |f| f.record.len()),
+                    })
+                }
             };
             field(p, m, &v.name, raw)
         })
@@ -302,6 +347,13 @@ pub fn message_line<M: Message>(
                 FieldValue::Int(i) => Owned::Int(i),
                 FieldValue::Text(t) => Owned::Text(t.to_vec()),
                 FieldValue::List(items) => Owned::List(items.iter().collect()),
+                FieldValue::Records(list) => Owned::Records(
+                    (0..list.len())
+                        .flat_map(|k| (0..list.fields()).map(move |j| (k, j)))
+                        .map(|(k, j)| list.get(k, j).unwrap_or(0))
+                        .collect(),
+                    list.fields(),
+                ),
             },
         ))
     });
@@ -318,12 +370,14 @@ pub fn message_line<M: Message>(
             };
         }
         let (_, rf, r) = m.counted_by(i)?;
-        let Owned::List(l) = lookup(&rf.name)? else {
-            return None;
+        let len = match lookup(&rf.name)? {
+            Owned::List(l) => l.len(),
+            Owned::Records(l, w) => l.len() / (*w).max(1),
+            _ => return None,
         };
         let n = match r.count {
-            Count::Bytes(_) => rf.elements_len(l.len()),
-            Count::Elements(_) | Count::ToEnd => l.len(),
+            Count::Bytes(_) => rf.elements_len(len),
+            Count::Elements(_) | Count::ToEnd => len,
         };
         Some(Owned::Int(n as i64))
     };
@@ -356,6 +410,8 @@ enum Owned {
     Int(i64),
     Text(Vec<u8>),
     List(Vec<i64>),
+    /// Records' raw values, record after record, and the fields to a record.
+    Records(Vec<i64>, usize),
 }
 
 impl Owned {
@@ -364,6 +420,10 @@ impl Owned {
             Owned::Int(i) => FieldValue::Int(*i),
             Owned::Text(t) => FieldValue::Text(t),
             Owned::List(l) => FieldValue::List(Elements::I64(l)),
+            Owned::Records(l, w) => FieldValue::Records(RecordList::Flat {
+                values: l,
+                fields: *w,
+            }),
         }
     }
 }

@@ -15,6 +15,8 @@ enum Owned {
     Int(i64),
     Text(Vec<u8>),
     List(Vec<i64>),
+    /// Records' raw values, record after record, and the fields to a record.
+    Records(Vec<i64>, usize),
 }
 
 impl Owned {
@@ -23,6 +25,13 @@ impl Owned {
             FieldValue::Int(i) => Owned::Int(i),
             FieldValue::Text(t) => Owned::Text(t.to_vec()),
             FieldValue::List(items) => Owned::List(items.iter().collect()),
+            FieldValue::Records(l) => Owned::Records(
+                (0..l.len())
+                    .flat_map(|k| (0..l.fields()).map(move |j| (k, j)))
+                    .map(|(k, j)| l.get(k, j).unwrap_or(0))
+                    .collect(),
+                l.fields(),
+            ),
         }
     }
 
@@ -31,6 +40,10 @@ impl Owned {
             Owned::Int(i) => FieldValue::Int(*i),
             Owned::Text(t) => FieldValue::Text(t),
             Owned::List(l) => FieldValue::List(Elements::I64(l)),
+            Owned::Records(l, w) => FieldValue::Records(busspec_runtime::RecordList::Flat {
+                values: l,
+                fields: *w,
+            }),
         }
     }
 }

@@ -501,6 +501,16 @@ fn command_rule(
         };
         let rm = &p.responses[r];
         match field(rm, into) {
+            Some(f) if f.is_record() => {
+                sink.error(
+                    join(path, "into"),
+                    format!(
+                        "`{}.{into}` is a repeated record; a space's elements are numbers",
+                        rm.name
+                    ),
+                );
+                return None;
+            }
             Some(f) if f.repeat.is_some() => {}
             _ => {
                 sink.error(
@@ -524,6 +534,16 @@ fn command_rule(
         };
         stray("into", c.into.is_some(), sink);
         let list = |name: &str, key: &str, sink: &mut Sink| match field(m, name) {
+            Some(f) if f.is_record() => {
+                sink.error(
+                    join(path, key),
+                    format!(
+                        "`{}.{name}` is a repeated record; a space's elements are numbers",
+                        m.name
+                    ),
+                );
+                false
+            }
             Some(f) if f.repeat.is_some() => true,
             _ => {
                 sink.error(

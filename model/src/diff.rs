@@ -403,6 +403,8 @@ fn type_name(f: &Field) -> String {
         format!("ascii[{}]", f.width)
     } else if f.ty == crate::ir::FieldType::Bit {
         "bit".to_owned()
+    } else if f.is_record() {
+        format!("record[{}]", f.width)
     } else if f.is_float() {
         format!("f{}", f.width * 8)
     } else {
@@ -1501,11 +1503,59 @@ impl<'a> Differ<'a> {
                 }
             }
         }
+        self.record_fields((m, f), (x, g), path, maps);
         self.doc_change(
             path.to_owned(),
             &format!("field {what}"),
             &[("doc", &f.doc, &g.doc)],
         );
+    }
+
+    /// A repeated record's fields, paired by their offset in the record: one added, removed
+    /// or moved changes every record's bytes (wire-breaking); each pair is compared as a field
+    /// (`blocks.position`), its width, type, meaning and range.
+    fn record_fields(
+        &mut self,
+        (m, f): (&Message, &Field),
+        (x, g): (&Message, &Field),
+        path: &str,
+        maps: &Maps,
+    ) {
+        let what = format!("`{}.{}`", x.name, g.name);
+        for a in &f.record {
+            let Some(b) = g.record.iter().find(|b| b.offset == a.offset) else {
+                self.wire(
+                    "record_field_removed",
+                    format!("{path}.fields.{}", a.name),
+                    format!(
+                        "record {what}: field `{}` ({} at record offset {}) removed",
+                        a.name,
+                        type_name(a),
+                        a.offset
+                    ),
+                );
+                continue;
+            };
+            let (mut a, mut b) = (a.clone(), b.clone());
+            a.name = format!("{}.{}", f.name, a.name);
+            b.name = format!("{}.{}", g.name, b.name);
+            let bpath = format!("{path}.fields.{}", b.name);
+            self.field((m, &a), (x, &b), &bpath, maps);
+        }
+        for b in &g.record {
+            if !f.record.iter().any(|a| a.offset == b.offset) {
+                self.wire(
+                    "record_field_added",
+                    format!("{path}.fields.{}", b.name),
+                    format!(
+                        "record {what}: field `{}` ({} at record offset {}) added",
+                        b.name,
+                        type_name(b),
+                        b.offset
+                    ),
+                );
+            }
+        }
     }
 
     /// How a field's raw value is read: unit (scale and offset), enum, flags, or a plain number.

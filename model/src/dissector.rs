@@ -287,6 +287,11 @@ fn field(f: &Field) -> String {
             lua_bool(pk.lsb_first)
         );
     }
+    if f.is_record() {
+        // A record's fields, each at its offset in the record.
+        let rec: Vec<String> = f.record.iter().map(field).collect();
+        let _ = write!(o, ", rec = {{{}}}", rec.join(", "));
+    }
     if let Some(r) = &f.repeat {
         let (count, by) = match r.count {
             Count::Elements(i) => ("elements", i + 1),

@@ -575,7 +575,18 @@ local function misfit(P, m, b, n, soft)
   local pos, lens = places(m, b, n, pend)
   for i, f in ipairs(m.fields) do
     local at = pos[i]
-    if f.rep then
+    if f.rec then
+      -- Each record's fields in order, at their offsets in the frame.
+      local k = at
+      while k + f.width <= at + lens[i] do
+        for _, g in ipairs(f.rec) do
+          local _, v = int_of(g, b, k + g.offset)
+          local range = range_violation(g, nil, v)
+          if range then soft[#soft + 1] = out_of_range(m, f.name .. "." .. g.name, k + g.offset, v, range) end
+        end
+        k = k + f.width
+      end
+    elseif f.rep then
       local step = f.rep.bit and 0 or f.width
       for k, v in ipairs(read_elements(f, b, at, at + lens[i])) do
         local range = range_violation(f, nil, v)
@@ -767,7 +778,30 @@ local function setup(P)
     local info = {}
     for i, f in ipairs(m.fields) do
       local at = pos[i]
-      if f.rep or f.pk then
+      if f.rec then
+        -- A list of objects, as busspec's JSON prints records; raw, a list of lists.
+        local stop = at + lens[i]
+        local vals, raws = {}, {}
+        local k = at
+        while k + f.width <= stop do
+          local kv, kr = {}, {}
+          for _, g in ipairs(f.rec) do
+            local _, v = int_of(g, b, k + g.offset)
+            kv[#kv + 1] = json_name(g.name) .. ":" .. value_json(P, g, nil, v)
+            kr[#kr + 1] = numtext(v)
+          end
+          vals[#vals + 1] = "{" .. concat(kv, ",") .. "}"
+          raws[#raws + 1] = "[" .. concat(kr, ",") .. "]"
+          k = k + f.width
+        end
+        local value = "[" .. concat(vals, ",") .. "]"
+        local range = tvb:range(0, n)
+        if stop > at then range = tvb:range(at, stop - at) end
+        local item = node:add(m.pf[f.name].value, range, value)
+        item:set_text(fmt("%s: %s (%d records)", f.name, value, #vals))
+        item:add(m.pf[f.name].raw, range, "[" .. concat(raws, ",") .. "]")
+        info[#info + 1] = f.name .. "=" .. value
+      elseif f.rep or f.pk then
         local stop, els
         if f.pk then
           stop = at + f.width

@@ -56,6 +56,7 @@ fn scalar_type_name(f: &Field) -> String {
         FieldType::F32 => "f32".into(),
         FieldType::F64 => "f64".into(),
         FieldType::Bit => "bit".into(),
+        FieldType::Record => format!("record[{}]", f.width),
     };
     if f.bcd {
         format!("{base} BCD")
@@ -227,6 +228,26 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
                 .unwrap_or_else(|| "—".into()),
             field_notes(p, m, f)
         );
+        // A record's fields, each at its offset in the record.
+        for g in &f.record {
+            let _ = writeln!(
+                out,
+                "| ↳ record + {} | `{}.{}` | {} | {} | {} | {} | {} | {} |",
+                g.offset,
+                f.name,
+                g.name,
+                type_name(g),
+                g.width,
+                if g.width > 1 {
+                    order(g.byte_order)
+                } else {
+                    "—"
+                },
+                cell(&unit_text(p, g.unit)),
+                range_text(g.range),
+                field_notes(p, m, g)
+            );
+        }
         for b in &f.bits {
             let (lo, hi) = raw_limits(u32::from(b.width()), b.signed);
             let mut notes = Vec::new();
@@ -285,6 +306,24 @@ fn examples_of(out: &mut String, p: &Protocol, r: MessageRef) {
                     "{k} = [{}]",
                     n.iter()
                         .map(|x| x.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                StatedValue::Records(rs) => format!(
+                    "{k} = [{}]",
+                    rs.iter()
+                        .map(|r| format!(
+                            "{{{}}}",
+                            r.iter()
+                                .map(|(n, v)| match v {
+                                    StatedValue::Number(x) => format!("{n}: {x}"),
+                                    StatedValue::Name(x) => format!("{n}: {x}"),
+                                    StatedValue::Exact { text, .. } => format!("{n}: {text}"),
+                                    _ => format!("{n}: …"),
+                                })
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ))
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),

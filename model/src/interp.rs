@@ -24,6 +24,20 @@ pub enum Raw {
     Text(Vec<u8>),
     /// The elements of a repeated field (bits as 0 or 1).
     List(Vec<i64>),
+    /// The elements of a repeated record (`type: record`): each record's raw values, one per
+    /// field of the record in its order.
+    Records(Vec<Vec<i64>>),
+}
+
+impl Raw {
+    /// How many elements a repeated field's value holds (`None`: not a list).
+    pub fn elements(&self) -> Option<usize> {
+        match self {
+            Raw::List(l) => Some(l.len()),
+            Raw::Records(r) => Some(r.len()),
+            Raw::Int(_) | Raw::Text(_) => None,
+        }
+    }
 }
 
 /// One named value of a decoded frame; packed words appear as their sub-fields. A decoded
@@ -1603,6 +1617,8 @@ impl Misfit {
         let name = |field: usize, bit: Option<usize>| {
             let f = m.fields.get(field);
             match bit {
+                // A record's field `b`: `blocks.position`.
+                Some(b) if f.is_some_and(Field::is_record) => f.map(|f| f.record_field_name(b)),
                 Some(b) => f.and_then(|f| f.bits.get(b)).map(|b| b.name.clone()),
                 None => f.map(|f| f.name.clone()),
             }
@@ -1737,6 +1753,27 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let sh = shape(p, m, wire).unwrap_or_default();
     let pos = |i: usize| sh.at(m, i);
     for (i, f) in m.fields.iter().enumerate() {
+        if f.is_record() {
+            let at = o.payload + pos(i);
+            let bytes = list_bytes(f, payload, pos(i), &sh, i);
+            for (k, rec) in bytes.chunks_exact(f.width.max(1)).enumerate() {
+                for (j, g) in f.record.iter().enumerate() {
+                    let v = int_of(g, rec, g.offset).1;
+                    if let Some((min, max)) = range_violation(g, None, v) {
+                        return Some(Misfit::Range {
+                            field: i,
+                            bit: Some(j),
+                            offset: at + k * f.width + g.offset,
+                            found: v,
+                            min,
+                            max,
+                            kind: NumKind::Int,
+                        });
+                    }
+                }
+            }
+            continue;
+        }
         if f.repeat.is_some() {
             let at = o.payload + pos(i);
             // The offset of the element out of range (bits: of the field).
@@ -1896,6 +1933,13 @@ fn values_of<'p>(
     values.reserve(m.fields.len());
     for (i, f) in m.fields.iter().enumerate() {
         let at = sh.at(m, i);
+        if f.is_record() {
+            values.push(Value {
+                name: Cow::Borrowed(&f.name),
+                raw: Raw::Records(read_records(f, list_bytes(f, payload, at, &sh, i))),
+            });
+            continue;
+        }
         if f.repeat.is_some() {
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
@@ -1939,12 +1983,31 @@ fn values_of<'p>(
 /// The elements of repeated field `i` (`f`), from payload offset `at`, as many bytes as the
 /// frame's [`Shape`] gives it (to the payload's end for a message that has none).
 fn list_at(f: &Field, payload: &[u8], at: usize, sh: &Shape, i: usize) -> Vec<i64> {
+    read_elements(f, list_bytes(f, payload, at, sh, i))
+}
+
+/// The bytes of repeated field `i`'s elements, from payload offset `at`: as many as the
+/// frame's [`Shape`] gives it (to the payload's end for a message that has none).
+fn list_bytes<'w>(_f: &Field, payload: &'w [u8], at: usize, sh: &Shape, i: usize) -> &'w [u8] {
     let bytes = payload.get(at..).unwrap_or(&[]);
-    let bytes = match sh.lists.iter().find(|l| l.0 == i) {
+    match sh.lists.iter().find(|l| l.0 == i) {
         Some(l) => bytes.get(..l.2).unwrap_or(bytes),
         None => bytes,
-    };
-    read_elements(f, bytes)
+    }
+}
+
+/// The records of a repeated record from the bytes of its elements: each record's fields'
+/// raw values, as whole fields read (signed ones sign-extended).
+fn read_records(f: &Field, bytes: &[u8]) -> Vec<Vec<i64>> {
+    bytes
+        .chunks_exact(f.width.max(1))
+        .map(|rec| {
+            f.record
+                .iter()
+                .map(|g| int_of(g, rec, g.offset).1)
+                .collect()
+        })
+        .collect()
 }
 
 /// The bits of a packed field's last byte that no element takes (0 in a valid frame).
@@ -2024,8 +2087,8 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
     let mut shift = 0usize;
     for f in &m.fields {
         let at = m.layout.payload + f.offset + shift;
-        if let (Some(_), Some(Raw::List(l))) = (&f.repeat, reply.get(&f.name)) {
-            shift += f.elements_len(l.len());
+        if let (Some(_), Some(n)) = (&f.repeat, reply.get(&f.name).and_then(Raw::elements)) {
+            shift += f.elements_len(n);
         }
         if let Some(Follows::Request(rel)) = &f.follows {
             let (Some(base), Some(Raw::Int(found))) = (req_int(&rel.field), reply.get(&f.name))
@@ -2045,13 +2108,15 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
             }
         }
         if let Some(rel) = f.repeat.as_ref().and_then(|r| r.request.as_ref()) {
-            let (Some(base), Some(Raw::List(list))) = (req_int(&rel.field), reply.get(&f.name))
-            else {
+            let (Some(base), Some(found)) = (
+                req_int(&rel.field),
+                reply.get(&f.name).and_then(Raw::elements),
+            ) else {
                 continue;
             };
             let expected = rel.apply(base);
             let same = match usize::try_from(expected) {
-                Ok(n) => f.elements_len(n) == f.elements_len(list.len()),
+                Ok(n) => f.elements_len(n) == f.elements_len(found),
                 Err(_) => false,
             };
             if !same {
@@ -2060,7 +2125,7 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
                     field: f.name.clone(),
                     offset: at,
                     expected: format!("{expected} ({} of the request)", rel.describe(&rel.field)),
-                    found: list.len() as i64,
+                    found: found as i64,
                 });
             }
         }
@@ -2105,7 +2170,7 @@ pub fn encode(
     let lookup = |name: &str| values.iter().find(|v| v.name == name).map(|v| &v.raw);
     let int = |name: &str| match lookup(name) {
         Some(Raw::Int(i)) => Ok(*i),
-        Some(Raw::Text(_) | Raw::List(_)) => Err(EncodeError::NotNumber {
+        Some(Raw::Text(_) | Raw::List(_) | Raw::Records(_)) => Err(EncodeError::NotNumber {
             field: name.to_owned(),
         }),
         None => Err(EncodeError::MissingValue {
@@ -2116,8 +2181,19 @@ pub fn encode(
     // The repeated fields' elements, checked against their bounds and their element type, and
     // the value of each count field.
     let mut lists: Vec<(usize, &[i64])> = Vec::new();
+    let mut records: Vec<(usize, &[Vec<i64>])> = Vec::new();
     let mut counts: Vec<(usize, i64)> = Vec::new();
     for (fi, f, r) in m.repeats() {
+        if f.is_record() {
+            let recs = record_list(f, r, lookup(&f.name))?;
+            match r.count {
+                Count::Elements(i) => counts.push((i, recs.len() as i64)),
+                Count::Bytes(i) => counts.push((i, f.elements_len(recs.len()) as i64)),
+                Count::ToEnd => {}
+            }
+            records.push((fi, recs));
+            continue;
+        }
         let list: &[i64] = match lookup(&f.name) {
             Some(Raw::List(l)) => l,
             Some(_) => {
@@ -2177,9 +2253,15 @@ pub fn encode(
         lists.push((fi, list));
     }
     let list_of = |i: usize| lists.iter().find(|l| l.0 == i).map_or(&[][..], |l| l.1);
+    let records_of = |i: usize| records.iter().find(|l| l.0 == i).map_or(&[][..], |l| l.1);
     let tail: usize = lists
         .iter()
         .map(|&(i, l)| m.fields[i].elements_len(l.len()))
+        .chain(
+            records
+                .iter()
+                .map(|&(i, l)| m.fields[i].elements_len(l.len())),
+        )
         .sum();
     let mut out = vec![0u8; p.frame_len(m) + tail];
     for at in [o.start, o.start_again].into_iter().flatten() {
@@ -2203,6 +2285,18 @@ pub fn encode(
     let mut shift = 0usize;
     for (i, f) in m.fields.iter().enumerate() {
         let at = o.payload + f.offset + shift;
+        if f.is_record() {
+            let recs = records_of(i);
+            shift += f.elements_len(recs.len());
+            for (k, rec) in recs.iter().enumerate() {
+                for (g, &v) in f.record.iter().zip(rec) {
+                    let s = at + k * f.width + g.offset;
+                    write_uint(v as u64, &mut out[s..s + g.width], g.byte_order);
+                }
+            }
+            ints.push(0);
+            continue;
+        }
         if f.repeat.is_some() {
             let list = list_of(i);
             shift += f.elements_len(list.len());
@@ -2300,7 +2394,7 @@ pub fn encode(
         if f.is_ascii() {
             let text = match lookup(&f.name) {
                 Some(Raw::Text(t)) => t,
-                Some(Raw::Int(_) | Raw::List(_)) => {
+                Some(Raw::Int(_) | Raw::List(_) | Raw::Records(_)) => {
                     return Err(EncodeError::NotText {
                         field: f.name.clone(),
                     })
@@ -2435,6 +2529,70 @@ pub fn encode(
     Ok(out)
 }
 
+/// The records given for repeated record `f` (repeat `r`), each checked: as many as the repeat
+/// allows, each with one value for each of the record's fields, each value within its field's
+/// spec range and its type.
+#[cfg(feature = "tools")]
+fn record_list<'v>(
+    f: &Field,
+    r: &crate::ir::Repeat,
+    given: Option<&'v Raw>,
+) -> Result<&'v [Vec<i64>], EncodeError> {
+    let recs: &[Vec<i64>] = match given {
+        Some(Raw::Records(l)) => l,
+        Some(_) => {
+            return Err(EncodeError::NotList {
+                field: f.name.clone(),
+            })
+        }
+        None => {
+            return Err(EncodeError::MissingValue {
+                field: f.name.clone(),
+            })
+        }
+    };
+    if recs.len() < r.min || recs.len() > r.max {
+        return Err(EncodeError::WrongCount {
+            field: f.name.clone(),
+            min: r.min,
+            max: r.max,
+            found: recs.len(),
+        });
+    }
+    for rec in recs {
+        if rec.len() > f.record.len() {
+            return Err(EncodeError::UnknownValue {
+                field: format!("{}[{}]", f.name, f.record.len()),
+            });
+        }
+        for (j, g) in f.record.iter().enumerate() {
+            let name = f.record_field_name(j);
+            let Some(&v) = rec.get(j) else {
+                return Err(EncodeError::MissingValue { field: name });
+            };
+            if let Some((min, max)) = range_violation(g, None, v) {
+                return Err(EncodeError::NotInRange {
+                    field: name,
+                    value: v,
+                    min,
+                    max,
+                    kind: NumKind::Int,
+                });
+            }
+            let (min, max) = g.raw_span();
+            if v < min || v > max {
+                return Err(EncodeError::OutOfRange {
+                    field: name,
+                    value: v,
+                    min,
+                    max,
+                });
+            }
+        }
+    }
+    Ok(recs)
+}
+
 /// Reorders a frame between the document's printed byte order and the wire's: every multi-byte
 /// number field (and the checksum) is reversed when the two orders differ. `text` must already
 /// have the message's frame length.
@@ -2485,6 +2643,21 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
             }
             None => 1,
         };
+        if f.is_record() {
+            for k in 0..n {
+                for g in f
+                    .record
+                    .iter()
+                    .filter(|g| g.width > 1 && flip(g.byte_order))
+                {
+                    let s = at + k * f.width + g.offset;
+                    if let Some(s) = wire.get_mut(s..s + g.width) {
+                        s.reverse();
+                    }
+                }
+            }
+            continue;
+        }
         if f.is_ascii() || f.packed.is_some() || f.width < 2 || !flip(f.byte_order) {
             continue;
         }

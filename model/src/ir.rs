@@ -777,6 +777,10 @@ pub struct Field {
     pub packed: Option<Packed>,
     /// The value follows from another field (of this frame or of the request).
     pub follows: Option<Follows>,
+    /// A repeated record (`type: record`): its fields, each of a fixed width, `offset` counted
+    /// from the record's first byte; `width` is their sum (one element's bytes). Empty for
+    /// every other field.
+    pub record: Vec<Field>,
 }
 
 /// A fixed number of elements, each `bits` wide, packed into one bit stream (CRSF's 16 × 11-bit
@@ -961,6 +965,19 @@ impl Field {
         self.repeat.is_some() || self.packed.is_some()
     }
 
+    /// Whether it is a repeated record (`type: record`), whose elements are groups of fields.
+    pub fn is_record(&self) -> bool {
+        self.ty == FieldType::Record
+    }
+
+    /// The name a record's field `j` goes by in errors: `blocks.position`.
+    pub fn record_field_name(&self, j: usize) -> String {
+        match self.record.get(j) {
+            Some(r) => format!("{}.{}", self.name, r.name),
+            None => self.name.clone(),
+        }
+    }
+
     /// How its raw value reads as a number.
     pub fn num_kind(&self) -> crate::number::NumKind {
         crate::number::NumKind::of(self.ty)
@@ -1052,6 +1069,8 @@ pub enum StatedValue {
     Names(Vec<String>),
     /// The elements of a repeated field.
     Numbers(Vec<Rational>),
+    /// The records of a repeated record: each record's stated values by field name.
+    Records(Vec<Vec<(String, StatedValue)>>),
     /// A number with more digits than a rational holds, as written: a 64-bit integer or a
     /// float reads it as its type; any other field refuses it for `why`.
     Exact {

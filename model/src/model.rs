@@ -579,6 +579,9 @@ pub enum FieldType {
     Ascii,
     /// One bit; only as the element of a `repeat` (coils), packed least significant bit first.
     Bit,
+    /// A named group of fixed-width fields (`fields`); only as the element of a `repeat`
+    /// (Dynamixel SYNC_WRITE's blocks, register/value pairs).
+    Record,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -620,6 +623,9 @@ pub struct Field {
     pub packed: Option<Packed>,
     #[serde(default)]
     pub follows: Option<Follows>,
+    /// A record's fields (`type: record`), each of a fixed width, in wire order.
+    #[serde(default)]
+    pub fields: Vec<Field>,
     #[serde(default)]
     pub doc: Option<String>,
 }

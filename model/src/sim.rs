@@ -357,7 +357,8 @@ impl Sim {
                     }
                     if let Some(r) = request.get(&name) {
                         let fits = match r {
-                            Raw::List(_) => f.is_list(),
+                            Raw::List(_) => f.is_list() && !f.is_record(),
+                            Raw::Records(_) => f.is_record(),
                             Raw::Text(_) => f.is_ascii(),
                             Raw::Int(_) => !f.is_list() && !f.is_ascii(),
                         };
@@ -387,7 +388,21 @@ impl Sim {
                             .and_then(|rel| request_int(&rel.field).map(|v| rel.apply(v)))
                             .and_then(|n| usize::try_from(n).ok())
                             .unwrap_or(r.min);
-                        Raw::List(vec![first_valid(f.range, None); n])
+                        if f.is_record() {
+                            let rec = f
+                                .record
+                                .iter()
+                                .map(|g| {
+                                    let first_enum = g.enumeration.and_then(|e| {
+                                        p.enums[e].values.first().map(|v| v.value as i64)
+                                    });
+                                    first_valid(g.range, first_enum)
+                                })
+                                .collect();
+                            Raw::Records(vec![rec; n])
+                        } else {
+                            Raw::List(vec![first_valid(f.range, None); n])
+                        }
                     } else if f.is_ascii() {
                         Raw::Text(vec![b' '; f.width])
                     } else {

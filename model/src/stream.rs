@@ -937,6 +937,9 @@ pub fn relaxed(p: &Protocol) -> Protocol {
             for b in &mut f.bits {
                 b.range = None;
             }
+            for g in &mut f.record {
+                g.range = None;
+            }
         }
     }
     let a = &mut r.framing.address;
@@ -991,8 +994,28 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
     let mut shift = 0usize;
     for f in &m.fields {
         let offset = at.payload + f.offset + shift;
-        if let (Some(_), Some(Raw::List(l))) = (&f.repeat, frame.get(&f.name)) {
-            shift += f.elements_len(l.len());
+        if let (Some(_), Some(n)) = (&f.repeat, frame.get(&f.name).and_then(Raw::elements)) {
+            shift += f.elements_len(n);
+        }
+        // Every record's fields in order, each outside its range where strict decoding
+        // stops: the first such is the error strict decoding gives.
+        if let Some(Raw::Records(recs)) = frame.get(&f.name) {
+            for (k, rec) in recs.iter().enumerate() {
+                for (j, (g, &v)) in f.record.iter().zip(rec).enumerate() {
+                    if let Some((min, max)) = interp::range_violation(g, None, v) {
+                        out.push(DecodeError::OutOfRange {
+                            message: m.name.clone(),
+                            field: f.record_field_name(j),
+                            offset: offset + k * f.width + g.offset,
+                            found: v,
+                            min,
+                            max,
+                            kind: crate::number::NumKind::Int,
+                        });
+                    }
+                }
+            }
+            continue;
         }
         let leaves: Vec<(&str, Option<&crate::ir::BitField>)> = if f.bits.is_empty() {
             vec![(f.name.as_str(), None)]

@@ -1833,6 +1833,8 @@ fn field(
         T::F32 => (4, false),
         T::F64 => (8, false),
         T::Bit => (1, false),
+        // A record's width is its fields' (below).
+        T::Record => (1, false),
         T::Ascii => match f.length {
             Some(n) if (1..=255).contains(&n) => (n as usize, false),
             Some(n) => {
@@ -1876,7 +1878,17 @@ fn field(
         repeat: None,
         packed: None,
         follows: None,
+        record: Vec::new(),
     };
+    if f.ty != T::Record && !f.fields.is_empty() {
+        sink.error(
+            join(p, "fields"),
+            "`fields` is only for a `type: record` (a repeated group of fields)",
+        );
+    }
+    if f.ty == T::Record {
+        return record_field(f, p, out, byte_order, earlier, refs, sink);
+    }
     if f.word_order.is_some()
         && !matches!(f.ty, T::U32 | T::I32 | T::F32 | T::U64 | T::I64 | T::F64)
     {
@@ -2138,6 +2150,102 @@ fn field(
             name: s.name.clone(),
             doc: text(&s.doc),
         });
+    }
+    out
+}
+
+/// A repeated record (`type: record`): its `repeat`, and its fields, each a fixed-width
+/// integer with what a plain number field takes (unit, enum, flags, range, special values),
+/// nothing that varies, repeats or derives from another field.
+fn record_field(
+    f: &model::Field,
+    p: &str,
+    mut out: Field,
+    byte_order: ByteOrder,
+    earlier: &[Field],
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Field {
+    use model::FieldType as T;
+    for (k, given) in [
+        ("length", f.length.is_some()),
+        ("word_order", f.word_order.is_some()),
+        ("unit", f.unit.is_some()),
+        ("range", f.range.is_some()),
+        ("value", f.value.is_some()),
+        ("enum", f.enum_.is_some()),
+        ("flags", f.flags.is_some()),
+        ("equals", f.equals.is_some()),
+        ("special", !f.special.is_empty()),
+        ("bits", !f.bits.is_empty()),
+        ("follows", f.follows.is_some()),
+    ] {
+        if given {
+            sink.error(
+                join(p, k),
+                format!("`{k}` cannot be combined with a record: its fields take their own"),
+            );
+        }
+    }
+    let fpath = join(p, "fields");
+    if f.fields.is_empty() {
+        sink.error(&fpath, "a record needs at least one field");
+    }
+    let mut names = BTreeSet::new();
+    let mut offset = 0usize;
+    for g in &f.fields {
+        let gp = join(&fpath, &g.name);
+        check_ident(&g.name, &gp, "field", sink);
+        if !names.insert(g.name.clone()) {
+            sink.error(
+                &gp,
+                format!("duplicate field name `{}` in the record", g.name),
+            );
+        }
+        if !matches!(
+            g.ty,
+            T::U8 | T::U16 | T::U24 | T::U32 | T::I8 | T::I16 | T::I24 | T::I32
+        ) {
+            sink.error(
+                join(&gp, "type"),
+                "a record's field is an integer of 8 to 32 bits (u8 u16 u24 u32 i8 i16 i24 i32); records of text, bits, records, floats or 64-bit integers are not expressible yet",
+            );
+            continue;
+        }
+        let mut refused = false;
+        for (k, given) in [
+            ("repeat", g.repeat.is_some()),
+            ("value", g.value.is_some()),
+            ("equals", g.equals.is_some()),
+            ("follows", g.follows.is_some()),
+            ("bits", !g.bits.is_empty()),
+            ("word_order", g.word_order.is_some()),
+            ("fields", !g.fields.is_empty()),
+            ("packed", g.packed.is_some()),
+            ("encoding", g.encoding == Some(model::Encoding::Bcd)),
+        ] {
+            if given {
+                refused = true;
+                sink.error(
+                    join(&gp, k),
+                    format!("`{k}` cannot be used in a record's field (each is a plain number of a fixed width)"),
+                );
+            }
+        }
+        if refused {
+            continue;
+        }
+        let sub = field(g, &gp, offset, byte_order, &[], refs, sink);
+        offset += sub.width;
+        out.record.push(sub);
+    }
+    out.width = offset.max(1);
+    match &f.repeat {
+        Some(r) => out.repeat = repeat(r, f, &join(p, "repeat"), earlier, sink),
+        None => sink.error(
+            join(p, "type"),
+            "a `record` is only the element of a repeated field; give it a `repeat`",
+        ),
     }
     out
 }
@@ -3041,6 +3149,23 @@ fn stated(v: &model::OpenValue) -> Result<StatedValue, String> {
             },
         }),
         V::String(s) => Ok(StatedValue::Name(s.clone())),
+        V::List(items) if items.iter().any(|i| matches!(i, V::Map(_))) => items
+            .iter()
+            .map(|i| match i {
+                V::Map(m) => {
+                    m.0.iter()
+                        .map(|(k, v)| {
+                            let k = k
+                                .as_str()
+                                .ok_or_else(|| "a record's keys are its field names".to_owned())?;
+                            Ok((k.to_owned(), stated(v)?))
+                        })
+                        .collect::<Result<Vec<_>, String>>()
+                }
+                _ => Err("a list of records holds something else".to_owned()),
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map(StatedValue::Records),
         V::List(items) if items.iter().any(|i| matches!(i, V::Number(_))) => items
             .iter()
             .map(|i| match i {
@@ -3348,6 +3473,34 @@ fn compare(
             };
         }
         Raw::Int(i) => *i,
+        Raw::Records(recs) => {
+            let StatedValue::Records(want) = want else {
+                return Err(
+                    "a repeated record; state its records as a list of mappings of field names to values"
+                        .to_owned(),
+                );
+            };
+            if recs.len() != want.len() {
+                return Err(format!(
+                    "the frame carries {} records, the example states {}",
+                    recs.len(),
+                    want.len()
+                ));
+            }
+            for (k, (rec, stated)) in recs.iter().zip(want).enumerate() {
+                for (name, w) in stated {
+                    let Some(j) = f.record.iter().position(|g| &g.name == name) else {
+                        return Err(format!(
+                            "record {k}: states `{name}`, which the record does not have"
+                        ));
+                    };
+                    let (g, raw) = (&f.record[j], rec.get(j).copied().unwrap_or(0));
+                    compare(p, g, None, &Raw::Int(raw), w, excused)
+                        .map_err(|e| format!("record {k}: {name}: {e}"))?;
+                }
+            }
+            return Ok(());
+        }
         Raw::List(list) => {
             let StatedValue::Numbers(want) = want else {
                 return Err("a repeated field; state its elements as a list of numbers".to_owned());
@@ -3396,7 +3549,9 @@ fn compare(
             Ok(n) => compare(p, f, bits, raw, &StatedValue::Number(n), excused),
             Err(_) => Err(why.clone()),
         },
-        StatedValue::Numbers(_) => Err("not a repeated field; state one value".to_owned()),
+        StatedValue::Numbers(_) | StatedValue::Records(_) => {
+            Err("not a repeated field; state one value".to_owned())
+        }
         StatedValue::Number(n) => {
             let (got, sym) = match unit.map(|u| &p.units[u]) {
                 Some(u) => (u.physical(int), u.symbol.as_str()),

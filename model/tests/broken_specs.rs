@@ -17,6 +17,39 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- repeated records (made from valid/records, without its examples)
+    (
+        "record_without_repeat",
+        &[("commands.sync_write.fields.blocks.type", "a `record` is only the element of a repeated field")],
+    ),
+    (
+        "record_field_repeated",
+        &[("commands.sync_write.fields.blocks.fields.id.repeat", "`repeat` cannot be used in a record's field")],
+    ),
+    (
+        "record_field_not_fixed",
+        &[("commands.sync_write.fields.blocks.fields.id.type", "a record's field is an integer of 8 to 32 bits")],
+    ),
+    (
+        "record_field_duplicate",
+        &[("commands.sync_write.fields.blocks.fields.id", "duplicate field name `id` in the record")],
+    ),
+    (
+        "record_empty",
+        &[("commands.sync_write.fields.blocks.fields", "a record needs at least one field")],
+    ),
+    (
+        "record_with_unit",
+        &[("commands.sync_write.fields.blocks.unit", "`unit` cannot be combined with a record")],
+    ),
+    (
+        "fields_without_record",
+        &[("commands.sync_write.fields.flags.fields", "`fields` is only for a `type: record`")],
+    ),
+    (
+        "record_field_without_unit",
+        &[("commands.sync_write.fields.blocks.fields.id", "a number field needs a `unit`")],
+    ),
     // ---- escaping and stuffing (made from valid/slip_sensor, hdlc_like, cobs_link and
     // dynamixel2_stuffed, without their examples)
     (
@@ -211,6 +244,16 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
             ("framing.layout", "a second `start` is not expressible with `escaping` yet"),
             ("framing.layout", "a second `length` is not expressible with `escaping` yet"),
         ],
+    ),
+    // ---- BCD beside packed elements and records (made from valid/packed_channels.yaml and
+    // valid/records.yaml, without their examples)
+    (
+        "packed_bcd",
+        &[("commands.channels.fields.channels.encoding", "`encoding` cannot be combined with `packed`")],
+    ),
+    (
+        "record_field_bcd",
+        &[("commands.sync_write.fields.blocks.fields.id.encoding", "`encoding` cannot be used in a record's field (each is a plain number of a fixed width)")],
     ),
     // ---- BCD fields (made from valid/bcd_meter.yaml, without its examples)
     (

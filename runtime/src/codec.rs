@@ -21,15 +21,17 @@ pub use crate::escape::{
 pub use crate::lists::{Lists, Split};
 pub use crate::repeated::{
     encode_packed_in_range, list, list_bits, pack, packed_in_range, packed_padding, read_bits,
-    read_elements, unpack, write_bits, write_elements, CountBy, CountField, Element, RepeatAt,
+    read_elements, records, unpack, write_bits, write_elements, CountBy, CountField, Element,
+    RepeatAt,
 };
 pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
-pub use crate::FieldValue::{Int, List, Text};
+pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, CommandKind, DecodeError, Decoded,
-    EncodeError, FieldError, FieldValue, Message, NumKind, Protocol, Repeated, Reply,
+    Elements, EncodeError, FieldError, FieldValue, Message, NumKind, Protocol, Record, RecordList,
+    Repeated, Reply,
 };
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter

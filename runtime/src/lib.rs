@@ -157,6 +157,118 @@ pub enum FieldValue<'a> {
     Text(&'a [u8]),
     /// A repeated field's elements, borrowed from the message (or the caller).
     List(Elements<'a>),
+    /// A repeated record's records (`type: record`), each its fields' raw values.
+    Records(RecordList<'a>),
+}
+
+/// The records of a repeated record, as raw values: a generated message's records (each a
+/// [`Record`]), or a caller's raw values one record after the other.
+#[derive(Clone, Copy)]
+pub enum RecordList<'a> {
+    /// Records that lend their raw values (a generated message's `rt::Repeated` of records).
+    Table(&'a dyn RecordTable),
+    /// Raw values, record after record, `fields` to a record (for callers holding raw values,
+    /// as the interpreter does).
+    Flat { values: &'a [i64], fields: usize },
+}
+
+/// A table of records' raw values: how [`RecordList::Table`] reads them.
+pub trait RecordTable {
+    /// How many records.
+    fn records(&self) -> usize;
+    /// How many fields a record has.
+    fn fields(&self) -> usize;
+    /// The raw value of field `field` of record `record` (0 outside the table).
+    fn raw(&self, record: usize, field: usize) -> i64;
+}
+
+/// One record of a repeated record in generated code: a `Copy` struct of its fields, as
+/// generated for each repeated record. Public only for generated code.
+pub trait Record: Copy + Default {
+    /// How many fields it has.
+    const FIELDS: usize;
+    /// The raw wire value of field `field` (0 past the last).
+    fn raw(&self, field: usize) -> i64;
+    /// The record from the raw values of record `k` of `list`, each checked against its
+    /// field's wire limits.
+    fn from_raw(list: &RecordList<'_>, k: usize) -> Result<Self, FieldError>;
+}
+
+impl RecordList<'_> {
+    /// How many records.
+    pub fn len(&self) -> usize {
+        match self {
+            RecordList::Table(t) => t.records(),
+            RecordList::Flat { values, fields } => values.len() / (*fields).max(1),
+        }
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// How many fields each record has.
+    pub fn fields(&self) -> usize {
+        match self {
+            RecordList::Table(t) => t.fields(),
+            RecordList::Flat { fields, .. } => *fields,
+        }
+    }
+
+    /// The raw value of field `field` of record `record`, if both exist.
+    pub fn get(&self, record: usize, field: usize) -> Option<i64> {
+        if record >= self.len() || field >= self.fields() {
+            return None;
+        }
+        match self {
+            RecordList::Table(t) => Some(t.raw(record, field)),
+            RecordList::Flat { values, fields } => values.get(record * fields + field).copied(),
+        }
+    }
+}
+
+impl PartialEq for RecordList<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        let (n, w) = (self.len(), self.fields());
+        n == other.len()
+            && w == other.fields()
+            && (0..n).all(|k| (0..w).all(|j| self.get(k, j) == other.get(k, j)))
+    }
+}
+
+impl Eq for RecordList<'_> {}
+
+impl core::hash::Hash for RecordList<'_> {
+    fn hash<H: core::hash::Hasher>(&self, state: &mut H) {
+        let (n, w) = (self.len(), self.fields());
+        (n, w).hash(state);
+        for k in 0..n {
+            for j in 0..w {
+                self.get(k, j).hash(state);
+            }
+        }
+    }
+}
+
+impl fmt::Debug for RecordList<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let w = self.fields();
+        f.debug_list()
+            .entries((0..self.len()).map(|k| Row(self, k, w)))
+            .finish()
+    }
+}
+
+/// One record of a [`RecordList`], for `Debug`.
+struct Row<'r, 'a>(&'r RecordList<'a>, usize, usize);
+
+impl fmt::Debug for Row<'_, '_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list()
+            .entries((0..self.2).map(|j| self.0.get(self.1, j).unwrap_or(0)))
+            .finish()
+    }
 }
 
 /// The elements of a repeated field, as the message holds them: a slice of its element type
@@ -171,7 +283,55 @@ pub enum Elements<'a> {
     U32(&'a [u32]),
     I32(&'a [i32]),
     I64(&'a [i64]),
-    Bits { packed: &'a [u8], len: usize },
+    Bits {
+        packed: &'a [u8],
+        len: usize,
+    },
+    /// Elements of a type of the spec's (a unit's newtype, an enum), each lent as its raw
+    /// value.
+    Table(ElementRef<'a>),
+}
+
+/// A list whose elements lend their raw values: how [`Elements::Table`] reads them.
+pub trait ElementTable {
+    /// How many elements.
+    fn count(&self) -> usize;
+    /// The raw value of element `i` (0 past the last).
+    fn raw(&self, i: usize) -> i64;
+}
+
+/// An [`ElementTable`] lent to [`Elements::Table`]: compared, hashed and printed by its raw
+/// values.
+#[derive(Clone, Copy)]
+pub struct ElementRef<'a>(pub &'a dyn ElementTable);
+
+impl ElementRef<'_> {
+    fn values(&self) -> impl Iterator<Item = i64> + '_ {
+        (0..self.0.count()).map(|i| self.0.raw(i))
+    }
+}
+
+impl PartialEq for ElementRef<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.count() == other.0.count() && self.values().eq(other.values())
+    }
+}
+
+impl Eq for ElementRef<'_> {}
+
+impl core::hash::Hash for ElementRef<'_> {
+    fn hash<H: core::hash::Hasher>(&self, state: &mut H) {
+        self.0.count().hash(state);
+        for v in self.values() {
+            v.hash(state);
+        }
+    }
+}
+
+impl fmt::Debug for ElementRef<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.values()).finish()
+    }
 }
 
 impl Elements<'_> {
@@ -186,6 +346,7 @@ impl Elements<'_> {
             Elements::I32(s) => s.len(),
             Elements::I64(s) => s.len(),
             Elements::Bits { len, .. } => *len,
+            Elements::Table(t) => t.0.count(),
         }
     }
 
@@ -208,6 +369,7 @@ impl Elements<'_> {
                 packed.get(i / 8).map(|b| i64::from(b >> (i % 8) & 1))
             }
             Elements::Bits { .. } => None,
+            Elements::Table(t) => (i < t.0.count()).then(|| t.0.raw(i)),
         }
     }
 
@@ -226,6 +388,8 @@ pub enum ValueKind {
     Text,
     /// [`FieldValue::List`]: a repeated field.
     List,
+    /// [`FieldValue::Records`]: a repeated record.
+    Records,
 }
 
 /// Why a message could not be built from field values ([`Message::from_fields`]), and where.
@@ -300,6 +464,10 @@ impl fmt::Display for FieldError {
                 field,
                 expected: ValueKind::List,
             } => write!(f, "{field} takes a list of numbers"),
+            FieldError::WrongKind {
+                field,
+                expected: ValueKind::Records,
+            } => write!(f, "{field} takes a list of records"),
             FieldError::TooMany { field, found, max } => {
                 write!(f, "{field} holds at most {max} elements, got {found}")
             }
@@ -327,10 +495,12 @@ pub fn field_int(
             min,
             max,
         }),
-        Some(FieldValue::Text(_) | FieldValue::List(_)) => Err(FieldError::WrongKind {
-            field,
-            expected: ValueKind::Int,
-        }),
+        Some(FieldValue::Text(_) | FieldValue::List(_) | FieldValue::Records(_)) => {
+            Err(FieldError::WrongKind {
+                field,
+                expected: ValueKind::Int,
+            })
+        }
         None => Err(FieldError::Missing { field }),
     }
 }
@@ -349,10 +519,12 @@ pub fn field_text<const N: usize>(
             expected: N,
             found: text.len(),
         }),
-        Some(FieldValue::Int(_) | FieldValue::List(_)) => Err(FieldError::WrongKind {
-            field,
-            expected: ValueKind::Text,
-        }),
+        Some(FieldValue::Int(_) | FieldValue::List(_) | FieldValue::Records(_)) => {
+            Err(FieldError::WrongKind {
+                field,
+                expected: ValueKind::Text,
+            })
+        }
         None => Err(FieldError::Missing { field }),
     }
 }

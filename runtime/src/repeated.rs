@@ -168,6 +168,79 @@ impl<T: Element, const N: usize> Repeated<T, N> {
     }
 }
 
+impl<T: Wire, const N: usize> crate::ElementTable for Repeated<T, N> {
+    fn count(&self) -> usize {
+        self.len
+    }
+    fn raw(&self, i: usize) -> i64 {
+        self.as_slice().get(i).map_or(0, |v| v.to_i64())
+    }
+}
+
+impl<T: Wire, const N: usize> Repeated<T, N> {
+    /// Elements of a type of the spec's (a unit's newtype, an enum) as
+    /// [`crate::Message::visit`] reports them: by their raw values.
+    #[inline]
+    pub fn table(&self) -> Elements<'_> {
+        Elements::Table(crate::ElementRef(self))
+    }
+}
+
+impl<R: crate::Record, const N: usize> crate::RecordTable for Repeated<R, N> {
+    fn records(&self) -> usize {
+        self.len
+    }
+    fn fields(&self) -> usize {
+        R::FIELDS
+    }
+    fn raw(&self, record: usize, field: usize) -> i64 {
+        self.as_slice().get(record).map_or(0, |r| r.raw(field))
+    }
+}
+
+impl<R: crate::Record, const N: usize> Repeated<R, N> {
+    /// The records as [`crate::Message::visit`] reports them.
+    #[inline]
+    pub fn records(&self) -> crate::RecordList<'_> {
+        crate::RecordList::Table(self)
+    }
+}
+
+/// Repeated record `name` from a [`crate::Message::from_fields`] getter: a list of at most
+/// `N` records, each of `R::FIELDS` raw values within their fields' wire limits. Public only
+/// for generated code.
+#[inline]
+pub fn records<'v, R: crate::Record, const N: usize>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<Repeated<R, N>, FieldError> {
+    let list = match field(name) {
+        Some(FieldValue::Records(list)) if list.fields() == R::FIELDS || list.is_empty() => list,
+        Some(_) => {
+            return Err(FieldError::WrongKind {
+                field: name,
+                expected: ValueKind::Records,
+            })
+        }
+        None => return Err(FieldError::Missing { field: name }),
+    };
+    if list.len() > N {
+        return Err(FieldError::TooMany {
+            field: name,
+            found: list.len(),
+            max: N,
+        });
+    }
+    let mut out = Repeated::new();
+    for k in 0..list.len() {
+        let r = R::from_raw(&list, k)?;
+        if out.push(r).is_err() {
+            break;
+        }
+    }
+    Ok(out)
+}
+
 /// The elements the getter gives for repeated field `name`: a list, or the error that says
 /// it gave none or something else.
 #[inline]

@@ -71,6 +71,8 @@ pub(super) struct Leaf<'a> {
     pub(super) wire: IntType,
     pub(super) bits: Option<&'a BitField>,
     pub(super) field: &'a Field,
+    /// The message it belongs to (a repeated record's struct is named by it).
+    pub(super) message: &'a str,
 }
 
 /// The generated Rust type of a value, and how to turn raw integers into it and back.
@@ -89,14 +91,21 @@ pub(super) enum Kind {
         raw: IntType,
     },
     Text(usize),
-    /// A repeated field: at most `max` elements, each its field's wire integer.
+    /// A repeated field: at most `max` elements, each its field's wire integer, or the type
+    /// of its enum or (scaled) unit where it has one (`typed`).
     List {
         elem: IntType,
         max: usize,
+        typed: Option<Ident>,
     },
     /// A repeated bit field, packed into `bytes` bytes.
     BitList {
         bytes: usize,
+    },
+    /// A repeated record: at most `max` records, each the generated struct `ty`.
+    Records {
+        ty: Ident,
+        max: usize,
     },
 }
 
@@ -133,7 +142,15 @@ impl<'a> Ctx<'a> {
             });
         };
         for m in p.commands.iter().chain(&p.responses) {
-            for f in &m.fields {
+            // A record's fields are typed as fields are.
+            for f in m
+                .fields
+                .iter()
+                .flat_map(|f| std::iter::once(f).chain(&f.record))
+            {
+                if f.is_record() {
+                    continue;
+                }
                 let w = wire_type(f);
                 if let Some(u) = f.unit {
                     widen(&mut unit_span[u], w.limits());
@@ -188,6 +205,13 @@ impl<'a> Ctx<'a> {
                 return Kind::List {
                     elem: leaf.wire,
                     max: pk.count,
+                    typed: None,
+                };
+            }
+            if let (Some(r), true) = (&f.repeat, f.is_record()) {
+                return Kind::Records {
+                    ty: record_type(leaf.message, f),
+                    max: r.max,
                 };
             }
             if let Some(r) = &f.repeat {
@@ -199,6 +223,7 @@ impl<'a> Ctx<'a> {
                     Kind::List {
                         elem: leaf.wire,
                         max: r.max,
+                        typed: self.element_type(f),
                     }
                 };
             }
@@ -227,6 +252,21 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// The type of a repeated field's elements where it is one of the spec's: its enum's, or
+    /// its unit's newtype (a unit of scale 1 and offset 0 leaves them integers).
+    pub(super) fn element_type(&self, f: &Field) -> Option<Ident> {
+        if f.repeat.is_none() || f.ty == FieldType::Bit || f.is_record() {
+            return None;
+        }
+        if let Some(e) = f.enumeration {
+            return Some(type_ident(&self.p.enums[e].name));
+        }
+        match f.unit {
+            Some(u) if !is_identity(&self.p.units[u]) => Some(type_ident(&self.p.units[u].name)),
+            _ => None,
+        }
+    }
+
     pub(super) fn rust_type(&self, leaf: &Leaf) -> TokenStream {
         match self.kind(leaf) {
             Kind::Int(t) => {
@@ -238,16 +278,27 @@ impl<'a> Ctx<'a> {
                 let n = Literal::usize_unsuffixed(n);
                 quote!([u8; #n])
             }
-            Kind::List { elem, max } => {
-                let (e, max) = (elem.ident(), usize_lit(max));
+            Kind::List { elem, max, typed } => {
+                let e = typed.unwrap_or_else(|| elem.ident());
+                let max = usize_lit(max);
                 quote!(rt::Repeated<#e, #max>)
             }
             Kind::BitList { bytes } => {
                 let bytes = usize_lit(bytes);
                 quote!(rt::Bits<#bytes>)
             }
+            Kind::Records { ty, max } => {
+                let max = usize_lit(max);
+                quote!(rt::Repeated<#ty, #max>)
+            }
         }
     }
+}
+
+/// The struct generated for repeated record `f` of message `m` (its name is the message's
+/// and the field's: `SyncWriteBlocks`).
+pub(super) fn record_type(m: &str, f: &Field) -> Ident {
+    type_ident(&format!("{m}_{}", f.name))
 }
 
 pub(super) fn wire_type(f: &Field) -> IntType {
@@ -280,6 +331,7 @@ pub(super) fn leaves(m: &Message) -> Vec<Leaf<'_>> {
                 wire: wire_type(f),
                 bits: None,
                 field: f,
+                message: &m.name,
             });
         }
         for b in &f.bits {
@@ -290,6 +342,7 @@ pub(super) fn leaves(m: &Message) -> Vec<Leaf<'_>> {
                     wire: bits_type(b),
                     bits: Some(b),
                     field: f,
+                    message: &m.name,
                 });
             }
         }
@@ -389,7 +442,7 @@ pub(super) fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenSt
         Kind::Unit { raw, .. } | Kind::Enum { raw, .. } | Kind::Flags { raw, .. } => {
             Some((raw, quote!(#v.raw())))
         }
-        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => None,
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } | Kind::Records { .. } => None,
     }
 }
 
@@ -499,6 +552,6 @@ pub(super) fn from_wire(
             let (r, raw) = (r.ident(), paren(raw));
             quote!(#ty::from_raw(#raw as #r))
         }
-        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } => raw,
+        Kind::Text(_) | Kind::List { .. } | Kind::BitList { .. } | Kind::Records { .. } => raw,
     }
 }

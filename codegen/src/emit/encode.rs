@@ -80,7 +80,12 @@ pub(super) fn emit_encode_arm(
         .collect();
     for ((k, _, f, v), b) in lists.iter().zip(&list_bytes) {
         let k = usize_lit(*k);
-        let limits = (f.ty != FieldType::Bit && f.width == 3).then(|| wire_type(f).limits());
+        // A 24-bit element, or one of the spec's types (whose raw type may be wider than the
+        // field), must fit its wire field.
+        let limits = (f.ty != FieldType::Bit
+            && !f.is_record()
+            && (f.width == 3 || ctx.element_type(f).is_some()))
+        .then(|| wire_type(f).limits());
         if let Some((lo, hi)) = f.range.or(limits) {
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             stmts.push(quote!(#lc.lists[#k].encode_in_range(#v.as_slice(), #lo, #hi)?;));
@@ -98,7 +103,10 @@ pub(super) fn emit_encode_arm(
     if let Some((f, c, v)) = &repeat {
         // Each element within the spec's range (a 24-bit one within its wire field too), then
         // the count within its bounds, which gives the frame's length.
-        let limits = (f.ty != FieldType::Bit && f.width == 3).then(|| wire_type(f).limits());
+        let limits = (f.ty != FieldType::Bit
+            && !f.is_record()
+            && (f.width == 3 || ctx.element_type(f).is_some()))
+        .then(|| wire_type(f).limits());
         if let Some((lo, hi)) = f.range.or(limits) {
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             stmts.push(quote!(#c.encode_in_range(#v.as_slice(), #lo, #hi)?;));

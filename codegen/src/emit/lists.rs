@@ -109,6 +109,20 @@ pub(super) fn repeated(m: &Message) -> Vec<usize> {
 
 /// The statement writing repeated field `f`'s elements (the local `v`) into `out` from `at`.
 pub(super) fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
+    if f.is_record() {
+        // Each record into an array of its width, then into the frame.
+        let w = usize_lit(f.width);
+        return quote! {
+            for (k, r) in #v.iter().enumerate() {
+                let mut bytes = [0u8; #w];
+                r.write(&mut bytes)?;
+                let at = #at + k * #w;
+                if let rt::Some(to) = out.get_mut(at..at + #w) {
+                    to.copy_from_slice(&bytes);
+                }
+            }
+        };
+    }
     if f.ty == FieldType::Bit {
         quote!(rt::write_bits(&#v, &mut out[#at..]);)
     } else {
@@ -140,8 +154,34 @@ pub(super) fn decode_repeat(
         }
     };
     let value = match ctx.kind(l) {
-        Kind::List { elem, max } => {
-            let (e, max) = (elem.ident(), usize_lit(max));
+        Kind::Records { ty, max } => {
+            // Each record read from an array of its width, at its offset in the frame.
+            let (w, max, v) = (usize_lit(f.width), usize_lit(max), local(&f.name));
+            let base = usize_lit(m.layout.payload + f.offset);
+            let j = m
+                .fields
+                .iter()
+                .take_while(|g| !std::ptr::eq(*g, f))
+                .filter(|g| g.repeat.is_some())
+                .count();
+            let at = if has_lists(m) && j > 0 {
+                let j = usize_lit(j);
+                quote!(#base + s.shift(#j))
+            } else {
+                quote!(#base)
+            };
+            stmts.push(quote! {
+                let mut #v = rt::Repeated::<#ty, #max>::new();
+                for (k, bytes) in #elements.chunks_exact(#w).enumerate() {
+                    let bytes = <[u8; #w]>::try_from(bytes).unwrap_or([0; #w]);
+                    let _ = #v.push(#ty::read(&bytes, #at + k * #w)?);
+                }
+            });
+            let _ = (c, count);
+            return Some(quote!(#v));
+        }
+        Kind::List { elem, max, typed } => {
+            let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
             let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
             quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?)
         }

@@ -83,7 +83,9 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                         quote!(rt::Int(#v.raw() as i64))
                     }
                     Kind::Text(_) => quote!(rt::Text(&#v[..])),
+                    Kind::List { typed: Some(_), .. } => quote!(rt::List(#v.table())),
                     Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
+                    Kind::Records { .. } => quote!(rt::Records(#v.records())),
                 };
                 quote!(f(#n, #value))
             })
@@ -114,6 +116,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         }
     };
     let repeats = emit_repeats(p, d);
+    let records = emit_records(ctx, d);
     let dispatch = emit_dispatch(ctx, d, &ty);
     let from_fields = emit_from_fields(ctx, d);
     let command_info = if d == Direction::Request {
@@ -206,6 +209,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     };
     quote! {
         #repeats
+        #records
         #[doc = #what]
         #derives
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -299,8 +303,8 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             let (n, f) = (l.name, ident(l.name));
             let value = match ctx.kind(l) {
                 Kind::Text(_) => quote!(rt::text(&mut field, #n)?),
-                Kind::List { elem, max } => {
-                    let (e, max) = (elem.ident(), usize_lit(max));
+                Kind::List { elem, max, typed } => {
+                    let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
                     let (lo, hi) = elem.limits();
                     let (lo, hi) = (i64_lit(lo), i64_lit(hi));
                     quote!(rt::list::<#e, #max>(&mut field, #n, #lo, #hi)?)
@@ -308,6 +312,10 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
                 Kind::BitList { bytes } => {
                     let bytes = usize_lit(bytes);
                     quote!(rt::list_bits::<#bytes>(&mut field, #n)?)
+                }
+                Kind::Records { ty, max } => {
+                    let max = usize_lit(max);
+                    quote!(rt::records::<#ty, #max>(&mut field, #n)?)
                 }
                 _ if l.bits.is_none() && l.wire.bits != 24 => {
                     let w = l.wire.ident();

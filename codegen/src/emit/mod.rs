@@ -7,6 +7,7 @@
 //! - `types`: units, enums and flags;
 //! - `messages`: the `Request`/`Response` enums and their per-message tables; `encode` and
 //!   `decode` the arms of one message; `lists` where repeated fields sit and how they are split;
+//!   `records` the struct of each repeated record;
 //! - `dispatch`: code → message, the decode entry point;
 //! - `stream`: the stream decoder's tables and the `Protocol` impl;
 //! - `protocol`: pairing (`COMMANDS`, `follows_request`);
@@ -41,7 +42,8 @@
 //! - constants (and a list's count field, computed from the list) are not part of the typed
 //!   message: encode writes them, decode checks them; a repeated field is an
 //!   `rt::Repeated<wire, max>` or `rt::Bits<bytes>` value, with a `REPEAT_<NAME>` const saying
-//!   where it sits and how it is counted.
+//!   where it sits and how it is counted; a repeated record is an `rt::Repeated<Struct, max>` of
+//!   a struct named by its message and field, its fields typed by these rules.
 
 mod ctx;
 mod decode;
@@ -51,6 +53,7 @@ mod head;
 mod lists;
 mod messages;
 mod protocol;
+mod records;
 mod stream;
 #[cfg(test)]
 mod tests;
@@ -66,6 +69,7 @@ use head::*;
 use lists::*;
 use messages::*;
 use protocol::*;
+use records::*;
 use stream::*;
 pub use tokens::camel;
 use tokens::*;
@@ -96,6 +100,7 @@ pub fn emit_module(p: &Protocol, source: &str, spec_path: &str) -> Result<String
             gaps.join("; ")
         ));
     }
+    record_names(p)?;
     // A command's replies are a bit set of responses (`Request::COMMANDS`).
     if p.responses.len() > 128 {
         return Err(format!(
@@ -108,6 +113,45 @@ pub fn emit_module(p: &Protocol, source: &str, spec_path: &str) -> Result<String
     let file: syn::File = syn::parse2(tokens)
         .map_err(|e| format!("generated code for {} does not parse: {e}", p.name))?;
     Ok(format!("{PREAMBLE}\n{}", prettyplease::unparse(&file)))
+}
+
+/// A repeated record's struct is named after its message and field (`SyncWriteBlocks`): that
+/// name must be no other type's of the module (a unit's, an enum's, a flag set's, another
+/// record's, or one the module always defines).
+fn record_names(p: &Protocol) -> Result<(), String> {
+    let mut taken: Vec<(String, String)> =
+        ["Request", "Response", "Decoded", "StreamDecoder", "Event"]
+            .iter()
+            .map(|n| {
+                (
+                    n.to_string(),
+                    "a type every generated module defines".to_owned(),
+                )
+            })
+            .collect();
+    taken.push((camel(&p.name), "the protocol's type".to_owned()));
+    for (names, what) in [
+        (p.units.iter().map(|u| &u.name).collect::<Vec<_>>(), "unit"),
+        (p.enums.iter().map(|e| &e.name).collect(), "enum"),
+        (p.flags.iter().map(|f| &f.name).collect(), "flag set"),
+    ] {
+        for n in names {
+            taken.push((camel(n), format!("the {what} `{n}`")));
+        }
+    }
+    for m in p.commands.iter().chain(&p.responses) {
+        for f in m.fields.iter().filter(|f| f.is_record()) {
+            let name = record_type(&m.name, f).to_string();
+            if let Some((_, other)) = taken.iter().find(|(n, _)| *n == name) {
+                return Err(format!(
+                    "{}: the record `{}.{}` would be the struct `{name}`, the name of {other}; rename one (the interpreter serves it: `busspec decode --spec`)",
+                    p.name, m.name, f.name
+                ));
+            }
+            taken.push((name, format!("the record `{}.{}`", m.name, f.name)));
+        }
+    }
+    Ok(())
 }
 
 fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {

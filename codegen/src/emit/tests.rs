@@ -29,6 +29,7 @@ fn field(range: (i64, i64), special: &[i64]) -> Field {
         repeat: None,
         packed: None,
         follows: None,
+        record: Vec::new(),
     }
 }
 
@@ -155,4 +156,24 @@ fn type_names() {
             name
         );
     }
+}
+
+#[test]
+fn a_record_named_like_another_type_is_refused_by_name() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../model/tests/fixtures/valid/records.yaml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    // `sync_write.blocks` would be `SyncWriteBlocks`, a unit's name here.
+    let clash = text.replace(
+        "  - {name: count, symbol: \"\", scale: \"1\"}",
+        "  - {name: count, symbol: \"\", scale: \"1\"}\n  - {name: sync_write_blocks, symbol: \"\", scale: \"2\"}",
+    );
+    let p = busspec_model::load_str("records.yaml", &clash).unwrap_or_else(|d| panic!("{d}"));
+    let e = super::emit_module(&p, "records.yaml", "records.yaml").unwrap_err();
+    assert!(
+        e.contains("`sync_write.blocks` would be the struct `SyncWriteBlocks`, the name of the unit `sync_write_blocks`"),
+        "{e}"
+    );
+    let p = busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"));
+    assert!(super::emit_module(&p, "records.yaml", "records.yaml").is_ok());
 }

@@ -112,8 +112,50 @@ pub(super) fn emit_units(ctx: &Ctx) -> TokenStream {
                 }
             }
         });
+        if list_elements(ctx).contains(&ty.to_string()) {
+            out.extend(wire_impl(&ty, raw, quote!(Self(v as #r)), quote!(self.0)));
+        }
     }
     out
+}
+
+/// The names of the spec's types some repeated field's elements take (`Kind::List`'s `typed`).
+fn list_elements(ctx: &Ctx) -> Vec<String> {
+    ctx.p
+        .commands
+        .iter()
+        .chain(&ctx.p.responses)
+        .flat_map(|m| &m.fields)
+        .filter_map(|f| ctx.element_type(f))
+        .map(|t| t.to_string())
+        .collect()
+}
+
+/// `rt::Wire` for a type of the spec's a list's elements take, over its raw type `raw`:
+/// `from` makes it from the raw `v: i64`, `to` is its raw value.
+fn wire_impl(ty: &Ident, raw: IntType, from: TokenStream, to: TokenStream) -> TokenStream {
+    let (lo, hi) = raw.limits();
+    let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+    let d = " A list's element: its raw value as it travels.";
+    quote! {
+        #[doc = #d]
+        impl rt::Wire for #ty {
+            const MIN: i64 = #lo;
+            const MAX: i64 = #hi;
+            #[inline]
+            fn from_i64(v: i64) -> Self {
+                #from
+            }
+            #[inline]
+            fn to_i64(self) -> i64 {
+                #to as i64
+            }
+            #[inline]
+            fn to_u64(self) -> u64 {
+                #to as u64
+            }
+        }
+    }
 }
 
 pub(super) fn emit_enums(ctx: &Ctx) -> TokenStream {
@@ -203,6 +245,22 @@ pub(super) fn emit_enums(ctx: &Ctx) -> TokenStream {
                 }
             }
         });
+        if list_elements(ctx).contains(&ty.to_string()) {
+            out.extend(wire_impl(
+                &ty,
+                raw,
+                quote!(Self::from_raw(v as #r)),
+                quote!(self.raw()),
+            ));
+            out.extend(quote! {
+                /// A list's empty slots: raw 0.
+                impl ::core::default::Default for #ty {
+                    fn default() -> Self {
+                        Self::from_raw(0)
+                    }
+                }
+            });
+        }
     }
     out
 }

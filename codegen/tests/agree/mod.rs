@@ -35,6 +35,15 @@ fn raw(v: FieldValue<'_>) -> Raw {
         FieldValue::Int(i) => Raw::Int(i),
         FieldValue::Text(t) => Raw::Text(t.to_vec()),
         FieldValue::List(items) => Raw::List(items.iter().collect()),
+        FieldValue::Records(list) => Raw::Records(
+            (0..list.len())
+                .map(|k| {
+                    (0..list.fields())
+                        .map(|j| list.get(k, j).unwrap_or(0))
+                        .collect()
+                })
+                .collect(),
+        ),
     }
 }
 
@@ -209,12 +218,28 @@ fn encode_generated<M: Message>(
     values: &[Value],
     buf: &mut [u8],
 ) -> Option<Vec<u8>> {
-    let m = M::from_fields(name, |n| {
-        values.iter().find(|v| v.name == n).map(|v| match &v.raw {
-            Raw::Int(i) => FieldValue::Int(*i),
-            Raw::Text(t) => FieldValue::Text(t),
-            Raw::List(l) => FieldValue::List(Elements::I64(l)),
+    // Records lent flat, record after record.
+    let flats: Vec<(Vec<i64>, usize)> = values
+        .iter()
+        .map(|v| match &v.raw {
+            Raw::Records(r) => (r.concat(), r.first().map_or(0, Vec::len)),
+            _ => (Vec::new(), 0),
         })
+        .collect();
+    let m = M::from_fields(name, |n| {
+        values
+            .iter()
+            .zip(&flats)
+            .find(|(v, _)| v.name == n)
+            .map(|(v, (flat, fields))| match &v.raw {
+                Raw::Int(i) => FieldValue::Int(*i),
+                Raw::Text(t) => FieldValue::Text(t),
+                Raw::List(l) => FieldValue::List(Elements::I64(l)),
+                Raw::Records(_) => FieldValue::Records(busspec_runtime::RecordList::Flat {
+                    values: flat,
+                    fields: *fields,
+                }),
+            })
     })
     .ok()?;
     let n = m.encode(address, buf).ok()?;
@@ -339,10 +364,30 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
                         _ => lo + rng.below((hi - lo) as u64 + 1) as i64,
                     })
                     .collect();
+                // Records: each field at the ends of its type or anywhere between.
+                let records: Vec<Vec<i64>> = (0..n)
+                    .map(|k| {
+                        rf.record
+                            .iter()
+                            .map(|g| {
+                                let (lo, hi) = g.raw_span();
+                                match (k + rng.below(3) as usize) % 4 {
+                                    0 => lo,
+                                    1 => hi,
+                                    _ => lo + rng.below((hi - lo) as u64 + 1) as i64,
+                                }
+                            })
+                            .collect()
+                    })
+                    .collect();
                 let mut values = given.clone();
                 for v in &mut values {
                     if v.name == rf.name {
-                        v.raw = Raw::List(list.clone());
+                        v.raw = if rf.is_record() {
+                            Raw::Records(records.clone())
+                        } else {
+                            Raw::List(list.clone())
+                        };
                     }
                 }
                 // As given (a count following another field may now disagree), then with every

@@ -107,6 +107,23 @@ pub mod lists_length {
             rt::Some(Self(raw as i16))
         }
     }
+    /// A list's element: its raw value as it travels.
+    impl rt::Wire for Millivolts {
+        const MIN: i64 = -32768;
+        const MAX: i64 = 32767;
+        #[inline]
+        fn from_i64(v: i64) -> Self {
+            Self(v as i16)
+        }
+        #[inline]
+        fn to_i64(self) -> i64 {
+            self.0 as i64
+        }
+        #[inline]
+        fn to_u64(self) -> u64 {
+            self.0 as u64
+        }
+    }
     /// Where `log.channels` sits in the frame and how its elements are counted.
     pub const REPEAT_LOG: rt::RepeatAt = rt::RepeatAt {
         message: "log",
@@ -202,7 +219,7 @@ pub mod lists_length {
             /// Valid raw range 0..=15.
             channels: rt::Repeated<u8, 6>,
             /// \[mV\]
-            samples: rt::Repeated<i16, 6>,
+            samples: rt::Repeated<Millivolts, 6>,
             seq: u16,
         },
         /// §2 Set outputs (code `0x21`, 8 to 9 bytes).
@@ -249,7 +266,7 @@ pub mod lists_length {
             match self {
                 Self::Log { channels: v_channels, samples: v_samples, seq: v_seq } => {
                     f("channels", rt::List(v_channels.elements()));
-                    f("samples", rt::List(v_samples.elements()));
+                    f("samples", rt::List(v_samples.table()));
                     f("seq", rt::Int(*v_seq as i64));
                 }
                 Self::SetOutputs { outputs: v_outputs, mask: v_mask } => {
@@ -272,6 +289,9 @@ pub mod lists_length {
                     LISTS_LOG.lists[0].encode_in_range(v_channels.as_slice(), 0, 15)?;
                     let bytes_0: usize = LISTS_LOG.lists[0].encode_len(v_channels.len())?
                         - LISTS_LOG.base;
+                    LISTS_LOG
+                        .lists[1]
+                        .encode_in_range(v_samples.as_slice(), -32768, 32767)?;
                     let bytes_1: usize = LISTS_LOG.lists[1].encode_len(v_samples.len())?
                         - LISTS_LOG.base;
                     let mut compact = [0u8; 7];
@@ -355,7 +375,7 @@ pub mod lists_length {
                         channels: v_channels,
                         samples: s
                             .lists[1]
-                            .elements::<i16, 6>(s.elements(1), true, true)?,
+                            .elements::<Millivolts, 6>(s.elements(1), true, true)?,
                         seq: u16::from_le_bytes([frame[4], frame[5]]),
                     })
                 }
@@ -382,7 +402,7 @@ pub mod lists_length {
                     rt::Ok(Self::Log {
                         channels: rt::list::<u8, 6>(&mut field, "channels", 0, 255)?,
                         samples: rt::list::<
-                            i16,
+                            Millivolts,
                             6,
                         >(&mut field, "samples", -32768, 32767)?,
                         seq: rt::get(&mut field, "seq")?,

@@ -320,6 +320,8 @@ pub fn number_positions<M: Message>(m: &M, address: u8) -> Vec<(usize, usize)> {
         Int(i64),
         Text(Vec<u8>),
         List(Vec<i64>),
+        /// Records' raw values, record after record, and the fields to a record.
+        Records(Vec<i64>, usize),
     }
     let mut fields: Vec<(&'static str, Value)> = Vec::new();
     m.visit(|name, v| {
@@ -329,6 +331,13 @@ pub fn number_positions<M: Message>(m: &M, address: u8) -> Vec<(usize, usize)> {
                 FieldValue::Int(i) => Value::Int(i),
                 FieldValue::Text(t) => Value::Text(t.to_vec()),
                 FieldValue::List(items) => Value::List(items.iter().collect()),
+                FieldValue::Records(l) => Value::Records(
+                    (0..l.len())
+                        .flat_map(|k| (0..l.fields()).map(move |j| (k, j)))
+                        .map(|(k, j)| l.get(k, j).unwrap_or(0))
+                        .collect(),
+                    l.fields(),
+                ),
             },
         ))
     });
@@ -339,6 +348,10 @@ pub fn number_positions<M: Message>(m: &M, address: u8) -> Vec<(usize, usize)> {
                 Value::Int(i) => FieldValue::Int(*i),
                 Value::Text(t) => FieldValue::Text(t),
                 Value::List(l) => FieldValue::List(Elements::I64(l)),
+                Value::Records(l, w) => FieldValue::Records(busspec_runtime::RecordList::Flat {
+                    values: l,
+                    fields: *w,
+                }),
             })
         })
     };

@@ -1,0 +1,165 @@
+use super::*;
+
+/// The struct of each repeated record of direction `d`'s messages (`type: record`): its
+/// fields typed as fields are (units, enums, flags), `Copy`, read from and written to a
+/// fixed-size array of its width, each field's range checked, and its raw values lent to
+/// `visit` and taken from `from_fields` (`rt::Record`).
+pub(super) fn emit_records(ctx: &Ctx, d: Direction) -> TokenStream {
+    let mut out = TokenStream::new();
+    for m in ctx.p.messages(d) {
+        for f in m.fields.iter().filter(|f| f.is_record()) {
+            out.extend(emit_record(ctx, m, f));
+        }
+    }
+    out
+}
+
+fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
+    let p = ctx.p;
+    let ty = record_type(&m.name, f);
+    let message = m.name.as_str();
+    let width = usize_lit(f.width);
+    // Each field goes by `record.field` in errors, as the interpreter names it.
+    let names: Vec<String> = (0..f.record.len())
+        .map(|j| f.record_field_name(j))
+        .collect();
+    let leaves: Vec<Leaf> = f
+        .record
+        .iter()
+        .zip(&names)
+        .map(|(g, n)| Leaf {
+            name: n,
+            doc: g.doc.clone(),
+            wire: wire_type(g),
+            bits: None,
+            field: g,
+            message: &m.name,
+        })
+        .collect();
+    let mut decls = Vec::new();
+    let mut reads = Vec::new();
+    let mut built = Vec::new();
+    let mut writes = Vec::new();
+    let mut raws = Vec::new();
+    let mut from_raw = Vec::new();
+    let mut defaults = Vec::new();
+    for (j, (g, l)) in f.record.iter().zip(&leaves).enumerate() {
+        let (gn, v) = (ident(&g.name), local(&g.name));
+        let t = ctx.rust_type(l);
+        let d = doc(&leaf_doc(p, l));
+        decls.push(quote!(#d pub #gn: #t));
+        let wt = wire_type(g);
+        let w = wt.ident();
+        let name = l.name;
+        // Decode: the wire integer, its range, the typed value.
+        let read = read_wire(g, 0);
+        reads.push(quote!(let #v: #w = #read;));
+        if let Some((range_fn, range)) = leaf_range(g, None, wt.limits()) {
+            let at = match g.offset {
+                0 => quote!(at),
+                o => {
+                    let o = usize_lit(o);
+                    quote!(at + #o)
+                }
+            };
+            reads.push(quote!(rt::#range_fn(#message, #name, #at, #v, #range)?;));
+        }
+        let typed = from_wire(ctx, l, Some(wt), quote!(#v));
+        built.push(quote!(#gn: #typed));
+        // Encode: its range, its wire integer in the field's bytes.
+        writes.push(quote!(let #v = self.#gn;));
+        if let Some((raw_t, raw)) = raw_of(ctx, l, &v) {
+            if let Some((range_fn, range)) = leaf_range(g, None, raw_t.limits()) {
+                let range_fn = format_ident!("encode_{}", range_fn);
+                writes.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
+            }
+        }
+        let value = paren(to_wire(ctx, l, &v, None));
+        let (at, end) = (usize_lit(g.offset), usize_lit(g.offset + g.width));
+        writes.push(if g.width == 1 && !wt.signed {
+            quote!(out[#at] = #value;)
+        } else if g.width == 3 {
+            let le = g.byte_order == ByteOrder::Little;
+            quote!(out[#at..#end].copy_from_slice(&rt::bytes24(#value as u32, #le));)
+        } else {
+            let conv = to_bytes(g.byte_order);
+            quote!(out[#at..#end].copy_from_slice(&#value.#conv());)
+        });
+        // Its raw value, and from a raw value.
+        let jl = usize_lit(j);
+        let raw = match raw_of(ctx, l, &format_ident!("x")) {
+            Some(_) => match ctx.kind(l) {
+                Kind::Int(_) => quote!(self.#gn as i64),
+                _ => quote!(self.#gn.raw() as i64),
+            },
+            None => quote!(0),
+        };
+        raws.push(quote!(#jl => #raw));
+        let (lo, hi) = wt.limits();
+        let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+        let get = quote!(rt::field_int(#name, rt::Some(rt::Int(list.get(k, #jl).unwrap_or(0))), #lo, #hi)?);
+        let typed = from_wire(ctx, l, None, get);
+        from_raw.push(quote!(#gn: #typed));
+        let zero_t = raw_of(ctx, l, &v).map(|(t, _)| t);
+        let zero = from_wire(ctx, l, zero_t, quote!(0));
+        defaults.push(quote!(#gn: #zero));
+    }
+    let n = usize_lit(f.record.len());
+    // Plain integers derive their zero; a unit, enum or flag set is made from raw 0.
+    let plain = leaves.iter().all(|l| matches!(ctx.kind(l), Kind::Int(_)));
+    let (derive_default, default_impl) = if plain {
+        (quote!(, Default), quote!())
+    } else {
+        (
+            quote!(),
+            quote! {
+                impl ::core::default::Default for #ty {
+                    fn default() -> Self {
+                        Self { #(#defaults,)* }
+                    }
+                }
+            },
+        )
+    };
+    let d = doc(&format!(
+        "One record of `{}.{}` ({} bytes). {}",
+        m.name, f.name, f.width, f.doc
+    ));
+    let read_doc = " Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.";
+    quote! {
+        #d
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash #derive_default)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct #ty {
+            #(#decls,)*
+        }
+        impl #ty {
+            /// Its bytes on the wire.
+            pub const WIDTH: usize = #width;
+            #[doc = #read_doc]
+            pub fn read(frame: &[u8; #width], at: usize) -> rt::DecodeResult<Self> {
+                #(#reads)*
+                rt::Ok(Self { #(#built,)* })
+            }
+            /// Writes the record into its bytes, each field's range checked as the spec says.
+            pub fn write(&self, out: &mut [u8; #width]) -> rt::Result<(), rt::EncodeError> {
+                #(#writes)*
+                rt::Ok(())
+            }
+        }
+        #default_impl
+        impl rt::Record for #ty {
+            const FIELDS: usize = #n;
+            fn raw(&self, field: usize) -> i64 {
+                match field {
+                    #(#raws,)*
+                    _ => 0,
+                }
+            }
+            fn from_raw(list: &rt::RecordList<'_>, k: usize) -> rt::Result<Self, rt::FieldError> {
+                rt::Ok(Self { #(#from_raw,)* })
+            }
+        }
+    }
+}
