@@ -630,6 +630,35 @@ pub struct Field {
     pub doc: Option<String>,
 }
 
+impl Field {
+    /// Whether the field sets the key `key` as written in YAML (`encoding` only where it is
+    /// `bcd`, the default being binary); `false` for a key it does not know.
+    pub fn sets(&self, key: &str) -> bool {
+        match key {
+            "length" => self.length.is_some(),
+            "word_order" => self.word_order.is_some(),
+            "encoding" => self.encoding == Some(Encoding::Bcd),
+            "unit" => self.unit.is_some(),
+            "range" => self.range.is_some(),
+            "value" => self.value.is_some(),
+            "enum" => self.enum_.is_some(),
+            "flags" => self.flags.is_some(),
+            "equals" => self.equals.is_some(),
+            "special" => !self.special.is_empty(),
+            "bits" => !self.bits.is_empty(),
+            "repeat" => self.repeat.is_some(),
+            "packed" => self.packed.is_some(),
+            "follows" => self.follows.is_some(),
+            "fields" => !self.fields.is_empty(),
+            // The validator's own key lists name only these: a misspelt one is its bug.
+            _ => {
+                debug_assert!(false, "`{key}` is no key of a field");
+                false
+            }
+        }
+    }
+}
+
 /// `packed: {count: 16, bits: 11, bit_order: lsb_first}`: `count` elements of `bits` bits each,
 /// one after the other in a bit stream that fills bytes in `bit_order` (CRSF's RC channels).
 #[derive(Debug, Clone, Copy, Deserialize)]

@@ -1914,20 +1914,13 @@ fn field(
     }
     if let Some(r) = &f.repeat {
         out.repeat = repeat(r, f, &join(p, "repeat"), earlier, sink);
-        for (k, given) in [
-            ("value", f.value.is_some()),
-            ("equals", f.equals.is_some()),
-            ("bits", !f.bits.is_empty()),
-            ("special", !f.special.is_empty()),
-            ("follows", f.follows.is_some()),
-        ] {
-            if given {
-                sink.error(
-                    join(p, k),
-                    format!("`{k}` cannot be combined with `repeat`"),
-                );
-            }
-        }
+        refuse_keys(
+            f,
+            p,
+            &["value", "equals", "bits", "special", "follows"],
+            |k| format!("`{k}` cannot be combined with `repeat`"),
+            sink,
+        );
         if f.ty == T::Ascii {
             sink.error(join(p, "repeat"), "an ascii field cannot repeat");
         }
@@ -1939,17 +1932,13 @@ fn field(
                 "a `bit` is only the element of a repeated field (coils); give it a `repeat`",
             );
         }
-        for (k, given) in [
-            ("unit", f.unit.is_some()),
-            ("range", f.range.is_some()),
-            ("enum", f.enum_.is_some()),
-            ("flags", f.flags.is_some()),
-            ("follows", f.follows.is_some()),
-        ] {
-            if given {
-                sink.error(join(p, k), format!("`{k}` cannot be combined with a bit"));
-            }
-        }
+        refuse_keys(
+            f,
+            p,
+            &["unit", "range", "enum", "flags", "follows"],
+            |k| format!("`{k}` cannot be combined with a bit"),
+            sink,
+        );
         return out;
     }
     if let Some(fo) = &f.follows {
@@ -1958,23 +1947,7 @@ fn field(
             |name: &str, sink: &mut Sink| relation(name, fo.multiply, fo.divide, &fpath, sink);
         match (&fo.field, &fo.request) {
             (Some(other), None) => {
-                for (k, given) in [
-                    ("unit", f.unit.is_some()),
-                    ("range", f.range.is_some()),
-                    ("value", f.value.is_some()),
-                    ("enum", f.enum_.is_some()),
-                    ("flags", f.flags.is_some()),
-                    ("equals", f.equals.is_some()),
-                    ("bits", !f.bits.is_empty()),
-                    ("special", !f.special.is_empty()),
-                ] {
-                    if given {
-                        sink.error(
-                            join(p, k),
-                            format!("`{k}` cannot be combined with `follows` a field: its value is computed"),
-                        );
-                    }
-                }
+                refuse_keys(f, p, &["unit", "range", "value", "enum", "flags", "equals", "bits", "special"], |k| format!("`{k}` cannot be combined with `follows` a field: its value is computed"), sink);
                 match earlier.iter().position(|e| &e.name == other) {
                     Some(i) if earlier[i].bits.is_empty() && !earlier[i].is_ascii() && !earlier[i].is_wide() && !earlier[i].bcd && !earlier[i].is_list() => {
                         out.follows = Some(Follows::Field(i, relation(other, sink)));
@@ -2167,26 +2140,25 @@ fn record_field(
     sink: &mut Sink,
 ) -> Field {
     use model::FieldType as T;
-    for (k, given) in [
-        ("length", f.length.is_some()),
-        ("word_order", f.word_order.is_some()),
-        ("unit", f.unit.is_some()),
-        ("range", f.range.is_some()),
-        ("value", f.value.is_some()),
-        ("enum", f.enum_.is_some()),
-        ("flags", f.flags.is_some()),
-        ("equals", f.equals.is_some()),
-        ("special", !f.special.is_empty()),
-        ("bits", !f.bits.is_empty()),
-        ("follows", f.follows.is_some()),
-    ] {
-        if given {
-            sink.error(
-                join(p, k),
-                format!("`{k}` cannot be combined with a record: its fields take their own"),
-            );
-        }
-    }
+    refuse_keys(
+        f,
+        p,
+        &[
+            "length",
+            "word_order",
+            "unit",
+            "range",
+            "value",
+            "enum",
+            "flags",
+            "equals",
+            "special",
+            "bits",
+            "follows",
+        ],
+        |k| format!("`{k}` cannot be combined with a record: its fields take their own"),
+        sink,
+    );
     let fpath = join(p, "fields");
     if f.fields.is_empty() {
         sink.error(&fpath, "a record needs at least one field");
@@ -2212,26 +2184,25 @@ fn record_field(
             );
             continue;
         }
-        let mut refused = false;
-        for (k, given) in [
-            ("repeat", g.repeat.is_some()),
-            ("value", g.value.is_some()),
-            ("equals", g.equals.is_some()),
-            ("follows", g.follows.is_some()),
-            ("bits", !g.bits.is_empty()),
-            ("word_order", g.word_order.is_some()),
-            ("fields", !g.fields.is_empty()),
-            ("packed", g.packed.is_some()),
-            ("encoding", g.encoding == Some(model::Encoding::Bcd)),
-        ] {
-            if given {
-                refused = true;
-                sink.error(
-                    join(&gp, k),
-                    format!("`{k}` cannot be used in a record's field (each is a plain number of a fixed width)"),
-                );
-            }
-        }
+        let refused = refuse_keys(
+            g,
+            &gp,
+            &[
+                "repeat",
+                "value",
+                "equals",
+                "follows",
+                "bits",
+                "word_order",
+                "fields",
+                "packed",
+                "encoding",
+            ],
+            |k| {
+                format!("`{k}` cannot be used in a record's field (each is a plain number of a fixed width)")
+            },
+            sink,
+        );
         if refused {
             continue;
         }
@@ -2388,6 +2359,25 @@ fn int_range(r: model::FieldRange, p: &str, sink: &mut Sink) -> Option<model::Ra
     ok.then_some(r)
 }
 
+/// Refuses each of `keys` (in this order) that the field sets, at its path, worded by `why`;
+/// whether it refused any.
+fn refuse_keys(
+    f: &model::Field,
+    p: &str,
+    keys: &[&str],
+    why: impl Fn(&str) -> String,
+    sink: &mut Sink,
+) -> bool {
+    let mut any = false;
+    for &k in keys {
+        if f.sets(k) {
+            any = true;
+            sink.error(join(p, k), why(k));
+        }
+    }
+    any
+}
+
 /// A BCD field (`encoding: bcd`): an unsigned number of 1 to 4 bytes with a `unit` and a
 /// `range` within what its digits hold (that range when none is given); nothing else yet.
 fn bcd_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut Sink) -> Field {
@@ -2399,23 +2389,15 @@ fn bcd_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut 
         );
         return out;
     }
-    for (k, given) in [
-        ("value", f.value.is_some()),
-        ("enum", f.enum_.is_some()),
-        ("flags", f.flags.is_some()),
-        ("equals", f.equals.is_some()),
-        ("special", !f.special.is_empty()),
-        ("bits", !f.bits.is_empty()),
-        ("repeat", f.repeat.is_some()),
-        ("follows", f.follows.is_some()),
-    ] {
-        if given {
-            sink.error(
-                join(p, k),
-                format!("`{k}` cannot be combined with `encoding: bcd` (not expressible yet)"),
-            );
-        }
-    }
+    refuse_keys(
+        f,
+        p,
+        &[
+            "value", "enum", "flags", "equals", "special", "bits", "repeat", "follows",
+        ],
+        |k| format!("`{k}` cannot be combined with `encoding: bcd` (not expressible yet)"),
+        sink,
+    );
     let most = 10i64.pow(2 * out.width as u32) - 1;
     match &f.unit {
         Some(u) => match refs.units.get(u) {
@@ -2489,25 +2471,24 @@ fn packed_field(
             return out;
         }
     };
-    for (k, given) in [
-        ("repeat", f.repeat.is_some()),
-        ("value", f.value.is_some()),
-        ("enum", f.enum_.is_some()),
-        ("flags", f.flags.is_some()),
-        ("equals", f.equals.is_some()),
-        ("bits", !f.bits.is_empty()),
-        ("special", !f.special.is_empty()),
-        ("follows", f.follows.is_some()),
-        ("word_order", f.word_order.is_some()),
-        ("encoding", out.bcd),
-    ] {
-        if given {
-            sink.error(
-                join(p, k),
-                format!("`{k}` cannot be combined with `packed`"),
-            );
-        }
-    }
+    refuse_keys(
+        f,
+        p,
+        &[
+            "repeat",
+            "value",
+            "enum",
+            "flags",
+            "equals",
+            "bits",
+            "special",
+            "follows",
+            "word_order",
+            "encoding",
+        ],
+        |k| format!("`{k}` cannot be combined with `packed`"),
+        sink,
+    );
     let type_bits = 8 * elem_width as i64;
     // Its bytes as written, even where a rule below refuses it: the errors about the payload's
     // size then follow from what the spec says, not from a placeholder.
@@ -2569,23 +2550,15 @@ fn wide_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut
         T::F32 | T::F64 => "a float",
         _ => "a 64-bit integer",
     };
-    for (k, given) in [
-        ("value", f.value.is_some()),
-        ("enum", f.enum_.is_some()),
-        ("flags", f.flags.is_some()),
-        ("equals", f.equals.is_some()),
-        ("special", !f.special.is_empty()),
-        ("bits", !f.bits.is_empty()),
-        ("repeat", f.repeat.is_some()),
-        ("follows", f.follows.is_some()),
-    ] {
-        if given {
-            sink.error(
-                join(p, k),
-                format!("`{k}` cannot be combined with {what} field (not expressible yet)"),
-            );
-        }
-    }
+    refuse_keys(
+        f,
+        p,
+        &[
+            "value", "enum", "flags", "equals", "special", "bits", "repeat", "follows",
+        ],
+        |k| format!("`{k}` cannot be combined with {what} field (not expressible yet)"),
+        sink,
+    );
     match &f.unit {
         Some(u) => match refs.units.get(u) {
             Some(i) => {
