@@ -191,7 +191,7 @@ enum Command {
         rate: f64,
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Only this protocol (default: all four built-in ones).
+        /// Only this protocol (default: every built-in one).
         protocol: Option<String>,
         /// Soak the protocol of this spec file against devices of its `device:` section.
         #[arg(long, value_name = "FILE", requires = "protocol")]
