@@ -159,11 +159,28 @@ pub enum Part {
 }
 
 /// The start of a frame: one byte (`0xAA`) or a sync sequence (`[0xFF, 0xFF]`).
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum StartBytes {
     One(i64),
     Many(Vec<i64>),
+}
+
+/// A number is one byte, a list of numbers several; anything else is named as wrong.
+impl<'de> Deserialize<'de> for StartBytes {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let v = serde_yaml::Value::deserialize(d)?;
+        let wrong = || D::Error::custom("expected a byte (0x7E) or a list of bytes ([0xFF, 0xFF])");
+        match v {
+            serde_yaml::Value::Number(_) => i64::deserialize(v)
+                .map(StartBytes::One)
+                .map_err(|_| wrong()),
+            serde_yaml::Value::Sequence(_) => Vec::<i64>::deserialize(v)
+                .map(StartBytes::Many)
+                .map_err(|_| wrong()),
+            _ => Err(wrong()),
+        }
+    }
 }
 
 impl StartBytes {

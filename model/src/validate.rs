@@ -926,7 +926,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
                                 response_sync.len()
                             ),
                         );
-                    } else if sync == response_sync {
+                    } else if sync == response_sync && !sync.is_empty() {
                         sink.error(
                             "framing.start",
                             "the start bytes of both directions are the same: give them once (`start: [...]`)",

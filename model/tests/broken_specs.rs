@@ -290,6 +290,17 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.start", "unknown field `reply`, expected `request` or `response`")],
     ),
     (
+        "start_by_direction_not_bytes",
+        &[("framing.start", "expected a byte (0x7E) or a list of bytes ([0xFF, 0xFF])")],
+    ),
+    (
+        "start_by_direction_empty",
+        &[
+            ("framing.start.request", "a sync sequence is 1 to 4 bytes, found 0"),
+            ("framing.start.response", "a sync sequence is 1 to 4 bytes, found 0"),
+        ],
+    ),
+    (
         "start_not_bytes",
         &[("framing.start", "expected a start byte, a list of start bytes, or `{request: [...], response: [...]}`")],
     ),
