@@ -2,6 +2,8 @@
 //! refuses a digit above 9 where it lies, writes a value's digits and refuses one its digits
 //! cannot hold; docs, diff and JSON show the decimal number.
 
+#![cfg(feature = "tools")]
+
 use std::path::Path;
 
 use busspec_model::interp::{self, DecodeError, Raw, Value};

@@ -3,6 +3,8 @@
 //! records counted in bytes, records to the end counted by the request; little-endian wire
 //! printed big-endian).
 
+#![cfg(feature = "tools")]
+
 use std::path::Path;
 
 use busspec_model::interp::{self, DecodeError, EncodeError, Raw, Value};

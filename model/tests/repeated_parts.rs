@@ -3,6 +3,8 @@
 //! order and refuses a second that differs where it lies, encode writes both, and a stream
 //! finds the frames.
 
+#![cfg(feature = "tools")]
+
 use std::path::Path;
 
 use busspec_model::interp::{self, DecodeError};

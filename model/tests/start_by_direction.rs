@@ -3,6 +3,8 @@
 //! frame with the other direction's at the byte that differs, its stream decoder keeps each
 //! frame's direction, and docs and diff show them.
 
+#![cfg(feature = "tools")]
+
 use std::path::Path;
 
 use busspec_model::interp::{self, DecodeError};
