@@ -165,6 +165,16 @@ fn repeated_start_and_length_spec_generates_its_snapshot() {
     );
 }
 
+/// The start bytes again after a two-byte code: decode reads the second copy at the
+/// direction's own code length.
+#[test]
+fn start_after_code_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/sync_after_code.yaml",
+        "sync_after_code.rs",
+    );
+}
+
 /// BCD fields (`encoding: bcd`): decode checks each digit (`rt::bcd`) and reads the decimal
 /// number, encode writes its digits (`rt::to_bcd`) after the range check.
 #[test]

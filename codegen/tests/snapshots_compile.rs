@@ -19,6 +19,7 @@ include!("snapshots/msp_v1.rs");
 include!("snapshots/msp_by_direction.rs");
 include!("snapshots/bcd_meter.rs");
 include!("snapshots/ft12_variable.rs");
+include!("snapshots/sync_after_code.rs");
 include!("snapshots/meter_floats.rs");
 include!("snapshots/telemetry_le.rs");
 include!("snapshots/slip_sensor.rs");
@@ -862,6 +863,36 @@ fn repeated_start_and_length_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 3 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<Ft12Variable>(&p, 0x6868, "rsp_ud");
     assert!(found > 30, "only {found} rsp_ud frames found");
+}
+
+/// The start bytes again after a two-byte code: the generated decode reads the second copy
+/// where a two-byte code puts it (it read it at a one-byte code's offset, and refused every
+/// frame: random specs, seed 34), and agrees with the interpreter on every mutation.
+#[test]
+fn start_after_a_two_byte_code_is_read_where_it_sits() {
+    use busspec_runtime::DecodeError;
+    use sync_after_code::{Request, SyncAfterCode};
+    let file = "model/tests/fixtures/valid/sync_after_code.yaml";
+    replay::<SyncAfterCode>(file);
+    let p = fixture(file);
+    let read = [0x7E, 0x01, 0x02, 0x7E, 0x05, 0x06];
+    assert_eq!(
+        Request::decode(&read).map(|d| d.message),
+        Ok(Request::Read { register: 5 })
+    );
+    let mut bad = read;
+    bad[3] = 0x7F;
+    bad[5] ^= 0x01;
+    assert_eq!(
+        Request::decode(&bad),
+        Err(DecodeError::BadStart {
+            offset: 3,
+            expected: 0x7E,
+            found: 0x7F
+        })
+    );
+    let t = agree::agree::<SyncAfterCode>(&p);
+    assert!(t.accepted >= 2 && t.refused > 50, "{t:?}");
 }
 
 /// BCD fields: the examples replay, a digit above 9 is refused as the interpreter refuses it,
