@@ -12,8 +12,8 @@ use std::fmt;
 use crate::checksum;
 use crate::escape;
 use crate::ir::{
-    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, LengthRule, Message,
-    MessageRef, Packed, Protocol,
+    BitField, ByteOrder, Count, Direction, Field, FieldType, Follows, FrameLayout, LengthRule,
+    Message, MessageRef, Packed, Protocol,
 };
 use crate::number::{swap_index, Num, NumKind};
 
@@ -885,11 +885,10 @@ fn decode_plain<'p>(
     // Start bytes that differ by direction tell the frame's direction.
     let (sync0, sync1) = match directions {
         [a, b] if p.framing.sync_by_direction() => {
-            let both = |d: Direction| {
-                check_sync(p, d, first.start, wire)?;
-                check_sync(p, d, first.start_again, wire)
-            };
-            let (x, y) = (both(*a), both(*b));
+            let (x, y) = (
+                check_sync(p, *a, &first, wire),
+                check_sync(p, *b, &first, wire),
+            );
             if let (Err(e), Err(_)) = (&x, &y) {
                 return Err(e.clone());
             }
@@ -897,8 +896,7 @@ fn decode_plain<'p>(
         }
         _ => {
             let d = directions.first().copied().unwrap_or(Direction::Request);
-            check_sync(p, d, first.start, wire)?;
-            check_sync(p, d, first.start_again, wire)?;
+            check_sync(p, d, &first, wire)?;
             (true, true)
         }
     };
@@ -1214,8 +1212,7 @@ fn decode_as_unescaped<'p>(
     let m = p.message(r);
     let len = p.frame_len(m);
     let o = m.layout;
-    check_sync(p, r.direction, o.start, wire)?;
-    check_sync(p, r.direction, o.start_again, wire)?;
+    check_sync(p, r.direction, &o, wire)?;
     if wire.len() < len {
         return Err(DecodeError::Truncated {
             needed: len,
@@ -1311,24 +1308,19 @@ fn check_end(p: &Protocol, wire: &[u8]) -> Result<(), DecodeError> {
     Ok(())
 }
 
-/// Refuses a frame whose start bytes are not the sync sequence of direction `d` (from `at`).
-fn check_sync(
-    p: &Protocol,
-    d: Direction,
-    at: Option<usize>,
-    wire: &[u8],
-) -> Result<(), DecodeError> {
-    let Some(at) = at else {
-        return Ok(());
-    };
-    for (i, &expected) in p.framing.sync_of(d).iter().enumerate() {
-        if let Some(&found) = wire.get(at + i) {
-            if found != expected {
-                return Err(DecodeError::BadStart {
-                    offset: at + i,
-                    expected,
-                    found,
-                });
+/// Refuses a frame whose start bytes, at each place layout `o` has them (in layout order),
+/// are not the sync sequence of direction `d`.
+fn check_sync(p: &Protocol, d: Direction, o: &FrameLayout, wire: &[u8]) -> Result<(), DecodeError> {
+    for at in o.starts() {
+        for (i, &expected) in p.framing.sync_of(d).iter().enumerate() {
+            if let Some(&found) = wire.get(at + i) {
+                if found != expected {
+                    return Err(DecodeError::BadStart {
+                        offset: at + i,
+                        expected,
+                        found,
+                    });
+                }
             }
         }
     }
@@ -1536,7 +1528,7 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
 
 /// The address a frame carries at `o.address`: 0 where frames carry none (or the frame is too
 /// short to hold it).
-fn address_in(o: crate::ir::FrameLayout, wire: &[u8]) -> u8 {
+fn address_in(o: FrameLayout, wire: &[u8]) -> u8 {
     o.address.and_then(|at| wire.get(at).copied()).unwrap_or(0)
 }
 
@@ -1707,23 +1699,32 @@ impl Misfit {
 }
 
 /// A whole field's value: unsigned as read, and as the field's type reads it (0 for text).
+/// A BCD field's value is the number its digits give (0 where one is above 9: [`misfit`]
+/// refuses those through [`bcd_of`] before any value is taken).
 fn int_of(f: &Field, payload: &[u8], at: usize) -> (u64, i64) {
+    match bcd_of(f, payload, at) {
+        Ok(v) => v,
+        Err(_) => (0, 0),
+    }
+}
+
+/// [`int_of`], or a BCD field's bytes as read where a digit is above 9.
+fn bcd_of(f: &Field, payload: &[u8], at: usize) -> Result<(u64, i64), u64> {
     if f.is_ascii() {
-        return (0, 0);
+        return Ok((0, 0));
     }
     let bytes = payload.get(at..at + f.width).unwrap_or(&[]);
     let unsigned = read_number(f, bytes);
     if f.bcd {
-        // Checked by `misfit` before any value is taken.
-        let v = crate::number::from_bcd(unsigned).unwrap_or(0);
-        return (v, v as i64);
+        let v = crate::number::from_bcd(unsigned).ok_or(unsigned)?;
+        return Ok((v, v as i64));
     }
     let v = if f.signed {
         sign_extend(unsigned, 8 * f.width as u32)
     } else {
         unsigned as i64
     };
-    (unsigned, v)
+    Ok((unsigned, v))
 }
 
 /// [`decode_fields`], failing with a [`Misfit`]: the fields are checked first
@@ -1824,18 +1825,16 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             }
             continue;
         }
-        if f.bcd {
-            let bytes = payload.get(pos(i)..pos(i) + f.width).unwrap_or(&[]);
-            let found = read_number(f, bytes);
-            if crate::number::from_bcd(found).is_none() {
+        let (unsigned, v) = match bcd_of(f, payload, pos(i)) {
+            Ok(v) => v,
+            Err(found) => {
                 return Some(Misfit::NotBcd {
                     field: i,
                     offset: at,
                     found,
-                });
+                })
             }
-        }
-        let (unsigned, v) = int_of(f, payload, pos(i));
+        };
         if let Some(c) = f.constant {
             if unsigned != c {
                 return Some(Misfit::Constant {
@@ -2264,7 +2263,7 @@ pub fn encode(
         )
         .sum();
     let mut out = vec![0u8; p.frame_len(m) + tail];
-    for at in [o.start, o.start_again].into_iter().flatten() {
+    for at in o.starts() {
         for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
             out[at + i] = *s;
         }
@@ -2275,7 +2274,7 @@ pub fn encode(
     out[o.code..o.code + m.code.len()].copy_from_slice(&m.code);
     if let Some(l) = &p.framing.length {
         let v = length_for(p, m.direction, out.len()).unwrap_or(0);
-        for at in [o.length, o.length_again].into_iter().flatten() {
+        for at in o.lengths() {
             write_uint(v as u64, &mut out[at..at + l.width], p.byte_order);
         }
     }
@@ -2676,7 +2675,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
         }
     }
     if let Some(l) = &p.framing.length {
-        for at in [o.length, o.length_again].into_iter().flatten() {
+        for at in o.lengths() {
             if l.width > 1 && flip(p.byte_order) {
                 if let Some(s) = wire.get_mut(at..at + l.width) {
                     s.reverse();

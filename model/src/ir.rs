@@ -199,6 +199,18 @@ pub struct FrameLayout {
     pub len: usize,
 }
 
+impl FrameLayout {
+    /// Where each copy of the start bytes begins, in layout order.
+    pub fn starts(&self) -> impl Iterator<Item = usize> {
+        [self.start, self.start_again].into_iter().flatten()
+    }
+
+    /// Where each copy of the length field begins, in layout order.
+    pub fn lengths(&self) -> impl Iterator<Item = usize> {
+        [self.length, self.length_again].into_iter().flatten()
+    }
+}
+
 impl Framing {
     /// Where the start byte, address and code sit in any frame whose code has `code_len` bytes
     /// (the payload taken as empty, so `payload`, `checksum` and `len` are those of a frame

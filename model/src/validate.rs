@@ -730,6 +730,14 @@ fn flag_sets(spec: &model::Spec, sink: &mut Sink) -> Vec<FlagSet> {
 }
 
 /// A layout part as the spec writes it.
+/// Every code length of either direction, once each, shortest first.
+fn all_code_lengths(request: &[usize], response: &[usize]) -> Vec<usize> {
+    let mut lens: Vec<usize> = request.iter().chain(response).copied().collect();
+    lens.sort_unstable();
+    lens.dedup();
+    lens
+}
+
 fn part_name(p: Part) -> &'static str {
     match p {
         Part::Start => "start",
@@ -1057,14 +1065,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     let response = direction(&f.response, "response", sink);
     let pos = |p: Part| f.layout.iter().position(|x| *x == p);
     if pos(Part::Code) < pos(Part::Address) {
-        let mut lens: Vec<usize> = request
-            .code_lengths
-            .iter()
-            .chain(&response.code_lengths)
-            .copied()
-            .collect();
-        lens.sort_unstable();
-        lens.dedup();
+        let lens = all_code_lengths(&request.code_lengths, &response.code_lengths);
         if lens.len() > 1 {
             sink.error(
                 "framing.layout",
@@ -1137,13 +1138,11 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     }
     // A second start or length after the code sits after as many bytes as the code has: one
     // offset only where every code has one length.
+    let lens = all_code_lengths(
+        &framing.request.code_lengths,
+        &framing.response.code_lengths,
+    );
     {
-        let mut lens: Vec<usize> = (framing.request.code_lengths.iter())
-            .chain(&framing.response.code_lengths)
-            .copied()
-            .collect();
-        lens.sort_unstable();
-        lens.dedup();
         let code_at = f.layout.iter().position(|x| *x == Part::Code);
         for (part, name) in [(Part::Start, "start"), (Part::Length, "length")] {
             let second = f.layout.iter().rposition(|x| *x == part);
@@ -1161,12 +1160,6 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
     if let Some(part) = f.checksum.as_ref().and_then(|c| c.covers_from) {
         // A part after the code sits after as many bytes as the code has: one offset only
         // where every code has one length.
-        let mut lens: Vec<usize> = (framing.request.code_lengths.iter())
-            .chain(&framing.response.code_lengths)
-            .copied()
-            .collect();
-        lens.sort_unstable();
-        lens.dedup();
         let pos = |p: Part| f.layout.iter().position(|x| *x == p);
         if pos(Part::Code) < pos(part) && lens.len() > 1 {
             sink.error(

@@ -174,18 +174,15 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
         .unwrap_or(0);
     let head = p.framing.head(code_len);
     let sync = match (head.start, p.framing.sync_of(d)) {
-        (Some(at), sync)
+        (Some(_), sync)
             if sync.len() > 1
                 || ((by_direction || head.start_again.is_some()) && !sync.is_empty()) =>
         {
-            let checks = [Some(at), head.start_again]
-                .into_iter()
-                .flatten()
-                .map(|at| {
-                    let at = usize_lit(at);
-                    let bytes = sync.iter().map(|b| hex_u8(*b));
-                    quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
-                });
+            let checks = head.starts().map(|at| {
+                let at = usize_lit(at);
+                let bytes = sync.iter().map(|b| hex_u8(*b));
+                quote!(rt::check_sync(frame, #max_len, #at, &[#(#bytes),*])?;)
+            });
             quote!(#(#checks)*)
         }
         _ => quote!(),

@@ -123,14 +123,14 @@ pub(super) fn emit_encode_arm(
         consts[at] = b;
         known[at] = Some(hex_u8(b));
     };
-    for at in [o.start, o.start_again].into_iter().flatten() {
+    for at in o.starts() {
         for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
             set(at + i, *s);
         }
     }
     if let (Some(l), false) = (&p.framing.length, m.is_variable()) {
         let v = p.framing.length_value(l, m.code.len(), m.payload_len);
-        for at in [o.length, o.length_again].into_iter().flatten() {
+        for at in o.lengths() {
             for (i, b) in constant_bytes(v as u64, l.width, p.byte_order)
                 .into_iter()
                 .enumerate()
