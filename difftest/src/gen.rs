@@ -1872,6 +1872,25 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         fields.iter().any(|x| x.bits.iter().any(|b| b.signed)),
         "signed sub-field",
     );
+    // A 1-bit unsigned sub-field without a scaled unit or a narrower range: a `bool` in
+    // generated code.
+    add(
+        fields.iter().any(|x| {
+            x.bits.iter().any(|b| {
+                let identity = b.unit.map_or(true, |u| {
+                    let u = &p.units[u];
+                    u.scale == busspec_model::rational::Rational::ONE
+                        && u.offset == busspec_model::rational::Rational::ZERO
+                });
+                b.width() == 1
+                    && !b.signed
+                    && b.constant.is_none()
+                    && identity
+                    && b.range.map_or(true, |r| r == (0, 1))
+            })
+        }),
+        "1-bit bool sub-field",
+    );
     add(fields.iter().any(|x| x.enumeration.is_some()), "enum");
     add(fields.iter().any(|x| x.flags.is_some()), "flags");
     add(fields.iter().any(|x| x.range.is_some()), "range");

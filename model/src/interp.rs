@@ -1702,10 +1702,7 @@ impl Misfit {
 /// A BCD field's value is the number its digits give (0 where one is above 9: [`misfit`]
 /// refuses those through [`bcd_of`] before any value is taken).
 fn int_of(f: &Field, payload: &[u8], at: usize) -> (u64, i64) {
-    match bcd_of(f, payload, at) {
-        Ok(v) => v,
-        Err(_) => (0, 0),
-    }
+    bcd_of(f, payload, at).unwrap_or_default()
 }
 
 /// [`int_of`], or a BCD field's bytes as read where a digit is above 9.

@@ -78,6 +78,8 @@ pub(super) struct Leaf<'a> {
 /// The generated Rust type of a value, and how to turn raw integers into it and back.
 pub(super) enum Kind {
     Int(IntType),
+    /// A 1-bit unsigned sub-field of no scaled unit and no narrower range: `bool`.
+    Bool,
     Unit {
         ty: Ident,
         raw: IntType,
@@ -243,6 +245,13 @@ impl<'a> Ctx<'a> {
                 };
             }
         }
+        if let Some(b) = leaf.bits {
+            let plain = unit.map_or(true, |u| is_identity(&self.p.units[u]));
+            let whole = b.range.map_or(true, |r| r == (0, 1));
+            if b.width() == 1 && !b.signed && plain && whole {
+                return Kind::Bool;
+            }
+        }
         match unit {
             Some(u) if !is_identity(&self.p.units[u]) => Kind::Unit {
                 ty: type_ident(&self.p.units[u].name),
@@ -273,6 +282,7 @@ impl<'a> Ctx<'a> {
                 let i = t.ident();
                 quote!(#i)
             }
+            Kind::Bool => quote!(bool),
             Kind::Unit { ty, .. } | Kind::Enum { ty, .. } | Kind::Flags { ty, .. } => quote!(#ty),
             Kind::Text(n) => {
                 let n = Literal::usize_unsuffixed(n);
@@ -439,6 +449,7 @@ pub(super) fn leaf_doc(p: &Protocol, l: &Leaf) -> String {
 pub(super) fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenStream)> {
     match ctx.kind(l) {
         Kind::Int(t) => Some((t, quote!(#v))),
+        Kind::Bool => Some((IntType::covering(0, 1), quote!(#v as u8))),
         Kind::Unit { raw, .. } | Kind::Enum { raw, .. } | Kind::Flags { raw, .. } => {
             Some((raw, quote!(#v.raw())))
         }
@@ -456,6 +467,10 @@ pub(super) fn to_wire(ctx: &Ctx, l: &Leaf, v: &Ident, as_type: Option<IntType>) 
     let wt = l.wire;
     let target = as_type.unwrap_or(wt);
     let w = target.ident();
+    if let Kind::Bool = ctx.kind(l) {
+        // 0 or 1, which every wire type holds.
+        return quote!(#v as #w);
+    }
     let Some((raw_t, raw_expr)) = raw_of(ctx, l, v) else {
         return quote!(#v);
     };
@@ -542,6 +557,10 @@ pub(super) fn from_wire(
         Kind::Int(t) => {
             let (t, raw) = (t.ident(), paren(raw));
             quote!(#raw as #t)
+        }
+        Kind::Bool => {
+            let raw = paren(raw);
+            quote!(#raw != 0)
         }
         Kind::Unit { ty, raw: r } | Kind::Enum { ty, raw: r } | Kind::Flags { ty, raw: r }
             if Some(r) == wire =>

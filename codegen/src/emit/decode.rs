@@ -202,7 +202,11 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
                             .push(quote!(rt::#range_fn(#message, #bname, #at, #extract, #range)?;));
                     }
                     if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
-                        values.push((ident(&b.name), from_wire(ctx, leaf, Some(bt), extract)));
+                        let value = match ctx.kind(leaf) {
+                            Kind::Bool => quote!(#field_p != 0),
+                            _ => from_wire(ctx, leaf, Some(bt), extract),
+                        };
+                        values.push((ident(&b.name), value));
                     }
                 }
             }

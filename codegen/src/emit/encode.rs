@@ -282,7 +282,9 @@ pub(super) fn emit_encode_arm(
                             continue;
                         };
                         let v = paren(to_wire(ctx, leaf, &local(&b.name), Some(unsigned)));
-                        if lsb + u32::from(b.width()) >= wt.rust_bits() {
+                        if lsb + u32::from(b.width()) >= wt.rust_bits()
+                            || matches!(ctx.kind(leaf), Kind::Bool)
+                        {
                             v
                         } else {
                             let mask = hex_lit((1u64 << b.width()) - 1);

@@ -78,7 +78,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 let (n, v) = (l.name, local(l.name));
                 let value = match ctx.kind(l) {
                     Kind::Int(t) if t.float => quote!(rt::Int(rt::raw(*#v))),
-                    Kind::Int(_) => quote!(rt::Int(*#v as i64)),
+                    Kind::Int(_) | Kind::Bool => quote!(rt::Int(*#v as i64)),
                     Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
                         quote!(rt::Int(#v.raw() as i64))
                     }

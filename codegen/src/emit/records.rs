@@ -89,7 +89,7 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
         let jl = usize_lit(j);
         let raw = match raw_of(ctx, l, &format_ident!("x")) {
             Some(_) => match ctx.kind(l) {
-                Kind::Int(_) => quote!(self.#gn as i64),
+                Kind::Int(_) | Kind::Bool => quote!(self.#gn as i64),
                 _ => quote!(self.#gn.raw() as i64),
             },
             None => quote!(0),

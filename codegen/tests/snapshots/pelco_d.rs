@@ -123,31 +123,31 @@ pub mod pelco_d2 {
         /// §3 Pan, tilt, zoom, focus, iris (standard command) (code `0x`, 7 bytes).
         Ptz {
             /// \[step\]
-            sense: u8,
+            sense: bool,
             /// \[step\]
-            auto_scan: u8,
+            auto_scan: bool,
             /// \[step\]
-            camera_on: u8,
+            camera_on: bool,
             /// \[step\]
-            iris_close: u8,
+            iris_close: bool,
             /// \[step\]
-            iris_open: u8,
+            iris_open: bool,
             /// \[step\]
-            focus_near: u8,
+            focus_near: bool,
             /// \[step\]
-            focus_far: u8,
+            focus_far: bool,
             /// \[step\]
-            zoom_wide: u8,
+            zoom_wide: bool,
             /// \[step\]
-            zoom_tele: u8,
+            zoom_tele: bool,
             /// \[step\]
-            tilt_down: u8,
+            tilt_down: bool,
             /// \[step\]
-            tilt_up: u8,
+            tilt_up: bool,
             /// \[step\]
-            pan_left: u8,
+            pan_left: bool,
             /// \[step\]
-            pan_right: u8,
+            pan_right: bool,
             /// \[step\] Valid raw range 0..=63. Raw 255 = turbo.
             pan_speed: u8,
             /// \[step\] Valid raw range 0..=63.
@@ -267,29 +267,13 @@ pub mod pelco_d2 {
                     rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
                     rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
                     let out = rt::head(out, &[0xFF, address]);
-                    let field_0: u16 = ((rt::fits("sense", v_sense, 0, 1)? as u16) << 15)
-                        | (((rt::fits("auto_scan", v_auto_scan, 0, 1)? as u16) & 0x1)
-                            << 12)
-                        | (((rt::fits("camera_on", v_camera_on, 0, 1)? as u16) & 0x1)
-                            << 11)
-                        | (((rt::fits("iris_close", v_iris_close, 0, 1)? as u16) & 0x1)
-                            << 10)
-                        | (((rt::fits("iris_open", v_iris_open, 0, 1)? as u16) & 0x1)
-                            << 9)
-                        | (((rt::fits("focus_near", v_focus_near, 0, 1)? as u16) & 0x1)
-                            << 8)
-                        | (((rt::fits("focus_far", v_focus_far, 0, 1)? as u16) & 0x1)
-                            << 7)
-                        | (((rt::fits("zoom_wide", v_zoom_wide, 0, 1)? as u16) & 0x1)
-                            << 6)
-                        | (((rt::fits("zoom_tele", v_zoom_tele, 0, 1)? as u16) & 0x1)
-                            << 5)
-                        | (((rt::fits("tilt_down", v_tilt_down, 0, 1)? as u16) & 0x1)
-                            << 4)
-                        | (((rt::fits("tilt_up", v_tilt_up, 0, 1)? as u16) & 0x1) << 3)
-                        | (((rt::fits("pan_left", v_pan_left, 0, 1)? as u16) & 0x1) << 2)
-                        | (((rt::fits("pan_right", v_pan_right, 0, 1)? as u16) & 0x1)
-                            << 1);
+                    let field_0: u16 = ((v_sense as u16) << 15)
+                        | ((v_auto_scan as u16) << 12) | ((v_camera_on as u16) << 11)
+                        | ((v_iris_close as u16) << 10) | ((v_iris_open as u16) << 9)
+                        | ((v_focus_near as u16) << 8) | ((v_focus_far as u16) << 7)
+                        | ((v_zoom_wide as u16) << 6) | ((v_zoom_tele as u16) << 5)
+                        | ((v_tilt_down as u16) << 4) | ((v_tilt_up as u16) << 3)
+                        | ((v_pan_left as u16) << 2) | ((v_pan_right as u16) << 1);
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out[4] = v_pan_speed;
                     out[5] = v_tilt_speed;
@@ -380,19 +364,19 @@ pub mod pelco_d2 {
             rt::in_range_or("ptz", "pan_speed", 4, frame[4], 0, 63, &[255])?;
             rt::in_range("ptz", "tilt_speed", 5, frame[5], 0, 63)?;
             rt::Ok(Self::Ptz {
-                sense: (field_0 >> 15) as u8,
-                auto_scan: ((field_0 >> 12) & 0x1) as u8,
-                camera_on: ((field_0 >> 11) & 0x1) as u8,
-                iris_close: ((field_0 >> 10) & 0x1) as u8,
-                iris_open: ((field_0 >> 9) & 0x1) as u8,
-                focus_near: ((field_0 >> 8) & 0x1) as u8,
-                focus_far: ((field_0 >> 7) & 0x1) as u8,
-                zoom_wide: ((field_0 >> 6) & 0x1) as u8,
-                zoom_tele: ((field_0 >> 5) & 0x1) as u8,
-                tilt_down: ((field_0 >> 4) & 0x1) as u8,
-                tilt_up: ((field_0 >> 3) & 0x1) as u8,
-                pan_left: ((field_0 >> 2) & 0x1) as u8,
-                pan_right: ((field_0 >> 1) & 0x1) as u8,
+                sense: (field_0 >> 15) != 0,
+                auto_scan: ((field_0 >> 12) & 0x1) != 0,
+                camera_on: ((field_0 >> 11) & 0x1) != 0,
+                iris_close: ((field_0 >> 10) & 0x1) != 0,
+                iris_open: ((field_0 >> 9) & 0x1) != 0,
+                focus_near: ((field_0 >> 8) & 0x1) != 0,
+                focus_far: ((field_0 >> 7) & 0x1) != 0,
+                zoom_wide: ((field_0 >> 6) & 0x1) != 0,
+                zoom_tele: ((field_0 >> 5) & 0x1) != 0,
+                tilt_down: ((field_0 >> 4) & 0x1) != 0,
+                tilt_up: ((field_0 >> 3) & 0x1) != 0,
+                pan_left: ((field_0 >> 2) & 0x1) != 0,
+                pan_right: ((field_0 >> 1) & 0x1) != 0,
                 pan_speed: frame[4],
                 tilt_speed: frame[5],
             })
@@ -407,38 +391,38 @@ pub mod pelco_d2 {
             match name {
                 "ptz" => {
                     rt::Ok(Self::Ptz {
-                        sense: rt::field_int("sense", field("sense"), 0, 1)? as u8,
+                        sense: rt::field_int("sense", field("sense"), 0, 1)? != 0,
                         auto_scan: rt::field_int("auto_scan", field("auto_scan"), 0, 1)?
-                            as u8,
+                            != 0,
                         camera_on: rt::field_int("camera_on", field("camera_on"), 0, 1)?
-                            as u8,
+                            != 0,
                         iris_close: rt::field_int(
                             "iris_close",
                             field("iris_close"),
                             0,
                             1,
-                        )? as u8,
+                        )? != 0,
                         iris_open: rt::field_int("iris_open", field("iris_open"), 0, 1)?
-                            as u8,
+                            != 0,
                         focus_near: rt::field_int(
                             "focus_near",
                             field("focus_near"),
                             0,
                             1,
-                        )? as u8,
+                        )? != 0,
                         focus_far: rt::field_int("focus_far", field("focus_far"), 0, 1)?
-                            as u8,
+                            != 0,
                         zoom_wide: rt::field_int("zoom_wide", field("zoom_wide"), 0, 1)?
-                            as u8,
+                            != 0,
                         zoom_tele: rt::field_int("zoom_tele", field("zoom_tele"), 0, 1)?
-                            as u8,
+                            != 0,
                         tilt_down: rt::field_int("tilt_down", field("tilt_down"), 0, 1)?
-                            as u8,
-                        tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)? as u8,
+                            != 0,
+                        tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)? != 0,
                         pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
-                            as u8,
+                            != 0,
                         pan_right: rt::field_int("pan_right", field("pan_right"), 0, 1)?
-                            as u8,
+                            != 0,
                         pan_speed: rt::get(&mut field, "pan_speed")?,
                         tilt_speed: rt::get(&mut field, "tilt_speed")?,
                     })
