@@ -103,8 +103,12 @@ impl std::error::Error for Error {}
 pub struct Generated {
     /// Protocol names, in the order the specs were given.
     pub protocols: Vec<String>,
-    /// Every file written or left as it was (already up to date), the index last.
+    /// Every file written or left as it was (already up to date), the index last: the
+    /// modules, and for a spec that includes files, the spec as one text (`NAME.spec.yaml`,
+    /// which the module embeds as `SPEC_YAML`).
     pub files: Vec<PathBuf>,
+    /// Every file read: each spec, and each file a spec's `include` read.
+    pub inputs: Vec<PathBuf>,
 }
 
 impl Builder {
@@ -152,14 +156,20 @@ impl Builder {
         };
         let mut errors = Vec::new();
         let mut modules: Vec<(String, PathBuf, String)> = Vec::new();
+        // A spec that includes files is embedded as one text without them (`SPEC_YAML`),
+        // written beside the modules.
+        let mut flattened: Vec<(PathBuf, String)> = Vec::new();
+        let mut inputs: Vec<PathBuf> = Vec::new();
         for spec in &self.specs {
-            let protocol = match busspec_model::load_file(spec) {
-                Ok(p) => p,
+            inputs.push(spec.clone());
+            let (protocol, included) = match busspec_model::load_file_with_includes(spec) {
+                Ok(l) => (l.protocol, l.included),
                 Err(d) => {
                     errors.push(Error::Spec(d));
                     continue;
                 }
             };
+            inputs.extend(included.files.iter().map(|f| f.1.clone()));
             if let Some((_, first, _)) = modules.iter().find(|m| m.0 == protocol.name) {
                 errors.push(Error::DuplicateProtocol {
                     name: protocol.name.clone(),
@@ -169,7 +179,22 @@ impl Builder {
                 continue;
             }
             // include_str! needs a path that holds wherever the module is included from.
-            let absolute = std::fs::canonicalize(spec).unwrap_or_else(|_| spec.clone());
+            let absolute = match included.flattened {
+                Some(text) => {
+                    // What the crate embeds must load as it is, without the files.
+                    if let Err(d) = busspec_model::load_str(&spec.display().to_string(), &text) {
+                        errors.push(Error::Emit(format!(
+                            "{}: the spec with its includes in place does not load on its own:\n{d}",
+                            spec.display()
+                        )));
+                        continue;
+                    }
+                    let path = out.join(format!("{}.spec.yaml", protocol.name));
+                    flattened.push((path.clone(), text));
+                    std::path::absolute(&path).unwrap_or(path)
+                }
+                None => std::fs::canonicalize(spec).unwrap_or_else(|_| spec.clone()),
+            };
             let source = spec.display().to_string();
             match emit::emit_module(&protocol, &source, &absolute.to_string_lossy()) {
                 Ok(code) => modules.push((protocol.name.clone(), spec.clone(), code)),
@@ -185,6 +210,10 @@ impl Builder {
         };
         std::fs::create_dir_all(&out).map_err(|e| vec![io(&out, e)])?;
         let mut files = Vec::new();
+        for (path, text) in &flattened {
+            write_if_changed(path, text).map_err(|e| vec![io(path, e)])?;
+            files.push(path.clone());
+        }
         for (name, _, code) in &modules {
             let path = out.join(format!("{name}.rs"));
             write_if_changed(&path, code).map_err(|e| vec![io(&path, e)])?;
@@ -198,6 +227,7 @@ impl Builder {
         Ok(Generated {
             protocols: names.iter().map(|n| n.to_string()).collect(),
             files,
+            inputs,
         })
     }
 
@@ -205,20 +235,37 @@ impl Builder {
     /// failure prints every error as a cargo diagnostic line (`file: path: message`) and exits
     /// the build script with status 1.
     pub fn compile(&self) {
-        for spec in &self.specs {
-            println!("cargo::rerun-if-changed={}", spec.display());
-        }
         // Generated types derive serde and arbitrary behind features of those names; the
         // including crate may not declare them.
         println!("cargo::rustc-check-cfg=cfg(feature, values(\"serde\", \"arbitrary\"))");
-        if let Err(errors) = self.generate() {
-            for e in errors {
-                for line in e.to_string().lines() {
-                    println!("cargo::error={line}");
+        match self.generate() {
+            Ok(g) => {
+                for input in &g.inputs {
+                    println!("cargo::rerun-if-changed={}", input.display());
                 }
             }
-            std::process::exit(1);
+            Err(errors) => {
+                // Which files a broken spec includes may not be known: rerun on any change
+                // beside each spec (cargo scans a directory's files).
+                for spec in &self.specs {
+                    println!("cargo::rerun-if-changed={}", spec.display());
+                    if let Some(dir) = spec.parent().filter(|d| !d.as_os_str().is_empty()) {
+                        println!("cargo::rerun-if-changed={}", dir.display());
+                    }
+                }
+                Self::fail(errors);
+            }
         }
+    }
+
+    /// Prints every error as a cargo diagnostic line and exits the build script.
+    fn fail(errors: Vec<Error>) -> ! {
+        for e in errors {
+            for line in e.to_string().lines() {
+                println!("cargo::error={line}");
+            }
+        }
+        std::process::exit(1);
     }
 }
 

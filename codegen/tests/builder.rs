@@ -106,3 +106,71 @@ fn a_missing_spec_file_two_specs_of_one_protocol_and_no_specs_are_errors() {
     assert!(matches!(none[0], Error::NoSpecs));
     assert!(!out.exists());
 }
+
+/// A spec that includes a file of common types: the module embeds the spec with them in place
+/// (`NAME.spec.yaml`, written beside the modules, loads on its own), and `inputs` names the
+/// included file so that a build script reruns when it changes.
+#[test]
+fn a_spec_with_includes_embeds_one_text_and_names_every_file_read() {
+    let out = out_dir("include");
+    let dir = out.join("spec");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(fixture("valid", "minimal.yaml")).unwrap();
+    let (a, b) = (text.find("units:").unwrap(), text.find("enums:").unwrap());
+    std::fs::write(dir.join("common.yaml"), &text[a..b]).unwrap();
+    let spec = dir.join("mini.yaml");
+    std::fs::write(
+        &spec,
+        format!("include: common.yaml\n{}{}", &text[..a], &text[b..]),
+    )
+    .unwrap();
+    let g = Builder::new()
+        .spec(&spec)
+        .out_dir(out.join("gen"))
+        .generate()
+        .unwrap_or_else(|e| panic!("{e:?}"));
+    let flat_path = out.join("gen/mini.spec.yaml");
+    assert_eq!(g.files[0], flat_path);
+    assert_eq!(
+        g.inputs,
+        [
+            spec.clone(),
+            std::fs::canonicalize(dir.join("common.yaml")).unwrap()
+        ]
+    );
+    let flat = std::fs::read_to_string(&flat_path).unwrap();
+    let p = busspec_model::load_str("mini.spec.yaml", &flat).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(p.units.len(), 4);
+    let module = std::fs::read_to_string(out.join("gen/mini.rs")).unwrap();
+    let embeds = format!(
+        "{:?}",
+        std::path::absolute(&flat_path).unwrap().to_string_lossy()
+    );
+    let at = module
+        .find("SPEC_YAML: &str = include_str!(")
+        .expect("SPEC_YAML");
+    assert!(
+        module[at..]
+            .trim_start_matches(|c: char| c != '"')
+            .starts_with(&embeds),
+        "SPEC_YAML does not embed {embeds}"
+    );
+    // A broken included file is the spec's error, located in that file.
+    std::fs::write(
+        dir.join("common.yaml"),
+        text[a..b].replace("scale: \"0.01\"", "scale: \"0\""),
+    )
+    .unwrap();
+    let e = Builder::new()
+        .spec(&spec)
+        .out_dir(out.join("gen"))
+        .generate()
+        .expect_err("scale 0");
+    assert!(
+        e[0].to_string()
+            .ends_with("mini.yaml: include common.yaml: units.capacitance.scale: scale 0 must be greater than zero"),
+        "{}",
+        e[0]
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -278,7 +278,24 @@ fn run_round(args: &Args, dir: &std::path::Path, round: u64, seeds: &[u64], f: &
         if let Err(e) = busspec_codegen::write_if_changed(&path, &text) {
             fail(&format!("{}: {e}", path.display()));
         }
-        let abs = std::fs::canonicalize(&path).unwrap_or(path.clone());
+        let mut abs = std::fs::canonicalize(&path).unwrap_or(path.clone());
+        // One spec in three takes its units, enums and flag sets from a file it includes: it
+        // must load to the same protocol, and the code is generated from the spec with the
+        // file in place (as a build script embeds it), which the comparison then loads.
+        if s % 3 == 0 {
+            match with_include(&specs_dir, &p, &text) {
+                Ok(Some(flat)) => {
+                    *tally.entry("include").or_default() += 1;
+                    abs = std::fs::canonicalize(&flat).unwrap_or(flat);
+                }
+                Ok(None) => {}
+                Err(e) => {
+                    f.refused += 1;
+                    println!("spec seed {s}: {e}\n--- spec ---\n{text}--- end ---");
+                    continue;
+                }
+            }
+        }
         match busspec_codegen::emit::emit_module(
             &p,
             &path.display().to_string(),
@@ -376,4 +393,66 @@ fn run_round(args: &Args, dir: &std::path::Path, round: u64, seeds: &[u64], f: &
             println!("  the batch binary ended without totals ({})", out.status);
         }
     }
+}
+
+/// Writes spec `text` (loaded as `p`) as two files, its units, enums and flag sets in
+/// `NAME.types.yaml` and the rest in `NAME.inc.yaml` with `include: NAME.types.yaml`; loads
+/// that, which must give `p` again (its digest aside), and writes the spec with the file in
+/// place, which must load to `p` too. Returns where that flattened text is (`None`: a spec
+/// without those sections).
+fn with_include(
+    dir: &std::path::Path,
+    p: &busspec_model::Protocol,
+    text: &str,
+) -> Result<Option<std::path::PathBuf>, String> {
+    let mut types = String::new();
+    let mut rest = String::new();
+    let mut in_types = false;
+    for line in text.split_inclusive('\n') {
+        if !line.starts_with([' ', '#', '-', '\n']) {
+            in_types = ["units:", "enums:", "flags:"]
+                .iter()
+                .any(|k| line.starts_with(k));
+        }
+        if in_types {
+            types.push_str(line);
+        } else {
+            rest.push_str(line);
+        }
+    }
+    if types.is_empty() {
+        return Ok(None);
+    }
+    let name = &p.name;
+    let write = |file: String, text: &str| {
+        let path = dir.join(file);
+        busspec_codegen::write_if_changed(&path, text)
+            .map(|()| path)
+            .map_err(|e| e.to_string())
+    };
+    write(format!("{name}.types.yaml"), &types)?;
+    let main = write(
+        format!("{name}.inc.yaml"),
+        &format!("include: {name}.types.yaml\n{rest}"),
+    )?;
+    let loaded = busspec_model::load_file_with_includes(&main)
+        .map_err(|d| format!("the spec with an include is refused:\n{d}"))?;
+    let same = |q: &busspec_model::Protocol| {
+        let mut q = q.clone();
+        q.spec_sha256.clone_from(&p.spec_sha256);
+        format!("{q:?}") == format!("{p:?}")
+    };
+    if !same(&loaded.protocol) {
+        return Err("the spec with an include loads to another protocol".to_owned());
+    }
+    let flat = loaded
+        .included
+        .flattened
+        .ok_or("the spec with an include has no flattened text")?;
+    let again = busspec_model::load_str("flat.yaml", &flat)
+        .map_err(|d| format!("the flattened spec is refused:\n{d}"))?;
+    if !same(&again) {
+        return Err("the flattened spec loads to another protocol".to_owned());
+    }
+    write(format!("{name}.flat.yaml"), &flat).map(Some)
 }

@@ -49,72 +49,81 @@ pub use ir::Protocol;
 
 pub use load::MAX_SPEC_BYTES;
 
-/// Loads and validates spec text. `file` names it in diagnostics.
+/// Loads and validates spec text. `file` names it in diagnostics. Text cannot `include` files
+/// (there is no directory to find them in): [`load_file`] can.
 pub fn load_str(file: &str, text: &str) -> Result<Protocol, Diagnostics> {
+    load(file, text, None).map(|l| l.protocol)
+}
+
+/// A spec loaded from its file, with what its `include` read.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    pub protocol: Protocol,
+    /// The files `include` read (none without includes): their text, where they were read
+    /// from, and the spec as one text without them (what a generated crate embeds).
+    pub included: load::Included,
+}
+
+/// Reads and validates a spec file. At most [`MAX_SPEC_BYTES`] (and one more) are read, the
+/// spec and the files its `include` names together.
+pub fn load_file(path: &Path) -> Result<Protocol, Diagnostics> {
+    load_file_with_includes(path).map(|l| l.protocol)
+}
+
+/// [`load_file`], keeping what `include` read.
+pub fn load_file_with_includes(path: &Path) -> Result<Loaded, Diagnostics> {
+    let file = path.display().to_string();
+    let text = load::read_text(path, MAX_SPEC_BYTES).map_err(|(at, message)| Diagnostics {
+        file: file.clone(),
+        items: vec![Diagnostic::new(at, message)],
+    })?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    load(&file, &text, Some(dir))
+}
+
+fn load(file: &str, text: &str, dir: Option<&Path>) -> Result<Loaded, Diagnostics> {
     let mut sink = diag::Sink::default();
-    let fail = |sink: diag::Sink| Diagnostics {
+    let mut included = load::Included::default();
+    // Diagnostics about what an included file holds name that file.
+    let fail = |sink: diag::Sink, included: &load::Included| Diagnostics {
         file: file.to_owned(),
-        items: sink.items,
+        items: sink
+            .items
+            .into_iter()
+            .map(|d| Diagnostic::new(included.locate(&d.path), d.message))
+            .collect(),
     };
     // The text's size, depth, aliases and characters are checked first (`load::prescan`).
-    let Some(spec) = load::parse(text, &mut sink) else {
-        return Err(fail(sink));
+    let Some(spec) = load::parse_with(text, dir, &mut included, &mut sink) else {
+        return Err(fail(sink, &included));
     };
     match validate::validate(&spec, &mut sink) {
         Some(mut p) => {
-            p.spec_sha256 = spec_sha256(text);
-            Ok(p)
+            let texts = std::iter::once(text).chain(included.files.iter().map(|f| f.2.as_str()));
+            p.spec_sha256 = sha256_hex(texts);
+            Ok(Loaded {
+                protocol: p,
+                included,
+            })
         }
-        None => Err(fail(sink)),
+        None => Err(fail(sink, &included)),
     }
 }
 
 /// SHA-256 of a spec's text as lowercase hex: the same digest `sha256sum FILE` prints, so a
-/// generated artifact can be traced to the exact file it came from.
+/// generated artifact can be traced to the exact file it came from. (A spec that includes
+/// files is traced by [`Protocol::spec_sha256`], the digest of its text followed by each
+/// included file's in the order read: `cat spec.yaml common.yaml | sha256sum`.)
 pub fn spec_sha256(text: &str) -> String {
-    hmac_sha256::Hash::hash(text.as_bytes())
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    sha256_hex(std::iter::once(text))
 }
 
-/// Reads and validates a spec file. At most [`MAX_SPEC_BYTES`] (and one more) are read.
-pub fn load_file(path: &Path) -> Result<Protocol, Diagnostics> {
-    use std::io::Read;
-    let file = path.display().to_string();
-    let refuse = |path: String, message: String| Diagnostics {
-        file: file.clone(),
-        items: vec![Diagnostic::new(path, message)],
-    };
-    let cannot = |e: std::io::Error| refuse(String::new(), format!("cannot read: {e}"));
-    let f = std::fs::File::open(path).map_err(cannot)?;
-    let declared = f.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut bytes = Vec::new();
-    f.take(MAX_SPEC_BYTES as u64 + 1)
-        .read_to_end(&mut bytes)
-        .map_err(cannot)?;
-    if bytes.len() > MAX_SPEC_BYTES {
-        let len = declared.max(bytes.len() as u64) as usize;
-        let r = load::too_large(&bytes, len);
-        return Err(refuse(r.path(), r.message));
+fn sha256_hex<'t>(texts: impl Iterator<Item = &'t str>) -> String {
+    let mut h = hmac_sha256::Hash::new();
+    for t in texts {
+        h.update(t.as_bytes());
     }
-    let text = match String::from_utf8(bytes) {
-        Ok(text) => text,
-        Err(e) => {
-            let bytes = e.as_bytes();
-            let at = e.utf8_error().valid_up_to();
-            let r = load::Refusal::at(
-                bytes,
-                at,
-                format!(
-                    "not UTF-8 text: invalid byte 0x{:02X} at offset {at}",
-                    bytes.get(at).copied().unwrap_or(0)
-                ),
-            );
-            return Err(refuse(r.path(), r.message));
-        }
-    };
-    load_str(&file, &text)
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
 #[cfg(test)]

@@ -15,6 +15,8 @@
 //! scalars) not to count what only looks like structure. What passes it is small and shallow, and
 //! serde_yaml's own bounds (recursion depth 128, alias repetitions) stay behind it.
 
+use std::path::{Path, PathBuf};
+
 use serde::de::DeserializeOwned;
 use serde_yaml::{Mapping, Value};
 
@@ -33,46 +35,38 @@ const LIST_KEYS: &[&str] = &[
 ];
 
 /// Parses spec text. On failure returns every shape error found (or the one limit [`prescan`]
-/// found exceeded).
+/// found exceeded). A spec read this way cannot `include` files ([`parse_with`] can).
 pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
-    if let Err(refusal) = prescan(text) {
-        sink.error(refusal.path(), refusal.message);
-        return None;
-    }
-    let root: Value = match serde_yaml::from_str(text) {
-        Ok(v) => v,
-        Err(e) => {
-            let at = e
-                .location()
-                .map(|l| format!("line {} column {}", l.line(), l.column()))
-                .unwrap_or_else(|| "(top)".to_owned());
-            sink.error(
-                at,
-                format!(
-                    "not valid YAML: {}",
-                    explain_big_integer(&strip_location(&e.to_string()))
-                ),
-            );
+    parse_with(text, None, &mut Included::default(), sink)
+}
+
+/// [`parse`] of a spec read from a file in directory `dir`: the files its `include` names are
+/// read from there (`included` says which, and what each brought in, also on failure).
+pub fn parse_with(
+    text: &str,
+    dir: Option<&Path>,
+    included: &mut Included,
+    sink: &mut Sink,
+) -> Option<Spec> {
+    let mut map = yaml_mapping(text, "spec keys", sink)?;
+    if let Some(value) = map.remove("include") {
+        let before = sink.items.len();
+        include(&mut map, &value, dir, text.len(), included, sink);
+        // What the spec refers to in a file not read would only be reported missing.
+        if sink.items.len() > before {
             return None;
         }
-    };
-    let Value::Mapping(mut map) = root else {
-        sink.error(
-            "",
-            format!(
-                "expected a mapping of spec keys at the top, found {}",
-                kind(&root)
-            ),
-        );
-        return None;
-    };
+        if !included.files.is_empty() {
+            included.flattened = serde_yaml::to_string(&Value::Mapping(map.clone())).ok();
+        }
+    }
     for key in map.keys() {
         match key.as_str() {
             Some(k) if SPEC_KEYS.contains(&k) => {}
             Some(k) => sink.error(
                 k,
                 format!(
-                    "unknown key `{k}`, expected one of {}",
+                    "unknown key `{k}`, expected one of include, {}",
                     SPEC_KEYS.join(", ")
                 ),
             ),
@@ -134,6 +128,364 @@ pub fn parse(text: &str, sink: &mut Sink) -> Option<Spec> {
         }
     }
     spec.filter(|_| sink.is_empty())
+}
+
+/// Text to its top-level YAML mapping (of `what`), after [`prescan`]; errors located by line.
+fn yaml_mapping(text: &str, what: &str, sink: &mut Sink) -> Option<Mapping> {
+    if let Err(refusal) = prescan(text) {
+        sink.error(refusal.path(), refusal.message);
+        return None;
+    }
+    let root: Value = match serde_yaml::from_str(text) {
+        Ok(v) => v,
+        Err(e) => {
+            let at = e
+                .location()
+                .map(|l| format!("line {} column {}", l.line(), l.column()))
+                .unwrap_or_else(|| "(top)".to_owned());
+            sink.error(
+                at,
+                format!(
+                    "not valid YAML: {}",
+                    explain_big_integer(&strip_location(&e.to_string()))
+                ),
+            );
+            return None;
+        }
+    };
+    match root {
+        Value::Mapping(map) => Some(map),
+        other => {
+            sink.error(
+                "",
+                format!(
+                    "expected a mapping of {what} at the top, found {}",
+                    kind(&other)
+                ),
+            );
+            None
+        }
+    }
+}
+
+/// The lists an included file may hold: common types, which any spec may share.
+pub const INCLUDED_LISTS: &[&str] = &["units", "enums", "flags"];
+
+/// How deep includes may nest (a file that includes a file that includes ...).
+pub const MAX_INCLUDE_DEPTH: usize = 8;
+
+/// Files one spec may include, nested includes counted.
+pub const MAX_INCLUDED_FILES: usize = 32;
+
+/// What a spec's `include` read.
+#[derive(Debug, Default, Clone)]
+pub struct Included {
+    /// Each file read, in the order read (a file included twice is read once): its path as
+    /// the spec's diagnostics name it (relative to the spec's directory), where it was read
+    /// from, and its text.
+    pub files: Vec<(String, PathBuf, String)>,
+    /// Each unit, enum and flag set an included file brought: list key, name, the file (as
+    /// named in `files`).
+    pub origin: Vec<(&'static str, String, String)>,
+    /// The spec with every included item in place and no `include`: YAML text that loads
+    /// without the files (what a generated crate embeds as its spec). `None` without includes.
+    pub flattened: Option<String>,
+}
+
+impl Included {
+    /// The included file unit, enum or flag set `name` of list `key` came from.
+    pub fn origin_of(&self, key: &str, name: &str) -> Option<&str> {
+        self.origin
+            .iter()
+            .find(|(k, n, _)| *k == key && n == name)
+            .map(|(_, _, f)| f.as_str())
+    }
+
+    /// The diagnostic path `path` names something an included file holds: that file's path
+    /// before it (`include common.yaml: units.volts.scale`); any other path as it is.
+    pub fn locate(&self, path: &str) -> String {
+        for key in INCLUDED_LISTS {
+            let Some(rest) = path.strip_prefix(key).and_then(|r| r.strip_prefix('.')) else {
+                continue;
+            };
+            let name = rest.split('.').next().unwrap_or(rest);
+            if let Some(file) = self.origin_of(key, name) {
+                return format!("include {file}: {path}");
+            }
+        }
+        path.to_owned()
+    }
+}
+
+/// Reads the files `value` (a file name or a list of them) names, relative to `dir`, and puts
+/// their units, enums and flag sets into `map`'s lists before the spec's own, in include
+/// order. A name defined twice is reported once and its later definition dropped. The spec
+/// (`spec_bytes` long) and its included files together stay within [`MAX_SPEC_BYTES`].
+fn include(
+    map: &mut Mapping,
+    value: &Value,
+    dir: Option<&Path>,
+    spec_bytes: usize,
+    included: &mut Included,
+    sink: &mut Sink,
+) {
+    let Some(dir) = dir else {
+        sink.error(
+            "include",
+            "a spec given as text cannot include files (there is no directory to find them in): load it from its file",
+        );
+        return;
+    };
+    let mut lists: Vec<(&'static str, Vec<(Value, String)>)> =
+        INCLUDED_LISTS.iter().map(|k| (*k, Vec::new())).collect();
+    let mut reading = Reading {
+        chain: Vec::new(),
+        bytes: spec_bytes,
+        lists: &mut lists,
+        included,
+    };
+    reading.files(value, dir, Path::new(""), "include", sink);
+    for (key, mut items) in lists {
+        match map.remove(key) {
+            None | Some(Value::Null) => {}
+            Some(Value::Sequence(own)) => {
+                items.extend(own.into_iter().map(|v| (v, "this spec".to_owned())));
+            }
+            Some(other) => {
+                // Its shape is reported where the lists are read.
+                map.insert(Value::from(key), other);
+                continue;
+            }
+        }
+        let mut kept: Vec<Value> = Vec::with_capacity(items.len());
+        let mut seen: Vec<(String, String)> = Vec::new();
+        for (item, from) in items {
+            if let Some(name) = item.get("name").and_then(Value::as_str) {
+                if let Some((_, first)) = seen.iter().find(|(n, _)| n == name) {
+                    sink.error(
+                        "include",
+                        format!("`{key}` has `{name}` in {first} and again in {from}: a name is defined once"),
+                    );
+                    continue;
+                }
+                seen.push((name.to_owned(), from));
+            }
+            kept.push(item);
+        }
+        map.insert(Value::from(key), Value::Sequence(kept));
+    }
+}
+
+/// The state of reading a spec's includes: the files being read (to refuse a cycle), the
+/// bytes read in all, and the included lists so far.
+struct Reading<'a> {
+    chain: Vec<PathBuf>,
+    bytes: usize,
+    lists: &'a mut Vec<(&'static str, Vec<(Value, String)>)>,
+    included: &'a mut Included,
+}
+
+impl Reading<'_> {
+    /// Reads each file `value` names (relative to `dir`, shown relative to `shown_dir`).
+    fn files(&mut self, value: &Value, dir: &Path, shown_dir: &Path, at: &str, sink: &mut Sink) {
+        let names: Vec<&str> = match value {
+            Value::String(s) => vec![s.as_str()],
+            Value::Sequence(items) => {
+                let mut names = Vec::new();
+                for (i, item) in items.iter().enumerate() {
+                    match item.as_str() {
+                        Some(name) => names.push(name),
+                        None => sink.error(
+                            format!("{at}[{i}]"),
+                            format!("expected a file name, found {}", kind(item)),
+                        ),
+                    }
+                }
+                names
+            }
+            other => {
+                sink.error(
+                    at,
+                    format!(
+                        "expected a file name or a list of file names, found {}",
+                        kind(other)
+                    ),
+                );
+                return;
+            }
+        };
+        for name in names {
+            self.file(name, dir, shown_dir, at, sink);
+        }
+    }
+
+    fn file(&mut self, name: &str, dir: &Path, shown_dir: &Path, at: &str, sink: &mut Sink) {
+        let shown = shown_dir.join(name).display().to_string();
+        let path = dir.join(name);
+        let here = format!("{at} {shown}");
+        if self.chain.len() >= MAX_INCLUDE_DEPTH {
+            sink.error(
+                here,
+                format!("includes nest deeper than {MAX_INCLUDE_DEPTH} files"),
+            );
+            return;
+        }
+        let canonical = match std::fs::canonicalize(&path) {
+            Ok(c) => c,
+            Err(e) => {
+                sink.error(here, format!("cannot read: {e}"));
+                return;
+            }
+        };
+        if let Some(i) = self.chain.iter().position(|c| *c == canonical) {
+            let cycle: Vec<String> = self.chain[i..]
+                .iter()
+                .chain([&canonical])
+                .map(|c| {
+                    c.file_name()
+                        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+                })
+                .collect();
+            sink.error(here, format!("includes itself: {}", cycle.join(" -> ")));
+            return;
+        }
+        // A file two others include is read once.
+        if self.included.files.iter().any(|f| f.1 == canonical) {
+            return;
+        }
+        if self.included.files.len() >= MAX_INCLUDED_FILES {
+            sink.error(
+                here,
+                format!("a spec may include at most {MAX_INCLUDED_FILES} files"),
+            );
+            return;
+        }
+        let text = match read_text(&path, MAX_SPEC_BYTES.saturating_sub(self.bytes)) {
+            Ok(text) => text,
+            Err((p, message)) => {
+                sink.error(join_file(&here, &p), message);
+                return;
+            }
+        };
+        self.bytes += text.len();
+        let mut inner = Sink::default();
+        let map = yaml_mapping(
+            &text,
+            "common types (units, enums, flags, include)",
+            &mut inner,
+        );
+        let before = sink.items.len();
+        for d in inner.items.drain(..) {
+            sink.error(join_file(&here, &d.path), d.message);
+        }
+        let Some(mut map) = map else {
+            return;
+        };
+        self.included
+            .files
+            .push((shown.clone(), canonical.clone(), text));
+        for key in map.keys() {
+            match key.as_str() {
+                Some(k) if k == "include" || INCLUDED_LISTS.contains(&k) => {}
+                Some(k) => sink.error(
+                    join_file(&here, k),
+                    format!("an included file holds common types only (units, enums, flags and include), not `{k}`"),
+                ),
+                None => sink.error(
+                    here.clone(),
+                    format!("top-level keys must be strings, found {}", kind(key)),
+                ),
+            }
+        }
+        if sink.items.len() > before {
+            return;
+        }
+        // Its own includes come first: what it includes, it builds on.
+        if let Some(value) = map.remove("include") {
+            self.chain.push(canonical.clone());
+            let inner_dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+            let inner_shown = Path::new(&shown)
+                .parent()
+                .unwrap_or(Path::new(""))
+                .to_path_buf();
+            self.files(
+                &value,
+                &inner_dir,
+                &inner_shown,
+                &format!("{here}: include"),
+                sink,
+            );
+            self.chain.pop();
+        }
+        for (key, items) in self.lists.iter_mut() {
+            match map.remove(*key) {
+                None | Some(Value::Null) => {}
+                Some(Value::Sequence(list)) => {
+                    for item in list {
+                        if let Some(name) = item.get("name").and_then(Value::as_str) {
+                            self.included
+                                .origin
+                                .push((key, name.to_owned(), shown.clone()));
+                        }
+                        items.push((item, shown.clone()));
+                    }
+                }
+                Some(other) => sink.error(
+                    join_file(&here, key),
+                    format!("expected a list, found {}", kind(&other)),
+                ),
+            }
+        }
+    }
+}
+
+/// A path inside an included file, after the file (`include common.yaml: line 3 column 1`).
+fn join_file(file: &str, path: &str) -> String {
+    if path.is_empty() {
+        file.to_owned()
+    } else {
+        format!("{file}: {path}")
+    }
+}
+
+/// Reads a spec file's text: at most `limit` bytes (and one more, to tell a larger file), which
+/// must be UTF-8. An error is a diagnostic path (a line and column where one applies) and what
+/// is wrong.
+pub fn read_text(path: &Path, limit: usize) -> Result<String, (String, String)> {
+    use std::io::Read;
+    let cannot = |e: std::io::Error| (String::new(), format!("cannot read: {e}"));
+    let f = std::fs::File::open(path).map_err(cannot)?;
+    let declared = f.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut bytes = Vec::new();
+    f.take(limit as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    if bytes.len() > limit {
+        let len = declared.max(bytes.len() as u64) as usize;
+        let r = if limit == MAX_SPEC_BYTES {
+            too_large(&bytes, len)
+        } else {
+            Refusal::at(
+                &bytes,
+                limit,
+                format!("the spec and the files it includes are limited to {MAX_SPEC_BYTES} bytes together; this file is {len} bytes"),
+            )
+        };
+        return Err((r.path(), r.message));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let bytes = e.as_bytes();
+        let at = e.utf8_error().valid_up_to();
+        let r = Refusal::at(
+            bytes,
+            at,
+            format!(
+                "not UTF-8 text: invalid byte 0x{:02X} at offset {at}",
+                bytes.get(at).copied().unwrap_or(0)
+            ),
+        );
+        (r.path(), r.message)
+    })
 }
 
 /// Top-level keys with a default when absent: the lists, `common_responses`, `transactions` and
