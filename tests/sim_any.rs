@@ -74,19 +74,43 @@ fn modbus_dynamixel_and_pelco_d_soak_against_their_device_sections() {
     }
     // Pelco P's commands get no reply (its position queries aside): a command lost or garbled
     // on the line is not seen by the master, so the device may differ from what was sent; the
-    // soak counts those, and only those, as accepted silently.
+    // soak counts those as lost unseen, not as a wrong value accepted.
     let out = run(&["soak", "--transactions", "3000", "--seed", "7", "pelco_p"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let report = text(&out.stdout);
     let completed =
         figure(&report, "completed first time") + figure(&report, "completed after retries");
     assert!(completed > 2500, "{report}");
-    for example in report.lines().filter(|l| l.contains("e.g.")) {
-        assert!(
-            example.contains("accepted  (None), expected None; device state differs"),
-            "{report}"
-        );
+    assert_eq!(figure(&report, "wrong, accepted silently"), 0, "{report}");
+    // On a line without faults every transaction completes, also where commands get no reply
+    // or an optional one. (Commands that get none were judged before their device had seen
+    // them, and frames sent back to back reached the simulated devices as one: Pelco P lost
+    // 2 and CRSF 98 of 400 this way.)
+    for protocol in ["pelco_p", "crsf"] {
+        let out = run(&[
+            "soak",
+            "--transactions",
+            "400",
+            "--seed",
+            "7",
+            "--rate",
+            "0",
+            protocol,
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let report = text(&out.stdout);
+        assert_eq!(figure(&report, "completed first time"), 400, "{report}");
     }
+    // CRSF's RC frames get an optional GPS answer: one the line loses is silence the spec
+    // allows, lost unseen (it was counted as a wrong value accepted).
+    let out = run(&["soak", "--transactions", "400", "--seed", "7", "crsf"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report = text(&out.stdout);
+    assert!(
+        figure(&report, "lost unseen (no or optional reply)") > 0,
+        "{report}"
+    );
+    assert_eq!(figure(&report, "wrong, accepted silently"), 0, "{report}");
     // Without a protocol: all six, UB2 and SD with their own models.
     let out = run(&["soak", "--transactions", "200"]);
     assert!(out.status.success(), "{}", text(&out.stderr));

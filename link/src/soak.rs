@@ -10,6 +10,10 @@
 //! - **failed**: the master returned an error (no reply, no valid reply, ...);
 //! - **not sent**: the master refused the request itself, because the spec forbids it (a value
 //!   outside its range: the mixes include some on purpose, as a careless caller would send);
+//! - **unseen**: a request whose reply the spec leaves out (`reply: none`) or makes optional
+//!   (`reply: optional`) was lost or damaged, and the master, rightly, returned no reply: the
+//!   device's state or the reference's reply differs, but the protocol gives the master no way
+//!   to tell (a command with no acknowledgment, a telemetry answer that may not come);
 //! - **silent wrong**: the master returned a reply, but it differs from the reference's or the
 //!   device's state does (a damaged request that still passed the device's checks).
 //!
@@ -33,7 +37,7 @@ use std::fmt;
 use std::rc::Rc;
 use std::time::Duration;
 
-use busspec_runtime::Message;
+use busspec_runtime::{Message, Reply};
 
 use crate::clock::{Clock, SimClock};
 use crate::fault::{FaultConfig, FaultCounts, Faulty};
@@ -77,7 +81,11 @@ pub struct SoakReport {
     pub refused: u64,
     /// Of failed and refused, those after which the device's state differs from the intended one.
     pub failed_with_device_changed: u64,
-    /// Returned a reply that was wrong, or left the device in a wrong state, with no error.
+    /// Lost where the protocol cannot tell: no reply returned to a request whose reply is
+    /// none or optional, while the device's state or the reference's reply differs.
+    pub unseen: u64,
+    /// Returned a reply that was wrong, or left the device in a wrong state, with no error
+    /// the protocol could have raised.
     pub silent_wrong: u64,
     /// The checksum-only master: transactions where some reply passed its checksum.
     pub checksum_only_accepted: u64,
@@ -142,6 +150,12 @@ impl fmt::Display for SoakReport {
             self.not_sent,
             pct(self.not_sent)
         )?;
+        writeln!(
+            f,
+            "  lost unseen (no or optional reply) {:>8} ({:.2} %)",
+            self.unseen,
+            pct(self.unseen)
+        )?;
         writeln!(f, "  wrong, accepted silently  {:>8}", self.silent_wrong)?;
         write!(
             f,
@@ -167,7 +181,9 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
     let clock = SimClock::new();
     let devices: Vec<D> = (0..config.devices.max(1)).map(device).collect();
     let addresses: Vec<u8> = devices.iter().map(Device::address).collect();
-    let bus = SimBus::new(clock.clone(), BusConfig::new(P::baud()), devices);
+    let bus_config = BusConfig::new(P::baud());
+    let frame_gap = bus_config.frame_gap;
+    let bus = SimBus::new(clock.clone(), bus_config, devices);
     let timing = Timing::for_protocol::<P>();
     let faults = FaultConfig::byte_error_rate(config.byte_error_rate, timing.reply_timeout);
     let line = Faulty::new(bus.clone(), clock.clone(), faults, config.seed);
@@ -215,8 +231,12 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
         bus.freeze_time(Some(t0));
         received.borrow_mut().clear();
         let result = master.transact(address, request);
-        bus.freeze_time(None);
+        // The devices take the last bytes sent as a frame once the line is quiet for the
+        // bus's frame gap: a command that gets no reply ends its transaction as soon as it is
+        // sent, and is judged after its device has seen it.
+        clock.advance(frame_gap);
         let actual = bus.with_devices(|d| std::mem::replace(&mut d[which], reference.clone()));
+        bus.freeze_time(None);
         let state_ok = actual == reference;
         match result {
             Ok(ex) if ex.response == expected_response && state_ok => {
@@ -237,6 +257,11 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
                 if !state_ok {
                     report.failed_with_device_changed += 1;
                 }
+            }
+            // Nothing came back, as the spec allows for this request: what was lost, the
+            // protocol does not let a master see.
+            Ok(ex) if ex.response.is_none() && P::reply(&request) != Reply::Required => {
+                report.unseen += 1;
             }
             Ok(ex) => {
                 report.silent_wrong += 1;

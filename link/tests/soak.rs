@@ -27,7 +27,7 @@ fn sd_soak_accepts_no_wrong_value() {
     println!("{r}\n{:#?}", r.examples);
     assert_eq!(r.silent_wrong, 0, "{r}\n{:#?}", r.examples);
     assert_eq!(
-        r.completed + r.retried + r.failed + r.not_sent + r.refused + r.silent_wrong,
+        r.completed + r.retried + r.failed + r.not_sent + r.refused + r.unseen + r.silent_wrong,
         r.transactions
     );
     // Faults were really injected, and retries really rescued transactions.
@@ -44,7 +44,7 @@ fn ub2_soak_full_checks_accept_fewer_wrong_values_than_the_checksum_alone() {
     let r = run::<Ub2>(config(2));
     println!("{r}\n{:#?}", r.examples);
     assert_eq!(
-        r.completed + r.retried + r.failed + r.not_sent + r.refused + r.silent_wrong,
+        r.completed + r.retried + r.failed + r.not_sent + r.refused + r.unseen + r.silent_wrong,
         r.transactions
     );
     assert!(r.retried > 0, "{r}");

@@ -137,8 +137,46 @@ impl Sim {
         true
     }
 
+    /// Handles the bytes a device received between two silences on the line: one request
+    /// frame, or, where the master sent frames back to back (commands that get no reply, at a
+    /// rate the protocol allows with no gap between frames: CRSF, Pelco P), several, which the
+    /// device tells apart by the protocol's framing as a real one does (its start bytes,
+    /// length and checksum) and answers each. Returns the reply to send (each frame's, one
+    /// after the other), if any.
+    pub fn answer(&mut self, bytes: &[u8]) -> Option<Vec<u8>> {
+        if let Some(reply) = self.answer_frame(bytes) {
+            return Some(reply);
+        }
+        // Only bytes that are no frame on their own may hold several.
+        let p = Arc::clone(&self.p);
+        if interp::decode(&p, Some(Direction::Request), None, bytes).is_ok() {
+            return None;
+        }
+        let mut stream = crate::stream::StreamDecoder::new(&p, Some(Direction::Request));
+        let mut events = stream.push(bytes);
+        events.extend(stream.flush());
+        let frames: Vec<&[u8]> = events
+            .iter()
+            .filter(|e| {
+                matches!(
+                    e,
+                    crate::stream::Event::Frame { .. } | crate::stream::Event::OutOfSpec { .. }
+                )
+            })
+            .map(crate::stream::Event::bytes)
+            .collect();
+        if frames.len() < 2 {
+            return None;
+        }
+        let mut reply = Vec::new();
+        for frame in frames {
+            reply.extend(self.answer_frame(frame).unwrap_or_default());
+        }
+        (!reply.is_empty()).then_some(reply)
+    }
+
     /// Handles one request frame; returns the reply to send, if any.
-    pub fn answer(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+    fn answer_frame(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
         let p = Arc::clone(&self.p);
         let p = &*p;
         let addressed = p.framing.has_address();

@@ -133,6 +133,40 @@ fn modbus_writes_change_what_reads_return() {
     assert_eq!(d.element("coils", 0), Some(1));
 }
 
+/// Frames sent with no silence between them reach a device as one run of bytes: it tells them
+/// apart by the protocol's framing and answers each, one reply after the other. (It answered
+/// none: the run was taken for one frame, which it is not.)
+#[test]
+fn frames_received_back_to_back_are_each_answered() {
+    let p = spec("modbus");
+    let mut d = Sim::new(Arc::clone(&p), 0x11);
+    let write = |start: i64, values: &[i64]| {
+        request(
+            &p,
+            "write_multiple_registers",
+            0x11,
+            &[
+                int("starting_address", start),
+                int("quantity", values.len() as i64),
+                list("values", values),
+            ],
+        )
+    };
+    let (a, b) = (write(10, &[1, 2]), write(20, &[3]));
+    let both = [a.clone(), b.clone()].concat();
+    let replies = d.answer(&both).expect("replies");
+    let first = reply(&p, &a, &replies[..8]);
+    let second = reply(&p, &b, &replies[8..]);
+    assert_eq!(replies.len(), 16);
+    assert_eq!(get(&first.1, "starting_address"), &Raw::Int(10));
+    assert_eq!(get(&second.1, "starting_address"), &Raw::Int(20));
+    assert_eq!(d.element("holding_registers", 11), Some(2));
+    assert_eq!(d.element("holding_registers", 20), Some(3));
+    // Bytes that are no frame, alone or together, still get no answer.
+    assert_eq!(d.answer(&[0x11, 0x10, 0x00]), None);
+    assert_eq!(d.answer(&[a[..5].to_vec(), b[..3].to_vec()].concat()), None);
+}
+
 #[test]
 fn modbus_refusals_are_the_exceptions_the_spec_names() {
     let p = spec("modbus");
