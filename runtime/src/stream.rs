@@ -748,9 +748,10 @@ impl<C: Protocol> Core<C> {
     }
 
     /// The framing rule at the head of a whole window (`window.len()` the buffer's capacity,
-    /// settled as when flushing) where it is simple, which is almost always: no variable-length
-    /// candidate, each candidate length of one direction only, and the longest that decodes
-    /// before any breaks only a rule of the spec. Returns its event, or `None` with `head`
+    /// settled as when flushing) where it is simple, which is almost always: no candidate
+    /// waiting for its length or count field, and the longest candidate length that decodes
+    /// before any breaks only a rule of the spec (fixed and variable lengths alike, of one
+    /// direction or both). Returns its event, or `None` with `head`
     /// past a byte of noise (counted, not reported); sets `slow` and changes nothing where
     /// the case is not simple, for [`Self::advance`] to decide.
     #[inline(always)]
@@ -869,35 +870,97 @@ impl<C: Protocol> Core<C> {
                 VarLen::NONE
             },
         );
+        let no_var = var == (VarLen::NONE, VarLen::NONE);
         // With one frame length (a constant), the candidates say only which direction a frame
-        // is (bit 0 of each mask), and candidates of both are the case left to the full rule:
-        // decided here once, the frame's length the constant, no mask walked.
+        // is (bit 0 of each mask): decided here once, the frame's length the constant, no mask
+        // walked. Variable-length candidates and candidates of both directions take the walk
+        // below.
         if let [len] = C::FRAME_LENGTHS {
             let (q, r) = (requests & 1 != 0, responses & 1 != 0);
-            if var != (VarLen::NONE, VarLen::NONE) || q && r {
-                *end = FastEnd::Slow;
+            if no_var && !(q && r) {
+                if q || r {
+                    try_frame!(window.get(..*len), q, true);
+                }
+                self.noise_byte();
+                *end = FastEnd::Noise;
                 return acc;
             }
-            if q || r {
-                try_frame!(window.get(..*len), q, true);
-            }
-            self.noise_byte();
-            *end = FastEnd::Noise;
-            return acc;
         }
-        if var != (VarLen::NONE, VarLen::NONE) || requests & responses != 0 {
+        // The walk of `advance` on a whole window (settled as when flushing): every candidate
+        // length longest first, the fixed ones of the mask and the variable ones, each tried
+        // once with every direction that has it; a variable length the window cannot hold is
+        // no candidate. Its one case left to the full rule: a length that checksums and breaks
+        // only a rule of the spec, which the rule reports unless a shorter one is a frame.
+        if var.0.needs_more() || var.1.needs_more() {
             *end = FastEnd::Slow;
             return acc;
         }
+        let complete = |v: VarLen| v.get().filter(|&l| l <= window.len()).unwrap_or(0);
+        let (mut lq, mut lr) = (complete(var.0), complete(var.1));
         let mut rest = requests | responses;
-        while rest != 0 {
+        loop {
             let i = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            try_frame!(
-                C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)),
-                requests & (1 << i) != 0,
-                false
-            );
+            let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
+            let len = fixed.max(lq).max(lr);
+            if len == 0 {
+                break;
+            }
+            let bit = if fixed == len { 1u64 << i } else { 0 };
+            rest &= !bit;
+            let request = requests & bit != 0 || lq == len;
+            let response = responses & bit != 0 || lr == len;
+            if lq == len {
+                lq = 0;
+            }
+            if lr == len {
+                lr = 0;
+            }
+            if !(request && response) {
+                try_frame!(window.get(..len), request, false);
+                continue;
+            }
+            // Both directions at one length (a Modbus echo, a Dynamixel instruction that also
+            // reads as a status packet): `try_frame`'s decision, each event written where it
+            // is made.
+            let Some(frame) = window.get(..len) else {
+                *end = FastEnd::Slow;
+                return acc;
+            };
+            let offset = self.head;
+            let as_request = C::decode_request(frame);
+            let as_response = self.response(frame);
+            match (as_request, as_response) {
+                (Ok(_), Ok(_) | Err(DecodeError::Ambiguous { .. })) => {
+                    self.last_request = None;
+                    self.head += len as u64;
+                    let code = frame
+                        .iter()
+                        .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
+                    return emit(self, acc, Event::Ambiguous { offset, len, code });
+                }
+                (Ok(frame), Err(_)) => {
+                    self.last_request = Some(frame.message);
+                    self.head += len as u64;
+                    return emit(self, acc, Event::Request { offset, len, frame });
+                }
+                (Err(_), Ok(frame)) => {
+                    self.last_request = None;
+                    self.head += len as u64;
+                    return emit(self, acc, Event::Response { offset, len, frame });
+                }
+                (Err(_), Err(DecodeError::Ambiguous { code, .. })) => {
+                    self.last_request = None;
+                    self.head += len as u64;
+                    return emit(self, acc, Event::Ambiguous { offset, len, code });
+                }
+                (Err(q), Err(r)) => {
+                    let why = if r.progress() > q.progress() { r } else { q };
+                    if breaks_spec(&why) {
+                        *end = FastEnd::Slow;
+                        return acc;
+                    }
+                }
+            }
         }
         self.noise_byte();
         *end = FastEnd::Noise;
