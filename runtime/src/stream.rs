@@ -254,6 +254,18 @@ pub enum Event<Q, R> {
     },
 }
 
+/// The code of an [`Event::Ambiguous`] frame that decodes as a request and as a response: its
+/// bytes folded into a `u32` (each shifting the ones before it left by 8), which leaves its last
+/// four bytes, most significant first.
+#[inline(always)]
+fn both_ways_code(frame: &[u8]) -> u32 {
+    frame
+        .get(frame.len().saturating_sub(4)..)
+        .unwrap_or_default()
+        .iter()
+        .fold(0u32, |a, b| a << 8 | u32::from(*b))
+}
+
 /// Whether `e` says a frame breaks a rule of the spec rather than its framing: a value outside
 /// its range, an address outside the allowed ones, a broadcast the command does not accept.
 /// A frame whose strict decoding fails with such an error (and whose checksum passed) is an
@@ -703,10 +715,7 @@ impl<C: Protocol> Core<C> {
             }
             (Some(_), Some(_)) => {
                 self.last_request = None;
-                let code = frame
-                    .iter()
-                    .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
-                Found::Ambiguous(code)
+                Found::Ambiguous(both_ways_code(frame))
             }
             (None, None) => {
                 if out_of_spec.is_none() {
@@ -929,37 +938,37 @@ impl<C: Protocol> Core<C> {
             let offset = self.head;
             let as_request = C::decode_request(frame);
             let as_response = self.response(frame);
-            match (as_request, as_response) {
-                (Ok(_), Ok(_) | Err(DecodeError::Ambiguous { .. })) => {
-                    self.last_request = None;
-                    self.head += len as u64;
-                    let code = frame
-                        .iter()
-                        .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
-                    return emit(self, acc, Event::Ambiguous { offset, len, code });
-                }
-                (Ok(frame), Err(_)) => {
+            match as_request {
+                Ok(frame) => {
+                    if let Ok(_) | Err(DecodeError::Ambiguous { .. }) = as_response {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        let code = both_ways_code(window.get(..len).unwrap_or_default());
+                        return emit(self, acc, Event::Ambiguous { offset, len, code });
+                    }
                     self.last_request = Some(frame.message);
                     self.head += len as u64;
                     return emit(self, acc, Event::Request { offset, len, frame });
                 }
-                (Err(_), Ok(frame)) => {
-                    self.last_request = None;
-                    self.head += len as u64;
-                    return emit(self, acc, Event::Response { offset, len, frame });
-                }
-                (Err(_), Err(DecodeError::Ambiguous { code, .. })) => {
-                    self.last_request = None;
-                    self.head += len as u64;
-                    return emit(self, acc, Event::Ambiguous { offset, len, code });
-                }
-                (Err(q), Err(r)) => {
-                    let why = if r.progress() > q.progress() { r } else { q };
-                    if breaks_spec(&why) {
-                        *end = FastEnd::Slow;
-                        return acc;
+                Err(q) => match as_response {
+                    Ok(frame) => {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        return emit(self, acc, Event::Response { offset, len, frame });
                     }
-                }
+                    Err(DecodeError::Ambiguous { code, .. }) => {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        return emit(self, acc, Event::Ambiguous { offset, len, code });
+                    }
+                    Err(r) => {
+                        let why = if r.progress() > q.progress() { r } else { q };
+                        if breaks_spec(&why) {
+                            *end = FastEnd::Slow;
+                            return acc;
+                        }
+                    }
+                },
             }
         }
         self.noise_byte();
