@@ -58,23 +58,50 @@ fn states<P: Protocol>(wires: &[Vec<u8>]) -> Vec<StreamDecoder<P>> {
 fn both<P: Protocol>(states: &[StreamDecoder<P>], window: &[u8], decided: &mut Tally) {
     for (i, d) in states.iter().enumerate() {
         let noise = [0, 1, MAX_SKIPPED_RUN - 1][(i + window[0] as usize) % 3];
-        match d.fast_and_full(window, noise) {
-            None => decided.deferred += 1,
-            Some([fast, full]) => {
-                assert_eq!(
-                    fast,
-                    full,
-                    "{}: the fast path and the full rule differ on {:02X?} (state {i}, {noise} bytes of noise before)",
-                    P::NAME,
-                    window
-                );
-                match fast.event.or(fast.pending) {
-                    Some(Event::Request { .. } | Event::Response { .. }) => decided.frames += 1,
-                    _ => decided.noise += 1,
-                }
+        compare(d, window, noise, decided, || format!("state {i}"));
+    }
+}
+
+/// Runs both paths on `window` from `d`'s state with `noise` bytes of noise before the head;
+/// the same event and state wherever the fast path decides (`at` says where, if they differ).
+fn compare<P: Protocol>(
+    d: &StreamDecoder<P>,
+    window: &[u8],
+    noise: u64,
+    decided: &mut Tally,
+    at: impl Fn() -> String,
+) {
+    match d.fast_and_full(window, noise) {
+        None => decided.deferred += 1,
+        Some([fast, full]) => {
+            assert_eq!(
+                fast,
+                full,
+                "{}: the fast path and the full rule differ on {:02X?} ({}, {noise} bytes of noise before)",
+                P::NAME,
+                window,
+                at()
+            );
+            match fast.event.or(fast.pending) {
+                Some(Event::Request { .. } | Event::Response { .. }) => decided.frames += 1,
+                _ => decided.noise += 1,
             }
         }
     }
+}
+
+/// The spec of `P`, its example frames (sorted, each once) and the [`states`] they give.
+fn examples<P: Protocol>() -> (
+    busspec_model::ir::Protocol,
+    Vec<Vec<u8>>,
+    Vec<StreamDecoder<P>>,
+) {
+    let p = spec::<P>();
+    let mut wires: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    wires.sort();
+    wires.dedup();
+    let states = states::<P>(&wires);
+    (p, wires, states)
 }
 
 #[derive(Default, Debug)]
@@ -92,11 +119,7 @@ fn window(bytes: &[u8], len: usize) -> Vec<u8> {
 }
 
 fn fast_path_is_the_rule<P: Protocol>(frames: usize) {
-    let p = spec::<P>();
-    let mut wires: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
-    wires.sort();
-    wires.dedup();
-    let states = states::<P>(&wires);
+    let (p, wires, states) = examples::<P>();
     let cap = P::MAX_FRAME_LEN;
     let mut t = Tally::default();
     for (k, wire) in wires.iter().enumerate() {
@@ -291,7 +314,7 @@ fn captures_fed_and_pushed_agree() {
 /// with noise before them, a byte changed with or without the checksum written again, or cut
 /// short) and the random inputs of `common::random_input` (noise, mutated examples, random
 /// frames of random messages).
-fn capture<P: Protocol>(p: &busspec_model::ir::Protocol, rng: &mut fastrand::Rng) -> Vec<u8> {
+fn capture(p: &busspec_model::ir::Protocol, rng: &mut fastrand::Rng) -> Vec<u8> {
     let mut cap = Vec::new();
     for _ in 0..30 {
         if rng.u8(..4) == 0 {
@@ -322,16 +345,12 @@ fn capture<P: Protocol>(p: &busspec_model::ir::Protocol, rng: &mut fastrand::Rng
 /// time (the full rule alone) from the state it is in there, pairing included; the fast path's
 /// answer, where it gives one, must be the rule's, event and state. Returns the tally.
 fn every_head_is_the_rule<P: Protocol>(seed: u64, captures: usize) -> Tally {
-    let p = spec::<P>();
-    let mut wires: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
-    wires.sort();
-    wires.dedup();
-    let states = states::<P>(&wires);
+    let (p, _, states) = examples::<P>();
     let cap = P::MAX_FRAME_LEN;
     let mut rng = fastrand::Rng::with_seed(seed);
     let mut t = Tally::default();
     for _ in 0..captures {
-        let bytes = capture::<P>(&p, &mut rng);
+        let bytes = capture(&p, &mut rng);
         for at in 0..bytes.len() {
             both(&states, &window(&bytes[at..], cap), &mut t);
         }
@@ -345,24 +364,9 @@ fn every_head_is_the_rule<P: Protocol>(seed: u64, captures: usize) -> Tally {
                 let at = head as usize;
                 let noise = [0, 1, MAX_SKIPPED_RUN - 1][i % 3];
                 let w = window(&bytes[at..], cap);
-                match d.fast_and_full(&w, noise) {
-                    None => t.deferred += 1,
-                    Some([fast, full]) => {
-                        assert_eq!(
-                            fast,
-                            full,
-                            "{}: the fast path and the full rule differ at offset {at} of {:02X?}",
-                            P::NAME,
-                            bytes
-                        );
-                        match fast.event.or(fast.pending) {
-                            Some(Event::Request { .. } | Event::Response { .. }) => {
-                                t.frames += 1;
-                            }
-                            _ => t.noise += 1,
-                        }
-                    }
-                }
+                compare(&d, &w, noise, &mut t, || {
+                    format!("the decoder's state at offset {at} of {bytes:02X?}")
+                });
             }
             assert_eq!(d.push(std::slice::from_ref(b)), 1);
             while d.poll().is_some() {}

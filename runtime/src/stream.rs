@@ -254,6 +254,38 @@ pub enum Event<Q, R> {
     },
 }
 
+/// The next candidate length of the framing rule's walk, longest first: the fixed ones left in
+/// `rest` (bit i for [`Protocol::FRAME_LENGTHS`]`[i]`) and the variable ones `lq` and `lr` (0
+/// for none), each length once with every direction that has it (`(length, as a request, as a
+/// response)`), taken out of the walk; `None` when none is left. The one walk of
+/// `Core::advance` and the fast path.
+#[inline(always)]
+fn next_length<C: Protocol>(
+    rest: &mut u64,
+    lq: &mut usize,
+    lr: &mut usize,
+    requests: u64,
+    responses: u64,
+) -> Option<(usize, bool, bool)> {
+    let i = rest.trailing_zeros() as usize;
+    let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
+    let len = fixed.max(*lq).max(*lr);
+    if len == 0 {
+        return None;
+    }
+    let bit = if fixed == len { 1u64 << i } else { 0 };
+    *rest &= !bit;
+    let request = requests & bit != 0 || *lq == len;
+    let response = responses & bit != 0 || *lr == len;
+    if *lq == len {
+        *lq = 0;
+    }
+    if *lr == len {
+        *lr = 0;
+    }
+    Some((len, request, response))
+}
+
 /// The code of an [`Event::Ambiguous`] frame that decodes as a request and as a response: its
 /// bytes folded into a `u32` (each shifting the ones before it left by 8), which leaves its last
 /// four bytes, most significant first.
@@ -586,25 +618,12 @@ impl<C: Protocol> Core<C> {
             // The longest length that checksums and breaks only a rule of the spec, and why:
             // reported if no length is a frame.
             let mut out_of_spec: Option<(usize, DecodeError)> = None;
-            loop {
-                // The next length, longest first: the fixed ones of the mask and the variable
-                // ones, each length tried once with every direction that has it.
-                let i = rest.trailing_zeros() as usize;
-                let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
-                let len = fixed.max(lq).max(lr);
-                let Some(frame) = window.get(..len).filter(|_| len > 0) else {
+            while let Some((len, request, response)) =
+                next_length::<C>(&mut rest, &mut lq, &mut lr, requests, responses)
+            {
+                let Some(frame) = window.get(..len) else {
                     break;
                 };
-                let bit = if fixed == len { 1u64 << i } else { 0 };
-                rest &= !bit;
-                let request = requests & bit != 0 || lq == len;
-                let response = responses & bit != 0 || lr == len;
-                if lq == len {
-                    lq = 0;
-                }
-                if lr == len {
-                    lr = 0;
-                }
                 if let Some(found) = self.try_frame(frame, request, response, &mut out_of_spec) {
                     self.head += len as u64;
                     return Step::Frame(len, found);
@@ -907,23 +926,9 @@ impl<C: Protocol> Core<C> {
         let complete = |v: VarLen| v.get().filter(|&l| l <= window.len()).unwrap_or(0);
         let (mut lq, mut lr) = (complete(var.0), complete(var.1));
         let mut rest = requests | responses;
-        loop {
-            let i = rest.trailing_zeros() as usize;
-            let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
-            let len = fixed.max(lq).max(lr);
-            if len == 0 {
-                break;
-            }
-            let bit = if fixed == len { 1u64 << i } else { 0 };
-            rest &= !bit;
-            let request = requests & bit != 0 || lq == len;
-            let response = responses & bit != 0 || lr == len;
-            if lq == len {
-                lq = 0;
-            }
-            if lr == len {
-                lr = 0;
-            }
+        while let Some((len, request, response)) =
+            next_length::<C>(&mut rest, &mut lq, &mut lr, requests, responses)
+        {
             if !(request && response) {
                 try_frame!(window.get(..len), request, false);
                 continue;
