@@ -1221,3 +1221,20 @@ impl<C: Protocol> Feed<'_, '_, C> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// The last four bytes are what folding every byte into a `u32` leaves, as the code of an
+    /// ambiguous frame was computed before.
+    #[test]
+    fn both_ways_code_is_the_fold_of_every_byte() {
+        let bytes: [u8; 9] = [0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0x99];
+        for n in 0..=bytes.len() {
+            let frame = &bytes[..n];
+            let fold = frame
+                .iter()
+                .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
+            assert_eq!(super::both_ways_code(frame), fold, "{n} bytes");
+        }
+    }
+}
