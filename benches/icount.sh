@@ -3,8 +3,11 @@
 # `icount` binary for two pass counts and divides the difference in instructions by the
 # difference in frames or bytes, so set-up (loading the spec, building the inputs) cancels out.
 # Stream rows: the 1 MiB capture with 1 % noise (`generated`) and without (`generated-clean`),
-# per byte and per frame decoded, and their ratio to the yardstick: the clean capture's frames
-# decoded one by one, their boundaries known (`stream decode`).
+# per byte and per frame of the capture (the yardstick's frames: bytes per frame as in the clean
+# capture), and their ratio to the yardstick: the clean capture's frames decoded one by one,
+# their boundaries known (`stream decode`). Also per frame the stream reports as a request or
+# response, which leaves out the frames it reports as ambiguous (a Modbus echo, a Dynamixel
+# instruction that also reads as a status packet) though it decoded them.
 # Prints Markdown table rows. Needs valgrind.
 # Usage: bash benches/icount.sh [ub2|sd|modbus|dynamixel ...] (default: all four)
 set -euo pipefail
@@ -30,8 +33,10 @@ count() {
   echo "$ir $units ${frames:-0}"
 }
 
-# Instructions per frame of `stream decode`, set by the first stream row of a protocol.
+# Instructions per frame of `stream decode` and its bytes per frame, set by the first stream
+# row of a protocol.
 yardstick=0
+bytes_per_frame=0
 
 # per PROTO WHO OP LO HI UNIT -> one table row
 per() {
@@ -45,13 +50,18 @@ per() {
   # For the stream decoders, also per frame decoded (the yardstick is decode's per frame).
   if [[ $op == stream && $who == decode ]]; then
     yardstick=$(awk -v a="$a" -v b="$b" -v f="$(((hi - lo) * frames))" 'BEGIN { print (b - a) / f }')
+    bytes_per_frame=$(awk -v u="$units" -v f="$frames" 'BEGIN { print u / f }')
   fi
   awk -v a="$a" -v b="$b" -v n="$(((hi - lo) * units))" -v f="$(((hi - lo) * frames))" \
-    -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" -v y="$yardstick" \
+    -v p="$proto" -v w="$who" -v o="$op" -v u="$unit" -v y="$yardstick" -v bpf="$bytes_per_frame" \
     'BEGIN { per = (f > 0) ? (b - a) / f : 0
-             ratio = (o == "stream" && w != "decode" && w != "plain-sum" && y > 0) ? sprintf(", %.2f× decode", per / y) : ""
-             extra = (u == "byte" && f > 0) ? sprintf(" (%.1f per frame%s)", per, ratio) : ""
-             printf "| %s | %s | %s | %.1f per %s%s |\n", p, o, w, (b - a) / n, u, extra }'
+             byte = (b - a) / n
+             stream = (o == "stream" && w != "decode" && w != "plain-sum" && y > 0)
+             capture = byte * bpf
+             ratio = stream ? sprintf(", %.2f× decode; %.1f per frame it decodes", capture / y, per) : ""
+             first = stream ? capture : per
+             extra = (u == "byte" && f > 0) ? sprintf(" (%.1f per frame%s)", first, ratio) : ""
+             printf "| %s | %s | %s | %.1f per %s%s |\n", p, o, w, byte, u, extra }'
 }
 
 protos=("$@")

@@ -733,7 +733,7 @@ pub struct Fixed {
 
 impl Fixed {
     /// Whether `head` agrees with every byte fixed: `None` while some are not buffered yet.
-    #[inline]
+    #[inline(always)]
     pub fn agrees(&self, head: &[u8]) -> Option<bool> {
         match (
             code_agrees(head, self.code_at, self.code),
@@ -765,7 +765,7 @@ pub fn code_agrees(head: &[u8], at: usize, code: &[u8]) -> Option<bool> {
 /// every frame's length: the length `field` gives, within the shortest and longest frame of
 /// the variable-length messages (`(code offset, code, shortest, longest)`) whose code agrees
 /// with `head` or is not buffered yet; none if no such message agrees.
-#[inline]
+#[inline(always)]
 pub fn var_by_length(head: &[u8], shapes: &[(Fixed, usize, usize)], field: LengthField) -> VarLen {
     let (mut min, mut max) = (usize::MAX, 0);
     for &(fixed, lo, hi) in shapes {
@@ -784,7 +784,7 @@ pub fn var_by_length(head: &[u8], shapes: &[(Fixed, usize, usize)], field: Lengt
 /// by a field (`(the bytes it fixes, where the repeat sits)`): the length the count field of
 /// the first whose fixed bytes agree with `head` gives; [`VarLen::NEED_MORE`] while some are
 /// not buffered yet.
-#[inline]
+#[inline(always)]
 pub fn var_by_count(head: &[u8], shapes: &[(Fixed, RepeatAt)]) -> VarLen {
     first_agreeing(head, shapes, |r| r.frame_len(head))
 }
@@ -798,7 +798,7 @@ pub enum Counted {
 }
 
 /// [`var_by_count`] for a direction with messages counted by several fields ([`Counted`]).
-#[inline]
+#[inline(always)]
 pub fn var_by_counts(head: &[u8], shapes: &[(Fixed, Counted)]) -> VarLen {
     first_agreeing(head, shapes, |c| match c {
         Counted::One(r) => r.frame_len(head),

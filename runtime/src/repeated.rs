@@ -543,6 +543,7 @@ impl RepeatAt {
     /// elsewhere: a length field, or the candidates' lengths) or while the count field is still
     /// missing. A count whose frame could not hold `min..=max` elements gives `Some(0)`, which
     /// no frame has: the stream decoder then drops a byte and resynchronises.
+    #[inline]
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
         let (c, bytes) = match self.count {
             CountBy::End => return None,

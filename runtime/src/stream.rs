@@ -254,6 +254,50 @@ pub enum Event<Q, R> {
     },
 }
 
+/// The next candidate length of the framing rule's walk, longest first: the fixed ones left in
+/// `rest` (bit i for [`Protocol::FRAME_LENGTHS`]`[i]`) and the variable ones `lq` and `lr` (0
+/// for none), each length once with every direction that has it (`(length, as a request, as a
+/// response)`), taken out of the walk; `None` when none is left. The one walk of
+/// `Core::advance` and the fast path.
+#[inline(always)]
+fn next_length<C: Protocol>(
+    rest: &mut u64,
+    lq: &mut usize,
+    lr: &mut usize,
+    requests: u64,
+    responses: u64,
+) -> Option<(usize, bool, bool)> {
+    let i = rest.trailing_zeros() as usize;
+    let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
+    let len = fixed.max(*lq).max(*lr);
+    if len == 0 {
+        return None;
+    }
+    let bit = if fixed == len { 1u64 << i } else { 0 };
+    *rest &= !bit;
+    let request = requests & bit != 0 || *lq == len;
+    let response = responses & bit != 0 || *lr == len;
+    if *lq == len {
+        *lq = 0;
+    }
+    if *lr == len {
+        *lr = 0;
+    }
+    Some((len, request, response))
+}
+
+/// The code of an [`Event::Ambiguous`] frame that decodes as a request and as a response: its
+/// bytes folded into a `u32` (each shifting the ones before it left by 8), which leaves its last
+/// four bytes, most significant first.
+#[inline(always)]
+fn both_ways_code(frame: &[u8]) -> u32 {
+    frame
+        .get(frame.len().saturating_sub(4)..)
+        .unwrap_or_default()
+        .iter()
+        .fold(0u32, |a, b| a << 8 | u32::from(*b))
+}
+
 /// Whether `e` says a frame breaks a rule of the spec rather than its framing: a value outside
 /// its range, an address outside the allowed ones, a broadcast the command does not accept.
 /// A frame whose strict decoding fails with such an error (and whose checksum passed) is an
@@ -574,25 +618,12 @@ impl<C: Protocol> Core<C> {
             // The longest length that checksums and breaks only a rule of the spec, and why:
             // reported if no length is a frame.
             let mut out_of_spec: Option<(usize, DecodeError)> = None;
-            loop {
-                // The next length, longest first: the fixed ones of the mask and the variable
-                // ones, each length tried once with every direction that has it.
-                let i = rest.trailing_zeros() as usize;
-                let fixed = C::FRAME_LENGTHS.get(i).copied().unwrap_or(0);
-                let len = fixed.max(lq).max(lr);
-                let Some(frame) = window.get(..len).filter(|_| len > 0) else {
+            while let Some((len, request, response)) =
+                next_length::<C>(&mut rest, &mut lq, &mut lr, requests, responses)
+            {
+                let Some(frame) = window.get(..len) else {
                     break;
                 };
-                let bit = if fixed == len { 1u64 << i } else { 0 };
-                rest &= !bit;
-                let request = requests & bit != 0 || lq == len;
-                let response = responses & bit != 0 || lr == len;
-                if lq == len {
-                    lq = 0;
-                }
-                if lr == len {
-                    lr = 0;
-                }
                 if let Some(found) = self.try_frame(frame, request, response, &mut out_of_spec) {
                     self.head += len as u64;
                     return Step::Frame(len, found);
@@ -703,10 +734,7 @@ impl<C: Protocol> Core<C> {
             }
             (Some(_), Some(_)) => {
                 self.last_request = None;
-                let code = frame
-                    .iter()
-                    .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
-                Found::Ambiguous(code)
+                Found::Ambiguous(both_ways_code(frame))
             }
             (None, None) => {
                 if out_of_spec.is_none() {
@@ -748,9 +776,10 @@ impl<C: Protocol> Core<C> {
     }
 
     /// The framing rule at the head of a whole window (`window.len()` the buffer's capacity,
-    /// settled as when flushing) where it is simple, which is almost always: no variable-length
-    /// candidate, each candidate length of one direction only, and the longest that decodes
-    /// before any breaks only a rule of the spec. Returns its event, or `None` with `head`
+    /// settled as when flushing) where it is simple, which is almost always: no candidate
+    /// waiting for its length or count field, and the longest candidate length that decodes
+    /// before any breaks only a rule of the spec (fixed and variable lengths alike, of one
+    /// direction or both). Returns its event, or `None` with `head`
     /// past a byte of noise (counted, not reported); sets `slow` and changes nothing where
     /// the case is not simple, for [`Self::advance`] to decide.
     #[inline(always)]
@@ -869,35 +898,83 @@ impl<C: Protocol> Core<C> {
                 VarLen::NONE
             },
         );
+        let no_var = var == (VarLen::NONE, VarLen::NONE);
         // With one frame length (a constant), the candidates say only which direction a frame
-        // is (bit 0 of each mask), and candidates of both are the case left to the full rule:
-        // decided here once, the frame's length the constant, no mask walked.
+        // is (bit 0 of each mask): decided here once, the frame's length the constant, no mask
+        // walked. Variable-length candidates and candidates of both directions take the walk
+        // below.
         if let [len] = C::FRAME_LENGTHS {
             let (q, r) = (requests & 1 != 0, responses & 1 != 0);
-            if var != (VarLen::NONE, VarLen::NONE) || q && r {
-                *end = FastEnd::Slow;
+            if no_var && !(q && r) {
+                if q || r {
+                    try_frame!(window.get(..*len), q, true);
+                }
+                self.noise_byte();
+                *end = FastEnd::Noise;
                 return acc;
             }
-            if q || r {
-                try_frame!(window.get(..*len), q, true);
-            }
-            self.noise_byte();
-            *end = FastEnd::Noise;
-            return acc;
         }
-        if var != (VarLen::NONE, VarLen::NONE) || requests & responses != 0 {
+        // The walk of `advance` on a whole window (settled as when flushing): every candidate
+        // length longest first, the fixed ones of the mask and the variable ones, each tried
+        // once with every direction that has it; a variable length the window cannot hold is
+        // no candidate. Its one case left to the full rule: a length that checksums and breaks
+        // only a rule of the spec, which the rule reports unless a shorter one is a frame.
+        if var.0.needs_more() || var.1.needs_more() {
             *end = FastEnd::Slow;
             return acc;
         }
+        let complete = |v: VarLen| v.get().filter(|&l| l <= window.len()).unwrap_or(0);
+        let (mut lq, mut lr) = (complete(var.0), complete(var.1));
         let mut rest = requests | responses;
-        while rest != 0 {
-            let i = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            try_frame!(
-                C::FRAME_LENGTHS.get(i).and_then(|&l| window.get(..l)),
-                requests & (1 << i) != 0,
-                false
-            );
+        while let Some((len, request, response)) =
+            next_length::<C>(&mut rest, &mut lq, &mut lr, requests, responses)
+        {
+            if !(request && response) {
+                try_frame!(window.get(..len), request, false);
+                continue;
+            }
+            // Both directions at one length (a Modbus echo, a Dynamixel instruction that also
+            // reads as a status packet): `try_frame`'s decision, each event written where it
+            // is made.
+            let Some(frame) = window.get(..len) else {
+                *end = FastEnd::Slow;
+                return acc;
+            };
+            let offset = self.head;
+            let as_request = C::decode_request(frame);
+            let as_response = self.response(frame);
+            match as_request {
+                Ok(frame) => {
+                    if let Ok(_) | Err(DecodeError::Ambiguous { .. }) = as_response {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        let code = both_ways_code(window.get(..len).unwrap_or_default());
+                        return emit(self, acc, Event::Ambiguous { offset, len, code });
+                    }
+                    self.last_request = Some(frame.message);
+                    self.head += len as u64;
+                    return emit(self, acc, Event::Request { offset, len, frame });
+                }
+                Err(q) => match as_response {
+                    Ok(frame) => {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        return emit(self, acc, Event::Response { offset, len, frame });
+                    }
+                    Err(DecodeError::Ambiguous { code, .. }) => {
+                        self.last_request = None;
+                        self.head += len as u64;
+                        return emit(self, acc, Event::Ambiguous { offset, len, code });
+                    }
+                    Err(r) => {
+                        let why = if r.progress() > q.progress() { r } else { q };
+                        if breaks_spec(&why) {
+                            *end = FastEnd::Slow;
+                            return acc;
+                        }
+                    }
+                },
+            }
         }
         self.noise_byte();
         *end = FastEnd::Noise;
@@ -1141,6 +1218,23 @@ impl<C: Protocol> Feed<'_, '_, C> {
                 return Some(None);
             }
             d.push(rest);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The last four bytes are what folding every byte into a `u32` leaves, as the code of an
+    /// ambiguous frame was computed before.
+    #[test]
+    fn both_ways_code_is_the_fold_of_every_byte() {
+        let bytes: [u8; 9] = [0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0x99];
+        for n in 0..=bytes.len() {
+            let frame = &bytes[..n];
+            let fold = frame
+                .iter()
+                .fold(0u32, |a, b| a.wrapping_shl(8) | u32::from(*b));
+            assert_eq!(super::both_ways_code(frame), fold, "{n} bytes");
         }
     }
 }

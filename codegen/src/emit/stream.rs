@@ -582,6 +582,7 @@ pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -
         only_if(quote!(responses_agree), responses),
     );
     quote! {
+        #[inline]
         fn variable_candidates(head: &[u8]) -> rt::VarLens {
             #start_check
             rt::VarLens { requests: #requests, responses: #responses }

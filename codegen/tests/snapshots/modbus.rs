@@ -1905,6 +1905,7 @@ pub mod modbus {
                 responses: (mask >> 64) as u64,
             }
         }
+        #[inline]
         fn variable_candidates(head: &[u8]) -> rt::VarLens {
             rt::VarLens {
                 requests: rt::var_by_count(

@@ -652,6 +652,7 @@ pub mod msp_by_direction {
                 responses: (mask >> 64) as u64,
             }
         }
+        #[inline]
         fn variable_candidates(head: &[u8]) -> rt::VarLens {
             let requests_agree = head.first().map_or(true, |&b| b == 0x24)
                 && head.get(1).map_or(true, |&b| b == 0x4D)

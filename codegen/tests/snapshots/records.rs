@@ -1108,6 +1108,7 @@ pub mod records {
                 responses: (mask >> 64) as u64,
             }
         }
+        #[inline]
         fn variable_candidates(head: &[u8]) -> rt::VarLens {
             if head.first().is_some_and(|&b| b != 0x7E) {
                 return rt::VarLens::NONE;

@@ -717,6 +717,7 @@ pub mod vario {
                 responses: (mask >> 64) as u64,
             }
         }
+        #[inline]
         fn variable_candidates(head: &[u8]) -> rt::VarLens {
             if head.first().is_some_and(|&b| b != 0xA5) {
                 return rt::VarLens::NONE;
