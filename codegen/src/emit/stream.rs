@@ -4,6 +4,14 @@ use super::*;
 /// `candidates` function that narrows them by start byte and code, one `match` arm per code and
 /// per code prefix. Not by address: a frame from an address the spec does not allow is still a
 /// frame, which the stream decoder reports as out of spec (strict decoding says why).
+/// Each start byte of `sync` from offset `at`: the head's byte where it sits (`None` past the
+/// head), and its value.
+fn sync_bytes(at: usize, sync: &[u8]) -> impl Iterator<Item = (TokenStream, TokenStream)> + '_ {
+    sync.iter()
+        .enumerate()
+        .map(move |(i, s)| (head_byte(at + i), hex_u8(*s)))
+}
+
 pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     // A variable-length message whose length or count field gives its length lists none
     // (`variable_candidates` reads it); a repeat to the end without a length field lists
@@ -37,10 +45,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     // Start bytes that differ by direction say which direction's messages the head may start.
     let by_direction = p.framing.sync_by_direction();
     let agree = |at: usize, sync: &[u8]| {
-        let each = sync.iter().enumerate().map(|(i, s)| {
-            let (at, s) = (head_byte(at + i), hex_u8(*s));
-            quote!(#at.map_or(true, |&b| b == #s))
-        });
+        let each = sync_bytes(at, sync).map(|(at, s)| quote!(#at.map_or(true, |&b| b == #s)));
         quote!(#(#each)&&*)
     };
     let start_check = |none: TokenStream| match first.start {
@@ -58,8 +63,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
         Some(at) => {
-            let checks = p.framing.sync.iter().enumerate().map(|(i, s)| {
-                let (at, s) = (head_byte(at + i), hex_u8(*s));
+            let checks = sync_bytes(at, &p.framing.sync).map(|(at, s)| {
                 quote! {
                     if #at.is_some_and(|&b| b != #s) {
                         return #none;
