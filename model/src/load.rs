@@ -360,6 +360,15 @@ impl Reading<'_> {
             );
             return;
         }
+        // A spec names what it includes: a device, a pipe or a FIFO (whose opening waits for
+        // a writer) would make loading hang or read without end.
+        if !canonical.is_file() {
+            sink.error(
+                here,
+                "not a regular file: an included file holds common types (units, enums, flags)",
+            );
+            return;
+        }
         let text = match read_text(&path, MAX_SPEC_BYTES.saturating_sub(self.bytes)) {
             Ok(text) => text,
             Err((p, message)) => {

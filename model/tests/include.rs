@@ -187,6 +187,22 @@ fn missing_files_cycles_depth_and_size_are_refused() {
         errors(&e)[0].starts_with("include nowhere.yaml: cannot read: "),
         "{e}"
     );
+    // A device (its reading would not end) and a directory.
+    for (name, what) in [("/dev/zero", "/dev/zero"), ("..", "..")] {
+        let spec = write(&d, "mini.yaml", &format!("include: {name}\n{rest}"));
+        let e = load_file(&spec).expect_err(what);
+        assert_eq!(
+            errors(&e),
+            [format!("include {name}: not a regular file: an included file holds common types (units, enums, flags)")]
+        );
+    }
+    // A FIFO, whose opening would wait for a writer: refused without being opened.
+    let fifo = d.join("fifo.yaml");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo {}", fifo.display());
+    let spec = write(&d, "mini.yaml", &format!("include: fifo.yaml\n{rest}"));
+    let e = load_file(&spec).expect_err("a FIFO");
+    assert!(errors(&e)[0].contains("not a regular file"), "{e}");
     // a.yaml includes b.yaml includes a.yaml.
     write(&d, "a.yaml", "include: b.yaml\n");
     write(&d, "b.yaml", "include: a.yaml\n");
