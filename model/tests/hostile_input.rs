@@ -269,6 +269,10 @@ fn real_specs_pass_the_prescan() {
         if let Err(r) = busspec_model::load::prescan(&text) {
             panic!("{}: {} {}", path.display(), r.path(), r.message);
         }
+        // A file of common types (`include`d by a spec) is no spec of its own.
+        if !text.lines().any(|l| l.starts_with("protocol:")) {
+            continue;
+        }
         if let Err(d) = load_file(&path) {
             panic!("{d}");
         }
