@@ -107,6 +107,44 @@ fn check_on_a_missing_file_says_so() {
     );
 }
 
+/// A spec that includes a file of common types checks, decodes and encodes through the CLI as
+/// one that holds them; a missing included file is named where the spec names it.
+#[test]
+fn check_follows_include_and_names_an_included_file_that_is_missing() {
+    let out = busspec(&["check", "examples/own-protocol/spec/thermo.yaml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let out = busspec(&[
+        "decode",
+        "--spec",
+        "examples/own-protocol/spec/thermo.yaml",
+        "thermo",
+        "A5 01 10 61 BF",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/tmp/cli_include");
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = std::fs::read_to_string("examples/own-protocol/spec/thermo.yaml").unwrap();
+    let broken = dir.join("thermo.yaml");
+    std::fs::write(
+        &broken,
+        spec.replace("include: th_units.yaml", "include: gone.yaml"),
+    )
+    .unwrap();
+    let out = busspec(&["check", &broken.to_string_lossy()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("thermo.yaml: include gone.yaml: cannot read: "),
+        "{err}"
+    );
+    // Only the include is reported, not every unit the spec then misses.
+    assert_eq!(
+        err.lines().filter(|l| l.contains("thermo.yaml")).count(),
+        1,
+        "{err}"
+    );
+}
+
 #[test]
 fn wrong_arguments_are_a_usage_error() {
     let out = busspec(&["chekc"]);
