@@ -138,11 +138,7 @@ fn check_follows_include_and_names_an_included_file_that_is_missing() {
         "{err}"
     );
     // Only the include is reported, not every unit the spec then misses.
-    assert_eq!(
-        err.lines().filter(|l| l.contains("thermo.yaml")).count(),
-        1,
-        "{err}"
-    );
+    assert!(err.contains("thermo.yaml: 1 error"), "{err}");
 }
 
 #[test]
