@@ -79,6 +79,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/msp_by_direction.yaml"),
         // BCD fields: the dissector shows their decimal numbers.
         spec("model/tests/fixtures/valid/bcd_meter.yaml"),
+        // A CRC that takes each message's extra byte (MAVLink's CRC_EXTRA).
+        spec("model/tests/fixtures/valid/crc_extra.yaml"),
         // A start and a length field sent twice.
         spec("model/tests/fixtures/valid/ft12_variable.yaml"),
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),

@@ -180,6 +180,7 @@ fn start_after_code_spec_generates_its_snapshot() {
 #[test]
 fn bcd_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/bcd_meter.yaml", "bcd_meter.rs");
+    check("model/tests/fixtures/valid/crc_extra.yaml", "crc_extra.rs");
 }
 
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows

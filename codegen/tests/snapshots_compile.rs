@@ -18,6 +18,7 @@ include!("snapshots/pelco_p.rs");
 include!("snapshots/msp_v1.rs");
 include!("snapshots/msp_by_direction.rs");
 include!("snapshots/bcd_meter.rs");
+include!("snapshots/crc_extra.rs");
 include!("snapshots/ft12_variable.rs");
 include!("snapshots/sync_after_code.rs");
 include!("snapshots/meter_floats.rs");
@@ -898,6 +899,37 @@ fn start_after_a_two_byte_code_is_read_where_it_sits() {
 /// BCD fields: the examples replay, a digit above 9 is refused as the interpreter refuses it,
 /// a value past the digits is refused by encode, and both engines agree on every frame
 /// mutated from the examples and on captures of them.
+/// A CRC that takes each message's extra byte (MAVLink's CRC_EXTRA): the generated checksum
+/// finds it by the code, as the interpreter does; a frame checked without it, or with another
+/// message's, is refused alike.
+#[test]
+fn crc_extra_snapshot_agrees_with_the_interpreter() {
+    use crc_extra::{CrcExtra, Response};
+    let file = "model/tests/fixtures/valid/crc_extra.yaml";
+    replay::<CrcExtra>(file);
+    let p = fixture(file);
+    let t = agree::agree::<CrcExtra>(&p);
+    assert!(t.accepted >= p.examples.len() && t.refused > 100, "{t:?}");
+    let heartbeat = [
+        0xFE, 0x09, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x03, 0x51, 0x04, 0x03, 0x37, 0x97,
+    ];
+    assert!(Response::decode(&heartbeat).is_ok());
+    assert_eq!(crc_extra::checksum_extra(&heartbeat[1..12]), Some(50));
+    // The CRC without the extra byte, as a reader that knows no CRC_EXTRA computes it.
+    let plain = busspec_runtime::crc::Crc::<u16>::new(&crc_extra::CRC_ALGORITHM)
+        .checksum(&heartbeat[1..12])
+        .to_le_bytes();
+    let mut bare = heartbeat;
+    bare[12..].copy_from_slice(&plain);
+    let refused = Response::decode(&bare).unwrap_err();
+    let interp = busspec_model::interp::decode(&p, None, None, &bare).unwrap_err();
+    assert_eq!(refused.to_string(), interp.to_string());
+    assert!(
+        refused.to_string().contains("checksum mismatch"),
+        "{refused}"
+    );
+}
+
 #[test]
 fn bcd_snapshot_agrees_with_the_interpreter() {
     use bcd_meter::{BcdMeter, Request, Response};

@@ -1723,8 +1723,40 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         .filter(|(i, _)| lens.len() == 1 || code_at.map_or(true, |c| *i <= c))
         .map(|(_, p)| p)
         .collect();
+    let mut from = layout.first().copied().unwrap_or("");
     if !cs.is_empty() && g.chance(40) {
-        let _ = write!(cs, ", covers_from: {}", g.pick(&before));
+        from = *g.pick(&before);
+        let _ = write!(cs, ", covers_from: {from}");
+    }
+    // A CRC that takes each message's extra byte (MAVLink's CRC_EXTRA): where nothing
+    // escapes, every code has one length and the checksum covers the code. The byte is drawn
+    // per code, so a request and a response of one code take the same.
+    let pos = |part: &str| layout.iter().position(|p| *p == part);
+    let extra_by_code = cs.starts_with("algorithm: crc")
+        && escaping == Escaping::None
+        && matches!(lens.as_slice(), [n] if *n > 0)
+        && pos(from) <= pos("code")
+        && !responses
+            .iter()
+            .any(|r| r.extra.contains("code_from_request"))
+        && g.chance(70);
+    let mut extras: Vec<(Vec<u8>, u8)> = Vec::new();
+    let mut extra_of = |g: &mut G, code: &[u8]| -> String {
+        if !extra_by_code {
+            return String::new();
+        }
+        let x = match extras.iter().find(|(c, _)| c.as_slice() == code) {
+            Some((_, x)) => *x,
+            None => {
+                let x = g.rng.u8(..);
+                extras.push((code.to_vec(), x));
+                x
+            }
+        };
+        format!(", checksum_extra: {x}")
+    };
+    if extra_by_code {
+        cs.push_str(", extra: per_message");
     }
     if !cs.is_empty() {
         let _ = writeln!(framing, "  checksum: {{{cs}}}");
@@ -1739,9 +1771,10 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     for (c, m) in commands.iter().enumerate() {
         let resp: Vec<String> = lists[c].iter().map(|r| format!("r{r}")).collect();
         let fields: Vec<&str> = m.fields.iter().map(|f| f.yaml.as_str()).collect();
+        let x = extra_of(&mut g, &m.code);
         let _ = writeln!(
             y,
-            "  - {{name: {}, title: \"{}\", section: \"3\", code: \"{}\"{}{}, fields: [{}], responses: [{}]}}",
+            "  - {{name: {}, title: \"{}\", section: \"3\", code: \"{}\"{}{x}{}, fields: [{}], responses: [{}]}}",
             m.name,
             m.name,
             code_text(&m.code),
@@ -1754,9 +1787,10 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     y.push_str("responses:\n");
     for m in &responses {
         let fields: Vec<&str> = m.fields.iter().map(|f| f.yaml.as_str()).collect();
+        let x = extra_of(&mut g, &m.code);
         let _ = writeln!(
             y,
-            "  - {{name: {}, title: \"{}\", section: \"4\", code: \"{}\"{}, fields: [{}]}}",
+            "  - {{name: {}, title: \"{}\", section: \"4\", code: \"{}\"{}{x}, fields: [{}]}}",
             m.name,
             m.name,
             code_text(&m.code),
@@ -2021,6 +2055,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     };
     add(true, alg);
     add(f.checksum.covers_from > 0, "covers_from");
+    add(
+        f.checksum.extra.is_some(),
+        "checksum extra byte per message",
+    );
     add(
         f.checksum.len() > 1 && f.checksum.byte_order == ir::ByteOrder::Little,
         "checksum little-endian",

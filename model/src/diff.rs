@@ -1136,6 +1136,19 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
+        if m.checksum_extra != x.checksum_extra {
+            let show = |c: Option<u8>| c.map_or("none".to_owned(), |c| c.to_string());
+            self.wire(
+                "checksum_extra_changed",
+                format!("{path}.checksum_extra"),
+                format!(
+                    "{word} `{}`: checksum extra byte {} → {}",
+                    x.name,
+                    show(m.checksum_extra),
+                    show(x.checksum_extra)
+                ),
+            );
+        }
         if m.code_from_request != x.code_from_request {
             let show = |c: Option<u8>| {
                 c.map_or("its own".to_owned(), |c| {

@@ -467,16 +467,35 @@ fn protocol(p: &Protocol) -> String {
         length_rule(f.length_rule(Direction::Request)),
         length_rule(f.length_rule(Direction::Response))
     );
+    // With an extra byte per message (MAVLink's CRC_EXTRA), `fn` runs `plain` over the covered
+    // bytes and the byte of the message whose code they hold; `plain` alone is checked
+    // against the spec's check value.
+    let plain = checksum_fn(&c.algorithm);
+    let with_extra = match &c.extra {
+        None => "nil".to_owned(),
+        Some(e) => {
+            let arms: Vec<String> = e
+                .by_code
+                .iter()
+                .map(|(code, x)| format!("{{ {}, {x} }}", bytes(code)))
+                .collect();
+            format!(
+                "(function(plain, at, extras) return function(b, from, to) for _, e in ipairs(extras) do local code, same = e[1], true for k = 1, #code do if b[from + at + k - 1] ~= code[k] then same = false break end end if same then local t = setmetatable({{}}, {{ __index = function(_, i) if i == to then return e[2] end return b[i] end }}) return plain(t, from, to + 1) end end return plain(b, from, to) end end)({plain}, {}, {{ {} }})",
+                e.code_at,
+                arms.join(", ")
+            )
+        }
+    };
     let _ = writeln!(
         s,
-        "  checksum = {{ name = {}, width = {}, len = {}, order = {}, covers_from = {}, check = {},\n    fn = {} }},",
+        "  checksum = {{ name = {}, width = {}, len = {}, order = {}, covers_from = {}, check = {},\n    plain = {plain},\n    fn = {} }},",
         lua_str(&c.algorithm.name()),
         c.width,
         c.len(),
         order(c.byte_order),
         c.covers_from,
         c.check,
-        checksum_fn(&c.algorithm)
+        if c.extra.is_some() { with_extra } else { "nil".to_owned() }
     );
     s.push_str("  units = {\n");
     for u in &p.units {

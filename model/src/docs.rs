@@ -555,7 +555,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
         ChecksumAlgorithm::Crc(k) => {
             let _ = writeln!(
                 o,
-                "Checksum: CRC-{}{}, poly 0x{:X}, init 0x{:X}, refin {}, refout {}, xorout 0x{:X}, check 0x{:X} over \"123456789\"; sent {}.\n",
+                "Checksum: CRC-{}{}, poly 0x{:X}, init 0x{:X}, refin {}, refout {}, xorout 0x{:X}, check 0x{:X} over \"123456789\"; sent {}.{}\n",
                 k.width,
                 c.catalogue.as_ref().map(|n| format!(" ({n})")).unwrap_or_default(),
                 k.poly,
@@ -564,7 +564,12 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 k.refout,
                 k.xorout,
                 c.check,
-                if c.byte_order == ByteOrder::Big { "high byte first" } else { "low byte first" }
+                if c.byte_order == ByteOrder::Big { "high byte first" } else { "low byte first" },
+                if c.extra.is_some() {
+                    " After the bytes it covers the CRC takes one byte of the message's own, its checksum extra byte (MAVLink's CRC_EXTRA), which no frame carries."
+                } else {
+                    ""
+                }
             );
         }
         a => {
@@ -699,12 +704,16 @@ pub fn render(p: &Protocol, source: &str) -> String {
             );
             let _ = writeln!(
                 o,
-                "Code `{}`, {}, {} bytes per frame.{}{}\n",
+                "Code `{}`, {}, {} bytes per frame.{}{}{}\n",
                 m.code_hex(),
                 kind_name(m),
                 frame_bytes(p, m),
                 match m.code_from_request {
                     Some(or) => format!(" Its code is the request's with 0x{or:02X} set."),
+                    None => String::new(),
+                },
+                match m.checksum_extra {
+                    Some(x) => format!(" Checksum extra byte {x} (0x{x:02X})."),
                     None => String::new(),
                 },
                 if m.needs_request {

@@ -21,7 +21,6 @@
 
 use std::borrow::Cow;
 
-use crate::checksum;
 use crate::interp::{read_uint, write_uint, DecodeError, EscapeFault};
 use crate::ir::{Computed, EscapeKind, Framing, Protocol};
 
@@ -262,7 +261,7 @@ pub fn escape(p: &Protocol, frame: &[u8]) -> Vec<u8> {
             }
             let c = &f.checksum;
             let at = f.checksum_at(wire.len());
-            let sum = checksum::compute(&c.algorithm, wire.get(c.covers_from..at).unwrap_or(&[]));
+            let sum = c.compute(wire.get(c.covers_from..at).unwrap_or(&[]));
             write_uint(sum, &mut wire[at..at + c.len()], c.byte_order);
             wire
         }
@@ -318,10 +317,10 @@ fn normalize(p: &Protocol, wire: &[u8], out: &mut [u8], added: usize) -> Escaped
     });
     let (f, c) = (&p.framing, &p.framing.checksum);
     let at = f.checksum_at(wire.len());
-    let expected = checksum::compute(&c.algorithm, wire.get(c.covers_from..at).unwrap_or(&[]));
+    let expected = c.compute(wire.get(c.covers_from..at).unwrap_or(&[]));
     let found = read_uint(&wire[at..at + c.len()], c.byte_order);
     let own_at = f.checksum_at(out.len());
-    let own = checksum::compute(&c.algorithm, out.get(c.covers_from..own_at).unwrap_or(&[]));
+    let own = c.compute(out.get(c.covers_from..own_at).unwrap_or(&[]));
     let written = if expected == found { own } else { own ^ 1 };
     write_uint(written, &mut out[own_at..own_at + c.len()], c.byte_order);
     EscapedChecks {

@@ -465,9 +465,45 @@ pub struct Checksum {
     /// Offset of the first byte the checksum covers (it covers every byte from there up to
     /// itself): 0 unless the spec says `covers_from`.
     pub covers_from: usize,
+    /// A byte of each message's own the checksum takes after the bytes it covers (MAVLink's
+    /// CRC_EXTRA), found by the code the covered bytes hold.
+    pub extra: Option<ChecksumExtra>,
+}
+
+/// Each message's extra checksum byte, by its code (`framing.checksum.extra: per_message`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChecksumExtra {
+    /// Where the code sits in the covered bytes (every code has one length).
+    pub code_at: usize,
+    /// Each code and its byte, in message order, each code once.
+    pub by_code: Vec<(Vec<u8>, u8)>,
+}
+
+impl ChecksumExtra {
+    /// The extra byte of the message whose code `covered` holds; `None` for a code no message
+    /// has (such a frame is checked without one).
+    pub fn of(&self, covered: &[u8]) -> Option<u8> {
+        self.by_code.iter().find_map(|(code, x)| {
+            (covered.get(self.code_at..self.code_at + code.len()) == Some(code)).then_some(*x)
+        })
+    }
 }
 
 impl Checksum {
+    /// The checksum of the frame bytes it covers: its algorithm over them, and over the
+    /// message's extra byte after them where it takes one.
+    pub fn compute(&self, covered: &[u8]) -> u64 {
+        match self.extra.as_ref().and_then(|e| e.of(covered)) {
+            Some(x) => {
+                let mut with = Vec::with_capacity(covered.len() + 1);
+                with.extend_from_slice(covered);
+                with.push(x);
+                crate::checksum::compute(&self.algorithm, &with)
+            }
+            None => crate::checksum::compute(&self.algorithm, covered),
+        }
+    }
+
     /// No checksum: frames whose layout has none.
     pub fn none(byte_order: ByteOrder) -> Checksum {
         Checksum {
@@ -477,6 +513,7 @@ impl Checksum {
             catalogue: None,
             check: 0,
             covers_from: 0,
+            extra: None,
         }
     }
 
@@ -596,6 +633,9 @@ pub struct Message {
     /// The longest frame of this message: `layout.len` unless it has a repeated field, whose
     /// elements `layout` leaves out (a frame with none).
     pub max_len: usize,
+    /// The byte its checksum takes after the covered bytes (`checksum_extra`), where the
+    /// framing's checksum takes one.
+    pub checksum_extra: Option<u8>,
 }
 
 impl Message {

@@ -395,6 +395,18 @@ pub struct Checksum {
     /// every byte from there up to itself.
     #[serde(default)]
     pub covers_from: Option<Part>,
+    /// A byte of each message's own the checksum takes after the bytes it covers (MAVLink's
+    /// CRC_EXTRA): `per_message`, each message giving its `checksum_extra`.
+    #[serde(default)]
+    pub extra: Option<ChecksumExtra>,
+}
+
+/// Where a checksum's extra byte comes from (`framing.checksum.extra`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChecksumExtra {
+    /// Each message's `checksum_extra`.
+    PerMessage,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -509,6 +521,10 @@ pub struct Command {
     pub response_meanings: OpenMap,
     #[serde(default)]
     pub broadcast: Option<Broadcast>,
+    /// The byte the checksum takes after the frame's covered bytes, where
+    /// `framing.checksum.extra` is `per_message`.
+    #[serde(default)]
+    pub checksum_extra: Option<i64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -529,6 +545,9 @@ pub struct Response {
     /// code is the command's code with these bits set (Modbus exceptions: `0x80`).
     #[serde(default)]
     pub code_from_request: Option<CodeFromRequest>,
+    /// As [`Command::checksum_extra`].
+    #[serde(default)]
+    pub checksum_extra: Option<i64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -172,7 +172,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         );
     }
 
-    let framing = framing(&spec.framing, spec.byte_order, sink);
+    let mut framing = framing(&spec.framing, spec.byte_order, sink);
 
     // Commands and responses share one name space: examples refer to either by name.
     let all_names = spec
@@ -347,6 +347,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             needs_request: false,
             code_from_request: None,
             max_len: layout.len + (max_payload - payload_len),
+            checksum_extra: None,
         });
     }
 
@@ -401,8 +402,10 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             needs_request: r.needs_request,
             code_from_request,
             max_len: layout.len + (max_payload - payload_len),
+            checksum_extra: None,
         });
     }
+    checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
 
     check_overlaps(&commands, "commands", sink);
     check_overlaps(&responses, "responses", sink);
@@ -482,6 +485,131 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     proto.examples = examples(spec, &proto, sink);
     proto.device = crate::device::validate(spec.device.as_ref(), &proto, sink);
     sink.is_empty().then_some(proto)
+}
+
+/// `framing.checksum.extra: per_message` and each message's `checksum_extra` (MAVLink's
+/// CRC_EXTRA): the byte a CRC takes after the covered bytes, found by the code those bytes
+/// hold. The code must be covered, sit at one place (every code one length, no escaping to
+/// move it) and name one byte whichever direction has it.
+fn checksum_extras(
+    spec: &model::Spec,
+    framing: &mut Framing,
+    commands: &mut [Message],
+    responses: &mut [Message],
+    sink: &mut Sink,
+) {
+    let path = "framing.checksum.extra";
+    let Some(model::ChecksumExtra::PerMessage) =
+        spec.framing.checksum.as_ref().and_then(|c| c.extra)
+    else {
+        for (list, names) in [
+            (
+                "commands",
+                spec.commands
+                    .iter()
+                    .map(|c| (&c.name, c.checksum_extra))
+                    .collect::<Vec<_>>(),
+            ),
+            (
+                "responses",
+                spec.responses
+                    .iter()
+                    .map(|r| (&r.name, r.checksum_extra))
+                    .collect(),
+            ),
+        ] {
+            for (name, x) in names {
+                if x.is_some() {
+                    sink.error(
+                        format!("{list}.{name}.checksum_extra"),
+                        "a message's checksum extra byte needs `framing.checksum.extra: per_message`",
+                    );
+                }
+            }
+        }
+        return;
+    };
+    let errors = sink.items.len();
+    if !matches!(framing.checksum.algorithm, ChecksumAlgorithm::Crc(_)) {
+        sink.error(
+            path,
+            "an extra byte per message is taken by a CRC only (MAVLink's CRC_EXTRA)",
+        );
+    }
+    if framing.escaping.is_some() {
+        sink.error(
+            path,
+            "not with `escaping`: the code's place in the bytes the checksum covers would move",
+        );
+    }
+    let lens = all_code_lengths(
+        &framing.request.code_lengths,
+        &framing.response.code_lengths,
+    );
+    let head = framing.head(lens.first().copied().unwrap_or(0));
+    match lens.as_slice() {
+        [n] if *n > 0 => {}
+        _ => sink.error(
+            path,
+            format!("the extra byte is found by the code, so every message needs a code of one length; code_lengths give {lens:?}"),
+        ),
+    }
+    if head.code < framing.checksum.covers_from {
+        sink.error(
+            path,
+            "the checksum must cover the code, by which its extra byte is found",
+        );
+    }
+    let mut by_code: Vec<(Vec<u8>, u8, String)> = Vec::new();
+    for (list, ms, xs) in [
+        (
+            "commands",
+            &mut *commands,
+            spec.commands
+                .iter()
+                .map(|c| c.checksum_extra)
+                .collect::<Vec<_>>(),
+        ),
+        (
+            "responses",
+            &mut *responses,
+            spec.responses.iter().map(|r| r.checksum_extra).collect(),
+        ),
+    ] {
+        for (m, x) in ms.iter_mut().zip(xs) {
+            let at = format!("{list}.{}.checksum_extra", m.name);
+            let Some(x) = x else {
+                sink.error(
+                    at,
+                    "missing: `framing.checksum.extra: per_message` wants each message's byte",
+                );
+                continue;
+            };
+            let x = u8_of(x, &at, "a checksum extra byte", sink);
+            if m.code_from_request.is_some() {
+                sink.error(
+                    at,
+                    "not with `code_from_request`: the code is the request's",
+                );
+                continue;
+            }
+            match by_code.iter().find(|(c, _, _)| *c == m.code) {
+                Some((_, y, first)) if *y != x => sink.error(
+                    at,
+                    format!("{x} differs from {y}, {first}'s, which has the same code: the extra byte is found by the code"),
+                ),
+                Some(_) => {}
+                None => by_code.push((m.code.clone(), x, m.name.clone())),
+            }
+            m.checksum_extra = Some(x);
+        }
+    }
+    if sink.items.len() == errors {
+        framing.checksum.extra = Some(ChecksumExtra {
+            code_at: head.code - framing.checksum.covers_from,
+            by_code: by_code.into_iter().map(|(c, x, _)| (c, x)).collect(),
+        });
+    }
 }
 
 /// A reply's `code_from_request`: its code must be every answered command's code with those
@@ -1639,6 +1767,7 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
         catalogue: c.catalogue.clone(),
         check,
         covers_from: 0,
+        extra: None,
     }
 }
 

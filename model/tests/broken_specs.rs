@@ -272,6 +272,36 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "bcd_without_unit",
         &[("commands.set_clock.fields.year", "a BCD field needs a `unit`")],
     ),
+    // ---- a checksum's extra byte per message (made from valid/crc_extra.yaml)
+    (
+        "crc_extra_not_a_crc",
+        &[("framing.checksum.extra", "an extra byte per message is taken by a CRC only (MAVLink's CRC_EXTRA)")],
+    ),
+    (
+        "crc_extra_missing",
+        &[("commands.request_data_stream.checksum_extra", "missing: `framing.checksum.extra: per_message` wants each message's byte")],
+    ),
+    (
+        "crc_extra_without_framing",
+        &[
+            ("commands.ping.checksum_extra", "a message's checksum extra byte needs `framing.checksum.extra: per_message`"),
+            ("commands.request_data_stream.checksum_extra", "a message's checksum extra byte needs `framing.checksum.extra: per_message`"),
+            ("responses.ping_reply.checksum_extra", "a message's checksum extra byte needs `framing.checksum.extra: per_message`"),
+            ("responses.heartbeat.checksum_extra", "a message's checksum extra byte needs `framing.checksum.extra: per_message`"),
+        ],
+    ),
+    (
+        "crc_extra_differs_by_direction",
+        &[("responses.ping_reply.checksum_extra", "238 differs from 237, ping's, which has the same code: the extra byte is found by the code")],
+    ),
+    (
+        "crc_extra_too_large",
+        &[("responses.heartbeat.checksum_extra", "a checksum extra byte 300 does not fit in one byte (0..=255)")],
+    ),
+    (
+        "crc_extra_code_not_covered",
+        &[("framing.checksum.extra", "the checksum must cover the code, by which its extra byte is found")],
+    ),
     // ---- start bytes by direction (made from valid/msp_by_direction.yaml)
     (
         "start_by_direction_lengths_differ",

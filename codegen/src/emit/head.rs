@@ -214,6 +214,50 @@ pub(super) fn emit_checksum(p: &Protocol) -> TokenStream {
                 )
             };
             let (poly, init, xorout, check) = (lit(poly), lit(init), lit(xorout), lit(check));
+            let checksum_fn = match &c.extra {
+                None => quote! {
+                    /// The frame checksum over `bytes`.
+                    #[inline]
+                    pub fn checksum(bytes: &[u8]) -> #ty {
+                        CRC.checksum(bytes)
+                    }
+                },
+                Some(e) => {
+                    let (at, end) = (
+                        usize_lit(e.code_at),
+                        usize_lit(e.code_at + e.by_code.first().map_or(0, |c| c.0.len())),
+                    );
+                    let arms = e.by_code.iter().map(|(code, x)| {
+                        let code = code.iter().map(|b| hex_u8(*b));
+                        let x = hex_u8(*x);
+                        quote!(rt::Some(&[#(#code),*]) => rt::Some(#x),)
+                    });
+                    quote! {
+                        /// The byte of each message's own the checksum takes after the bytes
+                        /// it covers (`checksum_extra`), found by the code they hold.
+                        pub fn checksum_extra(bytes: &[u8]) -> rt::Option<u8> {
+                            match bytes.get(#at..#end) {
+                                #(#arms)*
+                                _ => rt::None,
+                            }
+                        }
+                        /// The frame checksum over `bytes` and their message's extra byte
+                        /// (without one for a code no message has).
+                        #[inline]
+                        pub fn checksum(bytes: &[u8]) -> #ty {
+                            match checksum_extra(bytes) {
+                                rt::Some(x) => {
+                                    let mut d = CRC.digest();
+                                    d.update(bytes);
+                                    d.update(&[x]);
+                                    d.finalize()
+                                }
+                                rt::None => CRC.checksum(bytes),
+                            }
+                        }
+                    }
+                }
+            };
             let name = c.catalogue.clone().unwrap_or_else(|| "CRC".into());
             let d = format!(" {name}: the frame checksum, over every byte before it.");
             quote! {
@@ -232,11 +276,7 @@ pub(super) fn emit_checksum(p: &Protocol) -> TokenStream {
                 // a const cost 40 % more per 4-byte CRC (BENCHMARKS.md, "What the benches
                 // taught the generator").
                 static CRC: rt::crc::Crc<#ty> = rt::crc::Crc::<#ty>::new(&CRC_ALGORITHM);
-                /// The frame checksum over `bytes`.
-                #[inline]
-                pub fn checksum(bytes: &[u8]) -> #ty {
-                    CRC.checksum(bytes)
-                }
+                #checksum_fn
             }
         }
         // Every sum took the path above.
