@@ -1,0 +1,217 @@
+//! `busspec sim --fault-rate`: simulated devices whose replies are damaged on a pseudo-terminal,
+//! as `soak --rate` damages a line. At rate 0 the replies are today's, byte for byte; at a high
+//! rate a master sees damaged and missing replies and `talk` fails with a clear error, never a
+//! wrong value; the same seed gives the same damage; a bad rate is refused.
+
+#![cfg(unix)]
+
+use std::io::{Read, Write};
+use std::path::Path;
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+use busspec_model::interp;
+use busspec_model::ir::{Direction, MessageRef};
+use busspec_model::load_file;
+
+const BIN: &str = env!("CARGO_BIN_EXE_busspec");
+
+#[path = "common/cli.rs"]
+mod cli;
+use cli::Sim;
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("busspec runs")
+}
+
+/// UB2 requests to 0x21, by command name, without fields.
+fn ub2_requests(names: &[&str]) -> Vec<Vec<u8>> {
+    let p = load_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("spec/ub2.yaml")).unwrap();
+    names
+        .iter()
+        .map(|name| {
+            let index = p.commands.iter().position(|c| c.name == *name).unwrap();
+            let r = MessageRef {
+                direction: Direction::Request,
+                index,
+            };
+            interp::encode(&p, r, 0x21, &[]).unwrap()
+        })
+        .collect()
+}
+
+/// Sends each request to the simulator on `path` and gathers what comes back within `wait`
+/// (past the longest late reply), one entry a request.
+fn exchange(path: &str, requests: &[Vec<u8>], wait: Duration) -> Vec<Vec<u8>> {
+    let mut port = serialport::new(path, 19200)
+        .timeout(Duration::from_millis(20))
+        .open()
+        .expect("the pseudo-terminal opens");
+    let mut buf = [0u8; 256];
+    requests
+        .iter()
+        .map(|request| {
+            port.write_all(request).unwrap();
+            let mut reply = Vec::new();
+            let until = Instant::now() + wait;
+            while Instant::now() < until {
+                if let Ok(n) = port.read(&mut buf) {
+                    reply.extend_from_slice(&buf[..n]);
+                }
+            }
+            reply
+        })
+        .collect()
+}
+
+const MIX: [&str; 6] = [
+    "get_firmware_version",
+    "get_status",
+    "get_firmware_version",
+    "get_status",
+    "get_firmware_version",
+    "get_status",
+];
+
+#[test]
+fn at_rate_zero_the_replies_are_those_of_a_simulator_without_faults() {
+    let requests = ub2_requests(&MIX);
+    let plain = Sim::start(&["ub2"]);
+    let zero = Sim::start_heard(&["ub2", "--fault-rate", "0", "--fault-seed", "5"]);
+    let wait = Duration::from_millis(150);
+    let want = exchange(&plain.path, &requests, wait);
+    let got = exchange(&zero.path, &requests, wait);
+    assert_eq!(got, want);
+    assert_eq!(
+        interp::format_hex(&got[0]),
+        "AA 21 41 61 32 30 31 30 30 34 33 33 2E 30 30 88",
+        "the firmware version reply"
+    );
+    assert!(got.iter().all(|r| !r.is_empty()));
+    let (status, said) = zero.stop();
+    assert_eq!(status, Some(0), "{said}");
+    let bytes: usize = got.iter().map(Vec::len).sum();
+    assert!(
+        said.contains(&format!(
+            "faults injected: 0 bytes corrupted, 0 dropped, 0 duplicated; 0 chunks truncated, 0 silenced, 0 late (of {bytes} bytes)"
+        )),
+        "{said}"
+    );
+}
+
+#[test]
+fn the_same_seed_damages_the_same_replies_the_same_way() {
+    let requests = ub2_requests(&MIX);
+    let clean = {
+        let sim = Sim::start(&["ub2"]);
+        exchange(&sim.path, &requests, Duration::from_millis(150))
+    };
+    let args = ["ub2", "--fault-rate", "0.2", "--fault-seed", "7"];
+    // A late UB2 reply comes 200 to 360 ms late: wait past it.
+    let wait = Duration::from_millis(700);
+    let (first, second) = std::thread::scope(|s| {
+        let one = s.spawn(|| {
+            let sim = Sim::start_heard(&args);
+            let got = exchange(&sim.path, &requests, wait);
+            (got, sim.stop())
+        });
+        let two = s.spawn(|| {
+            let sim = Sim::start_heard(&args);
+            let got = exchange(&sim.path, &requests, wait);
+            (got, sim.stop())
+        });
+        (one.join().unwrap(), two.join().unwrap())
+    });
+    assert_eq!(first.0, second.0, "the same damage");
+    assert_ne!(first.0, clean, "damaged or missing replies");
+    let (status, said) = &first.1;
+    assert_eq!(*status, Some(0), "{said}");
+    let line = |said: &str| {
+        said.lines()
+            .find(|l| l.starts_with("faults injected: "))
+            .unwrap_or_else(|| panic!("no faults line in {said}"))
+            .to_owned()
+    };
+    assert_eq!(line(said), line(&second.1 .1));
+    assert!(!line(said).starts_with("faults injected: 0 bytes corrupted, 0 dropped"));
+    // Another seed, other damage.
+    let sim = Sim::start(&["ub2", "--fault-rate", "0.2", "--fault-seed", "8"]);
+    assert_ne!(exchange(&sim.path, &requests, wait), first.0);
+}
+
+#[test]
+fn talk_to_a_faulty_simulator_fails_clearly_and_never_prints_a_wrong_value() {
+    let sim = Sim::start_heard(&["ub2", "--fault-rate", "0.2", "--fault-seed", "7"]);
+    let mut failed = 0;
+    for _ in 0..6 {
+        let out = run(&[
+            "talk",
+            "--port",
+            &sim.path,
+            "ub2",
+            "--address",
+            "0x21",
+            "get_firmware_version",
+        ]);
+        let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+        if out.status.success() {
+            let line: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+            assert_eq!(
+                line["fields"]["firmware_version"], "20100433.00",
+                "{stdout}"
+            );
+        } else {
+            failed += 1;
+            assert_eq!(out.status.code(), Some(1), "{stderr}");
+            assert!(stdout.is_empty(), "{stdout}");
+            assert!(
+                stderr.starts_with("error: ub2 get_firmware_version to address 0x21: no"),
+                "{stderr}"
+            );
+            assert!(!stderr.contains("panicked"), "{stderr}");
+        }
+    }
+    assert!(
+        failed > 0,
+        "a fifth of the bytes damaged, and every talk got through"
+    );
+    let (status, said) = sim.stop();
+    assert_eq!(status, Some(0), "{said}");
+    assert!(said.contains("faults injected: "), "{said}");
+}
+
+#[test]
+fn a_bad_fault_rate_is_refused_naming_the_option() {
+    let rate = |r: &'static str| vec!["sim", "ub2", "--pty", "--fault-rate", r];
+    for (args, says) in [
+        (rate("1.5"), "`1.5` is not a probability"),
+        (rate("-0.1"), "`-0.1` is not a probability"),
+        (rate("NaN"), "`NaN` is not a probability"),
+        (rate("lots"), "`lots` is not a number"),
+        (rate(""), "is not a number"),
+        (
+            vec!["sim", "ub2", "--pty", "--fault-seed", "3"],
+            "--fault-rate <RATE>",
+        ),
+        (
+            [rate("0.1"), vec!["--fault-seed", "x"]].concat(),
+            "--fault-seed",
+        ),
+    ] {
+        let out = run(&args);
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(err.contains("--fault-"), "{args:?} names the option: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?}: nothing served");
+    }
+}
