@@ -96,7 +96,7 @@ fn at_rate_zero_the_replies_are_those_of_a_simulator_without_faults() {
         "the firmware version reply"
     );
     assert!(got.iter().all(|r| !r.is_empty()));
-    let (status, said) = zero.stop();
+    let (status, said) = zero.stop("INT");
     assert_eq!(status, Some(0), "{said}");
     let bytes: usize = got.iter().map(Vec::len).sum();
     assert!(
@@ -121,12 +121,12 @@ fn the_same_seed_damages_the_same_replies_the_same_way() {
         let one = s.spawn(|| {
             let sim = Sim::start_heard(&args);
             let got = exchange(&sim.path, &requests, wait);
-            (got, sim.stop())
+            (got, sim.stop("TERM"))
         });
         let two = s.spawn(|| {
             let sim = Sim::start_heard(&args);
             let got = exchange(&sim.path, &requests, wait);
-            (got, sim.stop())
+            (got, sim.stop("TERM"))
         });
         (one.join().unwrap(), two.join().unwrap())
     });
@@ -147,33 +147,24 @@ fn the_same_seed_damages_the_same_replies_the_same_way() {
     assert_ne!(exchange(&sim.path, &requests, wait), first.0);
 }
 
-#[test]
-fn talk_to_a_faulty_simulator_fails_clearly_and_never_prints_a_wrong_value() {
-    let sim = Sim::start_heard(&["ub2", "--fault-rate", "0.2", "--fault-seed", "7"]);
+/// `talk ARGS` six times against `sim SIM_ARGS` damaging a fifth of the reply bytes: each call
+/// prints the reply `field` holding `value` or fails with exit status 1 and `error: WHAT: no
+/// ...`; some fail.
+fn talk_through_faults(sim_args: &[&str], args: &[&str], field: &str, value: &str, what: &str) {
+    let sim = Sim::start_heard(sim_args);
     let mut failed = 0;
     for _ in 0..6 {
-        let out = run(&[
-            "talk",
-            "--port",
-            &sim.path,
-            "ub2",
-            "--address",
-            "0x21",
-            "get_firmware_version",
-        ]);
+        let out = run(&[&["talk", "--port", &sim.path][..], args].concat());
         let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
         if out.status.success() {
             let line: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-            assert_eq!(
-                line["fields"]["firmware_version"], "20100433.00",
-                "{stdout}"
-            );
+            assert_eq!(line["fields"][field].to_string(), value, "{stdout}");
         } else {
             failed += 1;
             assert_eq!(out.status.code(), Some(1), "{stderr}");
             assert!(stdout.is_empty(), "{stdout}");
             assert!(
-                stderr.starts_with("error: ub2 get_firmware_version to address 0x21: no"),
+                stderr.starts_with(&format!("error: {what}: no")),
                 "{stderr}"
             );
             assert!(!stderr.contains("panicked"), "{stderr}");
@@ -183,9 +174,45 @@ fn talk_to_a_faulty_simulator_fails_clearly_and_never_prints_a_wrong_value() {
         failed > 0,
         "a fifth of the bytes damaged, and every talk got through"
     );
-    let (status, said) = sim.stop();
+    let (status, said) = sim.stop("INT");
     assert_eq!(status, Some(0), "{said}");
     assert!(said.contains("faults injected: "), "{said}");
+}
+
+#[test]
+fn talk_to_a_faulty_simulator_fails_clearly_and_never_prints_a_wrong_value() {
+    talk_through_faults(
+        &["ub2", "--fault-rate", "0.2", "--fault-seed", "7"],
+        &["ub2", "--address", "0x21", "get_firmware_version"],
+        "firmware_version",
+        "\"20100433.00\"",
+        "ub2 get_firmware_version to address 0x21",
+    );
+    // A spec's simulator (its late replies 1 to 1.8 s late: the spec's reply timeout).
+    talk_through_faults(
+        &[
+            "modbus",
+            "--spec",
+            "spec/modbus.yaml",
+            "--address",
+            "7",
+            "--fault-rate",
+            "0.2",
+        ],
+        &[
+            "--timeout",
+            "300",
+            "modbus",
+            "--address",
+            "7",
+            "read_input_registers",
+            "starting_address=0",
+            "quantity=2",
+        ],
+        "registers",
+        "[1000,2000]",
+        "modbus read_input_registers to address 0x07",
+    );
 }
 
 #[test]

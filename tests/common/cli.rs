@@ -61,12 +61,14 @@ impl Sim {
 }
 
 impl Sim {
-    /// Ends the simulator as Ctrl-C would (SIGTERM, which it handles alike) and returns its
-    /// exit status and what it said on stderr (started with [`Sim::start_heard`]).
-    pub fn stop(mut self) -> (Option<i32>, String) {
+    /// Ends the simulator with `signal` (`INT`, as Ctrl-C does, or `TERM`) and returns its exit
+    /// status and what it said on stderr (started with [`Sim::start_heard`]).
+    pub fn stop(mut self, signal: &str) -> (Option<i32>, String) {
         let pid = self.child.id().to_string();
-        let sent = Command::new("kill").args(["-TERM", &pid]).status();
-        assert!(sent.is_ok_and(|s| s.success()), "kill -TERM {pid}");
+        let sent = Command::new("kill")
+            .args([&format!("-{signal}"), &pid])
+            .status();
+        assert!(sent.is_ok_and(|s| s.success()), "kill -{signal} {pid}");
         let mut said = String::new();
         if let Some(mut e) = self.child.stderr.take() {
             e.read_to_string(&mut said).expect("stderr reads");
