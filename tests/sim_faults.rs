@@ -48,8 +48,8 @@ fn ub2_requests(names: &[&str]) -> Vec<Vec<u8>> {
         .collect()
 }
 
-/// Sends each request to the simulator on `path` and gathers what comes back within `wait`
-/// (past the longest late reply), one entry a request.
+/// Sends each request to the simulator on `path` and gathers what comes back within `wait`,
+/// one entry a request.
 fn exchange(path: &str, requests: &[Vec<u8>], wait: Duration) -> Vec<Vec<u8>> {
     let mut port = serialport::new(path, 19200)
         .timeout(Duration::from_millis(20))
@@ -81,14 +81,48 @@ const MIX: [&str; 6] = [
     "get_status",
 ];
 
+/// Replies come within milliseconds, late ones 200 to 360 ms late: a second per request leaves
+/// room for a loaded machine.
+const WAIT: Duration = Duration::from_millis(1000);
+
+/// What one simulator answered to [`MIX`], and its exit status and stderr once stopped.
+type Run = (Vec<Vec<u8>>, (Option<i32>, String));
+
+/// [`MIX`] through `busspec sim ARGS --pty`, each set of arguments its own simulator, all at
+/// once, each stopped by `signal` after.
+fn through(runs: &[&[&str]], signal: &str) -> Vec<Run> {
+    let requests = ub2_requests(&MIX);
+    std::thread::scope(|s| {
+        let runs: Vec<_> = runs
+            .iter()
+            .map(|args| {
+                let requests = &requests;
+                s.spawn(move || {
+                    let sim = Sim::start_heard(args);
+                    let got = exchange(&sim.path, requests, WAIT);
+                    (got, sim.stop(signal))
+                })
+            })
+            .collect();
+        runs.into_iter().map(|r| r.join().unwrap()).collect()
+    })
+}
+
+/// The `faults injected: ...` line of a simulator's stderr.
+fn faults_line(said: &str) -> &str {
+    said.lines()
+        .find(|l| l.starts_with("faults injected: "))
+        .unwrap_or_else(|| panic!("no faults line in {said}"))
+}
+
 #[test]
 fn at_rate_zero_the_replies_are_those_of_a_simulator_without_faults() {
-    let requests = ub2_requests(&MIX);
-    let plain = Sim::start(&["ub2"]);
-    let zero = Sim::start_heard(&["ub2", "--fault-rate", "0", "--fault-seed", "5"]);
-    let wait = Duration::from_millis(150);
-    let want = exchange(&plain.path, &requests, wait);
-    let got = exchange(&zero.path, &requests, wait);
+    let runs = through(
+        &[&["ub2"], &["ub2", "--fault-rate", "0", "--fault-seed", "5"]],
+        "INT",
+    );
+    let (want, (status, said)) = (&runs[0].0, &runs[1].1);
+    let got = &runs[1].0;
     assert_eq!(got, want);
     assert_eq!(
         interp::format_hex(&got[0]),
@@ -96,55 +130,34 @@ fn at_rate_zero_the_replies_are_those_of_a_simulator_without_faults() {
         "the firmware version reply"
     );
     assert!(got.iter().all(|r| !r.is_empty()));
-    let (status, said) = zero.stop("INT");
-    assert_eq!(status, Some(0), "{said}");
+    assert_eq!(*status, Some(0), "{said}");
     let bytes: usize = got.iter().map(Vec::len).sum();
-    assert!(
-        said.contains(&format!(
+    assert_eq!(
+        faults_line(said),
+        format!(
             "faults injected: 0 bytes corrupted, 0 dropped, 0 duplicated; 0 chunks truncated, 0 silenced, 0 late (of {bytes} bytes)"
-        )),
-        "{said}"
+        )
+    );
+    // Without --fault-rate, nothing said of faults.
+    assert!(
+        !runs[0].1 .1.contains("faults injected"),
+        "{}",
+        runs[0].1 .1
     );
 }
 
 #[test]
 fn the_same_seed_damages_the_same_replies_the_same_way() {
-    let requests = ub2_requests(&MIX);
-    let clean = {
-        let sim = Sim::start(&["ub2"]);
-        exchange(&sim.path, &requests, Duration::from_millis(150))
-    };
-    let args = ["ub2", "--fault-rate", "0.2", "--fault-seed", "7"];
-    // A late UB2 reply comes 200 to 360 ms late: wait past it.
-    let wait = Duration::from_millis(700);
-    let (first, second) = std::thread::scope(|s| {
-        let one = s.spawn(|| {
-            let sim = Sim::start_heard(&args);
-            let got = exchange(&sim.path, &requests, wait);
-            (got, sim.stop("TERM"))
-        });
-        let two = s.spawn(|| {
-            let sim = Sim::start_heard(&args);
-            let got = exchange(&sim.path, &requests, wait);
-            (got, sim.stop("TERM"))
-        });
-        (one.join().unwrap(), two.join().unwrap())
-    });
+    let seed = |n| ["ub2", "--fault-rate", "0.2", "--fault-seed", n];
+    let runs = through(&[&["ub2"], &seed("7"), &seed("7"), &seed("8")], "TERM");
+    let (clean, first, second, other) = (&runs[0], &runs[1], &runs[2], &runs[3]);
     assert_eq!(first.0, second.0, "the same damage");
-    assert_ne!(first.0, clean, "damaged or missing replies");
+    assert_ne!(first.0, clean.0, "damaged or missing replies");
+    assert_ne!(other.0, first.0, "another seed, other damage");
     let (status, said) = &first.1;
     assert_eq!(*status, Some(0), "{said}");
-    let line = |said: &str| {
-        said.lines()
-            .find(|l| l.starts_with("faults injected: "))
-            .unwrap_or_else(|| panic!("no faults line in {said}"))
-            .to_owned()
-    };
-    assert_eq!(line(said), line(&second.1 .1));
-    assert!(!line(said).starts_with("faults injected: 0 bytes corrupted, 0 dropped"));
-    // Another seed, other damage.
-    let sim = Sim::start(&["ub2", "--fault-rate", "0.2", "--fault-seed", "8"]);
-    assert_ne!(exchange(&sim.path, &requests, wait), first.0);
+    assert_eq!(faults_line(said), faults_line(&second.1 .1));
+    assert!(!faults_line(said).starts_with("faults injected: 0 bytes corrupted, 0 dropped"));
 }
 
 /// `talk ARGS` six times against `sim SIM_ARGS` damaging a fifth of the reply bytes: each call
