@@ -10,6 +10,7 @@ use busspec_devices::sim::ub2::Ub2Sim;
 use busspec_devices::soak;
 use busspec_devices::{Sd, Ub2};
 use busspec_link::clock::Clock;
+use busspec_link::fault::{FaultConfig, FaultyReplies};
 use busspec_link::master::{LinkError, Progress};
 use busspec_link::protocol::{byte_order_source, declared_byte_order};
 use busspec_link::sim::{serve, Device};
@@ -29,6 +30,31 @@ pub fn parse_address(text: &str) -> Result<u8, String> {
         None => t.parse::<u8>(),
     };
     parsed.map_err(|_| format!("address `{text}` is not a byte (decimal, or hex with 0x)"))
+}
+
+/// A byte-error rate for `sim --fault-rate`: a number from 0 to 1.
+pub fn parse_rate(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(r) if (0.0..=1.0).contains(&r) => Ok(r),
+        Ok(_) => Err(format!(
+            "`{text}` is not a probability: a byte-error rate lies from 0 to 1 (0.01 = 1 %)"
+        )),
+        Err(_) => Err(format!(
+            "`{text}` is not a number: a byte-error rate lies from 0 to 1 (0.01 = 1 %)"
+        )),
+    }
+}
+
+/// Where and how `busspec sim` serves.
+pub struct SimLine<'a> {
+    /// A new pseudo-terminal (its path printed).
+    pub pty: bool,
+    /// Or this serial port.
+    pub port: Option<&'a str>,
+    /// Log every frame on stderr.
+    pub verbose: bool,
+    /// Damage the replies: a byte-error rate as `soak --rate`'s, and the generator's seed.
+    pub faults: Option<(f64, u64)>,
 }
 
 /// The request frame for `command` with `name=value` arguments, through the same JSON contract
@@ -548,9 +574,7 @@ pub fn sim(
     protocol: &str,
     spec_file: Option<&Path>,
     addresses: &[u8],
-    pty: bool,
-    port: Option<&str>,
-    verbose: bool,
+    line: &SimLine,
     msb_first: bool,
 ) -> Result<(), String> {
     if msb_first && (protocol != Ub2::NAME || spec_file.is_some()) {
@@ -571,7 +595,8 @@ pub fn sim(
                 .iter()
                 .map(|&a| Ub2Sim::new(a).msb_first(msb_first))
                 .collect();
-            run_sim(Ub2::NAME, Ub2::BAUD, devices, pty, port, verbose)
+            let timeout = busspec_link::Timing::for_protocol::<Ub2>().reply_timeout;
+            run_sim(Ub2::NAME, Ub2::BAUD, timeout, devices, line)
         }
         p if p == Sd::NAME && spec_file.is_none() => {
             let addresses = if addresses.is_empty() {
@@ -581,7 +606,8 @@ pub fn sim(
             };
             check_addresses::<Sd>(&addresses)?;
             let devices: Vec<SdSim> = addresses.iter().map(|&a| SdSim::new(a)).collect();
-            run_sim(Sd::NAME, Sd::BAUD, devices, pty, port, verbose)
+            let timeout = busspec_link::Timing::for_protocol::<Sd>().reply_timeout;
+            run_sim(Sd::NAME, Sd::BAUD, timeout, devices, line)
         }
         // Every other protocol, built in or a spec file: its `device:` section.
         name => {
@@ -600,7 +626,11 @@ pub fn sim(
                 );
             }
             let devices = spec_sim::devices(&spec, &addresses);
-            run_sim(&spec.name, spec.serial.baud, devices, pty, port, verbose)
+            let timeout = busspec_link::busspec_link_core::master::default_reply_timeout(
+                spec.transactions.response_timeout_us,
+                spec.serial.baud,
+            );
+            run_sim(&spec.name, spec.serial.baud, timeout, devices, line)
         }
     }
 }
@@ -653,17 +683,26 @@ fn check_addresses<P: Protocol>(addresses: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Serves `devices` on the line until Ctrl-C (or SIGTERM), or until the line fails; with
+/// faults, their replies are damaged on the way out (late ones by 1 to 1.8 times `timeout`, the
+/// protocol's reply timeout) and what was injected is said on stderr at the end.
 fn run_sim<D: Device>(
     name: &str,
     baud: u32,
+    timeout: Duration,
     mut devices: Vec<D>,
-    pty: bool,
-    port: Option<&str>,
-    verbose: bool,
+    line: &SimLine,
 ) -> Result<(), String> {
+    // Before the path is printed: whoever reads it may stop the simulator at once.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let stop = std::sync::Arc::clone(&stop);
+        ctrlc::set_handler(move || stop.store(true, std::sync::atomic::Ordering::SeqCst))
+            .map_err(|e| format!("error: sim: cannot handle Ctrl-C: {e}"))?;
+    }
     // Keep the pty's other end open for as long as we serve, so the line never hangs up.
     let mut _slave = None;
-    let mut transport = match (pty, port) {
+    let transport = match (line.pty, line.port) {
         (true, _) => {
             let (ours, theirs) = serialport::TTYPort::pair()
                 .map_err(|e| format!("error: cannot open a pseudo-terminal: {e}"))?;
@@ -682,19 +721,28 @@ fn run_sim<D: Device>(
         .iter()
         .map(|d| format!("0x{:02X}", d.address()))
         .collect();
+    let clock = SystemClock::new();
+    let (rate, seed) = line.faults.unwrap_or((0.0, 1));
+    let config = FaultConfig::byte_error_rate(rate, timeout);
+    let mut transport = FaultyReplies::new(transport, clock, config, seed);
     eprintln!(
-        "{} simulator serving address{} {}",
+        "{} simulator serving address{} {}{}",
         name,
         if addresses.len() == 1 { "" } else { "es" },
-        addresses.join(", ")
+        addresses.join(", "),
+        match line.faults {
+            Some(_) =>
+                format!(", its replies damaged at a byte-error rate of {rate} (seed {seed})"),
+            None => String::new(),
+        }
     );
-    let clock = SystemClock::new();
-    serve(
+    let verbose = line.verbose;
+    let served = serve(
         &mut transport,
         &clock,
         &mut devices,
         Duration::from_millis(3),
-        || true,
+        || !stop.load(std::sync::atomic::Ordering::SeqCst),
         |req, reply| {
             if verbose {
                 eprintln!(
@@ -706,8 +754,11 @@ fn run_sim<D: Device>(
                 );
             }
         },
-    )
-    .map_err(|e| format!("error: serving the simulator: {e}"))
+    );
+    if line.faults.is_some() {
+        eprintln!("{}", transport.counts());
+    }
+    served.map_err(|e| format!("error: serving the simulator: {e}"))
 }
 
 /// `busspec soak`.

@@ -200,7 +200,7 @@ enum Command {
 }
 
 const SIM_HELP: &str = "\
-Run simulated devices on a line until killed.
+Run simulated devices on a line until Ctrl-C.
 
 With --pty, opens a pseudo-terminal pair and prints the path of the end to talk to (one line on
 stdout), e.g. /dev/pts/5; `busspec talk --port /dev/pts/5 ...` then talks to the simulators.
@@ -217,7 +217,15 @@ come from it, and requests past the end of a space or breaking the spec's rules 
 refusal it names (Modbus exceptions 2 and 3, Dynamixel's range error). Broadcasts are carried
 out and answered only where the spec says so; frames that do not decode, or are for another
 address, get no reply. A spec without the section answers each command with its reply and
-stores nothing.";
+stores nothing.
+
+--fault-rate RATE makes the devices a faulty line's far end, to test a master against: their
+replies (never the requests they read) are damaged at that byte-error rate (0.01 = 1 %), split
+as `busspec soak --rate` splits it: 60/20/20 over corrupted, dropped and duplicated bytes, and
+a fifth of it per reply for each of truncated, silenced and late (1 to 1.8 times the protocol's
+reply timeout). --fault-seed N (default 1) seeds it: the same requests in the same order get
+the same damage. Ctrl-C (or SIGTERM) ends the simulator; with --fault-rate it then prints
+`faults injected: ...` on stderr, as the soak reports it.";
 
 const TALK_HELP: &str = "\
 Run one transaction with a device and print its reply as one JSON line, in the shape `busspec
@@ -258,9 +266,16 @@ struct SimArgs {
     /// Serve on this serial port.
     #[arg(long, value_name = "PATH")]
     port: Option<String>,
-    /// Log every frame on stderr.
+    /// Log every frame on stderr (replies as the devices made them, before --fault-rate).
     #[arg(long)]
     verbose: bool,
+    /// Damage the replies at this byte-error rate (0.01 = 1 %), as `soak --rate` damages a
+    /// line: corrupted, dropped and duplicated bytes, truncated, silenced and late replies.
+    #[arg(long, value_name = "RATE", value_parser = link_cli::parse_rate, allow_negative_numbers = true)]
+    fault_rate: Option<f64>,
+    /// The seed of --fault-rate's damage: the same seed, the same damage (default 1).
+    #[arg(long, value_name = "N", requires = "fault_rate")]
+    fault_seed: Option<u64>,
     /// ub2: a device built to the document's examples, not its text: multi-byte numbers travel
     /// most significant byte first (erratum ub2-e01). `talk` refuses to move it.
     #[arg(long)]
@@ -439,9 +454,12 @@ fn main() -> ExitCode {
             &a.protocol,
             a.spec.as_deref(),
             &a.addresses,
-            a.pty,
-            a.port.as_deref(),
-            a.verbose,
+            &link_cli::SimLine {
+                pty: a.pty,
+                port: a.port.as_deref(),
+                verbose: a.verbose,
+                faults: a.fault_rate.map(|r| (r, a.fault_seed.unwrap_or(1))),
+            },
             a.msb_first,
         ),
         Command::Talk(a) => talk(a),

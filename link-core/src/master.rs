@@ -68,11 +68,7 @@ impl Timing {
     pub fn for_line<P: Link>(line: &Line) -> Timing {
         // Where the spec gives no reply time (UB2, SD): UB2 runs at 19,200 baud with a 10 ms
         // command gap; SD at 115,200 baud and 50 frames per second, one exchange every 20 ms.
-        let reply_timeout = match P::transactions().response_timeout_us {
-            Some(us) => Duration::from_micros(u64::from(us)),
-            None if P::baud() >= 100_000 => Duration::from_millis(50),
-            None => Duration::from_millis(200),
-        };
+        let reply_timeout = default_reply_timeout(P::transactions().response_timeout_us, P::baud());
         Timing {
             reply_timeout,
             byte_gap: Duration::from_millis(5),
@@ -80,6 +76,17 @@ impl Timing {
             inter_request_gap: P::request_gap(line.baud, line.bits_per_byte),
             attempts: 3,
         }
+    }
+}
+
+/// The reply timeout of a protocol whose spec declares `response_timeout_us` (or none) and
+/// whose document's line runs at `baud`: the declared one, else 50 ms from 100,000 baud and
+/// 200 ms below.
+pub fn default_reply_timeout(response_timeout_us: Option<u32>, baud: u32) -> Duration {
+    match response_timeout_us {
+        Some(us) => Duration::from_micros(u64::from(us)),
+        None if baud >= 100_000 => Duration::from_millis(50),
+        None => Duration::from_millis(200),
     }
 }
 

@@ -4,7 +4,8 @@
 //! replayed), damages what passes through: per byte it corrupts (XOR with a random non-zero
 //! byte), drops or duplicates; per chunk (one write, or one run of bytes read) it truncates,
 //! swallows whole (silence) or holds back past the reply timeout (a late reply). Each
-//! direction is damaged on its own.
+//! direction is damaged on its own. [`FaultyReplies`] does the same to what a simulator writes
+//! (its replies) and nothing to what it reads; [`Damage`] is the part both share.
 
 use std::collections::VecDeque;
 use std::io;
@@ -73,31 +74,33 @@ pub struct FaultCounts {
     pub bytes: u64,
 }
 
-/// A transport that damages traffic; see the module docs.
-pub struct Faulty<T, C> {
-    inner: T,
-    clock: C,
+impl std::fmt::Display for FaultCounts {
+    /// `faults injected: ...`, the line the soak reports and `busspec sim --fault-rate` ends with.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "faults injected: {} bytes corrupted, {} dropped, {} duplicated; {} chunks truncated, {} silenced, {} late (of {} bytes)",
+            self.corrupted, self.dropped, self.duplicated, self.truncated, self.silenced, self.delayed, self.bytes
+        )
+    }
+}
+
+/// The damage [`FaultConfig`] describes, done to one chunk at a time with a seeded generator:
+/// what [`Faulty`] does to the traffic through it, and [`FaultyReplies`] to what a simulator
+/// writes.
+pub struct Damage {
     rng: fastrand::Rng,
     config: FaultConfig,
-    /// Received bytes held back, with when they may be read.
-    held: VecDeque<(Duration, u8)>,
     pub counts: FaultCounts,
 }
 
-impl<T: Transport, C: Clock> Faulty<T, C> {
-    pub fn new(inner: T, clock: C, config: FaultConfig, seed: u64) -> Self {
-        Faulty {
-            inner,
-            clock,
+impl Damage {
+    pub fn new(config: FaultConfig, seed: u64) -> Self {
+        Damage {
             rng: fastrand::Rng::with_seed(seed),
             config,
-            held: VecDeque::new(),
             counts: FaultCounts::default(),
         }
-    }
-
-    pub fn inner_mut(&mut self) -> &mut T {
-        &mut self.inner
     }
 
     fn chance(&mut self, p: f64) -> bool {
@@ -105,7 +108,7 @@ impl<T: Transport, C: Clock> Faulty<T, C> {
     }
 
     /// Damages one chunk; `None` when it is swallowed whole.
-    fn damage(&mut self, bytes: &[u8]) -> Option<Vec<u8>> {
+    pub fn chunk(&mut self, bytes: &[u8]) -> Option<Vec<u8>> {
         self.counts.bytes += bytes.len() as u64;
         if self.chance(self.config.silence) {
             self.counts.silenced += 1;
@@ -136,14 +139,57 @@ impl<T: Transport, C: Clock> Faulty<T, C> {
         }
         Some(out)
     }
+
+    /// How late a chunk comes: `None` (on time), or a delay within the config's `late_by`.
+    pub fn delay(&mut self) -> Option<Duration> {
+        if !self.chance(self.config.late) {
+            return None;
+        }
+        self.counts.delayed += 1;
+        let (lo, hi) = self.config.late_by;
+        let span = hi.saturating_sub(lo).as_nanos() as u64;
+        let extra = if span == 0 { 0 } else { self.rng.u64(0..span) };
+        Some(lo + Duration::from_nanos(extra))
+    }
+}
+
+/// A transport that damages traffic; see the module docs.
+pub struct Faulty<T, C> {
+    inner: T,
+    clock: C,
+    damage: Damage,
+    replies_only: bool,
+    /// Received bytes held back, with when they may be read.
+    held: VecDeque<(Duration, u8)>,
+}
+
+impl<T: Transport, C: Clock> Faulty<T, C> {
+    pub fn new(inner: T, clock: C, config: FaultConfig, seed: u64) -> Self {
+        Faulty {
+            inner,
+            clock,
+            damage: Damage::new(config, seed),
+            replies_only: config.replies_only,
+            held: VecDeque::new(),
+        }
+    }
+
+    pub fn inner_mut(&mut self) -> &mut T {
+        &mut self.inner
+    }
+
+    /// What was injected so far.
+    pub fn counts(&self) -> FaultCounts {
+        self.damage.counts
+    }
 }
 
 impl<T: Transport, C: Clock> Transport for Faulty<T, C> {
     fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
-        if self.config.replies_only {
+        if self.replies_only {
             return self.inner.write(bytes);
         }
-        match self.damage(bytes) {
+        match self.damage.chunk(bytes) {
             Some(out) if !out.is_empty() => self.inner.write(&out),
             // Nothing reaches the line, but sending still takes the master its time.
             _ => self.inner.write(&[]),
@@ -181,16 +227,12 @@ impl<T: Transport, C: Clock> Transport for Faulty<T, C> {
                 continue;
             }
             let got = chunk[..n].to_vec();
-            let Some(out) = self.damage(&got) else {
+            let Some(out) = self.damage.chunk(&got) else {
                 continue;
             };
             let mut at = self.clock.now();
-            if self.chance(self.config.late) {
-                self.counts.delayed += 1;
-                let (lo, hi) = self.config.late_by;
-                let span = hi.saturating_sub(lo).as_nanos() as u64;
-                let extra = if span == 0 { 0 } else { self.rng.u64(0..span) };
-                at += lo + Duration::from_nanos(extra);
+            if let Some(d) = self.damage.delay() {
+                at += d;
             }
             let at = self.held.back().map_or(at, |&(t, _)| t.max(at));
             self.held.extend(out.into_iter().map(|b| (at, b)));
@@ -203,5 +245,227 @@ impl<T: Transport, C: Clock> Transport for Faulty<T, C> {
             self.held.pop_front();
         }
         self.inner.clear_input()
+    }
+}
+
+/// A simulator's end of a line, damaging what it writes (its replies) as [`Faulty`] damages a
+/// chunk; what it reads (the requests) passes untouched. A late reply is held back and written
+/// by the first `read` (or `write`) after its time, the replies written after it behind it, so
+/// the simulator goes on reading requests meanwhile. What `busspec sim --fault-rate` serves
+/// through.
+pub struct FaultyReplies<T, C> {
+    inner: T,
+    clock: C,
+    damage: Damage,
+    /// Late replies, and those behind them, with when they may go out.
+    held: VecDeque<(Duration, Vec<u8>)>,
+}
+
+impl<T: Transport, C: Clock> FaultyReplies<T, C> {
+    pub fn new(inner: T, clock: C, config: FaultConfig, seed: u64) -> Self {
+        FaultyReplies {
+            inner,
+            clock,
+            damage: Damage::new(config, seed),
+            held: VecDeque::new(),
+        }
+    }
+
+    /// What was injected so far.
+    pub fn counts(&self) -> FaultCounts {
+        self.damage.counts
+    }
+
+    /// Writes the held replies whose time has come.
+    fn release(&mut self) -> io::Result<()> {
+        let now = self.clock.now();
+        while self.held.front().is_some_and(|(t, _)| *t <= now) {
+            if let Some((_, bytes)) = self.held.pop_front() {
+                self.inner.write(&bytes)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<T: Transport, C: Clock> Transport for FaultyReplies<T, C> {
+    fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.release()?;
+        let Some(out) = self.damage.chunk(bytes) else {
+            return Ok(());
+        };
+        let delay = self.damage.delay();
+        if out.is_empty() {
+            return Ok(());
+        }
+        match (delay, self.held.back()) {
+            (None, None) => self.inner.write(&out),
+            (delay, last) => {
+                let at = self.clock.now() + delay.unwrap_or_default();
+                let at = last.map_or(at, |(t, _)| at.max(*t));
+                self.held.push_back((at, out));
+                Ok(())
+            }
+        }
+    }
+
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
+        self.release()?;
+        let timeout = match self.held.front() {
+            Some((t, _)) => timeout.min(t.saturating_sub(self.clock.now())),
+            None => timeout,
+        };
+        let n = self.inner.read(buf, timeout)?;
+        self.release()?;
+        Ok(n)
+    }
+
+    fn clear_input(&mut self) -> io::Result<()> {
+        self.inner.clear_input()
+    }
+
+    fn set_driver_enable(&mut self, on: bool) -> io::Result<()> {
+        self.inner.set_driver_enable(on)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clock::SimClock;
+
+    /// Records what is written; reads hand out `incoming`.
+    #[derive(Default)]
+    struct Wire {
+        written: Vec<Vec<u8>>,
+        incoming: Vec<u8>,
+    }
+
+    impl Transport for Wire {
+        fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
+            self.written.push(bytes.to_vec());
+            Ok(())
+        }
+        fn read(&mut self, buf: &mut [u8], _timeout: Duration) -> io::Result<usize> {
+            let n = buf.len().min(self.incoming.len());
+            buf[..n].copy_from_slice(&self.incoming[..n]);
+            self.incoming.drain(..n);
+            Ok(n)
+        }
+        fn clear_input(&mut self) -> io::Result<()> {
+            Ok(())
+        }
+    }
+
+    fn ms(n: u64) -> Duration {
+        Duration::from_millis(n)
+    }
+
+    /// 200 replies written 10 ms apart, as a simulator would (reading between them), and all
+    /// that has gone out a second after the last.
+    fn replies(rate: f64, seed: u64) -> (Vec<Vec<u8>>, FaultCounts) {
+        let clock = SimClock::new();
+        let config = FaultConfig::byte_error_rate(rate, ms(200));
+        let mut line = FaultyReplies::new(Wire::default(), clock.clone(), config, seed);
+        let mut buf = [0u8; 8];
+        for i in 0..200u8 {
+            line.write(&[0xAA, i, 1, 2, 3, 4, 5, 6, 7, i ^ 0x55])
+                .unwrap();
+            clock.advance(ms(10));
+            line.read(&mut buf, ms(3)).unwrap();
+        }
+        clock.advance(ms(1000));
+        line.read(&mut buf, ms(3)).unwrap();
+        let counts = line.counts();
+        (line.inner.written, counts)
+    }
+
+    #[test]
+    fn at_rate_zero_replies_go_out_as_written() {
+        let (written, counts) = replies(0.0, 3);
+        assert_eq!(written.len(), 200);
+        assert!(written
+            .iter()
+            .enumerate()
+            .all(|(i, w)| w[..] == [0xAA, i as u8, 1, 2, 3, 4, 5, 6, 7, i as u8 ^ 0x55]));
+        assert_eq!(
+            counts,
+            FaultCounts {
+                bytes: 2000,
+                ..FaultCounts::default()
+            }
+        );
+    }
+
+    #[test]
+    fn replies_are_damaged_the_same_way_for_the_same_seed() {
+        let (a, counts) = replies(0.2, 7);
+        assert_eq!(replies(0.2, 7), (a.clone(), counts));
+        assert_ne!(replies(0.2, 8).0, a);
+        // Every kind of fault, the silenced replies not written at all.
+        let c = counts;
+        assert!(
+            c.corrupted > 0 && c.dropped > 0 && c.duplicated > 0,
+            "{c:?}"
+        );
+        assert!(c.truncated > 0 && c.silenced > 0 && c.delayed > 0, "{c:?}");
+        // (A reply all of whose bytes are dropped is not written either: none is, here.)
+        assert_eq!(a.len() as u64, 200 - c.silenced);
+        assert_eq!(
+            c.to_string(),
+            format!(
+                "faults injected: {} bytes corrupted, {} dropped, {} duplicated; {} chunks truncated, {} silenced, {} late (of 2000 bytes)",
+                c.corrupted, c.dropped, c.duplicated, c.truncated, c.silenced, c.delayed
+            )
+        );
+    }
+
+    #[test]
+    fn a_late_reply_does_not_hold_up_the_requests_after_it() {
+        let clock = SimClock::new();
+        let config = FaultConfig {
+            late: 1.0,
+            late_by: (ms(200), ms(200)),
+            ..FaultConfig::none()
+        };
+        let wire = Wire {
+            incoming: vec![1, 2, 3],
+            ..Wire::default()
+        };
+        let mut line = FaultyReplies::new(wire, clock.clone(), config, 1);
+        line.write(&[0xAA, 1]).unwrap();
+        // The simulator is not kept waiting: the next request is read at once.
+        assert_eq!(clock.now(), Duration::ZERO);
+        let mut buf = [0u8; 8];
+        assert_eq!(line.read(&mut buf, ms(3)).unwrap(), 3);
+        assert!(line.inner.written.is_empty());
+        // A reply written meanwhile goes out behind the late one, not before it.
+        line.write(&[0xAA, 2]).unwrap();
+        clock.advance(ms(199));
+        line.read(&mut buf, ms(3)).unwrap();
+        assert!(line.inner.written.is_empty());
+        clock.advance(ms(201));
+        line.read(&mut buf, ms(3)).unwrap();
+        assert_eq!(line.inner.written, [vec![0xAA, 1], vec![0xAA, 2]]);
+        assert_eq!(line.counts().delayed, 2);
+    }
+
+    #[test]
+    fn what_the_simulator_reads_is_never_damaged() {
+        let request: Vec<u8> = (0..=255).collect();
+        let wire = Wire {
+            incoming: request.clone(),
+            ..Wire::default()
+        };
+        let mut line = FaultyReplies::new(
+            wire,
+            SimClock::new(),
+            FaultConfig::byte_error_rate(1.0, Duration::ZERO),
+            1,
+        );
+        let mut got = vec![0u8; 256];
+        assert_eq!(line.read(&mut got, Duration::from_millis(5)).unwrap(), 256);
+        assert_eq!(got, request);
+        assert_eq!(line.counts(), FaultCounts::default());
     }
 }

@@ -114,11 +114,7 @@ impl fmt::Display for SoakReport {
             self.sends,
             self.bus_time.as_secs_f64()
         )?;
-        writeln!(
-            f,
-            "  faults injected: {} bytes corrupted, {} dropped, {} duplicated; {} chunks truncated, {} silenced, {} late (of {} bytes)",
-            self.faults.corrupted, self.faults.dropped, self.faults.duplicated, self.faults.truncated, self.faults.silenced, self.faults.delayed, self.faults.bytes
-        )?;
+        writeln!(f, "  {}", self.faults)?;
         writeln!(
             f,
             "  completed first time      {:>8} ({:.2} %)",
@@ -311,7 +307,7 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
         }
     }
     report.sends = *sends.borrow();
-    report.faults = master.transport_mut().counts;
+    report.faults = master.transport_mut().counts();
     report.bus_time = clock.now();
     report
 }

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Command, Stdio};
 
 /// Whether tshark runs here. Where it does not, the check is skipped with a word on stderr,
@@ -33,13 +33,22 @@ pub struct Sim {
 
 impl Sim {
     pub fn start(args: &[&str]) -> Sim {
+        Sim::spawn(args, Stdio::null())
+    }
+
+    /// As [`Sim::start`], keeping what it says on stderr for [`Sim::stop`].
+    pub fn start_heard(args: &[&str]) -> Sim {
+        Sim::spawn(args, Stdio::piped())
+    }
+
+    fn spawn(args: &[&str], stderr: Stdio) -> Sim {
         let mut child = Command::new(env!("CARGO_BIN_EXE_busspec"))
             .arg("sim")
             .args(args)
             .arg("--pty")
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .stdout(Stdio::piped())
-            .stderr(Stdio::null())
+            .stderr(stderr)
             .spawn()
             .expect("busspec runs");
         let mut line = String::new();
@@ -48,6 +57,24 @@ impl Sim {
         let path = line.trim().to_owned();
         assert!(path.starts_with("/dev/"), "sim printed {line:?}");
         Sim { child, path }
+    }
+}
+
+impl Sim {
+    /// Ends the simulator with `signal` (`INT`, as Ctrl-C does, or `TERM`) and returns its exit
+    /// status and what it said on stderr (started with [`Sim::start_heard`]).
+    pub fn stop(mut self, signal: &str) -> (Option<i32>, String) {
+        let pid = self.child.id().to_string();
+        let sent = Command::new("kill")
+            .args([&format!("-{signal}"), &pid])
+            .status();
+        assert!(sent.is_ok_and(|s| s.success()), "kill -{signal} {pid}");
+        let mut said = String::new();
+        if let Some(mut e) = self.child.stderr.take() {
+            e.read_to_string(&mut said).expect("stderr reads");
+        }
+        let status = self.child.wait().expect("the simulator ends");
+        (status.code(), said)
     }
 }
 
