@@ -994,6 +994,11 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
     let mut shift = 0usize;
     for f in &m.fields {
         let offset = at.payload + f.offset + shift;
+        // A record whose last field's bytes a field gives: as wide as the frame says.
+        let f = &*interp::record_sized(m, f, |name| match frame.get(name) {
+            Some(Raw::Int(v)) => Some(*v),
+            _ => None,
+        });
         if let (Some(_), Some(n)) = (&f.repeat, frame.get(&f.name).and_then(Raw::elements)) {
             shift += f.elements_len(n);
         }
