@@ -1559,6 +1559,7 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
 }
 
 /// A repeated record's field index, the record as the frame sizes it, and its records.
+#[cfg(feature = "tools")]
 type SizedRecords<'f, 'v> = (usize, Cow<'f, Field>, &'v [Vec<i64>]);
 
 /// Repeated record `f` of `m` as a frame has it: its last field as many bytes wide as the

@@ -1166,14 +1166,6 @@ impl Protocol {
                 }
             }
         }
-        for m in self.commands.iter().chain(&self.responses) {
-            for f in m.fields.iter().filter(|f| f.record_bytes_from().is_some()) {
-                gaps.push(format!(
-                    "`{}.{}`: records whose width a field gives",
-                    m.name, f.name
-                ));
-            }
-        }
         for r in &self.responses {
             let rels = r
                 .fields
