@@ -4,7 +4,7 @@
 //! returns normally otherwise.
 //!
 //! For each protocol, one generic body over [`Protocol`] per target, with a thin wrapper per
-//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`], [`pelco_d`], [`pelco_p`], [`crsf`]) that the fuzz
+//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`], [`pelco_d`], [`pelco_p`], [`crsf`], [`dynamixel2`]) that the fuzz
 //! targets call by name:
 //! * [`decode`]: arbitrary bytes through `decode_request`, `decode_response` and
 //!   `decode_reply`; errors point inside the frame, and every accepted frame
@@ -27,7 +27,7 @@
 //! Modbus and Dynamixel have the generated `decode` and `stream` bodies
 //! (`modbus_generated_decode`, ...), and [`interpreted`] has a decode and a stream body each
 //! for the interpreter on its own (`modbus_decode`, ...), from before the generator emitted
-//! them. Pelco D, Pelco P and CRSF have the generated `decode` and `stream` bodies alone
+//! them. Pelco D, Pelco P, CRSF and Dynamixel 2.0 have the generated `decode` and `stream` bodies alone
 //! (`pelco_d_generated_decode`, ...).
 //!
 //! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
@@ -164,6 +164,14 @@ pub const TARGETS: &[Target] = &[
         name: "crsf_generated_stream",
         body: crsf::generated_stream,
     },
+    Target {
+        name: "dynamixel2_generated_decode",
+        body: dynamixel2::generated_decode,
+    },
+    Target {
+        name: "dynamixel2_generated_stream",
+        body: dynamixel2::generated_stream,
+    },
 ];
 
 /// The bodies for Modbus RTU, as the fuzz targets call them: the interpreter's own
@@ -226,6 +234,22 @@ pub mod pelco_p {
     /// [`crate::stream`] for the generated Pelco P.
     pub fn generated_stream(data: &[u8]) {
         crate::stream::<PelcoP>(data)
+    }
+}
+
+/// The bodies for Dynamixel 2.0, as the fuzz targets call them: the generated code's (byte
+/// stuffing, CRC-16, records whose width a field gives; [`crate::decode`] and [`crate::stream`]
+/// hold it to the interpreter).
+pub mod dynamixel2 {
+    use busspec_protocols::dynamixel2::Dynamixel2;
+
+    /// [`crate::decode`] for the generated Dynamixel 2.0.
+    pub fn generated_decode(data: &[u8]) {
+        crate::decode::<Dynamixel2>(data)
+    }
+    /// [`crate::stream`] for the generated Dynamixel 2.0.
+    pub fn generated_stream(data: &[u8]) {
+        crate::stream::<Dynamixel2>(data)
     }
 }
 
