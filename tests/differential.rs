@@ -13,6 +13,7 @@ mod common;
 use busspec_model::ir::Direction;
 use busspec_protocols::crsf::Crsf;
 use busspec_protocols::dynamixel::Dynamixel;
+use busspec_protocols::dynamixel2::Dynamixel2;
 use busspec_protocols::modbus::Modbus;
 use busspec_protocols::sd::Sd;
 use busspec_protocols::ub2::Ub2;
@@ -129,5 +130,21 @@ fn crsf_generated_and_interpreter_agree_on_random_inputs() {
     assert!(
         accepted * 8 > n,
         "only {accepted} of {n} random CRSF inputs decoded"
+    );
+}
+
+/// Dynamixel 2.0: byte stuffing, CRC-16, SYNC_WRITE's records whose width `data_length`
+/// gives, the status packets only their request tells apart; both engines alike.
+#[test]
+fn dynamixel2_generated_and_interpreter_agree_on_every_example() {
+    every_example::<Dynamixel2>();
+}
+
+#[test]
+fn dynamixel2_generated_and_interpreter_agree_on_random_inputs() {
+    let (accepted, n) = random::<Dynamixel2>(0xD2);
+    assert!(
+        accepted * 8 > n,
+        "only {accepted} of {n} random Dynamixel 2.0 inputs decoded"
     );
 }
