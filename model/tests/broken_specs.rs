@@ -77,6 +77,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("commands.trim.fields.offsets.fields.offset.bytes", "`width` is not an unsigned number field the sender sets")],
     ),
     (
+        "record_bytes_by_request",
+        &[("responses.trim_reply.fields.vals.fields.v.bytes", "take no count from the request")],
+    ),
+    (
         "record_bytes_without_length",
         &[
             ("commands.sync_write.fields.blocks.fields.data.bytes", "needs a length field (framing.length)"),
