@@ -175,6 +175,15 @@ pub enum DecodeError {
         expected: String,
         found: i64,
     },
+    /// The field `field` at `offset` gives each record's last field `found` bytes (`bytes:`),
+    /// outside `1..=most`: the frame's records cannot be laid out.
+    BadWidth {
+        message: String,
+        field: String,
+        offset: usize,
+        found: i64,
+        most: usize,
+    },
     /// A count field says the elements of `list` take `found` bytes; the frame's length gives
     /// them `expected`.
     ByteCount {
@@ -340,6 +349,10 @@ impl fmt::Display for DecodeError {
             DecodeError::BadCount { message, field, offset, expected, found } => write!(
                 f,
                 "{message}.{field} at offset {offset}: {found} elements, expected {expected}"
+            ),
+            DecodeError::BadWidth { message, field, offset, found, most } => write!(
+                f,
+                "{message}.{field} at offset {offset} is {found}: each record's last field takes 1..={most} bytes"
             ),
             DecodeError::ByteCount { message, field, offset, list, expected, found } => write!(
                 f,
@@ -1450,14 +1463,12 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
                 let v = read_uint(wire.get(o..o + c.width).unwrap_or(&[]), c.byte_order) as i64;
                 let most = f.record.last().map_or(1, |g| g.width) as i64;
                 if !(1..=most).contains(&v) {
-                    return Err(DecodeError::OutOfRange {
+                    return Err(DecodeError::BadWidth {
                         message: m.name.clone(),
                         field: c.name.clone(),
                         offset: o,
                         found: v,
-                        min: 1,
-                        max: most,
-                        kind: NumKind::Int,
+                        most: most as usize,
                     });
                 }
                 sized = f.record_in_frame(v as usize);

@@ -82,12 +82,12 @@ fn a_width_outside_one_to_the_type_is_refused_at_the_width_field() {
         wire[n - 1] = s;
         let e = interp::decode(&p, Some(Direction::Request), None, &wire).unwrap_err();
         assert!(
-            matches!(&e, DecodeError::OutOfRange { field, offset: 6, min: 1, max: 4, .. } if field == "data_length"),
+            matches!(&e, DecodeError::BadWidth { field, offset: 6, most: 4, .. } if field == "data_length"),
             "{e}"
         );
         assert_eq!(
             e.to_string(),
-            format!("sync_write.data_length at offset 6 is {len}, outside its range 1..=4")
+            format!("sync_write.data_length at offset 6 is {len}: each record's last field takes 1..=4 bytes")
         );
     }
     // Three bytes of records at a width of two: no whole record.

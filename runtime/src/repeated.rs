@@ -557,14 +557,12 @@ impl RepeatAt {
         if let CountBy::EndSized(s) = self.count {
             let v = s.field.read(frame).unwrap_or(0);
             if v < 1 || v > s.most as u64 {
-                return Err(DecodeError::OutOfRange {
+                return Err(DecodeError::BadWidth {
                     message: self.message,
                     field: s.field.name,
                     offset: s.field.at,
                     found: v as i64,
-                    min: 1,
-                    max: s.most as i64,
-                    kind: crate::NumKind::Int,
+                    most: s.most,
                 });
             }
         }

@@ -347,6 +347,12 @@ fn check_error(e: &DecodeError, len: usize) {
         | DecodeError::BadEscape { offset, .. } => {
             assert!(offset < len, "{e}")
         }
+        DecodeError::BadWidth {
+            offset,
+            found,
+            most,
+            ..
+        } => assert!(offset < len && !(1..=most as i64).contains(&found), "{e}"),
         DecodeError::LengthMismatch {
             offset,
             expected,
