@@ -113,6 +113,18 @@ struct G {
     sized: bool,
 }
 
+/// The types a record's field may have: name, bytes, signed.
+const RECORD_FIELD_TYPES: [(&str, usize, bool); 8] = [
+    ("u8", 1, false),
+    ("i8", 1, true),
+    ("u16", 2, false),
+    ("i16", 2, true),
+    ("u24", 3, false),
+    ("i24", 3, true),
+    ("u32", 4, false),
+    ("i32", 4, true),
+];
+
 fn limits(width: usize, signed: bool) -> (i64, i64) {
     interp::raw_limits(8 * width as u32, signed)
 }
@@ -586,16 +598,7 @@ impl G {
     fn sized_records(&mut self, fields: &mut Vec<Gf>) {
         let wname = format!("f{}", fields.len());
         let &(wty, ww) = self.pick(&[("u8", 1usize), ("u16", 2)]);
-        let &(ty, most, signed) = self.pick(&[
-            ("u8", 1usize, false),
-            ("i8", 1, true),
-            ("u16", 2, false),
-            ("i16", 2, true),
-            ("u24", 3, false),
-            ("i24", 3, true),
-            ("u32", 4, false),
-            ("i32", 4, true),
-        ]);
+        let &(ty, most, signed) = self.pick(&RECORD_FIELD_TYPES);
         let mut wy = format!("{{name: {wname}, type: {wty}, unit: count");
         if self.chance(50) {
             let _ = write!(wy, ", range: {{min: 1, max: {most}}}");
@@ -644,16 +647,7 @@ impl G {
         let mut items = Vec::new();
         let mut width = 0;
         for j in 0..self.rng.usize(1..=3) {
-            let &(ty, w, signed) = self.pick(&[
-                ("u8", 1, false),
-                ("i8", 1, true),
-                ("u16", 2, false),
-                ("i16", 2, true),
-                ("u24", 3, false),
-                ("i24", 3, true),
-                ("u32", 4, false),
-                ("i32", 4, true),
-            ]);
+            let &(ty, w, signed) = self.pick(&RECORD_FIELD_TYPES);
             width += w;
             let name = format!("r{j}");
             let mut y = match self.rng.u8(..10) {

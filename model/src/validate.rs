@@ -2254,6 +2254,12 @@ fn record_field(
     out
 }
 
+/// An unsigned plain number field: what counts a list or gives a record's width (no sign,
+/// 64-bit or float type, BCD, text, bits or list).
+fn plain_unsigned(f: &Field) -> bool {
+    !f.signed && !f.is_wide() && !f.bcd && !f.is_ascii() && f.bits.is_empty() && !f.is_list()
+}
+
 /// A record's last field whose bytes an earlier field of the message gives (`bytes:
 /// data_length`, Dynamixel SYNC_WRITE): that field's index, where it is an unsigned plain
 /// number field and the record runs to the end of the frame.
@@ -2289,12 +2295,7 @@ fn record_bytes(
     }
     match earlier.iter().position(|e| e.name == by) {
         Some(i)
-            if !earlier[i].signed
-                && !earlier[i].is_wide()
-                && !earlier[i].bcd
-                && !earlier[i].is_ascii()
-                && earlier[i].bits.is_empty()
-                && !earlier[i].is_list()
+            if plain_unsigned(&earlier[i])
                 && earlier[i].equals.is_none()
                 && earlier[i].follows.is_none()
                 && earlier[i].constant.is_none() =>
@@ -2374,19 +2375,10 @@ fn repeat(
         Count::ToEnd
     } else {
         match earlier.iter().position(|e| e.name == r.count) {
-            Some(i)
-                if !earlier[i].signed
-                    && !earlier[i].is_wide()
-                    && !earlier[i].bcd
-                    && !earlier[i].is_ascii()
-                    && earlier[i].bits.is_empty()
-                    && !earlier[i].is_list() =>
-            {
-                match of {
-                    model::CountOf::Elements => Count::Elements(i),
-                    model::CountOf::Bytes => Count::Bytes(i),
-                }
-            }
+            Some(i) if plain_unsigned(&earlier[i]) => match of {
+                model::CountOf::Elements => Count::Elements(i),
+                model::CountOf::Bytes => Count::Bytes(i),
+            },
             Some(_) => {
                 sink.error(
                     join(p, "count"),
