@@ -1,12 +1,12 @@
-//! Generates the UB2, SD, Modbus RTU, Dynamixel 1.0, Pelco D, Pelco P and CRSF modules from the
+//! Generates the UB2, SD, Modbus RTU, Dynamixel 1.0, Pelco D, Pelco P, CRSF and Dynamixel 2.0 modules from the
 //! repository's specs (`spec/` in this package is the repository's `spec/` directory, so the
 //! package carries the specs it is built from): each behind the cargo feature of its name (`ub2`,
-//! `sd`, `modbus`, `dynamixel`, `pelco_d`, `pelco_p`, `crsf`; all seven by default), so a firmware build
+//! `sd`, `modbus`, `dynamixel`, `pelco_d`, `pelco_p`, `crsf`, `dynamixel2`; all eight by default), so a firmware build
 //! compiles only the protocols it names.
 //! With none of them on, the crate has no protocol module and `PROTOCOLS` is empty.
 
 /// Each protocol's feature and spec, in the order the modules are generated.
-const PROTOCOLS: [(&str, &str); 7] = [
+const PROTOCOLS: [(&str, &str); 8] = [
     ("sd", "spec/sd.yaml"),
     ("ub2", "spec/ub2.yaml"),
     ("modbus", "spec/modbus.yaml"),
@@ -14,6 +14,7 @@ const PROTOCOLS: [(&str, &str); 7] = [
     ("pelco_d", "spec/pelco_d.yaml"),
     ("pelco_p", "spec/pelco_p.yaml"),
     ("crsf", "spec/crsf.yaml"),
+    ("dynamixel2", "spec/dynamixel2.yaml"),
 ];
 
 fn main() {

@@ -10,8 +10,8 @@ use clap::Args;
 use crate::frames::Engine;
 
 pub const DISSECTOR_HELP: &str = "\
-Write a Wireshark Lua dissector for protocols: built-in ones by name (default: all seven, ub2,
-sd, modbus, dynamixel, pelco_d, pelco_p and crsf, when no protocol and no --spec is given) and the specs of --spec
+Write a Wireshark Lua dissector for protocols: built-in ones by name (default: all eight, ub2,
+sd, modbus, dynamixel, pelco_d, pelco_p, crsf and dynamixel2, when no protocol and no --spec is given) and the specs of --spec
 files, all in one Lua file (stdout, or -o FILE).
 
 Load it with `wireshark -X lua_script:FILE` or `tshark -X lua_script:FILE -r CAPTURE`, or copy
@@ -37,7 +37,7 @@ protocol named twice; 1 when the file cannot be written.";
 
 #[derive(Args)]
 pub struct DissectorArgs {
-    /// Built-in protocols: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf (default: all seven, unless --spec is
+    /// Built-in protocols: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf, dynamixel2 (default: all eight, unless --spec is
     /// given). A name a --spec file defines takes that spec.
     protocols: Vec<String>,
     /// Also a protocol from this spec file (repeat for several).

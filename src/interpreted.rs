@@ -458,6 +458,19 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
         },
         // The runtime words a bad count with a rule of its own; the interpreter's text is the
         // element count found against what may stand.
+        I::BadWidth {
+            message,
+            field,
+            offset,
+            found,
+            most,
+        } => DecodeError::BadWidth {
+            message: keep(&message),
+            field: keep(&field),
+            offset,
+            found,
+            most,
+        },
         I::BadCount { message, found, .. } => DecodeError::WrongLength {
             message: keep(&message),
             expected: &[],

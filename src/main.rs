@@ -209,7 +209,7 @@ devices on the one line (default: ub2 0x21, sd 0x01, otherwise the spec's defaul
 its first from 1). --verbose logs every frame on stderr.
 
 UB2 and SD devices are behavioural models of the documents (movements, C-curve, strings).
-Every other protocol, built in (modbus, dynamixel, pelco_d, pelco_p, crsf) or a spec file given with --spec, is
+Every other protocol, built in (modbus, dynamixel, pelco_d, pelco_p, crsf, dynamixel2) or a spec file given with --spec, is
 simulated from its spec's `device:` section (spec/SCHEMA.md): the spaces it declares (Modbus's
 coils, discrete inputs, holding and input registers; Dynamixel's control table) start at their
 initial values, writes change what later reads return, values a reply takes from its request
@@ -251,7 +251,7 @@ Exit status 1 with `error: ...` on stderr when no valid reply comes.";
 
 #[derive(Args)]
 struct SimArgs {
-    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf, or the `protocol:` of the spec given with
+    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf, dynamixel2, or the `protocol:` of the spec given with
     /// --spec.
     protocol: String,
     /// Simulate devices of this spec file (by its `device:` section).
@@ -295,10 +295,10 @@ struct TalkArgs {
     baud: Option<u32>,
     /// Reply timeout in milliseconds (default: the spec's `transactions.response_timeout_ms`,
     /// else 200 below 100,000 baud and 50 from it: ub2 200, sd 50, modbus 1000, dynamixel 50,
-    /// pelco_d 200, pelco_p 200, crsf 50).
+    /// pelco_d 200, pelco_p 200, crsf 50, dynamixel2 200).
     #[arg(long, value_name = "MS")]
     timeout: Option<u64>,
-    /// A built-in protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p or crsf; or the `protocol:` of --spec.
+    /// A built-in protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf or dynamixel2; or the `protocol:` of --spec.
     protocol: String,
     /// The device address (decimal or 0x..); the SD broadcast ID 0x1F where the command takes it.
     #[arg(long, value_parser = link_cli::parse_address)]
@@ -380,7 +380,7 @@ impl Gate {
 
 #[derive(Args)]
 struct DecodeArgs {
-    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf (built in: generated code), or the `protocol:` of the spec given with --spec.
+    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf, dynamixel2 (built in: generated code), or the `protocol:` of the spec given with --spec.
     protocol: String,
     /// Frames in hex, one per argument, bytes in wire order; spaces and 0x allowed. `-` alone:
     /// hex frames from stdin, one per line (`#` starts a comment).
@@ -420,7 +420,7 @@ struct DecodeArgs {
 
 #[derive(Args)]
 struct EncodeArgs {
-    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf (built in: generated code), or the `protocol:` of the spec given with --spec.
+    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf, dynamixel2 (built in: generated code), or the `protocol:` of the spec given with --spec.
     protocol: String,
     /// Load the spec from this file instead of the built-in one.
     #[arg(long, value_name = "FILE")]

@@ -57,7 +57,7 @@ pub struct SniffArgs {
     /// The serial port (or pseudo-terminal) to listen on.
     #[arg(long, value_name = "PATH")]
     port: String,
-    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf (built in: generated code), or the
+    /// The protocol: ub2, sd, modbus, dynamixel, pelco_d, pelco_p, crsf, dynamixel2 (built in: generated code), or the
     /// `protocol:` of the spec given with --spec.
     protocol: String,
     /// A spec file to decode with (the interpreter), instead of a built-in protocol.

@@ -21,10 +21,11 @@ fn check_passes_on_every_spec_and_summarises_them() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let stdout = text(&out.stdout);
     let lines: Vec<&str> = stdout.lines().collect();
-    assert_eq!(lines.len(), 7, "{stdout}");
+    assert_eq!(lines.len(), 8, "{stdout}");
     for (line, name) in lines.iter().zip([
         "crsf",
         "dynamixel",
+        "dynamixel2",
         "modbus",
         "pelco_d",
         "pelco_p",

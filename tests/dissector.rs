@@ -97,6 +97,9 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/packed_channels.yaml"),
         // Repeated records: a list of objects, each field as a field of its own prints.
         spec("model/tests/fixtures/valid/records.yaml"),
+        // Records whose width a field gives, and Dynamixel 2.0 built in (its SYNC_WRITE).
+        spec("model/tests/fixtures/valid/records_sized.yaml"),
+        built_in("dynamixel2", "spec/dynamixel2.yaml"),
         derived_units(),
     ]
 }

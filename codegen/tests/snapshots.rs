@@ -232,6 +232,16 @@ fn records_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/records.yaml", "records.rs");
 }
 
+/// Records whose width a field gives (`snapshots_compile.rs` compiles it and holds it to the
+/// interpreter).
+#[test]
+fn records_sized_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/records_sized.yaml",
+        "records_sized.rs",
+    );
+}
+
 /// The two public protocols, generated whole (`snapshots_compile.rs` and
 /// `generated_public.rs` compile them, replay their examples and hold them to the
 /// interpreter).

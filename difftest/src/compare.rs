@@ -166,7 +166,9 @@ fn class(g: &DecodeError) -> &'static str {
         DecodeError::OutOfRange { .. } => "out of range",
         DecodeError::BadAddress { .. } => "bad address",
         DecodeError::BroadcastNotAccepted { .. } => "broadcast",
-        DecodeError::BadCount { .. } | DecodeError::ByteCount { .. } => "bad count",
+        DecodeError::BadCount { .. }
+        | DecodeError::ByteCount { .. }
+        | DecodeError::BadWidth { .. } => "bad count",
         DecodeError::BadEscape { .. } => "bad escape",
     }
 }
@@ -192,7 +194,9 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             InterpError::OutOfRange { .. } => "out of range",
             InterpError::BadAddress { .. } => "bad address",
             InterpError::BroadcastNotAccepted { .. } => "broadcast",
-            InterpError::BadCount { .. } | InterpError::ByteCount { .. } => "bad count",
+            InterpError::BadCount { .. }
+            | InterpError::ByteCount { .. }
+            | InterpError::BadWidth { .. } => "bad count",
             InterpError::BadEscape { .. } => "bad escape",
         },
     }

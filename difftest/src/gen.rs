@@ -109,7 +109,21 @@ struct G {
     rng: fastrand::Rng,
     n_enums: usize,
     n_flags: usize,
+    /// Frames have a length field: a message may end in records whose width a field gives.
+    sized: bool,
 }
+
+/// The types a record's field may have: name, bytes, signed.
+const RECORD_FIELD_TYPES: [(&str, usize, bool); 8] = [
+    ("u8", 1, false),
+    ("i8", 1, true),
+    ("u16", 2, false),
+    ("i16", 2, true),
+    ("u24", 3, false),
+    ("i24", 3, true),
+    ("u32", 4, false),
+    ("i32", 4, true),
+];
 
 fn limits(width: usize, signed: bool) -> (i64, i64) {
     interp::raw_limits(8 * width as u32, signed)
@@ -577,21 +591,63 @@ impl G {
         });
     }
 
+    /// Records to the end whose last field's bytes a field gives (Dynamixel 2.0 SYNC_WRITE's
+    /// `data_length`): the width field (u8 or u16, maybe with the range 1..=the last field's
+    /// most), then one to three fixed fields and the last field of 1 to 4 bytes, any integer
+    /// type, maybe with a range.
+    fn sized_records(&mut self, fields: &mut Vec<Gf>) {
+        let wname = format!("f{}", fields.len());
+        let &(wty, ww) = self.pick(&[("u8", 1usize), ("u16", 2)]);
+        let &(ty, most, signed) = self.pick(&RECORD_FIELD_TYPES);
+        let mut wy = format!("{{name: {wname}, type: {wty}, unit: count");
+        if self.chance(50) {
+            let _ = write!(wy, ", range: {{min: 1, max: {most}}}");
+        }
+        wy.push('}');
+        fields.push(Gf {
+            name: wname.clone(),
+            ty: wty,
+            width: ww,
+            yaml: wy,
+            plain: false,
+            countable: false,
+            repeat_tail: 0,
+        });
+        let (fs, w) = self.record_fields();
+        let mut last = format!("{{name: rl, type: {ty}, unit: {}", self.unit());
+        if self.chance(40) {
+            let (lo, hi) = limits(most, signed);
+            let r = self.range_yaml(lo, hi);
+            let _ = write!(last, ", {r}");
+        }
+        let _ = write!(last, ", bytes: {wname}}}");
+        let min = self.rng.usize(0..=2);
+        let max = self.rng.usize(min.max(1)..=6);
+        let name = format!("f{}", fields.len());
+        let mut r = String::from("count: end");
+        if min > 0 || self.chance(30) {
+            let _ = write!(r, ", min: {min}");
+        }
+        let _ = write!(r, ", max: {max}");
+        fields.push(Gf {
+            name: name.clone(),
+            ty: "record",
+            width: w + most,
+            yaml: format!(
+                "{{name: {name}, type: record, fields: [{fs}, {last}], repeat: {{{r}}}}}"
+            ),
+            plain: false,
+            countable: false,
+            repeat_tail: (max * (w + most)).max(1),
+        });
+    }
+
     /// A record's fields (YAML flow items) and its width.
     fn record_fields(&mut self) -> (String, usize) {
         let mut items = Vec::new();
         let mut width = 0;
         for j in 0..self.rng.usize(1..=3) {
-            let &(ty, w, signed) = self.pick(&[
-                ("u8", 1, false),
-                ("i8", 1, true),
-                ("u16", 2, false),
-                ("i16", 2, true),
-                ("u24", 3, false),
-                ("i24", 3, true),
-                ("u32", 4, false),
-                ("i32", 4, true),
-            ]);
+            let &(ty, w, signed) = self.pick(&RECORD_FIELD_TYPES);
             width += w;
             let name = format!("r{j}");
             let mut y = match self.rng.u8(..10) {
@@ -656,6 +712,11 @@ impl G {
             let lists = if self.chance(30) { 2 } else { 1 };
             for l in 0..lists {
                 let request = if l == 0 { request_field } else { None };
+                // Records whose width a field gives: the message's only list, its last field.
+                if lists == 1 && request.is_none() && self.sized && self.chance(35) {
+                    self.sized_records(&mut out);
+                    break;
+                }
                 self.repeated(&mut out, request, lists > 1);
                 if self.chance(35) {
                     for _ in 0..self.rng.usize(1..=2) {
@@ -940,6 +1001,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         rng: fastrand::Rng::with_seed(seed),
         n_enums: 0,
         n_flags: 0,
+        sized: false,
     };
     let mut y = String::new();
     let _ = writeln!(y, "# busspec-difftest random spec, seed {seed}");
@@ -1018,6 +1080,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     // Stuffing (Dynamixel 2.0's) needs a length field before the code.
     let want_insert = g.chance(8);
     let has_length = want_insert || g.chance(30);
+    g.sized = has_length;
     // Frames without an address (a point-to-point link).
     let addressed = !g.chance(15);
     let code_first = addressed && g.chance(12);
@@ -1997,6 +2060,11 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         msgs.iter().any(|m| m.fields.iter().any(|f| f.is_record())),
         "records",
+    );
+    add(
+        msgs.iter()
+            .any(|m| m.fields.iter().any(|f| f.record_bytes_from().is_some())),
+        "records sized by a field",
     );
     add(
         msgs.iter().any(|m| {

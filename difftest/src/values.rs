@@ -98,7 +98,7 @@ pub fn random_values(
     rng: &mut fastrand::Rng,
     strict: bool,
 ) -> Vec<Value<'static>> {
-    let mut out = Vec::new();
+    let mut out: Vec<Value<'static>> = Vec::new();
     for l in m.leaves() {
         if !carried(m, &l) {
             continue;
@@ -148,9 +148,48 @@ pub fn random_values(
                     } else {
                         rng.usize(..=r.max + 1)
                     };
+                    // Records whose last field's bytes a field gives: that field's value
+                    // within 1..=the most (always where strict, mostly otherwise), and each
+                    // last field within the bytes it gives.
+                    let sized = f.record_bytes_from().zip(f.record.last());
+                    let mut bytes = None;
+                    if let Some((wi, g)) = sized {
+                        let name = m.fields[wi].name.as_str();
+                        if let Some(w) = out.iter_mut().find(|v| v.name == name) {
+                            if strict || rng.u8(..4) != 0 {
+                                if let Raw::Int(x) = &mut w.raw {
+                                    if !(1..=g.width as i64).contains(x) {
+                                        *x = rng.i64(1..=g.width as i64);
+                                    }
+                                }
+                            }
+                            if let Raw::Int(x) = w.raw {
+                                bytes = Some(x.clamp(1, g.width as i64) as u32);
+                            }
+                        }
+                    }
+                    let last = f.record.len().saturating_sub(1);
                     Raw::Records(
                         (0..n)
-                            .map(|_| f.record.iter().map(|g| scalar(p, g, rng, strict)).collect())
+                            .map(|_| {
+                                f.record
+                                    .iter()
+                                    .enumerate()
+                                    .map(|(j, g)| match bytes {
+                                        Some(b) if j == last && (strict || rng.u8(..8) != 0) => {
+                                            let (lo, hi) = raw_limits(8 * b, g.signed);
+                                            let (lo, hi) = match g.range {
+                                                Some((a, c)) if a.max(lo) <= c.min(hi) => {
+                                                    (a.max(lo), c.min(hi))
+                                                }
+                                                _ => (lo, hi),
+                                            };
+                                            within(rng, lo, hi)
+                                        }
+                                        _ => scalar(p, g, rng, strict),
+                                    })
+                                    .collect()
+                            })
                             .collect(),
                     )
                 } else if let Some(r) = &f.repeat {

@@ -7,17 +7,18 @@
 //! - [`dynamixel`]: ROBOTIS Dynamixel Protocol 1.0;
 //! - [`pelco_d`]: Pelco D, PTZ camera receivers (pan, tilt, lens, presets, position queries);
 //! - [`pelco_p`]: Pelco P, PTZ camera receivers (commands only: receivers do not answer);
-//! - [`crsf`]: CRSF (Crossfire, ExpressLRS), RC links: packed RC channels, telemetry, extended frames.
+//! - [`crsf`]: CRSF (Crossfire, ExpressLRS), RC links: packed RC channels, telemetry, extended frames;
+//! - [`dynamixel2`]: ROBOTIS Dynamixel Protocol 2.0 (byte stuffing, CRC-16, sync and bulk instructions).
 //!
 //! Each module has `Request` and `Response` enums (one variant per command or response, named
 //! fields, physical units as types), `encode` into a caller's buffer, `decode` from a byte
 //! slice, `decode_reply` against the request, a `StreamDecoder` for raw captures, and a unit
 //! type ([`ub2::Ub2`], [`sd::Sd`], [`modbus::Modbus`], [`dynamixel::Dynamixel`],
-//! [`pelco_d::PelcoD`], [`pelco_p::PelcoP`], [`crsf::Crsf`]) implementing
+//! [`pelco_d::PelcoD`], [`pelco_p::PelcoP`], [`crsf::Crsf`], [`dynamixel2::Dynamixel2`]) implementing
 //! [`Protocol`], so code generic over protocols works with all of them. [`PROTOCOLS`] and [`with_protocol`] find a protocol by name.
 //!
 //! Each module is behind the cargo feature of its name (`ub2`, `sd`, `modbus`, `dynamixel`,
-//! `pelco_d`, `pelco_p`, `crsf`; all seven by default): a firmware build turns the default off and names the protocols it speaks,
+//! `pelco_d`, `pelco_p`, `crsf`, `dynamixel2`; all eight by default): a firmware build turns the default off and names the protocols it speaks,
 //! so it compiles only those; [`PROTOCOLS`] lists the ones built.
 //!
 //! Everything protocol-independent (errors, [`Decoded`], [`FieldValue`], the stream decoder) is

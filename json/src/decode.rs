@@ -87,7 +87,7 @@ fn request_or_both<P: Protocol>(
         return Ok(Typed::Request(d));
     };
     let settled = reply_to
-        .and_then(|cmd| request_for::<P>(p, cmd))
+        .and_then(|cmd| request_for_reply::<P>(p, cmd, wire))
         .and_then(|q| P::decode_reply(wire, &q).ok());
     if let Some(r) = settled {
         return Ok(Typed::Response(r));
@@ -108,12 +108,60 @@ const SPACES: [u8; 255] = [b' '; 255];
 /// spaces, every other field 0 (constants and repeated fields as the spec fixes them). `None`
 /// if `P` has no such command.
 pub fn request_for<P: Protocol>(p: &Spec, cmd: usize) -> Option<P::Request> {
+    request_with::<P>(p, cmd, &[])
+}
+
+/// [`request_for`] as the request `wire` (a response) answers: a field a response takes from
+/// the request (`follows: {request}`, a list counted by the request) holds what the frame's
+/// value implies (a READ whose reply holds four bytes asked for four), as the interpreter
+/// settles a reply by its command alone; every other field neutral.
+fn request_for_reply<P: Protocol>(p: &Spec, cmd: usize, wire: &[u8]) -> Option<P::Request> {
+    let mut implied: Vec<(String, i64)> = Vec::new();
+    if let Ok(f) = interp::decode(p, Some(Direction::Response), Some(cmd), wire) {
+        let m = p.message(f.message);
+        for field in &m.fields {
+            let rel = match (&field.follows, &field.repeat) {
+                (Some(busspec_model::ir::Follows::Request(rel)), _) => rel,
+                (_, Some(r)) => match &r.request {
+                    Some(rel) => rel,
+                    None => continue,
+                },
+                _ => continue,
+            };
+            let n = match f.get(&field.name) {
+                Some(interp::Raw::Int(v)) => *v,
+                Some(raw) => raw.elements().map_or(0, |n| n as i64),
+                None => continue,
+            };
+            // The request's value that gives `n`: its inverse, tried with its neighbours.
+            let guess = n.saturating_mul(rel.divide as i64) / (rel.multiply as i64).max(1);
+            if let Some(v) = (guess.saturating_sub(1)..=guess.saturating_add(1))
+                .find(|v| *v >= 0 && rel.apply(*v) == n)
+            {
+                implied.push((rel.field.clone(), v));
+            }
+        }
+    }
+    request_with::<P>(p, cmd, &implied)
+}
+
+/// A request of command `cmd` from neutral values, but the named ones given.
+fn request_with<P: Protocol>(p: &Spec, cmd: usize, given: &[(String, i64)]) -> Option<P::Request> {
     let c = p.commands.get(cmd)?;
     let neutral = |name: &'static str| {
+        if let Some((_, v)) = given.iter().find(|(n, _)| n == name) {
+            return Some(FieldValue::Int(*v));
+        }
         let (f, bit) = interp::leaf_field(c, name)?;
         Some(match bit {
             Some(_) => FieldValue::Int(0),
             None if f.is_ascii() => FieldValue::Text(SPACES.get(..f.width)?),
+            // A list or records: none (a reply is told apart by its command, not by them).
+            None if f.is_record() => FieldValue::Records(busspec_runtime::RecordList::Flat {
+                values: &[],
+                fields: f.record.len().max(1),
+            }),
+            None if f.is_list() => FieldValue::List(busspec_runtime::Elements::I64(&[])),
             None => FieldValue::Int(
                 f.enumeration
                     .and_then(|e| p.enums.get(e))
@@ -130,7 +178,7 @@ pub fn request_for<P: Protocol>(p: &Spec, cmd: usize) -> Option<P::Request> {
 pub(crate) fn candidates<P: Protocol>(p: &Spec, wire: &[u8]) -> Vec<String> {
     let mut found: Vec<&'static str> = Vec::new();
     for cmd in 0..p.commands.len() {
-        if let Some(q) = request_for::<P>(p, cmd) {
+        if let Some(q) = request_for_reply::<P>(p, cmd, wire) {
             if let Ok(d) = P::decode_reply(wire, &q) {
                 found.push(d.message.name());
             }
@@ -220,7 +268,7 @@ pub fn decode_typed<P: Protocol>(
         Err(DecodeError::Ambiguous { .. }) => {
             let names = candidates::<P>(p, wire);
             let settled = reply_to
-                .and_then(|cmd| request_for::<P>(p, cmd))
+                .and_then(|cmd| request_for_reply::<P>(p, cmd, wire))
                 .and_then(|q| P::decode_reply(wire, &q).ok());
             return match settled {
                 Some(d) => Ok(Typed::Response(d)),

@@ -403,6 +403,8 @@ fn type_name(f: &Field) -> String {
         format!("ascii[{}]", f.width)
     } else if f.ty == crate::ir::FieldType::Bit {
         "bit".to_owned()
+    } else if f.is_record() && f.record_bytes_from().is_some() {
+        format!("record[{}..={}]", f.min_element_width(), f.width)
     } else if f.is_record() {
         format!("record[{}]", f.width)
     } else if f.is_float() {
@@ -1549,6 +1551,25 @@ impl<'a> Differ<'a> {
                 );
                 continue;
             };
+            // Bytes given by another field, or another field giving them: every record moves.
+            let from = |m: &Message, i: Option<usize>| i.map(|i| m.fields[i].name.clone());
+            let (fa, fb) = (from(m, a.bytes_from), from(x, b.bytes_from));
+            if fa != fb {
+                let said = |n: &Option<String>| match n {
+                    Some(n) => format!("`{n}` bytes"),
+                    None => "its type's width".to_owned(),
+                };
+                self.wire(
+                    "record_field_width_changed",
+                    format!("{path}.fields.{}.bytes", b.name),
+                    format!(
+                        "record {what}: field `{}` takes {} → {}",
+                        b.name,
+                        said(&fa),
+                        said(&fb)
+                    ),
+                );
+            }
             let (mut a, mut b) = (a.clone(), b.clone());
             a.name = format!("{}.{}", f.name, a.name);
             b.name = format!("{}.{}", g.name, b.name);

@@ -291,6 +291,16 @@ fn field(f: &Field) -> String {
         // A record's fields, each at its offset in the record.
         let rec: Vec<String> = f.record.iter().map(field).collect();
         let _ = write!(o, ", rec = {{{}}}", rec.join(", "));
+        // Its last field as many bytes wide as an earlier field of the message says.
+        if let (Some(by), Some(g)) = (f.record_bytes_from(), f.record.last()) {
+            let _ = write!(
+                o,
+                ", sized = {{ by = {}, fixed = {}, most = {} }}",
+                by + 1,
+                f.width - g.width,
+                g.width
+            );
+        }
     }
     if let Some(r) = &f.repeat {
         let (count, by) = match r.count {

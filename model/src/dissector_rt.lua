@@ -437,6 +437,29 @@ local function elements_len(f, n)
   return n * f.width
 end
 
+-- A repeated record's width in this frame and its fields, the last as many bytes wide as
+-- the field `f.sized.by` (at `at[by]`) says where one gives it (nil where that is outside
+-- 1..=most: `interp::shape` refuses it); otherwise its width and fields as they are.
+local function record_layout(m, f, b, at)
+  local s = f.sized
+  if not s then return f.width, f.rec end
+  local c = m.fields[s.by]
+  local v = read_uint(b, at[s.by], c.width, c.order)
+  if v < 1 or v > s.most then return nil end
+  local rec = {}
+  for j, g in ipairs(f.rec) do
+    if j == #f.rec then
+      local h = {}
+      for k, x in pairs(g) do h[k] = x end
+      h.width = v
+      rec[j] = h
+    else
+      rec[j] = g
+    end
+  end
+  return s.fixed + v, rec
+end
+
 -- Where each field of message m sits in the frame (`at[i]`, byte offsets as `b` indexes them)
 -- and the bytes each repeated field's elements take (`len[i]`), the lists counted in wire
 -- order; nil where the frame's length, a count field and the bounds disagree (`interp::shape`).
@@ -456,6 +479,10 @@ local function shape(m, b, n)
       seen = seen + 1
       local last = seen == lists
       local w = f.width
+      if f.sized then
+        w = record_layout(m, f, b, at)
+        if not w then return nil end
+      end
       if w < 1 then w = 1 end
       local count
       if r.count == "to_end" then
@@ -476,7 +503,7 @@ local function shape(m, b, n)
       local lo, hi = r.min, r.max
       if r.bit then lo, hi = math.ceil(lo / 8) * 8, math.ceil(hi / 8) * 8 end
       if count < lo or count > hi then return nil end
-      len[i] = elements_len(f, count)
+      len[i] = f.sized and count * w or elements_len(f, count)
       rest = rest - len[i]
       shift = shift + len[i]
     end
@@ -578,13 +605,15 @@ local function misfit(P, m, b, n, soft)
     if f.rec then
       -- Each record's fields in order, at their offsets in the frame.
       local k = at
-      while k + f.width <= at + lens[i] do
-        for _, g in ipairs(f.rec) do
+      local w, rec = record_layout(m, f, b, pos)
+      if not w then w, rec = f.width, f.rec end
+      while k + w <= at + lens[i] do
+        for _, g in ipairs(rec) do
           local _, v = int_of(g, b, k + g.offset)
           local range = range_violation(g, nil, v)
           if range then soft[#soft + 1] = out_of_range(m, f.name .. "." .. g.name, k + g.offset, v, range) end
         end
-        k = k + f.width
+        k = k + w
       end
     elseif f.rep then
       local step = f.rep.bit and 0 or f.width
@@ -785,16 +814,18 @@ local function setup(P)
         local stop = at + lens[i]
         local vals, raws = {}, {}
         local k = at
-        while k + f.width <= stop do
+        local w, rec = record_layout(m, f, b, pos)
+        if not w then w, rec = f.width, f.rec end
+        while k + w <= stop do
           local kv, kr = {}, {}
-          for _, g in ipairs(f.rec) do
+          for _, g in ipairs(rec) do
             local _, v = int_of(g, b, k + g.offset)
             kv[#kv + 1] = json_name(g.name) .. ":" .. value_json(P, g, nil, v)
             kr[#kr + 1] = numtext(v)
           end
           vals[#vals + 1] = "{" .. concat(kv, ",") .. "}"
           raws[#raws + 1] = "[" .. concat(kr, ",") .. "]"
-          k = k + f.width
+          k = k + w
         end
         local value = "[" .. concat(vals, ",") .. "]"
         local range = tvb:range(0, n)

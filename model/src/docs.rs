@@ -56,6 +56,9 @@ fn scalar_type_name(f: &Field) -> String {
         FieldType::F32 => "f32".into(),
         FieldType::F64 => "f64".into(),
         FieldType::Bit => "bit".into(),
+        FieldType::Record if f.record_bytes_from().is_some() => {
+            format!("record[{}..={}]", f.min_element_width(), f.width)
+        }
         FieldType::Record => format!("record[{}]", f.width),
     };
     if f.bcd {
@@ -122,6 +125,12 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
     }
     if let Some(o) = f.equals {
         notes.push(format!("repeats `{}`", m.fields[o].name));
+    }
+    if let Some(o) = f.bytes_from {
+        notes.push(format!(
+            "takes `{}` bytes (1 to {})",
+            m.fields[o].name, f.width
+        ));
     }
     match &f.follows {
         Some(Follows::Field(_, rel)) => notes.push(format!(

@@ -175,6 +175,15 @@ pub enum DecodeError {
         expected: String,
         found: i64,
     },
+    /// The field `field` at `offset` gives each record's last field `found` bytes (`bytes:`),
+    /// outside `1..=most`: the frame's records cannot be laid out.
+    BadWidth {
+        message: String,
+        field: String,
+        offset: usize,
+        found: i64,
+        most: usize,
+    },
     /// A count field says the elements of `list` take `found` bytes; the frame's length gives
     /// them `expected`.
     ByteCount {
@@ -340,6 +349,10 @@ impl fmt::Display for DecodeError {
             DecodeError::BadCount { message, field, offset, expected, found } => write!(
                 f,
                 "{message}.{field} at offset {offset}: {found} elements, expected {expected}"
+            ),
+            DecodeError::BadWidth { message, field, offset, found, most } => write!(
+                f,
+                "{message}.{field} at offset {offset} is {found}: each record's last field takes 1..={most} bytes"
             ),
             DecodeError::ByteCount { message, field, offset, list, expected, found } => write!(
                 f,
@@ -1434,6 +1447,28 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
     let mut shift = 0usize;
     for (k, &(fi, f, r)) in lists.iter().enumerate() {
         let last = k + 1 == lists.len();
+        // A record whose last field's bytes an earlier field gives: as wide as it says.
+        let sized;
+        let f = match f.record_bytes_from() {
+            Some(wi) => {
+                let c = &m.fields[wi];
+                let o = m.layout.payload + c.offset + out.shift(wi);
+                let v = read_uint(wire.get(o..o + c.width).unwrap_or(&[]), c.byte_order) as i64;
+                let most = f.record.last().map_or(1, |g| g.width) as i64;
+                if !(1..=most).contains(&v) {
+                    return Err(DecodeError::BadWidth {
+                        message: m.name.clone(),
+                        field: c.name.clone(),
+                        offset: o,
+                        found: v,
+                        most: most as usize,
+                    });
+                }
+                sized = f.record_in_frame(v as usize);
+                &*sized
+            }
+            None => f,
+        };
         let at = m.layout.payload + f.offset + shift;
         let bad = |expected: String, found: i64| DecodeError::BadCount {
             message: m.name.clone(),
@@ -1525,6 +1560,37 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
         out.lists.push((fi, n, bytes));
     }
     Ok(out)
+}
+
+/// A repeated record's field index, the record as the frame sizes it, and its records.
+#[cfg(feature = "tools")]
+type SizedRecords<'f, 'v> = (usize, Cow<'f, Field>, &'v [Vec<i64>]);
+
+/// Repeated record `f` of `m` as a frame has it: its last field as many bytes wide as the
+/// field it takes them from says (`value` gives that field's value by name; one clamped to
+/// 1..=the type's width, the values outside refused where they are read), or as it is.
+pub fn record_sized<'f>(
+    m: &Message,
+    f: &'f Field,
+    value: impl Fn(&str) -> Option<i64>,
+) -> Cow<'f, Field> {
+    match (f.record_bytes_from(), f.record.last()) {
+        (Some(wi), Some(g)) => {
+            let v = m.fields.get(wi).and_then(|c| value(&c.name)).unwrap_or(1);
+            f.record_in_frame(v.clamp(1, g.width as i64) as usize)
+        }
+        _ => Cow::Borrowed(f),
+    }
+}
+
+/// [`record_sized`] for a frame's payload as [`Shape`] places its fields.
+fn record_in_payload<'f>(m: &Message, f: &'f Field, payload: &[u8], sh: &Shape) -> Cow<'f, Field> {
+    record_sized(m, f, |name| {
+        let i = m.fields.iter().position(|c| c.name == name)?;
+        let c = &m.fields[i];
+        let at = sh.at(m, i);
+        Some(int_of(c, payload, at).1)
+    })
 }
 
 /// The address a frame carries at `o.address`: 0 where frames carry none (or the frame is too
@@ -1753,6 +1819,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let pos = |i: usize| sh.at(m, i);
     for (i, f) in m.fields.iter().enumerate() {
         if f.is_record() {
+            let f = &*record_in_payload(m, f, payload, &sh);
             let at = o.payload + pos(i);
             let bytes = list_bytes(f, payload, pos(i), &sh, i);
             for (k, rec) in bytes.chunks_exact(f.width.max(1)).enumerate() {
@@ -1931,9 +1998,10 @@ fn values_of<'p>(
     for (i, f) in m.fields.iter().enumerate() {
         let at = sh.at(m, i);
         if f.is_record() {
+            let sized = record_in_payload(m, f, payload, &sh);
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
-                raw: Raw::Records(read_records(f, list_bytes(f, payload, at, &sh, i))),
+                raw: Raw::Records(read_records(&sized, list_bytes(f, payload, at, &sh, i))),
             });
             continue;
         }
@@ -2084,6 +2152,10 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
     let mut shift = 0usize;
     for f in &m.fields {
         let at = m.layout.payload + f.offset + shift;
+        let f = &*record_sized(m, f, |name| match reply.get(name) {
+            Some(Raw::Int(v)) => Some(*v),
+            _ => None,
+        });
         if let (Some(_), Some(n)) = (&f.repeat, reply.get(&f.name).and_then(Raw::elements)) {
             shift += f.elements_len(n);
         }
@@ -2178,17 +2250,32 @@ pub fn encode(
     // The repeated fields' elements, checked against their bounds and their element type, and
     // the value of each count field.
     let mut lists: Vec<(usize, &[i64])> = Vec::new();
-    let mut records: Vec<(usize, &[Vec<i64>])> = Vec::new();
+    let mut records: Vec<SizedRecords> = Vec::new();
     let mut counts: Vec<(usize, i64)> = Vec::new();
     for (fi, f, r) in m.repeats() {
         if f.is_record() {
-            let recs = record_list(f, r, lookup(&f.name))?;
+            // Its last field as wide as the field it takes its bytes from says, 1 up to its type's.
+            if let (Some(wi), Some(g)) = (f.record_bytes_from(), f.record.last()) {
+                let c = &m.fields[wi];
+                let v = int(&c.name)?;
+                if !(1..=g.width as i64).contains(&v) {
+                    return Err(EncodeError::NotInRange {
+                        field: c.name.clone(),
+                        value: v,
+                        min: 1,
+                        max: g.width as i64,
+                        kind: NumKind::Int,
+                    });
+                }
+            }
+            let f = record_sized(m, f, |name| int(name).ok());
+            let recs = record_list(&f, r, lookup(&f.name))?;
             match r.count {
                 Count::Elements(i) => counts.push((i, recs.len() as i64)),
                 Count::Bytes(i) => counts.push((i, f.elements_len(recs.len()) as i64)),
                 Count::ToEnd => {}
             }
-            records.push((fi, recs));
+            records.push((fi, f, recs));
             continue;
         }
         let list: &[i64] = match lookup(&f.name) {
@@ -2250,15 +2337,11 @@ pub fn encode(
         lists.push((fi, list));
     }
     let list_of = |i: usize| lists.iter().find(|l| l.0 == i).map_or(&[][..], |l| l.1);
-    let records_of = |i: usize| records.iter().find(|l| l.0 == i).map_or(&[][..], |l| l.1);
+    let records_of = |i: usize| records.iter().find(|l| l.0 == i).map(|l| (&*l.1, l.2));
     let tail: usize = lists
         .iter()
         .map(|&(i, l)| m.fields[i].elements_len(l.len()))
-        .chain(
-            records
-                .iter()
-                .map(|&(i, l)| m.fields[i].elements_len(l.len())),
-        )
+        .chain(records.iter().map(|(_, f, l)| f.elements_len(l.len())))
         .sum();
     let mut out = vec![0u8; p.frame_len(m) + tail];
     for at in o.starts() {
@@ -2283,7 +2366,7 @@ pub fn encode(
     for (i, f) in m.fields.iter().enumerate() {
         let at = o.payload + f.offset + shift;
         if f.is_record() {
-            let recs = records_of(i);
+            let (f, recs) = records_of(i).unwrap_or((f, &[]));
             shift += f.elements_len(recs.len());
             for (k, rec) in recs.iter().enumerate() {
                 for (g, &v) in f.record.iter().zip(rec) {
@@ -2611,6 +2694,13 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
     for (i, f) in m.fields.iter().enumerate() {
         shifts.push(shift);
         let at = o.payload + f.offset + shift;
+        let f = &*record_sized(m, f, |name| {
+            let c = m.fields.iter().position(|c| c.name == name)?;
+            let cf = &m.fields[c];
+            let cat = o.payload + cf.offset + shifts.get(c).copied().unwrap_or(0);
+            text.get(cat..cat + cf.width)
+                .map(|b| read_uint(b, order) as i64)
+        });
         let n = match &f.repeat {
             Some(r) => {
                 let fixed_after: usize = m.fields[i + 1..]

@@ -705,7 +705,10 @@ impl Message {
         self.layout.len
             + self
                 .repeats()
-                .map(|(_, f, r)| f.elements_len(r.min))
+                .map(|(_, f, r)| match f.record_bytes_from() {
+                    Some(_) => r.min.saturating_mul(f.min_element_width()),
+                    None => f.elements_len(r.min),
+                })
                 .sum::<usize>()
     }
 
@@ -833,6 +836,10 @@ pub struct Field {
     /// from the record's first byte; `width` is their sum (one element's bytes). Empty for
     /// every other field.
     pub record: Vec<Field>,
+    /// A record's last field whose bytes an earlier field of the message gives (`bytes:`):
+    /// that field's index. Its `width` is its type's (the most it takes); in a frame it takes
+    /// the named field's value, 1 up to that. The record's `width` counts it at its most.
+    pub bytes_from: Option<usize>,
 }
 
 /// A fixed number of elements, each `bits` wide, packed into one bit stream (CRSF's 16 × 11-bit
@@ -1020,6 +1027,37 @@ impl Field {
     /// Whether it is a repeated record (`type: record`), whose elements are groups of fields.
     pub fn is_record(&self) -> bool {
         self.ty == FieldType::Record
+    }
+
+    /// A repeated record whose last field's bytes an earlier field gives (`bytes:`): that
+    /// field's index in the message.
+    pub fn record_bytes_from(&self) -> Option<usize> {
+        self.record.last().and_then(|g| g.bytes_from)
+    }
+
+    /// The narrowest a record element can be: its width with its last field at one byte
+    /// where an earlier field gives that field's bytes (else its width).
+    pub fn min_element_width(&self) -> usize {
+        match (self.record_bytes_from(), self.record.last()) {
+            (Some(_), Some(g)) => self.width - g.width + 1,
+            _ => self.width,
+        }
+    }
+
+    /// This repeated record as one frame has it, its last field `bytes` wide where an earlier
+    /// field gives that (`bytes:`); the record as it is otherwise.
+    pub fn record_in_frame(&self, bytes: usize) -> std::borrow::Cow<'_, Field> {
+        match (self.record_bytes_from(), self.record.last()) {
+            (Some(_), Some(g)) => {
+                let mut f = self.clone();
+                f.width = self.width - g.width + bytes;
+                if let Some(last) = f.record.last_mut() {
+                    last.width = bytes;
+                }
+                std::borrow::Cow::Owned(f)
+            }
+            _ => std::borrow::Cow::Borrowed(self),
+        }
     }
 
     /// The name a record's field `j` goes by in errors: `blocks.position`.

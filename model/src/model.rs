@@ -662,6 +662,10 @@ pub struct Field {
     /// A record's fields (`type: record`), each of a fixed width, in wire order.
     #[serde(default)]
     pub fields: Vec<Field>,
+    /// A record's last field only: its bytes on the wire are the value of this earlier field
+    /// of the message (Dynamixel SYNC_WRITE's `data_length`), 1 up to its type's width.
+    #[serde(default)]
+    pub bytes: Option<String>,
     #[serde(default)]
     pub doc: Option<String>,
 }
@@ -686,6 +690,7 @@ impl Field {
             "packed" => self.packed.is_some(),
             "follows" => self.follows.is_some(),
             "fields" => !self.fields.is_empty(),
+            "bytes" => self.bytes.is_some(),
             // The validator's own key lists name only these: a misspelt one is its bug.
             _ => {
                 debug_assert!(false, "`{key}` is no key of a field");

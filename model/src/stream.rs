@@ -361,6 +361,10 @@ pub struct StreamDecoder<'p> {
     noise_at: u64,
     /// Command index of the last request seen since the previous response.
     last_request: Option<usize>,
+    /// That request's frame: a reply it settles must also agree with its values (a READ's
+    /// reply holds as many bytes as it asked for), as the generated stream decoder checks
+    /// `decode_reply` against the request it keeps; a reply that does not is decoded alone.
+    last_frame: Option<Frame<'p>>,
     default_request: Option<usize>,
     /// The spec with its rules lifted ([`relaxed`]), made at the first out-of-spec frame.
     relaxed: Option<Box<Protocol>>,
@@ -447,6 +451,7 @@ impl<'p> StreamDecoder<'p> {
             noise: Vec::new(),
             noise_at: 0,
             last_request: None,
+            last_frame: None,
             default_request: None,
             relaxed: None,
             spare_bytes: Vec::new(),
@@ -841,7 +846,13 @@ impl<'p> StreamDecoder<'p> {
             (Some([_, responses]), 2) => responses,
             _ => &self.lookup,
         };
-        let decoded = lookup.decode_paired_reusing(self.p, request, wire, &mut self.spare);
+        let mut decoded = lookup.decode_paired_reusing(self.p, request, wire, &mut self.spare);
+        if let (Ok(f), Some(q), Some(_)) = (&decoded, &self.last_frame, self.last_request) {
+            if f.message.direction == Direction::Response && interp::answers(self.p, q, f).is_err()
+            {
+                decoded = lookup.decode_paired_reusing(self.p, None, wire, &mut self.spare);
+            }
+        }
         let values = std::mem::take(&mut self.spare.values);
         if values.capacity() > 0 {
             // Not taken: no frame decoded.
@@ -859,6 +870,7 @@ impl<'p> StreamDecoder<'p> {
         out.push(match found {
             Ok(frame) => {
                 self.pair(frame.message);
+                self.last_frame = self.last_request.map(|_| frame.clone());
                 Event::Frame {
                     offset,
                     bytes,
@@ -994,6 +1006,11 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
     let mut shift = 0usize;
     for f in &m.fields {
         let offset = at.payload + f.offset + shift;
+        // A record whose last field's bytes a field gives: as wide as the frame says.
+        let f = &*interp::record_sized(m, f, |name| match frame.get(name) {
+            Some(Raw::Int(v)) => Some(*v),
+            _ => None,
+        });
         if let (Some(_), Some(n)) = (&f.repeat, frame.get(&f.name).and_then(Raw::elements)) {
             shift += f.elements_len(n);
         }

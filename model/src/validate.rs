@@ -1900,6 +1900,27 @@ fn message_body(
         out.push(field);
     }
     let lists = out.iter().filter(|f| f.repeat.is_some()).count();
+    // A record whose width a field gives: the one list, last, framed by a length field (a
+    // stream decoder lists no lengths of it beforehand, nor places fields after it).
+    if let Some((i, f)) = out
+        .iter()
+        .enumerate()
+        .find(|(_, f)| f.record_bytes_from().is_some())
+    {
+        let g = f.record.last().map_or("", |g| g.name.as_str());
+        let bp = join(&join(&join(&join(&fpath, &f.name), "fields"), g), "bytes");
+        if framing.length.is_none() {
+            sink.error(
+                &bp,
+                "a record whose width a field gives needs a length field (framing.length) to frame it",
+            );
+        } else if lists > 1 || i + 1 != out.len() {
+            sink.error(
+                &bp,
+                "a record whose width a field gives is the message's only repeated field and its last field",
+            );
+        }
+    }
     if lists > MAX_LISTS {
         sink.error(
             &fpath,
@@ -2001,7 +2022,14 @@ fn field(
         packed: None,
         follows: None,
         record: Vec::new(),
+        bytes_from: None,
     };
+    if f.bytes.is_some() {
+        sink.error(
+            join(p, "bytes"),
+            "`bytes` is only for a record's last field (its bytes given by an earlier field of the message)",
+        );
+    }
     if f.ty != T::Record && !f.fields.is_empty() {
         sink.error(
             join(p, "fields"),
@@ -2328,7 +2356,12 @@ fn record_field(
         if refused {
             continue;
         }
-        let sub = field(g, &gp, offset, byte_order, &[], refs, sink);
+        let mut plain = g.clone();
+        plain.bytes = None;
+        let mut sub = field(&plain, &gp, offset, byte_order, &[], refs, sink);
+        if let Some(by) = &g.bytes {
+            sub.bytes_from = record_bytes(g, by, &gp, f, earlier, sink);
+        }
         offset += sub.width;
         out.record.push(sub);
     }
@@ -2341,6 +2374,71 @@ fn record_field(
         ),
     }
     out
+}
+
+/// An unsigned plain number field: what counts a list or gives a record's width (no sign,
+/// 64-bit or float type, BCD, text, bits or list).
+fn plain_unsigned(f: &Field) -> bool {
+    !f.signed && !f.is_wide() && !f.bcd && !f.is_ascii() && f.bits.is_empty() && !f.is_list()
+}
+
+/// A record's last field whose bytes an earlier field of the message gives (`bytes:
+/// data_length`, Dynamixel SYNC_WRITE): that field's index, where it is an unsigned plain
+/// number field and the record runs to the end of the frame.
+fn record_bytes(
+    g: &model::Field,
+    by: &str,
+    gp: &str,
+    f: &model::Field,
+    earlier: &[Field],
+    sink: &mut Sink,
+) -> Option<usize> {
+    let path = join(gp, "bytes");
+    if f.fields.last().map(|l| l.name.as_str()) != Some(g.name.as_str()) {
+        sink.error(
+            &path,
+            "only a record's last field takes its bytes from another field (the fields after it would move)",
+        );
+        return None;
+    }
+    if f.repeat.as_ref().is_some_and(|r| r.request.is_some()) {
+        sink.error(
+            &path,
+            "records whose width a field gives take no count from the request (not expressible yet)",
+        );
+        return None;
+    }
+    if f.repeat.as_ref().is_some_and(|r| r.count != "end") {
+        sink.error(
+            &path,
+            "a record whose width a field gives runs to the `end` of the frame (count: end); counted records of it are not expressible yet",
+        );
+        return None;
+    }
+    match earlier.iter().position(|e| e.name == by) {
+        Some(i)
+            if plain_unsigned(&earlier[i])
+                && earlier[i].equals.is_none()
+                && earlier[i].follows.is_none()
+                && earlier[i].constant.is_none() =>
+        {
+            Some(i)
+        }
+        Some(_) => {
+            sink.error(
+                &path,
+                format!("`{by}` is not an unsigned number field the sender sets"),
+            );
+            None
+        }
+        None => {
+            sink.error(
+                &path,
+                format!("refers to `{by}`, which is not an earlier field of this message"),
+            );
+            None
+        }
+    }
 }
 
 /// `ceil(name × multiply / divide)`, each factor 1..=65535 (default 1).
@@ -2399,19 +2497,10 @@ fn repeat(
         Count::ToEnd
     } else {
         match earlier.iter().position(|e| e.name == r.count) {
-            Some(i)
-                if !earlier[i].signed
-                    && !earlier[i].is_wide()
-                    && !earlier[i].bcd
-                    && !earlier[i].is_ascii()
-                    && earlier[i].bits.is_empty()
-                    && !earlier[i].is_list() =>
-            {
-                match of {
-                    model::CountOf::Elements => Count::Elements(i),
-                    model::CountOf::Bytes => Count::Bytes(i),
-                }
-            }
+            Some(i) if plain_unsigned(&earlier[i]) => match of {
+                model::CountOf::Elements => Count::Elements(i),
+                model::CountOf::Bytes => Count::Bytes(i),
+            },
             Some(_) => {
                 sink.error(
                     join(p, "count"),

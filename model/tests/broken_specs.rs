@@ -50,6 +50,43 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "record_field_without_unit",
         &[("commands.sync_write.fields.blocks.fields.id", "a number field needs a `unit`")],
     ),
+    // ---- records whose width a field gives (made from valid/records_sized, without its
+    // examples)
+    (
+        "record_bytes_not_last",
+        &[("commands.sync_write.fields.blocks.fields.data.bytes", "only a record's last field takes its bytes from another field")],
+    ),
+    (
+        "record_bytes_unknown",
+        &[("commands.sync_write.fields.blocks.fields.data.bytes", "refers to `data_size`, which is not an earlier field of this message")],
+    ),
+    (
+        "record_bytes_counted",
+        &[("commands.sync_write.fields.blocks.fields.data.bytes", "a record whose width a field gives runs to the `end` of the frame")],
+    ),
+    (
+        "record_bytes_plain_field",
+        &[("commands.sync_write.fields.start_address.bytes", "`bytes` is only for a record's last field")],
+    ),
+    (
+        "record_bytes_field_after",
+        &[("commands.sync_write.fields.blocks.fields.data.bytes", "is the message's only repeated field and its last field")],
+    ),
+    (
+        "record_bytes_signed_width",
+        &[("commands.trim.fields.offsets.fields.offset.bytes", "`width` is not an unsigned number field the sender sets")],
+    ),
+    (
+        "record_bytes_by_request",
+        &[("responses.trim_reply.fields.vals.fields.v.bytes", "take no count from the request")],
+    ),
+    (
+        "record_bytes_without_length",
+        &[
+            ("commands.sync_write.fields.blocks.fields.data.bytes", "needs a length field (framing.length)"),
+            ("commands.trim.fields.offsets.fields.offset.bytes", "needs a length field (framing.length)"),
+        ],
+    ),
     // ---- escaping and stuffing (made from valid/slip_sensor, hdlc_like, cobs_link and
     // dynamixel2_stuffed, without their examples)
     (

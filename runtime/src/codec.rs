@@ -22,7 +22,7 @@ pub use crate::lists::{Lists, Split};
 pub use crate::repeated::{
     encode_packed_in_range, list, list_bits, pack, packed_in_range, packed_padding, read_bits,
     read_elements, records, unpack, write_bits, write_elements, CountBy, CountField, Element,
-    RepeatAt,
+    RepeatAt, SizedBy,
 };
 pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;
@@ -1325,6 +1325,47 @@ pub fn following<T: Wire>(
             expected,
             found: found.to_i64(),
         });
+    }
+    Ok(())
+}
+
+/// The integer the bytes of a record's last field hold where another field gives their number
+/// (1 to 4; `signed`: sign-extended from their width).
+#[inline]
+pub fn sized_int(bytes: &[u8], le: bool, signed: bool) -> i64 {
+    let v = uint(bytes, le);
+    let bits = 8 * bytes.len() as u32;
+    if signed && (1..64).contains(&bits) && v >> (bits - 1) & 1 == 1 {
+        (v as i64) - (1i64 << bits)
+    } else {
+        v as i64
+    }
+}
+
+/// Writes `v` into all of `out` (`le`: least significant byte first), a record's last field
+/// as many bytes wide as another field says: [`EncodeError::OutOfRange`] where it does not fit
+/// them (`signed`: as a signed integer of that width).
+#[inline]
+pub fn write_sized(
+    field: &'static str,
+    v: i64,
+    signed: bool,
+    le: bool,
+    out: &mut [u8],
+) -> Result<(), EncodeError> {
+    let bits = 8 * out.len() as u32;
+    let (lo, hi) = if signed {
+        (-(1i64 << (bits - 1)), (1i64 << (bits - 1)) - 1)
+    } else {
+        (0, (1i64 << bits) - 1)
+    };
+    if bits == 0 || bits > 32 || v < lo || v > hi {
+        return Err(EncodeError::OutOfRange { field });
+    }
+    let n = out.len();
+    for (i, b) in out.iter_mut().enumerate() {
+        let k = if le { i } else { n - 1 - i };
+        *b = (v >> (8 * k)) as u8;
     }
     Ok(())
 }

@@ -667,6 +667,15 @@ pub enum DecodeError {
     /// The bytes as they travel break the protocol's escaping (`framing.escaping`) at
     /// `offset` (counted in the escaped bytes).
     BadEscape { offset: usize, fault: EscapeFault },
+    /// The field `field` at `offset` gives each record's last field `found` bytes
+    /// (`bytes:` in the spec), outside `1..=most`: the frame's records cannot be laid out.
+    BadWidth {
+        message: &'static str,
+        field: &'static str,
+        offset: usize,
+        found: i64,
+        most: usize,
+    },
 }
 
 /// What is wrong with escaped bytes ([`DecodeError::BadEscape`]), as the interpreter's
@@ -802,6 +811,7 @@ impl DecodeError {
             DecodeError::Truncated { .. } => 1,
             DecodeError::WrongLength { .. }
             | DecodeError::BadCount { .. }
+            | DecodeError::BadWidth { .. }
             | DecodeError::ByteCount { .. } => 2,
             _ => 3,
         }
@@ -1005,6 +1015,16 @@ impl fmt::Display for DecodeError {
             DecodeError::BadEscape { offset, fault } => {
                 write!(f, "bad escape at offset {offset}: {fault}")
             }
+            DecodeError::BadWidth {
+                message,
+                field,
+                offset,
+                found,
+                most,
+            } => write!(
+                f,
+                "{message}.{field} at offset {offset} is {found}: each record's last field takes 1..={most} bytes"
+            ),
         }
     }
 }

@@ -103,7 +103,9 @@ impl Lists {
             let mut r = self.list(k);
             r.at += shift;
             r.count = match r.count {
-                CountBy::End => CountBy::End,
+                // Records whose width a field gives are a message's only list (validated):
+                // never in `Lists`.
+                CountBy::End | CountBy::EndSized(_) => CountBy::End,
                 CountBy::Elements(c) => CountBy::Elements(self.moved(c, &bytes[..k])),
                 CountBy::Bytes(c) => CountBy::Bytes(self.moved(c, &bytes[..k])),
             };
@@ -119,7 +121,7 @@ impl Lists {
                 expected,
             };
             let count = match r.count {
-                CountBy::End => {
+                CountBy::End | CountBy::EndSized(_) => {
                     if !bits && rest % w != 0 {
                         return Err(bad(rest as i64, CountRule::Whole(r.width)));
                     }
@@ -207,7 +209,7 @@ impl Lists {
         let mut total = self.base;
         for (k, r) in self.lists.iter().enumerate().take(64) {
             let (c, by_bytes) = match r.count {
-                CountBy::End => return None,
+                CountBy::End | CountBy::EndSized(_) => return None,
                 CountBy::Elements(c) => (c, false),
                 CountBy::Bytes(c) => (c, true),
             };

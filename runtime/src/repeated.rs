@@ -438,6 +438,21 @@ pub enum CountBy {
     Elements(CountField),
     /// An earlier field holds the number of bytes the elements take.
     Bytes(CountField),
+    /// Records to the end of the frame whose last field's bytes an earlier field gives
+    /// (Dynamixel 2.0 SYNC_WRITE's `data_length`): each record takes
+    /// `fixed` + that field's value, which must be 1..=`most`. The `width` of its
+    /// [`RepeatAt`] is a record at its widest.
+    EndSized(SizedBy),
+}
+
+/// The field that gives the bytes of each record's last field ([`CountBy::EndSized`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SizedBy {
+    pub field: CountField,
+    /// The bytes of a record's other fields.
+    pub fixed: usize,
+    /// The most bytes the last field takes (its type's width).
+    pub most: usize,
 }
 
 /// An unsigned field of the frame that counts a repeated field's elements or bytes.
@@ -471,6 +486,50 @@ pub(crate) fn beyond(frame: &[u8], base: usize) -> Result<usize, DecodeError> {
 }
 
 impl RepeatAt {
+    /// The bytes one element takes in `frame` (or its fixed head): [`Self::width`], or for
+    /// records whose last field's bytes a field gives, their fixed bytes plus its value
+    /// (held to `1..=most`; [`Self::count`] refuses any other).
+    #[inline]
+    pub fn element_width(&self, frame: &[u8]) -> usize {
+        match self.count {
+            CountBy::EndSized(s) => {
+                let v = s.field.read(frame).unwrap_or(1).clamp(1, s.most as u64);
+                s.fixed + v as usize
+            }
+            _ => self.width,
+        }
+    }
+
+    /// The length of a frame of records whose last field's bytes a field gives, holding
+    /// `held` records with that field `width` bytes wide: [`EncodeError::NotInRange`] for a
+    /// width outside `1..=most` (naming that field) or a count outside the bounds. Any other
+    /// list: [`Self::encode_len`].
+    #[inline]
+    pub fn encode_len_sized(&self, held: usize, width: u64) -> Result<usize, EncodeError> {
+        let CountBy::EndSized(s) = self.count else {
+            return self.encode_len(held);
+        };
+        if width < 1 || width > s.most as u64 {
+            return Err(EncodeError::NotInRange {
+                field: s.field.name,
+                value: width as i64,
+                min: 1,
+                max: s.most as i64,
+                kind: crate::NumKind::Int,
+            });
+        }
+        if held < self.min || held > self.max {
+            return Err(EncodeError::NotInRange {
+                field: self.field,
+                value: held as i64,
+                min: self.min as i64,
+                max: self.max as i64,
+                kind: crate::NumKind::Int,
+            });
+        }
+        Ok(self.base + held * (s.fixed + width as usize))
+    }
+
     /// Bytes `n` elements take.
     #[inline]
     pub const fn bytes_of(&self, n: usize) -> usize {
@@ -494,14 +553,28 @@ impl RepeatAt {
             expected,
         };
         let extra = beyond(frame, self.base)?;
-        let whole = self.width == 0 || extra % self.width == 0;
+        // Records whose width a field gives: that field first, within 1..=its most.
+        if let CountBy::EndSized(s) = self.count {
+            let v = s.field.read(frame).unwrap_or(0);
+            if v < 1 || v > s.most as u64 {
+                return Err(DecodeError::BadWidth {
+                    message: self.message,
+                    field: s.field.name,
+                    offset: s.field.at,
+                    found: v as i64,
+                    most: s.most,
+                });
+            }
+        }
+        let width = self.element_width(frame);
+        let whole = width == 0 || extra % width == 0;
         // Bits (width 0) come eight to a byte.
-        let mut n = extra
-            .checked_div(self.width)
-            .unwrap_or(extra.saturating_mul(8));
+        let mut n = extra.checked_div(width).unwrap_or(extra.saturating_mul(8));
         match self.count {
-            CountBy::End if !whole => return Err(bad(extra as i64, CountRule::Whole(self.width))),
-            CountBy::End => {}
+            CountBy::End | CountBy::EndSized(_) if !whole => {
+                return Err(bad(extra as i64, CountRule::Whole(width)))
+            }
+            CountBy::End | CountBy::EndSized(_) => {}
             CountBy::Elements(c) => {
                 // Bits by count: as many as it says, the last byte's padding left out.
                 let v = c.read(frame).unwrap_or(0);
@@ -546,7 +619,7 @@ impl RepeatAt {
     #[inline]
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
         let (c, bytes) = match self.count {
-            CountBy::End => return None,
+            CountBy::End | CountBy::EndSized(_) => return None,
             CountBy::Elements(c) => (c, false),
             CountBy::Bytes(c) => (c, true),
         };
@@ -681,7 +754,7 @@ impl RepeatAt {
                     (v / w + 1, v / w)
                 }
             }
-            CountBy::Elements(_) | CountBy::End => (v, v),
+            CountBy::Elements(_) | CountBy::End | CountBy::EndSized(_) => (v, v),
         }
     }
 
@@ -697,6 +770,7 @@ impl RepeatAt {
         let bytes = match self.count {
             // Bits by bytes or to the end: every byte before the checksum.
             CountBy::End | CountBy::Bytes(_) if self.width == 0 => n / 8,
+            CountBy::EndSized(_) => n * self.element_width(frame),
             _ => self.bytes_of(n),
         };
         let head = frame.first_chunk::<AT>();
@@ -780,7 +854,7 @@ impl RepeatAt {
             CountBy::Elements(_) => held,
             CountBy::Bytes(_) if self.width == 0 => held.div_ceil(8),
             CountBy::Bytes(_) => held * self.width,
-            CountBy::End => 0,
+            CountBy::End | CountBy::EndSized(_) => 0,
         }
     }
 

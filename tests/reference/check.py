@@ -1,4 +1,4 @@
-"""busspec's Modbus RTU, Dynamixel 1.0, Pelco D and CRSF specs against the reference implementations.
+"""busspec's Modbus RTU, Dynamixel 1.0 and 2.0, Pelco D and CRSF specs against the reference implementations.
 
 Each way, for every function code / instruction:
 - peer -> busspec: the peer's own encoder builds a frame; `busspec decode --spec` must decode it
@@ -468,6 +468,187 @@ def check_dynamixel_erratum():
         count("dynamixel-sdk", "busspec -> peer (refused by the peer: erratum dxl-e01)")
 
 
+# ------------------------------------------------------- Dynamixel 2.0 (dynamixel-sdk)
+#
+# The SDK's protocol 2.0 packet handler writes each instruction packet to the port (byte
+# stuffing and CRC-16 applied by its txPacket) and parses status packets with its rxPacket
+# (CRC checked, stuffing removed); the port is the Port above.
+
+DYNAMIXEL2 = os.path.join(ROOT, "spec", "dynamixel2.yaml")
+
+
+def stuffable(n):
+    """n random bytes, now and then holding the FF FF FD that byte stuffing escapes."""
+    data = [rng.randrange(256) for _ in range(n)]
+    if n >= 3 and rng.random() < 0.4:
+        at = rng.randrange(n - 2)
+        data[at:at + 3] = [0xFF, 0xFF, 0xFD]
+    return data
+
+
+def unstuffed(frame):
+    """Whether an instruction packet holds FF FF FD after its header without the stuffed FD."""
+    body = frame[7:-2]
+    for i in range(len(body)):
+        ctx = frame[i + 5:i + 8]
+        if body[i] == 0xFD and ctx[:2] == b"\xff\xff" and (i + 1 >= len(body) or body[i + 1] != 0xFD):
+            return True
+    return False
+
+
+def sdk_stuffed(ph, frame):
+    """`frame` as the SDK's addStuffing stuffs it, its CRC computed again over the result."""
+    p = ph.addStuffing(list(frame))
+    crc = ph.updateCRC(0, p, len(p) - 2)
+    p[-2], p[-1] = crc & 0xFF, crc >> 8
+    return bytes(p)
+
+
+def dxl2_cases():
+    """(sdk call sending a request, busspec values of that request, the ID it goes to)."""
+    ph = dxl.PacketHandler(2.0)
+    cases = []
+
+    def ping(p, d):
+        tx = [0] * 10
+        tx[4], tx[5], tx[7] = d, 3, dxl.INST_PING
+        ph.txPacket(p, tx)
+
+    for dev in (0, 1, 7, 100, 252, 0xFE):
+        cases.append((lambda p, d=dev: ping(p, d), {"message": "ping"}, dev))
+        cases.append((lambda p, d=dev: ph.action(p, d), {"message": "action"}, dev))
+        cases.append((lambda p, d=dev: ph.reboot(p, d), {"message": "reboot"}, dev))
+        cases.append((lambda p, d=dev: ph.clearMultiTurn(p, d), {"message": "clear"}, dev))
+        for option, name in ((0xFF, "reset_all"), (0x01, "except_id"), (0x02, "except_id_and_baud")):
+            cases.append((lambda p, d=dev, o=option: ph.factoryReset(p, d, o),
+                          {"message": "factory_reset", "option": name}, dev))
+        for addr in (0, 64, 116, 0x1FF, 0xFFFD):
+            for n in (1, 2, 4, 16, 64, 200):
+                data = stuffable(n)
+                if dev != 0xFE:
+                    cases.append((lambda p, d=dev, a=addr, n=n: ph.readTx(p, d, a, n),
+                                  {"message": "read", "address": addr, "length": n}, dev))
+                cases.append((lambda p, d=dev, a=addr, n=n, x=data: ph.writeTxOnly(p, d, a, n, x),
+                              {"message": "write", "address": addr, "data": data}, dev))
+                cases.append((lambda p, d=dev, a=addr, n=n, x=data: ph.regWriteTxOnly(p, d, a, n, x),
+                              {"message": "reg_write", "address": addr, "data": data}, dev))
+    for addr in (0, 116, 0x1FD):
+        for n in (1, 2, 3, 4):
+            for ids in ([1], [1, 2], list(range(0, 40)), [0xFF, 0xFF, 0xFD][:0] or [252, 0, 17]):
+                cases.append((lambda p, a=addr, n=n, i=ids: ph.syncReadTx(p, a, n, i, len(i), False),
+                              {"message": "sync_read", "address": addr, "length": n, "ids": ids}, 0xFE))
+                blocks, param = [], []
+                for i in ids[:50]:
+                    data = stuffable(n)
+                    blocks.append({"id": i, "data": int.from_bytes(bytes(data), "little")})
+                    param += [i] + data
+                cases.append((lambda p, a=addr, n=n, x=param: ph.syncWriteTxOnly(p, a, n, x, len(x)),
+                              {"message": "sync_write", "address": addr, "data_length": n, "blocks": blocks}, 0xFE))
+    for k in (1, 2, 5, 30):
+        blocks, param, wparam = [], [], []
+        for j in range(k):
+            i, a, n = rng.randrange(253), rng.randrange(0x10000), rng.randrange(1, 40)
+            blocks.append({"id": i, "address": a, "length": n})
+            param += [i, a & 0xFF, a >> 8, n & 0xFF, n >> 8]
+            if len(wparam) < 200:
+                data = stuffable(n)
+                wparam += [i, a & 0xFF, a >> 8, n & 0xFF, n >> 8] + data
+        cases.append((lambda p, x=param: ph.bulkReadTx(p, x, len(x), False),
+                      {"message": "bulk_read", "blocks": blocks}, 0xFE))
+        if len(wparam) <= 255:
+            cases.append((lambda p, x=wparam: ph.bulkWriteTxOnly(p, x, len(x)),
+                          {"message": "bulk_write", "blocks": wparam}, 0xFE))
+    return ph, cases
+
+
+def check_dynamixel2():
+    peer = "dynamixel-sdk (protocol 2.0)"
+    ph, cases = dxl2_cases()
+    sent = []
+    for call, want, dev in cases:
+        port = Port()
+        call(port)
+        if not port.written:
+            fail(f"the SDK sent nothing for {want}")
+        sent.append((port.written, want, dev))
+    # The SDK's txPacket drops what addStuffing returns: a packet whose parameters hold
+    # FF FF FD goes out unstuffed (erratum dxl2-e05). busspec refuses those, as the e-Manual's
+    # receiver would; the others decode to the values they were built from.
+    plain = [s for s in sent if not unstuffed(s[0])]
+    got = decode(DYNAMIXEL2, "dynamixel2", [s for s, _, _ in plain], ["--direction", "request"])
+    for (frame, want, dev), g in zip(plain, got):
+        expect(frame, g, want, peer)
+        if g["address"] != dev:
+            fail(f"{peer} frame {frame.hex()}: busspec reads ID {g['address']}, the SDK sent {dev}")
+        count(peer, "peer -> busspec")
+    for frame, want, _ in sent:
+        if unstuffed(frame):
+            rc, _, err = both_engines("decode", DYNAMIXEL2, "dynamixel2", ["--direction", "request", frame.hex()])
+            if rc == 0 or "bad escape" not in err:
+                fail(f"{peer} frame {frame.hex()} ({want['message']}, unstuffed): busspec answers {rc} {err.strip()}")
+            count(peer, "peer -> busspec (unstuffed, refused by busspec: erratum dxl2-e05)")
+    # busspec -> SDK, requests: what busspec encodes from the same values is what the SDK sends
+    # (stuffed as its own addStuffing stuffs, CRC over the stuffed packet).
+    objs = [{"message": w["message"], "address": dev,
+             "fields": {k: v for k, v in w.items() if k != "message"}} for _, w, dev in sent]
+    for frame, (sdk, want, _) in zip(encode(DYNAMIXEL2, "dynamixel2", objs), sent):
+        if frame != sdk_stuffed(ph, sdk):
+            fail(f"{want['message']}: busspec encodes {frame.hex()}, the SDK sends {sdk.hex()}")
+        count(peer, "busspec -> peer")
+    # Status packets: the SDK's rxPacket reads what busspec encodes (ID, error byte,
+    # parameters), and busspec decodes them back as the reply to the request they answer.
+    statuses = []
+    for dev in (0, 1, 7, 252):
+        for error in (0, 1, 2, 7, 0x80, 0x85):
+            alert, number = error >> 7, error & 0x7F
+            statuses.append(({"message": "status", "address": dev,
+                              "fields": {"alert": alert, "error_number": number}}, error, [], "write", None))
+            model, fw = rng.randrange(0x10000), rng.randrange(256)
+            statuses.append(({"message": "ping_status", "address": dev,
+                              "fields": {"ping_alert": alert, "ping_error_number": number,
+                                         "model_number": model, "firmware_version": fw}},
+                             error, [model & 0xFF, model >> 8, fw], "ping", None))
+            for n in (1, 2, 3, 4, 32, 200):
+                data = stuffable(n)
+                statuses.append(({"message": "read_status", "address": dev,
+                                  "fields": {"read_alert": alert, "read_error_number": number, "data": data}},
+                                 error, data, "read", {"address": 0, "length": n}))
+                statuses.append(({"message": "bulk_read_status", "address": dev,
+                                  "fields": {"bulk_alert": alert, "bulk_error_number": number, "data": data}},
+                                 error, data, "bulk_read", None))
+    frames = encode(DYNAMIXEL2, "dynamixel2", [s[0] for s in statuses])
+    for frame, (obj, error, params, cmd, req) in zip(frames, statuses):
+        port = Port()
+        port.incoming = frame
+        rx, result = ph.rxPacket(port, False)
+        if result != dxl.COMM_SUCCESS:
+            fail(f"the SDK refuses busspec's status packet {frame.hex()}: {ph.getTxRxResult(result)}")
+        length = rx[5] | rx[6] << 8
+        got = rx[9:9 + length - 4]
+        if rx[4] != obj["address"] or rx[8] != error or got != params:
+            fail(f"the SDK reads {frame.hex()} as ID {rx[4]}, error {rx[8]}, parameters {got}; busspec wrote {obj}")
+        count(peer, "busspec -> peer")
+        # And back, as the reply to its command (READ: to a request of that many bytes).
+        extra = ["--reply-to", cmd]
+        if req is not None:
+            (q,) = encode(DYNAMIXEL2, "dynamixel2", [{"message": cmd, "address": obj["address"], "fields": req}])
+            extra = ["--request", q.hex()]
+        (g,) = decode(DYNAMIXEL2, "dynamixel2", [frame], extra)
+        expect(frame, g, {"message": obj["message"], **obj["fields"]}, peer)
+        count(peer, "peer -> busspec (status packets the SDK accepted)")
+
+
+def check_dynamixel2_errata():
+    """dxl2-e01: a Sync Write of more than four bytes a device the SDK builds, busspec refuses."""
+    ph = dxl.PacketHandler(2.0)
+    port = Port()
+    ph.syncWriteTxOnly(port, 116, 8, [1] + list(range(8)), 9)
+    rc, _, err = both_engines("decode", DYNAMIXEL2, "dynamixel2", ["--direction", "request", port.written.hex()])
+    if rc == 0 or "data_length" not in err:
+        fail(f"busspec now decodes {port.written.hex()} (8 bytes a device): erratum dxl2-e01 is out of date")
+    count("dynamixel-sdk (protocol 2.0)", "peer -> busspec (refused by busspec: erratum dxl2-e01)")
+
+
 # --------------------------------------------------------------- Pelco D (pyptzcontroller)
 #
 # pyptzcontroller 0.1.2's PtzControl writes its frames to a serial port and reads a position
@@ -882,6 +1063,8 @@ def check_crsf():
 check_modbus()
 check_dynamixel()
 check_dynamixel_erratum()
+check_dynamixel2()
+check_dynamixel2_errata()
 check_pelco_d()
 check_crsf()
 for (peer, way), n in sorted(counts.items()):

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Checks spec/modbus.yaml, spec/dynamixel.yaml, spec/pelco_d.yaml and spec/crsf.yaml against the
-# reference implementations: pymodbus, the ROBOTIS dynamixel-sdk, pyptzcontroller (a Pelco D camera
+# Checks spec/modbus.yaml, spec/dynamixel.yaml, spec/dynamixel2.yaml, spec/pelco_d.yaml and
+# spec/crsf.yaml against the reference implementations: pymodbus, the ROBOTIS dynamixel-sdk
+# (its protocol 1.0 and 2.0 packet handlers), pyptzcontroller (a Pelco D camera
 # controller) and crsf-parser (CRSF, with construct, which it parses with), installed from PyPI
 # into a virtual environment under
 # target/ that this script makes (rebuilt when missing). Frames each peer's encoders build must

@@ -111,7 +111,20 @@ pub(super) fn emit_encode_arm(
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             stmts.push(quote!(#c.encode_in_range(#v.as_slice(), #lo, #hi)?;));
         }
-        stmts.push(quote!(let frame_len = #c.encode_len(#v.len())?;));
+        match sized_record(m, f).and_then(|(wf, ..)| {
+            let l = ls
+                .iter()
+                .find(|l| std::ptr::eq(l.field, wf) && l.bits.is_none())?;
+            raw_of(ctx, l, &local(l.name))
+        }) {
+            Some((_, raw)) => {
+                // The records' last field as wide as its width field says (1..=its most).
+                let last = sized_local();
+                stmts.push(quote!(let frame_len = #c.encode_len_sized(#v.len(), (#raw) as u64)?;));
+                stmts.push(quote!(let #last = (#raw) as usize;));
+            }
+            None => stmts.push(quote!(let frame_len = #c.encode_len(#v.len())?;)),
+        }
     }
     // The bytes known without a field value (start byte, address, code, constant fields), one
     // write per contiguous run.

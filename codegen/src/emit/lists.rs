@@ -39,6 +39,16 @@ pub(super) fn repeat_at(m: &Message, f: &Field, r: &busspec_model::ir::Repeat) -
         quote!(rt::CountField { name: #cn, at: #cat, width: #cw, le: #le })
     };
     let count = match r.count {
+        Count::ToEnd if sized_record(m, f).is_some() => {
+            let (wf, fixed, most) = sized_record(m, f).unwrap_or((f, 0, 1));
+            let i = m
+                .fields
+                .iter()
+                .position(|g| std::ptr::eq(g, wf))
+                .unwrap_or(0);
+            let (c, fixed, most) = (counter(i), usize_lit(fixed), usize_lit(most));
+            quote!(rt::CountBy::EndSized(rt::SizedBy { field: #c, fixed: #fixed, most: #most }))
+        }
         Count::ToEnd => quote!(rt::CountBy::End),
         Count::Elements(i) => {
             let c = counter(i);
@@ -107,8 +117,38 @@ pub(super) fn repeated(m: &Message) -> Vec<usize> {
         .collect()
 }
 
+/// A repeated record whose last field's bytes an earlier field gives (`bytes:`): that field,
+/// the bytes of the record's other fields, and the most its last field takes.
+pub(super) fn sized_record<'m>(m: &'m Message, f: &Field) -> Option<(&'m Field, usize, usize)> {
+    let wi = f.record_bytes_from()?;
+    let g = f.record.last()?;
+    Some((m.fields.get(wi)?, f.width - g.width, g.width))
+}
+
+/// The local holding the bytes of the last field of each record of a message whose records'
+/// width a field gives (set by encode before the records are written).
+pub(super) fn sized_local() -> Ident {
+    format_ident!("last_width")
+}
+
 /// The statement writing repeated field `f`'s elements (the local `v`) into `out` from `at`.
 pub(super) fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
+    if f.is_record() && f.record_bytes_from().is_some() {
+        // Each record into an array of its widest, then as many bytes as it takes here.
+        let (w, last) = (usize_lit(f.width), sized_local());
+        let fixed = usize_lit(f.width - f.record.last().map_or(0, |g| g.width));
+        return quote! {
+            let rec_width = #fixed + #last;
+            for (k, r) in #v.iter().enumerate() {
+                let mut bytes = [0u8; #w];
+                r.write(&mut bytes, #last)?;
+                let at = #at + k * rec_width;
+                if let (rt::Some(to), rt::Some(from)) = (out.get_mut(at..at + rec_width), bytes.get(..rec_width)) {
+                    to.copy_from_slice(from);
+                }
+            }
+        };
+    }
     if f.is_record() {
         // Each record into an array of its width, then into the frame.
         let w = usize_lit(f.width);
@@ -154,6 +194,26 @@ pub(super) fn decode_repeat(
         }
     };
     let value = match ctx.kind(l) {
+        Kind::Records { ty, max } if f.record_bytes_from().is_some() => {
+            // Each record as wide as the frame's width field says, read from an array of its
+            // widest.
+            let (w, max, v) = (usize_lit(f.width), usize_lit(max), local(&f.name));
+            let fixed = usize_lit(f.width - f.record.last().map_or(0, |g| g.width));
+            let base = usize_lit(m.layout.payload + f.offset);
+            stmts.push(quote! {
+                let rec_width = #c.element_width(frame);
+                let mut #v = rt::Repeated::<#ty, #max>::new();
+                for (k, chunk) in #elements.chunks_exact(rec_width).enumerate() {
+                    let mut bytes = [0u8; #w];
+                    if let rt::Some(to) = bytes.get_mut(..rec_width) {
+                        to.copy_from_slice(chunk);
+                    }
+                    let _ = #v.push(#ty::read(&bytes, #base + k * rec_width, rec_width - #fixed)?);
+                }
+            });
+            let _ = count;
+            return Some(quote!(#v));
+        }
         Kind::Records { ty, max } => {
             // Each record read from an array of its width, at its offset in the frame.
             let (w, max, v) = (usize_lit(f.width), usize_lit(max), local(&f.name));

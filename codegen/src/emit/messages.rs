@@ -70,7 +70,24 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             len_arms.push(quote!(Self::#v { #(#names,)* .. } => #c.base #(+ #sum)*));
         } else if let Some((f, _)) = m.repeat() {
             let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
-            len_arms.push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len())));
+            let sized = sized_record(m, f).and_then(|(wf, fixed, _)| {
+                let wl = ls
+                    .iter()
+                    .find(|l| std::ptr::eq(l.field, wf) && l.bits.is_none())?;
+                Some((wl, raw_of(ctx, wl, &local(wl.name))?.1, fixed))
+            });
+            match sized {
+                Some((wl, raw, fixed)) => {
+                    // Each record as wide as its width field says.
+                    let (wn, wv, fixed) = (ident(wl.name), local(wl.name), usize_lit(fixed));
+                    len_arms.push(quote!(Self::#v { #n: #l, #wn: #wv, .. } => {
+                        let #wv = *#wv;
+                        #c.base + #l.len() * (#fixed + (#raw) as usize)
+                    }));
+                }
+                None => len_arms
+                    .push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len()))),
+            }
         }
         let visits: Vec<TokenStream> = ls
             .iter()

@@ -43,7 +43,10 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
     let mut raws = Vec::new();
     let mut from_raw = Vec::new();
     let mut defaults = Vec::new();
+    // A last field whose bytes another field gives reads and writes `last` bytes.
+    let sized = f.record_bytes_from().is_some();
     for (j, (g, l)) in f.record.iter().zip(&leaves).enumerate() {
+        let is_sized = sized && j + 1 == f.record.len();
         let (gn, v) = (ident(&g.name), local(&g.name));
         let t = ctx.rust_type(l);
         let d = doc(&leaf_doc(p, l));
@@ -52,7 +55,16 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
         let w = wt.ident();
         let name = l.name;
         // Decode: the wire integer, its range, the typed value.
-        let read = read_wire(g, 0);
+        let read = if is_sized {
+            let (at, le, signed) = (
+                usize_lit(g.offset),
+                g.byte_order == ByteOrder::Little,
+                wt.signed,
+            );
+            quote!(rt::sized_int(frame.get(#at..#at + last).unwrap_or(&[]), #le, #signed) as #w)
+        } else {
+            read_wire(g, 0)
+        };
         reads.push(quote!(let #v: #w = #read;));
         if let Some((range_fn, range)) = leaf_range(g, None, wt.limits()) {
             let at = match g.offset {
@@ -76,7 +88,10 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
         }
         let value = paren(to_wire(ctx, l, &v, None));
         let (at, end) = (usize_lit(g.offset), usize_lit(g.offset + g.width));
-        writes.push(if g.width == 1 && !wt.signed {
+        writes.push(if is_sized {
+            let (le, signed) = (g.byte_order == ByteOrder::Little, wt.signed);
+            quote!(rt::write_sized(#name, #value as i64, #signed, #le, out.get_mut(#at..#at + last).unwrap_or(&mut []))?;)
+        } else if g.width == 1 && !wt.signed {
             quote!(out[#at] = #value;)
         } else if g.width == 3 {
             let le = g.byte_order == ByteOrder::Little;
@@ -126,6 +141,12 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
         m.name, f.name, f.width, f.doc
     ));
     let read_doc = " Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.";
+    let (last_param, last_doc) = if sized {
+        let d = " Its last field takes `last` bytes (the frame's width field says how many; the array holds a record at its widest).";
+        (quote!(, last: usize), quote!(#[doc = #d]))
+    } else {
+        (quote!(), quote!())
+    };
     quote! {
         #d
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash #derive_default)]
@@ -138,12 +159,14 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
             /// Its bytes on the wire.
             pub const WIDTH: usize = #width;
             #[doc = #read_doc]
-            pub fn read(frame: &[u8; #width], at: usize) -> rt::DecodeResult<Self> {
+            #last_doc
+            pub fn read(frame: &[u8; #width], at: usize #last_param) -> rt::DecodeResult<Self> {
                 #(#reads)*
                 rt::Ok(Self { #(#built,)* })
             }
             /// Writes the record into its bytes, each field's range checked as the spec says.
-            pub fn write(&self, out: &mut [u8; #width]) -> rt::Result<(), rt::EncodeError> {
+            #last_doc
+            pub fn write(&self, out: &mut [u8; #width] #last_param) -> rt::Result<(), rt::EncodeError> {
                 #(#writes)*
                 rt::Ok(())
             }

@@ -30,6 +30,7 @@ fn field(range: (i64, i64), special: &[i64]) -> Field {
         packed: None,
         follows: None,
         record: Vec::new(),
+        bytes_from: None,
     }
 }
 

@@ -4,7 +4,7 @@
 //! returns normally otherwise.
 //!
 //! For each protocol, one generic body over [`Protocol`] per target, with a thin wrapper per
-//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`], [`pelco_d`], [`pelco_p`], [`crsf`]) that the fuzz
+//! protocol ([`ub2`], [`sd`], [`modbus`], [`dynamixel`], [`pelco_d`], [`pelco_p`], [`crsf`], [`dynamixel2`]) that the fuzz
 //! targets call by name:
 //! * [`decode`]: arbitrary bytes through `decode_request`, `decode_response` and
 //!   `decode_reply`; errors point inside the frame, and every accepted frame
@@ -27,7 +27,7 @@
 //! Modbus and Dynamixel have the generated `decode` and `stream` bodies
 //! (`modbus_generated_decode`, ...), and [`interpreted`] has a decode and a stream body each
 //! for the interpreter on its own (`modbus_decode`, ...), from before the generator emitted
-//! them. Pelco D, Pelco P and CRSF have the generated `decode` and `stream` bodies alone
+//! them. Pelco D, Pelco P, CRSF and Dynamixel 2.0 have the generated `decode` and `stream` bodies alone
 //! (`pelco_d_generated_decode`, ...).
 //!
 //! And [`spec_loader`]: arbitrary text through the loader and validator (and, when it loads,
@@ -164,6 +164,14 @@ pub const TARGETS: &[Target] = &[
         name: "crsf_generated_stream",
         body: crsf::generated_stream,
     },
+    Target {
+        name: "dynamixel2_generated_decode",
+        body: dynamixel2::generated_decode,
+    },
+    Target {
+        name: "dynamixel2_generated_stream",
+        body: dynamixel2::generated_stream,
+    },
 ];
 
 /// The bodies for Modbus RTU, as the fuzz targets call them: the interpreter's own
@@ -229,6 +237,22 @@ pub mod pelco_p {
     }
 }
 
+/// The bodies for Dynamixel 2.0, as the fuzz targets call them: the generated code's (byte
+/// stuffing, CRC-16, records whose width a field gives; [`crate::decode`] and [`crate::stream`]
+/// hold it to the interpreter).
+pub mod dynamixel2 {
+    use busspec_protocols::dynamixel2::Dynamixel2;
+
+    /// [`crate::decode`] for the generated Dynamixel 2.0.
+    pub fn generated_decode(data: &[u8]) {
+        crate::decode::<Dynamixel2>(data)
+    }
+    /// [`crate::stream`] for the generated Dynamixel 2.0.
+    pub fn generated_stream(data: &[u8]) {
+        crate::stream::<Dynamixel2>(data)
+    }
+}
+
 /// The bodies for CRSF, as the fuzz targets call them: the generated code's (its packed RC
 /// channels, telemetry and extended frames; [`crate::decode`] and [`crate::stream`] hold it to
 /// the interpreter).
@@ -269,6 +293,11 @@ fn once<K: 'static, T: Send + Sync + 'static>(init: impl FnOnce() -> T) -> &'sta
 
 /// The spec of protocol `P`, as its code was generated from it
 /// ([`Protocol::SPEC_YAML`]: embedded, so a fuzz binary needs no files), loaded once.
+/// Whether protocol `P` escapes its frames (`framing.escaping`).
+fn escapes<P: Protocol>() -> bool {
+    spec::<P>().framing.escaping.is_some()
+}
+
 pub fn spec<P: Protocol>() -> &'static busspec_model::Protocol {
     once::<P, _>(|| {
         busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
@@ -287,12 +316,15 @@ pub fn spec_named(name: &str) -> Option<&'static busspec_model::Protocol> {
     busspec_protocols::with_protocol(name, Spec)
 }
 
-/// A decode error must say where, and the place must be inside the `len`-byte frame.
-fn check_error(e: &DecodeError, len: usize) {
+/// A decode error must say where, and the place must be inside the `len`-byte frame. `escaped`:
+/// the protocol escapes its frames (`framing.escaping`), whose lengths the errors give
+/// unescaped, at most the bytes that travelled (offsets stay those of the bytes that travelled).
+fn check_error(e: &DecodeError, len: usize, escaped: bool) {
+    let same_len = |found: usize| if escaped { found <= len } else { found == len };
     assert!(!e.to_string().is_empty());
     match *e {
         DecodeError::Truncated { needed, found } => {
-            assert_eq!(found, len, "{e}");
+            assert!(same_len(found), "{e}");
             assert!(needed > found, "{e}");
         }
         DecodeError::BadStart {
@@ -323,6 +355,12 @@ fn check_error(e: &DecodeError, len: usize) {
         | DecodeError::BadEscape { offset, .. } => {
             assert!(offset < len, "{e}")
         }
+        DecodeError::BadWidth {
+            offset,
+            found,
+            most,
+            ..
+        } => assert!(offset < len && !(1..=most as i64).contains(&found), "{e}"),
         DecodeError::LengthMismatch {
             offset,
             expected,
@@ -334,12 +372,12 @@ fn check_error(e: &DecodeError, len: usize) {
             found,
         } => {
             assert!(
-                found == len && !expected.contains(&len) && !message.is_empty(),
+                same_len(found) && !expected.contains(&found) && !message.is_empty(),
                 "{e}"
             )
         }
         DecodeError::Ambiguous { .. } | DecodeError::NotAReply { .. } => {}
-        DecodeError::TooLong { max, found } => assert!(found == len && found > max, "{e}"),
+        DecodeError::TooLong { max, found } => assert!(same_len(found) && found > max, "{e}"),
         DecodeError::OutOfRange { offset, .. } | DecodeError::BadAddress { offset, .. } => {
             assert!(offset < len, "{e}")
         }
@@ -423,7 +461,7 @@ pub fn decode<P: Protocol>(data: &[u8]) {
             assert_eq!(reencode::<P, _>(&d), data, "{d:?} re-encodes differently");
         }
         Err(e) => {
-            check_error(&e, data.len());
+            check_error(&e, data.len(), escapes::<P>());
             interp_refuses_alike::<P>(data, Direction::Request, &e);
         }
     }
@@ -433,7 +471,7 @@ pub fn decode<P: Protocol>(data: &[u8]) {
             assert_eq!(reencode::<P, _>(d), data, "{d:?} re-encodes differently");
         }
         Err(e) => {
-            check_error(e, data.len());
+            check_error(e, data.len(), escapes::<P>());
             interp_refuses_alike::<P>(data, Direction::Response, e);
         }
     }
@@ -450,7 +488,7 @@ pub fn decode<P: Protocol>(data: &[u8]) {
                 assert_eq!(reencode::<P, _>(&d), data, "{d:?} re-encodes differently");
             }
             Err(e) => {
-                check_error(&e, data.len());
+                check_error(&e, data.len(), escapes::<P>());
                 if let Ok(a) = alone {
                     assert!(
                         !P::answers(r, &a.message),
@@ -831,7 +869,7 @@ fn encode_both_ways<P: Protocol, M: Message>(
                             assert_eq!(direction, Direction::Response, "{}", events::hex(&frame));
                         }
                         e => {
-                            check_error(&e, frame.len());
+                            check_error(&e, frame.len(), escapes::<P>());
                             assert!(
                                 same_refusal(p, Refusal::of_decode(&e).as_ref(), &why),
                                 "{d:?} refused ({why:?}), {} decodes to {e}",
@@ -880,7 +918,7 @@ fn response_roundtrip<P: Protocol>(d: &Decoded<P::Response>) {
                             events::hex(&frame)
                         ),
                         Err(e) => {
-                            check_error(&e, frame.len());
+                            check_error(&e, frame.len(), escapes::<P>());
                             assert!(
                                 same_refusal(p, Refusal::of_decode(&e).as_ref(), &why),
                                 "{d:?} as the reply to {r:?}: {e}"

@@ -180,6 +180,16 @@ fn crsf_generated_stream() {
 }
 
 #[test]
+fn dynamixel2_generated_decode() {
+    replay_target("dynamixel2_generated_decode");
+}
+
+#[test]
+fn dynamixel2_generated_stream() {
+    replay_target("dynamixel2_generated_stream");
+}
+
+#[test]
 fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
     let names = [
         "ub2_decode",
@@ -205,6 +215,8 @@ fn every_target_has_a_replay_test_a_fuzz_target_and_a_nightly_job() {
         "pelco_p_generated_stream",
         "crsf_generated_decode",
         "crsf_generated_stream",
+        "dynamixel2_generated_decode",
+        "dynamixel2_generated_stream",
     ];
     let targets: Vec<&str> = TARGETS.iter().map(|t| t.name).collect();
     assert_eq!(targets, names);
