@@ -857,6 +857,7 @@ pub mod records_sized {
                 responses: (mask >> 64) as u64,
             }
         }
+        #[inline]
         fn variable_candidates(head: &[u8]) -> rt::VarLens {
             if head.first().is_some_and(|&b| b != 0xC5) {
                 return rt::VarLens::NONE;
