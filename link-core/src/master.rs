@@ -276,9 +276,12 @@ enum Phase {
     Main,
 }
 
-/// The received-bytes buffer: a reply is never longer than four frames (reading stops there),
-/// plus one read's worth.
-const RX: usize = 256;
+/// The received-bytes buffer. Any one frame of a protocol fits (a protocol whose frames may be
+/// longer does not build: [`MasterCore::new`]); reading stops at four frames' worth or when it
+/// is full. It held 256 bytes, which cut Dynamixel 2.0's status packets of 246 data bytes and
+/// more (257 bytes and up) into "no valid reply"; 1024 is also the longest frame a spec read at
+/// run time may have.
+pub const RX: usize = 1024;
 
 /// The sans-IO master for protocol `P`; see the module docs.
 pub struct MasterCore<P: Link> {
@@ -323,8 +326,17 @@ impl<P: Link> Default for MasterCore<P> {
 }
 
 impl<P: Link> MasterCore<P> {
+    /// Every frame of `P` fits the receive buffer.
+    const FRAME_FITS: () = assert!(
+        P::MAX_FRAME_LEN <= RX,
+        "a frame of this protocol is longer than the master's receive buffer (link_core::master::RX)"
+    );
+
     /// A master with the protocol's [`Timing`] and [`Line`].
     pub fn new() -> Self {
+        // Refused at build time for a protocol whose frames the buffer cannot hold.
+        #[allow(clippy::let_unit_value)]
+        let () = Self::FRAME_FITS;
         MasterCore {
             timing: Timing::for_protocol::<P>(),
             line: Line::for_link::<P>(),
