@@ -1371,6 +1371,48 @@ fn dynamixel2_decodes_and_encodes_as_a_built_in_protocol() {
         );
     }
 
+    // As a stream, `--reply-to` settles such a status packet where no request comes before
+    // it, and the READ before one settles it by what it asked for; a status packet that
+    // does not follow the READ before it stays ambiguous. Both engines give the same lines
+    // (the generated stream once reported the first as ambiguous: its default request was
+    // a READ of zero bytes).
+    let two = "FF FF FD 00 01 06 00 55 00 A6 00 CC 0F";
+    let read2 = "FF FF FD 00 01 07 00 02 84 00 02 00 1D 01";
+    let bytes: Vec<u8> = [status, read2, two, read2, status]
+        .iter()
+        .flat_map(|f| f.split(' ').map(|b| u8::from_str_radix(b, 16).unwrap()))
+        .collect();
+    let mut lines = Vec::new();
+    for spec in [&[][..], &["--spec", "spec/dynamixel2.yaml"]] {
+        let mut args = vec!["decode"];
+        args.extend_from_slice(spec);
+        args.extend_from_slice(&["dynamixel2", "--reply-to", "read", "--stream", "-"]);
+        let out = run_in(root(), &args, &bytes);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        lines.push(text(&out.stdout));
+    }
+    assert_eq!(lines[0], lines[1]);
+    let messages: Vec<&str> = lines[0]
+        .lines()
+        .map(|l| {
+            l.split("\"message\":\"")
+                .nth(1)
+                .and_then(|rest| rest.split('"').next())
+                .unwrap_or_default()
+        })
+        .collect();
+    assert_eq!(
+        messages,
+        ["read_status", "read", "read_status", "read", ""],
+        "{}",
+        lines[0]
+    );
+    assert!(
+        lines[0].lines().last().unwrap().contains("\"ambiguous\""),
+        "{}",
+        lines[0]
+    );
+
     // The examples as one stream between noise bytes.
     let p = spec("dynamixel2.yaml");
     let (bytes, expected) = capture(

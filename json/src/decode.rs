@@ -115,7 +115,11 @@ pub fn request_for<P: Protocol>(p: &Spec, cmd: usize) -> Option<P::Request> {
 /// the request (`follows: {request}`, a list counted by the request) holds what the frame's
 /// value implies (a READ whose reply holds four bytes asked for four), as the interpreter
 /// settles a reply by its command alone; every other field neutral.
-fn request_for_reply<P: Protocol>(p: &Spec, cmd: usize, wire: &[u8]) -> Option<P::Request> {
+pub(crate) fn request_for_reply<P: Protocol>(
+    p: &Spec,
+    cmd: usize,
+    wire: &[u8],
+) -> Option<P::Request> {
     let mut implied: Vec<(String, i64)> = Vec::new();
     if let Ok(f) = interp::decode(p, Some(Direction::Response), Some(cmd), wire) {
         let m = p.message(f.message);

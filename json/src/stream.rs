@@ -5,7 +5,7 @@ use busspec_model::stream::{decode_lenient, relaxed, Event as InterpEvent};
 use busspec_runtime::stream::{Direction as StreamDirection, Event, StreamDecoder};
 use busspec_runtime::{Decoded, Message, Protocol};
 
-use crate::decode::{ambiguous_candidates, request_for};
+use crate::decode::{ambiguous_candidates, request_for, request_for_reply};
 use crate::print::{ambiguous_line, frame_line, out_of_spec_line, skipped_line};
 use crate::{Printer, Spec, Typed};
 
@@ -66,6 +66,11 @@ pub struct TypedStream<'s, P: Protocol> {
     done: usize,
     base: u64,
     direction: Option<Direction>,
+    /// The command a response with no request before it answers (`--reply-to`).
+    reply_to: Option<usize>,
+    /// Whether the last frame reported was a request: the decoder then paired the next
+    /// response with it, not with the default request.
+    after_request: bool,
     /// `spec` with its rules lifted, made at the first out-of-spec frame.
     relaxed: Option<Spec>,
 }
@@ -90,6 +95,8 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             done: 0,
             base: 0,
             direction: along,
+            reply_to,
+            after_request: false,
             relaxed: None,
         }
     }
@@ -134,6 +141,8 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
 
     /// Writes the line of `e` as [`Self::line`] gives it.
     fn write(&mut self, e: &Event<P::Request, P::Response>, out: &mut Vec<u8>) {
+        let after_request = self.after_request;
+        self.pair(e);
         let printed = match *e {
             Event::Request { offset, frame, .. } => {
                 self.decoded(Direction::Request, offset, e.len(), &frame, out)
@@ -149,9 +158,32 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             Event::Ambiguous { offset, .. } => {
                 let r = self.take_range(offset, e.len());
                 let bytes = self.pending.get(r).unwrap_or_default();
-                let candidates = ambiguous_candidates::<P>(self.spec, self.direction, bytes);
-                Printer::ambiguous(out, offset, &candidates, bytes);
-                Ok(())
+                match Self::settled_by(
+                    self.spec,
+                    self.direction,
+                    self.reply_to,
+                    after_request,
+                    bytes,
+                ) {
+                    Some(d) => {
+                        let (printer, spec) = (&mut self.printer, self.spec);
+                        let (address, message) = (d.address, &d.message);
+                        printer.message(
+                            out,
+                            spec,
+                            Direction::Response,
+                            address,
+                            message,
+                            Some(offset),
+                        )
+                    }
+                    None => {
+                        let candidates =
+                            ambiguous_candidates::<P>(self.spec, self.direction, bytes);
+                        Printer::ambiguous(out, offset, &candidates, bytes);
+                        Ok(())
+                    }
+                }
             }
             Event::OutOfSpec { .. } => {
                 out.extend_from_slice(self.line(e).as_bytes());
@@ -177,6 +209,37 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
         self.take_range(offset, len);
         let (printer, spec) = (&mut self.printer, self.spec);
         printer.message(out, spec, direction, d.address, &d.message, Some(offset))
+    }
+
+    /// Follows the decoder's pairing: a response is paired with the request reported just
+    /// before it (noise between them aside), else with the default request.
+    fn pair(&mut self, e: &Event<P::Request, P::Response>) {
+        match e {
+            Event::Request { .. } => self.after_request = true,
+            Event::Skipped { .. } => {}
+            _ => self.after_request = false,
+        }
+    }
+
+    /// An ambiguous response `bytes` settled by `--reply-to` where no request came before
+    /// it, as [`crate::decode_typed`] settles one frame: the default request the decoder was
+    /// given holds neutral values, which a reply whose fields follow the request's (a READ's
+    /// bytes, as many as it asked for) does not follow; here the request is the one the frame
+    /// implies, so the generated stream answers as the interpreter's, which settles a reply
+    /// by its command. A frame that also decodes as a request stays ambiguous.
+    fn settled_by(
+        spec: &Spec,
+        direction: Option<Direction>,
+        reply_to: Option<usize>,
+        after_request: bool,
+        bytes: &[u8],
+    ) -> Option<Decoded<P::Response>> {
+        let cmd = reply_to.filter(|_| !after_request)?;
+        if direction.is_none() && P::decode_request(bytes).is_ok() {
+            return None;
+        }
+        let request = request_for_reply::<P>(spec, cmd, bytes)?;
+        P::decode_reply(bytes, &request).ok()
     }
 
     /// Keeps pushed bytes until their event reports them.
@@ -212,6 +275,8 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
     }
 
     fn line(&mut self, e: &Event<P::Request, P::Response>) -> String {
+        let after_request = self.after_request;
+        self.pair(e);
         let bytes = self.take(e.offset(), e.len());
         let printed = match *e {
             Event::Request { offset, frame, .. } => {
@@ -220,11 +285,20 @@ impl<'s, P: Protocol> TypedStream<'s, P> {
             Event::Response { offset, frame, .. } => {
                 Typed::<P>::Response(frame).line(self.spec, Some(offset))
             }
-            Event::Ambiguous { offset, .. } => Ok(ambiguous_line(
-                offset,
-                &ambiguous_candidates::<P>(self.spec, self.direction, &bytes),
+            Event::Ambiguous { offset, .. } => match Self::settled_by(
+                self.spec,
+                self.direction,
+                self.reply_to,
+                after_request,
                 &bytes,
-            )),
+            ) {
+                Some(d) => Typed::<P>::Response(d).line(self.spec, Some(offset)),
+                None => Ok(ambiguous_line(
+                    offset,
+                    &ambiguous_candidates::<P>(self.spec, self.direction, &bytes),
+                    &bytes,
+                )),
+            },
             Event::Skipped { offset, .. } => Ok(skipped_line(offset, &bytes)),
             // The values of a frame the generated code refuses come from the interpreter,
             // with the spec's rules lifted; the reason, worded as the interpreter's stream
