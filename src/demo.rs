@@ -123,7 +123,7 @@ fn ub2_part(out: &mut Out, svg: Option<&Path>) -> Result<(), String> {
     let clock = SimClock::new();
     let bus = SimBus::new(
         clock.clone(),
-        BusConfig::new(Ub2::BAUD),
+        BusConfig::new(Ub2::BUS.baud),
         vec![Ub2Sim::new(0x21), Ub2Sim::new(0x22)],
     );
     let mut m: Master<Ub2, _, _> = Master::new(bus.clone(), clock.clone());
@@ -282,7 +282,7 @@ fn sd_part(out: &mut Out) -> Result<(), String> {
     let clock = SimClock::new();
     let bus = SimBus::new(
         clock.clone(),
-        BusConfig::new(Sd::BAUD),
+        BusConfig::new(Sd::BUS.baud),
         vec![SdSim::new(1), SdSim::new(2)],
     );
     let mut m: Master<Sd, _, _> = Master::new(bus.clone(), clock.clone());
@@ -352,7 +352,7 @@ fn faults_part(out: &mut Out) -> Result<(), String> {
     let clock = SimClock::new();
     let bus = SimBus::new(
         clock.clone(),
-        BusConfig::new(Ub2::BAUD),
+        BusConfig::new(Ub2::BUS.baud),
         vec![Ub2Sim::new(0x21)],
     );
     let mut cfg = FaultConfig::none();

@@ -20,10 +20,11 @@ use busspec_link::Link;
 use busspec_model::interp::{self, Raw, Value};
 use busspec_model::ir::{Direction, MessageKind, MessageRef};
 use busspec_model::Protocol as Spec;
-use busspec_runtime::stream::{Candidate, Candidates, VarLens};
+use busspec_runtime::stream::Candidates;
 use busspec_runtime::{
-    Broadcast, CommandKind, DecodeError, Decoded, Elements, EncodeError, EscapeFault, FieldError,
-    FieldValue, Message, MessageNames, NumKind, Protocol, Reply, Transactions,
+    Broadcast, Bus, Command, CommandKind, DecodeError, Decoded, Elements, EncodeError, EscapeFault,
+    FieldError, FieldValue, Framing, Message, MessageNames, NumKind, Protocol, Reply, Source,
+    Transactions,
 };
 
 /// The most bytes a frame of a spec read at run time may take.
@@ -553,27 +554,23 @@ impl Protocol for Interpreted {
     type Buffer = [u8; CAP];
 
     const NAME: &'static str = "spec";
-    const DOCUMENT: &'static str = "";
-    const DOCUMENT_REVISION: &'static str = "";
-    const SPEC_SHA256: &'static str = "";
-    const SPEC_YAML: &'static str = "";
-    const MAX_REQUEST_LEN: usize = CAP;
-    const MAX_RESPONSE_LEN: usize = CAP;
+    const SOURCE: Source = Source {
+        document: "",
+        revision: "",
+        spec_sha256: "",
+        spec_yaml: "",
+    };
+    const BUS: Bus = Bus {
+        baud: 9600,
+        inter_frame_gap_ms: None,
+        max_frames_per_s: None,
+        device_addresses: 0..=255,
+        broadcast_address: None,
+        host_address: None,
+        transactions: Transactions::UNDECLARED,
+    };
     const MAX_FRAME_LEN: usize = CAP;
-    const FRAME_LENGTHS: &'static [usize] = &[];
     const EMPTY_BUFFER: [u8; CAP] = [0; CAP];
-    const BAUD: u32 = 9600;
-    const INTER_FRAME_GAP_MS: Option<u32> = None;
-    const MAX_FRAMES_PER_S: Option<u32> = None;
-    const DEVICE_ADDRESSES: core::ops::RangeInclusive<u8> = 0..=255;
-    const BROADCAST_ADDRESS: Option<u8> = None;
-
-    fn may_retry(request: &Self::Request) -> bool {
-        match (spec(), request.message()) {
-            (Some(p), Some(m)) => p.transactions.retry_safe(m),
-            _ => false,
-        }
-    }
 
     fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError> {
         let p = spec().ok_or(DecodeError::Truncated {
@@ -619,8 +616,9 @@ impl Protocol for Interpreted {
         }
     }
 
-    fn kind(request: &Self::Request) -> CommandKind {
-        match request.message().map(|m| &m.kind) {
+    fn command(request: &Self::Request) -> Command {
+        let m = request.message();
+        let kind = match m.map(|m| &m.kind) {
             Some(MessageKind::Command(k)) => match *k {
                 busspec_model::ir::CommandKind::Movement => CommandKind::Movement,
                 busspec_model::ir::CommandKind::CompletionCheck => CommandKind::CompletionCheck,
@@ -629,11 +627,8 @@ impl Protocol for Interpreted {
                 busspec_model::ir::CommandKind::Reset => CommandKind::Reset,
             },
             _ => CommandKind::Getter,
-        }
-    }
-
-    fn broadcast(request: &Self::Request) -> Broadcast {
-        match request.message().and_then(|m| m.broadcast.as_ref()) {
+        };
+        let broadcast = match m.and_then(|m| m.broadcast.as_ref()) {
             Some(b) => Broadcast {
                 accepted: b.accepted,
                 answered: b.answered,
@@ -642,14 +637,21 @@ impl Protocol for Interpreted {
                 accepted: false,
                 answered: false,
             },
-        }
-    }
-
-    fn reply(request: &Self::Request) -> Reply {
-        match request.message().map(|m| m.reply) {
+        };
+        let reply = match m.map(|m| m.reply) {
             Some(busspec_model::ir::Reply::Optional) => Reply::Optional,
             Some(busspec_model::ir::Reply::None) => Reply::None,
             _ => Reply::Required,
+        };
+        let may_retry = match (spec(), m) {
+            (Some(p), Some(m)) => p.transactions.retry_safe(m),
+            _ => false,
+        };
+        Command {
+            kind,
+            broadcast,
+            reply,
+            may_retry,
         }
     }
 
@@ -673,17 +675,15 @@ impl Protocol for Interpreted {
         interp::reseal(p, &mut copy);
         copy == frame
     }
+}
+
+impl Framing for Interpreted {
+    const MAX_REQUEST_LEN: usize = CAP;
+    const MAX_RESPONSE_LEN: usize = CAP;
+    const FRAME_LENGTHS: &'static [usize] = &[];
 
     fn candidates(_head: &[u8]) -> Candidates {
         Candidates::default()
-    }
-
-    fn variable_candidates(_head: &[u8]) -> VarLens {
-        VarLens::default()
-    }
-
-    fn candidate(_head: &[u8]) -> Candidate {
-        Candidate::MANY
     }
 }
 
@@ -693,7 +693,7 @@ impl Link for Interpreted {
     }
 
     fn baud() -> u32 {
-        spec().map_or(Self::BAUD, |p| p.serial.baud)
+        spec().map_or(Self::BUS.baud, |p| p.serial.baud)
     }
 
     fn transactions() -> Transactions {

@@ -486,7 +486,7 @@ fn check_byte_order<P: Link, T: Transport, C: Clock>(
     address: u8,
     request: &P::Request,
 ) -> Result<(), String> {
-    if P::kind(request) != CommandKind::Movement {
+    if P::command(request).kind != CommandKind::Movement {
         return Ok(());
     }
     if let Some(check) = m.check_byte_order(address, request).map_err(link_error)? {
@@ -596,7 +596,7 @@ pub fn sim(
                 .map(|&a| Ub2Sim::new(a).msb_first(msb_first))
                 .collect();
             let timeout = busspec_link::Timing::for_protocol::<Ub2>().reply_timeout;
-            run_sim(Ub2::NAME, Ub2::BAUD, timeout, devices, line)
+            run_sim(Ub2::NAME, Ub2::BUS.baud, timeout, devices, line)
         }
         p if p == Sd::NAME && spec_file.is_none() => {
             let addresses = if addresses.is_empty() {
@@ -607,7 +607,7 @@ pub fn sim(
             check_addresses::<Sd>(&addresses)?;
             let devices: Vec<SdSim> = addresses.iter().map(|&a| SdSim::new(a)).collect();
             let timeout = busspec_link::Timing::for_protocol::<Sd>().reply_timeout;
-            run_sim(Sd::NAME, Sd::BAUD, timeout, devices, line)
+            run_sim(Sd::NAME, Sd::BUS.baud, timeout, devices, line)
         }
         // Every other protocol, built in or a spec file: its `device:` section.
         name => {
@@ -666,12 +666,12 @@ fn check_spec_addresses(spec: &Spec, addresses: &[u8]) -> Result<(), String> {
 
 fn check_addresses<P: Protocol>(addresses: &[u8]) -> Result<(), String> {
     for (i, a) in addresses.iter().enumerate() {
-        if !P::DEVICE_ADDRESSES.contains(a) {
+        if !P::BUS.device_addresses.contains(a) {
             return Err(format!(
                 "error: address 0x{a:02X} is not a {} device address (0x{:02X}..=0x{:02X})",
                 P::NAME,
-                P::DEVICE_ADDRESSES.start(),
-                P::DEVICE_ADDRESSES.end()
+                P::BUS.device_addresses.start(),
+                P::BUS.device_addresses.end()
             ));
         }
         if addresses[..i].contains(a) {
@@ -968,7 +968,7 @@ mod tests {
                 .message;
             assert_eq!(request.name(), c.name);
             let clock = SimClock::new();
-            let bus = SimBus::new(clock.clone(), BusConfig::new(P::BAUD), vec![device()]);
+            let bus = SimBus::new(clock.clone(), BusConfig::new(P::BUS.baud), vec![device()]);
             let mut m: Master<P, _, _> = Master::new(bus, clock);
             let ex = m
                 .transact(address, request)

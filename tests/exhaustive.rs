@@ -313,38 +313,45 @@ fn command_info<P: Generated>() {
             K::Getter => CommandKind::Getter,
             K::Reset => CommandKind::Reset,
         };
-        assert_eq!(P::kind(&q), want, "{}", c.name);
-        let b = P::broadcast(&q);
+        assert_eq!(P::command(&q).kind, want, "{}", c.name);
+        let b = P::command(&q).broadcast;
         let (accepted, answered) = c
             .broadcast
             .as_ref()
             .map_or((false, false), |b| (b.accepted, b.answered));
         assert_eq!((b.accepted, b.answered), (accepted, answered), "{}", c.name);
-        assert_eq!(P::may_retry(&q), p.transactions.retry_safe(c), "{}", c.name);
+        assert_eq!(
+            P::command(&q).may_retry,
+            p.transactions.retry_safe(c),
+            "{}",
+            c.name
+        );
     }
     let t = &p.transactions;
     assert_eq!(
-        P::TRANSACTIONS.response_timeout_us,
+        P::BUS.transactions.response_timeout_us,
         t.response_timeout_us,
         "{}",
         p.name
     );
-    assert_eq!(P::TRANSACTIONS.turnaround_us, t.turnaround_us);
+    assert_eq!(P::BUS.transactions.turnaround_us, t.turnaround_us);
     assert_eq!(
-        P::TRANSACTIONS.gap_tenths_of_character,
+        P::BUS.transactions.gap_tenths_of_character,
         t.gap.map(|g| g.tenths)
     );
     if t.declared {
-        assert_eq!(P::TRANSACTIONS.character_bits, t.character_bits);
+        assert_eq!(P::BUS.transactions.character_bits, t.character_bits);
         assert_eq!(
-            P::TRANSACTIONS.gap_us_at(p.serial.baud, t.character_bits),
+            P::BUS
+                .transactions
+                .gap_us_at(p.serial.baud, t.character_bits),
             t.gap_us_at(p.serial.baud)
         );
     }
-    assert_eq!(P::BAUD, p.serial.baud);
-    assert_eq!(P::INTER_FRAME_GAP_MS, p.serial.inter_frame_gap_ms);
+    assert_eq!(P::BUS.baud, p.serial.baud);
+    assert_eq!(P::BUS.inter_frame_gap_ms, p.serial.inter_frame_gap_ms);
     assert_eq!(
-        P::MAX_FRAMES_PER_S,
+        P::BUS.max_frames_per_s,
         p.serial.frame_rate.as_ref().map(|r| r.max_per_s)
     );
 }

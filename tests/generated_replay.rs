@@ -9,7 +9,7 @@ use busspec_protocols::{Decoded, Message, Protocol as Generated};
 
 /// The spec `P`'s code was generated from.
 fn spec<P: Generated>() -> Protocol {
-    busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
+    busspec_model::load_str(P::NAME, P::SOURCE.spec_yaml).unwrap_or_else(|d| panic!("{d}"))
 }
 
 /// Replays every example of `P`'s spec through its generated code; returns how many.

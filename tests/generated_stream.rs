@@ -443,20 +443,10 @@ impl busspec_protocols::Protocol for Ub2SmallBuffer {
     type Response = <Ub2 as busspec_protocols::Protocol>::Response;
     type Buffer = [u8; 4];
     const NAME: &'static str = Ub2::NAME;
-    const DOCUMENT: &'static str = Ub2::DOCUMENT;
-    const DOCUMENT_REVISION: &'static str = Ub2::DOCUMENT_REVISION;
-    const SPEC_SHA256: &'static str = Ub2::SPEC_SHA256;
-    const SPEC_YAML: &'static str = Ub2::SPEC_YAML;
-    const MAX_REQUEST_LEN: usize = Ub2::MAX_REQUEST_LEN;
-    const MAX_RESPONSE_LEN: usize = Ub2::MAX_RESPONSE_LEN;
+    const SOURCE: busspec_protocols::Source = Ub2::SOURCE;
+    const BUS: busspec_protocols::Bus = Ub2::BUS;
     const MAX_FRAME_LEN: usize = Ub2::MAX_FRAME_LEN;
-    const FRAME_LENGTHS: &'static [usize] = Ub2::FRAME_LENGTHS;
     const EMPTY_BUFFER: [u8; 4] = [0; 4];
-    const BAUD: u32 = Ub2::BAUD;
-    const INTER_FRAME_GAP_MS: Option<u32> = Ub2::INTER_FRAME_GAP_MS;
-    const MAX_FRAMES_PER_S: Option<u32> = Ub2::MAX_FRAMES_PER_S;
-    const DEVICE_ADDRESSES: std::ops::RangeInclusive<u8> = Ub2::DEVICE_ADDRESSES;
-    const BROADCAST_ADDRESS: Option<u8> = Ub2::BROADCAST_ADDRESS;
     fn decode_request(
         frame: &[u8],
     ) -> Result<busspec_protocols::Decoded<Self::Request>, busspec_protocols::DecodeError> {
@@ -471,11 +461,8 @@ impl busspec_protocols::Protocol for Ub2SmallBuffer {
     fn answers(request: &Self::Request, response: &Self::Response) -> bool {
         Ub2::answers(request, response)
     }
-    fn kind(request: &Self::Request) -> busspec_protocols::CommandKind {
-        Ub2::kind(request)
-    }
-    fn broadcast(request: &Self::Request) -> busspec_protocols::Broadcast {
-        Ub2::broadcast(request)
+    fn command(request: &Self::Request) -> busspec_protocols::Command {
+        Ub2::command(request)
     }
     fn is_nak(response: &Self::Response) -> bool {
         Ub2::is_nak(response)
@@ -483,6 +470,12 @@ impl busspec_protocols::Protocol for Ub2SmallBuffer {
     fn checksum_ok(frame: &[u8]) -> bool {
         Ub2::checksum_ok(frame)
     }
+}
+
+impl busspec_protocols::Framing for Ub2SmallBuffer {
+    const MAX_REQUEST_LEN: usize = Ub2::MAX_REQUEST_LEN;
+    const MAX_RESPONSE_LEN: usize = Ub2::MAX_RESPONSE_LEN;
+    const FRAME_LENGTHS: &'static [usize] = Ub2::FRAME_LENGTHS;
     fn candidates(head: &[u8]) -> busspec_protocols::stream::Candidates {
         Ub2::candidates(head)
     }

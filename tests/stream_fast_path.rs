@@ -15,7 +15,7 @@
 //! request for responses), each with no noise, one byte or one byte short of a whole run of
 //! it before the head (which of the three turns with the state and the head's first byte).
 //! Then whole random captures with noise, fed in chunks (the fast path where it can) and
-//! pushed byte by byte (the full rule only). The fast path asks `Protocol::candidate` (UB2's
+//! pushed byte by byte (the full rule only). The fast path asks `Framing::candidate` (UB2's
 //! generated table) before the candidates' mask, so these comparisons run that route; its
 //! answers are also held to the candidates' on every two-byte code.
 

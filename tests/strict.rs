@@ -22,7 +22,7 @@ use serde::Serialize;
 
 /// The IR of a generated protocol, loaded from the spec text it was generated from.
 fn spec<P: Protocol>() -> ir::Protocol {
-    busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
+    busspec_model::load_str(P::NAME, P::SOURCE.spec_yaml).unwrap_or_else(|d| panic!("{d}"))
 }
 
 fn hex(text: &str) -> Vec<u8> {

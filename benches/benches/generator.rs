@@ -24,9 +24,13 @@ fn specs() -> [(&'static str, String, &'static str); 2] {
         (
             Ub2::NAME,
             format!("spec/{}.yaml", Ub2::NAME),
-            Ub2::SPEC_YAML,
+            Ub2::SOURCE.spec_yaml,
         ),
-        (Sd::NAME, format!("spec/{}.yaml", Sd::NAME), Sd::SPEC_YAML),
+        (
+            Sd::NAME,
+            format!("spec/{}.yaml", Sd::NAME),
+            Sd::SOURCE.spec_yaml,
+        ),
     ]
 }
 

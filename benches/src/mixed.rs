@@ -11,9 +11,9 @@ use busspec_protocols::ub2::Ub2;
 use busspec_protocols::Protocol as _;
 
 /// The validated spec of generated protocol `P`: the text it was generated from
-/// ([`busspec_protocols::Protocol::SPEC_YAML`]), loaded by the interpreter's loader.
+/// ([`Source::spec_yaml`](busspec_runtime::Source::spec_yaml)), loaded by the interpreter's loader.
 pub fn spec<P: busspec_protocols::Protocol>() -> Protocol {
-    busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
+    busspec_model::load_str(P::NAME, P::SOURCE.spec_yaml).unwrap_or_else(|d| panic!("{d}"))
 }
 
 /// A protocol the benches cover: UB2 and SD with hand-written and deku baselines

@@ -36,7 +36,7 @@ include!("snapshots/records_sized.rs");
 mod agree;
 
 use busspec_model::ir::{self, Direction};
-use busspec_runtime::{Message, Protocol};
+use busspec_runtime::{Framing, Message, Protocol};
 
 /// `name`, a path from the repository's root.
 fn fixture(name: &str) -> ir::Protocol {
@@ -724,8 +724,11 @@ fn pelco_p_snapshot_agrees_with_the_interpreter() {
     let go_to = [0xA0, 0x00, 0x00, 0x07, 0x00, 0x01, 0xAF, 0x09];
     let d = Request::decode(&go_to).unwrap();
     assert_eq!(d.message, Request::GoToPreset { preset: 1 });
-    assert_eq!(d.message.reply(), busspec_runtime::Reply::None);
-    assert_eq!(PelcoP::reply(&d.message), busspec_runtime::Reply::None);
+    assert_eq!(d.message.command().reply, busspec_runtime::Reply::None);
+    assert_eq!(
+        PelcoP::command(&d.message).reply,
+        busspec_runtime::Reply::None
+    );
     let mut etx = go_to;
     etx[6] = 0xAE;
     let g = Request::decode(&etx).map(|_| ());

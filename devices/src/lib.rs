@@ -45,54 +45,16 @@ macro_rules! protocol_as {
             type Buffer = <$codec as busspec_runtime::Protocol>::Buffer;
 
             const NAME: &'static str = <$codec as busspec_runtime::Protocol>::NAME;
-            const DOCUMENT: &'static str = <$codec as busspec_runtime::Protocol>::DOCUMENT;
-            const DOCUMENT_REVISION: &'static str =
-                <$codec as busspec_runtime::Protocol>::DOCUMENT_REVISION;
-            const SPEC_SHA256: &'static str = <$codec as busspec_runtime::Protocol>::SPEC_SHA256;
-            const SPEC_YAML: &'static str = <$codec as busspec_runtime::Protocol>::SPEC_YAML;
-            const MAX_REQUEST_LEN: usize = <$codec as busspec_runtime::Protocol>::MAX_REQUEST_LEN;
-            const MAX_RESPONSE_LEN: usize =
-                <$codec as busspec_runtime::Protocol>::MAX_RESPONSE_LEN;
+            const SOURCE: busspec_runtime::Source = <$codec as busspec_runtime::Protocol>::SOURCE;
+            const BUS: busspec_runtime::Bus = <$codec as busspec_runtime::Protocol>::BUS;
             const MAX_FRAME_LEN: usize = <$codec as busspec_runtime::Protocol>::MAX_FRAME_LEN;
-            const FRAME_LENGTHS: &'static [usize] =
-                <$codec as busspec_runtime::Protocol>::FRAME_LENGTHS;
             const EMPTY_BUFFER: Self::Buffer = <$codec as busspec_runtime::Protocol>::EMPTY_BUFFER;
-            const BAUD: u32 = <$codec as busspec_runtime::Protocol>::BAUD;
-            const INTER_FRAME_GAP_MS: Option<u32> =
-                <$codec as busspec_runtime::Protocol>::INTER_FRAME_GAP_MS;
-            const MAX_FRAMES_PER_S: Option<u32> =
-                <$codec as busspec_runtime::Protocol>::MAX_FRAMES_PER_S;
-            const DEVICE_ADDRESSES: core::ops::RangeInclusive<u8> =
-                <$codec as busspec_runtime::Protocol>::DEVICE_ADDRESSES;
-            const BROADCAST_ADDRESS: Option<u8> =
-                <$codec as busspec_runtime::Protocol>::BROADCAST_ADDRESS;
-            const HOST_ADDRESS: Option<u8> = <$codec as busspec_runtime::Protocol>::HOST_ADDRESS;
-            const TRANSACTIONS: busspec_runtime::Transactions =
-                <$codec as busspec_runtime::Protocol>::TRANSACTIONS;
-
-            #[inline]
-            fn may_retry(request: &Self::Request) -> bool {
-                <$codec as busspec_runtime::Protocol>::may_retry(request)
-            }
 
             #[inline]
             fn decode_request(
                 frame: &[u8],
             ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
                 <$codec as busspec_runtime::Protocol>::decode_request(frame)
-            }
-            #[inline]
-            fn decode_response(
-                frame: &[u8],
-            ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-                <$codec as busspec_runtime::Protocol>::decode_response(frame)
-            }
-            #[inline]
-            fn decode_reply(
-                frame: &[u8],
-                request: &Self::Request,
-            ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-                <$codec as busspec_runtime::Protocol>::decode_reply(frame, request)
             }
             #[inline]
             fn decode_response_for(
@@ -106,16 +68,8 @@ macro_rules! protocol_as {
                 <$codec as busspec_runtime::Protocol>::answers(request, response)
             }
             #[inline]
-            fn kind(request: &Self::Request) -> busspec_runtime::CommandKind {
-                <$codec as busspec_runtime::Protocol>::kind(request)
-            }
-            #[inline]
-            fn broadcast(request: &Self::Request) -> busspec_runtime::Broadcast {
-                <$codec as busspec_runtime::Protocol>::broadcast(request)
-            }
-            #[inline]
-            fn reply(request: &Self::Request) -> busspec_runtime::Reply {
-                <$codec as busspec_runtime::Protocol>::reply(request)
+            fn command(request: &Self::Request) -> busspec_runtime::Command {
+                <$codec as busspec_runtime::Protocol>::command(request)
             }
             #[inline]
             fn is_nak(response: &Self::Response) -> bool {
@@ -125,17 +79,24 @@ macro_rules! protocol_as {
             fn checksum_ok(frame: &[u8]) -> bool {
                 <$codec as busspec_runtime::Protocol>::checksum_ok(frame)
             }
+        }
+
+        impl busspec_runtime::Framing for $name {
+            const MAX_REQUEST_LEN: usize = <$codec as busspec_runtime::Framing>::MAX_REQUEST_LEN;
+            const MAX_RESPONSE_LEN: usize = <$codec as busspec_runtime::Framing>::MAX_RESPONSE_LEN;
+            const FRAME_LENGTHS: &'static [usize] =
+                <$codec as busspec_runtime::Framing>::FRAME_LENGTHS;
             #[inline]
             fn candidates(head: &[u8]) -> busspec_runtime::stream::Candidates {
-                <$codec as busspec_runtime::Protocol>::candidates(head)
+                <$codec as busspec_runtime::Framing>::candidates(head)
             }
             #[inline]
             fn candidate(head: &[u8]) -> busspec_runtime::stream::Candidate {
-                <$codec as busspec_runtime::Protocol>::candidate(head)
+                <$codec as busspec_runtime::Framing>::candidate(head)
             }
             #[inline]
             fn variable_candidates(head: &[u8]) -> busspec_runtime::stream::VarLens {
-                <$codec as busspec_runtime::Protocol>::variable_candidates(head)
+                <$codec as busspec_runtime::Framing>::variable_candidates(head)
             }
         }
     };

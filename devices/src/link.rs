@@ -60,7 +60,7 @@ impl Link for crate::Ub2 {
     /// clipped to the limit, not as a refusal.
     fn nak_approves(request: &ub2::Request, response: &ub2::Response) -> bool {
         matches!(response, ub2::Response::NakLimitReached)
-            && Self::kind(request) == CommandKind::Movement
+            && Self::command(request).kind == CommandKind::Movement
     }
 
     /// The factory limits (§6.16, §6.17): every capacitor has them, they travel as `u32` of
@@ -101,7 +101,8 @@ impl Link for crate::Ub2 {
 
     /// A reset, and a new slave address (§5.3): the device answers elsewhere from then on.
     fn forgets_byte_order_checks(r: &ub2::Request) -> bool {
-        matches!(r, ub2::Request::SetSlaveAddress { .. }) || Self::kind(r) == CommandKind::Reset
+        matches!(r, ub2::Request::SetSlaveAddress { .. })
+            || Self::command(r).kind == CommandKind::Reset
     }
 }
 
@@ -155,10 +156,10 @@ mod tests {
         let go = ub2::Request::GoToCapacitance {
             target: ub2::Capacitance(15000),
         };
-        assert_eq!(Ub2::kind(&go), CommandKind::Movement);
+        assert_eq!(Ub2::command(&go).kind, CommandKind::Movement);
         assert!(!Ub2::retry_safe(&go));
         assert_eq!(
-            Ub2::kind(&ub2::Request::GetActualCapacitance),
+            Ub2::command(&ub2::Request::GetActualCapacitance).kind,
             CommandKind::Getter
         );
         assert!(Ub2::retry_safe(&ub2::Request::GetActualCapacitance));
@@ -167,15 +168,19 @@ mod tests {
             freshness: 0,
             position: sd::Angle(0),
         };
-        assert_eq!(Sd::kind(&sp), CommandKind::Movement);
+        assert_eq!(Sd::command(&sp).kind, CommandKind::Movement);
         assert_eq!(
-            Sd::broadcast(&sp),
+            Sd::command(&sp).broadcast,
             Broadcast {
                 accepted: true,
                 answered: false
             }
         );
-        assert!(Sd::broadcast(&sd::Request::ReadActualPosition).answered);
+        assert!(
+            Sd::command(&sd::Request::ReadActualPosition)
+                .broadcast
+                .answered
+        );
         assert!(!Sd::retry_safe(&sd::Request::ResetStallEventCounter));
         assert_eq!(Ub2::INTER_REQUEST_GAP, Duration::from_millis(10));
         assert_eq!(Sd::INTER_REQUEST_GAP, Duration::from_millis(10));
@@ -202,7 +207,7 @@ mod tests {
         let limit = Q::SetLowerCustomerLimit {
             limit: ub2::Capacitance(1),
         };
-        assert_eq!(Ub2::kind(&limit), CommandKind::Setter);
+        assert_eq!(Ub2::command(&limit).kind, CommandKind::Setter);
         // The spec lets both get 0x93.
         assert!(Ub2::answers(&movement, &R::NakLimitReached));
         assert!(Ub2::answers(&limit, &R::NakLimitReached));

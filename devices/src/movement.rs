@@ -30,11 +30,11 @@ pub fn ub2_completion_check(trigger: &ub2::Request) -> Option<ub2::Request> {
     if code.len() != 2 || code[1] != 0x00 {
         return None;
     }
-    let address = *Ub2::DEVICE_ADDRESSES.start();
+    let address = *Ub2::BUS.device_addresses.start();
     let mut frame = [0xAA, address, code[0], 0x01, 0];
     frame[4] = ub2::checksum(&frame[..4]);
     match Ub2::decode_request(&frame) {
-        Ok(d) if Ub2::kind(&d.message) == CommandKind::CompletionCheck => Some(d.message),
+        Ok(d) if Ub2::command(&d.message).kind == CommandKind::CompletionCheck => Some(d.message),
         _ => None,
     }
 }

@@ -966,10 +966,10 @@ pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
 }
 
 /// Compares the engines on generated protocol `P` with `seed`, within `budget`. The spec is
-/// `P`'s own text (`Protocol::SPEC_YAML`), loaded here; a panic anywhere outside the engines
+/// `P`'s own text (`Protocol::SOURCE.spec_yaml`), loaded here; a panic anywhere outside the engines
 /// (a bug of this harness or a spec that does not load) is reported as a disagreement too.
 pub fn compare<P: Protocol>(seed: u64, budget: Budget) -> Report {
-    let p = match caught(|| busspec_model::load_str(P::NAME, P::SPEC_YAML)) {
+    let p = match caught(|| busspec_model::load_str(P::NAME, P::SOURCE.spec_yaml)) {
         Ok(Ok(p)) => p,
         other => {
             let mut r = Report::default();

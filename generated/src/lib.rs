@@ -36,9 +36,12 @@
 #[cfg(feature = "arbitrary")]
 extern crate std;
 
+#[doc(hidden)]
+pub use busspec_runtime::Framing;
 pub use busspec_runtime::{
-    stream, Broadcast, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
-    FieldValue, Message, MessageNames, NumKind, Protocol, ProtocolVisitor, Repeated,
+    stream, Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements,
+    EncodeError, FieldValue, Message, MessageNames, NumKind, Protocol, ProtocolVisitor, Repeated,
+    Source,
 };
 
 include!(concat!(env!("OUT_DIR"), "/protocols.rs"));

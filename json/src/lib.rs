@@ -64,10 +64,10 @@ pub fn parse_hex(text: &str) -> Result<Vec<u8>, String> {
 }
 
 /// The IR of a generated protocol, loaded from the spec text it was generated from
-/// ([`Protocol::SPEC_YAML`]): the units, enums and names [`message_line`] prints with.
+/// ([`Source::spec_yaml`](busspec_runtime::Source::spec_yaml)): the units, enums and names [`message_line`] prints with.
 pub fn load_spec<P: Protocol>() -> Result<Spec, String> {
     let file = format!("spec/{}.yaml", P::NAME);
-    busspec_model::load_str(&file, P::SPEC_YAML)
+    busspec_model::load_str(&file, P::SOURCE.spec_yaml)
         .map_err(|d| format!("built-in spec is invalid:\n{d}"))
 }
 

@@ -47,13 +47,13 @@ impl Line {
     /// says), its declared turnaround (none unless it says), no echo, no driver-enable line: a
     /// plain full-duplex port or a USB adapter that switches direction by itself.
     pub const fn for_protocol<P: Protocol>() -> Line {
-        let turnaround = match P::TRANSACTIONS.turnaround_us {
+        let turnaround = match P::BUS.transactions.turnaround_us {
             Some(us) => Duration::from_micros(us as u64),
             None => Duration::ZERO,
         };
         Line {
-            baud: P::BAUD,
-            bits_per_byte: P::TRANSACTIONS.character_bits,
+            baud: P::BUS.baud,
+            bits_per_byte: P::BUS.transactions.character_bits,
             echo: false,
             driver_enable: None,
             turnaround,

@@ -17,19 +17,19 @@ use busspec_runtime::{CommandKind, Protocol};
 
 /// The quiet time between two requests of protocol `P` on a line of `baud` and
 /// `character_bits` a character: the longest of the document's gap between frames
-/// ([`Protocol::INTER_FRAME_GAP_MS`]), the gap its `transactions:` section declares in
+/// ([`Bus::inter_frame_gap_ms`](busspec_runtime::Bus::inter_frame_gap_ms)), the gap its `transactions:` section declares in
 /// character times at this baud rate ([`busspec_runtime::Transactions::gap_us_at`]; it replaces
 /// the millisecond gap, which is the same gap at the document's baud rate), and the period of
 /// its highest frame rate.
 pub const fn inter_request_gap<P: Protocol>(baud: u32, character_bits: u32) -> Duration {
-    let gap_us = match P::TRANSACTIONS.gap_us_at(baud, character_bits) {
+    let gap_us = match P::BUS.transactions.gap_us_at(baud, character_bits) {
         Some(us) => us,
-        None => match P::INTER_FRAME_GAP_MS {
+        None => match P::BUS.inter_frame_gap_ms {
             Some(g) => g as u64 * 1000,
             None => 0,
         },
     };
-    let period_us = match P::MAX_FRAMES_PER_S {
+    let period_us = match P::BUS.max_frames_per_s {
         Some(r) if r > 0 => 1000u64.div_ceil(r as u64) * 1000,
         _ => 0,
     };
@@ -85,10 +85,14 @@ pub fn text(args: core::fmt::Arguments<'_>) -> Text {
 /// The spec's `byte_order:` line: its line number (from 1) and its text without the comment
 /// (`byte_order: little`), if the spec has one at the top level.
 pub fn spec_byte_order_line<P: Protocol>() -> Option<(usize, &'static str)> {
-    P::SPEC_YAML.lines().enumerate().find_map(|(i, line)| {
-        line.starts_with("byte_order:")
-            .then(|| (i + 1, line.split('#').next().unwrap_or(line).trim_end()))
-    })
+    P::SOURCE
+        .spec_yaml
+        .lines()
+        .enumerate()
+        .find_map(|(i, line)| {
+            line.starts_with("byte_order:")
+                .then(|| (i + 1, line.split('#').next().unwrap_or(line).trim_end()))
+        })
 }
 
 /// The byte order the spec declares, as a word (`little-endian`), from its `byte_order:` line.
@@ -140,40 +144,14 @@ impl<P: Protocol> Protocol for Plain<P> {
     type Response = P::Response;
     type Buffer = P::Buffer;
     const NAME: &'static str = P::NAME;
-    const DOCUMENT: &'static str = P::DOCUMENT;
-    const DOCUMENT_REVISION: &'static str = P::DOCUMENT_REVISION;
-    const SPEC_SHA256: &'static str = P::SPEC_SHA256;
-    const SPEC_YAML: &'static str = P::SPEC_YAML;
-    const MAX_REQUEST_LEN: usize = P::MAX_REQUEST_LEN;
-    const MAX_RESPONSE_LEN: usize = P::MAX_RESPONSE_LEN;
+    const SOURCE: busspec_runtime::Source = P::SOURCE;
+    const BUS: busspec_runtime::Bus = P::BUS;
     const MAX_FRAME_LEN: usize = P::MAX_FRAME_LEN;
-    const FRAME_LENGTHS: &'static [usize] = P::FRAME_LENGTHS;
     const EMPTY_BUFFER: Self::Buffer = P::EMPTY_BUFFER;
-    const BAUD: u32 = P::BAUD;
-    const INTER_FRAME_GAP_MS: Option<u32> = P::INTER_FRAME_GAP_MS;
-    const MAX_FRAMES_PER_S: Option<u32> = P::MAX_FRAMES_PER_S;
-    const DEVICE_ADDRESSES: core::ops::RangeInclusive<u8> = P::DEVICE_ADDRESSES;
-    const BROADCAST_ADDRESS: Option<u8> = P::BROADCAST_ADDRESS;
-    const HOST_ADDRESS: Option<u8> = P::HOST_ADDRESS;
-    const TRANSACTIONS: busspec_runtime::Transactions = P::TRANSACTIONS;
-    fn may_retry(request: &Self::Request) -> bool {
-        P::may_retry(request)
-    }
     fn decode_request(
         frame: &[u8],
     ) -> Result<busspec_runtime::Decoded<Self::Request>, busspec_runtime::DecodeError> {
         P::decode_request(frame)
-    }
-    fn decode_response(
-        frame: &[u8],
-    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-        P::decode_response(frame)
-    }
-    fn decode_reply(
-        frame: &[u8],
-        request: &Self::Request,
-    ) -> Result<busspec_runtime::Decoded<Self::Response>, busspec_runtime::DecodeError> {
-        P::decode_reply(frame, request)
     }
     fn decode_response_for(
         frame: &[u8],
@@ -184,14 +162,8 @@ impl<P: Protocol> Protocol for Plain<P> {
     fn answers(request: &Self::Request, response: &Self::Response) -> bool {
         P::answers(request, response)
     }
-    fn kind(request: &Self::Request) -> CommandKind {
-        P::kind(request)
-    }
-    fn broadcast(request: &Self::Request) -> busspec_runtime::Broadcast {
-        P::broadcast(request)
-    }
-    fn reply(request: &Self::Request) -> busspec_runtime::Reply {
-        P::reply(request)
+    fn command(request: &Self::Request) -> busspec_runtime::Command {
+        P::command(request)
     }
     fn is_nak(response: &Self::Response) -> bool {
         P::is_nak(response)
@@ -199,6 +171,12 @@ impl<P: Protocol> Protocol for Plain<P> {
     fn checksum_ok(frame: &[u8]) -> bool {
         P::checksum_ok(frame)
     }
+}
+
+impl<P: Protocol> busspec_runtime::Framing for Plain<P> {
+    const MAX_REQUEST_LEN: usize = P::MAX_REQUEST_LEN;
+    const MAX_RESPONSE_LEN: usize = P::MAX_RESPONSE_LEN;
+    const FRAME_LENGTHS: &'static [usize] = P::FRAME_LENGTHS;
     fn candidates(head: &[u8]) -> busspec_runtime::stream::Candidates {
         P::candidates(head)
     }
@@ -218,7 +196,7 @@ pub trait Link: Protocol {
     /// ([`inter_request_gap`]): UB2 §2.1 demands 10 ms; SD §1 allows at most 100 frames per
     /// second, i.e. one every 10 ms; Modbus t3.5 is 2.005 ms at 19,200 baud, 8E1.
     const INTER_REQUEST_GAP: Duration =
-        inter_request_gap::<Self>(Self::BAUD, Self::TRANSACTIONS.character_bits);
+        inter_request_gap::<Self>(Self::BUS.baud, Self::BUS.transactions.character_bits);
 
     /// The protocol's name, its document's baud rate, its `transactions:` section, its device
     /// and broadcast addresses: what the master reads of the spec's line constants. The
@@ -229,19 +207,19 @@ pub trait Link: Protocol {
     }
     /// See [`Link::name`].
     fn baud() -> u32 {
-        Self::BAUD
+        Self::BUS.baud
     }
     /// See [`Link::name`].
     fn transactions() -> busspec_runtime::Transactions {
-        Self::TRANSACTIONS
+        Self::BUS.transactions
     }
     /// See [`Link::name`].
     fn device_addresses() -> core::ops::RangeInclusive<u8> {
-        Self::DEVICE_ADDRESSES
+        Self::BUS.device_addresses
     }
     /// See [`Link::name`].
     fn broadcast_address() -> Option<u8> {
-        Self::BROADCAST_ADDRESS
+        Self::BUS.broadcast_address
     }
     /// The quiet time between two requests on a line of `baud` and `character_bits`
     /// ([`inter_request_gap`] by default).
@@ -250,11 +228,11 @@ pub trait Link: Protocol {
     }
 
     /// Whether sending `r` twice does no more than sending it once, so a lost or garbled reply
-    /// may be answered by sending it again: what the spec declares ([`Protocol::may_retry`]:
+    /// may be answered by sending it again: what the spec declares ([`Command::may_retry`](busspec_runtime::Command::may_retry):
     /// its `transactions.retry`, by default by kind). A protocol's rules may add commands the
     /// spec cannot tell about.
     fn retry_safe(r: &Self::Request) -> bool {
-        Self::may_retry(r)
+        Self::command(r).may_retry
     }
 
     /// The address the reply to `r`, sent to `address`, comes from.
@@ -316,6 +294,6 @@ pub trait Link: Protocol {
     /// a reset, or a command that moves a device to another address (another device may then
     /// answer where a checked one did). A reset by default.
     fn forgets_byte_order_checks(r: &Self::Request) -> bool {
-        Self::kind(r) == CommandKind::Reset
+        Self::command(r).kind == CommandKind::Reset
     }
 }

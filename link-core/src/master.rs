@@ -21,8 +21,8 @@
 //! - **Settle**: after a timeout (or a collision) the line must be quiet for
 //!   [`Timing::settle`] (at most four times that) before the next send, so a late reply is
 //!   discarded instead of taken for the next request's answer.
-//! - **Broadcasts** the spec leaves unanswered ([`Protocol::broadcast`](crate::Protocol::broadcast)) finish when sent.
-//! - **Commands without a reply** ([`Protocol::reply`](crate::Protocol::reply): `reply: none`)
+//! - **Broadcasts** the spec leaves unanswered ([`Command::broadcast`](busspec_runtime::Command::broadcast)) finish when sent.
+//! - **Commands without a reply** ([`Command::reply`](busspec_runtime::Command::reply): `reply: none`)
 //!   finish when sent; where the reply is optional, silence until the timeout finishes the
 //!   transaction with no response, and is not retried.
 //! - **Freshness counters** ([`Link::freshness_mut`], SD §3.1) are kept per address: every
@@ -583,9 +583,9 @@ impl<P: Link> MasterCore<P> {
         self.broadcast = broadcast;
         // A command the spec says gets no reply is done once sent, like a broadcast nobody
         // answers; one whose reply is optional is done when none comes.
-        let rule = P::reply(&request);
+        let rule = P::command(&request).reply;
         self.expects_reply =
-            rule != ReplyRule::None && (!broadcast || P::broadcast(&request).answered);
+            rule != ReplyRule::None && (!broadcast || P::command(&request).broadcast.answered);
         self.reply_optional = rule == ReplyRule::Optional;
         self.allowed = if P::retry_safe(&request) {
             self.timing.attempts.max(1)
@@ -600,7 +600,7 @@ impl<P: Link> MasterCore<P> {
 
     fn check_address(request: &P::Request, address: u8) -> Result<bool, AddressProblem> {
         if Some(address) == P::broadcast_address() {
-            return if P::broadcast(request).accepted {
+            return if P::command(request).broadcast.accepted {
                 Ok(true)
             } else {
                 Err(AddressProblem::NoBroadcast)

@@ -11,7 +11,7 @@
 //! before it sends again, so a reply that comes late is discarded instead of being taken for
 //! the answer to the next request.
 //!
-//! Broadcasts that the spec says go unanswered ([`busspec_runtime::Protocol::broadcast`]) return at once with no
+//! Broadcasts that the spec says go unanswered ([`busspec_runtime::Command::broadcast`]) return at once with no
 //! response. A freshness counter ([`Link::freshness_mut`], the SD set point's, §3.1) is kept
 //! here, per address: every request that carries one carries the next value, whatever the caller
 //! put in it; the first one to an address starts from the device's own view of the counter

@@ -256,7 +256,7 @@ pub fn run_with<P: Link, D: Device + Clone + PartialEq>(
             }
             // Nothing came back, as the spec allows for this request: what was lost, the
             // protocol does not let a master see.
-            Ok(ex) if ex.response.is_none() && P::reply(&request) != Reply::Required => {
+            Ok(ex) if ex.response.is_none() && P::command(&request).reply != Reply::Required => {
                 report.unseen += 1;
             }
             Ok(ex) => {

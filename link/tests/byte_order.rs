@@ -24,7 +24,7 @@ type Sent = Rc<RefCell<Vec<Vec<u8>>>>;
 /// A master on a bus with `devices`, and the request frames it sends.
 fn bus(devices: Vec<Ub2Sim>) -> (Bus, Master<Ub2, Bus, SimClock>, Sent) {
     let clock = SimClock::new();
-    let bus = SimBus::new(clock.clone(), BusConfig::new(Ub2::BAUD), devices);
+    let bus = SimBus::new(clock.clone(), BusConfig::new(Ub2::BUS.baud), devices);
     let mut master = Master::new(bus.clone(), clock);
     let sent = Rc::new(RefCell::new(Vec::new()));
     let s = Rc::clone(&sent);
@@ -167,7 +167,11 @@ fn an_msb_first_device_is_not_moved() {
     assert_eq!(frames.len(), 2 * 5);
     for f in frames.iter() {
         let q = Ub2::decode_request(f).unwrap().message;
-        assert_ne!(Ub2::kind(&q), CommandKind::Movement, "{q:?} was sent");
+        assert_ne!(
+            Ub2::command(&q).kind,
+            CommandKind::Movement,
+            "{q:?} was sent"
+        );
     }
     assert!(names(&frames)
         .iter()
@@ -187,7 +191,7 @@ fn the_msb_first_simulator_sends_what_the_examples_print() {
     let clock = SimClock::new();
     let mut bus = SimBus::new(
         clock.clone(),
-        BusConfig::new(Ub2::BAUD),
+        BusConfig::new(Ub2::BUS.baud),
         vec![Ub2Sim::new(0x21).msb_first(true)],
     );
     let mut ask = |bytes: &[u8]| {

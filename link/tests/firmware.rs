@@ -18,7 +18,7 @@ fn the_set_point_loop_keeps_the_freshness_counter_and_drops_no_frame() {
     let mut device = SdSim::new(1);
     // Another master counted to 5 before this one started.
     device.host_freshness = Some(5);
-    let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![device]);
+    let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BUS.baud), vec![device]);
     let mut driver: Driver<Sd, _, _, _> = Driver::new(
         Port::new(bus.clone()),
         SimTime(clock.clone()),
@@ -62,7 +62,7 @@ fn the_modbus_variant_reads_writes_and_reads_back_by_the_spec_alone() {
     let clock = SimClock::new();
     let bus = SimBus::new(
         clock.clone(),
-        BusConfig::new(Modbus::BAUD),
+        BusConfig::new(Modbus::BUS.baud),
         vec![ModbusDevice(sim)],
     );
     let mut driver: Driver<Plain<Modbus>, _, _, _> = Driver::new(

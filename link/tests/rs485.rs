@@ -156,7 +156,7 @@ fn driver_enable_rises_before_the_first_byte_and_falls_when_the_last_has_left() 
 #[test]
 fn a_collision_names_the_offset_and_both_bytes() {
     let clock = SimClock::new();
-    let mut config = BusConfig::new(Sd::BAUD);
+    let mut config = BusConfig::new(Sd::BUS.baud);
     config.echo = true;
     config.collide_at = Some(1);
     let bus = SimBus::new(clock.clone(), config, vec![SdSim::new(1)]);
@@ -183,7 +183,11 @@ fn a_collision_names_the_offset_and_both_bytes() {
 #[test]
 fn a_missing_echo_says_how_much_came_back() {
     let clock = SimClock::new();
-    let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![SdSim::new(1)]);
+    let bus = SimBus::new(
+        clock.clone(),
+        BusConfig::new(Sd::BUS.baud),
+        vec![SdSim::new(1)],
+    );
     let mut line = Line::for_protocol::<Sd>();
     line.echo = true;
     let mut m: Master<Sd, _, _> = Master::new(bus, clock).with_line(line);

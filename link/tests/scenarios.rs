@@ -21,7 +21,7 @@ type Bus = SimBus<Dev>;
 
 fn sim_bus<P: Link>(setup: &mut Setup) -> (Bus, SimClock) {
     let clock = SimClock::new();
-    let mut config = BusConfig::new(P::BAUD);
+    let mut config = BusConfig::new(P::BUS.baud);
     config.echo = setup.echo;
     config.collide_at = setup.collide_at;
     config.driver_enable_required = setup.driver_enable_required;

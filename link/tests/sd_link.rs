@@ -299,7 +299,11 @@ fn the_freshness_counter_wraps_at_the_protocols_modulus() {
     use busspec_devices::sim::ub2::Ub2Sim;
     use busspec_devices::{Protocol, Ub2};
     let clock = SimClock::new();
-    let bus = SimBus::new(clock.clone(), BusConfig::new(Sd::BAUD), vec![SdSim::new(1)]);
+    let bus = SimBus::new(
+        clock.clone(),
+        BusConfig::new(Sd::BUS.baud),
+        vec![SdSim::new(1)],
+    );
     let mut m: Master<Sd, _, _> = Master::new(bus, clock);
     m.set_freshness(1, 0x0F);
     assert_eq!(m.next_freshness_value(1), Some(0));
@@ -308,7 +312,7 @@ fn the_freshness_counter_wraps_at_the_protocols_modulus() {
     let clock = SimClock::new();
     let bus = SimBus::new(
         clock.clone(),
-        BusConfig::new(Ub2::BAUD),
+        BusConfig::new(Ub2::BUS.baud),
         vec![Ub2Sim::new(0x21)],
     );
     let mut m: Master<Ub2, _, _> = Master::new(bus, clock);

@@ -29,7 +29,9 @@ mod protocol;
 mod repeated;
 pub mod stream;
 
-pub use protocol::{Message, Protocol, ProtocolVisitor, Transactions};
+#[doc(hidden)]
+pub use protocol::Framing;
+pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};
 pub use repeated::{Bits, CapacityError, Element, Repeated};
 
 use core::fmt;
@@ -76,7 +78,7 @@ impl CommandKind {
     /// with nothing else known about it: reads, completion checks and setters (the same value
     /// set twice is set once); never movements (a second trigger restarts or extends the move)
     /// or resets (the second reply reports the reset state, not the value before it). A spec
-    /// says otherwise in `transactions.retry` ([`Protocol::may_retry`]).
+    /// says otherwise in `transactions.retry` ([`Command::may_retry`](crate::Command::may_retry)).
     pub const fn safe_to_repeat(self) -> bool {
         matches!(
             self,

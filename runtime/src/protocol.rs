@@ -41,11 +41,14 @@ pub trait Message: Copy + Debug + PartialEq + Send + Sync + 'static {
     ) -> Result<Self, FieldError>;
 }
 
-/// A protocol generated from a busspec spec: its line constants, its codec and its framing.
+/// A protocol generated from a busspec spec: its types, where it came from, its bus, and its
+/// codec.
 ///
 /// Implemented by the unit type each generated module declares. All methods are associated
-/// functions (no `self`): a protocol is a type, not a value.
-pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
+/// functions (no `self`): a protocol is a type, not a value. What the stream decoder asks of a
+/// protocol (frame lengths and the candidates a head leaves) is [`Framing`], a supertrait no
+/// user needs to name.
+pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     /// Master to device.
     type Request: Message;
     /// Device to master.
@@ -55,67 +58,35 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
 
     /// The protocol's name in the spec (`ub2`).
     const NAME: &'static str;
-    /// The vendor document the spec transcribes.
-    const DOCUMENT: &'static str;
-    /// The document's revision.
-    const DOCUMENT_REVISION: &'static str;
-    /// SHA-256 of the spec file the code was generated from, lowercase hex (`sha256sum`).
-    const SPEC_SHA256: &'static str;
-    /// The spec's text, as the code was generated from it: tools that need more than the codec
-    /// (names of units, documentation, the interpreter) load it with `busspec-model`. Costs
-    /// nothing in a binary that does not use it.
-    const SPEC_YAML: &'static str;
-
-    /// The longest request frame, in bytes.
-    const MAX_REQUEST_LEN: usize;
-    /// The longest response frame, in bytes.
-    const MAX_RESPONSE_LEN: usize;
+    /// The document the spec transcribes, and the spec the code was generated from.
+    const SOURCE: Source;
+    /// The bus the document puts its devices on: baud rate, gaps, addresses, transaction
+    /// timing.
+    const BUS: Bus;
     /// The longest frame in either direction: a buffer this long holds any frame.
     const MAX_FRAME_LEN: usize;
-    /// Every distinct frame length, longest first (at most 64).
-    const FRAME_LENGTHS: &'static [usize];
     /// An all-zero [`Self::Buffer`].
     const EMPTY_BUFFER: Self::Buffer;
-
-    /// The document's baud rate.
-    const BAUD: u32;
-    /// The quiet time the document demands between frames, in milliseconds, if it says.
-    const INTER_FRAME_GAP_MS: Option<u32>;
-    /// The most frames per second the document allows, if it says.
-    const MAX_FRAMES_PER_S: Option<u32>;
-    /// Device addresses, inclusive.
-    const DEVICE_ADDRESSES: RangeInclusive<u8>;
-    /// The broadcast address, if the protocol has one.
-    const BROADCAST_ADDRESS: Option<u8>;
-    /// The host's own address, if the spec gives one: a frame may carry it besides the device
-    /// range and the broadcast address.
-    const HOST_ADDRESS: Option<u8> = None;
-    /// What a bus master needs that the spec declares in its `transactions:` section
-    /// ([`Transactions::UNDECLARED`] for a spec without one).
-    const TRANSACTIONS: Transactions = Transactions::UNDECLARED;
-
-    /// Whether a master may send `request` again when its reply is lost or garbled: the spec's
-    /// `transactions.retry`, by default [`CommandKind::safe_to_repeat`] of its kind.
-    #[inline]
-    fn may_retry(request: &Self::Request) -> bool {
-        Self::kind(request).safe_to_repeat()
-    }
 
     /// Decodes a request frame.
     fn decode_request(frame: &[u8]) -> Result<Decoded<Self::Request>, DecodeError>;
     /// Decodes a response frame on its own; a response only its request identifies is
     /// [`DecodeError::Ambiguous`].
+    #[inline]
     fn decode_response(frame: &[u8]) -> Result<Decoded<Self::Response>, DecodeError> {
         Self::decode_response_for(frame, None)
     }
     /// Decodes a frame as the reply to `request`: only the responses `request` may get.
+    #[inline]
     fn decode_reply(
         frame: &[u8],
         request: &Self::Request,
     ) -> Result<Decoded<Self::Response>, DecodeError> {
         Self::decode_response_for(frame, Some(request))
     }
-    /// [`Self::decode_response`] without a request, [`Self::decode_reply`] with one.
+    /// [`Self::decode_response`] without a request, [`Self::decode_reply`] with one: what
+    /// the generated code implements, and the stream decoder calls.
+    #[doc(hidden)]
     fn decode_response_for(
         frame: &[u8],
         request: Option<&Self::Request>,
@@ -123,21 +94,27 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
 
     /// Whether `response` is one the spec lets `request` get.
     fn answers(request: &Self::Request, response: &Self::Response) -> bool;
-    /// What `request` does, as the spec classifies it.
-    fn kind(request: &Self::Request) -> CommandKind;
-    /// How `request` treats the broadcast address, from the spec.
-    fn broadcast(request: &Self::Request) -> Broadcast;
-    /// Whether `request` gets a reply, from the spec (`reply`; required unless it says).
-    #[inline]
-    fn reply(request: &Self::Request) -> Reply {
-        let _ = request;
-        Reply::Required
-    }
+    /// What the spec says of `request` beyond its frame: its kind, the broadcast address,
+    /// its reply, whether a master may send it again.
+    fn command(request: &Self::Request) -> Command;
     /// Whether `response` is a refusal: the spec marks it `kind: nak`.
     fn is_nak(response: &Self::Response) -> bool;
     /// Whether `frame` ends in the checksum of the bytes it covers, and nothing else: the
     /// weakest acceptance test (a frame shorter than a checksum fails it).
     fn checksum_ok(frame: &[u8]) -> bool;
+}
+
+/// What the stream decoder asks of a protocol to find frames in a stream: implemented by the
+/// generated code, beside [`Protocol`]; a tool that only decodes, encodes or talks never names
+/// it.
+#[doc(hidden)]
+pub trait Framing {
+    /// The longest request frame, in bytes.
+    const MAX_REQUEST_LEN: usize;
+    /// The longest response frame, in bytes.
+    const MAX_RESPONSE_LEN: usize;
+    /// Every distinct frame length, longest first (at most 64).
+    const FRAME_LENGTHS: &'static [usize];
 
     /// The messages whose start byte and code agree with `head`, the bytes buffered from a
     /// possible frame start (possibly fewer than a whole frame): the stream decoder's framing
@@ -145,7 +122,7 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     /// address the spec does not allow is reported as out of spec, not skipped.
     fn candidates(head: &[u8]) -> Candidates;
 
-    /// [`Self::candidates`] for a head of at least [`Self::MAX_FRAME_LEN`] bytes, where its
+    /// [`Self::candidates`] for a head of at least `MAX_FRAME_LEN` bytes, where its
     /// start byte and code leave at most two frames ([`Candidate::of`] of the candidates):
     /// the same decision in one table lookup, which the stream decoder's fast path takes
     /// first. [`Candidate::MANY`] (the default) wherever the candidates must be asked.
@@ -177,6 +154,57 @@ pub trait Protocol: Copy + Debug + Default + Send + Sync + 'static {
     }
 }
 
+/// Where a protocol's code came from ([`Protocol::SOURCE`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Source {
+    /// The vendor document the spec transcribes.
+    pub document: &'static str,
+    /// The document's revision.
+    pub revision: &'static str,
+    /// SHA-256 of the spec the code was generated from (with the files it includes),
+    /// lowercase hex.
+    pub spec_sha256: &'static str,
+    /// The spec's text, as the code was generated from it: tools that need more than the
+    /// codec (names of units, documentation, the interpreter) load it with `busspec-model`.
+    /// Costs nothing in a binary that does not use it.
+    pub spec_yaml: &'static str,
+}
+
+/// The bus a protocol's document puts its devices on ([`Protocol::BUS`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Bus {
+    /// The document's baud rate.
+    pub baud: u32,
+    /// The quiet time the document demands between frames, in milliseconds, if it says.
+    pub inter_frame_gap_ms: Option<u32>,
+    /// The most frames per second the document allows, if it says.
+    pub max_frames_per_s: Option<u32>,
+    /// Device addresses, inclusive.
+    pub device_addresses: RangeInclusive<u8>,
+    /// The broadcast address, if the protocol has one.
+    pub broadcast_address: Option<u8>,
+    /// The host's own address, if the spec gives one: a frame may carry it besides the device
+    /// range and the broadcast address.
+    pub host_address: Option<u8>,
+    /// What a bus master needs that the spec declares in its `transactions:` section
+    /// ([`Transactions::UNDECLARED`] for a spec without one).
+    pub transactions: Transactions,
+}
+
+/// What a spec says of one command beyond its frame ([`Protocol::command`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Command {
+    /// What the command does, as the spec classifies it.
+    pub kind: CommandKind,
+    /// How the command treats the broadcast address.
+    pub broadcast: Broadcast,
+    /// Whether it gets a reply (`reply`; required unless the spec says).
+    pub reply: Reply,
+    /// Whether a master may send it again when its reply is lost or garbled: the spec's
+    /// `transactions.retry`, by default [`CommandKind::safe_to_repeat`] of its kind.
+    pub may_retry: bool,
+}
+
 /// The timing a spec's `transactions:` section declares for a bus master. Durations are in
 /// microseconds; `None` where the spec does not say (the master keeps its own default).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -187,7 +215,7 @@ pub struct Transactions {
     /// does not answer, before it takes the next request.
     pub turnaround_us: Option<u32>,
     /// The quiet time between frames in tenths of a character time (35 for Modbus's t3.5), at
-    /// the line's baud rate; [`Protocol::INTER_FRAME_GAP_MS`] is the same gap at the document's.
+    /// the line's baud rate; [`Bus::inter_frame_gap_ms`] is the same gap at the document's.
     pub gap_tenths_of_character: Option<u32>,
     /// The gap is never shorter than this (Modbus: 1750 µs above 19,200 baud).
     pub gap_at_least_us: u32,

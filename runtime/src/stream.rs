@@ -11,14 +11,14 @@
 //! # The framing rule
 //!
 //! The decoder looks at the earliest byte not yet accounted for and asks which messages could
-//! start there (their *candidates*, [`Protocol::candidates`]): those whose start byte and code
+//! start there (their *candidates*, [`Framing::candidates`](crate::Framing::candidates)): those whose start byte and code
 //! agree with every byte buffered so far. The address is not part of it: a frame from an
 //! address the spec does not allow is still a frame on the wire, and a sniffer must see it.
 //! No candidate: the byte is noise; it is dropped and the next one tried, and consecutive
 //! dropped bytes are reported as one [`Event::Skipped`] (split every [`MAX_SKIPPED_RUN`]
 //! bytes). A candidate's length is fixed by its message (one of
-//! [`Protocol::FRAME_LENGTHS`]) or, for a variable-length message, given by its length or count
-//! field once that is buffered ([`Protocol::variable_candidates`]); a field that gives a length
+//! [`Framing::FRAME_LENGTHS`](crate::Framing::FRAME_LENGTHS)) or, for a variable-length message, given by its length or count
+//! field once that is buffered ([`Framing::variable_candidates`](crate::Framing::variable_candidates)); a field that gives a length
 //! no frame of the message can have makes it no candidate, so a length that lies drops one
 //! byte and the decoder resynchronises. While a candidate is longer than what is buffered, or
 //! its length or count field has not arrived, the decoder waits. Then every complete candidate
@@ -60,7 +60,7 @@ pub enum Direction {
 }
 
 /// The messages that could start at the head of the buffer, as sets of frame lengths: bit `i`
-/// stands for [`Protocol::FRAME_LENGTHS`]`[i]`.
+/// stands for [`Framing::FRAME_LENGTHS`](crate::Framing::FRAME_LENGTHS)`[i]`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Candidates {
     pub requests: u64,
@@ -69,7 +69,7 @@ pub struct Candidates {
 
 /// The frames that could start at the head of a whole window, where the start byte and code
 /// fix at most two of them (one length of each direction, or two lengths of one):
-/// [`Protocol::candidate`], a faster route to the decision [`Protocol::candidates`] gives (the
+/// [`Framing::candidate`](crate::Framing::candidate), a faster route to the decision [`Framing::candidates`](crate::Framing::candidates) gives (the
 /// stream decoder's fast path asks it first, and the candidates only where it says
 /// [`Candidate::MANY`]).
 ///
@@ -82,10 +82,10 @@ impl Candidate {
     /// No message agrees with the head: its byte is noise.
     pub const NONE: Candidate = Candidate(0);
     /// Not fixed by the head's start byte and code (more than two frames, a length of both
-    /// directions, or a head too short): [`Protocol::candidates`] says which.
+    /// directions, or a head too short): [`Framing::candidates`](crate::Framing::candidates) says which.
     pub const MANY: Candidate = Candidate(0xFFFF);
 
-    /// From a [`Candidates`] mask over `lengths` (the protocol's [`Protocol::FRAME_LENGTHS`],
+    /// From a [`Candidates`] mask over `lengths` (the protocol's [`Framing::FRAME_LENGTHS`](crate::Framing::FRAME_LENGTHS),
     /// longest first): what the generated tables hold, computed when they are generated.
     pub fn of(c: Candidates, lengths: &[usize]) -> Candidate {
         let mut slots = 0u16;
@@ -105,8 +105,8 @@ impl Candidate {
 }
 
 /// The length of a variable-length frame (one whose length a length field or a repeated
-/// field's count gives, so [`Protocol::FRAME_LENGTHS`] does not list it) that could start at
-/// the head of the buffer, for one direction: see [`Protocol::variable_candidates`].
+/// field's count gives, so [`Framing::FRAME_LENGTHS`](crate::Framing::FRAME_LENGTHS) does not list it) that could start at
+/// the head of the buffer, for one direction: see [`Framing::variable_candidates`](crate::Framing::variable_candidates).
 ///
 /// A `u32` with two reserved values rather than an `Option<Option<usize>>`: it costs one
 /// register, and [`VarLens::NONE`] is one compare against zero on the decoder's path for
@@ -170,7 +170,7 @@ impl VarLen {
 }
 
 /// The variable-length candidates at the head of the buffer: at most one per direction
-/// ([`Protocol::variable_candidates`]).
+/// ([`Framing::variable_candidates`](crate::Framing::variable_candidates)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct VarLens {
     pub requests: VarLen,
@@ -255,7 +255,7 @@ pub enum Event<Q, R> {
 }
 
 /// The next candidate length of the framing rule's walk, longest first: the fixed ones left in
-/// `rest` (bit i for [`Protocol::FRAME_LENGTHS`]`[i]`) and the variable ones `lq` and `lr` (0
+/// `rest` (bit i for [`Framing::FRAME_LENGTHS`](crate::Framing::FRAME_LENGTHS)`[i]`) and the variable ones `lq` and `lr` (0
 /// for none), each length once with every direction that has it (`(length, as a request, as a
 /// response)`), taken out of the walk; `None` when none is left. The one walk of
 /// `Core::advance` and the fast path.

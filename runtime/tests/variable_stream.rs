@@ -1,4 +1,4 @@
-//! The stream decoder's variable-length framing ([`Protocol::variable_candidates`]), through a
+//! The stream decoder's variable-length framing ([`Framing::variable_candidates`](crate::Framing::variable_candidates)), through a
 //! protocol written by hand: `toy`, whose frames carry a length byte. Held to the interpreter's
 //! stream decoder (`busspec_model::stream`, whose `lens_of` is the reference for a variable
 //! message's lengths) on captures with noise, lying length bytes, truncated frames and
@@ -18,8 +18,8 @@ use busspec_model::stream as interp_stream;
 use busspec_runtime::codec::{LengthField, VarLen, VarLens};
 use busspec_runtime::stream::{Candidates, Event, StreamDecoder};
 use busspec_runtime::{
-    Broadcast, CommandKind, DecodeError, Decoded, EncodeError, FieldError, FieldValue, Message,
-    Protocol, Repeated,
+    Broadcast, Bus, Command, CommandKind, DecodeError, Decoded, EncodeError, FieldError,
+    FieldValue, Framing, Message, Protocol, Repeated, Reply, Source, Transactions,
 };
 
 const SPEC: &str = r#"
@@ -279,21 +279,23 @@ impl Protocol for Toy {
     type Response = Resp;
     type Buffer = [u8; 11];
     const NAME: &'static str = "toy";
-    const DOCUMENT: &'static str = "Toy document";
-    const DOCUMENT_REVISION: &'static str = "1";
-    const SPEC_SHA256: &'static str = "";
-    const SPEC_YAML: &'static str = SPEC;
-    const MAX_REQUEST_LEN: usize = 11;
-    const MAX_RESPONSE_LEN: usize = 11;
+    const SOURCE: Source = Source {
+        document: "Toy document",
+        revision: "1",
+        spec_sha256: "",
+        spec_yaml: SPEC,
+    };
+    const BUS: Bus = Bus {
+        baud: 9600,
+        inter_frame_gap_ms: None,
+        max_frames_per_s: None,
+        device_addresses: 1..=16,
+        broadcast_address: None,
+        host_address: None,
+        transactions: Transactions::UNDECLARED,
+    };
     const MAX_FRAME_LEN: usize = 11;
-    /// Only the fixed-length messages' length: the variable ones come from the length byte.
-    const FRAME_LENGTHS: &'static [usize] = &[6];
     const EMPTY_BUFFER: [u8; 11] = [0; 11];
-    const BAUD: u32 = 9600;
-    const INTER_FRAME_GAP_MS: Option<u32> = None;
-    const MAX_FRAMES_PER_S: Option<u32> = None;
-    const DEVICE_ADDRESSES: core::ops::RangeInclusive<u8> = 1..=16;
-    const BROADCAST_ADDRESS: Option<u8> = None;
 
     fn decode_request(frame: &[u8]) -> Result<Decoded<Req>, DecodeError> {
         let code = check(frame)?;
@@ -378,16 +380,19 @@ impl Protocol for Toy {
             (Req::Read { .. }, Resp::Data { .. }) | (Req::Write { .. }, Resp::Ack { .. })
         )
     }
-    fn kind(request: &Req) -> CommandKind {
-        match request {
+    fn command(request: &Req) -> Command {
+        let kind = match request {
             Req::Read { .. } => CommandKind::Getter,
             Req::Write { .. } => CommandKind::Setter,
-        }
-    }
-    fn broadcast(_request: &Req) -> Broadcast {
-        Broadcast {
-            accepted: false,
-            answered: false,
+        };
+        Command {
+            kind,
+            broadcast: Broadcast {
+                accepted: false,
+                answered: false,
+            },
+            reply: Reply::Required,
+            may_retry: kind.safe_to_repeat(),
         }
     }
     fn is_nak(_response: &Resp) -> bool {
@@ -397,6 +402,13 @@ impl Protocol for Toy {
         frame.len() > 1
             && busspec_runtime::sum8(&frame[..frame.len() - 1]) == frame[frame.len() - 1]
     }
+}
+
+impl Framing for Toy {
+    const MAX_REQUEST_LEN: usize = 11;
+    const MAX_RESPONSE_LEN: usize = 11;
+    /// Only the fixed-length messages' length: the variable ones come from the length byte.
+    const FRAME_LENGTHS: &'static [usize] = &[6];
 
     fn candidates(head: &[u8]) -> Candidates {
         if head.first().is_some_and(|&b| b != 0x7E) {

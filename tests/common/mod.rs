@@ -13,9 +13,9 @@ pub use busspec_fuzz_bodies::oracle::{
 };
 
 /// The interpreter's view of generated protocol `P`: the spec text its code was generated
-/// from ([`busspec_protocols::Protocol::SPEC_YAML`]), loaded and validated.
+/// from ([`Source::spec_yaml`](busspec_runtime::Source::spec_yaml)), loaded and validated.
 pub fn spec<P: busspec_protocols::Protocol>() -> Protocol {
-    busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
+    busspec_model::load_str(P::NAME, P::SOURCE.spec_yaml).unwrap_or_else(|d| panic!("{d}"))
 }
 
 /// Writes the checksum of the bytes before it it covers into `frame`'s last bytes (before

@@ -39,9 +39,12 @@ fn main() -> ExitCode {
     let mut specs = vec![
         (
             format!("spec/{}.yaml", Ub2::NAME),
-            Ub2::SPEC_YAML.to_string(),
+            Ub2::SOURCE.spec_yaml.to_string(),
         ),
-        (format!("spec/{}.yaml", Sd::NAME), Sd::SPEC_YAML.to_string()),
+        (
+            format!("spec/{}.yaml", Sd::NAME),
+            Sd::SOURCE.spec_yaml.to_string(),
+        ),
     ];
     if args.len() > 2 {
         specs.clear();

@@ -43,24 +43,23 @@ pub(super) fn emit_command_info(p: &Protocol) -> TokenStream {
     } else {
         quote!(match self { #(#arms)* _ => rt::Reply::Required })
     };
+    let may_retry =
+        crate::transactions::may_retry(p, quote!(c.0), |c| any_of(&ident("Request"), c));
     quote! {
         impl Request {
-            /// Whether the command gets a reply, as the spec says.
-            pub const fn reply(&self) -> rt::Reply {
-                #reply
-            }
             /// Each command's kind, whether it accepts and answers the broadcast address, and the
             /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
             const COMMANDS: [(rt::CommandKind, bool, bool, #mask); #n] = [#(#rows),*];
-            /// What the command does, as the spec classifies it.
-            pub const fn kind(&self) -> rt::CommandKind {
-                Self::COMMANDS[self.index()].0
-            }
-            /// Whether the command may go to the broadcast address, and whether it is then
-            /// answered.
-            pub const fn broadcast(&self) -> rt::Broadcast {
+            /// What the spec says of the command beyond its frame: its kind, the broadcast
+            /// address, its reply, whether a master may send it again.
+            pub const fn command(&self) -> rt::Command {
                 let c = Self::COMMANDS[self.index()];
-                rt::Broadcast { accepted: c.1, answered: c.2 }
+                rt::Command {
+                    kind: c.0,
+                    broadcast: rt::Broadcast { accepted: c.1, answered: c.2 },
+                    reply: #reply,
+                    may_retry: #may_retry,
+                }
             }
             /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
             const fn replies(&self) -> #mask {

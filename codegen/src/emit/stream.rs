@@ -206,8 +206,8 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         p.name
     );
     let type_doc = doc(&doc_text);
-    let transactions = crate::transactions::protocol_items(p, |c| any_of(&ident("Request"), c));
-    let framing_fns = if p.framing.escaping.is_none() {
+    let transactions = crate::transactions::transactions(p);
+    let checksum_ok = if p.framing.escaping.is_none() {
         quote! {
             fn checksum_ok(frame: &[u8]) -> bool {
                 match frame.len().checked_sub(#ck_len) {
@@ -215,18 +215,8 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
                     _ => false,
                 }
             }
-            #[inline]
-            fn candidates(head: &[u8]) -> rt::Candidates {
-                #start_check
-                #mask
-                #by_sync
-                rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
-            }
-            #candidate
-            #variable
         }
     } else {
-        // Escaped frames are framed by their end byte or their length field alone.
         quote! {
             fn checksum_ok(frame: &[u8]) -> bool {
                 let mut plain = [0u8; UNESCAPED_LEN];
@@ -242,6 +232,23 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
                     _ => false,
                 }
             }
+        }
+    };
+    let framing_fns = if p.framing.escaping.is_none() {
+        quote! {
+            #[inline]
+            fn candidates(head: &[u8]) -> rt::Candidates {
+                #start_check
+                #mask
+                #by_sync
+                rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
+            }
+            #candidate
+            #variable
+        }
+    } else {
+        // Escaped frames are framed by their end byte or their length field alone.
+        quote! {
             #[inline]
             fn candidates(_head: &[u8]) -> rt::Candidates {
                 rt::Candidates { requests: 0, responses: 0 }
@@ -266,22 +273,23 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             type Response = Response;
             type Buffer = [u8; MAX_FRAME_LEN];
             const NAME: &'static str = PROTOCOL;
-            const DOCUMENT: &'static str = DOCUMENT;
-            const DOCUMENT_REVISION: &'static str = DOCUMENT_REVISION;
-            const SPEC_SHA256: &'static str = SPEC_SHA256;
-            const SPEC_YAML: &'static str = SPEC_YAML;
-            const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
-            const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+            const SOURCE: rt::Source = rt::Source {
+                document: DOCUMENT,
+                revision: DOCUMENT_REVISION,
+                spec_sha256: SPEC_SHA256,
+                spec_yaml: SPEC_YAML,
+            };
+            const BUS: rt::Bus = rt::Bus {
+                baud: BAUD,
+                inter_frame_gap_ms: INTER_FRAME_GAP_MS,
+                max_frames_per_s: MAX_FRAMES_PER_S,
+                device_addresses: DEVICE_ADDRESSES,
+                broadcast_address: BROADCAST_ADDRESS,
+                host_address: HOST_ADDRESS,
+                transactions: #transactions,
+            };
             const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-            const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
             const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
-            const BAUD: u32 = BAUD;
-            const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
-            const MAX_FRAMES_PER_S: rt::Option<u32> = MAX_FRAMES_PER_S;
-            const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
-            const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
-            const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
-            #transactions
             #[inline]
             fn decode_request(frame: &[u8]) -> rt::Result<Decoded<Request>, rt::DecodeError> {
                 Request::decode(frame)
@@ -295,20 +303,18 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
                 response.answers(request)
             }
             #[inline]
-            fn kind(request: &Request) -> rt::CommandKind {
-                request.kind()
-            }
-            #[inline]
-            fn broadcast(request: &Request) -> rt::Broadcast {
-                request.broadcast()
-            }
-            #[inline]
-            fn reply(request: &Request) -> rt::Reply {
-                request.reply()
+            fn command(request: &Request) -> rt::Command {
+                request.command()
             }
             fn is_nak(#nak_param: &Response) -> bool {
                 #is_nak
             }
+            #checksum_ok
+        }
+        impl rt::Framing for #ty {
+            const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+            const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+            const FRAME_LENGTHS: &'static [usize] = &[#(#lens),*];
             #framing_fns
         }
         /// A streaming decoder for this protocol: see [`busspec_runtime::stream`].

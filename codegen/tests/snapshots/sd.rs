@@ -1787,10 +1787,6 @@ pub mod sd {
         }
     }
     impl Request {
-        /// Whether the command gets a reply, as the spec says.
-        pub const fn reply(&self) -> rt::Reply {
-            rt::Reply::Required
-        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 43] = [
@@ -1838,17 +1834,38 @@ pub mod sd {
             (rt::Reset, false, false, 0x10000000000),
             (rt::Getter, false, false, 0x20000000000),
         ];
-        /// What the command does, as the spec classifies it.
-        pub const fn kind(&self) -> rt::CommandKind {
-            Self::COMMANDS[self.index()].0
-        }
-        /// Whether the command may go to the broadcast address, and whether it is then
-        /// answered.
-        pub const fn broadcast(&self) -> rt::Broadcast {
+        /// What the spec says of the command beyond its frame: its kind, the broadcast
+        /// address, its reply, whether a master may send it again.
+        pub const fn command(&self) -> rt::Command {
             let c = Self::COMMANDS[self.index()];
-            rt::Broadcast {
-                accepted: c.1,
-                answered: c.2,
+            rt::Command {
+                kind: c.0,
+                broadcast: rt::Broadcast {
+                    accepted: c.1,
+                    answered: c.2,
+                },
+                reply: rt::Reply::Required,
+                may_retry: matches!(
+                    self, Request::ReadActualPosition | Request::SetVelocity { .. } |
+                    Request::ReadActualVelocity | Request::ReadServoId |
+                    Request::ReadCurrentConsumption | Request::ReadBusVoltages |
+                    Request::ReadExtendedCurrentConsumption | Request::ReadTemperatures |
+                    Request::ReadHumidity | Request::ReadSkippedFramesCounter |
+                    Request::ReadActuatorStatusWord | Request::ReadCurrentZeroOffset |
+                    Request::ReadElectronicSerialNumber { .. } |
+                    Request::ReadProductDescription { .. } |
+                    Request::ReadSoftwareRevision { .. } | Request::ReadHardwareRevision
+                    { .. } | Request::ReadTotalRuntimeHours |
+                    Request::ReadTotalRuntimeMinSec | Request::ReadLoadRuntime024Hours |
+                    Request::ReadLoadRuntime024MinSec | Request::ReadLoadRuntime2549Hours
+                    | Request::ReadLoadRuntime2549MinSec |
+                    Request::ReadLoadRuntime5074Hours |
+                    Request::ReadLoadRuntime5074MinSec |
+                    Request::ReadLoadRuntime7599Hours |
+                    Request::ReadLoadRuntime7599MinSec | Request::ReadLoadRuntime100Hours
+                    | Request::ReadLoadRuntime100MinSec | Request::ReadStallEventCounter
+                    | Request::ReadPowerUpCycles
+                ),
             }
         }
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
@@ -3762,49 +3779,29 @@ pub mod sd {
         type Response = Response;
         type Buffer = [u8; MAX_FRAME_LEN];
         const NAME: &'static str = PROTOCOL;
-        const DOCUMENT: &'static str = DOCUMENT;
-        const DOCUMENT_REVISION: &'static str = DOCUMENT_REVISION;
-        const SPEC_SHA256: &'static str = SPEC_SHA256;
-        const SPEC_YAML: &'static str = SPEC_YAML;
-        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
-        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
-        const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[6];
-        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
-        const BAUD: u32 = BAUD;
-        const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
-        const MAX_FRAMES_PER_S: rt::Option<u32> = MAX_FRAMES_PER_S;
-        const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
-        const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
-        const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
-        const TRANSACTIONS: ::busspec_runtime::Transactions = ::busspec_runtime::Transactions {
-            response_timeout_us: rt::None,
-            turnaround_us: rt::None,
-            gap_tenths_of_character: rt::None,
-            gap_at_least_us: 0u32,
-            character_bits: 10u32,
+        const SOURCE: rt::Source = rt::Source {
+            document: DOCUMENT,
+            revision: DOCUMENT_REVISION,
+            spec_sha256: SPEC_SHA256,
+            spec_yaml: SPEC_YAML,
         };
-        #[inline]
-        fn may_retry(request: &Request) -> bool {
-            matches!(
-                request, Request::ReadActualPosition | Request::SetVelocity { .. } |
-                Request::ReadActualVelocity | Request::ReadServoId |
-                Request::ReadCurrentConsumption | Request::ReadBusVoltages |
-                Request::ReadExtendedCurrentConsumption | Request::ReadTemperatures |
-                Request::ReadHumidity | Request::ReadSkippedFramesCounter |
-                Request::ReadActuatorStatusWord | Request::ReadCurrentZeroOffset |
-                Request::ReadElectronicSerialNumber { .. } |
-                Request::ReadProductDescription { .. } | Request::ReadSoftwareRevision {
-                .. } | Request::ReadHardwareRevision { .. } |
-                Request::ReadTotalRuntimeHours | Request::ReadTotalRuntimeMinSec |
-                Request::ReadLoadRuntime024Hours | Request::ReadLoadRuntime024MinSec |
-                Request::ReadLoadRuntime2549Hours | Request::ReadLoadRuntime2549MinSec |
-                Request::ReadLoadRuntime5074Hours | Request::ReadLoadRuntime5074MinSec |
-                Request::ReadLoadRuntime7599Hours | Request::ReadLoadRuntime7599MinSec |
-                Request::ReadLoadRuntime100Hours | Request::ReadLoadRuntime100MinSec |
-                Request::ReadStallEventCounter | Request::ReadPowerUpCycles
-            )
-        }
+        const BUS: rt::Bus = rt::Bus {
+            baud: BAUD,
+            inter_frame_gap_ms: INTER_FRAME_GAP_MS,
+            max_frames_per_s: MAX_FRAMES_PER_S,
+            device_addresses: DEVICE_ADDRESSES,
+            broadcast_address: BROADCAST_ADDRESS,
+            host_address: HOST_ADDRESS,
+            transactions: rt::Transactions {
+                response_timeout_us: rt::None,
+                turnaround_us: rt::None,
+                gap_tenths_of_character: rt::None,
+                gap_at_least_us: 0u32,
+                character_bits: 10u32,
+            },
+        };
+        const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+        const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
         #[inline]
         fn decode_request(
             frame: &[u8],
@@ -3823,16 +3820,8 @@ pub mod sd {
             response.answers(request)
         }
         #[inline]
-        fn kind(request: &Request) -> rt::CommandKind {
-            request.kind()
-        }
-        #[inline]
-        fn broadcast(request: &Request) -> rt::Broadcast {
-            request.broadcast()
-        }
-        #[inline]
-        fn reply(request: &Request) -> rt::Reply {
-            request.reply()
+        fn command(request: &Request) -> rt::Command {
+            request.command()
         }
         fn is_nak(_response: &Response) -> bool {
             false
@@ -3845,6 +3834,11 @@ pub mod sd {
                 _ => false,
             }
         }
+    }
+    impl rt::Framing for Sd {
+        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+        const FRAME_LENGTHS: &'static [usize] = &[6];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             static TABLE: [u8; 528] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10\x10\x10\x10\0\0\0\0\0\0\0\0\0\0\0\0\x10\x10\x10\x10\x10\x10\x10\x10\x10\x10\0\0\0\0\0\0\x10\x10\x10\0\0\0\0 \x10\0\0\0\0\0\0\0 \x10\0\0\0\0\0\0\x10\x10\0\0\x10\0\0\0\0\0\0\0\0\x10\x10\x10\0\0\x10\0\0\0\0\0\0\0\0\0\x10\x10\0\0  \0\0\0\x10\0\0\0\0\0\0\0\0  \0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0 \0\0  \0\0\0\0\0\0           \0\0\0\0\0   \0 \0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0 \0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0    \0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";

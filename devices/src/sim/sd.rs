@@ -462,11 +462,11 @@ impl Device for SdSim {
     fn on_frame(&mut self, frame: &[u8], now: Duration) -> Option<Vec<u8>> {
         let decoded = Sd::decode_request(frame).ok()?;
         let (to, request) = (decoded.address, decoded.message);
-        let broadcast = Some(to) == Sd::BROADCAST_ADDRESS;
+        let broadcast = Some(to) == Sd::BUS.broadcast_address;
         if !broadcast && to != self.id {
             return None;
         }
-        let rules = Sd::broadcast(&request);
+        let rules = Sd::command(&request).broadcast;
         if broadcast && !rules.accepted {
             return None;
         }

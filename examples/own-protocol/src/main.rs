@@ -34,12 +34,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // Every thermostat on the bus to heating: a broadcast, which nobody answers.
     let heat = Request::SetMode { mode: Mode::Heat };
-    let broadcast = Thermo::BROADCAST_ADDRESS.ok_or("no broadcast address")?;
+    let broadcast = Thermo::BUS
+        .broadcast_address
+        .ok_or("no broadcast address")?;
     let n = heat.encode(broadcast, &mut buf)?;
     println!(
         "request  {:02X?} {heat:?} (broadcast, answered: {})",
         &buf[..n],
-        Thermo::broadcast(&heat).answered
+        Thermo::command(&heat).broadcast.answered
     );
 
     // A value that does not fit its wire field (the set point travels as a u16) is refused

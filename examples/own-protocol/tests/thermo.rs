@@ -213,7 +213,7 @@ fn exercise<P: Protocol>(requests: &[P::Request], responses: &[P::Response]) -> 
     let mut capture = vec![0x00]; // noise first
     let mut frames = 0;
     for request in requests {
-        let address = *P::DEVICE_ADDRESSES.start();
+        let address = *P::BUS.device_addresses.start();
         let n = request.encode(address, buf.as_mut()).unwrap();
         let frame = &buf.as_ref()[..n];
         assert!(n <= P::MAX_REQUEST_LEN && P::FRAME_LENGTHS.contains(&n));
@@ -305,24 +305,43 @@ fn generic_code_works_with_the_thermostat() {
 #[test]
 fn the_protocol_constants_are_the_spec() {
     assert_eq!(Thermo::NAME, "thermo");
-    assert_eq!(Thermo::DOCUMENT_REVISION, "1.2");
-    assert_eq!(Thermo::BAUD, 9600);
-    assert_eq!(Thermo::INTER_FRAME_GAP_MS, Some(5));
-    assert_eq!(Thermo::DEVICE_ADDRESSES, 0x01..=0x20);
-    assert_eq!(Thermo::BROADCAST_ADDRESS, Some(0x00));
-    assert_eq!(Thermo::FRAME_LENGTHS, [11, 10, 7, 6, 5]);
+    assert_eq!(Thermo::SOURCE.revision, "1.2");
+    assert_eq!(Thermo::BUS.baud, 9600);
+    assert_eq!(Thermo::BUS.inter_frame_gap_ms, Some(5));
+    assert_eq!(Thermo::BUS.device_addresses, 0x01..=0x20);
+    assert_eq!(Thermo::BUS.broadcast_address, Some(0x00));
+    // The frame lengths the stream decoder walks (its framing table, not a user's API).
+    assert_eq!(
+        <Thermo as busspec_runtime::Framing>::FRAME_LENGTHS,
+        [11, 10, 7, 6, 5]
+    );
     assert_eq!(Thermo::MAX_FRAME_LEN, 11);
     // The spec embedded is the one in this crate with the units it includes in place
     // (`spec/th_units.yaml`): one text that loads on its own.
-    assert!(!Thermo::SPEC_YAML.contains("include"), "{}", Thermo::SPEC_YAML);
-    for part in ["protocol: thermo", "name: deci_celsius", "name: humidity", "name: set_mode"] {
-        assert!(Thermo::SPEC_YAML.contains(part), "{part} in {}", Thermo::SPEC_YAML);
+    assert!(
+        !Thermo::SOURCE.spec_yaml.contains("include"),
+        "{}",
+        Thermo::SOURCE.spec_yaml
+    );
+    for part in [
+        "protocol: thermo",
+        "name: deci_celsius",
+        "name: humidity",
+        "name: set_mode",
+    ] {
+        assert!(
+            Thermo::SOURCE.spec_yaml.contains(part),
+            "{part} in {}",
+            Thermo::SOURCE.spec_yaml
+        );
     }
-    assert_eq!(Thermo::SPEC_SHA256.len(), 64);
+    assert_eq!(Thermo::SOURCE.spec_sha256.len(), 64);
     let heat = Request::SetMode { mode: Mode::Heat };
-    assert_eq!(Thermo::kind(&heat), CommandKind::Setter);
-    assert!(Thermo::broadcast(&heat).accepted && !Thermo::broadcast(&heat).answered);
-    assert!(!Thermo::broadcast(&Request::ReadStatus).accepted);
+    assert_eq!(Thermo::command(&heat).kind, CommandKind::Setter);
+    assert!(
+        Thermo::command(&heat).broadcast.accepted && !Thermo::command(&heat).broadcast.answered
+    );
+    assert!(!Thermo::command(&Request::ReadStatus).broadcast.accepted);
     let mut fields = Vec::new();
     heat.visit(|name, value| fields.push((name, value == FieldValue::Int(1))));
     assert_eq!(fields, [("mode", true)]);
@@ -334,7 +353,7 @@ fn the_protocol_is_found_by_name() {
     impl ProtocolVisitor for Describe {
         type Output = (&'static str, usize, u32);
         fn visit<P: Protocol>(self) -> Self::Output {
-            (P::NAME, P::MAX_FRAME_LEN, P::BAUD)
+            (P::NAME, P::MAX_FRAME_LEN, P::BUS.baud)
         }
     }
     assert_eq!(PROTOCOLS, ["thermo"]);

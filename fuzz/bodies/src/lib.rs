@@ -292,7 +292,7 @@ fn once<K: 'static, T: Send + Sync + 'static>(init: impl FnOnce() -> T) -> &'sta
 }
 
 /// The spec of protocol `P`, as its code was generated from it
-/// ([`Protocol::SPEC_YAML`]: embedded, so a fuzz binary needs no files), loaded once.
+/// ([`Protocol::SOURCE.spec_yaml`]: embedded, so a fuzz binary needs no files), loaded once.
 /// Whether protocol `P` escapes its frames (`framing.escaping`).
 fn escapes<P: Protocol>() -> bool {
     spec::<P>().framing.escaping.is_some()
@@ -300,7 +300,7 @@ fn escapes<P: Protocol>() -> bool {
 
 pub fn spec<P: Protocol>() -> &'static busspec_model::Protocol {
     once::<P, _>(|| {
-        busspec_model::load_str(P::NAME, P::SPEC_YAML).unwrap_or_else(|d| panic!("{d}"))
+        busspec_model::load_str(P::NAME, P::SOURCE.spec_yaml).unwrap_or_else(|d| panic!("{d}"))
     })
 }
 

@@ -321,7 +321,7 @@ pub fn sd_freshness_and_broadcast<D: Drive<Sd>>(make: &mut dyn FnMut(Setup) -> D
         freshness: 0,
         position: sd::Angle(-200),
     };
-    let broadcast = Sd::BROADCAST_ADDRESS.unwrap();
+    let broadcast = Sd::BUS.broadcast_address.unwrap();
     assert_eq!(m.transact(broadcast, all), Outcome::Reply(None));
     // The next transaction goes out after the broadcast has been taken in, wherever the
     // devices run.
@@ -588,7 +588,7 @@ impl Device for ModbusRegisters {
     fn on_frame(&mut self, frame: &[u8], _now: Duration) -> Option<Vec<u8>> {
         use busspec_protocols::modbus::{ExceptionCode, Request as Q, Response as R};
         let d = Modbus::decode_request(frame).ok()?;
-        let broadcast = Some(d.address) == Modbus::BROADCAST_ADDRESS;
+        let broadcast = Some(d.address) == Modbus::BUS.broadcast_address;
         if d.address != self.address && !broadcast {
             return None;
         }
