@@ -214,7 +214,7 @@ simulated from its spec's `device:` section (spec/SCHEMA.md): the spaces it decl
 coils, discrete inputs, holding and input registers; Dynamixel's control table) start at their
 initial values, writes change what later reads return, values a reply takes from its request
 come from it, and requests past the end of a space or breaking the spec's rules get the
-refusal it names (Modbus exceptions 2 and 3, Dynamixel's range error). Broadcasts are carried
+refusal it names (Modbus exceptions 2 and 3, Dynamixel's range error, Dynamixel 2.0's Access Error). Broadcasts are carried
 out and answered only where the spec says so; frames that do not decode, or are for another
 address, get no reply. A spec without the section answers each command with its reply and
 stores nothing.

@@ -90,7 +90,7 @@ pub fn random_request(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Opt
     match &rule.action {
         Action::Read {
             space,
-            start,
+            start: Some(start),
             count,
             ..
         } => {
@@ -152,17 +152,44 @@ pub fn random_request(p: &Protocol, rng: &mut fastrand::Rng, address: u8) -> Opt
                     }
                     fixed.push((l.clone(), Raw::List(list)));
                 }
-                Source::Records { list, length } => {
+                Source::Records { list, length, big } => {
                     let s = span(rng, sp.size, n, start);
                     fixed.push((start.clone(), Raw::Int(s)));
                     fixed.push((length.clone(), Raw::Int(n)));
-                    let mut records = vec![i64::from(address)];
-                    records.extend((0..n).map(|_| element(rng)));
-                    fixed.push((list.clone(), Raw::List(records)));
+                    let elements: Vec<i64> = (0..n).map(|_| element(rng)).collect();
+                    match big {
+                        None => {
+                            let mut records = vec![i64::from(address)];
+                            records.extend(elements);
+                            fixed.push((list.clone(), Raw::List(records)));
+                        }
+                        // One record: the address and the elements as one number.
+                        Some(big) => {
+                            let bits = busspec_model::device::element_bits(sp.ty);
+                            let mut data = 0i64;
+                            for (k, e) in elements.iter().enumerate() {
+                                let k = if *big {
+                                    n as u32 - 1 - k as u32
+                                } else {
+                                    k as u32
+                                };
+                                data |= (e & ((1i64 << bits) - 1)) << (bits * k);
+                            }
+                            fixed.push((
+                                list.clone(),
+                                Raw::Records(vec![vec![i64::from(address), data]]),
+                            ));
+                        }
+                    }
                 }
             }
         }
         _ => {}
+    }
+    // A command only the devices it lists answer: this one alone (another listed device on
+    // the soak's bus would answer too).
+    if let Some(l) = &rule.listed {
+        fixed.push((l.clone(), Raw::List(vec![i64::from(address)])));
     }
     let mut values: Vec<Value> = Vec::new();
     for leaf in m.leaves() {

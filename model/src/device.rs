@@ -127,6 +127,13 @@ pub struct CommandSpec {
     pub from: Option<String>,
     #[serde(default)]
     pub into: Option<String>,
+    /// Reply fields a read takes from fixed elements of its space: field name → element.
+    #[serde(default)]
+    pub at: Option<std::collections::BTreeMap<String, u32>>,
+    /// A list of the command's whose elements are device addresses: a device acts and
+    /// answers only where it is listed (Dynamixel's SYNC READ).
+    #[serde(default)]
+    pub listed: Option<String>,
     #[serde(default)]
     pub records: Option<RecordsSpec>,
     #[serde(default)]
@@ -168,18 +175,29 @@ pub enum Source {
     Value(String),
     /// A repeated field, the first `count` elements where the rule has a count.
     List(String),
-    /// A repeated field of records: the device's address, then `length` (a field) elements.
-    Records { list: String, length: String },
+    /// Records: the device's address, then `length` (a field) elements. `big`: `None` where
+    /// the list is plain numbers (the address, then the elements, in turn); for a repeated
+    /// record of the address and one number, that number's `length` elements, the first
+    /// its most significant where `Some(true)`.
+    Records {
+        list: String,
+        length: String,
+        big: Option<bool>,
+    },
 }
 
 /// What a command does to the device's data.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Action {
+    /// `count` elements (1 without it) from the element `start` names into the reply's list
+    /// `into`, and each of `at`'s reply fields from its fixed element (a field wider than the
+    /// space's elements from as many as it takes, in the field's byte order).
     Read {
         space: usize,
-        start: String,
+        start: Option<String>,
         count: Option<String>,
-        into: String,
+        into: Option<String>,
+        at: Vec<At>,
     },
     Write {
         space: usize,
@@ -194,6 +212,42 @@ pub enum Action {
     Nothing,
 }
 
+/// A reply field a read takes from fixed elements of its space.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct At {
+    pub field: String,
+    /// The first element.
+    pub element: u32,
+    /// How many elements the field takes, and the bits each gives.
+    pub elements: u32,
+    pub bits: u32,
+    /// The first element is the most significant.
+    pub big: bool,
+    /// The field is signed: the value is sign-extended from its width.
+    pub signed: bool,
+}
+
+impl At {
+    /// The field's value from its elements, in order.
+    pub fn value(&self, elements: &[i64]) -> i64 {
+        let mask = (1i64 << self.bits) - 1;
+        let mut v: i64 = 0;
+        for (k, e) in elements.iter().enumerate() {
+            let shift = if self.big {
+                self.bits * (self.elements - 1 - k as u32)
+            } else {
+                self.bits * k as u32
+            };
+            v |= (e & mask) << shift;
+        }
+        let width = self.bits * self.elements;
+        if self.signed && width < 64 && v >> (width - 1) & 1 == 1 {
+            v -= 1i64 << width;
+        }
+        v
+    }
+}
+
 /// A refusal: the response (index into `Protocol::responses`) and the values it states.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Refusal {
@@ -205,6 +259,9 @@ pub struct Refusal {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Rule {
     pub action: Action,
+    /// The command's list of device addresses where a device acts and answers only if it is
+    /// listed.
+    pub listed: Option<String>,
     /// The reply it sends (index into `Protocol::responses`), if it gets one.
     pub reply: Option<usize>,
     pub outside: Option<Refusal>,
@@ -243,6 +300,17 @@ fn element_range(ty: FieldType) -> Option<(i64, i64)> {
     })
 }
 
+/// The bits one element of a space of `ty` takes.
+pub fn element_bits(ty: FieldType) -> u32 {
+    match ty {
+        FieldType::Bit => 1,
+        FieldType::U8 | FieldType::I8 => 8,
+        FieldType::U16 | FieldType::I16 => 16,
+        FieldType::U24 | FieldType::I24 => 24,
+        _ => 32,
+    }
+}
+
 /// A whole number, or why not.
 fn whole(n: &NumberText) -> Result<i64, String> {
     let r = Rational::parse(&n.0)?;
@@ -256,6 +324,7 @@ fn whole(n: &NumberText) -> Result<i64, String> {
 fn default_rule(p: &Protocol, command: usize) -> Rule {
     Rule {
         action: Action::Nothing,
+        listed: None,
         reply: first_reply(p, command),
         outside: None,
         invalid: None,
@@ -483,48 +552,137 @@ fn command_rule(
     };
     let action = if let Some(sp) = &c.reads {
         let space = space("reads", sp, sink)?;
-        let Some(start) = start else {
-            sink.error(path, "a read needs `start`");
-            return None;
-        };
         stray("value", value.is_some(), sink);
         stray("from", c.from.is_some(), sink);
         stray("records", c.records.is_some(), sink);
         stray("staged", c.staged, sink);
-        let Some(into) = &c.into else {
-            sink.error(path, "a read needs `into`, the reply's list it fills");
-            return None;
-        };
+        let at = c.at.clone().unwrap_or_default();
+        match (&start, &c.into) {
+            (None, None) if at.is_empty() => {
+                sink.error(
+                    path,
+                    "a read needs `start` and `into` (the reply's list it fills), or `at` (reply fields from fixed elements)",
+                );
+                return None;
+            }
+            (Some(_), None) => {
+                sink.error(path, "a read needs `into`, the reply's list it fills");
+                return None;
+            }
+            (None, Some(_)) => {
+                sink.error(path, "a read needs `start`");
+                return None;
+            }
+            _ => {}
+        }
+        if c.into.is_none() {
+            stray("count", count.is_some(), sink);
+        }
         let Some(r) = reply else {
             sink.error(path, format!("`{}` gets no reply to read into", m.name));
             return None;
         };
         let rm = &p.responses[r];
-        match field(rm, into) {
-            Some(f) if f.is_record() => {
+        if let Some(into) = &c.into {
+            match field(rm, into) {
+                Some(f) if f.is_record() => {
+                    sink.error(
+                        join(path, "into"),
+                        format!(
+                            "`{}.{into}` is a repeated record; a space's elements are numbers",
+                            rm.name
+                        ),
+                    );
+                    return None;
+                }
+                Some(f) if f.repeat.is_some() => {}
+                _ => {
+                    sink.error(
+                        join(path, "into"),
+                        format!("`{}` has no repeated field `{into}`", rm.name),
+                    );
+                    return None;
+                }
+            }
+        }
+        let sp = &d.spaces[space];
+        let elem_bits = element_bits(sp.ty);
+        let mut fixed = Vec::new();
+        for (name, &element) in &at {
+            let key = join(&join(path, "at"), name);
+            let f = match field(rm, name) {
+                Some(f)
+                    if f.repeat.is_none()
+                        && !f.is_ascii()
+                        && !f.is_float()
+                        && f.bits.is_empty()
+                        && f.constant.is_none()
+                        && f.width <= 4 =>
+                {
+                    f
+                }
+                Some(_) => {
+                    sink.error(
+                        key,
+                        format!(
+                            "`{}.{name}` is not a single integer of up to 4 bytes",
+                            rm.name
+                        ),
+                    );
+                    continue;
+                }
+                None => {
+                    sink.error(key, format!("`{}` has no field `{name}`", rm.name));
+                    continue;
+                }
+            };
+            let field_bits = 8 * f.width as u32;
+            let (elements, bits) = if sp.ty == FieldType::Bit || elem_bits >= field_bits {
+                (1, field_bits.min(elem_bits))
+            } else if field_bits % elem_bits == 0 {
+                (field_bits / elem_bits, elem_bits)
+            } else {
                 sink.error(
-                    join(path, "into"),
+                    key,
                     format!(
-                        "`{}.{into}` is a repeated record; a space's elements are numbers",
-                        rm.name
+                        "`{}.{name}` ({} bytes) is no whole number of `{}`'s elements",
+                        rm.name, f.width, sp.name
                     ),
                 );
-                return None;
-            }
-            Some(f) if f.repeat.is_some() => {}
-            _ => {
+                continue;
+            };
+            if u64::from(element) + u64::from(elements) > u64::from(sp.size) {
+                let what = match elements {
+                    1 => format!("element {element} is"),
+                    n => format!(
+                        "elements {element} to {} are",
+                        u64::from(element) + u64::from(n) - 1
+                    ),
+                };
                 sink.error(
-                    join(path, "into"),
-                    format!("`{}` has no repeated field `{into}`", rm.name),
+                    key,
+                    format!(
+                        "{what} past the end of `{}` ({} elements)",
+                        sp.name, sp.size
+                    ),
                 );
-                return None;
+                continue;
             }
+            fixed.push(At {
+                field: name.clone(),
+                element,
+                elements,
+                bits,
+                big: f.byte_order == crate::model::ByteOrder::Big,
+                signed: f.signed,
+            });
         }
         Action::Read {
             space,
             start,
             count,
-            into: into.clone(),
+            into: c.into.clone(),
+            at: fixed,
         }
     } else if let Some(sp) = &c.writes {
         let space = space("writes", sp, sink)?;
@@ -533,6 +691,9 @@ fn command_rule(
             return None;
         };
         stray("into", c.into.is_some(), sink);
+        if c.at.is_some() {
+            sink.error(join(path, "at"), "`at` belongs to a read");
+        }
         let list = |name: &str, key: &str, sink: &mut Sink| match field(m, name) {
             Some(f) if f.is_record() => {
                 sink.error(
@@ -565,14 +726,40 @@ fn command_rule(
                 Source::List(from.clone())
             }
             (None, Some(from), Some(rec)) => {
-                if !list(from, "from", sink) {
-                    return None;
-                }
+                // A repeated record of the device's address and its data (Dynamixel 2.0's
+                // SYNC WRITE blocks), or a plain list of both in turn (1.0's).
+                let data = match field(m, from) {
+                    Some(f) if f.is_record() => {
+                        let whole = |x: &Field| !x.is_ascii() && !x.is_float() && x.bits.is_empty();
+                        match &f.record[..] {
+                            [a, d] if whole(a) && whole(d) && d.width <= 4 => {
+                                Some(d.byte_order == crate::model::ByteOrder::Big)
+                            }
+                            _ => {
+                                sink.error(
+                                    join(path, "from"),
+                                    format!(
+                                        "`{}.{from}`'s records are not a device's address and its data: two integer fields",
+                                        m.name
+                                    ),
+                                );
+                                return None;
+                            }
+                        }
+                    }
+                    _ => {
+                        if !list(from, "from", sink) {
+                            return None;
+                        }
+                        None
+                    }
+                };
                 stray("count", count.is_some(), sink);
                 let length = scalar("records", &Some(rec.length.clone()), sink)??;
                 Source::Records {
                     list: from.clone(),
                     length,
+                    big: data,
                 }
             }
             (None, None, Some(_)) => {
@@ -601,6 +788,7 @@ fn command_rule(
             ("value", value.is_some()),
             ("from", c.from.is_some()),
             ("into", c.into.is_some()),
+            ("at", c.at.is_some()),
             ("records", c.records.is_some()),
             ("staged", c.staged),
         ] {
@@ -625,8 +813,24 @@ fn command_rule(
     };
     let outside = pick("outside", &own.outside, &defaults.outside);
     let invalid = pick("invalid", &own.invalid, &defaults.invalid);
+    if let Some(l) = &c.listed {
+        match field(m, l) {
+            Some(f) if f.repeat.is_some() && !f.is_record() && f.packed.is_none() => {}
+            _ => sink.error(
+                join(path, "listed"),
+                format!("`{}` has no repeated field `{l}` of addresses", m.name),
+            ),
+        }
+        if !p.framing.has_address() {
+            sink.error(
+                join(path, "listed"),
+                format!("`{}`'s frames carry no address to be listed", p.name),
+            );
+        }
+    }
     (sink.items.len() == before).then_some(Rule {
         action,
+        listed: c.listed.clone(),
         reply,
         outside,
         invalid,
@@ -793,6 +997,15 @@ pub fn render(p: &Protocol) -> String {
 
 /// What a rule does, in words; `None` for a command that changes nothing.
 fn does(d: &Device, r: &Rule) -> Option<String> {
+    let listed = r
+        .listed
+        .as_ref()
+        .map(|l| format!(" (only a device listed in `{l}` acts and answers)"));
+    let text = does_action(d, r)?;
+    Some(text + listed.as_deref().unwrap_or(""))
+}
+
+fn does_action(d: &Device, r: &Rule) -> Option<String> {
     Some(match &r.action {
         Action::Nothing => return None,
         Action::Read {
@@ -800,13 +1013,28 @@ fn does(d: &Device, r: &Rule) -> Option<String> {
             start,
             count,
             into,
-        } => format!(
-            "reads {} of `{}` from `{start}` into `{into}`",
-            count
-                .as_deref()
-                .map_or("1".to_owned(), |c| format!("`{c}`")),
-            d.spaces[*space].name
-        ),
+            at,
+        } => {
+            let name = &d.spaces[*space].name;
+            let mut parts = Vec::new();
+            if let (Some(start), Some(into)) = (start, into) {
+                let n = count
+                    .as_deref()
+                    .map_or("1".to_owned(), |c| format!("`{c}`"));
+                parts.push(format!(
+                    "reads {n} of `{name}` from `{start}` into `{into}`"
+                ));
+            }
+            for a in at {
+                let what = if a.elements == 1 {
+                    format!("element {}", a.element)
+                } else {
+                    format!("elements {} to {}", a.element, a.element + a.elements - 1)
+                };
+                parts.push(format!("reads `{}` from {what} of `{name}`", a.field));
+            }
+            parts.join("; ")
+        }
         Action::Write {
             space,
             start,

@@ -20,7 +20,7 @@
 
 use std::sync::Arc;
 
-use crate::device::{Action, Refusal, Rule, Source, Space};
+use crate::device::{element_bits, Action, Refusal, Rule, Source, Space};
 use crate::interp::{self, Raw, Value};
 use crate::ir::{Direction, FieldType, Follows, Leaf, MessageRef, Protocol};
 
@@ -210,6 +210,16 @@ impl Sim {
         let command = p.message(request.message);
         let answered = !broadcast || command.broadcast.as_ref().is_some_and(|b| b.answered);
         let rule = p.device.rules[request.message.index].clone();
+        // A command for the devices it lists (Dynamixel's SYNC READ): the others ignore it.
+        if let Some(list) = &rule.listed {
+            let listed = match request.get(list) {
+                Some(Raw::List(ids)) => ids.contains(&i64::from(self.address)),
+                _ => false,
+            };
+            if !listed {
+                return None;
+            }
+        }
         match self.act(p, &rule, &request) {
             Err(Refused::Outside) => {
                 let r = rule.outside.as_ref()?;
@@ -224,24 +234,24 @@ impl Sim {
                 }
                 let reply = rule.reply?;
                 let given = into
-                    .map(|(name, list)| Value {
-                        name: name.into(),
-                        raw: Raw::List(list),
-                    })
                     .into_iter()
+                    .map(|(name, raw)| Value {
+                        name: name.into(),
+                        raw,
+                    })
                     .collect();
                 self.reply(p, &request, reply, given)
             }
         }
     }
 
-    /// Carries out `rule` for `request`: the list a read fills, or nothing.
+    /// Carries out `rule` for `request`: the reply fields a read fills, or none.
     fn act(
         &mut self,
         p: &Protocol,
         rule: &Rule,
         request: &interp::Frame,
-    ) -> Result<Option<(String, Vec<i64>)>, Refused> {
+    ) -> Result<Vec<(String, Raw)>, Refused> {
         let int = |name: &str| match request.get(name) {
             Some(Raw::Int(i)) => *i,
             _ => 0,
@@ -251,18 +261,29 @@ impl Sim {
             _ => Vec::new(),
         };
         match &rule.action {
-            Action::Nothing => Ok(None),
+            Action::Nothing => Ok(Vec::new()),
             Action::Read {
                 space,
                 start,
                 count,
                 into,
+                at,
             } => {
-                let n = count.as_deref().map_or(1, int);
-                let at = self.span(*space, int(start), n)?;
                 let store = &self.spaces[*space];
-                let values = (at..at + n as u32).map(|i| store.get(i)).collect();
-                Ok(Some((into.clone(), values)))
+                let mut given = Vec::new();
+                if let (Some(start), Some(into)) = (start, into) {
+                    let n = count.as_deref().map_or(1, int);
+                    let from = self.span(*space, int(start), n)?;
+                    let values = (from..from + n as u32).map(|i| store.get(i)).collect();
+                    given.push((into.clone(), Raw::List(values)));
+                }
+                for a in at {
+                    let elements: Vec<i64> = (a.element..a.element + a.elements)
+                        .map(|i| store.get(i))
+                        .collect();
+                    given.push((a.field.clone(), Raw::Int(a.value(&elements))));
+                }
+                Ok(given)
             }
             Action::Write {
                 space,
@@ -284,7 +305,11 @@ impl Sim {
                         }
                         l
                     }
-                    Source::Records { list: l, length } => {
+                    Source::Records {
+                        list: l,
+                        length,
+                        big: None,
+                    } => {
                         let len = usize::try_from(int(length)).map_err(|_| Refused::Outside)?;
                         let records = list(l);
                         let mine = records
@@ -293,8 +318,37 @@ impl Sim {
                         match mine {
                             Some(r) => r[1..].to_vec(),
                             // No record for this device: nothing to do.
-                            None => return Ok(None),
+                            None => return Ok(Vec::new()),
                         }
+                    }
+                    Source::Records {
+                        list: l,
+                        length,
+                        big: Some(big),
+                    } => {
+                        let len = u32::try_from(int(length)).map_err(|_| Refused::Outside)?;
+                        let mine = match request.get(l) {
+                            Some(Raw::Records(rs)) => rs
+                                .iter()
+                                .find(|r| r.first() == Some(&i64::from(self.address)))
+                                .and_then(|r| r.get(1).copied()),
+                            _ => None,
+                        };
+                        // No record for this device: nothing to do.
+                        let Some(data) = mine else {
+                            return Ok(Vec::new());
+                        };
+                        let bits = element_bits(p.device.spaces[*space].ty);
+                        if u64::from(len) * u64::from(bits) > 64 {
+                            return Err(Refused::Outside);
+                        }
+                        let mask = (1i64 << bits) - 1;
+                        (0..len)
+                            .map(|k| {
+                                let k = if *big { len - 1 - k } else { k };
+                                data >> (bits * k) & mask
+                            })
+                            .collect()
                     }
                 };
                 let s = &p.device.spaces[*space];
@@ -314,18 +368,18 @@ impl Sim {
                 } else {
                     self.write(*space, at, &values);
                 }
-                Ok(None)
+                Ok(Vec::new())
             }
             Action::Commit => {
                 for (space, at, values) in std::mem::take(&mut self.staged) {
                     self.write(space, at, &values);
                 }
-                Ok(None)
+                Ok(Vec::new())
             }
             Action::Reset => {
                 self.spaces = p.device.spaces.iter().map(Store::new).collect();
                 self.staged.clear();
-                Ok(None)
+                Ok(Vec::new())
             }
         }
     }

@@ -156,6 +156,18 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
             ("device.commands[4]", "a command reads, writes, commits or resets: one of them"),
         ],
     ),
+    (
+        "device_reads_at",
+        &[
+            ("device.commands[0].at.firmware", "`status.firmware` is not a single integer of up to 4 bytes"),
+            ("device.commands[0].at.nope", "`status` has no field `nope`"),
+            ("device.commands[0].at.position_word", "`status.position_word` is not a single integer of up to 4 bytes"),
+            ("device.commands[0].at.temperature", "element 8 is past the end of `regs` (8 elements)"),
+            ("device.commands[1].at.target", "`started` has no field `target`"),
+            ("device.commands[2].at", "`at` belongs to a read"),
+            ("device.commands[2].listed", "`set_mode` has no repeated field `mode` of addresses"),
+        ],
+    ),
     // ---- the `transactions:` section (made from valid/minimal.yaml)
     (
         "transactions_unknown_command",

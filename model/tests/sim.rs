@@ -308,6 +308,68 @@ fn dynamixel_control_table_staged_writes_records_and_reset() {
     assert_eq!(d.element("control_table", 0), Some(29));
 }
 
+/// Dynamixel 2.0's device: PING answers the model number and firmware from the table (`at`),
+/// SYNC READ is answered only by the devices it lists (`listed`), SYNC WRITE's blocks are
+/// records of an ID and a number of `data_length` bytes, low byte first.
+#[test]
+fn dynamixel2_ping_reads_the_table_sync_read_answers_the_listed_sync_write_takes_records() {
+    let p = spec("dynamixel2");
+    let mut d = Sim::new(Arc::clone(&p), 1);
+    let mut other = Sim::new(Arc::clone(&p), 2);
+    let ping = request(&p, "ping", 1, &[]);
+    let (name, v) = reply(&p, &ping, &d.answer(&ping).unwrap());
+    assert_eq!(name, "ping_status");
+    assert_eq!(get(&v, "model_number"), &Raw::Int(1030));
+    assert_eq!(get(&v, "firmware_version"), &Raw::Int(38));
+    // The model number is the table's, low byte first.
+    let w = request(
+        &p,
+        "write",
+        1,
+        &[int("address", 0), list("data", &[0x34, 0x12])],
+    );
+    assert!(d.answer(&w).is_some());
+    let (_, v) = reply(&p, &ping, &d.answer(&ping).unwrap());
+    assert_eq!(get(&v, "model_number"), &Raw::Int(0x1234));
+    // SYNC WRITE: each device its own block.
+    let blocks = Value {
+        name: "blocks".into(),
+        raw: Raw::Records(vec![vec![1, 0x0201], vec![2, 0x0403]]),
+    };
+    let s = request(
+        &p,
+        "sync_write",
+        254,
+        &[int("address", 100), int("data_length", 2), blocks],
+    );
+    assert_eq!(d.answer(&s), None);
+    assert_eq!(other.answer(&s), None);
+    assert_eq!(d.element("control_table", 100), Some(1));
+    assert_eq!(d.element("control_table", 101), Some(2));
+    assert_eq!(other.element("control_table", 100), Some(3));
+    assert_eq!(other.element("control_table", 101), Some(4));
+    // SYNC READ listing device 2 alone: device 1 stays silent.
+    let r = request(
+        &p,
+        "sync_read",
+        254,
+        &[int("address", 100), int("length", 2), list("ids", &[2])],
+    );
+    assert_eq!(d.answer(&r), None);
+    let (name, v) = reply(&p, &r, &other.answer(&r).unwrap());
+    assert_eq!(name, "read_status");
+    assert_eq!(get(&v, "data"), &Raw::List(vec![3, 4]));
+    // Past the table's end: Access Error.
+    let r = request(&p, "read", 1, &[int("address", 660), int("length", 4)]);
+    let (_, v) = reply(&p, &r, &d.answer(&r).unwrap());
+    assert_eq!(get(&v, "read_error_number"), &Raw::Int(7));
+    // Factory reset: the table as at start.
+    let reset = request(&p, "factory_reset", 1, &[int("option", 0xFF)]);
+    assert!(d.answer(&reset).is_some());
+    let (_, v) = reply(&p, &ping, &d.answer(&ping).unwrap());
+    assert_eq!(get(&v, "model_number"), &Raw::Int(1030));
+}
+
 #[test]
 fn diff_says_what_a_command_does_now_and_breaks_no_peer() {
     use busspec_model::diff::{diff, Category};

@@ -11,7 +11,8 @@
 # Then live, over pseudo-terminals, both ways: `busspec talk modbus` against pymodbus's RTU serial
 # server (tests/reference/live_modbus.py; pyserial is what the server opens its port with),
 # pymodbus's serial client against `busspec sim modbus` (live_sim_modbus.py), and dynamixel-sdk's
-# protocol 1.0 packet handler against `busspec sim dynamixel` (live_sim_dynamixel.py).
+# protocol 1.0 and 2.0 packet handlers against `busspec sim dynamixel` and `busspec sim dynamixel2`
+# (live_sim_dynamixel.py).
 # Versions are pinned so a new release cannot change the result silently.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/../.."
@@ -32,4 +33,5 @@ BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/check.py
 # Bounded twice: each talk call and the script time out on their own; this is the last resort.
 BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_modbus.py
 BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_sim_modbus.py
-BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_sim_dynamixel.py
+BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_sim_dynamixel.py 1.0
+BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_sim_dynamixel.py 2.0
