@@ -806,25 +806,37 @@ impl<C: Protocol> Core<C> {
         acc: T,
         emit: impl FnOnce(&mut Self, T, Event<C::Request, C::Response>) -> T,
     ) -> T {
+        // A frame settled: the request it leaves for the next response to pair with, the
+        // head past it, its event handed to `emit`.
+        macro_rules! settle {
+            ($last:expr, $len:expr, $event:expr) => {{
+                self.last_request = $last;
+                self.head += $len as u64;
+                return emit(self, acc, $event);
+            }};
+        }
+        // The case left to the full rule.
+        macro_rules! slow {
+            () => {{
+                *end = FastEnd::Slow;
+                return acc;
+            }};
+        }
         // One frame tried: returns with its event, or where it leaves the case to the full
         // rule; goes on where it is not a frame.
         macro_rules! try_frame {
             ($frame:expr, $request:expr, $defer:expr) => {
-                let Some(frame) = $frame else {
-                    *end = FastEnd::Slow;
-                    return acc;
-                };
+                let Some(frame) = $frame else { slow!() };
                 let (offset, len) = (self.head, frame.len());
                 if $request {
                     match C::decode_request(frame) {
-                        Ok(frame) => {
-                            self.last_request = Some(frame.message);
-                            self.head += len as u64;
-                            return emit(self, acc, Event::Request { offset, len, frame });
-                        }
+                        Ok(frame) => settle!(
+                            Some(frame.message),
+                            len,
+                            Event::Request { offset, len, frame }
+                        ),
                         Err(e) if breaks_spec(&e) => {
-                            *end = FastEnd::Slow;
-                            return acc;
+                            slow!()
                         }
                         Err(_) => {}
                     }
@@ -840,28 +852,18 @@ impl<C: Protocol> Core<C> {
                         match self.last_request.as_ref().or(self.default_request.as_ref()) {
                             Some(r) => match C::decode_response_for(frame, Some(r)) {
                                 Ok(d) => Ok(d),
-                                Err(_) => {
-                                    *end = FastEnd::Slow;
-                                    return acc;
-                                }
+                                Err(_) => slow!(),
                             },
                             None => C::decode_response_for(frame, None),
                         }
                     };
                     match reply {
-                        Ok(frame) => {
-                            self.last_request = None;
-                            self.head += len as u64;
-                            return emit(self, acc, Event::Response { offset, len, frame });
-                        }
+                        Ok(frame) => settle!(None, len, Event::Response { offset, len, frame }),
                         Err(DecodeError::Ambiguous { code, .. }) => {
-                            self.last_request = None;
-                            self.head += len as u64;
-                            return emit(self, acc, Event::Ambiguous { offset, len, code });
+                            settle!(None, len, Event::Ambiguous { offset, len, code })
                         }
                         Err(e) if breaks_spec(&e) => {
-                            *end = FastEnd::Slow;
-                            return acc;
+                            slow!()
                         }
                         Err(_) => {}
                     }
@@ -920,8 +922,7 @@ impl<C: Protocol> Core<C> {
         // no candidate. Its one case left to the full rule: a length that checksums and breaks
         // only a rule of the spec, which the rule reports unless a shorter one is a frame.
         if var.0.needs_more() || var.1.needs_more() {
-            *end = FastEnd::Slow;
-            return acc;
+            slow!()
         }
         let complete = |v: VarLen| v.get().filter(|&l| l <= window.len()).unwrap_or(0);
         let (mut lq, mut lr) = (complete(var.0), complete(var.1));
@@ -937,8 +938,7 @@ impl<C: Protocol> Core<C> {
             // reads as a status packet): `try_frame`'s decision, each event written where it
             // is made.
             let Some(frame) = window.get(..len) else {
-                *end = FastEnd::Slow;
-                return acc;
+                slow!()
             };
             let offset = self.head;
             let as_request = C::decode_request(frame);
@@ -946,31 +946,24 @@ impl<C: Protocol> Core<C> {
             match as_request {
                 Ok(frame) => {
                     if let Ok(_) | Err(DecodeError::Ambiguous { .. }) = as_response {
-                        self.last_request = None;
-                        self.head += len as u64;
                         let code = both_ways_code(window.get(..len).unwrap_or_default());
-                        return emit(self, acc, Event::Ambiguous { offset, len, code });
+                        settle!(None, len, Event::Ambiguous { offset, len, code });
                     }
-                    self.last_request = Some(frame.message);
-                    self.head += len as u64;
-                    return emit(self, acc, Event::Request { offset, len, frame });
+                    settle!(
+                        Some(frame.message),
+                        len,
+                        Event::Request { offset, len, frame }
+                    );
                 }
                 Err(q) => match as_response {
-                    Ok(frame) => {
-                        self.last_request = None;
-                        self.head += len as u64;
-                        return emit(self, acc, Event::Response { offset, len, frame });
-                    }
+                    Ok(frame) => settle!(None, len, Event::Response { offset, len, frame }),
                     Err(DecodeError::Ambiguous { code, .. }) => {
-                        self.last_request = None;
-                        self.head += len as u64;
-                        return emit(self, acc, Event::Ambiguous { offset, len, code });
+                        settle!(None, len, Event::Ambiguous { offset, len, code })
                     }
                     Err(r) => {
                         let why = if r.progress() > q.progress() { r } else { q };
                         if breaks_spec(&why) {
-                            *end = FastEnd::Slow;
-                            return acc;
+                            slow!()
                         }
                     }
                 },
