@@ -1469,7 +1469,7 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
             }
             None => f,
         };
-        let at = m.layout.payload + f.offset + shift;
+        let at = f.frame_at(&m.layout) + shift;
         let bad = |expected: String, found: i64| DecodeError::BadCount {
             message: m.name.clone(),
             field: f.name.clone(),
@@ -1818,6 +1818,23 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let sh = shape(p, m, wire).unwrap_or_default();
     let pos = |i: usize| sh.at(m, i);
     for (i, f) in m.fields.iter().enumerate() {
+        if f.header {
+            // A header field: a plain integer in the frame's header, only its range to check.
+            let at = f.frame_at(&o);
+            let v = int_of(f, wire, at).1;
+            if let Some((min, max)) = range_violation(f, None, v) {
+                return Some(Misfit::Range {
+                    field: i,
+                    bit: None,
+                    offset: at,
+                    found: v,
+                    min,
+                    max,
+                    kind: f.num_kind(),
+                });
+            }
+            continue;
+        }
         if f.is_record() {
             let f = &*record_in_payload(m, f, payload, &sh);
             let at = o.payload + pos(i);
@@ -1997,6 +2014,13 @@ fn values_of<'p>(
     values.reserve(m.fields.len());
     for (i, f) in m.fields.iter().enumerate() {
         let at = sh.at(m, i);
+        if f.header {
+            values.push(Value {
+                name: Cow::Borrowed(&f.name),
+                raw: Raw::Int(int_of(f, wire, f.frame_at(&m.layout)).1),
+            });
+            continue;
+        }
         if f.is_record() {
             let sized = record_in_payload(m, f, payload, &sh);
             values.push(Value {
@@ -2151,7 +2175,7 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
     // A field sits further than its offset by the bytes of the lists before it.
     let mut shift = 0usize;
     for f in &m.fields {
-        let at = m.layout.payload + f.offset + shift;
+        let at = f.frame_at(&m.layout) + shift;
         let f = &*record_sized(m, f, |name| match reply.get(name) {
             Some(Raw::Int(v)) => Some(*v),
             _ => None,
@@ -2364,7 +2388,7 @@ pub fn encode(
     let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
     let mut shift = 0usize;
     for (i, f) in m.fields.iter().enumerate() {
-        let at = o.payload + f.offset + shift;
+        let at = f.frame_at(&o) + shift;
         if f.is_record() {
             let (f, recs) = records_of(i).unwrap_or((f, &[]));
             shift += f.elements_len(recs.len());
@@ -2693,7 +2717,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
     let mut shift = 0usize;
     for (i, f) in m.fields.iter().enumerate() {
         shifts.push(shift);
-        let at = o.payload + f.offset + shift;
+        let at = f.frame_at(&o) + shift;
         let f = &*record_sized(m, f, |name| {
             let c = m.fields.iter().position(|c| c.name == name)?;
             let cf = &m.fields[c];

@@ -159,7 +159,7 @@ pub(super) fn emit_encode_arm(
         if let (Some(c), false) = (f.constant, named.contains(&fi)) {
             let bytes = constant_bytes(c, f.width, f.byte_order);
             for (i, b) in bytes.into_iter().enumerate() {
-                set(o.payload + f.offset + i, b);
+                set(f.frame_at(&o) + i, b);
             }
         }
     }
@@ -214,8 +214,8 @@ pub(super) fn emit_encode_arm(
     }
     let counter = m.count_field();
     for (fi, f) in m.fields.iter().enumerate() {
-        let at = usize_lit(o.payload + f.offset);
-        let end = usize_lit(o.payload + f.offset + f.width);
+        let at = usize_lit(f.frame_at(&o));
+        let end = usize_lit(f.frame_at(&o) + f.width);
         let wt = wire_type(f);
         let w = wt.ident();
         let unsigned = IntType {
