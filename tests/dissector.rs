@@ -83,6 +83,7 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/crc_extra.yaml"),
         // Header fields every message carries (MAVLink v1's sequence, system and component).
         spec("model/tests/fixtures/valid/mavlink_v1.yaml"),
+        spec("model/tests/fixtures/valid/msp_v2.yaml"),
         // A start and a length field sent twice.
         spec("model/tests/fixtures/valid/ft12_variable.yaml"),
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),

@@ -191,6 +191,7 @@ fn header_fields_spec_generates_its_snapshot() {
         "model/tests/fixtures/valid/mavlink_v1.yaml",
         "mavlink_v1.rs",
     );
+    check("model/tests/fixtures/valid/msp_v2.yaml", "msp_v2.rs");
 }
 
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows

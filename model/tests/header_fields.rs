@@ -161,3 +161,20 @@ fn docs_place_the_header_and_diff_calls_a_changed_header_field_wire_breaking() {
         "{changes:#?}"
     );
 }
+
+/// MSP v2: the flag byte a header field before the code, the checksum covering from it.
+#[test]
+fn a_header_before_the_code_is_covered_by_a_checksum_from_it() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/msp_v2.yaml");
+    let p = busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"));
+    let h = p.framing.head(2);
+    assert_eq!((h.header, h.code, h.length, h.payload), (3, 4, Some(6), 8));
+    assert_eq!(p.framing.checksum.covers_from, 3);
+    let wire = interp::parse_hex("24 58 3C 01 02 00 00 00 3C").unwrap();
+    let f = interp::decode(&p, None, None, &wire).unwrap();
+    assert_eq!(int(&f.values, "flags"), 1);
+    let mut bad = wire.clone();
+    bad[3] = 0;
+    let e = interp::decode(&p, None, None, &bad).unwrap_err();
+    assert!(e.to_string().contains("checksum mismatch"), "{e}");
+}
