@@ -48,9 +48,7 @@ fn the_header_fields_decode_to_what_pymavlink_put_in() {
     let p = fixture();
     for &(name, hex, seq, sysid, compid) in PYMAVLINK {
         let wire = interp::parse_hex(hex).unwrap();
-        let d = if name == "ping" {
-            Direction::Request
-        } else if name == "request_data_stream" {
+        let d = if matches!(name, "ping" | "request_data_stream") {
             Direction::Request
         } else {
             Direction::Response
