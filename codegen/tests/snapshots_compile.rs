@@ -995,10 +995,10 @@ fn msp_v2_snapshot_agrees_with_the_interpreter() {
     let t = agree::agree::<MspV2>(&p);
     assert!(t.accepted >= p.examples.len() && t.refused > 20, "{t:?}");
     let flagged = [0x24, 0x58, 0x3C, 0x01, 0x02, 0x00, 0x00, 0x00, 0x3C];
-    let Request::FcVariant { flags } = Request::decode(&flagged).unwrap().message else {
+    let Request::FcVariant { dont_reply } = Request::decode(&flagged).unwrap().message else {
         panic!()
     };
-    assert_eq!(flags, 1);
+    assert!(dont_reply);
     let mut bad = flagged;
     bad[3] = 0x00;
     same_text(

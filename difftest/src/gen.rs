@@ -193,6 +193,16 @@ impl G {
                 (format!("{{name: {name}, type: u8, enum: e{e}}}"), 1)
             }
             20..=29 if self.n_flags > 0 => (format!("{{name: {name}, type: u16, flags: fl0}}"), 2),
+            // Sub-fields (MSP v2's flag byte), some of them constant.
+            30..=49 => {
+                for _ in 0..64 {
+                    let f = self.field(name.clone(), &[]);
+                    if f.yaml.contains(", bits: [") {
+                        return (f.yaml, f.width);
+                    }
+                }
+                (format!("{{name: {name}, type: u8, unit: count}}"), 1)
+            }
             _ => {
                 let mut y = format!("{{name: {name}, type: {ty}, unit: {}", self.unit());
                 if self.chance(40) {
@@ -1981,6 +1991,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(pos(Part::Code) < pos(Part::Address), "code before address");
     add(!f.has_address(), "no address");
     add(!f.header.is_empty(), "header fields");
+    add(
+        f.header.iter().any(|h| !h.bits.is_empty()),
+        "header sub-fields",
+    );
     add(
         f.length
             .as_ref()

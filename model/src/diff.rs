@@ -1139,6 +1139,20 @@ impl<'a> Differ<'a> {
                 );
                 continue;
             };
+            let subs = |f: &Field| -> Vec<(String, u8, u8, bool, Option<u64>)> {
+                f.bits
+                    .iter()
+                    .map(|b| (b.name.clone(), b.msb, b.lsb, b.signed, b.constant))
+                    .collect()
+            };
+            if subs(f) != subs(g) && (f.offset, f.width) == (g.offset, g.width) {
+                self.wire(
+                    "header_field_changed",
+                    path,
+                    format!("header field `{}`: its sub-fields changed", f.name),
+                );
+                continue;
+            }
             if (f.offset, f.width, f.signed) != (g.offset, g.width, g.signed) {
                 self.wire(
                     "header_field_changed",

@@ -1818,23 +1818,6 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let sh = shape(p, m, wire).unwrap_or_default();
     let pos = |i: usize| sh.at(m, i);
     for (i, f) in m.fields.iter().enumerate() {
-        if f.header {
-            // A header field: a plain integer in the frame's header, only its range to check.
-            let at = f.frame_at(&o);
-            let v = int_of(f, wire, at).1;
-            if let Some((min, max)) = range_violation(f, None, v) {
-                return Some(Misfit::Range {
-                    field: i,
-                    bit: None,
-                    offset: at,
-                    found: v,
-                    min,
-                    max,
-                    kind: f.num_kind(),
-                });
-            }
-            continue;
-        }
         if f.is_record() {
             let f = &*record_in_payload(m, f, payload, &sh);
             let at = o.payload + pos(i);
@@ -1881,6 +1864,13 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             continue;
         }
         let at = o.payload + pos(i);
+        // A header field (a plain integer, maybe with sub-fields) is read from the frame's
+        // header; every other from the payload.
+        let (src, rel, at) = if f.header {
+            (wire, f.frame_at(&o), f.frame_at(&o))
+        } else {
+            (payload, pos(i), at)
+        };
         if let Some(pk) = &f.packed {
             let bytes = payload.get(pos(i)..pos(i) + f.width).unwrap_or(&[]);
             if !pk.padding_clear(bytes) {
@@ -1907,7 +1897,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             }
             continue;
         }
-        let (unsigned, v) = match bcd_of(f, payload, pos(i)) {
+        let (unsigned, v) = match bcd_of(f, src, rel) {
             Ok(v) => v,
             Err(found) => {
                 return Some(Misfit::NotBcd {
@@ -2014,13 +2004,6 @@ fn values_of<'p>(
     values.reserve(m.fields.len());
     for (i, f) in m.fields.iter().enumerate() {
         let at = sh.at(m, i);
-        if f.header {
-            values.push(Value {
-                name: Cow::Borrowed(&f.name),
-                raw: Raw::Int(int_of(f, wire, f.frame_at(&m.layout)).1),
-            });
-            continue;
-        }
         if f.is_record() {
             let sized = record_in_payload(m, f, payload, &sh);
             values.push(Value {
@@ -2052,7 +2035,11 @@ fn values_of<'p>(
             });
             continue;
         }
-        let (unsigned, v) = int_of(f, payload, at);
+        let (unsigned, v) = if f.header {
+            int_of(f, wire, f.frame_at(&m.layout))
+        } else {
+            int_of(f, payload, at)
+        };
         if f.bits.is_empty() {
             values.push(Value {
                 name: Cow::Borrowed(&f.name),

@@ -1648,7 +1648,6 @@ fn header_fields(
             &[
                 "value",
                 "equals",
-                "bits",
                 "repeat",
                 "packed",
                 "follows",
@@ -1659,7 +1658,7 @@ fn header_fields(
                 "length",
             ],
             |k| {
-                format!("`{k}` cannot be used in a header field (an integer every message carries, with its unit, range, enum, flags or special values)")
+                format!("`{k}` cannot be used in a header field (an integer every message carries, with its unit, range, enum, flags, special values or sub-fields)")
             },
             sink,
         ) {
@@ -1667,6 +1666,17 @@ fn header_fields(
         }
         let mut field = field(h, &p, offset, byte_order, &out, refs, sink);
         field.header = true;
+        for b in &field.bits {
+            let taken = out
+                .iter()
+                .any(|g| g.name == b.name || g.bits.iter().any(|c| c.name == b.name));
+            if taken {
+                sink.error(
+                    join(&join(&p, "bits"), &b.name),
+                    format!("duplicate field name `{}`", b.name),
+                );
+            }
+        }
         offset += field.width;
         out.push(field);
     }
@@ -1965,7 +1975,15 @@ fn message_body(
     }
     let fpath = join(path, "fields");
     // Field and sub-field names share one name space per message: they are the keys of its values.
-    let mut leaf_names: BTreeSet<String> = framing.header.iter().map(|h| h.name.clone()).collect();
+    // The header fields' values (each whole, or its sub-fields) are named in every message.
+    let mut leaf_names: BTreeSet<String> = framing
+        .header
+        .iter()
+        .flat_map(|h| {
+            let own = h.bits.is_empty().then(|| h.name.clone());
+            own.into_iter().chain(h.bits.iter().map(|b| b.name.clone()))
+        })
+        .collect();
     // The header fields every message carries come first (they sit in the frame's header).
     let mut out: Vec<Field> = framing.header.clone();
     let mut offset = 0usize;
@@ -1996,7 +2014,11 @@ fn message_body(
             }
         }
         if f.bits.is_empty() && !leaf_names.insert(f.name.clone()) {
-            let what = if framing.header.iter().any(|h| h.name == f.name) {
+            let what = if framing
+                .header
+                .iter()
+                .any(|h| h.name == f.name || h.bits.iter().any(|b| b.name == f.name))
+            {
                 " (a header field every message carries: framing.header)"
             } else {
                 ""
@@ -3118,7 +3140,8 @@ fn template(m: &Message) -> Vec<(u8, u8)> {
     for (slot, b) in t.iter_mut().zip(&m.code) {
         *slot = (0xFF, *b);
     }
-    for f in &m.fields {
+    // Header fields sit outside the code and payload: their fixed bits are not in it.
+    for f in m.fields.iter().filter(|f| !f.header) {
         if f.repeat.is_some() {
             break;
         }

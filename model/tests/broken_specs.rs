@@ -331,6 +331,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("responses.heartbeat.fields.sysid", "duplicate field name `sysid` (a header field every message carries: framing.header)")],
     ),
     (
+        "header_sub_field_name_clash",
+        &[("responses.api_version_reply.fields.dont_reply", "duplicate field name `dont_reply` (a header field every message carries: framing.header)")],
+    ),
+    (
         "header_after_payload",
         &[("framing.layout", "`header` must come before the payload")],
     ),

@@ -170,9 +170,48 @@ fn a_header_before_the_code_is_covered_by_a_checksum_from_it() {
     assert_eq!(p.framing.checksum.covers_from, 3);
     let wire = interp::parse_hex("24 58 3C 01 02 00 00 00 3C").unwrap();
     let f = interp::decode(&p, None, None, &wire).unwrap();
-    assert_eq!(int(&f.values, "flags"), 1);
+    assert_eq!(int(&f.values, "dont_reply"), 1);
     let mut bad = wire.clone();
     bad[3] = 0;
     let e = interp::decode(&p, None, None, &bad).unwrap_err();
     assert!(e.to_string().contains("checksum mismatch"), "{e}");
+    // A reserved flag bit set, the checksum made again: the header's constant sub-field says
+    // where.
+    let mut reserved = wire.clone();
+    reserved[3] = 0x81;
+    interp::reseal(&p, &mut reserved);
+    let e = interp::decode(&p, None, None, &reserved).unwrap_err();
+    assert!(e.to_string().contains("offset 3"), "{e}");
+    assert!(e.to_string().contains("reserved_flags"), "{e}");
+}
+
+/// A header field's sub-fields changed (a reserved bit taken): wire-breaking, said once.
+#[test]
+fn diff_calls_a_changed_header_sub_field_wire_breaking() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/msp_v2.yaml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let old = busspec_model::load_str("msp_v2.yaml", &text).unwrap_or_else(|d| panic!("{d}"));
+    let changed = text.replace(
+        "{name: reserved_flags, msb: 7, lsb: 1, value: 0}",
+        "{name: reserved_flags, msb: 7, lsb: 2, value: 0}\n        - {name: ack, msb: 1, lsb: 1, unit: count}",
+    );
+    let changed = format!(
+        "{}\nexamples: []\nerrata: []\n",
+        changed.split("\nexamples:").next().unwrap()
+    );
+    let new = busspec_model::load_str("changed.yaml", &changed).unwrap_or_else(|d| panic!("{d}"));
+    let changes = busspec_model::diff::diff(&old, &new);
+    let header: Vec<_> = changes
+        .iter()
+        .filter(|c| c.path.starts_with("framing.header"))
+        .collect();
+    assert_eq!(header.len(), 1, "{changes:#?}");
+    assert_eq!(
+        header[0].text,
+        "header field `flags`: its sub-fields changed"
+    );
+    assert_eq!(
+        header[0].category,
+        busspec_model::diff::Category::WireBreaking
+    );
 }

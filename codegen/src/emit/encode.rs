@@ -294,13 +294,14 @@ pub(super) fn emit_encode_arm(
                         let Some(leaf) = ls.iter().find(|l| l.name == b.name) else {
                             continue;
                         };
-                        let v = paren(to_wire(ctx, leaf, &local(&b.name), Some(unsigned)));
+                        let v = to_wire(ctx, leaf, &local(&b.name), Some(unsigned));
                         if lsb + u32::from(b.width()) >= wt.rust_bits()
                             || matches!(ctx.kind(leaf), Kind::Bool)
                         {
+                            // Parenthesized below where it is shifted or or-ed with others.
                             v
                         } else {
-                            let mask = hex_lit((1u64 << b.width()) - 1);
+                            let (v, mask) = (paren(v), hex_lit((1u64 << b.width()) - 1));
                             quote!(#v & #mask)
                         }
                     }

@@ -25,7 +25,7 @@ pub mod msp_v2 {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2018-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "5ba269a23f50f8cd4d420cc11601ae5f8811c9dc2e2d8bcd84e7a607baf62025";
+    pub const SPEC_SHA256: &str = "8ecb21c936804a04601d3583ca3ef483ff0853628dac0e40f3083e84028c33a7";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/msp_v2.yaml"
@@ -86,15 +86,9 @@ pub mod msp_v2 {
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
         /// §3 MSP_API_VERSION (1) (code `0x0100`, 9 bytes).
-        ApiVersion {
-            /// Flag byte (0 unless a message says otherwise).
-            flags: u8,
-        },
+        ApiVersion { dont_reply: bool },
         /// §3 MSP_FC_VARIANT (2) (code `0x0200`, 9 bytes).
-        FcVariant {
-            /// Flag byte (0 unless a message says otherwise).
-            flags: u8,
-        },
+        FcVariant { dont_reply: bool },
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -125,11 +119,11 @@ pub mod msp_v2 {
         /// field is signed), in frame order; constant and repeated fields are not visited.
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ApiVersion { flags: v_flags } => {
-                    f("flags", rt::Int(*v_flags as i64))
+                Self::ApiVersion { dont_reply: v_dont_reply } => {
+                    f("dont_reply", rt::Int(*v_dont_reply as i64))
                 }
-                Self::FcVariant { flags: v_flags } => {
-                    f("flags", rt::Int(*v_flags as i64))
+                Self::FcVariant { dont_reply: v_dont_reply } => {
+                    f("dont_reply", rt::Int(*v_dont_reply as i64))
                 }
             }
         }
@@ -144,16 +138,18 @@ pub mod msp_v2 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<9>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion { flags: v_flags } => {
+                Self::ApiVersion { dont_reply: v_dont_reply } => {
                     let out = rt::head(out, &[0x24, 0x58, 0x3C]);
                     out[4..8].copy_from_slice(&[0x01, 0x00, 0x00, 0x00]);
-                    out[3] = v_flags;
+                    let field_0: u8 = v_dont_reply as u8;
+                    out[3] = field_0;
                     out.len()
                 }
-                Self::FcVariant { flags: v_flags } => {
+                Self::FcVariant { dont_reply: v_dont_reply } => {
                     let out = rt::head(out, &[0x24, 0x58, 0x3C]);
                     out[4..8].copy_from_slice(&[0x02, 0x00, 0x00, 0x00]);
-                    out[3] = v_flags;
+                    let field_0: u8 = v_dont_reply as u8;
+                    out[3] = field_0;
                     out.len()
                 }
             };
@@ -183,13 +179,17 @@ pub mod msp_v2 {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
                     let frame = rt::fixed::<9>(frame, "api_version", &[9])?;
+                    rt::equal("api_version", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
                     rt::Ok(Self::ApiVersion {
-                        flags: frame[3],
+                        dont_reply: (frame[3] & 0x1) != 0,
                     })
                 }
                 0x0200 => {
                     let frame = rt::fixed::<9>(frame, "fc_variant", &[9])?;
-                    rt::Ok(Self::FcVariant { flags: frame[3] })
+                    rt::equal("fc_variant", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
+                    rt::Ok(Self::FcVariant {
+                        dont_reply: (frame[3] & 0x1) != 0,
+                    })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 2, 1, false)),
             }
@@ -204,12 +204,22 @@ pub mod msp_v2 {
             match name {
                 "api_version" => {
                     rt::Ok(Self::ApiVersion {
-                        flags: rt::get(&mut field, "flags")?,
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
                     })
                 }
                 "fc_variant" => {
                     rt::Ok(Self::FcVariant {
-                        flags: rt::get(&mut field, "flags")?,
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
                     })
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
@@ -286,18 +296,13 @@ pub mod msp_v2 {
     pub enum Response {
         /// §3 MSP_API_VERSION (1), answered (code `0x0100`, 12 bytes).
         ApiVersionReply {
-            /// Flag byte (0 unless a message says otherwise).
-            flags: u8,
+            dont_reply: bool,
             protocol_version: u8,
             api_major: u8,
             api_minor: u8,
         },
         /// §3 MSP_FC_VARIANT (2), answered (code `0x0200`, 13 bytes).
-        FcVariantReply {
-            /// Flag byte (0 unless a message says otherwise).
-            flags: u8,
-            variant: [u8; 4],
-        },
+        FcVariantReply { dont_reply: bool, variant: [u8; 4] },
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -329,18 +334,21 @@ pub mod msp_v2 {
         pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
                 Self::ApiVersionReply {
-                    flags: v_flags,
+                    dont_reply: v_dont_reply,
                     protocol_version: v_protocol_version,
                     api_major: v_api_major,
                     api_minor: v_api_minor,
                 } => {
-                    f("flags", rt::Int(*v_flags as i64));
+                    f("dont_reply", rt::Int(*v_dont_reply as i64));
                     f("protocol_version", rt::Int(*v_protocol_version as i64));
                     f("api_major", rt::Int(*v_api_major as i64));
                     f("api_minor", rt::Int(*v_api_minor as i64));
                 }
-                Self::FcVariantReply { flags: v_flags, variant: v_variant } => {
-                    f("flags", rt::Int(*v_flags as i64));
+                Self::FcVariantReply {
+                    dont_reply: v_dont_reply,
+                    variant: v_variant,
+                } => {
+                    f("dont_reply", rt::Int(*v_dont_reply as i64));
                     f("variant", rt::Text(&v_variant[..]));
                 }
             }
@@ -356,23 +364,28 @@ pub mod msp_v2 {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ApiVersionReply {
-                    flags: v_flags,
+                    dont_reply: v_dont_reply,
                     protocol_version: v_protocol_version,
                     api_major: v_api_major,
                     api_minor: v_api_minor,
                 } => {
                     let out = rt::frame_mut::<12>(buf, &[0x24, 0x58, 0x3E])?;
                     out[4..8].copy_from_slice(&[0x01, 0x00, 0x03, 0x00]);
-                    out[3] = v_flags;
+                    let field_0: u8 = v_dont_reply as u8;
+                    out[3] = field_0;
                     out[8] = v_protocol_version;
                     out[9] = v_api_major;
                     out[10] = v_api_minor;
                     out.len()
                 }
-                Self::FcVariantReply { flags: v_flags, variant: v_variant } => {
+                Self::FcVariantReply {
+                    dont_reply: v_dont_reply,
+                    variant: v_variant,
+                } => {
                     let out = rt::frame_mut::<13>(buf, &[0x24, 0x58, 0x3E])?;
                     out[4..8].copy_from_slice(&[0x02, 0x00, 0x04, 0x00]);
-                    out[3] = v_flags;
+                    let field_0: u8 = v_dont_reply as u8;
+                    out[3] = field_0;
                     out[8..12].copy_from_slice(&v_variant);
                     out.len()
                 }
@@ -430,8 +443,15 @@ pub mod msp_v2 {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
                     let frame = rt::fixed::<12>(frame, "api_version_reply", &[12])?;
+                    rt::equal(
+                        "api_version_reply",
+                        "reserved_flags",
+                        3,
+                        frame[3] >> 1,
+                        0x0,
+                    )?;
                     rt::Ok(Self::ApiVersionReply {
-                        flags: frame[3],
+                        dont_reply: (frame[3] & 0x1) != 0,
                         protocol_version: frame[8],
                         api_major: frame[9],
                         api_minor: frame[10],
@@ -439,8 +459,15 @@ pub mod msp_v2 {
                 }
                 0x0200 => {
                     let frame = rt::fixed::<13>(frame, "fc_variant_reply", &[13])?;
+                    rt::equal(
+                        "fc_variant_reply",
+                        "reserved_flags",
+                        3,
+                        frame[3] >> 1,
+                        0x0,
+                    )?;
                     rt::Ok(Self::FcVariantReply {
-                        flags: frame[3],
+                        dont_reply: (frame[3] & 0x1) != 0,
                         variant: frame[8..12].try_into().unwrap_or([0; 4]),
                     })
                 }
@@ -457,7 +484,12 @@ pub mod msp_v2 {
             match name {
                 "api_version_reply" => {
                     rt::Ok(Self::ApiVersionReply {
-                        flags: rt::get(&mut field, "flags")?,
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
                         protocol_version: rt::get(&mut field, "protocol_version")?,
                         api_major: rt::get(&mut field, "api_major")?,
                         api_minor: rt::get(&mut field, "api_minor")?,
@@ -465,7 +497,12 @@ pub mod msp_v2 {
                 }
                 "fc_variant_reply" => {
                     rt::Ok(Self::FcVariantReply {
-                        flags: rt::get(&mut field, "flags")?,
+                        dont_reply: rt::field_int(
+                            "dont_reply",
+                            field("dont_reply"),
+                            0,
+                            1,
+                        )? != 0,
                         variant: rt::text(&mut field, "variant")?,
                     })
                 }
