@@ -183,6 +183,17 @@ fn bcd_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/crc_extra.yaml", "crc_extra.rs");
 }
 
+/// Header fields every message carries (MAVLink v1's sequence, system and component IDs):
+/// each variant carries them as fields, read and written at the header's offset in the frame.
+#[test]
+fn header_fields_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/mavlink_v1.yaml",
+        "mavlink_v1.rs",
+    );
+    check("model/tests/fixtures/valid/msp_v2.yaml", "msp_v2.rs");
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

@@ -182,6 +182,43 @@ impl G {
         format!("range: {{min: {a}, max: {b}}}")
     }
 
+    /// A header field every message carries (`framing.header`): an integer of 1 to 4 bytes
+    /// with a unit (maybe a range and a special value), an enum or flags. Its YAML and width.
+    fn header_field(&mut self, name: String) -> (String, usize) {
+        let &(ty, width, signed) = self.pick(&INT_TYPES);
+        let (lo, hi) = limits(width, signed);
+        match self.rng.u8(..100) {
+            0..=19 if self.n_enums > 0 => {
+                let e = self.rng.usize(..self.n_enums);
+                (format!("{{name: {name}, type: u8, enum: e{e}}}"), 1)
+            }
+            20..=29 if self.n_flags > 0 => (format!("{{name: {name}, type: u16, flags: fl0}}"), 2),
+            // Sub-fields (MSP v2's flag byte), some of them constant.
+            30..=49 => {
+                for _ in 0..64 {
+                    let f = self.field(name.clone(), &[]);
+                    if f.yaml.contains(", bits: [") {
+                        return (f.yaml, f.width);
+                    }
+                }
+                (format!("{{name: {name}, type: u8, unit: count}}"), 1)
+            }
+            _ => {
+                let mut y = format!("{{name: {name}, type: {ty}, unit: {}", self.unit());
+                if self.chance(40) {
+                    let r = self.range_yaml(lo, hi);
+                    let _ = write!(y, ", {r}");
+                }
+                if self.chance(15) {
+                    let v = self.rng.i64(lo..=hi);
+                    let _ = write!(y, ", special: [{{value: {v}, name: sp_{name}}}]");
+                }
+                y.push('}');
+                (y, width)
+            }
+        }
+    }
+
     /// One field that is not repeated. `earlier`: the fields before it.
     fn field(&mut self, name: String, earlier: &[Gf]) -> Gf {
         let &(ty, width, signed) = self.pick(&INT_TYPES);
@@ -1185,6 +1222,31 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             }
         }
     }
+    // Header fields every message carries (MAVLink's sequence, system and component IDs):
+    // anywhere after the leading start bytes and before the payload; after the code only
+    // where every code has one length (it would move them).
+    let header: Vec<(String, usize)> = if g.chance(15) {
+        (0..g.rng.usize(1..=3))
+            .map(|k| g.header_field(format!("h{k}")))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    if !header.is_empty() {
+        let mut lens: Vec<usize> = req_lens.iter().chain(&resp_lens).copied().collect();
+        lens.sort_unstable();
+        lens.dedup();
+        let first = usize::from(layout.first() == Some(&"start"));
+        let last = if lens.len() == 1 {
+            pos(&layout, "payload")
+        } else {
+            pos(&layout, "code")
+        }
+        .unwrap_or(layout.len());
+        let at = g.rng.usize(first..=last.max(first));
+        layout.insert(at, "header");
+    }
+    let header_len: usize = header.iter().map(|h| h.1).sum();
     let mut escaping_yaml = String::new();
     match escaping {
         Escaping::Bytes | Escaping::Cobs => {
@@ -1728,6 +1790,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
                 .unwrap_or(0),
             "payload" => qlo.min(slo),
             "end" => end.len(),
+            "header" => header_len,
             _ => csum_len,
         };
         let least: usize = parts.iter().map(|p| size(p)).sum();
@@ -1741,6 +1804,10 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             let _ = write!(framing, ", adjust: {adjust}");
         }
         framing.push_str("}\n");
+    }
+    if !header.is_empty() {
+        let items: Vec<&str> = header.iter().map(|h| h.0.as_str()).collect();
+        let _ = writeln!(framing, "  header: [{}]", items.join(", "));
     }
     match end.len() {
         0 => {}
@@ -1923,6 +1990,21 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     let pos = |x: Part| f.layout.iter().position(|y| *y == x);
     add(pos(Part::Code) < pos(Part::Address), "code before address");
     add(!f.has_address(), "no address");
+    add(!f.header.is_empty(), "header fields");
+    add(
+        f.header.iter().any(|h| !h.bits.is_empty()),
+        "header sub-fields",
+    );
+    add(
+        f.length
+            .as_ref()
+            .is_some_and(|l| l.counts.contains(&Part::Header)),
+        "header counted by the length",
+    );
+    add(
+        !f.header.is_empty() && pos(Part::Code) < pos(Part::Header),
+        "header after the code",
+    );
     add(!f.end.is_empty(), "end bytes");
     add(f.end_first(), "end bytes before the checksum");
     add(

@@ -701,6 +701,7 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
+        self.header();
         if o.end != n.end {
             self.wire(
                 "framing_changed",
@@ -1118,6 +1119,87 @@ impl<'a> Differ<'a> {
     }
 
     /// Everything about a matched message except its name and code.
+    /// The header fields every message carries (`framing.header`), once for all messages: one
+    /// removed, added, moved, widened or re-signed changes every frame; a changed unit, range,
+    /// enum or flag set changes what the values mean.
+    fn header(&mut self) {
+        let (o, n) = (&self.old.framing.header, &self.new.framing.header);
+        for f in o {
+            let path = format!("framing.header.{}", f.name);
+            let Some(g) = n.iter().find(|g| g.name == f.name) else {
+                self.wire(
+                    "header_field_removed",
+                    path,
+                    format!(
+                        "header field `{}` ({} at header + {}) removed",
+                        f.name,
+                        type_name(f),
+                        f.offset
+                    ),
+                );
+                continue;
+            };
+            let subs = |f: &Field| -> Vec<(String, u8, u8, bool, Option<u64>)> {
+                f.bits
+                    .iter()
+                    .map(|b| (b.name.clone(), b.msb, b.lsb, b.signed, b.constant))
+                    .collect()
+            };
+            if subs(f) != subs(g) && (f.offset, f.width) == (g.offset, g.width) {
+                self.wire(
+                    "header_field_changed",
+                    path,
+                    format!("header field `{}`: its sub-fields changed", f.name),
+                );
+                continue;
+            }
+            if (f.offset, f.width, f.signed) != (g.offset, g.width, g.signed) {
+                self.wire(
+                    "header_field_changed",
+                    path,
+                    format!(
+                        "header field `{}`: {} at header + {} → {} at header + {}",
+                        f.name,
+                        type_name(f),
+                        f.offset,
+                        type_name(g),
+                        g.offset
+                    ),
+                );
+                continue;
+            }
+            let unit = |p: &Protocol, f: &Field| f.unit.map(|u| p.units[u].name.clone());
+            let en = |p: &Protocol, f: &Field| f.enumeration.map(|e| p.enums[e].name.clone());
+            let fl = |p: &Protocol, f: &Field| f.flags.map(|e| p.flags[e].name.clone());
+            if f.range != g.range
+                || unit(self.old, f) != unit(self.new, g)
+                || en(self.old, f) != en(self.new, g)
+                || fl(self.old, f) != fl(self.new, g)
+            {
+                self.api(
+                    "header_field_changed",
+                    path,
+                    format!(
+                        "header field `{}`: its unit, range, enum or flags changed",
+                        f.name
+                    ),
+                );
+            }
+        }
+        for g in n.iter().filter(|g| !o.iter().any(|f| f.name == g.name)) {
+            self.wire(
+                "header_field_added",
+                format!("framing.header.{}", g.name),
+                format!(
+                    "header field `{}` ({} at header + {}) added",
+                    g.name,
+                    type_name(g),
+                    g.offset
+                ),
+            );
+        }
+    }
+
     fn message_body(&mut self, m: &Message, x: &Message, path: &str, maps: &Maps) {
         let (o, n) = (self.old, self.new);
         let word = direction_word(m.direction);
@@ -1168,21 +1250,22 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
-        // A field keeps its name where it moved; otherwise what sits at its offset is it.
-        let fmap = pair_named(
-            &m.fields,
-            &x.fields,
-            |f| &f.name,
-            |f, g| f.offset == g.offset,
+        // A field keeps its name where it moved; otherwise what sits at its offset is it. The
+        // header fields every message carries lead its fields: `header` compares them once.
+        let (mh, xh) = (o.framing.header.len(), n.framing.header.len());
+        let (mf, xf) = (
+            &m.fields[mh.min(m.fields.len())..],
+            &x.fields[xh.min(x.fields.len())..],
         );
+        let fmap = pair_named(mf, xf, |f| &f.name, |f, g| f.offset == g.offset);
         let place = |m: &Message, f: &Field| {
             m.fields
                 .iter()
                 .position(|g| std::ptr::eq(g, f))
                 .map_or_else(String::new, |i| m.place(i))
         };
-        for (i, f) in m.fields.iter().enumerate() {
-            let Some(g) = fmap[i].map(|j| &x.fields[j]) else {
+        for (i, f) in mf.iter().enumerate() {
+            let Some(g) = fmap[i].map(|j| &xf[j]) else {
                 self.wire(
                     "field_removed",
                     format!("{path}.fields.{}", f.name),
@@ -1207,7 +1290,7 @@ impl<'a> Differ<'a> {
             }
             self.field((m, f), (x, g), &fpath, maps);
         }
-        for (j, g) in x.fields.iter().enumerate() {
+        for (j, g) in xf.iter().enumerate() {
             if !taken(&fmap, j) {
                 self.wire(
                     "field_added",

@@ -192,11 +192,15 @@ fn range(r: Option<(i64, i64)>) -> String {
     )
 }
 
-fn field(f: &Field) -> String {
+/// A field's table; `offset` counted from the payload (a header field's is negative where the
+/// header comes before the payload: the runtime reads every field at the payload's offset plus
+/// its own).
+fn field(f: &Field, lay: &FrameLayout) -> String {
+    let offset = f.frame_at(lay) as i64 - lay.payload as i64;
     let mut o = format!(
         "{{ name = {}, offset = {}, width = {}, signed = {}, order = {}, ascii = {}",
         lua_str(&f.name),
-        f.offset,
+        offset,
         f.width,
         lua_bool(f.signed),
         order(f.byte_order),
@@ -289,7 +293,7 @@ fn field(f: &Field) -> String {
     }
     if f.is_record() {
         // A record's fields, each at its offset in the record.
-        let rec: Vec<String> = f.record.iter().map(field).collect();
+        let rec: Vec<String> = f.record.iter().map(|g| field(g, lay)).collect();
         let _ = write!(o, ", rec = {{{}}}", rec.join(", "));
         // Its last field as many bytes wide as an earlier field of the message says.
         if let (Some(by), Some(g)) = (f.record_bytes_from(), f.record.last()) {
@@ -359,7 +363,7 @@ fn message(m: &Message, index: usize) -> String {
     );
     s.push_str("      fields = {\n");
     for f in &m.fields {
-        let _ = writeln!(s, "        {},", field(f));
+        let _ = writeln!(s, "        {},", field(f, &o));
     }
     s.push_str("      } },\n");
     s

@@ -533,6 +533,18 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 ),
                 "fields of the message".to_owned(),
             ),
+            Part::Header => (
+                "header".to_owned(),
+                f.header_len().to_string(),
+                format!(
+                    "header fields every message carries: {}",
+                    f.header
+                        .iter()
+                        .map(|h| format!("`{}` ({})", h.name, h.width))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ),
             Part::Checksum => (
                 "checksum".to_owned(),
                 f.checksum.len().to_string(),

@@ -1469,7 +1469,7 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
             }
             None => f,
         };
-        let at = m.layout.payload + f.offset + shift;
+        let at = f.frame_at(&m.layout) + shift;
         let bad = |expected: String, found: i64| DecodeError::BadCount {
             message: m.name.clone(),
             field: f.name.clone(),
@@ -1864,6 +1864,13 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             continue;
         }
         let at = o.payload + pos(i);
+        // A header field (a plain integer, maybe with sub-fields) is read from the frame's
+        // header; every other from the payload.
+        let (src, rel, at) = if f.header {
+            (wire, f.frame_at(&o), f.frame_at(&o))
+        } else {
+            (payload, pos(i), at)
+        };
         if let Some(pk) = &f.packed {
             let bytes = payload.get(pos(i)..pos(i) + f.width).unwrap_or(&[]);
             if !pk.padding_clear(bytes) {
@@ -1890,7 +1897,7 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
             }
             continue;
         }
-        let (unsigned, v) = match bcd_of(f, payload, pos(i)) {
+        let (unsigned, v) = match bcd_of(f, src, rel) {
             Ok(v) => v,
             Err(found) => {
                 return Some(Misfit::NotBcd {
@@ -2028,7 +2035,11 @@ fn values_of<'p>(
             });
             continue;
         }
-        let (unsigned, v) = int_of(f, payload, at);
+        let (unsigned, v) = if f.header {
+            int_of(f, wire, f.frame_at(&m.layout))
+        } else {
+            int_of(f, payload, at)
+        };
         if f.bits.is_empty() {
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
@@ -2151,7 +2162,7 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
     // A field sits further than its offset by the bytes of the lists before it.
     let mut shift = 0usize;
     for f in &m.fields {
-        let at = m.layout.payload + f.offset + shift;
+        let at = f.frame_at(&m.layout) + shift;
         let f = &*record_sized(m, f, |name| match reply.get(name) {
             Some(Raw::Int(v)) => Some(*v),
             _ => None,
@@ -2364,7 +2375,7 @@ pub fn encode(
     let mut ints: Vec<i64> = Vec::with_capacity(m.fields.len());
     let mut shift = 0usize;
     for (i, f) in m.fields.iter().enumerate() {
-        let at = o.payload + f.offset + shift;
+        let at = f.frame_at(&o) + shift;
         if f.is_record() {
             let (f, recs) = records_of(i).unwrap_or((f, &[]));
             shift += f.elements_len(recs.len());
@@ -2693,7 +2704,7 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
     let mut shift = 0usize;
     for (i, f) in m.fields.iter().enumerate() {
         shifts.push(shift);
-        let at = o.payload + f.offset + shift;
+        let at = f.frame_at(&o) + shift;
         let f = &*record_sized(m, f, |name| {
             let c = m.fields.iter().position(|c| c.name == name)?;
             let cf = &m.fields[c];

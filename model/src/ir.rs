@@ -89,6 +89,9 @@ pub struct Framing {
     /// offset and length of the IR is the unescaped frame's; [`crate::escape`] turns one into
     /// the other.
     pub escaping: Option<Escaping>,
+    /// The header fields every message carries (`framing.header`), `offset` counted from the
+    /// layout's `header` part; every message's `fields` begin with copies of them.
+    pub header: Vec<Field>,
 }
 
 /// Escaping or stuffing, declared once in `framing.escaping`.
@@ -191,6 +194,8 @@ pub struct FrameLayout {
     pub length_again: Option<usize>,
     /// `None` when the layout has no address.
     pub address: Option<usize>,
+    /// Where the header fields begin (`framing.header`; 0 when the layout has none).
+    pub header: usize,
     pub code: usize,
     pub payload: usize,
     /// Where the checksum is: the payload's end (also where frames have none).
@@ -261,6 +266,11 @@ impl Framing {
         }
     }
 
+    /// Bytes of the header fields every frame carries (0 without `framing.header`).
+    pub fn header_len(&self) -> usize {
+        self.header.iter().map(|f| f.width).sum()
+    }
+
     /// Whether frames carry an address (the layout has `address`).
     pub fn has_address(&self) -> bool {
         self.layout.contains(&Part::Address)
@@ -276,6 +286,7 @@ impl Framing {
                 Part::Length => self.length.as_ref().map_or(0, |l| l.width),
                 Part::Checksum => self.checksum.len(),
                 Part::End => self.end.len(),
+                Part::Header => self.header_len(),
                 Part::Code | Part::Payload => 0,
             })
             .sum()
@@ -320,6 +331,7 @@ impl Framing {
                         Part::Payload => payload,
                         Part::Checksum => self.checksum.len(),
                         Part::End => self.end.len(),
+                        Part::Header => self.header_len(),
                     }
             })
             .sum();
@@ -671,6 +683,7 @@ impl Message {
             return String::new();
         };
         match self.fields[..i].iter().rev().find(|g| g.repeat.is_some()) {
+            _ if f.header => format!("header + {}", f.offset),
             Some(l) => format!("`{}` + {}", l.name, f.offset - l.offset),
             None => f.offset.to_string(),
         }
@@ -687,7 +700,7 @@ impl Message {
     /// a stream before its length or count is read (both stream decoders).
     pub fn leading_constants(&self) -> Vec<u8> {
         let mut lead = Vec::new();
-        for f in &self.fields {
+        for f in self.fields.iter().filter(|f| !f.header) {
             match f.constant {
                 Some(c) if f.bits.is_empty() && f.repeat.is_none() && lead.len() == f.offset => {
                     let mut bytes = vec![0u8; f.width];
@@ -799,8 +812,12 @@ pub struct Field {
     pub name: String,
     pub doc: String,
     pub ty: FieldType,
-    /// Offset in the payload, bytes.
+    /// Offset in the payload, bytes; for a header field ([`Self::header`]), in the header.
     pub offset: usize,
+    /// A header field (`framing.header`): it sits in the frame's header, at the layout's
+    /// `header` part plus `offset`, not in the payload. Header fields come first in a
+    /// message's fields.
+    pub header: bool,
     /// Width on the wire, bytes.
     pub width: usize,
     pub signed: bool,
@@ -986,6 +1003,16 @@ pub enum Follows {
 }
 
 impl Field {
+    /// Where the field (its first element, for a list before which every list is empty) sits
+    /// in a frame laid out as `o`: in the header or in the payload.
+    pub fn frame_at(&self, o: &FrameLayout) -> usize {
+        if self.header {
+            o.header + self.offset
+        } else {
+            o.payload + self.offset
+        }
+    }
+
     /// Its constant as decode reads it: sign-extended where the field is signed.
     pub fn constant_value(&self) -> Option<i64> {
         let c = self.constant?;

@@ -156,6 +156,8 @@ pub enum Part {
     Length,
     /// Constant bytes after the checksum that end every frame (`framing.end`).
     End,
+    /// The header fields every message carries (`framing.header`), in their order.
+    Header,
 }
 
 /// The start of a frame: one byte (`0xAA`) or a sync sequence (`[0xFF, 0xFF]`).
@@ -263,6 +265,10 @@ pub struct Framing {
     /// Escaping or stuffing applied to every frame on the wire (optional).
     #[serde(default)]
     pub escaping: Option<Escaping>,
+    /// Fields every message carries, where the layout's `header` part places them (MAVLink's
+    /// sequence, system and component bytes); required iff the layout has `header`.
+    #[serde(default)]
+    pub header: Option<Vec<Field>>,
 }
 
 /// How frames are escaped or stuffed on the wire: exactly one of `escape` (with `xor` and

@@ -1005,7 +1005,7 @@ pub fn violations(p: &Protocol, frame: &Frame) -> Vec<DecodeError> {
     // A field sits further than its offset by the bytes of the lists before it.
     let mut shift = 0usize;
     for f in &m.fields {
-        let offset = at.payload + f.offset + shift;
+        let offset = f.frame_at(&at) + shift;
         // A record whose last field's bytes a field gives: as wide as the frame says.
         let f = &*interp::record_sized(m, f, |name| match frame.get(name) {
             Some(Raw::Int(v)) => Some(*v),

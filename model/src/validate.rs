@@ -172,7 +172,15 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         );
     }
 
-    let mut framing = framing(&spec.framing, spec.byte_order, sink);
+    let refs = Refs {
+        units: &unit_names,
+        enums: &enum_names,
+        flags: &flag_names,
+        enum_defs: &enums,
+        flag_defs: &flags,
+        unit_defs: &units,
+    };
+    let mut framing = framing(&spec.framing, spec.byte_order, &refs, sink);
 
     // Commands and responses share one name space: examples refer to either by name.
     let all_names = spec
@@ -198,14 +206,6 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             );
         }
     }
-    let refs = Refs {
-        units: &unit_names,
-        enums: &enum_names,
-        flags: &flag_names,
-        enum_defs: &enums,
-        flag_defs: &flags,
-        unit_defs: &units,
-    };
     let response_names = Names {
         map: spec
             .responses
@@ -875,10 +875,11 @@ fn part_name(p: Part) -> &'static str {
         Part::Payload => "payload",
         Part::Checksum => "checksum",
         Part::End => "end",
+        Part::Header => "header",
     }
 }
 
-fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framing {
+fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Sink) -> Framing {
     let path = "framing";
     let count = |p: Part| f.layout.iter().filter(|x| **x == p).count();
     for (p, name) in [(Part::Code, "code"), (Part::Payload, "payload")] {
@@ -1257,6 +1258,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
         checksum,
         heads: Vec::new(),
         escaping: None,
+        header: header_fields(f, byte_order, refs, sink),
     };
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
@@ -1304,6 +1306,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, sink: &mut Sink) -> Framin
             Part::Address => head.address,
             Part::Length => head.length,
             Part::Code => Some(head.code),
+            Part::Header => Some(head.header),
             Part::Payload | Part::Checksum | Part::End => None,
         };
         match at {
@@ -1566,6 +1569,138 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
     (errors_before == sink.items.len()).then_some(escaping)
 }
 
+/// `framing.header`: the fields every message carries, each an integer of 1 to 4 bytes with
+/// its unit, range, enum or flags; `offset` counted from the layout's `header` part.
+fn header_fields(
+    f: &model::Framing,
+    byte_order: ByteOrder,
+    refs: &Refs,
+    sink: &mut Sink,
+) -> Vec<Field> {
+    use model::FieldType as T;
+    let in_layout = f.layout.iter().filter(|p| **p == Part::Header).count();
+    let Some(fields) = &f.header else {
+        if in_layout > 0 {
+            sink.error(
+                "framing.layout",
+                "layout has `header` but `framing.header` is missing",
+            );
+        }
+        return Vec::new();
+    };
+    let path = "framing.header";
+    match in_layout {
+        0 => sink.error(
+            path,
+            "`framing.header` needs a `header` part in the layout, where its fields sit",
+        ),
+        1 => {}
+        _ => sink.error("framing.layout", "layout holds `header` more than once"),
+    }
+    let pos = |p: Part| f.layout.iter().position(|x| *x == p);
+    if in_layout > 0 && pos(Part::Header) > pos(Part::Payload) {
+        sink.error("framing.layout", "`header` must come before the payload");
+    }
+    if in_layout > 0 && pos(Part::Header) > pos(Part::Code) && {
+        let mut lens: Vec<i64> = f
+            .request
+            .code_lengths
+            .iter()
+            .chain(&f.response.code_lengths)
+            .copied()
+            .collect();
+        lens.sort_unstable();
+        lens.dedup();
+        lens.len() > 1
+    } {
+        sink.error(
+            "framing.layout",
+            "a `header` after the code needs every code to have one length: the code's length would move it",
+        );
+    }
+    if fields.is_empty() {
+        sink.error(
+            path,
+            "`framing.header` is empty: give its fields or leave it out",
+        );
+    }
+    let mut out: Vec<Field> = Vec::new();
+    let mut offset = 0;
+    for h in fields {
+        let p = join(path, &h.name);
+        check_ident(&h.name, &p, "field", sink);
+        if out.iter().any(|g| g.name == h.name) {
+            sink.error(&p, format!("duplicate field name `{}`", h.name));
+        }
+        if !matches!(
+            h.ty,
+            T::U8 | T::U16 | T::U24 | T::U32 | T::I8 | T::I16 | T::I24 | T::I32
+        ) {
+            sink.error(
+                join(&p, "type"),
+                "a header field is an integer of 1 to 4 bytes (u8 u16 u24 u32 i8 i16 i24 i32)",
+            );
+            continue;
+        }
+        if refuse_keys(
+            h,
+            &p,
+            &[
+                "value",
+                "equals",
+                "repeat",
+                "packed",
+                "follows",
+                "fields",
+                "bytes",
+                "encoding",
+                "word_order",
+                "length",
+            ],
+            |k| {
+                format!("`{k}` cannot be used in a header field (an integer every message carries, with its unit, range, enum, flags, special values or sub-fields)")
+            },
+            sink,
+        ) {
+            continue;
+        }
+        let mut field = field(h, &p, offset, byte_order, &out, refs, sink);
+        field.header = true;
+        for b in &field.bits {
+            let taken = out
+                .iter()
+                .any(|g| g.name == b.name || g.bits.iter().any(|c| c.name == b.name));
+            if taken {
+                sink.error(
+                    join(&join(&p, "bits"), &b.name),
+                    format!("duplicate field name `{}`", b.name),
+                );
+            }
+        }
+        offset += field.width;
+        out.push(field);
+    }
+    out
+}
+
+/// A field that refers to a header field (of the first `headers` of the message): by counting
+/// it, repeating it, following it or taking its bytes from it.
+fn header_reference(f: &Field, headers: usize) -> Option<usize> {
+    let count = f.repeat.as_ref().and_then(|r| match r.count {
+        Count::Elements(c) | Count::Bytes(c) => Some(c),
+        Count::ToEnd => None,
+    });
+    let follows = match f.follows {
+        Some(Follows::Field(i, _)) => Some(i),
+        _ => None,
+    };
+    let bytes = f.record.iter().find_map(|g| g.bytes_from);
+    [count, f.equals, follows, bytes]
+        .into_iter()
+        .flatten()
+        .find(|&i| i < headers)
+}
+
 /// Where each part of a frame sits when its code has `code_len` bytes and its payload
 /// `payload_len`. Used only here, while the IR is built; everything else reads the result from
 /// [`Message::layout`] and [`Framing::head`].
@@ -1576,6 +1711,7 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
         length: None,
         length_again: None,
         address: None,
+        header: 0,
         code: 0,
         payload: 0,
         checksum: 0,
@@ -1618,6 +1754,10 @@ fn frame_layout(framing: &Framing, code_len: usize, payload_len: usize) -> Frame
                 at += framing.checksum.len();
             }
             Part::End => at += framing.end.len(),
+            Part::Header => {
+                o.header = at;
+                at += framing.header_len();
+            }
         }
     }
     o.len = at;
@@ -1835,8 +1975,17 @@ fn message_body(
     }
     let fpath = join(path, "fields");
     // Field and sub-field names share one name space per message: they are the keys of its values.
-    let mut leaf_names = BTreeSet::new();
-    let mut out: Vec<Field> = Vec::new();
+    // The header fields' values (each whole, or its sub-fields) are named in every message.
+    let mut leaf_names: BTreeSet<String> = framing
+        .header
+        .iter()
+        .flat_map(|h| {
+            let own = h.bits.is_empty().then(|| h.name.clone());
+            own.into_iter().chain(h.bits.iter().map(|b| b.name.clone()))
+        })
+        .collect();
+    // The header fields every message carries come first (they sit in the frame's header).
+    let mut out: Vec<Field> = framing.header.clone();
     let mut offset = 0usize;
     let mut tail = 0usize;
     let mut min_tail = 0usize;
@@ -1865,9 +2014,27 @@ fn message_body(
             }
         }
         if f.bits.is_empty() && !leaf_names.insert(f.name.clone()) {
-            sink.error(&p, format!("duplicate field name `{}`", f.name));
+            let what = if framing
+                .header
+                .iter()
+                .any(|h| h.name == f.name || h.bits.iter().any(|b| b.name == f.name))
+            {
+                " (a header field every message carries: framing.header)"
+            } else {
+                ""
+            };
+            sink.error(&p, format!("duplicate field name `{}`{what}", f.name));
         }
         let field = field(f, &p, offset, byte_order, &out, refs, sink);
+        if let Some(h) = header_reference(&field, framing.header.len()) {
+            sink.error(
+                &p,
+                format!(
+                    "refers to `{}`, a header field (framing.header): a message's counts, copies and relations refer to its payload's fields",
+                    out[h].name
+                ),
+            );
+        }
         for b in &field.bits {
             if !leaf_names.insert(b.name.clone()) {
                 sink.error(
@@ -2023,6 +2190,7 @@ fn field(
         follows: None,
         record: Vec::new(),
         bytes_from: None,
+        header: false,
     };
     if f.bytes.is_some() {
         sink.error(
@@ -2972,7 +3140,8 @@ fn template(m: &Message) -> Vec<(u8, u8)> {
     for (slot, b) in t.iter_mut().zip(&m.code) {
         *slot = (0xFF, *b);
     }
-    for f in &m.fields {
+    // Header fields sit outside the code and payload: their fixed bits are not in it.
+    for f in m.fields.iter().filter(|f| !f.header) {
         if f.repeat.is_some() {
             break;
         }

@@ -321,6 +321,39 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "bcd_without_unit",
         &[("commands.set_clock.fields.year", "a BCD field needs a `unit`")],
     ),
+    // ---- header fields every message carries (made from valid/mavlink_v1.yaml, without its examples)
+    (
+        "header_not_in_layout",
+        &[("framing.header", "`framing.header` needs a `header` part in the layout, where its fields sit")],
+    ),
+    (
+        "header_missing",
+        &[("framing.layout", "layout has `header` but `framing.header` is missing")],
+    ),
+    (
+        "header_constant",
+        &[("framing.header.sequence.value", "`value` cannot be used in a header field")],
+    ),
+    (
+        "header_float",
+        &[("framing.header.sysid.type", "a header field is an integer of 1 to 4 bytes")],
+    ),
+    (
+        "header_name_clash",
+        &[("responses.heartbeat.fields.sysid", "duplicate field name `sysid` (a header field every message carries: framing.header)")],
+    ),
+    (
+        "header_sub_field_name_clash",
+        &[("responses.api_version_reply.fields.dont_reply", "duplicate field name `dont_reply` (a header field every message carries: framing.header)")],
+    ),
+    (
+        "header_after_payload",
+        &[("framing.layout", "`header` must come before the payload")],
+    ),
+    (
+        "header_counts_a_list",
+        &[("responses.heartbeat.fields.extra", "refers to `compid`, a header field (framing.header)")],
+    ),
     // ---- a checksum's extra byte per message (made from valid/crc_extra.yaml)
     (
         "crc_extra_not_a_crc",

@@ -25,7 +25,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     let mut wires: Vec<TokenStream> = Vec::new();
     for (fi, f) in m.fields.iter().enumerate() {
         let n = format_ident!("field_{}", fi);
-        let read_at = usize_lit(o.payload + f.offset);
+        let read_at = usize_lit(f.frame_at(&o));
         // Where the field sits in this frame, as errors say it: after `j` lists, further by
         // their bytes (`s`, the frame taken apart by `rt::Lists`).
         let j = m.fields[..fi].iter().filter(|g| g.repeat.is_some()).count();
@@ -45,7 +45,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
                 usize_lit(pk.bits as usize),
                 pk.lsb_first,
             );
-            let end = usize_lit(o.payload + f.offset + f.width);
+            let end = usize_lit(f.frame_at(&o) + f.width);
             let last = usize_lit(f.width - 1);
             let v = local(name);
             let bytes = quote!(&frame[#read_at..#end]);
@@ -67,7 +67,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             }
         }
         if f.is_ascii() {
-            let end = usize_lit(o.payload + f.offset + f.width);
+            let end = usize_lit(f.frame_at(&o) + f.width);
             let width = usize_lit(f.width);
             values.push((
                 ident(name),
@@ -76,7 +76,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             wires.push(quote!());
             continue;
         }
-        let read = read_wire(f, o.payload);
+        let read = read_wire(f, f.frame_at(&o) - f.offset);
         let wt = wire_type(f);
         let w = wt.ident();
         let unsigned = IntType {

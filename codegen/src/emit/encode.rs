@@ -159,7 +159,7 @@ pub(super) fn emit_encode_arm(
         if let (Some(c), false) = (f.constant, named.contains(&fi)) {
             let bytes = constant_bytes(c, f.width, f.byte_order);
             for (i, b) in bytes.into_iter().enumerate() {
-                set(o.payload + f.offset + i, b);
+                set(f.frame_at(&o) + i, b);
             }
         }
     }
@@ -214,8 +214,8 @@ pub(super) fn emit_encode_arm(
     }
     let counter = m.count_field();
     for (fi, f) in m.fields.iter().enumerate() {
-        let at = usize_lit(o.payload + f.offset);
-        let end = usize_lit(o.payload + f.offset + f.width);
+        let at = usize_lit(f.frame_at(&o));
+        let end = usize_lit(f.frame_at(&o) + f.width);
         let wt = wire_type(f);
         let w = wt.ident();
         let unsigned = IntType {
@@ -294,13 +294,14 @@ pub(super) fn emit_encode_arm(
                         let Some(leaf) = ls.iter().find(|l| l.name == b.name) else {
                             continue;
                         };
-                        let v = paren(to_wire(ctx, leaf, &local(&b.name), Some(unsigned)));
+                        let v = to_wire(ctx, leaf, &local(&b.name), Some(unsigned));
                         if lsb + u32::from(b.width()) >= wt.rust_bits()
                             || matches!(ctx.kind(leaf), Kind::Bool)
                         {
+                            // Parenthesized below where it is shifted or or-ed with others.
                             v
                         } else {
-                            let mask = hex_lit((1u64 << b.width()) - 1);
+                            let (v, mask) = (paren(v), hex_lit((1u64 << b.width()) - 1));
                             quote!(#v & #mask)
                         }
                     }
