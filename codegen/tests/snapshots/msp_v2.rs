@@ -260,27 +260,24 @@ pub mod msp_v2 {
         }
     }
     impl Request {
-        /// Whether the command gets a reply, as the spec says.
-        pub const fn reply(&self) -> rt::Reply {
-            rt::Reply::Required
-        }
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
         const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
             (rt::Getter, false, false, 0x1),
             (rt::Getter, false, false, 0x2),
         ];
-        /// What the command does, as the spec classifies it.
-        pub const fn kind(&self) -> rt::CommandKind {
-            Self::COMMANDS[self.index()].0
-        }
-        /// Whether the command may go to the broadcast address, and whether it is then
-        /// answered.
-        pub const fn broadcast(&self) -> rt::Broadcast {
+        /// What the spec says of the command beyond its frame: its kind, the broadcast
+        /// address, its reply, whether a master may send it again.
+        pub const fn command(&self) -> rt::Command {
             let c = Self::COMMANDS[self.index()];
-            rt::Broadcast {
-                accepted: c.1,
-                answered: c.2,
+            rt::Command {
+                kind: c.0,
+                broadcast: rt::Broadcast {
+                    accepted: c.1,
+                    answered: c.2,
+                },
+                reply: rt::Reply::Required,
+                may_retry: c.0.safe_to_repeat(),
             }
         }
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
@@ -557,21 +554,23 @@ pub mod msp_v2 {
         type Response = Response;
         type Buffer = [u8; MAX_FRAME_LEN];
         const NAME: &'static str = PROTOCOL;
-        const DOCUMENT: &'static str = DOCUMENT;
-        const DOCUMENT_REVISION: &'static str = DOCUMENT_REVISION;
-        const SPEC_SHA256: &'static str = SPEC_SHA256;
-        const SPEC_YAML: &'static str = SPEC_YAML;
-        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
-        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+        const SOURCE: rt::Source = rt::Source {
+            document: DOCUMENT,
+            revision: DOCUMENT_REVISION,
+            spec_sha256: SPEC_SHA256,
+            spec_yaml: SPEC_YAML,
+        };
+        const BUS: rt::Bus = rt::Bus {
+            baud: BAUD,
+            inter_frame_gap_ms: INTER_FRAME_GAP_MS,
+            max_frames_per_s: MAX_FRAMES_PER_S,
+            device_addresses: DEVICE_ADDRESSES,
+            broadcast_address: BROADCAST_ADDRESS,
+            host_address: HOST_ADDRESS,
+            transactions: rt::Transactions::UNDECLARED,
+        };
         const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
-        const FRAME_LENGTHS: &'static [usize] = &[13, 12, 9];
         const EMPTY_BUFFER: [u8; MAX_FRAME_LEN] = [0; MAX_FRAME_LEN];
-        const BAUD: u32 = BAUD;
-        const INTER_FRAME_GAP_MS: rt::Option<u32> = INTER_FRAME_GAP_MS;
-        const MAX_FRAMES_PER_S: rt::Option<u32> = MAX_FRAMES_PER_S;
-        const DEVICE_ADDRESSES: rt::RangeInclusive<u8> = DEVICE_ADDRESSES;
-        const BROADCAST_ADDRESS: rt::Option<u8> = BROADCAST_ADDRESS;
-        const HOST_ADDRESS: rt::Option<u8> = HOST_ADDRESS;
         #[inline]
         fn decode_request(
             frame: &[u8],
@@ -590,16 +589,8 @@ pub mod msp_v2 {
             response.answers(request)
         }
         #[inline]
-        fn kind(request: &Request) -> rt::CommandKind {
-            request.kind()
-        }
-        #[inline]
-        fn broadcast(request: &Request) -> rt::Broadcast {
-            request.broadcast()
-        }
-        #[inline]
-        fn reply(request: &Request) -> rt::Reply {
-            request.reply()
+        fn command(request: &Request) -> rt::Command {
+            request.command()
         }
         fn is_nak(_response: &Response) -> bool {
             false
@@ -617,6 +608,11 @@ pub mod msp_v2 {
                 _ => false,
             }
         }
+    }
+    impl rt::Framing for MspV2 {
+        const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
+        const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
+        const FRAME_LENGTHS: &'static [usize] = &[13, 12, 9];
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             let requests_agree = head.first().map_or(true, |&b| b == 0x24)
