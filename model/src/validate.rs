@@ -499,29 +499,28 @@ fn checksum_extras(
     sink: &mut Sink,
 ) {
     let path = "framing.checksum.extra";
+    // Each message's byte as the spec gives it, commands then responses.
+    let declared = [
+        (
+            "commands",
+            spec.commands
+                .iter()
+                .map(|c| c.checksum_extra)
+                .collect::<Vec<_>>(),
+        ),
+        (
+            "responses",
+            spec.responses.iter().map(|r| r.checksum_extra).collect(),
+        ),
+    ];
     let Some(model::ChecksumExtra::PerMessage) =
         spec.framing.checksum.as_ref().and_then(|c| c.extra)
     else {
-        for (list, names) in [
-            (
-                "commands",
-                spec.commands
-                    .iter()
-                    .map(|c| (&c.name, c.checksum_extra))
-                    .collect::<Vec<_>>(),
-            ),
-            (
-                "responses",
-                spec.responses
-                    .iter()
-                    .map(|r| (&r.name, r.checksum_extra))
-                    .collect(),
-            ),
-        ] {
-            for (name, x) in names {
+        for ((list, xs), ms) in declared.iter().zip([&*commands, &*responses]) {
+            for (m, x) in ms.iter().zip(xs) {
                 if x.is_some() {
                     sink.error(
-                        format!("{list}.{name}.checksum_extra"),
+                        format!("{list}.{}.checksum_extra", m.name),
                         "a message's checksum extra byte needs `framing.checksum.extra: per_message`",
                     );
                 }
@@ -561,21 +560,7 @@ fn checksum_extras(
         );
     }
     let mut by_code: Vec<(Vec<u8>, u8, String)> = Vec::new();
-    for (list, ms, xs) in [
-        (
-            "commands",
-            &mut *commands,
-            spec.commands
-                .iter()
-                .map(|c| c.checksum_extra)
-                .collect::<Vec<_>>(),
-        ),
-        (
-            "responses",
-            &mut *responses,
-            spec.responses.iter().map(|r| r.checksum_extra).collect(),
-        ),
-    ] {
+    for ((list, xs), ms) in declared.into_iter().zip([commands, responses]) {
         for (m, x) in ms.iter_mut().zip(xs) {
             let at = format!("{list}.{}.checksum_extra", m.name);
             let Some(x) = x else {
