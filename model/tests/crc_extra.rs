@@ -6,6 +6,7 @@
 
 #![cfg(feature = "tools")]
 
+mod common;
 use std::path::Path;
 
 use busspec_model::interp::{self, DecodeError, Raw, Value};
@@ -102,17 +103,7 @@ fn docs_name_each_byte_and_diff_calls_a_changed_one_wire_breaking() {
         docs.contains("its checksum extra byte (MAVLink's CRC_EXTRA)"),
         "{docs}"
     );
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/crc_extra.yaml"),
-    )
-    .unwrap();
-    let changed = text
-        .replace("checksum_extra: 50", "checksum_extra: 51")
-        .lines()
-        .filter(|l| !l.trim_start().starts_with("- {section"))
-        .collect::<Vec<_>>()
-        .join("\n");
-    let new = busspec_model::load_str("changed.yaml", &changed).unwrap_or_else(|d| panic!("{d}"));
+    let (_, new) = common::revisions("crc_extra", &[("checksum_extra: 50", "checksum_extra: 51")]);
     let changes = busspec_model::diff::diff(&p, &new);
     let c: Vec<_> = changes
         .iter()

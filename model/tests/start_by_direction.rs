@@ -5,6 +5,7 @@
 
 #![cfg(feature = "tools")]
 
+mod common;
 use std::path::Path;
 
 use busspec_model::interp::{self, DecodeError};
@@ -111,19 +112,13 @@ fn docs_and_diff_show_the_start_bytes_of_each_direction() {
         docs.contains("| start | 3 | requests 0x24 0x4D 0x3C, responses 0x24 0x4D 0x3E |"),
         "{docs}"
     );
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid/msp_by_direction.yaml");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let changed = text.replace(
-        "response: [0x24, 0x4D, 0x3E]",
-        "response: [0x24, 0x4D, 0x21]",
+    let (_, new) = common::revisions(
+        "msp_by_direction",
+        &[(
+            "response: [0x24, 0x4D, 0x3E]",
+            "response: [0x24, 0x4D, 0x21]",
+        )],
     );
-    let changed = changed
-        .lines()
-        .filter(|l| !l.trim_start().starts_with("- {section"))
-        .collect::<Vec<_>>()
-        .join("\n");
-    let new = busspec_model::load_str("changed.yaml", &changed).unwrap_or_else(|d| panic!("{d}"));
     let changes = busspec_model::diff::diff(&p, &new);
     let start: Vec<_> = changes
         .iter()
