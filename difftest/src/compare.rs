@@ -839,7 +839,14 @@ impl<'p, P: Protocol> Run<'p, P> {
                         capture.extend_from_slice(&f[..self.rng.usize(..f.len())]);
                     }
                     _ if !valid.is_empty() => {
-                        capture.extend_from_slice(&valid[self.rng.usize(..valid.len())])
+                        let f = &valid[self.rng.usize(..valid.len())];
+                        // A flag that closes one frame and opens the next, shared by a
+                        // sender (HDLC): the frame's own opening flag left out.
+                        let shared = p.framing.shared_flag().is_some_and(|flag| {
+                            capture.last() == Some(&flag) && f.first() == Some(&flag)
+                        });
+                        let from = usize::from(shared && self.rng.bool());
+                        capture.extend_from_slice(&f[from..])
                     }
                     _ => {}
                 }

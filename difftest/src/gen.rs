@@ -1254,6 +1254,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             layout.push("end");
             let e = if escaping == Escaping::Cobs {
                 0
+            } else if sync.len() == 1 && g.chance(60) {
+                // One flag that opens and closes every frame, which frames may share (HDLC).
+                sync[0]
             } else {
                 g.rng.u8(..)
             };
@@ -1971,6 +1974,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         "stuffing (insert)",
     );
     add(matches!(esc, Some(ir::EscapeKind::Cobs)), "cobs");
+    add(f.shared_flag().is_some(), "shared flag");
     add(f.sync.len() == 1, "start byte");
     add(f.sync.len() > 1, "sync sequence");
     add(f.sync_by_direction(), "start bytes by direction");

@@ -177,6 +177,7 @@ impl<P: Protocol> busspec_runtime::Framing for Plain<P> {
     const MAX_REQUEST_LEN: usize = P::MAX_REQUEST_LEN;
     const MAX_RESPONSE_LEN: usize = P::MAX_RESPONSE_LEN;
     const FRAME_LENGTHS: &'static [usize] = P::FRAME_LENGTHS;
+    const SHARED_FLAG: Option<u8> = P::SHARED_FLAG;
     fn candidates(head: &[u8]) -> busspec_runtime::stream::Candidates {
         P::candidates(head)
     }

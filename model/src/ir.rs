@@ -243,6 +243,26 @@ impl Framing {
         self.checksum.len() + self.end.len()
     }
 
+    /// The flag of flag framing (HDLC, KISS): one byte that both opens and closes every
+    /// escaped frame (`start` and `end` the same single byte, escaping that keeps it out of
+    /// the frame between them). A flag that closes one frame may also open the next, as
+    /// ISO/IEC 13239 and RFC 1662 allow a sender to share it: both stream decoders then take
+    /// a frame's closing flag as the next frame's opening one where the bytes after it make
+    /// one, and drop it silently where they do not.
+    pub fn shared_flag(&self) -> Option<u8> {
+        let escaped = matches!(
+            self.escaping.as_ref().map(|e| &e.kind),
+            Some(EscapeKind::Bytes { .. } | EscapeKind::Cobs)
+        );
+        let framed = self.layout.first() == Some(&Part::Start)
+            && self.layout.last() == Some(&Part::End)
+            && self.response_sync == self.sync;
+        match (self.sync.as_slice(), self.end.as_slice()) {
+            ([s], [e]) if escaped && framed && s == e => Some(*s),
+            _ => None,
+        }
+    }
+
     /// Whether the end bytes come before the checksum (which then covers them: Pelco-P's
     /// ETX), rather than after it.
     pub fn end_first(&self) -> bool {

@@ -62,6 +62,15 @@
 //! - Decisions depend only on the bytes, never on how they were cut into chunks: the same capture
 //!   gives the same events however it is pushed, as long as `flush` is called only at its end.
 //!
+//! # Shared flags
+//!
+//! Where one byte both opens and closes every frame ([`crate::ir::Framing::shared_flag`]: HDLC's
+//! `7E`, KISS's `C0`), a sender may let the flag that closes a frame open the next one. A frame's
+//! closing flag is therefore left at the head after its event: if a frame starts there, the two
+//! events share that byte (the later one starts where the earlier one ends, less one); if none
+//! does (the next flag follows at once, or the capture ends), it is dropped without being
+//! reported as noise, since its frame accounted for it.
+//!
 //! # Pairing responses with requests
 //!
 //! A response that only its request can identify is decoded as the answer to the last request
@@ -359,6 +368,11 @@ pub struct StreamDecoder<'p> {
     /// Noise not yet reported; its first byte is at capture offset `noise_at`.
     noise: Vec<u8>,
     noise_at: u64,
+    /// The flag of flag framing ([`crate::ir::Framing::shared_flag`]), if the protocol has one.
+    shared_flag: Option<u8>,
+    /// Whether `buf[0]` is the closing flag of the frame just reported, kept as the next
+    /// frame's possible opening one: if it opens none, it is dropped without being noise.
+    held_flag: bool,
     /// Command index of the last request seen since the previous response.
     last_request: Option<usize>,
     /// That request's frame: a reply it settles must also agree with its values (a READ's
@@ -450,6 +464,8 @@ impl<'p> StreamDecoder<'p> {
             head: 0,
             noise: Vec::new(),
             noise_at: 0,
+            shared_flag: p.framing.shared_flag(),
+            held_flag: false,
             last_request: None,
             last_frame: None,
             default_request: None,
@@ -681,7 +697,7 @@ impl<'p> StreamDecoder<'p> {
                 reason,
                 frame,
             });
-            self.consume(len);
+            self.consume_frame(len);
             return Step::Progress;
         }
         self.drop_byte(out);
@@ -866,7 +882,7 @@ impl<'p> StreamDecoder<'p> {
         let mut bytes = self.spare_bytes.pop().unwrap_or_default();
         bytes.extend_from_slice(wire);
         self.report_noise(out);
-        self.consume(len);
+        self.consume_frame(len);
         out.push(match found {
             Ok(frame) => {
                 self.pair(frame.message);
@@ -902,10 +918,25 @@ impl<'p> StreamDecoder<'p> {
         self.head += n as u64;
     }
 
+    /// Consumes a frame of `len` bytes that was reported, all but its closing flag where the
+    /// framing shares flags: that byte may open the next frame too.
+    fn consume_frame(&mut self, len: usize) {
+        let keep = len > 1
+            && self.shared_flag.is_some()
+            && self.buf.get(len - 1) == self.shared_flag.as_ref();
+        self.consume(len - usize::from(keep));
+        self.held_flag = keep;
+    }
+
     fn drop_byte(&mut self, out: &mut Vec<Event<'p>>) {
         let Some(&b) = self.buf.first() else {
             return;
         };
+        if std::mem::take(&mut self.held_flag) {
+            // The closing flag of the frame before, which opens no frame: reported with it.
+            self.consume(1);
+            return;
+        }
         if self.noise.is_empty() {
             self.noise_at = self.head;
         }

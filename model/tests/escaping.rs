@@ -287,3 +287,87 @@ fn streams_of_escaped_frames() {
         }
     }
 }
+
+/// HDLC's flag both opens and closes a frame, and a sender may share one flag between two
+/// frames (ISO/IEC 13239, RFC 1662 4.3). A stream of the examples with every flag shared, then
+/// with doubled flags and a damaged frame between them, finds every frame (each sharing its
+/// opening flag with the frame before, so the events overlap by that byte), reports no shared
+/// or doubled flag as noise, and decides the same however the capture is cut.
+#[test]
+fn shared_flags_open_the_next_frame() {
+    let p = fixture("hdlc_like");
+    assert_eq!(p.framing.shared_flag(), Some(0x7E));
+    for other in ["slip_sensor", "cobs_link", "dynamixel2_stuffed"] {
+        assert_eq!(fixture(other).framing.shared_flag(), None, "{other}");
+    }
+    let run = |capture: &[u8], chunks: &[&[u8]]| {
+        let mut d = StreamDecoder::new(&p, None);
+        let mut events = Vec::new();
+        for c in chunks {
+            events.extend(d.push(c));
+        }
+        events.extend(d.flush());
+        let seen: Vec<(u64, String)> = events
+            .iter()
+            .map(|e| match e {
+                Event::Frame { offset, frame, .. } => {
+                    (*offset, p.message(frame.message).name.clone())
+                }
+                Event::Skipped { offset, bytes } => (*offset, format!("skipped {bytes:02X?}")),
+                other => (other.offset(), format!("{other:?}")),
+            })
+            .collect();
+        let whole: Vec<u8> = chunks.concat();
+        assert_eq!(whole, capture);
+        seen
+    };
+    // Every flag shared: each frame after the first starts at the flag that closed the one
+    // before.
+    let mut shared = Vec::new();
+    let mut want = Vec::new();
+    for e in &p.examples {
+        let from = usize::from(!shared.is_empty());
+        want.push((
+            (shared.len() - from) as u64,
+            p.message(e.message).name.clone(),
+        ));
+        shared.extend_from_slice(&e.wire[from..]);
+    }
+    let got = run(&shared, &[&shared]);
+    assert_eq!(got, want);
+    for cut in 0..shared.len() {
+        let (a, b) = shared.split_at(cut);
+        assert_eq!(run(&shared, &[a, b]), want, "cut at {cut}");
+    }
+    // Doubled flags (an empty frame, idle fill) and a damaged frame: a frame's closing flag
+    // that opens none is silent (its frame reported it), a second flag is noise, and the
+    // damaged frame's closing flag opens the next.
+    let status = &p.examples[1].wire;
+    let mut damaged = status.clone();
+    damaged[2] ^= 0x01;
+    let mut capture = status.clone();
+    capture.push(0x7E);
+    capture.extend_from_slice(status);
+    capture.extend_from_slice(&damaged[1..]);
+    capture.extend_from_slice(&status[1..]);
+    let n = status.len() as u64;
+    let got = run(&capture, &[&capture]);
+    assert_eq!(
+        got,
+        vec![
+            (0, "status".to_owned()),
+            (n, "skipped [7E]".to_owned()),
+            (n + 1, "status".to_owned()),
+            (
+                2 * n + 1,
+                "skipped [01, 91, 7D, 5E, 7D, 5D, AA, AB]".to_owned()
+            ),
+            (3 * n - 1, "status".to_owned()),
+        ],
+        "{capture:02X?}"
+    );
+    for cut in 0..capture.len() {
+        let (a, b) = capture.split_at(cut);
+        assert_eq!(run(&capture, &[a, b]), got, "cut at {cut}");
+    }
+}

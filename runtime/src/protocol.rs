@@ -115,6 +115,11 @@ pub trait Framing {
     const MAX_RESPONSE_LEN: usize;
     /// Every distinct frame length, longest first (at most 64).
     const FRAME_LENGTHS: &'static [usize];
+    /// The flag of flag framing (HDLC's `7E`, KISS's `C0`: one byte that opens and closes
+    /// every escaped frame), which a sender may share between two frames: the stream decoder
+    /// then keeps a frame's closing flag as the next frame's possible opening one. `None`
+    /// (the default) for every other framing.
+    const SHARED_FLAG: Option<u8> = None;
 
     /// The messages whose start byte and code agree with `head`, the bytes buffered from a
     /// possible frame start (possibly fewer than a whole frame): the stream decoder's framing

@@ -41,6 +41,11 @@
 //! request and as a response (a Modbus echo) is an [`Event::Ambiguous`] whatever request came
 //! before it (it may be the master's next request or retry), as in the interpreter's.
 //!
+//! Where one flag byte opens and closes every frame and a sender may share it between two
+//! ([`Framing::SHARED_FLAG`](crate::Framing::SHARED_FLAG): HDLC, KISS), a frame's closing flag
+//! stays at the head as the next frame's possible opening one: the two events then share that
+//! byte, and a flag that opens nothing is dropped without being noise.
+//!
 //! Decisions depend only on the bytes, never on how they were cut into chunks, as long as
 //! `finish` is called only at the end.
 
@@ -363,6 +368,10 @@ struct Core<C: Protocol> {
     noise_at: u64,
     noise_len: u64,
     pending: Option<Event<C::Request, C::Response>>,
+    /// Whether the byte at `head` is the closing flag of the frame just settled, kept as the
+    /// next frame's possible opening one ([`Framing::SHARED_FLAG`]): if it opens none, it is
+    /// dropped without being noise.
+    held_flag: bool,
 }
 
 impl<C: Protocol> Clone for Core<C> {
@@ -414,6 +423,7 @@ impl<C: Protocol> StreamDecoder<C> {
                 noise_at: 0,
                 noise_len: 0,
                 pending: None,
+                held_flag: false,
             },
         }
     }
@@ -514,9 +524,9 @@ impl<C: Protocol> StreamDecoder<C> {
             );
             match step {
                 Step::Wait => return None,
-                Step::Frame(n, found) => {
+                Step::Frame(n, len, found) => {
                     self.consume(n);
-                    return Some(self.core.frame_event(n, found));
+                    return Some(self.core.frame_event(n, len, found));
                 }
                 Step::Settled(n) => {
                     self.consume(n);
@@ -558,8 +568,9 @@ enum FastEnd {
 enum Step<Q, R> {
     /// A candidate is longer than the window and more bytes may come.
     Wait,
-    /// A frame of that many bytes (already settled: `head` is past it).
-    Frame(usize, Found<Q, R>),
+    /// A frame: the bytes settled (`head` is past them: all of the frame's but a shared
+    /// closing flag, [`Framing::SHARED_FLAG`]), its length, what it decoded as.
+    Frame(usize, usize, Found<Q, R>),
     /// That many bytes settled with what they report, if anything, left to
     /// [`Core::report`]: a byte of noise, or an out-of-spec frame (in `pending`).
     Settled(usize),
@@ -625,8 +636,8 @@ impl<C: Protocol> Core<C> {
                     break;
                 };
                 if let Some(found) = self.try_frame(frame, request, response, &mut out_of_spec) {
-                    self.head += len as u64;
-                    return Step::Frame(len, found);
+                    let n = self.pass(window, len);
+                    return Step::Frame(n, len, found);
                 }
             }
             if let Some((len, reason)) = out_of_spec {
@@ -636,8 +647,7 @@ impl<C: Protocol> Core<C> {
                     len,
                     reason,
                 });
-                self.head += len as u64;
-                return Step::Settled(len);
+                return Step::Settled(self.pass(window, len));
             }
         }
         // The head byte starts no frame.
@@ -645,15 +655,16 @@ impl<C: Protocol> Core<C> {
         Step::Settled(1)
     }
 
-    /// The event of a frame of `len` bytes that [`Self::advance`] found and settled, after any
-    /// noise before it (then the frame waits in `pending`).
+    /// The event of a frame of `len` bytes that [`Self::advance`] found and settled (`settled`
+    /// of them), after any noise before it (then the frame waits in `pending`).
     #[inline(always)]
     fn frame_event(
         &mut self,
+        settled: usize,
         len: usize,
         found: Found<C::Request, C::Response>,
     ) -> Event<C::Request, C::Response> {
-        let offset = self.head - len as u64;
+        let offset = self.head - settled as u64;
         let ev = match found {
             Found::Request(frame) => Event::Request { offset, len, frame },
             Found::Response(frame) => Event::Response { offset, len, frame },
@@ -811,7 +822,7 @@ impl<C: Protocol> Core<C> {
         macro_rules! settle {
             ($last:expr, $len:expr, $event:expr) => {{
                 self.last_request = $last;
-                self.head += $len as u64;
+                self.pass(window, $len);
                 return emit(self, acc, $event);
             }};
         }
@@ -1004,7 +1015,7 @@ impl<C: Protocol> Core<C> {
     #[inline(always)]
     fn full_step(&mut self, window: &[u8]) -> Option<Event<C::Request, C::Response>> {
         match self.advance(window, true) {
-            Step::Frame(n, found) => Some(self.frame_event(n, found)),
+            Step::Frame(n, len, found) => Some(self.frame_event(n, len, found)),
             Step::Settled(_) => self.report(),
             // Not when flushing.
             Step::Wait => None,
@@ -1025,9 +1036,31 @@ impl<C: Protocol> Core<C> {
         }
     }
 
-    /// The head byte starts no frame: one more byte of noise.
+    /// Settles the `len` bytes of a frame (or out-of-spec frame) at the head of `window`: all
+    /// but its last byte where that is a shared flag ([`Framing::SHARED_FLAG`]), which stays
+    /// at the head as the next frame's possible opening flag. Returns how many were settled.
+    #[inline(always)]
+    fn pass(&mut self, window: &[u8], len: usize) -> usize {
+        let n = match C::SHARED_FLAG {
+            Some(flag) => {
+                let keep = len > 1 && window.get(len - 1) == Some(&flag);
+                self.held_flag = keep;
+                len - usize::from(keep)
+            }
+            None => len,
+        };
+        self.head += n as u64;
+        n
+    }
+
+    /// The head byte starts no frame: one more byte of noise (but a held closing flag, which
+    /// its frame accounted for).
     #[inline(always)]
     fn noise_byte(&mut self) {
+        if C::SHARED_FLAG.is_some() && core::mem::take(&mut self.held_flag) {
+            self.head += 1;
+            return;
+        }
         if self.noise_len == 0 {
             self.noise_at = self.head;
         }

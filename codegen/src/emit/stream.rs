@@ -247,8 +247,14 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             #variable
         }
     } else {
-        // Escaped frames are framed by their end byte or their length field alone.
+        // Escaped frames are framed by their end byte or their length field alone; a flag
+        // that opens and closes them may be shared by two frames.
+        let shared_flag = p.framing.shared_flag().map(|flag| {
+            let flag = hex_u8(flag);
+            quote! { const SHARED_FLAG: rt::Option<u8> = rt::Some(#flag); }
+        });
         quote! {
+            #shared_flag
             #[inline]
             fn candidates(_head: &[u8]) -> rt::Candidates {
                 rt::Candidates { requests: 0, responses: 0 }

@@ -616,6 +616,7 @@ pub mod hdlc_like {
         const MAX_REQUEST_LEN: usize = MAX_REQUEST_LEN;
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[];
+        const SHARED_FLAG: rt::Option<u8> = rt::Some(0x7E);
         #[inline]
         fn candidates(_head: &[u8]) -> rt::Candidates {
             rt::Candidates {
