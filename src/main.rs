@@ -92,7 +92,7 @@ sniff` does live, and \"decided_by\" says what settled the event: \"bytes\", \"t
 
 --pcapng OUT also writes the stream to OUT as pcapng: one Enhanced Packet Block per line
 printed (frames, and skipped, ambiguous and out-of-spec bytes, so the packets concatenated are
-the capture), link type LINKTYPE_USER0 (147), the frame's wire bytes as the packet, the
+the capture, but that a flag two frames share, as HDLC's may be, is in both), link type LINKTYPE_USER0 (147), the frame's wire bytes as the packet, the
 direction in epb_flags (request outbound, response inbound, none for noise), a comment with the
 message or the reason, and as timestamp the time the event's first byte starts on the line at
 the spec's serial settings (start, data, parity and stop bits at its baud rate), counted from

@@ -371,8 +371,8 @@ fn float_and_64_bit_specs_generate_their_snapshots() {
     );
 }
 
-/// Escaping and stuffing (`framing.escaping`): SLIP, HDLC, COBS and Dynamixel 2.0's stuffing
-/// (`snapshots_compile.rs` compiles them and holds them to the interpreter).
+/// Escaping and stuffing (`framing.escaping`): SLIP, HDLC, COBS, Dynamixel 2.0's stuffing and
+/// XBee's escaping without an end byte (`snapshots_compile.rs` compiles them and holds them to the interpreter).
 #[test]
 fn escaped_specs_generate_their_snapshots() {
     check(
@@ -385,4 +385,5 @@ fn escaped_specs_generate_their_snapshots() {
         "model/tests/fixtures/valid/dynamixel2_stuffed.yaml",
         "dynamixel2_stuffed.rs",
     );
+    check("model/tests/fixtures/valid/xbee_api2.yaml", "xbee_api2.rs");
 }

@@ -1251,16 +1251,25 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     match escaping {
         Escaping::Bytes | Escaping::Cobs => {
             layout.retain(|p| *p != "end");
-            layout.push("end");
+            // Without an end byte, framed by the length field before the code (XBee API
+            // mode 2); `e` is then one more escaped byte.
+            let by_length = escaping == Escaping::Bytes
+                && has_length
+                && pos(&layout, "length") < pos(&layout, "code")
+                && g.chance(70);
+            if !by_length {
+                layout.push("end");
+            }
             let e = if escaping == Escaping::Cobs {
                 0
             } else if sync.len() == 1 && g.chance(60) {
-                // One flag that opens and closes every frame, which frames may share (HDLC).
+                // One flag that opens and closes every frame, which frames may share (HDLC),
+                // or a start byte escaped inside the frame (XBee).
                 sync[0]
             } else {
                 g.rng.u8(..)
             };
-            end = vec![e];
+            end = if by_length { Vec::new() } else { vec![e] };
             if escaping == Escaping::Cobs {
                 escaping_yaml = "  escaping: {cobs: true, computed: unescaped}\n".to_owned();
             } else {
@@ -1475,39 +1484,41 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             extra,
         });
     }
-    // Shared codes must differ in payload length or a constant: make them differ in length.
+    // Shared codes must differ in payload length or a constant: make them differ in length,
+    // longer than every earlier command of the code (padding against one alone could land on
+    // another's length).
     for k in 1..commands.len() {
         let same: Vec<usize> = (0..k)
             .filter(|&j| commands[j].code == commands[k].code && !commands[k].code.is_empty())
             .collect();
-        for j in same {
-            let clash = commands[j].fixed() == commands[k].fixed()
+        let clash = same.iter().any(|&j| {
+            commands[j].fixed() == commands[k].fixed()
                 || commands[j].tail() > 0
-                || commands[k].tail() > 0;
-            if clash {
-                let n = commands[k].fields.len();
-                let filler = Gf {
-                    name: format!("f{n}"),
-                    ty: "u8",
-                    width: 1,
-                    yaml: format!("{{name: f{n}, type: u8, value: 1}}"),
-                    plain: true,
-                    countable: false,
-                    repeat_tail: 0,
-                };
-                // Distinct lengths: drop the repeat, pad to one more byte than the other.
-                commands[k].fields.retain(|f| f.repeat_tail == 0);
-                commands[k].fields.retain(|f| !f.yaml.contains("repeat:"));
-                let target = commands[j].fixed() + commands[j].tail() + 1;
-                let mut i = 0;
-                while commands[k].fixed() < target {
-                    let mut f = filler.clone();
-                    f.name = format!("pad{j}_{i}");
-                    f.yaml = format!("{{name: pad{j}_{i}, type: u8, value: 1}}");
-                    commands[k].fields.push(f);
-                    i += 1;
-                }
-            }
+                || commands[k].tail() > 0
+        });
+        if !clash {
+            continue;
+        }
+        // Distinct lengths: drop the repeat, pad to one more byte than the longest other.
+        commands[k].fields.retain(|f| f.repeat_tail == 0);
+        commands[k].fields.retain(|f| !f.yaml.contains("repeat:"));
+        let target = same
+            .iter()
+            .map(|&j| commands[j].fixed() + commands[j].tail() + 1)
+            .max()
+            .unwrap_or(0);
+        let mut i = 0;
+        while commands[k].fixed() < target {
+            commands[k].fields.push(Gf {
+                name: format!("pad{i}"),
+                ty: "u8",
+                width: 1,
+                yaml: format!("{{name: pad{i}, type: u8, value: 1}}"),
+                plain: true,
+                countable: false,
+                repeat_tail: 0,
+            });
+            i += 1;
         }
     }
 
@@ -1975,6 +1986,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     add(matches!(esc, Some(ir::EscapeKind::Cobs)), "cobs");
     add(f.shared_flag().is_some(), "shared flag");
+    add(
+        matches!(esc, Some(ir::EscapeKind::Bytes { .. })) && f.end.is_empty(),
+        "byte escaping framed by length",
+    );
     add(f.sync.len() == 1, "start byte");
     add(f.sync.len() > 1, "sync sequence");
     add(f.sync_by_direction(), "start bytes by direction");

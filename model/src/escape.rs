@@ -8,9 +8,10 @@
 //! escaped frame's offsets and values ([`Unescaped::locate`]).
 //!
 //! The three kinds (the generated code's `rt::escape` does the same, written separately):
-//! - **Bytes** (SLIP, KISS, HDLC): between the leading start bytes and the end byte, each byte
-//!   of the map travels as the escape byte and its replacement. An escape byte followed by
-//!   anything else, or a byte of the map found as it is, is refused.
+//! - **Bytes** (SLIP, KISS, HDLC): between the leading start bytes and the end byte (or the
+//!   frame's end, where a length field frames it: XBee API mode 2), each byte of the map
+//!   travels as the escape byte and its replacement. An escape byte followed by anything else,
+//!   or a byte of the map found as it is, is refused.
 //! - **Insert** (Dynamixel 2.0): from the declared part through the payload, the byte is
 //!   inserted after every occurrence of the pattern, matched left to right on the unstuffed
 //!   bytes and afresh after each one. A pattern not followed by the byte is refused.
@@ -191,6 +192,29 @@ fn unescape_region(
         }
     }
     Ok(())
+}
+
+/// Byte escaping: the byte that `wire[i]` unescapes to and where the next one starts; `None`
+/// where `wire` ends first, `Err` at a bad escape (or without byte escaping). How a stream
+/// reads the length field of frames with no end byte (XBee API mode 2).
+pub fn unescape_one(f: &Framing, wire: &[u8], i: usize) -> Option<Result<(u8, usize), ()>> {
+    let Some(EscapeKind::Bytes { escape, map, .. }) = f.escaping.as_ref().map(|e| &e.kind) else {
+        return Some(Err(()));
+    };
+    let b = *wire.get(i)?;
+    if b == *escape {
+        let next = *wire.get(i + 1)?;
+        return Some(
+            map.iter()
+                .find(|(_, r)| *r == next)
+                .map(|(raw, _)| (*raw, i + 2))
+                .ok_or(()),
+        );
+    }
+    if map.iter().any(|(raw, _)| *raw == b) {
+        return Some(Err(()));
+    }
+    Some(Ok((b, i + 1)))
 }
 
 /// Escapes `frame[from..to]` onto `out`.

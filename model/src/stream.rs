@@ -728,12 +728,15 @@ impl<'p> StreamDecoder<'p> {
             f.escaping.as_ref().map(|e| &e.kind),
             Some(crate::ir::EscapeKind::Insert { .. })
         );
+        let lead = if f.layout.first() == Some(&crate::ir::Part::Start) {
+            f.sync.len()
+        } else {
+            0
+        };
+        if !insert && f.end.is_empty() {
+            return self.escaped_lens_by_length(lead, flushing, lens, dirs);
+        }
         if !insert {
-            let lead = if f.layout.first() == Some(&crate::ir::Part::Start) {
-                f.sync.len()
-            } else {
-                0
-            };
             let end = f.end.first().copied().unwrap_or(0);
             let Some(i) = buf.iter().skip(lead).position(|&b| b == end) else {
                 return wait;
@@ -809,6 +812,88 @@ impl<'p> StreamDecoder<'p> {
             if lens.is_empty() {
                 return Escaped::Drop;
             }
+        }
+        Escaped::Try
+    }
+
+    /// [`Self::escaped_lens`] for byte escaping without an end byte (XBee API mode 2): the
+    /// frame's length comes from its length field, read as the bytes after the start bytes
+    /// unescape, and the frame runs on until that many bytes have unescaped.
+    fn escaped_lens_by_length(
+        &self,
+        lead: usize,
+        flushing: bool,
+        lens: &mut Vec<usize>,
+        dirs: &mut Vec<u8>,
+    ) -> Escaped {
+        let (p, buf) = (self.p, &self.buf);
+        let f = &p.framing;
+        let wait = if flushing || buf.len() >= self.capacity {
+            Escaped::Drop
+        } else {
+            Escaped::NeedMore
+        };
+        let (Some(l), Some(at)) = (&f.length, f.head(0).length) else {
+            return Escaped::Drop;
+        };
+        // `ends[n]`: where the first `n` unescaped bytes end on the wire (from `lead` on);
+        // `plain` the bytes.
+        let mut plain: Vec<u8> = buf.get(..lead).unwrap_or_default().to_vec();
+        let mut ends: Vec<usize> = (0..=plain.len()).collect();
+        let mut i = lead;
+        let need = |n: usize, plain: &mut Vec<u8>, ends: &mut Vec<usize>, i: &mut usize| {
+            while plain.len() < n {
+                match crate::escape::unescape_one(f, buf, *i) {
+                    Some(Ok((b, next))) => {
+                        plain.push(b);
+                        ends.push(next);
+                        *i = next;
+                    }
+                    Some(Err(())) => return Some(false),
+                    None => return None,
+                }
+            }
+            Some(true)
+        };
+        match need(at + l.width, &mut plain, &mut ends, &mut i) {
+            Some(true) => {}
+            Some(false) => return Escaped::Drop,
+            None => return wait,
+        }
+        let v = interp::read_uint(&plain[at..at + l.width], p.byte_order) as i64;
+        let mut waiting = false;
+        for (d, bit) in [(Direction::Request, 1u8), (Direction::Response, 2)] {
+            if self.direction.is_some_and(|want| want != d) {
+                continue;
+            }
+            let Some(rule) = f.length_rule(d).filter(|r| r.grows) else {
+                continue;
+            };
+            let fits = |n: usize| {
+                p.frame_len_bounds(d)
+                    .is_some_and(|(lo, hi)| (lo..=hi).contains(&n))
+            };
+            let n = usize::try_from(v - rule.k).ok();
+            // No frame ends before its length field.
+            let Some(n) = n.filter(|&n| fits(n) && n >= at + l.width) else {
+                continue;
+            };
+            match need(n, &mut plain, &mut ends, &mut i) {
+                Some(true) => {
+                    lens.push(ends[n]);
+                    dirs.push(bit);
+                }
+                Some(false) => {}
+                None => waiting = true,
+            }
+        }
+        if waiting && !matches!(wait, Escaped::Drop) {
+            lens.clear();
+            dirs.clear();
+            return Escaped::NeedMore;
+        }
+        if lens.is_empty() {
+            return Escaped::Drop;
         }
         Escaped::Try
     }

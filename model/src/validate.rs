@@ -1396,10 +1396,25 @@ fn escaping(e: &model::Escaping, f: &Framing, sink: &mut Sink) -> Option<Escapin
                 format!("the escape byte 0x{escape:02X} must itself travel escaped: list it"),
             );
         }
-        if !last_is_end || f.end.len() != 1 || !map.iter().any(|(r, _)| Some(r) == f.end.first()) {
+        // Framed by an end byte (SLIP, KISS, HDLC), or without one by the length field
+        // (XBee API mode 2), which then sits at one offset, read as the bytes unescape.
+        let by_end =
+            last_is_end && f.end.len() == 1 && map.iter().any(|(r, _)| Some(r) == f.end.first());
+        let codes = f
+            .request
+            .code_lengths
+            .iter()
+            .chain(&f.response.code_lengths);
+        let length_at: Vec<Option<usize>> = codes.map(|&c| f.head(c).length).collect();
+        let by_length = !f.layout.contains(&Part::End)
+            && f.length.is_some()
+            && length_at
+                .first()
+                .is_some_and(|first| first.is_some() && length_at.iter().all(|at| at == first));
+        if !by_end && !by_length {
             sink.error(
                 path,
-                "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them: it is how a frame's end is found",
+                "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them, or, without `end`, carry a length field at one offset (before the code, or every code one length): it is how a frame's end is found",
             );
         }
         EscapeKind::Bytes {

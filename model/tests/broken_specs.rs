@@ -106,6 +106,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.escaping", "escaped frames end in one `end` byte (the last part of the layout) that travels escaped inside them")],
     ),
     (
+        "escaping_length_moves",
+        &[("framing.escaping", "or, without `end`, carry a length field at one offset (before the code, or every code one length)")],
+    ),
+    (
         "escaping_computed_escaped",
         &[("framing.escaping.computed", "they are computed on the frame before escaping (`computed: unescaped`)")],
     ),

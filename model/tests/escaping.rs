@@ -20,11 +20,12 @@ fn fixture(name: &str) -> Protocol {
     busspec_model::load_file(std::path::Path::new(&path)).unwrap_or_else(|d| panic!("{d}"))
 }
 
-const ESCAPED: [&str; 4] = [
+const ESCAPED: [&str; 5] = [
     "slip_sensor",
     "hdlc_like",
     "cobs_link",
     "dynamixel2_stuffed",
+    "xbee_api2",
 ];
 
 fn values(frame: &Frame) -> Vec<Value<'static>> {
@@ -297,7 +298,12 @@ fn streams_of_escaped_frames() {
 fn shared_flags_open_the_next_frame() {
     let p = fixture("hdlc_like");
     assert_eq!(p.framing.shared_flag(), Some(0x7E));
-    for other in ["slip_sensor", "cobs_link", "dynamixel2_stuffed"] {
+    for other in [
+        "slip_sensor",
+        "cobs_link",
+        "dynamixel2_stuffed",
+        "xbee_api2",
+    ] {
         assert_eq!(fixture(other).framing.shared_flag(), None, "{other}");
     }
     let run = |capture: &[u8], chunks: &[&[u8]]| {

@@ -408,6 +408,9 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
             return VarLens::NONE;
         }
     }
+    if let (EscapeKind::Bytes { escape, map }, 0) = (e.kind, e.tail) {
+        return lens_by_length(e, head, escape, map);
+    }
     if let EscapeKind::Bytes { .. } | EscapeKind::Cobs = e.kind {
         let lead = e.sync.len();
         let Some(i) = head.iter().skip(lead).position(|&b| b == e.end) else {
@@ -450,5 +453,104 @@ pub fn frame_lens(e: &Escaping, head: &[u8], max: usize) -> VarLens {
     VarLens {
         requests: of(e.rules[0]),
         responses: of(e.rules[1]),
+    }
+}
+
+/// Byte escaping without an end byte (XBee API mode 2): the length field read as the bytes
+/// after the start bytes unescape, and each direction's frame as far as that many bytes
+/// unescape (its frame length from the field, [`Escaping::rules`], within [`Escaping::lens`]).
+fn lens_by_length(e: &Escaping, head: &[u8], escape: u8, map: &[(u8, u8)]) -> VarLens {
+    const NEED_MORE: VarLens = VarLens {
+        requests: VarLen::NEED_MORE,
+        responses: VarLen::NEED_MORE,
+    };
+    let Some((at, width, le)) = e.length else {
+        return VarLens::NONE;
+    };
+    // The byte at `i` unescaped and where the next starts; `None` past `head`, `Err` at a
+    // bad escape.
+    let one = |i: usize| -> Option<Result<(u8, usize), ()>> {
+        let b = *head.get(i)?;
+        if b == escape {
+            let next = *head.get(i + 1)?;
+            return Some(
+                map.iter()
+                    .find(|(_, r)| *r == next)
+                    .map(|(raw, _)| (*raw, i + 2))
+                    .ok_or(()),
+            );
+        }
+        if map.iter().any(|(raw, _)| *raw == b) {
+            return Some(Err(()));
+        }
+        Some(Ok((b, i + 1)))
+    };
+    // Unescaped bytes up to `n` (counted from the frame's first byte): where the `n`th ends on
+    // the wire, continuing from (`count`, `i`).
+    let advance = |count: &mut usize, i: &mut usize, n: usize, mut seen: Option<&mut [u8; 4]>| {
+        while *count < n {
+            match one(*i) {
+                Some(Ok((b, next))) => {
+                    if let Some(bytes) = seen.as_deref_mut() {
+                        if let Some(slot) = (*count).checked_sub(at).and_then(|k| bytes.get_mut(k))
+                        {
+                            *slot = b;
+                        }
+                    }
+                    *count += 1;
+                    *i = next;
+                }
+                Some(Err(())) => return Some(false),
+                None => return None,
+            }
+        }
+        Some(true)
+    };
+    let lead = e.sync.len();
+    let (mut count, mut i) = (lead, lead);
+    let mut field = [0u8; 4];
+    match advance(&mut count, &mut i, at + width, Some(&mut field)) {
+        Some(true) => {}
+        Some(false) => return VarLens::NONE,
+        None => return NEED_MORE,
+    }
+    let v = i64::from(read(&field[..width.min(4)], !le));
+    // Each direction's frame length, shortest first, as far as the bytes go.
+    let mut wanted: [(usize, usize); 2] = [(usize::MAX, 0), (usize::MAX, 1)];
+    for (want, (rule, (lo, hi))) in wanted.iter_mut().zip(e.rules.iter().zip(e.lens)) {
+        if let Some((k, _)) = rule {
+            if let Ok(n) = usize::try_from(v - k) {
+                if lo <= n && n <= hi {
+                    want.0 = n;
+                }
+            }
+        }
+    }
+    if wanted[1].0 < wanted[0].0 {
+        wanted.swap(0, 1);
+    }
+    let mut out = [VarLen::NONE; 2];
+    for (n, d) in wanted {
+        // No frame ends before its length field.
+        if n == usize::MAX || n < at + width {
+            continue;
+        }
+        out[d] = match advance(&mut count, &mut i, n, None) {
+            Some(true) => VarLen::len(i),
+            Some(false) => break,
+            None => {
+                // This frame and every one as long or longer wait for more bytes.
+                for (n2, d2) in wanted {
+                    if n2 != usize::MAX && n2 >= n {
+                        out[d2] = VarLen::NEED_MORE;
+                    }
+                }
+                break;
+            }
+        };
+    }
+    VarLens {
+        requests: out[0],
+        responses: out[1],
     }
 }
