@@ -10,7 +10,7 @@ use busspec_devices::sim::ub2::Ub2Sim;
 use busspec_devices::soak;
 use busspec_devices::{Sd, Ub2};
 use busspec_link::clock::Clock;
-use busspec_link::fault::{FaultConfig, FaultyReplies};
+use busspec_link::fault::{Fate, FaultConfig, FaultyReplies};
 use busspec_link::master::{LinkError, Progress};
 use busspec_link::protocol::{byte_order_source, declared_byte_order};
 use busspec_link::sim::{serve, Device};
@@ -737,6 +737,8 @@ fn run_sim<D: Device>(
         }
     );
     let verbose = line.verbose;
+    let damaged = line.faults.is_some();
+    let fates = transport.last_fate();
     let served = serve(
         &mut transport,
         &clock,
@@ -745,12 +747,25 @@ fn run_sim<D: Device>(
         || !stop.load(std::sync::atomic::Ordering::SeqCst),
         |req, reply| {
             if verbose {
+                // With faults, what went out on the line beside the reply the device made.
+                let fate = match (reply, fates.take()) {
+                    (Some(reply), Some(fate)) if damaged => {
+                        let same = matches!(&fate, Fate::Sent { bytes, late } if bytes[..] == reply[..] && late.is_zero());
+                        match fate {
+                            _ if same => String::new(),
+                            Fate::Lost => " (lost on the line)".to_owned(),
+                            fate => format!(" (sent as {fate})"),
+                        }
+                    }
+                    _ => String::new(),
+                };
                 eprintln!(
-                    "{} -> {}",
+                    "{} -> {}{}",
                     frames::hex(req),
                     reply
                         .map(frames::hex)
-                        .unwrap_or_else(|| "(no reply)".to_owned())
+                        .unwrap_or_else(|| "(no reply)".to_owned()),
+                    fate
                 );
             }
         },

@@ -206,7 +206,8 @@ With --pty, opens a pseudo-terminal pair and prints the path of the end to talk 
 stdout), e.g. /dev/pts/5; `busspec talk --port /dev/pts/5 ...` then talks to the simulators.
 With --port PATH, serves on that serial port instead. Several --address options put several
 devices on the one line (default: ub2 0x21, sd 0x01, otherwise the spec's default address or
-its first from 1). --verbose logs every frame on stderr.
+its first from 1). --verbose logs every frame on stderr (`REQUEST -> REPLY`; with --fault-rate,
+`(sent as BYTES[, N ms late])` or `(lost on the line)` after a reply the line changed).
 
 UB2 and SD devices are behavioural models of the documents (movements, C-curve, strings).
 Every other protocol, built in (modbus, dynamixel, pelco_d, pelco_p, crsf, dynamixel2) or a spec file given with --spec, is

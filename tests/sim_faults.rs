@@ -258,3 +258,47 @@ fn a_bad_fault_rate_is_refused_naming_the_option() {
         assert!(out.stdout.is_empty(), "{args:?}: nothing served");
     }
 }
+
+/// `--verbose` with faults logs each reply as the device made it and, where the line changed
+/// it, what went out instead: the bytes a master received, or that none came. (It logged the
+/// reply as made alone, so a damaged reply read as a sound one.)
+#[test]
+fn verbose_logs_what_the_line_carried_beside_the_reply_made() {
+    let args = [
+        "ub2",
+        "--fault-rate",
+        "0.2",
+        "--fault-seed",
+        "7",
+        "--verbose",
+    ];
+    let runs = through(&[&args, &args[..5]], "INT");
+    let (got, (status, said)) = &runs[0];
+    assert_eq!(*status, Some(0), "{said}");
+    assert_eq!(*got, runs[1].0, "--verbose damages the same way");
+    let lines: Vec<&str> = said.lines().filter(|l| l.contains(" -> ")).collect();
+    assert_eq!(lines.len(), MIX.len(), "{said}");
+    let mut changed = 0;
+    for (line, got) in lines.iter().zip(got) {
+        let (_, after) = line.split_once(" -> ").unwrap();
+        let hex = |b: &[u8]| interp::format_hex(b).replace(' ', "");
+        if let Some((made, fate)) = after.split_once(" (") {
+            changed += 1;
+            let fate = fate.trim_end_matches(')');
+            if fate == "lost on the line" {
+                assert!(got.is_empty(), "{line}: received {}", hex(got));
+            } else {
+                let sent = fate.trim_start_matches("sent as ");
+                let sent = sent.split(", ").next().unwrap();
+                assert_eq!(sent, hex(got), "{line}");
+                assert_ne!(made, hex(got), "{line}");
+            }
+        } else {
+            assert_eq!(after, hex(got), "{line}");
+        }
+    }
+    assert!(
+        changed > 0,
+        "seed 7 damages some of the six replies: {said}"
+    );
+}

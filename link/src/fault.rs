@@ -9,6 +9,7 @@
 
 use std::collections::VecDeque;
 use std::io;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use crate::clock::Clock;
@@ -259,6 +260,49 @@ pub struct FaultyReplies<T, C> {
     damage: Damage,
     /// Late replies, and those behind them, with when they may go out.
     held: VecDeque<(Duration, Vec<u8>)>,
+    /// What became of the last reply written, for [`Self::last_fate`]'s handles.
+    last: Arc<Mutex<Option<Fate>>>,
+}
+
+/// What [`FaultyReplies`] did to a reply: what a log of the simulator's traffic shows beside
+/// the reply the device made.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Fate {
+    /// Not written at all (silenced, or every byte dropped).
+    Lost,
+    /// Written as these bytes (damaged or not), this late.
+    Sent { bytes: Vec<u8>, late: Duration },
+}
+
+impl std::fmt::Display for Fate {
+    /// `lost`, or the bytes in hex as busspec prints frames (`AA01`) with `, 200 ms late`
+    /// where it was held back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fate::Lost => f.write_str("lost"),
+            Fate::Sent { bytes, late } => {
+                for b in bytes {
+                    write!(f, "{b:02X}")?;
+                }
+                if !late.is_zero() {
+                    write!(f, ", {} ms late", late.as_millis())?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// A handle on what became of the last reply a [`FaultyReplies`] was given
+/// ([`FaultyReplies::last_fate`]): it can be read while the line is lent to a server loop.
+#[derive(Debug, Clone)]
+pub struct LastFate(Arc<Mutex<Option<Fate>>>);
+
+impl LastFate {
+    /// The last reply's fate, taken (so each is read once); `None` before the first reply.
+    pub fn take(&self) -> Option<Fate> {
+        self.0.lock().ok().and_then(|mut last| last.take())
+    }
 }
 
 impl<T: Transport, C: Clock> FaultyReplies<T, C> {
@@ -268,12 +312,25 @@ impl<T: Transport, C: Clock> FaultyReplies<T, C> {
             clock,
             damage: Damage::new(config, seed),
             held: VecDeque::new(),
+            last: Arc::new(Mutex::new(None)),
         }
     }
 
     /// What was injected so far.
     pub fn counts(&self) -> FaultCounts {
         self.damage.counts
+    }
+
+    /// A handle that says what became of each reply written (`busspec sim --verbose` logs
+    /// it beside the reply the device made).
+    pub fn last_fate(&self) -> LastFate {
+        LastFate(Arc::clone(&self.last))
+    }
+
+    fn note(&self, fate: Fate) {
+        if let Ok(mut last) = self.last.lock() {
+            *last = Some(fate);
+        }
     }
 
     /// Writes the held replies whose time has come.
@@ -292,17 +349,30 @@ impl<T: Transport, C: Clock> Transport for FaultyReplies<T, C> {
     fn write(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.release()?;
         let Some(out) = self.damage.chunk(bytes) else {
+            self.note(Fate::Lost);
             return Ok(());
         };
         let delay = self.damage.delay();
         if out.is_empty() {
+            self.note(Fate::Lost);
             return Ok(());
         }
+        let now = self.clock.now();
         match (delay, self.held.back()) {
-            (None, None) => self.inner.write(&out),
+            (None, None) => {
+                self.note(Fate::Sent {
+                    bytes: out.clone(),
+                    late: Duration::ZERO,
+                });
+                self.inner.write(&out)
+            }
             (delay, last) => {
-                let at = self.clock.now() + delay.unwrap_or_default();
+                let at = now + delay.unwrap_or_default();
                 let at = last.map_or(at, |(t, _)| at.max(*t));
+                self.note(Fate::Sent {
+                    bytes: out.clone(),
+                    late: at.saturating_sub(now),
+                });
                 self.held.push_back((at, out));
                 Ok(())
             }
@@ -417,6 +487,58 @@ mod tests {
                 "faults injected: {} bytes corrupted, {} dropped, {} duplicated; {} chunks truncated, {} silenced, {} late (of 2000 bytes)",
                 c.corrupted, c.dropped, c.duplicated, c.truncated, c.silenced, c.delayed
             )
+        );
+    }
+
+    /// The fate of each reply is what went out on the wire: its bytes as written (damaged),
+    /// how late, or lost; at rate 0 the reply itself.
+    #[test]
+    fn each_reply_s_fate_is_what_the_line_carried() {
+        let clock = SimClock::new();
+        let config = FaultConfig::byte_error_rate(0.2, ms(200));
+        let mut line = FaultyReplies::new(Wire::default(), clock.clone(), config, 7);
+        let fates = line.last_fate();
+        assert_eq!(fates.take(), None);
+        let mut buf = [0u8; 8];
+        let (mut sent, mut lost, mut damaged, mut late) = (Vec::new(), 0, 0, 0);
+        for i in 0..200u8 {
+            let reply = [0xAA, i, 1, 2, 3, 4, 5, 6, 7, i ^ 0x55];
+            line.write(&reply).unwrap();
+            match fates.take() {
+                Some(Fate::Sent { bytes, late: l }) => {
+                    damaged += usize::from(bytes[..] != reply[..]);
+                    late += usize::from(!l.is_zero());
+                    sent.push(bytes);
+                }
+                Some(Fate::Lost) => lost += 1,
+                None => panic!("reply {i} has no fate"),
+            }
+            assert_eq!(fates.take(), None, "a fate is read once");
+            clock.advance(ms(10));
+            line.read(&mut buf, ms(3)).unwrap();
+        }
+        clock.advance(ms(1000));
+        line.read(&mut buf, ms(3)).unwrap();
+        assert_eq!(line.inner.written, sent);
+        assert!(
+            lost > 0 && damaged > 0 && late > 0,
+            "{lost} {damaged} {late}"
+        );
+        let fate = Fate::Sent {
+            bytes: vec![0xAA, 0x01],
+            late: ms(200),
+        };
+        assert_eq!(fate.to_string(), "AA01, 200 ms late");
+        assert_eq!(Fate::Lost.to_string(), "lost");
+        let mut clean = FaultyReplies::new(Wire::default(), clock, FaultConfig::none(), 1);
+        let fates = clean.last_fate();
+        clean.write(&[0xAA, 2]).unwrap();
+        assert_eq!(
+            fates.take(),
+            Some(Fate::Sent {
+                bytes: vec![0xAA, 2],
+                late: Duration::ZERO
+            })
         );
     }
 
