@@ -205,17 +205,29 @@ impl G {
             }
             _ => {
                 let mut y = format!("{{name: {name}, type: {ty}, unit: {}", self.unit());
-                if self.chance(40) {
-                    let r = self.range_yaml(lo, hi);
-                    let _ = write!(y, ", {r}");
-                }
-                if self.chance(15) {
-                    let v = self.rng.i64(lo..=hi);
-                    let _ = write!(y, ", special: [{{value: {v}, name: sp_{name}}}]");
-                }
+                self.range_and_special(&mut y, &name, (lo, hi), (40, 15));
                 y.push('}');
                 (y, width)
             }
+        }
+    }
+
+    /// A plain number's optional keys, appended to its YAML `y`: a range within `lo..=hi`
+    /// and a special value, each with its odds (percent).
+    fn range_and_special(
+        &mut self,
+        y: &mut String,
+        name: &str,
+        (lo, hi): (i64, i64),
+        (range, special): (u8, u8),
+    ) {
+        if self.chance(range) {
+            let r = self.range_yaml(lo, hi);
+            let _ = write!(y, ", {r}");
+        }
+        if self.chance(special) {
+            let v = self.rng.i64(lo..=hi);
+            let _ = write!(y, ", special: [{{value: {v}, name: sp_{name}}}]");
         }
     }
 
@@ -248,14 +260,7 @@ impl G {
                 if width == 4 && self.chance(30) {
                     y.push_str(", word_order: swapped");
                 }
-                if self.chance(50) {
-                    let r = self.range_yaml(lo, hi);
-                    let _ = write!(y, ", {r}");
-                }
-                if self.chance(25) {
-                    let v = self.rng.i64(lo..=hi);
-                    let _ = write!(y, ", special: [{{value: {v}, name: sp_{name}}}]");
-                }
+                self.range_and_special(&mut y, &name, (lo, hi), (50, 25));
                 y.push('}');
                 let mut g = plain_unsigned(ty, width, y, name);
                 g.countable = !signed && !g.yaml.contains("range") && width <= 2;
