@@ -34,6 +34,7 @@ include!("snapshots/lists_length.rs");
 include!("snapshots/packed_channels.rs");
 include!("snapshots/records.rs");
 include!("snapshots/records_sized.rs");
+include!("snapshots/mbus_short.rs");
 
 mod agree;
 
@@ -666,6 +667,53 @@ fn end_byte_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<Ft12Fixed>(&p, 0xF712, "reset_remote_link");
     assert!(found > 100, "only {found} reset_remote_link frames found");
+}
+
+/// A constant whole frame beside framed ones (M-Bus's `E5`): the examples replay; `E5` decodes
+/// as `ack` with address 0 and encodes back whatever address it is given; it is the reply only
+/// of the commands that list it, refused in both engines' words otherwise; a frame that merely
+/// begins with it is no constant; both engines agree on every frame mutated from the examples
+/// and on captures of them.
+#[test]
+fn constant_frame_snapshot_agrees_with_the_interpreter() {
+    use mbus_short::{MbusShort, Request, Response};
+    let file = "model/tests/fixtures/valid/mbus_short.yaml";
+    replay::<MbusShort>(file);
+    let p = fixture(file);
+    let d = Response::decode(&[0xE5]).unwrap();
+    assert_eq!((d.address, d.message), (0, Response::Ack));
+    assert_eq!(Response::Ack.constant_frame(), Some(&[0xE5][..]));
+    assert_eq!(Response::StatusOfLink.constant_frame(), None);
+    let mut buf = [0u8; 8];
+    assert_eq!(Response::Ack.encode(0xFE, &mut buf), Ok(1));
+    assert_eq!(buf[0], 0xE5);
+    assert_eq!(
+        Response::Ack.encode(0, &mut []).unwrap_err().to_string(),
+        busspec_runtime::EncodeError::BufferTooSmall {
+            needed: 1,
+            available: 0
+        }
+        .to_string()
+    );
+    // The reply of `snd_nke` and `req_ske`; and `E5` to a request is no frame at all.
+    assert!(Response::decode_reply(&[0xE5], &Request::SndNke).is_ok());
+    assert!(Response::decode_reply(&[0xE5], &Request::ReqSke).is_ok());
+    assert!(Request::decode(&[0xE5]).is_err());
+    same_text(
+        Request::decode(&[0xE5]).map(|_| ()),
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &[0xE5]).map(|_| ()),
+    );
+    // Bytes that begin with E5 are refused, in the same words.
+    for bad in [&[0xE5, 0xE5][..], &[0xE5, 0x10, 0x0B, 0x05, 0x10], &[]] {
+        same_text(
+            Response::decode(bad).map(|_| ()),
+            busspec_model::interp::decode(&p, Some(Direction::Response), None, bad).map(|_| ()),
+        );
+    }
+    let t = agree::agree::<MbusShort>(&p);
+    assert!(t.accepted >= 5 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<MbusShort>(&p, 0xE5E5, "ack");
+    assert!(found > 100, "only {found} ack frames found");
 }
 
 /// The 8-bit Fletcher checksum (UBX): the examples replay, a frame with its two checksum bytes
