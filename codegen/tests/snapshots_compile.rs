@@ -716,6 +716,62 @@ fn constant_frame_snapshot_agrees_with_the_interpreter() {
     assert!(found > 100, "only {found} ack frames found");
 }
 
+/// The runtime stream decoder's fast path is its full rule at every head of captures of the
+/// constant-frame fixture (examples, `E5`s, noise, cut frames), from a fresh decoder, one
+/// after a request and one of responses only: where the fast path decides, the same event and
+/// state; and `E5` heads are decided as frames.
+#[test]
+fn constant_frame_fast_path_is_the_rule() {
+    use busspec_runtime::stream::{Direction as Dir, Event, StreamDecoder};
+    use mbus_short::{MbusShort, Request};
+    let p = fixture("model/tests/fixtures/valid/mbus_short.yaml");
+    let frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    let mut after = StreamDecoder::<MbusShort>::new(None);
+    assert!(after.feed(&frames[0]).count() > 0);
+    let states = [
+        StreamDecoder::<MbusShort>::new(None),
+        after,
+        StreamDecoder::<MbusShort>::new(Some(Dir::Response))
+            .with_default_request(Some(Request::ReqSke)),
+        StreamDecoder::<MbusShort>::new(Some(Dir::Request)),
+    ];
+    let cap = <MbusShort as Protocol>::MAX_FRAME_LEN;
+    let mut rng = agree::Rng(0xE5);
+    let (mut decided, mut acks) = (0, 0);
+    for _ in 0..200 {
+        let mut bytes = Vec::new();
+        for _ in 0..12 {
+            let f = &frames[rng.below(frames.len() as u64) as usize];
+            match rng.below(6) {
+                0 => bytes.extend((0..1 + rng.below(3)).map(|_| rng.below(256) as u8)),
+                1 => bytes.extend_from_slice(&f[..f.len() - 1]),
+                _ => bytes.extend_from_slice(f),
+            }
+        }
+        for at in 0..bytes.len() {
+            let mut w: Vec<u8> = bytes[at..].iter().copied().take(cap).collect();
+            w.resize(cap, 0);
+            for (i, d) in states.iter().enumerate() {
+                let Some([fast, full]) = d.fast_and_full(&w, (i % 2) as u64) else {
+                    continue;
+                };
+                assert_eq!(fast, full, "{w:02X?} from state {i}");
+                decided += 1;
+                if w[0] == 0xE5 && i < 3 {
+                    assert!(
+                        [&fast.event, &fast.pending]
+                            .iter()
+                            .any(|e| matches!(e, Some(Event::Response { len: 1, .. }))),
+                        "{w:02X?} from state {i}: {fast:?}"
+                    );
+                    acks += 1;
+                }
+            }
+        }
+    }
+    assert!(decided > 5000 && acks > 300, "{decided} decided, {acks} acks");
+}
+
 /// The 8-bit Fletcher checksum (UBX): the examples replay, a frame with its two checksum bytes
 /// swapped is refused in both engines' words, and both agree on every frame mutated from the
 /// examples and on captures of them.
