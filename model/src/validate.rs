@@ -253,7 +253,7 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     for c in &spec.commands {
         let path = join("commands", &c.name);
         let (code, fields, payload_len, max_payload) = message_body(
-            &c.code,
+            Some(&c.code),
             &c.fields,
             &path,
             Direction::Request,
@@ -423,9 +423,9 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             continue;
         }
         let (code, fields, payload_len, max_payload) = message_body(
-            r.code.as_deref().unwrap_or_else(|| {
+            r.code.as_deref().or_else(|| {
                 sink.error(&path, "missing field `code` (a response without one is a constant whole frame: `frame`)");
-                ""
+                None
             }),
             &r.fields,
             &path,
@@ -2092,7 +2092,7 @@ fn spaced_hex(bytes: &[u8]) -> String {
 }
 
 fn message_body(
-    code: &str,
+    code: Option<&str>,
     fields: &[model::Field],
     path: &str,
     direction: Direction,
@@ -2101,7 +2101,8 @@ fn message_body(
     refs: &Refs,
     sink: &mut Sink,
 ) -> Body {
-    let code = parse_code(code, &join(path, "code"), sink);
+    // No code (a response without one, reported where it is read): none to check either.
+    let code = code.and_then(|code| parse_code(code, &join(path, "code"), sink));
     let parsed = code.is_some();
     let code = code.unwrap_or_default();
     let dir = framing.direction(direction);
