@@ -769,7 +769,10 @@ fn constant_frame_fast_path_is_the_rule() {
             }
         }
     }
-    assert!(decided > 5000 && acks > 300, "{decided} decided, {acks} acks");
+    assert!(
+        decided > 5000 && acks > 300,
+        "{decided} decided, {acks} acks"
+    );
 }
 
 /// The 8-bit Fletcher checksum (UBX): the examples replay, a frame with its two checksum bytes

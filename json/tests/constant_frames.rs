@@ -28,7 +28,11 @@ fn the_constant_frames_line_reads_back_to_its_byte() {
         "{\"message\":\"ack\"}",
         "{\"message\":\"ack\",\"address\":254,\"fields\":{}}",
     ] {
-        assert_eq!(parse_line(&p, l).unwrap().encode(&p).unwrap(), [0xE5], "{l}");
+        assert_eq!(
+            parse_line(&p, l).unwrap().encode(&p).unwrap(),
+            [0xE5],
+            "{l}"
+        );
     }
     // A field it does not have is refused; a framed message still needs its address.
     assert!(parse_line(&p, "{\"message\":\"ack\",\"fields\":{\"x\":1}}").is_err());
@@ -40,6 +44,10 @@ fn the_constant_frames_line_reads_back_to_its_byte() {
     for e in &p.examples {
         let f = decode_frame(&p, Some(e.message.direction), None, &e.wire).unwrap();
         let line = frame_line(&p, &f, None);
-        assert_eq!(parse_line(&p, &line).unwrap().encode(&p).unwrap(), e.wire, "{line}");
+        assert_eq!(
+            parse_line(&p, &line).unwrap().encode(&p).unwrap(),
+            e.wire,
+            "{line}"
+        );
     }
 }

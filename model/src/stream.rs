@@ -344,8 +344,15 @@ fn constants(
         .into_iter()
         .filter(move |d| direction.map_or(true, |want| want == *d))
         .flat_map(move |d| {
-            p.constants(d)
-                .map(move |(index, f)| (MessageRef { direction: d, index }, f))
+            p.constants(d).map(move |(index, f)| {
+                (
+                    MessageRef {
+                        direction: d,
+                        index,
+                    },
+                    f,
+                )
+            })
         })
 }
 
@@ -434,7 +441,12 @@ impl<'p> StreamDecoder<'p> {
                     .max()
                     .unwrap_or(0),
             )
-            .max(constants(p, direction).map(|(_, f)| f.len()).max().unwrap_or(0))
+            .max(
+                constants(p, direction)
+                    .map(|(_, f)| f.len())
+                    .max()
+                    .unwrap_or(0),
+            )
             .max(1);
         let shortest = shapes.iter().map(|s| s.len).min().unwrap_or(1).max(1);
         let mut by_code: Vec<ByCode> = Vec::new();

@@ -2051,14 +2051,19 @@ fn constant_frame(
             &fpath,
             "a constant frame needs frames that begin with start bytes (framing.start first in the layout): without them any frame could begin with its bytes",
         );
-    } else if let Some(b) = first.filter(|b| *b == framing.sync[0] || Some(b) == framing.response_sync.first()) {
+    } else if let Some(b) =
+        first.filter(|b| *b == framing.sync[0] || Some(b) == framing.response_sync.first())
+    {
         sink.error(
             &fpath,
             format!("a constant frame cannot begin with 0x{b:02X}, a start byte of the framing: it could not be told from a frame's start"),
         );
     }
     if framing.escaping.is_some() {
-        sink.error(&fpath, "a constant frame is not expressible with `escaping`, yet");
+        sink.error(
+            &fpath,
+            "a constant frame is not expressible with `escaping`, yet",
+        );
     }
     if !framing.header.is_empty() {
         sink.error(

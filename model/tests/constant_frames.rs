@@ -31,7 +31,10 @@ fn edited(edits: &[(&str, &str)]) -> Protocol {
         assert!(t.contains(from), "no `{from}`");
         t = t.replace(from, to);
     }
-    let t = format!("{}examples: []\nerrata: []\n", &t[..t.find("examples:").unwrap()]);
+    let t = format!(
+        "{}examples: []\nerrata: []\n",
+        &t[..t.find("examples:").unwrap()]
+    );
     busspec_model::load_str("mbus_short.yaml", &t).unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -59,7 +62,11 @@ fn the_constant_is_a_response_after_the_framed_ones_with_its_bytes() {
     // Both commands list it.
     let ack = p.find("ack").unwrap();
     for c in &p.commands {
-        assert!(c.responses.iter().any(|(i, _)| *i == ack.index), "{}", c.name);
+        assert!(
+            c.responses.iter().any(|(i, _)| *i == ack.index),
+            "{}",
+            c.name
+        );
     }
 }
 
@@ -93,7 +100,13 @@ fn e5_decodes_as_the_constant_every_way_and_nothing_else_does() {
     for bad in [&[0xE5, 0xE5][..], &[0xE5, 0x10, 0x0B, 0x05, 0x10, 0x16]] {
         let e = interp::decode(&p, None, None, bad).unwrap_err();
         assert_eq!(e, both.decode(&p, None, bad).unwrap_err());
-        assert!(matches!(e, DecodeError::BadStart { offset: 0, .. } | DecodeError::TooLong { .. }), "{e:?}");
+        assert!(
+            matches!(
+                e,
+                DecodeError::BadStart { offset: 0, .. } | DecodeError::TooLong { .. }
+            ),
+            "{e:?}"
+        );
     }
     // Decoded as the constant message, other bytes are refused and say why.
     assert_eq!(
@@ -117,11 +130,15 @@ fn the_constant_is_the_reply_only_of_the_commands_that_list_it() {
     let p = fixture();
     for c in ["snd_nke", "req_ske"] {
         let q = p.find(c).unwrap();
-        let request = interp::decode_as(&p, q, &if c == "snd_nke" {
-            SND_NKE
-        } else {
-            [0x10, 0x49, 0x05, 0x4E, 0x16]
-        })
+        let request = interp::decode_as(
+            &p,
+            q,
+            &if c == "snd_nke" {
+                SND_NKE
+            } else {
+                [0x10, 0x49, 0x05, 0x4E, 0x16]
+            },
+        )
         .unwrap();
         let r = interp::decode_reply(&p, &request, &[0xE5]).unwrap();
         assert_eq!(name(&p, r.message), "ack");
@@ -237,12 +254,17 @@ fn a_stream_finds_the_constant_among_frames_and_noise_however_it_is_cut() {
         all.extend(d.flush());
         for e in all {
             if let Event::Frame { bytes, frame, .. } = e {
-                assert_eq!(interp::decode(&p, None, None, &bytes).unwrap().message, frame.message);
+                assert_eq!(
+                    interp::decode(&p, None, None, &bytes).unwrap().message,
+                    frame.message
+                );
             }
         }
         // A decoder of requests only takes every E5 for noise.
         let requests = events(&p, Some(Direction::Request), &[&cap]);
-        assert!(requests.iter().all(|(_, w)| w != "ack" && w != "status_of_link"));
+        assert!(requests
+            .iter()
+            .all(|(_, w)| w != "ack" && w != "status_of_link"));
     }
     assert!(acks > 500, "{acks}");
 }
@@ -265,7 +287,95 @@ fn a_constant_of_two_bytes_waits_for_its_second_and_is_noise_without_it() {
         ]
     );
     assert_eq!(
-        interp::decode(&p, None, None, &[0xA2, 0x01]).unwrap().message,
+        interp::decode(&p, None, None, &[0xA2, 0x01])
+            .unwrap()
+            .message,
         p.find("ack").unwrap()
+    );
+}
+
+#[test]
+fn docs_show_the_constant_frames_bytes() {
+    let p = fixture();
+    let md = busspec_model::docs::render(&p, "mbus_short.yaml");
+    assert!(
+        md.contains("| `E5 (whole frame)` | [`ack`](#ack) | ACK | 5.4 | 1 |"),
+        "{md}"
+    );
+    assert!(md.contains(
+        "Constant whole frame `E5`, ACK, 1 bytes: the frame is these bytes alone, without start, address, code or checksum."
+    ));
+    // The commands' reply lists show it by its bytes too.
+    assert!(md.contains("- [`ack`](#ack) `E5 (whole frame)`"));
+}
+
+#[test]
+fn diff_classifies_constant_frames_changed_added_and_made() {
+    use busspec_model::diff::{Category, Change};
+    // The edited revision drops the examples: those changes aside.
+    let diff = |a: &Protocol, b: &Protocol| -> Vec<Change> {
+        busspec_model::diff::diff(a, b)
+            .into_iter()
+            .filter(|c| c.kind != "example_removed")
+            .collect()
+    };
+    let (old, new) = common::revisions("mbus_short", &[("frame: \"E5\"", "frame: \"06\"")]);
+    let changes = diff(&old, &new);
+    assert_eq!(changes.len(), 1, "{changes:?}");
+    assert_eq!(changes[0].category, Category::WireBreaking);
+    assert_eq!(changes[0].kind, "constant_frame_changed");
+    assert_eq!(changes[0].path, "responses.ack.frame");
+    assert_eq!(changes[0].text, "response `ack`: frame E5 → frame 06");
+    // A framed response made a constant one: wire-breaking, said once.
+    let (old, new) = common::revisions(
+        "mbus_short",
+        &[("    code: \"0x0B\"\n", "    frame: \"A2\"\n")],
+    );
+    let changes = diff(&old, &new);
+    assert_eq!(changes.len(), 1, "{changes:?}");
+    assert_eq!(
+        (changes[0].kind, changes[0].text.as_str()),
+        (
+            "constant_frame_changed",
+            "response `status_of_link`: 0x0B → frame A2"
+        )
+    );
+    // A constant response added (and listed by a command): compatible, named by its bytes.
+    let (old, new) = common::revisions(
+        "mbus_short",
+        &[
+            ("responses: [ack]\n", "responses: [ack, nak]\n"),
+            (
+                "  - name: status_of_link\n",
+                "  - name: nak\n    title: \"NAK\"\n    section: \"5.4\"\n    kind: nak\n    frame: \"15\"\n  - name: status_of_link\n",
+            ),
+        ],
+    );
+    let changes = diff(&old, &new);
+    let added = changes
+        .iter()
+        .find(|c| c.kind == "message_added")
+        .unwrap_or_else(|| panic!("{changes:?}"));
+    assert_eq!(added.category, Category::Compatible);
+    assert_eq!(added.text, "response `nak` (frame 15, §5.4) added");
+    // Renamed with the same bytes: paired by them, a rename.
+    let (old, new) = common::revisions(
+        "mbus_short",
+        &[
+            ("name: ack\n", "name: confirm\n"),
+            ("[ack]", "[confirm]"),
+            ("[status_of_link, ack]", "[status_of_link, confirm]"),
+            ("      ack: \"", "      confirm: \""),
+        ],
+    );
+    let changes = diff(&old, &new);
+    assert!(
+        changes.iter().any(|c| c.kind == "message_renamed"
+            && c.text == "response `ack` (frame E5) renamed to `confirm`"),
+        "{changes:?}"
+    );
+    assert!(
+        changes.iter().all(|c| c.category != Category::WireBreaking),
+        "{changes:?}"
     );
 }

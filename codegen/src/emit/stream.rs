@@ -112,15 +112,10 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     // Not where a variable-length message exists: the route would ask `variable_candidates`
     // too, and the mask's route pays for both (Modbus 1254.6 -> 1280.5 a frame with it).
     let candidate = if variable.is_empty() && !by_direction {
-        emit_candidate(
-            &shapes,
-            &lengths,
-            code_at,
-            {
-                let framed = start_check(quote!(rt::Candidate::NONE));
-                quote!(#constants_in_table #framed)
-            },
-        )
+        emit_candidate(&shapes, &lengths, code_at, {
+            let framed = start_check(quote!(rt::Candidate::NONE));
+            quote!(#constants_in_table #framed)
+        })
     } else {
         quote!()
     };
