@@ -1974,7 +1974,11 @@ impl<'a> Differ<'a> {
 
 /// A message's wire identity within its direction: its code and its constant fields
 /// (offset, value), which select between messages sharing a code.
-fn key(m: &Message) -> (Vec<u8>, Vec<(usize, u64)>, Option<Vec<u8>>) {
+/// What tells a message apart on the wire: its code, its constant fields (offset, value) and
+/// its constant whole frame.
+type WireKey = (Vec<u8>, Vec<(usize, u64)>, Option<Vec<u8>>);
+
+fn key(m: &Message) -> WireKey {
     let constants = m
         .fields
         .iter()

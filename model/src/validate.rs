@@ -471,9 +471,10 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     check_overlaps(&commands, "commands", sink);
     let framed = responses.len() - constants.len();
     check_overlaps(&responses[..framed], "responses", sink);
+    // Constant frames' lengths among them: the generated stream decoder lists those too.
     let mut lengths: Vec<usize> = commands
         .iter()
-        .chain(&responses[..framed])
+        .chain(&responses)
         .filter(|m| !m.is_variable())
         .map(|m| m.layout.len)
         .collect();
@@ -1993,7 +1994,6 @@ pub const MAX_PACKED: i64 = 256;
 /// What [`message_body`] resolves: code, fields, fixed payload bytes, most payload bytes.
 type Body = (Vec<u8>, Vec<Field>, usize, usize);
 
-#[allow(clippy::too_many_arguments)]
 /// A response's constant whole frame (`frame:`), its rules checked: hex bytes, 1 to
 /// [`MAX_CONSTANT_FRAME`] of them; no code, fields, request-bound keys or checksum byte; a
 /// framing whose every frame begins with its start bytes, none of whose first bytes the constant
@@ -2096,6 +2096,7 @@ fn spaced_hex(bytes: &[u8]) -> String {
     hex.join(" ")
 }
 
+#[allow(clippy::too_many_arguments)]
 fn message_body(
     code: Option<&str>,
     fields: &[model::Field],
