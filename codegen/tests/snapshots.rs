@@ -110,6 +110,17 @@ fn end_byte_spec_generates_its_snapshot() {
     );
 }
 
+/// A constant whole frame beside framed ones (M-Bus's single character `E5` beside its short
+/// frame): a unit variant whose `encode` writes the bytes and which `decode` recognises before
+/// the framing is checked (`snapshots_compile.rs` compiles it and holds it to the interpreter).
+#[test]
+fn constant_frame_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/mbus_short.yaml",
+        "mbus_short.rs",
+    );
+}
+
 /// The 8-bit Fletcher checksum of UBX-shaped frames, over code, a 16-bit length and payload
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
 #[test]

@@ -35,6 +35,7 @@ include!("snapshots/lists_length.rs");
 include!("snapshots/packed_channels.rs");
 include!("snapshots/records.rs");
 include!("snapshots/records_sized.rs");
+include!("snapshots/mbus_short.rs");
 
 mod agree;
 
@@ -667,6 +668,112 @@ fn end_byte_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<Ft12Fixed>(&p, 0xF712, "reset_remote_link");
     assert!(found > 100, "only {found} reset_remote_link frames found");
+}
+
+/// A constant whole frame beside framed ones (M-Bus's `E5`): the examples replay; `E5` decodes
+/// as `ack` with address 0 and encodes back whatever address it is given; it is the reply only
+/// of the commands that list it, refused in both engines' words otherwise; a frame that merely
+/// begins with it is no constant; both engines agree on every frame mutated from the examples
+/// and on captures of them.
+#[test]
+fn constant_frame_snapshot_agrees_with_the_interpreter() {
+    use mbus_short::{MbusShort, Request, Response};
+    let file = "model/tests/fixtures/valid/mbus_short.yaml";
+    replay::<MbusShort>(file);
+    let p = fixture(file);
+    let d = Response::decode(&[0xE5]).unwrap();
+    assert_eq!((d.address, d.message), (0, Response::Ack));
+    assert_eq!(Response::Ack.constant_frame(), Some(&[0xE5][..]));
+    assert_eq!(Response::StatusOfLink.constant_frame(), None);
+    let mut buf = [0u8; 8];
+    assert_eq!(Response::Ack.encode(0xFE, &mut buf), Ok(1));
+    assert_eq!(buf[0], 0xE5);
+    assert_eq!(
+        Response::Ack.encode(0, &mut []).unwrap_err().to_string(),
+        busspec_runtime::EncodeError::BufferTooSmall {
+            needed: 1,
+            available: 0
+        }
+        .to_string()
+    );
+    // The reply of `snd_nke` and `req_ske`; and `E5` to a request is no frame at all.
+    assert!(Response::decode_reply(&[0xE5], &Request::SndNke).is_ok());
+    assert!(Response::decode_reply(&[0xE5], &Request::ReqSke).is_ok());
+    assert!(Request::decode(&[0xE5]).is_err());
+    same_text(
+        Request::decode(&[0xE5]).map(|_| ()),
+        busspec_model::interp::decode(&p, Some(Direction::Request), None, &[0xE5]).map(|_| ()),
+    );
+    // Bytes that begin with E5 are refused, in the same words.
+    for bad in [&[0xE5, 0xE5][..], &[0xE5, 0x10, 0x0B, 0x05, 0x10], &[]] {
+        same_text(
+            Response::decode(bad).map(|_| ()),
+            busspec_model::interp::decode(&p, Some(Direction::Response), None, bad).map(|_| ()),
+        );
+    }
+    let t = agree::agree::<MbusShort>(&p);
+    assert!(t.accepted >= 5 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<MbusShort>(&p, 0xE5E5, "ack");
+    assert!(found > 100, "only {found} ack frames found");
+}
+
+/// The runtime stream decoder's fast path is its full rule at every head of captures of the
+/// constant-frame fixture (examples, `E5`s, noise, cut frames), from a fresh decoder, one
+/// after a request and one of responses only: where the fast path decides, the same event and
+/// state; and `E5` heads are decided as frames.
+#[test]
+fn constant_frame_fast_path_is_the_rule() {
+    use busspec_runtime::stream::{Direction as Dir, Event, StreamDecoder};
+    use mbus_short::{MbusShort, Request};
+    let p = fixture("model/tests/fixtures/valid/mbus_short.yaml");
+    let frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    let mut after = StreamDecoder::<MbusShort>::new(None);
+    assert!(after.feed(&frames[0]).count() > 0);
+    let states = [
+        StreamDecoder::<MbusShort>::new(None),
+        after,
+        StreamDecoder::<MbusShort>::new(Some(Dir::Response))
+            .with_default_request(Some(Request::ReqSke)),
+        StreamDecoder::<MbusShort>::new(Some(Dir::Request)),
+    ];
+    let cap = <MbusShort as Protocol>::MAX_FRAME_LEN;
+    let mut rng = agree::Rng(0xE5);
+    let (mut decided, mut acks) = (0, 0);
+    for _ in 0..200 {
+        let mut bytes = Vec::new();
+        for _ in 0..12 {
+            let f = &frames[rng.below(frames.len() as u64) as usize];
+            match rng.below(6) {
+                0 => bytes.extend((0..1 + rng.below(3)).map(|_| rng.below(256) as u8)),
+                1 => bytes.extend_from_slice(&f[..f.len() - 1]),
+                _ => bytes.extend_from_slice(f),
+            }
+        }
+        for at in 0..bytes.len() {
+            let mut w: Vec<u8> = bytes[at..].iter().copied().take(cap).collect();
+            w.resize(cap, 0);
+            for (i, d) in states.iter().enumerate() {
+                let Some([fast, full]) = d.fast_and_full(&w, (i % 2) as u64) else {
+                    continue;
+                };
+                assert_eq!(fast, full, "{w:02X?} from state {i}");
+                decided += 1;
+                if w[0] == 0xE5 && i < 3 {
+                    assert!(
+                        [&fast.event, &fast.pending]
+                            .iter()
+                            .any(|e| matches!(e, Some(Event::Response { len: 1, .. }))),
+                        "{w:02X?} from state {i}: {fast:?}"
+                    );
+                    acks += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        decided > 5000 && acks > 300,
+        "{decided} decided, {acks} acks"
+    );
 }
 
 /// The 8-bit Fletcher checksum (UBX): the examples replay, a frame with its two checksum bytes

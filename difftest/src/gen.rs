@@ -1912,13 +1912,65 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     }
     framing.push_str(&escaping_yaml);
 
+    // Constant whole frames (M-Bus's single character E5): where every frame begins with its
+    // start bytes and nothing escapes, carries header fields or takes a byte per message, one or
+    // two responses of 1 to 3 bytes, none beginning with a start byte, none a prefix of
+    // another, each listed by some commands that get a reply.
+    let mut constants: Vec<Vec<u8>> = Vec::new();
+    let mut constant_of: Vec<Vec<usize>> = vec![Vec::new(); n_cmd];
+    let replying: Vec<usize> = (0..n_cmd)
+        .filter(|&c| reply[c] != ", reply: none")
+        .collect();
+    if layout.first() == Some(&"start")
+        && !sync.is_empty()
+        && escaping == Escaping::None
+        && header.is_empty()
+        && !extra_by_code
+        && !replying.is_empty()
+        && g.chance(13)
+    {
+        let starts = [
+            sync[0],
+            response_sync
+                .as_ref()
+                .and_then(|r| r.first().copied())
+                .unwrap_or(sync[0]),
+        ];
+        for _ in 0..g.rng.usize(1..=2) {
+            let len = *g.pick(&[1, 1, 1, 2, 3]);
+            let bytes: Vec<u8> = (0..len).map(|_| g.rng.u8(..)).collect();
+            let prefix = constants
+                .iter()
+                .any(|o| o.starts_with(&bytes) || bytes.starts_with(o));
+            if starts.contains(&bytes[0]) || prefix {
+                continue;
+            }
+            let k = constants.len();
+            constants.push(bytes);
+            let mut listed = false;
+            for &c in &replying {
+                if g.chance(50) {
+                    constant_of[c].push(k);
+                    listed = true;
+                }
+            }
+            if !listed {
+                constant_of[*g.pick(&replying)].push(k);
+            }
+        }
+    }
+
     y.push_str(&framing);
     y.push_str(&units);
     y.push_str(&enums);
     y.push_str(&flags);
     y.push_str("commands:\n");
     for (c, m) in commands.iter().enumerate() {
-        let resp: Vec<String> = lists[c].iter().map(|r| format!("r{r}")).collect();
+        let resp: Vec<String> = lists[c]
+            .iter()
+            .map(|r| format!("r{r}"))
+            .chain(constant_of[c].iter().map(|k| format!("k{k}")))
+            .collect();
         let fields: Vec<&str> = m.fields.iter().map(|f| f.yaml.as_str()).collect();
         let x = extra_of(&mut g, &m.code);
         let _ = writeln!(
@@ -1947,12 +1999,20 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             fields.join(", ")
         );
     }
+    for (k, bytes) in constants.iter().enumerate() {
+        let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+        let _ = writeln!(
+            y,
+            "  - {{name: k{k}, title: \"k{k}\", section: \"4\", kind: ack, frame: \"{}\"}}",
+            hex.join(" ")
+        );
+    }
     if !common.is_empty() {
         let c: Vec<String> = common.iter().map(|r| format!("r{r}")).collect();
         let _ = writeln!(y, "common_responses: [{}]", c.join(", "));
     }
     let _ = needs_request;
-    (y, n_cmd + responses.len())
+    (y, n_cmd + responses.len() + constants.len())
 }
 
 /// The escaping a random spec takes, if any.
@@ -2015,6 +2075,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(pos(Part::Code) < pos(Part::Address), "code before address");
     add(!f.has_address(), "no address");
     add(!f.header.is_empty(), "header fields");
+    add(
+        p.responses.iter().any(|m| m.frame.is_some()),
+        "constant frame",
+    );
     add(
         f.header.iter().any(|h| !h.bits.is_empty()),
         "header sub-fields",

@@ -3,7 +3,7 @@
 //! One JSON object per frame, keys in this order:
 //! `{"protocol":"ub2","direction":"response","address":33,"code":"0x4101","message":"actual_capacitance","fields":{"capacitance":79.98}}`
 //! (a stream puts `"offset":N` first; a protocol whose frames carry no address has no
-//! `"address"`). Field values:
+//! `"address"`, nor has a constant whole frame such as M-Bus's `E5`). Field values:
 //!
 //! - numbers with a unit: the physical value `raw * scale + offset`, exact, in the unit's symbol;
 //! - `special` raw values: their name;

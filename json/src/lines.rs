@@ -90,6 +90,8 @@ struct Plan {
     side: usize,
     /// `,"code":"0x…","message":"…","fields":{`
     tail: String,
+    /// A constant whole frame (`frame:`): its line has no `"address"`.
+    bare: bool,
     leaves: Vec<Leaf>,
     /// Leaf index by name.
     by_name: HashMap<String, usize>,
@@ -481,6 +483,7 @@ impl Printer {
                     ),
                     leaves,
                     by_name,
+                    bare: m.frame.is_some(),
                 });
             }
         }
@@ -527,8 +530,13 @@ impl Printer {
     ) {
         let head = heads
             .get(plan.side)
-            .and_then(|h| h.get(usize::from(address)))
+            .and_then(|h| h.get(usize::from(if plan.bare { 0 } else { address })))
             .map_or(&[][..], |h| h.as_bytes());
+        // A constant frame's head without the address (where the protocol's have one).
+        let head = match plan.bare {
+            true => head.strip_suffix(b",\"address\":0").unwrap_or(head),
+            false => head,
+        };
         // The digits of the offset, and the braces after the fields.
         out.reserve(head.len() + plan.tail.len() + 32);
         match offset {

@@ -39,10 +39,11 @@ impl Parsed {
         let m = p.message(self.message);
         let direction = self.message.direction;
         let address = self.address;
-        if !p.framing.has_address() && address != 0 {
+        // A constant whole frame is its bytes whatever the address (as `encode` writes it).
+        if m.frame.is_none() && !p.framing.has_address() && address != 0 {
             return Err(EncodeError::Unaddressed { address }.to_string());
         }
-        if !busspec_model::interp::address_allowed(p, address) {
+        if m.frame.is_none() && !busspec_model::interp::address_allowed(p, address) {
             let a = &p.framing.address;
             return Err(EncodeError::BadAddress {
                 address,
@@ -261,8 +262,11 @@ pub fn parse_line(p: &Spec, line: &str) -> Result<Parsed, String> {
             ))
         }
     };
-    // A protocol whose frames carry no address prints none; a line may still give 0.
-    let address = match (&input.address, p.framing.has_address()) {
+    let r = find_message(p, &input.message, direction)?;
+    let m = p.message(r);
+    // A protocol whose frames carry no address prints none; a line may still give 0. A
+    // constant whole frame carries none either: its line prints 0, and may give any or none.
+    let address = match (&input.address, p.framing.has_address() && m.frame.is_none()) {
         (Some(n), _) => match n.as_u64().map(u8::try_from) {
             Some(Ok(a)) => a,
             _ => return Err(format!("address {n} is not a byte (0..=255)")),
@@ -270,8 +274,6 @@ pub fn parse_line(p: &Spec, line: &str) -> Result<Parsed, String> {
         (None, false) => 0,
         (None, true) => return Err("missing field `address`".to_owned()),
     };
-    let r = find_message(p, &input.message, direction)?;
-    let m = p.message(r);
     if let Some(code) = &input.code {
         let bytes = if matches!(code.trim(), "" | "0x" | "0X") {
             // A message without a code (a Dynamixel status packet) prints as "0x".

@@ -201,7 +201,7 @@ fn field(p: &Spec, m: &IrMessage, name: &str, raw: FieldValue<'_>) -> (String, J
 }
 
 /// A frame's keys, in the contract's order, after `"offset"` (if any); no `"address"` where
-/// the protocol's frames carry none.
+/// the protocol's frames carry none, nor for a constant whole frame (`frame:`).
 fn frame_keys(
     p: &Spec,
     r: MessageRef,
@@ -213,7 +213,8 @@ fn frame_keys(
         ("protocol", Json::Str(p.name.clone())),
         ("direction", Json::Str(r.direction.as_str().to_owned())),
     ];
-    if p.framing.has_address() {
+    // A constant whole frame carries no address either.
+    if p.framing.has_address() && m.frame.is_none() {
         keys.push(("address", num(address)));
     }
     keys.extend([

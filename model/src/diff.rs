@@ -1042,7 +1042,7 @@ impl<'a> Differ<'a> {
                 self.wire(
                     "message_removed",
                     format!("{list}.{}", m.name),
-                    format!("{word} `{}` ({}) removed", m.name, m.code_hex()),
+                    format!("{word} `{}` ({}) removed", m.name, code_of(m)),
                 );
                 continue;
             };
@@ -1082,12 +1082,12 @@ impl<'a> Differ<'a> {
                     format!(
                         "{word} `{}` ({}) renamed to `{}`",
                         m.name,
-                        x.code_hex(),
+                        code_of(x),
                         x.name
                     ),
                 );
             }
-            if m.code != x.code {
+            if m.code != x.code && m.frame.is_none() && x.frame.is_none() {
                 self.wire(
                     "code_changed",
                     path.clone(),
@@ -1106,12 +1106,7 @@ impl<'a> Differ<'a> {
                 self.compatible(
                     "message_added",
                     format!("{list}.{}", x.name),
-                    format!(
-                        "{word} `{}` ({}, §{}) added",
-                        x.name,
-                        x.code_hex(),
-                        x.section
-                    ),
+                    format!("{word} `{}` ({}, §{}) added", x.name, code_of(x), x.section),
                 );
             }
         }
@@ -1204,7 +1199,17 @@ impl<'a> Differ<'a> {
         let (o, n) = (self.old, self.new);
         let word = direction_word(m.direction);
         let (ol, nl) = (o.frame_len(m), n.frame_len(x));
-        if ol != nl {
+        // A constant whole frame changed, added to or taken from a message: its bytes say it
+        // all (its length, its code).
+        if m.frame.is_some() || x.frame.is_some() {
+            if m.frame != x.frame {
+                self.wire(
+                    "constant_frame_changed",
+                    format!("{path}.frame"),
+                    format!("{word} `{}`: {} → {}", x.name, code_of(m), code_of(x)),
+                );
+            }
+        } else if ol != nl {
             self.wire(
                 "frame_length_changed",
                 path.to_owned(),
@@ -1969,13 +1974,26 @@ impl<'a> Differ<'a> {
 
 /// A message's wire identity within its direction: its code and its constant fields
 /// (offset, value), which select between messages sharing a code.
-fn key(m: &Message) -> (Vec<u8>, Vec<(usize, u64)>) {
+/// What tells a message apart on the wire: its code, its constant fields (offset, value) and
+/// its constant whole frame.
+type WireKey = (Vec<u8>, Vec<(usize, u64)>, Option<Vec<u8>>);
+
+fn key(m: &Message) -> WireKey {
     let constants = m
         .fields
         .iter()
         .filter_map(|f| f.constant.map(|c| (f.offset, c)))
         .collect();
-    (m.code.clone(), constants)
+    (m.code.clone(), constants, m.frame.clone())
+}
+
+/// A message's code as the texts give it (`0x2000`), or a constant whole frame's bytes
+/// (`frame E5`).
+fn code_of(m: &Message) -> String {
+    match &m.frame {
+        Some(f) => format!("frame {}", bytes(f)),
+        None => m.code_hex(),
+    }
 }
 
 /// Bytes in hex, `none` for none (sync and end bytes).

@@ -354,7 +354,8 @@ fn message(m: &Message, index: usize) -> String {
         .collect();
     let _ = writeln!(
         s,
-        "      len = {}, max_len = {}, variable = {}, broadcast_ok = {}, gets = {{{}}},",
+        "      frame = {}, len = {}, max_len = {}, variable = {}, broadcast_ok = {}, gets = {{{}}},",
+        m.frame.as_deref().map_or("nil".to_owned(), bytes),
         o.len,
         m.max_len,
         lua_bool(m.is_variable()),

@@ -779,10 +779,13 @@ local function setup(P)
   }
   proto.experts = { E.checksum, E.out_of_spec, E.skipped, E.ambiguous }
 
+  -- Constant whole frames (`frame:`, M-Bus's E5) apart: a packet that is one's bytes is it.
   local by_dir = { request = {}, response = {} }
+  local constants = { request = {}, response = {} }
   P.commands, P.longest = {}, 0
   for _, m in ipairs(P.messages) do
     local l = by_dir[m.dir]
+    if m.frame then l = constants[m.dir] end
     l[#l + 1] = m
     if m.dir == "request" then P.commands[m.idx + 1] = m end
     if m.max_len > P.longest then P.longest = m.max_len end
@@ -955,10 +958,24 @@ local function setup(P)
 
     local strict, lenient = {}, {}
     local b = {}
+    local constant
     if n <= P.longest then
       local ba = whole:bytes()
       for i = 0, n - 1 do b[i] = ba:get_index(i) end
       for _, d in ipairs(dirs) do
+        for _, m in ipairs(constants[d]) do
+          local same = (#m.frame == n)
+          for i, x in ipairs(m.frame) do
+            if b[i - 1] ~= x then same = false end
+          end
+          if same then constant = m end
+        end
+      end
+      if constant then
+        strict[1] = { m = constant, soft = {} }
+        lenient[1] = strict[1]
+      end
+      for _, d in ipairs(constant and {} or dirs) do
         for _, m in ipairs(by_dir[d]) do
           if structural(P, m, b, n) then
             local soft = {}
@@ -990,7 +1007,7 @@ local function setup(P)
       -- Computed on the escaped bytes (`computed: escaped`): as they carry it.
       ck_at, ck_expected, ck_found, ck_tvb = wire_ck.at, wire_ck.expected, wire_ck.found, wire_ck.tvb
       ck_good = (ck_expected == ck_found)
-    elseif ck.len > 0 then
+    elseif ck.len > 0 and not constant then
       ck_at = checksum_at(P, n)
       ck_expected = ck.fn(b, ck.covers_from, ck_at)
       ck_found = read_uint(b, ck_at, ck.len, ck.order)
@@ -1085,9 +1102,11 @@ local function setup(P)
     local pend = n - P.trailer
     local plen = pend - m.payload_at
     local fields_node = root
-    if plen > 0 then fields_node = root:add(F.payload, tvb:range(m.payload_at, plen)) end
+    if constant then
+      item:append_text(" [constant frame]")
+    elseif plen > 0 then fields_node = root:add(F.payload, tvb:range(m.payload_at, plen)) end
     local info = show_leaves(m, b, n, tvb, fields_node)
-    if #P.ends > 0 then root:add(F.ends, tvb:range(end_at(P, n), #P.ends)) end
+    if #P.ends > 0 and not constant then root:add(F.ends, tvb:range(end_at(P, n), #P.ends)) end
     show_checksum()
     for _, why in ipairs(chosen.soft) do
       root:add(F.out_of_spec, whole, why):set_generated()

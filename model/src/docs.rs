@@ -112,6 +112,21 @@ fn frame_bytes(p: &Protocol, m: &Message) -> String {
     }
 }
 
+/// A message's code as the tables show it: `0x2000`, or a constant whole frame's bytes
+/// (`E5 (whole frame)`).
+fn code_text(m: &Message) -> String {
+    match &m.frame {
+        Some(bytes) => format!("{} (whole frame)", hex_bytes(bytes)),
+        None => m.code_hex(),
+    }
+}
+
+/// Bytes as a frame prints them: `E5`, `A2 01`.
+fn hex_bytes(bytes: &[u8]) -> String {
+    let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    hex.join(" ")
+}
+
 fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
     let mut notes = Vec::new();
     if let Some(c) = f.constant {
@@ -705,7 +720,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
             let _ = writeln!(
                 o,
                 "| `{}` | [`{}`](#{}) | {} | {} | {} |",
-                m.code_hex(),
+                code_text(m),
                 m.name,
                 anchor(&m.name),
                 kind_name(m),
@@ -723,26 +738,36 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 m.title,
                 m.section
             );
-            let _ = writeln!(
-                o,
-                "Code `{}`, {}, {} bytes per frame.{}{}{}\n",
-                m.code_hex(),
-                kind_name(m),
-                frame_bytes(p, m),
-                match m.code_from_request {
-                    Some(or) => format!(" Its code is the request's with 0x{or:02X} set."),
-                    None => String::new(),
-                },
-                match m.checksum_extra {
-                    Some(x) => format!(" Checksum extra byte {x} (0x{x:02X})."),
-                    None => String::new(),
-                },
-                if m.needs_request {
-                    " Shares its code and length with other responses: decode it together with the request it answers."
-                } else {
-                    ""
-                }
-            );
+            if let Some(bytes) = &m.frame {
+                let _ = writeln!(
+                    o,
+                    "Constant whole frame `{}`, {}, {} bytes: the frame is these bytes alone, without start, address, code or checksum.\n",
+                    hex_bytes(bytes),
+                    kind_name(m),
+                    bytes.len()
+                );
+            } else {
+                let _ = writeln!(
+                    o,
+                    "Code `{}`, {}, {} bytes per frame.{}{}{}\n",
+                    m.code_hex(),
+                    kind_name(m),
+                    frame_bytes(p, m),
+                    match m.code_from_request {
+                        Some(or) => format!(" Its code is the request's with 0x{or:02X} set."),
+                        None => String::new(),
+                    },
+                    match m.checksum_extra {
+                        Some(x) => format!(" Checksum extra byte {x} (0x{x:02X})."),
+                        None => String::new(),
+                    },
+                    if m.needs_request {
+                        " Shares its code and length with other responses: decode it together with the request it answers."
+                    } else {
+                        ""
+                    }
+                );
+            }
             if !m.doc.is_empty() {
                 let _ = writeln!(o, "{}\n", m.doc.trim());
             }
@@ -779,7 +804,7 @@ pub fn render(p: &Protocol, source: &str) -> String {
                         "- [`{}`](#{}) `{}`{}{}",
                         resp.name,
                         anchor(&resp.name),
-                        resp.code_hex(),
+                        code_text(resp),
                         common,
                         meaning
                             .as_ref()

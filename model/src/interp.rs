@@ -665,12 +665,13 @@ impl Limits {
             directions,
             longest_frame: directions
                 .iter()
-                .map(|d| p.max_frame_len(*d))
+                .flat_map(|d| p.framed(*d))
+                .map(|m| m.max_len)
                 .max()
                 .unwrap_or(0),
             shortest: directions
                 .iter()
-                .flat_map(|d| p.messages(*d))
+                .flat_map(|d| p.framed(*d))
                 .map(Message::min_len)
                 .min()
                 .unwrap_or(0),
@@ -734,7 +735,7 @@ impl Lookup {
         // (frame length, code offset, first code byte or 256 for none, message), sorted.
         let mut all = Vec::new();
         for &direction in limits.directions {
-            for (index, m) in p.messages(direction).iter().enumerate() {
+            for (index, m) in p.framed(direction).iter().enumerate() {
                 let first = m.code.first().map_or(256, |&b| usize::from(b));
                 let r = MessageRef { direction, index };
                 // A variable message under every length it can have (`decode_in` checks
@@ -868,6 +869,12 @@ fn decode_in<'p>(
     wire: &[u8],
     spare: &mut Spare<'p>,
 ) -> Result<Frame<'p>, DecodeError> {
+    // A constant whole frame is its bytes exactly; no framed frame begins as one does.
+    for &d in limits.directions {
+        if let Some(message) = p.constant_of(d, wire) {
+            return Ok(constant_frame(message));
+        }
+    }
     let un = escape::unescape(p, wire)?;
     decode_plain(p, limits, lookup, reply_to, &un.frame, spare).map_err(|e| un.locate(e))
 }
@@ -1006,7 +1013,7 @@ fn decode_plain<'p>(
     // Messages whose code matches the bytes where the code sits, in the order they are tried.
     let mut by_code: Vec<MessageRef> = Vec::new();
     for &direction in directions {
-        for index in 0..p.messages(direction).len() {
+        for index in 0..p.framed(direction).len() {
             let r = MessageRef { direction, index };
             if code_fits(&r) {
                 by_code.push(r);
@@ -1216,6 +1223,15 @@ pub fn decode_as<'p>(
     decode_as_unescaped(p, r, &un.frame).map_err(|e| un.locate(e))
 }
 
+/// A constant whole frame, decoded: no address, no values.
+pub fn constant_frame<'p>(message: MessageRef) -> Frame<'p> {
+    Frame {
+        message,
+        address: 0,
+        values: Vec::new(),
+    }
+}
+
 /// [`decode_as`] of an unescaped frame.
 fn decode_as_unescaped<'p>(
     p: &'p Protocol,
@@ -1223,6 +1239,25 @@ fn decode_as_unescaped<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let m = p.message(r);
+    if let Some(bytes) = &m.frame {
+        return match wire.len().cmp(&bytes.len()) {
+            _ if wire == &bytes[..] => Ok(constant_frame(r)),
+            std::cmp::Ordering::Less => Err(DecodeError::Truncated {
+                needed: bytes.len(),
+                found: wire.len(),
+            }),
+            std::cmp::Ordering::Greater => Err(DecodeError::WrongLength {
+                message: m.name.clone(),
+                expected: vec![bytes.len()],
+                found: wire.len(),
+            }),
+            std::cmp::Ordering::Equal => Err(DecodeError::UnknownCode {
+                offset: 0,
+                code: wire.to_vec(),
+                direction: Some(m.direction),
+            }),
+        };
+    }
     let len = p.frame_len(m);
     let o = m.layout;
     check_sync(p, r.direction, &o, wire)?;
@@ -2223,6 +2258,15 @@ pub fn encode(
     values: &[Value],
 ) -> Result<Vec<u8>, EncodeError> {
     let m = p.message(r);
+    // A constant whole frame carries no address: its bytes, whatever address is given.
+    if let Some(bytes) = &m.frame {
+        if let Some(v) = values.first() {
+            return Err(EncodeError::UnknownValue {
+                field: v.name.to_string(),
+            });
+        }
+        return Ok(bytes.clone());
+    }
     let a = &p.framing.address;
     if !p.framing.has_address() && address != 0 {
         return Err(EncodeError::Unaddressed { address });

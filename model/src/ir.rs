@@ -17,6 +17,9 @@ use crate::rational::Rational;
 /// The generated stream decoder keeps its candidate frame lengths in a 64-bit set.
 pub const MAX_DISTINCT_LENGTHS: usize = 64;
 
+/// The longest constant whole frame (`frame:`), in bytes.
+pub const MAX_CONSTANT_FRAME: usize = 16;
+
 #[derive(Debug, Clone)]
 pub struct Protocol {
     pub name: String,
@@ -668,6 +671,11 @@ pub struct Message {
     /// The byte its checksum takes after the covered bytes (`checksum_extra`), where the
     /// framing's checksum takes one.
     pub checksum_extra: Option<u8>,
+    /// A constant whole frame (`frame:`, responses only): the message is these bytes and
+    /// nothing else, outside the framing (M-Bus's single character `E5`). It has no code,
+    /// fields, address or checksum; its `layout.len` and `max_len` are the bytes' length. Such
+    /// messages come after every framed one of their direction ([`Protocol::framed`]).
+    pub frame: Option<Vec<u8>>,
 }
 
 impl Message {
@@ -1317,6 +1325,33 @@ impl Protocol {
             Direction::Request => &self.commands,
             Direction::Response => &self.responses,
         }
+    }
+
+    /// The messages of direction `d` that follow the framing: every one but the constant
+    /// whole frames (`frame:`), which come after them, so an index into this slice is an index
+    /// into [`Self::messages`].
+    pub fn framed(&self, d: Direction) -> &[Message] {
+        let all = self.messages(d);
+        let constants = all.iter().rev().take_while(|m| m.frame.is_some()).count();
+        &all[..all.len() - constants]
+    }
+
+    /// The constant whole frames of direction `d` (`frame:`), with their indices in
+    /// [`Self::messages`].
+    pub fn constants(&self, d: Direction) -> impl Iterator<Item = (usize, &[u8])> {
+        let all = self.messages(d);
+        let from = self.framed(d).len();
+        (from..all.len()).filter_map(move |i| all[i].frame.as_deref().map(|f| (i, f)))
+    }
+
+    /// The constant whole frame of direction `d` that `wire` is, byte for byte, if any.
+    pub fn constant_of(&self, d: Direction, wire: &[u8]) -> Option<MessageRef> {
+        self.constants(d)
+            .find(|(_, f)| *f == wire)
+            .map(|(index, _)| MessageRef {
+                direction: d,
+                index,
+            })
     }
 
     /// Frame length of a message, in bytes (its resolved [`Message::layout`]).

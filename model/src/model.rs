@@ -540,7 +540,13 @@ pub struct Response {
     pub title: String,
     pub section: String,
     pub kind: ResponseKind,
-    pub code: String,
+    /// Its code; required unless the response is a constant whole frame (`frame`).
+    #[serde(default)]
+    pub code: Option<String>,
+    /// A constant whole frame (hex bytes, `"E5"`): the response is these bytes and nothing
+    /// else, outside the framing (M-Bus's single character); no code, fields or checksum.
+    #[serde(default)]
+    pub frame: Option<String>,
     #[serde(default)]
     pub doc: Option<String>,
     #[serde(default)]

@@ -13,6 +13,10 @@
 //! of its buffer (the earliest byte not yet accounted for) and asks which messages could start
 //! there:
 //!
+//! 0. A constant whole frame (`frame:`, M-Bus's `E5`) whose bytes the head holds is that
+//!    frame, settled at once; while the head holds only the start of one, the decoder waits
+//!    (unless flushing). No framed frame begins with a constant frame's first byte
+//!    (validated), so no other candidate competes.
 //! 1. A message is a *candidate* while every byte already buffered agrees with it: the start byte
 //!    (protocols that have one) and its code. Not the address: strict decoding judges it
 //!    ([`crate::interp::address_allowed`]), so the stream accepts exactly the addresses
@@ -331,6 +335,36 @@ enum Escaped {
     NeedMore,
 }
 
+/// What the head of the buffer holds as constant whole frames go.
+enum Constant {
+    /// This constant frame, this long.
+    Found(MessageRef, usize),
+    /// The start of one, not yet complete.
+    Wait,
+    None,
+}
+
+/// The constant whole frames of the directions decoded (`None`: both).
+fn constants(
+    p: &Protocol,
+    direction: Option<Direction>,
+) -> impl Iterator<Item = (MessageRef, &[u8])> {
+    [Direction::Request, Direction::Response]
+        .into_iter()
+        .filter(move |d| direction.map_or(true, |want| want == *d))
+        .flat_map(move |d| {
+            p.constants(d).map(move |(index, f)| {
+                (
+                    MessageRef {
+                        direction: d,
+                        index,
+                    },
+                    f,
+                )
+            })
+        })
+}
+
 /// What one step of the framing rule did.
 enum Step {
     Progress,
@@ -398,7 +432,7 @@ impl<'p> StreamDecoder<'p> {
             if direction.is_some_and(|want| want != d) {
                 continue;
             }
-            for (index, m) in p.messages(d).iter().enumerate() {
+            for (index, m) in p.framed(d).iter().enumerate() {
                 shapes.push(Shape {
                     message: MessageRef {
                         direction: d,
@@ -418,6 +452,12 @@ impl<'p> StreamDecoder<'p> {
                 shapes
                     .iter()
                     .map(|s| p.message(s.message).max_len)
+                    .max()
+                    .unwrap_or(0),
+            )
+            .max(
+                constants(p, direction)
+                    .map(|(_, f)| f.len())
                     .max()
                     .unwrap_or(0),
             )
@@ -569,6 +609,26 @@ impl<'p> StreamDecoder<'p> {
         }
         // The lengths of the candidates (rule 1) that are complete; whether there is any
         // candidate, and any longer than what is buffered.
+        // Rule 0: a constant whole frame at the head is settled as soon as its bytes are there.
+        match self.constant_at(flushing) {
+            Constant::Found(message, len) => {
+                let mut bytes = self.spare_bytes.pop().unwrap_or_default();
+                bytes.extend_from_slice(&self.buf[..len]);
+                let offset = self.head;
+                self.report_noise(out);
+                self.consume(len);
+                self.pair(message);
+                self.last_frame = None;
+                out.push(Event::Frame {
+                    offset,
+                    bytes,
+                    frame: interp::constant_frame(message),
+                });
+                return Step::Progress;
+            }
+            Constant::Wait => return Step::NeedMore,
+            Constant::None => {}
+        }
         let mut lens = std::mem::take(&mut self.lens);
         lens.clear();
         let mut dirs = std::mem::take(&mut self.dirs);
@@ -896,6 +956,23 @@ impl<'p> StreamDecoder<'p> {
             return Escaped::Drop;
         }
         Escaped::Try
+    }
+
+    /// Whether the buffer begins with a constant whole frame of a direction decoded, or is (not
+    /// flushing) the start of one still incomplete.
+    fn constant_at(&self, flushing: bool) -> Constant {
+        let mut wait = false;
+        for (r, f) in constants(self.p, self.direction) {
+            if self.buf.starts_with(f) {
+                return Constant::Found(r, f.len());
+            }
+            wait |= !flushing && f.starts_with(&self.buf);
+        }
+        if wait {
+            Constant::Wait
+        } else {
+            Constant::None
+        }
     }
 
     /// The shapes that can agree with the buffer (indices into `shapes`), in `out` (cleared

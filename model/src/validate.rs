@@ -101,6 +101,18 @@ impl Names {
 }
 
 pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
+    // Constant whole frames (`frame:`) come after every framed response in the IR, so each
+    // direction's framed messages are a prefix of its list ([`Protocol::framed`]); errors
+    // are located by name, so the order changes none of them.
+    if spec.responses.iter().any(|r| r.frame.is_some()) {
+        let mut spec = spec.clone();
+        spec.responses.sort_by_key(|r| r.frame.is_some());
+        return validate_ordered(&spec, sink);
+    }
+    validate_ordered(spec, sink)
+}
+
+fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     check_ident(&spec.protocol, "protocol", "protocol name", sink);
     if spec.title.trim().is_empty() {
         sink.error("title", "title is empty");
@@ -241,7 +253,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     for c in &spec.commands {
         let path = join("commands", &c.name);
         let (code, fields, payload_len, max_payload) = message_body(
-            &c.code,
+            Some(&c.code),
             &c.fields,
             &path,
             Direction::Request,
@@ -348,6 +360,7 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             code_from_request: None,
             max_len: layout.len + (max_payload - payload_len),
             checksum_extra: None,
+            frame: None,
         });
     }
 
@@ -363,10 +376,57 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         }
     }
     let mut responses = Vec::new();
+    let mut constants: Vec<(&str, Vec<u8>)> = Vec::new();
     for (ri, r) in spec.responses.iter().enumerate() {
         let path = join("responses", &r.name);
+        if let Some(hex) = &r.frame {
+            let answers = std::mem::take(&mut answered_by[ri]);
+            if answers.is_empty() {
+                sink.error(&path, "no command lists this response (add it to a command's `responses` or to `common_responses`)");
+            }
+            check_section(&r.section, &path, sink);
+            let frame = constant_frame(r, hex, &framing, &constants, &path, sink);
+            constants.push((&r.name, frame.clone()));
+            let len = frame.len();
+            responses.push(Message {
+                name: r.name.clone(),
+                title: r.title.clone(),
+                section: r.section.clone(),
+                doc: text(&r.doc),
+                direction: Direction::Response,
+                kind: MessageKind::Response(r.kind),
+                code: Vec::new(),
+                fields: Vec::new(),
+                payload_len: 0,
+                layout: FrameLayout {
+                    start: None,
+                    start_again: None,
+                    length: None,
+                    length_again: None,
+                    address: None,
+                    header: 0,
+                    code: 0,
+                    payload: 0,
+                    checksum: len,
+                    len,
+                },
+                responses: Vec::new(),
+                reply: model::Reply::Required,
+                answers,
+                broadcast: None,
+                needs_request: false,
+                code_from_request: None,
+                max_len: len,
+                checksum_extra: None,
+                frame: Some(frame),
+            });
+            continue;
+        }
         let (code, fields, payload_len, max_payload) = message_body(
-            &r.code,
+            r.code.as_deref().or_else(|| {
+                sink.error(&path, "missing field `code` (a response without one is a constant whole frame: `frame`)");
+                None
+            }),
             &r.fields,
             &path,
             Direction::Response,
@@ -403,12 +463,15 @@ pub fn validate(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             code_from_request,
             max_len: layout.len + (max_payload - payload_len),
             checksum_extra: None,
+            frame: None,
         });
     }
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
 
     check_overlaps(&commands, "commands", sink);
-    check_overlaps(&responses, "responses", sink);
+    let framed = responses.len() - constants.len();
+    check_overlaps(&responses[..framed], "responses", sink);
+    // Constant frames' lengths among them: the generated stream decoder lists those too.
     let mut lengths: Vec<usize> = commands
         .iter()
         .chain(&responses)
@@ -1946,9 +2009,111 @@ pub const MAX_PACKED: i64 = 256;
 /// What [`message_body`] resolves: code, fields, fixed payload bytes, most payload bytes.
 type Body = (Vec<u8>, Vec<Field>, usize, usize);
 
+/// A response's constant whole frame (`frame:`), its rules checked: hex bytes, 1 to
+/// [`MAX_CONSTANT_FRAME`] of them; no code, fields, request-bound keys or checksum byte; a
+/// framing whose every frame begins with its start bytes, none of whose first bytes the constant
+/// frame begins with (a stream could not tell it from a frame's start otherwise); no escaping
+/// or header fields (not expressible yet); not equal to, a prefix of or prefixed by another.
+fn constant_frame(
+    r: &model::Response,
+    text: &str,
+    framing: &Framing,
+    earlier: &[(&str, Vec<u8>)],
+    path: &str,
+    sink: &mut Sink,
+) -> Vec<u8> {
+    let fpath = join(path, "frame");
+    let frame = match interp::parse_hex(text) {
+        Ok(b) => b,
+        Err(_) if text.chars().all(|c| c.is_whitespace() || c == ',') => {
+            sink.error(
+                &fpath,
+                format!("a constant frame is 1 to {MAX_CONSTANT_FRAME} bytes, not 0"),
+            );
+            return Vec::new();
+        }
+        Err(e) => {
+            sink.error(&fpath, format!("a constant frame is hex bytes: {e}"));
+            return Vec::new();
+        }
+    };
+    if frame.len() > MAX_CONSTANT_FRAME {
+        sink.error(
+            &fpath,
+            format!(
+                "a constant frame is 1 to {MAX_CONSTANT_FRAME} bytes, not {}",
+                frame.len()
+            ),
+        );
+    }
+    for (key, given) in [
+        ("code", r.code.is_some()),
+        ("fields", !r.fields.is_empty()),
+        ("needs_request", r.needs_request),
+        ("code_from_request", r.code_from_request.is_some()),
+        ("checksum_extra", r.checksum_extra.is_some()),
+    ] {
+        if given {
+            sink.error(
+                join(path, key),
+                format!("a constant frame (`frame`) is its bytes alone: it takes no `{key}`"),
+            );
+        }
+    }
+    let first = frame.first().copied();
+    if framing.layout.first() != Some(&Part::Start) || framing.sync.is_empty() {
+        sink.error(
+            &fpath,
+            "a constant frame needs frames that begin with start bytes (framing.start first in the layout): without them any frame could begin with its bytes",
+        );
+    } else if let Some(b) =
+        first.filter(|b| *b == framing.sync[0] || Some(b) == framing.response_sync.first())
+    {
+        sink.error(
+            &fpath,
+            format!("a constant frame cannot begin with 0x{b:02X}, a start byte of the framing: it could not be told from a frame's start"),
+        );
+    }
+    if framing.escaping.is_some() {
+        sink.error(
+            &fpath,
+            "a constant frame is not expressible with `escaping`, yet",
+        );
+    }
+    if !framing.header.is_empty() {
+        sink.error(
+            &fpath,
+            "a constant frame is not expressible with header fields (framing.header), yet: every message carries them",
+        );
+    }
+    for (name, other) in earlier {
+        if other.is_empty() || frame.is_empty() {
+            continue;
+        }
+        if *other == frame {
+            sink.error(
+                &fpath,
+                format!("the same constant frame as response `{name}`"),
+            );
+        } else if other.starts_with(&frame) || frame.starts_with(other) {
+            sink.error(
+                &fpath,
+                format!("constant frame {} and response `{name}`'s {}: one is a prefix of the other, so a stream could not tell where one ends", spaced_hex(&frame), spaced_hex(other)),
+            );
+        }
+    }
+    frame
+}
+
+/// Bytes as `E5 00`.
+fn spaced_hex(bytes: &[u8]) -> String {
+    let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    hex.join(" ")
+}
+
 #[allow(clippy::too_many_arguments)]
 fn message_body(
-    code: &str,
+    code: Option<&str>,
     fields: &[model::Field],
     path: &str,
     direction: Direction,
@@ -1957,7 +2122,8 @@ fn message_body(
     refs: &Refs,
     sink: &mut Sink,
 ) -> Body {
-    let code = parse_code(code, &join(path, "code"), sink);
+    // No code (a response without one, reported where it is read): none to check either.
+    let code = code.and_then(|code| parse_code(code, &join(path, "code"), sink));
     let parsed = code.is_some();
     let code = code.unwrap_or_default();
     let dir = framing.direction(direction);

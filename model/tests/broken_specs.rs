@@ -17,6 +17,46 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- constant whole frames (made from valid/mbus_short, without its examples)
+    (
+        "constant_frame_not_hex",
+        &[("responses.ack.frame", "a constant frame is hex bytes: `G` at character 4 is not a hex digit")],
+    ),
+    (
+        "constant_frame_empty",
+        &[("responses.ack.frame", "a constant frame is 1 to 16 bytes, not 0")],
+    ),
+    (
+        "constant_frame_too_long",
+        &[("responses.ack.frame", "a constant frame is 1 to 16 bytes, not 17")],
+    ),
+    (
+        "constant_frame_with_code_and_fields",
+        &[
+            ("responses.ack.code", "a constant frame (`frame`) is its bytes alone: it takes no `code`"),
+            ("responses.ack.fields", "a constant frame (`frame`) is its bytes alone: it takes no `fields`"),
+        ],
+    ),
+    (
+        "constant_frames_same",
+        &[("responses.ack.frame", "the same constant frame as response `ack_again`")],
+    ),
+    (
+        "constant_frames_prefix",
+        &[("responses.ack.frame", "constant frame E5 and response `ack_again`'s E5 01: one is a prefix of the other")],
+    ),
+    (
+        "constant_frame_start_byte",
+        &[("responses.ack.frame", "a constant frame cannot begin with 0x10, a start byte of the framing")],
+    ),
+    (
+        "constant_frame_without_start",
+        &[("responses.ack.frame", "a constant frame needs frames that begin with start bytes")],
+    ),
+    (
+        "response_without_code",
+        &[("responses.status_of_link", "missing field `code` (a response without one is a constant whole frame: `frame`)")],
+    ),
     // ---- repeated records (made from valid/records, without its examples)
     (
         "record_without_repeat",

@@ -995,6 +995,21 @@ pub fn fits<T: Wire>(field: &'static str, raw: T, min: i64, max: i64) -> Result<
     Err(EncodeError::OutOfRange { field })
 }
 
+/// Writes a constant whole frame (`frame:` in the spec, M-Bus's `E5`) into `buf`: its length,
+/// or [`EncodeError::BufferTooSmall`].
+#[inline]
+pub fn put_frame(buf: &mut [u8], frame: &[u8]) -> Result<usize, EncodeError> {
+    let available = buf.len();
+    let out = buf
+        .get_mut(..frame.len())
+        .ok_or(EncodeError::BufferTooSmall {
+            needed: frame.len(),
+            available,
+        })?;
+    out.copy_from_slice(frame);
+    Ok(frame.len())
+}
+
 /// The first `N` bytes of `buf`, for a frame of `N` bytes, with `head` (the bytes known before
 /// any field: start, address, code, constants) written at its start.
 #[inline(always)]

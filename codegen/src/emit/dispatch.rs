@@ -51,10 +51,11 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
         .copied()
         .max()
         .unwrap_or(1);
-    let msgs = p.messages(d);
+    // Constant whole frames (`frame:`) are recognised before the framing is checked.
+    let msgs = p.framed(d);
     let clen = p.framing.trailer_len();
     let min_len = msgs.iter().map(|m| len_range(m).0).min().unwrap_or(0);
-    let max_len = p.max_frame_len(d);
+    let max_len = msgs.iter().map(|m| m.max_len).max().unwrap_or(0);
     let code_at = |l: usize| p.framing.head(l).code;
     let replies = d == Direction::Response;
     let first_code_at = usize_lit(code_at(1));
@@ -207,7 +208,18 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
         quote!()
     };
     let length = length_check(p, d);
+    let constant = if p.constants(d).next().is_some() {
+        quote! {
+            if let rt::Some(message) = Self::constant(frame) {
+                #answered
+                return rt::Ok(Decoded { address: 0, message });
+            }
+        }
+    } else {
+        quote!()
+    };
     let checks = quote! {
+        #constant
         #sync
         let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
         #length

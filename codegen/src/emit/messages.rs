@@ -4,12 +4,13 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let p = ctx.p;
     let (ty, what) = direction_names(d);
     let msgs = p.messages(d);
+    let framed = p.framed(d);
     // Where every frame of the direction has one length, `encode` takes the buffer's frame
     // once before its match (one `BufferTooSmall` check instead of one per arm: SD's 21
     // arms took 8 bytes each at opt-level s); the arms write into it.
-    let one_len = match msgs.first() {
+    let one_len = match framed.first() {
         Some(m)
-            if msgs
+            if framed
                 .iter()
                 .all(|x| !x.is_variable() && p.frame_len(x) == p.frame_len(m)) =>
         {
@@ -23,6 +24,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let mut encode_arms = Vec::new();
     let mut visit_arms = Vec::new();
     let mut len_arms = Vec::new();
+    let mut constant_arms = Vec::new();
     for (i, m) in msgs.iter().enumerate() {
         let v = variant(m);
         let ls = leaves(m);
@@ -36,13 +38,22 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             (lo, hi) if lo == hi => format!("{lo} bytes"),
             (lo, hi) => format!("{lo} to {hi} bytes"),
         };
-        let d = doc(&format!(
-            "§{} {} (code `{}`, {size}). {}",
-            m.section,
-            m.title,
-            m.code_hex(),
-            m.doc
-        ));
+        let d = match &m.frame {
+            Some(bytes) => doc(&format!(
+                "§{} {} (constant frame `{}`, {size}). {}",
+                m.section,
+                m.title,
+                hex_spaced(bytes),
+                m.doc
+            )),
+            None => doc(&format!(
+                "§{} {} (code `{}`, {size}). {}",
+                m.section,
+                m.title,
+                m.code_hex(),
+                m.doc
+            )),
+        };
         if ls.is_empty() {
             variants.push(quote!(#d #v));
         } else {
@@ -56,6 +67,13 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let any = any_of(&ident("Self"), m);
         index_arms.push(quote!(#any => #i));
         let pattern = binding(m, &ls);
+        if let Some(bytes) = &m.frame {
+            let bytes = bytes.iter().map(|b| hex_u8(*b));
+            let frame = quote!(&[#(#bytes),*]);
+            constant_arms.push(quote!(#any => rt::Some(#frame),));
+            encode_arms.push(quote!(#any => return rt::put_frame(buf, #frame),));
+            continue;
+        }
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
         if has_lists(m) {
             let c = lists_const(m);
@@ -175,9 +193,46 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         quote!(#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)])
     };
+    // Constant whole frames (`frame:`): their bytes, whatever the address, before any check
+    // of a framed frame; `constant` recognises them before `decode` checks the framing.
+    let (constant_first, constant_fns) = if constant_arms.is_empty() {
+        (quote!(), quote!())
+    } else {
+        let recognise = msgs.iter().filter_map(|m| {
+            let bytes = m.frame.as_ref()?.iter().map(|b| hex_u8(*b));
+            let any = any_of(&ident("Self"), m);
+            Some(quote!([#(#bytes),*] => rt::Some(#any),))
+        });
+        (
+            quote! {
+                if let rt::Some(frame) = self.constant_frame() {
+                    return rt::put_frame(buf, frame);
+                }
+            },
+            quote! {
+                /// The bytes of a constant whole frame (`frame:` in the spec), `None` for a
+                /// framed message.
+                pub const fn constant_frame(&self) -> rt::Option<&'static [u8]> {
+                    match *self {
+                        #(#constant_arms)*
+                        _ => rt::None,
+                    }
+                }
+                /// The constant whole frame `frame` is, byte for byte, if any.
+                #[inline]
+                fn constant(frame: &[u8]) -> rt::Option<Self> {
+                    match frame {
+                        #(#recognise)*
+                        _ => rt::None,
+                    }
+                }
+            },
+        )
+    };
     let encode_fn = if p.framing.escaping.is_none() {
         quote! {
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                #constant_first
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
@@ -264,6 +319,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             /// decode refuses: an address no frame may carry, the broadcast address for a command
             /// that does not accept it, a value outside its field's range.
             #encode_fn
+            #constant_fns
             #dispatch
             #from_fields
         }

@@ -30,7 +30,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     // LENGTHS[i]. The validator keeps distinct lengths to at most 64.
     let mut shapes: Vec<(&[u8], u128)> = Vec::new();
     for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
-        for m in p.messages(d) {
+        for m in p.framed(d) {
             let mask = m.listed_lengths(&p.framing).iter().fold(0u128, |a, len| {
                 let i = lengths.iter().position(|l| l == len).unwrap_or(0) as u32;
                 a | 1u128 << (i + shift)
@@ -74,23 +74,58 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         }
         None => quote!(),
     };
+    // Constant whole frames (`frame:`): a head that begins with one's first byte (never a
+    // start byte: validated) has those frames for candidates, each of its length, and no
+    // framed one; the fast path's table asks `candidates` there.
+    let mut firsts: Vec<(u8, u128)> = Vec::new();
+    for (d, shift) in [(Direction::Request, 0u32), (Direction::Response, 64)] {
+        for (_, f) in p.constants(d) {
+            let i = lengths.iter().position(|l| *l == f.len()).unwrap_or(0) as u32;
+            let bit = 1u128 << (i + shift);
+            match firsts.iter_mut().find(|(b, _)| Some(b) == f.first()) {
+                Some((_, m)) => *m |= bit,
+                None => firsts.push((f.first().copied().unwrap_or(0), bit)),
+            }
+        }
+    }
+    let constant_check = |each: &dyn Fn(u128) -> TokenStream| {
+        if firsts.is_empty() {
+            return quote!();
+        }
+        let arms = firsts.iter().map(|(b, m)| {
+            let (b, v) = (hex_u8(*b), each(*m));
+            quote!(rt::Some(&#b) => return #v,)
+        });
+        quote! {
+            match head.first() {
+                #(#arms)*
+                _ => {}
+            }
+        }
+    };
+    let constants_in_mask = constant_check(&|m| {
+        let (q, r) = (mask_lit(m & u128::from(u64::MAX)), mask_lit(m >> 64));
+        quote!(rt::Candidates { requests: #q as u64, responses: #r as u64 })
+    });
+    let constants_in_table = constant_check(&|_| quote!(rt::Candidate::MANY));
     let variable = emit_variable_candidates(p, start_check(quote!(rt::VarLens::NONE)));
     // Not where a variable-length message exists: the route would ask `variable_candidates`
     // too, and the mask's route pays for both (Modbus 1254.6 -> 1280.5 a frame with it).
     let candidate = if variable.is_empty() && !by_direction {
-        emit_candidate(
-            &shapes,
-            &lengths,
-            code_at,
-            start_check(quote!(rt::Candidate::NONE)),
-        )
+        emit_candidate(&shapes, &lengths, code_at, {
+            let framed = start_check(quote!(rt::Candidate::NONE));
+            quote!(#constants_in_table #framed)
+        })
     } else {
         quote!()
     };
-    let start_check = start_check(quote!(rt::Candidates {
-        requests: 0,
-        responses: 0
-    }));
+    let start_check = {
+        let framed = start_check(quote!(rt::Candidates {
+            requests: 0,
+            responses: 0
+        }));
+        quote!(#constants_in_mask #framed)
+    };
     let depth = shapes.iter().map(|s| s.0.len()).max().unwrap_or(1);
     let mut arms = Vec::new();
     flat_trie(&shapes, 0, depth, &mut Vec::new(), 0, &mut arms);

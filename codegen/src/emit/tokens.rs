@@ -107,6 +107,12 @@ pub(super) fn hex_u8(b: u8) -> TokenStream {
     format!("0x{b:02X}").parse().unwrap_or_else(|_| quote!(#b))
 }
 
+/// Bytes as the documents print a frame: `E5`, `10 5B`.
+pub(super) fn hex_spaced(bytes: &[u8]) -> String {
+    let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    hex.join(" ")
+}
+
 /// A code as the documents print it, one or more bytes as one hex number: `0x4072`.
 pub(super) fn hex_code(code: &[u8]) -> TokenStream {
     let digits: String = code.iter().map(|b| format!("{b:02X}")).collect();

@@ -163,13 +163,13 @@ pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
             let mut m = wire.to_vec();
             m[i] = f(m[i]);
             out.push(m.clone());
-            if i < wire.len() - clen {
+            if i < wire.len().saturating_sub(clen) {
                 reseal(p, &mut m);
                 out.push(m);
             }
         }
     }
-    let body = wire.len() - clen;
+    let body = wire.len().saturating_sub(clen);
     for k in 1..=3 {
         let mut variants = Vec::new();
         if body > k {
