@@ -108,30 +108,27 @@ fn unescape_region(
     let bad = |offset: usize, fault: EscapeFault| DecodeError::BadEscape { offset, fault };
     match kind {
         EscapeKind::Bytes { escape, map, .. } => {
+            // The escapes lie inside the region: one cut by its end (before the end byte at
+            // worst) is refused with the byte after it.
+            let region = &wire[..to];
             let mut i = from;
             while i < to {
-                let b = wire[i];
-                if b == *escape {
-                    // The byte after it is in the frame: the end byte at worst.
-                    let next = wire.get(i + 1).copied().unwrap_or(0);
-                    match map.iter().find(|(_, r)| *r == next) {
-                        Some((raw, _)) if i + 1 < to => out.push(*raw),
-                        _ => {
-                            return Err(bad(
-                                i,
-                                EscapeFault::Escape {
-                                    escape: b,
-                                    found: next,
-                                },
-                            ))
-                        }
+                match unescape_byte(*escape, map, region, i) {
+                    Some(Ok((b, next))) => {
+                        out.push(b);
+                        i = next;
                     }
-                    i += 2;
-                } else if map.iter().any(|(raw, _)| *raw == b) {
-                    return Err(bad(i, EscapeFault::Unescaped { found: b }));
-                } else {
-                    out.push(b);
-                    i += 1;
+                    Some(Err(fault)) => return Err(bad(i, fault)),
+                    None => {
+                        let found = wire.get(i + 1).copied().unwrap_or(0);
+                        return Err(bad(
+                            i,
+                            EscapeFault::Escape {
+                                escape: *escape,
+                                found,
+                            },
+                        ));
+                    }
                 }
             }
         }
@@ -201,18 +198,31 @@ pub fn unescape_one(f: &Framing, wire: &[u8], i: usize) -> Option<Result<(u8, us
     let Some(EscapeKind::Bytes { escape, map, .. }) = f.escaping.as_ref().map(|e| &e.kind) else {
         return Some(Err(()));
     };
+    unescape_byte(*escape, map, wire, i).map(|r| r.map_err(|_| ()))
+}
+
+/// Byte escaping: what `wire[i]` unescapes to and where the next byte starts; `None` where
+/// `wire` ends inside the escape, the fault at a bad one. What [`unescape_region`] and
+/// [`unescape_one`] both read by.
+fn unescape_byte(
+    escape: u8,
+    map: &[(u8, u8)],
+    wire: &[u8],
+    i: usize,
+) -> Option<Result<(u8, usize), EscapeFault>> {
     let b = *wire.get(i)?;
-    if b == *escape {
+    if b == escape {
         let next = *wire.get(i + 1)?;
-        return Some(
-            map.iter()
-                .find(|(_, r)| *r == next)
-                .map(|(raw, _)| (*raw, i + 2))
-                .ok_or(()),
-        );
+        return Some(match map.iter().find(|(_, r)| *r == next) {
+            Some((raw, _)) => Ok((*raw, i + 2)),
+            None => Err(EscapeFault::Escape {
+                escape,
+                found: next,
+            }),
+        });
     }
     if map.iter().any(|(raw, _)| *raw == b) {
-        return Some(Err(()));
+        return Some(Err(EscapeFault::Unescaped { found: b }));
     }
     Some(Ok((b, i + 1)))
 }

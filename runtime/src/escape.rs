@@ -163,29 +163,21 @@ pub fn unescape(
     let bad = |offset: usize, fault: EscapeFault| DecodeError::BadEscape { offset, fault };
     match e.kind {
         EscapeKind::Bytes { escape, map } => {
+            // The escapes lie inside the region: one cut by its end is refused with the byte
+            // after it.
+            let region = &wire[..to];
             let mut i = e.from;
             while i < to {
-                let b = wire[i];
-                if b == escape {
-                    let next = wire.get(i + 1).copied().unwrap_or(0);
-                    match map.iter().find(|(_, r)| *r == next) {
-                        Some((raw, _)) if i + 1 < to => o.push(*raw),
-                        _ => {
-                            return Err(bad(
-                                i,
-                                EscapeFault::Escape {
-                                    escape: b,
-                                    found: next,
-                                },
-                            ))
-                        }
+                match unescape_byte(escape, map, region, i) {
+                    Some(Ok((b, next))) => {
+                        o.push(b);
+                        i = next;
                     }
-                    i += 2;
-                } else if map.iter().any(|(raw, _)| *raw == b) {
-                    return Err(bad(i, EscapeFault::Unescaped { found: b }));
-                } else {
-                    o.push(b);
-                    i += 1;
+                    Some(Err(fault)) => return Err(bad(i, fault)),
+                    None => {
+                        let found = wire.get(i + 1).copied().unwrap_or(0);
+                        return Err(bad(i, EscapeFault::Escape { escape, found }));
+                    }
                 }
             }
         }
@@ -469,22 +461,7 @@ fn lens_by_length(e: &Escaping, head: &[u8], escape: u8, map: &[(u8, u8)]) -> Va
     };
     // The byte at `i` unescaped and where the next starts; `None` past `head`, `Err` at a
     // bad escape.
-    let one = |i: usize| -> Option<Result<(u8, usize), ()>> {
-        let b = *head.get(i)?;
-        if b == escape {
-            let next = *head.get(i + 1)?;
-            return Some(
-                map.iter()
-                    .find(|(_, r)| *r == next)
-                    .map(|(raw, _)| (*raw, i + 2))
-                    .ok_or(()),
-            );
-        }
-        if map.iter().any(|(raw, _)| *raw == b) {
-            return Some(Err(()));
-        }
-        Some(Ok((b, i + 1)))
-    };
+    let one = |i: usize| unescape_byte(escape, map, head, i);
     // Unescaped bytes up to `n` (counted from the frame's first byte): where the `n`th ends on
     // the wire, continuing from (`count`, `i`).
     let advance = |count: &mut usize, i: &mut usize, n: usize, mut seen: Option<&mut [u8; 4]>| {
@@ -500,7 +477,7 @@ fn lens_by_length(e: &Escaping, head: &[u8], escape: u8, map: &[(u8, u8)]) -> Va
                     *count += 1;
                     *i = next;
                 }
-                Some(Err(())) => return Some(false),
+                Some(Err(_)) => return Some(false),
                 None => return None,
             }
         }
@@ -553,4 +530,31 @@ fn lens_by_length(e: &Escaping, head: &[u8], escape: u8, map: &[(u8, u8)]) -> Va
         requests: out[0],
         responses: out[1],
     }
+}
+
+/// Byte escaping: what `wire[i]` unescapes to and where the next byte starts; `None` where
+/// `wire` ends inside the escape, the fault at a bad one. What [`unescape`] and a stream's
+/// [`frame_lens`] both read by.
+#[inline]
+fn unescape_byte(
+    escape: u8,
+    map: &[(u8, u8)],
+    wire: &[u8],
+    i: usize,
+) -> Option<Result<(u8, usize), EscapeFault>> {
+    let b = *wire.get(i)?;
+    if b == escape {
+        let next = *wire.get(i + 1)?;
+        return Some(match map.iter().find(|(_, r)| *r == next) {
+            Some((raw, _)) => Ok((*raw, i + 2)),
+            None => Err(EscapeFault::Escape {
+                escape,
+                found: next,
+            }),
+        });
+    }
+    if map.iter().any(|(raw, _)| *raw == b) {
+        return Some(Err(EscapeFault::Unescaped { found: b }));
+    }
+    Some(Ok((b, i + 1)))
 }
