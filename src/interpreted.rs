@@ -22,9 +22,9 @@ use busspec_model::ir::{Direction, MessageKind, MessageRef};
 use busspec_model::Protocol as Spec;
 use busspec_runtime::stream::Candidates;
 use busspec_runtime::{
-    Broadcast, Bus, Command, CommandKind, DecodeError, Decoded, Elements, EncodeError, EscapeFault,
-    FieldError, FieldValue, Framing, Message, MessageNames, NumKind, Protocol, Reply, Source,
-    Transactions,
+    Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
+    EscapeFault, FieldError, FieldValue, Framing, Message, MessageNames, NumKind, Protocol, Reply,
+    Source, Transactions,
 };
 
 /// The most bytes a frame of a spec read at run time may take.
@@ -457,8 +457,6 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             offset,
             fault: escape_fault(fault),
         },
-        // The runtime words a bad count with a rule of its own; the interpreter's text is the
-        // element count found against what may stand.
         I::BadWidth {
             message,
             field,
@@ -472,10 +470,19 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             found,
             most,
         },
-        I::BadCount { message, found, .. } => DecodeError::WrongLength {
+        // The interpreter states the rule as text: kept in its words.
+        I::BadCount {
+            message,
+            field,
+            offset,
+            expected,
+            found,
+        } => DecodeError::BadCount {
             message: keep(&message),
-            expected: &[],
-            found: usize::try_from(found).unwrap_or(0),
+            field: keep(&field),
+            offset,
+            found,
+            expected: CountRule::Stated(keep(&expected)),
         },
     }
 }
@@ -734,5 +741,37 @@ impl Link for Interpreted {
             _ => 0,
         };
         Duration::from_micros(gap_us.max(period_us))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A list whose count does not fit its frame is refused as the interpreter refuses it:
+    /// the same error, in the same words (it was a wrong length, its number the count).
+    #[test]
+    fn a_count_that_does_not_fit_is_refused_in_the_interpreters_words() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("spec/dynamixel2.yaml");
+        let spec = busspec_model::load_file(&path).expect("dynamixel2.yaml loads");
+        let spec = install(spec).expect("the one spec of this process");
+        // SYNC WRITE of 2 data bytes a device (3-byte blocks), with 4 bytes of blocks.
+        let mut frame = vec![
+            0xFF, 0xFF, 0xFD, 0x00, 0xFE, 0x0B, 0x00, 0x83, 0x74, 0x00, 0x02, 0x00, 0x01, 0x10,
+            0x00, 0x02, 0x00, 0x00,
+        ];
+        interp::reseal(spec, &mut frame);
+        let theirs = interp::decode(spec, Some(Direction::Request), None, &frame)
+            .expect_err("the interpreter refuses the count");
+        assert!(
+            matches!(theirs, interp::DecodeError::BadCount { .. }),
+            "{theirs:?}"
+        );
+        let ours = Interpreted::decode_request(&frame).expect_err("refused here too");
+        assert!(
+            matches!(ours, DecodeError::BadCount { offset: 12, .. }),
+            "{ours:?}"
+        );
+        assert_eq!(ours.to_string(), theirs.to_string());
     }
 }

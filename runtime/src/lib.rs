@@ -783,6 +783,9 @@ pub enum CountRule {
     Between(usize, usize),
     /// As many as follow from the request (`rule`, the relation's words).
     Request(i64, &'static str),
+    /// The rule in the words of an engine that states it as text (the interpreter behind a
+    /// spec read at run time).
+    Stated(&'static str),
 }
 
 impl fmt::Display for CountRule {
@@ -793,6 +796,7 @@ impl fmt::Display for CountRule {
             CountRule::AtMost(n) => write!(f, "at most {n} by the frame's length"),
             CountRule::Between(min, max) => write!(f, "{min}..={max}"),
             CountRule::Request(n, rule) => write!(f, "{n} ({rule} of the request)"),
+            CountRule::Stated(rule) => f.write_str(rule),
         }
     }
 }
