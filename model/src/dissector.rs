@@ -207,13 +207,45 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
         lua_bool(f.is_ascii())
     );
     if f.is_wide() {
-        // Floats and 64-bit integers: shown as their wire bytes (a Lua number holds neither
-        // exactly), with no unit or range.
-        o.push_str(", wide = true, bits = {} }");
+        // Floats and 64-bit integers: read from their bytes whole (a Lua number holds
+        // neither exactly) and printed as busspec prints them; their unit's scale is 1.
+        let kind = match f.ty {
+            FieldType::U64 => "u64",
+            FieldType::I64 => "i64",
+            FieldType::F32 => "f32",
+            _ => "f64",
+        };
+        let _ = write!(
+            o,
+            ", wide = {}, swap = {}",
+            lua_str(kind),
+            lua_bool(f.word_swapped)
+        );
+        if let Some(u) = f.unit {
+            let _ = write!(o, ", unit = {}", u + 1);
+        }
+        if let Some((min, max)) = f.range {
+            // The bounds as busspec prints them, and a float's as numbers to compare with.
+            let k = f.num_kind();
+            let _ = write!(
+                o,
+                ", wrange = {{ {}, {}",
+                lua_str(&k.text(min)),
+                lua_str(&k.text(max))
+            );
+            if let (Some(lo), Some(hi)) = (k.float(min), k.float(max)) {
+                let _ = write!(o, ", {lo:e}, {hi:e}");
+            }
+            o.push_str(" }");
+        }
+        o.push_str(", bits = {} }");
         return o;
     }
     if f.bcd {
         o.push_str(", bcd = true");
+    }
+    if f.word_swapped {
+        o.push_str(", swap = true");
     }
     if let Some(u) = f.unit {
         let _ = write!(o, ", unit = {}", u + 1);

@@ -174,6 +174,169 @@ local function physical(u, raw)
   return rust_f64(tonumber(bn_str(N)) / u.Df)
 end
 
+-- The value bytes of a 64-bit or float field, most significant first: its byte order
+-- undone, and a word-swapped number's 16-bit words put back (`number::swap_index`).
+local function wide_bytes(f, b, at)
+  local w, v = f.width, {}
+  for i = 0, w - 1 do
+    local j = i
+    if f.swap then j = (w / 2 - 1 - floor(i / 2)) * 2 + i % 2 end
+    local x = b[at + j] or 0
+    if f.order == "big" then v[i + 1] = x else v[w - i] = x end
+  end
+  return v
+end
+
+local function word32(v, from)
+  return ((v[from] * 256 + v[from + 1]) * 256 + v[from + 2]) * 256 + v[from + 3]
+end
+
+-- A 64-bit pattern (two 32-bit words) as a decimal integer, signed or not.
+local function int64_text(hi, lo, signed)
+  local two32 = bn_int(4294967296)
+  local n = bn_add(bn_mul(bn_int(hi), two32), bn_int(lo))
+  if signed and hi >= 2147483648 then
+    local two64 = bn_mul(two32, two32)
+    two64.n = true
+    n = bn_add(n, two64)
+  end
+  return bn_str(n)
+end
+
+-- A double rounded to the nearest f32 (ties to even), as a double.
+local function to_f32(d)
+  if d ~= d or d == huge or d == -huge or d == 0 then return d end
+  local a = math.abs(d)
+  local e = floor(math.log(a) / math.log(2))
+  if 2 ^ e > a then e = e - 1 elseif 2 ^ (e + 1) <= a then e = e + 1 end
+  if e < -126 then e = -126 end
+  local ulp = 2 ^ (e - 23)
+  local q = a / ulp
+  local r = floor(q)
+  local frac = q - r
+  if frac > 0.5 or (frac == 0.5 and r % 2 == 1) then r = r + 1 end
+  local v = r * ulp
+  if v >= 2 ^ 128 then v = huge end
+  if d < 0 then return -v end
+  return v
+end
+
+-- A finite float as Rust's `{:?}` prints it: the shortest digits that read back to the same
+-- value of its type (`single`: an f32), with an exponent below 1e-4 and from 1e16 on, and a
+-- point otherwise.
+local function rust_debug_float(x, single)
+  if x == 0 then return (1 / x < 0) and "-0.0" or "0.0" end
+  local s, p
+  for q = 0, 16 do
+    p = q
+    s = fmt("%." .. p .. "e", x)
+    local back = tonumber(s)
+    if single then back = to_f32(back) end
+    if back == x then break end
+  end
+  local sign, m, e = s:match("^(-?)([%d%.]+)e([-+]%d+)$")
+  local digits = m:gsub("%.", "")
+  e = tonumber(e)
+  -- Where the value lies halfway between two shortest texts, Rust takes the one further from
+  -- zero (`%e` rounds half to even): its exact digits, the shortest ones rounded up.
+  local exact = fmt("%." .. (p + 21) .. "e", x):match("^-?([%d%.]+)e"):gsub("%.", "")
+  if exact:sub(p + 2, p + 2) == "5" and exact:sub(p + 3):match("^0*$") then
+    local up, carry = {}, 1
+    for i = p + 1, 1, -1 do
+      local d = tonumber(exact:sub(i, i)) + carry
+      carry = (d == 10) and 1 or 0
+      up[i] = tostring(d % 10)
+    end
+    digits = concat(up)
+    if carry == 1 then
+      digits = "1" .. digits
+      e = e + 1
+    end
+  end
+  digits = digits:gsub("0+$", "")
+  if digits == "" then digits = "0" end
+  local a = math.abs(x)
+  if a < 1e-4 or a >= 1e16 then
+    local frac = digits:sub(2)
+    return sign .. digits:sub(1, 1) .. (frac ~= "" and ("." .. frac) or "") .. "e" .. e
+  end
+  local out
+  if e >= 0 then
+    if #digits <= e + 1 then
+      out = digits .. string.rep("0", e + 1 - #digits) .. ".0"
+    else
+      out = digits:sub(1, e + 1) .. "." .. digits:sub(e + 2)
+    end
+  else
+    out = "0." .. string.rep("0", -e - 1) .. digits
+  end
+  return sign .. out
+end
+
+-- A 64-bit or float field's value: `json` as busspec's JSON prints it (`number::NumKind::
+-- text`, a non-finite float a string), `text` as its errors print it, `raw` its raw value (the
+-- bits as an i64, an f32's zero-extended), and `x` (a float, as a double) or `n` (an integer,
+-- a big number) to compare with its range.
+local function wide_value(f, b, at)
+  local v = wide_bytes(f, b, at)
+  local function float(x, special)
+    if special then return { json = '"' .. special .. '"', text = special, x = x } end
+    return { json = rust_debug_float(x, f.wide == "f32"), x = x }
+  end
+  local out
+  if f.wide == "f32" then
+    local bits = word32(v, 1)
+    local neg, e, mant = bits >= 2147483648, floor(bits / 8388608) % 256, bits % 8388608
+    if e == 255 and mant ~= 0 then
+      out = float(0 / 0, bits == 2143289344 and "NaN" or fmt("NaN:0x%08X", bits))
+    elseif e == 255 then
+      out = float(neg and -huge or huge, neg and "-inf" or "inf")
+    else
+      local x
+      if e == 0 then x = mant * 2 ^ -149 else x = (8388608 + mant) * 2 ^ (e - 150) end
+      out = float(neg and -x or x)
+    end
+    out.raw = fmt("%d", bits)
+  else
+    local hi, lo = word32(v, 1), word32(v, 5)
+    local raw = int64_text(hi, lo, true)
+    if f.wide == "u64" or f.wide == "i64" then
+      local text = (f.wide == "u64") and int64_text(hi, lo, false) or raw
+      out = { json = text, n = bn_parse(text) }
+    else
+      local neg = hi >= 2147483648
+      local e, mant = floor(hi / 1048576) % 2048, (hi % 1048576) * 4294967296 + lo
+      if e == 2047 and mant ~= 0 then
+        out = float(0 / 0, (hi == 2146959360 and lo == 0) and "NaN" or fmt("NaN:0x%08X%08X", hi, lo))
+      elseif e == 2047 then
+        out = float(neg and -huge or huge, neg and "-inf" or "inf")
+      else
+        local x
+        if e == 0 then x = mant * 2 ^ -1074 else x = (4503599627370496 + mant) * 2 ^ (e - 1075) end
+        out = float(neg and -x or x)
+      end
+    end
+    out.raw = raw
+  end
+  out.text = out.text or out.json
+  return out
+end
+
+-- Whether a 64-bit or float value lies in its field's range (`wrange`: the bounds' texts, and
+-- a float's as numbers): a NaN lies in none.
+local function wide_within(f, w)
+  local r = f.wrange
+  if not r then return true end
+  if w.x then return w.x >= r[3] and w.x <= r[4] end
+  local function cmp(a, c)
+    if a.n ~= c.n then return a.n and -1 or 1 end
+    local m = bn_cmpabs(a, c)
+    if a.n then return -m end
+    return m
+  end
+  return cmp(w.n, bn_parse(r[1])) >= 0 and cmp(w.n, bn_parse(r[2])) <= 0
+end
+
 local function numtext(v)
   return fmt("%d", v)
 end
@@ -349,7 +512,15 @@ end
 -- number, both).
 local function int_of(f, b, at)
   if f.ascii then return 0, 0 end
-  local u = read_uint(b, at, f.width, f.order)
+  local u
+  if f.swap then
+    -- A word-swapped number: its 16-bit words put back in its byte order first.
+    local w = {}
+    for i = 0, f.width - 1 do w[i] = b[at + (f.width / 2 - 1 - floor(i / 2)) * 2 + i % 2] end
+    u = read_uint(w, 0, f.width, f.order)
+  else
+    u = read_uint(b, at, f.width, f.order)
+  end
   if f.bcd then
     local v = from_bcd(u) or 0
     return v, v
@@ -627,7 +798,13 @@ local function misfit(P, m, b, n, soft)
         local range = range_violation(f, nil, v)
         if range then soft[#soft + 1] = out_of_range(m, f.name, at + floor((k - 1) * f.pk.bits / 8), v, range) end
       end
-    elseif not f.ascii and not f.wide then
+    elseif f.wide then
+      local w = wide_value(f, b, at)
+      if not wide_within(f, w) then
+        soft[#soft + 1] = fmt("%s.%s at offset %d is %s, outside its range %s..=%s", m.name, f.name,
+          at, w.text, f.wrange[1], f.wrange[2])
+      end
+    elseif not f.ascii then
       if f.bcd and from_bcd(read_uint(b, at, f.width, f.order)) == nil then return true end
       local u, v = int_of(f, b, at)
       if f.constant and u ~= f.constant then return true end
@@ -860,11 +1037,11 @@ local function setup(P)
         info[#info + 1] = f.name .. "=" .. value
       elseif f.wide then
         local range = tvb:range(at, f.width)
-        local text = "0x" .. tostring(range:bytes())
-        local item = node:add(m.pf[f.name].value, range, text)
-        item:set_text(f.name .. ": " .. text .. " (wire bytes: floats and 64-bit numbers are not decoded here)")
-        item:add(m.pf[f.name].raw, range, tostring(range:bytes()))
-        info[#info + 1] = f.name .. "=" .. text
+        local w = wide_value(f, b, at)
+        local item = node:add(m.pf[f.name].value, range, w.json)
+        item:set_text(f.name .. ": " .. w.json .. unit_of(P, f, nil) .. " (raw " .. w.raw .. ")")
+        item:add(m.pf[f.name].raw, range, w.raw)
+        info[#info + 1] = f.name .. "=" .. w.json
       elseif f.ascii then
         local chars = {}
         for i = 0, f.width - 1 do chars[#chars + 1] = string.char(b[at + i]) end
