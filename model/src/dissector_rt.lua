@@ -113,25 +113,66 @@ end
 
 local I128_MAX = "170141183460469231731687303715884105727"
 
--- A double as Rust's `{}` prints it: the shortest digits that read back, never an exponent.
-local function rust_f64(x)
-  if x ~= x then return "NaN" end
-  if x == huge then return "inf" end
-  if x == -huge then return "-inf" end
-  if x == 0 then return (1 / x < 0) and "-0" or "0" end
-  local s
-  for p = 0, 16 do
+-- A double rounded to the nearest f32 (ties to even), as a double.
+local function to_f32(d)
+  if d ~= d or d == huge or d == -huge or d == 0 then return d end
+  local a = math.abs(d)
+  local e = floor(math.log(a) / math.log(2))
+  if 2 ^ e > a then e = e - 1 elseif 2 ^ (e + 1) <= a then e = e + 1 end
+  if e < -126 then e = -126 end
+  local ulp = 2 ^ (e - 23)
+  local q = a / ulp
+  local r = floor(q)
+  local frac = q - r
+  if frac > 0.5 or (frac == 0.5 and r % 2 == 1) then r = r + 1 end
+  local v = r * ulp
+  if v >= 2 ^ 128 then v = huge end
+  if d < 0 then return -v end
+  return v
+end
+
+-- The shortest digits of a finite non-zero double that read back to it (`single`: to the same
+-- f32), as Rust finds them: its sign, the digits (no trailing zeros) and the first digit's
+-- power of ten. Where the value lies halfway between two shortest texts, Rust takes the one
+-- further from zero (`%e` rounds half to even): the exact digits, rounded up.
+local function shortest_digits(x, single)
+  local s, p
+  for q = 0, 16 do
+    p = q
     s = fmt("%." .. p .. "e", x)
-    if tonumber(s) == x then break end
+    local back = tonumber(s)
+    if single then back = to_f32(back) end
+    if back == x then break end
   end
   local sign, m, e = s:match("^(-?)([%d%.]+)e([-+]%d+)$")
-  local digits = m:gsub("%.", ""):gsub("0+$", "")
-  if digits == "" then digits = "0" end
+  local digits = m:gsub("%.", "")
   e = tonumber(e)
+  local exact = fmt("%." .. (p + 21) .. "e", x):match("^-?([%d%.]+)e"):gsub("%.", "")
+  if exact:sub(p + 2, p + 2) == "5" and exact:sub(p + 3):match("^0*$") then
+    local up, carry = {}, 1
+    for i = p + 1, 1, -1 do
+      local d = tonumber(exact:sub(i, i)) + carry
+      carry = (d == 10) and 1 or 0
+      up[i] = tostring(d % 10)
+    end
+    digits = concat(up)
+    if carry == 1 then
+      digits = "1" .. digits
+      e = e + 1
+    end
+  end
+  digits = digits:gsub("0+$", "")
+  if digits == "" then digits = "0" end
+  return sign, digits, e
+end
+
+-- Digits whose first is at 10^e, written out without an exponent (`point`: with ".0" where
+-- there is no fraction).
+local function positional(sign, digits, e, point)
   local out
   if e >= 0 then
     if #digits <= e + 1 then
-      out = digits .. string.rep("0", e + 1 - #digits)
+      out = digits .. string.rep("0", e + 1 - #digits) .. (point and ".0" or "")
     else
       out = digits:sub(1, e + 1) .. "." .. digits:sub(e + 2)
     end
@@ -141,6 +182,28 @@ local function rust_f64(x)
   return sign .. out
 end
 
+-- A double as Rust's `{}` prints it: the shortest digits that read back, never an exponent.
+local function rust_f64(x)
+  if x ~= x then return "NaN" end
+  if x == huge then return "inf" end
+  if x == -huge then return "-inf" end
+  if x == 0 then return (1 / x < 0) and "-0" or "0" end
+  local sign, digits, e = shortest_digits(x, false)
+  return positional(sign, digits, e, false)
+end
+
+-- A finite float as Rust's `{:?}` prints it (`single`: an f32): the shortest digits, with an
+-- exponent below 1e-4 and from 1e16 on, and a point otherwise.
+local function rust_debug_float(x, single)
+  if x == 0 then return (1 / x < 0) and "-0.0" or "0.0" end
+  local sign, digits, e = shortest_digits(x, single)
+  local a = math.abs(x)
+  if a < 1e-4 or a >= 1e16 then
+    local frac = digits:sub(2)
+    return sign .. digits:sub(1, 1) .. (frac ~= "" and ("." .. frac) or "") .. "e" .. e
+  end
+  return positional(sign, digits, e, true)
+end
 -- `digits` (an integer's text) divided by 10^k, as Rust's `Rational` prints it: no trailing
 -- zeros; nil where Rust's i128 arithmetic would not hold it (it then prints the double).
 local function decimal(digits, k)
@@ -174,13 +237,18 @@ local function physical(u, raw)
   return rust_f64(tonumber(bn_str(N)) / u.Df)
 end
 
+-- Where byte i of a word-swapped number of w bytes travels (`number::swap_index`).
+local function swap_index(i, w)
+  return (w / 2 - 1 - floor(i / 2)) * 2 + i % 2
+end
+
 -- The value bytes of a 64-bit or float field, most significant first: its byte order
--- undone, and a word-swapped number's 16-bit words put back (`number::swap_index`).
+-- undone, and a word-swapped number's 16-bit words put back.
 local function wide_bytes(f, b, at)
   local w, v = f.width, {}
   for i = 0, w - 1 do
     local j = i
-    if f.swap then j = (w / 2 - 1 - floor(i / 2)) * 2 + i % 2 end
+    if f.swap then j = swap_index(i, w) end
     local x = b[at + j] or 0
     if f.order == "big" then v[i + 1] = x else v[w - i] = x end
   end
@@ -203,76 +271,6 @@ local function int64_text(hi, lo, signed)
   return bn_str(n)
 end
 
--- A double rounded to the nearest f32 (ties to even), as a double.
-local function to_f32(d)
-  if d ~= d or d == huge or d == -huge or d == 0 then return d end
-  local a = math.abs(d)
-  local e = floor(math.log(a) / math.log(2))
-  if 2 ^ e > a then e = e - 1 elseif 2 ^ (e + 1) <= a then e = e + 1 end
-  if e < -126 then e = -126 end
-  local ulp = 2 ^ (e - 23)
-  local q = a / ulp
-  local r = floor(q)
-  local frac = q - r
-  if frac > 0.5 or (frac == 0.5 and r % 2 == 1) then r = r + 1 end
-  local v = r * ulp
-  if v >= 2 ^ 128 then v = huge end
-  if d < 0 then return -v end
-  return v
-end
-
--- A finite float as Rust's `{:?}` prints it: the shortest digits that read back to the same
--- value of its type (`single`: an f32), with an exponent below 1e-4 and from 1e16 on, and a
--- point otherwise.
-local function rust_debug_float(x, single)
-  if x == 0 then return (1 / x < 0) and "-0.0" or "0.0" end
-  local s, p
-  for q = 0, 16 do
-    p = q
-    s = fmt("%." .. p .. "e", x)
-    local back = tonumber(s)
-    if single then back = to_f32(back) end
-    if back == x then break end
-  end
-  local sign, m, e = s:match("^(-?)([%d%.]+)e([-+]%d+)$")
-  local digits = m:gsub("%.", "")
-  e = tonumber(e)
-  -- Where the value lies halfway between two shortest texts, Rust takes the one further from
-  -- zero (`%e` rounds half to even): its exact digits, the shortest ones rounded up.
-  local exact = fmt("%." .. (p + 21) .. "e", x):match("^-?([%d%.]+)e"):gsub("%.", "")
-  if exact:sub(p + 2, p + 2) == "5" and exact:sub(p + 3):match("^0*$") then
-    local up, carry = {}, 1
-    for i = p + 1, 1, -1 do
-      local d = tonumber(exact:sub(i, i)) + carry
-      carry = (d == 10) and 1 or 0
-      up[i] = tostring(d % 10)
-    end
-    digits = concat(up)
-    if carry == 1 then
-      digits = "1" .. digits
-      e = e + 1
-    end
-  end
-  digits = digits:gsub("0+$", "")
-  if digits == "" then digits = "0" end
-  local a = math.abs(x)
-  if a < 1e-4 or a >= 1e16 then
-    local frac = digits:sub(2)
-    return sign .. digits:sub(1, 1) .. (frac ~= "" and ("." .. frac) or "") .. "e" .. e
-  end
-  local out
-  if e >= 0 then
-    if #digits <= e + 1 then
-      out = digits .. string.rep("0", e + 1 - #digits) .. ".0"
-    else
-      out = digits:sub(1, e + 1) .. "." .. digits:sub(e + 2)
-    end
-  else
-    out = "0." .. string.rep("0", -e - 1) .. digits
-  end
-  return sign .. out
-end
-
 -- A 64-bit or float field's value: `json` as busspec's JSON prints it (`number::NumKind::
 -- text`, a non-finite float a string), `text` as its errors print it, `raw` its raw value (the
 -- bits as an i64, an f32's zero-extended), and `x` (a float, as a double) or `n` (an integer,
@@ -283,20 +281,21 @@ local function wide_value(f, b, at)
     if special then return { json = '"' .. special .. '"', text = special, x = x } end
     return { json = rust_debug_float(x, f.wide == "f32"), x = x }
   end
+  -- A float from its sign, biased exponent and fraction (`bits` of them, `top` the all-ones
+  -- exponent), with the text of its NaN.
+  local function ieee(neg, e, frac, bits, top, nan)
+    if e == top and frac ~= 0 then return float(0 / 0, nan) end
+    if e == top then return float(neg and -huge or huge, neg and "-inf" or "inf") end
+    local bias, x = (top - 1) / 2, nil
+    if e == 0 then x = frac * 2 ^ (1 - bias - bits) else x = (2 ^ bits + frac) * 2 ^ (e - bias - bits) end
+    return float(neg and -x or x)
+  end
   local out
   if f.wide == "f32" then
-    local bits = word32(v, 1)
-    local neg, e, mant = bits >= 2147483648, floor(bits / 8388608) % 256, bits % 8388608
-    if e == 255 and mant ~= 0 then
-      out = float(0 / 0, bits == 2143289344 and "NaN" or fmt("NaN:0x%08X", bits))
-    elseif e == 255 then
-      out = float(neg and -huge or huge, neg and "-inf" or "inf")
-    else
-      local x
-      if e == 0 then x = mant * 2 ^ -149 else x = (8388608 + mant) * 2 ^ (e - 150) end
-      out = float(neg and -x or x)
-    end
-    out.raw = fmt("%d", bits)
+    local w = word32(v, 1)
+    local nan = (w == 2143289344) and "NaN" or fmt("NaN:0x%08X", w)
+    out = ieee(w >= 2147483648, floor(w / 8388608) % 256, w % 8388608, 23, 255, nan)
+    out.raw = fmt("%d", w)
   else
     local hi, lo = word32(v, 1), word32(v, 5)
     local raw = int64_text(hi, lo, true)
@@ -304,17 +303,9 @@ local function wide_value(f, b, at)
       local text = (f.wide == "u64") and int64_text(hi, lo, false) or raw
       out = { json = text, n = bn_parse(text) }
     else
-      local neg = hi >= 2147483648
-      local e, mant = floor(hi / 1048576) % 2048, (hi % 1048576) * 4294967296 + lo
-      if e == 2047 and mant ~= 0 then
-        out = float(0 / 0, (hi == 2146959360 and lo == 0) and "NaN" or fmt("NaN:0x%08X%08X", hi, lo))
-      elseif e == 2047 then
-        out = float(neg and -huge or huge, neg and "-inf" or "inf")
-      else
-        local x
-        if e == 0 then x = mant * 2 ^ -1074 else x = (4503599627370496 + mant) * 2 ^ (e - 1075) end
-        out = float(neg and -x or x)
-      end
+      local nan = (hi == 2146959360 and lo == 0) and "NaN" or fmt("NaN:0x%08X%08X", hi, lo)
+      local frac = (hi % 1048576) * 4294967296 + lo
+      out = ieee(hi >= 2147483648, floor(hi / 1048576) % 2048, frac, 52, 2047, nan)
     end
     out.raw = raw
   end
@@ -516,7 +507,7 @@ local function int_of(f, b, at)
   if f.swap then
     -- A word-swapped number: its 16-bit words put back in its byte order first.
     local w = {}
-    for i = 0, f.width - 1 do w[i] = b[at + (f.width / 2 - 1 - floor(i / 2)) * 2 + i % 2] end
+    for i = 0, f.width - 1 do w[i] = b[at + swap_index(i, f.width)] end
     u = read_uint(w, 0, f.width, f.order)
   else
     u = read_uint(b, at, f.width, f.order)
