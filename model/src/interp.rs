@@ -875,6 +875,8 @@ fn decode_in<'p>(
             return Ok(constant_frame(message));
         }
     }
+    // Offsets count from the frame's first byte, after any preamble.
+    let wire = p.framing.after_preamble(wire);
     let un = escape::unescape(p, wire)?;
     decode_plain(p, limits, lookup, reply_to, &un.frame, spare).map_err(|e| un.locate(e))
 }
@@ -1219,7 +1221,7 @@ pub fn decode_as<'p>(
     r: MessageRef,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
-    let un = escape::unescape(p, wire)?;
+    let un = escape::unescape(p, p.framing.after_preamble(wire))?;
     decode_as_unescaped(p, r, &un.frame).map_err(|e| un.locate(e))
 }
 
@@ -2660,6 +2662,13 @@ pub fn encode(
     }
     if p.framing.escaping.is_some() {
         return Ok(escape::escape(p, &out));
+    }
+    if let Some(pre) = &p.framing.preamble {
+        // The wake-up bytes, then the frame.
+        out.splice(
+            0..0,
+            std::iter::repeat(pre.byte).take(usize::from(pre.send)),
+        );
     }
     Ok(out)
 }
