@@ -112,6 +112,15 @@ pub struct Preamble {
 }
 
 impl Preamble {
+    /// The preamble in words, as docs and diff print it: `0xFE sent 4 times before every
+    /// frame; 0 to 4 taken before one`.
+    pub fn describe(&self) -> String {
+        format!(
+            "0x{:02X} sent {} times before every frame; 0 to {} taken before one",
+            self.byte, self.send, self.max
+        )
+    }
+
     /// How many preamble bytes `wire` begins with, at most `max`: the frame follows them.
     pub fn skip(&self, wire: &[u8]) -> usize {
         wire.iter()
