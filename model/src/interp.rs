@@ -2839,15 +2839,20 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
 }
 
 /// The same reordering the other way. An escaped frame (`framing.escaping`) is reordered
-/// unescaped and escaped again, byte for byte, as example text is read back.
+/// unescaped and escaped again, byte for byte, as example text is read back; the preamble
+/// bytes before a frame (`framing.preamble`) are kept as they are.
 #[cfg(feature = "tools")]
 pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
-    match escape::unescape_bytes(&p.framing, wire) {
+    let frame = p.framing.after_preamble(wire);
+    let mut out = wire[..wire.len() - frame.len()].to_vec();
+    let wire = frame;
+    out.extend(match escape::unescape_bytes(&p.framing, wire) {
         Ok(plain) if p.framing.escaping.is_some() => {
             escape::escape_bytes(&p.framing, &reorder(p, m, &plain, p.byte_order))
         }
         _ => reorder(p, m, wire, p.byte_order),
-    }
+    });
+    out
 }
 
 /// Parses frame text as people write it: hex digits with optional `0x` prefixes, spaces,
