@@ -1425,3 +1425,53 @@ fn dynamixel2_decodes_and_encodes_as_a_built_in_protocol() {
     assert_eq!(lines, expected, "{}", text(&out.stderr));
     assert!(lines.iter().any(|l| l.contains("sync_write")));
 }
+
+/// Wake-up bytes (DL/T 645's preamble, a spec read at run time): decode takes a frame with
+/// four or none before it, encode writes four, and a stream counts them into the frame's line
+/// (its offset at the first), the ones that open no frame skipped.
+#[test]
+fn frames_with_a_preamble_decode_encode_and_stream() {
+    let spec = "model/tests/fixtures/valid/dlt645.yaml";
+    let frame = "68 AA AA AA AA AA AA 68 13 00 DF 16";
+    let line = r#"{"protocol":"dlt645","direction":"request","code":"0x13","message":"read_address","fields":{"address_low":11184810,"address_high":11184810}}"#;
+    for wire in [format!("FE FE FE FE {frame}"), frame.to_owned()] {
+        let out = busspec(&["decode", "dlt645", "--spec", spec, &wire]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        assert_eq!(text(&out.stdout).trim_end(), line);
+    }
+    let out = busspec_stdin(&["encode", "dlt645", "--spec", spec], line);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout).trim_end(),
+        format!("FE FE FE FE {frame}").replace(' ', "")
+    );
+    let dir = temp_dir("preamble");
+    let cap = dir.join("cap.bin");
+    let mut bytes = vec![0x00, 0xFE, 0xFE];
+    bytes.extend(busspec_model::interp::parse_hex(frame).unwrap());
+    bytes.extend([0xFE, 0xFE]);
+    std::fs::write(&cap, &bytes).unwrap();
+    let out = busspec(&[
+        "decode",
+        "dlt645",
+        "--spec",
+        spec,
+        "--stream",
+        cap.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let lines: Vec<String> = text(&out.stdout).lines().map(str::to_owned).collect();
+    assert_eq!(lines.len(), 3, "{lines:?}");
+    assert!(
+        lines[0].starts_with(r#"{"offset":0,"skipped":1,"bytes":"00"}"#),
+        "{lines:?}"
+    );
+    assert!(
+        lines[1].starts_with(r#"{"offset":1,"protocol":"dlt645","direction":"request""#),
+        "{lines:?}"
+    );
+    assert!(
+        lines[2].starts_with(r#"{"offset":15,"skipped":2,"bytes":"FEFE"}"#),
+        "{lines:?}"
+    );
+}

@@ -98,6 +98,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/cobs_link.yaml"),
         spec("model/tests/fixtures/valid/dynamixel2_stuffed.yaml"),
         spec("model/tests/fixtures/valid/xbee_api2.yaml"),
+        // Wake-up bytes before frames (DL/T 645's preamble): the dissector skips them.
+        spec("model/tests/fixtures/valid/dlt645.yaml"),
         // Fields after lists, and several lists (with and without a length field).
         spec("model/tests/fixtures/valid/lists_after.yaml"),
         spec("model/tests/fixtures/valid/lists_length.yaml"),
@@ -195,10 +197,11 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
     frames
 }
 
-/// `wire` unescaped (`framing.escaping`; as it is without): frames are changed unescaped and
-/// escaped again ([`escape::escape`]).
+/// `wire` after its preamble and unescaped (`framing.preamble`, `framing.escaping`; as it is
+/// without): frames are changed unescaped and escaped again ([`escape::escape`]), and sent
+/// without a preamble.
 fn plain(p: &Protocol, wire: &[u8]) -> Vec<u8> {
-    escape::unescape_bytes(&p.framing, wire).unwrap()
+    escape::unescape_bytes(&p.framing, p.framing.after_preamble(wire)).unwrap()
 }
 
 /// The capture of `p`: every example with noise before every third, then out-of-spec frames

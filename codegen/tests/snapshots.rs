@@ -398,3 +398,10 @@ fn escaped_specs_generate_their_snapshots() {
     );
     check("model/tests/fixtures/valid/xbee_api2.yaml", "xbee_api2.rs");
 }
+
+/// A preamble of wake-up bytes (`framing.preamble`, DL/T 645's `FE FE FE FE`):
+/// `snapshots_compile.rs` compiles it and holds it to the interpreter.
+#[test]
+fn preamble_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/dlt645.yaml", "dlt645.rs");
+}

@@ -36,6 +36,7 @@ include!("snapshots/packed_channels.rs");
 include!("snapshots/records.rs");
 include!("snapshots/records_sized.rs");
 include!("snapshots/mbus_short.rs");
+include!("snapshots/dlt645.rs");
 
 mod agree;
 
@@ -1187,6 +1188,15 @@ fn examples_stream_alike<P: Protocol>(p: &ir::Protocol, seed: u64, message: &str
             let shared = p.framing.shared_flag().is_some_and(|flag| {
                 cap.last() == Some(&flag) && f.first() == Some(&flag) && rng.below(2) == 0
             });
+            // Wake-up bytes (DL/T 645): as many as the frame may have, or a few more (the
+            // first of which are noise), or none.
+            if let Some(pre) = p.framing.preamble.as_ref().filter(|_| rng.below(2) == 0) {
+                let frame = p.framing.after_preamble(f);
+                let k = rng.below(u64::from(pre.max) + 3) as usize;
+                cap.extend(std::iter::repeat(pre.byte).take(k));
+                cap.extend_from_slice(frame);
+                continue;
+            }
             cap.extend_from_slice(&f[usize::from(shared)..]);
         }
         let cuts: Vec<usize> = (0..6).map(|_| 1 + rng.below(20) as usize).collect();
@@ -1776,4 +1786,86 @@ fn xbee_responses_alone_stream_as_the_interpreter_does() {
         assert_eq!(got, want, "{md:?}");
         assert_eq!(got.len(), frames, "{md:?}: {got:?}");
     }
+}
+
+/// A preamble of wake-up bytes (DL/T 645, `framing.preamble`): the examples replay (encode
+/// sends four `FE`, decode takes the frames printed with four or none); a frame after 0 to 4
+/// `FE` decodes in both engines, after 5 both refuse it in the same words; both agree on
+/// frames mutated from the examples and on captures with runs of `FE` before frames, however
+/// they are cut; the runtime's fast path is its full rule at every head of such captures.
+#[test]
+fn preamble_snapshot_agrees_with_the_interpreter() {
+    use busspec_runtime::stream::StreamDecoder;
+    use dlt645::{Dlt645, Request};
+    let file = "model/tests/fixtures/valid/dlt645.yaml";
+    replay::<Dlt645>(file);
+    let p = fixture(file);
+    let frame = [
+        0x68, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0xAA, 0x68, 0x13, 0x00, 0xDF, 0x16,
+    ];
+    for k in 0..=6 {
+        let mut w = vec![0xFE; k];
+        w.extend_from_slice(&frame);
+        let g = Request::decode(&w).map(|d| d.message.name());
+        let i = busspec_model::interp::decode(&p, None, None, &w);
+        if k <= 4 {
+            assert_eq!(g, Ok("read_address"), "{k}");
+            assert_eq!(p.message(i.unwrap().message).name, "read_address");
+        } else {
+            same_text(g.map(|_| ()), i.map(|_| ()));
+        }
+    }
+    let mut buf = [0u8; dlt645::MAX_FRAME_LEN];
+    assert_eq!(dlt645::MAX_FRAME_LEN, 4 + 22);
+    let n = Request::ReadAddress {
+        address_low: 0xAAAAAA,
+        address_high: 0xAAAAAA,
+    }
+    .encode(0, &mut buf)
+    .unwrap();
+    assert_eq!(&buf[..n], [&[0xFE; 4][..], &frame].concat());
+    assert!(Request::ReadAddress {
+        address_low: 1,
+        address_high: 0,
+    }
+    .encode(0, &mut buf[..3])
+    .is_err());
+    let t = agree::agree::<Dlt645>(&p);
+    assert!(t.accepted >= 5 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<Dlt645>(&p, 0xFEFE, "read_data");
+    assert!(found > 30, "only {found} read_data frames found");
+    // The fast path, at every head of captures with preambles, noise and cut frames.
+    let frames: Vec<Vec<u8>> = p.examples.iter().map(|e| e.wire.clone()).collect();
+    let mut after = StreamDecoder::<Dlt645>::new(None);
+    assert!(after.feed(&frames[0]).count() > 0);
+    // Wake-up bytes held, for the frame that may follow.
+    let mut woken = StreamDecoder::<Dlt645>::new(None);
+    assert_eq!(woken.feed(&[0x00, 0xFE, 0xFE]).count(), 0);
+    let states = [StreamDecoder::<Dlt645>::new(None), after, woken];
+    let cap = <Dlt645 as Protocol>::MAX_FRAME_LEN;
+    let mut rng = agree::Rng(0xFE);
+    let mut decided = 0;
+    for _ in 0..100 {
+        let mut bytes = Vec::new();
+        for _ in 0..12 {
+            let f = &frames[rng.below(frames.len() as u64) as usize];
+            match rng.below(6) {
+                0 => bytes.extend((0..1 + rng.below(3)).map(|_| rng.below(256) as u8)),
+                1 => bytes.extend_from_slice(&f[..f.len() - 1]),
+                2 => bytes.extend(std::iter::repeat(0xFE).take(rng.below(7) as usize)),
+                _ => bytes.extend_from_slice(f),
+            }
+        }
+        for at in 0..bytes.len() {
+            let mut w: Vec<u8> = bytes[at..].iter().copied().take(cap).collect();
+            w.resize(cap, 0);
+            for (i, d) in states.iter().enumerate() {
+                if let Some([fast, full]) = d.fast_and_full(&w, (i % 2) as u64) {
+                    assert_eq!(fast, full, "{w:02X?} from state {i}");
+                    decided += 1;
+                }
+            }
+        }
+    }
+    assert!(decided > 1000, "{decided} decided");
 }

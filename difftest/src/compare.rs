@@ -846,6 +846,14 @@ impl<'p, P: Protocol> Run<'p, P> {
                             capture.last() == Some(&flag) && f.first() == Some(&flag)
                         });
                         let from = usize::from(shared && self.rng.bool());
+                        // Wake-up bytes (DL/T 645): none, as many as a frame may have, or a
+                        // few more (the first of which are noise).
+                        if let Some(pre) = p.framing.preamble.as_ref().filter(|_| self.rng.bool()) {
+                            let k = self.rng.usize(..=usize::from(pre.max) + 2);
+                            capture.extend(std::iter::repeat(pre.byte).take(k));
+                            capture.extend_from_slice(p.framing.after_preamble(f));
+                            continue;
+                        }
                         capture.extend_from_slice(&f[from..])
                     }
                     _ => {}
@@ -879,11 +887,18 @@ pub fn lenient(p: &ir::Protocol) -> ir::Protocol {
 
 /// `frame` with its checksum recomputed over what it covers (and its end bytes).
 pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
-    interp::reseal(p, frame);
+    interp::reseal(p, after_preamble(p, frame));
+}
+
+/// `frame` after its preamble bytes (`framing.preamble`): where the frame's offsets count from.
+fn after_preamble<'f>(p: &ir::Protocol, frame: &'f mut [u8]) -> &'f mut [u8] {
+    let k = frame.len() - p.framing.after_preamble(frame).len();
+    &mut frame[k..]
 }
 
 /// `frame` with its length field set to what its length gives, where the framing has one.
 pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
+    let frame = after_preamble(p, frame);
     let Some(rule) = p.framing.length_rule(d) else {
         return;
     };
@@ -898,6 +913,7 @@ pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
 /// The repeated field's count field set to a nearby or random value (the checksum repaired
 /// or not): a count that lies about the frame.
 fn lie_about_count(p: &ir::Protocol, r: MessageRef, frame: &mut [u8], rng: &mut fastrand::Rng) {
+    let frame = after_preamble(p, frame);
     let m = p.message(r);
     if let Some((_, rep)) = m.repeat() {
         if let Count::Elements(i) | Count::Bytes(i) = rep.count {

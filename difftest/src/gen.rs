@@ -1960,6 +1960,37 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
+    // A preamble of wake-up bytes (DL/T 645's FE FE FE FE): where every frame begins with its
+    // start bytes, nothing escapes and no frame is constant; drawn by a generator of its own,
+    // so every spec drawn without one is as it was.
+    if constants.is_empty()
+        && layout.first() == Some(&"start")
+        && !sync.is_empty()
+        && escaping == Escaping::None
+    {
+        let mut rng = fastrand::Rng::with_seed(seed ^ 0xFEFE_FEFE_FEFE_FEFE);
+        if rng.u8(..100) < 12 {
+            let starts = [
+                sync[0],
+                response_sync
+                    .as_ref()
+                    .and_then(|r| r.first().copied())
+                    .unwrap_or(sync[0]),
+            ];
+            let byte = loop {
+                let b = if rng.bool() { 0xFE } else { rng.u8(..) };
+                if !starts.contains(&b) {
+                    break b;
+                }
+            };
+            let send = rng.u8(..=4);
+            let max = rng.u8(send.max(1)..=send + 3);
+            let _ = writeln!(
+                framing,
+                "  preamble: {{byte: {byte:#04X}, send: {send}, max: {max}}}"
+            );
+        }
+    }
     y.push_str(&framing);
     y.push_str(&units);
     y.push_str(&enums);
@@ -2051,6 +2082,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     );
     add(matches!(esc, Some(ir::EscapeKind::Cobs)), "cobs");
     add(f.shared_flag().is_some(), "shared flag");
+    add(f.preamble.is_some(), "preamble");
     add(
         matches!(esc, Some(ir::EscapeKind::Bytes { .. })) && f.end.is_empty(),
         "byte escaping framed by length",

@@ -178,6 +178,7 @@ impl<P: Protocol> busspec_runtime::Framing for Plain<P> {
     const MAX_RESPONSE_LEN: usize = P::MAX_RESPONSE_LEN;
     const FRAME_LENGTHS: &'static [usize] = P::FRAME_LENGTHS;
     const SHARED_FLAG: Option<u8> = P::SHARED_FLAG;
+    const PREAMBLE: Option<busspec_runtime::Preamble> = P::PREAMBLE;
     fn candidates(head: &[u8]) -> busspec_runtime::stream::Candidates {
         P::candidates(head)
     }

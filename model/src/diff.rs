@@ -723,6 +723,20 @@ impl<'a> Differ<'a> {
                 ),
             );
         }
+        // A preamble added, removed, or sending another byte or count: every frame travels
+        // otherwise; fewer taken refuses what a sender may send, more taken refuses nothing.
+        let (op, np) = (o.preamble.as_ref(), n.preamble.as_ref());
+        if op.map(|p| (p.byte, p.send, p.max)) != np.map(|p| (p.byte, p.send, p.max)) {
+            let show =
+                |p: Option<&crate::ir::Preamble>| p.map_or("none".to_owned(), |p| p.describe());
+            let text = format!("preamble: {} → {}", show(op), show(np));
+            match (op, np) {
+                (Some(a), Some(b)) if (a.byte, a.send) == (b.byte, b.send) && b.max > a.max => {
+                    self.compatible("preamble_changed", "framing.preamble", text)
+                }
+                _ => self.wire("preamble_changed", "framing.preamble", text),
+            }
+        }
         if o.length != n.length {
             let show = |l: &Option<crate::ir::LengthField>| match l {
                 None => "none".to_owned(),

@@ -508,6 +508,11 @@ fn protocol(p: &Protocol) -> String {
     };
     let _ = writeln!(s, "  address = {address},");
     let _ = writeln!(s, "  escaping = {},", escaping(p));
+    let preamble = match &f.preamble {
+        Some(pre) => format!("{{ byte = {}, max = {} }}", pre.byte, pre.max),
+        None => "false".to_owned(),
+    };
+    let _ = writeln!(s, "  preamble = {preamble},");
     let _ = writeln!(
         s,
         "  rules = {{ request = {}, response = {} }},",

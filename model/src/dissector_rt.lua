@@ -1069,6 +1069,19 @@ local function setup(P)
   -- frame") and dissected from it; a bad escape is shown as busspec refuses it.
   local function dissect(tvb, pinfo, tree)
     local n = tvb:len()
+    -- Wake-up bytes before the frame (`framing.preamble`, 0 to its most): shown apart, the
+    -- frame dissected from the byte after them, as busspec decodes it.
+    local pre = P.preamble
+    if pre and n > 0 then
+      local k = 0
+      while k < pre.max and k < n and tvb:range(k, 1):uint() == pre.byte do k = k + 1 end
+      if k > 0 and k < n then
+        local item = tree:add(proto, tvb:range(0, k))
+        item:set_text(fmt("busspec %s: preamble, %d wake-up byte(s) 0x%02X", P.name, k, pre.byte))
+        dissect_frame(tvb:range(k, n - k):tvb(), pinfo, tree)
+        return n
+      end
+    end
     if not P.escaping or n == 0 then return dissect_frame(tvb, pinfo, tree) end
     local w = {}
     local wa = tvb:range(0, n):bytes()

@@ -636,6 +636,18 @@ pub fn render(p: &Protocol, source: &str) -> String {
         );
     }
 
+    if let Some(pre) = &f.preamble {
+        let _ = writeln!(
+            o,
+            "Preamble{}: {} (wake-up bytes). The layout above, its offsets and those in errors count from the frame's first byte, after the preamble; a stream counts the wake-up bytes before a frame into it.\n",
+            pre.section
+                .as_ref()
+                .map(|s| format!(" (§{s})"))
+                .unwrap_or_default(),
+            pre.describe()
+        );
+    }
+
     if !p.units.is_empty() {
         o.push_str("## Units\n\nPhysical value = raw × scale + offset.\n\n| Unit | Symbol | Scale | Offset | Notes |\n|---|---|---|---|---|\n");
         for u in &p.units {

@@ -875,6 +875,8 @@ fn decode_in<'p>(
             return Ok(constant_frame(message));
         }
     }
+    // Offsets count from the frame's first byte, after any preamble.
+    let wire = p.framing.after_preamble(wire);
     let un = escape::unescape(p, wire)?;
     decode_plain(p, limits, lookup, reply_to, &un.frame, spare).map_err(|e| un.locate(e))
 }
@@ -1219,7 +1221,7 @@ pub fn decode_as<'p>(
     r: MessageRef,
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
-    let un = escape::unescape(p, wire)?;
+    let un = escape::unescape(p, p.framing.after_preamble(wire))?;
     decode_as_unescaped(p, r, &un.frame).map_err(|e| un.locate(e))
 }
 
@@ -2661,6 +2663,13 @@ pub fn encode(
     if p.framing.escaping.is_some() {
         return Ok(escape::escape(p, &out));
     }
+    if let Some(pre) = &p.framing.preamble {
+        // The wake-up bytes, then the frame.
+        out.splice(
+            0..0,
+            std::iter::repeat(pre.byte).take(usize::from(pre.send)),
+        );
+    }
     Ok(out)
 }
 
@@ -2830,15 +2839,20 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
 }
 
 /// The same reordering the other way. An escaped frame (`framing.escaping`) is reordered
-/// unescaped and escaped again, byte for byte, as example text is read back.
+/// unescaped and escaped again, byte for byte, as example text is read back; the preamble
+/// bytes before a frame (`framing.preamble`) are kept as they are.
 #[cfg(feature = "tools")]
 pub fn wire_to_printed(p: &Protocol, m: &Message, wire: &[u8]) -> Vec<u8> {
-    match escape::unescape_bytes(&p.framing, wire) {
+    let frame = p.framing.after_preamble(wire);
+    let mut out = wire[..wire.len() - frame.len()].to_vec();
+    let wire = frame;
+    out.extend(match escape::unescape_bytes(&p.framing, wire) {
         Ok(plain) if p.framing.escaping.is_some() => {
             escape::escape_bytes(&p.framing, &reorder(p, m, &plain, p.byte_order))
         }
         _ => reorder(p, m, wire, p.byte_order),
-    }
+    });
+    out
 }
 
 /// Parses frame text as people write it: hex digits with optional `0x` prefixes, spaces,

@@ -95,6 +95,39 @@ pub struct Framing {
     /// The header fields every message carries (`framing.header`), `offset` counted from the
     /// layout's `header` part; every message's `fields` begin with copies of them.
     pub header: Vec<Field>,
+    /// Wake-up bytes before every frame (`framing.preamble`), outside the frame: no offset,
+    /// length or checksum of the IR counts them.
+    pub preamble: Option<Preamble>,
+}
+
+/// A preamble of wake-up bytes (DL/T 645's `FE FE FE FE`): encoders write `send` copies of
+/// `byte` before every frame; decoders take 0 to `max` of them before a frame's start byte,
+/// which is never `byte`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Preamble {
+    pub section: Option<String>,
+    pub byte: u8,
+    pub send: u8,
+    pub max: u8,
+}
+
+impl Preamble {
+    /// The preamble in words, as docs and diff print it: `0xFE sent 4 times before every
+    /// frame; 0 to 4 taken before one`.
+    pub fn describe(&self) -> String {
+        format!(
+            "0x{:02X} sent {} times before every frame; 0 to {} taken before one",
+            self.byte, self.send, self.max
+        )
+    }
+
+    /// How many preamble bytes `wire` begins with, at most `max`: the frame follows them.
+    pub fn skip(&self, wire: &[u8]) -> usize {
+        wire.iter()
+            .take(usize::from(self.max))
+            .take_while(|b| **b == self.byte)
+            .count()
+    }
 }
 
 /// Escaping or stuffing, declared once in `framing.escaping`.
@@ -263,6 +296,15 @@ impl Framing {
         match (self.sync.as_slice(), self.end.as_slice()) {
             ([s], [e]) if escaped && framed && s == e => Some(*s),
             _ => None,
+        }
+    }
+
+    /// `wire` after its preamble bytes (0 to the preamble's `max`): the frame. All of `wire`
+    /// where the framing has no preamble.
+    pub fn after_preamble<'w>(&self, wire: &'w [u8]) -> &'w [u8] {
+        match &self.preamble {
+            Some(pre) => &wire[pre.skip(wire)..],
+            None => wire,
         }
     }
 
@@ -1376,9 +1418,11 @@ impl Protocol {
         Some((lo, self.max_frame_len(d)))
     }
 
-    /// The longest frame in a direction as it travels: escaped at worst.
+    /// The longest frame in a direction as it travels: escaped at worst, after the preamble
+    /// an encoder sends.
     pub fn max_wire_len(&self, d: Direction) -> usize {
-        self.framing.wire_len(self.max_frame_len(d))
+        let preamble = self.framing.preamble.as_ref().map_or(0, |pre| pre.send);
+        self.framing.wire_len(self.max_frame_len(d)) + usize::from(preamble)
     }
 
     /// Finds a command or response by name.

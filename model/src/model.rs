@@ -269,6 +269,22 @@ pub struct Framing {
     /// sequence, system and component bytes); required iff the layout has `header`.
     #[serde(default)]
     pub header: Option<Vec<Field>>,
+    /// Wake-up bytes sent before every frame (DL/T 645's `FE FE FE FE`), optional.
+    #[serde(default)]
+    pub preamble: Option<Preamble>,
+}
+
+/// A preamble: `send` copies of `byte` written before every frame, 0 to `max` (default
+/// `send`) of them accepted before one.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Preamble {
+    #[serde(default)]
+    pub section: Option<String>,
+    pub byte: i64,
+    pub send: i64,
+    #[serde(default)]
+    pub max: Option<i64>,
 }
 
 /// How frames are escaped or stuffed on the wire: exactly one of `escape` (with `xor` and

@@ -75,6 +75,16 @@
 //! does (the next flag follows at once, or the capture ends), it is dropped without being
 //! reported as noise, since its frame accounted for it.
 //!
+//! # Preambles
+//!
+//! Where wake-up bytes come before a frame ([`crate::ir::Framing::preamble`]: DL/T 645's
+//! `FE FE FE FE`), a run of the preamble byte (which starts no frame: it is never a start byte)
+//! is held rather than reported as noise. A frame (or an ambiguous or out-of-spec one) that
+//! starts right after the run takes the held bytes into its event, whose offset is then the
+//! first of them; at most the preamble's `max` are held, so in a longer run the first bytes
+//! are noise. Held bytes that open no frame (a byte that is neither a frame nor the preamble
+//! byte follows, or the capture ends) are noise after all.
+//!
 //! # Pairing responses with requests
 //!
 //! A response that only its request can identify is decoded as the answer to the last request
@@ -407,6 +417,12 @@ pub struct StreamDecoder<'p> {
     /// Whether `buf[0]` is the closing flag of the frame just reported, kept as the next
     /// frame's possible opening one: if it opens none, it is dropped without being noise.
     held_flag: bool,
+    /// The preamble's byte and the most a frame takes ([`crate::ir::Framing::preamble`]).
+    preamble: Option<(u8, usize)>,
+    /// Preamble bytes held just before `buf[0]`, the first at capture offset `preamble_at`:
+    /// the next frame's if one starts at `buf[0]`, else noise.
+    preamble_at: u64,
+    preamble_len: usize,
     /// Command index of the last request seen since the previous response.
     last_request: Option<usize>,
     /// That request's frame: a reply it settles must also agree with its values (a READ's
@@ -506,6 +522,13 @@ impl<'p> StreamDecoder<'p> {
             noise_at: 0,
             shared_flag: p.framing.shared_flag(),
             held_flag: false,
+            preamble: p
+                .framing
+                .preamble
+                .as_ref()
+                .map(|pre| (pre.byte, usize::from(pre.max))),
+            preamble_at: 0,
+            preamble_len: 0,
             last_request: None,
             last_frame: None,
             default_request: None,
@@ -594,6 +617,7 @@ impl<'p> StreamDecoder<'p> {
     pub fn flush(&mut self) -> Vec<Event<'p>> {
         let mut out = Vec::new();
         self.drain(true, &mut out);
+        self.release_preamble();
         self.report_noise(&mut out);
         out
     }
@@ -742,7 +766,8 @@ impl<'p> StreamDecoder<'p> {
             return Step::Progress;
         }
         if let Some((len, reason)) = out_of_spec {
-            let bytes = self.buf.get(..len).unwrap_or_default().to_vec();
+            let (offset, mut bytes) = self.with_preamble();
+            bytes.extend_from_slice(self.buf.get(..len).unwrap_or_default());
             let relaxed = self
                 .relaxed
                 .get_or_insert_with(|| Box::new(relaxed(self.p)));
@@ -752,7 +777,7 @@ impl<'p> StreamDecoder<'p> {
             self.last_request = None;
             self.report_noise(out);
             out.push(Event::OutOfSpec {
-                offset: self.head,
+                offset,
                 bytes,
                 reason,
                 frame,
@@ -1016,7 +1041,6 @@ impl<'p> StreamDecoder<'p> {
         let Some(wire) = self.buf.get(..len) else {
             return Err(None);
         };
-        let offset = self.head;
         let request = self.last_request.or(self.default_request);
         self.spare.values = self.spare_values.pop().unwrap_or_default();
         let lookup = match (&self.one_way, dir) {
@@ -1042,6 +1066,14 @@ impl<'p> StreamDecoder<'p> {
             Err(e) => return Err(Some(e).filter(breaks_spec)),
         };
         let mut bytes = self.spare_bytes.pop().unwrap_or_default();
+        let offset = match self.preamble {
+            Some((byte, _)) if self.preamble_len > 0 => {
+                let n = std::mem::take(&mut self.preamble_len);
+                bytes.extend(std::iter::repeat(byte).take(n));
+                self.preamble_at
+            }
+            _ => self.head,
+        };
         bytes.extend_from_slice(wire);
         self.report_noise(out);
         self.consume_frame(len);
@@ -1099,6 +1131,29 @@ impl<'p> StreamDecoder<'p> {
             self.consume(1);
             return;
         }
+        if let Some((byte, max)) = self.preamble {
+            if b == byte {
+                if self.preamble_len >= max {
+                    // More in a row than a frame takes: the first of them is noise.
+                    if self.noise.is_empty() {
+                        self.noise_at = self.preamble_at;
+                    }
+                    self.noise.push(byte);
+                    self.preamble_at += 1;
+                    self.preamble_len -= 1;
+                }
+                if self.preamble_len == 0 {
+                    self.preamble_at = self.head;
+                }
+                self.preamble_len += 1;
+                self.consume(1);
+                if self.noise.len() >= MAX_SKIPPED_RUN {
+                    self.report_noise(out);
+                }
+                return;
+            }
+            self.release_preamble();
+        }
         if self.noise.is_empty() {
             self.noise_at = self.head;
         }
@@ -1106,6 +1161,30 @@ impl<'p> StreamDecoder<'p> {
         self.consume(1);
         if self.noise.len() >= MAX_SKIPPED_RUN {
             self.report_noise(out);
+        }
+    }
+
+    /// The offset of a frame at the head, and its event's bytes so far: the preamble bytes
+    /// held before it, which it takes.
+    fn with_preamble(&mut self) -> (u64, Vec<u8>) {
+        let mut bytes = self.spare_bytes.pop().unwrap_or_default();
+        match self.preamble {
+            Some((byte, _)) if self.preamble_len > 0 => {
+                bytes.extend(std::iter::repeat(byte).take(std::mem::take(&mut self.preamble_len)));
+                (self.preamble_at, bytes)
+            }
+            _ => (self.head, bytes),
+        }
+    }
+
+    /// The preamble bytes held, which open no frame: noise.
+    fn release_preamble(&mut self) {
+        if let Some((byte, _)) = self.preamble.filter(|_| self.preamble_len > 0) {
+            if self.noise.is_empty() {
+                self.noise_at = self.preamble_at;
+            }
+            let n = std::mem::take(&mut self.preamble_len);
+            self.noise.extend(std::iter::repeat(byte).take(n));
         }
     }
 

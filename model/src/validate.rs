@@ -1307,12 +1307,16 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         heads: Vec::new(),
         escaping: None,
         header: header_fields(f, byte_order, refs, sink),
+        preamble: None,
     };
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
         .collect();
     if let Some(e) = &f.escaping {
         framing.escaping = escaping(e, &framing, sink);
+    }
+    if let Some(pre) = &f.preamble {
+        framing.preamble = preamble(pre, &framing, sink);
     }
     // A second start or length after the code sits after as many bytes as the code has: one
     // offset only where every code has one length.
@@ -1366,6 +1370,62 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         }
     }
     framing
+}
+
+/// The most preamble bytes a spec may send or accept.
+pub const MAX_PREAMBLE: i64 = 16;
+
+/// `framing.preamble`, checked against the rest of the framing (resolved but for it and
+/// escaping): a byte, 0 to `max` sent, 1 to [`MAX_PREAMBLE`] accepted; frames that begin with
+/// start bytes, the first of which (either direction's) is not the preamble byte; no escaping
+/// (not expressible yet).
+fn preamble(pre: &model::Preamble, f: &Framing, sink: &mut Sink) -> Option<Preamble> {
+    let path = "framing.preamble";
+    let errors_before = sink.items.len();
+    let byte = u8_of(pre.byte, &join(path, "byte"), "preamble byte", sink);
+    let max = pre.max.unwrap_or(pre.send);
+    if !(0..=MAX_PREAMBLE).contains(&pre.send) {
+        sink.error(
+            join(path, "send"),
+            format!(
+                "a preamble sends 0 to {MAX_PREAMBLE} bytes, not {}",
+                pre.send
+            ),
+        );
+    } else if !(1..=MAX_PREAMBLE).contains(&max) {
+        sink.error(
+            join(path, if pre.max.is_some() { "max" } else { "send" }),
+            format!("a preamble accepts 1 to {MAX_PREAMBLE} bytes, not {max}"),
+        );
+    } else if pre.send > max {
+        sink.error(
+            join(path, "max"),
+            format!(
+                "a preamble cannot send more bytes than it accepts: send {} > max {max}",
+                pre.send
+            ),
+        );
+    }
+    if f.layout.first() != Some(&Part::Start) || f.sync.is_empty() {
+        sink.error(
+            path,
+            "a preamble needs frames that begin with start bytes (framing.start first in the layout): without them a preamble byte could begin a frame",
+        );
+    } else if f.sync[0] == byte || f.response_sync.first() == Some(&byte) {
+        sink.error(
+            join(path, "byte"),
+            format!("the preamble byte 0x{byte:02X} is a start byte of the framing: a frame's start could not be told from its preamble"),
+        );
+    }
+    if f.escaping.is_some() {
+        sink.error(path, "a preamble is not expressible with `escaping`, yet");
+    }
+    (errors_before == sink.items.len()).then(|| Preamble {
+        section: pre.section.clone(),
+        byte,
+        send: pre.send as u8,
+        max: max as u8,
+    })
 }
 
 /// `framing.escaping`, checked against the rest of the framing (resolved but for it).
@@ -2078,6 +2138,12 @@ fn constant_frame(
         sink.error(
             &fpath,
             "a constant frame is not expressible with `escaping`, yet",
+        );
+    }
+    if framing.preamble.is_some() {
+        sink.error(
+            &fpath,
+            "a constant frame is not expressible with a preamble (framing.preamble), yet",
         );
     }
     if !framing.header.is_empty() {
@@ -3900,8 +3966,10 @@ fn frame_problems(
     let m = p.message(r);
     let printed =
         interp::parse_hex(frame_text).map_err(|e| format!("frame text `{frame_text}`: {e}"))?;
+    // Wake-up bytes before the frame (0 to the preamble's most): the frame follows them.
+    let printed = p.framing.after_preamble(&printed);
     // An escaped frame is read unescaped, reordered, and escaped again.
-    let printed = crate::escape::unescape_bytes(&p.framing, &printed)
+    let printed = crate::escape::unescape_bytes(&p.framing, printed)
         .map_err(|e| format!("frame `{frame_text}`: {e}"))?;
     let len = p.frame_len(m);
     if m.is_variable() && (len..=m.max_len).contains(&printed.len()) {
@@ -3943,7 +4011,11 @@ fn frame_problems(
         };
         compare(p, field, bits, raw, want, excused).map_err(|e| format!("{name}: {e}"))?;
     }
-    Ok(wire)
+    // The bytes an encoder sends: its preamble, then the frame.
+    Ok(match &p.framing.preamble {
+        Some(pre) => [vec![pre.byte; usize::from(pre.send)], wire].concat(),
+        None => wire,
+    })
 }
 
 fn compare(

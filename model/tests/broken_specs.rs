@@ -17,6 +17,35 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- preambles (made from valid/dlt645, hdlc_like and mbus_short, without their examples)
+    (
+        "preamble_start_byte",
+        &[("framing.preamble.byte", "the preamble byte 0x68 is a start byte of the framing")],
+    ),
+    (
+        "preamble_send_over_max",
+        &[("framing.preamble.max", "a preamble cannot send more bytes than it accepts: send 5 > max 4")],
+    ),
+    (
+        "preamble_too_long",
+        &[("framing.preamble.send", "a preamble sends 0 to 16 bytes, not 17")],
+    ),
+    (
+        "preamble_accepts_none",
+        &[("framing.preamble.send", "a preamble accepts 1 to 16 bytes, not 0")],
+    ),
+    (
+        "preamble_without_start",
+        &[("framing.preamble", "a preamble needs frames that begin with start bytes")],
+    ),
+    (
+        "preamble_with_escaping",
+        &[("framing.preamble", "a preamble is not expressible with `escaping`, yet")],
+    ),
+    (
+        "preamble_with_constant_frame",
+        &[("responses.ack.frame", "a constant frame is not expressible with a preamble (framing.preamble), yet")],
+    ),
     // ---- constant whole frames (made from valid/mbus_short, without its examples)
     (
         "constant_frame_not_hex",

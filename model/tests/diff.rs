@@ -2,6 +2,7 @@
 //! category applied. Each test lists every change it expects, so a change reported in the wrong
 //! category, under the wrong path, or not at all fails it.
 
+mod common;
 use std::path::{Path, PathBuf};
 
 use busspec_model::diff::{self, Category, Change};
@@ -558,4 +559,51 @@ fn packed_element_changes_are_wire_breaking() {
         text.contains("u16[4] × 11 bits lsb first → u16[4] × 11 bits msb first"),
         "{text}"
     );
+}
+
+/// A preamble added, removed, or sending another byte or count is a wire-breaking change of
+/// `framing.preamble`; taking more wake-up bytes is compatible, fewer wire-breaking.
+#[test]
+fn preamble_changes_are_classified() {
+    let line = "  preamble: {section: \"5.1\", byte: 0xFE, send: 4, max: 4}\n";
+    let (with, without) = common::revisions("dlt645", &[(line, "")]);
+    let summary_of = |a: &Protocol, b: &Protocol| {
+        diff::diff(a, b)
+            .into_iter()
+            .map(|c| (c.category, c.kind, c.path, c.text))
+            .collect::<Vec<_>>()
+    };
+    let removed = summary_of(&with, &without);
+    assert_eq!(
+        removed[0],
+        (
+            Wire,
+            "preamble_changed",
+            "framing.preamble".to_owned(),
+            "preamble: 0xFE sent 4 times before every frame; 0 to 4 taken before one → none"
+                .to_owned()
+        ),
+        "{removed:#?}"
+    );
+    assert_eq!(summary_of(&without, &with)[0].1, "preamble_changed");
+    for (to, category) in [
+        ("byte: 0xFF, send: 4, max: 4", Wire),
+        ("byte: 0xFE, send: 2, max: 4", Wire),
+        ("byte: 0xFE, send: 4, max: 8", Compat),
+    ] {
+        let (old, new) = common::revisions("dlt645", &[("byte: 0xFE, send: 4, max: 4", to)]);
+        let got = summary_of(&old, &new);
+        let preamble: Vec<_> = got.iter().filter(|c| c.1 == "preamble_changed").collect();
+        assert_eq!(preamble.len(), 1, "{to}: {got:#?}");
+        assert_eq!(preamble[0].0, category, "{to}");
+    }
+    // Taking fewer: the other way round.
+    let (old, new) = common::revisions("dlt645", &[("max: 4}", "max: 8}")]);
+    let fewer = summary_of(&new, &old);
+    assert_eq!(
+        (fewer[0].0, fewer[0].1),
+        (Wire, "preamble_changed"),
+        "{fewer:#?}"
+    );
+    assert_eq!(summary_of(&with, &with), []);
 }

@@ -30,8 +30,8 @@ pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, Bus, Command, CommandKind, DecodeError,
-    Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind, Protocol,
-    Record, RecordList, Repeated, Reply, Source, Transactions,
+    Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind, Preamble,
+    Protocol, Record, RecordList, Repeated, Reply, Source, Transactions,
 };
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter

@@ -29,9 +29,9 @@ mod protocol;
 mod repeated;
 pub mod stream;
 
-#[doc(hidden)]
-pub use protocol::Framing;
 pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};
+#[doc(hidden)]
+pub use protocol::{Framing, Preamble};
 pub use repeated::{Bits, CapacityError, Element, Repeated};
 
 use core::fmt;

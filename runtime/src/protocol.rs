@@ -104,6 +104,42 @@ pub trait Protocol: Framing + Copy + Debug + Default + Send + Sync + 'static {
     fn checksum_ok(frame: &[u8]) -> bool;
 }
 
+/// A preamble of wake-up bytes (`framing.preamble`): `send` copies of `byte` are written
+/// before every frame, and 0 to `max` of them are taken before one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Preamble {
+    pub byte: u8,
+    pub send: u8,
+    pub max: u8,
+}
+
+impl Preamble {
+    /// `frame` after its preamble bytes (0 to `max` of them).
+    #[inline]
+    pub fn skip<'f>(&self, frame: &'f [u8]) -> &'f [u8] {
+        let n = frame
+            .iter()
+            .take(usize::from(self.max))
+            .take_while(|b| **b == self.byte)
+            .count();
+        frame.get(n..).unwrap_or_default()
+    }
+
+    /// Writes the `send` preamble bytes at the start of `buf`: how many, or
+    /// [`EncodeError::BufferTooSmall`](crate::EncodeError::BufferTooSmall).
+    #[inline]
+    pub fn put(&self, buf: &mut [u8]) -> Result<usize, crate::EncodeError> {
+        let n = usize::from(self.send);
+        let available = buf.len();
+        let out = buf.get_mut(..n).ok_or(crate::EncodeError::BufferTooSmall {
+            needed: n,
+            available,
+        })?;
+        out.fill(self.byte);
+        Ok(n)
+    }
+}
+
 /// What the stream decoder asks of a protocol to find frames in a stream: implemented by the
 /// generated code, beside [`Protocol`]; a tool that only decodes, encodes or talks never names
 /// it.
@@ -120,6 +156,10 @@ pub trait Framing {
     /// then keeps a frame's closing flag as the next frame's possible opening one. `None`
     /// (the default) for every other framing.
     const SHARED_FLAG: Option<u8> = None;
+    /// The wake-up bytes sent before every frame (DL/T 645's `FE FE FE FE`), which the stream
+    /// decoder counts into the frame they precede. `None` (the default) for every other
+    /// framing.
+    const PREAMBLE: Option<Preamble> = None;
 
     /// The messages whose start byte and code agree with `head`, the bytes buffered from a
     /// possible frame start (possibly fewer than a whole frame): the stream decoder's framing

@@ -46,6 +46,13 @@
 //! stays at the head as the next frame's possible opening one: the two events then share that
 //! byte, and a flag that opens nothing is dropped without being noise.
 //!
+//! Where wake-up bytes come before a frame ([`Framing::PREAMBLE`](crate::Framing::PREAMBLE):
+//! DL/T 645's `FE FE FE FE`), a run of the preamble byte is held rather than reported as noise:
+//! the frame that follows it takes the last `max` of them into its event (its offset at the
+//! first of them), and those that open no frame are noise after all (a byte that is neither a
+//! frame nor the preamble byte follows them, more than `max` come in a row, or the capture
+//! ends).
+//!
 //! Decisions depend only on the bytes, never on how they were cut into chunks, as long as
 //! `finish` is called only at the end.
 
@@ -372,6 +379,10 @@ struct Core<C: Protocol> {
     /// next frame's possible opening one ([`Framing::SHARED_FLAG`]): if it opens none, it is
     /// dropped without being noise.
     held_flag: bool,
+    /// Preamble bytes ([`Framing::PREAMBLE`]) held just before `head`, the first at
+    /// `preamble_at`: the next frame's if one starts at `head`, else noise.
+    preamble_at: u64,
+    preamble_len: u8,
 }
 
 impl<C: Protocol> Clone for Core<C> {
@@ -424,6 +435,8 @@ impl<C: Protocol> StreamDecoder<C> {
                 noise_len: 0,
                 pending: None,
                 held_flag: false,
+                preamble_at: 0,
+                preamble_len: 0,
             },
         }
     }
@@ -511,6 +524,7 @@ impl<C: Protocol> StreamDecoder<C> {
             }
             if self.len == 0 {
                 return if flushing {
+                    self.core.release_preamble();
                     self.core.take_noise()
                 } else {
                     None
@@ -642,16 +656,17 @@ impl<C: Protocol> Core<C> {
             }
             if let Some((len, reason)) = out_of_spec {
                 self.last_request = None;
+                let (offset, whole) = self.with_preamble(self.head, len);
                 self.pending = Some(Event::OutOfSpec {
-                    offset: self.head,
-                    len,
+                    offset,
+                    len: whole,
                     reason,
                 });
                 return Step::Settled(self.pass(window, len));
             }
         }
         // The head byte starts no frame.
-        self.noise_byte();
+        self.noise_byte(window);
         Step::Settled(1)
     }
 
@@ -664,7 +679,7 @@ impl<C: Protocol> Core<C> {
         len: usize,
         found: Found<C::Request, C::Response>,
     ) -> Event<C::Request, C::Response> {
-        let offset = self.head - settled as u64;
+        let (offset, len) = self.with_preamble(self.head - settled as u64, len);
         let ev = match found {
             Found::Request(frame) => Event::Request { offset, len, frame },
             Found::Response(frame) => Event::Response { offset, len, frame },
@@ -881,6 +896,12 @@ impl<C: Protocol> Core<C> {
                 }
             };
         }
+        // A frame after preamble bytes takes them into its event: the full rule's case.
+        if let Some(pre) = C::PREAMBLE {
+            if self.preamble_len > 0 && window.first() != Some(&pre.byte) {
+                slow!()
+            }
+        }
         // Where the head fixes its frames (and the decoder looks for both directions, with no
         // variable-length candidate), they are tried in turn: no mask to build or walk.
         let one = C::candidate(window);
@@ -891,7 +912,7 @@ impl<C: Protocol> Core<C> {
                 slots >>= 8;
                 try_frame!(window.get(..len), request, false);
             }
-            self.noise_byte();
+            self.noise_byte(window);
             *end = FastEnd::Noise;
             return acc;
         }
@@ -922,7 +943,7 @@ impl<C: Protocol> Core<C> {
                 if q || r {
                     try_frame!(window.get(..*len), q, true);
                 }
-                self.noise_byte();
+                self.noise_byte(window);
                 *end = FastEnd::Noise;
                 return acc;
             }
@@ -980,7 +1001,7 @@ impl<C: Protocol> Core<C> {
                 },
             }
         }
-        self.noise_byte();
+        self.noise_byte(window);
         *end = FastEnd::Noise;
         acc
     }
@@ -1053,13 +1074,56 @@ impl<C: Protocol> Core<C> {
         n
     }
 
-    /// The head byte starts no frame: one more byte of noise (but a held closing flag, which
-    /// its frame accounted for).
+    /// The event's offset and length of a frame of `len` bytes at `offset` (the head), with
+    /// the preamble bytes held before it, which it takes ([`Framing::PREAMBLE`]).
     #[inline(always)]
-    fn noise_byte(&mut self) {
+    fn with_preamble(&mut self, offset: u64, len: usize) -> (u64, usize) {
+        if C::PREAMBLE.is_some() && self.preamble_len > 0 {
+            let held = core::mem::take(&mut self.preamble_len);
+            return (self.preamble_at, len + usize::from(held));
+        }
+        (offset, len)
+    }
+
+    /// The preamble bytes held, which open no frame: noise.
+    #[inline(always)]
+    fn release_preamble(&mut self) {
+        if C::PREAMBLE.is_some() && self.preamble_len > 0 {
+            if self.noise_len == 0 {
+                self.noise_at = self.preamble_at;
+            }
+            self.noise_len += u64::from(core::mem::take(&mut self.preamble_len));
+        }
+    }
+
+    /// The head byte (`window[0]`) starts no frame: one more byte of noise (but a held
+    /// closing flag, which its frame accounted for, and a preamble byte, held for the frame
+    /// that may follow).
+    #[inline(always)]
+    fn noise_byte(&mut self, window: &[u8]) {
         if C::SHARED_FLAG.is_some() && core::mem::take(&mut self.held_flag) {
             self.head += 1;
             return;
+        }
+        if let Some(pre) = C::PREAMBLE {
+            if window.first() == Some(&pre.byte) {
+                if self.preamble_len >= pre.max {
+                    // More in a row than a frame takes: the first of them is noise.
+                    if self.noise_len == 0 {
+                        self.noise_at = self.preamble_at;
+                    }
+                    self.noise_len += 1;
+                    self.preamble_at += 1;
+                    self.preamble_len -= 1;
+                }
+                if self.preamble_len == 0 {
+                    self.preamble_at = self.head;
+                }
+                self.preamble_len += 1;
+                self.head += 1;
+                return;
+            }
+            self.release_preamble();
         }
         if self.noise_len == 0 {
             self.noise_at = self.head;

@@ -218,8 +218,15 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
     } else {
         quote!()
     };
+    // Wake-up bytes before the frame (`framing.preamble`): offsets count after them.
+    let preamble = if p.framing.preamble.is_some() {
+        quote!(let frame = PREAMBLE.skip(frame);)
+    } else {
+        quote!()
+    };
     let checks = quote! {
         #constant
+        #preamble
         #sync
         let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
         #length

@@ -13,6 +13,14 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
     let max = max_req.max(max_resp);
     let (max_req, max_resp, max) = (usize_lit(max_req), usize_lit(max_resp), usize_lit(max));
     let escaping = emit_escaping(p);
+    let preamble = p.framing.preamble.as_ref().map(|pre| {
+        let (byte, send, max) = (hex_u8(pre.byte), pre.send, pre.max);
+        quote! {
+            /// The wake-up bytes sent before every frame (`framing.preamble`): `send` of
+            /// them are written, 0 to `max` taken.
+            pub const PREAMBLE: rt::Preamble = rt::Preamble { byte: #byte, send: #send, max: #max };
+        }
+    });
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.",
         p.title,
@@ -117,6 +125,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             end_first: #end_first,
         };
         #escaping
+        #preamble
     }
 }
 

@@ -229,7 +229,26 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             },
         )
     };
-    let encode_fn = if p.framing.escaping.is_none() {
+    let encode_fn = if p.framing.preamble.is_some() {
+        // Escaping and constant frames are refused beside a preamble (validated).
+        quote! {
+            ///
+            /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
+            /// `MAX_FRAME_LEN` bytes holds any frame with them.
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                let n = PREAMBLE.put(buf)?;
+                let len = self.encode_frame(address, &mut buf[n..])?;
+                rt::Ok(n + len)
+            }
+            /// The frame after the preamble, into `buf`.
+            fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #seal
+            }
+        }
+    } else if p.framing.escaping.is_none() {
         quote! {
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
                 #constant_first

@@ -242,9 +242,15 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     );
     let type_doc = doc(&doc_text);
     let transactions = crate::transactions::transactions(p);
+    let skip_preamble = if p.framing.preamble.is_some() {
+        quote!(let frame = PREAMBLE.skip(frame);)
+    } else {
+        quote!()
+    };
     let checksum_ok = if p.framing.escaping.is_none() {
         quote! {
             fn checksum_ok(frame: &[u8]) -> bool {
+                #skip_preamble
                 match frame.len().checked_sub(#ck_len) {
                     rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
                     _ => false,
@@ -270,7 +276,13 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         }
     };
     let framing_fns = if p.framing.escaping.is_none() {
+        let preamble = p
+            .framing
+            .preamble
+            .as_ref()
+            .map(|_| quote! { const PREAMBLE: rt::Option<rt::Preamble> = rt::Some(PREAMBLE); });
         quote! {
+            #preamble
             #[inline]
             fn candidates(head: &[u8]) -> rt::Candidates {
                 #start_check

@@ -87,7 +87,7 @@ pub fn check<P: Protocol>(
             same(p, &g.message, &i, wire);
             assert_eq!(g.message.frame_len(), unescaped_len(p, wire));
             let n = g.message.encode(g.address, &mut buf).unwrap();
-            assert_eq!(&buf[..n], wire, "written back");
+            written_back(p, &buf[..n], wire);
         }
         Direction::Response => {
             let g = P::decode_response_for(wire, request.map(|r| r.0));
@@ -107,15 +107,35 @@ pub fn check<P: Protocol>(
                 assert!(P::answers(r, &g.message), "{wire:02X?}");
             }
             let n = g.message.encode(g.address, &mut buf).unwrap();
-            assert_eq!(&buf[..n], wire, "written back");
+            written_back(p, &buf[..n], wire);
         }
     }
     true
 }
 
-/// The length of `wire` unescaped (`framing.escaping`): a message's `frame_len`.
+/// The length of `wire` after its preamble and unescaped (`framing.preamble`,
+/// `framing.escaping`): a message's `frame_len`.
 fn unescaped_len(p: &ir::Protocol, wire: &[u8]) -> usize {
-    busspec_model::escape::unescape_bytes(&p.framing, wire).map_or(wire.len(), |f| f.len())
+    let frame = p.framing.after_preamble(wire);
+    busspec_model::escape::unescape_bytes(&p.framing, frame).map_or(frame.len(), |f| f.len())
+}
+
+/// What an encoder wrote back is the frame decoded: byte for byte, but that it sends its
+/// preamble whatever number of preamble bytes came before the frame.
+fn written_back(p: &ir::Protocol, written: &[u8], wire: &[u8]) {
+    match &p.framing.preamble {
+        Some(pre) => {
+            let frame = p.framing.after_preamble(wire);
+            let sent = [vec![pre.byte; usize::from(pre.send)], frame.to_vec()].concat();
+            assert_eq!(written, sent, "written back");
+        }
+        None => assert_eq!(written, wire, "written back"),
+    }
+}
+
+/// How many preamble bytes `wire` begins with (`framing.preamble`).
+fn preamble_len(p: &ir::Protocol, wire: &[u8]) -> usize {
+    wire.len() - p.framing.after_preamble(wire).len()
 }
 
 /// Both engines refused a frame: they say so in the same words. Returns false (refused).
@@ -132,11 +152,14 @@ fn same_words(
 
 /// `frame` with its checksum recomputed over what it covers (and its end bytes).
 pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
-    busspec_model::interp::reseal(p, frame);
+    let k = preamble_len(p, frame);
+    busspec_model::interp::reseal(p, &mut frame[k..]);
 }
 
 /// `frame` with its length field set to what its length gives, where the framing has one.
 pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
+    let k = preamble_len(p, frame);
+    let frame = &mut frame[k..];
     let Some(rule) = p.framing.length_rule(d) else {
         return;
     };
