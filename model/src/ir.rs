@@ -1383,6 +1383,15 @@ impl Protocol {
                 }
             }
         }
+        // Optional fields: the interpreter's, not yet the generator's.
+        for m in self.commands.iter().chain(&self.responses) {
+            if let Some((_, f, _)) = m.optionals().next() {
+                gaps.push(format!(
+                    "`{}.{}`: an optional field (`present`; the interpreter serves it: `busspec decode --spec`)",
+                    m.name, f.name
+                ));
+            }
+        }
         let max = MAX_DISTINCT_LENGTHS;
         if lengths.len() > max {
             for m in self.commands.iter().chain(&self.responses) {

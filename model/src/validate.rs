@@ -2158,6 +2158,7 @@ fn message_body(
     let mut offset = 0usize;
     let mut tail = 0usize;
     let mut min_tail = 0usize;
+    let mut optional = 0usize;
     let mut counters = BTreeSet::new();
     for (i, f) in fields.iter().enumerate() {
         let p = join(&fpath, &f.name);
@@ -2236,7 +2237,7 @@ fn message_body(
             }
             // An optional field sits after every fixed one, where the optional fields before
             // it leave it (`ir::Field::present`); the frame's shortest length leaves it out.
-            None if f.present.is_some() => tail += field.width,
+            None if f.present.is_some() => optional += field.width,
             None => offset += field.width,
         }
         out.push(field);
@@ -2270,7 +2271,7 @@ fn message_body(
             format!("{lists} repeated fields; a message has at most {MAX_LISTS}"),
         );
     }
-    if offset + min_tail < dir.payload_min || offset + tail > dir.payload_max {
+    if offset + min_tail < dir.payload_min || offset + tail + optional > dir.payload_max {
         let most = if tail > 0 {
             let which = if fields.iter().filter(|f| f.repeat.is_some()).count() > 1 {
                 "fields"
@@ -2278,6 +2279,8 @@ fn message_body(
                 "field"
             };
             format!(" (and up to {tail} more in the repeated {which})")
+        } else if optional > 0 {
+            format!(" (and up to {optional} more in the optional fields)")
         } else {
             String::new()
         };
@@ -2292,7 +2295,7 @@ fn message_body(
             ),
         );
     }
-    (code, out, offset, offset + tail)
+    (code, out, offset, offset + tail + optional)
 }
 
 /// The most optional fields (`present:`) a message may have.
