@@ -791,15 +791,6 @@ impl Message {
         c.holds(crate::interp::read_uint(bytes, g.byte_order) as i64)
     }
 
-    /// The payload bytes of the optional fields on the wire in a frame whose payload is
-    /// `payload`.
-    pub fn optional_bytes(&self, payload: &[u8]) -> usize {
-        self.optionals()
-            .filter(|(i, _, _)| self.present_in(*i, payload))
-            .map(|(_, f, _)| f.width)
-            .sum()
-    }
-
     /// The field (index) that counts the elements or bytes of its first repeated field, if any.
     pub fn count_field(&self) -> Option<usize> {
         match self.repeat()?.1.count {

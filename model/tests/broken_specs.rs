@@ -19,6 +19,17 @@ use busspec_model::{load_str, Diagnostics};
 const CASES: &[(&str, &[(&str, &str)])] = &[
     // ---- optional fields (made from valid/optional_sensor, without its examples)
     (
+        "optional_with_escaping",
+        &[
+            ("responses.reading.fields.humidity.present", "optional fields with `escaping` are not expressible yet"),
+            ("responses.event.fields.detail.present", "optional fields with `escaping` are not expressible yet"),
+        ],
+    ),
+    (
+        "optional_code_from_request",
+        &[("responses.event.fields.detail.present", "optional fields in a message whose code comes from the request are not expressible yet")],
+    ),
+    (
         "optional_beside_list",
         &[
             ("responses.event.fields.log", "a field after the optional field `detail`: optional fields end the message, yet"),
