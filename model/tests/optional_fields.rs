@@ -334,3 +334,18 @@ fn diff_calls_a_changed_presence_wire_breaking() {
         ]
     );
 }
+
+#[test]
+fn docs_say_when_each_optional_field_is_present() {
+    let p = fixture();
+    let md = busspec_model::docs::render(&p, "optional_sensor.yaml");
+    for note in [
+        "optional: present only when bit 0 of `status` is set (else absent, and the frame shorter by 2 bytes)",
+        "optional: present only when bit 1 of `status` is set (else absent, and the frame shorter by 4 bytes)",
+        "optional: present only when `kind` = 2 (else absent, and the frame shorter by 2 bytes)",
+    ] {
+        assert!(md.contains(note), "{note}\n{md}");
+    }
+    // The second optional field sits after the first where it is present.
+    assert!(md.contains("| 3 + earlier optional | `pressure` |"), "{md}");
+}
