@@ -111,6 +111,8 @@ fn cases() -> Vec<Case> {
         // Records whose width a field gives, and Dynamixel 2.0 built in (its SYNC_WRITE).
         spec("model/tests/fixtures/valid/records_sized.yaml"),
         built_in("dynamixel2", "spec/dynamixel2.yaml"),
+        // Optional fields: shown only where their condition holds.
+        spec("model/tests/fixtures/valid/optional_sensor.yaml"),
         derived_units(),
     ]
 }
@@ -162,7 +164,7 @@ fn load(file: &str) -> Protocol {
 fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> Vec<Vec<u8>> {
     let m = p.message(r);
     let mut frames = Vec::new();
-    for f in &m.fields {
+    for (i, f) in m.fields.iter().enumerate() {
         let Some((min, max)) = f.range else { continue };
         if f.repeat.is_some() || !f.bits.is_empty() || f.is_ascii() || f.equals.is_some() {
             continue;
@@ -179,7 +181,17 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
             continue;
         }
         let mut w = plain(p, wire);
-        let at = f.frame_at(&m.layout);
+        let mut at = f.frame_at(&m.layout);
+        if f.present.is_some() {
+            // An optional field: where the frame has it, if it does.
+            let Ok(sh) = interp::shape(p, m, &w) else {
+                continue;
+            };
+            if !sh.present(m, i) {
+                continue;
+            }
+            at = m.layout.payload + sh.at(m, i);
+        }
         interp::write_uint(v as u64, &mut w[at..at + f.width], f.byte_order);
         interp::reseal(p, &mut w);
         frames.push(escape::escape(p, &w));

@@ -254,6 +254,7 @@ fn interp_encode_class(i: &interp::EncodeError) -> &'static str {
         E::BroadcastNotAccepted { .. } => "broadcast",
         E::Fixed { .. } => "fixed",
         E::Inconsistent { .. } => "inconsistent",
+        E::Optional { .. } => "optional",
     }
 }
 

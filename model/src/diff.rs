@@ -1397,6 +1397,25 @@ impl<'a> Differ<'a> {
                 format!("field `{msg}.{}` renamed to `{}`", f.name, g.name),
             );
         }
+        let presence = |m: &Message, f: &Field| {
+            f.present.map(|c| {
+                let of = m.fields.get(c.field).map_or("", |h| h.name.as_str());
+                c.describe(of)
+            })
+        };
+        let (was, now) = (presence(m, f), presence(x, g));
+        if was != now {
+            // Optional or not, or present by another condition: the frames' lengths differ.
+            let text = |c: &Option<String>| match c {
+                Some(c) => format!("present only when {c}"),
+                None => "always present".to_owned(),
+            };
+            self.wire(
+                "field_presence_changed",
+                path.to_owned(),
+                format!("field {what}: {} → {}", text(&was), text(&now)),
+            );
+        }
         if f.width != g.width {
             self.wire(
                 "field_width_changed",

@@ -27,6 +27,9 @@
 //! integer arithmetic, enum and special values and flags by name, text, lists), with its raw
 //! value under `.raw`; bytes that start no frame show as such.
 //!
+//! An optional field (`present:`) shows only where its condition holds; a frame whose length
+//! disagrees with the optional fields present is no frame of its message.
+//!
 //! Not shown yet: values that follow from the request's fields (`follows: {request}`, a
 //! reply's element count from the request) are shown but not checked against the request,
 //! as busspec's stream does not check them either; a unit whose exact value needs dividing
@@ -274,6 +277,14 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
             rel.divide.min(EXACT as u64)
         );
     }
+    if let Some(c) = &f.present {
+        // An optional field: on the wire where field `by`'s bit is set or its value is `eq`.
+        let when = match c.when {
+            PresentWhen::Bit(b) => format!("bit = {b}"),
+            PresentWhen::Equals(v) => format!("eq = {}", num(v)),
+        };
+        let _ = write!(o, ", opt = {{ by = {}, {when} }}", c.field + 1);
+    }
     if !f.special.is_empty() {
         // The first special value of each raw value names it, as busspec's printer finds it.
         let mut seen = Vec::new();
@@ -386,11 +397,12 @@ fn message(m: &Message, index: usize) -> String {
         .collect();
     let _ = writeln!(
         s,
-        "      frame = {}, len = {}, max_len = {}, variable = {}, broadcast_ok = {}, gets = {{{}}},",
+        "      frame = {}, len = {}, max_len = {}, variable = {}, optional = {}, broadcast_ok = {}, gets = {{{}}},",
         m.frame.as_deref().map_or("nil".to_owned(), bytes),
         o.len,
         m.max_len,
         lua_bool(m.is_variable()),
+        lua_bool(m.has_optional()),
         lua_bool(broadcast_ok),
         gets.join(", ")
     );

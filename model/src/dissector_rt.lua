@@ -634,10 +634,21 @@ local function shape(m, b, n)
   for _, f in ipairs(m.fields) do
     if f.rep then lists = lists + 1 end
   end
+  local opt = 0
   for i, f in ipairs(m.fields) do
     at[i] = m.payload_at + f.offset + shift
     local r = f.rep
-    if r then
+    if f.opt then
+      -- An optional field: its bytes where its condition holds (it ends the payload; the
+      -- field its condition reads sits before it).
+      local c = m.fields[f.opt.by]
+      local v = read_uint(b, at[f.opt.by], c.width, c.order)
+      local on
+      if f.opt.bit then on = has_bit(v, f.opt.bit) else on = v == f.opt.eq end
+      len[i] = on and f.width or 0
+      opt = opt + len[i]
+      shift = shift + len[i]
+    elseif r then
       seen = seen + 1
       local last = seen == lists
       local w = f.width
@@ -670,6 +681,7 @@ local function shape(m, b, n)
       shift = shift + len[i]
     end
   end
+  if m.optional and n ~= m.len + opt then return nil end
   return at, len
 end
 
@@ -682,6 +694,7 @@ local function places(m, b, n, pend)
   for i, f in ipairs(m.fields) do
     at[i] = m.payload_at + f.offset
     if f.rep then len[i] = math.max(pend - at[i], 0) end
+    if f.opt then len[i] = 0 end
   end
   return at, len
 end
@@ -764,7 +777,9 @@ local function misfit(P, m, b, n, soft)
   local pos, lens = places(m, b, n, pend)
   for i, f in ipairs(m.fields) do
     local at = pos[i]
-    if f.rec then
+    if f.opt and lens[i] == 0 then
+      -- An optional field not on the wire.
+    elseif f.rec then
       -- Each record's fields in order, at their offsets in the frame.
       local k = at
       local w, rec = record_layout(m, f, b, pos)
@@ -980,7 +995,9 @@ local function setup(P)
     local info = {}
     for i, f in ipairs(m.fields) do
       local at = pos[i]
-      if f.rec then
+      if f.opt and lens[i] == 0 then
+        -- An optional field not on the wire: not shown, as busspec's JSON leaves its key out.
+      elseif f.rec then
         -- A list of objects, as busspec's JSON prints records; raw, a list of lists.
         local stop = at + lens[i]
         local vals, raws = {}, {}

@@ -141,6 +141,14 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
     if let Some(o) = f.equals {
         notes.push(format!("repeats `{}`", m.fields[o].name));
     }
+    if let Some(c) = &f.present {
+        let of = m.fields.get(c.field).map_or("", |g| g.name.as_str());
+        notes.push(format!(
+            "optional: present only when {} (else absent, and the frame shorter by {} bytes)",
+            c.describe(of),
+            f.width
+        ));
+    }
     if let Some(o) = f.bytes_from {
         notes.push(format!(
             "takes `{}` bytes (1 to {})",

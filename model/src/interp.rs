@@ -447,6 +447,13 @@ pub enum EncodeError {
     Inconsistent {
         reason: String,
     },
+    /// An optional field (`present:`) given where its condition does not hold, or not given
+    /// where it does: `condition` in words (`bit 0 of `flags` is set`).
+    Optional {
+        field: String,
+        condition: String,
+        given: bool,
+    },
 }
 
 #[cfg(feature = "tools")]
@@ -519,6 +526,22 @@ impl fmt::Display for EncodeError {
             EncodeError::Inconsistent { reason } => {
                 write!(f, "the values do not make a valid frame: {reason}")
             }
+            EncodeError::Optional {
+                field,
+                condition,
+                given: true,
+            } => write!(
+                f,
+                "value given for {field}, which is present only when {condition}"
+            ),
+            EncodeError::Optional {
+                field,
+                condition,
+                given: false,
+            } => write!(
+                f,
+                "no value given for field {field}, which is present when {condition}"
+            ),
         }
     }
 }
@@ -1458,6 +1481,13 @@ impl Shape {
     pub fn count(&self, i: usize) -> usize {
         self.lists.iter().find(|l| l.0 == i).map_or(0, |l| l.1)
     }
+
+    /// Whether field `i` of `m` is on the wire in this frame: every field but an optional one
+    /// whose condition does not hold (an optional field stands in [`Self::lists`] as one
+    /// element where it is present, none where not).
+    pub fn present(&self, m: &Message, i: usize) -> bool {
+        m.fields.get(i).is_some_and(|f| f.present.is_none()) || self.count(i) == 1
+    }
 }
 
 /// The [`Shape`] of `wire` as a frame of `m`: each list's elements, in wire order, from its
@@ -1465,8 +1495,27 @@ impl Shape {
 /// the frame's length leaves; each checked against its element size, the bytes the frame has
 /// left and its bounds. The last list takes exactly what is left.
 pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeError> {
-    let _ = p;
     let mut out = Shape::default();
+    if m.has_optional() {
+        // Optional fields (never beside a list): each present or not by its condition, and
+        // the frame exactly as long as those present make it.
+        let payload = payload_of(p, m, wire);
+        let mut len = m.layout.len;
+        for (i, f, _) in m.optionals() {
+            let on = m.present_in(i, payload);
+            let bytes = if on { f.width } else { 0 };
+            len += bytes;
+            out.lists.push((i, usize::from(on), bytes));
+        }
+        if wire.len() != len {
+            return Err(DecodeError::WrongLength {
+                message: m.name.clone(),
+                expected: vec![len],
+                found: wire.len(),
+            });
+        }
+        return Ok(out);
+    }
     let lists: Vec<(usize, &Field, &crate::ir::Repeat)> = m.repeats().collect();
     let Some(&(_, first, first_r)) = lists.first() else {
         return Ok(out);
@@ -1855,6 +1904,9 @@ fn misfit(p: &Protocol, m: &Message, wire: &[u8]) -> Option<Misfit> {
     let sh = shape(p, m, wire).unwrap_or_default();
     let pos = |i: usize| sh.at(m, i);
     for (i, f) in m.fields.iter().enumerate() {
+        if !sh.present(m, i) {
+            continue;
+        }
         if f.is_record() {
             let f = &*record_in_payload(m, f, payload, &sh);
             let at = o.payload + pos(i);
@@ -2040,6 +2092,9 @@ fn values_of<'p>(
     values.clear();
     values.reserve(m.fields.len());
     for (i, f) in m.fields.iter().enumerate() {
+        if !sh.present(m, i) {
+            continue;
+        }
         let at = sh.at(m, i);
         if f.is_record() {
             let sized = record_in_payload(m, f, payload, &sh);
@@ -2395,11 +2450,19 @@ pub fn encode(
     }
     let list_of = |i: usize| lists.iter().find(|l| l.0 == i).map_or(&[][..], |l| l.1);
     let records_of = |i: usize| records.iter().find(|l| l.0 == i).map(|l| (&*l.1, l.2));
+    // Optional fields take their bytes where a value is given for them (the loop below
+    // refuses one given where its condition does not hold, or missing where it does).
+    let optional: usize = m
+        .optionals()
+        .filter(|(_, f, _)| lookup(&f.name).is_some())
+        .map(|(_, f, _)| f.width)
+        .sum();
     let tail: usize = lists
         .iter()
         .map(|&(i, l)| m.fields[i].elements_len(l.len()))
         .chain(records.iter().map(|(_, f, l)| f.elements_len(l.len())))
-        .sum();
+        .sum::<usize>()
+        + optional;
     let mut out = vec![0u8; p.frame_len(m) + tail];
     for at in o.starts() {
         for (i, s) in p.framing.sync_of(m.direction).iter().enumerate() {
@@ -2422,6 +2485,24 @@ pub fn encode(
     let mut shift = 0usize;
     for (i, f) in m.fields.iter().enumerate() {
         let at = f.frame_at(&o) + shift;
+        if let Some(c) = &f.present {
+            // Its condition reads a field before it, encoded already.
+            let on = c.holds(ints.get(c.field).copied().unwrap_or(0));
+            let given = lookup(&f.name).is_some();
+            if on != given {
+                let of = m.fields.get(c.field).map_or("", |g| g.name.as_str());
+                return Err(EncodeError::Optional {
+                    field: f.name.clone(),
+                    condition: c.describe(of),
+                    given,
+                });
+            }
+            if !on {
+                ints.push(0);
+                continue;
+            }
+            shift += f.width;
+        }
         if f.is_record() {
             let (f, recs) = records_of(i).unwrap_or((f, &[]));
             shift += f.elements_len(recs.len());

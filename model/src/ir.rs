@@ -754,6 +754,10 @@ impl Message {
         };
         match self.fields[..i].iter().rev().find(|g| g.repeat.is_some()) {
             _ if f.header => format!("header + {}", f.offset),
+            // After the optional fields before it that are present.
+            _ if f.present.is_some() && self.fields[..i].iter().any(|g| g.present.is_some()) => {
+                format!("{} + earlier optional", f.offset)
+            }
             Some(l) => format!("`{}` + {}", l.name, f.offset - l.offset),
             None => f.offset.to_string(),
         }
@@ -783,7 +787,8 @@ impl Message {
         lead
     }
 
-    /// Its shortest frame: with the fewest elements its repeated fields may have.
+    /// Its shortest frame: with the fewest elements its repeated fields may have (and no
+    /// optional field).
     pub fn min_len(&self) -> usize {
         self.layout.len
             + self
@@ -795,9 +800,37 @@ impl Message {
                 .sum::<usize>()
     }
 
-    /// Whether its frames vary in length.
+    /// Whether its frames vary in length: a repeated field, or optional fields.
     pub fn is_variable(&self) -> bool {
-        self.repeat().is_some()
+        self.repeat().is_some() || self.has_optional()
+    }
+
+    /// Whether it has optional fields (`present:`).
+    pub fn has_optional(&self) -> bool {
+        self.fields.iter().any(|f| f.present.is_some())
+    }
+
+    /// Every optional field (index, field, its condition), in wire order.
+    pub fn optionals(&self) -> impl Iterator<Item = (usize, &Field, &Presence)> {
+        self.fields
+            .iter()
+            .enumerate()
+            .filter_map(|(i, f)| f.present.as_ref().map(|c| (i, f, c)))
+    }
+
+    /// Whether optional field `i` is on the wire in a frame whose payload is `payload` (its
+    /// condition's field read where it sits; a field without `present` always is). Optional
+    /// fields follow every other field, and the fields their conditions read sit at fixed
+    /// offsets before them.
+    pub fn present_in(&self, i: usize, payload: &[u8]) -> bool {
+        let Some(c) = self.fields.get(i).and_then(|f| f.present.as_ref()) else {
+            return true;
+        };
+        let Some(g) = self.fields.get(c.field) else {
+            return false;
+        };
+        let bytes = payload.get(g.offset..g.offset + g.width).unwrap_or(&[]);
+        c.holds(crate::interp::read_uint(bytes, g.byte_order) as i64)
     }
 
     /// The field (index) that counts the elements or bytes of its first repeated field, if any.
@@ -826,6 +859,10 @@ impl Message {
     /// of elements gives; none where a length or count field gives each frame's length (the
     /// stream decoder reads it from the frame).
     pub fn listed_lengths(&self, framing: &Framing) -> Vec<usize> {
+        if self.has_optional() {
+            // A length field gives each frame's length (the validator requires one).
+            return Vec::new();
+        }
         let Some((f, r)) = self.repeat() else {
             return vec![self.layout.len];
         };
@@ -927,6 +964,46 @@ pub struct Field {
     /// that field's index. Its `width` is its type's (the most it takes); in a frame it takes
     /// the named field's value, 1 up to that. The record's `width` counts it at its most.
     pub bytes_from: Option<usize>,
+    /// An optional field (`present:`): on the wire only where its condition holds. Optional
+    /// fields end the payload; `offset` is where the field sits when no optional field before
+    /// it is on the wire (the optional fields before it on the wire shift it by their widths,
+    /// as lists shift the fields after them: `interp::Shape`).
+    pub present: Option<Presence>,
+}
+
+/// When an optional field is on the wire: a condition on an earlier field of its message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Presence {
+    /// The field (index in the message's fields) whose raw value says.
+    pub field: usize,
+    pub when: PresentWhen,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PresentWhen {
+    /// That bit (0 = least significant) of the field is set.
+    Bit(u32),
+    /// The field holds this raw value.
+    Equals(i64),
+}
+
+impl Presence {
+    /// Whether the field is present when the field it depends on holds `raw`.
+    pub fn holds(&self, raw: i64) -> bool {
+        match self.when {
+            PresentWhen::Bit(b) => b < 64 && (raw as u64) >> b & 1 == 1,
+            PresentWhen::Equals(v) => raw == v,
+        }
+    }
+
+    /// The condition in words, with the name of the field it reads: `bit 0 of flags is set`,
+    /// `kind = 2`.
+    pub fn describe(&self, of: &str) -> String {
+        match self.when {
+            PresentWhen::Bit(b) => format!("bit {b} of `{of}` is set"),
+            PresentWhen::Equals(v) => format!("`{of}` = {v}"),
+        }
+    }
 }
 
 /// A fixed number of elements, each `bits` wide, packed into one bit stream (CRSF's 16 × 11-bit
@@ -1337,6 +1414,15 @@ impl Protocol {
                         ));
                     }
                 }
+            }
+        }
+        // Optional fields: the interpreter's, not yet the generator's.
+        for m in self.commands.iter().chain(&self.responses) {
+            if let Some((_, f, _)) = m.optionals().next() {
+                gaps.push(format!(
+                    "`{}.{}`: an optional field (`present`; the interpreter serves it: `busspec decode --spec`)",
+                    m.name, f.name
+                ));
             }
         }
         let max = MAX_DISTINCT_LENGTHS;

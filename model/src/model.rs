@@ -694,6 +694,10 @@ pub struct Field {
     /// of the message (Dynamixel SYNC_WRITE's `data_length`), 1 up to its type's width.
     #[serde(default)]
     pub bytes: Option<String>,
+    /// An optional field: on the wire only when an earlier field says so (`present: {field:
+    /// flags, bit: 0}` or `present: {field: kind, equals: 2}`).
+    #[serde(default)]
+    pub present: Option<Present>,
     #[serde(default)]
     pub doc: Option<String>,
 }
@@ -719,6 +723,7 @@ impl Field {
             "follows" => self.follows.is_some(),
             "fields" => !self.fields.is_empty(),
             "bytes" => self.bytes.is_some(),
+            "present" => self.present.is_some(),
             // The validator's own key lists name only these: a misspelt one is its bug.
             _ => {
                 debug_assert!(false, "`{key}` is no key of a field");
@@ -726,6 +731,19 @@ impl Field {
             }
         }
     }
+}
+
+/// `present: {field: flags, bit: 3}` (the field is on the wire when bit 3 of the earlier
+/// field `flags` is set) or `present: {field: kind, equals: 2}` (when `kind` is 2): exactly one
+/// of `bit` and `equals`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Present {
+    pub field: String,
+    #[serde(default)]
+    pub bit: Option<i64>,
+    #[serde(default)]
+    pub equals: Option<i64>,
 }
 
 /// `packed: {count: 16, bits: 11, bit_order: lsb_first}`: `count` elements of `bits` bits each,

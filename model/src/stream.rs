@@ -188,15 +188,16 @@ enum Lens {
 /// fixed length; the length its length field or count field gives; for a repeat to the end of
 /// the frame, every whole number of elements between its bounds.
 fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
-    let Some((f, r)) = m.repeat() else {
+    let repeat = m.repeat();
+    if repeat.is_none() && !m.has_optional() {
         return Lens::Are(vec![m.layout.len]);
-    };
+    }
     // A variable-length message whose length or count field gives its length is told apart
     // by the constants that lead its payload too, as by its code
     // (`Message::leading_constants`): wait for them, and none where one differs. One whose
     // elements run to the end without a length field has its lengths listed, as a fixed
     // message's, by its code alone.
-    let listed = p.framing.length.is_none() && r.count == Count::ToEnd;
+    let listed = p.framing.length.is_none() && repeat.is_some_and(|(_, r)| r.count == Count::ToEnd);
     let lead = if listed {
         Vec::new()
     } else {
@@ -225,6 +226,10 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
         let base = interp::length_for(p, m.direction, m.layout.len).unwrap_or(0);
         return within(m.layout.len as i64 + (v - base));
     }
+    // Optional fields have a length field (validated): only a list is left to read.
+    let Some((f, r)) = repeat else {
+        return Lens::Are(Vec::new());
+    };
     match r.count {
         Count::Elements(_) | Count::Bytes(_) => {
             // Each list's count field, read where the lists before it put it (a list to the

@@ -468,6 +468,8 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     }
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
 
+    optional_codes(&commands, "commands", sink);
+    optional_codes(&responses, "responses", sink);
     check_overlaps(&commands, "commands", sink);
     let framed = responses.len() - constants.len();
     check_overlaps(&responses[..framed], "responses", sink);
@@ -1779,6 +1781,7 @@ fn header_fields(
                 "encoding",
                 "word_order",
                 "length",
+                "present",
             ],
             |k| {
                 format!("`{k}` cannot be used in a header field (an integer every message carries, with its unit, range, enum, flags, special values or sub-fields)")
@@ -2221,6 +2224,7 @@ fn message_body(
     let mut offset = 0usize;
     let mut tail = 0usize;
     let mut min_tail = 0usize;
+    let mut optional = 0usize;
     let mut counters = BTreeSet::new();
     for (i, f) in fields.iter().enumerate() {
         let p = join(&fpath, &f.name);
@@ -2257,7 +2261,10 @@ fn message_body(
             };
             sink.error(&p, format!("duplicate field name `{}`{what}", f.name));
         }
-        let field = field(f, &p, offset, byte_order, &out, refs, sink);
+        let mut field = field(f, &p, offset, byte_order, &out, refs, sink);
+        if let Some(pr) = &f.present {
+            field.present = presence(f, pr, &p, &out, fields, sink);
+        }
         if let Some(h) = header_reference(&field, framing.header.len()) {
             sink.error(
                 &p,
@@ -2294,10 +2301,14 @@ fn message_body(
                 tail += field.elements_len(r.max);
                 min_tail += field.elements_len(r.min);
             }
+            // An optional field sits after every fixed one, where the optional fields before
+            // it leave it (`ir::Field::present`); the frame's shortest length leaves it out.
+            None if f.present.is_some() => optional += field.width,
             None => offset += field.width,
         }
         out.push(field);
     }
+    optional_layout(fields, &fpath, framing, sink);
     let lists = out.iter().filter(|f| f.repeat.is_some()).count();
     // A record whose width a field gives: the one list, last, framed by a length field (a
     // stream decoder lists no lengths of it beforehand, nor places fields after it).
@@ -2326,7 +2337,7 @@ fn message_body(
             format!("{lists} repeated fields; a message has at most {MAX_LISTS}"),
         );
     }
-    if offset + min_tail < dir.payload_min || offset + tail > dir.payload_max {
+    if offset + min_tail < dir.payload_min || offset + tail + optional > dir.payload_max {
         let most = if tail > 0 {
             let which = if fields.iter().filter(|f| f.repeat.is_some()).count() > 1 {
                 "fields"
@@ -2334,6 +2345,8 @@ fn message_body(
                 "field"
             };
             format!(" (and up to {tail} more in the repeated {which})")
+        } else if optional > 0 {
+            format!(" (and up to {optional} more in the optional fields)")
         } else {
             String::new()
         };
@@ -2348,7 +2361,196 @@ fn message_body(
             ),
         );
     }
-    (code, out, offset, offset + tail)
+    (code, out, offset, offset + tail + optional)
+}
+
+/// The most optional fields (`present:`) a message may have.
+pub const MAX_OPTIONAL: usize = 4;
+
+/// An optional field's condition (`present: {field, bit | equals}`), resolved against the
+/// fields before it (`earlier`, header fields first); and what an optional field may be: a
+/// plain number of a fixed width.
+fn presence(
+    f: &model::Field,
+    pr: &model::Present,
+    p: &str,
+    earlier: &[Field],
+    all: &[model::Field],
+    sink: &mut Sink,
+) -> Option<Presence> {
+    use model::FieldType as T;
+    let pp = join(p, "present");
+    refuse_keys(
+        f,
+        p,
+        &[
+            "value", "equals", "follows", "bits", "repeat", "packed", "fields", "encoding",
+        ],
+        |k| {
+            format!("`{k}` cannot be combined with `present`: an optional field is a plain number of a fixed width")
+        },
+        sink,
+    );
+    if matches!(f.ty, T::Ascii | T::Bit | T::Record) {
+        sink.error(
+            join(p, "type"),
+            "an optional field (`present`) is a number of a fixed width (u8 to u64, i8 to i64, f32, f64)",
+        );
+    }
+    let fp = join(&pp, "field");
+    let Some(i) = earlier.iter().position(|g| g.name == pr.field && !g.header) else {
+        let why = if earlier.iter().any(|g| g.name == pr.field) {
+            format!("`{}` is a header field (framing.header): a condition reads a field of the message's payload", pr.field)
+        } else if all.iter().any(|g| g.name == pr.field) {
+            format!(
+                "`{}` comes later: a condition reads a field before the optional one",
+                pr.field
+            )
+        } else {
+            format!("no field `{}` before this one", pr.field)
+        };
+        sink.error(fp, why);
+        return None;
+    };
+    let g = &earlier[i];
+    let refused = if g.present.is_some() {
+        Some("an optional field")
+    } else if g.repeat.is_some() || g.packed.is_some() {
+        Some("a list")
+    } else if g.ty == T::Ascii {
+        Some("text")
+    } else if g.is_float() {
+        Some("a float")
+    } else if g.signed {
+        Some("signed")
+    } else if g.bcd {
+        Some("BCD")
+    } else if g.word_swapped {
+        Some("word-swapped")
+    } else if g.equals.is_some() || g.follows.is_some() {
+        Some("derived from another field (`equals`, `follows`)")
+    } else {
+        None
+    };
+    if let Some(what) = refused {
+        sink.error(
+            fp,
+            format!("`{}` is {what}: a condition reads an unsigned binary integer that is always on the wire", g.name),
+        );
+        return None;
+    }
+    let bits = 8 * g.width as u32;
+    let when = match (pr.bit, pr.equals) {
+        (Some(b), None) => {
+            if !(0..i64::from(bits)).contains(&b) {
+                sink.error(
+                    join(&pp, "bit"),
+                    format!("bit {b} is outside `{}`'s bits 0..={}", g.name, bits - 1),
+                );
+                return None;
+            }
+            PresentWhen::Bit(b as u32)
+        }
+        (None, Some(v)) => {
+            if v < 0 || !fits_unsigned(v, bits) {
+                sink.error(
+                    join(&pp, "equals"),
+                    format!("{v} does not fit `{}` (0..={})", g.name, g.raw_span().1),
+                );
+                return None;
+            }
+            PresentWhen::Equals(v)
+        }
+        _ => {
+            sink.error(
+                pp,
+                "`present` takes exactly one of `bit` and `equals` beside `field`",
+            );
+            return None;
+        }
+    };
+    Some(Presence { field: i, when })
+}
+
+/// A message with optional fields is the one message of its code (a code of its own, not
+/// taken from its request) in a direction where every message has a code: its frames are
+/// told apart by the code alone, whatever their length.
+fn optional_codes(msgs: &[Message], list: &str, sink: &mut Sink) {
+    let codeless = msgs.iter().find(|m| m.code.is_empty() && m.frame.is_none());
+    for m in msgs.iter().filter(|m| m.has_optional()) {
+        let Some((_, f, _)) = m.optionals().next() else {
+            continue;
+        };
+        let pp = join(
+            &join(&join(&join(list, &m.name), "fields"), &f.name),
+            "present",
+        );
+        if m.code.is_empty() {
+            sink.error(
+                pp,
+                "optional fields in a message without a code are not expressible yet",
+            );
+        } else if m.code_from_request.is_some() {
+            sink.error(pp, "optional fields in a message whose code comes from the request are not expressible yet");
+        } else if let Some(o) = msgs.iter().find(|o| o.name != m.name && o.code == m.code) {
+            sink.error(
+                pp,
+                format!("optional fields in a message whose code `{}` `{}` shares are not expressible yet", m.code_hex(), o.name),
+            );
+        } else if let Some(c) = codeless {
+            sink.error(
+                pp,
+                format!("optional fields where a message of the direction has no code (`{}`) are not expressible yet", c.name),
+            );
+        }
+    }
+}
+
+/// Where optional fields may stand in a message's fields: last, beside no list, at most
+/// [`MAX_OPTIONAL`], in a framing with a length field (which gives each frame's length, so a
+/// stream decoder frames it without reading its conditions) and without escaping.
+fn optional_layout(fields: &[model::Field], fpath: &str, framing: &Framing, sink: &mut Sink) {
+    let Some(first) = fields.iter().position(|f| f.present.is_some()) else {
+        return;
+    };
+    let name = &fields[first].name;
+    for f in fields[first + 1..].iter().filter(|f| f.present.is_none()) {
+        sink.error(
+            join(fpath, &f.name),
+            format!(
+                "a field after the optional field `{name}`: optional fields end the message, yet"
+            ),
+        );
+    }
+    let n = fields.iter().filter(|f| f.present.is_some()).count();
+    if n > MAX_OPTIONAL {
+        sink.error(
+            fpath,
+            format!("{n} optional fields; a message has at most {MAX_OPTIONAL}"),
+        );
+    }
+    let pp = join(&join(fpath, name), "present");
+    if let Some(l) = fields.iter().find(|f| f.repeat.is_some()) {
+        sink.error(
+            &pp,
+            format!(
+                "optional fields beside a repeated field (`{}`) are not expressible yet",
+                l.name
+            ),
+        );
+    }
+    if framing.length.is_none() {
+        sink.error(
+            &pp,
+            "optional fields need a length field (framing.length): it gives each frame's length, which the fields present must agree with",
+        );
+    }
+    if framing.escaping.is_some() {
+        sink.error(
+            &pp,
+            "optional fields with `escaping` are not expressible yet",
+        );
+    }
 }
 
 fn field(
@@ -2423,6 +2625,7 @@ fn field(
         record: Vec::new(),
         bytes_from: None,
         header: false,
+        present: None,
     };
     if f.bytes.is_some() {
         sink.error(
@@ -2705,6 +2908,7 @@ fn record_field(
             "special",
             "bits",
             "follows",
+            "present",
         ],
         |k| format!("`{k}` cannot be combined with a record: its fields take their own"),
         sink,
@@ -2747,6 +2951,7 @@ fn record_field(
                 "fields",
                 "packed",
                 "encoding",
+                "present",
             ],
             |k| {
                 format!("`{k}` cannot be used in a record's field (each is a plain number of a fixed width)")

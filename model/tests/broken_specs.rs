@@ -46,6 +46,120 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "preamble_with_constant_frame",
         &[("responses.ack.frame", "a constant frame is not expressible with a preamble (framing.preamble), yet")],
     ),
+    // ---- optional fields (made from valid/optional_sensor, without its examples)
+    (
+        "optional_with_escaping",
+        &[
+            ("responses.reading.fields.humidity.present", "optional fields with `escaping` are not expressible yet"),
+            ("responses.event.fields.detail.present", "optional fields with `escaping` are not expressible yet"),
+        ],
+    ),
+    (
+        "optional_code_from_request",
+        &[("responses.event.fields.detail.present", "optional fields in a message whose code comes from the request are not expressible yet")],
+    ),
+    (
+        "optional_beside_list",
+        &[
+            ("responses.event.fields.log", "a field after the optional field `detail`: optional fields end the message, yet"),
+            ("responses.event.fields.detail.present", "optional fields beside a repeated field (`log`) are not expressible yet"),
+        ],
+    ),
+    (
+        "optional_bit_and_equals",
+        &[
+            ("responses.event.fields.detail.present", "`present` takes exactly one of `bit` and `equals` beside `field`"),
+        ],
+    ),
+    (
+        "optional_bit_outside",
+        &[
+            ("responses.reading.fields.humidity.present.bit", "bit 8 is outside `status`'s bits 0..=7"),
+        ],
+    ),
+    (
+        "optional_condition_later",
+        &[
+            ("responses.reading.fields.humidity.present.field", "`pressure` comes later: a condition reads a field before the optional one"),
+        ],
+    ),
+    (
+        "optional_condition_missing",
+        &[
+            ("responses.reading.fields.humidity.present.field", "no field `stat` before this one"),
+        ],
+    ),
+    (
+        "optional_condition_optional",
+        &[
+            ("responses.reading.fields.pressure.present.field", "`humidity` is an optional field: a condition reads an unsigned binary integer that is always on the wire"),
+        ],
+    ),
+    (
+        "optional_condition_signed",
+        &[
+            ("responses.reading.fields.humidity.present.field", "`temperature` is signed"),
+        ],
+    ),
+    (
+        "optional_constant",
+        &[
+            ("responses.event.fields.detail.value", "`value` cannot be combined with `present`: an optional field is a plain number of a fixed width"),
+        ],
+    ),
+    (
+        "optional_equals_too_wide",
+        &[
+            ("responses.event.fields.detail.present.equals", "256 does not fit `kind` (0..=255)"),
+        ],
+    ),
+    (
+        "optional_field_after",
+        &[
+            ("responses.reading.fields.battery", "a field after the optional field `humidity`: optional fields end the message, yet"),
+        ],
+    ),
+    (
+        "optional_in_header",
+        &[
+            ("framing.header.seq.present", "`present` cannot be used in a header field"),
+        ],
+    ),
+    (
+        "optional_in_record",
+        &[
+            ("responses.event.fields.recs.fields.a.present", "`present` cannot be used in a record's field"),
+            ("responses.event.fields.recs", "a field after the optional field `detail`"),
+            ("responses.event.fields.detail.present", "optional fields beside a repeated field (`recs`) are not expressible yet"),
+        ],
+    ),
+    (
+        "optional_shared_code",
+        &[
+            ("responses.reading.fields.humidity.present", "optional fields in a message whose code `0x81` `event` shares are not expressible yet"),
+            ("responses.event.fields.detail.present", "optional fields in a message whose code `0x81` `reading` shares are not expressible yet"),
+            ("responses.event", "duplicate code: `reading` (0x81) and `event` (0x81)"),
+        ],
+    ),
+    (
+        "optional_text",
+        &[
+            ("responses.event.fields.detail.type", "an optional field (`present`) is a number of a fixed width"),
+        ],
+    ),
+    (
+        "optional_too_many",
+        &[
+            ("responses.reading.fields", "5 optional fields; a message has at most 4"),
+        ],
+    ),
+    (
+        "optional_without_length_field",
+        &[
+            ("responses.reading.fields.humidity.present", "optional fields need a length field (framing.length)"),
+            ("responses.event.fields.detail.present", "optional fields need a length field (framing.length)"),
+        ],
+    ),
     // ---- constant whole frames (made from valid/mbus_short, without its examples)
     (
         "constant_frame_not_hex",

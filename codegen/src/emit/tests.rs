@@ -31,6 +31,7 @@ fn field(range: (i64, i64), special: &[i64]) -> Field {
         follows: None,
         record: Vec::new(),
         bytes_from: None,
+        present: None,
         header: false,
     }
 }
