@@ -13,13 +13,14 @@ use embedded_io::{Read, ReadReady, Write};
 
 use crate::driver::{nanos, tick, Blocking, Error, NoPin, Now};
 use crate::link::Link;
-use crate::master::{Action, Reply};
+use crate::master::{Action, Reply, RX};
 use crate::movement::{run, Drive, MoveReport, Movement, Moving};
 
 /// A blocking master for protocol `P` on the UART `U` (builders: [`crate::driver::Driver`]).
-pub type Driver<P, U, N, D, DE = NoPin> = crate::driver::Driver<P, U, N, D, DE, Blocking>;
+pub type Driver<P, U, N, D, DE = NoPin, const CAP: usize = RX> =
+    crate::driver::Driver<P, U, N, D, DE, Blocking, CAP>;
 
-impl<P: Link, U, N, D, DE> Driver<P, U, N, D, DE>
+impl<P: Link, U, N, D, DE, const CAP: usize> Driver<P, U, N, D, DE, CAP>
 where
     U: Read + Write + ReadReady,
     N: Now,
@@ -109,9 +110,9 @@ where
 }
 
 /// The driver as the movement loop borrows it ([`Drive`]).
-struct Steps<'a, P: Link, U, N, D, DE>(&'a mut Driver<P, U, N, D, DE>);
+struct Steps<'a, P: Link, U, N, D, DE, const CAP: usize>(&'a mut Driver<P, U, N, D, DE, CAP>);
 
-impl<P: Link, U, N, D, DE> Drive<P> for Steps<'_, P, U, N, D, DE>
+impl<P: Link, U, N, D, DE, const CAP: usize> Drive<P> for Steps<'_, P, U, N, D, DE, CAP>
 where
     U: Read + Write + ReadReady,
     N: Now,

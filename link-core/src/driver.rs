@@ -11,7 +11,7 @@ use embedded_hal::digital::{ErrorKind, ErrorType, OutputPin};
 
 use crate::line::Line;
 use crate::link::Link;
-use crate::master::{Failure, MasterCore, Timing};
+use crate::master::{Failure, MasterCore, Timing, RX};
 use crate::movement::{MoveError, MovementError};
 
 /// A monotonic time source: time since any fixed epoch (a free-running timer).
@@ -108,9 +108,9 @@ pub struct Async;
 
 /// A master for protocol `P` on the UART `U`, timed by `N` and `D`, with the driver-enable
 /// pin `DE`; `M` is [`Blocking`] or [`Async`] (use `blocking::Driver` or
-/// `nonblocking::Driver`).
-pub struct Driver<P: Link, U, N, D, DE, M> {
-    pub(crate) core: MasterCore<P>,
+/// `nonblocking::Driver`); `CAP` is its core's receive buffer in bytes ([`MasterCore`]).
+pub struct Driver<P: Link, U, N, D, DE, M, const CAP: usize = RX> {
+    pub(crate) core: MasterCore<P, CAP>,
     pub(crate) uart: U,
     pub(crate) now: N,
     pub(crate) delay: D,
@@ -118,7 +118,7 @@ pub struct Driver<P: Link, U, N, D, DE, M> {
     _kind: PhantomData<M>,
 }
 
-impl<P: Link, U, N: Now, D, M> Driver<P, U, N, D, NoPin, M> {
+impl<P: Link, U, N: Now, D, M, const CAP: usize> Driver<P, U, N, D, NoPin, M, CAP> {
     /// A driver with the protocol's timing and line, and no driver-enable pin.
     pub fn new(uart: U, now: N, delay: D) -> Self {
         Driver {
@@ -132,9 +132,9 @@ impl<P: Link, U, N: Now, D, M> Driver<P, U, N, D, NoPin, M> {
     }
 }
 
-impl<P: Link, U, N: Now, D, DE, M> Driver<P, U, N, D, DE, M> {
+impl<P: Link, U, N: Now, D, DE, M, const CAP: usize> Driver<P, U, N, D, DE, M, CAP> {
     /// Drives `pin` as the transceiver's driver-enable line; set [`Line::driver_enable`] too.
-    pub fn with_driver_enable<E: OutputPin>(self, pin: E) -> Driver<P, U, N, D, E, M> {
+    pub fn with_driver_enable<E: OutputPin>(self, pin: E) -> Driver<P, U, N, D, E, M, CAP> {
         Driver {
             core: self.core,
             uart: self.uart,
@@ -156,11 +156,11 @@ impl<P: Link, U, N: Now, D, DE, M> Driver<P, U, N, D, DE, M> {
     }
 
     /// The sans-IO core: freshness counters, byte-order checks, the last frames.
-    pub fn core(&self) -> &MasterCore<P> {
+    pub fn core(&self) -> &MasterCore<P, CAP> {
         &self.core
     }
 
-    pub fn core_mut(&mut self) -> &mut MasterCore<P> {
+    pub fn core_mut(&mut self) -> &mut MasterCore<P, CAP> {
         &mut self.core
     }
 

@@ -276,15 +276,36 @@ enum Phase {
     Main,
 }
 
-/// The received-bytes buffer. Any one frame of a protocol fits (a protocol whose frames may be
+/// The receive buffer's default size in bytes, [`MasterCore`]'s `CAP` where a type does not
+/// name one. Any one frame of a protocol must fit the buffer (a protocol whose frames may be
 /// longer does not build: [`MasterCore::new`]); reading stops at four frames' worth or when it
-/// is full. It held 256 bytes, which cut Dynamixel 2.0's status packets of 246 data bytes and
-/// more (257 bytes and up) into "no valid reply"; 1024 is also the longest frame a spec read at
-/// run time may have.
+/// is full. 1024 bytes hold Dynamixel 2.0's longest status packet (256 bytes cut its packets of
+/// 246 data bytes and more into "no valid reply") and the longest frame a spec read at run
+/// time may have.
 pub const RX: usize = 1024;
 
-/// The sans-IO master for protocol `P`; see the module docs.
-pub struct MasterCore<P: Link> {
+/// The sans-IO master for protocol `P`, with a receive buffer of `CAP` bytes; see the module
+/// docs.
+///
+/// `CAP` defaults to [`RX`]. Firmware whose protocol has short frames takes less RAM with a
+/// smaller one, and a protocol whose frames are longer than 1024 bytes needs a larger one:
+///
+/// ```
+/// # use busspec_link_core::MasterCore;
+/// # use busspec_devices::Sd;
+/// // SD's frames are 6 bytes: 32 bytes hold four of them and more.
+/// let core = MasterCore::<Sd, 32>::new();
+/// assert!(!core.busy());
+/// ```
+///
+/// A `CAP` below the protocol's longest frame does not build:
+///
+/// ```compile_fail
+/// # use busspec_link_core::MasterCore;
+/// # use busspec_devices::Sd;
+/// let core = MasterCore::<Sd, 4>::new();
+/// ```
+pub struct MasterCore<P: Link, const CAP: usize = RX> {
     timing: Timing,
     line: Line,
     /// When the line was last busy (a send or a received byte), if ever.
@@ -312,24 +333,24 @@ pub struct MasterCore<P: Link> {
     attempt: u32,
     frame: P::Buffer,
     frame_len: usize,
-    rx: [u8; RX],
+    rx: [u8; CAP],
     rx_len: usize,
     last_error: Option<Failure<P>>,
     outcome: Option<Result<Reply<P>, Failure<P>>>,
     events: heapless::Deque<Event, 4>,
 }
 
-impl<P: Link> Default for MasterCore<P> {
+impl<P: Link, const CAP: usize> Default for MasterCore<P, CAP> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<P: Link> MasterCore<P> {
+impl<P: Link, const CAP: usize> MasterCore<P, CAP> {
     /// Every frame of `P` fits the receive buffer.
     const FRAME_FITS: () = assert!(
-        P::MAX_FRAME_LEN <= RX,
-        "a frame of this protocol is longer than the master's receive buffer (link_core::master::RX)"
+        P::MAX_FRAME_LEN <= CAP,
+        "a frame of this protocol is longer than the master's receive buffer (MasterCore's CAP, link_core::master::RX by default)"
     );
 
     /// A master with the protocol's [`Timing`] and [`Line`].
@@ -358,7 +379,7 @@ impl<P: Link> MasterCore<P> {
             attempt: 0,
             frame: P::EMPTY_BUFFER,
             frame_len: 0,
-            rx: [0; RX],
+            rx: [0; CAP],
             rx_len: 0,
             last_error: None,
             outcome: None,
@@ -394,7 +415,7 @@ impl<P: Link> MasterCore<P> {
 
     /// The bytes last received: the reply being read or judged, or bytes discarded.
     pub fn reply(&self) -> &[u8] {
-        &self.rx[..self.rx_len.min(RX)]
+        &self.rx[..self.rx_len.min(CAP)]
     }
 
     /// The address and request of the operation last started.
@@ -903,8 +924,8 @@ impl<P: Link> MasterCore<P> {
     }
 
     fn store(&mut self, bytes: &[u8]) {
-        let start = self.rx_len.min(RX);
-        let n = bytes.len().min(RX - start);
+        let start = self.rx_len.min(CAP);
+        let n = bytes.len().min(CAP - start);
         self.rx[start..start + n].copy_from_slice(&bytes[..n]);
         self.rx_len += bytes.len();
     }

@@ -15,13 +15,14 @@ use embedded_io_async::{Read, ReadReady, Write};
 
 use crate::driver::{nanos, tick, Async, Error, NoPin, Now};
 use crate::link::Link;
-use crate::master::{Action, Reply};
+use crate::master::{Action, Reply, RX};
 use crate::movement::{run_async, DriveAsync, MoveReport, Movement, Moving};
 
 /// An async master for protocol `P` on the UART `U` (builders: [`crate::driver::Driver`]).
-pub type Driver<P, U, N, D, DE = NoPin> = crate::driver::Driver<P, U, N, D, DE, Async>;
+pub type Driver<P, U, N, D, DE = NoPin, const CAP: usize = RX> =
+    crate::driver::Driver<P, U, N, D, DE, Async, CAP>;
 
-impl<P: Link, U, N, D, DE> Driver<P, U, N, D, DE>
+impl<P: Link, U, N, D, DE, const CAP: usize> Driver<P, U, N, D, DE, CAP>
 where
     U: Read + Write + ReadReady,
     N: Now,
@@ -111,9 +112,9 @@ where
 }
 
 /// The driver as the movement loop borrows it ([`DriveAsync`]).
-struct Steps<'a, P: Link, U, N, D, DE>(&'a mut Driver<P, U, N, D, DE>);
+struct Steps<'a, P: Link, U, N, D, DE, const CAP: usize>(&'a mut Driver<P, U, N, D, DE, CAP>);
 
-impl<P: Link, U, N, D, DE> DriveAsync<P> for Steps<'_, P, U, N, D, DE>
+impl<P: Link, U, N, D, DE, const CAP: usize> DriveAsync<P> for Steps<'_, P, U, N, D, DE, CAP>
 where
     U: Read + Write + ReadReady,
     N: Now,

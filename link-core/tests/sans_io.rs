@@ -109,3 +109,61 @@ fn the_first_set_point_reads_the_devices_counter_first() {
     assert_eq!(core.poll(ms(12)), Action::Write(&frame(&set(13), 1)));
     assert_eq!(core.next_freshness_value(1), Some(14));
 }
+
+#[test]
+fn a_smaller_receive_buffer_runs_the_same_transaction_in_less_memory() {
+    // UB2's longest frame is 16 bytes: a 16-byte buffer holds any one reply.
+    let mut small: MasterCore<Ub2, 16> = MasterCore::new();
+    let mut default: MasterCore<Ub2> = MasterCore::new();
+    assert_eq!(
+        core::mem::size_of::<MasterCore<Ub2>>() - core::mem::size_of::<MasterCore<Ub2, 16>>(),
+        1024 - 16
+    );
+    let q = ub2::Request::GetActualCapacitance;
+    let reply = ub2::Response::ActualCapacitance {
+        capacitance: ub2::Capacitance(321),
+    };
+    let bytes = frame(&reply, 0x21);
+    small.start(0x21, q);
+    default.start(0x21, q);
+    for t in [0, 0, 3] {
+        assert_eq!(small.poll(ms(t)), default.poll(ms(t)));
+    }
+    small.received(&bytes, ms(10));
+    default.received(&bytes, ms(10));
+    assert_eq!(small.poll(ms(10)), Action::Done);
+    assert_eq!(default.poll(ms(10)), Action::Done);
+    let (s, d) = (
+        small.take_outcome().unwrap(),
+        default.take_outcome().unwrap(),
+    );
+    assert_eq!(s.unwrap().response, Some(reply));
+    assert_eq!(d.unwrap().response, Some(reply));
+    assert_eq!(small.reply(), default.reply());
+}
+
+#[test]
+fn a_babbling_line_overflows_a_small_buffer_into_a_bad_reply_not_a_panic() {
+    let mut core: MasterCore<Ub2, 16> = MasterCore::new();
+    core.start(0x21, ub2::Request::GetActualCapacitance);
+    core.poll(ms(0));
+    core.poll(ms(0));
+    assert_eq!(core.poll(ms(3)), Action::Read { until: ms(203) });
+    // Four frames' worth of noise (64 bytes) in pieces: the buffer keeps its first 16 and
+    // the reply is judged then, without waiting for the line to fall quiet.
+    for i in 0..8u64 {
+        core.received(&[0x55; 8], ms(10 + i));
+    }
+    assert_eq!(core.reply(), &[0x55; 16][..]);
+    assert!(matches!(
+        core.take_event(),
+        Some(Event::Sent { attempt: 1 })
+    ));
+    assert!(matches!(
+        core.take_event(),
+        Some(Event::Received {
+            attempt: 1,
+            rejected: Some(_)
+        })
+    ));
+}

@@ -31,7 +31,7 @@ use std::fmt;
 use std::io;
 use std::time::Duration;
 
-use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply};
+use busspec_link_core::master::{Action, AddressProblem, Event, Failure, MasterCore, Reply, RX};
 pub use busspec_link_core::master::{Rejection, Timing};
 pub use busspec_link_core::movement::MoveReport;
 use busspec_link_core::movement::{self, Drive, MoveError, Movement, MovementError};
@@ -344,18 +344,19 @@ pub enum TraceEvent<'a> {
 type Observer = Box<dyn FnMut(&TraceEvent<'_>)>;
 
 /// A bus master for protocol `P` over transport `T`, timed by clock `C`: the blocking `std`
-/// driver of [`MasterCore`], which keeps every rule; this loop only does what it says.
-pub struct Master<P: Link, T: Transport, C: Clock> {
+/// driver of [`MasterCore`], which keeps every rule; this loop only does what it says. `CAP` is
+/// the receive buffer in bytes ([`MasterCore`]; 1024 by default).
+pub struct Master<P: Link, T: Transport, C: Clock, const CAP: usize = RX> {
     transport: T,
     clock: C,
-    core: MasterCore<P>,
+    core: MasterCore<P, CAP>,
     /// The byte-order check that passed, per address ([`Link::byte_order_probe`]); valid while
     /// the core still counts the address as checked.
     byte_order: Vec<Option<ByteOrderCheck>>,
     observer: Option<Observer>,
 }
 
-impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
+impl<P: Link, T: Transport, C: Clock, const CAP: usize> Master<P, T, C, CAP> {
     pub fn new(transport: T, clock: C) -> Self {
         Master {
             transport,
@@ -575,9 +576,9 @@ impl<P: Link, T: Transport, C: Clock> Master<P, T, C> {
 }
 
 /// The master as the movement loop borrows it ([`Drive`]).
-struct Steps<'a, P: Link, T: Transport, C: Clock>(&'a mut Master<P, T, C>);
+struct Steps<'a, P: Link, T: Transport, C: Clock, const CAP: usize>(&'a mut Master<P, T, C, CAP>);
 
-impl<P: Link, T: Transport, C: Clock> Drive<P> for Steps<'_, P, T, C> {
+impl<P: Link, T: Transport, C: Clock, const CAP: usize> Drive<P> for Steps<'_, P, T, C, CAP> {
     type Error = LinkError;
 
     fn now(&mut self) -> Duration {
@@ -617,7 +618,10 @@ impl<P: Link> MovementError<P> for LinkError {
 }
 
 /// The core's failure as a [`LinkError`], with names and texts (every driver reports through it).
-pub(crate) fn link_error<P: Link>(core: &mut MasterCore<P>, failure: Failure<P>) -> LinkError {
+pub(crate) fn link_error<P: Link, const CAP: usize>(
+    core: &mut MasterCore<P, CAP>,
+    failure: Failure<P>,
+) -> LinkError {
     let timeout = core.timing().reply_timeout;
     match failure {
         Failure::Encode { request, source } => LinkError::Encode {
@@ -780,7 +784,10 @@ fn move_error<P: Link>(address: u8, e: MoveError<P>) -> LinkError {
 }
 
 /// A completed transaction of the core as an [`Exchange`].
-pub(crate) fn exchange<P: Link>(core: &MasterCore<P>, reply: Reply<P>) -> Exchange<P::Response> {
+pub(crate) fn exchange<P: Link, const CAP: usize>(
+    core: &MasterCore<P, CAP>,
+    reply: Reply<P>,
+) -> Exchange<P::Response> {
     Exchange {
         response: reply.response,
         address: reply.address,

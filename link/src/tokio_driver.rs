@@ -12,7 +12,7 @@ use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::time::Instant;
 
-use busspec_link_core::master::{Action, MasterCore};
+use busspec_link_core::master::{Action, MasterCore, RX};
 use busspec_link_core::{Line, Link};
 
 use busspec_link_core::movement::{run_async, DriveAsync, MoveReport, Movement, Moving};
@@ -44,13 +44,13 @@ impl AsyncPort for tokio_serial::SerialStream {
 }
 
 /// A bus master for protocol `P` on the async port `S`.
-pub struct AsyncMaster<P: Link, S: AsyncPort> {
+pub struct AsyncMaster<P: Link, S: AsyncPort, const CAP: usize = RX> {
     port: S,
-    core: MasterCore<P>,
+    core: MasterCore<P, CAP>,
     epoch: Instant,
 }
 
-impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
+impl<P: Link, S: AsyncPort, const CAP: usize> AsyncMaster<P, S, CAP> {
     pub fn new(port: S) -> Self {
         AsyncMaster {
             port,
@@ -70,7 +70,7 @@ impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
     }
 
     /// The sans-IO core: freshness counters, byte-order checks, timing.
-    pub fn core_mut(&mut self) -> &mut MasterCore<P> {
+    pub fn core_mut(&mut self) -> &mut MasterCore<P, CAP> {
         &mut self.core
     }
 
@@ -171,9 +171,9 @@ impl<P: Link, S: AsyncPort> AsyncMaster<P, S> {
 }
 
 /// The driver as the movement loop borrows it ([`DriveAsync`]).
-struct Steps<'a, P: Link, S: AsyncPort>(&'a mut AsyncMaster<P, S>);
+struct Steps<'a, P: Link, S: AsyncPort, const CAP: usize>(&'a mut AsyncMaster<P, S, CAP>);
 
-impl<P: Link, S: AsyncPort> DriveAsync<P> for Steps<'_, P, S> {
+impl<P: Link, S: AsyncPort, const CAP: usize> DriveAsync<P> for Steps<'_, P, S, CAP> {
     type Error = LinkError;
 
     fn now(&mut self) -> Duration {

@@ -34,9 +34,9 @@ pub struct Report {
 }
 
 /// Sends a set point to `address` for each of `targets` (in 360/4096 degree counts), then reads
-/// the actuator's skipped-frames counter.
-pub async fn set_point_loop<U, N, D, DE>(
-    driver: &mut Driver<Sd, U, N, D, DE>,
+/// the actuator's skipped-frames counter. `CAP` is the driver's receive buffer in bytes.
+pub async fn set_point_loop<U, N, D, DE, const CAP: usize>(
+    driver: &mut Driver<Sd, U, N, D, DE, CAP>,
     address: u8,
     targets: &[i16],
 ) -> Result<Report, Error<Sd, U::Error>>

@@ -22,7 +22,9 @@ mod firmware {
     pub extern "C" fn _start() -> ! {
         let mut line = Line::for_protocol::<Sd>();
         line.driver_enable = Some(DriverEnable::Computed);
-        let mut driver: Driver<Sd, _, _, _, _> = Driver::new(Uart, Timer, Timer)
+        // SD's frames are 6 bytes: a 32-byte receive buffer (four frames and more) instead of
+        // the default 1024 keeps about 1 KiB of RAM off the stack.
+        let mut driver: Driver<Sd, _, _, _, _, 32> = Driver::new(Uart, Timer, Timer)
             .with_driver_enable(DePin)
             .with_line(line);
         let targets = core::hint::black_box([0i16, 512, 1024, -512]);
