@@ -1982,7 +1982,7 @@ fn optional_fields_snapshot_agrees_with_the_interpreter() {
     }
     assert_eq!(
         (encoded, refused),
-        (6 * 1 + 5, 6 * 3 + 5),
+        (6 + 5, 6 * 3 + 5),
         "every presence encodes once"
     );
     // A value out of its range is refused where it is given.
