@@ -535,6 +535,15 @@ fn encode_error(e: interp::EncodeError) -> EncodeError {
             max,
             kind: num_kind(kind),
         },
+        I::Optional {
+            field,
+            condition,
+            given,
+        } => EncodeError::Optional {
+            field: keep(&field),
+            condition: keep(&condition),
+            given,
+        },
         other => EncodeError::OutOfRange {
             field: keep(&other.to_string()),
         },

@@ -37,6 +37,7 @@ include!("snapshots/records.rs");
 include!("snapshots/records_sized.rs");
 include!("snapshots/mbus_short.rs");
 include!("snapshots/dlt645.rs");
+include!("snapshots/optional_sensor.rs");
 
 mod agree;
 
@@ -1868,4 +1869,147 @@ fn preamble_snapshot_agrees_with_the_interpreter() {
         }
     }
     assert!(decided > 1000, "{decided} decided");
+}
+
+/// Optional fields (`present:`): the examples replay; frames of every presence (each status
+/// byte's bits, each event kind) and of every length from too short to too long, with the
+/// length field made to agree and the checksum resealed, decode alike in both engines (the
+/// same values, a length the fields present do not make refused in the same words); every
+/// presence given or left out encodes alike, a value given where its condition does not hold
+/// or missing where it does refused by both in the same words; captures stream alike.
+#[test]
+fn optional_fields_snapshot_agrees_with_the_interpreter() {
+    use busspec_model::interp::{Raw, Value};
+    use optional_sensor::{OptionalSensor, Response};
+    use std::borrow::Cow;
+    let file = "model/tests/fixtures/valid/optional_sensor.yaml";
+    replay::<OptionalSensor>(file);
+    let p = fixture(file);
+    let t = agree::agree::<OptionalSensor>(&p);
+    assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
+    // Every length of each code's frames, for each presence.
+    let mut rng = agree::Rng(0x0971);
+    let (mut accepted, mut wrong_length) = (0, 0);
+    for (code, conditions) in [
+        (0x81u8, [0u8, 1, 2, 3, 0xFC, 0xFF]),
+        (0x82, [0, 1, 2, 3, 4, 0xFF]),
+    ] {
+        for c in conditions {
+            for len in 5..=16usize {
+                let mut w = vec![0xA5, 0x01, 0, code];
+                if len > 5 {
+                    w.push(c);
+                }
+                // Small bytes: a humidity within its range.
+                while w.len() < len - 1 {
+                    w.push(rng.below(4) as u8);
+                }
+                w.push(0);
+                w.truncate(len);
+                agree::fix_length(&p, Direction::Response, &mut w);
+                agree::reseal(&p, &mut w);
+                if agree::check::<OptionalSensor>(&p, Direction::Response, None, &w) {
+                    accepted += 1;
+                } else if Response::decode(&w)
+                    .is_err_and(|e| e.to_string().starts_with("wrong length"))
+                {
+                    wrong_length += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        accepted == 12 && wrong_length > 40,
+        "{accepted} / {wrong_length}"
+    );
+    // Typed values: absent is `None`.
+    let d = Response::decode(&p.examples[1].wire).unwrap().message;
+    assert!(
+        matches!(
+            d,
+            Response::Reading {
+                humidity: None,
+                pressure: None,
+                ..
+            }
+        ),
+        "{d:?}"
+    );
+    let d = Response::decode(&p.examples[3].wire).unwrap().message;
+    assert!(
+        matches!(d, Response::Reading { humidity: Some(h), pressure: Some(101000), .. } if h.raw() == 450),
+        "{d:?}"
+    );
+    // Every presence given or not, for each condition's value: both encode alike, and refuse
+    // a presence their condition does not allow in the same words.
+    let (mut encoded, mut refused) = (0, 0);
+    let value = |name: &'static str, v: i64| Value {
+        name: Cow::Borrowed(name),
+        raw: Raw::Int(v),
+    };
+    let r = p.find("reading").unwrap();
+    for status in [0i64, 1, 2, 3, 0x80, 0xFF] {
+        for given in 0..4 {
+            let mut values = vec![value("status", status), value("temperature", -100)];
+            if given & 1 != 0 {
+                values.push(value("humidity", 999));
+            }
+            if given & 2 != 0 {
+                values.push(value("pressure", 0xFFFF_FFFF));
+            }
+            if agree::encode_alike::<OptionalSensor>(&p, r, 1, &values) {
+                encoded += 1;
+            } else {
+                refused += 1;
+                same_encode_words(&p, "reading", &values);
+            }
+        }
+    }
+    let e = p.find("event").unwrap();
+    for kind in [0i64, 1, 2, 3, 255] {
+        for given in [false, true] {
+            let mut values = vec![value("kind", kind)];
+            if given {
+                values.push(value("detail", 7));
+            }
+            if agree::encode_alike::<OptionalSensor>(&p, e, 1, &values) {
+                encoded += 1;
+            } else {
+                refused += 1;
+                same_encode_words(&p, "event", &values);
+            }
+        }
+    }
+    assert_eq!(
+        (encoded, refused),
+        (6 + 5, 6 * 3 + 5),
+        "every presence encodes once"
+    );
+    // A value out of its range is refused where it is given.
+    let over = [
+        value("status", 1),
+        value("temperature", 0),
+        value("humidity", 1001),
+    ];
+    assert!(!agree::encode_alike::<OptionalSensor>(&p, r, 1, &over));
+    let found = examples_stream_alike::<OptionalSensor>(&p, 0x0971, "reading");
+    assert!(found > 100, "only {found} reading frames found");
+}
+
+/// Both engines refuse to encode `values` as response `name` of `p` in the same words.
+fn same_encode_words(p: &ir::Protocol, name: &str, values: &[busspec_model::interp::Value]) {
+    use busspec_model::interp::Raw;
+    use busspec_runtime::FieldValue;
+    let r = p.find(name).unwrap();
+    let i = busspec_model::interp::encode(p, r, 1, values).unwrap_err();
+    let m = <optional_sensor::Response as Message>::from_fields(name, |n| {
+        values.iter().find(|v| v.name == n).map(|v| match v.raw {
+            Raw::Int(x) => FieldValue::Int(x),
+            _ => unreachable!(),
+        })
+    })
+    .unwrap();
+    let mut buf = [0u8; optional_sensor::MAX_FRAME_LEN];
+    let g = m.encode(1, &mut buf).unwrap_err();
+    assert_eq!(g.to_string(), i.to_string(), "{values:?}");
 }

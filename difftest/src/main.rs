@@ -158,6 +158,8 @@ struct Figures {
     rounds: usize,
     failed_builds: usize,
     signatures: BTreeMap<String, usize>,
+    /// Specs with each construct, over every round.
+    coverage: BTreeMap<&'static str, usize>,
 }
 
 fn main() {
@@ -209,6 +211,13 @@ fn main() {
         t.disagreements,
         t.specs_disagreeing,
         f.failed_builds
+    );
+    // The constructs the language added last, over the whole run.
+    let count = |k: &str| f.coverage.get(k).copied().unwrap_or(0);
+    println!(
+        "  specs with optional fields {}, with a preamble {}",
+        count("optional fields"),
+        count("preamble")
     );
     if !f.signatures.is_empty() {
         println!("disagreements by what differs (count, what):");
@@ -319,6 +328,9 @@ fn run_round(args: &Args, dir: &std::path::Path, round: u64, seeds: &[u64], f: &
     );
     let cov: Vec<String> = tally.iter().map(|(k, v)| format!("{k} {v}")).collect();
     println!("  coverage (specs with each construct): {}", cov.join(", "));
+    for (k, v) in &tally {
+        *f.coverage.entry(*k).or_default() += v;
+    }
     if modules.is_empty() || args.generate_only {
         return;
     }

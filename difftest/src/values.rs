@@ -103,6 +103,15 @@ pub fn random_values(
         if !carried(m, &l) {
             continue;
         }
+        // An optional field: given where its condition holds on the values drawn so far
+        // (always where strict; otherwise now and then the other way, which encode refuses).
+        if let Some(c) = l_present(&l) {
+            let on = c.holds(condition_raw(m, c.field, &out));
+            let flip = !strict && rng.u8(..8) == 0;
+            if on == flip {
+                continue;
+            }
+        }
         let raw = match l {
             Leaf::Bits(_, _, b) => {
                 let (lo, hi) = raw_limits(u32::from(b.width()), b.signed);
@@ -235,6 +244,46 @@ pub fn random_values(
         });
     }
     out
+}
+
+/// The condition of optional leaf `l`, if it is an optional field.
+fn l_present(l: &Leaf<'_>) -> Option<busspec_model::ir::Presence> {
+    match l {
+        Leaf::Field(_, f) => f.present,
+        Leaf::Bits(..) => None,
+    }
+}
+
+/// The raw value field `fi` of `m` takes from the values drawn so far (`out`), as encode
+/// writes it: a constant, its sub-fields put together, or its own value (0 where none is).
+fn condition_raw(m: &Message, fi: usize, out: &[Value<'static>]) -> i64 {
+    let Some(g) = m.fields.get(fi) else {
+        return 0;
+    };
+    let int = |name: &str| {
+        out.iter()
+            .find(|v| v.name == name)
+            .and_then(|v| match v.raw {
+                Raw::Int(x) => Some(x),
+                _ => None,
+            })
+            .unwrap_or(0)
+    };
+    if let Some(c) = g.constant {
+        return c as i64;
+    }
+    if g.bits.is_empty() {
+        return int(&g.name);
+    }
+    let mut word = 0u64;
+    for b in &g.bits {
+        let v = b.constant.map_or_else(|| int(&b.name), |c| c as i64);
+        let mask = 1u64
+            .checked_shl(u32::from(b.width()))
+            .map_or(u64::MAX, |x| x - 1);
+        word |= ((v as u64) & mask) << b.lsb;
+    }
+    word as i64
 }
 
 /// A value of a whole integer field (a record's field too): a named enum value, a special

@@ -2839,6 +2839,19 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
     for (i, f) in m.fields.iter().enumerate() {
         shifts.push(shift);
         let at = f.frame_at(&o) + shift;
+        if let Some(c) = &f.present {
+            // An optional field: where its condition holds (on a field before it, always on
+            // the wire), it sits after the optional fields before it that are present.
+            let v = m.fields.get(c.field).map_or(0, |cf| {
+                let cat = o.payload + cf.offset;
+                text.get(cat..cat + cf.width)
+                    .map_or(0, |b| read_uint(b, order))
+            });
+            if !c.holds(v as i64) {
+                continue;
+            }
+            shift += f.width;
+        }
         let f = &*record_sized(m, f, |name| {
             let c = m.fields.iter().position(|c| c.name == name)?;
             let cf = &m.fields[c];

@@ -1356,8 +1356,8 @@ impl Protocol {
     /// What the code generator cannot emit yet, one line each (empty: it can emit all of it).
     /// It emits every construct of the language: sync sequences, every checksum and its
     /// coverage, 24-bit integers, a length field, values that follow another field or the
-    /// request, codes derived from the request's, code-less messages and repeated fields
-    /// (variable-length frames). It refuses, by name, repeats to the end of the frame without a
+    /// request, codes derived from the request's, code-less messages, repeated fields and
+    /// optional fields (variable-length frames). It refuses, by name, repeats to the end of the frame without a
     /// length field whose frame lengths (every whole number of elements) would make more than
     /// [`MAX_DISTINCT_LENGTHS`] in all: its stream decoder lists such lengths
     /// beforehand. The interpreter (`--spec`) serves those.
@@ -1414,15 +1414,6 @@ impl Protocol {
                         ));
                     }
                 }
-            }
-        }
-        // Optional fields: the interpreter's, not yet the generator's.
-        for m in self.commands.iter().chain(&self.responses) {
-            if let Some((_, f, _)) = m.optionals().next() {
-                gaps.push(format!(
-                    "`{}.{}`: an optional field (`present`; the interpreter serves it: `busspec decode --spec`)",
-                    m.name, f.name
-                ));
             }
         }
         let max = MAX_DISTINCT_LENGTHS;

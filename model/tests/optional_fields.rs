@@ -349,3 +349,41 @@ fn docs_say_when_each_optional_field_is_present() {
     // The second optional field sits after the first where it is present.
     assert!(md.contains("| 3 + earlier optional | `pressure` |"), "{md}");
 }
+
+/// A document that prints numbers in another byte order than the wire's: example text is
+/// reordered field by field, an optional field only where it is present and where the fields
+/// present put it (pressure right after temperature when humidity is absent).
+#[test]
+fn printed_byte_order_reorders_only_the_fields_present() {
+    let little = head().replace(
+        "byte_order: big\nprinted_byte_order: big",
+        "byte_order: little\nprinted_byte_order: big",
+    );
+    assert!(little.contains("printed_byte_order: big"), "{little}");
+    let p =
+        busspec_model::load_str("optional_sensor.yaml", &little).unwrap_or_else(|d| panic!("{d}"));
+    let r = p.find("reading").unwrap();
+    let m = p.message(r);
+    // Pressure alone: status 2, temperature -100, pressure 101000 (0x00018A88).
+    let values = [
+        v("status", 2),
+        v("temperature", -100),
+        v("pressure", 101_000),
+    ];
+    let wire = interp::encode(&p, r, 1, &values).unwrap();
+    assert_eq!(&wire[4..11], &[2, 0x9C, 0xFF, 0x88, 0x8A, 0x01, 0x00]);
+    let printed = interp::wire_to_printed(&p, m, &wire);
+    assert_eq!(&printed[4..11], &[2, 0xFF, 0x9C, 0x00, 0x01, 0x8A, 0x88]);
+    assert_eq!(interp::printed_to_wire(&p, m, &printed), wire);
+    // Both present: each reversed where it sits.
+    let values = [
+        v("status", 3),
+        v("temperature", 1),
+        v("humidity", 0x0102),
+        v("pressure", 0x0304_0506),
+    ];
+    let wire = interp::encode(&p, r, 1, &values).unwrap();
+    let printed = interp::wire_to_printed(&p, m, &wire);
+    assert_eq!(&printed[4..13], &[3, 0, 1, 1, 2, 3, 4, 5, 6]);
+    assert_eq!(interp::printed_to_wire(&p, m, &printed), wire);
+}

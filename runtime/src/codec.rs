@@ -19,6 +19,7 @@ pub use crate::escape::{
     Escaping,
 };
 pub use crate::lists::{Lists, Split};
+pub use crate::optional::{presence, OptionalAt, Optionals, Present, When};
 pub use crate::repeated::{
     encode_packed_in_range, list, list_bits, pack, packed_in_range, packed_padding, read_bits,
     read_elements, records, unpack, write_bits, write_elements, CountBy, CountField, Element,
@@ -186,6 +187,33 @@ pub fn get<'v, T: Wire>(
     name: &'static str,
 ) -> Result<T, FieldError> {
     field_int(name, field(name), T::MIN, T::MAX).map(T::from_i64)
+}
+
+/// The value of optional field `name` from a `from_fields` getter (`None`: no value, the
+/// field absent), checked against its wire type `T`.
+#[inline]
+pub fn get_opt<'v, T: Wire>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<Option<T>, FieldError> {
+    match field(name) {
+        None => Ok(None),
+        value => field_int(name, value, T::MIN, T::MAX).map(|v| Some(T::from_i64(v))),
+    }
+}
+
+/// [`field_int`] of an optional field: `None` where no value is given (the field absent).
+#[inline]
+pub fn field_int_opt(
+    name: &'static str,
+    value: Option<FieldValue<'_>>,
+    min: i64,
+    max: i64,
+) -> Result<Option<i64>, FieldError> {
+    match value {
+        None => Ok(None),
+        value => field_int(name, value, min, max).map(Some),
+    }
 }
 
 /// The bytes of ASCII field `name` (exactly `N`) from a `from_fields` getter.

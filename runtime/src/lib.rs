@@ -25,6 +25,7 @@ pub use crc;
 pub mod codec;
 pub mod escape;
 mod lists;
+mod optional;
 mod protocol;
 mod repeated;
 pub mod stream;
@@ -1061,6 +1062,14 @@ pub enum EncodeError {
     Unaddressed { address: u8 },
     /// The command does not accept the broadcast address `address`, says the spec.
     BroadcastNotAccepted { message: &'static str, address: u8 },
+    /// An optional field (`present:` in the spec) given where its condition does not hold
+    /// (`given`), or not given where it does: `condition` in words (``bit 0 of `flags` is
+    /// set``).
+    Optional {
+        field: &'static str,
+        condition: &'static str,
+        given: bool,
+    },
 }
 
 impl fmt::Display for EncodeError {
@@ -1099,6 +1108,22 @@ impl fmt::Display for EncodeError {
             EncodeError::BroadcastNotAccepted { message, address } => write!(
                 f,
                 "{message} does not accept the broadcast address 0x{address:02X}"
+            ),
+            EncodeError::Optional {
+                field,
+                condition,
+                given: true,
+            } => write!(
+                f,
+                "value given for {field}, which is present only when {condition}"
+            ),
+            EncodeError::Optional {
+                field,
+                condition,
+                given: false,
+            } => write!(
+                f,
+                "no value given for field {field}, which is present when {condition}"
             ),
         }
     }

@@ -36,6 +36,36 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             quote!(#read_at)
         };
         let name = &f.name;
+        if let (Some(_), Some(k)) = (&f.present, optional_index(m, fi)) {
+            // An optional field (a plain number): read from the frame laid out as if every
+            // optional field were present (`rt::Optionals::split`), where it is present.
+            let read = read_wire(f, f.frame_at(&o) - f.offset + full_shift(m, fi));
+            let wt = wire_type(f);
+            let (w, k, v) = (wt.ident(), usize_lit(k), local(name));
+            let mut inner = Vec::new();
+            let wire = match leaf_range(f, None, wt.limits()) {
+                Some((range_fn, range)) => {
+                    inner.push(quote!(let #n: #w = #read;));
+                    inner.push(quote!(rt::#range_fn(#message, #name, s.at(#k), #n, #range)?;));
+                    quote!(#n)
+                }
+                None => read,
+            };
+            if let Some(leaf) = ls.iter().find(|l| l.bits.is_none() && l.name == f.name) {
+                let value = from_wire(ctx, leaf, Some(wt), wire);
+                stmts.push(quote! {
+                    let #v = if s.has(#k) {
+                        #(#inner)*
+                        rt::Some(#value)
+                    } else {
+                        rt::None
+                    };
+                });
+                values.push((ident(name), quote!(#v)));
+            }
+            wires.push(quote!());
+            continue;
+        }
         if let Some(pk) = &f.packed {
             // Packed elements: the padding bits 0, then each element within its range.
             let mname = &m.name;

@@ -57,6 +57,12 @@ pub(super) fn emit_encode_arm(
         };
         let name = l.name;
         let range_fn = format_ident!("encode_{}", range_fn);
+        if l.field.present.is_some() && l.bits.is_none() {
+            // An optional field, where a value is given.
+            let v = local(l.name);
+            stmts.push(quote!(if let rt::Some(#v) = #v { rt::#range_fn(#name, #raw, #range)?; }));
+            continue;
+        }
         stmts.push(quote!(rt::#range_fn(#name, #raw, #range)?;));
     }
     let repeat = m
@@ -127,8 +133,9 @@ pub(super) fn emit_encode_arm(
         }
     }
     // The bytes known without a field value (start byte, address, code, constant fields), one
-    // write per contiguous run.
-    let named = repeated(m);
+    // write per contiguous run. A field an optional field's condition reads gets a name too.
+    let mut named = repeated(m);
+    named.extend(m.optionals().map(|(_, _, c)| c.field));
     let mut known: Vec<Option<TokenStream>> = vec![None; o.checksum];
     // The same bytes' values, but the address's.
     let mut consts: Vec<u8> = vec![0; o.checksum];
@@ -174,6 +181,12 @@ pub(super) fn emit_encode_arm(
     let head = (i, o.address.is_some_and(|a| a < i).then_some(k));
     let take = if taken {
         quote!(rt::head(out, &[#(#first),*]))
+    } else if m.has_optional() {
+        // Optional fields: the frame laid out as if every one were present, packed into the
+        // buffer once written (`rt::Optionals::pack`).
+        let (full, n) = (usize_lit(m.max_len), usize_lit(first.len()));
+        stmts.push(quote!(let mut compact = [0u8; #full];));
+        quote!({ compact[..#n].copy_from_slice(&[#(#first),*]); &mut compact })
     } else if !lists.is_empty() {
         let (base, n) = (usize_lit(m.layout.len), usize_lit(first.len()));
         stmts.push(quote!(let mut compact = [0u8; #base];));
@@ -183,7 +196,7 @@ pub(super) fn emit_encode_arm(
     } else {
         quote!(rt::frame_mut::<#len>(buf, &[#(#first),*])?)
     };
-    if i == known.len() && repeat.is_none() && lists.is_empty() {
+    if i == known.len() && repeat.is_none() && lists.is_empty() && !m.has_optional() {
         let (check, end) = (stmts, encode_end(p, take, false, head));
         return quote!(#pattern => { #(#check)* #end });
     }
@@ -214,8 +227,10 @@ pub(super) fn emit_encode_arm(
     }
     let counter = m.count_field();
     for (fi, f) in m.fields.iter().enumerate() {
-        let at = usize_lit(f.frame_at(&o));
-        let end = usize_lit(f.frame_at(&o) + f.width);
+        // An optional field sits where it does when every optional field is present.
+        let full = f.frame_at(&o) + full_shift(m, fi);
+        let at = usize_lit(full);
+        let end = usize_lit(full + f.width);
         let wt = wire_type(f);
         let w = wt.ident();
         let unsigned = IntType {
@@ -360,7 +375,29 @@ pub(super) fn emit_encode_arm(
             (None, Some(_)) => list_counted(fi).map(|(k, v)| (quote!(#lc.lists[#k]), v)),
             _ => None,
         };
-        if named.contains(&fi) || !f.bits.is_empty() || f.constant.is_some() || agrees.is_some() {
+        if let Some(c) = &f.present {
+            // Written where a value is given, which must be exactly where its condition holds.
+            let (name, v) = (&f.name, local(&f.name));
+            let cond = format_ident!("field_{}", c.field);
+            let on = match c.when {
+                PresentWhen::Bit(b) => {
+                    let mask = hex_lit(1u64 << b);
+                    quote!(#cond & #mask != 0)
+                }
+                PresentWhen::Equals(x) => {
+                    let x = Literal::u64_unsuffixed(x as u64);
+                    quote!(#cond == #x)
+                }
+            };
+            let words = condition_text(m, c);
+            stmts.push(quote!(rt::presence(#name, #on, #v.is_some(), #words)?;));
+            let put = put(value);
+            stmts.push(quote!(if let rt::Some(#v) = #v { #put }));
+        } else if named.contains(&fi)
+            || !f.bits.is_empty()
+            || f.constant.is_some()
+            || agrees.is_some()
+        {
             let n = format_ident!("field_{}", fi);
             stmts.push(quote!(let #n: #w = #value;));
             if let Some((c, v)) = agrees {
@@ -387,7 +424,22 @@ pub(super) fn emit_encode_arm(
             }
         }
     }
-    let end = encode_end(p, quote!(out), repeat.is_some() || !lists.is_empty(), head);
+    if m.has_optional() {
+        let c = optional_const(m);
+        let given = m.optionals().map(|(_, f, _)| {
+            let v = local(&f.name);
+            quote!(#v.is_some())
+        });
+        stmts.push(quote!(let out = #c.pack(&compact, &[#(#given),*], buf)?;));
+        if let Some(rule) = p.framing.length_rule(m.direction) {
+            for r in length_copies(rule) {
+                let args = length_args(p, r);
+                stmts.push(quote!(rt::put_length(out, #args)?;));
+            }
+        }
+    }
+    let variable = repeat.is_some() || !lists.is_empty() || m.has_optional();
+    let end = encode_end(p, quote!(out), variable, head);
     quote! {
         #pattern => {
             #(#stmts)*

@@ -81,6 +81,22 @@ pub(super) fn repeat_at(m: &Message, f: &Field, r: &busspec_model::ir::Repeat) -
 pub(super) fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
     let mut out = TokenStream::new();
     for m in p.messages(d) {
+        if m.has_optional() {
+            let (c, value) = (optional_const(m), optionals_value(m));
+            let names: Vec<String> = m
+                .optionals()
+                .map(|(_, f, c)| format!("`{}` when {}", f.name, condition_text(m, c)))
+                .collect();
+            let d = format!(
+                " The optional fields of `{}`, each on the wire only where its condition holds: {}.",
+                m.name,
+                names.join(", ")
+            );
+            out.extend(quote! {
+                #[doc = #d]
+                pub const #c: rt::Optionals = #value;
+            });
+        }
         let Some((f, r)) = m.repeat() else { continue };
         let c = repeat_const(m);
         let value = repeat_at(m, f, r);
@@ -107,6 +123,86 @@ pub(super) fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
         }
     }
     out
+}
+
+/// The name of the `rt::Optionals` constant of a message with optional fields.
+pub(super) fn optional_const(m: &Message) -> Ident {
+    format_ident!("OPTIONAL_{}", m.name.to_ascii_uppercase())
+}
+
+/// How much further than its `offset` field `fi` of `m` sits in the layout where every
+/// optional field is present (the array `rt::Optionals` decodes into and encodes from): the
+/// widths of the optional fields before it.
+pub(super) fn full_shift(m: &Message, fi: usize) -> usize {
+    m.fields[..fi.min(m.fields.len())]
+        .iter()
+        .filter(|g| g.present.is_some())
+        .map(|g| g.width)
+        .sum()
+}
+
+/// The index among `m`'s optional fields of field `fi`, if it is one.
+pub(super) fn optional_index(m: &Message, fi: usize) -> Option<usize> {
+    m.optionals().position(|(i, _, _)| i == fi)
+}
+
+/// The condition of optional field `fi` of `m` in words, as the interpreter's refusal says it
+/// (``bit 0 of `status` is set``).
+pub(super) fn condition_text(m: &Message, c: &Presence) -> String {
+    c.describe(m.fields.get(c.field).map_or("", |g| g.name.as_str()))
+}
+
+/// The `rt::Optionals` constant of `m`: where its optional fields sit, what each condition
+/// reads, and every length a frame can have.
+pub(super) fn optionals_value(m: &Message) -> TokenStream {
+    let (message, base) = (&m.name, usize_lit(m.layout.len));
+    let first = m.optionals().next().map_or(0, |(_, f, _)| f.offset);
+    let at = usize_lit(m.layout.payload + first);
+    let fields = m.optionals().map(|(_, f, c)| {
+        let (name, width) = (&f.name, usize_lit(f.width));
+        let g = &m.fields[c.field];
+        let (cn, cat, cw) = (
+            &g.name,
+            usize_lit(m.layout.payload + g.offset),
+            usize_lit(g.width),
+        );
+        let le = g.byte_order == ByteOrder::Little;
+        let when = match c.when {
+            PresentWhen::Bit(b) => {
+                let b = Literal::u32_unsuffixed(b);
+                quote!(rt::When::Bit(#b))
+            }
+            PresentWhen::Equals(v) => {
+                let v = Literal::u64_unsuffixed(v as u64);
+                quote!(rt::When::Equals(#v))
+            }
+        };
+        quote! {
+            rt::OptionalAt {
+                name: #name,
+                width: #width,
+                on: rt::CountField { name: #cn, at: #cat, width: #cw, le: #le },
+                when: #when,
+            }
+        }
+    });
+    let mut lengths = vec![m.layout.len];
+    for (_, f, _) in m.optionals() {
+        let more: Vec<usize> = lengths.iter().map(|l| l + f.width).collect();
+        lengths.extend(more);
+    }
+    lengths.sort_unstable();
+    lengths.dedup();
+    let lengths = lengths.into_iter().map(usize_lit);
+    quote! {
+        rt::Optionals {
+            message: #message,
+            base: #base,
+            at: #at,
+            fields: &[#(#fields),*],
+            lengths: &[#(#lengths),*],
+        }
+    }
 }
 
 /// Indices of the fields another field repeats (`equals`): their wire value gets a name.
@@ -264,6 +360,11 @@ pub(super) fn decode_repeat(
 /// the array `frame`, so every fixed field's read is in bounds by type), the bytes of its
 /// elements and their number, once their count is checked.
 pub(super) fn split_frame(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+    if m.has_optional() {
+        // Optional fields: the frame laid out as if every one were present.
+        let (c, max) = (optional_const(m), usize_lit(m.max_len));
+        return quote!(let s = #c.split::<#max>(frame)?; let frame = &s.frame;);
+    }
     if has_lists(m) {
         let (c, (base, k)) = (lists_const(m), lists_dims(m));
         return quote!(let s = #c.split::<#base, #k>(frame)?; let frame = &s.frame;);

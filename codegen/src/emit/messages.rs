@@ -31,7 +31,19 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let fields = ls.iter().map(|l| {
             let n = ident(l.name);
             let t = ctx.rust_type(l);
-            let d = doc(&leaf_doc(p, l));
+            let mut d = leaf_doc(p, l);
+            // An optional field: `None` where its condition does not hold.
+            let t = match l.field.present.as_ref().filter(|_| l.bits.is_none()) {
+                Some(c) => {
+                    d.push_str(&format!(
+                        " On the wire only when {}; `None` where it is not.",
+                        condition_text(m, c)
+                    ));
+                    quote!(rt::Option<#t>)
+                }
+                None => t,
+            };
+            let d = doc(d.trim());
             quote!(#d #n: #t)
         });
         let size = match len_range(m) {
@@ -75,7 +87,18 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             continue;
         }
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
-        if has_lists(m) {
+        if m.has_optional() {
+            // The frame as long as the optional fields given make it.
+            let c = optional_const(m);
+            let (names, given): (Vec<TokenStream>, Vec<TokenStream>) = m
+                .optionals()
+                .map(|(_, f, _)| {
+                    let (n, l) = (ident(&f.name), local(&f.name));
+                    (quote!(#n: #l), quote!(#l.is_some()))
+                })
+                .unzip();
+            len_arms.push(quote!(Self::#v { #(#names,)* .. } => #c.frame_len(&[#(#given),*])));
+        } else if has_lists(m) {
             let c = lists_const(m);
             let (names, sum): (Vec<TokenStream>, Vec<TokenStream>) = m
                 .repeats()
@@ -122,7 +145,11 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                     Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
                     Kind::Records { .. } => quote!(rt::Records(#v.records())),
                 };
-                quote!(f(#n, #value))
+                match l.field.present.as_ref().filter(|_| l.bits.is_none()) {
+                    // Visited where present.
+                    Some(_) => quote!(if let rt::Some(#v) = #v { f(#n, #value) }),
+                    None => quote!(f(#n, #value)),
+                }
             })
             .collect();
         match visits.as_slice() {
@@ -408,6 +435,33 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
                 Kind::Records { ty, max } => {
                     let max = usize_lit(max);
                     quote!(rt::records::<#ty, #max>(&mut field, #n)?)
+                }
+                _ if l.bits.is_none() && l.field.present.is_some() => {
+                    // An optional field: no value, absent (`None`).
+                    let raw = ident("raw");
+                    let get = if l.wire.bits == 24 {
+                        let (lo, hi) = l.wire.limits();
+                        let (lo, hi) = (i64_lit(lo), i64_lit(hi));
+                        quote!(rt::field_int_opt(#n, field(#n), #lo, #hi)?)
+                    } else {
+                        let w = l.wire.ident();
+                        quote!(rt::get_opt::<#w>(&mut field, #n)?)
+                    };
+                    let wire = (l.wire.bits != 24).then_some(l.wire);
+                    match ctx.kind(l) {
+                        Kind::Int(t) if Some(t) == wire => get,
+                        Kind::Unit { ty, raw: r }
+                        | Kind::Enum { ty, raw: r }
+                        | Kind::Flags { ty, raw: r }
+                            if Some(r) == wire =>
+                        {
+                            quote!(#get.map(#ty::from_raw))
+                        }
+                        _ => {
+                            let value = from_wire(ctx, l, wire, quote!(#raw));
+                            quote!(#get.map(|#raw| #value))
+                        }
+                    }
                 }
                 _ if l.bits.is_none() && l.wire.bits != 24 => {
                     let w = l.wire.ident();

@@ -43,7 +43,11 @@
 //!   message: encode writes them, decode checks them; a repeated field is an
 //!   `rt::Repeated<wire, max>` or `rt::Bits<bytes>` value, with a `REPEAT_<NAME>` const saying
 //!   where it sits and how it is counted; a repeated record is an `rt::Repeated<Struct, max>` of
-//!   a struct named by its message and field, its fields typed by these rules.
+//!   a struct named by its message and field, its fields typed by these rules;
+//! - an optional field (`present:`) is an `rt::Option` of its type, with an `OPTIONAL_<NAME>`
+//!   const (`rt::Optionals`) saying what each condition reads: decode lays the frame out as if
+//!   every optional field were present and reads each at a fixed offset, encode writes that
+//!   layout and packs the fields given into the frame.
 
 mod ctx;
 mod decode;
