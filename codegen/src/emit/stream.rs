@@ -275,47 +275,47 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     };
-    let framing_fns =
-        if p.framing.escaping.is_none() {
-            let preamble =
-                p.framing.preamble.as_ref().map(
-                    |_| quote! { const PREAMBLE: rt::Option<rt::Preamble> = rt::Some(PREAMBLE); },
-                );
-            let transform = p.framing.transform.as_ref().map(
-                |_| quote! { const TRANSFORM: rt::Option<rt::Transform> = rt::Some(TRANSFORM); },
-            );
-            quote! {
-                #preamble
-                #transform
-                #[inline]
-                fn candidates(head: &[u8]) -> rt::Candidates {
-                    #start_check
-                    #mask
-                    #by_sync
-                    rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
-                }
-                #candidate
-                #variable
+    let framing_fns = if p.framing.escaping.is_none() {
+        let preamble = p
+            .framing
+            .preamble
+            .as_ref()
+            .map(|_| quote! { const PREAMBLE: rt::Option<rt::Preamble> = rt::Some(PREAMBLE); });
+        let transform = p.framing.transform.as_ref().map(|_| {
+            quote! { const TRANSFORM: rt::Option<rt::Transform> = rt::Some(TRANSFORM); }
+        });
+        quote! {
+            #preamble
+            #transform
+            #[inline]
+            fn candidates(head: &[u8]) -> rt::Candidates {
+                #start_check
+                #mask
+                #by_sync
+                rt::Candidates { requests: mask as u64, responses: (mask >> 64) as u64 }
             }
-        } else {
-            // Escaped frames are framed by their end byte or their length field alone; a flag
-            // that opens and closes them may be shared by two frames.
-            let shared_flag = p.framing.shared_flag().map(|flag| {
-                let flag = hex_u8(flag);
-                quote! { const SHARED_FLAG: rt::Option<u8> = rt::Some(#flag); }
-            });
-            quote! {
-                #shared_flag
-                #[inline]
-                fn candidates(_head: &[u8]) -> rt::Candidates {
-                    rt::Candidates { requests: 0, responses: 0 }
-                }
-                #[inline]
-                fn variable_candidates(head: &[u8]) -> rt::VarLens {
-                    rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN)
-                }
+            #candidate
+            #variable
+        }
+    } else {
+        // Escaped frames are framed by their end byte or their length field alone; a flag
+        // that opens and closes them may be shared by two frames.
+        let shared_flag = p.framing.shared_flag().map(|flag| {
+            let flag = hex_u8(flag);
+            quote! { const SHARED_FLAG: rt::Option<u8> = rt::Some(#flag); }
+        });
+        quote! {
+            #shared_flag
+            #[inline]
+            fn candidates(_head: &[u8]) -> rt::Candidates {
+                rt::Candidates { requests: 0, responses: 0 }
             }
-        };
+            #[inline]
+            fn variable_candidates(head: &[u8]) -> rt::VarLens {
+                rt::escaped_lens(&ESCAPING, head, MAX_FRAME_LEN)
+            }
+        }
+    };
     let lens: Vec<Literal> = if p.framing.escaping.is_some() {
         Vec::new()
     } else {
