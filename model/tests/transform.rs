@@ -201,3 +201,13 @@ fn a_stream_compares_leading_constants_as_they_travel() {
         .collect();
     assert_eq!(found, frames);
 }
+
+#[test]
+fn docs_state_the_transform_under_the_frame_layout() {
+    let p = fixture();
+    let md = busspec_model::docs::render(&p, "dlt645.yaml");
+    let at = md.find("Transform (§5.3): every payload byte travels plus 0x33 (mod 256)");
+    let pre = md.find("Preamble (§5.1)");
+    assert!(at.is_some() && pre.is_some(), "{md}");
+    assert!(at > pre);
+}
