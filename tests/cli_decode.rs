@@ -1475,3 +1475,52 @@ fn frames_with_a_preamble_decode_encode_and_stream() {
         "{lines:?}"
     );
 }
+
+/// A per-byte transform of the payload (DL/T 645's +33H, a spec read at run time): decode
+/// prints go645's frames with their real values (data identifier 00 01 00 00 as 65536), encode
+/// writes them back byte for byte, the sum over the bytes as they travel, and a reply decodes
+/// as the reply to its request from a stream.
+#[test]
+fn frames_with_a_transformed_payload_decode_encode_and_stream() {
+    let spec = "model/tests/fixtures/valid/dlt645.yaml";
+    let request = "68 01 00 00 00 00 00 68 11 04 33 33 34 33 B3 16";
+    let reply = "68 01 00 00 00 00 00 68 91 08 33 33 34 33 59 B3 55 44 DC 16";
+    let line = r#"{"protocol":"dlt645","direction":"request","code":"0x11","message":"read_data","fields":{"address_low":1,"address_high":0,"data_id":65536}}"#;
+    let out = busspec(&["decode", "dlt645", "--spec", spec, request]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout).trim_end(), line);
+    let out = busspec_stdin(&["encode", "dlt645", "--spec", spec], line);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout).trim_end(),
+        format!("FE FE FE FE {request}").replace(' ', "")
+    );
+    let dir = temp_dir("transform");
+    let cap = dir.join("cap.bin");
+    let mut bytes = busspec_model::interp::parse_hex(request).unwrap();
+    bytes.extend(busspec_model::interp::parse_hex(reply).unwrap());
+    std::fs::write(&cap, &bytes).unwrap();
+    let out = busspec(&[
+        "decode",
+        "dlt645",
+        "--spec",
+        spec,
+        "--stream",
+        cap.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let lines: Vec<String> = text(&out.stdout).lines().map(str::to_owned).collect();
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert!(
+        lines[1].contains(r#""message":"data_reply","fields":{"address_low":1,"address_high":0,"data_id":65536,"value":11228026}"#),
+        "{lines:?}"
+    );
+    // The reply's line encodes back to the frame (with the wake-up bytes an encoder sends).
+    let reply_line = lines[1].replacen(r#"{"offset":16,"#, "{", 1);
+    let out = busspec_stdin(&["encode", "dlt645", "--spec", spec], &reply_line);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout).trim_end(),
+        format!("FE FE FE FE {reply}").replace(' ', "")
+    );
+}

@@ -98,7 +98,8 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/cobs_link.yaml"),
         spec("model/tests/fixtures/valid/dynamixel2_stuffed.yaml"),
         spec("model/tests/fixtures/valid/xbee_api2.yaml"),
-        // Wake-up bytes before frames (DL/T 645's preamble): the dissector skips them.
+        // Wake-up bytes before frames (DL/T 645's preamble): the dissector skips them; its
+        // payload travels +33H (`framing.transform`): shown transformed back.
         spec("model/tests/fixtures/valid/dlt645.yaml"),
         // Fields after lists, and several lists (with and without a length field).
         spec("model/tests/fixtures/valid/lists_after.yaml"),

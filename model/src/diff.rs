@@ -737,6 +737,14 @@ impl<'a> Differ<'a> {
                 _ => self.wire("preamble_changed", "framing.preamble", text),
             }
         }
+        // A transform added, removed or changed: every payload byte travels otherwise.
+        let (ot, nt) = (o.transform.as_ref(), n.transform.as_ref());
+        if ot.map(|t| t.kind) != nt.map(|t| t.kind) {
+            let show =
+                |t: Option<&crate::ir::Transform>| t.map_or("none".to_owned(), |t| t.describe());
+            let text = format!("transform: {} → {}", show(ot), show(nt));
+            self.wire("transform_changed", "framing.transform", text);
+        }
         if o.length != n.length {
             let show = |l: &Option<crate::ir::LengthField>| match l {
                 None => "none".to_owned(),

@@ -525,6 +525,20 @@ fn protocol(p: &Protocol) -> String {
         None => "false".to_owned(),
     };
     let _ = writeln!(s, "  preamble = {preamble},");
+    // A per-byte transform of the payload (`framing.transform`): where the payload begins and
+    // each byte as it travelled, transformed back (a table: no bit operators needed).
+    let transform = match &f.transform {
+        Some(t) => {
+            let undo: Vec<u8> = (0..=255u8).map(|b| t.undo(b)).collect();
+            format!(
+                "{{ at = {}, undo = {} }}",
+                f.transformed(0).start,
+                bytes(&undo)
+            )
+        }
+        None => "false".to_owned(),
+    };
+    let _ = writeln!(s, "  transform = {transform},");
     let _ = writeln!(
         s,
         "  rules = {{ request = {}, response = {} }},",

@@ -1082,6 +1082,41 @@ local function setup(P)
 
   local dissect_frame
 
+  -- A per-byte transform of the payload (`framing.transform`): the checksum is checked over
+  -- the bytes as they travelled, and the fields dissected from a tvb of the frame with the
+  -- payload transformed back ("Payload transformed back"). A constant whole frame is its
+  -- bytes as they travel.
+  local function dissect_transformed(tvb, pinfo, tree)
+    local t, n = P.transform, tvb:len()
+    if not t or n < t.at + P.trailer or n > P.longest then return dissect_frame(tvb, pinfo, tree) end
+    local w = {}
+    local wa = tvb:range(0, n):bytes()
+    for i = 0, n - 1 do w[i] = wa:get_index(i) end
+    for _, d in ipairs({ "request", "response" }) do
+      for _, m in ipairs(constants[d]) do
+        local same = (#m.frame == n)
+        for i, x in ipairs(m.frame) do
+          if w[i - 1] ~= x then same = false end
+        end
+        if same then return dissect_frame(tvb, pinfo, tree) end
+      end
+    end
+    local wire_ck
+    local ck = P.checksum
+    if ck.len > 0 then
+      local at = checksum_at(P, n)
+      wire_ck = { at = at, expected = ck.fn(w, ck.covers_from, at), found = read_uint(w, at, ck.len, ck.order), tvb = tvb }
+    end
+    local ba = ByteArray.new()
+    ba:set_size(n)
+    for i = 0, n - 1 do
+      local x = w[i]
+      if i >= t.at and i < n - P.trailer then x = t.undo[x + 1] end
+      ba:set_index(i, x)
+    end
+    return dissect_frame(ba:tvb("Payload transformed back"), pinfo, tree, wire_ck)
+  end
+
   -- Escaped frames (`framing.escaping`) are unescaped into a tvb of their own ("Unescaped
   -- frame") and dissected from it; a bad escape is shown as busspec refuses it.
   local function dissect(tvb, pinfo, tree)
@@ -1095,11 +1130,11 @@ local function setup(P)
       if k > 0 and k < n then
         local item = tree:add(proto, tvb:range(0, k))
         item:set_text(fmt("busspec %s: preamble, %d wake-up byte(s) 0x%02X", P.name, k, pre.byte))
-        dissect_frame(tvb:range(k, n - k):tvb(), pinfo, tree)
+        dissect_transformed(tvb:range(k, n - k):tvb(), pinfo, tree)
         return n
       end
     end
-    if not P.escaping or n == 0 then return dissect_frame(tvb, pinfo, tree) end
+    if not P.escaping or n == 0 then return dissect_transformed(tvb, pinfo, tree) end
     local w = {}
     local wa = tvb:range(0, n):bytes()
     for i = 0, n - 1 do w[i] = wa:get_index(i) end

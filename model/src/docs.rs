@@ -656,6 +656,18 @@ pub fn render(p: &Protocol, source: &str) -> String {
         );
     }
 
+    if let Some(t) = &f.transform {
+        let _ = writeln!(
+            o,
+            "Transform{}: {} (the bytes of the `payload` part; the header, code, length, checksum and end bytes travel as they are). Fields, constants and examples' values are the bytes before it; encoders transform the payload, then compute the checksum over the bytes as they travel, and decoders check it there before undoing the transform.\n",
+            t.section
+                .as_ref()
+                .map(|s| format!(" (§{s})"))
+                .unwrap_or_default(),
+            t.describe()
+        );
+    }
+
     if !p.units.is_empty() {
         o.push_str("## Units\n\nPhysical value = raw × scale + offset.\n\n| Unit | Symbol | Scale | Offset | Notes |\n|---|---|---|---|---|\n");
         for u in &p.units {

@@ -954,6 +954,10 @@ fn decode_plain<'p>(
     check_end(p, wire)?;
     check_checksum(p, lookup.map(|l| &l.checksum), wire)?;
     check_address(p, first.address, wire)?;
+    // The checksum covers the payload as it travelled; the fields are read with its transform
+    // undone (`framing.transform`).
+    let plain = p.framing.untransformed(wire);
+    let wire: &[u8] = &plain;
     // Decoded both ways where the directions' length fields differ (each after a code of its
     // own length), the frame is of a direction whose length field it agrees with.
     let (keep0, keep1) = match directions {
@@ -1309,6 +1313,8 @@ fn decode_as_unescaped<'p>(
     check_end(p, wire)?;
     check_checksum(p, None, wire)?;
     check_address(p, o.address, wire)?;
+    let plain = p.framing.untransformed(wire);
+    let wire: &[u8] = &plain;
     check_length_field(p, &[m.direction], wire)?;
     element_count(p, m, wire)?;
     let values = decode_fields(p, m, wire)?;
@@ -2733,6 +2739,8 @@ pub fn encode(
             word as i64
         });
     }
+    // The payload as it travels (`framing.transform`), then the checksum over it.
+    p.framing.transform_in_place(&mut out);
     reseal(p, &mut out);
     if m.is_variable() {
         // A count field given a value, or one that follows another, may disagree with the

@@ -98,6 +98,58 @@ pub struct Framing {
     /// Wake-up bytes before every frame (`framing.preamble`), outside the frame: no offset,
     /// length or checksum of the IR counts them.
     pub preamble: Option<Preamble>,
+    /// A per-byte transform of every payload byte as it travels (`framing.transform`: DL/T
+    /// 645's +33H): the IR's constants and values are the bytes before it; the checksum covers
+    /// the bytes as they travel.
+    pub transform: Option<Transform>,
+}
+
+/// A per-byte transform of the payload (`framing.transform`): every byte of the `payload`
+/// part travels transformed; header, code, length, checksum and end bytes do not. Encoders
+/// write the fields, transform the payload, then compute the checksum over the bytes as they
+/// travel; decoders check the checksum, then undo the transform before reading fields.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Transform {
+    pub section: Option<String>,
+    pub kind: TransformKind,
+}
+
+/// What a [`Transform`] does to a byte.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TransformKind {
+    /// The byte plus this, mod 256 (DL/T 645's 0x33).
+    Add(u8),
+    /// The byte XOR this.
+    Xor(u8),
+}
+
+impl Transform {
+    /// A byte as it travels.
+    pub fn apply(&self, b: u8) -> u8 {
+        match self.kind {
+            TransformKind::Add(k) => b.wrapping_add(k),
+            TransformKind::Xor(k) => b ^ k,
+        }
+    }
+
+    /// A byte as it travelled, back to its value.
+    pub fn undo(&self, b: u8) -> u8 {
+        match self.kind {
+            TransformKind::Add(k) => b.wrapping_sub(k),
+            TransformKind::Xor(k) => b ^ k,
+        }
+    }
+
+    /// The transform in words, as docs and diff print it: `every payload byte travels plus
+    /// 0x33 (mod 256)`.
+    pub fn describe(&self) -> String {
+        match self.kind {
+            TransformKind::Add(k) => {
+                format!("every payload byte travels plus 0x{k:02X} (mod 256)")
+            }
+            TransformKind::Xor(k) => format!("every payload byte travels XOR 0x{k:02X}"),
+        }
+    }
 }
 
 /// A preamble of wake-up bytes (DL/T 645's `FE FE FE FE`): encoders write `send` copies of
@@ -305,6 +357,47 @@ impl Framing {
         match &self.preamble {
             Some(pre) => &wire[pre.skip(wire)..],
             None => wire,
+        }
+    }
+
+    /// The bytes of a frame of `len` bytes (after any preamble, unescaped) that travel
+    /// transformed (`framing.transform`): its payload, from where the payload begins (every
+    /// code has one length: validated) to the checksum and end bytes. Empty without a
+    /// transform.
+    pub fn transformed(&self, len: usize) -> std::ops::Range<usize> {
+        if self.transform.is_none() {
+            return 0..0;
+        }
+        let code_len = self.request.code_lengths.first().copied().unwrap_or(0);
+        let at = self.head(code_len).payload;
+        let end = len.saturating_sub(self.trailer_len()).max(at);
+        at..end
+    }
+
+    /// `frame` with its payload's transform undone (`framing.transform`), where the framing
+    /// has one; `frame` itself otherwise.
+    pub fn untransformed<'f>(&self, frame: &'f [u8]) -> std::borrow::Cow<'f, [u8]> {
+        match &self.transform {
+            Some(t) => {
+                let mut plain = frame.to_vec();
+                let range = self.transformed(frame.len());
+                for b in plain.get_mut(range).unwrap_or_default() {
+                    *b = t.undo(*b);
+                }
+                std::borrow::Cow::Owned(plain)
+            }
+            None => std::borrow::Cow::Borrowed(frame),
+        }
+    }
+
+    /// Transforms `frame`'s payload in place, as it travels (`framing.transform`); nothing
+    /// without one.
+    pub fn transform_in_place(&self, frame: &mut [u8]) {
+        if let Some(t) = &self.transform {
+            let range = self.transformed(frame.len());
+            for b in frame.get_mut(range).unwrap_or_default() {
+                *b = t.apply(*b);
+            }
         }
     }
 

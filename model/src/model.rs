@@ -272,6 +272,22 @@ pub struct Framing {
     /// Wake-up bytes sent before every frame (DL/T 645's `FE FE FE FE`), optional.
     #[serde(default)]
     pub preamble: Option<Preamble>,
+    /// A per-byte transform of the payload (DL/T 645's +33H on every data byte), optional.
+    #[serde(default)]
+    pub transform: Option<Transform>,
+}
+
+/// A per-byte transform of every payload byte as it travels: exactly one of `add` (the byte
+/// plus it, mod 256: DL/T 645's 0x33) or `xor`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Transform {
+    #[serde(default)]
+    pub section: Option<String>,
+    #[serde(default)]
+    pub add: Option<i64>,
+    #[serde(default)]
+    pub xor: Option<i64>,
 }
 
 /// A preamble: `send` copies of `byte` written before every frame, 0 to `max` (default

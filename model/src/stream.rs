@@ -203,6 +203,11 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
     } else {
         m.leading_constants()
     };
+    // As they travel (`framing.transform`).
+    let lead: Vec<u8> = match &p.framing.transform {
+        Some(t) => lead.iter().map(|&b| t.apply(b)).collect(),
+        None => lead,
+    };
     let at = m.layout.payload;
     for (i, &b) in lead.iter().enumerate() {
         match buf.get(at + i) {

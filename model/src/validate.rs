@@ -467,6 +467,8 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
         });
     }
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
+    transform_lists(&framing, &commands, "commands", sink);
+    transform_lists(&framing, &responses, "responses", sink);
 
     optional_codes(&commands, "commands", sink);
     optional_codes(&responses, "responses", sink);
@@ -1310,6 +1312,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         escaping: None,
         header: header_fields(f, byte_order, refs, sink),
         preamble: None,
+        transform: None,
     };
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
@@ -1319,6 +1322,9 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
     }
     if let Some(pre) = &f.preamble {
         framing.preamble = preamble(pre, &framing, sink);
+    }
+    if let Some(t) = &f.transform {
+        framing.transform = transform(t, &framing, sink);
     }
     // A second start or length after the code sits after as many bytes as the code has: one
     // offset only where every code has one length.
@@ -1428,6 +1434,81 @@ fn preamble(pre: &model::Preamble, f: &Framing, sink: &mut Sink) -> Option<Pream
         send: pre.send as u8,
         max: max as u8,
     })
+}
+
+/// `framing.transform`, checked against the rest of the framing (resolved but for it):
+/// exactly one of `add` and `xor`, a byte other than 0 (which would change nothing); every code
+/// of one length (the payload begins at one offset); no escaping (not expressible yet).
+fn transform(t: &model::Transform, f: &Framing, sink: &mut Sink) -> Option<Transform> {
+    let path = "framing.transform";
+    let errors_before = sink.items.len();
+    let kind = match (t.add, t.xor) {
+        (Some(v), None) => {
+            TransformKind::Add(u8_of(v, &join(path, "add"), "a transform's addend", sink))
+        }
+        (None, Some(v)) => {
+            TransformKind::Xor(u8_of(v, &join(path, "xor"), "a transform's XOR mask", sink))
+        }
+        (Some(_), Some(_)) => {
+            sink.error(
+                path,
+                "a transform either adds (`add`) or XORs (`xor`) a byte, not both",
+            );
+            return None;
+        }
+        (None, None) => {
+            sink.error(path, "a transform needs `add` or `xor` (the byte every payload byte travels plus, or XOR)");
+            return None;
+        }
+    };
+    if errors_before == sink.items.len() {
+        if let (TransformKind::Add(0), key) | (TransformKind::Xor(0), key) =
+            (kind, if t.add.is_some() { "add" } else { "xor" })
+        {
+            sink.error(
+                join(path, key),
+                format!(
+                    "a transform with `{key}: 0` changes no byte: leave `framing.transform` out"
+                ),
+            );
+        }
+    }
+    let lens = all_code_lengths(&f.request.code_lengths, &f.response.code_lengths);
+    if lens.len() > 1 {
+        sink.error(
+            path,
+            format!(
+                "a transform needs every code of one length (the payload at one offset), not {}, yet",
+                lens.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(" and ")
+            ),
+        );
+    }
+    if f.escaping.is_some() {
+        sink.error(path, "a transform is not expressible with `escaping`, yet");
+    }
+    (errors_before == sink.items.len()).then(|| Transform {
+        section: t.section.clone(),
+        kind,
+    })
+}
+
+/// A transform (`framing.transform`) beside a list whose count field a stream would read
+/// before the frame's length is known (no length field): not expressible yet, located at the
+/// list.
+fn transform_lists(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Sink) {
+    if framing.transform.is_none() || framing.length.is_some() {
+        return;
+    }
+    for m in msgs {
+        for (_, f, r) in m.repeats() {
+            if matches!(r.count, Count::Elements(_) | Count::Bytes(_)) {
+                sink.error(
+                    format!("{list}.{}.fields.{}", m.name, f.name),
+                    "a list counted by a field beside a transform (framing.transform) needs a length field (framing.length), yet",
+                );
+            }
+        }
+    }
 }
 
 /// `framing.escaping`, checked against the rest of the framing (resolved but for it).

@@ -46,6 +46,44 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "preamble_with_constant_frame",
         &[("responses.ack.frame", "a constant frame is not expressible with a preamble (framing.preamble), yet")],
     ),
+    // ---- transforms (made from valid/dlt645, hdlc_like, pelco_d_codeless and minimal_end,
+    // without their examples)
+    (
+        "transform_add_zero",
+        &[("framing.transform.add", "a transform with `add: 0` changes no byte")],
+    ),
+    (
+        "transform_xor_zero",
+        &[("framing.transform.xor", "a transform with `xor: 0` changes no byte")],
+    ),
+    (
+        "transform_add_and_xor",
+        &[("framing.transform", "a transform either adds (`add`) or XORs (`xor`) a byte, not both")],
+    ),
+    (
+        "transform_neither",
+        &[("framing.transform", "a transform needs `add` or `xor`")],
+    ),
+    (
+        "transform_unknown_key",
+        &[("framing.transform.sub", "unknown field `sub`, expected one of `section`, `add`, `xor`")],
+    ),
+    (
+        "transform_too_wide",
+        &[("framing.transform.add", "a transform's addend 307 does not fit in one byte")],
+    ),
+    (
+        "transform_with_escaping",
+        &[("framing.transform", "a transform is not expressible with `escaping`, yet")],
+    ),
+    (
+        "transform_code_lengths",
+        &[("framing.transform", "a transform needs every code of one length (the payload at one offset), not 0 and 2, yet")],
+    ),
+    (
+        "transform_counted_list",
+        &[("commands.write.fields.values", "a list counted by a field beside a transform (framing.transform) needs a length field (framing.length), yet")],
+    ),
     // ---- optional fields (made from valid/optional_sensor, without its examples)
     (
         "optional_with_escaping",

@@ -607,3 +607,38 @@ fn preamble_changes_are_classified() {
     );
     assert_eq!(summary_of(&with, &with), []);
 }
+
+/// A per-byte transform added, removed, or adding or XORing another byte is a wire-breaking
+/// change of `framing.transform`.
+#[test]
+fn transform_changes_are_classified() {
+    let line = "  transform: {section: \"5.3\", add: 0x33}\n";
+    let (with, without) = common::revisions("dlt645", &[(line, "")]);
+    let summary_of = |a: &Protocol, b: &Protocol| {
+        // The edited revision has no examples: their removal aside.
+        diff::diff(a, b)
+            .into_iter()
+            .filter(|c| c.kind != "example_removed")
+            .map(|c| (c.category, c.kind, c.path, c.text))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        summary_of(&with, &without),
+        [(
+            Wire,
+            "transform_changed",
+            "framing.transform".to_owned(),
+            "transform: every payload byte travels plus 0x33 (mod 256) → none".to_owned()
+        )]
+    );
+    assert_eq!(summary_of(&without, &with)[0].1, "transform_changed");
+    for to in ["add: 0x34", "xor: 0x33"] {
+        let (old, new) = common::revisions("dlt645", &[("add: 0x33", to)]);
+        let got = summary_of(&old, &new);
+        assert_eq!(got.len(), 1, "{to}: {got:#?}");
+        assert_eq!((got[0].0, got[0].1), (Wire, "transform_changed"), "{to}");
+    }
+    // Another section only: no change.
+    let (old, new) = common::revisions("dlt645", &[("section: \"5.3\", add", "add")]);
+    assert_eq!(summary_of(&old, &new), []);
+}

@@ -118,7 +118,7 @@ fn encode_sends_four_wake_up_bytes_then_the_frame() {
         },
         Value {
             name: "data_id".into(),
-            raw: Raw::Int(0x33343333),
+            raw: Raw::Int(0x0001_0000),
         },
     ];
     let wire = interp::encode(&p, r, 0, &values).unwrap();
@@ -292,7 +292,7 @@ fn printed_text_is_reordered_after_the_preamble() {
     assert_eq!(&printed[4 + 10..4 + 14], [0x33, 0x34, 0x33, 0x33]);
     assert_eq!(&printed[4 + 1..4 + 4], [0x00, 0x00, 0x01]);
     let example = format!(
-        "{head}examples:\n  - {{section: \"1\", message: read_data, derived: \"{}\", values: {{data_id: 0x33343333}}}}\nerrata: []\n",
+        "{head}examples:\n  - {{section: \"1\", message: read_data, derived: \"{}\", values: {{data_id: 0x00010000}}}}\nerrata: []\n",
         interp::format_hex(&printed)
     );
     let q = busspec_model::load_str("dlt645.yaml", &example).unwrap_or_else(|d| panic!("{d}"));

@@ -32,7 +32,7 @@ pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, Bus, Command, CommandKind, DecodeError,
     Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind, Preamble,
-    Protocol, Record, RecordList, Repeated, Reply, Source, Transactions,
+    Protocol, Record, RecordList, Repeated, Reply, Source, Transactions, Transform,
 };
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter

@@ -32,7 +32,7 @@ pub mod stream;
 
 pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};
 #[doc(hidden)]
-pub use protocol::{Framing, Preamble};
+pub use protocol::{Framing, Preamble, Transform};
 pub use repeated::{Bits, CapacityError, Element, Repeated};
 
 use core::fmt;

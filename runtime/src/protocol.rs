@@ -140,6 +140,73 @@ impl Preamble {
     }
 }
 
+/// A per-byte transform of every payload byte as it travels (`framing.transform`: DL/T 645's
+/// +33H). Encoders write the fields, transform the payload, then compute the checksum over the
+/// bytes as they travel; decoders check the checksum, then undo the transform before reading
+/// fields.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transform {
+    /// The byte plus this, mod 256.
+    Add(u8),
+    /// The byte XOR this.
+    Xor(u8),
+}
+
+impl Transform {
+    /// A byte as it travels.
+    #[inline(always)]
+    pub const fn apply(self, b: u8) -> u8 {
+        match self {
+            Transform::Add(k) => b.wrapping_add(k),
+            Transform::Xor(k) => b ^ k,
+        }
+    }
+
+    /// A byte as it travelled, back to its value.
+    #[inline(always)]
+    pub const fn undo(self, b: u8) -> u8 {
+        match self {
+            Transform::Add(k) => b.wrapping_sub(k),
+            Transform::Xor(k) => b ^ k,
+        }
+    }
+
+    /// Transforms the payload of the frame of `len` bytes in `buf`, from `at` to the last
+    /// `trailer` bytes (checksum and end bytes), in place: as it travels.
+    #[inline]
+    pub fn put(self, buf: &mut [u8], len: usize, at: usize, trailer: usize) {
+        let end = len.saturating_sub(trailer);
+        if let Some(payload) = buf.get_mut(at..end) {
+            for b in payload {
+                *b = self.apply(*b);
+            }
+        }
+    }
+
+    /// `frame` copied into `plain` (at least as long) with its payload's transform undone,
+    /// from `at` to the last `trailer` bytes: the copy.
+    #[inline]
+    pub fn undo_into<'b>(
+        self,
+        frame: &[u8],
+        at: usize,
+        trailer: usize,
+        plain: &'b mut [u8],
+    ) -> &'b [u8] {
+        let len = frame.len();
+        let Some(out) = plain.get_mut(..len) else {
+            return &[];
+        };
+        out.copy_from_slice(frame);
+        if let Some(payload) = out.get_mut(at..len.saturating_sub(trailer)) {
+            for b in payload {
+                *b = self.undo(*b);
+            }
+        }
+        out
+    }
+}
+
 /// What the stream decoder asks of a protocol to find frames in a stream: implemented by the
 /// generated code, beside [`Protocol`]; a tool that only decodes, encodes or talks never names
 /// it.
@@ -160,6 +227,10 @@ pub trait Framing {
     /// decoder counts into the frame they precede. `None` (the default) for every other
     /// framing.
     const PREAMBLE: Option<Preamble> = None;
+    /// The per-byte transform of every payload byte (DL/T 645's +33H), which the generated
+    /// candidate tables already apply to the constants they compare. `None` (the default) for
+    /// every other framing.
+    const TRANSFORM: Option<Transform> = None;
 
     /// The messages whose start byte and code agree with `head`, the bytes buffered from a
     /// possible frame start (possibly fewer than a whole frame): the stream decoder's framing

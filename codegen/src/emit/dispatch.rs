@@ -224,12 +224,25 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
     } else {
         quote!()
     };
+    // A transform of the payload (`framing.transform`): the checksum checked on the bytes as
+    // they travelled, the fields read from a copy with the transform undone.
+    let untransform = if p.framing.transform.is_some() {
+        let range = p.framing.transformed(0);
+        let (at, trailer) = (usize_lit(range.start), usize_lit(p.framing.trailer_len()));
+        quote! {
+            let mut plain = [0u8; #max_len];
+            let frame = TRANSFORM.undo_into(frame, #at, #trailer, &mut plain);
+        }
+    } else {
+        quote!()
+    };
     let checks = quote! {
         #constant
         #preamble
         #sync
         let address = rt::check_frame(frame, #min_len, #max_len, #addr_at, &FRAME, #sum)?;
         #length
+        #untransform
         let message = Self::dispatch(frame #request_arg)?;
         #answered
         rt::Ok(Decoded { address, message })

@@ -21,6 +21,24 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             pub const PREAMBLE: rt::Preamble = rt::Preamble { byte: #byte, send: #send, max: #max };
         }
     });
+    let transform = p.framing.transform.as_ref().map(|t| {
+        let kind = match t.kind {
+            TransformKind::Add(k) => {
+                let k = hex_u8(k);
+                quote!(rt::Transform::Add(#k))
+            }
+            TransformKind::Xor(k) => {
+                let k = hex_u8(k);
+                quote!(rt::Transform::Xor(#k))
+            }
+        };
+        quote! {
+            /// The per-byte transform of every payload byte as it travels
+            /// (`framing.transform`): undone before fields are read, done before the checksum
+            /// is computed.
+            pub const TRANSFORM: rt::Transform = #kind;
+        }
+    });
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.",
         p.title,
@@ -126,6 +144,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
         };
         #escaping
         #preamble
+        #transform
     }
 }
 
@@ -395,6 +414,8 @@ pub(super) fn checksum_in_arms(p: &Protocol) -> bool {
     matches!(p.framing.checksum.algorithm, ChecksumAlgorithm::Sum8)
         && p.framing.checksum.covers_from == 0
         && p.framing.end.is_empty()
+        // The sum covers the payload as it travels, transformed after the arms write it.
+        && p.framing.transform.is_none()
 }
 
 /// The checksum of a frame's bytes before it, as the runtime's frame checks take it: over the

@@ -190,6 +190,14 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let n = usize_lit(n);
         quote!(let out = rt::frame_mut::<#n>(buf, &[])?;)
     });
+    // A transform of the payload (`framing.transform`): done before the checksum is computed.
+    let transform = if p.framing.transform.is_some() {
+        let range = p.framing.transformed(0);
+        let (at, trailer) = (usize_lit(range.start), usize_lit(p.framing.trailer_len()));
+        quote!(TRANSFORM.put(buf, len, #at, #trailer);)
+    } else {
+        quote!()
+    };
     let seal = if checksum_in_arms(p) {
         quote!(rt::Ok(len))
     } else {
@@ -272,6 +280,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
+                #transform
                 #seal
             }
         }
@@ -282,6 +291,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
+                #transform
                 #seal
             }
         }
@@ -301,6 +311,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 rt::encode_address(address, &FRAME)?;
                 #take_once
                 let len = match *self { #(#encode_arms)* };
+                #transform
                 #seal
             }
         }

@@ -281,8 +281,12 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             .preamble
             .as_ref()
             .map(|_| quote! { const PREAMBLE: rt::Option<rt::Preamble> = rt::Some(PREAMBLE); });
+        let transform = p.framing.transform.as_ref().map(|_| {
+            quote! { const TRANSFORM: rt::Option<rt::Transform> = rt::Some(TRANSFORM); }
+        });
         quote! {
             #preamble
+            #transform
             #[inline]
             fn candidates(head: &[u8]) -> rt::Candidates {
                 #start_check
@@ -557,10 +561,17 @@ pub(super) fn emit_variable_candidates(p: &Protocol, start_check: TokenStream) -
         // A message's code and the constants that lead its payload: what tells code-less
         // messages (and messages sharing a code) apart before their count is read.
         let code = |m: &Message| {
-            let lead = m.leading_constants();
+            // As they travel (`framing.transform`).
+            let lead = m
+                .leading_constants()
+                .into_iter()
+                .map(|b| match &p.framing.transform {
+                    Some(t) => t.apply(b),
+                    None => b,
+                });
             let (at, lead_at) = (usize_lit(m.layout.code), usize_lit(m.layout.payload));
             let code = m.code.iter().map(|b| hex_u8(*b));
-            let lead = lead.into_iter().map(hex_u8);
+            let lead = lead.map(hex_u8);
             quote!(rt::Fixed { code_at: #at, code: &[#(#code),*], lead_at: #lead_at, lead: &[#(#lead),*] })
         };
         let rule = p.framing.length_rule(d).filter(|r| r.grows);

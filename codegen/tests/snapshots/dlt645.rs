@@ -25,7 +25,7 @@ pub mod dlt645 {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-27";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "58d03a0053c1c6b434623654ead9f9358b18936918cdeba02045ef3e7cff6403";
+    pub const SPEC_SHA256: &str = "fca3a5104db8b798e4abf3046b706d5f92b3439b6c7f97adfd4f18d717d13726";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/dlt645.yaml"
@@ -69,6 +69,10 @@ pub mod dlt645 {
         send: 4u8,
         max: 4u8,
     };
+    /// The per-byte transform of every payload byte as it travels
+    /// (`framing.transform`): undone before fields are read, done before the checksum
+    /// is computed.
+    pub const TRANSFORM: rt::Transform = rt::Transform::Add(0x33);
     /// The frame checksum: 8-bit sum of every byte before it.
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u8 {
@@ -93,7 +97,7 @@ pub mod dlt645 {
             address_low: u32,
             /// Address bytes A3..A5 (AA AA AA: every meter)
             address_high: u32,
-            /// Data identifier DI0..DI3, each byte +33H on the wire
+            /// Data identifier DI3..DI0 (sent DI0 first)
             data_id: u32,
         },
     }
@@ -218,6 +222,7 @@ pub mod dlt645 {
                     out.len()
                 }
             };
+            TRANSFORM.put(buf, len, 10, 2);
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
         }
@@ -237,6 +242,8 @@ pub mod dlt645 {
                 |b| u32::from(checksum(b)),
             )?;
             rt::length_field(frame, 9, 1, true, true, -12)?;
+            let mut plain = [0u8; 16];
+            let frame = TRANSFORM.undo_into(frame, 10, 2, &mut plain);
             let message = Self::dispatch(frame)?;
             rt::Ok(Decoded { address, message })
         }
@@ -383,9 +390,9 @@ pub mod dlt645 {
             address_low: u32,
             /// Address bytes A3..A5 (AA AA AA: every meter)
             address_high: u32,
-            /// Address bytes A0..A2, each +33H
+            /// The meter's address bytes A0..A2 (BCD digits)
             meter_low: u32,
-            /// Address bytes A3..A5, each +33H
+            /// The meter's address bytes A3..A5 (BCD digits)
             meter_high: u32,
         },
         /// §7.2 Read data reply, a 4-byte value (control code 91H) (code `0x91`, 20 bytes).
@@ -394,9 +401,9 @@ pub mod dlt645 {
             address_low: u32,
             /// Address bytes A3..A5 (AA AA AA: every meter)
             address_high: u32,
-            /// Data identifier, each byte +33H
+            /// Data identifier DI3..DI0
             data_id: u32,
-            /// The value's BCD bytes, each +33H
+            /// The value, 8 BCD digits (its decimal point as the data identifier says) Valid raw range 0..=99999999.
             value: u32,
         },
         /// §7.2 Read data reply, the meter number 04000402 (control code 91H) (code `0x91`, 22 bytes).
@@ -405,9 +412,9 @@ pub mod dlt645 {
             address_low: u32,
             /// Address bytes A3..A5 (AA AA AA: every meter)
             address_high: u32,
-            /// Meter number, low three bytes, each +33H
+            /// Meter number, low three bytes (BCD digits)
             number_low: u32,
-            /// Meter number, high three bytes, each +33H
+            /// Meter number, high three bytes (BCD digits)
             number_high: u32,
         },
     }
@@ -548,6 +555,7 @@ pub mod dlt645 {
                     data_id: v_data_id,
                     value: v_value,
                 } => {
+                    rt::encode_in_range("value", v_value, 0, 99999999)?;
                     let out = rt::frame_mut::<20>(buf, &[0x68])?;
                     out[7..10].copy_from_slice(&[0x68, 0x91, 0x08]);
                     out[1..4]
@@ -567,7 +575,10 @@ pub mod dlt645 {
                             ),
                         );
                     out[10..14].copy_from_slice(&v_data_id.to_le_bytes());
-                    out[14..18].copy_from_slice(&v_value.to_le_bytes());
+                    out[14..18]
+                        .copy_from_slice(
+                            &(rt::to_bcd(v_value as u64) as u32).to_le_bytes(),
+                        );
                     out.len()
                 }
                 Self::MeterNumberReply {
@@ -578,7 +589,7 @@ pub mod dlt645 {
                 } => {
                     let out = rt::frame_mut::<22>(buf, &[0x68])?;
                     out[7..14]
-                        .copy_from_slice(&[0x68, 0x91, 0x0A, 0x35, 0x37, 0x33, 0x37]);
+                        .copy_from_slice(&[0x68, 0x91, 0x0A, 0x02, 0x04, 0x00, 0x04]);
                     out[1..4]
                         .copy_from_slice(
                             &rt::bytes24(
@@ -614,6 +625,7 @@ pub mod dlt645 {
                     out.len()
                 }
             };
+            TRANSFORM.put(buf, len, 10, 2);
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
         }
@@ -655,6 +667,8 @@ pub mod dlt645 {
                 |b| u32::from(checksum(b)),
             )?;
             rt::length_field(frame, 9, 1, true, true, -12)?;
+            let mut plain = [0u8; 22];
+            let frame = TRANSFORM.undo_into(frame, 10, 2, &mut plain);
             let message = Self::dispatch(frame, request)?;
             if let rt::Some(request) = request {
                 if request.replies() >> message.index() & 1 == 0 {
@@ -682,6 +696,18 @@ pub mod dlt645 {
                 0x91 => {
                     let mut g = rt::Group::new(frame, 0x91, request.map(Request::name));
                     g.attempt(|frame: &[u8; 20]| {
+                        let field_3: u32 = rt::bcd(
+                            "data_reply",
+                            "value",
+                            14,
+                            u32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]) as u64,
+                        )? as u32;
+                        rt::in_range("data_reply", "value", 14, field_3, 0, 99999999)?;
                         rt::Ok(Self::DataReply {
                             address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                             address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -691,12 +717,7 @@ pub mod dlt645 {
                                 frame[12],
                                 frame[13],
                             ]),
-                            value: u32::from_le_bytes([
-                                frame[14],
-                                frame[15],
-                                frame[16],
-                                frame[17],
-                            ]),
+                            value: field_3,
                         })
                     });
                     g.attempt(|frame: &[u8; 22]| {
@@ -710,7 +731,7 @@ pub mod dlt645 {
                                 frame[12],
                                 frame[13],
                             ]),
-                            0x37333735,
+                            0x4000402,
                         )?;
                         rt::Ok(Self::MeterNumberReply {
                             address_low: rt::u24([frame[1], frame[2], frame[3]], true),
@@ -913,6 +934,7 @@ pub mod dlt645 {
         const MAX_RESPONSE_LEN: usize = MAX_RESPONSE_LEN;
         const FRAME_LENGTHS: &'static [usize] = &[22, 20, 18, 16, 12];
         const PREAMBLE: rt::Option<rt::Preamble> = rt::Some(PREAMBLE);
+        const TRANSFORM: rt::Option<rt::Transform> = rt::Some(TRANSFORM);
         #[inline]
         fn candidates(head: &[u8]) -> rt::Candidates {
             if head.first().is_some_and(|&b| b != 0x68) {
