@@ -304,6 +304,16 @@ fn the_generator_has_no_gaps() {
     assert!(specs.len() > 8, "{specs:?}");
     for spec in specs {
         let p = busspec_model::load_file(&spec).unwrap_or_else(|d| panic!("{d}"));
+        if spec.ends_with("text_counted.yaml") {
+            let gaps = [
+                "`set_name.name`: text a count field counts (`type: ascii` with `repeat`; the interpreter serves it: `busspec decode --spec`)",
+                "`device_info.name`: text a count field counts (`type: ascii` with `repeat`; the interpreter serves it: `busspec decode --spec`)",
+            ];
+            assert_eq!(p.generator_gaps(), gaps);
+            let e = busspec_codegen::emit::emit_module(&p, "x", "x").unwrap_err();
+            assert!(e.contains(gaps[0]), "{e}");
+            continue;
+        }
         assert_eq!(
             p.generator_gaps(),
             Vec::<String>::new(),

@@ -1193,9 +1193,15 @@ impl Field {
         self.ty == FieldType::Ascii
     }
 
-    /// Whether its value is a list: a repeated field or packed elements.
+    /// Whether its value is a list: a repeated field (not counted text) or packed elements.
     pub fn is_list(&self) -> bool {
-        self.repeat.is_some() || self.packed.is_some()
+        (self.repeat.is_some() && !self.is_ascii()) || self.packed.is_some()
+    }
+
+    /// Text a count field counts (`type: ascii` with `repeat`): on the wire one byte a
+    /// character, framed as a list of bytes is; its value is text ([`Self::is_ascii`]).
+    pub fn is_counted_text(&self) -> bool {
+        self.is_ascii() && self.repeat.is_some()
     }
 
     /// Whether it is a repeated record (`type: record`), whose elements are groups of fields.
@@ -1390,6 +1396,15 @@ impl Protocol {
                         m.name, f.name
                     ));
                 }
+            }
+        }
+        // Counted text: the interpreter's, not yet the generator's (`rt::Text<N>` is to come).
+        for m in self.commands.iter().chain(&self.responses) {
+            if let Some(f) = m.fields.iter().find(|f| f.is_counted_text()) {
+                gaps.push(format!(
+                    "`{}.{}`: text a count field counts (`type: ascii` with `repeat`; the interpreter serves it: `busspec decode --spec`)",
+                    m.name, f.name
+                ));
             }
         }
         for r in &self.responses {
