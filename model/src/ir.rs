@@ -1398,15 +1398,6 @@ impl Protocol {
                 }
             }
         }
-        // Counted text: the interpreter's, not yet the generator's (`rt::Text<N>` is to come).
-        for m in self.commands.iter().chain(&self.responses) {
-            if let Some(f) = m.fields.iter().find(|f| f.is_counted_text()) {
-                gaps.push(format!(
-                    "`{}.{}`: text a count field counts (`type: ascii` with `repeat`; the interpreter serves it: `busspec decode --spec`)",
-                    m.name, f.name
-                ));
-            }
-        }
         for r in &self.responses {
             let rels = r
                 .fields
