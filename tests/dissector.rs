@@ -114,6 +114,8 @@ fn cases() -> Vec<Case> {
         built_in("dynamixel2", "spec/dynamixel2.yaml"),
         // Optional fields: shown only where their condition holds.
         spec("model/tests/fixtures/valid/optional_sensor.yaml"),
+        // Text a count field counts, with fields after it: shown as text.
+        spec("model/tests/fixtures/valid/text_counted.yaml"),
         derived_units(),
     ]
 }

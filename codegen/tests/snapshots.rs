@@ -416,3 +416,14 @@ fn optional_fields_spec_generates_its_snapshot() {
         "optional_sensor.rs",
     );
 }
+
+/// Counted text (`type: ascii` with `repeat`), followed by fields: `rt::Repeated<u8, max>`
+/// lent as text (`FieldValue::Text`). `snapshots_compile.rs` compiles it and holds it to the
+/// interpreter.
+#[test]
+fn counted_text_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/text_counted.yaml",
+        "text_counted.rs",
+    );
+}

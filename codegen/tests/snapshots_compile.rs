@@ -38,6 +38,7 @@ include!("snapshots/records_sized.rs");
 include!("snapshots/mbus_short.rs");
 include!("snapshots/dlt645.rs");
 include!("snapshots/optional_sensor.rs");
+include!("snapshots/text_counted.rs");
 
 mod agree;
 
@@ -2057,6 +2058,78 @@ fn optional_fields_snapshot_agrees_with_the_interpreter() {
     assert!(!agree::encode_alike::<OptionalSensor>(&p, r, 1, &over));
     let found = examples_stream_alike::<OptionalSensor>(&p, 0x0971, "reading");
     assert!(found > 100, "only {found} reading frames found");
+}
+
+/// Counted text (`type: ascii` with `repeat`) followed by fields: the examples replay; frames
+/// of every count from 0 past `max`, their characters any bytes, with the checksum resealed,
+/// decode alike in both engines (the same text, the same refusals); text of every length up
+/// to past `max`, and a value that is not text, encode alike; captures stream alike.
+#[test]
+fn counted_text_snapshot_agrees_with_the_interpreter() {
+    use busspec_model::interp::{Raw, Value};
+    use std::borrow::Cow;
+    use text_counted::{Response, TextCounted};
+    let file = "model/tests/fixtures/valid/text_counted.yaml";
+    replay::<TextCounted>(file);
+    let p = fixture(file);
+    let t = agree::agree::<TextCounted>(&p);
+    assert!(t.accepted >= 4 && t.refused > 10, "{t:?}");
+    let mut rng = agree::Rng(0x7e57);
+    let mut accepted = 0;
+    for count in 0..=20u8 {
+        for _ in 0..8 {
+            let mut w = vec![0x7E, 0x03, 0x21, count];
+            for _ in 0..count {
+                w.push(rng.below(256) as u8);
+            }
+            w.extend_from_slice(&[0, 0, 0x30, 0x39, 7, 0]);
+            agree::reseal(&p, &mut w);
+            if agree::check::<TextCounted>(&p, Direction::Response, None, &w) {
+                accepted += 1;
+            }
+        }
+    }
+    // Counts 1..=16 of 21 fit (min 1, max 16, payload at most 24 bytes).
+    assert_eq!(accepted, 16 * 8);
+    let d = Response::decode(&p.examples[3].wire).unwrap().message;
+    let Response::DeviceInfo { name, serial, .. } = d else {
+        panic!("{d:?}")
+    };
+    assert_eq!((name.as_slice(), serial), (&b"ACME1"[..], 123_456));
+    let r = p.find("set_name").unwrap();
+    let (mut encoded, mut refused) = (0, 0);
+    for len in 0..=18usize {
+        let text: Vec<u8> = (0..len).map(|k| b'a' + k as u8).collect();
+        let values = [
+            Value {
+                name: Cow::Borrowed("name"),
+                raw: Raw::Text(text),
+            },
+            Value {
+                name: Cow::Borrowed("channel"),
+                raw: Raw::Int(3),
+            },
+        ];
+        if agree::encode_alike::<TextCounted>(&p, r, 3, &values) {
+            encoded += 1;
+        } else {
+            refused += 1;
+        }
+    }
+    assert_eq!((encoded, refused), (17, 2));
+    let not_text = [
+        Value {
+            name: Cow::Borrowed("name"),
+            raw: Raw::List(vec![65, 66]),
+        },
+        Value {
+            name: Cow::Borrowed("channel"),
+            raw: Raw::Int(3),
+        },
+    ];
+    assert!(!agree::encode_alike::<TextCounted>(&p, r, 3, &not_text));
+    let found = examples_stream_alike::<TextCounted>(&p, 0x7e57, "device_info");
+    assert!(found > 50, "only {found} device_info frames found");
 }
 
 /// Both engines refuse to encode `values` as response `name` of `p` in the same words.

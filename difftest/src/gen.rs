@@ -93,6 +93,16 @@ fn condition_target(f: &Gf) -> bool {
         .all(|k| !f.yaml.contains(k))
 }
 
+/// Whether `f` is a list a random spec may turn into counted text: plain `u8` elements with a
+/// unit (no range, enum or record), its count not from the request.
+fn counted_text_eligible(f: &Gf) -> bool {
+    f.ty == "u8"
+        && f.repeat_tail > 0
+        && f.yaml.contains("type: u8, unit: ")
+        && !f.yaml.contains("range:")
+        && !f.yaml.contains("request:")
+}
+
 /// Code-less messages beside others of their direction are told apart by a constant first
 /// byte, as Pelco-D's `ptz` is by a constant bit (the validator refuses them otherwise): a
 /// value no code of the direction starts with, one per code-less message, shared by the two
@@ -1870,6 +1880,27 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         std::mem::swap(&mut g.rng, &mut rng);
     }
 
+    // Counted text (`type: ascii` with `repeat`): a list of plain u8 elements (a unit, no
+    // range, no enum, no record) becomes text of as many characters, in about 30 % of the
+    // messages that have one; drawn by a generator of its own, so every spec drawn without
+    // them is as it was (the count field, bounds and tail stay the list's).
+    {
+        let mut rng = fastrand::Rng::with_seed(seed ^ 0x7E47_7E47_7E47_7E47);
+        for m in commands.iter_mut().chain(responses.iter_mut()) {
+            let Some(f) = m.fields.iter_mut().find(|f| counted_text_eligible(f)) else {
+                continue;
+            };
+            if rng.u8(..100) >= 30 {
+                continue;
+            }
+            if let (Some(a), Some(b)) = (f.yaml.find("type: u8, unit: "), f.yaml.find(", repeat:"))
+            {
+                f.yaml = format!("{}type: ascii{}", &f.yaml[..a], &f.yaml[b..]);
+                f.ty = "ascii";
+            }
+        }
+    }
+
     // Payload bounds per direction (the shortest without optional fields).
     let bounds = |ms: &[Gm]| {
         let lo = ms
@@ -2340,6 +2371,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         fields.iter().any(|x| x.present.is_some()),
         "optional fields",
     );
+    add(fields.iter().any(|x| x.is_counted_text()), "counted text");
     add(fields.iter().any(|x| x.constant.is_some()), "constant");
     add(fields.iter().any(|x| !x.bits.is_empty()), "bits");
     add(

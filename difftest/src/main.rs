@@ -215,9 +215,10 @@ fn main() {
     // The constructs the language added last, over the whole run.
     let count = |k: &str| f.coverage.get(k).copied().unwrap_or(0);
     println!(
-        "  specs with optional fields {}, with a preamble {}",
+        "  specs with optional fields {}, with a preamble {}, with counted text {}",
         count("optional fields"),
-        count("preamble")
+        count("preamble"),
+        count("counted text")
     );
     if !f.signatures.is_empty() {
         println!("disagreements by what differs (count, what):");

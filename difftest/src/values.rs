@@ -127,7 +127,14 @@ pub fn random_values(
             }
             Leaf::Field(_, f) => {
                 if f.ty == FieldType::Ascii {
-                    let t: Vec<u8> = (0..f.width)
+                    // Counted text: as many characters as a list's elements (now and then one
+                    // past its most).
+                    let n = match &f.repeat {
+                        Some(r) if strict => rng.usize(r.min..=r.max),
+                        Some(r) => rng.usize(..=r.max + 1),
+                        None => f.width,
+                    };
+                    let t: Vec<u8> = (0..n)
                         .map(|_| {
                             if strict || rng.bool() {
                                 rng.u8(0x20..0x7F)

@@ -1022,7 +1022,7 @@ local function setup(P)
         item:set_text(fmt("%s: %s (%d records)", f.name, value, #vals))
         item:add(m.pf[f.name].raw, range, "[" .. concat(raws, ",") .. "]")
         info[#info + 1] = f.name .. "=" .. value
-      elseif f.rep or f.pk then
+      elseif (f.rep or f.pk) and not f.ascii then
         local stop, els
         if f.pk then
           stop = at + f.width
@@ -1051,13 +1051,21 @@ local function setup(P)
         item:add(m.pf[f.name].raw, range, w.raw)
         info[#info + 1] = f.name .. "=" .. w.json
       elseif f.ascii then
+        -- Fixed text takes its width; counted text (`repeat`) as many bytes as its count says.
+        local w = f.width
+        if f.rep then w = lens[i] end
         local chars = {}
-        for i = 0, f.width - 1 do chars[#chars + 1] = string.char(b[at + i]) end
+        for i = 0, w - 1 do chars[#chars + 1] = string.char(b[at + i]) end
         local text = json_bytes(concat(chars))
-        local range = tvb:range(at, f.width)
+        local range = tvb:range(0, n)
+        local raw = ""
+        if w > 0 then
+          range = tvb:range(at, w)
+          raw = tostring(range:bytes())
+        end
         local item = node:add(m.pf[f.name].value, range, text)
         item:set_text(f.name .. ": " .. text)
-        item:add(m.pf[f.name].raw, range, tostring(range:bytes()))
+        item:add(m.pf[f.name].raw, range, raw)
         info[#info + 1] = f.name .. "=" .. text
       else
         local u, v = int_of(f, b, at)

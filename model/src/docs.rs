@@ -42,6 +42,8 @@ fn type_name(f: &Field) -> String {
 
 fn scalar_type_name(f: &Field) -> String {
     let base: String = match f.ty {
+        // Counted text: its count follows (`ascii[0..=16]`).
+        FieldType::Ascii if f.is_counted_text() => "ascii".into(),
         FieldType::Ascii => format!("ascii[{}]", f.width),
         FieldType::U8 => "u8".into(),
         FieldType::U16 => "u16".into(),

@@ -2111,9 +2111,16 @@ fn values_of<'p>(
             continue;
         }
         if f.repeat.is_some() {
+            let list = list_at(f, payload, at, &sh, i);
+            // Counted text: its characters are the list's bytes.
+            let raw = if f.is_ascii() {
+                Raw::Text(list.into_iter().map(|b| b as u8).collect())
+            } else {
+                Raw::List(list)
+            };
             values.push(Value {
                 name: Cow::Borrowed(&f.name),
-                raw: Raw::List(list_at(f, payload, at, &sh, i)),
+                raw,
             });
             continue;
         }
@@ -2315,6 +2322,38 @@ pub fn answers(p: &Protocol, request: &Frame, reply: &Frame) -> Result<(), Decod
 /// themselves in and need no value; every other leaf must be given exactly once.
 #[cfg(feature = "tools")]
 pub fn encode(
+    p: &Protocol,
+    r: MessageRef,
+    address: u8,
+    values: &[Value],
+) -> Result<Vec<u8>, EncodeError> {
+    let m = p.message(r);
+    // Counted text (`type: ascii` with `repeat`) is encoded as the list of its bytes.
+    if m.fields.iter().any(Field::is_counted_text) {
+        let mut given = values.to_vec();
+        for v in &mut given {
+            let Some(f) = m.fields.iter().find(|f| f.name == v.name) else {
+                continue;
+            };
+            if !f.is_counted_text() {
+                continue;
+            }
+            match &v.raw {
+                Raw::Text(t) => v.raw = Raw::List(t.iter().map(|&b| i64::from(b)).collect()),
+                _ => {
+                    return Err(EncodeError::NotText {
+                        field: f.name.clone(),
+                    })
+                }
+            }
+        }
+        return encode_values(p, r, address, &given);
+    }
+    encode_values(p, r, address, values)
+}
+
+#[cfg(feature = "tools")]
+fn encode_values(
     p: &Protocol,
     r: MessageRef,
     address: u8,

@@ -1286,9 +1286,15 @@ impl Field {
         self.ty == FieldType::Ascii
     }
 
-    /// Whether its value is a list: a repeated field or packed elements.
+    /// Whether its value is a list: a repeated field (not counted text) or packed elements.
     pub fn is_list(&self) -> bool {
-        self.repeat.is_some() || self.packed.is_some()
+        (self.repeat.is_some() && !self.is_ascii()) || self.packed.is_some()
+    }
+
+    /// Text a count field counts (`type: ascii` with `repeat`): on the wire one byte a
+    /// character, framed as a list of bytes is; its value is text ([`Self::is_ascii`]).
+    pub fn is_counted_text(&self) -> bool {
+        self.is_ascii() && self.repeat.is_some()
     }
 
     /// Whether it is a repeated record (`type: record`), whose elements are groups of fields.

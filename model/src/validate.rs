@@ -2660,6 +2660,16 @@ fn field(
         T::Bit => (1, false),
         // A record's width is its fields' (below).
         T::Record => (1, false),
+        // Text a count field counts (`repeat`): a character is one element of one byte.
+        T::Ascii if f.repeat.is_some() => {
+            if f.length.is_some() {
+                sink.error(
+                    join(p, "length"),
+                    "`length` cannot be combined with `repeat`: the count field gives the text's length, `repeat.max` its most",
+                );
+            }
+            (1, false)
+        }
         T::Ascii => match f.length {
             Some(n) if (1..=255).contains(&n) => (n as usize, false),
             Some(n) => {
@@ -2755,9 +2765,6 @@ fn field(
             |k| format!("`{k}` cannot be combined with `repeat`"),
             sink,
         );
-        if f.ty == T::Ascii {
-            sink.error(join(p, "repeat"), "an ascii field cannot repeat");
-        }
     }
     if f.ty == T::Bit {
         if f.repeat.is_none() {

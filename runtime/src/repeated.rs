@@ -292,6 +292,28 @@ pub fn list<'v, T: crate::codec::Wire + Default, const N: usize>(
     Ok(r)
 }
 
+/// Counted text `name` (`type: ascii` with `repeat`) from a [`crate::Message::from_fields`]
+/// getter: text of at most `N` bytes, held as the list of its bytes. Public only for generated
+/// code.
+#[inline]
+pub fn list_text<'v, const N: usize>(
+    field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
+    name: &'static str,
+) -> Result<Repeated<u8, N>, FieldError> {
+    match field(name) {
+        Some(FieldValue::Text(t)) => Repeated::from_slice(t).map_err(|_| FieldError::TooMany {
+            field: name,
+            found: t.len(),
+            max: N,
+        }),
+        Some(_) => Err(FieldError::WrongKind {
+            field: name,
+            expected: ValueKind::Text,
+        }),
+        None => Err(FieldError::Missing { field: name }),
+    }
+}
+
 /// Repeated bit field `name` from a [`crate::Message::from_fields`] getter, as [`list`]: at
 /// most `8 × BYTES` elements, each 0 or 1. Public only for generated code.
 #[inline]

@@ -99,6 +99,8 @@ pub(super) enum Kind {
         elem: IntType,
         max: usize,
         typed: Option<Ident>,
+        /// Counted text (`type: ascii` with `repeat`): bytes as any `u8` list, its value text.
+        text: bool,
     },
     /// A repeated bit field, packed into `bytes` bytes.
     BitList {
@@ -208,6 +210,7 @@ impl<'a> Ctx<'a> {
                     elem: leaf.wire,
                     max: pk.count,
                     typed: None,
+                    text: false,
                 };
             }
             if let (Some(r), true) = (&f.repeat, f.is_record()) {
@@ -226,6 +229,7 @@ impl<'a> Ctx<'a> {
                         elem: leaf.wire,
                         max: r.max,
                         typed: self.element_type(f),
+                        text: f.is_ascii(),
                     }
                 };
             }
@@ -288,7 +292,9 @@ impl<'a> Ctx<'a> {
                 let n = Literal::usize_unsuffixed(n);
                 quote!([u8; #n])
             }
-            Kind::List { elem, max, typed } => {
+            Kind::List {
+                elem, max, typed, ..
+            } => {
                 let e = typed.unwrap_or_else(|| elem.ident());
                 let max = usize_lit(max);
                 quote!(rt::Repeated<#e, #max>)

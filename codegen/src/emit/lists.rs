@@ -336,7 +336,9 @@ pub(super) fn decode_repeat(
             let _ = (c, count);
             return Some(quote!(#v));
         }
-        Kind::List { elem, max, typed } => {
+        Kind::List {
+            elem, max, typed, ..
+        } => {
             let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
             let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
             quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?)

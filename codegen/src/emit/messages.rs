@@ -141,6 +141,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                         quote!(rt::Int(#v.raw() as i64))
                     }
                     Kind::Text(_) => quote!(rt::Text(&#v[..])),
+                    Kind::List { text: true, .. } => quote!(rt::Text(#v.as_slice())),
                     Kind::List { typed: Some(_), .. } => quote!(rt::List(#v.table())),
                     Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
                     Kind::Records { .. } => quote!(rt::Records(#v.records())),
@@ -433,7 +434,15 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             let (n, f) = (l.name, ident(l.name));
             let value = match ctx.kind(l) {
                 Kind::Text(_) => quote!(rt::text(&mut field, #n)?),
-                Kind::List { elem, max, typed } => {
+                Kind::List {
+                    max, text: true, ..
+                } => {
+                    let max = usize_lit(max);
+                    quote!(rt::list_text::<#max>(&mut field, #n)?)
+                }
+                Kind::List {
+                    elem, max, typed, ..
+                } => {
                     let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
                     let (lo, hi) = elem.limits();
                     let (lo, hi) = (i64_lit(lo), i64_lit(hi));
