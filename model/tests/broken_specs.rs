@@ -73,6 +73,14 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.transform.add", "a transform's addend 307 does not fit in one byte")],
     ),
     (
+        "counted_text_with_length",
+        &[("commands.set_name.fields.name.length", "`length` cannot be combined with `repeat`: the count field gives the text's length, `repeat.max` its most")],
+    ),
+    (
+        "counted_text_with_unit",
+        &[("commands.set_name.fields.name.unit", "`unit` cannot be combined with an ascii field")],
+    ),
+    (
         "transform_with_escaping",
         &[("framing.transform", "a transform is not expressible with `escaping`, yet")],
     ),
