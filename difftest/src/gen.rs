@@ -96,9 +96,12 @@ fn condition_target(f: &Gf) -> bool {
 /// Whether `f` is a list a random spec may turn into counted text: plain `u8` elements with a
 /// unit (no range, enum or record), its count not from the request.
 fn counted_text_eligible(f: &Gf) -> bool {
+    // The list's own type, not a field of a record's (a record of one u8 field is a u8 list
+    // too, and its record text must stay whole).
     f.ty == "u8"
         && f.repeat_tail > 0
-        && f.yaml.contains("type: u8, unit: ")
+        && f.yaml
+            .starts_with(&format!("{{name: {}, type: u8, unit: ", f.name))
         && !f.yaml.contains("range:")
         && !f.yaml.contains("request:")
 }
