@@ -194,7 +194,39 @@ fn is_wide(ty: &str) -> bool {
     matches!(ty, "u64" | "i64" | "f32" | "f64")
 }
 
+/// What is drawn from a generator of its own, each seeded by the spec's seed XOR its salt, so a
+/// construct added to the generator leaves every spec drawn without it as it was (the stream
+/// of `G::rng` unchanged). A new construct takes a new salt here.
+#[derive(Clone, Copy)]
+#[repr(u64)]
+enum Own {
+    /// The examples, drawn after the spec text is complete.
+    Examples = 0x5EED_E8A3_71E5,
+    /// Optional fields (`present:`).
+    Optionals = 0x0971_0971_0971_0971,
+    /// Counted text (`type: ascii` with `repeat`).
+    CountedText = 0x7E47_7E47_7E47_7E47,
+    /// A preamble of wake-up bytes.
+    Preamble = 0xFEFE_FEFE_FEFE_FEFE,
+    /// A per-byte transform of the payload.
+    Transform = 0x3333_3333_3333_3333,
+}
+
+/// The generator of `what` for the spec of `seed`.
+fn own_rng(seed: u64, what: Own) -> fastrand::Rng {
+    fastrand::Rng::with_seed(seed ^ what as u64)
+}
+
 impl G {
+    /// Runs `f` with the generator of `what` in place of the spec's own, which is put back
+    /// after: what `f` draws leaves the rest of the spec as it was.
+    fn with_own<R>(&mut self, seed: u64, what: Own, f: impl FnOnce(&mut G) -> R) -> R {
+        let spec_rng = std::mem::replace(&mut self.rng, own_rng(seed, what));
+        let r = f(self);
+        self.rng = spec_rng;
+        r
+    }
+
     fn pick<'a, T>(&mut self, xs: &'a [T]) -> &'a T {
         &xs[self.rng.usize(..xs.len())]
     }
@@ -1064,7 +1096,7 @@ pub fn random_spec(seed: u64) -> String {
         // A generator bug: the caller validates the text and reports it.
         Err(_) => return text,
     };
-    let mut rng = fastrand::Rng::with_seed(seed ^ 0x5EED_E8A3_71E5);
+    let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
         None => format!("{text}examples: []\nerrata: []\n"),
@@ -1874,13 +1906,12 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
 
     // Optional fields (`present:`): where the frames have a length field and nothing
     // escapes, in about 13 % of the messages that may have them; drawn by a generator of
-    // their own (swapped in for the while), so every spec drawn without them is as it was.
+    // their own (`Own`), so every spec drawn without them is as it was.
     if has_length && escaping == Escaping::None {
-        let mut rng = fastrand::Rng::with_seed(seed ^ 0x0971_0971_0971_0971);
-        std::mem::swap(&mut g.rng, &mut rng);
-        g.optionals(&mut commands);
-        g.optionals(&mut responses);
-        std::mem::swap(&mut g.rng, &mut rng);
+        g.with_own(seed, Own::Optionals, |g| {
+            g.optionals(&mut commands);
+            g.optionals(&mut responses);
+        });
     }
 
     // Counted text (`type: ascii` with `repeat`): a list of plain u8 elements (a unit, no
@@ -1888,7 +1919,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     // messages that have one; drawn by a generator of its own, so every spec drawn without
     // them is as it was (the count field, bounds and tail stay the list's).
     {
-        let mut rng = fastrand::Rng::with_seed(seed ^ 0x7E47_7E47_7E47_7E47);
+        let mut rng = own_rng(seed, Own::CountedText);
         for m in commands.iter_mut().chain(responses.iter_mut()) {
             let Some(f) = m.fields.iter_mut().find(|f| counted_text_eligible(f)) else {
                 continue;
@@ -2106,6 +2137,11 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     // two responses of 1 to 3 bytes, none beginning with a start byte, none a prefix of
     // another, each listed by some commands that get a reply.
     let mut constants: Vec<Vec<u8>> = Vec::new();
+    // The first start byte of each direction (requests', responses'), where frames have one.
+    let first_starts: Option<[u8; 2]> = sync.first().map(|&s| {
+        let r = response_sync.as_ref().and_then(|r| r.first().copied());
+        [s, r.unwrap_or(s)]
+    });
     let mut constant_of: Vec<Vec<usize>> = vec![Vec::new(); n_cmd];
     let replying: Vec<usize> = (0..n_cmd)
         .filter(|&c| reply[c] != ", reply: none")
@@ -2118,13 +2154,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         && !replying.is_empty()
         && g.chance(13)
     {
-        let starts = [
-            sync[0],
-            response_sync
-                .as_ref()
-                .and_then(|r| r.first().copied())
-                .unwrap_or(sync[0]),
-        ];
+        let starts = first_starts.unwrap_or_default();
         for _ in 0..g.rng.usize(1..=2) {
             let len = *g.pick(&[1, 1, 1, 2, 3]);
             let bytes: Vec<u8> = (0..len).map(|_| g.rng.u8(..)).collect();
@@ -2157,15 +2187,9 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         && !sync.is_empty()
         && escaping == Escaping::None
     {
-        let mut rng = fastrand::Rng::with_seed(seed ^ 0xFEFE_FEFE_FEFE_FEFE);
+        let mut rng = own_rng(seed, Own::Preamble);
         if rng.u8(..100) < 12 {
-            let starts = [
-                sync[0],
-                response_sync
-                    .as_ref()
-                    .and_then(|r| r.first().copied())
-                    .unwrap_or(sync[0]),
-            ];
+            let starts = first_starts.unwrap_or_default();
             let byte = loop {
                 let b = if rng.bool() { 0xFE } else { rng.u8(..) };
                 if !starts.contains(&b) {
@@ -2194,7 +2218,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             .any(|f| f.yaml.contains("repeat: {count: ") && !f.yaml.contains("repeat: {count: end"))
     });
     if escaping == Escaping::None && one_code_len && (has_length || !counted) {
-        let mut rng = fastrand::Rng::with_seed(seed ^ 0x3333_3333_3333_3333);
+        let mut rng = own_rng(seed, Own::Transform);
         if rng.u8(..100) < 40 {
             let k = rng.u8(1..);
             let kind = if rng.bool() { "add" } else { "xor" };
