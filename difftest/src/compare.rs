@@ -21,6 +21,7 @@ use busspec_fuzz_bodies::oracle::{interp_values, visit_values, Values};
 use busspec_fuzz_bodies::{seen, stream_events};
 use busspec_model::interp::{self, DecodeError as InterpError, Raw, Value};
 use busspec_model::ir::{self, Count, Direction, MessageRef};
+use busspec_model::mutate::{after_preamble, mutations, reseal};
 use busspec_runtime::stream::Direction as StreamDirection;
 use busspec_runtime::{DecodeError, Elements, EncodeError, FieldValue, Message, Protocol};
 
@@ -886,31 +887,6 @@ pub fn lenient(p: &ir::Protocol) -> ir::Protocol {
     p
 }
 
-/// `frame` with its checksum recomputed over what it covers (and its end bytes).
-pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
-    interp::reseal(p, after_preamble(p, frame));
-}
-
-/// `frame` after its preamble bytes (`framing.preamble`): where the frame's offsets count from.
-fn after_preamble<'f>(p: &ir::Protocol, frame: &'f mut [u8]) -> &'f mut [u8] {
-    let k = frame.len() - p.framing.after_preamble(frame).len();
-    &mut frame[k..]
-}
-
-/// `frame` with its length field set to what its length gives, where the framing has one.
-pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
-    let frame = after_preamble(p, frame);
-    let Some(rule) = p.framing.length_rule(d) else {
-        return;
-    };
-    let Some(v) = rule.value(frame.len()) else {
-        return;
-    };
-    if let Some(at) = frame.get_mut(rule.at..rule.at + rule.width) {
-        interp::write_uint(v as u64, at, p.byte_order);
-    }
-}
-
 /// The repeated field's count field set to a nearby or random value (the checksum repaired
 /// or not): a count that lies about the frame.
 fn lie_about_count(p: &ir::Protocol, r: MessageRef, frame: &mut [u8], rng: &mut fastrand::Rng) {
@@ -943,50 +919,6 @@ fn lie_about_count(p: &ir::Protocol, r: MessageRef, frame: &mut [u8], rng: &mut 
     if rng.u8(..4) != 0 {
         reseal(p, frame);
     }
-}
-
-/// Frames made from `wire`: every byte changed four ways, the frame cut and lengthened by one
-/// to three bytes before its checksum (its length field kept, or made to agree), each with its
-/// checksum as it was and recomputed.
-pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
-    let clen = p.framing.trailer_len();
-    let mut out = Vec::new();
-    for i in 0..wire.len() {
-        for f in [|b: u8| b ^ 0x01, |b: u8| b ^ 0x80, |_| 0x00, |_| 0xFF] {
-            let mut m = wire.to_vec();
-            m[i] = f(m[i]);
-            if m == wire {
-                continue;
-            }
-            out.push(m.clone());
-            if i + clen < wire.len() {
-                reseal(p, &mut m);
-                out.push(m);
-            }
-        }
-    }
-    let body = wire.len().saturating_sub(clen);
-    for k in 1..=3 {
-        let mut variants = Vec::new();
-        if body > k {
-            let mut cut = wire[..body - k].to_vec();
-            cut.extend_from_slice(&wire[body..]);
-            variants.push(cut);
-        }
-        let mut long = wire[..body].to_vec();
-        long.extend(vec![0x5Au8; k]);
-        long.extend_from_slice(&wire[body..]);
-        variants.push(long);
-        for v in variants {
-            let mut sealed = v.clone();
-            reseal(p, &mut sealed);
-            let mut agreed = v.clone();
-            fix_length(p, d, &mut agreed);
-            reseal(p, &mut agreed);
-            out.extend([v, sealed, agreed]);
-        }
-    }
-    out
 }
 
 /// Compares the engines on generated protocol `P` with `seed`, within `budget`. The spec is

@@ -33,6 +33,8 @@ pub mod interp;
 pub mod ir;
 pub mod load;
 pub mod model;
+#[cfg(feature = "tools")]
+pub mod mutate;
 pub mod number;
 pub mod rational;
 #[cfg(feature = "tools")]

@@ -5,10 +5,10 @@
 //!
 //! Shared by the test files that include generated code with repeated fields.
 
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
 use busspec_model::interp::{self, Raw, Value};
-use busspec_model::ir::{self, ByteOrder, Direction, MessageRef};
+use busspec_model::ir::{self, Direction, MessageRef};
 use busspec_runtime::{Elements, FieldValue, Message, Protocol};
 
 /// `name`, a path from the repository's root.
@@ -134,10 +134,6 @@ fn written_back(p: &ir::Protocol, written: &[u8], wire: &[u8]) {
 }
 
 /// How many preamble bytes `wire` begins with (`framing.preamble`).
-fn preamble_len(p: &ir::Protocol, wire: &[u8]) -> usize {
-    wire.len() - p.framing.after_preamble(wire).len()
-}
-
 /// Both engines refused a frame: they say so in the same words. Returns false (refused).
 fn same_words(
     g: Option<busspec_runtime::DecodeError>,
@@ -150,71 +146,7 @@ fn same_words(
     false
 }
 
-/// `frame` with its checksum recomputed over what it covers (and its end bytes).
-pub fn reseal(p: &ir::Protocol, frame: &mut [u8]) {
-    let k = preamble_len(p, frame);
-    busspec_model::interp::reseal(p, &mut frame[k..]);
-}
-
-/// `frame` with its length field set to what its length gives, where the framing has one.
-pub fn fix_length(p: &ir::Protocol, d: Direction, frame: &mut [u8]) {
-    let k = preamble_len(p, frame);
-    let frame = &mut frame[k..];
-    let Some(rule) = p.framing.length_rule(d) else {
-        return;
-    };
-    let Some(v) = rule.value(frame.len()) else {
-        return;
-    };
-    for k in 0..rule.width {
-        let shift = match p.byte_order {
-            ByteOrder::Big => 8 * (rule.width - 1 - k),
-            ByteOrder::Little => 8 * k,
-        };
-        frame[rule.at + k] = (v >> shift) as u8;
-    }
-}
-
-/// Frames made from `wire`: every byte changed four ways, the frame cut and lengthened by one
-/// to three bytes before its checksum (its length field kept, or made to agree), each with its
-/// checksum as it was and recomputed.
-pub fn mutations(p: &ir::Protocol, d: Direction, wire: &[u8]) -> Vec<Vec<u8>> {
-    let clen = p.framing.trailer_len();
-    let mut out = Vec::new();
-    for i in 0..wire.len() {
-        for f in [|b: u8| b ^ 0x01, |b: u8| b ^ 0x80, |_| 0x00, |_| 0xFF] {
-            let mut m = wire.to_vec();
-            m[i] = f(m[i]);
-            out.push(m.clone());
-            if i < wire.len().saturating_sub(clen) {
-                reseal(p, &mut m);
-                out.push(m);
-            }
-        }
-    }
-    let body = wire.len().saturating_sub(clen);
-    for k in 1..=3 {
-        let mut variants = Vec::new();
-        if body > k {
-            let mut cut = wire[..body - k].to_vec();
-            cut.extend_from_slice(&wire[body..]);
-            variants.push(cut);
-        }
-        let mut long = wire[..body].to_vec();
-        long.extend(vec![0x5Au8; k]);
-        long.extend_from_slice(&wire[body..]);
-        variants.push(long);
-        for v in variants {
-            let mut sealed = v.clone();
-            reseal(p, &mut sealed);
-            let mut agreed = v.clone();
-            fix_length(p, d, &mut agreed);
-            reseal(p, &mut agreed);
-            out.extend([v, sealed, agreed]);
-        }
-    }
-    out
-}
+pub use busspec_model::mutate::{fix_length, mutations, reseal};
 
 /// A small deterministic generator (xorshift), so failures replay.
 pub struct Rng(pub u64);
