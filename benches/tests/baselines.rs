@@ -144,7 +144,9 @@ fn deku_ub2_response(f: &peer::ub2::ResponseFrame) -> Decoded<ub2::Response> {
                 capacitance: Capacitance(capacitance),
             },
             Data::ControllerTemperature { temperature } => G::ControllerTemperature { temperature },
-            Data::FirmwareVersion { firmware_version } => G::FirmwareVersion { firmware_version },
+            Data::FirmwareVersion { firmware_version } => G::FirmwareVersion {
+                firmware_version: firmware_version.into(),
+            },
             Data::Limit {
                 limit: Limit::LowerCustomer,
                 capacitance,

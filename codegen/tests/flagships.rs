@@ -44,3 +44,24 @@ fn units_debug_print_the_physical_value_beside_the_raw_one() {
     assert_eq!(sd::Temperature(75).value(), 25.0);
     assert_eq!(sd::Temperature::from_value(25.0), Some(sd::Temperature(75)));
 }
+
+/// An ASCII field is `rt::Ascii<N>`: its bytes as the frame holds them, shown as text in a
+/// message's `Debug`, read as text by `as_str`, and written back as they were.
+#[test]
+fn ascii_fields_show_their_text() {
+    let r = ub2::Response::FirmwareVersion {
+        firmware_version: busspec_runtime::Ascii(*b"20100433.00"),
+    };
+    assert_eq!(
+        format!("{r:?}"),
+        r#"FirmwareVersion { firmware_version: "20100433.00" }"#
+    );
+    let mut buf = [0u8; 16];
+    let n = r.encode(0x21, &mut buf).unwrap();
+    let back = ub2::Response::decode(&buf[..n]).unwrap();
+    let ub2::Response::FirmwareVersion { firmware_version } = back.message else {
+        panic!("{back:?}");
+    };
+    assert_eq!(firmware_version.as_str(), Some("20100433.00"));
+    assert_eq!(firmware_version, *b"20100433.00");
+}

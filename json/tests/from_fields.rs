@@ -266,7 +266,7 @@ fn from_fields_says_what_is_wrong_and_where() {
             b"20100433.00"
         ))),
         Ok(Response::FirmwareVersion {
-            firmware_version: *b"20100433.00"
+            firmware_version: busspec_runtime::Ascii(*b"20100433.00")
         })
     );
     // Sub-fields are checked against their own width, signed ones sign-extended.

@@ -33,7 +33,7 @@ fn reads_answer_from_the_device_state() {
     assert_eq!(
         r,
         Response::FirmwareVersion {
-            firmware_version: *b"20100433.00"
+            firmware_version: busspec_runtime::Ascii(*b"20100433.00")
         }
     );
     let expected = bus.with_devices(|d| d[0].capacitance_at(d[0].position));

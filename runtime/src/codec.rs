@@ -30,9 +30,9 @@ pub use crate::Bits;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::{
-    crc, field_int, field_text, round, sum8, Broadcast, Bus, Command, CommandKind, DecodeError,
-    Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind, Preamble,
-    Protocol, Record, RecordList, Repeated, Reply, Source, Transactions, Transform,
+    crc, field_int, field_text, round, sum8, Ascii, Broadcast, Bus, Command, CommandKind,
+    DecodeError, Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind,
+    Preamble, Protocol, Record, RecordList, Repeated, Reply, Source, Transactions, Transform,
 };
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter
@@ -221,7 +221,7 @@ pub fn field_int_opt(
 pub fn text<'v, const N: usize>(
     field: &mut impl FnMut(&'static str) -> Option<FieldValue<'v>>,
     name: &'static str,
-) -> Result<[u8; N], FieldError> {
+) -> Result<Ascii<N>, FieldError> {
     field_text(name, field(name))
 }
 

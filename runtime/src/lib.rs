@@ -22,6 +22,9 @@ extern crate std;
 /// generated code needs no dependency of its own on it.
 pub use crc;
 
+mod ascii;
+pub use ascii::Ascii;
+
 pub mod codec;
 pub mod escape;
 mod lists;
@@ -515,13 +518,17 @@ pub fn field_int(
 pub fn field_text<const N: usize>(
     field: &'static str,
     value: Option<FieldValue<'_>>,
-) -> Result<[u8; N], FieldError> {
+) -> Result<Ascii<N>, FieldError> {
     match value {
-        Some(FieldValue::Text(text)) => text.try_into().map_err(|_| FieldError::TextLength {
-            field,
-            expected: N,
-            found: text.len(),
-        }),
+        Some(FieldValue::Text(text)) => {
+            text.try_into()
+                .map(Ascii)
+                .map_err(|_| FieldError::TextLength {
+                    field,
+                    expected: N,
+                    found: text.len(),
+                })
+        }
         Some(FieldValue::Int(_) | FieldValue::List(_) | FieldValue::Records(_)) => {
             Err(FieldError::WrongKind {
                 field,

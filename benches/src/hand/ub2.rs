@@ -224,7 +224,9 @@ pub fn decode_response(
         [0x41, 0x61, ref text @ ..] if text.len() == 11 => {
             let mut firmware_version = [0u8; 11];
             firmware_version.copy_from_slice(text);
-            Response::FirmwareVersion { firmware_version }
+            Response::FirmwareVersion {
+                firmware_version: firmware_version.into(),
+            }
         }
         [0x41, 0x72, index, a, b, c, d] => {
             let capacitance = Capacitance(u32le(a, b, c, d));
@@ -385,7 +387,7 @@ pub fn encode_response(
             put(address, &[0x41, 0x32], &[temperature], buf)
         }
         Response::FirmwareVersion { firmware_version } => {
-            put(address, &[0x41, 0x61], &firmware_version, buf)
+            put(address, &[0x41, 0x61], &firmware_version.0, buf)
         }
         Response::LowerCustomerLimit { capacitance } => {
             let c = capacitance.0.to_le_bytes();

@@ -290,7 +290,7 @@ impl<'a> Ctx<'a> {
             Kind::Unit { ty, .. } | Kind::Enum { ty, .. } | Kind::Flags { ty, .. } => quote!(#ty),
             Kind::Text(n) => {
                 let n = Literal::usize_unsuffixed(n);
-                quote!([u8; #n])
+                quote!(rt::Ascii<#n>)
             }
             Kind::List {
                 elem, max, typed, ..

@@ -101,7 +101,7 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             let width = usize_lit(f.width);
             values.push((
                 ident(name),
-                quote!(frame[#read_at..#end].try_into().unwrap_or([0; #width])),
+                quote!(rt::Ascii(frame[#read_at..#end].try_into().unwrap_or([0; #width]))),
             ));
             wires.push(quote!());
             continue;

@@ -260,7 +260,7 @@ pub(super) fn emit_encode_arm(
         }
         if f.is_ascii() {
             let n = local(&f.name);
-            stmts.push(quote!(out[#at..#end].copy_from_slice(&#n);));
+            stmts.push(quote!(out[#at..#end].copy_from_slice(&#n.0);));
             continue;
         }
         if f.constant.is_some() && !named.contains(&fi) {

@@ -38,7 +38,7 @@
 //! - a unit with scale 1 and offset 0 stays a plain integer of its field's width;
 //! - any other unit becomes a newtype over the smallest integer that holds every field using it,
 //!   with conversions to and from physical values;
-//! - enums are open (`Unknown(raw)`), flags are a bit-set newtype, ascii fields `[u8; N]`;
+//! - enums are open (`Unknown(raw)`), flags are a bit-set newtype, ascii fields `rt::Ascii<N>` (the bytes, shown as text);
 //! - constants (and a list's count field, computed from the list) are not part of the typed
 //!   message: encode writes them, decode checks them; a repeated field is an
 //!   `rt::Repeated<wire, max>` or `rt::Bits<bytes>` value, with a `REPEAT_<NAME>` const saying

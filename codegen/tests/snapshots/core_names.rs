@@ -512,7 +512,7 @@ pub mod clash {
         },
         /// §8 usize (code `0x52`, 7 bytes).
         Usize {
-            asked: [u8; 2],
+            asked: rt::Ascii<2>,
             none: u8,
             /// \[S\]
             some: Some,
@@ -595,7 +595,7 @@ pub mod clash {
                 }
                 Self::Usize { asked: v_asked, none: v_none, some: v_some } => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x52])?;
-                    out[3..5].copy_from_slice(&v_asked);
+                    out[3..5].copy_from_slice(&v_asked.0);
                     let field_1: u8 = ((rt::fits("none", v_none, 0, 15)? as u8) << 4)
                         | ((rt::fits("some", v_some.raw(), -8, 7)? as u8) & 0xF);
                     out[5] = field_1;
@@ -662,7 +662,7 @@ pub mod clash {
                 0x52 => {
                     let frame = rt::fixed::<7>(frame, "usize", &[7])?;
                     rt::Ok(Self::Usize {
-                        asked: frame[3..5].try_into().unwrap_or([0; 2]),
+                        asked: rt::Ascii(frame[3..5].try_into().unwrap_or([0; 2])),
                         none: (frame[5] >> 4) as u8,
                         some: Some::from_raw(
                             ((((frame[5] & 0xF) as u8) << 4) as i8 >> 4) as i16,

@@ -521,7 +521,7 @@ pub mod mini {
             freshness: u8,
             /// \[°\]
             position: Angle,
-            firmware: [u8; 3],
+            firmware: rt::Ascii<3>,
             /// \[°C\]
             temperature: Celsius,
         },
@@ -621,7 +621,7 @@ pub mod mini {
                         | ((rt::fits("position", v_position.raw(), -2048, 2047)? as u16)
                             & 0xFFF);
                     out[5..7].copy_from_slice(&field_1.to_le_bytes());
-                    out[7..10].copy_from_slice(&v_firmware);
+                    out[7..10].copy_from_slice(&v_firmware.0);
                     out[10] = v_temperature.raw();
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xEA))
                 }
@@ -700,7 +700,7 @@ pub mod mini {
                         position: Angle::from_raw(
                             (((field_1 & 0xFFF) as u16) << 4) as i16 >> 4,
                         ),
-                        firmware: frame[7..10].try_into().unwrap_or([0; 3]),
+                        firmware: rt::Ascii(frame[7..10].try_into().unwrap_or([0; 3])),
                         temperature: Celsius::from_raw(frame[10]),
                     })
                 }

@@ -299,7 +299,7 @@ pub mod msp_v2 {
             api_minor: u8,
         },
         /// §3 MSP_FC_VARIANT (2), answered (code `0x0200`, 13 bytes).
-        FcVariantReply { dont_reply: bool, variant: [u8; 4] },
+        FcVariantReply { dont_reply: bool, variant: rt::Ascii<4> },
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -383,7 +383,7 @@ pub mod msp_v2 {
                     out[4..8].copy_from_slice(&[0x02, 0x00, 0x04, 0x00]);
                     let field_0: u8 = v_dont_reply as u8;
                     out[3] = field_0;
-                    out[8..12].copy_from_slice(&v_variant);
+                    out[8..12].copy_from_slice(&v_variant.0);
                     out.len()
                 }
             };
@@ -465,7 +465,7 @@ pub mod msp_v2 {
                     )?;
                     rt::Ok(Self::FcVariantReply {
                         dont_reply: (frame[3] & 0x1) != 0,
-                        variant: frame[8..12].try_into().unwrap_or([0; 4]),
+                        variant: rt::Ascii(frame[8..12].try_into().unwrap_or([0; 4])),
                     })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 2, 1, true)),

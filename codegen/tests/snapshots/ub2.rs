@@ -1642,12 +1642,12 @@ pub mod ub2 {
         /// §6.10 Command approved (firmware version) (code `0x4161`, 16 bytes). Firmware version, 11 ASCII characters (e.g. "20100433.00").
         FirmwareVersion {
             /// 11 bytes \[ASCII character\]
-            firmware_version: [u8; 11],
+            firmware_version: rt::Ascii<11>,
         },
         /// §6.11 Command approved (serial number) (code `0x4162`, 13 bytes). Serial number of the capacitor, 8 ASCII characters (e.g. "##654321").
         SerialNumber {
             /// 8 bytes \[ASCII character\]
-            serial_number: [u8; 8],
+            serial_number: rt::Ascii<8>,
         },
         /// §6.12 Command approved (Cmin-nom) (code `0x4170`, 9 bytes). Nominal minimum capacitance Cmin-nom.
         CminNom {
@@ -2091,12 +2091,12 @@ pub mod ub2 {
                 }
                 Self::FirmwareVersion { firmware_version: v_firmware_version } => {
                     let out = rt::frame_mut::<16>(buf, &[0xAA, address, 0x41, 0x61])?;
-                    out[4..15].copy_from_slice(&v_firmware_version);
+                    out[4..15].copy_from_slice(&v_firmware_version.0);
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x4C))
                 }
                 Self::SerialNumber { serial_number: v_serial_number } => {
                     let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x62])?;
-                    out[4..12].copy_from_slice(&v_serial_number);
+                    out[4..12].copy_from_slice(&v_serial_number.0);
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x4D))
                 }
                 Self::CminNom { capacitance: v_capacitance } => {
@@ -2406,13 +2406,17 @@ pub mod ub2 {
                 0x4161 => {
                     let frame = rt::fixed::<16>(frame, "firmware_version", &[16])?;
                     rt::Ok(Self::FirmwareVersion {
-                        firmware_version: frame[4..15].try_into().unwrap_or([0; 11]),
+                        firmware_version: rt::Ascii(
+                            frame[4..15].try_into().unwrap_or([0; 11]),
+                        ),
                     })
                 }
                 0x4162 => {
                     let frame = rt::fixed::<13>(frame, "serial_number", &[13])?;
                     rt::Ok(Self::SerialNumber {
-                        serial_number: frame[4..12].try_into().unwrap_or([0; 8]),
+                        serial_number: rt::Ascii(
+                            frame[4..12].try_into().unwrap_or([0; 8]),
+                        ),
                     })
                 }
                 0x4170 => {

@@ -315,7 +315,7 @@ pub mod unaddressed {
         /// §4.2 Acknowledge (code `0xA0`, 5 bytes).
         Ack,
         /// §4.3 Firmware version (code `0xB0`, 9 bytes).
-        Version { version: [u8; 4] },
+        Version { version: rt::Ascii<4> },
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -381,7 +381,7 @@ pub mod unaddressed {
                 Self::Ack => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len(),
                 Self::Version { version: v_version } => {
                     let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, 0x05, 0xB0])?;
-                    out[4..8].copy_from_slice(&v_version);
+                    out[4..8].copy_from_slice(&v_version.0);
                     out.len()
                 }
             };
@@ -455,7 +455,7 @@ pub mod unaddressed {
                 0xB0 => {
                     let frame = rt::fixed::<9>(frame, "version", &[9])?;
                     rt::Ok(Self::Version {
-                        version: frame[4..8].try_into().unwrap_or([0; 4]),
+                        version: rt::Ascii(frame[4..8].try_into().unwrap_or([0; 4])),
                     })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),

@@ -313,7 +313,7 @@ pub mod xbee_api2 {
             /// Matches the response; 0 asks for none.
             frame_id: u8,
             /// The two AT command characters.
-            command: [u8; 2],
+            command: rt::Ascii<2>,
             /// Sets the parameter; none queries it.
             parameter: rt::Repeated<u8, 20>,
         },
@@ -433,7 +433,7 @@ pub mod xbee_api2 {
                     rt::put_length(out, 1, 2, false, true, -4)?;
                     out[3] = 0x08;
                     out[4] = v_frame_id;
-                    out[5..7].copy_from_slice(&v_command);
+                    out[5..7].copy_from_slice(&v_command.0);
                     rt::write_elements(v_parameter.as_slice(), 1, false, &mut out[7..]);
                     out.len()
                 }
@@ -504,7 +504,7 @@ pub mod xbee_api2 {
                     let (frame, elements, _) = REPEAT_AT_COMMAND.split::<7>(frame)?;
                     rt::Ok(Self::AtCommand {
                         frame_id: frame[4],
-                        command: frame[5..7].try_into().unwrap_or([0; 2]),
+                        command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
                         parameter: REPEAT_AT_COMMAND
                             .elements::<u8, 20>(elements, false, false)?,
                     })
@@ -657,7 +657,7 @@ pub mod xbee_api2 {
         /// §0x88 AT Command Response AT Command Response (0x88) (code `0x88`, 9 to 29 bytes).
         AtResponse {
             frame_id: u8,
-            command: [u8; 2],
+            command: rt::Ascii<2>,
             status: AtStatus,
             data: rt::Repeated<u8, 20>,
         },
@@ -800,7 +800,7 @@ pub mod xbee_api2 {
                     rt::put_length(out, 1, 2, false, true, -4)?;
                     out[3] = 0x88;
                     out[4] = v_frame_id;
-                    out[5..7].copy_from_slice(&v_command);
+                    out[5..7].copy_from_slice(&v_command.0);
                     out[7] = v_status.raw();
                     rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
                     out.len()
@@ -916,7 +916,7 @@ pub mod xbee_api2 {
                     let (frame, elements, _) = REPEAT_AT_RESPONSE.split::<8>(frame)?;
                     rt::Ok(Self::AtResponse {
                         frame_id: frame[4],
-                        command: frame[5..7].try_into().unwrap_or([0; 2]),
+                        command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
                         status: AtStatus::from_raw(frame[7]),
                         data: REPEAT_AT_RESPONSE
                             .elements::<u8, 20>(elements, false, false)?,

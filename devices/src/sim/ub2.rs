@@ -585,10 +585,10 @@ impl Ub2Sim {
             },
             Q::GetMicroStepPosition => R::MicroStepPosition { micro_steps: here },
             Q::GetFirmwareVersion => R::FirmwareVersion {
-                firmware_version: self.config.firmware_version,
+                firmware_version: self.config.firmware_version.into(),
             },
             Q::GetSerialNumber => R::SerialNumber {
-                serial_number: self.config.serial_number,
+                serial_number: self.config.serial_number.into(),
             },
             Q::GetCminNom => R::CminNom {
                 capacitance: self.config.cmin_nom,

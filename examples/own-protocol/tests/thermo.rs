@@ -3,7 +3,9 @@
 //! with `Thermo` as it does with the built-in protocols.
 
 use busspec_runtime::stream::{Direction, Event, StreamDecoder};
-use busspec_runtime::{CommandKind, DecodeError, FieldValue, Message, Protocol, ProtocolVisitor};
+use busspec_runtime::{
+    Ascii, CommandKind, DecodeError, FieldValue, Message, Protocol, ProtocolVisitor,
+};
 use own_protocol::thermo::{
     DeciCelsius, Humidity, Mode, NakReason, Request, Response, StatusBits, Thermo, MAX_FRAME_LEN,
 };
@@ -90,7 +92,7 @@ fn responses() -> Vec<Response> {
         all.push(Response::Status {
             mode: Mode::from_raw(raw % 5),
             flags: StatusBits::from_raw(raw),
-            firmware: *[b"1.20", b"2.0b", b"    "][raw as usize % 3],
+            firmware: Ascii(*[b"1.20", b"2.0b", b"    "][raw as usize % 3]),
         });
     }
     all
@@ -171,7 +173,7 @@ fn documented_frames_decode_as_documented() {
         Response::Status {
             mode: Mode::Heat,
             flags: StatusBits::HEATING,
-            firmware: *b"1.20",
+            firmware: Ascii(*b"1.20"),
         }
     );
 
@@ -292,7 +294,7 @@ fn generic_code_works_with_the_thermostat() {
         Response::Status {
             mode: Mode::Cool,
             flags: StatusBits::from_raw(0b1010),
-            firmware: *b"1.20",
+            firmware: Ascii(*b"1.20"),
         },
         Response::Nak {
             reason: NakReason::Busy,
