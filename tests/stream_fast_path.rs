@@ -23,6 +23,7 @@ mod common;
 
 use busspec_protocols::crsf::Crsf;
 use busspec_protocols::dynamixel::Dynamixel;
+use busspec_protocols::dynamixel2::Dynamixel2;
 use busspec_protocols::modbus::Modbus;
 use busspec_protocols::pelco_d::PelcoD;
 use busspec_protocols::pelco_p::PelcoP;
@@ -395,4 +396,5 @@ fn every_head_of_captures_fast_path_is_the_rule() {
     run::<PelcoD>(25);
     run::<PelcoP>(26);
     run::<Crsf>(27);
+    run::<Dynamixel2>(28);
 }
