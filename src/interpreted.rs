@@ -457,6 +457,15 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             offset,
             fault: escape_fault(fault),
         },
+        I::NeedlessLong {
+            offset,
+            length,
+            most,
+        } => DecodeError::NeedlessLong {
+            offset,
+            length,
+            most,
+        },
         I::BadWidth {
             message,
             field,

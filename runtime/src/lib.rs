@@ -670,6 +670,14 @@ pub enum DecodeError {
     /// The bytes as they travel break the protocol's escaping (`framing.escaping`) at
     /// `offset` (counted in the escaped bytes).
     BadEscape { offset: usize, fault: EscapeFault },
+    /// A frame in the long form of its length field (`framing.length.long`: VESC's `03 lenH
+    /// lenL`) whose length the short form holds (at most `most`): encoders send it short, so
+    /// decoding refuses it. `offset` is the length field's.
+    NeedlessLong {
+        offset: usize,
+        length: i64,
+        most: i64,
+    },
     /// The field `field` at `offset` gives each record's last field `found` bytes
     /// (`bytes:` in the spec), outside `1..=most`: the frame's records cannot be laid out.
     BadWidth {
@@ -1022,6 +1030,14 @@ impl fmt::Display for DecodeError {
             DecodeError::BadEscape { offset, fault } => {
                 write!(f, "bad escape at offset {offset}: {fault}")
             }
+            DecodeError::NeedlessLong {
+                offset,
+                length,
+                most,
+            } => write!(
+                f,
+                "long length field at offset {offset} says {length}: lengths up to {most} take the short form"
+            ),
             DecodeError::BadWidth {
                 message,
                 field,
