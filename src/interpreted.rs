@@ -325,6 +325,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             message: keep(&message),
             expected: &[],
             found,
+            less: 0,
         },
         I::ConstantMismatch {
             message,

@@ -25,11 +25,14 @@ pub use crc;
 pub mod codec;
 pub mod escape;
 mod lists;
+mod long;
 mod optional;
 mod protocol;
 mod repeated;
 pub mod stream;
 
+#[doc(hidden)]
+pub use long::LongLength;
 pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};
 #[doc(hidden)]
 pub use protocol::{Framing, Preamble, Transform};
@@ -567,6 +570,11 @@ pub enum DecodeError {
         message: &'static str,
         expected: &'static [usize],
         found: usize,
+        /// How much shorter than `expected` says each length is as the frame travelled: 0 but
+        /// for a frame that travelled in the short form of a length field the start byte
+        /// chooses (`framing.length.long`), whose `expected` are the lengths laid out in the
+        /// long form's width.
+        less: usize,
     },
     /// A constant field (or constant bits of one) holds another value.
     InvalidValue {
@@ -897,13 +905,14 @@ impl fmt::Display for DecodeError {
                 message,
                 expected,
                 found,
+                less,
             } => {
                 write!(f, "wrong length for {message}: expected ")?;
                 for (i, n) in expected.iter().enumerate() {
                     if i > 0 {
                         f.write_str(" or ")?;
                     }
-                    write!(f, "{n}")?;
+                    write!(f, "{}", n.saturating_sub(less))?;
                 }
                 write!(f, " bytes, found {found}")
             }

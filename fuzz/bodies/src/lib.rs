@@ -370,6 +370,7 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
             message,
             expected,
             found,
+            less: _,
         } => {
             assert!(
                 same_len(found) && !expected.contains(&found) && !message.is_empty(),
