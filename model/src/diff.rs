@@ -745,7 +745,26 @@ impl<'a> Differ<'a> {
             let text = format!("transform: {} → {}", show(ot), show(nt));
             self.wire("transform_changed", "framing.transform", text);
         }
-        if o.length != n.length {
+        // A long length form added, removed or changed (`framing.length.long`): frames whose
+        // length the short form cannot hold travel otherwise. The length field itself is
+        // compared in the short form's width (the IR lays frames out in the long one's).
+        if o.long != n.long {
+            let show =
+                |l: Option<crate::ir::LongForm>| l.map_or("none".to_owned(), |l| l.describe());
+            let text = format!("long length form: {} → {}", show(o.long), show(n.long));
+            self.wire("long_length_changed", "framing.length.long", text);
+        }
+        let short = |f: &crate::ir::Framing| {
+            f.length.clone().map(|mut l| {
+                if let Some(g) = f.long {
+                    l.width = g.short_width;
+                }
+                l
+            })
+        };
+        let (o_length, n_length) = (short(o), short(n));
+        if o_length != n_length {
+            let (o, n) = (&o_length, &n_length);
             let show = |l: &Option<crate::ir::LengthField>| match l {
                 None => "none".to_owned(),
                 Some(l) => format!("{} byte(s) counting {:?}{:+}", l.width, l.counts, l.adjust)
@@ -754,7 +773,7 @@ impl<'a> Differ<'a> {
             self.wire(
                 "framing_changed",
                 "framing.length",
-                format!("length field: {} → {}", show(&o.length), show(&n.length)),
+                format!("length field: {} → {}", show(o), show(n)),
             );
         }
         let (oc, nc) = (&o.checksum, &n.checksum);
