@@ -409,6 +409,32 @@ impl Framing {
         }
     }
 
+    /// The length a frame of direction `d` laid out in `len` bytes has as it travels: as long
+    /// in the long form of a length field the start byte chooses (`framing.length.long`)
+    /// where its length field's value needs it, shorter by the bytes the short field lacks
+    /// otherwise; `len` without a long form.
+    pub fn travelled_len(&self, d: Direction, len: usize) -> usize {
+        let (Some(l), Some(rule)) = (self.long, self.length_rule(d)) else {
+            return len;
+        };
+        match rule.value(len) {
+            Some(v) if v > l.short_max() => len,
+            _ => len.saturating_sub(l.extra()),
+        }
+    }
+
+    /// Where the checksum starts as a frame travels in the short form of a length field the
+    /// start byte chooses (`framing.length.long`): where it starts laid out, less the bytes the
+    /// short field lacks (the checksum covers no byte before the length field's end:
+    /// validated). `checksum.covers_from` without a long form.
+    pub fn short_covers_from(&self) -> usize {
+        let from = self.checksum.covers_from;
+        match self.long {
+            Some(l) if from >= l.length_at + l.width => from - l.extra(),
+            _ => from,
+        }
+    }
+
     /// The bytes of a frame of `len` bytes (after any preamble, unescaped) that travel
     /// transformed (`framing.transform`): its payload, from where the payload begins (every
     /// code has one length: validated) to the checksum and end bytes. Empty without a
