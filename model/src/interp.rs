@@ -2272,7 +2272,8 @@ pub fn decode_reply<'p>(
         Some(request.message.index),
         wire,
     )?;
-    answers(p, request, &frame)?;
+    // Its offsets are the IR's layout's: on the frame as it travelled (a long length form).
+    answers(p, request, &frame).map_err(|e| crate::long::locate_on(p, wire, e))?;
     Ok(frame)
 }
 

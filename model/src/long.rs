@@ -127,6 +127,15 @@ pub fn wire_len(p: &Protocol, buf: &[u8]) -> Option<Option<(i64, usize)>> {
     )
 }
 
+/// An error found in the IR's layout of `wire` (a frame as it travelled) after its decode
+/// (a reply's check against its request), located on `wire`.
+pub fn locate_on(p: &Protocol, wire: &[u8], e: DecodeError) -> DecodeError {
+    match canonical(p, wire) {
+        Ok(c) => c.locate(e),
+        Err(_) => e,
+    }
+}
+
 /// An offset in the layout of a frame that travelled short, on the wire.
 fn offset(l: &LongForm, o: usize) -> usize {
     if o >= l.length_at + l.width {
