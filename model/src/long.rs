@@ -116,9 +116,9 @@ pub fn travel(p: &Protocol, mut frame: Vec<u8>) -> Vec<u8> {
 /// field's value (per direction: the caller's).
 pub fn wire_len(p: &Protocol, buf: &[u8]) -> Option<Option<(i64, usize)>> {
     let l = p.framing.long?;
-    let (width, extra) = match buf.get(l.start_at)? {
-        &b if b == l.start => (l.width, 0),
-        &b if b == l.short_start => (l.short_width, l.extra()),
+    let (width, extra) = match *buf.get(l.start_at)? {
+        b if b == l.start => (l.width, 0),
+        b if b == l.short_start => (l.short_width, l.extra()),
         _ => return None,
     };
     Some(

@@ -1599,7 +1599,7 @@ fn long_form(
     }
     let head = f.head(0);
     let (start_at, length_at) = (head.start.unwrap_or(0), head.length.unwrap_or(1));
-    if f.checksum.len() > 0
+    if !f.checksum.is_empty()
         && f.checksum.covers_from < length_at + f.length.as_ref().map_or(0, |l| l.width)
     {
         sink.error(
