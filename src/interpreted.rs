@@ -325,6 +325,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             message: keep(&message),
             expected: &[],
             found,
+            less: 0,
         },
         I::ConstantMismatch {
             message,
@@ -456,6 +457,15 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
         I::BadEscape { offset, fault } => DecodeError::BadEscape {
             offset,
             fault: escape_fault(fault),
+        },
+        I::NeedlessLong {
+            offset,
+            length,
+            most,
+        } => DecodeError::NeedlessLong {
+            offset,
+            length,
+            most,
         },
         I::BadWidth {
             message,

@@ -1524,3 +1524,69 @@ fn frames_with_a_transformed_payload_decode_encode_and_stream() {
         format!("FE FE FE FE {reply}").replace(' ', "")
     );
 }
+
+/// A length field whose width the start byte chooses (VESC, a spec read at run time): decode
+/// prints pyvesc's short frame, encode writes it back, a 256-byte payload goes out long and
+/// decodes, a long form of a length the short field holds is refused with its reason and
+/// place, and a stream frames both forms.
+#[test]
+fn frames_of_both_length_forms_decode_encode_and_stream() {
+    let spec = "model/tests/fixtures/valid/vesc.yaml";
+    let set_rpm = "02 05 08 FF FF EE 6C 18 7A 03";
+    let line = r#"{"protocol":"vesc","direction":"request","code":"0x08","message":"set_rpm","fields":{"rpm":-4500}}"#;
+    let out = busspec(&["decode", "vesc", "--spec", spec, set_rpm]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout).trim_end(), line);
+    let out = busspec_stdin(&["encode", "vesc", "--spec", spec], line);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout).trim_end(), set_rpm.replace(' ', ""));
+    // 4 + 251 data bytes and the code: 256, long.
+    let data: Vec<String> = (0..251).map(|i| (i % 256).to_string()).collect();
+    let write = format!(
+        r#"{{"protocol":"vesc","direction":"request","code":"0x03","message":"write_new_app_data","fields":{{"offset":4096,"data":[{}]}}}}"#,
+        data.join(",")
+    );
+    let out = busspec_stdin(&["encode", "vesc", "--spec", spec], &write);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let long = text(&out.stdout).trim_end().to_owned();
+    assert!(long.starts_with("0301000300001000"), "{long}");
+    assert_eq!(long.len(), 2 * 262);
+    let out = busspec(&["decode", "vesc", "--spec", spec, &long]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(text(&out.stdout).trim_end(), write);
+    let needless = "03 00 05 08 FF FF EE 6C 18 7A 03";
+    let out = busspec(&["decode", "vesc", "--spec", spec, needless]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        text(&out.stderr).trim_end(),
+        format!("frame 1 ({needless}): long length field at offset 1 says 5: lengths up to 255 take the short form")
+    );
+    let dir = temp_dir("long_length");
+    let cap = dir.join("cap.bin");
+    let mut bytes = busspec_model::interp::parse_hex(set_rpm).unwrap();
+    bytes.extend(busspec_model::interp::parse_hex(&long).unwrap());
+    bytes.extend(busspec_model::interp::parse_hex("02 01 04 40 84 03").unwrap());
+    std::fs::write(&cap, &bytes).unwrap();
+    let out = busspec(&[
+        "decode",
+        "vesc",
+        "--spec",
+        spec,
+        "--stream",
+        cap.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let lines: Vec<String> = text(&out.stdout).lines().map(str::to_owned).collect();
+    assert_eq!(lines.len(), 3, "{lines:?}");
+    assert!(
+        lines[0].starts_with(r#"{"offset":0,"protocol":"vesc""#),
+        "{lines:?}"
+    );
+    assert!(
+        lines[1]
+            .starts_with(r#"{"offset":10,"protocol":"vesc","direction":"request","code":"0x03""#),
+        "{lines:?}"
+    );
+    assert!(lines[2].starts_with(r#"{"offset":272,"#), "{lines:?}");
+    assert!(lines[2].contains(r#""message":"get_values""#), "{lines:?}");
+}

@@ -406,6 +406,14 @@ fn preamble_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/dlt645.yaml", "dlt645.rs");
 }
 
+/// A length field whose width the start byte chooses (`framing.length.long`, VESC's
+/// `02 len …` and `03 lenH lenL …`): `snapshots_compile.rs` compiles it and holds it to the
+/// interpreter.
+#[test]
+fn long_length_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/vesc.yaml", "vesc.rs");
+}
+
 /// Optional fields (`present:`), on a flag bit and on a value: `rt::Option` fields, the frame
 /// laid out as if every one were present (`rt::Optionals`). `snapshots_compile.rs` compiles it
 /// and holds it to the interpreter.

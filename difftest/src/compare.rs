@@ -171,6 +171,7 @@ fn class(g: &DecodeError) -> &'static str {
         | DecodeError::ByteCount { .. }
         | DecodeError::BadWidth { .. } => "bad count",
         DecodeError::BadEscape { .. } => "bad escape",
+        DecodeError::NeedlessLong { .. } => "needless long form",
     }
 }
 
@@ -199,6 +200,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             | InterpError::ByteCount { .. }
             | InterpError::BadWidth { .. } => "bad count",
             InterpError::BadEscape { .. } => "bad escape",
+            InterpError::NeedlessLong { .. } => "needless long form",
         },
     }
 }

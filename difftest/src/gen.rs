@@ -210,6 +210,10 @@ enum Own {
     Preamble = 0xFEFE_FEFE_FEFE_FEFE,
     /// A per-byte transform of the payload.
     Transform = 0x3333_3333_3333_3333,
+    /// Whether an eligible spec takes a long length form.
+    TakesLongForm = 0x0302_0302_0302_0302,
+    /// The long length form: its start byte, its length's adjustment.
+    LongForm = 0x0303_0303_0303_0303,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -2132,6 +2136,91 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     }
     framing.push_str(&escaping_yaml);
 
+    // A length field whose width the start byte chooses (VESC's `02 len …` and `03 lenH lenL
+    // …`): where the layout begins with start bytes (the same both ways) and the length
+    // field, each once, and nothing escapes (three such specs in five); drawn by a
+    // generator of its own, so every spec drawn without one is as it was. A spec that takes it
+    // is made to fit: one start byte (a sync sequence's first), a one-byte short field that
+    // counts neither the start byte nor itself
+    // (half of them adjusted near 255, so frames of both forms occur), a checksum that covers
+    // from the part after the length field, examples printed in the wire's byte order.
+    let once = |x: &str| layout.iter().filter(|p| **p == x).count() == 1;
+    let length_line = framing
+        .lines()
+        .find(|l| l.starts_with("  length: {"))
+        .map(str::to_owned);
+    let after_length = layout.get(2).copied().unwrap_or("payload");
+    let long_form = layout.starts_with(&["start", "length"])
+        && once("start")
+        && once("length")
+        && !sync.is_empty()
+        && response_sync.is_none()
+        && escaping == Escaping::None
+        && (cs.is_empty() || after_length != "payload")
+        && length_line.is_some()
+        && {
+            let mut rng = own_rng(seed, Own::TakesLongForm);
+            rng.u8(..100) < 60
+        };
+    if let (true, Some(line)) = (long_form, &length_line) {
+        let mut rng = own_rng(seed, Own::LongForm);
+        let start = loop {
+            let b = rng.u8(..);
+            if b != sync[0] {
+                break b;
+            }
+        };
+        let counts: Vec<&str> = line
+            .split("counts: [")
+            .nth(1)
+            .and_then(|r| r.split(']').next())
+            .unwrap_or("payload")
+            .split(", ")
+            .filter(|p| *p != "start" && *p != "length")
+            .collect();
+        let adjust = if rng.bool() {
+            rng.i64(240..=256)
+        } else {
+            rng.i64(0..=2)
+        };
+        let long = format!(
+            "  length: {{width: 1, counts: [{}], adjust: {adjust}, long: {{start: {start:#04X}, width: 2}}}}",
+            counts.join(", ")
+        );
+        framing = framing.replacen(line.as_str(), &long, 1);
+        if let Some(ck) = framing
+            .lines()
+            .find(|l| l.starts_with("  checksum: {"))
+            .map(str::to_owned)
+        {
+            // Its `covers_from` item out (whatever follows it kept), the new one last.
+            let body = ck.trim_end_matches('}');
+            let body = match body.find(", covers_from: ") {
+                Some(at) => {
+                    let rest = &body[at + 2..];
+                    let tail = rest.find(", ").map_or("", |k| &rest[k..]);
+                    format!("{}{tail}", &body[..at])
+                }
+                None => body.to_owned(),
+            };
+            let fixed = format!("{body}, covers_from: {after_length}}}");
+            framing = framing.replacen(ck.as_str(), &fixed, 1);
+        }
+        // One start byte: a sync sequence keeps its first.
+        if let Some(st) = framing
+            .lines()
+            .find(|l| l.starts_with("  start: "))
+            .map(str::to_owned)
+        {
+            framing = framing.replacen(st.as_str(), &format!("  start: {:#04X}", sync[0]), 1);
+        }
+        y = y.replacen(
+            &format!("printed_byte_order: {pbo}"),
+            &format!("printed_byte_order: {bo}"),
+            1,
+        );
+    }
+
     // Constant whole frames (M-Bus's single character E5): where every frame begins with its
     // start bytes and nothing escapes, carries header fields or takes a byte per message, one or
     // two responses of 1 to 3 bytes, none beginning with a start byte, none a prefix of
@@ -2152,6 +2241,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         && header.is_empty()
         && !extra_by_code
         && !replying.is_empty()
+        && !long_form
         && g.chance(13)
     {
         let starts = first_starts.unwrap_or_default();
@@ -2183,6 +2273,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     // start bytes, nothing escapes and no frame is constant; drawn by a generator of its own,
     // so every spec drawn without one is as it was.
     if constants.is_empty()
+        && !long_form
         && layout.first() == Some(&"start")
         && !sync.is_empty()
         && escaping == Escaping::None
@@ -2217,7 +2308,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             .iter()
             .any(|f| f.yaml.contains("repeat: {count: ") && !f.yaml.contains("repeat: {count: end"))
     });
-    if escaping == Escaping::None && one_code_len && (has_length || !counted) {
+    if escaping == Escaping::None && one_code_len && (has_length || !counted) && !long_form {
         let mut rng = own_rng(seed, Own::Transform);
         if rng.u8(..100) < 40 {
             let k = rng.u8(1..);
@@ -2318,6 +2409,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(f.shared_flag().is_some(), "shared flag");
     add(f.preamble.is_some(), "preamble");
     add(f.transform.is_some(), "transform");
+    add(f.long.is_some(), "long length form");
     add(
         matches!(esc, Some(ir::EscapeKind::Bytes { .. })) && f.end.is_empty(),
         "byte escaping framed by length",

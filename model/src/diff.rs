@@ -745,7 +745,26 @@ impl<'a> Differ<'a> {
             let text = format!("transform: {} → {}", show(ot), show(nt));
             self.wire("transform_changed", "framing.transform", text);
         }
-        if o.length != n.length {
+        // A long length form added, removed or changed (`framing.length.long`): frames whose
+        // length the short form cannot hold travel otherwise. The length field itself is
+        // compared in the short form's width (the IR lays frames out in the long one's).
+        if o.long != n.long {
+            let show =
+                |l: Option<crate::ir::LongForm>| l.map_or("none".to_owned(), |l| l.describe());
+            let text = format!("long length form: {} → {}", show(o.long), show(n.long));
+            self.wire("long_length_changed", "framing.length.long", text);
+        }
+        let short = |f: &crate::ir::Framing| {
+            f.length.clone().map(|mut l| {
+                if let Some(g) = f.long {
+                    l.width = g.short_width;
+                }
+                l
+            })
+        };
+        let (o_length, n_length) = (short(o), short(n));
+        if o_length != n_length {
+            let (o, n) = (&o_length, &n_length);
             let show = |l: &Option<crate::ir::LengthField>| match l {
                 None => "none".to_owned(),
                 Some(l) => format!("{} byte(s) counting {:?}{:+}", l.width, l.counts, l.adjust)
@@ -754,18 +773,18 @@ impl<'a> Differ<'a> {
             self.wire(
                 "framing_changed",
                 "framing.length",
-                format!("length field: {} → {}", show(&o.length), show(&n.length)),
+                format!("length field: {} → {}", show(o), show(n)),
             );
         }
         let (oc, nc) = (&o.checksum, &n.checksum);
-        if oc.covers_from != nc.covers_from {
+        // Where it starts in a frame as it travels short (a long length form lays frames out
+        // longer).
+        let (ocf, ncf) = (o.short_covers_from(), n.short_covers_from());
+        if ocf != ncf {
             self.wire(
                 "checksum_changed",
                 "framing.checksum.covers_from",
-                format!(
-                    "checksum covers from offset {} → {}",
-                    oc.covers_from, nc.covers_from
-                ),
+                format!("checksum covers from offset {ocf} → {ncf}"),
             );
         }
         // The byte order of a one-byte checksum means nothing on the wire.
@@ -1220,7 +1239,15 @@ impl<'a> Differ<'a> {
     fn message_body(&mut self, m: &Message, x: &Message, path: &str, maps: &Maps) {
         let (o, n) = (self.old, self.new);
         let word = direction_word(m.direction);
-        let (ol, nl) = (o.frame_len(m), n.frame_len(x));
+        // As the frames travel (a long length form lays them out longer).
+        let (ol, nl) = (
+            o.framing.travelled_len(m.direction, o.frame_len(m)),
+            n.framing.travelled_len(x.direction, n.frame_len(x)),
+        );
+        let (om, nm) = (
+            o.framing.travelled_len(m.direction, m.max_len),
+            n.framing.travelled_len(x.direction, x.max_len),
+        );
         // A constant whole frame changed, added to or taken from a message: its bytes say it
         // all (its length, its code).
         if m.frame.is_some() || x.frame.is_some() {
@@ -1237,14 +1264,11 @@ impl<'a> Differ<'a> {
                 path.to_owned(),
                 format!("{word} `{}`: frame length {ol} → {nl} bytes", x.name),
             );
-        } else if m.max_len != x.max_len {
+        } else if om != nm {
             self.wire(
                 "frame_length_changed",
                 path.to_owned(),
-                format!(
-                    "{word} `{}`: longest frame {} → {} bytes",
-                    x.name, m.max_len, x.max_len
-                ),
+                format!("{word} `{}`: longest frame {om} → {nm} bytes", x.name),
             );
         }
         if m.checksum_extra != x.checksum_extra {

@@ -539,6 +539,22 @@ fn protocol(p: &Protocol) -> String {
         None => "false".to_owned(),
     };
     let _ = writeln!(s, "  transform = {transform},");
+    // A length field whose width the start byte chooses (`framing.length.long`): frames are
+    // dissected laid out in the long form's width, as busspec decodes them.
+    let long = match &f.long {
+        Some(l) => format!(
+            "{{ start = {}, short_start = {}, start_at = {}, length_at = {}, short_width = {}, width = {}, le = {} }}",
+            l.start,
+            l.short_start,
+            l.start_at,
+            l.length_at,
+            l.short_width,
+            l.width,
+            p.byte_order == crate::model::ByteOrder::Little
+        ),
+        None => "false".to_owned(),
+    };
+    let _ = writeln!(s, "  long = {long},");
     let _ = writeln!(
         s,
         "  rules = {{ request = {}, response = {} }},",

@@ -1125,6 +1125,61 @@ local function setup(P)
     return dissect_frame(ba:tvb("Payload transformed back"), pinfo, tree, wire_ck)
   end
 
+  -- A length field whose width the start byte chooses (`framing.length.long`: VESC): the
+  -- frame dissected laid out in the long form's width ("Frame laid out in the long form"),
+  -- as busspec decodes it: a short frame with the long field's high bytes (zeros), a long one
+  -- with the short form's start byte. A long frame whose length the short form holds is
+  -- shown as busspec refuses it.
+  local function dissect_long(tvb, pinfo, tree)
+    local l, n = P.long, tvb:len()
+    if not l or n <= l.start_at then return dissect_transformed(tvb, pinfo, tree) end
+    local w = {}
+    local wa = tvb:range(0, n):bytes()
+    for i = 0, n - 1 do w[i] = wa:get_index(i) end
+    local b = w[l.start_at]
+    local out, m = {}, 0
+    if b == l.start then
+      if n >= l.length_at + l.width then
+        local v = read_uint(w, l.length_at, l.width, l.le and "little" or "big")
+        local most = 2 ^ (8 * l.short_width) - 1
+        if v <= most then
+          pinfo.cols.protocol = P.name
+          local text = fmt("long length field at offset %d says %d: lengths up to %d take the short form", l.length_at, v, most)
+          local root = tree:add(proto, tvb:range(0, n))
+          root:set_text(fmt("busspec %s: %s", P.name, text))
+          root:add_proto_expert_info(E.skipped, text)
+          pinfo.cols.info = text
+          return n
+        end
+      end
+      for i = 0, n - 1 do out[i] = w[i] end
+      out[l.start_at] = l.short_start
+      m = n
+    elseif b == l.short_start and n >= l.length_at + l.short_width then
+      local extra = l.width - l.short_width
+      local at = l.le and (l.length_at + l.short_width) or l.length_at
+      for i = 0, at - 1 do out[i] = w[i] end
+      for i = 0, extra - 1 do out[at + i] = 0 end
+      for i = at, n - 1 do out[i + extra] = w[i] end
+      m = n + extra
+    else
+      return dissect_transformed(tvb, pinfo, tree)
+    end
+    -- The checksum as it travelled: the same bytes, from one byte earlier in a short frame.
+    local wire_ck
+    local ck = P.checksum
+    if ck.len > 0 and n >= P.trailer then
+      local at = checksum_at(P, n)
+      local from = ck.covers_from - (m - n)
+      wire_ck = { at = at, expected = ck.fn(w, from, at), found = read_uint(w, at, ck.len, ck.order), tvb = tvb }
+    end
+    local ba = ByteArray.new()
+    ba:set_size(m)
+    for i = 0, m - 1 do ba:set_index(i, out[i]) end
+    dissect_frame(ba:tvb("Frame laid out in the long form"), pinfo, tree, wire_ck)
+    return n
+  end
+
   -- Escaped frames (`framing.escaping`) are unescaped into a tvb of their own ("Unescaped
   -- frame") and dissected from it; a bad escape is shown as busspec refuses it.
   local function dissect(tvb, pinfo, tree)
@@ -1142,6 +1197,7 @@ local function setup(P)
         return n
       end
     end
+    if P.long then return dissect_long(tvb, pinfo, tree) end
     if not P.escaping or n == 0 then return dissect_transformed(tvb, pinfo, tree) end
     local w = {}
     local wa = tvb:range(0, n):bytes()

@@ -503,6 +503,11 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 } else {
                     hex(&f.sync)
                 };
+                // The long form's start byte beside it (`framing.length.long`).
+                let content = match f.long {
+                    Some(l) => format!("{content}, or 0x{:02X} (long form)", l.start),
+                    None => content,
+                };
                 ("start".to_owned(), f.sync.len().to_string(), content)
             }
             Part::Length => {
@@ -522,7 +527,10 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 };
                 (
                     "length".to_owned(),
-                    l.map_or(0, |l| l.width).to_string(),
+                    match f.long {
+                        Some(g) => format!("{} or {}", g.short_width, g.width),
+                        None => l.map_or(0, |l| l.width).to_string(),
+                    },
                     format!("bytes of {}{adjust}", counts.join(", ")),
                 )
             }
@@ -655,6 +663,14 @@ pub fn render(p: &Protocol, source: &str) -> String {
                 .map(|s| format!(" (§{s})"))
                 .unwrap_or_default(),
             pre.describe()
+        );
+    }
+
+    if let Some(l) = &f.long {
+        let _ = writeln!(
+            o,
+            "Long length form: {}. Encoders send the long form only where the length does not fit the short field; strict decoding refuses a long form whose length the short one holds. Frame lengths and offsets below (after the length field) are the long form's, one byte further than in the short form; offsets and lengths in errors count the frame as it travelled.\n",
+            l.describe()
         );
     }
 

@@ -208,6 +208,14 @@ pub enum DecodeError {
     /// The escaped bytes break the protocol's escaping (`framing.escaping`); `offset` counts
     /// the bytes as they travel.
     BadEscape { offset: usize, fault: EscapeFault },
+    /// A frame in the long form of its length field (`framing.length.long`) whose length the
+    /// short form holds (at most `most`): encoders send it short, so strict decoding refuses
+    /// it. `offset` is the length field's.
+    NeedlessLong {
+        offset: usize,
+        length: i64,
+        most: i64,
+    },
 }
 
 /// What is wrong with escaped bytes ([`DecodeError::BadEscape`]); the runtime's
@@ -369,6 +377,10 @@ impl fmt::Display for DecodeError {
             DecodeError::BadEscape { offset, fault } => {
                 write!(f, "bad escape at offset {offset}: {fault}")
             }
+            DecodeError::NeedlessLong { offset, length, most } => write!(
+                f,
+                "long length field at offset {offset} says {length}: lengths up to {most} take the short form"
+            ),
         }
     }
 }
@@ -901,7 +913,9 @@ fn decode_in<'p>(
     // Offsets count from the frame's first byte, after any preamble.
     let wire = p.framing.after_preamble(wire);
     let un = escape::unescape(p, wire)?;
-    decode_plain(p, limits, lookup, reply_to, &un.frame, spare).map_err(|e| un.locate(e))
+    // A frame of either form of a length field the start byte chooses, in the IR's layout.
+    let c = crate::long::canonical(p, &un.frame)?;
+    decode_plain(p, limits, lookup, reply_to, &c.frame, spare).map_err(|e| un.locate(c.locate(e)))
 }
 
 /// Decodes an unescaped frame.
@@ -1249,7 +1263,8 @@ pub fn decode_as<'p>(
     wire: &[u8],
 ) -> Result<Frame<'p>, DecodeError> {
     let un = escape::unescape(p, p.framing.after_preamble(wire))?;
-    decode_as_unescaped(p, r, &un.frame).map_err(|e| un.locate(e))
+    let c = crate::long::canonical(p, &un.frame)?;
+    decode_as_unescaped(p, r, &c.frame).map_err(|e| un.locate(c.locate(e)))
 }
 
 /// A constant whole frame, decoded: no address, no values.
@@ -1360,14 +1375,29 @@ fn check_checksum(
 
 /// Writes into `frame` (of any message's length) its checksum, over the bytes it covers, and
 /// the end bytes after it; nothing into a frame shorter than those.
+///
+/// A frame of a length field the start byte chooses (`framing.length.long`) is taken as it
+/// travels: one with the short start byte covered from where its checksum starts in the short
+/// form.
 pub fn reseal(p: &Protocol, frame: &mut [u8]) {
+    let short = p
+        .framing
+        .long
+        .filter(|l| frame.get(l.start_at) == Some(&l.short_start));
+    reseal_from(p, frame, short.map_or(0, |l| l.extra()));
+}
+
+/// [`reseal`] of a frame whose checksum covers from `back` bytes before where the IR's layout
+/// says (0: a frame as the IR lays it out).
+fn reseal_from(p: &Protocol, frame: &mut [u8], back: usize) {
     let (c, f) = (&p.framing.checksum, &p.framing);
     if frame.len() < f.trailer_len() {
         return;
     }
     let (at, end) = (f.checksum_at(frame.len()), f.end_at(frame.len()));
     frame[end..end + f.end.len()].copy_from_slice(&f.end);
-    let sum = c.compute(frame.get(c.covers_from..at).unwrap_or(&[]));
+    let from = c.covers_from.saturating_sub(back);
+    let sum = c.compute(frame.get(from..at).unwrap_or(&[]));
     write_uint(sum, &mut frame[at..at + c.len()], c.byte_order);
 }
 
@@ -2242,7 +2272,8 @@ pub fn decode_reply<'p>(
         Some(request.message.index),
         wire,
     )?;
-    answers(p, request, &frame)?;
+    // Its offsets are the IR's layout's: on the frame as it travelled (a long length form).
+    answers(p, request, &frame).map_err(|e| crate::long::locate_on(p, wire, e))?;
     Ok(frame)
 }
 
@@ -2780,7 +2811,7 @@ fn encode_values(
     }
     // The payload as it travels (`framing.transform`), then the checksum over it.
     p.framing.transform_in_place(&mut out);
-    reseal(p, &mut out);
+    reseal_from(p, &mut out, 0);
     if m.is_variable() {
         // A count field given a value, or one that follows another, may disagree with the
         // list: what encode writes, decode must accept.
@@ -2791,6 +2822,8 @@ fn encode_values(
     if p.framing.escaping.is_some() {
         return Ok(escape::escape(p, &out));
     }
+    // Short where the length fits the short form, long otherwise (`framing.length.long`).
+    let mut out = crate::long::travel(p, out);
     if let Some(pre) = &p.framing.preamble {
         // The wake-up bytes, then the frame.
         out.splice(

@@ -102,6 +102,55 @@ pub struct Framing {
     /// 645's +33H): the IR's constants and values are the bytes before it; the checksum covers
     /// the bytes as they travel.
     pub transform: Option<Transform>,
+    /// A long form of the length field that a second start byte announces
+    /// (`framing.length.long`: VESC's `03 lenH lenL`). Every offset and length of the IR is
+    /// the long layout's, with the first start byte: [`crate::long`] turns a frame as it
+    /// travels (either form) into that layout and back.
+    pub long: Option<LongForm>,
+}
+
+/// The long form of a length field (`framing.length.long`): a frame whose start byte is
+/// `start` carries the length field in [`LengthField::width`] bytes, a frame with the
+/// framing's start byte in `short_width` bytes. Encoders take the long form only for a length
+/// the short one cannot hold; strict decoders refuse a long form whose length it could.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LongForm {
+    /// The long form's start byte.
+    pub start: u8,
+    /// The framing's own start byte (the short form's; the one the IR's layout carries).
+    pub short_start: u8,
+    /// The short form's length width (the spec's `length.width`).
+    pub short_width: usize,
+    /// The long form's length width (the IR's `length.width`).
+    pub width: usize,
+    /// Where the start byte and the length field sit (the length field at the same offset in
+    /// both forms: the start byte is the only part before it).
+    pub start_at: usize,
+    pub length_at: usize,
+}
+
+impl LongForm {
+    /// How many bytes longer the long form's length field is.
+    pub fn extra(&self) -> usize {
+        self.width - self.short_width
+    }
+
+    /// The largest length the short form holds.
+    pub fn short_max(&self) -> i64 {
+        (1i64 << (8 * self.short_width)) - 1
+    }
+
+    /// The form in words, as docs and diff print it.
+    pub fn describe(&self) -> String {
+        format!(
+            "start 0x{:02X} with a {}-byte length, or 0x{:02X} with a {}-byte length for lengths over {}",
+            self.short_start,
+            self.short_width,
+            self.start,
+            self.width,
+            self.short_max()
+        )
+    }
 }
 
 /// A per-byte transform of the payload (`framing.transform`): every byte of the `payload`
@@ -357,6 +406,32 @@ impl Framing {
         match &self.preamble {
             Some(pre) => &wire[pre.skip(wire)..],
             None => wire,
+        }
+    }
+
+    /// The length a frame of direction `d` laid out in `len` bytes has as it travels: as long
+    /// in the long form of a length field the start byte chooses (`framing.length.long`)
+    /// where its length field's value needs it, shorter by the bytes the short field lacks
+    /// otherwise; `len` without a long form.
+    pub fn travelled_len(&self, d: Direction, len: usize) -> usize {
+        let (Some(l), Some(rule)) = (self.long, self.length_rule(d)) else {
+            return len;
+        };
+        match rule.value(len) {
+            Some(v) if v > l.short_max() => len,
+            _ => len.saturating_sub(l.extra()),
+        }
+    }
+
+    /// Where the checksum starts as a frame travels in the short form of a length field the
+    /// start byte chooses (`framing.length.long`): where it starts laid out, less the bytes the
+    /// short field lacks (the checksum covers no byte before the length field's end:
+    /// validated). `checksum.covers_from` without a long form.
+    pub fn short_covers_from(&self) -> usize {
+        let from = self.checksum.covers_from;
+        match self.long {
+            Some(l) if from >= l.length_at + l.width => from - l.extra(),
+            _ => from,
         }
     }
 

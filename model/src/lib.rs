@@ -32,6 +32,7 @@ pub mod escape;
 pub mod interp;
 pub mod ir;
 pub mod load;
+pub mod long;
 pub mod model;
 #[cfg(feature = "tools")]
 pub mod mutate;

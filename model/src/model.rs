@@ -239,6 +239,19 @@ pub struct LengthField {
     /// Added to the count of those bytes (optional, default 0).
     #[serde(default)]
     pub adjust: Option<i64>,
+    /// A second, wider form of the length field that a second start byte announces (VESC's
+    /// `03 lenH lenL`), sent only where the length does not fit `width`; optional.
+    #[serde(default)]
+    pub long: Option<LongLength>,
+}
+
+/// The long form of a length field (`framing.length.long`): frames starting with `start`
+/// carry a length field of `width` bytes.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LongLength {
+    pub start: i64,
+    pub width: i64,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -21,6 +21,9 @@ pub fn after_preamble<'f>(p: &Protocol, frame: &'f mut [u8]) -> &'f mut [u8] {
 /// `frame` with its length field set to what its length gives, where the framing has one.
 pub fn fix_length(p: &Protocol, d: Direction, frame: &mut [u8]) {
     let frame = after_preamble(p, frame);
+    if p.framing.long.is_some() {
+        return crate::long::fix_length(p, d, frame);
+    }
     let Some(rule) = p.framing.length_rule(d) else {
         return;
     };

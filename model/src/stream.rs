@@ -85,6 +85,15 @@
 //! are noise. Held bytes that open no frame (a byte that is neither a frame nor the preamble
 //! byte follows, or the capture ends) are noise after all.
 //!
+//! # Long length forms
+//!
+//! Where the start byte chooses the length field's width ([`crate::ir::Framing::long`]: VESC's
+//! `02 len …` and `03 lenH lenL …`), both start bytes open a frame: the head byte is noise
+//! unless it is one of them, and the frame is as long as the length field of its form says
+//! (waiting for that field, then for the frame). A long frame whose length the short form holds
+//! is refused by strict decoding ([`DecodeError::NeedlessLong`]) and so is noise here, as a
+//! frame with a bad checksum is; the decoder resynchronises on the byte after its start byte.
+//!
 //! # Pairing responses with requests
 //!
 //! A response that only its request can identify is decoded as the answer to the last request
@@ -667,8 +676,13 @@ impl<'p> StreamDecoder<'p> {
         lens.clear();
         let mut dirs = std::mem::take(&mut self.dirs);
         dirs.clear();
-        if self.p.framing.escaping.is_some() {
-            return match self.escaped_lens(flushing, &mut lens, &mut dirs) {
+        if self.p.framing.escaping.is_some() || self.p.framing.long.is_some() {
+            let found = if self.p.framing.long.is_some() {
+                self.long_lens(flushing, &mut lens, &mut dirs)
+            } else {
+                self.escaped_lens(flushing, &mut lens, &mut dirs)
+            };
+            return match found {
                 Escaped::Try => self.try_lens(lens, dirs, out),
                 Escaped::Drop => {
                     (self.lens, self.dirs) = (lens, dirs);
@@ -907,6 +921,55 @@ impl<'p> StreamDecoder<'p> {
             if lens.is_empty() {
                 return Escaped::Drop;
             }
+        }
+        Escaped::Try
+    }
+
+    /// The frame lengths at the head of the buffer of a protocol whose start byte chooses its
+    /// length field's width (`framing.length.long`; see the module docs, "Long length
+    /// forms"), in `lens`: as the length field of the form the head byte starts says, on the
+    /// wire.
+    fn long_lens(&self, flushing: bool, lens: &mut Vec<usize>, dirs: &mut Vec<u8>) -> Escaped {
+        let (p, buf) = (self.p, &self.buf);
+        let wait = flushing || buf.len() >= self.capacity;
+        let (v, extra) = match crate::long::wire_len(p, buf) {
+            None => return Escaped::Drop,
+            Some(None) if wait => return Escaped::Drop,
+            Some(None) => return Escaped::NeedMore,
+            Some(Some(found)) => found,
+        };
+        let mut longer = false;
+        for (d, bit) in [(Direction::Request, 1u8), (Direction::Response, 2)] {
+            if self.direction.is_some_and(|want| want != d) {
+                continue;
+            }
+            let Some(rule) = p.framing.length_rule(d).filter(|r| r.grows) else {
+                continue;
+            };
+            let fits = |n: usize| {
+                n >= rule.head_len
+                    && p.frame_len_bounds(d)
+                        .is_some_and(|(lo, hi)| (lo..=hi).contains(&n))
+            };
+            // The length in the IR's layout, less the bytes the short form's field lacks.
+            let Some(n) = usize::try_from(v - rule.k).ok().filter(|&n| fits(n)) else {
+                continue;
+            };
+            let n = n - extra;
+            if n > buf.len() {
+                longer = true;
+            } else {
+                lens.push(n);
+                dirs.push(bit);
+            }
+        }
+        if longer && !wait {
+            lens.clear();
+            dirs.clear();
+            return Escaped::NeedMore;
+        }
+        if lens.is_empty() {
+            return Escaped::Drop;
         }
         Escaped::Try
     }

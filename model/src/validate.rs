@@ -469,6 +469,20 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
     transform_lists(&framing, &commands, "commands", sink);
     transform_lists(&framing, &responses, "responses", sink);
+    if framing.long.is_some() && spec.printed_byte_order != spec.byte_order {
+        sink.error(
+            "printed_byte_order",
+            "examples printed in another byte order beside a long length form (framing.length.long) are not expressible yet",
+        );
+    }
+    if framing.long.is_some() {
+        for m in responses.iter().filter(|m| m.frame.is_some()) {
+            sink.error(
+                format!("responses.{}.frame", m.name),
+                "a constant whole frame beside a long length form (framing.length.long) is not expressible yet",
+            );
+        }
+    }
 
     optional_codes(&commands, "commands", sink);
     optional_codes(&responses, "responses", sink);
@@ -1012,8 +1026,10 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
                     );
                 }
             }
+            // With a long form (`long:`), the IR lays frames out in its width.
+            let width = l.long.as_ref().map_or(l.width, |g| g.width.max(l.width));
             Some(LengthField {
-                width: l.width.clamp(1, 2) as usize,
+                width: width.clamp(1, 2) as usize,
                 counts: l.counts.clone(),
                 adjust: l.adjust.unwrap_or(0),
             })
@@ -1227,19 +1243,25 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
                 lens.push(l as usize);
             }
         }
-        if d.payload.min < 0 || d.payload.max < d.payload.min || d.payload.max > 255 {
+        // A long length form (`framing.length.long`) carries longer payloads.
+        let most = if f.length.as_ref().is_some_and(|l| l.long.is_some()) {
+            MAX_LONG_PAYLOAD
+        } else {
+            255
+        };
+        if d.payload.min < 0 || d.payload.max < d.payload.min || d.payload.max > most {
             sink.error(
                 join(&dpath, "payload"),
                 format!(
-                    "payload length range {}..={} is invalid (0 <= min <= max <= 255)",
+                    "payload length range {}..={} is invalid (0 <= min <= max <= {most})",
                     d.payload.min, d.payload.max
                 ),
             );
         }
         DirectionFraming {
             code_lengths: lens,
-            payload_min: d.payload.min.clamp(0, 255) as usize,
-            payload_max: d.payload.max.clamp(0, 255) as usize,
+            payload_min: d.payload.min.clamp(0, most) as usize,
+            payload_max: d.payload.max.clamp(0, most) as usize,
         }
     };
     let request = direction(&f.request, "request", sink);
@@ -1313,6 +1335,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         header: header_fields(f, byte_order, refs, sink),
         preamble: None,
         transform: None,
+        long: None,
     };
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
@@ -1377,8 +1400,15 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
             ),
         }
     }
+    if let Some(l) = f.length.as_ref().filter(|l| l.long.is_some()) {
+        framing.long = long_form(f, l, &framing, sink);
+    }
     framing
 }
+
+/// The longest payload of a framing with a long length form (`framing.length.long`); 255
+/// without one.
+pub const MAX_LONG_PAYLOAD: i64 = 4096;
 
 /// The most preamble bytes a spec may send or accept.
 pub const MAX_PREAMBLE: i64 = 16;
@@ -1489,6 +1519,113 @@ fn transform(t: &model::Transform, f: &Framing, sink: &mut Sink) -> Option<Trans
     (errors_before == sink.items.len()).then(|| Transform {
         section: t.section.clone(),
         kind,
+    })
+}
+
+/// `framing.length.long`, checked against the rest of the framing (resolved but for it; its
+/// length field already as wide as the long form): a wider long form, at most 2 bytes, a start
+/// byte of its own; a one-byte start (the same both ways) and the length field right after it
+/// (the only part before the length field is the start byte, so every other part sits one
+/// width later in the long form); a checksum that covers neither and a length that counts
+/// neither (so both are the same in either form); no escaping, preamble or transform, nor a
+/// second start or length, nor examples printed in another byte order (not expressible yet).
+fn long_form(
+    spec: &model::Framing,
+    l: &model::LengthField,
+    f: &Framing,
+    sink: &mut Sink,
+) -> Option<LongForm> {
+    let long = l.long.as_ref()?;
+    let path = "framing.length.long";
+    let errors_before = sink.items.len();
+    let start = u8_of(
+        long.start,
+        &join(path, "start"),
+        "the long form's start byte",
+        sink,
+    );
+    if long.width <= l.width || long.width > 2 {
+        sink.error(
+            join(path, "width"),
+            format!(
+                "the long form's length field is wider than the short one's {} byte(s) and at most 2 bytes, not {}",
+                l.width, long.width
+            ),
+        );
+    }
+    let short_start = match (f.sync.as_slice(), spec.start.is_some()) {
+        ([b], true) if f.response_sync == f.sync => Some(*b),
+        (_, false) => {
+            sink.error(
+                path,
+                "a long form needs a start byte (`start`): its own start byte tells the forms apart",
+            );
+            None
+        }
+        _ => {
+            sink.error(
+                path,
+                "a long form needs one start byte, the same both ways (not a start sequence or start bytes by direction), yet",
+            );
+            None
+        }
+    };
+    if short_start == Some(start) {
+        sink.error(
+            join(path, "start"),
+            format!("the long form's start byte 0x{start:02X} is the short form's: the forms need start bytes of their own"),
+        );
+    }
+    if !matches!(spec.layout.as_slice(), [Part::Start, Part::Length, ..]) {
+        sink.error(
+            "framing.layout",
+            "a long length form (framing.length.long) needs the layout to begin with `start, length`",
+        );
+    }
+    let twice = |p: Part| spec.layout.iter().filter(|x| **x == p).count() > 1;
+    if twice(Part::Start) || twice(Part::Length) {
+        sink.error(
+            "framing.layout",
+            "a second `start` or `length` beside a long length form (framing.length.long) is not expressible yet",
+        );
+    }
+    for (part, name) in [(Part::Start, "start"), (Part::Length, "length")] {
+        if l.counts.contains(&part) {
+            sink.error(
+                "framing.length.counts",
+                format!("beside a long form (`long`), the length counts no `{name}`: it differs by form"),
+            );
+        }
+    }
+    let head = f.head(0);
+    let (start_at, length_at) = (head.start.unwrap_or(0), head.length.unwrap_or(1));
+    if !f.checksum.is_empty()
+        && f.checksum.covers_from < length_at + f.length.as_ref().map_or(0, |l| l.width)
+    {
+        sink.error(
+            "framing.checksum",
+            "beside a long length form (framing.length.long), the checksum covers neither the start byte nor the length field (`covers_from` a part after them), yet",
+        );
+    }
+    for (what, there) in [
+        ("escaping", f.escaping.is_some()),
+        ("preamble", f.preamble.is_some()),
+        ("transform", f.transform.is_some()),
+    ] {
+        if there {
+            sink.error(
+                path,
+                format!("a long length form beside `{what}` is not expressible yet"),
+            );
+        }
+    }
+    (errors_before == sink.items.len()).then(|| LongForm {
+        start,
+        short_start: short_start.unwrap_or(0),
+        short_width: l.width as usize,
+        width: long.width as usize,
+        start_at,
+        length_at,
     })
 }
 
@@ -4264,10 +4401,14 @@ fn frame_problems(
     // An escaped frame is read unescaped, reordered, and escaped again.
     let printed = crate::escape::unescape_bytes(&p.framing, printed)
         .map_err(|e| format!("frame `{frame_text}`: {e}"))?;
+    // Either form of a length field the start byte chooses, as the IR lays it out.
+    let laid_out = crate::long::canonical(p, &printed)
+        .map_err(|e| format!("frame `{frame_text}`: {e}"))?
+        .frame;
     let len = p.frame_len(m);
-    if m.is_variable() && (len..=m.max_len).contains(&printed.len()) {
+    if m.is_variable() && (len..=m.max_len).contains(&laid_out.len()) {
         // Its repeated field's count is checked by decoding it.
-    } else if printed.len() != len {
+    } else if laid_out.len() != len {
         return Err(format!(
             "frame `{frame_text}` has {} bytes, but a {} frame has {len} ({} overhead + {}-byte code + {} payload)",
             printed.len(),

@@ -46,6 +46,74 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "preamble_with_constant_frame",
         &[("responses.ack.frame", "a constant frame is not expressible with a preamble (framing.preamble), yet")],
     ),
+    // ---- a length field whose width the start byte chooses (made from valid/vesc, without
+    // its examples)
+    (
+        "long_not_wider",
+        &[
+            ("framing.length.long.width", "wider than the short one's 1 byte(s) and at most 2 bytes, not 1"),
+            ("commands.write_new_app_data", "the length field would say 517, outside a 1-byte length's 0..=255"),
+        ],
+    ),
+    (
+        "long_too_wide",
+        &[("framing.length.long.width", "wider than the short one's 1 byte(s) and at most 2 bytes, not 3")],
+    ),
+    (
+        "long_same_start",
+        &[("framing.length.long.start", "the long form's start byte 0x02 is the short form's")],
+    ),
+    (
+        "long_unknown_key",
+        &[("framing.length.long.adjust", "unknown field `adjust`, expected `start` or `width`")],
+    ),
+    (
+        "long_start_sequence",
+        &[("framing.length.long", "a long form needs one start byte, the same both ways (not a start sequence or start bytes by direction), yet")],
+    ),
+    (
+        "long_start_by_direction",
+        &[("framing.length.long", "a long form needs one start byte, the same both ways")],
+    ),
+    (
+        "long_without_start",
+        &[
+            ("framing.length.long", "a long form needs a start byte (`start`)"),
+            ("framing.layout", "needs the layout to begin with `start, length`"),
+        ],
+    ),
+    (
+        "long_length_twice",
+        &[("framing.layout", "a second `start` or `length` beside a long length form (framing.length.long) is not expressible yet")],
+    ),
+    (
+        "long_checksum_covers_length",
+        &[("framing.checksum", "the checksum covers neither the start byte nor the length field")],
+    ),
+    (
+        "long_counts_start",
+        &[("framing.length.counts", "beside a long form (`long`), the length counts no `start`")],
+    ),
+    (
+        "long_with_preamble",
+        &[("framing.length.long", "a long length form beside `preamble` is not expressible yet")],
+    ),
+    (
+        "long_with_escaping",
+        &[("framing.length.long", "a long length form beside `escaping` is not expressible yet")],
+    ),
+    (
+        "long_with_constant_frame",
+        &[("responses.nak.frame", "a constant whole frame beside a long length form (framing.length.long) is not expressible yet")],
+    ),
+    (
+        "long_printed_little",
+        &[("printed_byte_order", "examples printed in another byte order beside a long length form (framing.length.long) are not expressible yet")],
+    ),
+    (
+        "long_payload_too_long",
+        &[("framing.request.payload", "payload length range 0..=5000 is invalid (0 <= min <= max <= 4096)")],
+    ),
     // ---- transforms (made from valid/dlt645, hdlc_like, pelco_d_codeless and minimal_end,
     // without their examples)
     (

@@ -29,6 +29,7 @@ pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Records, Text};
+pub use crate::LongLength;
 pub use crate::{
     crc, field_int, field_text, round, sum8, Ascii, Broadcast, Bus, Command, CommandKind,
     DecodeError, Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind,
@@ -395,6 +396,7 @@ pub fn wrong_length(frame: &[u8], message: &'static str, lengths: &'static [usiz
             message,
             expected: lengths,
             found: frame.len(),
+            less: 0,
         },
     }
 }

@@ -28,11 +28,14 @@ pub use ascii::Ascii;
 pub mod codec;
 pub mod escape;
 mod lists;
+mod long;
 mod optional;
 mod protocol;
 mod repeated;
 pub mod stream;
 
+#[doc(hidden)]
+pub use long::LongLength;
 pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};
 #[doc(hidden)]
 pub use protocol::{Framing, Preamble, Transform};
@@ -574,6 +577,11 @@ pub enum DecodeError {
         message: &'static str,
         expected: &'static [usize],
         found: usize,
+        /// How much shorter than `expected` says each length is as the frame travelled: 0 but
+        /// for a frame that travelled in the short form of a length field the start byte
+        /// chooses (`framing.length.long`), whose `expected` are the lengths laid out in the
+        /// long form's width.
+        less: usize,
     },
     /// A constant field (or constant bits of one) holds another value.
     InvalidValue {
@@ -677,6 +685,14 @@ pub enum DecodeError {
     /// The bytes as they travel break the protocol's escaping (`framing.escaping`) at
     /// `offset` (counted in the escaped bytes).
     BadEscape { offset: usize, fault: EscapeFault },
+    /// A frame in the long form of its length field (`framing.length.long`: VESC's `03 lenH
+    /// lenL`) whose length the short form holds (at most `most`): encoders send it short, so
+    /// decoding refuses it. `offset` is the length field's.
+    NeedlessLong {
+        offset: usize,
+        length: i64,
+        most: i64,
+    },
     /// The field `field` at `offset` gives each record's last field `found` bytes
     /// (`bytes:` in the spec), outside `1..=most`: the frame's records cannot be laid out.
     BadWidth {
@@ -896,13 +912,14 @@ impl fmt::Display for DecodeError {
                 message,
                 expected,
                 found,
+                less,
             } => {
                 write!(f, "wrong length for {message}: expected ")?;
                 for (i, n) in expected.iter().enumerate() {
                     if i > 0 {
                         f.write_str(" or ")?;
                     }
-                    write!(f, "{n}")?;
+                    write!(f, "{}", n.saturating_sub(less))?;
                 }
                 write!(f, " bytes, found {found}")
             }
@@ -1029,6 +1046,14 @@ impl fmt::Display for DecodeError {
             DecodeError::BadEscape { offset, fault } => {
                 write!(f, "bad escape at offset {offset}: {fault}")
             }
+            DecodeError::NeedlessLong {
+                offset,
+                length,
+                most,
+            } => write!(
+                f,
+                "long length field at offset {offset} says {length}: lengths up to {most} take the short form"
+            ),
             DecodeError::BadWidth {
                 message,
                 field,

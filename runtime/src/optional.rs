@@ -133,6 +133,7 @@ impl Optionals {
                 message: self.message,
                 expected: self.expected(len),
                 found: frame.len(),
+                less: 0,
             });
         }
         let mut out = Present {
@@ -290,6 +291,7 @@ mod tests {
                 message: "reading",
                 expected: &[12],
                 found: 10,
+                less: 0,
             }) => {}
             other => panic!("{other:?}"),
         }

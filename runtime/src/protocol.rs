@@ -231,6 +231,10 @@ pub trait Framing {
     /// candidate tables already apply to the constants they compare. `None` (the default) for
     /// every other framing.
     const TRANSFORM: Option<Transform> = None;
+    /// The long form of a length field whose width the start byte chooses (VESC's `03 lenH
+    /// lenL`), by which the generated `variable_candidates` frames both forms. `None` (the
+    /// default) for every other framing.
+    const LONG: Option<crate::LongLength> = None;
 
     /// The messages whose start byte and code agree with `head`, the bytes buffered from a
     /// possible frame start (possibly fewer than a whole frame): the stream decoder's framing

@@ -260,6 +260,7 @@ fn values(frame: &[u8]) -> Result<Repeated<u8, 6>, DecodeError> {
         message: "values",
         expected: &[11],
         found: frame.len(),
+        less: 0,
     })
 }
 
@@ -325,6 +326,7 @@ impl Protocol for Toy {
                     message: "read",
                     expected: &[6],
                     found: frame.len(),
+                    less: 0,
                 })
             }
             (code, _) => {
@@ -358,6 +360,7 @@ impl Protocol for Toy {
                     message: "read",
                     expected: &[6],
                     found: frame.len(),
+                    less: 0,
                 })
             }
             (code, _) => {

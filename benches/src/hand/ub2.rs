@@ -98,6 +98,7 @@ fn wrong_length(message: &'static str, expected: &'static [usize], frame: &[u8])
         message,
         expected,
         found: frame.len(),
+        less: 0,
     }
 }
 

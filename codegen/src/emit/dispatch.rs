@@ -313,6 +313,42 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
                 },
             )
         }
+    } else if p.framing.long.is_some() {
+        // A length field whose width the start byte chooses (`framing.length.long`): the frame
+        // laid out in the long form's width, checked as any frame by a function of its own,
+        // its errors placed back on the frame as it travelled.
+        let max = usize_lit(p.max_frame_len(d));
+        let lay_out = quote! {
+            let mut laid = [0u8; #max];
+            let (laid, short) = LONG.lay_out(frame, &mut laid)?;
+        };
+        if replies {
+            (
+                quote! {
+                    #lay_out
+                    Self::decode_for_laid_out(laid, request).map_err(|e| LONG.locate(e, short))
+                },
+                quote! {
+                    /// [`Self::decode_for`] of the frame laid out in the long form's width.
+                    fn decode_for_laid_out(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        } else {
+            (
+                quote! {
+                    #lay_out
+                    Self::decode_laid_out(laid).map_err(|e| LONG.locate(e, short))
+                },
+                quote! {
+                    /// [`Self::decode`] of the frame laid out in the long form's width.
+                    fn decode_laid_out(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        }
     } else {
         (checks, quote!())
     };

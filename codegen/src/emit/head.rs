@@ -39,6 +39,42 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             pub const TRANSFORM: rt::Transform = #kind;
         }
     });
+    let long = p.framing.long.as_ref().map(|l| {
+        let (start, short_start) = (hex_u8(l.start), hex_u8(l.short_start));
+        let (start_at, length_at) = (usize_lit(l.start_at), usize_lit(l.length_at));
+        let (short_width, width) = (usize_lit(l.short_width), usize_lit(l.width));
+        let le = p.byte_order == ByteOrder::Little;
+        let rules = [Direction::Request, Direction::Response].map(|d| {
+            match (
+                p.framing.length_rule(d).filter(|r| r.grows),
+                p.frame_len_bounds(d),
+            ) {
+                (Some(r), Some((lo, hi))) => {
+                    let k = Literal::i64_unsuffixed(r.k);
+                    let (lo, hi) = (usize_lit(lo.max(r.head_len)), usize_lit(hi));
+                    quote!(rt::Some((#k, #lo, #hi)))
+                }
+                _ => quote!(rt::None),
+            }
+        });
+        let [rq, rs] = rules;
+        quote! {
+            /// The long form of the length field (`framing.length.long`): frames starting with
+            /// its start byte carry the wider length field. Decoding lays every frame out in
+            /// its width; encoding sends the long form only where the length does not fit the
+            /// short one.
+            pub const LONG: rt::LongLength = rt::LongLength {
+                start: #start,
+                short_start: #short_start,
+                start_at: #start_at,
+                length_at: #length_at,
+                short_width: #short_width,
+                width: #width,
+                le: #le,
+                rules: [#rq, #rs],
+            };
+        }
+    });
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.",
         p.title,
@@ -145,6 +181,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
         #escaping
         #preamble
         #transform
+        #long
     }
 }
 

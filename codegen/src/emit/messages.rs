@@ -285,6 +285,27 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #seal
             }
         }
+    } else if p.framing.long.is_some() {
+        // A length field whose width the start byte chooses (`framing.length.long`; escaping,
+        // preambles and constant frames are refused beside it: validated): laid out in the
+        // long form's width, then sent in the form the length needs.
+        quote! {
+            ///
+            /// The frame travels short where its length fits the short length field, else long
+            /// (`framing.length.long`); `buf` of `MAX_FRAME_LEN` bytes holds any.
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                let len = self.encode_laid_out(address, buf)?;
+                rt::Ok(LONG.travel(buf, len))
+            }
+            /// The frame laid out in the long form's width, into `buf`.
+            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #transform
+                #seal
+            }
+        }
     } else if p.framing.escaping.is_none() {
         quote! {
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {

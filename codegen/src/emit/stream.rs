@@ -247,7 +247,21 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     } else {
         quote!()
     };
-    let checksum_ok = if p.framing.escaping.is_none() {
+    let checksum_ok = if p.framing.long.is_some() {
+        // Laid out in the long form's width (`framing.length.long`) before the check.
+        quote! {
+            fn checksum_ok(frame: &[u8]) -> bool {
+                let mut laid = [0u8; MAX_FRAME_LEN];
+                let rt::Ok((frame, _)) = LONG.lay_out(frame, &mut laid) else {
+                    return false;
+                };
+                match frame.len().checked_sub(#ck_len) {
+                    rt::Some(n) if n > 0 => rt::check_sum(frame, n, &FRAME, #sum),
+                    _ => false,
+                }
+            }
+        }
+    } else if p.framing.escaping.is_none() {
         quote! {
             fn checksum_ok(frame: &[u8]) -> bool {
                 #skip_preamble
@@ -275,7 +289,21 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     };
-    let framing_fns = if p.framing.escaping.is_none() {
+    let framing_fns = if p.framing.long.is_some() {
+        // Both forms of a length field the start byte chooses are framed by their length
+        // field alone (`framing.length.long`).
+        quote! {
+            const LONG: rt::Option<rt::LongLength> = rt::Some(LONG);
+            #[inline]
+            fn candidates(_head: &[u8]) -> rt::Candidates {
+                rt::Candidates { requests: 0, responses: 0 }
+            }
+            #[inline]
+            fn variable_candidates(head: &[u8]) -> rt::VarLens {
+                LONG.frame_lens(head)
+            }
+        }
+    } else if p.framing.escaping.is_none() {
         let preamble = p
             .framing
             .preamble
@@ -316,7 +344,7 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     };
-    let lens: Vec<Literal> = if p.framing.escaping.is_some() {
+    let lens: Vec<Literal> = if p.framing.escaping.is_some() || p.framing.long.is_some() {
         Vec::new()
     } else {
         lens.collect()

@@ -114,8 +114,12 @@ pub fn check<P: Protocol>(
 }
 
 /// The length of `wire` after its preamble and unescaped (`framing.preamble`,
-/// `framing.escaping`): a message's `frame_len`.
+/// `framing.escaping`), or laid out in a long length form's width (`framing.length.long`): a
+/// message's `frame_len`.
 fn unescaped_len(p: &ir::Protocol, wire: &[u8]) -> usize {
+    if p.framing.long.is_some() {
+        return busspec_model::long::canonical(p, wire).map_or(wire.len(), |c| c.frame.len());
+    }
     let frame = p.framing.after_preamble(wire);
     busspec_model::escape::unescape_bytes(&p.framing, frame).map_or(frame.len(), |f| f.len())
 }

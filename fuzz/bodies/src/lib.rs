@@ -370,6 +370,7 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
             message,
             expected,
             found,
+            less: _,
         } => {
             assert!(
                 same_len(found) && !expected.contains(&found) && !message.is_empty(),
@@ -382,6 +383,11 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
             assert!(offset < len, "{e}")
         }
         DecodeError::BroadcastNotAccepted { .. } => {}
+        DecodeError::NeedlessLong {
+            offset,
+            length,
+            most,
+        } => assert!(offset < len && length <= most, "{e}"),
         DecodeError::BadCount {
             offset, message, ..
         } => assert!(offset < len && !message.is_empty(), "{e}"),
