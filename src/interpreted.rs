@@ -23,8 +23,8 @@ use busspec_model::Protocol as Spec;
 use busspec_runtime::stream::Candidates;
 use busspec_runtime::{
     Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
-    EscapeFault, FieldError, FieldValue, Framing, Message, MessageNames, NumKind, Protocol, Reply,
-    Source, Transactions,
+    EscapeFault, FieldError, FieldValue, Framing, Message, MessageDesc, MessageNames, NumKind,
+    Protocol, Reply, Source, Transactions,
 };
 
 /// The most bytes a frame of a spec read at run time may take.
@@ -78,6 +78,24 @@ fn keep(s: &str) -> &'static str {
         return k;
     }
     let k: &'static str = Box::leak(s.to_owned().into_boxed_str());
+    set.insert(k);
+    k
+}
+
+/// A message's descriptor with the life of the process, kept once each, as the runtime's
+/// errors point at one: its name, its code (`code_len` bytes) and no lengths.
+fn keep_message(name: &str, code: u32, code_len: u8) -> &'static MessageDesc {
+    static KEPT: OnceLock<Mutex<HashSet<&'static MessageDesc>>> = OnceLock::new();
+    let set = KEPT.get_or_init(|| Mutex::new(HashSet::new()));
+    let mut set = match set.lock() {
+        Ok(g) => g,
+        Err(poisoned) => poisoned.into_inner(),
+    };
+    let d = MessageDesc::new(keep(name), code, code_len, &[]);
+    if let Some(k) = set.get(&d) {
+        return k;
+    }
+    let k: &'static MessageDesc = Box::leak(Box::new(d));
     set.insert(k);
     k
 }
@@ -322,8 +340,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             }
         }
         I::WrongLength { message, found, .. } => DecodeError::WrongLength {
-            message: keep(&message),
-            expected: &[],
+            message: keep_message(&message, 0, 0),
             found,
         },
         I::ConstantMismatch {
@@ -405,9 +422,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             code: c,
             address,
         } => DecodeError::BroadcastNotAccepted {
-            message: keep(&message),
-            code: code(&c),
-            len: c.len() as u8,
+            message: keep_message(&message, code(&c), c.len() as u8),
             address,
         },
         I::LengthMismatch {
@@ -519,7 +534,7 @@ fn encode_error(e: interp::EncodeError) -> EncodeError {
         I::BadAddress { address, min, max } => EncodeError::BadAddress { address, min, max },
         I::Unaddressed { address } => EncodeError::Unaddressed { address },
         I::BroadcastNotAccepted { message, address } => EncodeError::BroadcastNotAccepted {
-            message: keep(&message),
+            message: keep_message(&message, 0, 0),
             address,
         },
         I::NotInRange {

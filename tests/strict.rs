@@ -580,9 +580,13 @@ fn sd_read_temperatures_to_broadcast_is_refused() {
     assert_eq!(
         sd::Request::ReadTemperatures.encode(0x1F, &mut buf),
         Err(EncodeError::BroadcastNotAccepted {
-            message: "read_temperatures",
+            message: &sd::request::READ_TEMPERATURES,
             address: 0x1F
         })
+    );
+    assert_eq!(
+        sd::request::READ_TEMPERATURES,
+        busspec_protocols::MessageDesc::new("read_temperatures", 0xA0, 1, &[6])
     );
     let p = spec::<sd::Sd>();
     let r = p.find("read_temperatures").unwrap();
@@ -596,9 +600,7 @@ fn sd_read_temperatures_to_broadcast_is_refused() {
     assert_eq!(
         sd::Request::decode(&frame),
         Err(DecodeError::BroadcastNotAccepted {
-            message: "read_temperatures",
-            code: 0xA0,
-            len: 1,
+            message: &sd::request::READ_TEMPERATURES,
             address: 0x1F
         })
     );

@@ -31,8 +31,8 @@ pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::{
     crc, field_int, field_text, round, sum8, Broadcast, Bus, Command, CommandKind, DecodeError,
-    Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind, Preamble,
-    Protocol, Record, RecordList, Repeated, Reply, Source, Transactions, Transform,
+    Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, MessageDesc, NumKind,
+    Preamble, Protocol, Record, RecordList, Repeated, Reply, Source, Transactions, Transform,
 };
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter
@@ -368,32 +368,28 @@ pub fn code(frame: &[u8], at: usize, n: usize) -> u32 {
 }
 
 /// The frame as the fixed-size array of `message`, whose code matched, or why not: too short
-/// for it, or another length (`lengths`: every length of a message with this code, `[N]`
+/// for it, or another length (its `lengths`: every length of a message with this code, `[N]`
 /// where it is the only one).
 #[inline(always)]
 pub fn fixed<'f, const N: usize>(
     frame: &'f [u8],
-    message: &'static str,
-    lengths: &'static [usize],
+    message: &'static MessageDesc,
 ) -> Result<&'f [u8; N], DecodeError> {
-    frame
-        .try_into()
-        .map_err(|_| wrong_length(frame, message, lengths))
+    frame.try_into().map_err(|_| wrong_length(frame, message))
 }
 
-/// The refusal of a frame whose code is known but whose length is none of `lengths` (sorted,
-/// the lengths of the messages with its code, `message` the first tried): truncated where
-/// every one is longer, as the interpreter reports it.
+/// The refusal of a frame whose code is known but whose length is none of `message`'s
+/// `lengths` (sorted, the lengths of the messages with its code, `message` the first tried):
+/// truncated where every one is longer, as the interpreter reports it.
 #[cold]
-pub fn wrong_length(frame: &[u8], message: &'static str, lengths: &'static [usize]) -> DecodeError {
-    match lengths.first() {
+pub fn wrong_length(frame: &[u8], message: &'static MessageDesc) -> DecodeError {
+    match message.lengths.first() {
         Some(&needed) if needed > frame.len() => DecodeError::Truncated {
             needed,
             found: frame.len(),
         },
         _ => DecodeError::WrongLength {
             message,
-            expected: lengths,
             found: frame.len(),
         },
     }
@@ -701,9 +697,9 @@ impl<'f, T> Group<'f, T> {
     /// candidate that decoded, the first refused candidate's error, a set-aside candidate that
     /// decoded (not the request's reply), a set-aside candidate's error, a count that does not
     /// fit, or a wrong length ([`wrong_length`]: `message`, the first
-    /// candidate, and `lengths`, every candidate's, sorted).
+    /// candidate, its `lengths` every candidate's, sorted).
     #[inline(always)]
-    pub fn end(self, message: &'static str, lengths: &'static [usize]) -> DecodeResult<T> {
+    pub fn end(self, message: &'static MessageDesc) -> DecodeResult<T> {
         if self.decoded.names().len() > 1 {
             return Err(DecodeError::Ambiguous {
                 code: self.code,
@@ -722,26 +718,18 @@ impl<'f, T> Group<'f, T> {
             (None, _, _, Some(e)) => e,
             _ => match self.count {
                 Some(e) => e,
-                None => wrong_length(self.frame, message, lengths),
+                None => wrong_length(self.frame, message),
             },
         })
     }
 }
 
-/// A refusal of the broadcast address `b` by a command that does not accept it.
+/// A refusal of the broadcast address `b` by a command (`message`) that does not accept it.
 #[inline(always)]
-pub fn no_broadcast(
-    address: u8,
-    b: u8,
-    message: &'static str,
-    code: u32,
-    len: u8,
-) -> Result<(), DecodeError> {
+pub fn no_broadcast(address: u8, b: u8, message: &'static MessageDesc) -> Result<(), DecodeError> {
     if address == b {
         return Err(DecodeError::BroadcastNotAccepted {
-            len,
             message,
-            code,
             address: b,
         });
     }
@@ -973,7 +961,11 @@ pub fn encode_address(address: u8, f: &Frame) -> Result<(), EncodeError> {
 
 /// [`no_broadcast`] for an encoder.
 #[inline(always)]
-pub fn encode_broadcast(address: u8, b: u8, message: &'static str) -> Result<(), EncodeError> {
+pub fn encode_broadcast(
+    address: u8,
+    b: u8,
+    message: &'static MessageDesc,
+) -> Result<(), EncodeError> {
     if address == b {
         return Err(EncodeError::BroadcastNotAccepted { message, address });
     }

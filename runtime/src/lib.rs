@@ -532,7 +532,49 @@ pub fn field_text<const N: usize>(
     }
 }
 
+/// A message as errors name it: its spec name, its code and the frame lengths of its code. Each
+/// generated module has one per message, a `const` in its `desc` module
+/// (`modbus::desc::request::READ_COILS`), which refusals point at: building one stores a
+/// reference, not the name, code and lengths, and [`DecodeError`]'s `Display` reads them here.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MessageDesc {
+    /// The message's name in the spec.
+    pub name: &'static str,
+    /// Its code as the frame holds it (big-endian, `code_len` bytes; 0 bytes: it has none).
+    pub code: u32,
+    /// The code's length in bytes.
+    pub code_len: u8,
+    /// The frame lengths of the messages with its code, sorted (for one of variable length,
+    /// its shortest); empty where the refusing engine does not say them (the interpreter's
+    /// errors carried over by the CLI).
+    pub lengths: &'static [usize],
+}
+
+impl MessageDesc {
+    /// A descriptor for message `name` with `code` (`code_len` bytes) and the frame `lengths`
+    /// of its code.
+    pub const fn new(
+        name: &'static str,
+        code: u32,
+        code_len: u8,
+        lengths: &'static [usize],
+    ) -> Self {
+        MessageDesc {
+            name,
+            code,
+            code_len,
+            lengths,
+        }
+    }
+}
+
 /// Why a frame did not decode, and where.
+///
+/// A refusal names the message it concerns by its [`MessageDesc`] (a `&'static` constant of
+/// the generated module, `request::READ_COILS`), not by its name and numbers: building one
+/// stores a reference, and the error stays small. Match on the descriptor's fields
+/// (`DecodeError::WrongLength { message, .. } if message.name == "read_coils"`) or compare it
+/// with the constant (`message == &request::READ_COILS`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DecodeError {
     /// Fewer bytes than the shortest frame that could start like this one.
@@ -562,10 +604,9 @@ pub enum DecodeError {
     /// No response has this code (a frame decoded as a response only).
     UnknownResponse { offset: usize, code: u32, len: u8 },
     /// The code is known but the frame's length is none of the lengths its messages have
-    /// (`message`: the first of them).
+    /// (`message`: the first of them; the lengths: its `lengths`).
     WrongLength {
-        message: &'static str,
-        expected: &'static [usize],
+        message: &'static MessageDesc,
         found: usize,
     },
     /// A constant field (or constant bits of one) holds another value.
@@ -649,12 +690,10 @@ pub enum DecodeError {
         min: u8,
         max: u8,
     },
-    /// A request to the broadcast address `address` for a command the spec says does not
-    /// accept broadcast; `len`: the code's length in bytes.
+    /// A request to the broadcast address `address` for a command (`message`, its code
+    /// there) the spec says does not accept broadcast.
     BroadcastNotAccepted {
-        message: &'static str,
-        code: u32,
-        len: u8,
+        message: &'static MessageDesc,
         address: u8,
     },
     /// The repeated field `field`, whose elements start at `offset`, cannot have what this
@@ -885,13 +924,9 @@ impl fmt::Display for DecodeError {
                 hex(f, code, len)?;
                 write!(f, " at offset {offset}")
             }
-            DecodeError::WrongLength {
-                message,
-                expected,
-                found,
-            } => {
-                write!(f, "wrong length for {message}: expected ")?;
-                for (i, n) in expected.iter().enumerate() {
+            DecodeError::WrongLength { message, found } => {
+                write!(f, "wrong length for {}: expected ", message.name)?;
+                for (i, n) in message.lengths.iter().enumerate() {
                     if i > 0 {
                         f.write_str(" or ")?;
                     }
@@ -994,17 +1029,18 @@ impl fmt::Display for DecodeError {
                 f,
                 "address 0x{found:02X} at offset {offset} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
             ),
-            DecodeError::BroadcastNotAccepted {
-                message,
-                code,
-                len,
-                address,
-            } => {
-                if len == 0 {
-                    write!(f, "{message} (no code)")?;
+            DecodeError::BroadcastNotAccepted { message, address } => {
+                let MessageDesc {
+                    name,
+                    code,
+                    code_len,
+                    ..
+                } = *message;
+                if code_len == 0 {
+                    write!(f, "{name} (no code)")?;
                 } else {
-                    write!(f, "{message} (code ")?;
-                    hex(f, code, len)?;
+                    write!(f, "{name} (code ")?;
+                    hex(f, code, code_len)?;
                     f.write_str(")")?;
                 }
                 write!(f, " does not accept the broadcast address 0x{address:02X}")
@@ -1061,7 +1097,10 @@ pub enum EncodeError {
     /// An address other than 0 for a protocol whose frames carry none.
     Unaddressed { address: u8 },
     /// The command does not accept the broadcast address `address`, says the spec.
-    BroadcastNotAccepted { message: &'static str, address: u8 },
+    BroadcastNotAccepted {
+        message: &'static MessageDesc,
+        address: u8,
+    },
     /// An optional field (`present:` in the spec) given where its condition does not hold
     /// (`given`), or not given where it does: `condition` in words (``bit 0 of `flags` is
     /// set``).
@@ -1107,7 +1146,8 @@ impl fmt::Display for EncodeError {
             ),
             EncodeError::BroadcastNotAccepted { message, address } => write!(
                 f,
-                "{message} does not accept the broadcast address 0x{address:02X}"
+                "{} does not accept the broadcast address 0x{address:02X}",
+                message.name
             ),
             EncodeError::Optional {
                 field,
@@ -1185,7 +1225,50 @@ pub fn round(x: f64) -> Option<i64> {
 
 #[cfg(test)]
 mod tests {
-    use super::{sum8, sum8_bytes};
+    extern crate std;
+    use super::{sum8, sum8_bytes, DecodeError, EncodeError, MessageDesc};
+    use std::string::ToString;
+
+    static READ: MessageDesc = MessageDesc::new("read", 0x4072, 2, &[6, 8]);
+    static PING: MessageDesc = MessageDesc::new("ping", 0, 0, &[4]);
+
+    /// A refusal that points at a message's descriptor says what the descriptor holds, in the
+    /// interpreter's words: every length of the code, the code at its width.
+    #[test]
+    fn refusals_read_their_descriptor() {
+        let e = DecodeError::WrongLength {
+            message: &READ,
+            found: 7,
+        };
+        assert_eq!(
+            e.to_string(),
+            "wrong length for read: expected 6 or 8 bytes, found 7"
+        );
+        let e = DecodeError::BroadcastNotAccepted {
+            message: &READ,
+            address: 0,
+        };
+        assert_eq!(
+            e.to_string(),
+            "read (code 0x4072) does not accept the broadcast address 0x00"
+        );
+        let e = DecodeError::BroadcastNotAccepted {
+            message: &PING,
+            address: 0xFE,
+        };
+        assert_eq!(
+            e.to_string(),
+            "ping (no code) does not accept the broadcast address 0xFE"
+        );
+        let e = EncodeError::BroadcastNotAccepted {
+            message: &PING,
+            address: 0xFE,
+        };
+        assert_eq!(
+            e.to_string(),
+            "ping does not accept the broadcast address 0xFE"
+        );
+    }
 
     /// The chain for short inputs and the loop for long ones sum alike, at every length up to
     /// 40, for bytes that carry on every add (all 0xFF), none and a mix.

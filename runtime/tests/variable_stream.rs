@@ -19,7 +19,7 @@ use busspec_runtime::codec::{LengthField, VarLen, VarLens};
 use busspec_runtime::stream::{Candidates, Event, StreamDecoder};
 use busspec_runtime::{
     Broadcast, Bus, Command, CommandKind, DecodeError, Decoded, EncodeError, FieldError,
-    FieldValue, Framing, Message, Protocol, Repeated, Reply, Source, Transactions,
+    FieldValue, Framing, Message, MessageDesc, Protocol, Repeated, Reply, Source, Transactions,
 };
 
 const SPEC: &str = r#"
@@ -255,10 +255,13 @@ fn byte(message: &'static str, field: &'static str, v: u8, max: u8) -> Result<u8
     Ok(v)
 }
 
+/// The hand-written messages as their wrong lengths name them.
+static VALUES: MessageDesc = MessageDesc::new("values", 0, 0, &[11]);
+static READ: MessageDesc = MessageDesc::new("read", 0, 0, &[6]);
+
 fn values(frame: &[u8]) -> Result<Repeated<u8, 6>, DecodeError> {
     Repeated::from_slice(&frame[4..frame.len() - 1]).map_err(|_| DecodeError::WrongLength {
-        message: "values",
-        expected: &[11],
+        message: &VALUES,
         found: frame.len(),
     })
 }
@@ -322,8 +325,7 @@ impl Protocol for Toy {
             }
             (0x01 | 0x02, _) => {
                 return Err(DecodeError::WrongLength {
-                    message: "read",
-                    expected: &[6],
+                    message: &READ,
                     found: frame.len(),
                 })
             }
@@ -355,8 +357,7 @@ impl Protocol for Toy {
             },
             (0x81 | 0x02, _) => {
                 return Err(DecodeError::WrongLength {
-                    message: "read",
-                    expected: &[6],
+                    message: &READ,
                     found: frame.len(),
                 })
             }

@@ -5,8 +5,10 @@
 //! humidity and run-time minutes and seconds lie in their ranges; a frame longer than 6 bytes
 //! is refused first.
 
-use busspec_protocols::sd::{ActuatorStatusBits, Angle, Request, Response, Temperature, Velocity};
-use busspec_protocols::{DecodeError, Decoded, EncodeError, MessageNames};
+use busspec_protocols::sd::{
+    request, ActuatorStatusBits, Angle, Request, Response, Temperature, Velocity,
+};
+use busspec_protocols::{DecodeError, Decoded, EncodeError, MessageDesc, MessageNames};
 
 const LEN: usize = 6;
 const FIRST_ID: u8 = 0x01;
@@ -54,14 +56,9 @@ fn envelope(frame: &[u8]) -> Result<(u8, u8, u8, u8), DecodeError> {
 
 /// Refuses the broadcast ID for a command that does not accept it.
 #[inline]
-fn unicast(address: u8, message: &'static str, code: u8) -> Result<(), DecodeError> {
+fn unicast(address: u8, message: &'static MessageDesc) -> Result<(), DecodeError> {
     if address == BROADCAST {
-        return Err(DecodeError::BroadcastNotAccepted {
-            message,
-            code: code.into(),
-            len: 1,
-            address,
-        });
+        return Err(DecodeError::BroadcastNotAccepted { message, address });
     }
     Ok(())
 }
@@ -170,20 +167,20 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
             )?,
         },
         0xA0 => {
-            unicast(address, "read_temperatures", code)?;
+            unicast(address, &request::READ_TEMPERATURES)?;
             constants("read_temperatures", a1, a2).map(|()| Request::ReadTemperatures)?
         }
         0xA1 => {
-            unicast(address, "read_humidity", code)?;
+            unicast(address, &request::READ_HUMIDITY)?;
             constants("read_humidity", a1, a2).map(|()| Request::ReadHumidity)?
         }
         0x40 => match (a1, a2) {
             (0xAA, 0x02) => {
-                unicast(address, "read_actuator_status_word", code)?;
+                unicast(address, &request::READ_ACTUATOR_STATUS_WORD)?;
                 Request::ReadActuatorStatusWord
             }
             (0xAA, 0x52) => {
-                unicast(address, "reset_actuator_status_word", code)?;
+                unicast(address, &request::RESET_ACTUATOR_STATUS_WORD)?;
                 Request::ResetActuatorStatusWord
             }
             (0xAA, _) => return Err(invalid("read_actuator_status_word", "arg2", 3, a2)),
@@ -191,11 +188,11 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
         },
         0xA2 => match (a1, a2) {
             (0x00, 0x00) => {
-                unicast(address, "read_total_runtime_hours", code)?;
+                unicast(address, &request::READ_TOTAL_RUNTIME_HOURS)?;
                 Request::ReadTotalRuntimeHours
             }
             (0x00, 0x01) => {
-                unicast(address, "read_total_runtime_min_sec", code)?;
+                unicast(address, &request::READ_TOTAL_RUNTIME_MIN_SEC)?;
                 Request::ReadTotalRuntimeMinSec
             }
             (0x00, _) => return Err(invalid("read_total_runtime_hours", "arg2", 3, a2)),
@@ -385,7 +382,7 @@ fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, E
 
 /// Refuses the broadcast ID for a command that does not accept it.
 #[inline]
-fn unicast_to(message: &'static str, address: u8) -> Result<(), EncodeError> {
+fn unicast_to(message: &'static MessageDesc, address: u8) -> Result<(), EncodeError> {
     if address == BROADCAST {
         return Err(EncodeError::BroadcastNotAccepted { message, address });
     }
@@ -454,27 +451,27 @@ pub fn encode_request(
             (0xAA, id, id)
         }
         Request::ReadTemperatures => {
-            tri!(unicast_to("read_temperatures", address));
+            tri!(unicast_to(&request::READ_TEMPERATURES, address));
             (0xA0, 0, 0)
         }
         Request::ReadHumidity => {
-            tri!(unicast_to("read_humidity", address));
+            tri!(unicast_to(&request::READ_HUMIDITY, address));
             (0xA1, 0, 0)
         }
         Request::ReadActuatorStatusWord => {
-            tri!(unicast_to("read_actuator_status_word", address));
+            tri!(unicast_to(&request::READ_ACTUATOR_STATUS_WORD, address));
             (0x40, 0xAA, 0x02)
         }
         Request::ResetActuatorStatusWord => {
-            tri!(unicast_to("reset_actuator_status_word", address));
+            tri!(unicast_to(&request::RESET_ACTUATOR_STATUS_WORD, address));
             (0x40, 0xAA, 0x52)
         }
         Request::ReadTotalRuntimeHours => {
-            tri!(unicast_to("read_total_runtime_hours", address));
+            tri!(unicast_to(&request::READ_TOTAL_RUNTIME_HOURS, address));
             (0xA2, 0, 0)
         }
         Request::ReadTotalRuntimeMinSec => {
-            tri!(unicast_to("read_total_runtime_min_sec", address));
+            tri!(unicast_to(&request::READ_TOTAL_RUNTIME_MIN_SEC, address));
             (0xA2, 0, 1)
         }
         _ => return None,

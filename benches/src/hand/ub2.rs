@@ -4,7 +4,7 @@
 //! C-curve index lies in 0..=499, and a frame longer than the longest is refused first.
 
 use busspec_protocols::ub2::{Capacitance, ModeOfOperation, Request, Response};
-use busspec_protocols::{DecodeError, Decoded, EncodeError};
+use busspec_protocols::{DecodeError, Decoded, EncodeError, MessageDesc};
 
 const START: u8 = 0xAA;
 /// The host's address; the devices' follow it (§2.2, §2.3; erratum ub2-e02).
@@ -92,14 +92,26 @@ fn u32le(a: u8, b: u8, c: u8, d: u8) -> u32 {
 }
 
 /// A frame of a known code and another length. One arm stands for several codes here, so the
-/// error names the first message of the code range, not each.
-fn wrong_length(message: &'static str, expected: &'static [usize], frame: &[u8]) -> DecodeError {
+/// error names the protocol, not each message, and the length of the arm's frames.
+fn wrong_length(message: &'static MessageDesc, frame: &[u8]) -> DecodeError {
     DecodeError::WrongLength {
         message,
-        expected,
         found: frame.len(),
     }
 }
+
+/// What [`wrong_length`] names for frames of `lengths`.
+const fn ub2(lengths: &'static [usize]) -> MessageDesc {
+    MessageDesc::new("ub2", 0, 0, lengths)
+}
+static LEN_4: MessageDesc = ub2(&[4]);
+static LEN_5: MessageDesc = ub2(&[5]);
+static LEN_6: MessageDesc = ub2(&[6]);
+static LEN_7: MessageDesc = ub2(&[7]);
+static LEN_9: MessageDesc = ub2(&[9]);
+static LEN_10: MessageDesc = ub2(&[10]);
+static LEN_13: MessageDesc = ub2(&[13]);
+static LEN_16: MessageDesc = ub2(&[16]);
 
 pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
     let (address, rest) = envelope(frame, 5, 9)?;
@@ -138,11 +150,11 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 })
             }
         },
-        [0x20, 0x00, ..] => return Err(wrong_length("ub2", &[9], frame)),
-        [0x21 | 0x22, 0x00, ..] | [0x40, 0x30, ..] => return Err(wrong_length("ub2", &[7], frame)),
-        [0x80, 0x00, ..] | [0x40, 0x72, ..] => return Err(wrong_length("ub2", &[6], frame)),
+        [0x20, 0x00, ..] => return Err(wrong_length(&LEN_9, frame)),
+        [0x21 | 0x22, 0x00, ..] | [0x40, 0x30, ..] => return Err(wrong_length(&LEN_7, frame)),
+        [0x80, 0x00, ..] | [0x40, 0x72, ..] => return Err(wrong_length(&LEN_6, frame)),
         [0x10, 0x00, ..] | [0x20, 0x01, ..] | [0x40, 0x01 | 0x32 | 0x61 | 0x80, ..] => {
-            return Err(wrong_length("ub2", &[5], frame))
+            return Err(wrong_length(&LEN_5, frame))
         }
         [hi, lo, ..] => {
             return Err(DecodeError::UnknownCommand {
@@ -151,7 +163,7 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 len: 2,
             })
         }
-        _ => return Err(wrong_length("ub2", &[5], frame)),
+        _ => return Err(wrong_length(&LEN_5, frame)),
     };
     Ok(Decoded { address, message })
 }
@@ -242,14 +254,14 @@ pub fn decode_response(
                 }
             }
         }
-        [0x50..=0x52 | 0x93 | 0x94, ..] => return Err(wrong_length("ub2", &[4], frame)),
-        [0x80, 0x00, ..] => return Err(wrong_length("ub2", &[5], frame)),
-        [0x41, 0x01, ..] => return Err(wrong_length("ub2", &[9], frame)),
-        [0x41, 0x80, ..] => return Err(wrong_length("ub2", &[6], frame)),
-        [0x41, 0x30, ..] => return Err(wrong_length("ub2", &[13], frame)),
-        [0x41, 0x32, ..] => return Err(wrong_length("ub2", &[6], frame)),
-        [0x41, 0x61, ..] => return Err(wrong_length("ub2", &[16], frame)),
-        [0x41, 0x72, ..] => return Err(wrong_length("ub2", &[10], frame)),
+        [0x50..=0x52 | 0x93 | 0x94, ..] => return Err(wrong_length(&LEN_4, frame)),
+        [0x80, 0x00, ..] => return Err(wrong_length(&LEN_5, frame)),
+        [0x41, 0x01, ..] => return Err(wrong_length(&LEN_9, frame)),
+        [0x41, 0x80, ..] => return Err(wrong_length(&LEN_6, frame)),
+        [0x41, 0x30, ..] => return Err(wrong_length(&LEN_13, frame)),
+        [0x41, 0x32, ..] => return Err(wrong_length(&LEN_6, frame)),
+        [0x41, 0x61, ..] => return Err(wrong_length(&LEN_16, frame)),
+        [0x41, 0x72, ..] => return Err(wrong_length(&LEN_10, frame)),
         [code, ..] => {
             return Err(DecodeError::UnknownResponse {
                 offset: 2,
@@ -257,7 +269,7 @@ pub fn decode_response(
                 len: 1,
             })
         }
-        [] => return Err(wrong_length("ub2", &[4], frame)),
+        [] => return Err(wrong_length(&LEN_4, frame)),
     };
     if let Some(q) = request {
         if !answers(q, &message) {

@@ -12,11 +12,9 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     let message = m.name.as_str();
     let mut stmts = Vec::new();
     if let (Some(b), Some(at)) = (refuses_broadcast(p, m), o.address) {
-        let name = &m.name;
-        let code = hex_code(&m.code);
+        let desc = message_desc(m);
         let (at, b) = (usize_lit(at), hex_u8(b));
-        let len = Literal::u8_unsuffixed(m.code.len() as u8);
-        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code, #len)?;));
+        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #desc)?;));
     }
     let named = repeated(m);
     // Each leaf's value: an expression over `frame` or over a named wire value.

@@ -193,10 +193,16 @@ pub(super) fn optionals_value(m: &Message) -> TokenStream {
     }
     lengths.sort_unstable();
     lengths.dedup();
-    let lengths = lengths.into_iter().map(usize_lit);
+    // The message as a wrong length names it, once for each length: naming that length.
+    let (code, code_len) = code_args(m);
+    let by_length = lengths.iter().map(|&l| {
+        let l = usize_lit(l);
+        quote!(rt::MessageDesc::new(#message, #code, #code_len, &[#l]))
+    });
+    let lengths = lengths.iter().map(|&l| usize_lit(l));
     quote! {
         rt::Optionals {
-            message: #message,
+            by_length: &[#(#by_length),*],
             base: #base,
             at: #at,
             fields: &[#(#fields),*],

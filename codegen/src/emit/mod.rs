@@ -51,6 +51,7 @@
 
 mod ctx;
 mod decode;
+mod desc;
 mod dispatch;
 mod encode;
 mod head;
@@ -67,6 +68,7 @@ mod types;
 use ctx::*;
 use ctx::{Kind, Leaf};
 use decode::*;
+use desc::*;
 use dispatch::*;
 use encode::*;
 use head::*;
@@ -169,6 +171,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let responses = emit_messages(&ctx, Direction::Response);
     let pairing = emit_pairing(&ctx);
     let stream = emit_stream(p);
+    let descs = emit_descs(&ctx);
     let name = ident(&p.name);
     quote! {
       pub mod #name {
@@ -181,6 +184,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         #responses
         #pairing
         #stream
+        #descs
       }
     }
 }

@@ -212,10 +212,11 @@ pub mod bcd_meter {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x11 => {
-                    rt::fixed::<5>(frame, "read_energy", &[5]).map(|_| Self::ReadEnergy)
+                    rt::fixed::<5>(frame, &request::READ_ENERGY)
+                        .map(|_| Self::ReadEnergy)
                 }
                 0x08 => {
-                    let frame = rt::fixed::<9>(frame, "set_clock", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::SET_CLOCK)?;
                     let field_0: u8 = rt::bcd("set_clock", "hour", 3, frame[3] as u64)?
                         as u8;
                     rt::in_range("set_clock", "hour", 3, field_0, 0, 23)?;
@@ -442,7 +443,7 @@ pub mod bcd_meter {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x91 => {
-                    let frame = rt::fixed::<10>(frame, "energy", &[10])?;
+                    let frame = rt::fixed::<10>(frame, &response::ENERGY)?;
                     let field_0: u32 = rt::bcd(
                         "energy",
                         "energy",
@@ -459,7 +460,7 @@ pub mod bcd_meter {
                         tariff: field_1,
                     })
                 }
-                0x88 => rt::fixed::<5>(frame, "ack", &[5]).map(|_| Self::Ack),
+                0x88 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, true)),
             }
         }
@@ -625,4 +626,26 @@ pub mod bcd_meter {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<BcdMeter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_energy`, code 0x11
+        pub const READ_ENERGY: MessageDesc = MessageDesc::new(
+            "read_energy",
+            0x11,
+            1,
+            &[5],
+        );
+        /// `set_clock`, code 0x08
+        pub const SET_CLOCK: MessageDesc = MessageDesc::new("set_clock", 0x08, 1, &[9]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `energy`, code 0x91
+        pub const ENERGY: MessageDesc = MessageDesc::new("energy", 0x91, 1, &[10]);
+        /// `ack`, code 0x88
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x88, 1, &[5]);
+    }
 }

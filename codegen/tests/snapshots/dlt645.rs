@@ -252,14 +252,14 @@ pub mod dlt645 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 8, 1) {
                 0x13 => {
-                    let frame = rt::fixed::<12>(frame, "read_address", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &request::READ_ADDRESS)?;
                     rt::Ok(Self::ReadAddress {
                         address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                         address_high: rt::u24([frame[4], frame[5], frame[6]], true),
                     })
                 }
                 0x11 => {
-                    let frame = rt::fixed::<16>(frame, "read_data", &[16])?;
+                    let frame = rt::fixed::<16>(frame, &request::READ_DATA)?;
                     rt::Ok(Self::ReadData {
                         address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                         address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -685,7 +685,7 @@ pub mod dlt645 {
         ) -> rt::DecodeResult<Self> {
             match rt::code(frame, 8, 1) {
                 0x93 => {
-                    let frame = rt::fixed::<18>(frame, "address_reply", &[18])?;
+                    let frame = rt::fixed::<18>(frame, &response::ADDRESS_REPLY)?;
                     rt::Ok(Self::AddressReply {
                         address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                         address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -740,7 +740,7 @@ pub mod dlt645 {
                             number_high: rt::u24([frame[17], frame[18], frame[19]], true),
                         })
                     });
-                    g.end("data_reply", &[20, 22])
+                    g.end(&response::DATA_REPLY)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 8, 1, 2, true)),
             }
@@ -977,4 +977,43 @@ pub mod dlt645 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dlt645>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_address`, code 0x13
+        pub const READ_ADDRESS: MessageDesc = MessageDesc::new(
+            "read_address",
+            0x13,
+            1,
+            &[12],
+        );
+        /// `read_data`, code 0x11
+        pub const READ_DATA: MessageDesc = MessageDesc::new("read_data", 0x11, 1, &[16]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `address_reply`, code 0x93
+        pub const ADDRESS_REPLY: MessageDesc = MessageDesc::new(
+            "address_reply",
+            0x93,
+            1,
+            &[18],
+        );
+        /// `data_reply`, code 0x91
+        pub const DATA_REPLY: MessageDesc = MessageDesc::new(
+            "data_reply",
+            0x91,
+            1,
+            &[20, 22],
+        );
+        /// `meter_number_reply`, code 0x91
+        pub const METER_NUMBER_REPLY: MessageDesc = MessageDesc::new(
+            "meter_number_reply",
+            0x91,
+            1,
+            &[20, 22],
+        );
+    }
 }

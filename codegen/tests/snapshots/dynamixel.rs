@@ -273,11 +273,11 @@ pub mod dynamixel {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping => {
-                    rt::encode_broadcast(address, 0xFE, "ping")?;
+                    rt::encode_broadcast(address, 0xFE, &request::PING)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
                 Self::Read { address: v_address, length: v_length } => {
-                    rt::encode_broadcast(address, 0xFE, "read")?;
+                    rt::encode_broadcast(address, 0xFE, &request::READ)?;
                     rt::encode_in_range("length", v_length, 1, 253)?;
                     let out = rt::frame_mut::<
                         8,
@@ -350,13 +350,13 @@ pub mod dynamixel {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<6>(frame, "ping", &[6])?;
-                    rt::no_broadcast(frame[2], 0xFE, "ping", 0x01, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::PING)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::PING)?;
                     rt::Ok(Self::Ping)
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, "read", &[8])?;
-                    rt::no_broadcast(frame[2], 0xFE, "read", 0x02, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::READ)?;
                     rt::in_range("read", "length", 6, frame[6], 1, 253)?;
                     rt::Ok(Self::Read {
                         address: frame[5],
@@ -378,8 +378,8 @@ pub mod dynamixel {
                             .elements::<u8, 252>(elements, true, false)?,
                     })
                 }
-                0x05 => rt::fixed::<6>(frame, "action", &[6]).map(|_| Self::Action),
-                0x06 => rt::fixed::<6>(frame, "reset", &[6]).map(|_| Self::Reset),
+                0x05 => rt::fixed::<6>(frame, &request::ACTION).map(|_| Self::Action),
+                0x06 => rt::fixed::<6>(frame, &request::RESET).map(|_| Self::Reset),
                 0x83 => {
                     let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
                     rt::Ok(Self::SyncWrite {
@@ -661,7 +661,7 @@ pub mod dynamixel {
                             })
                         },
                     );
-                    g.end("status", &[6])
+                    g.end(&response::STATUS)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }
@@ -934,4 +934,36 @@ pub mod dynamixel {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `ping`, code 0x01
+        pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[6]);
+        /// `read`, code 0x02
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x02, 1, &[8]);
+        /// `write`, code 0x03
+        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x03, 1, &[7]);
+        /// `reg_write`, code 0x04
+        pub const REG_WRITE: MessageDesc = MessageDesc::new("reg_write", 0x04, 1, &[7]);
+        /// `action`, code 0x05
+        pub const ACTION: MessageDesc = MessageDesc::new("action", 0x05, 1, &[6]);
+        /// `reset`, code 0x06
+        pub const RESET: MessageDesc = MessageDesc::new("reset", 0x06, 1, &[6]);
+        /// `sync_write`, code 0x83
+        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
+            "sync_write",
+            0x83,
+            1,
+            &[8],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `status` (no code)
+        pub const STATUS: MessageDesc = MessageDesc::new("status", 0, 0, &[6]);
+        /// `read_status` (no code)
+        pub const READ_STATUS: MessageDesc = MessageDesc::new("read_status", 0, 0, &[6]);
+    }
 }

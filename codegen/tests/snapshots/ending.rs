@@ -225,7 +225,7 @@ pub mod ending {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, "read", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &request::READ)?;
                     rt::in_range("read", "quantity", 6, frame[6], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[4], frame[5]]),
@@ -250,7 +250,7 @@ pub mod ending {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, "stamp", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &request::STAMP)?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[4], frame[5], frame[6]], false),
                     })
@@ -509,13 +509,13 @@ pub mod ending {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<6>(frame, "read_error", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::READ_ERROR)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[4],
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<6>(frame, "write_reply", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::WRITE_REPLY)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[4],
                     })
@@ -740,4 +740,40 @@ pub mod ending {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ending>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read`, code 0x01
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[8]);
+        /// `write`, code 0x02
+        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x02, 1, &[7]);
+        /// `stamp`, code 0x03
+        pub const STAMP: MessageDesc = MessageDesc::new("stamp", 0x03, 1, &[8]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_reply`, code 0x01
+        pub const READ_REPLY: MessageDesc = MessageDesc::new(
+            "read_reply",
+            0x01,
+            1,
+            &[5],
+        );
+        /// `read_error`, code 0x81
+        pub const READ_ERROR: MessageDesc = MessageDesc::new(
+            "read_error",
+            0x81,
+            1,
+            &[6],
+        );
+        /// `write_reply`, code 0x02
+        pub const WRITE_REPLY: MessageDesc = MessageDesc::new(
+            "write_reply",
+            0x02,
+            1,
+            &[6],
+        );
+    }
 }

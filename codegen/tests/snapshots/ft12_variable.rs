@@ -121,7 +121,7 @@ pub mod ft12_variable {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50]).len()
                 }
                 Self::ReadData => {
-                    rt::encode_broadcast(address, 0xFE, "read_data")?;
+                    rt::encode_broadcast(address, 0xFE, &request::READ_DATA)?;
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }
             };
@@ -152,13 +152,13 @@ pub mod ft12_variable {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x53 => {
-                    let frame = rt::fixed::<9>(frame, "reset", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::RESET)?;
                     rt::equal("reset", "ci", 6, frame[6], 0x50)?;
                     rt::Ok(Self::Reset)
                 }
                 0x7B => {
-                    let frame = rt::fixed::<9>(frame, "read_data", &[9])?;
-                    rt::no_broadcast(frame[5], 0xFE, "read_data", 0x7B, 1)?;
+                    let frame = rt::fixed::<9>(frame, &request::READ_DATA)?;
+                    rt::no_broadcast(frame[5], 0xFE, &request::READ_DATA)?;
                     rt::equal("read_data", "ci", 6, frame[6], 0x5B)?;
                     rt::Ok(Self::ReadData)
                 }
@@ -410,7 +410,7 @@ pub mod ft12_variable {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x08 => {
-                    let frame = rt::fixed::<27>(frame, "rsp_ud", &[27])?;
+                    let frame = rt::fixed::<27>(frame, &response::RSP_UD)?;
                     rt::equal("rsp_ud", "ci", 6, frame[6], 0x72)?;
                     let field_1: u32 = rt::bcd(
                         "rsp_ud",
@@ -613,4 +613,19 @@ pub mod ft12_variable {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Variable>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `reset`, code 0x53
+        pub const RESET: MessageDesc = MessageDesc::new("reset", 0x53, 1, &[9]);
+        /// `read_data`, code 0x7B
+        pub const READ_DATA: MessageDesc = MessageDesc::new("read_data", 0x7B, 1, &[9]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `rsp_ud`, code 0x08
+        pub const RSP_UD: MessageDesc = MessageDesc::new("rsp_ud", 0x08, 1, &[27]);
+    }
 }

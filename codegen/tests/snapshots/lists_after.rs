@@ -332,7 +332,7 @@ pub mod lists_after {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<7>(frame, "read_block", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &request::READ_BLOCK)?;
                     rt::in_range("read_block", "quantity", 5, frame[5], 1, 8)?;
                     rt::Ok(Self::ReadBlock {
                         first: u16::from_be_bytes([frame[3], frame[4]]),
@@ -637,7 +637,7 @@ pub mod lists_after {
                     })
                 }
                 0x11 => {
-                    let frame = rt::fixed::<5>(frame, "ack", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
@@ -856,4 +856,38 @@ pub mod lists_after {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsAfter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_block`, code 0x10
+        pub const READ_BLOCK: MessageDesc = MessageDesc::new(
+            "read_block",
+            0x10,
+            1,
+            &[7],
+        );
+        /// `write_block`, code 0x11
+        pub const WRITE_BLOCK: MessageDesc = MessageDesc::new(
+            "write_block",
+            0x11,
+            1,
+            &[7],
+        );
+        /// `copy`, code 0x12
+        pub const COPY: MessageDesc = MessageDesc::new("copy", 0x12, 1, &[7]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `block_reply`, code 0x10
+        pub const BLOCK_REPLY: MessageDesc = MessageDesc::new(
+            "block_reply",
+            0x10,
+            1,
+            &[6],
+        );
+        /// `ack`, code 0x11
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x11, 1, &[5]);
+    }
 }

@@ -584,7 +584,7 @@ pub mod lists_length {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, "log_ack", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::LOG_ACK)?;
                     rt::Ok(Self::LogAck {
                         seq: u16::from_le_bytes([frame[3], frame[4]]),
                     })
@@ -785,4 +785,24 @@ pub mod lists_length {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsLength>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `log`, code 0x20
+        pub const LOG: MessageDesc = MessageDesc::new("log", 0x20, 1, &[7]);
+        /// `set_outputs`, code 0x21
+        pub const SET_OUTPUTS: MessageDesc = MessageDesc::new(
+            "set_outputs",
+            0x21,
+            1,
+            &[7],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `log_ack`, code 0x20
+        pub const LOG_ACK: MessageDesc = MessageDesc::new("log_ack", 0x20, 1, &[6]);
+    }
 }

@@ -230,7 +230,7 @@ pub mod maestro_compact {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x84 => {
-                    let frame = rt::fixed::<4>(frame, "set_target", &[4])?;
+                    let frame = rt::fixed::<4>(frame, &request::SET_TARGET)?;
                     rt::in_range("set_target", "channel", 1, frame[1], 0, 23)?;
                     let field_1: u16 = u16::from_le_bytes([frame[2], frame[3]]);
                     rt::equal("set_target", "zero_high", 2, field_1 >> 15, 0x0)?;
@@ -246,7 +246,7 @@ pub mod maestro_compact {
                     })
                 }
                 0x90 => {
-                    let frame = rt::fixed::<2>(frame, "get_position", &[2])?;
+                    let frame = rt::fixed::<2>(frame, &request::GET_POSITION)?;
                     rt::in_range("get_position", "channel", 1, frame[1], 0, 23)?;
                     rt::Ok(Self::GetPosition {
                         channel: frame[1],
@@ -458,7 +458,7 @@ pub mod maestro_compact {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 0) {
                 0u32 => {
-                    let frame = rt::fixed::<2>(frame, "position", &[2])?;
+                    let frame = rt::fixed::<2>(frame, &response::POSITION)?;
                     rt::Ok(Self::Position {
                         position: QuarterMicroseconds::from_raw(
                             u16::from_le_bytes([frame[0], frame[1]]),
@@ -621,4 +621,29 @@ pub mod maestro_compact {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MaestroCompact>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `set_target`, code 0x84
+        pub const SET_TARGET: MessageDesc = MessageDesc::new(
+            "set_target",
+            0x84,
+            1,
+            &[4],
+        );
+        /// `get_position`, code 0x90
+        pub const GET_POSITION: MessageDesc = MessageDesc::new(
+            "get_position",
+            0x90,
+            1,
+            &[2],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `position` (no code)
+        pub const POSITION: MessageDesc = MessageDesc::new("position", 0, 0, &[2]);
+    }
 }

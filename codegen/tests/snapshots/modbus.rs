@@ -428,7 +428,7 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_coils")?;
+                    rt::encode_broadcast(address, 0x00, &request::READ_COILS)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -439,7 +439,7 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_discrete_inputs")?;
+                    rt::encode_broadcast(address, 0x00, &request::READ_DISCRETE_INPUTS)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -450,7 +450,11 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_holding_registers")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x00,
+                        &request::READ_HOLDING_REGISTERS,
+                    )?;
                     rt::encode_in_range("quantity", v_quantity, 1, 125)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -461,7 +465,7 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_input_registers")?;
+                    rt::encode_broadcast(address, 0x00, &request::READ_INPUT_REGISTERS)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 125)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -558,8 +562,8 @@ pub mod modbus {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, "read_coils", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_coils", 0x01, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_COILS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_COILS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range("read_coils", "quantity", 4, field_1, 1, 2000)?;
                     rt::Ok(Self::ReadCoils {
@@ -568,8 +572,8 @@ pub mod modbus {
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, "read_discrete_inputs", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_discrete_inputs", 0x02, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_DISCRETE_INPUTS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_DISCRETE_INPUTS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         "read_discrete_inputs",
@@ -585,8 +589,8 @@ pub mod modbus {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, "read_holding_registers", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_holding_registers", 0x03, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_HOLDING_REGISTERS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_HOLDING_REGISTERS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         "read_holding_registers",
@@ -602,8 +606,8 @@ pub mod modbus {
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<8>(frame, "read_input_registers", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_input_registers", 0x04, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_INPUT_REGISTERS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_INPUT_REGISTERS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         "read_input_registers",
@@ -619,7 +623,7 @@ pub mod modbus {
                     })
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, "write_single_coil", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_COIL)?;
                     rt::Ok(Self::WriteSingleCoil {
                         output_address: u16::from_be_bytes([frame[2], frame[3]]),
                         output_value: CoilState::from_raw(
@@ -628,7 +632,7 @@ pub mod modbus {
                     })
                 }
                 0x06 => {
-                    let frame = rt::fixed::<8>(frame, "write_single_register", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_REGISTER)?;
                     rt::Ok(Self::WriteSingleRegister {
                         register_address: u16::from_be_bytes([frame[2], frame[3]]),
                         register_value: u16::from_be_bytes([frame[4], frame[5]]),
@@ -1293,7 +1297,7 @@ pub mod modbus {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<5>(frame, "read_coils_exception", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::READ_COILS_EXCEPTION)?;
                     rt::Ok(Self::ReadCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1309,7 +1313,7 @@ pub mod modbus {
                 0x82 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "read_discrete_inputs_exception", &[5])?;
+                    >(frame, &response::READ_DISCRETE_INPUTS_EXCEPTION)?;
                     rt::Ok(Self::ReadDiscreteInputsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1325,7 +1329,7 @@ pub mod modbus {
                 0x83 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "read_holding_registers_exception", &[5])?;
+                    >(frame, &response::READ_HOLDING_REGISTERS_EXCEPTION)?;
                     rt::Ok(Self::ReadHoldingRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1341,13 +1345,15 @@ pub mod modbus {
                 0x84 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "read_input_registers_exception", &[5])?;
+                    >(frame, &response::READ_INPUT_REGISTERS_EXCEPTION)?;
                     rt::Ok(Self::ReadInputRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, "write_single_coil_reply", &[8])?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &response::WRITE_SINGLE_COIL_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleCoilReply {
@@ -1358,7 +1364,7 @@ pub mod modbus {
                 0x85 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_single_coil_exception", &[5])?;
+                    >(frame, &response::WRITE_SINGLE_COIL_EXCEPTION)?;
                     rt::Ok(Self::WriteSingleCoilException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1366,7 +1372,7 @@ pub mod modbus {
                 0x06 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, "write_single_register_reply", &[8])?;
+                    >(frame, &response::WRITE_SINGLE_REGISTER_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleRegisterReply {
@@ -1377,7 +1383,7 @@ pub mod modbus {
                 0x86 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_single_register_exception", &[5])?;
+                    >(frame, &response::WRITE_SINGLE_REGISTER_EXCEPTION)?;
                     rt::Ok(Self::WriteSingleRegisterException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1385,7 +1391,7 @@ pub mod modbus {
                 0x0F => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, "write_multiple_coils_reply", &[8])?;
+                    >(frame, &response::WRITE_MULTIPLE_COILS_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleCoilsReply {
@@ -1396,7 +1402,7 @@ pub mod modbus {
                 0x8F => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_multiple_coils_exception", &[5])?;
+                    >(frame, &response::WRITE_MULTIPLE_COILS_EXCEPTION)?;
                     rt::Ok(Self::WriteMultipleCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1404,7 +1410,7 @@ pub mod modbus {
                 0x10 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, "write_multiple_registers_reply", &[8])?;
+                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleRegistersReply {
@@ -1415,7 +1421,7 @@ pub mod modbus {
                 0x90 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_multiple_registers_exception", &[5])?;
+                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_EXCEPTION)?;
                     rt::Ok(Self::WriteMultipleRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1971,4 +1977,181 @@ pub mod modbus {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Modbus>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_coils`, code 0x01
+        pub const READ_COILS: MessageDesc = MessageDesc::new(
+            "read_coils",
+            0x01,
+            1,
+            &[8],
+        );
+        /// `read_discrete_inputs`, code 0x02
+        pub const READ_DISCRETE_INPUTS: MessageDesc = MessageDesc::new(
+            "read_discrete_inputs",
+            0x02,
+            1,
+            &[8],
+        );
+        /// `read_holding_registers`, code 0x03
+        pub const READ_HOLDING_REGISTERS: MessageDesc = MessageDesc::new(
+            "read_holding_registers",
+            0x03,
+            1,
+            &[8],
+        );
+        /// `read_input_registers`, code 0x04
+        pub const READ_INPUT_REGISTERS: MessageDesc = MessageDesc::new(
+            "read_input_registers",
+            0x04,
+            1,
+            &[8],
+        );
+        /// `write_single_coil`, code 0x05
+        pub const WRITE_SINGLE_COIL: MessageDesc = MessageDesc::new(
+            "write_single_coil",
+            0x05,
+            1,
+            &[8],
+        );
+        /// `write_single_register`, code 0x06
+        pub const WRITE_SINGLE_REGISTER: MessageDesc = MessageDesc::new(
+            "write_single_register",
+            0x06,
+            1,
+            &[8],
+        );
+        /// `write_multiple_coils`, code 0x0F
+        pub const WRITE_MULTIPLE_COILS: MessageDesc = MessageDesc::new(
+            "write_multiple_coils",
+            0x0F,
+            1,
+            &[9],
+        );
+        /// `write_multiple_registers`, code 0x10
+        pub const WRITE_MULTIPLE_REGISTERS: MessageDesc = MessageDesc::new(
+            "write_multiple_registers",
+            0x10,
+            1,
+            &[9],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_coils_reply`, code 0x01
+        pub const READ_COILS_REPLY: MessageDesc = MessageDesc::new(
+            "read_coils_reply",
+            0x01,
+            1,
+            &[5],
+        );
+        /// `read_coils_exception`, code 0x81
+        pub const READ_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_coils_exception",
+            0x81,
+            1,
+            &[5],
+        );
+        /// `read_discrete_inputs_reply`, code 0x02
+        pub const READ_DISCRETE_INPUTS_REPLY: MessageDesc = MessageDesc::new(
+            "read_discrete_inputs_reply",
+            0x02,
+            1,
+            &[5],
+        );
+        /// `read_discrete_inputs_exception`, code 0x82
+        pub const READ_DISCRETE_INPUTS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_discrete_inputs_exception",
+            0x82,
+            1,
+            &[5],
+        );
+        /// `read_holding_registers_reply`, code 0x03
+        pub const READ_HOLDING_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
+            "read_holding_registers_reply",
+            0x03,
+            1,
+            &[5],
+        );
+        /// `read_holding_registers_exception`, code 0x83
+        pub const READ_HOLDING_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_holding_registers_exception",
+            0x83,
+            1,
+            &[5],
+        );
+        /// `read_input_registers_reply`, code 0x04
+        pub const READ_INPUT_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
+            "read_input_registers_reply",
+            0x04,
+            1,
+            &[5],
+        );
+        /// `read_input_registers_exception`, code 0x84
+        pub const READ_INPUT_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_input_registers_exception",
+            0x84,
+            1,
+            &[5],
+        );
+        /// `write_single_coil_reply`, code 0x05
+        pub const WRITE_SINGLE_COIL_REPLY: MessageDesc = MessageDesc::new(
+            "write_single_coil_reply",
+            0x05,
+            1,
+            &[8],
+        );
+        /// `write_single_coil_exception`, code 0x85
+        pub const WRITE_SINGLE_COIL_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_single_coil_exception",
+            0x85,
+            1,
+            &[5],
+        );
+        /// `write_single_register_reply`, code 0x06
+        pub const WRITE_SINGLE_REGISTER_REPLY: MessageDesc = MessageDesc::new(
+            "write_single_register_reply",
+            0x06,
+            1,
+            &[8],
+        );
+        /// `write_single_register_exception`, code 0x86
+        pub const WRITE_SINGLE_REGISTER_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_single_register_exception",
+            0x86,
+            1,
+            &[5],
+        );
+        /// `write_multiple_coils_reply`, code 0x0F
+        pub const WRITE_MULTIPLE_COILS_REPLY: MessageDesc = MessageDesc::new(
+            "write_multiple_coils_reply",
+            0x0F,
+            1,
+            &[8],
+        );
+        /// `write_multiple_coils_exception`, code 0x8F
+        pub const WRITE_MULTIPLE_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_multiple_coils_exception",
+            0x8F,
+            1,
+            &[5],
+        );
+        /// `write_multiple_registers_reply`, code 0x10
+        pub const WRITE_MULTIPLE_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
+            "write_multiple_registers_reply",
+            0x10,
+            1,
+            &[8],
+        );
+        /// `write_multiple_registers_exception`, code 0x90
+        pub const WRITE_MULTIPLE_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_multiple_registers_exception",
+            0x90,
+            1,
+            &[5],
+        );
+    }
 }

@@ -194,7 +194,7 @@ pub mod msp_v1 {
                         rt::equal("attitude", "cmd", 4, frame[4], 0x6C)?;
                         rt::Ok(Self::Attitude)
                     });
-                    g.end("api_version", &[6])
+                    g.end(&request::API_VERSION)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -451,10 +451,10 @@ pub mod msp_v1 {
                             yaw: i16::from_le_bytes([frame[9], frame[10]]),
                         })
                     });
-                    g.end("api_version_reply", &[9, 12])
+                    g.end(&response::API_VERSION_REPLY)
                 }
                 0x21 => {
-                    let frame = rt::fixed::<6>(frame, "error", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ERROR)?;
                     rt::Ok(Self::Error { cmd: frame[4] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
@@ -680,4 +680,38 @@ pub mod msp_v1 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV1>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `api_version`, code 0x3C
+        pub const API_VERSION: MessageDesc = MessageDesc::new(
+            "api_version",
+            0x3C,
+            1,
+            &[6],
+        );
+        /// `attitude`, code 0x3C
+        pub const ATTITUDE: MessageDesc = MessageDesc::new("attitude", 0x3C, 1, &[6]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `api_version_reply`, code 0x3E
+        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
+            "api_version_reply",
+            0x3E,
+            1,
+            &[9, 12],
+        );
+        /// `attitude_reply`, code 0x3E
+        pub const ATTITUDE_REPLY: MessageDesc = MessageDesc::new(
+            "attitude_reply",
+            0x3E,
+            1,
+            &[9, 12],
+        );
+        /// `error`, code 0x21
+        pub const ERROR: MessageDesc = MessageDesc::new("error", 0x21, 1, &[6]);
+    }
 }

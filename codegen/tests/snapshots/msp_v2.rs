@@ -178,14 +178,14 @@ pub mod msp_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
-                    let frame = rt::fixed::<9>(frame, "api_version", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::API_VERSION)?;
                     rt::equal("api_version", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
                     rt::Ok(Self::ApiVersion {
                         dont_reply: (frame[3] & 0x1) != 0,
                     })
                 }
                 0x0200 => {
-                    let frame = rt::fixed::<9>(frame, "fc_variant", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::FC_VARIANT)?;
                     rt::equal("fc_variant", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
                     rt::Ok(Self::FcVariant {
                         dont_reply: (frame[3] & 0x1) != 0,
@@ -439,7 +439,7 @@ pub mod msp_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
-                    let frame = rt::fixed::<12>(frame, "api_version_reply", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &response::API_VERSION_REPLY)?;
                     rt::equal(
                         "api_version_reply",
                         "reserved_flags",
@@ -455,7 +455,7 @@ pub mod msp_v2 {
                     })
                 }
                 0x0200 => {
-                    let frame = rt::fixed::<13>(frame, "fc_variant_reply", &[13])?;
+                    let frame = rt::fixed::<13>(frame, &response::FC_VARIANT_REPLY)?;
                     rt::equal(
                         "fc_variant_reply",
                         "reserved_flags",
@@ -648,4 +648,41 @@ pub mod msp_v2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `api_version`, code 0x0100
+        pub const API_VERSION: MessageDesc = MessageDesc::new(
+            "api_version",
+            0x0100,
+            2,
+            &[9],
+        );
+        /// `fc_variant`, code 0x0200
+        pub const FC_VARIANT: MessageDesc = MessageDesc::new(
+            "fc_variant",
+            0x0200,
+            2,
+            &[9],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `api_version_reply`, code 0x0100
+        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
+            "api_version_reply",
+            0x0100,
+            2,
+            &[12],
+        );
+        /// `fc_variant_reply`, code 0x0200
+        pub const FC_VARIANT_REPLY: MessageDesc = MessageDesc::new(
+            "fc_variant_reply",
+            0x0200,
+            2,
+            &[13],
+        );
+    }
 }

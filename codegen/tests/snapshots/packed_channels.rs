@@ -205,7 +205,7 @@ pub mod packed_channels {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x16 => {
-                    let frame = rt::fixed::<11>(frame, "channels", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::CHANNELS)?;
                     rt::equal(
                         "channels",
                         "channels",
@@ -229,7 +229,7 @@ pub mod packed_channels {
                     })
                 }
                 0x17 => {
-                    let frame = rt::fixed::<7>(frame, "levels", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &request::LEVELS)?;
                     rt::equal(
                         "levels",
                         "levels",
@@ -461,7 +461,7 @@ pub mod packed_channels {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x18 => {
-                    let frame = rt::fixed::<12>(frame, "readings", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &response::READINGS)?;
                     rt::equal(
                         "readings",
                         "readings",
@@ -645,4 +645,19 @@ pub mod packed_channels {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PackedChannels>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `channels`, code 0x16
+        pub const CHANNELS: MessageDesc = MessageDesc::new("channels", 0x16, 1, &[11]);
+        /// `levels`, code 0x17
+        pub const LEVELS: MessageDesc = MessageDesc::new("levels", 0x17, 1, &[7]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `readings`, code 0x18
+        pub const READINGS: MessageDesc = MessageDesc::new("readings", 0x18, 1, &[12]);
+    }
 }

@@ -326,7 +326,7 @@ pub mod pelco_d2 {
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("set_preset", &[7])
+                            g.end(&request::SET_PRESET)
                         };
                     }
                     0x0007 => {
@@ -347,13 +347,13 @@ pub mod pelco_d2 {
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("go_to_preset", &[7])
+                            g.end(&request::GO_TO_PRESET)
                         };
                     }
                     _ => {}
                 }
             }
-            rt::fixed::<7>(frame, "ptz", &[7]).and_then(Self::codeless_ptz)
+            rt::fixed::<7>(frame, &request::PTZ).and_then(Self::codeless_ptz)
         }
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
@@ -609,7 +609,7 @@ pub mod pelco_d2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 0) {
                 0u32 => {
-                    let frame = rt::fixed::<4>(frame, "general_response", &[4])?;
+                    let frame = rt::fixed::<4>(frame, &response::GENERAL_RESPONSE)?;
                     rt::Ok(Self::GeneralResponse {
                         alarms: Alarms::from_raw(frame[2]),
                     })
@@ -783,4 +783,36 @@ pub mod pelco_d2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoD2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `ptz` (no code)
+        pub const PTZ: MessageDesc = MessageDesc::new("ptz", 0, 0, &[7]);
+        /// `set_preset`, code 0x0003
+        pub const SET_PRESET: MessageDesc = MessageDesc::new(
+            "set_preset",
+            0x0003,
+            2,
+            &[7],
+        );
+        /// `go_to_preset`, code 0x0007
+        pub const GO_TO_PRESET: MessageDesc = MessageDesc::new(
+            "go_to_preset",
+            0x0007,
+            2,
+            &[7],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `general_response` (no code)
+        pub const GENERAL_RESPONSE: MessageDesc = MessageDesc::new(
+            "general_response",
+            0,
+            0,
+            &[4],
+        );
+    }
 }

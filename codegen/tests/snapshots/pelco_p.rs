@@ -279,7 +279,7 @@ pub mod pelco_p {
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("set_preset", &[8])
+                            g.end(&request::SET_PRESET)
                         };
                     }
                     0x0007 => {
@@ -300,13 +300,13 @@ pub mod pelco_p {
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("go_to_preset", &[8])
+                            g.end(&request::GO_TO_PRESET)
                         };
                     }
                     _ => {}
                 }
             }
-            rt::fixed::<8>(frame, "ptz", &[8]).and_then(Self::codeless_ptz)
+            rt::fixed::<8>(frame, &request::PTZ).and_then(Self::codeless_ptz)
         }
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
@@ -699,4 +699,27 @@ pub mod pelco_p {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoP>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `ptz` (no code)
+        pub const PTZ: MessageDesc = MessageDesc::new("ptz", 0, 0, &[8]);
+        /// `set_preset`, code 0x0003
+        pub const SET_PRESET: MessageDesc = MessageDesc::new(
+            "set_preset",
+            0x0003,
+            2,
+            &[8],
+        );
+        /// `go_to_preset`, code 0x0007
+        pub const GO_TO_PRESET: MessageDesc = MessageDesc::new(
+            "go_to_preset",
+            0x0007,
+            2,
+            &[8],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {}
 }

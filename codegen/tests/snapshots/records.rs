@@ -594,7 +594,7 @@ pub mod records {
                     rt::Ok(Self::WritePairs { pairs: v_pairs })
                 }
                 0x85 => {
-                    let frame = rt::fixed::<5>(frame, "read_status", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &request::READ_STATUS)?;
                     rt::in_range("read_status", "quantity", 3, frame[3], 1, 6)?;
                     rt::Ok(Self::ReadStatus {
                         quantity: frame[3],
@@ -910,7 +910,7 @@ pub mod records {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x80 => {
-                    let frame = rt::fixed::<5>(frame, "ack", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 0x85 => {
@@ -1141,4 +1141,43 @@ pub mod records {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Records>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `sync_write`, code 0x83
+        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
+            "sync_write",
+            0x83,
+            1,
+            &[6],
+        );
+        /// `write_pairs`, code 0x84
+        pub const WRITE_PAIRS: MessageDesc = MessageDesc::new(
+            "write_pairs",
+            0x84,
+            1,
+            &[5],
+        );
+        /// `read_status`, code 0x85
+        pub const READ_STATUS: MessageDesc = MessageDesc::new(
+            "read_status",
+            0x85,
+            1,
+            &[5],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ack`, code 0x80
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x80, 1, &[5]);
+        /// `status_reply`, code 0x85
+        pub const STATUS_REPLY: MessageDesc = MessageDesc::new(
+            "status_reply",
+            0x85,
+            1,
+            &[4],
+        );
+    }
 }

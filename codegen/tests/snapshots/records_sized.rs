@@ -417,7 +417,7 @@ pub mod records_sized {
                     out.len()
                 }
                 Self::Trim { width: v_width, offsets: v_offsets } => {
-                    rt::encode_broadcast(address, 0xFE, "trim")?;
+                    rt::encode_broadcast(address, 0xFE, &request::TRIM)?;
                     let frame_len = REPEAT_TRIM
                         .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
                     let last_width = (v_width) as usize;
@@ -489,7 +489,7 @@ pub mod records_sized {
                 }
                 0x84 => {
                     let (frame, elements, _) = REPEAT_TRIM.split::<5>(frame)?;
-                    rt::no_broadcast(frame[1], 0xFE, "trim", 0x84, 1)?;
+                    rt::no_broadcast(frame[1], 0xFE, &request::TRIM)?;
                     let rec_width = REPEAT_TRIM.element_width(frame);
                     let mut v_offsets = rt::Repeated::<TrimOffsets, 4>::new();
                     for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {
@@ -701,7 +701,7 @@ pub mod records_sized {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x55 => {
-                    let frame = rt::fixed::<6>(frame, "ack", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { error: frame[4] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
@@ -900,4 +900,24 @@ pub mod records_sized {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<RecordsSized>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `sync_write`, code 0x83
+        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
+            "sync_write",
+            0x83,
+            1,
+            &[9],
+        );
+        /// `trim`, code 0x84
+        pub const TRIM: MessageDesc = MessageDesc::new("trim", 0x84, 1, &[6]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ack`, code 0x55
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x55, 1, &[6]);
+    }
 }

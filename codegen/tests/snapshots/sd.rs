@@ -617,70 +617,98 @@ pub mod sd {
                 }
                 Self::ReadServoId => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
                 Self::ReadCurrentConsumption => {
-                    rt::encode_broadcast(address, 0x1F, "read_current_consumption")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_CURRENT_CONSUMPTION,
+                    )?;
                     rt::head(out, &[0xB0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadBusVoltages => {
-                    rt::encode_broadcast(address, 0x1F, "read_bus_voltages")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_BUS_VOLTAGES)?;
                     rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadExtendedCurrentConsumption => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_extended_current_consumption",
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION,
                     )?;
                     rt::head(out, &[0xB2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTemperatures => {
-                    rt::encode_broadcast(address, 0x1F, "read_temperatures")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_TEMPERATURES)?;
                     rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadHumidity => {
-                    rt::encode_broadcast(address, 0x1F, "read_humidity")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_HUMIDITY)?;
                     rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadSkippedFramesCounter => {
-                    rt::encode_broadcast(address, 0x1F, "read_skipped_frames_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_SKIPPED_FRAMES_COUNTER,
+                    )?;
                     rt::head(out, &[0x37, address, 0x00, 0x01]).len()
                 }
                 Self::ResetDroppedFramesCounter => {
-                    rt::encode_broadcast(address, 0x1F, "reset_dropped_frames_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_DROPPED_FRAMES_COUNTER,
+                    )?;
                     rt::head(out, &[0x37, address, 0x00, 0x02]).len()
                 }
                 Self::ReadActuatorStatusWord => {
-                    rt::encode_broadcast(address, 0x1F, "read_actuator_status_word")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_ACTUATOR_STATUS_WORD,
+                    )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x02]).len()
                 }
                 Self::ResetActuatorStatusWord => {
-                    rt::encode_broadcast(address, 0x1F, "reset_actuator_status_word")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_ACTUATOR_STATUS_WORD,
+                    )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x52]).len()
                 }
                 Self::ResetDefaultRoleAndErrorFlags => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "reset_default_role_and_error_flags",
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS,
                     )?;
                     rt::head(out, &[0xB4, address, 0x41, 0x53]).len()
                 }
                 Self::SetCurrentPositionAsZero => {
-                    rt::encode_broadcast(address, 0x1F, "set_current_position_as_zero")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::SET_CURRENT_POSITION_AS_ZERO,
+                    )?;
                     rt::head(out, &[0x99, address, 0x00, 0x00]).len()
                 }
                 Self::ReadCurrentZeroOffset => {
-                    rt::encode_broadcast(address, 0x1F, "read_current_zero_offset")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_CURRENT_ZERO_OFFSET,
+                    )?;
                     rt::head(out, &[0x95, address, 0x00, 0x00]).len()
                 }
                 Self::ResetZeroOffset => {
-                    rt::encode_broadcast(address, 0x1F, "reset_zero_offset")?;
+                    rt::encode_broadcast(address, 0x1F, &request::RESET_ZERO_OFFSET)?;
                     rt::head(out, &[0x98, address, 0x00, 0x00]).len()
                 }
                 Self::ReadElectronicSerialNumber { byte_number: v_byte_number } => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_electronic_serial_number",
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER,
                     )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF0, address, 0x00]);
@@ -688,55 +716,83 @@ pub mod sd {
                     out.len()
                 }
                 Self::ReadProductDescription { byte_number: v_byte_number } => {
-                    rt::encode_broadcast(address, 0x1F, "read_product_description")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_PRODUCT_DESCRIPTION,
+                    )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF1, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
                 Self::ReadSoftwareRevision { byte_number: v_byte_number } => {
-                    rt::encode_broadcast(address, 0x1F, "read_software_revision")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_SOFTWARE_REVISION,
+                    )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF2, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
                 Self::ReadHardwareRevision { byte_number: v_byte_number } => {
-                    rt::encode_broadcast(address, 0x1F, "read_hardware_revision")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_HARDWARE_REVISION,
+                    )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF3, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
                 Self::ReadTotalRuntimeHours => {
-                    rt::encode_broadcast(address, 0x1F, "read_total_runtime_hours")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_TOTAL_RUNTIME_HOURS,
+                    )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTotalRuntimeMinSec => {
-                    rt::encode_broadcast(address, 0x1F, "read_total_runtime_min_sec")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_TOTAL_RUNTIME_MIN_SEC,
+                    )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x01]).len()
                 }
                 Self::ReadLoadRuntime024Hours => {
-                    rt::encode_broadcast(address, 0x1F, "read_load_runtime_0_24_hours")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_LOAD_RUNTIME_0_24_HOURS,
+                    )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime024MinSec => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_0_24_min_sec",
+                        &request::READ_LOAD_RUNTIME_0_24_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime024 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_0_24")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_0_24,
+                    )?;
                     rt::head(out, &[0xA3, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime2549Hours => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_25_49_hours",
+                        &request::READ_LOAD_RUNTIME_25_49_HOURS,
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x00]).len()
                 }
@@ -744,19 +800,23 @@ pub mod sd {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_25_49_min_sec",
+                        &request::READ_LOAD_RUNTIME_25_49_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime2549 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_25_49")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_25_49,
+                    )?;
                     rt::head(out, &[0xA4, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime5074Hours => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_50_74_hours",
+                        &request::READ_LOAD_RUNTIME_50_74_HOURS,
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x00]).len()
                 }
@@ -764,19 +824,23 @@ pub mod sd {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_50_74_min_sec",
+                        &request::READ_LOAD_RUNTIME_50_74_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime5074 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_50_74")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_50_74,
+                    )?;
                     rt::head(out, &[0xA5, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime7599Hours => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_75_99_hours",
+                        &request::READ_LOAD_RUNTIME_75_99_HOURS,
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x00]).len()
                 }
@@ -784,40 +848,60 @@ pub mod sd {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_75_99_min_sec",
+                        &request::READ_LOAD_RUNTIME_75_99_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime7599 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_75_99")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_75_99,
+                    )?;
                     rt::head(out, &[0xA6, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime100Hours => {
-                    rt::encode_broadcast(address, 0x1F, "read_load_runtime_100_hours")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_LOAD_RUNTIME_100_HOURS,
+                    )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime100MinSec => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_100_min_sec",
+                        &request::READ_LOAD_RUNTIME_100_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime100 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_100")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_100,
+                    )?;
                     rt::head(out, &[0xA7, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadStallEventCounter => {
-                    rt::encode_broadcast(address, 0x1F, "read_stall_event_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_STALL_EVENT_COUNTER,
+                    )?;
                     rt::head(out, &[0xA8, address, 0x00, 0x00]).len()
                 }
                 Self::ResetStallEventCounter => {
-                    rt::encode_broadcast(address, 0x1F, "reset_stall_event_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_STALL_EVENT_COUNTER,
+                    )?;
                     rt::head(out, &[0xA8, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadPowerUpCycles => {
-                    rt::encode_broadcast(address, 0x1F, "read_power_up_cycles")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_POWER_UP_CYCLES)?;
                     rt::head(out, &[0xA9, address, 0x00, 0x00]).len()
                 }
             };
@@ -844,7 +928,7 @@ pub mod sd {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x76 => {
-                    let frame = rt::fixed::<6>(frame, "set_point", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_POINT)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::Ok(Self::SetPoint {
                         freshness: (field_0 >> 12) as u8,
@@ -854,13 +938,13 @@ pub mod sd {
                     })
                 }
                 0x69 => {
-                    let frame = rt::fixed::<6>(frame, "read_actual_position", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_POSITION)?;
                     rt::equal("read_actual_position", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_actual_position", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadActualPosition)
                 }
                 0x77 => {
-                    let frame = rt::fixed::<6>(frame, "set_velocity", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_VELOCITY)?;
                     rt::Ok(Self::SetVelocity {
                         set_velocity: Velocity::from_raw(
                             i16::from_be_bytes([frame[2], frame[3]]),
@@ -868,13 +952,13 @@ pub mod sd {
                     })
                 }
                 0x68 => {
-                    let frame = rt::fixed::<6>(frame, "read_actual_velocity", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_VELOCITY)?;
                     rt::equal("read_actual_velocity", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_actual_velocity", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadActualVelocity)
                 }
                 0xAA => {
-                    let frame = rt::fixed::<6>(frame, "set_servo_id", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_SERVO_ID)?;
                     rt::in_range("set_servo_id", "new_id", 2, frame[2], 1, 30)?;
                     rt::same(
                         "set_servo_id",
@@ -889,27 +973,27 @@ pub mod sd {
                     })
                 }
                 0xDA => {
-                    let frame = rt::fixed::<6>(frame, "read_servo_id", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_SERVO_ID)?;
                     rt::equal("read_servo_id", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_servo_id", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadServoId)
                 }
                 0xB0 => {
-                    let frame = rt::fixed::<6>(frame, "read_current_consumption", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::READ_CURRENT_CONSUMPTION)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_current_consumption",
-                        0xB0,
-                        1,
+                        &request::READ_CURRENT_CONSUMPTION,
                     )?;
                     rt::equal("read_current_consumption", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_current_consumption", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadCurrentConsumption)
                 }
                 0xB1 => {
-                    let frame = rt::fixed::<6>(frame, "read_bus_voltages", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_bus_voltages", 0xB1, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_BUS_VOLTAGES)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_BUS_VOLTAGES)?;
                     rt::equal("read_bus_voltages", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_bus_voltages", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadBusVoltages)
@@ -917,13 +1001,11 @@ pub mod sd {
                 0xB2 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "read_extended_current_consumption", &[6])?;
+                    >(frame, &request::READ_EXTENDED_CURRENT_CONSUMPTION)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_extended_current_consumption",
-                        0xB2,
-                        1,
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION,
                     )?;
                     rt::equal(
                         "read_extended_current_consumption",
@@ -942,15 +1024,15 @@ pub mod sd {
                     rt::Ok(Self::ReadExtendedCurrentConsumption)
                 }
                 0xA0 => {
-                    let frame = rt::fixed::<6>(frame, "read_temperatures", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_temperatures", 0xA0, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_TEMPERATURES)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_TEMPERATURES)?;
                     rt::equal("read_temperatures", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_temperatures", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadTemperatures)
                 }
                 0xA1 => {
-                    let frame = rt::fixed::<6>(frame, "read_humidity", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_humidity", 0xA1, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_HUMIDITY)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_HUMIDITY)?;
                     rt::equal("read_humidity", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_humidity", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadHumidity)
@@ -961,9 +1043,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_skipped_frames_counter",
-                            0x37,
-                            1,
+                            &request::READ_SKIPPED_FRAMES_COUNTER,
                         )?;
                         rt::equal(
                             "read_skipped_frames_counter",
@@ -985,9 +1065,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_dropped_frames_counter",
-                            0x37,
-                            1,
+                            &request::RESET_DROPPED_FRAMES_COUNTER,
                         )?;
                         rt::equal(
                             "reset_dropped_frames_counter",
@@ -1005,7 +1083,7 @@ pub mod sd {
                         )?;
                         rt::Ok(Self::ResetDroppedFramesCounter)
                     });
-                    g.end("read_skipped_frames_counter", &[6])
+                    g.end(&request::READ_SKIPPED_FRAMES_COUNTER)
                 }
                 0x40 => {
                     let mut g = rt::Group::new(frame, 0x40, rt::None);
@@ -1013,9 +1091,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_actuator_status_word",
-                            0x40,
-                            1,
+                            &request::READ_ACTUATOR_STATUS_WORD,
                         )?;
                         rt::equal(
                             "read_actuator_status_word",
@@ -1037,9 +1113,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_actuator_status_word",
-                            0x40,
-                            1,
+                            &request::RESET_ACTUATOR_STATUS_WORD,
                         )?;
                         rt::equal(
                             "reset_actuator_status_word",
@@ -1057,18 +1131,16 @@ pub mod sd {
                         )?;
                         rt::Ok(Self::ResetActuatorStatusWord)
                     });
-                    g.end("read_actuator_status_word", &[6])
+                    g.end(&request::READ_ACTUATOR_STATUS_WORD)
                 }
                 0xB4 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "reset_default_role_and_error_flags", &[6])?;
+                    >(frame, &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "reset_default_role_and_error_flags",
-                        0xB4,
-                        1,
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS,
                     )?;
                     rt::equal(
                         "reset_default_role_and_error_flags",
@@ -1089,34 +1161,32 @@ pub mod sd {
                 0x99 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "set_current_position_as_zero", &[6])?;
+                    >(frame, &request::SET_CURRENT_POSITION_AS_ZERO)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "set_current_position_as_zero",
-                        0x99,
-                        1,
+                        &request::SET_CURRENT_POSITION_AS_ZERO,
                     )?;
                     rt::equal("set_current_position_as_zero", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("set_current_position_as_zero", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::SetCurrentPositionAsZero)
                 }
                 0x95 => {
-                    let frame = rt::fixed::<6>(frame, "read_current_zero_offset", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::READ_CURRENT_ZERO_OFFSET)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_current_zero_offset",
-                        0x95,
-                        1,
+                        &request::READ_CURRENT_ZERO_OFFSET,
                     )?;
                     rt::equal("read_current_zero_offset", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_current_zero_offset", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadCurrentZeroOffset)
                 }
                 0x98 => {
-                    let frame = rt::fixed::<6>(frame, "reset_zero_offset", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "reset_zero_offset", 0x98, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::RESET_ZERO_OFFSET)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::RESET_ZERO_OFFSET)?;
                     rt::equal("reset_zero_offset", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("reset_zero_offset", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ResetZeroOffset)
@@ -1124,13 +1194,11 @@ pub mod sd {
                 0xF0 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "read_electronic_serial_number", &[6])?;
+                    >(frame, &request::READ_ELECTRONIC_SERIAL_NUMBER)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_electronic_serial_number",
-                        0xF0,
-                        1,
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER,
                     )?;
                     rt::equal(
                         "read_electronic_serial_number",
@@ -1152,13 +1220,13 @@ pub mod sd {
                     })
                 }
                 0xF1 => {
-                    let frame = rt::fixed::<6>(frame, "read_product_description", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::READ_PRODUCT_DESCRIPTION)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_product_description",
-                        0xF1,
-                        1,
+                        &request::READ_PRODUCT_DESCRIPTION,
                     )?;
                     rt::equal("read_product_description", "arg1", 2, frame[2], 0x0)?;
                     rt::in_range(
@@ -1174,8 +1242,8 @@ pub mod sd {
                     })
                 }
                 0xF2 => {
-                    let frame = rt::fixed::<6>(frame, "read_software_revision", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_software_revision", 0xF2, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_SOFTWARE_REVISION)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_SOFTWARE_REVISION)?;
                     rt::equal("read_software_revision", "arg1", 2, frame[2], 0x0)?;
                     rt::in_range(
                         "read_software_revision",
@@ -1190,8 +1258,8 @@ pub mod sd {
                     })
                 }
                 0xF3 => {
-                    let frame = rt::fixed::<6>(frame, "read_hardware_revision", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_hardware_revision", 0xF3, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_HARDWARE_REVISION)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_HARDWARE_REVISION)?;
                     rt::equal("read_hardware_revision", "arg1", 2, frame[2], 0x0)?;
                     rt::in_range(
                         "read_hardware_revision",
@@ -1211,9 +1279,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_total_runtime_hours",
-                            0xA2,
-                            1,
+                            &request::READ_TOTAL_RUNTIME_HOURS,
                         )?;
                         rt::equal("read_total_runtime_hours", "arg1", 2, frame[2], 0x0)?;
                         rt::equal("read_total_runtime_hours", "arg2", 3, frame[3], 0x0)?;
@@ -1223,9 +1289,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_total_runtime_min_sec",
-                            0xA2,
-                            1,
+                            &request::READ_TOTAL_RUNTIME_MIN_SEC,
                         )?;
                         rt::equal(
                             "read_total_runtime_min_sec",
@@ -1243,7 +1307,7 @@ pub mod sd {
                         )?;
                         rt::Ok(Self::ReadTotalRuntimeMinSec)
                     });
-                    g.end("read_total_runtime_hours", &[6])
+                    g.end(&request::READ_TOTAL_RUNTIME_HOURS)
                 }
                 0xA3 => {
                     let mut g = rt::Group::new(frame, 0xA3, rt::None);
@@ -1251,9 +1315,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_0_24_hours",
-                            0xA3,
-                            1,
+                            &request::READ_LOAD_RUNTIME_0_24_HOURS,
                         )?;
                         rt::equal(
                             "read_load_runtime_0_24_hours",
@@ -1275,9 +1337,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_0_24_min_sec",
-                            0xA3,
-                            1,
+                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC,
                         )?;
                         rt::equal(
                             "read_load_runtime_0_24_min_sec",
@@ -1299,15 +1359,13 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_0_24",
-                            0xA3,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_0_24,
                         )?;
                         rt::equal("reset_load_runtime_0_24", "arg1", 2, frame[2], 0xAA)?;
                         rt::equal("reset_load_runtime_0_24", "arg2", 3, frame[3], 0x55)?;
                         rt::Ok(Self::ResetLoadRuntime024)
                     });
-                    g.end("read_load_runtime_0_24_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_0_24_HOURS)
                 }
                 0xA4 => {
                     let mut g = rt::Group::new(frame, 0xA4, rt::None);
@@ -1315,9 +1373,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_25_49_hours",
-                            0xA4,
-                            1,
+                            &request::READ_LOAD_RUNTIME_25_49_HOURS,
                         )?;
                         rt::equal(
                             "read_load_runtime_25_49_hours",
@@ -1339,9 +1395,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_25_49_min_sec",
-                            0xA4,
-                            1,
+                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC,
                         )?;
                         rt::equal(
                             "read_load_runtime_25_49_min_sec",
@@ -1363,9 +1417,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_25_49",
-                            0xA4,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_25_49,
                         )?;
                         rt::equal(
                             "reset_load_runtime_25_49",
@@ -1383,7 +1435,7 @@ pub mod sd {
                         )?;
                         rt::Ok(Self::ResetLoadRuntime2549)
                     });
-                    g.end("read_load_runtime_25_49_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_25_49_HOURS)
                 }
                 0xA5 => {
                     let mut g = rt::Group::new(frame, 0xA5, rt::None);
@@ -1391,9 +1443,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_50_74_hours",
-                            0xA5,
-                            1,
+                            &request::READ_LOAD_RUNTIME_50_74_HOURS,
                         )?;
                         rt::equal(
                             "read_load_runtime_50_74_hours",
@@ -1415,9 +1465,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_50_74_min_sec",
-                            0xA5,
-                            1,
+                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC,
                         )?;
                         rt::equal(
                             "read_load_runtime_50_74_min_sec",
@@ -1439,9 +1487,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_50_74",
-                            0xA5,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_50_74,
                         )?;
                         rt::equal(
                             "reset_load_runtime_50_74",
@@ -1459,7 +1505,7 @@ pub mod sd {
                         )?;
                         rt::Ok(Self::ResetLoadRuntime5074)
                     });
-                    g.end("read_load_runtime_50_74_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_50_74_HOURS)
                 }
                 0xA6 => {
                     let mut g = rt::Group::new(frame, 0xA6, rt::None);
@@ -1467,9 +1513,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_75_99_hours",
-                            0xA6,
-                            1,
+                            &request::READ_LOAD_RUNTIME_75_99_HOURS,
                         )?;
                         rt::equal(
                             "read_load_runtime_75_99_hours",
@@ -1491,9 +1535,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_75_99_min_sec",
-                            0xA6,
-                            1,
+                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC,
                         )?;
                         rt::equal(
                             "read_load_runtime_75_99_min_sec",
@@ -1515,9 +1557,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_75_99",
-                            0xA6,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_75_99,
                         )?;
                         rt::equal(
                             "reset_load_runtime_75_99",
@@ -1535,7 +1575,7 @@ pub mod sd {
                         )?;
                         rt::Ok(Self::ResetLoadRuntime7599)
                     });
-                    g.end("read_load_runtime_75_99_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_75_99_HOURS)
                 }
                 0xA7 => {
                     let mut g = rt::Group::new(frame, 0xA7, rt::None);
@@ -1543,9 +1583,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_100_hours",
-                            0xA7,
-                            1,
+                            &request::READ_LOAD_RUNTIME_100_HOURS,
                         )?;
                         rt::equal(
                             "read_load_runtime_100_hours",
@@ -1567,9 +1605,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_100_min_sec",
-                            0xA7,
-                            1,
+                            &request::READ_LOAD_RUNTIME_100_MIN_SEC,
                         )?;
                         rt::equal(
                             "read_load_runtime_100_min_sec",
@@ -1591,15 +1627,13 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_100",
-                            0xA7,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_100,
                         )?;
                         rt::equal("reset_load_runtime_100", "arg1", 2, frame[2], 0xAA)?;
                         rt::equal("reset_load_runtime_100", "arg2", 3, frame[3], 0x55)?;
                         rt::Ok(Self::ResetLoadRuntime100)
                     });
-                    g.end("read_load_runtime_100_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_100_HOURS)
                 }
                 0xA8 => {
                     let mut g = rt::Group::new(frame, 0xA8, rt::None);
@@ -1607,9 +1641,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_stall_event_counter",
-                            0xA8,
-                            1,
+                            &request::READ_STALL_EVENT_COUNTER,
                         )?;
                         rt::equal("read_stall_event_counter", "arg1", 2, frame[2], 0x0)?;
                         rt::equal("read_stall_event_counter", "arg2", 3, frame[3], 0x0)?;
@@ -1619,9 +1651,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_stall_event_counter",
-                            0xA8,
-                            1,
+                            &request::RESET_STALL_EVENT_COUNTER,
                         )?;
                         rt::equal(
                             "reset_stall_event_counter",
@@ -1639,11 +1669,11 @@ pub mod sd {
                         )?;
                         rt::Ok(Self::ResetStallEventCounter)
                     });
-                    g.end("read_stall_event_counter", &[6])
+                    g.end(&request::READ_STALL_EVENT_COUNTER)
                 }
                 0xA9 => {
-                    let frame = rt::fixed::<6>(frame, "read_power_up_cycles", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_power_up_cycles", 0xA9, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_POWER_UP_CYCLES)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_POWER_UP_CYCLES)?;
                     rt::equal("read_power_up_cycles", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("read_power_up_cycles", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadPowerUpCycles)
@@ -2844,7 +2874,7 @@ pub mod sd {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 0, 1) {
                 0x56 => {
-                    let frame = rt::fixed::<6>(frame, "set_point_reply", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::SET_POINT_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::Ok(Self::SetPointReply {
                         freshness: (field_0 >> 12) as u8,
@@ -2854,7 +2884,7 @@ pub mod sd {
                     })
                 }
                 0x49 => {
-                    let frame = rt::fixed::<6>(frame, "actual_position", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACTUAL_POSITION)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal("actual_position", "zero", 2, field_0 >> 12, 0x0)?;
                     rt::Ok(Self::ActualPosition {
@@ -2864,7 +2894,7 @@ pub mod sd {
                     })
                 }
                 0x57 => {
-                    let frame = rt::fixed::<6>(frame, "set_velocity_reply", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::SET_VELOCITY_REPLY)?;
                     rt::Ok(Self::SetVelocityReply {
                         actual_velocity: Velocity::from_raw(
                             i16::from_be_bytes([frame[2], frame[3]]),
@@ -2872,7 +2902,7 @@ pub mod sd {
                     })
                 }
                 0x48 => {
-                    let frame = rt::fixed::<6>(frame, "actual_velocity", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACTUAL_VELOCITY)?;
                     rt::Ok(Self::ActualVelocity {
                         actual_velocity: Velocity::from_raw(
                             i16::from_be_bytes([frame[2], frame[3]]),
@@ -2880,7 +2910,7 @@ pub mod sd {
                     })
                 }
                 0x55 => {
-                    let frame = rt::fixed::<6>(frame, "set_servo_id_reply", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::SET_SERVO_ID_REPLY)?;
                     rt::in_range("set_servo_id_reply", "new_id", 2, frame[2], 1, 30)?;
                     rt::same(
                         "set_servo_id_reply",
@@ -2895,13 +2925,13 @@ pub mod sd {
                     })
                 }
                 0x6D => {
-                    let frame = rt::fixed::<6>(frame, "servo_id", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::SERVO_ID)?;
                     rt::in_range("servo_id", "id", 2, frame[2], 1, 30)?;
                     rt::same("servo_id", "id_repeat", 3, frame[3], "id", frame[2])?;
                     rt::Ok(Self::ServoId { id: frame[2] })
                 }
                 0x30 => {
-                    let frame = rt::fixed::<6>(frame, "current_consumption", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::CURRENT_CONSUMPTION)?;
                     rt::same(
                         "current_consumption",
                         "current_repeat",
@@ -2915,7 +2945,7 @@ pub mod sd {
                     })
                 }
                 0x31 => {
-                    let frame = rt::fixed::<6>(frame, "bus_voltages", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::BUS_VOLTAGES)?;
                     rt::Ok(Self::BusVoltages {
                         power_bus_1_voltage: Voltage::from_raw(frame[2]),
                         power_bus_2_voltage: Voltage::from_raw(frame[3]),
@@ -2924,7 +2954,7 @@ pub mod sd {
                 0x32 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "extended_current_consumption", &[6])?;
+                    >(frame, &response::EXTENDED_CURRENT_CONSUMPTION)?;
                     rt::Ok(Self::ExtendedCurrentConsumption {
                         current: Current::from_raw(
                             u16::from_be_bytes([frame[2], frame[3]]),
@@ -2932,14 +2962,14 @@ pub mod sd {
                     })
                 }
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, "temperatures", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::TEMPERATURES)?;
                     rt::Ok(Self::Temperatures {
                         motor_temperature: Temperature::from_raw(frame[2]),
                         pcb_temperature: Temperature::from_raw(frame[3]),
                     })
                 }
                 0x21 => {
-                    let frame = rt::fixed::<6>(frame, "humidity", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::HUMIDITY)?;
                     rt::in_range_or("humidity", "humidity", 2, frame[2], 1, 100, &[0])?;
                     rt::same(
                         "humidity",
@@ -2981,10 +3011,10 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("skipped_frames_counter", &[6])
+                    g.end(&response::SKIPPED_FRAMES_COUNTER)
                 }
                 0x41 => {
-                    let frame = rt::fixed::<6>(frame, "actuator_status_word", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACTUATOR_STATUS_WORD)?;
                     rt::Ok(Self::ActuatorStatusWord {
                         status_bits: ActuatorStatusBits::from_raw(frame[2]),
                         status_arg2: frame[3],
@@ -2993,7 +3023,7 @@ pub mod sd {
                 0x5A => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "reset_default_role_and_error_flags_reply", &[6])?;
+                    >(frame, &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY)?;
                     rt::equal(
                         "reset_default_role_and_error_flags_reply",
                         "arg1",
@@ -3013,7 +3043,7 @@ pub mod sd {
                 0x4C => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "set_current_position_as_zero_reply", &[6])?;
+                    >(frame, &response::SET_CURRENT_POSITION_AS_ZERO_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(
                         "set_current_position_as_zero_reply",
@@ -3029,7 +3059,7 @@ pub mod sd {
                     })
                 }
                 0x65 => {
-                    let frame = rt::fixed::<6>(frame, "current_zero_offset", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::CURRENT_ZERO_OFFSET)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal("current_zero_offset", "zero", 2, field_0 >> 12, 0x0)?;
                     rt::Ok(Self::CurrentZeroOffset {
@@ -3039,7 +3069,9 @@ pub mod sd {
                     })
                 }
                 0x64 => {
-                    let frame = rt::fixed::<6>(frame, "reset_zero_offset_reply", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::RESET_ZERO_OFFSET_REPLY)?;
                     rt::equal("reset_zero_offset_reply", "arg1", 2, frame[2], 0x0)?;
                     rt::equal("reset_zero_offset_reply", "arg2", 3, frame[3], 0x0)?;
                     rt::Ok(Self::ResetZeroOffsetReply)
@@ -3047,7 +3079,7 @@ pub mod sd {
                 0x10 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "electronic_serial_number_character", &[6])?;
+                    >(frame, &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER)?;
                     rt::in_range(
                         "electronic_serial_number_character",
                         "string_length",
@@ -3064,7 +3096,7 @@ pub mod sd {
                 0x11 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "product_description_character", &[6])?;
+                    >(frame, &response::PRODUCT_DESCRIPTION_CHARACTER)?;
                     rt::in_range(
                         "product_description_character",
                         "string_length",
@@ -3081,7 +3113,7 @@ pub mod sd {
                 0x12 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "software_revision_character", &[6])?;
+                    >(frame, &response::SOFTWARE_REVISION_CHARACTER)?;
                     rt::in_range(
                         "software_revision_character",
                         "string_length",
@@ -3098,7 +3130,7 @@ pub mod sd {
                 0x13 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "hardware_revision_character", &[6])?;
+                    >(frame, &response::HARDWARE_REVISION_CHARACTER)?;
                     rt::in_range(
                         "hardware_revision_character",
                         "string_length",
@@ -3149,7 +3181,7 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("total_runtime_hours", &[6])
+                    g.end(&response::TOTAL_RUNTIME_HOURS)
                 }
                 0x23 => {
                     let mut g = rt::Group::new(frame, 0x23, request.map(Request::name));
@@ -3200,7 +3232,7 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_0_24_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_0_24_HOURS)
                 }
                 0x24 => {
                     let mut g = rt::Group::new(frame, 0x24, request.map(Request::name));
@@ -3251,7 +3283,7 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_25_49_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_25_49_HOURS)
                 }
                 0x25 => {
                     let mut g = rt::Group::new(frame, 0x25, request.map(Request::name));
@@ -3302,7 +3334,7 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_50_74_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_50_74_HOURS)
                 }
                 0x26 => {
                     let mut g = rt::Group::new(frame, 0x26, request.map(Request::name));
@@ -3353,7 +3385,7 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_75_99_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_75_99_HOURS)
                 }
                 0x27 => {
                     let mut g = rt::Group::new(frame, 0x27, request.map(Request::name));
@@ -3404,7 +3436,7 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_100_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_100_HOURS)
                 }
                 0x28 => {
                     let mut g = rt::Group::new(frame, 0x28, request.map(Request::name));
@@ -3429,10 +3461,10 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("stall_event_counter", &[6])
+                    g.end(&response::STALL_EVENT_COUNTER)
                 }
                 0x29 => {
-                    let frame = rt::fixed::<6>(frame, "power_up_cycles", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::POWER_UP_CYCLES)?;
                     rt::Ok(Self::PowerUpCycles {
                         power_up_cycles: u16::from_be_bytes([frame[2], frame[3]]),
                     })
@@ -3861,4 +3893,593 @@ pub mod sd {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Sd>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `set_point`, code 0x76
+        pub const SET_POINT: MessageDesc = MessageDesc::new("set_point", 0x76, 1, &[6]);
+        /// `read_actual_position`, code 0x69
+        pub const READ_ACTUAL_POSITION: MessageDesc = MessageDesc::new(
+            "read_actual_position",
+            0x69,
+            1,
+            &[6],
+        );
+        /// `set_velocity`, code 0x77
+        pub const SET_VELOCITY: MessageDesc = MessageDesc::new(
+            "set_velocity",
+            0x77,
+            1,
+            &[6],
+        );
+        /// `read_actual_velocity`, code 0x68
+        pub const READ_ACTUAL_VELOCITY: MessageDesc = MessageDesc::new(
+            "read_actual_velocity",
+            0x68,
+            1,
+            &[6],
+        );
+        /// `set_servo_id`, code 0xAA
+        pub const SET_SERVO_ID: MessageDesc = MessageDesc::new(
+            "set_servo_id",
+            0xAA,
+            1,
+            &[6],
+        );
+        /// `read_servo_id`, code 0xDA
+        pub const READ_SERVO_ID: MessageDesc = MessageDesc::new(
+            "read_servo_id",
+            0xDA,
+            1,
+            &[6],
+        );
+        /// `read_current_consumption`, code 0xB0
+        pub const READ_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "read_current_consumption",
+            0xB0,
+            1,
+            &[6],
+        );
+        /// `read_bus_voltages`, code 0xB1
+        pub const READ_BUS_VOLTAGES: MessageDesc = MessageDesc::new(
+            "read_bus_voltages",
+            0xB1,
+            1,
+            &[6],
+        );
+        /// `read_extended_current_consumption`, code 0xB2
+        pub const READ_EXTENDED_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "read_extended_current_consumption",
+            0xB2,
+            1,
+            &[6],
+        );
+        /// `read_temperatures`, code 0xA0
+        pub const READ_TEMPERATURES: MessageDesc = MessageDesc::new(
+            "read_temperatures",
+            0xA0,
+            1,
+            &[6],
+        );
+        /// `read_humidity`, code 0xA1
+        pub const READ_HUMIDITY: MessageDesc = MessageDesc::new(
+            "read_humidity",
+            0xA1,
+            1,
+            &[6],
+        );
+        /// `read_skipped_frames_counter`, code 0x37
+        pub const READ_SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
+            "read_skipped_frames_counter",
+            0x37,
+            1,
+            &[6],
+        );
+        /// `reset_dropped_frames_counter`, code 0x37
+        pub const RESET_DROPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
+            "reset_dropped_frames_counter",
+            0x37,
+            1,
+            &[6],
+        );
+        /// `read_actuator_status_word`, code 0x40
+        pub const READ_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
+            "read_actuator_status_word",
+            0x40,
+            1,
+            &[6],
+        );
+        /// `reset_actuator_status_word`, code 0x40
+        pub const RESET_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
+            "reset_actuator_status_word",
+            0x40,
+            1,
+            &[6],
+        );
+        /// `reset_default_role_and_error_flags`, code 0xB4
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS: MessageDesc = MessageDesc::new(
+            "reset_default_role_and_error_flags",
+            0xB4,
+            1,
+            &[6],
+        );
+        /// `set_current_position_as_zero`, code 0x99
+        pub const SET_CURRENT_POSITION_AS_ZERO: MessageDesc = MessageDesc::new(
+            "set_current_position_as_zero",
+            0x99,
+            1,
+            &[6],
+        );
+        /// `read_current_zero_offset`, code 0x95
+        pub const READ_CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
+            "read_current_zero_offset",
+            0x95,
+            1,
+            &[6],
+        );
+        /// `reset_zero_offset`, code 0x98
+        pub const RESET_ZERO_OFFSET: MessageDesc = MessageDesc::new(
+            "reset_zero_offset",
+            0x98,
+            1,
+            &[6],
+        );
+        /// `read_electronic_serial_number`, code 0xF0
+        pub const READ_ELECTRONIC_SERIAL_NUMBER: MessageDesc = MessageDesc::new(
+            "read_electronic_serial_number",
+            0xF0,
+            1,
+            &[6],
+        );
+        /// `read_product_description`, code 0xF1
+        pub const READ_PRODUCT_DESCRIPTION: MessageDesc = MessageDesc::new(
+            "read_product_description",
+            0xF1,
+            1,
+            &[6],
+        );
+        /// `read_software_revision`, code 0xF2
+        pub const READ_SOFTWARE_REVISION: MessageDesc = MessageDesc::new(
+            "read_software_revision",
+            0xF2,
+            1,
+            &[6],
+        );
+        /// `read_hardware_revision`, code 0xF3
+        pub const READ_HARDWARE_REVISION: MessageDesc = MessageDesc::new(
+            "read_hardware_revision",
+            0xF3,
+            1,
+            &[6],
+        );
+        /// `read_total_runtime_hours`, code 0xA2
+        pub const READ_TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
+            "read_total_runtime_hours",
+            0xA2,
+            1,
+            &[6],
+        );
+        /// `read_total_runtime_min_sec`, code 0xA2
+        pub const READ_TOTAL_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_total_runtime_min_sec",
+            0xA2,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_0_24_hours`, code 0xA3
+        pub const READ_LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_0_24_hours",
+            0xA3,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_0_24_min_sec`, code 0xA3
+        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_0_24_min_sec",
+            0xA3,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_0_24`, code 0xA3
+        pub const RESET_LOAD_RUNTIME_0_24: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_0_24",
+            0xA3,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_25_49_hours`, code 0xA4
+        pub const READ_LOAD_RUNTIME_25_49_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_25_49_hours",
+            0xA4,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_25_49_min_sec`, code 0xA4
+        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_25_49_min_sec",
+            0xA4,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_25_49`, code 0xA4
+        pub const RESET_LOAD_RUNTIME_25_49: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_25_49",
+            0xA4,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_50_74_hours`, code 0xA5
+        pub const READ_LOAD_RUNTIME_50_74_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_50_74_hours",
+            0xA5,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_50_74_min_sec`, code 0xA5
+        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_50_74_min_sec",
+            0xA5,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_50_74`, code 0xA5
+        pub const RESET_LOAD_RUNTIME_50_74: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_50_74",
+            0xA5,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_75_99_hours`, code 0xA6
+        pub const READ_LOAD_RUNTIME_75_99_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_75_99_hours",
+            0xA6,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_75_99_min_sec`, code 0xA6
+        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_75_99_min_sec",
+            0xA6,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_75_99`, code 0xA6
+        pub const RESET_LOAD_RUNTIME_75_99: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_75_99",
+            0xA6,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_100_hours`, code 0xA7
+        pub const READ_LOAD_RUNTIME_100_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_100_hours",
+            0xA7,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_100_min_sec`, code 0xA7
+        pub const READ_LOAD_RUNTIME_100_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_100_min_sec",
+            0xA7,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_100`, code 0xA7
+        pub const RESET_LOAD_RUNTIME_100: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_100",
+            0xA7,
+            1,
+            &[6],
+        );
+        /// `read_stall_event_counter`, code 0xA8
+        pub const READ_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
+            "read_stall_event_counter",
+            0xA8,
+            1,
+            &[6],
+        );
+        /// `reset_stall_event_counter`, code 0xA8
+        pub const RESET_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
+            "reset_stall_event_counter",
+            0xA8,
+            1,
+            &[6],
+        );
+        /// `read_power_up_cycles`, code 0xA9
+        pub const READ_POWER_UP_CYCLES: MessageDesc = MessageDesc::new(
+            "read_power_up_cycles",
+            0xA9,
+            1,
+            &[6],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `set_point_reply`, code 0x56
+        pub const SET_POINT_REPLY: MessageDesc = MessageDesc::new(
+            "set_point_reply",
+            0x56,
+            1,
+            &[6],
+        );
+        /// `actual_position`, code 0x49
+        pub const ACTUAL_POSITION: MessageDesc = MessageDesc::new(
+            "actual_position",
+            0x49,
+            1,
+            &[6],
+        );
+        /// `set_velocity_reply`, code 0x57
+        pub const SET_VELOCITY_REPLY: MessageDesc = MessageDesc::new(
+            "set_velocity_reply",
+            0x57,
+            1,
+            &[6],
+        );
+        /// `actual_velocity`, code 0x48
+        pub const ACTUAL_VELOCITY: MessageDesc = MessageDesc::new(
+            "actual_velocity",
+            0x48,
+            1,
+            &[6],
+        );
+        /// `set_servo_id_reply`, code 0x55
+        pub const SET_SERVO_ID_REPLY: MessageDesc = MessageDesc::new(
+            "set_servo_id_reply",
+            0x55,
+            1,
+            &[6],
+        );
+        /// `servo_id`, code 0x6D
+        pub const SERVO_ID: MessageDesc = MessageDesc::new("servo_id", 0x6D, 1, &[6]);
+        /// `current_consumption`, code 0x30
+        pub const CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "current_consumption",
+            0x30,
+            1,
+            &[6],
+        );
+        /// `bus_voltages`, code 0x31
+        pub const BUS_VOLTAGES: MessageDesc = MessageDesc::new(
+            "bus_voltages",
+            0x31,
+            1,
+            &[6],
+        );
+        /// `extended_current_consumption`, code 0x32
+        pub const EXTENDED_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "extended_current_consumption",
+            0x32,
+            1,
+            &[6],
+        );
+        /// `temperatures`, code 0x20
+        pub const TEMPERATURES: MessageDesc = MessageDesc::new(
+            "temperatures",
+            0x20,
+            1,
+            &[6],
+        );
+        /// `humidity`, code 0x21
+        pub const HUMIDITY: MessageDesc = MessageDesc::new("humidity", 0x21, 1, &[6]);
+        /// `skipped_frames_counter`, code 0x38
+        pub const SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
+            "skipped_frames_counter",
+            0x38,
+            1,
+            &[6],
+        );
+        /// `dropped_frames_counter_reset`, code 0x38
+        pub const DROPPED_FRAMES_COUNTER_RESET: MessageDesc = MessageDesc::new(
+            "dropped_frames_counter_reset",
+            0x38,
+            1,
+            &[6],
+        );
+        /// `actuator_status_word`, code 0x41
+        pub const ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
+            "actuator_status_word",
+            0x41,
+            1,
+            &[6],
+        );
+        /// `reset_default_role_and_error_flags_reply`, code 0x5A
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY: MessageDesc = MessageDesc::new(
+            "reset_default_role_and_error_flags_reply",
+            0x5A,
+            1,
+            &[6],
+        );
+        /// `set_current_position_as_zero_reply`, code 0x4C
+        pub const SET_CURRENT_POSITION_AS_ZERO_REPLY: MessageDesc = MessageDesc::new(
+            "set_current_position_as_zero_reply",
+            0x4C,
+            1,
+            &[6],
+        );
+        /// `current_zero_offset`, code 0x65
+        pub const CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
+            "current_zero_offset",
+            0x65,
+            1,
+            &[6],
+        );
+        /// `reset_zero_offset_reply`, code 0x64
+        pub const RESET_ZERO_OFFSET_REPLY: MessageDesc = MessageDesc::new(
+            "reset_zero_offset_reply",
+            0x64,
+            1,
+            &[6],
+        );
+        /// `electronic_serial_number_character`, code 0x10
+        pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER: MessageDesc = MessageDesc::new(
+            "electronic_serial_number_character",
+            0x10,
+            1,
+            &[6],
+        );
+        /// `product_description_character`, code 0x11
+        pub const PRODUCT_DESCRIPTION_CHARACTER: MessageDesc = MessageDesc::new(
+            "product_description_character",
+            0x11,
+            1,
+            &[6],
+        );
+        /// `software_revision_character`, code 0x12
+        pub const SOFTWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
+            "software_revision_character",
+            0x12,
+            1,
+            &[6],
+        );
+        /// `hardware_revision_character`, code 0x13
+        pub const HARDWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
+            "hardware_revision_character",
+            0x13,
+            1,
+            &[6],
+        );
+        /// `total_runtime_hours`, code 0x22
+        pub const TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
+            "total_runtime_hours",
+            0x22,
+            1,
+            &[6],
+        );
+        /// `total_runtime_min_sec`, code 0x22
+        pub const TOTAL_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
+            "total_runtime_min_sec",
+            0x22,
+            1,
+            &[6],
+        );
+        /// `load_runtime_0_24_hours`, code 0x23
+        pub const LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_0_24_hours",
+            0x23,
+            1,
+            &[6],
+        );
+        /// `load_runtime_0_24_min_sec`, code 0x23
+        pub const LOAD_RUNTIME_0_24_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_0_24_min_sec",
+            0x23,
+            1,
+            &[6],
+        );
+        /// `load_runtime_0_24_hours_before_reset`, code 0x23
+        pub const LOAD_RUNTIME_0_24_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_0_24_hours_before_reset",
+            0x23,
+            1,
+            &[6],
+        );
+        /// `load_runtime_25_49_hours`, code 0x24
+        pub const LOAD_RUNTIME_25_49_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_25_49_hours",
+            0x24,
+            1,
+            &[6],
+        );
+        /// `load_runtime_25_49_min_sec`, code 0x24
+        pub const LOAD_RUNTIME_25_49_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_25_49_min_sec",
+            0x24,
+            1,
+            &[6],
+        );
+        /// `load_runtime_25_49_hours_before_reset`, code 0x24
+        pub const LOAD_RUNTIME_25_49_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_25_49_hours_before_reset",
+            0x24,
+            1,
+            &[6],
+        );
+        /// `load_runtime_50_74_hours`, code 0x25
+        pub const LOAD_RUNTIME_50_74_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_50_74_hours",
+            0x25,
+            1,
+            &[6],
+        );
+        /// `load_runtime_50_74_min_sec`, code 0x25
+        pub const LOAD_RUNTIME_50_74_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_50_74_min_sec",
+            0x25,
+            1,
+            &[6],
+        );
+        /// `load_runtime_50_74_hours_before_reset`, code 0x25
+        pub const LOAD_RUNTIME_50_74_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_50_74_hours_before_reset",
+            0x25,
+            1,
+            &[6],
+        );
+        /// `load_runtime_75_99_hours`, code 0x26
+        pub const LOAD_RUNTIME_75_99_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_75_99_hours",
+            0x26,
+            1,
+            &[6],
+        );
+        /// `load_runtime_75_99_min_sec`, code 0x26
+        pub const LOAD_RUNTIME_75_99_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_75_99_min_sec",
+            0x26,
+            1,
+            &[6],
+        );
+        /// `load_runtime_75_99_hours_before_reset`, code 0x26
+        pub const LOAD_RUNTIME_75_99_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_75_99_hours_before_reset",
+            0x26,
+            1,
+            &[6],
+        );
+        /// `load_runtime_100_hours`, code 0x27
+        pub const LOAD_RUNTIME_100_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_100_hours",
+            0x27,
+            1,
+            &[6],
+        );
+        /// `load_runtime_100_min_sec`, code 0x27
+        pub const LOAD_RUNTIME_100_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_100_min_sec",
+            0x27,
+            1,
+            &[6],
+        );
+        /// `load_runtime_100_hours_before_reset`, code 0x27
+        pub const LOAD_RUNTIME_100_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_100_hours_before_reset",
+            0x27,
+            1,
+            &[6],
+        );
+        /// `stall_event_counter`, code 0x28
+        pub const STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
+            "stall_event_counter",
+            0x28,
+            1,
+            &[6],
+        );
+        /// `stall_event_counter_before_reset`, code 0x28
+        pub const STALL_EVENT_COUNTER_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "stall_event_counter_before_reset",
+            0x28,
+            1,
+            &[6],
+        );
+        /// `power_up_cycles`, code 0x29
+        pub const POWER_UP_CYCLES: MessageDesc = MessageDesc::new(
+            "power_up_cycles",
+            0x29,
+            1,
+            &[6],
+        );
+    }
 }

@@ -175,9 +175,11 @@ pub mod telemetry_le {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
-                0x01 => rt::fixed::<5>(frame, "get_state", &[5]).map(|_| Self::GetState),
+                0x01 => {
+                    rt::fixed::<5>(frame, &request::GET_STATE).map(|_| Self::GetState)
+                }
                 0x02 => {
-                    let frame = rt::fixed::<21>(frame, "set_home", &[21])?;
+                    let frame = rt::fixed::<21>(frame, &request::SET_HOME)?;
                     let field_0: f64 = f64::from_le_bytes([
                         frame[4],
                         frame[5],
@@ -463,7 +465,7 @@ pub mod telemetry_le {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x81 => {
-                    let frame = rt::fixed::<41>(frame, "state", &[41])?;
+                    let frame = rt::fixed::<41>(frame, &response::STATE)?;
                     let field_4: f32 = f32::from_le_bytes([
                         frame[34],
                         frame[35],
@@ -524,7 +526,7 @@ pub mod telemetry_le {
                         ]),
                     })
                 }
-                0x82 => rt::fixed::<5>(frame, "ack", &[5]).map(|_| Self::Ack),
+                0x82 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
         }
@@ -708,4 +710,21 @@ pub mod telemetry_le {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TelemetryLe>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `get_state`, code 0x01
+        pub const GET_STATE: MessageDesc = MessageDesc::new("get_state", 0x01, 1, &[5]);
+        /// `set_home`, code 0x02
+        pub const SET_HOME: MessageDesc = MessageDesc::new("set_home", 0x02, 1, &[21]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `state`, code 0x81
+        pub const STATE: MessageDesc = MessageDesc::new("state", 0x81, 1, &[41]);
+        /// `ack`, code 0x82
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x82, 1, &[5]);
+    }
 }

@@ -226,7 +226,7 @@ pub mod text_counted {
                         channel: frame[4],
                     })
                 }
-                0x21 => rt::fixed::<4>(frame, "get_info", &[4]).map(|_| Self::GetInfo),
+                0x21 => rt::fixed::<4>(frame, &request::GET_INFO).map(|_| Self::GetInfo),
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
         }
@@ -494,7 +494,7 @@ pub mod text_counted {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x20 => {
-                    let frame = rt::fixed::<5>(frame, "ack", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 0x21 => {
@@ -710,4 +710,26 @@ pub mod text_counted {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TextCounted>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `set_name`, code 0x20
+        pub const SET_NAME: MessageDesc = MessageDesc::new("set_name", 0x20, 1, &[6]);
+        /// `get_info`, code 0x21
+        pub const GET_INFO: MessageDesc = MessageDesc::new("get_info", 0x21, 1, &[4]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ack`, code 0x20
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x20, 1, &[5]);
+        /// `device_info`, code 0x21
+        pub const DEVICE_INFO: MessageDesc = MessageDesc::new(
+            "device_info",
+            0x21,
+            1,
+            &[10],
+        );
+    }
 }

@@ -246,7 +246,7 @@ pub mod ubx_like {
                             ),
                         })
                     });
-                    g.end("poll_rate", &[8, 14])
+                    g.end(&request::POLL_RATE)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
             }
@@ -501,7 +501,7 @@ pub mod ubx_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x0608 => {
-                    let frame = rt::fixed::<14>(frame, "rate", &[14])?;
+                    let frame = rt::fixed::<14>(frame, &response::RATE)?;
                     rt::Ok(Self::Rate {
                         meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
                         nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
@@ -511,14 +511,14 @@ pub mod ubx_like {
                     })
                 }
                 0x0501 => {
-                    let frame = rt::fixed::<10>(frame, "ack", &[10])?;
+                    let frame = rt::fixed::<10>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack {
                         class_id: frame[6],
                         msg_id: frame[7],
                     })
                 }
                 0x0500 => {
-                    let frame = rt::fixed::<10>(frame, "nak", &[10])?;
+                    let frame = rt::fixed::<10>(frame, &response::NAK)?;
                     rt::Ok(Self::Nak {
                         class_id: frame[6],
                         msg_id: frame[7],
@@ -717,4 +717,33 @@ pub mod ubx_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<UbxLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `poll_rate`, code 0x0608
+        pub const POLL_RATE: MessageDesc = MessageDesc::new(
+            "poll_rate",
+            0x0608,
+            2,
+            &[8, 14],
+        );
+        /// `set_rate`, code 0x0608
+        pub const SET_RATE: MessageDesc = MessageDesc::new(
+            "set_rate",
+            0x0608,
+            2,
+            &[8, 14],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `rate`, code 0x0608
+        pub const RATE: MessageDesc = MessageDesc::new("rate", 0x0608, 2, &[14]);
+        /// `ack`, code 0x0501
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x0501, 2, &[10]);
+        /// `nak`, code 0x0500
+        pub const NAK: MessageDesc = MessageDesc::new("nak", 0x0500, 2, &[10]);
+    }
 }

@@ -228,7 +228,7 @@ pub mod vario {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, "read", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::READ)?;
                     rt::in_range("read", "quantity", 7, frame[7], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[5], frame[6]]),
@@ -253,7 +253,7 @@ pub mod vario {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame, "stamp", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::STAMP)?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[5], frame[6], frame[7]], false),
                     })
@@ -515,13 +515,13 @@ pub mod vario {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<7>(frame, "read_error", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::READ_ERROR)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[5],
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<7>(frame, "write_reply", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::WRITE_REPLY)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[5],
                     })
@@ -775,4 +775,40 @@ pub mod vario {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Vario>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read`, code 0x01
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[9]);
+        /// `write`, code 0x02
+        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x02, 1, &[8]);
+        /// `stamp`, code 0x03
+        pub const STAMP: MessageDesc = MessageDesc::new("stamp", 0x03, 1, &[9]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_reply`, code 0x01
+        pub const READ_REPLY: MessageDesc = MessageDesc::new(
+            "read_reply",
+            0x01,
+            1,
+            &[6],
+        );
+        /// `read_error`, code 0x81
+        pub const READ_ERROR: MessageDesc = MessageDesc::new(
+            "read_error",
+            0x81,
+            1,
+            &[7],
+        );
+        /// `write_reply`, code 0x02
+        pub const WRITE_REPLY: MessageDesc = MessageDesc::new(
+            "write_reply",
+            0x02,
+            1,
+            &[7],
+        );
+    }
 }

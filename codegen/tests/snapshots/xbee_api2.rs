@@ -923,7 +923,7 @@ pub mod xbee_api2 {
                     })
                 }
                 0x8B => {
-                    let frame = rt::fixed::<11>(frame, "transmit_status", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &response::TRANSMIT_STATUS)?;
                     rt::Ok(Self::TransmitStatus {
                         frame_id: frame[4],
                         destination16: u16::from_be_bytes([frame[5], frame[6]]),
@@ -933,7 +933,7 @@ pub mod xbee_api2 {
                     })
                 }
                 0x8A => {
-                    let frame = rt::fixed::<6>(frame, "modem_status", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::MODEM_STATUS)?;
                     rt::Ok(Self::ModemStatus {
                         status: ModemStatus::from_raw(frame[4]),
                     })
@@ -1139,4 +1139,55 @@ pub mod xbee_api2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<XbeeApi2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request as its refusals name it: name, code and the frame lengths of its code
+    /// ([`MessageDesc`]).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `at_command`, code 0x08
+        pub const AT_COMMAND: MessageDesc = MessageDesc::new(
+            "at_command",
+            0x08,
+            1,
+            &[8],
+        );
+        /// `transmit_request`, code 0x10
+        pub const TRANSMIT_REQUEST: MessageDesc = MessageDesc::new(
+            "transmit_request",
+            0x10,
+            1,
+            &[18],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `at_response`, code 0x88
+        pub const AT_RESPONSE: MessageDesc = MessageDesc::new(
+            "at_response",
+            0x88,
+            1,
+            &[9],
+        );
+        /// `transmit_status`, code 0x8B
+        pub const TRANSMIT_STATUS: MessageDesc = MessageDesc::new(
+            "transmit_status",
+            0x8B,
+            1,
+            &[11],
+        );
+        /// `modem_status`, code 0x8A
+        pub const MODEM_STATUS: MessageDesc = MessageDesc::new(
+            "modem_status",
+            0x8A,
+            1,
+            &[6],
+        );
+        /// `receive_packet`, code 0x90
+        pub const RECEIVE_PACKET: MessageDesc = MessageDesc::new(
+            "receive_packet",
+            0x90,
+            1,
+            &[16],
+        );
+    }
 }

@@ -366,13 +366,9 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
             expected,
             found,
         } => assert!(offset < len && expected != found, "{e}"),
-        DecodeError::WrongLength {
-            message,
-            expected,
-            found,
-        } => {
+        DecodeError::WrongLength { message, found } => {
             assert!(
-                same_len(found) && !expected.contains(&found) && !message.is_empty(),
+                same_len(found) && !message.lengths.contains(&found) && !message.name.is_empty(),
                 "{e}"
             )
         }
@@ -548,7 +544,7 @@ impl Refusal {
                 Refusal::Address(address)
             }
             EncodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
-                message: message.to_owned(),
+                message: message.name.to_owned(),
                 address,
             },
             EncodeError::NotInRange {
@@ -594,10 +590,8 @@ impl Refusal {
     fn of_decode(e: &DecodeError) -> Option<Refusal> {
         Some(match *e {
             DecodeError::BadAddress { found, .. } => Refusal::Address(found),
-            DecodeError::BroadcastNotAccepted {
-                message, address, ..
-            } => Refusal::Broadcast {
-                message: message.to_owned(),
+            DecodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
+                message: message.name.to_owned(),
                 address,
             },
             DecodeError::OutOfRange {
