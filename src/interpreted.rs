@@ -23,8 +23,8 @@ use busspec_model::Protocol as Spec;
 use busspec_runtime::stream::Candidates;
 use busspec_runtime::{
     Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
-    EscapeFault, FieldError, FieldValue, Framing, Message, MessageDesc, MessageNames, NumKind,
-    Protocol, Reply, Source, Transactions,
+    EscapeFault, FieldDesc, FieldError, FieldValue, Framing, Message, MessageDesc, MessageNames,
+    NumKind, Protocol, Reply, Source, Transactions,
 };
 
 /// The most bytes a frame of a spec read at run time may take.
@@ -96,6 +96,24 @@ fn keep_message(name: &str, code: u32, code_len: u8) -> &'static MessageDesc {
         return k;
     }
     let k: &'static MessageDesc = Box::leak(Box::new(d));
+    set.insert(k);
+    k
+}
+
+/// A field's descriptor with the life of the process, kept once each, as the runtime's
+/// errors point at one: field `field` of message `message`.
+fn keep_field(message: &str, field: &str) -> &'static FieldDesc {
+    static KEPT: OnceLock<Mutex<HashSet<&'static FieldDesc>>> = OnceLock::new();
+    let set = KEPT.get_or_init(|| Mutex::new(HashSet::new()));
+    let mut set = match set.lock() {
+        Ok(g) => g,
+        Err(poisoned) => poisoned.into_inner(),
+    };
+    let d = FieldDesc::new(keep(message), keep(field));
+    if let Some(k) = set.get(&d) {
+        return k;
+    }
+    let k: &'static FieldDesc = Box::leak(Box::new(d));
     set.insert(k);
     k
 }
@@ -350,8 +368,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::InvalidValue {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             expected,
             found,
@@ -362,8 +379,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             offset,
             found,
         } => DecodeError::NotBcd {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             found,
         },
@@ -375,8 +391,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::NotEqual {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             other: keep(&other),
             expected,
@@ -385,7 +400,10 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
         I::Ambiguous { candidates } => DecodeError::Ambiguous {
             code: 0,
             candidates: MessageNames::from_slice(
-                &candidates.iter().map(|c| keep(c)).collect::<Vec<_>>(),
+                &candidates
+                    .iter()
+                    .map(|c| keep_message(c, 0, 0))
+                    .collect::<Vec<_>>(),
             ),
         },
         I::TooLong { max, found } => DecodeError::TooLong { max, found },
@@ -398,8 +416,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             max,
             kind,
         } => DecodeError::OutOfRange {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             found,
             min,
@@ -442,10 +459,9 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::ByteCount {
-            message: keep(&message),
+            list: keep_field(&message, &list),
             field: keep(&field),
             offset,
-            list: keep(&list),
             expected,
             found,
         },
@@ -457,8 +473,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::NotFollowing {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             rule: keep(&rule),
             expected,
@@ -479,7 +494,8 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             found,
             most,
         } => DecodeError::BadWidth {
-            message: keep(&message),
+            // The interpreter names the message, not the list: what the words say.
+            list: keep_field(&message, ""),
             field: keep(&field),
             offset,
             found,
@@ -493,8 +509,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::BadCount {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             found,
             expected: CountRule::Stated(keep(&expected)),

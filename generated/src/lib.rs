@@ -40,7 +40,7 @@ extern crate std;
 pub use busspec_runtime::Framing;
 pub use busspec_runtime::{
     stream, Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements,
-    EncodeError, FieldValue, Message, MessageDesc, MessageNames, NumKind, Protocol,
+    EncodeError, FieldDesc, FieldValue, Message, MessageDesc, MessageNames, NumKind, Protocol,
     ProtocolVisitor, Repeated, Source,
 };
 

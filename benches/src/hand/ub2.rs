@@ -4,7 +4,7 @@
 //! C-curve index lies in 0..=499, and a frame longer than the longest is refused first.
 
 use busspec_protocols::ub2::{Capacitance, ModeOfOperation, Request, Response};
-use busspec_protocols::{DecodeError, Decoded, EncodeError, MessageDesc};
+use busspec_protocols::{DecodeError, Decoded, EncodeError, FieldDesc, MessageDesc};
 
 const START: u8 = 0xAA;
 /// The host's address; the devices' follow it (§2.2, §2.3; erratum ub2-e02).
@@ -67,12 +67,11 @@ fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeE
 
 /// A C-curve index, refused beyond the table's last (the field starts at offset 4).
 #[inline]
-fn index(message: &'static str, a: u8, b: u8) -> Result<u16, DecodeError> {
+fn index(field: &'static FieldDesc, a: u8, b: u8) -> Result<u16, DecodeError> {
     let index = u16le(a, b);
     if index > LAST_INDEX {
         return Err(DecodeError::OutOfRange {
-            message,
-            field: "index",
+            field,
             offset: 4,
             found: index.into(),
             min: 0,
@@ -133,7 +132,11 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
         [0x40, 0x01] => Request::GetActualCapacitance,
         [0x40, 0x80] => Request::GetModeOfOperation,
         [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance {
-            index: index("get_c_curve_indexed_full_step_capacitance", a, b)?,
+            index: index(
+                field!("get_c_curve_indexed_full_step_capacitance", "index"),
+                a,
+                b,
+            )?,
         },
         [0x40, 0x32] => Request::GetControllerTemperature,
         [0x40, 0x61] => Request::GetFirmwareVersion,
@@ -142,8 +145,7 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
             0x02 => Request::GetUpperCustomerLimit,
             found => {
                 return Err(DecodeError::InvalidValue {
-                    message: "get_lower_customer_limit",
-                    field: "index",
+                    field: field!("get_lower_customer_limit", "index"),
                     offset: 4,
                     expected: 1,
                     found: found.into(),
@@ -228,7 +230,7 @@ pub fn decode_response(
             mode: ModeOfOperation::from_raw(m),
         },
         [0x41, 0x30, i0, i1, f0, f1, c0, c1, c2, c3] => Response::CCurveEntry {
-            index: index("c_curve_entry", i0, i1)?,
+            index: index(field!("c_curve_entry", "index"), i0, i1)?,
             full_steps: u16le(f0, f1),
             capacitance: Capacitance(u32le(c0, c1, c2, c3)),
         },
@@ -245,8 +247,7 @@ pub fn decode_response(
                 0x02 => Response::UpperCustomerLimit { capacitance },
                 found => {
                     return Err(DecodeError::InvalidValue {
-                        message: "lower_customer_limit",
-                        field: "index",
+                        field: field!("lower_customer_limit", "index"),
                         offset: 4,
                         expected: 1,
                         found: found.into(),

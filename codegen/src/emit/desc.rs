@@ -1,41 +1,69 @@
 use super::*;
 
 /// The `request` and `response` modules: one `rt::MessageDesc` per framed message of the
-/// direction (`request::READ_COILS`), its name, code and the frame lengths of its code, which
-/// the refusals point at (`rt::fixed`, `rt::Group::end`, `rt::no_broadcast`,
-/// `rt::encode_broadcast`) instead of spelling them at every call.
+/// direction (`request::READ_COILS`), its name, code and the frame lengths of its code, and
+/// after it an `rt::FieldDesc` for each of its fields a refusal names
+/// (`request::READ_COILS_QUANTITY`, [`Ctx::field_desc`]), which the refusals point at
+/// (`rt::fixed`, `rt::in_range`, `rt::Group::end`, ...) instead of spelling names at every
+/// call. Emitted last, once every refusal has named its fields.
 pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
     let p = ctx.p;
+    let fields = ctx.field_descs.borrow();
     let dir = |d: Direction| {
-        let consts = p.framed(d).iter().map(|m| {
-            let c = desc_ident(m);
-            let name = &m.name;
-            let (code, code_len) = code_args(m);
-            let lengths = dispatch_lengths(p, m);
-            let text = match m.code.as_slice() {
-                [] => format!("`{name}` (no code)"),
-                code => format!("`{name}`, code {}", hex_code(code)),
-            };
-            let doc = doc(&text);
-            let lengths = lengths.into_iter().map(usize_lit);
-            quote! {
-                #doc
-                pub const #c: MessageDesc = MessageDesc::new(#name, #code, #code_len, &[#(#lengths),*]);
+        let framed = p.framed(d);
+        let mut consts = Vec::new();
+        let mut uses = Vec::new();
+        for m in p.messages(d) {
+            if framed.iter().any(|x| x.name == m.name) {
+                let c = desc_ident(m);
+                let name = &m.name;
+                let (code, code_len) = code_args(m);
+                let lengths = dispatch_lengths(p, m);
+                let text = match m.code.as_slice() {
+                    [] => format!("`{name}` (no code)"),
+                    code => format!("`{name}`, code {}", hex_code(code)),
+                };
+                let doc = doc(&text);
+                let lengths = lengths.into_iter().map(usize_lit);
+                consts.push(quote! {
+                    #doc
+                    pub const #c: MessageDesc = MessageDesc::new(#name, #code, #code_len, &[#(#lengths),*]);
+                });
+                if uses.is_empty() {
+                    uses.push(quote!(MessageDesc));
+                }
             }
-        });
-        let consts: Vec<TokenStream> = consts.collect();
+            for (_, _, f, c) in fields
+                .iter()
+                .filter(|(fd, mn, ..)| *fd == d && *mn == m.name)
+            {
+                let name = &m.name;
+                let doc = doc(&format!("`{name}.{f}`"));
+                consts.push(quote! {
+                    #doc
+                    pub const #c: FieldDesc = FieldDesc::new(#name, #f);
+                });
+                if !uses.iter().any(|u| u.to_string() == "FieldDesc") {
+                    uses.push(quote!(FieldDesc));
+                }
+            }
+        }
         if consts.is_empty() {
             return quote!();
         }
+        let uses = match uses.as_slice() {
+            [one] => quote!(#one),
+            more => quote!({#(#more),*}),
+        };
         quote! {
-            use ::busspec_runtime::MessageDesc;
+            use ::busspec_runtime::#uses;
             #(#consts)*
         }
     };
     let (requests, responses) = (dir(Direction::Request), dir(Direction::Response));
     quote! {
-        /// Each request as its refusals name it: name, code and the frame lengths of its code
-        /// ([`MessageDesc`]).
+        /// Each request and its fields as refusals name them: name, code and the frame
+        /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
         pub mod request {
             #requests
         }
@@ -53,12 +81,17 @@ fn desc_ident(m: &Message) -> Ident {
 
 /// `&request::READ_COILS`: message `m`'s descriptor, as the refusals take it.
 pub(super) fn message_desc(m: &Message) -> TokenStream {
-    let dir = match m.direction {
-        Direction::Request => ident("request"),
-        Direction::Response => ident("response"),
-    };
+    let dir = direction_module(m.direction);
     let c = desc_ident(m);
     quote!(&#dir::#c)
+}
+
+/// The module of direction `d`'s descriptors: `request` or `response`.
+pub(super) fn direction_module(d: Direction) -> Ident {
+    match d {
+        Direction::Request => ident("request"),
+        Direction::Response => ident("response"),
+    }
 }
 
 /// `m`'s code as a descriptor gives it: its value and length in bytes.

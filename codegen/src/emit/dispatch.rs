@@ -519,7 +519,7 @@ pub(super) fn emit_group(
     }
     let tries = group.iter().map(|m| {
         let len = usize_lit(p.frame_len(m));
-        let name = &m.name;
+        let name = message_desc(m);
         let ambiguous = is_ambiguous(m, group);
         let a = if ambiguous { admitted(m) } else { quote!() };
         let decode = match by_fn(m) {

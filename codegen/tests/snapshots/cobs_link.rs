@@ -314,8 +314,7 @@ pub mod cobs_link {
     }
     /// Where `log.entries` sits in the frame and how its elements are counted.
     pub const REPEAT_LOG: rt::RepeatAt = rt::RepeatAt {
-        message: "log",
-        field: "entries",
+        field: &response::LOG_ENTRIES,
         base: 4,
         at: 2,
         width: 1,
@@ -666,8 +665,8 @@ pub mod cobs_link {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CobsLink>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `read_position`, code 0x10
@@ -684,12 +683,14 @@ pub mod cobs_link {
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `position`, code 0x90
         pub const POSITION: MessageDesc = MessageDesc::new("position", 0x90, 1, &[8]);
         /// `ack`, code 0xA0
         pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[4]);
         /// `log`, code 0xB0
         pub const LOG: MessageDesc = MessageDesc::new("log", 0xB0, 1, &[4]);
+        /// `log.entries`
+        pub const LOG_ENTRIES: FieldDesc = FieldDesc::new("log", "entries");
     }
 }

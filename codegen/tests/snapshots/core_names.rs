@@ -367,7 +367,7 @@ pub mod clash {
                     let frame = rt::fixed::<7>(frame, &request::OPTION)?;
                     rt::no_broadcast(frame[1], 0x00, &request::OPTION)?;
                     let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range("option", "core", 4, field_1, 0, 1000)?;
+                    rt::in_range(&request::OPTION_CORE, 4, field_1, 0, 1000)?;
                     rt::Ok(Self::Option {
                         some: Result::from_raw(frame[3]),
                         core: Option::from_raw(field_1),
@@ -382,7 +382,7 @@ pub mod clash {
                 }
                 0x12 => {
                     let frame = rt::fixed::<7>(frame, &request::CORE)?;
-                    rt::equal("core", "buf", 4, frame[4], 0x0)?;
+                    rt::equal(&request::CORE_BUF, 4, frame[4], 0x0)?;
                     rt::Ok(Self::Core {
                         address: frame[3],
                         out: frame[5] as i8,
@@ -391,7 +391,7 @@ pub mod clash {
                 0x13 => {
                     let frame = rt::fixed::<6>(frame, &request::RT)?;
                     rt::no_broadcast(frame[1], 0x00, &request::RT)?;
-                    rt::same("rt", "field", 4, frame[4], "f", frame[3])?;
+                    rt::same(&request::RT_FIELD, 4, frame[4], "f", frame[3])?;
                     rt::Ok(Self::Rt { f: frame[3] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
@@ -844,18 +844,24 @@ pub mod clash {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Clash>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `option`, code 0x10
         pub const OPTION: MessageDesc = MessageDesc::new("option", 0x10, 1, &[7]);
+        /// `option.core`
+        pub const OPTION_CORE: FieldDesc = FieldDesc::new("option", "core");
         /// `u8`, code 0x11
         pub const U8: MessageDesc = MessageDesc::new("u8", 0x11, 1, &[5]);
         /// `core`, code 0x12
         pub const CORE: MessageDesc = MessageDesc::new("core", 0x12, 1, &[7]);
+        /// `core.buf`
+        pub const CORE_BUF: FieldDesc = FieldDesc::new("core", "buf");
         /// `rt`, code 0x13
         pub const RT: MessageDesc = MessageDesc::new("rt", 0x13, 1, &[6]);
+        /// `rt.field`
+        pub const RT_FIELD: FieldDesc = FieldDesc::new("rt", "field");
     }
     /// Each response as its refusals name it.
     pub mod response {

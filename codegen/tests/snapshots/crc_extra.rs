@@ -267,8 +267,7 @@ pub mod crc_extra {
                 0x42 => {
                     let frame = rt::fixed::<11>(frame, &request::REQUEST_DATA_STREAM)?;
                     rt::in_range(
-                        "request_data_stream",
-                        "start_stop",
+                        &request::REQUEST_DATA_STREAM_START_STOP,
                         8,
                         frame[8],
                         0,
@@ -768,10 +767,10 @@ pub mod crc_extra {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CrcExtra>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `ping`, code 0x04
         pub const PING: MessageDesc = MessageDesc::new("ping", 0x04, 1, &[19]);
         /// `request_data_stream`, code 0x42
@@ -780,6 +779,11 @@ pub mod crc_extra {
             0x42,
             1,
             &[11],
+        );
+        /// `request_data_stream.start_stop`
+        pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
+            "request_data_stream",
+            "start_stop",
         );
     }
     /// Each response as its refusals name it.

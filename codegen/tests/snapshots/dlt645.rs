@@ -697,8 +697,7 @@ pub mod dlt645 {
                     let mut g = rt::Group::new(frame, 0x91, request.map(Request::name));
                     g.attempt(|frame: &[u8; 20]| {
                         let field_3: u32 = rt::bcd(
-                            "data_reply",
-                            "value",
+                            &response::DATA_REPLY_VALUE,
                             14,
                             u32::from_le_bytes([
                                 frame[14],
@@ -707,7 +706,13 @@ pub mod dlt645 {
                                 frame[17],
                             ]) as u64,
                         )? as u32;
-                        rt::in_range("data_reply", "value", 14, field_3, 0, 99999999)?;
+                        rt::in_range(
+                            &response::DATA_REPLY_VALUE,
+                            14,
+                            field_3,
+                            0,
+                            99999999,
+                        )?;
                         rt::Ok(Self::DataReply {
                             address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                             address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -722,8 +727,7 @@ pub mod dlt645 {
                     });
                     g.attempt(|frame: &[u8; 22]| {
                         rt::equal(
-                            "meter_number_reply",
-                            "data_id",
+                            &response::METER_NUMBER_REPLY_DATA_ID,
                             10,
                             u32::from_le_bytes([
                                 frame[10],
@@ -977,8 +981,8 @@ pub mod dlt645 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dlt645>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `read_address`, code 0x13
@@ -993,7 +997,7 @@ pub mod dlt645 {
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `address_reply`, code 0x93
         pub const ADDRESS_REPLY: MessageDesc = MessageDesc::new(
             "address_reply",
@@ -1008,12 +1012,19 @@ pub mod dlt645 {
             1,
             &[20, 22],
         );
+        /// `data_reply.value`
+        pub const DATA_REPLY_VALUE: FieldDesc = FieldDesc::new("data_reply", "value");
         /// `meter_number_reply`, code 0x91
         pub const METER_NUMBER_REPLY: MessageDesc = MessageDesc::new(
             "meter_number_reply",
             0x91,
             1,
             &[20, 22],
+        );
+        /// `meter_number_reply.data_id`
+        pub const METER_NUMBER_REPLY_DATA_ID: FieldDesc = FieldDesc::new(
+            "meter_number_reply",
+            "data_id",
         );
     }
 }

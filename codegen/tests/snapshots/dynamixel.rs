@@ -114,8 +114,7 @@ pub mod dynamixel {
     }
     /// Where `write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "write",
-        field: "data",
+        field: &request::WRITE_DATA,
         base: 7,
         at: 6,
         width: 1,
@@ -125,8 +124,7 @@ pub mod dynamixel {
     };
     /// Where `reg_write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_REG_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "reg_write",
-        field: "data",
+        field: &request::REG_WRITE_DATA,
         base: 7,
         at: 6,
         width: 1,
@@ -136,8 +134,7 @@ pub mod dynamixel {
     };
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "sync_write",
-        field: "blocks",
+        field: &request::SYNC_WRITE_BLOCKS,
         base: 8,
         at: 7,
         width: 1,
@@ -357,7 +354,7 @@ pub mod dynamixel {
                 0x02 => {
                     let frame = rt::fixed::<8>(frame, &request::READ)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::READ)?;
-                    rt::in_range("read", "length", 6, frame[6], 1, 253)?;
+                    rt::in_range(&request::READ_LENGTH, 6, frame[6], 1, 253)?;
                     rt::Ok(Self::Read {
                         address: frame[5],
                         length: frame[6],
@@ -498,8 +495,7 @@ pub mod dynamixel {
     }
     /// Where `read_status.data` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_STATUS: rt::RepeatAt = rt::RepeatAt {
-        message: "read_status",
-        field: "data",
+        field: &response::READ_STATUS_DATA,
         base: 6,
         at: 5,
         width: 1,
@@ -934,18 +930,24 @@ pub mod dynamixel {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `ping`, code 0x01
         pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[6]);
         /// `read`, code 0x02
         pub const READ: MessageDesc = MessageDesc::new("read", 0x02, 1, &[8]);
+        /// `read.length`
+        pub const READ_LENGTH: FieldDesc = FieldDesc::new("read", "length");
         /// `write`, code 0x03
         pub const WRITE: MessageDesc = MessageDesc::new("write", 0x03, 1, &[7]);
+        /// `write.data`
+        pub const WRITE_DATA: FieldDesc = FieldDesc::new("write", "data");
         /// `reg_write`, code 0x04
         pub const REG_WRITE: MessageDesc = MessageDesc::new("reg_write", 0x04, 1, &[7]);
+        /// `reg_write.data`
+        pub const REG_WRITE_DATA: FieldDesc = FieldDesc::new("reg_write", "data");
         /// `action`, code 0x05
         pub const ACTION: MessageDesc = MessageDesc::new("action", 0x05, 1, &[6]);
         /// `reset`, code 0x06
@@ -957,13 +959,17 @@ pub mod dynamixel {
             1,
             &[8],
         );
+        /// `sync_write.blocks`
+        pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `status` (no code)
         pub const STATUS: MessageDesc = MessageDesc::new("status", 0, 0, &[6]);
         /// `read_status` (no code)
         pub const READ_STATUS: MessageDesc = MessageDesc::new("read_status", 0, 0, &[6]);
+        /// `read_status.data`
+        pub const READ_STATUS_DATA: FieldDesc = FieldDesc::new("read_status", "data");
     }
 }

@@ -532,8 +532,8 @@ pub mod ft12_fixed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Fixed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `reset_remote_link`, code 0x40

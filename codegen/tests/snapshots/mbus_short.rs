@@ -538,8 +538,8 @@ pub mod mbus_short {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MbusShort>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `snd_nke`, code 0x40

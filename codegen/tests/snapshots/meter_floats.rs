@@ -195,8 +195,7 @@ pub mod meter_floats {
                         frame[5],
                     ]);
                     rt::in_range(
-                        "set_limits",
-                        "voltage_limit",
+                        &request::SET_LIMITS_VOLTAGE_LIMIT,
                         2,
                         field_0,
                         rt::f32_raw(0f32),
@@ -508,8 +507,7 @@ pub mod meter_floats {
                         frame[9],
                     ]);
                     rt::in_range(
-                        "readings",
-                        "frequency",
+                        &response::READINGS_FREQUENCY,
                         6,
                         field_1,
                         rt::f32_raw(45f32),
@@ -526,8 +524,7 @@ pub mod meter_floats {
                         frame[41],
                     ]);
                     rt::in_range(
-                        "readings",
-                        "drift",
+                        &response::READINGS_DRIFT,
                         34,
                         field_5,
                         -9000000000000,
@@ -599,8 +596,7 @@ pub mod meter_floats {
                         frame[9],
                     ]);
                     rt::in_range(
-                        "limits_set",
-                        "serial",
+                        &response::LIMITS_SET_SERIAL,
                         2,
                         field_0,
                         rt::u64_raw(1u64),
@@ -774,10 +770,10 @@ pub mod meter_floats {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MeterFloats>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `read_readings`, code 0x04
         pub const READ_READINGS: MessageDesc = MessageDesc::new(
             "read_readings",
@@ -792,12 +788,24 @@ pub mod meter_floats {
             1,
             &[16],
         );
+        /// `set_limits.voltage_limit`
+        pub const SET_LIMITS_VOLTAGE_LIMIT: FieldDesc = FieldDesc::new(
+            "set_limits",
+            "voltage_limit",
+        );
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `readings`, code 0x04
         pub const READINGS: MessageDesc = MessageDesc::new("readings", 0x04, 1, &[52]);
+        /// `readings.frequency`
+        pub const READINGS_FREQUENCY: FieldDesc = FieldDesc::new(
+            "readings",
+            "frequency",
+        );
+        /// `readings.drift`
+        pub const READINGS_DRIFT: FieldDesc = FieldDesc::new("readings", "drift");
         /// `limits_set`, code 0x10
         pub const LIMITS_SET: MessageDesc = MessageDesc::new(
             "limits_set",
@@ -805,5 +813,7 @@ pub mod meter_floats {
             1,
             &[12],
         );
+        /// `limits_set.serial`
+        pub const LIMITS_SET_SERIAL: FieldDesc = FieldDesc::new("limits_set", "serial");
     }
 }

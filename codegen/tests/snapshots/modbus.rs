@@ -220,8 +220,7 @@ pub mod modbus {
     }
     /// Where `write_multiple_coils.outputs` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_COILS: rt::RepeatAt = rt::RepeatAt {
-        message: "write_multiple_coils",
-        field: "outputs",
+        field: &request::WRITE_MULTIPLE_COILS_OUTPUTS,
         base: 9,
         at: 7,
         width: 0,
@@ -236,8 +235,7 @@ pub mod modbus {
     };
     /// Where `write_multiple_registers.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_REGISTERS: rt::RepeatAt = rt::RepeatAt {
-        message: "write_multiple_registers",
-        field: "values",
+        field: &request::WRITE_MULTIPLE_REGISTERS_VALUES,
         base: 9,
         at: 7,
         width: 2,
@@ -565,7 +563,7 @@ pub mod modbus {
                     let frame = rt::fixed::<8>(frame, &request::READ_COILS)?;
                     rt::no_broadcast(frame[0], 0x00, &request::READ_COILS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("read_coils", "quantity", 4, field_1, 1, 2000)?;
+                    rt::in_range(&request::READ_COILS_QUANTITY, 4, field_1, 1, 2000)?;
                     rt::Ok(Self::ReadCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
@@ -576,8 +574,7 @@ pub mod modbus {
                     rt::no_broadcast(frame[0], 0x00, &request::READ_DISCRETE_INPUTS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "read_discrete_inputs",
-                        "quantity",
+                        &request::READ_DISCRETE_INPUTS_QUANTITY,
                         4,
                         field_1,
                         1,
@@ -593,8 +590,7 @@ pub mod modbus {
                     rt::no_broadcast(frame[0], 0x00, &request::READ_HOLDING_REGISTERS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "read_holding_registers",
-                        "quantity",
+                        &request::READ_HOLDING_REGISTERS_QUANTITY,
                         4,
                         field_1,
                         1,
@@ -610,8 +606,7 @@ pub mod modbus {
                     rt::no_broadcast(frame[0], 0x00, &request::READ_INPUT_REGISTERS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "read_input_registers",
-                        "quantity",
+                        &request::READ_INPUT_REGISTERS_QUANTITY,
                         4,
                         field_1,
                         1,
@@ -643,16 +638,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "write_multiple_coils",
-                        "quantity",
+                        &request::WRITE_MULTIPLE_COILS_QUANTITY,
                         4,
                         field_1,
                         1,
                         1968,
                     )?;
                     rt::following(
-                        "write_multiple_coils",
-                        "byte_count",
+                        &request::WRITE_MULTIPLE_COILS_BYTE_COUNT,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -671,16 +664,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "write_multiple_registers",
-                        "quantity",
+                        &request::WRITE_MULTIPLE_REGISTERS_QUANTITY,
                         4,
                         field_1,
                         1,
                         123,
                     )?;
                     rt::following(
-                        "write_multiple_registers",
-                        "byte_count",
+                        &request::WRITE_MULTIPLE_REGISTERS_BYTE_COUNT,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -832,8 +823,7 @@ pub mod modbus {
     }
     /// Where `read_coils_reply.coils` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_COILS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_coils_reply",
-        field: "coils",
+        field: &response::READ_COILS_REPLY_COILS,
         base: 5,
         at: 3,
         width: 0,
@@ -848,8 +838,7 @@ pub mod modbus {
     };
     /// Where `read_discrete_inputs_reply.inputs` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_DISCRETE_INPUTS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_discrete_inputs_reply",
-        field: "inputs",
+        field: &response::READ_DISCRETE_INPUTS_REPLY_INPUTS,
         base: 5,
         at: 3,
         width: 0,
@@ -864,8 +853,7 @@ pub mod modbus {
     };
     /// Where `read_holding_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_HOLDING_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_holding_registers_reply",
-        field: "registers",
+        field: &response::READ_HOLDING_REGISTERS_REPLY_REGISTERS,
         base: 5,
         at: 3,
         width: 2,
@@ -880,8 +868,7 @@ pub mod modbus {
     };
     /// Where `read_input_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_INPUT_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_input_registers_reply",
-        field: "registers",
+        field: &response::READ_INPUT_REGISTERS_REPLY_REGISTERS,
         base: 5,
         at: 3,
         width: 2,
@@ -1598,8 +1585,7 @@ pub mod modbus {
                     &Request::ReadCoils { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_coils_reply",
-                        "byte_count",
+                        &response::READ_COILS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
                         r_quantity as i64,
@@ -1619,8 +1605,7 @@ pub mod modbus {
                     &Request::ReadDiscreteInputs { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_discrete_inputs_reply",
-                        "byte_count",
+                        &response::READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
                             as u64,
@@ -1641,8 +1626,7 @@ pub mod modbus {
                     &Request::ReadHoldingRegisters { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_holding_registers_reply",
-                        "byte_count",
+                        &response::READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_HOLDING_REGISTERS_REPLY
                             .count_value(v_registers.len()) as u64,
@@ -1663,8 +1647,7 @@ pub mod modbus {
                     &Request::ReadInputRegisters { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_input_registers_reply",
-                        "byte_count",
+                        &response::READ_INPUT_REGISTERS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
                             as u64,
@@ -1693,8 +1676,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_single_coil_reply",
-                        "output_address",
+                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS,
                         2,
                         v_output_address,
                         r_output_address as i64,
@@ -1702,8 +1684,7 @@ pub mod modbus {
                         "output_address of the request",
                     )?;
                     rt::following(
-                        "write_single_coil_reply",
-                        "output_value",
+                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE,
                         4,
                         v_output_value.raw(),
                         r_output_value.raw() as i64,
@@ -1724,8 +1705,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_single_register_reply",
-                        "register_address",
+                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS,
                         2,
                         v_register_address,
                         r_register_address as i64,
@@ -1733,8 +1713,7 @@ pub mod modbus {
                         "register_address of the request",
                     )?;
                     rt::following(
-                        "write_single_register_reply",
-                        "register_value",
+                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE,
                         4,
                         v_register_value,
                         r_register_value as i64,
@@ -1755,8 +1734,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_multiple_coils_reply",
-                        "starting_address",
+                        &response::WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS,
                         2,
                         v_starting_address,
                         r_starting_address as i64,
@@ -1764,8 +1742,7 @@ pub mod modbus {
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        "write_multiple_coils_reply",
-                        "quantity",
+                        &response::WRITE_MULTIPLE_COILS_REPLY_QUANTITY,
                         4,
                         v_quantity,
                         r_quantity as i64,
@@ -1786,8 +1763,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_multiple_registers_reply",
-                        "starting_address",
+                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS,
                         2,
                         v_starting_address,
                         r_starting_address as i64,
@@ -1795,8 +1771,7 @@ pub mod modbus {
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        "write_multiple_registers_reply",
-                        "quantity",
+                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY,
                         4,
                         v_quantity,
                         r_quantity as i64,
@@ -1977,16 +1952,21 @@ pub mod modbus {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Modbus>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `read_coils`, code 0x01
         pub const READ_COILS: MessageDesc = MessageDesc::new(
             "read_coils",
             0x01,
             1,
             &[8],
+        );
+        /// `read_coils.quantity`
+        pub const READ_COILS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_coils",
+            "quantity",
         );
         /// `read_discrete_inputs`, code 0x02
         pub const READ_DISCRETE_INPUTS: MessageDesc = MessageDesc::new(
@@ -1995,6 +1975,11 @@ pub mod modbus {
             1,
             &[8],
         );
+        /// `read_discrete_inputs.quantity`
+        pub const READ_DISCRETE_INPUTS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_discrete_inputs",
+            "quantity",
+        );
         /// `read_holding_registers`, code 0x03
         pub const READ_HOLDING_REGISTERS: MessageDesc = MessageDesc::new(
             "read_holding_registers",
@@ -2002,12 +1987,22 @@ pub mod modbus {
             1,
             &[8],
         );
+        /// `read_holding_registers.quantity`
+        pub const READ_HOLDING_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_holding_registers",
+            "quantity",
+        );
         /// `read_input_registers`, code 0x04
         pub const READ_INPUT_REGISTERS: MessageDesc = MessageDesc::new(
             "read_input_registers",
             0x04,
             1,
             &[8],
+        );
+        /// `read_input_registers.quantity`
+        pub const READ_INPUT_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_input_registers",
+            "quantity",
         );
         /// `write_single_coil`, code 0x05
         pub const WRITE_SINGLE_COIL: MessageDesc = MessageDesc::new(
@@ -2030,6 +2025,21 @@ pub mod modbus {
             1,
             &[9],
         );
+        /// `write_multiple_coils.outputs`
+        pub const WRITE_MULTIPLE_COILS_OUTPUTS: FieldDesc = FieldDesc::new(
+            "write_multiple_coils",
+            "outputs",
+        );
+        /// `write_multiple_coils.quantity`
+        pub const WRITE_MULTIPLE_COILS_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_coils",
+            "quantity",
+        );
+        /// `write_multiple_coils.byte_count`
+        pub const WRITE_MULTIPLE_COILS_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "write_multiple_coils",
+            "byte_count",
+        );
         /// `write_multiple_registers`, code 0x10
         pub const WRITE_MULTIPLE_REGISTERS: MessageDesc = MessageDesc::new(
             "write_multiple_registers",
@@ -2037,16 +2047,41 @@ pub mod modbus {
             1,
             &[9],
         );
+        /// `write_multiple_registers.values`
+        pub const WRITE_MULTIPLE_REGISTERS_VALUES: FieldDesc = FieldDesc::new(
+            "write_multiple_registers",
+            "values",
+        );
+        /// `write_multiple_registers.quantity`
+        pub const WRITE_MULTIPLE_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_registers",
+            "quantity",
+        );
+        /// `write_multiple_registers.byte_count`
+        pub const WRITE_MULTIPLE_REGISTERS_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "write_multiple_registers",
+            "byte_count",
+        );
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `read_coils_reply`, code 0x01
         pub const READ_COILS_REPLY: MessageDesc = MessageDesc::new(
             "read_coils_reply",
             0x01,
             1,
             &[5],
+        );
+        /// `read_coils_reply.coils`
+        pub const READ_COILS_REPLY_COILS: FieldDesc = FieldDesc::new(
+            "read_coils_reply",
+            "coils",
+        );
+        /// `read_coils_reply.byte_count`
+        pub const READ_COILS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_coils_reply",
+            "byte_count",
         );
         /// `read_coils_exception`, code 0x81
         pub const READ_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
@@ -2062,6 +2097,16 @@ pub mod modbus {
             1,
             &[5],
         );
+        /// `read_discrete_inputs_reply.inputs`
+        pub const READ_DISCRETE_INPUTS_REPLY_INPUTS: FieldDesc = FieldDesc::new(
+            "read_discrete_inputs_reply",
+            "inputs",
+        );
+        /// `read_discrete_inputs_reply.byte_count`
+        pub const READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_discrete_inputs_reply",
+            "byte_count",
+        );
         /// `read_discrete_inputs_exception`, code 0x82
         pub const READ_DISCRETE_INPUTS_EXCEPTION: MessageDesc = MessageDesc::new(
             "read_discrete_inputs_exception",
@@ -2075,6 +2120,16 @@ pub mod modbus {
             0x03,
             1,
             &[5],
+        );
+        /// `read_holding_registers_reply.registers`
+        pub const READ_HOLDING_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
+            "read_holding_registers_reply",
+            "registers",
+        );
+        /// `read_holding_registers_reply.byte_count`
+        pub const READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_holding_registers_reply",
+            "byte_count",
         );
         /// `read_holding_registers_exception`, code 0x83
         pub const READ_HOLDING_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
@@ -2090,6 +2145,16 @@ pub mod modbus {
             1,
             &[5],
         );
+        /// `read_input_registers_reply.registers`
+        pub const READ_INPUT_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
+            "read_input_registers_reply",
+            "registers",
+        );
+        /// `read_input_registers_reply.byte_count`
+        pub const READ_INPUT_REGISTERS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_input_registers_reply",
+            "byte_count",
+        );
         /// `read_input_registers_exception`, code 0x84
         pub const READ_INPUT_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
             "read_input_registers_exception",
@@ -2103,6 +2168,16 @@ pub mod modbus {
             0x05,
             1,
             &[8],
+        );
+        /// `write_single_coil_reply.output_address`
+        pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_single_coil_reply",
+            "output_address",
+        );
+        /// `write_single_coil_reply.output_value`
+        pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE: FieldDesc = FieldDesc::new(
+            "write_single_coil_reply",
+            "output_value",
         );
         /// `write_single_coil_exception`, code 0x85
         pub const WRITE_SINGLE_COIL_EXCEPTION: MessageDesc = MessageDesc::new(
@@ -2118,6 +2193,16 @@ pub mod modbus {
             1,
             &[8],
         );
+        /// `write_single_register_reply.register_address`
+        pub const WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_single_register_reply",
+            "register_address",
+        );
+        /// `write_single_register_reply.register_value`
+        pub const WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE: FieldDesc = FieldDesc::new(
+            "write_single_register_reply",
+            "register_value",
+        );
         /// `write_single_register_exception`, code 0x86
         pub const WRITE_SINGLE_REGISTER_EXCEPTION: MessageDesc = MessageDesc::new(
             "write_single_register_exception",
@@ -2132,6 +2217,16 @@ pub mod modbus {
             1,
             &[8],
         );
+        /// `write_multiple_coils_reply.starting_address`
+        pub const WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_multiple_coils_reply",
+            "starting_address",
+        );
+        /// `write_multiple_coils_reply.quantity`
+        pub const WRITE_MULTIPLE_COILS_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_coils_reply",
+            "quantity",
+        );
         /// `write_multiple_coils_exception`, code 0x8F
         pub const WRITE_MULTIPLE_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
             "write_multiple_coils_exception",
@@ -2145,6 +2240,16 @@ pub mod modbus {
             0x10,
             1,
             &[8],
+        );
+        /// `write_multiple_registers_reply.starting_address`
+        pub const WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_multiple_registers_reply",
+            "starting_address",
+        );
+        /// `write_multiple_registers_reply.quantity`
+        pub const WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_registers_reply",
+            "quantity",
         );
         /// `write_multiple_registers_exception`, code 0x90
         pub const WRITE_MULTIPLE_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(

@@ -275,8 +275,7 @@ pub mod msp_by_direction {
     }
     /// Where `rc_reply.channels` sits in the frame and how its elements are counted.
     pub const REPEAT_RC_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "rc_reply",
-        field: "channels",
+        field: &response::RC_REPLY_CHANNELS,
         base: 6,
         at: 5,
         width: 2,
@@ -696,8 +695,8 @@ pub mod msp_by_direction {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspByDirection>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `api_version`, code 0x01
@@ -714,7 +713,7 @@ pub mod msp_by_direction {
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `api_version_reply`, code 0x01
         pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
             "api_version_reply",
@@ -724,6 +723,8 @@ pub mod msp_by_direction {
         );
         /// `rc_reply`, code 0x69
         pub const RC_REPLY: MessageDesc = MessageDesc::new("rc_reply", 0x69, 1, &[6]);
+        /// `rc_reply.channels`
+        pub const RC_REPLY_CHANNELS: FieldDesc = FieldDesc::new("rc_reply", "channels");
         /// `attitude_reply`, code 0x6C
         pub const ATTITUDE_REPLY: MessageDesc = MessageDesc::new(
             "attitude_reply",

@@ -179,14 +179,24 @@ pub mod msp_v2 {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
                     let frame = rt::fixed::<9>(frame, &request::API_VERSION)?;
-                    rt::equal("api_version", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
+                    rt::equal(
+                        &request::API_VERSION_RESERVED_FLAGS,
+                        3,
+                        frame[3] >> 1,
+                        0x0,
+                    )?;
                     rt::Ok(Self::ApiVersion {
                         dont_reply: (frame[3] & 0x1) != 0,
                     })
                 }
                 0x0200 => {
                     let frame = rt::fixed::<9>(frame, &request::FC_VARIANT)?;
-                    rt::equal("fc_variant", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
+                    rt::equal(
+                        &request::FC_VARIANT_RESERVED_FLAGS,
+                        3,
+                        frame[3] >> 1,
+                        0x0,
+                    )?;
                     rt::Ok(Self::FcVariant {
                         dont_reply: (frame[3] & 0x1) != 0,
                     })
@@ -441,8 +451,7 @@ pub mod msp_v2 {
                 0x0100 => {
                     let frame = rt::fixed::<12>(frame, &response::API_VERSION_REPLY)?;
                     rt::equal(
-                        "api_version_reply",
-                        "reserved_flags",
+                        &response::API_VERSION_REPLY_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -457,8 +466,7 @@ pub mod msp_v2 {
                 0x0200 => {
                     let frame = rt::fixed::<13>(frame, &response::FC_VARIANT_REPLY)?;
                     rt::equal(
-                        "fc_variant_reply",
-                        "reserved_flags",
+                        &response::FC_VARIANT_REPLY_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -648,16 +656,21 @@ pub mod msp_v2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `api_version`, code 0x0100
         pub const API_VERSION: MessageDesc = MessageDesc::new(
             "api_version",
             0x0100,
             2,
             &[9],
+        );
+        /// `api_version.reserved_flags`
+        pub const API_VERSION_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "api_version",
+            "reserved_flags",
         );
         /// `fc_variant`, code 0x0200
         pub const FC_VARIANT: MessageDesc = MessageDesc::new(
@@ -666,10 +679,15 @@ pub mod msp_v2 {
             2,
             &[9],
         );
+        /// `fc_variant.reserved_flags`
+        pub const FC_VARIANT_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "fc_variant",
+            "reserved_flags",
+        );
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `api_version_reply`, code 0x0100
         pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
             "api_version_reply",
@@ -677,12 +695,22 @@ pub mod msp_v2 {
             2,
             &[12],
         );
+        /// `api_version_reply.reserved_flags`
+        pub const API_VERSION_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "api_version_reply",
+            "reserved_flags",
+        );
         /// `fc_variant_reply`, code 0x0200
         pub const FC_VARIANT_REPLY: MessageDesc = MessageDesc::new(
             "fc_variant_reply",
             0x0200,
             2,
             &[13],
+        );
+        /// `fc_variant_reply.reserved_flags`
+        pub const FC_VARIANT_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "fc_variant_reply",
+            "reserved_flags",
         );
     }
 }

@@ -668,7 +668,13 @@ pub mod optional_sensor {
                     let frame = &s.frame;
                     let v_humidity = if s.has(0) {
                         let field_2: u16 = u16::from_be_bytes([frame[7], frame[8]]);
-                        rt::in_range("reading", "humidity", s.at(0), field_2, 0, 1000)?;
+                        rt::in_range(
+                            &response::READING_HUMIDITY,
+                            s.at(0),
+                            field_2,
+                            0,
+                            1000,
+                        )?;
                         rt::Some(Permille::from_raw(field_2))
                     } else {
                         rt::None
@@ -915,8 +921,8 @@ pub mod optional_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<OptionalSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `read`, code 0x01
@@ -931,9 +937,11 @@ pub mod optional_sensor {
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `reading`, code 0x81
         pub const READING: MessageDesc = MessageDesc::new("reading", 0x81, 1, &[8]);
+        /// `reading.humidity`
+        pub const READING_HUMIDITY: FieldDesc = FieldDesc::new("reading", "humidity");
         /// `event`, code 0x82
         pub const EVENT: MessageDesc = MessageDesc::new("event", 0x82, 1, &[6]);
     }

@@ -939,8 +939,8 @@ pub mod sd {
                 }
                 0x69 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_POSITION)?;
-                    rt::equal("read_actual_position", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_actual_position", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::READ_ACTUAL_POSITION_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_ACTUAL_POSITION_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadActualPosition)
                 }
                 0x77 => {
@@ -953,16 +953,15 @@ pub mod sd {
                 }
                 0x68 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_VELOCITY)?;
-                    rt::equal("read_actual_velocity", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_actual_velocity", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::READ_ACTUAL_VELOCITY_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_ACTUAL_VELOCITY_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadActualVelocity)
                 }
                 0xAA => {
                     let frame = rt::fixed::<6>(frame, &request::SET_SERVO_ID)?;
-                    rt::in_range("set_servo_id", "new_id", 2, frame[2], 1, 30)?;
+                    rt::in_range(&request::SET_SERVO_ID_NEW_ID, 2, frame[2], 1, 30)?;
                     rt::same(
-                        "set_servo_id",
-                        "new_id_repeat",
+                        &request::SET_SERVO_ID_NEW_ID_REPEAT,
                         3,
                         frame[3],
                         "new_id",
@@ -974,8 +973,8 @@ pub mod sd {
                 }
                 0xDA => {
                     let frame = rt::fixed::<6>(frame, &request::READ_SERVO_ID)?;
-                    rt::equal("read_servo_id", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_servo_id", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::READ_SERVO_ID_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_SERVO_ID_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadServoId)
                 }
                 0xB0 => {
@@ -987,15 +986,25 @@ pub mod sd {
                         0x1F,
                         &request::READ_CURRENT_CONSUMPTION,
                     )?;
-                    rt::equal("read_current_consumption", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_current_consumption", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &request::READ_CURRENT_CONSUMPTION_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::READ_CURRENT_CONSUMPTION_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::ReadCurrentConsumption)
                 }
                 0xB1 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_BUS_VOLTAGES)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::READ_BUS_VOLTAGES)?;
-                    rt::equal("read_bus_voltages", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_bus_voltages", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::READ_BUS_VOLTAGES_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_BUS_VOLTAGES_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadBusVoltages)
                 }
                 0xB2 => {
@@ -1008,15 +1017,13 @@ pub mod sd {
                         &request::READ_EXTENDED_CURRENT_CONSUMPTION,
                     )?;
                     rt::equal(
-                        "read_extended_current_consumption",
-                        "arg1",
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION_ARG1,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::equal(
-                        "read_extended_current_consumption",
-                        "arg2",
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION_ARG2,
                         3,
                         frame[3],
                         0x0,
@@ -1026,15 +1033,15 @@ pub mod sd {
                 0xA0 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_TEMPERATURES)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::READ_TEMPERATURES)?;
-                    rt::equal("read_temperatures", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_temperatures", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::READ_TEMPERATURES_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_TEMPERATURES_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadTemperatures)
                 }
                 0xA1 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_HUMIDITY)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::READ_HUMIDITY)?;
-                    rt::equal("read_humidity", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_humidity", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::READ_HUMIDITY_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_HUMIDITY_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadHumidity)
                 }
                 0x37 => {
@@ -1046,15 +1053,13 @@ pub mod sd {
                             &request::READ_SKIPPED_FRAMES_COUNTER,
                         )?;
                         rt::equal(
-                            "read_skipped_frames_counter",
-                            "arg1",
+                            &request::READ_SKIPPED_FRAMES_COUNTER_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_skipped_frames_counter",
-                            "arg2",
+                            &request::READ_SKIPPED_FRAMES_COUNTER_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1068,15 +1073,13 @@ pub mod sd {
                             &request::RESET_DROPPED_FRAMES_COUNTER,
                         )?;
                         rt::equal(
-                            "reset_dropped_frames_counter",
-                            "arg1",
+                            &request::RESET_DROPPED_FRAMES_COUNTER_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "reset_dropped_frames_counter",
-                            "arg2",
+                            &request::RESET_DROPPED_FRAMES_COUNTER_ARG2,
                             3,
                             frame[3],
                             0x2,
@@ -1094,15 +1097,13 @@ pub mod sd {
                             &request::READ_ACTUATOR_STATUS_WORD,
                         )?;
                         rt::equal(
-                            "read_actuator_status_word",
-                            "arg1",
+                            &request::READ_ACTUATOR_STATUS_WORD_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "read_actuator_status_word",
-                            "arg2",
+                            &request::READ_ACTUATOR_STATUS_WORD_ARG2,
                             3,
                             frame[3],
                             0x2,
@@ -1116,15 +1117,13 @@ pub mod sd {
                             &request::RESET_ACTUATOR_STATUS_WORD,
                         )?;
                         rt::equal(
-                            "reset_actuator_status_word",
-                            "arg1",
+                            &request::RESET_ACTUATOR_STATUS_WORD_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_actuator_status_word",
-                            "arg2",
+                            &request::RESET_ACTUATOR_STATUS_WORD_ARG2,
                             3,
                             frame[3],
                             0x52,
@@ -1143,15 +1142,13 @@ pub mod sd {
                         &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS,
                     )?;
                     rt::equal(
-                        "reset_default_role_and_error_flags",
-                        "arg1",
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1,
                         2,
                         frame[2],
                         0x41,
                     )?;
                     rt::equal(
-                        "reset_default_role_and_error_flags",
-                        "arg2",
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG2,
                         3,
                         frame[3],
                         0x53,
@@ -1167,8 +1164,18 @@ pub mod sd {
                         0x1F,
                         &request::SET_CURRENT_POSITION_AS_ZERO,
                     )?;
-                    rt::equal("set_current_position_as_zero", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("set_current_position_as_zero", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &request::SET_CURRENT_POSITION_AS_ZERO_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::SET_CURRENT_POSITION_AS_ZERO_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::SetCurrentPositionAsZero)
                 }
                 0x95 => {
@@ -1180,15 +1187,25 @@ pub mod sd {
                         0x1F,
                         &request::READ_CURRENT_ZERO_OFFSET,
                     )?;
-                    rt::equal("read_current_zero_offset", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_current_zero_offset", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &request::READ_CURRENT_ZERO_OFFSET_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::READ_CURRENT_ZERO_OFFSET_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::ReadCurrentZeroOffset)
                 }
                 0x98 => {
                     let frame = rt::fixed::<6>(frame, &request::RESET_ZERO_OFFSET)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::RESET_ZERO_OFFSET)?;
-                    rt::equal("reset_zero_offset", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("reset_zero_offset", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::RESET_ZERO_OFFSET_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::RESET_ZERO_OFFSET_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ResetZeroOffset)
                 }
                 0xF0 => {
@@ -1201,15 +1218,13 @@ pub mod sd {
                         &request::READ_ELECTRONIC_SERIAL_NUMBER,
                     )?;
                     rt::equal(
-                        "read_electronic_serial_number",
-                        "arg1",
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER_ARG1,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::in_range(
-                        "read_electronic_serial_number",
-                        "byte_number",
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1228,10 +1243,14 @@ pub mod sd {
                         0x1F,
                         &request::READ_PRODUCT_DESCRIPTION,
                     )?;
-                    rt::equal("read_product_description", "arg1", 2, frame[2], 0x0)?;
+                    rt::equal(
+                        &request::READ_PRODUCT_DESCRIPTION_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
                     rt::in_range(
-                        "read_product_description",
-                        "byte_number",
+                        &request::READ_PRODUCT_DESCRIPTION_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1244,10 +1263,9 @@ pub mod sd {
                 0xF2 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_SOFTWARE_REVISION)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::READ_SOFTWARE_REVISION)?;
-                    rt::equal("read_software_revision", "arg1", 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_SOFTWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
                     rt::in_range(
-                        "read_software_revision",
-                        "byte_number",
+                        &request::READ_SOFTWARE_REVISION_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1260,10 +1278,9 @@ pub mod sd {
                 0xF3 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_HARDWARE_REVISION)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::READ_HARDWARE_REVISION)?;
-                    rt::equal("read_hardware_revision", "arg1", 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_HARDWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
                     rt::in_range(
-                        "read_hardware_revision",
-                        "byte_number",
+                        &request::READ_HARDWARE_REVISION_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1281,8 +1298,18 @@ pub mod sd {
                             0x1F,
                             &request::READ_TOTAL_RUNTIME_HOURS,
                         )?;
-                        rt::equal("read_total_runtime_hours", "arg1", 2, frame[2], 0x0)?;
-                        rt::equal("read_total_runtime_hours", "arg2", 3, frame[3], 0x0)?;
+                        rt::equal(
+                            &request::READ_TOTAL_RUNTIME_HOURS_ARG1,
+                            2,
+                            frame[2],
+                            0x0,
+                        )?;
+                        rt::equal(
+                            &request::READ_TOTAL_RUNTIME_HOURS_ARG2,
+                            3,
+                            frame[3],
+                            0x0,
+                        )?;
                         rt::Ok(Self::ReadTotalRuntimeHours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
@@ -1292,15 +1319,13 @@ pub mod sd {
                             &request::READ_TOTAL_RUNTIME_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_total_runtime_min_sec",
-                            "arg1",
+                            &request::READ_TOTAL_RUNTIME_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_total_runtime_min_sec",
-                            "arg2",
+                            &request::READ_TOTAL_RUNTIME_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1318,15 +1343,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_0_24_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_0_24_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_0_24_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1340,15 +1363,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_0_24_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1361,8 +1382,18 @@ pub mod sd {
                             0x1F,
                             &request::RESET_LOAD_RUNTIME_0_24,
                         )?;
-                        rt::equal("reset_load_runtime_0_24", "arg1", 2, frame[2], 0xAA)?;
-                        rt::equal("reset_load_runtime_0_24", "arg2", 3, frame[3], 0x55)?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_0_24_ARG1,
+                            2,
+                            frame[2],
+                            0xAA,
+                        )?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_0_24_ARG2,
+                            3,
+                            frame[3],
+                            0x55,
+                        )?;
                         rt::Ok(Self::ResetLoadRuntime024)
                     });
                     g.end(&request::READ_LOAD_RUNTIME_0_24_HOURS)
@@ -1376,15 +1407,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_25_49_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_25_49_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_25_49_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1398,15 +1427,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_25_49_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1420,15 +1447,13 @@ pub mod sd {
                             &request::RESET_LOAD_RUNTIME_25_49,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_25_49",
-                            "arg1",
+                            &request::RESET_LOAD_RUNTIME_25_49_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_25_49",
-                            "arg2",
+                            &request::RESET_LOAD_RUNTIME_25_49_ARG2,
                             3,
                             frame[3],
                             0x55,
@@ -1446,15 +1471,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_50_74_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_50_74_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_50_74_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1468,15 +1491,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_50_74_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1490,15 +1511,13 @@ pub mod sd {
                             &request::RESET_LOAD_RUNTIME_50_74,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_50_74",
-                            "arg1",
+                            &request::RESET_LOAD_RUNTIME_50_74_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_50_74",
-                            "arg2",
+                            &request::RESET_LOAD_RUNTIME_50_74_ARG2,
                             3,
                             frame[3],
                             0x55,
@@ -1516,15 +1535,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_75_99_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_75_99_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_75_99_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1538,15 +1555,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_75_99_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1560,15 +1575,13 @@ pub mod sd {
                             &request::RESET_LOAD_RUNTIME_75_99,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_75_99",
-                            "arg1",
+                            &request::RESET_LOAD_RUNTIME_75_99_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_75_99",
-                            "arg2",
+                            &request::RESET_LOAD_RUNTIME_75_99_ARG2,
                             3,
                             frame[3],
                             0x55,
@@ -1586,15 +1599,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_100_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_100_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_100_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1608,15 +1619,13 @@ pub mod sd {
                             &request::READ_LOAD_RUNTIME_100_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_100_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_100_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1629,8 +1638,18 @@ pub mod sd {
                             0x1F,
                             &request::RESET_LOAD_RUNTIME_100,
                         )?;
-                        rt::equal("reset_load_runtime_100", "arg1", 2, frame[2], 0xAA)?;
-                        rt::equal("reset_load_runtime_100", "arg2", 3, frame[3], 0x55)?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_100_ARG1,
+                            2,
+                            frame[2],
+                            0xAA,
+                        )?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_100_ARG2,
+                            3,
+                            frame[3],
+                            0x55,
+                        )?;
                         rt::Ok(Self::ResetLoadRuntime100)
                     });
                     g.end(&request::READ_LOAD_RUNTIME_100_HOURS)
@@ -1643,8 +1662,18 @@ pub mod sd {
                             0x1F,
                             &request::READ_STALL_EVENT_COUNTER,
                         )?;
-                        rt::equal("read_stall_event_counter", "arg1", 2, frame[2], 0x0)?;
-                        rt::equal("read_stall_event_counter", "arg2", 3, frame[3], 0x0)?;
+                        rt::equal(
+                            &request::READ_STALL_EVENT_COUNTER_ARG1,
+                            2,
+                            frame[2],
+                            0x0,
+                        )?;
+                        rt::equal(
+                            &request::READ_STALL_EVENT_COUNTER_ARG2,
+                            3,
+                            frame[3],
+                            0x0,
+                        )?;
                         rt::Ok(Self::ReadStallEventCounter)
                     });
                     g.attempt(|frame: &[u8; 6]| {
@@ -1654,15 +1683,13 @@ pub mod sd {
                             &request::RESET_STALL_EVENT_COUNTER,
                         )?;
                         rt::equal(
-                            "reset_stall_event_counter",
-                            "arg1",
+                            &request::RESET_STALL_EVENT_COUNTER_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_stall_event_counter",
-                            "arg2",
+                            &request::RESET_STALL_EVENT_COUNTER_ARG2,
                             3,
                             frame[3],
                             0x55,
@@ -1674,8 +1701,8 @@ pub mod sd {
                 0xA9 => {
                     let frame = rt::fixed::<6>(frame, &request::READ_POWER_UP_CYCLES)?;
                     rt::no_broadcast(frame[1], 0x1F, &request::READ_POWER_UP_CYCLES)?;
-                    rt::equal("read_power_up_cycles", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_power_up_cycles", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(&request::READ_POWER_UP_CYCLES_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_POWER_UP_CYCLES_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadPowerUpCycles)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, false)),
@@ -2886,7 +2913,7 @@ pub mod sd {
                 0x49 => {
                     let frame = rt::fixed::<6>(frame, &response::ACTUAL_POSITION)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal("actual_position", "zero", 2, field_0 >> 12, 0x0)?;
+                    rt::equal(&response::ACTUAL_POSITION_ZERO, 2, field_0 >> 12, 0x0)?;
                     rt::Ok(Self::ActualPosition {
                         position: Angle::from_raw(
                             (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
@@ -2911,10 +2938,15 @@ pub mod sd {
                 }
                 0x55 => {
                     let frame = rt::fixed::<6>(frame, &response::SET_SERVO_ID_REPLY)?;
-                    rt::in_range("set_servo_id_reply", "new_id", 2, frame[2], 1, 30)?;
+                    rt::in_range(
+                        &response::SET_SERVO_ID_REPLY_NEW_ID,
+                        2,
+                        frame[2],
+                        1,
+                        30,
+                    )?;
                     rt::same(
-                        "set_servo_id_reply",
-                        "new_id_repeat",
+                        &response::SET_SERVO_ID_REPLY_NEW_ID_REPEAT,
                         3,
                         frame[3],
                         "new_id",
@@ -2926,15 +2958,20 @@ pub mod sd {
                 }
                 0x6D => {
                     let frame = rt::fixed::<6>(frame, &response::SERVO_ID)?;
-                    rt::in_range("servo_id", "id", 2, frame[2], 1, 30)?;
-                    rt::same("servo_id", "id_repeat", 3, frame[3], "id", frame[2])?;
+                    rt::in_range(&response::SERVO_ID_ID, 2, frame[2], 1, 30)?;
+                    rt::same(
+                        &response::SERVO_ID_ID_REPEAT,
+                        3,
+                        frame[3],
+                        "id",
+                        frame[2],
+                    )?;
                     rt::Ok(Self::ServoId { id: frame[2] })
                 }
                 0x30 => {
                     let frame = rt::fixed::<6>(frame, &response::CURRENT_CONSUMPTION)?;
                     rt::same(
-                        "current_consumption",
-                        "current_repeat",
+                        &response::CURRENT_CONSUMPTION_CURRENT_REPEAT,
                         3,
                         frame[3],
                         "current",
@@ -2970,10 +3007,16 @@ pub mod sd {
                 }
                 0x21 => {
                     let frame = rt::fixed::<6>(frame, &response::HUMIDITY)?;
-                    rt::in_range_or("humidity", "humidity", 2, frame[2], 1, 100, &[0])?;
+                    rt::in_range_or(
+                        &response::HUMIDITY_HUMIDITY,
+                        2,
+                        frame[2],
+                        1,
+                        100,
+                        &[0],
+                    )?;
                     rt::same(
-                        "humidity",
-                        "humidity_repeat",
+                        &response::HUMIDITY_HUMIDITY_REPEAT,
                         3,
                         frame[3],
                         "humidity",
@@ -2987,7 +3030,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x38, request.map(Request::name));
                     g.ambiguous(
                         asked >> 11 & 1 != 0,
-                        "skipped_frames_counter",
+                        &response::SKIPPED_FRAMES_COUNTER,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::SkippedFramesCounter {
                                 host_freshness_counter: frame[2],
@@ -2997,11 +3040,10 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 12 & 1 != 0,
-                        "dropped_frames_counter_reset",
+                        &response::DROPPED_FRAMES_COUNTER_RESET,
                         |frame: &[u8; 6]| {
                             rt::equal(
-                                "dropped_frames_counter_reset",
-                                "arg2",
+                                &response::DROPPED_FRAMES_COUNTER_RESET_ARG2,
                                 3,
                                 frame[3],
                                 0x0,
@@ -3025,15 +3067,13 @@ pub mod sd {
                         6,
                     >(frame, &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY)?;
                     rt::equal(
-                        "reset_default_role_and_error_flags_reply",
-                        "arg1",
+                        &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1,
                         2,
                         frame[2],
                         0x41,
                     )?;
                     rt::equal(
-                        "reset_default_role_and_error_flags_reply",
-                        "arg2",
+                        &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG2,
                         3,
                         frame[3],
                         0x53,
@@ -3046,8 +3086,7 @@ pub mod sd {
                     >(frame, &response::SET_CURRENT_POSITION_AS_ZERO_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(
-                        "set_current_position_as_zero_reply",
-                        "zero",
+                        &response::SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO,
                         2,
                         field_0 >> 12,
                         0x0,
@@ -3061,7 +3100,12 @@ pub mod sd {
                 0x65 => {
                     let frame = rt::fixed::<6>(frame, &response::CURRENT_ZERO_OFFSET)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal("current_zero_offset", "zero", 2, field_0 >> 12, 0x0)?;
+                    rt::equal(
+                        &response::CURRENT_ZERO_OFFSET_ZERO,
+                        2,
+                        field_0 >> 12,
+                        0x0,
+                    )?;
                     rt::Ok(Self::CurrentZeroOffset {
                         zero_offset: Angle::from_raw(
                             (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
@@ -3072,8 +3116,18 @@ pub mod sd {
                     let frame = rt::fixed::<
                         6,
                     >(frame, &response::RESET_ZERO_OFFSET_REPLY)?;
-                    rt::equal("reset_zero_offset_reply", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("reset_zero_offset_reply", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &response::RESET_ZERO_OFFSET_REPLY_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &response::RESET_ZERO_OFFSET_REPLY_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::ResetZeroOffsetReply)
                 }
                 0x10 => {
@@ -3081,8 +3135,7 @@ pub mod sd {
                         6,
                     >(frame, &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER)?;
                     rt::in_range(
-                        "electronic_serial_number_character",
-                        "string_length",
+                        &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3098,8 +3151,7 @@ pub mod sd {
                         6,
                     >(frame, &response::PRODUCT_DESCRIPTION_CHARACTER)?;
                     rt::in_range(
-                        "product_description_character",
-                        "string_length",
+                        &response::PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3115,8 +3167,7 @@ pub mod sd {
                         6,
                     >(frame, &response::SOFTWARE_REVISION_CHARACTER)?;
                     rt::in_range(
-                        "software_revision_character",
-                        "string_length",
+                        &response::SOFTWARE_REVISION_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3132,8 +3183,7 @@ pub mod sd {
                         6,
                     >(frame, &response::HARDWARE_REVISION_CHARACTER)?;
                     rt::in_range(
-                        "hardware_revision_character",
-                        "string_length",
+                        &response::HARDWARE_REVISION_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3148,7 +3198,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
                     g.ambiguous(
                         asked >> 22 & 1 != 0,
-                        "total_runtime_hours",
+                        &response::TOTAL_RUNTIME_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::TotalRuntimeHours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3157,19 +3207,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 23 & 1 != 0,
-                        "total_runtime_min_sec",
+                        &response::TOTAL_RUNTIME_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "total_runtime_min_sec",
-                                "runtime_minutes",
+                                &response::TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "total_runtime_min_sec",
-                                "runtime_seconds",
+                                &response::TOTAL_RUNTIME_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3187,7 +3235,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x23, request.map(Request::name));
                     g.ambiguous(
                         asked >> 24 & 1 != 0,
-                        "load_runtime_0_24_hours",
+                        &response::LOAD_RUNTIME_0_24_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime024Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3196,19 +3244,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 25 & 1 != 0,
-                        "load_runtime_0_24_min_sec",
+                        &response::LOAD_RUNTIME_0_24_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_0_24_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_0_24_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3222,7 +3268,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 26 & 1 != 0,
-                        "load_runtime_0_24_hours_before_reset",
+                        &response::LOAD_RUNTIME_0_24_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime024HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3238,7 +3284,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x24, request.map(Request::name));
                     g.ambiguous(
                         asked >> 27 & 1 != 0,
-                        "load_runtime_25_49_hours",
+                        &response::LOAD_RUNTIME_25_49_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime2549Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3247,19 +3293,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 28 & 1 != 0,
-                        "load_runtime_25_49_min_sec",
+                        &response::LOAD_RUNTIME_25_49_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_25_49_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_25_49_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3273,7 +3317,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 29 & 1 != 0,
-                        "load_runtime_25_49_hours_before_reset",
+                        &response::LOAD_RUNTIME_25_49_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime2549HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3289,7 +3333,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x25, request.map(Request::name));
                     g.ambiguous(
                         asked >> 30 & 1 != 0,
-                        "load_runtime_50_74_hours",
+                        &response::LOAD_RUNTIME_50_74_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime5074Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3298,19 +3342,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 31 & 1 != 0,
-                        "load_runtime_50_74_min_sec",
+                        &response::LOAD_RUNTIME_50_74_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_50_74_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_50_74_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3324,7 +3366,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 32 & 1 != 0,
-                        "load_runtime_50_74_hours_before_reset",
+                        &response::LOAD_RUNTIME_50_74_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime5074HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3340,7 +3382,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x26, request.map(Request::name));
                     g.ambiguous(
                         asked >> 33 & 1 != 0,
-                        "load_runtime_75_99_hours",
+                        &response::LOAD_RUNTIME_75_99_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime7599Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3349,19 +3391,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 34 & 1 != 0,
-                        "load_runtime_75_99_min_sec",
+                        &response::LOAD_RUNTIME_75_99_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_75_99_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_75_99_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3375,7 +3415,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 35 & 1 != 0,
-                        "load_runtime_75_99_hours_before_reset",
+                        &response::LOAD_RUNTIME_75_99_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime7599HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3391,7 +3431,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x27, request.map(Request::name));
                     g.ambiguous(
                         asked >> 36 & 1 != 0,
-                        "load_runtime_100_hours",
+                        &response::LOAD_RUNTIME_100_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime100Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3400,19 +3440,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 37 & 1 != 0,
-                        "load_runtime_100_min_sec",
+                        &response::LOAD_RUNTIME_100_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_100_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_100_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_100_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3426,7 +3464,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 38 & 1 != 0,
-                        "load_runtime_100_hours_before_reset",
+                        &response::LOAD_RUNTIME_100_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime100HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3442,7 +3480,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x28, request.map(Request::name));
                     g.ambiguous(
                         asked >> 39 & 1 != 0,
-                        "stall_event_counter",
+                        &response::STALL_EVENT_COUNTER,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::StallEventCounter {
                                 stall_events: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3451,7 +3489,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 40 & 1 != 0,
-                        "stall_event_counter_before_reset",
+                        &response::STALL_EVENT_COUNTER_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::StallEventCounterBeforeReset {
                                 stall_events_before_reset: u16::from_be_bytes([
@@ -3893,10 +3931,10 @@ pub mod sd {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Sd>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `set_point`, code 0x76
         pub const SET_POINT: MessageDesc = MessageDesc::new("set_point", 0x76, 1, &[6]);
         /// `read_actual_position`, code 0x69
@@ -3905,6 +3943,16 @@ pub mod sd {
             0x69,
             1,
             &[6],
+        );
+        /// `read_actual_position.arg1`
+        pub const READ_ACTUAL_POSITION_ARG1: FieldDesc = FieldDesc::new(
+            "read_actual_position",
+            "arg1",
+        );
+        /// `read_actual_position.arg2`
+        pub const READ_ACTUAL_POSITION_ARG2: FieldDesc = FieldDesc::new(
+            "read_actual_position",
+            "arg2",
         );
         /// `set_velocity`, code 0x77
         pub const SET_VELOCITY: MessageDesc = MessageDesc::new(
@@ -3920,12 +3968,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_actual_velocity.arg1`
+        pub const READ_ACTUAL_VELOCITY_ARG1: FieldDesc = FieldDesc::new(
+            "read_actual_velocity",
+            "arg1",
+        );
+        /// `read_actual_velocity.arg2`
+        pub const READ_ACTUAL_VELOCITY_ARG2: FieldDesc = FieldDesc::new(
+            "read_actual_velocity",
+            "arg2",
+        );
         /// `set_servo_id`, code 0xAA
         pub const SET_SERVO_ID: MessageDesc = MessageDesc::new(
             "set_servo_id",
             0xAA,
             1,
             &[6],
+        );
+        /// `set_servo_id.new_id`
+        pub const SET_SERVO_ID_NEW_ID: FieldDesc = FieldDesc::new(
+            "set_servo_id",
+            "new_id",
+        );
+        /// `set_servo_id.new_id_repeat`
+        pub const SET_SERVO_ID_NEW_ID_REPEAT: FieldDesc = FieldDesc::new(
+            "set_servo_id",
+            "new_id_repeat",
         );
         /// `read_servo_id`, code 0xDA
         pub const READ_SERVO_ID: MessageDesc = MessageDesc::new(
@@ -3934,12 +4002,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_servo_id.arg1`
+        pub const READ_SERVO_ID_ARG1: FieldDesc = FieldDesc::new(
+            "read_servo_id",
+            "arg1",
+        );
+        /// `read_servo_id.arg2`
+        pub const READ_SERVO_ID_ARG2: FieldDesc = FieldDesc::new(
+            "read_servo_id",
+            "arg2",
+        );
         /// `read_current_consumption`, code 0xB0
         pub const READ_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
             "read_current_consumption",
             0xB0,
             1,
             &[6],
+        );
+        /// `read_current_consumption.arg1`
+        pub const READ_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
+            "read_current_consumption",
+            "arg1",
+        );
+        /// `read_current_consumption.arg2`
+        pub const READ_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
+            "read_current_consumption",
+            "arg2",
         );
         /// `read_bus_voltages`, code 0xB1
         pub const READ_BUS_VOLTAGES: MessageDesc = MessageDesc::new(
@@ -3948,12 +4036,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_bus_voltages.arg1`
+        pub const READ_BUS_VOLTAGES_ARG1: FieldDesc = FieldDesc::new(
+            "read_bus_voltages",
+            "arg1",
+        );
+        /// `read_bus_voltages.arg2`
+        pub const READ_BUS_VOLTAGES_ARG2: FieldDesc = FieldDesc::new(
+            "read_bus_voltages",
+            "arg2",
+        );
         /// `read_extended_current_consumption`, code 0xB2
         pub const READ_EXTENDED_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
             "read_extended_current_consumption",
             0xB2,
             1,
             &[6],
+        );
+        /// `read_extended_current_consumption.arg1`
+        pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
+            "read_extended_current_consumption",
+            "arg1",
+        );
+        /// `read_extended_current_consumption.arg2`
+        pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
+            "read_extended_current_consumption",
+            "arg2",
         );
         /// `read_temperatures`, code 0xA0
         pub const READ_TEMPERATURES: MessageDesc = MessageDesc::new(
@@ -3962,12 +4070,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_temperatures.arg1`
+        pub const READ_TEMPERATURES_ARG1: FieldDesc = FieldDesc::new(
+            "read_temperatures",
+            "arg1",
+        );
+        /// `read_temperatures.arg2`
+        pub const READ_TEMPERATURES_ARG2: FieldDesc = FieldDesc::new(
+            "read_temperatures",
+            "arg2",
+        );
         /// `read_humidity`, code 0xA1
         pub const READ_HUMIDITY: MessageDesc = MessageDesc::new(
             "read_humidity",
             0xA1,
             1,
             &[6],
+        );
+        /// `read_humidity.arg1`
+        pub const READ_HUMIDITY_ARG1: FieldDesc = FieldDesc::new(
+            "read_humidity",
+            "arg1",
+        );
+        /// `read_humidity.arg2`
+        pub const READ_HUMIDITY_ARG2: FieldDesc = FieldDesc::new(
+            "read_humidity",
+            "arg2",
         );
         /// `read_skipped_frames_counter`, code 0x37
         pub const READ_SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
@@ -3976,12 +4104,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_skipped_frames_counter.arg1`
+        pub const READ_SKIPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "read_skipped_frames_counter",
+            "arg1",
+        );
+        /// `read_skipped_frames_counter.arg2`
+        pub const READ_SKIPPED_FRAMES_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "read_skipped_frames_counter",
+            "arg2",
+        );
         /// `reset_dropped_frames_counter`, code 0x37
         pub const RESET_DROPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
             "reset_dropped_frames_counter",
             0x37,
             1,
             &[6],
+        );
+        /// `reset_dropped_frames_counter.arg1`
+        pub const RESET_DROPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "reset_dropped_frames_counter",
+            "arg1",
+        );
+        /// `reset_dropped_frames_counter.arg2`
+        pub const RESET_DROPPED_FRAMES_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "reset_dropped_frames_counter",
+            "arg2",
         );
         /// `read_actuator_status_word`, code 0x40
         pub const READ_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
@@ -3990,12 +4138,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_actuator_status_word.arg1`
+        pub const READ_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
+            "read_actuator_status_word",
+            "arg1",
+        );
+        /// `read_actuator_status_word.arg2`
+        pub const READ_ACTUATOR_STATUS_WORD_ARG2: FieldDesc = FieldDesc::new(
+            "read_actuator_status_word",
+            "arg2",
+        );
         /// `reset_actuator_status_word`, code 0x40
         pub const RESET_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
             "reset_actuator_status_word",
             0x40,
             1,
             &[6],
+        );
+        /// `reset_actuator_status_word.arg1`
+        pub const RESET_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
+            "reset_actuator_status_word",
+            "arg1",
+        );
+        /// `reset_actuator_status_word.arg2`
+        pub const RESET_ACTUATOR_STATUS_WORD_ARG2: FieldDesc = FieldDesc::new(
+            "reset_actuator_status_word",
+            "arg2",
         );
         /// `reset_default_role_and_error_flags`, code 0xB4
         pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS: MessageDesc = MessageDesc::new(
@@ -4004,12 +4172,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `reset_default_role_and_error_flags.arg1`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags",
+            "arg1",
+        );
+        /// `reset_default_role_and_error_flags.arg2`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG2: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags",
+            "arg2",
+        );
         /// `set_current_position_as_zero`, code 0x99
         pub const SET_CURRENT_POSITION_AS_ZERO: MessageDesc = MessageDesc::new(
             "set_current_position_as_zero",
             0x99,
             1,
             &[6],
+        );
+        /// `set_current_position_as_zero.arg1`
+        pub const SET_CURRENT_POSITION_AS_ZERO_ARG1: FieldDesc = FieldDesc::new(
+            "set_current_position_as_zero",
+            "arg1",
+        );
+        /// `set_current_position_as_zero.arg2`
+        pub const SET_CURRENT_POSITION_AS_ZERO_ARG2: FieldDesc = FieldDesc::new(
+            "set_current_position_as_zero",
+            "arg2",
         );
         /// `read_current_zero_offset`, code 0x95
         pub const READ_CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
@@ -4018,12 +4206,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_current_zero_offset.arg1`
+        pub const READ_CURRENT_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
+            "read_current_zero_offset",
+            "arg1",
+        );
+        /// `read_current_zero_offset.arg2`
+        pub const READ_CURRENT_ZERO_OFFSET_ARG2: FieldDesc = FieldDesc::new(
+            "read_current_zero_offset",
+            "arg2",
+        );
         /// `reset_zero_offset`, code 0x98
         pub const RESET_ZERO_OFFSET: MessageDesc = MessageDesc::new(
             "reset_zero_offset",
             0x98,
             1,
             &[6],
+        );
+        /// `reset_zero_offset.arg1`
+        pub const RESET_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
+            "reset_zero_offset",
+            "arg1",
+        );
+        /// `reset_zero_offset.arg2`
+        pub const RESET_ZERO_OFFSET_ARG2: FieldDesc = FieldDesc::new(
+            "reset_zero_offset",
+            "arg2",
         );
         /// `read_electronic_serial_number`, code 0xF0
         pub const READ_ELECTRONIC_SERIAL_NUMBER: MessageDesc = MessageDesc::new(
@@ -4032,12 +4240,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_electronic_serial_number.arg1`
+        pub const READ_ELECTRONIC_SERIAL_NUMBER_ARG1: FieldDesc = FieldDesc::new(
+            "read_electronic_serial_number",
+            "arg1",
+        );
+        /// `read_electronic_serial_number.byte_number`
+        pub const READ_ELECTRONIC_SERIAL_NUMBER_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_electronic_serial_number",
+            "byte_number",
+        );
         /// `read_product_description`, code 0xF1
         pub const READ_PRODUCT_DESCRIPTION: MessageDesc = MessageDesc::new(
             "read_product_description",
             0xF1,
             1,
             &[6],
+        );
+        /// `read_product_description.arg1`
+        pub const READ_PRODUCT_DESCRIPTION_ARG1: FieldDesc = FieldDesc::new(
+            "read_product_description",
+            "arg1",
+        );
+        /// `read_product_description.byte_number`
+        pub const READ_PRODUCT_DESCRIPTION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_product_description",
+            "byte_number",
         );
         /// `read_software_revision`, code 0xF2
         pub const READ_SOFTWARE_REVISION: MessageDesc = MessageDesc::new(
@@ -4046,12 +4274,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_software_revision.arg1`
+        pub const READ_SOFTWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
+            "read_software_revision",
+            "arg1",
+        );
+        /// `read_software_revision.byte_number`
+        pub const READ_SOFTWARE_REVISION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_software_revision",
+            "byte_number",
+        );
         /// `read_hardware_revision`, code 0xF3
         pub const READ_HARDWARE_REVISION: MessageDesc = MessageDesc::new(
             "read_hardware_revision",
             0xF3,
             1,
             &[6],
+        );
+        /// `read_hardware_revision.arg1`
+        pub const READ_HARDWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
+            "read_hardware_revision",
+            "arg1",
+        );
+        /// `read_hardware_revision.byte_number`
+        pub const READ_HARDWARE_REVISION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_hardware_revision",
+            "byte_number",
         );
         /// `read_total_runtime_hours`, code 0xA2
         pub const READ_TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
@@ -4060,12 +4308,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_total_runtime_hours.arg1`
+        pub const READ_TOTAL_RUNTIME_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_total_runtime_hours",
+            "arg1",
+        );
+        /// `read_total_runtime_hours.arg2`
+        pub const READ_TOTAL_RUNTIME_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_total_runtime_hours",
+            "arg2",
+        );
         /// `read_total_runtime_min_sec`, code 0xA2
         pub const READ_TOTAL_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
             "read_total_runtime_min_sec",
             0xA2,
             1,
             &[6],
+        );
+        /// `read_total_runtime_min_sec.arg1`
+        pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_total_runtime_min_sec",
+            "arg1",
+        );
+        /// `read_total_runtime_min_sec.arg2`
+        pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_total_runtime_min_sec",
+            "arg2",
         );
         /// `read_load_runtime_0_24_hours`, code 0xA3
         pub const READ_LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
@@ -4074,12 +4342,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_load_runtime_0_24_hours.arg1`
+        pub const READ_LOAD_RUNTIME_0_24_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_0_24_hours.arg2`
+        pub const READ_LOAD_RUNTIME_0_24_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_hours",
+            "arg2",
+        );
         /// `read_load_runtime_0_24_min_sec`, code 0xA3
         pub const READ_LOAD_RUNTIME_0_24_MIN_SEC: MessageDesc = MessageDesc::new(
             "read_load_runtime_0_24_min_sec",
             0xA3,
             1,
             &[6],
+        );
+        /// `read_load_runtime_0_24_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_0_24_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_min_sec",
+            "arg2",
         );
         /// `reset_load_runtime_0_24`, code 0xA3
         pub const RESET_LOAD_RUNTIME_0_24: MessageDesc = MessageDesc::new(
@@ -4088,12 +4376,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `reset_load_runtime_0_24.arg1`
+        pub const RESET_LOAD_RUNTIME_0_24_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_0_24",
+            "arg1",
+        );
+        /// `reset_load_runtime_0_24.arg2`
+        pub const RESET_LOAD_RUNTIME_0_24_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_0_24",
+            "arg2",
+        );
         /// `read_load_runtime_25_49_hours`, code 0xA4
         pub const READ_LOAD_RUNTIME_25_49_HOURS: MessageDesc = MessageDesc::new(
             "read_load_runtime_25_49_hours",
             0xA4,
             1,
             &[6],
+        );
+        /// `read_load_runtime_25_49_hours.arg1`
+        pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_25_49_hours.arg2`
+        pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_hours",
+            "arg2",
         );
         /// `read_load_runtime_25_49_min_sec`, code 0xA4
         pub const READ_LOAD_RUNTIME_25_49_MIN_SEC: MessageDesc = MessageDesc::new(
@@ -4102,12 +4410,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_load_runtime_25_49_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_25_49_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_min_sec",
+            "arg2",
+        );
         /// `reset_load_runtime_25_49`, code 0xA4
         pub const RESET_LOAD_RUNTIME_25_49: MessageDesc = MessageDesc::new(
             "reset_load_runtime_25_49",
             0xA4,
             1,
             &[6],
+        );
+        /// `reset_load_runtime_25_49.arg1`
+        pub const RESET_LOAD_RUNTIME_25_49_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_25_49",
+            "arg1",
+        );
+        /// `reset_load_runtime_25_49.arg2`
+        pub const RESET_LOAD_RUNTIME_25_49_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_25_49",
+            "arg2",
         );
         /// `read_load_runtime_50_74_hours`, code 0xA5
         pub const READ_LOAD_RUNTIME_50_74_HOURS: MessageDesc = MessageDesc::new(
@@ -4116,12 +4444,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_load_runtime_50_74_hours.arg1`
+        pub const READ_LOAD_RUNTIME_50_74_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_50_74_hours.arg2`
+        pub const READ_LOAD_RUNTIME_50_74_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_hours",
+            "arg2",
+        );
         /// `read_load_runtime_50_74_min_sec`, code 0xA5
         pub const READ_LOAD_RUNTIME_50_74_MIN_SEC: MessageDesc = MessageDesc::new(
             "read_load_runtime_50_74_min_sec",
             0xA5,
             1,
             &[6],
+        );
+        /// `read_load_runtime_50_74_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_50_74_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_min_sec",
+            "arg2",
         );
         /// `reset_load_runtime_50_74`, code 0xA5
         pub const RESET_LOAD_RUNTIME_50_74: MessageDesc = MessageDesc::new(
@@ -4130,12 +4478,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `reset_load_runtime_50_74.arg1`
+        pub const RESET_LOAD_RUNTIME_50_74_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_50_74",
+            "arg1",
+        );
+        /// `reset_load_runtime_50_74.arg2`
+        pub const RESET_LOAD_RUNTIME_50_74_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_50_74",
+            "arg2",
+        );
         /// `read_load_runtime_75_99_hours`, code 0xA6
         pub const READ_LOAD_RUNTIME_75_99_HOURS: MessageDesc = MessageDesc::new(
             "read_load_runtime_75_99_hours",
             0xA6,
             1,
             &[6],
+        );
+        /// `read_load_runtime_75_99_hours.arg1`
+        pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_75_99_hours.arg2`
+        pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_hours",
+            "arg2",
         );
         /// `read_load_runtime_75_99_min_sec`, code 0xA6
         pub const READ_LOAD_RUNTIME_75_99_MIN_SEC: MessageDesc = MessageDesc::new(
@@ -4144,12 +4512,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_load_runtime_75_99_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_75_99_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_min_sec",
+            "arg2",
+        );
         /// `reset_load_runtime_75_99`, code 0xA6
         pub const RESET_LOAD_RUNTIME_75_99: MessageDesc = MessageDesc::new(
             "reset_load_runtime_75_99",
             0xA6,
             1,
             &[6],
+        );
+        /// `reset_load_runtime_75_99.arg1`
+        pub const RESET_LOAD_RUNTIME_75_99_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_75_99",
+            "arg1",
+        );
+        /// `reset_load_runtime_75_99.arg2`
+        pub const RESET_LOAD_RUNTIME_75_99_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_75_99",
+            "arg2",
         );
         /// `read_load_runtime_100_hours`, code 0xA7
         pub const READ_LOAD_RUNTIME_100_HOURS: MessageDesc = MessageDesc::new(
@@ -4158,12 +4546,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_load_runtime_100_hours.arg1`
+        pub const READ_LOAD_RUNTIME_100_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_100_hours.arg2`
+        pub const READ_LOAD_RUNTIME_100_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_hours",
+            "arg2",
+        );
         /// `read_load_runtime_100_min_sec`, code 0xA7
         pub const READ_LOAD_RUNTIME_100_MIN_SEC: MessageDesc = MessageDesc::new(
             "read_load_runtime_100_min_sec",
             0xA7,
             1,
             &[6],
+        );
+        /// `read_load_runtime_100_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_100_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_min_sec",
+            "arg2",
         );
         /// `reset_load_runtime_100`, code 0xA7
         pub const RESET_LOAD_RUNTIME_100: MessageDesc = MessageDesc::new(
@@ -4172,12 +4580,32 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `reset_load_runtime_100.arg1`
+        pub const RESET_LOAD_RUNTIME_100_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_100",
+            "arg1",
+        );
+        /// `reset_load_runtime_100.arg2`
+        pub const RESET_LOAD_RUNTIME_100_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_100",
+            "arg2",
+        );
         /// `read_stall_event_counter`, code 0xA8
         pub const READ_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
             "read_stall_event_counter",
             0xA8,
             1,
             &[6],
+        );
+        /// `read_stall_event_counter.arg1`
+        pub const READ_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "read_stall_event_counter",
+            "arg1",
+        );
+        /// `read_stall_event_counter.arg2`
+        pub const READ_STALL_EVENT_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "read_stall_event_counter",
+            "arg2",
         );
         /// `reset_stall_event_counter`, code 0xA8
         pub const RESET_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
@@ -4186,6 +4614,16 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `reset_stall_event_counter.arg1`
+        pub const RESET_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "reset_stall_event_counter",
+            "arg1",
+        );
+        /// `reset_stall_event_counter.arg2`
+        pub const RESET_STALL_EVENT_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "reset_stall_event_counter",
+            "arg2",
+        );
         /// `read_power_up_cycles`, code 0xA9
         pub const READ_POWER_UP_CYCLES: MessageDesc = MessageDesc::new(
             "read_power_up_cycles",
@@ -4193,10 +4631,20 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `read_power_up_cycles.arg1`
+        pub const READ_POWER_UP_CYCLES_ARG1: FieldDesc = FieldDesc::new(
+            "read_power_up_cycles",
+            "arg1",
+        );
+        /// `read_power_up_cycles.arg2`
+        pub const READ_POWER_UP_CYCLES_ARG2: FieldDesc = FieldDesc::new(
+            "read_power_up_cycles",
+            "arg2",
+        );
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `set_point_reply`, code 0x56
         pub const SET_POINT_REPLY: MessageDesc = MessageDesc::new(
             "set_point_reply",
@@ -4210,6 +4658,11 @@ pub mod sd {
             0x49,
             1,
             &[6],
+        );
+        /// `actual_position.zero`
+        pub const ACTUAL_POSITION_ZERO: FieldDesc = FieldDesc::new(
+            "actual_position",
+            "zero",
         );
         /// `set_velocity_reply`, code 0x57
         pub const SET_VELOCITY_REPLY: MessageDesc = MessageDesc::new(
@@ -4232,14 +4685,36 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `set_servo_id_reply.new_id`
+        pub const SET_SERVO_ID_REPLY_NEW_ID: FieldDesc = FieldDesc::new(
+            "set_servo_id_reply",
+            "new_id",
+        );
+        /// `set_servo_id_reply.new_id_repeat`
+        pub const SET_SERVO_ID_REPLY_NEW_ID_REPEAT: FieldDesc = FieldDesc::new(
+            "set_servo_id_reply",
+            "new_id_repeat",
+        );
         /// `servo_id`, code 0x6D
         pub const SERVO_ID: MessageDesc = MessageDesc::new("servo_id", 0x6D, 1, &[6]);
+        /// `servo_id.id`
+        pub const SERVO_ID_ID: FieldDesc = FieldDesc::new("servo_id", "id");
+        /// `servo_id.id_repeat`
+        pub const SERVO_ID_ID_REPEAT: FieldDesc = FieldDesc::new(
+            "servo_id",
+            "id_repeat",
+        );
         /// `current_consumption`, code 0x30
         pub const CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
             "current_consumption",
             0x30,
             1,
             &[6],
+        );
+        /// `current_consumption.current_repeat`
+        pub const CURRENT_CONSUMPTION_CURRENT_REPEAT: FieldDesc = FieldDesc::new(
+            "current_consumption",
+            "current_repeat",
         );
         /// `bus_voltages`, code 0x31
         pub const BUS_VOLTAGES: MessageDesc = MessageDesc::new(
@@ -4264,6 +4739,13 @@ pub mod sd {
         );
         /// `humidity`, code 0x21
         pub const HUMIDITY: MessageDesc = MessageDesc::new("humidity", 0x21, 1, &[6]);
+        /// `humidity.humidity`
+        pub const HUMIDITY_HUMIDITY: FieldDesc = FieldDesc::new("humidity", "humidity");
+        /// `humidity.humidity_repeat`
+        pub const HUMIDITY_HUMIDITY_REPEAT: FieldDesc = FieldDesc::new(
+            "humidity",
+            "humidity_repeat",
+        );
         /// `skipped_frames_counter`, code 0x38
         pub const SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
             "skipped_frames_counter",
@@ -4277,6 +4759,11 @@ pub mod sd {
             0x38,
             1,
             &[6],
+        );
+        /// `dropped_frames_counter_reset.arg2`
+        pub const DROPPED_FRAMES_COUNTER_RESET_ARG2: FieldDesc = FieldDesc::new(
+            "dropped_frames_counter_reset",
+            "arg2",
         );
         /// `actuator_status_word`, code 0x41
         pub const ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
@@ -4292,12 +4779,27 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `reset_default_role_and_error_flags_reply.arg1`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags_reply",
+            "arg1",
+        );
+        /// `reset_default_role_and_error_flags_reply.arg2`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG2: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags_reply",
+            "arg2",
+        );
         /// `set_current_position_as_zero_reply`, code 0x4C
         pub const SET_CURRENT_POSITION_AS_ZERO_REPLY: MessageDesc = MessageDesc::new(
             "set_current_position_as_zero_reply",
             0x4C,
             1,
             &[6],
+        );
+        /// `set_current_position_as_zero_reply.zero`
+        pub const SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO: FieldDesc = FieldDesc::new(
+            "set_current_position_as_zero_reply",
+            "zero",
         );
         /// `current_zero_offset`, code 0x65
         pub const CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
@@ -4306,12 +4808,27 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `current_zero_offset.zero`
+        pub const CURRENT_ZERO_OFFSET_ZERO: FieldDesc = FieldDesc::new(
+            "current_zero_offset",
+            "zero",
+        );
         /// `reset_zero_offset_reply`, code 0x64
         pub const RESET_ZERO_OFFSET_REPLY: MessageDesc = MessageDesc::new(
             "reset_zero_offset_reply",
             0x64,
             1,
             &[6],
+        );
+        /// `reset_zero_offset_reply.arg1`
+        pub const RESET_ZERO_OFFSET_REPLY_ARG1: FieldDesc = FieldDesc::new(
+            "reset_zero_offset_reply",
+            "arg1",
+        );
+        /// `reset_zero_offset_reply.arg2`
+        pub const RESET_ZERO_OFFSET_REPLY_ARG2: FieldDesc = FieldDesc::new(
+            "reset_zero_offset_reply",
+            "arg2",
         );
         /// `electronic_serial_number_character`, code 0x10
         pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER: MessageDesc = MessageDesc::new(
@@ -4320,12 +4837,22 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `electronic_serial_number_character.string_length`
+        pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "electronic_serial_number_character",
+            "string_length",
+        );
         /// `product_description_character`, code 0x11
         pub const PRODUCT_DESCRIPTION_CHARACTER: MessageDesc = MessageDesc::new(
             "product_description_character",
             0x11,
             1,
             &[6],
+        );
+        /// `product_description_character.string_length`
+        pub const PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "product_description_character",
+            "string_length",
         );
         /// `software_revision_character`, code 0x12
         pub const SOFTWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
@@ -4334,12 +4861,22 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `software_revision_character.string_length`
+        pub const SOFTWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "software_revision_character",
+            "string_length",
+        );
         /// `hardware_revision_character`, code 0x13
         pub const HARDWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
             "hardware_revision_character",
             0x13,
             1,
             &[6],
+        );
+        /// `hardware_revision_character.string_length`
+        pub const HARDWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "hardware_revision_character",
+            "string_length",
         );
         /// `total_runtime_hours`, code 0x22
         pub const TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
@@ -4355,6 +4892,16 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `total_runtime_min_sec.runtime_minutes`
+        pub const TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "total_runtime_min_sec",
+            "runtime_minutes",
+        );
+        /// `total_runtime_min_sec.runtime_seconds`
+        pub const TOTAL_RUNTIME_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "total_runtime_min_sec",
+            "runtime_seconds",
+        );
         /// `load_runtime_0_24_hours`, code 0x23
         pub const LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
             "load_runtime_0_24_hours",
@@ -4368,6 +4915,16 @@ pub mod sd {
             0x23,
             1,
             &[6],
+        );
+        /// `load_runtime_0_24_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_0_24_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_0_24_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_0_24_min_sec",
+            "runtime_seconds",
         );
         /// `load_runtime_0_24_hours_before_reset`, code 0x23
         pub const LOAD_RUNTIME_0_24_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
@@ -4390,6 +4947,16 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `load_runtime_25_49_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_25_49_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_25_49_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_25_49_min_sec",
+            "runtime_seconds",
+        );
         /// `load_runtime_25_49_hours_before_reset`, code 0x24
         pub const LOAD_RUNTIME_25_49_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
             "load_runtime_25_49_hours_before_reset",
@@ -4410,6 +4977,16 @@ pub mod sd {
             0x25,
             1,
             &[6],
+        );
+        /// `load_runtime_50_74_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_50_74_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_50_74_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_50_74_min_sec",
+            "runtime_seconds",
         );
         /// `load_runtime_50_74_hours_before_reset`, code 0x25
         pub const LOAD_RUNTIME_50_74_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
@@ -4432,6 +5009,16 @@ pub mod sd {
             1,
             &[6],
         );
+        /// `load_runtime_75_99_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_75_99_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_75_99_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_75_99_min_sec",
+            "runtime_seconds",
+        );
         /// `load_runtime_75_99_hours_before_reset`, code 0x26
         pub const LOAD_RUNTIME_75_99_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
             "load_runtime_75_99_hours_before_reset",
@@ -4452,6 +5039,16 @@ pub mod sd {
             0x27,
             1,
             &[6],
+        );
+        /// `load_runtime_100_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_100_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_100_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_100_min_sec",
+            "runtime_seconds",
         );
         /// `load_runtime_100_hours_before_reset`, code 0x27
         pub const LOAD_RUNTIME_100_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(

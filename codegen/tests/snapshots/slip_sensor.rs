@@ -361,8 +361,7 @@ pub mod slip_sensor {
     }
     /// Where `samples.samples` sits in the frame and how its elements are counted.
     pub const REPEAT_SAMPLES: rt::RepeatAt = rt::RepeatAt {
-        message: "samples",
-        field: "samples",
+        field: &response::SAMPLES_SAMPLES,
         base: 4,
         at: 1,
         width: 1,
@@ -710,8 +709,8 @@ pub mod slip_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SlipSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `read_temperature`, code 0x01
@@ -738,7 +737,7 @@ pub mod slip_sensor {
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `temperature`, code 0x81
         pub const TEMPERATURE: MessageDesc = MessageDesc::new(
             "temperature",
@@ -750,5 +749,7 @@ pub mod slip_sensor {
         pub const ACK: MessageDesc = MessageDesc::new("ack", 0x82, 1, &[4]);
         /// `samples`, code 0x83
         pub const SAMPLES: MessageDesc = MessageDesc::new("samples", 0x83, 1, &[4]);
+        /// `samples.samples`
+        pub const SAMPLES_SAMPLES: FieldDesc = FieldDesc::new("samples", "samples");
     }
 }

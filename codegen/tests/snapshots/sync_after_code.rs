@@ -508,8 +508,8 @@ pub mod sync_after_code {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SyncAfterCode>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
         use ::busspec_runtime::MessageDesc;
         /// `read`, code 0x0102

@@ -244,7 +244,13 @@ pub mod syncy {
                     let frame = rt::fixed::<9>(frame, &request::MOVE_TO)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::MOVE_TO)?;
                     let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
-                    rt::in_range("move_to", "target", 5, field_0, -1000000, 1000000)?;
+                    rt::in_range(
+                        &request::MOVE_TO_TARGET,
+                        5,
+                        field_0,
+                        -1000000,
+                        1000000,
+                    )?;
                     rt::Ok(Self::MoveTo {
                         target: Millimetre::from_raw(field_0 as i32),
                     })
@@ -257,10 +263,9 @@ pub mod syncy {
                 0x05 => {
                     let frame = rt::fixed::<10>(frame, &request::SET_PAIR)?;
                     rt::no_broadcast(frame[2], 0xFE, &request::SET_PAIR)?;
-                    rt::in_range("set_pair", "quantity", 5, frame[5], 1, 100)?;
+                    rt::in_range(&request::SET_PAIR_QUANTITY, 5, frame[5], 1, 100)?;
                     rt::following(
-                        "set_pair",
-                        "doubled",
+                        &request::SET_PAIR_DOUBLED,
                         6,
                         frame[6],
                         frame[5] as i64,
@@ -636,8 +641,7 @@ pub mod syncy {
                     &Request::SetPair { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "set_pair_reply",
-                        "quantity",
+                        &response::SET_PAIR_REPLY_QUANTITY,
                         5,
                         v_quantity,
                         r_quantity as i64,
@@ -645,8 +649,7 @@ pub mod syncy {
                         "quantity of the request",
                     )?;
                     rt::following(
-                        "set_pair_reply",
-                        "groups",
+                        &response::SET_PAIR_REPLY_GROUPS,
                         6,
                         v_groups,
                         r_quantity as i64,
@@ -777,12 +780,14 @@ pub mod syncy {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Syncy>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `move_to`, code 0x03
         pub const MOVE_TO: MessageDesc = MessageDesc::new("move_to", 0x03, 1, &[9]);
+        /// `move_to.target`
+        pub const MOVE_TO_TARGET: FieldDesc = FieldDesc::new("move_to", "target");
         /// `get_counter`, code 0x04
         pub const GET_COUNTER: MessageDesc = MessageDesc::new(
             "get_counter",
@@ -792,10 +797,14 @@ pub mod syncy {
         );
         /// `set_pair`, code 0x05
         pub const SET_PAIR: MessageDesc = MessageDesc::new("set_pair", 0x05, 1, &[10]);
+        /// `set_pair.quantity`
+        pub const SET_PAIR_QUANTITY: FieldDesc = FieldDesc::new("set_pair", "quantity");
+        /// `set_pair.doubled`
+        pub const SET_PAIR_DOUBLED: FieldDesc = FieldDesc::new("set_pair", "doubled");
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `moving`, code 0x00
         pub const MOVING: MessageDesc = MessageDesc::new("moving", 0x00, 1, &[6]);
         /// `counter`, code 0x01
@@ -806,6 +815,16 @@ pub mod syncy {
             0x05,
             1,
             &[8],
+        );
+        /// `set_pair_reply.quantity`
+        pub const SET_PAIR_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
+            "set_pair_reply",
+            "quantity",
+        );
+        /// `set_pair_reply.groups`
+        pub const SET_PAIR_REPLY_GROUPS: FieldDesc = FieldDesc::new(
+            "set_pair_reply",
+            "groups",
         );
         /// `set_pair_error`, code 0x85
         pub const SET_PAIR_ERROR: MessageDesc = MessageDesc::new(

@@ -191,8 +191,7 @@ pub mod telemetry_le {
                         frame[11],
                     ]);
                     rt::in_range(
-                        "set_home",
-                        "lat",
+                        &request::SET_HOME_LAT,
                         4,
                         field_0,
                         rt::f64_raw(-90f64),
@@ -209,8 +208,7 @@ pub mod telemetry_le {
                         frame[19],
                     ]);
                     rt::in_range(
-                        "set_home",
-                        "lon",
+                        &request::SET_HOME_LON,
                         12,
                         field_1,
                         rt::f64_raw(-180f64),
@@ -473,8 +471,7 @@ pub mod telemetry_le {
                         frame[33],
                     ]);
                     rt::in_range(
-                        "state",
-                        "pressure",
+                        &response::STATE_PRESSURE,
                         32,
                         field_4,
                         rt::f32_raw(300f32),
@@ -710,20 +707,26 @@ pub mod telemetry_le {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TelemetryLe>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `get_state`, code 0x01
         pub const GET_STATE: MessageDesc = MessageDesc::new("get_state", 0x01, 1, &[5]);
         /// `set_home`, code 0x02
         pub const SET_HOME: MessageDesc = MessageDesc::new("set_home", 0x02, 1, &[21]);
+        /// `set_home.lat`
+        pub const SET_HOME_LAT: FieldDesc = FieldDesc::new("set_home", "lat");
+        /// `set_home.lon`
+        pub const SET_HOME_LON: FieldDesc = FieldDesc::new("set_home", "lon");
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `state`, code 0x81
         pub const STATE: MessageDesc = MessageDesc::new("state", 0x81, 1, &[41]);
+        /// `state.pressure`
+        pub const STATE_PRESSURE: FieldDesc = FieldDesc::new("state", "pressure");
         /// `ack`, code 0x82
         pub const ACK: MessageDesc = MessageDesc::new("ack", 0x82, 1, &[5]);
     }

@@ -1062,7 +1062,13 @@ pub mod ub2 {
                 }
                 0x2700 => {
                     let frame = rt::fixed::<6>(frame, &request::GO_TO_STORED_POSITION)?;
-                    rt::in_range("go_to_stored_position", "index", 4, frame[4], 0, 9)?;
+                    rt::in_range(
+                        &request::GO_TO_STORED_POSITION_INDEX,
+                        4,
+                        frame[4],
+                        0,
+                        9,
+                    )?;
                     rt::Ok(Self::GoToStoredPosition {
                         index: frame[4],
                     })
@@ -1076,16 +1082,14 @@ pub mod ub2 {
                         7,
                     >(frame, &request::SET_ACCELERATION_SPEED_INDEX)?;
                     rt::in_range(
-                        "set_acceleration_speed_index",
-                        "acceleration_index",
+                        &request::SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        "set_acceleration_speed_index",
-                        "speed_index",
+                        &request::SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX,
                         5,
                         frame[5],
                         0,
@@ -1105,7 +1109,13 @@ pub mod ub2 {
                 }
                 0x6000 => {
                     let frame = rt::fixed::<6>(frame, &request::SET_SLAVE_ADDRESS)?;
-                    rt::in_range("set_slave_address", "address", 4, frame[4], 33, 64)?;
+                    rt::in_range(
+                        &request::SET_SLAVE_ADDRESS_ADDRESS,
+                        4,
+                        frame[4],
+                        33,
+                        64,
+                    )?;
                     rt::Ok(Self::SetSlaveAddress {
                         address: frame[4],
                     })
@@ -1138,7 +1148,13 @@ pub mod ub2 {
                 }
                 0x7500 => {
                     let frame = rt::fixed::<8>(frame, &request::STORE_INDEXED_POSITION)?;
-                    rt::in_range("store_indexed_position", "index", 4, frame[4], 0, 9)?;
+                    rt::in_range(
+                        &request::STORE_INDEXED_POSITION_INDEX,
+                        4,
+                        frame[4],
+                        0,
+                        9,
+                    )?;
                     rt::Ok(Self::StoreIndexedPosition {
                         index: frame[4],
                         position: u16::from_le_bytes([frame[5], frame[6]]),
@@ -1179,8 +1195,7 @@ pub mod ub2 {
                     >(frame, &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "get_c_curve_indexed_full_step_capacitance",
-                        "index",
+                        &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX,
                         4,
                         field_0,
                         0,
@@ -1218,8 +1233,7 @@ pub mod ub2 {
                     let mut g = rt::Group::new(frame, 0x4072, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            "get_lower_customer_limit",
-                            "index",
+                            &request::GET_LOWER_CUSTOMER_LIMIT_INDEX,
                             4,
                             frame[4],
                             0x1,
@@ -1228,8 +1242,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            "get_upper_customer_limit",
-                            "index",
+                            &request::GET_UPPER_CUSTOMER_LIMIT_INDEX,
                             4,
                             frame[4],
                             0x2,
@@ -1237,11 +1250,21 @@ pub mod ub2 {
                         rt::Ok(Self::GetUpperCustomerLimit)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("get_lower_factory_limit", "index", 4, frame[4], 0x3)?;
+                        rt::equal(
+                            &request::GET_LOWER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x3,
+                        )?;
                         rt::Ok(Self::GetLowerFactoryLimit)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("get_upper_factory_limit", "index", 4, frame[4], 0x4)?;
+                        rt::equal(
+                            &request::GET_UPPER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x4,
+                        )?;
                         rt::Ok(Self::GetUpperFactoryLimit)
                     });
                     g.end(&request::GET_LOWER_CUSTOMER_LIMIT)
@@ -1249,13 +1272,17 @@ pub mod ub2 {
                 0x4073 => {
                     let mut g = rt::Group::new(frame, 0x4073, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("get_preset_capacitance", "index", 4, frame[4], 0x0)?;
+                        rt::equal(
+                            &request::GET_PRESET_CAPACITANCE_INDEX,
+                            4,
+                            frame[4],
+                            0x0,
+                        )?;
                         rt::Ok(Self::GetPresetCapacitance)
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            "get_preset_full_step_position",
-                            "index",
+                            &request::GET_PRESET_FULL_STEP_POSITION_INDEX,
                             4,
                             frame[4],
                             0x1,
@@ -1269,8 +1296,7 @@ pub mod ub2 {
                         6,
                     >(frame, &request::GET_STORED_FULL_STEP_POSITION)?;
                     rt::in_range(
-                        "get_stored_full_step_position",
-                        "index",
+                        &request::GET_STORED_FULL_STEP_POSITION_INDEX,
                         4,
                         frame[4],
                         0,
@@ -2350,16 +2376,14 @@ pub mod ub2 {
                 0x4121 => {
                     let frame = rt::fixed::<7>(frame, &response::ACCELERATION_SPEED)?;
                     rt::in_range(
-                        "acceleration_speed",
-                        "acceleration_index",
+                        &response::ACCELERATION_SPEED_ACCELERATION_INDEX,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        "acceleration_speed",
-                        "speed_index",
+                        &response::ACCELERATION_SPEED_SPEED_INDEX,
                         5,
                         frame[5],
                         0,
@@ -2380,7 +2404,7 @@ pub mod ub2 {
                 0x4130 => {
                     let frame = rt::fixed::<13>(frame, &response::C_CURVE_ENTRY)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range("c_curve_entry", "index", 4, field_0, 0, 499)?;
+                    rt::in_range(&response::C_CURVE_ENTRY_INDEX, 4, field_0, 0, 499)?;
                     rt::Ok(Self::CCurveEntry {
                         index: field_0,
                         full_steps: u16::from_le_bytes([frame[6], frame[7]]),
@@ -2448,7 +2472,12 @@ pub mod ub2 {
                         request.map(Request::name),
                     );
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("lower_customer_limit", "index", 4, frame[4], 0x1)?;
+                        rt::equal(
+                            &response::LOWER_CUSTOMER_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x1,
+                        )?;
                         rt::Ok(Self::LowerCustomerLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2456,7 +2485,12 @@ pub mod ub2 {
                         })
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("upper_customer_limit", "index", 4, frame[4], 0x2)?;
+                        rt::equal(
+                            &response::UPPER_CUSTOMER_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x2,
+                        )?;
                         rt::Ok(Self::UpperCustomerLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2464,7 +2498,12 @@ pub mod ub2 {
                         })
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("lower_factory_limit", "index", 4, frame[4], 0x3)?;
+                        rt::equal(
+                            &response::LOWER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x3,
+                        )?;
                         rt::Ok(Self::LowerFactoryLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2472,7 +2511,12 @@ pub mod ub2 {
                         })
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("upper_factory_limit", "index", 4, frame[4], 0x4)?;
+                        rt::equal(
+                            &response::UPPER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x4,
+                        )?;
                         rt::Ok(Self::UpperFactoryLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2488,7 +2532,12 @@ pub mod ub2 {
                         request.map(Request::name),
                     );
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("preset_capacitance", "index", 4, frame[4], 0x0)?;
+                        rt::equal(
+                            &response::PRESET_CAPACITANCE_INDEX,
+                            4,
+                            frame[4],
+                            0x0,
+                        )?;
                         rt::Ok(Self::PresetCapacitance {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2497,8 +2546,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            "preset_full_step_position",
-                            "index",
+                            &response::PRESET_FULL_STEP_POSITION_INDEX,
                             4,
                             frame[4],
                             0x1,
@@ -2519,8 +2567,7 @@ pub mod ub2 {
                         8,
                     >(frame, &response::STORED_FULL_STEP_POSITION)?;
                     rt::in_range(
-                        "stored_full_step_position",
-                        "index",
+                        &response::STORED_FULL_STEP_POSITION_INDEX,
                         4,
                         frame[4],
                         0,
@@ -2951,10 +2998,10 @@ pub mod ub2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ub2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `reference_run`, code 0x1000
         pub const REFERENCE_RUN: MessageDesc = MessageDesc::new(
             "reference_run",
@@ -3074,6 +3121,11 @@ pub mod ub2 {
             2,
             &[6],
         );
+        /// `go_to_stored_position.index`
+        pub const GO_TO_STORED_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "go_to_stored_position",
+            "index",
+        );
         /// `go_to_stored_position_status`, code 0x2701
         pub const GO_TO_STORED_POSITION_STATUS: MessageDesc = MessageDesc::new(
             "go_to_stored_position_status",
@@ -3088,6 +3140,16 @@ pub mod ub2 {
             2,
             &[7],
         );
+        /// `set_acceleration_speed_index.acceleration_index`
+        pub const SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
+            "set_acceleration_speed_index",
+            "acceleration_index",
+        );
+        /// `set_acceleration_speed_index.speed_index`
+        pub const SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX: FieldDesc = FieldDesc::new(
+            "set_acceleration_speed_index",
+            "speed_index",
+        );
         /// `set_current`, code 0x4500
         pub const SET_CURRENT: MessageDesc = MessageDesc::new(
             "set_current",
@@ -3101,6 +3163,11 @@ pub mod ub2 {
             0x6000,
             2,
             &[6],
+        );
+        /// `set_slave_address.address`
+        pub const SET_SLAVE_ADDRESS_ADDRESS: FieldDesc = FieldDesc::new(
+            "set_slave_address",
+            "address",
         );
         /// `set_baud_rate`, code 0x6100
         pub const SET_BAUD_RATE: MessageDesc = MessageDesc::new(
@@ -3129,6 +3196,11 @@ pub mod ub2 {
             0x7500,
             2,
             &[8],
+        );
+        /// `store_indexed_position.index`
+        pub const STORE_INDEXED_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "store_indexed_position",
+            "index",
         );
         /// `set_mode_of_operation`, code 0x8000
         pub const SET_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
@@ -3186,6 +3258,11 @@ pub mod ub2 {
             2,
             &[7],
         );
+        /// `get_c_curve_indexed_full_step_capacitance.index`
+        pub const GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
+            "get_c_curve_indexed_full_step_capacitance",
+            "index",
+        );
         /// `get_controller_temperature`, code 0x4032
         pub const GET_CONTROLLER_TEMPERATURE: MessageDesc = MessageDesc::new(
             "get_controller_temperature",
@@ -3235,12 +3312,22 @@ pub mod ub2 {
             2,
             &[6],
         );
+        /// `get_lower_customer_limit.index`
+        pub const GET_LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_lower_customer_limit",
+            "index",
+        );
         /// `get_upper_customer_limit`, code 0x4072
         pub const GET_UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
             "get_upper_customer_limit",
             0x4072,
             2,
             &[6],
+        );
+        /// `get_upper_customer_limit.index`
+        pub const GET_UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_upper_customer_limit",
+            "index",
         );
         /// `get_lower_factory_limit`, code 0x4072
         pub const GET_LOWER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
@@ -3249,12 +3336,22 @@ pub mod ub2 {
             2,
             &[6],
         );
+        /// `get_lower_factory_limit.index`
+        pub const GET_LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_lower_factory_limit",
+            "index",
+        );
         /// `get_upper_factory_limit`, code 0x4072
         pub const GET_UPPER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
             "get_upper_factory_limit",
             0x4072,
             2,
             &[6],
+        );
+        /// `get_upper_factory_limit.index`
+        pub const GET_UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_upper_factory_limit",
+            "index",
         );
         /// `get_preset_capacitance`, code 0x4073
         pub const GET_PRESET_CAPACITANCE: MessageDesc = MessageDesc::new(
@@ -3263,6 +3360,11 @@ pub mod ub2 {
             2,
             &[6],
         );
+        /// `get_preset_capacitance.index`
+        pub const GET_PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
+            "get_preset_capacitance",
+            "index",
+        );
         /// `get_preset_full_step_position`, code 0x4073
         pub const GET_PRESET_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
             "get_preset_full_step_position",
@@ -3270,12 +3372,22 @@ pub mod ub2 {
             2,
             &[6],
         );
+        /// `get_preset_full_step_position.index`
+        pub const GET_PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "get_preset_full_step_position",
+            "index",
+        );
         /// `get_stored_full_step_position`, code 0x4075
         pub const GET_STORED_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
             "get_stored_full_step_position",
             0x4075,
             2,
             &[6],
+        );
+        /// `get_stored_full_step_position.index`
+        pub const GET_STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "get_stored_full_step_position",
+            "index",
         );
         /// `get_mode_of_operation`, code 0x4080
         pub const GET_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
@@ -3287,7 +3399,7 @@ pub mod ub2 {
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `movement_started`, code 0x50
         pub const MOVEMENT_STARTED: MessageDesc = MessageDesc::new(
             "movement_started",
@@ -3449,6 +3561,16 @@ pub mod ub2 {
             2,
             &[7],
         );
+        /// `acceleration_speed.acceleration_index`
+        pub const ACCELERATION_SPEED_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
+            "acceleration_speed",
+            "acceleration_index",
+        );
+        /// `acceleration_speed.speed_index`
+        pub const ACCELERATION_SPEED_SPEED_INDEX: FieldDesc = FieldDesc::new(
+            "acceleration_speed",
+            "speed_index",
+        );
         /// `status`, code 0x4122
         pub const STATUS: MessageDesc = MessageDesc::new("status", 0x4122, 2, &[7]);
         /// `c_curve_entry`, code 0x4130
@@ -3457,6 +3579,11 @@ pub mod ub2 {
             0x4130,
             2,
             &[13],
+        );
+        /// `c_curve_entry.index`
+        pub const C_CURVE_ENTRY_INDEX: FieldDesc = FieldDesc::new(
+            "c_curve_entry",
+            "index",
         );
         /// `controller_temperature`, code 0x4132
         pub const CONTROLLER_TEMPERATURE: MessageDesc = MessageDesc::new(
@@ -3497,12 +3624,22 @@ pub mod ub2 {
             2,
             &[10],
         );
+        /// `lower_customer_limit.index`
+        pub const LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "lower_customer_limit",
+            "index",
+        );
         /// `upper_customer_limit`, code 0x4172
         pub const UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
             "upper_customer_limit",
             0x4172,
             2,
             &[10],
+        );
+        /// `upper_customer_limit.index`
+        pub const UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "upper_customer_limit",
+            "index",
         );
         /// `lower_factory_limit`, code 0x4172
         pub const LOWER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
@@ -3511,12 +3648,22 @@ pub mod ub2 {
             2,
             &[10],
         );
+        /// `lower_factory_limit.index`
+        pub const LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "lower_factory_limit",
+            "index",
+        );
         /// `upper_factory_limit`, code 0x4172
         pub const UPPER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
             "upper_factory_limit",
             0x4172,
             2,
             &[10],
+        );
+        /// `upper_factory_limit.index`
+        pub const UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "upper_factory_limit",
+            "index",
         );
         /// `preset_capacitance`, code 0x4173
         pub const PRESET_CAPACITANCE: MessageDesc = MessageDesc::new(
@@ -3525,6 +3672,11 @@ pub mod ub2 {
             2,
             &[10],
         );
+        /// `preset_capacitance.index`
+        pub const PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
+            "preset_capacitance",
+            "index",
+        );
         /// `preset_full_step_position`, code 0x4173
         pub const PRESET_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
             "preset_full_step_position",
@@ -3532,12 +3684,22 @@ pub mod ub2 {
             2,
             &[10],
         );
+        /// `preset_full_step_position.index`
+        pub const PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "preset_full_step_position",
+            "index",
+        );
         /// `stored_full_step_position`, code 0x4175
         pub const STORED_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
             "stored_full_step_position",
             0x4175,
             2,
             &[8],
+        );
+        /// `stored_full_step_position.index`
+        pub const STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "stored_full_step_position",
+            "index",
         );
         /// `actual_mode_of_operation`, code 0x4180
         pub const ACTUAL_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(

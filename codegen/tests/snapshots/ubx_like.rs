@@ -235,9 +235,15 @@ pub mod ubx_like {
                     g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate));
                     g.attempt(|frame: &[u8; 14]| {
                         let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
-                        rt::in_range("set_rate", "meas_rate", 6, field_0, 25, 65535)?;
+                        rt::in_range(
+                            &request::SET_RATE_MEAS_RATE,
+                            6,
+                            field_0,
+                            25,
+                            65535,
+                        )?;
                         let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
-                        rt::in_range("set_rate", "nav_rate", 8, field_1, 1, 127)?;
+                        rt::in_range(&request::SET_RATE_NAV_RATE, 8, field_1, 1, 127)?;
                         rt::Ok(Self::SetRate {
                             meas_rate: field_0,
                             nav_rate: field_1,
@@ -717,10 +723,10 @@ pub mod ubx_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<UbxLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `poll_rate`, code 0x0608
         pub const POLL_RATE: MessageDesc = MessageDesc::new(
             "poll_rate",
@@ -735,6 +741,13 @@ pub mod ubx_like {
             2,
             &[8, 14],
         );
+        /// `set_rate.meas_rate`
+        pub const SET_RATE_MEAS_RATE: FieldDesc = FieldDesc::new(
+            "set_rate",
+            "meas_rate",
+        );
+        /// `set_rate.nav_rate`
+        pub const SET_RATE_NAV_RATE: FieldDesc = FieldDesc::new("set_rate", "nav_rate");
     }
     /// Each response as its refusals name it.
     pub mod response {

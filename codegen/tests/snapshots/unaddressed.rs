@@ -212,7 +212,7 @@ pub mod unaddressed {
                 0x20 => {
                     let frame = rt::fixed::<7>(frame, &request::SET_RATE)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range("set_rate", "rate", 4, field_0, 1, 1000)?;
+                    rt::in_range(&request::SET_RATE_RATE, 4, field_0, 1, 1000)?;
                     rt::Ok(Self::SetRate { rate: field_0 })
                 }
                 0x30 => {
@@ -440,8 +440,7 @@ pub mod unaddressed {
                     let frame = rt::fixed::<7>(frame, &response::TEMPERATURE)?;
                     let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "temperature",
-                        "temperature",
+                        &response::TEMPERATURE_TEMPERATURE,
                         4,
                         field_0,
                         -4000,
@@ -643,10 +642,10 @@ pub mod unaddressed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Unaddressed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `read_temperature`, code 0x10
         pub const READ_TEMPERATURE: MessageDesc = MessageDesc::new(
             "read_temperature",
@@ -656,6 +655,8 @@ pub mod unaddressed {
         );
         /// `set_rate`, code 0x20
         pub const SET_RATE: MessageDesc = MessageDesc::new("set_rate", 0x20, 1, &[7]);
+        /// `set_rate.rate`
+        pub const SET_RATE_RATE: FieldDesc = FieldDesc::new("set_rate", "rate");
         /// `read_version`, code 0x30
         pub const READ_VERSION: MessageDesc = MessageDesc::new(
             "read_version",
@@ -666,13 +667,18 @@ pub mod unaddressed {
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `temperature`, code 0x90
         pub const TEMPERATURE: MessageDesc = MessageDesc::new(
             "temperature",
             0x90,
             1,
             &[7],
+        );
+        /// `temperature.temperature`
+        pub const TEMPERATURE_TEMPERATURE: FieldDesc = FieldDesc::new(
+            "temperature",
+            "temperature",
         );
         /// `ack`, code 0xA0
         pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[5]);

@@ -282,8 +282,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_command.parameter` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_COMMAND: rt::RepeatAt = rt::RepeatAt {
-        message: "at_command",
-        field: "parameter",
+        field: &request::AT_COMMAND_PARAMETER,
         base: 8,
         at: 7,
         width: 1,
@@ -293,8 +292,7 @@ pub mod xbee_api2 {
     };
     /// Where `transmit_request.data` sits in the frame and how its elements are counted.
     pub const REPEAT_TRANSMIT_REQUEST: rt::RepeatAt = rt::RepeatAt {
-        message: "transmit_request",
-        field: "data",
+        field: &request::TRANSMIT_REQUEST_DATA,
         base: 18,
         at: 17,
         width: 1,
@@ -628,8 +626,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_response.data` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_RESPONSE: rt::RepeatAt = rt::RepeatAt {
-        message: "at_response",
-        field: "data",
+        field: &response::AT_RESPONSE_DATA,
         base: 9,
         at: 8,
         width: 1,
@@ -639,8 +636,7 @@ pub mod xbee_api2 {
     };
     /// Where `receive_packet.data` sits in the frame and how its elements are counted.
     pub const REPEAT_RECEIVE_PACKET: rt::RepeatAt = rt::RepeatAt {
-        message: "receive_packet",
-        field: "data",
+        field: &response::RECEIVE_PACKET_DATA,
         base: 16,
         at: 15,
         width: 1,
@@ -1139,16 +1135,21 @@ pub mod xbee_api2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<XbeeApi2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as its refusals name it: name, code and the frame lengths of its code
-    /// ([`MessageDesc`]).
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `at_command`, code 0x08
         pub const AT_COMMAND: MessageDesc = MessageDesc::new(
             "at_command",
             0x08,
             1,
             &[8],
+        );
+        /// `at_command.parameter`
+        pub const AT_COMMAND_PARAMETER: FieldDesc = FieldDesc::new(
+            "at_command",
+            "parameter",
         );
         /// `transmit_request`, code 0x10
         pub const TRANSMIT_REQUEST: MessageDesc = MessageDesc::new(
@@ -1157,10 +1158,15 @@ pub mod xbee_api2 {
             1,
             &[18],
         );
+        /// `transmit_request.data`
+        pub const TRANSMIT_REQUEST_DATA: FieldDesc = FieldDesc::new(
+            "transmit_request",
+            "data",
+        );
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `at_response`, code 0x88
         pub const AT_RESPONSE: MessageDesc = MessageDesc::new(
             "at_response",
@@ -1168,6 +1174,8 @@ pub mod xbee_api2 {
             1,
             &[9],
         );
+        /// `at_response.data`
+        pub const AT_RESPONSE_DATA: FieldDesc = FieldDesc::new("at_response", "data");
         /// `transmit_status`, code 0x8B
         pub const TRANSMIT_STATUS: MessageDesc = MessageDesc::new(
             "transmit_status",
@@ -1188,6 +1196,11 @@ pub mod xbee_api2 {
             0x90,
             1,
             &[16],
+        );
+        /// `receive_packet.data`
+        pub const RECEIVE_PACKET_DATA: FieldDesc = FieldDesc::new(
+            "receive_packet",
+            "data",
         );
     }
 }

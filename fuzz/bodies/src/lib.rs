@@ -378,9 +378,9 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
             assert!(offset < len, "{e}")
         }
         DecodeError::BroadcastNotAccepted { .. } => {}
-        DecodeError::BadCount {
-            offset, message, ..
-        } => assert!(offset < len && !message.is_empty(), "{e}"),
+        DecodeError::BadCount { offset, field, .. } => {
+            assert!(offset < len && !field.message.is_empty(), "{e}")
+        }
     }
 }
 
@@ -601,7 +601,7 @@ impl Refusal {
                 max,
                 ..
             } => Refusal::Range {
-                field: field.to_owned(),
+                field: field.name.to_owned(),
                 value: found,
                 min,
                 max,
