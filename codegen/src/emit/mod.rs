@@ -11,6 +11,8 @@
 //! - `dispatch`: code → message, the decode entry point;
 //! - `stream`: the stream decoder's tables and the `Protocol` impl;
 //! - `protocol`: pairing (`COMMANDS`, `follows_request`);
+//! - `desc`: the `request` and `response` modules of descriptors (`rt::MessageDesc` of each
+//!   message, `rt::FieldDesc` of each field a refusal names), which the refusals point at;
 //! - `ctx` and `tokens`: what the others share (the IR walked as leaves, typed literals, docs).
 //!
 //! Shape (kept lean so a firmware engineer can read it, about 30–40 lines per message):
