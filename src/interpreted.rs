@@ -23,8 +23,8 @@ use busspec_model::Protocol as Spec;
 use busspec_runtime::stream::Candidates;
 use busspec_runtime::{
     Broadcast, Bus, Command, CommandKind, CountRule, DecodeError, Decoded, Elements, EncodeError,
-    EscapeFault, FieldError, FieldValue, Framing, Message, MessageNames, NumKind, Protocol, Reply,
-    Source, Transactions,
+    EscapeFault, FieldDesc, FieldError, FieldValue, Framing, Message, MessageDesc, MessageNames,
+    NumKind, Protocol, Reply, Source, Transactions,
 };
 
 /// The most bytes a frame of a spec read at run time may take.
@@ -78,6 +78,42 @@ fn keep(s: &str) -> &'static str {
         return k;
     }
     let k: &'static str = Box::leak(s.to_owned().into_boxed_str());
+    set.insert(k);
+    k
+}
+
+/// A message's descriptor with the life of the process, kept once each, as the runtime's
+/// errors point at one: its name, its code (`code_len` bytes) and no lengths.
+fn keep_message(name: &str, code: u32, code_len: u8) -> &'static MessageDesc {
+    static KEPT: OnceLock<Mutex<HashSet<&'static MessageDesc>>> = OnceLock::new();
+    let set = KEPT.get_or_init(|| Mutex::new(HashSet::new()));
+    let mut set = match set.lock() {
+        Ok(g) => g,
+        Err(poisoned) => poisoned.into_inner(),
+    };
+    let d = MessageDesc::new(keep(name), code, code_len, &[]);
+    if let Some(k) = set.get(&d) {
+        return k;
+    }
+    let k: &'static MessageDesc = Box::leak(Box::new(d));
+    set.insert(k);
+    k
+}
+
+/// A field's descriptor with the life of the process, kept once each, as the runtime's
+/// errors point at one: field `field` of message `message`.
+fn keep_field(message: &str, field: &str) -> &'static FieldDesc {
+    static KEPT: OnceLock<Mutex<HashSet<&'static FieldDesc>>> = OnceLock::new();
+    let set = KEPT.get_or_init(|| Mutex::new(HashSet::new()));
+    let mut set = match set.lock() {
+        Ok(g) => g,
+        Err(poisoned) => poisoned.into_inner(),
+    };
+    let d = FieldDesc::new(keep(message), keep(field));
+    if let Some(k) = set.get(&d) {
+        return k;
+    }
+    let k: &'static FieldDesc = Box::leak(Box::new(d));
     set.insert(k);
     k
 }
@@ -322,8 +358,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             }
         }
         I::WrongLength { message, found, .. } => DecodeError::WrongLength {
-            message: keep(&message),
-            expected: &[],
+            message: keep_message(&message, 0, 0),
             found,
             less: 0,
         },
@@ -334,8 +369,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::InvalidValue {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             expected,
             found,
@@ -346,8 +380,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             offset,
             found,
         } => DecodeError::NotBcd {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             found,
         },
@@ -359,8 +392,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::NotEqual {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             other: keep(&other),
             expected,
@@ -369,7 +401,10 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
         I::Ambiguous { candidates } => DecodeError::Ambiguous {
             code: 0,
             candidates: MessageNames::from_slice(
-                &candidates.iter().map(|c| keep(c)).collect::<Vec<_>>(),
+                &candidates
+                    .iter()
+                    .map(|c| keep_message(c, 0, 0))
+                    .collect::<Vec<_>>(),
             ),
         },
         I::TooLong { max, found } => DecodeError::TooLong { max, found },
@@ -382,8 +417,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             max,
             kind,
         } => DecodeError::OutOfRange {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             found,
             min,
@@ -406,9 +440,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             code: c,
             address,
         } => DecodeError::BroadcastNotAccepted {
-            message: keep(&message),
-            code: code(&c),
-            len: c.len() as u8,
+            message: keep_message(&message, code(&c), c.len() as u8),
             address,
         },
         I::LengthMismatch {
@@ -428,10 +460,9 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::ByteCount {
-            message: keep(&message),
+            list: keep_field(&message, &list),
             field: keep(&field),
             offset,
-            list: keep(&list),
             expected,
             found,
         },
@@ -443,8 +474,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::NotFollowing {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             rule: keep(&rule),
             expected,
@@ -474,7 +504,8 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             found,
             most,
         } => DecodeError::BadWidth {
-            message: keep(&message),
+            // The interpreter names the message, not the list: what the words say.
+            list: keep_field(&message, ""),
             field: keep(&field),
             offset,
             found,
@@ -488,8 +519,7 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             expected,
             found,
         } => DecodeError::BadCount {
-            message: keep(&message),
-            field: keep(&field),
+            field: keep_field(&message, &field),
             offset,
             found,
             expected: CountRule::Stated(keep(&expected)),
@@ -529,7 +559,7 @@ fn encode_error(e: interp::EncodeError) -> EncodeError {
         I::BadAddress { address, min, max } => EncodeError::BadAddress { address, min, max },
         I::Unaddressed { address } => EncodeError::Unaddressed { address },
         I::BroadcastNotAccepted { message, address } => EncodeError::BroadcastNotAccepted {
-            message: keep(&message),
+            message: keep_message(&message, 0, 0),
             address,
         },
         I::NotInRange {

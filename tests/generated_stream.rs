@@ -239,7 +239,10 @@ fn the_issues_frames_are_out_of_spec_in_a_stream() {
                     offset: 6,
                     len: 6,
                     reason: DecodeError::OutOfRange {
-                        field: "string_length",
+                        field: busspec_runtime::FieldDesc {
+                            name: "string_length",
+                            ..
+                        },
                         found: 75,
                         ..
                     },

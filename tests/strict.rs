@@ -411,8 +411,7 @@ fn sd_string_length_75_is_refused() {
         assert_eq!(
             e,
             DecodeError::OutOfRange {
-                message: "electronic_serial_number_character",
-                field: "string_length",
+                field: &sd::response::ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH,
                 offset: 3,
                 found: 75,
                 min: 0,
@@ -448,7 +447,10 @@ fn sd_humidity_101_and_new_id_0_are_refused() {
     assert!(matches!(
         sd::Response::decode(&frame),
         Err(DecodeError::OutOfRange {
-            field: "humidity",
+            field: busspec_protocols::FieldDesc {
+                name: "humidity",
+                ..
+            },
             found: 101,
             min: 1,
             max: 100,
@@ -498,7 +500,7 @@ fn sd_humidity_101_and_new_id_0_are_refused() {
     assert!(matches!(
         sd::Request::decode(&frame),
         Err(DecodeError::OutOfRange {
-            field: "new_id",
+            field: busspec_protocols::FieldDesc { name: "new_id", .. },
             found: 0,
             min: 1,
             max: 0x1E,
@@ -567,7 +569,10 @@ fn sd_encode_byte_number_37_is_refused() {
     assert!(matches!(
         sd::Request::decode(&frame),
         Err(DecodeError::OutOfRange {
-            field: "byte_number",
+            field: busspec_protocols::FieldDesc {
+                name: "byte_number",
+                ..
+            },
             found: 37,
             ..
         })
@@ -580,9 +585,13 @@ fn sd_read_temperatures_to_broadcast_is_refused() {
     assert_eq!(
         sd::Request::ReadTemperatures.encode(0x1F, &mut buf),
         Err(EncodeError::BroadcastNotAccepted {
-            message: "read_temperatures",
+            message: &sd::request::READ_TEMPERATURES,
             address: 0x1F
         })
+    );
+    assert_eq!(
+        sd::request::READ_TEMPERATURES,
+        busspec_protocols::MessageDesc::new("read_temperatures", 0xA0, 1, &[6])
     );
     let p = spec::<sd::Sd>();
     let r = p.find("read_temperatures").unwrap();
@@ -596,9 +605,7 @@ fn sd_read_temperatures_to_broadcast_is_refused() {
     assert_eq!(
         sd::Request::decode(&frame),
         Err(DecodeError::BroadcastNotAccepted {
-            message: "read_temperatures",
-            code: 0xA0,
-            len: 1,
+            message: &sd::request::READ_TEMPERATURES,
             address: 0x1F
         })
     );
@@ -733,7 +740,7 @@ where
                     measured.refused_values += 1;
                     assert!(
                         matches!(gen, Err(DecodeError::OutOfRange { field, found, min: a, max: b, .. })
-                            if field == name && found == raw && (a, b) == (min, max)),
+                            if field.name == name && found == raw && (a, b) == (min, max)),
                         "{}.{name} = {raw}: {gen:?}",
                         m.name
                     );

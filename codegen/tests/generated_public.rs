@@ -65,8 +65,10 @@ fn modbus_coils_and_registers() {
     assert!(matches!(
         modbus::Response::decode_reply(&wire("read_coils_reply"), &more),
         Err(DecodeError::NotFollowing {
-            message: "read_coils_reply",
-            field: "byte_count",
+            field: busspec_runtime::FieldDesc {
+                message: "read_coils_reply",
+                name: "byte_count",
+            },
             offset: 2,
             expected: 4,
             found: 3,
@@ -126,7 +128,10 @@ fn dynamixel_status_and_length_byte() {
     };
     assert!(matches!(
         dynamixel::Response::decode_reply(&status, &two),
-        Err(DecodeError::BadCount { field: "data", .. })
+        Err(DecodeError::BadCount {
+            field: busspec_runtime::FieldDesc { name: "data", .. },
+            ..
+        })
     ));
     let mut lying = status;
     lying[3] = 4;

@@ -78,8 +78,10 @@ fn repeat_at(p: &ir::Protocol, m: &ir::Message) -> rt::RepeatAt {
     };
     let _ = p;
     rt::RepeatAt {
-        message: leak(&m.name),
-        field: leak(&f.name),
+        field: Box::leak(Box::new(busspec_runtime::FieldDesc::new(
+            leak(&m.name),
+            leak(&f.name),
+        ))),
         base: m.layout.len,
         at: m.layout.payload + f.offset,
         width: if f.ty == FieldType::Bit { 0 } else { f.width },
@@ -166,9 +168,10 @@ fn element_counts_agree_with_the_interpreter() {
 #[test]
 fn a_count_that_lies_gives_no_frame_length() {
     // Modbus read holding registers reply: address, code 0x03, byte count, registers.
+    static VALUES: busspec_runtime::FieldDesc =
+        busspec_runtime::FieldDesc::new("read_holding_registers_reply", "values");
     let ra = rt::RepeatAt {
-        message: "read_holding_registers_reply",
-        field: "values",
+        field: &VALUES,
         base: 5,
         at: 3,
         width: 2,
@@ -198,10 +201,9 @@ fn a_count_that_lies_gives_no_frame_length() {
     assert_eq!(
         ra.count(&[0x01, 0x03, 0x06, 0, 1, 0, 2, 0xAA, 0xBB]),
         Err(busspec_runtime::DecodeError::ByteCount {
-            message: "read_holding_registers_reply",
+            list: &VALUES,
             field: "byte_count",
             offset: 2,
-            list: "values",
             expected: 4,
             found: 6
         })

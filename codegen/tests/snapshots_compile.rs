@@ -274,8 +274,10 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
     assert!(matches!(
         syncy::Request::decode(&bad),
         Err(DecodeError::NotFollowing {
-            message: "set_pair",
-            field: "doubled",
+            field: busspec_runtime::FieldDesc {
+                message: "set_pair",
+                name: "doubled",
+            },
             offset: 6,
             expected: 20,
             found: 21,
@@ -310,7 +312,10 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
     assert!(matches!(
         syncy::Response::decode_reply(&wrong_quantity, &req),
         Err(DecodeError::NotFollowing {
-            field: "quantity",
+            field: busspec_runtime::FieldDesc {
+                name: "quantity",
+                ..
+            },
             offset: 5,
             expected: 10,
             found: 9,
@@ -458,7 +463,7 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     assert!(matches!(
         vario::Response::decode_reply(&three, &read),
         Err(DecodeError::BadCount {
-            field: "values",
+            field: busspec_runtime::FieldDesc { name: "values", .. },
             found: 3,
             ..
         })
@@ -625,7 +630,7 @@ fn codeless_beside_coded_snapshot_agrees_with_the_interpreter() {
     assert!(matches!(
         Request::decode(&zero),
         Err(busspec_runtime::DecodeError::OutOfRange {
-            field: "preset",
+            field: busspec_runtime::FieldDesc { name: "preset", .. },
             ..
         })
     ));
@@ -1142,8 +1147,7 @@ fn bcd_snapshot_agrees_with_the_interpreter() {
     assert_eq!(
         refused,
         DecodeError::NotBcd {
-            message: "energy",
-            field: "energy",
+            field: &bcd_meter::response::ENERGY_ENERGY,
             offset: 3,
             found: 0x0012_345A
         }

@@ -32,8 +32,9 @@ pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::LongLength;
 pub use crate::{
     crc, field_int, field_text, round, sum8, Ascii, Broadcast, Bus, Command, CommandKind,
-    DecodeError, Decoded, Elements, EncodeError, FieldError, FieldValue, Framing, Message, NumKind,
-    Preamble, Protocol, Record, RecordList, Repeated, Reply, Source, Transactions, Transform,
+    DecodeError, Decoded, Elements, EncodeError, FieldDesc, FieldError, FieldValue, Framing,
+    Message, MessageDesc, NumKind, Preamble, Protocol, Record, RecordList, Repeated, Reply, Source,
+    Transactions, Transform,
 };
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter
@@ -369,32 +370,28 @@ pub fn code(frame: &[u8], at: usize, n: usize) -> u32 {
 }
 
 /// The frame as the fixed-size array of `message`, whose code matched, or why not: too short
-/// for it, or another length (`lengths`: every length of a message with this code, `[N]`
+/// for it, or another length (its `lengths`: every length of a message with this code, `[N]`
 /// where it is the only one).
 #[inline(always)]
 pub fn fixed<'f, const N: usize>(
     frame: &'f [u8],
-    message: &'static str,
-    lengths: &'static [usize],
+    message: &'static MessageDesc,
 ) -> Result<&'f [u8; N], DecodeError> {
-    frame
-        .try_into()
-        .map_err(|_| wrong_length(frame, message, lengths))
+    frame.try_into().map_err(|_| wrong_length(frame, message))
 }
 
-/// The refusal of a frame whose code is known but whose length is none of `lengths` (sorted,
-/// the lengths of the messages with its code, `message` the first tried): truncated where
-/// every one is longer, as the interpreter reports it.
+/// The refusal of a frame whose code is known but whose length is none of `message`'s
+/// `lengths` (sorted, the lengths of the messages with its code, `message` the first tried):
+/// truncated where every one is longer, as the interpreter reports it.
 #[cold]
-pub fn wrong_length(frame: &[u8], message: &'static str, lengths: &'static [usize]) -> DecodeError {
-    match lengths.first() {
+pub fn wrong_length(frame: &[u8], message: &'static MessageDesc) -> DecodeError {
+    match message.lengths.first() {
         Some(&needed) if needed > frame.len() => DecodeError::Truncated {
             needed,
             found: frame.len(),
         },
         _ => DecodeError::WrongLength {
             message,
-            expected: lengths,
             found: frame.len(),
             less: 0,
         },
@@ -530,17 +527,17 @@ impl<'f, T> Group<'f, T> {
     pub fn ambiguous_split<const AT: usize>(
         &mut self,
         admitted: bool,
-        name: &'static str,
+        message: &'static MessageDesc,
         repeat: &RepeatAt,
         decode: impl FnOnce(&'f [u8; AT], &'f [u8], usize) -> DecodeResult<T>,
     ) {
         if self.set_aside(admitted) {
             if let Some((frame, elements, n)) = self.split(repeat) {
                 let r = decode(frame, elements, n);
-                self.aside(r.map(|_| ()), name);
+                self.aside(r.map(|_| ()), message);
             }
         } else if let Some(m) = self.try_split(repeat, decode) {
-            self.settle_ambiguous(m, name);
+            self.settle_ambiguous(m, message);
         }
     }
 
@@ -580,17 +577,17 @@ impl<'f, T> Group<'f, T> {
     pub fn ambiguous_lists<const BASE: usize, const K: usize>(
         &mut self,
         admitted: bool,
-        name: &'static str,
+        message: &'static MessageDesc,
         lists: &Lists,
         decode: impl FnOnce(&Split<'f, BASE, K>) -> DecodeResult<T>,
     ) {
         if self.set_aside(admitted) {
             if let Some(s) = self.split_lists::<BASE, K>(lists) {
                 let r = decode(&s);
-                self.aside(r.map(|_| ()), name);
+                self.aside(r.map(|_| ()), message);
             }
         } else if let Some(m) = self.try_lists(lists, decode) {
-            self.settle_ambiguous(m, name);
+            self.settle_ambiguous(m, message);
         }
     }
 
@@ -649,12 +646,12 @@ impl<'f, T> Group<'f, T> {
         self.request.is_some() && !admitted && self.done.is_none()
     }
 
-    /// A set-aside candidate `name` decoded to `r`.
+    /// A set-aside candidate `message` decoded to `r`.
     #[inline(always)]
-    fn aside(&mut self, r: DecodeResult<()>, name: &'static str) {
+    fn aside(&mut self, r: DecodeResult<()>, message: &'static MessageDesc) {
         match r {
             Ok(()) => {
-                self.refused.get_or_insert(name);
+                self.refused.get_or_insert(message.name);
             }
             Err(e) => {
                 self.aside.get_or_insert(e);
@@ -662,38 +659,38 @@ impl<'f, T> Group<'f, T> {
         }
     }
 
-    /// Tries a candidate `name` that shares code and length with another only the request
+    /// Tries a candidate `message` that shares code and length with another only the request
     /// tells apart (`admitted`: the request gets it).
     #[inline(always)]
     pub fn ambiguous<const N: usize>(
         &mut self,
         admitted: bool,
-        name: &'static str,
+        message: &'static MessageDesc,
         decode: impl FnOnce(&[u8; N]) -> DecodeResult<T>,
     ) {
         if self.set_aside(admitted) {
             if let Ok(frame) = <&[u8; N]>::try_from(self.frame) {
                 let r = decode(frame);
-                self.aside(r.map(|_| ()), name);
+                self.aside(r.map(|_| ()), message);
             }
             return;
         }
         let Some(m) = self.try_one(decode) else {
             return;
         };
-        self.settle_ambiguous(m, name);
+        self.settle_ambiguous(m, message);
     }
 
     /// An ambiguous candidate's message that decoded (one the request gets, where there is a
     /// request): a request settles the frame; without one it is kept and named, and the others
     /// are still tried, so that an ambiguous frame names every message it decodes as.
     #[inline(always)]
-    fn settle_ambiguous(&mut self, m: T, name: &'static str) {
+    fn settle_ambiguous(&mut self, m: T, message: &'static MessageDesc) {
         if self.request.is_some() {
             self.done = Some(Ok(m));
             return;
         }
-        self.decoded.push(name);
+        self.decoded.push(message);
         if self.found.is_none() {
             self.found = Some(m);
         }
@@ -703,10 +700,10 @@ impl<'f, T> Group<'f, T> {
     /// candidate that decoded, the first refused candidate's error, a set-aside candidate that
     /// decoded (not the request's reply), a set-aside candidate's error, a count that does not
     /// fit, or a wrong length ([`wrong_length`]: `message`, the first
-    /// candidate, and `lengths`, every candidate's, sorted).
+    /// candidate, its `lengths` every candidate's, sorted).
     #[inline(always)]
-    pub fn end(self, message: &'static str, lengths: &'static [usize]) -> DecodeResult<T> {
-        if self.decoded.names().len() > 1 {
+    pub fn end(self, message: &'static MessageDesc) -> DecodeResult<T> {
+        if self.decoded.messages().len() > 1 {
             return Err(DecodeError::Ambiguous {
                 code: self.code,
                 candidates: self.decoded,
@@ -724,26 +721,18 @@ impl<'f, T> Group<'f, T> {
             (None, _, _, Some(e)) => e,
             _ => match self.count {
                 Some(e) => e,
-                None => wrong_length(self.frame, message, lengths),
+                None => wrong_length(self.frame, message),
             },
         })
     }
 }
 
-/// A refusal of the broadcast address `b` by a command that does not accept it.
+/// A refusal of the broadcast address `b` by a command (`message`) that does not accept it.
 #[inline(always)]
-pub fn no_broadcast(
-    address: u8,
-    b: u8,
-    message: &'static str,
-    code: u32,
-    len: u8,
-) -> Result<(), DecodeError> {
+pub fn no_broadcast(address: u8, b: u8, message: &'static MessageDesc) -> Result<(), DecodeError> {
     if address == b {
         return Err(DecodeError::BroadcastNotAccepted {
-            len,
             message,
-            code,
             address: b,
         });
     }
@@ -862,21 +851,19 @@ fn first_agreeing<S>(
 /// A decoded field checked against its spec range `min..=max`.
 #[inline(always)]
 pub fn in_range<T: Wire>(
-    message: &'static str,
-    field: &'static str,
+    field: &'static FieldDesc,
     offset: usize,
     raw: T,
     min: i64,
     max: i64,
 ) -> Result<(), DecodeError> {
-    in_range_or(message, field, offset, raw, min, max, &[])
+    in_range_or(field, offset, raw, min, max, &[])
 }
 
 /// [`in_range`], where `special` values outside the range are allowed too.
 #[inline(always)]
 pub fn in_range_or<T: Wire>(
-    message: &'static str,
-    field: &'static str,
+    field: &'static FieldDesc,
     offset: usize,
     raw: T,
     min: i64,
@@ -888,7 +875,6 @@ pub fn in_range_or<T: Wire>(
         return Ok(());
     }
     Err(DecodeError::OutOfRange {
-        message,
         field,
         offset,
         found: raw,
@@ -914,8 +900,7 @@ fn is_special(raw: i64, special: &[i64]) -> bool {
 /// be `expected`.
 #[inline(always)]
 pub fn equal<T: Wire>(
-    message: &'static str,
-    field: &'static str,
+    field: &'static FieldDesc,
     offset: usize,
     found: T,
     expected: u64,
@@ -923,7 +908,6 @@ pub fn equal<T: Wire>(
     let found = found.to_u64();
     if found != expected {
         return Err(DecodeError::InvalidValue {
-            message,
             field,
             offset,
             expected,
@@ -936,8 +920,7 @@ pub fn equal<T: Wire>(
 /// A decoded field that must repeat field `other` of its frame (`equals`).
 #[inline(always)]
 pub fn same<T: Wire + PartialEq>(
-    message: &'static str,
-    field: &'static str,
+    field: &'static FieldDesc,
     offset: usize,
     found: T,
     other: &'static str,
@@ -945,7 +928,6 @@ pub fn same<T: Wire + PartialEq>(
 ) -> Result<(), DecodeError> {
     if found != repeated {
         return Err(DecodeError::NotEqual {
-            message,
             field,
             offset,
             other,
@@ -975,7 +957,11 @@ pub fn encode_address(address: u8, f: &Frame) -> Result<(), EncodeError> {
 
 /// [`no_broadcast`] for an encoder.
 #[inline(always)]
-pub fn encode_broadcast(address: u8, b: u8, message: &'static str) -> Result<(), EncodeError> {
+pub fn encode_broadcast(
+    address: u8,
+    b: u8,
+    message: &'static MessageDesc,
+) -> Result<(), EncodeError> {
     if address == b {
         return Err(EncodeError::BroadcastNotAccepted { message, address });
     }
@@ -1272,12 +1258,7 @@ pub fn check_sync(frame: &[u8], max: usize, at: usize, sync: &[u8]) -> Result<()
 /// A BCD field's value (`encoding: bcd`) from its bytes as read, `raw` (each 4 bits a digit,
 /// the high ones the more significant): refused where a digit is above 9.
 #[inline]
-pub fn bcd(
-    message: &'static str,
-    field: &'static str,
-    offset: usize,
-    raw: u64,
-) -> Result<u64, DecodeError> {
+pub fn bcd(field: &'static FieldDesc, offset: usize, raw: u64) -> Result<u64, DecodeError> {
     let mut v = 0u64;
     let mut i = 16;
     while i > 0 {
@@ -1285,7 +1266,6 @@ pub fn bcd(
         let d = (raw >> (4 * i)) & 0xF;
         if d > 9 {
             return Err(DecodeError::NotBcd {
-                message,
                 field,
                 offset,
                 found: raw,
@@ -1350,10 +1330,8 @@ pub fn follows(base: i64, multiply: u64, divide: u64) -> i64 {
 /// A decoded field that follows another (of its frame, or of the request a reply answers): it
 /// must be `ceil(base × multiply / divide)`, the relation `rule` describes.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub fn following<T: Wire>(
-    message: &'static str,
-    field: &'static str,
+    field: &'static FieldDesc,
     offset: usize,
     found: T,
     base: i64,
@@ -1363,7 +1341,6 @@ pub fn following<T: Wire>(
     let expected = follows(base, multiply, divide);
     if found.to_i64() != expected {
         return Err(DecodeError::NotFollowing {
-            message,
             field,
             offset,
             rule,
@@ -1488,13 +1465,13 @@ mod lang_tests {
         assert_eq!(follows(9, 1, 8), 2);
         assert_eq!(follows(16, 1, 8), 2);
         assert_eq!(follows(i64::MAX, 2, 1), i64::MAX);
-        assert_eq!(following("m", "n", 3, 4u8, 2, (2, 1), "2 × k"), Ok(()));
-        let e = following("m", "n", 3, 5u8, 2, (2, 1), "2 × k").unwrap_err();
+        static N: FieldDesc = FieldDesc::new("m", "n");
+        assert_eq!(following(&N, 3, 4u8, 2, (2, 1), "2 × k"), Ok(()));
+        let e = following(&N, 3, 5u8, 2, (2, 1), "2 × k").unwrap_err();
         assert_eq!(
             e,
             DecodeError::NotFollowing {
-                message: "m",
-                field: "n",
+                field: &N,
                 offset: 3,
                 rule: "2 × k",
                 expected: 4,

@@ -542,7 +542,75 @@ pub fn field_text<const N: usize>(
     }
 }
 
+/// A message as errors name it: its spec name, its code and the frame lengths of its code. Each
+/// generated module has one per message, a `const` in its `request` or `response` module
+/// (`modbus::request::READ_COILS`), which refusals point at: building one stores a
+/// reference, not the name, code and lengths, and [`DecodeError`]'s `Display` reads them here.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MessageDesc {
+    /// The message's name in the spec.
+    pub name: &'static str,
+    /// Its code as the frame holds it (big-endian, `code_len` bytes; 0 bytes: it has none).
+    pub code: u32,
+    /// The code's length in bytes.
+    pub code_len: u8,
+    /// The frame lengths of the messages with its code, sorted (for one of variable length,
+    /// its shortest); empty where the refusing engine does not say them (the interpreter's
+    /// errors carried over by the CLI).
+    pub lengths: &'static [usize],
+}
+
+impl MessageDesc {
+    /// A descriptor for message `name` with `code` (`code_len` bytes) and the frame `lengths`
+    /// of its code.
+    pub const fn new(
+        name: &'static str,
+        code: u32,
+        code_len: u8,
+        lengths: &'static [usize],
+    ) -> Self {
+        MessageDesc {
+            name,
+            code,
+            code_len,
+            lengths,
+        }
+    }
+}
+
+/// A field (a sub-field, a repeated field) as refusals name it: its message's name and its
+/// own. Each generated module has one for each field its decoders refuse, a `const` beside its
+/// message's [`MessageDesc`] (`request::READ_COILS_QUANTITY`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct FieldDesc {
+    /// The name of the message holding it, in the spec.
+    pub message: &'static str,
+    /// Its name in the spec.
+    pub name: &'static str,
+}
+
+impl FieldDesc {
+    /// A descriptor for field `name` of message `message`.
+    pub const fn new(message: &'static str, name: &'static str) -> Self {
+        FieldDesc { message, name }
+    }
+}
+
+impl fmt::Display for FieldDesc {
+    /// `message.field`, as refusals name a field.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}", self.message, self.name)
+    }
+}
+
 /// Why a frame did not decode, and where.
+///
+/// A refusal names the message it concerns by its [`MessageDesc`] (a `&'static` constant of
+/// the generated module, `request::READ_COILS`), not by its name and numbers: building one
+/// stores a reference, and the error stays small; a field by its [`FieldDesc`]
+/// (`request::READ_COILS_QUANTITY`). Match on the descriptor's fields
+/// (`DecodeError::WrongLength { message, .. } if message.name == "read_coils"`) or compare it
+/// with the constant (`message == &request::READ_COILS`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DecodeError {
     /// Fewer bytes than the shortest frame that could start like this one.
@@ -572,10 +640,9 @@ pub enum DecodeError {
     /// No response has this code (a frame decoded as a response only).
     UnknownResponse { offset: usize, code: u32, len: u8 },
     /// The code is known but the frame's length is none of the lengths its messages have
-    /// (`message`: the first of them).
+    /// (`message`: the first of them; the lengths: its `lengths`).
     WrongLength {
-        message: &'static str,
-        expected: &'static [usize],
+        message: &'static MessageDesc,
         found: usize,
         /// How much shorter than `expected` says each length is as the frame travelled: 0 but
         /// for a frame that travelled in the short form of a length field the start byte
@@ -585,23 +652,20 @@ pub enum DecodeError {
     },
     /// A constant field (or constant bits of one) holds another value.
     InvalidValue {
-        message: &'static str,
-        field: &'static str,
+        field: &'static FieldDesc,
         offset: usize,
         expected: u64,
         found: u64,
     },
     /// A BCD field (`encoding: bcd`) holds a nibble above 9: its bytes as read, `found`.
     NotBcd {
-        message: &'static str,
-        field: &'static str,
+        field: &'static FieldDesc,
         offset: usize,
         found: u64,
     },
     /// A field that repeats another (`equals`) holds another value than that field.
     NotEqual {
-        message: &'static str,
-        field: &'static str,
+        field: &'static FieldDesc,
         offset: usize,
         other: &'static str,
         expected: i64,
@@ -610,20 +674,18 @@ pub enum DecodeError {
     /// A field that follows from another (of the frame or of the request) does not: it must
     /// be `expected`, by `rule`.
     NotFollowing {
-        message: &'static str,
-        field: &'static str,
+        field: &'static FieldDesc,
         offset: usize,
         rule: &'static str,
         expected: i64,
         found: i64,
     },
-    /// The count field `field` at `offset` says the elements of `list` take `found` bytes; the
-    /// frame's length gives them `expected`.
+    /// The count field `field` at `offset` says the elements of `list` (of the same message)
+    /// take `found` bytes; the frame's length gives them `expected`.
     ByteCount {
-        message: &'static str,
+        list: &'static FieldDesc,
         field: &'static str,
         offset: usize,
-        list: &'static str,
         expected: i64,
         found: i64,
     },
@@ -647,8 +709,7 @@ pub enum DecodeError {
     /// A field's raw value lies outside the `range` the spec gives it (and is none of its
     /// special values); `offset` is where the field (or the word holding the sub-field) starts.
     OutOfRange {
-        message: &'static str,
-        field: &'static str,
+        field: &'static FieldDesc,
         offset: usize,
         found: i64,
         min: i64,
@@ -664,20 +725,17 @@ pub enum DecodeError {
         min: u8,
         max: u8,
     },
-    /// A request to the broadcast address `address` for a command the spec says does not
-    /// accept broadcast; `len`: the code's length in bytes.
+    /// A request to the broadcast address `address` for a command (`message`, its code
+    /// there) the spec says does not accept broadcast.
     BroadcastNotAccepted {
-        message: &'static str,
-        code: u32,
-        len: u8,
+        message: &'static MessageDesc,
         address: u8,
     },
     /// The repeated field `field`, whose elements start at `offset`, cannot have what this
     /// frame gives it: `found` (elements, or bytes where they are not whole elements) against
     /// what it must be.
     BadCount {
-        message: &'static str,
-        field: &'static str,
+        field: &'static FieldDesc,
         offset: usize,
         found: i64,
         expected: CountRule,
@@ -694,9 +752,10 @@ pub enum DecodeError {
         most: i64,
     },
     /// The field `field` at `offset` gives each record's last field `found` bytes
-    /// (`bytes:` in the spec), outside `1..=most`: the frame's records cannot be laid out.
+    /// (`bytes:` in the spec), outside `1..=most`: the records of `list` (of the same
+    /// message) cannot be laid out.
     BadWidth {
-        message: &'static str,
+        list: &'static FieldDesc,
         field: &'static str,
         offset: usize,
         found: i64,
@@ -751,40 +810,57 @@ impl fmt::Display for EscapeFault {
 }
 
 /// The messages an ambiguous frame decodes as, in spec order (the first four: no spec has more
-/// than two responses only the request tells apart).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+/// than two responses only the request tells apart), by their descriptors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct MessageNames {
-    names: [&'static str; 4],
+    messages: [&'static MessageDesc; 4],
     len: u8,
 }
 
+/// What an empty slot of [`MessageNames`] holds.
+static NO_MESSAGE: MessageDesc = MessageDesc::new("", 0, 0, &[]);
+
+impl Default for MessageNames {
+    fn default() -> Self {
+        MessageNames {
+            messages: [&NO_MESSAGE; 4],
+            len: 0,
+        }
+    }
+}
+
 impl MessageNames {
-    /// `names`, the first four of them.
-    pub fn from_slice(names: &[&'static str]) -> Self {
+    /// `messages`, the first four of them.
+    pub fn from_slice(messages: &[&'static MessageDesc]) -> Self {
         let mut c = MessageNames::default();
-        for n in names {
-            c.push(n);
+        for m in messages {
+            c.push(m);
         }
         c
     }
 
-    /// Adds `name` (dropped past the fourth).
-    pub fn push(&mut self, name: &'static str) {
-        if let Some(slot) = self.names.get_mut(usize::from(self.len)) {
-            *slot = name;
+    /// Adds `message` (dropped past the fourth).
+    pub fn push(&mut self, message: &'static MessageDesc) {
+        if let Some(slot) = self.messages.get_mut(usize::from(self.len)) {
+            *slot = message;
             self.len += 1;
         }
     }
 
-    /// The names, in spec order.
-    pub fn names(&self) -> &[&'static str] {
-        &self.names[..usize::from(self.len)]
+    /// The messages, in spec order.
+    pub fn messages(&self) -> &[&'static MessageDesc] {
+        &self.messages[..usize::from(self.len)]
+    }
+
+    /// Their names, in spec order.
+    pub fn names(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.messages().iter().map(|m| m.name)
     }
 }
 
 impl fmt::Display for MessageNames {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (i, n) in self.names().iter().enumerate() {
+        for (i, n) in self.names().enumerate() {
             if i > 0 {
                 f.write_str(" or ")?;
             }
@@ -910,12 +986,11 @@ impl fmt::Display for DecodeError {
             }
             DecodeError::WrongLength {
                 message,
-                expected,
                 found,
                 less,
             } => {
-                write!(f, "wrong length for {message}: expected ")?;
-                for (i, n) in expected.iter().enumerate() {
+                write!(f, "wrong length for {}: expected ", message.name)?;
+                for (i, n) in message.lengths.iter().enumerate() {
                     if i > 0 {
                         f.write_str(" or ")?;
                     }
@@ -924,26 +999,23 @@ impl fmt::Display for DecodeError {
                 write!(f, " bytes, found {found}")
             }
             DecodeError::InvalidValue {
-                message,
                 field,
                 offset,
                 expected,
                 found,
             } => write!(
                 f,
-                "invalid value for {message}.{field} at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
+                "invalid value for {field} at offset {offset}: expected 0x{expected:02X}, found 0x{found:02X}"
             ),
             DecodeError::NotBcd {
-                message,
                 field,
                 offset,
                 found,
             } => write!(
                 f,
-                "invalid value for {message}.{field} at offset {offset}: 0x{found:02X} is not BCD (a digit above 9)"
+                "invalid value for {field} at offset {offset}: 0x{found:02X} is not BCD (a digit above 9)"
             ),
             DecodeError::NotEqual {
-                message,
                 field,
                 offset,
                 other,
@@ -951,10 +1023,9 @@ impl fmt::Display for DecodeError {
                 found,
             } => write!(
                 f,
-                "invalid value for {message}.{field} at offset {offset}: must repeat {other} ({expected}), found {found}"
+                "invalid value for {field} at offset {offset}: must repeat {other} ({expected}), found {found}"
             ),
             DecodeError::NotFollowing {
-                message,
                 field,
                 offset,
                 rule,
@@ -962,18 +1033,18 @@ impl fmt::Display for DecodeError {
                 found,
             } => write!(
                 f,
-                "invalid value for {message}.{field} at offset {offset}: must be {rule} ({expected}), found {found}"
+                "invalid value for {field} at offset {offset}: must be {rule} ({expected}), found {found}"
             ),
             DecodeError::ByteCount {
-                message,
+                list,
                 field,
                 offset,
-                list,
                 expected,
                 found,
             } => write!(
                 f,
-                "invalid value for {message}.{field} at offset {offset}: must be the bytes of {list} ({expected}), found {found}"
+                "invalid value for {}.{field} at offset {offset}: must be the bytes of {} ({expected}), found {found}",
+                list.message, list.name
             ),
             DecodeError::LengthMismatch {
                 offset,
@@ -995,7 +1066,6 @@ impl fmt::Display for DecodeError {
                 "frame too long: {found} bytes, the longest frame has {max}"
             ),
             DecodeError::OutOfRange {
-                message,
                 field,
                 offset,
                 found,
@@ -1004,7 +1074,7 @@ impl fmt::Display for DecodeError {
                 kind,
             } => write!(
                 f,
-                "{message}.{field} at offset {offset} is {}, outside its range {}..={}",
+                "{field} at offset {offset} is {}, outside its range {}..={}",
                 Num(kind, found),
                 Num(kind, min),
                 Num(kind, max)
@@ -1018,30 +1088,30 @@ impl fmt::Display for DecodeError {
                 f,
                 "address 0x{found:02X} at offset {offset} is outside the device range 0x{min:02X}..=0x{max:02X} and is not the broadcast or host address"
             ),
-            DecodeError::BroadcastNotAccepted {
-                message,
-                code,
-                len,
-                address,
-            } => {
-                if len == 0 {
-                    write!(f, "{message} (no code)")?;
+            DecodeError::BroadcastNotAccepted { message, address } => {
+                let MessageDesc {
+                    name,
+                    code,
+                    code_len,
+                    ..
+                } = *message;
+                if code_len == 0 {
+                    write!(f, "{name} (no code)")?;
                 } else {
-                    write!(f, "{message} (code ")?;
-                    hex(f, code, len)?;
+                    write!(f, "{name} (code ")?;
+                    hex(f, code, code_len)?;
                     f.write_str(")")?;
                 }
                 write!(f, " does not accept the broadcast address 0x{address:02X}")
             }
             DecodeError::BadCount {
-                message,
                 field,
                 offset,
                 found,
                 expected,
             } => write!(
                 f,
-                "{message}.{field} at offset {offset}: {found} elements, expected {expected}"
+                "{field} at offset {offset}: {found} elements, expected {expected}"
             ),
             DecodeError::BadEscape { offset, fault } => {
                 write!(f, "bad escape at offset {offset}: {fault}")
@@ -1055,14 +1125,15 @@ impl fmt::Display for DecodeError {
                 "long length field at offset {offset} says {length}: lengths up to {most} take the short form"
             ),
             DecodeError::BadWidth {
-                message,
+                list,
                 field,
                 offset,
                 found,
                 most,
             } => write!(
                 f,
-                "{message}.{field} at offset {offset} is {found}: each record's last field takes 1..={most} bytes"
+                "{}.{field} at offset {offset} is {found}: each record's last field takes 1..={most} bytes",
+                list.message
             ),
         }
     }
@@ -1093,7 +1164,10 @@ pub enum EncodeError {
     /// An address other than 0 for a protocol whose frames carry none.
     Unaddressed { address: u8 },
     /// The command does not accept the broadcast address `address`, says the spec.
-    BroadcastNotAccepted { message: &'static str, address: u8 },
+    BroadcastNotAccepted {
+        message: &'static MessageDesc,
+        address: u8,
+    },
     /// An optional field (`present:` in the spec) given where its condition does not hold
     /// (`given`), or not given where it does: `condition` in words (``bit 0 of `flags` is
     /// set``).
@@ -1139,7 +1213,8 @@ impl fmt::Display for EncodeError {
             ),
             EncodeError::BroadcastNotAccepted { message, address } => write!(
                 f,
-                "{message} does not accept the broadcast address 0x{address:02X}"
+                "{} does not accept the broadcast address 0x{address:02X}",
+                message.name
             ),
             EncodeError::Optional {
                 field,
@@ -1217,7 +1292,105 @@ pub fn round(x: f64) -> Option<i64> {
 
 #[cfg(test)]
 mod tests {
-    use super::{sum8, sum8_bytes};
+    extern crate std;
+    use super::{sum8, sum8_bytes, DecodeError, EncodeError, FieldDesc, MessageDesc};
+    use std::string::ToString;
+
+    static READ: MessageDesc = MessageDesc::new("read", 0x4072, 2, &[6, 8]);
+    static PING: MessageDesc = MessageDesc::new("ping", 0, 0, &[4]);
+
+    /// A refusal is a few words: the names and numbers the spec fixes are in the `&'static`
+    /// descriptors it points at, so a `Result` carrying one stays small to build and to move
+    /// (88 bytes on a 64-bit target before the descriptors, 56 now: the largest variant is
+    /// `BadCount`, whose `CountRule` carries a relation's words).
+    #[test]
+    fn a_decode_error_is_small() {
+        let size = core::mem::size_of::<DecodeError>();
+        assert!(size <= 56, "DecodeError is {size} bytes");
+        assert!(core::mem::size_of::<super::MessageNames>() <= 40);
+    }
+
+    static QUANTITY: FieldDesc = FieldDesc::new("read_coils", "quantity");
+    static VALUES: FieldDesc = FieldDesc::new("write", "values");
+
+    /// A refusal that points at a field's descriptor names the field as `message.field`, and
+    /// one about a list's count field names the list's message and the list.
+    #[test]
+    fn field_refusals_read_their_descriptor() {
+        let e = DecodeError::OutOfRange {
+            field: &QUANTITY,
+            offset: 4,
+            found: 0,
+            min: 1,
+            max: 2000,
+            kind: super::NumKind::Int,
+        };
+        assert_eq!(
+            e.to_string(),
+            "read_coils.quantity at offset 4 is 0, outside its range 1..=2000"
+        );
+        let e = DecodeError::ByteCount {
+            list: &VALUES,
+            field: "byte_count",
+            offset: 6,
+            expected: 4,
+            found: 6,
+        };
+        assert_eq!(
+            e.to_string(),
+            "invalid value for write.byte_count at offset 6: must be the bytes of values (4), found 6"
+        );
+        let e = DecodeError::BadWidth {
+            list: &VALUES,
+            field: "data_length",
+            offset: 7,
+            found: 0,
+            most: 4,
+        };
+        assert_eq!(
+            e.to_string(),
+            "write.data_length at offset 7 is 0: each record's last field takes 1..=4 bytes"
+        );
+    }
+
+    /// A refusal that points at a message's descriptor says what the descriptor holds, in the
+    /// interpreter's words: every length of the code, the code at its width.
+    #[test]
+    fn refusals_read_their_descriptor() {
+        let e = DecodeError::WrongLength {
+            message: &READ,
+            found: 7,
+            less: 0,
+        };
+        assert_eq!(
+            e.to_string(),
+            "wrong length for read: expected 6 or 8 bytes, found 7"
+        );
+        let e = DecodeError::BroadcastNotAccepted {
+            message: &READ,
+            address: 0,
+        };
+        assert_eq!(
+            e.to_string(),
+            "read (code 0x4072) does not accept the broadcast address 0x00"
+        );
+        let e = DecodeError::BroadcastNotAccepted {
+            message: &PING,
+            address: 0xFE,
+        };
+        assert_eq!(
+            e.to_string(),
+            "ping (no code) does not accept the broadcast address 0xFE"
+        );
+        let e = EncodeError::BroadcastNotAccepted {
+            message: &PING,
+            address: 0xFE,
+        };
+        assert_eq!(
+            e.to_string(),
+            "ping does not accept the broadcast address 0xFE"
+        );
+    }
 
     /// The chain for short inputs and the loop for long ones sum alike, at every length up to
     /// 40, for bytes that carry on every add (all 0xFF), none and a mix.

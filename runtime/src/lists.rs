@@ -7,7 +7,10 @@
 //! lists before it put it; the last list takes exactly what the frame's length leaves.
 
 use crate::repeated::{CountBy, CountField, RepeatAt};
-use crate::{CountRule, DecodeError, EncodeError};
+use crate::{CountRule, DecodeError, EncodeError, FieldDesc};
+
+/// The field [`NONE`] names.
+static NO_FIELD: FieldDesc = FieldDesc::new("", "");
 
 /// Every repeated field of a message, in wire order; `base` is the frame's length with every
 /// list empty (each list's `base` is too).
@@ -52,8 +55,7 @@ impl<'f, const BASE: usize, const K: usize> Split<'f, BASE, K> {
 
 /// A list with no elements and no count, where a list is missing.
 const NONE: RepeatAt = RepeatAt {
-    message: "",
-    field: "",
+    field: &NO_FIELD,
     base: 0,
     at: 0,
     width: 1,
@@ -114,7 +116,6 @@ impl Lists {
             let w = r.width.max(1);
             let per_byte = |b: usize| if bits { b.saturating_mul(8) } else { b / w };
             let bad = |found: i64, expected: CountRule| DecodeError::BadCount {
-                message: r.message,
                 field: r.field,
                 offset: r.at,
                 found,
@@ -144,10 +145,9 @@ impl Lists {
                     if last {
                         if !(bits || rest % w == 0) || usize::try_from(v) != Ok(rest) {
                             return Err(DecodeError::ByteCount {
-                                message: r.message,
+                                list: r.field,
                                 field: c.name,
                                 offset: c.at,
-                                list: r.field,
                                 expected: rest as i64,
                                 found: v as i64,
                             });

@@ -137,212 +137,40 @@ impl LongLength {
             }
         };
         use DecodeError as E;
-        match e {
-            E::Truncated { needed, found } => E::Truncated {
-                needed: n(needed),
-                found: n(found),
-            },
-            E::TooLong { max, found } => E::TooLong {
-                max: n(max),
-                found: n(found),
-            },
-            E::WrongLength {
-                message,
-                expected,
-                found,
-                less,
-            } => E::WrongLength {
-                message,
-                expected,
-                found: n(found),
-                less: less + extra,
-            },
-            E::BadStart {
-                offset,
-                expected,
-                found,
-            } => E::BadStart {
-                offset: o(offset),
-                expected,
-                found,
-            },
-            E::BadEnd {
-                offset,
-                expected,
-                found,
-            } => E::BadEnd {
-                offset: o(offset),
-                expected,
-                found,
-            },
-            E::ChecksumMismatch {
-                offset,
-                expected,
-                found,
-                width,
-            } => E::ChecksumMismatch {
-                offset: o(offset),
-                expected,
-                found,
-                width,
-            },
-            E::UnknownCommand { offset, code, len } => E::UnknownCommand {
-                offset: o(offset),
-                code,
-                len,
-            },
-            E::UnknownResponse { offset, code, len } => E::UnknownResponse {
-                offset: o(offset),
-                code,
-                len,
-            },
-            E::InvalidValue {
-                message,
-                field,
-                offset,
-                expected,
-                found,
-            } => E::InvalidValue {
-                message,
-                field,
-                offset: o(offset),
-                expected,
-                found,
-            },
-            E::NotBcd {
-                message,
-                field,
-                offset,
-                found,
-            } => E::NotBcd {
-                message,
-                field,
-                offset: o(offset),
-                found,
-            },
-            E::NotEqual {
-                message,
-                field,
-                offset,
-                other,
-                expected,
-                found,
-            } => E::NotEqual {
-                message,
-                field,
-                offset: o(offset),
-                other,
-                expected,
-                found,
-            },
-            E::NotFollowing {
-                message,
-                field,
-                offset,
-                rule,
-                expected,
-                found,
-            } => E::NotFollowing {
-                message,
-                field,
-                offset: o(offset),
-                rule,
-                expected,
-                found,
-            },
-            E::ByteCount {
-                message,
-                field,
-                offset,
-                list,
-                expected,
-                found,
-            } => E::ByteCount {
-                message,
-                field,
-                offset: o(offset),
-                list,
-                expected,
-                found,
-            },
-            E::LengthMismatch {
-                offset,
-                expected,
-                found,
-            } => E::LengthMismatch {
-                offset: o(offset),
-                expected,
-                found,
-            },
-            E::OutOfRange {
-                message,
-                field,
-                offset,
-                found,
-                min,
-                max,
-                kind,
-            } => E::OutOfRange {
-                message,
-                field,
-                offset: o(offset),
-                found,
-                min,
-                max,
-                kind,
-            },
-            E::BadAddress {
-                offset,
-                found,
-                min,
-                max,
-            } => E::BadAddress {
-                offset: o(offset),
-                found,
-                min,
-                max,
-            },
-            E::BadCount {
-                message,
-                field,
-                offset,
-                found,
-                expected,
-            } => E::BadCount {
-                message,
-                field,
-                offset: o(offset),
-                found,
-                expected,
-            },
-            E::BadEscape { offset, fault } => E::BadEscape {
-                offset: o(offset),
-                fault,
-            },
-            E::NeedlessLong {
-                offset,
-                length,
-                most,
-            } => E::NeedlessLong {
-                offset: o(offset),
-                length,
-                most,
-            },
-            E::BadWidth {
-                message,
-                field,
-                offset,
-                found,
-                most,
-            } => E::BadWidth {
-                message,
-                field,
-                offset: o(offset),
-                found,
-                most,
-            },
-            e @ (E::Ambiguous { .. } | E::NotAReply { .. } | E::BroadcastNotAccepted { .. }) => e,
+        let mut e = e;
+        match &mut e {
+            E::Truncated { needed, found } => {
+                *needed = n(*needed);
+                *found = n(*found);
+            }
+            E::TooLong { max, found } => {
+                *max = n(*max);
+                *found = n(*found);
+            }
+            E::WrongLength { found, less, .. } => {
+                *found = n(*found);
+                *less += extra;
+            }
+            E::BadStart { offset, .. }
+            | E::BadEnd { offset, .. }
+            | E::ChecksumMismatch { offset, .. }
+            | E::UnknownCommand { offset, .. }
+            | E::UnknownResponse { offset, .. }
+            | E::InvalidValue { offset, .. }
+            | E::NotBcd { offset, .. }
+            | E::NotEqual { offset, .. }
+            | E::NotFollowing { offset, .. }
+            | E::ByteCount { offset, .. }
+            | E::LengthMismatch { offset, .. }
+            | E::OutOfRange { offset, .. }
+            | E::BadAddress { offset, .. }
+            | E::BadCount { offset, .. }
+            | E::BadEscape { offset, .. }
+            | E::NeedlessLong { offset, .. }
+            | E::BadWidth { offset, .. } => *offset = o(*offset),
+            E::Ambiguous { .. } | E::NotAReply { .. } | E::BroadcastNotAccepted { .. } => {}
         }
+        e
     }
 
     /// The laid-out frame of `len` bytes in `buf`, as it travels: short (the long field's

@@ -12,7 +12,11 @@
 //! interpreter's (`interp::shape`, `interp::encode`).
 
 use crate::repeated::CountField;
-use crate::{DecodeError, EncodeError};
+use crate::{DecodeError, EncodeError, MessageDesc};
+
+/// What [`Optionals::naming`] falls back on for a table with no descriptor (generated tables
+/// always have one for each length).
+static NAMELESS: MessageDesc = MessageDesc::new("", 0, 0, &[]);
 
 /// The most optional fields a message has (the validator's `MAX_OPTIONAL`).
 pub const MAX_OPTIONAL: usize = 4;
@@ -52,7 +56,9 @@ pub struct OptionalAt {
 /// The optional fields of a message, in wire order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Optionals {
-    pub message: &'static str,
+    /// The message as a wrong length names it, once for each of [`Self::lengths`]: with that
+    /// one length (the one the fields present make).
+    pub by_length: &'static [MessageDesc],
     /// The frame's length with no optional field present.
     pub base: usize,
     /// Where the first optional field sits in the frame (each sits after those before it that
@@ -106,13 +112,14 @@ impl Optionals {
         (on, len)
     }
 
-    /// The one-element slice of [`Self::lengths`] holding `len` (all of them where none does,
-    /// which no frame meets).
-    fn expected(&self, len: usize) -> &'static [usize] {
-        let lengths: &'static [usize] = self.lengths;
-        match lengths.iter().position(|&l| l == len) {
-            Some(i) => lengths.get(i..=i).unwrap_or(lengths),
-            None => lengths,
+    /// The message's descriptor naming length `len` of [`Self::lengths`] (the first where
+    /// none is `len`, which no frame meets: `len` is one the fields present make).
+    fn naming(&self, len: usize) -> &'static MessageDesc {
+        let by_length: &'static [MessageDesc] = self.by_length;
+        let i = self.lengths.iter().position(|&l| l == len).unwrap_or(0);
+        match by_length.get(i).or(by_length.first()) {
+            Some(d) => d,
+            None => &NAMELESS,
         }
     }
 
@@ -130,8 +137,7 @@ impl Optionals {
         let (on, len) = self.present_in(frame);
         if frame.len() != len {
             return Err(DecodeError::WrongLength {
-                message: self.message,
-                expected: self.expected(len),
+                message: self.naming(len),
                 found: frame.len(),
                 less: 0,
             });
@@ -235,7 +241,12 @@ mod tests {
     /// `optional_sensor`'s reading: status, temperature, then humidity (bit 0) and pressure
     /// (bit 1); start, address, length, code before the payload, a sum-8 after it.
     const READING: Optionals = Optionals {
-        message: "reading",
+        by_length: &[
+            MessageDesc::new("reading", 0x81, 1, &[8]),
+            MessageDesc::new("reading", 0x81, 1, &[10]),
+            MessageDesc::new("reading", 0x81, 1, &[12]),
+            MessageDesc::new("reading", 0x81, 1, &[14]),
+        ],
         base: 8,
         at: 7,
         fields: &[
@@ -288,8 +299,12 @@ mod tests {
         let frame = [0xA5, 1, 5, 0x81, 2, 0, 1, 0xAA, 0xBB, 0x99];
         match READING.split::<14>(&frame) {
             Err(DecodeError::WrongLength {
-                message: "reading",
-                expected: &[12],
+                message:
+                    MessageDesc {
+                        name: "reading",
+                        lengths: &[12],
+                        ..
+                    },
                 found: 10,
                 less: 0,
             }) => {}

@@ -14,7 +14,9 @@
 use core::fmt;
 
 use crate::codec::Wire;
-use crate::{CountRule, DecodeError, Elements, EncodeError, FieldError, FieldValue, ValueKind};
+use crate::{
+    CountRule, DecodeError, Elements, EncodeError, FieldDesc, FieldError, FieldValue, ValueKind,
+};
 
 /// At most `N` elements of `T`, stored in place: no allocation, `Copy` when `T` is.
 ///
@@ -435,10 +437,8 @@ impl<const BYTES: usize> fmt::Debug for Bits<BYTES> {
 /// long the frame is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RepeatAt {
-    /// The spec name of the message holding it.
-    pub message: &'static str,
-    /// The field's spec name.
-    pub field: &'static str,
+    /// The field, as refusals name it.
+    pub field: &'static FieldDesc,
     /// The length of the message's frame without any element.
     pub base: usize,
     /// Where the first element sits in the frame.
@@ -542,7 +542,7 @@ impl RepeatAt {
         }
         if held < self.min || held > self.max {
             return Err(EncodeError::NotInRange {
-                field: self.field,
+                field: self.field.name,
                 value: held as i64,
                 min: self.min as i64,
                 max: self.max as i64,
@@ -568,7 +568,6 @@ impl RepeatAt {
     /// counts them.
     pub fn count(&self, frame: &[u8]) -> Result<usize, DecodeError> {
         let bad = |found: i64, expected: CountRule| DecodeError::BadCount {
-            message: self.message,
             field: self.field,
             offset: self.at,
             found,
@@ -580,7 +579,7 @@ impl RepeatAt {
             let v = s.field.read(frame).unwrap_or(0);
             if v < 1 || v > s.most as u64 {
                 return Err(DecodeError::BadWidth {
-                    message: self.message,
+                    list: self.field,
                     field: s.field.name,
                     offset: s.field.at,
                     found: v as i64,
@@ -612,10 +611,9 @@ impl RepeatAt {
                 let v = c.read(frame).unwrap_or(0);
                 if !whole || usize::try_from(v) != Ok(extra) {
                     return Err(DecodeError::ByteCount {
-                        message: self.message,
+                        list: self.field,
                         field: c.name,
                         offset: c.at,
-                        list: self.field,
                         expected: extra as i64,
                         found: v as i64,
                     });
@@ -808,7 +806,6 @@ impl RepeatAt {
 
     fn bad_count(&self, found: usize) -> DecodeError {
         DecodeError::BadCount {
-            message: self.message,
             field: self.field,
             offset: self.at,
             found: found as i64,
@@ -855,7 +852,6 @@ impl RepeatAt {
             let found = v.to_i64();
             if !(min..=max).contains(&found) {
                 return Err(DecodeError::OutOfRange {
-                    message: self.message,
                     field: self.field,
                     offset: self.at + i * self.width,
                     found,
@@ -894,7 +890,6 @@ impl RepeatAt {
         match usize::try_from(expected) {
             Ok(n) if self.bytes_of(n) == self.bytes_of(held) => Ok(()),
             _ => Err(DecodeError::BadCount {
-                message: self.message,
                 field: self.field,
                 offset: self.at,
                 found: held as i64,
@@ -915,7 +910,7 @@ impl RepeatAt {
         };
         if held < self.min || held > hi {
             return Err(EncodeError::NotInRange {
-                field: self.field,
+                field: self.field.name,
                 value: held as i64,
                 min: self.min as i64,
                 max: hi as i64,
@@ -935,7 +930,7 @@ impl RepeatAt {
         }
         let (min, max) = self.elements_for(count);
         Err(EncodeError::NotInRange {
-            field: self.field,
+            field: self.field.name,
             value: held as i64,
             min,
             max,
@@ -955,7 +950,7 @@ impl RepeatAt {
             let value = v.to_i64();
             if !(min..=max).contains(&value) {
                 return Err(EncodeError::NotInRange {
-                    field: self.field,
+                    field: self.field.name,
                     value,
                     min,
                     max,
@@ -1134,8 +1129,7 @@ pub fn pack<T: crate::codec::Wire>(
 /// where the first that is not starts (`at`: where the field does).
 #[inline]
 pub fn packed_in_range<T: crate::codec::Wire>(
-    message: &'static str,
-    field: &'static str,
+    field: &'static FieldDesc,
     at: usize,
     bits: usize,
     items: &[T],
@@ -1146,7 +1140,6 @@ pub fn packed_in_range<T: crate::codec::Wire>(
         let found = v.to_i64();
         if !(min..=max).contains(&found) {
             return Err(DecodeError::OutOfRange {
-                message,
                 field,
                 offset: at + k * bits / 8,
                 found,

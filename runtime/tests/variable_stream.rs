@@ -18,8 +18,8 @@ use busspec_model::stream as interp_stream;
 use busspec_runtime::codec::{LengthField, VarLen, VarLens};
 use busspec_runtime::stream::{Candidates, Event, StreamDecoder};
 use busspec_runtime::{
-    Broadcast, Bus, Command, CommandKind, DecodeError, Decoded, EncodeError, FieldError,
-    FieldValue, Framing, Message, Protocol, Repeated, Reply, Source, Transactions,
+    Broadcast, Bus, Command, CommandKind, DecodeError, Decoded, EncodeError, FieldDesc, FieldError,
+    FieldValue, Framing, Message, MessageDesc, Protocol, Repeated, Reply, Source, Transactions,
 };
 
 const SPEC: &str = r#"
@@ -240,10 +240,14 @@ fn check(frame: &[u8]) -> Result<u8, DecodeError> {
     Ok(frame[3])
 }
 
-fn byte(message: &'static str, field: &'static str, v: u8, max: u8) -> Result<u8, DecodeError> {
+/// The hand-written fields as their refusals name them.
+static READ_REG: FieldDesc = FieldDesc::new("read", "reg");
+static WRITE_VALUES: FieldDesc = FieldDesc::new("write", "values");
+static ACK_STATUS: FieldDesc = FieldDesc::new("ack", "status");
+
+fn byte(field: &'static FieldDesc, v: u8, max: u8) -> Result<u8, DecodeError> {
     if v > max {
         return Err(DecodeError::OutOfRange {
-            message,
             field,
             offset: 4,
             found: i64::from(v),
@@ -255,10 +259,13 @@ fn byte(message: &'static str, field: &'static str, v: u8, max: u8) -> Result<u8
     Ok(v)
 }
 
+/// The hand-written messages as their wrong lengths name them.
+static VALUES: MessageDesc = MessageDesc::new("values", 0, 0, &[11]);
+static READ: MessageDesc = MessageDesc::new("read", 0, 0, &[6]);
+
 fn values(frame: &[u8]) -> Result<Repeated<u8, 6>, DecodeError> {
     Repeated::from_slice(&frame[4..frame.len() - 1]).map_err(|_| DecodeError::WrongLength {
-        message: "values",
-        expected: &[11],
+        message: &VALUES,
         found: frame.len(),
         less: 0,
     })
@@ -302,15 +309,14 @@ impl Protocol for Toy {
         let code = check(frame)?;
         let message = match (code, frame.len()) {
             (0x01, 6) => Req::Read {
-                reg: byte("read", "reg", frame[4], 0x7F)?,
+                reg: byte(&READ_REG, frame[4], 0x7F)?,
             },
             (0x02, 6..) => {
                 let values = values(frame)?;
                 for v in values.iter() {
                     if *v < 0x10 {
                         return Err(DecodeError::OutOfRange {
-                            message: "write",
-                            field: "values",
+                            field: &WRITE_VALUES,
                             offset: 4,
                             found: i64::from(*v),
                             min: 0x10,
@@ -323,8 +329,7 @@ impl Protocol for Toy {
             }
             (0x01 | 0x02, _) => {
                 return Err(DecodeError::WrongLength {
-                    message: "read",
-                    expected: &[6],
+                    message: &READ,
                     found: frame.len(),
                     less: 0,
                 })
@@ -353,12 +358,11 @@ impl Protocol for Toy {
                 values: values(frame)?,
             },
             (0x02, 6) => Resp::Ack {
-                status: byte("ack", "status", frame[4], 3)?,
+                status: byte(&ACK_STATUS, frame[4], 3)?,
             },
             (0x81 | 0x02, _) => {
                 return Err(DecodeError::WrongLength {
-                    message: "read",
-                    expected: &[6],
+                    message: &READ,
                     found: frame.len(),
                     less: 0,
                 })

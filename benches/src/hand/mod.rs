@@ -4,6 +4,16 @@
 //! constants, repeated arguments, field ranges; the encoders refuse the same), typed results. They
 //! produce the generated crate's types, so the tests can compare the two value for value.
 
+/// A `&'static` descriptor of field `$field` of message `$message`, as the runtime's refusals
+/// point at one.
+macro_rules! field {
+    ($message:literal, $field:literal) => {{
+        static FIELD: busspec_protocols::FieldDesc =
+            busspec_protocols::FieldDesc::new($message, $field);
+        &FIELD
+    }};
+}
+
 pub mod sd;
 pub mod ub2;
 

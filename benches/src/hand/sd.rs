@@ -5,8 +5,10 @@
 //! humidity and run-time minutes and seconds lie in their ranges; a frame longer than 6 bytes
 //! is refused first.
 
-use busspec_protocols::sd::{ActuatorStatusBits, Angle, Request, Response, Temperature, Velocity};
-use busspec_protocols::{DecodeError, Decoded, EncodeError, MessageNames};
+use busspec_protocols::sd::{
+    request, response, ActuatorStatusBits, Angle, Request, Response, Temperature, Velocity,
+};
+use busspec_protocols::{DecodeError, Decoded, EncodeError, FieldDesc, MessageDesc, MessageNames};
 
 const LEN: usize = 6;
 const FIRST_ID: u8 = 0x01;
@@ -54,14 +56,9 @@ fn envelope(frame: &[u8]) -> Result<(u8, u8, u8, u8), DecodeError> {
 
 /// Refuses the broadcast ID for a command that does not accept it.
 #[inline]
-fn unicast(address: u8, message: &'static str, code: u8) -> Result<(), DecodeError> {
+fn unicast(address: u8, message: &'static MessageDesc) -> Result<(), DecodeError> {
     if address == BROADCAST {
-        return Err(DecodeError::BroadcastNotAccepted {
-            message,
-            code: code.into(),
-            len: 1,
-            address,
-        });
+        return Err(DecodeError::BroadcastNotAccepted { message, address });
     }
     Ok(())
 }
@@ -69,23 +66,21 @@ fn unicast(address: u8, message: &'static str, code: u8) -> Result<(), DecodeErr
 /// A byte repeated in argument 2, and in `min..=max`.
 #[inline]
 fn repeated(
-    message: &'static str,
     a1: u8,
     a2: u8,
-    field: &'static str,
-    repeat: &'static str,
+    field: &'static FieldDesc,
+    repeat: &'static FieldDesc,
     min: u8,
     max: u8,
 ) -> Result<u8, DecodeError> {
     if !(min..=max).contains(&a1) {
-        return Err(out_of_range(message, field, 2, a1, min, max));
+        return Err(out_of_range(field, 2, a1, min, max));
     }
     if a2 != a1 {
         return Err(DecodeError::NotEqual {
-            message,
             field: repeat,
             offset: 3,
-            other: field,
+            other: field.name,
             expected: a1.into(),
             found: a2.into(),
         });
@@ -94,15 +89,13 @@ fn repeated(
 }
 
 fn out_of_range(
-    message: &'static str,
-    field: &'static str,
+    field: &'static FieldDesc,
     offset: usize,
     found: u8,
     min: u8,
     max: u8,
 ) -> DecodeError {
     DecodeError::OutOfRange {
-        message,
         field,
         offset,
         found: found.into(),
@@ -114,9 +107,8 @@ fn out_of_range(
 
 /// A constant argument byte that holds another value. The commands sharing a code here are
 /// told apart by their argument bytes, so the error names the code's first message.
-fn invalid(message: &'static str, field: &'static str, offset: usize, found: u8) -> DecodeError {
+fn invalid(field: &'static FieldDesc, offset: usize, found: u8) -> DecodeError {
     DecodeError::InvalidValue {
-        message,
         field,
         offset,
         expected: 0,
@@ -126,12 +118,16 @@ fn invalid(message: &'static str, field: &'static str, offset: usize, found: u8)
 
 /// Both argument bytes must be these constants.
 #[inline]
-fn constants(message: &'static str, a1: u8, a2: u8) -> Result<(), DecodeError> {
+fn constants(
+    (arg1, arg2): (&'static FieldDesc, &'static FieldDesc),
+    a1: u8,
+    a2: u8,
+) -> Result<(), DecodeError> {
     if a1 != 0 {
-        return Err(invalid(message, "arg1", 2, a1));
+        return Err(invalid(arg1, 2, a1));
     }
     if a2 != 0 {
-        return Err(invalid(message, "arg2", 3, a2));
+        return Err(invalid(arg2, 3, a2));
     }
     Ok(())
 }
@@ -153,53 +149,84 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 position,
             }
         }
-        0x69 => constants("read_actual_position", a1, a2).map(|()| Request::ReadActualPosition)?,
+        0x69 => constants(
+            (
+                field!("read_actual_position", "arg1"),
+                field!("read_actual_position", "arg2"),
+            ),
+            a1,
+            a2,
+        )
+        .map(|()| Request::ReadActualPosition)?,
         0x77 => Request::SetVelocity {
             set_velocity: Velocity(i16::from_be_bytes([a1, a2])),
         },
-        0x68 => constants("read_actual_velocity", a1, a2).map(|()| Request::ReadActualVelocity)?,
+        0x68 => constants(
+            (
+                field!("read_actual_velocity", "arg1"),
+                field!("read_actual_velocity", "arg2"),
+            ),
+            a1,
+            a2,
+        )
+        .map(|()| Request::ReadActualVelocity)?,
         0xAA => Request::SetServoId {
             new_id: repeated(
-                "set_servo_id",
                 a1,
                 a2,
-                "new_id",
-                "new_id_repeat",
+                field!("set_servo_id", "new_id"),
+                field!("set_servo_id", "new_id_repeat"),
                 FIRST_ID,
                 LAST_ID,
             )?,
         },
         0xA0 => {
-            unicast(address, "read_temperatures", code)?;
-            constants("read_temperatures", a1, a2).map(|()| Request::ReadTemperatures)?
+            unicast(address, &request::READ_TEMPERATURES)?;
+            constants(
+                (
+                    field!("read_temperatures", "arg1"),
+                    field!("read_temperatures", "arg2"),
+                ),
+                a1,
+                a2,
+            )
+            .map(|()| Request::ReadTemperatures)?
         }
         0xA1 => {
-            unicast(address, "read_humidity", code)?;
-            constants("read_humidity", a1, a2).map(|()| Request::ReadHumidity)?
+            unicast(address, &request::READ_HUMIDITY)?;
+            constants(
+                (
+                    field!("read_humidity", "arg1"),
+                    field!("read_humidity", "arg2"),
+                ),
+                a1,
+                a2,
+            )
+            .map(|()| Request::ReadHumidity)?
         }
         0x40 => match (a1, a2) {
             (0xAA, 0x02) => {
-                unicast(address, "read_actuator_status_word", code)?;
+                unicast(address, &request::READ_ACTUATOR_STATUS_WORD)?;
                 Request::ReadActuatorStatusWord
             }
             (0xAA, 0x52) => {
-                unicast(address, "reset_actuator_status_word", code)?;
+                unicast(address, &request::RESET_ACTUATOR_STATUS_WORD)?;
                 Request::ResetActuatorStatusWord
             }
-            (0xAA, _) => return Err(invalid("read_actuator_status_word", "arg2", 3, a2)),
-            _ => return Err(invalid("read_actuator_status_word", "arg1", 2, a1)),
+            (0xAA, _) => return Err(invalid(field!("read_actuator_status_word", "arg2"), 3, a2)),
+            _ => return Err(invalid(field!("read_actuator_status_word", "arg1"), 2, a1)),
         },
         0xA2 => match (a1, a2) {
             (0x00, 0x00) => {
-                unicast(address, "read_total_runtime_hours", code)?;
+                unicast(address, &request::READ_TOTAL_RUNTIME_HOURS)?;
                 Request::ReadTotalRuntimeHours
             }
             (0x00, 0x01) => {
-                unicast(address, "read_total_runtime_min_sec", code)?;
+                unicast(address, &request::READ_TOTAL_RUNTIME_MIN_SEC)?;
                 Request::ReadTotalRuntimeMinSec
             }
-            (0x00, _) => return Err(invalid("read_total_runtime_hours", "arg2", 3, a2)),
-            _ => return Err(invalid("read_total_runtime_hours", "arg1", 2, a1)),
+            (0x00, _) => return Err(invalid(field!("read_total_runtime_hours", "arg2"), 3, a2)),
+            _ => return Err(invalid(field!("read_total_runtime_hours", "arg1"), 2, a1)),
         },
         _ => {
             return Err(DecodeError::UnknownCommand {
@@ -253,7 +280,7 @@ pub fn decode_response(
         0x49 => {
             let (zero, position) = position_word(a1, a2);
             if zero != 0 {
-                return Err(invalid("actual_position", "zero", 2, zero));
+                return Err(invalid(field!("actual_position", "zero"), 2, zero));
             }
             Response::ActualPosition { position }
         }
@@ -265,11 +292,10 @@ pub fn decode_response(
         },
         0x55 => Response::SetServoIdReply {
             new_id: repeated(
-                "set_servo_id_reply",
                 a1,
                 a2,
-                "new_id",
-                "new_id_repeat",
+                field!("set_servo_id_reply", "new_id"),
+                field!("set_servo_id_reply", "new_id_repeat"),
                 FIRST_ID,
                 LAST_ID,
             )?,
@@ -281,7 +307,14 @@ pub fn decode_response(
         },
         // 1..=100 %, with 0 (no sensor) special.
         0x21 => Response::Humidity {
-            humidity: repeated("humidity", a1, a2, "humidity", "humidity_repeat", 0, 100)?,
+            humidity: repeated(
+                a1,
+                a2,
+                field!("humidity", "humidity"),
+                field!("humidity", "humidity_repeat"),
+                0,
+                100,
+            )?,
         },
         0x41 => Response::ActuatorStatusWord {
             status_bits: ActuatorStatusBits(a1),
@@ -294,8 +327,7 @@ pub fn decode_response(
             Some(Request::ReadTotalRuntimeMinSec) => {
                 if a1 > 59 {
                     return Err(out_of_range(
-                        "total_runtime_min_sec",
-                        "runtime_minutes",
+                        field!("total_runtime_min_sec", "runtime_minutes"),
                         2,
                         a1,
                         0,
@@ -304,8 +336,7 @@ pub fn decode_response(
                 }
                 if a2 > 59 {
                     return Err(out_of_range(
-                        "total_runtime_min_sec",
-                        "runtime_seconds",
+                        field!("total_runtime_min_sec", "runtime_seconds"),
                         3,
                         a2,
                         0,
@@ -327,8 +358,8 @@ pub fn decode_response(
                 return Err(DecodeError::Ambiguous {
                     code: 0x22,
                     candidates: MessageNames::from_slice(&[
-                        "total_runtime_hours",
-                        "total_runtime_min_sec",
+                        &response::TOTAL_RUNTIME_HOURS,
+                        &response::TOTAL_RUNTIME_MIN_SEC,
                     ]),
                 })
             }
@@ -385,7 +416,7 @@ fn put(code: u8, address: u8, a1: u8, a2: u8, buf: &mut [u8]) -> Result<usize, E
 
 /// Refuses the broadcast ID for a command that does not accept it.
 #[inline]
-fn unicast_to(message: &'static str, address: u8) -> Result<(), EncodeError> {
+fn unicast_to(message: &'static MessageDesc, address: u8) -> Result<(), EncodeError> {
     if address == BROADCAST {
         return Err(EncodeError::BroadcastNotAccepted { message, address });
     }
@@ -454,27 +485,27 @@ pub fn encode_request(
             (0xAA, id, id)
         }
         Request::ReadTemperatures => {
-            tri!(unicast_to("read_temperatures", address));
+            tri!(unicast_to(&request::READ_TEMPERATURES, address));
             (0xA0, 0, 0)
         }
         Request::ReadHumidity => {
-            tri!(unicast_to("read_humidity", address));
+            tri!(unicast_to(&request::READ_HUMIDITY, address));
             (0xA1, 0, 0)
         }
         Request::ReadActuatorStatusWord => {
-            tri!(unicast_to("read_actuator_status_word", address));
+            tri!(unicast_to(&request::READ_ACTUATOR_STATUS_WORD, address));
             (0x40, 0xAA, 0x02)
         }
         Request::ResetActuatorStatusWord => {
-            tri!(unicast_to("reset_actuator_status_word", address));
+            tri!(unicast_to(&request::RESET_ACTUATOR_STATUS_WORD, address));
             (0x40, 0xAA, 0x52)
         }
         Request::ReadTotalRuntimeHours => {
-            tri!(unicast_to("read_total_runtime_hours", address));
+            tri!(unicast_to(&request::READ_TOTAL_RUNTIME_HOURS, address));
             (0xA2, 0, 0)
         }
         Request::ReadTotalRuntimeMinSec => {
-            tri!(unicast_to("read_total_runtime_min_sec", address));
+            tri!(unicast_to(&request::READ_TOTAL_RUNTIME_MIN_SEC, address));
             (0xA2, 0, 1)
         }
         _ => return None,

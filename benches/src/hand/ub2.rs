@@ -4,7 +4,7 @@
 //! C-curve index lies in 0..=499, and a frame longer than the longest is refused first.
 
 use busspec_protocols::ub2::{Capacitance, ModeOfOperation, Request, Response};
-use busspec_protocols::{DecodeError, Decoded, EncodeError};
+use busspec_protocols::{DecodeError, Decoded, EncodeError, FieldDesc, MessageDesc};
 
 const START: u8 = 0xAA;
 /// The host's address; the devices' follow it (§2.2, §2.3; erratum ub2-e02).
@@ -67,12 +67,11 @@ fn envelope(frame: &[u8], min: usize, max: usize) -> Result<(u8, &[u8]), DecodeE
 
 /// A C-curve index, refused beyond the table's last (the field starts at offset 4).
 #[inline]
-fn index(message: &'static str, a: u8, b: u8) -> Result<u16, DecodeError> {
+fn index(field: &'static FieldDesc, a: u8, b: u8) -> Result<u16, DecodeError> {
     let index = u16le(a, b);
     if index > LAST_INDEX {
         return Err(DecodeError::OutOfRange {
-            message,
-            field: "index",
+            field,
             offset: 4,
             found: index.into(),
             min: 0,
@@ -92,15 +91,27 @@ fn u32le(a: u8, b: u8, c: u8, d: u8) -> u32 {
 }
 
 /// A frame of a known code and another length. One arm stands for several codes here, so the
-/// error names the first message of the code range, not each.
-fn wrong_length(message: &'static str, expected: &'static [usize], frame: &[u8]) -> DecodeError {
+/// error names the protocol, not each message, and the length of the arm's frames.
+fn wrong_length(message: &'static MessageDesc, frame: &[u8]) -> DecodeError {
     DecodeError::WrongLength {
         message,
-        expected,
         found: frame.len(),
         less: 0,
     }
 }
+
+/// What [`wrong_length`] names for frames of `lengths`.
+const fn ub2(lengths: &'static [usize]) -> MessageDesc {
+    MessageDesc::new("ub2", 0, 0, lengths)
+}
+static LEN_4: MessageDesc = ub2(&[4]);
+static LEN_5: MessageDesc = ub2(&[5]);
+static LEN_6: MessageDesc = ub2(&[6]);
+static LEN_7: MessageDesc = ub2(&[7]);
+static LEN_9: MessageDesc = ub2(&[9]);
+static LEN_10: MessageDesc = ub2(&[10]);
+static LEN_13: MessageDesc = ub2(&[13]);
+static LEN_16: MessageDesc = ub2(&[16]);
 
 pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
     let (address, rest) = envelope(frame, 5, 9)?;
@@ -122,7 +133,11 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
         [0x40, 0x01] => Request::GetActualCapacitance,
         [0x40, 0x80] => Request::GetModeOfOperation,
         [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance {
-            index: index("get_c_curve_indexed_full_step_capacitance", a, b)?,
+            index: index(
+                field!("get_c_curve_indexed_full_step_capacitance", "index"),
+                a,
+                b,
+            )?,
         },
         [0x40, 0x32] => Request::GetControllerTemperature,
         [0x40, 0x61] => Request::GetFirmwareVersion,
@@ -131,19 +146,18 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
             0x02 => Request::GetUpperCustomerLimit,
             found => {
                 return Err(DecodeError::InvalidValue {
-                    message: "get_lower_customer_limit",
-                    field: "index",
+                    field: field!("get_lower_customer_limit", "index"),
                     offset: 4,
                     expected: 1,
                     found: found.into(),
                 })
             }
         },
-        [0x20, 0x00, ..] => return Err(wrong_length("ub2", &[9], frame)),
-        [0x21 | 0x22, 0x00, ..] | [0x40, 0x30, ..] => return Err(wrong_length("ub2", &[7], frame)),
-        [0x80, 0x00, ..] | [0x40, 0x72, ..] => return Err(wrong_length("ub2", &[6], frame)),
+        [0x20, 0x00, ..] => return Err(wrong_length(&LEN_9, frame)),
+        [0x21 | 0x22, 0x00, ..] | [0x40, 0x30, ..] => return Err(wrong_length(&LEN_7, frame)),
+        [0x80, 0x00, ..] | [0x40, 0x72, ..] => return Err(wrong_length(&LEN_6, frame)),
         [0x10, 0x00, ..] | [0x20, 0x01, ..] | [0x40, 0x01 | 0x32 | 0x61 | 0x80, ..] => {
-            return Err(wrong_length("ub2", &[5], frame))
+            return Err(wrong_length(&LEN_5, frame))
         }
         [hi, lo, ..] => {
             return Err(DecodeError::UnknownCommand {
@@ -152,7 +166,7 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 len: 2,
             })
         }
-        _ => return Err(wrong_length("ub2", &[5], frame)),
+        _ => return Err(wrong_length(&LEN_5, frame)),
     };
     Ok(Decoded { address, message })
 }
@@ -217,7 +231,7 @@ pub fn decode_response(
             mode: ModeOfOperation::from_raw(m),
         },
         [0x41, 0x30, i0, i1, f0, f1, c0, c1, c2, c3] => Response::CCurveEntry {
-            index: index("c_curve_entry", i0, i1)?,
+            index: index(field!("c_curve_entry", "index"), i0, i1)?,
             full_steps: u16le(f0, f1),
             capacitance: Capacitance(u32le(c0, c1, c2, c3)),
         },
@@ -236,8 +250,7 @@ pub fn decode_response(
                 0x02 => Response::UpperCustomerLimit { capacitance },
                 found => {
                     return Err(DecodeError::InvalidValue {
-                        message: "lower_customer_limit",
-                        field: "index",
+                        field: field!("lower_customer_limit", "index"),
                         offset: 4,
                         expected: 1,
                         found: found.into(),
@@ -245,14 +258,14 @@ pub fn decode_response(
                 }
             }
         }
-        [0x50..=0x52 | 0x93 | 0x94, ..] => return Err(wrong_length("ub2", &[4], frame)),
-        [0x80, 0x00, ..] => return Err(wrong_length("ub2", &[5], frame)),
-        [0x41, 0x01, ..] => return Err(wrong_length("ub2", &[9], frame)),
-        [0x41, 0x80, ..] => return Err(wrong_length("ub2", &[6], frame)),
-        [0x41, 0x30, ..] => return Err(wrong_length("ub2", &[13], frame)),
-        [0x41, 0x32, ..] => return Err(wrong_length("ub2", &[6], frame)),
-        [0x41, 0x61, ..] => return Err(wrong_length("ub2", &[16], frame)),
-        [0x41, 0x72, ..] => return Err(wrong_length("ub2", &[10], frame)),
+        [0x50..=0x52 | 0x93 | 0x94, ..] => return Err(wrong_length(&LEN_4, frame)),
+        [0x80, 0x00, ..] => return Err(wrong_length(&LEN_5, frame)),
+        [0x41, 0x01, ..] => return Err(wrong_length(&LEN_9, frame)),
+        [0x41, 0x80, ..] => return Err(wrong_length(&LEN_6, frame)),
+        [0x41, 0x30, ..] => return Err(wrong_length(&LEN_13, frame)),
+        [0x41, 0x32, ..] => return Err(wrong_length(&LEN_6, frame)),
+        [0x41, 0x61, ..] => return Err(wrong_length(&LEN_16, frame)),
+        [0x41, 0x72, ..] => return Err(wrong_length(&LEN_10, frame)),
         [code, ..] => {
             return Err(DecodeError::UnknownResponse {
                 offset: 2,
@@ -260,7 +273,7 @@ pub fn decode_response(
                 len: 1,
             })
         }
-        [] => return Err(wrong_length("ub2", &[4], frame)),
+        [] => return Err(wrong_length(&LEN_4, frame)),
     };
     if let Some(q) = request {
         if !answers(q, &message) {

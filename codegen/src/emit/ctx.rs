@@ -118,6 +118,9 @@ pub(super) struct Ctx<'a> {
     pub(super) unit_raw: Vec<Option<IntType>>,
     pub(super) enum_raw: Vec<IntType>,
     pub(super) flag_raw: Vec<IntType>,
+    /// The field descriptors the emitted refusals point at, in the order first named: the
+    /// message's direction and name, the field's name, the constant's name.
+    pub(super) field_descs: std::cell::RefCell<Vec<(Direction, String, String, Ident)>>,
 }
 
 impl<'a> Ctx<'a> {
@@ -196,7 +199,41 @@ impl<'a> Ctx<'a> {
             unit_raw,
             enum_raw,
             flag_raw,
+            field_descs: std::cell::RefCell::new(Vec::new()),
         }
+    }
+
+    /// `&request::READ_COILS_QUANTITY`: the descriptor of field (or sub-field) `name` of `m`,
+    /// emitted beside `m`'s own in its direction's module (`emit_descs`). Its constant is the
+    /// message's and the field's names upper-cased, joined by `_`, or by `__` where that is
+    /// already another constant's name.
+    pub(super) fn field_desc(&self, m: &Message, name: &str) -> TokenStream {
+        let dir = direction_module(m.direction);
+        let mut descs = self.field_descs.borrow_mut();
+        let found = descs
+            .iter()
+            .find(|(d, mn, f, _)| *d == m.direction && *mn == m.name && f == name);
+        if let Some((.., c)) = found {
+            return quote!(&#dir::#c);
+        }
+        // A record's field is named `list.field`: its constant `LIST_FIELD`.
+        let upper = |s: &str| s.to_uppercase().replace('.', "_");
+        let mut c = format!("{}_{}", upper(&m.name), upper(name));
+        let taken = |c: &str| {
+            self.p
+                .messages(m.direction)
+                .iter()
+                .any(|x| upper(&x.name) == c)
+                || descs
+                    .iter()
+                    .any(|(d, _, _, k)| *d == m.direction && *k == c)
+        };
+        if taken(&c) {
+            c = format!("{}__{}", upper(&m.name), upper(name));
+        }
+        let c = ident(&c);
+        descs.push((m.direction, m.name.clone(), name.to_owned(), c.clone()));
+        quote!(&#dir::#c)
     }
 
     pub(super) fn kind(&self, leaf: &Leaf) -> Kind {

@@ -9,14 +9,11 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
     let ls = ls.as_slice();
     let o = m.layout;
     let v = variant(m);
-    let message = m.name.as_str();
     let mut stmts = Vec::new();
     if let (Some(b), Some(at)) = (refuses_broadcast(p, m), o.address) {
-        let name = &m.name;
-        let code = hex_code(&m.code);
+        let desc = message_desc(m);
         let (at, b) = (usize_lit(at), hex_u8(b));
-        let len = Literal::u8_unsuffixed(m.code.len() as u8);
-        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #name, #code, #len)?;));
+        stmts.push(quote!(rt::no_broadcast(frame[#at], #b, #desc)?;));
     }
     let named = repeated(m);
     // Each leaf's value: an expression over `frame` or over a named wire value.
@@ -46,7 +43,8 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             let wire = match leaf_range(f, None, wt.limits()) {
                 Some((range_fn, range)) => {
                     inner.push(quote!(let #n: #w = #read;));
-                    inner.push(quote!(rt::#range_fn(#message, #name, s.at(#k), #n, #range)?;));
+                    let fd = ctx.field_desc(m, name);
+                    inner.push(quote!(rt::#range_fn(#fd, s.at(#k), #n, #range)?;));
                     quote!(#n)
                 }
                 None => read,
@@ -68,7 +66,6 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
         }
         if let Some(pk) = &f.packed {
             // Packed elements: the padding bits 0, then each element within its range.
-            let mname = &m.name;
             let e = wire_type(f).ident();
             let (count, bits, lsb) = (
                 usize_lit(pk.count),
@@ -79,11 +76,13 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             let last = usize_lit(f.width - 1);
             let v = local(name);
             let bytes = quote!(&frame[#read_at..#end]);
-            stmts.push(quote!(rt::equal(#mname, #name, #at + #last, rt::packed_padding(#bytes, #count, #bits, #lsb), 0)?;));
+            let fd = ctx.field_desc(m, name);
+            stmts.push(quote!(rt::equal(#fd, #at + #last, rt::packed_padding(#bytes, #count, #bits, #lsb), 0)?;));
             stmts.push(quote!(let #v = rt::unpack::<#e, #count>(#bytes, #bits, #lsb);));
             if let Some((lo, hi)) = f.range {
                 let (lo, hi) = (i64_lit(lo), i64_lit(hi));
-                stmts.push(quote!(rt::packed_in_range(#mname, #name, #at, #bits, #v.as_slice(), #lo, #hi)?;));
+                let fd = ctx.field_desc(m, name);
+                stmts.push(quote!(rt::packed_in_range(#fd, #at, #bits, #v.as_slice(), #lo, #hi)?;));
             }
             values.push((ident(name), quote!(#v)));
             wires.push(quote!());
@@ -137,7 +136,8 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             );
         let wire = if f.bcd {
             // Its digits checked, the decimal number they give (what every check below reads).
-            stmts.push(quote!(let #n: #w = rt::bcd(#message, #name, #at, #read as u64)? as #w;));
+            let fd = ctx.field_desc(m, name);
+            stmts.push(quote!(let #n: #w = rt::bcd(#fd, #at, #read as u64)? as #w;));
             quote!(#n)
         } else if f.width > 1 && uses > 1 {
             stmts.push(quote!(let #n: #w = #read;));
@@ -155,23 +155,25 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
                 (true, 24) => quote!(#wire as u32 & 0xFF_FFFF),
                 (true, _) => quote!(#wire as #ut),
             };
-            stmts.push(quote!(rt::equal(#message, #name, #at, #bits, #l)?;));
+            let fd = ctx.field_desc(m, name);
+            stmts.push(quote!(rt::equal(#fd, #at, #bits, #l)?;));
         }
         if let Some(other) = f.equals {
             let on = wires.get(other).cloned().unwrap_or_default();
             let other_name = m.fields.get(other).map_or("", |o| o.name.as_str());
-            stmts.push(quote!(rt::same(#message, #name, #at, #wire, #other_name, #on)?;));
+            let fd = ctx.field_desc(m, name);
+            stmts.push(quote!(rt::same(#fd, #at, #wire, #other_name, #on)?;));
         }
         if let Some((other, rel)) = follows_field(f) {
             let on = wires.get(other).cloned().unwrap_or_default();
             let args = relation_args(rel);
             let rule = rel.describe(&rel.field);
-            stmts.push(
-                quote!(rt::following(#message, #name, #at, #wire, #on as i64, (#args), #rule)?;),
-            );
+            let fd = ctx.field_desc(m, name);
+            stmts.push(quote!(rt::following(#fd, #at, #wire, #on as i64, (#args), #rule)?;));
         }
         if let Some(range) = range {
-            stmts.push(quote!(rt::#range_fn(#message, #name, #at, #wire, #range)?;));
+            let fd = ctx.field_desc(m, name);
+            stmts.push(quote!(rt::#range_fn(#fd, #at, #wire, #range)?;));
         }
         if f.bits.is_empty() {
             if f.constant.is_none() && f.equals.is_none() && follows_field(f).is_none() {
@@ -223,13 +225,14 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
             match b.constant {
                 Some(c) => {
                     let l = hex_lit(c);
-                    stmts.push(quote!(rt::equal(#message, #bname, #at, #field, #l)?;));
+                    let fd = ctx.field_desc(m, bname);
+                    stmts.push(quote!(rt::equal(#fd, #at, #field, #l)?;));
                 }
                 None => {
                     let limits = raw_limits(u32::from(b.width()), b.signed);
                     if let Some((range_fn, range)) = leaf_range(f, Some(b), limits) {
-                        stmts
-                            .push(quote!(rt::#range_fn(#message, #bname, #at, #extract, #range)?;));
+                        let fd = ctx.field_desc(m, bname);
+                        stmts.push(quote!(rt::#range_fn(#fd, #at, #extract, #range)?;));
                     }
                     if let Some(leaf) = ls.iter().find(|l| l.name == b.name) {
                         let value = match ctx.kind(leaf) {

@@ -538,8 +538,8 @@ pub(super) fn emit_group(
             }};
         }
         let len = usize_lit(p.frame_len(m));
-        let name = &m.name;
-        let frame = quote!(rt::fixed::<#len>(frame, #name, &[#len]));
+        let desc = message_desc(m);
+        let frame = quote!(rt::fixed::<#len>(frame, #desc));
         if let Some(f) = by_fn(m) {
             return quote!(#frame.and_then(Self::#f));
         }
@@ -555,7 +555,7 @@ pub(super) fn emit_group(
     }
     let tries = group.iter().map(|m| {
         let len = usize_lit(p.frame_len(m));
-        let name = &m.name;
+        let name = message_desc(m);
         let ambiguous = is_ambiguous(m, group);
         let a = if ambiguous { admitted(m) } else { quote!() };
         let decode = match by_fn(m) {
@@ -598,11 +598,7 @@ pub(super) fn emit_group(
     });
     // A frame of none of the group's lengths is refused naming the first and every length,
     // as the interpreter refuses it.
-    let first = &group[0].name;
-    let mut lengths: Vec<usize> = group.iter().map(|m| p.frame_len(m)).collect();
-    lengths.sort_unstable();
-    lengths.dedup();
-    let lengths = lengths.into_iter().map(usize_lit);
+    let first = message_desc(group[0]);
     let request = if replies {
         quote!(request.map(Request::name))
     } else {
@@ -611,6 +607,6 @@ pub(super) fn emit_group(
     quote! {{
         let mut g = rt::Group::new(frame, #value, #request);
         #(#tries)*
-        g.end(#first, &[#(#lengths),*])
+        g.end(#first)
     }}
 }

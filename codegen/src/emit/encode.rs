@@ -40,8 +40,8 @@ pub(super) fn emit_encode_arm(
     let o = m.layout;
     let mut stmts = Vec::new();
     if let Some(b) = refuses_broadcast(p, m) {
-        let (name, b) = (&m.name, hex_u8(b));
-        stmts.push(quote!(rt::encode_broadcast(address, #b, #name)?;));
+        let (desc, b) = (message_desc(m), hex_u8(b));
+        stmts.push(quote!(rt::encode_broadcast(address, #b, #desc)?;));
     }
     for l in ls {
         if let (Some(_), Some((lo, hi)), None) = (l.field.packed, l.field.range, l.bits) {

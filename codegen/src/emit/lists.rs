@@ -23,8 +23,13 @@ pub(super) fn has_lists(m: &Message) -> bool {
 
 /// The `rt::RepeatAt` of repeated field `f` of `m`: its offset (and its count field's) with
 /// every earlier list empty, how it is counted and its bounds.
-pub(super) fn repeat_at(m: &Message, f: &Field, r: &busspec_model::ir::Repeat) -> TokenStream {
-    let (message, name) = (&m.name, &f.name);
+pub(super) fn repeat_at(
+    ctx: &Ctx,
+    m: &Message,
+    f: &Field,
+    r: &busspec_model::ir::Repeat,
+) -> TokenStream {
+    let fd = ctx.field_desc(m, &f.name);
     let base = usize_lit(m.layout.len);
     let at = usize_lit(m.layout.payload + f.offset);
     let width = usize_lit(if f.ty == FieldType::Bit { 0 } else { f.width });
@@ -62,8 +67,7 @@ pub(super) fn repeat_at(m: &Message, f: &Field, r: &busspec_model::ir::Repeat) -
     let (min, max) = (usize_lit(r.min), usize_lit(r.max));
     quote! {
         rt::RepeatAt {
-            message: #message,
-            field: #name,
+            field: #fd,
             base: #base,
             at: #at,
             width: #width,
@@ -78,7 +82,8 @@ pub(super) fn repeat_at(m: &Message, f: &Field, r: &busspec_model::ir::Repeat) -
 /// first): where it sits, how it is counted and its bounds, for decode, encode and the
 /// stream's framing; and the `rt::Lists` constant of each message with several lists or
 /// fields after one.
-pub(super) fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
+pub(super) fn emit_repeats(ctx: &Ctx, d: Direction) -> TokenStream {
+    let p = ctx.p;
     let mut out = TokenStream::new();
     for m in p.messages(d) {
         if m.has_optional() {
@@ -99,7 +104,7 @@ pub(super) fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
         }
         let Some((f, r)) = m.repeat() else { continue };
         let c = repeat_const(m);
-        let value = repeat_at(m, f, r);
+        let value = repeat_at(ctx, m, f, r);
         let d = format!(
             " Where `{}.{}` sits in the frame and how its elements are counted.",
             m.name, f.name
@@ -111,7 +116,7 @@ pub(super) fn emit_repeats(p: &Protocol, d: Direction) -> TokenStream {
         if has_lists(m) {
             let c = lists_const(m);
             let base = usize_lit(m.layout.len);
-            let lists = m.repeats().map(|(_, f, r)| repeat_at(m, f, r));
+            let lists = m.repeats().map(|(_, f, r)| repeat_at(ctx, m, f, r));
             let d = format!(
                 " Every repeated field of `{}`, in wire order, each where it sits with every earlier list empty.",
                 m.name
@@ -193,10 +198,16 @@ pub(super) fn optionals_value(m: &Message) -> TokenStream {
     }
     lengths.sort_unstable();
     lengths.dedup();
-    let lengths = lengths.into_iter().map(usize_lit);
+    // The message as a wrong length names it, once for each length: naming that length.
+    let (code, code_len) = code_args(m);
+    let by_length = lengths.iter().map(|&l| {
+        let l = usize_lit(l);
+        quote!(rt::MessageDesc::new(#message, #code, #code_len, &[#l]))
+    });
+    let lengths = lengths.iter().map(|&l| usize_lit(l));
     quote! {
         rt::Optionals {
-            message: #message,
+            by_length: &[#(#by_length),*],
             base: #base,
             at: #at,
             fields: &[#(#fields),*],

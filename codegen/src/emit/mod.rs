@@ -11,6 +11,8 @@
 //! - `dispatch`: code → message, the decode entry point;
 //! - `stream`: the stream decoder's tables and the `Protocol` impl;
 //! - `protocol`: pairing (`COMMANDS`, `follows_request`);
+//! - `desc`: the `request` and `response` modules of descriptors (`rt::MessageDesc` of each
+//!   message, `rt::FieldDesc` of each field a refusal names), which the refusals point at;
 //! - `ctx` and `tokens`: what the others share (the IR walked as leaves, typed literals, docs).
 //!
 //! Shape (kept lean so a firmware engineer can read it, about 30–40 lines per message):
@@ -51,6 +53,7 @@
 
 mod ctx;
 mod decode;
+mod desc;
 mod dispatch;
 mod encode;
 mod head;
@@ -67,6 +70,7 @@ mod types;
 use ctx::*;
 use ctx::{Kind, Leaf};
 use decode::*;
+use desc::*;
 use dispatch::*;
 use encode::*;
 use head::*;
@@ -169,6 +173,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let responses = emit_messages(&ctx, Direction::Response);
     let pairing = emit_pairing(&ctx);
     let stream = emit_stream(p);
+    let descs = emit_descs(&ctx);
     let name = ident(&p.name);
     quote! {
       pub mod #name {
@@ -181,6 +186,7 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         #responses
         #pairing
         #stream
+        #descs
       }
     }
 }

@@ -215,13 +215,11 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                     continue;
                 };
                 own.push(quote!(#n: #mine));
-                let (message, name) = (&m.name, l.name);
+                let fd = ctx.field_desc(m, l.name);
                 let at = usize_lit(m.layout.payload + l.field.offset);
                 let args = relation_args(rel);
                 let rule = format!("{} of the request", rel.describe(&rel.field));
-                checks.push(
-                    quote!(rt::following(#message, #name, #at, #a, #b as i64, (#args), #rule)?;),
-                );
+                checks.push(quote!(rt::following(#fd, #at, #a, #b as i64, (#args), #rule)?;));
             }
             if let Some(list) = list {
                 let rc = repeat_const(m);
@@ -237,10 +235,10 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                     }
                     let args = relation_args(rel);
                     if *is_count {
-                        let (message, name) = (&m.name, &f.name);
+                        let fd = ctx.field_desc(m, &f.name);
                         let at = usize_lit(m.layout.payload + f.offset);
                         let rule = format!("{} of the request", rel.describe(&rel.field));
-                        checks.push(quote!(rt::following(#message, #name, #at, #rc.count_value(#mine.len()) as u64, #b as i64, (#args), #rule)?;));
+                        checks.push(quote!(rt::following(#fd, #at, #rc.count_value(#mine.len()) as u64, #b as i64, (#args), #rule)?;));
                     } else {
                         let rule = rel.describe(&rel.field);
                         checks.push(

@@ -17,7 +17,6 @@ pub(super) fn emit_records(ctx: &Ctx, d: Direction) -> TokenStream {
 fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
     let p = ctx.p;
     let ty = record_type(&m.name, f);
-    let message = m.name.as_str();
     let width = usize_lit(f.width);
     // Each field goes by `record.field` in errors, as the interpreter names it.
     let names: Vec<String> = (0..f.record.len())
@@ -74,7 +73,8 @@ fn emit_record(ctx: &Ctx, m: &Message, f: &Field) -> TokenStream {
                     quote!(at + #o)
                 }
             };
-            reads.push(quote!(rt::#range_fn(#message, #name, #at, #v, #range)?;));
+            let fd = ctx.field_desc(m, name);
+            reads.push(quote!(rt::#range_fn(#fd, #at, #v, #range)?;));
         }
         let typed = from_wire(ctx, l, Some(wt), quote!(#v));
         built.push(quote!(#gn: #typed));

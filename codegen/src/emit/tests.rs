@@ -180,3 +180,30 @@ fn a_record_named_like_another_type_is_refused_by_name() {
     let p = busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"));
     assert!(super::emit_module(&p, "records.yaml", "records.yaml").is_ok());
 }
+
+/// A field's descriptor is the message's and the field's names upper-cased, the same constant
+/// each time the field is named; where that is a message's descriptor (message `read`, field
+/// `coils`, beside message `read_coils`), the two names are joined by `__`.
+#[test]
+fn a_field_descriptor_never_takes_another_constants_name() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../spec/modbus.yaml");
+    let p = busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"));
+    let ctx = Ctx::new(&p);
+    let read_coils = &p.commands[0];
+    assert_eq!(read_coils.name, "read_coils");
+    let quantity = quote!(&request::READ_COILS_QUANTITY).to_string();
+    assert_eq!(ctx.field_desc(read_coils, "quantity").to_string(), quantity);
+    let mut read = read_coils.clone();
+    read.name = "read".into();
+    assert_eq!(
+        ctx.field_desc(&read, "coils").to_string(),
+        quote!(&request::READ__COILS).to_string()
+    );
+    assert_eq!(ctx.field_desc(read_coils, "quantity").to_string(), quantity);
+    let reply = &p.responses[0];
+    assert_eq!(
+        ctx.field_desc(reply, "coils").to_string(),
+        quote!(&response::READ_COILS_REPLY_COILS).to_string()
+    );
+    assert_eq!(ctx.field_descs.borrow().len(), 3);
+}

@@ -212,23 +212,29 @@ pub mod bcd_meter {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x11 => {
-                    rt::fixed::<5>(frame, "read_energy", &[5]).map(|_| Self::ReadEnergy)
+                    rt::fixed::<5>(frame, &request::READ_ENERGY)
+                        .map(|_| Self::ReadEnergy)
                 }
                 0x08 => {
-                    let frame = rt::fixed::<9>(frame, "set_clock", &[9])?;
-                    let field_0: u8 = rt::bcd("set_clock", "hour", 3, frame[3] as u64)?
-                        as u8;
-                    rt::in_range("set_clock", "hour", 3, field_0, 0, 23)?;
-                    let field_1: u8 = rt::bcd("set_clock", "minute", 4, frame[4] as u64)?
-                        as u8;
-                    rt::in_range("set_clock", "minute", 4, field_1, 0, 59)?;
+                    let frame = rt::fixed::<9>(frame, &request::SET_CLOCK)?;
+                    let field_0: u8 = rt::bcd(
+                        &request::SET_CLOCK_HOUR,
+                        3,
+                        frame[3] as u64,
+                    )? as u8;
+                    rt::in_range(&request::SET_CLOCK_HOUR, 3, field_0, 0, 23)?;
+                    let field_1: u8 = rt::bcd(
+                        &request::SET_CLOCK_MINUTE,
+                        4,
+                        frame[4] as u64,
+                    )? as u8;
+                    rt::in_range(&request::SET_CLOCK_MINUTE, 4, field_1, 0, 59)?;
                     let field_2: u16 = rt::bcd(
-                        "set_clock",
-                        "year",
+                        &request::SET_CLOCK_YEAR,
                         5,
                         u16::from_le_bytes([frame[5], frame[6]]) as u64,
                     )? as u16;
-                    rt::in_range("set_clock", "year", 5, field_2, 0, 9999)?;
+                    rt::in_range(&request::SET_CLOCK_YEAR, 5, field_2, 0, 9999)?;
                     rt::Ok(Self::SetClock {
                         hour: field_0,
                         minute: field_1,
@@ -442,24 +448,26 @@ pub mod bcd_meter {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x91 => {
-                    let frame = rt::fixed::<10>(frame, "energy", &[10])?;
+                    let frame = rt::fixed::<10>(frame, &response::ENERGY)?;
                     let field_0: u32 = rt::bcd(
-                        "energy",
-                        "energy",
+                        &response::ENERGY_ENERGY,
                         3,
                         u32::from_le_bytes([frame[3], frame[4], frame[5], frame[6]])
                             as u64,
                     )? as u32;
-                    rt::in_range("energy", "energy", 3, field_0, 0, 99999999)?;
-                    let field_1: u8 = rt::bcd("energy", "tariff", 7, frame[7] as u64)?
-                        as u8;
-                    rt::in_range("energy", "tariff", 7, field_1, 1, 4)?;
+                    rt::in_range(&response::ENERGY_ENERGY, 3, field_0, 0, 99999999)?;
+                    let field_1: u8 = rt::bcd(
+                        &response::ENERGY_TARIFF,
+                        7,
+                        frame[7] as u64,
+                    )? as u8;
+                    rt::in_range(&response::ENERGY_TARIFF, 7, field_1, 1, 4)?;
                     rt::Ok(Self::Energy {
                         energy: KilowattHours::from_raw(field_0),
                         tariff: field_1,
                     })
                 }
-                0x88 => rt::fixed::<5>(frame, "ack", &[5]).map(|_| Self::Ack),
+                0x88 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, true)),
             }
         }
@@ -625,4 +633,36 @@ pub mod bcd_meter {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<BcdMeter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_energy`, code 0x11
+        pub const READ_ENERGY: MessageDesc = MessageDesc::new(
+            "read_energy",
+            0x11,
+            1,
+            &[5],
+        );
+        /// `set_clock`, code 0x08
+        pub const SET_CLOCK: MessageDesc = MessageDesc::new("set_clock", 0x08, 1, &[9]);
+        /// `set_clock.hour`
+        pub const SET_CLOCK_HOUR: FieldDesc = FieldDesc::new("set_clock", "hour");
+        /// `set_clock.minute`
+        pub const SET_CLOCK_MINUTE: FieldDesc = FieldDesc::new("set_clock", "minute");
+        /// `set_clock.year`
+        pub const SET_CLOCK_YEAR: FieldDesc = FieldDesc::new("set_clock", "year");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `energy`, code 0x91
+        pub const ENERGY: MessageDesc = MessageDesc::new("energy", 0x91, 1, &[10]);
+        /// `energy.energy`
+        pub const ENERGY_ENERGY: FieldDesc = FieldDesc::new("energy", "energy");
+        /// `energy.tariff`
+        pub const ENERGY_TARIFF: FieldDesc = FieldDesc::new("energy", "tariff");
+        /// `ack`, code 0x88
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x88, 1, &[5]);
+    }
 }

@@ -220,16 +220,16 @@ pub mod cobs_link {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x10 => {
-                    rt::fixed::<4>(frame, "read_position", &[4])
+                    rt::fixed::<4>(frame, &request::READ_POSITION)
                         .map(|_| Self::ReadPosition)
                 }
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, "set_speed", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_SPEED)?;
                     rt::Ok(Self::SetSpeed {
                         speed: u16::from_le_bytes([frame[2], frame[3]]),
                     })
                 }
-                0x30 => rt::fixed::<4>(frame, "read_log", &[4]).map(|_| Self::ReadLog),
+                0x30 => rt::fixed::<4>(frame, &request::READ_LOG).map(|_| Self::ReadLog),
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
             }
         }
@@ -314,8 +314,7 @@ pub mod cobs_link {
     }
     /// Where `log.entries` sits in the frame and how its elements are counted.
     pub const REPEAT_LOG: rt::RepeatAt = rt::RepeatAt {
-        message: "log",
-        field: "entries",
+        field: &response::LOG_ENTRIES,
         base: 4,
         at: 2,
         width: 1,
@@ -493,7 +492,7 @@ pub mod cobs_link {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x90 => {
-                    let frame = rt::fixed::<8>(frame, "position", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &response::POSITION)?;
                     rt::Ok(Self::Position {
                         position: i32::from_le_bytes([
                             frame[2],
@@ -503,7 +502,7 @@ pub mod cobs_link {
                         ]),
                     })
                 }
-                0xA0 => rt::fixed::<4>(frame, "ack", &[4]).map(|_| Self::Ack),
+                0xA0 => rt::fixed::<4>(frame, &response::ACK).map(|_| Self::Ack),
                 0xB0 => {
                     let (_, elements, _) = REPEAT_LOG.split::<2>(frame)?;
                     rt::Ok(Self::Log {
@@ -666,4 +665,32 @@ pub mod cobs_link {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CobsLink>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_position`, code 0x10
+        pub const READ_POSITION: MessageDesc = MessageDesc::new(
+            "read_position",
+            0x10,
+            1,
+            &[4],
+        );
+        /// `set_speed`, code 0x20
+        pub const SET_SPEED: MessageDesc = MessageDesc::new("set_speed", 0x20, 1, &[6]);
+        /// `read_log`, code 0x30
+        pub const READ_LOG: MessageDesc = MessageDesc::new("read_log", 0x30, 1, &[4]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `position`, code 0x90
+        pub const POSITION: MessageDesc = MessageDesc::new("position", 0x90, 1, &[8]);
+        /// `ack`, code 0xA0
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[4]);
+        /// `log`, code 0xB0
+        pub const LOG: MessageDesc = MessageDesc::new("log", 0xB0, 1, &[4]);
+        /// `log.entries`
+        pub const LOG_ENTRIES: FieldDesc = FieldDesc::new("log", "entries");
+    }
 }

@@ -190,9 +190,9 @@ pub mod codeless {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
-                0x01 => rt::fixed::<6>(frame, "ping", &[6]).map(|_| Self::Ping),
+                0x01 => rt::fixed::<6>(frame, &request::PING).map(|_| Self::Ping),
                 0x02 => {
-                    let frame = rt::fixed::<7>(frame, "read", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &request::READ)?;
                     rt::Ok(Self::Read { register: frame[5] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
@@ -413,7 +413,7 @@ pub mod codeless {
                             value: u16::from_le_bytes([frame[5], frame[6]]),
                         })
                     });
-                    g.end("status", &[6, 8])
+                    g.end(&response::STATUS)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }
@@ -598,4 +598,26 @@ pub mod codeless {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Codeless>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `ping`, code 0x01
+        pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[6]);
+        /// `read`, code 0x02
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x02, 1, &[7]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `status` (no code)
+        pub const STATUS: MessageDesc = MessageDesc::new("status", 0, 0, &[6, 8]);
+        /// `read_status` (no code)
+        pub const READ_STATUS: MessageDesc = MessageDesc::new(
+            "read_status",
+            0,
+            0,
+            &[6, 8],
+        );
+    }
 }

@@ -313,7 +313,7 @@ pub mod clash {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Option { some: v_some, core: v_core } => {
-                    rt::encode_broadcast(address, 0x00, "option")?;
+                    rt::encode_broadcast(address, 0x00, &request::OPTION)?;
                     rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
                     out[3] = v_some.raw();
@@ -321,7 +321,7 @@ pub mod clash {
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xBA))
                 }
                 Self::U8 { frame: v_frame } => {
-                    rt::encode_broadcast(address, 0x00, "u8")?;
+                    rt::encode_broadcast(address, 0x00, &request::U8)?;
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
                     out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB))
@@ -334,7 +334,7 @@ pub mod clash {
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xBC))
                 }
                 Self::Rt { f: v_f } => {
-                    rt::encode_broadcast(address, 0x00, "rt")?;
+                    rt::encode_broadcast(address, 0x00, &request::RT)?;
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
                     let field_0: u8 = v_f;
                     out[3] = field_0;
@@ -364,34 +364,34 @@ pub mod clash {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<7>(frame, "option", &[7])?;
-                    rt::no_broadcast(frame[1], 0x00, "option", 0x10, 1)?;
+                    let frame = rt::fixed::<7>(frame, &request::OPTION)?;
+                    rt::no_broadcast(frame[1], 0x00, &request::OPTION)?;
                     let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range("option", "core", 4, field_1, 0, 1000)?;
+                    rt::in_range(&request::OPTION_CORE, 4, field_1, 0, 1000)?;
                     rt::Ok(Self::Option {
                         some: Result::from_raw(frame[3]),
                         core: Option::from_raw(field_1),
                     })
                 }
                 0x11 => {
-                    let frame = rt::fixed::<5>(frame, "u8", &[5])?;
-                    rt::no_broadcast(frame[1], 0x00, "u8", 0x11, 1)?;
+                    let frame = rt::fixed::<5>(frame, &request::U8)?;
+                    rt::no_broadcast(frame[1], 0x00, &request::U8)?;
                     rt::Ok(Self::U8 {
                         frame: Some::from_raw(frame[3] as i16),
                     })
                 }
                 0x12 => {
-                    let frame = rt::fixed::<7>(frame, "core", &[7])?;
-                    rt::equal("core", "buf", 4, frame[4], 0x0)?;
+                    let frame = rt::fixed::<7>(frame, &request::CORE)?;
+                    rt::equal(&request::CORE_BUF, 4, frame[4], 0x0)?;
                     rt::Ok(Self::Core {
                         address: frame[3],
                         out: frame[5] as i8,
                     })
                 }
                 0x13 => {
-                    let frame = rt::fixed::<6>(frame, "rt", &[6])?;
-                    rt::no_broadcast(frame[1], 0x00, "rt", 0x13, 1)?;
-                    rt::same("rt", "field", 4, frame[4], "f", frame[3])?;
+                    let frame = rt::fixed::<6>(frame, &request::RT)?;
+                    rt::no_broadcast(frame[1], 0x00, &request::RT)?;
+                    rt::same(&request::RT_FIELD, 4, frame[4], "f", frame[3])?;
                     rt::Ok(Self::Rt { f: frame[3] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
@@ -650,17 +650,17 @@ pub mod clash {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
-                0x50 => rt::fixed::<4>(frame, "ok", &[4]).map(|_| Self::Ok),
-                0x90 => rt::fixed::<4>(frame, "err", &[4]).map(|_| Self::Err),
+                0x50 => rt::fixed::<4>(frame, &response::OK).map(|_| Self::Ok),
+                0x90 => rt::fixed::<4>(frame, &response::ERR).map(|_| Self::Err),
                 0x51 => {
-                    let frame = rt::fixed::<7>(frame, "result", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::RESULT)?;
                     rt::Ok(Self::Result {
                         g: Ok::from_raw(frame[3]),
                         usize: Option::from_raw(u16::from_le_bytes([frame[4], frame[5]])),
                     })
                 }
                 0x52 => {
-                    let frame = rt::fixed::<7>(frame, "usize", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::USIZE)?;
                     rt::Ok(Self::Usize {
                         asked: rt::Ascii(frame[3..5].try_into().unwrap_or([0; 2])),
                         none: (frame[5] >> 4) as u8,
@@ -844,4 +844,35 @@ pub mod clash {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Clash>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `option`, code 0x10
+        pub const OPTION: MessageDesc = MessageDesc::new("option", 0x10, 1, &[7]);
+        /// `option.core`
+        pub const OPTION_CORE: FieldDesc = FieldDesc::new("option", "core");
+        /// `u8`, code 0x11
+        pub const U8: MessageDesc = MessageDesc::new("u8", 0x11, 1, &[5]);
+        /// `core`, code 0x12
+        pub const CORE: MessageDesc = MessageDesc::new("core", 0x12, 1, &[7]);
+        /// `core.buf`
+        pub const CORE_BUF: FieldDesc = FieldDesc::new("core", "buf");
+        /// `rt`, code 0x13
+        pub const RT: MessageDesc = MessageDesc::new("rt", 0x13, 1, &[6]);
+        /// `rt.field`
+        pub const RT_FIELD: FieldDesc = FieldDesc::new("rt", "field");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ok`, code 0x50
+        pub const OK: MessageDesc = MessageDesc::new("ok", 0x50, 1, &[4]);
+        /// `err`, code 0x90
+        pub const ERR: MessageDesc = MessageDesc::new("err", 0x90, 1, &[4]);
+        /// `result`, code 0x51
+        pub const RESULT: MessageDesc = MessageDesc::new("result", 0x51, 1, &[7]);
+        /// `usize`, code 0x52
+        pub const USIZE: MessageDesc = MessageDesc::new("usize", 0x52, 1, &[7]);
+    }
 }

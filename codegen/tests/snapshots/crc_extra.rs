@@ -242,7 +242,7 @@ pub mod crc_extra {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<19>(frame, "ping", &[19])?;
+                    let frame = rt::fixed::<19>(frame, &request::PING)?;
                     rt::Ok(Self::Ping {
                         time_usec: u64::from_le_bytes([
                             frame[3],
@@ -265,10 +265,9 @@ pub mod crc_extra {
                     })
                 }
                 0x42 => {
-                    let frame = rt::fixed::<11>(frame, "request_data_stream", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::REQUEST_DATA_STREAM)?;
                     rt::in_range(
-                        "request_data_stream",
-                        "start_stop",
+                        &request::REQUEST_DATA_STREAM_START_STOP,
                         8,
                         frame[8],
                         0,
@@ -549,7 +548,7 @@ pub mod crc_extra {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<19>(frame, "ping_reply", &[19])?;
+                    let frame = rt::fixed::<19>(frame, &response::PING_REPLY)?;
                     rt::Ok(Self::PingReply {
                         time_usec: u64::from_le_bytes([
                             frame[3],
@@ -572,7 +571,7 @@ pub mod crc_extra {
                     })
                 }
                 0x00 => {
-                    let frame = rt::fixed::<14>(frame, "heartbeat", &[14])?;
+                    let frame = rt::fixed::<14>(frame, &response::HEARTBEAT)?;
                     rt::Ok(Self::Heartbeat {
                         custom_mode: u32::from_le_bytes([
                             frame[3],
@@ -768,4 +767,36 @@ pub mod crc_extra {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CrcExtra>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `ping`, code 0x04
+        pub const PING: MessageDesc = MessageDesc::new("ping", 0x04, 1, &[19]);
+        /// `request_data_stream`, code 0x42
+        pub const REQUEST_DATA_STREAM: MessageDesc = MessageDesc::new(
+            "request_data_stream",
+            0x42,
+            1,
+            &[11],
+        );
+        /// `request_data_stream.start_stop`
+        pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
+            "request_data_stream",
+            "start_stop",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ping_reply`, code 0x04
+        pub const PING_REPLY: MessageDesc = MessageDesc::new(
+            "ping_reply",
+            0x04,
+            1,
+            &[19],
+        );
+        /// `heartbeat`, code 0x00
+        pub const HEARTBEAT: MessageDesc = MessageDesc::new("heartbeat", 0x00, 1, &[14]);
+    }
 }

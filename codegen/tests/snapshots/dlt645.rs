@@ -252,14 +252,14 @@ pub mod dlt645 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 8, 1) {
                 0x13 => {
-                    let frame = rt::fixed::<12>(frame, "read_address", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &request::READ_ADDRESS)?;
                     rt::Ok(Self::ReadAddress {
                         address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                         address_high: rt::u24([frame[4], frame[5], frame[6]], true),
                     })
                 }
                 0x11 => {
-                    let frame = rt::fixed::<16>(frame, "read_data", &[16])?;
+                    let frame = rt::fixed::<16>(frame, &request::READ_DATA)?;
                     rt::Ok(Self::ReadData {
                         address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                         address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -685,7 +685,7 @@ pub mod dlt645 {
         ) -> rt::DecodeResult<Self> {
             match rt::code(frame, 8, 1) {
                 0x93 => {
-                    let frame = rt::fixed::<18>(frame, "address_reply", &[18])?;
+                    let frame = rt::fixed::<18>(frame, &response::ADDRESS_REPLY)?;
                     rt::Ok(Self::AddressReply {
                         address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                         address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -697,8 +697,7 @@ pub mod dlt645 {
                     let mut g = rt::Group::new(frame, 0x91, request.map(Request::name));
                     g.attempt(|frame: &[u8; 20]| {
                         let field_3: u32 = rt::bcd(
-                            "data_reply",
-                            "value",
+                            &response::DATA_REPLY_VALUE,
                             14,
                             u32::from_le_bytes([
                                 frame[14],
@@ -707,7 +706,13 @@ pub mod dlt645 {
                                 frame[17],
                             ]) as u64,
                         )? as u32;
-                        rt::in_range("data_reply", "value", 14, field_3, 0, 99999999)?;
+                        rt::in_range(
+                            &response::DATA_REPLY_VALUE,
+                            14,
+                            field_3,
+                            0,
+                            99999999,
+                        )?;
                         rt::Ok(Self::DataReply {
                             address_low: rt::u24([frame[1], frame[2], frame[3]], true),
                             address_high: rt::u24([frame[4], frame[5], frame[6]], true),
@@ -722,8 +727,7 @@ pub mod dlt645 {
                     });
                     g.attempt(|frame: &[u8; 22]| {
                         rt::equal(
-                            "meter_number_reply",
-                            "data_id",
+                            &response::METER_NUMBER_REPLY_DATA_ID,
                             10,
                             u32::from_le_bytes([
                                 frame[10],
@@ -740,7 +744,7 @@ pub mod dlt645 {
                             number_high: rt::u24([frame[17], frame[18], frame[19]], true),
                         })
                     });
-                    g.end("data_reply", &[20, 22])
+                    g.end(&response::DATA_REPLY)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 8, 1, 2, true)),
             }
@@ -977,4 +981,50 @@ pub mod dlt645 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dlt645>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_address`, code 0x13
+        pub const READ_ADDRESS: MessageDesc = MessageDesc::new(
+            "read_address",
+            0x13,
+            1,
+            &[12],
+        );
+        /// `read_data`, code 0x11
+        pub const READ_DATA: MessageDesc = MessageDesc::new("read_data", 0x11, 1, &[16]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `address_reply`, code 0x93
+        pub const ADDRESS_REPLY: MessageDesc = MessageDesc::new(
+            "address_reply",
+            0x93,
+            1,
+            &[18],
+        );
+        /// `data_reply`, code 0x91
+        pub const DATA_REPLY: MessageDesc = MessageDesc::new(
+            "data_reply",
+            0x91,
+            1,
+            &[20, 22],
+        );
+        /// `data_reply.value`
+        pub const DATA_REPLY_VALUE: FieldDesc = FieldDesc::new("data_reply", "value");
+        /// `meter_number_reply`, code 0x91
+        pub const METER_NUMBER_REPLY: MessageDesc = MessageDesc::new(
+            "meter_number_reply",
+            0x91,
+            1,
+            &[20, 22],
+        );
+        /// `meter_number_reply.data_id`
+        pub const METER_NUMBER_REPLY_DATA_ID: FieldDesc = FieldDesc::new(
+            "meter_number_reply",
+            "data_id",
+        );
+    }
 }

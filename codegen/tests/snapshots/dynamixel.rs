@@ -114,8 +114,7 @@ pub mod dynamixel {
     }
     /// Where `write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "write",
-        field: "data",
+        field: &request::WRITE_DATA,
         base: 7,
         at: 6,
         width: 1,
@@ -125,8 +124,7 @@ pub mod dynamixel {
     };
     /// Where `reg_write.data` sits in the frame and how its elements are counted.
     pub const REPEAT_REG_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "reg_write",
-        field: "data",
+        field: &request::REG_WRITE_DATA,
         base: 7,
         at: 6,
         width: 1,
@@ -136,8 +134,7 @@ pub mod dynamixel {
     };
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "sync_write",
-        field: "blocks",
+        field: &request::SYNC_WRITE_BLOCKS,
         base: 8,
         at: 7,
         width: 1,
@@ -273,11 +270,11 @@ pub mod dynamixel {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping => {
-                    rt::encode_broadcast(address, 0xFE, "ping")?;
+                    rt::encode_broadcast(address, 0xFE, &request::PING)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
                 Self::Read { address: v_address, length: v_length } => {
-                    rt::encode_broadcast(address, 0xFE, "read")?;
+                    rt::encode_broadcast(address, 0xFE, &request::READ)?;
                     rt::encode_in_range("length", v_length, 1, 253)?;
                     let out = rt::frame_mut::<
                         8,
@@ -350,14 +347,14 @@ pub mod dynamixel {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<6>(frame, "ping", &[6])?;
-                    rt::no_broadcast(frame[2], 0xFE, "ping", 0x01, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::PING)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::PING)?;
                     rt::Ok(Self::Ping)
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, "read", &[8])?;
-                    rt::no_broadcast(frame[2], 0xFE, "read", 0x02, 1)?;
-                    rt::in_range("read", "length", 6, frame[6], 1, 253)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::READ)?;
+                    rt::in_range(&request::READ_LENGTH, 6, frame[6], 1, 253)?;
                     rt::Ok(Self::Read {
                         address: frame[5],
                         length: frame[6],
@@ -378,8 +375,8 @@ pub mod dynamixel {
                             .elements::<u8, 252>(elements, true, false)?,
                     })
                 }
-                0x05 => rt::fixed::<6>(frame, "action", &[6]).map(|_| Self::Action),
-                0x06 => rt::fixed::<6>(frame, "reset", &[6]).map(|_| Self::Reset),
+                0x05 => rt::fixed::<6>(frame, &request::ACTION).map(|_| Self::Action),
+                0x06 => rt::fixed::<6>(frame, &request::RESET).map(|_| Self::Reset),
                 0x83 => {
                     let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
                     rt::Ok(Self::SyncWrite {
@@ -498,8 +495,7 @@ pub mod dynamixel {
     }
     /// Where `read_status.data` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_STATUS: rt::RepeatAt = rt::RepeatAt {
-        message: "read_status",
-        field: "data",
+        field: &response::READ_STATUS_DATA,
         base: 6,
         at: 5,
         width: 1,
@@ -661,7 +657,7 @@ pub mod dynamixel {
                             })
                         },
                     );
-                    g.end("status", &[6])
+                    g.end(&response::STATUS)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }
@@ -934,4 +930,46 @@ pub mod dynamixel {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `ping`, code 0x01
+        pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[6]);
+        /// `read`, code 0x02
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x02, 1, &[8]);
+        /// `read.length`
+        pub const READ_LENGTH: FieldDesc = FieldDesc::new("read", "length");
+        /// `write`, code 0x03
+        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x03, 1, &[7]);
+        /// `write.data`
+        pub const WRITE_DATA: FieldDesc = FieldDesc::new("write", "data");
+        /// `reg_write`, code 0x04
+        pub const REG_WRITE: MessageDesc = MessageDesc::new("reg_write", 0x04, 1, &[7]);
+        /// `reg_write.data`
+        pub const REG_WRITE_DATA: FieldDesc = FieldDesc::new("reg_write", "data");
+        /// `action`, code 0x05
+        pub const ACTION: MessageDesc = MessageDesc::new("action", 0x05, 1, &[6]);
+        /// `reset`, code 0x06
+        pub const RESET: MessageDesc = MessageDesc::new("reset", 0x06, 1, &[6]);
+        /// `sync_write`, code 0x83
+        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
+            "sync_write",
+            0x83,
+            1,
+            &[8],
+        );
+        /// `sync_write.blocks`
+        pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `status` (no code)
+        pub const STATUS: MessageDesc = MessageDesc::new("status", 0, 0, &[6]);
+        /// `read_status` (no code)
+        pub const READ_STATUS: MessageDesc = MessageDesc::new("read_status", 0, 0, &[6]);
+        /// `read_status.data`
+        pub const READ_STATUS_DATA: FieldDesc = FieldDesc::new("read_status", "data");
+    }
 }

@@ -279,9 +279,9 @@ pub mod dynamixel2_stuffed {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 7, 1) {
-                0x01 => rt::fixed::<10>(frame, "ping", &[10]).map(|_| Self::Ping),
+                0x01 => rt::fixed::<10>(frame, &request::PING).map(|_| Self::Ping),
                 0x03 => {
-                    let frame = rt::fixed::<16>(frame, "write4", &[16])?;
+                    let frame = rt::fixed::<16>(frame, &request::WRITE4)?;
                     rt::Ok(Self::Write4 {
                         address: u16::from_le_bytes([frame[8], frame[9]]),
                         value: u32::from_le_bytes([
@@ -559,7 +559,7 @@ pub mod dynamixel2_stuffed {
                             error: StatusError::from_raw(frame[8]),
                         })
                     });
-                    g.end("ping_status", &[11, 14])
+                    g.end(&response::PING_STATUS)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 7, 1, 2, true)),
             }
@@ -718,4 +718,26 @@ pub mod dynamixel2_stuffed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel2Stuffed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `ping`, code 0x01
+        pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[10]);
+        /// `write4`, code 0x03
+        pub const WRITE4: MessageDesc = MessageDesc::new("write4", 0x03, 1, &[16]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ping_status`, code 0x55
+        pub const PING_STATUS: MessageDesc = MessageDesc::new(
+            "ping_status",
+            0x55,
+            1,
+            &[11, 14],
+        );
+        /// `status`, code 0x55
+        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x55, 1, &[11, 14]);
+    }
 }

@@ -69,8 +69,7 @@ pub mod ending {
     }
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "write",
-        field: "values",
+        field: &request::WRITE_VALUES,
         base: 7,
         at: 6,
         width: 2,
@@ -225,8 +224,8 @@ pub mod ending {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, "read", &[8])?;
-                    rt::in_range("read", "quantity", 6, frame[6], 1, 16)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ)?;
+                    rt::in_range(&request::READ_QUANTITY, 6, frame[6], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[4], frame[5]]),
                         quantity: frame[6],
@@ -234,10 +233,9 @@ pub mod ending {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range("write", "quantity", 4, frame[4], 1, 16)?;
+                    rt::in_range(&request::WRITE_QUANTITY, 4, frame[4], 1, 16)?;
                     rt::following(
-                        "write",
-                        "byte_count",
+                        &request::WRITE_BYTE_COUNT,
                         5,
                         frame[5],
                         frame[4] as i64,
@@ -250,7 +248,7 @@ pub mod ending {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, "stamp", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &request::STAMP)?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[4], frame[5], frame[6]], false),
                     })
@@ -350,8 +348,7 @@ pub mod ending {
     }
     /// Where `read_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_reply",
-        field: "values",
+        field: &response::READ_REPLY_VALUES,
         base: 5,
         at: 4,
         width: 2,
@@ -509,13 +506,13 @@ pub mod ending {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<6>(frame, "read_error", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::READ_ERROR)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[4],
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<6>(frame, "write_reply", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::WRITE_REPLY)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[4],
                     })
@@ -740,4 +737,50 @@ pub mod ending {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ending>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read`, code 0x01
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[8]);
+        /// `read.quantity`
+        pub const READ_QUANTITY: FieldDesc = FieldDesc::new("read", "quantity");
+        /// `write`, code 0x02
+        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x02, 1, &[7]);
+        /// `write.values`
+        pub const WRITE_VALUES: FieldDesc = FieldDesc::new("write", "values");
+        /// `write.quantity`
+        pub const WRITE_QUANTITY: FieldDesc = FieldDesc::new("write", "quantity");
+        /// `write.byte_count`
+        pub const WRITE_BYTE_COUNT: FieldDesc = FieldDesc::new("write", "byte_count");
+        /// `stamp`, code 0x03
+        pub const STAMP: MessageDesc = MessageDesc::new("stamp", 0x03, 1, &[8]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_reply`, code 0x01
+        pub const READ_REPLY: MessageDesc = MessageDesc::new(
+            "read_reply",
+            0x01,
+            1,
+            &[5],
+        );
+        /// `read_reply.values`
+        pub const READ_REPLY_VALUES: FieldDesc = FieldDesc::new("read_reply", "values");
+        /// `read_error`, code 0x81
+        pub const READ_ERROR: MessageDesc = MessageDesc::new(
+            "read_error",
+            0x81,
+            1,
+            &[6],
+        );
+        /// `write_reply`, code 0x02
+        pub const WRITE_REPLY: MessageDesc = MessageDesc::new(
+            "write_reply",
+            0x02,
+            1,
+            &[6],
+        );
+    }
 }

@@ -127,15 +127,19 @@ pub mod ft12_fixed {
             let len = match *self {
                 Self::ResetRemoteLink => rt::head(out, &[0x10, 0x40, address]).len(),
                 Self::RequestStatusOfLink => {
-                    rt::encode_broadcast(address, 0xFF, "request_status_of_link")?;
+                    rt::encode_broadcast(
+                        address,
+                        0xFF,
+                        &request::REQUEST_STATUS_OF_LINK,
+                    )?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
                 Self::RequestClass2 => {
-                    rt::encode_broadcast(address, 0xFF, "request_class_2")?;
+                    rt::encode_broadcast(address, 0xFF, &request::REQUEST_CLASS_2)?;
                     rt::head(out, &[0x10, 0x5B, address]).len()
                 }
                 Self::RequestClass2Fcb => {
-                    rt::encode_broadcast(address, 0xFF, "request_class_2_fcb")?;
+                    rt::encode_broadcast(address, 0xFF, &request::REQUEST_CLASS_2_FCB)?;
                     rt::head(out, &[0x10, 0x7B, address]).len()
                 }
             };
@@ -162,22 +166,22 @@ pub mod ft12_fixed {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x40 => {
-                    rt::fixed::<5>(frame, "reset_remote_link", &[5])
+                    rt::fixed::<5>(frame, &request::RESET_REMOTE_LINK)
                         .map(|_| Self::ResetRemoteLink)
                 }
                 0x49 => {
-                    let frame = rt::fixed::<5>(frame, "request_status_of_link", &[5])?;
-                    rt::no_broadcast(frame[2], 0xFF, "request_status_of_link", 0x49, 1)?;
+                    let frame = rt::fixed::<5>(frame, &request::REQUEST_STATUS_OF_LINK)?;
+                    rt::no_broadcast(frame[2], 0xFF, &request::REQUEST_STATUS_OF_LINK)?;
                     rt::Ok(Self::RequestStatusOfLink)
                 }
                 0x5B => {
-                    let frame = rt::fixed::<5>(frame, "request_class_2", &[5])?;
-                    rt::no_broadcast(frame[2], 0xFF, "request_class_2", 0x5B, 1)?;
+                    let frame = rt::fixed::<5>(frame, &request::REQUEST_CLASS_2)?;
+                    rt::no_broadcast(frame[2], 0xFF, &request::REQUEST_CLASS_2)?;
                     rt::Ok(Self::RequestClass2)
                 }
                 0x7B => {
-                    let frame = rt::fixed::<5>(frame, "request_class_2_fcb", &[5])?;
-                    rt::no_broadcast(frame[2], 0xFF, "request_class_2_fcb", 0x7B, 1)?;
+                    let frame = rt::fixed::<5>(frame, &request::REQUEST_CLASS_2_FCB)?;
+                    rt::no_broadcast(frame[2], 0xFF, &request::REQUEST_CLASS_2_FCB)?;
                     rt::Ok(Self::RequestClass2Fcb)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
@@ -370,10 +374,10 @@ pub mod ft12_fixed {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
-                0x00 => rt::fixed::<5>(frame, "ack", &[5]).map(|_| Self::Ack),
-                0x01 => rt::fixed::<5>(frame, "nack", &[5]).map(|_| Self::Nack),
+                0x00 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
+                0x01 => rt::fixed::<5>(frame, &response::NACK).map(|_| Self::Nack),
                 0x0B => {
-                    rt::fixed::<5>(frame, "status_of_link", &[5])
+                    rt::fixed::<5>(frame, &response::STATUS_OF_LINK)
                         .map(|_| Self::StatusOfLink)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
@@ -528,4 +532,52 @@ pub mod ft12_fixed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Fixed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `reset_remote_link`, code 0x40
+        pub const RESET_REMOTE_LINK: MessageDesc = MessageDesc::new(
+            "reset_remote_link",
+            0x40,
+            1,
+            &[5],
+        );
+        /// `request_status_of_link`, code 0x49
+        pub const REQUEST_STATUS_OF_LINK: MessageDesc = MessageDesc::new(
+            "request_status_of_link",
+            0x49,
+            1,
+            &[5],
+        );
+        /// `request_class_2`, code 0x5B
+        pub const REQUEST_CLASS_2: MessageDesc = MessageDesc::new(
+            "request_class_2",
+            0x5B,
+            1,
+            &[5],
+        );
+        /// `request_class_2_fcb`, code 0x7B
+        pub const REQUEST_CLASS_2_FCB: MessageDesc = MessageDesc::new(
+            "request_class_2_fcb",
+            0x7B,
+            1,
+            &[5],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ack`, code 0x00
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x00, 1, &[5]);
+        /// `nack`, code 0x01
+        pub const NACK: MessageDesc = MessageDesc::new("nack", 0x01, 1, &[5]);
+        /// `status_of_link`, code 0x0B
+        pub const STATUS_OF_LINK: MessageDesc = MessageDesc::new(
+            "status_of_link",
+            0x0B,
+            1,
+            &[5],
+        );
+    }
 }

@@ -121,7 +121,7 @@ pub mod ft12_variable {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50]).len()
                 }
                 Self::ReadData => {
-                    rt::encode_broadcast(address, 0xFE, "read_data")?;
+                    rt::encode_broadcast(address, 0xFE, &request::READ_DATA)?;
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }
             };
@@ -152,14 +152,14 @@ pub mod ft12_variable {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x53 => {
-                    let frame = rt::fixed::<9>(frame, "reset", &[9])?;
-                    rt::equal("reset", "ci", 6, frame[6], 0x50)?;
+                    let frame = rt::fixed::<9>(frame, &request::RESET)?;
+                    rt::equal(&request::RESET_CI, 6, frame[6], 0x50)?;
                     rt::Ok(Self::Reset)
                 }
                 0x7B => {
-                    let frame = rt::fixed::<9>(frame, "read_data", &[9])?;
-                    rt::no_broadcast(frame[5], 0xFE, "read_data", 0x7B, 1)?;
-                    rt::equal("read_data", "ci", 6, frame[6], 0x5B)?;
+                    let frame = rt::fixed::<9>(frame, &request::READ_DATA)?;
+                    rt::no_broadcast(frame[5], 0xFE, &request::READ_DATA)?;
+                    rt::equal(&request::READ_DATA_CI, 6, frame[6], 0x5B)?;
                     rt::Ok(Self::ReadData)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, false)),
@@ -410,18 +410,23 @@ pub mod ft12_variable {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x08 => {
-                    let frame = rt::fixed::<27>(frame, "rsp_ud", &[27])?;
-                    rt::equal("rsp_ud", "ci", 6, frame[6], 0x72)?;
+                    let frame = rt::fixed::<27>(frame, &response::RSP_UD)?;
+                    rt::equal(&response::RSP_UD_CI, 6, frame[6], 0x72)?;
                     let field_1: u32 = rt::bcd(
-                        "rsp_ud",
-                        "identification",
+                        &response::RSP_UD_IDENTIFICATION,
                         7,
                         u32::from_le_bytes([frame[7], frame[8], frame[9], frame[10]])
                             as u64,
                     )? as u32;
-                    rt::in_range("rsp_ud", "identification", 7, field_1, 0, 99999999)?;
-                    rt::equal("rsp_ud", "dif", 19, frame[19], 0x4)?;
-                    rt::equal("rsp_ud", "vif", 20, frame[20], 0x13)?;
+                    rt::in_range(
+                        &response::RSP_UD_IDENTIFICATION,
+                        7,
+                        field_1,
+                        0,
+                        99999999,
+                    )?;
+                    rt::equal(&response::RSP_UD_DIF, 19, frame[19], 0x4)?;
+                    rt::equal(&response::RSP_UD_VIF, 20, frame[20], 0x13)?;
                     rt::Ok(Self::RspUd {
                         identification: field_1,
                         manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
@@ -613,4 +618,34 @@ pub mod ft12_variable {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Variable>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `reset`, code 0x53
+        pub const RESET: MessageDesc = MessageDesc::new("reset", 0x53, 1, &[9]);
+        /// `reset.ci`
+        pub const RESET_CI: FieldDesc = FieldDesc::new("reset", "ci");
+        /// `read_data`, code 0x7B
+        pub const READ_DATA: MessageDesc = MessageDesc::new("read_data", 0x7B, 1, &[9]);
+        /// `read_data.ci`
+        pub const READ_DATA_CI: FieldDesc = FieldDesc::new("read_data", "ci");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `rsp_ud`, code 0x08
+        pub const RSP_UD: MessageDesc = MessageDesc::new("rsp_ud", 0x08, 1, &[27]);
+        /// `rsp_ud.ci`
+        pub const RSP_UD_CI: FieldDesc = FieldDesc::new("rsp_ud", "ci");
+        /// `rsp_ud.identification`
+        pub const RSP_UD_IDENTIFICATION: FieldDesc = FieldDesc::new(
+            "rsp_ud",
+            "identification",
+        );
+        /// `rsp_ud.dif`
+        pub const RSP_UD_DIF: FieldDesc = FieldDesc::new("rsp_ud", "dif");
+        /// `rsp_ud.vif`
+        pub const RSP_UD_VIF: FieldDesc = FieldDesc::new("rsp_ud", "vif");
+    }
 }

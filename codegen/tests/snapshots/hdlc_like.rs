@@ -177,7 +177,7 @@ pub mod hdlc_like {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadStatus => {
-                    rt::encode_broadcast(address, 0xFF, "read_status")?;
+                    rt::encode_broadcast(address, 0xFF, &request::READ_STATUS)?;
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x10])?.len()
                 }
                 Self::WriteRegister { register: v_register, value: v_value } => {
@@ -229,12 +229,12 @@ pub mod hdlc_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<6>(frame, "read_status", &[6])?;
-                    rt::no_broadcast(frame[1], 0xFF, "read_status", 0x10, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_STATUS)?;
+                    rt::no_broadcast(frame[1], 0xFF, &request::READ_STATUS)?;
                     rt::Ok(Self::ReadStatus)
                 }
                 0x20 => {
-                    let frame = rt::fixed::<10>(frame, "write_register", &[10])?;
+                    let frame = rt::fixed::<10>(frame, &request::WRITE_REGISTER)?;
                     rt::Ok(Self::WriteRegister {
                         register: u16::from_le_bytes([frame[3], frame[4]]),
                         value: u16::from_le_bytes([frame[5], frame[6]]),
@@ -470,12 +470,12 @@ pub mod hdlc_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x90 => {
-                    let frame = rt::fixed::<8>(frame, "status", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &response::STATUS)?;
                     rt::Ok(Self::Status {
                         state: u16::from_le_bytes([frame[3], frame[4]]),
                     })
                 }
-                0xA0 => rt::fixed::<6>(frame, "ack", &[6]).map(|_| Self::Ack),
+                0xA0 => rt::fixed::<6>(frame, &response::ACK).map(|_| Self::Ack),
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, true)),
             }
         }
@@ -633,4 +633,31 @@ pub mod hdlc_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<HdlcLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_status`, code 0x10
+        pub const READ_STATUS: MessageDesc = MessageDesc::new(
+            "read_status",
+            0x10,
+            1,
+            &[6],
+        );
+        /// `write_register`, code 0x20
+        pub const WRITE_REGISTER: MessageDesc = MessageDesc::new(
+            "write_register",
+            0x20,
+            1,
+            &[10],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `status`, code 0x90
+        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x90, 1, &[8]);
+        /// `ack`, code 0xA0
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[6]);
+    }
 }

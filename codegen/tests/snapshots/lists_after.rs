@@ -69,8 +69,7 @@ pub mod lists_after {
     }
     /// Where `write_block.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_BLOCK: rt::RepeatAt = rt::RepeatAt {
-        message: "write_block",
-        field: "values",
+        field: &request::WRITE_BLOCK_VALUES,
         base: 7,
         at: 4,
         width: 2,
@@ -88,8 +87,7 @@ pub mod lists_after {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                message: "write_block",
-                field: "values",
+                field: &request::WRITE_BLOCK_VALUES,
                 base: 7,
                 at: 4,
                 width: 2,
@@ -106,8 +104,7 @@ pub mod lists_after {
     };
     /// Where `copy.sources` sits in the frame and how its elements are counted.
     pub const REPEAT_COPY: rt::RepeatAt = rt::RepeatAt {
-        message: "copy",
-        field: "sources",
+        field: &request::COPY_SOURCES,
         base: 7,
         at: 4,
         width: 1,
@@ -125,8 +122,7 @@ pub mod lists_after {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                message: "copy",
-                field: "sources",
+                field: &request::COPY_SOURCES,
                 base: 7,
                 at: 4,
                 width: 1,
@@ -140,8 +136,7 @@ pub mod lists_after {
                 max: 4,
             },
             rt::RepeatAt {
-                message: "copy",
-                field: "targets",
+                field: &request::COPY_TARGETS,
                 base: 7,
                 at: 5,
                 width: 2,
@@ -332,8 +327,8 @@ pub mod lists_after {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<7>(frame, "read_block", &[7])?;
-                    rt::in_range("read_block", "quantity", 5, frame[5], 1, 8)?;
+                    let frame = rt::fixed::<7>(frame, &request::READ_BLOCK)?;
+                    rt::in_range(&request::READ_BLOCK_QUANTITY, 5, frame[5], 1, 8)?;
                     rt::Ok(Self::ReadBlock {
                         first: u16::from_be_bytes([frame[3], frame[4]]),
                         quantity: frame[5],
@@ -344,8 +339,7 @@ pub mod lists_after {
                     let frame = &s.frame;
                     let field_2: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "write_block",
-                        "flags",
+                        &request::WRITE_BLOCK_FLAGS,
                         4 + s.shift(1),
                         field_2,
                         0,
@@ -365,7 +359,7 @@ pub mod lists_after {
                         .lists[1]
                         .elements::<u16, 4>(s.elements(1), false, false)?;
                     s.lists[1].in_range(v_targets.as_slice(), 1, 1000)?;
-                    rt::equal("copy", "mode", 5 + s.shift(2), frame[5], 0x1)?;
+                    rt::equal(&request::COPY_MODE, 5 + s.shift(2), frame[5], 0x1)?;
                     rt::Ok(Self::Copy {
                         sources: s
                             .lists[0]
@@ -468,8 +462,7 @@ pub mod lists_after {
     }
     /// Where `block_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_BLOCK_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "block_reply",
-        field: "values",
+        field: &response::BLOCK_REPLY_VALUES,
         base: 6,
         at: 3,
         width: 2,
@@ -482,8 +475,7 @@ pub mod lists_after {
         base: 6,
         lists: &[
             rt::RepeatAt {
-                message: "block_reply",
-                field: "values",
+                field: &response::BLOCK_REPLY_VALUES,
                 base: 6,
                 at: 3,
                 width: 2,
@@ -637,7 +629,7 @@ pub mod lists_after {
                     })
                 }
                 0x11 => {
-                    let frame = rt::fixed::<5>(frame, "ack", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
@@ -856,4 +848,61 @@ pub mod lists_after {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsAfter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_block`, code 0x10
+        pub const READ_BLOCK: MessageDesc = MessageDesc::new(
+            "read_block",
+            0x10,
+            1,
+            &[7],
+        );
+        /// `read_block.quantity`
+        pub const READ_BLOCK_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_block",
+            "quantity",
+        );
+        /// `write_block`, code 0x11
+        pub const WRITE_BLOCK: MessageDesc = MessageDesc::new(
+            "write_block",
+            0x11,
+            1,
+            &[7],
+        );
+        /// `write_block.values`
+        pub const WRITE_BLOCK_VALUES: FieldDesc = FieldDesc::new(
+            "write_block",
+            "values",
+        );
+        /// `write_block.flags`
+        pub const WRITE_BLOCK_FLAGS: FieldDesc = FieldDesc::new("write_block", "flags");
+        /// `copy`, code 0x12
+        pub const COPY: MessageDesc = MessageDesc::new("copy", 0x12, 1, &[7]);
+        /// `copy.sources`
+        pub const COPY_SOURCES: FieldDesc = FieldDesc::new("copy", "sources");
+        /// `copy.targets`
+        pub const COPY_TARGETS: FieldDesc = FieldDesc::new("copy", "targets");
+        /// `copy.mode`
+        pub const COPY_MODE: FieldDesc = FieldDesc::new("copy", "mode");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `block_reply`, code 0x10
+        pub const BLOCK_REPLY: MessageDesc = MessageDesc::new(
+            "block_reply",
+            0x10,
+            1,
+            &[6],
+        );
+        /// `block_reply.values`
+        pub const BLOCK_REPLY_VALUES: FieldDesc = FieldDesc::new(
+            "block_reply",
+            "values",
+        );
+        /// `ack`, code 0x11
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x11, 1, &[5]);
+    }
 }

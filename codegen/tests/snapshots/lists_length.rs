@@ -126,8 +126,7 @@ pub mod lists_length {
     }
     /// Where `log.channels` sits in the frame and how its elements are counted.
     pub const REPEAT_LOG: rt::RepeatAt = rt::RepeatAt {
-        message: "log",
-        field: "channels",
+        field: &request::LOG_CHANNELS,
         base: 7,
         at: 4,
         width: 1,
@@ -145,8 +144,7 @@ pub mod lists_length {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                message: "log",
-                field: "channels",
+                field: &request::LOG_CHANNELS,
                 base: 7,
                 at: 4,
                 width: 1,
@@ -160,8 +158,7 @@ pub mod lists_length {
                 max: 6,
             },
             rt::RepeatAt {
-                message: "log",
-                field: "samples",
+                field: &request::LOG_SAMPLES,
                 base: 7,
                 at: 4,
                 width: 2,
@@ -173,8 +170,7 @@ pub mod lists_length {
     };
     /// Where `set_outputs.outputs` sits in the frame and how its elements are counted.
     pub const REPEAT_SET_OUTPUTS: rt::RepeatAt = rt::RepeatAt {
-        message: "set_outputs",
-        field: "outputs",
+        field: &request::SET_OUTPUTS_OUTPUTS,
         base: 7,
         at: 4,
         width: 0,
@@ -192,8 +188,7 @@ pub mod lists_length {
         base: 7,
         lists: &[
             rt::RepeatAt {
-                message: "set_outputs",
-                field: "outputs",
+                field: &request::SET_OUTPUTS_OUTPUTS,
                 base: 7,
                 at: 4,
                 width: 0,
@@ -584,7 +579,7 @@ pub mod lists_length {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, "log_ack", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::LOG_ACK)?;
                     rt::Ok(Self::LogAck {
                         seq: u16::from_le_bytes([frame[3], frame[4]]),
                     })
@@ -785,4 +780,33 @@ pub mod lists_length {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsLength>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `log`, code 0x20
+        pub const LOG: MessageDesc = MessageDesc::new("log", 0x20, 1, &[7]);
+        /// `log.channels`
+        pub const LOG_CHANNELS: FieldDesc = FieldDesc::new("log", "channels");
+        /// `log.samples`
+        pub const LOG_SAMPLES: FieldDesc = FieldDesc::new("log", "samples");
+        /// `set_outputs`, code 0x21
+        pub const SET_OUTPUTS: MessageDesc = MessageDesc::new(
+            "set_outputs",
+            0x21,
+            1,
+            &[7],
+        );
+        /// `set_outputs.outputs`
+        pub const SET_OUTPUTS_OUTPUTS: FieldDesc = FieldDesc::new(
+            "set_outputs",
+            "outputs",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `log_ack`, code 0x20
+        pub const LOG_ACK: MessageDesc = MessageDesc::new("log_ack", 0x20, 1, &[6]);
+    }
 }

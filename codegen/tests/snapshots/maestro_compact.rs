@@ -230,11 +230,16 @@ pub mod maestro_compact {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x84 => {
-                    let frame = rt::fixed::<4>(frame, "set_target", &[4])?;
-                    rt::in_range("set_target", "channel", 1, frame[1], 0, 23)?;
+                    let frame = rt::fixed::<4>(frame, &request::SET_TARGET)?;
+                    rt::in_range(&request::SET_TARGET_CHANNEL, 1, frame[1], 0, 23)?;
                     let field_1: u16 = u16::from_le_bytes([frame[2], frame[3]]);
-                    rt::equal("set_target", "zero_high", 2, field_1 >> 15, 0x0)?;
-                    rt::equal("set_target", "zero_low", 2, (field_1 >> 7) & 0x1, 0x0)?;
+                    rt::equal(&request::SET_TARGET_ZERO_HIGH, 2, field_1 >> 15, 0x0)?;
+                    rt::equal(
+                        &request::SET_TARGET_ZERO_LOW,
+                        2,
+                        (field_1 >> 7) & 0x1,
+                        0x0,
+                    )?;
                     rt::Ok(Self::SetTarget {
                         channel: frame[1],
                         target_high: QuarterMicroseconds::from_raw(
@@ -246,8 +251,8 @@ pub mod maestro_compact {
                     })
                 }
                 0x90 => {
-                    let frame = rt::fixed::<2>(frame, "get_position", &[2])?;
-                    rt::in_range("get_position", "channel", 1, frame[1], 0, 23)?;
+                    let frame = rt::fixed::<2>(frame, &request::GET_POSITION)?;
+                    rt::in_range(&request::GET_POSITION_CHANNEL, 1, frame[1], 0, 23)?;
                     rt::Ok(Self::GetPosition {
                         channel: frame[1],
                     })
@@ -458,7 +463,7 @@ pub mod maestro_compact {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 0) {
                 0u32 => {
-                    let frame = rt::fixed::<2>(frame, "position", &[2])?;
+                    let frame = rt::fixed::<2>(frame, &response::POSITION)?;
                     rt::Ok(Self::Position {
                         position: QuarterMicroseconds::from_raw(
                             u16::from_le_bytes([frame[0], frame[1]]),
@@ -621,4 +626,49 @@ pub mod maestro_compact {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MaestroCompact>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `set_target`, code 0x84
+        pub const SET_TARGET: MessageDesc = MessageDesc::new(
+            "set_target",
+            0x84,
+            1,
+            &[4],
+        );
+        /// `set_target.channel`
+        pub const SET_TARGET_CHANNEL: FieldDesc = FieldDesc::new(
+            "set_target",
+            "channel",
+        );
+        /// `set_target.zero_high`
+        pub const SET_TARGET_ZERO_HIGH: FieldDesc = FieldDesc::new(
+            "set_target",
+            "zero_high",
+        );
+        /// `set_target.zero_low`
+        pub const SET_TARGET_ZERO_LOW: FieldDesc = FieldDesc::new(
+            "set_target",
+            "zero_low",
+        );
+        /// `get_position`, code 0x90
+        pub const GET_POSITION: MessageDesc = MessageDesc::new(
+            "get_position",
+            0x90,
+            1,
+            &[2],
+        );
+        /// `get_position.channel`
+        pub const GET_POSITION_CHANNEL: FieldDesc = FieldDesc::new(
+            "get_position",
+            "channel",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `position` (no code)
+        pub const POSITION: MessageDesc = MessageDesc::new("position", 0, 0, &[2]);
+    }
 }

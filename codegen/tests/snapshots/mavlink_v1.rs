@@ -282,7 +282,7 @@ pub mod mavlink_v1 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 5, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<22>(frame, "ping", &[22])?;
+                    let frame = rt::fixed::<22>(frame, &request::PING)?;
                     rt::Ok(Self::Ping {
                         sequence: frame[2],
                         sysid: frame[3],
@@ -308,10 +308,9 @@ pub mod mavlink_v1 {
                     })
                 }
                 0x42 => {
-                    let frame = rt::fixed::<14>(frame, "request_data_stream", &[14])?;
+                    let frame = rt::fixed::<14>(frame, &request::REQUEST_DATA_STREAM)?;
                     rt::in_range(
-                        "request_data_stream",
-                        "start_stop",
+                        &request::REQUEST_DATA_STREAM_START_STOP,
                         11,
                         frame[11],
                         0,
@@ -832,7 +831,7 @@ pub mod mavlink_v1 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 5, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<22>(frame, "ping_reply", &[22])?;
+                    let frame = rt::fixed::<22>(frame, &response::PING_REPLY)?;
                     rt::Ok(Self::PingReply {
                         sequence: frame[2],
                         sysid: frame[3],
@@ -858,7 +857,7 @@ pub mod mavlink_v1 {
                     })
                 }
                 0x00 => {
-                    let frame = rt::fixed::<17>(frame, "heartbeat", &[17])?;
+                    let frame = rt::fixed::<17>(frame, &response::HEARTBEAT)?;
                     rt::Ok(Self::Heartbeat {
                         sequence: frame[2],
                         sysid: frame[3],
@@ -877,7 +876,7 @@ pub mod mavlink_v1 {
                     })
                 }
                 0x01 => {
-                    let frame = rt::fixed::<39>(frame, "sys_status", &[39])?;
+                    let frame = rt::fixed::<39>(frame, &response::SYS_STATUS)?;
                     rt::Ok(Self::SysStatus {
                         sequence: frame[2],
                         sysid: frame[3],
@@ -913,7 +912,7 @@ pub mod mavlink_v1 {
                     })
                 }
                 0x1E => {
-                    let frame = rt::fixed::<36>(frame, "attitude", &[36])?;
+                    let frame = rt::fixed::<36>(frame, &response::ATTITUDE)?;
                     rt::Ok(Self::Attitude {
                         sequence: frame[2],
                         sysid: frame[3],
@@ -1192,4 +1191,45 @@ pub mod mavlink_v1 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MavlinkV1>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `ping`, code 0x04
+        pub const PING: MessageDesc = MessageDesc::new("ping", 0x04, 1, &[22]);
+        /// `request_data_stream`, code 0x42
+        pub const REQUEST_DATA_STREAM: MessageDesc = MessageDesc::new(
+            "request_data_stream",
+            0x42,
+            1,
+            &[14],
+        );
+        /// `request_data_stream.start_stop`
+        pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
+            "request_data_stream",
+            "start_stop",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ping_reply`, code 0x04
+        pub const PING_REPLY: MessageDesc = MessageDesc::new(
+            "ping_reply",
+            0x04,
+            1,
+            &[22],
+        );
+        /// `heartbeat`, code 0x00
+        pub const HEARTBEAT: MessageDesc = MessageDesc::new("heartbeat", 0x00, 1, &[17]);
+        /// `sys_status`, code 0x01
+        pub const SYS_STATUS: MessageDesc = MessageDesc::new(
+            "sys_status",
+            0x01,
+            1,
+            &[39],
+        );
+        /// `attitude`, code 0x1E
+        pub const ATTITUDE: MessageDesc = MessageDesc::new("attitude", 0x1E, 1, &[36]);
+    }
 }

@@ -119,7 +119,7 @@ pub mod mbus_short {
             let len = match *self {
                 Self::SndNke => rt::head(out, &[0x10, 0x40, address]).len(),
                 Self::ReqSke => {
-                    rt::encode_broadcast(address, 0xFF, "req_ske")?;
+                    rt::encode_broadcast(address, 0xFF, &request::REQ_SKE)?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
             };
@@ -145,10 +145,10 @@ pub mod mbus_short {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
-                0x40 => rt::fixed::<5>(frame, "snd_nke", &[5]).map(|_| Self::SndNke),
+                0x40 => rt::fixed::<5>(frame, &request::SND_NKE).map(|_| Self::SndNke),
                 0x49 => {
-                    let frame = rt::fixed::<5>(frame, "req_ske", &[5])?;
-                    rt::no_broadcast(frame[2], 0xFF, "req_ske", 0x49, 1)?;
+                    let frame = rt::fixed::<5>(frame, &request::REQ_SKE)?;
+                    rt::no_broadcast(frame[2], 0xFF, &request::REQ_SKE)?;
                     rt::Ok(Self::ReqSke)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
@@ -357,7 +357,7 @@ pub mod mbus_short {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x0B => {
-                    rt::fixed::<5>(frame, "status_of_link", &[5])
+                    rt::fixed::<5>(frame, &response::STATUS_OF_LINK)
                         .map(|_| Self::StatusOfLink)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
@@ -538,4 +538,24 @@ pub mod mbus_short {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MbusShort>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `snd_nke`, code 0x40
+        pub const SND_NKE: MessageDesc = MessageDesc::new("snd_nke", 0x40, 1, &[5]);
+        /// `req_ske`, code 0x49
+        pub const REQ_SKE: MessageDesc = MessageDesc::new("req_ske", 0x49, 1, &[5]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `status_of_link`, code 0x0B
+        pub const STATUS_OF_LINK: MessageDesc = MessageDesc::new(
+            "status_of_link",
+            0x0B,
+            1,
+            &[5],
+        );
+    }
 }

@@ -141,11 +141,11 @@ pub mod meter_floats {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadReadings => {
-                    rt::encode_broadcast(address, 0x00, "read_readings")?;
+                    rt::encode_broadcast(address, 0x00, &request::READ_READINGS)?;
                     rt::frame_mut::<4>(buf, &[address, 0x04])?.len()
                 }
                 Self::SetLimits { voltage_limit: v_voltage_limit, serial: v_serial } => {
-                    rt::encode_broadcast(address, 0x00, "set_limits")?;
+                    rt::encode_broadcast(address, 0x00, &request::SET_LIMITS)?;
                     rt::encode_in_range(
                         "voltage_limit",
                         v_voltage_limit,
@@ -181,13 +181,13 @@ pub mod meter_floats {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<4>(frame, "read_readings", &[4])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_readings", 0x04, 1)?;
+                    let frame = rt::fixed::<4>(frame, &request::READ_READINGS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_READINGS)?;
                     rt::Ok(Self::ReadReadings)
                 }
                 0x10 => {
-                    let frame = rt::fixed::<16>(frame, "set_limits", &[16])?;
-                    rt::no_broadcast(frame[0], 0x00, "set_limits", 0x10, 1)?;
+                    let frame = rt::fixed::<16>(frame, &request::SET_LIMITS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::SET_LIMITS)?;
                     let field_0: f32 = f32::from_be_bytes([
                         frame[2],
                         frame[3],
@@ -195,8 +195,7 @@ pub mod meter_floats {
                         frame[5],
                     ]);
                     rt::in_range(
-                        "set_limits",
-                        "voltage_limit",
+                        &request::SET_LIMITS_VOLTAGE_LIMIT,
                         2,
                         field_0,
                         rt::f32_raw(0f32),
@@ -500,7 +499,7 @@ pub mod meter_floats {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<52>(frame, "readings", &[52])?;
+                    let frame = rt::fixed::<52>(frame, &response::READINGS)?;
                     let field_1: f32 = f32::from_be_bytes([
                         frame[6],
                         frame[7],
@@ -508,8 +507,7 @@ pub mod meter_floats {
                         frame[9],
                     ]);
                     rt::in_range(
-                        "readings",
-                        "frequency",
+                        &response::READINGS_FREQUENCY,
                         6,
                         field_1,
                         rt::f32_raw(45f32),
@@ -526,8 +524,7 @@ pub mod meter_floats {
                         frame[41],
                     ]);
                     rt::in_range(
-                        "readings",
-                        "drift",
+                        &response::READINGS_DRIFT,
                         34,
                         field_5,
                         -9000000000000,
@@ -587,7 +584,7 @@ pub mod meter_floats {
                     })
                 }
                 0x10 => {
-                    let frame = rt::fixed::<12>(frame, "limits_set", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &response::LIMITS_SET)?;
                     let field_0: u64 = u64::from_be_bytes([
                         frame[2],
                         frame[3],
@@ -599,8 +596,7 @@ pub mod meter_floats {
                         frame[9],
                     ]);
                     rt::in_range(
-                        "limits_set",
-                        "serial",
+                        &response::LIMITS_SET_SERIAL,
                         2,
                         field_0,
                         rt::u64_raw(1u64),
@@ -774,4 +770,50 @@ pub mod meter_floats {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MeterFloats>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_readings`, code 0x04
+        pub const READ_READINGS: MessageDesc = MessageDesc::new(
+            "read_readings",
+            0x04,
+            1,
+            &[4],
+        );
+        /// `set_limits`, code 0x10
+        pub const SET_LIMITS: MessageDesc = MessageDesc::new(
+            "set_limits",
+            0x10,
+            1,
+            &[16],
+        );
+        /// `set_limits.voltage_limit`
+        pub const SET_LIMITS_VOLTAGE_LIMIT: FieldDesc = FieldDesc::new(
+            "set_limits",
+            "voltage_limit",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `readings`, code 0x04
+        pub const READINGS: MessageDesc = MessageDesc::new("readings", 0x04, 1, &[52]);
+        /// `readings.frequency`
+        pub const READINGS_FREQUENCY: FieldDesc = FieldDesc::new(
+            "readings",
+            "frequency",
+        );
+        /// `readings.drift`
+        pub const READINGS_DRIFT: FieldDesc = FieldDesc::new("readings", "drift");
+        /// `limits_set`, code 0x10
+        pub const LIMITS_SET: MessageDesc = MessageDesc::new(
+            "limits_set",
+            0x10,
+            1,
+            &[12],
+        );
+        /// `limits_set.serial`
+        pub const LIMITS_SET_SERIAL: FieldDesc = FieldDesc::new("limits_set", "serial");
+    }
 }

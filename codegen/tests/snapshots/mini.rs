@@ -388,27 +388,27 @@ pub mod mini {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x2000 => {
-                    let frame = rt::fixed::<9>(frame, "go_to", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::GO_TO)?;
                     let field_0: u32 = u32::from_le_bytes([
                         frame[4],
                         frame[5],
                         frame[6],
                         frame[7],
                     ]);
-                    rt::in_range("go_to", "target", 4, field_0, 0, 100000)?;
+                    rt::in_range(&request::GO_TO_TARGET, 4, field_0, 0, 100000)?;
                     rt::Ok(Self::GoTo {
                         target: Capacitance::from_raw(field_0),
                     })
                 }
                 0x3000 => {
-                    let frame = rt::fixed::<6>(frame, "set_mode", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_MODE)?;
                     rt::Ok(Self::SetMode {
                         mode: Mode::from_raw(frame[4]),
                     })
                 }
                 0x4000 => {
-                    let frame = rt::fixed::<6>(frame, "get_status", &[6])?;
-                    rt::in_range("get_status", "channel", 4, frame[4], 0, 3)?;
+                    let frame = rt::fixed::<6>(frame, &request::GET_STATUS)?;
+                    rt::in_range(&request::GET_STATUS_CHANNEL, 4, frame[4], 0, 3)?;
                     rt::Ok(Self::GetStatus {
                         channel: frame[4],
                     })
@@ -676,10 +676,12 @@ pub mod mini {
             if frame.len() >= 4 {
                 match rt::code(frame, 2, 1) {
                     0x50 => {
-                        return rt::fixed::<4>(frame, "started", &[4])
+                        return rt::fixed::<4>(frame, &response::STARTED)
                             .map(|_| Self::Started);
                     }
-                    0x90 => return rt::fixed::<4>(frame, "nak", &[4]).map(|_| Self::Nak),
+                    0x90 => {
+                        return rt::fixed::<4>(frame, &response::NAK).map(|_| Self::Nak);
+                    }
                     _ => {}
                 }
             }
@@ -688,12 +690,13 @@ pub mod mini {
             }
             match rt::code(frame, 2, 2) {
                 0x3000 => {
-                    rt::fixed::<5>(frame, "set_mode_ack", &[5]).map(|_| Self::SetModeAck)
+                    rt::fixed::<5>(frame, &response::SET_MODE_ACK)
+                        .map(|_| Self::SetModeAck)
                 }
                 0x4000 => {
-                    let frame = rt::fixed::<13>(frame, "status", &[13])?;
+                    let frame = rt::fixed::<13>(frame, &response::STATUS)?;
                     let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
-                    rt::equal("status", "reserved", 11, frame[11], 0x0)?;
+                    rt::equal(&response::STATUS_RESERVED, 11, frame[11], 0x0)?;
                     rt::Ok(Self::Status {
                         error_bits: StatusBits::from_raw(frame[4]),
                         freshness: (field_1 >> 12) as u8,
@@ -887,4 +890,46 @@ pub mod mini {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Mini>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `go_to`, code 0x2000
+        pub const GO_TO: MessageDesc = MessageDesc::new("go_to", 0x2000, 2, &[9]);
+        /// `go_to.target`
+        pub const GO_TO_TARGET: FieldDesc = FieldDesc::new("go_to", "target");
+        /// `set_mode`, code 0x3000
+        pub const SET_MODE: MessageDesc = MessageDesc::new("set_mode", 0x3000, 2, &[6]);
+        /// `get_status`, code 0x4000
+        pub const GET_STATUS: MessageDesc = MessageDesc::new(
+            "get_status",
+            0x4000,
+            2,
+            &[6],
+        );
+        /// `get_status.channel`
+        pub const GET_STATUS_CHANNEL: FieldDesc = FieldDesc::new(
+            "get_status",
+            "channel",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `started`, code 0x50
+        pub const STARTED: MessageDesc = MessageDesc::new("started", 0x50, 1, &[4]);
+        /// `nak`, code 0x90
+        pub const NAK: MessageDesc = MessageDesc::new("nak", 0x90, 1, &[4]);
+        /// `set_mode_ack`, code 0x3000
+        pub const SET_MODE_ACK: MessageDesc = MessageDesc::new(
+            "set_mode_ack",
+            0x3000,
+            2,
+            &[5],
+        );
+        /// `status`, code 0x4000
+        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x4000, 2, &[13]);
+        /// `status.reserved`
+        pub const STATUS_RESERVED: FieldDesc = FieldDesc::new("status", "reserved");
+    }
 }

@@ -141,11 +141,11 @@ pub mod mini_crc {
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
                 Self::ReadRuntimeHours => {
-                    rt::encode_broadcast(address, 0x1F, "read_runtime_hours")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_RUNTIME_HOURS)?;
                     rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
                 Self::ReadRuntimeMinSec => {
-                    rt::encode_broadcast(address, 0x1F, "read_runtime_min_sec")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_RUNTIME_MIN_SEC)?;
                     rt::head(out, &[0x69, address, 0x02, 0x00]).len()
                 }
                 Self::SetCounter { counter: v_counter } => {
@@ -179,27 +179,40 @@ pub mod mini_crc {
                 0x69 => {
                     let mut g = rt::Group::new(frame, 0x69, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(frame[1], 0x1F, "read_runtime_hours", 0x69, 1)?;
-                        rt::equal("read_runtime_hours", "selector", 2, frame[2], 0x1)?;
-                        rt::equal("read_runtime_hours", "arg2", 3, frame[3], 0x0)?;
+                        rt::no_broadcast(frame[1], 0x1F, &request::READ_RUNTIME_HOURS)?;
+                        rt::equal(
+                            &request::READ_RUNTIME_HOURS_SELECTOR,
+                            2,
+                            frame[2],
+                            0x1,
+                        )?;
+                        rt::equal(&request::READ_RUNTIME_HOURS_ARG2, 3, frame[3], 0x0)?;
                         rt::Ok(Self::ReadRuntimeHours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_runtime_min_sec",
-                            0x69,
-                            1,
+                            &request::READ_RUNTIME_MIN_SEC,
                         )?;
-                        rt::equal("read_runtime_min_sec", "selector", 2, frame[2], 0x2)?;
-                        rt::equal("read_runtime_min_sec", "arg2", 3, frame[3], 0x0)?;
+                        rt::equal(
+                            &request::READ_RUNTIME_MIN_SEC_SELECTOR,
+                            2,
+                            frame[2],
+                            0x2,
+                        )?;
+                        rt::equal(
+                            &request::READ_RUNTIME_MIN_SEC_ARG2,
+                            3,
+                            frame[3],
+                            0x0,
+                        )?;
                         rt::Ok(Self::ReadRuntimeMinSec)
                     });
-                    g.end("read_runtime_hours", &[6])
+                    g.end(&request::READ_RUNTIME_HOURS)
                 }
                 0x70 => {
-                    let frame = rt::fixed::<6>(frame, "set_counter", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_COUNTER)?;
                     rt::Ok(Self::SetCounter {
                         counter: u16::from_be_bytes([frame[2], frame[3]]),
                     })
@@ -437,7 +450,7 @@ pub mod mini_crc {
                     let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
                     g.ambiguous(
                         asked & 1 != 0,
-                        "runtime_hours",
+                        &response::RUNTIME_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::RuntimeHours {
                                 hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -446,19 +459,17 @@ pub mod mini_crc {
                     );
                     g.ambiguous(
                         asked >> 1 & 1 != 0,
-                        "runtime_min_sec",
+                        &response::RUNTIME_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "runtime_min_sec",
-                                "minutes",
+                                &response::RUNTIME_MIN_SEC_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "runtime_min_sec",
-                                "seconds",
+                                &response::RUNTIME_MIN_SEC_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -470,10 +481,10 @@ pub mod mini_crc {
                             })
                         },
                     );
-                    g.end("runtime_hours", &[6])
+                    g.end(&response::RUNTIME_HOURS)
                 }
                 0x70 => {
-                    let frame = rt::fixed::<6>(frame, "counter_echo", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::COUNTER_ECHO)?;
                     rt::Ok(Self::CounterEcho {
                         counter: u16::from_be_bytes([frame[2], frame[3]]),
                     })
@@ -632,4 +643,85 @@ pub mod mini_crc {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MiniCrc>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_runtime_hours`, code 0x69
+        pub const READ_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
+            "read_runtime_hours",
+            0x69,
+            1,
+            &[6],
+        );
+        /// `read_runtime_hours.selector`
+        pub const READ_RUNTIME_HOURS_SELECTOR: FieldDesc = FieldDesc::new(
+            "read_runtime_hours",
+            "selector",
+        );
+        /// `read_runtime_hours.arg2`
+        pub const READ_RUNTIME_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_runtime_hours",
+            "arg2",
+        );
+        /// `read_runtime_min_sec`, code 0x69
+        pub const READ_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_runtime_min_sec",
+            0x69,
+            1,
+            &[6],
+        );
+        /// `read_runtime_min_sec.selector`
+        pub const READ_RUNTIME_MIN_SEC_SELECTOR: FieldDesc = FieldDesc::new(
+            "read_runtime_min_sec",
+            "selector",
+        );
+        /// `read_runtime_min_sec.arg2`
+        pub const READ_RUNTIME_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_runtime_min_sec",
+            "arg2",
+        );
+        /// `set_counter`, code 0x70
+        pub const SET_COUNTER: MessageDesc = MessageDesc::new(
+            "set_counter",
+            0x70,
+            1,
+            &[6],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `runtime_hours`, code 0x22
+        pub const RUNTIME_HOURS: MessageDesc = MessageDesc::new(
+            "runtime_hours",
+            0x22,
+            1,
+            &[6],
+        );
+        /// `runtime_min_sec`, code 0x22
+        pub const RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
+            "runtime_min_sec",
+            0x22,
+            1,
+            &[6],
+        );
+        /// `runtime_min_sec.minutes`
+        pub const RUNTIME_MIN_SEC_MINUTES: FieldDesc = FieldDesc::new(
+            "runtime_min_sec",
+            "minutes",
+        );
+        /// `runtime_min_sec.seconds`
+        pub const RUNTIME_MIN_SEC_SECONDS: FieldDesc = FieldDesc::new(
+            "runtime_min_sec",
+            "seconds",
+        );
+        /// `counter_echo`, code 0x70
+        pub const COUNTER_ECHO: MessageDesc = MessageDesc::new(
+            "counter_echo",
+            0x70,
+            1,
+            &[6],
+        );
+    }
 }

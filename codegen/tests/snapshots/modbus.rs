@@ -220,8 +220,7 @@ pub mod modbus {
     }
     /// Where `write_multiple_coils.outputs` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_COILS: rt::RepeatAt = rt::RepeatAt {
-        message: "write_multiple_coils",
-        field: "outputs",
+        field: &request::WRITE_MULTIPLE_COILS_OUTPUTS,
         base: 9,
         at: 7,
         width: 0,
@@ -236,8 +235,7 @@ pub mod modbus {
     };
     /// Where `write_multiple_registers.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_MULTIPLE_REGISTERS: rt::RepeatAt = rt::RepeatAt {
-        message: "write_multiple_registers",
-        field: "values",
+        field: &request::WRITE_MULTIPLE_REGISTERS_VALUES,
         base: 9,
         at: 7,
         width: 2,
@@ -428,7 +426,7 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_coils")?;
+                    rt::encode_broadcast(address, 0x00, &request::READ_COILS)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -439,7 +437,7 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_discrete_inputs")?;
+                    rt::encode_broadcast(address, 0x00, &request::READ_DISCRETE_INPUTS)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -450,7 +448,11 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_holding_registers")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x00,
+                        &request::READ_HOLDING_REGISTERS,
+                    )?;
                     rt::encode_in_range("quantity", v_quantity, 1, 125)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -461,7 +463,7 @@ pub mod modbus {
                     starting_address: v_starting_address,
                     quantity: v_quantity,
                 } => {
-                    rt::encode_broadcast(address, 0x00, "read_input_registers")?;
+                    rt::encode_broadcast(address, 0x00, &request::READ_INPUT_REGISTERS)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 125)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
@@ -558,22 +560,21 @@ pub mod modbus {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, "read_coils", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_coils", 0x01, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_COILS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_COILS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::in_range("read_coils", "quantity", 4, field_1, 1, 2000)?;
+                    rt::in_range(&request::READ_COILS_QUANTITY, 4, field_1, 1, 2000)?;
                     rt::Ok(Self::ReadCoils {
                         starting_address: u16::from_be_bytes([frame[2], frame[3]]),
                         quantity: field_1,
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, "read_discrete_inputs", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_discrete_inputs", 0x02, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_DISCRETE_INPUTS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_DISCRETE_INPUTS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "read_discrete_inputs",
-                        "quantity",
+                        &request::READ_DISCRETE_INPUTS_QUANTITY,
                         4,
                         field_1,
                         1,
@@ -585,12 +586,11 @@ pub mod modbus {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, "read_holding_registers", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_holding_registers", 0x03, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_HOLDING_REGISTERS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_HOLDING_REGISTERS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "read_holding_registers",
-                        "quantity",
+                        &request::READ_HOLDING_REGISTERS_QUANTITY,
                         4,
                         field_1,
                         1,
@@ -602,12 +602,11 @@ pub mod modbus {
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<8>(frame, "read_input_registers", &[8])?;
-                    rt::no_broadcast(frame[0], 0x00, "read_input_registers", 0x04, 1)?;
+                    let frame = rt::fixed::<8>(frame, &request::READ_INPUT_REGISTERS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_INPUT_REGISTERS)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "read_input_registers",
-                        "quantity",
+                        &request::READ_INPUT_REGISTERS_QUANTITY,
                         4,
                         field_1,
                         1,
@@ -619,7 +618,7 @@ pub mod modbus {
                     })
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, "write_single_coil", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_COIL)?;
                     rt::Ok(Self::WriteSingleCoil {
                         output_address: u16::from_be_bytes([frame[2], frame[3]]),
                         output_value: CoilState::from_raw(
@@ -628,7 +627,7 @@ pub mod modbus {
                     })
                 }
                 0x06 => {
-                    let frame = rt::fixed::<8>(frame, "write_single_register", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_REGISTER)?;
                     rt::Ok(Self::WriteSingleRegister {
                         register_address: u16::from_be_bytes([frame[2], frame[3]]),
                         register_value: u16::from_be_bytes([frame[4], frame[5]]),
@@ -639,16 +638,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "write_multiple_coils",
-                        "quantity",
+                        &request::WRITE_MULTIPLE_COILS_QUANTITY,
                         4,
                         field_1,
                         1,
                         1968,
                     )?;
                     rt::following(
-                        "write_multiple_coils",
-                        "byte_count",
+                        &request::WRITE_MULTIPLE_COILS_BYTE_COUNT,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -667,16 +664,14 @@ pub mod modbus {
                         .split::<7>(frame)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "write_multiple_registers",
-                        "quantity",
+                        &request::WRITE_MULTIPLE_REGISTERS_QUANTITY,
                         4,
                         field_1,
                         1,
                         123,
                     )?;
                     rt::following(
-                        "write_multiple_registers",
-                        "byte_count",
+                        &request::WRITE_MULTIPLE_REGISTERS_BYTE_COUNT,
                         6,
                         frame[6],
                         field_1 as i64,
@@ -828,8 +823,7 @@ pub mod modbus {
     }
     /// Where `read_coils_reply.coils` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_COILS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_coils_reply",
-        field: "coils",
+        field: &response::READ_COILS_REPLY_COILS,
         base: 5,
         at: 3,
         width: 0,
@@ -844,8 +838,7 @@ pub mod modbus {
     };
     /// Where `read_discrete_inputs_reply.inputs` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_DISCRETE_INPUTS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_discrete_inputs_reply",
-        field: "inputs",
+        field: &response::READ_DISCRETE_INPUTS_REPLY_INPUTS,
         base: 5,
         at: 3,
         width: 0,
@@ -860,8 +853,7 @@ pub mod modbus {
     };
     /// Where `read_holding_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_HOLDING_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_holding_registers_reply",
-        field: "registers",
+        field: &response::READ_HOLDING_REGISTERS_REPLY_REGISTERS,
         base: 5,
         at: 3,
         width: 2,
@@ -876,8 +868,7 @@ pub mod modbus {
     };
     /// Where `read_input_registers_reply.registers` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_INPUT_REGISTERS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_input_registers_reply",
-        field: "registers",
+        field: &response::READ_INPUT_REGISTERS_REPLY_REGISTERS,
         base: 5,
         at: 3,
         width: 2,
@@ -1293,7 +1284,7 @@ pub mod modbus {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<5>(frame, "read_coils_exception", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::READ_COILS_EXCEPTION)?;
                     rt::Ok(Self::ReadCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1309,7 +1300,7 @@ pub mod modbus {
                 0x82 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "read_discrete_inputs_exception", &[5])?;
+                    >(frame, &response::READ_DISCRETE_INPUTS_EXCEPTION)?;
                     rt::Ok(Self::ReadDiscreteInputsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1325,7 +1316,7 @@ pub mod modbus {
                 0x83 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "read_holding_registers_exception", &[5])?;
+                    >(frame, &response::READ_HOLDING_REGISTERS_EXCEPTION)?;
                     rt::Ok(Self::ReadHoldingRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1341,13 +1332,15 @@ pub mod modbus {
                 0x84 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "read_input_registers_exception", &[5])?;
+                    >(frame, &response::READ_INPUT_REGISTERS_EXCEPTION)?;
                     rt::Ok(Self::ReadInputRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, "write_single_coil_reply", &[8])?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &response::WRITE_SINGLE_COIL_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleCoilReply {
@@ -1358,7 +1351,7 @@ pub mod modbus {
                 0x85 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_single_coil_exception", &[5])?;
+                    >(frame, &response::WRITE_SINGLE_COIL_EXCEPTION)?;
                     rt::Ok(Self::WriteSingleCoilException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1366,7 +1359,7 @@ pub mod modbus {
                 0x06 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, "write_single_register_reply", &[8])?;
+                    >(frame, &response::WRITE_SINGLE_REGISTER_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleRegisterReply {
@@ -1377,7 +1370,7 @@ pub mod modbus {
                 0x86 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_single_register_exception", &[5])?;
+                    >(frame, &response::WRITE_SINGLE_REGISTER_EXCEPTION)?;
                     rt::Ok(Self::WriteSingleRegisterException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1385,7 +1378,7 @@ pub mod modbus {
                 0x0F => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, "write_multiple_coils_reply", &[8])?;
+                    >(frame, &response::WRITE_MULTIPLE_COILS_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleCoilsReply {
@@ -1396,7 +1389,7 @@ pub mod modbus {
                 0x8F => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_multiple_coils_exception", &[5])?;
+                    >(frame, &response::WRITE_MULTIPLE_COILS_EXCEPTION)?;
                     rt::Ok(Self::WriteMultipleCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1404,7 +1397,7 @@ pub mod modbus {
                 0x10 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, "write_multiple_registers_reply", &[8])?;
+                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleRegistersReply {
@@ -1415,7 +1408,7 @@ pub mod modbus {
                 0x90 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, "write_multiple_registers_exception", &[5])?;
+                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_EXCEPTION)?;
                     rt::Ok(Self::WriteMultipleRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -1592,8 +1585,7 @@ pub mod modbus {
                     &Request::ReadCoils { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_coils_reply",
-                        "byte_count",
+                        &response::READ_COILS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
                         r_quantity as i64,
@@ -1613,8 +1605,7 @@ pub mod modbus {
                     &Request::ReadDiscreteInputs { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_discrete_inputs_reply",
-                        "byte_count",
+                        &response::READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
                             as u64,
@@ -1635,8 +1626,7 @@ pub mod modbus {
                     &Request::ReadHoldingRegisters { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_holding_registers_reply",
-                        "byte_count",
+                        &response::READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_HOLDING_REGISTERS_REPLY
                             .count_value(v_registers.len()) as u64,
@@ -1657,8 +1647,7 @@ pub mod modbus {
                     &Request::ReadInputRegisters { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "read_input_registers_reply",
-                        "byte_count",
+                        &response::READ_INPUT_REGISTERS_REPLY_BYTE_COUNT,
                         2,
                         REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
                             as u64,
@@ -1687,8 +1676,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_single_coil_reply",
-                        "output_address",
+                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS,
                         2,
                         v_output_address,
                         r_output_address as i64,
@@ -1696,8 +1684,7 @@ pub mod modbus {
                         "output_address of the request",
                     )?;
                     rt::following(
-                        "write_single_coil_reply",
-                        "output_value",
+                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE,
                         4,
                         v_output_value.raw(),
                         r_output_value.raw() as i64,
@@ -1718,8 +1705,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_single_register_reply",
-                        "register_address",
+                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS,
                         2,
                         v_register_address,
                         r_register_address as i64,
@@ -1727,8 +1713,7 @@ pub mod modbus {
                         "register_address of the request",
                     )?;
                     rt::following(
-                        "write_single_register_reply",
-                        "register_value",
+                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE,
                         4,
                         v_register_value,
                         r_register_value as i64,
@@ -1749,8 +1734,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_multiple_coils_reply",
-                        "starting_address",
+                        &response::WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS,
                         2,
                         v_starting_address,
                         r_starting_address as i64,
@@ -1758,8 +1742,7 @@ pub mod modbus {
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        "write_multiple_coils_reply",
-                        "quantity",
+                        &response::WRITE_MULTIPLE_COILS_REPLY_QUANTITY,
                         4,
                         v_quantity,
                         r_quantity as i64,
@@ -1780,8 +1763,7 @@ pub mod modbus {
                     },
                 ) => {
                     rt::following(
-                        "write_multiple_registers_reply",
-                        "starting_address",
+                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS,
                         2,
                         v_starting_address,
                         r_starting_address as i64,
@@ -1789,8 +1771,7 @@ pub mod modbus {
                         "starting_address of the request",
                     )?;
                     rt::following(
-                        "write_multiple_registers_reply",
-                        "quantity",
+                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY,
                         4,
                         v_quantity,
                         r_quantity as i64,
@@ -1971,4 +1952,311 @@ pub mod modbus {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Modbus>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_coils`, code 0x01
+        pub const READ_COILS: MessageDesc = MessageDesc::new(
+            "read_coils",
+            0x01,
+            1,
+            &[8],
+        );
+        /// `read_coils.quantity`
+        pub const READ_COILS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_coils",
+            "quantity",
+        );
+        /// `read_discrete_inputs`, code 0x02
+        pub const READ_DISCRETE_INPUTS: MessageDesc = MessageDesc::new(
+            "read_discrete_inputs",
+            0x02,
+            1,
+            &[8],
+        );
+        /// `read_discrete_inputs.quantity`
+        pub const READ_DISCRETE_INPUTS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_discrete_inputs",
+            "quantity",
+        );
+        /// `read_holding_registers`, code 0x03
+        pub const READ_HOLDING_REGISTERS: MessageDesc = MessageDesc::new(
+            "read_holding_registers",
+            0x03,
+            1,
+            &[8],
+        );
+        /// `read_holding_registers.quantity`
+        pub const READ_HOLDING_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_holding_registers",
+            "quantity",
+        );
+        /// `read_input_registers`, code 0x04
+        pub const READ_INPUT_REGISTERS: MessageDesc = MessageDesc::new(
+            "read_input_registers",
+            0x04,
+            1,
+            &[8],
+        );
+        /// `read_input_registers.quantity`
+        pub const READ_INPUT_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_input_registers",
+            "quantity",
+        );
+        /// `write_single_coil`, code 0x05
+        pub const WRITE_SINGLE_COIL: MessageDesc = MessageDesc::new(
+            "write_single_coil",
+            0x05,
+            1,
+            &[8],
+        );
+        /// `write_single_register`, code 0x06
+        pub const WRITE_SINGLE_REGISTER: MessageDesc = MessageDesc::new(
+            "write_single_register",
+            0x06,
+            1,
+            &[8],
+        );
+        /// `write_multiple_coils`, code 0x0F
+        pub const WRITE_MULTIPLE_COILS: MessageDesc = MessageDesc::new(
+            "write_multiple_coils",
+            0x0F,
+            1,
+            &[9],
+        );
+        /// `write_multiple_coils.outputs`
+        pub const WRITE_MULTIPLE_COILS_OUTPUTS: FieldDesc = FieldDesc::new(
+            "write_multiple_coils",
+            "outputs",
+        );
+        /// `write_multiple_coils.quantity`
+        pub const WRITE_MULTIPLE_COILS_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_coils",
+            "quantity",
+        );
+        /// `write_multiple_coils.byte_count`
+        pub const WRITE_MULTIPLE_COILS_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "write_multiple_coils",
+            "byte_count",
+        );
+        /// `write_multiple_registers`, code 0x10
+        pub const WRITE_MULTIPLE_REGISTERS: MessageDesc = MessageDesc::new(
+            "write_multiple_registers",
+            0x10,
+            1,
+            &[9],
+        );
+        /// `write_multiple_registers.values`
+        pub const WRITE_MULTIPLE_REGISTERS_VALUES: FieldDesc = FieldDesc::new(
+            "write_multiple_registers",
+            "values",
+        );
+        /// `write_multiple_registers.quantity`
+        pub const WRITE_MULTIPLE_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_registers",
+            "quantity",
+        );
+        /// `write_multiple_registers.byte_count`
+        pub const WRITE_MULTIPLE_REGISTERS_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "write_multiple_registers",
+            "byte_count",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_coils_reply`, code 0x01
+        pub const READ_COILS_REPLY: MessageDesc = MessageDesc::new(
+            "read_coils_reply",
+            0x01,
+            1,
+            &[5],
+        );
+        /// `read_coils_reply.coils`
+        pub const READ_COILS_REPLY_COILS: FieldDesc = FieldDesc::new(
+            "read_coils_reply",
+            "coils",
+        );
+        /// `read_coils_reply.byte_count`
+        pub const READ_COILS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_coils_reply",
+            "byte_count",
+        );
+        /// `read_coils_exception`, code 0x81
+        pub const READ_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_coils_exception",
+            0x81,
+            1,
+            &[5],
+        );
+        /// `read_discrete_inputs_reply`, code 0x02
+        pub const READ_DISCRETE_INPUTS_REPLY: MessageDesc = MessageDesc::new(
+            "read_discrete_inputs_reply",
+            0x02,
+            1,
+            &[5],
+        );
+        /// `read_discrete_inputs_reply.inputs`
+        pub const READ_DISCRETE_INPUTS_REPLY_INPUTS: FieldDesc = FieldDesc::new(
+            "read_discrete_inputs_reply",
+            "inputs",
+        );
+        /// `read_discrete_inputs_reply.byte_count`
+        pub const READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_discrete_inputs_reply",
+            "byte_count",
+        );
+        /// `read_discrete_inputs_exception`, code 0x82
+        pub const READ_DISCRETE_INPUTS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_discrete_inputs_exception",
+            0x82,
+            1,
+            &[5],
+        );
+        /// `read_holding_registers_reply`, code 0x03
+        pub const READ_HOLDING_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
+            "read_holding_registers_reply",
+            0x03,
+            1,
+            &[5],
+        );
+        /// `read_holding_registers_reply.registers`
+        pub const READ_HOLDING_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
+            "read_holding_registers_reply",
+            "registers",
+        );
+        /// `read_holding_registers_reply.byte_count`
+        pub const READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_holding_registers_reply",
+            "byte_count",
+        );
+        /// `read_holding_registers_exception`, code 0x83
+        pub const READ_HOLDING_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_holding_registers_exception",
+            0x83,
+            1,
+            &[5],
+        );
+        /// `read_input_registers_reply`, code 0x04
+        pub const READ_INPUT_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
+            "read_input_registers_reply",
+            0x04,
+            1,
+            &[5],
+        );
+        /// `read_input_registers_reply.registers`
+        pub const READ_INPUT_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
+            "read_input_registers_reply",
+            "registers",
+        );
+        /// `read_input_registers_reply.byte_count`
+        pub const READ_INPUT_REGISTERS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
+            "read_input_registers_reply",
+            "byte_count",
+        );
+        /// `read_input_registers_exception`, code 0x84
+        pub const READ_INPUT_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "read_input_registers_exception",
+            0x84,
+            1,
+            &[5],
+        );
+        /// `write_single_coil_reply`, code 0x05
+        pub const WRITE_SINGLE_COIL_REPLY: MessageDesc = MessageDesc::new(
+            "write_single_coil_reply",
+            0x05,
+            1,
+            &[8],
+        );
+        /// `write_single_coil_reply.output_address`
+        pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_single_coil_reply",
+            "output_address",
+        );
+        /// `write_single_coil_reply.output_value`
+        pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE: FieldDesc = FieldDesc::new(
+            "write_single_coil_reply",
+            "output_value",
+        );
+        /// `write_single_coil_exception`, code 0x85
+        pub const WRITE_SINGLE_COIL_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_single_coil_exception",
+            0x85,
+            1,
+            &[5],
+        );
+        /// `write_single_register_reply`, code 0x06
+        pub const WRITE_SINGLE_REGISTER_REPLY: MessageDesc = MessageDesc::new(
+            "write_single_register_reply",
+            0x06,
+            1,
+            &[8],
+        );
+        /// `write_single_register_reply.register_address`
+        pub const WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_single_register_reply",
+            "register_address",
+        );
+        /// `write_single_register_reply.register_value`
+        pub const WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE: FieldDesc = FieldDesc::new(
+            "write_single_register_reply",
+            "register_value",
+        );
+        /// `write_single_register_exception`, code 0x86
+        pub const WRITE_SINGLE_REGISTER_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_single_register_exception",
+            0x86,
+            1,
+            &[5],
+        );
+        /// `write_multiple_coils_reply`, code 0x0F
+        pub const WRITE_MULTIPLE_COILS_REPLY: MessageDesc = MessageDesc::new(
+            "write_multiple_coils_reply",
+            0x0F,
+            1,
+            &[8],
+        );
+        /// `write_multiple_coils_reply.starting_address`
+        pub const WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_multiple_coils_reply",
+            "starting_address",
+        );
+        /// `write_multiple_coils_reply.quantity`
+        pub const WRITE_MULTIPLE_COILS_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_coils_reply",
+            "quantity",
+        );
+        /// `write_multiple_coils_exception`, code 0x8F
+        pub const WRITE_MULTIPLE_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_multiple_coils_exception",
+            0x8F,
+            1,
+            &[5],
+        );
+        /// `write_multiple_registers_reply`, code 0x10
+        pub const WRITE_MULTIPLE_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
+            "write_multiple_registers_reply",
+            0x10,
+            1,
+            &[8],
+        );
+        /// `write_multiple_registers_reply.starting_address`
+        pub const WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
+            "write_multiple_registers_reply",
+            "starting_address",
+        );
+        /// `write_multiple_registers_reply.quantity`
+        pub const WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
+            "write_multiple_registers_reply",
+            "quantity",
+        );
+        /// `write_multiple_registers_exception`, code 0x90
+        pub const WRITE_MULTIPLE_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
+            "write_multiple_registers_exception",
+            0x90,
+            1,
+            &[5],
+        );
+    }
 }

@@ -190,10 +190,11 @@ pub mod msp_by_direction {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    rt::fixed::<6>(frame, "api_version", &[6]).map(|_| Self::ApiVersion)
+                    rt::fixed::<6>(frame, &request::API_VERSION)
+                        .map(|_| Self::ApiVersion)
                 }
-                0x69 => rt::fixed::<6>(frame, "rc", &[6]).map(|_| Self::Rc),
-                0x6C => rt::fixed::<6>(frame, "attitude", &[6]).map(|_| Self::Attitude),
+                0x69 => rt::fixed::<6>(frame, &request::RC).map(|_| Self::Rc),
+                0x6C => rt::fixed::<6>(frame, &request::ATTITUDE).map(|_| Self::Attitude),
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
             }
         }
@@ -274,8 +275,7 @@ pub mod msp_by_direction {
     }
     /// Where `rc_reply.channels` sits in the frame and how its elements are counted.
     pub const REPEAT_RC_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "rc_reply",
-        field: "channels",
+        field: &response::RC_REPLY_CHANNELS,
         base: 6,
         at: 5,
         width: 2,
@@ -450,7 +450,7 @@ pub mod msp_by_direction {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, "api_version_reply", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::API_VERSION_REPLY)?;
                     rt::Ok(Self::ApiVersionReply {
                         protocol_version: frame[5],
                         api_major: frame[6],
@@ -465,7 +465,7 @@ pub mod msp_by_direction {
                     })
                 }
                 0x6C => {
-                    let frame = rt::fixed::<12>(frame, "attitude_reply", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &response::ATTITUDE_REPLY)?;
                     rt::Ok(Self::AttitudeReply {
                         roll: Decidegrees::from_raw(
                             i16::from_le_bytes([frame[5], frame[6]]),
@@ -695,4 +695,42 @@ pub mod msp_by_direction {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspByDirection>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `api_version`, code 0x01
+        pub const API_VERSION: MessageDesc = MessageDesc::new(
+            "api_version",
+            0x01,
+            1,
+            &[6],
+        );
+        /// `rc`, code 0x69
+        pub const RC: MessageDesc = MessageDesc::new("rc", 0x69, 1, &[6]);
+        /// `attitude`, code 0x6C
+        pub const ATTITUDE: MessageDesc = MessageDesc::new("attitude", 0x6C, 1, &[6]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `api_version_reply`, code 0x01
+        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
+            "api_version_reply",
+            0x01,
+            1,
+            &[9],
+        );
+        /// `rc_reply`, code 0x69
+        pub const RC_REPLY: MessageDesc = MessageDesc::new("rc_reply", 0x69, 1, &[6]);
+        /// `rc_reply.channels`
+        pub const RC_REPLY_CHANNELS: FieldDesc = FieldDesc::new("rc_reply", "channels");
+        /// `attitude_reply`, code 0x6C
+        pub const ATTITUDE_REPLY: MessageDesc = MessageDesc::new(
+            "attitude_reply",
+            0x6C,
+            1,
+            &[12],
+        );
+    }
 }

@@ -187,14 +187,14 @@ pub mod msp_v1 {
                 0x3C => {
                     let mut g = rt::Group::new(frame, 0x3C, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("api_version", "cmd", 4, frame[4], 0x1)?;
+                        rt::equal(&request::API_VERSION_CMD, 4, frame[4], 0x1)?;
                         rt::Ok(Self::ApiVersion)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("attitude", "cmd", 4, frame[4], 0x6C)?;
+                        rt::equal(&request::ATTITUDE_CMD, 4, frame[4], 0x6C)?;
                         rt::Ok(Self::Attitude)
                     });
-                    g.end("api_version", &[6])
+                    g.end(&request::API_VERSION)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -432,7 +432,7 @@ pub mod msp_v1 {
                 0x3E => {
                     let mut g = rt::Group::new(frame, 0x3E, request.map(Request::name));
                     g.attempt(|frame: &[u8; 9]| {
-                        rt::equal("api_version_reply", "cmd", 4, frame[4], 0x1)?;
+                        rt::equal(&response::API_VERSION_REPLY_CMD, 4, frame[4], 0x1)?;
                         rt::Ok(Self::ApiVersionReply {
                             protocol_version: frame[5],
                             api_major: frame[6],
@@ -440,7 +440,7 @@ pub mod msp_v1 {
                         })
                     });
                     g.attempt(|frame: &[u8; 12]| {
-                        rt::equal("attitude_reply", "cmd", 4, frame[4], 0x6C)?;
+                        rt::equal(&response::ATTITUDE_REPLY_CMD, 4, frame[4], 0x6C)?;
                         rt::Ok(Self::AttitudeReply {
                             roll: Decidegrees::from_raw(
                                 i16::from_le_bytes([frame[5], frame[6]]),
@@ -451,10 +451,10 @@ pub mod msp_v1 {
                             yaw: i16::from_le_bytes([frame[9], frame[10]]),
                         })
                     });
-                    g.end("api_version_reply", &[9, 12])
+                    g.end(&response::API_VERSION_REPLY)
                 }
                 0x21 => {
-                    let frame = rt::fixed::<6>(frame, "error", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ERROR)?;
                     rt::Ok(Self::Error { cmd: frame[4] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
@@ -537,8 +537,7 @@ pub mod msp_v1 {
             match (self, request) {
                 (&Self::Error { cmd: v_cmd, .. }, &Request::ApiVersion { .. }) => {
                     rt::following(
-                        "error",
-                        "cmd",
+                        &response::ERROR_CMD,
                         4,
                         v_cmd,
                         1 as i64,
@@ -548,8 +547,7 @@ pub mod msp_v1 {
                 }
                 (&Self::Error { cmd: v_cmd, .. }, &Request::Attitude { .. }) => {
                     rt::following(
-                        "error",
-                        "cmd",
+                        &response::ERROR_CMD,
                         4,
                         v_cmd,
                         108 as i64,
@@ -680,4 +678,54 @@ pub mod msp_v1 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV1>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `api_version`, code 0x3C
+        pub const API_VERSION: MessageDesc = MessageDesc::new(
+            "api_version",
+            0x3C,
+            1,
+            &[6],
+        );
+        /// `api_version.cmd`
+        pub const API_VERSION_CMD: FieldDesc = FieldDesc::new("api_version", "cmd");
+        /// `attitude`, code 0x3C
+        pub const ATTITUDE: MessageDesc = MessageDesc::new("attitude", 0x3C, 1, &[6]);
+        /// `attitude.cmd`
+        pub const ATTITUDE_CMD: FieldDesc = FieldDesc::new("attitude", "cmd");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `api_version_reply`, code 0x3E
+        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
+            "api_version_reply",
+            0x3E,
+            1,
+            &[9, 12],
+        );
+        /// `api_version_reply.cmd`
+        pub const API_VERSION_REPLY_CMD: FieldDesc = FieldDesc::new(
+            "api_version_reply",
+            "cmd",
+        );
+        /// `attitude_reply`, code 0x3E
+        pub const ATTITUDE_REPLY: MessageDesc = MessageDesc::new(
+            "attitude_reply",
+            0x3E,
+            1,
+            &[9, 12],
+        );
+        /// `attitude_reply.cmd`
+        pub const ATTITUDE_REPLY_CMD: FieldDesc = FieldDesc::new(
+            "attitude_reply",
+            "cmd",
+        );
+        /// `error`, code 0x21
+        pub const ERROR: MessageDesc = MessageDesc::new("error", 0x21, 1, &[6]);
+        /// `error.cmd`
+        pub const ERROR_CMD: FieldDesc = FieldDesc::new("error", "cmd");
+    }
 }

@@ -178,15 +178,25 @@ pub mod msp_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
-                    let frame = rt::fixed::<9>(frame, "api_version", &[9])?;
-                    rt::equal("api_version", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
+                    let frame = rt::fixed::<9>(frame, &request::API_VERSION)?;
+                    rt::equal(
+                        &request::API_VERSION_RESERVED_FLAGS,
+                        3,
+                        frame[3] >> 1,
+                        0x0,
+                    )?;
                     rt::Ok(Self::ApiVersion {
                         dont_reply: (frame[3] & 0x1) != 0,
                     })
                 }
                 0x0200 => {
-                    let frame = rt::fixed::<9>(frame, "fc_variant", &[9])?;
-                    rt::equal("fc_variant", "reserved_flags", 3, frame[3] >> 1, 0x0)?;
+                    let frame = rt::fixed::<9>(frame, &request::FC_VARIANT)?;
+                    rt::equal(
+                        &request::FC_VARIANT_RESERVED_FLAGS,
+                        3,
+                        frame[3] >> 1,
+                        0x0,
+                    )?;
                     rt::Ok(Self::FcVariant {
                         dont_reply: (frame[3] & 0x1) != 0,
                     })
@@ -439,10 +449,9 @@ pub mod msp_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
-                    let frame = rt::fixed::<12>(frame, "api_version_reply", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &response::API_VERSION_REPLY)?;
                     rt::equal(
-                        "api_version_reply",
-                        "reserved_flags",
+                        &response::API_VERSION_REPLY_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -455,10 +464,9 @@ pub mod msp_v2 {
                     })
                 }
                 0x0200 => {
-                    let frame = rt::fixed::<13>(frame, "fc_variant_reply", &[13])?;
+                    let frame = rt::fixed::<13>(frame, &response::FC_VARIANT_REPLY)?;
                     rt::equal(
-                        "fc_variant_reply",
-                        "reserved_flags",
+                        &response::FC_VARIANT_REPLY_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
@@ -648,4 +656,61 @@ pub mod msp_v2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `api_version`, code 0x0100
+        pub const API_VERSION: MessageDesc = MessageDesc::new(
+            "api_version",
+            0x0100,
+            2,
+            &[9],
+        );
+        /// `api_version.reserved_flags`
+        pub const API_VERSION_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "api_version",
+            "reserved_flags",
+        );
+        /// `fc_variant`, code 0x0200
+        pub const FC_VARIANT: MessageDesc = MessageDesc::new(
+            "fc_variant",
+            0x0200,
+            2,
+            &[9],
+        );
+        /// `fc_variant.reserved_flags`
+        pub const FC_VARIANT_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "fc_variant",
+            "reserved_flags",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `api_version_reply`, code 0x0100
+        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
+            "api_version_reply",
+            0x0100,
+            2,
+            &[12],
+        );
+        /// `api_version_reply.reserved_flags`
+        pub const API_VERSION_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "api_version_reply",
+            "reserved_flags",
+        );
+        /// `fc_variant_reply`, code 0x0200
+        pub const FC_VARIANT_REPLY: MessageDesc = MessageDesc::new(
+            "fc_variant_reply",
+            0x0200,
+            2,
+            &[13],
+        );
+        /// `fc_variant_reply.reserved_flags`
+        pub const FC_VARIANT_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
+            "fc_variant_reply",
+            "reserved_flags",
+        );
+    }
 }

@@ -312,9 +312,9 @@ pub mod optional_sensor {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
-                0x01 => rt::fixed::<5>(frame, "read", &[5]).map(|_| Self::Read),
+                0x01 => rt::fixed::<5>(frame, &request::READ).map(|_| Self::Read),
                 0x02 => {
-                    rt::fixed::<5>(frame, "last_event", &[5]).map(|_| Self::LastEvent)
+                    rt::fixed::<5>(frame, &request::LAST_EVENT).map(|_| Self::LastEvent)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
@@ -394,7 +394,12 @@ pub mod optional_sensor {
     }
     /// The optional fields of `reading`, each on the wire only where its condition holds: `humidity` when bit 0 of `status` is set, `pressure` when bit 1 of `status` is set.
     pub const OPTIONAL_READING: rt::Optionals = rt::Optionals {
-        message: "reading",
+        by_length: &[
+            rt::MessageDesc::new("reading", 0x81, 1, &[8]),
+            rt::MessageDesc::new("reading", 0x81, 1, &[10]),
+            rt::MessageDesc::new("reading", 0x81, 1, &[12]),
+            rt::MessageDesc::new("reading", 0x81, 1, &[14]),
+        ],
         base: 8,
         at: 7,
         fields: &[
@@ -425,7 +430,10 @@ pub mod optional_sensor {
     };
     /// The optional fields of `event`, each on the wire only where its condition holds: `detail` when `kind` = 2.
     pub const OPTIONAL_EVENT: rt::Optionals = rt::Optionals {
-        message: "event",
+        by_length: &[
+            rt::MessageDesc::new("event", 0x82, 1, &[6]),
+            rt::MessageDesc::new("event", 0x82, 1, &[8]),
+        ],
         base: 6,
         at: 5,
         fields: &[
@@ -660,7 +668,13 @@ pub mod optional_sensor {
                     let frame = &s.frame;
                     let v_humidity = if s.has(0) {
                         let field_2: u16 = u16::from_be_bytes([frame[7], frame[8]]);
-                        rt::in_range("reading", "humidity", s.at(0), field_2, 0, 1000)?;
+                        rt::in_range(
+                            &response::READING_HUMIDITY,
+                            s.at(0),
+                            field_2,
+                            0,
+                            1000,
+                        )?;
                         rt::Some(Permille::from_raw(field_2))
                     } else {
                         rt::None
@@ -907,4 +921,28 @@ pub mod optional_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<OptionalSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read`, code 0x01
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[5]);
+        /// `last_event`, code 0x02
+        pub const LAST_EVENT: MessageDesc = MessageDesc::new(
+            "last_event",
+            0x02,
+            1,
+            &[5],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `reading`, code 0x81
+        pub const READING: MessageDesc = MessageDesc::new("reading", 0x81, 1, &[8]);
+        /// `reading.humidity`
+        pub const READING_HUMIDITY: FieldDesc = FieldDesc::new("reading", "humidity");
+        /// `event`, code 0x82
+        pub const EVENT: MessageDesc = MessageDesc::new("event", 0x82, 1, &[6]);
+    }
 }

@@ -205,18 +205,16 @@ pub mod packed_channels {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x16 => {
-                    let frame = rt::fixed::<11>(frame, "channels", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::CHANNELS)?;
                     rt::equal(
-                        "channels",
-                        "channels",
+                        &request::CHANNELS_CHANNELS,
                         3 + 5,
                         rt::packed_padding(&frame[3..9], 4, 11, true),
                         0,
                     )?;
                     let v_channels = rt::unpack::<u16, 4>(&frame[3..9], 11, true);
                     rt::packed_in_range(
-                        "channels",
-                        "channels",
+                        &request::CHANNELS_CHANNELS,
                         3,
                         11,
                         v_channels.as_slice(),
@@ -229,18 +227,16 @@ pub mod packed_channels {
                     })
                 }
                 0x17 => {
-                    let frame = rt::fixed::<7>(frame, "levels", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &request::LEVELS)?;
                     rt::equal(
-                        "levels",
-                        "levels",
+                        &request::LEVELS_LEVELS,
                         4 + 1,
                         rt::packed_padding(&frame[4..6], 5, 3, false),
                         0,
                     )?;
                     let v_levels = rt::unpack::<u8, 5>(&frame[4..6], 3, false);
                     rt::packed_in_range(
-                        "levels",
-                        "levels",
+                        &request::LEVELS_LEVELS,
                         4,
                         3,
                         v_levels.as_slice(),
@@ -461,10 +457,9 @@ pub mod packed_channels {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x18 => {
-                    let frame = rt::fixed::<12>(frame, "readings", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &response::READINGS)?;
                     rt::equal(
-                        "readings",
-                        "readings",
+                        &response::READINGS_READINGS,
                         3 + 7,
                         rt::packed_padding(&frame[3..11], 3, 20, false),
                         0,
@@ -645,4 +640,25 @@ pub mod packed_channels {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PackedChannels>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `channels`, code 0x16
+        pub const CHANNELS: MessageDesc = MessageDesc::new("channels", 0x16, 1, &[11]);
+        /// `channels.channels`
+        pub const CHANNELS_CHANNELS: FieldDesc = FieldDesc::new("channels", "channels");
+        /// `levels`, code 0x17
+        pub const LEVELS: MessageDesc = MessageDesc::new("levels", 0x17, 1, &[7]);
+        /// `levels.levels`
+        pub const LEVELS_LEVELS: FieldDesc = FieldDesc::new("levels", "levels");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `readings`, code 0x18
+        pub const READINGS: MessageDesc = MessageDesc::new("readings", 0x18, 1, &[12]);
+        /// `readings.readings`
+        pub const READINGS_READINGS: FieldDesc = FieldDesc::new("readings", "readings");
+    }
 }

@@ -319,24 +319,29 @@ pub mod pelco_d2 {
                         return {
                             let mut g = rt::Group::new(frame, 0x0003, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal("set_preset", "data1", 4, frame[4], 0x0)?;
-                                rt::in_range("set_preset", "preset", 5, frame[5], 1, 255)?;
+                                rt::equal(&request::SET_PRESET_DATA1, 4, frame[4], 0x0)?;
+                                rt::in_range(
+                                    &request::SET_PRESET_PRESET,
+                                    5,
+                                    frame[5],
+                                    1,
+                                    255,
+                                )?;
                                 rt::Ok(Self::SetPreset {
                                     preset: frame[5],
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("set_preset", &[7])
+                            g.end(&request::SET_PRESET)
                         };
                     }
                     0x0007 => {
                         return {
                             let mut g = rt::Group::new(frame, 0x0007, rt::None);
                             g.attempt(|frame: &[u8; 7]| {
-                                rt::equal("go_to_preset", "data1", 4, frame[4], 0x0)?;
+                                rt::equal(&request::GO_TO_PRESET_DATA1, 4, frame[4], 0x0)?;
                                 rt::in_range(
-                                    "go_to_preset",
-                                    "preset",
+                                    &request::GO_TO_PRESET_PRESET,
                                     5,
                                     frame[5],
                                     1,
@@ -347,22 +352,22 @@ pub mod pelco_d2 {
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("go_to_preset", &[7])
+                            g.end(&request::GO_TO_PRESET)
                         };
                     }
                     _ => {}
                 }
             }
-            rt::fixed::<7>(frame, "ptz", &[7]).and_then(Self::codeless_ptz)
+            rt::fixed::<7>(frame, &request::PTZ).and_then(Self::codeless_ptz)
         }
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
         fn codeless_ptz(frame: &[u8; 7]) -> rt::DecodeResult<Self> {
             let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal("ptz", "reserved", 2, (field_0 >> 13) & 0x3, 0x0)?;
-            rt::equal("ptz", "extended", 2, field_0 & 0x1, 0x0)?;
-            rt::in_range_or("ptz", "pan_speed", 4, frame[4], 0, 63, &[255])?;
-            rt::in_range("ptz", "tilt_speed", 5, frame[5], 0, 63)?;
+            rt::equal(&request::PTZ_RESERVED, 2, (field_0 >> 13) & 0x3, 0x0)?;
+            rt::equal(&request::PTZ_EXTENDED, 2, field_0 & 0x1, 0x0)?;
+            rt::in_range_or(&request::PTZ_PAN_SPEED, 4, frame[4], 0, 63, &[255])?;
+            rt::in_range(&request::PTZ_TILT_SPEED, 5, frame[5], 0, 63)?;
             rt::Ok(Self::Ptz {
                 sense: (field_0 >> 15) != 0,
                 auto_scan: ((field_0 >> 12) & 0x1) != 0,
@@ -609,7 +614,7 @@ pub mod pelco_d2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 0) {
                 0u32 => {
-                    let frame = rt::fixed::<4>(frame, "general_response", &[4])?;
+                    let frame = rt::fixed::<4>(frame, &response::GENERAL_RESPONSE)?;
                     rt::Ok(Self::GeneralResponse {
                         alarms: Alarms::from_raw(frame[2]),
                     })
@@ -783,4 +788,58 @@ pub mod pelco_d2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoD2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `ptz` (no code)
+        pub const PTZ: MessageDesc = MessageDesc::new("ptz", 0, 0, &[7]);
+        /// `ptz.reserved`
+        pub const PTZ_RESERVED: FieldDesc = FieldDesc::new("ptz", "reserved");
+        /// `ptz.extended`
+        pub const PTZ_EXTENDED: FieldDesc = FieldDesc::new("ptz", "extended");
+        /// `ptz.pan_speed`
+        pub const PTZ_PAN_SPEED: FieldDesc = FieldDesc::new("ptz", "pan_speed");
+        /// `ptz.tilt_speed`
+        pub const PTZ_TILT_SPEED: FieldDesc = FieldDesc::new("ptz", "tilt_speed");
+        /// `set_preset`, code 0x0003
+        pub const SET_PRESET: MessageDesc = MessageDesc::new(
+            "set_preset",
+            0x0003,
+            2,
+            &[7],
+        );
+        /// `set_preset.data1`
+        pub const SET_PRESET_DATA1: FieldDesc = FieldDesc::new("set_preset", "data1");
+        /// `set_preset.preset`
+        pub const SET_PRESET_PRESET: FieldDesc = FieldDesc::new("set_preset", "preset");
+        /// `go_to_preset`, code 0x0007
+        pub const GO_TO_PRESET: MessageDesc = MessageDesc::new(
+            "go_to_preset",
+            0x0007,
+            2,
+            &[7],
+        );
+        /// `go_to_preset.data1`
+        pub const GO_TO_PRESET_DATA1: FieldDesc = FieldDesc::new(
+            "go_to_preset",
+            "data1",
+        );
+        /// `go_to_preset.preset`
+        pub const GO_TO_PRESET_PRESET: FieldDesc = FieldDesc::new(
+            "go_to_preset",
+            "preset",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `general_response` (no code)
+        pub const GENERAL_RESPONSE: MessageDesc = MessageDesc::new(
+            "general_response",
+            0,
+            0,
+            &[4],
+        );
+    }
 }

@@ -272,24 +272,29 @@ pub mod pelco_p {
                         return {
                             let mut g = rt::Group::new(frame, 0x0003, rt::None);
                             g.attempt(|frame: &[u8; 8]| {
-                                rt::equal("set_preset", "data3", 4, frame[4], 0x0)?;
-                                rt::in_range("set_preset", "preset", 5, frame[5], 1, 255)?;
+                                rt::equal(&request::SET_PRESET_DATA3, 4, frame[4], 0x0)?;
+                                rt::in_range(
+                                    &request::SET_PRESET_PRESET,
+                                    5,
+                                    frame[5],
+                                    1,
+                                    255,
+                                )?;
                                 rt::Ok(Self::SetPreset {
                                     preset: frame[5],
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("set_preset", &[8])
+                            g.end(&request::SET_PRESET)
                         };
                     }
                     0x0007 => {
                         return {
                             let mut g = rt::Group::new(frame, 0x0007, rt::None);
                             g.attempt(|frame: &[u8; 8]| {
-                                rt::equal("go_to_preset", "data3", 4, frame[4], 0x0)?;
+                                rt::equal(&request::GO_TO_PRESET_DATA3, 4, frame[4], 0x0)?;
                                 rt::in_range(
-                                    "go_to_preset",
-                                    "preset",
+                                    &request::GO_TO_PRESET_PRESET,
                                     5,
                                     frame[5],
                                     1,
@@ -300,23 +305,23 @@ pub mod pelco_p {
                                 })
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end("go_to_preset", &[8])
+                            g.end(&request::GO_TO_PRESET)
                         };
                     }
                     _ => {}
                 }
             }
-            rt::fixed::<8>(frame, "ptz", &[8]).and_then(Self::codeless_ptz)
+            rt::fixed::<8>(frame, &request::PTZ).and_then(Self::codeless_ptz)
         }
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
         fn codeless_ptz(frame: &[u8; 8]) -> rt::DecodeResult<Self> {
             let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-            rt::equal("ptz", "fixed_zero", 2, field_0 >> 15, 0x0)?;
-            rt::equal("ptz", "fixed_zero_2", 2, (field_0 >> 7) & 0x1, 0x0)?;
-            rt::equal("ptz", "fixed_zero_3", 2, field_0 & 0x1, 0x0)?;
-            rt::in_range("ptz", "pan_speed", 4, frame[4], 0, 64)?;
-            rt::in_range("ptz", "tilt_speed", 5, frame[5], 0, 63)?;
+            rt::equal(&request::PTZ_FIXED_ZERO, 2, field_0 >> 15, 0x0)?;
+            rt::equal(&request::PTZ_FIXED_ZERO_2, 2, (field_0 >> 7) & 0x1, 0x0)?;
+            rt::equal(&request::PTZ_FIXED_ZERO_3, 2, field_0 & 0x1, 0x0)?;
+            rt::in_range(&request::PTZ_PAN_SPEED, 4, frame[4], 0, 64)?;
+            rt::in_range(&request::PTZ_TILT_SPEED, 5, frame[5], 0, 63)?;
             rt::Ok(Self::Ptz {
                 camera_on: ((field_0 >> 14) & 0x1) != 0,
                 auto_scan: ((field_0 >> 13) & 0x1) != 0,
@@ -699,4 +704,51 @@ pub mod pelco_p {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoP>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `ptz` (no code)
+        pub const PTZ: MessageDesc = MessageDesc::new("ptz", 0, 0, &[8]);
+        /// `ptz.fixed_zero`
+        pub const PTZ_FIXED_ZERO: FieldDesc = FieldDesc::new("ptz", "fixed_zero");
+        /// `ptz.fixed_zero_2`
+        pub const PTZ_FIXED_ZERO_2: FieldDesc = FieldDesc::new("ptz", "fixed_zero_2");
+        /// `ptz.fixed_zero_3`
+        pub const PTZ_FIXED_ZERO_3: FieldDesc = FieldDesc::new("ptz", "fixed_zero_3");
+        /// `ptz.pan_speed`
+        pub const PTZ_PAN_SPEED: FieldDesc = FieldDesc::new("ptz", "pan_speed");
+        /// `ptz.tilt_speed`
+        pub const PTZ_TILT_SPEED: FieldDesc = FieldDesc::new("ptz", "tilt_speed");
+        /// `set_preset`, code 0x0003
+        pub const SET_PRESET: MessageDesc = MessageDesc::new(
+            "set_preset",
+            0x0003,
+            2,
+            &[8],
+        );
+        /// `set_preset.data3`
+        pub const SET_PRESET_DATA3: FieldDesc = FieldDesc::new("set_preset", "data3");
+        /// `set_preset.preset`
+        pub const SET_PRESET_PRESET: FieldDesc = FieldDesc::new("set_preset", "preset");
+        /// `go_to_preset`, code 0x0007
+        pub const GO_TO_PRESET: MessageDesc = MessageDesc::new(
+            "go_to_preset",
+            0x0007,
+            2,
+            &[8],
+        );
+        /// `go_to_preset.data3`
+        pub const GO_TO_PRESET_DATA3: FieldDesc = FieldDesc::new(
+            "go_to_preset",
+            "data3",
+        );
+        /// `go_to_preset.preset`
+        pub const GO_TO_PRESET_PRESET: FieldDesc = FieldDesc::new(
+            "go_to_preset",
+            "preset",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {}
 }

@@ -201,8 +201,7 @@ pub mod records {
     }
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "sync_write",
-        field: "blocks",
+        field: &request::SYNC_WRITE_BLOCKS,
         base: 6,
         at: 4,
         width: 4,
@@ -220,8 +219,7 @@ pub mod records {
         base: 6,
         lists: &[
             rt::RepeatAt {
-                message: "sync_write",
-                field: "blocks",
+                field: &request::SYNC_WRITE_BLOCKS,
                 base: 6,
                 at: 4,
                 width: 4,
@@ -238,8 +236,7 @@ pub mod records {
     };
     /// Where `write_pairs.pairs` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_PAIRS: rt::RepeatAt = rt::RepeatAt {
-        message: "write_pairs",
-        field: "pairs",
+        field: &request::WRITE_PAIRS_PAIRS,
         base: 5,
         at: 4,
         width: 5,
@@ -269,9 +266,15 @@ pub mod records {
         /// Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.
         pub fn read(frame: &[u8; 4], at: usize) -> rt::DecodeResult<Self> {
             let v_id: u8 = frame[0];
-            rt::in_range("sync_write", "blocks.id", at, v_id, 1, 252)?;
+            rt::in_range(&request::SYNC_WRITE_BLOCKS_ID, at, v_id, 1, 252)?;
             let v_position: u16 = u16::from_le_bytes([frame[1], frame[2]]);
-            rt::in_range("sync_write", "blocks.position", at + 1, v_position, 0, 3600)?;
+            rt::in_range(
+                &request::SYNC_WRITE_BLOCKS_POSITION,
+                at + 1,
+                v_position,
+                0,
+                3600,
+            )?;
             let v_mode: u8 = frame[3];
             rt::Ok(Self {
                 id: v_id,
@@ -359,7 +362,7 @@ pub mod records {
             let v_register: u16 = u16::from_le_bytes([frame[0], frame[1]]);
             let v_value: i16 = i16::from_le_bytes([frame[2], frame[3]]);
             let v_bank: u8 = frame[4];
-            rt::in_range("write_pairs", "pairs.bank", at + 4, v_bank, 1, 4)?;
+            rt::in_range(&request::WRITE_PAIRS_PAIRS_BANK, at + 4, v_bank, 1, 4)?;
             rt::Ok(Self {
                 register: v_register,
                 value: v_value,
@@ -594,8 +597,8 @@ pub mod records {
                     rt::Ok(Self::WritePairs { pairs: v_pairs })
                 }
                 0x85 => {
-                    let frame = rt::fixed::<5>(frame, "read_status", &[5])?;
-                    rt::in_range("read_status", "quantity", 3, frame[3], 1, 6)?;
+                    let frame = rt::fixed::<5>(frame, &request::READ_STATUS)?;
+                    rt::in_range(&request::READ_STATUS_QUANTITY, 3, frame[3], 1, 6)?;
                     rt::Ok(Self::ReadStatus {
                         quantity: frame[3],
                     })
@@ -693,8 +696,7 @@ pub mod records {
     }
     /// Where `status_reply.readings` sits in the frame and how its elements are counted.
     pub const REPEAT_STATUS_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "status_reply",
-        field: "readings",
+        field: &response::STATUS_REPLY_READINGS,
         base: 4,
         at: 3,
         width: 4,
@@ -910,7 +912,7 @@ pub mod records {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x80 => {
-                    let frame = rt::fixed::<5>(frame, "ack", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 0x85 => {
@@ -1141,4 +1143,72 @@ pub mod records {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Records>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `sync_write`, code 0x83
+        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
+            "sync_write",
+            0x83,
+            1,
+            &[6],
+        );
+        /// `sync_write.blocks`
+        pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
+        /// `sync_write.blocks.id`
+        pub const SYNC_WRITE_BLOCKS_ID: FieldDesc = FieldDesc::new(
+            "sync_write",
+            "blocks.id",
+        );
+        /// `sync_write.blocks.position`
+        pub const SYNC_WRITE_BLOCKS_POSITION: FieldDesc = FieldDesc::new(
+            "sync_write",
+            "blocks.position",
+        );
+        /// `write_pairs`, code 0x84
+        pub const WRITE_PAIRS: MessageDesc = MessageDesc::new(
+            "write_pairs",
+            0x84,
+            1,
+            &[5],
+        );
+        /// `write_pairs.pairs`
+        pub const WRITE_PAIRS_PAIRS: FieldDesc = FieldDesc::new("write_pairs", "pairs");
+        /// `write_pairs.pairs.bank`
+        pub const WRITE_PAIRS_PAIRS_BANK: FieldDesc = FieldDesc::new(
+            "write_pairs",
+            "pairs.bank",
+        );
+        /// `read_status`, code 0x85
+        pub const READ_STATUS: MessageDesc = MessageDesc::new(
+            "read_status",
+            0x85,
+            1,
+            &[5],
+        );
+        /// `read_status.quantity`
+        pub const READ_STATUS_QUANTITY: FieldDesc = FieldDesc::new(
+            "read_status",
+            "quantity",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `ack`, code 0x80
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x80, 1, &[5]);
+        /// `status_reply`, code 0x85
+        pub const STATUS_REPLY: MessageDesc = MessageDesc::new(
+            "status_reply",
+            0x85,
+            1,
+            &[4],
+        );
+        /// `status_reply.readings`
+        pub const STATUS_REPLY_READINGS: FieldDesc = FieldDesc::new(
+            "status_reply",
+            "readings",
+        );
+    }
 }

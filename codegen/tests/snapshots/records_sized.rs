@@ -109,8 +109,7 @@ pub mod records_sized {
     }
     /// Where `sync_write.blocks` sits in the frame and how its elements are counted.
     pub const REPEAT_SYNC_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "sync_write",
-        field: "blocks",
+        field: &request::SYNC_WRITE_BLOCKS,
         base: 9,
         at: 8,
         width: 5,
@@ -129,8 +128,7 @@ pub mod records_sized {
     };
     /// Where `trim.offsets` sits in the frame and how its elements are counted.
     pub const REPEAT_TRIM: rt::RepeatAt = rt::RepeatAt {
-        message: "trim",
-        field: "offsets",
+        field: &request::TRIM_OFFSETS,
         base: 6,
         at: 5,
         width: 3,
@@ -163,7 +161,7 @@ pub mod records_sized {
         /// Its last field takes `last` bytes (the frame's width field says how many; the array holds a record at its widest).
         pub fn read(frame: &[u8; 5], at: usize, last: usize) -> rt::DecodeResult<Self> {
             let v_id: u8 = frame[0];
-            rt::in_range("sync_write", "blocks.id", at, v_id, 0, 252)?;
+            rt::in_range(&request::SYNC_WRITE_BLOCKS_ID, at, v_id, 0, 252)?;
             let v_data: u32 = rt::sized_int(
                 frame.get(1..1 + last).unwrap_or(&[]),
                 true,
@@ -242,7 +240,7 @@ pub mod records_sized {
                 true,
                 true,
             ) as i16;
-            rt::in_range("trim", "offsets.offset", at + 1, v_offset, -900, 900)?;
+            rt::in_range(&request::TRIM_OFFSETS_OFFSET, at + 1, v_offset, -900, 900)?;
             rt::Ok(Self {
                 channel: v_channel,
                 offset: TenthDegree::from_raw(v_offset),
@@ -417,7 +415,7 @@ pub mod records_sized {
                     out.len()
                 }
                 Self::Trim { width: v_width, offsets: v_offsets } => {
-                    rt::encode_broadcast(address, 0xFE, "trim")?;
+                    rt::encode_broadcast(address, 0xFE, &request::TRIM)?;
                     let frame_len = REPEAT_TRIM
                         .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
                     let last_width = (v_width) as usize;
@@ -489,7 +487,7 @@ pub mod records_sized {
                 }
                 0x84 => {
                     let (frame, elements, _) = REPEAT_TRIM.split::<5>(frame)?;
-                    rt::no_broadcast(frame[1], 0xFE, "trim", 0x84, 1)?;
+                    rt::no_broadcast(frame[1], 0xFE, &request::TRIM)?;
                     let rec_width = REPEAT_TRIM.element_width(frame);
                     let mut v_offsets = rt::Repeated::<TrimOffsets, 4>::new();
                     for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {
@@ -701,7 +699,7 @@ pub mod records_sized {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x55 => {
-                    let frame = rt::fixed::<6>(frame, "ack", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { error: frame[4] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
@@ -900,4 +898,38 @@ pub mod records_sized {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<RecordsSized>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `sync_write`, code 0x83
+        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
+            "sync_write",
+            0x83,
+            1,
+            &[9],
+        );
+        /// `sync_write.blocks`
+        pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
+        /// `sync_write.blocks.id`
+        pub const SYNC_WRITE_BLOCKS_ID: FieldDesc = FieldDesc::new(
+            "sync_write",
+            "blocks.id",
+        );
+        /// `trim`, code 0x84
+        pub const TRIM: MessageDesc = MessageDesc::new("trim", 0x84, 1, &[6]);
+        /// `trim.offsets`
+        pub const TRIM_OFFSETS: FieldDesc = FieldDesc::new("trim", "offsets");
+        /// `trim.offsets.offset`
+        pub const TRIM_OFFSETS_OFFSET: FieldDesc = FieldDesc::new(
+            "trim",
+            "offsets.offset",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `ack`, code 0x55
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x55, 1, &[6]);
+    }
 }

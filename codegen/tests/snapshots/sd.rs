@@ -617,70 +617,98 @@ pub mod sd {
                 }
                 Self::ReadServoId => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
                 Self::ReadCurrentConsumption => {
-                    rt::encode_broadcast(address, 0x1F, "read_current_consumption")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_CURRENT_CONSUMPTION,
+                    )?;
                     rt::head(out, &[0xB0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadBusVoltages => {
-                    rt::encode_broadcast(address, 0x1F, "read_bus_voltages")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_BUS_VOLTAGES)?;
                     rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadExtendedCurrentConsumption => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_extended_current_consumption",
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION,
                     )?;
                     rt::head(out, &[0xB2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTemperatures => {
-                    rt::encode_broadcast(address, 0x1F, "read_temperatures")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_TEMPERATURES)?;
                     rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
                 }
                 Self::ReadHumidity => {
-                    rt::encode_broadcast(address, 0x1F, "read_humidity")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_HUMIDITY)?;
                     rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
                 }
                 Self::ReadSkippedFramesCounter => {
-                    rt::encode_broadcast(address, 0x1F, "read_skipped_frames_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_SKIPPED_FRAMES_COUNTER,
+                    )?;
                     rt::head(out, &[0x37, address, 0x00, 0x01]).len()
                 }
                 Self::ResetDroppedFramesCounter => {
-                    rt::encode_broadcast(address, 0x1F, "reset_dropped_frames_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_DROPPED_FRAMES_COUNTER,
+                    )?;
                     rt::head(out, &[0x37, address, 0x00, 0x02]).len()
                 }
                 Self::ReadActuatorStatusWord => {
-                    rt::encode_broadcast(address, 0x1F, "read_actuator_status_word")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_ACTUATOR_STATUS_WORD,
+                    )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x02]).len()
                 }
                 Self::ResetActuatorStatusWord => {
-                    rt::encode_broadcast(address, 0x1F, "reset_actuator_status_word")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_ACTUATOR_STATUS_WORD,
+                    )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x52]).len()
                 }
                 Self::ResetDefaultRoleAndErrorFlags => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "reset_default_role_and_error_flags",
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS,
                     )?;
                     rt::head(out, &[0xB4, address, 0x41, 0x53]).len()
                 }
                 Self::SetCurrentPositionAsZero => {
-                    rt::encode_broadcast(address, 0x1F, "set_current_position_as_zero")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::SET_CURRENT_POSITION_AS_ZERO,
+                    )?;
                     rt::head(out, &[0x99, address, 0x00, 0x00]).len()
                 }
                 Self::ReadCurrentZeroOffset => {
-                    rt::encode_broadcast(address, 0x1F, "read_current_zero_offset")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_CURRENT_ZERO_OFFSET,
+                    )?;
                     rt::head(out, &[0x95, address, 0x00, 0x00]).len()
                 }
                 Self::ResetZeroOffset => {
-                    rt::encode_broadcast(address, 0x1F, "reset_zero_offset")?;
+                    rt::encode_broadcast(address, 0x1F, &request::RESET_ZERO_OFFSET)?;
                     rt::head(out, &[0x98, address, 0x00, 0x00]).len()
                 }
                 Self::ReadElectronicSerialNumber { byte_number: v_byte_number } => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_electronic_serial_number",
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER,
                     )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF0, address, 0x00]);
@@ -688,55 +716,83 @@ pub mod sd {
                     out.len()
                 }
                 Self::ReadProductDescription { byte_number: v_byte_number } => {
-                    rt::encode_broadcast(address, 0x1F, "read_product_description")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_PRODUCT_DESCRIPTION,
+                    )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF1, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
                 Self::ReadSoftwareRevision { byte_number: v_byte_number } => {
-                    rt::encode_broadcast(address, 0x1F, "read_software_revision")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_SOFTWARE_REVISION,
+                    )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF2, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
                 Self::ReadHardwareRevision { byte_number: v_byte_number } => {
-                    rt::encode_broadcast(address, 0x1F, "read_hardware_revision")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_HARDWARE_REVISION,
+                    )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF3, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
                 Self::ReadTotalRuntimeHours => {
-                    rt::encode_broadcast(address, 0x1F, "read_total_runtime_hours")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_TOTAL_RUNTIME_HOURS,
+                    )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x00]).len()
                 }
                 Self::ReadTotalRuntimeMinSec => {
-                    rt::encode_broadcast(address, 0x1F, "read_total_runtime_min_sec")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_TOTAL_RUNTIME_MIN_SEC,
+                    )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x01]).len()
                 }
                 Self::ReadLoadRuntime024Hours => {
-                    rt::encode_broadcast(address, 0x1F, "read_load_runtime_0_24_hours")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_LOAD_RUNTIME_0_24_HOURS,
+                    )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime024MinSec => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_0_24_min_sec",
+                        &request::READ_LOAD_RUNTIME_0_24_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime024 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_0_24")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_0_24,
+                    )?;
                     rt::head(out, &[0xA3, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime2549Hours => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_25_49_hours",
+                        &request::READ_LOAD_RUNTIME_25_49_HOURS,
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x00]).len()
                 }
@@ -744,19 +800,23 @@ pub mod sd {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_25_49_min_sec",
+                        &request::READ_LOAD_RUNTIME_25_49_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime2549 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_25_49")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_25_49,
+                    )?;
                     rt::head(out, &[0xA4, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime5074Hours => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_50_74_hours",
+                        &request::READ_LOAD_RUNTIME_50_74_HOURS,
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x00]).len()
                 }
@@ -764,19 +824,23 @@ pub mod sd {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_50_74_min_sec",
+                        &request::READ_LOAD_RUNTIME_50_74_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime5074 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_50_74")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_50_74,
+                    )?;
                     rt::head(out, &[0xA5, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime7599Hours => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_75_99_hours",
+                        &request::READ_LOAD_RUNTIME_75_99_HOURS,
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x00]).len()
                 }
@@ -784,40 +848,60 @@ pub mod sd {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_75_99_min_sec",
+                        &request::READ_LOAD_RUNTIME_75_99_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime7599 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_75_99")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_75_99,
+                    )?;
                     rt::head(out, &[0xA6, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadLoadRuntime100Hours => {
-                    rt::encode_broadcast(address, 0x1F, "read_load_runtime_100_hours")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_LOAD_RUNTIME_100_HOURS,
+                    )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x00]).len()
                 }
                 Self::ReadLoadRuntime100MinSec => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        "read_load_runtime_100_min_sec",
+                        &request::READ_LOAD_RUNTIME_100_MIN_SEC,
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x01]).len()
                 }
                 Self::ResetLoadRuntime100 => {
-                    rt::encode_broadcast(address, 0x1F, "reset_load_runtime_100")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_LOAD_RUNTIME_100,
+                    )?;
                     rt::head(out, &[0xA7, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadStallEventCounter => {
-                    rt::encode_broadcast(address, 0x1F, "read_stall_event_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::READ_STALL_EVENT_COUNTER,
+                    )?;
                     rt::head(out, &[0xA8, address, 0x00, 0x00]).len()
                 }
                 Self::ResetStallEventCounter => {
-                    rt::encode_broadcast(address, 0x1F, "reset_stall_event_counter")?;
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::RESET_STALL_EVENT_COUNTER,
+                    )?;
                     rt::head(out, &[0xA8, address, 0xAA, 0x55]).len()
                 }
                 Self::ReadPowerUpCycles => {
-                    rt::encode_broadcast(address, 0x1F, "read_power_up_cycles")?;
+                    rt::encode_broadcast(address, 0x1F, &request::READ_POWER_UP_CYCLES)?;
                     rt::head(out, &[0xA9, address, 0x00, 0x00]).len()
                 }
             };
@@ -844,7 +928,7 @@ pub mod sd {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x76 => {
-                    let frame = rt::fixed::<6>(frame, "set_point", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_POINT)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::Ok(Self::SetPoint {
                         freshness: (field_0 >> 12) as u8,
@@ -854,13 +938,13 @@ pub mod sd {
                     })
                 }
                 0x69 => {
-                    let frame = rt::fixed::<6>(frame, "read_actual_position", &[6])?;
-                    rt::equal("read_actual_position", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_actual_position", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_POSITION)?;
+                    rt::equal(&request::READ_ACTUAL_POSITION_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_ACTUAL_POSITION_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadActualPosition)
                 }
                 0x77 => {
-                    let frame = rt::fixed::<6>(frame, "set_velocity", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_VELOCITY)?;
                     rt::Ok(Self::SetVelocity {
                         set_velocity: Velocity::from_raw(
                             i16::from_be_bytes([frame[2], frame[3]]),
@@ -868,17 +952,16 @@ pub mod sd {
                     })
                 }
                 0x68 => {
-                    let frame = rt::fixed::<6>(frame, "read_actual_velocity", &[6])?;
-                    rt::equal("read_actual_velocity", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_actual_velocity", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_VELOCITY)?;
+                    rt::equal(&request::READ_ACTUAL_VELOCITY_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_ACTUAL_VELOCITY_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadActualVelocity)
                 }
                 0xAA => {
-                    let frame = rt::fixed::<6>(frame, "set_servo_id", &[6])?;
-                    rt::in_range("set_servo_id", "new_id", 2, frame[2], 1, 30)?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_SERVO_ID)?;
+                    rt::in_range(&request::SET_SERVO_ID_NEW_ID, 2, frame[2], 1, 30)?;
                     rt::same(
-                        "set_servo_id",
-                        "new_id_repeat",
+                        &request::SET_SERVO_ID_NEW_ID_REPEAT,
                         3,
                         frame[3],
                         "new_id",
@@ -889,52 +972,58 @@ pub mod sd {
                     })
                 }
                 0xDA => {
-                    let frame = rt::fixed::<6>(frame, "read_servo_id", &[6])?;
-                    rt::equal("read_servo_id", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_servo_id", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_SERVO_ID)?;
+                    rt::equal(&request::READ_SERVO_ID_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_SERVO_ID_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadServoId)
                 }
                 0xB0 => {
-                    let frame = rt::fixed::<6>(frame, "read_current_consumption", &[6])?;
-                    rt::no_broadcast(
-                        frame[1],
-                        0x1F,
-                        "read_current_consumption",
-                        0xB0,
-                        1,
-                    )?;
-                    rt::equal("read_current_consumption", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_current_consumption", "arg2", 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadCurrentConsumption)
-                }
-                0xB1 => {
-                    let frame = rt::fixed::<6>(frame, "read_bus_voltages", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_bus_voltages", 0xB1, 1)?;
-                    rt::equal("read_bus_voltages", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_bus_voltages", "arg2", 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadBusVoltages)
-                }
-                0xB2 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "read_extended_current_consumption", &[6])?;
+                    >(frame, &request::READ_CURRENT_CONSUMPTION)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_extended_current_consumption",
-                        0xB2,
-                        1,
+                        &request::READ_CURRENT_CONSUMPTION,
                     )?;
                     rt::equal(
-                        "read_extended_current_consumption",
-                        "arg1",
+                        &request::READ_CURRENT_CONSUMPTION_ARG1,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::equal(
-                        "read_extended_current_consumption",
-                        "arg2",
+                        &request::READ_CURRENT_CONSUMPTION_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
+                    rt::Ok(Self::ReadCurrentConsumption)
+                }
+                0xB1 => {
+                    let frame = rt::fixed::<6>(frame, &request::READ_BUS_VOLTAGES)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_BUS_VOLTAGES)?;
+                    rt::equal(&request::READ_BUS_VOLTAGES_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_BUS_VOLTAGES_ARG2, 3, frame[3], 0x0)?;
+                    rt::Ok(Self::ReadBusVoltages)
+                }
+                0xB2 => {
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::READ_EXTENDED_CURRENT_CONSUMPTION)?;
+                    rt::no_broadcast(
+                        frame[1],
+                        0x1F,
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION,
+                    )?;
+                    rt::equal(
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::READ_EXTENDED_CURRENT_CONSUMPTION_ARG2,
                         3,
                         frame[3],
                         0x0,
@@ -942,17 +1031,17 @@ pub mod sd {
                     rt::Ok(Self::ReadExtendedCurrentConsumption)
                 }
                 0xA0 => {
-                    let frame = rt::fixed::<6>(frame, "read_temperatures", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_temperatures", 0xA0, 1)?;
-                    rt::equal("read_temperatures", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_temperatures", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_TEMPERATURES)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_TEMPERATURES)?;
+                    rt::equal(&request::READ_TEMPERATURES_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_TEMPERATURES_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadTemperatures)
                 }
                 0xA1 => {
-                    let frame = rt::fixed::<6>(frame, "read_humidity", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_humidity", 0xA1, 1)?;
-                    rt::equal("read_humidity", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_humidity", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_HUMIDITY)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_HUMIDITY)?;
+                    rt::equal(&request::READ_HUMIDITY_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_HUMIDITY_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadHumidity)
                 }
                 0x37 => {
@@ -961,20 +1050,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_skipped_frames_counter",
-                            0x37,
-                            1,
+                            &request::READ_SKIPPED_FRAMES_COUNTER,
                         )?;
                         rt::equal(
-                            "read_skipped_frames_counter",
-                            "arg1",
+                            &request::READ_SKIPPED_FRAMES_COUNTER_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_skipped_frames_counter",
-                            "arg2",
+                            &request::READ_SKIPPED_FRAMES_COUNTER_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -985,27 +1070,23 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_dropped_frames_counter",
-                            0x37,
-                            1,
+                            &request::RESET_DROPPED_FRAMES_COUNTER,
                         )?;
                         rt::equal(
-                            "reset_dropped_frames_counter",
-                            "arg1",
+                            &request::RESET_DROPPED_FRAMES_COUNTER_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "reset_dropped_frames_counter",
-                            "arg2",
+                            &request::RESET_DROPPED_FRAMES_COUNTER_ARG2,
                             3,
                             frame[3],
                             0x2,
                         )?;
                         rt::Ok(Self::ResetDroppedFramesCounter)
                     });
-                    g.end("read_skipped_frames_counter", &[6])
+                    g.end(&request::READ_SKIPPED_FRAMES_COUNTER)
                 }
                 0x40 => {
                     let mut g = rt::Group::new(frame, 0x40, rt::None);
@@ -1013,20 +1094,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_actuator_status_word",
-                            0x40,
-                            1,
+                            &request::READ_ACTUATOR_STATUS_WORD,
                         )?;
                         rt::equal(
-                            "read_actuator_status_word",
-                            "arg1",
+                            &request::READ_ACTUATOR_STATUS_WORD_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "read_actuator_status_word",
-                            "arg2",
+                            &request::READ_ACTUATOR_STATUS_WORD_ARG2,
                             3,
                             frame[3],
                             0x2,
@@ -1037,49 +1114,41 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_actuator_status_word",
-                            0x40,
-                            1,
+                            &request::RESET_ACTUATOR_STATUS_WORD,
                         )?;
                         rt::equal(
-                            "reset_actuator_status_word",
-                            "arg1",
+                            &request::RESET_ACTUATOR_STATUS_WORD_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_actuator_status_word",
-                            "arg2",
+                            &request::RESET_ACTUATOR_STATUS_WORD_ARG2,
                             3,
                             frame[3],
                             0x52,
                         )?;
                         rt::Ok(Self::ResetActuatorStatusWord)
                     });
-                    g.end("read_actuator_status_word", &[6])
+                    g.end(&request::READ_ACTUATOR_STATUS_WORD)
                 }
                 0xB4 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "reset_default_role_and_error_flags", &[6])?;
+                    >(frame, &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "reset_default_role_and_error_flags",
-                        0xB4,
-                        1,
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS,
                     )?;
                     rt::equal(
-                        "reset_default_role_and_error_flags",
-                        "arg1",
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1,
                         2,
                         frame[2],
                         0x41,
                     )?;
                     rt::equal(
-                        "reset_default_role_and_error_flags",
-                        "arg2",
+                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG2,
                         3,
                         frame[3],
                         0x53,
@@ -1089,59 +1158,73 @@ pub mod sd {
                 0x99 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "set_current_position_as_zero", &[6])?;
+                    >(frame, &request::SET_CURRENT_POSITION_AS_ZERO)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "set_current_position_as_zero",
-                        0x99,
-                        1,
+                        &request::SET_CURRENT_POSITION_AS_ZERO,
                     )?;
-                    rt::equal("set_current_position_as_zero", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("set_current_position_as_zero", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &request::SET_CURRENT_POSITION_AS_ZERO_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::SET_CURRENT_POSITION_AS_ZERO_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::SetCurrentPositionAsZero)
                 }
                 0x95 => {
-                    let frame = rt::fixed::<6>(frame, "read_current_zero_offset", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::READ_CURRENT_ZERO_OFFSET)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_current_zero_offset",
-                        0x95,
-                        1,
+                        &request::READ_CURRENT_ZERO_OFFSET,
                     )?;
-                    rt::equal("read_current_zero_offset", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_current_zero_offset", "arg2", 3, frame[3], 0x0)?;
+                    rt::equal(
+                        &request::READ_CURRENT_ZERO_OFFSET_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &request::READ_CURRENT_ZERO_OFFSET_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::ReadCurrentZeroOffset)
                 }
                 0x98 => {
-                    let frame = rt::fixed::<6>(frame, "reset_zero_offset", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "reset_zero_offset", 0x98, 1)?;
-                    rt::equal("reset_zero_offset", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("reset_zero_offset", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::RESET_ZERO_OFFSET)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::RESET_ZERO_OFFSET)?;
+                    rt::equal(&request::RESET_ZERO_OFFSET_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::RESET_ZERO_OFFSET_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ResetZeroOffset)
                 }
                 0xF0 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "read_electronic_serial_number", &[6])?;
+                    >(frame, &request::READ_ELECTRONIC_SERIAL_NUMBER)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_electronic_serial_number",
-                        0xF0,
-                        1,
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER,
                     )?;
                     rt::equal(
-                        "read_electronic_serial_number",
-                        "arg1",
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER_ARG1,
                         2,
                         frame[2],
                         0x0,
                     )?;
                     rt::in_range(
-                        "read_electronic_serial_number",
-                        "byte_number",
+                        &request::READ_ELECTRONIC_SERIAL_NUMBER_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1152,18 +1235,22 @@ pub mod sd {
                     })
                 }
                 0xF1 => {
-                    let frame = rt::fixed::<6>(frame, "read_product_description", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::READ_PRODUCT_DESCRIPTION)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        "read_product_description",
-                        0xF1,
-                        1,
+                        &request::READ_PRODUCT_DESCRIPTION,
                     )?;
-                    rt::equal("read_product_description", "arg1", 2, frame[2], 0x0)?;
+                    rt::equal(
+                        &request::READ_PRODUCT_DESCRIPTION_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
                     rt::in_range(
-                        "read_product_description",
-                        "byte_number",
+                        &request::READ_PRODUCT_DESCRIPTION_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1174,12 +1261,11 @@ pub mod sd {
                     })
                 }
                 0xF2 => {
-                    let frame = rt::fixed::<6>(frame, "read_software_revision", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_software_revision", 0xF2, 1)?;
-                    rt::equal("read_software_revision", "arg1", 2, frame[2], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_SOFTWARE_REVISION)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_SOFTWARE_REVISION)?;
+                    rt::equal(&request::READ_SOFTWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
                     rt::in_range(
-                        "read_software_revision",
-                        "byte_number",
+                        &request::READ_SOFTWARE_REVISION_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1190,12 +1276,11 @@ pub mod sd {
                     })
                 }
                 0xF3 => {
-                    let frame = rt::fixed::<6>(frame, "read_hardware_revision", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_hardware_revision", 0xF3, 1)?;
-                    rt::equal("read_hardware_revision", "arg1", 2, frame[2], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_HARDWARE_REVISION)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_HARDWARE_REVISION)?;
+                    rt::equal(&request::READ_HARDWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
                     rt::in_range(
-                        "read_hardware_revision",
-                        "byte_number",
+                        &request::READ_HARDWARE_REVISION_BYTE_NUMBER,
                         3,
                         frame[3],
                         0,
@@ -1211,39 +1296,43 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_total_runtime_hours",
-                            0xA2,
-                            1,
+                            &request::READ_TOTAL_RUNTIME_HOURS,
                         )?;
-                        rt::equal("read_total_runtime_hours", "arg1", 2, frame[2], 0x0)?;
-                        rt::equal("read_total_runtime_hours", "arg2", 3, frame[3], 0x0)?;
+                        rt::equal(
+                            &request::READ_TOTAL_RUNTIME_HOURS_ARG1,
+                            2,
+                            frame[2],
+                            0x0,
+                        )?;
+                        rt::equal(
+                            &request::READ_TOTAL_RUNTIME_HOURS_ARG2,
+                            3,
+                            frame[3],
+                            0x0,
+                        )?;
                         rt::Ok(Self::ReadTotalRuntimeHours)
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_total_runtime_min_sec",
-                            0xA2,
-                            1,
+                            &request::READ_TOTAL_RUNTIME_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_total_runtime_min_sec",
-                            "arg1",
+                            &request::READ_TOTAL_RUNTIME_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_total_runtime_min_sec",
-                            "arg2",
+                            &request::READ_TOTAL_RUNTIME_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
                         )?;
                         rt::Ok(Self::ReadTotalRuntimeMinSec)
                     });
-                    g.end("read_total_runtime_hours", &[6])
+                    g.end(&request::READ_TOTAL_RUNTIME_HOURS)
                 }
                 0xA3 => {
                     let mut g = rt::Group::new(frame, 0xA3, rt::None);
@@ -1251,20 +1340,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_0_24_hours",
-                            0xA3,
-                            1,
+                            &request::READ_LOAD_RUNTIME_0_24_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_0_24_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_0_24_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1275,20 +1360,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_0_24_min_sec",
-                            0xA3,
-                            1,
+                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_0_24_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1299,15 +1380,23 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_0_24",
-                            0xA3,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_0_24,
                         )?;
-                        rt::equal("reset_load_runtime_0_24", "arg1", 2, frame[2], 0xAA)?;
-                        rt::equal("reset_load_runtime_0_24", "arg2", 3, frame[3], 0x55)?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_0_24_ARG1,
+                            2,
+                            frame[2],
+                            0xAA,
+                        )?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_0_24_ARG2,
+                            3,
+                            frame[3],
+                            0x55,
+                        )?;
                         rt::Ok(Self::ResetLoadRuntime024)
                     });
-                    g.end("read_load_runtime_0_24_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_0_24_HOURS)
                 }
                 0xA4 => {
                     let mut g = rt::Group::new(frame, 0xA4, rt::None);
@@ -1315,20 +1404,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_25_49_hours",
-                            0xA4,
-                            1,
+                            &request::READ_LOAD_RUNTIME_25_49_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_25_49_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_25_49_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1339,20 +1424,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_25_49_min_sec",
-                            0xA4,
-                            1,
+                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_25_49_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1363,27 +1444,23 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_25_49",
-                            0xA4,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_25_49,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_25_49",
-                            "arg1",
+                            &request::RESET_LOAD_RUNTIME_25_49_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_25_49",
-                            "arg2",
+                            &request::RESET_LOAD_RUNTIME_25_49_ARG2,
                             3,
                             frame[3],
                             0x55,
                         )?;
                         rt::Ok(Self::ResetLoadRuntime2549)
                     });
-                    g.end("read_load_runtime_25_49_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_25_49_HOURS)
                 }
                 0xA5 => {
                     let mut g = rt::Group::new(frame, 0xA5, rt::None);
@@ -1391,20 +1468,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_50_74_hours",
-                            0xA5,
-                            1,
+                            &request::READ_LOAD_RUNTIME_50_74_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_50_74_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_50_74_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1415,20 +1488,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_50_74_min_sec",
-                            0xA5,
-                            1,
+                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_50_74_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1439,27 +1508,23 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_50_74",
-                            0xA5,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_50_74,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_50_74",
-                            "arg1",
+                            &request::RESET_LOAD_RUNTIME_50_74_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_50_74",
-                            "arg2",
+                            &request::RESET_LOAD_RUNTIME_50_74_ARG2,
                             3,
                             frame[3],
                             0x55,
                         )?;
                         rt::Ok(Self::ResetLoadRuntime5074)
                     });
-                    g.end("read_load_runtime_50_74_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_50_74_HOURS)
                 }
                 0xA6 => {
                     let mut g = rt::Group::new(frame, 0xA6, rt::None);
@@ -1467,20 +1532,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_75_99_hours",
-                            0xA6,
-                            1,
+                            &request::READ_LOAD_RUNTIME_75_99_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_75_99_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_75_99_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1491,20 +1552,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_75_99_min_sec",
-                            0xA6,
-                            1,
+                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_75_99_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1515,27 +1572,23 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_75_99",
-                            0xA6,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_75_99,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_75_99",
-                            "arg1",
+                            &request::RESET_LOAD_RUNTIME_75_99_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_load_runtime_75_99",
-                            "arg2",
+                            &request::RESET_LOAD_RUNTIME_75_99_ARG2,
                             3,
                             frame[3],
                             0x55,
                         )?;
                         rt::Ok(Self::ResetLoadRuntime7599)
                     });
-                    g.end("read_load_runtime_75_99_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_75_99_HOURS)
                 }
                 0xA7 => {
                     let mut g = rt::Group::new(frame, 0xA7, rt::None);
@@ -1543,20 +1596,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_100_hours",
-                            0xA7,
-                            1,
+                            &request::READ_LOAD_RUNTIME_100_HOURS,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_hours",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_100_HOURS_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_hours",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_100_HOURS_ARG2,
                             3,
                             frame[3],
                             0x0,
@@ -1567,20 +1616,16 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_load_runtime_100_min_sec",
-                            0xA7,
-                            1,
+                            &request::READ_LOAD_RUNTIME_100_MIN_SEC,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_min_sec",
-                            "arg1",
+                            &request::READ_LOAD_RUNTIME_100_MIN_SEC_ARG1,
                             2,
                             frame[2],
                             0x0,
                         )?;
                         rt::equal(
-                            "read_load_runtime_100_min_sec",
-                            "arg2",
+                            &request::READ_LOAD_RUNTIME_100_MIN_SEC_ARG2,
                             3,
                             frame[3],
                             0x1,
@@ -1591,15 +1636,23 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_load_runtime_100",
-                            0xA7,
-                            1,
+                            &request::RESET_LOAD_RUNTIME_100,
                         )?;
-                        rt::equal("reset_load_runtime_100", "arg1", 2, frame[2], 0xAA)?;
-                        rt::equal("reset_load_runtime_100", "arg2", 3, frame[3], 0x55)?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_100_ARG1,
+                            2,
+                            frame[2],
+                            0xAA,
+                        )?;
+                        rt::equal(
+                            &request::RESET_LOAD_RUNTIME_100_ARG2,
+                            3,
+                            frame[3],
+                            0x55,
+                        )?;
                         rt::Ok(Self::ResetLoadRuntime100)
                     });
-                    g.end("read_load_runtime_100_hours", &[6])
+                    g.end(&request::READ_LOAD_RUNTIME_100_HOURS)
                 }
                 0xA8 => {
                     let mut g = rt::Group::new(frame, 0xA8, rt::None);
@@ -1607,45 +1660,49 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "read_stall_event_counter",
-                            0xA8,
-                            1,
+                            &request::READ_STALL_EVENT_COUNTER,
                         )?;
-                        rt::equal("read_stall_event_counter", "arg1", 2, frame[2], 0x0)?;
-                        rt::equal("read_stall_event_counter", "arg2", 3, frame[3], 0x0)?;
+                        rt::equal(
+                            &request::READ_STALL_EVENT_COUNTER_ARG1,
+                            2,
+                            frame[2],
+                            0x0,
+                        )?;
+                        rt::equal(
+                            &request::READ_STALL_EVENT_COUNTER_ARG2,
+                            3,
+                            frame[3],
+                            0x0,
+                        )?;
                         rt::Ok(Self::ReadStallEventCounter)
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            "reset_stall_event_counter",
-                            0xA8,
-                            1,
+                            &request::RESET_STALL_EVENT_COUNTER,
                         )?;
                         rt::equal(
-                            "reset_stall_event_counter",
-                            "arg1",
+                            &request::RESET_STALL_EVENT_COUNTER_ARG1,
                             2,
                             frame[2],
                             0xAA,
                         )?;
                         rt::equal(
-                            "reset_stall_event_counter",
-                            "arg2",
+                            &request::RESET_STALL_EVENT_COUNTER_ARG2,
                             3,
                             frame[3],
                             0x55,
                         )?;
                         rt::Ok(Self::ResetStallEventCounter)
                     });
-                    g.end("read_stall_event_counter", &[6])
+                    g.end(&request::READ_STALL_EVENT_COUNTER)
                 }
                 0xA9 => {
-                    let frame = rt::fixed::<6>(frame, "read_power_up_cycles", &[6])?;
-                    rt::no_broadcast(frame[1], 0x1F, "read_power_up_cycles", 0xA9, 1)?;
-                    rt::equal("read_power_up_cycles", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("read_power_up_cycles", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<6>(frame, &request::READ_POWER_UP_CYCLES)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::READ_POWER_UP_CYCLES)?;
+                    rt::equal(&request::READ_POWER_UP_CYCLES_ARG1, 2, frame[2], 0x0)?;
+                    rt::equal(&request::READ_POWER_UP_CYCLES_ARG2, 3, frame[3], 0x0)?;
                     rt::Ok(Self::ReadPowerUpCycles)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, false)),
@@ -2844,7 +2901,7 @@ pub mod sd {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 0, 1) {
                 0x56 => {
-                    let frame = rt::fixed::<6>(frame, "set_point_reply", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::SET_POINT_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::Ok(Self::SetPointReply {
                         freshness: (field_0 >> 12) as u8,
@@ -2854,9 +2911,9 @@ pub mod sd {
                     })
                 }
                 0x49 => {
-                    let frame = rt::fixed::<6>(frame, "actual_position", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACTUAL_POSITION)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal("actual_position", "zero", 2, field_0 >> 12, 0x0)?;
+                    rt::equal(&response::ACTUAL_POSITION_ZERO, 2, field_0 >> 12, 0x0)?;
                     rt::Ok(Self::ActualPosition {
                         position: Angle::from_raw(
                             (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
@@ -2864,7 +2921,7 @@ pub mod sd {
                     })
                 }
                 0x57 => {
-                    let frame = rt::fixed::<6>(frame, "set_velocity_reply", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::SET_VELOCITY_REPLY)?;
                     rt::Ok(Self::SetVelocityReply {
                         actual_velocity: Velocity::from_raw(
                             i16::from_be_bytes([frame[2], frame[3]]),
@@ -2872,7 +2929,7 @@ pub mod sd {
                     })
                 }
                 0x48 => {
-                    let frame = rt::fixed::<6>(frame, "actual_velocity", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACTUAL_VELOCITY)?;
                     rt::Ok(Self::ActualVelocity {
                         actual_velocity: Velocity::from_raw(
                             i16::from_be_bytes([frame[2], frame[3]]),
@@ -2880,11 +2937,16 @@ pub mod sd {
                     })
                 }
                 0x55 => {
-                    let frame = rt::fixed::<6>(frame, "set_servo_id_reply", &[6])?;
-                    rt::in_range("set_servo_id_reply", "new_id", 2, frame[2], 1, 30)?;
+                    let frame = rt::fixed::<6>(frame, &response::SET_SERVO_ID_REPLY)?;
+                    rt::in_range(
+                        &response::SET_SERVO_ID_REPLY_NEW_ID,
+                        2,
+                        frame[2],
+                        1,
+                        30,
+                    )?;
                     rt::same(
-                        "set_servo_id_reply",
-                        "new_id_repeat",
+                        &response::SET_SERVO_ID_REPLY_NEW_ID_REPEAT,
                         3,
                         frame[3],
                         "new_id",
@@ -2895,16 +2957,21 @@ pub mod sd {
                     })
                 }
                 0x6D => {
-                    let frame = rt::fixed::<6>(frame, "servo_id", &[6])?;
-                    rt::in_range("servo_id", "id", 2, frame[2], 1, 30)?;
-                    rt::same("servo_id", "id_repeat", 3, frame[3], "id", frame[2])?;
+                    let frame = rt::fixed::<6>(frame, &response::SERVO_ID)?;
+                    rt::in_range(&response::SERVO_ID_ID, 2, frame[2], 1, 30)?;
+                    rt::same(
+                        &response::SERVO_ID_ID_REPEAT,
+                        3,
+                        frame[3],
+                        "id",
+                        frame[2],
+                    )?;
                     rt::Ok(Self::ServoId { id: frame[2] })
                 }
                 0x30 => {
-                    let frame = rt::fixed::<6>(frame, "current_consumption", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::CURRENT_CONSUMPTION)?;
                     rt::same(
-                        "current_consumption",
-                        "current_repeat",
+                        &response::CURRENT_CONSUMPTION_CURRENT_REPEAT,
                         3,
                         frame[3],
                         "current",
@@ -2915,7 +2982,7 @@ pub mod sd {
                     })
                 }
                 0x31 => {
-                    let frame = rt::fixed::<6>(frame, "bus_voltages", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::BUS_VOLTAGES)?;
                     rt::Ok(Self::BusVoltages {
                         power_bus_1_voltage: Voltage::from_raw(frame[2]),
                         power_bus_2_voltage: Voltage::from_raw(frame[3]),
@@ -2924,7 +2991,7 @@ pub mod sd {
                 0x32 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "extended_current_consumption", &[6])?;
+                    >(frame, &response::EXTENDED_CURRENT_CONSUMPTION)?;
                     rt::Ok(Self::ExtendedCurrentConsumption {
                         current: Current::from_raw(
                             u16::from_be_bytes([frame[2], frame[3]]),
@@ -2932,18 +2999,24 @@ pub mod sd {
                     })
                 }
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, "temperatures", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::TEMPERATURES)?;
                     rt::Ok(Self::Temperatures {
                         motor_temperature: Temperature::from_raw(frame[2]),
                         pcb_temperature: Temperature::from_raw(frame[3]),
                     })
                 }
                 0x21 => {
-                    let frame = rt::fixed::<6>(frame, "humidity", &[6])?;
-                    rt::in_range_or("humidity", "humidity", 2, frame[2], 1, 100, &[0])?;
+                    let frame = rt::fixed::<6>(frame, &response::HUMIDITY)?;
+                    rt::in_range_or(
+                        &response::HUMIDITY_HUMIDITY,
+                        2,
+                        frame[2],
+                        1,
+                        100,
+                        &[0],
+                    )?;
                     rt::same(
-                        "humidity",
-                        "humidity_repeat",
+                        &response::HUMIDITY_HUMIDITY_REPEAT,
                         3,
                         frame[3],
                         "humidity",
@@ -2957,7 +3030,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x38, request.map(Request::name));
                     g.ambiguous(
                         asked >> 11 & 1 != 0,
-                        "skipped_frames_counter",
+                        &response::SKIPPED_FRAMES_COUNTER,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::SkippedFramesCounter {
                                 host_freshness_counter: frame[2],
@@ -2967,11 +3040,10 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 12 & 1 != 0,
-                        "dropped_frames_counter_reset",
+                        &response::DROPPED_FRAMES_COUNTER_RESET,
                         |frame: &[u8; 6]| {
                             rt::equal(
-                                "dropped_frames_counter_reset",
-                                "arg2",
+                                &response::DROPPED_FRAMES_COUNTER_RESET_ARG2,
                                 3,
                                 frame[3],
                                 0x0,
@@ -2981,10 +3053,10 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("skipped_frames_counter", &[6])
+                    g.end(&response::SKIPPED_FRAMES_COUNTER)
                 }
                 0x41 => {
-                    let frame = rt::fixed::<6>(frame, "actuator_status_word", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::ACTUATOR_STATUS_WORD)?;
                     rt::Ok(Self::ActuatorStatusWord {
                         status_bits: ActuatorStatusBits::from_raw(frame[2]),
                         status_arg2: frame[3],
@@ -2993,17 +3065,15 @@ pub mod sd {
                 0x5A => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "reset_default_role_and_error_flags_reply", &[6])?;
+                    >(frame, &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY)?;
                     rt::equal(
-                        "reset_default_role_and_error_flags_reply",
-                        "arg1",
+                        &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1,
                         2,
                         frame[2],
                         0x41,
                     )?;
                     rt::equal(
-                        "reset_default_role_and_error_flags_reply",
-                        "arg2",
+                        &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG2,
                         3,
                         frame[3],
                         0x53,
@@ -3013,11 +3083,10 @@ pub mod sd {
                 0x4C => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "set_current_position_as_zero_reply", &[6])?;
+                    >(frame, &response::SET_CURRENT_POSITION_AS_ZERO_REPLY)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(
-                        "set_current_position_as_zero_reply",
-                        "zero",
+                        &response::SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO,
                         2,
                         field_0 >> 12,
                         0x0,
@@ -3029,9 +3098,14 @@ pub mod sd {
                     })
                 }
                 0x65 => {
-                    let frame = rt::fixed::<6>(frame, "current_zero_offset", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::CURRENT_ZERO_OFFSET)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::equal("current_zero_offset", "zero", 2, field_0 >> 12, 0x0)?;
+                    rt::equal(
+                        &response::CURRENT_ZERO_OFFSET_ZERO,
+                        2,
+                        field_0 >> 12,
+                        0x0,
+                    )?;
                     rt::Ok(Self::CurrentZeroOffset {
                         zero_offset: Angle::from_raw(
                             (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
@@ -3039,18 +3113,29 @@ pub mod sd {
                     })
                 }
                 0x64 => {
-                    let frame = rt::fixed::<6>(frame, "reset_zero_offset_reply", &[6])?;
-                    rt::equal("reset_zero_offset_reply", "arg1", 2, frame[2], 0x0)?;
-                    rt::equal("reset_zero_offset_reply", "arg2", 3, frame[3], 0x0)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::RESET_ZERO_OFFSET_REPLY)?;
+                    rt::equal(
+                        &response::RESET_ZERO_OFFSET_REPLY_ARG1,
+                        2,
+                        frame[2],
+                        0x0,
+                    )?;
+                    rt::equal(
+                        &response::RESET_ZERO_OFFSET_REPLY_ARG2,
+                        3,
+                        frame[3],
+                        0x0,
+                    )?;
                     rt::Ok(Self::ResetZeroOffsetReply)
                 }
                 0x10 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "electronic_serial_number_character", &[6])?;
+                    >(frame, &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER)?;
                     rt::in_range(
-                        "electronic_serial_number_character",
-                        "string_length",
+                        &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3064,10 +3149,9 @@ pub mod sd {
                 0x11 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "product_description_character", &[6])?;
+                    >(frame, &response::PRODUCT_DESCRIPTION_CHARACTER)?;
                     rt::in_range(
-                        "product_description_character",
-                        "string_length",
+                        &response::PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3081,10 +3165,9 @@ pub mod sd {
                 0x12 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "software_revision_character", &[6])?;
+                    >(frame, &response::SOFTWARE_REVISION_CHARACTER)?;
                     rt::in_range(
-                        "software_revision_character",
-                        "string_length",
+                        &response::SOFTWARE_REVISION_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3098,10 +3181,9 @@ pub mod sd {
                 0x13 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "hardware_revision_character", &[6])?;
+                    >(frame, &response::HARDWARE_REVISION_CHARACTER)?;
                     rt::in_range(
-                        "hardware_revision_character",
-                        "string_length",
+                        &response::HARDWARE_REVISION_CHARACTER_STRING_LENGTH,
                         3,
                         frame[3],
                         0,
@@ -3116,7 +3198,7 @@ pub mod sd {
                     let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
                     g.ambiguous(
                         asked >> 22 & 1 != 0,
-                        "total_runtime_hours",
+                        &response::TOTAL_RUNTIME_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::TotalRuntimeHours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3125,19 +3207,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 23 & 1 != 0,
-                        "total_runtime_min_sec",
+                        &response::TOTAL_RUNTIME_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "total_runtime_min_sec",
-                                "runtime_minutes",
+                                &response::TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "total_runtime_min_sec",
-                                "runtime_seconds",
+                                &response::TOTAL_RUNTIME_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3149,13 +3229,13 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("total_runtime_hours", &[6])
+                    g.end(&response::TOTAL_RUNTIME_HOURS)
                 }
                 0x23 => {
                     let mut g = rt::Group::new(frame, 0x23, request.map(Request::name));
                     g.ambiguous(
                         asked >> 24 & 1 != 0,
-                        "load_runtime_0_24_hours",
+                        &response::LOAD_RUNTIME_0_24_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime024Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3164,19 +3244,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 25 & 1 != 0,
-                        "load_runtime_0_24_min_sec",
+                        &response::LOAD_RUNTIME_0_24_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_0_24_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_0_24_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3190,7 +3268,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 26 & 1 != 0,
-                        "load_runtime_0_24_hours_before_reset",
+                        &response::LOAD_RUNTIME_0_24_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime024HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3200,13 +3278,13 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_0_24_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_0_24_HOURS)
                 }
                 0x24 => {
                     let mut g = rt::Group::new(frame, 0x24, request.map(Request::name));
                     g.ambiguous(
                         asked >> 27 & 1 != 0,
-                        "load_runtime_25_49_hours",
+                        &response::LOAD_RUNTIME_25_49_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime2549Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3215,19 +3293,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 28 & 1 != 0,
-                        "load_runtime_25_49_min_sec",
+                        &response::LOAD_RUNTIME_25_49_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_25_49_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_25_49_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3241,7 +3317,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 29 & 1 != 0,
-                        "load_runtime_25_49_hours_before_reset",
+                        &response::LOAD_RUNTIME_25_49_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime2549HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3251,13 +3327,13 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_25_49_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_25_49_HOURS)
                 }
                 0x25 => {
                     let mut g = rt::Group::new(frame, 0x25, request.map(Request::name));
                     g.ambiguous(
                         asked >> 30 & 1 != 0,
-                        "load_runtime_50_74_hours",
+                        &response::LOAD_RUNTIME_50_74_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime5074Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3266,19 +3342,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 31 & 1 != 0,
-                        "load_runtime_50_74_min_sec",
+                        &response::LOAD_RUNTIME_50_74_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_50_74_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_50_74_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3292,7 +3366,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 32 & 1 != 0,
-                        "load_runtime_50_74_hours_before_reset",
+                        &response::LOAD_RUNTIME_50_74_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime5074HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3302,13 +3376,13 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_50_74_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_50_74_HOURS)
                 }
                 0x26 => {
                     let mut g = rt::Group::new(frame, 0x26, request.map(Request::name));
                     g.ambiguous(
                         asked >> 33 & 1 != 0,
-                        "load_runtime_75_99_hours",
+                        &response::LOAD_RUNTIME_75_99_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime7599Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3317,19 +3391,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 34 & 1 != 0,
-                        "load_runtime_75_99_min_sec",
+                        &response::LOAD_RUNTIME_75_99_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_75_99_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_75_99_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3343,7 +3415,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 35 & 1 != 0,
-                        "load_runtime_75_99_hours_before_reset",
+                        &response::LOAD_RUNTIME_75_99_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime7599HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3353,13 +3425,13 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_75_99_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_75_99_HOURS)
                 }
                 0x27 => {
                     let mut g = rt::Group::new(frame, 0x27, request.map(Request::name));
                     g.ambiguous(
                         asked >> 36 & 1 != 0,
-                        "load_runtime_100_hours",
+                        &response::LOAD_RUNTIME_100_HOURS,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime100Hours {
                                 runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3368,19 +3440,17 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 37 & 1 != 0,
-                        "load_runtime_100_min_sec",
+                        &response::LOAD_RUNTIME_100_MIN_SEC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
-                                "load_runtime_100_min_sec",
-                                "runtime_minutes",
+                                &response::LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES,
                                 2,
                                 frame[2],
                                 0,
                                 59,
                             )?;
                             rt::in_range(
-                                "load_runtime_100_min_sec",
-                                "runtime_seconds",
+                                &response::LOAD_RUNTIME_100_MIN_SEC_RUNTIME_SECONDS,
                                 3,
                                 frame[3],
                                 0,
@@ -3394,7 +3464,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 38 & 1 != 0,
-                        "load_runtime_100_hours_before_reset",
+                        &response::LOAD_RUNTIME_100_HOURS_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::LoadRuntime100HoursBeforeReset {
                                 runtime_hours_before_reset: u16::from_be_bytes([
@@ -3404,13 +3474,13 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("load_runtime_100_hours", &[6])
+                    g.end(&response::LOAD_RUNTIME_100_HOURS)
                 }
                 0x28 => {
                     let mut g = rt::Group::new(frame, 0x28, request.map(Request::name));
                     g.ambiguous(
                         asked >> 39 & 1 != 0,
-                        "stall_event_counter",
+                        &response::STALL_EVENT_COUNTER,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::StallEventCounter {
                                 stall_events: u16::from_be_bytes([frame[2], frame[3]]),
@@ -3419,7 +3489,7 @@ pub mod sd {
                     );
                     g.ambiguous(
                         asked >> 40 & 1 != 0,
-                        "stall_event_counter_before_reset",
+                        &response::STALL_EVENT_COUNTER_BEFORE_RESET,
                         |frame: &[u8; 6]| {
                             rt::Ok(Self::StallEventCounterBeforeReset {
                                 stall_events_before_reset: u16::from_be_bytes([
@@ -3429,10 +3499,10 @@ pub mod sd {
                             })
                         },
                     );
-                    g.end("stall_event_counter", &[6])
+                    g.end(&response::STALL_EVENT_COUNTER)
                 }
                 0x29 => {
-                    let frame = rt::fixed::<6>(frame, "power_up_cycles", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::POWER_UP_CYCLES)?;
                     rt::Ok(Self::PowerUpCycles {
                         power_up_cycles: u16::from_be_bytes([frame[2], frame[3]]),
                     })
@@ -3861,4 +3931,1152 @@ pub mod sd {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Sd>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `set_point`, code 0x76
+        pub const SET_POINT: MessageDesc = MessageDesc::new("set_point", 0x76, 1, &[6]);
+        /// `read_actual_position`, code 0x69
+        pub const READ_ACTUAL_POSITION: MessageDesc = MessageDesc::new(
+            "read_actual_position",
+            0x69,
+            1,
+            &[6],
+        );
+        /// `read_actual_position.arg1`
+        pub const READ_ACTUAL_POSITION_ARG1: FieldDesc = FieldDesc::new(
+            "read_actual_position",
+            "arg1",
+        );
+        /// `read_actual_position.arg2`
+        pub const READ_ACTUAL_POSITION_ARG2: FieldDesc = FieldDesc::new(
+            "read_actual_position",
+            "arg2",
+        );
+        /// `set_velocity`, code 0x77
+        pub const SET_VELOCITY: MessageDesc = MessageDesc::new(
+            "set_velocity",
+            0x77,
+            1,
+            &[6],
+        );
+        /// `read_actual_velocity`, code 0x68
+        pub const READ_ACTUAL_VELOCITY: MessageDesc = MessageDesc::new(
+            "read_actual_velocity",
+            0x68,
+            1,
+            &[6],
+        );
+        /// `read_actual_velocity.arg1`
+        pub const READ_ACTUAL_VELOCITY_ARG1: FieldDesc = FieldDesc::new(
+            "read_actual_velocity",
+            "arg1",
+        );
+        /// `read_actual_velocity.arg2`
+        pub const READ_ACTUAL_VELOCITY_ARG2: FieldDesc = FieldDesc::new(
+            "read_actual_velocity",
+            "arg2",
+        );
+        /// `set_servo_id`, code 0xAA
+        pub const SET_SERVO_ID: MessageDesc = MessageDesc::new(
+            "set_servo_id",
+            0xAA,
+            1,
+            &[6],
+        );
+        /// `set_servo_id.new_id`
+        pub const SET_SERVO_ID_NEW_ID: FieldDesc = FieldDesc::new(
+            "set_servo_id",
+            "new_id",
+        );
+        /// `set_servo_id.new_id_repeat`
+        pub const SET_SERVO_ID_NEW_ID_REPEAT: FieldDesc = FieldDesc::new(
+            "set_servo_id",
+            "new_id_repeat",
+        );
+        /// `read_servo_id`, code 0xDA
+        pub const READ_SERVO_ID: MessageDesc = MessageDesc::new(
+            "read_servo_id",
+            0xDA,
+            1,
+            &[6],
+        );
+        /// `read_servo_id.arg1`
+        pub const READ_SERVO_ID_ARG1: FieldDesc = FieldDesc::new(
+            "read_servo_id",
+            "arg1",
+        );
+        /// `read_servo_id.arg2`
+        pub const READ_SERVO_ID_ARG2: FieldDesc = FieldDesc::new(
+            "read_servo_id",
+            "arg2",
+        );
+        /// `read_current_consumption`, code 0xB0
+        pub const READ_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "read_current_consumption",
+            0xB0,
+            1,
+            &[6],
+        );
+        /// `read_current_consumption.arg1`
+        pub const READ_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
+            "read_current_consumption",
+            "arg1",
+        );
+        /// `read_current_consumption.arg2`
+        pub const READ_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
+            "read_current_consumption",
+            "arg2",
+        );
+        /// `read_bus_voltages`, code 0xB1
+        pub const READ_BUS_VOLTAGES: MessageDesc = MessageDesc::new(
+            "read_bus_voltages",
+            0xB1,
+            1,
+            &[6],
+        );
+        /// `read_bus_voltages.arg1`
+        pub const READ_BUS_VOLTAGES_ARG1: FieldDesc = FieldDesc::new(
+            "read_bus_voltages",
+            "arg1",
+        );
+        /// `read_bus_voltages.arg2`
+        pub const READ_BUS_VOLTAGES_ARG2: FieldDesc = FieldDesc::new(
+            "read_bus_voltages",
+            "arg2",
+        );
+        /// `read_extended_current_consumption`, code 0xB2
+        pub const READ_EXTENDED_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "read_extended_current_consumption",
+            0xB2,
+            1,
+            &[6],
+        );
+        /// `read_extended_current_consumption.arg1`
+        pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
+            "read_extended_current_consumption",
+            "arg1",
+        );
+        /// `read_extended_current_consumption.arg2`
+        pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
+            "read_extended_current_consumption",
+            "arg2",
+        );
+        /// `read_temperatures`, code 0xA0
+        pub const READ_TEMPERATURES: MessageDesc = MessageDesc::new(
+            "read_temperatures",
+            0xA0,
+            1,
+            &[6],
+        );
+        /// `read_temperatures.arg1`
+        pub const READ_TEMPERATURES_ARG1: FieldDesc = FieldDesc::new(
+            "read_temperatures",
+            "arg1",
+        );
+        /// `read_temperatures.arg2`
+        pub const READ_TEMPERATURES_ARG2: FieldDesc = FieldDesc::new(
+            "read_temperatures",
+            "arg2",
+        );
+        /// `read_humidity`, code 0xA1
+        pub const READ_HUMIDITY: MessageDesc = MessageDesc::new(
+            "read_humidity",
+            0xA1,
+            1,
+            &[6],
+        );
+        /// `read_humidity.arg1`
+        pub const READ_HUMIDITY_ARG1: FieldDesc = FieldDesc::new(
+            "read_humidity",
+            "arg1",
+        );
+        /// `read_humidity.arg2`
+        pub const READ_HUMIDITY_ARG2: FieldDesc = FieldDesc::new(
+            "read_humidity",
+            "arg2",
+        );
+        /// `read_skipped_frames_counter`, code 0x37
+        pub const READ_SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
+            "read_skipped_frames_counter",
+            0x37,
+            1,
+            &[6],
+        );
+        /// `read_skipped_frames_counter.arg1`
+        pub const READ_SKIPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "read_skipped_frames_counter",
+            "arg1",
+        );
+        /// `read_skipped_frames_counter.arg2`
+        pub const READ_SKIPPED_FRAMES_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "read_skipped_frames_counter",
+            "arg2",
+        );
+        /// `reset_dropped_frames_counter`, code 0x37
+        pub const RESET_DROPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
+            "reset_dropped_frames_counter",
+            0x37,
+            1,
+            &[6],
+        );
+        /// `reset_dropped_frames_counter.arg1`
+        pub const RESET_DROPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "reset_dropped_frames_counter",
+            "arg1",
+        );
+        /// `reset_dropped_frames_counter.arg2`
+        pub const RESET_DROPPED_FRAMES_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "reset_dropped_frames_counter",
+            "arg2",
+        );
+        /// `read_actuator_status_word`, code 0x40
+        pub const READ_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
+            "read_actuator_status_word",
+            0x40,
+            1,
+            &[6],
+        );
+        /// `read_actuator_status_word.arg1`
+        pub const READ_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
+            "read_actuator_status_word",
+            "arg1",
+        );
+        /// `read_actuator_status_word.arg2`
+        pub const READ_ACTUATOR_STATUS_WORD_ARG2: FieldDesc = FieldDesc::new(
+            "read_actuator_status_word",
+            "arg2",
+        );
+        /// `reset_actuator_status_word`, code 0x40
+        pub const RESET_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
+            "reset_actuator_status_word",
+            0x40,
+            1,
+            &[6],
+        );
+        /// `reset_actuator_status_word.arg1`
+        pub const RESET_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
+            "reset_actuator_status_word",
+            "arg1",
+        );
+        /// `reset_actuator_status_word.arg2`
+        pub const RESET_ACTUATOR_STATUS_WORD_ARG2: FieldDesc = FieldDesc::new(
+            "reset_actuator_status_word",
+            "arg2",
+        );
+        /// `reset_default_role_and_error_flags`, code 0xB4
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS: MessageDesc = MessageDesc::new(
+            "reset_default_role_and_error_flags",
+            0xB4,
+            1,
+            &[6],
+        );
+        /// `reset_default_role_and_error_flags.arg1`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags",
+            "arg1",
+        );
+        /// `reset_default_role_and_error_flags.arg2`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG2: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags",
+            "arg2",
+        );
+        /// `set_current_position_as_zero`, code 0x99
+        pub const SET_CURRENT_POSITION_AS_ZERO: MessageDesc = MessageDesc::new(
+            "set_current_position_as_zero",
+            0x99,
+            1,
+            &[6],
+        );
+        /// `set_current_position_as_zero.arg1`
+        pub const SET_CURRENT_POSITION_AS_ZERO_ARG1: FieldDesc = FieldDesc::new(
+            "set_current_position_as_zero",
+            "arg1",
+        );
+        /// `set_current_position_as_zero.arg2`
+        pub const SET_CURRENT_POSITION_AS_ZERO_ARG2: FieldDesc = FieldDesc::new(
+            "set_current_position_as_zero",
+            "arg2",
+        );
+        /// `read_current_zero_offset`, code 0x95
+        pub const READ_CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
+            "read_current_zero_offset",
+            0x95,
+            1,
+            &[6],
+        );
+        /// `read_current_zero_offset.arg1`
+        pub const READ_CURRENT_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
+            "read_current_zero_offset",
+            "arg1",
+        );
+        /// `read_current_zero_offset.arg2`
+        pub const READ_CURRENT_ZERO_OFFSET_ARG2: FieldDesc = FieldDesc::new(
+            "read_current_zero_offset",
+            "arg2",
+        );
+        /// `reset_zero_offset`, code 0x98
+        pub const RESET_ZERO_OFFSET: MessageDesc = MessageDesc::new(
+            "reset_zero_offset",
+            0x98,
+            1,
+            &[6],
+        );
+        /// `reset_zero_offset.arg1`
+        pub const RESET_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
+            "reset_zero_offset",
+            "arg1",
+        );
+        /// `reset_zero_offset.arg2`
+        pub const RESET_ZERO_OFFSET_ARG2: FieldDesc = FieldDesc::new(
+            "reset_zero_offset",
+            "arg2",
+        );
+        /// `read_electronic_serial_number`, code 0xF0
+        pub const READ_ELECTRONIC_SERIAL_NUMBER: MessageDesc = MessageDesc::new(
+            "read_electronic_serial_number",
+            0xF0,
+            1,
+            &[6],
+        );
+        /// `read_electronic_serial_number.arg1`
+        pub const READ_ELECTRONIC_SERIAL_NUMBER_ARG1: FieldDesc = FieldDesc::new(
+            "read_electronic_serial_number",
+            "arg1",
+        );
+        /// `read_electronic_serial_number.byte_number`
+        pub const READ_ELECTRONIC_SERIAL_NUMBER_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_electronic_serial_number",
+            "byte_number",
+        );
+        /// `read_product_description`, code 0xF1
+        pub const READ_PRODUCT_DESCRIPTION: MessageDesc = MessageDesc::new(
+            "read_product_description",
+            0xF1,
+            1,
+            &[6],
+        );
+        /// `read_product_description.arg1`
+        pub const READ_PRODUCT_DESCRIPTION_ARG1: FieldDesc = FieldDesc::new(
+            "read_product_description",
+            "arg1",
+        );
+        /// `read_product_description.byte_number`
+        pub const READ_PRODUCT_DESCRIPTION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_product_description",
+            "byte_number",
+        );
+        /// `read_software_revision`, code 0xF2
+        pub const READ_SOFTWARE_REVISION: MessageDesc = MessageDesc::new(
+            "read_software_revision",
+            0xF2,
+            1,
+            &[6],
+        );
+        /// `read_software_revision.arg1`
+        pub const READ_SOFTWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
+            "read_software_revision",
+            "arg1",
+        );
+        /// `read_software_revision.byte_number`
+        pub const READ_SOFTWARE_REVISION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_software_revision",
+            "byte_number",
+        );
+        /// `read_hardware_revision`, code 0xF3
+        pub const READ_HARDWARE_REVISION: MessageDesc = MessageDesc::new(
+            "read_hardware_revision",
+            0xF3,
+            1,
+            &[6],
+        );
+        /// `read_hardware_revision.arg1`
+        pub const READ_HARDWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
+            "read_hardware_revision",
+            "arg1",
+        );
+        /// `read_hardware_revision.byte_number`
+        pub const READ_HARDWARE_REVISION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
+            "read_hardware_revision",
+            "byte_number",
+        );
+        /// `read_total_runtime_hours`, code 0xA2
+        pub const READ_TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
+            "read_total_runtime_hours",
+            0xA2,
+            1,
+            &[6],
+        );
+        /// `read_total_runtime_hours.arg1`
+        pub const READ_TOTAL_RUNTIME_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_total_runtime_hours",
+            "arg1",
+        );
+        /// `read_total_runtime_hours.arg2`
+        pub const READ_TOTAL_RUNTIME_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_total_runtime_hours",
+            "arg2",
+        );
+        /// `read_total_runtime_min_sec`, code 0xA2
+        pub const READ_TOTAL_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_total_runtime_min_sec",
+            0xA2,
+            1,
+            &[6],
+        );
+        /// `read_total_runtime_min_sec.arg1`
+        pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_total_runtime_min_sec",
+            "arg1",
+        );
+        /// `read_total_runtime_min_sec.arg2`
+        pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_total_runtime_min_sec",
+            "arg2",
+        );
+        /// `read_load_runtime_0_24_hours`, code 0xA3
+        pub const READ_LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_0_24_hours",
+            0xA3,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_0_24_hours.arg1`
+        pub const READ_LOAD_RUNTIME_0_24_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_0_24_hours.arg2`
+        pub const READ_LOAD_RUNTIME_0_24_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_hours",
+            "arg2",
+        );
+        /// `read_load_runtime_0_24_min_sec`, code 0xA3
+        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_0_24_min_sec",
+            0xA3,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_0_24_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_0_24_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_0_24_min_sec",
+            "arg2",
+        );
+        /// `reset_load_runtime_0_24`, code 0xA3
+        pub const RESET_LOAD_RUNTIME_0_24: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_0_24",
+            0xA3,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_0_24.arg1`
+        pub const RESET_LOAD_RUNTIME_0_24_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_0_24",
+            "arg1",
+        );
+        /// `reset_load_runtime_0_24.arg2`
+        pub const RESET_LOAD_RUNTIME_0_24_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_0_24",
+            "arg2",
+        );
+        /// `read_load_runtime_25_49_hours`, code 0xA4
+        pub const READ_LOAD_RUNTIME_25_49_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_25_49_hours",
+            0xA4,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_25_49_hours.arg1`
+        pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_25_49_hours.arg2`
+        pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_hours",
+            "arg2",
+        );
+        /// `read_load_runtime_25_49_min_sec`, code 0xA4
+        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_25_49_min_sec",
+            0xA4,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_25_49_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_25_49_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_25_49_min_sec",
+            "arg2",
+        );
+        /// `reset_load_runtime_25_49`, code 0xA4
+        pub const RESET_LOAD_RUNTIME_25_49: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_25_49",
+            0xA4,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_25_49.arg1`
+        pub const RESET_LOAD_RUNTIME_25_49_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_25_49",
+            "arg1",
+        );
+        /// `reset_load_runtime_25_49.arg2`
+        pub const RESET_LOAD_RUNTIME_25_49_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_25_49",
+            "arg2",
+        );
+        /// `read_load_runtime_50_74_hours`, code 0xA5
+        pub const READ_LOAD_RUNTIME_50_74_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_50_74_hours",
+            0xA5,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_50_74_hours.arg1`
+        pub const READ_LOAD_RUNTIME_50_74_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_50_74_hours.arg2`
+        pub const READ_LOAD_RUNTIME_50_74_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_hours",
+            "arg2",
+        );
+        /// `read_load_runtime_50_74_min_sec`, code 0xA5
+        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_50_74_min_sec",
+            0xA5,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_50_74_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_50_74_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_50_74_min_sec",
+            "arg2",
+        );
+        /// `reset_load_runtime_50_74`, code 0xA5
+        pub const RESET_LOAD_RUNTIME_50_74: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_50_74",
+            0xA5,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_50_74.arg1`
+        pub const RESET_LOAD_RUNTIME_50_74_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_50_74",
+            "arg1",
+        );
+        /// `reset_load_runtime_50_74.arg2`
+        pub const RESET_LOAD_RUNTIME_50_74_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_50_74",
+            "arg2",
+        );
+        /// `read_load_runtime_75_99_hours`, code 0xA6
+        pub const READ_LOAD_RUNTIME_75_99_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_75_99_hours",
+            0xA6,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_75_99_hours.arg1`
+        pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_75_99_hours.arg2`
+        pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_hours",
+            "arg2",
+        );
+        /// `read_load_runtime_75_99_min_sec`, code 0xA6
+        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_75_99_min_sec",
+            0xA6,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_75_99_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_75_99_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_75_99_min_sec",
+            "arg2",
+        );
+        /// `reset_load_runtime_75_99`, code 0xA6
+        pub const RESET_LOAD_RUNTIME_75_99: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_75_99",
+            0xA6,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_75_99.arg1`
+        pub const RESET_LOAD_RUNTIME_75_99_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_75_99",
+            "arg1",
+        );
+        /// `reset_load_runtime_75_99.arg2`
+        pub const RESET_LOAD_RUNTIME_75_99_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_75_99",
+            "arg2",
+        );
+        /// `read_load_runtime_100_hours`, code 0xA7
+        pub const READ_LOAD_RUNTIME_100_HOURS: MessageDesc = MessageDesc::new(
+            "read_load_runtime_100_hours",
+            0xA7,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_100_hours.arg1`
+        pub const READ_LOAD_RUNTIME_100_HOURS_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_hours",
+            "arg1",
+        );
+        /// `read_load_runtime_100_hours.arg2`
+        pub const READ_LOAD_RUNTIME_100_HOURS_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_hours",
+            "arg2",
+        );
+        /// `read_load_runtime_100_min_sec`, code 0xA7
+        pub const READ_LOAD_RUNTIME_100_MIN_SEC: MessageDesc = MessageDesc::new(
+            "read_load_runtime_100_min_sec",
+            0xA7,
+            1,
+            &[6],
+        );
+        /// `read_load_runtime_100_min_sec.arg1`
+        pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_min_sec",
+            "arg1",
+        );
+        /// `read_load_runtime_100_min_sec.arg2`
+        pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
+            "read_load_runtime_100_min_sec",
+            "arg2",
+        );
+        /// `reset_load_runtime_100`, code 0xA7
+        pub const RESET_LOAD_RUNTIME_100: MessageDesc = MessageDesc::new(
+            "reset_load_runtime_100",
+            0xA7,
+            1,
+            &[6],
+        );
+        /// `reset_load_runtime_100.arg1`
+        pub const RESET_LOAD_RUNTIME_100_ARG1: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_100",
+            "arg1",
+        );
+        /// `reset_load_runtime_100.arg2`
+        pub const RESET_LOAD_RUNTIME_100_ARG2: FieldDesc = FieldDesc::new(
+            "reset_load_runtime_100",
+            "arg2",
+        );
+        /// `read_stall_event_counter`, code 0xA8
+        pub const READ_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
+            "read_stall_event_counter",
+            0xA8,
+            1,
+            &[6],
+        );
+        /// `read_stall_event_counter.arg1`
+        pub const READ_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "read_stall_event_counter",
+            "arg1",
+        );
+        /// `read_stall_event_counter.arg2`
+        pub const READ_STALL_EVENT_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "read_stall_event_counter",
+            "arg2",
+        );
+        /// `reset_stall_event_counter`, code 0xA8
+        pub const RESET_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
+            "reset_stall_event_counter",
+            0xA8,
+            1,
+            &[6],
+        );
+        /// `reset_stall_event_counter.arg1`
+        pub const RESET_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
+            "reset_stall_event_counter",
+            "arg1",
+        );
+        /// `reset_stall_event_counter.arg2`
+        pub const RESET_STALL_EVENT_COUNTER_ARG2: FieldDesc = FieldDesc::new(
+            "reset_stall_event_counter",
+            "arg2",
+        );
+        /// `read_power_up_cycles`, code 0xA9
+        pub const READ_POWER_UP_CYCLES: MessageDesc = MessageDesc::new(
+            "read_power_up_cycles",
+            0xA9,
+            1,
+            &[6],
+        );
+        /// `read_power_up_cycles.arg1`
+        pub const READ_POWER_UP_CYCLES_ARG1: FieldDesc = FieldDesc::new(
+            "read_power_up_cycles",
+            "arg1",
+        );
+        /// `read_power_up_cycles.arg2`
+        pub const READ_POWER_UP_CYCLES_ARG2: FieldDesc = FieldDesc::new(
+            "read_power_up_cycles",
+            "arg2",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `set_point_reply`, code 0x56
+        pub const SET_POINT_REPLY: MessageDesc = MessageDesc::new(
+            "set_point_reply",
+            0x56,
+            1,
+            &[6],
+        );
+        /// `actual_position`, code 0x49
+        pub const ACTUAL_POSITION: MessageDesc = MessageDesc::new(
+            "actual_position",
+            0x49,
+            1,
+            &[6],
+        );
+        /// `actual_position.zero`
+        pub const ACTUAL_POSITION_ZERO: FieldDesc = FieldDesc::new(
+            "actual_position",
+            "zero",
+        );
+        /// `set_velocity_reply`, code 0x57
+        pub const SET_VELOCITY_REPLY: MessageDesc = MessageDesc::new(
+            "set_velocity_reply",
+            0x57,
+            1,
+            &[6],
+        );
+        /// `actual_velocity`, code 0x48
+        pub const ACTUAL_VELOCITY: MessageDesc = MessageDesc::new(
+            "actual_velocity",
+            0x48,
+            1,
+            &[6],
+        );
+        /// `set_servo_id_reply`, code 0x55
+        pub const SET_SERVO_ID_REPLY: MessageDesc = MessageDesc::new(
+            "set_servo_id_reply",
+            0x55,
+            1,
+            &[6],
+        );
+        /// `set_servo_id_reply.new_id`
+        pub const SET_SERVO_ID_REPLY_NEW_ID: FieldDesc = FieldDesc::new(
+            "set_servo_id_reply",
+            "new_id",
+        );
+        /// `set_servo_id_reply.new_id_repeat`
+        pub const SET_SERVO_ID_REPLY_NEW_ID_REPEAT: FieldDesc = FieldDesc::new(
+            "set_servo_id_reply",
+            "new_id_repeat",
+        );
+        /// `servo_id`, code 0x6D
+        pub const SERVO_ID: MessageDesc = MessageDesc::new("servo_id", 0x6D, 1, &[6]);
+        /// `servo_id.id`
+        pub const SERVO_ID_ID: FieldDesc = FieldDesc::new("servo_id", "id");
+        /// `servo_id.id_repeat`
+        pub const SERVO_ID_ID_REPEAT: FieldDesc = FieldDesc::new(
+            "servo_id",
+            "id_repeat",
+        );
+        /// `current_consumption`, code 0x30
+        pub const CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "current_consumption",
+            0x30,
+            1,
+            &[6],
+        );
+        /// `current_consumption.current_repeat`
+        pub const CURRENT_CONSUMPTION_CURRENT_REPEAT: FieldDesc = FieldDesc::new(
+            "current_consumption",
+            "current_repeat",
+        );
+        /// `bus_voltages`, code 0x31
+        pub const BUS_VOLTAGES: MessageDesc = MessageDesc::new(
+            "bus_voltages",
+            0x31,
+            1,
+            &[6],
+        );
+        /// `extended_current_consumption`, code 0x32
+        pub const EXTENDED_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
+            "extended_current_consumption",
+            0x32,
+            1,
+            &[6],
+        );
+        /// `temperatures`, code 0x20
+        pub const TEMPERATURES: MessageDesc = MessageDesc::new(
+            "temperatures",
+            0x20,
+            1,
+            &[6],
+        );
+        /// `humidity`, code 0x21
+        pub const HUMIDITY: MessageDesc = MessageDesc::new("humidity", 0x21, 1, &[6]);
+        /// `humidity.humidity`
+        pub const HUMIDITY_HUMIDITY: FieldDesc = FieldDesc::new("humidity", "humidity");
+        /// `humidity.humidity_repeat`
+        pub const HUMIDITY_HUMIDITY_REPEAT: FieldDesc = FieldDesc::new(
+            "humidity",
+            "humidity_repeat",
+        );
+        /// `skipped_frames_counter`, code 0x38
+        pub const SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
+            "skipped_frames_counter",
+            0x38,
+            1,
+            &[6],
+        );
+        /// `dropped_frames_counter_reset`, code 0x38
+        pub const DROPPED_FRAMES_COUNTER_RESET: MessageDesc = MessageDesc::new(
+            "dropped_frames_counter_reset",
+            0x38,
+            1,
+            &[6],
+        );
+        /// `dropped_frames_counter_reset.arg2`
+        pub const DROPPED_FRAMES_COUNTER_RESET_ARG2: FieldDesc = FieldDesc::new(
+            "dropped_frames_counter_reset",
+            "arg2",
+        );
+        /// `actuator_status_word`, code 0x41
+        pub const ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
+            "actuator_status_word",
+            0x41,
+            1,
+            &[6],
+        );
+        /// `reset_default_role_and_error_flags_reply`, code 0x5A
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY: MessageDesc = MessageDesc::new(
+            "reset_default_role_and_error_flags_reply",
+            0x5A,
+            1,
+            &[6],
+        );
+        /// `reset_default_role_and_error_flags_reply.arg1`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags_reply",
+            "arg1",
+        );
+        /// `reset_default_role_and_error_flags_reply.arg2`
+        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG2: FieldDesc = FieldDesc::new(
+            "reset_default_role_and_error_flags_reply",
+            "arg2",
+        );
+        /// `set_current_position_as_zero_reply`, code 0x4C
+        pub const SET_CURRENT_POSITION_AS_ZERO_REPLY: MessageDesc = MessageDesc::new(
+            "set_current_position_as_zero_reply",
+            0x4C,
+            1,
+            &[6],
+        );
+        /// `set_current_position_as_zero_reply.zero`
+        pub const SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO: FieldDesc = FieldDesc::new(
+            "set_current_position_as_zero_reply",
+            "zero",
+        );
+        /// `current_zero_offset`, code 0x65
+        pub const CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
+            "current_zero_offset",
+            0x65,
+            1,
+            &[6],
+        );
+        /// `current_zero_offset.zero`
+        pub const CURRENT_ZERO_OFFSET_ZERO: FieldDesc = FieldDesc::new(
+            "current_zero_offset",
+            "zero",
+        );
+        /// `reset_zero_offset_reply`, code 0x64
+        pub const RESET_ZERO_OFFSET_REPLY: MessageDesc = MessageDesc::new(
+            "reset_zero_offset_reply",
+            0x64,
+            1,
+            &[6],
+        );
+        /// `reset_zero_offset_reply.arg1`
+        pub const RESET_ZERO_OFFSET_REPLY_ARG1: FieldDesc = FieldDesc::new(
+            "reset_zero_offset_reply",
+            "arg1",
+        );
+        /// `reset_zero_offset_reply.arg2`
+        pub const RESET_ZERO_OFFSET_REPLY_ARG2: FieldDesc = FieldDesc::new(
+            "reset_zero_offset_reply",
+            "arg2",
+        );
+        /// `electronic_serial_number_character`, code 0x10
+        pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER: MessageDesc = MessageDesc::new(
+            "electronic_serial_number_character",
+            0x10,
+            1,
+            &[6],
+        );
+        /// `electronic_serial_number_character.string_length`
+        pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "electronic_serial_number_character",
+            "string_length",
+        );
+        /// `product_description_character`, code 0x11
+        pub const PRODUCT_DESCRIPTION_CHARACTER: MessageDesc = MessageDesc::new(
+            "product_description_character",
+            0x11,
+            1,
+            &[6],
+        );
+        /// `product_description_character.string_length`
+        pub const PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "product_description_character",
+            "string_length",
+        );
+        /// `software_revision_character`, code 0x12
+        pub const SOFTWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
+            "software_revision_character",
+            0x12,
+            1,
+            &[6],
+        );
+        /// `software_revision_character.string_length`
+        pub const SOFTWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "software_revision_character",
+            "string_length",
+        );
+        /// `hardware_revision_character`, code 0x13
+        pub const HARDWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
+            "hardware_revision_character",
+            0x13,
+            1,
+            &[6],
+        );
+        /// `hardware_revision_character.string_length`
+        pub const HARDWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
+            "hardware_revision_character",
+            "string_length",
+        );
+        /// `total_runtime_hours`, code 0x22
+        pub const TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
+            "total_runtime_hours",
+            0x22,
+            1,
+            &[6],
+        );
+        /// `total_runtime_min_sec`, code 0x22
+        pub const TOTAL_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
+            "total_runtime_min_sec",
+            0x22,
+            1,
+            &[6],
+        );
+        /// `total_runtime_min_sec.runtime_minutes`
+        pub const TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "total_runtime_min_sec",
+            "runtime_minutes",
+        );
+        /// `total_runtime_min_sec.runtime_seconds`
+        pub const TOTAL_RUNTIME_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "total_runtime_min_sec",
+            "runtime_seconds",
+        );
+        /// `load_runtime_0_24_hours`, code 0x23
+        pub const LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_0_24_hours",
+            0x23,
+            1,
+            &[6],
+        );
+        /// `load_runtime_0_24_min_sec`, code 0x23
+        pub const LOAD_RUNTIME_0_24_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_0_24_min_sec",
+            0x23,
+            1,
+            &[6],
+        );
+        /// `load_runtime_0_24_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_0_24_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_0_24_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_0_24_min_sec",
+            "runtime_seconds",
+        );
+        /// `load_runtime_0_24_hours_before_reset`, code 0x23
+        pub const LOAD_RUNTIME_0_24_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_0_24_hours_before_reset",
+            0x23,
+            1,
+            &[6],
+        );
+        /// `load_runtime_25_49_hours`, code 0x24
+        pub const LOAD_RUNTIME_25_49_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_25_49_hours",
+            0x24,
+            1,
+            &[6],
+        );
+        /// `load_runtime_25_49_min_sec`, code 0x24
+        pub const LOAD_RUNTIME_25_49_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_25_49_min_sec",
+            0x24,
+            1,
+            &[6],
+        );
+        /// `load_runtime_25_49_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_25_49_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_25_49_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_25_49_min_sec",
+            "runtime_seconds",
+        );
+        /// `load_runtime_25_49_hours_before_reset`, code 0x24
+        pub const LOAD_RUNTIME_25_49_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_25_49_hours_before_reset",
+            0x24,
+            1,
+            &[6],
+        );
+        /// `load_runtime_50_74_hours`, code 0x25
+        pub const LOAD_RUNTIME_50_74_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_50_74_hours",
+            0x25,
+            1,
+            &[6],
+        );
+        /// `load_runtime_50_74_min_sec`, code 0x25
+        pub const LOAD_RUNTIME_50_74_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_50_74_min_sec",
+            0x25,
+            1,
+            &[6],
+        );
+        /// `load_runtime_50_74_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_50_74_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_50_74_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_50_74_min_sec",
+            "runtime_seconds",
+        );
+        /// `load_runtime_50_74_hours_before_reset`, code 0x25
+        pub const LOAD_RUNTIME_50_74_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_50_74_hours_before_reset",
+            0x25,
+            1,
+            &[6],
+        );
+        /// `load_runtime_75_99_hours`, code 0x26
+        pub const LOAD_RUNTIME_75_99_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_75_99_hours",
+            0x26,
+            1,
+            &[6],
+        );
+        /// `load_runtime_75_99_min_sec`, code 0x26
+        pub const LOAD_RUNTIME_75_99_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_75_99_min_sec",
+            0x26,
+            1,
+            &[6],
+        );
+        /// `load_runtime_75_99_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_75_99_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_75_99_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_75_99_min_sec",
+            "runtime_seconds",
+        );
+        /// `load_runtime_75_99_hours_before_reset`, code 0x26
+        pub const LOAD_RUNTIME_75_99_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_75_99_hours_before_reset",
+            0x26,
+            1,
+            &[6],
+        );
+        /// `load_runtime_100_hours`, code 0x27
+        pub const LOAD_RUNTIME_100_HOURS: MessageDesc = MessageDesc::new(
+            "load_runtime_100_hours",
+            0x27,
+            1,
+            &[6],
+        );
+        /// `load_runtime_100_min_sec`, code 0x27
+        pub const LOAD_RUNTIME_100_MIN_SEC: MessageDesc = MessageDesc::new(
+            "load_runtime_100_min_sec",
+            0x27,
+            1,
+            &[6],
+        );
+        /// `load_runtime_100_min_sec.runtime_minutes`
+        pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
+            "load_runtime_100_min_sec",
+            "runtime_minutes",
+        );
+        /// `load_runtime_100_min_sec.runtime_seconds`
+        pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
+            "load_runtime_100_min_sec",
+            "runtime_seconds",
+        );
+        /// `load_runtime_100_hours_before_reset`, code 0x27
+        pub const LOAD_RUNTIME_100_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "load_runtime_100_hours_before_reset",
+            0x27,
+            1,
+            &[6],
+        );
+        /// `stall_event_counter`, code 0x28
+        pub const STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
+            "stall_event_counter",
+            0x28,
+            1,
+            &[6],
+        );
+        /// `stall_event_counter_before_reset`, code 0x28
+        pub const STALL_EVENT_COUNTER_BEFORE_RESET: MessageDesc = MessageDesc::new(
+            "stall_event_counter_before_reset",
+            0x28,
+            1,
+            &[6],
+        );
+        /// `power_up_cycles`, code 0x29
+        pub const POWER_UP_CYCLES: MessageDesc = MessageDesc::new(
+            "power_up_cycles",
+            0x29,
+            1,
+            &[6],
+        );
+    }
 }

@@ -264,17 +264,17 @@ pub mod slip_sensor {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x01 => {
-                    rt::fixed::<4>(frame, "read_temperature", &[4])
+                    rt::fixed::<4>(frame, &request::READ_TEMPERATURE)
                         .map(|_| Self::ReadTemperature)
                 }
                 0x02 => {
-                    let frame = rt::fixed::<6>(frame, "set_threshold", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_THRESHOLD)?;
                     rt::Ok(Self::SetThreshold {
                         threshold: u16::from_be_bytes([frame[1], frame[2]]),
                     })
                 }
                 0x03 => {
-                    rt::fixed::<4>(frame, "read_samples", &[4])
+                    rt::fixed::<4>(frame, &request::READ_SAMPLES)
                         .map(|_| Self::ReadSamples)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 3, false)),
@@ -361,8 +361,7 @@ pub mod slip_sensor {
     }
     /// Where `samples.samples` sits in the frame and how its elements are counted.
     pub const REPEAT_SAMPLES: rt::RepeatAt = rt::RepeatAt {
-        message: "samples",
-        field: "samples",
+        field: &response::SAMPLES_SAMPLES,
         base: 4,
         at: 1,
         width: 1,
@@ -537,14 +536,14 @@ pub mod slip_sensor {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x81 => {
-                    let frame = rt::fixed::<6>(frame, "temperature", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::TEMPERATURE)?;
                     rt::Ok(Self::Temperature {
                         temperature: Centidegrees::from_raw(
                             i16::from_be_bytes([frame[1], frame[2]]),
                         ),
                     })
                 }
-                0x82 => rt::fixed::<4>(frame, "ack", &[4]).map(|_| Self::Ack),
+                0x82 => rt::fixed::<4>(frame, &response::ACK).map(|_| Self::Ack),
                 0x83 => {
                     let (_, elements, _) = REPEAT_SAMPLES.split::<1>(frame)?;
                     rt::Ok(Self::Samples {
@@ -710,4 +709,47 @@ pub mod slip_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SlipSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read_temperature`, code 0x01
+        pub const READ_TEMPERATURE: MessageDesc = MessageDesc::new(
+            "read_temperature",
+            0x01,
+            1,
+            &[4],
+        );
+        /// `set_threshold`, code 0x02
+        pub const SET_THRESHOLD: MessageDesc = MessageDesc::new(
+            "set_threshold",
+            0x02,
+            1,
+            &[6],
+        );
+        /// `read_samples`, code 0x03
+        pub const READ_SAMPLES: MessageDesc = MessageDesc::new(
+            "read_samples",
+            0x03,
+            1,
+            &[4],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `temperature`, code 0x81
+        pub const TEMPERATURE: MessageDesc = MessageDesc::new(
+            "temperature",
+            0x81,
+            1,
+            &[6],
+        );
+        /// `ack`, code 0x82
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x82, 1, &[4]);
+        /// `samples`, code 0x83
+        pub const SAMPLES: MessageDesc = MessageDesc::new("samples", 0x83, 1, &[4]);
+        /// `samples.samples`
+        pub const SAMPLES_SAMPLES: FieldDesc = FieldDesc::new("samples", "samples");
+    }
 }

@@ -150,7 +150,7 @@ pub mod sync_after_code {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 2) {
                 0x0102 => {
-                    let frame = rt::fixed::<6>(frame, "read", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::READ)?;
                     rt::Ok(Self::Read { register: frame[4] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 2, 1, false)),
@@ -339,7 +339,7 @@ pub mod sync_after_code {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 2) {
                 0x8102 => {
-                    let frame = rt::fixed::<7>(frame, "value", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::VALUE)?;
                     rt::Ok(Self::Value {
                         value: u16::from_be_bytes([frame[4], frame[5]]),
                     })
@@ -508,4 +508,17 @@ pub mod sync_after_code {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SyncAfterCode>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::MessageDesc;
+        /// `read`, code 0x0102
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x0102, 2, &[6]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `value`, code 0x8102
+        pub const VALUE: MessageDesc = MessageDesc::new("value", 0x8102, 2, &[7]);
+    }
 }

@@ -179,7 +179,7 @@ pub mod syncy {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::MoveTo { target: v_target } => {
-                    rt::encode_broadcast(address, 0xFE, "move_to")?;
+                    rt::encode_broadcast(address, 0xFE, &request::MOVE_TO)?;
                     rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
                     let out = rt::frame_mut::<
                         9,
@@ -195,11 +195,11 @@ pub mod syncy {
                     out.len()
                 }
                 Self::GetCounter => {
-                    rt::encode_broadcast(address, 0xFE, "get_counter")?;
+                    rt::encode_broadcast(address, 0xFE, &request::GET_COUNTER)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
                 Self::SetPair { quantity: v_quantity, level: v_level } => {
-                    rt::encode_broadcast(address, 0xFE, "set_pair")?;
+                    rt::encode_broadcast(address, 0xFE, &request::SET_PAIR)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 100)?;
                     let out = rt::frame_mut::<
                         10,
@@ -241,26 +241,31 @@ pub mod syncy {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame, "move_to", &[9])?;
-                    rt::no_broadcast(frame[2], 0xFE, "move_to", 0x03, 1)?;
+                    let frame = rt::fixed::<9>(frame, &request::MOVE_TO)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::MOVE_TO)?;
                     let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
-                    rt::in_range("move_to", "target", 5, field_0, -1000000, 1000000)?;
+                    rt::in_range(
+                        &request::MOVE_TO_TARGET,
+                        5,
+                        field_0,
+                        -1000000,
+                        1000000,
+                    )?;
                     rt::Ok(Self::MoveTo {
                         target: Millimetre::from_raw(field_0 as i32),
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<6>(frame, "get_counter", &[6])?;
-                    rt::no_broadcast(frame[2], 0xFE, "get_counter", 0x04, 1)?;
+                    let frame = rt::fixed::<6>(frame, &request::GET_COUNTER)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::GET_COUNTER)?;
                     rt::Ok(Self::GetCounter)
                 }
                 0x05 => {
-                    let frame = rt::fixed::<10>(frame, "set_pair", &[10])?;
-                    rt::no_broadcast(frame[2], 0xFE, "set_pair", 0x05, 1)?;
-                    rt::in_range("set_pair", "quantity", 5, frame[5], 1, 100)?;
+                    let frame = rt::fixed::<10>(frame, &request::SET_PAIR)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::SET_PAIR)?;
+                    rt::in_range(&request::SET_PAIR_QUANTITY, 5, frame[5], 1, 100)?;
                     rt::following(
-                        "set_pair",
-                        "doubled",
+                        &request::SET_PAIR_DOUBLED,
                         6,
                         frame[6],
                         frame[5] as i64,
@@ -524,9 +529,9 @@ pub mod syncy {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
-                0x00 => rt::fixed::<6>(frame, "moving", &[6]).map(|_| Self::Moving),
+                0x00 => rt::fixed::<6>(frame, &response::MOVING).map(|_| Self::Moving),
                 0x01 => {
-                    let frame = rt::fixed::<12>(frame, "counter", &[12])?;
+                    let frame = rt::fixed::<12>(frame, &response::COUNTER)?;
                     let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
                     rt::Ok(Self::Counter {
                         total: rt::u24([frame[5], frame[6], frame[7]], false),
@@ -535,14 +540,14 @@ pub mod syncy {
                     })
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, "set_pair_reply", &[8])?;
+                    let frame = rt::fixed::<8>(frame, &response::SET_PAIR_REPLY)?;
                     rt::Ok(Self::SetPairReply {
                         quantity: frame[5],
                         groups: frame[6],
                     })
                 }
                 0x85 => {
-                    let frame = rt::fixed::<7>(frame, "set_pair_error", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::SET_PAIR_ERROR)?;
                     rt::Ok(Self::SetPairError {
                         reason: frame[5],
                     })
@@ -636,8 +641,7 @@ pub mod syncy {
                     &Request::SetPair { quantity: r_quantity, .. },
                 ) => {
                     rt::following(
-                        "set_pair_reply",
-                        "quantity",
+                        &response::SET_PAIR_REPLY_QUANTITY,
                         5,
                         v_quantity,
                         r_quantity as i64,
@@ -645,8 +649,7 @@ pub mod syncy {
                         "quantity of the request",
                     )?;
                     rt::following(
-                        "set_pair_reply",
-                        "groups",
+                        &response::SET_PAIR_REPLY_GROUPS,
                         6,
                         v_groups,
                         r_quantity as i64,
@@ -777,4 +780,58 @@ pub mod syncy {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Syncy>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `move_to`, code 0x03
+        pub const MOVE_TO: MessageDesc = MessageDesc::new("move_to", 0x03, 1, &[9]);
+        /// `move_to.target`
+        pub const MOVE_TO_TARGET: FieldDesc = FieldDesc::new("move_to", "target");
+        /// `get_counter`, code 0x04
+        pub const GET_COUNTER: MessageDesc = MessageDesc::new(
+            "get_counter",
+            0x04,
+            1,
+            &[6],
+        );
+        /// `set_pair`, code 0x05
+        pub const SET_PAIR: MessageDesc = MessageDesc::new("set_pair", 0x05, 1, &[10]);
+        /// `set_pair.quantity`
+        pub const SET_PAIR_QUANTITY: FieldDesc = FieldDesc::new("set_pair", "quantity");
+        /// `set_pair.doubled`
+        pub const SET_PAIR_DOUBLED: FieldDesc = FieldDesc::new("set_pair", "doubled");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `moving`, code 0x00
+        pub const MOVING: MessageDesc = MessageDesc::new("moving", 0x00, 1, &[6]);
+        /// `counter`, code 0x01
+        pub const COUNTER: MessageDesc = MessageDesc::new("counter", 0x01, 1, &[12]);
+        /// `set_pair_reply`, code 0x05
+        pub const SET_PAIR_REPLY: MessageDesc = MessageDesc::new(
+            "set_pair_reply",
+            0x05,
+            1,
+            &[8],
+        );
+        /// `set_pair_reply.quantity`
+        pub const SET_PAIR_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
+            "set_pair_reply",
+            "quantity",
+        );
+        /// `set_pair_reply.groups`
+        pub const SET_PAIR_REPLY_GROUPS: FieldDesc = FieldDesc::new(
+            "set_pair_reply",
+            "groups",
+        );
+        /// `set_pair_error`, code 0x85
+        pub const SET_PAIR_ERROR: MessageDesc = MessageDesc::new(
+            "set_pair_error",
+            0x85,
+            1,
+            &[7],
+        );
+    }
 }

@@ -175,9 +175,11 @@ pub mod telemetry_le {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
-                0x01 => rt::fixed::<5>(frame, "get_state", &[5]).map(|_| Self::GetState),
+                0x01 => {
+                    rt::fixed::<5>(frame, &request::GET_STATE).map(|_| Self::GetState)
+                }
                 0x02 => {
-                    let frame = rt::fixed::<21>(frame, "set_home", &[21])?;
+                    let frame = rt::fixed::<21>(frame, &request::SET_HOME)?;
                     let field_0: f64 = f64::from_le_bytes([
                         frame[4],
                         frame[5],
@@ -189,8 +191,7 @@ pub mod telemetry_le {
                         frame[11],
                     ]);
                     rt::in_range(
-                        "set_home",
-                        "lat",
+                        &request::SET_HOME_LAT,
                         4,
                         field_0,
                         rt::f64_raw(-90f64),
@@ -207,8 +208,7 @@ pub mod telemetry_le {
                         frame[19],
                     ]);
                     rt::in_range(
-                        "set_home",
-                        "lon",
+                        &request::SET_HOME_LON,
                         12,
                         field_1,
                         rt::f64_raw(-180f64),
@@ -463,7 +463,7 @@ pub mod telemetry_le {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x81 => {
-                    let frame = rt::fixed::<41>(frame, "state", &[41])?;
+                    let frame = rt::fixed::<41>(frame, &response::STATE)?;
                     let field_4: f32 = f32::from_le_bytes([
                         frame[34],
                         frame[35],
@@ -471,8 +471,7 @@ pub mod telemetry_le {
                         frame[33],
                     ]);
                     rt::in_range(
-                        "state",
-                        "pressure",
+                        &response::STATE_PRESSURE,
                         32,
                         field_4,
                         rt::f32_raw(300f32),
@@ -524,7 +523,7 @@ pub mod telemetry_le {
                         ]),
                     })
                 }
-                0x82 => rt::fixed::<5>(frame, "ack", &[5]).map(|_| Self::Ack),
+                0x82 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
         }
@@ -708,4 +707,27 @@ pub mod telemetry_le {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TelemetryLe>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `get_state`, code 0x01
+        pub const GET_STATE: MessageDesc = MessageDesc::new("get_state", 0x01, 1, &[5]);
+        /// `set_home`, code 0x02
+        pub const SET_HOME: MessageDesc = MessageDesc::new("set_home", 0x02, 1, &[21]);
+        /// `set_home.lat`
+        pub const SET_HOME_LAT: FieldDesc = FieldDesc::new("set_home", "lat");
+        /// `set_home.lon`
+        pub const SET_HOME_LON: FieldDesc = FieldDesc::new("set_home", "lon");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `state`, code 0x81
+        pub const STATE: MessageDesc = MessageDesc::new("state", 0x81, 1, &[41]);
+        /// `state.pressure`
+        pub const STATE_PRESSURE: FieldDesc = FieldDesc::new("state", "pressure");
+        /// `ack`, code 0x82
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x82, 1, &[5]);
+    }
 }

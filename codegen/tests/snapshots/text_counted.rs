@@ -69,8 +69,7 @@ pub mod text_counted {
     }
     /// Where `set_name.name` sits in the frame and how its elements are counted.
     pub const REPEAT_SET_NAME: rt::RepeatAt = rt::RepeatAt {
-        message: "set_name",
-        field: "name",
+        field: &request::SET_NAME_NAME,
         base: 6,
         at: 4,
         width: 1,
@@ -88,8 +87,7 @@ pub mod text_counted {
         base: 6,
         lists: &[
             rt::RepeatAt {
-                message: "set_name",
-                field: "name",
+                field: &request::SET_NAME_NAME,
                 base: 6,
                 at: 4,
                 width: 1,
@@ -218,7 +216,13 @@ pub mod text_counted {
                 0x20 => {
                     let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
                     let frame = &s.frame;
-                    rt::in_range("set_name", "channel", 4 + s.shift(1), frame[4], 0, 7)?;
+                    rt::in_range(
+                        &request::SET_NAME_CHANNEL,
+                        4 + s.shift(1),
+                        frame[4],
+                        0,
+                        7,
+                    )?;
                     rt::Ok(Self::SetName {
                         name: s
                             .lists[0]
@@ -226,7 +230,7 @@ pub mod text_counted {
                         channel: frame[4],
                     })
                 }
-                0x21 => rt::fixed::<4>(frame, "get_info", &[4]).map(|_| Self::GetInfo),
+                0x21 => rt::fixed::<4>(frame, &request::GET_INFO).map(|_| Self::GetInfo),
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
         }
@@ -310,8 +314,7 @@ pub mod text_counted {
     }
     /// Where `device_info.name` sits in the frame and how its elements are counted.
     pub const REPEAT_DEVICE_INFO: rt::RepeatAt = rt::RepeatAt {
-        message: "device_info",
-        field: "name",
+        field: &response::DEVICE_INFO_NAME,
         base: 10,
         at: 4,
         width: 1,
@@ -329,8 +332,7 @@ pub mod text_counted {
         base: 10,
         lists: &[
             rt::RepeatAt {
-                message: "device_info",
-                field: "name",
+                field: &response::DEVICE_INFO_NAME,
                 base: 10,
                 at: 4,
                 width: 1,
@@ -494,7 +496,7 @@ pub mod text_counted {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x20 => {
-                    let frame = rt::fixed::<5>(frame, "ack", &[5])?;
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 0x21 => {
@@ -710,4 +712,32 @@ pub mod text_counted {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TextCounted>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `set_name`, code 0x20
+        pub const SET_NAME: MessageDesc = MessageDesc::new("set_name", 0x20, 1, &[6]);
+        /// `set_name.name`
+        pub const SET_NAME_NAME: FieldDesc = FieldDesc::new("set_name", "name");
+        /// `set_name.channel`
+        pub const SET_NAME_CHANNEL: FieldDesc = FieldDesc::new("set_name", "channel");
+        /// `get_info`, code 0x21
+        pub const GET_INFO: MessageDesc = MessageDesc::new("get_info", 0x21, 1, &[4]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `ack`, code 0x20
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x20, 1, &[5]);
+        /// `device_info`, code 0x21
+        pub const DEVICE_INFO: MessageDesc = MessageDesc::new(
+            "device_info",
+            0x21,
+            1,
+            &[10],
+        );
+        /// `device_info.name`
+        pub const DEVICE_INFO_NAME: FieldDesc = FieldDesc::new("device_info", "name");
+    }
 }

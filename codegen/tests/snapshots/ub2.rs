@@ -973,15 +973,15 @@ pub mod ub2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x1000 => {
-                    rt::fixed::<5>(frame, "reference_run", &[5])
+                    rt::fixed::<5>(frame, &request::REFERENCE_RUN)
                         .map(|_| Self::ReferenceRun)
                 }
                 0x1001 => {
-                    rt::fixed::<5>(frame, "reference_run_status", &[5])
+                    rt::fixed::<5>(frame, &request::REFERENCE_RUN_STATUS)
                         .map(|_| Self::ReferenceRunStatus)
                 }
                 0x2000 => {
-                    let frame = rt::fixed::<9>(frame, "go_to_capacitance", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::GO_TO_CAPACITANCE)?;
                     rt::Ok(Self::GoToCapacitance {
                         target: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -989,47 +989,49 @@ pub mod ub2 {
                     })
                 }
                 0x2001 => {
-                    rt::fixed::<5>(frame, "go_to_capacitance_status", &[5])
+                    rt::fixed::<5>(frame, &request::GO_TO_CAPACITANCE_STATUS)
                         .map(|_| Self::GoToCapacitanceStatus)
                 }
                 0x2100 => {
-                    let frame = rt::fixed::<7>(frame, "go_to_full_step_position", &[7])?;
+                    let frame = rt::fixed::<
+                        7,
+                    >(frame, &request::GO_TO_FULL_STEP_POSITION)?;
                     rt::Ok(Self::GoToFullStepPosition {
                         target: u16::from_le_bytes([frame[4], frame[5]]),
                     })
                 }
                 0x2101 => {
-                    rt::fixed::<5>(frame, "go_to_full_step_position_status", &[5])
+                    rt::fixed::<5>(frame, &request::GO_TO_FULL_STEP_POSITION_STATUS)
                         .map(|_| Self::GoToFullStepPositionStatus)
                 }
                 0x2200 => {
-                    let frame = rt::fixed::<7>(frame, "move_full_steps", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &request::MOVE_FULL_STEPS)?;
                     rt::Ok(Self::MoveFullSteps {
                         steps: i16::from_le_bytes([frame[4], frame[5]]),
                     })
                 }
                 0x2201 => {
-                    rt::fixed::<5>(frame, "move_full_steps_status", &[5])
+                    rt::fixed::<5>(frame, &request::MOVE_FULL_STEPS_STATUS)
                         .map(|_| Self::MoveFullStepsStatus)
                 }
                 0x2300 => {
-                    rt::fixed::<5>(frame, "go_to_cmin", &[5]).map(|_| Self::GoToCmin)
+                    rt::fixed::<5>(frame, &request::GO_TO_CMIN).map(|_| Self::GoToCmin)
                 }
                 0x2301 => {
-                    rt::fixed::<5>(frame, "go_to_cmin_status", &[5])
+                    rt::fixed::<5>(frame, &request::GO_TO_CMIN_STATUS)
                         .map(|_| Self::GoToCminStatus)
                 }
                 0x2400 => {
-                    rt::fixed::<5>(frame, "go_to_cmax", &[5]).map(|_| Self::GoToCmax)
+                    rt::fixed::<5>(frame, &request::GO_TO_CMAX).map(|_| Self::GoToCmax)
                 }
                 0x2401 => {
-                    rt::fixed::<5>(frame, "go_to_cmax_status", &[5])
+                    rt::fixed::<5>(frame, &request::GO_TO_CMAX_STATUS)
                         .map(|_| Self::GoToCmaxStatus)
                 }
                 0x2500 => {
                     let frame = rt::fixed::<
                         9,
-                    >(frame, "go_to_micro_step_position", &[9])?;
+                    >(frame, &request::GO_TO_MICRO_STEP_POSITION)?;
                     rt::Ok(Self::GoToMicroStepPosition {
                         target: u32::from_le_bytes([
                             frame[4],
@@ -1040,11 +1042,11 @@ pub mod ub2 {
                     })
                 }
                 0x2501 => {
-                    rt::fixed::<5>(frame, "go_to_micro_step_position_status", &[5])
+                    rt::fixed::<5>(frame, &request::GO_TO_MICRO_STEP_POSITION_STATUS)
                         .map(|_| Self::GoToMicroStepPositionStatus)
                 }
                 0x2600 => {
-                    let frame = rt::fixed::<9>(frame, "move_micro_steps", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::MOVE_MICRO_STEPS)?;
                     rt::Ok(Self::MoveMicroSteps {
                         steps: i32::from_le_bytes([
                             frame[4],
@@ -1055,35 +1057,39 @@ pub mod ub2 {
                     })
                 }
                 0x2601 => {
-                    rt::fixed::<5>(frame, "move_micro_steps_status", &[5])
+                    rt::fixed::<5>(frame, &request::MOVE_MICRO_STEPS_STATUS)
                         .map(|_| Self::MoveMicroStepsStatus)
                 }
                 0x2700 => {
-                    let frame = rt::fixed::<6>(frame, "go_to_stored_position", &[6])?;
-                    rt::in_range("go_to_stored_position", "index", 4, frame[4], 0, 9)?;
+                    let frame = rt::fixed::<6>(frame, &request::GO_TO_STORED_POSITION)?;
+                    rt::in_range(
+                        &request::GO_TO_STORED_POSITION_INDEX,
+                        4,
+                        frame[4],
+                        0,
+                        9,
+                    )?;
                     rt::Ok(Self::GoToStoredPosition {
                         index: frame[4],
                     })
                 }
                 0x2701 => {
-                    rt::fixed::<5>(frame, "go_to_stored_position_status", &[5])
+                    rt::fixed::<5>(frame, &request::GO_TO_STORED_POSITION_STATUS)
                         .map(|_| Self::GoToStoredPositionStatus)
                 }
                 0x4300 => {
                     let frame = rt::fixed::<
                         7,
-                    >(frame, "set_acceleration_speed_index", &[7])?;
+                    >(frame, &request::SET_ACCELERATION_SPEED_INDEX)?;
                     rt::in_range(
-                        "set_acceleration_speed_index",
-                        "acceleration_index",
+                        &request::SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        "set_acceleration_speed_index",
-                        "speed_index",
+                        &request::SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX,
                         5,
                         frame[5],
                         0,
@@ -1095,27 +1101,35 @@ pub mod ub2 {
                     })
                 }
                 0x4500 => {
-                    let frame = rt::fixed::<7>(frame, "set_current", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &request::SET_CURRENT)?;
                     rt::Ok(Self::SetCurrent {
                         idle_current: frame[4],
                         drive_current: frame[5],
                     })
                 }
                 0x6000 => {
-                    let frame = rt::fixed::<6>(frame, "set_slave_address", &[6])?;
-                    rt::in_range("set_slave_address", "address", 4, frame[4], 33, 64)?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_SLAVE_ADDRESS)?;
+                    rt::in_range(
+                        &request::SET_SLAVE_ADDRESS_ADDRESS,
+                        4,
+                        frame[4],
+                        33,
+                        64,
+                    )?;
                     rt::Ok(Self::SetSlaveAddress {
                         address: frame[4],
                     })
                 }
                 0x6100 => {
-                    let frame = rt::fixed::<6>(frame, "set_baud_rate", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_BAUD_RATE)?;
                     rt::Ok(Self::SetBaudRate {
                         baud_rate: BaudRateIndex::from_raw(frame[4]),
                     })
                 }
                 0x7201 => {
-                    let frame = rt::fixed::<9>(frame, "set_lower_customer_limit", &[9])?;
+                    let frame = rt::fixed::<
+                        9,
+                    >(frame, &request::SET_LOWER_CUSTOMER_LIMIT)?;
                     rt::Ok(Self::SetLowerCustomerLimit {
                         limit: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -1123,7 +1137,9 @@ pub mod ub2 {
                     })
                 }
                 0x7202 => {
-                    let frame = rt::fixed::<9>(frame, "set_upper_customer_limit", &[9])?;
+                    let frame = rt::fixed::<
+                        9,
+                    >(frame, &request::SET_UPPER_CUSTOMER_LIMIT)?;
                     rt::Ok(Self::SetUpperCustomerLimit {
                         limit: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -1131,50 +1147,55 @@ pub mod ub2 {
                     })
                 }
                 0x7500 => {
-                    let frame = rt::fixed::<8>(frame, "store_indexed_position", &[8])?;
-                    rt::in_range("store_indexed_position", "index", 4, frame[4], 0, 9)?;
+                    let frame = rt::fixed::<8>(frame, &request::STORE_INDEXED_POSITION)?;
+                    rt::in_range(
+                        &request::STORE_INDEXED_POSITION_INDEX,
+                        4,
+                        frame[4],
+                        0,
+                        9,
+                    )?;
                     rt::Ok(Self::StoreIndexedPosition {
                         index: frame[4],
                         position: u16::from_le_bytes([frame[5], frame[6]]),
                     })
                 }
                 0x8000 => {
-                    let frame = rt::fixed::<6>(frame, "set_mode_of_operation", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &request::SET_MODE_OF_OPERATION)?;
                     rt::Ok(Self::SetModeOfOperation {
                         mode: ModeOfOperation::from_raw(frame[4]),
                     })
                 }
                 0x4001 => {
-                    rt::fixed::<5>(frame, "get_actual_capacitance", &[5])
+                    rt::fixed::<5>(frame, &request::GET_ACTUAL_CAPACITANCE)
                         .map(|_| Self::GetActualCapacitance)
                 }
                 0x4002 => {
-                    rt::fixed::<5>(frame, "get_actual_full_step_position", &[5])
+                    rt::fixed::<5>(frame, &request::GET_ACTUAL_FULL_STEP_POSITION)
                         .map(|_| Self::GetActualFullStepPosition)
                 }
                 0x4010 => {
-                    rt::fixed::<5>(frame, "get_minimum_capacitance", &[5])
+                    rt::fixed::<5>(frame, &request::GET_MINIMUM_CAPACITANCE)
                         .map(|_| Self::GetMinimumCapacitance)
                 }
                 0x4011 => {
-                    rt::fixed::<5>(frame, "get_maximum_capacitance", &[5])
+                    rt::fixed::<5>(frame, &request::GET_MAXIMUM_CAPACITANCE)
                         .map(|_| Self::GetMaximumCapacitance)
                 }
                 0x4021 => {
-                    rt::fixed::<5>(frame, "get_acceleration_speed", &[5])
+                    rt::fixed::<5>(frame, &request::GET_ACCELERATION_SPEED)
                         .map(|_| Self::GetAccelerationSpeed)
                 }
                 0x4022 => {
-                    rt::fixed::<5>(frame, "get_status", &[5]).map(|_| Self::GetStatus)
+                    rt::fixed::<5>(frame, &request::GET_STATUS).map(|_| Self::GetStatus)
                 }
                 0x4030 => {
                     let frame = rt::fixed::<
                         7,
-                    >(frame, "get_c_curve_indexed_full_step_capacitance", &[7])?;
+                    >(frame, &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "get_c_curve_indexed_full_step_capacitance",
-                        "index",
+                        &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX,
                         4,
                         field_0,
                         0,
@@ -1185,33 +1206,34 @@ pub mod ub2 {
                     })
                 }
                 0x4032 => {
-                    rt::fixed::<5>(frame, "get_controller_temperature", &[5])
+                    rt::fixed::<5>(frame, &request::GET_CONTROLLER_TEMPERATURE)
                         .map(|_| Self::GetControllerTemperature)
                 }
                 0x4036 => {
-                    rt::fixed::<5>(frame, "get_micro_step_position", &[5])
+                    rt::fixed::<5>(frame, &request::GET_MICRO_STEP_POSITION)
                         .map(|_| Self::GetMicroStepPosition)
                 }
                 0x4061 => {
-                    rt::fixed::<5>(frame, "get_firmware_version", &[5])
+                    rt::fixed::<5>(frame, &request::GET_FIRMWARE_VERSION)
                         .map(|_| Self::GetFirmwareVersion)
                 }
                 0x4062 => {
-                    rt::fixed::<5>(frame, "get_serial_number", &[5])
+                    rt::fixed::<5>(frame, &request::GET_SERIAL_NUMBER)
                         .map(|_| Self::GetSerialNumber)
                 }
                 0x4070 => {
-                    rt::fixed::<5>(frame, "get_cmin_nom", &[5]).map(|_| Self::GetCminNom)
+                    rt::fixed::<5>(frame, &request::GET_CMIN_NOM)
+                        .map(|_| Self::GetCminNom)
                 }
                 0x4071 => {
-                    rt::fixed::<5>(frame, "get_cmax_nom", &[5]).map(|_| Self::GetCmaxNom)
+                    rt::fixed::<5>(frame, &request::GET_CMAX_NOM)
+                        .map(|_| Self::GetCmaxNom)
                 }
                 0x4072 => {
                     let mut g = rt::Group::new(frame, 0x4072, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            "get_lower_customer_limit",
-                            "index",
+                            &request::GET_LOWER_CUSTOMER_LIMIT_INDEX,
                             4,
                             frame[4],
                             0x1,
@@ -1220,8 +1242,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            "get_upper_customer_limit",
-                            "index",
+                            &request::GET_UPPER_CUSTOMER_LIMIT_INDEX,
                             4,
                             frame[4],
                             0x2,
@@ -1229,40 +1250,53 @@ pub mod ub2 {
                         rt::Ok(Self::GetUpperCustomerLimit)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("get_lower_factory_limit", "index", 4, frame[4], 0x3)?;
+                        rt::equal(
+                            &request::GET_LOWER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x3,
+                        )?;
                         rt::Ok(Self::GetLowerFactoryLimit)
                     });
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("get_upper_factory_limit", "index", 4, frame[4], 0x4)?;
+                        rt::equal(
+                            &request::GET_UPPER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x4,
+                        )?;
                         rt::Ok(Self::GetUpperFactoryLimit)
                     });
-                    g.end("get_lower_customer_limit", &[6])
+                    g.end(&request::GET_LOWER_CUSTOMER_LIMIT)
                 }
                 0x4073 => {
                     let mut g = rt::Group::new(frame, 0x4073, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::equal("get_preset_capacitance", "index", 4, frame[4], 0x0)?;
+                        rt::equal(
+                            &request::GET_PRESET_CAPACITANCE_INDEX,
+                            4,
+                            frame[4],
+                            0x0,
+                        )?;
                         rt::Ok(Self::GetPresetCapacitance)
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            "get_preset_full_step_position",
-                            "index",
+                            &request::GET_PRESET_FULL_STEP_POSITION_INDEX,
                             4,
                             frame[4],
                             0x1,
                         )?;
                         rt::Ok(Self::GetPresetFullStepPosition)
                     });
-                    g.end("get_preset_capacitance", &[6])
+                    g.end(&request::GET_PRESET_CAPACITANCE)
                 }
                 0x4075 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, "get_stored_full_step_position", &[6])?;
+                    >(frame, &request::GET_STORED_FULL_STEP_POSITION)?;
                     rt::in_range(
-                        "get_stored_full_step_position",
-                        "index",
+                        &request::GET_STORED_FULL_STEP_POSITION_INDEX,
                         4,
                         frame[4],
                         0,
@@ -1273,7 +1307,7 @@ pub mod ub2 {
                     })
                 }
                 0x4080 => {
-                    rt::fixed::<5>(frame, "get_mode_of_operation", &[5])
+                    rt::fixed::<5>(frame, &request::GET_MODE_OF_OPERATION)
                         .map(|_| Self::GetModeOfOperation)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, false)),
@@ -2220,39 +2254,39 @@ pub mod ub2 {
             if frame.len() >= 4 {
                 match rt::code(frame, 2, 1) {
                     0x50 => {
-                        return rt::fixed::<4>(frame, "movement_started", &[4])
+                        return rt::fixed::<4>(frame, &response::MOVEMENT_STARTED)
                             .map(|_| Self::MovementStarted);
                     }
                     0x51 => {
-                        return rt::fixed::<4>(frame, "movement_completed", &[4])
+                        return rt::fixed::<4>(frame, &response::MOVEMENT_COMPLETED)
                             .map(|_| Self::MovementCompleted);
                     }
                     0x52 => {
-                        return rt::fixed::<4>(frame, "movement_not_completed", &[4])
+                        return rt::fixed::<4>(frame, &response::MOVEMENT_NOT_COMPLETED)
                             .map(|_| Self::MovementNotCompleted);
                     }
                     0x53 => {
-                        return rt::fixed::<4>(frame, "movement_not_triggered", &[4])
+                        return rt::fixed::<4>(frame, &response::MOVEMENT_NOT_TRIGGERED)
                             .map(|_| Self::MovementNotTriggered);
                     }
                     0x90 => {
-                        return rt::fixed::<4>(frame, "nak_unknown_command", &[4])
+                        return rt::fixed::<4>(frame, &response::NAK_UNKNOWN_COMMAND)
                             .map(|_| Self::NakUnknownCommand);
                     }
                     0x91 => {
-                        return rt::fixed::<4>(frame, "nak_incompatible_status", &[4])
+                        return rt::fixed::<4>(frame, &response::NAK_INCOMPATIBLE_STATUS)
                             .map(|_| Self::NakIncompatibleStatus);
                     }
                     0x92 => {
-                        return rt::fixed::<4>(frame, "nak_checksum_error", &[4])
+                        return rt::fixed::<4>(frame, &response::NAK_CHECKSUM_ERROR)
                             .map(|_| Self::NakChecksumError);
                     }
                     0x93 => {
-                        return rt::fixed::<4>(frame, "nak_limit_reached", &[4])
+                        return rt::fixed::<4>(frame, &response::NAK_LIMIT_REACHED)
                             .map(|_| Self::NakLimitReached);
                     }
                     0x94 => {
-                        return rt::fixed::<4>(frame, "nak_index_out_of_range", &[4])
+                        return rt::fixed::<4>(frame, &response::NAK_INDEX_OUT_OF_RANGE)
                             .map(|_| Self::NakIndexOutOfRange);
                     }
                     _ => {}
@@ -2265,7 +2299,7 @@ pub mod ub2 {
                 0x5400 => {
                     let frame = rt::fixed::<
                         9,
-                    >(frame, "movement_completed_with_step_loss", &[9])?;
+                    >(frame, &response::MOVEMENT_COMPLETED_WITH_STEP_LOSS)?;
                     rt::Ok(Self::MovementCompletedWithStepLoss {
                         lost_micro_steps: u32::from_le_bytes([
                             frame[4],
@@ -2276,39 +2310,39 @@ pub mod ub2 {
                     })
                 }
                 0x4300 => {
-                    rt::fixed::<5>(frame, "set_acceleration_speed_index_ack", &[5])
+                    rt::fixed::<5>(frame, &response::SET_ACCELERATION_SPEED_INDEX_ACK)
                         .map(|_| Self::SetAccelerationSpeedIndexAck)
                 }
                 0x4500 => {
-                    rt::fixed::<5>(frame, "set_current_ack", &[5])
+                    rt::fixed::<5>(frame, &response::SET_CURRENT_ACK)
                         .map(|_| Self::SetCurrentAck)
                 }
                 0x6000 => {
-                    rt::fixed::<5>(frame, "set_slave_address_ack", &[5])
+                    rt::fixed::<5>(frame, &response::SET_SLAVE_ADDRESS_ACK)
                         .map(|_| Self::SetSlaveAddressAck)
                 }
                 0x6100 => {
-                    rt::fixed::<5>(frame, "set_baud_rate_ack", &[5])
+                    rt::fixed::<5>(frame, &response::SET_BAUD_RATE_ACK)
                         .map(|_| Self::SetBaudRateAck)
                 }
                 0x7201 => {
-                    rt::fixed::<5>(frame, "set_lower_customer_limit_ack", &[5])
+                    rt::fixed::<5>(frame, &response::SET_LOWER_CUSTOMER_LIMIT_ACK)
                         .map(|_| Self::SetLowerCustomerLimitAck)
                 }
                 0x7202 => {
-                    rt::fixed::<5>(frame, "set_upper_customer_limit_ack", &[5])
+                    rt::fixed::<5>(frame, &response::SET_UPPER_CUSTOMER_LIMIT_ACK)
                         .map(|_| Self::SetUpperCustomerLimitAck)
                 }
                 0x7500 => {
-                    rt::fixed::<5>(frame, "store_indexed_position_ack", &[5])
+                    rt::fixed::<5>(frame, &response::STORE_INDEXED_POSITION_ACK)
                         .map(|_| Self::StoreIndexedPositionAck)
                 }
                 0x8000 => {
-                    rt::fixed::<5>(frame, "set_mode_of_operation_ack", &[5])
+                    rt::fixed::<5>(frame, &response::SET_MODE_OF_OPERATION_ACK)
                         .map(|_| Self::SetModeOfOperationAck)
                 }
                 0x4101 => {
-                    let frame = rt::fixed::<9>(frame, "actual_capacitance", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::ACTUAL_CAPACITANCE)?;
                     rt::Ok(Self::ActualCapacitance {
                         capacitance: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -2318,13 +2352,13 @@ pub mod ub2 {
                 0x4102 => {
                     let frame = rt::fixed::<
                         7,
-                    >(frame, "actual_full_step_position", &[7])?;
+                    >(frame, &response::ACTUAL_FULL_STEP_POSITION)?;
                     rt::Ok(Self::ActualFullStepPosition {
                         full_steps: u16::from_le_bytes([frame[4], frame[5]]),
                     })
                 }
                 0x4110 => {
-                    let frame = rt::fixed::<9>(frame, "minimum_capacitance", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::MINIMUM_CAPACITANCE)?;
                     rt::Ok(Self::MinimumCapacitance {
                         capacitance: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -2332,7 +2366,7 @@ pub mod ub2 {
                     })
                 }
                 0x4111 => {
-                    let frame = rt::fixed::<9>(frame, "maximum_capacitance", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::MAXIMUM_CAPACITANCE)?;
                     rt::Ok(Self::MaximumCapacitance {
                         capacitance: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -2340,18 +2374,16 @@ pub mod ub2 {
                     })
                 }
                 0x4121 => {
-                    let frame = rt::fixed::<7>(frame, "acceleration_speed", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::ACCELERATION_SPEED)?;
                     rt::in_range(
-                        "acceleration_speed",
-                        "acceleration_index",
+                        &response::ACCELERATION_SPEED_ACCELERATION_INDEX,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        "acceleration_speed",
-                        "speed_index",
+                        &response::ACCELERATION_SPEED_SPEED_INDEX,
                         5,
                         frame[5],
                         0,
@@ -2363,16 +2395,16 @@ pub mod ub2 {
                     })
                 }
                 0x4122 => {
-                    let frame = rt::fixed::<7>(frame, "status", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::STATUS)?;
                     rt::Ok(Self::Status {
                         error_bits: StatusErrorBits::from_raw(frame[4]),
                         reserved: frame[5],
                     })
                 }
                 0x4130 => {
-                    let frame = rt::fixed::<13>(frame, "c_curve_entry", &[13])?;
+                    let frame = rt::fixed::<13>(frame, &response::C_CURVE_ENTRY)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range("c_curve_entry", "index", 4, field_0, 0, 499)?;
+                    rt::in_range(&response::C_CURVE_ENTRY_INDEX, 4, field_0, 0, 499)?;
                     rt::Ok(Self::CCurveEntry {
                         index: field_0,
                         full_steps: u16::from_le_bytes([frame[6], frame[7]]),
@@ -2387,13 +2419,15 @@ pub mod ub2 {
                     })
                 }
                 0x4132 => {
-                    let frame = rt::fixed::<6>(frame, "controller_temperature", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::CONTROLLER_TEMPERATURE)?;
                     rt::Ok(Self::ControllerTemperature {
                         temperature: frame[4],
                     })
                 }
                 0x4136 => {
-                    let frame = rt::fixed::<9>(frame, "micro_step_position", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::MICRO_STEP_POSITION)?;
                     rt::Ok(Self::MicroStepPosition {
                         micro_steps: u32::from_le_bytes([
                             frame[4],
@@ -2404,7 +2438,7 @@ pub mod ub2 {
                     })
                 }
                 0x4161 => {
-                    let frame = rt::fixed::<16>(frame, "firmware_version", &[16])?;
+                    let frame = rt::fixed::<16>(frame, &response::FIRMWARE_VERSION)?;
                     rt::Ok(Self::FirmwareVersion {
                         firmware_version: rt::Ascii(
                             frame[4..15].try_into().unwrap_or([0; 11]),
@@ -2412,7 +2446,7 @@ pub mod ub2 {
                     })
                 }
                 0x4162 => {
-                    let frame = rt::fixed::<13>(frame, "serial_number", &[13])?;
+                    let frame = rt::fixed::<13>(frame, &response::SERIAL_NUMBER)?;
                     rt::Ok(Self::SerialNumber {
                         serial_number: rt::Ascii(
                             frame[4..12].try_into().unwrap_or([0; 8]),
@@ -2420,7 +2454,7 @@ pub mod ub2 {
                     })
                 }
                 0x4170 => {
-                    let frame = rt::fixed::<9>(frame, "cmin_nom", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::CMIN_NOM)?;
                     rt::Ok(Self::CminNom {
                         capacitance: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -2428,7 +2462,7 @@ pub mod ub2 {
                     })
                 }
                 0x4171 => {
-                    let frame = rt::fixed::<9>(frame, "cmax_nom", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::CMAX_NOM)?;
                     rt::Ok(Self::CmaxNom {
                         capacitance: Capacitance::from_raw(
                             u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -2442,7 +2476,12 @@ pub mod ub2 {
                         request.map(Request::name),
                     );
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("lower_customer_limit", "index", 4, frame[4], 0x1)?;
+                        rt::equal(
+                            &response::LOWER_CUSTOMER_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x1,
+                        )?;
                         rt::Ok(Self::LowerCustomerLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2450,7 +2489,12 @@ pub mod ub2 {
                         })
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("upper_customer_limit", "index", 4, frame[4], 0x2)?;
+                        rt::equal(
+                            &response::UPPER_CUSTOMER_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x2,
+                        )?;
                         rt::Ok(Self::UpperCustomerLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2458,7 +2502,12 @@ pub mod ub2 {
                         })
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("lower_factory_limit", "index", 4, frame[4], 0x3)?;
+                        rt::equal(
+                            &response::LOWER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x3,
+                        )?;
                         rt::Ok(Self::LowerFactoryLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2466,14 +2515,19 @@ pub mod ub2 {
                         })
                     });
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("upper_factory_limit", "index", 4, frame[4], 0x4)?;
+                        rt::equal(
+                            &response::UPPER_FACTORY_LIMIT_INDEX,
+                            4,
+                            frame[4],
+                            0x4,
+                        )?;
                         rt::Ok(Self::UpperFactoryLimit {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
                             ),
                         })
                     });
-                    g.end("lower_customer_limit", &[10])
+                    g.end(&response::LOWER_CUSTOMER_LIMIT)
                 }
                 0x4173 => {
                     let mut g = rt::Group::new(
@@ -2482,7 +2536,12 @@ pub mod ub2 {
                         request.map(Request::name),
                     );
                     g.attempt(|frame: &[u8; 10]| {
-                        rt::equal("preset_capacitance", "index", 4, frame[4], 0x0)?;
+                        rt::equal(
+                            &response::PRESET_CAPACITANCE_INDEX,
+                            4,
+                            frame[4],
+                            0x0,
+                        )?;
                         rt::Ok(Self::PresetCapacitance {
                             capacitance: Capacitance::from_raw(
                                 u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
@@ -2491,8 +2550,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            "preset_full_step_position",
-                            "index",
+                            &response::PRESET_FULL_STEP_POSITION_INDEX,
                             4,
                             frame[4],
                             0x1,
@@ -2506,15 +2564,14 @@ pub mod ub2 {
                             ]),
                         })
                     });
-                    g.end("preset_capacitance", &[10])
+                    g.end(&response::PRESET_CAPACITANCE)
                 }
                 0x4175 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, "stored_full_step_position", &[8])?;
+                    >(frame, &response::STORED_FULL_STEP_POSITION)?;
                     rt::in_range(
-                        "stored_full_step_position",
-                        "index",
+                        &response::STORED_FULL_STEP_POSITION_INDEX,
                         4,
                         frame[4],
                         0,
@@ -2526,7 +2583,9 @@ pub mod ub2 {
                     })
                 }
                 0x4180 => {
-                    let frame = rt::fixed::<6>(frame, "actual_mode_of_operation", &[6])?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::ACTUAL_MODE_OF_OPERATION)?;
                     rt::Ok(Self::ActualModeOfOperation {
                         mode: ModeOfOperation::from_raw(frame[4]),
                     })
@@ -2943,4 +3002,715 @@ pub mod ub2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ub2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `reference_run`, code 0x1000
+        pub const REFERENCE_RUN: MessageDesc = MessageDesc::new(
+            "reference_run",
+            0x1000,
+            2,
+            &[5],
+        );
+        /// `reference_run_status`, code 0x1001
+        pub const REFERENCE_RUN_STATUS: MessageDesc = MessageDesc::new(
+            "reference_run_status",
+            0x1001,
+            2,
+            &[5],
+        );
+        /// `go_to_capacitance`, code 0x2000
+        pub const GO_TO_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "go_to_capacitance",
+            0x2000,
+            2,
+            &[9],
+        );
+        /// `go_to_capacitance_status`, code 0x2001
+        pub const GO_TO_CAPACITANCE_STATUS: MessageDesc = MessageDesc::new(
+            "go_to_capacitance_status",
+            0x2001,
+            2,
+            &[5],
+        );
+        /// `go_to_full_step_position`, code 0x2100
+        pub const GO_TO_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "go_to_full_step_position",
+            0x2100,
+            2,
+            &[7],
+        );
+        /// `go_to_full_step_position_status`, code 0x2101
+        pub const GO_TO_FULL_STEP_POSITION_STATUS: MessageDesc = MessageDesc::new(
+            "go_to_full_step_position_status",
+            0x2101,
+            2,
+            &[5],
+        );
+        /// `move_full_steps`, code 0x2200
+        pub const MOVE_FULL_STEPS: MessageDesc = MessageDesc::new(
+            "move_full_steps",
+            0x2200,
+            2,
+            &[7],
+        );
+        /// `move_full_steps_status`, code 0x2201
+        pub const MOVE_FULL_STEPS_STATUS: MessageDesc = MessageDesc::new(
+            "move_full_steps_status",
+            0x2201,
+            2,
+            &[5],
+        );
+        /// `go_to_cmin`, code 0x2300
+        pub const GO_TO_CMIN: MessageDesc = MessageDesc::new(
+            "go_to_cmin",
+            0x2300,
+            2,
+            &[5],
+        );
+        /// `go_to_cmin_status`, code 0x2301
+        pub const GO_TO_CMIN_STATUS: MessageDesc = MessageDesc::new(
+            "go_to_cmin_status",
+            0x2301,
+            2,
+            &[5],
+        );
+        /// `go_to_cmax`, code 0x2400
+        pub const GO_TO_CMAX: MessageDesc = MessageDesc::new(
+            "go_to_cmax",
+            0x2400,
+            2,
+            &[5],
+        );
+        /// `go_to_cmax_status`, code 0x2401
+        pub const GO_TO_CMAX_STATUS: MessageDesc = MessageDesc::new(
+            "go_to_cmax_status",
+            0x2401,
+            2,
+            &[5],
+        );
+        /// `go_to_micro_step_position`, code 0x2500
+        pub const GO_TO_MICRO_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "go_to_micro_step_position",
+            0x2500,
+            2,
+            &[9],
+        );
+        /// `go_to_micro_step_position_status`, code 0x2501
+        pub const GO_TO_MICRO_STEP_POSITION_STATUS: MessageDesc = MessageDesc::new(
+            "go_to_micro_step_position_status",
+            0x2501,
+            2,
+            &[5],
+        );
+        /// `move_micro_steps`, code 0x2600
+        pub const MOVE_MICRO_STEPS: MessageDesc = MessageDesc::new(
+            "move_micro_steps",
+            0x2600,
+            2,
+            &[9],
+        );
+        /// `move_micro_steps_status`, code 0x2601
+        pub const MOVE_MICRO_STEPS_STATUS: MessageDesc = MessageDesc::new(
+            "move_micro_steps_status",
+            0x2601,
+            2,
+            &[5],
+        );
+        /// `go_to_stored_position`, code 0x2700
+        pub const GO_TO_STORED_POSITION: MessageDesc = MessageDesc::new(
+            "go_to_stored_position",
+            0x2700,
+            2,
+            &[6],
+        );
+        /// `go_to_stored_position.index`
+        pub const GO_TO_STORED_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "go_to_stored_position",
+            "index",
+        );
+        /// `go_to_stored_position_status`, code 0x2701
+        pub const GO_TO_STORED_POSITION_STATUS: MessageDesc = MessageDesc::new(
+            "go_to_stored_position_status",
+            0x2701,
+            2,
+            &[5],
+        );
+        /// `set_acceleration_speed_index`, code 0x4300
+        pub const SET_ACCELERATION_SPEED_INDEX: MessageDesc = MessageDesc::new(
+            "set_acceleration_speed_index",
+            0x4300,
+            2,
+            &[7],
+        );
+        /// `set_acceleration_speed_index.acceleration_index`
+        pub const SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
+            "set_acceleration_speed_index",
+            "acceleration_index",
+        );
+        /// `set_acceleration_speed_index.speed_index`
+        pub const SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX: FieldDesc = FieldDesc::new(
+            "set_acceleration_speed_index",
+            "speed_index",
+        );
+        /// `set_current`, code 0x4500
+        pub const SET_CURRENT: MessageDesc = MessageDesc::new(
+            "set_current",
+            0x4500,
+            2,
+            &[7],
+        );
+        /// `set_slave_address`, code 0x6000
+        pub const SET_SLAVE_ADDRESS: MessageDesc = MessageDesc::new(
+            "set_slave_address",
+            0x6000,
+            2,
+            &[6],
+        );
+        /// `set_slave_address.address`
+        pub const SET_SLAVE_ADDRESS_ADDRESS: FieldDesc = FieldDesc::new(
+            "set_slave_address",
+            "address",
+        );
+        /// `set_baud_rate`, code 0x6100
+        pub const SET_BAUD_RATE: MessageDesc = MessageDesc::new(
+            "set_baud_rate",
+            0x6100,
+            2,
+            &[6],
+        );
+        /// `set_lower_customer_limit`, code 0x7201
+        pub const SET_LOWER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
+            "set_lower_customer_limit",
+            0x7201,
+            2,
+            &[9],
+        );
+        /// `set_upper_customer_limit`, code 0x7202
+        pub const SET_UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
+            "set_upper_customer_limit",
+            0x7202,
+            2,
+            &[9],
+        );
+        /// `store_indexed_position`, code 0x7500
+        pub const STORE_INDEXED_POSITION: MessageDesc = MessageDesc::new(
+            "store_indexed_position",
+            0x7500,
+            2,
+            &[8],
+        );
+        /// `store_indexed_position.index`
+        pub const STORE_INDEXED_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "store_indexed_position",
+            "index",
+        );
+        /// `set_mode_of_operation`, code 0x8000
+        pub const SET_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
+            "set_mode_of_operation",
+            0x8000,
+            2,
+            &[6],
+        );
+        /// `get_actual_capacitance`, code 0x4001
+        pub const GET_ACTUAL_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "get_actual_capacitance",
+            0x4001,
+            2,
+            &[5],
+        );
+        /// `get_actual_full_step_position`, code 0x4002
+        pub const GET_ACTUAL_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "get_actual_full_step_position",
+            0x4002,
+            2,
+            &[5],
+        );
+        /// `get_minimum_capacitance`, code 0x4010
+        pub const GET_MINIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "get_minimum_capacitance",
+            0x4010,
+            2,
+            &[5],
+        );
+        /// `get_maximum_capacitance`, code 0x4011
+        pub const GET_MAXIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "get_maximum_capacitance",
+            0x4011,
+            2,
+            &[5],
+        );
+        /// `get_acceleration_speed`, code 0x4021
+        pub const GET_ACCELERATION_SPEED: MessageDesc = MessageDesc::new(
+            "get_acceleration_speed",
+            0x4021,
+            2,
+            &[5],
+        );
+        /// `get_status`, code 0x4022
+        pub const GET_STATUS: MessageDesc = MessageDesc::new(
+            "get_status",
+            0x4022,
+            2,
+            &[5],
+        );
+        /// `get_c_curve_indexed_full_step_capacitance`, code 0x4030
+        pub const GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "get_c_curve_indexed_full_step_capacitance",
+            0x4030,
+            2,
+            &[7],
+        );
+        /// `get_c_curve_indexed_full_step_capacitance.index`
+        pub const GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
+            "get_c_curve_indexed_full_step_capacitance",
+            "index",
+        );
+        /// `get_controller_temperature`, code 0x4032
+        pub const GET_CONTROLLER_TEMPERATURE: MessageDesc = MessageDesc::new(
+            "get_controller_temperature",
+            0x4032,
+            2,
+            &[5],
+        );
+        /// `get_micro_step_position`, code 0x4036
+        pub const GET_MICRO_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "get_micro_step_position",
+            0x4036,
+            2,
+            &[5],
+        );
+        /// `get_firmware_version`, code 0x4061
+        pub const GET_FIRMWARE_VERSION: MessageDesc = MessageDesc::new(
+            "get_firmware_version",
+            0x4061,
+            2,
+            &[5],
+        );
+        /// `get_serial_number`, code 0x4062
+        pub const GET_SERIAL_NUMBER: MessageDesc = MessageDesc::new(
+            "get_serial_number",
+            0x4062,
+            2,
+            &[5],
+        );
+        /// `get_cmin_nom`, code 0x4070
+        pub const GET_CMIN_NOM: MessageDesc = MessageDesc::new(
+            "get_cmin_nom",
+            0x4070,
+            2,
+            &[5],
+        );
+        /// `get_cmax_nom`, code 0x4071
+        pub const GET_CMAX_NOM: MessageDesc = MessageDesc::new(
+            "get_cmax_nom",
+            0x4071,
+            2,
+            &[5],
+        );
+        /// `get_lower_customer_limit`, code 0x4072
+        pub const GET_LOWER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
+            "get_lower_customer_limit",
+            0x4072,
+            2,
+            &[6],
+        );
+        /// `get_lower_customer_limit.index`
+        pub const GET_LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_lower_customer_limit",
+            "index",
+        );
+        /// `get_upper_customer_limit`, code 0x4072
+        pub const GET_UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
+            "get_upper_customer_limit",
+            0x4072,
+            2,
+            &[6],
+        );
+        /// `get_upper_customer_limit.index`
+        pub const GET_UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_upper_customer_limit",
+            "index",
+        );
+        /// `get_lower_factory_limit`, code 0x4072
+        pub const GET_LOWER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
+            "get_lower_factory_limit",
+            0x4072,
+            2,
+            &[6],
+        );
+        /// `get_lower_factory_limit.index`
+        pub const GET_LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_lower_factory_limit",
+            "index",
+        );
+        /// `get_upper_factory_limit`, code 0x4072
+        pub const GET_UPPER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
+            "get_upper_factory_limit",
+            0x4072,
+            2,
+            &[6],
+        );
+        /// `get_upper_factory_limit.index`
+        pub const GET_UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "get_upper_factory_limit",
+            "index",
+        );
+        /// `get_preset_capacitance`, code 0x4073
+        pub const GET_PRESET_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "get_preset_capacitance",
+            0x4073,
+            2,
+            &[6],
+        );
+        /// `get_preset_capacitance.index`
+        pub const GET_PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
+            "get_preset_capacitance",
+            "index",
+        );
+        /// `get_preset_full_step_position`, code 0x4073
+        pub const GET_PRESET_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "get_preset_full_step_position",
+            0x4073,
+            2,
+            &[6],
+        );
+        /// `get_preset_full_step_position.index`
+        pub const GET_PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "get_preset_full_step_position",
+            "index",
+        );
+        /// `get_stored_full_step_position`, code 0x4075
+        pub const GET_STORED_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "get_stored_full_step_position",
+            0x4075,
+            2,
+            &[6],
+        );
+        /// `get_stored_full_step_position.index`
+        pub const GET_STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "get_stored_full_step_position",
+            "index",
+        );
+        /// `get_mode_of_operation`, code 0x4080
+        pub const GET_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
+            "get_mode_of_operation",
+            0x4080,
+            2,
+            &[5],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `movement_started`, code 0x50
+        pub const MOVEMENT_STARTED: MessageDesc = MessageDesc::new(
+            "movement_started",
+            0x50,
+            1,
+            &[4],
+        );
+        /// `movement_completed`, code 0x51
+        pub const MOVEMENT_COMPLETED: MessageDesc = MessageDesc::new(
+            "movement_completed",
+            0x51,
+            1,
+            &[4],
+        );
+        /// `movement_not_completed`, code 0x52
+        pub const MOVEMENT_NOT_COMPLETED: MessageDesc = MessageDesc::new(
+            "movement_not_completed",
+            0x52,
+            1,
+            &[4],
+        );
+        /// `movement_not_triggered`, code 0x53
+        pub const MOVEMENT_NOT_TRIGGERED: MessageDesc = MessageDesc::new(
+            "movement_not_triggered",
+            0x53,
+            1,
+            &[4],
+        );
+        /// `movement_completed_with_step_loss`, code 0x5400
+        pub const MOVEMENT_COMPLETED_WITH_STEP_LOSS: MessageDesc = MessageDesc::new(
+            "movement_completed_with_step_loss",
+            0x5400,
+            2,
+            &[9],
+        );
+        /// `nak_unknown_command`, code 0x90
+        pub const NAK_UNKNOWN_COMMAND: MessageDesc = MessageDesc::new(
+            "nak_unknown_command",
+            0x90,
+            1,
+            &[4],
+        );
+        /// `nak_incompatible_status`, code 0x91
+        pub const NAK_INCOMPATIBLE_STATUS: MessageDesc = MessageDesc::new(
+            "nak_incompatible_status",
+            0x91,
+            1,
+            &[4],
+        );
+        /// `nak_checksum_error`, code 0x92
+        pub const NAK_CHECKSUM_ERROR: MessageDesc = MessageDesc::new(
+            "nak_checksum_error",
+            0x92,
+            1,
+            &[4],
+        );
+        /// `nak_limit_reached`, code 0x93
+        pub const NAK_LIMIT_REACHED: MessageDesc = MessageDesc::new(
+            "nak_limit_reached",
+            0x93,
+            1,
+            &[4],
+        );
+        /// `nak_index_out_of_range`, code 0x94
+        pub const NAK_INDEX_OUT_OF_RANGE: MessageDesc = MessageDesc::new(
+            "nak_index_out_of_range",
+            0x94,
+            1,
+            &[4],
+        );
+        /// `set_acceleration_speed_index_ack`, code 0x4300
+        pub const SET_ACCELERATION_SPEED_INDEX_ACK: MessageDesc = MessageDesc::new(
+            "set_acceleration_speed_index_ack",
+            0x4300,
+            2,
+            &[5],
+        );
+        /// `set_current_ack`, code 0x4500
+        pub const SET_CURRENT_ACK: MessageDesc = MessageDesc::new(
+            "set_current_ack",
+            0x4500,
+            2,
+            &[5],
+        );
+        /// `set_slave_address_ack`, code 0x6000
+        pub const SET_SLAVE_ADDRESS_ACK: MessageDesc = MessageDesc::new(
+            "set_slave_address_ack",
+            0x6000,
+            2,
+            &[5],
+        );
+        /// `set_baud_rate_ack`, code 0x6100
+        pub const SET_BAUD_RATE_ACK: MessageDesc = MessageDesc::new(
+            "set_baud_rate_ack",
+            0x6100,
+            2,
+            &[5],
+        );
+        /// `set_lower_customer_limit_ack`, code 0x7201
+        pub const SET_LOWER_CUSTOMER_LIMIT_ACK: MessageDesc = MessageDesc::new(
+            "set_lower_customer_limit_ack",
+            0x7201,
+            2,
+            &[5],
+        );
+        /// `set_upper_customer_limit_ack`, code 0x7202
+        pub const SET_UPPER_CUSTOMER_LIMIT_ACK: MessageDesc = MessageDesc::new(
+            "set_upper_customer_limit_ack",
+            0x7202,
+            2,
+            &[5],
+        );
+        /// `store_indexed_position_ack`, code 0x7500
+        pub const STORE_INDEXED_POSITION_ACK: MessageDesc = MessageDesc::new(
+            "store_indexed_position_ack",
+            0x7500,
+            2,
+            &[5],
+        );
+        /// `set_mode_of_operation_ack`, code 0x8000
+        pub const SET_MODE_OF_OPERATION_ACK: MessageDesc = MessageDesc::new(
+            "set_mode_of_operation_ack",
+            0x8000,
+            2,
+            &[5],
+        );
+        /// `actual_capacitance`, code 0x4101
+        pub const ACTUAL_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "actual_capacitance",
+            0x4101,
+            2,
+            &[9],
+        );
+        /// `actual_full_step_position`, code 0x4102
+        pub const ACTUAL_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "actual_full_step_position",
+            0x4102,
+            2,
+            &[7],
+        );
+        /// `minimum_capacitance`, code 0x4110
+        pub const MINIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "minimum_capacitance",
+            0x4110,
+            2,
+            &[9],
+        );
+        /// `maximum_capacitance`, code 0x4111
+        pub const MAXIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "maximum_capacitance",
+            0x4111,
+            2,
+            &[9],
+        );
+        /// `acceleration_speed`, code 0x4121
+        pub const ACCELERATION_SPEED: MessageDesc = MessageDesc::new(
+            "acceleration_speed",
+            0x4121,
+            2,
+            &[7],
+        );
+        /// `acceleration_speed.acceleration_index`
+        pub const ACCELERATION_SPEED_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
+            "acceleration_speed",
+            "acceleration_index",
+        );
+        /// `acceleration_speed.speed_index`
+        pub const ACCELERATION_SPEED_SPEED_INDEX: FieldDesc = FieldDesc::new(
+            "acceleration_speed",
+            "speed_index",
+        );
+        /// `status`, code 0x4122
+        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x4122, 2, &[7]);
+        /// `c_curve_entry`, code 0x4130
+        pub const C_CURVE_ENTRY: MessageDesc = MessageDesc::new(
+            "c_curve_entry",
+            0x4130,
+            2,
+            &[13],
+        );
+        /// `c_curve_entry.index`
+        pub const C_CURVE_ENTRY_INDEX: FieldDesc = FieldDesc::new(
+            "c_curve_entry",
+            "index",
+        );
+        /// `controller_temperature`, code 0x4132
+        pub const CONTROLLER_TEMPERATURE: MessageDesc = MessageDesc::new(
+            "controller_temperature",
+            0x4132,
+            2,
+            &[6],
+        );
+        /// `micro_step_position`, code 0x4136
+        pub const MICRO_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "micro_step_position",
+            0x4136,
+            2,
+            &[9],
+        );
+        /// `firmware_version`, code 0x4161
+        pub const FIRMWARE_VERSION: MessageDesc = MessageDesc::new(
+            "firmware_version",
+            0x4161,
+            2,
+            &[16],
+        );
+        /// `serial_number`, code 0x4162
+        pub const SERIAL_NUMBER: MessageDesc = MessageDesc::new(
+            "serial_number",
+            0x4162,
+            2,
+            &[13],
+        );
+        /// `cmin_nom`, code 0x4170
+        pub const CMIN_NOM: MessageDesc = MessageDesc::new("cmin_nom", 0x4170, 2, &[9]);
+        /// `cmax_nom`, code 0x4171
+        pub const CMAX_NOM: MessageDesc = MessageDesc::new("cmax_nom", 0x4171, 2, &[9]);
+        /// `lower_customer_limit`, code 0x4172
+        pub const LOWER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
+            "lower_customer_limit",
+            0x4172,
+            2,
+            &[10],
+        );
+        /// `lower_customer_limit.index`
+        pub const LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "lower_customer_limit",
+            "index",
+        );
+        /// `upper_customer_limit`, code 0x4172
+        pub const UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
+            "upper_customer_limit",
+            0x4172,
+            2,
+            &[10],
+        );
+        /// `upper_customer_limit.index`
+        pub const UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "upper_customer_limit",
+            "index",
+        );
+        /// `lower_factory_limit`, code 0x4172
+        pub const LOWER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
+            "lower_factory_limit",
+            0x4172,
+            2,
+            &[10],
+        );
+        /// `lower_factory_limit.index`
+        pub const LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "lower_factory_limit",
+            "index",
+        );
+        /// `upper_factory_limit`, code 0x4172
+        pub const UPPER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
+            "upper_factory_limit",
+            0x4172,
+            2,
+            &[10],
+        );
+        /// `upper_factory_limit.index`
+        pub const UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
+            "upper_factory_limit",
+            "index",
+        );
+        /// `preset_capacitance`, code 0x4173
+        pub const PRESET_CAPACITANCE: MessageDesc = MessageDesc::new(
+            "preset_capacitance",
+            0x4173,
+            2,
+            &[10],
+        );
+        /// `preset_capacitance.index`
+        pub const PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
+            "preset_capacitance",
+            "index",
+        );
+        /// `preset_full_step_position`, code 0x4173
+        pub const PRESET_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "preset_full_step_position",
+            0x4173,
+            2,
+            &[10],
+        );
+        /// `preset_full_step_position.index`
+        pub const PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "preset_full_step_position",
+            "index",
+        );
+        /// `stored_full_step_position`, code 0x4175
+        pub const STORED_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
+            "stored_full_step_position",
+            0x4175,
+            2,
+            &[8],
+        );
+        /// `stored_full_step_position.index`
+        pub const STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
+            "stored_full_step_position",
+            "index",
+        );
+        /// `actual_mode_of_operation`, code 0x4180
+        pub const ACTUAL_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
+            "actual_mode_of_operation",
+            0x4180,
+            2,
+            &[6],
+        );
+    }
 }

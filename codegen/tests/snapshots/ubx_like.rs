@@ -235,9 +235,15 @@ pub mod ubx_like {
                     g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate));
                     g.attempt(|frame: &[u8; 14]| {
                         let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
-                        rt::in_range("set_rate", "meas_rate", 6, field_0, 25, 65535)?;
+                        rt::in_range(
+                            &request::SET_RATE_MEAS_RATE,
+                            6,
+                            field_0,
+                            25,
+                            65535,
+                        )?;
                         let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
-                        rt::in_range("set_rate", "nav_rate", 8, field_1, 1, 127)?;
+                        rt::in_range(&request::SET_RATE_NAV_RATE, 8, field_1, 1, 127)?;
                         rt::Ok(Self::SetRate {
                             meas_rate: field_0,
                             nav_rate: field_1,
@@ -246,7 +252,7 @@ pub mod ubx_like {
                             ),
                         })
                     });
-                    g.end("poll_rate", &[8, 14])
+                    g.end(&request::POLL_RATE)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
             }
@@ -501,7 +507,7 @@ pub mod ubx_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x0608 => {
-                    let frame = rt::fixed::<14>(frame, "rate", &[14])?;
+                    let frame = rt::fixed::<14>(frame, &response::RATE)?;
                     rt::Ok(Self::Rate {
                         meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
                         nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
@@ -511,14 +517,14 @@ pub mod ubx_like {
                     })
                 }
                 0x0501 => {
-                    let frame = rt::fixed::<10>(frame, "ack", &[10])?;
+                    let frame = rt::fixed::<10>(frame, &response::ACK)?;
                     rt::Ok(Self::Ack {
                         class_id: frame[6],
                         msg_id: frame[7],
                     })
                 }
                 0x0500 => {
-                    let frame = rt::fixed::<10>(frame, "nak", &[10])?;
+                    let frame = rt::fixed::<10>(frame, &response::NAK)?;
                     rt::Ok(Self::Nak {
                         class_id: frame[6],
                         msg_id: frame[7],
@@ -717,4 +723,40 @@ pub mod ubx_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<UbxLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `poll_rate`, code 0x0608
+        pub const POLL_RATE: MessageDesc = MessageDesc::new(
+            "poll_rate",
+            0x0608,
+            2,
+            &[8, 14],
+        );
+        /// `set_rate`, code 0x0608
+        pub const SET_RATE: MessageDesc = MessageDesc::new(
+            "set_rate",
+            0x0608,
+            2,
+            &[8, 14],
+        );
+        /// `set_rate.meas_rate`
+        pub const SET_RATE_MEAS_RATE: FieldDesc = FieldDesc::new(
+            "set_rate",
+            "meas_rate",
+        );
+        /// `set_rate.nav_rate`
+        pub const SET_RATE_NAV_RATE: FieldDesc = FieldDesc::new("set_rate", "nav_rate");
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::MessageDesc;
+        /// `rate`, code 0x0608
+        pub const RATE: MessageDesc = MessageDesc::new("rate", 0x0608, 2, &[14]);
+        /// `ack`, code 0x0501
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x0501, 2, &[10]);
+        /// `nak`, code 0x0500
+        pub const NAK: MessageDesc = MessageDesc::new("nak", 0x0500, 2, &[10]);
+    }
 }

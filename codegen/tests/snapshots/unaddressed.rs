@@ -206,17 +206,17 @@ pub mod unaddressed {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x10 => {
-                    rt::fixed::<5>(frame, "read_temperature", &[5])
+                    rt::fixed::<5>(frame, &request::READ_TEMPERATURE)
                         .map(|_| Self::ReadTemperature)
                 }
                 0x20 => {
-                    let frame = rt::fixed::<7>(frame, "set_rate", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &request::SET_RATE)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range("set_rate", "rate", 4, field_0, 1, 1000)?;
+                    rt::in_range(&request::SET_RATE_RATE, 4, field_0, 1, 1000)?;
                     rt::Ok(Self::SetRate { rate: field_0 })
                 }
                 0x30 => {
-                    rt::fixed::<5>(frame, "read_version", &[5])
+                    rt::fixed::<5>(frame, &request::READ_VERSION)
                         .map(|_| Self::ReadVersion)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
@@ -437,11 +437,10 @@ pub mod unaddressed {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x90 => {
-                    let frame = rt::fixed::<7>(frame, "temperature", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::TEMPERATURE)?;
                     let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        "temperature",
-                        "temperature",
+                        &response::TEMPERATURE_TEMPERATURE,
                         4,
                         field_0,
                         -4000,
@@ -451,9 +450,9 @@ pub mod unaddressed {
                         temperature: Centidegrees::from_raw(field_0),
                     })
                 }
-                0xA0 => rt::fixed::<5>(frame, "ack", &[5]).map(|_| Self::Ack),
+                0xA0 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
                 0xB0 => {
-                    let frame = rt::fixed::<9>(frame, "version", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &response::VERSION)?;
                     rt::Ok(Self::Version {
                         version: rt::Ascii(frame[4..8].try_into().unwrap_or([0; 4])),
                     })
@@ -643,4 +642,47 @@ pub mod unaddressed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Unaddressed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_temperature`, code 0x10
+        pub const READ_TEMPERATURE: MessageDesc = MessageDesc::new(
+            "read_temperature",
+            0x10,
+            1,
+            &[5],
+        );
+        /// `set_rate`, code 0x20
+        pub const SET_RATE: MessageDesc = MessageDesc::new("set_rate", 0x20, 1, &[7]);
+        /// `set_rate.rate`
+        pub const SET_RATE_RATE: FieldDesc = FieldDesc::new("set_rate", "rate");
+        /// `read_version`, code 0x30
+        pub const READ_VERSION: MessageDesc = MessageDesc::new(
+            "read_version",
+            0x30,
+            1,
+            &[5],
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `temperature`, code 0x90
+        pub const TEMPERATURE: MessageDesc = MessageDesc::new(
+            "temperature",
+            0x90,
+            1,
+            &[7],
+        );
+        /// `temperature.temperature`
+        pub const TEMPERATURE_TEMPERATURE: FieldDesc = FieldDesc::new(
+            "temperature",
+            "temperature",
+        );
+        /// `ack`, code 0xA0
+        pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[5]);
+        /// `version`, code 0xB0
+        pub const VERSION: MessageDesc = MessageDesc::new("version", 0xB0, 1, &[9]);
+    }
 }

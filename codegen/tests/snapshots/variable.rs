@@ -69,8 +69,7 @@ pub mod vario {
     }
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
-        message: "write",
-        field: "values",
+        field: &request::WRITE_VALUES,
         base: 8,
         at: 7,
         width: 2,
@@ -228,8 +227,8 @@ pub mod vario {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, "read", &[9])?;
-                    rt::in_range("read", "quantity", 7, frame[7], 1, 16)?;
+                    let frame = rt::fixed::<9>(frame, &request::READ)?;
+                    rt::in_range(&request::READ_QUANTITY, 7, frame[7], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[5], frame[6]]),
                         quantity: frame[7],
@@ -237,10 +236,9 @@ pub mod vario {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<7>(frame)?;
-                    rt::in_range("write", "quantity", 5, frame[5], 1, 16)?;
+                    rt::in_range(&request::WRITE_QUANTITY, 5, frame[5], 1, 16)?;
                     rt::following(
-                        "write",
-                        "byte_count",
+                        &request::WRITE_BYTE_COUNT,
                         6,
                         frame[6],
                         frame[5] as i64,
@@ -253,7 +251,7 @@ pub mod vario {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame, "stamp", &[9])?;
+                    let frame = rt::fixed::<9>(frame, &request::STAMP)?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[5], frame[6], frame[7]], false),
                     })
@@ -353,8 +351,7 @@ pub mod vario {
     }
     /// Where `read_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "read_reply",
-        field: "values",
+        field: &response::READ_REPLY_VALUES,
         base: 6,
         at: 5,
         width: 2,
@@ -515,13 +512,13 @@ pub mod vario {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<7>(frame, "read_error", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::READ_ERROR)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[5],
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<7>(frame, "write_reply", &[7])?;
+                    let frame = rt::fixed::<7>(frame, &response::WRITE_REPLY)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[5],
                     })
@@ -775,4 +772,50 @@ pub mod vario {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Vario>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read`, code 0x01
+        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[9]);
+        /// `read.quantity`
+        pub const READ_QUANTITY: FieldDesc = FieldDesc::new("read", "quantity");
+        /// `write`, code 0x02
+        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x02, 1, &[8]);
+        /// `write.values`
+        pub const WRITE_VALUES: FieldDesc = FieldDesc::new("write", "values");
+        /// `write.quantity`
+        pub const WRITE_QUANTITY: FieldDesc = FieldDesc::new("write", "quantity");
+        /// `write.byte_count`
+        pub const WRITE_BYTE_COUNT: FieldDesc = FieldDesc::new("write", "byte_count");
+        /// `stamp`, code 0x03
+        pub const STAMP: MessageDesc = MessageDesc::new("stamp", 0x03, 1, &[9]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `read_reply`, code 0x01
+        pub const READ_REPLY: MessageDesc = MessageDesc::new(
+            "read_reply",
+            0x01,
+            1,
+            &[6],
+        );
+        /// `read_reply.values`
+        pub const READ_REPLY_VALUES: FieldDesc = FieldDesc::new("read_reply", "values");
+        /// `read_error`, code 0x81
+        pub const READ_ERROR: MessageDesc = MessageDesc::new(
+            "read_error",
+            0x81,
+            1,
+            &[7],
+        );
+        /// `write_reply`, code 0x02
+        pub const WRITE_REPLY: MessageDesc = MessageDesc::new(
+            "write_reply",
+            0x02,
+            1,
+            &[7],
+        );
+    }
 }

@@ -455,8 +455,7 @@ pub mod vesc {
     }
     /// Where `write_new_app_data.data` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE_NEW_APP_DATA: rt::RepeatAt = rt::RepeatAt {
-        message: "write_new_app_data",
-        field: "data",
+        field: &request::WRITE_NEW_APP_DATA_DATA,
         base: 11,
         at: 8,
         width: 1,
@@ -662,7 +661,7 @@ pub mod vesc {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x00 => {
-                    rt::fixed::<7>(frame, "fw_version", &[7]).map(|_| Self::FwVersion)
+                    rt::fixed::<7>(frame, &request::FW_VERSION).map(|_| Self::FwVersion)
                 }
                 0x03 => {
                     let (frame, elements, _) = REPEAT_WRITE_NEW_APP_DATA
@@ -679,10 +678,10 @@ pub mod vesc {
                     })
                 }
                 0x04 => {
-                    rt::fixed::<7>(frame, "get_values", &[7]).map(|_| Self::GetValues)
+                    rt::fixed::<7>(frame, &request::GET_VALUES).map(|_| Self::GetValues)
                 }
                 0x05 => {
-                    let frame = rt::fixed::<11>(frame, "set_duty", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::SET_DUTY)?;
                     rt::Ok(Self::SetDuty {
                         duty: Duty::from_raw(
                             i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -690,7 +689,7 @@ pub mod vesc {
                     })
                 }
                 0x06 => {
-                    let frame = rt::fixed::<11>(frame, "set_current", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::SET_CURRENT)?;
                     rt::Ok(Self::SetCurrent {
                         current: Milliamps::from_raw(
                             i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -698,7 +697,7 @@ pub mod vesc {
                     })
                 }
                 0x07 => {
-                    let frame = rt::fixed::<11>(frame, "set_current_brake", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::SET_CURRENT_BRAKE)?;
                     rt::Ok(Self::SetCurrentBrake {
                         current: Milliamps::from_raw(
                             i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
@@ -706,20 +705,20 @@ pub mod vesc {
                     })
                 }
                 0x08 => {
-                    let frame = rt::fixed::<11>(frame, "set_rpm", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::SET_RPM)?;
                     rt::Ok(Self::SetRpm {
                         rpm: i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
                     })
                 }
                 0x09 => {
-                    let frame = rt::fixed::<11>(frame, "set_pos", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &request::SET_POS)?;
                     rt::Ok(Self::SetPos {
                         pos: MicroDegrees::from_raw(
                             i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
                         ),
                     })
                 }
-                0x1E => rt::fixed::<7>(frame, "alive", &[7]).map(|_| Self::Alive),
+                0x1E => rt::fixed::<7>(frame, &request::ALIVE).map(|_| Self::Alive),
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 3, false)),
             }
         }
@@ -845,8 +844,7 @@ pub mod vesc {
     }
     /// Where `fw_version_reply.rest` sits in the frame and how its elements are counted.
     pub const REPEAT_FW_VERSION_REPLY: rt::RepeatAt = rt::RepeatAt {
-        message: "fw_version_reply",
-        field: "rest",
+        field: &response::FW_VERSION_REPLY_REST,
         base: 9,
         at: 6,
         width: 1,
@@ -1165,8 +1163,14 @@ pub mod vesc {
                 0x03 => {
                     let frame = rt::fixed::<
                         12,
-                    >(frame, "write_new_app_data_reply", &[12])?;
-                    rt::in_range("write_new_app_data_reply", "ok", 4, frame[4], 0, 1)?;
+                    >(frame, &response::WRITE_NEW_APP_DATA_REPLY)?;
+                    rt::in_range(
+                        &response::WRITE_NEW_APP_DATA_REPLY_OK,
+                        4,
+                        frame[4],
+                        0,
+                        1,
+                    )?;
                     rt::Ok(Self::WriteNewAppDataReply {
                         ok: frame[4],
                         offset: u32::from_be_bytes([
@@ -1178,7 +1182,7 @@ pub mod vesc {
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<62>(frame, "get_values_reply", &[62])?;
+                    let frame = rt::fixed::<62>(frame, &response::GET_VALUES_REPLY)?;
                     rt::Ok(Self::GetValuesReply {
                         temp_mos1: DeciCelsius::from_raw(
                             i16::from_be_bytes([frame[4], frame[5]]),
@@ -1478,4 +1482,92 @@ pub mod vesc {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Vesc>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `fw_version`, code 0x00
+        pub const FW_VERSION: MessageDesc = MessageDesc::new(
+            "fw_version",
+            0x00,
+            1,
+            &[7],
+        );
+        /// `write_new_app_data`, code 0x03
+        pub const WRITE_NEW_APP_DATA: MessageDesc = MessageDesc::new(
+            "write_new_app_data",
+            0x03,
+            1,
+            &[11],
+        );
+        /// `write_new_app_data.data`
+        pub const WRITE_NEW_APP_DATA_DATA: FieldDesc = FieldDesc::new(
+            "write_new_app_data",
+            "data",
+        );
+        /// `get_values`, code 0x04
+        pub const GET_VALUES: MessageDesc = MessageDesc::new(
+            "get_values",
+            0x04,
+            1,
+            &[7],
+        );
+        /// `set_duty`, code 0x05
+        pub const SET_DUTY: MessageDesc = MessageDesc::new("set_duty", 0x05, 1, &[11]);
+        /// `set_current`, code 0x06
+        pub const SET_CURRENT: MessageDesc = MessageDesc::new(
+            "set_current",
+            0x06,
+            1,
+            &[11],
+        );
+        /// `set_current_brake`, code 0x07
+        pub const SET_CURRENT_BRAKE: MessageDesc = MessageDesc::new(
+            "set_current_brake",
+            0x07,
+            1,
+            &[11],
+        );
+        /// `set_rpm`, code 0x08
+        pub const SET_RPM: MessageDesc = MessageDesc::new("set_rpm", 0x08, 1, &[11]);
+        /// `set_pos`, code 0x09
+        pub const SET_POS: MessageDesc = MessageDesc::new("set_pos", 0x09, 1, &[11]);
+        /// `alive`, code 0x1E
+        pub const ALIVE: MessageDesc = MessageDesc::new("alive", 0x1E, 1, &[7]);
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `fw_version_reply`, code 0x00
+        pub const FW_VERSION_REPLY: MessageDesc = MessageDesc::new(
+            "fw_version_reply",
+            0x00,
+            1,
+            &[9],
+        );
+        /// `fw_version_reply.rest`
+        pub const FW_VERSION_REPLY_REST: FieldDesc = FieldDesc::new(
+            "fw_version_reply",
+            "rest",
+        );
+        /// `write_new_app_data_reply`, code 0x03
+        pub const WRITE_NEW_APP_DATA_REPLY: MessageDesc = MessageDesc::new(
+            "write_new_app_data_reply",
+            0x03,
+            1,
+            &[12],
+        );
+        /// `write_new_app_data_reply.ok`
+        pub const WRITE_NEW_APP_DATA_REPLY_OK: FieldDesc = FieldDesc::new(
+            "write_new_app_data_reply",
+            "ok",
+        );
+        /// `get_values_reply`, code 0x04
+        pub const GET_VALUES_REPLY: MessageDesc = MessageDesc::new(
+            "get_values_reply",
+            0x04,
+            1,
+            &[62],
+        );
+    }
 }

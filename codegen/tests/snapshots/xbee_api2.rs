@@ -282,8 +282,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_command.parameter` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_COMMAND: rt::RepeatAt = rt::RepeatAt {
-        message: "at_command",
-        field: "parameter",
+        field: &request::AT_COMMAND_PARAMETER,
         base: 8,
         at: 7,
         width: 1,
@@ -293,8 +292,7 @@ pub mod xbee_api2 {
     };
     /// Where `transmit_request.data` sits in the frame and how its elements are counted.
     pub const REPEAT_TRANSMIT_REQUEST: rt::RepeatAt = rt::RepeatAt {
-        message: "transmit_request",
-        field: "data",
+        field: &request::TRANSMIT_REQUEST_DATA,
         base: 18,
         at: 17,
         width: 1,
@@ -628,8 +626,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_response.data` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_RESPONSE: rt::RepeatAt = rt::RepeatAt {
-        message: "at_response",
-        field: "data",
+        field: &response::AT_RESPONSE_DATA,
         base: 9,
         at: 8,
         width: 1,
@@ -639,8 +636,7 @@ pub mod xbee_api2 {
     };
     /// Where `receive_packet.data` sits in the frame and how its elements are counted.
     pub const REPEAT_RECEIVE_PACKET: rt::RepeatAt = rt::RepeatAt {
-        message: "receive_packet",
-        field: "data",
+        field: &response::RECEIVE_PACKET_DATA,
         base: 16,
         at: 15,
         width: 1,
@@ -923,7 +919,7 @@ pub mod xbee_api2 {
                     })
                 }
                 0x8B => {
-                    let frame = rt::fixed::<11>(frame, "transmit_status", &[11])?;
+                    let frame = rt::fixed::<11>(frame, &response::TRANSMIT_STATUS)?;
                     rt::Ok(Self::TransmitStatus {
                         frame_id: frame[4],
                         destination16: u16::from_be_bytes([frame[5], frame[6]]),
@@ -933,7 +929,7 @@ pub mod xbee_api2 {
                     })
                 }
                 0x8A => {
-                    let frame = rt::fixed::<6>(frame, "modem_status", &[6])?;
+                    let frame = rt::fixed::<6>(frame, &response::MODEM_STATUS)?;
                     rt::Ok(Self::ModemStatus {
                         status: ModemStatus::from_raw(frame[4]),
                     })
@@ -1139,4 +1135,72 @@ pub mod xbee_api2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<XbeeApi2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
+    /// Each request and its fields as refusals name them: name, code and the frame
+    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    pub mod request {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `at_command`, code 0x08
+        pub const AT_COMMAND: MessageDesc = MessageDesc::new(
+            "at_command",
+            0x08,
+            1,
+            &[8],
+        );
+        /// `at_command.parameter`
+        pub const AT_COMMAND_PARAMETER: FieldDesc = FieldDesc::new(
+            "at_command",
+            "parameter",
+        );
+        /// `transmit_request`, code 0x10
+        pub const TRANSMIT_REQUEST: MessageDesc = MessageDesc::new(
+            "transmit_request",
+            0x10,
+            1,
+            &[18],
+        );
+        /// `transmit_request.data`
+        pub const TRANSMIT_REQUEST_DATA: FieldDesc = FieldDesc::new(
+            "transmit_request",
+            "data",
+        );
+    }
+    /// Each response as its refusals name it.
+    pub mod response {
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
+        /// `at_response`, code 0x88
+        pub const AT_RESPONSE: MessageDesc = MessageDesc::new(
+            "at_response",
+            0x88,
+            1,
+            &[9],
+        );
+        /// `at_response.data`
+        pub const AT_RESPONSE_DATA: FieldDesc = FieldDesc::new("at_response", "data");
+        /// `transmit_status`, code 0x8B
+        pub const TRANSMIT_STATUS: MessageDesc = MessageDesc::new(
+            "transmit_status",
+            0x8B,
+            1,
+            &[11],
+        );
+        /// `modem_status`, code 0x8A
+        pub const MODEM_STATUS: MessageDesc = MessageDesc::new(
+            "modem_status",
+            0x8A,
+            1,
+            &[6],
+        );
+        /// `receive_packet`, code 0x90
+        pub const RECEIVE_PACKET: MessageDesc = MessageDesc::new(
+            "receive_packet",
+            0x90,
+            1,
+            &[16],
+        );
+        /// `receive_packet.data`
+        pub const RECEIVE_PACKET_DATA: FieldDesc = FieldDesc::new(
+            "receive_packet",
+            "data",
+        );
+    }
 }

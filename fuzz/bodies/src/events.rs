@@ -64,13 +64,12 @@ impl Why {
             DecodeError::OutOfRange {
                 field,
                 offset,
-                message: _,
                 found,
                 min,
                 max,
                 kind: _,
             } => Why::OutOfRange {
-                field: field.to_owned(),
+                field: field.name.to_owned(),
                 offset,
                 found,
                 min,

@@ -368,12 +368,16 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
         } => assert!(offset < len && expected != found, "{e}"),
         DecodeError::WrongLength {
             message,
-            expected,
             found,
-            less: _,
+            less,
         } => {
             assert!(
-                same_len(found) && !expected.contains(&found) && !message.is_empty(),
+                same_len(found)
+                    && !message
+                        .lengths
+                        .iter()
+                        .any(|n| n.saturating_sub(less) == found)
+                    && !message.name.is_empty(),
                 "{e}"
             )
         }
@@ -388,9 +392,9 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
             length,
             most,
         } => assert!(offset < len && length <= most, "{e}"),
-        DecodeError::BadCount {
-            offset, message, ..
-        } => assert!(offset < len && !message.is_empty(), "{e}"),
+        DecodeError::BadCount { offset, field, .. } => {
+            assert!(offset < len && !field.message.is_empty(), "{e}")
+        }
     }
 }
 
@@ -554,7 +558,7 @@ impl Refusal {
                 Refusal::Address(address)
             }
             EncodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
-                message: message.to_owned(),
+                message: message.name.to_owned(),
                 address,
             },
             EncodeError::NotInRange {
@@ -600,10 +604,8 @@ impl Refusal {
     fn of_decode(e: &DecodeError) -> Option<Refusal> {
         Some(match *e {
             DecodeError::BadAddress { found, .. } => Refusal::Address(found),
-            DecodeError::BroadcastNotAccepted {
-                message, address, ..
-            } => Refusal::Broadcast {
-                message: message.to_owned(),
+            DecodeError::BroadcastNotAccepted { message, address } => Refusal::Broadcast {
+                message: message.name.to_owned(),
                 address,
             },
             DecodeError::OutOfRange {
@@ -613,7 +615,7 @@ impl Refusal {
                 max,
                 ..
             } => Refusal::Range {
-                field: field.to_owned(),
+                field: field.name.to_owned(),
                 value: found,
                 min,
                 max,
