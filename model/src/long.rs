@@ -153,209 +153,43 @@ fn locate(l: &LongForm, e: DecodeError) -> DecodeError {
     let n = |len: usize| len.saturating_sub(l.extra());
     let o = |at: usize| offset(l, at);
     use DecodeError as E;
-    match e {
-        E::Truncated { needed, found } => E::Truncated {
-            needed: n(needed),
-            found: n(found),
-        },
-        E::TooLong { max, found } => E::TooLong {
-            max: n(max),
-            found: n(found),
-        },
+    let mut e = e;
+    match &mut e {
+        E::Truncated { needed, found } => {
+            *needed = n(*needed);
+            *found = n(*found);
+        }
+        E::TooLong { max, found } => {
+            *max = n(*max);
+            *found = n(*found);
+        }
         E::WrongLength {
-            message,
-            expected,
-            found,
-        } => E::WrongLength {
-            message,
-            expected: expected.into_iter().map(n).collect(),
-            found: n(found),
-        },
-        E::BadStart {
-            offset,
-            expected,
-            found,
-        } => E::BadStart {
-            offset: o(offset),
-            expected,
-            found,
-        },
-        E::BadEnd {
-            offset,
-            expected,
-            found,
-        } => E::BadEnd {
-            offset: o(offset),
-            expected,
-            found,
-        },
-        E::ChecksumMismatch {
-            offset,
-            expected,
-            found,
-            width,
-        } => E::ChecksumMismatch {
-            offset: o(offset),
-            expected,
-            found,
-            width,
-        },
-        E::UnknownCode {
-            offset,
-            code,
-            direction,
-        } => E::UnknownCode {
-            offset: o(offset),
-            code,
-            direction,
-        },
-        E::ConstantMismatch {
-            message,
-            field,
-            offset,
-            expected,
-            found,
-        } => E::ConstantMismatch {
-            message,
-            field,
-            offset: o(offset),
-            expected,
-            found,
-        },
-        E::NotBcd {
-            message,
-            field,
-            offset,
-            found,
-        } => E::NotBcd {
-            message,
-            field,
-            offset: o(offset),
-            found,
-        },
-        E::NotEqual {
-            message,
-            field,
-            offset,
-            other,
-            expected,
-            found,
-        } => E::NotEqual {
-            message,
-            field,
-            offset: o(offset),
-            other,
-            expected,
-            found,
-        },
-        E::OutOfRange {
-            message,
-            field,
-            offset,
-            found,
-            min,
-            max,
-            kind,
-        } => E::OutOfRange {
-            message,
-            field,
-            offset: o(offset),
-            found,
-            min,
-            max,
-            kind,
-        },
-        E::BadAddress {
-            offset,
-            found,
-            min,
-            max,
-        } => E::BadAddress {
-            offset: o(offset),
-            found,
-            min,
-            max,
-        },
-        E::LengthMismatch {
-            offset,
-            expected,
-            found,
-        } => E::LengthMismatch {
-            offset: o(offset),
-            expected,
-            found,
-        },
-        E::BadCount {
-            message,
-            field,
-            offset,
-            expected,
-            found,
-        } => E::BadCount {
-            message,
-            field,
-            offset: o(offset),
-            expected,
-            found,
-        },
-        E::BadWidth {
-            message,
-            field,
-            offset,
-            found,
-            most,
-        } => E::BadWidth {
-            message,
-            field,
-            offset: o(offset),
-            found,
-            most,
-        },
-        E::ByteCount {
-            message,
-            field,
-            offset,
-            list,
-            expected,
-            found,
-        } => E::ByteCount {
-            message,
-            field,
-            offset: o(offset),
-            list,
-            expected,
-            found,
-        },
-        E::NotFollowing {
-            message,
-            field,
-            offset,
-            rule,
-            expected,
-            found,
-        } => E::NotFollowing {
-            message,
-            field,
-            offset: o(offset),
-            rule,
-            expected,
-            found,
-        },
-        E::BadEscape { offset, fault } => E::BadEscape {
-            offset: o(offset),
-            fault,
-        },
-        E::NeedlessLong {
-            offset,
-            length,
-            most,
-        } => E::NeedlessLong {
-            offset: o(offset),
-            length,
-            most,
-        },
-        e @ (E::Ambiguous { .. } | E::BroadcastNotAccepted { .. } | E::NotAnAnswer { .. }) => e,
+            expected, found, ..
+        } => {
+            for x in expected.iter_mut() {
+                *x = n(*x);
+            }
+            *found = n(*found);
+        }
+        E::BadStart { offset, .. }
+        | E::BadEnd { offset, .. }
+        | E::ChecksumMismatch { offset, .. }
+        | E::UnknownCode { offset, .. }
+        | E::ConstantMismatch { offset, .. }
+        | E::NotBcd { offset, .. }
+        | E::NotEqual { offset, .. }
+        | E::OutOfRange { offset, .. }
+        | E::BadAddress { offset, .. }
+        | E::LengthMismatch { offset, .. }
+        | E::BadCount { offset, .. }
+        | E::BadWidth { offset, .. }
+        | E::ByteCount { offset, .. }
+        | E::NotFollowing { offset, .. }
+        | E::BadEscape { offset, .. }
+        | E::NeedlessLong { offset, .. } => *offset = o(*offset),
+        E::Ambiguous { .. } | E::BroadcastNotAccepted { .. } | E::NotAnAnswer { .. } => {}
     }
+    e
 }
 
 /// Sets the length field of `frame` (as it travels, either form; direction `d`) to what its
