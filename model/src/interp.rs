@@ -2909,6 +2909,10 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
 /// are read in.
 fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> {
     let mut wire = text.to_vec();
+    // Values that place fields (a presence condition, a count, a record's width) are read
+    // as the fields hold them: with the payload's transform undone. Reversing a field's bytes
+    // commutes with a per-byte transform, so the reordering itself works on `text` as it is.
+    let text = &*p.framing.untransformed(text);
     let o = m.layout;
     let flip = |order: ByteOrder| order != p.printed_byte_order;
     let end = wire.len().saturating_sub(p.framing.trailer_len());
