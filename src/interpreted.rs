@@ -497,6 +497,18 @@ fn decode_error(e: interp::DecodeError) -> DecodeError {
             length,
             most,
         },
+        I::NoTerminator {
+            message,
+            field,
+            offset,
+            terminator,
+            within,
+        } => DecodeError::NoTerminator {
+            field: keep_field(&message, &field),
+            offset,
+            terminator,
+            within,
+        },
         I::BadWidth {
             message,
             field,
@@ -583,6 +595,15 @@ fn encode_error(e: interp::EncodeError) -> EncodeError {
             field: keep(&field),
             condition: keep(&condition),
             given,
+        },
+        I::HoldsTerminator {
+            field,
+            index,
+            terminator,
+        } => EncodeError::HoldsTerminator {
+            field: keep(&field),
+            index,
+            terminator,
         },
         other => EncodeError::OutOfRange {
             field: keep(&other.to_string()),

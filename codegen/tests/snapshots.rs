@@ -435,3 +435,14 @@ fn counted_text_spec_generates_its_snapshot() {
         "text_counted.rs",
     );
 }
+
+/// Text up to a terminator (`repeat: {until: 0x00}`), one followed by fields and two in one
+/// message: decoded through `rt::Lists` with `rt::CountBy::Until`. `snapshots_compile.rs`
+/// compiles it and holds it to the interpreter.
+#[test]
+fn terminated_text_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/text_terminated.yaml",
+        "text_terminated.rs",
+    );
+}

@@ -39,6 +39,7 @@ include!("snapshots/mbus_short.rs");
 include!("snapshots/dlt645.rs");
 include!("snapshots/optional_sensor.rs");
 include!("snapshots/text_counted.rs");
+include!("snapshots/text_terminated.rs");
 include!("snapshots/vesc.rs");
 
 mod agree;
@@ -2135,6 +2136,96 @@ fn counted_text_snapshot_agrees_with_the_interpreter() {
     assert!(!agree::encode_alike::<TextCounted>(&p, r, 3, &not_text));
     let found = examples_stream_alike::<TextCounted>(&p, 0x7e57, "device_info");
     assert!(found > 50, "only {found} device_info frames found");
+}
+
+/// Text up to a terminator (`repeat: {until: 0x00}`): the examples replay; device information
+/// frames whose name is 0 to 30 random non-NUL bytes, with and without the NUL after them,
+/// length and checksum resealed, decode alike in both engines, and exactly those with the NUL
+/// and 1..=24 characters decode; text of every length to past `max` encodes alike, and text
+/// holding its terminator is refused by both in the same words; captures stream alike.
+#[test]
+fn terminated_text_snapshot_agrees_with_the_interpreter() {
+    use busspec_model::interp::{Raw, Value};
+    use std::borrow::Cow;
+    use text_terminated::{Response, TextTerminated};
+    let file = "model/tests/fixtures/valid/text_terminated.yaml";
+    replay::<TextTerminated>(file);
+    let p = fixture(file);
+    let t = agree::agree::<TextTerminated>(&p);
+    assert!(t.accepted >= 5 && t.refused > 10, "{t:?}");
+    let mut rng = agree::Rng(0x0029);
+    let mut accepted = 0;
+    for len in 0..=30usize {
+        for nul in [true, false] {
+            let mut w = vec![0xC8, 0, 0x29];
+            for _ in 0..len {
+                w.push(1 + rng.below(255) as u8);
+            }
+            if nul {
+                w.push(0);
+            }
+            w.extend_from_slice(&[0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 3, 4, 5, 0]);
+            w[1] = (w.len() - 2) as u8;
+            agree::reseal(&p, &mut w);
+            if agree::check::<TextTerminated>(&p, Direction::Response, None, &w) {
+                accepted += 1;
+            }
+        }
+    }
+    // With the NUL, 1..=24 characters fit (min 1, max 24; the payload holds at most 40).
+    assert_eq!(accepted, 24);
+    let d = Response::decode(&p.examples[3].wire).unwrap().message;
+    let Response::DeviceInfo { name, serial, .. } = d else {
+        panic!("{d:?}")
+    };
+    assert_eq!(
+        (name.as_slice(), serial),
+        (&b"TBS Tracer"[..], 1_414_745_936)
+    );
+    let r = p.find("set_name").unwrap();
+    let text = |t: &[u8]| {
+        [
+            Value {
+                name: Cow::Borrowed("name"),
+                raw: Raw::Text(t.to_vec()),
+            },
+            Value {
+                name: Cow::Borrowed("channel"),
+                raw: Raw::Int(3),
+            },
+        ]
+    };
+    let (mut encoded, mut refused) = (0, 0);
+    for len in 0..=18usize {
+        let t: Vec<u8> = (0..len).map(|k| b'a' + k as u8).collect();
+        if agree::encode_alike::<TextTerminated>(&p, r, 0, &text(&t)) {
+            encoded += 1;
+        } else {
+            refused += 1;
+        }
+    }
+    assert_eq!((encoded, refused), (17, 2));
+    // A NUL among the characters would end the text early: both refuse, in the same words.
+    let held = text(b"ab\0cd");
+    assert!(!agree::encode_alike::<TextTerminated>(&p, r, 0, &held));
+    let i = busspec_model::interp::encode(&p, r, 0, &held).unwrap_err();
+    let mut chars = busspec_runtime::Repeated::<u8, 16>::new();
+    for &b in b"ab\0cd" {
+        chars.push(b).unwrap();
+    }
+    let m = text_terminated::Request::SetName {
+        name: chars,
+        channel: 3,
+    };
+    let mut buf = [0u8; text_terminated::MAX_FRAME_LEN];
+    let g = m.encode(0, &mut buf).unwrap_err();
+    assert_eq!(g.to_string(), i.to_string());
+    assert_eq!(
+        g.to_string(),
+        "name holds its terminator 0x00 (character 2), which would end it there"
+    );
+    let found = examples_stream_alike::<TextTerminated>(&p, 0x0029, "parameter");
+    assert!(found > 50, "only {found} parameter frames found");
 }
 
 /// Both engines refuse to encode `values` as response `name` of `p` in the same words.

@@ -427,6 +427,7 @@ fn repeat_shape(m: &Message, f: &Field) -> Option<String> {
             format!("bytes counted by the field at payload offset {}", at(i))
         }
         crate::ir::Count::ToEnd => "to the end of the frame".to_owned(),
+        crate::ir::Count::Until(t) => format!("up to a terminator 0x{t:02X}"),
     };
     Some(format!("{count}, {}..={} elements", r.min, r.max))
 }

@@ -354,6 +354,7 @@ fn field(f: &Field, lay: &FrameLayout) -> String {
             Count::Elements(i) => ("elements", i + 1),
             Count::Bytes(i) => ("bytes", i + 1),
             Count::ToEnd => ("to_end", 0),
+            Count::Until(t) => ("until", usize::from(t)),
         };
         let _ = write!(
             o,

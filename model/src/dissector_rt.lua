@@ -596,6 +596,8 @@ end
 
 local function elements_len(f, n)
   if f.rep.bit then return math.ceil(n / 8) end
+  -- Text up to a terminator: its characters and the terminator after them.
+  if f.rep.count == "until" then return n + 1 end
   return n * f.width
 end
 
@@ -661,6 +663,15 @@ local function shape(m, b, n)
       if r.count == "to_end" then
         if not r.bit and rest % w ~= 0 then return nil end
         count = r.bit and rest * 8 or floor(rest / w)
+      elseif r.count == "until" then
+        -- Characters up to the first terminator byte (`r.by`) the frame's length leaves.
+        for k = 0, rest - 1 do
+          if b[at[i] + k] == r.by then
+            count = k
+            break
+          end
+        end
+        if not count then return nil end
       else
         local c = m.fields[r.by]
         local v = read_uint(b, at[r.by], c.width, c.order)
@@ -1051,9 +1062,11 @@ local function setup(P)
         item:add(m.pf[f.name].raw, range, w.raw)
         info[#info + 1] = f.name .. "=" .. w.json
       elseif f.ascii then
-        -- Fixed text takes its width; counted text (`repeat`) as many bytes as its count says.
+        -- Fixed text takes its width; counted text (`repeat`) as many bytes as its count says;
+        -- text up to a terminator its characters (the terminator after them is no character).
         local w = f.width
         if f.rep then w = lens[i] end
+        if f.rep and f.rep.count == "until" and w > 0 then w = w - 1 end
         local chars = {}
         for i = 0, w - 1 do chars[#chars + 1] = string.char(b[at + i]) end
         local text = json_bytes(concat(chars))

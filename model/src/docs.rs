@@ -186,6 +186,7 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
             Count::Elements(i) => format!("as many as `{}` says", m.fields[i].name),
             Count::Bytes(i) => format!("as many bytes as `{}` says", m.fields[i].name),
             Count::ToEnd => "to the end of the frame".to_owned(),
+            Count::Until(t) => format!("up to a terminator byte 0x{t:02X}, which follows them"),
         };
         let bits = if f.ty == FieldType::Bit {
             ", eight to a byte, least significant bit first"

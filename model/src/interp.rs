@@ -184,6 +184,15 @@ pub enum DecodeError {
         found: i64,
         most: usize,
     },
+    /// Text up to a terminator (`repeat: {until}`) whose terminator is not among the
+    /// `within` bytes from `offset` that the frame's length leaves it.
+    NoTerminator {
+        message: String,
+        field: String,
+        offset: usize,
+        terminator: u8,
+        within: usize,
+    },
     /// A count field says the elements of `list` take `found` bytes; the frame's length gives
     /// them `expected`.
     ByteCount {
@@ -362,6 +371,10 @@ impl fmt::Display for DecodeError {
                 f,
                 "{message}.{field} at offset {offset} is {found}: each record's last field takes 1..={most} bytes"
             ),
+            DecodeError::NoTerminator { message, field, offset, terminator, within } => write!(
+                f,
+                "{message}.{field} at offset {offset}: no terminator 0x{terminator:02X} in the {within} bytes the frame's length leaves it"
+            ),
             DecodeError::ByteCount { message, field, offset, list, expected, found } => write!(
                 f,
                 "invalid value for {message}.{field} at offset {offset}: must be the bytes of {list} ({expected}), found {found}"
@@ -447,6 +460,13 @@ pub enum EncodeError {
     NotList {
         field: String,
     },
+    /// Text up to a terminator (`repeat: {until}`) whose characters hold the terminator (the
+    /// `index`th): the frame would end it there.
+    HoldsTerminator {
+        field: String,
+        index: usize,
+        terminator: u8,
+    },
     /// A repeated field's list is longer or shorter than the spec allows.
     WrongCount {
         field: String,
@@ -531,6 +551,10 @@ impl fmt::Display for EncodeError {
                 "{message} does not accept the broadcast address 0x{address:02X}"
             ),
             EncodeError::NotList { field } => write!(f, "{field} takes a list of numbers"),
+            EncodeError::HoldsTerminator { field, index, terminator } => write!(
+                f,
+                "{field} holds its terminator 0x{terminator:02X} (character {index}), which would end it there"
+            ),
             EncodeError::WrongCount { field, min, max, found } => write!(
                 f,
                 "{field} takes {min}..={max} elements, got {found}"
@@ -1613,6 +1637,25 @@ pub fn shape(p: &Protocol, m: &Message, wire: &[u8]) -> Result<Shape, DecodeErro
             read_uint(wire.get(o..o + c.width).unwrap_or(&[]), c.byte_order) as i64
         };
         let n = match r.count {
+            // Characters up to the first terminator among the bytes the frame leaves; the
+            // terminator travels after them.
+            Count::Until(t) => wire
+                .get(at..at.saturating_add(rest))
+                .and_then(|b| b.iter().position(|&x| x == t))
+                .ok_or_else(|| DecodeError::NoTerminator {
+                    message: m.name.clone(),
+                    field: f.name.clone(),
+                    offset: at,
+                    terminator: t,
+                    within: rest,
+                })
+                .and_then(|n| {
+                    // The last list takes exactly what the frame's length leaves.
+                    if last && n + 1 != rest {
+                        return Err(bad(format!("{} by the frame's length", rest - 1), n as i64));
+                    }
+                    Ok(n)
+                })?,
             Count::ToEnd => {
                 if !bits && rest % f.width.max(1) != 0 {
                     return Err(bad(format!("whole {}-byte elements", f.width), rest as i64));
@@ -2199,9 +2242,11 @@ fn list_at(f: &Field, payload: &[u8], at: usize, sh: &Shape, i: usize) -> Vec<i6
 
 /// The bytes of repeated field `i`'s elements, from payload offset `at`: as many as the
 /// frame's [`Shape`] gives it (to the payload's end for a message that has none).
-fn list_bytes<'w>(_f: &Field, payload: &'w [u8], at: usize, sh: &Shape, i: usize) -> &'w [u8] {
+fn list_bytes<'w>(f: &Field, payload: &'w [u8], at: usize, sh: &Shape, i: usize) -> &'w [u8] {
     let bytes = payload.get(at..).unwrap_or(&[]);
     match sh.lists.iter().find(|l| l.0 == i) {
+        // Text up to a terminator: its characters, not the terminator after them.
+        Some(l) if f.terminator().is_some() => bytes.get(..l.1).unwrap_or(bytes),
         Some(l) => bytes.get(..l.2).unwrap_or(bytes),
         None => bytes,
     }
@@ -2370,7 +2415,18 @@ pub fn encode(
                 continue;
             }
             match &v.raw {
-                Raw::Text(t) => v.raw = Raw::List(t.iter().map(|&b| i64::from(b)).collect()),
+                Raw::Text(t) => {
+                    if let Some(t0) = f.terminator() {
+                        if let Some(index) = t.iter().position(|&b| b == t0) {
+                            return Err(EncodeError::HoldsTerminator {
+                                field: f.name.clone(),
+                                index,
+                                terminator: t0,
+                            });
+                        }
+                    }
+                    v.raw = Raw::List(t.iter().map(|&b| i64::from(b)).collect())
+                }
                 _ => {
                     return Err(EncodeError::NotText {
                         field: f.name.clone(),
@@ -2461,7 +2517,7 @@ fn encode_values(
             match r.count {
                 Count::Elements(i) => counts.push((i, recs.len() as i64)),
                 Count::Bytes(i) => counts.push((i, f.elements_len(recs.len()) as i64)),
-                Count::ToEnd => {}
+                Count::ToEnd | Count::Until(_) => {}
             }
             records.push((fi, f, recs));
             continue;
@@ -2520,7 +2576,7 @@ fn encode_values(
         match r.count {
             Count::Elements(i) => counts.push((i, list.len() as i64)),
             Count::Bytes(i) => counts.push((i, f.elements_len(list.len()) as i64)),
-            Count::ToEnd => {}
+            Count::ToEnd | Count::Until(_) => {}
         }
         lists.push((fi, list));
     }
@@ -2602,6 +2658,9 @@ fn encode_values(
                 for (k, &v) in list.iter().enumerate() {
                     let s = at + k * f.width;
                     write_uint(v as u64, &mut out[s..s + f.width], f.byte_order);
+                }
+                if let Some(t) = f.terminator() {
+                    out[at + list.len()] = t;
                 }
             }
             ints.push(0);
@@ -2953,6 +3012,11 @@ fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> 
                 let fit = f.elements_from(end.saturating_sub(at).saturating_sub(fixed_after));
                 let n = match r.count {
                     Count::ToEnd => fit,
+                    // Characters up to the first terminator (the terminator's byte follows).
+                    Count::Until(t) => text
+                        .get(at..end)
+                        .and_then(|b| b.iter().position(|&x| x == t))
+                        .unwrap_or(0),
                     Count::Elements(c) | Count::Bytes(c) => {
                         let cf = &m.fields[c];
                         let cat = o.payload + cf.offset + shifts.get(c).copied().unwrap_or(0);

@@ -1003,10 +1003,7 @@ impl Message {
 
     /// The field (index) that counts the elements or bytes of its first repeated field, if any.
     pub fn count_field(&self) -> Option<usize> {
-        match self.repeat()?.1.count {
-            Count::Elements(i) | Count::Bytes(i) => Some(i),
-            Count::ToEnd => None,
-        }
+        self.repeat()?.1.count.field()
     }
 
     /// Whether field `i` is filled in from the rest of the frame: a constant, a repeat of
@@ -1269,6 +1266,19 @@ pub enum Count {
     Bytes(usize),
     /// As many as fit before the checksum.
     ToEnd,
+    /// Characters up to the first terminator byte (this one), which travels after them: text
+    /// (`type: ascii`) with `repeat: {until: 0x00}`.
+    Until(u8),
+}
+
+impl Count {
+    /// The earlier field (index) whose value counts the elements or bytes, if one does.
+    pub fn field(&self) -> Option<usize> {
+        match *self {
+            Count::Elements(i) | Count::Bytes(i) => Some(i),
+            Count::ToEnd | Count::Until(_) => None,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -1343,8 +1353,19 @@ impl Field {
     pub fn elements_len(&self, n: usize) -> usize {
         if self.ty == FieldType::Bit {
             n.div_ceil(8)
+        } else if self.terminator().is_some() {
+            // Characters and the terminator after them.
+            n.saturating_add(1)
         } else {
             n.saturating_mul(self.width)
+        }
+    }
+
+    /// The byte that ends text with `repeat: {until}` ([`Count::Until`]).
+    pub fn terminator(&self) -> Option<u8> {
+        match self.repeat.as_ref()?.count {
+            Count::Until(t) => Some(t),
+            _ => None,
         }
     }
 

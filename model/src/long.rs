@@ -183,6 +183,7 @@ fn locate(l: &LongForm, e: DecodeError) -> DecodeError {
         | E::LengthMismatch { offset, .. }
         | E::BadCount { offset, .. }
         | E::BadWidth { offset, .. }
+        | E::NoTerminator { offset, .. }
         | E::ByteCount { offset, .. }
         | E::NotFollowing { offset, .. }
         | E::BadEscape { offset, .. }

@@ -802,7 +802,13 @@ pub enum BitOrder {
 #[serde(deny_unknown_fields)]
 pub struct Repeat {
     /// An earlier field of the message holding the count, or `end`: to the end of the payload.
+    /// Empty (absent) where `until` ends the list instead.
+    #[serde(default)]
     pub count: String,
+    /// Text that ends at a terminator byte (`until: 0x00`, a C string): the characters run up
+    /// to the first such byte, which travels after them and is no character.
+    #[serde(default)]
+    pub until: Option<i64>,
     /// What `count` counts: `elements` (default) or `bytes`.
     #[serde(default)]
     pub of: Option<CountOf>,

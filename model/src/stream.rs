@@ -253,7 +253,8 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
             for (li, lf, lr) in m.repeats() {
                 let c = match lr.count {
                     Count::Elements(c) | Count::Bytes(c) => c,
-                    Count::ToEnd => continue,
+                    // Text up to a terminator has a length field (validated): not here.
+                    Count::ToEnd | Count::Until(_) => continue,
                 };
                 let cf = &m.fields[c];
                 let shift: usize = lists.iter().filter(|l| l.0 < c).map(|l| l.1).sum();
@@ -287,6 +288,8 @@ fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
             }
             within(m.layout.len.saturating_add(tail) as i64)
         }
+        // Text up to a terminator has a length field (validated), read above.
+        Count::Until(_) => Lens::Are(Vec::new()),
         Count::ToEnd => {
             let step = if f.ty == crate::ir::FieldType::Bit {
                 1

@@ -2030,10 +2030,7 @@ fn header_fields(
 /// A field that refers to a header field (of the first `headers` of the message): by counting
 /// it, repeating it, following it or taking its bytes from it.
 fn header_reference(f: &Field, headers: usize) -> Option<usize> {
-    let count = f.repeat.as_ref().and_then(|r| match r.count {
-        Count::Elements(c) | Count::Bytes(c) => Some(c),
-        Count::ToEnd => None,
-    });
+    let count = f.repeat.as_ref().and_then(|r| r.count.field());
     let follows = match f.follows {
         Some(Follows::Field(i, _)) => Some(i),
         _ => None,
@@ -2467,6 +2464,20 @@ fn message_body(
                 );
             }
         }
+        if let Some(r) = f.repeat.as_ref().filter(|r| r.until.is_some()) {
+            // Its terminator is found by reading the frame: a stream needs the frame's length
+            // first, and the bytes must be the characters as they are.
+            let why = if framing.length.is_none() {
+                Some("text up to a terminator needs a length field (framing.length): a stream decoder reads the frame's length before it can look for the terminator")
+            } else if framing.transform.is_some() {
+                Some("text up to a terminator beside a transform (framing.transform) is not expressible yet")
+            } else {
+                None
+            };
+            if let (Some(why), true) = (why, r.count.is_empty()) {
+                sink.error(join(&join(&p, "repeat"), "until"), why);
+            }
+        }
         if f.bits.is_empty() && !leaf_names.insert(f.name.clone()) {
             let what = if framing
                 .header
@@ -2500,10 +2511,7 @@ fn message_body(
                 );
             }
         }
-        if let Some(c) = field.repeat.as_ref().and_then(|r| match r.count {
-            Count::Elements(c) | Count::Bytes(c) => Some(c),
-            Count::ToEnd => None,
-        }) {
+        if let Some(c) = field.repeat.as_ref().and_then(|r| r.count.field()) {
             if !counters.insert(c) {
                 sink.error(
                     join(&join(&p, "repeat"), "count"),
@@ -3317,7 +3325,51 @@ fn repeat(
         );
         return None;
     }
-    let count = if r.count == "end" {
+    let count = if let Some(t) = r.until {
+        let refused = if !r.count.is_empty() {
+            Some((
+                "count",
+                "`until` and `count` are two ways to end a list: give one",
+            ))
+        } else if r.of.is_some() {
+            Some((
+                "of",
+                "`of` says what a count field counts; text up to a terminator has none",
+            ))
+        } else if r.request.is_some() {
+            Some((
+                "request",
+                "text up to a terminator takes no count from the request (its terminator ends it)",
+            ))
+        } else if f.ty != model::FieldType::Ascii {
+            Some((
+                "until",
+                "a terminator ends text (type: ascii); a list of numbers is counted by a field or runs to the `end`",
+            ))
+        } else {
+            None
+        };
+        if let Some((k, why)) = refused {
+            sink.error(join(p, k), why);
+            return None;
+        }
+        match u8::try_from(t) {
+            Ok(t) => Count::Until(t),
+            Err(_) => {
+                sink.error(
+                    join(p, "until"),
+                    format!("a terminator is one byte, 0x00..=0xFF, not {t}"),
+                );
+                return None;
+            }
+        }
+    } else if r.count.is_empty() {
+        sink.error(
+            p,
+            "a repeat needs `count` (an earlier field, or `end`) or, for text, `until` (its terminator byte)",
+        );
+        return None;
+    } else if r.count == "end" {
         if r.of.is_some() {
             sink.error(
                 join(p, "of"),

@@ -17,6 +17,41 @@ use busspec_model::{load_str, Diagnostics};
 /// Fixture name → every diagnostic it must give, as (path, part of the message).
 /// The number of diagnostics must equal the number of rows.
 const CASES: &[(&str, &[(&str, &str)])] = &[
+    // ---- text up to a terminator (made from valid/text_terminated, without its examples)
+    (
+        "until_without_length",
+        &[
+            ("commands.set_name.fields.name.repeat.until", "text up to a terminator needs a length field (framing.length)"),
+            ("responses.device_info.fields.name.repeat.until", "text up to a terminator needs a length field (framing.length)"),
+            ("responses.parameter.fields.label.repeat.until", "text up to a terminator needs a length field (framing.length)"),
+            ("responses.parameter.fields.unit.repeat.until", "text up to a terminator needs a length field (framing.length)"),
+        ],
+    ),
+    (
+        "until_with_transform",
+        &[
+            ("commands.set_name.fields.name.repeat.until", "text up to a terminator beside a transform (framing.transform) is not expressible yet"),
+            ("responses.device_info.fields.name.repeat.until", "text up to a terminator beside a transform (framing.transform) is not expressible yet"),
+            ("responses.parameter.fields.label.repeat.until", "text up to a terminator beside a transform (framing.transform) is not expressible yet"),
+            ("responses.parameter.fields.unit.repeat.until", "text up to a terminator beside a transform (framing.transform) is not expressible yet"),
+        ],
+    ),
+    (
+        "until_and_count",
+        &[("commands.set_name.fields.name.repeat.count", "`until` and `count` are two ways to end a list: give one")],
+    ),
+    (
+        "until_on_numbers",
+        &[("responses.parameter.fields.value.repeat.until", "a terminator ends text (type: ascii)")],
+    ),
+    (
+        "until_not_a_byte",
+        &[("commands.set_name.fields.name.repeat.until", "a terminator is one byte, 0x00..=0xFF, not 256")],
+    ),
+    (
+        "repeat_without_count",
+        &[("commands.set_name.fields.name.repeat", "a repeat needs `count` (an earlier field, or `end`) or, for text, `until`")],
+    ),
     // ---- preambles (made from valid/dlt645, hdlc_like and mbus_short, without their examples)
     (
         "preamble_start_byte",

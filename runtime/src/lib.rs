@@ -751,6 +751,14 @@ pub enum DecodeError {
         length: i64,
         most: i64,
     },
+    /// Text up to a terminator (`repeat: {until}`) whose terminator is not among the
+    /// `within` bytes from `offset` that the frame's length leaves it.
+    NoTerminator {
+        field: &'static FieldDesc,
+        offset: usize,
+        terminator: u8,
+        within: usize,
+    },
     /// The field `field` at `offset` gives each record's last field `found` bytes
     /// (`bytes:` in the spec), outside `1..=most`: the records of `list` (of the same
     /// message) cannot be laid out.
@@ -918,6 +926,7 @@ impl DecodeError {
             DecodeError::WrongLength { .. }
             | DecodeError::BadCount { .. }
             | DecodeError::BadWidth { .. }
+            | DecodeError::NoTerminator { .. }
             | DecodeError::ByteCount { .. } => 2,
             _ => 3,
         }
@@ -1116,6 +1125,15 @@ impl fmt::Display for DecodeError {
             DecodeError::BadEscape { offset, fault } => {
                 write!(f, "bad escape at offset {offset}: {fault}")
             }
+            DecodeError::NoTerminator {
+                field,
+                offset,
+                terminator,
+                within,
+            } => write!(
+                f,
+                "{field} at offset {offset}: no terminator 0x{terminator:02X} in the {within} bytes the frame's length leaves it"
+            ),
             DecodeError::NeedlessLong {
                 offset,
                 length,
@@ -1176,6 +1194,13 @@ pub enum EncodeError {
         condition: &'static str,
         given: bool,
     },
+    /// Text up to a terminator (`repeat: {until}`) whose characters hold the terminator (the
+    /// `index`th): the frame would end it there.
+    HoldsTerminator {
+        field: &'static str,
+        index: usize,
+        terminator: u8,
+    },
 }
 
 impl fmt::Display for EncodeError {
@@ -1231,6 +1256,14 @@ impl fmt::Display for EncodeError {
             } => write!(
                 f,
                 "no value given for field {field}, which is present when {condition}"
+            ),
+            EncodeError::HoldsTerminator {
+                field,
+                index,
+                terminator,
+            } => write!(
+                f,
+                "{field} holds its terminator 0x{terminator:02X} (character {index}), which would end it there"
             ),
         }
     }

@@ -40,7 +40,14 @@ impl<'f, const BASE: usize, const K: usize> Split<'f, BASE, K> {
     #[inline]
     pub fn elements(&self, k: usize) -> &'f [u8] {
         match (self.lists.get(k), self.bytes.get(k)) {
-            (Some(r), Some(&b)) => self.whole.get(r.at..r.at + b).unwrap_or(&[]),
+            // Text up to a terminator: its characters, not the terminator after them.
+            (Some(r), Some(&b)) => {
+                let b = match r.count {
+                    CountBy::Until(_) => b.saturating_sub(1),
+                    _ => b,
+                };
+                self.whole.get(r.at..r.at + b).unwrap_or(&[])
+            }
             _ => &[],
         }
     }
@@ -108,6 +115,7 @@ impl Lists {
                 // Records whose width a field gives are a message's only list (validated):
                 // never in `Lists`.
                 CountBy::End | CountBy::EndSized(_) => CountBy::End,
+                CountBy::Until(t) => CountBy::Until(t),
                 CountBy::Elements(c) => CountBy::Elements(self.moved(c, &bytes[..k])),
                 CountBy::Bytes(c) => CountBy::Bytes(self.moved(c, &bytes[..k])),
             };
@@ -122,6 +130,7 @@ impl Lists {
                 expected,
             };
             let count = match r.count {
+                CountBy::Until(t) => r.until(frame, t, rest, last)?,
                 CountBy::End | CountBy::EndSized(_) => {
                     if !bits && rest % w != 0 {
                         return Err(bad(rest as i64, CountRule::Whole(r.width)));
@@ -209,7 +218,7 @@ impl Lists {
         let mut total = self.base;
         for (k, r) in self.lists.iter().enumerate().take(64) {
             let (c, by_bytes) = match r.count {
-                CountBy::End | CountBy::EndSized(_) => return None,
+                CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
                 CountBy::Elements(c) => (c, false),
                 CountBy::Bytes(c) => (c, true),
             };

@@ -465,6 +465,10 @@ pub enum CountBy {
     /// `fixed` + that field's value, which must be 1..=`most`. The `width` of its
     /// [`RepeatAt`] is a record at its widest.
     EndSized(SizedBy),
+    /// Text up to the first terminator byte (this one) among the bytes the frame's length
+    /// leaves it (`repeat: {until: 0x00}`): its characters, then the terminator, which is no
+    /// character. Always decoded through [`crate::Lists`]; the frame has a length field.
+    Until(u8),
 }
 
 /// The field that gives the bytes of each record's last field ([`CountBy::EndSized`]).
@@ -557,6 +561,9 @@ impl RepeatAt {
     pub const fn bytes_of(&self, n: usize) -> usize {
         if self.width == 0 {
             n.div_ceil(8)
+        } else if let CountBy::Until(_) = self.count {
+            // The characters and their terminator.
+            n.saturating_add(1)
         } else {
             n.saturating_mul(self.width)
         }
@@ -592,6 +599,7 @@ impl RepeatAt {
         // Bits (width 0) come eight to a byte.
         let mut n = extra.checked_div(width).unwrap_or(extra.saturating_mul(8));
         match self.count {
+            CountBy::Until(t) => n = self.until(frame, t, extra, true)?,
             CountBy::End | CountBy::EndSized(_) if !whole => {
                 return Err(bad(extra as i64, CountRule::Whole(width)))
             }
@@ -631,6 +639,53 @@ impl RepeatAt {
         Ok(n)
     }
 
+    /// The characters of text up to terminator `t` that starts at [`Self::at`] in `frame`,
+    /// among the `rest` bytes the frame's length leaves it; as the last list (`last`) its
+    /// terminator must be the last of them.
+    pub(crate) fn until(
+        &self,
+        frame: &[u8],
+        t: u8,
+        rest: usize,
+        last: bool,
+    ) -> Result<usize, DecodeError> {
+        let n = frame
+            .get(self.at..self.at.saturating_add(rest))
+            .and_then(|b| b.iter().position(|&x| x == t))
+            .ok_or(DecodeError::NoTerminator {
+                field: self.field,
+                offset: self.at,
+                terminator: t,
+                within: rest,
+            })?;
+        if last && n + 1 != rest {
+            return Err(DecodeError::BadCount {
+                field: self.field,
+                offset: self.at,
+                found: n as i64,
+                expected: CountRule::ByLength(rest - 1),
+            });
+        }
+        Ok(n)
+    }
+
+    /// Text up to a terminator ([`CountBy::Until`]) to encode: none of its characters may be
+    /// the terminator, which would end it early. Any other list: nothing to check.
+    #[inline]
+    pub fn encode_until(&self, chars: &[u8]) -> Result<(), EncodeError> {
+        let CountBy::Until(t) = self.count else {
+            return Ok(());
+        };
+        match chars.iter().position(|&b| b == t) {
+            Some(index) => Err(EncodeError::HoldsTerminator {
+                field: self.field.name,
+                index,
+                terminator: t,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// The length of the frame that starts `head` (the bytes buffered so far), once its count
     /// field has arrived: `None` for a count to the end (the frame's length comes from
     /// elsewhere: a length field, or the candidates' lengths) or while the count field is still
@@ -639,7 +694,7 @@ impl RepeatAt {
     #[inline]
     pub fn frame_len(&self, head: &[u8]) -> Option<usize> {
         let (c, bytes) = match self.count {
-            CountBy::End | CountBy::EndSized(_) => return None,
+            CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => return None,
             CountBy::Elements(c) => (c, false),
             CountBy::Bytes(c) => (c, true),
         };
@@ -774,7 +829,9 @@ impl RepeatAt {
                     (v / w + 1, v / w)
                 }
             }
-            CountBy::Elements(_) | CountBy::End | CountBy::EndSized(_) => (v, v),
+            CountBy::Elements(_) | CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => {
+                (v, v)
+            }
         }
     }
 
@@ -791,6 +848,8 @@ impl RepeatAt {
             // Bits by bytes or to the end: every byte before the checksum.
             CountBy::End | CountBy::Bytes(_) if self.width == 0 => n / 8,
             CountBy::EndSized(_) => n * self.element_width(frame),
+            // The characters, not their terminator.
+            CountBy::Until(_) => n,
             _ => self.bytes_of(n),
         };
         let head = frame.first_chunk::<AT>();
@@ -872,7 +931,7 @@ impl RepeatAt {
             CountBy::Elements(_) => held,
             CountBy::Bytes(_) if self.width == 0 => held.div_ceil(8),
             CountBy::Bytes(_) => held * self.width,
-            CountBy::End | CountBy::EndSized(_) => 0,
+            CountBy::End | CountBy::EndSized(_) | CountBy::Until(_) => 0,
         }
     }
 

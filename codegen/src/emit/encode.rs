@@ -96,6 +96,9 @@ pub(super) fn emit_encode_arm(
             let (lo, hi) = (i64_lit(lo), i64_lit(hi));
             stmts.push(quote!(#lc.lists[#k].encode_in_range(#v.as_slice(), #lo, #hi)?;));
         }
+        if f.terminator().is_some() {
+            stmts.push(quote!(#lc.lists[#k].encode_until(#v.as_slice())?;));
+        }
         stmts.push(quote!(let #b: usize = #lc.lists[#k].encode_len(#v.len())? - #lc.base;));
     }
     // The list (its index among the lists, its value) whose count field is field `fi`.

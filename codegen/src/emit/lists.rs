@@ -16,9 +16,10 @@ pub(super) fn lists_const(m: &Message) -> Ident {
     format_ident!("LISTS_{}", m.name.to_ascii_uppercase())
 }
 
-/// Whether `m`'s fields do not all keep a fixed offset: it is decoded through `rt::Lists`.
+/// Whether `m`'s fields do not all keep a fixed offset, or it has text up to a terminator
+/// (whose bytes are its characters and the terminator): it is decoded through `rt::Lists`.
 pub(super) fn has_lists(m: &Message) -> bool {
-    !m.tail_repeat()
+    !m.tail_repeat() || m.fields.iter().any(|f| f.terminator().is_some())
 }
 
 /// The `rt::RepeatAt` of repeated field `f` of `m`: its offset (and its count field's) with
@@ -55,6 +56,10 @@ pub(super) fn repeat_at(
             quote!(rt::CountBy::EndSized(rt::SizedBy { field: #c, fixed: #fixed, most: #most }))
         }
         Count::ToEnd => quote!(rt::CountBy::End),
+        Count::Until(t) => {
+            let t = Literal::u8_unsuffixed(t);
+            quote!(rt::CountBy::Until(#t))
+        }
         Count::Elements(i) => {
             let c = counter(i);
             quote!(rt::CountBy::Elements(#c))
@@ -272,6 +277,16 @@ pub(super) fn write_list(f: &Field, v: &Ident, at: TokenStream) -> TokenStream {
     }
     if f.ty == FieldType::Bit {
         quote!(rt::write_bits(&#v, &mut out[#at..]);)
+    } else if let Some(t) = f.terminator() {
+        // The characters, then their terminator.
+        let t = Literal::u8_unsuffixed(t);
+        quote! {{
+            let at = #at;
+            rt::write_elements(#v.as_slice(), 1, false, &mut out[at..]);
+            if let rt::Some(b) = out.get_mut(at + #v.len()) {
+                *b = #t;
+            }
+        }}
     } else {
         let (width, le) = (usize_lit(f.width), f.byte_order == ByteOrder::Little);
         quote!(rt::write_elements(#v.as_slice(), #width, #le, &mut out[#at..]);)
