@@ -116,6 +116,9 @@ fn cases() -> Vec<Case> {
         spec("model/tests/fixtures/valid/optional_sensor.yaml"),
         // Text a count field counts, with fields after it: shown as text.
         spec("model/tests/fixtures/valid/text_counted.yaml"),
+        // Text up to a terminator, one before fields and two in one message: shown as text,
+        // without the terminator.
+        spec("model/tests/fixtures/valid/text_terminated.yaml"),
         // A length field whose width the start byte chooses (VESC): short and long frames
         // dissected laid out in the long form's width.
         spec("model/tests/fixtures/valid/vesc.yaml"),

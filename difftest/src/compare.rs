@@ -172,6 +172,7 @@ fn class(g: &DecodeError) -> &'static str {
         | DecodeError::BadWidth { .. } => "bad count",
         DecodeError::BadEscape { .. } => "bad escape",
         DecodeError::NeedlessLong { .. } => "needless long form",
+        DecodeError::NoTerminator { .. } => "no terminator",
     }
 }
 
@@ -201,6 +202,7 @@ fn interp_class(i: &InterpRefusal) -> &'static str {
             | InterpError::BadWidth { .. } => "bad count",
             InterpError::BadEscape { .. } => "bad escape",
             InterpError::NeedlessLong { .. } => "needless long form",
+            InterpError::NoTerminator { .. } => "no terminator",
         },
     }
 }
@@ -237,6 +239,7 @@ fn encode_class(g: &GenEncodeError) -> &'static str {
         GenEncodeError::Encode(EncodeError::Unaddressed { .. }) => "unaddressed",
         GenEncodeError::Encode(EncodeError::BroadcastNotAccepted { .. }) => "broadcast",
         GenEncodeError::Encode(EncodeError::BufferTooSmall { .. }) => "buffer",
+        GenEncodeError::Encode(EncodeError::HoldsTerminator { .. }) => "holds its terminator",
         #[allow(unreachable_patterns)]
         GenEncodeError::Encode(_) => "other",
     }
@@ -258,6 +261,7 @@ fn interp_encode_class(i: &interp::EncodeError) -> &'static str {
         E::Fixed { .. } => "fixed",
         E::Inconsistent { .. } => "inconsistent",
         E::Optional { .. } => "optional",
+        E::HoldsTerminator { .. } => "holds its terminator",
     }
 }
 

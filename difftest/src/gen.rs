@@ -214,6 +214,8 @@ enum Own {
     TakesLongForm = 0x0302_0302_0302_0302,
     /// The long length form: its start byte, its length's adjustment.
     LongForm = 0x0303_0303_0303_0303,
+    /// Text up to a terminator (`repeat: {until}`), from counted text.
+    TerminatedText = 0x0000_5A5A_0000_5A5A,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1939,6 +1941,36 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
+    // Text up to a terminator (`repeat: {until}`): counted text becomes text ended by a
+    // terminator byte (0x00 mostly) in about 40 % of the messages that have it, where frames
+    // have a length field (which the validator requires); its count field stays as a plain
+    // field. Drawn by a generator of its own, so every spec drawn without it is as it was.
+    if has_length {
+        let mut rng = own_rng(seed, Own::TerminatedText);
+        for m in commands.iter_mut().chain(responses.iter_mut()) {
+            for f in m.fields.iter_mut().filter(|f| f.ty == "ascii") {
+                let Some(a) = f.yaml.find("repeat: {count: ") else {
+                    continue;
+                };
+                if rng.u8(..100) >= 40 {
+                    continue;
+                }
+                let start = a + "repeat: {".len();
+                let Some(len) = f.yaml[start..].find(", ") else {
+                    continue;
+                };
+                let mut rest = f.yaml[start + len..].to_owned();
+                for of in [", of: elements", ", of: bytes"] {
+                    rest = rest.replacen(of, "", 1);
+                }
+                let t = if rng.u8(..4) == 0 { rng.u8(..) } else { 0 };
+                f.yaml = format!("{}until: {t:#04X}{rest}", &f.yaml[..start]);
+                // Its terminator travels after the characters.
+                f.repeat_tail += 1;
+            }
+        }
+    }
+
     // Payload bounds per direction (the shortest without optional fields).
     let bounds = |ms: &[Gm]| {
         let lo = ms
@@ -2308,7 +2340,17 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             .iter()
             .any(|f| f.yaml.contains("repeat: {count: ") && !f.yaml.contains("repeat: {count: end"))
     });
-    if escaping == Escaping::None && one_code_len && (has_length || !counted) && !long_form {
+    // Never beside text up to a terminator (not expressible yet).
+    let terminated = commands
+        .iter()
+        .chain(&responses)
+        .any(|m| m.fields.iter().any(|f| f.yaml.contains("repeat: {until: ")));
+    if escaping == Escaping::None
+        && one_code_len
+        && (has_length || !counted)
+        && !long_form
+        && !terminated
+    {
         let mut rng = own_rng(seed, Own::Transform);
         if rng.u8(..100) < 40 {
             let k = rng.u8(1..);
@@ -2491,6 +2533,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         "optional fields",
     );
     add(fields.iter().any(|x| x.is_counted_text()), "counted text");
+    add(
+        fields.iter().any(|x| x.terminator().is_some()),
+        "text up to a terminator",
+    );
     add(fields.iter().any(|x| x.constant.is_some()), "constant");
     add(fields.iter().any(|x| !x.bits.is_empty()), "bits");
     add(

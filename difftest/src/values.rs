@@ -134,6 +134,8 @@ pub fn random_values(
                         Some(r) => rng.usize(..=r.max + 1),
                         None => f.width,
                     };
+                    // Text up to a terminator holds it only where not strict (drawn the same:
+                    // the byte is moved off the terminator after the draw).
                     let t: Vec<u8> = (0..n)
                         .map(|_| {
                             if strict || rng.bool() {
@@ -141,6 +143,10 @@ pub fn random_values(
                             } else {
                                 rng.u8(..)
                             }
+                        })
+                        .map(|b| match f.terminator() {
+                            Some(t) if strict && b == t => b ^ 1,
+                            _ => b,
                         })
                         .collect();
                     Raw::Text(t)

@@ -355,6 +355,9 @@ fn check_error(e: &DecodeError, len: usize, escaped: bool) {
         | DecodeError::BadEscape { offset, .. } => {
             assert!(offset < len, "{e}")
         }
+        DecodeError::NoTerminator { offset, within, .. } => {
+            assert!(offset < len && offset + within <= len, "{e}")
+        }
         DecodeError::BadWidth {
             offset,
             found,
