@@ -89,6 +89,7 @@ fn repeat_at(p: &ir::Protocol, m: &ir::Message) -> rt::RepeatAt {
             ir::Count::ToEnd => rt::CountBy::End,
             ir::Count::Elements(i) => rt::CountBy::Elements(field(i)),
             ir::Count::Bytes(i) => rt::CountBy::Bytes(field(i)),
+            ir::Count::Until(t) => rt::CountBy::Until(t),
         },
         min: r.min,
         max: r.max,
