@@ -1028,6 +1028,16 @@ def check_crsf():
         extended.append(("timing_correction", 0x3A, d, o,
                          bytes([0x10]) + i.to_bytes(4, "big") + off.to_bytes(4, "big", signed=True),
                          {"update_interval": i / 10, "offset": off / 10}))
+        # Device information: the name up to its NUL (0 to 43 printable characters), then
+        # the serial number, hardware and firmware IDs and the parameters (erratum crsf-e06).
+        name = "".join(chr(rng.randrange(0x20, 0x7F)) for _ in range(rng.randrange(44)))
+        serial, hw, fw = (rng.randrange(1 << 32) for _ in range(3))
+        total, version = rng.randrange(256), rng.randrange(256)
+        extended.append(("device_information", 0x29, d, o,
+                         name.encode() + b"\0" + b"".join(x.to_bytes(4, "big") for x in (serial, hw, fw))
+                         + bytes([total, version]),
+                         {"device_name": name, "serial_number": serial, "hardware_id": hw, "firmware_id": fw,
+                          "parameters_total": total, "parameter_version": version}))
     peer_frames = []
     for message, kind, d, o, payload, _ in extended:
         head = crsf_header.build({"frame_length": 4 + len(payload), "type": kind,
