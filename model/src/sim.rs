@@ -480,7 +480,16 @@ impl Sim {
                             .and_then(|rel| request_int(&rel.field).map(|v| rel.apply(v)))
                             .and_then(|n| usize::try_from(n).ok())
                             .unwrap_or(r.min);
-                        if f.is_record() {
+                        if f.is_ascii() {
+                            // Text (counted, or up to a terminator): as many spaces as it
+                            // takes at least, none of them its terminator.
+                            let c = if f.terminator() == Some(b' ') {
+                                b'_'
+                            } else {
+                                b' '
+                            };
+                            Raw::Text(vec![c; n])
+                        } else if f.is_record() {
                             let rec = f
                                 .record
                                 .iter()

@@ -491,3 +491,26 @@ fn a_device_answers_every_frame_it_meets_with_a_reply_the_spec_allows_or_not_at_
         }
     }
 }
+
+/// A spec without a `device:` section answers each command with its reply; text in the reply
+/// (counted, or up to a terminator) is as many spaces as it takes at least. Before, a reply
+/// with text was built as a list, refused by the encoder, and the device stayed silent.
+#[test]
+fn replies_with_text_are_answered() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/valid");
+    for (file, command, reply, field) in [
+        ("text_counted.yaml", "get_info", "device_info", "name"),
+        ("text_terminated.yaml", "ping", "device_info", "name"),
+    ] {
+        let p = Arc::new(load_file(&root.join(file)).expect("spec loads"));
+        let address = if p.framing.has_address() { 1 } else { 0 };
+        let mut sim = Sim::new(p.clone(), address);
+        let ask = request(&p, command, address, &[]);
+        let answer = sim
+            .answer(&ask)
+            .unwrap_or_else(|| panic!("{file}: no answer"));
+        let f = interp::decode(&p, Some(Direction::Response), None, &answer).unwrap();
+        assert_eq!(p.message(f.message).name, reply, "{file}");
+        assert_eq!(f.get(field), Some(&Raw::Text(b" ".to_vec())), "{file}");
+    }
+}
