@@ -25,7 +25,7 @@ pub mod text_terminated {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-01-01";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "d586db506c7eee4365683c90ed1f1595856b324753acb7cde511c314c1f242f3";
+    pub const SPEC_SHA256: &str = "ce277982d01a3a46400059c5f45176dd8991e2cb6f8acae8baf9e1351c570096";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/text_terminated.yaml"
