@@ -467,7 +467,7 @@ pub enum CountBy {
     EndSized(SizedBy),
     /// Text up to the first terminator byte (this one) among the bytes the frame's length
     /// leaves it (`repeat: {until: 0x00}`): its characters, then the terminator, which is no
-    /// character. Always decoded through [`crate::Lists`]; the frame has a length field.
+    /// character. Always decoded through [`crate::codec::Lists`]; the frame has a length field.
     Until(u8),
 }
 
