@@ -27,6 +27,7 @@ pub use crate::repeated::{
 };
 pub use crate::stream::{Candidate, Candidates, LengthField, VarLen, VarLens};
 pub use crate::Bits;
+pub use crate::{BitsView, ListView};
 pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::LongLength;

@@ -32,6 +32,7 @@ mod long;
 mod optional;
 mod protocol;
 mod repeated;
+mod view;
 pub mod stream;
 
 #[doc(hidden)]
@@ -40,6 +41,7 @@ pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Tra
 #[doc(hidden)]
 pub use protocol::{Framing, Preamble, Transform};
 pub use repeated::{Bits, CapacityError, Element, Repeated};
+pub use view::{BitsView, ListView};
 
 use core::fmt;
 
