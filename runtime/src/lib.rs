@@ -32,8 +32,8 @@ mod long;
 mod optional;
 mod protocol;
 mod repeated;
-mod view;
 pub mod stream;
+mod view;
 
 #[doc(hidden)]
 pub use long::LongLength;
