@@ -31,6 +31,20 @@ pub(super) fn no_view(p: &Protocol, d: Direction) -> Option<&'static str> {
     None
 }
 
+/// The module docs' line on its borrowed views: which directions have one, and why a direction
+/// has none.
+pub(super) fn views_doc(p: &Protocol) -> String {
+    let one = |d: Direction, ty: &str| match no_view(p, d) {
+        None => format!("`{ty}View<'a>` lends its lists"),
+        Some(why) => format!("no `{ty}View`: {why}"),
+    };
+    format!(
+        "Borrowed views: {}; {}.",
+        one(Direction::Request, "Request"),
+        one(Direction::Response, "Response")
+    )
+}
+
 /// Whether leaf `l` is a list a view lends (`rt::ListView`, `rt::BitsView`): a repeated field
 /// of numbers or bits. A repeated record, a packed field and text keep their owned types.
 fn lent(l: &Leaf) -> bool {

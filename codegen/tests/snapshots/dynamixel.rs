@@ -4,6 +4,7 @@ pub mod dynamixel {
     //!
     //! Generated from `spec/dynamixel.yaml`, transcribed from *ROBOTIS e-Manual: DYNAMIXEL Protocol 1.0*, revision Protocol 1.0 (2019-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod ending {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal_end.yaml`, transcribed from *Variable-length test document*, revision 1 (2024-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

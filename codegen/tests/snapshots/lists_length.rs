@@ -4,6 +4,7 @@ pub mod lists_length {
     //!
     //! Generated from `model/tests/fixtures/valid/lists_length.yaml`, transcribed from *Lists test document*, revision 2 (2026-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

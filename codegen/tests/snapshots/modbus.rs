@@ -4,6 +4,7 @@ pub mod modbus {
     //!
     //! Generated from `spec/modbus.yaml`, transcribed from *MODBUS Application Protocol Specification V1.1b3; MODBUS over Serial Line Specification and Implementation Guide V1.02*, revision V1.1b3 / V1.02 (2012-04-26).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

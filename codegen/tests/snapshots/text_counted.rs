@@ -4,6 +4,7 @@ pub mod text_counted {
     //!
     //! Generated from `model/tests/fixtures/valid/text_counted.yaml`, transcribed from *Counted text test document*, revision 1 (2026-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

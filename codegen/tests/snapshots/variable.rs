@@ -4,6 +4,7 @@ pub mod vario {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal_variable.yaml`, transcribed from *Variable-length test document*, revision 1 (2024-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
