@@ -376,16 +376,15 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
     t
 }
 
+/// A view made owned: its address, its name and the owned message, or the view's refusal;
+/// `None` where the direction has no view.
+pub type Viewed<M> = Option<Result<(u8, &'static str, M), busspec_runtime::DecodeError>>;
+
 /// A generated module's borrowed views (`RequestView`/`ResponseView`), each made owned
 /// (`to_owned`) with its name, so they can be held to the owned decoders: see [`views!`].
 pub trait Views: Protocol {
-    fn view_request(
-        frame: &[u8],
-    ) -> Option<Result<(u8, &'static str, Self::Request), busspec_runtime::DecodeError>>;
-    fn view_response(
-        frame: &[u8],
-        request: Option<&Self::Request>,
-    ) -> Option<Result<(u8, &'static str, Self::Response), busspec_runtime::DecodeError>>;
+    fn view_request(frame: &[u8]) -> Viewed<Self::Request>;
+    fn view_response(frame: &[u8], request: Option<&Self::Request>) -> Viewed<Self::Response>;
 }
 
 /// `views!(Proto, module, request, response)`: [`Views`] for `Proto` of generated `module`,
@@ -412,16 +411,13 @@ macro_rules! views {
     }};
     ($p:ty, $m:ident, $q:tt, $s:tt) => {
         impl $crate::agree::Views for $p {
-            fn view_request(
-                frame: &[u8],
-            ) -> Option<Result<(u8, &'static str, $m::Request), busspec_runtime::DecodeError>> {
+            fn view_request(frame: &[u8]) -> $crate::agree::Viewed<$m::Request> {
                 $crate::views!(@req $m, $q, frame)
             }
             fn view_response(
                 frame: &[u8],
                 request: Option<&$m::Request>,
-            ) -> Option<Result<(u8, &'static str, $m::Response), busspec_runtime::DecodeError>>
-            {
+            ) -> $crate::agree::Viewed<$m::Response> {
                 $crate::views!(@res $m, $s, frame, request)
             }
         }
