@@ -113,6 +113,7 @@ pub fn emit_module(p: &Protocol, source: &str, spec_path: &str) -> Result<String
         ));
     }
     record_names(p)?;
+    view_names(p)?;
     // A command's replies are a bit set of responses (`Request::COMMANDS`).
     if p.responses.len() > 128 {
         return Err(format!(

@@ -238,4 +238,9 @@ fn views_only_where_the_decoder_reads_the_frame_itself() {
     assert!(
         code.contains("pub enum RequestView<'a>") && code.contains("pub enum ResponseView<'a>")
     );
+    // A type of the spec named as a view would be is refused, naming it.
+    let mut p = p;
+    p.units[0].name = "request_view".into();
+    let e = emit_module(&p, "v", "v").unwrap_err();
+    assert!(e.contains("`RequestView`"), "{e}");
 }

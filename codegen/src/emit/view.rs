@@ -31,6 +31,44 @@ pub(super) fn no_view(p: &Protocol, d: Direction) -> Option<&'static str> {
     None
 }
 
+/// A type of the spec's (unit, enum, flag set, repeated record) whose Rust name would be a view
+/// type the module defines (`RequestView`, `ResponseView`) is refused with a message naming it.
+pub(super) fn view_names(p: &Protocol) -> Result<(), String> {
+    let mut types: Vec<(String, String)> = Vec::new();
+    for (names, what) in [
+        (p.units.iter().map(|u| &u.name).collect::<Vec<_>>(), "unit"),
+        (p.enums.iter().map(|e| &e.name).collect(), "enum"),
+        (p.flags.iter().map(|f| &f.name).collect(), "flag set"),
+    ] {
+        types.extend(
+            names
+                .into_iter()
+                .map(|n| (camel(n), format!("the {what} `{n}`"))),
+        );
+    }
+    for m in p.commands.iter().chain(&p.responses) {
+        for f in m.fields.iter().filter(|f| f.is_record()) {
+            let what = format!("the record `{}.{}`", m.name, f.name);
+            types.push((record_type(&m.name, f).to_string(), what));
+        }
+    }
+    for (d, view) in [
+        (Direction::Request, "RequestView"),
+        (Direction::Response, "ResponseView"),
+    ] {
+        if no_view(p, d).is_some() {
+            continue;
+        }
+        if let Some((_, what)) = types.iter().find(|(n, _)| n == view) {
+            return Err(format!(
+                "{}: {what} would be the type `{view}`, the name of the module's borrowed view; rename it",
+                p.name
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The module docs' line on its borrowed views: which directions have one, and why a direction
 /// has none.
 pub(super) fn views_doc(p: &Protocol) -> String {
