@@ -80,6 +80,10 @@ for proto in "${protos[@]}"; do
     for who in generated "${peers[@]}"; do
       per "$proto" "$who" "$op" 10 110 frame
     done
+    # Modbus and Dynamixel decode through the generated borrowed views too.
+    if [[ $op == decode && ($proto == modbus || $proto == dynamixel) ]]; then
+      per "$proto" view "$op" 10 110 frame
+    fi
     per "$proto" interpreter "$op" 2 12 frame
   done
   per "$proto" stream decode 1 3 byte

@@ -282,6 +282,39 @@ pub fn decode_all<C: Contender>(c: &C, bytes: &[u8], jobs: &[Job<C::Request>]) -
     ok
 }
 
+/// [`decode_all`] through a generated module's borrowed views (`RequestView`/`ResponseView`):
+/// each view made (every check the owned decode makes, the lists lent in place) and passed to
+/// `black_box` by reference, as `decode_all` passes the owned result.
+macro_rules! decode_all_views {
+    ($name:ident, $m:ident) => {
+        #[doc = concat!("[`decode_all`] of `", stringify!($m), "` through its views.")]
+        #[inline(never)]
+        pub fn $name(bytes: &[u8], jobs: &[Job<Decoded<busspec_protocols::$m::Request>>]) -> usize {
+            use busspec_protocols::$m::{RequestView, ResponseView};
+            let mut ok = 0;
+            for job in jobs {
+                let decoded = match job {
+                    Job::Request(r) => black_box(&RequestView::decode(&bytes[r.clone()])).is_ok(),
+                    Job::Response(r, q) => {
+                        let frame = &bytes[r.clone()];
+                        match q {
+                            Some(q) => {
+                                black_box(&ResponseView::decode_reply(frame, &q.message)).is_ok()
+                            }
+                            None => black_box(&ResponseView::decode(frame)).is_ok(),
+                        }
+                    }
+                };
+                ok += usize::from(decoded);
+            }
+            ok
+        }
+    };
+}
+
+decode_all_views!(decode_all_modbus_views, modbus);
+decode_all_views!(decode_all_dynamixel_views, dynamixel);
+
 /// A decoded message, for the encode benches.
 #[derive(Debug, Clone)]
 pub enum Message<Q, R> {

@@ -152,3 +152,58 @@ fn dynamixel_status_and_length_byte() {
     let n = w.encode(1, &mut buf).unwrap();
     assert_eq!(&buf[..n], &[0xFF, 0xFF, 1, 5, 3, 30, 0xF4, 0x01, 0xE3]);
 }
+
+crate::views!(modbus::Modbus, modbus, request, response);
+crate::views!(dynamixel::Dynamixel, dynamixel, request, response);
+
+/// The borrowed views (`RequestView`/`ResponseView`) are made of exactly the frames the owned
+/// decode accepts, refuse the others with its error, and hold its values: every example, its
+/// mutations and random frames near it.
+#[test]
+fn modbus_and_dynamixel_views_agree_with_the_owned_decode() {
+    let p = agree::fixture("spec/modbus.yaml");
+    let (made, refused) = agree::views_agree::<modbus::Modbus>(&p, 400);
+    eprintln!("modbus views: {made} made, {refused} refused");
+    assert!(
+        made > 2 * p.examples.len() && refused > 2000,
+        "{made} {refused}"
+    );
+    let p = agree::fixture("spec/dynamixel.yaml");
+    let (made, refused) = agree::views_agree::<dynamixel::Dynamixel>(&p, 400);
+    eprintln!("dynamixel views: {made} made, {refused} refused");
+    assert!(
+        made > 2 * p.examples.len() && refused > 1000,
+        "{made} {refused}"
+    );
+}
+
+/// A view lends the registers where the frame holds them, and reads each as the owned list
+/// holds it.
+#[test]
+fn a_modbus_view_lends_its_registers_in_place() {
+    let p = agree::fixture("spec/modbus.yaml");
+    let e = p
+        .examples
+        .iter()
+        .find(|e| p.message(e.message).name == "read_holding_registers_reply")
+        .unwrap();
+    let owned = modbus::Response::decode(&e.wire).unwrap().message;
+    let view = modbus::ResponseView::decode(&e.wire).unwrap().message;
+    let (
+        modbus::Response::ReadHoldingRegistersReply { registers: o },
+        modbus::ResponseView::ReadHoldingRegistersReply { registers: v },
+    ) = (owned, view)
+    else {
+        panic!("{owned:?} / {view:?}");
+    };
+    assert!(!o.is_empty());
+    assert_eq!(v.len(), o.len());
+    assert_eq!(v.as_bytes().as_ptr(), e.wire[3..].as_ptr());
+    assert!(v.iter().eq(o.iter().copied()));
+    for (i, r) in o.iter().enumerate() {
+        assert_eq!(v.get(i), Some(*r));
+    }
+    assert_eq!(v.get(o.len()), None);
+    assert_eq!(view.to_owned(), owned);
+    assert_eq!(view.name(), "read_holding_registers_reply");
+}

@@ -44,6 +44,34 @@ include!("snapshots/vesc.rs");
 
 mod agree;
 
+crate::views!(vario::Vario, vario, request, response);
+crate::views!(ending::Ending, ending, request, response);
+crate::views!(lists_after::ListsAfter, lists_after, request, response);
+crate::views!(lists_length::ListsLength, lists_length, request, -);
+crate::views!(msp_by_direction::MspByDirection, msp_by_direction, -, response);
+crate::views!(text_counted::TextCounted, text_counted, request, response);
+
+/// Every fixture with a borrowed view: made of exactly the frames the owned decode accepts,
+/// refused with its error elsewhere, its values the owned message's (`agree::views_agree`).
+#[test]
+fn fixture_views_agree_with_the_owned_decode() {
+    fn one<P: agree::Views>(file: &str) {
+        let p = fixture(file);
+        let (made, refused) = agree::views_agree::<P>(&p, 200);
+        eprintln!("{file}: {made} made, {refused} refused");
+        assert!(
+            made >= p.examples.len() && refused > 100,
+            "{file}: {made} {refused}"
+        );
+    }
+    one::<vario::Vario>("model/tests/fixtures/valid/minimal_variable.yaml");
+    one::<ending::Ending>("model/tests/fixtures/valid/minimal_end.yaml");
+    one::<lists_after::ListsAfter>("model/tests/fixtures/valid/lists_after.yaml");
+    one::<lists_length::ListsLength>("model/tests/fixtures/valid/lists_length.yaml");
+    one::<msp_by_direction::MspByDirection>("model/tests/fixtures/valid/msp_by_direction.yaml");
+    one::<text_counted::TextCounted>("model/tests/fixtures/valid/text_counted.yaml");
+}
+
 use busspec_model::ir::{self, Direction};
 use busspec_runtime::{Framing, Message, Protocol};
 

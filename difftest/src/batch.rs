@@ -26,6 +26,50 @@ pub fn entry<P: busspec_runtime::Protocol>(seed: u64, budget: Budget) -> Report 
     compare::compare::<P>(seed, budget)
 }
 
+/// [`entry`] with the module's borrowed views held to its owned decode (see
+/// [`compare::ViewFns`]).
+pub fn entry_views<P: busspec_runtime::Protocol>(
+    seed: u64,
+    budget: Budget,
+    views: compare::ViewFns<P>,
+) -> Report {
+    compare::compare_with_views::<P>(seed, budget, views)
+}
+
+/// The glue of the batch's `main` for module `name` (protocol type `ty`) whose code is `code`:
+/// where it has views, a function running [`entry_views`] with them, and the entry's function.
+fn views_glue(name: &str, ty: &str, code: &str) -> (String, String) {
+    let request = code.contains("pub enum RequestView<'a>");
+    let response = code.contains("pub enum ResponseView<'a>");
+    if !request && !response {
+        return (
+            String::new(),
+            format!("busspec_difftest::batch::entry::<{name}::{ty}>"),
+        );
+    }
+    let request = if request {
+        format!(
+            "Some(|f| {name}::RequestView::decode(f).map(|d| (d.address, d.message.to_owned())))"
+        )
+    } else {
+        "None".to_owned()
+    };
+    let response = if response {
+        format!(
+            "Some(|f, r| match r {{ Some(r) => {name}::ResponseView::decode_reply(f, r), None => {name}::ResponseView::decode(f) }}.map(|d| (d.address, d.message.to_owned())))"
+        )
+    } else {
+        "None".to_owned()
+    };
+    let f = format!("views_{name}");
+    (
+        format!(
+            "fn {f}(seed: u64, budget: busspec_difftest::compare::Budget) -> busspec_difftest::compare::Report {{\n    busspec_difftest::batch::entry_views::<{name}::{ty}>(seed, budget, busspec_difftest::compare::ViewFns {{ request: {request}, response: {response} }})\n}}\n"
+        ),
+        f,
+    )
+}
+
 /// Writes the batch crate into `dir` for `specs` (seed, protocol name, emitted module), so
 /// that `cargo build` there builds one binary comparing them all. Files are rewritten only
 /// when they change.
@@ -73,11 +117,18 @@ unexpected_cfgs = {{ level = "allow" }}
         busspec_codegen::write_if_changed(&src.join("gen").join(format!("{name}.rs")), code)?;
         main.push_str(&format!("include!(\"gen/{name}.rs\");\n"));
     }
+    // Modules with borrowed views run them beside their owned decode.
+    let glue: Vec<(String, String)> = specs
+        .iter()
+        .map(|(_, name, code)| views_glue(name, &busspec_codegen::emit::camel(name), code))
+        .collect();
+    for (f, _) in &glue {
+        main.push_str(f);
+    }
     main.push_str("\nconst SPECS: &[busspec_difftest::batch::Entry] = &[\n");
-    for (seed, name, _) in specs {
-        let ty = busspec_codegen::emit::camel(name);
+    for ((seed, name, _), (_, run)) in specs.iter().zip(&glue) {
         main.push_str(&format!(
-            "    ({seed}, \"{name}\", busspec_difftest::batch::entry::<{name}::{ty}>, {name}::SPEC_YAML),\n"
+            "    ({seed}, \"{name}\", {run}, {name}::SPEC_YAML),\n"
         ));
     }
     main.push_str("];\n\nfn main() {\n    busspec_difftest::batch::main(SPECS);\n}\n");

@@ -288,12 +288,58 @@ struct Ask<P: Protocol> {
     interp: interp::Frame<'static>,
 }
 
+/// A generated module's borrowed views (`RequestView::decode`, `ResponseView::decode` and
+/// `decode_reply`), each made owned (`to_owned`) with its address; `None` where the generator
+/// made no view of a direction. Where given, every frame the generated code decodes is also
+/// made into a view, which must accept and refuse as the owned decode does and hold its
+/// message: a view that does not is a panic of the generated side (a disagreement).
+pub struct ViewFns<P: Protocol> {
+    pub request: Option<ViewRequest<P>>,
+    pub response: Option<ViewResponse<P>>,
+}
+
+/// A request view made owned: [`ViewFns::request`].
+pub type ViewRequest<P> = fn(&[u8]) -> Result<(u8, <P as Protocol>::Request), DecodeError>;
+/// A response view (as the reply to the request where given) made owned:
+/// [`ViewFns::response`].
+pub type ViewResponse<P> = fn(
+    &[u8],
+    Option<&<P as Protocol>::Request>,
+) -> Result<(u8, <P as Protocol>::Response), DecodeError>;
+
+impl<P: Protocol> ViewFns<P> {
+    /// No views.
+    pub fn none() -> Self {
+        ViewFns {
+            request: None,
+            response: None,
+        }
+    }
+}
+
+/// The view agrees with the owned decode: both accept with the same address, message and raw
+/// values (as `visit` gives them: a NaN is its bits), or both refuse with the same error;
+/// panics where they do not.
+fn same_as_view<M: Message + fmt::Debug>(
+    owned: &Result<busspec_runtime::Decoded<M>, DecodeError>,
+    view: Option<Result<(u8, M), DecodeError>>,
+) {
+    let Some(view) = view else { return };
+    let raw = |m: &M| (m.name(), visit_values(|f| m.visit(f)));
+    match (owned, &view) {
+        (Ok(o), Ok((a, m))) if o.address == *a && raw(&o.message) == raw(m) => {}
+        (Err(o), Err(v)) if o == v => {}
+        _ => panic!("the view disagrees with the owned decode: view {view:?}, owned {owned:?}"),
+    }
+}
+
 /// Everything one spec's comparison needs.
 pub struct Run<'p, P: Protocol> {
     p: &'p ir::Protocol,
     asks: Vec<Ask<P>>,
     rng: fastrand::Rng,
     pub report: Report,
+    views: ViewFns<P>,
 }
 
 impl<E: fmt::Debug> fmt::Display for Said<E> {
@@ -355,6 +401,7 @@ impl<'p, P: Protocol> Run<'p, P> {
             asks: Vec::new(),
             rng: fastrand::Rng::with_seed(seed),
             report: Report::default(),
+            views: ViewFns::none(),
         };
         // A request per command both engines decode: its first example, else encoded from
         // random values.
@@ -400,24 +447,37 @@ impl<'p, P: Protocol> Run<'p, P> {
     fn generated(&self, frame: &[u8], mode: Mode) -> Said<DecodeError> {
         let max = P::MAX_FRAME_LEN.max(frame.len());
         let got = caught(|| match mode {
-            Mode::Request => P::decode_request(frame).map(|d| Accepted {
-                name: d.message.name().to_owned(),
-                address: d.address,
-                values: visit_values(|f| d.message.visit(f)),
-                reencoded: pattern_encode(&d.message, d.address, max),
-            }),
+            Mode::Request => {
+                let d = P::decode_request(frame);
+                same_as_view(&d, self.views.request.map(|v| v(frame)));
+                d.map(|d| Accepted {
+                    name: d.message.name().to_owned(),
+                    address: d.address,
+                    values: visit_values(|f| d.message.visit(f)),
+                    reencoded: pattern_encode(&d.message, d.address, max),
+                })
+            }
             Mode::Response | Mode::Reply(_) => {
                 let d = match mode {
                     Mode::Reply(k) => {
                         let ask = &self.asks[k];
-                        P::decode_reply(frame, &ask.generated).inspect(|d| {
+                        let d = P::decode_reply(frame, &ask.generated).inspect(|d| {
                             assert!(
                                 P::answers(&ask.generated, &d.message),
                                 "decode_reply gave a response that does not answer"
                             )
-                        })
+                        });
+                        same_as_view(
+                            &d,
+                            self.views.response.map(|v| v(frame, Some(&ask.generated))),
+                        );
+                        d
                     }
-                    _ => P::decode_response(frame),
+                    _ => {
+                        let d = P::decode_response(frame);
+                        same_as_view(&d, self.views.response.map(|v| v(frame, None)));
+                        d
+                    }
                 };
                 d.map(|d| Accepted {
                     name: d.message.name().to_owned(),
@@ -931,6 +991,12 @@ fn lie_about_count(p: &ir::Protocol, r: MessageRef, frame: &mut [u8], rng: &mut 
 /// `P`'s own text (`Protocol::SOURCE.spec_yaml`), loaded here; a panic anywhere outside the engines
 /// (a bug of this harness or a spec that does not load) is reported as a disagreement too.
 pub fn compare<P: Protocol>(seed: u64, budget: Budget) -> Report {
+    compare_with_views::<P>(seed, budget, ViewFns::none())
+}
+
+/// [`compare`], every frame the generated code decodes also made into a view where `views`
+/// has one (see [`ViewFns`]).
+pub fn compare_with_views<P: Protocol>(seed: u64, budget: Budget, views: ViewFns<P>) -> Report {
     let p = match caught(|| busspec_model::load_str(P::NAME, P::SOURCE.spec_yaml)) {
         Ok(Ok(p)) => p,
         other => {
@@ -953,6 +1019,7 @@ pub fn compare<P: Protocol>(seed: u64, budget: Budget) -> Report {
     };
     let outcome = caught(|| {
         let mut r = Run::<P>::new(&p, seed);
+        r.views = views;
         r.all(budget);
         r.report
     });

@@ -36,6 +36,7 @@ pub use crate::{
     Message, MessageDesc, NumKind, Preamble, Protocol, Record, RecordList, Repeated, Reply, Source,
     Transactions, Transform,
 };
+pub use crate::{BitsView, ListView};
 
 /// A wire number type: the raw values a whole field of it holds, as a `from_fields` getter
 /// gives them (a `u64`'s bits, an `f32`'s zero-extended, an `f64`'s: see `NumKind`).

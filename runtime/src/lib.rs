@@ -33,6 +33,7 @@ mod optional;
 mod protocol;
 mod repeated;
 pub mod stream;
+mod view;
 
 #[doc(hidden)]
 pub use long::LongLength;
@@ -40,6 +41,7 @@ pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Tra
 #[doc(hidden)]
 pub use protocol::{Framing, Preamble, Transform};
 pub use repeated::{Bits, CapacityError, Element, Repeated};
+pub use view::{BitsView, ListView};
 
 use core::fmt;
 

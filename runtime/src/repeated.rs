@@ -863,6 +863,25 @@ impl RepeatAt {
         }
     }
 
+    /// [`Self::bad_count`], for the views (`view.rs`).
+    #[inline]
+    pub(crate) fn refuse_count(&self, found: usize) -> DecodeError {
+        self.bad_count(found)
+    }
+
+    /// The refusal of element `i` of value `found` outside `min..=max`.
+    #[inline]
+    pub(crate) fn out_of_range(&self, i: usize, found: i64, min: i64, max: i64) -> DecodeError {
+        DecodeError::OutOfRange {
+            field: self.field,
+            offset: self.at + i * self.width,
+            found,
+            min,
+            max,
+            kind: crate::NumKind::Int,
+        }
+    }
+
     fn bad_count(&self, found: usize) -> DecodeError {
         DecodeError::BadCount {
             field: self.field,
@@ -910,14 +929,7 @@ impl RepeatAt {
         for (i, v) in items.iter().enumerate() {
             let found = v.to_i64();
             if !(min..=max).contains(&found) {
-                return Err(DecodeError::OutOfRange {
-                    field: self.field,
-                    offset: self.at + i * self.width,
-                    found,
-                    min,
-                    max,
-                    kind: crate::NumKind::Int,
-                });
+                return Err(self.out_of_range(i, found, min, max));
             }
         }
         Ok(())

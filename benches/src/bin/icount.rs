@@ -6,13 +6,15 @@
 //! ```text
 //! icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>
 //! icount <modbus|dynamixel> <generated|interpreter|modbus-core> <decode|encode> <passes>
+//! icount <modbus|dynamixel> view decode <passes>
 //! icount <ub2|sd|modbus|dynamixel> stream <generated|generated-clean|plain-sum|decode> <passes>
 //! ```
 //!
 //! A decode or encode pass is the 128-frame mixed stream; a stream pass is the 1 MiB capture
 //! (1 % noise; `generated-clean`: none; `decode`: the frames of the clean capture decoded one
 //! by one, their boundaries known, the stream rows' yardstick). Modbus and Dynamixel have no
-//! hand-written or deku contender; `modbus-core` is Modbus's peer.
+//! hand-written or deku contender; `modbus-core` is Modbus's peer; `view` decodes through the
+//! generated borrowed views (`RequestView`/`ResponseView`).
 //! Prints the units one pass stands for (frames or bytes) and a value computed from the work,
 //! so none of it can be optimised away.
 
@@ -21,8 +23,8 @@ use std::process::ExitCode;
 use busspec_benches::mixed::{capture_with_noise, Mixed, Proto, CAPTURE_BYTES, NOISE_PER_MILLE};
 use busspec_benches::peer::modbus_core;
 use busspec_benches::{
-    decode_all, encode_all, jobs, messages, plain_sum, stream_generated, Contender, Deku,
-    Generated, Hand, Interp,
+    decode_all, decode_all_dynamixel_views, decode_all_modbus_views, encode_all, jobs, messages,
+    plain_sum, stream_generated, Contender, Deku, Generated, Hand, Interp,
 };
 use busspec_model::ir::Direction;
 use busspec_protocols::dynamixel::Dynamixel;
@@ -31,7 +33,7 @@ use busspec_protocols::sd::Sd;
 use busspec_protocols::ub2::Ub2;
 use busspec_protocols::Protocol;
 
-const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <modbus|dynamixel> <generated|interpreter|modbus-core> <decode|encode> <passes>\n       icount <ub2|sd|modbus|dynamixel> stream <generated|generated-clean|plain-sum|decode> <passes>";
+const USAGE: &str = "usage: icount <ub2|sd> <generated|hand-written|deku|interpreter> <decode|encode> <passes>\n       icount <modbus|dynamixel> <generated|interpreter|modbus-core> <decode|encode> <passes>\n       icount <modbus|dynamixel> view decode <passes>\n       icount <ub2|sd|modbus|dynamixel> stream <generated|generated-clean|plain-sum|decode> <passes>";
 
 fn run<C: Contender>(c: &C, mixed: &Mixed, op: &str, passes: u64) -> Result<u64, String> {
     match op {
@@ -135,6 +137,43 @@ fn measure_variable<P: Protocol>(who: &str, op: &str, passes: u64) -> Result<u64
     }
 }
 
+/// Decode through the generated borrowed views (`RequestView`/`ResponseView`) of Modbus and
+/// Dynamixel over the mixed stream, replies with their request as the owned decode takes them;
+/// every frame must make a view.
+fn view_run(proto: Proto, op: &str, passes: u64) -> Result<u64, String> {
+    if op != "decode" {
+        return Err(format!("a view only decodes, not `{op}`\n{USAGE}"));
+    }
+    let spec = proto.spec();
+    let mixed = Mixed::from_spec(proto, &spec);
+    mixed_units(&mixed);
+    let n = mixed.entries.len();
+    let all = |made: usize| {
+        if made == n {
+            Ok(made as u64)
+        } else {
+            Err(format!("{made} of {n} frames made a view"))
+        }
+    };
+    match proto {
+        Proto::Modbus => {
+            let jobs = jobs(&Generated::<Modbus>::default(), &mixed);
+            all(decode_all_modbus_views(&mixed.bytes, &jobs))?;
+            Ok((0..passes)
+                .map(|_| decode_all_modbus_views(&mixed.bytes, &jobs) as u64)
+                .sum())
+        }
+        Proto::Dynamixel => {
+            let jobs = jobs(&Generated::<Dynamixel>::default(), &mixed);
+            all(decode_all_dynamixel_views(&mixed.bytes, &jobs))?;
+            Ok((0..passes)
+                .map(|_| decode_all_dynamixel_views(&mixed.bytes, &jobs) as u64)
+                .sum())
+        }
+        _ => Err(format!("no view contender for {proto:?}\n{USAGE}")),
+    }
+}
+
 /// modbus-core over the mixed stream: every frame must decode, and encode back to the stream.
 fn modbus_core_run(mixed: &Mixed, op: &str, passes: u64) -> Result<u64, String> {
     let frames: Vec<(Direction, std::ops::Range<usize>)> = mixed
@@ -178,6 +217,7 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     };
     let result = match proto {
+        _ if who == "view" => view_run(proto, op, passes),
         Proto::Ub2 => measure::<Ub2>(who, op, passes),
         Proto::Sd => measure::<Sd>(who, op, passes),
         Proto::Modbus => measure_variable::<Modbus>(who, op, passes),

@@ -121,6 +121,10 @@ pub(super) struct Ctx<'a> {
     /// The field descriptors the emitted refusals point at, in the order first named: the
     /// message's direction and name, the field's name, the constant's name.
     pub(super) field_descs: std::cell::RefCell<Vec<(Direction, String, String, Ident)>>,
+    /// Set while the borrowed views are emitted (`view.rs`): decode then lends each list as
+    /// `rt::ListView`/`rt::BitsView` instead of copying it, and its functions take the
+    /// frame as `&'a [u8]`.
+    pub(super) view: std::cell::Cell<bool>,
 }
 
 impl<'a> Ctx<'a> {
@@ -200,6 +204,7 @@ impl<'a> Ctx<'a> {
             enum_raw,
             flag_raw,
             field_descs: std::cell::RefCell::new(Vec::new()),
+            view: std::cell::Cell::new(false),
         }
     }
 

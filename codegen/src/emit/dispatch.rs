@@ -40,8 +40,14 @@ pub(super) fn messages_by_code(msgs: &[Message]) -> Vec<(&[u8], Vec<&Message>)> 
 /// (`rt::check_frame`), then `dispatch`, one `match` on the code per code length, each arm
 /// decoding its message from the frame as a fixed-size array. Messages sharing a code are
 /// told apart by length, then constants (`rt::Group`).
-pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream {
+pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenStream {
     let p = ctx.p;
+    // The frame as the decoders take it: a view's lends its lists (`view.rs`).
+    let fr = if ctx.view.get() {
+        quote!(&'a [u8])
+    } else {
+        quote!(&[u8])
+    };
     // An unknown code is quoted with as many bytes as this direction's longest code.
     let longest_code = p
         .framing
@@ -262,7 +268,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
     let dispatch = quote! {
         /// The message of a frame that passed the checks every frame passes, by its code.
         #[inline]
-        fn dispatch(frame: &[u8] #request_param) -> rt::DecodeResult<Self> {
+        fn dispatch(frame: #fr #request_param) -> rt::DecodeResult<Self> {
             #asked
             #(#body)*
             #no_message
@@ -355,7 +361,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
     if !replies {
         return quote! {
             #doc_decode
-            pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+            pub fn decode(frame: #fr) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
                 #checks
             }
             #unescaped_fn
@@ -368,19 +374,19 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &Ident) -> TokenStream 
         /// Responses that only their request tells apart are reported as
         /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
         #[inline]
-        pub fn decode(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+        pub fn decode(frame: #fr) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
             Self::decode_for(frame, rt::None)
         }
         /// Decodes a frame as the reply to `request`: only responses `request` may get are
         /// considered, which settles responses that share code and length (and are otherwise
         /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
         #[inline]
-        pub fn decode_reply(frame: &[u8], request: &Request) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+        pub fn decode_reply(frame: #fr, request: &Request) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
             Self::decode_for(frame, rt::Some(request))
         }
         /// The one decoder behind [`Self::decode`] (`request` is `None`) and
         /// [`Self::decode_reply`].
-        fn decode_for(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+        fn decode_for(frame: #fr, request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
             #checks
         }
         #unescaped_fn
@@ -453,7 +459,7 @@ pub(super) fn emit_codeless_fns(ctx: &Ctx, codeless: &[&Message]) -> TokenStream
             m.name
         ));
         if m.is_variable() {
-            let params = split_params(m, &stmts, &build);
+            let params = split_params(ctx, m, &stmts, &build);
             let prelude = lists_prelude(m);
             return quote! {
                 #doc
@@ -563,7 +569,7 @@ pub(super) fn emit_group(
             None => {
                 let (stmts, build) = decode_body(ctx, m);
                 if m.is_variable() {
-                    let params = split_params(m, &stmts, &build);
+                    let params = split_params(ctx, m, &stmts, &build);
                     let prelude = lists_prelude(m);
                     quote!(|#params| {
                         #prelude

@@ -76,10 +76,11 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
         }
     });
     let inner = inner_doc(&format!(
-        "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.",
+        "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.\n{}",
         p.title,
         name,
-        if p.byte_order == ByteOrder::Little { "little-endian" } else { "big-endian" }
+        if p.byte_order == ByteOrder::Little { "little-endian" } else { "big-endian" },
+        views_doc(p)
     ));
     let (lo, hi) = (hex_u8(p.framing.address.min), hex_u8(p.framing.address.max));
     let byte = |v: Option<u8>| match v {

@@ -367,11 +367,19 @@ pub(super) fn decode_repeat(
         } => {
             let (e, max) = (typed.unwrap_or_else(|| elem.ident()), usize_lit(max));
             let (le, signed) = (f.byte_order == ByteOrder::Little, f.signed);
-            quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?)
+            if ctx.view.get() {
+                quote!(#c.view::<#e, #max>(#elements, #le, #signed)?)
+            } else {
+                quote!(#c.elements::<#e, #max>(#elements, #le, #signed)?)
+            }
         }
         Kind::BitList { bytes } => {
             let bytes = usize_lit(bytes);
-            quote!(#c.bits::<#bytes>(#elements, #count)?)
+            if ctx.view.get() {
+                quote!(#c.view_bits::<#bytes>(#elements, #count)?)
+            } else {
+                quote!(#c.bits::<#bytes>(#elements, #count)?)
+            }
         }
         _ => return None,
     };
@@ -380,7 +388,11 @@ pub(super) fn decode_repeat(
     };
     let (v, lo, hi) = (local(&f.name), i64_lit(lo), i64_lit(hi));
     stmts.push(quote!(let #v = #value;));
-    stmts.push(quote!(#c.in_range(#v.as_slice(), #lo, #hi)?;));
+    if ctx.view.get() {
+        stmts.push(quote!(#c.view_in_range(&#v, #lo, #hi)?;));
+    } else {
+        stmts.push(quote!(#c.in_range(#v.as_slice(), #lo, #hi)?;));
+    }
     Some(quote!(#v))
 }
 
@@ -416,9 +428,19 @@ pub(super) fn split_frame(m: &Message, stmts: &[TokenStream], build: &TokenStrea
 
 /// The parameters a variable-length message's decoder takes from `rt::Group::attempt_split`
 /// (its fixed part as an array, the elements' bytes, their number), `_` where unused.
-pub(super) fn split_params(m: &Message, stmts: &[TokenStream], build: &TokenStream) -> TokenStream {
+pub(super) fn split_params(
+    ctx: &Ctx,
+    m: &Message,
+    stmts: &[TokenStream],
+    build: &TokenStream,
+) -> TokenStream {
+    // A view lends the elements: they live as long as the frame (`'a`).
+    let view = ctx.view.get();
     if has_lists(m) {
         let (base, k) = lists_dims(m);
+        if view {
+            return quote!(s: &rt::Split<'a, #base, #k>);
+        }
         return quote!(s: &rt::Split<'_, #base, #k>);
     }
     let at = m.repeat().map_or(0, |(f, _)| m.layout.payload + f.offset);
@@ -433,6 +455,9 @@ pub(super) fn split_params(m: &Message, stmts: &[TokenStream], build: &TokenStre
     } else {
         quote!(_)
     };
+    if view {
+        return quote!(#frame: &'a [u8; #at], elements: &'a [u8], #count: usize);
+    }
     quote!(#frame: &[u8; #at], elements: &[u8], #count: usize)
 }
 

@@ -180,7 +180,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     };
     let repeats = emit_repeats(ctx, d);
     let records = emit_records(ctx, d);
-    let dispatch = emit_dispatch(ctx, d, &ty);
+    let dispatch = emit_dispatch(ctx, d, &quote!(#ty));
     let from_fields = emit_from_fields(ctx, d);
     let command_info = if d == Direction::Request {
         emit_command_info(p)

@@ -11,6 +11,8 @@
 //! - `dispatch`: code → message, the decode entry point;
 //! - `stream`: the stream decoder's tables and the `Protocol` impl;
 //! - `protocol`: pairing (`COMMANDS`, `follows_request`);
+//! - `view`: the borrowed views (`RequestView<'a>`/`ResponseView<'a>`: the decoders again,
+//!   each list lent as `rt::ListView`/`rt::BitsView`), where `view::no_view` finds none missing;
 //! - `desc`: the `request` and `response` modules of descriptors (`rt::MessageDesc` of each
 //!   message, `rt::FieldDesc` of each field a refusal names), which the refusals point at;
 //! - `ctx` and `tokens`: what the others share (the IR walked as leaves, typed literals, docs).
@@ -66,6 +68,7 @@ mod stream;
 mod tests;
 mod tokens;
 mod types;
+mod view;
 
 use ctx::*;
 use ctx::{Kind, Leaf};
@@ -82,6 +85,7 @@ use stream::*;
 pub use tokens::camel;
 use tokens::*;
 use types::*;
+use view::*;
 
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
@@ -109,6 +113,7 @@ pub fn emit_module(p: &Protocol, source: &str, spec_path: &str) -> Result<String
         ));
     }
     record_names(p)?;
+    view_names(p)?;
     // A command's replies are a bit set of responses (`Request::COMMANDS`).
     if p.responses.len() > 128 {
         return Err(format!(
@@ -172,6 +177,8 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
     let requests = emit_messages(&ctx, Direction::Request);
     let responses = emit_messages(&ctx, Direction::Response);
     let pairing = emit_pairing(&ctx);
+    let request_view = emit_view(&ctx, Direction::Request);
+    let response_view = emit_view(&ctx, Direction::Response);
     let stream = emit_stream(p);
     let descs = emit_descs(&ctx);
     let name = ident(&p.name);
@@ -185,6 +192,8 @@ fn module_tokens(p: &Protocol, source: &str, spec_path: &str) -> TokenStream {
         #requests
         #responses
         #pairing
+        #request_view
+        #response_view
         #stream
         #descs
       }

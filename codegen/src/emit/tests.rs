@@ -207,3 +207,40 @@ fn a_field_descriptor_never_takes_another_constants_name() {
     );
     assert_eq!(ctx.field_descs.borrow().len(), 3);
 }
+
+/// A view lends the frame's own bytes: where the decoder reads a copy (escaping, the long
+/// length form) there is none, and the module's docs say why; a plain variable-length spec has
+/// both.
+#[test]
+fn views_only_where_the_decoder_reads_the_frame_itself() {
+    let load = |name: &str| {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../model/tests/fixtures/valid")
+            .join(name);
+        busspec_model::load_file(&path).unwrap_or_else(|d| panic!("{d}"))
+    };
+    for (file, why) in [
+        ("cobs_link.yaml", "escaped"),
+        ("dynamixel2_stuffed.yaml", "escaped"),
+        ("vesc.yaml", "long length form"),
+    ] {
+        let p = load(file);
+        assert!(no_view(&p, Direction::Request).is_some_and(|w| w.contains(why)));
+        assert!(no_view(&p, Direction::Response).is_some_and(|w| w.contains(why)));
+        let code = emit_module(&p, file, file).unwrap();
+        assert!(!code.contains("View<'a>"), "{file}");
+        assert!(code.contains("Borrowed views: no `RequestView`"), "{file}");
+    }
+    let p = load("minimal_variable.yaml");
+    assert_eq!(no_view(&p, Direction::Request), None);
+    assert_eq!(no_view(&p, Direction::Response), None);
+    let code = emit_module(&p, "v", "v").unwrap();
+    assert!(
+        code.contains("pub enum RequestView<'a>") && code.contains("pub enum ResponseView<'a>")
+    );
+    // A type of the spec named as a view would be is refused, naming it.
+    let mut p = p;
+    p.units[0].name = "request_view".into();
+    let e = emit_module(&p, "v", "v").unwrap_err();
+    assert!(e.contains("`RequestView`"), "{e}");
+}

@@ -375,3 +375,160 @@ pub fn agree<P: Protocol>(p: &ir::Protocol) -> Tally {
     }
     t
 }
+
+/// A view made owned: its address, its name and the owned message, or the view's refusal;
+/// `None` where the direction has no view.
+pub type Viewed<M> = Option<Result<(u8, &'static str, M), busspec_runtime::DecodeError>>;
+
+/// A generated module's borrowed views (`RequestView`/`ResponseView`), each made owned
+/// (`to_owned`) with its name, so they can be held to the owned decoders: see [`views!`].
+pub trait Views: Protocol {
+    fn view_request(frame: &[u8]) -> Viewed<Self::Request>;
+    fn view_response(frame: &[u8], request: Option<&Self::Request>) -> Viewed<Self::Response>;
+}
+
+/// `views!(Proto, module, request, response)`: [`Views`] for `Proto` of generated `module`,
+/// each direction named having a view (`-` where the generator made none: `None`).
+#[macro_export]
+macro_rules! views {
+    (@req $m:ident, request, $f:expr) => {
+        Some($m::RequestView::decode($f).map(|d| (d.address, d.message.name(), d.message.to_owned())))
+    };
+    (@req $m:ident, -, $f:expr) => {{
+        let _ = $f;
+        None
+    }};
+    (@res $m:ident, response, $f:expr, $r:expr) => {
+        Some(match $r {
+            Some(r) => $m::ResponseView::decode_reply($f, r),
+            None => $m::ResponseView::decode($f),
+        }
+        .map(|d| (d.address, d.message.name(), d.message.to_owned())))
+    };
+    (@res $m:ident, -, $f:expr, $r:expr) => {{
+        let _ = ($f, $r);
+        None
+    }};
+    ($p:ty, $m:ident, $q:tt, $s:tt) => {
+        impl $crate::agree::Views for $p {
+            fn view_request(frame: &[u8]) -> $crate::agree::Viewed<$m::Request> {
+                $crate::views!(@req $m, $q, frame)
+            }
+            fn view_response(
+                frame: &[u8],
+                request: Option<&$m::Request>,
+            ) -> $crate::agree::Viewed<$m::Response> {
+                $crate::views!(@res $m, $s, frame, request)
+            }
+        }
+    };
+}
+
+/// The view of `wire` (as the reply to `request` where given) is made exactly where the owned
+/// decode accepts it, refused with the same error where it does not, and made owned is the
+/// owned message, with the same address and name. Returns (made, refused), `None` where the
+/// direction has no view.
+pub fn view_agrees<P: Views>(
+    d: Direction,
+    request: Option<&P::Request>,
+    wire: &[u8],
+) -> Option<bool> {
+    match d {
+        Direction::Request => {
+            let v = P::view_request(wire)?;
+            let o = P::decode_request(wire);
+            match (&v, &o) {
+                (Ok((a, n, m)), Ok(g)) => {
+                    // Raw values as `visit` gives them: a NaN is its bits.
+                    assert_eq!(
+                        (*a, *n, visited(m)),
+                        (g.address, g.message.name(), visited(&g.message)),
+                        "{wire:02X?}"
+                    );
+                }
+                (Err(ve), Err(ge)) => assert_eq!(ve, ge, "{wire:02X?}"),
+                _ => panic!("view {v:?} / owned {o:?}: {wire:02X?}"),
+            }
+            Some(o.is_ok())
+        }
+        Direction::Response => {
+            let v = P::view_response(wire, request)?;
+            let o = P::decode_response_for(wire, request);
+            match (&v, &o) {
+                (Ok((a, n, m)), Ok(g)) => {
+                    // Raw values as `visit` gives them: a NaN is its bits.
+                    assert_eq!(
+                        (*a, *n, visited(m)),
+                        (g.address, g.message.name(), visited(&g.message)),
+                        "{wire:02X?}"
+                    );
+                }
+                (Err(ve), Err(ge)) => assert_eq!(ve, ge, "{wire:02X?}"),
+                _ => panic!("view {v:?} / owned {o:?}: {wire:02X?}"),
+            }
+            Some(o.is_ok())
+        }
+    }
+}
+
+/// Every example of `p`, the frames mutated from it (`busspec_model::mutate`) and `random`
+/// frames more from each (bytes changed at random, cut or lengthened, the length field made to
+/// agree and the checksum resealed, or not) through [`view_agrees`], replies alone and as the
+/// reply to their example request. Returns (frames made into views, frames refused by both).
+pub fn views_agree<P: Views>(p: &ir::Protocol, random: usize) -> (usize, usize) {
+    let (mut made, mut refused) = (0, 0);
+    let mut rng = Rng(0xD1B5_4A32_D192_ED03);
+    let mut tally = |r: Option<bool>| match r {
+        Some(true) => made += 1,
+        Some(false) => refused += 1,
+        None => {}
+    };
+    for e in &p.examples {
+        let d = e.message.direction;
+        let request = e.reply_to.and_then(|c| {
+            let w = &p
+                .examples
+                .iter()
+                .find(|x| x.message.direction == Direction::Request && x.message.index == c)?
+                .wire;
+            Some(P::decode_request(w).ok()?.message)
+        });
+        let mut frames = vec![e.wire.clone()];
+        frames.extend(mutations(p, d, &e.wire));
+        for _ in 0..random {
+            let mut f = e.wire.clone();
+            for _ in 0..=rng.below(3) {
+                match rng.below(4) {
+                    0 if f.len() > 1 => {
+                        let n = f.len() - 1 - rng.below(3.min(f.len() as u64 - 1)) as usize;
+                        f.truncate(n);
+                    }
+                    1 => {
+                        for _ in 0..=rng.below(4) {
+                            f.push(rng.next() as u8);
+                        }
+                    }
+                    _ if !f.is_empty() => {
+                        let i = rng.below(f.len() as u64) as usize;
+                        f[i] = rng.next() as u8;
+                    }
+                    _ => {}
+                }
+            }
+            if rng.below(2) == 0 {
+                fix_length(p, d, &mut f);
+            }
+            if rng.below(4) != 0 {
+                reseal(p, &mut f);
+            }
+            frames.push(f);
+        }
+        for f in &frames {
+            tally(view_agrees::<P>(d, None, f));
+            if let Some(r) = &request {
+                tally(view_agrees::<P>(d, Some(r), f));
+            }
+        }
+    }
+    (made, refused)
+}

@@ -4,6 +4,7 @@ pub mod bcd_meter {
     //!
     //! Generated from `model/tests/fixtures/valid/bcd_meter.yaml`, transcribed from *busspec test fixture: a meter with BCD readings*, revision 1 (2026-11-26).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

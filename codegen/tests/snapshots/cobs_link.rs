@@ -4,6 +4,7 @@ pub mod cobs_link {
     //!
     //! Generated from `model/tests/fixtures/valid/cobs_link.yaml`, transcribed from *busspec test fixture: a controller on COBS framing*, revision 1 (2026-11-26).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: its frames are escaped: the decoder reads an unescaped copy; no `ResponseView`: its frames are escaped: the decoder reads an unescaped copy.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod codeless {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal_codeless.yaml`, transcribed from *Code-less test document*, revision 1 (2024-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

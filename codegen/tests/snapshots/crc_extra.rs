@@ -4,6 +4,7 @@ pub mod crc_extra {
     //!
     //! Generated from `model/tests/fixtures/valid/crc_extra.yaml`, transcribed from *busspec test fixture: MAVLink v1's CRC_EXTRA on a frame without its header fields*, revision 1 (2026-11-26).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod dlt645 {
     //!
     //! Generated from `model/tests/fixtures/valid/dlt645.yaml`, transcribed from *DL/T 645-2007 Multi-function watt-hour meter communication protocol (from its public descriptions)*, revision 2007 (2026-11-27).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: its payload transform is undone into a copy before decode; no `ResponseView`: its payload transform is undone into a copy before decode.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod dynamixel {
     //!
     //! Generated from `spec/dynamixel.yaml`, transcribed from *ROBOTIS e-Manual: DYNAMIXEL Protocol 1.0*, revision Protocol 1.0 (2019-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -724,6 +725,259 @@ pub mod dynamixel {
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
                 && self.follows_request(request).is_ok()
+        }
+        /// Checks every field this response takes from `request` (`follows: {request}` in the
+        /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
+        pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
+            match (self, request) {
+                (
+                    &Self::ReadStatus { data: v_data, .. },
+                    &Request::Read { length: r_length, .. },
+                ) => {
+                    REPEAT_READ_STATUS
+                        .follows_request(
+                            v_data.len(),
+                            r_length as i64,
+                            (1, 1),
+                            "length",
+                        )?;
+                }
+                _ => {}
+            }
+            rt::Ok(())
+        }
+    }
+    /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum RequestView<'a> {
+        /// [`Request::Ping`], read from the frame.
+        Ping,
+        /// [`Request::Read`], read from the frame.
+        Read { address: u8, length: u8 },
+        /// [`Request::Write`], read from the frame.
+        Write { address: u8, data: rt::ListView<'a, u8> },
+        /// [`Request::RegWrite`], read from the frame.
+        RegWrite { address: u8, data: rt::ListView<'a, u8> },
+        /// [`Request::Action`], read from the frame.
+        Action,
+        /// [`Request::Reset`], read from the frame.
+        Reset,
+        /// [`Request::SyncWrite`], read from the frame.
+        SyncWrite { address: u8, data_length: u8, blocks: rt::ListView<'a, u8> },
+    }
+    impl<'a> RequestView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
+            let address = rt::check_frame(
+                frame,
+                6,
+                259,
+                2,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 2))),
+            )?;
+            rt::length_field(frame, 3, 1, true, true, -4)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 4, 1) {
+                0x01 => {
+                    let frame = rt::fixed::<6>(frame, &request::PING)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::PING)?;
+                    rt::Ok(Self::Ping)
+                }
+                0x02 => {
+                    let frame = rt::fixed::<8>(frame, &request::READ)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::READ)?;
+                    rt::in_range(&request::READ_LENGTH, 6, frame[6], 1, 253)?;
+                    rt::Ok(Self::Read {
+                        address: frame[5],
+                        length: frame[6],
+                    })
+                }
+                0x03 => {
+                    let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
+                    rt::Ok(Self::Write {
+                        address: frame[5],
+                        data: REPEAT_WRITE.view::<u8, 252>(elements, true, false)?,
+                    })
+                }
+                0x04 => {
+                    let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
+                    rt::Ok(Self::RegWrite {
+                        address: frame[5],
+                        data: REPEAT_REG_WRITE.view::<u8, 252>(elements, true, false)?,
+                    })
+                }
+                0x05 => rt::fixed::<6>(frame, &request::ACTION).map(|_| Self::Action),
+                0x06 => rt::fixed::<6>(frame, &request::RESET).map(|_| Self::Reset),
+                0x83 => {
+                    let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
+                    rt::Ok(Self::SyncWrite {
+                        address: frame[5],
+                        data_length: frame[6],
+                        blocks: REPEAT_SYNC_WRITE.view::<u8, 251>(elements, true, false)?,
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::Ping => 0,
+                Self::Read { .. } => 1,
+                Self::Write { .. } => 2,
+                Self::RegWrite { .. } => 3,
+                Self::Action => 4,
+                Self::Reset => 5,
+                Self::SyncWrite { .. } => 6,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Request::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Request {
+            match self {
+                Self::Ping => Request::Ping,
+                Self::Read { address, length } => Request::Read { address, length },
+                Self::Write { address, data } => {
+                    Request::Write {
+                        address,
+                        data: data.to_repeated(),
+                    }
+                }
+                Self::RegWrite { address, data } => {
+                    Request::RegWrite {
+                        address,
+                        data: data.to_repeated(),
+                    }
+                }
+                Self::Action => Request::Action,
+                Self::Reset => Request::Reset,
+                Self::SyncWrite { address, data_length, blocks } => {
+                    Request::SyncWrite {
+                        address,
+                        data_length,
+                        blocks: blocks.to_repeated(),
+                    }
+                }
+            }
+        }
+    }
+    /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum ResponseView<'a> {
+        /// [`Response::Status`], read from the frame.
+        Status { error: StatusError },
+        /// [`Response::ReadStatus`], read from the frame.
+        ReadStatus { error: StatusError, data: rt::ListView<'a, u8> },
+    }
+    impl<'a> ResponseView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(
+            frame: &'a [u8],
+            request: &Request,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            rt::check_sync(frame, 259, 0, &[0xFF, 0xFF])?;
+            let address = rt::check_frame(
+                frame,
+                6,
+                259,
+                2,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 2))),
+            )?;
+            rt::length_field(frame, 3, 1, true, true, -4)?;
+            let message = Self::dispatch(frame, request)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+                message.follows_request(request)?;
+            }
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 4, 0) {
+                0u32 => {
+                    let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
+                    g.attempt(|frame: &[u8; 6]| {
+                        rt::Ok(Self::Status {
+                            error: StatusError::from_raw(frame[4]),
+                        })
+                    });
+                    g.attempt_split(
+                        &REPEAT_READ_STATUS,
+                        |frame: &'a [u8; 5], elements: &'a [u8], _: usize| {
+                            rt::Ok(Self::ReadStatus {
+                                error: StatusError::from_raw(frame[4]),
+                                data: REPEAT_READ_STATUS
+                                    .view::<u8, 253>(elements, true, false)?,
+                            })
+                        },
+                    );
+                    g.end(&response::STATUS)
+                }
+                _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::Status { .. } => 0,
+                Self::ReadStatus { .. } => 1,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Response::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Response {
+            match self {
+                Self::Status { error } => Response::Status { error },
+                Self::ReadStatus { error, data } => {
+                    Response::ReadStatus {
+                        error,
+                        data: data.to_repeated(),
+                    }
+                }
+            }
         }
         /// Checks every field this response takes from `request` (`follows: {request}` in the
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.

@@ -4,6 +4,7 @@ pub mod dynamixel2_stuffed {
     //!
     //! Generated from `model/tests/fixtures/valid/dynamixel2_stuffed.yaml`, transcribed from *ROBOTIS e-Manual: DYNAMIXEL Protocol 2.0 (public description)*, revision Protocol 2.0 (2026-11-26).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: its frames are escaped: the decoder reads an unescaped copy; no `ResponseView`: its frames are escaped: the decoder reads an unescaped copy.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod ft12_fixed {
     //!
     //! Generated from `model/tests/fixtures/valid/ft12_fixed.yaml`, transcribed from *IEC 60870-5-2 link transmission procedures, FT1.2 fixed-length frame (from its public descriptions)*, revision 1992 (1992-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

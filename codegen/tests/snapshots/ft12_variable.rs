@@ -4,6 +4,7 @@ pub mod ft12_variable {
     //!
     //! Generated from `model/tests/fixtures/valid/ft12_variable.yaml`, transcribed from *IEC 60870-5-2 FT1.2 variable-length frame, as M-Bus (EN 13757-2/-3) uses it (from its public descriptions)*, revision 1 (2026-11-26).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

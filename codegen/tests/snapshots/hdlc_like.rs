@@ -4,6 +4,7 @@ pub mod hdlc_like {
     //!
     //! Generated from `model/tests/fixtures/valid/hdlc_like.yaml`, transcribed from *busspec test fixture: a device on HDLC asynchronous framing (RFC 1662)*, revision 1 (2026-11-26).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: its frames are escaped: the decoder reads an unescaped copy; no `ResponseView`: its frames are escaped: the decoder reads an unescaped copy.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

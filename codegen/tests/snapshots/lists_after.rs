@@ -4,6 +4,7 @@ pub mod lists_after {
     //!
     //! Generated from `model/tests/fixtures/valid/lists_after.yaml`, transcribed from *Lists test document*, revision 1 (2026-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -697,6 +698,227 @@ pub mod lists_after {
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
                 && self.follows_request(request).is_ok()
+        }
+        /// Checks every field this response takes from `request` (`follows: {request}` in the
+        /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
+        pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
+            match (self, request) {
+                (
+                    &Self::BlockReply { values: v_values, .. },
+                    &Request::ReadBlock { quantity: r_quantity, .. },
+                ) => {
+                    REPEAT_BLOCK_REPLY
+                        .follows_request(
+                            v_values.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
+                }
+                _ => {}
+            }
+            rt::Ok(())
+        }
+    }
+    /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum RequestView<'a> {
+        /// [`Request::ReadBlock`], read from the frame.
+        ReadBlock { first: u16, quantity: u8 },
+        /// [`Request::WriteBlock`], read from the frame.
+        WriteBlock { values: rt::ListView<'a, u16>, flags: u16 },
+        /// [`Request::Copy`], read from the frame.
+        Copy { sources: rt::ListView<'a, u8>, targets: rt::ListView<'a, u16> },
+    }
+    impl<'a> RequestView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                7,
+                23,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 1))),
+            )?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 1) {
+                0x10 => {
+                    let frame = rt::fixed::<7>(frame, &request::READ_BLOCK)?;
+                    rt::in_range(&request::READ_BLOCK_QUANTITY, 5, frame[5], 1, 8)?;
+                    rt::Ok(Self::ReadBlock {
+                        first: u16::from_be_bytes([frame[3], frame[4]]),
+                        quantity: frame[5],
+                    })
+                }
+                0x11 => {
+                    let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
+                    let frame = &s.frame;
+                    let field_2: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::in_range(
+                        &request::WRITE_BLOCK_FLAGS,
+                        4 + s.shift(1),
+                        field_2,
+                        0,
+                        255,
+                    )?;
+                    rt::Ok(Self::WriteBlock {
+                        values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
+                        flags: field_2,
+                    })
+                }
+                0x12 => {
+                    let s = LISTS_COPY.split::<7, 2>(frame)?;
+                    let frame = &s.frame;
+                    let v_targets = s
+                        .lists[1]
+                        .view::<u16, 4>(s.elements(1), false, false)?;
+                    s.lists[1].view_in_range(&v_targets, 1, 1000)?;
+                    rt::equal(&request::COPY_MODE, 5 + s.shift(2), frame[5], 0x1)?;
+                    rt::Ok(Self::Copy {
+                        sources: s.lists[0].view::<u8, 4>(s.elements(0), false, false)?,
+                        targets: v_targets,
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::ReadBlock { .. } => 0,
+                Self::WriteBlock { .. } => 1,
+                Self::Copy { .. } => 2,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Request::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Request {
+            match self {
+                Self::ReadBlock { first, quantity } => {
+                    Request::ReadBlock {
+                        first,
+                        quantity,
+                    }
+                }
+                Self::WriteBlock { values, flags } => {
+                    Request::WriteBlock {
+                        values: values.to_repeated(),
+                        flags,
+                    }
+                }
+                Self::Copy { sources, targets } => {
+                    Request::Copy {
+                        sources: sources.to_repeated(),
+                        targets: targets.to_repeated(),
+                    }
+                }
+            }
+        }
+    }
+    /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum ResponseView<'a> {
+        /// [`Response::BlockReply`], read from the frame.
+        BlockReply { values: rt::ListView<'a, u16>, status: u16 },
+        /// [`Response::Ack`], read from the frame.
+        Ack { status: u8 },
+    }
+    impl<'a> ResponseView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(
+            frame: &'a [u8],
+            request: &Request,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                5,
+                22,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 1))),
+            )?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+                message.follows_request(request)?;
+            }
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 1) {
+                0x10 => {
+                    let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
+                    let frame = &s.frame;
+                    rt::Ok(Self::BlockReply {
+                        values: s.lists[0].view::<u16, 8>(s.elements(0), false, false)?,
+                        status: u16::from_be_bytes([frame[3], frame[4]]),
+                    })
+                }
+                0x11 => {
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
+                    rt::Ok(Self::Ack { status: frame[3] })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::BlockReply { .. } => 0,
+                Self::Ack { .. } => 1,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Response::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Response {
+            match self {
+                Self::BlockReply { values, status } => {
+                    Response::BlockReply {
+                        values: values.to_repeated(),
+                        status,
+                    }
+                }
+                Self::Ack { status } => Response::Ack { status },
+            }
         }
         /// Checks every field this response takes from `request` (`follows: {request}` in the
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.

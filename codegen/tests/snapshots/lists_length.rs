@@ -4,6 +4,7 @@ pub mod lists_length {
     //!
     //! Generated from `model/tests/fixtures/valid/lists_length.yaml`, transcribed from *Lists test document*, revision 2 (2026-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -641,6 +642,95 @@ pub mod lists_length {
         /// Whether this response is one the document says `request` may get.
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
+        }
+    }
+    /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum RequestView<'a> {
+        /// [`Request::Log`], read from the frame.
+        Log {
+            channels: rt::ListView<'a, u8>,
+            samples: rt::ListView<'a, Millivolts>,
+            seq: u16,
+        },
+        /// [`Request::SetOutputs`], read from the frame.
+        SetOutputs { outputs: rt::BitsView<'a>, mask: u16 },
+    }
+    impl<'a> RequestView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                8,
+                25,
+                0,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 1))),
+            )?;
+            rt::length_field(frame, 1, 1, true, true, -3)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 1) {
+                0x20 => {
+                    let s = LISTS_LOG.split::<7, 2>(frame)?;
+                    let frame = &s.frame;
+                    let v_channels = s
+                        .lists[0]
+                        .view::<u8, 6>(s.elements(0), true, false)?;
+                    s.lists[0].view_in_range(&v_channels, 0, 15)?;
+                    rt::Ok(Self::Log {
+                        channels: v_channels,
+                        samples: s
+                            .lists[1]
+                            .view::<Millivolts, 6>(s.elements(1), true, true)?,
+                        seq: u16::from_le_bytes([frame[4], frame[5]]),
+                    })
+                }
+                0x21 => {
+                    let s = LISTS_SET_OUTPUTS.split::<7, 1>(frame)?;
+                    let frame = &s.frame;
+                    rt::Ok(Self::SetOutputs {
+                        outputs: s.lists[0].view_bits::<2>(s.elements(0), s.n[0])?,
+                        mask: u16::from_le_bytes([frame[4], frame[5]]),
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::Log { .. } => 0,
+                Self::SetOutputs { .. } => 1,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Request::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Request {
+            match self {
+                Self::Log { channels, samples, seq } => {
+                    Request::Log {
+                        channels: channels.to_repeated(),
+                        samples: samples.to_repeated(),
+                        seq,
+                    }
+                }
+                Self::SetOutputs { outputs, mask } => {
+                    Request::SetOutputs {
+                        outputs: outputs.to_bits(),
+                        mask,
+                    }
+                }
+            }
         }
     }
     /// The lists_length protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.

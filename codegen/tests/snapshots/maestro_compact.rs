@@ -4,6 +4,7 @@ pub mod maestro_compact {
     //!
     //! Generated from `model/tests/fixtures/valid/maestro_compact.yaml`, transcribed from *Pololu Maestro Servo Controller User's Guide, serial servo commands, compact protocol (public)*, revision 2019 (2019-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod mavlink_v1 {
     //!
     //! Generated from `model/tests/fixtures/valid/mavlink_v1.yaml`, transcribed from *MAVLink Developer Guide: Serialization (packet format v1) and the common message set*, revision common.xml as in pymavlink 2.4.50 (2026-11-26).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

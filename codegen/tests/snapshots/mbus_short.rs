@@ -4,6 +4,7 @@ pub mod mbus_short {
     //!
     //! Generated from `model/tests/fixtures/valid/mbus_short.yaml`, transcribed from *EN 13757-2 Communication systems for meters, physical and link layer (from its public descriptions)*, revision 2018 (2018-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: it has constant whole frames.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

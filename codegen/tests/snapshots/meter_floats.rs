@@ -4,6 +4,7 @@ pub mod meter_floats {
     //!
     //! Generated from `model/tests/fixtures/valid/meter_floats.yaml`, transcribed from *busspec test fixture: an energy meter's float and 64-bit registers*, revision 1 (2026-12-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod mini {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal.yaml`, transcribed from *Minimal protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

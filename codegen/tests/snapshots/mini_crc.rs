@@ -4,6 +4,7 @@ pub mod mini_crc {
     //!
     //! Generated from `model/tests/fixtures/valid/minimal_crc.yaml`, transcribed from *Minimal CRC protocol reference*, revision 1.0 (2024-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod modbus {
     //!
     //! Generated from `spec/modbus.yaml`, transcribed from *MODBUS Application Protocol Specification V1.1b3; MODBUS over Serial Line Specification and Implementation Guide V1.02*, revision V1.1b3 / V1.02 (2012-04-26).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -1575,6 +1576,802 @@ pub mod modbus {
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
                 && self.follows_request(request).is_ok()
+        }
+        /// Checks every field this response takes from `request` (`follows: {request}` in the
+        /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
+        pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
+            match (self, request) {
+                (
+                    &Self::ReadCoilsReply { coils: v_coils, .. },
+                    &Request::ReadCoils { quantity: r_quantity, .. },
+                ) => {
+                    rt::following(
+                        &response::READ_COILS_REPLY_BYTE_COUNT,
+                        2,
+                        REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
+                        r_quantity as i64,
+                        (1, 8),
+                        "ceil(quantity / 8) of the request",
+                    )?;
+                    REPEAT_READ_COILS_REPLY
+                        .follows_request(
+                            v_coils.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
+                }
+                (
+                    &Self::ReadDiscreteInputsReply { inputs: v_inputs, .. },
+                    &Request::ReadDiscreteInputs { quantity: r_quantity, .. },
+                ) => {
+                    rt::following(
+                        &response::READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT,
+                        2,
+                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
+                            as u64,
+                        r_quantity as i64,
+                        (1, 8),
+                        "ceil(quantity / 8) of the request",
+                    )?;
+                    REPEAT_READ_DISCRETE_INPUTS_REPLY
+                        .follows_request(
+                            v_inputs.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
+                }
+                (
+                    &Self::ReadHoldingRegistersReply { registers: v_registers, .. },
+                    &Request::ReadHoldingRegisters { quantity: r_quantity, .. },
+                ) => {
+                    rt::following(
+                        &response::READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT,
+                        2,
+                        REPEAT_READ_HOLDING_REGISTERS_REPLY
+                            .count_value(v_registers.len()) as u64,
+                        r_quantity as i64,
+                        (2, 1),
+                        "2 × quantity of the request",
+                    )?;
+                    REPEAT_READ_HOLDING_REGISTERS_REPLY
+                        .follows_request(
+                            v_registers.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
+                }
+                (
+                    &Self::ReadInputRegistersReply { registers: v_registers, .. },
+                    &Request::ReadInputRegisters { quantity: r_quantity, .. },
+                ) => {
+                    rt::following(
+                        &response::READ_INPUT_REGISTERS_REPLY_BYTE_COUNT,
+                        2,
+                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
+                            as u64,
+                        r_quantity as i64,
+                        (2, 1),
+                        "2 × quantity of the request",
+                    )?;
+                    REPEAT_READ_INPUT_REGISTERS_REPLY
+                        .follows_request(
+                            v_registers.len(),
+                            r_quantity as i64,
+                            (1, 1),
+                            "quantity",
+                        )?;
+                }
+                (
+                    &Self::WriteSingleCoilReply {
+                        output_address: v_output_address,
+                        output_value: v_output_value,
+                        ..
+                    },
+                    &Request::WriteSingleCoil {
+                        output_address: r_output_address,
+                        output_value: r_output_value,
+                        ..
+                    },
+                ) => {
+                    rt::following(
+                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS,
+                        2,
+                        v_output_address,
+                        r_output_address as i64,
+                        (1, 1),
+                        "output_address of the request",
+                    )?;
+                    rt::following(
+                        &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE,
+                        4,
+                        v_output_value.raw(),
+                        r_output_value.raw() as i64,
+                        (1, 1),
+                        "output_value of the request",
+                    )?;
+                }
+                (
+                    &Self::WriteSingleRegisterReply {
+                        register_address: v_register_address,
+                        register_value: v_register_value,
+                        ..
+                    },
+                    &Request::WriteSingleRegister {
+                        register_address: r_register_address,
+                        register_value: r_register_value,
+                        ..
+                    },
+                ) => {
+                    rt::following(
+                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS,
+                        2,
+                        v_register_address,
+                        r_register_address as i64,
+                        (1, 1),
+                        "register_address of the request",
+                    )?;
+                    rt::following(
+                        &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_VALUE,
+                        4,
+                        v_register_value,
+                        r_register_value as i64,
+                        (1, 1),
+                        "register_value of the request",
+                    )?;
+                }
+                (
+                    &Self::WriteMultipleCoilsReply {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                        ..
+                    },
+                    &Request::WriteMultipleCoils {
+                        starting_address: r_starting_address,
+                        quantity: r_quantity,
+                        ..
+                    },
+                ) => {
+                    rt::following(
+                        &response::WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS,
+                        2,
+                        v_starting_address,
+                        r_starting_address as i64,
+                        (1, 1),
+                        "starting_address of the request",
+                    )?;
+                    rt::following(
+                        &response::WRITE_MULTIPLE_COILS_REPLY_QUANTITY,
+                        4,
+                        v_quantity,
+                        r_quantity as i64,
+                        (1, 1),
+                        "quantity of the request",
+                    )?;
+                }
+                (
+                    &Self::WriteMultipleRegistersReply {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                        ..
+                    },
+                    &Request::WriteMultipleRegisters {
+                        starting_address: r_starting_address,
+                        quantity: r_quantity,
+                        ..
+                    },
+                ) => {
+                    rt::following(
+                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS,
+                        2,
+                        v_starting_address,
+                        r_starting_address as i64,
+                        (1, 1),
+                        "starting_address of the request",
+                    )?;
+                    rt::following(
+                        &response::WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY,
+                        4,
+                        v_quantity,
+                        r_quantity as i64,
+                        (1, 1),
+                        "quantity of the request",
+                    )?;
+                }
+                _ => {}
+            }
+            rt::Ok(())
+        }
+    }
+    /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum RequestView<'a> {
+        /// [`Request::ReadCoils`], read from the frame.
+        ReadCoils { starting_address: u16, quantity: u16 },
+        /// [`Request::ReadDiscreteInputs`], read from the frame.
+        ReadDiscreteInputs { starting_address: u16, quantity: u16 },
+        /// [`Request::ReadHoldingRegisters`], read from the frame.
+        ReadHoldingRegisters { starting_address: u16, quantity: u16 },
+        /// [`Request::ReadInputRegisters`], read from the frame.
+        ReadInputRegisters { starting_address: u16, quantity: u16 },
+        /// [`Request::WriteSingleCoil`], read from the frame.
+        WriteSingleCoil { output_address: u16, output_value: CoilState },
+        /// [`Request::WriteSingleRegister`], read from the frame.
+        WriteSingleRegister { register_address: u16, register_value: u16 },
+        /// [`Request::WriteMultipleCoils`], read from the frame.
+        WriteMultipleCoils {
+            starting_address: u16,
+            quantity: u16,
+            outputs: rt::BitsView<'a>,
+        },
+        /// [`Request::WriteMultipleRegisters`], read from the frame.
+        WriteMultipleRegisters {
+            starting_address: u16,
+            quantity: u16,
+            values: rt::ListView<'a, u16>,
+        },
+    }
+    impl<'a> RequestView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                8,
+                255,
+                0,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 1, 1) {
+                0x01 => {
+                    let frame = rt::fixed::<8>(frame, &request::READ_COILS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_COILS)?;
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::in_range(&request::READ_COILS_QUANTITY, 4, field_1, 1, 2000)?;
+                    rt::Ok(Self::ReadCoils {
+                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        quantity: field_1,
+                    })
+                }
+                0x02 => {
+                    let frame = rt::fixed::<8>(frame, &request::READ_DISCRETE_INPUTS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_DISCRETE_INPUTS)?;
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::in_range(
+                        &request::READ_DISCRETE_INPUTS_QUANTITY,
+                        4,
+                        field_1,
+                        1,
+                        2000,
+                    )?;
+                    rt::Ok(Self::ReadDiscreteInputs {
+                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        quantity: field_1,
+                    })
+                }
+                0x03 => {
+                    let frame = rt::fixed::<8>(frame, &request::READ_HOLDING_REGISTERS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_HOLDING_REGISTERS)?;
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::in_range(
+                        &request::READ_HOLDING_REGISTERS_QUANTITY,
+                        4,
+                        field_1,
+                        1,
+                        125,
+                    )?;
+                    rt::Ok(Self::ReadHoldingRegisters {
+                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        quantity: field_1,
+                    })
+                }
+                0x04 => {
+                    let frame = rt::fixed::<8>(frame, &request::READ_INPUT_REGISTERS)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::READ_INPUT_REGISTERS)?;
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::in_range(
+                        &request::READ_INPUT_REGISTERS_QUANTITY,
+                        4,
+                        field_1,
+                        1,
+                        125,
+                    )?;
+                    rt::Ok(Self::ReadInputRegisters {
+                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        quantity: field_1,
+                    })
+                }
+                0x05 => {
+                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_COIL)?;
+                    rt::Ok(Self::WriteSingleCoil {
+                        output_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        output_value: CoilState::from_raw(
+                            u16::from_be_bytes([frame[4], frame[5]]),
+                        ),
+                    })
+                }
+                0x06 => {
+                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_REGISTER)?;
+                    rt::Ok(Self::WriteSingleRegister {
+                        register_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        register_value: u16::from_be_bytes([frame[4], frame[5]]),
+                    })
+                }
+                0x0F => {
+                    let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
+                        .split::<7>(frame)?;
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::in_range(
+                        &request::WRITE_MULTIPLE_COILS_QUANTITY,
+                        4,
+                        field_1,
+                        1,
+                        1968,
+                    )?;
+                    rt::following(
+                        &request::WRITE_MULTIPLE_COILS_BYTE_COUNT,
+                        6,
+                        frame[6],
+                        field_1 as i64,
+                        (1, 8),
+                        "ceil(quantity / 8)",
+                    )?;
+                    rt::Ok(Self::WriteMultipleCoils {
+                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        quantity: field_1,
+                        outputs: REPEAT_WRITE_MULTIPLE_COILS
+                            .view_bits::<246>(elements, count)?,
+                    })
+                }
+                0x10 => {
+                    let (frame, elements, _) = REPEAT_WRITE_MULTIPLE_REGISTERS
+                        .split::<7>(frame)?;
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::in_range(
+                        &request::WRITE_MULTIPLE_REGISTERS_QUANTITY,
+                        4,
+                        field_1,
+                        1,
+                        123,
+                    )?;
+                    rt::following(
+                        &request::WRITE_MULTIPLE_REGISTERS_BYTE_COUNT,
+                        6,
+                        frame[6],
+                        field_1 as i64,
+                        (2, 1),
+                        "2 × quantity",
+                    )?;
+                    rt::Ok(Self::WriteMultipleRegisters {
+                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                        quantity: field_1,
+                        values: REPEAT_WRITE_MULTIPLE_REGISTERS
+                            .view::<u16, 123>(elements, false, false)?,
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::ReadCoils { .. } => 0,
+                Self::ReadDiscreteInputs { .. } => 1,
+                Self::ReadHoldingRegisters { .. } => 2,
+                Self::ReadInputRegisters { .. } => 3,
+                Self::WriteSingleCoil { .. } => 4,
+                Self::WriteSingleRegister { .. } => 5,
+                Self::WriteMultipleCoils { .. } => 6,
+                Self::WriteMultipleRegisters { .. } => 7,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Request::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Request {
+            match self {
+                Self::ReadCoils { starting_address, quantity } => {
+                    Request::ReadCoils {
+                        starting_address,
+                        quantity,
+                    }
+                }
+                Self::ReadDiscreteInputs { starting_address, quantity } => {
+                    Request::ReadDiscreteInputs {
+                        starting_address,
+                        quantity,
+                    }
+                }
+                Self::ReadHoldingRegisters { starting_address, quantity } => {
+                    Request::ReadHoldingRegisters {
+                        starting_address,
+                        quantity,
+                    }
+                }
+                Self::ReadInputRegisters { starting_address, quantity } => {
+                    Request::ReadInputRegisters {
+                        starting_address,
+                        quantity,
+                    }
+                }
+                Self::WriteSingleCoil { output_address, output_value } => {
+                    Request::WriteSingleCoil {
+                        output_address,
+                        output_value,
+                    }
+                }
+                Self::WriteSingleRegister { register_address, register_value } => {
+                    Request::WriteSingleRegister {
+                        register_address,
+                        register_value,
+                    }
+                }
+                Self::WriteMultipleCoils { starting_address, quantity, outputs } => {
+                    Request::WriteMultipleCoils {
+                        starting_address,
+                        quantity,
+                        outputs: outputs.to_bits(),
+                    }
+                }
+                Self::WriteMultipleRegisters { starting_address, quantity, values } => {
+                    Request::WriteMultipleRegisters {
+                        starting_address,
+                        quantity,
+                        values: values.to_repeated(),
+                    }
+                }
+            }
+        }
+    }
+    /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum ResponseView<'a> {
+        /// [`Response::ReadCoilsReply`], read from the frame.
+        ReadCoilsReply { coils: rt::BitsView<'a> },
+        /// [`Response::ReadCoilsException`], read from the frame.
+        ReadCoilsException { exception_code: ExceptionCode },
+        /// [`Response::ReadDiscreteInputsReply`], read from the frame.
+        ReadDiscreteInputsReply { inputs: rt::BitsView<'a> },
+        /// [`Response::ReadDiscreteInputsException`], read from the frame.
+        ReadDiscreteInputsException { exception_code: ExceptionCode },
+        /// [`Response::ReadHoldingRegistersReply`], read from the frame.
+        ReadHoldingRegistersReply { registers: rt::ListView<'a, u16> },
+        /// [`Response::ReadHoldingRegistersException`], read from the frame.
+        ReadHoldingRegistersException { exception_code: ExceptionCode },
+        /// [`Response::ReadInputRegistersReply`], read from the frame.
+        ReadInputRegistersReply { registers: rt::ListView<'a, u16> },
+        /// [`Response::ReadInputRegistersException`], read from the frame.
+        ReadInputRegistersException { exception_code: ExceptionCode },
+        /// [`Response::WriteSingleCoilReply`], read from the frame.
+        WriteSingleCoilReply { output_address: u16, output_value: CoilState },
+        /// [`Response::WriteSingleCoilException`], read from the frame.
+        WriteSingleCoilException { exception_code: ExceptionCode },
+        /// [`Response::WriteSingleRegisterReply`], read from the frame.
+        WriteSingleRegisterReply { register_address: u16, register_value: u16 },
+        /// [`Response::WriteSingleRegisterException`], read from the frame.
+        WriteSingleRegisterException { exception_code: ExceptionCode },
+        /// [`Response::WriteMultipleCoilsReply`], read from the frame.
+        WriteMultipleCoilsReply { starting_address: u16, quantity: u16 },
+        /// [`Response::WriteMultipleCoilsException`], read from the frame.
+        WriteMultipleCoilsException { exception_code: ExceptionCode },
+        /// [`Response::WriteMultipleRegistersReply`], read from the frame.
+        WriteMultipleRegistersReply { starting_address: u16, quantity: u16 },
+        /// [`Response::WriteMultipleRegistersException`], read from the frame.
+        WriteMultipleRegistersException { exception_code: ExceptionCode },
+    }
+    impl<'a> ResponseView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(
+            frame: &'a [u8],
+            request: &Request,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                5,
+                255,
+                0,
+                &FRAME,
+                |b| u32::from(checksum(b)),
+            )?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+                message.follows_request(request)?;
+            }
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 1, 1) {
+                0x01 => {
+                    let (_, elements, count) = REPEAT_READ_COILS_REPLY
+                        .split::<3>(frame)?;
+                    rt::Ok(Self::ReadCoilsReply {
+                        coils: REPEAT_READ_COILS_REPLY.view_bits::<250>(elements, count)?,
+                    })
+                }
+                0x81 => {
+                    let frame = rt::fixed::<5>(frame, &response::READ_COILS_EXCEPTION)?;
+                    rt::Ok(Self::ReadCoilsException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                0x02 => {
+                    let (_, elements, count) = REPEAT_READ_DISCRETE_INPUTS_REPLY
+                        .split::<3>(frame)?;
+                    rt::Ok(Self::ReadDiscreteInputsReply {
+                        inputs: REPEAT_READ_DISCRETE_INPUTS_REPLY
+                            .view_bits::<250>(elements, count)?,
+                    })
+                }
+                0x82 => {
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::READ_DISCRETE_INPUTS_EXCEPTION)?;
+                    rt::Ok(Self::ReadDiscreteInputsException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                0x03 => {
+                    let (_, elements, _) = REPEAT_READ_HOLDING_REGISTERS_REPLY
+                        .split::<3>(frame)?;
+                    rt::Ok(Self::ReadHoldingRegistersReply {
+                        registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
+                            .view::<u16, 125>(elements, false, false)?,
+                    })
+                }
+                0x83 => {
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::READ_HOLDING_REGISTERS_EXCEPTION)?;
+                    rt::Ok(Self::ReadHoldingRegistersException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                0x04 => {
+                    let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY
+                        .split::<3>(frame)?;
+                    rt::Ok(Self::ReadInputRegistersReply {
+                        registers: REPEAT_READ_INPUT_REGISTERS_REPLY
+                            .view::<u16, 125>(elements, false, false)?,
+                    })
+                }
+                0x84 => {
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::READ_INPUT_REGISTERS_EXCEPTION)?;
+                    rt::Ok(Self::ReadInputRegistersException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                0x05 => {
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &response::WRITE_SINGLE_COIL_REPLY)?;
+                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::Ok(Self::WriteSingleCoilReply {
+                        output_address: field_0,
+                        output_value: CoilState::from_raw(field_1),
+                    })
+                }
+                0x85 => {
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::WRITE_SINGLE_COIL_EXCEPTION)?;
+                    rt::Ok(Self::WriteSingleCoilException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                0x06 => {
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &response::WRITE_SINGLE_REGISTER_REPLY)?;
+                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::Ok(Self::WriteSingleRegisterReply {
+                        register_address: field_0,
+                        register_value: field_1,
+                    })
+                }
+                0x86 => {
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::WRITE_SINGLE_REGISTER_EXCEPTION)?;
+                    rt::Ok(Self::WriteSingleRegisterException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                0x0F => {
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &response::WRITE_MULTIPLE_COILS_REPLY)?;
+                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::Ok(Self::WriteMultipleCoilsReply {
+                        starting_address: field_0,
+                        quantity: field_1,
+                    })
+                }
+                0x8F => {
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::WRITE_MULTIPLE_COILS_EXCEPTION)?;
+                    rt::Ok(Self::WriteMultipleCoilsException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                0x10 => {
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_REPLY)?;
+                    let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
+                    let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
+                    rt::Ok(Self::WriteMultipleRegistersReply {
+                        starting_address: field_0,
+                        quantity: field_1,
+                    })
+                }
+                0x90 => {
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_EXCEPTION)?;
+                    rt::Ok(Self::WriteMultipleRegistersException {
+                        exception_code: ExceptionCode::from_raw(frame[2]),
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::ReadCoilsReply { .. } => 0,
+                Self::ReadCoilsException { .. } => 1,
+                Self::ReadDiscreteInputsReply { .. } => 2,
+                Self::ReadDiscreteInputsException { .. } => 3,
+                Self::ReadHoldingRegistersReply { .. } => 4,
+                Self::ReadHoldingRegistersException { .. } => 5,
+                Self::ReadInputRegistersReply { .. } => 6,
+                Self::ReadInputRegistersException { .. } => 7,
+                Self::WriteSingleCoilReply { .. } => 8,
+                Self::WriteSingleCoilException { .. } => 9,
+                Self::WriteSingleRegisterReply { .. } => 10,
+                Self::WriteSingleRegisterException { .. } => 11,
+                Self::WriteMultipleCoilsReply { .. } => 12,
+                Self::WriteMultipleCoilsException { .. } => 13,
+                Self::WriteMultipleRegistersReply { .. } => 14,
+                Self::WriteMultipleRegistersException { .. } => 15,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Response::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Response {
+            match self {
+                Self::ReadCoilsReply { coils } => {
+                    Response::ReadCoilsReply {
+                        coils: coils.to_bits(),
+                    }
+                }
+                Self::ReadCoilsException { exception_code } => {
+                    Response::ReadCoilsException {
+                        exception_code,
+                    }
+                }
+                Self::ReadDiscreteInputsReply { inputs } => {
+                    Response::ReadDiscreteInputsReply {
+                        inputs: inputs.to_bits(),
+                    }
+                }
+                Self::ReadDiscreteInputsException { exception_code } => {
+                    Response::ReadDiscreteInputsException {
+                        exception_code,
+                    }
+                }
+                Self::ReadHoldingRegistersReply { registers } => {
+                    Response::ReadHoldingRegistersReply {
+                        registers: registers.to_repeated(),
+                    }
+                }
+                Self::ReadHoldingRegistersException { exception_code } => {
+                    Response::ReadHoldingRegistersException {
+                        exception_code,
+                    }
+                }
+                Self::ReadInputRegistersReply { registers } => {
+                    Response::ReadInputRegistersReply {
+                        registers: registers.to_repeated(),
+                    }
+                }
+                Self::ReadInputRegistersException { exception_code } => {
+                    Response::ReadInputRegistersException {
+                        exception_code,
+                    }
+                }
+                Self::WriteSingleCoilReply { output_address, output_value } => {
+                    Response::WriteSingleCoilReply {
+                        output_address,
+                        output_value,
+                    }
+                }
+                Self::WriteSingleCoilException { exception_code } => {
+                    Response::WriteSingleCoilException {
+                        exception_code,
+                    }
+                }
+                Self::WriteSingleRegisterReply { register_address, register_value } => {
+                    Response::WriteSingleRegisterReply {
+                        register_address,
+                        register_value,
+                    }
+                }
+                Self::WriteSingleRegisterException { exception_code } => {
+                    Response::WriteSingleRegisterException {
+                        exception_code,
+                    }
+                }
+                Self::WriteMultipleCoilsReply { starting_address, quantity } => {
+                    Response::WriteMultipleCoilsReply {
+                        starting_address,
+                        quantity,
+                    }
+                }
+                Self::WriteMultipleCoilsException { exception_code } => {
+                    Response::WriteMultipleCoilsException {
+                        exception_code,
+                    }
+                }
+                Self::WriteMultipleRegistersReply { starting_address, quantity } => {
+                    Response::WriteMultipleRegistersReply {
+                        starting_address,
+                        quantity,
+                    }
+                }
+                Self::WriteMultipleRegistersException { exception_code } => {
+                    Response::WriteMultipleRegistersException {
+                        exception_code,
+                    }
+                }
+            }
         }
         /// Checks every field this response takes from `request` (`follows: {request}` in the
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.

@@ -4,6 +4,7 @@ pub mod msp_by_direction {
     //!
     //! Generated from `model/tests/fixtures/valid/msp_by_direction.yaml`, transcribed from *MultiWii Serial Protocol, version 1 (public description)*, revision 1 (2015-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -547,6 +548,131 @@ pub mod msp_by_direction {
         /// Whether this response is one the document says `request` may get.
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
+        }
+    }
+    /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum ResponseView<'a> {
+        /// [`Response::ApiVersionReply`], read from the frame.
+        ApiVersionReply { protocol_version: u8, api_major: u8, api_minor: u8 },
+        /// [`Response::RcReply`], read from the frame.
+        RcReply { channels: rt::ListView<'a, u16> },
+        /// [`Response::AttitudeReply`], read from the frame.
+        AttitudeReply { roll: Decidegrees, pitch: Decidegrees, yaw: i16 },
+    }
+    impl<'a> ResponseView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(
+            frame: &'a [u8],
+            request: &Request,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            rt::check_sync(frame, 42, 0, &[0x24, 0x4D, 0x3E])?;
+            let address = rt::check_frame(
+                frame,
+                6,
+                42,
+                0,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 3))),
+            )?;
+            rt::length_field(frame, 3, 1, true, true, -6)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 4, 1) {
+                0x01 => {
+                    let frame = rt::fixed::<9>(frame, &response::API_VERSION_REPLY)?;
+                    rt::Ok(Self::ApiVersionReply {
+                        protocol_version: frame[5],
+                        api_major: frame[6],
+                        api_minor: frame[7],
+                    })
+                }
+                0x69 => {
+                    let (_, elements, _) = REPEAT_RC_REPLY.split::<5>(frame)?;
+                    rt::Ok(Self::RcReply {
+                        channels: REPEAT_RC_REPLY.view::<u16, 18>(elements, true, false)?,
+                    })
+                }
+                0x6C => {
+                    let frame = rt::fixed::<12>(frame, &response::ATTITUDE_REPLY)?;
+                    rt::Ok(Self::AttitudeReply {
+                        roll: Decidegrees::from_raw(
+                            i16::from_le_bytes([frame[5], frame[6]]),
+                        ),
+                        pitch: Decidegrees::from_raw(
+                            i16::from_le_bytes([frame[7], frame[8]]),
+                        ),
+                        yaw: i16::from_le_bytes([frame[9], frame[10]]),
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::ApiVersionReply { .. } => 0,
+                Self::RcReply { .. } => 1,
+                Self::AttitudeReply { .. } => 2,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Response::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Response {
+            match self {
+                Self::ApiVersionReply { protocol_version, api_major, api_minor } => {
+                    Response::ApiVersionReply {
+                        protocol_version,
+                        api_major,
+                        api_minor,
+                    }
+                }
+                Self::RcReply { channels } => {
+                    Response::RcReply {
+                        channels: channels.to_repeated(),
+                    }
+                }
+                Self::AttitudeReply { roll, pitch, yaw } => {
+                    Response::AttitudeReply {
+                        roll,
+                        pitch,
+                        yaw,
+                    }
+                }
+            }
         }
     }
     /// The msp_by_direction protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.

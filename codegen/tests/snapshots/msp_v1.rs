@@ -4,6 +4,7 @@ pub mod msp_v1 {
     //!
     //! Generated from `model/tests/fixtures/valid/msp_v1.yaml`, transcribed from *MultiWii Serial Protocol, version 1 (public description)*, revision 1 (2015-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod msp_v2 {
     //!
     //! Generated from `model/tests/fixtures/valid/msp_v2.yaml`, transcribed from *MSP V2 (INAV wiki)*, revision 1 (2018-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

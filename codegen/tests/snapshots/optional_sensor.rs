@@ -4,6 +4,7 @@ pub mod optional_sensor {
     //!
     //! Generated from `model/tests/fixtures/valid/optional_sensor.yaml`, transcribed from *busspec test fixture: a sensor whose reading says which optional values follow*, revision 1 (2026-11-27).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

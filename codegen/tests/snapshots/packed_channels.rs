@@ -4,6 +4,7 @@ pub mod packed_channels {
     //!
     //! Generated from `model/tests/fixtures/valid/packed_channels.yaml`, transcribed from *busspec test fixture: packed elements*, revision 1 (2026-11-26).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

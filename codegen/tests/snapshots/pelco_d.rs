@@ -4,6 +4,7 @@ pub mod pelco_d2 {
     //!
     //! Generated from `model/tests/fixtures/valid/pelco_d_codeless.yaml`, transcribed from *Pelco D protocol manual (transcribed from its public description)*, revision 1999 (1999-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod records_sized {
     //!
     //! Generated from `model/tests/fixtures/valid/records_sized.yaml`, transcribed from *Records test document*, revision 2 (2026-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod sd {
     //!
     //! Generated from `spec/sd.yaml`, transcribed from *SD-01/02 RS485 ICD specification*, revision 01/11/2021 (2021-11-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

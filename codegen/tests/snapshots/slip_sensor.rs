@@ -4,6 +4,7 @@ pub mod slip_sensor {
     //!
     //! Generated from `model/tests/fixtures/valid/slip_sensor.yaml`, transcribed from *busspec test fixture: a sensor on SLIP framing (RFC 1055)*, revision 1 (2026-11-26).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: its frames are escaped: the decoder reads an unescaped copy; no `ResponseView`: its frames are escaped: the decoder reads an unescaped copy.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

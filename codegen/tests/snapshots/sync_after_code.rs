@@ -4,6 +4,7 @@ pub mod sync_after_code {
     //!
     //! Generated from `model/tests/fixtures/valid/sync_after_code.yaml`, transcribed from *busspec test fixture: start bytes after the code*, revision 1 (2026-11-26).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

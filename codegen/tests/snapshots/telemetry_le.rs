@@ -4,6 +4,7 @@ pub mod telemetry_le {
     //!
     //! Generated from `model/tests/fixtures/valid/telemetry_le.yaml`, transcribed from *busspec test fixture: little-endian telemetry*, revision 1 (2026-12-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod text_counted {
     //!
     //! Generated from `model/tests/fixtures/valid/text_counted.yaml`, transcribed from *Counted text test document*, revision 1 (2026-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -579,6 +580,178 @@ pub mod text_counted {
         /// Whether this response is one the document says `request` may get.
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
+        }
+    }
+    /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum RequestView<'a> {
+        /// [`Request::SetName`], read from the frame.
+        SetName { name: rt::ListView<'a, u8>, channel: u8 },
+        /// [`Request::GetInfo`], read from the frame.
+        GetInfo,
+    }
+    impl<'a> RequestView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                4,
+                22,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 1))),
+            )?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 1) {
+                0x20 => {
+                    let s = LISTS_SET_NAME.split::<6, 1>(frame)?;
+                    let frame = &s.frame;
+                    rt::in_range(
+                        &request::SET_NAME_CHANNEL,
+                        4 + s.shift(1),
+                        frame[4],
+                        0,
+                        7,
+                    )?;
+                    rt::Ok(Self::SetName {
+                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        channel: frame[4],
+                    })
+                }
+                0x21 => rt::fixed::<4>(frame, &request::GET_INFO).map(|_| Self::GetInfo),
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::SetName { .. } => 0,
+                Self::GetInfo => 1,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Request::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Request {
+            match self {
+                Self::SetName { name, channel } => {
+                    Request::SetName {
+                        name: name.to_repeated(),
+                        channel,
+                    }
+                }
+                Self::GetInfo => Request::GetInfo,
+            }
+        }
+    }
+    /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum ResponseView<'a> {
+        /// [`Response::Ack`], read from the frame.
+        Ack { status: u8 },
+        /// [`Response::DeviceInfo`], read from the frame.
+        DeviceInfo { name: rt::ListView<'a, u8>, serial: u32, version: u8 },
+    }
+    impl<'a> ResponseView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(
+            frame: &'a [u8],
+            request: &Request,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                5,
+                26,
+                1,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 1))),
+            )?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 1) {
+                0x20 => {
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
+                    rt::Ok(Self::Ack { status: frame[3] })
+                }
+                0x21 => {
+                    let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
+                    let frame = &s.frame;
+                    rt::Ok(Self::DeviceInfo {
+                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        serial: u32::from_be_bytes([
+                            frame[4],
+                            frame[5],
+                            frame[6],
+                            frame[7],
+                        ]),
+                        version: frame[8],
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::Ack { .. } => 0,
+                Self::DeviceInfo { .. } => 1,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Response::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Response {
+            match self {
+                Self::Ack { status } => Response::Ack { status },
+                Self::DeviceInfo { name, serial, version } => {
+                    Response::DeviceInfo {
+                        name: name.to_repeated(),
+                        serial,
+                        version,
+                    }
+                }
+            }
         }
     }
     /// The text_counted protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.

@@ -4,6 +4,7 @@ pub mod ub2 {
     //!
     //! Generated from `spec/ub2.yaml`, transcribed from *Service Bulletin-70 | Motorized Capacitor: Interface Protocol (Universal-ID 'UB2' with Encoder and RS485)*, revision 1.0.0 (2020-06-19).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: no message of the direction has a list to lend; no `ResponseView`: no message of the direction has a list to lend.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod vesc {
     //!
     //! Generated from `model/tests/fixtures/valid/vesc.yaml`, transcribed from *VESC firmware (bldc): packet.c, commands.c, datatypes.h*, revision 3.40 (2018-01-24).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: its long length form is laid out into a copy before decode; no `ResponseView`: its long length form is laid out into a copy before decode.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,

@@ -4,6 +4,7 @@ pub mod xbee_api2 {
     //!
     //! Generated from `model/tests/fixtures/valid/xbee_api2.yaml`, transcribed from *busspec test fixture: XBee API frames in escaped API mode*, revision 1 (2026-11-26).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: no `RequestView`: its frames are escaped: the decoder reads an unescaped copy; no `ResponseView`: its frames are escaped: the decoder reads an unescaped copy.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
