@@ -50,6 +50,7 @@ crate::views!(lists_after::ListsAfter, lists_after, request, response);
 crate::views!(lists_length::ListsLength, lists_length, request, -);
 crate::views!(msp_by_direction::MspByDirection, msp_by_direction, -, response);
 crate::views!(text_counted::TextCounted, text_counted, request, response);
+crate::views!(text_terminated::TextTerminated, text_terminated, request, response);
 
 /// Every fixture with a borrowed view: made of exactly the frames the owned decode accepts,
 /// refused with its error elsewhere, its values the owned message's (`agree::views_agree`).
@@ -70,6 +71,7 @@ fn fixture_views_agree_with_the_owned_decode() {
     one::<lists_length::ListsLength>("model/tests/fixtures/valid/lists_length.yaml");
     one::<msp_by_direction::MspByDirection>("model/tests/fixtures/valid/msp_by_direction.yaml");
     one::<text_counted::TextCounted>("model/tests/fixtures/valid/text_counted.yaml");
+    one::<text_terminated::TextTerminated>("model/tests/fixtures/valid/text_terminated.yaml");
 }
 
 use busspec_model::ir::{self, Direction};

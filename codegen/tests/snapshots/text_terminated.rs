@@ -4,6 +4,7 @@ pub mod text_terminated {
     //!
     //! Generated from `model/tests/fixtures/valid/text_terminated.yaml`, transcribed from *Terminated text test document*, revision 1 (2026-01-01).
     //! Numbers travel big-endian on the wire.
+    //! Borrowed views: `RequestView<'a>` lends its lists; `ResponseView<'a>` lends its lists.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
@@ -746,6 +747,246 @@ pub mod text_terminated {
         /// Whether this response is one the document says `request` may get.
         pub fn answers(&self, request: &Request) -> bool {
             request.replies() >> self.index() & 1 != 0
+        }
+    }
+    /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum RequestView<'a> {
+        /// [`Request::Ping`], read from the frame.
+        Ping,
+        /// [`Request::SetName`], read from the frame.
+        SetName { name: rt::ListView<'a, u8>, channel: u8 },
+        /// [`Request::ReadParameter`], read from the frame.
+        ReadParameter { index: u8 },
+    }
+    impl<'a> RequestView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                4,
+                22,
+                0,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 2))),
+            )?;
+            rt::length_field(frame, 1, 1, false, true, -2)?;
+            let message = Self::dispatch(frame)?;
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 1) {
+                0x28 => rt::fixed::<4>(frame, &request::PING).map(|_| Self::Ping),
+                0x2A => {
+                    let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
+                    let frame = &s.frame;
+                    rt::in_range(
+                        &request::SET_NAME_CHANNEL,
+                        3 + s.shift(1),
+                        frame[3],
+                        0,
+                        7,
+                    )?;
+                    rt::Ok(Self::SetName {
+                        name: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        channel: frame[3],
+                    })
+                }
+                0x2C => {
+                    let frame = rt::fixed::<5>(frame, &request::READ_PARAMETER)?;
+                    rt::Ok(Self::ReadParameter {
+                        index: frame[3],
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::Ping => 0,
+                Self::SetName { .. } => 1,
+                Self::ReadParameter { .. } => 2,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Request::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Request {
+            match self {
+                Self::Ping => Request::Ping,
+                Self::SetName { name, channel } => {
+                    Request::SetName {
+                        name: name.to_repeated(),
+                        channel,
+                    }
+                }
+                Self::ReadParameter { index } => Request::ReadParameter { index },
+            }
+        }
+    }
+    /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum ResponseView<'a> {
+        /// [`Response::DeviceInfo`], read from the frame.
+        DeviceInfo {
+            name: rt::ListView<'a, u8>,
+            serial: u32,
+            hardware: u32,
+            firmware: u32,
+            parameters: u8,
+            version: u8,
+        },
+        /// [`Response::Ack`], read from the frame.
+        Ack { status: u8 },
+        /// [`Response::Parameter`], read from the frame.
+        Parameter {
+            index: u8,
+            label: rt::ListView<'a, u8>,
+            unit: rt::ListView<'a, u8>,
+            value: i16,
+        },
+    }
+    impl<'a> ResponseView<'a> {
+        /// Decodes one whole frame: refuses one longer than the longest, checks its start byte,
+        /// checksum and address, then its code, constants, repeated fields, the ranges the
+        /// spec gives its fields and the command's broadcast rule.
+        ///
+        /// Responses that only their request tells apart are reported as
+        /// [`busspec_runtime::DecodeError::Ambiguous`]; decode those with [`Self::decode_reply`].
+        #[inline]
+        pub fn decode(frame: &'a [u8]) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::None)
+        }
+        /// Decodes a frame as the reply to `request`: only responses `request` may get are
+        /// considered, which settles responses that share code and length (and are otherwise
+        /// reported as [`busspec_runtime::DecodeError::Ambiguous`]).
+        #[inline]
+        pub fn decode_reply(
+            frame: &'a [u8],
+            request: &Request,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            Self::decode_for(frame, rt::Some(request))
+        }
+        /// The one decoder behind [`Self::decode`] (`request` is `None`) and
+        /// [`Self::decode_reply`].
+        fn decode_for(
+            frame: &'a [u8],
+            request: rt::Option<&Request>,
+        ) -> rt::Result<Decoded<Self>, rt::DecodeError> {
+            let address = rt::check_frame(
+                frame,
+                5,
+                43,
+                0,
+                &FRAME,
+                |b| u32::from(checksum(rt::covered(b, 2))),
+            )?;
+            rt::length_field(frame, 1, 1, false, true, -2)?;
+            let message = Self::dispatch(frame)?;
+            if let rt::Some(request) = request {
+                if request.replies() >> message.index() & 1 == 0 {
+                    return rt::Err(rt::not_a_reply(message.name(), request.name()));
+                }
+            }
+            rt::Ok(Decoded { address, message })
+        }
+        /// The message of a frame that passed the checks every frame passes, by its code.
+        #[inline]
+        fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
+            match rt::code(frame, 2, 1) {
+                0x29 => {
+                    let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
+                    let frame = &s.frame;
+                    rt::Ok(Self::DeviceInfo {
+                        name: s.lists[0].view::<u8, 24>(s.elements(0), false, false)?,
+                        serial: u32::from_be_bytes([
+                            frame[3],
+                            frame[4],
+                            frame[5],
+                            frame[6],
+                        ]),
+                        hardware: u32::from_be_bytes([
+                            frame[7],
+                            frame[8],
+                            frame[9],
+                            frame[10],
+                        ]),
+                        firmware: u32::from_be_bytes([
+                            frame[11],
+                            frame[12],
+                            frame[13],
+                            frame[14],
+                        ]),
+                        parameters: frame[15],
+                        version: frame[16],
+                    })
+                }
+                0x2A => {
+                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
+                    rt::Ok(Self::Ack { status: frame[3] })
+                }
+                0x2B => {
+                    let s = LISTS_PARAMETER.split::<7, 2>(frame)?;
+                    let frame = &s.frame;
+                    rt::Ok(Self::Parameter {
+                        index: frame[3],
+                        label: s.lists[0].view::<u8, 16>(s.elements(0), false, false)?,
+                        unit: s.lists[1].view::<u8, 8>(s.elements(1), false, false)?,
+                        value: i16::from_be_bytes([frame[4], frame[5]]),
+                    })
+                }
+                _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
+            }
+        }
+        /// This message's row in the owned type's `MESSAGES`.
+        const fn index(&self) -> usize {
+            match *self {
+                Self::DeviceInfo { .. } => 0,
+                Self::Ack { .. } => 1,
+                Self::Parameter { .. } => 2,
+            }
+        }
+        /// The spec's snake_case name of this message.
+        pub const fn name(&self) -> &'static str {
+            Response::MESSAGES[self.index()].0
+        }
+        /// The owned message: each lent list copied.
+        pub fn to_owned(self) -> Response {
+            match self {
+                Self::DeviceInfo {
+                    name,
+                    serial,
+                    hardware,
+                    firmware,
+                    parameters,
+                    version,
+                } => {
+                    Response::DeviceInfo {
+                        name: name.to_repeated(),
+                        serial,
+                        hardware,
+                        firmware,
+                        parameters,
+                        version,
+                    }
+                }
+                Self::Ack { status } => Response::Ack { status },
+                Self::Parameter { index, label, unit, value } => {
+                    Response::Parameter {
+                        index,
+                        label: label.to_repeated(),
+                        unit: unit.to_repeated(),
+                        value,
+                    }
+                }
+            }
         }
     }
     /// The text_terminated protocol as a type: implements [`busspec_runtime::Protocol`], so code generic over protocols works with it.
