@@ -27,6 +27,7 @@ pub use ascii::Ascii;
 
 pub mod codec;
 pub mod escape;
+mod forms;
 mod lists;
 mod long;
 mod optional;
@@ -34,6 +35,8 @@ mod protocol;
 mod repeated;
 pub mod stream;
 
+#[doc(hidden)]
+pub use forms::ShortForm;
 #[doc(hidden)]
 pub use long::LongLength;
 pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};
