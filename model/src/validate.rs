@@ -1440,7 +1440,7 @@ fn short_form(
         );
     }
     let form = spec.forms.first()?;
-    let fpath = join(path, "0");
+    let fpath = format!("{path}[0]");
     let start = u8_of(
         form.start,
         &join(&fpath, "start"),
@@ -1500,12 +1500,6 @@ fn short_form(
         );
         return None;
     };
-    if !l.counts.contains(&Part::Payload) {
-        sink.error(
-            "framing.length.counts",
-            "beside a frame form (framing.forms), the length counts the payload: a short frame is one whose payload is empty",
-        );
-    }
     let (rq, rs) = (&f.request.code_lengths, &f.response.code_lengths);
     if rq.len() != 1 || rq != rs {
         sink.error(
