@@ -1419,7 +1419,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
 /// `framing.forms`, checked against the rest of the framing (resolved but for it): one form,
 /// a start byte of its own beside the framing's one start byte, dropping the length field's
 /// copies and perhaps the second start, which sit together in the layout after the first start
-/// byte; a length that counts the payload, one code length the same both ways, a checksum that
+/// byte (anywhere before the payload); a length that counts the payload, one code length the same both ways, a checksum that
 /// covers none of the dropped parts; no long length form, escaping, preamble, transform or
 /// header fields beside it (not expressible yet).
 fn short_form(
@@ -1528,10 +1528,10 @@ fn short_form(
     runs.sort_unstable();
     let at = runs.first().map_or(0, |r| r.0);
     let together = runs.windows(2).all(|w| w[0].0 + w[0].1 == w[1].0);
-    if !together || at != start_at + f.sync.len() {
+    if !together || at <= start_at {
         sink.error(
             "framing.layout",
-            "a frame form drops parts that sit together right after the first start byte (`start, length, length, start, ...` or `start, length, ...`), yet",
+            "a frame form drops parts that sit together after the first start byte (`start, length, length, start, ...`, `start, code, length, ...`), yet",
         );
     }
     let n: usize = runs.iter().map(|r| r.1).sum();

@@ -145,7 +145,7 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     (
         "forms_drops_apart",
-        &[("framing.layout", "a frame form drops parts that sit together right after the first start byte")],
+        &[("framing.layout", "a frame form drops parts that sit together after the first start byte")],
     ),
     (
         "forms_without_length",
