@@ -119,6 +119,9 @@ fn cases() -> Vec<Case> {
         // A length field whose width the start byte chooses (VESC): short and long frames
         // dissected laid out in the long form's width.
         spec("model/tests/fixtures/valid/vesc.yaml"),
+        // A short form of the frame (M-Bus): short frames dissected laid out in the long
+        // form, beside long frames and the single character E5.
+        spec("model/tests/fixtures/valid/mbus.yaml"),
         derived_units(),
     ]
 }

@@ -2317,6 +2317,12 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             &format!("printed_byte_order: {bo}"),
             1,
         );
+        // Room for a command without payload (`short_cmd`, below), which travels short.
+        framing = framing.replacen(
+            &format!("payload: {{min: {qlo}, max: {qhi}}}"),
+            &format!("payload: {{min: 0, max: {qhi}}}"),
+            1,
+        );
     }
 
     // Constant whole frames (M-Bus's single character E5): where every frame begins with its
@@ -2445,6 +2451,25 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
             resp.join(", ")
         );
     }
+    // Beside a short form, a command without payload that travels in it, its code one no
+    // other command has (the request payload's least made 0 above).
+    let mut short_cmd = 0;
+    if let (Some(_), Some(&len)) = (short_form, req_lens.first().filter(|l| **l > 0)) {
+        let mut rng = own_rng(seed, Own::ShortForm);
+        let code = loop {
+            let code: Vec<u8> = (0..len).map(|_| rng.u8(..)).collect();
+            if commands.iter().all(|m| m.code != code) {
+                break code;
+            }
+        };
+        let x = extra_of(&mut g, &code);
+        let _ = writeln!(
+            y,
+            "  - {{name: short_cmd, title: \"short_cmd\", section: \"3\", code: \"{}\", kind: setter{x}, reply: none, fields: [], responses: []}}",
+            code_text(&code)
+        );
+        short_cmd = 1;
+    }
     y.push_str("responses:\n");
     for m in &responses {
         let fields: Vec<&str> = m.fields.iter().map(|f| f.yaml.as_str()).collect();
@@ -2472,7 +2497,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         let _ = writeln!(y, "common_responses: [{}]", c.join(", "));
     }
     let _ = needs_request;
-    (y, n_cmd + responses.len() + constants.len())
+    (y, n_cmd + short_cmd + responses.len() + constants.len())
 }
 
 /// The escaping a random spec takes, if any.

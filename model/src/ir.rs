@@ -502,9 +502,6 @@ impl Framing {
     /// validated). `checksum.covers_from` without a long form.
     pub fn short_covers_from(&self) -> usize {
         let from = self.checksum.covers_from;
-        if let Some(f) = &self.form {
-            return from.saturating_sub(f.extra());
-        }
         match self.long {
             Some(l) if from >= l.length_at + l.width => from - l.extra(),
             _ => from,
