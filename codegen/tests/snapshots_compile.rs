@@ -2268,8 +2268,14 @@ fn short_form_snapshot_agrees_with_the_interpreter() {
         &buf[..n],
         &[0x68, 0x03, 0x03, 0x68, 0x53, 0x01, 0x50, 0xA4, 0x16]
     );
-    let n = Response::Ack.encode(0x01, &mut buf).unwrap();
-    assert_eq!(&buf[..n], &[0xE5]);
+    // The single character whatever the address, as the interpreter writes it (0xFC is no
+    // device's).
+    for a in [0x01, 0xFC] {
+        let n = Response::Ack.encode(a, &mut buf).unwrap();
+        assert_eq!(&buf[..n], &[0xE5]);
+        let i = busspec_model::interp::encode(&p, p.find("ack").unwrap(), a, &[]).unwrap();
+        assert_eq!(i, [0xE5]);
+    }
     for (hex, words) in [
         // SND_NKE sent long: refused at the length field by both.
         (

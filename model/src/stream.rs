@@ -1327,7 +1327,11 @@ pub fn decode_lenient<'r>(
     wire: &[u8],
 ) -> Result<(Frame<'r>, Vec<DecodeError>), DecodeError> {
     let frame = interp::decode(relaxed, direction, reply_to, wire)?;
-    let violations = violations(p, &frame);
+    // Offsets as the frame travelled (a short form's or a long length form's short frame).
+    let violations = violations(p, &frame)
+        .into_iter()
+        .map(|e| crate::long::locate_on(p, wire, e))
+        .collect();
     Ok((frame, violations))
 }
 

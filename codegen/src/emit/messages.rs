@@ -290,7 +290,8 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         // preambles and constant frames are refused beside it: validated): laid out in the
         // long form's width, then sent in the form the length needs. A short form of the
         // frame (`framing.forms`: escaping and preambles refused beside it) likewise: laid out
-        // in the framing's own layout, then sent short where the payload is empty.
+        // in the framing's own layout, then sent short where the payload is empty; a constant
+        // whole frame beside it is its bytes, whatever the address.
         let (lay, travels) = if p.framing.form.is_some() {
             (
                 quote!(FORM),
@@ -306,6 +307,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             ///
             #travels
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                #constant_first
                 let len = self.encode_laid_out(address, buf)?;
                 rt::Ok(#lay.travel(buf, len))
             }

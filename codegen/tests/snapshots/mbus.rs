@@ -371,6 +371,9 @@ pub mod mbus {
             address: u8,
             buf: &mut [u8],
         ) -> rt::Result<usize, rt::EncodeError> {
+            if let rt::Some(frame) = self.constant_frame() {
+                return rt::put_frame(buf, frame);
+            }
             let len = self.encode_laid_out(address, buf)?;
             rt::Ok(FORM.travel(buf, len))
         }
