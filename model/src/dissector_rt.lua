@@ -1452,7 +1452,7 @@ local function setup(P)
     if m.start_at and #P.sync > 0 then root:add(F.start, tvb:range(m.start_at, #P.sync)) end
     if address then root:add(F.address, tvb:range(m.address_at, 1), address) end
     local rule = P.rules[m.dir]
-    if rule then root:add(F.length, tvb:range(rule.at, rule.width), read_uint(b, rule.at, rule.width, P.order)) end
+    if rule and not constant then root:add(F.length, tvb:range(rule.at, rule.width), read_uint(b, rule.at, rule.width, P.order)) end
     root:add(F.code, (#m.code > 0) and tvb:range(m.code_at, #m.code) or whole, m.code_hex)
     local pend = n - P.trailer
     local plen = pend - m.payload_at

@@ -129,14 +129,14 @@ fn strict_decoding_refuses_what_does_not_travel_so() {
 }
 
 /// Lenient decoding words a short frame's broken rules as strict decoding does: on the frame
-/// as it travelled (its address at offset 1, not 5).
+/// as it travelled (its address at offset 2, not 5).
 #[test]
 fn lenient_decoding_locates_a_short_frames_violations() {
     let p = fixture();
     let relaxed = busspec_model::stream::relaxed(&p);
     let wire = hex("10 40 FC 3C 16");
     let strict = interp::decode(&p, None, None, &wire).unwrap_err();
-    assert!(strict.to_string().contains("offset 1"), "{strict}");
+    assert!(strict.to_string().contains("offset 2"), "{strict}");
     let (_, violations) =
         busspec_model::stream::decode_lenient(&p, &relaxed, None, None, &wire).unwrap();
     assert_eq!(violations, [strict]);
