@@ -295,12 +295,19 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         let (lay, travels) = if p.framing.form.is_some() {
             (
                 quote!(FORM),
-                doc("The frame travels short where its payload is empty, else in the framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes holds any."),
+                quote! {
+                    /// The frame travels short where its payload is empty, else in the
+                    /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
+                    /// holds any.
+                },
             )
         } else {
             (
                 quote!(LONG),
-                doc("The frame travels short where its length fits the short length field, else long (`framing.length.long`); `buf` of `MAX_FRAME_LEN` bytes holds any."),
+                quote! {
+                    /// The frame travels short where its length fits the short length field, else long
+                    /// (`framing.length.long`); `buf` of `MAX_FRAME_LEN` bytes holds any.
+                },
             )
         };
         quote! {

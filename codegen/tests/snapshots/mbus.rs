@@ -131,7 +131,9 @@ pub mod mbus {
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
         ///
-        /// The frame travels short where its payload is empty, else in the framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes holds any.
+        /// The frame travels short where its payload is empty, else in the
+        /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
+        /// holds any.
         pub fn encode(
             &self,
             address: u8,
@@ -365,7 +367,9 @@ pub mod mbus {
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
         ///
-        /// The frame travels short where its payload is empty, else in the framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes holds any.
+        /// The frame travels short where its payload is empty, else in the
+        /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
+        /// holds any.
         pub fn encode(
             &self,
             address: u8,
