@@ -122,6 +122,9 @@ fn cases() -> Vec<Case> {
         // A length field whose width the start byte chooses (VESC): short and long frames
         // dissected laid out in the long form's width.
         spec("model/tests/fixtures/valid/vesc.yaml"),
+        // A short form of the frame (M-Bus) is not compared here yet: the dissector words a
+        // short frame's out-of-spec address at its laid-out offset (5, not 2). Its dissector
+        // loads and survives random bytes (`every_fixture_dissector_loads_...`).
         derived_units(),
     ]
 }
@@ -189,7 +192,7 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
         if f.special.iter().any(|s| s.value == v) {
             continue;
         }
-        let mut w = plain(p, wire);
+        let mut w = laid(p, wire);
         let mut at = f.frame_at(&m.layout);
         if f.present.is_some() {
             // An optional field: where the frame has it, if it does.
@@ -203,16 +206,16 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
         }
         interp::write_uint(v as u64, &mut w[at..at + f.width], f.byte_order);
         interp::reseal(p, &mut w);
-        frames.push(escape::escape(p, &w));
+        frames.push(sent(p, w));
         break;
     }
     if let Some(at) = m.layout.address {
         let bad = (0..=255u8).rev().find(|a| !interp::address_allowed(p, *a));
         if let Some(a) = bad {
-            let mut w = plain(p, wire);
+            let mut w = laid(p, wire);
             w[at] = a;
             interp::reseal(p, &mut w);
-            frames.push(escape::escape(p, &w));
+            frames.push(sent(p, w));
         }
     }
     frames
@@ -223,6 +226,18 @@ fn out_of_spec(p: &Protocol, wire: &[u8], r: busspec_model::ir::MessageRef) -> V
 /// without a preamble.
 fn plain(p: &Protocol, wire: &[u8]) -> Vec<u8> {
     escape::unescape_bytes(&p.framing, p.framing.after_preamble(wire)).unwrap()
+}
+
+/// [`plain`], laid out as the IR lays it out (a short form's or a long length form's short
+/// frame with the bytes it lacks), where offsets of the IR count.
+fn laid(p: &Protocol, wire: &[u8]) -> Vec<u8> {
+    let w = plain(p, wire);
+    busspec_model::long::canonical(p, &w).map_or(w.clone(), |c| c.frame.into_owned())
+}
+
+/// A frame [`laid`] out, as it travels: in the form it takes, escaped.
+fn sent(p: &Protocol, w: Vec<u8>) -> Vec<u8> {
+    escape::escape(p, &busspec_model::long::travel(p, w))
 }
 
 /// The capture of `p`: every example with noise before every third, then out-of-spec frames

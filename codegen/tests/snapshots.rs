@@ -176,6 +176,14 @@ fn repeated_start_and_length_spec_generates_its_snapshot() {
     );
 }
 
+/// A short form of the frame (`framing.forms`: M-Bus's `10 C A CS 16` beside `68 L L 68 ...`
+/// and the single character `E5`): `FORM`, decode laid out, encode sent short where the
+/// payload is empty, the stream framed by start byte and length field.
+#[test]
+fn short_form_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/mbus.yaml", "mbus.rs");
+}
+
 /// The start bytes again after a two-byte code: decode reads the second copy at the
 /// direction's own code length.
 #[test]

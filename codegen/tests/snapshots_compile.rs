@@ -41,6 +41,7 @@ include!("snapshots/optional_sensor.rs");
 include!("snapshots/text_counted.rs");
 include!("snapshots/text_terminated.rs");
 include!("snapshots/vesc.rs");
+include!("snapshots/mbus.rs");
 
 mod agree;
 
@@ -2361,4 +2362,74 @@ fn long_length_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 14 && t.refused > 1000, "{t:?}");
     let found = examples_stream_alike::<Vesc>(&p, 0x5E5C, "write_new_app_data");
     assert!(found > 100, "{found}");
+}
+
+/// A short form of the frame (M-Bus, `framing.forms`): the examples replay (short frames,
+/// long frames and `E5`, decoded and encoded back byte for byte); a frame with an empty payload
+/// is sent short and one with a payload long by both engines; a long frame with an empty
+/// payload is refused by both in the same words, a short frame's errors are located on its own
+/// bytes alike, and a short frame of another length is refused as it travelled; both agree on
+/// frames mutated from the examples and on captures of every form however they are cut.
+#[test]
+fn short_form_snapshot_agrees_with_the_interpreter() {
+    use busspec_model::interp;
+    use mbus::{Mbus, Request, Response};
+    let file = "model/tests/fixtures/valid/mbus.yaml";
+    replay::<Mbus>(file);
+    let p = fixture(file);
+    assert_eq!(
+        (mbus::FORM.start, mbus::FORM.fill, mbus::FORM.laid_len),
+        (0x10, &[0x02u8, 0x02, 0x68][..], 8)
+    );
+    let mut buf = [0u8; mbus::MAX_FRAME_LEN];
+    let n = Request::ReqUd2.encode(0x01, &mut buf).unwrap();
+    assert_eq!(&buf[..n], &[0x10, 0x5B, 0x01, 0x5C, 0x16]);
+    let n = Request::SndUdReset.encode(0x01, &mut buf).unwrap();
+    assert_eq!(
+        &buf[..n],
+        &[0x68, 0x03, 0x03, 0x68, 0x53, 0x01, 0x50, 0xA4, 0x16]
+    );
+    // The single character whatever the address, as the interpreter writes it (0xFC is no
+    // device's).
+    for a in [0x01, 0xFC] {
+        let n = Response::Ack.encode(a, &mut buf).unwrap();
+        assert_eq!(&buf[..n], &[0xE5]);
+        let i = busspec_model::interp::encode(&p, p.find("ack").unwrap(), a, &[]).unwrap();
+        assert_eq!(i, [0xE5]);
+    }
+    for (hex, words) in [
+        // SND_NKE sent long: refused at the length field by both.
+        (
+            "68 02 02 68 40 01 41 16",
+            "long length field at offset 1 says 2: lengths up to 2 take the short form",
+        ),
+        // A short frame's checksum on its own bytes: offset 3, not 6.
+        (
+            "10 40 01 42 16",
+            "checksum mismatch at offset 3: expected 0x41, found 0x42",
+        ),
+        // A short frame with a payload byte: as long as it travelled.
+        (
+            "10 40 01 00 41 16",
+            "frame too long: 6 bytes, the longest frame has 5",
+        ),
+        ("10 40 01 41", "need at least 5 bytes, found 4"),
+        // A short frame whose message has a payload: its length as it travelled.
+        ("10 53 01 54 16", "found 5"),
+    ] {
+        let frame = interp::parse_hex(hex).unwrap();
+        let g = Request::decode(&frame).map(|_| ());
+        assert!(
+            g.as_ref().unwrap_err().to_string().contains(words),
+            "{hex}: {g:?}"
+        );
+        same_text(
+            g,
+            interp::decode(&p, Some(Direction::Request), None, &frame).map(|_| ()),
+        );
+    }
+    let t = agree::agree::<Mbus>(&p);
+    assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<Mbus>(&p, 0x1068, "req_ud2");
+    assert!(found > 30, "only {found} req_ud2 frames found");
 }

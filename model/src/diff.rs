@@ -755,6 +755,20 @@ impl<'a> Differ<'a> {
             let text = format!("long length form: {} → {}", show(o.long), show(n.long));
             self.wire("long_length_changed", "framing.length.long", text);
         }
+        // A short form of the frame added, removed or changed (`framing.forms`): frames with
+        // an empty payload travel otherwise. The layout's own (long) frames are compared as
+        // they were.
+        if o.form != n.form {
+            let show = |f: Option<&crate::ir::ShortForm>| {
+                f.map_or("none".to_owned(), crate::ir::ShortForm::describe)
+            };
+            let text = format!(
+                "short form: {} → {}",
+                show(o.form.as_ref()),
+                show(n.form.as_ref())
+            );
+            self.wire("form_changed", "framing.forms", text);
+        }
         let short = |f: &crate::ir::Framing| {
             f.length.clone().map(|mut l| {
                 if let Some(g) = f.long {

@@ -556,6 +556,25 @@ fn protocol(p: &Protocol) -> String {
         None => "false".to_owned(),
     };
     let _ = writeln!(s, "  long = {long},");
+    // A short form of the frame (`framing.forms`: M-Bus's `10 C A CS 16`): short frames are
+    // dissected laid out in the layout's own form, as busspec decodes them.
+    let form = match &f.form {
+        Some(g) => format!(
+            "{{ start = {}, long_start = {}, start_at = {}, at = {}, fill = {}, length_at = {}, width = {}, le = {}, most = {}, laid_len = {} }}",
+            g.start,
+            g.long_start,
+            g.start_at,
+            g.at,
+            bytes(&g.fill),
+            g.length_at,
+            g.width,
+            p.byte_order == crate::model::ByteOrder::Little,
+            g.most,
+            g.laid_len
+        ),
+        None => "false".to_owned(),
+    };
+    let _ = writeln!(s, "  form = {form},");
     let _ = writeln!(
         s,
         "  rules = {{ request = {}, response = {} }},",

@@ -1193,6 +1193,63 @@ local function setup(P)
     return n
   end
 
+  -- A short form of the frame (`framing.forms`: M-Bus's `10 C A CS 16` beside `68 L L 68
+  -- ...`): a short frame dissected laid out in the layout's own form ("Frame laid out in the
+  -- long form"), as busspec decodes it: its own start byte replaced, the dropped parts' bytes
+  -- of an empty payload put back. A short frame of another length, and a long frame whose
+  -- length field says an empty payload, are shown as busspec refuses them.
+  local function dissect_form(tvb, pinfo, tree)
+    local f, n = P.form, tvb:len()
+    if not f or n <= f.start_at then return dissect_transformed(tvb, pinfo, tree) end
+    local w = {}
+    local wa = tvb:range(0, n):bytes()
+    for i = 0, n - 1 do w[i] = wa:get_index(i) end
+    local function refuse(text)
+      pinfo.cols.protocol = P.name
+      local root = tree:add(proto, tvb:range(0, n))
+      root:set_text(fmt("busspec %s: %s", P.name, text))
+      root:add_proto_expert_info(E.skipped, text)
+      pinfo.cols.info = text
+      return n
+    end
+    local b = w[f.start_at]
+    if b == f.long_start then
+      if n >= f.length_at + f.width then
+        local v = read_uint(w, f.length_at, f.width, f.le and "little" or "big")
+        if v == f.most then
+          return refuse(fmt("long length field at offset %d says %d: lengths up to %d take the short form", f.length_at, v, f.most))
+        end
+      end
+      return dissect_transformed(tvb, pinfo, tree)
+    elseif b ~= f.start then
+      return dissect_transformed(tvb, pinfo, tree)
+    end
+    local extra = #f.fill
+    local short = f.laid_len - extra
+    if n < short then
+      return refuse(fmt("truncated frame: need at least %d bytes, found %d", short, n))
+    elseif n > short then
+      return refuse(fmt("frame too long: %d bytes, the longest frame has %d", n, short))
+    end
+    local out = {}
+    for i = 0, f.at - 1 do out[i] = w[i] end
+    for i, x in ipairs(f.fill) do out[f.at + i - 1] = x end
+    for i = f.at, n - 1 do out[i + extra] = w[i] end
+    out[f.start_at] = f.long_start
+    -- The checksum as it travelled: the same bytes, from `extra` bytes earlier.
+    local wire_ck
+    local ck = P.checksum
+    if ck.len > 0 and n >= P.trailer then
+      local at = checksum_at(P, n)
+      wire_ck = { at = at, expected = ck.fn(w, ck.covers_from - extra, at), found = read_uint(w, at, ck.len, ck.order), tvb = tvb }
+    end
+    local ba = ByteArray.new()
+    ba:set_size(f.laid_len)
+    for i = 0, f.laid_len - 1 do ba:set_index(i, out[i]) end
+    dissect_frame(ba:tvb("Frame laid out in the long form"), pinfo, tree, wire_ck)
+    return n
+  end
+
   -- Escaped frames (`framing.escaping`) are unescaped into a tvb of their own ("Unescaped
   -- frame") and dissected from it; a bad escape is shown as busspec refuses it.
   local function dissect(tvb, pinfo, tree)
@@ -1211,6 +1268,7 @@ local function setup(P)
       end
     end
     if P.long then return dissect_long(tvb, pinfo, tree) end
+    if P.form then return dissect_form(tvb, pinfo, tree) end
     if not P.escaping or n == 0 then return dissect_transformed(tvb, pinfo, tree) end
     local w = {}
     local wa = tvb:range(0, n):bytes()
@@ -1407,7 +1465,7 @@ local function setup(P)
     if m.start_at and #P.sync > 0 then root:add(F.start, tvb:range(m.start_at, #P.sync)) end
     if address then root:add(F.address, tvb:range(m.address_at, 1), address) end
     local rule = P.rules[m.dir]
-    if rule then root:add(F.length, tvb:range(rule.at, rule.width), read_uint(b, rule.at, rule.width, P.order)) end
+    if rule and not constant then root:add(F.length, tvb:range(rule.at, rule.width), read_uint(b, rule.at, rule.width, P.order)) end
     root:add(F.code, (#m.code > 0) and tvb:range(m.code_at, #m.code) or whole, m.code_hex)
     local pend = n - P.trailer
     local plen = pend - m.payload_at

@@ -509,6 +509,11 @@ pub fn render(p: &Protocol, source: &str) -> String {
                     Some(l) => format!("{content}, or 0x{:02X} (long form)", l.start),
                     None => content,
                 };
+                // The short form's start byte beside it (`framing.forms`).
+                let content = match &f.form {
+                    Some(s) => format!("{content}, or 0x{:02X} (short form)", s.start),
+                    None => content,
+                };
                 ("start".to_owned(), f.sync.len().to_string(), content)
             }
             Part::Length => {
@@ -672,6 +677,19 @@ pub fn render(p: &Protocol, source: &str) -> String {
             o,
             "Long length form: {}. Encoders send the long form only where the length does not fit the short field; strict decoding refuses a long form whose length the short one holds. Frame lengths and offsets below (after the length field) are the long form's, one byte further than in the short form; offsets and lengths in errors count the frame as it travelled.\n",
             l.describe()
+        );
+    }
+
+    if let Some(s) = &f.form {
+        let _ = writeln!(
+            o,
+            "Short form{}: {}. Encoders send a frame short exactly where its payload is empty; strict decoding refuses a frame with an empty payload in the long form, and a short frame of another length. Frame lengths and offsets below are the layout's own (the long form's); a short frame lacks the {} dropped bytes, and offsets and lengths in errors count the frame as it travelled. The checksum covers none of the dropped bytes, so it is the same in both forms.\n",
+            s.section
+                .as_ref()
+                .map(|x| format!(" (§{x})"))
+                .unwrap_or_default(),
+            s.describe(),
+            s.extra()
         );
     }
 

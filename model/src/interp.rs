@@ -1404,6 +1404,15 @@ fn check_checksum(
 /// travels: one with the short start byte covered from where its checksum starts in the short
 /// form.
 pub fn reseal(p: &Protocol, frame: &mut [u8]) {
+    // A short frame (`framing.forms`): covered from where its checksum starts in it.
+    if let Some(f) = p
+        .framing
+        .form
+        .as_ref()
+        .filter(|_| crate::forms::is_short(p, frame))
+    {
+        return reseal_from(p, frame, f.extra());
+    }
     let short = p
         .framing
         .long

@@ -107,6 +107,72 @@ pub struct Framing {
     /// the long layout's, with the first start byte: [`crate::long`] turns a frame as it
     /// travels (either form) into that layout and back.
     pub long: Option<LongForm>,
+    /// A short form of the frame (`framing.forms`: M-Bus's `10 C A CS 16` beside its long
+    /// `68 L L 68 C A ... CS 16`). Every offset and length of the IR is the layout's own (the
+    /// long frame's): [`crate::forms`] turns a short frame into that layout and back.
+    pub form: Option<ShortForm>,
+}
+
+/// A short form of the frame (`framing.forms`): the layout without a run of parts (the length
+/// field's copies, a second start), opened by its own start byte. A frame with an empty
+/// payload travels in it, every other one in the layout's own form; strict decoders refuse a
+/// frame with an empty payload in the long form.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ShortForm {
+    /// The short form's start byte.
+    pub start: u8,
+    /// The framing's own start byte (the long form's; the one the IR's layout carries).
+    pub long_start: u8,
+    /// Where the start byte sits.
+    pub start_at: usize,
+    /// Where the dropped parts sit in the layout.
+    pub at: usize,
+    /// The dropped parts' bytes in a frame with an empty payload, as the layout holds them
+    /// (the length field's copies and the second start byte).
+    pub fill: Vec<u8>,
+    /// Where the length field sits in the layout.
+    pub length_at: usize,
+    /// The length field's width.
+    pub width: usize,
+    /// The length field's value in a frame with an empty payload.
+    pub most: i64,
+    /// A frame with an empty payload, laid out: the short frame is `fill` shorter.
+    pub laid_len: usize,
+    /// The parts it drops, as the spec names them.
+    pub drops: Vec<Part>,
+    pub section: Option<String>,
+}
+
+impl ShortForm {
+    /// How many bytes the short form lacks.
+    pub fn extra(&self) -> usize {
+        self.fill.len()
+    }
+
+    /// The short frame's length as it travels.
+    pub fn short_len(&self) -> usize {
+        self.laid_len - self.fill.len()
+    }
+
+    /// The form in words, as docs and diff print it.
+    pub fn describe(&self) -> String {
+        let drops: Vec<&str> = self
+            .drops
+            .iter()
+            .map(|p| match p {
+                Part::Length => "length",
+                Part::Start => "start",
+                _ => "?",
+            })
+            .collect();
+        format!(
+            "start 0x{:02X} without [{}] for frames with an empty payload ({} bytes), 0x{:02X} with them for every other",
+            self.start,
+            drops.join(", "),
+            self.short_len(),
+            self.long_start
+        )
+    }
 }
 
 /// The long form of a length field (`framing.length.long`): a frame whose start byte is
@@ -414,6 +480,13 @@ impl Framing {
     /// where its length field's value needs it, shorter by the bytes the short field lacks
     /// otherwise; `len` without a long form.
     pub fn travelled_len(&self, d: Direction, len: usize) -> usize {
+        if let Some(f) = &self.form {
+            return if len == f.laid_len {
+                f.short_len()
+            } else {
+                len
+            };
+        }
         let (Some(l), Some(rule)) = (self.long, self.length_rule(d)) else {
             return len;
         };

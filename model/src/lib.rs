@@ -29,6 +29,7 @@ pub mod dissector;
 #[cfg(feature = "tools")]
 pub mod docs;
 pub mod escape;
+pub mod forms;
 pub mod interp;
 pub mod ir;
 pub mod load;

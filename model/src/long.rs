@@ -25,12 +25,18 @@ pub struct Canonical<'w> {
     /// The frame as the IR lays it out.
     pub frame: Cow<'w, [u8]>,
     /// Set where the frame travelled short: the long form and how many bytes were inserted.
-    short: Option<LongForm>,
+    pub(crate) short: Option<LongForm>,
+    /// Set where the frame travelled in a short form (`framing.forms`): where the parts it
+    /// drops sit in the layout, and how many bytes they are.
+    pub(crate) dropped: Option<(usize, usize)>,
 }
 
 impl Canonical<'_> {
     /// An error the laid-out frame's decode gave, located on the frame as it travelled.
     pub fn locate(&self, e: DecodeError) -> DecodeError {
+        if let Some((at, n)) = self.dropped {
+            return crate::forms::locate(at, n, e);
+        }
         match self.short {
             Some(l) => locate(&l, e),
             None => e,
@@ -50,9 +56,13 @@ fn inserted_at(l: &LongForm, order: ByteOrder) -> usize {
 /// `wire` in the IR's layout: itself where the framing has no long form, or the frame is too
 /// short or starts with neither start byte (decoding then says what is wrong with it).
 pub fn canonical<'w>(p: &Protocol, wire: &'w [u8]) -> Result<Canonical<'w>, DecodeError> {
+    if let Some(f) = &p.framing.form {
+        return crate::forms::canonical(p, f, wire);
+    }
     let borrowed = Canonical {
         frame: Cow::Borrowed(wire),
         short: None,
+        dropped: None,
     };
     let Some(l) = p.framing.long else {
         return Ok(borrowed);
@@ -74,6 +84,7 @@ pub fn canonical<'w>(p: &Protocol, wire: &'w [u8]) -> Result<Canonical<'w>, Deco
             Ok(Canonical {
                 frame: Cow::Owned(out),
                 short: None,
+                dropped: None,
             })
         }
         Some(&b) if b == l.short_start && wire.len() >= l.length_at + l.short_width => {
@@ -85,6 +96,7 @@ pub fn canonical<'w>(p: &Protocol, wire: &'w [u8]) -> Result<Canonical<'w>, Deco
             Ok(Canonical {
                 frame: Cow::Owned(out),
                 short: Some(l),
+                dropped: None,
             })
         }
         _ => Ok(borrowed),
@@ -94,6 +106,9 @@ pub fn canonical<'w>(p: &Protocol, wire: &'w [u8]) -> Result<Canonical<'w>, Deco
 /// A frame the IR laid out (`frame`), as it travels: short where its length field's value
 /// fits the short width, else long. `frame` itself without a long form.
 pub fn travel(p: &Protocol, mut frame: Vec<u8>) -> Vec<u8> {
+    if let Some(f) = &p.framing.form {
+        return crate::forms::travel(f, frame);
+    }
     let Some(l) = p.framing.long else {
         return frame;
     };
@@ -115,6 +130,9 @@ pub fn travel(p: &Protocol, mut frame: Vec<u8>) -> Vec<u8> {
 /// buffered yet. `laid_out` gives the frame's length in the IR's layout from the length
 /// field's value (per direction: the caller's).
 pub fn wire_len(p: &Protocol, buf: &[u8]) -> Option<Option<(i64, usize)>> {
+    if let Some(f) = &p.framing.form {
+        return crate::forms::wire_len(p, f, buf);
+    }
     let l = p.framing.long?;
     let (width, extra) = match *buf.get(l.start_at)? {
         b if b == l.start => (l.width, 0),
@@ -150,8 +168,15 @@ fn offset(l: &LongForm, o: usize) -> usize {
 /// An error of a frame that travelled short, found in its layout: offsets and frame lengths
 /// as on the wire.
 fn locate(l: &LongForm, e: DecodeError) -> DecodeError {
-    let n = |len: usize| len.saturating_sub(l.extra());
-    let o = |at: usize| offset(l, at);
+    relocate(e, |len| len.saturating_sub(l.extra()), |at| offset(l, at))
+}
+
+/// An error with its frame lengths mapped by `n` and its offsets by `o`.
+pub(crate) fn relocate(
+    e: DecodeError,
+    n: impl Fn(usize) -> usize,
+    o: impl Fn(usize) -> usize,
+) -> DecodeError {
     use DecodeError as E;
     let mut e = e;
     match &mut e {

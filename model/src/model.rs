@@ -288,6 +288,21 @@ pub struct Framing {
     /// A per-byte transform of the payload (DL/T 645's +33H on every data byte), optional.
     #[serde(default)]
     pub transform: Option<Transform>,
+    /// Other forms of the frame, each told apart by its start byte (M-Bus's short frame
+    /// `10 C A CS 16` beside the long `68 L L 68 ...`), optional.
+    #[serde(default)]
+    pub forms: Vec<Form>,
+}
+
+/// Another form of the frame (`framing.forms`): the layout without the parts it drops, opened
+/// by a start byte of its own; a frame with an empty payload travels in it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Form {
+    #[serde(default)]
+    pub section: Option<String>,
+    pub start: i64,
+    pub drops: Vec<Part>,
 }
 
 /// A per-byte transform of every payload byte as it travels: exactly one of `add` (the byte

@@ -24,6 +24,10 @@ pub fn fix_length(p: &Protocol, d: Direction, frame: &mut [u8]) {
     if p.framing.long.is_some() {
         return crate::long::fix_length(p, d, frame);
     }
+    // A short frame (`framing.forms`) has no length field.
+    if crate::forms::is_short(p, frame) {
+        return;
+    }
     let Some(rule) = p.framing.length_rule(d) else {
         return;
     };

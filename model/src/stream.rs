@@ -94,6 +94,11 @@
 //! is refused by strict decoding ([`DecodeError::NeedlessLong`]) and so is noise here, as a
 //! frame with a bad checksum is; the decoder resynchronises on the byte after its start byte.
 //!
+//! A short form of the frame ([`crate::ir::Framing::form`]: M-Bus's `10 C A CS 16` beside
+//! `68 L L 68 …`) is framed the same way: its start byte opens a frame of the short form's one
+//! length (a frame with an empty payload), the framing's own start byte one as long as its
+//! length field says.
+//!
 //! # Pairing responses with requests
 //!
 //! A response that only its request can identify is decoded as the answer to the last request
@@ -679,8 +684,9 @@ impl<'p> StreamDecoder<'p> {
         lens.clear();
         let mut dirs = std::mem::take(&mut self.dirs);
         dirs.clear();
-        if self.p.framing.escaping.is_some() || self.p.framing.long.is_some() {
-            let found = if self.p.framing.long.is_some() {
+        let forms = self.p.framing.long.is_some() || self.p.framing.form.is_some();
+        if self.p.framing.escaping.is_some() || forms {
+            let found = if forms {
                 self.long_lens(flushing, &mut lens, &mut dirs)
             } else {
                 self.escaped_lens(flushing, &mut lens, &mut dirs)
@@ -1324,7 +1330,11 @@ pub fn decode_lenient<'r>(
     wire: &[u8],
 ) -> Result<(Frame<'r>, Vec<DecodeError>), DecodeError> {
     let frame = interp::decode(relaxed, direction, reply_to, wire)?;
-    let violations = violations(p, &frame);
+    // Offsets as the frame travelled (a short form's or a long length form's short frame).
+    let violations = violations(p, &frame)
+        .into_iter()
+        .map(|e| crate::long::locate_on(p, wire, e))
+        .collect();
     Ok((frame, violations))
 }
 

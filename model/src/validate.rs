@@ -475,6 +475,12 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             "examples printed in another byte order beside a long length form (framing.length.long) are not expressible yet",
         );
     }
+    if framing.form.is_some() && spec.printed_byte_order != spec.byte_order {
+        sink.error(
+            "printed_byte_order",
+            "examples printed in another byte order beside a frame form (framing.forms) are not expressible yet",
+        );
+    }
     if framing.long.is_some() {
         for m in responses.iter().filter(|m| m.frame.is_some()) {
             sink.error(
@@ -1336,6 +1342,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         preamble: None,
         transform: None,
         long: None,
+        form: None,
     };
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
@@ -1403,7 +1410,185 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
     if let Some(l) = f.length.as_ref().filter(|l| l.long.is_some()) {
         framing.long = long_form(f, l, &framing, sink);
     }
+    if !f.forms.is_empty() {
+        framing.form = short_form(f, &framing, byte_order, sink);
+    }
     framing
+}
+
+/// `framing.forms`, checked against the rest of the framing (resolved but for it): one form,
+/// a start byte of its own beside the framing's one start byte, dropping the length field's
+/// copies and perhaps the second start, which sit together in the layout after the first start
+/// byte (anywhere before the payload); a length that counts the payload, one code length the same both ways, a checksum that
+/// covers none of the dropped parts; no long length form, escaping, preamble, transform or
+/// header fields beside it (not expressible yet).
+fn short_form(
+    spec: &model::Framing,
+    f: &Framing,
+    byte_order: ByteOrder,
+    sink: &mut Sink,
+) -> Option<ShortForm> {
+    let path = "framing.forms";
+    let errors_before = sink.items.len();
+    if spec.forms.len() > 1 {
+        sink.error(
+            path,
+            format!(
+                "one short form beside the layout's own is expressible yet, not {}",
+                spec.forms.len()
+            ),
+        );
+    }
+    let form = spec.forms.first()?;
+    let fpath = format!("{path}[0]");
+    let start = u8_of(
+        form.start,
+        &join(&fpath, "start"),
+        "a form's start byte",
+        sink,
+    );
+    let long_start = match (f.sync.as_slice(), spec.start.is_some()) {
+        ([b], true) if f.response_sync == f.sync => Some(*b),
+        (_, false) => {
+            sink.error(
+                path,
+                "a frame form needs a start byte (`start`): its own start byte tells the forms apart",
+            );
+            None
+        }
+        _ => {
+            sink.error(
+                path,
+                "a frame form needs one start byte, the same both ways (not a start sequence or start bytes by direction), yet",
+            );
+            None
+        }
+    };
+    if long_start == Some(start) {
+        sink.error(
+            join(&fpath, "start"),
+            format!("the form's start byte 0x{start:02X} is the layout's own: the forms need start bytes of their own"),
+        );
+    }
+    let dpath = join(&fpath, "drops");
+    let mut drops: Vec<Part> = Vec::new();
+    for p in &form.drops {
+        if !matches!(p, Part::Length | Part::Start) {
+            sink.error(
+                &dpath,
+                format!(
+                    "a form drops `length` and perhaps the second `start`, not `{}`",
+                    part_name(*p)
+                ),
+            );
+        } else if drops.contains(p) {
+            sink.error(&dpath, format!("`{}` dropped twice", part_name(*p)));
+        } else {
+            drops.push(*p);
+        }
+    }
+    if !drops.contains(&Part::Length) {
+        sink.error(
+            &dpath,
+            "a form drops the length field (`length`): a short frame is one with an empty payload",
+        );
+    }
+    let Some(l) = &f.length else {
+        sink.error(
+            path,
+            "a frame form needs a length field (`length`) in the layout: the short form drops it",
+        );
+        return None;
+    };
+    let (rq, rs) = (&f.request.code_lengths, &f.response.code_lengths);
+    if rq.len() != 1 || rq != rs {
+        sink.error(
+            path,
+            "a frame form needs one code length, the same both ways (`code_lengths`), yet: a short frame has one length",
+        );
+    }
+    let head = f.head(rq.first().copied().unwrap_or(0));
+    let start_at = head.start.unwrap_or(0);
+    // The dropped parts: every copy of the length field, and the second start bytes.
+    let mut runs: Vec<(usize, usize)> = head.lengths().map(|at| (at, l.width)).collect();
+    if drops.contains(&Part::Start) {
+        match head.start_again {
+            Some(at) => runs.push((at, f.sync.len())),
+            None => sink.error(
+                &dpath,
+                "the form drops `start`, but the layout holds the start byte once: only a second `start` can be dropped",
+            ),
+        }
+    } else if head.start_again.is_some() {
+        sink.error(
+            &dpath,
+            "the layout's second `start` stays in the short form: drop it too (`drops: [length, start]`), as the length before it goes",
+        );
+    }
+    runs.sort_unstable();
+    let at = runs.first().map_or(0, |r| r.0);
+    let together = runs.windows(2).all(|w| w[0].0 + w[0].1 == w[1].0);
+    if !together || at <= start_at {
+        sink.error(
+            "framing.layout",
+            "a frame form drops parts that sit together after the first start byte (`start, length, length, start, ...`, `start, code, length, ...`), yet",
+        );
+    }
+    let n: usize = runs.iter().map(|r| r.1).sum();
+    if !f.checksum.is_empty() && f.checksum.covers_from < at + n {
+        sink.error(
+            "framing.checksum",
+            "beside a frame form (framing.forms), the checksum covers neither the start byte nor the parts the form drops (`covers_from` a part after them), yet",
+        );
+    }
+    for (what, there) in [
+        (
+            "a long length form (framing.length.long)",
+            f.long.is_some() || l_has_long(spec),
+        ),
+        ("escaping", f.escaping.is_some()),
+        ("preamble", f.preamble.is_some()),
+        ("transform", f.transform.is_some()),
+        ("header fields (framing.header)", !f.header.is_empty()),
+    ] {
+        if there {
+            sink.error(
+                path,
+                format!("a frame form (framing.forms) beside {what} is not expressible yet"),
+            );
+        }
+    }
+    if errors_before != sink.items.len() {
+        return None;
+    }
+    // The dropped parts' bytes in a frame with an empty payload, as the layout holds them.
+    let laid_len = head.len;
+    let most = f.length_value(l, rq[0], 0);
+    let mut frame = vec![0u8; laid_len];
+    for at in head.lengths() {
+        crate::interp::write_uint(most as u64, &mut frame[at..at + l.width], byte_order);
+    }
+    if let Some(again) = head.start_again {
+        frame[again..again + f.sync.len()].copy_from_slice(&f.sync);
+    }
+    Some(ShortForm {
+        start,
+        long_start: long_start.unwrap_or(0),
+        start_at,
+        at,
+        fill: frame[at..at + n].to_vec(),
+        length_at: head.length.unwrap_or(at),
+        width: l.width,
+        most,
+        laid_len,
+        drops,
+        section: form.section.clone(),
+    })
+}
+
+/// Whether the spec declares a long length form.
+fn l_has_long(spec: &model::Framing) -> bool {
+    spec.length.as_ref().is_some_and(|l| l.long.is_some())
 }
 
 /// The longest payload of a framing with a long length form (`framing.length.long`); 255
@@ -2344,9 +2529,11 @@ fn constant_frame(
             &fpath,
             "a constant frame needs frames that begin with start bytes (framing.start first in the layout): without them any frame could begin with its bytes",
         );
-    } else if let Some(b) =
-        first.filter(|b| *b == framing.sync[0] || Some(b) == framing.response_sync.first())
-    {
+    } else if let Some(b) = first.filter(|b| {
+        *b == framing.sync[0]
+            || Some(b) == framing.response_sync.first()
+            || framing.form.as_ref().is_some_and(|f| f.start == *b)
+    }) {
         sink.error(
             &fpath,
             format!("a constant frame cannot begin with 0x{b:02X}, a start byte of the framing: it could not be told from a frame's start"),

@@ -149,6 +149,88 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "long_payload_too_long",
         &[("framing.request.payload", "payload length range 0..=5000 is invalid (0 <= min <= max <= 4096)")],
     ),
+    // ---- a short form of the frame (made from valid/mbus, without its examples)
+    (
+        "forms_same_start",
+        &[("framing.forms[0].start", "the form's start byte 0x68 is the layout's own")],
+    ),
+    (
+        "forms_two",
+        &[("framing.forms", "one short form beside the layout's own is expressible yet, not 2")],
+    ),
+    (
+        "forms_drops_code",
+        &[("framing.forms[0].drops", "a form drops `length` and perhaps the second `start`, not `code`")],
+    ),
+    (
+        "forms_drops_twice",
+        &[("framing.forms[0].drops", "`length` dropped twice")],
+    ),
+    (
+        "forms_keeps_length",
+        &[("framing.forms[0].drops", "a form drops the length field (`length`)")],
+    ),
+    (
+        "forms_keeps_second_start",
+        &[("framing.forms[0].drops", "the layout's second `start` stays in the short form")],
+    ),
+    (
+        "forms_drops_start_once",
+        &[("framing.forms[0].drops", "the layout holds the start byte once: only a second `start` can be dropped")],
+    ),
+    (
+        "forms_drops_apart",
+        &[("framing.layout", "a frame form drops parts that sit together after the first start byte")],
+    ),
+    (
+        "forms_without_length",
+        &[("framing.forms", "a frame form needs a length field (`length`) in the layout")],
+    ),
+    (
+        "forms_checksum_covers_length",
+        &[("framing.checksum", "beside a frame form (framing.forms), the checksum covers neither the start byte nor the parts the form drops")],
+    ),
+    (
+        "forms_two_code_lengths",
+        &[
+            ("framing.layout", "the code comes before the address"),
+            ("framing.forms", "a frame form needs one code length, the same both ways"),
+        ],
+    ),
+    (
+        "forms_start_sequence",
+        &[("framing.forms", "a frame form needs one start byte, the same both ways")],
+    ),
+    (
+        "forms_with_preamble",
+        &[
+            ("framing.forms", "a frame form (framing.forms) beside preamble is not expressible yet"),
+            ("responses.ack.frame", "a constant frame is not expressible with a preamble"),
+        ],
+    ),
+    (
+        "forms_with_transform",
+        &[("framing.forms", "a frame form (framing.forms) beside transform is not expressible yet")],
+    ),
+    (
+        "forms_with_long",
+        &[
+            ("framing.layout", "a second `start` or `length` beside a long length form"),
+            ("framing.forms", "a frame form (framing.forms) beside a long length form (framing.length.long) is not expressible yet"),
+        ],
+    ),
+    (
+        "forms_constant_frame_start",
+        &[("responses.ack.frame", "a constant frame cannot begin with 0x10, a start byte of the framing")],
+    ),
+    (
+        "forms_printed_big",
+        &[("printed_byte_order", "examples printed in another byte order beside a frame form (framing.forms) are not expressible yet")],
+    ),
+    (
+        "forms_unknown_key",
+        &[("framing.forms[0].stop", "unknown field `stop`, expected one of `section`, `start`, `drops`")],
+    ),
     // ---- transforms (made from valid/dlt645, hdlc_like, pelco_d_codeless and minimal_end,
     // without their examples)
     (

@@ -27,6 +27,7 @@ pub use ascii::Ascii;
 
 pub mod codec;
 pub mod escape;
+mod forms;
 mod lists;
 mod long;
 mod optional;
@@ -35,6 +36,8 @@ mod repeated;
 pub mod stream;
 mod view;
 
+#[doc(hidden)]
+pub use forms::ShortForm;
 #[doc(hidden)]
 pub use long::LongLength;
 pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Transactions};

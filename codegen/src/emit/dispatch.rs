@@ -319,20 +319,26 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
                 },
             )
         }
-    } else if p.framing.long.is_some() {
-        // A length field whose width the start byte chooses (`framing.length.long`): the frame
+    } else if p.framing.long.is_some() || p.framing.form.is_some() {
+        let lay = if p.framing.form.is_some() {
+            quote!(FORM)
+        } else {
+            quote!(LONG)
+        };
+        // A length field whose width the start byte chooses (or a short form of the frame,
+        // `framing.forms`) (`framing.length.long`): the frame
         // laid out in the long form's width, checked as any frame by a function of its own,
         // its errors placed back on the frame as it travelled.
         let max = usize_lit(p.max_frame_len(d));
         let lay_out = quote! {
             let mut laid = [0u8; #max];
-            let (laid, short) = LONG.lay_out(frame, &mut laid)?;
+            let (laid, short) = #lay.lay_out(frame, &mut laid)?;
         };
         if replies {
             (
                 quote! {
                     #lay_out
-                    Self::decode_for_laid_out(laid, request).map_err(|e| LONG.locate(e, short))
+                    Self::decode_for_laid_out(laid, request).map_err(|e| #lay.locate(e, short))
                 },
                 quote! {
                     /// [`Self::decode_for`] of the frame laid out in the long form's width.
@@ -345,7 +351,7 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
             (
                 quote! {
                     #lay_out
-                    Self::decode_laid_out(laid).map_err(|e| LONG.locate(e, short))
+                    Self::decode_laid_out(laid).map_err(|e| #lay.locate(e, short))
                 },
                 quote! {
                     /// [`Self::decode`] of the frame laid out in the long form's width.

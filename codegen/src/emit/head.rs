@@ -39,6 +39,48 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             pub const TRANSFORM: rt::Transform = #kind;
         }
     });
+    let rules = [Direction::Request, Direction::Response].map(|d| {
+        match (
+            p.framing.length_rule(d).filter(|r| r.grows),
+            p.frame_len_bounds(d),
+        ) {
+            (Some(r), Some((lo, hi))) => {
+                let k = Literal::i64_unsuffixed(r.k);
+                let (lo, hi) = (usize_lit(lo.max(r.head_len)), usize_lit(hi));
+                quote!(rt::Some((#k, #lo, #hi)))
+            }
+            _ => quote!(rt::None),
+        }
+    });
+    let form = p.framing.form.as_ref().map(|f| {
+        let (start, long_start) = (hex_u8(f.start), hex_u8(f.long_start));
+        let (start_at, at) = (usize_lit(f.start_at), usize_lit(f.at));
+        let fill = f.fill.iter().map(|b| hex_u8(*b));
+        let (length_at, width) = (usize_lit(f.length_at), usize_lit(f.width));
+        let le = p.byte_order == ByteOrder::Little;
+        let most = Literal::i64_unsuffixed(f.most);
+        let laid_len = usize_lit(f.laid_len);
+        let [rq, rs] = rules.clone();
+        quote! {
+            /// The short form of the frame (`framing.forms`): frames starting with its start
+            /// byte lack the parts it drops and carry an empty payload. Decoding lays every
+            /// frame out in the framing's own layout; encoding sends a frame with an empty
+            /// payload short.
+            pub const FORM: rt::ShortForm = rt::ShortForm {
+                start: #start,
+                long_start: #long_start,
+                start_at: #start_at,
+                at: #at,
+                fill: &[#(#fill),*],
+                length_at: #length_at,
+                width: #width,
+                le: #le,
+                most: #most,
+                laid_len: #laid_len,
+                rules: [#rq, #rs],
+            };
+        }
+    });
     let long = p.framing.long.as_ref().map(|l| {
         let (start, short_start) = (hex_u8(l.start), hex_u8(l.short_start));
         let (start_at, length_at) = (usize_lit(l.start_at), usize_lit(l.length_at));
@@ -183,6 +225,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
         #preamble
         #transform
         #long
+        #form
     }
 }
 

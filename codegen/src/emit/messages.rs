@@ -285,17 +285,38 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #seal
             }
         }
-    } else if p.framing.long.is_some() {
+    } else if p.framing.long.is_some() || p.framing.form.is_some() {
         // A length field whose width the start byte chooses (`framing.length.long`; escaping,
         // preambles and constant frames are refused beside it: validated): laid out in the
-        // long form's width, then sent in the form the length needs.
+        // long form's width, then sent in the form the length needs. A short form of the
+        // frame (`framing.forms`: escaping and preambles refused beside it) likewise: laid out
+        // in the framing's own layout, then sent short where the payload is empty; a constant
+        // whole frame beside it is its bytes, whatever the address.
+        let (lay, travels) = if p.framing.form.is_some() {
+            (
+                quote!(FORM),
+                quote! {
+                    /// The frame travels short where its payload is empty, else in the
+                    /// framing's own layout (`framing.forms`); `buf` of `MAX_FRAME_LEN` bytes
+                    /// holds any.
+                },
+            )
+        } else {
+            (
+                quote!(LONG),
+                quote! {
+                    /// The frame travels short where its length fits the short length field, else long
+                    /// (`framing.length.long`); `buf` of `MAX_FRAME_LEN` bytes holds any.
+                },
+            )
+        };
         quote! {
             ///
-            /// The frame travels short where its length fits the short length field, else long
-            /// (`framing.length.long`); `buf` of `MAX_FRAME_LEN` bytes holds any.
+            #travels
             pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                #constant_first
                 let len = self.encode_laid_out(address, buf)?;
-                rt::Ok(LONG.travel(buf, len))
+                rt::Ok(#lay.travel(buf, len))
             }
             /// The frame laid out in the long form's width, into `buf`.
             fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {

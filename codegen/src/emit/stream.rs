@@ -26,6 +26,16 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
         .collect();
     lengths.sort_unstable_by(|a, b| b.cmp(a));
     lengths.dedup();
+    // A short form of the frame (`framing.forms`): framed messages are framed by their start
+    // byte and length field (`variable_candidates`); only constant whole frames are listed.
+    if p.framing.form.is_some() {
+        lengths.clear();
+        for d in [Direction::Request, Direction::Response] {
+            lengths.extend(p.constants(d).map(|(_, f)| f.len()));
+        }
+        lengths.sort_unstable_by(|a, b| b.cmp(a));
+        lengths.dedup();
+    }
     // Shapes: (code, mask) where the mask has bit i (requests) or 64 + i (responses) for
     // LENGTHS[i]. The validator keeps distinct lengths to at most 64.
     let mut shapes: Vec<(&[u8], u128)> = Vec::new();
@@ -247,12 +257,17 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     } else {
         quote!()
     };
-    let checksum_ok = if p.framing.long.is_some() {
+    let lay = if p.framing.form.is_some() {
+        quote!(FORM)
+    } else {
+        quote!(LONG)
+    };
+    let checksum_ok = if p.framing.long.is_some() || p.framing.form.is_some() {
         // Laid out in the long form's width (`framing.length.long`) before the check.
         quote! {
             fn checksum_ok(frame: &[u8]) -> bool {
                 let mut laid = [0u8; MAX_FRAME_LEN];
-                let rt::Ok((frame, _)) = LONG.lay_out(frame, &mut laid) else {
+                let rt::Ok((frame, _)) = #lay.lay_out(frame, &mut laid) else {
                     return false;
                 };
                 match frame.len().checked_sub(#ck_len) {
@@ -289,7 +304,22 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     };
-    let framing_fns = if p.framing.long.is_some() {
+    let framing_fns = if p.framing.form.is_some() {
+        // A short form of the frame (`framing.forms`): both forms are framed by their start
+        // byte and the long one's length field; a constant whole frame by its first byte.
+        quote! {
+            #[inline]
+            fn candidates(head: &[u8]) -> rt::Candidates {
+                let _ = head;
+                #constants_in_mask
+                rt::Candidates { requests: 0, responses: 0 }
+            }
+            #[inline]
+            fn variable_candidates(head: &[u8]) -> rt::VarLens {
+                FORM.frame_lens(head)
+            }
+        }
+    } else if p.framing.long.is_some() {
         // Both forms of a length field the start byte chooses are framed by their length
         // field alone (`framing.length.long`).
         quote! {

@@ -117,7 +117,7 @@ pub fn check<P: Protocol>(
 /// `framing.escaping`), or laid out in a long length form's width (`framing.length.long`): a
 /// message's `frame_len`.
 fn unescaped_len(p: &ir::Protocol, wire: &[u8]) -> usize {
-    if p.framing.long.is_some() {
+    if p.framing.long.is_some() || p.framing.form.is_some() {
         return busspec_model::long::canonical(p, wire).map_or(wire.len(), |c| c.frame.len());
     }
     let frame = p.framing.after_preamble(wire);

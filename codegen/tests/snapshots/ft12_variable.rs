@@ -26,7 +26,7 @@ pub mod ft12_variable {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-26";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "6f7736b49b458ec9cc8ad88b3ee2504c7fbac118715ce200d8b599ae35e9da71";
+    pub const SPEC_SHA256: &str = "d16105bd2a95424ac4ebaba65af4aeac756bc4ef0ac11db72716bccc71c9a917";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/ft12_variable.yaml"
