@@ -51,7 +51,12 @@ crate::views!(lists_after::ListsAfter, lists_after, request, response);
 crate::views!(lists_length::ListsLength, lists_length, request, -);
 crate::views!(msp_by_direction::MspByDirection, msp_by_direction, -, response);
 crate::views!(text_counted::TextCounted, text_counted, request, response);
-crate::views!(text_terminated::TextTerminated, text_terminated, request, response);
+crate::views!(
+    text_terminated::TextTerminated,
+    text_terminated,
+    request,
+    response
+);
 
 /// Every fixture with a borrowed view: made of exactly the frames the owned decode accepts,
 /// refused with its error elsewhere, its values the owned message's (`agree::views_agree`).

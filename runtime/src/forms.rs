@@ -166,7 +166,8 @@ impl ShortForm {
             | E::BadCount { offset, .. }
             | E::BadEscape { offset, .. }
             | E::NeedlessLong { offset, .. }
-            | E::BadWidth { offset, .. } => *offset = o(*offset),
+            | E::BadWidth { offset, .. }
+            | E::NoTerminator { offset, .. } => *offset = o(*offset),
             E::Ambiguous { .. } | E::NotAReply { .. } | E::BroadcastNotAccepted { .. } => {}
         }
         e

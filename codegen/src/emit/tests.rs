@@ -223,6 +223,7 @@ fn views_only_where_the_decoder_reads_the_frame_itself() {
         ("cobs_link.yaml", "escaped"),
         ("dynamixel2_stuffed.yaml", "escaped"),
         ("vesc.yaml", "long length form"),
+        ("mbus.yaml", "short form"),
     ] {
         let p = load(file);
         assert!(no_view(&p, Direction::Request).is_some_and(|w| w.contains(why)));

@@ -3,9 +3,9 @@ use super::*;
 /// Why protocol `p` gets no borrowed views in direction `d`, or `None` where it gets them.
 ///
 /// A view lends the frame's own bytes, so it needs the bytes the decoder reads to be the
-/// frame's: not where the frame is unescaped, laid out in the long length form, or has its
-/// payload transform undone into a buffer of the decoder's (escaping, `length.long`,
-/// `transform`), nor where the direction has constant whole frames (recognised before the
+/// frame's: not where the frame is unescaped, laid out in the long length form or from a short
+/// form, or has its payload transform undone into a buffer of the decoder's (escaping,
+/// `length.long`, `forms`, `transform`), nor where the direction has constant whole frames (recognised before the
 /// framing, outside the dispatch the view shares). A direction with no list has nothing to
 /// lend: its owned value is already a copy of a few scalars.
 pub(super) fn no_view(p: &Protocol, d: Direction) -> Option<&'static str> {
@@ -14,6 +14,9 @@ pub(super) fn no_view(p: &Protocol, d: Direction) -> Option<&'static str> {
     }
     if p.framing.long.is_some() {
         return Some("its long length form is laid out into a copy before decode");
+    }
+    if p.framing.form.is_some() {
+        return Some("its short form is laid out into a copy before decode");
     }
     if p.framing.transform.is_some() {
         return Some("its payload transform is undone into a copy before decode");

@@ -4,6 +4,7 @@ pub mod mbus {
     //!
     //! Generated from `model/tests/fixtures/valid/mbus.yaml`, transcribed from *EN 13757-2 Communication systems for meters, physical and link layer (from its public descriptions)*, revision 2018 (2018-01-01).
     //! Numbers travel little-endian on the wire.
+    //! Borrowed views: no `RequestView`: its short form is laid out into a copy before decode; no `ResponseView`: its short form is laid out into a copy before decode.
     #![allow(
         clippy::get_first,
         clippy::unnecessary_cast,
