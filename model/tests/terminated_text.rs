@@ -1,5 +1,7 @@
 //! Text up to a terminator (`repeat: {until: 0x00}`, fixture `text_terminated`): the
 //! interpreter's rules, each with the frame that breaks it.
+#![cfg(feature = "tools")]
+
 use std::borrow::Cow;
 use std::path::Path;
 
