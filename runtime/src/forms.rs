@@ -125,7 +125,6 @@ impl ShortForm {
             return e;
         }
         let (at, extra) = (self.at, self.extra());
-        let n = |len: usize| len.saturating_sub(extra);
         let o = |o: usize| {
             if o >= at + extra {
                 o - extra
@@ -135,42 +134,7 @@ impl ShortForm {
                 o
             }
         };
-        use DecodeError as E;
-        let mut e = e;
-        match &mut e {
-            E::Truncated { needed, found } => {
-                *needed = n(*needed);
-                *found = n(*found);
-            }
-            E::TooLong { max, found } => {
-                *max = n(*max);
-                *found = n(*found);
-            }
-            E::WrongLength { found, less, .. } => {
-                *found = n(*found);
-                *less += extra;
-            }
-            E::BadStart { offset, .. }
-            | E::BadEnd { offset, .. }
-            | E::ChecksumMismatch { offset, .. }
-            | E::UnknownCommand { offset, .. }
-            | E::UnknownResponse { offset, .. }
-            | E::InvalidValue { offset, .. }
-            | E::NotBcd { offset, .. }
-            | E::NotEqual { offset, .. }
-            | E::NotFollowing { offset, .. }
-            | E::ByteCount { offset, .. }
-            | E::LengthMismatch { offset, .. }
-            | E::OutOfRange { offset, .. }
-            | E::BadAddress { offset, .. }
-            | E::BadCount { offset, .. }
-            | E::BadEscape { offset, .. }
-            | E::NeedlessLong { offset, .. }
-            | E::BadWidth { offset, .. }
-            | E::NoTerminator { offset, .. } => *offset = o(*offset),
-            E::Ambiguous { .. } | E::NotAReply { .. } | E::BroadcastNotAccepted { .. } => {}
-        }
-        e
+        crate::long::on_shorter(e, extra, o)
     }
 
     /// The laid-out frame of `len` bytes in `buf`, as it travels: short (the dropped parts

@@ -126,7 +126,6 @@ impl LongLength {
             return e;
         }
         let extra = self.extra();
-        let n = |len: usize| len.saturating_sub(extra);
         let o = |at: usize| {
             if at >= self.length_at + self.width {
                 at - extra
@@ -136,42 +135,7 @@ impl LongLength {
                 at
             }
         };
-        use DecodeError as E;
-        let mut e = e;
-        match &mut e {
-            E::Truncated { needed, found } => {
-                *needed = n(*needed);
-                *found = n(*found);
-            }
-            E::TooLong { max, found } => {
-                *max = n(*max);
-                *found = n(*found);
-            }
-            E::WrongLength { found, less, .. } => {
-                *found = n(*found);
-                *less += extra;
-            }
-            E::BadStart { offset, .. }
-            | E::BadEnd { offset, .. }
-            | E::ChecksumMismatch { offset, .. }
-            | E::UnknownCommand { offset, .. }
-            | E::UnknownResponse { offset, .. }
-            | E::InvalidValue { offset, .. }
-            | E::NotBcd { offset, .. }
-            | E::NotEqual { offset, .. }
-            | E::NotFollowing { offset, .. }
-            | E::ByteCount { offset, .. }
-            | E::LengthMismatch { offset, .. }
-            | E::OutOfRange { offset, .. }
-            | E::BadAddress { offset, .. }
-            | E::BadCount { offset, .. }
-            | E::BadEscape { offset, .. }
-            | E::NeedlessLong { offset, .. }
-            | E::BadWidth { offset, .. }
-            | E::NoTerminator { offset, .. } => *offset = o(*offset),
-            E::Ambiguous { .. } | E::NotAReply { .. } | E::BroadcastNotAccepted { .. } => {}
-        }
-        e
+        on_shorter(e, extra, o)
     }
 
     /// The laid-out frame of `len` bytes in `buf`, as it travels: short (the long field's
@@ -223,4 +187,47 @@ impl LongLength {
             responses: of(self.rules[1]),
         }
     }
+}
+
+/// `e`, an error of a laid-out frame `extra` bytes longer than the frame as it travelled, on
+/// that frame: every offset through `o`, frame lengths `extra` shorter. The long length form
+/// ([`LongLength::locate`]) and the short form (`ShortForm::locate`) both place errors so.
+pub(crate) fn on_shorter(e: DecodeError, extra: usize, o: impl Fn(usize) -> usize) -> DecodeError {
+    let n = |len: usize| len.saturating_sub(extra);
+    use DecodeError as E;
+    let mut e = e;
+    match &mut e {
+        E::Truncated { needed, found } => {
+            *needed = n(*needed);
+            *found = n(*found);
+        }
+        E::TooLong { max, found } => {
+            *max = n(*max);
+            *found = n(*found);
+        }
+        E::WrongLength { found, less, .. } => {
+            *found = n(*found);
+            *less += extra;
+        }
+        E::BadStart { offset, .. }
+        | E::BadEnd { offset, .. }
+        | E::ChecksumMismatch { offset, .. }
+        | E::UnknownCommand { offset, .. }
+        | E::UnknownResponse { offset, .. }
+        | E::InvalidValue { offset, .. }
+        | E::NotBcd { offset, .. }
+        | E::NotEqual { offset, .. }
+        | E::NotFollowing { offset, .. }
+        | E::ByteCount { offset, .. }
+        | E::LengthMismatch { offset, .. }
+        | E::OutOfRange { offset, .. }
+        | E::BadAddress { offset, .. }
+        | E::BadCount { offset, .. }
+        | E::BadEscape { offset, .. }
+        | E::NeedlessLong { offset, .. }
+        | E::BadWidth { offset, .. }
+        | E::NoTerminator { offset, .. } => *offset = o(*offset),
+        E::Ambiguous { .. } | E::NotAReply { .. } | E::BroadcastNotAccepted { .. } => {}
+    }
+    e
 }
