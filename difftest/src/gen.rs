@@ -219,6 +219,8 @@ enum Own {
     /// A short form of the frame (`framing.forms`): whether an eligible spec takes one, its
     /// start byte.
     ShortForm = 0x1068_1068_1068_1068,
+    /// A payload longer than 255 bytes: whether a spec takes one, the list and its new most.
+    BigPayload = 0x0100_0100_0100_0100,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1974,6 +1976,47 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
+    // Payloads longer than 255 bytes (UBX's NAV-SAT, MSP v2's long replies): where frames
+    // have a length field, in about half the specs with an eligible list, a list to the end (of numbers, text or
+    // records) may hold enough elements to pass 255 bytes, up to 4096, and the length field
+    // is two bytes wide. Drawn by a generator of its own, so every spec drawn without it is as
+    // it was.
+    let big = has_length && {
+        let mut rng = own_rng(seed, Own::BigPayload);
+        // Only in a message whose code no other message of its direction has: messages that
+        // share a code (or have none) are told apart by their lengths, which it would blur.
+        let own_code = |ms: &[Gm]| -> Vec<bool> {
+            ms.iter()
+                .map(|m| !m.code.is_empty() && ms.iter().filter(|o| o.code == m.code).count() == 1)
+                .collect()
+        };
+        let (own_c, own_r) = (own_code(&commands), own_code(&responses));
+        let mut eligible: Vec<&mut Gf> = commands
+            .iter_mut()
+            .zip(own_c)
+            .chain(responses.iter_mut().zip(own_r))
+            .filter(|(_, own)| *own)
+            .flat_map(|(m, _)| m.fields.iter_mut())
+            .filter(|f| {
+                f.yaml.contains("repeat: {count: end")
+                    && !f.yaml.contains("bytes:")
+                    && f.ty != "bit"
+            })
+            .collect();
+        if rng.u8(..100) < 50 && !eligible.is_empty() {
+            let at = rng.usize(..eligible.len());
+            let f = &mut eligible[at];
+            let w = f.width.max(1);
+            let most = rng.usize(256 / w + 1..=4000 / w);
+            let from = f.yaml.rfind(", max: ").unwrap_or(f.yaml.len());
+            f.yaml = format!("{}, max: {most}}}}}", &f.yaml[..from]);
+            f.repeat_tail = most * w;
+            true
+        } else {
+            false
+        }
+    };
+
     // Payload bounds per direction (the shortest without optional fields).
     let bounds = |ms: &[Gm]| {
         let lo = ms
@@ -2034,7 +2077,11 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     if has_length {
         // Stuffed frames count their stuffed bytes, at worst one in every pattern's length.
         let stuffed = escaping == Escaping::Insert;
-        let width = if g.chance(70) && !stuffed { 1 } else { 2 };
+        let width = if g.chance(70) && !stuffed && !big {
+            1
+        } else {
+            2
+        };
         let mut parts: Vec<&str> = Vec::new();
         // Each part once, though the layout may hold a start or the length twice.
         for p in layout.iter().copied() {
@@ -2665,6 +2712,10 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         fields.iter().any(|x| x.terminator().is_some()),
         "text up to a terminator",
+    );
+    add(
+        f.request.payload_max > 255 || f.response.payload_max > 255,
+        "payload over 255 bytes",
     );
     add(fields.iter().any(|x| x.constant.is_some()), "constant");
     add(fields.iter().any(|x| !x.bits.is_empty()), "bits");

@@ -215,12 +215,13 @@ fn main() {
     // The constructs the language added last, over the whole run.
     let count = |k: &str| f.coverage.get(k).copied().unwrap_or(0);
     println!(
-        "  specs with optional fields {}, with a preamble {}, with counted text {}, with a long length form {}, with text up to a terminator {}",
+        "  specs with optional fields {}, with a preamble {}, with counted text {}, with a long length form {}, with text up to a terminator {}, with a payload over 255 bytes {}",
         count("optional fields"),
         count("preamble"),
         count("counted text"),
         count("long length form"),
-        count("text up to a terminator")
+        count("text up to a terminator"),
+        count("payload over 255 bytes")
     );
     if !f.signatures.is_empty() {
         println!("disagreements by what differs (count, what):");

@@ -1249,17 +1249,23 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
                 lens.push(l as usize);
             }
         }
-        // A long length form (`framing.length.long`) carries longer payloads.
-        let most = if f.length.as_ref().is_some_and(|l| l.long.is_some()) {
-            MAX_LONG_PAYLOAD
-        } else {
-            255
-        };
+        // A two-byte length field, or a long length form (`framing.length.long`), carries
+        // longer payloads.
+        let wide = f
+            .length
+            .as_ref()
+            .is_some_and(|l| l.long.is_some() || l.width == 2);
+        let most = if wide { MAX_LONG_PAYLOAD } else { 255 };
         if d.payload.min < 0 || d.payload.max < d.payload.min || d.payload.max > most {
+            let why = if wide {
+                ""
+            } else {
+                "; a two-byte length field carries payloads up to 4096 bytes"
+            };
             sink.error(
                 join(&dpath, "payload"),
                 format!(
-                    "payload length range {}..={} is invalid (0 <= min <= max <= {most})",
+                    "payload length range {}..={} is invalid (0 <= min <= max <= {most}{why})",
                     d.payload.min, d.payload.max
                 ),
             );
@@ -1591,8 +1597,8 @@ fn l_has_long(spec: &model::Framing) -> bool {
     spec.length.as_ref().is_some_and(|l| l.long.is_some())
 }
 
-/// The longest payload of a framing with a long length form (`framing.length.long`); 255
-/// without one.
+/// The longest payload of a framing with a two-byte length field or a long length form
+/// (`framing.length.long`); 255 without one.
 pub const MAX_LONG_PAYLOAD: i64 = 4096;
 
 /// The most preamble bytes a spec may send or accept.

@@ -149,6 +149,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "long_payload_too_long",
         &[("framing.request.payload", "payload length range 0..=5000 is invalid (0 <= min <= max <= 4096)")],
     ),
+    (
+        "payload_past_one_byte_length",
+        &[("framing.response.payload", "payload length range 1..=300 is invalid (0 <= min <= max <= 255; a two-byte length field carries payloads up to 4096 bytes)")],
+    ),
     // ---- a short form of the frame (made from valid/mbus, without its examples)
     (
         "forms_same_start",

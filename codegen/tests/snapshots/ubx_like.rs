@@ -26,7 +26,7 @@ pub mod ubx_like {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-26";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "0d72c63dd0cb5bcc85cd3a228be61de662ad5f4c2ce1ba7a4472b831395ef85a";
+    pub const SPEC_SHA256: &str = "43d990c9b45ade0e1a69ba6290836a1ed5f15fd930276991475b7cf6028fac87";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/ubx_like.yaml"
@@ -34,9 +34,9 @@ pub mod ubx_like {
     /// The longest request frame, in bytes.
     pub const MAX_REQUEST_LEN: usize = 14;
     /// The longest response frame, in bytes.
-    pub const MAX_RESPONSE_LEN: usize = 14;
+    pub const MAX_RESPONSE_LEN: usize = 976;
     /// The longest frame in either direction: a buffer this long holds any frame.
-    pub const MAX_FRAME_LEN: usize = 14;
+    pub const MAX_FRAME_LEN: usize = 976;
     /// The document's baud rate.
     pub const BAUD: u32 = 9600u32;
     /// The quiet time the document demands between frames, in milliseconds, if it says.
@@ -67,6 +67,46 @@ pub mod ubx_like {
     #[inline]
     pub fn checksum(bytes: &[u8]) -> u16 {
         rt::fletcher8(bytes)
+    }
+    /// meters
+    ///
+    /// Physical value = raw × 0.1.
+    #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+    #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+    #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+    pub struct Meters(pub i16);
+    /// Shows the raw value and the physical one.
+    impl rt::Debug for Meters {
+        fn fmt(&self, f: &mut rt::Formatter<'_>) -> rt::FmtResult {
+            write!(f, "Meters({} = {} m)", self.0, self.value())
+        }
+    }
+    impl Meters {
+        /// The unit's symbol.
+        pub const SYMBOL: &'static str = "m";
+        /// The raw wire value.
+        #[inline]
+        pub const fn raw(self) -> i16 {
+            self.0
+        }
+        /// From a raw wire value.
+        #[inline]
+        pub const fn from_raw(raw: i16) -> Self {
+            Self(raw)
+        }
+        /// The physical value, in [`Self::SYMBOL`].
+        #[inline]
+        pub fn value(self) -> f64 {
+            self.0 as f64 / 10f64
+        }
+        /// The raw value nearest to a physical value; `None` if it is not finite or out of range.
+        pub fn from_value(value: f64) -> rt::Option<Self> {
+            let raw = rt::round(value * 10f64)?;
+            if !(-32768..=32767).contains(&raw) {
+                return rt::None;
+            }
+            rt::Some(Self(raw as i16))
+        }
     }
     ///  (§3)
     ///
@@ -136,18 +176,22 @@ pub mod ubx_like {
             nav_rate: u16,
             time_ref: TimeRef,
         },
+        /// §3 Poll the satellite information (NAV-SAT) (code `0x0135`, 8 bytes).
+        PollSatellites,
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 2] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
             ("poll_rate", &[0x06, 0x08], 8),
             ("set_rate", &[0x06, 0x08], 14),
+            ("poll_satellites", &[0x01, 0x35], 8),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
                 Self::PollRate => 0,
                 Self::SetRate { .. } => 1,
+                Self::PollSatellites => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -206,6 +250,9 @@ pub mod ubx_like {
                     out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
                     out.len()
                 }
+                Self::PollSatellites => {
+                    rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x01, 0x35, 0x00, 0x00])?.len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 2, false);
             rt::Ok(len)
@@ -255,6 +302,10 @@ pub mod ubx_like {
                     });
                     g.end(&request::POLL_RATE)
                 }
+                0x0135 => {
+                    rt::fixed::<8>(frame, &request::POLL_SATELLITES)
+                        .map(|_| Self::PollSatellites)
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
             }
         }
@@ -274,6 +325,7 @@ pub mod ubx_like {
                         time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
                     })
                 }
+                "poll_satellites" => rt::Ok(Self::PollSatellites),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -314,9 +366,10 @@ pub mod ubx_like {
     impl Request {
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
-        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
             (rt::Getter, false, false, 0x1),
             (rt::Setter, false, false, 0x6),
+            (rt::Getter, false, false, 0x8),
         ];
         /// What the spec says of the command beyond its frame: its kind, the broadcast
         /// address, its reply, whether a master may send it again.
@@ -335,6 +388,166 @@ pub mod ubx_like {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
+        }
+    }
+    /// Where `satellites.svs` sits in the frame and how its elements are counted.
+    pub const REPEAT_SATELLITES: rt::RepeatAt = rt::RepeatAt {
+        field: &response::SATELLITES_SVS,
+        base: 16,
+        at: 14,
+        width: 12,
+        count: rt::CountBy::Elements(rt::CountField {
+            name: "num_svs",
+            at: 11,
+            width: 1,
+            le: true,
+        }),
+        min: 0,
+        max: 80,
+    };
+    /// One record of `satellites.svs` (12 bytes).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+    #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+    pub struct SatellitesSvs {
+        /// \[cycles\]
+        pub gnss_id: u8,
+        /// \[cycles\]
+        pub sv_id: u8,
+        /// \[dBHz\]
+        pub cno: u8,
+        /// \[deg\]
+        pub elev: i8,
+        /// \[deg\]
+        pub azim: i16,
+        /// \[m\]
+        pub pr_res: Meters,
+        /// \[cycles\]
+        pub flags: u32,
+    }
+    impl SatellitesSvs {
+        /// Its bytes on the wire.
+        pub const WIDTH: usize = 12;
+        /// Reads a record from its bytes, at frame offset `at` (for errors), each field's range checked as the spec says.
+        pub fn read(frame: &[u8; 12], at: usize) -> rt::DecodeResult<Self> {
+            let v_gnss_id: u8 = frame[0];
+            let v_sv_id: u8 = frame[1];
+            let v_cno: u8 = frame[2];
+            let v_elev: i8 = frame[3] as i8;
+            let v_azim: i16 = i16::from_le_bytes([frame[4], frame[5]]);
+            let v_pr_res: i16 = i16::from_le_bytes([frame[6], frame[7]]);
+            let v_flags: u32 = u32::from_le_bytes([
+                frame[8],
+                frame[9],
+                frame[10],
+                frame[11],
+            ]);
+            rt::Ok(Self {
+                gnss_id: v_gnss_id,
+                sv_id: v_sv_id,
+                cno: v_cno,
+                elev: v_elev,
+                azim: v_azim,
+                pr_res: Meters::from_raw(v_pr_res),
+                flags: v_flags,
+            })
+        }
+        /// Writes the record into its bytes, each field's range checked as the spec says.
+        pub fn write(&self, out: &mut [u8; 12]) -> rt::Result<(), rt::EncodeError> {
+            let v_gnss_id = self.gnss_id;
+            out[0] = v_gnss_id;
+            let v_sv_id = self.sv_id;
+            out[1] = v_sv_id;
+            let v_cno = self.cno;
+            out[2] = v_cno;
+            let v_elev = self.elev;
+            out[3..4].copy_from_slice(&v_elev.to_le_bytes());
+            let v_azim = self.azim;
+            out[4..6].copy_from_slice(&v_azim.to_le_bytes());
+            let v_pr_res = self.pr_res;
+            out[6..8].copy_from_slice(&v_pr_res.raw().to_le_bytes());
+            let v_flags = self.flags;
+            out[8..12].copy_from_slice(&v_flags.to_le_bytes());
+            rt::Ok(())
+        }
+    }
+    impl ::core::default::Default for SatellitesSvs {
+        fn default() -> Self {
+            Self {
+                gnss_id: 0,
+                sv_id: 0,
+                cno: 0,
+                elev: 0,
+                azim: 0,
+                pr_res: Meters::from_raw(0),
+                flags: 0,
+            }
+        }
+    }
+    impl rt::Record for SatellitesSvs {
+        const FIELDS: usize = 7;
+        fn raw(&self, field: usize) -> i64 {
+            match field {
+                0 => self.gnss_id as i64,
+                1 => self.sv_id as i64,
+                2 => self.cno as i64,
+                3 => self.elev as i64,
+                4 => self.azim as i64,
+                5 => self.pr_res.raw() as i64,
+                6 => self.flags as i64,
+                _ => 0,
+            }
+        }
+        fn from_raw(
+            list: &rt::RecordList<'_>,
+            k: usize,
+        ) -> rt::Result<Self, rt::FieldError> {
+            rt::Ok(Self {
+                gnss_id: rt::field_int(
+                    "svs.gnss_id",
+                    rt::Some(rt::Int(list.get(k, 0).unwrap_or(0))),
+                    0,
+                    255,
+                )? as u8,
+                sv_id: rt::field_int(
+                    "svs.sv_id",
+                    rt::Some(rt::Int(list.get(k, 1).unwrap_or(0))),
+                    0,
+                    255,
+                )? as u8,
+                cno: rt::field_int(
+                    "svs.cno",
+                    rt::Some(rt::Int(list.get(k, 2).unwrap_or(0))),
+                    0,
+                    255,
+                )? as u8,
+                elev: rt::field_int(
+                    "svs.elev",
+                    rt::Some(rt::Int(list.get(k, 3).unwrap_or(0))),
+                    -128,
+                    127,
+                )? as i8,
+                azim: rt::field_int(
+                    "svs.azim",
+                    rt::Some(rt::Int(list.get(k, 4).unwrap_or(0))),
+                    -32768,
+                    32767,
+                )? as i16,
+                pr_res: Meters::from_raw(
+                    rt::field_int(
+                        "svs.pr_res",
+                        rt::Some(rt::Int(list.get(k, 5).unwrap_or(0))),
+                        -32768,
+                        32767,
+                    )? as i16,
+                ),
+                flags: rt::field_int(
+                    "svs.flags",
+                    rt::Some(rt::Int(list.get(k, 6).unwrap_or(0))),
+                    0,
+                    4294967295,
+                )? as u32,
+            })
         }
     }
     ///A response, device to host.
@@ -365,13 +578,22 @@ pub mod ubx_like {
             /// \[cycles\]
             msg_id: u8,
         },
+        /// §3 Satellite information (NAV-SAT) (code `0x0135`, 16 to 976 bytes).
+        Satellites {
+            /// GPS time of week of the navigation epoch \[ms\]
+            itow: u32,
+            /// \[cycles\]
+            reserved1: u16,
+            svs: rt::Repeated<SatellitesSvs, 80>,
+        },
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 4] = [
             ("rate", &[0x06, 0x08], 14),
             ("ack", &[0x05, 0x01], 10),
             ("nak", &[0x05, 0x00], 10),
+            ("satellites", &[0x01, 0x35], 16),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
@@ -379,6 +601,7 @@ pub mod ubx_like {
                 Self::Rate { .. } => 0,
                 Self::Ack { .. } => 1,
                 Self::Nak { .. } => 2,
+                Self::Satellites { .. } => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -391,7 +614,12 @@ pub mod ubx_like {
         }
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
-            Self::MESSAGES[self.index()].2
+            match self {
+                Self::Satellites { svs: v_svs, .. } => {
+                    REPEAT_SATELLITES.base + REPEAT_SATELLITES.bytes_of(v_svs.len())
+                }
+                _ => Self::MESSAGES[self.index()].2,
+            }
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
@@ -413,6 +641,15 @@ pub mod ubx_like {
                 Self::Nak { class_id: v_class_id, msg_id: v_msg_id } => {
                     f("class_id", rt::Int(*v_class_id as i64));
                     f("msg_id", rt::Int(*v_msg_id as i64));
+                }
+                Self::Satellites {
+                    itow: v_itow,
+                    reserved1: v_reserved1,
+                    svs: v_svs,
+                } => {
+                    f("itow", rt::Int(*v_itow as i64));
+                    f("reserved1", rt::Int(*v_reserved1 as i64));
+                    f("svs", rt::Records(v_svs.records()));
                 }
             }
         }
@@ -455,6 +692,37 @@ pub mod ubx_like {
                     out[7] = v_msg_id;
                     out.len()
                 }
+                Self::Satellites {
+                    itow: v_itow,
+                    reserved1: v_reserved1,
+                    svs: v_svs,
+                } => {
+                    let frame_len = REPEAT_SATELLITES.encode_len(v_svs.len())?;
+                    let out = rt::frame_mut_len(
+                        buf,
+                        frame_len,
+                        &[0xB5, 0x62, 0x01, 0x35],
+                    )?;
+                    rt::put_length(out, 4, 2, true, true, -8)?;
+                    out[10] = 0x01;
+                    out[6..10].copy_from_slice(&v_itow.to_le_bytes());
+                    out[11] = rt::fits(
+                        "num_svs",
+                        REPEAT_SATELLITES.count_value(v_svs.len()) as u64,
+                        0,
+                        255,
+                    )? as u8;
+                    out[12..14].copy_from_slice(&v_reserved1.to_le_bytes());
+                    for (k, r) in v_svs.iter().enumerate() {
+                        let mut bytes = [0u8; 12];
+                        r.write(&mut bytes)?;
+                        let at = 14 + k * 12;
+                        if let rt::Some(to) = out.get_mut(at..at + 12) {
+                            to.copy_from_slice(&bytes);
+                        }
+                    }
+                    out.len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 2, false);
             rt::Ok(len)
@@ -485,11 +753,11 @@ pub mod ubx_like {
             frame: &[u8],
             request: rt::Option<&Request>,
         ) -> rt::Result<Decoded<Response>, rt::DecodeError> {
-            rt::check_sync(frame, 14, 0, &[0xB5, 0x62])?;
+            rt::check_sync(frame, 976, 0, &[0xB5, 0x62])?;
             let address = rt::check_frame(
                 frame,
                 10,
-                14,
+                976,
                 0,
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
@@ -531,6 +799,25 @@ pub mod ubx_like {
                         msg_id: frame[7],
                     })
                 }
+                0x0135 => {
+                    let (frame, elements, _) = REPEAT_SATELLITES.split::<14>(frame)?;
+                    rt::equal(&response::SATELLITES_VERSION, 10, frame[10], 0x1)?;
+                    let mut v_svs = rt::Repeated::<SatellitesSvs, 80>::new();
+                    for (k, bytes) in elements.chunks_exact(12).enumerate() {
+                        let bytes = <[u8; 12]>::try_from(bytes).unwrap_or([0; 12]);
+                        let _ = v_svs.push(SatellitesSvs::read(&bytes, 14 + k * 12)?);
+                    }
+                    rt::Ok(Self::Satellites {
+                        itow: u32::from_le_bytes([
+                            frame[6],
+                            frame[7],
+                            frame[8],
+                            frame[9],
+                        ]),
+                        reserved1: u16::from_le_bytes([frame[12], frame[13]]),
+                        svs: v_svs,
+                    })
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, true)),
             }
         }
@@ -559,6 +846,13 @@ pub mod ubx_like {
                     rt::Ok(Self::Nak {
                         class_id: rt::get(&mut field, "class_id")?,
                         msg_id: rt::get(&mut field, "msg_id")?,
+                    })
+                }
+                "satellites" => {
+                    rt::Ok(Self::Satellites {
+                        itow: rt::get(&mut field, "itow")?,
+                        reserved1: rt::get(&mut field, "reserved1")?,
+                        svs: rt::records::<SatellitesSvs, 80>(&mut field, "svs")?,
                     })
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
@@ -687,6 +981,8 @@ pub mod ubx_like {
             }
             let mask: u128 = match (head.get(2), head.get(3)) {
                 (rt::None, _) => 0x30000000000000005,
+                (rt::Some(0x01), rt::None) => 0x4,
+                (rt::Some(0x01), rt::Some(0x35)) => 0x4,
                 (rt::Some(0x05), rt::None) => 0x20000000000000000,
                 (rt::Some(0x05), rt::Some(0x00)) => 0x20000000000000000,
                 (rt::Some(0x05), rt::Some(0x01)) => 0x20000000000000000,
@@ -700,23 +996,38 @@ pub mod ubx_like {
             }
         }
         #[inline]
-        fn candidate(head: &[u8]) -> rt::Candidate {
+        fn variable_candidates(head: &[u8]) -> rt::VarLens {
             if head.first().is_some_and(|&b| b != 0xB5) {
-                return rt::Candidate::NONE;
+                return rt::VarLens::NONE;
             }
             if head.get(1).is_some_and(|&b| b != 0x62) {
-                return rt::Candidate::NONE;
+                return rt::VarLens::NONE;
             }
-            static TABLE: [u8; 1534] = *b"\0\0\0\0\0\x03\x06\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\x01\x01\x01\x01\x01\x02\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\x01\0\0\0\0\0\0\x8A\0\0\0\0\0\0\0\0\0\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF";
-            match (head.get(2), head.get(3)) {
-                (rt::Some(&a), rt::Some(&b)) => {
-                    let i = TABLE[a as usize] as usize
-                        + TABLE[256 + b as usize] as usize;
-                    rt::Candidate(
-                        u16::from_le_bytes([TABLE[512 + 2 * i], TABLE[513 + 2 * i]]),
-                    )
-                }
-                _ => rt::Candidate::MANY,
+            rt::VarLens {
+                requests: rt::VarLen::NONE,
+                responses: rt::var_by_length(
+                    head,
+                    &[
+                        (
+                            rt::Fixed {
+                                code_at: 2,
+                                code: &[0x01, 0x35],
+                                lead_at: 6,
+                                lead: &[],
+                            },
+                            16,
+                            976,
+                        ),
+                    ],
+                    rt::LengthField {
+                        at: 4,
+                        width: 2,
+                        le: true,
+                        excess: 8,
+                        min: 0,
+                        max: 0,
+                    },
+                ),
             }
         }
     }
@@ -749,15 +1060,36 @@ pub mod ubx_like {
         );
         /// `set_rate.nav_rate`
         pub const SET_RATE_NAV_RATE: FieldDesc = FieldDesc::new("set_rate", "nav_rate");
+        /// `poll_satellites`, code 0x0135
+        pub const POLL_SATELLITES: MessageDesc = MessageDesc::new(
+            "poll_satellites",
+            0x0135,
+            2,
+            &[8],
+        );
     }
     /// Each response as its refusals name it.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
+        use ::busspec_runtime::{MessageDesc, FieldDesc};
         /// `rate`, code 0x0608
         pub const RATE: MessageDesc = MessageDesc::new("rate", 0x0608, 2, &[14]);
         /// `ack`, code 0x0501
         pub const ACK: MessageDesc = MessageDesc::new("ack", 0x0501, 2, &[10]);
         /// `nak`, code 0x0500
         pub const NAK: MessageDesc = MessageDesc::new("nak", 0x0500, 2, &[10]);
+        /// `satellites`, code 0x0135
+        pub const SATELLITES: MessageDesc = MessageDesc::new(
+            "satellites",
+            0x0135,
+            2,
+            &[16],
+        );
+        /// `satellites.svs`
+        pub const SATELLITES_SVS: FieldDesc = FieldDesc::new("satellites", "svs");
+        /// `satellites.version`
+        pub const SATELLITES_VERSION: FieldDesc = FieldDesc::new(
+            "satellites",
+            "version",
+        );
     }
 }
