@@ -54,11 +54,19 @@ struct Gm {
     extra: String,
 }
 
+/// Whether `f` is a list of a fixed count (`repeat: {count: 3}`), which has a fixed size.
+fn fixed_count(f: &Gf) -> bool {
+    f.yaml.split("repeat: {count: ").nth(1).is_some_and(|r| {
+        let digits = r.chars().take_while(char::is_ascii_digit).count();
+        digits > 0 && r[digits..].starts_with('}')
+    })
+}
+
 impl Gm {
     fn fixed(&self) -> usize {
         self.fields
             .iter()
-            .filter(|f| f.repeat_tail == 0 && !f.yaml.contains("repeat:"))
+            .filter(|f| f.repeat_tail == 0 && (!f.yaml.contains("repeat:") || fixed_count(f)))
             .map(|f| f.width)
             .sum()
     }
@@ -221,6 +229,8 @@ enum Own {
     ShortForm = 0x1068_1068_1068_1068,
     /// A payload longer than 255 bytes: whether a spec takes one, the list and its new most.
     BigPayload = 0x0100_0100_0100_0100,
+    /// Lists of a fixed count (`repeat: {count: N}`), from packed elements of whole bytes.
+    FixedList = 0xF1ED_F1ED_F1ED_F1ED,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -1976,6 +1986,50 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         }
     }
 
+    // Lists of a fixed count (`repeat: {count: N}`): packed elements of whole bytes in the
+    // protocol's byte order (any order for u8) are written so in about 60 % of the fields that
+    // may be; the same bytes, so the rest of the spec stays as it was drawn. Drawn by a
+    // generator of its own.
+    {
+        let mut rng = own_rng(seed, Own::FixedList);
+        let order = if bo == "little" {
+            "lsb_first"
+        } else {
+            "msb_first"
+        };
+        for f in commands
+            .iter_mut()
+            .chain(responses.iter_mut())
+            .flat_map(|m| m.fields.iter_mut())
+        {
+            let Some(at) = f.yaml.find(", packed: {count: ") else {
+                continue;
+            };
+            let tw = match f.ty {
+                "u8" => 8,
+                "u16" => 16,
+                "u32" => 32,
+                _ => continue,
+            };
+            let rest = &f.yaml[at + ", packed: {count: ".len()..];
+            let Some(close) = rest.find('}') else {
+                continue;
+            };
+            let inner = &rest[..close];
+            let mut parts = inner.split(", ");
+            let count = parts.next().unwrap_or("");
+            let whole = inner.contains(&format!("bits: {tw},"));
+            if !whole || !(tw == 8 || inner.ends_with(order)) || rng.u8(..100) >= 60 {
+                continue;
+            }
+            f.yaml = format!(
+                "{}, repeat: {{count: {count}}}{}",
+                &f.yaml[..at],
+                &rest[close + 1..]
+            );
+        }
+    }
+
     // Payloads longer than 255 bytes (UBX's NAV-SAT, MSP v2's long replies): where frames
     // have a length field, in about half the specs with an eligible list, a list to the end (of numbers, text or
     // records) may hold enough elements to pass 255 bytes, up to 4096, and the length field
@@ -2716,6 +2770,12 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(
         f.request.payload_max > 255 || f.response.payload_max > 255,
         "payload over 255 bytes",
+    );
+    add(
+        fields
+            .iter()
+            .any(|x| x.packed.as_ref().is_some_and(|pk| pk.whole())),
+        "whole packed elements or a fixed count",
     );
     add(fields.iter().any(|x| x.constant.is_some()), "constant");
     add(fields.iter().any(|x| !x.bits.is_empty()), "bits");

@@ -24,6 +24,9 @@ fn cell(s: &str) -> String {
 fn type_name(f: &Field) -> String {
     let one = scalar_type_name(f);
     if let Some(pk) = &f.packed {
+        if pk.whole() {
+            return format!("{one}[{}]", pk.count);
+        }
         return format!("{one}[{}] × {} bits", pk.count, pk.bits);
     }
     match &f.repeat {
@@ -168,7 +171,7 @@ fn field_notes(p: &Protocol, m: &Message, f: &Field) -> String {
         )),
         None => {}
     }
-    if let Some(pk) = &f.packed {
+    if let Some(pk) = f.packed.as_ref().filter(|pk| !pk.whole()) {
         notes.push(format!(
             "{} elements of {} bits packed into {} bytes, {}",
             pk.count,
@@ -230,7 +233,7 @@ fn fields_table(out: &mut String, p: &Protocol, m: &Message) {
     );
     out.push_str("|---|---|---|---|---|---|---|---|\n");
     for (i, f) in m.fields.iter().enumerate() {
-        let order_cell = if let Some(pk) = &f.packed {
+        let order_cell = if let Some(pk) = f.packed.as_ref().filter(|pk| !pk.whole()) {
             if pk.lsb_first {
                 "bit stream, LSB first"
             } else {

@@ -1257,6 +1257,12 @@ pub struct Packed {
 }
 
 impl Packed {
+    /// Whether each element takes whole bytes of its type (`bits` its type's width): a plain
+    /// array, as `repeat: {count: 4}` writes one, each element in the protocol's byte order.
+    pub fn whole(&self) -> bool {
+        self.bits as usize == 8 * self.elem_width
+    }
+
     /// The bytes `count` elements take.
     pub fn bytes(&self) -> usize {
         (self.count * self.bits as usize).div_ceil(8)

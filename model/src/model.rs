@@ -816,9 +816,10 @@ pub enum BitOrder {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Repeat {
-    /// An earlier field of the message holding the count, or `end`: to the end of the payload.
-    /// Empty (absent) where `until` ends the list instead.
-    #[serde(default)]
+    /// An earlier field of the message holding the count, or `end`: to the end of the payload,
+    /// or a number: that many elements always (`count: 5`, kept here as its digits). Empty
+    /// (absent) where `until` ends the list instead.
+    #[serde(default, deserialize_with = "count_text")]
     pub count: String,
     /// Text that ends at a terminator byte (`until: 0x00`, a C string): the characters run up
     /// to the first such byte, which travels after them and is no character.
@@ -830,11 +831,33 @@ pub struct Repeat {
     /// The fewest elements a frame carries (default 0).
     #[serde(default)]
     pub min: Option<i64>,
-    /// The most elements a frame may carry.
-    pub max: i64,
+    /// The most elements a frame may carry; required but where `count` is a number.
+    #[serde(default)]
+    pub max: Option<i64>,
     /// In a reply: the element count follows from a field of the request.
     #[serde(default)]
     pub request: Option<Relation>,
+}
+
+/// `repeat.count` as text: a field's name, `end`, or a number's digits (`count: 5`).
+fn count_text<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    struct V;
+    impl serde::de::Visitor<'_> for V {
+        type Value = String;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("an earlier field's name, `end`, or a number of elements")
+        }
+        fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<String, E> {
+            Ok(s.to_owned())
+        }
+        fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<String, E> {
+            Ok(v.to_string())
+        }
+        fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<String, E> {
+            Ok(v.to_string())
+        }
+    }
+    d.deserialize_any(V)
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -2617,6 +2617,11 @@ fn message_body(
         );
     }
     let fpath = join(path, "fields");
+    let fields: Vec<model::Field> = fields
+        .iter()
+        .map(|f| fixed_list(f, &join(&fpath, &f.name), byte_order, sink))
+        .collect();
+    let fields = fields.as_slice();
     // Field and sub-field names share one name space per message: they are the keys of its values.
     // The header fields' values (each whole, or its sub-fields) are named in every message.
     let mut leaf_names: BTreeSet<String> = framing
@@ -3503,18 +3508,25 @@ fn repeat(
     sink: &mut Sink,
 ) -> Option<Repeat> {
     let of = r.of.unwrap_or(model::CountOf::Elements);
-    if !(1..=0xFFFF).contains(&r.max) {
+    let Some(max) = r.max else {
+        sink.error(
+            p,
+            "missing field `max` (the most elements a frame may carry; only a fixed count, `count: 4`, needs none)",
+        );
+        return None;
+    };
+    if !(1..=0xFFFF).contains(&max) {
         sink.error(
             join(p, "max"),
-            format!("a repeat's maximum is 1..=65535 elements, not {}", r.max),
+            format!("a repeat's maximum is 1..=65535 elements, not {max}"),
         );
         return None;
     }
     let min = r.min.unwrap_or(0);
-    if !(0..=r.max).contains(&min) {
+    if !(0..=max).contains(&min) {
         sink.error(
             join(p, "min"),
-            format!("a repeat's minimum {min} is outside 0..={}", r.max),
+            format!("a repeat's minimum {min} is outside 0..={max}"),
         );
         return None;
     }
@@ -3559,7 +3571,7 @@ fn repeat(
     } else if r.count.is_empty() {
         sink.error(
             p,
-            "a repeat needs `count` (an earlier field, or `end`) or, for text, `until` (its terminator byte)",
+            "a repeat needs `count` (an earlier field, `end`, or a number of elements) or, for text, `until` (its terminator byte)",
         );
         return None;
     } else if r.count == "end" {
@@ -3613,7 +3625,7 @@ fn repeat(
     Some(Repeat {
         count,
         min: min as usize,
-        max: r.max as usize,
+        max: max as usize,
         request,
     })
 }
@@ -3728,6 +3740,87 @@ fn bcd_field(f: &model::Field, p: &str, mut out: Field, refs: &Refs, sink: &mut 
     } else if ok {
         out.range = Some((min, max));
     }
+    out
+}
+
+/// A list of a fixed number of elements (`repeat: {count: 4}`) is packed elements of whole
+/// bytes (`packed: {count: 4, bits: 16, bit_order}` for u16, the bit order the protocol's byte
+/// order): `f` as such, its `repeat` checked here; any other field as it is. Unsigned elements
+/// of 1, 2 or 4 bytes yet; a list of other elements is refused at its type.
+fn fixed_list(f: &model::Field, p: &str, byte_order: ByteOrder, sink: &mut Sink) -> model::Field {
+    use model::FieldType as T;
+    let Some(r) = &f.repeat else {
+        return f.clone();
+    };
+    let Ok(n) = r.count.parse::<i64>() else {
+        return f.clone();
+    };
+    let rp = join(p, "repeat");
+    let mut out = f.clone();
+    out.repeat = None;
+    let refused = if !(1..=MAX_PACKED).contains(&n) {
+        Some((
+            "count",
+            format!("a fixed count is 1..={MAX_PACKED} elements, not {n}"),
+        ))
+    } else if r.until.is_some() {
+        Some((
+            "until",
+            "`until` and `count` are two ways to end a list: give one".to_owned(),
+        ))
+    } else if r.of.is_some() {
+        Some((
+            "of",
+            "`of` says what a count field counts; a fixed count is of elements".to_owned(),
+        ))
+    } else if r.request.is_some() {
+        Some((
+            "request",
+            "a fixed count takes nothing from the request".to_owned(),
+        ))
+    } else if let Some((k, v)) = [("min", r.min), ("max", r.max)]
+        .into_iter()
+        .find_map(|(k, v)| v.filter(|v| *v != n).map(|v| (k, v)))
+    {
+        Some((
+            k,
+            format!("a list of a fixed count of {n} holds {n} elements; `{k}: {v}` says otherwise (leave it out)"),
+        ))
+    } else if f.packed.is_some() {
+        Some((
+            "count",
+            "`packed` gives its own count: leave out `repeat`".to_owned(),
+        ))
+    } else {
+        None
+    };
+    if let Some((k, why)) = refused {
+        sink.error(join(&rp, k), why);
+        return out;
+    }
+    let bits = match f.ty {
+        T::U8 => 8,
+        T::U16 => 16,
+        T::U32 => 32,
+        _ => {
+            sink.error(
+                join(p, "type"),
+                format!(
+                    "a list of a fixed count (`count: {n}`) holds u8, u16 or u32 elements yet; {} elements are not expressible yet (a list counted by a field or to the `end` takes them)",
+                    format!("{:?}", f.ty).to_lowercase()
+                ),
+            );
+            return out;
+        }
+    };
+    out.packed = Some(model::Packed {
+        count: n,
+        bits,
+        bit_order: match byte_order {
+            ByteOrder::Little => model::BitOrder::LsbFirst,
+            ByteOrder::Big => model::BitOrder::MsbFirst,
+        },
+    });
     out
 }
 

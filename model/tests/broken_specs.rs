@@ -50,7 +50,7 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     ),
     (
         "repeat_without_count",
-        &[("commands.set_name.fields.name.repeat", "a repeat needs `count` (an earlier field, or `end`) or, for text, `until`")],
+        &[("commands.set_name.fields.name.repeat", "a repeat needs `count` (an earlier field, `end`, or a number of elements) or, for text, `until`")],
     ),
     // ---- preambles (made from valid/dlt645, hdlc_like and mbus_short, without their examples)
     (
@@ -148,6 +148,27 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
     (
         "long_payload_too_long",
         &[("framing.request.payload", "payload length range 0..=5000 is invalid (0 <= min <= max <= 4096)")],
+    ),
+    // ---- lists of a fixed count (made from valid/packed_channels, without its examples)
+    (
+        "fixed_list_signed",
+        &[("commands.calibrate.fields.offsets.type", "a list of a fixed count (`count: 3`) holds u8, u16 or u32 elements yet; i16 elements are not expressible yet (a list counted by a field or to the `end` takes them)")],
+    ),
+    (
+        "fixed_list_max_differs",
+        &[("commands.calibrate.fields.gains.repeat.max", "a list of a fixed count of 2 holds 2 elements; `max: 4` says otherwise (leave it out)")],
+    ),
+    (
+        "fixed_list_zero",
+        &[("commands.calibrate.fields.offsets.repeat.count", "a fixed count is 1..=256 elements, not 0")],
+    ),
+    (
+        "fixed_list_of_bytes",
+        &[("commands.calibrate.fields.offsets.repeat.of", "`of` says what a count field counts; a fixed count is of elements")],
+    ),
+    (
+        "repeat_without_max",
+        &[("commands.calibrate.fields.gains.repeat", "missing field `max` (the most elements a frame may carry; only a fixed count, `count: 4`, needs none)")],
     ),
     (
         "payload_past_one_byte_length",

@@ -26,13 +26,13 @@ pub mod packed_channels {
     /// The document's date.
     pub const DOCUMENT_DATE: &str = "2026-11-26";
     /// SHA-256 of the spec file this module was generated from, lowercase hex (`sha256sum`).
-    pub const SPEC_SHA256: &str = "c7a28f34df15168c3c2bc4871863346e2cb5045173ed32e1e842daf89f7e0f6c";
+    pub const SPEC_SHA256: &str = "4d0b37741959064d0bc533118ecaf5c11ce0042869c043152cb923bac6da6d0b";
     /// The spec's text, exactly as this module was generated from it.
     pub const SPEC_YAML: &str = include_str!(
         "../../../model/tests/fixtures/valid/packed_channels.yaml"
     );
     /// The longest request frame, in bytes.
-    pub const MAX_REQUEST_LEN: usize = 11;
+    pub const MAX_REQUEST_LEN: usize = 12;
     /// The longest response frame, in bytes.
     pub const MAX_RESPONSE_LEN: usize = 12;
     /// The longest frame in either direction: a buffer this long holds any frame.
@@ -98,18 +98,26 @@ pub mod packed_channels {
             /// Valid raw range 0..=6.
             levels: rt::Repeated<u8, 5>,
         },
+        /// §3.3 Calibrate (code `0x19`, 12 bytes).
+        Calibrate {
+            offsets: rt::Repeated<u16, 3>,
+            /// Valid raw range 1..=9.
+            gains: rt::Repeated<u8, 2>,
+        },
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
-        const MESSAGES: [(&'static str, &'static [u8], usize); 2] = [
+        const MESSAGES: [(&'static str, &'static [u8], usize); 3] = [
             ("channels", &[0x16], 11),
             ("levels", &[0x17], 7),
+            ("calibrate", &[0x19], 12),
         ];
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
                 Self::Channels { .. } => 0,
                 Self::Levels { .. } => 1,
+                Self::Calibrate { .. } => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -135,6 +143,10 @@ pub mod packed_channels {
                 Self::Levels { bank: v_bank, levels: v_levels } => {
                     f("bank", rt::Int(*v_bank as i64));
                     f("levels", rt::List(v_levels.elements()));
+                }
+                Self::Calibrate { offsets: v_offsets, gains: v_gains } => {
+                    f("offsets", rt::List(v_offsets.elements()));
+                    f("gains", rt::List(v_gains.elements()));
                 }
             }
         }
@@ -181,6 +193,20 @@ pub mod packed_channels {
                     )?;
                     out.len()
                 }
+                Self::Calibrate { offsets: v_offsets, gains: v_gains } => {
+                    rt::encode_packed_in_range("gains", v_gains.as_slice(), 1, 9)?;
+                    let out = rt::frame_mut::<12>(buf, &[0xC8, 0x0A, 0x19])?;
+                    rt::pack(
+                        "offsets",
+                        v_offsets.as_slice(),
+                        3,
+                        16,
+                        false,
+                        &mut out[3..9],
+                    )?;
+                    rt::pack("gains", v_gains.as_slice(), 2, 8, false, &mut out[9..11])?;
+                    out.len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, true);
             rt::Ok(len)
@@ -192,7 +218,7 @@ pub mod packed_channels {
             let address = rt::check_frame(
                 frame,
                 7,
-                11,
+                12,
                 0,
                 &FRAME,
                 |b| u32::from(checksum(rt::covered(b, 2))),
@@ -249,6 +275,35 @@ pub mod packed_channels {
                         levels: v_levels,
                     })
                 }
+                0x19 => {
+                    let frame = rt::fixed::<12>(frame, &request::CALIBRATE)?;
+                    rt::equal(
+                        &request::CALIBRATE_OFFSETS,
+                        3 + 5,
+                        rt::packed_padding(&frame[3..9], 3, 16, false),
+                        0,
+                    )?;
+                    let v_offsets = rt::unpack::<u16, 3>(&frame[3..9], 16, false);
+                    rt::equal(
+                        &request::CALIBRATE_GAINS,
+                        9 + 1,
+                        rt::packed_padding(&frame[9..11], 2, 8, false),
+                        0,
+                    )?;
+                    let v_gains = rt::unpack::<u8, 2>(&frame[9..11], 8, false);
+                    rt::packed_in_range(
+                        &request::CALIBRATE_GAINS,
+                        9,
+                        8,
+                        v_gains.as_slice(),
+                        1,
+                        9,
+                    )?;
+                    rt::Ok(Self::Calibrate {
+                        offsets: v_offsets,
+                        gains: v_gains,
+                    })
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
         }
@@ -270,6 +325,12 @@ pub mod packed_channels {
                     rt::Ok(Self::Levels {
                         bank: rt::get(&mut field, "bank")?,
                         levels: rt::list::<u8, 5>(&mut field, "levels", 0, 255)?,
+                    })
+                }
+                "calibrate" => {
+                    rt::Ok(Self::Calibrate {
+                        offsets: rt::list::<u16, 3>(&mut field, "offsets", 0, 65535)?,
+                        gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
                     })
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
@@ -312,8 +373,9 @@ pub mod packed_channels {
     impl Request {
         /// Each command's kind, whether it accepts and answers the broadcast address, and the
         /// responses it may get (bit `i`: row `i` of `Response::MESSAGES`), in spec order.
-        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 2] = [
+        const COMMANDS: [(rt::CommandKind, bool, bool, u64); 3] = [
             (rt::Setter, false, false, 0x1),
+            (rt::Setter, false, false, 0x0),
             (rt::Setter, false, false, 0x0),
         ];
         /// What the spec says of the command beyond its frame: its kind, the broadcast
@@ -329,6 +391,7 @@ pub mod packed_channels {
                 reply: match self {
                     Request::Channels { .. } => rt::Reply::Optional,
                     Request::Levels { .. } => rt::Reply::None,
+                    Request::Calibrate { .. } => rt::Reply::None,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -607,7 +670,7 @@ pub mod packed_channels {
                     responses: 0,
                 };
             }
-            static TABLE: [u8; 528] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10 0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+            static TABLE: [u8; 528] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x10 0@\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x04\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
             let mask = match head.get(2) {
                 rt::Some(&b) => {
                     let i = 256 + TABLE[b as usize] as usize;
@@ -615,7 +678,7 @@ pub mod packed_channels {
                     m.copy_from_slice(&TABLE[i..i + 16]);
                     u128::from_le_bytes(m)
                 }
-                rt::None => 0x10000000000000006,
+                rt::None => 0x10000000000000007,
             };
             rt::Candidates {
                 requests: mask as u64,
@@ -627,7 +690,7 @@ pub mod packed_channels {
             if head.first().is_some_and(|&b| b != 0xC8) {
                 return rt::Candidate::NONE;
             }
-            static CELLS: [u8; 512] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x0B\0\x07\0\x8C\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+            static CELLS: [u8; 512] = *b"\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x0B\0\x07\0\x8C\0\x0C\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
             match head.get(2) {
                 rt::Some(&b) => {
                     let i = 2 * b as usize;
@@ -653,6 +716,12 @@ pub mod packed_channels {
         pub const LEVELS: MessageDesc = MessageDesc::new("levels", 0x17, 1, &[7]);
         /// `levels.levels`
         pub const LEVELS_LEVELS: FieldDesc = FieldDesc::new("levels", "levels");
+        /// `calibrate`, code 0x19
+        pub const CALIBRATE: MessageDesc = MessageDesc::new("calibrate", 0x19, 1, &[12]);
+        /// `calibrate.offsets`
+        pub const CALIBRATE_OFFSETS: FieldDesc = FieldDesc::new("calibrate", "offsets");
+        /// `calibrate.gains`
+        pub const CALIBRATE_GAINS: FieldDesc = FieldDesc::new("calibrate", "gains");
     }
     /// Each response as its refusals name it.
     pub mod response {
