@@ -1366,7 +1366,7 @@ fn decode_as_unescaped<'p>(
 
 /// Refuses a frame whose checksum is wrong; `prepared` is the protocol's checksum made once
 /// (else it is computed from its parameters).
-fn check_checksum(
+pub(crate) fn check_checksum(
     p: &Protocol,
     prepared: Option<&checksum::Prepared>,
     wire: &[u8],
