@@ -8,6 +8,8 @@
 
 #![cfg(feature = "tools")]
 
+mod common;
+
 use std::path::Path;
 
 use busspec_model::interp::{self, DecodeError, Raw};
@@ -185,4 +187,36 @@ fn a_three_byte_code_is_sent_as_written() {
     .unwrap();
     assert_eq!(d.message, r);
     assert_eq!(d.get("index"), Some(&Raw::Int(0)));
+}
+
+/// Docs state the rule; diff calls adding or removing truncation wire-breaking, on its own.
+#[test]
+fn docs_and_diff_say_it() {
+    let p = fixture();
+    let md = busspec_model::docs::render(&p, "mavlink_v2.yaml");
+    assert!(
+        md.contains("Payload truncation (trailing zeros): a sender strips the payload's trailing zero bytes, keeping at least one"),
+        "{md}"
+    );
+    let (with, without) =
+        common::revisions("mavlink_v2", &[("  truncation: trailing_zeros\n", "")]);
+    let summary = |a: &Protocol, b: &Protocol| {
+        busspec_model::diff::diff(a, b)
+            .into_iter()
+            .filter(|c| c.kind != "example_removed")
+            .map(|c| (c.kind, c.path, c.text))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        summary(&with, &without),
+        [(
+            "truncation_changed",
+            "framing.truncation".to_owned(),
+            "payload truncation: trailing zeros stripped → none".to_owned()
+        )]
+    );
+    let back = busspec_model::diff::diff(&without, &with);
+    assert!(back.iter().any(|c| c.kind == "truncation_changed"
+        && c.category == busspec_model::diff::Category::WireBreaking));
+    assert_eq!(summary(&with, &with), []);
 }
