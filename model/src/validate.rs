@@ -478,6 +478,12 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
             "examples printed in another byte order beside a long length form (framing.length.long) are not expressible yet",
         );
     }
+    if framing.truncation.is_some() && spec.printed_byte_order != spec.byte_order {
+        sink.error(
+            "printed_byte_order",
+            "examples printed in another byte order beside payload truncation (framing.truncation) are not expressible yet",
+        );
+    }
     if framing.form.is_some() && spec.printed_byte_order != spec.byte_order {
         sink.error(
             "printed_byte_order",
