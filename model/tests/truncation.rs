@@ -236,8 +236,9 @@ fn example_text_is_the_bytes_as_they_travel() {
     );
     let r = p.find("attitude").unwrap();
     let m = p.message(r);
+    let original = fixture();
     let values = interp::decode(
-        &fixture(),
+        &original,
         None,
         None,
         &hex("FD 10 00 00 03 01 01 1E 00 00 40 E2 01 00 00 00 80 3D 00 00 00 BE 00 00 C0 3F 7C 41"),
