@@ -89,6 +89,8 @@ fn cases() -> Vec<Case> {
         // Header fields every message carries (MAVLink v1's sequence, system and component).
         spec("model/tests/fixtures/valid/mavlink_v1.yaml"),
         spec("model/tests/fixtures/valid/msp_v2.yaml"),
+        // Payload truncation (MAVLink v2): truncated frames dissected padded with zeros.
+        spec("model/tests/fixtures/valid/mavlink_v2.yaml"),
         // A start and a length field sent twice.
         spec("model/tests/fixtures/valid/ft12_variable.yaml"),
         spec("model/tests/fixtures/valid/minimal_variable.yaml"),

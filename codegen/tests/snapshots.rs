@@ -213,6 +213,17 @@ fn header_fields_spec_generates_its_snapshot() {
     check("model/tests/fixtures/valid/msp_v2.yaml", "msp_v2.rs");
 }
 
+/// Payload truncation (MAVLink v2's trailing zeros, `framing.truncation`): `TRUNCATION`, decode
+/// of a truncated frame padded into a copy, encode stripped, the stream framed by the length
+/// field; a 3-byte message id as the code.
+#[test]
+fn truncation_spec_generates_its_snapshot() {
+    check(
+        "model/tests/fixtures/valid/mavlink_v2.yaml",
+        "mavlink_v2.rs",
+    );
+}
+
 /// Repeated fields (variable-length frames): a list counted in bytes by a field that follows
 /// another, a reply's list to the end of the frame whose count follows the request, a length
 /// field from each frame's length (`snapshots_compile.rs` compiles and replays it).

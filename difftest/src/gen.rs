@@ -158,6 +158,9 @@ struct G {
     n_flags: usize,
     /// Frames have a length field: a message may end in records whose width a field gives.
     sized: bool,
+    /// Drawn for payload truncation (`Own::Truncation`): a length field, no lists and no
+    /// optional fields, so every message has one length.
+    fixed: bool,
 }
 
 /// The types a record's field may have: name, bytes, signed.
@@ -231,6 +234,8 @@ enum Own {
     BigPayload = 0x0100_0100_0100_0100,
     /// Lists of a fixed count (`repeat: {count: N}`), from packed elements of whole bytes.
     FixedList = 0xF1ED_F1ED_F1ED_F1ED,
+    /// Payload truncation (`framing.truncation`, MAVLink v2): whether a spec tries it.
+    Truncation = 0x00FD_00FD_00FD_00FD,
 }
 
 /// The generator of `what` for the spec of `seed`.
@@ -958,7 +963,7 @@ impl G {
                 repeat_tail: 0,
             });
         }
-        if self.chance(30) || request_field.is_some() {
+        if !self.fixed && (self.chance(30) || request_field.is_some()) {
             // One list, or two (each counted by its own field, the second's count possibly
             // after the first list), each possibly followed by fixed fields.
             let lists = if self.chance(30) { 2 } else { 1 };
@@ -1112,16 +1117,45 @@ fn checksum_yaml(g: &mut G) -> (String, usize) {
 /// A random spec that the validator accepts, as YAML text; the same text for the same seed.
 pub fn random_spec(seed: u64) -> String {
     let (text, _) = random_spec_without_examples(seed);
-    let p = match busspec_model::load_str("generated.yaml", &text) {
+    let mut p = match busspec_model::load_str("generated.yaml", &text) {
         Ok(p) => p,
         // A generator bug: the caller validates the text and reports it.
         Err(_) => return text,
     };
+    // Payload truncation (MAVLink v2's trailing zeros): tried on about half the specs whose
+    // framing could take it (a length field, one code length, fixed-length messages), kept
+    // where the validator accepts it, so every rule it holds truncation to is the
+    // validator's; drawn by a generator of its own, so every spec without it is as it was.
+    let mut text = text;
+    let eligible = p.framing.length.is_some()
+        && p.framing.escaping.is_none()
+        && p.framing.truncation.is_none()
+        && p.commands
+            .iter()
+            .chain(&p.responses)
+            .all(|m| !m.is_variable());
+    if eligible && truncation_draw(seed).1 {
+        let head = "framing:\n  section: \"2\"\n";
+        let with = text.replacen(head, &format!("{head}  truncation: trailing_zeros\n"), 1);
+        if let Ok(q) = busspec_model::load_str("generated.yaml", &with) {
+            (text, p) = (with, q);
+        }
+    }
     let mut rng = own_rng(seed, Own::Examples);
     match examples(&p, &mut rng) {
         Some(examples) => format!("{text}examples:\n{examples}errata: []\n"),
         None => format!("{text}examples: []\nerrata: []\n"),
     }
+}
+
+/// Payload truncation's draw for the spec of `seed` (`Own::Truncation`): whether the spec is
+/// drawn without lists and optional fields, with a length field (one in five), and
+/// whether truncation is tried where the validator may take it (those, and half the others).
+fn truncation_draw(seed: u64) -> (bool, bool) {
+    let mut rng = own_rng(seed, Own::Truncation);
+    let fixed = rng.u8(..100) < 20;
+    let tries = rng.u8(..100) < 50;
+    (fixed, fixed || tries)
 }
 
 /// The examples of `p`: for each message up to two frames the interpreter encodes from random
@@ -1254,6 +1288,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         n_enums: 0,
         n_flags: 0,
         sized: false,
+        fixed: truncation_draw(seed).0,
     };
     let mut y = String::new();
     let _ = writeln!(y, "# busspec-difftest random spec, seed {seed}");
@@ -1331,7 +1366,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     };
     // Stuffing (Dynamixel 2.0's) needs a length field before the code.
     let want_insert = g.chance(8);
-    let has_length = want_insert || g.chance(30);
+    let has_length = want_insert || g.fixed || g.chance(30);
     g.sized = has_length;
     // Frames without an address (a point-to-point link).
     let addressed = !g.chance(15);
@@ -1352,6 +1387,11 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     };
     let (req_lens, resp_lens) = if code_first {
         let l = *g.pick(&[0usize, 1, 2]);
+        (vec![l], vec![l])
+    } else if g.fixed {
+        // Drawn for payload truncation: one code length both ways, 1 to 3 bytes (MAVLink
+        // v2's message id is 3).
+        let l = *g.pick(&[1usize, 2, 3]);
         (vec![l], vec![l])
     } else if has_length {
         // A length field holds one rule per direction: codes of one length each.
@@ -1390,7 +1430,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         layout.push("checksum");
     }
     // Constant bytes after the checksum (M-Bus's 16, a line end).
-    let mut end: Vec<u8> = if g.chance(15) {
+    let mut end: Vec<u8> = if !g.fixed && g.chance(15) {
         let n = *g.pick(&[1, 1, 2, 3]);
         (0..n).map(|_| g.rng.u8(..)).collect()
     } else {
@@ -1423,7 +1463,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         lens.sort_unstable();
         lens.dedup();
         for part in ["start", "length"] {
-            if let (Some(first), true) = (pos(&layout, part), g.chance(20)) {
+            if let (Some(first), true) = (pos(&layout, part), !g.fixed && g.chance(20)) {
                 let last = if lens.len() == 1 {
                     pos(&layout, "payload")
                 } else {
@@ -1667,14 +1707,19 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
                     let c = [g.rng.u8(0xC0..=0xFF), *g.pick(&[0u8, 1, 2, 3, low])];
                     if !used2.contains(&c) {
                         used2.push(c);
-                        break c.to_vec();
+                        let mut code = c.to_vec();
+                        // Three bytes (drawn for payload truncation: MAVLink v2's id).
+                        if l == 3 {
+                            code.push(*g.pick(&[0u8, 1]));
+                        }
+                        break code;
                     }
                 },
             }
         };
     let mut commands: Vec<Gm> = Vec::new();
     for k in 0..n_cmd {
-        let code = if k > 0 && g.chance(10) {
+        let code = if k > 0 && !g.fixed && g.chance(10) {
             // A code shared with another command (told apart by payload length or constants).
             commands[k - 1].code.clone()
         } else {
@@ -1928,7 +1973,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
     // Optional fields (`present:`): where the frames have a length field and nothing
     // escapes, in about 13 % of the messages that may have them; drawn by a generator of
     // their own (`Own`), so every spec drawn without them is as it was.
-    if has_length && escaping == Escaping::None {
+    if has_length && escaping == Escaping::None && !g.fixed {
         g.with_own(seed, Own::Optionals, |g| {
             g.optionals(&mut commands);
             g.optionals(&mut responses);
@@ -2560,6 +2605,7 @@ fn random_spec_without_examples(seed: u64) -> (String, usize) {
         && !long_form
         && !terminated
         && short_form.is_none()
+        && !g.fixed
     {
         let mut rng = own_rng(seed, Own::Transform);
         if rng.u8(..100) < 40 {
@@ -2682,6 +2728,7 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
     add(f.transform.is_some(), "transform");
     add(f.long.is_some(), "long length form");
     add(f.form.is_some(), "short form");
+    add(f.truncation.is_some(), "payload truncation");
     add(
         matches!(esc, Some(ir::EscapeKind::Bytes { .. })) && f.end.is_empty(),
         "byte escaping framed by length",

@@ -746,6 +746,20 @@ impl<'a> Differ<'a> {
             let text = format!("transform: {} → {}", show(ot), show(nt));
             self.wire("transform_changed", "framing.transform", text);
         }
+        // Payload truncation added or removed (`framing.truncation`): frames whose payload
+        // ends in zeros travel shorter (or whole), and a receiver that does not pad refuses
+        // them.
+        if o.truncation != n.truncation {
+            let show = |t: Option<crate::model::Truncation>| {
+                t.map_or("none", |_| "trailing zeros stripped")
+            };
+            let text = format!(
+                "payload truncation: {} → {}",
+                show(o.truncation),
+                show(n.truncation)
+            );
+            self.wire("truncation_changed", "framing.truncation", text);
+        }
         // A long length form added, removed or changed (`framing.length.long`): frames whose
         // length the short form cannot hold travel otherwise. The length field itself is
         // compared in the short form's width (the IR lays frames out in the long one's).

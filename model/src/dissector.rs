@@ -575,6 +575,35 @@ fn protocol(p: &Protocol) -> String {
         None => "false".to_owned(),
     };
     let _ = writeln!(s, "  form = {form},");
+    // Payload truncation (`framing.truncation`: MAVLink v2): a truncated frame is dissected
+    // with its payload padded with zeros, as busspec decodes it; each code's whole payload.
+    let truncation = match f.truncation {
+        Some(_) => {
+            let code_len = f.request.code_lengths.first().copied().unwrap_or(0);
+            let head = f.head(code_len);
+            let mut codes: Vec<String> = Vec::new();
+            for d in [Direction::Request, Direction::Response] {
+                for m in p.framed(d) {
+                    let entry = format!("{{ {}, {} }}", bytes(&m.code), m.payload_len);
+                    if !codes.contains(&entry) {
+                        codes.push(entry);
+                    }
+                }
+            }
+            format!(
+                "{{ start_at = {}, length_at = {}, width = {}, k = {}, code_at = {}, payload_at = {}, codes = {{ {} }} }}",
+                head.start.map_or("false".to_owned(), |a| a.to_string()),
+                head.length.unwrap_or(0),
+                f.length.as_ref().map_or(1, |l| l.width),
+                f.length_rule(Direction::Request).map_or(0, |r| r.k),
+                head.code,
+                head.payload,
+                codes.join(", ")
+            )
+        }
+        None => "false".to_owned(),
+    };
+    let _ = writeln!(s, "  truncation = {truncation},");
     let _ = writeln!(
         s,
         "  rules = {{ request = {}, response = {} }},",

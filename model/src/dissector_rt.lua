@@ -1107,7 +1107,62 @@ local function setup(P)
   -- the bytes as they travelled, and the fields dissected from a tvb of the frame with the
   -- payload transformed back ("Payload transformed back"). A constant whole frame is its
   -- bytes as they travel.
+  -- Payload truncation (`framing.truncation`: MAVLink v2): a frame whose start bytes and
+  -- length field agree, whose code names a message and whose payload is 1 byte up to one
+  -- less than the message's is dissected with its payload padded with zeros ("Payload padded
+  -- with zeros", its length field the padded frame's), as busspec decodes it; its checksum
+  -- as it travelled. nil where the frame is dissected as it came.
+  local function dissect_truncated(tvb, pinfo, tree)
+    local t, n = P.truncation, tvb:len()
+    if not t or n < t.payload_at + P.trailer or n > P.longest then return nil end
+    local w = {}
+    local wa = tvb:range(0, n):bytes()
+    for i = 0, n - 1 do w[i] = wa:get_index(i) end
+    if t.start_at then
+      local function agree(sync)
+        for i, x in ipairs(sync) do
+          if w[t.start_at + i - 1] ~= x then return false end
+        end
+        return true
+      end
+      if not agree(P.sync) and not agree(P.response_sync) then return nil end
+    end
+    if read_uint(w, t.length_at, t.width, P.order) ~= n + t.k then return nil end
+    local full
+    for _, c in ipairs(t.codes) do
+      local same = true
+      for k, x in ipairs(c[1]) do
+        if w[t.code_at + k - 1] ~= x then same = false break end
+      end
+      if same then full = c[2] break end
+    end
+    if not full then return nil end
+    local got = n - t.payload_at - P.trailer
+    if got == 0 or got >= full then return nil end
+    local wire_ck
+    local ck = P.checksum
+    local at = checksum_at(P, n)
+    if ck.len > 0 then
+      wire_ck = { at = at, expected = ck.fn(w, ck.covers_from, at), found = read_uint(w, at, ck.len, ck.order), tvb = tvb }
+    end
+    local m = t.payload_at + full + P.trailer
+    local out = {}
+    for i = 0, m - 1 do out[i] = 0 end
+    for i = 0, t.payload_at + got - 1 do out[i] = w[i] end
+    for i = 0, P.trailer - 1 do out[m - P.trailer + i] = w[at + i] end
+    write_uint(out, t.length_at, t.width, P.order, m + t.k)
+    local ba = ByteArray.new()
+    ba:set_size(m)
+    for i = 0, m - 1 do ba:set_index(i, out[i]) end
+    dissect_frame(ba:tvb("Payload padded with zeros"), pinfo, tree, wire_ck)
+    return n
+  end
+
   local function dissect_transformed(tvb, pinfo, tree)
+    if P.truncation then
+      local done = dissect_truncated(tvb, pinfo, tree)
+      if done then return done end
+    end
     local t, n = P.transform, tvb:len()
     if not t or n < t.at + P.trailer or n > P.longest then return dissect_frame(tvb, pinfo, tree) end
     local w = {}

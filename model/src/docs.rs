@@ -696,6 +696,13 @@ pub fn render(p: &Protocol, source: &str) -> String {
         );
     }
 
+    if f.truncation.is_some() {
+        let _ = writeln!(
+            o,
+            "Payload truncation (trailing zeros): a sender strips the payload's trailing zero bytes, keeping at least one, and the length field counts what is sent; a receiver pads a payload of 1 byte up to its message's length with zeros (a payload of none, or longer than the message's, is refused). Encoders strip; frame lengths and offsets below are the whole payload's; the checksum covers the bytes as they travel.\n"
+        );
+    }
+
     if let Some(t) = &f.transform {
         let _ = writeln!(
             o,

@@ -1366,7 +1366,7 @@ fn decode_as_unescaped<'p>(
 
 /// Refuses a frame whose checksum is wrong; `prepared` is the protocol's checksum made once
 /// (else it is computed from its parameters).
-fn check_checksum(
+pub(crate) fn check_checksum(
     p: &Protocol,
     prepared: Option<&checksum::Prepared>,
     wire: &[u8],
@@ -2977,6 +2977,12 @@ pub fn printed_to_wire(p: &Protocol, m: &Message, printed: &[u8]) -> Vec<u8> {
 /// are read in.
 fn reorder(p: &Protocol, m: &Message, text: &[u8], order: ByteOrder) -> Vec<u8> {
     let mut wire = text.to_vec();
+    // Beside payload truncation (`framing.truncation`) example text is the bytes as they
+    // travel: a truncated frame is shorter than the layout that places its parts, and the
+    // printed byte order is the wire's (validated).
+    if p.framing.truncation.is_some() {
+        return wire;
+    }
     // Values that place fields (a presence condition, a count, a record's width) are read
     // as the fields hold them: with the payload's transform undone. Reversing a field's bytes
     // commutes with a per-byte transform, so the reordering itself works on `text` as it is.

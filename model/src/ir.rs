@@ -111,6 +111,10 @@ pub struct Framing {
     /// `68 L L 68 C A ... CS 16`). Every offset and length of the IR is the layout's own (the
     /// long frame's): [`crate::forms`] turns a short frame into that layout and back.
     pub form: Option<ShortForm>,
+    /// Payload truncation (`framing.truncation: trailing_zeros`, MAVLink v2): every offset and
+    /// length of the IR is the whole payload's; [`crate::truncate`] pads a truncated frame to
+    /// it and strips an encoded one.
+    pub truncation: Option<crate::model::Truncation>,
 }
 
 /// A short form of the frame (`framing.forms`): the layout without a run of parts (the length

@@ -44,6 +44,7 @@ pub mod sim;
 #[cfg(feature = "tools")]
 pub mod stream;
 pub mod transactions;
+pub mod truncate;
 pub mod validate;
 
 use std::path::Path;

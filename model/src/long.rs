@@ -56,6 +56,14 @@ fn inserted_at(l: &LongForm, order: ByteOrder) -> usize {
 /// `wire` in the IR's layout: itself where the framing has no long form, or the frame is too
 /// short or starts with neither start byte (decoding then says what is wrong with it).
 pub fn canonical<'w>(p: &Protocol, wire: &'w [u8]) -> Result<Canonical<'w>, DecodeError> {
+    // A truncated payload (`framing.truncation`) padded to its message's.
+    if let Some(out) = crate::truncate::canonical(p, wire)? {
+        return Ok(Canonical {
+            frame: Cow::Owned(out),
+            short: None,
+            dropped: None,
+        });
+    }
     if let Some(f) = &p.framing.form {
         return crate::forms::canonical(p, f, wire);
     }
@@ -106,6 +114,9 @@ pub fn canonical<'w>(p: &Protocol, wire: &'w [u8]) -> Result<Canonical<'w>, Deco
 /// A frame the IR laid out (`frame`), as it travels: short where its length field's value
 /// fits the short width, else long. `frame` itself without a long form.
 pub fn travel(p: &Protocol, mut frame: Vec<u8>) -> Vec<u8> {
+    if p.framing.truncation.is_some() {
+        return crate::truncate::travel(p, frame);
+    }
     if let Some(f) = &p.framing.form {
         return crate::forms::travel(f, frame);
     }

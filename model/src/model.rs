@@ -292,6 +292,18 @@ pub struct Framing {
     /// `10 C A CS 16` beside the long `68 L L 68 ...`), optional.
     #[serde(default)]
     pub forms: Vec<Form>,
+    /// Payload truncation (MAVLink v2's trailing zeros), optional.
+    #[serde(default)]
+    pub truncation: Option<Truncation>,
+}
+
+/// How a sender shortens a payload (`framing.truncation`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Truncation {
+    /// The payload's trailing zero bytes stripped, at least one byte kept; a receiver pads a
+    /// shorter payload with zeros up to its message's length (MAVLink v2).
+    TrailingZeros,
 }
 
 /// Another form of the frame (`framing.forms`): the layout without the parts it drops, opened

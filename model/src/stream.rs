@@ -202,6 +202,22 @@ enum Lens {
 /// fixed length; the length its length field or count field gives; for a repeat to the end of
 /// the frame, every whole number of elements between its bounds.
 fn lens_of(p: &Protocol, m: &Message, buf: &[u8]) -> Lens {
+    // A truncated payload (`framing.truncation`): its length field gives the frame's length,
+    // one payload byte up to the message's whole (fixed: validated).
+    if p.framing.truncation.is_some() {
+        let (Some(l), Some(at)) = (&p.framing.length, m.layout.length) else {
+            return Lens::Are(Vec::new());
+        };
+        let Some(bytes) = buf.get(at..at + l.width) else {
+            return Lens::Need;
+        };
+        let v = interp::read_uint(bytes, p.byte_order) as i64;
+        let base = interp::length_for(p, m.direction, m.layout.len).unwrap_or(0);
+        let ok = usize::try_from(m.layout.len as i64 + (v - base))
+            .ok()
+            .filter(|n| crate::truncate::lens(m.layout.len, m.payload_len).contains(n));
+        return Lens::Are(ok.into_iter().collect());
+    }
     let repeat = m.repeat();
     if repeat.is_none() && !m.has_optional() {
         return Lens::Are(vec![m.layout.len]);
@@ -483,7 +499,8 @@ impl<'p> StreamDecoder<'p> {
                     },
                     code: m.code.clone(),
                     len: p.frame_len(m),
-                    variable: m.is_variable(),
+                    // A truncating framing's frames are as long as their length field says.
+                    variable: m.is_variable() || p.framing.truncation.is_some(),
                     at: m.layout,
                 });
             }

@@ -469,10 +469,19 @@ fn validate_ordered(spec: &model::Spec, sink: &mut Sink) -> Option<Protocol> {
     checksum_extras(spec, &mut framing, &mut commands, &mut responses, sink);
     transform_lists(&framing, &commands, "commands", sink);
     transform_lists(&framing, &responses, "responses", sink);
+    truncated_messages(&framing, &commands, "commands", sink);
+    truncated_messages(&framing, &responses, "responses", sink);
+    truncated_across(&framing, &commands, &responses, sink);
     if framing.long.is_some() && spec.printed_byte_order != spec.byte_order {
         sink.error(
             "printed_byte_order",
             "examples printed in another byte order beside a long length form (framing.length.long) are not expressible yet",
+        );
+    }
+    if framing.truncation.is_some() && spec.printed_byte_order != spec.byte_order {
+        sink.error(
+            "printed_byte_order",
+            "examples printed in another byte order beside payload truncation (framing.truncation) are not expressible yet",
         );
     }
     if framing.form.is_some() && spec.printed_byte_order != spec.byte_order {
@@ -1349,6 +1358,7 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
         transform: None,
         long: None,
         form: None,
+        truncation: None,
     };
     framing.heads = (0..=MAX_CODE_LEN)
         .map(|l| frame_layout(&framing, l, 0))
@@ -1419,7 +1429,141 @@ fn framing(f: &model::Framing, byte_order: ByteOrder, refs: &Refs, sink: &mut Si
     if !f.forms.is_empty() {
         framing.form = short_form(f, &framing, byte_order, sink);
     }
+    if let Some(t) = f.truncation {
+        framing.truncation = truncation(t, f, &framing, sink);
+    }
     framing
+}
+
+/// `framing.truncation`, checked against the rest of the framing (resolved but for it): a
+/// length field, once, that counts the payload (it is how the payload's length is found);
+/// every code of one length, at least a byte (it is how the message, and so the whole
+/// payload's length, is found); no escaping, preamble, transform, end bytes, second start,
+/// long length form or short form (not expressible yet).
+fn truncation(
+    t: model::Truncation,
+    spec: &model::Framing,
+    f: &Framing,
+    sink: &mut Sink,
+) -> Option<model::Truncation> {
+    let path = "framing.truncation";
+    let errors_before = sink.items.len();
+    let times = |p: Part| spec.layout.iter().filter(|x| **x == p).count();
+    match &f.length {
+        None => sink.error(
+            path,
+            "payload truncation needs a length field (framing.length): it is how a receiver knows how much of the payload came",
+        ),
+        Some(l) if !l.counts.contains(&Part::Payload) => sink.error(
+            path,
+            "payload truncation needs a length field that counts the payload",
+        ),
+        Some(_) if times(Part::Length) > 1 => sink.error(
+            path,
+            "payload truncation beside a length field sent twice is not expressible yet",
+        ),
+        Some(_) => {}
+    }
+    let lens = all_code_lengths(&f.request.code_lengths, &f.response.code_lengths);
+    if lens.len() != 1 || lens[0] == 0 {
+        sink.error(
+            path,
+            format!(
+                "payload truncation needs every code of one length, at least a byte (the code says which message's payload to pad to), not {lens:?}"
+            ),
+        );
+    }
+    for (what, present) in [
+        ("escaping", f.escaping.is_some()),
+        ("a preamble (framing.preamble)", f.preamble.is_some()),
+        ("a transform (framing.transform)", f.transform.is_some()),
+        ("end bytes", !f.end.is_empty()),
+        ("a second start", times(Part::Start) > 1),
+        (
+            "a long length form (framing.length.long)",
+            f.long.is_some() || l_has_long(spec),
+        ),
+        ("a frame form (framing.forms)", !spec.forms.is_empty()),
+    ] {
+        if present {
+            sink.error(
+                path,
+                format!("payload truncation beside {what} is not expressible yet"),
+            );
+        }
+    }
+    (errors_before == sink.items.len()).then_some(t)
+}
+
+/// Payload truncation (`framing.truncation`) beside the messages: each of a fixed length (no
+/// list, no optional field: a padded payload must have one length), every message of one
+/// code (either direction) of one payload length, no constant whole frame. Located at the
+/// message.
+fn truncated_messages(framing: &Framing, msgs: &[Message], list: &str, sink: &mut Sink) {
+    if framing.truncation.is_none() {
+        return;
+    }
+    for (i, m) in msgs.iter().enumerate() {
+        let path = format!("{list}.{}", m.name);
+        if m.frame.is_some() {
+            sink.error(
+                join(&path, "frame"),
+                "a constant whole frame beside payload truncation (framing.truncation) is not expressible yet",
+            );
+            continue;
+        }
+        if m.is_variable() || m.has_optional() {
+            sink.error(
+                &path,
+                "beside payload truncation (framing.truncation) every message has one length: lists and optional fields are not expressible yet (a padded payload must have one length)",
+            );
+        }
+        if m.code_from_request.is_some() {
+            sink.error(
+                &path,
+                "a code from the request beside payload truncation (framing.truncation) is not expressible yet",
+            );
+        }
+        if let Some(other) = msgs[..i]
+            .iter()
+            .find(|o| o.frame.is_none() && o.code == m.code && o.payload_len != m.payload_len)
+        {
+            sink.error(
+                &path,
+                format!(
+                    "beside payload truncation (framing.truncation) the messages of one code have one payload length (the code says how far to pad): `{}` has {} bytes, this {}",
+                    other.name, other.payload_len, m.payload_len
+                ),
+            );
+        }
+    }
+}
+
+/// [`truncated_messages`] across directions: a request and a response of one code have one
+/// payload length (a frame is padded before its direction is known).
+fn truncated_across(
+    framing: &Framing,
+    commands: &[Message],
+    responses: &[Message],
+    sink: &mut Sink,
+) {
+    if framing.truncation.is_none() {
+        return;
+    }
+    for r in responses.iter().filter(|r| r.frame.is_none()) {
+        if let Some(c) = commands
+            .iter()
+            .find(|c| c.code == r.code && c.payload_len != r.payload_len)
+        {
+            sink.error(
+                format!("responses.{}", r.name),
+                format!(
+                    "beside payload truncation (framing.truncation) a request and a response of one code have one payload length (a frame is padded before its direction is known): command `{}` has {} bytes, this {}",
+                    c.name, c.payload_len, r.payload_len
+                ),
+            );
+        }
+    }
 }
 
 /// `framing.forms`, checked against the rest of the framing (resolved but for it): one form,

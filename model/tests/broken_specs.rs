@@ -256,6 +256,31 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         "forms_unknown_key",
         &[("framing.forms[0].stop", "unknown field `stop`, expected one of `section`, `start`, `drops`")],
     ),
+    // ---- payload truncation (made from valid/mavlink_v2, without its examples)
+    (
+        "truncation_without_length",
+        &[("framing.truncation", "payload truncation needs a length field (framing.length)")],
+    ),
+    (
+        "truncation_with_list",
+        &[("responses.raw_rpm", "beside payload truncation (framing.truncation) every message has one length")],
+    ),
+    (
+        "truncation_code_payloads_differ",
+        &[("responses.ping_reply", "a request and a response of one code have one payload length")],
+    ),
+    (
+        "truncation_unknown_kind",
+        &[("framing.truncation", "unknown variant `leading_zeros`, expected `trailing_zeros`")],
+    ),
+    (
+        "truncation_printed_big",
+        &[("printed_byte_order", "examples printed in another byte order beside payload truncation (framing.truncation) are not expressible yet")],
+    ),
+    (
+        "truncation_with_end",
+        &[("framing.truncation", "payload truncation beside end bytes is not expressible yet")],
+    ),
     // ---- transforms (made from valid/dlt645, hdlc_like, pelco_d_codeless and minimal_end,
     // without their examples)
     (

@@ -31,6 +31,7 @@ pub use crate::CommandKind::{CompletionCheck, Getter, Movement, Reset, Setter};
 pub use crate::FieldValue::{Int, List, Records, Text};
 pub use crate::LongLength;
 pub use crate::ShortForm;
+pub use crate::Truncation;
 pub use crate::{
     crc, field_int, field_text, round, sum8, Ascii, Broadcast, Bus, Command, CommandKind,
     DecodeError, Decoded, Elements, EncodeError, FieldDesc, FieldError, FieldValue, Framing,

@@ -34,6 +34,7 @@ mod optional;
 mod protocol;
 mod repeated;
 pub mod stream;
+mod truncate;
 mod view;
 
 #[doc(hidden)]
@@ -44,6 +45,7 @@ pub use protocol::{Bus, Command, Message, Protocol, ProtocolVisitor, Source, Tra
 #[doc(hidden)]
 pub use protocol::{Framing, Preamble, Transform};
 pub use repeated::{Bits, CapacityError, Element, Repeated};
+pub use truncate::Truncation;
 pub use view::{BitsView, ListView};
 
 use core::fmt;

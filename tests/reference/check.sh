@@ -4,7 +4,8 @@
 # (its protocol 1.0 and 2.0 packet handlers), pyptzcontroller (a Pelco D camera
 # controller), crsf-parser (CRSF, with construct, which it parses with) and pymavlink (MAVLink v1
 # through the fixture model/tests/fixtures/valid/mavlink_v1.yaml: tests/reference/mavlink_v1_check.py,
-# with the interpreter only, as no MAVLink is built in) and pyvesc (VESC, short and long frames,
+# and MAVLink v2 with payload truncation through model/tests/fixtures/valid/mavlink_v2.yaml:
+# tests/reference/mavlink_v2_check.py, with the interpreter only, as no MAVLink is built in) and pyvesc (VESC, short and long frames,
 # through the fixture model/tests/fixtures/valid/vesc.yaml: tests/reference/vesc_check.py; pyvesc
 # imports `PyCRC`, which PythonCRC provides, not the distribution now named PyCRC), installed from PyPI
 # into a virtual environment under
@@ -35,6 +36,7 @@ fi
 cargo build --locked --quiet --bin busspec
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/check.py
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/mavlink_v1_check.py
+BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/mavlink_v2_check.py
 BUSSPEC=target/debug/busspec "$venv/bin/python" tests/reference/vesc_check.py
 # Bounded twice: each talk call and the script time out on their own; this is the last resort.
 BUSSPEC=target/debug/busspec timeout 600 "$venv/bin/python" tests/reference/live_modbus.py

@@ -319,6 +319,43 @@ pub(super) fn emit_dispatch(ctx: &Ctx, d: Direction, ty: &TokenStream) -> TokenS
                 },
             )
         }
+    } else if p.framing.truncation.is_some() {
+        // Payload truncation (`framing.truncation`): a truncated frame padded into a copy
+        // with its whole payload, checked as any frame by a function of its own; its errors
+        // keep their offsets.
+        let max = usize_lit(p.max_frame_len(d));
+        let sum = super::head::frame_sum(p);
+        let lay_out = quote! {
+            let mut laid = [0u8; #max];
+            let laid = TRUNCATION.lay_out(frame, &mut laid, &FRAME, #sum)?;
+        };
+        if replies {
+            (
+                quote! {
+                    #lay_out
+                    Self::decode_for_laid_out(laid, request)
+                },
+                quote! {
+                    /// [`Self::decode_for`] of the frame with its whole payload.
+                    fn decode_for_laid_out(frame: &[u8], request: rt::Option<&Request>) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        } else {
+            (
+                quote! {
+                    #lay_out
+                    Self::decode_laid_out(laid)
+                },
+                quote! {
+                    /// [`Self::decode`] of the frame with its whole payload.
+                    fn decode_laid_out(frame: &[u8]) -> rt::Result<Decoded<#ty>, rt::DecodeError> {
+                        #checks
+                    }
+                },
+            )
+        }
     } else if p.framing.long.is_some() || p.framing.form.is_some() {
         let lay = if p.framing.form.is_some() {
             quote!(FORM)

@@ -117,6 +117,64 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
             };
         }
     });
+    let truncation = p.framing.truncation.map(|_| {
+        let code_len = p.framing.request.code_lengths.first().copied().unwrap_or(0);
+        let head = p.framing.head(code_len);
+        let rule = p.framing.length_rule(Direction::Request);
+        let start_at = match head.start {
+            Some(at) => {
+                let at = usize_lit(at);
+                quote!(rt::Some(#at))
+            }
+            None => quote!(rt::None),
+        };
+        let sync = p.framing.sync.iter().map(|b| hex_u8(*b));
+        let response_sync = p.framing.response_sync.iter().map(|b| hex_u8(*b));
+        let length_at = usize_lit(head.length.unwrap_or(0));
+        let width = usize_lit(p.framing.length.as_ref().map_or(1, |l| l.width));
+        let le = p.byte_order == ByteOrder::Little;
+        let k = Literal::i64_unsuffixed(rule.map_or(0, |r| r.k));
+        let (code_at, code_len_lit, payload_at) = (
+            usize_lit(head.code),
+            usize_lit(code_len),
+            usize_lit(head.payload),
+        );
+        // Each code once, its payload's length and the directions that have it.
+        let mut codes: Vec<(u32, usize, u8)> = Vec::new();
+        for (d, bit) in [(Direction::Request, 1u8), (Direction::Response, 2)] {
+            for m in p.framed(d) {
+                let code = m.code.iter().fold(0u32, |a, b| a << 8 | u32::from(*b));
+                match codes.iter_mut().find(|(c, _, _)| *c == code) {
+                    Some((_, _, dirs)) => *dirs |= bit,
+                    None => codes.push((code, m.payload_len, bit)),
+                }
+            }
+        }
+        let entries = codes.iter().map(|(c, n, d)| {
+            let c = hex_lit(u64::from(*c));
+            let n = usize_lit(*n);
+            let d = Literal::u8_unsuffixed(*d);
+            quote!((#c, #n, #d))
+        });
+        quote! {
+            /// Payload truncation (`framing.truncation: trailing_zeros`): a payload's trailing
+            /// zero bytes are stripped as it travels (one byte kept); decoding pads it with
+            /// zeros up to its message's length.
+            pub const TRUNCATION: rt::Truncation = rt::Truncation {
+                start_at: #start_at,
+                sync: &[#(#sync),*],
+                response_sync: &[#(#response_sync),*],
+                length_at: #length_at,
+                width: #width,
+                le: #le,
+                k: #k,
+                code_at: #code_at,
+                code_len: #code_len_lit,
+                payload_at: #payload_at,
+                payloads: &[#(#entries),*],
+            };
+        }
+    });
     let inner = inner_doc(&format!(
         "{} (`{}`).\n\nGenerated from `{source}`, transcribed from *{title}*, revision {revision} ({date}).\nNumbers travel {} on the wire.\n{}",
         p.title,
@@ -226,6 +284,7 @@ pub(super) fn emit_header(p: &Protocol, source: &str, spec_path: &str) -> TokenS
         #transform
         #long
         #form
+        #truncation
     }
 }
 

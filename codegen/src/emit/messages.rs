@@ -285,6 +285,28 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 #seal
             }
         }
+    } else if p.framing.truncation.is_some() {
+        // Payload truncation (`framing.truncation`; escaping, preambles, transforms, forms
+        // and constant frames are refused beside it: validated): the frame laid out with its
+        // whole payload, then its trailing zeros stripped.
+        let sum = super::head::frame_sum(p);
+        quote! {
+            ///
+            /// The payload's trailing zero bytes are stripped (one byte kept), the length field
+            /// and checksum rewritten (`framing.truncation`).
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                let len = self.encode_laid_out(address, buf)?;
+                rt::Ok(TRUNCATION.travel(buf, len, &FRAME, #sum))
+            }
+            /// The frame laid out with its whole payload, into `buf`.
+            fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::Result<usize, rt::EncodeError> {
+                rt::encode_address(address, &FRAME)?;
+                #take_once
+                let len = match *self { #(#encode_arms)* };
+                #transform
+                #seal
+            }
+        }
     } else if p.framing.long.is_some() || p.framing.form.is_some() {
         // A length field whose width the start byte chooses (`framing.length.long`; escaping,
         // preambles and constant frames are refused beside it: validated): laid out in the

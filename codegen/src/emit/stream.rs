@@ -28,6 +28,10 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
     lengths.dedup();
     // A short form of the frame (`framing.forms`): framed messages are framed by their start
     // byte and length field (`variable_candidates`); only constant whole frames are listed.
+    // Payload truncation (`framing.truncation`): every frame by its length field alone.
+    if p.framing.truncation.is_some() {
+        lengths.clear();
+    }
     if p.framing.form.is_some() {
         lengths.clear();
         for d in [Direction::Request, Direction::Response] {
@@ -304,7 +308,21 @@ pub(super) fn emit_stream(p: &Protocol) -> TokenStream {
             }
         }
     };
-    let framing_fns = if p.framing.form.is_some() {
+    let framing_fns = if p.framing.truncation.is_some() {
+        // Payload truncation (`framing.truncation`): every frame is framed by its length
+        // field, within the lengths its code's message travels in.
+        let trailer = usize_lit(p.framing.trailer_len());
+        quote! {
+            #[inline]
+            fn candidates(_head: &[u8]) -> rt::Candidates {
+                rt::Candidates { requests: 0, responses: 0 }
+            }
+            #[inline]
+            fn variable_candidates(head: &[u8]) -> rt::VarLens {
+                TRUNCATION.frame_lens(head, #trailer)
+            }
+        }
+    } else if p.framing.form.is_some() {
         // A short form of the frame (`framing.forms`): both forms are framed by their start
         // byte and the long one's length field; a constant whole frame by its first byte.
         quote! {

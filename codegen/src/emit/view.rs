@@ -21,6 +21,9 @@ pub(super) fn no_view(p: &Protocol, d: Direction) -> Option<&'static str> {
     if p.framing.transform.is_some() {
         return Some("its payload transform is undone into a copy before decode");
     }
+    if p.framing.truncation.is_some() {
+        return Some("its truncated payloads are padded into a copy before decode");
+    }
     if p.constants(d).next().is_some() {
         return Some("it has constant whole frames");
     }

@@ -117,7 +117,7 @@ pub fn check<P: Protocol>(
 /// `framing.escaping`), or laid out in a long length form's width (`framing.length.long`): a
 /// message's `frame_len`.
 fn unescaped_len(p: &ir::Protocol, wire: &[u8]) -> usize {
-    if p.framing.long.is_some() || p.framing.form.is_some() {
+    if p.framing.long.is_some() || p.framing.form.is_some() || p.framing.truncation.is_some() {
         return busspec_model::long::canonical(p, wire).map_or(wire.len(), |c| c.frame.len());
     }
     let frame = p.framing.after_preamble(wire);
@@ -127,6 +127,15 @@ fn unescaped_len(p: &ir::Protocol, wire: &[u8]) -> usize {
 /// What an encoder wrote back is the frame decoded: byte for byte, but that it sends its
 /// preamble whatever number of preamble bytes came before the frame.
 fn written_back(p: &ir::Protocol, written: &[u8], wire: &[u8]) {
+    // Payload truncation (`framing.truncation`): a frame that came with trailing zeros in its
+    // payload is written back stripped of them.
+    if p.framing.truncation.is_some() {
+        let laid =
+            busspec_model::long::canonical(p, wire).map_or(wire.to_vec(), |c| c.frame.to_vec());
+        let sent = busspec_model::truncate::travel(p, laid);
+        assert_eq!(written, sent, "written back stripped");
+        return;
+    }
     match &p.framing.preamble {
         Some(pre) => {
             let frame = p.framing.after_preamble(wire);
