@@ -120,22 +120,50 @@ pub mod ubx_like {
             }
         }
     }
+    impl request::PollRate {
+        pub const NAME: &'static str = "poll_rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0608,
+            2,
+            &[8, 14],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::PollRate(*self).encode(address, buf)
+        }
+    }
+    impl request::SetRate {
+        pub const NAME: &'static str = "set_rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0608,
+            2,
+            &[8, 14],
+        );
+        pub const MEAS_RATE: rt::Range<usize> = 6..8;
+        pub const NAV_RATE: rt::Range<usize> = 8..10;
+        pub const TIME_REF: rt::Range<usize> = 10..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("meas_rate", rt::Int(self.meas_rate as i64));
+            f("nav_rate", rt::Int(self.nav_rate as i64));
+            f("time_ref", rt::Int(self.time_ref.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetRate(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 Poll the navigation rate (CFG-RATE) (code `0x0608`, 8 bytes).
-        PollRate,
-        /// §3 Set the navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
-        SetRate {
-            /// \[ms\] Valid raw range 25..=65535.
-            meas_rate: u16,
-            /// \[cycles\] Valid raw range 1..=127.
-            nav_rate: u16,
-            time_ref: TimeRef,
-        },
+        PollRate(request::PollRate),
+        SetRate(request::SetRate),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -146,8 +174,8 @@ pub mod ubx_like {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::PollRate => 0,
-                Self::SetRate { .. } => 1,
+                Self::PollRate(_) => 0,
+                Self::SetRate(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -164,17 +192,9 @@ pub mod ubx_like {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetRate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
-                    f("meas_rate", rt::Int(*v_meas_rate as i64));
-                    f("nav_rate", rt::Int(*v_nav_rate as i64));
-                    f("time_ref", rt::Int(v_time_ref.raw() as i64));
-                }
+                Self::SetRate(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -188,14 +208,16 @@ pub mod ubx_like {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PollRate => {
+                Self::PollRate(request::PollRate {}) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x00, 0x00])?.len()
                 }
-                Self::SetRate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
+                Self::SetRate(
+                    request::SetRate {
+                        meas_rate: v_meas_rate,
+                        nav_rate: v_nav_rate,
+                        time_ref: v_time_ref,
+                    },
+                ) => {
                     rt::encode_in_range("meas_rate", v_meas_rate, 25, 65535)?;
                     rt::encode_in_range("nav_rate", v_nav_rate, 1, 127)?;
                     let out = rt::frame_mut::<
@@ -233,7 +255,7 @@ pub mod ubx_like {
             match rt::code(frame, 2, 2) {
                 0x0608 => {
                     let mut g = rt::Group::new(frame, 0x0608, rt::None);
-                    g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate));
+                    g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate(request::PollRate)));
                     g.attempt(|frame: &[u8; 14]| {
                         let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
                         rt::in_range(
@@ -245,15 +267,17 @@ pub mod ubx_like {
                         )?;
                         let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
                         rt::in_range(&request::SET_RATE_NAV_RATE, 8, field_1, 1, 127)?;
-                        rt::Ok(Self::SetRate {
-                            meas_rate: field_0,
-                            nav_rate: field_1,
-                            time_ref: TimeRef::from_raw(
-                                u16::from_le_bytes([frame[10], frame[11]]),
-                            ),
-                        })
+                        rt::Ok(
+                            Self::SetRate(request::SetRate {
+                                meas_rate: field_0,
+                                nav_rate: field_1,
+                                time_ref: TimeRef::from_raw(
+                                    u16::from_le_bytes([frame[10], frame[11]]),
+                                ),
+                            }),
+                        )
                     });
-                    g.end(&request::POLL_RATE)
+                    g.end(&request::PollRate::DESC)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
             }
@@ -266,13 +290,15 @@ pub mod ubx_like {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "poll_rate" => rt::Ok(Self::PollRate),
+                "poll_rate" => rt::Ok(Self::PollRate(request::PollRate)),
                 "set_rate" => {
-                    rt::Ok(Self::SetRate {
-                        meas_rate: rt::get(&mut field, "meas_rate")?,
-                        nav_rate: rt::get(&mut field, "nav_rate")?,
-                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                    })
+                    rt::Ok(
+                        Self::SetRate(request::SetRate {
+                            meas_rate: rt::get(&mut field, "meas_rate")?,
+                            nav_rate: rt::get(&mut field, "nav_rate")?,
+                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -337,34 +363,77 @@ pub mod ubx_like {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Rate {
+        pub const NAME: &'static str = "rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0608,
+            2,
+            &[14],
+        );
+        pub const MEAS_RATE: rt::Range<usize> = 6..8;
+        pub const NAV_RATE: rt::Range<usize> = 8..10;
+        pub const TIME_REF: rt::Range<usize> = 10..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("meas_rate", rt::Int(self.meas_rate as i64));
+            f("nav_rate", rt::Int(self.nav_rate as i64));
+            f("time_ref", rt::Int(self.time_ref.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Rate(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x05, 0x01];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0501,
+            2,
+            &[10],
+        );
+        pub const CLASS_ID: rt::Range<usize> = 6..7;
+        pub const MSG_ID: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("class_id", rt::Int(self.class_id as i64));
+            f("msg_id", rt::Int(self.msg_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Nak {
+        pub const NAME: &'static str = "nak";
+        pub const CODE: &'static [u8] = &[0x05, 0x00];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0500,
+            2,
+            &[10],
+        );
+        pub const CLASS_ID: rt::Range<usize> = 6..7;
+        pub const MSG_ID: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("class_id", rt::Int(self.class_id as i64));
+            f("msg_id", rt::Int(self.msg_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Nak(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 Navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
-        Rate {
-            /// \[ms\]
-            meas_rate: u16,
-            /// \[cycles\]
-            nav_rate: u16,
-            time_ref: TimeRef,
-        },
-        /// §4 Message acknowledged (ACK-ACK) (code `0x0501`, 10 bytes).
-        Ack {
-            /// \[cycles\]
-            class_id: u8,
-            /// \[cycles\]
-            msg_id: u8,
-        },
-        /// §4 Message not acknowledged (ACK-NAK) (code `0x0500`, 10 bytes).
-        Nak {
-            /// \[cycles\]
-            class_id: u8,
-            /// \[cycles\]
-            msg_id: u8,
-        },
+        Rate(response::Rate),
+        Ack(response::Ack),
+        Nak(response::Nak),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -376,9 +445,9 @@ pub mod ubx_like {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Rate { .. } => 0,
-                Self::Ack { .. } => 1,
-                Self::Nak { .. } => 2,
+                Self::Rate(_) => 0,
+                Self::Ack(_) => 1,
+                Self::Nak(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -395,25 +464,11 @@ pub mod ubx_like {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Rate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
-                    f("meas_rate", rt::Int(*v_meas_rate as i64));
-                    f("nav_rate", rt::Int(*v_nav_rate as i64));
-                    f("time_ref", rt::Int(v_time_ref.raw() as i64));
-                }
-                Self::Ack { class_id: v_class_id, msg_id: v_msg_id } => {
-                    f("class_id", rt::Int(*v_class_id as i64));
-                    f("msg_id", rt::Int(*v_msg_id as i64));
-                }
-                Self::Nak { class_id: v_class_id, msg_id: v_msg_id } => {
-                    f("class_id", rt::Int(*v_class_id as i64));
-                    f("msg_id", rt::Int(*v_msg_id as i64));
-                }
+                Self::Rate(m) => m.visit(f),
+                Self::Ack(m) => m.visit(f),
+                Self::Nak(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -426,11 +481,13 @@ pub mod ubx_like {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Rate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
+                Self::Rate(
+                    response::Rate {
+                        meas_rate: v_meas_rate,
+                        nav_rate: v_nav_rate,
+                        time_ref: v_time_ref,
+                    },
+                ) => {
                     let out = rt::frame_mut::<
                         14,
                     >(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
@@ -439,7 +496,7 @@ pub mod ubx_like {
                     out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
                     out.len()
                 }
-                Self::Ack { class_id: v_class_id, msg_id: v_msg_id } => {
+                Self::Ack(response::Ack { class_id: v_class_id, msg_id: v_msg_id }) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xB5, 0x62, 0x05, 0x01, 0x02, 0x00])?;
@@ -447,7 +504,7 @@ pub mod ubx_like {
                     out[7] = v_msg_id;
                     out.len()
                 }
-                Self::Nak { class_id: v_class_id, msg_id: v_msg_id } => {
+                Self::Nak(response::Nak { class_id: v_class_id, msg_id: v_msg_id }) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xB5, 0x62, 0x05, 0x00, 0x02, 0x00])?;
@@ -508,28 +565,34 @@ pub mod ubx_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x0608 => {
-                    let frame = rt::fixed::<14>(frame, &response::RATE)?;
-                    rt::Ok(Self::Rate {
-                        meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
-                        nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
-                        time_ref: TimeRef::from_raw(
-                            u16::from_le_bytes([frame[10], frame[11]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<14>(frame, &response::Rate::DESC)?;
+                    rt::Ok(
+                        Self::Rate(response::Rate {
+                            meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
+                            nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
+                            time_ref: TimeRef::from_raw(
+                                u16::from_le_bytes([frame[10], frame[11]]),
+                            ),
+                        }),
+                    )
                 }
                 0x0501 => {
-                    let frame = rt::fixed::<10>(frame, &response::ACK)?;
-                    rt::Ok(Self::Ack {
-                        class_id: frame[6],
-                        msg_id: frame[7],
-                    })
+                    let frame = rt::fixed::<10>(frame, &response::Ack::DESC)?;
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            class_id: frame[6],
+                            msg_id: frame[7],
+                        }),
+                    )
                 }
                 0x0500 => {
-                    let frame = rt::fixed::<10>(frame, &response::NAK)?;
-                    rt::Ok(Self::Nak {
-                        class_id: frame[6],
-                        msg_id: frame[7],
-                    })
+                    let frame = rt::fixed::<10>(frame, &response::Nak::DESC)?;
+                    rt::Ok(
+                        Self::Nak(response::Nak {
+                            class_id: frame[6],
+                            msg_id: frame[7],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, true)),
             }
@@ -543,23 +606,29 @@ pub mod ubx_like {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "rate" => {
-                    rt::Ok(Self::Rate {
-                        meas_rate: rt::get(&mut field, "meas_rate")?,
-                        nav_rate: rt::get(&mut field, "nav_rate")?,
-                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                    })
+                    rt::Ok(
+                        Self::Rate(response::Rate {
+                            meas_rate: rt::get(&mut field, "meas_rate")?,
+                            nav_rate: rt::get(&mut field, "nav_rate")?,
+                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                        }),
+                    )
                 }
                 "ack" => {
-                    rt::Ok(Self::Ack {
-                        class_id: rt::get(&mut field, "class_id")?,
-                        msg_id: rt::get(&mut field, "msg_id")?,
-                    })
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            class_id: rt::get(&mut field, "class_id")?,
+                            msg_id: rt::get(&mut field, "msg_id")?,
+                        }),
+                    )
                 }
                 "nak" => {
-                    rt::Ok(Self::Nak {
-                        class_id: rt::get(&mut field, "class_id")?,
-                        msg_id: rt::get(&mut field, "msg_id")?,
-                    })
+                    rt::Ok(
+                        Self::Nak(response::Nak {
+                            class_id: rt::get(&mut field, "class_id")?,
+                            msg_id: rt::get(&mut field, "msg_id")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -651,7 +720,7 @@ pub mod ubx_like {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::Nak { .. })
+            matches!(response, Response::Nak(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
@@ -724,24 +793,28 @@ pub mod ubx_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<UbxLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `poll_rate`, code 0x0608
-        pub const POLL_RATE: MessageDesc = MessageDesc::new(
-            "poll_rate",
-            0x0608,
-            2,
-            &[8, 14],
-        );
-        /// `set_rate`, code 0x0608
-        pub const SET_RATE: MessageDesc = MessageDesc::new(
-            "set_rate",
-            0x0608,
-            2,
-            &[8, 14],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 Poll the navigation rate (CFG-RATE) (code `0x0608`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct PollRate;
+        /// §3 Set the navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetRate {
+            /// \[ms\] Valid raw range 25..=65535.
+            pub meas_rate: u16,
+            /// \[cycles\] Valid raw range 1..=127.
+            pub nav_rate: u16,
+            pub time_ref: super::TimeRef,
+        }
         /// `set_rate.meas_rate`
         pub const SET_RATE_MEAS_RATE: FieldDesc = FieldDesc::new(
             "set_rate",
@@ -750,14 +823,41 @@ pub mod ubx_like {
         /// `set_rate.nav_rate`
         pub const SET_RATE_NAV_RATE: FieldDesc = FieldDesc::new("set_rate", "nav_rate");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `rate`, code 0x0608
-        pub const RATE: MessageDesc = MessageDesc::new("rate", 0x0608, 2, &[14]);
-        /// `ack`, code 0x0501
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x0501, 2, &[10]);
-        /// `nak`, code 0x0500
-        pub const NAK: MessageDesc = MessageDesc::new("nak", 0x0500, 2, &[10]);
+        /// §3 Navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Rate {
+            /// \[ms\]
+            pub meas_rate: u16,
+            /// \[cycles\]
+            pub nav_rate: u16,
+            pub time_ref: super::TimeRef,
+        }
+        /// §4 Message acknowledged (ACK-ACK) (code `0x0501`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ack {
+            /// \[cycles\]
+            pub class_id: u8,
+            /// \[cycles\]
+            pub msg_id: u8,
+        }
+        /// §4 Message not acknowledged (ACK-NAK) (code `0x0500`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Nak {
+            /// \[cycles\]
+            pub class_id: u8,
+            /// \[cycles\]
+            pub msg_id: u8,
+        }
     }
 }
