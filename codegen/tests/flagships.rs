@@ -54,7 +54,7 @@ fn ascii_fields_show_their_text() {
     });
     assert_eq!(
         format!("{r:?}"),
-        r#"FirmwareVersion { firmware_version: "20100433.00" }"#
+        r#"FirmwareVersion(FirmwareVersion { firmware_version: "20100433.00" })"#
     );
     let mut buf = [0u8; 16];
     let n = r.encode(0x21, &mut buf).unwrap();

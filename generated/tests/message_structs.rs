@@ -23,7 +23,8 @@ fn constants_say_what_the_spec_says() {
         sd::request::ReadActualPosition::NAME,
         "read_actual_position"
     );
-    assert_eq!(sd::request::ReadActualPosition::LEN, 3);
+    assert_eq!(sd::request::ReadActualPosition::LEN, 6);
+    assert_eq!(sd::request::ReadActualPosition::CODE, [0x69]);
 }
 
 #[test]
