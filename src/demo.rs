@@ -128,12 +128,12 @@ fn ub2_part(out: &mut Out, svg: Option<&Path>) -> Result<(), String> {
     );
     let mut m: Master<Ub2, _, _> = Master::new(bus.clone(), clock.clone());
     for q in [
-        Q::GetFirmwareVersion,
-        Q::GetSerialNumber,
-        Q::GetLowerFactoryLimit,
-        Q::GetUpperFactoryLimit,
-        Q::GetStatus,
-        Q::GetStatus,
+        Q::GetFirmwareVersion(ub2::request::GetFirmwareVersion),
+        Q::GetSerialNumber(ub2::request::GetSerialNumber),
+        Q::GetLowerFactoryLimit(ub2::request::GetLowerFactoryLimit),
+        Q::GetUpperFactoryLimit(ub2::request::GetUpperFactoryLimit),
+        Q::GetStatus(ub2::request::GetStatus),
+        Q::GetStatus(ub2::request::GetStatus),
     ] {
         out.step(&mut m, 0x21, q)?;
     }
@@ -143,48 +143,61 @@ fn ub2_part(out: &mut Out, svg: Option<&Path>) -> Result<(), String> {
     out.step(
         &mut m,
         0x21,
-        Q::SetAccelerationSpeedIndex {
+        Q::SetAccelerationSpeedIndex(ub2::request::SetAccelerationSpeedIndex {
             acceleration_index: 10,
             speed_index: 12,
-        },
+        }),
     )?;
     movement(
         out,
         &mut m,
-        Q::GoToCapacitance {
+        Q::GoToCapacitance(ub2::request::GoToCapacitance {
             target: Capacitance(15000),
-        },
+        }),
     )?;
-    out.step(&mut m, 0x21, Q::GetActualCapacitance)?;
+    out.step(
+        &mut m,
+        0x21,
+        Q::GetActualCapacitance(ub2::request::GetActualCapacitance),
+    )?;
     out.say("-- limits: with the upper customer limit at 300 pF, 400 pF runs to the limit (0x93)");
     out.step(
         &mut m,
         0x21,
-        Q::SetUpperCustomerLimit {
+        Q::SetUpperCustomerLimit(ub2::request::SetUpperCustomerLimit {
             limit: Capacitance(30000),
-        },
+        }),
     )?;
     movement(
         out,
         &mut m,
-        Q::GoToCapacitance {
+        Q::GoToCapacitance(ub2::request::GoToCapacitance {
             target: Capacitance(40000),
-        },
+        }),
     )?;
-    out.step(&mut m, 0x21, Q::GetActualCapacitance)?;
+    out.step(
+        &mut m,
+        0x21,
+        Q::GetActualCapacitance(ub2::request::GetActualCapacitance),
+    )?;
     out.say("-- stored positions, and a movement that loses 40 micro-steps (0x5400)");
     out.step(
         &mut m,
         0x21,
-        Q::StoreIndexedPosition {
+        Q::StoreIndexedPosition(ub2::request::StoreIndexedPosition {
             index: 3,
             position: 800,
-        },
+        }),
     )?;
     bus.with_devices(|d| d[0].lose_steps_next_move = 40);
-    movement(out, &mut m, Q::GoToStoredPosition { index: 3 })?;
+    movement(
+        out,
+        &mut m,
+        Q::GoToStoredPosition(ub2::request::GoToStoredPosition { index: 3 }),
+    )?;
     out.say("-- refusals: busspec refuses an index outside the spec's range before it reaches the bus; the device refuses an index past its table (0x94) and a mode change while moving (0x91)");
-    let out_of_range = Q::GetStoredFullStepPosition { index: 12 };
+    let out_of_range =
+        Q::GetStoredFullStepPosition(ub2::request::GetStoredFullStepPosition { index: 12 });
     match m.transact(0x21, out_of_range) {
         Err(e) => out.say(format!("→ 0x21 {:<40} (not sent) {e}", out_of_range.name())),
         Ok(ex) => {
@@ -197,15 +210,21 @@ fn ub2_part(out: &mut Out, svg: Option<&Path>) -> Result<(), String> {
     out.step(
         &mut m,
         0x21,
-        Q::GetCCurveIndexedFullStepCapacitance { index: 499 },
+        Q::GetCCurveIndexedFullStepCapacitance(ub2::request::GetCCurveIndexedFullStepCapacitance {
+            index: 499,
+        }),
     )?;
-    out.step(&mut m, 0x21, Q::GoToFullStepPosition { target: 1000 })?;
     out.step(
         &mut m,
         0x21,
-        Q::SetModeOfOperation {
+        Q::GoToFullStepPosition(ub2::request::GoToFullStepPosition { target: 1000 }),
+    )?;
+    out.step(
+        &mut m,
+        0x21,
+        Q::SetModeOfOperation(ub2::request::SetModeOfOperation {
             mode: ub2::ModeOfOperation::CloseLoopControl,
-        },
+        }),
     )?;
     out.say("-- the second capacitor's C-curve table, entry by entry");
     let mut read = 0;
@@ -286,7 +305,7 @@ fn sd_part(out: &mut Out) -> Result<(), String> {
         vec![SdSim::new(1), SdSim::new(2)],
     );
     let mut m: Master<Sd, _, _> = Master::new(bus.clone(), clock.clone());
-    out.step(&mut m, 1, Q::ReadServoId)?;
+    out.step(&mut m, 1, Q::ReadServoId(sd::request::ReadServoId))?;
     for which in SdString::ALL {
         let text = m
             .read_string(1, which, &mut |_| {})
@@ -302,21 +321,29 @@ fn sd_part(out: &mut Out) -> Result<(), String> {
     out.step(
         &mut m,
         0x1F,
-        Q::SetPoint {
+        Q::SetPoint(sd::request::SetPoint {
             freshness: 0,
             position: Angle(-256),
-        },
+        }),
     )?;
     clock.advance(Duration::from_secs(2));
-    out.step(&mut m, 1, Q::ReadActualPosition)?;
-    out.step(&mut m, 2, Q::ReadActualPosition)?;
+    out.step(
+        &mut m,
+        1,
+        Q::ReadActualPosition(sd::request::ReadActualPosition),
+    )?;
+    out.step(
+        &mut m,
+        2,
+        Q::ReadActualPosition(sd::request::ReadActualPosition),
+    )?;
     out.say("-- set points: the master keeps the freshness counter, starting from the actuator's own (0x37)");
     out.step(
         &mut m,
         1,
-        Q::SetVelocity {
+        Q::SetVelocity(sd::request::SetVelocity {
             set_velocity: sd::Velocity(900),
-        },
+        }),
     )?;
     out.say("→ 0x01 set_point                                position=45 (then polls read_actual_position)");
     let mut lines = Vec::new();
@@ -337,12 +364,32 @@ fn sd_part(out: &mut Out) -> Result<(), String> {
             r.elapsed.as_secs_f64()
         ));
     }
-    out.step(&mut m, 1, Q::ReadSkippedFramesCounter)?;
+    out.step(
+        &mut m,
+        1,
+        Q::ReadSkippedFramesCounter(sd::request::ReadSkippedFramesCounter),
+    )?;
     out.say("-- zero offset, and a counter reset that reports the value before it");
-    out.step(&mut m, 2, Q::SetCurrentPositionAsZero)?;
-    out.step(&mut m, 2, Q::ReadActualPosition)?;
-    out.step(&mut m, 2, Q::ResetLoadRuntime024)?;
-    out.step(&mut m, 2, Q::ReadLoadRuntime024Hours)?;
+    out.step(
+        &mut m,
+        2,
+        Q::SetCurrentPositionAsZero(sd::request::SetCurrentPositionAsZero),
+    )?;
+    out.step(
+        &mut m,
+        2,
+        Q::ReadActualPosition(sd::request::ReadActualPosition),
+    )?;
+    out.step(
+        &mut m,
+        2,
+        Q::ResetLoadRuntime024(sd::request::ResetLoadRuntime024),
+    )?;
+    out.step(
+        &mut m,
+        2,
+        Q::ReadLoadRuntime024Hours(sd::request::ReadLoadRuntime024Hours),
+    )?;
     Ok(())
 }
 
@@ -359,7 +406,10 @@ fn faults_part(out: &mut Out) -> Result<(), String> {
     cfg.silence = 1.0;
     cfg.replies_only = true;
     let mut m: Master<Ub2, _, _> = Master::new(Faulty::new(bus, clock.clone(), cfg, 1), clock);
-    match m.transact(0x21, ub2::Request::GetActualCapacitance) {
+    match m.transact(
+        0x21,
+        ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance),
+    ) {
         Err(e) => out.say(format!("   a line that never answers: {e}")),
         Ok(_) => return Err("demo failed: a silent line answered".to_owned()),
     }

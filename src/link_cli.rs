@@ -439,11 +439,11 @@ fn talk_ub2(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
             .read_c_curve(o.address, &mut |p| line.show("entries", p))
             .map_err(link_error)?;
         for p in &table {
-            let r = ub2::Response::CCurveEntry {
+            let r = ub2::Response::CCurveEntry(ub2::response::CCurveEntry {
                 index: p.index,
                 full_steps: p.full_steps,
                 capacitance: p.capacitance,
-            };
+            });
             print(&reply_line::<Ub2>(spec, &r, o.address))?;
         }
         eprintln!("read {} C-curve entries", table.len());
@@ -550,7 +550,7 @@ fn talk_sd(spec: &Spec, o: &TalkOptions) -> Result<(), String> {
     let request = checked::<Sd>(spec, o)?;
     let mut m = open::<Sd>(spec, o)?;
     check_byte_order(&mut m, o.address, &request)?;
-    if let (true, sd::Request::SetPoint { position, .. }) =
+    if let (true, sd::Request::SetPoint(sd::request::SetPoint { position, .. })) =
         (o.wait && Some(o.address) != sd::BROADCAST_ADDRESS, request)
     {
         let mut line = ProgressLine::new();

@@ -34,10 +34,10 @@ fn sd_set_point_every_angle_and_freshness() {
     for freshness in 0..16u8 {
         for raw in -2048..2048i16 {
             let position = sd::Angle::from_raw(raw);
-            let msg = sd::Request::SetPoint {
+            let msg = sd::Request::SetPoint(sd::request::SetPoint {
                 freshness,
                 position,
-            };
+            });
             let n = msg.encode(0x05, &mut buf).unwrap();
             let frame = &buf[..n];
             assert!(
@@ -55,18 +55,18 @@ fn sd_set_point_every_angle_and_freshness() {
     }
     assert_eq!(seen.len(), 4096 * 16);
     // Outside 12 bits the encoder refuses rather than wrapping.
-    let wide = sd::Request::SetPoint {
+    let wide = sd::Request::SetPoint(sd::request::SetPoint {
         freshness: 0,
         position: sd::Angle::from_raw(2048),
-    };
+    });
     assert!(matches!(
         wide.encode(5, &mut buf),
         Err(busspec_protocols::EncodeError::OutOfRange { field: "position" })
     ));
-    let wide = sd::Request::SetPoint {
+    let wide = sd::Request::SetPoint(sd::request::SetPoint {
         freshness: 16,
         position: sd::Angle::from_raw(0),
-    };
+    });
     assert!(wide.encode(5, &mut buf).is_err());
 }
 

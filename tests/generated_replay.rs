@@ -101,7 +101,9 @@ fn generated_errors_say_what_and_where() {
     good[8] = 0x6A;
     let d = Response::decode(&good).unwrap();
     match d.message {
-        Response::ActualCapacitance { capacitance } => {
+        Response::ActualCapacitance(busspec_protocols::ub2::response::ActualCapacitance {
+            capacitance,
+        }) => {
             assert!((capacitance.value() - 79.98).abs() < 1e-9)
         }
         other => panic!("decoded {other:?}"),

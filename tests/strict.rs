@@ -402,7 +402,10 @@ fn address_zero_is_refused() {
 fn sd_string_length_75_is_refused() {
     let frame = hex("10 01 4B 4B FB 8A");
     assert!(sd::Sd::checksum_ok(&frame), "the frame checksums");
-    let request = sd::Request::ReadElectronicSerialNumber { byte_number: 0 };
+    let request =
+        sd::Request::ReadElectronicSerialNumber(sd::request::ReadElectronicSerialNumber {
+            byte_number: 0,
+        });
     for got in [
         sd::Response::decode(&frame),
         sd::Response::decode_reply(&frame, &request),
@@ -476,7 +479,7 @@ fn sd_humidity_101_and_new_id_0_are_refused() {
         assert!(sd::Response::decode(&frame).is_ok());
     }
     assert_eq!(
-        sd::Response::Humidity { humidity: 101 }.encode(1, &mut [0; 6]),
+        sd::Response::Humidity(sd::response::Humidity { humidity: 101 }).encode(1, &mut [0; 6]),
         Err(EncodeError::NotInRange {
             field: "humidity",
             value: 101,
@@ -512,7 +515,7 @@ fn sd_humidity_101_and_new_id_0_are_refused() {
         Err(interp::DecodeError::OutOfRange { ref field, found: 0, .. }) if field == "new_id"
     ));
     assert_eq!(
-        sd::Request::SetServoId { new_id: 0 }.encode(1, &mut [0; 6]),
+        sd::Request::SetServoId(sd::request::SetServoId { new_id: 0 }).encode(1, &mut [0; 6]),
         Err(EncodeError::NotInRange {
             field: "new_id",
             value: 0,
@@ -526,9 +529,11 @@ fn sd_humidity_101_and_new_id_0_are_refused() {
 #[test]
 fn sd_encode_byte_number_37_is_refused() {
     let mut buf = [0u8; sd::MAX_FRAME_LEN];
-    let e = sd::Request::ReadElectronicSerialNumber { byte_number: 37 }
-        .encode(1, &mut buf)
-        .unwrap_err();
+    let e = sd::Request::ReadElectronicSerialNumber(sd::request::ReadElectronicSerialNumber {
+        byte_number: 37,
+    })
+    .encode(1, &mut buf)
+    .unwrap_err();
     assert_eq!(
         e,
         EncodeError::NotInRange {
@@ -583,14 +588,14 @@ fn sd_encode_byte_number_37_is_refused() {
 fn sd_read_temperatures_to_broadcast_is_refused() {
     let mut buf = [0u8; sd::MAX_FRAME_LEN];
     assert_eq!(
-        sd::Request::ReadTemperatures.encode(0x1F, &mut buf),
+        sd::Request::ReadTemperatures(sd::request::ReadTemperatures).encode(0x1F, &mut buf),
         Err(EncodeError::BroadcastNotAccepted {
-            message: &sd::request::READ_TEMPERATURES,
+            message: &sd::request::ReadTemperatures::DESC,
             address: 0x1F
         })
     );
     assert_eq!(
-        sd::request::READ_TEMPERATURES,
+        sd::request::ReadTemperatures::DESC,
         busspec_protocols::MessageDesc::new("read_temperatures", 0xA0, 1, &[6])
     );
     let p = spec::<sd::Sd>();
@@ -605,7 +610,7 @@ fn sd_read_temperatures_to_broadcast_is_refused() {
     assert_eq!(
         sd::Request::decode(&frame),
         Err(DecodeError::BroadcastNotAccepted {
-            message: &sd::request::READ_TEMPERATURES,
+            message: &sd::request::ReadTemperatures::DESC,
             address: 0x1F
         })
     );
@@ -614,9 +619,11 @@ fn sd_read_temperatures_to_broadcast_is_refused() {
         Err(interp::DecodeError::BroadcastNotAccepted { address: 0x1F, .. })
     ));
     // A command that accepts broadcast still goes there.
-    assert!(sd::Request::ReadActualPosition
-        .encode(0x1F, &mut buf)
-        .is_ok());
+    assert!(
+        sd::Request::ReadActualPosition(sd::request::ReadActualPosition)
+            .encode(0x1F, &mut buf)
+            .is_ok()
+    );
 }
 
 #[test]

@@ -46,29 +46,33 @@ impl Device for Devices {
         }
         s.frames += 1;
         let response = match d.message {
-            Q::ReadHoldingRegisters {
+            Q::ReadHoldingRegisters(modbus::request::ReadHoldingRegisters {
                 starting_address,
                 quantity,
-            } => {
+            }) => {
                 let (a, n) = (usize::from(starting_address), usize::from(quantity));
                 match s.registers.get(a..a + n) {
-                    Some(regs) => R::ReadHoldingRegistersReply {
-                        registers: busspec_protocols::Repeated::from_slice(regs).ok()?,
-                    },
-                    None => R::ReadHoldingRegistersException {
-                        exception_code: ExceptionCode::IllegalDataAddress,
-                    },
+                    Some(regs) => {
+                        R::ReadHoldingRegistersReply(modbus::response::ReadHoldingRegistersReply {
+                            registers: busspec_protocols::Repeated::from_slice(regs).ok()?,
+                        })
+                    }
+                    None => R::ReadHoldingRegistersException(
+                        modbus::response::ReadHoldingRegistersException {
+                            exception_code: ExceptionCode::IllegalDataAddress,
+                        },
+                    ),
                 }
             }
-            Q::WriteSingleRegister {
+            Q::WriteSingleRegister(modbus::request::WriteSingleRegister {
                 register_address,
                 register_value,
-            } => {
+            }) => {
                 *s.registers.get_mut(usize::from(register_address))? = register_value;
-                R::WriteSingleRegisterReply {
+                R::WriteSingleRegisterReply(modbus::response::WriteSingleRegisterReply {
                     register_address,
                     register_value,
-                }
+                })
             }
             _ => return None,
         };

@@ -87,29 +87,33 @@ fn deku_ub2_request(f: &peer::ub2::RequestFrame) -> Decoded<ub2::Request> {
     use peer::ub2::{Limit, Request as D};
     use ub2::{Capacitance, Request as G};
     let message = match f.message {
-        D::ReferenceRun => G::ReferenceRun,
-        D::GoToCapacitance { target } => G::GoToCapacitance {
+        D::ReferenceRun => G::ReferenceRun(ub2::request::ReferenceRun),
+        D::GoToCapacitance { target } => G::GoToCapacitance(ub2::request::GoToCapacitance {
             target: Capacitance(target),
-        },
-        D::GoToCapacitanceStatus => G::GoToCapacitanceStatus,
-        D::GoToFullStepPosition { target } => G::GoToFullStepPosition { target },
-        D::MoveFullSteps { steps } => G::MoveFullSteps { steps },
-        D::SetModeOfOperation { mode } => G::SetModeOfOperation {
-            mode: mode_of(mode),
-        },
-        D::GetActualCapacitance => G::GetActualCapacitance,
-        D::GetModeOfOperation => G::GetModeOfOperation,
-        D::GetCCurveIndexedFullStepCapacitance { index } => {
-            G::GetCCurveIndexedFullStepCapacitance { index }
+        }),
+        D::GoToCapacitanceStatus => G::GoToCapacitanceStatus(ub2::request::GoToCapacitanceStatus),
+        D::GoToFullStepPosition { target } => {
+            G::GoToFullStepPosition(ub2::request::GoToFullStepPosition { target })
         }
-        D::GetControllerTemperature => G::GetControllerTemperature,
-        D::GetFirmwareVersion => G::GetFirmwareVersion,
+        D::MoveFullSteps { steps } => G::MoveFullSteps(ub2::request::MoveFullSteps { steps }),
+        D::SetModeOfOperation { mode } => G::SetModeOfOperation(ub2::request::SetModeOfOperation {
+            mode: mode_of(mode),
+        }),
+        D::GetActualCapacitance => G::GetActualCapacitance(ub2::request::GetActualCapacitance),
+        D::GetModeOfOperation => G::GetModeOfOperation(ub2::request::GetModeOfOperation),
+        D::GetCCurveIndexedFullStepCapacitance { index } => G::GetCCurveIndexedFullStepCapacitance(
+            ub2::request::GetCCurveIndexedFullStepCapacitance { index },
+        ),
+        D::GetControllerTemperature => {
+            G::GetControllerTemperature(ub2::request::GetControllerTemperature)
+        }
+        D::GetFirmwareVersion => G::GetFirmwareVersion(ub2::request::GetFirmwareVersion),
         D::GetLimit {
             limit: Limit::LowerCustomer,
-        } => G::GetLowerCustomerLimit,
+        } => G::GetLowerCustomerLimit(ub2::request::GetLowerCustomerLimit),
         D::GetLimit {
             limit: Limit::UpperCustomer,
-        } => G::GetUpperCustomerLimit,
+        } => G::GetUpperCustomerLimit(ub2::request::GetUpperCustomerLimit),
     };
     Decoded {
         address: f.address,
@@ -121,44 +125,54 @@ fn deku_ub2_response(f: &peer::ub2::ResponseFrame) -> Decoded<ub2::Response> {
     use peer::ub2::{Data, Echo, Limit, Response as D};
     use ub2::{Capacitance, Response as G};
     let message = match f.message {
-        D::MovementStarted => G::MovementStarted,
-        D::MovementCompleted => G::MovementCompleted,
-        D::MovementNotCompleted => G::MovementNotCompleted,
-        D::NakLimitReached => G::NakLimitReached,
-        D::NakIndexOutOfRange => G::NakIndexOutOfRange,
-        D::Echo(Echo::SetModeOfOperationAck) => G::SetModeOfOperationAck,
+        D::MovementStarted => G::MovementStarted(ub2::response::MovementStarted),
+        D::MovementCompleted => G::MovementCompleted(ub2::response::MovementCompleted),
+        D::MovementNotCompleted => G::MovementNotCompleted(ub2::response::MovementNotCompleted),
+        D::NakLimitReached => G::NakLimitReached(ub2::response::NakLimitReached),
+        D::NakIndexOutOfRange => G::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange),
+        D::Echo(Echo::SetModeOfOperationAck) => {
+            G::SetModeOfOperationAck(ub2::response::SetModeOfOperationAck)
+        }
         D::Data(d) => match d {
-            Data::ActualCapacitance { capacitance } => G::ActualCapacitance {
-                capacitance: Capacitance(capacitance),
-            },
-            Data::ActualModeOfOperation { mode } => G::ActualModeOfOperation {
-                mode: mode_of(mode),
-            },
+            Data::ActualCapacitance { capacitance } => {
+                G::ActualCapacitance(ub2::response::ActualCapacitance {
+                    capacitance: Capacitance(capacitance),
+                })
+            }
+            Data::ActualModeOfOperation { mode } => {
+                G::ActualModeOfOperation(ub2::response::ActualModeOfOperation {
+                    mode: mode_of(mode),
+                })
+            }
             Data::CCurveEntry {
                 index,
                 full_steps,
                 capacitance,
-            } => G::CCurveEntry {
+            } => G::CCurveEntry(ub2::response::CCurveEntry {
                 index,
                 full_steps,
                 capacitance: Capacitance(capacitance),
-            },
-            Data::ControllerTemperature { temperature } => G::ControllerTemperature { temperature },
-            Data::FirmwareVersion { firmware_version } => G::FirmwareVersion {
-                firmware_version: firmware_version.into(),
-            },
+            }),
+            Data::ControllerTemperature { temperature } => {
+                G::ControllerTemperature(ub2::response::ControllerTemperature { temperature })
+            }
+            Data::FirmwareVersion { firmware_version } => {
+                G::FirmwareVersion(ub2::response::FirmwareVersion {
+                    firmware_version: firmware_version.into(),
+                })
+            }
             Data::Limit {
                 limit: Limit::LowerCustomer,
                 capacitance,
-            } => G::LowerCustomerLimit {
+            } => G::LowerCustomerLimit(ub2::response::LowerCustomerLimit {
                 capacitance: Capacitance(capacitance),
-            },
+            }),
             Data::Limit {
                 limit: Limit::UpperCustomer,
                 capacitance,
-            } => G::UpperCustomerLimit {
+            } => G::UpperCustomerLimit(ub2::response::UpperCustomerLimit {
                 capacitance: Capacitance(capacitance),
-            },
+            }),
         },
     };
     Decoded {
@@ -175,33 +189,33 @@ fn deku_sd_request(f: &peer::sd::RequestFrame) -> Decoded<sd::Request> {
         D::SetPoint {
             freshness,
             position,
-        } => G::SetPoint {
+        } => G::SetPoint(sd::request::SetPoint {
             freshness,
             position: Angle(position),
-        },
-        D::ReadActualPosition { .. } => G::ReadActualPosition,
-        D::SetVelocity { set_velocity } => G::SetVelocity {
+        }),
+        D::ReadActualPosition { .. } => G::ReadActualPosition(sd::request::ReadActualPosition),
+        D::SetVelocity { set_velocity } => G::SetVelocity(sd::request::SetVelocity {
             set_velocity: Velocity(set_velocity),
-        },
-        D::ReadActualVelocity { .. } => G::ReadActualVelocity,
-        D::SetServoId { new_id, .. } => G::SetServoId { new_id },
-        D::ReadTemperatures { .. } => G::ReadTemperatures,
-        D::ReadHumidity { .. } => G::ReadHumidity,
+        }),
+        D::ReadActualVelocity { .. } => G::ReadActualVelocity(sd::request::ReadActualVelocity),
+        D::SetServoId { new_id, .. } => G::SetServoId(sd::request::SetServoId { new_id }),
+        D::ReadTemperatures { .. } => G::ReadTemperatures(sd::request::ReadTemperatures),
+        D::ReadHumidity { .. } => G::ReadHumidity(sd::request::ReadHumidity),
         D::ActuatorStatusWord {
             op: StatusOp::Read, ..
-        } => G::ReadActuatorStatusWord,
+        } => G::ReadActuatorStatusWord(sd::request::ReadActuatorStatusWord),
         D::ActuatorStatusWord {
             op: StatusOp::Reset,
             ..
-        } => G::ResetActuatorStatusWord,
+        } => G::ResetActuatorStatusWord(sd::request::ResetActuatorStatusWord),
         D::ReadTotalRuntime {
             part: RuntimePart::Hours,
             ..
-        } => G::ReadTotalRuntimeHours,
+        } => G::ReadTotalRuntimeHours(sd::request::ReadTotalRuntimeHours),
         D::ReadTotalRuntime {
             part: RuntimePart::MinSec,
             ..
-        } => G::ReadTotalRuntimeMinSec,
+        } => G::ReadTotalRuntimeMinSec(sd::request::ReadTotalRuntimeMinSec),
     };
     Decoded {
         address: f.address,
@@ -215,9 +229,9 @@ fn deku_sd_response(r: &peer::sd::Reply) -> Decoded<sd::Response> {
     let (address, message) = match *r {
         Reply::TotalRuntimeHours { address, hours } => (
             address,
-            G::TotalRuntimeHours {
+            G::TotalRuntimeHours(sd::response::TotalRuntimeHours {
                 runtime_hours: hours,
-            },
+            }),
         ),
         Reply::TotalRuntimeMinSec {
             address,
@@ -225,10 +239,10 @@ fn deku_sd_response(r: &peer::sd::Reply) -> Decoded<sd::Response> {
             seconds,
         } => (
             address,
-            G::TotalRuntimeMinSec {
+            G::TotalRuntimeMinSec(sd::response::TotalRuntimeMinSec {
                 runtime_minutes: minutes,
                 runtime_seconds: seconds,
-            },
+            }),
         ),
         Reply::Frame(f) => (
             f.address,
@@ -236,35 +250,43 @@ fn deku_sd_response(r: &peer::sd::Reply) -> Decoded<sd::Response> {
                 D::SetPointReply {
                     freshness,
                     position,
-                } => G::SetPointReply {
+                } => G::SetPointReply(sd::response::SetPointReply {
                     freshness,
                     position: Angle(position),
-                },
-                D::ActualPosition { position, .. } => G::ActualPosition {
-                    position: Angle(position),
-                },
-                D::SetVelocityReply { actual_velocity } => G::SetVelocityReply {
-                    actual_velocity: Velocity(actual_velocity),
-                },
-                D::ActualVelocity { actual_velocity } => G::ActualVelocity {
-                    actual_velocity: Velocity(actual_velocity),
-                },
-                D::SetServoIdReply { new_id, .. } => G::SetServoIdReply { new_id },
+                }),
+                D::ActualPosition { position, .. } => {
+                    G::ActualPosition(sd::response::ActualPosition {
+                        position: Angle(position),
+                    })
+                }
+                D::SetVelocityReply { actual_velocity } => {
+                    G::SetVelocityReply(sd::response::SetVelocityReply {
+                        actual_velocity: Velocity(actual_velocity),
+                    })
+                }
+                D::ActualVelocity { actual_velocity } => {
+                    G::ActualVelocity(sd::response::ActualVelocity {
+                        actual_velocity: Velocity(actual_velocity),
+                    })
+                }
+                D::SetServoIdReply { new_id, .. } => {
+                    G::SetServoIdReply(sd::response::SetServoIdReply { new_id })
+                }
                 D::Temperatures {
                     motor_temperature,
                     pcb_temperature,
-                } => G::Temperatures {
+                } => G::Temperatures(sd::response::Temperatures {
                     motor_temperature: Temperature(motor_temperature),
                     pcb_temperature: Temperature(pcb_temperature),
-                },
-                D::Humidity { humidity, .. } => G::Humidity { humidity },
+                }),
+                D::Humidity { humidity, .. } => G::Humidity(sd::response::Humidity { humidity }),
                 D::ActuatorStatusWord {
                     status_bits,
                     status_arg2,
-                } => G::ActuatorStatusWord {
+                } => G::ActuatorStatusWord(sd::response::ActuatorStatusWord {
                     status_bits: ActuatorStatusBits(status_bits),
                     status_arg2,
-                },
+                }),
                 D::TotalRuntime { .. } => panic!("0x22 is interpreted by its request"),
             },
         ),
@@ -577,7 +599,10 @@ fn the_hand_written_and_deku_encoders_refuse_what_the_generated_encoders_refuse(
             match (&mut g, &mut d) {
                 (
                     Message::Request(Decoded {
-                        message: ub2::Request::GetCCurveIndexedFullStepCapacitance { index },
+                        message:
+                            ub2::Request::GetCCurveIndexedFullStepCapacitance(
+                                ub2::request::GetCCurveIndexedFullStepCapacitance { index },
+                            ),
                         ..
                     }),
                     Message::Request(peer::ub2::RequestFrame {
@@ -588,7 +613,8 @@ fn the_hand_written_and_deku_encoders_refuse_what_the_generated_encoders_refuse(
                 )
                 | (
                     Message::Response(Decoded {
-                        message: ub2::Response::CCurveEntry { index, .. },
+                        message:
+                            ub2::Response::CCurveEntry(ub2::response::CCurveEntry { index, .. }),
                         ..
                     }),
                     Message::Response(peer::ub2::ResponseFrame {
@@ -634,7 +660,7 @@ fn the_hand_written_and_deku_encoders_refuse_what_the_generated_encoders_refuse(
             match (&mut g, &mut d) {
                 (
                     Message::Request(Decoded {
-                        message: sd::Request::SetServoId { new_id },
+                        message: sd::Request::SetServoId(sd::request::SetServoId { new_id }),
                         ..
                     }),
                     Message::Request(RequestFrame {
@@ -648,7 +674,8 @@ fn the_hand_written_and_deku_encoders_refuse_what_the_generated_encoders_refuse(
                 )
                 | (
                     Message::Response(Decoded {
-                        message: sd::Response::SetServoIdReply { new_id },
+                        message:
+                            sd::Response::SetServoIdReply(sd::response::SetServoIdReply { new_id }),
                         ..
                     }),
                     Message::Response(Reply::Frame(ResponseFrame {
@@ -662,7 +689,7 @@ fn the_hand_written_and_deku_encoders_refuse_what_the_generated_encoders_refuse(
                 )
                 | (
                     Message::Response(Decoded {
-                        message: sd::Response::Humidity { humidity: new_id },
+                        message: sd::Response::Humidity(sd::response::Humidity { humidity: new_id }),
                         ..
                     }),
                     Message::Response(Reply::Frame(ResponseFrame {
@@ -677,10 +704,10 @@ fn the_hand_written_and_deku_encoders_refuse_what_the_generated_encoders_refuse(
                 (
                     Message::Response(Decoded {
                         message:
-                            sd::Response::TotalRuntimeMinSec {
+                            sd::Response::TotalRuntimeMinSec(sd::response::TotalRuntimeMinSec {
                                 runtime_minutes,
                                 runtime_seconds,
-                            },
+                            }),
                         ..
                     }),
                     Message::Response(Reply::TotalRuntimeMinSec {

@@ -49,17 +49,19 @@ fn units_debug_print_the_physical_value_beside_the_raw_one() {
 /// message's `Debug`, read as text by `as_str`, and written back as they were.
 #[test]
 fn ascii_fields_show_their_text() {
-    let r = ub2::Response::FirmwareVersion {
+    let r = ub2::Response::FirmwareVersion(ub2::response::FirmwareVersion {
         firmware_version: busspec_runtime::Ascii(*b"20100433.00"),
-    };
+    });
     assert_eq!(
         format!("{r:?}"),
-        r#"FirmwareVersion { firmware_version: "20100433.00" }"#
+        r#"FirmwareVersion(FirmwareVersion { firmware_version: "20100433.00" })"#
     );
     let mut buf = [0u8; 16];
     let n = r.encode(0x21, &mut buf).unwrap();
     let back = ub2::Response::decode(&buf[..n]).unwrap();
-    let ub2::Response::FirmwareVersion { firmware_version } = back.message else {
+    let ub2::Response::FirmwareVersion(ub2::response::FirmwareVersion { firmware_version }) =
+        back.message
+    else {
         panic!("{back:?}");
     };
     assert_eq!(firmware_version.as_str(), Some("20100433.00"));

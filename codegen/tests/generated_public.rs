@@ -50,7 +50,7 @@ fn modbus_coils_and_registers() {
     let reply = modbus::Response::decode_reply(&wire("read_coils_reply"), &read)
         .unwrap()
         .message;
-    let modbus::Response::ReadCoilsReply { coils } = reply else {
+    let modbus::Response::ReadCoilsReply(modbus::response::ReadCoilsReply { coils }) = reply else {
         panic!("{reply:?}")
     };
     assert_eq!(coils.as_bytes(), &[0xCD, 0x6B, 0x05]);
@@ -58,10 +58,10 @@ fn modbus_coils_and_registers() {
     assert_eq!(coils.get(0), Some(true));
     assert_eq!(coils.get(1), Some(false));
     // A request for 25 coils is answered with 4 bytes, not 3.
-    let more = modbus::Request::ReadCoils {
+    let more = modbus::Request::ReadCoils(modbus::request::ReadCoils {
         starting_address: 19,
         quantity: 25,
-    };
+    });
     assert!(matches!(
         modbus::Response::decode_reply(&wire("read_coils_reply"), &more),
         Err(DecodeError::NotFollowing {
@@ -78,24 +78,27 @@ fn modbus_coils_and_registers() {
     assert!(!reply.answers(&more) && reply.answers(&read));
     // Registers: 555, 0, 100 (6.3), and 126 are more than the 125 the spec allows.
     let registers = Repeated::from_slice(&[555u16, 0, 100]).unwrap();
-    let r = modbus::Response::ReadHoldingRegistersReply { registers };
+    let r =
+        modbus::Response::ReadHoldingRegistersReply(modbus::response::ReadHoldingRegistersReply {
+            registers,
+        });
     let mut buf = [0u8; modbus::MAX_FRAME_LEN];
     let n = r.encode(0x11, &mut buf).unwrap();
     assert_eq!(&buf[..n], &wire("read_holding_registers_reply")[..]);
     assert_eq!(r.frame_len(), n);
-    let w = modbus::Request::WriteMultipleRegisters {
+    let w = modbus::Request::WriteMultipleRegisters(modbus::request::WriteMultipleRegisters {
         starting_address: 1,
         quantity: 2,
         values: Repeated::from_slice(&[10, 258]).unwrap(),
-    };
+    });
     let n = w.encode(0x11, &mut buf).unwrap();
     assert_eq!(&buf[1..11], &[0x10, 0, 1, 0, 2, 4, 0, 10, 1, 2]);
     assert_eq!(modbus::Request::decode(&buf[..n]).unwrap().message, w);
-    let wrong = modbus::Request::WriteMultipleRegisters {
+    let wrong = modbus::Request::WriteMultipleRegisters(modbus::request::WriteMultipleRegisters {
         starting_address: 1,
         quantity: 3,
         values: Repeated::from_slice(&[10, 258]).unwrap(),
-    };
+    });
     assert!(matches!(
         wrong.encode(0x11, &mut buf),
         Err(EncodeError::NotInRange {
@@ -112,20 +115,21 @@ fn modbus_coils_and_registers() {
 /// asked, and a length byte that lies is refused.
 #[test]
 fn dynamixel_status_and_length_byte() {
-    let read = dynamixel::Request::Read {
+    let read = dynamixel::Request::Read(dynamixel::request::Read {
         address: 0x2B,
         length: 1,
-    };
+    });
     let status = [0xFF, 0xFF, 0x01, 0x03, 0x00, 0x20, 0xDB];
     let d = dynamixel::Response::decode_reply(&status, &read).unwrap();
-    let dynamixel::Response::ReadStatus { data, .. } = d.message else {
+    let dynamixel::Response::ReadStatus(dynamixel::response::ReadStatus { data, .. }) = d.message
+    else {
         panic!("{d:?}")
     };
     assert_eq!(data.as_slice(), &[0x20]);
-    let two = dynamixel::Request::Read {
+    let two = dynamixel::Request::Read(dynamixel::request::Read {
         address: 0x2B,
         length: 2,
-    };
+    });
     assert!(matches!(
         dynamixel::Response::decode_reply(&status, &two),
         Err(DecodeError::BadCount {
@@ -144,10 +148,10 @@ fn dynamixel_status_and_length_byte() {
             found: 4
         })
     );
-    let w = dynamixel::Request::Write {
+    let w = dynamixel::Request::Write(dynamixel::request::Write {
         address: 30,
         data: Repeated::from_slice(&[0xF4, 0x01]).unwrap(),
-    };
+    });
     let mut buf = [0u8; dynamixel::MAX_FRAME_LEN];
     let n = w.encode(1, &mut buf).unwrap();
     assert_eq!(&buf[..n], &[0xFF, 0xFF, 1, 5, 3, 30, 0xF4, 0x01, 0xE3]);
@@ -190,7 +194,9 @@ fn a_modbus_view_lends_its_registers_in_place() {
     let owned = modbus::Response::decode(&e.wire).unwrap().message;
     let view = modbus::ResponseView::decode(&e.wire).unwrap().message;
     let (
-        modbus::Response::ReadHoldingRegistersReply { registers: o },
+        modbus::Response::ReadHoldingRegistersReply(modbus::response::ReadHoldingRegistersReply {
+            registers: o,
+        }),
         modbus::ResponseView::ReadHoldingRegistersReply { registers: v },
     ) = (owned, view)
     else {

@@ -150,10 +150,10 @@ fn mini_crc_snapshot_replays_its_examples() {
 fn a_single_length_encoder_refuses_a_short_buffer_before_the_message() {
     use busspec_runtime::EncodeError;
     use mini_crc::Response;
-    let bad = Response::RuntimeMinSec {
+    let bad = Response::RuntimeMinSec(mini_crc::response::RuntimeMinSec {
         minutes: 60,
         seconds: 0,
-    };
+    });
     let short = EncodeError::BufferTooSmall {
         needed: 6,
         available: 5,
@@ -166,10 +166,10 @@ fn a_single_length_encoder_refuses_a_short_buffer_before_the_message() {
             ..
         })
     ));
-    let good = Response::RuntimeMinSec {
+    let good = Response::RuntimeMinSec(mini_crc::response::RuntimeMinSec {
         minutes: 59,
         seconds: 0,
-    };
+    });
     assert_eq!(good.encode(0x01, &mut [0; 5]), Err(short));
     assert_eq!(good.encode(0x01, &mut [0; 6]), Ok(6));
 }
@@ -180,17 +180,17 @@ fn a_single_length_encoder_refuses_a_short_buffer_before_the_message() {
 #[test]
 fn core_names_snapshot_replays_its_examples() {
     replay::<clash::Clash>("codegen/tests/fixtures/core_names.yaml");
-    let m = clash::Request::Option {
+    let m = clash::Request::Option(clash::request::Option {
         some: clash::Result::Err,
         core: clash::Option(5),
-    };
+    });
     let mut buf = [0u8; clash::MAX_FRAME_LEN];
     let n = m.encode(0x21, &mut buf).unwrap();
     assert_eq!(clash::Request::decode(&buf[..n]).unwrap().message, m);
     let flags = clash::Ok::SOME;
     assert!(flags.contains(clash::Ok::SOME) && !flags.contains(clash::Ok::NONE));
     assert_eq!(clash::Some(3).value(), 5.0);
-    let rt = clash::Request::Rt { f: 7 };
+    let rt = clash::Request::Rt(clash::request::Rt { f: 7 });
     let n = rt.encode(0x21, &mut buf).unwrap();
     assert_eq!(&buf[3..5], &[7, 7]);
     assert_eq!(clash::Request::decode(&buf[..n]).unwrap().message, rt);
@@ -214,11 +214,11 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
     use busspec_runtime::DecodeError;
     replay::<syncy::Syncy>("model/tests/fixtures/valid/minimal_sync.yaml");
     let p = fixture("model/tests/fixtures/valid/minimal_sync.yaml");
-    let m = syncy::Response::Counter {
+    let m = syncy::Response::Counter(syncy::response::Counter {
         total: 0xFF_FFFF,
         tag: 15,
         offset: -0x8_0000,
-    };
+    });
     let mut buf = [0u8; syncy::MAX_FRAME_LEN];
     let n = m.encode(3, &mut buf).unwrap();
     let want = syncy_frame(&[0xFF, 0xFF, 3, 8, 1, 0xFF, 0xFF, 0xFF, 0xF8, 0, 0]);
@@ -269,9 +269,9 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
         syncy::Request::decode(&lying).map(|_| ()),
         busspec_model::interp::decode(&p, Some(Direction::Request), None, &lying).map(|_| ()),
     );
-    let far = syncy::Request::MoveTo {
+    let far = syncy::Request::MoveTo(syncy::request::MoveTo {
         target: syncy::Millimetre::from_raw(0x80_0000),
-    };
+    });
     assert!(far.encode(1, &mut buf).is_err());
     // In a stream: noise, a lone sync byte, then the frame.
     let mut s = syncy::StreamDecoder::new(None);
@@ -299,10 +299,10 @@ fn sync_snapshot_replays_and_agrees_with_the_interpreter() {
 fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
     use busspec_runtime::DecodeError;
     let p = fixture("model/tests/fixtures/valid/minimal_sync.yaml");
-    let req = syncy::Request::SetPair {
+    let req = syncy::Request::SetPair(syncy::request::SetPair {
         quantity: 10,
         level: 0x0102,
-    };
+    });
     let mut buf = [0u8; syncy::MAX_FRAME_LEN];
     let n = req.encode(1, &mut buf).unwrap();
     let wire = syncy_frame(&[0xFF, 0xFF, 1, 6, 5, 10, 20, 1, 2]);
@@ -327,10 +327,10 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
         busspec_model::interp::decode(&p, Some(Direction::Request), None, &bad).map(|_| ()),
     );
     // 200 × 2 does not fit the byte `doubled` is: encode refuses.
-    let far = syncy::Request::SetPair {
+    let far = syncy::Request::SetPair(syncy::request::SetPair {
         quantity: 200,
         level: 0,
-    };
+    });
     assert!(far.encode(1, &mut buf).is_err());
     let ireq = busspec_model::interp::decode(&p, Some(Direction::Request), None, &wire).unwrap();
     let wrong_quantity = syncy_frame(&[0xFF, 0xFF, 1, 4, 5, 9, 2]);
@@ -364,7 +364,10 @@ fn following_fields_are_computed_and_checked_as_the_interpreter_does() {
         syncy::Response::decode_reply(&wrong_quantity, &req).map(|_| ()),
         busspec_model::interp::decode_reply(&p, &ireq, &wrong_quantity).map(|_| ()),
     );
-    assert_eq!(syncy::Response::SetPairError { reason: 3 }.code(), &[0x85]);
+    assert_eq!(
+        syncy::Response::SetPairError(syncy::response::SetPairError { reason: 3 }).code(),
+        &[0x85]
+    );
 }
 
 /// Replies without a code are told apart by their length, and by the request where they share
@@ -380,21 +383,24 @@ fn codeless_snapshot_replays_and_agrees_with_the_interpreter() {
     let d = codeless::Response::decode(&status).unwrap();
     assert_eq!(
         d.message,
-        codeless::Response::Status {
+        codeless::Response::Status(codeless::response::Status {
             error: codeless::Errors::ANGLE
-        }
+        })
     );
     let d = codeless::Response::decode(&read_status).unwrap();
     assert_eq!(
         d.message,
-        codeless::Response::ReadStatus {
+        codeless::Response::ReadStatus(codeless::response::ReadStatus {
             error: codeless::Errors::from_raw(0),
             value: 0x1234
-        }
+        })
     );
     // A ping gets a status, not a status with a value.
     assert!(matches!(
-        codeless::Response::decode_reply(&read_status, &codeless::Request::Ping),
+        codeless::Response::decode_reply(
+            &read_status,
+            &codeless::Request::Ping(codeless::request::Ping)
+        ),
         Err(DecodeError::NotAReply { .. } | DecodeError::WrongLength { .. })
     ));
     for frame in [&status, &read_status, &long] {
@@ -433,10 +439,10 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     assert!(t.encoded > 4 && t.encode_refused > 4, "{t:?}");
     // A write of two registers, by hand.
     let values = busspec_runtime::Repeated::from_slice(&[0x1234u16, 0xABCD]).unwrap();
-    let w = vario::Request::Write {
+    let w = vario::Request::Write(vario::request::Write {
         quantity: 2,
         values,
-    };
+    });
     assert_eq!(w.frame_len(), 12);
     let mut buf = [0u8; vario::MAX_FRAME_LEN];
     let n = w.encode(3, &mut buf).unwrap();
@@ -445,10 +451,10 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
     assert_eq!(&buf[..n], &want[..]);
     assert_eq!(vario::Request::decode(&want).unwrap().message, w);
     // A quantity the list does not have: refused, naming the list and the count that fits.
-    let short = vario::Request::Write {
+    let short = vario::Request::Write(vario::request::Write {
         quantity: 3,
         values,
-    };
+    });
     assert_eq!(
         short.encode(3, &mut buf),
         Err(EncodeError::NotInRange {
@@ -459,10 +465,10 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
             kind: busspec_runtime::NumKind::Int,
         })
     );
-    let empty = vario::Request::Write {
+    let empty = vario::Request::Write(vario::request::Write {
         quantity: 1,
         values: busspec_runtime::Repeated::new(),
-    };
+    });
     assert_eq!(
         empty.encode(3, &mut buf),
         Err(EncodeError::NotInRange {
@@ -491,10 +497,10 @@ fn variable_snapshot_replays_and_agrees_with_the_interpreter() {
         busspec_model::interp::decode(&p, Some(Direction::Request), None, &lying).map(|_| ()),
     );
     // The reply's count follows the request: two registers asked, three sent.
-    let read = vario::Request::Read {
+    let read = vario::Request::Read(vario::request::Read {
         first: 16,
         quantity: 2,
-    };
+    });
     let mut three = vec![0xA5, 0x5A, 1, 8, 1, 0, 7, 1, 0, 0, 9, 0];
     agree::reseal(&p, &mut three);
     assert!(vario::Response::decode(&three).is_ok());
@@ -620,9 +626,9 @@ fn repeat_to_the_end_snapshot_streams_as_the_interpreter_does() {
     let mut buf = [0u8; ending::MAX_FRAME_LEN];
     for n in 1..=16u16 {
         let values: Vec<u16> = (0..n).map(|k| k.wrapping_mul(0x1F3D)).collect();
-        let reply = ending::Response::ReadReply {
+        let reply = ending::Response::ReadReply(ending::response::ReadReply {
             values: Repeated::from_slice(&values).unwrap(),
-        };
+        });
         let len = reply.encode(2, &mut buf).unwrap();
         assert!(ending::Ending::FRAME_LENGTHS.contains(&len), "{len}");
         frames.push(buf[..len].to_vec());
@@ -655,7 +661,9 @@ fn codeless_beside_coded_snapshot_agrees_with_the_interpreter() {
     let go_to = [0xFF, 0x01, 0x00, 0x07, 0x00, 0x01, 0x09];
     assert_eq!(
         Request::decode(&go_to).map(|d| d.message),
-        Ok(Request::GoToPreset { preset: 1 })
+        Ok(Request::GoToPreset(pelco_d2::request::GoToPreset {
+            preset: 1
+        }))
     );
     replay::<PelcoD2>(file);
     let p = fixture(file);
@@ -698,9 +706,18 @@ fn end_byte_snapshot_agrees_with_the_interpreter() {
     let p = fixture(file);
     let reset = [0x10, 0x40, 0x01, 0x41, 0x16];
     let d = Request::decode(&reset).unwrap();
-    assert_eq!((d.address, d.message), (1, Request::ResetRemoteLink));
+    assert_eq!(
+        (d.address, d.message),
+        (
+            1,
+            Request::ResetRemoteLink(ft12_fixed::request::ResetRemoteLink)
+        )
+    );
     let mut buf = [0u8; 8];
-    assert_eq!(Request::ResetRemoteLink.encode(0xFF, &mut buf), Ok(5));
+    assert_eq!(
+        Request::ResetRemoteLink(ft12_fixed::request::ResetRemoteLink).encode(0xFF, &mut buf),
+        Ok(5)
+    );
     assert_eq!(buf[..5], [0x10, 0x40, 0xFF, 0x3F, 0x16]);
     // A wrong end byte and a wrong checksum: the end byte is named first.
     let bad = [0x10, 0x40, 0x01, 0x42, 0x17];
@@ -729,14 +746,29 @@ fn constant_frame_snapshot_agrees_with_the_interpreter() {
     replay::<MbusShort>(file);
     let p = fixture(file);
     let d = Response::decode(&[0xE5]).unwrap();
-    assert_eq!((d.address, d.message), (0, Response::Ack));
-    assert_eq!(Response::Ack.constant_frame(), Some(&[0xE5][..]));
-    assert_eq!(Response::StatusOfLink.constant_frame(), None);
+    assert_eq!(
+        (d.address, d.message),
+        (0, Response::Ack(mbus_short::response::Ack))
+    );
+    assert_eq!(
+        Response::Ack(mbus_short::response::Ack).constant_frame(),
+        Some(&[0xE5][..])
+    );
+    assert_eq!(
+        Response::StatusOfLink(mbus_short::response::StatusOfLink).constant_frame(),
+        None
+    );
     let mut buf = [0u8; 8];
-    assert_eq!(Response::Ack.encode(0xFE, &mut buf), Ok(1));
+    assert_eq!(
+        Response::Ack(mbus_short::response::Ack).encode(0xFE, &mut buf),
+        Ok(1)
+    );
     assert_eq!(buf[0], 0xE5);
     assert_eq!(
-        Response::Ack.encode(0, &mut []).unwrap_err().to_string(),
+        Response::Ack(mbus_short::response::Ack)
+            .encode(0, &mut [])
+            .unwrap_err()
+            .to_string(),
         busspec_runtime::EncodeError::BufferTooSmall {
             needed: 1,
             available: 0
@@ -744,8 +776,8 @@ fn constant_frame_snapshot_agrees_with_the_interpreter() {
         .to_string()
     );
     // The reply of `snd_nke` and `req_ske`; and `E5` to a request is no frame at all.
-    assert!(Response::decode_reply(&[0xE5], &Request::SndNke).is_ok());
-    assert!(Response::decode_reply(&[0xE5], &Request::ReqSke).is_ok());
+    assert!(Response::decode_reply(&[0xE5], &Request::SndNke(mbus_short::request::SndNke)).is_ok());
+    assert!(Response::decode_reply(&[0xE5], &Request::ReqSke(mbus_short::request::ReqSke)).is_ok());
     assert!(Request::decode(&[0xE5]).is_err());
     same_text(
         Request::decode(&[0xE5]).map(|_| ()),
@@ -780,7 +812,7 @@ fn constant_frame_fast_path_is_the_rule() {
         StreamDecoder::<MbusShort>::new(None),
         after,
         StreamDecoder::<MbusShort>::new(Some(Dir::Response))
-            .with_default_request(Some(Request::ReqSke)),
+            .with_default_request(Some(Request::ReqSke(mbus_short::request::ReqSke))),
         StreamDecoder::<MbusShort>::new(Some(Dir::Request)),
     ];
     let cap = <MbusShort as Protocol>::MAX_FRAME_LEN;
@@ -844,7 +876,7 @@ fn fletcher_snapshot_agrees_with_the_interpreter() {
     // A payload over 255 bytes (NAV-SAT with 22 satellites), which the two-byte length carries.
     let big = p.examples.iter().find(|e| e.wire.len() > 255).unwrap();
     match ubx_like::Response::decode(&big.wire).map(|d| d.message) {
-        Ok(ubx_like::Response::Satellites { svs, .. }) => assert_eq!(svs.len(), 22),
+        Ok(ubx_like::Response::Satellites(s)) => assert_eq!(s.svs.len(), 22),
         other => panic!("NAV-SAT decoded as {other:?}"),
     }
     let t = agree::agree::<UbxLike>(&p);
@@ -864,7 +896,9 @@ fn no_checksum_snapshot_agrees_with_the_interpreter() {
     let p = fixture(file);
     assert_eq!(
         Request::decode(&[0x90, 0x05]).map(|d| d.message),
-        Ok(Request::GetPosition { channel: 5 })
+        Ok(Request::GetPosition(
+            maestro_compact::request::GetPosition { channel: 5 }
+        ))
     );
     let t = agree::agree::<MaestroCompact>(&p);
     assert!(t.accepted >= 3 && t.refused > 10, "{t:?}");
@@ -886,7 +920,10 @@ fn pelco_p_snapshot_agrees_with_the_interpreter() {
     let p = fixture(file);
     let go_to = [0xA0, 0x00, 0x00, 0x07, 0x00, 0x01, 0xAF, 0x09];
     let d = Request::decode(&go_to).unwrap();
-    assert_eq!(d.message, Request::GoToPreset { preset: 1 });
+    assert_eq!(
+        d.message,
+        Request::GoToPreset(pelco_p::request::GoToPreset { preset: 1 })
+    );
     assert_eq!(d.message.command().reply, busspec_runtime::Reply::None);
     assert_eq!(
         PelcoP::command(&d.message).reply,
@@ -928,12 +965,13 @@ fn msp_snapshot_agrees_with_the_interpreter() {
     assert_eq!(msp_v1::checksum(&[0x00, 0x01]), 0x01);
     assert_eq!(
         Request::decode(&[0x24, 0x4D, 0x3C, 0x00, 0x01, 0x01]).map(|d| d.message),
-        Ok(Request::ApiVersion)
+        Ok(Request::ApiVersion(msp_v1::request::ApiVersion))
     );
     let error = [0x24, 0x4D, 0x21, 0x00, 0x6C, 0x6C];
     assert_eq!(
-        Response::decode_reply(&error, &Request::Attitude).map(|d| d.message),
-        Ok(Response::Error { cmd: 108 })
+        Response::decode_reply(&error, &Request::Attitude(msp_v1::request::Attitude))
+            .map(|d| d.message),
+        Ok(Response::Error(msp_v1::response::Error { cmd: 108 }))
     );
     let t = agree::agree::<MspV1>(&p);
     assert!(t.accepted >= 4 && t.refused > 100, "{t:?}");
@@ -955,7 +993,7 @@ fn start_by_direction_snapshot_agrees_with_the_interpreter() {
     let reply = [0x24, 0x4D, 0x3E, 0x03, 0x01, 0x00, 0x01, 0x2C, 0x2F];
     assert_eq!(
         Request::decode(&request).map(|d| d.message),
-        Ok(Request::ApiVersion)
+        Ok(Request::ApiVersion(msp_by_direction::request::ApiVersion))
     );
     let wrong = DecodeError::BadStart {
         offset: 2,
@@ -965,14 +1003,18 @@ fn start_by_direction_snapshot_agrees_with_the_interpreter() {
     assert_eq!(Response::decode(&request), Err(wrong));
     assert_eq!(
         Response::decode(&reply).map(|d| d.message),
-        Ok(Response::ApiVersionReply {
-            protocol_version: 0,
-            api_major: 1,
-            api_minor: 44
-        })
+        Ok(Response::ApiVersionReply(
+            msp_by_direction::response::ApiVersionReply {
+                protocol_version: 0,
+                api_major: 1,
+                api_minor: 44
+            }
+        ))
     );
     let mut buf = [0u8; 16];
-    let n = Request::ApiVersion.encode(0, &mut buf).unwrap();
+    let n = Request::ApiVersion(msp_by_direction::request::ApiVersion)
+        .encode(0, &mut buf)
+        .unwrap();
     assert_eq!(&buf[..n], &request);
     let t = agree::agree::<MspByDirection>(&p);
     assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
@@ -995,10 +1037,12 @@ fn repeated_start_and_length_snapshot_agrees_with_the_interpreter() {
     let reset = [0x68, 0x03, 0x03, 0x68, 0x53, 0xFE, 0x50, 0xA1, 0x16];
     assert_eq!(
         Request::decode(&reset).map(|d| (d.address, d.message)),
-        Ok((0xFE, Request::Reset))
+        Ok((0xFE, Request::Reset(ft12_variable::request::Reset)))
     );
     let mut buf = [0u8; 32];
-    let n = Request::Reset.encode(0xFE, &mut buf).unwrap();
+    let n = Request::Reset(ft12_variable::request::Reset)
+        .encode(0xFE, &mut buf)
+        .unwrap();
     assert_eq!(&buf[..n], &reset);
     for (at, b, want) in [
         (
@@ -1046,7 +1090,9 @@ fn start_after_a_two_byte_code_is_read_where_it_sits() {
     let read = [0x7E, 0x01, 0x02, 0x7E, 0x05, 0x06];
     assert_eq!(
         Request::decode(&read).map(|d| d.message),
-        Ok(Request::Read { register: 5 })
+        Ok(Request::Read(sync_after_code::request::Read {
+            register: 5
+        }))
     );
     let mut bad = read;
     bad[3] = 0x7F;
@@ -1115,20 +1161,20 @@ fn mavlink_v1_snapshot_agrees_with_the_interpreter() {
         0x15, 0xEA,
     ];
     let d = Response::decode(&heartbeat).unwrap();
-    let Response::Heartbeat {
+    let Response::Heartbeat(mavlink_v1::response::Heartbeat {
         sequence,
         sysid,
         compid,
         vehicle_type,
         ..
-    } = d.message
+    }) = d.message
     else {
         panic!("{d:?}");
     };
     assert_eq!((sequence, sysid, compid, vehicle_type), (17, 255, 190, 6));
     // The next heartbeat: one more in the sequence, the CRC over it.
     let mut next = d.message;
-    if let Response::Heartbeat { sequence, .. } = &mut next {
+    if let Response::Heartbeat(mavlink_v1::response::Heartbeat { sequence, .. }) = &mut next {
         *sequence = 18;
     }
     let mut buf = [0u8; MavlinkV1::MAX_FRAME_LEN];
@@ -1141,7 +1187,9 @@ fn mavlink_v1_snapshot_agrees_with_the_interpreter() {
         0xFE, 0x0E, 0x05, 0xFF, 0xBE, 0x04, 0x40, 0x42, 0x0F, 0x00, 0x00, 0x00, 0x00, 0x00, 0x07,
         0x00, 0x00, 0x00, 0x01, 0x01, 0xBE, 0xAC,
     ];
-    let Request::Ping { sequence, seq, .. } = Request::decode(&ping).unwrap().message else {
+    let Request::Ping(mavlink_v1::request::Ping { sequence, seq, .. }) =
+        Request::decode(&ping).unwrap().message
+    else {
         panic!()
     };
     assert_eq!((sequence, seq), (5, 7));
@@ -1178,11 +1226,11 @@ fn truncation_snapshot_agrees_with_the_interpreter() {
             accepted += 1;
             // Its values: the payload padded with zeros.
             let g = Response::decode(&wire).unwrap();
-            let Response::SysStatus {
+            let Response::SysStatus(mavlink_v2::response::SysStatus {
                 battery_remaining,
                 onboard_control_sensors_health_extended,
                 ..
-            } = g.message
+            }) = g.message
             else {
                 panic!("{g:?}");
             };
@@ -1220,7 +1268,7 @@ fn truncation_snapshot_agrees_with_the_interpreter() {
     assert_eq!(accepted, 43);
     // Every request payload truncated (a PING of zeros travels as one byte).
     let mut buf = [0u8; MavlinkV2::MAX_FRAME_LEN];
-    let ping = mavlink_v2::Request::Ping {
+    let ping = mavlink_v2::Request::Ping(mavlink_v2::request::Ping {
         incompat_flags: 0,
         compat_flags: 0,
         sequence: 9,
@@ -1230,7 +1278,7 @@ fn truncation_snapshot_agrees_with_the_interpreter() {
         seq: 0,
         target_system: 0,
         target_component: 0,
-    };
+    });
     let k = ping.encode(0, &mut buf).unwrap();
     assert_eq!(
         &buf[..k],
@@ -1239,9 +1287,9 @@ fn truncation_snapshot_agrees_with_the_interpreter() {
     let rpm = interp::parse_hex("FD 04 00 00 4E 01 01 53 01 00 00 90 BB 44 3C B5").unwrap();
     assert!(matches!(
         Response::decode(&rpm).unwrap().message,
-        Response::RawRpm { index: 0, .. }
+        Response::RawRpm(mavlink_v2::response::RawRpm { index: 0, .. })
     ));
-    assert_eq!(mavlink_v2::response::RAW_RPM.code, 0x530100);
+    assert_eq!(mavlink_v2::response::RawRpm::DESC.code, 0x530100);
     let t = agree::agree::<MavlinkV2>(&p);
     assert!(t.accepted >= p.examples.len() && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<MavlinkV2>(&p, 0x2323, "attitude");
@@ -1260,7 +1308,9 @@ fn msp_v2_snapshot_agrees_with_the_interpreter() {
     let t = agree::agree::<MspV2>(&p);
     assert!(t.accepted >= p.examples.len() && t.refused > 20, "{t:?}");
     let flagged = [0x24, 0x58, 0x3C, 0x01, 0x02, 0x00, 0x00, 0x00, 0x3C];
-    let Request::FcVariant { dont_reply } = Request::decode(&flagged).unwrap().message else {
+    let Request::FcVariant(msp_v2::request::FcVariant { dont_reply }) =
+        Request::decode(&flagged).unwrap().message
+    else {
         panic!()
     };
     assert!(dont_reply);
@@ -1281,7 +1331,7 @@ fn bcd_snapshot_agrees_with_the_interpreter() {
     let p = fixture(file);
     let energy = [0x68, 0x01, 0x91, 0x56, 0x34, 0x12, 0x00, 0x02, 0x98, 0x16];
     let d = Response::decode(&energy).unwrap();
-    let Response::Energy { energy: e, tariff } = d.message else {
+    let Response::Energy(bcd_meter::response::Energy { energy: e, tariff }) = d.message else {
         panic!("{d:?}");
     };
     assert_eq!((e.raw(), tariff), (123_456, 2));
@@ -1300,21 +1350,21 @@ fn bcd_snapshot_agrees_with_the_interpreter() {
     let interp = busspec_model::interp::decode(&p, None, None, &bad).unwrap_err();
     assert_eq!(refused.to_string(), interp.to_string());
     let mut buf = [0u8; 16];
-    let clock = Request::SetClock {
+    let clock = Request::SetClock(bcd_meter::request::SetClock {
         hour: 7,
         minute: 5,
         year: 1999,
-    };
+    });
     let n = clock.encode(1, &mut buf).unwrap();
     assert_eq!(
         &buf[..n],
         &[0x68, 0x01, 0x08, 0x07, 0x05, 0x99, 0x19, 0x2F, 0x16]
     );
-    let too_big = Request::SetClock {
+    let too_big = Request::SetClock(bcd_meter::request::SetClock {
         hour: 7,
         minute: 5,
         year: 10_000,
-    };
+    });
     assert!(too_big.encode(1, &mut buf).is_err());
     let t = agree::agree::<BcdMeter>(&p);
     assert!(t.accepted >= 4 && t.refused > 100, "{t:?}");
@@ -1371,7 +1421,13 @@ fn unaddressed_snapshot_agrees_with_the_interpreter() {
     let p = fixture(file);
     let set_rate = [0xA5, 0x5A, 0x03, 0x20, 0x64, 0x00, 0x47];
     let d = Request::decode(&set_rate).unwrap();
-    assert_eq!((d.address, d.message), (0, Request::SetRate { rate: 100 }));
+    assert_eq!(
+        (d.address, d.message),
+        (
+            0,
+            Request::SetRate(unaddressed::request::SetRate { rate: 100 })
+        )
+    );
     let mut buf = [0u8; 16];
     let g = d.message.encode(3, &mut buf).map(|_| ());
     let values = [busspec_model::interp::Value {
@@ -1427,7 +1483,7 @@ fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
     )
     .unwrap();
     let d = Response::decode(&readings).unwrap();
-    let Response::Readings {
+    let Response::Readings(meter_floats::response::Readings {
         voltage,
         frequency,
         energy,
@@ -1436,7 +1492,7 @@ fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
         drift,
         counter,
         temperature,
-    } = d.message
+    }) = d.message
     else {
         panic!("{d:?}")
     };
@@ -1480,10 +1536,10 @@ fn float_and_64_bit_snapshots_agree_with_the_interpreter() {
     let found = examples_stream_alike::<TelemetryLe>(&p, 0x7E1E, "state");
     assert!(found > 100, "only {found} state frames found");
     // Encode refuses a NaN where the field has a range, as the interpreter does.
-    let m = Request::SetHome {
+    let m = Request::SetHome(telemetry_le::request::SetHome {
         lat: f64::NAN,
         lon: 0.0,
-    };
+    });
     let g = m.encode(0, &mut buf).map(|_| ());
     let values = [
         busspec_model::interp::Value {
@@ -1602,10 +1658,10 @@ fn escaped_snapshots_agree_with_the_interpreter() {
     );
     assert_eq!(g.to_string(), i.to_string());
     // The stuffed write: the generated encoder stuffs FD after FF FF FD and counts it.
-    let w = dynamixel2_stuffed::Request::Write4 {
+    let w = dynamixel2_stuffed::Request::Write4(dynamixel2_stuffed::request::Write4 {
         address: 0x74,
         value: 0x00FD_FFFF,
-    };
+    });
     let mut buf = [0u8; dynamixel2_stuffed::MAX_FRAME_LEN];
     let n = w.encode(1, &mut buf).unwrap();
     assert_eq!(
@@ -1753,7 +1809,7 @@ fn a_scaled_list_holds_its_units_type() {
         .filter(|e| e.message.direction == Direction::Request)
     {
         let d = lists_length::Request::decode(&e.wire).unwrap();
-        if let lists_length::Request::Log { samples, .. } = d.message {
+        if let lists_length::Request::Log(lists_length::request::Log { samples, .. }) = d.message {
             let typed: &busspec_runtime::Repeated<lists_length::Millivolts, 6> = &samples;
             let i = busspec_model::interp::decode_as(&p, e.message, &e.wire).unwrap();
             let raws: Vec<i64> = typed.iter().map(|m| i64::from(m.raw())).collect();
@@ -1779,7 +1835,8 @@ fn records_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted > 5 && t.refused > 50 && t.encoded > 10, "{t:?}");
     // A record is a struct of typed fields inside `rt::Repeated`.
     let d = records::Request::decode(&p.examples[0].wire).unwrap();
-    let records::Request::SyncWrite { blocks, flags } = d.message else {
+    let records::Request::SyncWrite(records::request::SyncWrite { blocks, flags }) = d.message
+    else {
         panic!("{d:?}");
     };
     assert_eq!(flags, 7);
@@ -1794,7 +1851,7 @@ fn records_snapshot_agrees_with_the_interpreter() {
     let mut items = blocks.to_vec();
     items[0].id = 0;
     let bad = busspec_runtime::Repeated::from_slice(&items).unwrap();
-    let e = records::Request::SyncWrite { blocks: bad, flags }
+    let e = records::Request::SyncWrite(records::request::SyncWrite { blocks: bad, flags })
         .encode(1, &mut buf)
         .unwrap_err();
     assert!(e.to_string().contains("blocks.id"), "{e}");
@@ -1812,11 +1869,11 @@ fn records_sized_snapshot_agrees_with_the_interpreter() {
     // Random widths are mostly outside 1..=4: most random messages are refused by both.
     assert!(t.accepted > 50 && t.refused > 200 && t.encoded > 5, "{t:?}");
     let d = records_sized::Request::decode(&p.examples[1].wire).unwrap();
-    let records_sized::Request::SyncWrite {
+    let records_sized::Request::SyncWrite(records_sized::request::SyncWrite {
         blocks,
         data_length,
         ..
-    } = d.message
+    }) = d.message
     else {
         panic!("{d:?}");
     };
@@ -1828,18 +1885,18 @@ fn records_sized_snapshot_agrees_with_the_interpreter() {
     let mut items = blocks.to_vec();
     items[0].data = 256;
     let bad = busspec_runtime::Repeated::from_slice(&items).unwrap();
-    let m = records_sized::Request::SyncWrite {
+    let m = records_sized::Request::SyncWrite(records_sized::request::SyncWrite {
         start_address: 64,
         data_length: 1,
         blocks: bad,
-    };
+    });
     let e = m.encode(1, &mut buf).unwrap_err();
     assert!(e.to_string().contains("blocks.data"), "{e}");
-    let m = records_sized::Request::SyncWrite {
+    let m = records_sized::Request::SyncWrite(records_sized::request::SyncWrite {
         start_address: 64,
         data_length: 5,
         blocks,
-    };
+    });
     let e = m.encode(1, &mut buf).unwrap_err();
     assert!(e.to_string().contains("data_length"), "{e}");
 }
@@ -1961,21 +2018,21 @@ fn transform_snapshot_agrees_with_the_interpreter() {
     let d = Response::decode(&wire).unwrap();
     assert_eq!(
         d.message,
-        Response::DataReply {
+        Response::DataReply(dlt645::response::DataReply {
             address_low: 1,
             address_high: 0,
             data_id: 0x0001_0000,
             value: 11_228_026,
-        }
+        })
     );
     let mut buf = [0u8; dlt645::MAX_FRAME_LEN];
     let n = d.message.encode(0, &mut buf).unwrap();
     assert_eq!(&buf[..n], [&[0xFE; 4][..], &wire].concat());
-    let n = Request::ReadData {
+    let n = Request::ReadData(dlt645::request::ReadData {
         address_low: 1,
         address_high: 0,
         data_id: 0x0001_0000,
-    }
+    })
     .encode(0, &mut buf)
     .unwrap();
     assert_eq!(
@@ -2032,17 +2089,17 @@ fn preamble_snapshot_agrees_with_the_interpreter() {
     }
     let mut buf = [0u8; dlt645::MAX_FRAME_LEN];
     assert_eq!(dlt645::MAX_FRAME_LEN, 4 + 22);
-    let n = Request::ReadAddress {
+    let n = Request::ReadAddress(dlt645::request::ReadAddress {
         address_low: 0xAAAAAA,
         address_high: 0xAAAAAA,
-    }
+    })
     .encode(0, &mut buf)
     .unwrap();
     assert_eq!(&buf[..n], [&[0xFE; 4][..], &frame].concat());
-    assert!(Request::ReadAddress {
+    assert!(Request::ReadAddress(dlt645::request::ReadAddress {
         address_low: 1,
         address_high: 0,
-    }
+    })
     .encode(0, &mut buf[..3])
     .is_err());
     let t = agree::agree::<Dlt645>(&p);
@@ -2141,17 +2198,17 @@ fn optional_fields_snapshot_agrees_with_the_interpreter() {
     assert!(
         matches!(
             d,
-            Response::Reading {
+            Response::Reading(optional_sensor::response::Reading {
                 humidity: None,
                 pressure: None,
                 ..
-            }
+            })
         ),
         "{d:?}"
     );
     let d = Response::decode(&p.examples[3].wire).unwrap().message;
     assert!(
-        matches!(d, Response::Reading { humidity: Some(h), pressure: Some(101000), .. } if h.raw() == 450),
+        matches!(d, Response::Reading(optional_sensor::response::Reading { humidity: Some(h), pressure: Some(101000), .. }) if h.raw() == 450),
         "{d:?}"
     );
     // Every presence given or not, for each condition's value: both encode alike, and refuse
@@ -2242,7 +2299,7 @@ fn counted_text_snapshot_agrees_with_the_interpreter() {
     // Counts 1..=16 of 21 fit (min 1, max 16, payload at most 24 bytes).
     assert_eq!(accepted, 16 * 8);
     let d = Response::decode(&p.examples[3].wire).unwrap().message;
-    let Response::DeviceInfo { name, serial, .. } = d else {
+    let Response::DeviceInfo(text_counted::response::DeviceInfo { name, serial, .. }) = d else {
         panic!("{d:?}")
     };
     assert_eq!((name.as_slice(), serial), (&b"ACME1"[..], 123_456));
@@ -2319,7 +2376,7 @@ fn terminated_text_snapshot_agrees_with_the_interpreter() {
     // With the NUL, 1..=24 characters fit (min 1, max 24; the payload holds at most 40).
     assert_eq!(accepted, 24);
     let d = Response::decode(&p.examples[3].wire).unwrap().message;
-    let Response::DeviceInfo { name, serial, .. } = d else {
+    let Response::DeviceInfo(text_terminated::response::DeviceInfo { name, serial, .. }) = d else {
         panic!("{d:?}")
     };
     assert_eq!(
@@ -2357,10 +2414,10 @@ fn terminated_text_snapshot_agrees_with_the_interpreter() {
     for &b in b"ab\0cd" {
         chars.push(b).unwrap();
     }
-    let m = text_terminated::Request::SetName {
+    let m = text_terminated::Request::SetName(text_terminated::request::SetName {
         name: chars,
         channel: 3,
-    };
+    });
     let mut buf = [0u8; text_terminated::MAX_FRAME_LEN];
     let g = m.encode(0, &mut buf).unwrap_err();
     assert_eq!(g.to_string(), i.to_string());
@@ -2415,10 +2472,10 @@ fn long_length_snapshot_agrees_with_the_interpreter() {
         (512, 0x03, 523),
     ] {
         let data: Vec<u8> = (0..n).map(|i| i as u8).collect();
-        let g = Request::WriteNewAppData {
+        let g = Request::WriteNewAppData(vesc::request::WriteNewAppData {
             offset: 7,
             data: busspec_runtime::Repeated::from_slice(&data).unwrap(),
-        }
+        })
         .encode(0, &mut buf)
         .unwrap();
         let values = [
@@ -2495,9 +2552,13 @@ fn short_form_snapshot_agrees_with_the_interpreter() {
         (0x10, &[0x02u8, 0x02, 0x68][..], 8)
     );
     let mut buf = [0u8; mbus::MAX_FRAME_LEN];
-    let n = Request::ReqUd2.encode(0x01, &mut buf).unwrap();
+    let n = Request::ReqUd2(mbus::request::ReqUd2)
+        .encode(0x01, &mut buf)
+        .unwrap();
     assert_eq!(&buf[..n], &[0x10, 0x5B, 0x01, 0x5C, 0x16]);
-    let n = Request::SndUdReset.encode(0x01, &mut buf).unwrap();
+    let n = Request::SndUdReset(mbus::request::SndUdReset)
+        .encode(0x01, &mut buf)
+        .unwrap();
     assert_eq!(
         &buf[..n],
         &[0x68, 0x03, 0x03, 0x68, 0x53, 0x01, 0x50, 0xA4, 0x16]
@@ -2505,7 +2566,9 @@ fn short_form_snapshot_agrees_with_the_interpreter() {
     // The single character whatever the address, as the interpreter writes it (0xFC is no
     // device's).
     for a in [0x01, 0xFC] {
-        let n = Response::Ack.encode(a, &mut buf).unwrap();
+        let n = Response::Ack(mbus::response::Ack)
+            .encode(a, &mut buf)
+            .unwrap();
         assert_eq!(&buf[..n], &[0xE5]);
         let i = busspec_model::interp::encode(&p, p.find("ack").unwrap(), a, &[]).unwrap();
         assert_eq!(i, [0xE5]);

@@ -48,7 +48,10 @@ impl core::fmt::Display for Pf {
 #[cfg(feature = "ub2")]
 impl Link for crate::Ub2 {
     fn is_checksum_nak(r: &ub2::Response) -> bool {
-        matches!(r, ub2::Response::NakChecksumError)
+        matches!(
+            r,
+            ub2::Response::NakChecksumError(ub2::response::NakChecksumError)
+        )
     }
 
     /// §7.2, 0x93 "Limit reached": the spec marks it `kind: nak`, as the document files it, and
@@ -59,8 +62,10 @@ impl Link for crate::Ub2 {
     /// `response_meanings`): the device moves, so the master takes it as the answer, a movement
     /// clipped to the limit, not as a refusal.
     fn nak_approves(request: &ub2::Request, response: &ub2::Response) -> bool {
-        matches!(response, ub2::Response::NakLimitReached)
-            && Self::command(request).kind == CommandKind::Movement
+        matches!(
+            response,
+            ub2::Response::NakLimitReached(ub2::response::NakLimitReached)
+        ) && Self::command(request).kind == CommandKind::Movement
     }
 
     /// The factory limits (§6.16, §6.17): every capacitor has them, they travel as `u32` of
@@ -69,17 +74,19 @@ impl Link for crate::Ub2 {
     /// (ub2-e01); these readings can.
     fn byte_order_probe() -> &'static [ub2::Request] {
         &[
-            ub2::Request::GetLowerFactoryLimit,
-            ub2::Request::GetUpperFactoryLimit,
+            ub2::Request::GetLowerFactoryLimit(ub2::request::GetLowerFactoryLimit),
+            ub2::Request::GetUpperFactoryLimit(ub2::request::GetUpperFactoryLimit),
         ]
     }
 
     fn byte_order_check(replies: &[ub2::Response]) -> Option<ByteOrderCheck> {
-        let [ub2::Response::LowerFactoryLimit {
-            capacitance: lower, ..
-        }, ub2::Response::UpperFactoryLimit {
-            capacitance: upper, ..
-        }] = replies
+        let [ub2::Response::LowerFactoryLimit(ub2::response::LowerFactoryLimit {
+            capacitance: lower,
+            ..
+        }), ub2::Response::UpperFactoryLimit(ub2::response::UpperFactoryLimit {
+            capacitance: upper,
+            ..
+        })] = replies
         else {
             return None;
         };
@@ -101,8 +108,7 @@ impl Link for crate::Ub2 {
 
     /// A reset, and a new slave address (§5.3): the device answers elsewhere from then on.
     fn forgets_byte_order_checks(r: &ub2::Request) -> bool {
-        matches!(r, ub2::Request::SetSlaveAddress { .. })
-            || Self::command(r).kind == CommandKind::Reset
+        matches!(r, ub2::Request::SetSlaveAddress(_)) || Self::command(r).kind == CommandKind::Reset
     }
 }
 
@@ -114,7 +120,7 @@ impl Link for crate::Sd {
     fn reply_address(r: &sd::Request, address: u8) -> u8 {
         match r {
             // The actuator answers with its new ID (sd-e04).
-            sd::Request::SetServoId { new_id } => *new_id,
+            sd::Request::SetServoId(sd::request::SetServoId { new_id }) => *new_id,
             _ => address,
         }
     }
@@ -124,21 +130,23 @@ impl Link for crate::Sd {
 
     fn freshness_mut(r: &mut sd::Request) -> Option<&mut u8> {
         match r {
-            sd::Request::SetPoint { freshness, .. } => Some(freshness),
+            sd::Request::SetPoint(sd::request::SetPoint { freshness, .. }) => Some(freshness),
             _ => None,
         }
     }
 
     fn freshness_readout() -> Option<sd::Request> {
-        Some(sd::Request::ReadSkippedFramesCounter)
+        Some(sd::Request::ReadSkippedFramesCounter(
+            sd::request::ReadSkippedFramesCounter,
+        ))
     }
 
     fn freshness_from_reply(r: &sd::Response) -> Option<u8> {
         match r {
-            sd::Response::SkippedFramesCounter {
+            sd::Response::SkippedFramesCounter(sd::response::SkippedFramesCounter {
                 host_freshness_counter,
                 ..
-            } => Some(*host_freshness_counter),
+            }) => Some(*host_freshness_counter),
             _ => None,
         }
     }
@@ -153,21 +161,28 @@ mod tests {
 
     #[test]
     fn policies_come_from_the_specs() {
-        let go = ub2::Request::GoToCapacitance {
+        let go = ub2::Request::GoToCapacitance(ub2::request::GoToCapacitance {
             target: ub2::Capacitance(15000),
-        };
+        });
         assert_eq!(Ub2::command(&go).kind, CommandKind::Movement);
         assert!(!Ub2::retry_safe(&go));
         assert_eq!(
-            Ub2::command(&ub2::Request::GetActualCapacitance).kind,
+            Ub2::command(&ub2::Request::GetActualCapacitance(
+                ub2::request::GetActualCapacitance
+            ))
+            .kind,
             CommandKind::Getter
         );
-        assert!(Ub2::retry_safe(&ub2::Request::GetActualCapacitance));
-        assert!(!Ub2::retry_safe(&ub2::Request::GetStatus));
-        let sp = sd::Request::SetPoint {
+        assert!(Ub2::retry_safe(&ub2::Request::GetActualCapacitance(
+            ub2::request::GetActualCapacitance
+        )));
+        assert!(!Ub2::retry_safe(&ub2::Request::GetStatus(
+            ub2::request::GetStatus
+        )));
+        let sp = sd::Request::SetPoint(sd::request::SetPoint {
             freshness: 0,
             position: sd::Angle(0),
-        };
+        });
         assert_eq!(Sd::command(&sp).kind, CommandKind::Movement);
         assert_eq!(
             Sd::command(&sp).broadcast,
@@ -177,11 +192,15 @@ mod tests {
             }
         );
         assert!(
-            Sd::command(&sd::Request::ReadActualPosition)
-                .broadcast
-                .answered
+            Sd::command(&sd::Request::ReadActualPosition(
+                sd::request::ReadActualPosition
+            ))
+            .broadcast
+            .answered
         );
-        assert!(!Sd::retry_safe(&sd::Request::ResetStallEventCounter));
+        assert!(!Sd::retry_safe(&sd::Request::ResetStallEventCounter(
+            sd::request::ResetStallEventCounter
+        )));
         assert_eq!(Ub2::INTER_REQUEST_GAP, Duration::from_millis(10));
         assert_eq!(Sd::INTER_REQUEST_GAP, Duration::from_millis(10));
     }
@@ -193,39 +212,64 @@ mod tests {
     fn naks_are_the_specs_but_limit_reached_approves_a_movement() {
         use ub2::{Request as Q, Response as R};
         let naks = [
-            R::NakUnknownCommand,
-            R::NakIncompatibleStatus,
-            R::NakChecksumError,
-            R::NakLimitReached,
-            R::NakIndexOutOfRange,
+            R::NakUnknownCommand(ub2::response::NakUnknownCommand),
+            R::NakIncompatibleStatus(ub2::response::NakIncompatibleStatus),
+            R::NakChecksumError(ub2::response::NakChecksumError),
+            R::NakLimitReached(ub2::response::NakLimitReached),
+            R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange),
         ];
         assert!(naks.iter().all(Ub2::is_nak));
         assert_eq!(naks[3].code(), &[0x93]);
-        let movement = Q::GoToCapacitance {
+        let movement = Q::GoToCapacitance(ub2::request::GoToCapacitance {
             target: ub2::Capacitance(15000),
-        };
-        let limit = Q::SetLowerCustomerLimit {
+        });
+        let limit = Q::SetLowerCustomerLimit(ub2::request::SetLowerCustomerLimit {
             limit: ub2::Capacitance(1),
-        };
+        });
         assert_eq!(Ub2::command(&limit).kind, CommandKind::Setter);
         // The spec lets both get 0x93.
-        assert!(Ub2::answers(&movement, &R::NakLimitReached));
-        assert!(Ub2::answers(&limit, &R::NakLimitReached));
+        assert!(Ub2::answers(
+            &movement,
+            &R::NakLimitReached(ub2::response::NakLimitReached)
+        ));
+        assert!(Ub2::answers(
+            &limit,
+            &R::NakLimitReached(ub2::response::NakLimitReached)
+        ));
         // To the movement it is the answer (the cap runs to the limit), to the setter a refusal.
-        assert!(Ub2::nak_approves(&movement, &R::NakLimitReached));
-        assert!(!Ub2::is_refusal(&movement, &R::NakLimitReached));
-        assert!(!Ub2::nak_approves(&limit, &R::NakLimitReached));
-        assert!(Ub2::is_refusal(&limit, &R::NakLimitReached));
+        assert!(Ub2::nak_approves(
+            &movement,
+            &R::NakLimitReached(ub2::response::NakLimitReached)
+        ));
+        assert!(!Ub2::is_refusal(
+            &movement,
+            &R::NakLimitReached(ub2::response::NakLimitReached)
+        ));
+        assert!(!Ub2::nak_approves(
+            &limit,
+            &R::NakLimitReached(ub2::response::NakLimitReached)
+        ));
+        assert!(Ub2::is_refusal(
+            &limit,
+            &R::NakLimitReached(ub2::response::NakLimitReached)
+        ));
         // Every other NAK refuses a movement too; an answer refuses nothing.
-        for nak in naks.iter().filter(|r| **r != R::NakLimitReached) {
+        for nak in naks
+            .iter()
+            .filter(|r| **r != R::NakLimitReached(ub2::response::NakLimitReached))
+        {
             assert!(Ub2::is_refusal(&movement, nak), "{nak:?}");
             assert!(Ub2::is_refusal(&limit, nak), "{nak:?}");
         }
-        assert!(!Ub2::is_refusal(&movement, &R::MovementStarted));
-        assert!(!Ub2::is_nak(&R::MovementStarted));
+        assert!(!Ub2::is_refusal(
+            &movement,
+            &R::MovementStarted(ub2::response::MovementStarted)
+        ));
+        assert!(!Ub2::is_nak(&R::MovementStarted(
+            ub2::response::MovementStarted
+        )));
         // The only checksum NAK is 0x92.
-        assert!(naks
-            .iter()
-            .all(|r| Ub2::is_checksum_nak(r) == (*r == R::NakChecksumError)));
+        assert!(naks.iter().all(|r| Ub2::is_checksum_nak(r)
+            == (*r == R::NakChecksumError(ub2::response::NakChecksumError))));
     }
 }

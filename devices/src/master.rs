@@ -83,18 +83,20 @@ impl<T: Transport, C: Clock> Ub2Master for Master<Ub2, T, C> {
         const MAX_ENTRIES: u16 = 500;
         let mut table = Vec::new();
         for index in 0..MAX_ENTRIES {
-            let request = ub2::Request::GetCCurveIndexedFullStepCapacitance { index };
+            let request = ub2::Request::GetCCurveIndexedFullStepCapacitance(
+                ub2::request::GetCCurveIndexedFullStepCapacitance { index },
+            );
             match self.ask(address, request)? {
-                ub2::Response::CCurveEntry {
+                ub2::Response::CCurveEntry(ub2::response::CCurveEntry {
                     index: got,
                     full_steps,
                     capacitance,
-                } if got == index => table.push(CCurvePoint {
+                }) if got == index => table.push(CCurvePoint {
                     index,
                     full_steps,
                     capacitance,
                 }),
-                ub2::Response::CCurveEntry { index: got, .. } => {
+                ub2::Response::CCurveEntry(ub2::response::CCurveEntry { index: got, .. }) => {
                     return Err(LinkError::BadReply {
                         protocol: Ub2::NAME,
                         request: request.name(),
@@ -104,7 +106,7 @@ impl<T: Transport, C: Clock> Ub2Master for Master<Ub2, T, C> {
                         bytes: Vec::new(),
                     })
                 }
-                ub2::Response::NakIndexOutOfRange => break,
+                ub2::Response::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange) => break,
                 other => {
                     return Err(LinkError::refused::<Ub2>(
                         &request,
@@ -142,32 +144,48 @@ impl SdString {
     /// The request for byte `byte_number` of this string.
     pub fn request(self, byte_number: u8) -> sd::Request {
         match self {
-            SdString::SerialNumber => sd::Request::ReadElectronicSerialNumber { byte_number },
-            SdString::ProductDescription => sd::Request::ReadProductDescription { byte_number },
-            SdString::SoftwareRevision => sd::Request::ReadSoftwareRevision { byte_number },
-            SdString::HardwareRevision => sd::Request::ReadHardwareRevision { byte_number },
+            SdString::SerialNumber => {
+                sd::Request::ReadElectronicSerialNumber(sd::request::ReadElectronicSerialNumber {
+                    byte_number,
+                })
+            }
+            SdString::ProductDescription => {
+                sd::Request::ReadProductDescription(sd::request::ReadProductDescription {
+                    byte_number,
+                })
+            }
+            SdString::SoftwareRevision => {
+                sd::Request::ReadSoftwareRevision(sd::request::ReadSoftwareRevision { byte_number })
+            }
+            SdString::HardwareRevision => {
+                sd::Request::ReadHardwareRevision(sd::request::ReadHardwareRevision { byte_number })
+            }
         }
     }
 
     /// The character and the string length a reply carries.
     pub fn character(response: &sd::Response) -> Option<(u8, u8)> {
         match *response {
-            sd::Response::ElectronicSerialNumberCharacter {
+            sd::Response::ElectronicSerialNumberCharacter(
+                sd::response::ElectronicSerialNumberCharacter {
+                    character,
+                    string_length,
+                },
+            )
+            | sd::Response::ProductDescriptionCharacter(
+                sd::response::ProductDescriptionCharacter {
+                    character,
+                    string_length,
+                },
+            )
+            | sd::Response::SoftwareRevisionCharacter(sd::response::SoftwareRevisionCharacter {
                 character,
                 string_length,
-            }
-            | sd::Response::ProductDescriptionCharacter {
+            })
+            | sd::Response::HardwareRevisionCharacter(sd::response::HardwareRevisionCharacter {
                 character,
                 string_length,
-            }
-            | sd::Response::SoftwareRevisionCharacter {
-                character,
-                string_length,
-            }
-            | sd::Response::HardwareRevisionCharacter {
-                character,
-                string_length,
-            } => Some((character, string_length)),
+            }) => Some((character, string_length)),
             _ => None,
         }
     }

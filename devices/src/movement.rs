@@ -134,7 +134,7 @@ impl Movement<Ub2> for Ub2Movement {
         match (self.phase, response) {
             (Ub2Phase::Trigger, Some(r)) => {
                 self.clipped = match r {
-                    ub2::Response::MovementStarted => false,
+                    ub2::Response::MovementStarted(ub2::response::MovementStarted) => false,
                     // 0x93: approved, the cap runs to the customer limit (§7.2).
                     r if Ub2::nak_approves(&self.trigger, &r) => true,
                     other => {
@@ -149,11 +149,11 @@ impl Movement<Ub2> for Ub2Movement {
                 self.polls += 1;
                 let elapsed = now.saturating_sub(self.start);
                 let lost = match reply {
-                    ub2::Response::MovementCompleted => None,
-                    ub2::Response::MovementCompletedWithStepLoss { lost_micro_steps } => {
-                        Some(lost_micro_steps)
-                    }
-                    ub2::Response::MovementNotCompleted => {
+                    ub2::Response::MovementCompleted(ub2::response::MovementCompleted) => None,
+                    ub2::Response::MovementCompletedWithStepLoss(
+                        ub2::response::MovementCompletedWithStepLoss { lost_micro_steps },
+                    ) => Some(lost_micro_steps),
+                    ub2::Response::MovementNotCompleted(ub2::response::MovementNotCompleted) => {
                         if elapsed >= self.limit {
                             return Step::Failed(MoveError::Timeout {
                                 request: self.trigger,
@@ -162,7 +162,9 @@ impl Movement<Ub2> for Ub2Movement {
                         }
                         self.phase = Ub2Phase::Position { elapsed };
                         return Step::Ask {
-                            request: ub2::Request::GetActualFullStepPosition,
+                            request: ub2::Request::GetActualFullStepPosition(
+                                ub2::request::GetActualFullStepPosition,
+                            ),
                             optional: true,
                         };
                     }
@@ -175,7 +177,9 @@ impl Movement<Ub2> for Ub2Movement {
                     }
                 };
                 Step::Done(MoveReport {
-                    started: self.started.unwrap_or(ub2::Response::MovementStarted),
+                    started: self.started.unwrap_or(ub2::Response::MovementStarted(
+                        ub2::response::MovementStarted,
+                    )),
                     finished: Some(reply),
                     clipped: self.clipped,
                     lost_micro_steps: lost,
@@ -185,7 +189,9 @@ impl Movement<Ub2> for Ub2Movement {
             }
             (Ub2Phase::Position { elapsed }, r) => {
                 let progress = match r {
-                    Some(ub2::Response::ActualFullStepPosition { full_steps }) => Some(Moving {
+                    Some(ub2::Response::ActualFullStepPosition(
+                        ub2::response::ActualFullStepPosition { full_steps },
+                    )) => Some(Moving {
                         elapsed,
                         position: f64::from(full_steps),
                     }),
@@ -229,10 +235,10 @@ impl SdMove {
     }
 
     fn set_point(&self) -> sd::Request {
-        sd::Request::SetPoint {
+        sd::Request::SetPoint(sd::request::SetPoint {
             freshness: 0,
             position: self.target,
-        }
+        })
     }
 }
 
@@ -251,7 +257,7 @@ impl Movement<Sd> for SdMove {
             };
         }
         Step::Ask {
-            request: sd::Request::ReadActualPosition,
+            request: sd::Request::ReadActualPosition(sd::request::ReadActualPosition),
             optional: false,
         }
     }
@@ -266,9 +272,9 @@ impl Movement<Sd> for SdMove {
         };
         self.polls += 1;
         let elapsed = now.saturating_sub(self.start);
-        let sd::Response::ActualPosition { position } = reply else {
+        let sd::Response::ActualPosition(sd::response::ActualPosition { position }) = reply else {
             return Step::Failed(MoveError::Refused {
-                request: sd::Request::ReadActualPosition,
+                request: sd::Request::ReadActualPosition(sd::request::ReadActualPosition),
                 response: reply,
                 detail: "expected the actual position",
             });

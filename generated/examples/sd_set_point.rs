@@ -1,15 +1,17 @@
 //! Encode an SD set point, decode the actuator's reply as the answer to it, and split a noisy
 //! capture into frames. `cargo run -p busspec-protocols --example sd_set_point`
 
-use busspec_protocols::sd::{Angle, Event, Request, Response, StreamDecoder, MAX_FRAME_LEN};
+use busspec_protocols::sd::{
+    request, response, Angle, Event, Request, Response, StreamDecoder, MAX_FRAME_LEN,
+};
 use busspec_protocols::DecodeError;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Move actuator 5 to +45°, freshness counter 3.
-    let set_point = Request::SetPoint {
+    let set_point = Request::SetPoint(request::SetPoint {
         freshness: 3,
         position: Angle::from_value(45.0).ok_or("45° is not a whole number of counts")?,
-    };
+    });
     let mut buf = [0u8; MAX_FRAME_LEN];
     let n = set_point.encode(0x05, &mut buf)?;
     println!("request  {:02X?}", &buf[..n]);
@@ -17,10 +19,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The actuator's reply (here encoded as a simulator would; on a bus, read from the port),
     // decoded as the answer to our request.
     let mut rx = [0u8; MAX_FRAME_LEN];
-    let reply = Response::SetPointReply {
+    let reply = Response::SetPointReply(response::SetPointReply {
         freshness: 12,
         position: Angle::from_raw(509),
-    };
+    });
     let m = reply.encode(0x05, &mut rx)?;
     let got = Response::decode_reply(&rx[..m], &set_point)?;
     assert!(got.message.answers(&set_point));
@@ -51,7 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let decoded = Request::decode(&buf[..n])?;
     assert_eq!(decoded.message, set_point);
     assert_eq!(decoded.address, 0x05);
-    if let Request::SetPoint { position, .. } = decoded.message {
+    if let Request::SetPoint(request::SetPoint { position, .. }) = decoded.message {
         println!("set point {} {}", position.value(), Angle::SYMBOL);
     }
     Ok(())

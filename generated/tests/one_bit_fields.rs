@@ -14,13 +14,13 @@ const PAN_LEFT: [u8; 8] = [0xA0, 0x00, 0x00, 0x04, 0x20, 0x00, 0xAF, 0x2B];
 #[test]
 fn one_bit_fields_decode_and_encode_as_bools() {
     let d = pelco_p::Request::decode(&PAN_LEFT).unwrap();
-    let pelco_p::Request::Ptz {
+    let pelco_p::Request::Ptz(pelco_p::request::Ptz {
         pan_left,
         pan_right,
         camera_on,
         pan_speed,
         ..
-    } = d.message
+    }) = d.message
     else {
         panic!("decoded as {:?}", d.message);
     };
@@ -30,7 +30,7 @@ fn one_bit_fields_decode_and_encode_as_bools() {
     let n = d.message.encode(0x00, &mut buf).unwrap();
     assert_eq!(buf[..n], PAN_LEFT);
     // Every bit set: the top bit (`camera_on`, bit 14 of the command word) as well.
-    let all = pelco_p::Request::Ptz {
+    let all = pelco_p::Request::Ptz(pelco_p::request::Ptz {
         camera_on: true,
         auto_scan: true,
         camera_on_off: true,
@@ -46,7 +46,7 @@ fn one_bit_fields_decode_and_encode_as_bools() {
         pan_right: true,
         pan_speed: 0,
         tilt_speed: 0,
-    };
+    });
     let n = all.encode(0x00, &mut buf).unwrap();
     // The fixed zero bits (15 and 7) and bit 0 stay clear.
     assert_eq!(buf[2..4], [0x7F, 0x7E]);

@@ -265,9 +265,9 @@ fn from_fields_says_what_is_wrong_and_where() {
         Response::from_fields("firmware_version", |_| Some(FieldValue::Text(
             b"20100433.00"
         ))),
-        Ok(Response::FirmwareVersion {
+        Ok(Response::FirmwareVersion(ub2::response::FirmwareVersion {
             firmware_version: busspec_runtime::Ascii(*b"20100433.00")
-        })
+        }))
     );
     // Sub-fields are checked against their own width, signed ones sign-extended.
     let set_point = |freshness: i64, position: i64| {

@@ -20,16 +20,16 @@ fn frame<M: Message>(m: &M, address: u8) -> Vec<u8> {
 #[test]
 fn a_transaction_step_by_step() {
     let mut core: MasterCore<Ub2> = MasterCore::new();
-    let q = ub2::Request::GetActualCapacitance;
+    let q = ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance);
     core.start(0x21, q);
     assert_eq!(core.poll(ms(0)), Action::ClearInput);
     assert_eq!(core.poll(ms(0)), Action::Write(&frame(&q, 0x21)));
     assert_eq!(core.take_event(), Some(Event::Sent { attempt: 1 }));
     // The write took 3 ms; the reply timeout (200 ms at 19,200 baud) starts then.
     assert_eq!(core.poll(ms(3)), Action::Read { until: ms(203) });
-    let reply = ub2::Response::ActualCapacitance {
+    let reply = ub2::Response::ActualCapacitance(ub2::response::ActualCapacitance {
         capacitance: ub2::Capacitance(12345),
-    };
+    });
     let bytes = frame(&reply, 0x21);
     // Half a reply, then the rest: it is complete as soon as it decodes.
     core.received(&bytes[..3], ms(10));
@@ -49,7 +49,10 @@ fn a_transaction_step_by_step() {
 #[test]
 fn silence_settles_then_retries_a_getter_but_never_a_movement() {
     let mut core: MasterCore<Ub2> = MasterCore::new();
-    core.start(0x21, ub2::Request::GetActualCapacitance);
+    core.start(
+        0x21,
+        ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance),
+    );
     core.poll(ms(0));
     core.poll(ms(0));
     assert_eq!(core.poll(ms(0)), Action::Read { until: ms(200) });
@@ -65,7 +68,7 @@ fn silence_settles_then_retries_a_getter_but_never_a_movement() {
     assert_eq!(core.take_event(), Some(Event::Discarded));
     assert_eq!(core.take_event(), Some(Event::Sent { attempt: 2 }));
 
-    let go = ub2::Request::GoToFullStepPosition { target: 5 };
+    let go = ub2::Request::GoToFullStepPosition(ub2::request::GoToFullStepPosition { target: 5 });
     core.start(0x21, go);
     let mut t = ms(1000);
     let mut writes = 0;
@@ -87,21 +90,26 @@ fn silence_settles_then_retries_a_getter_but_never_a_movement() {
 #[test]
 fn the_first_set_point_reads_the_devices_counter_first() {
     let mut core: MasterCore<Sd> = MasterCore::new();
-    let set = |freshness| sd::Request::SetPoint {
-        freshness,
-        position: sd::Angle(10),
+    let set = |freshness| {
+        sd::Request::SetPoint(sd::request::SetPoint {
+            freshness,
+            position: sd::Angle(10),
+        })
     };
     core.start(1, set(0));
     core.poll(ms(0));
     assert_eq!(
         core.poll(ms(0)),
-        Action::Write(&frame(&sd::Request::ReadSkippedFramesCounter, 1))
+        Action::Write(&frame(
+            &sd::Request::ReadSkippedFramesCounter(sd::request::ReadSkippedFramesCounter),
+            1
+        ))
     );
     assert!(matches!(core.poll(ms(1)), Action::Read { .. }));
-    let counter = sd::Response::SkippedFramesCounter {
+    let counter = sd::Response::SkippedFramesCounter(sd::response::SkippedFramesCounter {
         host_freshness_counter: 12,
         dropped_frames: 0,
-    };
+    });
     core.received(&frame(&counter, 1), ms(2));
     // Then the set point, after the gap, carrying 13 whatever the caller put in it.
     assert_eq!(core.poll(ms(2)), Action::Sleep(ms(12)));
@@ -119,10 +127,10 @@ fn a_smaller_receive_buffer_runs_the_same_transaction_in_less_memory() {
         core::mem::size_of::<MasterCore<Ub2>>() - core::mem::size_of::<MasterCore<Ub2, 16>>(),
         1024 - 16
     );
-    let q = ub2::Request::GetActualCapacitance;
-    let reply = ub2::Response::ActualCapacitance {
+    let q = ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance);
+    let reply = ub2::Response::ActualCapacitance(ub2::response::ActualCapacitance {
         capacitance: ub2::Capacitance(321),
-    };
+    });
     let bytes = frame(&reply, 0x21);
     small.start(0x21, q);
     default.start(0x21, q);
@@ -145,7 +153,10 @@ fn a_smaller_receive_buffer_runs_the_same_transaction_in_less_memory() {
 #[test]
 fn a_babbling_line_overflows_a_small_buffer_into_a_bad_reply_not_a_panic() {
     let mut core: MasterCore<Ub2, 16> = MasterCore::new();
-    core.start(0x21, ub2::Request::GetActualCapacitance);
+    core.start(
+        0x21,
+        ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance),
+    );
     core.poll(ms(0));
     core.poll(ms(0));
     assert_eq!(core.poll(ms(3)), Action::Read { until: ms(203) });

@@ -30,14 +30,14 @@ fn the_spec_sets_timeout_gap_in_characters_and_turnaround() {
     assert_eq!(at(38_400), Duration::from_micros(1750));
     assert_eq!(at(115_200), Duration::from_micros(1750));
     // Reads may be sent twice, writes not.
-    let read = Q::ReadHoldingRegisters {
+    let read = Q::ReadHoldingRegisters(modbus::request::ReadHoldingRegisters {
         starting_address: 0,
         quantity: 1,
-    };
-    let write = Q::WriteSingleRegister {
+    });
+    let write = Q::WriteSingleRegister(modbus::request::WriteSingleRegister {
         register_address: 0,
         register_value: 1,
-    };
+    });
     assert!(Modbus::retry_safe(&read));
     assert!(!Modbus::retry_safe(&write));
     // A spec without the section keeps the master's defaults.
@@ -48,10 +48,10 @@ fn the_spec_sets_timeout_gap_in_characters_and_turnaround() {
 #[test]
 fn after_an_unanswered_broadcast_the_next_request_waits_the_turnaround() {
     let mut core: MasterCore<Modbus> = MasterCore::new();
-    let write = Q::WriteSingleRegister {
+    let write = Q::WriteSingleRegister(modbus::request::WriteSingleRegister {
         register_address: 3,
         register_value: 7,
-    };
+    });
     core.start(0, write);
     assert_eq!(core.poll(ms(0)), Action::ClearInput);
     assert!(matches!(core.poll(ms(0)), Action::Write(_)));
@@ -61,10 +61,10 @@ fn after_an_unanswered_broadcast_the_next_request_waits_the_turnaround() {
     // Sent at 0: the devices take 100 ms to turn around, then the t3.5 gap.
     core.start(
         7,
-        Q::ReadHoldingRegisters {
+        Q::ReadHoldingRegisters(modbus::request::ReadHoldingRegisters {
             starting_address: 3,
             quantity: 1,
-        },
+        }),
     );
     assert_eq!(
         core.poll(ms(1)),

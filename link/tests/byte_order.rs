@@ -14,7 +14,7 @@ use busspec_link::master::{LinkError, TraceEvent};
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::transport::Transport;
 use busspec_link::{Master, SimClock};
-use busspec_protocols::ub2::{Capacitance, Request, Response};
+use busspec_protocols::ub2::{request, response, Capacitance, Request, Response};
 use busspec_protocols::{CommandKind, Protocol};
 
 type Bus = SimBus<Ub2Sim>;
@@ -49,9 +49,9 @@ fn names(frames: &[Vec<u8>]) -> Vec<&'static str> {
 }
 
 fn go(pf: f64) -> Request {
-    Request::GoToCapacitance {
+    Request::GoToCapacitance(request::GoToCapacitance {
         target: Capacitance::from_value(pf).unwrap(),
-    }
+    })
 }
 
 fn run(m: &mut Master<Ub2, Bus, SimClock>, address: u8, trigger: Request) -> Result<(), LinkError> {
@@ -92,12 +92,17 @@ fn a_correct_device_moves_after_one_check_per_address() {
     // The second movement to the same address is not checked again: it costs what it did
     // before the check existed.
     sent.borrow_mut().clear();
-    run(&mut m, 0x21, Request::MoveFullSteps { steps: 40 }).unwrap();
+    run(
+        &mut m,
+        0x21,
+        Request::MoveFullSteps(request::MoveFullSteps { steps: 40 }),
+    )
+    .unwrap();
     assert_eq!(names(&sent.borrow())[0], "move_full_steps");
 
     // Another address is checked on its first movement.
     sent.borrow_mut().clear();
-    run(&mut m, 0x22, Request::GoToCmin).unwrap();
+    run(&mut m, 0x22, Request::GoToCmin(request::GoToCmin)).unwrap();
     assert_eq!(
         names(&sent.borrow())[..3],
         [
@@ -110,15 +115,25 @@ fn a_correct_device_moves_after_one_check_per_address() {
 
     // Reads never trigger the check.
     sent.borrow_mut().clear();
-    m.ask(0x21, Request::GetActualCapacitance).unwrap();
+    m.ask(
+        0x21,
+        Request::GetActualCapacitance(request::GetActualCapacitance),
+    )
+    .unwrap();
     assert_eq!(names(&sent.borrow()), ["get_actual_capacitance"]);
 
     // A new slave address forgets every check: another device may answer where a checked one
     // did. The next movement, to the device at its new address, checks again.
     let r = m
-        .ask(0x22, Request::SetSlaveAddress { address: 0x23 })
+        .ask(
+            0x22,
+            Request::SetSlaveAddress(request::SetSlaveAddress { address: 0x23 }),
+        )
         .unwrap();
-    assert_eq!(r, Response::SetSlaveAddressAck);
+    assert_eq!(
+        r,
+        Response::SetSlaveAddressAck(response::SetSlaveAddressAck)
+    );
     assert!(m.byte_order_checked(0x21).is_none() && m.byte_order_checked(0x22).is_none());
     sent.borrow_mut().clear();
     run(&mut m, 0x23, go(100.0)).unwrap();
@@ -138,10 +153,10 @@ fn an_msb_first_device_is_not_moved() {
     let before = bus.with_devices(|d| d[0].clone());
     for trigger in [
         go(150.0),
-        Request::GoToFullStepPosition { target: 5000 },
-        Request::MoveFullSteps { steps: -150 },
-        Request::ReferenceRun,
-        Request::GoToCmax,
+        Request::GoToFullStepPosition(request::GoToFullStepPosition { target: 5000 }),
+        Request::MoveFullSteps(request::MoveFullSteps { steps: -150 }),
+        Request::ReferenceRun(request::ReferenceRun),
+        Request::GoToCmax(request::GoToCmax),
     ] {
         let err = run(&mut m, 0x21, trigger).unwrap_err();
         let text = err.to_string();
@@ -207,52 +222,66 @@ fn the_msb_first_simulator_sends_what_the_examples_print() {
         buf[..n].to_vec()
     };
     assert_eq!(
-        ask(&frame(Request::GetLowerFactoryLimit)),
+        ask(&frame(Request::GetLowerFactoryLimit(
+            request::GetLowerFactoryLimit
+        ))),
         [0xAA, 0x21, 0x41, 0x72, 0x03, 0x00, 0x00, 0x13, 0x88, 0x1C]
     );
     assert_eq!(
-        ask(&frame(Request::GetUpperFactoryLimit)),
+        ask(&frame(Request::GetUpperFactoryLimit(
+            request::GetUpperFactoryLimit
+        ))),
         [0xAA, 0x21, 0x41, 0x72, 0x04, 0x00, 0x00, 0xC3, 0x50, 0x95]
     );
     // The spec's reading of those bytes is what the check refuses.
     let d = Ub2::decode_reply(
         &[0xAA, 0x21, 0x41, 0x72, 0x03, 0x00, 0x00, 0x13, 0x88, 0x1C],
-        &Request::GetLowerFactoryLimit,
+        &Request::GetLowerFactoryLimit(request::GetLowerFactoryLimit),
     )
     .unwrap();
     assert_eq!(
         d.message,
-        Response::LowerFactoryLimit {
+        Response::LowerFactoryLimit(response::LowerFactoryLimit {
             capacitance: Capacitance(0x8813_0000)
-        }
+        })
     );
     // A C-curve index of 1 is 0x0100 = 256 to it, beyond its 200 entries; 3 is 768, beyond
     // the 500 the spec allows: both "index out of range" (§6.7, §7.1, 0x94).
     for index in [1, 3] {
         assert_eq!(
-            ask(&frame(Request::GetCCurveIndexedFullStepCapacitance {
-                index
-            })),
-            frame_reply(Response::NakIndexOutOfRange)
+            ask(&frame(Request::GetCCurveIndexedFullStepCapacitance(
+                request::GetCCurveIndexedFullStepCapacitance { index }
+            ))),
+            frame_reply(Response::NakIndexOutOfRange(response::NakIndexOutOfRange))
         );
     }
     // One-byte numbers are the same either way: stored position 1 is index 1 to it too.
-    let r = ask(&frame(Request::GetStoredFullStepPosition { index: 1 }));
+    let r = ask(&frame(Request::GetStoredFullStepPosition(
+        request::GetStoredFullStepPosition { index: 1 },
+    )));
     assert_eq!(
-        Ub2::decode_reply(&r, &Request::GetStoredFullStepPosition { index: 1 })
-            .unwrap()
-            .message,
-        Response::StoredFullStepPosition {
+        Ub2::decode_reply(
+            &r,
+            &Request::GetStoredFullStepPosition(request::GetStoredFullStepPosition { index: 1 })
+        )
+        .unwrap()
+        .message,
+        Response::StoredFullStepPosition(response::StoredFullStepPosition {
             index: 1,
             full_steps: 0
-        }
+        })
     );
-    let r = ask(&frame(Request::GetControllerTemperature));
+    let r = ask(&frame(Request::GetControllerTemperature(
+        request::GetControllerTemperature,
+    )));
     assert_eq!(
-        Ub2::decode_reply(&r, &Request::GetControllerTemperature)
-            .unwrap()
-            .message
-            .name(),
+        Ub2::decode_reply(
+            &r,
+            &Request::GetControllerTemperature(request::GetControllerTemperature)
+        )
+        .unwrap()
+        .message
+        .name(),
         "controller_temperature"
     );
 }
@@ -298,7 +327,10 @@ fn start_movement_checks_and_transact_does_not() {
     );
     let (_, mut m, sent) = bus(vec![Ub2Sim::new(0x21)]);
     let ex = m.start_movement(0x21, go(150.0)).unwrap();
-    assert_eq!(ex.response, Some(Response::MovementStarted));
+    assert_eq!(
+        ex.response,
+        Some(Response::MovementStarted(response::MovementStarted))
+    );
     assert_eq!(
         names(&sent.borrow()),
         [
@@ -308,6 +340,10 @@ fn start_movement_checks_and_transact_does_not() {
         ]
     );
     sent.borrow_mut().clear();
-    m.transact(0x21, Request::GoToCapacitanceStatus).unwrap();
+    m.transact(
+        0x21,
+        Request::GoToCapacitanceStatus(request::GoToCapacitanceStatus),
+    )
+    .unwrap();
     assert_eq!(names(&sent.borrow()), ["go_to_capacitance_status"]);
 }

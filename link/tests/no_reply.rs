@@ -35,7 +35,10 @@ fn silent<P: busspec_link_core::Link>(core: &mut MasterCore<P>) -> usize {
 #[test]
 fn a_command_without_a_reply_is_done_once_sent() {
     let mut core: MasterCore<Plain<pelco_p::PelcoP>> = MasterCore::new();
-    core.start(0x01, pelco_p::Request::GoToPreset { preset: 3 });
+    core.start(
+        0x01,
+        pelco_p::Request::GoToPreset(pelco_p::request::GoToPreset { preset: 3 }),
+    );
     assert_eq!(core.poll(ms(0)), Action::ClearInput);
     assert!(matches!(core.poll(ms(0)), Action::Write(_)));
     assert_eq!(
@@ -51,12 +54,18 @@ fn a_command_without_a_reply_is_done_once_sent() {
 fn an_optional_reply_that_does_not_come_ends_the_transaction_without_a_retry() {
     use ft12_fixed::{Ft12Fixed, Request};
     let mut core: MasterCore<Plain<Ft12Fixed>> = MasterCore::new();
-    core.start(0x05, Request::RequestClass2);
+    core.start(
+        0x05,
+        Request::RequestClass2(ft12_fixed::request::RequestClass2),
+    );
     assert_eq!(silent(&mut core), 1);
     let r = core.take_outcome().unwrap().unwrap();
     assert_eq!((r.response, r.attempts), (None, 1));
     // The same silence after a command whose reply is required: retried, then no reply.
-    core.start(0x05, Request::RequestStatusOfLink);
+    core.start(
+        0x05,
+        Request::RequestStatusOfLink(ft12_fixed::request::RequestStatusOfLink),
+    );
     let writes = silent(&mut core);
     assert!(
         writes > 1,

@@ -105,7 +105,10 @@ fn one_request(line: Line) -> Vec<Seen> {
         .with_driver_enable(fake.clone())
         .with_timing(timing)
         .with_line(line);
-    let r = d.transact(0x21, ub2::Request::GetActualCapacitance);
+    let r = d.transact(
+        0x21,
+        ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance),
+    );
     assert!(
         matches!(r, Err(Error::Link(Failure::NoReply { attempts: 1, .. }))),
         "{r:?}"
@@ -163,9 +166,19 @@ fn a_collision_names_the_offset_and_both_bytes() {
     let mut line = Line::for_protocol::<Sd>();
     line.echo = true;
     let mut m: Master<Sd, _, _> = Master::new(bus.clone(), clock).with_line(line);
-    let err = m.transact(1, sd::Request::ReadActualPosition).unwrap_err();
+    let err = m
+        .transact(
+            1,
+            sd::Request::ReadActualPosition(sd::request::ReadActualPosition),
+        )
+        .unwrap_err();
     let mut frame = [0u8; 8];
-    let n = busspec_link::Message::encode(&sd::Request::ReadActualPosition, 1, &mut frame).unwrap();
+    let n = busspec_link::Message::encode(
+        &sd::Request::ReadActualPosition(sd::request::ReadActualPosition),
+        1,
+        &mut frame,
+    )
+    .unwrap();
     let sent: String = frame[..n].iter().map(|b| format!("{b:02X}")).collect();
     assert_eq!(
         err.to_string(),
@@ -193,7 +206,12 @@ fn a_missing_echo_says_how_much_came_back() {
     let mut m: Master<Sd, _, _> = Master::new(bus, clock).with_line(line);
     // Nobody at 2 answers, and the adapter does not echo after all. (With a device there, its
     // reply would be taken for a garbled echo: a collision at offset 0.)
-    let err = m.transact(2, sd::Request::ReadActualPosition).unwrap_err();
+    let err = m
+        .transact(
+            2,
+            sd::Request::ReadActualPosition(sd::request::ReadActualPosition),
+        )
+        .unwrap_err();
     assert_eq!(
         err.to_string(),
         "sd read_actual_position to address 0x02: the line echoes, but only 0 of the 6 bytes of \

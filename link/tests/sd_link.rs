@@ -11,7 +11,9 @@ use busspec_link::clock::Clock;
 use busspec_link::master::{LinkError, TraceEvent};
 use busspec_link::sim::{BusConfig, Device, SimBus};
 use busspec_link::{Master, SimClock};
-use busspec_protocols::sd::{self, ActuatorStatusBits, Angle, Request, Response};
+use busspec_protocols::sd::{
+    self, request, response, ActuatorStatusBits, Angle, Request, Response,
+};
 
 type Bus = SimBus<SdSim>;
 
@@ -24,10 +26,10 @@ fn bus(ids: &[u8]) -> (Bus, Master<Sd, Bus, SimClock>, SimClock) {
 }
 
 fn set_point(position: i16) -> Request {
-    Request::SetPoint {
+    Request::SetPoint(request::SetPoint {
         freshness: 0,
         position: Angle(position),
-    }
+    })
 }
 
 #[test]
@@ -62,9 +64,11 @@ fn skipped_counts_are_dropped_frames_and_too_many_load_the_fail_safe_position() 
     a.config.freshness_threshold = 2;
     a.config.fail_safe_position = -300;
     let t = Duration::ZERO;
-    let sp = |f: u8, p: i16| Request::SetPoint {
-        freshness: f,
-        position: Angle(p),
+    let sp = |f: u8, p: i16| {
+        Request::SetPoint(request::SetPoint {
+            freshness: f,
+            position: Angle(p),
+        })
     };
     a.respond(&sp(1, 100), t);
     a.respond(&sp(3, 100), t); // one skipped
@@ -79,11 +83,14 @@ fn skipped_counts_are_dropped_frames_and_too_many_load_the_fail_safe_position() 
     a.respond(&sp(10, 500), t);
     assert!(a.status_bits.contains(ActuatorStatusBits::FRC));
     assert_eq!(
-        a.respond(&Request::ReadSkippedFramesCounter, t),
-        Response::SkippedFramesCounter {
+        a.respond(
+            &Request::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter),
+            t
+        ),
+        Response::SkippedFramesCounter(response::SkippedFramesCounter {
             host_freshness_counter: 10,
             dropped_frames: 3
-        }
+        })
     );
 }
 
@@ -93,12 +100,12 @@ fn the_position_slews_at_the_set_velocity() {
     assert!(matches!(
         m.ask(
             1,
-            Request::SetVelocity {
+            Request::SetVelocity(request::SetVelocity {
                 set_velocity: sd::Velocity(450)
-            }
+            })
         )
         .unwrap(),
-        Response::SetVelocityReply { .. }
+        Response::SetVelocityReply(_)
     ));
     let start = clock.now();
     let report = m
@@ -118,9 +125,9 @@ fn the_position_slews_at_the_set_velocity() {
     );
     assert_eq!(
         report.finished,
-        Some(Response::ActualPosition {
+        Some(Response::ActualPosition(response::ActualPosition {
             position: Angle(1024)
-        })
+        }))
     );
 }
 
@@ -154,20 +161,29 @@ fn zero_offset_shifts_reported_positions() {
     )
     .unwrap();
     assert_eq!(
-        m.ask(1, Request::SetCurrentPositionAsZero).unwrap(),
-        Response::SetCurrentPositionAsZeroReply {
+        m.ask(
+            1,
+            Request::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero)
+        )
+        .unwrap(),
+        Response::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
             zero_offset: Angle(400)
-        }
+        })
     );
     assert_eq!(
-        m.ask(1, Request::ReadActualPosition).unwrap(),
-        Response::ActualPosition { position: Angle(0) }
+        m.ask(1, Request::ReadActualPosition(request::ReadActualPosition))
+            .unwrap(),
+        Response::ActualPosition(response::ActualPosition { position: Angle(0) })
     );
     assert_eq!(
-        m.ask(1, Request::ReadCurrentZeroOffset).unwrap(),
-        Response::CurrentZeroOffset {
+        m.ask(
+            1,
+            Request::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset)
+        )
+        .unwrap(),
+        Response::CurrentZeroOffset(response::CurrentZeroOffset {
             zero_offset: Angle(400)
-        }
+        })
     );
     m.move_to(
         1,
@@ -182,32 +198,42 @@ fn zero_offset_shifts_reported_positions() {
         300
     );
     assert_eq!(
-        m.ask(1, Request::ResetZeroOffset).unwrap(),
-        Response::ResetZeroOffsetReply
+        m.ask(1, Request::ResetZeroOffset(request::ResetZeroOffset))
+            .unwrap(),
+        Response::ResetZeroOffsetReply(response::ResetZeroOffsetReply)
     );
     assert_eq!(
-        m.ask(1, Request::ReadActualPosition).unwrap(),
-        Response::ActualPosition {
+        m.ask(1, Request::ReadActualPosition(request::ReadActualPosition))
+            .unwrap(),
+        Response::ActualPosition(response::ActualPosition {
             position: Angle(300)
-        }
+        })
     );
 }
 
 #[test]
 fn the_id_changes_and_the_reply_comes_from_the_new_one() {
     let (_, mut m, _) = bus(&[1]);
-    let ex = m.transact(1, Request::SetServoId { new_id: 7 }).unwrap();
+    let ex = m
+        .transact(1, Request::SetServoId(request::SetServoId { new_id: 7 }))
+        .unwrap();
     assert_eq!(
         (ex.address, ex.response),
-        (7, Some(Response::SetServoIdReply { new_id: 7 }))
+        (
+            7,
+            Some(Response::SetServoIdReply(response::SetServoIdReply {
+                new_id: 7
+            }))
+        )
     );
     // The master checks replies come from the address asked; 7 answers now, 1 does not.
     assert_eq!(
-        m.ask(7, Request::ReadServoId).unwrap(),
-        Response::ServoId { id: 7 }
+        m.ask(7, Request::ReadServoId(request::ReadServoId))
+            .unwrap(),
+        Response::ServoId(response::ServoId { id: 7 })
     );
     assert!(matches!(
-        m.transact(1, Request::ReadServoId),
+        m.transact(1, Request::ReadServoId(request::ReadServoId)),
         Err(LinkError::NoReply { .. })
     ));
 }
@@ -224,9 +250,16 @@ fn broadcasts_reach_every_actuator_and_only_some_are_answered() {
         }
     });
     // An answered broadcast with two actuators: the replies collide, and the master says so.
-    assert!(m.transact(0x1F, Request::ReadActualPosition).is_err());
+    assert!(m
+        .transact(
+            0x1F,
+            Request::ReadActualPosition(request::ReadActualPosition)
+        )
+        .is_err());
     // A command that does not accept the broadcast ID is refused before it is sent.
-    let err = m.transact(0x1F, Request::ReadHumidity).unwrap_err();
+    let err = m
+        .transact(0x1F, Request::ReadHumidity(request::ReadHumidity))
+        .unwrap_err();
     assert_eq!(
         err.to_string(),
         "sd read_humidity to address 0x1F: this command does not accept the broadcast address"
@@ -236,10 +269,12 @@ fn broadcasts_reach_every_actuator_and_only_some_are_answered() {
 #[test]
 fn a_single_actuator_answers_a_broadcast_read_with_its_own_id() {
     let (_, mut m, _) = bus(&[5]);
-    let ex = m.transact(0x1F, Request::ReadServoId).unwrap();
+    let ex = m
+        .transact(0x1F, Request::ReadServoId(request::ReadServoId))
+        .unwrap();
     assert_eq!(
         (ex.address, ex.response),
-        (5, Some(Response::ServoId { id: 5 }))
+        (5, Some(Response::ServoId(response::ServoId { id: 5 })))
     );
 }
 
@@ -249,33 +284,51 @@ fn counters_reset_and_report_what_they_held() {
     a.stall_events = 4;
     let t = Duration::ZERO;
     assert_eq!(
-        a.respond(&Request::ResetStallEventCounter, t),
-        Response::StallEventCounterBeforeReset {
+        a.respond(
+            &Request::ResetStallEventCounter(request::ResetStallEventCounter),
+            t
+        ),
+        Response::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
             stall_events_before_reset: 4
-        }
+        })
     );
     assert_eq!(
-        a.respond(&Request::ReadStallEventCounter, t),
-        Response::StallEventCounter { stall_events: 0 }
+        a.respond(
+            &Request::ReadStallEventCounter(request::ReadStallEventCounter),
+            t
+        ),
+        Response::StallEventCounter(response::StallEventCounter { stall_events: 0 })
     );
     assert_eq!(
-        a.respond(&Request::ResetLoadRuntime100, t),
-        Response::LoadRuntime100HoursBeforeReset {
+        a.respond(
+            &Request::ResetLoadRuntime100(request::ResetLoadRuntime100),
+            t
+        ),
+        Response::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
             runtime_hours_before_reset: 1
-        }
+        })
     );
     assert_eq!(
-        a.respond(&Request::ReadLoadRuntime100Hours, t),
-        Response::LoadRuntime100Hours { runtime_hours: 0 }
+        a.respond(
+            &Request::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours),
+            t
+        ),
+        Response::LoadRuntime100Hours(response::LoadRuntime100Hours { runtime_hours: 0 })
     );
     // The total run-time counter runs with time.
     let t1 = Duration::from_secs(3600);
-    let before = a.respond(&Request::ReadTotalRuntimeHours, t);
-    let after = a.respond(&Request::ReadTotalRuntimeHours, t1);
+    let before = a.respond(
+        &Request::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours),
+        t,
+    );
+    let after = a.respond(
+        &Request::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours),
+        t1,
+    );
     match (before, after) {
         (
-            Response::TotalRuntimeHours { runtime_hours: h0 },
-            Response::TotalRuntimeHours { runtime_hours: h1 },
+            Response::TotalRuntimeHours(response::TotalRuntimeHours { runtime_hours: h0 }),
+            Response::TotalRuntimeHours(response::TotalRuntimeHours { runtime_hours: h1 }),
         ) => assert_eq!(h1, h0 + 1),
         other => panic!("{other:?}"),
     }
@@ -285,7 +338,9 @@ fn counters_reset_and_report_what_they_held() {
 fn frames_that_do_not_decode_get_no_reply() {
     let mut a = SdSim::new(1);
     let mut frame = [0u8; 6];
-    let n = Request::ReadServoId.encode(1, &mut frame).unwrap();
+    let n = Request::ReadServoId(request::ReadServoId)
+        .encode(1, &mut frame)
+        .unwrap();
     assert!(a.on_frame(&frame[..n], Duration::ZERO).is_some());
     frame[5] ^= 1;
     assert_eq!(a.on_frame(&frame, Duration::ZERO), None);

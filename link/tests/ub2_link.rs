@@ -13,7 +13,7 @@ use busspec_link::fault::{FaultConfig, Faulty};
 use busspec_link::master::{LinkError, Progress, TraceEvent};
 use busspec_link::sim::{BusConfig, SimBus};
 use busspec_link::{Master, SimClock};
-use busspec_protocols::ub2::{self, Capacitance, Request, Response};
+use busspec_protocols::ub2::{self, request, response, Capacitance, Request, Response};
 use busspec_protocols::Protocol as _;
 
 type Bus = SimBus<Ub2Sim>;
@@ -29,19 +29,28 @@ fn bus(addresses: &[u8]) -> (Bus, Master<Ub2, Bus, SimClock>, SimClock) {
 #[test]
 fn reads_answer_from_the_device_state() {
     let (bus, mut m, _) = bus(&[0x21]);
-    let r = m.ask(0x21, Request::GetFirmwareVersion).unwrap();
+    let r = m
+        .ask(
+            0x21,
+            Request::GetFirmwareVersion(request::GetFirmwareVersion),
+        )
+        .unwrap();
     assert_eq!(
         r,
-        Response::FirmwareVersion {
+        Response::FirmwareVersion(response::FirmwareVersion {
             firmware_version: busspec_runtime::Ascii(*b"20100433.00")
-        }
+        })
     );
     let expected = bus.with_devices(|d| d[0].capacitance_at(d[0].position));
     assert_eq!(
-        m.ask(0x21, Request::GetActualCapacitance).unwrap(),
-        Response::ActualCapacitance {
+        m.ask(
+            0x21,
+            Request::GetActualCapacitance(request::GetActualCapacitance)
+        )
+        .unwrap(),
+        Response::ActualCapacitance(response::ActualCapacitance {
             capacitance: expected
-        }
+        })
     );
 }
 
@@ -57,7 +66,11 @@ fn requests_are_at_least_10_ms_apart() {
         }
     });
     for _ in 0..5 {
-        m.ask(0x21, Request::GetActualFullStepPosition).unwrap();
+        m.ask(
+            0x21,
+            Request::GetActualFullStepPosition(request::GetActualFullStepPosition),
+        )
+        .unwrap();
     }
     let t = sends.borrow();
     assert_eq!(t.len(), 5);
@@ -72,28 +85,39 @@ fn several_capacitors_share_the_bus_and_answer_only_to_their_address() {
     let (bus, mut m, _) = bus(&[0x21, 0x22, 0x30]);
     bus.with_devices(|d| d[1].stored_positions[4] = 777);
     let r = m
-        .transact(0x22, Request::GetStoredFullStepPosition { index: 4 })
+        .transact(
+            0x22,
+            Request::GetStoredFullStepPosition(request::GetStoredFullStepPosition { index: 4 }),
+        )
         .unwrap();
     assert_eq!(r.address, 0x22);
     assert_eq!(
         r.response,
-        Some(Response::StoredFullStepPosition {
-            index: 4,
-            full_steps: 777
-        })
+        Some(Response::StoredFullStepPosition(
+            response::StoredFullStepPosition {
+                index: 4,
+                full_steps: 777
+            }
+        ))
     );
     let r = m
-        .ask(0x21, Request::GetStoredFullStepPosition { index: 4 })
+        .ask(
+            0x21,
+            Request::GetStoredFullStepPosition(request::GetStoredFullStepPosition { index: 4 }),
+        )
         .unwrap();
     assert_eq!(
         r,
-        Response::StoredFullStepPosition {
+        Response::StoredFullStepPosition(response::StoredFullStepPosition {
             index: 4,
             full_steps: 0
-        }
+        })
     );
     // Nobody at 0x25: a clear timeout, retried as a read may be.
-    match m.transact(0x25, Request::GetActualCapacitance) {
+    match m.transact(
+        0x25,
+        Request::GetActualCapacitance(request::GetActualCapacitance),
+    ) {
         Err(LinkError::NoReply {
             attempts: 3,
             address: 0x25,
@@ -110,14 +134,20 @@ fn a_movement_runs_in_simulated_time_and_reports_progress() {
     let report = m
         .run_movement(
             0x21,
-            Request::GoToFullStepPosition { target: 3000 },
+            Request::GoToFullStepPosition(request::GoToFullStepPosition { target: 3000 }),
             Duration::from_millis(100),
             Duration::from_secs(60),
             &mut |p| seen.push(p),
         )
         .unwrap();
-    assert_eq!(report.started, Response::MovementStarted);
-    assert_eq!(report.finished, Some(Response::MovementCompleted));
+    assert_eq!(
+        report.started,
+        Response::MovementStarted(response::MovementStarted)
+    );
+    assert_eq!(
+        report.finished,
+        Some(Response::MovementCompleted(response::MovementCompleted))
+    );
     assert!(!report.clipped);
     assert_eq!(report.lost_micro_steps, None);
     // 2362 full steps at speed index 7 (450 steps/s) take several seconds.
@@ -145,7 +175,7 @@ fn step_loss_and_limit_clipping_are_surfaced() {
     let r = m
         .run_movement(
             0x21,
-            Request::MoveFullSteps { steps: 100 },
+            Request::MoveFullSteps(request::MoveFullSteps { steps: 100 }),
             Duration::from_millis(50),
             Duration::from_secs(30),
             &mut |_| {},
@@ -154,37 +184,48 @@ fn step_loss_and_limit_clipping_are_surfaced() {
     assert_eq!(r.lost_micro_steps, Some(3));
     assert_eq!(
         r.finished,
-        Some(Response::MovementCompletedWithStepLoss {
-            lost_micro_steps: 3
-        })
+        Some(Response::MovementCompletedWithStepLoss(
+            response::MovementCompletedWithStepLoss {
+                lost_micro_steps: 3
+            }
+        ))
     );
 
     // An upper customer limit of 300 pF: going to 400 pF runs to the limit, with 0x93.
     assert_eq!(
         m.ask(
             0x21,
-            Request::SetUpperCustomerLimit {
+            Request::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
                 limit: Capacitance(30000)
-            }
+            })
         )
         .unwrap(),
-        Response::SetUpperCustomerLimitAck
+        Response::SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck)
     );
     let r = m
         .run_movement(
             0x21,
-            Request::GoToCapacitance {
+            Request::GoToCapacitance(request::GoToCapacitance {
                 target: Capacitance(40000),
-            },
+            }),
             Duration::from_millis(50),
             Duration::from_secs(60),
             &mut |_| {},
         )
         .unwrap();
     assert!(r.clipped);
-    assert_eq!(r.started, Response::NakLimitReached);
-    match m.ask(0x21, Request::GetActualCapacitance).unwrap() {
-        Response::ActualCapacitance { capacitance } => {
+    assert_eq!(
+        r.started,
+        Response::NakLimitReached(response::NakLimitReached)
+    );
+    match m
+        .ask(
+            0x21,
+            Request::GetActualCapacitance(request::GetActualCapacitance),
+        )
+        .unwrap()
+    {
+        Response::ActualCapacitance(response::ActualCapacitance { capacitance }) => {
             assert!(capacitance.0.abs_diff(30000) <= 2, "{capacitance:?}")
         }
         other => panic!("{other:?}"),
@@ -214,22 +255,22 @@ fn naks_follow_the_document() {
     // and its range, and puts nothing on the bus ...
     let refused = [
         (
-            Request::GetStoredFullStepPosition { index: 10 },
+            Request::GetStoredFullStepPosition(request::GetStoredFullStepPosition { index: 10 }),
             ("index", 10, 0, 9),
         ),
         (
-            Request::GoToStoredPosition { index: 12 },
+            Request::GoToStoredPosition(request::GoToStoredPosition { index: 12 }),
             ("index", 12, 0, 9),
         ),
         (
-            Request::SetAccelerationSpeedIndex {
+            Request::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
                 acceleration_index: 19,
                 speed_index: 3,
-            },
+            }),
             ("acceleration_index", 19, 0, 18),
         ),
         (
-            Request::SetSlaveAddress { address: 0x41 },
+            Request::SetSlaveAddress(request::SetSlaveAddress { address: 0x41 }),
             ("address", 0x41, 0x21, 0x40),
         ),
     ];
@@ -277,44 +318,55 @@ fn naks_follow_the_document() {
     assert_eq!(
         nak(
             &mut m,
-            Request::GetCCurveIndexedFullStepCapacitance { index: 499 }
+            Request::GetCCurveIndexedFullStepCapacitance(
+                request::GetCCurveIndexedFullStepCapacitance { index: 499 }
+            )
         ),
-        Response::NakIndexOutOfRange
+        Response::NakIndexOutOfRange(response::NakIndexOutOfRange)
     );
     assert_eq!(
         nak(
             &mut m,
-            Request::SetLowerCustomerLimit {
+            Request::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
                 limit: Capacitance(1000)
-            }
+            })
         ),
-        Response::NakLimitReached
+        Response::NakLimitReached(response::NakLimitReached)
     );
     // Not idle: mode changes and new movements are refused while moving.
     assert_eq!(
-        nak(&mut m, Request::GoToFullStepPosition { target: 9000 }),
-        Response::MovementStarted
+        nak(
+            &mut m,
+            Request::GoToFullStepPosition(request::GoToFullStepPosition { target: 9000 })
+        ),
+        Response::MovementStarted(response::MovementStarted)
     );
     assert_eq!(
         nak(
             &mut m,
-            Request::SetModeOfOperation {
+            Request::SetModeOfOperation(request::SetModeOfOperation {
                 mode: ub2::ModeOfOperation::CloseLoopControl
-            }
+            })
         ),
-        Response::NakIncompatibleStatus
+        Response::NakIncompatibleStatus(response::NakIncompatibleStatus)
     );
     assert_eq!(
-        nak(&mut m, Request::MoveFullSteps { steps: 1 }),
-        Response::NakIncompatibleStatus
+        nak(
+            &mut m,
+            Request::MoveFullSteps(request::MoveFullSteps { steps: 1 })
+        ),
+        Response::NakIncompatibleStatus(response::NakIncompatibleStatus)
     );
     assert_eq!(
-        nak(&mut m, Request::GoToCminStatus),
-        Response::MovementNotTriggered
+        nak(&mut m, Request::GoToCminStatus(request::GoToCminStatus)),
+        Response::MovementNotTriggered(response::MovementNotTriggered)
     );
     assert_eq!(
-        nak(&mut m, Request::GoToFullStepPositionStatus),
-        Response::MovementNotCompleted
+        nak(
+            &mut m,
+            Request::GoToFullStepPositionStatus(request::GoToFullStepPositionStatus)
+        ),
+        Response::MovementNotCompleted(response::MovementNotCompleted)
     );
 }
 
@@ -353,11 +405,17 @@ impl FrameBytes for Ub2Sim {
 fn status_reports_reset_once() {
     let (_, mut m, _) = bus(&[0x21]);
     let bits = |r| match r {
-        Response::Status { error_bits, .. } => error_bits,
+        Response::Status(response::Status { error_bits, .. }) => error_bits,
         other => panic!("{other:?}"),
     };
-    assert!(bits(m.ask(0x21, Request::GetStatus).unwrap()).contains(ub2::StatusErrorBits::RESET));
-    assert!(!bits(m.ask(0x21, Request::GetStatus).unwrap()).contains(ub2::StatusErrorBits::RESET));
+    assert!(
+        bits(m.ask(0x21, Request::GetStatus(request::GetStatus)).unwrap())
+            .contains(ub2::StatusErrorBits::RESET)
+    );
+    assert!(
+        !bits(m.ask(0x21, Request::GetStatus(request::GetStatus)).unwrap())
+            .contains(ub2::StatusErrorBits::RESET)
+    );
 }
 
 #[test]
@@ -395,15 +453,23 @@ fn a_500_entry_table_reads_to_the_end() {
 fn the_slave_address_changes_after_the_ack_from_the_old_one() {
     let (_, mut m, _) = bus(&[0x21]);
     let ex = m
-        .transact(0x21, Request::SetSlaveAddress { address: 0x24 })
+        .transact(
+            0x21,
+            Request::SetSlaveAddress(request::SetSlaveAddress { address: 0x24 }),
+        )
         .unwrap();
     assert_eq!(
         (ex.address, ex.response),
-        (0x21, Some(Response::SetSlaveAddressAck))
+        (
+            0x21,
+            Some(Response::SetSlaveAddressAck(response::SetSlaveAddressAck))
+        )
     );
-    assert!(m.ask(0x24, Request::GetSerialNumber).is_ok());
+    assert!(m
+        .ask(0x24, Request::GetSerialNumber(request::GetSerialNumber))
+        .is_ok());
     assert!(matches!(
-        m.transact(0x21, Request::GetSerialNumber),
+        m.transact(0x21, Request::GetSerialNumber(request::GetSerialNumber)),
         Err(LinkError::NoReply { .. })
     ));
 }
@@ -428,12 +494,18 @@ fn movements_are_never_retried_but_reads_are() {
         }
     });
     assert!(matches!(
-        m.transact(0x21, Request::GetActualCapacitance),
+        m.transact(
+            0x21,
+            Request::GetActualCapacitance(request::GetActualCapacitance)
+        ),
         Err(LinkError::NoReply { attempts: 3, .. })
     ));
     assert_eq!(*sends.borrow(), 3);
     let err = m
-        .transact(0x21, Request::GoToFullStepPosition { target: 100 })
+        .transact(
+            0x21,
+            Request::GoToFullStepPosition(request::GoToFullStepPosition { target: 100 }),
+        )
         .unwrap_err();
     assert!(
         matches!(err, LinkError::NoReply { attempts: 1, .. }),
@@ -453,7 +525,10 @@ fn a_corrupted_reply_is_retried_and_the_error_says_what_was_wrong() {
     cfg.replies_only = true;
     let mut m = faulty(cfg);
     let err = m
-        .transact(0x21, Request::GetMinimumCapacitance)
+        .transact(
+            0x21,
+            Request::GetMinimumCapacitance(request::GetMinimumCapacitance),
+        )
         .unwrap_err();
     let text = err.to_string();
     assert!(
@@ -467,21 +542,24 @@ fn a_corrupted_reply_is_retried_and_the_error_says_what_was_wrong() {
 #[test]
 fn every_trigger_has_its_completion_check() {
     let triggers = [
-        Request::ReferenceRun,
-        Request::GoToCapacitance {
+        Request::ReferenceRun(request::ReferenceRun),
+        Request::GoToCapacitance(request::GoToCapacitance {
             target: Capacitance(0),
-        },
-        Request::GoToFullStepPosition { target: 0 },
-        Request::MoveFullSteps { steps: 0 },
-        Request::GoToCmin,
-        Request::GoToCmax,
-        Request::GoToMicroStepPosition { target: 0 },
-        Request::MoveMicroSteps { steps: 0 },
-        Request::GoToStoredPosition { index: 0 },
+        }),
+        Request::GoToFullStepPosition(request::GoToFullStepPosition { target: 0 }),
+        Request::MoveFullSteps(request::MoveFullSteps { steps: 0 }),
+        Request::GoToCmin(request::GoToCmin),
+        Request::GoToCmax(request::GoToCmax),
+        Request::GoToMicroStepPosition(request::GoToMicroStepPosition { target: 0 }),
+        Request::MoveMicroSteps(request::MoveMicroSteps { steps: 0 }),
+        Request::GoToStoredPosition(request::GoToStoredPosition { index: 0 }),
     ];
     for t in triggers {
         let check = ub2_completion_check(&t).unwrap_or_else(|| panic!("{t:?}"));
         assert_eq!(check.name(), format!("{}_status", t.name()));
     }
-    assert_eq!(ub2_completion_check(&Request::GetStatus), None);
+    assert_eq!(
+        ub2_completion_check(&Request::GetStatus(request::GetStatus)),
+        None
+    );
 }

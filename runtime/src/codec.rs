@@ -10,7 +10,7 @@
 //! are not part of the runtime's documented API and may change with the generator.
 
 pub use core::fmt::{Debug, Formatter, Result as FmtResult};
-pub use core::ops::RangeInclusive;
+pub use core::ops::{Range, RangeInclusive};
 pub use core::option::Option::{self, None, Some};
 pub use core::result::Result::{self, Err, Ok};
 
@@ -232,6 +232,9 @@ pub fn text<'v, const N: usize>(
 
 /// What decoding one message gives.
 pub type DecodeResult<T> = Result<T, DecodeError>;
+
+/// What encoding one message gives: the frame's length.
+pub type EncodeResult = Result<usize, EncodeError>;
 
 /// The framing every frame of a protocol shares, for [`check_frame`].
 #[derive(Debug, Clone, Copy)]

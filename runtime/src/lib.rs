@@ -550,8 +550,9 @@ pub fn field_text<const N: usize>(
 }
 
 /// A message as errors name it: its spec name, its code and the frame lengths of its code. Each
-/// generated module has one per message, a `const` in its `request` or `response` module
-/// (`modbus::request::READ_COILS`), which refusals point at: building one stores a
+/// generated module has one per message, the constant `DESC` of the message's struct in its
+/// `request` or `response` module (`modbus::request::ReadCoils::DESC`), which refusals point
+/// at: building one stores a
 /// reference, not the name, code and lengths, and [`DecodeError`]'s `Display` reads them here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct MessageDesc {
@@ -613,11 +614,11 @@ impl fmt::Display for FieldDesc {
 /// Why a frame did not decode, and where.
 ///
 /// A refusal names the message it concerns by its [`MessageDesc`] (a `&'static` constant of
-/// the generated module, `request::READ_COILS`), not by its name and numbers: building one
+/// the generated module, `request::ReadCoils::DESC`), not by its name and numbers: building one
 /// stores a reference, and the error stays small; a field by its [`FieldDesc`]
 /// (`request::READ_COILS_QUANTITY`). Match on the descriptor's fields
 /// (`DecodeError::WrongLength { message, .. } if message.name == "read_coils"`) or compare it
-/// with the constant (`message == &request::READ_COILS`).
+/// with the constant (`message == &request::ReadCoils::DESC`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DecodeError {
     /// Fewer bytes than the shortest frame that could start like this one.

@@ -97,14 +97,20 @@ fn main() -> ExitCode {
                 Ub2Sim::new(0x21),
                 &core,
                 &[
-                    ub2::Request::GetActualCapacitance,
-                    ub2::Request::GetActualFullStepPosition,
-                    ub2::Request::GetControllerTemperature,
-                    ub2::Request::GetCCurveIndexedFullStepCapacitance { index: 3 },
-                    ub2::Request::SetAccelerationSpeedIndex {
-                        acceleration_index: 3,
-                        speed_index: 4,
-                    },
+                    ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance),
+                    ub2::Request::GetActualFullStepPosition(
+                        ub2::request::GetActualFullStepPosition,
+                    ),
+                    ub2::Request::GetControllerTemperature(ub2::request::GetControllerTemperature),
+                    ub2::Request::GetCCurveIndexedFullStepCapacitance(
+                        ub2::request::GetCCurveIndexedFullStepCapacitance { index: 3 },
+                    ),
+                    ub2::Request::SetAccelerationSpeedIndex(
+                        ub2::request::SetAccelerationSpeedIndex {
+                            acceleration_index: 3,
+                            speed_index: 4,
+                        },
+                    ),
                 ],
             );
             (mix.len(), run(&mut core, 0x21, &mix, passes))
@@ -113,18 +119,18 @@ fn main() -> ExitCode {
             let mut core: MasterCore<busspec_devices::Sd> = MasterCore::new();
             // The counter is known, so no set point reads it first: every pass is alike.
             core.set_freshness(1, 0);
-            let set_point = sd::Request::SetPoint {
+            let set_point = sd::Request::SetPoint(sd::request::SetPoint {
                 freshness: 0,
                 position: sd::Angle(100),
-            };
+            });
             let mix = answered(
                 SdSim::new(1),
                 &core,
                 &[
-                    sd::Request::ReadActualPosition,
-                    sd::Request::ReadSkippedFramesCounter,
+                    sd::Request::ReadActualPosition(sd::request::ReadActualPosition),
+                    sd::Request::ReadSkippedFramesCounter(sd::request::ReadSkippedFramesCounter),
                     set_point,
-                    sd::Request::ReadActualPosition,
+                    sd::Request::ReadActualPosition(sd::request::ReadActualPosition),
                     set_point,
                 ],
             );

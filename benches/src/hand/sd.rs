@@ -144,10 +144,10 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
     let message = match code {
         0x76 => {
             let (freshness, position) = position_word(a1, a2);
-            Request::SetPoint {
+            Request::SetPoint(request::SetPoint {
                 freshness,
                 position,
-            }
+            })
         }
         0x69 => constants(
             (
@@ -157,10 +157,10 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
             a1,
             a2,
         )
-        .map(|()| Request::ReadActualPosition)?,
-        0x77 => Request::SetVelocity {
+        .map(|()| Request::ReadActualPosition(request::ReadActualPosition))?,
+        0x77 => Request::SetVelocity(request::SetVelocity {
             set_velocity: Velocity(i16::from_be_bytes([a1, a2])),
-        },
+        }),
         0x68 => constants(
             (
                 field!("read_actual_velocity", "arg1"),
@@ -169,8 +169,8 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
             a1,
             a2,
         )
-        .map(|()| Request::ReadActualVelocity)?,
-        0xAA => Request::SetServoId {
+        .map(|()| Request::ReadActualVelocity(request::ReadActualVelocity))?,
+        0xAA => Request::SetServoId(request::SetServoId {
             new_id: repeated(
                 a1,
                 a2,
@@ -179,9 +179,9 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 FIRST_ID,
                 LAST_ID,
             )?,
-        },
+        }),
         0xA0 => {
-            unicast(address, &request::READ_TEMPERATURES)?;
+            unicast(address, &request::ReadTemperatures::DESC)?;
             constants(
                 (
                     field!("read_temperatures", "arg1"),
@@ -190,10 +190,10 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 a1,
                 a2,
             )
-            .map(|()| Request::ReadTemperatures)?
+            .map(|()| Request::ReadTemperatures(request::ReadTemperatures))?
         }
         0xA1 => {
-            unicast(address, &request::READ_HUMIDITY)?;
+            unicast(address, &request::ReadHumidity::DESC)?;
             constants(
                 (
                     field!("read_humidity", "arg1"),
@@ -202,28 +202,28 @@ pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
                 a1,
                 a2,
             )
-            .map(|()| Request::ReadHumidity)?
+            .map(|()| Request::ReadHumidity(request::ReadHumidity))?
         }
         0x40 => match (a1, a2) {
             (0xAA, 0x02) => {
-                unicast(address, &request::READ_ACTUATOR_STATUS_WORD)?;
-                Request::ReadActuatorStatusWord
+                unicast(address, &request::ReadActuatorStatusWord::DESC)?;
+                Request::ReadActuatorStatusWord(request::ReadActuatorStatusWord)
             }
             (0xAA, 0x52) => {
-                unicast(address, &request::RESET_ACTUATOR_STATUS_WORD)?;
-                Request::ResetActuatorStatusWord
+                unicast(address, &request::ResetActuatorStatusWord::DESC)?;
+                Request::ResetActuatorStatusWord(request::ResetActuatorStatusWord)
             }
             (0xAA, _) => return Err(invalid(field!("read_actuator_status_word", "arg2"), 3, a2)),
             _ => return Err(invalid(field!("read_actuator_status_word", "arg1"), 2, a1)),
         },
         0xA2 => match (a1, a2) {
             (0x00, 0x00) => {
-                unicast(address, &request::READ_TOTAL_RUNTIME_HOURS)?;
-                Request::ReadTotalRuntimeHours
+                unicast(address, &request::ReadTotalRuntimeHours::DESC)?;
+                Request::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours)
             }
             (0x00, 0x01) => {
-                unicast(address, &request::READ_TOTAL_RUNTIME_MIN_SEC)?;
-                Request::ReadTotalRuntimeMinSec
+                unicast(address, &request::ReadTotalRuntimeMinSec::DESC)?;
+                Request::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec)
             }
             (0x00, _) => return Err(invalid(field!("read_total_runtime_hours", "arg2"), 3, a2)),
             _ => return Err(invalid(field!("read_total_runtime_hours", "arg1"), 2, a1)),
@@ -245,19 +245,35 @@ fn answers(q: &Request, r: &Response) -> bool {
     use Response as R;
     matches!(
         (q, r),
-        (Q::SetPoint { .. }, R::SetPointReply { .. })
-            | (Q::ReadActualPosition, R::ActualPosition { .. })
-            | (Q::SetVelocity { .. }, R::SetVelocityReply { .. })
-            | (Q::ReadActualVelocity, R::ActualVelocity { .. })
-            | (Q::SetServoId { .. }, R::SetServoIdReply { .. })
-            | (Q::ReadTemperatures, R::Temperatures { .. })
-            | (Q::ReadHumidity, R::Humidity { .. })
+        (Q::SetPoint(_), R::SetPointReply(_))
             | (
-                Q::ReadActuatorStatusWord | Q::ResetActuatorStatusWord,
-                R::ActuatorStatusWord { .. }
+                Q::ReadActualPosition(request::ReadActualPosition),
+                R::ActualPosition(_)
             )
-            | (Q::ReadTotalRuntimeHours, R::TotalRuntimeHours { .. })
-            | (Q::ReadTotalRuntimeMinSec, R::TotalRuntimeMinSec { .. })
+            | (Q::SetVelocity(_), R::SetVelocityReply(_))
+            | (
+                Q::ReadActualVelocity(request::ReadActualVelocity),
+                R::ActualVelocity(_)
+            )
+            | (Q::SetServoId(_), R::SetServoIdReply(_))
+            | (
+                Q::ReadTemperatures(request::ReadTemperatures),
+                R::Temperatures(_)
+            )
+            | (Q::ReadHumidity(request::ReadHumidity), R::Humidity(_))
+            | (
+                Q::ReadActuatorStatusWord(request::ReadActuatorStatusWord)
+                    | Q::ResetActuatorStatusWord(request::ResetActuatorStatusWord),
+                R::ActuatorStatusWord(_)
+            )
+            | (
+                Q::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours),
+                R::TotalRuntimeHours(_)
+            )
+            | (
+                Q::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec),
+                R::TotalRuntimeMinSec(_)
+            )
     )
 }
 
@@ -272,25 +288,25 @@ pub fn decode_response(
     let message = match code {
         0x56 => {
             let (freshness, position) = position_word(a1, a2);
-            Response::SetPointReply {
+            Response::SetPointReply(response::SetPointReply {
                 freshness,
                 position,
-            }
+            })
         }
         0x49 => {
             let (zero, position) = position_word(a1, a2);
             if zero != 0 {
                 return Err(invalid(field!("actual_position", "zero"), 2, zero));
             }
-            Response::ActualPosition { position }
+            Response::ActualPosition(response::ActualPosition { position })
         }
-        0x57 => Response::SetVelocityReply {
+        0x57 => Response::SetVelocityReply(response::SetVelocityReply {
             actual_velocity: Velocity(i16::from_be_bytes([a1, a2])),
-        },
-        0x48 => Response::ActualVelocity {
+        }),
+        0x48 => Response::ActualVelocity(response::ActualVelocity {
             actual_velocity: Velocity(i16::from_be_bytes([a1, a2])),
-        },
-        0x55 => Response::SetServoIdReply {
+        }),
+        0x55 => Response::SetServoIdReply(response::SetServoIdReply {
             new_id: repeated(
                 a1,
                 a2,
@@ -299,14 +315,14 @@ pub fn decode_response(
                 FIRST_ID,
                 LAST_ID,
             )?,
-        },
+        }),
         // 0x01..=0xFE, with 0x00 (no sensor) and 0xFF (defective) special: every byte.
-        0x20 => Response::Temperatures {
+        0x20 => Response::Temperatures(response::Temperatures {
             motor_temperature: Temperature(a1),
             pcb_temperature: Temperature(a2),
-        },
+        }),
         // 1..=100 %, with 0 (no sensor) special.
-        0x21 => Response::Humidity {
+        0x21 => Response::Humidity(response::Humidity {
             humidity: repeated(
                 a1,
                 a2,
@@ -315,16 +331,18 @@ pub fn decode_response(
                 0,
                 100,
             )?,
-        },
-        0x41 => Response::ActuatorStatusWord {
+        }),
+        0x41 => Response::ActuatorStatusWord(response::ActuatorStatusWord {
             status_bits: ActuatorStatusBits(a1),
             status_arg2: a2,
-        },
+        }),
         0x22 => match request {
-            Some(Request::ReadTotalRuntimeHours) => Response::TotalRuntimeHours {
-                runtime_hours: u16::from_be_bytes([a1, a2]),
-            },
-            Some(Request::ReadTotalRuntimeMinSec) => {
+            Some(Request::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours)) => {
+                Response::TotalRuntimeHours(response::TotalRuntimeHours {
+                    runtime_hours: u16::from_be_bytes([a1, a2]),
+                })
+            }
+            Some(Request::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec)) => {
                 if a1 > 59 {
                     return Err(out_of_range(
                         field!("total_runtime_min_sec", "runtime_minutes"),
@@ -343,10 +361,10 @@ pub fn decode_response(
                         59,
                     ));
                 }
-                Response::TotalRuntimeMinSec {
+                Response::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
                     runtime_minutes: a1,
                     runtime_seconds: a2,
-                }
+                })
             }
             Some(q) => {
                 return Err(DecodeError::NotAReply {
@@ -358,8 +376,8 @@ pub fn decode_response(
                 return Err(DecodeError::Ambiguous {
                     code: 0x22,
                     candidates: MessageNames::from_slice(&[
-                        &response::TOTAL_RUNTIME_HOURS,
-                        &response::TOTAL_RUNTIME_MIN_SEC,
+                        &response::TotalRuntimeHours::DESC,
+                        &response::TotalRuntimeMinSec::DESC,
                     ]),
                 })
             }
@@ -467,45 +485,45 @@ pub fn encode_request(
 ) -> Option<Result<usize, EncodeError>> {
     tri!(check_address(address));
     let (code, a1, a2) = match *m {
-        Request::SetPoint {
+        Request::SetPoint(request::SetPoint {
             freshness,
             position,
-        } => {
+        }) => {
             let [a1, a2] = tri!(put_position_word(freshness, position));
             (0x76, a1, a2)
         }
-        Request::ReadActualPosition => (0x69, 0, 0),
-        Request::SetVelocity { set_velocity } => {
+        Request::ReadActualPosition(request::ReadActualPosition) => (0x69, 0, 0),
+        Request::SetVelocity(request::SetVelocity { set_velocity }) => {
             let [a1, a2] = set_velocity.0.to_be_bytes();
             (0x77, a1, a2)
         }
-        Request::ReadActualVelocity => (0x68, 0, 0),
-        Request::SetServoId { new_id } => {
+        Request::ReadActualVelocity(request::ReadActualVelocity) => (0x68, 0, 0),
+        Request::SetServoId(request::SetServoId { new_id }) => {
             let id = tri!(in_range("new_id", new_id, FIRST_ID, LAST_ID));
             (0xAA, id, id)
         }
-        Request::ReadTemperatures => {
-            tri!(unicast_to(&request::READ_TEMPERATURES, address));
+        Request::ReadTemperatures(request::ReadTemperatures) => {
+            tri!(unicast_to(&request::ReadTemperatures::DESC, address));
             (0xA0, 0, 0)
         }
-        Request::ReadHumidity => {
-            tri!(unicast_to(&request::READ_HUMIDITY, address));
+        Request::ReadHumidity(request::ReadHumidity) => {
+            tri!(unicast_to(&request::ReadHumidity::DESC, address));
             (0xA1, 0, 0)
         }
-        Request::ReadActuatorStatusWord => {
-            tri!(unicast_to(&request::READ_ACTUATOR_STATUS_WORD, address));
+        Request::ReadActuatorStatusWord(request::ReadActuatorStatusWord) => {
+            tri!(unicast_to(&request::ReadActuatorStatusWord::DESC, address));
             (0x40, 0xAA, 0x02)
         }
-        Request::ResetActuatorStatusWord => {
-            tri!(unicast_to(&request::RESET_ACTUATOR_STATUS_WORD, address));
+        Request::ResetActuatorStatusWord(request::ResetActuatorStatusWord) => {
+            tri!(unicast_to(&request::ResetActuatorStatusWord::DESC, address));
             (0x40, 0xAA, 0x52)
         }
-        Request::ReadTotalRuntimeHours => {
-            tri!(unicast_to(&request::READ_TOTAL_RUNTIME_HOURS, address));
+        Request::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours) => {
+            tri!(unicast_to(&request::ReadTotalRuntimeHours::DESC, address));
             (0xA2, 0, 0)
         }
-        Request::ReadTotalRuntimeMinSec => {
-            tri!(unicast_to(&request::READ_TOTAL_RUNTIME_MIN_SEC, address));
+        Request::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec) => {
+            tri!(unicast_to(&request::ReadTotalRuntimeMinSec::DESC, address));
             (0xA2, 0, 1)
         }
         _ => return None,
@@ -521,49 +539,49 @@ pub fn encode_response(
 ) -> Option<Result<usize, EncodeError>> {
     tri!(check_address(address));
     let (code, a1, a2) = match *m {
-        Response::SetPointReply {
+        Response::SetPointReply(response::SetPointReply {
             freshness,
             position,
-        } => {
+        }) => {
             let [a1, a2] = tri!(put_position_word(freshness, position));
             (0x56, a1, a2)
         }
-        Response::ActualPosition { position } => {
+        Response::ActualPosition(response::ActualPosition { position }) => {
             let [a1, a2] = tri!(put_position_word(0, position));
             (0x49, a1, a2)
         }
-        Response::SetVelocityReply { actual_velocity } => {
+        Response::SetVelocityReply(response::SetVelocityReply { actual_velocity }) => {
             let [a1, a2] = actual_velocity.0.to_be_bytes();
             (0x57, a1, a2)
         }
-        Response::ActualVelocity { actual_velocity } => {
+        Response::ActualVelocity(response::ActualVelocity { actual_velocity }) => {
             let [a1, a2] = actual_velocity.0.to_be_bytes();
             (0x48, a1, a2)
         }
-        Response::SetServoIdReply { new_id } => {
+        Response::SetServoIdReply(response::SetServoIdReply { new_id }) => {
             let id = tri!(in_range("new_id", new_id, FIRST_ID, LAST_ID));
             (0x55, id, id)
         }
-        Response::Temperatures {
+        Response::Temperatures(response::Temperatures {
             motor_temperature,
             pcb_temperature,
-        } => (0x20, motor_temperature.0, pcb_temperature.0),
-        Response::Humidity { humidity } => {
+        }) => (0x20, motor_temperature.0, pcb_temperature.0),
+        Response::Humidity(response::Humidity { humidity }) => {
             let h = tri!(in_range("humidity", humidity, 0, 100));
             (0x21, h, h)
         }
-        Response::ActuatorStatusWord {
+        Response::ActuatorStatusWord(response::ActuatorStatusWord {
             status_bits,
             status_arg2,
-        } => (0x41, status_bits.0, status_arg2),
-        Response::TotalRuntimeHours { runtime_hours } => {
+        }) => (0x41, status_bits.0, status_arg2),
+        Response::TotalRuntimeHours(response::TotalRuntimeHours { runtime_hours }) => {
             let [a1, a2] = runtime_hours.to_be_bytes();
             (0x22, a1, a2)
         }
-        Response::TotalRuntimeMinSec {
+        Response::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
             runtime_minutes,
             runtime_seconds,
-        } => {
+        }) => {
             let m = tri!(in_range("runtime_minutes", runtime_minutes, 0, 59));
             let s = tri!(in_range("runtime_seconds", runtime_seconds, 0, 59));
             (0x22, m, s)

@@ -3,7 +3,7 @@
 //! Strict as the spec: the address is a device's (0x21..=0x40) or the host's (0x20), the
 //! C-curve index lies in 0..=499, and a frame longer than the longest is refused first.
 
-use busspec_protocols::ub2::{Capacitance, ModeOfOperation, Request, Response};
+use busspec_protocols::ub2::{request, response, Capacitance, ModeOfOperation, Request, Response};
 use busspec_protocols::{DecodeError, Decoded, EncodeError, FieldDesc, MessageDesc};
 
 const START: u8 = 0xAA;
@@ -116,34 +116,36 @@ static LEN_16: MessageDesc = ub2(&[16]);
 pub fn decode_request(frame: &[u8]) -> Result<Decoded<Request>, DecodeError> {
     let (address, rest) = envelope(frame, 5, 9)?;
     let message = match *rest {
-        [0x10, 0x00] => Request::ReferenceRun,
-        [0x20, 0x00, a, b, c, d] => Request::GoToCapacitance {
+        [0x10, 0x00] => Request::ReferenceRun(request::ReferenceRun),
+        [0x20, 0x00, a, b, c, d] => Request::GoToCapacitance(request::GoToCapacitance {
             target: Capacitance(u32le(a, b, c, d)),
-        },
-        [0x20, 0x01] => Request::GoToCapacitanceStatus,
-        [0x21, 0x00, a, b] => Request::GoToFullStepPosition {
+        }),
+        [0x20, 0x01] => Request::GoToCapacitanceStatus(request::GoToCapacitanceStatus),
+        [0x21, 0x00, a, b] => Request::GoToFullStepPosition(request::GoToFullStepPosition {
             target: u16le(a, b),
-        },
-        [0x22, 0x00, a, b] => Request::MoveFullSteps {
+        }),
+        [0x22, 0x00, a, b] => Request::MoveFullSteps(request::MoveFullSteps {
             steps: i16::from_le_bytes([a, b]),
-        },
-        [0x80, 0x00, m] => Request::SetModeOfOperation {
+        }),
+        [0x80, 0x00, m] => Request::SetModeOfOperation(request::SetModeOfOperation {
             mode: ModeOfOperation::from_raw(m),
-        },
-        [0x40, 0x01] => Request::GetActualCapacitance,
-        [0x40, 0x80] => Request::GetModeOfOperation,
-        [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance {
-            index: index(
-                field!("get_c_curve_indexed_full_step_capacitance", "index"),
-                a,
-                b,
-            )?,
-        },
-        [0x40, 0x32] => Request::GetControllerTemperature,
-        [0x40, 0x61] => Request::GetFirmwareVersion,
+        }),
+        [0x40, 0x01] => Request::GetActualCapacitance(request::GetActualCapacitance),
+        [0x40, 0x80] => Request::GetModeOfOperation(request::GetModeOfOperation),
+        [0x40, 0x30, a, b] => Request::GetCCurveIndexedFullStepCapacitance(
+            request::GetCCurveIndexedFullStepCapacitance {
+                index: index(
+                    field!("get_c_curve_indexed_full_step_capacitance", "index"),
+                    a,
+                    b,
+                )?,
+            },
+        ),
+        [0x40, 0x32] => Request::GetControllerTemperature(request::GetControllerTemperature),
+        [0x40, 0x61] => Request::GetFirmwareVersion(request::GetFirmwareVersion),
         [0x40, 0x72, index] => match index {
-            0x01 => Request::GetLowerCustomerLimit,
-            0x02 => Request::GetUpperCustomerLimit,
+            0x01 => Request::GetLowerCustomerLimit(request::GetLowerCustomerLimit),
+            0x02 => Request::GetUpperCustomerLimit(request::GetUpperCustomerLimit),
             found => {
                 return Err(DecodeError::InvalidValue {
                     field: field!("get_lower_customer_limit", "index"),
@@ -178,35 +180,52 @@ fn answers(q: &Request, r: &Response) -> bool {
     use Response as R;
     matches!(
         (q, r),
-        (_, R::NakIndexOutOfRange)
+        (_, R::NakIndexOutOfRange(response::NakIndexOutOfRange))
             | (
-                Q::ReferenceRun
-                    | Q::GoToCapacitance { .. }
-                    | Q::GoToFullStepPosition { .. }
-                    | Q::MoveFullSteps { .. },
-                R::MovementStarted
+                Q::ReferenceRun(request::ReferenceRun)
+                    | Q::GoToCapacitance(_)
+                    | Q::GoToFullStepPosition(_)
+                    | Q::MoveFullSteps(_),
+                R::MovementStarted(response::MovementStarted)
             )
             | (
-                Q::GoToCapacitance { .. }
-                    | Q::GoToFullStepPosition { .. }
-                    | Q::MoveFullSteps { .. },
-                R::NakLimitReached
+                Q::GoToCapacitance(_) | Q::GoToFullStepPosition(_) | Q::MoveFullSteps(_),
+                R::NakLimitReached(response::NakLimitReached)
             )
             | (
-                Q::GoToCapacitanceStatus,
-                R::MovementCompleted | R::MovementNotCompleted
+                Q::GoToCapacitanceStatus(request::GoToCapacitanceStatus),
+                R::MovementCompleted(response::MovementCompleted)
+                    | R::MovementNotCompleted(response::MovementNotCompleted)
             )
-            | (Q::SetModeOfOperation { .. }, R::SetModeOfOperationAck)
-            | (Q::GetActualCapacitance, R::ActualCapacitance { .. })
-            | (Q::GetModeOfOperation, R::ActualModeOfOperation { .. })
             | (
-                Q::GetCCurveIndexedFullStepCapacitance { .. },
-                R::CCurveEntry { .. }
+                Q::SetModeOfOperation(_),
+                R::SetModeOfOperationAck(response::SetModeOfOperationAck)
             )
-            | (Q::GetControllerTemperature, R::ControllerTemperature { .. })
-            | (Q::GetFirmwareVersion, R::FirmwareVersion { .. })
-            | (Q::GetLowerCustomerLimit, R::LowerCustomerLimit { .. })
-            | (Q::GetUpperCustomerLimit, R::UpperCustomerLimit { .. })
+            | (
+                Q::GetActualCapacitance(request::GetActualCapacitance),
+                R::ActualCapacitance(_)
+            )
+            | (
+                Q::GetModeOfOperation(request::GetModeOfOperation),
+                R::ActualModeOfOperation(_)
+            )
+            | (Q::GetCCurveIndexedFullStepCapacitance(_), R::CCurveEntry(_))
+            | (
+                Q::GetControllerTemperature(request::GetControllerTemperature),
+                R::ControllerTemperature(_)
+            )
+            | (
+                Q::GetFirmwareVersion(request::GetFirmwareVersion),
+                R::FirmwareVersion(_)
+            )
+            | (
+                Q::GetLowerCustomerLimit(request::GetLowerCustomerLimit),
+                R::LowerCustomerLimit(_)
+            )
+            | (
+                Q::GetUpperCustomerLimit(request::GetUpperCustomerLimit),
+                R::UpperCustomerLimit(_)
+            )
     )
 }
 
@@ -218,36 +237,40 @@ pub fn decode_response(
 ) -> Result<Decoded<Response>, DecodeError> {
     let (address, rest) = envelope(frame, 4, 16)?;
     let message = match *rest {
-        [0x50] => Response::MovementStarted,
-        [0x51] => Response::MovementCompleted,
-        [0x52] => Response::MovementNotCompleted,
-        [0x93] => Response::NakLimitReached,
-        [0x94] => Response::NakIndexOutOfRange,
-        [0x80, 0x00] => Response::SetModeOfOperationAck,
-        [0x41, 0x01, a, b, c, d] => Response::ActualCapacitance {
+        [0x50] => Response::MovementStarted(response::MovementStarted),
+        [0x51] => Response::MovementCompleted(response::MovementCompleted),
+        [0x52] => Response::MovementNotCompleted(response::MovementNotCompleted),
+        [0x93] => Response::NakLimitReached(response::NakLimitReached),
+        [0x94] => Response::NakIndexOutOfRange(response::NakIndexOutOfRange),
+        [0x80, 0x00] => Response::SetModeOfOperationAck(response::SetModeOfOperationAck),
+        [0x41, 0x01, a, b, c, d] => Response::ActualCapacitance(response::ActualCapacitance {
             capacitance: Capacitance(u32le(a, b, c, d)),
-        },
-        [0x41, 0x80, m] => Response::ActualModeOfOperation {
+        }),
+        [0x41, 0x80, m] => Response::ActualModeOfOperation(response::ActualModeOfOperation {
             mode: ModeOfOperation::from_raw(m),
-        },
-        [0x41, 0x30, i0, i1, f0, f1, c0, c1, c2, c3] => Response::CCurveEntry {
-            index: index(field!("c_curve_entry", "index"), i0, i1)?,
-            full_steps: u16le(f0, f1),
-            capacitance: Capacitance(u32le(c0, c1, c2, c3)),
-        },
-        [0x41, 0x32, t] => Response::ControllerTemperature { temperature: t },
+        }),
+        [0x41, 0x30, i0, i1, f0, f1, c0, c1, c2, c3] => {
+            Response::CCurveEntry(response::CCurveEntry {
+                index: index(field!("c_curve_entry", "index"), i0, i1)?,
+                full_steps: u16le(f0, f1),
+                capacitance: Capacitance(u32le(c0, c1, c2, c3)),
+            })
+        }
+        [0x41, 0x32, t] => {
+            Response::ControllerTemperature(response::ControllerTemperature { temperature: t })
+        }
         [0x41, 0x61, ref text @ ..] if text.len() == 11 => {
             let mut firmware_version = [0u8; 11];
             firmware_version.copy_from_slice(text);
-            Response::FirmwareVersion {
+            Response::FirmwareVersion(response::FirmwareVersion {
                 firmware_version: firmware_version.into(),
-            }
+            })
         }
         [0x41, 0x72, index, a, b, c, d] => {
             let capacitance = Capacitance(u32le(a, b, c, d));
             match index {
-                0x01 => Response::LowerCustomerLimit { capacitance },
-                0x02 => Response::UpperCustomerLimit { capacitance },
+                0x01 => Response::LowerCustomerLimit(response::LowerCustomerLimit { capacitance }),
+                0x02 => Response::UpperCustomerLimit(response::UpperCustomerLimit { capacitance }),
                 found => {
                     return Err(DecodeError::InvalidValue {
                         field: field!("lower_customer_limit", "index"),
@@ -340,25 +363,43 @@ pub fn encode_request(
         return Some(Err(e));
     }
     Some(match *m {
-        Request::ReferenceRun => put(address, &[0x10, 0x00], &[], buf),
-        Request::GoToCapacitance { target } => {
+        Request::ReferenceRun(request::ReferenceRun) => put(address, &[0x10, 0x00], &[], buf),
+        Request::GoToCapacitance(request::GoToCapacitance { target }) => {
             put(address, &[0x20, 0x00], &target.0.to_le_bytes(), buf)
         }
-        Request::GoToCapacitanceStatus => put(address, &[0x20, 0x01], &[], buf),
-        Request::GoToFullStepPosition { target } => {
+        Request::GoToCapacitanceStatus(request::GoToCapacitanceStatus) => {
+            put(address, &[0x20, 0x01], &[], buf)
+        }
+        Request::GoToFullStepPosition(request::GoToFullStepPosition { target }) => {
             put(address, &[0x21, 0x00], &target.to_le_bytes(), buf)
         }
-        Request::MoveFullSteps { steps } => put(address, &[0x22, 0x00], &steps.to_le_bytes(), buf),
-        Request::SetModeOfOperation { mode } => put(address, &[0x80, 0x00], &[mode.raw()], buf),
-        Request::GetActualCapacitance => put(address, &[0x40, 0x01], &[], buf),
-        Request::GetModeOfOperation => put(address, &[0x40, 0x80], &[], buf),
-        Request::GetCCurveIndexedFullStepCapacitance { index } => {
-            put_index(index).and_then(|()| put(address, &[0x40, 0x30], &index.to_le_bytes(), buf))
+        Request::MoveFullSteps(request::MoveFullSteps { steps }) => {
+            put(address, &[0x22, 0x00], &steps.to_le_bytes(), buf)
         }
-        Request::GetControllerTemperature => put(address, &[0x40, 0x32], &[], buf),
-        Request::GetFirmwareVersion => put(address, &[0x40, 0x61], &[], buf),
-        Request::GetLowerCustomerLimit => put(address, &[0x40, 0x72], &[0x01], buf),
-        Request::GetUpperCustomerLimit => put(address, &[0x40, 0x72], &[0x02], buf),
+        Request::SetModeOfOperation(request::SetModeOfOperation { mode }) => {
+            put(address, &[0x80, 0x00], &[mode.raw()], buf)
+        }
+        Request::GetActualCapacitance(request::GetActualCapacitance) => {
+            put(address, &[0x40, 0x01], &[], buf)
+        }
+        Request::GetModeOfOperation(request::GetModeOfOperation) => {
+            put(address, &[0x40, 0x80], &[], buf)
+        }
+        Request::GetCCurveIndexedFullStepCapacitance(
+            request::GetCCurveIndexedFullStepCapacitance { index },
+        ) => put_index(index).and_then(|()| put(address, &[0x40, 0x30], &index.to_le_bytes(), buf)),
+        Request::GetControllerTemperature(request::GetControllerTemperature) => {
+            put(address, &[0x40, 0x32], &[], buf)
+        }
+        Request::GetFirmwareVersion(request::GetFirmwareVersion) => {
+            put(address, &[0x40, 0x61], &[], buf)
+        }
+        Request::GetLowerCustomerLimit(request::GetLowerCustomerLimit) => {
+            put(address, &[0x40, 0x72], &[0x01], buf)
+        }
+        Request::GetUpperCustomerLimit(request::GetUpperCustomerLimit) => {
+            put(address, &[0x40, 0x72], &[0x02], buf)
+        }
         _ => return None,
     })
 }
@@ -373,21 +414,29 @@ pub fn encode_response(
         return Some(Err(e));
     }
     Some(match *m {
-        Response::MovementStarted => put(address, &[0x50], &[], buf),
-        Response::MovementCompleted => put(address, &[0x51], &[], buf),
-        Response::MovementNotCompleted => put(address, &[0x52], &[], buf),
-        Response::NakLimitReached => put(address, &[0x93], &[], buf),
-        Response::NakIndexOutOfRange => put(address, &[0x94], &[], buf),
-        Response::SetModeOfOperationAck => put(address, &[0x80, 0x00], &[], buf),
-        Response::ActualCapacitance { capacitance } => {
+        Response::MovementStarted(response::MovementStarted) => put(address, &[0x50], &[], buf),
+        Response::MovementCompleted(response::MovementCompleted) => put(address, &[0x51], &[], buf),
+        Response::MovementNotCompleted(response::MovementNotCompleted) => {
+            put(address, &[0x52], &[], buf)
+        }
+        Response::NakLimitReached(response::NakLimitReached) => put(address, &[0x93], &[], buf),
+        Response::NakIndexOutOfRange(response::NakIndexOutOfRange) => {
+            put(address, &[0x94], &[], buf)
+        }
+        Response::SetModeOfOperationAck(response::SetModeOfOperationAck) => {
+            put(address, &[0x80, 0x00], &[], buf)
+        }
+        Response::ActualCapacitance(response::ActualCapacitance { capacitance }) => {
             put(address, &[0x41, 0x01], &capacitance.0.to_le_bytes(), buf)
         }
-        Response::ActualModeOfOperation { mode } => put(address, &[0x41, 0x80], &[mode.raw()], buf),
-        Response::CCurveEntry {
+        Response::ActualModeOfOperation(response::ActualModeOfOperation { mode }) => {
+            put(address, &[0x41, 0x80], &[mode.raw()], buf)
+        }
+        Response::CCurveEntry(response::CCurveEntry {
             index,
             full_steps,
             capacitance,
-        } => {
+        }) => {
             if let Err(e) = put_index(index) {
                 return Some(Err(e));
             }
@@ -397,17 +446,17 @@ pub fn encode_response(
             p[4..].copy_from_slice(&capacitance.0.to_le_bytes());
             put(address, &[0x41, 0x30], &p, buf)
         }
-        Response::ControllerTemperature { temperature } => {
+        Response::ControllerTemperature(response::ControllerTemperature { temperature }) => {
             put(address, &[0x41, 0x32], &[temperature], buf)
         }
-        Response::FirmwareVersion { firmware_version } => {
+        Response::FirmwareVersion(response::FirmwareVersion { firmware_version }) => {
             put(address, &[0x41, 0x61], &firmware_version.0, buf)
         }
-        Response::LowerCustomerLimit { capacitance } => {
+        Response::LowerCustomerLimit(response::LowerCustomerLimit { capacitance }) => {
             let c = capacitance.0.to_le_bytes();
             put(address, &[0x41, 0x72], &[0x01, c[0], c[1], c[2], c[3]], buf)
         }
-        Response::UpperCustomerLimit { capacitance } => {
+        Response::UpperCustomerLimit(response::UpperCustomerLimit { capacitance }) => {
             let c = capacitance.0.to_le_bytes();
             put(address, &[0x41, 0x72], &[0x02, c[0], c[1], c[2], c[3]], buf)
         }

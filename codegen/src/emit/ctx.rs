@@ -121,6 +121,8 @@ pub(super) struct Ctx<'a> {
     /// The field descriptors the emitted refusals point at, in the order first named: the
     /// message's direction and name, the field's name, the constant's name.
     pub(super) field_descs: std::cell::RefCell<Vec<(Direction, String, String, Ident)>>,
+    /// Each direction's message structs, emitted in its `request`/`response` module.
+    pub(super) structs: std::cell::RefCell<Vec<(Direction, TokenStream)>>,
     /// Set while the borrowed views are emitted (`view.rs`): decode then lends each list as
     /// `rt::ListView`/`rt::BitsView` instead of copying it, and its functions take the
     /// frame as `&'a [u8]`.
@@ -204,6 +206,7 @@ impl<'a> Ctx<'a> {
             enum_raw,
             flag_raw,
             field_descs: std::cell::RefCell::new(Vec::new()),
+            structs: std::cell::RefCell::new(Vec::new()),
             view: std::cell::Cell::new(false),
         }
     }
@@ -447,14 +450,8 @@ pub(super) fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
 /// shadow the generated code's own variables), or `Self::Name` without fields.
 pub(super) fn binding(m: &Message, ls: &[Leaf]) -> TokenStream {
     let v = variant(m);
-    if ls.is_empty() {
-        return quote!(Self::#v);
-    }
-    let fields = ls.iter().map(|l| {
-        let (n, v) = (ident(l.name), local(l.name));
-        quote!(#n: #v)
-    });
-    quote!(Self::#v { #(#fields),* })
+    let own = own_binding(m, ls);
+    quote!(Self::#v(#own))
 }
 
 pub(super) fn leaf_doc(p: &Protocol, l: &Leaf) -> String {

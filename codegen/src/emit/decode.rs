@@ -246,10 +246,12 @@ pub(super) fn decode_body(ctx: &Ctx, m: &Message) -> (Vec<TokenStream>, TokenStr
         }
     }
     let fields = values.iter().map(|(n, v)| quote!(#n: #v));
-    let build = if ls.is_empty() {
-        quote!(Self::#v)
-    } else {
-        quote!(Self::#v { #(#fields),* })
+    let dm = direction_module(m.direction);
+    let build = match (ls.is_empty(), ctx.view.get()) {
+        (true, true) => quote!(Self::#v),
+        (true, false) => quote!(Self::#v(#dm::#v)),
+        (false, true) => quote!(Self::#v { #(#fields),* }),
+        (false, false) => quote!(Self::#v(#dm::#v { #(#fields),* })),
     };
     (stmts, build)
 }

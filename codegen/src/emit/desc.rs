@@ -1,8 +1,9 @@
 use super::*;
 
-/// The `request` and `response` modules: one `rt::MessageDesc` per framed message of the
-/// direction (`request::READ_COILS`), its name, code and the frame lengths of its code, and
-/// after it an `rt::FieldDesc` for each of its fields a refusal names
+/// The `request` and `response` modules: each message's struct (its `rt::MessageDesc`, its
+/// name, code and the frame lengths of its code, is its constant `DESC`:
+/// `request::ReadCoils::DESC`, [`message_desc_const`]), and an `rt::FieldDesc` for each field
+/// a refusal names
 /// (`request::READ_COILS_QUANTITY`, [`Ctx::field_desc`]), which the refusals point at
 /// (`rt::fixed`, `rt::in_range`, `rt::Group::end`, ...) instead of spelling names at every
 /// call. Emitted last, once every refusal has named its fields.
@@ -10,29 +11,8 @@ pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
     let p = ctx.p;
     let fields = ctx.field_descs.borrow();
     let dir = |d: Direction| {
-        let framed = p.framed(d);
         let mut consts = Vec::new();
-        let mut uses = Vec::new();
         for m in p.messages(d) {
-            if framed.iter().any(|x| x.name == m.name) {
-                let c = desc_ident(m);
-                let name = &m.name;
-                let (code, code_len) = code_args(m);
-                let lengths = dispatch_lengths(p, m);
-                let text = match m.code.as_slice() {
-                    [] => format!("`{name}` (no code)"),
-                    code => format!("`{name}`, code {}", hex_code(code)),
-                };
-                let doc = doc(&text);
-                let lengths = lengths.into_iter().map(usize_lit);
-                consts.push(quote! {
-                    #doc
-                    pub const #c: MessageDesc = MessageDesc::new(#name, #code, #code_len, &[#(#lengths),*]);
-                });
-                if uses.is_empty() {
-                    uses.push(quote!(MessageDesc));
-                }
-            }
             for (_, _, f, c) in fields
                 .iter()
                 .filter(|(fd, mn, ..)| *fd == d && *mn == m.name)
@@ -43,47 +23,58 @@ pub(super) fn emit_descs(ctx: &Ctx) -> TokenStream {
                     #doc
                     pub const #c: FieldDesc = FieldDesc::new(#name, #f);
                 });
-                if !uses.iter().any(|u| u.to_string() == "FieldDesc") {
-                    uses.push(quote!(FieldDesc));
-                }
             }
         }
+        let structs: Vec<TokenStream> = ctx
+            .structs
+            .borrow()
+            .iter()
+            .filter(|(sd, _)| *sd == d)
+            .map(|(_, t)| t.clone())
+            .collect();
         if consts.is_empty() {
-            return quote!();
+            return quote!(#(#structs)*);
         }
-        let uses = match uses.as_slice() {
-            [one] => quote!(#one),
-            more => quote!({#(#more),*}),
-        };
         quote! {
-            use ::busspec_runtime::#uses;
+            use ::busspec_runtime::FieldDesc;
+            #(#structs)*
             #(#consts)*
         }
     };
     let (requests, responses) = (dir(Direction::Request), dir(Direction::Response));
     quote! {
-        /// Each request and its fields as refusals name them: name, code and the frame
-        /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+        /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+        /// code and the frame lengths of its code), and each field a refusal names
+        /// (`message.field`, `FieldDesc`).
         pub mod request {
             #requests
         }
-        /// Each response as its refusals name it.
+        /// Each response as a struct of its own, and the fields its refusals name.
         pub mod response {
             #responses
         }
     }
 }
 
-/// The constant naming message `m` in its direction's module: its name upper-cased.
-fn desc_ident(m: &Message) -> Ident {
-    ident(&m.name.to_uppercase())
-}
-
-/// `&request::READ_COILS`: message `m`'s descriptor, as the refusals take it.
+/// `&request::ReadCoils::DESC`: message `m`'s descriptor, as the refusals take it (a
+/// constant of its struct, [`message_desc_const`]).
 pub(super) fn message_desc(m: &Message) -> TokenStream {
     let dir = direction_module(m.direction);
-    let c = desc_ident(m);
-    quote!(&#dir::#c)
+    let v = variant(m);
+    quote!(&#dir::#v::DESC)
+}
+
+/// `DESC`, the descriptor of framed message `m`: its name, code and the frame lengths of its
+/// code; `None` for a constant whole frame, which no refusal names.
+pub(super) fn message_desc_const(p: &Protocol, m: &Message) -> Option<TokenStream> {
+    if !p.framed(m.direction).iter().any(|x| x.name == m.name) {
+        return None;
+    }
+    let (code, code_len) = code_args(m);
+    let lengths = dispatch_lengths(p, m).into_iter().map(usize_lit);
+    Some(quote! {
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, #code, #code_len, &[#(#lengths),*]);
+    })
 }
 
 /// The module of direction `d`'s descriptors: `request` or `response`.

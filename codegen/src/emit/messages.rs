@@ -25,6 +25,8 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     let mut visit_arms = Vec::new();
     let mut len_arms = Vec::new();
     let mut constant_arms = Vec::new();
+    let mut structs = Vec::new();
+    let mut impls = Vec::new();
     for (i, m) in msgs.iter().enumerate() {
         let v = variant(m);
         let ls = leaves(m);
@@ -44,12 +46,14 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 None => t,
             };
             let d = doc(d.trim());
-            quote!(#d #n: #t)
+            let t = in_parent(t);
+            quote!(#d pub #n: #t)
         });
         let size = match len_range(m) {
             (lo, hi) if lo == hi => format!("{lo} bytes"),
             (lo, hi) => format!("{lo} to {hi} bytes"),
         };
+        let d_of = m.direction;
         let d = match &m.frame {
             Some(bytes) => doc(&format!(
                 "§{} {} (constant frame `{}`, {size}). {}",
@@ -66,11 +70,9 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 m.doc
             )),
         };
-        if ls.is_empty() {
-            variants.push(quote!(#d #v));
-        } else {
-            variants.push(quote!(#d #v { #(#fields),* }));
-        }
+        let dm = direction_module(d_of);
+        variants.push(quote!(#v(#dm::#v)));
+        structs.push(message_struct(ctx, m, &ls, d, fields.collect()));
         let name = &m.name;
         let code = m.code.iter().map(|b| hex_u8(*b));
         let len = p.frame_len(m);
@@ -84,6 +86,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             let frame = quote!(&[#(#bytes),*]);
             constant_arms.push(quote!(#any => rt::Some(#frame),));
             encode_arms.push(quote!(#any => return rt::put_frame(buf, #frame),));
+            impls.push(message_impl(ctx, m, &ls, quote!()));
             continue;
         }
         encode_arms.push(emit_encode_arm(ctx, m, &pattern, &ls, one_len.is_some()));
@@ -97,7 +100,8 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                     (quote!(#n: #l), quote!(#l.is_some()))
                 })
                 .unzip();
-            len_arms.push(quote!(Self::#v { #(#names,)* .. } => #c.frame_len(&[#(#given),*])));
+            len_arms
+                .push(quote!(Self::#v(#dm::#v { #(#names,)* .. }) => #c.frame_len(&[#(#given),*])));
         } else if has_lists(m) {
             let c = lists_const(m);
             let (names, sum): (Vec<TokenStream>, Vec<TokenStream>) = m
@@ -108,7 +112,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                     (quote!(#n: #l), quote!(#c.lists[#k].bytes_of(#l.len())))
                 })
                 .unzip();
-            len_arms.push(quote!(Self::#v { #(#names,)* .. } => #c.base #(+ #sum)*));
+            len_arms.push(quote!(Self::#v(#dm::#v { #(#names,)* .. }) => #c.base #(+ #sum)*));
         } else if let Some((f, _)) = m.repeat() {
             let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
             let sized = sized_record(m, f).and_then(|(wf, fixed, _)| {
@@ -121,22 +125,32 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                 Some((wl, raw, fixed)) => {
                     // Each record as wide as its width field says.
                     let (wn, wv, fixed) = (ident(wl.name), local(wl.name), usize_lit(fixed));
-                    len_arms.push(quote!(Self::#v { #n: #l, #wn: #wv, .. } => {
+                    len_arms.push(quote!(Self::#v(#dm::#v { #n: #l, #wn: #wv, .. }) => {
                         let #wv = *#wv;
                         #c.base + #l.len() * (#fixed + (#raw) as usize)
                     }));
                 }
-                None => len_arms
-                    .push(quote!(Self::#v { #n: #l, .. } => #c.base + #c.bytes_of(#l.len()))),
+                None => len_arms.push(
+                    quote!(Self::#v(#dm::#v { #n: #l, .. }) => #c.base + #c.bytes_of(#l.len())),
+                ),
             }
         }
+        // Each field read where the struct holds it (`self.quantity`), an optional one where
+        // it is present.
         let visits: Vec<TokenStream> = ls
             .iter()
             .map(|l| {
-                let (n, v) = (l.name, local(l.name));
+                let (n, f) = (l.name, ident(l.name));
+                let optional = l.field.present.is_some() && l.bits.is_none();
+                let v = if optional {
+                    let l = local(l.name);
+                    quote!(#l)
+                } else {
+                    quote!(self.#f)
+                };
                 let value = match ctx.kind(l) {
-                    Kind::Int(t) if t.float => quote!(rt::Int(rt::raw(*#v))),
-                    Kind::Int(_) | Kind::Bool => quote!(rt::Int(*#v as i64)),
+                    Kind::Int(t) if t.float => quote!(rt::Int(rt::raw(#v))),
+                    Kind::Int(_) | Kind::Bool => quote!(rt::Int(#v as i64)),
                     Kind::Unit { .. } | Kind::Enum { .. } | Kind::Flags { .. } => {
                         quote!(rt::Int(#v.raw() as i64))
                     }
@@ -146,18 +160,26 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
                     Kind::List { .. } | Kind::BitList { .. } => quote!(rt::List(#v.elements())),
                     Kind::Records { .. } => quote!(rt::Records(#v.records())),
                 };
-                match l.field.present.as_ref().filter(|_| l.bits.is_none()) {
-                    // Visited where present.
-                    Some(_) => quote!(if let rt::Some(#v) = #v { f(#n, #value) }),
-                    None => quote!(f(#n, #value)),
+                if optional {
+                    quote!(if let rt::Some(#v) = self.#f { f(#n, #value) })
+                } else {
+                    quote!(f(#n, #value))
                 }
             })
             .collect();
-        match visits.as_slice() {
-            [] => {}
-            [one] => visit_arms.push(quote!(#pattern => #one,)),
-            many => visit_arms.push(quote!(#pattern => { #(#many;)* })),
-        }
+        let visit = match visits.as_slice() {
+            // Nothing to visit: the enum's `visit` passes it by.
+            [] => quote!(),
+            many => {
+                visit_arms.push(quote!(Self::#v(m) => m.visit(f),));
+                quote! {
+                    pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+                        #(#many;)*
+                    }
+                }
+            }
+        };
+        impls.push(message_impl(ctx, m, &ls, visit));
     }
     let (visit_param, visit_body) = if visit_arms.is_empty() {
         (quote!(_f), quote!())
@@ -165,7 +187,7 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         if visit_arms.len() < msgs.len() {
             visit_arms.push(quote!(_ => {}));
         }
-        (quote!(mut f), quote!(match self { #(#visit_arms)* }))
+        (quote!(f), quote!(match self { #(#visit_arms)* }))
     };
     let n = usize_lit(msgs.len());
     let frame_len = if len_arms.is_empty() {
@@ -236,8 +258,8 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
     } else {
         let recognise = msgs.iter().filter_map(|m| {
             let bytes = m.frame.as_ref()?.iter().map(|b| hex_u8(*b));
-            let any = any_of(&ident("Self"), m);
-            Some(quote!([#(#bytes),*] => rt::Some(#any),))
+            let (v, dm) = (variant(m), direction_module(m.direction));
+            Some(quote!([#(#bytes),*] => rt::Some(Self::#v(#dm::#v)),))
         });
         (
             quote! {
@@ -401,9 +423,11 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
             quote!(),
         )
     };
+    ctx.structs.borrow_mut().push((d, quote!(#(#structs)*)));
     quote! {
         #repeats
         #records
+        #(#impls)*
         #[doc = #what]
         #derives
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -490,9 +514,10 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
     let arms = ctx.p.messages(d).iter().map(|m| {
         let name = &m.name;
         let v = variant(m);
+        let dm = direction_module(d);
         let ls = leaves(m);
         if ls.is_empty() {
-            return quote!(#name => rt::Ok(Self::#v));
+            return quote!(#name => rt::Ok(Self::#v(#dm::#v)));
         }
         let fields = ls.iter().map(|l| {
             let (n, f) = (l.name, ident(l.name));
@@ -571,7 +596,7 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             };
             quote!(#f: #value)
         });
-        quote!(#name => rt::Ok(Self::#v { #(#fields),* }))
+        quote!(#name => rt::Ok(Self::#v(#dm::#v { #(#fields),* })))
     });
     quote! {
         /// The message called `name` in the spec, from each field's raw wire value by its spec
@@ -584,6 +609,103 @@ pub(super) fn emit_from_fields(ctx: &Ctx, d: Direction) -> TokenStream {
             match name {
                 #(#arms,)*
                 _ => rt::Err(rt::FieldError::UnknownMessage),
+            }
+        }
+    }
+}
+
+/// Message `m`'s struct, defined in its direction's module (`request::ReadCoils`): its fields
+/// public, typed as the enum's variants type them; a message without fields a unit struct.
+/// A struct with fields is aligned to 4 bytes, so that every message of a direction keeps its
+/// fields at one offset in the enum and decode moves no field to build it (`BENCHMARKS.md`).
+fn message_struct(
+    ctx: &Ctx,
+    m: &Message,
+    ls: &[Leaf],
+    doc: TokenStream,
+    fields: Vec<TokenStream>,
+) -> TokenStream {
+    let v = variant(m);
+    let derives = if m.fields.iter().any(Field::is_float) {
+        quote!(#[derive(Debug, Clone, Copy, PartialEq)])
+    } else {
+        quote!(#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)])
+    };
+    let _ = ctx;
+    let body = if ls.is_empty() {
+        quote!(pub struct #v;)
+    } else {
+        quote!(#[repr(align(4))] pub struct #v { #(#fields),* })
+    };
+    quote! {
+        #doc
+        #derives
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #body
+    }
+}
+
+/// `request::ReadCoils { starting_address: v_starting_address, .. }`: `m`'s struct binding
+/// each field to its `v_<name>` local.
+pub(super) fn own_binding(m: &Message, ls: &[Leaf]) -> TokenStream {
+    let (v, dm) = (variant(m), direction_module(m.direction));
+    let fields = ls.iter().map(|l| {
+        let (n, v) = (ident(l.name), local(l.name));
+        quote!(#n: #v)
+    });
+    quote!(#dm::#v { #(#fields),* })
+}
+
+/// Message `m`'s constants and methods: `NAME`, `CODE`, its frame length (`LEN`, or `MIN_LEN`
+/// and `MAX_LEN`), `DESC` (what its refusals point at) where it is framed, the byte range of each field at a fixed offset (named as the field,
+/// upper-cased; `AT_` before a name the others take), `visit` where it has fields to visit,
+/// and `encode` (the frame for an address, as the enum's `encode` writes it).
+fn message_impl(ctx: &Ctx, m: &Message, ls: &[Leaf], visit: TokenStream) -> TokenStream {
+    let (v, dm) = (variant(m), direction_module(m.direction));
+    let (ty, _) = direction_names(m.direction);
+    let name = &m.name;
+    let code = m.code.iter().map(|b| hex_u8(*b));
+    let lens = match len_range(m) {
+        (lo, hi) if lo == hi => {
+            let lo = usize_lit(lo);
+            quote!(pub const LEN: usize = #lo;)
+        }
+        (lo, hi) => {
+            let (lo, hi) = (usize_lit(lo), usize_lit(hi));
+            quote!(pub const MIN_LEN: usize = #lo; pub const MAX_LEN: usize = #hi;)
+        }
+    };
+    let o = m.layout;
+    let ranges = ls.iter().filter_map(|l| {
+        let f = l.field;
+        let fi = m.fields.iter().position(|g| std::ptr::eq(g, f))?;
+        let after_list = m.fields[..fi].iter().any(|g| g.repeat.is_some());
+        if l.bits.is_some() || f.repeat.is_some() || f.present.is_some() || after_list {
+            return None;
+        }
+        let at = f.frame_at(&o);
+        let upper = l.name.to_ascii_uppercase();
+        let c = match upper.as_str() {
+            "NAME" | "CODE" | "LEN" | "MIN_LEN" | "MAX_LEN" | "DESC" => {
+                format_ident!("AT_{}", upper)
+            }
+            _ => ident(&upper),
+        };
+        let (a, b) = (usize_lit(at), usize_lit(at + f.width));
+        Some(quote!(pub const #c: rt::Range<usize> = #a..#b;))
+    });
+    let desc = message_desc_const(ctx.p, m);
+    quote! {
+        impl #dm::#v {
+            pub const NAME: &'static str = #name;
+            pub const CODE: &'static [u8] = &[#(#code),*];
+            #lens
+            #desc
+            #(#ranges)*
+            #visit
+            pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+                #ty::#v(*self).encode(address, buf)
             }
         }
     }

@@ -5,16 +5,20 @@
 //! - `head`: the module head (docs, `SPEC_YAML`, buffer sizes, framing, checksum and escaping
 //!   constants);
 //! - `types`: units, enums and flags;
-//! - `messages`: the `Request`/`Response` enums and their per-message tables; `encode` and
-//!   `decode` the arms of one message; `lists` where repeated fields sit and how they are split;
-//!   `records` the struct of each repeated record;
+//! - `messages`: one struct per message in its direction's module (`request::ReadCoils`: its
+//!   fields, `NAME`, `CODE`, `LEN` or `MIN_LEN`/`MAX_LEN`, the byte range of each field at a
+//!   fixed offset, `visit`, `encode`), the `Request`/`Response` enums holding them (a variant
+//!   per message, `Request::ReadCoils(request::ReadCoils)`) and their per-message tables;
+//!   `encode` and `decode` the arms of one message; `lists` where repeated fields sit and how
+//!   they are split; `records` the struct of each repeated record;
 //! - `dispatch`: code → message, the decode entry point;
 //! - `stream`: the stream decoder's tables and the `Protocol` impl;
 //! - `protocol`: pairing (`COMMANDS`, `follows_request`);
 //! - `view`: the borrowed views (`RequestView<'a>`/`ResponseView<'a>`: the decoders again,
 //!   each list lent as `rt::ListView`/`rt::BitsView`), where `view::no_view` finds none missing;
-//! - `desc`: the `request` and `response` modules of descriptors (`rt::MessageDesc` of each
-//!   message, `rt::FieldDesc` of each field a refusal names), which the refusals point at;
+//! - `desc`: the `request` and `response` modules: the message structs, and the descriptors
+//!   (`rt::MessageDesc` of each message, `rt::FieldDesc` of each field a refusal names), which
+//!   the refusals point at;
 //! - `ctx` and `tokens`: what the others share (the IR walked as leaves, typed literals, docs).
 //!
 //! Shape (kept lean so a firmware engineer can read it, about 30–40 lines per message):

@@ -81,11 +81,7 @@ pub(super) fn reply_mask(p: &Protocol) -> Ident {
 /// A pattern matching any value of a message's variant.
 pub(super) fn any_of(ty: &Ident, m: &Message) -> TokenStream {
     let v = variant(m);
-    if leaves(m).is_empty() {
-        quote!(#ty::#v)
-    } else {
-        quote!(#ty::#v { .. })
-    }
+    quote!(#ty::#v(_))
 }
 
 pub(super) fn emit_pairing(ctx: &Ctx) -> TokenStream {
@@ -248,8 +244,14 @@ pub(super) fn emit_follows_request(ctx: &Ctx) -> Option<TokenStream> {
                 }
             }
             let cv = variant(cmd);
+            // A view's variant holds its fields; an owned response's, its message's struct.
+            let mine_pat = if ctx.view.get() {
+                quote!(Self::#v { #(#own,)* .. })
+            } else {
+                quote!(Self::#v(response::#v { #(#own,)* .. }))
+            };
             arms.push(quote! {
-                (&Self::#v { #(#own,)* .. }, &Request::#cv { #(#theirs,)* .. }) => {
+                (&#mine_pat, &Request::#cv(request::#cv { #(#theirs,)* .. })) => {
                     #(#checks)*
                 }
             });

@@ -179,3 +179,40 @@ pub(super) fn paren(e: TokenStream) -> TokenStream {
         quote!((#e))
     }
 }
+
+/// A type as the `request`/`response` modules name it: every path that starts at a type of the
+/// generated module (`Angle`, `rt::Repeated<Angle, 4>`) or at `rt` starts at `super::` instead,
+/// so a message's struct, which lives in that module, can be named as a spec type is
+/// (`codegen/tests/fixtures/core_names.yaml` names a message as a type).
+pub(super) fn in_parent(t: TokenStream) -> TokenStream {
+    use proc_macro2::{Group, TokenTree};
+    let mut out = TokenStream::new();
+    let mut after_colons = false;
+    for tt in t {
+        match tt {
+            TokenTree::Ident(i) => {
+                let s = i.to_string();
+                if !after_colons && (s == "rt" || s.starts_with(|c: char| c.is_ascii_uppercase())) {
+                    out.extend(quote!(super::));
+                }
+                out.extend([TokenTree::Ident(i)]);
+                after_colons = false;
+            }
+            TokenTree::Group(g) => {
+                let mut ng = Group::new(g.delimiter(), in_parent(g.stream()));
+                ng.set_span(g.span());
+                out.extend([TokenTree::Group(ng)]);
+                after_colons = false;
+            }
+            TokenTree::Punct(p) => {
+                after_colons = p.as_char() == ':';
+                out.extend([TokenTree::Punct(p)]);
+            }
+            other => {
+                after_colons = false;
+                out.extend([other]);
+            }
+        }
+    }
+    out
+}

@@ -133,13 +133,14 @@ pub(super) fn emit_view(ctx: &Ctx, d: Direction) -> TokenStream {
     let mut owned_arms = Vec::new();
     for (i, m) in msgs.iter().enumerate() {
         let v = variant(m);
+        let dm = direction_module(d);
         let ls = leaves(m);
         let i = usize_lit(i);
-        let d = doc(&format!("[`{ty}::{v}`], read from the frame."));
+        let d = doc(&format!("[`{dm}::{v}`], read from the frame."));
         if ls.is_empty() {
             variants.push(quote!(#d #v));
             index_arms.push(quote!(Self::#v => #i,));
-            owned_arms.push(quote!(Self::#v => #ty::#v,));
+            owned_arms.push(quote!(Self::#v => #ty::#v(#dm::#v),));
             continue;
         }
         let fields = ls.iter().map(|l| {
@@ -157,7 +158,7 @@ pub(super) fn emit_view(ctx: &Ctx, d: Direction) -> TokenStream {
                 _ => quote!(#n),
             }
         });
-        owned_arms.push(quote!(Self::#v { #(#names),* } => #ty::#v { #(#values),* },));
+        owned_arms.push(quote!(Self::#v { #(#names),* } => #ty::#v(#dm::#v { #(#values),* }),));
     }
     ctx.view.set(true);
     let dispatch = emit_dispatch(ctx, d, &quote!(Self));

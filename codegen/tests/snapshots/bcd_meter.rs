@@ -108,23 +108,50 @@ pub mod bcd_meter {
             rt::Some(Self(raw as u32))
         }
     }
+    impl request::ReadEnergy {
+        pub const NAME: &'static str = "read_energy";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x11,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadEnergy(*self).encode(address, buf)
+        }
+    }
+    impl request::SetClock {
+        pub const NAME: &'static str = "set_clock";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x08,
+            1,
+            &[9],
+        );
+        pub const HOUR: rt::Range<usize> = 3..4;
+        pub const MINUTE: rt::Range<usize> = 4..5;
+        pub const YEAR: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("hour", rt::Int(self.hour as i64));
+            f("minute", rt::Int(self.minute as i64));
+            f("year", rt::Int(self.year as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetClock(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Read the energy register (code `0x11`, 5 bytes).
-        ReadEnergy,
-        /// §3.2 Set the clock (code `0x08`, 9 bytes).
-        SetClock {
-            /// \[h\] Valid raw range 0..=23.
-            hour: u8,
-            /// \[min\] Valid raw range 0..=59.
-            minute: u8,
-            /// Valid raw range 0..=9999.
-            year: u16,
-        },
+        ReadEnergy(request::ReadEnergy),
+        SetClock(request::SetClock),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -135,8 +162,8 @@ pub mod bcd_meter {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadEnergy => 0,
-                Self::SetClock { .. } => 1,
+                Self::ReadEnergy(_) => 0,
+                Self::SetClock(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -153,13 +180,9 @@ pub mod bcd_meter {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetClock { hour: v_hour, minute: v_minute, year: v_year } => {
-                    f("hour", rt::Int(*v_hour as i64));
-                    f("minute", rt::Int(*v_minute as i64));
-                    f("year", rt::Int(*v_year as i64));
-                }
+                Self::SetClock(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -173,10 +196,12 @@ pub mod bcd_meter {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadEnergy => {
+                Self::ReadEnergy(request::ReadEnergy {}) => {
                     rt::frame_mut::<5>(buf, &[0x68, address, 0x11])?.len()
                 }
-                Self::SetClock { hour: v_hour, minute: v_minute, year: v_year } => {
+                Self::SetClock(
+                    request::SetClock { hour: v_hour, minute: v_minute, year: v_year },
+                ) => {
                     rt::encode_in_range("hour", v_hour, 0, 23)?;
                     rt::encode_in_range("minute", v_minute, 0, 59)?;
                     rt::encode_in_range("year", v_year, 0, 9999)?;
@@ -213,11 +238,11 @@ pub mod bcd_meter {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x11 => {
-                    rt::fixed::<5>(frame, &request::READ_ENERGY)
-                        .map(|_| Self::ReadEnergy)
+                    rt::fixed::<5>(frame, &request::ReadEnergy::DESC)
+                        .map(|_| Self::ReadEnergy(request::ReadEnergy))
                 }
                 0x08 => {
-                    let frame = rt::fixed::<9>(frame, &request::SET_CLOCK)?;
+                    let frame = rt::fixed::<9>(frame, &request::SetClock::DESC)?;
                     let field_0: u8 = rt::bcd(
                         &request::SET_CLOCK_HOUR,
                         3,
@@ -236,11 +261,13 @@ pub mod bcd_meter {
                         u16::from_le_bytes([frame[5], frame[6]]) as u64,
                     )? as u16;
                     rt::in_range(&request::SET_CLOCK_YEAR, 5, field_2, 0, 9999)?;
-                    rt::Ok(Self::SetClock {
-                        hour: field_0,
-                        minute: field_1,
-                        year: field_2,
-                    })
+                    rt::Ok(
+                        Self::SetClock(request::SetClock {
+                            hour: field_0,
+                            minute: field_1,
+                            year: field_2,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, false)),
             }
@@ -253,13 +280,15 @@ pub mod bcd_meter {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_energy" => rt::Ok(Self::ReadEnergy),
+                "read_energy" => rt::Ok(Self::ReadEnergy(request::ReadEnergy)),
                 "set_clock" => {
-                    rt::Ok(Self::SetClock {
-                        hour: rt::get(&mut field, "hour")?,
-                        minute: rt::get(&mut field, "minute")?,
-                        year: rt::get(&mut field, "year")?,
-                    })
+                    rt::Ok(
+                        Self::SetClock(request::SetClock {
+                            hour: rt::get(&mut field, "hour")?,
+                            minute: rt::get(&mut field, "minute")?,
+                            year: rt::get(&mut field, "year")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -324,21 +353,48 @@ pub mod bcd_meter {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Energy {
+        pub const NAME: &'static str = "energy";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x91,
+            1,
+            &[10],
+        );
+        pub const ENERGY: rt::Range<usize> = 3..7;
+        pub const TARIFF: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("energy", rt::Int(self.energy.raw() as i64));
+            f("tariff", rt::Int(self.tariff as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Energy(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x88];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x88,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 Energy register (code `0x91`, 10 bytes).
-        Energy {
-            /// \[kWh\] Valid raw range 0..=99999999.
-            energy: KilowattHours,
-            /// Valid raw range 1..=4.
-            tariff: u8,
-        },
-        /// §4.2 Acknowledge (code `0x88`, 5 bytes).
-        Ack,
+        Energy(response::Energy),
+        Ack(response::Ack),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -349,8 +405,8 @@ pub mod bcd_meter {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Energy { .. } => 0,
-                Self::Ack => 1,
+                Self::Energy(_) => 0,
+                Self::Ack(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -367,12 +423,9 @@ pub mod bcd_meter {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Energy { energy: v_energy, tariff: v_tariff } => {
-                    f("energy", rt::Int(v_energy.raw() as i64));
-                    f("tariff", rt::Int(*v_tariff as i64));
-                }
+                Self::Energy(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -386,7 +439,9 @@ pub mod bcd_meter {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Energy { energy: v_energy, tariff: v_tariff } => {
+                Self::Energy(
+                    response::Energy { energy: v_energy, tariff: v_tariff },
+                ) => {
                     rt::encode_in_range("energy", v_energy.raw(), 0, 99999999)?;
                     rt::encode_in_range("tariff", v_tariff, 1, 4)?;
                     let out = rt::frame_mut::<10>(buf, &[0x68, address, 0x91])?;
@@ -397,7 +452,9 @@ pub mod bcd_meter {
                     out[7] = rt::to_bcd(v_tariff as u64) as u8;
                     out.len()
                 }
-                Self::Ack => rt::frame_mut::<5>(buf, &[0x68, address, 0x88])?.len(),
+                Self::Ack(response::Ack {}) => {
+                    rt::frame_mut::<5>(buf, &[0x68, address, 0x88])?.len()
+                }
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -449,7 +506,7 @@ pub mod bcd_meter {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x91 => {
-                    let frame = rt::fixed::<10>(frame, &response::ENERGY)?;
+                    let frame = rt::fixed::<10>(frame, &response::Energy::DESC)?;
                     let field_0: u32 = rt::bcd(
                         &response::ENERGY_ENERGY,
                         3,
@@ -463,12 +520,17 @@ pub mod bcd_meter {
                         frame[7] as u64,
                     )? as u8;
                     rt::in_range(&response::ENERGY_TARIFF, 7, field_1, 1, 4)?;
-                    rt::Ok(Self::Energy {
-                        energy: KilowattHours::from_raw(field_0),
-                        tariff: field_1,
-                    })
+                    rt::Ok(
+                        Self::Energy(response::Energy {
+                            energy: KilowattHours::from_raw(field_0),
+                            tariff: field_1,
+                        }),
+                    )
                 }
-                0x88 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
+                0x88 => {
+                    rt::fixed::<5>(frame, &response::Ack::DESC)
+                        .map(|_| Self::Ack(response::Ack))
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, true)),
             }
         }
@@ -481,12 +543,16 @@ pub mod bcd_meter {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "energy" => {
-                    rt::Ok(Self::Energy {
-                        energy: KilowattHours::from_raw(rt::get(&mut field, "energy")?),
-                        tariff: rt::get(&mut field, "tariff")?,
-                    })
+                    rt::Ok(
+                        Self::Energy(response::Energy {
+                            energy: KilowattHours::from_raw(
+                                rt::get(&mut field, "energy")?,
+                            ),
+                            tariff: rt::get(&mut field, "tariff")?,
+                        }),
+                    )
                 }
-                "ack" => rt::Ok(Self::Ack),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -634,19 +700,29 @@ pub mod bcd_meter {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<BcdMeter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_energy`, code 0x11
-        pub const READ_ENERGY: MessageDesc = MessageDesc::new(
-            "read_energy",
-            0x11,
-            1,
-            &[5],
-        );
-        /// `set_clock`, code 0x08
-        pub const SET_CLOCK: MessageDesc = MessageDesc::new("set_clock", 0x08, 1, &[9]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Read the energy register (code `0x11`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadEnergy;
+        /// §3.2 Set the clock (code `0x08`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetClock {
+            /// \[h\] Valid raw range 0..=23.
+            pub hour: u8,
+            /// \[min\] Valid raw range 0..=59.
+            pub minute: u8,
+            /// Valid raw range 0..=9999.
+            pub year: u16,
+        }
         /// `set_clock.hour`
         pub const SET_CLOCK_HOUR: FieldDesc = FieldDesc::new("set_clock", "hour");
         /// `set_clock.minute`
@@ -654,16 +730,28 @@ pub mod bcd_meter {
         /// `set_clock.year`
         pub const SET_CLOCK_YEAR: FieldDesc = FieldDesc::new("set_clock", "year");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `energy`, code 0x91
-        pub const ENERGY: MessageDesc = MessageDesc::new("energy", 0x91, 1, &[10]);
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 Energy register (code `0x91`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Energy {
+            /// \[kWh\] Valid raw range 0..=99999999.
+            pub energy: super::KilowattHours,
+            /// Valid raw range 1..=4.
+            pub tariff: u8,
+        }
+        /// §4.2 Acknowledge (code `0x88`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
         /// `energy.energy`
         pub const ENERGY_ENERGY: FieldDesc = FieldDesc::new("energy", "energy");
         /// `energy.tariff`
         pub const ENERGY_TARIFF: FieldDesc = FieldDesc::new("energy", "tariff");
-        /// `ack`, code 0x88
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x88, 1, &[5]);
     }
 }

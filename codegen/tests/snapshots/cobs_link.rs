@@ -99,18 +99,61 @@ pub mod cobs_link {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
+    impl request::ReadPosition {
+        pub const NAME: &'static str = "read_position";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::SetSpeed {
+        pub const NAME: &'static str = "set_speed";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[6],
+        );
+        pub const SPEED: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("speed", rt::Int(self.speed as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetSpeed(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLog {
+        pub const NAME: &'static str = "read_log";
+        pub const CODE: &'static [u8] = &[0x30];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x30,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLog(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Read position (code `0x10`, 4 bytes).
-        ReadPosition,
-        /// §3.2 Set speed (code `0x20`, 6 bytes).
-        SetSpeed { speed: u16 },
-        /// §3.3 Read the log (code `0x30`, 4 bytes).
-        ReadLog,
+        ReadPosition(request::ReadPosition),
+        SetSpeed(request::SetSpeed),
+        ReadLog(request::ReadLog),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -122,9 +165,9 @@ pub mod cobs_link {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadPosition => 0,
-                Self::SetSpeed { .. } => 1,
-                Self::ReadLog => 2,
+                Self::ReadPosition(_) => 0,
+                Self::SetSpeed(_) => 1,
+                Self::ReadLog(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -141,9 +184,9 @@ pub mod cobs_link {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetSpeed { speed: v_speed } => f("speed", rt::Int(*v_speed as i64)),
+                Self::SetSpeed(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -170,13 +213,17 @@ pub mod cobs_link {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadPosition => rt::frame_mut::<4>(buf, &[0x00, 0x10])?.len(),
-                Self::SetSpeed { speed: v_speed } => {
+                Self::ReadPosition(request::ReadPosition {}) => {
+                    rt::frame_mut::<4>(buf, &[0x00, 0x10])?.len()
+                }
+                Self::SetSpeed(request::SetSpeed { speed: v_speed }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x02, 0x20])?;
                     out[2..4].copy_from_slice(&v_speed.to_le_bytes());
                     out.len()
                 }
-                Self::ReadLog => rt::frame_mut::<4>(buf, &[0x00, 0x30])?.len(),
+                Self::ReadLog(request::ReadLog {}) => {
+                    rt::frame_mut::<4>(buf, &[0x00, 0x30])?.len()
+                }
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -221,16 +268,21 @@ pub mod cobs_link {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x10 => {
-                    rt::fixed::<4>(frame, &request::READ_POSITION)
-                        .map(|_| Self::ReadPosition)
+                    rt::fixed::<4>(frame, &request::ReadPosition::DESC)
+                        .map(|_| Self::ReadPosition(request::ReadPosition))
                 }
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_SPEED)?;
-                    rt::Ok(Self::SetSpeed {
-                        speed: u16::from_le_bytes([frame[2], frame[3]]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &request::SetSpeed::DESC)?;
+                    rt::Ok(
+                        Self::SetSpeed(request::SetSpeed {
+                            speed: u16::from_le_bytes([frame[2], frame[3]]),
+                        }),
+                    )
                 }
-                0x30 => rt::fixed::<4>(frame, &request::READ_LOG).map(|_| Self::ReadLog),
+                0x30 => {
+                    rt::fixed::<4>(frame, &request::ReadLog::DESC)
+                        .map(|_| Self::ReadLog(request::ReadLog))
+                }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
             }
         }
@@ -242,13 +294,15 @@ pub mod cobs_link {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_position" => rt::Ok(Self::ReadPosition),
+                "read_position" => rt::Ok(Self::ReadPosition(request::ReadPosition)),
                 "set_speed" => {
-                    rt::Ok(Self::SetSpeed {
-                        speed: rt::get(&mut field, "speed")?,
-                    })
+                    rt::Ok(
+                        Self::SetSpeed(request::SetSpeed {
+                            speed: rt::get(&mut field, "speed")?,
+                        }),
+                    )
                 }
-                "read_log" => rt::Ok(Self::ReadLog),
+                "read_log" => rt::Ok(Self::ReadLog(request::ReadLog)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -323,21 +377,65 @@ pub mod cobs_link {
         min: 0,
         max: 254,
     };
+    impl response::Position {
+        pub const NAME: &'static str = "position";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[8],
+        );
+        pub const POSITION: rt::Range<usize> = 2..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("position", rt::Int(self.position as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Position(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA0,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Log {
+        pub const NAME: &'static str = "log";
+        pub const CODE: &'static [u8] = &[0xB0];
+        pub const MIN_LEN: usize = 4;
+        pub const MAX_LEN: usize = 258;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xB0,
+            1,
+            &[4],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("entries", rt::List(self.entries.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Log(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 Position (code `0x90`, 8 bytes).
-        Position {
-            /// \[steps\]
-            position: i32,
-        },
-        /// §4.2 Acknowledge (code `0xA0`, 4 bytes).
-        Ack,
-        /// §4.3 Log bytes (code `0xB0`, 4 to 258 bytes).
-        Log { entries: rt::Repeated<u8, 254> },
+        Position(response::Position),
+        Ack(response::Ack),
+        Log(response::Log),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -349,9 +447,9 @@ pub mod cobs_link {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Position { .. } => 0,
-                Self::Ack => 1,
-                Self::Log { .. } => 2,
+                Self::Position(_) => 0,
+                Self::Ack(_) => 1,
+                Self::Log(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -365,7 +463,7 @@ pub mod cobs_link {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Log { entries: v_entries, .. } => {
+                Self::Log(response::Log { entries: v_entries, .. }) => {
                     REPEAT_LOG.base + REPEAT_LOG.bytes_of(v_entries.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -373,14 +471,10 @@ pub mod cobs_link {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Position { position: v_position } => {
-                    f("position", rt::Int(*v_position as i64))
-                }
-                Self::Log { entries: v_entries } => {
-                    f("entries", rt::List(v_entries.elements()))
-                }
+                Self::Position(m) => m.visit(f),
+                Self::Log(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -407,13 +501,15 @@ pub mod cobs_link {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Position { position: v_position } => {
+                Self::Position(response::Position { position: v_position }) => {
                     let out = rt::frame_mut::<8>(buf, &[0x04, 0x90])?;
                     out[2..6].copy_from_slice(&v_position.to_le_bytes());
                     out.len()
                 }
-                Self::Ack => rt::frame_mut::<4>(buf, &[0x00, 0xA0])?.len(),
-                Self::Log { entries: v_entries } => {
+                Self::Ack(response::Ack {}) => {
+                    rt::frame_mut::<4>(buf, &[0x00, 0xA0])?.len()
+                }
+                Self::Log(response::Log { entries: v_entries }) => {
                     let frame_len = REPEAT_LOG.encode_len(v_entries.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[])?;
                     rt::put_length(out, 0, 1, true, true, -4)?;
@@ -493,22 +589,30 @@ pub mod cobs_link {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x90 => {
-                    let frame = rt::fixed::<8>(frame, &response::POSITION)?;
-                    rt::Ok(Self::Position {
-                        position: i32::from_le_bytes([
-                            frame[2],
-                            frame[3],
-                            frame[4],
-                            frame[5],
-                        ]),
-                    })
+                    let frame = rt::fixed::<8>(frame, &response::Position::DESC)?;
+                    rt::Ok(
+                        Self::Position(response::Position {
+                            position: i32::from_le_bytes([
+                                frame[2],
+                                frame[3],
+                                frame[4],
+                                frame[5],
+                            ]),
+                        }),
+                    )
                 }
-                0xA0 => rt::fixed::<4>(frame, &response::ACK).map(|_| Self::Ack),
+                0xA0 => {
+                    rt::fixed::<4>(frame, &response::Ack::DESC)
+                        .map(|_| Self::Ack(response::Ack))
+                }
                 0xB0 => {
                     let (_, elements, _) = REPEAT_LOG.split::<2>(frame)?;
-                    rt::Ok(Self::Log {
-                        entries: REPEAT_LOG.elements::<u8, 254>(elements, true, false)?,
-                    })
+                    rt::Ok(
+                        Self::Log(response::Log {
+                            entries: REPEAT_LOG
+                                .elements::<u8, 254>(elements, true, false)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
             }
@@ -522,15 +626,19 @@ pub mod cobs_link {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "position" => {
-                    rt::Ok(Self::Position {
-                        position: rt::get(&mut field, "position")?,
-                    })
+                    rt::Ok(
+                        Self::Position(response::Position {
+                            position: rt::get(&mut field, "position")?,
+                        }),
+                    )
                 }
-                "ack" => rt::Ok(Self::Ack),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 "log" => {
-                    rt::Ok(Self::Log {
-                        entries: rt::list::<u8, 254>(&mut field, "entries", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::Log(response::Log {
+                            entries: rt::list::<u8, 254>(&mut field, "entries", 0, 255)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -666,31 +774,54 @@ pub mod cobs_link {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CobsLink>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `read_position`, code 0x10
-        pub const READ_POSITION: MessageDesc = MessageDesc::new(
-            "read_position",
-            0x10,
-            1,
-            &[4],
-        );
-        /// `set_speed`, code 0x20
-        pub const SET_SPEED: MessageDesc = MessageDesc::new("set_speed", 0x20, 1, &[6]);
-        /// `read_log`, code 0x30
-        pub const READ_LOG: MessageDesc = MessageDesc::new("read_log", 0x30, 1, &[4]);
+        /// §3.1 Read position (code `0x10`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadPosition;
+        /// §3.2 Set speed (code `0x20`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetSpeed {
+            pub speed: u16,
+        }
+        /// §3.3 Read the log (code `0x30`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLog;
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `position`, code 0x90
-        pub const POSITION: MessageDesc = MessageDesc::new("position", 0x90, 1, &[8]);
-        /// `ack`, code 0xA0
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[4]);
-        /// `log`, code 0xB0
-        pub const LOG: MessageDesc = MessageDesc::new("log", 0xB0, 1, &[4]);
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 Position (code `0x90`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Position {
+            /// \[steps\]
+            pub position: i32,
+        }
+        /// §4.2 Acknowledge (code `0xA0`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
+        /// §4.3 Log bytes (code `0xB0`, 4 to 258 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Log {
+            pub entries: super::rt::Repeated<u8, 254>,
+        }
         /// `log.entries`
         pub const LOG_ENTRIES: FieldDesc = FieldDesc::new("log", "entries");
     }

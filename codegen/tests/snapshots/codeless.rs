@@ -100,16 +100,46 @@ pub mod codeless {
             Self(raw)
         }
     }
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[7],
+        );
+        pub const REGISTER: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register", rt::Int(self.register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Ping (code `0x01`, 6 bytes).
-        Ping,
-        /// §2 Read (code `0x02`, 7 bytes).
-        Read { register: u8 },
+        Ping(request::Ping),
+        Read(request::Read),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -120,8 +150,8 @@ pub mod codeless {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ping => 0,
-                Self::Read { .. } => 1,
+                Self::Ping(_) => 0,
+                Self::Read(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -138,11 +168,9 @@ pub mod codeless {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Read { register: v_register } => {
-                    f("register", rt::Int(*v_register as i64))
-                }
+                Self::Read(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -156,10 +184,10 @@ pub mod codeless {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping => {
+                Self::Ping(request::Ping {}) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
-                Self::Read { register: v_register } => {
+                Self::Read(request::Read { register: v_register }) => {
                     let out = rt::frame_mut::<
                         7,
                     >(buf, &[0xFF, 0xFF, address, 0x03, 0x02])?;
@@ -191,10 +219,17 @@ pub mod codeless {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
-                0x01 => rt::fixed::<6>(frame, &request::PING).map(|_| Self::Ping),
+                0x01 => {
+                    rt::fixed::<6>(frame, &request::Ping::DESC)
+                        .map(|_| Self::Ping(request::Ping))
+                }
                 0x02 => {
-                    let frame = rt::fixed::<7>(frame, &request::READ)?;
-                    rt::Ok(Self::Read { register: frame[5] })
+                    let frame = rt::fixed::<7>(frame, &request::Read::DESC)?;
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            register: frame[5],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
             }
@@ -207,11 +242,13 @@ pub mod codeless {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "ping" => rt::Ok(Self::Ping),
+                "ping" => rt::Ok(Self::Ping(request::Ping)),
                 "read" => {
-                    rt::Ok(Self::Read {
-                        register: rt::get(&mut field, "register")?,
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            register: rt::get(&mut field, "register")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -276,16 +313,52 @@ pub mod codeless {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0,
+            0,
+            &[6, 8],
+        );
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0,
+            0,
+            &[6, 8],
+        );
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub const VALUE: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadStatus(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 Status (code `0x`, 6 bytes).
-        Status { error: Errors },
-        /// §4 Status with a value (code `0x`, 8 bytes).
-        ReadStatus { error: Errors, value: u16 },
+        Status(response::Status),
+        ReadStatus(response::ReadStatus),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -296,8 +369,8 @@ pub mod codeless {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Status { .. } => 0,
-                Self::ReadStatus { .. } => 1,
+                Self::Status(_) => 0,
+                Self::ReadStatus(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -314,15 +387,10 @@ pub mod codeless {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Status { error: v_error } => {
-                    f("error", rt::Int(v_error.raw() as i64))
-                }
-                Self::ReadStatus { error: v_error, value: v_value } => {
-                    f("error", rt::Int(v_error.raw() as i64));
-                    f("value", rt::Int(*v_value as i64));
-                }
+                Self::Status(m) => m.visit(f),
+                Self::ReadStatus(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -335,12 +403,14 @@ pub mod codeless {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Status { error: v_error } => {
+                Self::Status(response::Status { error: v_error }) => {
                     let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02])?;
                     out[4] = v_error.raw();
                     out.len()
                 }
-                Self::ReadStatus { error: v_error, value: v_value } => {
+                Self::ReadStatus(
+                    response::ReadStatus { error: v_error, value: v_value },
+                ) => {
                     let out = rt::frame_mut::<8>(buf, &[0xFF, 0xFF, address, 0x04])?;
                     out[4] = v_error.raw();
                     out[5..7].copy_from_slice(&v_value.to_le_bytes());
@@ -404,17 +474,21 @@ pub mod codeless {
                 0u32 => {
                     let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::Ok(Self::Status {
-                            error: Errors::from_raw(frame[4]),
-                        })
+                        rt::Ok(
+                            Self::Status(response::Status {
+                                error: Errors::from_raw(frame[4]),
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 8]| {
-                        rt::Ok(Self::ReadStatus {
-                            error: Errors::from_raw(frame[4]),
-                            value: u16::from_le_bytes([frame[5], frame[6]]),
-                        })
+                        rt::Ok(
+                            Self::ReadStatus(response::ReadStatus {
+                                error: Errors::from_raw(frame[4]),
+                                value: u16::from_le_bytes([frame[5], frame[6]]),
+                            }),
+                        )
                     });
-                    g.end(&response::STATUS)
+                    g.end(&response::Status::DESC)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }
@@ -428,15 +502,19 @@ pub mod codeless {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "status" => {
-                    rt::Ok(Self::Status {
-                        error: Errors::from_raw(rt::get(&mut field, "error")?),
-                    })
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error: Errors::from_raw(rt::get(&mut field, "error")?),
+                        }),
+                    )
                 }
                 "read_status" => {
-                    rt::Ok(Self::ReadStatus {
-                        error: Errors::from_raw(rt::get(&mut field, "error")?),
-                        value: rt::get(&mut field, "value")?,
-                    })
+                    rt::Ok(
+                        Self::ReadStatus(response::ReadStatus {
+                            error: Errors::from_raw(rt::get(&mut field, "error")?),
+                            value: rt::get(&mut field, "value")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -599,26 +677,42 @@ pub mod codeless {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Codeless>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `ping`, code 0x01
-        pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[6]);
-        /// `read`, code 0x02
-        pub const READ: MessageDesc = MessageDesc::new("read", 0x02, 1, &[7]);
+        /// §1 Ping (code `0x01`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ping;
+        /// §2 Read (code `0x02`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Read {
+            pub register: u8,
+        }
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `status` (no code)
-        pub const STATUS: MessageDesc = MessageDesc::new("status", 0, 0, &[6, 8]);
-        /// `read_status` (no code)
-        pub const READ_STATUS: MessageDesc = MessageDesc::new(
-            "read_status",
-            0,
-            0,
-            &[6, 8],
-        );
+        /// §3 Status (code `0x`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Status {
+            pub error: super::Errors,
+        }
+        /// §4 Status with a value (code `0x`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadStatus {
+            pub error: super::Errors,
+            pub value: u16,
+        }
     }
 }

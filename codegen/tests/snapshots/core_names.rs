@@ -236,27 +236,92 @@ pub mod clash {
             Self(raw)
         }
     }
+    impl request::Option {
+        pub const NAME: &'static str = "option";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[7],
+        );
+        pub const SOME: rt::Range<usize> = 3..4;
+        pub const CORE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("some", rt::Int(self.some.raw() as i64));
+            f("core", rt::Int(self.core.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Option(*self).encode(address, buf)
+        }
+    }
+    impl request::U8 {
+        pub const NAME: &'static str = "u8";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x11,
+            1,
+            &[5],
+        );
+        pub const FRAME: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame", rt::Int(self.frame.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::U8(*self).encode(address, buf)
+        }
+    }
+    impl request::Core {
+        pub const NAME: &'static str = "core";
+        pub const CODE: &'static [u8] = &[0x12];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x12,
+            1,
+            &[7],
+        );
+        pub const ADDRESS: rt::Range<usize> = 3..4;
+        pub const OUT: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("out", rt::Int(self.out as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Core(*self).encode(address, buf)
+        }
+    }
+    impl request::Rt {
+        pub const NAME: &'static str = "rt";
+        pub const CODE: &'static [u8] = &[0x13];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x13,
+            1,
+            &[6],
+        );
+        pub const F: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("f", rt::Int(self.f as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Rt(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Option (code `0x10`, 7 bytes).
-        Option {
-            some: Result,
-            /// \[O\] Valid raw range 0..=1000.
-            core: Option,
-        },
-        /// §2 u8 (code `0x11`, 5 bytes).
-        U8 {
-            /// \[S\]
-            frame: Some,
-        },
-        /// §3 core (code `0x12`, 7 bytes).
-        Core { address: u8, out: i8 },
-        /// §4 rt (code `0x13`, 6 bytes).
-        Rt { f: u8 },
+        Option(request::Option),
+        U8(request::U8),
+        Core(request::Core),
+        Rt(request::Rt),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -269,10 +334,10 @@ pub mod clash {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Option { .. } => 0,
-                Self::U8 { .. } => 1,
-                Self::Core { .. } => 2,
-                Self::Rt { .. } => 3,
+                Self::Option(_) => 0,
+                Self::U8(_) => 1,
+                Self::Core(_) => 2,
+                Self::Rt(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -289,18 +354,12 @@ pub mod clash {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Option { some: v_some, core: v_core } => {
-                    f("some", rt::Int(v_some.raw() as i64));
-                    f("core", rt::Int(v_core.raw() as i64));
-                }
-                Self::U8 { frame: v_frame } => f("frame", rt::Int(v_frame.raw() as i64)),
-                Self::Core { address: v_address, out: v_out } => {
-                    f("address", rt::Int(*v_address as i64));
-                    f("out", rt::Int(*v_out as i64));
-                }
-                Self::Rt { f: v_f } => f("f", rt::Int(*v_f as i64)),
+                Self::Option(m) => m.visit(f),
+                Self::U8(m) => m.visit(f),
+                Self::Core(m) => m.visit(f),
+                Self::Rt(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -313,29 +372,29 @@ pub mod clash {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Option { some: v_some, core: v_core } => {
-                    rt::encode_broadcast(address, 0x00, &request::OPTION)?;
+                Self::Option(request::Option { some: v_some, core: v_core }) => {
+                    rt::encode_broadcast(address, 0x00, &request::Option::DESC)?;
                     rt::encode_in_range("core", v_core.raw(), 0, 1000)?;
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x10])?;
                     out[3] = v_some.raw();
                     out[4..6].copy_from_slice(&v_core.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xBA))
                 }
-                Self::U8 { frame: v_frame } => {
-                    rt::encode_broadcast(address, 0x00, &request::U8)?;
+                Self::U8(request::U8 { frame: v_frame }) => {
+                    rt::encode_broadcast(address, 0x00, &request::U8::DESC)?;
                     let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x11])?;
                     out[3] = rt::fits("frame", v_frame.raw(), 0, 255)? as u8;
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xBB))
                 }
-                Self::Core { address: v_address, out: v_out } => {
+                Self::Core(request::Core { address: v_address, out: v_out }) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x12])?;
                     out[4] = 0x00;
                     out[3] = v_address;
                     out[5..6].copy_from_slice(&v_out.to_le_bytes());
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xBC))
                 }
-                Self::Rt { f: v_f } => {
-                    rt::encode_broadcast(address, 0x00, &request::RT)?;
+                Self::Rt(request::Rt { f: v_f }) => {
+                    rt::encode_broadcast(address, 0x00, &request::Rt::DESC)?;
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x13])?;
                     let field_0: u8 = v_f;
                     out[3] = field_0;
@@ -365,35 +424,41 @@ pub mod clash {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<7>(frame, &request::OPTION)?;
-                    rt::no_broadcast(frame[1], 0x00, &request::OPTION)?;
+                    let frame = rt::fixed::<7>(frame, &request::Option::DESC)?;
+                    rt::no_broadcast(frame[1], 0x00, &request::Option::DESC)?;
                     let field_1: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(&request::OPTION_CORE, 4, field_1, 0, 1000)?;
-                    rt::Ok(Self::Option {
-                        some: Result::from_raw(frame[3]),
-                        core: Option::from_raw(field_1),
-                    })
+                    rt::Ok(
+                        Self::Option(request::Option {
+                            some: Result::from_raw(frame[3]),
+                            core: Option::from_raw(field_1),
+                        }),
+                    )
                 }
                 0x11 => {
-                    let frame = rt::fixed::<5>(frame, &request::U8)?;
-                    rt::no_broadcast(frame[1], 0x00, &request::U8)?;
-                    rt::Ok(Self::U8 {
-                        frame: Some::from_raw(frame[3] as i16),
-                    })
+                    let frame = rt::fixed::<5>(frame, &request::U8::DESC)?;
+                    rt::no_broadcast(frame[1], 0x00, &request::U8::DESC)?;
+                    rt::Ok(
+                        Self::U8(request::U8 {
+                            frame: Some::from_raw(frame[3] as i16),
+                        }),
+                    )
                 }
                 0x12 => {
-                    let frame = rt::fixed::<7>(frame, &request::CORE)?;
+                    let frame = rt::fixed::<7>(frame, &request::Core::DESC)?;
                     rt::equal(&request::CORE_BUF, 4, frame[4], 0x0)?;
-                    rt::Ok(Self::Core {
-                        address: frame[3],
-                        out: frame[5] as i8,
-                    })
+                    rt::Ok(
+                        Self::Core(request::Core {
+                            address: frame[3],
+                            out: frame[5] as i8,
+                        }),
+                    )
                 }
                 0x13 => {
-                    let frame = rt::fixed::<6>(frame, &request::RT)?;
-                    rt::no_broadcast(frame[1], 0x00, &request::RT)?;
+                    let frame = rt::fixed::<6>(frame, &request::Rt::DESC)?;
+                    rt::no_broadcast(frame[1], 0x00, &request::Rt::DESC)?;
                     rt::same(&request::RT_FIELD, 4, frame[4], "f", frame[3])?;
-                    rt::Ok(Self::Rt { f: frame[3] })
+                    rt::Ok(Self::Rt(request::Rt { f: frame[3] }))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -407,28 +472,36 @@ pub mod clash {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "option" => {
-                    rt::Ok(Self::Option {
-                        some: Result::from_raw(rt::get(&mut field, "some")?),
-                        core: Option::from_raw(rt::get(&mut field, "core")?),
-                    })
+                    rt::Ok(
+                        Self::Option(request::Option {
+                            some: Result::from_raw(rt::get(&mut field, "some")?),
+                            core: Option::from_raw(rt::get(&mut field, "core")?),
+                        }),
+                    )
                 }
                 "u8" => {
-                    rt::Ok(Self::U8 {
-                        frame: Some::from_raw(
-                            (rt::get::<u8>(&mut field, "frame")?) as i16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::U8(request::U8 {
+                            frame: Some::from_raw(
+                                (rt::get::<u8>(&mut field, "frame")?) as i16,
+                            ),
+                        }),
+                    )
                 }
                 "core" => {
-                    rt::Ok(Self::Core {
-                        address: rt::get(&mut field, "address")?,
-                        out: rt::get(&mut field, "out")?,
-                    })
+                    rt::Ok(
+                        Self::Core(request::Core {
+                            address: rt::get(&mut field, "address")?,
+                            out: rt::get(&mut field, "out")?,
+                        }),
+                    )
                 }
                 "rt" => {
-                    rt::Ok(Self::Rt {
-                        f: rt::get(&mut field, "f")?,
-                    })
+                    rt::Ok(
+                        Self::Rt(request::Rt {
+                            f: rt::get(&mut field, "f")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -495,29 +568,84 @@ pub mod clash {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Ok {
+        pub const NAME: &'static str = "ok";
+        pub const CODE: &'static [u8] = &[0x50];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x50,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ok(*self).encode(address, buf)
+        }
+    }
+    impl response::Err {
+        pub const NAME: &'static str = "err";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Err(*self).encode(address, buf)
+        }
+    }
+    impl response::Result {
+        pub const NAME: &'static str = "result";
+        pub const CODE: &'static [u8] = &[0x51];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x51,
+            1,
+            &[7],
+        );
+        pub const G: rt::Range<usize> = 3..4;
+        pub const USIZE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("g", rt::Int(self.g.raw() as i64));
+            f("usize", rt::Int(self.usize.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Result(*self).encode(address, buf)
+        }
+    }
+    impl response::Usize {
+        pub const NAME: &'static str = "usize";
+        pub const CODE: &'static [u8] = &[0x52];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x52,
+            1,
+            &[7],
+        );
+        pub const ASKED: rt::Range<usize> = 3..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("asked", rt::Text(&self.asked[..]));
+            f("none", rt::Int(self.none as i64));
+            f("some", rt::Int(self.some.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Usize(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §5 Ok (code `0x50`, 4 bytes).
-        Ok,
-        /// §6 Err (code `0x90`, 4 bytes).
-        Err,
-        /// §7 Result (code `0x51`, 7 bytes).
-        Result {
-            g: Ok,
-            /// \[O\]
-            usize: Option,
-        },
-        /// §8 usize (code `0x52`, 7 bytes).
-        Usize {
-            asked: rt::Ascii<2>,
-            none: u8,
-            /// \[S\]
-            some: Some,
-        },
+        Ok(response::Ok),
+        Err(response::Err),
+        Result(response::Result),
+        Usize(response::Usize),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -530,10 +658,10 @@ pub mod clash {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ok => 0,
-                Self::Err => 1,
-                Self::Result { .. } => 2,
-                Self::Usize { .. } => 3,
+                Self::Ok(_) => 0,
+                Self::Err(_) => 1,
+                Self::Result(_) => 2,
+                Self::Usize(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -550,17 +678,10 @@ pub mod clash {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Result { g: v_g, usize: v_usize } => {
-                    f("g", rt::Int(v_g.raw() as i64));
-                    f("usize", rt::Int(v_usize.raw() as i64));
-                }
-                Self::Usize { asked: v_asked, none: v_none, some: v_some } => {
-                    f("asked", rt::Text(&v_asked[..]));
-                    f("none", rt::Int(*v_none as i64));
-                    f("some", rt::Int(v_some.raw() as i64));
-                }
+                Self::Result(m) => m.visit(f),
+                Self::Usize(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -574,27 +695,29 @@ pub mod clash {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ok => {
+                Self::Ok(response::Ok {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
                         3,
                         address.wrapping_add(0xFA),
                     )
                 }
-                Self::Err => {
+                Self::Err(response::Err {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
                         3,
                         address.wrapping_add(0x3A),
                     )
                 }
-                Self::Result { g: v_g, usize: v_usize } => {
+                Self::Result(response::Result { g: v_g, usize: v_usize }) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x51])?;
                     out[3] = v_g.raw();
                     out[4..6].copy_from_slice(&v_usize.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 3, address.wrapping_add(0xFB))
                 }
-                Self::Usize { asked: v_asked, none: v_none, some: v_some } => {
+                Self::Usize(
+                    response::Usize { asked: v_asked, none: v_none, some: v_some },
+                ) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x52])?;
                     out[3..5].copy_from_slice(&v_asked.0);
                     let field_1: u8 = ((rt::fits("none", v_none, 0, 15)? as u8) << 4)
@@ -651,24 +774,36 @@ pub mod clash {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
-                0x50 => rt::fixed::<4>(frame, &response::OK).map(|_| Self::Ok),
-                0x90 => rt::fixed::<4>(frame, &response::ERR).map(|_| Self::Err),
+                0x50 => {
+                    rt::fixed::<4>(frame, &response::Ok::DESC)
+                        .map(|_| Self::Ok(response::Ok))
+                }
+                0x90 => {
+                    rt::fixed::<4>(frame, &response::Err::DESC)
+                        .map(|_| Self::Err(response::Err))
+                }
                 0x51 => {
-                    let frame = rt::fixed::<7>(frame, &response::RESULT)?;
-                    rt::Ok(Self::Result {
-                        g: Ok::from_raw(frame[3]),
-                        usize: Option::from_raw(u16::from_le_bytes([frame[4], frame[5]])),
-                    })
+                    let frame = rt::fixed::<7>(frame, &response::Result::DESC)?;
+                    rt::Ok(
+                        Self::Result(response::Result {
+                            g: Ok::from_raw(frame[3]),
+                            usize: Option::from_raw(
+                                u16::from_le_bytes([frame[4], frame[5]]),
+                            ),
+                        }),
+                    )
                 }
                 0x52 => {
-                    let frame = rt::fixed::<7>(frame, &response::USIZE)?;
-                    rt::Ok(Self::Usize {
-                        asked: rt::Ascii(frame[3..5].try_into().unwrap_or([0; 2])),
-                        none: (frame[5] >> 4) as u8,
-                        some: Some::from_raw(
-                            ((((frame[5] & 0xF) as u8) << 4) as i8 >> 4) as i16,
-                        ),
-                    })
+                    let frame = rt::fixed::<7>(frame, &response::Usize::DESC)?;
+                    rt::Ok(
+                        Self::Usize(response::Usize {
+                            asked: rt::Ascii(frame[3..5].try_into().unwrap_or([0; 2])),
+                            none: (frame[5] >> 4) as u8,
+                            some: Some::from_raw(
+                                ((((frame[5] & 0xF) as u8) << 4) as i8 >> 4) as i16,
+                            ),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -681,22 +816,26 @@ pub mod clash {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "ok" => rt::Ok(Self::Ok),
-                "err" => rt::Ok(Self::Err),
+                "ok" => rt::Ok(Self::Ok(response::Ok)),
+                "err" => rt::Ok(Self::Err(response::Err)),
                 "result" => {
-                    rt::Ok(Self::Result {
-                        g: Ok::from_raw(rt::get(&mut field, "g")?),
-                        usize: Option::from_raw(rt::get(&mut field, "usize")?),
-                    })
+                    rt::Ok(
+                        Self::Result(response::Result {
+                            g: Ok::from_raw(rt::get(&mut field, "g")?),
+                            usize: Option::from_raw(rt::get(&mut field, "usize")?),
+                        }),
+                    )
                 }
                 "usize" => {
-                    rt::Ok(Self::Usize {
-                        asked: rt::text(&mut field, "asked")?,
-                        none: rt::field_int("none", field("none"), 0, 15)? as u8,
-                        some: Some::from_raw(
-                            rt::field_int("some", field("some"), -8, 7)? as i16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::Usize(response::Usize {
+                            asked: rt::text(&mut field, "asked")?,
+                            none: rt::field_int("none", field("none"), 0, 15)? as u8,
+                            some: Some::from_raw(
+                                rt::field_int("some", field("some"), -8, 7)? as i16,
+                            ),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -788,7 +927,7 @@ pub mod clash {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::Err)
+            matches!(response, Response::Err(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
@@ -845,35 +984,86 @@ pub mod clash {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Clash>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `option`, code 0x10
-        pub const OPTION: MessageDesc = MessageDesc::new("option", 0x10, 1, &[7]);
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Option (code `0x10`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Option {
+            pub some: super::Result,
+            /// \[O\] Valid raw range 0..=1000.
+            pub core: super::Option,
+        }
+        /// §2 u8 (code `0x11`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct U8 {
+            /// \[S\]
+            pub frame: super::Some,
+        }
+        /// §3 core (code `0x12`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Core {
+            pub address: u8,
+            pub out: i8,
+        }
+        /// §4 rt (code `0x13`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Rt {
+            pub f: u8,
+        }
         /// `option.core`
         pub const OPTION_CORE: FieldDesc = FieldDesc::new("option", "core");
-        /// `u8`, code 0x11
-        pub const U8: MessageDesc = MessageDesc::new("u8", 0x11, 1, &[5]);
-        /// `core`, code 0x12
-        pub const CORE: MessageDesc = MessageDesc::new("core", 0x12, 1, &[7]);
         /// `core.buf`
         pub const CORE_BUF: FieldDesc = FieldDesc::new("core", "buf");
-        /// `rt`, code 0x13
-        pub const RT: MessageDesc = MessageDesc::new("rt", 0x13, 1, &[6]);
         /// `rt.field`
         pub const RT_FIELD: FieldDesc = FieldDesc::new("rt", "field");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `ok`, code 0x50
-        pub const OK: MessageDesc = MessageDesc::new("ok", 0x50, 1, &[4]);
-        /// `err`, code 0x90
-        pub const ERR: MessageDesc = MessageDesc::new("err", 0x90, 1, &[4]);
-        /// `result`, code 0x51
-        pub const RESULT: MessageDesc = MessageDesc::new("result", 0x51, 1, &[7]);
-        /// `usize`, code 0x52
-        pub const USIZE: MessageDesc = MessageDesc::new("usize", 0x52, 1, &[7]);
+        /// §5 Ok (code `0x50`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ok;
+        /// §6 Err (code `0x90`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Err;
+        /// §7 Result (code `0x51`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Result {
+            pub g: super::Ok,
+            /// \[O\]
+            pub usize: super::Option,
+        }
+        /// §8 usize (code `0x52`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Usize {
+            pub asked: super::rt::Ascii<2>,
+            pub none: u8,
+            /// \[S\]
+            pub some: super::Some,
+        }
     }
 }

@@ -99,30 +99,64 @@ pub mod crc_extra {
             rt::None => CRC.checksum(bytes),
         }
     }
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 19;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[19],
+        );
+        pub const TIME_USEC: rt::Range<usize> = 3..11;
+        pub const SEQ: rt::Range<usize> = 11..15;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 15..16;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 16..17;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestDataStream {
+        pub const NAME: &'static str = "request_data_stream";
+        pub const CODE: &'static [u8] = &[0x42];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x42,
+            1,
+            &[11],
+        );
+        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 3..5;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 5..6;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 6..7;
+        pub const REQ_STREAM_ID: rt::Range<usize> = 7..8;
+        pub const START_STOP: rt::Range<usize> = 8..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("req_message_rate", rt::Int(self.req_message_rate as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+            f("req_stream_id", rt::Int(self.req_stream_id as i64));
+            f("start_stop", rt::Int(self.start_stop as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestDataStream(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 PING (4) (code `0x04`, 19 bytes).
-        Ping {
-            /// \[µs\]
-            time_usec: u64,
-            seq: u32,
-            target_system: u8,
-            target_component: u8,
-        },
-        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x42`, 11 bytes).
-        RequestDataStream {
-            /// \[Hz\]
-            req_message_rate: u16,
-            target_system: u8,
-            target_component: u8,
-            req_stream_id: u8,
-            /// Valid raw range 0..=1.
-            start_stop: u8,
-        },
+        Ping(request::Ping),
+        RequestDataStream(request::RequestDataStream),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -133,8 +167,8 @@ pub mod crc_extra {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ping { .. } => 0,
-                Self::RequestDataStream { .. } => 1,
+                Self::Ping(_) => 0,
+                Self::RequestDataStream(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -151,32 +185,10 @@ pub mod crc_extra {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ping {
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
-                    f("time_usec", rt::Int(*v_time_usec as i64));
-                    f("seq", rt::Int(*v_seq as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                }
-                Self::RequestDataStream {
-                    req_message_rate: v_req_message_rate,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                    req_stream_id: v_req_stream_id,
-                    start_stop: v_start_stop,
-                } => {
-                    f("req_message_rate", rt::Int(*v_req_message_rate as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                    f("req_stream_id", rt::Int(*v_req_stream_id as i64));
-                    f("start_stop", rt::Int(*v_start_stop as i64));
-                }
+                Self::Ping(m) => m.visit(f),
+                Self::RequestDataStream(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -189,12 +201,14 @@ pub mod crc_extra {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping {
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
+                Self::Ping(
+                    request::Ping {
+                        time_usec: v_time_usec,
+                        seq: v_seq,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                    },
+                ) => {
                     let out = rt::frame_mut::<19>(buf, &[0xFE, 0x0E, 0x04])?;
                     out[3..11].copy_from_slice(&v_time_usec.to_le_bytes());
                     out[11..15].copy_from_slice(&v_seq.to_le_bytes());
@@ -202,13 +216,15 @@ pub mod crc_extra {
                     out[16] = v_target_component;
                     out.len()
                 }
-                Self::RequestDataStream {
-                    req_message_rate: v_req_message_rate,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                    req_stream_id: v_req_stream_id,
-                    start_stop: v_start_stop,
-                } => {
+                Self::RequestDataStream(
+                    request::RequestDataStream {
+                        req_message_rate: v_req_message_rate,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                        req_stream_id: v_req_stream_id,
+                        start_stop: v_start_stop,
+                    },
+                ) => {
                     rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
                     let out = rt::frame_mut::<11>(buf, &[0xFE, 0x06, 0x42])?;
                     out[3..5].copy_from_slice(&v_req_message_rate.to_le_bytes());
@@ -243,30 +259,34 @@ pub mod crc_extra {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<19>(frame, &request::PING)?;
-                    rt::Ok(Self::Ping {
-                        time_usec: u64::from_le_bytes([
-                            frame[3],
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                        ]),
-                        seq: u32::from_le_bytes([
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                            frame[14],
-                        ]),
-                        target_system: frame[15],
-                        target_component: frame[16],
-                    })
+                    let frame = rt::fixed::<19>(frame, &request::Ping::DESC)?;
+                    rt::Ok(
+                        Self::Ping(request::Ping {
+                            time_usec: u64::from_le_bytes([
+                                frame[3],
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                            ]),
+                            seq: u32::from_le_bytes([
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                                frame[14],
+                            ]),
+                            target_system: frame[15],
+                            target_component: frame[16],
+                        }),
+                    )
                 }
                 0x42 => {
-                    let frame = rt::fixed::<11>(frame, &request::REQUEST_DATA_STREAM)?;
+                    let frame = rt::fixed::<
+                        11,
+                    >(frame, &request::RequestDataStream::DESC)?;
                     rt::in_range(
                         &request::REQUEST_DATA_STREAM_START_STOP,
                         8,
@@ -274,13 +294,15 @@ pub mod crc_extra {
                         0,
                         1,
                     )?;
-                    rt::Ok(Self::RequestDataStream {
-                        req_message_rate: u16::from_le_bytes([frame[3], frame[4]]),
-                        target_system: frame[5],
-                        target_component: frame[6],
-                        req_stream_id: frame[7],
-                        start_stop: frame[8],
-                    })
+                    rt::Ok(
+                        Self::RequestDataStream(request::RequestDataStream {
+                            req_message_rate: u16::from_le_bytes([frame[3], frame[4]]),
+                            target_system: frame[5],
+                            target_component: frame[6],
+                            req_stream_id: frame[7],
+                            start_stop: frame[8],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, false)),
             }
@@ -294,21 +316,25 @@ pub mod crc_extra {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ping" => {
-                    rt::Ok(Self::Ping {
-                        time_usec: rt::get(&mut field, "time_usec")?,
-                        seq: rt::get(&mut field, "seq")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                    })
+                    rt::Ok(
+                        Self::Ping(request::Ping {
+                            time_usec: rt::get(&mut field, "time_usec")?,
+                            seq: rt::get(&mut field, "seq")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                        }),
+                    )
                 }
                 "request_data_stream" => {
-                    rt::Ok(Self::RequestDataStream {
-                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                        start_stop: rt::get(&mut field, "start_stop")?,
-                    })
+                    rt::Ok(
+                        Self::RequestDataStream(request::RequestDataStream {
+                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                            start_stop: rt::get(&mut field, "start_stop")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -365,7 +391,7 @@ pub mod crc_extra {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::RequestDataStream { .. } => rt::Reply::Optional,
+                    Request::RequestDataStream(_) => rt::Reply::Optional,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -376,29 +402,66 @@ pub mod crc_extra {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::PingReply {
+        pub const NAME: &'static str = "ping_reply";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 19;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[19],
+        );
+        pub const TIME_USEC: rt::Range<usize> = 3..11;
+        pub const SEQ: rt::Range<usize> = 11..15;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 15..16;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 16..17;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Heartbeat {
+        pub const NAME: &'static str = "heartbeat";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x00,
+            1,
+            &[14],
+        );
+        pub const CUSTOM_MODE: rt::Range<usize> = 3..7;
+        pub const VEHICLE_TYPE: rt::Range<usize> = 7..8;
+        pub const AUTOPILOT: rt::Range<usize> = 8..9;
+        pub const BASE_MODE: rt::Range<usize> = 9..10;
+        pub const SYSTEM_STATUS: rt::Range<usize> = 10..11;
+        pub const MAVLINK_VERSION: rt::Range<usize> = 11..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("custom_mode", rt::Int(self.custom_mode as i64));
+            f("vehicle_type", rt::Int(self.vehicle_type as i64));
+            f("autopilot", rt::Int(self.autopilot as i64));
+            f("base_mode", rt::Int(self.base_mode as i64));
+            f("system_status", rt::Int(self.system_status as i64));
+            f("mavlink_version", rt::Int(self.mavlink_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Heartbeat(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3.1 PING (4), answered (code `0x04`, 19 bytes).
-        PingReply {
-            /// \[µs\]
-            time_usec: u64,
-            seq: u32,
-            target_system: u8,
-            target_component: u8,
-        },
-        /// §3.3 HEARTBEAT (0) (code `0x00`, 14 bytes).
-        Heartbeat {
-            custom_mode: u32,
-            vehicle_type: u8,
-            autopilot: u8,
-            base_mode: u8,
-            system_status: u8,
-            mavlink_version: u8,
-        },
+        PingReply(response::PingReply),
+        Heartbeat(response::Heartbeat),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -409,8 +472,8 @@ pub mod crc_extra {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::PingReply { .. } => 0,
-                Self::Heartbeat { .. } => 1,
+                Self::PingReply(_) => 0,
+                Self::Heartbeat(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -427,34 +490,10 @@ pub mod crc_extra {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::PingReply {
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
-                    f("time_usec", rt::Int(*v_time_usec as i64));
-                    f("seq", rt::Int(*v_seq as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                }
-                Self::Heartbeat {
-                    custom_mode: v_custom_mode,
-                    vehicle_type: v_vehicle_type,
-                    autopilot: v_autopilot,
-                    base_mode: v_base_mode,
-                    system_status: v_system_status,
-                    mavlink_version: v_mavlink_version,
-                } => {
-                    f("custom_mode", rt::Int(*v_custom_mode as i64));
-                    f("vehicle_type", rt::Int(*v_vehicle_type as i64));
-                    f("autopilot", rt::Int(*v_autopilot as i64));
-                    f("base_mode", rt::Int(*v_base_mode as i64));
-                    f("system_status", rt::Int(*v_system_status as i64));
-                    f("mavlink_version", rt::Int(*v_mavlink_version as i64));
-                }
+                Self::PingReply(m) => m.visit(f),
+                Self::Heartbeat(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -467,12 +506,14 @@ pub mod crc_extra {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingReply {
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
+                Self::PingReply(
+                    response::PingReply {
+                        time_usec: v_time_usec,
+                        seq: v_seq,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                    },
+                ) => {
                     let out = rt::frame_mut::<19>(buf, &[0xFE, 0x0E, 0x04])?;
                     out[3..11].copy_from_slice(&v_time_usec.to_le_bytes());
                     out[11..15].copy_from_slice(&v_seq.to_le_bytes());
@@ -480,14 +521,16 @@ pub mod crc_extra {
                     out[16] = v_target_component;
                     out.len()
                 }
-                Self::Heartbeat {
-                    custom_mode: v_custom_mode,
-                    vehicle_type: v_vehicle_type,
-                    autopilot: v_autopilot,
-                    base_mode: v_base_mode,
-                    system_status: v_system_status,
-                    mavlink_version: v_mavlink_version,
-                } => {
+                Self::Heartbeat(
+                    response::Heartbeat {
+                        custom_mode: v_custom_mode,
+                        vehicle_type: v_vehicle_type,
+                        autopilot: v_autopilot,
+                        base_mode: v_base_mode,
+                        system_status: v_system_status,
+                        mavlink_version: v_mavlink_version,
+                    },
+                ) => {
                     let out = rt::frame_mut::<14>(buf, &[0xFE, 0x09, 0x00])?;
                     out[3..7].copy_from_slice(&v_custom_mode.to_le_bytes());
                     out[7] = v_vehicle_type;
@@ -549,43 +592,47 @@ pub mod crc_extra {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<19>(frame, &response::PING_REPLY)?;
-                    rt::Ok(Self::PingReply {
-                        time_usec: u64::from_le_bytes([
-                            frame[3],
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                        ]),
-                        seq: u32::from_le_bytes([
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                            frame[14],
-                        ]),
-                        target_system: frame[15],
-                        target_component: frame[16],
-                    })
+                    let frame = rt::fixed::<19>(frame, &response::PingReply::DESC)?;
+                    rt::Ok(
+                        Self::PingReply(response::PingReply {
+                            time_usec: u64::from_le_bytes([
+                                frame[3],
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                            ]),
+                            seq: u32::from_le_bytes([
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                                frame[14],
+                            ]),
+                            target_system: frame[15],
+                            target_component: frame[16],
+                        }),
+                    )
                 }
                 0x00 => {
-                    let frame = rt::fixed::<14>(frame, &response::HEARTBEAT)?;
-                    rt::Ok(Self::Heartbeat {
-                        custom_mode: u32::from_le_bytes([
-                            frame[3],
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                        ]),
-                        vehicle_type: frame[7],
-                        autopilot: frame[8],
-                        base_mode: frame[9],
-                        system_status: frame[10],
-                        mavlink_version: frame[11],
-                    })
+                    let frame = rt::fixed::<14>(frame, &response::Heartbeat::DESC)?;
+                    rt::Ok(
+                        Self::Heartbeat(response::Heartbeat {
+                            custom_mode: u32::from_le_bytes([
+                                frame[3],
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                            ]),
+                            vehicle_type: frame[7],
+                            autopilot: frame[8],
+                            base_mode: frame[9],
+                            system_status: frame[10],
+                            mavlink_version: frame[11],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 2, true)),
             }
@@ -599,22 +646,26 @@ pub mod crc_extra {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ping_reply" => {
-                    rt::Ok(Self::PingReply {
-                        time_usec: rt::get(&mut field, "time_usec")?,
-                        seq: rt::get(&mut field, "seq")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                    })
+                    rt::Ok(
+                        Self::PingReply(response::PingReply {
+                            time_usec: rt::get(&mut field, "time_usec")?,
+                            seq: rt::get(&mut field, "seq")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                        }),
+                    )
                 }
                 "heartbeat" => {
-                    rt::Ok(Self::Heartbeat {
-                        custom_mode: rt::get(&mut field, "custom_mode")?,
-                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                        autopilot: rt::get(&mut field, "autopilot")?,
-                        base_mode: rt::get(&mut field, "base_mode")?,
-                        system_status: rt::get(&mut field, "system_status")?,
-                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                    })
+                    rt::Ok(
+                        Self::Heartbeat(response::Heartbeat {
+                            custom_mode: rt::get(&mut field, "custom_mode")?,
+                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                            autopilot: rt::get(&mut field, "autopilot")?,
+                            base_mode: rt::get(&mut field, "base_mode")?,
+                            system_status: rt::get(&mut field, "system_status")?,
+                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -768,36 +819,69 @@ pub mod crc_extra {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<CrcExtra>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ping`, code 0x04
-        pub const PING: MessageDesc = MessageDesc::new("ping", 0x04, 1, &[19]);
-        /// `request_data_stream`, code 0x42
-        pub const REQUEST_DATA_STREAM: MessageDesc = MessageDesc::new(
-            "request_data_stream",
-            0x42,
-            1,
-            &[11],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 PING (4) (code `0x04`, 19 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ping {
+            /// \[µs\]
+            pub time_usec: u64,
+            pub seq: u32,
+            pub target_system: u8,
+            pub target_component: u8,
+        }
+        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x42`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RequestDataStream {
+            /// \[Hz\]
+            pub req_message_rate: u16,
+            pub target_system: u8,
+            pub target_component: u8,
+            pub req_stream_id: u8,
+            /// Valid raw range 0..=1.
+            pub start_stop: u8,
+        }
         /// `request_data_stream.start_stop`
         pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
             "request_data_stream",
             "start_stop",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `ping_reply`, code 0x04
-        pub const PING_REPLY: MessageDesc = MessageDesc::new(
-            "ping_reply",
-            0x04,
-            1,
-            &[19],
-        );
-        /// `heartbeat`, code 0x00
-        pub const HEARTBEAT: MessageDesc = MessageDesc::new("heartbeat", 0x00, 1, &[14]);
+        /// §3.1 PING (4), answered (code `0x04`, 19 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct PingReply {
+            /// \[µs\]
+            pub time_usec: u64,
+            pub seq: u32,
+            pub target_system: u8,
+            pub target_component: u8,
+        }
+        /// §3.3 HEARTBEAT (0) (code `0x00`, 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Heartbeat {
+            pub custom_mode: u32,
+            pub vehicle_type: u8,
+            pub autopilot: u8,
+            pub base_mode: u8,
+            pub system_status: u8,
+            pub mavlink_version: u8,
+        }
     }
 }

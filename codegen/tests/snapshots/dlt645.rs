@@ -79,28 +79,56 @@ pub mod dlt645 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    impl request::ReadAddress {
+        pub const NAME: &'static str = "read_address";
+        pub const CODE: &'static [u8] = &[0x13];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x13,
+            1,
+            &[12],
+        );
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadAddress(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadData {
+        pub const NAME: &'static str = "read_data";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x11,
+            1,
+            &[16],
+        );
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const DATA_ID: rt::Range<usize> = 10..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("data_id", rt::Int(self.data_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadData(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §7.9 Read the communication address (control code 13H) (code `0x13`, 12 bytes).
-        ReadAddress {
-            /// Address bytes A0..A2 (BCD digits, least significant first)
-            address_low: u32,
-            /// Address bytes A3..A5 (AA AA AA: every meter)
-            address_high: u32,
-        },
-        /// §7.2 Read data (control code 11H) (code `0x11`, 16 bytes).
-        ReadData {
-            /// Address bytes A0..A2 (BCD digits, least significant first)
-            address_low: u32,
-            /// Address bytes A3..A5 (AA AA AA: every meter)
-            address_high: u32,
-            /// Data identifier DI3..DI0 (sent DI0 first)
-            data_id: u32,
-        },
+        ReadAddress(request::ReadAddress),
+        ReadData(request::ReadData),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -111,8 +139,8 @@ pub mod dlt645 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadAddress { .. } => 0,
-                Self::ReadData { .. } => 1,
+                Self::ReadAddress(_) => 0,
+                Self::ReadData(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -129,24 +157,10 @@ pub mod dlt645 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ReadAddress {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                } => {
-                    f("address_low", rt::Int(*v_address_low as i64));
-                    f("address_high", rt::Int(*v_address_high as i64));
-                }
-                Self::ReadData {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    data_id: v_data_id,
-                } => {
-                    f("address_low", rt::Int(*v_address_low as i64));
-                    f("address_high", rt::Int(*v_address_high as i64));
-                    f("data_id", rt::Int(*v_data_id as i64));
-                }
+                Self::ReadAddress(m) => m.visit(f),
+                Self::ReadData(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -172,10 +186,12 @@ pub mod dlt645 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadAddress {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                } => {
+                Self::ReadAddress(
+                    request::ReadAddress {
+                        address_low: v_address_low,
+                        address_high: v_address_high,
+                    },
+                ) => {
                     let out = rt::frame_mut::<12>(buf, &[0x68])?;
                     out[7..10].copy_from_slice(&[0x68, 0x13, 0x00]);
                     out[1..4]
@@ -196,11 +212,13 @@ pub mod dlt645 {
                         );
                     out.len()
                 }
-                Self::ReadData {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    data_id: v_data_id,
-                } => {
+                Self::ReadData(
+                    request::ReadData {
+                        address_low: v_address_low,
+                        address_high: v_address_high,
+                        data_id: v_data_id,
+                    },
+                ) => {
                     let out = rt::frame_mut::<16>(buf, &[0x68])?;
                     out[7..10].copy_from_slice(&[0x68, 0x11, 0x04]);
                     out[1..4]
@@ -253,24 +271,28 @@ pub mod dlt645 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 8, 1) {
                 0x13 => {
-                    let frame = rt::fixed::<12>(frame, &request::READ_ADDRESS)?;
-                    rt::Ok(Self::ReadAddress {
-                        address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                        address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                    })
+                    let frame = rt::fixed::<12>(frame, &request::ReadAddress::DESC)?;
+                    rt::Ok(
+                        Self::ReadAddress(request::ReadAddress {
+                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                        }),
+                    )
                 }
                 0x11 => {
-                    let frame = rt::fixed::<16>(frame, &request::READ_DATA)?;
-                    rt::Ok(Self::ReadData {
-                        address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                        address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                        data_id: u32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                    })
+                    let frame = rt::fixed::<16>(frame, &request::ReadData::DESC)?;
+                    rt::Ok(
+                        Self::ReadData(request::ReadData {
+                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                            data_id: u32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 8, 1, 2, false)),
             }
@@ -284,37 +306,41 @@ pub mod dlt645 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read_address" => {
-                    rt::Ok(Self::ReadAddress {
-                        address_low: rt::field_int(
-                            "address_low",
-                            field("address_low"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        address_high: rt::field_int(
-                            "address_high",
-                            field("address_high"),
-                            0,
-                            16777215,
-                        )? as u32,
-                    })
+                    rt::Ok(
+                        Self::ReadAddress(request::ReadAddress {
+                            address_low: rt::field_int(
+                                "address_low",
+                                field("address_low"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            address_high: rt::field_int(
+                                "address_high",
+                                field("address_high"),
+                                0,
+                                16777215,
+                            )? as u32,
+                        }),
+                    )
                 }
                 "read_data" => {
-                    rt::Ok(Self::ReadData {
-                        address_low: rt::field_int(
-                            "address_low",
-                            field("address_low"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        address_high: rt::field_int(
-                            "address_high",
-                            field("address_high"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        data_id: rt::get(&mut field, "data_id")?,
-                    })
+                    rt::Ok(
+                        Self::ReadData(request::ReadData {
+                            address_low: rt::field_int(
+                                "address_low",
+                                field("address_low"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            address_high: rt::field_int(
+                                "address_high",
+                                field("address_high"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            data_id: rt::get(&mut field, "data_id")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -379,45 +405,87 @@ pub mod dlt645 {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::AddressReply {
+        pub const NAME: &'static str = "address_reply";
+        pub const CODE: &'static [u8] = &[0x93];
+        pub const LEN: usize = 18;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x93,
+            1,
+            &[18],
+        );
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const METER_LOW: rt::Range<usize> = 10..13;
+        pub const METER_HIGH: rt::Range<usize> = 13..16;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("meter_low", rt::Int(self.meter_low as i64));
+            f("meter_high", rt::Int(self.meter_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AddressReply(*self).encode(address, buf)
+        }
+    }
+    impl response::DataReply {
+        pub const NAME: &'static str = "data_reply";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 20;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x91,
+            1,
+            &[20, 22],
+        );
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const DATA_ID: rt::Range<usize> = 10..14;
+        pub const VALUE: rt::Range<usize> = 14..18;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("data_id", rt::Int(self.data_id as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DataReply(*self).encode(address, buf)
+        }
+    }
+    impl response::MeterNumberReply {
+        pub const NAME: &'static str = "meter_number_reply";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x91,
+            1,
+            &[20, 22],
+        );
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const NUMBER_LOW: rt::Range<usize> = 14..17;
+        pub const NUMBER_HIGH: rt::Range<usize> = 17..20;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("number_low", rt::Int(self.number_low as i64));
+            f("number_high", rt::Int(self.number_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MeterNumberReply(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §7.9 Address reply (control code 93H) (code `0x93`, 18 bytes).
-        AddressReply {
-            /// Address bytes A0..A2 (BCD digits, least significant first)
-            address_low: u32,
-            /// Address bytes A3..A5 (AA AA AA: every meter)
-            address_high: u32,
-            /// The meter's address bytes A0..A2 (BCD digits)
-            meter_low: u32,
-            /// The meter's address bytes A3..A5 (BCD digits)
-            meter_high: u32,
-        },
-        /// §7.2 Read data reply, a 4-byte value (control code 91H) (code `0x91`, 20 bytes).
-        DataReply {
-            /// Address bytes A0..A2 (BCD digits, least significant first)
-            address_low: u32,
-            /// Address bytes A3..A5 (AA AA AA: every meter)
-            address_high: u32,
-            /// Data identifier DI3..DI0
-            data_id: u32,
-            /// The value, 8 BCD digits (its decimal point as the data identifier says) Valid raw range 0..=99999999.
-            value: u32,
-        },
-        /// §7.2 Read data reply, the meter number 04000402 (control code 91H) (code `0x91`, 22 bytes).
-        MeterNumberReply {
-            /// Address bytes A0..A2 (BCD digits, least significant first)
-            address_low: u32,
-            /// Address bytes A3..A5 (AA AA AA: every meter)
-            address_high: u32,
-            /// Meter number, low three bytes (BCD digits)
-            number_low: u32,
-            /// Meter number, high three bytes (BCD digits)
-            number_high: u32,
-        },
+        AddressReply(response::AddressReply),
+        DataReply(response::DataReply),
+        MeterNumberReply(response::MeterNumberReply),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -429,9 +497,9 @@ pub mod dlt645 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::AddressReply { .. } => 0,
-                Self::DataReply { .. } => 1,
-                Self::MeterNumberReply { .. } => 2,
+                Self::AddressReply(_) => 0,
+                Self::DataReply(_) => 1,
+                Self::MeterNumberReply(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -448,41 +516,11 @@ pub mod dlt645 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::AddressReply {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    meter_low: v_meter_low,
-                    meter_high: v_meter_high,
-                } => {
-                    f("address_low", rt::Int(*v_address_low as i64));
-                    f("address_high", rt::Int(*v_address_high as i64));
-                    f("meter_low", rt::Int(*v_meter_low as i64));
-                    f("meter_high", rt::Int(*v_meter_high as i64));
-                }
-                Self::DataReply {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    data_id: v_data_id,
-                    value: v_value,
-                } => {
-                    f("address_low", rt::Int(*v_address_low as i64));
-                    f("address_high", rt::Int(*v_address_high as i64));
-                    f("data_id", rt::Int(*v_data_id as i64));
-                    f("value", rt::Int(*v_value as i64));
-                }
-                Self::MeterNumberReply {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    number_low: v_number_low,
-                    number_high: v_number_high,
-                } => {
-                    f("address_low", rt::Int(*v_address_low as i64));
-                    f("address_high", rt::Int(*v_address_high as i64));
-                    f("number_low", rt::Int(*v_number_low as i64));
-                    f("number_high", rt::Int(*v_number_high as i64));
-                }
+                Self::AddressReply(m) => m.visit(f),
+                Self::DataReply(m) => m.visit(f),
+                Self::MeterNumberReply(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -508,12 +546,14 @@ pub mod dlt645 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::AddressReply {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    meter_low: v_meter_low,
-                    meter_high: v_meter_high,
-                } => {
+                Self::AddressReply(
+                    response::AddressReply {
+                        address_low: v_address_low,
+                        address_high: v_address_high,
+                        meter_low: v_meter_low,
+                        meter_high: v_meter_high,
+                    },
+                ) => {
                     let out = rt::frame_mut::<18>(buf, &[0x68])?;
                     out[7..10].copy_from_slice(&[0x68, 0x93, 0x06]);
                     out[1..4]
@@ -550,12 +590,14 @@ pub mod dlt645 {
                         );
                     out.len()
                 }
-                Self::DataReply {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    data_id: v_data_id,
-                    value: v_value,
-                } => {
+                Self::DataReply(
+                    response::DataReply {
+                        address_low: v_address_low,
+                        address_high: v_address_high,
+                        data_id: v_data_id,
+                        value: v_value,
+                    },
+                ) => {
                     rt::encode_in_range("value", v_value, 0, 99999999)?;
                     let out = rt::frame_mut::<20>(buf, &[0x68])?;
                     out[7..10].copy_from_slice(&[0x68, 0x91, 0x08]);
@@ -582,12 +624,14 @@ pub mod dlt645 {
                         );
                     out.len()
                 }
-                Self::MeterNumberReply {
-                    address_low: v_address_low,
-                    address_high: v_address_high,
-                    number_low: v_number_low,
-                    number_high: v_number_high,
-                } => {
+                Self::MeterNumberReply(
+                    response::MeterNumberReply {
+                        address_low: v_address_low,
+                        address_high: v_address_high,
+                        number_low: v_number_low,
+                        number_high: v_number_high,
+                    },
+                ) => {
                     let out = rt::frame_mut::<22>(buf, &[0x68])?;
                     out[7..14]
                         .copy_from_slice(&[0x68, 0x91, 0x0A, 0x02, 0x04, 0x00, 0x04]);
@@ -686,13 +730,15 @@ pub mod dlt645 {
         ) -> rt::DecodeResult<Self> {
             match rt::code(frame, 8, 1) {
                 0x93 => {
-                    let frame = rt::fixed::<18>(frame, &response::ADDRESS_REPLY)?;
-                    rt::Ok(Self::AddressReply {
-                        address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                        address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                        meter_low: rt::u24([frame[10], frame[11], frame[12]], true),
-                        meter_high: rt::u24([frame[13], frame[14], frame[15]], true),
-                    })
+                    let frame = rt::fixed::<18>(frame, &response::AddressReply::DESC)?;
+                    rt::Ok(
+                        Self::AddressReply(response::AddressReply {
+                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                            meter_low: rt::u24([frame[10], frame[11], frame[12]], true),
+                            meter_high: rt::u24([frame[13], frame[14], frame[15]], true),
+                        }),
+                    )
                 }
                 0x91 => {
                     let mut g = rt::Group::new(frame, 0x91, request.map(Request::name));
@@ -714,17 +760,19 @@ pub mod dlt645 {
                             0,
                             99999999,
                         )?;
-                        rt::Ok(Self::DataReply {
-                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                            data_id: u32::from_le_bytes([
-                                frame[10],
-                                frame[11],
-                                frame[12],
-                                frame[13],
-                            ]),
-                            value: field_3,
-                        })
+                        rt::Ok(
+                            Self::DataReply(response::DataReply {
+                                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                                data_id: u32::from_le_bytes([
+                                    frame[10],
+                                    frame[11],
+                                    frame[12],
+                                    frame[13],
+                                ]),
+                                value: field_3,
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 22]| {
                         rt::equal(
@@ -738,14 +786,22 @@ pub mod dlt645 {
                             ]),
                             0x4000402,
                         )?;
-                        rt::Ok(Self::MeterNumberReply {
-                            address_low: rt::u24([frame[1], frame[2], frame[3]], true),
-                            address_high: rt::u24([frame[4], frame[5], frame[6]], true),
-                            number_low: rt::u24([frame[14], frame[15], frame[16]], true),
-                            number_high: rt::u24([frame[17], frame[18], frame[19]], true),
-                        })
+                        rt::Ok(
+                            Self::MeterNumberReply(response::MeterNumberReply {
+                                address_low: rt::u24([frame[1], frame[2], frame[3]], true),
+                                address_high: rt::u24([frame[4], frame[5], frame[6]], true),
+                                number_low: rt::u24(
+                                    [frame[14], frame[15], frame[16]],
+                                    true,
+                                ),
+                                number_high: rt::u24(
+                                    [frame[17], frame[18], frame[19]],
+                                    true,
+                                ),
+                            }),
+                        )
                     });
-                    g.end(&response::DATA_REPLY)
+                    g.end(&response::DataReply::DESC)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 8, 1, 2, true)),
             }
@@ -759,78 +815,84 @@ pub mod dlt645 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "address_reply" => {
-                    rt::Ok(Self::AddressReply {
-                        address_low: rt::field_int(
-                            "address_low",
-                            field("address_low"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        address_high: rt::field_int(
-                            "address_high",
-                            field("address_high"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        meter_low: rt::field_int(
-                            "meter_low",
-                            field("meter_low"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        meter_high: rt::field_int(
-                            "meter_high",
-                            field("meter_high"),
-                            0,
-                            16777215,
-                        )? as u32,
-                    })
+                    rt::Ok(
+                        Self::AddressReply(response::AddressReply {
+                            address_low: rt::field_int(
+                                "address_low",
+                                field("address_low"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            address_high: rt::field_int(
+                                "address_high",
+                                field("address_high"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            meter_low: rt::field_int(
+                                "meter_low",
+                                field("meter_low"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            meter_high: rt::field_int(
+                                "meter_high",
+                                field("meter_high"),
+                                0,
+                                16777215,
+                            )? as u32,
+                        }),
+                    )
                 }
                 "data_reply" => {
-                    rt::Ok(Self::DataReply {
-                        address_low: rt::field_int(
-                            "address_low",
-                            field("address_low"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        address_high: rt::field_int(
-                            "address_high",
-                            field("address_high"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        data_id: rt::get(&mut field, "data_id")?,
-                        value: rt::get(&mut field, "value")?,
-                    })
+                    rt::Ok(
+                        Self::DataReply(response::DataReply {
+                            address_low: rt::field_int(
+                                "address_low",
+                                field("address_low"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            address_high: rt::field_int(
+                                "address_high",
+                                field("address_high"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            data_id: rt::get(&mut field, "data_id")?,
+                            value: rt::get(&mut field, "value")?,
+                        }),
+                    )
                 }
                 "meter_number_reply" => {
-                    rt::Ok(Self::MeterNumberReply {
-                        address_low: rt::field_int(
-                            "address_low",
-                            field("address_low"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        address_high: rt::field_int(
-                            "address_high",
-                            field("address_high"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        number_low: rt::field_int(
-                            "number_low",
-                            field("number_low"),
-                            0,
-                            16777215,
-                        )? as u32,
-                        number_high: rt::field_int(
-                            "number_high",
-                            field("number_high"),
-                            0,
-                            16777215,
-                        )? as u32,
-                    })
+                    rt::Ok(
+                        Self::MeterNumberReply(response::MeterNumberReply {
+                            address_low: rt::field_int(
+                                "address_low",
+                                field("address_low"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            address_high: rt::field_int(
+                                "address_high",
+                                field("address_high"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            number_low: rt::field_int(
+                                "number_low",
+                                field("number_low"),
+                                0,
+                                16777215,
+                            )? as u32,
+                            number_high: rt::field_int(
+                                "number_high",
+                                field("number_high"),
+                                0,
+                                16777215,
+                            )? as u32,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -982,46 +1044,85 @@ pub mod dlt645 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dlt645>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `read_address`, code 0x13
-        pub const READ_ADDRESS: MessageDesc = MessageDesc::new(
-            "read_address",
-            0x13,
-            1,
-            &[12],
-        );
-        /// `read_data`, code 0x11
-        pub const READ_DATA: MessageDesc = MessageDesc::new("read_data", 0x11, 1, &[16]);
+        /// §7.9 Read the communication address (control code 13H) (code `0x13`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadAddress {
+            /// Address bytes A0..A2 (BCD digits, least significant first)
+            pub address_low: u32,
+            /// Address bytes A3..A5 (AA AA AA: every meter)
+            pub address_high: u32,
+        }
+        /// §7.2 Read data (control code 11H) (code `0x11`, 16 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadData {
+            /// Address bytes A0..A2 (BCD digits, least significant first)
+            pub address_low: u32,
+            /// Address bytes A3..A5 (AA AA AA: every meter)
+            pub address_high: u32,
+            /// Data identifier DI3..DI0 (sent DI0 first)
+            pub data_id: u32,
+        }
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `address_reply`, code 0x93
-        pub const ADDRESS_REPLY: MessageDesc = MessageDesc::new(
-            "address_reply",
-            0x93,
-            1,
-            &[18],
-        );
-        /// `data_reply`, code 0x91
-        pub const DATA_REPLY: MessageDesc = MessageDesc::new(
-            "data_reply",
-            0x91,
-            1,
-            &[20, 22],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §7.9 Address reply (control code 93H) (code `0x93`, 18 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct AddressReply {
+            /// Address bytes A0..A2 (BCD digits, least significant first)
+            pub address_low: u32,
+            /// Address bytes A3..A5 (AA AA AA: every meter)
+            pub address_high: u32,
+            /// The meter's address bytes A0..A2 (BCD digits)
+            pub meter_low: u32,
+            /// The meter's address bytes A3..A5 (BCD digits)
+            pub meter_high: u32,
+        }
+        /// §7.2 Read data reply, a 4-byte value (control code 91H) (code `0x91`, 20 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct DataReply {
+            /// Address bytes A0..A2 (BCD digits, least significant first)
+            pub address_low: u32,
+            /// Address bytes A3..A5 (AA AA AA: every meter)
+            pub address_high: u32,
+            /// Data identifier DI3..DI0
+            pub data_id: u32,
+            /// The value, 8 BCD digits (its decimal point as the data identifier says) Valid raw range 0..=99999999.
+            pub value: u32,
+        }
+        /// §7.2 Read data reply, the meter number 04000402 (control code 91H) (code `0x91`, 22 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MeterNumberReply {
+            /// Address bytes A0..A2 (BCD digits, least significant first)
+            pub address_low: u32,
+            /// Address bytes A3..A5 (AA AA AA: every meter)
+            pub address_high: u32,
+            /// Meter number, low three bytes (BCD digits)
+            pub number_low: u32,
+            /// Meter number, high three bytes (BCD digits)
+            pub number_high: u32,
+        }
         /// `data_reply.value`
         pub const DATA_REPLY_VALUE: FieldDesc = FieldDesc::new("data_reply", "value");
-        /// `meter_number_reply`, code 0x91
-        pub const METER_NUMBER_REPLY: MessageDesc = MessageDesc::new(
-            "meter_number_reply",
-            0x91,
-            1,
-            &[20, 22],
-        );
         /// `meter_number_reply.data_id`
         pub const METER_NUMBER_REPLY_DATA_ID: FieldDesc = FieldDesc::new(
             "meter_number_reply",

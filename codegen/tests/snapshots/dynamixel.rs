@@ -143,48 +143,143 @@ pub mod dynamixel {
         min: 2,
         max: 251,
     };
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[8],
+        );
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub const LENGTH: rt::Range<usize> = 6..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("length", rt::Int(self.length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::Write {
+        pub const NAME: &'static str = "write";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[7],
+        );
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write(*self).encode(address, buf)
+        }
+    }
+    impl request::RegWrite {
+        pub const NAME: &'static str = "reg_write";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[7],
+        );
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RegWrite(*self).encode(address, buf)
+        }
+    }
+    impl request::Action {
+        pub const NAME: &'static str = "action";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x05,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Action(*self).encode(address, buf)
+        }
+    }
+    impl request::Reset {
+        pub const NAME: &'static str = "reset";
+        pub const CODE: &'static [u8] = &[0x06];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x06,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Reset(*self).encode(address, buf)
+        }
+    }
+    impl request::SyncWrite {
+        pub const NAME: &'static str = "sync_write";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 10;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x83,
+            1,
+            &[8],
+        );
+        pub const ADDRESS: rt::Range<usize> = 5..6;
+        pub const DATA_LENGTH: rt::Range<usize> = 6..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("data_length", rt::Int(self.data_length as i64));
+            f("blocks", rt::List(self.blocks.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SyncWrite(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §Ping Ping (0x01) (code `0x01`, 6 bytes). Asks for a status packet; nothing else happens.
-        Ping,
-        /// §Read Read (0x02) (code `0x02`, 8 bytes). Reads `length` bytes of the control table from `address`.
-        Read {
-            /// Starting address of the data to be read
-            address: u8,
-            /// Length of the data to be read Valid raw range 1..=253.
-            length: u8,
-        },
-        /// §Write Write (0x03) (code `0x03`, 8 to 259 bytes). Writes `data` to the control table from `address`.
-        Write {
-            /// Starting address of the data to be written
-            address: u8,
-            /// Data to be written
-            data: rt::Repeated<u8, 252>,
-        },
-        /// §Reg Write Reg Write (0x04) (code `0x04`, 8 to 259 bytes). Registers `data` for `address`, to be written at the next ACTION.
-        RegWrite {
-            /// Starting address of the data to be written
-            address: u8,
-            /// Data to be written
-            data: rt::Repeated<u8, 252>,
-        },
-        /// §Action Action (0x05) (code `0x05`, 6 bytes). Executes the registered REG_WRITE.
-        Action,
-        /// §Factory Reset Factory Reset (0x06) (code `0x06`, 6 bytes). Resets the control table to the factory defaults.
-        Reset,
-        /// §Sync Write Sync Write (0x83) (code `0x83`, 10 to 259 bytes). Writes `data_length` bytes at `address` on several devices at once, sent to the broadcast ID. `blocks` holds, for each device, its ID followed by its `data_length` bytes of data (the spec language cannot yet say "records of 1 + data_length bytes", so the blocks are one list of bytes).
-        SyncWrite {
-            /// Starting address of the data to be written
-            address: u8,
-            /// Length of the data for each device
-            data_length: u8,
-            /// ID of the 1st device, its data, ID of the 2nd device, ...
-            blocks: rt::Repeated<u8, 251>,
-        },
+        Ping(request::Ping),
+        Read(request::Read),
+        Write(request::Write),
+        RegWrite(request::RegWrite),
+        Action(request::Action),
+        Reset(request::Reset),
+        SyncWrite(request::SyncWrite),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -200,13 +295,13 @@ pub mod dynamixel {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ping => 0,
-                Self::Read { .. } => 1,
-                Self::Write { .. } => 2,
-                Self::RegWrite { .. } => 3,
-                Self::Action => 4,
-                Self::Reset => 5,
-                Self::SyncWrite { .. } => 6,
+                Self::Ping(_) => 0,
+                Self::Read(_) => 1,
+                Self::Write(_) => 2,
+                Self::RegWrite(_) => 3,
+                Self::Action(_) => 4,
+                Self::Reset(_) => 5,
+                Self::SyncWrite(_) => 6,
             }
         }
         /// The spec's snake_case name of this message.
@@ -220,13 +315,13 @@ pub mod dynamixel {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Write { data: v_data, .. } => {
+                Self::Write(request::Write { data: v_data, .. }) => {
                     REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(v_data.len())
                 }
-                Self::RegWrite { data: v_data, .. } => {
+                Self::RegWrite(request::RegWrite { data: v_data, .. }) => {
                     REPEAT_REG_WRITE.base + REPEAT_REG_WRITE.bytes_of(v_data.len())
                 }
-                Self::SyncWrite { blocks: v_blocks, .. } => {
+                Self::SyncWrite(request::SyncWrite { blocks: v_blocks, .. }) => {
                     REPEAT_SYNC_WRITE.base + REPEAT_SYNC_WRITE.bytes_of(v_blocks.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -234,29 +329,12 @@ pub mod dynamixel {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Read { address: v_address, length: v_length } => {
-                    f("address", rt::Int(*v_address as i64));
-                    f("length", rt::Int(*v_length as i64));
-                }
-                Self::Write { address: v_address, data: v_data } => {
-                    f("address", rt::Int(*v_address as i64));
-                    f("data", rt::List(v_data.elements()));
-                }
-                Self::RegWrite { address: v_address, data: v_data } => {
-                    f("address", rt::Int(*v_address as i64));
-                    f("data", rt::List(v_data.elements()));
-                }
-                Self::SyncWrite {
-                    address: v_address,
-                    data_length: v_data_length,
-                    blocks: v_blocks,
-                } => {
-                    f("address", rt::Int(*v_address as i64));
-                    f("data_length", rt::Int(*v_data_length as i64));
-                    f("blocks", rt::List(v_blocks.elements()));
-                }
+                Self::Read(m) => m.visit(f),
+                Self::Write(m) => m.visit(f),
+                Self::RegWrite(m) => m.visit(f),
+                Self::SyncWrite(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -270,12 +348,12 @@ pub mod dynamixel {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping => {
-                    rt::encode_broadcast(address, 0xFE, &request::PING)?;
+                Self::Ping(request::Ping {}) => {
+                    rt::encode_broadcast(address, 0xFE, &request::Ping::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
-                Self::Read { address: v_address, length: v_length } => {
-                    rt::encode_broadcast(address, 0xFE, &request::READ)?;
+                Self::Read(request::Read { address: v_address, length: v_length }) => {
+                    rt::encode_broadcast(address, 0xFE, &request::Read::DESC)?;
                     rt::encode_in_range("length", v_length, 1, 253)?;
                     let out = rt::frame_mut::<
                         8,
@@ -284,7 +362,7 @@ pub mod dynamixel {
                     out[6] = v_length;
                     out.len()
                 }
-                Self::Write { address: v_address, data: v_data } => {
+                Self::Write(request::Write { address: v_address, data: v_data }) => {
                     let frame_len = REPEAT_WRITE.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
                     rt::put_length(out, 3, 1, true, true, -4)?;
@@ -293,7 +371,9 @@ pub mod dynamixel {
                     rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
                     out.len()
                 }
-                Self::RegWrite { address: v_address, data: v_data } => {
+                Self::RegWrite(
+                    request::RegWrite { address: v_address, data: v_data },
+                ) => {
                     let frame_len = REPEAT_REG_WRITE.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
                     rt::put_length(out, 3, 1, true, true, -4)?;
@@ -302,17 +382,19 @@ pub mod dynamixel {
                     rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
                     out.len()
                 }
-                Self::Action => {
+                Self::Action(request::Action {}) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x05])?.len()
                 }
-                Self::Reset => {
+                Self::Reset(request::Reset {}) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x06])?.len()
                 }
-                Self::SyncWrite {
-                    address: v_address,
-                    data_length: v_data_length,
-                    blocks: v_blocks,
-                } => {
+                Self::SyncWrite(
+                    request::SyncWrite {
+                        address: v_address,
+                        data_length: v_data_length,
+                        blocks: v_blocks,
+                    },
+                ) => {
                     let frame_len = REPEAT_SYNC_WRITE.encode_len(v_blocks.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
                     rt::put_length(out, 3, 1, true, true, -4)?;
@@ -348,44 +430,59 @@ pub mod dynamixel {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<6>(frame, &request::PING)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::PING)?;
-                    rt::Ok(Self::Ping)
+                    let frame = rt::fixed::<6>(frame, &request::Ping::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::Ping::DESC)?;
+                    rt::Ok(Self::Ping(request::Ping))
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::READ)?;
+                    let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
                     rt::in_range(&request::READ_LENGTH, 6, frame[6], 1, 253)?;
-                    rt::Ok(Self::Read {
-                        address: frame[5],
-                        length: frame[6],
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            address: frame[5],
+                            length: frame[6],
+                        }),
+                    )
                 }
                 0x03 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::Ok(Self::Write {
-                        address: frame[5],
-                        data: REPEAT_WRITE.elements::<u8, 252>(elements, true, false)?,
-                    })
+                    rt::Ok(
+                        Self::Write(request::Write {
+                            address: frame[5],
+                            data: REPEAT_WRITE
+                                .elements::<u8, 252>(elements, true, false)?,
+                        }),
+                    )
                 }
                 0x04 => {
                     let (frame, elements, _) = REPEAT_REG_WRITE.split::<6>(frame)?;
-                    rt::Ok(Self::RegWrite {
-                        address: frame[5],
-                        data: REPEAT_REG_WRITE
-                            .elements::<u8, 252>(elements, true, false)?,
-                    })
+                    rt::Ok(
+                        Self::RegWrite(request::RegWrite {
+                            address: frame[5],
+                            data: REPEAT_REG_WRITE
+                                .elements::<u8, 252>(elements, true, false)?,
+                        }),
+                    )
                 }
-                0x05 => rt::fixed::<6>(frame, &request::ACTION).map(|_| Self::Action),
-                0x06 => rt::fixed::<6>(frame, &request::RESET).map(|_| Self::Reset),
+                0x05 => {
+                    rt::fixed::<6>(frame, &request::Action::DESC)
+                        .map(|_| Self::Action(request::Action))
+                }
+                0x06 => {
+                    rt::fixed::<6>(frame, &request::Reset::DESC)
+                        .map(|_| Self::Reset(request::Reset))
+                }
                 0x83 => {
                     let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
-                    rt::Ok(Self::SyncWrite {
-                        address: frame[5],
-                        data_length: frame[6],
-                        blocks: REPEAT_SYNC_WRITE
-                            .elements::<u8, 251>(elements, true, false)?,
-                    })
+                    rt::Ok(
+                        Self::SyncWrite(request::SyncWrite {
+                            address: frame[5],
+                            data_length: frame[6],
+                            blocks: REPEAT_SYNC_WRITE
+                                .elements::<u8, 251>(elements, true, false)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
             }
@@ -398,33 +495,41 @@ pub mod dynamixel {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "ping" => rt::Ok(Self::Ping),
+                "ping" => rt::Ok(Self::Ping(request::Ping)),
                 "read" => {
-                    rt::Ok(Self::Read {
-                        address: rt::get(&mut field, "address")?,
-                        length: rt::get(&mut field, "length")?,
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            address: rt::get(&mut field, "address")?,
+                            length: rt::get(&mut field, "length")?,
+                        }),
+                    )
                 }
                 "write" => {
-                    rt::Ok(Self::Write {
-                        address: rt::get(&mut field, "address")?,
-                        data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::Write(request::Write {
+                            address: rt::get(&mut field, "address")?,
+                            data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
+                        }),
+                    )
                 }
                 "reg_write" => {
-                    rt::Ok(Self::RegWrite {
-                        address: rt::get(&mut field, "address")?,
-                        data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::RegWrite(request::RegWrite {
+                            address: rt::get(&mut field, "address")?,
+                            data: rt::list::<u8, 252>(&mut field, "data", 0, 255)?,
+                        }),
+                    )
                 }
-                "action" => rt::Ok(Self::Action),
-                "reset" => rt::Ok(Self::Reset),
+                "action" => rt::Ok(Self::Action(request::Action)),
+                "reset" => rt::Ok(Self::Reset(request::Reset)),
                 "sync_write" => {
-                    rt::Ok(Self::SyncWrite {
-                        address: rt::get(&mut field, "address")?,
-                        data_length: rt::get(&mut field, "data_length")?,
-                        blocks: rt::list::<u8, 251>(&mut field, "blocks", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::SyncWrite(request::SyncWrite {
+                            address: rt::get(&mut field, "address")?,
+                            data_length: rt::get(&mut field, "data_length")?,
+                            blocks: rt::list::<u8, 251>(&mut field, "blocks", 0, 255)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -504,20 +609,42 @@ pub mod dynamixel {
         min: 1,
         max: 253,
     };
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[6]);
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 259;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[6]);
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadStatus(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §Status Packet Status Packet (code `0x`, 6 bytes). The answer to every instruction but READ: the error byte alone.
-        Status { error: StatusError },
-        /// §Read Status Packet (Read) (code `0x`, 7 to 259 bytes). The answer to READ: the error byte and as many bytes as the request asked for.
-        ReadStatus {
-            error: StatusError,
-            /// The bytes read
-            data: rt::Repeated<u8, 253>,
-        },
+        Status(response::Status),
+        ReadStatus(response::ReadStatus),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -528,8 +655,8 @@ pub mod dynamixel {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Status { .. } => 0,
-                Self::ReadStatus { .. } => 1,
+                Self::Status(_) => 0,
+                Self::ReadStatus(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -543,7 +670,7 @@ pub mod dynamixel {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadStatus { data: v_data, .. } => {
+                Self::ReadStatus(response::ReadStatus { data: v_data, .. }) => {
                     REPEAT_READ_STATUS.base + REPEAT_READ_STATUS.bytes_of(v_data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -551,15 +678,10 @@ pub mod dynamixel {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Status { error: v_error } => {
-                    f("error", rt::Int(v_error.raw() as i64))
-                }
-                Self::ReadStatus { error: v_error, data: v_data } => {
-                    f("error", rt::Int(v_error.raw() as i64));
-                    f("data", rt::List(v_data.elements()));
-                }
+                Self::Status(m) => m.visit(f),
+                Self::ReadStatus(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -572,12 +694,14 @@ pub mod dynamixel {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Status { error: v_error } => {
+                Self::Status(response::Status { error: v_error }) => {
                     let out = rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02])?;
                     out[4] = v_error.raw();
                     out.len()
                 }
-                Self::ReadStatus { error: v_error, data: v_data } => {
+                Self::ReadStatus(
+                    response::ReadStatus { error: v_error, data: v_data },
+                ) => {
                     let frame_len = REPEAT_READ_STATUS.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xFF, 0xFF, address])?;
                     rt::put_length(out, 3, 1, true, true, -4)?;
@@ -644,21 +768,25 @@ pub mod dynamixel {
                 0u32 => {
                     let mut g = rt::Group::new(frame, 0u32, request.map(Request::name));
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::Ok(Self::Status {
-                            error: StatusError::from_raw(frame[4]),
-                        })
+                        rt::Ok(
+                            Self::Status(response::Status {
+                                error: StatusError::from_raw(frame[4]),
+                            }),
+                        )
                     });
                     g.attempt_split(
                         &REPEAT_READ_STATUS,
                         |frame: &[u8; 5], elements: &[u8], _: usize| {
-                            rt::Ok(Self::ReadStatus {
-                                error: StatusError::from_raw(frame[4]),
-                                data: REPEAT_READ_STATUS
-                                    .elements::<u8, 253>(elements, true, false)?,
-                            })
+                            rt::Ok(
+                                Self::ReadStatus(response::ReadStatus {
+                                    error: StatusError::from_raw(frame[4]),
+                                    data: REPEAT_READ_STATUS
+                                        .elements::<u8, 253>(elements, true, false)?,
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::STATUS)
+                    g.end(&response::Status::DESC)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }
@@ -672,15 +800,19 @@ pub mod dynamixel {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "status" => {
-                    rt::Ok(Self::Status {
-                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                    })
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                        }),
+                    )
                 }
                 "read_status" => {
-                    rt::Ok(Self::ReadStatus {
-                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                        data: rt::list::<u8, 253>(&mut field, "data", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::ReadStatus(response::ReadStatus {
+                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                            data: rt::list::<u8, 253>(&mut field, "data", 0, 255)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -731,8 +863,8 @@ pub mod dynamixel {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (
-                    &Self::ReadStatus { data: v_data, .. },
-                    &Request::Read { length: r_length, .. },
+                    &Self::ReadStatus(response::ReadStatus { data: v_data, .. }),
+                    &Request::Read(request::Read { length: r_length, .. }),
                 ) => {
                     REPEAT_READ_STATUS
                         .follows_request(
@@ -750,19 +882,19 @@ pub mod dynamixel {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::Ping`], read from the frame.
+        /// [`request::Ping`], read from the frame.
         Ping,
-        /// [`Request::Read`], read from the frame.
+        /// [`request::Read`], read from the frame.
         Read { address: u8, length: u8 },
-        /// [`Request::Write`], read from the frame.
+        /// [`request::Write`], read from the frame.
         Write { address: u8, data: rt::ListView<'a, u8> },
-        /// [`Request::RegWrite`], read from the frame.
+        /// [`request::RegWrite`], read from the frame.
         RegWrite { address: u8, data: rt::ListView<'a, u8> },
-        /// [`Request::Action`], read from the frame.
+        /// [`request::Action`], read from the frame.
         Action,
-        /// [`Request::Reset`], read from the frame.
+        /// [`request::Reset`], read from the frame.
         Reset,
-        /// [`Request::SyncWrite`], read from the frame.
+        /// [`request::SyncWrite`], read from the frame.
         SyncWrite { address: u8, data_length: u8, blocks: rt::ListView<'a, u8> },
     }
     impl<'a> RequestView<'a> {
@@ -788,13 +920,13 @@ pub mod dynamixel {
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<6>(frame, &request::PING)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::PING)?;
+                    let frame = rt::fixed::<6>(frame, &request::Ping::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::Ping::DESC)?;
                     rt::Ok(Self::Ping)
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::READ)?;
+                    let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::Read::DESC)?;
                     rt::in_range(&request::READ_LENGTH, 6, frame[6], 1, 253)?;
                     rt::Ok(Self::Read {
                         address: frame[5],
@@ -815,8 +947,10 @@ pub mod dynamixel {
                         data: REPEAT_REG_WRITE.view::<u8, 252>(elements, true, false)?,
                     })
                 }
-                0x05 => rt::fixed::<6>(frame, &request::ACTION).map(|_| Self::Action),
-                0x06 => rt::fixed::<6>(frame, &request::RESET).map(|_| Self::Reset),
+                0x05 => {
+                    rt::fixed::<6>(frame, &request::Action::DESC).map(|_| Self::Action)
+                }
+                0x06 => rt::fixed::<6>(frame, &request::Reset::DESC).map(|_| Self::Reset),
                 0x83 => {
                     let (frame, elements, _) = REPEAT_SYNC_WRITE.split::<7>(frame)?;
                     rt::Ok(Self::SyncWrite {
@@ -847,28 +981,30 @@ pub mod dynamixel {
         /// The owned message: each lent list copied.
         pub fn to_owned(self) -> Request {
             match self {
-                Self::Ping => Request::Ping,
-                Self::Read { address, length } => Request::Read { address, length },
+                Self::Ping => Request::Ping(request::Ping),
+                Self::Read { address, length } => {
+                    Request::Read(request::Read { address, length })
+                }
                 Self::Write { address, data } => {
-                    Request::Write {
+                    Request::Write(request::Write {
                         address,
                         data: data.to_repeated(),
-                    }
+                    })
                 }
                 Self::RegWrite { address, data } => {
-                    Request::RegWrite {
+                    Request::RegWrite(request::RegWrite {
                         address,
                         data: data.to_repeated(),
-                    }
+                    })
                 }
-                Self::Action => Request::Action,
-                Self::Reset => Request::Reset,
+                Self::Action => Request::Action(request::Action),
+                Self::Reset => Request::Reset(request::Reset),
                 Self::SyncWrite { address, data_length, blocks } => {
-                    Request::SyncWrite {
+                    Request::SyncWrite(request::SyncWrite {
                         address,
                         data_length,
                         blocks: blocks.to_repeated(),
-                    }
+                    })
                 }
             }
         }
@@ -876,9 +1012,9 @@ pub mod dynamixel {
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::Status`], read from the frame.
+        /// [`response::Status`], read from the frame.
         Status { error: StatusError },
-        /// [`Response::ReadStatus`], read from the frame.
+        /// [`response::ReadStatus`], read from the frame.
         ReadStatus { error: StatusError, data: rt::ListView<'a, u8> },
     }
     impl<'a> ResponseView<'a> {
@@ -951,7 +1087,7 @@ pub mod dynamixel {
                             })
                         },
                     );
-                    g.end(&response::STATUS)
+                    g.end(&response::Status::DESC)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 0, 1, true)),
             }
@@ -970,12 +1106,12 @@ pub mod dynamixel {
         /// The owned message: each lent list copied.
         pub fn to_owned(self) -> Response {
             match self {
-                Self::Status { error } => Response::Status { error },
+                Self::Status { error } => Response::Status(response::Status { error }),
                 Self::ReadStatus { error, data } => {
-                    Response::ReadStatus {
+                    Response::ReadStatus(response::ReadStatus {
                         error,
                         data: data.to_repeated(),
-                    }
+                    })
                 }
             }
         }
@@ -985,7 +1121,7 @@ pub mod dynamixel {
             match (self, request) {
                 (
                     &Self::ReadStatus { data: v_data, .. },
-                    &Request::Read { length: r_length, .. },
+                    &Request::Read(request::Read { length: r_length, .. }),
                 ) => {
                     REPEAT_READ_STATUS
                         .follows_request(
@@ -1184,45 +1320,102 @@ pub mod dynamixel {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ping`, code 0x01
-        pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[6]);
-        /// `read`, code 0x02
-        pub const READ: MessageDesc = MessageDesc::new("read", 0x02, 1, &[8]);
+        use ::busspec_runtime::FieldDesc;
+        /// §Ping Ping (0x01) (code `0x01`, 6 bytes). Asks for a status packet; nothing else happens.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ping;
+        /// §Read Read (0x02) (code `0x02`, 8 bytes). Reads `length` bytes of the control table from `address`.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Read {
+            /// Starting address of the data to be read
+            pub address: u8,
+            /// Length of the data to be read Valid raw range 1..=253.
+            pub length: u8,
+        }
+        /// §Write Write (0x03) (code `0x03`, 8 to 259 bytes). Writes `data` to the control table from `address`.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Write {
+            /// Starting address of the data to be written
+            pub address: u8,
+            /// Data to be written
+            pub data: super::rt::Repeated<u8, 252>,
+        }
+        /// §Reg Write Reg Write (0x04) (code `0x04`, 8 to 259 bytes). Registers `data` for `address`, to be written at the next ACTION.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RegWrite {
+            /// Starting address of the data to be written
+            pub address: u8,
+            /// Data to be written
+            pub data: super::rt::Repeated<u8, 252>,
+        }
+        /// §Action Action (0x05) (code `0x05`, 6 bytes). Executes the registered REG_WRITE.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Action;
+        /// §Factory Reset Factory Reset (0x06) (code `0x06`, 6 bytes). Resets the control table to the factory defaults.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Reset;
+        /// §Sync Write Sync Write (0x83) (code `0x83`, 10 to 259 bytes). Writes `data_length` bytes at `address` on several devices at once, sent to the broadcast ID. `blocks` holds, for each device, its ID followed by its `data_length` bytes of data (the spec language cannot yet say "records of 1 + data_length bytes", so the blocks are one list of bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SyncWrite {
+            /// Starting address of the data to be written
+            pub address: u8,
+            /// Length of the data for each device
+            pub data_length: u8,
+            /// ID of the 1st device, its data, ID of the 2nd device, ...
+            pub blocks: super::rt::Repeated<u8, 251>,
+        }
         /// `read.length`
         pub const READ_LENGTH: FieldDesc = FieldDesc::new("read", "length");
-        /// `write`, code 0x03
-        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x03, 1, &[7]);
         /// `write.data`
         pub const WRITE_DATA: FieldDesc = FieldDesc::new("write", "data");
-        /// `reg_write`, code 0x04
-        pub const REG_WRITE: MessageDesc = MessageDesc::new("reg_write", 0x04, 1, &[7]);
         /// `reg_write.data`
         pub const REG_WRITE_DATA: FieldDesc = FieldDesc::new("reg_write", "data");
-        /// `action`, code 0x05
-        pub const ACTION: MessageDesc = MessageDesc::new("action", 0x05, 1, &[6]);
-        /// `reset`, code 0x06
-        pub const RESET: MessageDesc = MessageDesc::new("reset", 0x06, 1, &[6]);
-        /// `sync_write`, code 0x83
-        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
-            "sync_write",
-            0x83,
-            1,
-            &[8],
-        );
         /// `sync_write.blocks`
         pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `status` (no code)
-        pub const STATUS: MessageDesc = MessageDesc::new("status", 0, 0, &[6]);
-        /// `read_status` (no code)
-        pub const READ_STATUS: MessageDesc = MessageDesc::new("read_status", 0, 0, &[6]);
+        use ::busspec_runtime::FieldDesc;
+        /// §Status Packet Status Packet (code `0x`, 6 bytes). The answer to every instruction but READ: the error byte alone.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Status {
+            pub error: super::StatusError,
+        }
+        /// §Read Status Packet (Read) (code `0x`, 7 to 259 bytes). The answer to READ: the error byte and as many bytes as the request asked for.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadStatus {
+            pub error: super::StatusError,
+            /// The bytes read
+            pub data: super::rt::Repeated<u8, 253>,
+        }
         /// `read_status.data`
         pub const READ_STATUS_DATA: FieldDesc = FieldDesc::new("read_status", "data");
     }

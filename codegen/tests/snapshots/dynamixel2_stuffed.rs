@@ -152,16 +152,48 @@ pub mod dynamixel2_stuffed {
             Self(raw)
         }
     }
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[10],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::Write4 {
+        pub const NAME: &'static str = "write4";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[16],
+        );
+        pub const ADDRESS: rt::Range<usize> = 8..10;
+        pub const VALUE: rt::Range<usize> = 10..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write4(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §Ping Ping (code `0x01`, 10 bytes).
-        Ping,
-        /// §Write Write (4 bytes) (code `0x03`, 16 bytes).
-        Write4 { address: u16, value: u32 },
+        Ping(request::Ping),
+        Write4(request::Write4),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -172,8 +204,8 @@ pub mod dynamixel2_stuffed {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ping => 0,
-                Self::Write4 { .. } => 1,
+                Self::Ping(_) => 0,
+                Self::Write4(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -190,12 +222,9 @@ pub mod dynamixel2_stuffed {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Write4 { address: v_address, value: v_value } => {
-                    f("address", rt::Int(*v_address as i64));
-                    f("value", rt::Int(*v_value as i64));
-                }
+                Self::Write4(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -222,13 +251,13 @@ pub mod dynamixel2_stuffed {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping => {
+                Self::Ping(request::Ping {}) => {
                     rt::frame_mut::<
                         10,
                     >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x03, 0x00, 0x01])?
                         .len()
                 }
-                Self::Write4 { address: v_address, value: v_value } => {
+                Self::Write4(request::Write4 { address: v_address, value: v_value }) => {
                     let out = rt::frame_mut::<
                         16,
                     >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x09, 0x00, 0x03])?;
@@ -280,18 +309,23 @@ pub mod dynamixel2_stuffed {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 7, 1) {
-                0x01 => rt::fixed::<10>(frame, &request::PING).map(|_| Self::Ping),
+                0x01 => {
+                    rt::fixed::<10>(frame, &request::Ping::DESC)
+                        .map(|_| Self::Ping(request::Ping))
+                }
                 0x03 => {
-                    let frame = rt::fixed::<16>(frame, &request::WRITE4)?;
-                    rt::Ok(Self::Write4 {
-                        address: u16::from_le_bytes([frame[8], frame[9]]),
-                        value: u32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                    })
+                    let frame = rt::fixed::<16>(frame, &request::Write4::DESC)?;
+                    rt::Ok(
+                        Self::Write4(request::Write4 {
+                            address: u16::from_le_bytes([frame[8], frame[9]]),
+                            value: u32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 7, 1, 2, false)),
             }
@@ -304,12 +338,14 @@ pub mod dynamixel2_stuffed {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "ping" => rt::Ok(Self::Ping),
+                "ping" => rt::Ok(Self::Ping(request::Ping)),
                 "write4" => {
-                    rt::Ok(Self::Write4 {
-                        address: rt::get(&mut field, "address")?,
-                        value: rt::get(&mut field, "value")?,
-                    })
+                    rt::Ok(
+                        Self::Write4(request::Write4 {
+                            address: rt::get(&mut field, "address")?,
+                            value: rt::get(&mut field, "value")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -374,16 +410,54 @@ pub mod dynamixel2_stuffed {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::PingStatus {
+        pub const NAME: &'static str = "ping_status";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x55,
+            1,
+            &[11, 14],
+        );
+        pub const ERROR: rt::Range<usize> = 8..9;
+        pub const MODEL_NUMBER: rt::Range<usize> = 9..11;
+        pub const FIRMWARE_VERSION: rt::Range<usize> = 11..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+            f("model_number", rt::Int(self.model_number as i64));
+            f("firmware_version", rt::Int(self.firmware_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x55,
+            1,
+            &[11, 14],
+        );
+        pub const ERROR: rt::Range<usize> = 8..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §Ping Status packet answering Ping (code `0x55`, 14 bytes).
-        PingStatus { error: StatusError, model_number: u16, firmware_version: u8 },
-        /// §Status Packet Status packet without parameters (code `0x55`, 11 bytes).
-        Status { error: StatusError },
+        PingStatus(response::PingStatus),
+        Status(response::Status),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -394,8 +468,8 @@ pub mod dynamixel2_stuffed {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::PingStatus { .. } => 0,
-                Self::Status { .. } => 1,
+                Self::PingStatus(_) => 0,
+                Self::Status(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -412,20 +486,10 @@ pub mod dynamixel2_stuffed {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::PingStatus {
-                    error: v_error,
-                    model_number: v_model_number,
-                    firmware_version: v_firmware_version,
-                } => {
-                    f("error", rt::Int(v_error.raw() as i64));
-                    f("model_number", rt::Int(*v_model_number as i64));
-                    f("firmware_version", rt::Int(*v_firmware_version as i64));
-                }
-                Self::Status { error: v_error } => {
-                    f("error", rt::Int(v_error.raw() as i64))
-                }
+                Self::PingStatus(m) => m.visit(f),
+                Self::Status(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -451,11 +515,13 @@ pub mod dynamixel2_stuffed {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingStatus {
-                    error: v_error,
-                    model_number: v_model_number,
-                    firmware_version: v_firmware_version,
-                } => {
+                Self::PingStatus(
+                    response::PingStatus {
+                        error: v_error,
+                        model_number: v_model_number,
+                        firmware_version: v_firmware_version,
+                    },
+                ) => {
                     let out = rt::frame_mut::<
                         14,
                     >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x07, 0x00, 0x55])?;
@@ -464,7 +530,7 @@ pub mod dynamixel2_stuffed {
                     out[11] = v_firmware_version;
                     out.len()
                 }
-                Self::Status { error: v_error } => {
+                Self::Status(response::Status { error: v_error }) => {
                     let out = rt::frame_mut::<
                         11,
                     >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x04, 0x00, 0x55])?;
@@ -549,18 +615,22 @@ pub mod dynamixel2_stuffed {
                 0x55 => {
                     let mut g = rt::Group::new(frame, 0x55, request.map(Request::name));
                     g.attempt(|frame: &[u8; 14]| {
-                        rt::Ok(Self::PingStatus {
-                            error: StatusError::from_raw(frame[8]),
-                            model_number: u16::from_le_bytes([frame[9], frame[10]]),
-                            firmware_version: frame[11],
-                        })
+                        rt::Ok(
+                            Self::PingStatus(response::PingStatus {
+                                error: StatusError::from_raw(frame[8]),
+                                model_number: u16::from_le_bytes([frame[9], frame[10]]),
+                                firmware_version: frame[11],
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 11]| {
-                        rt::Ok(Self::Status {
-                            error: StatusError::from_raw(frame[8]),
-                        })
+                        rt::Ok(
+                            Self::Status(response::Status {
+                                error: StatusError::from_raw(frame[8]),
+                            }),
+                        )
                     });
-                    g.end(&response::PING_STATUS)
+                    g.end(&response::PingStatus::DESC)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 7, 1, 2, true)),
             }
@@ -574,16 +644,20 @@ pub mod dynamixel2_stuffed {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ping_status" => {
-                    rt::Ok(Self::PingStatus {
-                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                        model_number: rt::get(&mut field, "model_number")?,
-                        firmware_version: rt::get(&mut field, "firmware_version")?,
-                    })
+                    rt::Ok(
+                        Self::PingStatus(response::PingStatus {
+                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                            model_number: rt::get(&mut field, "model_number")?,
+                            firmware_version: rt::get(&mut field, "firmware_version")?,
+                        }),
+                    )
                 }
                 "status" => {
-                    rt::Ok(Self::Status {
-                        error: StatusError::from_raw(rt::get(&mut field, "error")?),
-                    })
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error: StatusError::from_raw(rt::get(&mut field, "error")?),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -719,26 +793,44 @@ pub mod dynamixel2_stuffed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel2Stuffed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `ping`, code 0x01
-        pub const PING: MessageDesc = MessageDesc::new("ping", 0x01, 1, &[10]);
-        /// `write4`, code 0x03
-        pub const WRITE4: MessageDesc = MessageDesc::new("write4", 0x03, 1, &[16]);
+        /// §Ping Ping (code `0x01`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ping;
+        /// §Write Write (4 bytes) (code `0x03`, 16 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Write4 {
+            pub address: u16,
+            pub value: u32,
+        }
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `ping_status`, code 0x55
-        pub const PING_STATUS: MessageDesc = MessageDesc::new(
-            "ping_status",
-            0x55,
-            1,
-            &[11, 14],
-        );
-        /// `status`, code 0x55
-        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x55, 1, &[11, 14]);
+        /// §Ping Status packet answering Ping (code `0x55`, 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct PingStatus {
+            pub error: super::StatusError,
+            pub model_number: u16,
+            pub firmware_version: u8,
+        }
+        /// §Status Packet Status packet without parameters (code `0x55`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Status {
+            pub error: super::StatusError,
+        }
     }
 }

@@ -83,26 +83,73 @@ pub mod ending {
         min: 1,
         max: 16,
     };
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[8],
+        );
+        pub const FIRST: rt::Range<usize> = 4..6;
+        pub const QUANTITY: rt::Range<usize> = 6..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("first", rt::Int(self.first as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::Write {
+        pub const NAME: &'static str = "write";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[7],
+        );
+        pub const QUANTITY: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write(*self).encode(address, buf)
+        }
+    }
+    impl request::Stamp {
+        pub const NAME: &'static str = "stamp";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[8],
+        );
+        pub const TICKS: rt::Range<usize> = 4..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("ticks", rt::Int(self.ticks as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Stamp(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Read (code `0x01`, 8 bytes).
-        Read {
-            first: u16,
-            /// Valid raw range 1..=16.
-            quantity: u8,
-        },
-        /// §2 Write (code `0x02`, 9 to 39 bytes).
-        Write {
-            /// Valid raw range 1..=16.
-            quantity: u8,
-            values: rt::Repeated<u16, 16>,
-        },
-        /// §3 Stamp (code `0x03`, 8 bytes).
-        Stamp { ticks: u32 },
+        Read(request::Read),
+        Write(request::Write),
+        Stamp(request::Stamp),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -114,9 +161,9 @@ pub mod ending {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Read { .. } => 0,
-                Self::Write { .. } => 1,
-                Self::Stamp { .. } => 2,
+                Self::Read(_) => 0,
+                Self::Write(_) => 1,
+                Self::Stamp(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -130,7 +177,7 @@ pub mod ending {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Write { values: v_values, .. } => {
+                Self::Write(request::Write { values: v_values, .. }) => {
                     REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(v_values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -138,17 +185,11 @@ pub mod ending {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Read { first: v_first, quantity: v_quantity } => {
-                    f("first", rt::Int(*v_first as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::Write { quantity: v_quantity, values: v_values } => {
-                    f("quantity", rt::Int(*v_quantity as i64));
-                    f("values", rt::List(v_values.elements()));
-                }
-                Self::Stamp { ticks: v_ticks } => f("ticks", rt::Int(*v_ticks as i64)),
+                Self::Read(m) => m.visit(f),
+                Self::Write(m) => m.visit(f),
+                Self::Stamp(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -161,14 +202,16 @@ pub mod ending {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Read { first: v_first, quantity: v_quantity } => {
+                Self::Read(request::Read { first: v_first, quantity: v_quantity }) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 16)?;
                     let out = rt::frame_mut::<8>(buf, &[0xA5, 0x5A, address, 0x01])?;
                     out[4..6].copy_from_slice(&v_first.to_be_bytes());
                     out[6] = v_quantity;
                     out.len()
                 }
-                Self::Write { quantity: v_quantity, values: v_values } => {
+                Self::Write(
+                    request::Write { quantity: v_quantity, values: v_values },
+                ) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 16)?;
                     let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
                     let out = rt::frame_mut_len(
@@ -189,7 +232,7 @@ pub mod ending {
                     rt::write_elements(v_values.as_slice(), 2, false, &mut out[6..]);
                     out.len()
                 }
-                Self::Stamp { ticks: v_ticks } => {
+                Self::Stamp(request::Stamp { ticks: v_ticks }) => {
                     let out = rt::frame_mut::<8>(buf, &[0xA5, 0x5A, address, 0x03])?;
                     out[4..7]
                         .copy_from_slice(
@@ -225,12 +268,14 @@ pub mod ending {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ)?;
+                    let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::READ_QUANTITY, 6, frame[6], 1, 16)?;
-                    rt::Ok(Self::Read {
-                        first: u16::from_be_bytes([frame[4], frame[5]]),
-                        quantity: frame[6],
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            first: u16::from_be_bytes([frame[4], frame[5]]),
+                            quantity: frame[6],
+                        }),
+                    )
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
@@ -243,16 +288,21 @@ pub mod ending {
                         (2, 1),
                         "2 × quantity",
                     )?;
-                    rt::Ok(Self::Write {
-                        quantity: frame[4],
-                        values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::Write(request::Write {
+                            quantity: frame[4],
+                            values: REPEAT_WRITE
+                                .elements::<u16, 16>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, &request::STAMP)?;
-                    rt::Ok(Self::Stamp {
-                        ticks: rt::u24([frame[4], frame[5], frame[6]], false),
-                    })
+                    let frame = rt::fixed::<8>(frame, &request::Stamp::DESC)?;
+                    rt::Ok(
+                        Self::Stamp(request::Stamp {
+                            ticks: rt::u24([frame[4], frame[5], frame[6]], false),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
@@ -266,22 +316,28 @@ pub mod ending {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read" => {
-                    rt::Ok(Self::Read {
-                        first: rt::get(&mut field, "first")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            first: rt::get(&mut field, "first")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "write" => {
-                    rt::Ok(Self::Write {
-                        quantity: rt::get(&mut field, "quantity")?,
-                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::Write(request::Write {
+                            quantity: rt::get(&mut field, "quantity")?,
+                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                        }),
+                    )
                 }
                 "stamp" => {
-                    rt::Ok(Self::Stamp {
-                        ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
-                            as u32,
-                    })
+                    rt::Ok(
+                        Self::Stamp(request::Stamp {
+                            ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
+                                as u32,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -357,18 +413,69 @@ pub mod ending {
         min: 1,
         max: 16,
     };
+    impl response::ReadReply {
+        pub const NAME: &'static str = "read_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 37;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[5],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadError {
+        pub const NAME: &'static str = "read_error";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x81,
+            1,
+            &[6],
+        );
+        pub const REASON: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("reason", rt::Int(self.reason as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadError(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteReply {
+        pub const NAME: &'static str = "write_reply";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[6],
+        );
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteReply(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Read reply (code `0x01`, 7 to 37 bytes).
-        ReadReply { values: rt::Repeated<u16, 16> },
-        /// §1 Read error (code `0x81`, 6 bytes).
-        ReadError { reason: u8 },
-        /// §2 Write reply (code `0x02`, 6 bytes).
-        WriteReply { status: u8 },
+        ReadReply(response::ReadReply),
+        ReadError(response::ReadError),
+        WriteReply(response::WriteReply),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -380,9 +487,9 @@ pub mod ending {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadReply { .. } => 0,
-                Self::ReadError { .. } => 1,
-                Self::WriteReply { .. } => 2,
+                Self::ReadReply(_) => 0,
+                Self::ReadError(_) => 1,
+                Self::WriteReply(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -396,7 +503,7 @@ pub mod ending {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadReply { values: v_values, .. } => {
+                Self::ReadReply(response::ReadReply { values: v_values, .. }) => {
                     REPEAT_READ_REPLY.base + REPEAT_READ_REPLY.bytes_of(v_values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -404,17 +511,11 @@ pub mod ending {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ReadReply { values: v_values } => {
-                    f("values", rt::List(v_values.elements()))
-                }
-                Self::ReadError { reason: v_reason } => {
-                    f("reason", rt::Int(*v_reason as i64))
-                }
-                Self::WriteReply { status: v_status } => {
-                    f("status", rt::Int(*v_status as i64))
-                }
+                Self::ReadReply(m) => m.visit(f),
+                Self::ReadError(m) => m.visit(f),
+                Self::WriteReply(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -427,7 +528,7 @@ pub mod ending {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadReply { values: v_values } => {
+                Self::ReadReply(response::ReadReply { values: v_values }) => {
                     let frame_len = REPEAT_READ_REPLY.encode_len(v_values.len())?;
                     let out = rt::frame_mut_len(
                         buf,
@@ -437,12 +538,12 @@ pub mod ending {
                     rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
                     out.len()
                 }
-                Self::ReadError { reason: v_reason } => {
+                Self::ReadError(response::ReadError { reason: v_reason }) => {
                     let out = rt::frame_mut::<6>(buf, &[0xA5, 0x5A, address, 0x81])?;
                     out[4] = v_reason;
                     out.len()
                 }
-                Self::WriteReply { status: v_status } => {
+                Self::WriteReply(response::WriteReply { status: v_status }) => {
                     let out = rt::frame_mut::<6>(buf, &[0xA5, 0x5A, address, 0x02])?;
                     out[4] = v_status;
                     out.len()
@@ -501,22 +602,28 @@ pub mod ending {
             match rt::code(frame, 3, 1) {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<4>(frame)?;
-                    rt::Ok(Self::ReadReply {
-                        values: REPEAT_READ_REPLY
-                            .elements::<u16, 16>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::ReadReply(response::ReadReply {
+                            values: REPEAT_READ_REPLY
+                                .elements::<u16, 16>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x81 => {
-                    let frame = rt::fixed::<6>(frame, &response::READ_ERROR)?;
-                    rt::Ok(Self::ReadError {
-                        reason: frame[4],
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::ReadError::DESC)?;
+                    rt::Ok(
+                        Self::ReadError(response::ReadError {
+                            reason: frame[4],
+                        }),
+                    )
                 }
                 0x02 => {
-                    let frame = rt::fixed::<6>(frame, &response::WRITE_REPLY)?;
-                    rt::Ok(Self::WriteReply {
-                        status: frame[4],
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::WriteReply::DESC)?;
+                    rt::Ok(
+                        Self::WriteReply(response::WriteReply {
+                            status: frame[4],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
@@ -530,19 +637,25 @@ pub mod ending {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read_reply" => {
-                    rt::Ok(Self::ReadReply {
-                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::ReadReply(response::ReadReply {
+                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                        }),
+                    )
                 }
                 "read_error" => {
-                    rt::Ok(Self::ReadError {
-                        reason: rt::get(&mut field, "reason")?,
-                    })
+                    rt::Ok(
+                        Self::ReadError(response::ReadError {
+                            reason: rt::get(&mut field, "reason")?,
+                        }),
+                    )
                 }
                 "write_reply" => {
-                    rt::Ok(Self::WriteReply {
-                        status: rt::get(&mut field, "status")?,
-                    })
+                    rt::Ok(
+                        Self::WriteReply(response::WriteReply {
+                            status: rt::get(&mut field, "status")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -593,8 +706,8 @@ pub mod ending {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (
-                    &Self::ReadReply { values: v_values, .. },
-                    &Request::Read { quantity: r_quantity, .. },
+                    &Self::ReadReply(response::ReadReply { values: v_values, .. }),
+                    &Request::Read(request::Read { quantity: r_quantity, .. }),
                 ) => {
                     REPEAT_READ_REPLY
                         .follows_request(
@@ -612,11 +725,11 @@ pub mod ending {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::Read`], read from the frame.
+        /// [`request::Read`], read from the frame.
         Read { first: u16, quantity: u8 },
-        /// [`Request::Write`], read from the frame.
+        /// [`request::Write`], read from the frame.
         Write { quantity: u8, values: rt::ListView<'a, u16> },
-        /// [`Request::Stamp`], read from the frame.
+        /// [`request::Stamp`], read from the frame.
         Stamp { ticks: u32 },
     }
     impl<'a> RequestView<'a> {
@@ -641,7 +754,7 @@ pub mod ending {
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ)?;
+                    let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::READ_QUANTITY, 6, frame[6], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[4], frame[5]]),
@@ -665,7 +778,7 @@ pub mod ending {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, &request::STAMP)?;
+                    let frame = rt::fixed::<8>(frame, &request::Stamp::DESC)?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[4], frame[5], frame[6]], false),
                     })
@@ -688,25 +801,27 @@ pub mod ending {
         /// The owned message: each lent list copied.
         pub fn to_owned(self) -> Request {
             match self {
-                Self::Read { first, quantity } => Request::Read { first, quantity },
+                Self::Read { first, quantity } => {
+                    Request::Read(request::Read { first, quantity })
+                }
                 Self::Write { quantity, values } => {
-                    Request::Write {
+                    Request::Write(request::Write {
                         quantity,
                         values: values.to_repeated(),
-                    }
+                    })
                 }
-                Self::Stamp { ticks } => Request::Stamp { ticks },
+                Self::Stamp { ticks } => Request::Stamp(request::Stamp { ticks }),
             }
         }
     }
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::ReadReply`], read from the frame.
+        /// [`response::ReadReply`], read from the frame.
         ReadReply { values: rt::ListView<'a, u16> },
-        /// [`Response::ReadError`], read from the frame.
+        /// [`response::ReadError`], read from the frame.
         ReadError { reason: u8 },
-        /// [`Response::WriteReply`], read from the frame.
+        /// [`response::WriteReply`], read from the frame.
         WriteReply { status: u8 },
     }
     impl<'a> ResponseView<'a> {
@@ -766,13 +881,13 @@ pub mod ending {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<6>(frame, &response::READ_ERROR)?;
+                    let frame = rt::fixed::<6>(frame, &response::ReadError::DESC)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[4],
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<6>(frame, &response::WRITE_REPLY)?;
+                    let frame = rt::fixed::<6>(frame, &response::WriteReply::DESC)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[4],
                     })
@@ -796,12 +911,16 @@ pub mod ending {
         pub fn to_owned(self) -> Response {
             match self {
                 Self::ReadReply { values } => {
-                    Response::ReadReply {
+                    Response::ReadReply(response::ReadReply {
                         values: values.to_repeated(),
-                    }
+                    })
                 }
-                Self::ReadError { reason } => Response::ReadError { reason },
-                Self::WriteReply { status } => Response::WriteReply { status },
+                Self::ReadError { reason } => {
+                    Response::ReadError(response::ReadError { reason })
+                }
+                Self::WriteReply { status } => {
+                    Response::WriteReply(response::WriteReply { status })
+                }
             }
         }
         /// Checks every field this response takes from `request` (`follows: {request}` in the
@@ -810,7 +929,7 @@ pub mod ending {
             match (self, request) {
                 (
                     &Self::ReadReply { values: v_values, .. },
-                    &Request::Read { quantity: r_quantity, .. },
+                    &Request::Read(request::Read { quantity: r_quantity, .. }),
                 ) => {
                     REPEAT_READ_REPLY
                         .follows_request(
@@ -872,7 +991,7 @@ pub mod ending {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::ReadError { .. })
+            matches!(response, Response::ReadError(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
@@ -954,50 +1073,76 @@ pub mod ending {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ending>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read`, code 0x01
-        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[8]);
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Read (code `0x01`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Read {
+            pub first: u16,
+            /// Valid raw range 1..=16.
+            pub quantity: u8,
+        }
+        /// §2 Write (code `0x02`, 9 to 39 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Write {
+            /// Valid raw range 1..=16.
+            pub quantity: u8,
+            pub values: super::rt::Repeated<u16, 16>,
+        }
+        /// §3 Stamp (code `0x03`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Stamp {
+            pub ticks: u32,
+        }
         /// `read.quantity`
         pub const READ_QUANTITY: FieldDesc = FieldDesc::new("read", "quantity");
-        /// `write`, code 0x02
-        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x02, 1, &[7]);
         /// `write.values`
         pub const WRITE_VALUES: FieldDesc = FieldDesc::new("write", "values");
         /// `write.quantity`
         pub const WRITE_QUANTITY: FieldDesc = FieldDesc::new("write", "quantity");
         /// `write.byte_count`
         pub const WRITE_BYTE_COUNT: FieldDesc = FieldDesc::new("write", "byte_count");
-        /// `stamp`, code 0x03
-        pub const STAMP: MessageDesc = MessageDesc::new("stamp", 0x03, 1, &[8]);
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_reply`, code 0x01
-        pub const READ_REPLY: MessageDesc = MessageDesc::new(
-            "read_reply",
-            0x01,
-            1,
-            &[5],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Read reply (code `0x01`, 7 to 37 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadReply {
+            pub values: super::rt::Repeated<u16, 16>,
+        }
+        /// §1 Read error (code `0x81`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadError {
+            pub reason: u8,
+        }
+        /// §2 Write reply (code `0x02`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteReply {
+            pub status: u8,
+        }
         /// `read_reply.values`
         pub const READ_REPLY_VALUES: FieldDesc = FieldDesc::new("read_reply", "values");
-        /// `read_error`, code 0x81
-        pub const READ_ERROR: MessageDesc = MessageDesc::new(
-            "read_error",
-            0x81,
-            1,
-            &[6],
-        );
-        /// `write_reply`, code 0x02
-        pub const WRITE_REPLY: MessageDesc = MessageDesc::new(
-            "write_reply",
-            0x02,
-            1,
-            &[6],
-        );
     }
 }

@@ -68,20 +68,72 @@ pub mod ft12_fixed {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    impl request::ResetRemoteLink {
+        pub const NAME: &'static str = "reset_remote_link";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x40,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetRemoteLink(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestStatusOfLink {
+        pub const NAME: &'static str = "request_status_of_link";
+        pub const CODE: &'static [u8] = &[0x49];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x49,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestStatusOfLink(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestClass2 {
+        pub const NAME: &'static str = "request_class_2";
+        pub const CODE: &'static [u8] = &[0x5B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x5B,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestClass2(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestClass2Fcb {
+        pub const NAME: &'static str = "request_class_2_fcb";
+        pub const CODE: &'static [u8] = &[0x7B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7B,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestClass2Fcb(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 Reset of remote link (SND_NKE) (code `0x40`, 5 bytes).
-        ResetRemoteLink,
-        /// §3 Request status of link (code `0x49`, 5 bytes).
-        RequestStatusOfLink,
-        /// §3 Request user data class 2 (REQ_UD2), frame count bit clear (code `0x5B`, 5 bytes).
-        RequestClass2,
-        /// §3 Request user data class 2 (REQ_UD2), frame count bit set (code `0x7B`, 5 bytes).
-        RequestClass2Fcb,
+        ResetRemoteLink(request::ResetRemoteLink),
+        RequestStatusOfLink(request::RequestStatusOfLink),
+        RequestClass2(request::RequestClass2),
+        RequestClass2Fcb(request::RequestClass2Fcb),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -94,10 +146,10 @@ pub mod ft12_fixed {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ResetRemoteLink => 0,
-                Self::RequestStatusOfLink => 1,
-                Self::RequestClass2 => 2,
-                Self::RequestClass2Fcb => 3,
+                Self::ResetRemoteLink(_) => 0,
+                Self::RequestStatusOfLink(_) => 1,
+                Self::RequestClass2(_) => 2,
+                Self::RequestClass2Fcb(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -126,21 +178,27 @@ pub mod ft12_fixed {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::ResetRemoteLink => rt::head(out, &[0x10, 0x40, address]).len(),
-                Self::RequestStatusOfLink => {
+                Self::ResetRemoteLink(request::ResetRemoteLink {}) => {
+                    rt::head(out, &[0x10, 0x40, address]).len()
+                }
+                Self::RequestStatusOfLink(request::RequestStatusOfLink {}) => {
                     rt::encode_broadcast(
                         address,
                         0xFF,
-                        &request::REQUEST_STATUS_OF_LINK,
+                        &request::RequestStatusOfLink::DESC,
                     )?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
-                Self::RequestClass2 => {
-                    rt::encode_broadcast(address, 0xFF, &request::REQUEST_CLASS_2)?;
+                Self::RequestClass2(request::RequestClass2 {}) => {
+                    rt::encode_broadcast(address, 0xFF, &request::RequestClass2::DESC)?;
                     rt::head(out, &[0x10, 0x5B, address]).len()
                 }
-                Self::RequestClass2Fcb => {
-                    rt::encode_broadcast(address, 0xFF, &request::REQUEST_CLASS_2_FCB)?;
+                Self::RequestClass2Fcb(request::RequestClass2Fcb {}) => {
+                    rt::encode_broadcast(
+                        address,
+                        0xFF,
+                        &request::RequestClass2Fcb::DESC,
+                    )?;
                     rt::head(out, &[0x10, 0x7B, address]).len()
                 }
             };
@@ -167,23 +225,29 @@ pub mod ft12_fixed {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x40 => {
-                    rt::fixed::<5>(frame, &request::RESET_REMOTE_LINK)
-                        .map(|_| Self::ResetRemoteLink)
+                    rt::fixed::<5>(frame, &request::ResetRemoteLink::DESC)
+                        .map(|_| Self::ResetRemoteLink(request::ResetRemoteLink))
                 }
                 0x49 => {
-                    let frame = rt::fixed::<5>(frame, &request::REQUEST_STATUS_OF_LINK)?;
-                    rt::no_broadcast(frame[2], 0xFF, &request::REQUEST_STATUS_OF_LINK)?;
-                    rt::Ok(Self::RequestStatusOfLink)
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &request::RequestStatusOfLink::DESC)?;
+                    rt::no_broadcast(
+                        frame[2],
+                        0xFF,
+                        &request::RequestStatusOfLink::DESC,
+                    )?;
+                    rt::Ok(Self::RequestStatusOfLink(request::RequestStatusOfLink))
                 }
                 0x5B => {
-                    let frame = rt::fixed::<5>(frame, &request::REQUEST_CLASS_2)?;
-                    rt::no_broadcast(frame[2], 0xFF, &request::REQUEST_CLASS_2)?;
-                    rt::Ok(Self::RequestClass2)
+                    let frame = rt::fixed::<5>(frame, &request::RequestClass2::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFF, &request::RequestClass2::DESC)?;
+                    rt::Ok(Self::RequestClass2(request::RequestClass2))
                 }
                 0x7B => {
-                    let frame = rt::fixed::<5>(frame, &request::REQUEST_CLASS_2_FCB)?;
-                    rt::no_broadcast(frame[2], 0xFF, &request::REQUEST_CLASS_2_FCB)?;
-                    rt::Ok(Self::RequestClass2Fcb)
+                    let frame = rt::fixed::<5>(frame, &request::RequestClass2Fcb::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFF, &request::RequestClass2Fcb::DESC)?;
+                    rt::Ok(Self::RequestClass2Fcb(request::RequestClass2Fcb))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
             }
@@ -196,10 +260,16 @@ pub mod ft12_fixed {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "reset_remote_link" => rt::Ok(Self::ResetRemoteLink),
-                "request_status_of_link" => rt::Ok(Self::RequestStatusOfLink),
-                "request_class_2" => rt::Ok(Self::RequestClass2),
-                "request_class_2_fcb" => rt::Ok(Self::RequestClass2Fcb),
+                "reset_remote_link" => {
+                    rt::Ok(Self::ResetRemoteLink(request::ResetRemoteLink))
+                }
+                "request_status_of_link" => {
+                    rt::Ok(Self::RequestStatusOfLink(request::RequestStatusOfLink))
+                }
+                "request_class_2" => rt::Ok(Self::RequestClass2(request::RequestClass2)),
+                "request_class_2_fcb" => {
+                    rt::Ok(Self::RequestClass2Fcb(request::RequestClass2Fcb))
+                }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -257,7 +327,7 @@ pub mod ft12_fixed {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::RequestClass2 => rt::Reply::Optional,
+                    Request::RequestClass2(_) => rt::Reply::Optional,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -268,18 +338,57 @@ pub mod ft12_fixed {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x00,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Nack {
+        pub const NAME: &'static str = "nack";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Nack(*self).encode(address, buf)
+        }
+    }
+    impl response::StatusOfLink {
+        pub const NAME: &'static str = "status_of_link";
+        pub const CODE: &'static [u8] = &[0x0B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0B,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StatusOfLink(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4 Positive acknowledgement (code `0x00`, 5 bytes).
-        Ack,
-        /// §4 Message not accepted, link busy (code `0x01`, 5 bytes).
-        Nack,
-        /// §4 Status of link (code `0x0B`, 5 bytes).
-        StatusOfLink,
+        Ack(response::Ack),
+        Nack(response::Nack),
+        StatusOfLink(response::StatusOfLink),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -291,9 +400,9 @@ pub mod ft12_fixed {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ack => 0,
-                Self::Nack => 1,
-                Self::StatusOfLink => 2,
+                Self::Ack(_) => 0,
+                Self::Nack(_) => 1,
+                Self::StatusOfLink(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -322,9 +431,15 @@ pub mod ft12_fixed {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::Ack => rt::head(out, &[0x10, 0x00, address]).len(),
-                Self::Nack => rt::head(out, &[0x10, 0x01, address]).len(),
-                Self::StatusOfLink => rt::head(out, &[0x10, 0x0B, address]).len(),
+                Self::Ack(response::Ack {}) => {
+                    rt::head(out, &[0x10, 0x00, address]).len()
+                }
+                Self::Nack(response::Nack {}) => {
+                    rt::head(out, &[0x10, 0x01, address]).len()
+                }
+                Self::StatusOfLink(response::StatusOfLink {}) => {
+                    rt::head(out, &[0x10, 0x0B, address]).len()
+                }
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)
@@ -375,11 +490,17 @@ pub mod ft12_fixed {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
-                0x00 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
-                0x01 => rt::fixed::<5>(frame, &response::NACK).map(|_| Self::Nack),
+                0x00 => {
+                    rt::fixed::<5>(frame, &response::Ack::DESC)
+                        .map(|_| Self::Ack(response::Ack))
+                }
+                0x01 => {
+                    rt::fixed::<5>(frame, &response::Nack::DESC)
+                        .map(|_| Self::Nack(response::Nack))
+                }
                 0x0B => {
-                    rt::fixed::<5>(frame, &response::STATUS_OF_LINK)
-                        .map(|_| Self::StatusOfLink)
+                    rt::fixed::<5>(frame, &response::StatusOfLink::DESC)
+                        .map(|_| Self::StatusOfLink(response::StatusOfLink))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
             }
@@ -392,9 +513,9 @@ pub mod ft12_fixed {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "ack" => rt::Ok(Self::Ack),
-                "nack" => rt::Ok(Self::Nack),
-                "status_of_link" => rt::Ok(Self::StatusOfLink),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
+                "nack" => rt::Ok(Self::Nack(response::Nack)),
+                "status_of_link" => rt::Ok(Self::StatusOfLink(response::StatusOfLink)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -485,7 +606,7 @@ pub mod ft12_fixed {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::Nack)
+            matches!(response, Response::Nack(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
@@ -533,52 +654,47 @@ pub mod ft12_fixed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Fixed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `reset_remote_link`, code 0x40
-        pub const RESET_REMOTE_LINK: MessageDesc = MessageDesc::new(
-            "reset_remote_link",
-            0x40,
-            1,
-            &[5],
-        );
-        /// `request_status_of_link`, code 0x49
-        pub const REQUEST_STATUS_OF_LINK: MessageDesc = MessageDesc::new(
-            "request_status_of_link",
-            0x49,
-            1,
-            &[5],
-        );
-        /// `request_class_2`, code 0x5B
-        pub const REQUEST_CLASS_2: MessageDesc = MessageDesc::new(
-            "request_class_2",
-            0x5B,
-            1,
-            &[5],
-        );
-        /// `request_class_2_fcb`, code 0x7B
-        pub const REQUEST_CLASS_2_FCB: MessageDesc = MessageDesc::new(
-            "request_class_2_fcb",
-            0x7B,
-            1,
-            &[5],
-        );
+        /// §3 Reset of remote link (SND_NKE) (code `0x40`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetRemoteLink;
+        /// §3 Request status of link (code `0x49`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct RequestStatusOfLink;
+        /// §3 Request user data class 2 (REQ_UD2), frame count bit clear (code `0x5B`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct RequestClass2;
+        /// §3 Request user data class 2 (REQ_UD2), frame count bit set (code `0x7B`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct RequestClass2Fcb;
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `ack`, code 0x00
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x00, 1, &[5]);
-        /// `nack`, code 0x01
-        pub const NACK: MessageDesc = MessageDesc::new("nack", 0x01, 1, &[5]);
-        /// `status_of_link`, code 0x0B
-        pub const STATUS_OF_LINK: MessageDesc = MessageDesc::new(
-            "status_of_link",
-            0x0B,
-            1,
-            &[5],
-        );
+        /// §4 Positive acknowledgement (code `0x00`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
+        /// §4 Message not accepted, link busy (code `0x01`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Nack;
+        /// §4 Status of link (code `0x0B`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct StatusOfLink;
     }
 }

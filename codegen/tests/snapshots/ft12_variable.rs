@@ -68,16 +68,42 @@ pub mod ft12_variable {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    impl request::Reset {
+        pub const NAME: &'static str = "reset";
+        pub const CODE: &'static [u8] = &[0x53];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x53,
+            1,
+            &[9],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Reset(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadData {
+        pub const NAME: &'static str = "read_data";
+        pub const CODE: &'static [u8] = &[0x7B];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7B,
+            1,
+            &[9],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadData(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 SND_UD: application reset (code `0x53`, 9 bytes).
-        Reset,
-        /// §3.2 Read user data (this fixture's long-frame request) (code `0x7B`, 9 bytes).
-        ReadData,
+        Reset(request::Reset),
+        ReadData(request::ReadData),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -88,8 +114,8 @@ pub mod ft12_variable {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Reset => 0,
-                Self::ReadData => 1,
+                Self::Reset(_) => 0,
+                Self::ReadData(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -118,11 +144,11 @@ pub mod ft12_variable {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<9>(buf, &[])?;
             let len = match *self {
-                Self::Reset => {
+                Self::Reset(request::Reset {}) => {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50]).len()
                 }
-                Self::ReadData => {
-                    rt::encode_broadcast(address, 0xFE, &request::READ_DATA)?;
+                Self::ReadData(request::ReadData {}) => {
+                    rt::encode_broadcast(address, 0xFE, &request::ReadData::DESC)?;
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }
             };
@@ -153,15 +179,15 @@ pub mod ft12_variable {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x53 => {
-                    let frame = rt::fixed::<9>(frame, &request::RESET)?;
+                    let frame = rt::fixed::<9>(frame, &request::Reset::DESC)?;
                     rt::equal(&request::RESET_CI, 6, frame[6], 0x50)?;
-                    rt::Ok(Self::Reset)
+                    rt::Ok(Self::Reset(request::Reset))
                 }
                 0x7B => {
-                    let frame = rt::fixed::<9>(frame, &request::READ_DATA)?;
-                    rt::no_broadcast(frame[5], 0xFE, &request::READ_DATA)?;
+                    let frame = rt::fixed::<9>(frame, &request::ReadData::DESC)?;
+                    rt::no_broadcast(frame[5], 0xFE, &request::ReadData::DESC)?;
                     rt::equal(&request::READ_DATA_CI, 6, frame[6], 0x5B)?;
-                    rt::Ok(Self::ReadData)
+                    rt::Ok(Self::ReadData(request::ReadData))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, false)),
             }
@@ -174,8 +200,8 @@ pub mod ft12_variable {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "reset" => rt::Ok(Self::Reset),
-                "read_data" => rt::Ok(Self::ReadData),
+                "reset" => rt::Ok(Self::Reset(request::Reset)),
+                "read_data" => rt::Ok(Self::ReadData(request::ReadData)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -231,7 +257,7 @@ pub mod ft12_variable {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::Reset => rt::Reply::None,
+                    Request::Reset(_) => rt::Reply::None,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -242,26 +268,45 @@ pub mod ft12_variable {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::RspUd {
+        pub const NAME: &'static str = "rsp_ud";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const LEN: usize = 27;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x08,
+            1,
+            &[27],
+        );
+        pub const IDENTIFICATION: rt::Range<usize> = 7..11;
+        pub const MANUFACTURER: rt::Range<usize> = 11..13;
+        pub const VERSION: rt::Range<usize> = 13..14;
+        pub const MEDIUM: rt::Range<usize> = 14..15;
+        pub const ACCESS: rt::Range<usize> = 15..16;
+        pub const STATUS: rt::Range<usize> = 16..17;
+        pub const SIGNATURE: rt::Range<usize> = 17..19;
+        pub const VOLUME: rt::Range<usize> = 21..25;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("identification", rt::Int(self.identification as i64));
+            f("manufacturer", rt::Int(self.manufacturer as i64));
+            f("version", rt::Int(self.version as i64));
+            f("medium", rt::Int(self.medium as i64));
+            f("access", rt::Int(self.access as i64));
+            f("status", rt::Int(self.status as i64));
+            f("signature", rt::Int(self.signature as i64));
+            f("volume", rt::Int(self.volume as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RspUd(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3.2 RSP_UD: user data, one instantaneous volume record (code `0x08`, 27 bytes).
-        RspUd {
-            /// Identification number, 8 BCD digits Valid raw range 0..=99999999.
-            identification: u32,
-            manufacturer: u16,
-            version: u8,
-            medium: u8,
-            /// Access number
-            access: u8,
-            status: u8,
-            signature: u16,
-            /// \[l\]
-            volume: u32,
-        },
+        RspUd(response::RspUd),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -271,7 +316,7 @@ pub mod ft12_variable {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::RspUd { .. } => 0,
+                Self::RspUd(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -288,27 +333,9 @@ pub mod ft12_variable {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::RspUd {
-                    identification: v_identification,
-                    manufacturer: v_manufacturer,
-                    version: v_version,
-                    medium: v_medium,
-                    access: v_access,
-                    status: v_status,
-                    signature: v_signature,
-                    volume: v_volume,
-                } => {
-                    f("identification", rt::Int(*v_identification as i64));
-                    f("manufacturer", rt::Int(*v_manufacturer as i64));
-                    f("version", rt::Int(*v_version as i64));
-                    f("medium", rt::Int(*v_medium as i64));
-                    f("access", rt::Int(*v_access as i64));
-                    f("status", rt::Int(*v_status as i64));
-                    f("signature", rt::Int(*v_signature as i64));
-                    f("volume", rt::Int(*v_volume as i64));
-                }
+                Self::RspUd(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -322,16 +349,18 @@ pub mod ft12_variable {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<27>(buf, &[])?;
             let len = match *self {
-                Self::RspUd {
-                    identification: v_identification,
-                    manufacturer: v_manufacturer,
-                    version: v_version,
-                    medium: v_medium,
-                    access: v_access,
-                    status: v_status,
-                    signature: v_signature,
-                    volume: v_volume,
-                } => {
+                Self::RspUd(
+                    response::RspUd {
+                        identification: v_identification,
+                        manufacturer: v_manufacturer,
+                        version: v_version,
+                        medium: v_medium,
+                        access: v_access,
+                        status: v_status,
+                        signature: v_signature,
+                        volume: v_volume,
+                    },
+                ) => {
                     rt::encode_in_range(
                         "identification",
                         v_identification,
@@ -411,7 +440,7 @@ pub mod ft12_variable {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x08 => {
-                    let frame = rt::fixed::<27>(frame, &response::RSP_UD)?;
+                    let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
                     rt::equal(&response::RSP_UD_CI, 6, frame[6], 0x72)?;
                     let field_1: u32 = rt::bcd(
                         &response::RSP_UD_IDENTIFICATION,
@@ -428,21 +457,23 @@ pub mod ft12_variable {
                     )?;
                     rt::equal(&response::RSP_UD_DIF, 19, frame[19], 0x4)?;
                     rt::equal(&response::RSP_UD_VIF, 20, frame[20], 0x13)?;
-                    rt::Ok(Self::RspUd {
-                        identification: field_1,
-                        manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
-                        version: frame[13],
-                        medium: frame[14],
-                        access: frame[15],
-                        status: frame[16],
-                        signature: u16::from_le_bytes([frame[17], frame[18]]),
-                        volume: u32::from_le_bytes([
-                            frame[21],
-                            frame[22],
-                            frame[23],
-                            frame[24],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::RspUd(response::RspUd {
+                            identification: field_1,
+                            manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
+                            version: frame[13],
+                            medium: frame[14],
+                            access: frame[15],
+                            status: frame[16],
+                            signature: u16::from_le_bytes([frame[17], frame[18]]),
+                            volume: u32::from_le_bytes([
+                                frame[21],
+                                frame[22],
+                                frame[23],
+                                frame[24],
+                            ]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, true)),
             }
@@ -456,16 +487,18 @@ pub mod ft12_variable {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "rsp_ud" => {
-                    rt::Ok(Self::RspUd {
-                        identification: rt::get(&mut field, "identification")?,
-                        manufacturer: rt::get(&mut field, "manufacturer")?,
-                        version: rt::get(&mut field, "version")?,
-                        medium: rt::get(&mut field, "medium")?,
-                        access: rt::get(&mut field, "access")?,
-                        status: rt::get(&mut field, "status")?,
-                        signature: rt::get(&mut field, "signature")?,
-                        volume: rt::get(&mut field, "volume")?,
-                    })
+                    rt::Ok(
+                        Self::RspUd(response::RspUd {
+                            identification: rt::get(&mut field, "identification")?,
+                            manufacturer: rt::get(&mut field, "manufacturer")?,
+                            version: rt::get(&mut field, "version")?,
+                            medium: rt::get(&mut field, "medium")?,
+                            access: rt::get(&mut field, "access")?,
+                            status: rt::get(&mut field, "status")?,
+                            signature: rt::get(&mut field, "signature")?,
+                            volume: rt::get(&mut field, "volume")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -619,24 +652,47 @@ pub mod ft12_variable {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ft12Variable>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `reset`, code 0x53
-        pub const RESET: MessageDesc = MessageDesc::new("reset", 0x53, 1, &[9]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 SND_UD: application reset (code `0x53`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Reset;
+        /// §3.2 Read user data (this fixture's long-frame request) (code `0x7B`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadData;
         /// `reset.ci`
         pub const RESET_CI: FieldDesc = FieldDesc::new("reset", "ci");
-        /// `read_data`, code 0x7B
-        pub const READ_DATA: MessageDesc = MessageDesc::new("read_data", 0x7B, 1, &[9]);
         /// `read_data.ci`
         pub const READ_DATA_CI: FieldDesc = FieldDesc::new("read_data", "ci");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `rsp_ud`, code 0x08
-        pub const RSP_UD: MessageDesc = MessageDesc::new("rsp_ud", 0x08, 1, &[27]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3.2 RSP_UD: user data, one instantaneous volume record (code `0x08`, 27 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RspUd {
+            /// Identification number, 8 BCD digits Valid raw range 0..=99999999.
+            pub identification: u32,
+            pub manufacturer: u16,
+            pub version: u8,
+            pub medium: u8,
+            /// Access number
+            pub access: u8,
+            pub status: u8,
+            pub signature: u16,
+            /// \[l\]
+            pub volume: u32,
+        }
         /// `rsp_ud.ci`
         pub const RSP_UD_CI: FieldDesc = FieldDesc::new("rsp_ud", "ci");
         /// `rsp_ud.identification`

@@ -102,16 +102,48 @@ pub mod hdlc_like {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    impl request::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteRegister {
+        pub const NAME: &'static str = "write_register";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[10],
+        );
+        pub const REGISTER: rt::Range<usize> = 3..5;
+        pub const VALUE: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register", rt::Int(self.register as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteRegister(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Read status (code `0x10`, 6 bytes).
-        ReadStatus,
-        /// §3.2 Write a register (code `0x20`, 10 bytes).
-        WriteRegister { register: u16, value: u16 },
+        ReadStatus(request::ReadStatus),
+        WriteRegister(request::WriteRegister),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -122,8 +154,8 @@ pub mod hdlc_like {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadStatus => 0,
-                Self::WriteRegister { .. } => 1,
+                Self::ReadStatus(_) => 0,
+                Self::WriteRegister(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -140,12 +172,9 @@ pub mod hdlc_like {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::WriteRegister { register: v_register, value: v_value } => {
-                    f("register", rt::Int(*v_register as i64));
-                    f("value", rt::Int(*v_value as i64));
-                }
+                Self::WriteRegister(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -177,11 +206,13 @@ pub mod hdlc_like {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadStatus => {
-                    rt::encode_broadcast(address, 0xFF, &request::READ_STATUS)?;
+                Self::ReadStatus(request::ReadStatus {}) => {
+                    rt::encode_broadcast(address, 0xFF, &request::ReadStatus::DESC)?;
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x10])?.len()
                 }
-                Self::WriteRegister { register: v_register, value: v_value } => {
+                Self::WriteRegister(
+                    request::WriteRegister { register: v_register, value: v_value },
+                ) => {
                     let out = rt::frame_mut::<10>(buf, &[0x7E, address, 0x20])?;
                     out[3..5].copy_from_slice(&v_register.to_le_bytes());
                     out[5..7].copy_from_slice(&v_value.to_le_bytes());
@@ -230,16 +261,18 @@ pub mod hdlc_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_STATUS)?;
-                    rt::no_broadcast(frame[1], 0xFF, &request::READ_STATUS)?;
-                    rt::Ok(Self::ReadStatus)
+                    let frame = rt::fixed::<6>(frame, &request::ReadStatus::DESC)?;
+                    rt::no_broadcast(frame[1], 0xFF, &request::ReadStatus::DESC)?;
+                    rt::Ok(Self::ReadStatus(request::ReadStatus))
                 }
                 0x20 => {
-                    let frame = rt::fixed::<10>(frame, &request::WRITE_REGISTER)?;
-                    rt::Ok(Self::WriteRegister {
-                        register: u16::from_le_bytes([frame[3], frame[4]]),
-                        value: u16::from_le_bytes([frame[5], frame[6]]),
-                    })
+                    let frame = rt::fixed::<10>(frame, &request::WriteRegister::DESC)?;
+                    rt::Ok(
+                        Self::WriteRegister(request::WriteRegister {
+                            register: u16::from_le_bytes([frame[3], frame[4]]),
+                            value: u16::from_le_bytes([frame[5], frame[6]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, false)),
             }
@@ -252,12 +285,14 @@ pub mod hdlc_like {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_status" => rt::Ok(Self::ReadStatus),
+                "read_status" => rt::Ok(Self::ReadStatus(request::ReadStatus)),
                 "write_register" => {
-                    rt::Ok(Self::WriteRegister {
-                        register: rt::get(&mut field, "register")?,
-                        value: rt::get(&mut field, "value")?,
-                    })
+                    rt::Ok(
+                        Self::WriteRegister(request::WriteRegister {
+                            register: rt::get(&mut field, "register")?,
+                            value: rt::get(&mut field, "value")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -322,16 +357,46 @@ pub mod hdlc_like {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[8],
+        );
+        pub const STATE: rt::Range<usize> = 3..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("state", rt::Int(self.state as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA0,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 Status (code `0x90`, 8 bytes).
-        Status { state: u16 },
-        /// §4.2 Acknowledge (code `0xA0`, 6 bytes).
-        Ack,
+        Status(response::Status),
+        Ack(response::Ack),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -342,8 +407,8 @@ pub mod hdlc_like {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Status { .. } => 0,
-                Self::Ack => 1,
+                Self::Status(_) => 0,
+                Self::Ack(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -360,9 +425,9 @@ pub mod hdlc_like {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Status { state: v_state } => f("state", rt::Int(*v_state as i64)),
+                Self::Status(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -394,12 +459,14 @@ pub mod hdlc_like {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Status { state: v_state } => {
+                Self::Status(response::Status { state: v_state }) => {
                     let out = rt::frame_mut::<8>(buf, &[0x7E, address, 0x90])?;
                     out[3..5].copy_from_slice(&v_state.to_le_bytes());
                     out.len()
                 }
-                Self::Ack => rt::frame_mut::<6>(buf, &[0x7E, address, 0xA0])?.len(),
+                Self::Ack(response::Ack {}) => {
+                    rt::frame_mut::<6>(buf, &[0x7E, address, 0xA0])?.len()
+                }
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)
@@ -471,12 +538,17 @@ pub mod hdlc_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x90 => {
-                    let frame = rt::fixed::<8>(frame, &response::STATUS)?;
-                    rt::Ok(Self::Status {
-                        state: u16::from_le_bytes([frame[3], frame[4]]),
-                    })
+                    let frame = rt::fixed::<8>(frame, &response::Status::DESC)?;
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            state: u16::from_le_bytes([frame[3], frame[4]]),
+                        }),
+                    )
                 }
-                0xA0 => rt::fixed::<6>(frame, &response::ACK).map(|_| Self::Ack),
+                0xA0 => {
+                    rt::fixed::<6>(frame, &response::Ack::DESC)
+                        .map(|_| Self::Ack(response::Ack))
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 3, true)),
             }
         }
@@ -489,11 +561,13 @@ pub mod hdlc_like {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "status" => {
-                    rt::Ok(Self::Status {
-                        state: rt::get(&mut field, "state")?,
-                    })
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            state: rt::get(&mut field, "state")?,
+                        }),
+                    )
                 }
-                "ack" => rt::Ok(Self::Ack),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -634,31 +708,39 @@ pub mod hdlc_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<HdlcLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `read_status`, code 0x10
-        pub const READ_STATUS: MessageDesc = MessageDesc::new(
-            "read_status",
-            0x10,
-            1,
-            &[6],
-        );
-        /// `write_register`, code 0x20
-        pub const WRITE_REGISTER: MessageDesc = MessageDesc::new(
-            "write_register",
-            0x20,
-            1,
-            &[10],
-        );
+        /// §3.1 Read status (code `0x10`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadStatus;
+        /// §3.2 Write a register (code `0x20`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteRegister {
+            pub register: u16,
+            pub value: u16,
+        }
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `status`, code 0x90
-        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x90, 1, &[8]);
-        /// `ack`, code 0xA0
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[6]);
+        /// §4.1 Status (code `0x90`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Status {
+            pub state: u16,
+        }
+        /// §4.2 Acknowledge (code `0xA0`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
     }
 }

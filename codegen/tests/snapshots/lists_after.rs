@@ -152,30 +152,73 @@ pub mod lists_after {
             },
         ],
     };
+    impl request::ReadBlock {
+        pub const NAME: &'static str = "read_block";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[7],
+        );
+        pub const FIRST: rt::Range<usize> = 3..5;
+        pub const QUANTITY: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("first", rt::Int(self.first as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadBlock(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteBlock {
+        pub const NAME: &'static str = "write_block";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 23;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x11,
+            1,
+            &[7],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+            f("flags", rt::Int(self.flags as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteBlock(*self).encode(address, buf)
+        }
+    }
+    impl request::Copy {
+        pub const NAME: &'static str = "copy";
+        pub const CODE: &'static [u8] = &[0x12];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 19;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x12,
+            1,
+            &[7],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sources", rt::List(self.sources.elements()));
+            f("targets", rt::List(self.targets.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Copy(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Read block (code `0x10`, 7 bytes).
-        ReadBlock {
-            first: u16,
-            /// Valid raw range 1..=8.
-            quantity: u8,
-        },
-        /// §2 Write block (code `0x11`, 9 to 23 bytes).
-        WriteBlock {
-            values: rt::Repeated<u16, 8>,
-            /// Valid raw range 0..=255.
-            flags: u16,
-        },
-        /// §3 Copy (code `0x12`, 7 to 19 bytes).
-        Copy {
-            sources: rt::Repeated<u8, 4>,
-            /// Valid raw range 1..=1000.
-            targets: rt::Repeated<u16, 4>,
-        },
+        ReadBlock(request::ReadBlock),
+        WriteBlock(request::WriteBlock),
+        Copy(request::Copy),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -187,9 +230,9 @@ pub mod lists_after {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadBlock { .. } => 0,
-                Self::WriteBlock { .. } => 1,
-                Self::Copy { .. } => 2,
+                Self::ReadBlock(_) => 0,
+                Self::WriteBlock(_) => 1,
+                Self::Copy(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -203,11 +246,13 @@ pub mod lists_after {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteBlock { values: v_values, .. } => {
+                Self::WriteBlock(request::WriteBlock { values: v_values, .. }) => {
                     LISTS_WRITE_BLOCK.base
                         + LISTS_WRITE_BLOCK.lists[0].bytes_of(v_values.len())
                 }
-                Self::Copy { sources: v_sources, targets: v_targets, .. } => {
+                Self::Copy(
+                    request::Copy { sources: v_sources, targets: v_targets, .. },
+                ) => {
                     LISTS_COPY.base + LISTS_COPY.lists[0].bytes_of(v_sources.len())
                         + LISTS_COPY.lists[1].bytes_of(v_targets.len())
                 }
@@ -216,20 +261,11 @@ pub mod lists_after {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ReadBlock { first: v_first, quantity: v_quantity } => {
-                    f("first", rt::Int(*v_first as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::WriteBlock { values: v_values, flags: v_flags } => {
-                    f("values", rt::List(v_values.elements()));
-                    f("flags", rt::Int(*v_flags as i64));
-                }
-                Self::Copy { sources: v_sources, targets: v_targets } => {
-                    f("sources", rt::List(v_sources.elements()));
-                    f("targets", rt::List(v_targets.elements()));
-                }
+                Self::ReadBlock(m) => m.visit(f),
+                Self::WriteBlock(m) => m.visit(f),
+                Self::Copy(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -242,14 +278,18 @@ pub mod lists_after {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadBlock { first: v_first, quantity: v_quantity } => {
+                Self::ReadBlock(
+                    request::ReadBlock { first: v_first, quantity: v_quantity },
+                ) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 8)?;
                     let out = rt::frame_mut::<7>(buf, &[0x7E, address, 0x10])?;
                     out[3..5].copy_from_slice(&v_first.to_be_bytes());
                     out[5] = v_quantity;
                     out.len()
                 }
-                Self::WriteBlock { values: v_values, flags: v_flags } => {
+                Self::WriteBlock(
+                    request::WriteBlock { values: v_values, flags: v_flags },
+                ) => {
                     rt::encode_in_range("flags", v_flags, 0, 255)?;
                     let bytes_0: usize = LISTS_WRITE_BLOCK
                         .lists[0]
@@ -270,7 +310,7 @@ pub mod lists_after {
                     rt::write_elements(v_values.as_slice(), 2, false, &mut out[4..]);
                     out.len()
                 }
-                Self::Copy { sources: v_sources, targets: v_targets } => {
+                Self::Copy(request::Copy { sources: v_sources, targets: v_targets }) => {
                     let bytes_0: usize = LISTS_COPY.lists[0].encode_len(v_sources.len())?
                         - LISTS_COPY.base;
                     LISTS_COPY.lists[1].encode_in_range(v_targets.as_slice(), 1, 1000)?;
@@ -328,12 +368,14 @@ pub mod lists_after {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<7>(frame, &request::READ_BLOCK)?;
+                    let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
                     rt::in_range(&request::READ_BLOCK_QUANTITY, 5, frame[5], 1, 8)?;
-                    rt::Ok(Self::ReadBlock {
-                        first: u16::from_be_bytes([frame[3], frame[4]]),
-                        quantity: frame[5],
-                    })
+                    rt::Ok(
+                        Self::ReadBlock(request::ReadBlock {
+                            first: u16::from_be_bytes([frame[3], frame[4]]),
+                            quantity: frame[5],
+                        }),
+                    )
                 }
                 0x11 => {
                     let s = LISTS_WRITE_BLOCK.split::<7, 1>(frame)?;
@@ -346,12 +388,14 @@ pub mod lists_after {
                         0,
                         255,
                     )?;
-                    rt::Ok(Self::WriteBlock {
-                        values: s
-                            .lists[0]
-                            .elements::<u16, 8>(s.elements(0), false, false)?,
-                        flags: field_2,
-                    })
+                    rt::Ok(
+                        Self::WriteBlock(request::WriteBlock {
+                            values: s
+                                .lists[0]
+                                .elements::<u16, 8>(s.elements(0), false, false)?,
+                            flags: field_2,
+                        }),
+                    )
                 }
                 0x12 => {
                     let s = LISTS_COPY.split::<7, 2>(frame)?;
@@ -361,12 +405,14 @@ pub mod lists_after {
                         .elements::<u16, 4>(s.elements(1), false, false)?;
                     s.lists[1].in_range(v_targets.as_slice(), 1, 1000)?;
                     rt::equal(&request::COPY_MODE, 5 + s.shift(2), frame[5], 0x1)?;
-                    rt::Ok(Self::Copy {
-                        sources: s
-                            .lists[0]
-                            .elements::<u8, 4>(s.elements(0), false, false)?,
-                        targets: v_targets,
-                    })
+                    rt::Ok(
+                        Self::Copy(request::Copy {
+                            sources: s
+                                .lists[0]
+                                .elements::<u8, 4>(s.elements(0), false, false)?,
+                            targets: v_targets,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -380,22 +426,28 @@ pub mod lists_after {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read_block" => {
-                    rt::Ok(Self::ReadBlock {
-                        first: rt::get(&mut field, "first")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::ReadBlock(request::ReadBlock {
+                            first: rt::get(&mut field, "first")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "write_block" => {
-                    rt::Ok(Self::WriteBlock {
-                        values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
-                        flags: rt::get(&mut field, "flags")?,
-                    })
+                    rt::Ok(
+                        Self::WriteBlock(request::WriteBlock {
+                            values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
+                            flags: rt::get(&mut field, "flags")?,
+                        }),
+                    )
                 }
                 "copy" => {
-                    rt::Ok(Self::Copy {
-                        sources: rt::list::<u8, 4>(&mut field, "sources", 0, 255)?,
-                        targets: rt::list::<u16, 4>(&mut field, "targets", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::Copy(request::Copy {
+                            sources: rt::list::<u8, 4>(&mut field, "sources", 0, 255)?,
+                            targets: rt::list::<u16, 4>(&mut field, "targets", 0, 65535)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -486,16 +538,51 @@ pub mod lists_after {
             },
         ],
     };
+    impl response::BlockReply {
+        pub const NAME: &'static str = "block_reply";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::BlockReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x11,
+            1,
+            &[5],
+        );
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Block reply (code `0x10`, 8 to 22 bytes).
-        BlockReply { values: rt::Repeated<u16, 8>, status: u16 },
-        /// §2 Acknowledge (code `0x11`, 5 bytes).
-        Ack { status: u8 },
+        BlockReply(response::BlockReply),
+        Ack(response::Ack),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -506,8 +593,8 @@ pub mod lists_after {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::BlockReply { .. } => 0,
-                Self::Ack { .. } => 1,
+                Self::BlockReply(_) => 0,
+                Self::Ack(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -521,7 +608,7 @@ pub mod lists_after {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::BlockReply { values: v_values, .. } => {
+                Self::BlockReply(response::BlockReply { values: v_values, .. }) => {
                     LISTS_BLOCK_REPLY.base
                         + LISTS_BLOCK_REPLY.lists[0].bytes_of(v_values.len())
                 }
@@ -530,13 +617,10 @@ pub mod lists_after {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::BlockReply { values: v_values, status: v_status } => {
-                    f("values", rt::List(v_values.elements()));
-                    f("status", rt::Int(*v_status as i64));
-                }
-                Self::Ack { status: v_status } => f("status", rt::Int(*v_status as i64)),
+                Self::BlockReply(m) => m.visit(f),
+                Self::Ack(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -549,7 +633,9 @@ pub mod lists_after {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::BlockReply { values: v_values, status: v_status } => {
+                Self::BlockReply(
+                    response::BlockReply { values: v_values, status: v_status },
+                ) => {
                     let bytes_0: usize = LISTS_BLOCK_REPLY
                         .lists[0]
                         .encode_len(v_values.len())? - LISTS_BLOCK_REPLY.base;
@@ -563,7 +649,7 @@ pub mod lists_after {
                     rt::write_elements(v_values.as_slice(), 2, false, &mut out[3..]);
                     out.len()
                 }
-                Self::Ack { status: v_status } => {
+                Self::Ack(response::Ack { status: v_status }) => {
                     let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x11])?;
                     out[3] = v_status;
                     out.len()
@@ -622,16 +708,18 @@ pub mod lists_after {
                 0x10 => {
                     let s = LISTS_BLOCK_REPLY.split::<6, 1>(frame)?;
                     let frame = &s.frame;
-                    rt::Ok(Self::BlockReply {
-                        values: s
-                            .lists[0]
-                            .elements::<u16, 8>(s.elements(0), false, false)?,
-                        status: u16::from_be_bytes([frame[3], frame[4]]),
-                    })
+                    rt::Ok(
+                        Self::BlockReply(response::BlockReply {
+                            values: s
+                                .lists[0]
+                                .elements::<u16, 8>(s.elements(0), false, false)?,
+                            status: u16::from_be_bytes([frame[3], frame[4]]),
+                        }),
+                    )
                 }
                 0x11 => {
-                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
-                    rt::Ok(Self::Ack { status: frame[3] })
+                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
+                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -645,15 +733,19 @@ pub mod lists_after {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "block_reply" => {
-                    rt::Ok(Self::BlockReply {
-                        values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
-                        status: rt::get(&mut field, "status")?,
-                    })
+                    rt::Ok(
+                        Self::BlockReply(response::BlockReply {
+                            values: rt::list::<u16, 8>(&mut field, "values", 0, 65535)?,
+                            status: rt::get(&mut field, "status")?,
+                        }),
+                    )
                 }
                 "ack" => {
-                    rt::Ok(Self::Ack {
-                        status: rt::get(&mut field, "status")?,
-                    })
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            status: rt::get(&mut field, "status")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -704,8 +796,8 @@ pub mod lists_after {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (
-                    &Self::BlockReply { values: v_values, .. },
-                    &Request::ReadBlock { quantity: r_quantity, .. },
+                    &Self::BlockReply(response::BlockReply { values: v_values, .. }),
+                    &Request::ReadBlock(request::ReadBlock { quantity: r_quantity, .. }),
                 ) => {
                     REPEAT_BLOCK_REPLY
                         .follows_request(
@@ -723,11 +815,11 @@ pub mod lists_after {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::ReadBlock`], read from the frame.
+        /// [`request::ReadBlock`], read from the frame.
         ReadBlock { first: u16, quantity: u8 },
-        /// [`Request::WriteBlock`], read from the frame.
+        /// [`request::WriteBlock`], read from the frame.
         WriteBlock { values: rt::ListView<'a, u16>, flags: u16 },
-        /// [`Request::Copy`], read from the frame.
+        /// [`request::Copy`], read from the frame.
         Copy { sources: rt::ListView<'a, u8>, targets: rt::ListView<'a, u16> },
     }
     impl<'a> RequestView<'a> {
@@ -751,7 +843,7 @@ pub mod lists_after {
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x10 => {
-                    let frame = rt::fixed::<7>(frame, &request::READ_BLOCK)?;
+                    let frame = rt::fixed::<7>(frame, &request::ReadBlock::DESC)?;
                     rt::in_range(&request::READ_BLOCK_QUANTITY, 5, frame[5], 1, 8)?;
                     rt::Ok(Self::ReadBlock {
                         first: u16::from_be_bytes([frame[3], frame[4]]),
@@ -806,22 +898,22 @@ pub mod lists_after {
         pub fn to_owned(self) -> Request {
             match self {
                 Self::ReadBlock { first, quantity } => {
-                    Request::ReadBlock {
+                    Request::ReadBlock(request::ReadBlock {
                         first,
                         quantity,
-                    }
+                    })
                 }
                 Self::WriteBlock { values, flags } => {
-                    Request::WriteBlock {
+                    Request::WriteBlock(request::WriteBlock {
                         values: values.to_repeated(),
                         flags,
-                    }
+                    })
                 }
                 Self::Copy { sources, targets } => {
-                    Request::Copy {
+                    Request::Copy(request::Copy {
                         sources: sources.to_repeated(),
                         targets: targets.to_repeated(),
-                    }
+                    })
                 }
             }
         }
@@ -829,9 +921,9 @@ pub mod lists_after {
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::BlockReply`], read from the frame.
+        /// [`response::BlockReply`], read from the frame.
         BlockReply { values: rt::ListView<'a, u16>, status: u16 },
-        /// [`Response::Ack`], read from the frame.
+        /// [`response::Ack`], read from the frame.
         Ack { status: u8 },
     }
     impl<'a> ResponseView<'a> {
@@ -891,7 +983,7 @@ pub mod lists_after {
                     })
                 }
                 0x11 => {
-                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
+                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
@@ -912,12 +1004,12 @@ pub mod lists_after {
         pub fn to_owned(self) -> Response {
             match self {
                 Self::BlockReply { values, status } => {
-                    Response::BlockReply {
+                    Response::BlockReply(response::BlockReply {
                         values: values.to_repeated(),
                         status,
-                    }
+                    })
                 }
-                Self::Ack { status } => Response::Ack { status },
+                Self::Ack { status } => Response::Ack(response::Ack { status }),
             }
         }
         /// Checks every field this response takes from `request` (`follows: {request}` in the
@@ -926,7 +1018,7 @@ pub mod lists_after {
             match (self, request) {
                 (
                     &Self::BlockReply { values: v_values, .. },
-                    &Request::ReadBlock { quantity: r_quantity, .. },
+                    &Request::ReadBlock(request::ReadBlock { quantity: r_quantity, .. }),
                 ) => {
                     REPEAT_BLOCK_REPLY
                         .follows_request(
@@ -1070,28 +1162,45 @@ pub mod lists_after {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsAfter>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_block`, code 0x10
-        pub const READ_BLOCK: MessageDesc = MessageDesc::new(
-            "read_block",
-            0x10,
-            1,
-            &[7],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Read block (code `0x10`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadBlock {
+            pub first: u16,
+            /// Valid raw range 1..=8.
+            pub quantity: u8,
+        }
+        /// §2 Write block (code `0x11`, 9 to 23 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteBlock {
+            pub values: super::rt::Repeated<u16, 8>,
+            /// Valid raw range 0..=255.
+            pub flags: u16,
+        }
+        /// §3 Copy (code `0x12`, 7 to 19 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Copy {
+            pub sources: super::rt::Repeated<u8, 4>,
+            /// Valid raw range 1..=1000.
+            pub targets: super::rt::Repeated<u16, 4>,
+        }
         /// `read_block.quantity`
         pub const READ_BLOCK_QUANTITY: FieldDesc = FieldDesc::new(
             "read_block",
             "quantity",
-        );
-        /// `write_block`, code 0x11
-        pub const WRITE_BLOCK: MessageDesc = MessageDesc::new(
-            "write_block",
-            0x11,
-            1,
-            &[7],
         );
         /// `write_block.values`
         pub const WRITE_BLOCK_VALUES: FieldDesc = FieldDesc::new(
@@ -1100,8 +1209,6 @@ pub mod lists_after {
         );
         /// `write_block.flags`
         pub const WRITE_BLOCK_FLAGS: FieldDesc = FieldDesc::new("write_block", "flags");
-        /// `copy`, code 0x12
-        pub const COPY: MessageDesc = MessageDesc::new("copy", 0x12, 1, &[7]);
         /// `copy.sources`
         pub const COPY_SOURCES: FieldDesc = FieldDesc::new("copy", "sources");
         /// `copy.targets`
@@ -1109,22 +1216,30 @@ pub mod lists_after {
         /// `copy.mode`
         pub const COPY_MODE: FieldDesc = FieldDesc::new("copy", "mode");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `block_reply`, code 0x10
-        pub const BLOCK_REPLY: MessageDesc = MessageDesc::new(
-            "block_reply",
-            0x10,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Block reply (code `0x10`, 8 to 22 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct BlockReply {
+            pub values: super::rt::Repeated<u16, 8>,
+            pub status: u16,
+        }
+        /// §2 Acknowledge (code `0x11`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ack {
+            pub status: u8,
+        }
         /// `block_reply.values`
         pub const BLOCK_REPLY_VALUES: FieldDesc = FieldDesc::new(
             "block_reply",
             "values",
         );
-        /// `ack`, code 0x11
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x11, 1, &[5]);
     }
 }

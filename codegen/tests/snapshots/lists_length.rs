@@ -204,22 +204,53 @@ pub mod lists_length {
             },
         ],
     };
+    impl request::Log {
+        pub const NAME: &'static str = "log";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 25;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[7],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channels", rt::List(self.channels.elements()));
+            f("samples", rt::List(self.samples.table()));
+            f("seq", rt::Int(self.seq as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Log(*self).encode(address, buf)
+        }
+    }
+    impl request::SetOutputs {
+        pub const NAME: &'static str = "set_outputs";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x21,
+            1,
+            &[7],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("outputs", rt::List(self.outputs.elements()));
+            f("mask", rt::Int(self.mask as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetOutputs(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Log samples (code `0x20`, 9 to 25 bytes).
-        Log {
-            /// Valid raw range 0..=15.
-            channels: rt::Repeated<u8, 6>,
-            /// \[mV\]
-            samples: rt::Repeated<Millivolts, 6>,
-            seq: u16,
-        },
-        /// §2 Set outputs (code `0x21`, 8 to 9 bytes).
-        SetOutputs { outputs: rt::Bits<2>, mask: u16 },
+        Log(request::Log),
+        SetOutputs(request::SetOutputs),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -230,8 +261,8 @@ pub mod lists_length {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Log { .. } => 0,
-                Self::SetOutputs { .. } => 1,
+                Self::Log(_) => 0,
+                Self::SetOutputs(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -245,11 +276,13 @@ pub mod lists_length {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Log { channels: v_channels, samples: v_samples, .. } => {
+                Self::Log(
+                    request::Log { channels: v_channels, samples: v_samples, .. },
+                ) => {
                     LISTS_LOG.base + LISTS_LOG.lists[0].bytes_of(v_channels.len())
                         + LISTS_LOG.lists[1].bytes_of(v_samples.len())
                 }
-                Self::SetOutputs { outputs: v_outputs, .. } => {
+                Self::SetOutputs(request::SetOutputs { outputs: v_outputs, .. }) => {
                     LISTS_SET_OUTPUTS.base
                         + LISTS_SET_OUTPUTS.lists[0].bytes_of(v_outputs.len())
                 }
@@ -258,17 +291,10 @@ pub mod lists_length {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Log { channels: v_channels, samples: v_samples, seq: v_seq } => {
-                    f("channels", rt::List(v_channels.elements()));
-                    f("samples", rt::List(v_samples.table()));
-                    f("seq", rt::Int(*v_seq as i64));
-                }
-                Self::SetOutputs { outputs: v_outputs, mask: v_mask } => {
-                    f("outputs", rt::List(v_outputs.elements()));
-                    f("mask", rt::Int(*v_mask as i64));
-                }
+                Self::Log(m) => m.visit(f),
+                Self::SetOutputs(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -281,7 +307,9 @@ pub mod lists_length {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Log { channels: v_channels, samples: v_samples, seq: v_seq } => {
+                Self::Log(
+                    request::Log { channels: v_channels, samples: v_samples, seq: v_seq },
+                ) => {
                     LISTS_LOG.lists[0].encode_in_range(v_channels.as_slice(), 0, 15)?;
                     let bytes_0: usize = LISTS_LOG.lists[0].encode_len(v_channels.len())?
                         - LISTS_LOG.base;
@@ -314,7 +342,9 @@ pub mod lists_length {
                     rt::put_length(out, 1, 1, true, true, -3)?;
                     out.len()
                 }
-                Self::SetOutputs { outputs: v_outputs, mask: v_mask } => {
+                Self::SetOutputs(
+                    request::SetOutputs { outputs: v_outputs, mask: v_mask },
+                ) => {
                     let bytes_0: usize = LISTS_SET_OUTPUTS
                         .lists[0]
                         .encode_len(v_outputs.len())? - LISTS_SET_OUTPUTS.base;
@@ -367,21 +397,25 @@ pub mod lists_length {
                         .lists[0]
                         .elements::<u8, 6>(s.elements(0), true, false)?;
                     s.lists[0].in_range(v_channels.as_slice(), 0, 15)?;
-                    rt::Ok(Self::Log {
-                        channels: v_channels,
-                        samples: s
-                            .lists[1]
-                            .elements::<Millivolts, 6>(s.elements(1), true, true)?,
-                        seq: u16::from_le_bytes([frame[4], frame[5]]),
-                    })
+                    rt::Ok(
+                        Self::Log(request::Log {
+                            channels: v_channels,
+                            samples: s
+                                .lists[1]
+                                .elements::<Millivolts, 6>(s.elements(1), true, true)?,
+                            seq: u16::from_le_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 0x21 => {
                     let s = LISTS_SET_OUTPUTS.split::<7, 1>(frame)?;
                     let frame = &s.frame;
-                    rt::Ok(Self::SetOutputs {
-                        outputs: s.lists[0].bits::<2>(s.elements(0), s.n[0])?,
-                        mask: u16::from_le_bytes([frame[4], frame[5]]),
-                    })
+                    rt::Ok(
+                        Self::SetOutputs(request::SetOutputs {
+                            outputs: s.lists[0].bits::<2>(s.elements(0), s.n[0])?,
+                            mask: u16::from_le_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -395,20 +429,24 @@ pub mod lists_length {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "log" => {
-                    rt::Ok(Self::Log {
-                        channels: rt::list::<u8, 6>(&mut field, "channels", 0, 255)?,
-                        samples: rt::list::<
-                            Millivolts,
-                            6,
-                        >(&mut field, "samples", -32768, 32767)?,
-                        seq: rt::get(&mut field, "seq")?,
-                    })
+                    rt::Ok(
+                        Self::Log(request::Log {
+                            channels: rt::list::<u8, 6>(&mut field, "channels", 0, 255)?,
+                            samples: rt::list::<
+                                Millivolts,
+                                6,
+                            >(&mut field, "samples", -32768, 32767)?,
+                            seq: rt::get(&mut field, "seq")?,
+                        }),
+                    )
                 }
                 "set_outputs" => {
-                    rt::Ok(Self::SetOutputs {
-                        outputs: rt::list_bits::<2>(&mut field, "outputs")?,
-                        mask: rt::get(&mut field, "mask")?,
-                    })
+                    rt::Ok(
+                        Self::SetOutputs(request::SetOutputs {
+                            outputs: rt::list_bits::<2>(&mut field, "outputs")?,
+                            mask: rt::get(&mut field, "mask")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -473,14 +511,31 @@ pub mod lists_length {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::LogAck {
+        pub const NAME: &'static str = "log_ack";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[6],
+        );
+        pub const SEQ: rt::Range<usize> = 3..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("seq", rt::Int(self.seq as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LogAck(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Log acknowledged (code `0x20`, 6 bytes).
-        LogAck { seq: u16 },
+        LogAck(response::LogAck),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -490,7 +545,7 @@ pub mod lists_length {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::LogAck { .. } => 0,
+                Self::LogAck(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -507,9 +562,9 @@ pub mod lists_length {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::LogAck { seq: v_seq } => f("seq", rt::Int(*v_seq as i64)),
+                Self::LogAck(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -523,7 +578,7 @@ pub mod lists_length {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::LogAck { seq: v_seq } => {
+                Self::LogAck(response::LogAck { seq: v_seq }) => {
                     let out = rt::head(out, &[0xC5, 0x03, 0x20]);
                     out[3..5].copy_from_slice(&v_seq.to_le_bytes());
                     out.len()
@@ -580,10 +635,12 @@ pub mod lists_length {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, &response::LOG_ACK)?;
-                    rt::Ok(Self::LogAck {
-                        seq: u16::from_le_bytes([frame[3], frame[4]]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::LogAck::DESC)?;
+                    rt::Ok(
+                        Self::LogAck(response::LogAck {
+                            seq: u16::from_le_bytes([frame[3], frame[4]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -597,9 +654,11 @@ pub mod lists_length {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "log_ack" => {
-                    rt::Ok(Self::LogAck {
-                        seq: rt::get(&mut field, "seq")?,
-                    })
+                    rt::Ok(
+                        Self::LogAck(response::LogAck {
+                            seq: rt::get(&mut field, "seq")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -647,13 +706,13 @@ pub mod lists_length {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::Log`], read from the frame.
+        /// [`request::Log`], read from the frame.
         Log {
             channels: rt::ListView<'a, u8>,
             samples: rt::ListView<'a, Millivolts>,
             seq: u16,
         },
-        /// [`Request::SetOutputs`], read from the frame.
+        /// [`request::SetOutputs`], read from the frame.
         SetOutputs { outputs: rt::BitsView<'a>, mask: u16 },
     }
     impl<'a> RequestView<'a> {
@@ -718,17 +777,17 @@ pub mod lists_length {
         pub fn to_owned(self) -> Request {
             match self {
                 Self::Log { channels, samples, seq } => {
-                    Request::Log {
+                    Request::Log(request::Log {
                         channels: channels.to_repeated(),
                         samples: samples.to_repeated(),
                         seq,
-                    }
+                    })
                 }
                 Self::SetOutputs { outputs, mask } => {
-                    Request::SetOutputs {
+                    Request::SetOutputs(request::SetOutputs {
                         outputs: outputs.to_bits(),
                         mask,
-                    }
+                    })
                 }
             }
         }
@@ -870,33 +929,51 @@ pub mod lists_length {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<ListsLength>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `log`, code 0x20
-        pub const LOG: MessageDesc = MessageDesc::new("log", 0x20, 1, &[7]);
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Log samples (code `0x20`, 9 to 25 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Log {
+            /// Valid raw range 0..=15.
+            pub channels: super::rt::Repeated<u8, 6>,
+            /// \[mV\]
+            pub samples: super::rt::Repeated<super::Millivolts, 6>,
+            pub seq: u16,
+        }
+        /// §2 Set outputs (code `0x21`, 8 to 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetOutputs {
+            pub outputs: super::rt::Bits<2>,
+            pub mask: u16,
+        }
         /// `log.channels`
         pub const LOG_CHANNELS: FieldDesc = FieldDesc::new("log", "channels");
         /// `log.samples`
         pub const LOG_SAMPLES: FieldDesc = FieldDesc::new("log", "samples");
-        /// `set_outputs`, code 0x21
-        pub const SET_OUTPUTS: MessageDesc = MessageDesc::new(
-            "set_outputs",
-            0x21,
-            1,
-            &[7],
-        );
         /// `set_outputs.outputs`
         pub const SET_OUTPUTS_OUTPUTS: FieldDesc = FieldDesc::new(
             "set_outputs",
             "outputs",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `log_ack`, code 0x20
-        pub const LOG_ACK: MessageDesc = MessageDesc::new("log_ack", 0x20, 1, &[6]);
+        /// §1 Log acknowledged (code `0x20`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LogAck {
+            pub seq: u16,
+        }
     }
 }

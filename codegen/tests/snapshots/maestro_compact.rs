@@ -108,26 +108,52 @@ pub mod maestro_compact {
             rt::Some(Self(raw as u16))
         }
     }
+    impl request::SetTarget {
+        pub const NAME: &'static str = "set_target";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x84,
+            1,
+            &[4],
+        );
+        pub const CHANNEL: rt::Range<usize> = 1..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channel", rt::Int(self.channel as i64));
+            f("target_high", rt::Int(self.target_high.raw() as i64));
+            f("target_low", rt::Int(self.target_low.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetTarget(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPosition {
+        pub const NAME: &'static str = "get_position";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 2;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[2],
+        );
+        pub const CHANNEL: rt::Range<usize> = 1..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPosition(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §5.e Set Target (code `0x84`, 4 bytes).
-        SetTarget {
-            /// Valid raw range 0..=23.
-            channel: u8,
-            /// \[µs\]
-            target_high: QuarterMicroseconds,
-            /// \[µs\]
-            target_low: QuarterMicroseconds,
-        },
-        /// §5.e Get Position (code `0x90`, 2 bytes).
-        GetPosition {
-            /// Valid raw range 0..=23.
-            channel: u8,
-        },
+        SetTarget(request::SetTarget),
+        GetPosition(request::GetPosition),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -138,8 +164,8 @@ pub mod maestro_compact {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SetTarget { .. } => 0,
-                Self::GetPosition { .. } => 1,
+                Self::SetTarget(_) => 0,
+                Self::GetPosition(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -156,20 +182,10 @@ pub mod maestro_compact {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetTarget {
-                    channel: v_channel,
-                    target_high: v_target_high,
-                    target_low: v_target_low,
-                } => {
-                    f("channel", rt::Int(*v_channel as i64));
-                    f("target_high", rt::Int(v_target_high.raw() as i64));
-                    f("target_low", rt::Int(v_target_low.raw() as i64));
-                }
-                Self::GetPosition { channel: v_channel } => {
-                    f("channel", rt::Int(*v_channel as i64))
-                }
+                Self::SetTarget(m) => m.visit(f),
+                Self::GetPosition(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -182,11 +198,13 @@ pub mod maestro_compact {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SetTarget {
-                    channel: v_channel,
-                    target_high: v_target_high,
-                    target_low: v_target_low,
-                } => {
+                Self::SetTarget(
+                    request::SetTarget {
+                        channel: v_channel,
+                        target_high: v_target_high,
+                        target_low: v_target_low,
+                    },
+                ) => {
                     rt::encode_in_range("channel", v_channel, 0, 23)?;
                     let out = rt::frame_mut::<4>(buf, &[0x84])?;
                     out[1] = v_channel;
@@ -201,7 +219,7 @@ pub mod maestro_compact {
                     out[2..4].copy_from_slice(&field_1.to_le_bytes());
                     out.len()
                 }
-                Self::GetPosition { channel: v_channel } => {
+                Self::GetPosition(request::GetPosition { channel: v_channel }) => {
                     rt::encode_in_range("channel", v_channel, 0, 23)?;
                     let out = rt::frame_mut::<2>(buf, &[0x90])?;
                     out[1] = v_channel;
@@ -231,7 +249,7 @@ pub mod maestro_compact {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x84 => {
-                    let frame = rt::fixed::<4>(frame, &request::SET_TARGET)?;
+                    let frame = rt::fixed::<4>(frame, &request::SetTarget::DESC)?;
                     rt::in_range(&request::SET_TARGET_CHANNEL, 1, frame[1], 0, 23)?;
                     let field_1: u16 = u16::from_le_bytes([frame[2], frame[3]]);
                     rt::equal(&request::SET_TARGET_ZERO_HIGH, 2, field_1 >> 15, 0x0)?;
@@ -241,22 +259,26 @@ pub mod maestro_compact {
                         (field_1 >> 7) & 0x1,
                         0x0,
                     )?;
-                    rt::Ok(Self::SetTarget {
-                        channel: frame[1],
-                        target_high: QuarterMicroseconds::from_raw(
-                            (((field_1 >> 8) & 0x7F) as u8) as u16,
-                        ),
-                        target_low: QuarterMicroseconds::from_raw(
-                            ((field_1 & 0x7F) as u8) as u16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetTarget(request::SetTarget {
+                            channel: frame[1],
+                            target_high: QuarterMicroseconds::from_raw(
+                                (((field_1 >> 8) & 0x7F) as u8) as u16,
+                            ),
+                            target_low: QuarterMicroseconds::from_raw(
+                                ((field_1 & 0x7F) as u8) as u16,
+                            ),
+                        }),
+                    )
                 }
                 0x90 => {
-                    let frame = rt::fixed::<2>(frame, &request::GET_POSITION)?;
+                    let frame = rt::fixed::<2>(frame, &request::GetPosition::DESC)?;
                     rt::in_range(&request::GET_POSITION_CHANNEL, 1, frame[1], 0, 23)?;
-                    rt::Ok(Self::GetPosition {
-                        channel: frame[1],
-                    })
+                    rt::Ok(
+                        Self::GetPosition(request::GetPosition {
+                            channel: frame[1],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 0, false)),
             }
@@ -270,22 +292,26 @@ pub mod maestro_compact {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "set_target" => {
-                    rt::Ok(Self::SetTarget {
-                        channel: rt::get(&mut field, "channel")?,
-                        target_high: QuarterMicroseconds::from_raw(
-                            rt::field_int("target_high", field("target_high"), 0, 127)?
-                                as u16,
-                        ),
-                        target_low: QuarterMicroseconds::from_raw(
-                            rt::field_int("target_low", field("target_low"), 0, 127)?
-                                as u16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetTarget(request::SetTarget {
+                            channel: rt::get(&mut field, "channel")?,
+                            target_high: QuarterMicroseconds::from_raw(
+                                rt::field_int("target_high", field("target_high"), 0, 127)?
+                                    as u16,
+                            ),
+                            target_low: QuarterMicroseconds::from_raw(
+                                rt::field_int("target_low", field("target_low"), 0, 127)?
+                                    as u16,
+                            ),
+                        }),
+                    )
                 }
                 "get_position" => {
-                    rt::Ok(Self::GetPosition {
-                        channel: rt::get(&mut field, "channel")?,
-                    })
+                    rt::Ok(
+                        Self::GetPosition(request::GetPosition {
+                            channel: rt::get(&mut field, "channel")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -342,7 +368,7 @@ pub mod maestro_compact {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::SetTarget { .. } => rt::Reply::None,
+                    Request::SetTarget(_) => rt::Reply::None,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -353,17 +379,26 @@ pub mod maestro_compact {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Position {
+        pub const NAME: &'static str = "position";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 2;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[2]);
+        pub const POSITION: rt::Range<usize> = 0..2;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Position(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §5.e Position (code `0x`, 2 bytes). The reply to Get Position: the channel's position, low byte first.
-        Position {
-            /// \[µs\]
-            position: QuarterMicroseconds,
-        },
+        Position(response::Position),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -373,7 +408,7 @@ pub mod maestro_compact {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Position { .. } => 0,
+                Self::Position(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -390,11 +425,9 @@ pub mod maestro_compact {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Position { position: v_position } => {
-                    f("position", rt::Int(v_position.raw() as i64))
-                }
+                Self::Position(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -408,7 +441,7 @@ pub mod maestro_compact {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<2>(buf, &[])?;
             let len = match *self {
-                Self::Position { position: v_position } => {
+                Self::Position(response::Position { position: v_position }) => {
                     let out = rt::head(out, &[]);
                     out[0..2].copy_from_slice(&v_position.raw().to_le_bytes());
                     out.len()
@@ -464,12 +497,14 @@ pub mod maestro_compact {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 0) {
                 0u32 => {
-                    let frame = rt::fixed::<2>(frame, &response::POSITION)?;
-                    rt::Ok(Self::Position {
-                        position: QuarterMicroseconds::from_raw(
-                            u16::from_le_bytes([frame[0], frame[1]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<2>(frame, &response::Position::DESC)?;
+                    rt::Ok(
+                        Self::Position(response::Position {
+                            position: QuarterMicroseconds::from_raw(
+                                u16::from_le_bytes([frame[0], frame[1]]),
+                            ),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 0, 0, true)),
             }
@@ -483,11 +518,13 @@ pub mod maestro_compact {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "position" => {
-                    rt::Ok(Self::Position {
-                        position: QuarterMicroseconds::from_raw(
-                            rt::get(&mut field, "position")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::Position(response::Position {
+                            position: QuarterMicroseconds::from_raw(
+                                rt::get(&mut field, "position")?,
+                            ),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -627,17 +664,33 @@ pub mod maestro_compact {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MaestroCompact>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `set_target`, code 0x84
-        pub const SET_TARGET: MessageDesc = MessageDesc::new(
-            "set_target",
-            0x84,
-            1,
-            &[4],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §5.e Set Target (code `0x84`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetTarget {
+            /// Valid raw range 0..=23.
+            pub channel: u8,
+            /// \[µs\]
+            pub target_high: super::QuarterMicroseconds,
+            /// \[µs\]
+            pub target_low: super::QuarterMicroseconds,
+        }
+        /// §5.e Get Position (code `0x90`, 2 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GetPosition {
+            /// Valid raw range 0..=23.
+            pub channel: u8,
+        }
         /// `set_target.channel`
         pub const SET_TARGET_CHANNEL: FieldDesc = FieldDesc::new(
             "set_target",
@@ -653,23 +706,22 @@ pub mod maestro_compact {
             "set_target",
             "zero_low",
         );
-        /// `get_position`, code 0x90
-        pub const GET_POSITION: MessageDesc = MessageDesc::new(
-            "get_position",
-            0x90,
-            1,
-            &[2],
-        );
         /// `get_position.channel`
         pub const GET_POSITION_CHANNEL: FieldDesc = FieldDesc::new(
             "get_position",
             "channel",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `position` (no code)
-        pub const POSITION: MessageDesc = MessageDesc::new("position", 0, 0, &[2]);
+        /// §5.e Position (code `0x`, 2 bytes). The reply to Get Position: the channel's position, low byte first.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Position {
+            /// \[µs\]
+            pub position: super::QuarterMicroseconds,
+        }
     }
 }

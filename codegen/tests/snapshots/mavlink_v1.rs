@@ -101,42 +101,76 @@ pub mod mavlink_v1 {
             rt::None => CRC.checksum(bytes),
         }
     }
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[22],
+        );
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const TIME_USEC: rt::Range<usize> = 6..14;
+        pub const SEQ: rt::Range<usize> = 14..18;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 18..19;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 19..20;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestDataStream {
+        pub const NAME: &'static str = "request_data_stream";
+        pub const CODE: &'static [u8] = &[0x42];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x42,
+            1,
+            &[14],
+        );
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 6..8;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 8..9;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 9..10;
+        pub const REQ_STREAM_ID: rt::Range<usize> = 10..11;
+        pub const START_STOP: rt::Range<usize> = 11..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("req_message_rate", rt::Int(self.req_message_rate as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+            f("req_stream_id", rt::Int(self.req_stream_id as i64));
+            f("start_stop", rt::Int(self.start_stop as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestDataStream(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 PING (4) (code `0x04`, 22 bytes).
-        Ping {
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[µs\]
-            time_usec: u64,
-            seq: u32,
-            target_system: u8,
-            target_component: u8,
-        },
-        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x42`, 14 bytes).
-        RequestDataStream {
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[Hz\]
-            req_message_rate: u16,
-            target_system: u8,
-            target_component: u8,
-            req_stream_id: u8,
-            /// Valid raw range 0..=1.
-            start_stop: u8,
-        },
+        Ping(request::Ping),
+        RequestDataStream(request::RequestDataStream),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -147,8 +181,8 @@ pub mod mavlink_v1 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ping { .. } => 0,
-                Self::RequestDataStream { .. } => 1,
+                Self::Ping(_) => 0,
+                Self::RequestDataStream(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -165,44 +199,10 @@ pub mod mavlink_v1 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ping {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("time_usec", rt::Int(*v_time_usec as i64));
-                    f("seq", rt::Int(*v_seq as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                }
-                Self::RequestDataStream {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    req_message_rate: v_req_message_rate,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                    req_stream_id: v_req_stream_id,
-                    start_stop: v_start_stop,
-                } => {
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("req_message_rate", rt::Int(*v_req_message_rate as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                    f("req_stream_id", rt::Int(*v_req_stream_id as i64));
-                    f("start_stop", rt::Int(*v_start_stop as i64));
-                }
+                Self::Ping(m) => m.visit(f),
+                Self::RequestDataStream(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -215,15 +215,17 @@ pub mod mavlink_v1 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
+                Self::Ping(
+                    request::Ping {
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        time_usec: v_time_usec,
+                        seq: v_seq,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                    },
+                ) => {
                     let out = rt::frame_mut::<22>(buf, &[0xFE, 0x0E])?;
                     out[5] = 0x04;
                     out[2] = v_sequence;
@@ -235,16 +237,18 @@ pub mod mavlink_v1 {
                     out[19] = v_target_component;
                     out.len()
                 }
-                Self::RequestDataStream {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    req_message_rate: v_req_message_rate,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                    req_stream_id: v_req_stream_id,
-                    start_stop: v_start_stop,
-                } => {
+                Self::RequestDataStream(
+                    request::RequestDataStream {
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        req_message_rate: v_req_message_rate,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                        req_stream_id: v_req_stream_id,
+                        start_stop: v_start_stop,
+                    },
+                ) => {
                     rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
                     let out = rt::frame_mut::<14>(buf, &[0xFE, 0x06])?;
                     out[5] = 0x42;
@@ -283,33 +287,37 @@ pub mod mavlink_v1 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 5, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<22>(frame, &request::PING)?;
-                    rt::Ok(Self::Ping {
-                        sequence: frame[2],
-                        sysid: frame[3],
-                        compid: frame[4],
-                        time_usec: u64::from_le_bytes([
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        seq: u32::from_le_bytes([
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        target_system: frame[18],
-                        target_component: frame[19],
-                    })
+                    let frame = rt::fixed::<22>(frame, &request::Ping::DESC)?;
+                    rt::Ok(
+                        Self::Ping(request::Ping {
+                            sequence: frame[2],
+                            sysid: frame[3],
+                            compid: frame[4],
+                            time_usec: u64::from_le_bytes([
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            seq: u32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            target_system: frame[18],
+                            target_component: frame[19],
+                        }),
+                    )
                 }
                 0x42 => {
-                    let frame = rt::fixed::<14>(frame, &request::REQUEST_DATA_STREAM)?;
+                    let frame = rt::fixed::<
+                        14,
+                    >(frame, &request::RequestDataStream::DESC)?;
                     rt::in_range(
                         &request::REQUEST_DATA_STREAM_START_STOP,
                         11,
@@ -317,16 +325,18 @@ pub mod mavlink_v1 {
                         0,
                         1,
                     )?;
-                    rt::Ok(Self::RequestDataStream {
-                        sequence: frame[2],
-                        sysid: frame[3],
-                        compid: frame[4],
-                        req_message_rate: u16::from_le_bytes([frame[6], frame[7]]),
-                        target_system: frame[8],
-                        target_component: frame[9],
-                        req_stream_id: frame[10],
-                        start_stop: frame[11],
-                    })
+                    rt::Ok(
+                        Self::RequestDataStream(request::RequestDataStream {
+                            sequence: frame[2],
+                            sysid: frame[3],
+                            compid: frame[4],
+                            req_message_rate: u16::from_le_bytes([frame[6], frame[7]]),
+                            target_system: frame[8],
+                            target_component: frame[9],
+                            req_stream_id: frame[10],
+                            start_stop: frame[11],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 5, 1, 2, false)),
             }
@@ -340,27 +350,31 @@ pub mod mavlink_v1 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ping" => {
-                    rt::Ok(Self::Ping {
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        time_usec: rt::get(&mut field, "time_usec")?,
-                        seq: rt::get(&mut field, "seq")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                    })
+                    rt::Ok(
+                        Self::Ping(request::Ping {
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            time_usec: rt::get(&mut field, "time_usec")?,
+                            seq: rt::get(&mut field, "seq")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                        }),
+                    )
                 }
                 "request_data_stream" => {
-                    rt::Ok(Self::RequestDataStream {
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                        start_stop: rt::get(&mut field, "start_stop")?,
-                    })
+                    rt::Ok(
+                        Self::RequestDataStream(request::RequestDataStream {
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                            start_stop: rt::get(&mut field, "start_stop")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -417,7 +431,7 @@ pub mod mavlink_v1 {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::RequestDataStream { .. } => rt::Reply::Optional,
+                    Request::RequestDataStream(_) => rt::Reply::Optional,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -428,90 +442,173 @@ pub mod mavlink_v1 {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::PingReply {
+        pub const NAME: &'static str = "ping_reply";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[22],
+        );
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const TIME_USEC: rt::Range<usize> = 6..14;
+        pub const SEQ: rt::Range<usize> = 14..18;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 18..19;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 19..20;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Heartbeat {
+        pub const NAME: &'static str = "heartbeat";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 17;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x00,
+            1,
+            &[17],
+        );
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const CUSTOM_MODE: rt::Range<usize> = 6..10;
+        pub const VEHICLE_TYPE: rt::Range<usize> = 10..11;
+        pub const AUTOPILOT: rt::Range<usize> = 11..12;
+        pub const BASE_MODE: rt::Range<usize> = 12..13;
+        pub const SYSTEM_STATUS: rt::Range<usize> = 13..14;
+        pub const MAVLINK_VERSION: rt::Range<usize> = 14..15;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("custom_mode", rt::Int(self.custom_mode as i64));
+            f("vehicle_type", rt::Int(self.vehicle_type as i64));
+            f("autopilot", rt::Int(self.autopilot as i64));
+            f("base_mode", rt::Int(self.base_mode as i64));
+            f("system_status", rt::Int(self.system_status as i64));
+            f("mavlink_version", rt::Int(self.mavlink_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Heartbeat(*self).encode(address, buf)
+        }
+    }
+    impl response::SysStatus {
+        pub const NAME: &'static str = "sys_status";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[39],
+        );
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const ONBOARD_CONTROL_SENSORS_PRESENT: rt::Range<usize> = 6..10;
+        pub const ONBOARD_CONTROL_SENSORS_ENABLED: rt::Range<usize> = 10..14;
+        pub const ONBOARD_CONTROL_SENSORS_HEALTH: rt::Range<usize> = 14..18;
+        pub const LOAD: rt::Range<usize> = 18..20;
+        pub const VOLTAGE_BATTERY: rt::Range<usize> = 20..22;
+        pub const CURRENT_BATTERY: rt::Range<usize> = 22..24;
+        pub const DROP_RATE_COMM: rt::Range<usize> = 24..26;
+        pub const ERRORS_COMM: rt::Range<usize> = 26..28;
+        pub const ERRORS_COUNT1: rt::Range<usize> = 28..30;
+        pub const ERRORS_COUNT2: rt::Range<usize> = 30..32;
+        pub const ERRORS_COUNT3: rt::Range<usize> = 32..34;
+        pub const ERRORS_COUNT4: rt::Range<usize> = 34..36;
+        pub const BATTERY_REMAINING: rt::Range<usize> = 36..37;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f(
+                "onboard_control_sensors_present",
+                rt::Int(self.onboard_control_sensors_present as i64),
+            );
+            f(
+                "onboard_control_sensors_enabled",
+                rt::Int(self.onboard_control_sensors_enabled as i64),
+            );
+            f(
+                "onboard_control_sensors_health",
+                rt::Int(self.onboard_control_sensors_health as i64),
+            );
+            f("load", rt::Int(self.load as i64));
+            f("voltage_battery", rt::Int(self.voltage_battery as i64));
+            f("current_battery", rt::Int(self.current_battery as i64));
+            f("drop_rate_comm", rt::Int(self.drop_rate_comm as i64));
+            f("errors_comm", rt::Int(self.errors_comm as i64));
+            f("errors_count1", rt::Int(self.errors_count1 as i64));
+            f("errors_count2", rt::Int(self.errors_count2 as i64));
+            f("errors_count3", rt::Int(self.errors_count3 as i64));
+            f("errors_count4", rt::Int(self.errors_count4 as i64));
+            f("battery_remaining", rt::Int(self.battery_remaining as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SysStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x1E];
+        pub const LEN: usize = 36;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x1E,
+            1,
+            &[36],
+        );
+        pub const SEQUENCE: rt::Range<usize> = 2..3;
+        pub const SYSID: rt::Range<usize> = 3..4;
+        pub const COMPID: rt::Range<usize> = 4..5;
+        pub const TIME_BOOT_MS: rt::Range<usize> = 6..10;
+        pub const ROLL: rt::Range<usize> = 10..14;
+        pub const PITCH: rt::Range<usize> = 14..18;
+        pub const YAW: rt::Range<usize> = 18..22;
+        pub const ROLLSPEED: rt::Range<usize> = 22..26;
+        pub const PITCHSPEED: rt::Range<usize> = 26..30;
+        pub const YAWSPEED: rt::Range<usize> = 30..34;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_boot_ms", rt::Int(self.time_boot_ms as i64));
+            f("roll", rt::Int(rt::raw(self.roll)));
+            f("pitch", rt::Int(rt::raw(self.pitch)));
+            f("yaw", rt::Int(rt::raw(self.yaw)));
+            f("rollspeed", rt::Int(rt::raw(self.rollspeed)));
+            f("pitchspeed", rt::Int(rt::raw(self.pitchspeed)));
+            f("yawspeed", rt::Int(rt::raw(self.yawspeed)));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Attitude(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3.1 PING (4), answered (code `0x04`, 22 bytes).
-        PingReply {
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[µs\]
-            time_usec: u64,
-            seq: u32,
-            target_system: u8,
-            target_component: u8,
-        },
-        /// §3.3 HEARTBEAT (0) (code `0x00`, 17 bytes).
-        Heartbeat {
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            custom_mode: u32,
-            vehicle_type: u8,
-            autopilot: u8,
-            base_mode: u8,
-            system_status: u8,
-            mavlink_version: u8,
-        },
-        /// §3.4 SYS_STATUS (1) (code `0x01`, 39 bytes).
-        SysStatus {
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            onboard_control_sensors_present: u32,
-            onboard_control_sensors_enabled: u32,
-            onboard_control_sensors_health: u32,
-            /// \[‰\]
-            load: u16,
-            /// \[mV\]
-            voltage_battery: u16,
-            /// \[cA\]
-            current_battery: i16,
-            drop_rate_comm: u16,
-            errors_comm: u16,
-            errors_count1: u16,
-            errors_count2: u16,
-            errors_count3: u16,
-            errors_count4: u16,
-            /// \[%\]
-            battery_remaining: i8,
-        },
-        /// §3.5 ATTITUDE (30) (code `0x1E`, 36 bytes).
-        Attitude {
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[ms\]
-            time_boot_ms: u32,
-            /// \[rad\]
-            roll: f32,
-            /// \[rad\]
-            pitch: f32,
-            /// \[rad\]
-            yaw: f32,
-            /// \[rad/s\]
-            rollspeed: f32,
-            /// \[rad/s\]
-            pitchspeed: f32,
-            /// \[rad/s\]
-            yawspeed: f32,
-        },
+        PingReply(response::PingReply),
+        Heartbeat(response::Heartbeat),
+        SysStatus(response::SysStatus),
+        Attitude(response::Attitude),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -524,10 +621,10 @@ pub mod mavlink_v1 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::PingReply { .. } => 0,
-                Self::Heartbeat { .. } => 1,
-                Self::SysStatus { .. } => 2,
-                Self::Attitude { .. } => 3,
+                Self::PingReply(_) => 0,
+                Self::Heartbeat(_) => 1,
+                Self::SysStatus(_) => 2,
+                Self::Attitude(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -544,113 +641,12 @@ pub mod mavlink_v1 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::PingReply {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("time_usec", rt::Int(*v_time_usec as i64));
-                    f("seq", rt::Int(*v_seq as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                }
-                Self::Heartbeat {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    custom_mode: v_custom_mode,
-                    vehicle_type: v_vehicle_type,
-                    autopilot: v_autopilot,
-                    base_mode: v_base_mode,
-                    system_status: v_system_status,
-                    mavlink_version: v_mavlink_version,
-                } => {
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("custom_mode", rt::Int(*v_custom_mode as i64));
-                    f("vehicle_type", rt::Int(*v_vehicle_type as i64));
-                    f("autopilot", rt::Int(*v_autopilot as i64));
-                    f("base_mode", rt::Int(*v_base_mode as i64));
-                    f("system_status", rt::Int(*v_system_status as i64));
-                    f("mavlink_version", rt::Int(*v_mavlink_version as i64));
-                }
-                Self::SysStatus {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    onboard_control_sensors_present: v_onboard_control_sensors_present,
-                    onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
-                    onboard_control_sensors_health: v_onboard_control_sensors_health,
-                    load: v_load,
-                    voltage_battery: v_voltage_battery,
-                    current_battery: v_current_battery,
-                    drop_rate_comm: v_drop_rate_comm,
-                    errors_comm: v_errors_comm,
-                    errors_count1: v_errors_count1,
-                    errors_count2: v_errors_count2,
-                    errors_count3: v_errors_count3,
-                    errors_count4: v_errors_count4,
-                    battery_remaining: v_battery_remaining,
-                } => {
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f(
-                        "onboard_control_sensors_present",
-                        rt::Int(*v_onboard_control_sensors_present as i64),
-                    );
-                    f(
-                        "onboard_control_sensors_enabled",
-                        rt::Int(*v_onboard_control_sensors_enabled as i64),
-                    );
-                    f(
-                        "onboard_control_sensors_health",
-                        rt::Int(*v_onboard_control_sensors_health as i64),
-                    );
-                    f("load", rt::Int(*v_load as i64));
-                    f("voltage_battery", rt::Int(*v_voltage_battery as i64));
-                    f("current_battery", rt::Int(*v_current_battery as i64));
-                    f("drop_rate_comm", rt::Int(*v_drop_rate_comm as i64));
-                    f("errors_comm", rt::Int(*v_errors_comm as i64));
-                    f("errors_count1", rt::Int(*v_errors_count1 as i64));
-                    f("errors_count2", rt::Int(*v_errors_count2 as i64));
-                    f("errors_count3", rt::Int(*v_errors_count3 as i64));
-                    f("errors_count4", rt::Int(*v_errors_count4 as i64));
-                    f("battery_remaining", rt::Int(*v_battery_remaining as i64));
-                }
-                Self::Attitude {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_boot_ms: v_time_boot_ms,
-                    roll: v_roll,
-                    pitch: v_pitch,
-                    yaw: v_yaw,
-                    rollspeed: v_rollspeed,
-                    pitchspeed: v_pitchspeed,
-                    yawspeed: v_yawspeed,
-                } => {
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("time_boot_ms", rt::Int(*v_time_boot_ms as i64));
-                    f("roll", rt::Int(rt::raw(*v_roll)));
-                    f("pitch", rt::Int(rt::raw(*v_pitch)));
-                    f("yaw", rt::Int(rt::raw(*v_yaw)));
-                    f("rollspeed", rt::Int(rt::raw(*v_rollspeed)));
-                    f("pitchspeed", rt::Int(rt::raw(*v_pitchspeed)));
-                    f("yawspeed", rt::Int(rt::raw(*v_yawspeed)));
-                }
+                Self::PingReply(m) => m.visit(f),
+                Self::Heartbeat(m) => m.visit(f),
+                Self::SysStatus(m) => m.visit(f),
+                Self::Attitude(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -663,15 +659,17 @@ pub mod mavlink_v1 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingReply {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
+                Self::PingReply(
+                    response::PingReply {
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        time_usec: v_time_usec,
+                        seq: v_seq,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                    },
+                ) => {
                     let out = rt::frame_mut::<22>(buf, &[0xFE, 0x0E])?;
                     out[5] = 0x04;
                     out[2] = v_sequence;
@@ -683,17 +681,19 @@ pub mod mavlink_v1 {
                     out[19] = v_target_component;
                     out.len()
                 }
-                Self::Heartbeat {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    custom_mode: v_custom_mode,
-                    vehicle_type: v_vehicle_type,
-                    autopilot: v_autopilot,
-                    base_mode: v_base_mode,
-                    system_status: v_system_status,
-                    mavlink_version: v_mavlink_version,
-                } => {
+                Self::Heartbeat(
+                    response::Heartbeat {
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        custom_mode: v_custom_mode,
+                        vehicle_type: v_vehicle_type,
+                        autopilot: v_autopilot,
+                        base_mode: v_base_mode,
+                        system_status: v_system_status,
+                        mavlink_version: v_mavlink_version,
+                    },
+                ) => {
                     let out = rt::frame_mut::<17>(buf, &[0xFE, 0x09])?;
                     out[5] = 0x00;
                     out[2] = v_sequence;
@@ -707,24 +707,26 @@ pub mod mavlink_v1 {
                     out[14] = v_mavlink_version;
                     out.len()
                 }
-                Self::SysStatus {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    onboard_control_sensors_present: v_onboard_control_sensors_present,
-                    onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
-                    onboard_control_sensors_health: v_onboard_control_sensors_health,
-                    load: v_load,
-                    voltage_battery: v_voltage_battery,
-                    current_battery: v_current_battery,
-                    drop_rate_comm: v_drop_rate_comm,
-                    errors_comm: v_errors_comm,
-                    errors_count1: v_errors_count1,
-                    errors_count2: v_errors_count2,
-                    errors_count3: v_errors_count3,
-                    errors_count4: v_errors_count4,
-                    battery_remaining: v_battery_remaining,
-                } => {
+                Self::SysStatus(
+                    response::SysStatus {
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        onboard_control_sensors_present: v_onboard_control_sensors_present,
+                        onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
+                        onboard_control_sensors_health: v_onboard_control_sensors_health,
+                        load: v_load,
+                        voltage_battery: v_voltage_battery,
+                        current_battery: v_current_battery,
+                        drop_rate_comm: v_drop_rate_comm,
+                        errors_comm: v_errors_comm,
+                        errors_count1: v_errors_count1,
+                        errors_count2: v_errors_count2,
+                        errors_count3: v_errors_count3,
+                        errors_count4: v_errors_count4,
+                        battery_remaining: v_battery_remaining,
+                    },
+                ) => {
                     let out = rt::frame_mut::<39>(buf, &[0xFE, 0x1F])?;
                     out[5] = 0x01;
                     out[2] = v_sequence;
@@ -754,18 +756,20 @@ pub mod mavlink_v1 {
                     out[36..37].copy_from_slice(&v_battery_remaining.to_le_bytes());
                     out.len()
                 }
-                Self::Attitude {
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_boot_ms: v_time_boot_ms,
-                    roll: v_roll,
-                    pitch: v_pitch,
-                    yaw: v_yaw,
-                    rollspeed: v_rollspeed,
-                    pitchspeed: v_pitchspeed,
-                    yawspeed: v_yawspeed,
-                } => {
+                Self::Attitude(
+                    response::Attitude {
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        time_boot_ms: v_time_boot_ms,
+                        roll: v_roll,
+                        pitch: v_pitch,
+                        yaw: v_yaw,
+                        rollspeed: v_rollspeed,
+                        pitchspeed: v_pitchspeed,
+                        yawspeed: v_yawspeed,
+                    },
+                ) => {
                     let out = rt::frame_mut::<36>(buf, &[0xFE, 0x1C])?;
                     out[5] = 0x1E;
                     out[2] = v_sequence;
@@ -832,135 +836,143 @@ pub mod mavlink_v1 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 5, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<22>(frame, &response::PING_REPLY)?;
-                    rt::Ok(Self::PingReply {
-                        sequence: frame[2],
-                        sysid: frame[3],
-                        compid: frame[4],
-                        time_usec: u64::from_le_bytes([
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        seq: u32::from_le_bytes([
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        target_system: frame[18],
-                        target_component: frame[19],
-                    })
+                    let frame = rt::fixed::<22>(frame, &response::PingReply::DESC)?;
+                    rt::Ok(
+                        Self::PingReply(response::PingReply {
+                            sequence: frame[2],
+                            sysid: frame[3],
+                            compid: frame[4],
+                            time_usec: u64::from_le_bytes([
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            seq: u32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            target_system: frame[18],
+                            target_component: frame[19],
+                        }),
+                    )
                 }
                 0x00 => {
-                    let frame = rt::fixed::<17>(frame, &response::HEARTBEAT)?;
-                    rt::Ok(Self::Heartbeat {
-                        sequence: frame[2],
-                        sysid: frame[3],
-                        compid: frame[4],
-                        custom_mode: u32::from_le_bytes([
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                        ]),
-                        vehicle_type: frame[10],
-                        autopilot: frame[11],
-                        base_mode: frame[12],
-                        system_status: frame[13],
-                        mavlink_version: frame[14],
-                    })
+                    let frame = rt::fixed::<17>(frame, &response::Heartbeat::DESC)?;
+                    rt::Ok(
+                        Self::Heartbeat(response::Heartbeat {
+                            sequence: frame[2],
+                            sysid: frame[3],
+                            compid: frame[4],
+                            custom_mode: u32::from_le_bytes([
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                            ]),
+                            vehicle_type: frame[10],
+                            autopilot: frame[11],
+                            base_mode: frame[12],
+                            system_status: frame[13],
+                            mavlink_version: frame[14],
+                        }),
+                    )
                 }
                 0x01 => {
-                    let frame = rt::fixed::<39>(frame, &response::SYS_STATUS)?;
-                    rt::Ok(Self::SysStatus {
-                        sequence: frame[2],
-                        sysid: frame[3],
-                        compid: frame[4],
-                        onboard_control_sensors_present: u32::from_le_bytes([
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                        ]),
-                        onboard_control_sensors_enabled: u32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        onboard_control_sensors_health: u32::from_le_bytes([
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        load: u16::from_le_bytes([frame[18], frame[19]]),
-                        voltage_battery: u16::from_le_bytes([frame[20], frame[21]]),
-                        current_battery: i16::from_le_bytes([frame[22], frame[23]]),
-                        drop_rate_comm: u16::from_le_bytes([frame[24], frame[25]]),
-                        errors_comm: u16::from_le_bytes([frame[26], frame[27]]),
-                        errors_count1: u16::from_le_bytes([frame[28], frame[29]]),
-                        errors_count2: u16::from_le_bytes([frame[30], frame[31]]),
-                        errors_count3: u16::from_le_bytes([frame[32], frame[33]]),
-                        errors_count4: u16::from_le_bytes([frame[34], frame[35]]),
-                        battery_remaining: frame[36] as i8,
-                    })
+                    let frame = rt::fixed::<39>(frame, &response::SysStatus::DESC)?;
+                    rt::Ok(
+                        Self::SysStatus(response::SysStatus {
+                            sequence: frame[2],
+                            sysid: frame[3],
+                            compid: frame[4],
+                            onboard_control_sensors_present: u32::from_le_bytes([
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                            ]),
+                            onboard_control_sensors_enabled: u32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            onboard_control_sensors_health: u32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            load: u16::from_le_bytes([frame[18], frame[19]]),
+                            voltage_battery: u16::from_le_bytes([frame[20], frame[21]]),
+                            current_battery: i16::from_le_bytes([frame[22], frame[23]]),
+                            drop_rate_comm: u16::from_le_bytes([frame[24], frame[25]]),
+                            errors_comm: u16::from_le_bytes([frame[26], frame[27]]),
+                            errors_count1: u16::from_le_bytes([frame[28], frame[29]]),
+                            errors_count2: u16::from_le_bytes([frame[30], frame[31]]),
+                            errors_count3: u16::from_le_bytes([frame[32], frame[33]]),
+                            errors_count4: u16::from_le_bytes([frame[34], frame[35]]),
+                            battery_remaining: frame[36] as i8,
+                        }),
+                    )
                 }
                 0x1E => {
-                    let frame = rt::fixed::<36>(frame, &response::ATTITUDE)?;
-                    rt::Ok(Self::Attitude {
-                        sequence: frame[2],
-                        sysid: frame[3],
-                        compid: frame[4],
-                        time_boot_ms: u32::from_le_bytes([
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                        ]),
-                        roll: f32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        pitch: f32::from_le_bytes([
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        yaw: f32::from_le_bytes([
-                            frame[18],
-                            frame[19],
-                            frame[20],
-                            frame[21],
-                        ]),
-                        rollspeed: f32::from_le_bytes([
-                            frame[22],
-                            frame[23],
-                            frame[24],
-                            frame[25],
-                        ]),
-                        pitchspeed: f32::from_le_bytes([
-                            frame[26],
-                            frame[27],
-                            frame[28],
-                            frame[29],
-                        ]),
-                        yawspeed: f32::from_le_bytes([
-                            frame[30],
-                            frame[31],
-                            frame[32],
-                            frame[33],
-                        ]),
-                    })
+                    let frame = rt::fixed::<36>(frame, &response::Attitude::DESC)?;
+                    rt::Ok(
+                        Self::Attitude(response::Attitude {
+                            sequence: frame[2],
+                            sysid: frame[3],
+                            compid: frame[4],
+                            time_boot_ms: u32::from_le_bytes([
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                            ]),
+                            roll: f32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            pitch: f32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            yaw: f32::from_le_bytes([
+                                frame[18],
+                                frame[19],
+                                frame[20],
+                                frame[21],
+                            ]),
+                            rollspeed: f32::from_le_bytes([
+                                frame[22],
+                                frame[23],
+                                frame[24],
+                                frame[25],
+                            ]),
+                            pitchspeed: f32::from_le_bytes([
+                                frame[26],
+                                frame[27],
+                                frame[28],
+                                frame[29],
+                            ]),
+                            yawspeed: f32::from_le_bytes([
+                                frame[30],
+                                frame[31],
+                                frame[32],
+                                frame[33],
+                            ]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 5, 1, 2, true)),
             }
@@ -974,71 +986,79 @@ pub mod mavlink_v1 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ping_reply" => {
-                    rt::Ok(Self::PingReply {
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        time_usec: rt::get(&mut field, "time_usec")?,
-                        seq: rt::get(&mut field, "seq")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                    })
+                    rt::Ok(
+                        Self::PingReply(response::PingReply {
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            time_usec: rt::get(&mut field, "time_usec")?,
+                            seq: rt::get(&mut field, "seq")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                        }),
+                    )
                 }
                 "heartbeat" => {
-                    rt::Ok(Self::Heartbeat {
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        custom_mode: rt::get(&mut field, "custom_mode")?,
-                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                        autopilot: rt::get(&mut field, "autopilot")?,
-                        base_mode: rt::get(&mut field, "base_mode")?,
-                        system_status: rt::get(&mut field, "system_status")?,
-                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                    })
+                    rt::Ok(
+                        Self::Heartbeat(response::Heartbeat {
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            custom_mode: rt::get(&mut field, "custom_mode")?,
+                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                            autopilot: rt::get(&mut field, "autopilot")?,
+                            base_mode: rt::get(&mut field, "base_mode")?,
+                            system_status: rt::get(&mut field, "system_status")?,
+                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                        }),
+                    )
                 }
                 "sys_status" => {
-                    rt::Ok(Self::SysStatus {
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        onboard_control_sensors_present: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_present",
-                        )?,
-                        onboard_control_sensors_enabled: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_enabled",
-                        )?,
-                        onboard_control_sensors_health: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_health",
-                        )?,
-                        load: rt::get(&mut field, "load")?,
-                        voltage_battery: rt::get(&mut field, "voltage_battery")?,
-                        current_battery: rt::get(&mut field, "current_battery")?,
-                        drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
-                        errors_comm: rt::get(&mut field, "errors_comm")?,
-                        errors_count1: rt::get(&mut field, "errors_count1")?,
-                        errors_count2: rt::get(&mut field, "errors_count2")?,
-                        errors_count3: rt::get(&mut field, "errors_count3")?,
-                        errors_count4: rt::get(&mut field, "errors_count4")?,
-                        battery_remaining: rt::get(&mut field, "battery_remaining")?,
-                    })
+                    rt::Ok(
+                        Self::SysStatus(response::SysStatus {
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            onboard_control_sensors_present: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_present",
+                            )?,
+                            onboard_control_sensors_enabled: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_enabled",
+                            )?,
+                            onboard_control_sensors_health: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_health",
+                            )?,
+                            load: rt::get(&mut field, "load")?,
+                            voltage_battery: rt::get(&mut field, "voltage_battery")?,
+                            current_battery: rt::get(&mut field, "current_battery")?,
+                            drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
+                            errors_comm: rt::get(&mut field, "errors_comm")?,
+                            errors_count1: rt::get(&mut field, "errors_count1")?,
+                            errors_count2: rt::get(&mut field, "errors_count2")?,
+                            errors_count3: rt::get(&mut field, "errors_count3")?,
+                            errors_count4: rt::get(&mut field, "errors_count4")?,
+                            battery_remaining: rt::get(&mut field, "battery_remaining")?,
+                        }),
+                    )
                 }
                 "attitude" => {
-                    rt::Ok(Self::Attitude {
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
-                        roll: rt::get(&mut field, "roll")?,
-                        pitch: rt::get(&mut field, "pitch")?,
-                        yaw: rt::get(&mut field, "yaw")?,
-                        rollspeed: rt::get(&mut field, "rollspeed")?,
-                        pitchspeed: rt::get(&mut field, "pitchspeed")?,
-                        yawspeed: rt::get(&mut field, "yawspeed")?,
-                    })
+                    rt::Ok(
+                        Self::Attitude(response::Attitude {
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
+                            roll: rt::get(&mut field, "roll")?,
+                            pitch: rt::get(&mut field, "pitch")?,
+                            yaw: rt::get(&mut field, "yaw")?,
+                            rollspeed: rt::get(&mut field, "rollspeed")?,
+                            pitchspeed: rt::get(&mut field, "pitchspeed")?,
+                            yawspeed: rt::get(&mut field, "yawspeed")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -1192,45 +1212,150 @@ pub mod mavlink_v1 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MavlinkV1>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ping`, code 0x04
-        pub const PING: MessageDesc = MessageDesc::new("ping", 0x04, 1, &[22]);
-        /// `request_data_stream`, code 0x42
-        pub const REQUEST_DATA_STREAM: MessageDesc = MessageDesc::new(
-            "request_data_stream",
-            0x42,
-            1,
-            &[14],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 PING (4) (code `0x04`, 22 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ping {
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[µs\]
+            pub time_usec: u64,
+            pub seq: u32,
+            pub target_system: u8,
+            pub target_component: u8,
+        }
+        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x42`, 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RequestDataStream {
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[Hz\]
+            pub req_message_rate: u16,
+            pub target_system: u8,
+            pub target_component: u8,
+            pub req_stream_id: u8,
+            /// Valid raw range 0..=1.
+            pub start_stop: u8,
+        }
         /// `request_data_stream.start_stop`
         pub const REQUEST_DATA_STREAM_START_STOP: FieldDesc = FieldDesc::new(
             "request_data_stream",
             "start_stop",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `ping_reply`, code 0x04
-        pub const PING_REPLY: MessageDesc = MessageDesc::new(
-            "ping_reply",
-            0x04,
-            1,
-            &[22],
-        );
-        /// `heartbeat`, code 0x00
-        pub const HEARTBEAT: MessageDesc = MessageDesc::new("heartbeat", 0x00, 1, &[17]);
-        /// `sys_status`, code 0x01
-        pub const SYS_STATUS: MessageDesc = MessageDesc::new(
-            "sys_status",
-            0x01,
-            1,
-            &[39],
-        );
-        /// `attitude`, code 0x1E
-        pub const ATTITUDE: MessageDesc = MessageDesc::new("attitude", 0x1E, 1, &[36]);
+        /// §3.1 PING (4), answered (code `0x04`, 22 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct PingReply {
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[µs\]
+            pub time_usec: u64,
+            pub seq: u32,
+            pub target_system: u8,
+            pub target_component: u8,
+        }
+        /// §3.3 HEARTBEAT (0) (code `0x00`, 17 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Heartbeat {
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            pub custom_mode: u32,
+            pub vehicle_type: u8,
+            pub autopilot: u8,
+            pub base_mode: u8,
+            pub system_status: u8,
+            pub mavlink_version: u8,
+        }
+        /// §3.4 SYS_STATUS (1) (code `0x01`, 39 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SysStatus {
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            pub onboard_control_sensors_present: u32,
+            pub onboard_control_sensors_enabled: u32,
+            pub onboard_control_sensors_health: u32,
+            /// \[‰\]
+            pub load: u16,
+            /// \[mV\]
+            pub voltage_battery: u16,
+            /// \[cA\]
+            pub current_battery: i16,
+            pub drop_rate_comm: u16,
+            pub errors_comm: u16,
+            pub errors_count1: u16,
+            pub errors_count2: u16,
+            pub errors_count3: u16,
+            pub errors_count4: u16,
+            /// \[%\]
+            pub battery_remaining: i8,
+        }
+        /// §3.5 ATTITUDE (30) (code `0x1E`, 36 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Attitude {
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[ms\]
+            pub time_boot_ms: u32,
+            /// \[rad\]
+            pub roll: f32,
+            /// \[rad\]
+            pub pitch: f32,
+            /// \[rad\]
+            pub yaw: f32,
+            /// \[rad/s\]
+            pub rollspeed: f32,
+            /// \[rad/s\]
+            pub pitchspeed: f32,
+            /// \[rad/s\]
+            pub yawspeed: f32,
+        }
     }
 }

@@ -125,50 +125,84 @@ pub mod mavlink_v2 {
             rt::None => CRC.checksum(bytes),
         }
     }
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x04, 0x00, 0x00];
+        pub const LEN: usize = 26;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x040000,
+            3,
+            &[26],
+        );
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const TIME_USEC: rt::Range<usize> = 10..18;
+        pub const SEQ: rt::Range<usize> = 18..22;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 22..23;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 23..24;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::RequestDataStream {
+        pub const NAME: &'static str = "request_data_stream";
+        pub const CODE: &'static [u8] = &[0x42, 0x00, 0x00];
+        pub const LEN: usize = 18;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x420000,
+            3,
+            &[18],
+        );
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const REQ_MESSAGE_RATE: rt::Range<usize> = 10..12;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 12..13;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 13..14;
+        pub const REQ_STREAM_ID: rt::Range<usize> = 14..15;
+        pub const START_STOP: rt::Range<usize> = 15..16;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("req_message_rate", rt::Int(self.req_message_rate as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+            f("req_stream_id", rt::Int(self.req_stream_id as i64));
+            f("start_stop", rt::Int(self.start_stop as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::RequestDataStream(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 PING (4) (code `0x040000`, 26 bytes).
-        Ping {
-            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
-            incompat_flags: u8,
-            /// Compatibility flags: a receiver that does not know one still handles the frame.
-            compat_flags: u8,
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[µs\]
-            time_usec: u64,
-            seq: u32,
-            target_system: u8,
-            target_component: u8,
-        },
-        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x420000`, 18 bytes).
-        RequestDataStream {
-            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
-            incompat_flags: u8,
-            /// Compatibility flags: a receiver that does not know one still handles the frame.
-            compat_flags: u8,
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[Hz\]
-            req_message_rate: u16,
-            target_system: u8,
-            target_component: u8,
-            req_stream_id: u8,
-            /// Valid raw range 0..=1.
-            start_stop: u8,
-        },
+        Ping(request::Ping),
+        RequestDataStream(request::RequestDataStream),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -179,8 +213,8 @@ pub mod mavlink_v2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ping { .. } => 0,
-                Self::RequestDataStream { .. } => 1,
+                Self::Ping(_) => 0,
+                Self::RequestDataStream(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -197,52 +231,10 @@ pub mod mavlink_v2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ping {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
-                    f("incompat_flags", rt::Int(*v_incompat_flags as i64));
-                    f("compat_flags", rt::Int(*v_compat_flags as i64));
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("time_usec", rt::Int(*v_time_usec as i64));
-                    f("seq", rt::Int(*v_seq as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                }
-                Self::RequestDataStream {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    req_message_rate: v_req_message_rate,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                    req_stream_id: v_req_stream_id,
-                    start_stop: v_start_stop,
-                } => {
-                    f("incompat_flags", rt::Int(*v_incompat_flags as i64));
-                    f("compat_flags", rt::Int(*v_compat_flags as i64));
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("req_message_rate", rt::Int(*v_req_message_rate as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                    f("req_stream_id", rt::Int(*v_req_stream_id as i64));
-                    f("start_stop", rt::Int(*v_start_stop as i64));
-                }
+                Self::Ping(m) => m.visit(f),
+                Self::RequestDataStream(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -270,17 +262,19 @@ pub mod mavlink_v2 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
+                Self::Ping(
+                    request::Ping {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        time_usec: v_time_usec,
+                        seq: v_seq,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                    },
+                ) => {
                     rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
                     let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
                     out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
@@ -295,18 +289,20 @@ pub mod mavlink_v2 {
                     out[23] = v_target_component;
                     out.len()
                 }
-                Self::RequestDataStream {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    req_message_rate: v_req_message_rate,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                    req_stream_id: v_req_stream_id,
-                    start_stop: v_start_stop,
-                } => {
+                Self::RequestDataStream(
+                    request::RequestDataStream {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        req_message_rate: v_req_message_rate,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                        req_stream_id: v_req_stream_id,
+                        start_stop: v_start_stop,
+                    },
+                ) => {
                     rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
                     rt::encode_in_range("start_stop", v_start_stop, 0, 1)?;
                     let out = rt::frame_mut::<18>(buf, &[0xFD, 0x06])?;
@@ -362,36 +358,40 @@ pub mod mavlink_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 7, 3) {
                 0x040000 => {
-                    let frame = rt::fixed::<26>(frame, &request::PING)?;
+                    let frame = rt::fixed::<26>(frame, &request::Ping::DESC)?;
                     rt::in_range(&request::PING_INCOMPAT_FLAGS, 2, frame[2], 0, 0)?;
-                    rt::Ok(Self::Ping {
-                        incompat_flags: frame[2],
-                        compat_flags: frame[3],
-                        sequence: frame[4],
-                        sysid: frame[5],
-                        compid: frame[6],
-                        time_usec: u64::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        seq: u32::from_le_bytes([
-                            frame[18],
-                            frame[19],
-                            frame[20],
-                            frame[21],
-                        ]),
-                        target_system: frame[22],
-                        target_component: frame[23],
-                    })
+                    rt::Ok(
+                        Self::Ping(request::Ping {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            time_usec: u64::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            seq: u32::from_le_bytes([
+                                frame[18],
+                                frame[19],
+                                frame[20],
+                                frame[21],
+                            ]),
+                            target_system: frame[22],
+                            target_component: frame[23],
+                        }),
+                    )
                 }
                 0x420000 => {
-                    let frame = rt::fixed::<18>(frame, &request::REQUEST_DATA_STREAM)?;
+                    let frame = rt::fixed::<
+                        18,
+                    >(frame, &request::RequestDataStream::DESC)?;
                     rt::in_range(
                         &request::REQUEST_DATA_STREAM_INCOMPAT_FLAGS,
                         2,
@@ -406,18 +406,20 @@ pub mod mavlink_v2 {
                         0,
                         1,
                     )?;
-                    rt::Ok(Self::RequestDataStream {
-                        incompat_flags: frame[2],
-                        compat_flags: frame[3],
-                        sequence: frame[4],
-                        sysid: frame[5],
-                        compid: frame[6],
-                        req_message_rate: u16::from_le_bytes([frame[10], frame[11]]),
-                        target_system: frame[12],
-                        target_component: frame[13],
-                        req_stream_id: frame[14],
-                        start_stop: frame[15],
-                    })
+                    rt::Ok(
+                        Self::RequestDataStream(request::RequestDataStream {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            req_message_rate: u16::from_le_bytes([frame[10], frame[11]]),
+                            target_system: frame[12],
+                            target_component: frame[13],
+                            req_stream_id: frame[14],
+                            start_stop: frame[15],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 7, 3, 2, false)),
             }
@@ -431,31 +433,35 @@ pub mod mavlink_v2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ping" => {
-                    rt::Ok(Self::Ping {
-                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                        compat_flags: rt::get(&mut field, "compat_flags")?,
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        time_usec: rt::get(&mut field, "time_usec")?,
-                        seq: rt::get(&mut field, "seq")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                    })
+                    rt::Ok(
+                        Self::Ping(request::Ping {
+                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                            compat_flags: rt::get(&mut field, "compat_flags")?,
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            time_usec: rt::get(&mut field, "time_usec")?,
+                            seq: rt::get(&mut field, "seq")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                        }),
+                    )
                 }
                 "request_data_stream" => {
-                    rt::Ok(Self::RequestDataStream {
-                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                        compat_flags: rt::get(&mut field, "compat_flags")?,
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        req_message_rate: rt::get(&mut field, "req_message_rate")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                        req_stream_id: rt::get(&mut field, "req_stream_id")?,
-                        start_stop: rt::get(&mut field, "start_stop")?,
-                    })
+                    rt::Ok(
+                        Self::RequestDataStream(request::RequestDataStream {
+                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                            compat_flags: rt::get(&mut field, "compat_flags")?,
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            req_message_rate: rt::get(&mut field, "req_message_rate")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                            req_stream_id: rt::get(&mut field, "req_stream_id")?,
+                            start_stop: rt::get(&mut field, "start_stop")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -512,7 +518,7 @@ pub mod mavlink_v2 {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::RequestDataStream { .. } => rt::Reply::Optional,
+                    Request::RequestDataStream(_) => rt::Reply::Optional,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -523,128 +529,235 @@ pub mod mavlink_v2 {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::PingReply {
+        pub const NAME: &'static str = "ping_reply";
+        pub const CODE: &'static [u8] = &[0x04, 0x00, 0x00];
+        pub const LEN: usize = 26;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x040000,
+            3,
+            &[26],
+        );
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const TIME_USEC: rt::Range<usize> = 10..18;
+        pub const SEQ: rt::Range<usize> = 18..22;
+        pub const TARGET_SYSTEM: rt::Range<usize> = 22..23;
+        pub const TARGET_COMPONENT: rt::Range<usize> = 23..24;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_usec", rt::Int(self.time_usec as i64));
+            f("seq", rt::Int(self.seq as i64));
+            f("target_system", rt::Int(self.target_system as i64));
+            f("target_component", rt::Int(self.target_component as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Heartbeat {
+        pub const NAME: &'static str = "heartbeat";
+        pub const CODE: &'static [u8] = &[0x00, 0x00, 0x00];
+        pub const LEN: usize = 21;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x000000,
+            3,
+            &[21],
+        );
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const CUSTOM_MODE: rt::Range<usize> = 10..14;
+        pub const VEHICLE_TYPE: rt::Range<usize> = 14..15;
+        pub const AUTOPILOT: rt::Range<usize> = 15..16;
+        pub const BASE_MODE: rt::Range<usize> = 16..17;
+        pub const SYSTEM_STATUS: rt::Range<usize> = 17..18;
+        pub const MAVLINK_VERSION: rt::Range<usize> = 18..19;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("custom_mode", rt::Int(self.custom_mode as i64));
+            f("vehicle_type", rt::Int(self.vehicle_type as i64));
+            f("autopilot", rt::Int(self.autopilot as i64));
+            f("base_mode", rt::Int(self.base_mode as i64));
+            f("system_status", rt::Int(self.system_status as i64));
+            f("mavlink_version", rt::Int(self.mavlink_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Heartbeat(*self).encode(address, buf)
+        }
+    }
+    impl response::SysStatus {
+        pub const NAME: &'static str = "sys_status";
+        pub const CODE: &'static [u8] = &[0x01, 0x00, 0x00];
+        pub const LEN: usize = 55;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x010000,
+            3,
+            &[55],
+        );
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const ONBOARD_CONTROL_SENSORS_PRESENT: rt::Range<usize> = 10..14;
+        pub const ONBOARD_CONTROL_SENSORS_ENABLED: rt::Range<usize> = 14..18;
+        pub const ONBOARD_CONTROL_SENSORS_HEALTH: rt::Range<usize> = 18..22;
+        pub const LOAD: rt::Range<usize> = 22..24;
+        pub const VOLTAGE_BATTERY: rt::Range<usize> = 24..26;
+        pub const CURRENT_BATTERY: rt::Range<usize> = 26..28;
+        pub const DROP_RATE_COMM: rt::Range<usize> = 28..30;
+        pub const ERRORS_COMM: rt::Range<usize> = 30..32;
+        pub const ERRORS_COUNT1: rt::Range<usize> = 32..34;
+        pub const ERRORS_COUNT2: rt::Range<usize> = 34..36;
+        pub const ERRORS_COUNT3: rt::Range<usize> = 36..38;
+        pub const ERRORS_COUNT4: rt::Range<usize> = 38..40;
+        pub const BATTERY_REMAINING: rt::Range<usize> = 40..41;
+        pub const ONBOARD_CONTROL_SENSORS_PRESENT_EXTENDED: rt::Range<usize> = 41..45;
+        pub const ONBOARD_CONTROL_SENSORS_ENABLED_EXTENDED: rt::Range<usize> = 45..49;
+        pub const ONBOARD_CONTROL_SENSORS_HEALTH_EXTENDED: rt::Range<usize> = 49..53;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f(
+                "onboard_control_sensors_present",
+                rt::Int(self.onboard_control_sensors_present as i64),
+            );
+            f(
+                "onboard_control_sensors_enabled",
+                rt::Int(self.onboard_control_sensors_enabled as i64),
+            );
+            f(
+                "onboard_control_sensors_health",
+                rt::Int(self.onboard_control_sensors_health as i64),
+            );
+            f("load", rt::Int(self.load as i64));
+            f("voltage_battery", rt::Int(self.voltage_battery as i64));
+            f("current_battery", rt::Int(self.current_battery as i64));
+            f("drop_rate_comm", rt::Int(self.drop_rate_comm as i64));
+            f("errors_comm", rt::Int(self.errors_comm as i64));
+            f("errors_count1", rt::Int(self.errors_count1 as i64));
+            f("errors_count2", rt::Int(self.errors_count2 as i64));
+            f("errors_count3", rt::Int(self.errors_count3 as i64));
+            f("errors_count4", rt::Int(self.errors_count4 as i64));
+            f("battery_remaining", rt::Int(self.battery_remaining as i64));
+            f(
+                "onboard_control_sensors_present_extended",
+                rt::Int(self.onboard_control_sensors_present_extended as i64),
+            );
+            f(
+                "onboard_control_sensors_enabled_extended",
+                rt::Int(self.onboard_control_sensors_enabled_extended as i64),
+            );
+            f(
+                "onboard_control_sensors_health_extended",
+                rt::Int(self.onboard_control_sensors_health_extended as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SysStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x1E, 0x00, 0x00];
+        pub const LEN: usize = 40;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x1E0000,
+            3,
+            &[40],
+        );
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const TIME_BOOT_MS: rt::Range<usize> = 10..14;
+        pub const ROLL: rt::Range<usize> = 14..18;
+        pub const PITCH: rt::Range<usize> = 18..22;
+        pub const YAW: rt::Range<usize> = 22..26;
+        pub const ROLLSPEED: rt::Range<usize> = 26..30;
+        pub const PITCHSPEED: rt::Range<usize> = 30..34;
+        pub const YAWSPEED: rt::Range<usize> = 34..38;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("time_boot_ms", rt::Int(self.time_boot_ms as i64));
+            f("roll", rt::Int(rt::raw(self.roll)));
+            f("pitch", rt::Int(rt::raw(self.pitch)));
+            f("yaw", rt::Int(rt::raw(self.yaw)));
+            f("rollspeed", rt::Int(rt::raw(self.rollspeed)));
+            f("pitchspeed", rt::Int(rt::raw(self.pitchspeed)));
+            f("yawspeed", rt::Int(rt::raw(self.yawspeed)));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Attitude(*self).encode(address, buf)
+        }
+    }
+    impl response::RawRpm {
+        pub const NAME: &'static str = "raw_rpm";
+        pub const CODE: &'static [u8] = &[0x53, 0x01, 0x00];
+        pub const LEN: usize = 17;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x530100,
+            3,
+            &[17],
+        );
+        pub const INCOMPAT_FLAGS: rt::Range<usize> = 2..3;
+        pub const COMPAT_FLAGS: rt::Range<usize> = 3..4;
+        pub const SEQUENCE: rt::Range<usize> = 4..5;
+        pub const SYSID: rt::Range<usize> = 5..6;
+        pub const COMPID: rt::Range<usize> = 6..7;
+        pub const FREQUENCY: rt::Range<usize> = 10..14;
+        pub const INDEX: rt::Range<usize> = 14..15;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("incompat_flags", rt::Int(self.incompat_flags as i64));
+            f("compat_flags", rt::Int(self.compat_flags as i64));
+            f("sequence", rt::Int(self.sequence as i64));
+            f("sysid", rt::Int(self.sysid as i64));
+            f("compid", rt::Int(self.compid as i64));
+            f("frequency", rt::Int(rt::raw(self.frequency)));
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RawRpm(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3.1 PING (4), answered (code `0x040000`, 26 bytes).
-        PingReply {
-            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
-            incompat_flags: u8,
-            /// Compatibility flags: a receiver that does not know one still handles the frame.
-            compat_flags: u8,
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[µs\]
-            time_usec: u64,
-            seq: u32,
-            target_system: u8,
-            target_component: u8,
-        },
-        /// §3.3 HEARTBEAT (0) (code `0x000000`, 21 bytes).
-        Heartbeat {
-            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
-            incompat_flags: u8,
-            /// Compatibility flags: a receiver that does not know one still handles the frame.
-            compat_flags: u8,
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            custom_mode: u32,
-            vehicle_type: u8,
-            autopilot: u8,
-            base_mode: u8,
-            system_status: u8,
-            mavlink_version: u8,
-        },
-        /// §3.4 SYS_STATUS (1) (code `0x010000`, 55 bytes).
-        SysStatus {
-            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
-            incompat_flags: u8,
-            /// Compatibility flags: a receiver that does not know one still handles the frame.
-            compat_flags: u8,
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            onboard_control_sensors_present: u32,
-            onboard_control_sensors_enabled: u32,
-            onboard_control_sensors_health: u32,
-            /// \[‰\]
-            load: u16,
-            /// \[mV\]
-            voltage_battery: u16,
-            /// \[cA\]
-            current_battery: i16,
-            drop_rate_comm: u16,
-            errors_comm: u16,
-            errors_count1: u16,
-            errors_count2: u16,
-            errors_count3: u16,
-            errors_count4: u16,
-            /// \[%\]
-            battery_remaining: i8,
-            /// An extension field (MAVLink 2 only).
-            onboard_control_sensors_present_extended: u32,
-            /// An extension field (MAVLink 2 only).
-            onboard_control_sensors_enabled_extended: u32,
-            /// An extension field (MAVLink 2 only).
-            onboard_control_sensors_health_extended: u32,
-        },
-        /// §3.5 ATTITUDE (30) (code `0x1E0000`, 40 bytes).
-        Attitude {
-            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
-            incompat_flags: u8,
-            /// Compatibility flags: a receiver that does not know one still handles the frame.
-            compat_flags: u8,
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[ms\]
-            time_boot_ms: u32,
-            /// \[rad\]
-            roll: f32,
-            /// \[rad\]
-            pitch: f32,
-            /// \[rad\]
-            yaw: f32,
-            /// \[rad/s\]
-            rollspeed: f32,
-            /// \[rad/s\]
-            pitchspeed: f32,
-            /// \[rad/s\]
-            yawspeed: f32,
-        },
-        /// §3.6 RAW_RPM (339) (code `0x530100`, 17 bytes).
-        RawRpm {
-            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
-            incompat_flags: u8,
-            /// Compatibility flags: a receiver that does not know one still handles the frame.
-            compat_flags: u8,
-            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
-            sequence: u8,
-            /// The sending system's ID.
-            sysid: u8,
-            /// The sending component's ID.
-            compid: u8,
-            /// \[rpm\]
-            frequency: f32,
-            index: u8,
-        },
+        PingReply(response::PingReply),
+        Heartbeat(response::Heartbeat),
+        SysStatus(response::SysStatus),
+        Attitude(response::Attitude),
+        RawRpm(response::RawRpm),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -658,11 +771,11 @@ pub mod mavlink_v2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::PingReply { .. } => 0,
-                Self::Heartbeat { .. } => 1,
-                Self::SysStatus { .. } => 2,
-                Self::Attitude { .. } => 3,
-                Self::RawRpm { .. } => 4,
+                Self::PingReply(_) => 0,
+                Self::Heartbeat(_) => 1,
+                Self::SysStatus(_) => 2,
+                Self::Attitude(_) => 3,
+                Self::RawRpm(_) => 4,
             }
         }
         /// The spec's snake_case name of this message.
@@ -679,161 +792,13 @@ pub mod mavlink_v2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::PingReply {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
-                    f("incompat_flags", rt::Int(*v_incompat_flags as i64));
-                    f("compat_flags", rt::Int(*v_compat_flags as i64));
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("time_usec", rt::Int(*v_time_usec as i64));
-                    f("seq", rt::Int(*v_seq as i64));
-                    f("target_system", rt::Int(*v_target_system as i64));
-                    f("target_component", rt::Int(*v_target_component as i64));
-                }
-                Self::Heartbeat {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    custom_mode: v_custom_mode,
-                    vehicle_type: v_vehicle_type,
-                    autopilot: v_autopilot,
-                    base_mode: v_base_mode,
-                    system_status: v_system_status,
-                    mavlink_version: v_mavlink_version,
-                } => {
-                    f("incompat_flags", rt::Int(*v_incompat_flags as i64));
-                    f("compat_flags", rt::Int(*v_compat_flags as i64));
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("custom_mode", rt::Int(*v_custom_mode as i64));
-                    f("vehicle_type", rt::Int(*v_vehicle_type as i64));
-                    f("autopilot", rt::Int(*v_autopilot as i64));
-                    f("base_mode", rt::Int(*v_base_mode as i64));
-                    f("system_status", rt::Int(*v_system_status as i64));
-                    f("mavlink_version", rt::Int(*v_mavlink_version as i64));
-                }
-                Self::SysStatus {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    onboard_control_sensors_present: v_onboard_control_sensors_present,
-                    onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
-                    onboard_control_sensors_health: v_onboard_control_sensors_health,
-                    load: v_load,
-                    voltage_battery: v_voltage_battery,
-                    current_battery: v_current_battery,
-                    drop_rate_comm: v_drop_rate_comm,
-                    errors_comm: v_errors_comm,
-                    errors_count1: v_errors_count1,
-                    errors_count2: v_errors_count2,
-                    errors_count3: v_errors_count3,
-                    errors_count4: v_errors_count4,
-                    battery_remaining: v_battery_remaining,
-                    onboard_control_sensors_present_extended: v_onboard_control_sensors_present_extended,
-                    onboard_control_sensors_enabled_extended: v_onboard_control_sensors_enabled_extended,
-                    onboard_control_sensors_health_extended: v_onboard_control_sensors_health_extended,
-                } => {
-                    f("incompat_flags", rt::Int(*v_incompat_flags as i64));
-                    f("compat_flags", rt::Int(*v_compat_flags as i64));
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f(
-                        "onboard_control_sensors_present",
-                        rt::Int(*v_onboard_control_sensors_present as i64),
-                    );
-                    f(
-                        "onboard_control_sensors_enabled",
-                        rt::Int(*v_onboard_control_sensors_enabled as i64),
-                    );
-                    f(
-                        "onboard_control_sensors_health",
-                        rt::Int(*v_onboard_control_sensors_health as i64),
-                    );
-                    f("load", rt::Int(*v_load as i64));
-                    f("voltage_battery", rt::Int(*v_voltage_battery as i64));
-                    f("current_battery", rt::Int(*v_current_battery as i64));
-                    f("drop_rate_comm", rt::Int(*v_drop_rate_comm as i64));
-                    f("errors_comm", rt::Int(*v_errors_comm as i64));
-                    f("errors_count1", rt::Int(*v_errors_count1 as i64));
-                    f("errors_count2", rt::Int(*v_errors_count2 as i64));
-                    f("errors_count3", rt::Int(*v_errors_count3 as i64));
-                    f("errors_count4", rt::Int(*v_errors_count4 as i64));
-                    f("battery_remaining", rt::Int(*v_battery_remaining as i64));
-                    f(
-                        "onboard_control_sensors_present_extended",
-                        rt::Int(*v_onboard_control_sensors_present_extended as i64),
-                    );
-                    f(
-                        "onboard_control_sensors_enabled_extended",
-                        rt::Int(*v_onboard_control_sensors_enabled_extended as i64),
-                    );
-                    f(
-                        "onboard_control_sensors_health_extended",
-                        rt::Int(*v_onboard_control_sensors_health_extended as i64),
-                    );
-                }
-                Self::Attitude {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_boot_ms: v_time_boot_ms,
-                    roll: v_roll,
-                    pitch: v_pitch,
-                    yaw: v_yaw,
-                    rollspeed: v_rollspeed,
-                    pitchspeed: v_pitchspeed,
-                    yawspeed: v_yawspeed,
-                } => {
-                    f("incompat_flags", rt::Int(*v_incompat_flags as i64));
-                    f("compat_flags", rt::Int(*v_compat_flags as i64));
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("time_boot_ms", rt::Int(*v_time_boot_ms as i64));
-                    f("roll", rt::Int(rt::raw(*v_roll)));
-                    f("pitch", rt::Int(rt::raw(*v_pitch)));
-                    f("yaw", rt::Int(rt::raw(*v_yaw)));
-                    f("rollspeed", rt::Int(rt::raw(*v_rollspeed)));
-                    f("pitchspeed", rt::Int(rt::raw(*v_pitchspeed)));
-                    f("yawspeed", rt::Int(rt::raw(*v_yawspeed)));
-                }
-                Self::RawRpm {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    frequency: v_frequency,
-                    index: v_index,
-                } => {
-                    f("incompat_flags", rt::Int(*v_incompat_flags as i64));
-                    f("compat_flags", rt::Int(*v_compat_flags as i64));
-                    f("sequence", rt::Int(*v_sequence as i64));
-                    f("sysid", rt::Int(*v_sysid as i64));
-                    f("compid", rt::Int(*v_compid as i64));
-                    f("frequency", rt::Int(rt::raw(*v_frequency)));
-                    f("index", rt::Int(*v_index as i64));
-                }
+                Self::PingReply(m) => m.visit(f),
+                Self::Heartbeat(m) => m.visit(f),
+                Self::SysStatus(m) => m.visit(f),
+                Self::Attitude(m) => m.visit(f),
+                Self::RawRpm(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -861,17 +826,19 @@ pub mod mavlink_v2 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PingReply {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_usec: v_time_usec,
-                    seq: v_seq,
-                    target_system: v_target_system,
-                    target_component: v_target_component,
-                } => {
+                Self::PingReply(
+                    response::PingReply {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        time_usec: v_time_usec,
+                        seq: v_seq,
+                        target_system: v_target_system,
+                        target_component: v_target_component,
+                    },
+                ) => {
                     rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
                     let out = rt::frame_mut::<26>(buf, &[0xFD, 0x0E])?;
                     out[7..10].copy_from_slice(&[0x04, 0x00, 0x00]);
@@ -886,19 +853,21 @@ pub mod mavlink_v2 {
                     out[23] = v_target_component;
                     out.len()
                 }
-                Self::Heartbeat {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    custom_mode: v_custom_mode,
-                    vehicle_type: v_vehicle_type,
-                    autopilot: v_autopilot,
-                    base_mode: v_base_mode,
-                    system_status: v_system_status,
-                    mavlink_version: v_mavlink_version,
-                } => {
+                Self::Heartbeat(
+                    response::Heartbeat {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        custom_mode: v_custom_mode,
+                        vehicle_type: v_vehicle_type,
+                        autopilot: v_autopilot,
+                        base_mode: v_base_mode,
+                        system_status: v_system_status,
+                        mavlink_version: v_mavlink_version,
+                    },
+                ) => {
                     rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
                     let out = rt::frame_mut::<21>(buf, &[0xFD, 0x09])?;
                     out[7..10].copy_from_slice(&[0x00, 0x00, 0x00]);
@@ -915,29 +884,31 @@ pub mod mavlink_v2 {
                     out[18] = v_mavlink_version;
                     out.len()
                 }
-                Self::SysStatus {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    onboard_control_sensors_present: v_onboard_control_sensors_present,
-                    onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
-                    onboard_control_sensors_health: v_onboard_control_sensors_health,
-                    load: v_load,
-                    voltage_battery: v_voltage_battery,
-                    current_battery: v_current_battery,
-                    drop_rate_comm: v_drop_rate_comm,
-                    errors_comm: v_errors_comm,
-                    errors_count1: v_errors_count1,
-                    errors_count2: v_errors_count2,
-                    errors_count3: v_errors_count3,
-                    errors_count4: v_errors_count4,
-                    battery_remaining: v_battery_remaining,
-                    onboard_control_sensors_present_extended: v_onboard_control_sensors_present_extended,
-                    onboard_control_sensors_enabled_extended: v_onboard_control_sensors_enabled_extended,
-                    onboard_control_sensors_health_extended: v_onboard_control_sensors_health_extended,
-                } => {
+                Self::SysStatus(
+                    response::SysStatus {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        onboard_control_sensors_present: v_onboard_control_sensors_present,
+                        onboard_control_sensors_enabled: v_onboard_control_sensors_enabled,
+                        onboard_control_sensors_health: v_onboard_control_sensors_health,
+                        load: v_load,
+                        voltage_battery: v_voltage_battery,
+                        current_battery: v_current_battery,
+                        drop_rate_comm: v_drop_rate_comm,
+                        errors_comm: v_errors_comm,
+                        errors_count1: v_errors_count1,
+                        errors_count2: v_errors_count2,
+                        errors_count3: v_errors_count3,
+                        errors_count4: v_errors_count4,
+                        battery_remaining: v_battery_remaining,
+                        onboard_control_sensors_present_extended: v_onboard_control_sensors_present_extended,
+                        onboard_control_sensors_enabled_extended: v_onboard_control_sensors_enabled_extended,
+                        onboard_control_sensors_health_extended: v_onboard_control_sensors_health_extended,
+                    },
+                ) => {
                     rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
                     let out = rt::frame_mut::<55>(buf, &[0xFD, 0x2B])?;
                     out[7..10].copy_from_slice(&[0x01, 0x00, 0x00]);
@@ -982,20 +953,22 @@ pub mod mavlink_v2 {
                         );
                     out.len()
                 }
-                Self::Attitude {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    time_boot_ms: v_time_boot_ms,
-                    roll: v_roll,
-                    pitch: v_pitch,
-                    yaw: v_yaw,
-                    rollspeed: v_rollspeed,
-                    pitchspeed: v_pitchspeed,
-                    yawspeed: v_yawspeed,
-                } => {
+                Self::Attitude(
+                    response::Attitude {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        time_boot_ms: v_time_boot_ms,
+                        roll: v_roll,
+                        pitch: v_pitch,
+                        yaw: v_yaw,
+                        rollspeed: v_rollspeed,
+                        pitchspeed: v_pitchspeed,
+                        yawspeed: v_yawspeed,
+                    },
+                ) => {
                     rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
                     let out = rt::frame_mut::<40>(buf, &[0xFD, 0x1C])?;
                     out[7..10].copy_from_slice(&[0x1E, 0x00, 0x00]);
@@ -1013,15 +986,17 @@ pub mod mavlink_v2 {
                     out[34..38].copy_from_slice(&v_yawspeed.to_le_bytes());
                     out.len()
                 }
-                Self::RawRpm {
-                    incompat_flags: v_incompat_flags,
-                    compat_flags: v_compat_flags,
-                    sequence: v_sequence,
-                    sysid: v_sysid,
-                    compid: v_compid,
-                    frequency: v_frequency,
-                    index: v_index,
-                } => {
+                Self::RawRpm(
+                    response::RawRpm {
+                        incompat_flags: v_incompat_flags,
+                        compat_flags: v_compat_flags,
+                        sequence: v_sequence,
+                        sysid: v_sysid,
+                        compid: v_compid,
+                        frequency: v_frequency,
+                        index: v_index,
+                    },
+                ) => {
                     rt::encode_in_range("incompat_flags", v_incompat_flags, 0, 0)?;
                     let out = rt::frame_mut::<17>(buf, &[0xFD, 0x05])?;
                     out[7..10].copy_from_slice(&[0x53, 0x01, 0x00]);
@@ -1101,7 +1076,7 @@ pub mod mavlink_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 7, 3) {
                 0x040000 => {
-                    let frame = rt::fixed::<26>(frame, &response::PING_REPLY)?;
+                    let frame = rt::fixed::<26>(frame, &response::PingReply::DESC)?;
                     rt::in_range(
                         &response::PING_REPLY_INCOMPAT_FLAGS,
                         2,
@@ -1109,34 +1084,36 @@ pub mod mavlink_v2 {
                         0,
                         0,
                     )?;
-                    rt::Ok(Self::PingReply {
-                        incompat_flags: frame[2],
-                        compat_flags: frame[3],
-                        sequence: frame[4],
-                        sysid: frame[5],
-                        compid: frame[6],
-                        time_usec: u64::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        seq: u32::from_le_bytes([
-                            frame[18],
-                            frame[19],
-                            frame[20],
-                            frame[21],
-                        ]),
-                        target_system: frame[22],
-                        target_component: frame[23],
-                    })
+                    rt::Ok(
+                        Self::PingReply(response::PingReply {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            time_usec: u64::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            seq: u32::from_le_bytes([
+                                frame[18],
+                                frame[19],
+                                frame[20],
+                                frame[21],
+                            ]),
+                            target_system: frame[22],
+                            target_component: frame[23],
+                        }),
+                    )
                 }
                 0x000000 => {
-                    let frame = rt::fixed::<21>(frame, &response::HEARTBEAT)?;
+                    let frame = rt::fixed::<21>(frame, &response::Heartbeat::DESC)?;
                     rt::in_range(
                         &response::HEARTBEAT_INCOMPAT_FLAGS,
                         2,
@@ -1144,27 +1121,29 @@ pub mod mavlink_v2 {
                         0,
                         0,
                     )?;
-                    rt::Ok(Self::Heartbeat {
-                        incompat_flags: frame[2],
-                        compat_flags: frame[3],
-                        sequence: frame[4],
-                        sysid: frame[5],
-                        compid: frame[6],
-                        custom_mode: u32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        vehicle_type: frame[14],
-                        autopilot: frame[15],
-                        base_mode: frame[16],
-                        system_status: frame[17],
-                        mavlink_version: frame[18],
-                    })
+                    rt::Ok(
+                        Self::Heartbeat(response::Heartbeat {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            custom_mode: u32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            vehicle_type: frame[14],
+                            autopilot: frame[15],
+                            base_mode: frame[16],
+                            system_status: frame[17],
+                            mavlink_version: frame[18],
+                        }),
+                    )
                 }
                 0x010000 => {
-                    let frame = rt::fixed::<55>(frame, &response::SYS_STATUS)?;
+                    let frame = rt::fixed::<55>(frame, &response::SysStatus::DESC)?;
                     rt::in_range(
                         &response::SYS_STATUS_INCOMPAT_FLAGS,
                         2,
@@ -1172,130 +1151,136 @@ pub mod mavlink_v2 {
                         0,
                         0,
                     )?;
-                    rt::Ok(Self::SysStatus {
-                        incompat_flags: frame[2],
-                        compat_flags: frame[3],
-                        sequence: frame[4],
-                        sysid: frame[5],
-                        compid: frame[6],
-                        onboard_control_sensors_present: u32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        onboard_control_sensors_enabled: u32::from_le_bytes([
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        onboard_control_sensors_health: u32::from_le_bytes([
-                            frame[18],
-                            frame[19],
-                            frame[20],
-                            frame[21],
-                        ]),
-                        load: u16::from_le_bytes([frame[22], frame[23]]),
-                        voltage_battery: u16::from_le_bytes([frame[24], frame[25]]),
-                        current_battery: i16::from_le_bytes([frame[26], frame[27]]),
-                        drop_rate_comm: u16::from_le_bytes([frame[28], frame[29]]),
-                        errors_comm: u16::from_le_bytes([frame[30], frame[31]]),
-                        errors_count1: u16::from_le_bytes([frame[32], frame[33]]),
-                        errors_count2: u16::from_le_bytes([frame[34], frame[35]]),
-                        errors_count3: u16::from_le_bytes([frame[36], frame[37]]),
-                        errors_count4: u16::from_le_bytes([frame[38], frame[39]]),
-                        battery_remaining: frame[40] as i8,
-                        onboard_control_sensors_present_extended: u32::from_le_bytes([
-                            frame[41],
-                            frame[42],
-                            frame[43],
-                            frame[44],
-                        ]),
-                        onboard_control_sensors_enabled_extended: u32::from_le_bytes([
-                            frame[45],
-                            frame[46],
-                            frame[47],
-                            frame[48],
-                        ]),
-                        onboard_control_sensors_health_extended: u32::from_le_bytes([
-                            frame[49],
-                            frame[50],
-                            frame[51],
-                            frame[52],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::SysStatus(response::SysStatus {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            onboard_control_sensors_present: u32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            onboard_control_sensors_enabled: u32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            onboard_control_sensors_health: u32::from_le_bytes([
+                                frame[18],
+                                frame[19],
+                                frame[20],
+                                frame[21],
+                            ]),
+                            load: u16::from_le_bytes([frame[22], frame[23]]),
+                            voltage_battery: u16::from_le_bytes([frame[24], frame[25]]),
+                            current_battery: i16::from_le_bytes([frame[26], frame[27]]),
+                            drop_rate_comm: u16::from_le_bytes([frame[28], frame[29]]),
+                            errors_comm: u16::from_le_bytes([frame[30], frame[31]]),
+                            errors_count1: u16::from_le_bytes([frame[32], frame[33]]),
+                            errors_count2: u16::from_le_bytes([frame[34], frame[35]]),
+                            errors_count3: u16::from_le_bytes([frame[36], frame[37]]),
+                            errors_count4: u16::from_le_bytes([frame[38], frame[39]]),
+                            battery_remaining: frame[40] as i8,
+                            onboard_control_sensors_present_extended: u32::from_le_bytes([
+                                frame[41],
+                                frame[42],
+                                frame[43],
+                                frame[44],
+                            ]),
+                            onboard_control_sensors_enabled_extended: u32::from_le_bytes([
+                                frame[45],
+                                frame[46],
+                                frame[47],
+                                frame[48],
+                            ]),
+                            onboard_control_sensors_health_extended: u32::from_le_bytes([
+                                frame[49],
+                                frame[50],
+                                frame[51],
+                                frame[52],
+                            ]),
+                        }),
+                    )
                 }
                 0x1E0000 => {
-                    let frame = rt::fixed::<40>(frame, &response::ATTITUDE)?;
+                    let frame = rt::fixed::<40>(frame, &response::Attitude::DESC)?;
                     rt::in_range(&response::ATTITUDE_INCOMPAT_FLAGS, 2, frame[2], 0, 0)?;
-                    rt::Ok(Self::Attitude {
-                        incompat_flags: frame[2],
-                        compat_flags: frame[3],
-                        sequence: frame[4],
-                        sysid: frame[5],
-                        compid: frame[6],
-                        time_boot_ms: u32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        roll: f32::from_le_bytes([
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        pitch: f32::from_le_bytes([
-                            frame[18],
-                            frame[19],
-                            frame[20],
-                            frame[21],
-                        ]),
-                        yaw: f32::from_le_bytes([
-                            frame[22],
-                            frame[23],
-                            frame[24],
-                            frame[25],
-                        ]),
-                        rollspeed: f32::from_le_bytes([
-                            frame[26],
-                            frame[27],
-                            frame[28],
-                            frame[29],
-                        ]),
-                        pitchspeed: f32::from_le_bytes([
-                            frame[30],
-                            frame[31],
-                            frame[32],
-                            frame[33],
-                        ]),
-                        yawspeed: f32::from_le_bytes([
-                            frame[34],
-                            frame[35],
-                            frame[36],
-                            frame[37],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::Attitude(response::Attitude {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            time_boot_ms: u32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            roll: f32::from_le_bytes([
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            pitch: f32::from_le_bytes([
+                                frame[18],
+                                frame[19],
+                                frame[20],
+                                frame[21],
+                            ]),
+                            yaw: f32::from_le_bytes([
+                                frame[22],
+                                frame[23],
+                                frame[24],
+                                frame[25],
+                            ]),
+                            rollspeed: f32::from_le_bytes([
+                                frame[26],
+                                frame[27],
+                                frame[28],
+                                frame[29],
+                            ]),
+                            pitchspeed: f32::from_le_bytes([
+                                frame[30],
+                                frame[31],
+                                frame[32],
+                                frame[33],
+                            ]),
+                            yawspeed: f32::from_le_bytes([
+                                frame[34],
+                                frame[35],
+                                frame[36],
+                                frame[37],
+                            ]),
+                        }),
+                    )
                 }
                 0x530100 => {
-                    let frame = rt::fixed::<17>(frame, &response::RAW_RPM)?;
+                    let frame = rt::fixed::<17>(frame, &response::RawRpm::DESC)?;
                     rt::in_range(&response::RAW_RPM_INCOMPAT_FLAGS, 2, frame[2], 0, 0)?;
-                    rt::Ok(Self::RawRpm {
-                        incompat_flags: frame[2],
-                        compat_flags: frame[3],
-                        sequence: frame[4],
-                        sysid: frame[5],
-                        compid: frame[6],
-                        frequency: f32::from_le_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                        index: frame[14],
-                    })
+                    rt::Ok(
+                        Self::RawRpm(response::RawRpm {
+                            incompat_flags: frame[2],
+                            compat_flags: frame[3],
+                            sequence: frame[4],
+                            sysid: frame[5],
+                            compid: frame[6],
+                            frequency: f32::from_le_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                            index: frame[14],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 7, 3, 2, true)),
             }
@@ -1309,102 +1294,112 @@ pub mod mavlink_v2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ping_reply" => {
-                    rt::Ok(Self::PingReply {
-                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                        compat_flags: rt::get(&mut field, "compat_flags")?,
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        time_usec: rt::get(&mut field, "time_usec")?,
-                        seq: rt::get(&mut field, "seq")?,
-                        target_system: rt::get(&mut field, "target_system")?,
-                        target_component: rt::get(&mut field, "target_component")?,
-                    })
+                    rt::Ok(
+                        Self::PingReply(response::PingReply {
+                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                            compat_flags: rt::get(&mut field, "compat_flags")?,
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            time_usec: rt::get(&mut field, "time_usec")?,
+                            seq: rt::get(&mut field, "seq")?,
+                            target_system: rt::get(&mut field, "target_system")?,
+                            target_component: rt::get(&mut field, "target_component")?,
+                        }),
+                    )
                 }
                 "heartbeat" => {
-                    rt::Ok(Self::Heartbeat {
-                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                        compat_flags: rt::get(&mut field, "compat_flags")?,
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        custom_mode: rt::get(&mut field, "custom_mode")?,
-                        vehicle_type: rt::get(&mut field, "vehicle_type")?,
-                        autopilot: rt::get(&mut field, "autopilot")?,
-                        base_mode: rt::get(&mut field, "base_mode")?,
-                        system_status: rt::get(&mut field, "system_status")?,
-                        mavlink_version: rt::get(&mut field, "mavlink_version")?,
-                    })
+                    rt::Ok(
+                        Self::Heartbeat(response::Heartbeat {
+                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                            compat_flags: rt::get(&mut field, "compat_flags")?,
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            custom_mode: rt::get(&mut field, "custom_mode")?,
+                            vehicle_type: rt::get(&mut field, "vehicle_type")?,
+                            autopilot: rt::get(&mut field, "autopilot")?,
+                            base_mode: rt::get(&mut field, "base_mode")?,
+                            system_status: rt::get(&mut field, "system_status")?,
+                            mavlink_version: rt::get(&mut field, "mavlink_version")?,
+                        }),
+                    )
                 }
                 "sys_status" => {
-                    rt::Ok(Self::SysStatus {
-                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                        compat_flags: rt::get(&mut field, "compat_flags")?,
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        onboard_control_sensors_present: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_present",
-                        )?,
-                        onboard_control_sensors_enabled: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_enabled",
-                        )?,
-                        onboard_control_sensors_health: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_health",
-                        )?,
-                        load: rt::get(&mut field, "load")?,
-                        voltage_battery: rt::get(&mut field, "voltage_battery")?,
-                        current_battery: rt::get(&mut field, "current_battery")?,
-                        drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
-                        errors_comm: rt::get(&mut field, "errors_comm")?,
-                        errors_count1: rt::get(&mut field, "errors_count1")?,
-                        errors_count2: rt::get(&mut field, "errors_count2")?,
-                        errors_count3: rt::get(&mut field, "errors_count3")?,
-                        errors_count4: rt::get(&mut field, "errors_count4")?,
-                        battery_remaining: rt::get(&mut field, "battery_remaining")?,
-                        onboard_control_sensors_present_extended: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_present_extended",
-                        )?,
-                        onboard_control_sensors_enabled_extended: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_enabled_extended",
-                        )?,
-                        onboard_control_sensors_health_extended: rt::get(
-                            &mut field,
-                            "onboard_control_sensors_health_extended",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::SysStatus(response::SysStatus {
+                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                            compat_flags: rt::get(&mut field, "compat_flags")?,
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            onboard_control_sensors_present: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_present",
+                            )?,
+                            onboard_control_sensors_enabled: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_enabled",
+                            )?,
+                            onboard_control_sensors_health: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_health",
+                            )?,
+                            load: rt::get(&mut field, "load")?,
+                            voltage_battery: rt::get(&mut field, "voltage_battery")?,
+                            current_battery: rt::get(&mut field, "current_battery")?,
+                            drop_rate_comm: rt::get(&mut field, "drop_rate_comm")?,
+                            errors_comm: rt::get(&mut field, "errors_comm")?,
+                            errors_count1: rt::get(&mut field, "errors_count1")?,
+                            errors_count2: rt::get(&mut field, "errors_count2")?,
+                            errors_count3: rt::get(&mut field, "errors_count3")?,
+                            errors_count4: rt::get(&mut field, "errors_count4")?,
+                            battery_remaining: rt::get(&mut field, "battery_remaining")?,
+                            onboard_control_sensors_present_extended: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_present_extended",
+                            )?,
+                            onboard_control_sensors_enabled_extended: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_enabled_extended",
+                            )?,
+                            onboard_control_sensors_health_extended: rt::get(
+                                &mut field,
+                                "onboard_control_sensors_health_extended",
+                            )?,
+                        }),
+                    )
                 }
                 "attitude" => {
-                    rt::Ok(Self::Attitude {
-                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                        compat_flags: rt::get(&mut field, "compat_flags")?,
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
-                        roll: rt::get(&mut field, "roll")?,
-                        pitch: rt::get(&mut field, "pitch")?,
-                        yaw: rt::get(&mut field, "yaw")?,
-                        rollspeed: rt::get(&mut field, "rollspeed")?,
-                        pitchspeed: rt::get(&mut field, "pitchspeed")?,
-                        yawspeed: rt::get(&mut field, "yawspeed")?,
-                    })
+                    rt::Ok(
+                        Self::Attitude(response::Attitude {
+                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                            compat_flags: rt::get(&mut field, "compat_flags")?,
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            time_boot_ms: rt::get(&mut field, "time_boot_ms")?,
+                            roll: rt::get(&mut field, "roll")?,
+                            pitch: rt::get(&mut field, "pitch")?,
+                            yaw: rt::get(&mut field, "yaw")?,
+                            rollspeed: rt::get(&mut field, "rollspeed")?,
+                            pitchspeed: rt::get(&mut field, "pitchspeed")?,
+                            yawspeed: rt::get(&mut field, "yawspeed")?,
+                        }),
+                    )
                 }
                 "raw_rpm" => {
-                    rt::Ok(Self::RawRpm {
-                        incompat_flags: rt::get(&mut field, "incompat_flags")?,
-                        compat_flags: rt::get(&mut field, "compat_flags")?,
-                        sequence: rt::get(&mut field, "sequence")?,
-                        sysid: rt::get(&mut field, "sysid")?,
-                        compid: rt::get(&mut field, "compid")?,
-                        frequency: rt::get(&mut field, "frequency")?,
-                        index: rt::get(&mut field, "index")?,
-                    })
+                    rt::Ok(
+                        Self::RawRpm(response::RawRpm {
+                            incompat_flags: rt::get(&mut field, "incompat_flags")?,
+                            compat_flags: rt::get(&mut field, "compat_flags")?,
+                            sequence: rt::get(&mut field, "sequence")?,
+                            sysid: rt::get(&mut field, "sysid")?,
+                            compid: rt::get(&mut field, "compid")?,
+                            frequency: rt::get(&mut field, "frequency")?,
+                            index: rt::get(&mut field, "index")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -1532,23 +1527,61 @@ pub mod mavlink_v2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MavlinkV2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ping`, code 0x040000
-        pub const PING: MessageDesc = MessageDesc::new("ping", 0x040000, 3, &[26]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 PING (4) (code `0x040000`, 26 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ping {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[µs\]
+            pub time_usec: u64,
+            pub seq: u32,
+            pub target_system: u8,
+            pub target_component: u8,
+        }
+        /// §3.2 REQUEST_DATA_STREAM (66) (code `0x420000`, 18 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RequestDataStream {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[Hz\]
+            pub req_message_rate: u16,
+            pub target_system: u8,
+            pub target_component: u8,
+            pub req_stream_id: u8,
+            /// Valid raw range 0..=1.
+            pub start_stop: u8,
+        }
         /// `ping.incompat_flags`
         pub const PING_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
             "ping",
             "incompat_flags",
-        );
-        /// `request_data_stream`, code 0x420000
-        pub const REQUEST_DATA_STREAM: MessageDesc = MessageDesc::new(
-            "request_data_stream",
-            0x420000,
-            3,
-            &[18],
         );
         /// `request_data_stream.incompat_flags`
         pub const REQUEST_DATA_STREAM_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
@@ -1561,59 +1594,165 @@ pub mod mavlink_v2 {
             "start_stop",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ping_reply`, code 0x040000
-        pub const PING_REPLY: MessageDesc = MessageDesc::new(
-            "ping_reply",
-            0x040000,
-            3,
-            &[26],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 PING (4), answered (code `0x040000`, 26 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct PingReply {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[µs\]
+            pub time_usec: u64,
+            pub seq: u32,
+            pub target_system: u8,
+            pub target_component: u8,
+        }
+        /// §3.3 HEARTBEAT (0) (code `0x000000`, 21 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Heartbeat {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            pub custom_mode: u32,
+            pub vehicle_type: u8,
+            pub autopilot: u8,
+            pub base_mode: u8,
+            pub system_status: u8,
+            pub mavlink_version: u8,
+        }
+        /// §3.4 SYS_STATUS (1) (code `0x010000`, 55 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SysStatus {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            pub onboard_control_sensors_present: u32,
+            pub onboard_control_sensors_enabled: u32,
+            pub onboard_control_sensors_health: u32,
+            /// \[‰\]
+            pub load: u16,
+            /// \[mV\]
+            pub voltage_battery: u16,
+            /// \[cA\]
+            pub current_battery: i16,
+            pub drop_rate_comm: u16,
+            pub errors_comm: u16,
+            pub errors_count1: u16,
+            pub errors_count2: u16,
+            pub errors_count3: u16,
+            pub errors_count4: u16,
+            /// \[%\]
+            pub battery_remaining: i8,
+            /// An extension field (MAVLink 2 only).
+            pub onboard_control_sensors_present_extended: u32,
+            /// An extension field (MAVLink 2 only).
+            pub onboard_control_sensors_enabled_extended: u32,
+            /// An extension field (MAVLink 2 only).
+            pub onboard_control_sensors_health_extended: u32,
+        }
+        /// §3.5 ATTITUDE (30) (code `0x1E0000`, 40 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Attitude {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[ms\]
+            pub time_boot_ms: u32,
+            /// \[rad\]
+            pub roll: f32,
+            /// \[rad\]
+            pub pitch: f32,
+            /// \[rad\]
+            pub yaw: f32,
+            /// \[rad/s\]
+            pub rollspeed: f32,
+            /// \[rad/s\]
+            pub pitchspeed: f32,
+            /// \[rad/s\]
+            pub yawspeed: f32,
+        }
+        /// §3.6 RAW_RPM (339) (code `0x530100`, 17 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RawRpm {
+            /// Incompatibility flags: bit 0 says the frame is signed (a 13-byte signature follows the checksum), which is not expressible yet: held to 0. Valid raw range 0..=0.
+            pub incompat_flags: u8,
+            /// Compatibility flags: a receiver that does not know one still handles the frame.
+            pub compat_flags: u8,
+            /// Packet sequence number: one more for each packet the component sends, 255 then 0.
+            pub sequence: u8,
+            /// The sending system's ID.
+            pub sysid: u8,
+            /// The sending component's ID.
+            pub compid: u8,
+            /// \[rpm\]
+            pub frequency: f32,
+            pub index: u8,
+        }
         /// `ping_reply.incompat_flags`
         pub const PING_REPLY_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
             "ping_reply",
             "incompat_flags",
-        );
-        /// `heartbeat`, code 0x000000
-        pub const HEARTBEAT: MessageDesc = MessageDesc::new(
-            "heartbeat",
-            0x000000,
-            3,
-            &[21],
         );
         /// `heartbeat.incompat_flags`
         pub const HEARTBEAT_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
             "heartbeat",
             "incompat_flags",
         );
-        /// `sys_status`, code 0x010000
-        pub const SYS_STATUS: MessageDesc = MessageDesc::new(
-            "sys_status",
-            0x010000,
-            3,
-            &[55],
-        );
         /// `sys_status.incompat_flags`
         pub const SYS_STATUS_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
             "sys_status",
             "incompat_flags",
-        );
-        /// `attitude`, code 0x1E0000
-        pub const ATTITUDE: MessageDesc = MessageDesc::new(
-            "attitude",
-            0x1E0000,
-            3,
-            &[40],
         );
         /// `attitude.incompat_flags`
         pub const ATTITUDE_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
             "attitude",
             "incompat_flags",
         );
-        /// `raw_rpm`, code 0x530100
-        pub const RAW_RPM: MessageDesc = MessageDesc::new("raw_rpm", 0x530100, 3, &[17]);
         /// `raw_rpm.incompat_flags`
         pub const RAW_RPM_INCOMPAT_FLAGS: FieldDesc = FieldDesc::new(
             "raw_rpm",

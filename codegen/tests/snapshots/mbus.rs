@@ -85,18 +85,57 @@ pub mod mbus {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    impl request::SndNke {
+        pub const NAME: &'static str = "snd_nke";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x40,
+            1,
+            &[8],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SndNke(*self).encode(address, buf)
+        }
+    }
+    impl request::ReqUd2 {
+        pub const NAME: &'static str = "req_ud2";
+        pub const CODE: &'static [u8] = &[0x5B];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x5B,
+            1,
+            &[8],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReqUd2(*self).encode(address, buf)
+        }
+    }
+    impl request::SndUdReset {
+        pub const NAME: &'static str = "snd_ud_reset";
+        pub const CODE: &'static [u8] = &[0x53];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x53,
+            1,
+            &[9],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SndUdReset(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §5.5 SND_NKE: initialisation of the slave (short frame) (code `0x40`, 8 bytes).
-        SndNke,
-        /// §5.5 REQ_UD2: request for class 2 data (short frame) (code `0x5B`, 8 bytes).
-        ReqUd2,
-        /// §6.1 SND_UD: application reset (long frame, CI 50) (code `0x53`, 9 bytes).
-        SndUdReset,
+        SndNke(request::SndNke),
+        ReqUd2(request::ReqUd2),
+        SndUdReset(request::SndUdReset),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -108,9 +147,9 @@ pub mod mbus {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SndNke => 0,
-                Self::ReqUd2 => 1,
-                Self::SndUdReset => 2,
+                Self::SndNke(_) => 0,
+                Self::ReqUd2(_) => 1,
+                Self::SndUdReset(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -151,16 +190,16 @@ pub mod mbus {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SndNke => {
+                Self::SndNke(request::SndNke {}) => {
                     rt::frame_mut::<8>(buf, &[0x68, 0x02, 0x02, 0x68, 0x40, address])?
                         .len()
                 }
-                Self::ReqUd2 => {
-                    rt::encode_broadcast(address, 0xFF, &request::REQ_UD2)?;
+                Self::ReqUd2(request::ReqUd2 {}) => {
+                    rt::encode_broadcast(address, 0xFF, &request::ReqUd2::DESC)?;
                     rt::frame_mut::<8>(buf, &[0x68, 0x02, 0x02, 0x68, 0x5B, address])?
                         .len()
                 }
-                Self::SndUdReset => {
+                Self::SndUdReset(request::SndUdReset {}) => {
                     rt::frame_mut::<
                         9,
                     >(buf, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50])?
@@ -201,16 +240,19 @@ pub mod mbus {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
-                0x40 => rt::fixed::<8>(frame, &request::SND_NKE).map(|_| Self::SndNke),
+                0x40 => {
+                    rt::fixed::<8>(frame, &request::SndNke::DESC)
+                        .map(|_| Self::SndNke(request::SndNke))
+                }
                 0x5B => {
-                    let frame = rt::fixed::<8>(frame, &request::REQ_UD2)?;
-                    rt::no_broadcast(frame[5], 0xFF, &request::REQ_UD2)?;
-                    rt::Ok(Self::ReqUd2)
+                    let frame = rt::fixed::<8>(frame, &request::ReqUd2::DESC)?;
+                    rt::no_broadcast(frame[5], 0xFF, &request::ReqUd2::DESC)?;
+                    rt::Ok(Self::ReqUd2(request::ReqUd2))
                 }
                 0x53 => {
-                    let frame = rt::fixed::<9>(frame, &request::SND_UD_RESET)?;
+                    let frame = rt::fixed::<9>(frame, &request::SndUdReset::DESC)?;
                     rt::equal(&request::SND_UD_RESET_CI, 6, frame[6], 0x50)?;
-                    rt::Ok(Self::SndUdReset)
+                    rt::Ok(Self::SndUdReset(request::SndUdReset))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, false)),
             }
@@ -223,9 +265,9 @@ pub mod mbus {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "snd_nke" => rt::Ok(Self::SndNke),
-                "req_ud2" => rt::Ok(Self::ReqUd2),
-                "snd_ud_reset" => rt::Ok(Self::SndUdReset),
+                "snd_nke" => rt::Ok(Self::SndNke(request::SndNke)),
+                "req_ud2" => rt::Ok(Self::ReqUd2(request::ReqUd2)),
+                "snd_ud_reset" => rt::Ok(Self::SndUdReset(request::SndUdReset)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -290,28 +332,54 @@ pub mod mbus {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::RspUd {
+        pub const NAME: &'static str = "rsp_ud";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const LEN: usize = 27;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x08,
+            1,
+            &[27],
+        );
+        pub const IDENTIFICATION: rt::Range<usize> = 7..11;
+        pub const MANUFACTURER: rt::Range<usize> = 11..13;
+        pub const VERSION: rt::Range<usize> = 13..14;
+        pub const MEDIUM: rt::Range<usize> = 14..15;
+        pub const ACCESS: rt::Range<usize> = 15..16;
+        pub const STATUS: rt::Range<usize> = 16..17;
+        pub const SIGNATURE: rt::Range<usize> = 17..19;
+        pub const VOLUME: rt::Range<usize> = 21..25;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("identification", rt::Int(self.identification as i64));
+            f("manufacturer", rt::Int(self.manufacturer as i64));
+            f("version", rt::Int(self.version as i64));
+            f("medium", rt::Int(self.medium as i64));
+            f("access", rt::Int(self.access as i64));
+            f("status", rt::Int(self.status as i64));
+            f("signature", rt::Int(self.signature as i64));
+            f("volume", rt::Int(self.volume as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RspUd(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 1;
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §6.2 RSP_UD: user data, one instantaneous volume record (long frame) (code `0x08`, 27 bytes).
-        RspUd {
-            /// Identification number, 8 BCD digits Valid raw range 0..=99999999.
-            identification: u32,
-            manufacturer: u16,
-            version: u8,
-            medium: u8,
-            /// Access number
-            access: u8,
-            status: u8,
-            signature: u16,
-            /// \[l\]
-            volume: u32,
-        },
-        /// §5.4 Single character E5: acknowledgement (constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
-        Ack,
+        RspUd(response::RspUd),
+        Ack(response::Ack),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -322,8 +390,8 @@ pub mod mbus {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::RspUd { .. } => 0,
-                Self::Ack => 1,
+                Self::RspUd(_) => 0,
+                Self::Ack(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -340,27 +408,9 @@ pub mod mbus {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::RspUd {
-                    identification: v_identification,
-                    manufacturer: v_manufacturer,
-                    version: v_version,
-                    medium: v_medium,
-                    access: v_access,
-                    status: v_status,
-                    signature: v_signature,
-                    volume: v_volume,
-                } => {
-                    f("identification", rt::Int(*v_identification as i64));
-                    f("manufacturer", rt::Int(*v_manufacturer as i64));
-                    f("version", rt::Int(*v_version as i64));
-                    f("medium", rt::Int(*v_medium as i64));
-                    f("access", rt::Int(*v_access as i64));
-                    f("status", rt::Int(*v_status as i64));
-                    f("signature", rt::Int(*v_signature as i64));
-                    f("volume", rt::Int(*v_volume as i64));
-                }
+                Self::RspUd(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -391,16 +441,18 @@ pub mod mbus {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<27>(buf, &[])?;
             let len = match *self {
-                Self::RspUd {
-                    identification: v_identification,
-                    manufacturer: v_manufacturer,
-                    version: v_version,
-                    medium: v_medium,
-                    access: v_access,
-                    status: v_status,
-                    signature: v_signature,
-                    volume: v_volume,
-                } => {
+                Self::RspUd(
+                    response::RspUd {
+                        identification: v_identification,
+                        manufacturer: v_manufacturer,
+                        version: v_version,
+                        medium: v_medium,
+                        access: v_access,
+                        status: v_status,
+                        signature: v_signature,
+                        volume: v_volume,
+                    },
+                ) => {
                     rt::encode_in_range(
                         "identification",
                         v_identification,
@@ -425,7 +477,7 @@ pub mod mbus {
                     out[21..25].copy_from_slice(&v_volume.to_le_bytes());
                     out.len()
                 }
-                Self::Ack => return rt::put_frame(buf, &[0xE5]),
+                Self::Ack(_) => return rt::put_frame(buf, &[0xE5]),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 4))), &FRAME);
             rt::Ok(len)
@@ -434,7 +486,7 @@ pub mod mbus {
         /// framed message.
         pub const fn constant_frame(&self) -> rt::Option<&'static [u8]> {
             match *self {
-                Self::Ack => rt::Some(&[0xE5]),
+                Self::Ack(_) => rt::Some(&[0xE5]),
                 _ => rt::None,
             }
         }
@@ -442,7 +494,7 @@ pub mod mbus {
         #[inline]
         fn constant(frame: &[u8]) -> rt::Option<Self> {
             match frame {
-                [0xE5] => rt::Some(Self::Ack),
+                [0xE5] => rt::Some(Self::Ack(response::Ack)),
                 _ => rt::None,
             }
         }
@@ -514,7 +566,7 @@ pub mod mbus {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x08 => {
-                    let frame = rt::fixed::<27>(frame, &response::RSP_UD)?;
+                    let frame = rt::fixed::<27>(frame, &response::RspUd::DESC)?;
                     rt::equal(&response::RSP_UD_CI, 6, frame[6], 0x72)?;
                     let field_1: u32 = rt::bcd(
                         &response::RSP_UD_IDENTIFICATION,
@@ -531,21 +583,23 @@ pub mod mbus {
                     )?;
                     rt::equal(&response::RSP_UD_DIF, 19, frame[19], 0x4)?;
                     rt::equal(&response::RSP_UD_VIF, 20, frame[20], 0x13)?;
-                    rt::Ok(Self::RspUd {
-                        identification: field_1,
-                        manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
-                        version: frame[13],
-                        medium: frame[14],
-                        access: frame[15],
-                        status: frame[16],
-                        signature: u16::from_le_bytes([frame[17], frame[18]]),
-                        volume: u32::from_le_bytes([
-                            frame[21],
-                            frame[22],
-                            frame[23],
-                            frame[24],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::RspUd(response::RspUd {
+                            identification: field_1,
+                            manufacturer: u16::from_le_bytes([frame[11], frame[12]]),
+                            version: frame[13],
+                            medium: frame[14],
+                            access: frame[15],
+                            status: frame[16],
+                            signature: u16::from_le_bytes([frame[17], frame[18]]),
+                            volume: u32::from_le_bytes([
+                                frame[21],
+                                frame[22],
+                                frame[23],
+                                frame[24],
+                            ]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 2, true)),
             }
@@ -559,18 +613,20 @@ pub mod mbus {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "rsp_ud" => {
-                    rt::Ok(Self::RspUd {
-                        identification: rt::get(&mut field, "identification")?,
-                        manufacturer: rt::get(&mut field, "manufacturer")?,
-                        version: rt::get(&mut field, "version")?,
-                        medium: rt::get(&mut field, "medium")?,
-                        access: rt::get(&mut field, "access")?,
-                        status: rt::get(&mut field, "status")?,
-                        signature: rt::get(&mut field, "signature")?,
-                        volume: rt::get(&mut field, "volume")?,
-                    })
+                    rt::Ok(
+                        Self::RspUd(response::RspUd {
+                            identification: rt::get(&mut field, "identification")?,
+                            manufacturer: rt::get(&mut field, "manufacturer")?,
+                            version: rt::get(&mut field, "version")?,
+                            medium: rt::get(&mut field, "medium")?,
+                            access: rt::get(&mut field, "access")?,
+                            status: rt::get(&mut field, "status")?,
+                            signature: rt::get(&mut field, "signature")?,
+                            volume: rt::get(&mut field, "volume")?,
+                        }),
+                    )
                 }
-                "ack" => rt::Ok(Self::Ack),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -711,29 +767,55 @@ pub mod mbus {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Mbus>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `snd_nke`, code 0x40
-        pub const SND_NKE: MessageDesc = MessageDesc::new("snd_nke", 0x40, 1, &[8]);
-        /// `req_ud2`, code 0x5B
-        pub const REQ_UD2: MessageDesc = MessageDesc::new("req_ud2", 0x5B, 1, &[8]);
-        /// `snd_ud_reset`, code 0x53
-        pub const SND_UD_RESET: MessageDesc = MessageDesc::new(
-            "snd_ud_reset",
-            0x53,
-            1,
-            &[9],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §5.5 SND_NKE: initialisation of the slave (short frame) (code `0x40`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SndNke;
+        /// §5.5 REQ_UD2: request for class 2 data (short frame) (code `0x5B`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReqUd2;
+        /// §6.1 SND_UD: application reset (long frame, CI 50) (code `0x53`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SndUdReset;
         /// `snd_ud_reset.ci`
         pub const SND_UD_RESET_CI: FieldDesc = FieldDesc::new("snd_ud_reset", "ci");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `rsp_ud`, code 0x08
-        pub const RSP_UD: MessageDesc = MessageDesc::new("rsp_ud", 0x08, 1, &[27]);
+        use ::busspec_runtime::FieldDesc;
+        /// §6.2 RSP_UD: user data, one instantaneous volume record (long frame) (code `0x08`, 27 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RspUd {
+            /// Identification number, 8 BCD digits Valid raw range 0..=99999999.
+            pub identification: u32,
+            pub manufacturer: u16,
+            pub version: u8,
+            pub medium: u8,
+            /// Access number
+            pub access: u8,
+            pub status: u8,
+            pub signature: u16,
+            /// \[l\]
+            pub volume: u32,
+        }
+        /// §5.4 Single character E5: acknowledgement (constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
         /// `rsp_ud.ci`
         pub const RSP_UD_CI: FieldDesc = FieldDesc::new("rsp_ud", "ci");
         /// `rsp_ud.identification`

@@ -68,16 +68,42 @@ pub mod mbus_short {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
+    impl request::SndNke {
+        pub const NAME: &'static str = "snd_nke";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x40,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SndNke(*self).encode(address, buf)
+        }
+    }
+    impl request::ReqSke {
+        pub const NAME: &'static str = "req_ske";
+        pub const CODE: &'static [u8] = &[0x49];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x49,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReqSke(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §5.5 SND_NKE: initialisation of the slave (code `0x40`, 5 bytes).
-        SndNke,
-        /// §5.5 REQ_SKE: request status of link (code `0x49`, 5 bytes).
-        ReqSke,
+        SndNke(request::SndNke),
+        ReqSke(request::ReqSke),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -88,8 +114,8 @@ pub mod mbus_short {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SndNke => 0,
-                Self::ReqSke => 1,
+                Self::SndNke(_) => 0,
+                Self::ReqSke(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -118,9 +144,11 @@ pub mod mbus_short {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::SndNke => rt::head(out, &[0x10, 0x40, address]).len(),
-                Self::ReqSke => {
-                    rt::encode_broadcast(address, 0xFF, &request::REQ_SKE)?;
+                Self::SndNke(request::SndNke {}) => {
+                    rt::head(out, &[0x10, 0x40, address]).len()
+                }
+                Self::ReqSke(request::ReqSke {}) => {
+                    rt::encode_broadcast(address, 0xFF, &request::ReqSke::DESC)?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
             };
@@ -146,11 +174,14 @@ pub mod mbus_short {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
-                0x40 => rt::fixed::<5>(frame, &request::SND_NKE).map(|_| Self::SndNke),
+                0x40 => {
+                    rt::fixed::<5>(frame, &request::SndNke::DESC)
+                        .map(|_| Self::SndNke(request::SndNke))
+                }
                 0x49 => {
-                    let frame = rt::fixed::<5>(frame, &request::REQ_SKE)?;
-                    rt::no_broadcast(frame[2], 0xFF, &request::REQ_SKE)?;
-                    rt::Ok(Self::ReqSke)
+                    let frame = rt::fixed::<5>(frame, &request::ReqSke::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFF, &request::ReqSke::DESC)?;
+                    rt::Ok(Self::ReqSke(request::ReqSke))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
             }
@@ -163,8 +194,8 @@ pub mod mbus_short {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "snd_nke" => rt::Ok(Self::SndNke),
-                "req_ske" => rt::Ok(Self::ReqSke),
+                "snd_nke" => rt::Ok(Self::SndNke(request::SndNke)),
+                "req_ske" => rt::Ok(Self::ReqSke(request::ReqSke)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -228,16 +259,36 @@ pub mod mbus_short {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::StatusOfLink {
+        pub const NAME: &'static str = "status_of_link";
+        pub const CODE: &'static [u8] = &[0x0B];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0B,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StatusOfLink(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 1;
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §5.5 RSP_SKE: status of link (code `0x0B`, 5 bytes).
-        StatusOfLink,
-        /// §5.4 Single character E5: acknowledgement (constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
-        Ack,
+        StatusOfLink(response::StatusOfLink),
+        Ack(response::Ack),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -248,8 +299,8 @@ pub mod mbus_short {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::StatusOfLink => 0,
-                Self::Ack => 1,
+                Self::StatusOfLink(_) => 0,
+                Self::Ack(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -281,8 +332,10 @@ pub mod mbus_short {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::StatusOfLink => rt::head(out, &[0x10, 0x0B, address]).len(),
-                Self::Ack => return rt::put_frame(buf, &[0xE5]),
+                Self::StatusOfLink(response::StatusOfLink {}) => {
+                    rt::head(out, &[0x10, 0x0B, address]).len()
+                }
+                Self::Ack(_) => return rt::put_frame(buf, &[0xE5]),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)
@@ -291,7 +344,7 @@ pub mod mbus_short {
         /// framed message.
         pub const fn constant_frame(&self) -> rt::Option<&'static [u8]> {
             match *self {
-                Self::Ack => rt::Some(&[0xE5]),
+                Self::Ack(_) => rt::Some(&[0xE5]),
                 _ => rt::None,
             }
         }
@@ -299,7 +352,7 @@ pub mod mbus_short {
         #[inline]
         fn constant(frame: &[u8]) -> rt::Option<Self> {
             match frame {
-                [0xE5] => rt::Some(Self::Ack),
+                [0xE5] => rt::Some(Self::Ack(response::Ack)),
                 _ => rt::None,
             }
         }
@@ -358,8 +411,8 @@ pub mod mbus_short {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x0B => {
-                    rt::fixed::<5>(frame, &response::STATUS_OF_LINK)
-                        .map(|_| Self::StatusOfLink)
+                    rt::fixed::<5>(frame, &response::StatusOfLink::DESC)
+                        .map(|_| Self::StatusOfLink(response::StatusOfLink))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
             }
@@ -372,8 +425,8 @@ pub mod mbus_short {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "status_of_link" => rt::Ok(Self::StatusOfLink),
-                "ack" => rt::Ok(Self::Ack),
+                "status_of_link" => rt::Ok(Self::StatusOfLink(response::StatusOfLink)),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -539,24 +592,32 @@ pub mod mbus_short {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MbusShort>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `snd_nke`, code 0x40
-        pub const SND_NKE: MessageDesc = MessageDesc::new("snd_nke", 0x40, 1, &[5]);
-        /// `req_ske`, code 0x49
-        pub const REQ_SKE: MessageDesc = MessageDesc::new("req_ske", 0x49, 1, &[5]);
+        /// §5.5 SND_NKE: initialisation of the slave (code `0x40`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SndNke;
+        /// §5.5 REQ_SKE: request status of link (code `0x49`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReqSke;
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `status_of_link`, code 0x0B
-        pub const STATUS_OF_LINK: MessageDesc = MessageDesc::new(
-            "status_of_link",
-            0x0B,
-            1,
-            &[5],
-        );
+        /// §5.5 RSP_SKE: status of link (code `0x0B`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct StatusOfLink;
+        /// §5.4 Single character E5: acknowledgement (constant frame `E5`, 1 bytes). The single character: the whole frame is the one byte E5, without start, address, checksum or stop.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
     }
 }

@@ -80,20 +80,48 @@ pub mod meter_floats {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    impl request::ReadReadings {
+        pub const NAME: &'static str = "read_readings";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadReadings(*self).encode(address, buf)
+        }
+    }
+    impl request::SetLimits {
+        pub const NAME: &'static str = "set_limits";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[16],
+        );
+        pub const VOLTAGE_LIMIT: rt::Range<usize> = 2..6;
+        pub const SERIAL: rt::Range<usize> = 6..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("voltage_limit", rt::Int(rt::raw(self.voltage_limit)));
+            f("serial", rt::Int(self.serial as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetLimits(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Read the readings (code `0x04`, 4 bytes).
-        ReadReadings,
-        /// §3.2 Set the voltage limit and the serial number (code `0x10`, 16 bytes).
-        SetLimits {
-            /// A plain big-endian float. \[V\] Valid raw range 0.0..=300.5.
-            voltage_limit: f32,
-            serial: u64,
-        },
+        ReadReadings(request::ReadReadings),
+        SetLimits(request::SetLimits),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -104,8 +132,8 @@ pub mod meter_floats {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadReadings => 0,
-                Self::SetLimits { .. } => 1,
+                Self::ReadReadings(_) => 0,
+                Self::SetLimits(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -122,12 +150,9 @@ pub mod meter_floats {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetLimits { voltage_limit: v_voltage_limit, serial: v_serial } => {
-                    f("voltage_limit", rt::Int(rt::raw(*v_voltage_limit)));
-                    f("serial", rt::Int(*v_serial as i64));
-                }
+                Self::SetLimits(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -141,12 +166,17 @@ pub mod meter_floats {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadReadings => {
-                    rt::encode_broadcast(address, 0x00, &request::READ_READINGS)?;
+                Self::ReadReadings(request::ReadReadings {}) => {
+                    rt::encode_broadcast(address, 0x00, &request::ReadReadings::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x04])?.len()
                 }
-                Self::SetLimits { voltage_limit: v_voltage_limit, serial: v_serial } => {
-                    rt::encode_broadcast(address, 0x00, &request::SET_LIMITS)?;
+                Self::SetLimits(
+                    request::SetLimits {
+                        voltage_limit: v_voltage_limit,
+                        serial: v_serial,
+                    },
+                ) => {
+                    rt::encode_broadcast(address, 0x00, &request::SetLimits::DESC)?;
                     rt::encode_in_range(
                         "voltage_limit",
                         v_voltage_limit,
@@ -182,13 +212,13 @@ pub mod meter_floats {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<4>(frame, &request::READ_READINGS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_READINGS)?;
-                    rt::Ok(Self::ReadReadings)
+                    let frame = rt::fixed::<4>(frame, &request::ReadReadings::DESC)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::ReadReadings::DESC)?;
+                    rt::Ok(Self::ReadReadings(request::ReadReadings))
                 }
                 0x10 => {
-                    let frame = rt::fixed::<16>(frame, &request::SET_LIMITS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::SET_LIMITS)?;
+                    let frame = rt::fixed::<16>(frame, &request::SetLimits::DESC)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::SetLimits::DESC)?;
                     let field_0: f32 = f32::from_be_bytes([
                         frame[2],
                         frame[3],
@@ -202,19 +232,21 @@ pub mod meter_floats {
                         rt::f32_raw(0f32),
                         rt::f32_raw(300.5f32),
                     )?;
-                    rt::Ok(Self::SetLimits {
-                        voltage_limit: field_0,
-                        serial: u64::from_be_bytes([
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::SetLimits(request::SetLimits {
+                            voltage_limit: field_0,
+                            serial: u64::from_be_bytes([
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                            ]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
             }
@@ -227,12 +259,14 @@ pub mod meter_floats {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_readings" => rt::Ok(Self::ReadReadings),
+                "read_readings" => rt::Ok(Self::ReadReadings(request::ReadReadings)),
                 "set_limits" => {
-                    rt::Ok(Self::SetLimits {
-                        voltage_limit: rt::get(&mut field, "voltage_limit")?,
-                        serial: rt::get(&mut field, "serial")?,
-                    })
+                    rt::Ok(
+                        Self::SetLimits(request::SetLimits {
+                            voltage_limit: rt::get(&mut field, "voltage_limit")?,
+                            serial: rt::get(&mut field, "serial")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -297,35 +331,64 @@ pub mod meter_floats {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Readings {
+        pub const NAME: &'static str = "readings";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 52;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[52],
+        );
+        pub const VOLTAGE: rt::Range<usize> = 2..6;
+        pub const FREQUENCY: rt::Range<usize> = 6..10;
+        pub const ENERGY: rt::Range<usize> = 10..18;
+        pub const ENERGY_SWAPPED: rt::Range<usize> = 18..26;
+        pub const PULSES: rt::Range<usize> = 26..34;
+        pub const DRIFT: rt::Range<usize> = 34..42;
+        pub const COUNTER: rt::Range<usize> = 42..46;
+        pub const TEMPERATURE: rt::Range<usize> = 46..50;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("voltage", rt::Int(rt::raw(self.voltage)));
+            f("frequency", rt::Int(rt::raw(self.frequency)));
+            f("energy", rt::Int(rt::raw(self.energy)));
+            f("energy_swapped", rt::Int(rt::raw(self.energy_swapped)));
+            f("pulses", rt::Int(self.pulses as i64));
+            f("drift", rt::Int(self.drift as i64));
+            f("counter", rt::Int(self.counter as i64));
+            f("temperature", rt::Int(self.temperature as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Readings(*self).encode(address, buf)
+        }
+    }
+    impl response::LimitsSet {
+        pub const NAME: &'static str = "limits_set";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[12],
+        );
+        pub const SERIAL: rt::Range<usize> = 2..10;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("serial", rt::Int(self.serial as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LimitsSet(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 Readings (code `0x04`, 52 bytes).
-        Readings {
-            /// Low register first. \[V\] Its 16-bit words travel swapped.
-            voltage: f32,
-            /// \[Hz\] Valid raw range 45.0..=65.0.
-            frequency: f32,
-            /// \[kWh\]
-            energy: f64,
-            /// \[kWh\] Its 16-bit words travel swapped.
-            energy_swapped: f64,
-            pulses: u64,
-            /// \[ns\] Valid raw range -9000000000000..=9000000000000.
-            drift: i64,
-            /// Its 16-bit words travel swapped.
-            counter: u32,
-            /// \[°C\] Its 16-bit words travel swapped.
-            temperature: i32,
-        },
-        /// §4.2 Limits set (code `0x10`, 12 bytes).
-        LimitsSet {
-            /// Valid raw range 1..=18446744073709551615.
-            serial: u64,
-        },
+        Readings(response::Readings),
+        LimitsSet(response::LimitsSet),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -336,8 +399,8 @@ pub mod meter_floats {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Readings { .. } => 0,
-                Self::LimitsSet { .. } => 1,
+                Self::Readings(_) => 0,
+                Self::LimitsSet(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -354,30 +417,10 @@ pub mod meter_floats {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Readings {
-                    voltage: v_voltage,
-                    frequency: v_frequency,
-                    energy: v_energy,
-                    energy_swapped: v_energy_swapped,
-                    pulses: v_pulses,
-                    drift: v_drift,
-                    counter: v_counter,
-                    temperature: v_temperature,
-                } => {
-                    f("voltage", rt::Int(rt::raw(*v_voltage)));
-                    f("frequency", rt::Int(rt::raw(*v_frequency)));
-                    f("energy", rt::Int(rt::raw(*v_energy)));
-                    f("energy_swapped", rt::Int(rt::raw(*v_energy_swapped)));
-                    f("pulses", rt::Int(*v_pulses as i64));
-                    f("drift", rt::Int(*v_drift as i64));
-                    f("counter", rt::Int(*v_counter as i64));
-                    f("temperature", rt::Int(*v_temperature as i64));
-                }
-                Self::LimitsSet { serial: v_serial } => {
-                    f("serial", rt::Int(*v_serial as i64))
-                }
+                Self::Readings(m) => m.visit(f),
+                Self::LimitsSet(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -390,16 +433,18 @@ pub mod meter_floats {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Readings {
-                    voltage: v_voltage,
-                    frequency: v_frequency,
-                    energy: v_energy,
-                    energy_swapped: v_energy_swapped,
-                    pulses: v_pulses,
-                    drift: v_drift,
-                    counter: v_counter,
-                    temperature: v_temperature,
-                } => {
+                Self::Readings(
+                    response::Readings {
+                        voltage: v_voltage,
+                        frequency: v_frequency,
+                        energy: v_energy,
+                        energy_swapped: v_energy_swapped,
+                        pulses: v_pulses,
+                        drift: v_drift,
+                        counter: v_counter,
+                        temperature: v_temperature,
+                    },
+                ) => {
                     rt::encode_in_range(
                         "frequency",
                         v_frequency,
@@ -438,7 +483,7 @@ pub mod meter_floats {
                     }
                     out.len()
                 }
-                Self::LimitsSet { serial: v_serial } => {
+                Self::LimitsSet(response::LimitsSet { serial: v_serial }) => {
                     rt::encode_in_range(
                         "serial",
                         v_serial,
@@ -500,7 +545,7 @@ pub mod meter_floats {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x04 => {
-                    let frame = rt::fixed::<52>(frame, &response::READINGS)?;
+                    let frame = rt::fixed::<52>(frame, &response::Readings::DESC)?;
                     let field_1: f32 = f32::from_be_bytes([
                         frame[6],
                         frame[7],
@@ -531,61 +576,63 @@ pub mod meter_floats {
                         -9000000000000,
                         9000000000000,
                     )?;
-                    rt::Ok(Self::Readings {
-                        voltage: f32::from_be_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[2],
-                            frame[3],
-                        ]),
-                        frequency: field_1,
-                        energy: f64::from_be_bytes([
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                            frame[14],
-                            frame[15],
-                            frame[16],
-                            frame[17],
-                        ]),
-                        energy_swapped: f64::from_be_bytes([
-                            frame[24],
-                            frame[25],
-                            frame[22],
-                            frame[23],
-                            frame[20],
-                            frame[21],
-                            frame[18],
-                            frame[19],
-                        ]),
-                        pulses: u64::from_be_bytes([
-                            frame[26],
-                            frame[27],
-                            frame[28],
-                            frame[29],
-                            frame[30],
-                            frame[31],
-                            frame[32],
-                            frame[33],
-                        ]),
-                        drift: field_5,
-                        counter: u32::from_be_bytes([
-                            frame[44],
-                            frame[45],
-                            frame[42],
-                            frame[43],
-                        ]),
-                        temperature: i32::from_be_bytes([
-                            frame[48],
-                            frame[49],
-                            frame[46],
-                            frame[47],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::Readings(response::Readings {
+                            voltage: f32::from_be_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[2],
+                                frame[3],
+                            ]),
+                            frequency: field_1,
+                            energy: f64::from_be_bytes([
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                                frame[14],
+                                frame[15],
+                                frame[16],
+                                frame[17],
+                            ]),
+                            energy_swapped: f64::from_be_bytes([
+                                frame[24],
+                                frame[25],
+                                frame[22],
+                                frame[23],
+                                frame[20],
+                                frame[21],
+                                frame[18],
+                                frame[19],
+                            ]),
+                            pulses: u64::from_be_bytes([
+                                frame[26],
+                                frame[27],
+                                frame[28],
+                                frame[29],
+                                frame[30],
+                                frame[31],
+                                frame[32],
+                                frame[33],
+                            ]),
+                            drift: field_5,
+                            counter: u32::from_be_bytes([
+                                frame[44],
+                                frame[45],
+                                frame[42],
+                                frame[43],
+                            ]),
+                            temperature: i32::from_be_bytes([
+                                frame[48],
+                                frame[49],
+                                frame[46],
+                                frame[47],
+                            ]),
+                        }),
+                    )
                 }
                 0x10 => {
-                    let frame = rt::fixed::<12>(frame, &response::LIMITS_SET)?;
+                    let frame = rt::fixed::<12>(frame, &response::LimitsSet::DESC)?;
                     let field_0: u64 = u64::from_be_bytes([
                         frame[2],
                         frame[3],
@@ -603,7 +650,11 @@ pub mod meter_floats {
                         rt::u64_raw(1u64),
                         rt::u64_raw(18446744073709551615u64),
                     )?;
-                    rt::Ok(Self::LimitsSet { serial: field_0 })
+                    rt::Ok(
+                        Self::LimitsSet(response::LimitsSet {
+                            serial: field_0,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
             }
@@ -617,21 +668,25 @@ pub mod meter_floats {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "readings" => {
-                    rt::Ok(Self::Readings {
-                        voltage: rt::get(&mut field, "voltage")?,
-                        frequency: rt::get(&mut field, "frequency")?,
-                        energy: rt::get(&mut field, "energy")?,
-                        energy_swapped: rt::get(&mut field, "energy_swapped")?,
-                        pulses: rt::get(&mut field, "pulses")?,
-                        drift: rt::get(&mut field, "drift")?,
-                        counter: rt::get(&mut field, "counter")?,
-                        temperature: rt::get(&mut field, "temperature")?,
-                    })
+                    rt::Ok(
+                        Self::Readings(response::Readings {
+                            voltage: rt::get(&mut field, "voltage")?,
+                            frequency: rt::get(&mut field, "frequency")?,
+                            energy: rt::get(&mut field, "energy")?,
+                            energy_swapped: rt::get(&mut field, "energy_swapped")?,
+                            pulses: rt::get(&mut field, "pulses")?,
+                            drift: rt::get(&mut field, "drift")?,
+                            counter: rt::get(&mut field, "counter")?,
+                            temperature: rt::get(&mut field, "temperature")?,
+                        }),
+                    )
                 }
                 "limits_set" => {
-                    rt::Ok(Self::LimitsSet {
-                        serial: rt::get(&mut field, "serial")?,
-                    })
+                    rt::Ok(
+                        Self::LimitsSet(response::LimitsSet {
+                            serial: rt::get(&mut field, "serial")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -771,35 +826,66 @@ pub mod meter_floats {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MeterFloats>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_readings`, code 0x04
-        pub const READ_READINGS: MessageDesc = MessageDesc::new(
-            "read_readings",
-            0x04,
-            1,
-            &[4],
-        );
-        /// `set_limits`, code 0x10
-        pub const SET_LIMITS: MessageDesc = MessageDesc::new(
-            "set_limits",
-            0x10,
-            1,
-            &[16],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Read the readings (code `0x04`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadReadings;
+        /// §3.2 Set the voltage limit and the serial number (code `0x10`, 16 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetLimits {
+            /// A plain big-endian float. \[V\] Valid raw range 0.0..=300.5.
+            pub voltage_limit: f32,
+            pub serial: u64,
+        }
         /// `set_limits.voltage_limit`
         pub const SET_LIMITS_VOLTAGE_LIMIT: FieldDesc = FieldDesc::new(
             "set_limits",
             "voltage_limit",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `readings`, code 0x04
-        pub const READINGS: MessageDesc = MessageDesc::new("readings", 0x04, 1, &[52]);
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 Readings (code `0x04`, 52 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Readings {
+            /// Low register first. \[V\] Its 16-bit words travel swapped.
+            pub voltage: f32,
+            /// \[Hz\] Valid raw range 45.0..=65.0.
+            pub frequency: f32,
+            /// \[kWh\]
+            pub energy: f64,
+            /// \[kWh\] Its 16-bit words travel swapped.
+            pub energy_swapped: f64,
+            pub pulses: u64,
+            /// \[ns\] Valid raw range -9000000000000..=9000000000000.
+            pub drift: i64,
+            /// Its 16-bit words travel swapped.
+            pub counter: u32,
+            /// \[°C\] Its 16-bit words travel swapped.
+            pub temperature: i32,
+        }
+        /// §4.2 Limits set (code `0x10`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LimitsSet {
+            /// Valid raw range 1..=18446744073709551615.
+            pub serial: u64,
+        }
         /// `readings.frequency`
         pub const READINGS_FREQUENCY: FieldDesc = FieldDesc::new(
             "readings",
@@ -807,13 +893,6 @@ pub mod meter_floats {
         );
         /// `readings.drift`
         pub const READINGS_DRIFT: FieldDesc = FieldDesc::new("readings", "drift");
-        /// `limits_set`, code 0x10
-        pub const LIMITS_SET: MessageDesc = MessageDesc::new(
-            "limits_set",
-            0x10,
-            1,
-            &[12],
-        );
         /// `limits_set.serial`
         pub const LIMITS_SET_SERIAL: FieldDesc = FieldDesc::new("limits_set", "serial");
     }

@@ -280,24 +280,69 @@ pub mod mini {
             Self(raw)
         }
     }
+    impl request::GoTo {
+        pub const NAME: &'static str = "go_to";
+        pub const CODE: &'static [u8] = &[0x20, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2000,
+            2,
+            &[9],
+        );
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoTo(*self).encode(address, buf)
+        }
+    }
+    impl request::SetMode {
+        pub const NAME: &'static str = "set_mode";
+        pub const CODE: &'static [u8] = &[0x30, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x3000,
+            2,
+            &[6],
+        );
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetMode(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStatus {
+        pub const NAME: &'static str = "get_status";
+        pub const CODE: &'static [u8] = &[0x40, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4000,
+            2,
+            &[6],
+        );
+        pub const CHANNEL: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStatus(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §4.1 Go to capacitance (code `0x2000`, 9 bytes).
-        GoTo {
-            /// \[pF\] Valid raw range 0..=100000.
-            target: Capacitance,
-        },
-        /// §4.2 Set mode (code `0x3000`, 6 bytes).
-        SetMode { mode: Mode },
-        /// §4.3 Get status (code `0x4000`, 6 bytes).
-        GetStatus {
-            /// Valid raw range 0..=3.
-            channel: u8,
-        },
+        GoTo(request::GoTo),
+        SetMode(request::SetMode),
+        GetStatus(request::GetStatus),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -309,9 +354,9 @@ pub mod mini {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::GoTo { .. } => 0,
-                Self::SetMode { .. } => 1,
-                Self::GetStatus { .. } => 2,
+                Self::GoTo(_) => 0,
+                Self::SetMode(_) => 1,
+                Self::GetStatus(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -328,15 +373,11 @@ pub mod mini {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::GoTo { target: v_target } => {
-                    f("target", rt::Int(v_target.raw() as i64))
-                }
-                Self::SetMode { mode: v_mode } => f("mode", rt::Int(v_mode.raw() as i64)),
-                Self::GetStatus { channel: v_channel } => {
-                    f("channel", rt::Int(*v_channel as i64))
-                }
+                Self::GoTo(m) => m.visit(f),
+                Self::SetMode(m) => m.visit(f),
+                Self::GetStatus(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -349,18 +390,18 @@ pub mod mini {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::GoTo { target: v_target } => {
+                Self::GoTo(request::GoTo { target: v_target }) => {
                     rt::encode_in_range("target", v_target.raw(), 0, 100000)?;
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
                     out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA))
                 }
-                Self::SetMode { mode: v_mode } => {
+                Self::SetMode(request::SetMode { mode: v_mode }) => {
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x30, 0x00])?;
                     out[4] = v_mode.raw();
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xDA))
                 }
-                Self::GetStatus { channel: v_channel } => {
+                Self::GetStatus(request::GetStatus { channel: v_channel }) => {
                     rt::encode_in_range("channel", v_channel, 0, 3)?;
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x00])?;
                     out[4] = v_channel;
@@ -389,7 +430,7 @@ pub mod mini {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x2000 => {
-                    let frame = rt::fixed::<9>(frame, &request::GO_TO)?;
+                    let frame = rt::fixed::<9>(frame, &request::GoTo::DESC)?;
                     let field_0: u32 = u32::from_le_bytes([
                         frame[4],
                         frame[5],
@@ -397,22 +438,28 @@ pub mod mini {
                         frame[7],
                     ]);
                     rt::in_range(&request::GO_TO_TARGET, 4, field_0, 0, 100000)?;
-                    rt::Ok(Self::GoTo {
-                        target: Capacitance::from_raw(field_0),
-                    })
+                    rt::Ok(
+                        Self::GoTo(request::GoTo {
+                            target: Capacitance::from_raw(field_0),
+                        }),
+                    )
                 }
                 0x3000 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_MODE)?;
-                    rt::Ok(Self::SetMode {
-                        mode: Mode::from_raw(frame[4]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &request::SetMode::DESC)?;
+                    rt::Ok(
+                        Self::SetMode(request::SetMode {
+                            mode: Mode::from_raw(frame[4]),
+                        }),
+                    )
                 }
                 0x4000 => {
-                    let frame = rt::fixed::<6>(frame, &request::GET_STATUS)?;
+                    let frame = rt::fixed::<6>(frame, &request::GetStatus::DESC)?;
                     rt::in_range(&request::GET_STATUS_CHANNEL, 4, frame[4], 0, 3)?;
-                    rt::Ok(Self::GetStatus {
-                        channel: frame[4],
-                    })
+                    rt::Ok(
+                        Self::GetStatus(request::GetStatus {
+                            channel: frame[4],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, false)),
             }
@@ -426,19 +473,25 @@ pub mod mini {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "go_to" => {
-                    rt::Ok(Self::GoTo {
-                        target: Capacitance::from_raw(rt::get(&mut field, "target")?),
-                    })
+                    rt::Ok(
+                        Self::GoTo(request::GoTo {
+                            target: Capacitance::from_raw(rt::get(&mut field, "target")?),
+                        }),
+                    )
                 }
                 "set_mode" => {
-                    rt::Ok(Self::SetMode {
-                        mode: Mode::from_raw(rt::get(&mut field, "mode")?),
-                    })
+                    rt::Ok(
+                        Self::SetMode(request::SetMode {
+                            mode: Mode::from_raw(rt::get(&mut field, "mode")?),
+                        }),
+                    )
                 }
                 "get_status" => {
-                    rt::Ok(Self::GetStatus {
-                        channel: rt::get(&mut field, "channel")?,
-                    })
+                    rt::Ok(
+                        Self::GetStatus(request::GetStatus {
+                            channel: rt::get(&mut field, "channel")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -504,28 +557,82 @@ pub mod mini {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Started {
+        pub const NAME: &'static str = "started";
+        pub const CODE: &'static [u8] = &[0x50];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x50,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Started(*self).encode(address, buf)
+        }
+    }
+    impl response::Nak {
+        pub const NAME: &'static str = "nak";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Nak(*self).encode(address, buf)
+        }
+    }
+    impl response::SetModeAck {
+        pub const NAME: &'static str = "set_mode_ack";
+        pub const CODE: &'static [u8] = &[0x30, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x3000,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetModeAck(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x40, 0x00];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4000,
+            2,
+            &[13],
+        );
+        pub const ERROR_BITS: rt::Range<usize> = 4..5;
+        pub const FIRMWARE: rt::Range<usize> = 7..10;
+        pub const TEMPERATURE: rt::Range<usize> = 10..11;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error_bits", rt::Int(self.error_bits.raw() as i64));
+            f("freshness", rt::Int(self.freshness as i64));
+            f("position", rt::Int(self.position.raw() as i64));
+            f("firmware", rt::Text(&self.firmware[..]));
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §5.1 Movement started (code `0x50`, 4 bytes).
-        Started,
-        /// §5.2 Not acknowledged (code `0x90`, 4 bytes).
-        Nak,
-        /// §5.3 Mode set (code `0x3000`, 5 bytes).
-        SetModeAck,
-        /// §5.4 Status (code `0x4000`, 13 bytes).
-        Status {
-            error_bits: StatusBits,
-            freshness: u8,
-            /// \[°\]
-            position: Angle,
-            firmware: rt::Ascii<3>,
-            /// \[°C\]
-            temperature: Celsius,
-        },
+        Started(response::Started),
+        Nak(response::Nak),
+        SetModeAck(response::SetModeAck),
+        Status(response::Status),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -538,10 +645,10 @@ pub mod mini {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Started => 0,
-                Self::Nak => 1,
-                Self::SetModeAck => 2,
-                Self::Status { .. } => 3,
+                Self::Started(_) => 0,
+                Self::Nak(_) => 1,
+                Self::SetModeAck(_) => 2,
+                Self::Status(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -558,21 +665,9 @@ pub mod mini {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Status {
-                    error_bits: v_error_bits,
-                    freshness: v_freshness,
-                    position: v_position,
-                    firmware: v_firmware,
-                    temperature: v_temperature,
-                } => {
-                    f("error_bits", rt::Int(v_error_bits.raw() as i64));
-                    f("freshness", rt::Int(*v_freshness as i64));
-                    f("position", rt::Int(v_position.raw() as i64));
-                    f("firmware", rt::Text(&v_firmware[..]));
-                    f("temperature", rt::Int(v_temperature.raw() as i64));
-                }
+                Self::Status(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -586,34 +681,36 @@ pub mod mini {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Started => {
+                Self::Started(response::Started {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
                         3,
                         address.wrapping_add(0xFA),
                     )
                 }
-                Self::Nak => {
+                Self::Nak(response::Nak {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
                         3,
                         address.wrapping_add(0x3A),
                     )
                 }
-                Self::SetModeAck => {
+                Self::SetModeAck(response::SetModeAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?,
                         4,
                         address.wrapping_add(0xDA),
                     )
                 }
-                Self::Status {
-                    error_bits: v_error_bits,
-                    freshness: v_freshness,
-                    position: v_position,
-                    firmware: v_firmware,
-                    temperature: v_temperature,
-                } => {
+                Self::Status(
+                    response::Status {
+                        error_bits: v_error_bits,
+                        freshness: v_freshness,
+                        position: v_position,
+                        firmware: v_firmware,
+                        temperature: v_temperature,
+                    },
+                ) => {
                     let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x40, 0x00])?;
                     out[11] = 0x00;
                     out[4] = v_error_bits.raw();
@@ -677,11 +774,12 @@ pub mod mini {
             if frame.len() >= 4 {
                 match rt::code(frame, 2, 1) {
                     0x50 => {
-                        return rt::fixed::<4>(frame, &response::STARTED)
-                            .map(|_| Self::Started);
+                        return rt::fixed::<4>(frame, &response::Started::DESC)
+                            .map(|_| Self::Started(response::Started));
                     }
                     0x90 => {
-                        return rt::fixed::<4>(frame, &response::NAK).map(|_| Self::Nak);
+                        return rt::fixed::<4>(frame, &response::Nak::DESC)
+                            .map(|_| Self::Nak(response::Nak));
                     }
                     _ => {}
                 }
@@ -691,22 +789,26 @@ pub mod mini {
             }
             match rt::code(frame, 2, 2) {
                 0x3000 => {
-                    rt::fixed::<5>(frame, &response::SET_MODE_ACK)
-                        .map(|_| Self::SetModeAck)
+                    rt::fixed::<5>(frame, &response::SetModeAck::DESC)
+                        .map(|_| Self::SetModeAck(response::SetModeAck))
                 }
                 0x4000 => {
-                    let frame = rt::fixed::<13>(frame, &response::STATUS)?;
+                    let frame = rt::fixed::<13>(frame, &response::Status::DESC)?;
                     let field_1: u16 = u16::from_le_bytes([frame[5], frame[6]]);
                     rt::equal(&response::STATUS_RESERVED, 11, frame[11], 0x0)?;
-                    rt::Ok(Self::Status {
-                        error_bits: StatusBits::from_raw(frame[4]),
-                        freshness: (field_1 >> 12) as u8,
-                        position: Angle::from_raw(
-                            (((field_1 & 0xFFF) as u16) << 4) as i16 >> 4,
-                        ),
-                        firmware: rt::Ascii(frame[7..10].try_into().unwrap_or([0; 3])),
-                        temperature: Celsius::from_raw(frame[10]),
-                    })
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error_bits: StatusBits::from_raw(frame[4]),
+                            freshness: (field_1 >> 12) as u8,
+                            position: Angle::from_raw(
+                                (((field_1 & 0xFFF) as u16) << 4) as i16 >> 4,
+                            ),
+                            firmware: rt::Ascii(
+                                frame[7..10].try_into().unwrap_or([0; 3]),
+                            ),
+                            temperature: Celsius::from_raw(frame[10]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, true)),
             }
@@ -719,25 +821,31 @@ pub mod mini {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "started" => rt::Ok(Self::Started),
-                "nak" => rt::Ok(Self::Nak),
-                "set_mode_ack" => rt::Ok(Self::SetModeAck),
+                "started" => rt::Ok(Self::Started(response::Started)),
+                "nak" => rt::Ok(Self::Nak(response::Nak)),
+                "set_mode_ack" => rt::Ok(Self::SetModeAck(response::SetModeAck)),
                 "status" => {
-                    rt::Ok(Self::Status {
-                        error_bits: StatusBits::from_raw(
-                            rt::get(&mut field, "error_bits")?,
-                        ),
-                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
-                            as u8,
-                        position: Angle::from_raw(
-                            rt::field_int("position", field("position"), -2048, 2047)?
-                                as i16,
-                        ),
-                        firmware: rt::text(&mut field, "firmware")?,
-                        temperature: Celsius::from_raw(
-                            rt::get(&mut field, "temperature")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error_bits: StatusBits::from_raw(
+                                rt::get(&mut field, "error_bits")?,
+                            ),
+                            freshness: rt::field_int(
+                                "freshness",
+                                field("freshness"),
+                                0,
+                                15,
+                            )? as u8,
+                            position: Angle::from_raw(
+                                rt::field_int("position", field("position"), -2048, 2047)?
+                                    as i16,
+                            ),
+                            firmware: rt::text(&mut field, "firmware")?,
+                            temperature: Celsius::from_raw(
+                                rt::get(&mut field, "temperature")?,
+                            ),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -829,7 +937,7 @@ pub mod mini {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::Nak)
+            matches!(response, Response::Nak(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
@@ -891,45 +999,77 @@ pub mod mini {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Mini>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `go_to`, code 0x2000
-        pub const GO_TO: MessageDesc = MessageDesc::new("go_to", 0x2000, 2, &[9]);
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 Go to capacitance (code `0x2000`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GoTo {
+            /// \[pF\] Valid raw range 0..=100000.
+            pub target: super::Capacitance,
+        }
+        /// §4.2 Set mode (code `0x3000`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetMode {
+            pub mode: super::Mode,
+        }
+        /// §4.3 Get status (code `0x4000`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GetStatus {
+            /// Valid raw range 0..=3.
+            pub channel: u8,
+        }
         /// `go_to.target`
         pub const GO_TO_TARGET: FieldDesc = FieldDesc::new("go_to", "target");
-        /// `set_mode`, code 0x3000
-        pub const SET_MODE: MessageDesc = MessageDesc::new("set_mode", 0x3000, 2, &[6]);
-        /// `get_status`, code 0x4000
-        pub const GET_STATUS: MessageDesc = MessageDesc::new(
-            "get_status",
-            0x4000,
-            2,
-            &[6],
-        );
         /// `get_status.channel`
         pub const GET_STATUS_CHANNEL: FieldDesc = FieldDesc::new(
             "get_status",
             "channel",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `started`, code 0x50
-        pub const STARTED: MessageDesc = MessageDesc::new("started", 0x50, 1, &[4]);
-        /// `nak`, code 0x90
-        pub const NAK: MessageDesc = MessageDesc::new("nak", 0x90, 1, &[4]);
-        /// `set_mode_ack`, code 0x3000
-        pub const SET_MODE_ACK: MessageDesc = MessageDesc::new(
-            "set_mode_ack",
-            0x3000,
-            2,
-            &[5],
-        );
-        /// `status`, code 0x4000
-        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x4000, 2, &[13]);
+        use ::busspec_runtime::FieldDesc;
+        /// §5.1 Movement started (code `0x50`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Started;
+        /// §5.2 Not acknowledged (code `0x90`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Nak;
+        /// §5.3 Mode set (code `0x3000`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetModeAck;
+        /// §5.4 Status (code `0x4000`, 13 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Status {
+            pub error_bits: super::StatusBits,
+            pub freshness: u8,
+            /// \[°\]
+            pub position: super::Angle,
+            pub firmware: super::rt::Ascii<3>,
+            /// \[°C\]
+            pub temperature: super::Celsius,
+        }
         /// `status.reserved`
         pub const STATUS_RESERVED: FieldDesc = FieldDesc::new("status", "reserved");
     }

@@ -80,18 +80,61 @@ pub mod mini_crc {
     pub fn checksum(bytes: &[u8]) -> u16 {
         CRC.checksum(bytes)
     }
+    impl request::ReadRuntimeHours {
+        pub const NAME: &'static str = "read_runtime_hours";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x69,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadRuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadRuntimeMinSec {
+        pub const NAME: &'static str = "read_runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x69,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadRuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCounter {
+        pub const NAME: &'static str = "set_counter";
+        pub const CODE: &'static [u8] = &[0x70];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x70,
+            1,
+            &[6],
+        );
+        pub const COUNTER: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("counter", rt::Int(self.counter as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCounter(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Read run-time hours (code `0x69`, 6 bytes).
-        ReadRuntimeHours,
-        /// §3.2 Read run-time minutes and seconds (code `0x69`, 6 bytes).
-        ReadRuntimeMinSec,
-        /// §3.3 Set counter (code `0x70`, 6 bytes).
-        SetCounter { counter: u16 },
+        ReadRuntimeHours(request::ReadRuntimeHours),
+        ReadRuntimeMinSec(request::ReadRuntimeMinSec),
+        SetCounter(request::SetCounter),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -103,9 +146,9 @@ pub mod mini_crc {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadRuntimeHours => 0,
-                Self::ReadRuntimeMinSec => 1,
-                Self::SetCounter { .. } => 2,
+                Self::ReadRuntimeHours(_) => 0,
+                Self::ReadRuntimeMinSec(_) => 1,
+                Self::SetCounter(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -122,11 +165,9 @@ pub mod mini_crc {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetCounter { counter: v_counter } => {
-                    f("counter", rt::Int(*v_counter as i64))
-                }
+                Self::SetCounter(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -141,15 +182,23 @@ pub mod mini_crc {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ReadRuntimeHours => {
-                    rt::encode_broadcast(address, 0x1F, &request::READ_RUNTIME_HOURS)?;
+                Self::ReadRuntimeHours(request::ReadRuntimeHours {}) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::ReadRuntimeHours::DESC,
+                    )?;
                     rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
-                Self::ReadRuntimeMinSec => {
-                    rt::encode_broadcast(address, 0x1F, &request::READ_RUNTIME_MIN_SEC)?;
+                Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec {}) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::ReadRuntimeMinSec::DESC,
+                    )?;
                     rt::head(out, &[0x69, address, 0x02, 0x00]).len()
                 }
-                Self::SetCounter { counter: v_counter } => {
+                Self::SetCounter(request::SetCounter { counter: v_counter }) => {
                     let out = rt::head(out, &[0x70, address]);
                     out[2..4].copy_from_slice(&v_counter.to_be_bytes());
                     out.len()
@@ -180,7 +229,11 @@ pub mod mini_crc {
                 0x69 => {
                     let mut g = rt::Group::new(frame, 0x69, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
-                        rt::no_broadcast(frame[1], 0x1F, &request::READ_RUNTIME_HOURS)?;
+                        rt::no_broadcast(
+                            frame[1],
+                            0x1F,
+                            &request::ReadRuntimeHours::DESC,
+                        )?;
                         rt::equal(
                             &request::READ_RUNTIME_HOURS_SELECTOR,
                             2,
@@ -188,13 +241,13 @@ pub mod mini_crc {
                             0x1,
                         )?;
                         rt::equal(&request::READ_RUNTIME_HOURS_ARG2, 3, frame[3], 0x0)?;
-                        rt::Ok(Self::ReadRuntimeHours)
+                        rt::Ok(Self::ReadRuntimeHours(request::ReadRuntimeHours))
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_RUNTIME_MIN_SEC,
+                            &request::ReadRuntimeMinSec::DESC,
                         )?;
                         rt::equal(
                             &request::READ_RUNTIME_MIN_SEC_SELECTOR,
@@ -208,15 +261,17 @@ pub mod mini_crc {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadRuntimeMinSec)
+                        rt::Ok(Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec))
                     });
-                    g.end(&request::READ_RUNTIME_HOURS)
+                    g.end(&request::ReadRuntimeHours::DESC)
                 }
                 0x70 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_COUNTER)?;
-                    rt::Ok(Self::SetCounter {
-                        counter: u16::from_be_bytes([frame[2], frame[3]]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &request::SetCounter::DESC)?;
+                    rt::Ok(
+                        Self::SetCounter(request::SetCounter {
+                            counter: u16::from_be_bytes([frame[2], frame[3]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, false)),
             }
@@ -229,12 +284,18 @@ pub mod mini_crc {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_runtime_hours" => rt::Ok(Self::ReadRuntimeHours),
-                "read_runtime_min_sec" => rt::Ok(Self::ReadRuntimeMinSec),
+                "read_runtime_hours" => {
+                    rt::Ok(Self::ReadRuntimeHours(request::ReadRuntimeHours))
+                }
+                "read_runtime_min_sec" => {
+                    rt::Ok(Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec))
+                }
                 "set_counter" => {
-                    rt::Ok(Self::SetCounter {
-                        counter: rt::get(&mut field, "counter")?,
-                    })
+                    rt::Ok(
+                        Self::SetCounter(request::SetCounter {
+                            counter: rt::get(&mut field, "counter")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -300,26 +361,71 @@ pub mod mini_crc {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::RuntimeHours {
+        pub const NAME: &'static str = "runtime_hours";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x22,
+            1,
+            &[6],
+        );
+        pub const HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("hours", rt::Int(self.hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl response::RuntimeMinSec {
+        pub const NAME: &'static str = "runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x22,
+            1,
+            &[6],
+        );
+        pub const MINUTES: rt::Range<usize> = 2..3;
+        pub const SECONDS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("minutes", rt::Int(self.minutes as i64));
+            f("seconds", rt::Int(self.seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::CounterEcho {
+        pub const NAME: &'static str = "counter_echo";
+        pub const CODE: &'static [u8] = &[0x70];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x70,
+            1,
+            &[6],
+        );
+        pub const COUNTER: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("counter", rt::Int(self.counter as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CounterEcho(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3.1 Run-time hours (code `0x22`, 6 bytes).
-        RuntimeHours {
-            /// \[h\]
-            hours: u16,
-        },
-        /// §3.2 Run-time minutes and seconds (code `0x22`, 6 bytes).
-        RuntimeMinSec {
-            /// \[min\] Valid raw range 0..=59.
-            minutes: u8,
-            /// \[s\] Valid raw range 0..=59.
-            seconds: u8,
-        },
-        /// §3.3 Counter echo (code `0x70`, 6 bytes).
-        CounterEcho { counter: u16 },
+        RuntimeHours(response::RuntimeHours),
+        RuntimeMinSec(response::RuntimeMinSec),
+        CounterEcho(response::CounterEcho),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -331,9 +437,9 @@ pub mod mini_crc {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::RuntimeHours { .. } => 0,
-                Self::RuntimeMinSec { .. } => 1,
-                Self::CounterEcho { .. } => 2,
+                Self::RuntimeHours(_) => 0,
+                Self::RuntimeMinSec(_) => 1,
+                Self::CounterEcho(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -350,18 +456,11 @@ pub mod mini_crc {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::RuntimeHours { hours: v_hours } => {
-                    f("hours", rt::Int(*v_hours as i64))
-                }
-                Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
-                    f("minutes", rt::Int(*v_minutes as i64));
-                    f("seconds", rt::Int(*v_seconds as i64));
-                }
-                Self::CounterEcho { counter: v_counter } => {
-                    f("counter", rt::Int(*v_counter as i64))
-                }
+                Self::RuntimeHours(m) => m.visit(f),
+                Self::RuntimeMinSec(m) => m.visit(f),
+                Self::CounterEcho(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -375,12 +474,14 @@ pub mod mini_crc {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::RuntimeHours { hours: v_hours } => {
+                Self::RuntimeHours(response::RuntimeHours { hours: v_hours }) => {
                     let out = rt::head(out, &[0x22, address]);
                     out[2..4].copy_from_slice(&v_hours.to_be_bytes());
                     out.len()
                 }
-                Self::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds } => {
+                Self::RuntimeMinSec(
+                    response::RuntimeMinSec { minutes: v_minutes, seconds: v_seconds },
+                ) => {
                     rt::encode_in_range("minutes", v_minutes, 0, 59)?;
                     rt::encode_in_range("seconds", v_seconds, 0, 59)?;
                     let out = rt::head(out, &[0x22, address]);
@@ -388,7 +489,7 @@ pub mod mini_crc {
                     out[3] = v_seconds;
                     out.len()
                 }
-                Self::CounterEcho { counter: v_counter } => {
+                Self::CounterEcho(response::CounterEcho { counter: v_counter }) => {
                     let out = rt::head(out, &[0x70, address]);
                     out[2..4].copy_from_slice(&v_counter.to_be_bytes());
                     out.len()
@@ -451,16 +552,18 @@ pub mod mini_crc {
                     let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
                     g.ambiguous(
                         asked & 1 != 0,
-                        &response::RUNTIME_HOURS,
+                        &response::RuntimeHours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::RuntimeHours {
-                                hours: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::RuntimeHours(response::RuntimeHours {
+                                    hours: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 1 & 1 != 0,
-                        &response::RUNTIME_MIN_SEC,
+                        &response::RuntimeMinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
                                 &response::RUNTIME_MIN_SEC_MINUTES,
@@ -476,19 +579,23 @@ pub mod mini_crc {
                                 0,
                                 59,
                             )?;
-                            rt::Ok(Self::RuntimeMinSec {
-                                minutes: frame[2],
-                                seconds: frame[3],
-                            })
+                            rt::Ok(
+                                Self::RuntimeMinSec(response::RuntimeMinSec {
+                                    minutes: frame[2],
+                                    seconds: frame[3],
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::RUNTIME_HOURS)
+                    g.end(&response::RuntimeHours::DESC)
                 }
                 0x70 => {
-                    let frame = rt::fixed::<6>(frame, &response::COUNTER_ECHO)?;
-                    rt::Ok(Self::CounterEcho {
-                        counter: u16::from_be_bytes([frame[2], frame[3]]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::CounterEcho::DESC)?;
+                    rt::Ok(
+                        Self::CounterEcho(response::CounterEcho {
+                            counter: u16::from_be_bytes([frame[2], frame[3]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, true)),
             }
@@ -502,20 +609,26 @@ pub mod mini_crc {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "runtime_hours" => {
-                    rt::Ok(Self::RuntimeHours {
-                        hours: rt::get(&mut field, "hours")?,
-                    })
+                    rt::Ok(
+                        Self::RuntimeHours(response::RuntimeHours {
+                            hours: rt::get(&mut field, "hours")?,
+                        }),
+                    )
                 }
                 "runtime_min_sec" => {
-                    rt::Ok(Self::RuntimeMinSec {
-                        minutes: rt::get(&mut field, "minutes")?,
-                        seconds: rt::get(&mut field, "seconds")?,
-                    })
+                    rt::Ok(
+                        Self::RuntimeMinSec(response::RuntimeMinSec {
+                            minutes: rt::get(&mut field, "minutes")?,
+                            seconds: rt::get(&mut field, "seconds")?,
+                        }),
+                    )
                 }
                 "counter_echo" => {
-                    rt::Ok(Self::CounterEcho {
-                        counter: rt::get(&mut field, "counter")?,
-                    })
+                    rt::Ok(
+                        Self::CounterEcho(response::CounterEcho {
+                            counter: rt::get(&mut field, "counter")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -644,17 +757,29 @@ pub mod mini_crc {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MiniCrc>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_runtime_hours`, code 0x69
-        pub const READ_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
-            "read_runtime_hours",
-            0x69,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Read run-time hours (code `0x69`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadRuntimeHours;
+        /// §3.2 Read run-time minutes and seconds (code `0x69`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadRuntimeMinSec;
+        /// §3.3 Set counter (code `0x70`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetCounter {
+            pub counter: u16,
+        }
         /// `read_runtime_hours.selector`
         pub const READ_RUNTIME_HOURS_SELECTOR: FieldDesc = FieldDesc::new(
             "read_runtime_hours",
@@ -664,13 +789,6 @@ pub mod mini_crc {
         pub const READ_RUNTIME_HOURS_ARG2: FieldDesc = FieldDesc::new(
             "read_runtime_hours",
             "arg2",
-        );
-        /// `read_runtime_min_sec`, code 0x69
-        pub const READ_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
-            "read_runtime_min_sec",
-            0x69,
-            1,
-            &[6],
         );
         /// `read_runtime_min_sec.selector`
         pub const READ_RUNTIME_MIN_SEC_SELECTOR: FieldDesc = FieldDesc::new(
@@ -682,31 +800,38 @@ pub mod mini_crc {
             "read_runtime_min_sec",
             "arg2",
         );
-        /// `set_counter`, code 0x70
-        pub const SET_COUNTER: MessageDesc = MessageDesc::new(
-            "set_counter",
-            0x70,
-            1,
-            &[6],
-        );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `runtime_hours`, code 0x22
-        pub const RUNTIME_HOURS: MessageDesc = MessageDesc::new(
-            "runtime_hours",
-            0x22,
-            1,
-            &[6],
-        );
-        /// `runtime_min_sec`, code 0x22
-        pub const RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
-            "runtime_min_sec",
-            0x22,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Run-time hours (code `0x22`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RuntimeHours {
+            /// \[h\]
+            pub hours: u16,
+        }
+        /// §3.2 Run-time minutes and seconds (code `0x22`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RuntimeMinSec {
+            /// \[min\] Valid raw range 0..=59.
+            pub minutes: u8,
+            /// \[s\] Valid raw range 0..=59.
+            pub seconds: u8,
+        }
+        /// §3.3 Counter echo (code `0x70`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct CounterEcho {
+            pub counter: u16,
+        }
         /// `runtime_min_sec.minutes`
         pub const RUNTIME_MIN_SEC_MINUTES: FieldDesc = FieldDesc::new(
             "runtime_min_sec",
@@ -716,13 +841,6 @@ pub mod mini_crc {
         pub const RUNTIME_MIN_SEC_SECONDS: FieldDesc = FieldDesc::new(
             "runtime_min_sec",
             "seconds",
-        );
-        /// `counter_echo`, code 0x70
-        pub const COUNTER_ECHO: MessageDesc = MessageDesc::new(
-            "counter_echo",
-            0x70,
-            1,
-            &[6],
         );
     }
 }

@@ -249,56 +249,184 @@ pub mod modbus {
         min: 1,
         max: 123,
     };
+    impl request::ReadCoils {
+        pub const NAME: &'static str = "read_coils";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[8],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadCoils(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadDiscreteInputs {
+        pub const NAME: &'static str = "read_discrete_inputs";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[8],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadDiscreteInputs(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadHoldingRegisters {
+        pub const NAME: &'static str = "read_holding_registers";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[8],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadHoldingRegisters(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadInputRegisters {
+        pub const NAME: &'static str = "read_input_registers";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[8],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadInputRegisters(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteSingleCoil {
+        pub const NAME: &'static str = "write_single_coil";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x05,
+            1,
+            &[8],
+        );
+        pub const OUTPUT_ADDRESS: rt::Range<usize> = 2..4;
+        pub const OUTPUT_VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("output_address", rt::Int(self.output_address as i64));
+            f("output_value", rt::Int(self.output_value.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteSingleCoil(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteSingleRegister {
+        pub const NAME: &'static str = "write_single_register";
+        pub const CODE: &'static [u8] = &[0x06];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x06,
+            1,
+            &[8],
+        );
+        pub const REGISTER_ADDRESS: rt::Range<usize> = 2..4;
+        pub const REGISTER_VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register_address", rt::Int(self.register_address as i64));
+            f("register_value", rt::Int(self.register_value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteSingleRegister(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteMultipleCoils {
+        pub const NAME: &'static str = "write_multiple_coils";
+        pub const CODE: &'static [u8] = &[0x0F];
+        pub const MIN_LEN: usize = 10;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0F,
+            1,
+            &[9],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+            f("outputs", rt::List(self.outputs.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteMultipleCoils(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteMultipleRegisters {
+        pub const NAME: &'static str = "write_multiple_registers";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const MIN_LEN: usize = 11;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[9],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteMultipleRegisters(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §6.1 01 (0x01) Read Coils (code `0x01`, 8 bytes). Read 1 to 2000 contiguous coils.
-        ReadCoils {
-            starting_address: u16,
-            /// Quantity of coils, 1 to 2000 (0x7D0) Valid raw range 1..=2000.
-            quantity: u16,
-        },
-        /// §6.2 02 (0x02) Read Discrete Inputs (code `0x02`, 8 bytes). Read 1 to 2000 contiguous discrete inputs.
-        ReadDiscreteInputs {
-            starting_address: u16,
-            /// Quantity of inputs, 1 to 2000 (0x7D0) Valid raw range 1..=2000.
-            quantity: u16,
-        },
-        /// §6.3 03 (0x03) Read Holding Registers (code `0x03`, 8 bytes). Read 1 to 125 contiguous holding registers.
-        ReadHoldingRegisters {
-            starting_address: u16,
-            /// Quantity of registers, 1 to 125 (0x7D) Valid raw range 1..=125.
-            quantity: u16,
-        },
-        /// §6.4 04 (0x04) Read Input Registers (code `0x04`, 8 bytes). Read 1 to 125 contiguous input registers.
-        ReadInputRegisters {
-            starting_address: u16,
-            /// Quantity of input registers, 1 to 125 (0x7D) Valid raw range 1..=125.
-            quantity: u16,
-        },
-        /// §6.5 05 (0x05) Write Single Coil (code `0x05`, 8 bytes). Force one coil ON or OFF. The normal response echoes the request.
-        WriteSingleCoil { output_address: u16, output_value: CoilState },
-        /// §6.6 06 (0x06) Write Single Register (code `0x06`, 8 bytes). Write one holding register. The normal response echoes the request.
-        WriteSingleRegister { register_address: u16, register_value: u16 },
-        /// §6.11 15 (0x0F) Write Multiple Coils (code `0x0F`, 10 to 255 bytes). Force 1 to 1968 contiguous coils; bit 0 of the first byte is the coil at the starting address, unused bits of the last byte are zero.
-        WriteMultipleCoils {
-            starting_address: u16,
-            /// Quantity of outputs, 1 to 1968 (0x7B0) Valid raw range 1..=1968.
-            quantity: u16,
-            /// Outputs value, least significant bit first
-            outputs: rt::Bits<246>,
-        },
-        /// §6.12 16 (0x10) Write Multiple registers (code `0x10`, 11 to 255 bytes). Write 1 to 123 contiguous holding registers.
-        WriteMultipleRegisters {
-            starting_address: u16,
-            /// Quantity of registers, 1 to 123 (0x7B) Valid raw range 1..=123.
-            quantity: u16,
-            /// Registers value
-            values: rt::Repeated<u16, 123>,
-        },
+        ReadCoils(request::ReadCoils),
+        ReadDiscreteInputs(request::ReadDiscreteInputs),
+        ReadHoldingRegisters(request::ReadHoldingRegisters),
+        ReadInputRegisters(request::ReadInputRegisters),
+        WriteSingleCoil(request::WriteSingleCoil),
+        WriteSingleRegister(request::WriteSingleRegister),
+        WriteMultipleCoils(request::WriteMultipleCoils),
+        WriteMultipleRegisters(request::WriteMultipleRegisters),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -315,14 +443,14 @@ pub mod modbus {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadCoils { .. } => 0,
-                Self::ReadDiscreteInputs { .. } => 1,
-                Self::ReadHoldingRegisters { .. } => 2,
-                Self::ReadInputRegisters { .. } => 3,
-                Self::WriteSingleCoil { .. } => 4,
-                Self::WriteSingleRegister { .. } => 5,
-                Self::WriteMultipleCoils { .. } => 6,
-                Self::WriteMultipleRegisters { .. } => 7,
+                Self::ReadCoils(_) => 0,
+                Self::ReadDiscreteInputs(_) => 1,
+                Self::ReadHoldingRegisters(_) => 2,
+                Self::ReadInputRegisters(_) => 3,
+                Self::WriteSingleCoil(_) => 4,
+                Self::WriteSingleRegister(_) => 5,
+                Self::WriteMultipleCoils(_) => 6,
+                Self::WriteMultipleRegisters(_) => 7,
             }
         }
         /// The spec's snake_case name of this message.
@@ -336,11 +464,15 @@ pub mod modbus {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteMultipleCoils { outputs: v_outputs, .. } => {
+                Self::WriteMultipleCoils(
+                    request::WriteMultipleCoils { outputs: v_outputs, .. },
+                ) => {
                     REPEAT_WRITE_MULTIPLE_COILS.base
                         + REPEAT_WRITE_MULTIPLE_COILS.bytes_of(v_outputs.len())
                 }
-                Self::WriteMultipleRegisters { values: v_values, .. } => {
+                Self::WriteMultipleRegisters(
+                    request::WriteMultipleRegisters { values: v_values, .. },
+                ) => {
                     REPEAT_WRITE_MULTIPLE_REGISTERS.base
                         + REPEAT_WRITE_MULTIPLE_REGISTERS.bytes_of(v_values.len())
                 }
@@ -349,68 +481,16 @@ pub mod modbus {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ReadCoils {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::ReadDiscreteInputs {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::ReadHoldingRegisters {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::ReadInputRegisters {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::WriteSingleCoil {
-                    output_address: v_output_address,
-                    output_value: v_output_value,
-                } => {
-                    f("output_address", rt::Int(*v_output_address as i64));
-                    f("output_value", rt::Int(v_output_value.raw() as i64));
-                }
-                Self::WriteSingleRegister {
-                    register_address: v_register_address,
-                    register_value: v_register_value,
-                } => {
-                    f("register_address", rt::Int(*v_register_address as i64));
-                    f("register_value", rt::Int(*v_register_value as i64));
-                }
-                Self::WriteMultipleCoils {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                    outputs: v_outputs,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                    f("outputs", rt::List(v_outputs.elements()));
-                }
-                Self::WriteMultipleRegisters {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                    values: v_values,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                    f("values", rt::List(v_values.elements()));
-                }
+                Self::ReadCoils(m) => m.visit(f),
+                Self::ReadDiscreteInputs(m) => m.visit(f),
+                Self::ReadHoldingRegisters(m) => m.visit(f),
+                Self::ReadInputRegisters(m) => m.visit(f),
+                Self::WriteSingleCoil(m) => m.visit(f),
+                Self::WriteSingleRegister(m) => m.visit(f),
+                Self::WriteMultipleCoils(m) => m.visit(f),
+                Self::WriteMultipleRegisters(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -423,36 +503,46 @@ pub mod modbus {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadCoils {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    rt::encode_broadcast(address, 0x00, &request::READ_COILS)?;
+                Self::ReadCoils(
+                    request::ReadCoils {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                    },
+                ) => {
+                    rt::encode_broadcast(address, 0x00, &request::ReadCoils::DESC)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x01])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
                     out.len()
                 }
-                Self::ReadDiscreteInputs {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    rt::encode_broadcast(address, 0x00, &request::READ_DISCRETE_INPUTS)?;
+                Self::ReadDiscreteInputs(
+                    request::ReadDiscreteInputs {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                    },
+                ) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x00,
+                        &request::ReadDiscreteInputs::DESC,
+                    )?;
                     rt::encode_in_range("quantity", v_quantity, 1, 2000)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x02])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
                     out.len()
                 }
-                Self::ReadHoldingRegisters {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
+                Self::ReadHoldingRegisters(
+                    request::ReadHoldingRegisters {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                    },
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x00,
-                        &request::READ_HOLDING_REGISTERS,
+                        &request::ReadHoldingRegisters::DESC,
                     )?;
                     rt::encode_in_range("quantity", v_quantity, 1, 125)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x03])?;
@@ -460,40 +550,52 @@ pub mod modbus {
                     out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
                     out.len()
                 }
-                Self::ReadInputRegisters {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    rt::encode_broadcast(address, 0x00, &request::READ_INPUT_REGISTERS)?;
+                Self::ReadInputRegisters(
+                    request::ReadInputRegisters {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                    },
+                ) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x00,
+                        &request::ReadInputRegisters::DESC,
+                    )?;
                     rt::encode_in_range("quantity", v_quantity, 1, 125)?;
                     let out = rt::frame_mut::<8>(buf, &[address, 0x04])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
                     out.len()
                 }
-                Self::WriteSingleCoil {
-                    output_address: v_output_address,
-                    output_value: v_output_value,
-                } => {
+                Self::WriteSingleCoil(
+                    request::WriteSingleCoil {
+                        output_address: v_output_address,
+                        output_value: v_output_value,
+                    },
+                ) => {
                     let out = rt::frame_mut::<8>(buf, &[address, 0x05])?;
                     out[2..4].copy_from_slice(&v_output_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_output_value.raw().to_be_bytes());
                     out.len()
                 }
-                Self::WriteSingleRegister {
-                    register_address: v_register_address,
-                    register_value: v_register_value,
-                } => {
+                Self::WriteSingleRegister(
+                    request::WriteSingleRegister {
+                        register_address: v_register_address,
+                        register_value: v_register_value,
+                    },
+                ) => {
                     let out = rt::frame_mut::<8>(buf, &[address, 0x06])?;
                     out[2..4].copy_from_slice(&v_register_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_register_value.to_be_bytes());
                     out.len()
                 }
-                Self::WriteMultipleCoils {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                    outputs: v_outputs,
-                } => {
+                Self::WriteMultipleCoils(
+                    request::WriteMultipleCoils {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                        outputs: v_outputs,
+                    },
+                ) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 1968)?;
                     let frame_len = REPEAT_WRITE_MULTIPLE_COILS
                         .encode_len(v_outputs.len())?;
@@ -513,11 +615,13 @@ pub mod modbus {
                     rt::write_bits(&v_outputs, &mut out[7..]);
                     out.len()
                 }
-                Self::WriteMultipleRegisters {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                    values: v_values,
-                } => {
+                Self::WriteMultipleRegisters(
+                    request::WriteMultipleRegisters {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                        values: v_values,
+                    },
+                ) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 123)?;
                     let frame_len = REPEAT_WRITE_MULTIPLE_REGISTERS
                         .encode_len(v_values.len())?;
@@ -561,18 +665,26 @@ pub mod modbus {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_COILS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_COILS)?;
+                    let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(&request::READ_COILS_QUANTITY, 4, field_1, 1, 2000)?;
-                    rt::Ok(Self::ReadCoils {
-                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
-                    })
+                    rt::Ok(
+                        Self::ReadCoils(request::ReadCoils {
+                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            quantity: field_1,
+                        }),
+                    )
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_DISCRETE_INPUTS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_DISCRETE_INPUTS)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::ReadDiscreteInputs::DESC)?;
+                    rt::no_broadcast(
+                        frame[0],
+                        0x00,
+                        &request::ReadDiscreteInputs::DESC,
+                    )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::READ_DISCRETE_INPUTS_QUANTITY,
@@ -581,14 +693,22 @@ pub mod modbus {
                         1,
                         2000,
                     )?;
-                    rt::Ok(Self::ReadDiscreteInputs {
-                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
-                    })
+                    rt::Ok(
+                        Self::ReadDiscreteInputs(request::ReadDiscreteInputs {
+                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            quantity: field_1,
+                        }),
+                    )
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_HOLDING_REGISTERS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_HOLDING_REGISTERS)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::ReadHoldingRegisters::DESC)?;
+                    rt::no_broadcast(
+                        frame[0],
+                        0x00,
+                        &request::ReadHoldingRegisters::DESC,
+                    )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::READ_HOLDING_REGISTERS_QUANTITY,
@@ -597,14 +717,22 @@ pub mod modbus {
                         1,
                         125,
                     )?;
-                    rt::Ok(Self::ReadHoldingRegisters {
-                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
-                    })
+                    rt::Ok(
+                        Self::ReadHoldingRegisters(request::ReadHoldingRegisters {
+                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            quantity: field_1,
+                        }),
+                    )
                 }
                 0x04 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_INPUT_REGISTERS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_INPUT_REGISTERS)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::ReadInputRegisters::DESC)?;
+                    rt::no_broadcast(
+                        frame[0],
+                        0x00,
+                        &request::ReadInputRegisters::DESC,
+                    )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::READ_INPUT_REGISTERS_QUANTITY,
@@ -613,26 +741,34 @@ pub mod modbus {
                         1,
                         125,
                     )?;
-                    rt::Ok(Self::ReadInputRegisters {
-                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
-                    })
+                    rt::Ok(
+                        Self::ReadInputRegisters(request::ReadInputRegisters {
+                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            quantity: field_1,
+                        }),
+                    )
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_COIL)?;
-                    rt::Ok(Self::WriteSingleCoil {
-                        output_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        output_value: CoilState::from_raw(
-                            u16::from_be_bytes([frame[4], frame[5]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<8>(frame, &request::WriteSingleCoil::DESC)?;
+                    rt::Ok(
+                        Self::WriteSingleCoil(request::WriteSingleCoil {
+                            output_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            output_value: CoilState::from_raw(
+                                u16::from_be_bytes([frame[4], frame[5]]),
+                            ),
+                        }),
+                    )
                 }
                 0x06 => {
-                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_REGISTER)?;
-                    rt::Ok(Self::WriteSingleRegister {
-                        register_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        register_value: u16::from_be_bytes([frame[4], frame[5]]),
-                    })
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::WriteSingleRegister::DESC)?;
+                    rt::Ok(
+                        Self::WriteSingleRegister(request::WriteSingleRegister {
+                            register_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            register_value: u16::from_be_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 0x0F => {
                     let (frame, elements, count) = REPEAT_WRITE_MULTIPLE_COILS
@@ -653,12 +789,14 @@ pub mod modbus {
                         (1, 8),
                         "ceil(quantity / 8)",
                     )?;
-                    rt::Ok(Self::WriteMultipleCoils {
-                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
-                        outputs: REPEAT_WRITE_MULTIPLE_COILS
-                            .bits::<246>(elements, count)?,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleCoils(request::WriteMultipleCoils {
+                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            quantity: field_1,
+                            outputs: REPEAT_WRITE_MULTIPLE_COILS
+                                .bits::<246>(elements, count)?,
+                        }),
+                    )
                 }
                 0x10 => {
                     let (frame, elements, _) = REPEAT_WRITE_MULTIPLE_REGISTERS
@@ -679,12 +817,14 @@ pub mod modbus {
                         (2, 1),
                         "2 × quantity",
                     )?;
-                    rt::Ok(Self::WriteMultipleRegisters {
-                        starting_address: u16::from_be_bytes([frame[2], frame[3]]),
-                        quantity: field_1,
-                        values: REPEAT_WRITE_MULTIPLE_REGISTERS
-                            .elements::<u16, 123>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleRegisters(request::WriteMultipleRegisters {
+                            starting_address: u16::from_be_bytes([frame[2], frame[3]]),
+                            quantity: field_1,
+                            values: REPEAT_WRITE_MULTIPLE_REGISTERS
+                                .elements::<u16, 123>(elements, false, false)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, false)),
             }
@@ -698,56 +838,72 @@ pub mod modbus {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read_coils" => {
-                    rt::Ok(Self::ReadCoils {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::ReadCoils(request::ReadCoils {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "read_discrete_inputs" => {
-                    rt::Ok(Self::ReadDiscreteInputs {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::ReadDiscreteInputs(request::ReadDiscreteInputs {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "read_holding_registers" => {
-                    rt::Ok(Self::ReadHoldingRegisters {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::ReadHoldingRegisters(request::ReadHoldingRegisters {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "read_input_registers" => {
-                    rt::Ok(Self::ReadInputRegisters {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::ReadInputRegisters(request::ReadInputRegisters {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "write_single_coil" => {
-                    rt::Ok(Self::WriteSingleCoil {
-                        output_address: rt::get(&mut field, "output_address")?,
-                        output_value: CoilState::from_raw(
-                            rt::get(&mut field, "output_value")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::WriteSingleCoil(request::WriteSingleCoil {
+                            output_address: rt::get(&mut field, "output_address")?,
+                            output_value: CoilState::from_raw(
+                                rt::get(&mut field, "output_value")?,
+                            ),
+                        }),
+                    )
                 }
                 "write_single_register" => {
-                    rt::Ok(Self::WriteSingleRegister {
-                        register_address: rt::get(&mut field, "register_address")?,
-                        register_value: rt::get(&mut field, "register_value")?,
-                    })
+                    rt::Ok(
+                        Self::WriteSingleRegister(request::WriteSingleRegister {
+                            register_address: rt::get(&mut field, "register_address")?,
+                            register_value: rt::get(&mut field, "register_value")?,
+                        }),
+                    )
                 }
                 "write_multiple_coils" => {
-                    rt::Ok(Self::WriteMultipleCoils {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                        outputs: rt::list_bits::<246>(&mut field, "outputs")?,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleCoils(request::WriteMultipleCoils {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                            outputs: rt::list_bits::<246>(&mut field, "outputs")?,
+                        }),
+                    )
                 }
                 "write_multiple_registers" => {
-                    rt::Ok(Self::WriteMultipleRegisters {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                        values: rt::list::<u16, 123>(&mut field, "values", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleRegisters(request::WriteMultipleRegisters {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                            values: rt::list::<u16, 123>(&mut field, "values", 0, 65535)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -811,9 +967,8 @@ pub mod modbus {
                 },
                 reply: rt::Reply::Required,
                 may_retry: matches!(
-                    self, Request::ReadCoils { .. } | Request::ReadDiscreteInputs { .. }
-                    | Request::ReadHoldingRegisters { .. } | Request::ReadInputRegisters
-                    { .. }
+                    self, Request::ReadCoils(_) | Request::ReadDiscreteInputs(_) |
+                    Request::ReadHoldingRegisters(_) | Request::ReadInputRegisters(_)
                 ),
             }
         }
@@ -882,56 +1037,324 @@ pub mod modbus {
         min: 1,
         max: 125,
     };
+    impl response::ReadCoilsReply {
+        pub const NAME: &'static str = "read_coils_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[5],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("coils", rt::List(self.coils.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadCoilsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadCoilsException {
+        pub const NAME: &'static str = "read_coils_exception";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x81,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadCoilsException(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadDiscreteInputsReply {
+        pub const NAME: &'static str = "read_discrete_inputs_reply";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[5],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("inputs", rt::List(self.inputs.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadDiscreteInputsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadDiscreteInputsException {
+        pub const NAME: &'static str = "read_discrete_inputs_exception";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x82,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadDiscreteInputsException(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadHoldingRegistersReply {
+        pub const NAME: &'static str = "read_holding_registers_reply";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[5],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("registers", rt::List(self.registers.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadHoldingRegistersReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadHoldingRegistersException {
+        pub const NAME: &'static str = "read_holding_registers_exception";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x83,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadHoldingRegistersException(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadInputRegistersReply {
+        pub const NAME: &'static str = "read_input_registers_reply";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 255;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[5],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("registers", rt::List(self.registers.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadInputRegistersReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadInputRegistersException {
+        pub const NAME: &'static str = "read_input_registers_exception";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x84,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadInputRegistersException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleCoilReply {
+        pub const NAME: &'static str = "write_single_coil_reply";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x05,
+            1,
+            &[8],
+        );
+        pub const OUTPUT_ADDRESS: rt::Range<usize> = 2..4;
+        pub const OUTPUT_VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("output_address", rt::Int(self.output_address as i64));
+            f("output_value", rt::Int(self.output_value.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleCoilReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleCoilException {
+        pub const NAME: &'static str = "write_single_coil_exception";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x85,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleCoilException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleRegisterReply {
+        pub const NAME: &'static str = "write_single_register_reply";
+        pub const CODE: &'static [u8] = &[0x06];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x06,
+            1,
+            &[8],
+        );
+        pub const REGISTER_ADDRESS: rt::Range<usize> = 2..4;
+        pub const REGISTER_VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register_address", rt::Int(self.register_address as i64));
+            f("register_value", rt::Int(self.register_value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleRegisterReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteSingleRegisterException {
+        pub const NAME: &'static str = "write_single_register_exception";
+        pub const CODE: &'static [u8] = &[0x86];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x86,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteSingleRegisterException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleCoilsReply {
+        pub const NAME: &'static str = "write_multiple_coils_reply";
+        pub const CODE: &'static [u8] = &[0x0F];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0F,
+            1,
+            &[8],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleCoilsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleCoilsException {
+        pub const NAME: &'static str = "write_multiple_coils_exception";
+        pub const CODE: &'static [u8] = &[0x8F];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x8F,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleCoilsException(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleRegistersReply {
+        pub const NAME: &'static str = "write_multiple_registers_reply";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[8],
+        );
+        pub const STARTING_ADDRESS: rt::Range<usize> = 2..4;
+        pub const QUANTITY: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("starting_address", rt::Int(self.starting_address as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleRegistersReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteMultipleRegistersException {
+        pub const NAME: &'static str = "write_multiple_registers_exception";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[5],
+        );
+        pub const EXCEPTION_CODE: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("exception_code", rt::Int(self.exception_code.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteMultipleRegistersException(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §6.1 Read Coils response (code `0x01`, 6 to 255 bytes). Coil status, eight to a byte, the first coil in bit 0 of the first byte; the last byte padded with zeros.
-        ReadCoilsReply {
-            /// Coil status
-            coils: rt::Bits<250>,
-        },
-        /// §6.1 Read Coils error (code `0x81`, 5 bytes). Error code 0x81 (function code + 0x80).
-        ReadCoilsException { exception_code: ExceptionCode },
-        /// §6.2 Read Discrete Inputs response (code `0x02`, 6 to 255 bytes). Input status, eight to a byte, the first input in bit 0 of the first byte; the last byte padded with zeros.
-        ReadDiscreteInputsReply {
-            /// Input status
-            inputs: rt::Bits<250>,
-        },
-        /// §6.2 Read Discrete Inputs error (code `0x82`, 5 bytes). Error code 0x82.
-        ReadDiscreteInputsException { exception_code: ExceptionCode },
-        /// §6.3 Read Holding Registers response (code `0x03`, 7 to 255 bytes). Register values, two bytes each.
-        ReadHoldingRegistersReply {
-            /// Register value
-            registers: rt::Repeated<u16, 125>,
-        },
-        /// §6.3 Read Holding Registers error (code `0x83`, 5 bytes). Error code 0x83.
-        ReadHoldingRegistersException { exception_code: ExceptionCode },
-        /// §6.4 Read Input Registers response (code `0x04`, 7 to 255 bytes). Input register values, two bytes each.
-        ReadInputRegistersReply {
-            /// Input Registers
-            registers: rt::Repeated<u16, 125>,
-        },
-        /// §6.4 Read Input Registers error (code `0x84`, 5 bytes). Error code 0x84.
-        ReadInputRegistersException { exception_code: ExceptionCode },
-        /// §6.5 Write Single Coil response (code `0x05`, 8 bytes). The normal response is an echo of the request.
-        WriteSingleCoilReply { output_address: u16, output_value: CoilState },
-        /// §6.5 Write Single Coil error (code `0x85`, 5 bytes). Error code 0x85.
-        WriteSingleCoilException { exception_code: ExceptionCode },
-        /// §6.6 Write Single Register response (code `0x06`, 8 bytes). The normal response is an echo of the request.
-        WriteSingleRegisterReply { register_address: u16, register_value: u16 },
-        /// §6.6 Write Single Register error (code `0x86`, 5 bytes). Error code 0x86.
-        WriteSingleRegisterException { exception_code: ExceptionCode },
-        /// §6.11 Write Multiple Coils response (code `0x0F`, 8 bytes). Function code, starting address and quantity of coils forced.
-        WriteMultipleCoilsReply { starting_address: u16, quantity: u16 },
-        /// §6.11 Write Multiple Coils error (code `0x8F`, 5 bytes). Error code 0x8F.
-        WriteMultipleCoilsException { exception_code: ExceptionCode },
-        /// §6.12 Write Multiple registers response (code `0x10`, 8 bytes). Function code, starting address and quantity of registers written.
-        WriteMultipleRegistersReply { starting_address: u16, quantity: u16 },
-        /// §6.12 Write Multiple registers error (code `0x90`, 5 bytes). Error code 0x90.
-        WriteMultipleRegistersException { exception_code: ExceptionCode },
+        ReadCoilsReply(response::ReadCoilsReply),
+        ReadCoilsException(response::ReadCoilsException),
+        ReadDiscreteInputsReply(response::ReadDiscreteInputsReply),
+        ReadDiscreteInputsException(response::ReadDiscreteInputsException),
+        ReadHoldingRegistersReply(response::ReadHoldingRegistersReply),
+        ReadHoldingRegistersException(response::ReadHoldingRegistersException),
+        ReadInputRegistersReply(response::ReadInputRegistersReply),
+        ReadInputRegistersException(response::ReadInputRegistersException),
+        WriteSingleCoilReply(response::WriteSingleCoilReply),
+        WriteSingleCoilException(response::WriteSingleCoilException),
+        WriteSingleRegisterReply(response::WriteSingleRegisterReply),
+        WriteSingleRegisterException(response::WriteSingleRegisterException),
+        WriteMultipleCoilsReply(response::WriteMultipleCoilsReply),
+        WriteMultipleCoilsException(response::WriteMultipleCoilsException),
+        WriteMultipleRegistersReply(response::WriteMultipleRegistersReply),
+        WriteMultipleRegistersException(response::WriteMultipleRegistersException),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -956,22 +1379,22 @@ pub mod modbus {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadCoilsReply { .. } => 0,
-                Self::ReadCoilsException { .. } => 1,
-                Self::ReadDiscreteInputsReply { .. } => 2,
-                Self::ReadDiscreteInputsException { .. } => 3,
-                Self::ReadHoldingRegistersReply { .. } => 4,
-                Self::ReadHoldingRegistersException { .. } => 5,
-                Self::ReadInputRegistersReply { .. } => 6,
-                Self::ReadInputRegistersException { .. } => 7,
-                Self::WriteSingleCoilReply { .. } => 8,
-                Self::WriteSingleCoilException { .. } => 9,
-                Self::WriteSingleRegisterReply { .. } => 10,
-                Self::WriteSingleRegisterException { .. } => 11,
-                Self::WriteMultipleCoilsReply { .. } => 12,
-                Self::WriteMultipleCoilsException { .. } => 13,
-                Self::WriteMultipleRegistersReply { .. } => 14,
-                Self::WriteMultipleRegistersException { .. } => 15,
+                Self::ReadCoilsReply(_) => 0,
+                Self::ReadCoilsException(_) => 1,
+                Self::ReadDiscreteInputsReply(_) => 2,
+                Self::ReadDiscreteInputsException(_) => 3,
+                Self::ReadHoldingRegistersReply(_) => 4,
+                Self::ReadHoldingRegistersException(_) => 5,
+                Self::ReadInputRegistersReply(_) => 6,
+                Self::ReadInputRegistersException(_) => 7,
+                Self::WriteSingleCoilReply(_) => 8,
+                Self::WriteSingleCoilException(_) => 9,
+                Self::WriteSingleRegisterReply(_) => 10,
+                Self::WriteSingleRegisterException(_) => 11,
+                Self::WriteMultipleCoilsReply(_) => 12,
+                Self::WriteMultipleCoilsException(_) => 13,
+                Self::WriteMultipleRegistersReply(_) => 14,
+                Self::WriteMultipleRegistersException(_) => 15,
             }
         }
         /// The spec's snake_case name of this message.
@@ -985,19 +1408,25 @@ pub mod modbus {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadCoilsReply { coils: v_coils, .. } => {
+                Self::ReadCoilsReply(response::ReadCoilsReply { coils: v_coils, .. }) => {
                     REPEAT_READ_COILS_REPLY.base
                         + REPEAT_READ_COILS_REPLY.bytes_of(v_coils.len())
                 }
-                Self::ReadDiscreteInputsReply { inputs: v_inputs, .. } => {
+                Self::ReadDiscreteInputsReply(
+                    response::ReadDiscreteInputsReply { inputs: v_inputs, .. },
+                ) => {
                     REPEAT_READ_DISCRETE_INPUTS_REPLY.base
                         + REPEAT_READ_DISCRETE_INPUTS_REPLY.bytes_of(v_inputs.len())
                 }
-                Self::ReadHoldingRegistersReply { registers: v_registers, .. } => {
+                Self::ReadHoldingRegistersReply(
+                    response::ReadHoldingRegistersReply { registers: v_registers, .. },
+                ) => {
                     REPEAT_READ_HOLDING_REGISTERS_REPLY.base
                         + REPEAT_READ_HOLDING_REGISTERS_REPLY.bytes_of(v_registers.len())
                 }
-                Self::ReadInputRegistersReply { registers: v_registers, .. } => {
+                Self::ReadInputRegistersReply(
+                    response::ReadInputRegistersReply { registers: v_registers, .. },
+                ) => {
                     REPEAT_READ_INPUT_REGISTERS_REPLY.base
                         + REPEAT_READ_INPUT_REGISTERS_REPLY.bytes_of(v_registers.len())
                 }
@@ -1006,72 +1435,24 @@ pub mod modbus {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ReadCoilsReply { coils: v_coils } => {
-                    f("coils", rt::List(v_coils.elements()))
-                }
-                Self::ReadCoilsException { exception_code: v_exception_code } => {
-                    f("exception_code", rt::Int(v_exception_code.raw() as i64))
-                }
-                Self::ReadDiscreteInputsReply { inputs: v_inputs } => {
-                    f("inputs", rt::List(v_inputs.elements()))
-                }
-                Self::ReadDiscreteInputsException {
-                    exception_code: v_exception_code,
-                } => f("exception_code", rt::Int(v_exception_code.raw() as i64)),
-                Self::ReadHoldingRegistersReply { registers: v_registers } => {
-                    f("registers", rt::List(v_registers.elements()))
-                }
-                Self::ReadHoldingRegistersException {
-                    exception_code: v_exception_code,
-                } => f("exception_code", rt::Int(v_exception_code.raw() as i64)),
-                Self::ReadInputRegistersReply { registers: v_registers } => {
-                    f("registers", rt::List(v_registers.elements()))
-                }
-                Self::ReadInputRegistersException {
-                    exception_code: v_exception_code,
-                } => f("exception_code", rt::Int(v_exception_code.raw() as i64)),
-                Self::WriteSingleCoilReply {
-                    output_address: v_output_address,
-                    output_value: v_output_value,
-                } => {
-                    f("output_address", rt::Int(*v_output_address as i64));
-                    f("output_value", rt::Int(v_output_value.raw() as i64));
-                }
-                Self::WriteSingleCoilException { exception_code: v_exception_code } => {
-                    f("exception_code", rt::Int(v_exception_code.raw() as i64))
-                }
-                Self::WriteSingleRegisterReply {
-                    register_address: v_register_address,
-                    register_value: v_register_value,
-                } => {
-                    f("register_address", rt::Int(*v_register_address as i64));
-                    f("register_value", rt::Int(*v_register_value as i64));
-                }
-                Self::WriteSingleRegisterException {
-                    exception_code: v_exception_code,
-                } => f("exception_code", rt::Int(v_exception_code.raw() as i64)),
-                Self::WriteMultipleCoilsReply {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::WriteMultipleCoilsException {
-                    exception_code: v_exception_code,
-                } => f("exception_code", rt::Int(v_exception_code.raw() as i64)),
-                Self::WriteMultipleRegistersReply {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
-                    f("starting_address", rt::Int(*v_starting_address as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::WriteMultipleRegistersException {
-                    exception_code: v_exception_code,
-                } => f("exception_code", rt::Int(v_exception_code.raw() as i64)),
+                Self::ReadCoilsReply(m) => m.visit(f),
+                Self::ReadCoilsException(m) => m.visit(f),
+                Self::ReadDiscreteInputsReply(m) => m.visit(f),
+                Self::ReadDiscreteInputsException(m) => m.visit(f),
+                Self::ReadHoldingRegistersReply(m) => m.visit(f),
+                Self::ReadHoldingRegistersException(m) => m.visit(f),
+                Self::ReadInputRegistersReply(m) => m.visit(f),
+                Self::ReadInputRegistersException(m) => m.visit(f),
+                Self::WriteSingleCoilReply(m) => m.visit(f),
+                Self::WriteSingleCoilException(m) => m.visit(f),
+                Self::WriteSingleRegisterReply(m) => m.visit(f),
+                Self::WriteSingleRegisterException(m) => m.visit(f),
+                Self::WriteMultipleCoilsReply(m) => m.visit(f),
+                Self::WriteMultipleCoilsException(m) => m.visit(f),
+                Self::WriteMultipleRegistersReply(m) => m.visit(f),
+                Self::WriteMultipleRegistersException(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -1084,7 +1465,7 @@ pub mod modbus {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadCoilsReply { coils: v_coils } => {
+                Self::ReadCoilsReply(response::ReadCoilsReply { coils: v_coils }) => {
                     let frame_len = REPEAT_READ_COILS_REPLY.encode_len(v_coils.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[address, 0x01])?;
                     out[2] = rt::fits(
@@ -1096,12 +1477,16 @@ pub mod modbus {
                     rt::write_bits(&v_coils, &mut out[3..]);
                     out.len()
                 }
-                Self::ReadCoilsException { exception_code: v_exception_code } => {
+                Self::ReadCoilsException(
+                    response::ReadCoilsException { exception_code: v_exception_code },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x81])?;
                     out[2] = v_exception_code.raw();
                     out.len()
                 }
-                Self::ReadDiscreteInputsReply { inputs: v_inputs } => {
+                Self::ReadDiscreteInputsReply(
+                    response::ReadDiscreteInputsReply { inputs: v_inputs },
+                ) => {
                     let frame_len = REPEAT_READ_DISCRETE_INPUTS_REPLY
                         .encode_len(v_inputs.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[address, 0x02])?;
@@ -1115,14 +1500,18 @@ pub mod modbus {
                     rt::write_bits(&v_inputs, &mut out[3..]);
                     out.len()
                 }
-                Self::ReadDiscreteInputsException {
-                    exception_code: v_exception_code,
-                } => {
+                Self::ReadDiscreteInputsException(
+                    response::ReadDiscreteInputsException {
+                        exception_code: v_exception_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x82])?;
                     out[2] = v_exception_code.raw();
                     out.len()
                 }
-                Self::ReadHoldingRegistersReply { registers: v_registers } => {
+                Self::ReadHoldingRegistersReply(
+                    response::ReadHoldingRegistersReply { registers: v_registers },
+                ) => {
                     let frame_len = REPEAT_READ_HOLDING_REGISTERS_REPLY
                         .encode_len(v_registers.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[address, 0x03])?;
@@ -1136,14 +1525,18 @@ pub mod modbus {
                     rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
                     out.len()
                 }
-                Self::ReadHoldingRegistersException {
-                    exception_code: v_exception_code,
-                } => {
+                Self::ReadHoldingRegistersException(
+                    response::ReadHoldingRegistersException {
+                        exception_code: v_exception_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x83])?;
                     out[2] = v_exception_code.raw();
                     out.len()
                 }
-                Self::ReadInputRegistersReply { registers: v_registers } => {
+                Self::ReadInputRegistersReply(
+                    response::ReadInputRegistersReply { registers: v_registers },
+                ) => {
                     let frame_len = REPEAT_READ_INPUT_REGISTERS_REPLY
                         .encode_len(v_registers.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[address, 0x04])?;
@@ -1157,71 +1550,91 @@ pub mod modbus {
                     rt::write_elements(v_registers.as_slice(), 2, false, &mut out[3..]);
                     out.len()
                 }
-                Self::ReadInputRegistersException {
-                    exception_code: v_exception_code,
-                } => {
+                Self::ReadInputRegistersException(
+                    response::ReadInputRegistersException {
+                        exception_code: v_exception_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x84])?;
                     out[2] = v_exception_code.raw();
                     out.len()
                 }
-                Self::WriteSingleCoilReply {
-                    output_address: v_output_address,
-                    output_value: v_output_value,
-                } => {
+                Self::WriteSingleCoilReply(
+                    response::WriteSingleCoilReply {
+                        output_address: v_output_address,
+                        output_value: v_output_value,
+                    },
+                ) => {
                     let out = rt::frame_mut::<8>(buf, &[address, 0x05])?;
                     out[2..4].copy_from_slice(&v_output_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_output_value.raw().to_be_bytes());
                     out.len()
                 }
-                Self::WriteSingleCoilException { exception_code: v_exception_code } => {
+                Self::WriteSingleCoilException(
+                    response::WriteSingleCoilException {
+                        exception_code: v_exception_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x85])?;
                     out[2] = v_exception_code.raw();
                     out.len()
                 }
-                Self::WriteSingleRegisterReply {
-                    register_address: v_register_address,
-                    register_value: v_register_value,
-                } => {
+                Self::WriteSingleRegisterReply(
+                    response::WriteSingleRegisterReply {
+                        register_address: v_register_address,
+                        register_value: v_register_value,
+                    },
+                ) => {
                     let out = rt::frame_mut::<8>(buf, &[address, 0x06])?;
                     out[2..4].copy_from_slice(&v_register_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_register_value.to_be_bytes());
                     out.len()
                 }
-                Self::WriteSingleRegisterException {
-                    exception_code: v_exception_code,
-                } => {
+                Self::WriteSingleRegisterException(
+                    response::WriteSingleRegisterException {
+                        exception_code: v_exception_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x86])?;
                     out[2] = v_exception_code.raw();
                     out.len()
                 }
-                Self::WriteMultipleCoilsReply {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
+                Self::WriteMultipleCoilsReply(
+                    response::WriteMultipleCoilsReply {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                    },
+                ) => {
                     let out = rt::frame_mut::<8>(buf, &[address, 0x0F])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
                     out.len()
                 }
-                Self::WriteMultipleCoilsException {
-                    exception_code: v_exception_code,
-                } => {
+                Self::WriteMultipleCoilsException(
+                    response::WriteMultipleCoilsException {
+                        exception_code: v_exception_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x8F])?;
                     out[2] = v_exception_code.raw();
                     out.len()
                 }
-                Self::WriteMultipleRegistersReply {
-                    starting_address: v_starting_address,
-                    quantity: v_quantity,
-                } => {
+                Self::WriteMultipleRegistersReply(
+                    response::WriteMultipleRegistersReply {
+                        starting_address: v_starting_address,
+                        quantity: v_quantity,
+                    },
+                ) => {
                     let out = rt::frame_mut::<8>(buf, &[address, 0x10])?;
                     out[2..4].copy_from_slice(&v_starting_address.to_be_bytes());
                     out[4..6].copy_from_slice(&v_quantity.to_be_bytes());
                     out.len()
                 }
-                Self::WriteMultipleRegistersException {
-                    exception_code: v_exception_code,
-                } => {
+                Self::WriteMultipleRegistersException(
+                    response::WriteMultipleRegistersException {
+                        exception_code: v_exception_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<5>(buf, &[address, 0x90])?;
                     out[2] = v_exception_code.raw();
                     out.len()
@@ -1280,139 +1693,173 @@ pub mod modbus {
                 0x01 => {
                     let (_, elements, count) = REPEAT_READ_COILS_REPLY
                         .split::<3>(frame)?;
-                    rt::Ok(Self::ReadCoilsReply {
-                        coils: REPEAT_READ_COILS_REPLY.bits::<250>(elements, count)?,
-                    })
+                    rt::Ok(
+                        Self::ReadCoilsReply(response::ReadCoilsReply {
+                            coils: REPEAT_READ_COILS_REPLY.bits::<250>(elements, count)?,
+                        }),
+                    )
                 }
                 0x81 => {
-                    let frame = rt::fixed::<5>(frame, &response::READ_COILS_EXCEPTION)?;
-                    rt::Ok(Self::ReadCoilsException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::ReadCoilsException::DESC)?;
+                    rt::Ok(
+                        Self::ReadCoilsException(response::ReadCoilsException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 0x02 => {
                     let (_, elements, count) = REPEAT_READ_DISCRETE_INPUTS_REPLY
                         .split::<3>(frame)?;
-                    rt::Ok(Self::ReadDiscreteInputsReply {
-                        inputs: REPEAT_READ_DISCRETE_INPUTS_REPLY
-                            .bits::<250>(elements, count)?,
-                    })
+                    rt::Ok(
+                        Self::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
+                            inputs: REPEAT_READ_DISCRETE_INPUTS_REPLY
+                                .bits::<250>(elements, count)?,
+                        }),
+                    )
                 }
                 0x82 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::READ_DISCRETE_INPUTS_EXCEPTION)?;
-                    rt::Ok(Self::ReadDiscreteInputsException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    >(frame, &response::ReadDiscreteInputsException::DESC)?;
+                    rt::Ok(
+                        Self::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 0x03 => {
                     let (_, elements, _) = REPEAT_READ_HOLDING_REGISTERS_REPLY
                         .split::<3>(frame)?;
-                    rt::Ok(Self::ReadHoldingRegistersReply {
-                        registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .elements::<u16, 125>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
+                            registers: REPEAT_READ_HOLDING_REGISTERS_REPLY
+                                .elements::<u16, 125>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x83 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::READ_HOLDING_REGISTERS_EXCEPTION)?;
-                    rt::Ok(Self::ReadHoldingRegistersException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    >(frame, &response::ReadHoldingRegistersException::DESC)?;
+                    rt::Ok(
+                        Self::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 0x04 => {
                     let (_, elements, _) = REPEAT_READ_INPUT_REGISTERS_REPLY
                         .split::<3>(frame)?;
-                    rt::Ok(Self::ReadInputRegistersReply {
-                        registers: REPEAT_READ_INPUT_REGISTERS_REPLY
-                            .elements::<u16, 125>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::ReadInputRegistersReply(response::ReadInputRegistersReply {
+                            registers: REPEAT_READ_INPUT_REGISTERS_REPLY
+                                .elements::<u16, 125>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x84 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::READ_INPUT_REGISTERS_EXCEPTION)?;
-                    rt::Ok(Self::ReadInputRegistersException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    >(frame, &response::ReadInputRegistersException::DESC)?;
+                    rt::Ok(
+                        Self::ReadInputRegistersException(response::ReadInputRegistersException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 0x05 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_SINGLE_COIL_REPLY)?;
+                    >(frame, &response::WriteSingleCoilReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(Self::WriteSingleCoilReply {
-                        output_address: field_0,
-                        output_value: CoilState::from_raw(field_1),
-                    })
+                    rt::Ok(
+                        Self::WriteSingleCoilReply(response::WriteSingleCoilReply {
+                            output_address: field_0,
+                            output_value: CoilState::from_raw(field_1),
+                        }),
+                    )
                 }
                 0x85 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_SINGLE_COIL_EXCEPTION)?;
-                    rt::Ok(Self::WriteSingleCoilException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    >(frame, &response::WriteSingleCoilException::DESC)?;
+                    rt::Ok(
+                        Self::WriteSingleCoilException(response::WriteSingleCoilException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 0x06 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_SINGLE_REGISTER_REPLY)?;
+                    >(frame, &response::WriteSingleRegisterReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(Self::WriteSingleRegisterReply {
-                        register_address: field_0,
-                        register_value: field_1,
-                    })
+                    rt::Ok(
+                        Self::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
+                            register_address: field_0,
+                            register_value: field_1,
+                        }),
+                    )
                 }
                 0x86 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_SINGLE_REGISTER_EXCEPTION)?;
-                    rt::Ok(Self::WriteSingleRegisterException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    >(frame, &response::WriteSingleRegisterException::DESC)?;
+                    rt::Ok(
+                        Self::WriteSingleRegisterException(response::WriteSingleRegisterException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 0x0F => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_MULTIPLE_COILS_REPLY)?;
+                    >(frame, &response::WriteMultipleCoilsReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(Self::WriteMultipleCoilsReply {
-                        starting_address: field_0,
-                        quantity: field_1,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
+                            starting_address: field_0,
+                            quantity: field_1,
+                        }),
+                    )
                 }
                 0x8F => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_MULTIPLE_COILS_EXCEPTION)?;
-                    rt::Ok(Self::WriteMultipleCoilsException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    >(frame, &response::WriteMultipleCoilsException::DESC)?;
+                    rt::Ok(
+                        Self::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 0x10 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_REPLY)?;
+                    >(frame, &response::WriteMultipleRegistersReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
-                    rt::Ok(Self::WriteMultipleRegistersReply {
-                        starting_address: field_0,
-                        quantity: field_1,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
+                            starting_address: field_0,
+                            quantity: field_1,
+                        }),
+                    )
                 }
                 0x90 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_EXCEPTION)?;
-                    rt::Ok(Self::WriteMultipleRegistersException {
-                        exception_code: ExceptionCode::from_raw(frame[2]),
-                    })
+                    >(frame, &response::WriteMultipleRegistersException::DESC)?;
+                    rt::Ok(
+                        Self::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
+                            exception_code: ExceptionCode::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 1, 2, true)),
             }
@@ -1426,112 +1873,144 @@ pub mod modbus {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read_coils_reply" => {
-                    rt::Ok(Self::ReadCoilsReply {
-                        coils: rt::list_bits::<250>(&mut field, "coils")?,
-                    })
+                    rt::Ok(
+                        Self::ReadCoilsReply(response::ReadCoilsReply {
+                            coils: rt::list_bits::<250>(&mut field, "coils")?,
+                        }),
+                    )
                 }
                 "read_coils_exception" => {
-                    rt::Ok(Self::ReadCoilsException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::ReadCoilsException(response::ReadCoilsException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 "read_discrete_inputs_reply" => {
-                    rt::Ok(Self::ReadDiscreteInputsReply {
-                        inputs: rt::list_bits::<250>(&mut field, "inputs")?,
-                    })
+                    rt::Ok(
+                        Self::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
+                            inputs: rt::list_bits::<250>(&mut field, "inputs")?,
+                        }),
+                    )
                 }
                 "read_discrete_inputs_exception" => {
-                    rt::Ok(Self::ReadDiscreteInputsException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 "read_holding_registers_reply" => {
-                    rt::Ok(Self::ReadHoldingRegistersReply {
-                        registers: rt::list::<
-                            u16,
-                            125,
-                        >(&mut field, "registers", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
+                            registers: rt::list::<
+                                u16,
+                                125,
+                            >(&mut field, "registers", 0, 65535)?,
+                        }),
+                    )
                 }
                 "read_holding_registers_exception" => {
-                    rt::Ok(Self::ReadHoldingRegistersException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 "read_input_registers_reply" => {
-                    rt::Ok(Self::ReadInputRegistersReply {
-                        registers: rt::list::<
-                            u16,
-                            125,
-                        >(&mut field, "registers", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::ReadInputRegistersReply(response::ReadInputRegistersReply {
+                            registers: rt::list::<
+                                u16,
+                                125,
+                            >(&mut field, "registers", 0, 65535)?,
+                        }),
+                    )
                 }
                 "read_input_registers_exception" => {
-                    rt::Ok(Self::ReadInputRegistersException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::ReadInputRegistersException(response::ReadInputRegistersException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 "write_single_coil_reply" => {
-                    rt::Ok(Self::WriteSingleCoilReply {
-                        output_address: rt::get(&mut field, "output_address")?,
-                        output_value: CoilState::from_raw(
-                            rt::get(&mut field, "output_value")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::WriteSingleCoilReply(response::WriteSingleCoilReply {
+                            output_address: rt::get(&mut field, "output_address")?,
+                            output_value: CoilState::from_raw(
+                                rt::get(&mut field, "output_value")?,
+                            ),
+                        }),
+                    )
                 }
                 "write_single_coil_exception" => {
-                    rt::Ok(Self::WriteSingleCoilException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::WriteSingleCoilException(response::WriteSingleCoilException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 "write_single_register_reply" => {
-                    rt::Ok(Self::WriteSingleRegisterReply {
-                        register_address: rt::get(&mut field, "register_address")?,
-                        register_value: rt::get(&mut field, "register_value")?,
-                    })
+                    rt::Ok(
+                        Self::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
+                            register_address: rt::get(&mut field, "register_address")?,
+                            register_value: rt::get(&mut field, "register_value")?,
+                        }),
+                    )
                 }
                 "write_single_register_exception" => {
-                    rt::Ok(Self::WriteSingleRegisterException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::WriteSingleRegisterException(response::WriteSingleRegisterException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 "write_multiple_coils_reply" => {
-                    rt::Ok(Self::WriteMultipleCoilsReply {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "write_multiple_coils_exception" => {
-                    rt::Ok(Self::WriteMultipleCoilsException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 "write_multiple_registers_reply" => {
-                    rt::Ok(Self::WriteMultipleRegistersReply {
-                        starting_address: rt::get(&mut field, "starting_address")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
+                            starting_address: rt::get(&mut field, "starting_address")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "write_multiple_registers_exception" => {
-                    rt::Ok(Self::WriteMultipleRegistersException {
-                        exception_code: ExceptionCode::from_raw(
-                            rt::get(&mut field, "exception_code")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
+                            exception_code: ExceptionCode::from_raw(
+                                rt::get(&mut field, "exception_code")?,
+                            ),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -1582,8 +2061,10 @@ pub mod modbus {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (
-                    &Self::ReadCoilsReply { coils: v_coils, .. },
-                    &Request::ReadCoils { quantity: r_quantity, .. },
+                    &Self::ReadCoilsReply(
+                        response::ReadCoilsReply { coils: v_coils, .. },
+                    ),
+                    &Request::ReadCoils(request::ReadCoils { quantity: r_quantity, .. }),
                 ) => {
                     rt::following(
                         &response::READ_COILS_REPLY_BYTE_COUNT,
@@ -1602,8 +2083,12 @@ pub mod modbus {
                         )?;
                 }
                 (
-                    &Self::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                    &Request::ReadDiscreteInputs { quantity: r_quantity, .. },
+                    &Self::ReadDiscreteInputsReply(
+                        response::ReadDiscreteInputsReply { inputs: v_inputs, .. },
+                    ),
+                    &Request::ReadDiscreteInputs(
+                        request::ReadDiscreteInputs { quantity: r_quantity, .. },
+                    ),
                 ) => {
                     rt::following(
                         &response::READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT,
@@ -1623,8 +2108,15 @@ pub mod modbus {
                         )?;
                 }
                 (
-                    &Self::ReadHoldingRegistersReply { registers: v_registers, .. },
-                    &Request::ReadHoldingRegisters { quantity: r_quantity, .. },
+                    &Self::ReadHoldingRegistersReply(
+                        response::ReadHoldingRegistersReply {
+                            registers: v_registers,
+                            ..
+                        },
+                    ),
+                    &Request::ReadHoldingRegisters(
+                        request::ReadHoldingRegisters { quantity: r_quantity, .. },
+                    ),
                 ) => {
                     rt::following(
                         &response::READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT,
@@ -1644,8 +2136,12 @@ pub mod modbus {
                         )?;
                 }
                 (
-                    &Self::ReadInputRegistersReply { registers: v_registers, .. },
-                    &Request::ReadInputRegisters { quantity: r_quantity, .. },
+                    &Self::ReadInputRegistersReply(
+                        response::ReadInputRegistersReply { registers: v_registers, .. },
+                    ),
+                    &Request::ReadInputRegisters(
+                        request::ReadInputRegisters { quantity: r_quantity, .. },
+                    ),
                 ) => {
                     rt::following(
                         &response::READ_INPUT_REGISTERS_REPLY_BYTE_COUNT,
@@ -1665,16 +2161,20 @@ pub mod modbus {
                         )?;
                 }
                 (
-                    &Self::WriteSingleCoilReply {
-                        output_address: v_output_address,
-                        output_value: v_output_value,
-                        ..
-                    },
-                    &Request::WriteSingleCoil {
-                        output_address: r_output_address,
-                        output_value: r_output_value,
-                        ..
-                    },
+                    &Self::WriteSingleCoilReply(
+                        response::WriteSingleCoilReply {
+                            output_address: v_output_address,
+                            output_value: v_output_value,
+                            ..
+                        },
+                    ),
+                    &Request::WriteSingleCoil(
+                        request::WriteSingleCoil {
+                            output_address: r_output_address,
+                            output_value: r_output_value,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS,
@@ -1694,16 +2194,20 @@ pub mod modbus {
                     )?;
                 }
                 (
-                    &Self::WriteSingleRegisterReply {
-                        register_address: v_register_address,
-                        register_value: v_register_value,
-                        ..
-                    },
-                    &Request::WriteSingleRegister {
-                        register_address: r_register_address,
-                        register_value: r_register_value,
-                        ..
-                    },
+                    &Self::WriteSingleRegisterReply(
+                        response::WriteSingleRegisterReply {
+                            register_address: v_register_address,
+                            register_value: v_register_value,
+                            ..
+                        },
+                    ),
+                    &Request::WriteSingleRegister(
+                        request::WriteSingleRegister {
+                            register_address: r_register_address,
+                            register_value: r_register_value,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS,
@@ -1723,16 +2227,20 @@ pub mod modbus {
                     )?;
                 }
                 (
-                    &Self::WriteMultipleCoilsReply {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                        ..
-                    },
-                    &Request::WriteMultipleCoils {
-                        starting_address: r_starting_address,
-                        quantity: r_quantity,
-                        ..
-                    },
+                    &Self::WriteMultipleCoilsReply(
+                        response::WriteMultipleCoilsReply {
+                            starting_address: v_starting_address,
+                            quantity: v_quantity,
+                            ..
+                        },
+                    ),
+                    &Request::WriteMultipleCoils(
+                        request::WriteMultipleCoils {
+                            starting_address: r_starting_address,
+                            quantity: r_quantity,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS,
@@ -1752,16 +2260,20 @@ pub mod modbus {
                     )?;
                 }
                 (
-                    &Self::WriteMultipleRegistersReply {
-                        starting_address: v_starting_address,
-                        quantity: v_quantity,
-                        ..
-                    },
-                    &Request::WriteMultipleRegisters {
-                        starting_address: r_starting_address,
-                        quantity: r_quantity,
-                        ..
-                    },
+                    &Self::WriteMultipleRegistersReply(
+                        response::WriteMultipleRegistersReply {
+                            starting_address: v_starting_address,
+                            quantity: v_quantity,
+                            ..
+                        },
+                    ),
+                    &Request::WriteMultipleRegisters(
+                        request::WriteMultipleRegisters {
+                            starting_address: r_starting_address,
+                            quantity: r_quantity,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS,
@@ -1788,25 +2300,25 @@ pub mod modbus {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::ReadCoils`], read from the frame.
+        /// [`request::ReadCoils`], read from the frame.
         ReadCoils { starting_address: u16, quantity: u16 },
-        /// [`Request::ReadDiscreteInputs`], read from the frame.
+        /// [`request::ReadDiscreteInputs`], read from the frame.
         ReadDiscreteInputs { starting_address: u16, quantity: u16 },
-        /// [`Request::ReadHoldingRegisters`], read from the frame.
+        /// [`request::ReadHoldingRegisters`], read from the frame.
         ReadHoldingRegisters { starting_address: u16, quantity: u16 },
-        /// [`Request::ReadInputRegisters`], read from the frame.
+        /// [`request::ReadInputRegisters`], read from the frame.
         ReadInputRegisters { starting_address: u16, quantity: u16 },
-        /// [`Request::WriteSingleCoil`], read from the frame.
+        /// [`request::WriteSingleCoil`], read from the frame.
         WriteSingleCoil { output_address: u16, output_value: CoilState },
-        /// [`Request::WriteSingleRegister`], read from the frame.
+        /// [`request::WriteSingleRegister`], read from the frame.
         WriteSingleRegister { register_address: u16, register_value: u16 },
-        /// [`Request::WriteMultipleCoils`], read from the frame.
+        /// [`request::WriteMultipleCoils`], read from the frame.
         WriteMultipleCoils {
             starting_address: u16,
             quantity: u16,
             outputs: rt::BitsView<'a>,
         },
-        /// [`Request::WriteMultipleRegisters`], read from the frame.
+        /// [`request::WriteMultipleRegisters`], read from the frame.
         WriteMultipleRegisters {
             starting_address: u16,
             quantity: u16,
@@ -1834,8 +2346,8 @@ pub mod modbus {
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_COILS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_COILS)?;
+                    let frame = rt::fixed::<8>(frame, &request::ReadCoils::DESC)?;
+                    rt::no_broadcast(frame[0], 0x00, &request::ReadCoils::DESC)?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(&request::READ_COILS_QUANTITY, 4, field_1, 1, 2000)?;
                     rt::Ok(Self::ReadCoils {
@@ -1844,8 +2356,14 @@ pub mod modbus {
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_DISCRETE_INPUTS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_DISCRETE_INPUTS)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::ReadDiscreteInputs::DESC)?;
+                    rt::no_broadcast(
+                        frame[0],
+                        0x00,
+                        &request::ReadDiscreteInputs::DESC,
+                    )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::READ_DISCRETE_INPUTS_QUANTITY,
@@ -1860,8 +2378,14 @@ pub mod modbus {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_HOLDING_REGISTERS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_HOLDING_REGISTERS)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::ReadHoldingRegisters::DESC)?;
+                    rt::no_broadcast(
+                        frame[0],
+                        0x00,
+                        &request::ReadHoldingRegisters::DESC,
+                    )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::READ_HOLDING_REGISTERS_QUANTITY,
@@ -1876,8 +2400,14 @@ pub mod modbus {
                     })
                 }
                 0x04 => {
-                    let frame = rt::fixed::<8>(frame, &request::READ_INPUT_REGISTERS)?;
-                    rt::no_broadcast(frame[0], 0x00, &request::READ_INPUT_REGISTERS)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::ReadInputRegisters::DESC)?;
+                    rt::no_broadcast(
+                        frame[0],
+                        0x00,
+                        &request::ReadInputRegisters::DESC,
+                    )?;
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::READ_INPUT_REGISTERS_QUANTITY,
@@ -1892,7 +2422,7 @@ pub mod modbus {
                     })
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_COIL)?;
+                    let frame = rt::fixed::<8>(frame, &request::WriteSingleCoil::DESC)?;
                     rt::Ok(Self::WriteSingleCoil {
                         output_address: u16::from_be_bytes([frame[2], frame[3]]),
                         output_value: CoilState::from_raw(
@@ -1901,7 +2431,9 @@ pub mod modbus {
                     })
                 }
                 0x06 => {
-                    let frame = rt::fixed::<8>(frame, &request::WRITE_SINGLE_REGISTER)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::WriteSingleRegister::DESC)?;
                     rt::Ok(Self::WriteSingleRegister {
                         register_address: u16::from_be_bytes([frame[2], frame[3]]),
                         register_value: u16::from_be_bytes([frame[4], frame[5]]),
@@ -1983,54 +2515,54 @@ pub mod modbus {
         pub fn to_owned(self) -> Request {
             match self {
                 Self::ReadCoils { starting_address, quantity } => {
-                    Request::ReadCoils {
+                    Request::ReadCoils(request::ReadCoils {
                         starting_address,
                         quantity,
-                    }
+                    })
                 }
                 Self::ReadDiscreteInputs { starting_address, quantity } => {
-                    Request::ReadDiscreteInputs {
+                    Request::ReadDiscreteInputs(request::ReadDiscreteInputs {
                         starting_address,
                         quantity,
-                    }
+                    })
                 }
                 Self::ReadHoldingRegisters { starting_address, quantity } => {
-                    Request::ReadHoldingRegisters {
+                    Request::ReadHoldingRegisters(request::ReadHoldingRegisters {
                         starting_address,
                         quantity,
-                    }
+                    })
                 }
                 Self::ReadInputRegisters { starting_address, quantity } => {
-                    Request::ReadInputRegisters {
+                    Request::ReadInputRegisters(request::ReadInputRegisters {
                         starting_address,
                         quantity,
-                    }
+                    })
                 }
                 Self::WriteSingleCoil { output_address, output_value } => {
-                    Request::WriteSingleCoil {
+                    Request::WriteSingleCoil(request::WriteSingleCoil {
                         output_address,
                         output_value,
-                    }
+                    })
                 }
                 Self::WriteSingleRegister { register_address, register_value } => {
-                    Request::WriteSingleRegister {
+                    Request::WriteSingleRegister(request::WriteSingleRegister {
                         register_address,
                         register_value,
-                    }
+                    })
                 }
                 Self::WriteMultipleCoils { starting_address, quantity, outputs } => {
-                    Request::WriteMultipleCoils {
+                    Request::WriteMultipleCoils(request::WriteMultipleCoils {
                         starting_address,
                         quantity,
                         outputs: outputs.to_bits(),
-                    }
+                    })
                 }
                 Self::WriteMultipleRegisters { starting_address, quantity, values } => {
-                    Request::WriteMultipleRegisters {
+                    Request::WriteMultipleRegisters(request::WriteMultipleRegisters {
                         starting_address,
                         quantity,
                         values: values.to_repeated(),
-                    }
+                    })
                 }
             }
         }
@@ -2038,37 +2570,37 @@ pub mod modbus {
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::ReadCoilsReply`], read from the frame.
+        /// [`response::ReadCoilsReply`], read from the frame.
         ReadCoilsReply { coils: rt::BitsView<'a> },
-        /// [`Response::ReadCoilsException`], read from the frame.
+        /// [`response::ReadCoilsException`], read from the frame.
         ReadCoilsException { exception_code: ExceptionCode },
-        /// [`Response::ReadDiscreteInputsReply`], read from the frame.
+        /// [`response::ReadDiscreteInputsReply`], read from the frame.
         ReadDiscreteInputsReply { inputs: rt::BitsView<'a> },
-        /// [`Response::ReadDiscreteInputsException`], read from the frame.
+        /// [`response::ReadDiscreteInputsException`], read from the frame.
         ReadDiscreteInputsException { exception_code: ExceptionCode },
-        /// [`Response::ReadHoldingRegistersReply`], read from the frame.
+        /// [`response::ReadHoldingRegistersReply`], read from the frame.
         ReadHoldingRegistersReply { registers: rt::ListView<'a, u16> },
-        /// [`Response::ReadHoldingRegistersException`], read from the frame.
+        /// [`response::ReadHoldingRegistersException`], read from the frame.
         ReadHoldingRegistersException { exception_code: ExceptionCode },
-        /// [`Response::ReadInputRegistersReply`], read from the frame.
+        /// [`response::ReadInputRegistersReply`], read from the frame.
         ReadInputRegistersReply { registers: rt::ListView<'a, u16> },
-        /// [`Response::ReadInputRegistersException`], read from the frame.
+        /// [`response::ReadInputRegistersException`], read from the frame.
         ReadInputRegistersException { exception_code: ExceptionCode },
-        /// [`Response::WriteSingleCoilReply`], read from the frame.
+        /// [`response::WriteSingleCoilReply`], read from the frame.
         WriteSingleCoilReply { output_address: u16, output_value: CoilState },
-        /// [`Response::WriteSingleCoilException`], read from the frame.
+        /// [`response::WriteSingleCoilException`], read from the frame.
         WriteSingleCoilException { exception_code: ExceptionCode },
-        /// [`Response::WriteSingleRegisterReply`], read from the frame.
+        /// [`response::WriteSingleRegisterReply`], read from the frame.
         WriteSingleRegisterReply { register_address: u16, register_value: u16 },
-        /// [`Response::WriteSingleRegisterException`], read from the frame.
+        /// [`response::WriteSingleRegisterException`], read from the frame.
         WriteSingleRegisterException { exception_code: ExceptionCode },
-        /// [`Response::WriteMultipleCoilsReply`], read from the frame.
+        /// [`response::WriteMultipleCoilsReply`], read from the frame.
         WriteMultipleCoilsReply { starting_address: u16, quantity: u16 },
-        /// [`Response::WriteMultipleCoilsException`], read from the frame.
+        /// [`response::WriteMultipleCoilsException`], read from the frame.
         WriteMultipleCoilsException { exception_code: ExceptionCode },
-        /// [`Response::WriteMultipleRegistersReply`], read from the frame.
+        /// [`response::WriteMultipleRegistersReply`], read from the frame.
         WriteMultipleRegistersReply { starting_address: u16, quantity: u16 },
-        /// [`Response::WriteMultipleRegistersException`], read from the frame.
+        /// [`response::WriteMultipleRegistersException`], read from the frame.
         WriteMultipleRegistersException { exception_code: ExceptionCode },
     }
     impl<'a> ResponseView<'a> {
@@ -2127,7 +2659,9 @@ pub mod modbus {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<5>(frame, &response::READ_COILS_EXCEPTION)?;
+                    let frame = rt::fixed::<
+                        5,
+                    >(frame, &response::ReadCoilsException::DESC)?;
                     rt::Ok(Self::ReadCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2143,7 +2677,7 @@ pub mod modbus {
                 0x82 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::READ_DISCRETE_INPUTS_EXCEPTION)?;
+                    >(frame, &response::ReadDiscreteInputsException::DESC)?;
                     rt::Ok(Self::ReadDiscreteInputsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2159,7 +2693,7 @@ pub mod modbus {
                 0x83 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::READ_HOLDING_REGISTERS_EXCEPTION)?;
+                    >(frame, &response::ReadHoldingRegistersException::DESC)?;
                     rt::Ok(Self::ReadHoldingRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2175,7 +2709,7 @@ pub mod modbus {
                 0x84 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::READ_INPUT_REGISTERS_EXCEPTION)?;
+                    >(frame, &response::ReadInputRegistersException::DESC)?;
                     rt::Ok(Self::ReadInputRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2183,7 +2717,7 @@ pub mod modbus {
                 0x05 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_SINGLE_COIL_REPLY)?;
+                    >(frame, &response::WriteSingleCoilReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleCoilReply {
@@ -2194,7 +2728,7 @@ pub mod modbus {
                 0x85 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_SINGLE_COIL_EXCEPTION)?;
+                    >(frame, &response::WriteSingleCoilException::DESC)?;
                     rt::Ok(Self::WriteSingleCoilException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2202,7 +2736,7 @@ pub mod modbus {
                 0x06 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_SINGLE_REGISTER_REPLY)?;
+                    >(frame, &response::WriteSingleRegisterReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteSingleRegisterReply {
@@ -2213,7 +2747,7 @@ pub mod modbus {
                 0x86 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_SINGLE_REGISTER_EXCEPTION)?;
+                    >(frame, &response::WriteSingleRegisterException::DESC)?;
                     rt::Ok(Self::WriteSingleRegisterException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2221,7 +2755,7 @@ pub mod modbus {
                 0x0F => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_MULTIPLE_COILS_REPLY)?;
+                    >(frame, &response::WriteMultipleCoilsReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleCoilsReply {
@@ -2232,7 +2766,7 @@ pub mod modbus {
                 0x8F => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_MULTIPLE_COILS_EXCEPTION)?;
+                    >(frame, &response::WriteMultipleCoilsException::DESC)?;
                     rt::Ok(Self::WriteMultipleCoilsException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2240,7 +2774,7 @@ pub mod modbus {
                 0x10 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_REPLY)?;
+                    >(frame, &response::WriteMultipleRegistersReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     let field_1: u16 = u16::from_be_bytes([frame[4], frame[5]]);
                     rt::Ok(Self::WriteMultipleRegistersReply {
@@ -2251,7 +2785,7 @@ pub mod modbus {
                 0x90 => {
                     let frame = rt::fixed::<
                         5,
-                    >(frame, &response::WRITE_MULTIPLE_REGISTERS_EXCEPTION)?;
+                    >(frame, &response::WriteMultipleRegistersException::DESC)?;
                     rt::Ok(Self::WriteMultipleRegistersException {
                         exception_code: ExceptionCode::from_raw(frame[2]),
                     })
@@ -2288,88 +2822,88 @@ pub mod modbus {
         pub fn to_owned(self) -> Response {
             match self {
                 Self::ReadCoilsReply { coils } => {
-                    Response::ReadCoilsReply {
+                    Response::ReadCoilsReply(response::ReadCoilsReply {
                         coils: coils.to_bits(),
-                    }
+                    })
                 }
                 Self::ReadCoilsException { exception_code } => {
-                    Response::ReadCoilsException {
+                    Response::ReadCoilsException(response::ReadCoilsException {
                         exception_code,
-                    }
+                    })
                 }
                 Self::ReadDiscreteInputsReply { inputs } => {
-                    Response::ReadDiscreteInputsReply {
+                    Response::ReadDiscreteInputsReply(response::ReadDiscreteInputsReply {
                         inputs: inputs.to_bits(),
-                    }
+                    })
                 }
                 Self::ReadDiscreteInputsException { exception_code } => {
-                    Response::ReadDiscreteInputsException {
+                    Response::ReadDiscreteInputsException(response::ReadDiscreteInputsException {
                         exception_code,
-                    }
+                    })
                 }
                 Self::ReadHoldingRegistersReply { registers } => {
-                    Response::ReadHoldingRegistersReply {
+                    Response::ReadHoldingRegistersReply(response::ReadHoldingRegistersReply {
                         registers: registers.to_repeated(),
-                    }
+                    })
                 }
                 Self::ReadHoldingRegistersException { exception_code } => {
-                    Response::ReadHoldingRegistersException {
+                    Response::ReadHoldingRegistersException(response::ReadHoldingRegistersException {
                         exception_code,
-                    }
+                    })
                 }
                 Self::ReadInputRegistersReply { registers } => {
-                    Response::ReadInputRegistersReply {
+                    Response::ReadInputRegistersReply(response::ReadInputRegistersReply {
                         registers: registers.to_repeated(),
-                    }
+                    })
                 }
                 Self::ReadInputRegistersException { exception_code } => {
-                    Response::ReadInputRegistersException {
+                    Response::ReadInputRegistersException(response::ReadInputRegistersException {
                         exception_code,
-                    }
+                    })
                 }
                 Self::WriteSingleCoilReply { output_address, output_value } => {
-                    Response::WriteSingleCoilReply {
+                    Response::WriteSingleCoilReply(response::WriteSingleCoilReply {
                         output_address,
                         output_value,
-                    }
+                    })
                 }
                 Self::WriteSingleCoilException { exception_code } => {
-                    Response::WriteSingleCoilException {
+                    Response::WriteSingleCoilException(response::WriteSingleCoilException {
                         exception_code,
-                    }
+                    })
                 }
                 Self::WriteSingleRegisterReply { register_address, register_value } => {
-                    Response::WriteSingleRegisterReply {
+                    Response::WriteSingleRegisterReply(response::WriteSingleRegisterReply {
                         register_address,
                         register_value,
-                    }
+                    })
                 }
                 Self::WriteSingleRegisterException { exception_code } => {
-                    Response::WriteSingleRegisterException {
+                    Response::WriteSingleRegisterException(response::WriteSingleRegisterException {
                         exception_code,
-                    }
+                    })
                 }
                 Self::WriteMultipleCoilsReply { starting_address, quantity } => {
-                    Response::WriteMultipleCoilsReply {
+                    Response::WriteMultipleCoilsReply(response::WriteMultipleCoilsReply {
                         starting_address,
                         quantity,
-                    }
+                    })
                 }
                 Self::WriteMultipleCoilsException { exception_code } => {
-                    Response::WriteMultipleCoilsException {
+                    Response::WriteMultipleCoilsException(response::WriteMultipleCoilsException {
                         exception_code,
-                    }
+                    })
                 }
                 Self::WriteMultipleRegistersReply { starting_address, quantity } => {
-                    Response::WriteMultipleRegistersReply {
+                    Response::WriteMultipleRegistersReply(response::WriteMultipleRegistersReply {
                         starting_address,
                         quantity,
-                    }
+                    })
                 }
                 Self::WriteMultipleRegistersException { exception_code } => {
-                    Response::WriteMultipleRegistersException {
+                    Response::WriteMultipleRegistersException(response::WriteMultipleRegistersException {
                         exception_code,
-                    }
+                    })
                 }
             }
         }
@@ -2379,7 +2913,7 @@ pub mod modbus {
             match (self, request) {
                 (
                     &Self::ReadCoilsReply { coils: v_coils, .. },
-                    &Request::ReadCoils { quantity: r_quantity, .. },
+                    &Request::ReadCoils(request::ReadCoils { quantity: r_quantity, .. }),
                 ) => {
                     rt::following(
                         &response::READ_COILS_REPLY_BYTE_COUNT,
@@ -2399,7 +2933,9 @@ pub mod modbus {
                 }
                 (
                     &Self::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                    &Request::ReadDiscreteInputs { quantity: r_quantity, .. },
+                    &Request::ReadDiscreteInputs(
+                        request::ReadDiscreteInputs { quantity: r_quantity, .. },
+                    ),
                 ) => {
                     rt::following(
                         &response::READ_DISCRETE_INPUTS_REPLY_BYTE_COUNT,
@@ -2420,7 +2956,9 @@ pub mod modbus {
                 }
                 (
                     &Self::ReadHoldingRegistersReply { registers: v_registers, .. },
-                    &Request::ReadHoldingRegisters { quantity: r_quantity, .. },
+                    &Request::ReadHoldingRegisters(
+                        request::ReadHoldingRegisters { quantity: r_quantity, .. },
+                    ),
                 ) => {
                     rt::following(
                         &response::READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT,
@@ -2441,7 +2979,9 @@ pub mod modbus {
                 }
                 (
                     &Self::ReadInputRegistersReply { registers: v_registers, .. },
-                    &Request::ReadInputRegisters { quantity: r_quantity, .. },
+                    &Request::ReadInputRegisters(
+                        request::ReadInputRegisters { quantity: r_quantity, .. },
+                    ),
                 ) => {
                     rt::following(
                         &response::READ_INPUT_REGISTERS_REPLY_BYTE_COUNT,
@@ -2466,11 +3006,13 @@ pub mod modbus {
                         output_value: v_output_value,
                         ..
                     },
-                    &Request::WriteSingleCoil {
-                        output_address: r_output_address,
-                        output_value: r_output_value,
-                        ..
-                    },
+                    &Request::WriteSingleCoil(
+                        request::WriteSingleCoil {
+                            output_address: r_output_address,
+                            output_value: r_output_value,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS,
@@ -2495,11 +3037,13 @@ pub mod modbus {
                         register_value: v_register_value,
                         ..
                     },
-                    &Request::WriteSingleRegister {
-                        register_address: r_register_address,
-                        register_value: r_register_value,
-                        ..
-                    },
+                    &Request::WriteSingleRegister(
+                        request::WriteSingleRegister {
+                            register_address: r_register_address,
+                            register_value: r_register_value,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS,
@@ -2524,11 +3068,13 @@ pub mod modbus {
                         quantity: v_quantity,
                         ..
                     },
-                    &Request::WriteMultipleCoils {
-                        starting_address: r_starting_address,
-                        quantity: r_quantity,
-                        ..
-                    },
+                    &Request::WriteMultipleCoils(
+                        request::WriteMultipleCoils {
+                            starting_address: r_starting_address,
+                            quantity: r_quantity,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS,
@@ -2553,11 +3099,13 @@ pub mod modbus {
                         quantity: v_quantity,
                         ..
                     },
-                    &Request::WriteMultipleRegisters {
-                        starting_address: r_starting_address,
-                        quantity: r_quantity,
-                        ..
-                    },
+                    &Request::WriteMultipleRegisters(
+                        request::WriteMultipleRegisters {
+                            starting_address: r_starting_address,
+                            quantity: r_quantity,
+                            ..
+                        },
+                    ),
                 ) => {
                     rt::following(
                         &response::WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS,
@@ -2635,14 +3183,14 @@ pub mod modbus {
         }
         fn is_nak(response: &Response) -> bool {
             matches!(
-                response, Response::ReadCoilsException { .. } |
-                Response::ReadDiscreteInputsException { .. } |
-                Response::ReadHoldingRegistersException { .. } |
-                Response::ReadInputRegistersException { .. } |
-                Response::WriteSingleCoilException { .. } |
-                Response::WriteSingleRegisterException { .. } |
-                Response::WriteMultipleCoilsException { .. } |
-                Response::WriteMultipleRegistersException { .. }
+                response, Response::ReadCoilsException(_) |
+                Response::ReadDiscreteInputsException(_) |
+                Response::ReadHoldingRegistersException(_) |
+                Response::ReadInputRegistersException(_) |
+                Response::WriteSingleCoilException(_) |
+                Response::WriteSingleRegisterException(_) |
+                Response::WriteMultipleCoilsException(_) |
+                Response::WriteMultipleRegistersException(_)
             )
         }
         fn checksum_ok(frame: &[u8]) -> bool {
@@ -2749,78 +3297,112 @@ pub mod modbus {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Modbus>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_coils`, code 0x01
-        pub const READ_COILS: MessageDesc = MessageDesc::new(
-            "read_coils",
-            0x01,
-            1,
-            &[8],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §6.1 01 (0x01) Read Coils (code `0x01`, 8 bytes). Read 1 to 2000 contiguous coils.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadCoils {
+            pub starting_address: u16,
+            /// Quantity of coils, 1 to 2000 (0x7D0) Valid raw range 1..=2000.
+            pub quantity: u16,
+        }
+        /// §6.2 02 (0x02) Read Discrete Inputs (code `0x02`, 8 bytes). Read 1 to 2000 contiguous discrete inputs.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadDiscreteInputs {
+            pub starting_address: u16,
+            /// Quantity of inputs, 1 to 2000 (0x7D0) Valid raw range 1..=2000.
+            pub quantity: u16,
+        }
+        /// §6.3 03 (0x03) Read Holding Registers (code `0x03`, 8 bytes). Read 1 to 125 contiguous holding registers.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadHoldingRegisters {
+            pub starting_address: u16,
+            /// Quantity of registers, 1 to 125 (0x7D) Valid raw range 1..=125.
+            pub quantity: u16,
+        }
+        /// §6.4 04 (0x04) Read Input Registers (code `0x04`, 8 bytes). Read 1 to 125 contiguous input registers.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadInputRegisters {
+            pub starting_address: u16,
+            /// Quantity of input registers, 1 to 125 (0x7D) Valid raw range 1..=125.
+            pub quantity: u16,
+        }
+        /// §6.5 05 (0x05) Write Single Coil (code `0x05`, 8 bytes). Force one coil ON or OFF. The normal response echoes the request.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteSingleCoil {
+            pub output_address: u16,
+            pub output_value: super::CoilState,
+        }
+        /// §6.6 06 (0x06) Write Single Register (code `0x06`, 8 bytes). Write one holding register. The normal response echoes the request.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteSingleRegister {
+            pub register_address: u16,
+            pub register_value: u16,
+        }
+        /// §6.11 15 (0x0F) Write Multiple Coils (code `0x0F`, 10 to 255 bytes). Force 1 to 1968 contiguous coils; bit 0 of the first byte is the coil at the starting address, unused bits of the last byte are zero.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteMultipleCoils {
+            pub starting_address: u16,
+            /// Quantity of outputs, 1 to 1968 (0x7B0) Valid raw range 1..=1968.
+            pub quantity: u16,
+            /// Outputs value, least significant bit first
+            pub outputs: super::rt::Bits<246>,
+        }
+        /// §6.12 16 (0x10) Write Multiple registers (code `0x10`, 11 to 255 bytes). Write 1 to 123 contiguous holding registers.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteMultipleRegisters {
+            pub starting_address: u16,
+            /// Quantity of registers, 1 to 123 (0x7B) Valid raw range 1..=123.
+            pub quantity: u16,
+            /// Registers value
+            pub values: super::rt::Repeated<u16, 123>,
+        }
         /// `read_coils.quantity`
         pub const READ_COILS_QUANTITY: FieldDesc = FieldDesc::new(
             "read_coils",
             "quantity",
-        );
-        /// `read_discrete_inputs`, code 0x02
-        pub const READ_DISCRETE_INPUTS: MessageDesc = MessageDesc::new(
-            "read_discrete_inputs",
-            0x02,
-            1,
-            &[8],
         );
         /// `read_discrete_inputs.quantity`
         pub const READ_DISCRETE_INPUTS_QUANTITY: FieldDesc = FieldDesc::new(
             "read_discrete_inputs",
             "quantity",
         );
-        /// `read_holding_registers`, code 0x03
-        pub const READ_HOLDING_REGISTERS: MessageDesc = MessageDesc::new(
-            "read_holding_registers",
-            0x03,
-            1,
-            &[8],
-        );
         /// `read_holding_registers.quantity`
         pub const READ_HOLDING_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
             "read_holding_registers",
             "quantity",
         );
-        /// `read_input_registers`, code 0x04
-        pub const READ_INPUT_REGISTERS: MessageDesc = MessageDesc::new(
-            "read_input_registers",
-            0x04,
-            1,
-            &[8],
-        );
         /// `read_input_registers.quantity`
         pub const READ_INPUT_REGISTERS_QUANTITY: FieldDesc = FieldDesc::new(
             "read_input_registers",
             "quantity",
-        );
-        /// `write_single_coil`, code 0x05
-        pub const WRITE_SINGLE_COIL: MessageDesc = MessageDesc::new(
-            "write_single_coil",
-            0x05,
-            1,
-            &[8],
-        );
-        /// `write_single_register`, code 0x06
-        pub const WRITE_SINGLE_REGISTER: MessageDesc = MessageDesc::new(
-            "write_single_register",
-            0x06,
-            1,
-            &[8],
-        );
-        /// `write_multiple_coils`, code 0x0F
-        pub const WRITE_MULTIPLE_COILS: MessageDesc = MessageDesc::new(
-            "write_multiple_coils",
-            0x0F,
-            1,
-            &[9],
         );
         /// `write_multiple_coils.outputs`
         pub const WRITE_MULTIPLE_COILS_OUTPUTS: FieldDesc = FieldDesc::new(
@@ -2836,13 +3418,6 @@ pub mod modbus {
         pub const WRITE_MULTIPLE_COILS_BYTE_COUNT: FieldDesc = FieldDesc::new(
             "write_multiple_coils",
             "byte_count",
-        );
-        /// `write_multiple_registers`, code 0x10
-        pub const WRITE_MULTIPLE_REGISTERS: MessageDesc = MessageDesc::new(
-            "write_multiple_registers",
-            0x10,
-            1,
-            &[9],
         );
         /// `write_multiple_registers.values`
         pub const WRITE_MULTIPLE_REGISTERS_VALUES: FieldDesc = FieldDesc::new(
@@ -2860,16 +3435,145 @@ pub mod modbus {
             "byte_count",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_coils_reply`, code 0x01
-        pub const READ_COILS_REPLY: MessageDesc = MessageDesc::new(
-            "read_coils_reply",
-            0x01,
-            1,
-            &[5],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §6.1 Read Coils response (code `0x01`, 6 to 255 bytes). Coil status, eight to a byte, the first coil in bit 0 of the first byte; the last byte padded with zeros.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadCoilsReply {
+            /// Coil status
+            pub coils: super::rt::Bits<250>,
+        }
+        /// §6.1 Read Coils error (code `0x81`, 5 bytes). Error code 0x81 (function code + 0x80).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadCoilsException {
+            pub exception_code: super::ExceptionCode,
+        }
+        /// §6.2 Read Discrete Inputs response (code `0x02`, 6 to 255 bytes). Input status, eight to a byte, the first input in bit 0 of the first byte; the last byte padded with zeros.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadDiscreteInputsReply {
+            /// Input status
+            pub inputs: super::rt::Bits<250>,
+        }
+        /// §6.2 Read Discrete Inputs error (code `0x82`, 5 bytes). Error code 0x82.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadDiscreteInputsException {
+            pub exception_code: super::ExceptionCode,
+        }
+        /// §6.3 Read Holding Registers response (code `0x03`, 7 to 255 bytes). Register values, two bytes each.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadHoldingRegistersReply {
+            /// Register value
+            pub registers: super::rt::Repeated<u16, 125>,
+        }
+        /// §6.3 Read Holding Registers error (code `0x83`, 5 bytes). Error code 0x83.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadHoldingRegistersException {
+            pub exception_code: super::ExceptionCode,
+        }
+        /// §6.4 Read Input Registers response (code `0x04`, 7 to 255 bytes). Input register values, two bytes each.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadInputRegistersReply {
+            /// Input Registers
+            pub registers: super::rt::Repeated<u16, 125>,
+        }
+        /// §6.4 Read Input Registers error (code `0x84`, 5 bytes). Error code 0x84.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadInputRegistersException {
+            pub exception_code: super::ExceptionCode,
+        }
+        /// §6.5 Write Single Coil response (code `0x05`, 8 bytes). The normal response is an echo of the request.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteSingleCoilReply {
+            pub output_address: u16,
+            pub output_value: super::CoilState,
+        }
+        /// §6.5 Write Single Coil error (code `0x85`, 5 bytes). Error code 0x85.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteSingleCoilException {
+            pub exception_code: super::ExceptionCode,
+        }
+        /// §6.6 Write Single Register response (code `0x06`, 8 bytes). The normal response is an echo of the request.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteSingleRegisterReply {
+            pub register_address: u16,
+            pub register_value: u16,
+        }
+        /// §6.6 Write Single Register error (code `0x86`, 5 bytes). Error code 0x86.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteSingleRegisterException {
+            pub exception_code: super::ExceptionCode,
+        }
+        /// §6.11 Write Multiple Coils response (code `0x0F`, 8 bytes). Function code, starting address and quantity of coils forced.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteMultipleCoilsReply {
+            pub starting_address: u16,
+            pub quantity: u16,
+        }
+        /// §6.11 Write Multiple Coils error (code `0x8F`, 5 bytes). Error code 0x8F.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteMultipleCoilsException {
+            pub exception_code: super::ExceptionCode,
+        }
+        /// §6.12 Write Multiple registers response (code `0x10`, 8 bytes). Function code, starting address and quantity of registers written.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteMultipleRegistersReply {
+            pub starting_address: u16,
+            pub quantity: u16,
+        }
+        /// §6.12 Write Multiple registers error (code `0x90`, 5 bytes). Error code 0x90.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteMultipleRegistersException {
+            pub exception_code: super::ExceptionCode,
+        }
         /// `read_coils_reply.coils`
         pub const READ_COILS_REPLY_COILS: FieldDesc = FieldDesc::new(
             "read_coils_reply",
@@ -2879,20 +3583,6 @@ pub mod modbus {
         pub const READ_COILS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
             "read_coils_reply",
             "byte_count",
-        );
-        /// `read_coils_exception`, code 0x81
-        pub const READ_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
-            "read_coils_exception",
-            0x81,
-            1,
-            &[5],
-        );
-        /// `read_discrete_inputs_reply`, code 0x02
-        pub const READ_DISCRETE_INPUTS_REPLY: MessageDesc = MessageDesc::new(
-            "read_discrete_inputs_reply",
-            0x02,
-            1,
-            &[5],
         );
         /// `read_discrete_inputs_reply.inputs`
         pub const READ_DISCRETE_INPUTS_REPLY_INPUTS: FieldDesc = FieldDesc::new(
@@ -2904,20 +3594,6 @@ pub mod modbus {
             "read_discrete_inputs_reply",
             "byte_count",
         );
-        /// `read_discrete_inputs_exception`, code 0x82
-        pub const READ_DISCRETE_INPUTS_EXCEPTION: MessageDesc = MessageDesc::new(
-            "read_discrete_inputs_exception",
-            0x82,
-            1,
-            &[5],
-        );
-        /// `read_holding_registers_reply`, code 0x03
-        pub const READ_HOLDING_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
-            "read_holding_registers_reply",
-            0x03,
-            1,
-            &[5],
-        );
         /// `read_holding_registers_reply.registers`
         pub const READ_HOLDING_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
             "read_holding_registers_reply",
@@ -2927,20 +3603,6 @@ pub mod modbus {
         pub const READ_HOLDING_REGISTERS_REPLY_BYTE_COUNT: FieldDesc = FieldDesc::new(
             "read_holding_registers_reply",
             "byte_count",
-        );
-        /// `read_holding_registers_exception`, code 0x83
-        pub const READ_HOLDING_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
-            "read_holding_registers_exception",
-            0x83,
-            1,
-            &[5],
-        );
-        /// `read_input_registers_reply`, code 0x04
-        pub const READ_INPUT_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
-            "read_input_registers_reply",
-            0x04,
-            1,
-            &[5],
         );
         /// `read_input_registers_reply.registers`
         pub const READ_INPUT_REGISTERS_REPLY_REGISTERS: FieldDesc = FieldDesc::new(
@@ -2952,20 +3614,6 @@ pub mod modbus {
             "read_input_registers_reply",
             "byte_count",
         );
-        /// `read_input_registers_exception`, code 0x84
-        pub const READ_INPUT_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
-            "read_input_registers_exception",
-            0x84,
-            1,
-            &[5],
-        );
-        /// `write_single_coil_reply`, code 0x05
-        pub const WRITE_SINGLE_COIL_REPLY: MessageDesc = MessageDesc::new(
-            "write_single_coil_reply",
-            0x05,
-            1,
-            &[8],
-        );
         /// `write_single_coil_reply.output_address`
         pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_ADDRESS: FieldDesc = FieldDesc::new(
             "write_single_coil_reply",
@@ -2975,20 +3623,6 @@ pub mod modbus {
         pub const WRITE_SINGLE_COIL_REPLY_OUTPUT_VALUE: FieldDesc = FieldDesc::new(
             "write_single_coil_reply",
             "output_value",
-        );
-        /// `write_single_coil_exception`, code 0x85
-        pub const WRITE_SINGLE_COIL_EXCEPTION: MessageDesc = MessageDesc::new(
-            "write_single_coil_exception",
-            0x85,
-            1,
-            &[5],
-        );
-        /// `write_single_register_reply`, code 0x06
-        pub const WRITE_SINGLE_REGISTER_REPLY: MessageDesc = MessageDesc::new(
-            "write_single_register_reply",
-            0x06,
-            1,
-            &[8],
         );
         /// `write_single_register_reply.register_address`
         pub const WRITE_SINGLE_REGISTER_REPLY_REGISTER_ADDRESS: FieldDesc = FieldDesc::new(
@@ -3000,20 +3634,6 @@ pub mod modbus {
             "write_single_register_reply",
             "register_value",
         );
-        /// `write_single_register_exception`, code 0x86
-        pub const WRITE_SINGLE_REGISTER_EXCEPTION: MessageDesc = MessageDesc::new(
-            "write_single_register_exception",
-            0x86,
-            1,
-            &[5],
-        );
-        /// `write_multiple_coils_reply`, code 0x0F
-        pub const WRITE_MULTIPLE_COILS_REPLY: MessageDesc = MessageDesc::new(
-            "write_multiple_coils_reply",
-            0x0F,
-            1,
-            &[8],
-        );
         /// `write_multiple_coils_reply.starting_address`
         pub const WRITE_MULTIPLE_COILS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
             "write_multiple_coils_reply",
@@ -3024,20 +3644,6 @@ pub mod modbus {
             "write_multiple_coils_reply",
             "quantity",
         );
-        /// `write_multiple_coils_exception`, code 0x8F
-        pub const WRITE_MULTIPLE_COILS_EXCEPTION: MessageDesc = MessageDesc::new(
-            "write_multiple_coils_exception",
-            0x8F,
-            1,
-            &[5],
-        );
-        /// `write_multiple_registers_reply`, code 0x10
-        pub const WRITE_MULTIPLE_REGISTERS_REPLY: MessageDesc = MessageDesc::new(
-            "write_multiple_registers_reply",
-            0x10,
-            1,
-            &[8],
-        );
         /// `write_multiple_registers_reply.starting_address`
         pub const WRITE_MULTIPLE_REGISTERS_REPLY_STARTING_ADDRESS: FieldDesc = FieldDesc::new(
             "write_multiple_registers_reply",
@@ -3047,13 +3653,6 @@ pub mod modbus {
         pub const WRITE_MULTIPLE_REGISTERS_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
             "write_multiple_registers_reply",
             "quantity",
-        );
-        /// `write_multiple_registers_exception`, code 0x90
-        pub const WRITE_MULTIPLE_REGISTERS_EXCEPTION: MessageDesc = MessageDesc::new(
-            "write_multiple_registers_exception",
-            0x90,
-            1,
-            &[5],
         );
     }
 }

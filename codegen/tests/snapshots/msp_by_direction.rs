@@ -108,18 +108,57 @@ pub mod msp_by_direction {
             rt::Some(Self(raw as i16))
         }
     }
+    impl request::ApiVersion {
+        pub const NAME: &'static str = "api_version";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ApiVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::Rc {
+        pub const NAME: &'static str = "rc";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x69,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Rc(*self).encode(address, buf)
+        }
+    }
+    impl request::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x6C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x6C,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Attitude(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 MSP_API_VERSION (code `0x01`, 6 bytes).
-        ApiVersion,
-        /// §3 MSP_RC (code `0x69`, 6 bytes).
-        Rc,
-        /// §3 MSP_ATTITUDE (code `0x6C`, 6 bytes).
-        Attitude,
+        ApiVersion(request::ApiVersion),
+        Rc(request::Rc),
+        Attitude(request::Attitude),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -131,9 +170,9 @@ pub mod msp_by_direction {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ApiVersion => 0,
-                Self::Rc => 1,
-                Self::Attitude => 2,
+                Self::ApiVersion(_) => 0,
+                Self::Rc(_) => 1,
+                Self::Attitude(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -162,9 +201,15 @@ pub mod msp_by_direction {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x01]).len(),
-                Self::Rc => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x69]).len(),
-                Self::Attitude => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len(),
+                Self::ApiVersion(request::ApiVersion {}) => {
+                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x01]).len()
+                }
+                Self::Rc(request::Rc {}) => {
+                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x69]).len()
+                }
+                Self::Attitude(request::Attitude {}) => {
+                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
             rt::Ok(len)
@@ -191,11 +236,17 @@ pub mod msp_by_direction {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    rt::fixed::<6>(frame, &request::API_VERSION)
-                        .map(|_| Self::ApiVersion)
+                    rt::fixed::<6>(frame, &request::ApiVersion::DESC)
+                        .map(|_| Self::ApiVersion(request::ApiVersion))
                 }
-                0x69 => rt::fixed::<6>(frame, &request::RC).map(|_| Self::Rc),
-                0x6C => rt::fixed::<6>(frame, &request::ATTITUDE).map(|_| Self::Attitude),
+                0x69 => {
+                    rt::fixed::<6>(frame, &request::Rc::DESC)
+                        .map(|_| Self::Rc(request::Rc))
+                }
+                0x6C => {
+                    rt::fixed::<6>(frame, &request::Attitude::DESC)
+                        .map(|_| Self::Attitude(request::Attitude))
+                }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
             }
         }
@@ -207,9 +258,9 @@ pub mod msp_by_direction {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "api_version" => rt::Ok(Self::ApiVersion),
-                "rc" => rt::Ok(Self::Rc),
-                "attitude" => rt::Ok(Self::Attitude),
+                "api_version" => rt::Ok(Self::ApiVersion(request::ApiVersion)),
+                "rc" => rt::Ok(Self::Rc(request::Rc)),
+                "attitude" => rt::Ok(Self::Attitude(request::Attitude)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -284,28 +335,77 @@ pub mod msp_by_direction {
         min: 0,
         max: 18,
     };
+    impl response::ApiVersionReply {
+        pub const NAME: &'static str = "api_version_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[9],
+        );
+        pub const PROTOCOL_VERSION: rt::Range<usize> = 5..6;
+        pub const API_MAJOR: rt::Range<usize> = 6..7;
+        pub const API_MINOR: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("protocol_version", rt::Int(self.protocol_version as i64));
+            f("api_major", rt::Int(self.api_major as i64));
+            f("api_minor", rt::Int(self.api_minor as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ApiVersionReply(*self).encode(address, buf)
+        }
+    }
+    impl response::RcReply {
+        pub const NAME: &'static str = "rc_reply";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 42;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x69,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channels", rt::List(self.channels.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::RcReply(*self).encode(address, buf)
+        }
+    }
+    impl response::AttitudeReply {
+        pub const NAME: &'static str = "attitude_reply";
+        pub const CODE: &'static [u8] = &[0x6C];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x6C,
+            1,
+            &[12],
+        );
+        pub const ROLL: rt::Range<usize> = 5..7;
+        pub const PITCH: rt::Range<usize> = 7..9;
+        pub const YAW: rt::Range<usize> = 9..11;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("roll", rt::Int(self.roll.raw() as i64));
+            f("pitch", rt::Int(self.pitch.raw() as i64));
+            f("yaw", rt::Int(self.yaw as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AttitudeReply(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 MSP_API_VERSION reply (code `0x01`, 9 bytes).
-        ApiVersionReply { protocol_version: u8, api_major: u8, api_minor: u8 },
-        /// §3 MSP_RC reply: each channel's pulse width (code `0x69`, 6 to 42 bytes).
-        RcReply {
-            /// \[µs\]
-            channels: rt::Repeated<u16, 18>,
-        },
-        /// §3 MSP_ATTITUDE reply (code `0x6C`, 12 bytes).
-        AttitudeReply {
-            /// \[°\]
-            roll: Decidegrees,
-            /// \[°\]
-            pitch: Decidegrees,
-            /// \[°\]
-            yaw: i16,
-        },
+        ApiVersionReply(response::ApiVersionReply),
+        RcReply(response::RcReply),
+        AttitudeReply(response::AttitudeReply),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -317,9 +417,9 @@ pub mod msp_by_direction {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ApiVersionReply { .. } => 0,
-                Self::RcReply { .. } => 1,
-                Self::AttitudeReply { .. } => 2,
+                Self::ApiVersionReply(_) => 0,
+                Self::RcReply(_) => 1,
+                Self::AttitudeReply(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -333,7 +433,7 @@ pub mod msp_by_direction {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::RcReply { channels: v_channels, .. } => {
+                Self::RcReply(response::RcReply { channels: v_channels, .. }) => {
                     REPEAT_RC_REPLY.base + REPEAT_RC_REPLY.bytes_of(v_channels.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -341,25 +441,11 @@ pub mod msp_by_direction {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ApiVersionReply {
-                    protocol_version: v_protocol_version,
-                    api_major: v_api_major,
-                    api_minor: v_api_minor,
-                } => {
-                    f("protocol_version", rt::Int(*v_protocol_version as i64));
-                    f("api_major", rt::Int(*v_api_major as i64));
-                    f("api_minor", rt::Int(*v_api_minor as i64));
-                }
-                Self::RcReply { channels: v_channels } => {
-                    f("channels", rt::List(v_channels.elements()))
-                }
-                Self::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw } => {
-                    f("roll", rt::Int(v_roll.raw() as i64));
-                    f("pitch", rt::Int(v_pitch.raw() as i64));
-                    f("yaw", rt::Int(*v_yaw as i64));
-                }
+                Self::ApiVersionReply(m) => m.visit(f),
+                Self::RcReply(m) => m.visit(f),
+                Self::AttitudeReply(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -372,18 +458,20 @@ pub mod msp_by_direction {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ApiVersionReply {
-                    protocol_version: v_protocol_version,
-                    api_major: v_api_major,
-                    api_minor: v_api_minor,
-                } => {
+                Self::ApiVersionReply(
+                    response::ApiVersionReply {
+                        protocol_version: v_protocol_version,
+                        api_major: v_api_major,
+                        api_minor: v_api_minor,
+                    },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0x24, 0x4D, 0x3E, 0x03, 0x01])?;
                     out[5] = v_protocol_version;
                     out[6] = v_api_major;
                     out[7] = v_api_minor;
                     out.len()
                 }
-                Self::RcReply { channels: v_channels } => {
+                Self::RcReply(response::RcReply { channels: v_channels }) => {
                     let frame_len = REPEAT_RC_REPLY.encode_len(v_channels.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x24, 0x4D, 0x3E])?;
                     rt::put_length(out, 3, 1, true, true, -6)?;
@@ -391,7 +479,9 @@ pub mod msp_by_direction {
                     rt::write_elements(v_channels.as_slice(), 2, true, &mut out[5..]);
                     out.len()
                 }
-                Self::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw } => {
+                Self::AttitudeReply(
+                    response::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw },
+                ) => {
                     let out = rt::frame_mut::<12>(buf, &[0x24, 0x4D, 0x3E, 0x06, 0x6C])?;
                     out[5..7].copy_from_slice(&v_roll.raw().to_le_bytes());
                     out[7..9].copy_from_slice(&v_pitch.raw().to_le_bytes());
@@ -451,31 +541,37 @@ pub mod msp_by_direction {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, &response::API_VERSION_REPLY)?;
-                    rt::Ok(Self::ApiVersionReply {
-                        protocol_version: frame[5],
-                        api_major: frame[6],
-                        api_minor: frame[7],
-                    })
+                    let frame = rt::fixed::<9>(frame, &response::ApiVersionReply::DESC)?;
+                    rt::Ok(
+                        Self::ApiVersionReply(response::ApiVersionReply {
+                            protocol_version: frame[5],
+                            api_major: frame[6],
+                            api_minor: frame[7],
+                        }),
+                    )
                 }
                 0x69 => {
                     let (_, elements, _) = REPEAT_RC_REPLY.split::<5>(frame)?;
-                    rt::Ok(Self::RcReply {
-                        channels: REPEAT_RC_REPLY
-                            .elements::<u16, 18>(elements, true, false)?,
-                    })
+                    rt::Ok(
+                        Self::RcReply(response::RcReply {
+                            channels: REPEAT_RC_REPLY
+                                .elements::<u16, 18>(elements, true, false)?,
+                        }),
+                    )
                 }
                 0x6C => {
-                    let frame = rt::fixed::<12>(frame, &response::ATTITUDE_REPLY)?;
-                    rt::Ok(Self::AttitudeReply {
-                        roll: Decidegrees::from_raw(
-                            i16::from_le_bytes([frame[5], frame[6]]),
-                        ),
-                        pitch: Decidegrees::from_raw(
-                            i16::from_le_bytes([frame[7], frame[8]]),
-                        ),
-                        yaw: i16::from_le_bytes([frame[9], frame[10]]),
-                    })
+                    let frame = rt::fixed::<12>(frame, &response::AttitudeReply::DESC)?;
+                    rt::Ok(
+                        Self::AttitudeReply(response::AttitudeReply {
+                            roll: Decidegrees::from_raw(
+                                i16::from_le_bytes([frame[5], frame[6]]),
+                            ),
+                            pitch: Decidegrees::from_raw(
+                                i16::from_le_bytes([frame[7], frame[8]]),
+                            ),
+                            yaw: i16::from_le_bytes([frame[9], frame[10]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
             }
@@ -489,23 +585,32 @@ pub mod msp_by_direction {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "api_version_reply" => {
-                    rt::Ok(Self::ApiVersionReply {
-                        protocol_version: rt::get(&mut field, "protocol_version")?,
-                        api_major: rt::get(&mut field, "api_major")?,
-                        api_minor: rt::get(&mut field, "api_minor")?,
-                    })
+                    rt::Ok(
+                        Self::ApiVersionReply(response::ApiVersionReply {
+                            protocol_version: rt::get(&mut field, "protocol_version")?,
+                            api_major: rt::get(&mut field, "api_major")?,
+                            api_minor: rt::get(&mut field, "api_minor")?,
+                        }),
+                    )
                 }
                 "rc_reply" => {
-                    rt::Ok(Self::RcReply {
-                        channels: rt::list::<u16, 18>(&mut field, "channels", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::RcReply(response::RcReply {
+                            channels: rt::list::<
+                                u16,
+                                18,
+                            >(&mut field, "channels", 0, 65535)?,
+                        }),
+                    )
                 }
                 "attitude_reply" => {
-                    rt::Ok(Self::AttitudeReply {
-                        roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
-                        pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
-                        yaw: rt::get(&mut field, "yaw")?,
-                    })
+                    rt::Ok(
+                        Self::AttitudeReply(response::AttitudeReply {
+                            roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
+                            pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
+                            yaw: rt::get(&mut field, "yaw")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -553,11 +658,11 @@ pub mod msp_by_direction {
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::ApiVersionReply`], read from the frame.
+        /// [`response::ApiVersionReply`], read from the frame.
         ApiVersionReply { protocol_version: u8, api_major: u8, api_minor: u8 },
-        /// [`Response::RcReply`], read from the frame.
+        /// [`response::RcReply`], read from the frame.
         RcReply { channels: rt::ListView<'a, u16> },
-        /// [`Response::AttitudeReply`], read from the frame.
+        /// [`response::AttitudeReply`], read from the frame.
         AttitudeReply { roll: Decidegrees, pitch: Decidegrees, yaw: i16 },
     }
     impl<'a> ResponseView<'a> {
@@ -610,7 +715,7 @@ pub mod msp_by_direction {
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, &response::API_VERSION_REPLY)?;
+                    let frame = rt::fixed::<9>(frame, &response::ApiVersionReply::DESC)?;
                     rt::Ok(Self::ApiVersionReply {
                         protocol_version: frame[5],
                         api_major: frame[6],
@@ -624,7 +729,7 @@ pub mod msp_by_direction {
                     })
                 }
                 0x6C => {
-                    let frame = rt::fixed::<12>(frame, &response::ATTITUDE_REPLY)?;
+                    let frame = rt::fixed::<12>(frame, &response::AttitudeReply::DESC)?;
                     rt::Ok(Self::AttitudeReply {
                         roll: Decidegrees::from_raw(
                             i16::from_le_bytes([frame[5], frame[6]]),
@@ -654,23 +759,23 @@ pub mod msp_by_direction {
         pub fn to_owned(self) -> Response {
             match self {
                 Self::ApiVersionReply { protocol_version, api_major, api_minor } => {
-                    Response::ApiVersionReply {
+                    Response::ApiVersionReply(response::ApiVersionReply {
                         protocol_version,
                         api_major,
                         api_minor,
-                    }
+                    })
                 }
                 Self::RcReply { channels } => {
-                    Response::RcReply {
+                    Response::RcReply(response::RcReply {
                         channels: channels.to_repeated(),
-                    }
+                    })
                 }
                 Self::AttitudeReply { roll, pitch, yaw } => {
-                    Response::AttitudeReply {
+                    Response::AttitudeReply(response::AttitudeReply {
                         roll,
                         pitch,
                         yaw,
-                    }
+                    })
                 }
             }
         }
@@ -821,42 +926,62 @@ pub mod msp_by_direction {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspByDirection>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `api_version`, code 0x01
-        pub const API_VERSION: MessageDesc = MessageDesc::new(
-            "api_version",
-            0x01,
-            1,
-            &[6],
-        );
-        /// `rc`, code 0x69
-        pub const RC: MessageDesc = MessageDesc::new("rc", 0x69, 1, &[6]);
-        /// `attitude`, code 0x6C
-        pub const ATTITUDE: MessageDesc = MessageDesc::new("attitude", 0x6C, 1, &[6]);
+        /// §3 MSP_API_VERSION (code `0x01`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ApiVersion;
+        /// §3 MSP_RC (code `0x69`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Rc;
+        /// §3 MSP_ATTITUDE (code `0x6C`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Attitude;
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `api_version_reply`, code 0x01
-        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
-            "api_version_reply",
-            0x01,
-            1,
-            &[9],
-        );
-        /// `rc_reply`, code 0x69
-        pub const RC_REPLY: MessageDesc = MessageDesc::new("rc_reply", 0x69, 1, &[6]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3 MSP_API_VERSION reply (code `0x01`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ApiVersionReply {
+            pub protocol_version: u8,
+            pub api_major: u8,
+            pub api_minor: u8,
+        }
+        /// §3 MSP_RC reply: each channel's pulse width (code `0x69`, 6 to 42 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct RcReply {
+            /// \[µs\]
+            pub channels: super::rt::Repeated<u16, 18>,
+        }
+        /// §3 MSP_ATTITUDE reply (code `0x6C`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct AttitudeReply {
+            /// \[°\]
+            pub roll: super::Decidegrees,
+            /// \[°\]
+            pub pitch: super::Decidegrees,
+            /// \[°\]
+            pub yaw: i16,
+        }
         /// `rc_reply.channels`
         pub const RC_REPLY_CHANNELS: FieldDesc = FieldDesc::new("rc_reply", "channels");
-        /// `attitude_reply`, code 0x6C
-        pub const ATTITUDE_REPLY: MessageDesc = MessageDesc::new(
-            "attitude_reply",
-            0x6C,
-            1,
-            &[12],
-        );
     }
 }

@@ -108,16 +108,42 @@ pub mod msp_v1 {
             rt::Some(Self(raw as i16))
         }
     }
+    impl request::ApiVersion {
+        pub const NAME: &'static str = "api_version";
+        pub const CODE: &'static [u8] = &[0x3C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x3C,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ApiVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::Attitude {
+        pub const NAME: &'static str = "attitude";
+        pub const CODE: &'static [u8] = &[0x3C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x3C,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Attitude(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 MSP_API_VERSION (code `0x3C`, 6 bytes).
-        ApiVersion,
-        /// §3 MSP_ATTITUDE (code `0x3C`, 6 bytes).
-        Attitude,
+        ApiVersion(request::ApiVersion),
+        Attitude(request::Attitude),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -128,8 +154,8 @@ pub mod msp_v1 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ApiVersion => 0,
-                Self::Attitude => 1,
+                Self::ApiVersion(_) => 0,
+                Self::Attitude(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -158,8 +184,12 @@ pub mod msp_v1 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x01]).len(),
-                Self::Attitude => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len(),
+                Self::ApiVersion(request::ApiVersion {}) => {
+                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x01]).len()
+                }
+                Self::Attitude(request::Attitude {}) => {
+                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
             rt::Ok(len)
@@ -189,13 +219,13 @@ pub mod msp_v1 {
                     let mut g = rt::Group::new(frame, 0x3C, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(&request::API_VERSION_CMD, 4, frame[4], 0x1)?;
-                        rt::Ok(Self::ApiVersion)
+                        rt::Ok(Self::ApiVersion(request::ApiVersion))
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(&request::ATTITUDE_CMD, 4, frame[4], 0x6C)?;
-                        rt::Ok(Self::Attitude)
+                        rt::Ok(Self::Attitude(request::Attitude))
                     });
-                    g.end(&request::API_VERSION)
+                    g.end(&request::ApiVersion::DESC)
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -208,8 +238,8 @@ pub mod msp_v1 {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "api_version" => rt::Ok(Self::ApiVersion),
-                "attitude" => rt::Ok(Self::Attitude),
+                "api_version" => rt::Ok(Self::ApiVersion(request::ApiVersion)),
+                "attitude" => rt::Ok(Self::Attitude(request::Attitude)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -273,25 +303,77 @@ pub mod msp_v1 {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::ApiVersionReply {
+        pub const NAME: &'static str = "api_version_reply";
+        pub const CODE: &'static [u8] = &[0x3E];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x3E,
+            1,
+            &[9, 12],
+        );
+        pub const PROTOCOL_VERSION: rt::Range<usize> = 5..6;
+        pub const API_MAJOR: rt::Range<usize> = 6..7;
+        pub const API_MINOR: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("protocol_version", rt::Int(self.protocol_version as i64));
+            f("api_major", rt::Int(self.api_major as i64));
+            f("api_minor", rt::Int(self.api_minor as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ApiVersionReply(*self).encode(address, buf)
+        }
+    }
+    impl response::AttitudeReply {
+        pub const NAME: &'static str = "attitude_reply";
+        pub const CODE: &'static [u8] = &[0x3E];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x3E,
+            1,
+            &[9, 12],
+        );
+        pub const ROLL: rt::Range<usize> = 5..7;
+        pub const PITCH: rt::Range<usize> = 7..9;
+        pub const YAW: rt::Range<usize> = 9..11;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("roll", rt::Int(self.roll.raw() as i64));
+            f("pitch", rt::Int(self.pitch.raw() as i64));
+            f("yaw", rt::Int(self.yaw as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AttitudeReply(*self).encode(address, buf)
+        }
+    }
+    impl response::Error {
+        pub const NAME: &'static str = "error";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x21,
+            1,
+            &[6],
+        );
+        pub const CMD: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("cmd", rt::Int(self.cmd as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Error(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 MSP_API_VERSION reply (code `0x3E`, 9 bytes).
-        ApiVersionReply { protocol_version: u8, api_major: u8, api_minor: u8 },
-        /// §3 MSP_ATTITUDE reply (code `0x3E`, 12 bytes).
-        AttitudeReply {
-            /// \[°\]
-            roll: Decidegrees,
-            /// \[°\]
-            pitch: Decidegrees,
-            /// \[°\]
-            yaw: i16,
-        },
-        /// §2 Error: the command is not supported (code `0x21`, 6 bytes).
-        Error { cmd: u8 },
+        ApiVersionReply(response::ApiVersionReply),
+        AttitudeReply(response::AttitudeReply),
+        Error(response::Error),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -303,9 +385,9 @@ pub mod msp_v1 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ApiVersionReply { .. } => 0,
-                Self::AttitudeReply { .. } => 1,
-                Self::Error { .. } => 2,
+                Self::ApiVersionReply(_) => 0,
+                Self::AttitudeReply(_) => 1,
+                Self::Error(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -322,23 +404,11 @@ pub mod msp_v1 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ApiVersionReply {
-                    protocol_version: v_protocol_version,
-                    api_major: v_api_major,
-                    api_minor: v_api_minor,
-                } => {
-                    f("protocol_version", rt::Int(*v_protocol_version as i64));
-                    f("api_major", rt::Int(*v_api_major as i64));
-                    f("api_minor", rt::Int(*v_api_minor as i64));
-                }
-                Self::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw } => {
-                    f("roll", rt::Int(v_roll.raw() as i64));
-                    f("pitch", rt::Int(v_pitch.raw() as i64));
-                    f("yaw", rt::Int(*v_yaw as i64));
-                }
-                Self::Error { cmd: v_cmd } => f("cmd", rt::Int(*v_cmd as i64)),
+                Self::ApiVersionReply(m) => m.visit(f),
+                Self::AttitudeReply(m) => m.visit(f),
+                Self::Error(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -351,25 +421,29 @@ pub mod msp_v1 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ApiVersionReply {
-                    protocol_version: v_protocol_version,
-                    api_major: v_api_major,
-                    api_minor: v_api_minor,
-                } => {
+                Self::ApiVersionReply(
+                    response::ApiVersionReply {
+                        protocol_version: v_protocol_version,
+                        api_major: v_api_major,
+                        api_minor: v_api_minor,
+                    },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0x24, 0x4D, 0x3E, 0x03, 0x01])?;
                     out[5] = v_protocol_version;
                     out[6] = v_api_major;
                     out[7] = v_api_minor;
                     out.len()
                 }
-                Self::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw } => {
+                Self::AttitudeReply(
+                    response::AttitudeReply { roll: v_roll, pitch: v_pitch, yaw: v_yaw },
+                ) => {
                     let out = rt::frame_mut::<12>(buf, &[0x24, 0x4D, 0x3E, 0x06, 0x6C])?;
                     out[5..7].copy_from_slice(&v_roll.raw().to_le_bytes());
                     out[7..9].copy_from_slice(&v_pitch.raw().to_le_bytes());
                     out[9..11].copy_from_slice(&v_yaw.to_le_bytes());
                     out.len()
                 }
-                Self::Error { cmd: v_cmd } => {
+                Self::Error(response::Error { cmd: v_cmd }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x24, 0x4D, 0x21, 0x00])?;
                     out[4] = v_cmd;
                     out.len()
@@ -434,29 +508,33 @@ pub mod msp_v1 {
                     let mut g = rt::Group::new(frame, 0x3E, request.map(Request::name));
                     g.attempt(|frame: &[u8; 9]| {
                         rt::equal(&response::API_VERSION_REPLY_CMD, 4, frame[4], 0x1)?;
-                        rt::Ok(Self::ApiVersionReply {
-                            protocol_version: frame[5],
-                            api_major: frame[6],
-                            api_minor: frame[7],
-                        })
+                        rt::Ok(
+                            Self::ApiVersionReply(response::ApiVersionReply {
+                                protocol_version: frame[5],
+                                api_major: frame[6],
+                                api_minor: frame[7],
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 12]| {
                         rt::equal(&response::ATTITUDE_REPLY_CMD, 4, frame[4], 0x6C)?;
-                        rt::Ok(Self::AttitudeReply {
-                            roll: Decidegrees::from_raw(
-                                i16::from_le_bytes([frame[5], frame[6]]),
-                            ),
-                            pitch: Decidegrees::from_raw(
-                                i16::from_le_bytes([frame[7], frame[8]]),
-                            ),
-                            yaw: i16::from_le_bytes([frame[9], frame[10]]),
-                        })
+                        rt::Ok(
+                            Self::AttitudeReply(response::AttitudeReply {
+                                roll: Decidegrees::from_raw(
+                                    i16::from_le_bytes([frame[5], frame[6]]),
+                                ),
+                                pitch: Decidegrees::from_raw(
+                                    i16::from_le_bytes([frame[7], frame[8]]),
+                                ),
+                                yaw: i16::from_le_bytes([frame[9], frame[10]]),
+                            }),
+                        )
                     });
-                    g.end(&response::API_VERSION_REPLY)
+                    g.end(&response::ApiVersionReply::DESC)
                 }
                 0x21 => {
-                    let frame = rt::fixed::<6>(frame, &response::ERROR)?;
-                    rt::Ok(Self::Error { cmd: frame[4] })
+                    let frame = rt::fixed::<6>(frame, &response::Error::DESC)?;
+                    rt::Ok(Self::Error(response::Error { cmd: frame[4] }))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -470,23 +548,29 @@ pub mod msp_v1 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "api_version_reply" => {
-                    rt::Ok(Self::ApiVersionReply {
-                        protocol_version: rt::get(&mut field, "protocol_version")?,
-                        api_major: rt::get(&mut field, "api_major")?,
-                        api_minor: rt::get(&mut field, "api_minor")?,
-                    })
+                    rt::Ok(
+                        Self::ApiVersionReply(response::ApiVersionReply {
+                            protocol_version: rt::get(&mut field, "protocol_version")?,
+                            api_major: rt::get(&mut field, "api_major")?,
+                            api_minor: rt::get(&mut field, "api_minor")?,
+                        }),
+                    )
                 }
                 "attitude_reply" => {
-                    rt::Ok(Self::AttitudeReply {
-                        roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
-                        pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
-                        yaw: rt::get(&mut field, "yaw")?,
-                    })
+                    rt::Ok(
+                        Self::AttitudeReply(response::AttitudeReply {
+                            roll: Decidegrees::from_raw(rt::get(&mut field, "roll")?),
+                            pitch: Decidegrees::from_raw(rt::get(&mut field, "pitch")?),
+                            yaw: rt::get(&mut field, "yaw")?,
+                        }),
+                    )
                 }
                 "error" => {
-                    rt::Ok(Self::Error {
-                        cmd: rt::get(&mut field, "cmd")?,
-                    })
+                    rt::Ok(
+                        Self::Error(response::Error {
+                            cmd: rt::get(&mut field, "cmd")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -536,7 +620,10 @@ pub mod msp_v1 {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (&Self::Error { cmd: v_cmd, .. }, &Request::ApiVersion { .. }) => {
+                (
+                    &Self::Error(response::Error { cmd: v_cmd, .. }),
+                    &Request::ApiVersion(request::ApiVersion { .. }),
+                ) => {
                     rt::following(
                         &response::ERROR_CMD,
                         4,
@@ -546,7 +633,10 @@ pub mod msp_v1 {
                         "cmd of the request",
                     )?;
                 }
-                (&Self::Error { cmd: v_cmd, .. }, &Request::Attitude { .. }) => {
+                (
+                    &Self::Error(response::Error { cmd: v_cmd, .. }),
+                    &Request::Attitude(request::Attitude { .. }),
+                ) => {
                     rt::following(
                         &response::ERROR_CMD,
                         4,
@@ -608,7 +698,7 @@ pub mod msp_v1 {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::Error { .. })
+            matches!(response, Response::Error(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
@@ -679,53 +769,70 @@ pub mod msp_v1 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV1>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `api_version`, code 0x3C
-        pub const API_VERSION: MessageDesc = MessageDesc::new(
-            "api_version",
-            0x3C,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 MSP_API_VERSION (code `0x3C`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ApiVersion;
+        /// §3 MSP_ATTITUDE (code `0x3C`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Attitude;
         /// `api_version.cmd`
         pub const API_VERSION_CMD: FieldDesc = FieldDesc::new("api_version", "cmd");
-        /// `attitude`, code 0x3C
-        pub const ATTITUDE: MessageDesc = MessageDesc::new("attitude", 0x3C, 1, &[6]);
         /// `attitude.cmd`
         pub const ATTITUDE_CMD: FieldDesc = FieldDesc::new("attitude", "cmd");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `api_version_reply`, code 0x3E
-        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
-            "api_version_reply",
-            0x3E,
-            1,
-            &[9, 12],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 MSP_API_VERSION reply (code `0x3E`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ApiVersionReply {
+            pub protocol_version: u8,
+            pub api_major: u8,
+            pub api_minor: u8,
+        }
+        /// §3 MSP_ATTITUDE reply (code `0x3E`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct AttitudeReply {
+            /// \[°\]
+            pub roll: super::Decidegrees,
+            /// \[°\]
+            pub pitch: super::Decidegrees,
+            /// \[°\]
+            pub yaw: i16,
+        }
+        /// §2 Error: the command is not supported (code `0x21`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Error {
+            pub cmd: u8,
+        }
         /// `api_version_reply.cmd`
         pub const API_VERSION_REPLY_CMD: FieldDesc = FieldDesc::new(
             "api_version_reply",
             "cmd",
-        );
-        /// `attitude_reply`, code 0x3E
-        pub const ATTITUDE_REPLY: MessageDesc = MessageDesc::new(
-            "attitude_reply",
-            0x3E,
-            1,
-            &[9, 12],
         );
         /// `attitude_reply.cmd`
         pub const ATTITUDE_REPLY_CMD: FieldDesc = FieldDesc::new(
             "attitude_reply",
             "cmd",
         );
-        /// `error`, code 0x21
-        pub const ERROR: MessageDesc = MessageDesc::new("error", 0x21, 1, &[6]);
         /// `error.cmd`
         pub const ERROR_CMD: FieldDesc = FieldDesc::new("error", "cmd");
     }

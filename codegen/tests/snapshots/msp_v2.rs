@@ -80,16 +80,48 @@ pub mod msp_v2 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
+    impl request::ApiVersion {
+        pub const NAME: &'static str = "api_version";
+        pub const CODE: &'static [u8] = &[0x01, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0100,
+            2,
+            &[9],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ApiVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::FcVariant {
+        pub const NAME: &'static str = "fc_variant";
+        pub const CODE: &'static [u8] = &[0x02, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0200,
+            2,
+            &[9],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::FcVariant(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 MSP_API_VERSION (1) (code `0x0100`, 9 bytes).
-        ApiVersion { dont_reply: bool },
-        /// §3 MSP_FC_VARIANT (2) (code `0x0200`, 9 bytes).
-        FcVariant { dont_reply: bool },
+        ApiVersion(request::ApiVersion),
+        FcVariant(request::FcVariant),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -100,8 +132,8 @@ pub mod msp_v2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ApiVersion { .. } => 0,
-                Self::FcVariant { .. } => 1,
+                Self::ApiVersion(_) => 0,
+                Self::FcVariant(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -118,14 +150,10 @@ pub mod msp_v2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ApiVersion { dont_reply: v_dont_reply } => {
-                    f("dont_reply", rt::Int(*v_dont_reply as i64))
-                }
-                Self::FcVariant { dont_reply: v_dont_reply } => {
-                    f("dont_reply", rt::Int(*v_dont_reply as i64))
-                }
+                Self::ApiVersion(m) => m.visit(f),
+                Self::FcVariant(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -139,14 +167,14 @@ pub mod msp_v2 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<9>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion { dont_reply: v_dont_reply } => {
+                Self::ApiVersion(request::ApiVersion { dont_reply: v_dont_reply }) => {
                     let out = rt::head(out, &[0x24, 0x58, 0x3C]);
                     out[4..8].copy_from_slice(&[0x01, 0x00, 0x00, 0x00]);
                     let field_0: u8 = v_dont_reply as u8;
                     out[3] = field_0;
                     out.len()
                 }
-                Self::FcVariant { dont_reply: v_dont_reply } => {
+                Self::FcVariant(request::FcVariant { dont_reply: v_dont_reply }) => {
                     let out = rt::head(out, &[0x24, 0x58, 0x3C]);
                     out[4..8].copy_from_slice(&[0x02, 0x00, 0x00, 0x00]);
                     let field_0: u8 = v_dont_reply as u8;
@@ -179,28 +207,32 @@ pub mod msp_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
-                    let frame = rt::fixed::<9>(frame, &request::API_VERSION)?;
+                    let frame = rt::fixed::<9>(frame, &request::ApiVersion::DESC)?;
                     rt::equal(
                         &request::API_VERSION_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
                     )?;
-                    rt::Ok(Self::ApiVersion {
-                        dont_reply: (frame[3] & 0x1) != 0,
-                    })
+                    rt::Ok(
+                        Self::ApiVersion(request::ApiVersion {
+                            dont_reply: (frame[3] & 0x1) != 0,
+                        }),
+                    )
                 }
                 0x0200 => {
-                    let frame = rt::fixed::<9>(frame, &request::FC_VARIANT)?;
+                    let frame = rt::fixed::<9>(frame, &request::FcVariant::DESC)?;
                     rt::equal(
                         &request::FC_VARIANT_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
                     )?;
-                    rt::Ok(Self::FcVariant {
-                        dont_reply: (frame[3] & 0x1) != 0,
-                    })
+                    rt::Ok(
+                        Self::FcVariant(request::FcVariant {
+                            dont_reply: (frame[3] & 0x1) != 0,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 2, 1, false)),
             }
@@ -214,24 +246,28 @@ pub mod msp_v2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "api_version" => {
-                    rt::Ok(Self::ApiVersion {
-                        dont_reply: rt::field_int(
-                            "dont_reply",
-                            field("dont_reply"),
-                            0,
-                            1,
-                        )? != 0,
-                    })
+                    rt::Ok(
+                        Self::ApiVersion(request::ApiVersion {
+                            dont_reply: rt::field_int(
+                                "dont_reply",
+                                field("dont_reply"),
+                                0,
+                                1,
+                            )? != 0,
+                        }),
+                    )
                 }
                 "fc_variant" => {
-                    rt::Ok(Self::FcVariant {
-                        dont_reply: rt::field_int(
-                            "dont_reply",
-                            field("dont_reply"),
-                            0,
-                            1,
-                        )? != 0,
-                    })
+                    rt::Ok(
+                        Self::FcVariant(request::FcVariant {
+                            dont_reply: rt::field_int(
+                                "dont_reply",
+                                field("dont_reply"),
+                                0,
+                                1,
+                            )? != 0,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -296,21 +332,56 @@ pub mod msp_v2 {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::ApiVersionReply {
+        pub const NAME: &'static str = "api_version_reply";
+        pub const CODE: &'static [u8] = &[0x01, 0x00];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0100,
+            2,
+            &[12],
+        );
+        pub const PROTOCOL_VERSION: rt::Range<usize> = 8..9;
+        pub const API_MAJOR: rt::Range<usize> = 9..10;
+        pub const API_MINOR: rt::Range<usize> = 10..11;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+            f("protocol_version", rt::Int(self.protocol_version as i64));
+            f("api_major", rt::Int(self.api_major as i64));
+            f("api_minor", rt::Int(self.api_minor as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ApiVersionReply(*self).encode(address, buf)
+        }
+    }
+    impl response::FcVariantReply {
+        pub const NAME: &'static str = "fc_variant_reply";
+        pub const CODE: &'static [u8] = &[0x02, 0x00];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0200,
+            2,
+            &[13],
+        );
+        pub const VARIANT: rt::Range<usize> = 8..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("dont_reply", rt::Int(self.dont_reply as i64));
+            f("variant", rt::Text(&self.variant[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::FcVariantReply(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 MSP_API_VERSION (1), answered (code `0x0100`, 12 bytes).
-        ApiVersionReply {
-            dont_reply: bool,
-            protocol_version: u8,
-            api_major: u8,
-            api_minor: u8,
-        },
-        /// §3 MSP_FC_VARIANT (2), answered (code `0x0200`, 13 bytes).
-        FcVariantReply { dont_reply: bool, variant: rt::Ascii<4> },
+        ApiVersionReply(response::ApiVersionReply),
+        FcVariantReply(response::FcVariantReply),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -321,8 +392,8 @@ pub mod msp_v2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ApiVersionReply { .. } => 0,
-                Self::FcVariantReply { .. } => 1,
+                Self::ApiVersionReply(_) => 0,
+                Self::FcVariantReply(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -339,26 +410,10 @@ pub mod msp_v2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ApiVersionReply {
-                    dont_reply: v_dont_reply,
-                    protocol_version: v_protocol_version,
-                    api_major: v_api_major,
-                    api_minor: v_api_minor,
-                } => {
-                    f("dont_reply", rt::Int(*v_dont_reply as i64));
-                    f("protocol_version", rt::Int(*v_protocol_version as i64));
-                    f("api_major", rt::Int(*v_api_major as i64));
-                    f("api_minor", rt::Int(*v_api_minor as i64));
-                }
-                Self::FcVariantReply {
-                    dont_reply: v_dont_reply,
-                    variant: v_variant,
-                } => {
-                    f("dont_reply", rt::Int(*v_dont_reply as i64));
-                    f("variant", rt::Text(&v_variant[..]));
-                }
+                Self::ApiVersionReply(m) => m.visit(f),
+                Self::FcVariantReply(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -371,12 +426,14 @@ pub mod msp_v2 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ApiVersionReply {
-                    dont_reply: v_dont_reply,
-                    protocol_version: v_protocol_version,
-                    api_major: v_api_major,
-                    api_minor: v_api_minor,
-                } => {
+                Self::ApiVersionReply(
+                    response::ApiVersionReply {
+                        dont_reply: v_dont_reply,
+                        protocol_version: v_protocol_version,
+                        api_major: v_api_major,
+                        api_minor: v_api_minor,
+                    },
+                ) => {
                     let out = rt::frame_mut::<12>(buf, &[0x24, 0x58, 0x3E])?;
                     out[4..8].copy_from_slice(&[0x01, 0x00, 0x03, 0x00]);
                     let field_0: u8 = v_dont_reply as u8;
@@ -386,10 +443,12 @@ pub mod msp_v2 {
                     out[10] = v_api_minor;
                     out.len()
                 }
-                Self::FcVariantReply {
-                    dont_reply: v_dont_reply,
-                    variant: v_variant,
-                } => {
+                Self::FcVariantReply(
+                    response::FcVariantReply {
+                        dont_reply: v_dont_reply,
+                        variant: v_variant,
+                    },
+                ) => {
                     let out = rt::frame_mut::<13>(buf, &[0x24, 0x58, 0x3E])?;
                     out[4..8].copy_from_slice(&[0x02, 0x00, 0x04, 0x00]);
                     let field_0: u8 = v_dont_reply as u8;
@@ -450,32 +509,38 @@ pub mod msp_v2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 2) {
                 0x0100 => {
-                    let frame = rt::fixed::<12>(frame, &response::API_VERSION_REPLY)?;
+                    let frame = rt::fixed::<
+                        12,
+                    >(frame, &response::ApiVersionReply::DESC)?;
                     rt::equal(
                         &response::API_VERSION_REPLY_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
                     )?;
-                    rt::Ok(Self::ApiVersionReply {
-                        dont_reply: (frame[3] & 0x1) != 0,
-                        protocol_version: frame[8],
-                        api_major: frame[9],
-                        api_minor: frame[10],
-                    })
+                    rt::Ok(
+                        Self::ApiVersionReply(response::ApiVersionReply {
+                            dont_reply: (frame[3] & 0x1) != 0,
+                            protocol_version: frame[8],
+                            api_major: frame[9],
+                            api_minor: frame[10],
+                        }),
+                    )
                 }
                 0x0200 => {
-                    let frame = rt::fixed::<13>(frame, &response::FC_VARIANT_REPLY)?;
+                    let frame = rt::fixed::<13>(frame, &response::FcVariantReply::DESC)?;
                     rt::equal(
                         &response::FC_VARIANT_REPLY_RESERVED_FLAGS,
                         3,
                         frame[3] >> 1,
                         0x0,
                     )?;
-                    rt::Ok(Self::FcVariantReply {
-                        dont_reply: (frame[3] & 0x1) != 0,
-                        variant: rt::Ascii(frame[8..12].try_into().unwrap_or([0; 4])),
-                    })
+                    rt::Ok(
+                        Self::FcVariantReply(response::FcVariantReply {
+                            dont_reply: (frame[3] & 0x1) != 0,
+                            variant: rt::Ascii(frame[8..12].try_into().unwrap_or([0; 4])),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 2, 1, true)),
             }
@@ -489,28 +554,32 @@ pub mod msp_v2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "api_version_reply" => {
-                    rt::Ok(Self::ApiVersionReply {
-                        dont_reply: rt::field_int(
-                            "dont_reply",
-                            field("dont_reply"),
-                            0,
-                            1,
-                        )? != 0,
-                        protocol_version: rt::get(&mut field, "protocol_version")?,
-                        api_major: rt::get(&mut field, "api_major")?,
-                        api_minor: rt::get(&mut field, "api_minor")?,
-                    })
+                    rt::Ok(
+                        Self::ApiVersionReply(response::ApiVersionReply {
+                            dont_reply: rt::field_int(
+                                "dont_reply",
+                                field("dont_reply"),
+                                0,
+                                1,
+                            )? != 0,
+                            protocol_version: rt::get(&mut field, "protocol_version")?,
+                            api_major: rt::get(&mut field, "api_major")?,
+                            api_minor: rt::get(&mut field, "api_minor")?,
+                        }),
+                    )
                 }
                 "fc_variant_reply" => {
-                    rt::Ok(Self::FcVariantReply {
-                        dont_reply: rt::field_int(
-                            "dont_reply",
-                            field("dont_reply"),
-                            0,
-                            1,
-                        )? != 0,
-                        variant: rt::text(&mut field, "variant")?,
-                    })
+                    rt::Ok(
+                        Self::FcVariantReply(response::FcVariantReply {
+                            dont_reply: rt::field_int(
+                                "dont_reply",
+                                field("dont_reply"),
+                                0,
+                                1,
+                            )? != 0,
+                            variant: rt::text(&mut field, "variant")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -657,28 +726,31 @@ pub mod msp_v2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<MspV2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `api_version`, code 0x0100
-        pub const API_VERSION: MessageDesc = MessageDesc::new(
-            "api_version",
-            0x0100,
-            2,
-            &[9],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 MSP_API_VERSION (1) (code `0x0100`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ApiVersion {
+            pub dont_reply: bool,
+        }
+        /// §3 MSP_FC_VARIANT (2) (code `0x0200`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct FcVariant {
+            pub dont_reply: bool,
+        }
         /// `api_version.reserved_flags`
         pub const API_VERSION_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
             "api_version",
             "reserved_flags",
-        );
-        /// `fc_variant`, code 0x0200
-        pub const FC_VARIANT: MessageDesc = MessageDesc::new(
-            "fc_variant",
-            0x0200,
-            2,
-            &[9],
         );
         /// `fc_variant.reserved_flags`
         pub const FC_VARIANT_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
@@ -686,27 +758,33 @@ pub mod msp_v2 {
             "reserved_flags",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `api_version_reply`, code 0x0100
-        pub const API_VERSION_REPLY: MessageDesc = MessageDesc::new(
-            "api_version_reply",
-            0x0100,
-            2,
-            &[12],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 MSP_API_VERSION (1), answered (code `0x0100`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ApiVersionReply {
+            pub dont_reply: bool,
+            pub protocol_version: u8,
+            pub api_major: u8,
+            pub api_minor: u8,
+        }
+        /// §3 MSP_FC_VARIANT (2), answered (code `0x0200`, 13 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct FcVariantReply {
+            pub dont_reply: bool,
+            pub variant: super::rt::Ascii<4>,
+        }
         /// `api_version_reply.reserved_flags`
         pub const API_VERSION_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(
             "api_version_reply",
             "reserved_flags",
-        );
-        /// `fc_variant_reply`, code 0x0200
-        pub const FC_VARIANT_REPLY: MessageDesc = MessageDesc::new(
-            "fc_variant_reply",
-            0x0200,
-            2,
-            &[13],
         );
         /// `fc_variant_reply.reserved_flags`
         pub const FC_VARIANT_REPLY_RESERVED_FLAGS: FieldDesc = FieldDesc::new(

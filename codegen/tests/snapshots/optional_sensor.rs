@@ -237,16 +237,42 @@ pub mod optional_sensor {
             Self(raw)
         }
     }
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::LastEvent {
+        pub const NAME: &'static str = "last_event";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::LastEvent(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 Read the sensor (code `0x01`, 5 bytes).
-        Read,
-        /// §4 Read the last event (code `0x02`, 5 bytes).
-        LastEvent,
+        Read(request::Read),
+        LastEvent(request::LastEvent),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -257,8 +283,8 @@ pub mod optional_sensor {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Read => 0,
-                Self::LastEvent => 1,
+                Self::Read(_) => 0,
+                Self::LastEvent(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -287,8 +313,12 @@ pub mod optional_sensor {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::Read => rt::head(out, &[0xA5, address, 0x00, 0x01]).len(),
-                Self::LastEvent => rt::head(out, &[0xA5, address, 0x00, 0x02]).len(),
+                Self::Read(request::Read {}) => {
+                    rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
+                }
+                Self::LastEvent(request::LastEvent {}) => {
+                    rt::head(out, &[0xA5, address, 0x00, 0x02]).len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
             rt::Ok(len)
@@ -313,9 +343,13 @@ pub mod optional_sensor {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
-                0x01 => rt::fixed::<5>(frame, &request::READ).map(|_| Self::Read),
+                0x01 => {
+                    rt::fixed::<5>(frame, &request::Read::DESC)
+                        .map(|_| Self::Read(request::Read))
+                }
                 0x02 => {
-                    rt::fixed::<5>(frame, &request::LAST_EVENT).map(|_| Self::LastEvent)
+                    rt::fixed::<5>(frame, &request::LastEvent::DESC)
+                        .map(|_| Self::LastEvent(request::LastEvent))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
@@ -328,8 +362,8 @@ pub mod optional_sensor {
             _field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read" => rt::Ok(Self::Read),
-                "last_event" => rt::Ok(Self::LastEvent),
+                "read" => rt::Ok(Self::Read(request::Read)),
+                "last_event" => rt::Ok(Self::LastEvent(request::LastEvent)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -452,28 +486,63 @@ pub mod optional_sensor {
         ],
         lengths: &[6, 8],
     };
+    impl response::Reading {
+        pub const NAME: &'static str = "reading";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x81,
+            1,
+            &[8],
+        );
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub const TEMPERATURE: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+            if let rt::Some(v_humidity) = self.humidity {
+                f("humidity", rt::Int(v_humidity.raw() as i64))
+            }
+            if let rt::Some(v_pressure) = self.pressure {
+                f("pressure", rt::Int(v_pressure as i64))
+            }
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Reading(*self).encode(address, buf)
+        }
+    }
+    impl response::Event {
+        pub const NAME: &'static str = "event";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x82,
+            1,
+            &[6],
+        );
+        pub const KIND: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("kind", rt::Int(self.kind.raw() as i64));
+            if let rt::Some(v_detail) = self.detail {
+                f("detail", rt::Int(v_detail as i64))
+            }
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Event(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 Reading (code `0x81`, 8 to 14 bytes).
-        Reading {
-            status: ReadingPresent,
-            /// \[°C\]
-            temperature: Decicelsius,
-            /// \[%\] Valid raw range 0..=1000. On the wire only when bit 0 of `status` is set; `None` where it is not.
-            humidity: rt::Option<Permille>,
-            /// \[Pa\] On the wire only when bit 1 of `status` is set; `None` where it is not.
-            pressure: rt::Option<u32>,
-        },
-        /// §4 Last event (code `0x82`, 6 to 8 bytes).
-        Event {
-            kind: EventKind,
-            /// On the wire only when `kind` = 2; `None` where it is not.
-            detail: rt::Option<u16>,
-        },
+        Reading(response::Reading),
+        Event(response::Event),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -484,8 +553,8 @@ pub mod optional_sensor {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Reading { .. } => 0,
-                Self::Event { .. } => 1,
+                Self::Reading(_) => 0,
+                Self::Event(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -499,11 +568,13 @@ pub mod optional_sensor {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Reading { humidity: v_humidity, pressure: v_pressure, .. } => {
+                Self::Reading(
+                    response::Reading { humidity: v_humidity, pressure: v_pressure, .. },
+                ) => {
                     OPTIONAL_READING
                         .frame_len(&[v_humidity.is_some(), v_pressure.is_some()])
                 }
-                Self::Event { detail: v_detail, .. } => {
+                Self::Event(response::Event { detail: v_detail, .. }) => {
                     OPTIONAL_EVENT.frame_len(&[v_detail.is_some()])
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -511,29 +582,10 @@ pub mod optional_sensor {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Reading {
-                    status: v_status,
-                    temperature: v_temperature,
-                    humidity: v_humidity,
-                    pressure: v_pressure,
-                } => {
-                    f("status", rt::Int(v_status.raw() as i64));
-                    f("temperature", rt::Int(v_temperature.raw() as i64));
-                    if let rt::Some(v_humidity) = v_humidity {
-                        f("humidity", rt::Int(v_humidity.raw() as i64))
-                    }
-                    if let rt::Some(v_pressure) = v_pressure {
-                        f("pressure", rt::Int(*v_pressure as i64))
-                    }
-                }
-                Self::Event { kind: v_kind, detail: v_detail } => {
-                    f("kind", rt::Int(v_kind.raw() as i64));
-                    if let rt::Some(v_detail) = v_detail {
-                        f("detail", rt::Int(*v_detail as i64))
-                    }
-                }
+                Self::Reading(m) => m.visit(f),
+                Self::Event(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -546,12 +598,14 @@ pub mod optional_sensor {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Reading {
-                    status: v_status,
-                    temperature: v_temperature,
-                    humidity: v_humidity,
-                    pressure: v_pressure,
-                } => {
+                Self::Reading(
+                    response::Reading {
+                        status: v_status,
+                        temperature: v_temperature,
+                        humidity: v_humidity,
+                        pressure: v_pressure,
+                    },
+                ) => {
                     if let rt::Some(v_humidity) = v_humidity {
                         rt::encode_in_range("humidity", v_humidity.raw(), 0, 1000)?;
                     }
@@ -591,7 +645,7 @@ pub mod optional_sensor {
                     rt::put_length(out, 2, 1, false, true, -5)?;
                     out.len()
                 }
-                Self::Event { kind: v_kind, detail: v_detail } => {
+                Self::Event(response::Event { kind: v_kind, detail: v_detail }) => {
                     let mut compact = [0u8; 8];
                     let out = {
                         compact[..2].copy_from_slice(&[0xA5, address]);
@@ -692,14 +746,16 @@ pub mod optional_sensor {
                     } else {
                         rt::None
                     };
-                    rt::Ok(Self::Reading {
-                        status: ReadingPresent::from_raw(frame[4]),
-                        temperature: Decicelsius::from_raw(
-                            i16::from_be_bytes([frame[5], frame[6]]),
-                        ),
-                        humidity: v_humidity,
-                        pressure: v_pressure,
-                    })
+                    rt::Ok(
+                        Self::Reading(response::Reading {
+                            status: ReadingPresent::from_raw(frame[4]),
+                            temperature: Decicelsius::from_raw(
+                                i16::from_be_bytes([frame[5], frame[6]]),
+                            ),
+                            humidity: v_humidity,
+                            pressure: v_pressure,
+                        }),
+                    )
                 }
                 0x82 => {
                     let s = OPTIONAL_EVENT.split::<8>(frame)?;
@@ -709,10 +765,12 @@ pub mod optional_sensor {
                     } else {
                         rt::None
                     };
-                    rt::Ok(Self::Event {
-                        kind: EventKind::from_raw(frame[4]),
-                        detail: v_detail,
-                    })
+                    rt::Ok(
+                        Self::Event(response::Event {
+                            kind: EventKind::from_raw(frame[4]),
+                            detail: v_detail,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
@@ -726,21 +784,27 @@ pub mod optional_sensor {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "reading" => {
-                    rt::Ok(Self::Reading {
-                        status: ReadingPresent::from_raw(rt::get(&mut field, "status")?),
-                        temperature: Decicelsius::from_raw(
-                            rt::get(&mut field, "temperature")?,
-                        ),
-                        humidity: rt::get_opt::<u16>(&mut field, "humidity")?
-                            .map(Permille::from_raw),
-                        pressure: rt::get_opt::<u32>(&mut field, "pressure")?,
-                    })
+                    rt::Ok(
+                        Self::Reading(response::Reading {
+                            status: ReadingPresent::from_raw(
+                                rt::get(&mut field, "status")?,
+                            ),
+                            temperature: Decicelsius::from_raw(
+                                rt::get(&mut field, "temperature")?,
+                            ),
+                            humidity: rt::get_opt::<u16>(&mut field, "humidity")?
+                                .map(Permille::from_raw),
+                            pressure: rt::get_opt::<u32>(&mut field, "pressure")?,
+                        }),
+                    )
                 }
                 "event" => {
-                    rt::Ok(Self::Event {
-                        kind: EventKind::from_raw(rt::get(&mut field, "kind")?),
-                        detail: rt::get_opt::<u16>(&mut field, "detail")?,
-                    })
+                    rt::Ok(
+                        Self::Event(response::Event {
+                            kind: EventKind::from_raw(rt::get(&mut field, "kind")?),
+                            detail: rt::get_opt::<u16>(&mut field, "detail")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -922,28 +986,49 @@ pub mod optional_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<OptionalSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `read`, code 0x01
-        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[5]);
-        /// `last_event`, code 0x02
-        pub const LAST_EVENT: MessageDesc = MessageDesc::new(
-            "last_event",
-            0x02,
-            1,
-            &[5],
-        );
+        /// §3 Read the sensor (code `0x01`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Read;
+        /// §4 Read the last event (code `0x02`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct LastEvent;
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `reading`, code 0x81
-        pub const READING: MessageDesc = MessageDesc::new("reading", 0x81, 1, &[8]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3 Reading (code `0x81`, 8 to 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Reading {
+            pub status: super::ReadingPresent,
+            /// \[°C\]
+            pub temperature: super::Decicelsius,
+            /// \[%\] Valid raw range 0..=1000. On the wire only when bit 0 of `status` is set; `None` where it is not.
+            pub humidity: super::rt::Option<super::Permille>,
+            /// \[Pa\] On the wire only when bit 1 of `status` is set; `None` where it is not.
+            pub pressure: super::rt::Option<u32>,
+        }
+        /// §4 Last event (code `0x82`, 6 to 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Event {
+            pub kind: super::EventKind,
+            /// On the wire only when `kind` = 2; `None` where it is not.
+            pub detail: super::rt::Option<u16>,
+        }
         /// `reading.humidity`
         pub const READING_HUMIDITY: FieldDesc = FieldDesc::new("reading", "humidity");
-        /// `event`, code 0x82
-        pub const EVENT: MessageDesc = MessageDesc::new("event", 0x82, 1, &[6]);
     }
 }

@@ -80,30 +80,75 @@ pub mod packed_channels {
     pub fn checksum(bytes: &[u8]) -> u8 {
         CRC.checksum(bytes)
     }
+    impl request::Channels {
+        pub const NAME: &'static str = "channels";
+        pub const CODE: &'static [u8] = &[0x16];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x16,
+            1,
+            &[11],
+        );
+        pub const CHANNELS: rt::Range<usize> = 3..9;
+        pub const FLAGS: rt::Range<usize> = 9..10;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("channels", rt::List(self.channels.elements()));
+            f("flags", rt::Int(self.flags as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Channels(*self).encode(address, buf)
+        }
+    }
+    impl request::Levels {
+        pub const NAME: &'static str = "levels";
+        pub const CODE: &'static [u8] = &[0x17];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x17,
+            1,
+            &[7],
+        );
+        pub const BANK: rt::Range<usize> = 3..4;
+        pub const LEVELS: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("bank", rt::Int(self.bank as i64));
+            f("levels", rt::List(self.levels.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Levels(*self).encode(address, buf)
+        }
+    }
+    impl request::Calibrate {
+        pub const NAME: &'static str = "calibrate";
+        pub const CODE: &'static [u8] = &[0x19];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x19,
+            1,
+            &[12],
+        );
+        pub const OFFSETS: rt::Range<usize> = 3..9;
+        pub const GAINS: rt::Range<usize> = 9..11;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("offsets", rt::List(self.offsets.elements()));
+            f("gains", rt::List(self.gains.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Calibrate(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Channels (code `0x16`, 11 bytes).
-        Channels {
-            /// Valid raw range 0..=1999.
-            channels: rt::Repeated<u16, 4>,
-            flags: u8,
-        },
-        /// §3.2 Levels (code `0x17`, 7 bytes).
-        Levels {
-            bank: u8,
-            /// Valid raw range 0..=6.
-            levels: rt::Repeated<u8, 5>,
-        },
-        /// §3.3 Calibrate (code `0x19`, 12 bytes).
-        Calibrate {
-            offsets: rt::Repeated<u16, 3>,
-            /// Valid raw range 1..=9.
-            gains: rt::Repeated<u8, 2>,
-        },
+        Channels(request::Channels),
+        Levels(request::Levels),
+        Calibrate(request::Calibrate),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -115,9 +160,9 @@ pub mod packed_channels {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Channels { .. } => 0,
-                Self::Levels { .. } => 1,
-                Self::Calibrate { .. } => 2,
+                Self::Channels(_) => 0,
+                Self::Levels(_) => 1,
+                Self::Calibrate(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -134,20 +179,11 @@ pub mod packed_channels {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Channels { channels: v_channels, flags: v_flags } => {
-                    f("channels", rt::List(v_channels.elements()));
-                    f("flags", rt::Int(*v_flags as i64));
-                }
-                Self::Levels { bank: v_bank, levels: v_levels } => {
-                    f("bank", rt::Int(*v_bank as i64));
-                    f("levels", rt::List(v_levels.elements()));
-                }
-                Self::Calibrate { offsets: v_offsets, gains: v_gains } => {
-                    f("offsets", rt::List(v_offsets.elements()));
-                    f("gains", rt::List(v_gains.elements()));
-                }
+                Self::Channels(m) => m.visit(f),
+                Self::Levels(m) => m.visit(f),
+                Self::Calibrate(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -160,7 +196,9 @@ pub mod packed_channels {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Channels { channels: v_channels, flags: v_flags } => {
+                Self::Channels(
+                    request::Channels { channels: v_channels, flags: v_flags },
+                ) => {
                     rt::encode_packed_in_range(
                         "channels",
                         v_channels.as_slice(),
@@ -179,7 +217,7 @@ pub mod packed_channels {
                     out[9] = v_flags;
                     out.len()
                 }
-                Self::Levels { bank: v_bank, levels: v_levels } => {
+                Self::Levels(request::Levels { bank: v_bank, levels: v_levels }) => {
                     rt::encode_packed_in_range("levels", v_levels.as_slice(), 0, 6)?;
                     let out = rt::frame_mut::<7>(buf, &[0xC8, 0x05, 0x17])?;
                     out[3] = v_bank;
@@ -193,7 +231,9 @@ pub mod packed_channels {
                     )?;
                     out.len()
                 }
-                Self::Calibrate { offsets: v_offsets, gains: v_gains } => {
+                Self::Calibrate(
+                    request::Calibrate { offsets: v_offsets, gains: v_gains },
+                ) => {
                     rt::encode_packed_in_range("gains", v_gains.as_slice(), 1, 9)?;
                     let out = rt::frame_mut::<12>(buf, &[0xC8, 0x0A, 0x19])?;
                     rt::pack(
@@ -232,7 +272,7 @@ pub mod packed_channels {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x16 => {
-                    let frame = rt::fixed::<11>(frame, &request::CHANNELS)?;
+                    let frame = rt::fixed::<11>(frame, &request::Channels::DESC)?;
                     rt::equal(
                         &request::CHANNELS_CHANNELS,
                         3 + 5,
@@ -248,13 +288,15 @@ pub mod packed_channels {
                         0,
                         1999,
                     )?;
-                    rt::Ok(Self::Channels {
-                        channels: v_channels,
-                        flags: frame[9],
-                    })
+                    rt::Ok(
+                        Self::Channels(request::Channels {
+                            channels: v_channels,
+                            flags: frame[9],
+                        }),
+                    )
                 }
                 0x17 => {
-                    let frame = rt::fixed::<7>(frame, &request::LEVELS)?;
+                    let frame = rt::fixed::<7>(frame, &request::Levels::DESC)?;
                     rt::equal(
                         &request::LEVELS_LEVELS,
                         4 + 1,
@@ -270,13 +312,15 @@ pub mod packed_channels {
                         0,
                         6,
                     )?;
-                    rt::Ok(Self::Levels {
-                        bank: frame[3],
-                        levels: v_levels,
-                    })
+                    rt::Ok(
+                        Self::Levels(request::Levels {
+                            bank: frame[3],
+                            levels: v_levels,
+                        }),
+                    )
                 }
                 0x19 => {
-                    let frame = rt::fixed::<12>(frame, &request::CALIBRATE)?;
+                    let frame = rt::fixed::<12>(frame, &request::Calibrate::DESC)?;
                     rt::equal(
                         &request::CALIBRATE_OFFSETS,
                         3 + 5,
@@ -299,10 +343,12 @@ pub mod packed_channels {
                         1,
                         9,
                     )?;
-                    rt::Ok(Self::Calibrate {
-                        offsets: v_offsets,
-                        gains: v_gains,
-                    })
+                    rt::Ok(
+                        Self::Calibrate(request::Calibrate {
+                            offsets: v_offsets,
+                            gains: v_gains,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -316,22 +362,34 @@ pub mod packed_channels {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "channels" => {
-                    rt::Ok(Self::Channels {
-                        channels: rt::list::<u16, 4>(&mut field, "channels", 0, 65535)?,
-                        flags: rt::get(&mut field, "flags")?,
-                    })
+                    rt::Ok(
+                        Self::Channels(request::Channels {
+                            channels: rt::list::<
+                                u16,
+                                4,
+                            >(&mut field, "channels", 0, 65535)?,
+                            flags: rt::get(&mut field, "flags")?,
+                        }),
+                    )
                 }
                 "levels" => {
-                    rt::Ok(Self::Levels {
-                        bank: rt::get(&mut field, "bank")?,
-                        levels: rt::list::<u8, 5>(&mut field, "levels", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::Levels(request::Levels {
+                            bank: rt::get(&mut field, "bank")?,
+                            levels: rt::list::<u8, 5>(&mut field, "levels", 0, 255)?,
+                        }),
+                    )
                 }
                 "calibrate" => {
-                    rt::Ok(Self::Calibrate {
-                        offsets: rt::list::<u16, 3>(&mut field, "offsets", 0, 65535)?,
-                        gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::Calibrate(request::Calibrate {
+                            offsets: rt::list::<
+                                u16,
+                                3,
+                            >(&mut field, "offsets", 0, 65535)?,
+                            gains: rt::list::<u8, 2>(&mut field, "gains", 0, 255)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -389,9 +447,9 @@ pub mod packed_channels {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::Channels { .. } => rt::Reply::Optional,
-                    Request::Levels { .. } => rt::Reply::None,
-                    Request::Calibrate { .. } => rt::Reply::None,
+                    Request::Channels(_) => rt::Reply::Optional,
+                    Request::Levels(_) => rt::Reply::None,
+                    Request::Calibrate(_) => rt::Reply::None,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -402,17 +460,31 @@ pub mod packed_channels {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Readings {
+        pub const NAME: &'static str = "readings";
+        pub const CODE: &'static [u8] = &[0x18];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x18,
+            1,
+            &[12],
+        );
+        pub const READINGS: rt::Range<usize> = 3..11;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("readings", rt::List(self.readings.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Readings(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 Readings (code `0x18`, 12 bytes).
-        Readings {
-            /// \[mV\]
-            readings: rt::Repeated<u32, 3>,
-        },
+        Readings(response::Readings),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -422,7 +494,7 @@ pub mod packed_channels {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Readings { .. } => 0,
+                Self::Readings(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -439,11 +511,9 @@ pub mod packed_channels {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Readings { readings: v_readings } => {
-                    f("readings", rt::List(v_readings.elements()))
-                }
+                Self::Readings(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -457,7 +527,7 @@ pub mod packed_channels {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<12>(buf, &[])?;
             let len = match *self {
-                Self::Readings { readings: v_readings } => {
+                Self::Readings(response::Readings { readings: v_readings }) => {
                     let out = rt::head(out, &[0xC8, 0x0A, 0x18]);
                     rt::pack(
                         "readings",
@@ -521,7 +591,7 @@ pub mod packed_channels {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x18 => {
-                    let frame = rt::fixed::<12>(frame, &response::READINGS)?;
+                    let frame = rt::fixed::<12>(frame, &response::Readings::DESC)?;
                     rt::equal(
                         &response::READINGS_READINGS,
                         3 + 7,
@@ -529,9 +599,11 @@ pub mod packed_channels {
                         0,
                     )?;
                     let v_readings = rt::unpack::<u32, 3>(&frame[3..11], 20, false);
-                    rt::Ok(Self::Readings {
-                        readings: v_readings,
-                    })
+                    rt::Ok(
+                        Self::Readings(response::Readings {
+                            readings: v_readings,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -545,12 +617,14 @@ pub mod packed_channels {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "readings" => {
-                    rt::Ok(Self::Readings {
-                        readings: rt::list::<
-                            u32,
-                            3,
-                        >(&mut field, "readings", 0, 4294967295)?,
-                    })
+                    rt::Ok(
+                        Self::Readings(response::Readings {
+                            readings: rt::list::<
+                                u32,
+                                3,
+                            >(&mut field, "readings", 0, 4294967295)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -704,30 +778,62 @@ pub mod packed_channels {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PackedChannels>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `channels`, code 0x16
-        pub const CHANNELS: MessageDesc = MessageDesc::new("channels", 0x16, 1, &[11]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Channels (code `0x16`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Channels {
+            /// Valid raw range 0..=1999.
+            pub channels: super::rt::Repeated<u16, 4>,
+            pub flags: u8,
+        }
+        /// §3.2 Levels (code `0x17`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Levels {
+            pub bank: u8,
+            /// Valid raw range 0..=6.
+            pub levels: super::rt::Repeated<u8, 5>,
+        }
+        /// §3.3 Calibrate (code `0x19`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Calibrate {
+            pub offsets: super::rt::Repeated<u16, 3>,
+            /// Valid raw range 1..=9.
+            pub gains: super::rt::Repeated<u8, 2>,
+        }
         /// `channels.channels`
         pub const CHANNELS_CHANNELS: FieldDesc = FieldDesc::new("channels", "channels");
-        /// `levels`, code 0x17
-        pub const LEVELS: MessageDesc = MessageDesc::new("levels", 0x17, 1, &[7]);
         /// `levels.levels`
         pub const LEVELS_LEVELS: FieldDesc = FieldDesc::new("levels", "levels");
-        /// `calibrate`, code 0x19
-        pub const CALIBRATE: MessageDesc = MessageDesc::new("calibrate", 0x19, 1, &[12]);
         /// `calibrate.offsets`
         pub const CALIBRATE_OFFSETS: FieldDesc = FieldDesc::new("calibrate", "offsets");
         /// `calibrate.gains`
         pub const CALIBRATE_GAINS: FieldDesc = FieldDesc::new("calibrate", "gains");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `readings`, code 0x18
-        pub const READINGS: MessageDesc = MessageDesc::new("readings", 0x18, 1, &[12]);
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 Readings (code `0x18`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Readings {
+            /// \[mV\]
+            pub readings: super::rt::Repeated<u32, 3>,
+        }
         /// `readings.readings`
         pub const READINGS_READINGS: FieldDesc = FieldDesc::new("readings", "readings");
     }

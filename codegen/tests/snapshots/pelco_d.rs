@@ -115,55 +115,79 @@ pub mod pelco_d2 {
             Self(raw)
         }
     }
+    impl request::Ptz {
+        pub const NAME: &'static str = "ptz";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[7]);
+        pub const PAN_SPEED: rt::Range<usize> = 4..5;
+        pub const TILT_SPEED: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("sense", rt::Int(self.sense as i64));
+            f("auto_scan", rt::Int(self.auto_scan as i64));
+            f("camera_on", rt::Int(self.camera_on as i64));
+            f("iris_close", rt::Int(self.iris_close as i64));
+            f("iris_open", rt::Int(self.iris_open as i64));
+            f("focus_near", rt::Int(self.focus_near as i64));
+            f("focus_far", rt::Int(self.focus_far as i64));
+            f("zoom_wide", rt::Int(self.zoom_wide as i64));
+            f("zoom_tele", rt::Int(self.zoom_tele as i64));
+            f("tilt_down", rt::Int(self.tilt_down as i64));
+            f("tilt_up", rt::Int(self.tilt_up as i64));
+            f("pan_left", rt::Int(self.pan_left as i64));
+            f("pan_right", rt::Int(self.pan_right as i64));
+            f("pan_speed", rt::Int(self.pan_speed as i64));
+            f("tilt_speed", rt::Int(self.tilt_speed as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ptz(*self).encode(address, buf)
+        }
+    }
+    impl request::SetPreset {
+        pub const NAME: &'static str = "set_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x03];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0003,
+            2,
+            &[7],
+        );
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPreset(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToPreset {
+        pub const NAME: &'static str = "go_to_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x07];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0007,
+            2,
+            &[7],
+        );
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToPreset(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 Pan, tilt, zoom, focus, iris (standard command) (code `0x`, 7 bytes).
-        Ptz {
-            /// \[step\]
-            sense: bool,
-            /// \[step\]
-            auto_scan: bool,
-            /// \[step\]
-            camera_on: bool,
-            /// \[step\]
-            iris_close: bool,
-            /// \[step\]
-            iris_open: bool,
-            /// \[step\]
-            focus_near: bool,
-            /// \[step\]
-            focus_far: bool,
-            /// \[step\]
-            zoom_wide: bool,
-            /// \[step\]
-            zoom_tele: bool,
-            /// \[step\]
-            tilt_down: bool,
-            /// \[step\]
-            tilt_up: bool,
-            /// \[step\]
-            pan_left: bool,
-            /// \[step\]
-            pan_right: bool,
-            /// \[step\] Valid raw range 0..=63. Raw 255 = turbo.
-            pan_speed: u8,
-            /// \[step\] Valid raw range 0..=63.
-            tilt_speed: u8,
-        },
-        /// §4 Set preset (code `0x0003`, 7 bytes).
-        SetPreset {
-            /// \[#\] Valid raw range 1..=255.
-            preset: u8,
-        },
-        /// §4 Go to preset (code `0x0007`, 7 bytes).
-        GoToPreset {
-            /// \[#\] Valid raw range 1..=255.
-            preset: u8,
-        },
+        Ptz(request::Ptz),
+        SetPreset(request::SetPreset),
+        GoToPreset(request::GoToPreset),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -175,9 +199,9 @@ pub mod pelco_d2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ptz { .. } => 0,
-                Self::SetPreset { .. } => 1,
-                Self::GoToPreset { .. } => 2,
+                Self::Ptz(_) => 0,
+                Self::SetPreset(_) => 1,
+                Self::GoToPreset(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -194,47 +218,11 @@ pub mod pelco_d2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ptz {
-                    sense: v_sense,
-                    auto_scan: v_auto_scan,
-                    camera_on: v_camera_on,
-                    iris_close: v_iris_close,
-                    iris_open: v_iris_open,
-                    focus_near: v_focus_near,
-                    focus_far: v_focus_far,
-                    zoom_wide: v_zoom_wide,
-                    zoom_tele: v_zoom_tele,
-                    tilt_down: v_tilt_down,
-                    tilt_up: v_tilt_up,
-                    pan_left: v_pan_left,
-                    pan_right: v_pan_right,
-                    pan_speed: v_pan_speed,
-                    tilt_speed: v_tilt_speed,
-                } => {
-                    f("sense", rt::Int(*v_sense as i64));
-                    f("auto_scan", rt::Int(*v_auto_scan as i64));
-                    f("camera_on", rt::Int(*v_camera_on as i64));
-                    f("iris_close", rt::Int(*v_iris_close as i64));
-                    f("iris_open", rt::Int(*v_iris_open as i64));
-                    f("focus_near", rt::Int(*v_focus_near as i64));
-                    f("focus_far", rt::Int(*v_focus_far as i64));
-                    f("zoom_wide", rt::Int(*v_zoom_wide as i64));
-                    f("zoom_tele", rt::Int(*v_zoom_tele as i64));
-                    f("tilt_down", rt::Int(*v_tilt_down as i64));
-                    f("tilt_up", rt::Int(*v_tilt_up as i64));
-                    f("pan_left", rt::Int(*v_pan_left as i64));
-                    f("pan_right", rt::Int(*v_pan_right as i64));
-                    f("pan_speed", rt::Int(*v_pan_speed as i64));
-                    f("tilt_speed", rt::Int(*v_tilt_speed as i64));
-                }
-                Self::SetPreset { preset: v_preset } => {
-                    f("preset", rt::Int(*v_preset as i64))
-                }
-                Self::GoToPreset { preset: v_preset } => {
-                    f("preset", rt::Int(*v_preset as i64))
-                }
+                Self::Ptz(m) => m.visit(f),
+                Self::SetPreset(m) => m.visit(f),
+                Self::GoToPreset(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -248,23 +236,25 @@ pub mod pelco_d2 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::Ptz {
-                    sense: v_sense,
-                    auto_scan: v_auto_scan,
-                    camera_on: v_camera_on,
-                    iris_close: v_iris_close,
-                    iris_open: v_iris_open,
-                    focus_near: v_focus_near,
-                    focus_far: v_focus_far,
-                    zoom_wide: v_zoom_wide,
-                    zoom_tele: v_zoom_tele,
-                    tilt_down: v_tilt_down,
-                    tilt_up: v_tilt_up,
-                    pan_left: v_pan_left,
-                    pan_right: v_pan_right,
-                    pan_speed: v_pan_speed,
-                    tilt_speed: v_tilt_speed,
-                } => {
+                Self::Ptz(
+                    request::Ptz {
+                        sense: v_sense,
+                        auto_scan: v_auto_scan,
+                        camera_on: v_camera_on,
+                        iris_close: v_iris_close,
+                        iris_open: v_iris_open,
+                        focus_near: v_focus_near,
+                        focus_far: v_focus_far,
+                        zoom_wide: v_zoom_wide,
+                        zoom_tele: v_zoom_tele,
+                        tilt_down: v_tilt_down,
+                        tilt_up: v_tilt_up,
+                        pan_left: v_pan_left,
+                        pan_right: v_pan_right,
+                        pan_speed: v_pan_speed,
+                        tilt_speed: v_tilt_speed,
+                    },
+                ) => {
                     rt::encode_in_range_or("pan_speed", v_pan_speed, 0, 63, &[255])?;
                     rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
                     let out = rt::head(out, &[0xFF, address]);
@@ -280,13 +270,13 @@ pub mod pelco_d2 {
                     out[5] = v_tilt_speed;
                     out.len()
                 }
-                Self::SetPreset { preset: v_preset } => {
+                Self::SetPreset(request::SetPreset { preset: v_preset }) => {
                     rt::encode_in_range("preset", v_preset, 1, 255)?;
                     let out = rt::head(out, &[0xFF, address, 0x00, 0x03, 0x00]);
                     out[5] = v_preset;
                     out.len()
                 }
-                Self::GoToPreset { preset: v_preset } => {
+                Self::GoToPreset(request::GoToPreset { preset: v_preset }) => {
                     rt::encode_in_range("preset", v_preset, 1, 255)?;
                     let out = rt::head(out, &[0xFF, address, 0x00, 0x07, 0x00]);
                     out[5] = v_preset;
@@ -328,12 +318,14 @@ pub mod pelco_d2 {
                                     1,
                                     255,
                                 )?;
-                                rt::Ok(Self::SetPreset {
-                                    preset: frame[5],
-                                })
+                                rt::Ok(
+                                    Self::SetPreset(request::SetPreset {
+                                        preset: frame[5],
+                                    }),
+                                )
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end(&request::SET_PRESET)
+                            g.end(&request::SetPreset::DESC)
                         };
                     }
                     0x0007 => {
@@ -348,18 +340,20 @@ pub mod pelco_d2 {
                                     1,
                                     255,
                                 )?;
-                                rt::Ok(Self::GoToPreset {
-                                    preset: frame[5],
-                                })
+                                rt::Ok(
+                                    Self::GoToPreset(request::GoToPreset {
+                                        preset: frame[5],
+                                    }),
+                                )
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end(&request::GO_TO_PRESET)
+                            g.end(&request::GoToPreset::DESC)
                         };
                     }
                     _ => {}
                 }
             }
-            rt::fixed::<7>(frame, &request::PTZ).and_then(Self::codeless_ptz)
+            rt::fixed::<7>(frame, &request::Ptz::DESC).and_then(Self::codeless_ptz)
         }
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
@@ -369,23 +363,25 @@ pub mod pelco_d2 {
             rt::equal(&request::PTZ_EXTENDED, 2, field_0 & 0x1, 0x0)?;
             rt::in_range_or(&request::PTZ_PAN_SPEED, 4, frame[4], 0, 63, &[255])?;
             rt::in_range(&request::PTZ_TILT_SPEED, 5, frame[5], 0, 63)?;
-            rt::Ok(Self::Ptz {
-                sense: (field_0 >> 15) != 0,
-                auto_scan: ((field_0 >> 12) & 0x1) != 0,
-                camera_on: ((field_0 >> 11) & 0x1) != 0,
-                iris_close: ((field_0 >> 10) & 0x1) != 0,
-                iris_open: ((field_0 >> 9) & 0x1) != 0,
-                focus_near: ((field_0 >> 8) & 0x1) != 0,
-                focus_far: ((field_0 >> 7) & 0x1) != 0,
-                zoom_wide: ((field_0 >> 6) & 0x1) != 0,
-                zoom_tele: ((field_0 >> 5) & 0x1) != 0,
-                tilt_down: ((field_0 >> 4) & 0x1) != 0,
-                tilt_up: ((field_0 >> 3) & 0x1) != 0,
-                pan_left: ((field_0 >> 2) & 0x1) != 0,
-                pan_right: ((field_0 >> 1) & 0x1) != 0,
-                pan_speed: frame[4],
-                tilt_speed: frame[5],
-            })
+            rt::Ok(
+                Self::Ptz(request::Ptz {
+                    sense: (field_0 >> 15) != 0,
+                    auto_scan: ((field_0 >> 12) & 0x1) != 0,
+                    camera_on: ((field_0 >> 11) & 0x1) != 0,
+                    iris_close: ((field_0 >> 10) & 0x1) != 0,
+                    iris_open: ((field_0 >> 9) & 0x1) != 0,
+                    focus_near: ((field_0 >> 8) & 0x1) != 0,
+                    focus_far: ((field_0 >> 7) & 0x1) != 0,
+                    zoom_wide: ((field_0 >> 6) & 0x1) != 0,
+                    zoom_tele: ((field_0 >> 5) & 0x1) != 0,
+                    tilt_down: ((field_0 >> 4) & 0x1) != 0,
+                    tilt_up: ((field_0 >> 3) & 0x1) != 0,
+                    pan_left: ((field_0 >> 2) & 0x1) != 0,
+                    pan_right: ((field_0 >> 1) & 0x1) != 0,
+                    pan_speed: frame[4],
+                    tilt_speed: frame[5],
+                }),
+            )
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -396,52 +392,91 @@ pub mod pelco_d2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ptz" => {
-                    rt::Ok(Self::Ptz {
-                        sense: rt::field_int("sense", field("sense"), 0, 1)? != 0,
-                        auto_scan: rt::field_int("auto_scan", field("auto_scan"), 0, 1)?
-                            != 0,
-                        camera_on: rt::field_int("camera_on", field("camera_on"), 0, 1)?
-                            != 0,
-                        iris_close: rt::field_int(
-                            "iris_close",
-                            field("iris_close"),
-                            0,
-                            1,
-                        )? != 0,
-                        iris_open: rt::field_int("iris_open", field("iris_open"), 0, 1)?
-                            != 0,
-                        focus_near: rt::field_int(
-                            "focus_near",
-                            field("focus_near"),
-                            0,
-                            1,
-                        )? != 0,
-                        focus_far: rt::field_int("focus_far", field("focus_far"), 0, 1)?
-                            != 0,
-                        zoom_wide: rt::field_int("zoom_wide", field("zoom_wide"), 0, 1)?
-                            != 0,
-                        zoom_tele: rt::field_int("zoom_tele", field("zoom_tele"), 0, 1)?
-                            != 0,
-                        tilt_down: rt::field_int("tilt_down", field("tilt_down"), 0, 1)?
-                            != 0,
-                        tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)? != 0,
-                        pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
-                            != 0,
-                        pan_right: rt::field_int("pan_right", field("pan_right"), 0, 1)?
-                            != 0,
-                        pan_speed: rt::get(&mut field, "pan_speed")?,
-                        tilt_speed: rt::get(&mut field, "tilt_speed")?,
-                    })
+                    rt::Ok(
+                        Self::Ptz(request::Ptz {
+                            sense: rt::field_int("sense", field("sense"), 0, 1)? != 0,
+                            auto_scan: rt::field_int(
+                                "auto_scan",
+                                field("auto_scan"),
+                                0,
+                                1,
+                            )? != 0,
+                            camera_on: rt::field_int(
+                                "camera_on",
+                                field("camera_on"),
+                                0,
+                                1,
+                            )? != 0,
+                            iris_close: rt::field_int(
+                                "iris_close",
+                                field("iris_close"),
+                                0,
+                                1,
+                            )? != 0,
+                            iris_open: rt::field_int(
+                                "iris_open",
+                                field("iris_open"),
+                                0,
+                                1,
+                            )? != 0,
+                            focus_near: rt::field_int(
+                                "focus_near",
+                                field("focus_near"),
+                                0,
+                                1,
+                            )? != 0,
+                            focus_far: rt::field_int(
+                                "focus_far",
+                                field("focus_far"),
+                                0,
+                                1,
+                            )? != 0,
+                            zoom_wide: rt::field_int(
+                                "zoom_wide",
+                                field("zoom_wide"),
+                                0,
+                                1,
+                            )? != 0,
+                            zoom_tele: rt::field_int(
+                                "zoom_tele",
+                                field("zoom_tele"),
+                                0,
+                                1,
+                            )? != 0,
+                            tilt_down: rt::field_int(
+                                "tilt_down",
+                                field("tilt_down"),
+                                0,
+                                1,
+                            )? != 0,
+                            tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)?
+                                != 0,
+                            pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
+                                != 0,
+                            pan_right: rt::field_int(
+                                "pan_right",
+                                field("pan_right"),
+                                0,
+                                1,
+                            )? != 0,
+                            pan_speed: rt::get(&mut field, "pan_speed")?,
+                            tilt_speed: rt::get(&mut field, "tilt_speed")?,
+                        }),
+                    )
                 }
                 "set_preset" => {
-                    rt::Ok(Self::SetPreset {
-                        preset: rt::get(&mut field, "preset")?,
-                    })
+                    rt::Ok(
+                        Self::SetPreset(request::SetPreset {
+                            preset: rt::get(&mut field, "preset")?,
+                        }),
+                    )
                 }
                 "go_to_preset" => {
-                    rt::Ok(Self::GoToPreset {
-                        preset: rt::get(&mut field, "preset")?,
-                    })
+                    rt::Ok(
+                        Self::GoToPreset(request::GoToPreset {
+                            preset: rt::get(&mut field, "preset")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -507,14 +542,26 @@ pub mod pelco_d2 {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::GeneralResponse {
+        pub const NAME: &'static str = "general_response";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[4]);
+        pub const ALARMS: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("alarms", rt::Int(self.alarms.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::GeneralResponse(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §5 General response (code `0x`, 4 bytes). FF, address, alarm bits, checksum: sent by receivers that acknowledge commands.
-        GeneralResponse { alarms: Alarms },
+        GeneralResponse(response::GeneralResponse),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -524,7 +571,7 @@ pub mod pelco_d2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::GeneralResponse { .. } => 0,
+                Self::GeneralResponse(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -541,11 +588,9 @@ pub mod pelco_d2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::GeneralResponse { alarms: v_alarms } => {
-                    f("alarms", rt::Int(v_alarms.raw() as i64))
-                }
+                Self::GeneralResponse(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -559,7 +604,9 @@ pub mod pelco_d2 {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<4>(buf, &[])?;
             let len = match *self {
-                Self::GeneralResponse { alarms: v_alarms } => {
+                Self::GeneralResponse(
+                    response::GeneralResponse { alarms: v_alarms },
+                ) => {
                     let out = rt::head(out, &[0xFF, address]);
                     out[2] = v_alarms.raw();
                     out.len()
@@ -615,10 +662,12 @@ pub mod pelco_d2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 0) {
                 0u32 => {
-                    let frame = rt::fixed::<4>(frame, &response::GENERAL_RESPONSE)?;
-                    rt::Ok(Self::GeneralResponse {
-                        alarms: Alarms::from_raw(frame[2]),
-                    })
+                    let frame = rt::fixed::<4>(frame, &response::GeneralResponse::DESC)?;
+                    rt::Ok(
+                        Self::GeneralResponse(response::GeneralResponse {
+                            alarms: Alarms::from_raw(frame[2]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 0, 1, true)),
             }
@@ -632,9 +681,11 @@ pub mod pelco_d2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "general_response" => {
-                    rt::Ok(Self::GeneralResponse {
-                        alarms: Alarms::from_raw(rt::get(&mut field, "alarms")?),
-                    })
+                    rt::Ok(
+                        Self::GeneralResponse(response::GeneralResponse {
+                            alarms: Alarms::from_raw(rt::get(&mut field, "alarms")?),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -789,12 +840,66 @@ pub mod pelco_d2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoD2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ptz` (no code)
-        pub const PTZ: MessageDesc = MessageDesc::new("ptz", 0, 0, &[7]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3 Pan, tilt, zoom, focus, iris (standard command) (code `0x`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ptz {
+            /// \[step\]
+            pub sense: bool,
+            /// \[step\]
+            pub auto_scan: bool,
+            /// \[step\]
+            pub camera_on: bool,
+            /// \[step\]
+            pub iris_close: bool,
+            /// \[step\]
+            pub iris_open: bool,
+            /// \[step\]
+            pub focus_near: bool,
+            /// \[step\]
+            pub focus_far: bool,
+            /// \[step\]
+            pub zoom_wide: bool,
+            /// \[step\]
+            pub zoom_tele: bool,
+            /// \[step\]
+            pub tilt_down: bool,
+            /// \[step\]
+            pub tilt_up: bool,
+            /// \[step\]
+            pub pan_left: bool,
+            /// \[step\]
+            pub pan_right: bool,
+            /// \[step\] Valid raw range 0..=63. Raw 255 = turbo.
+            pub pan_speed: u8,
+            /// \[step\] Valid raw range 0..=63.
+            pub tilt_speed: u8,
+        }
+        /// §4 Set preset (code `0x0003`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPreset {
+            /// \[#\] Valid raw range 1..=255.
+            pub preset: u8,
+        }
+        /// §4 Go to preset (code `0x0007`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GoToPreset {
+            /// \[#\] Valid raw range 1..=255.
+            pub preset: u8,
+        }
         /// `ptz.reserved`
         pub const PTZ_RESERVED: FieldDesc = FieldDesc::new("ptz", "reserved");
         /// `ptz.extended`
@@ -803,24 +908,10 @@ pub mod pelco_d2 {
         pub const PTZ_PAN_SPEED: FieldDesc = FieldDesc::new("ptz", "pan_speed");
         /// `ptz.tilt_speed`
         pub const PTZ_TILT_SPEED: FieldDesc = FieldDesc::new("ptz", "tilt_speed");
-        /// `set_preset`, code 0x0003
-        pub const SET_PRESET: MessageDesc = MessageDesc::new(
-            "set_preset",
-            0x0003,
-            2,
-            &[7],
-        );
         /// `set_preset.data1`
         pub const SET_PRESET_DATA1: FieldDesc = FieldDesc::new("set_preset", "data1");
         /// `set_preset.preset`
         pub const SET_PRESET_PRESET: FieldDesc = FieldDesc::new("set_preset", "preset");
-        /// `go_to_preset`, code 0x0007
-        pub const GO_TO_PRESET: MessageDesc = MessageDesc::new(
-            "go_to_preset",
-            0x0007,
-            2,
-            &[7],
-        );
         /// `go_to_preset.data1`
         pub const GO_TO_PRESET_DATA1: FieldDesc = FieldDesc::new(
             "go_to_preset",
@@ -832,15 +923,15 @@ pub mod pelco_d2 {
             "preset",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `general_response` (no code)
-        pub const GENERAL_RESPONSE: MessageDesc = MessageDesc::new(
-            "general_response",
-            0,
-            0,
-            &[4],
-        );
+        /// §5 General response (code `0x`, 4 bytes). FF, address, alarm bits, checksum: sent by receivers that acknowledge commands.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GeneralResponse {
+            pub alarms: super::Alarms,
+        }
     }
 }

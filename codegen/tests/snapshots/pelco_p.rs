@@ -68,55 +68,79 @@ pub mod pelco_p {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    impl request::Ptz {
+        pub const NAME: &'static str = "ptz";
+        pub const CODE: &'static [u8] = &[];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(Self::NAME, 0, 0, &[8]);
+        pub const PAN_SPEED: rt::Range<usize> = 4..5;
+        pub const TILT_SPEED: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("camera_on", rt::Int(self.camera_on as i64));
+            f("auto_scan", rt::Int(self.auto_scan as i64));
+            f("camera_on_off", rt::Int(self.camera_on_off as i64));
+            f("iris_close", rt::Int(self.iris_close as i64));
+            f("iris_open", rt::Int(self.iris_open as i64));
+            f("focus_near", rt::Int(self.focus_near as i64));
+            f("focus_far", rt::Int(self.focus_far as i64));
+            f("zoom_wide", rt::Int(self.zoom_wide as i64));
+            f("zoom_tele", rt::Int(self.zoom_tele as i64));
+            f("tilt_down", rt::Int(self.tilt_down as i64));
+            f("tilt_up", rt::Int(self.tilt_up as i64));
+            f("pan_left", rt::Int(self.pan_left as i64));
+            f("pan_right", rt::Int(self.pan_right as i64));
+            f("pan_speed", rt::Int(self.pan_speed as i64));
+            f("tilt_speed", rt::Int(self.tilt_speed as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ptz(*self).encode(address, buf)
+        }
+    }
+    impl request::SetPreset {
+        pub const NAME: &'static str = "set_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x03];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0003,
+            2,
+            &[8],
+        );
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPreset(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToPreset {
+        pub const NAME: &'static str = "go_to_preset";
+        pub const CODE: &'static [u8] = &[0x00, 0x07];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0007,
+            2,
+            &[8],
+        );
+        pub const PRESET: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("preset", rt::Int(self.preset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToPreset(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 Pan, tilt, zoom, focus, iris (code `0x`, 8 bytes).
-        Ptz {
-            /// \[step\]
-            camera_on: bool,
-            /// \[step\]
-            auto_scan: bool,
-            /// \[step\]
-            camera_on_off: bool,
-            /// \[step\]
-            iris_close: bool,
-            /// \[step\]
-            iris_open: bool,
-            /// \[step\]
-            focus_near: bool,
-            /// \[step\]
-            focus_far: bool,
-            /// \[step\]
-            zoom_wide: bool,
-            /// \[step\]
-            zoom_tele: bool,
-            /// \[step\]
-            tilt_down: bool,
-            /// \[step\]
-            tilt_up: bool,
-            /// \[step\]
-            pan_left: bool,
-            /// \[step\]
-            pan_right: bool,
-            /// \[step\] Valid raw range 0..=64.
-            pan_speed: u8,
-            /// \[step\] Valid raw range 0..=63.
-            tilt_speed: u8,
-        },
-        /// §4 Set preset (code `0x0003`, 8 bytes).
-        SetPreset {
-            /// \[#\] Valid raw range 1..=255.
-            preset: u8,
-        },
-        /// §4 Go to preset (code `0x0007`, 8 bytes).
-        GoToPreset {
-            /// \[#\] Valid raw range 1..=255.
-            preset: u8,
-        },
+        Ptz(request::Ptz),
+        SetPreset(request::SetPreset),
+        GoToPreset(request::GoToPreset),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -128,9 +152,9 @@ pub mod pelco_p {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ptz { .. } => 0,
-                Self::SetPreset { .. } => 1,
-                Self::GoToPreset { .. } => 2,
+                Self::Ptz(_) => 0,
+                Self::SetPreset(_) => 1,
+                Self::GoToPreset(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -147,47 +171,11 @@ pub mod pelco_p {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ptz {
-                    camera_on: v_camera_on,
-                    auto_scan: v_auto_scan,
-                    camera_on_off: v_camera_on_off,
-                    iris_close: v_iris_close,
-                    iris_open: v_iris_open,
-                    focus_near: v_focus_near,
-                    focus_far: v_focus_far,
-                    zoom_wide: v_zoom_wide,
-                    zoom_tele: v_zoom_tele,
-                    tilt_down: v_tilt_down,
-                    tilt_up: v_tilt_up,
-                    pan_left: v_pan_left,
-                    pan_right: v_pan_right,
-                    pan_speed: v_pan_speed,
-                    tilt_speed: v_tilt_speed,
-                } => {
-                    f("camera_on", rt::Int(*v_camera_on as i64));
-                    f("auto_scan", rt::Int(*v_auto_scan as i64));
-                    f("camera_on_off", rt::Int(*v_camera_on_off as i64));
-                    f("iris_close", rt::Int(*v_iris_close as i64));
-                    f("iris_open", rt::Int(*v_iris_open as i64));
-                    f("focus_near", rt::Int(*v_focus_near as i64));
-                    f("focus_far", rt::Int(*v_focus_far as i64));
-                    f("zoom_wide", rt::Int(*v_zoom_wide as i64));
-                    f("zoom_tele", rt::Int(*v_zoom_tele as i64));
-                    f("tilt_down", rt::Int(*v_tilt_down as i64));
-                    f("tilt_up", rt::Int(*v_tilt_up as i64));
-                    f("pan_left", rt::Int(*v_pan_left as i64));
-                    f("pan_right", rt::Int(*v_pan_right as i64));
-                    f("pan_speed", rt::Int(*v_pan_speed as i64));
-                    f("tilt_speed", rt::Int(*v_tilt_speed as i64));
-                }
-                Self::SetPreset { preset: v_preset } => {
-                    f("preset", rt::Int(*v_preset as i64))
-                }
-                Self::GoToPreset { preset: v_preset } => {
-                    f("preset", rt::Int(*v_preset as i64))
-                }
+                Self::Ptz(m) => m.visit(f),
+                Self::SetPreset(m) => m.visit(f),
+                Self::GoToPreset(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -201,23 +189,25 @@ pub mod pelco_p {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<8>(buf, &[])?;
             let len = match *self {
-                Self::Ptz {
-                    camera_on: v_camera_on,
-                    auto_scan: v_auto_scan,
-                    camera_on_off: v_camera_on_off,
-                    iris_close: v_iris_close,
-                    iris_open: v_iris_open,
-                    focus_near: v_focus_near,
-                    focus_far: v_focus_far,
-                    zoom_wide: v_zoom_wide,
-                    zoom_tele: v_zoom_tele,
-                    tilt_down: v_tilt_down,
-                    tilt_up: v_tilt_up,
-                    pan_left: v_pan_left,
-                    pan_right: v_pan_right,
-                    pan_speed: v_pan_speed,
-                    tilt_speed: v_tilt_speed,
-                } => {
+                Self::Ptz(
+                    request::Ptz {
+                        camera_on: v_camera_on,
+                        auto_scan: v_auto_scan,
+                        camera_on_off: v_camera_on_off,
+                        iris_close: v_iris_close,
+                        iris_open: v_iris_open,
+                        focus_near: v_focus_near,
+                        focus_far: v_focus_far,
+                        zoom_wide: v_zoom_wide,
+                        zoom_tele: v_zoom_tele,
+                        tilt_down: v_tilt_down,
+                        tilt_up: v_tilt_up,
+                        pan_left: v_pan_left,
+                        pan_right: v_pan_right,
+                        pan_speed: v_pan_speed,
+                        tilt_speed: v_tilt_speed,
+                    },
+                ) => {
                     rt::encode_in_range("pan_speed", v_pan_speed, 0, 64)?;
                     rt::encode_in_range("tilt_speed", v_tilt_speed, 0, 63)?;
                     let out = rt::head(out, &[0xA0, address]);
@@ -233,13 +223,13 @@ pub mod pelco_p {
                     out[5] = v_tilt_speed;
                     out.len()
                 }
-                Self::SetPreset { preset: v_preset } => {
+                Self::SetPreset(request::SetPreset { preset: v_preset }) => {
                     rt::encode_in_range("preset", v_preset, 1, 255)?;
                     let out = rt::head(out, &[0xA0, address, 0x00, 0x03, 0x00]);
                     out[5] = v_preset;
                     out.len()
                 }
-                Self::GoToPreset { preset: v_preset } => {
+                Self::GoToPreset(request::GoToPreset { preset: v_preset }) => {
                     rt::encode_in_range("preset", v_preset, 1, 255)?;
                     let out = rt::head(out, &[0xA0, address, 0x00, 0x07, 0x00]);
                     out[5] = v_preset;
@@ -281,12 +271,14 @@ pub mod pelco_p {
                                     1,
                                     255,
                                 )?;
-                                rt::Ok(Self::SetPreset {
-                                    preset: frame[5],
-                                })
+                                rt::Ok(
+                                    Self::SetPreset(request::SetPreset {
+                                        preset: frame[5],
+                                    }),
+                                )
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end(&request::SET_PRESET)
+                            g.end(&request::SetPreset::DESC)
                         };
                     }
                     0x0007 => {
@@ -301,18 +293,20 @@ pub mod pelco_p {
                                     1,
                                     255,
                                 )?;
-                                rt::Ok(Self::GoToPreset {
-                                    preset: frame[5],
-                                })
+                                rt::Ok(
+                                    Self::GoToPreset(request::GoToPreset {
+                                        preset: frame[5],
+                                    }),
+                                )
                             });
                             g.attempt(Self::codeless_ptz);
-                            g.end(&request::GO_TO_PRESET)
+                            g.end(&request::GoToPreset::DESC)
                         };
                     }
                     _ => {}
                 }
             }
-            rt::fixed::<8>(frame, &request::PTZ).and_then(Self::codeless_ptz)
+            rt::fixed::<8>(frame, &request::Ptz::DESC).and_then(Self::codeless_ptz)
         }
         /// `ptz` (no code) from a frame whose checks every frame passes, as `dispatch` tries it.
         #[inline]
@@ -323,23 +317,25 @@ pub mod pelco_p {
             rt::equal(&request::PTZ_FIXED_ZERO_3, 2, field_0 & 0x1, 0x0)?;
             rt::in_range(&request::PTZ_PAN_SPEED, 4, frame[4], 0, 64)?;
             rt::in_range(&request::PTZ_TILT_SPEED, 5, frame[5], 0, 63)?;
-            rt::Ok(Self::Ptz {
-                camera_on: ((field_0 >> 14) & 0x1) != 0,
-                auto_scan: ((field_0 >> 13) & 0x1) != 0,
-                camera_on_off: ((field_0 >> 12) & 0x1) != 0,
-                iris_close: ((field_0 >> 11) & 0x1) != 0,
-                iris_open: ((field_0 >> 10) & 0x1) != 0,
-                focus_near: ((field_0 >> 9) & 0x1) != 0,
-                focus_far: ((field_0 >> 8) & 0x1) != 0,
-                zoom_wide: ((field_0 >> 6) & 0x1) != 0,
-                zoom_tele: ((field_0 >> 5) & 0x1) != 0,
-                tilt_down: ((field_0 >> 4) & 0x1) != 0,
-                tilt_up: ((field_0 >> 3) & 0x1) != 0,
-                pan_left: ((field_0 >> 2) & 0x1) != 0,
-                pan_right: ((field_0 >> 1) & 0x1) != 0,
-                pan_speed: frame[4],
-                tilt_speed: frame[5],
-            })
+            rt::Ok(
+                Self::Ptz(request::Ptz {
+                    camera_on: ((field_0 >> 14) & 0x1) != 0,
+                    auto_scan: ((field_0 >> 13) & 0x1) != 0,
+                    camera_on_off: ((field_0 >> 12) & 0x1) != 0,
+                    iris_close: ((field_0 >> 11) & 0x1) != 0,
+                    iris_open: ((field_0 >> 10) & 0x1) != 0,
+                    focus_near: ((field_0 >> 9) & 0x1) != 0,
+                    focus_far: ((field_0 >> 8) & 0x1) != 0,
+                    zoom_wide: ((field_0 >> 6) & 0x1) != 0,
+                    zoom_tele: ((field_0 >> 5) & 0x1) != 0,
+                    tilt_down: ((field_0 >> 4) & 0x1) != 0,
+                    tilt_up: ((field_0 >> 3) & 0x1) != 0,
+                    pan_left: ((field_0 >> 2) & 0x1) != 0,
+                    pan_right: ((field_0 >> 1) & 0x1) != 0,
+                    pan_speed: frame[4],
+                    tilt_speed: frame[5],
+                }),
+            )
         }
         /// The message called `name` in the spec, from each field's raw wire value by its spec
         /// name, as [`Self::visit`] gives them (`None`: no value); constant and repeated fields
@@ -350,57 +346,96 @@ pub mod pelco_p {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ptz" => {
-                    rt::Ok(Self::Ptz {
-                        camera_on: rt::field_int("camera_on", field("camera_on"), 0, 1)?
-                            != 0,
-                        auto_scan: rt::field_int("auto_scan", field("auto_scan"), 0, 1)?
-                            != 0,
-                        camera_on_off: rt::field_int(
-                            "camera_on_off",
-                            field("camera_on_off"),
-                            0,
-                            1,
-                        )? != 0,
-                        iris_close: rt::field_int(
-                            "iris_close",
-                            field("iris_close"),
-                            0,
-                            1,
-                        )? != 0,
-                        iris_open: rt::field_int("iris_open", field("iris_open"), 0, 1)?
-                            != 0,
-                        focus_near: rt::field_int(
-                            "focus_near",
-                            field("focus_near"),
-                            0,
-                            1,
-                        )? != 0,
-                        focus_far: rt::field_int("focus_far", field("focus_far"), 0, 1)?
-                            != 0,
-                        zoom_wide: rt::field_int("zoom_wide", field("zoom_wide"), 0, 1)?
-                            != 0,
-                        zoom_tele: rt::field_int("zoom_tele", field("zoom_tele"), 0, 1)?
-                            != 0,
-                        tilt_down: rt::field_int("tilt_down", field("tilt_down"), 0, 1)?
-                            != 0,
-                        tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)? != 0,
-                        pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
-                            != 0,
-                        pan_right: rt::field_int("pan_right", field("pan_right"), 0, 1)?
-                            != 0,
-                        pan_speed: rt::get(&mut field, "pan_speed")?,
-                        tilt_speed: rt::get(&mut field, "tilt_speed")?,
-                    })
+                    rt::Ok(
+                        Self::Ptz(request::Ptz {
+                            camera_on: rt::field_int(
+                                "camera_on",
+                                field("camera_on"),
+                                0,
+                                1,
+                            )? != 0,
+                            auto_scan: rt::field_int(
+                                "auto_scan",
+                                field("auto_scan"),
+                                0,
+                                1,
+                            )? != 0,
+                            camera_on_off: rt::field_int(
+                                "camera_on_off",
+                                field("camera_on_off"),
+                                0,
+                                1,
+                            )? != 0,
+                            iris_close: rt::field_int(
+                                "iris_close",
+                                field("iris_close"),
+                                0,
+                                1,
+                            )? != 0,
+                            iris_open: rt::field_int(
+                                "iris_open",
+                                field("iris_open"),
+                                0,
+                                1,
+                            )? != 0,
+                            focus_near: rt::field_int(
+                                "focus_near",
+                                field("focus_near"),
+                                0,
+                                1,
+                            )? != 0,
+                            focus_far: rt::field_int(
+                                "focus_far",
+                                field("focus_far"),
+                                0,
+                                1,
+                            )? != 0,
+                            zoom_wide: rt::field_int(
+                                "zoom_wide",
+                                field("zoom_wide"),
+                                0,
+                                1,
+                            )? != 0,
+                            zoom_tele: rt::field_int(
+                                "zoom_tele",
+                                field("zoom_tele"),
+                                0,
+                                1,
+                            )? != 0,
+                            tilt_down: rt::field_int(
+                                "tilt_down",
+                                field("tilt_down"),
+                                0,
+                                1,
+                            )? != 0,
+                            tilt_up: rt::field_int("tilt_up", field("tilt_up"), 0, 1)?
+                                != 0,
+                            pan_left: rt::field_int("pan_left", field("pan_left"), 0, 1)?
+                                != 0,
+                            pan_right: rt::field_int(
+                                "pan_right",
+                                field("pan_right"),
+                                0,
+                                1,
+                            )? != 0,
+                            pan_speed: rt::get(&mut field, "pan_speed")?,
+                            tilt_speed: rt::get(&mut field, "tilt_speed")?,
+                        }),
+                    )
                 }
                 "set_preset" => {
-                    rt::Ok(Self::SetPreset {
-                        preset: rt::get(&mut field, "preset")?,
-                    })
+                    rt::Ok(
+                        Self::SetPreset(request::SetPreset {
+                            preset: rt::get(&mut field, "preset")?,
+                        }),
+                    )
                 }
                 "go_to_preset" => {
-                    rt::Ok(Self::GoToPreset {
-                        preset: rt::get(&mut field, "preset")?,
-                    })
+                    rt::Ok(
+                        Self::GoToPreset(request::GoToPreset {
+                            preset: rt::get(&mut field, "preset")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -458,9 +493,9 @@ pub mod pelco_p {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::Ptz { .. } => rt::Reply::None,
-                    Request::SetPreset { .. } => rt::Reply::None,
-                    Request::GoToPreset { .. } => rt::Reply::None,
+                    Request::Ptz(_) => rt::Reply::None,
+                    Request::SetPreset(_) => rt::Reply::None,
+                    Request::GoToPreset(_) => rt::Reply::None,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -705,12 +740,66 @@ pub mod pelco_p {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<PelcoP>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ptz` (no code)
-        pub const PTZ: MessageDesc = MessageDesc::new("ptz", 0, 0, &[8]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3 Pan, tilt, zoom, focus, iris (code `0x`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ptz {
+            /// \[step\]
+            pub camera_on: bool,
+            /// \[step\]
+            pub auto_scan: bool,
+            /// \[step\]
+            pub camera_on_off: bool,
+            /// \[step\]
+            pub iris_close: bool,
+            /// \[step\]
+            pub iris_open: bool,
+            /// \[step\]
+            pub focus_near: bool,
+            /// \[step\]
+            pub focus_far: bool,
+            /// \[step\]
+            pub zoom_wide: bool,
+            /// \[step\]
+            pub zoom_tele: bool,
+            /// \[step\]
+            pub tilt_down: bool,
+            /// \[step\]
+            pub tilt_up: bool,
+            /// \[step\]
+            pub pan_left: bool,
+            /// \[step\]
+            pub pan_right: bool,
+            /// \[step\] Valid raw range 0..=64.
+            pub pan_speed: u8,
+            /// \[step\] Valid raw range 0..=63.
+            pub tilt_speed: u8,
+        }
+        /// §4 Set preset (code `0x0003`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPreset {
+            /// \[#\] Valid raw range 1..=255.
+            pub preset: u8,
+        }
+        /// §4 Go to preset (code `0x0007`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GoToPreset {
+            /// \[#\] Valid raw range 1..=255.
+            pub preset: u8,
+        }
         /// `ptz.fixed_zero`
         pub const PTZ_FIXED_ZERO: FieldDesc = FieldDesc::new("ptz", "fixed_zero");
         /// `ptz.fixed_zero_2`
@@ -721,24 +810,10 @@ pub mod pelco_p {
         pub const PTZ_PAN_SPEED: FieldDesc = FieldDesc::new("ptz", "pan_speed");
         /// `ptz.tilt_speed`
         pub const PTZ_TILT_SPEED: FieldDesc = FieldDesc::new("ptz", "tilt_speed");
-        /// `set_preset`, code 0x0003
-        pub const SET_PRESET: MessageDesc = MessageDesc::new(
-            "set_preset",
-            0x0003,
-            2,
-            &[8],
-        );
         /// `set_preset.data3`
         pub const SET_PRESET_DATA3: FieldDesc = FieldDesc::new("set_preset", "data3");
         /// `set_preset.preset`
         pub const SET_PRESET_PRESET: FieldDesc = FieldDesc::new("set_preset", "preset");
-        /// `go_to_preset`, code 0x0007
-        pub const GO_TO_PRESET: MessageDesc = MessageDesc::new(
-            "go_to_preset",
-            0x0007,
-            2,
-            &[8],
-        );
         /// `go_to_preset.data3`
         pub const GO_TO_PRESET_DATA3: FieldDesc = FieldDesc::new(
             "go_to_preset",
@@ -750,6 +825,6 @@ pub mod pelco_p {
             "preset",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {}
 }

@@ -418,25 +418,70 @@ pub mod records {
             })
         }
     }
+    impl request::SyncWrite {
+        pub const NAME: &'static str = "sync_write";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 10;
+        pub const MAX_LEN: usize = 38;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x83,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("blocks", rt::Records(self.blocks.records()));
+            f("flags", rt::Int(self.flags as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SyncWrite(*self).encode(address, buf)
+        }
+    }
+    impl request::WritePairs {
+        pub const NAME: &'static str = "write_pairs";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const MIN_LEN: usize = 5;
+        pub const MAX_LEN: usize = 20;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x84,
+            1,
+            &[5],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("pairs", rt::Records(self.pairs.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WritePairs(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadStatus {
+        pub const NAME: &'static str = "read_status";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x85,
+            1,
+            &[5],
+        );
+        pub const QUANTITY: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadStatus(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Synchronised write (code `0x83`, 10 to 38 bytes).
-        SyncWrite {
-            /// One servo's goal.
-            blocks: rt::Repeated<SyncWriteBlocks, 8>,
-            flags: u8,
-        },
-        /// §2 Write register pairs (code `0x84`, 5 to 20 bytes).
-        WritePairs { pairs: rt::Repeated<WritePairsPairs, 3> },
-        /// §3 Read channels (code `0x85`, 5 bytes).
-        ReadStatus {
-            /// Valid raw range 1..=6.
-            quantity: u8,
-        },
+        SyncWrite(request::SyncWrite),
+        WritePairs(request::WritePairs),
+        ReadStatus(request::ReadStatus),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -448,9 +493,9 @@ pub mod records {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SyncWrite { .. } => 0,
-                Self::WritePairs { .. } => 1,
-                Self::ReadStatus { .. } => 2,
+                Self::SyncWrite(_) => 0,
+                Self::WritePairs(_) => 1,
+                Self::ReadStatus(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -464,11 +509,11 @@ pub mod records {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SyncWrite { blocks: v_blocks, .. } => {
+                Self::SyncWrite(request::SyncWrite { blocks: v_blocks, .. }) => {
                     LISTS_SYNC_WRITE.base
                         + LISTS_SYNC_WRITE.lists[0].bytes_of(v_blocks.len())
                 }
-                Self::WritePairs { pairs: v_pairs, .. } => {
+                Self::WritePairs(request::WritePairs { pairs: v_pairs, .. }) => {
                     REPEAT_WRITE_PAIRS.base + REPEAT_WRITE_PAIRS.bytes_of(v_pairs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -476,18 +521,11 @@ pub mod records {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SyncWrite { blocks: v_blocks, flags: v_flags } => {
-                    f("blocks", rt::Records(v_blocks.records()));
-                    f("flags", rt::Int(*v_flags as i64));
-                }
-                Self::WritePairs { pairs: v_pairs } => {
-                    f("pairs", rt::Records(v_pairs.records()))
-                }
-                Self::ReadStatus { quantity: v_quantity } => {
-                    f("quantity", rt::Int(*v_quantity as i64))
-                }
+                Self::SyncWrite(m) => m.visit(f),
+                Self::WritePairs(m) => m.visit(f),
+                Self::ReadStatus(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -500,7 +538,9 @@ pub mod records {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SyncWrite { blocks: v_blocks, flags: v_flags } => {
+                Self::SyncWrite(
+                    request::SyncWrite { blocks: v_blocks, flags: v_flags },
+                ) => {
                     let bytes_0: usize = LISTS_SYNC_WRITE
                         .lists[0]
                         .encode_len(v_blocks.len())? - LISTS_SYNC_WRITE.base;
@@ -527,7 +567,7 @@ pub mod records {
                     }
                     out.len()
                 }
-                Self::WritePairs { pairs: v_pairs } => {
+                Self::WritePairs(request::WritePairs { pairs: v_pairs }) => {
                     let frame_len = REPEAT_WRITE_PAIRS.encode_len(v_pairs.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E, address, 0x84])?;
                     out[3] = rt::fits(
@@ -546,7 +586,7 @@ pub mod records {
                     }
                     out.len()
                 }
-                Self::ReadStatus { quantity: v_quantity } => {
+                Self::ReadStatus(request::ReadStatus { quantity: v_quantity }) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 6)?;
                     let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x85])?;
                     out[3] = v_quantity;
@@ -583,10 +623,12 @@ pub mod records {
                         let bytes = <[u8; 4]>::try_from(bytes).unwrap_or([0; 4]);
                         let _ = v_blocks.push(SyncWriteBlocks::read(&bytes, 4 + k * 4)?);
                     }
-                    rt::Ok(Self::SyncWrite {
-                        blocks: v_blocks,
-                        flags: frame[4],
-                    })
+                    rt::Ok(
+                        Self::SyncWrite(request::SyncWrite {
+                            blocks: v_blocks,
+                            flags: frame[4],
+                        }),
+                    )
                 }
                 0x84 => {
                     let (_, elements, _) = REPEAT_WRITE_PAIRS.split::<4>(frame)?;
@@ -595,14 +637,20 @@ pub mod records {
                         let bytes = <[u8; 5]>::try_from(bytes).unwrap_or([0; 5]);
                         let _ = v_pairs.push(WritePairsPairs::read(&bytes, 4 + k * 5)?);
                     }
-                    rt::Ok(Self::WritePairs { pairs: v_pairs })
+                    rt::Ok(
+                        Self::WritePairs(request::WritePairs {
+                            pairs: v_pairs,
+                        }),
+                    )
                 }
                 0x85 => {
-                    let frame = rt::fixed::<5>(frame, &request::READ_STATUS)?;
+                    let frame = rt::fixed::<5>(frame, &request::ReadStatus::DESC)?;
                     rt::in_range(&request::READ_STATUS_QUANTITY, 3, frame[3], 1, 6)?;
-                    rt::Ok(Self::ReadStatus {
-                        quantity: frame[3],
-                    })
+                    rt::Ok(
+                        Self::ReadStatus(request::ReadStatus {
+                            quantity: frame[3],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -616,20 +664,32 @@ pub mod records {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "sync_write" => {
-                    rt::Ok(Self::SyncWrite {
-                        blocks: rt::records::<SyncWriteBlocks, 8>(&mut field, "blocks")?,
-                        flags: rt::get(&mut field, "flags")?,
-                    })
+                    rt::Ok(
+                        Self::SyncWrite(request::SyncWrite {
+                            blocks: rt::records::<
+                                SyncWriteBlocks,
+                                8,
+                            >(&mut field, "blocks")?,
+                            flags: rt::get(&mut field, "flags")?,
+                        }),
+                    )
                 }
                 "write_pairs" => {
-                    rt::Ok(Self::WritePairs {
-                        pairs: rt::records::<WritePairsPairs, 3>(&mut field, "pairs")?,
-                    })
+                    rt::Ok(
+                        Self::WritePairs(request::WritePairs {
+                            pairs: rt::records::<
+                                WritePairsPairs,
+                                3,
+                            >(&mut field, "pairs")?,
+                        }),
+                    )
                 }
                 "read_status" => {
-                    rt::Ok(Self::ReadStatus {
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::ReadStatus(request::ReadStatus {
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -781,16 +841,50 @@ pub mod records {
             })
         }
     }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x80];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x80,
+            1,
+            &[5],
+        );
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::StatusReply {
+        pub const NAME: &'static str = "status_reply";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 28;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x85,
+            1,
+            &[4],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("readings", rt::Records(self.readings.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StatusReply(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Acknowledge (code `0x80`, 5 bytes).
-        Ack { status: u8 },
-        /// §3 Channels (code `0x85`, 8 to 28 bytes).
-        StatusReply { readings: rt::Repeated<StatusReplyReadings, 6> },
+        Ack(response::Ack),
+        StatusReply(response::StatusReply),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -801,8 +895,8 @@ pub mod records {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ack { .. } => 0,
-                Self::StatusReply { .. } => 1,
+                Self::Ack(_) => 0,
+                Self::StatusReply(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -816,7 +910,7 @@ pub mod records {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::StatusReply { readings: v_readings, .. } => {
+                Self::StatusReply(response::StatusReply { readings: v_readings, .. }) => {
                     REPEAT_STATUS_REPLY.base
                         + REPEAT_STATUS_REPLY.bytes_of(v_readings.len())
                 }
@@ -825,12 +919,10 @@ pub mod records {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ack { status: v_status } => f("status", rt::Int(*v_status as i64)),
-                Self::StatusReply { readings: v_readings } => {
-                    f("readings", rt::Records(v_readings.records()))
-                }
+                Self::Ack(m) => m.visit(f),
+                Self::StatusReply(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -843,12 +935,12 @@ pub mod records {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ack { status: v_status } => {
+                Self::Ack(response::Ack { status: v_status }) => {
                     let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x80])?;
                     out[3] = v_status;
                     out.len()
                 }
-                Self::StatusReply { readings: v_readings } => {
+                Self::StatusReply(response::StatusReply { readings: v_readings }) => {
                     let frame_len = REPEAT_STATUS_REPLY.encode_len(v_readings.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E, address, 0x85])?;
                     for (k, r) in v_readings.iter().enumerate() {
@@ -913,8 +1005,8 @@ pub mod records {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x80 => {
-                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
-                    rt::Ok(Self::Ack { status: frame[3] })
+                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
+                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
                 }
                 0x85 => {
                     let (_, elements, _) = REPEAT_STATUS_REPLY.split::<3>(frame)?;
@@ -924,9 +1016,11 @@ pub mod records {
                         let _ = v_readings
                             .push(StatusReplyReadings::read(&bytes, 3 + k * 4)?);
                     }
-                    rt::Ok(Self::StatusReply {
-                        readings: v_readings,
-                    })
+                    rt::Ok(
+                        Self::StatusReply(response::StatusReply {
+                            readings: v_readings,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -940,17 +1034,21 @@ pub mod records {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ack" => {
-                    rt::Ok(Self::Ack {
-                        status: rt::get(&mut field, "status")?,
-                    })
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            status: rt::get(&mut field, "status")?,
+                        }),
+                    )
                 }
                 "status_reply" => {
-                    rt::Ok(Self::StatusReply {
-                        readings: rt::records::<
-                            StatusReplyReadings,
-                            6,
-                        >(&mut field, "readings")?,
-                    })
+                    rt::Ok(
+                        Self::StatusReply(response::StatusReply {
+                            readings: rt::records::<
+                                StatusReplyReadings,
+                                6,
+                            >(&mut field, "readings")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -1001,8 +1099,12 @@ pub mod records {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (
-                    &Self::StatusReply { readings: v_readings, .. },
-                    &Request::ReadStatus { quantity: r_quantity, .. },
+                    &Self::StatusReply(
+                        response::StatusReply { readings: v_readings, .. },
+                    ),
+                    &Request::ReadStatus(
+                        request::ReadStatus { quantity: r_quantity, .. },
+                    ),
                 ) => {
                     REPEAT_STATUS_REPLY
                         .follows_request(
@@ -1144,17 +1246,38 @@ pub mod records {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Records>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `sync_write`, code 0x83
-        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
-            "sync_write",
-            0x83,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Synchronised write (code `0x83`, 10 to 38 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SyncWrite {
+            /// One servo's goal.
+            pub blocks: super::rt::Repeated<super::SyncWriteBlocks, 8>,
+            pub flags: u8,
+        }
+        /// §2 Write register pairs (code `0x84`, 5 to 20 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WritePairs {
+            pub pairs: super::rt::Repeated<super::WritePairsPairs, 3>,
+        }
+        /// §3 Read channels (code `0x85`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadStatus {
+            /// Valid raw range 1..=6.
+            pub quantity: u8,
+        }
         /// `sync_write.blocks`
         pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
         /// `sync_write.blocks.id`
@@ -1167,13 +1290,6 @@ pub mod records {
             "sync_write",
             "blocks.position",
         );
-        /// `write_pairs`, code 0x84
-        pub const WRITE_PAIRS: MessageDesc = MessageDesc::new(
-            "write_pairs",
-            0x84,
-            1,
-            &[5],
-        );
         /// `write_pairs.pairs`
         pub const WRITE_PAIRS_PAIRS: FieldDesc = FieldDesc::new("write_pairs", "pairs");
         /// `write_pairs.pairs.bank`
@@ -1181,31 +1297,31 @@ pub mod records {
             "write_pairs",
             "pairs.bank",
         );
-        /// `read_status`, code 0x85
-        pub const READ_STATUS: MessageDesc = MessageDesc::new(
-            "read_status",
-            0x85,
-            1,
-            &[5],
-        );
         /// `read_status.quantity`
         pub const READ_STATUS_QUANTITY: FieldDesc = FieldDesc::new(
             "read_status",
             "quantity",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ack`, code 0x80
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x80, 1, &[5]);
-        /// `status_reply`, code 0x85
-        pub const STATUS_REPLY: MessageDesc = MessageDesc::new(
-            "status_reply",
-            0x85,
-            1,
-            &[4],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Acknowledge (code `0x80`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ack {
+            pub status: u8,
+        }
+        /// §3 Channels (code `0x85`, 8 to 28 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct StatusReply {
+            pub readings: super::rt::Repeated<super::StatusReplyReadings, 6>,
+        }
         /// `status_reply.readings`
         pub const STATUS_REPLY_READINGS: FieldDesc = FieldDesc::new(
             "status_reply",

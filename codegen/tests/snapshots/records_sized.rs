@@ -307,21 +307,56 @@ pub mod records_sized {
             })
         }
     }
+    impl request::SyncWrite {
+        pub const NAME: &'static str = "sync_write";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 11;
+        pub const MAX_LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x83,
+            1,
+            &[9],
+        );
+        pub const START_ADDRESS: rt::Range<usize> = 4..6;
+        pub const DATA_LENGTH: rt::Range<usize> = 6..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("start_address", rt::Int(self.start_address as i64));
+            f("data_length", rt::Int(self.data_length as i64));
+            f("blocks", rt::Records(self.blocks.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SyncWrite(*self).encode(address, buf)
+        }
+    }
+    impl request::Trim {
+        pub const NAME: &'static str = "trim";
+        pub const CODE: &'static [u8] = &[0x84];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 18;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x84,
+            1,
+            &[6],
+        );
+        pub const WIDTH: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("width", rt::Int(self.width as i64));
+            f("offsets", rt::Records(self.offsets.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Trim(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Synchronised write (code `0x83`, 11 to 39 bytes).
-        SyncWrite {
-            start_address: u16,
-            data_length: u16,
-            /// One servo's ID and its data, `data_length` bytes.
-            blocks: rt::Repeated<SyncWriteBlocks, 6>,
-        },
-        /// §2 Trim offsets (code `0x84`, 6 to 18 bytes).
-        Trim { width: u8, offsets: rt::Repeated<TrimOffsets, 4> },
+        SyncWrite(request::SyncWrite),
+        Trim(request::Trim),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -332,8 +367,8 @@ pub mod records_sized {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SyncWrite { .. } => 0,
-                Self::Trim { .. } => 1,
+                Self::SyncWrite(_) => 0,
+                Self::Trim(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -347,12 +382,18 @@ pub mod records_sized {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SyncWrite { blocks: v_blocks, data_length: v_data_length, .. } => {
+                Self::SyncWrite(
+                    request::SyncWrite {
+                        blocks: v_blocks,
+                        data_length: v_data_length,
+                        ..
+                    },
+                ) => {
                     let v_data_length = *v_data_length;
                     REPEAT_SYNC_WRITE.base
                         + v_blocks.len() * (1 + (v_data_length) as usize)
                 }
-                Self::Trim { offsets: v_offsets, width: v_width, .. } => {
+                Self::Trim(request::Trim { offsets: v_offsets, width: v_width, .. }) => {
                     let v_width = *v_width;
                     REPEAT_TRIM.base + v_offsets.len() * (1 + (v_width) as usize)
                 }
@@ -361,21 +402,10 @@ pub mod records_sized {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SyncWrite {
-                    start_address: v_start_address,
-                    data_length: v_data_length,
-                    blocks: v_blocks,
-                } => {
-                    f("start_address", rt::Int(*v_start_address as i64));
-                    f("data_length", rt::Int(*v_data_length as i64));
-                    f("blocks", rt::Records(v_blocks.records()));
-                }
-                Self::Trim { width: v_width, offsets: v_offsets } => {
-                    f("width", rt::Int(*v_width as i64));
-                    f("offsets", rt::Records(v_offsets.records()));
-                }
+                Self::SyncWrite(m) => m.visit(f),
+                Self::Trim(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -388,11 +418,13 @@ pub mod records_sized {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SyncWrite {
-                    start_address: v_start_address,
-                    data_length: v_data_length,
-                    blocks: v_blocks,
-                } => {
+                Self::SyncWrite(
+                    request::SyncWrite {
+                        start_address: v_start_address,
+                        data_length: v_data_length,
+                        blocks: v_blocks,
+                    },
+                ) => {
                     let frame_len = REPEAT_SYNC_WRITE
                         .encode_len_sized(v_blocks.len(), (v_data_length) as u64)?;
                     let last_width = (v_data_length) as usize;
@@ -415,8 +447,8 @@ pub mod records_sized {
                     }
                     out.len()
                 }
-                Self::Trim { width: v_width, offsets: v_offsets } => {
-                    rt::encode_broadcast(address, 0xFE, &request::TRIM)?;
+                Self::Trim(request::Trim { width: v_width, offsets: v_offsets }) => {
+                    rt::encode_broadcast(address, 0xFE, &request::Trim::DESC)?;
                     let frame_len = REPEAT_TRIM
                         .encode_len_sized(v_offsets.len(), (v_width) as u64)?;
                     let last_width = (v_width) as usize;
@@ -480,15 +512,17 @@ pub mod records_sized {
                                 )?,
                             );
                     }
-                    rt::Ok(Self::SyncWrite {
-                        start_address: u16::from_le_bytes([frame[4], frame[5]]),
-                        data_length: u16::from_le_bytes([frame[6], frame[7]]),
-                        blocks: v_blocks,
-                    })
+                    rt::Ok(
+                        Self::SyncWrite(request::SyncWrite {
+                            start_address: u16::from_le_bytes([frame[4], frame[5]]),
+                            data_length: u16::from_le_bytes([frame[6], frame[7]]),
+                            blocks: v_blocks,
+                        }),
+                    )
                 }
                 0x84 => {
                     let (frame, elements, _) = REPEAT_TRIM.split::<5>(frame)?;
-                    rt::no_broadcast(frame[1], 0xFE, &request::TRIM)?;
+                    rt::no_broadcast(frame[1], 0xFE, &request::Trim::DESC)?;
                     let rec_width = REPEAT_TRIM.element_width(frame);
                     let mut v_offsets = rt::Repeated::<TrimOffsets, 4>::new();
                     for (k, chunk) in elements.chunks_exact(rec_width).enumerate() {
@@ -501,10 +535,12 @@ pub mod records_sized {
                                 TrimOffsets::read(&bytes, 5 + k * rec_width, rec_width - 1)?,
                             );
                     }
-                    rt::Ok(Self::Trim {
-                        width: frame[4],
-                        offsets: v_offsets,
-                    })
+                    rt::Ok(
+                        Self::Trim(request::Trim {
+                            width: frame[4],
+                            offsets: v_offsets,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
@@ -518,17 +554,27 @@ pub mod records_sized {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "sync_write" => {
-                    rt::Ok(Self::SyncWrite {
-                        start_address: rt::get(&mut field, "start_address")?,
-                        data_length: rt::get(&mut field, "data_length")?,
-                        blocks: rt::records::<SyncWriteBlocks, 6>(&mut field, "blocks")?,
-                    })
+                    rt::Ok(
+                        Self::SyncWrite(request::SyncWrite {
+                            start_address: rt::get(&mut field, "start_address")?,
+                            data_length: rt::get(&mut field, "data_length")?,
+                            blocks: rt::records::<
+                                SyncWriteBlocks,
+                                6,
+                            >(&mut field, "blocks")?,
+                        }),
+                    )
                 }
                 "trim" => {
-                    rt::Ok(Self::Trim {
-                        width: rt::get(&mut field, "width")?,
-                        offsets: rt::records::<TrimOffsets, 4>(&mut field, "offsets")?,
-                    })
+                    rt::Ok(
+                        Self::Trim(request::Trim {
+                            width: rt::get(&mut field, "width")?,
+                            offsets: rt::records::<
+                                TrimOffsets,
+                                4,
+                            >(&mut field, "offsets")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -593,14 +639,31 @@ pub mod records_sized {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x55,
+            1,
+            &[6],
+        );
+        pub const ERROR: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Acknowledge (code `0x55`, 6 bytes).
-        Ack { error: u8 },
+        Ack(response::Ack),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -610,7 +673,7 @@ pub mod records_sized {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ack { .. } => 0,
+                Self::Ack(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -627,9 +690,9 @@ pub mod records_sized {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ack { error: v_error } => f("error", rt::Int(*v_error as i64)),
+                Self::Ack(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -643,7 +706,7 @@ pub mod records_sized {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::Ack { error: v_error } => {
+                Self::Ack(response::Ack { error: v_error }) => {
                     let out = rt::head(out, &[0xC5, address, 0x02, 0x55]);
                     out[4] = v_error;
                     out.len()
@@ -700,8 +763,8 @@ pub mod records_sized {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x55 => {
-                    let frame = rt::fixed::<6>(frame, &response::ACK)?;
-                    rt::Ok(Self::Ack { error: frame[4] })
+                    let frame = rt::fixed::<6>(frame, &response::Ack::DESC)?;
+                    rt::Ok(Self::Ack(response::Ack { error: frame[4] }))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
@@ -715,9 +778,11 @@ pub mod records_sized {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ack" => {
-                    rt::Ok(Self::Ack {
-                        error: rt::get(&mut field, "error")?,
-                    })
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            error: rt::get(&mut field, "error")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -899,17 +964,31 @@ pub mod records_sized {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<RecordsSized>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `sync_write`, code 0x83
-        pub const SYNC_WRITE: MessageDesc = MessageDesc::new(
-            "sync_write",
-            0x83,
-            1,
-            &[9],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Synchronised write (code `0x83`, 11 to 39 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SyncWrite {
+            pub start_address: u16,
+            pub data_length: u16,
+            /// One servo's ID and its data, `data_length` bytes.
+            pub blocks: super::rt::Repeated<super::SyncWriteBlocks, 6>,
+        }
+        /// §2 Trim offsets (code `0x84`, 6 to 18 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Trim {
+            pub width: u8,
+            pub offsets: super::rt::Repeated<super::TrimOffsets, 4>,
+        }
         /// `sync_write.blocks`
         pub const SYNC_WRITE_BLOCKS: FieldDesc = FieldDesc::new("sync_write", "blocks");
         /// `sync_write.blocks.id`
@@ -917,8 +996,6 @@ pub mod records_sized {
             "sync_write",
             "blocks.id",
         );
-        /// `trim`, code 0x84
-        pub const TRIM: MessageDesc = MessageDesc::new("trim", 0x84, 1, &[6]);
         /// `trim.offsets`
         pub const TRIM_OFFSETS: FieldDesc = FieldDesc::new("trim", "offsets");
         /// `trim.offsets.offset`
@@ -927,10 +1004,15 @@ pub mod records_sized {
             "offsets.offset",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `ack`, code 0x55
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x55, 1, &[6]);
+        /// §1 Acknowledge (code `0x55`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ack {
+            pub error: u8,
+        }
     }
 }

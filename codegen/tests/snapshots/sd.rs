@@ -325,121 +325,685 @@ pub mod sd {
             Self(raw)
         }
     }
+    impl request::SetPoint {
+        pub const NAME: &'static str = "set_point";
+        pub const CODE: &'static [u8] = &[0x76];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x76,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("freshness", rt::Int(self.freshness as i64));
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPoint(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadActualPosition {
+        pub const NAME: &'static str = "read_actual_position";
+        pub const CODE: &'static [u8] = &[0x69];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x69,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadActualPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::SetVelocity {
+        pub const NAME: &'static str = "set_velocity";
+        pub const CODE: &'static [u8] = &[0x77];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x77,
+            1,
+            &[6],
+        );
+        pub const SET_VELOCITY: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("set_velocity", rt::Int(self.set_velocity.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetVelocity(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadActualVelocity {
+        pub const NAME: &'static str = "read_actual_velocity";
+        pub const CODE: &'static [u8] = &[0x68];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x68,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadActualVelocity(*self).encode(address, buf)
+        }
+    }
+    impl request::SetServoId {
+        pub const NAME: &'static str = "set_servo_id";
+        pub const CODE: &'static [u8] = &[0xAA];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xAA,
+            1,
+            &[6],
+        );
+        pub const NEW_ID: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("new_id", rt::Int(self.new_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetServoId(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadServoId {
+        pub const NAME: &'static str = "read_servo_id";
+        pub const CODE: &'static [u8] = &[0xDA];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xDA,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadServoId(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadCurrentConsumption {
+        pub const NAME: &'static str = "read_current_consumption";
+        pub const CODE: &'static [u8] = &[0xB0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xB0,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadCurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadBusVoltages {
+        pub const NAME: &'static str = "read_bus_voltages";
+        pub const CODE: &'static [u8] = &[0xB1];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xB1,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadBusVoltages(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadExtendedCurrentConsumption {
+        pub const NAME: &'static str = "read_extended_current_consumption";
+        pub const CODE: &'static [u8] = &[0xB2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xB2,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadExtendedCurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadTemperatures {
+        pub const NAME: &'static str = "read_temperatures";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA0,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTemperatures(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadHumidity {
+        pub const NAME: &'static str = "read_humidity";
+        pub const CODE: &'static [u8] = &[0xA1];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA1,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadHumidity(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadSkippedFramesCounter {
+        pub const NAME: &'static str = "read_skipped_frames_counter";
+        pub const CODE: &'static [u8] = &[0x37];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x37,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadSkippedFramesCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetDroppedFramesCounter {
+        pub const NAME: &'static str = "reset_dropped_frames_counter";
+        pub const CODE: &'static [u8] = &[0x37];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x37,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetDroppedFramesCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadActuatorStatusWord {
+        pub const NAME: &'static str = "read_actuator_status_word";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x40,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadActuatorStatusWord(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetActuatorStatusWord {
+        pub const NAME: &'static str = "reset_actuator_status_word";
+        pub const CODE: &'static [u8] = &[0x40];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x40,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetActuatorStatusWord(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetDefaultRoleAndErrorFlags {
+        pub const NAME: &'static str = "reset_default_role_and_error_flags";
+        pub const CODE: &'static [u8] = &[0xB4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xB4,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetDefaultRoleAndErrorFlags(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCurrentPositionAsZero {
+        pub const NAME: &'static str = "set_current_position_as_zero";
+        pub const CODE: &'static [u8] = &[0x99];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x99,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCurrentPositionAsZero(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadCurrentZeroOffset {
+        pub const NAME: &'static str = "read_current_zero_offset";
+        pub const CODE: &'static [u8] = &[0x95];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x95,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadCurrentZeroOffset(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetZeroOffset {
+        pub const NAME: &'static str = "reset_zero_offset";
+        pub const CODE: &'static [u8] = &[0x98];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x98,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetZeroOffset(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadElectronicSerialNumber {
+        pub const NAME: &'static str = "read_electronic_serial_number";
+        pub const CODE: &'static [u8] = &[0xF0];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xF0,
+            1,
+            &[6],
+        );
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadElectronicSerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadProductDescription {
+        pub const NAME: &'static str = "read_product_description";
+        pub const CODE: &'static [u8] = &[0xF1];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xF1,
+            1,
+            &[6],
+        );
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadProductDescription(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadSoftwareRevision {
+        pub const NAME: &'static str = "read_software_revision";
+        pub const CODE: &'static [u8] = &[0xF2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xF2,
+            1,
+            &[6],
+        );
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadSoftwareRevision(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadHardwareRevision {
+        pub const NAME: &'static str = "read_hardware_revision";
+        pub const CODE: &'static [u8] = &[0xF3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xF3,
+            1,
+            &[6],
+        );
+        pub const BYTE_NUMBER: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("byte_number", rt::Int(self.byte_number as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadHardwareRevision(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadTotalRuntimeHours {
+        pub const NAME: &'static str = "read_total_runtime_hours";
+        pub const CODE: &'static [u8] = &[0xA2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA2,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTotalRuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadTotalRuntimeMinSec {
+        pub const NAME: &'static str = "read_total_runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0xA2];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA2,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTotalRuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime024Hours {
+        pub const NAME: &'static str = "read_load_runtime_0_24_hours";
+        pub const CODE: &'static [u8] = &[0xA3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA3,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime024Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime024MinSec {
+        pub const NAME: &'static str = "read_load_runtime_0_24_min_sec";
+        pub const CODE: &'static [u8] = &[0xA3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA3,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime024MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime024 {
+        pub const NAME: &'static str = "reset_load_runtime_0_24";
+        pub const CODE: &'static [u8] = &[0xA3];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA3,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime024(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime2549Hours {
+        pub const NAME: &'static str = "read_load_runtime_25_49_hours";
+        pub const CODE: &'static [u8] = &[0xA4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA4,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime2549Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime2549MinSec {
+        pub const NAME: &'static str = "read_load_runtime_25_49_min_sec";
+        pub const CODE: &'static [u8] = &[0xA4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA4,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime2549MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime2549 {
+        pub const NAME: &'static str = "reset_load_runtime_25_49";
+        pub const CODE: &'static [u8] = &[0xA4];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA4,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime2549(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime5074Hours {
+        pub const NAME: &'static str = "read_load_runtime_50_74_hours";
+        pub const CODE: &'static [u8] = &[0xA5];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA5,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime5074Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime5074MinSec {
+        pub const NAME: &'static str = "read_load_runtime_50_74_min_sec";
+        pub const CODE: &'static [u8] = &[0xA5];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA5,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime5074MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime5074 {
+        pub const NAME: &'static str = "reset_load_runtime_50_74";
+        pub const CODE: &'static [u8] = &[0xA5];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA5,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime5074(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime7599Hours {
+        pub const NAME: &'static str = "read_load_runtime_75_99_hours";
+        pub const CODE: &'static [u8] = &[0xA6];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA6,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime7599Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime7599MinSec {
+        pub const NAME: &'static str = "read_load_runtime_75_99_min_sec";
+        pub const CODE: &'static [u8] = &[0xA6];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA6,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime7599MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime7599 {
+        pub const NAME: &'static str = "reset_load_runtime_75_99";
+        pub const CODE: &'static [u8] = &[0xA6];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA6,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime7599(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime100Hours {
+        pub const NAME: &'static str = "read_load_runtime_100_hours";
+        pub const CODE: &'static [u8] = &[0xA7];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA7,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime100Hours(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadLoadRuntime100MinSec {
+        pub const NAME: &'static str = "read_load_runtime_100_min_sec";
+        pub const CODE: &'static [u8] = &[0xA7];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA7,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadLoadRuntime100MinSec(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetLoadRuntime100 {
+        pub const NAME: &'static str = "reset_load_runtime_100";
+        pub const CODE: &'static [u8] = &[0xA7];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA7,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetLoadRuntime100(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadStallEventCounter {
+        pub const NAME: &'static str = "read_stall_event_counter";
+        pub const CODE: &'static [u8] = &[0xA8];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA8,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadStallEventCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ResetStallEventCounter {
+        pub const NAME: &'static str = "reset_stall_event_counter";
+        pub const CODE: &'static [u8] = &[0xA8];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA8,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ResetStallEventCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadPowerUpCycles {
+        pub const NAME: &'static str = "read_power_up_cycles";
+        pub const CODE: &'static [u8] = &[0xA9];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA9,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadPowerUpCycles(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Set Point Command (code `0x76`, 6 bytes). Set point: move to the given position. The host increments the 4-bit host data freshness counter with every set point command; the actuator checks it against its configured "Freshness Counter Threshold" (0 = no count may be skipped, 1 = one count may be skipped, ..., >= 15 = check disabled) and on a violation loads its set point from the configured "Fail-Safe Position" (erratum sd-e09).
-        SetPoint {
-            /// F = host data freshness counter (incremented by the host each transmission)
-            freshness: u8,
-            /// ABC = set point position (12-bit two's complement) \[°\]
-            position: Angle,
-        },
-        /// §3.2 Read Actual Position Command (code `0x69`, 6 bytes). Readout actual position.
-        ReadActualPosition,
-        /// §3.3 Set Velocity (code `0x77`, 6 bytes). Set velocity. Set velocity = velocity \[Deg/sec\] * 10, 16-bit two's complement (footnote 1, erratum sd-e10).
-        SetVelocity {
-            /// Set velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
-            set_velocity: Velocity,
-        },
-        /// §3.4 Read Actual Velocity (code `0x68`, 6 bytes). Readout actual velocity.
-        ReadActualVelocity,
-        /// §3.5 Set Servo ID Command (code `0xAA`, 6 bytes). Set servo ID: give the actuator a new ID (0x01..0x1E), sent twice. Accepts the broadcast ID; the document does not say whether it answers a broadcast (erratum sd-e11).
-        SetServoId {
-            /// New ID: 0x01 ... 0x1E Valid raw range 1..=30.
-            new_id: u8,
-        },
-        /// §3.6 Read Servo ID Command (code `0xDA`, 6 bytes). Read servo ID. Accepts the broadcast ID, which is how a host learns the ID of a single actuator on the bus; the document does not say whether it answers a broadcast (erratum sd-e11).
-        ReadServoId,
-        /// §3.7 Read Current Consumption (code `0xB0`, 6 bytes). Read current consumption (maximum value 5.1 A; above that use read_extended_current_consumption).
-        ReadCurrentConsumption,
-        /// §3.8 Read Bus Voltages (code `0xB1`, 6 bytes). Read bus voltages of power bus 1 (X1) and power bus 2 (X2).
-        ReadBusVoltages,
-        /// §3.9 Read Extended Current Consumption (code `0xB2`, 6 bytes). Read extended current consumption; used if the current consumption exceeds 5.1 A.
-        ReadExtendedCurrentConsumption,
-        /// §3.10 Read Temperatures (code `0xA0`, 6 bytes). Readout of temperature: motor and PCB temperature.
-        ReadTemperatures,
-        /// §3.11 Read Humidity (code `0xA1`, 6 bytes). Readout of humidity.
-        ReadHumidity,
-        /// §3.12 Read Skipped Frames Counter (code `0x37`, 6 bytes). Read skipped frames counter: the host freshness counter and the number of dropped (skipped) set point frames. Shares code 0x37 with reset_dropped_frames_counter; argument 2 (0x01) selects the readout (erratum sd-e13).
-        ReadSkippedFramesCounter,
-        /// §3.13 Reset of the Dropped Frames Counter (code `0x37`, 6 bytes). Reset the dropped frames counter. Argument 2 = 0x02 selects the reset. (The document's description line "Readout the role (master/slave)" is a copy-paste slip, erratum sd-e14.)
-        ResetDroppedFramesCounter,
-        /// §3.14 Read Actuator Status Word (code `0x40`, 6 bytes). Readout actuator status word. Shares code 0x40 with reset_actuator_status_word; argument 2 (0x02) selects the readout.
-        ReadActuatorStatusWord,
-        /// §3.15 Reset Actuator Status Word (code `0x40`, 6 bytes). Reset of actuator status word. Argument 2 (0x52) selects the reset.
-        ResetActuatorStatusWord,
-        /// §3.16 Reset Default Role and Reset Error Flags (code `0xB4`, 6 bytes). Reset default role and reset error flags ("Access to special actuator features"). The arguments are the fixed key 0x41 0x53, echoed in the reply (erratum sd-e18).
-        ResetDefaultRoleAndErrorFlags,
-        /// §3.17 Set Current Position As Zero (code `0x99`, 6 bytes). Set current position as zero; the reply carries the resulting offset relative to the real zero of the encoder.
-        SetCurrentPositionAsZero,
-        /// §3.18 Read Current Zero Offset (code `0x95`, 6 bytes). Report of zero position: the offset relative to the real zero of the encoder.
-        ReadCurrentZeroOffset,
-        /// §3.19 Reset Zero Offset (code `0x98`, 6 bytes). Reset zero offset.
-        ResetZeroOffset,
-        /// §3.20 Readout of Electronic Serial Number (code `0xF0`, 6 bytes). Readout of electronic serial number, one character per request (erratum sd-e21).
-        ReadElectronicSerialNumber {
-            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
-            byte_number: u8,
-        },
-        /// §3.21 Readout of Product Description (code `0xF1`, 6 bytes). Readout of product description, one character per request (erratum sd-e21).
-        ReadProductDescription {
-            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
-            byte_number: u8,
-        },
-        /// §3.22 Readout of Software Revision Number (code `0xF2`, 6 bytes). Readout of software revision number, one character per request (erratum sd-e21).
-        ReadSoftwareRevision {
-            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
-            byte_number: u8,
-        },
-        /// §3.23 Readout of Hardware Revision Number (code `0xF3`, 6 bytes). Readout of hardware revision number, one character per request (erratum sd-e21).
-        ReadHardwareRevision {
-            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
-            byte_number: u8,
-        },
-        /// §3.24 Readout Total Run-time Counter (code `0xA2`, 6 bytes). Readout total run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
-        ReadTotalRuntimeHours,
-        /// §3.24 Readout Total Run-time Counter (code `0xA2`, 6 bytes). Readout total run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
-        ReadTotalRuntimeMinSec,
-        /// §3.25 Readout 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
-        ReadLoadRuntime024Hours,
-        /// §3.25 Readout 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
-        ReadLoadRuntime024MinSec,
-        /// §3.26 Reset 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Reset 0%...24% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
-        ResetLoadRuntime024,
-        /// §3.27 Readout 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
-        ReadLoadRuntime2549Hours,
-        /// §3.27 Readout 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
-        ReadLoadRuntime2549MinSec,
-        /// §3.28 Reset 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Reset 25%...49% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset. The document's heading says "Readout" (erratum sd-e20); the title here is its description line.
-        ResetLoadRuntime2549,
-        /// §3.29 Readout 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
-        ReadLoadRuntime5074Hours,
-        /// §3.29 Readout 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
-        ReadLoadRuntime5074MinSec,
-        /// §3.30 Reset 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Reset 50%...74% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
-        ResetLoadRuntime5074,
-        /// §3.31 Readout 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
-        ReadLoadRuntime7599Hours,
-        /// §3.31 Readout 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
-        ReadLoadRuntime7599MinSec,
-        /// §3.32 Reset 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Reset 75%...99% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
-        ResetLoadRuntime7599,
-        /// §3.33 Readout of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Readout of 100% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
-        ReadLoadRuntime100Hours,
-        /// §3.33 Readout of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Readout of 100% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
-        ReadLoadRuntime100MinSec,
-        /// §3.34 Reset of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Reset of 100% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
-        ResetLoadRuntime100,
-        /// §3.35 Readout Stall Event Counter (code `0xA8`, 6 bytes). Readout stall event counter (arguments 0x00 0x00).
-        ReadStallEventCounter,
-        /// §3.36 Reset Stall Event Counter (code `0xA8`, 6 bytes). Reset stall event counter (arguments 0xAA 0x55); replies with the count before the reset.
-        ResetStallEventCounter,
-        /// §3.37 Readout of Number of Power Up Cycles (code `0xA9`, 6 bytes). Readout of number of power up cycles.
-        ReadPowerUpCycles,
+        SetPoint(request::SetPoint),
+        ReadActualPosition(request::ReadActualPosition),
+        SetVelocity(request::SetVelocity),
+        ReadActualVelocity(request::ReadActualVelocity),
+        SetServoId(request::SetServoId),
+        ReadServoId(request::ReadServoId),
+        ReadCurrentConsumption(request::ReadCurrentConsumption),
+        ReadBusVoltages(request::ReadBusVoltages),
+        ReadExtendedCurrentConsumption(request::ReadExtendedCurrentConsumption),
+        ReadTemperatures(request::ReadTemperatures),
+        ReadHumidity(request::ReadHumidity),
+        ReadSkippedFramesCounter(request::ReadSkippedFramesCounter),
+        ResetDroppedFramesCounter(request::ResetDroppedFramesCounter),
+        ReadActuatorStatusWord(request::ReadActuatorStatusWord),
+        ResetActuatorStatusWord(request::ResetActuatorStatusWord),
+        ResetDefaultRoleAndErrorFlags(request::ResetDefaultRoleAndErrorFlags),
+        SetCurrentPositionAsZero(request::SetCurrentPositionAsZero),
+        ReadCurrentZeroOffset(request::ReadCurrentZeroOffset),
+        ResetZeroOffset(request::ResetZeroOffset),
+        ReadElectronicSerialNumber(request::ReadElectronicSerialNumber),
+        ReadProductDescription(request::ReadProductDescription),
+        ReadSoftwareRevision(request::ReadSoftwareRevision),
+        ReadHardwareRevision(request::ReadHardwareRevision),
+        ReadTotalRuntimeHours(request::ReadTotalRuntimeHours),
+        ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec),
+        ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours),
+        ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec),
+        ResetLoadRuntime024(request::ResetLoadRuntime024),
+        ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours),
+        ReadLoadRuntime2549MinSec(request::ReadLoadRuntime2549MinSec),
+        ResetLoadRuntime2549(request::ResetLoadRuntime2549),
+        ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours),
+        ReadLoadRuntime5074MinSec(request::ReadLoadRuntime5074MinSec),
+        ResetLoadRuntime5074(request::ResetLoadRuntime5074),
+        ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours),
+        ReadLoadRuntime7599MinSec(request::ReadLoadRuntime7599MinSec),
+        ResetLoadRuntime7599(request::ResetLoadRuntime7599),
+        ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours),
+        ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec),
+        ResetLoadRuntime100(request::ResetLoadRuntime100),
+        ReadStallEventCounter(request::ReadStallEventCounter),
+        ResetStallEventCounter(request::ResetStallEventCounter),
+        ReadPowerUpCycles(request::ReadPowerUpCycles),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -491,49 +1055,49 @@ pub mod sd {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SetPoint { .. } => 0,
-                Self::ReadActualPosition => 1,
-                Self::SetVelocity { .. } => 2,
-                Self::ReadActualVelocity => 3,
-                Self::SetServoId { .. } => 4,
-                Self::ReadServoId => 5,
-                Self::ReadCurrentConsumption => 6,
-                Self::ReadBusVoltages => 7,
-                Self::ReadExtendedCurrentConsumption => 8,
-                Self::ReadTemperatures => 9,
-                Self::ReadHumidity => 10,
-                Self::ReadSkippedFramesCounter => 11,
-                Self::ResetDroppedFramesCounter => 12,
-                Self::ReadActuatorStatusWord => 13,
-                Self::ResetActuatorStatusWord => 14,
-                Self::ResetDefaultRoleAndErrorFlags => 15,
-                Self::SetCurrentPositionAsZero => 16,
-                Self::ReadCurrentZeroOffset => 17,
-                Self::ResetZeroOffset => 18,
-                Self::ReadElectronicSerialNumber { .. } => 19,
-                Self::ReadProductDescription { .. } => 20,
-                Self::ReadSoftwareRevision { .. } => 21,
-                Self::ReadHardwareRevision { .. } => 22,
-                Self::ReadTotalRuntimeHours => 23,
-                Self::ReadTotalRuntimeMinSec => 24,
-                Self::ReadLoadRuntime024Hours => 25,
-                Self::ReadLoadRuntime024MinSec => 26,
-                Self::ResetLoadRuntime024 => 27,
-                Self::ReadLoadRuntime2549Hours => 28,
-                Self::ReadLoadRuntime2549MinSec => 29,
-                Self::ResetLoadRuntime2549 => 30,
-                Self::ReadLoadRuntime5074Hours => 31,
-                Self::ReadLoadRuntime5074MinSec => 32,
-                Self::ResetLoadRuntime5074 => 33,
-                Self::ReadLoadRuntime7599Hours => 34,
-                Self::ReadLoadRuntime7599MinSec => 35,
-                Self::ResetLoadRuntime7599 => 36,
-                Self::ReadLoadRuntime100Hours => 37,
-                Self::ReadLoadRuntime100MinSec => 38,
-                Self::ResetLoadRuntime100 => 39,
-                Self::ReadStallEventCounter => 40,
-                Self::ResetStallEventCounter => 41,
-                Self::ReadPowerUpCycles => 42,
+                Self::SetPoint(_) => 0,
+                Self::ReadActualPosition(_) => 1,
+                Self::SetVelocity(_) => 2,
+                Self::ReadActualVelocity(_) => 3,
+                Self::SetServoId(_) => 4,
+                Self::ReadServoId(_) => 5,
+                Self::ReadCurrentConsumption(_) => 6,
+                Self::ReadBusVoltages(_) => 7,
+                Self::ReadExtendedCurrentConsumption(_) => 8,
+                Self::ReadTemperatures(_) => 9,
+                Self::ReadHumidity(_) => 10,
+                Self::ReadSkippedFramesCounter(_) => 11,
+                Self::ResetDroppedFramesCounter(_) => 12,
+                Self::ReadActuatorStatusWord(_) => 13,
+                Self::ResetActuatorStatusWord(_) => 14,
+                Self::ResetDefaultRoleAndErrorFlags(_) => 15,
+                Self::SetCurrentPositionAsZero(_) => 16,
+                Self::ReadCurrentZeroOffset(_) => 17,
+                Self::ResetZeroOffset(_) => 18,
+                Self::ReadElectronicSerialNumber(_) => 19,
+                Self::ReadProductDescription(_) => 20,
+                Self::ReadSoftwareRevision(_) => 21,
+                Self::ReadHardwareRevision(_) => 22,
+                Self::ReadTotalRuntimeHours(_) => 23,
+                Self::ReadTotalRuntimeMinSec(_) => 24,
+                Self::ReadLoadRuntime024Hours(_) => 25,
+                Self::ReadLoadRuntime024MinSec(_) => 26,
+                Self::ResetLoadRuntime024(_) => 27,
+                Self::ReadLoadRuntime2549Hours(_) => 28,
+                Self::ReadLoadRuntime2549MinSec(_) => 29,
+                Self::ResetLoadRuntime2549(_) => 30,
+                Self::ReadLoadRuntime5074Hours(_) => 31,
+                Self::ReadLoadRuntime5074MinSec(_) => 32,
+                Self::ResetLoadRuntime5074(_) => 33,
+                Self::ReadLoadRuntime7599Hours(_) => 34,
+                Self::ReadLoadRuntime7599MinSec(_) => 35,
+                Self::ResetLoadRuntime7599(_) => 36,
+                Self::ReadLoadRuntime100Hours(_) => 37,
+                Self::ReadLoadRuntime100MinSec(_) => 38,
+                Self::ResetLoadRuntime100(_) => 39,
+                Self::ReadStallEventCounter(_) => 40,
+                Self::ResetStallEventCounter(_) => 41,
+                Self::ReadPowerUpCycles(_) => 42,
             }
         }
         /// The spec's snake_case name of this message.
@@ -550,30 +1114,15 @@ pub mod sd {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetPoint { freshness: v_freshness, position: v_position } => {
-                    f("freshness", rt::Int(*v_freshness as i64));
-                    f("position", rt::Int(v_position.raw() as i64));
-                }
-                Self::SetVelocity { set_velocity: v_set_velocity } => {
-                    f("set_velocity", rt::Int(v_set_velocity.raw() as i64))
-                }
-                Self::SetServoId { new_id: v_new_id } => {
-                    f("new_id", rt::Int(*v_new_id as i64))
-                }
-                Self::ReadElectronicSerialNumber { byte_number: v_byte_number } => {
-                    f("byte_number", rt::Int(*v_byte_number as i64))
-                }
-                Self::ReadProductDescription { byte_number: v_byte_number } => {
-                    f("byte_number", rt::Int(*v_byte_number as i64))
-                }
-                Self::ReadSoftwareRevision { byte_number: v_byte_number } => {
-                    f("byte_number", rt::Int(*v_byte_number as i64))
-                }
-                Self::ReadHardwareRevision { byte_number: v_byte_number } => {
-                    f("byte_number", rt::Int(*v_byte_number as i64))
-                }
+                Self::SetPoint(m) => m.visit(f),
+                Self::SetVelocity(m) => m.visit(f),
+                Self::SetServoId(m) => m.visit(f),
+                Self::ReadElectronicSerialNumber(m) => m.visit(f),
+                Self::ReadProductDescription(m) => m.visit(f),
+                Self::ReadSoftwareRevision(m) => m.visit(f),
+                Self::ReadHardwareRevision(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -588,7 +1137,9 @@ pub mod sd {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::SetPoint { freshness: v_freshness, position: v_position } => {
+                Self::SetPoint(
+                    request::SetPoint { freshness: v_freshness, position: v_position },
+                ) => {
                     let out = rt::head(out, &[0x76, address]);
                     let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
                         as u16) << 12)
@@ -597,18 +1148,20 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::ReadActualPosition => {
+                Self::ReadActualPosition(request::ReadActualPosition {}) => {
                     rt::head(out, &[0x69, address, 0x00, 0x00]).len()
                 }
-                Self::SetVelocity { set_velocity: v_set_velocity } => {
+                Self::SetVelocity(
+                    request::SetVelocity { set_velocity: v_set_velocity },
+                ) => {
                     let out = rt::head(out, &[0x77, address]);
                     out[2..4].copy_from_slice(&v_set_velocity.raw().to_be_bytes());
                     out.len()
                 }
-                Self::ReadActualVelocity => {
+                Self::ReadActualVelocity(request::ReadActualVelocity {}) => {
                     rt::head(out, &[0x68, address, 0x00, 0x00]).len()
                 }
-                Self::SetServoId { new_id: v_new_id } => {
+                Self::SetServoId(request::SetServoId { new_id: v_new_id }) => {
                     rt::encode_in_range("new_id", v_new_id, 1, 30)?;
                     let out = rt::head(out, &[0xAA, address]);
                     let field_0: u8 = v_new_id;
@@ -616,293 +1169,331 @@ pub mod sd {
                     out[3] = field_0;
                     out.len()
                 }
-                Self::ReadServoId => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
-                Self::ReadCurrentConsumption => {
+                Self::ReadServoId(request::ReadServoId {}) => {
+                    rt::head(out, &[0xDA, address, 0x00, 0x00]).len()
+                }
+                Self::ReadCurrentConsumption(request::ReadCurrentConsumption {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_CURRENT_CONSUMPTION,
+                        &request::ReadCurrentConsumption::DESC,
                     )?;
                     rt::head(out, &[0xB0, address, 0x00, 0x00]).len()
                 }
-                Self::ReadBusVoltages => {
-                    rt::encode_broadcast(address, 0x1F, &request::READ_BUS_VOLTAGES)?;
-                    rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
-                }
-                Self::ReadExtendedCurrentConsumption => {
+                Self::ReadBusVoltages(request::ReadBusVoltages {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_EXTENDED_CURRENT_CONSUMPTION,
+                        &request::ReadBusVoltages::DESC,
+                    )?;
+                    rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
+                }
+                Self::ReadExtendedCurrentConsumption(
+                    request::ReadExtendedCurrentConsumption {},
+                ) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::ReadExtendedCurrentConsumption::DESC,
                     )?;
                     rt::head(out, &[0xB2, address, 0x00, 0x00]).len()
                 }
-                Self::ReadTemperatures => {
-                    rt::encode_broadcast(address, 0x1F, &request::READ_TEMPERATURES)?;
-                    rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
-                }
-                Self::ReadHumidity => {
-                    rt::encode_broadcast(address, 0x1F, &request::READ_HUMIDITY)?;
-                    rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
-                }
-                Self::ReadSkippedFramesCounter => {
+                Self::ReadTemperatures(request::ReadTemperatures {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_SKIPPED_FRAMES_COUNTER,
+                        &request::ReadTemperatures::DESC,
+                    )?;
+                    rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
+                }
+                Self::ReadHumidity(request::ReadHumidity {}) => {
+                    rt::encode_broadcast(address, 0x1F, &request::ReadHumidity::DESC)?;
+                    rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
+                }
+                Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter {}) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::ReadSkippedFramesCounter::DESC,
                     )?;
                     rt::head(out, &[0x37, address, 0x00, 0x01]).len()
                 }
-                Self::ResetDroppedFramesCounter => {
+                Self::ResetDroppedFramesCounter(
+                    request::ResetDroppedFramesCounter {},
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_DROPPED_FRAMES_COUNTER,
+                        &request::ResetDroppedFramesCounter::DESC,
                     )?;
                     rt::head(out, &[0x37, address, 0x00, 0x02]).len()
                 }
-                Self::ReadActuatorStatusWord => {
+                Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_ACTUATOR_STATUS_WORD,
+                        &request::ReadActuatorStatusWord::DESC,
                     )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x02]).len()
                 }
-                Self::ResetActuatorStatusWord => {
+                Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_ACTUATOR_STATUS_WORD,
+                        &request::ResetActuatorStatusWord::DESC,
                     )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x52]).len()
                 }
-                Self::ResetDefaultRoleAndErrorFlags => {
+                Self::ResetDefaultRoleAndErrorFlags(
+                    request::ResetDefaultRoleAndErrorFlags {},
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS,
+                        &request::ResetDefaultRoleAndErrorFlags::DESC,
                     )?;
                     rt::head(out, &[0xB4, address, 0x41, 0x53]).len()
                 }
-                Self::SetCurrentPositionAsZero => {
+                Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::SET_CURRENT_POSITION_AS_ZERO,
+                        &request::SetCurrentPositionAsZero::DESC,
                     )?;
                     rt::head(out, &[0x99, address, 0x00, 0x00]).len()
                 }
-                Self::ReadCurrentZeroOffset => {
+                Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_CURRENT_ZERO_OFFSET,
+                        &request::ReadCurrentZeroOffset::DESC,
                     )?;
                     rt::head(out, &[0x95, address, 0x00, 0x00]).len()
                 }
-                Self::ResetZeroOffset => {
-                    rt::encode_broadcast(address, 0x1F, &request::RESET_ZERO_OFFSET)?;
-                    rt::head(out, &[0x98, address, 0x00, 0x00]).len()
-                }
-                Self::ReadElectronicSerialNumber { byte_number: v_byte_number } => {
+                Self::ResetZeroOffset(request::ResetZeroOffset {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_ELECTRONIC_SERIAL_NUMBER,
+                        &request::ResetZeroOffset::DESC,
+                    )?;
+                    rt::head(out, &[0x98, address, 0x00, 0x00]).len()
+                }
+                Self::ReadElectronicSerialNumber(
+                    request::ReadElectronicSerialNumber { byte_number: v_byte_number },
+                ) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::ReadElectronicSerialNumber::DESC,
                     )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF0, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
-                Self::ReadProductDescription { byte_number: v_byte_number } => {
+                Self::ReadProductDescription(
+                    request::ReadProductDescription { byte_number: v_byte_number },
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_PRODUCT_DESCRIPTION,
+                        &request::ReadProductDescription::DESC,
                     )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF1, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
-                Self::ReadSoftwareRevision { byte_number: v_byte_number } => {
+                Self::ReadSoftwareRevision(
+                    request::ReadSoftwareRevision { byte_number: v_byte_number },
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_SOFTWARE_REVISION,
+                        &request::ReadSoftwareRevision::DESC,
                     )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF2, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
-                Self::ReadHardwareRevision { byte_number: v_byte_number } => {
+                Self::ReadHardwareRevision(
+                    request::ReadHardwareRevision { byte_number: v_byte_number },
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_HARDWARE_REVISION,
+                        &request::ReadHardwareRevision::DESC,
                     )?;
                     rt::encode_in_range("byte_number", v_byte_number, 0, 31)?;
                     let out = rt::head(out, &[0xF3, address, 0x00]);
                     out[3] = v_byte_number;
                     out.len()
                 }
-                Self::ReadTotalRuntimeHours => {
+                Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_TOTAL_RUNTIME_HOURS,
+                        &request::ReadTotalRuntimeHours::DESC,
                     )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x00]).len()
                 }
-                Self::ReadTotalRuntimeMinSec => {
+                Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_TOTAL_RUNTIME_MIN_SEC,
+                        &request::ReadTotalRuntimeMinSec::DESC,
                     )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x01]).len()
                 }
-                Self::ReadLoadRuntime024Hours => {
+                Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_0_24_HOURS,
+                        &request::ReadLoadRuntime024Hours::DESC,
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime024MinSec => {
+                Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_0_24_MIN_SEC,
+                        &request::ReadLoadRuntime024MinSec::DESC,
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime024 => {
+                Self::ResetLoadRuntime024(request::ResetLoadRuntime024 {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_LOAD_RUNTIME_0_24,
+                        &request::ResetLoadRuntime024::DESC,
                     )?;
                     rt::head(out, &[0xA3, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime2549Hours => {
+                Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_25_49_HOURS,
+                        &request::ReadLoadRuntime2549Hours::DESC,
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime2549MinSec => {
+                Self::ReadLoadRuntime2549MinSec(
+                    request::ReadLoadRuntime2549MinSec {},
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_25_49_MIN_SEC,
+                        &request::ReadLoadRuntime2549MinSec::DESC,
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime2549 => {
+                Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549 {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_LOAD_RUNTIME_25_49,
+                        &request::ResetLoadRuntime2549::DESC,
                     )?;
                     rt::head(out, &[0xA4, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime5074Hours => {
+                Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_50_74_HOURS,
+                        &request::ReadLoadRuntime5074Hours::DESC,
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime5074MinSec => {
+                Self::ReadLoadRuntime5074MinSec(
+                    request::ReadLoadRuntime5074MinSec {},
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_50_74_MIN_SEC,
+                        &request::ReadLoadRuntime5074MinSec::DESC,
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime5074 => {
+                Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074 {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_LOAD_RUNTIME_50_74,
+                        &request::ResetLoadRuntime5074::DESC,
                     )?;
                     rt::head(out, &[0xA5, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime7599Hours => {
+                Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_75_99_HOURS,
+                        &request::ReadLoadRuntime7599Hours::DESC,
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime7599MinSec => {
+                Self::ReadLoadRuntime7599MinSec(
+                    request::ReadLoadRuntime7599MinSec {},
+                ) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_75_99_MIN_SEC,
+                        &request::ReadLoadRuntime7599MinSec::DESC,
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime7599 => {
+                Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599 {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_LOAD_RUNTIME_75_99,
+                        &request::ResetLoadRuntime7599::DESC,
                     )?;
                     rt::head(out, &[0xA6, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime100Hours => {
+                Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_100_HOURS,
+                        &request::ReadLoadRuntime100Hours::DESC,
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime100MinSec => {
+                Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_LOAD_RUNTIME_100_MIN_SEC,
+                        &request::ReadLoadRuntime100MinSec::DESC,
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime100 => {
+                Self::ResetLoadRuntime100(request::ResetLoadRuntime100 {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_LOAD_RUNTIME_100,
+                        &request::ResetLoadRuntime100::DESC,
                     )?;
                     rt::head(out, &[0xA7, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadStallEventCounter => {
+                Self::ReadStallEventCounter(request::ReadStallEventCounter {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::READ_STALL_EVENT_COUNTER,
+                        &request::ReadStallEventCounter::DESC,
                     )?;
                     rt::head(out, &[0xA8, address, 0x00, 0x00]).len()
                 }
-                Self::ResetStallEventCounter => {
+                Self::ResetStallEventCounter(request::ResetStallEventCounter {}) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
-                        &request::RESET_STALL_EVENT_COUNTER,
+                        &request::ResetStallEventCounter::DESC,
                     )?;
                     rt::head(out, &[0xA8, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadPowerUpCycles => {
-                    rt::encode_broadcast(address, 0x1F, &request::READ_POWER_UP_CYCLES)?;
+                Self::ReadPowerUpCycles(request::ReadPowerUpCycles {}) => {
+                    rt::encode_broadcast(
+                        address,
+                        0x1F,
+                        &request::ReadPowerUpCycles::DESC,
+                    )?;
                     rt::head(out, &[0xA9, address, 0x00, 0x00]).len()
                 }
             };
@@ -929,37 +1520,45 @@ pub mod sd {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x76 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_POINT)?;
+                    let frame = rt::fixed::<6>(frame, &request::SetPoint::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::Ok(Self::SetPoint {
-                        freshness: (field_0 >> 12) as u8,
-                        position: Angle::from_raw(
-                            (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetPoint(request::SetPoint {
+                            freshness: (field_0 >> 12) as u8,
+                            position: Angle::from_raw(
+                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                            ),
+                        }),
+                    )
                 }
                 0x69 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_POSITION)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::ReadActualPosition::DESC)?;
                     rt::equal(&request::READ_ACTUAL_POSITION_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::READ_ACTUAL_POSITION_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadActualPosition)
+                    rt::Ok(Self::ReadActualPosition(request::ReadActualPosition))
                 }
                 0x77 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_VELOCITY)?;
-                    rt::Ok(Self::SetVelocity {
-                        set_velocity: Velocity::from_raw(
-                            i16::from_be_bytes([frame[2], frame[3]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<6>(frame, &request::SetVelocity::DESC)?;
+                    rt::Ok(
+                        Self::SetVelocity(request::SetVelocity {
+                            set_velocity: Velocity::from_raw(
+                                i16::from_be_bytes([frame[2], frame[3]]),
+                            ),
+                        }),
+                    )
                 }
                 0x68 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_ACTUAL_VELOCITY)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::ReadActualVelocity::DESC)?;
                     rt::equal(&request::READ_ACTUAL_VELOCITY_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::READ_ACTUAL_VELOCITY_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadActualVelocity)
+                    rt::Ok(Self::ReadActualVelocity(request::ReadActualVelocity))
                 }
                 0xAA => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_SERVO_ID)?;
+                    let frame = rt::fixed::<6>(frame, &request::SetServoId::DESC)?;
                     rt::in_range(&request::SET_SERVO_ID_NEW_ID, 2, frame[2], 1, 30)?;
                     rt::same(
                         &request::SET_SERVO_ID_NEW_ID_REPEAT,
@@ -968,24 +1567,26 @@ pub mod sd {
                         "new_id",
                         frame[2],
                     )?;
-                    rt::Ok(Self::SetServoId {
-                        new_id: frame[2],
-                    })
+                    rt::Ok(
+                        Self::SetServoId(request::SetServoId {
+                            new_id: frame[2],
+                        }),
+                    )
                 }
                 0xDA => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_SERVO_ID)?;
+                    let frame = rt::fixed::<6>(frame, &request::ReadServoId::DESC)?;
                     rt::equal(&request::READ_SERVO_ID_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::READ_SERVO_ID_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadServoId)
+                    rt::Ok(Self::ReadServoId(request::ReadServoId))
                 }
                 0xB0 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::READ_CURRENT_CONSUMPTION)?;
+                    >(frame, &request::ReadCurrentConsumption::DESC)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        &request::READ_CURRENT_CONSUMPTION,
+                        &request::ReadCurrentConsumption::DESC,
                     )?;
                     rt::equal(
                         &request::READ_CURRENT_CONSUMPTION_ARG1,
@@ -999,23 +1600,23 @@ pub mod sd {
                         frame[3],
                         0x0,
                     )?;
-                    rt::Ok(Self::ReadCurrentConsumption)
+                    rt::Ok(Self::ReadCurrentConsumption(request::ReadCurrentConsumption))
                 }
                 0xB1 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_BUS_VOLTAGES)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::READ_BUS_VOLTAGES)?;
+                    let frame = rt::fixed::<6>(frame, &request::ReadBusVoltages::DESC)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::ReadBusVoltages::DESC)?;
                     rt::equal(&request::READ_BUS_VOLTAGES_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::READ_BUS_VOLTAGES_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadBusVoltages)
+                    rt::Ok(Self::ReadBusVoltages(request::ReadBusVoltages))
                 }
                 0xB2 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::READ_EXTENDED_CURRENT_CONSUMPTION)?;
+                    >(frame, &request::ReadExtendedCurrentConsumption::DESC)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        &request::READ_EXTENDED_CURRENT_CONSUMPTION,
+                        &request::ReadExtendedCurrentConsumption::DESC,
                     )?;
                     rt::equal(
                         &request::READ_EXTENDED_CURRENT_CONSUMPTION_ARG1,
@@ -1029,21 +1630,25 @@ pub mod sd {
                         frame[3],
                         0x0,
                     )?;
-                    rt::Ok(Self::ReadExtendedCurrentConsumption)
+                    rt::Ok(
+                        Self::ReadExtendedCurrentConsumption(
+                            request::ReadExtendedCurrentConsumption,
+                        ),
+                    )
                 }
                 0xA0 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_TEMPERATURES)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::READ_TEMPERATURES)?;
+                    let frame = rt::fixed::<6>(frame, &request::ReadTemperatures::DESC)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::ReadTemperatures::DESC)?;
                     rt::equal(&request::READ_TEMPERATURES_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::READ_TEMPERATURES_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadTemperatures)
+                    rt::Ok(Self::ReadTemperatures(request::ReadTemperatures))
                 }
                 0xA1 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_HUMIDITY)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::READ_HUMIDITY)?;
+                    let frame = rt::fixed::<6>(frame, &request::ReadHumidity::DESC)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::ReadHumidity::DESC)?;
                     rt::equal(&request::READ_HUMIDITY_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::READ_HUMIDITY_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadHumidity)
+                    rt::Ok(Self::ReadHumidity(request::ReadHumidity))
                 }
                 0x37 => {
                     let mut g = rt::Group::new(frame, 0x37, rt::None);
@@ -1051,7 +1656,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_SKIPPED_FRAMES_COUNTER,
+                            &request::ReadSkippedFramesCounter::DESC,
                         )?;
                         rt::equal(
                             &request::READ_SKIPPED_FRAMES_COUNTER_ARG1,
@@ -1065,13 +1670,17 @@ pub mod sd {
                             frame[3],
                             0x1,
                         )?;
-                        rt::Ok(Self::ReadSkippedFramesCounter)
+                        rt::Ok(
+                            Self::ReadSkippedFramesCounter(
+                                request::ReadSkippedFramesCounter,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_DROPPED_FRAMES_COUNTER,
+                            &request::ResetDroppedFramesCounter::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_DROPPED_FRAMES_COUNTER_ARG1,
@@ -1085,9 +1694,13 @@ pub mod sd {
                             frame[3],
                             0x2,
                         )?;
-                        rt::Ok(Self::ResetDroppedFramesCounter)
+                        rt::Ok(
+                            Self::ResetDroppedFramesCounter(
+                                request::ResetDroppedFramesCounter,
+                            ),
+                        )
                     });
-                    g.end(&request::READ_SKIPPED_FRAMES_COUNTER)
+                    g.end(&request::ReadSkippedFramesCounter::DESC)
                 }
                 0x40 => {
                     let mut g = rt::Group::new(frame, 0x40, rt::None);
@@ -1095,7 +1708,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_ACTUATOR_STATUS_WORD,
+                            &request::ReadActuatorStatusWord::DESC,
                         )?;
                         rt::equal(
                             &request::READ_ACTUATOR_STATUS_WORD_ARG1,
@@ -1109,13 +1722,15 @@ pub mod sd {
                             frame[3],
                             0x2,
                         )?;
-                        rt::Ok(Self::ReadActuatorStatusWord)
+                        rt::Ok(
+                            Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_ACTUATOR_STATUS_WORD,
+                            &request::ResetActuatorStatusWord::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_ACTUATOR_STATUS_WORD_ARG1,
@@ -1129,18 +1744,22 @@ pub mod sd {
                             frame[3],
                             0x52,
                         )?;
-                        rt::Ok(Self::ResetActuatorStatusWord)
+                        rt::Ok(
+                            Self::ResetActuatorStatusWord(
+                                request::ResetActuatorStatusWord,
+                            ),
+                        )
                     });
-                    g.end(&request::READ_ACTUATOR_STATUS_WORD)
+                    g.end(&request::ReadActuatorStatusWord::DESC)
                 }
                 0xB4 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS)?;
+                    >(frame, &request::ResetDefaultRoleAndErrorFlags::DESC)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS,
+                        &request::ResetDefaultRoleAndErrorFlags::DESC,
                     )?;
                     rt::equal(
                         &request::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1,
@@ -1154,16 +1773,20 @@ pub mod sd {
                         frame[3],
                         0x53,
                     )?;
-                    rt::Ok(Self::ResetDefaultRoleAndErrorFlags)
+                    rt::Ok(
+                        Self::ResetDefaultRoleAndErrorFlags(
+                            request::ResetDefaultRoleAndErrorFlags,
+                        ),
+                    )
                 }
                 0x99 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::SET_CURRENT_POSITION_AS_ZERO)?;
+                    >(frame, &request::SetCurrentPositionAsZero::DESC)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        &request::SET_CURRENT_POSITION_AS_ZERO,
+                        &request::SetCurrentPositionAsZero::DESC,
                     )?;
                     rt::equal(
                         &request::SET_CURRENT_POSITION_AS_ZERO_ARG1,
@@ -1177,16 +1800,18 @@ pub mod sd {
                         frame[3],
                         0x0,
                     )?;
-                    rt::Ok(Self::SetCurrentPositionAsZero)
+                    rt::Ok(
+                        Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero),
+                    )
                 }
                 0x95 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::READ_CURRENT_ZERO_OFFSET)?;
+                    >(frame, &request::ReadCurrentZeroOffset::DESC)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        &request::READ_CURRENT_ZERO_OFFSET,
+                        &request::ReadCurrentZeroOffset::DESC,
                     )?;
                     rt::equal(
                         &request::READ_CURRENT_ZERO_OFFSET_ARG1,
@@ -1200,23 +1825,23 @@ pub mod sd {
                         frame[3],
                         0x0,
                     )?;
-                    rt::Ok(Self::ReadCurrentZeroOffset)
+                    rt::Ok(Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset))
                 }
                 0x98 => {
-                    let frame = rt::fixed::<6>(frame, &request::RESET_ZERO_OFFSET)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::RESET_ZERO_OFFSET)?;
+                    let frame = rt::fixed::<6>(frame, &request::ResetZeroOffset::DESC)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::ResetZeroOffset::DESC)?;
                     rt::equal(&request::RESET_ZERO_OFFSET_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::RESET_ZERO_OFFSET_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ResetZeroOffset)
+                    rt::Ok(Self::ResetZeroOffset(request::ResetZeroOffset))
                 }
                 0xF0 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::READ_ELECTRONIC_SERIAL_NUMBER)?;
+                    >(frame, &request::ReadElectronicSerialNumber::DESC)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        &request::READ_ELECTRONIC_SERIAL_NUMBER,
+                        &request::ReadElectronicSerialNumber::DESC,
                     )?;
                     rt::equal(
                         &request::READ_ELECTRONIC_SERIAL_NUMBER_ARG1,
@@ -1231,18 +1856,20 @@ pub mod sd {
                         0,
                         31,
                     )?;
-                    rt::Ok(Self::ReadElectronicSerialNumber {
-                        byte_number: frame[3],
-                    })
+                    rt::Ok(
+                        Self::ReadElectronicSerialNumber(request::ReadElectronicSerialNumber {
+                            byte_number: frame[3],
+                        }),
+                    )
                 }
                 0xF1 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::READ_PRODUCT_DESCRIPTION)?;
+                    >(frame, &request::ReadProductDescription::DESC)?;
                     rt::no_broadcast(
                         frame[1],
                         0x1F,
-                        &request::READ_PRODUCT_DESCRIPTION,
+                        &request::ReadProductDescription::DESC,
                     )?;
                     rt::equal(
                         &request::READ_PRODUCT_DESCRIPTION_ARG1,
@@ -1257,13 +1884,21 @@ pub mod sd {
                         0,
                         31,
                     )?;
-                    rt::Ok(Self::ReadProductDescription {
-                        byte_number: frame[3],
-                    })
+                    rt::Ok(
+                        Self::ReadProductDescription(request::ReadProductDescription {
+                            byte_number: frame[3],
+                        }),
+                    )
                 }
                 0xF2 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_SOFTWARE_REVISION)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::READ_SOFTWARE_REVISION)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::ReadSoftwareRevision::DESC)?;
+                    rt::no_broadcast(
+                        frame[1],
+                        0x1F,
+                        &request::ReadSoftwareRevision::DESC,
+                    )?;
                     rt::equal(&request::READ_SOFTWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
                     rt::in_range(
                         &request::READ_SOFTWARE_REVISION_BYTE_NUMBER,
@@ -1272,13 +1907,21 @@ pub mod sd {
                         0,
                         31,
                     )?;
-                    rt::Ok(Self::ReadSoftwareRevision {
-                        byte_number: frame[3],
-                    })
+                    rt::Ok(
+                        Self::ReadSoftwareRevision(request::ReadSoftwareRevision {
+                            byte_number: frame[3],
+                        }),
+                    )
                 }
                 0xF3 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_HARDWARE_REVISION)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::READ_HARDWARE_REVISION)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::ReadHardwareRevision::DESC)?;
+                    rt::no_broadcast(
+                        frame[1],
+                        0x1F,
+                        &request::ReadHardwareRevision::DESC,
+                    )?;
                     rt::equal(&request::READ_HARDWARE_REVISION_ARG1, 2, frame[2], 0x0)?;
                     rt::in_range(
                         &request::READ_HARDWARE_REVISION_BYTE_NUMBER,
@@ -1287,9 +1930,11 @@ pub mod sd {
                         0,
                         31,
                     )?;
-                    rt::Ok(Self::ReadHardwareRevision {
-                        byte_number: frame[3],
-                    })
+                    rt::Ok(
+                        Self::ReadHardwareRevision(request::ReadHardwareRevision {
+                            byte_number: frame[3],
+                        }),
+                    )
                 }
                 0xA2 => {
                     let mut g = rt::Group::new(frame, 0xA2, rt::None);
@@ -1297,7 +1942,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_TOTAL_RUNTIME_HOURS,
+                            &request::ReadTotalRuntimeHours::DESC,
                         )?;
                         rt::equal(
                             &request::READ_TOTAL_RUNTIME_HOURS_ARG1,
@@ -1311,13 +1956,15 @@ pub mod sd {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadTotalRuntimeHours)
+                        rt::Ok(
+                            Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_TOTAL_RUNTIME_MIN_SEC,
+                            &request::ReadTotalRuntimeMinSec::DESC,
                         )?;
                         rt::equal(
                             &request::READ_TOTAL_RUNTIME_MIN_SEC_ARG1,
@@ -1331,9 +1978,11 @@ pub mod sd {
                             frame[3],
                             0x1,
                         )?;
-                        rt::Ok(Self::ReadTotalRuntimeMinSec)
+                        rt::Ok(
+                            Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec),
+                        )
                     });
-                    g.end(&request::READ_TOTAL_RUNTIME_HOURS)
+                    g.end(&request::ReadTotalRuntimeHours::DESC)
                 }
                 0xA3 => {
                     let mut g = rt::Group::new(frame, 0xA3, rt::None);
@@ -1341,7 +1990,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_0_24_HOURS,
+                            &request::ReadLoadRuntime024Hours::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_0_24_HOURS_ARG1,
@@ -1355,13 +2004,17 @@ pub mod sd {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime024Hours)
+                        rt::Ok(
+                            Self::ReadLoadRuntime024Hours(
+                                request::ReadLoadRuntime024Hours,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_0_24_MIN_SEC,
+                            &request::ReadLoadRuntime024MinSec::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1,
@@ -1375,13 +2028,17 @@ pub mod sd {
                             frame[3],
                             0x1,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime024MinSec)
+                        rt::Ok(
+                            Self::ReadLoadRuntime024MinSec(
+                                request::ReadLoadRuntime024MinSec,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_LOAD_RUNTIME_0_24,
+                            &request::ResetLoadRuntime024::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_LOAD_RUNTIME_0_24_ARG1,
@@ -1395,9 +2052,9 @@ pub mod sd {
                             frame[3],
                             0x55,
                         )?;
-                        rt::Ok(Self::ResetLoadRuntime024)
+                        rt::Ok(Self::ResetLoadRuntime024(request::ResetLoadRuntime024))
                     });
-                    g.end(&request::READ_LOAD_RUNTIME_0_24_HOURS)
+                    g.end(&request::ReadLoadRuntime024Hours::DESC)
                 }
                 0xA4 => {
                     let mut g = rt::Group::new(frame, 0xA4, rt::None);
@@ -1405,7 +2062,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_25_49_HOURS,
+                            &request::ReadLoadRuntime2549Hours::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_25_49_HOURS_ARG1,
@@ -1419,13 +2076,17 @@ pub mod sd {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime2549Hours)
+                        rt::Ok(
+                            Self::ReadLoadRuntime2549Hours(
+                                request::ReadLoadRuntime2549Hours,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_25_49_MIN_SEC,
+                            &request::ReadLoadRuntime2549MinSec::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1,
@@ -1439,13 +2100,17 @@ pub mod sd {
                             frame[3],
                             0x1,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime2549MinSec)
+                        rt::Ok(
+                            Self::ReadLoadRuntime2549MinSec(
+                                request::ReadLoadRuntime2549MinSec,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_LOAD_RUNTIME_25_49,
+                            &request::ResetLoadRuntime2549::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_LOAD_RUNTIME_25_49_ARG1,
@@ -1459,9 +2124,9 @@ pub mod sd {
                             frame[3],
                             0x55,
                         )?;
-                        rt::Ok(Self::ResetLoadRuntime2549)
+                        rt::Ok(Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549))
                     });
-                    g.end(&request::READ_LOAD_RUNTIME_25_49_HOURS)
+                    g.end(&request::ReadLoadRuntime2549Hours::DESC)
                 }
                 0xA5 => {
                     let mut g = rt::Group::new(frame, 0xA5, rt::None);
@@ -1469,7 +2134,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_50_74_HOURS,
+                            &request::ReadLoadRuntime5074Hours::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_50_74_HOURS_ARG1,
@@ -1483,13 +2148,17 @@ pub mod sd {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime5074Hours)
+                        rt::Ok(
+                            Self::ReadLoadRuntime5074Hours(
+                                request::ReadLoadRuntime5074Hours,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_50_74_MIN_SEC,
+                            &request::ReadLoadRuntime5074MinSec::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1,
@@ -1503,13 +2172,17 @@ pub mod sd {
                             frame[3],
                             0x1,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime5074MinSec)
+                        rt::Ok(
+                            Self::ReadLoadRuntime5074MinSec(
+                                request::ReadLoadRuntime5074MinSec,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_LOAD_RUNTIME_50_74,
+                            &request::ResetLoadRuntime5074::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_LOAD_RUNTIME_50_74_ARG1,
@@ -1523,9 +2196,9 @@ pub mod sd {
                             frame[3],
                             0x55,
                         )?;
-                        rt::Ok(Self::ResetLoadRuntime5074)
+                        rt::Ok(Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074))
                     });
-                    g.end(&request::READ_LOAD_RUNTIME_50_74_HOURS)
+                    g.end(&request::ReadLoadRuntime5074Hours::DESC)
                 }
                 0xA6 => {
                     let mut g = rt::Group::new(frame, 0xA6, rt::None);
@@ -1533,7 +2206,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_75_99_HOURS,
+                            &request::ReadLoadRuntime7599Hours::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_75_99_HOURS_ARG1,
@@ -1547,13 +2220,17 @@ pub mod sd {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime7599Hours)
+                        rt::Ok(
+                            Self::ReadLoadRuntime7599Hours(
+                                request::ReadLoadRuntime7599Hours,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_75_99_MIN_SEC,
+                            &request::ReadLoadRuntime7599MinSec::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1,
@@ -1567,13 +2244,17 @@ pub mod sd {
                             frame[3],
                             0x1,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime7599MinSec)
+                        rt::Ok(
+                            Self::ReadLoadRuntime7599MinSec(
+                                request::ReadLoadRuntime7599MinSec,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_LOAD_RUNTIME_75_99,
+                            &request::ResetLoadRuntime7599::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_LOAD_RUNTIME_75_99_ARG1,
@@ -1587,9 +2268,9 @@ pub mod sd {
                             frame[3],
                             0x55,
                         )?;
-                        rt::Ok(Self::ResetLoadRuntime7599)
+                        rt::Ok(Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599))
                     });
-                    g.end(&request::READ_LOAD_RUNTIME_75_99_HOURS)
+                    g.end(&request::ReadLoadRuntime7599Hours::DESC)
                 }
                 0xA7 => {
                     let mut g = rt::Group::new(frame, 0xA7, rt::None);
@@ -1597,7 +2278,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_100_HOURS,
+                            &request::ReadLoadRuntime100Hours::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_100_HOURS_ARG1,
@@ -1611,13 +2292,17 @@ pub mod sd {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime100Hours)
+                        rt::Ok(
+                            Self::ReadLoadRuntime100Hours(
+                                request::ReadLoadRuntime100Hours,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_LOAD_RUNTIME_100_MIN_SEC,
+                            &request::ReadLoadRuntime100MinSec::DESC,
                         )?;
                         rt::equal(
                             &request::READ_LOAD_RUNTIME_100_MIN_SEC_ARG1,
@@ -1631,13 +2316,17 @@ pub mod sd {
                             frame[3],
                             0x1,
                         )?;
-                        rt::Ok(Self::ReadLoadRuntime100MinSec)
+                        rt::Ok(
+                            Self::ReadLoadRuntime100MinSec(
+                                request::ReadLoadRuntime100MinSec,
+                            ),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_LOAD_RUNTIME_100,
+                            &request::ResetLoadRuntime100::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_LOAD_RUNTIME_100_ARG1,
@@ -1651,9 +2340,9 @@ pub mod sd {
                             frame[3],
                             0x55,
                         )?;
-                        rt::Ok(Self::ResetLoadRuntime100)
+                        rt::Ok(Self::ResetLoadRuntime100(request::ResetLoadRuntime100))
                     });
-                    g.end(&request::READ_LOAD_RUNTIME_100_HOURS)
+                    g.end(&request::ReadLoadRuntime100Hours::DESC)
                 }
                 0xA8 => {
                     let mut g = rt::Group::new(frame, 0xA8, rt::None);
@@ -1661,7 +2350,7 @@ pub mod sd {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::READ_STALL_EVENT_COUNTER,
+                            &request::ReadStallEventCounter::DESC,
                         )?;
                         rt::equal(
                             &request::READ_STALL_EVENT_COUNTER_ARG1,
@@ -1675,13 +2364,15 @@ pub mod sd {
                             frame[3],
                             0x0,
                         )?;
-                        rt::Ok(Self::ReadStallEventCounter)
+                        rt::Ok(
+                            Self::ReadStallEventCounter(request::ReadStallEventCounter),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::no_broadcast(
                             frame[1],
                             0x1F,
-                            &request::RESET_STALL_EVENT_COUNTER,
+                            &request::ResetStallEventCounter::DESC,
                         )?;
                         rt::equal(
                             &request::RESET_STALL_EVENT_COUNTER_ARG1,
@@ -1695,16 +2386,20 @@ pub mod sd {
                             frame[3],
                             0x55,
                         )?;
-                        rt::Ok(Self::ResetStallEventCounter)
+                        rt::Ok(
+                            Self::ResetStallEventCounter(request::ResetStallEventCounter),
+                        )
                     });
-                    g.end(&request::READ_STALL_EVENT_COUNTER)
+                    g.end(&request::ReadStallEventCounter::DESC)
                 }
                 0xA9 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ_POWER_UP_CYCLES)?;
-                    rt::no_broadcast(frame[1], 0x1F, &request::READ_POWER_UP_CYCLES)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::ReadPowerUpCycles::DESC)?;
+                    rt::no_broadcast(frame[1], 0x1F, &request::ReadPowerUpCycles::DESC)?;
                     rt::equal(&request::READ_POWER_UP_CYCLES_ARG1, 2, frame[2], 0x0)?;
                     rt::equal(&request::READ_POWER_UP_CYCLES_ARG2, 3, frame[3], 0x0)?;
-                    rt::Ok(Self::ReadPowerUpCycles)
+                    rt::Ok(Self::ReadPowerUpCycles(request::ReadPowerUpCycles))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, false)),
             }
@@ -1718,95 +2413,213 @@ pub mod sd {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "set_point" => {
-                    rt::Ok(Self::SetPoint {
-                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
-                            as u8,
-                        position: Angle::from_raw(
-                            rt::field_int("position", field("position"), -2048, 2047)?
-                                as i16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetPoint(request::SetPoint {
+                            freshness: rt::field_int(
+                                "freshness",
+                                field("freshness"),
+                                0,
+                                15,
+                            )? as u8,
+                            position: Angle::from_raw(
+                                rt::field_int("position", field("position"), -2048, 2047)?
+                                    as i16,
+                            ),
+                        }),
+                    )
                 }
-                "read_actual_position" => rt::Ok(Self::ReadActualPosition),
+                "read_actual_position" => {
+                    rt::Ok(Self::ReadActualPosition(request::ReadActualPosition))
+                }
                 "set_velocity" => {
-                    rt::Ok(Self::SetVelocity {
-                        set_velocity: Velocity::from_raw(
-                            rt::get(&mut field, "set_velocity")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetVelocity(request::SetVelocity {
+                            set_velocity: Velocity::from_raw(
+                                rt::get(&mut field, "set_velocity")?,
+                            ),
+                        }),
+                    )
                 }
-                "read_actual_velocity" => rt::Ok(Self::ReadActualVelocity),
+                "read_actual_velocity" => {
+                    rt::Ok(Self::ReadActualVelocity(request::ReadActualVelocity))
+                }
                 "set_servo_id" => {
-                    rt::Ok(Self::SetServoId {
-                        new_id: rt::get(&mut field, "new_id")?,
-                    })
+                    rt::Ok(
+                        Self::SetServoId(request::SetServoId {
+                            new_id: rt::get(&mut field, "new_id")?,
+                        }),
+                    )
                 }
-                "read_servo_id" => rt::Ok(Self::ReadServoId),
-                "read_current_consumption" => rt::Ok(Self::ReadCurrentConsumption),
-                "read_bus_voltages" => rt::Ok(Self::ReadBusVoltages),
+                "read_servo_id" => rt::Ok(Self::ReadServoId(request::ReadServoId)),
+                "read_current_consumption" => {
+                    rt::Ok(Self::ReadCurrentConsumption(request::ReadCurrentConsumption))
+                }
+                "read_bus_voltages" => {
+                    rt::Ok(Self::ReadBusVoltages(request::ReadBusVoltages))
+                }
                 "read_extended_current_consumption" => {
-                    rt::Ok(Self::ReadExtendedCurrentConsumption)
+                    rt::Ok(
+                        Self::ReadExtendedCurrentConsumption(
+                            request::ReadExtendedCurrentConsumption,
+                        ),
+                    )
                 }
-                "read_temperatures" => rt::Ok(Self::ReadTemperatures),
-                "read_humidity" => rt::Ok(Self::ReadHumidity),
-                "read_skipped_frames_counter" => rt::Ok(Self::ReadSkippedFramesCounter),
-                "reset_dropped_frames_counter" => rt::Ok(Self::ResetDroppedFramesCounter),
-                "read_actuator_status_word" => rt::Ok(Self::ReadActuatorStatusWord),
-                "reset_actuator_status_word" => rt::Ok(Self::ResetActuatorStatusWord),
+                "read_temperatures" => {
+                    rt::Ok(Self::ReadTemperatures(request::ReadTemperatures))
+                }
+                "read_humidity" => rt::Ok(Self::ReadHumidity(request::ReadHumidity)),
+                "read_skipped_frames_counter" => {
+                    rt::Ok(
+                        Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter),
+                    )
+                }
+                "reset_dropped_frames_counter" => {
+                    rt::Ok(
+                        Self::ResetDroppedFramesCounter(
+                            request::ResetDroppedFramesCounter,
+                        ),
+                    )
+                }
+                "read_actuator_status_word" => {
+                    rt::Ok(Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord))
+                }
+                "reset_actuator_status_word" => {
+                    rt::Ok(
+                        Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord),
+                    )
+                }
                 "reset_default_role_and_error_flags" => {
-                    rt::Ok(Self::ResetDefaultRoleAndErrorFlags)
+                    rt::Ok(
+                        Self::ResetDefaultRoleAndErrorFlags(
+                            request::ResetDefaultRoleAndErrorFlags,
+                        ),
+                    )
                 }
-                "set_current_position_as_zero" => rt::Ok(Self::SetCurrentPositionAsZero),
-                "read_current_zero_offset" => rt::Ok(Self::ReadCurrentZeroOffset),
-                "reset_zero_offset" => rt::Ok(Self::ResetZeroOffset),
+                "set_current_position_as_zero" => {
+                    rt::Ok(
+                        Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero),
+                    )
+                }
+                "read_current_zero_offset" => {
+                    rt::Ok(Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset))
+                }
+                "reset_zero_offset" => {
+                    rt::Ok(Self::ResetZeroOffset(request::ResetZeroOffset))
+                }
                 "read_electronic_serial_number" => {
-                    rt::Ok(Self::ReadElectronicSerialNumber {
-                        byte_number: rt::get(&mut field, "byte_number")?,
-                    })
+                    rt::Ok(
+                        Self::ReadElectronicSerialNumber(request::ReadElectronicSerialNumber {
+                            byte_number: rt::get(&mut field, "byte_number")?,
+                        }),
+                    )
                 }
                 "read_product_description" => {
-                    rt::Ok(Self::ReadProductDescription {
-                        byte_number: rt::get(&mut field, "byte_number")?,
-                    })
+                    rt::Ok(
+                        Self::ReadProductDescription(request::ReadProductDescription {
+                            byte_number: rt::get(&mut field, "byte_number")?,
+                        }),
+                    )
                 }
                 "read_software_revision" => {
-                    rt::Ok(Self::ReadSoftwareRevision {
-                        byte_number: rt::get(&mut field, "byte_number")?,
-                    })
+                    rt::Ok(
+                        Self::ReadSoftwareRevision(request::ReadSoftwareRevision {
+                            byte_number: rt::get(&mut field, "byte_number")?,
+                        }),
+                    )
                 }
                 "read_hardware_revision" => {
-                    rt::Ok(Self::ReadHardwareRevision {
-                        byte_number: rt::get(&mut field, "byte_number")?,
-                    })
+                    rt::Ok(
+                        Self::ReadHardwareRevision(request::ReadHardwareRevision {
+                            byte_number: rt::get(&mut field, "byte_number")?,
+                        }),
+                    )
                 }
-                "read_total_runtime_hours" => rt::Ok(Self::ReadTotalRuntimeHours),
-                "read_total_runtime_min_sec" => rt::Ok(Self::ReadTotalRuntimeMinSec),
-                "read_load_runtime_0_24_hours" => rt::Ok(Self::ReadLoadRuntime024Hours),
+                "read_total_runtime_hours" => {
+                    rt::Ok(Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours))
+                }
+                "read_total_runtime_min_sec" => {
+                    rt::Ok(Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec))
+                }
+                "read_load_runtime_0_24_hours" => {
+                    rt::Ok(
+                        Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours),
+                    )
+                }
                 "read_load_runtime_0_24_min_sec" => {
-                    rt::Ok(Self::ReadLoadRuntime024MinSec)
+                    rt::Ok(
+                        Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec),
+                    )
                 }
-                "reset_load_runtime_0_24" => rt::Ok(Self::ResetLoadRuntime024),
-                "read_load_runtime_25_49_hours" => rt::Ok(Self::ReadLoadRuntime2549Hours),
+                "reset_load_runtime_0_24" => {
+                    rt::Ok(Self::ResetLoadRuntime024(request::ResetLoadRuntime024))
+                }
+                "read_load_runtime_25_49_hours" => {
+                    rt::Ok(
+                        Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours),
+                    )
+                }
                 "read_load_runtime_25_49_min_sec" => {
-                    rt::Ok(Self::ReadLoadRuntime2549MinSec)
+                    rt::Ok(
+                        Self::ReadLoadRuntime2549MinSec(
+                            request::ReadLoadRuntime2549MinSec,
+                        ),
+                    )
                 }
-                "reset_load_runtime_25_49" => rt::Ok(Self::ResetLoadRuntime2549),
-                "read_load_runtime_50_74_hours" => rt::Ok(Self::ReadLoadRuntime5074Hours),
+                "reset_load_runtime_25_49" => {
+                    rt::Ok(Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549))
+                }
+                "read_load_runtime_50_74_hours" => {
+                    rt::Ok(
+                        Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours),
+                    )
+                }
                 "read_load_runtime_50_74_min_sec" => {
-                    rt::Ok(Self::ReadLoadRuntime5074MinSec)
+                    rt::Ok(
+                        Self::ReadLoadRuntime5074MinSec(
+                            request::ReadLoadRuntime5074MinSec,
+                        ),
+                    )
                 }
-                "reset_load_runtime_50_74" => rt::Ok(Self::ResetLoadRuntime5074),
-                "read_load_runtime_75_99_hours" => rt::Ok(Self::ReadLoadRuntime7599Hours),
+                "reset_load_runtime_50_74" => {
+                    rt::Ok(Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074))
+                }
+                "read_load_runtime_75_99_hours" => {
+                    rt::Ok(
+                        Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours),
+                    )
+                }
                 "read_load_runtime_75_99_min_sec" => {
-                    rt::Ok(Self::ReadLoadRuntime7599MinSec)
+                    rt::Ok(
+                        Self::ReadLoadRuntime7599MinSec(
+                            request::ReadLoadRuntime7599MinSec,
+                        ),
+                    )
                 }
-                "reset_load_runtime_75_99" => rt::Ok(Self::ResetLoadRuntime7599),
-                "read_load_runtime_100_hours" => rt::Ok(Self::ReadLoadRuntime100Hours),
-                "read_load_runtime_100_min_sec" => rt::Ok(Self::ReadLoadRuntime100MinSec),
-                "reset_load_runtime_100" => rt::Ok(Self::ResetLoadRuntime100),
-                "read_stall_event_counter" => rt::Ok(Self::ReadStallEventCounter),
-                "reset_stall_event_counter" => rt::Ok(Self::ResetStallEventCounter),
-                "read_power_up_cycles" => rt::Ok(Self::ReadPowerUpCycles),
+                "reset_load_runtime_75_99" => {
+                    rt::Ok(Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599))
+                }
+                "read_load_runtime_100_hours" => {
+                    rt::Ok(
+                        Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours),
+                    )
+                }
+                "read_load_runtime_100_min_sec" => {
+                    rt::Ok(
+                        Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec),
+                    )
+                }
+                "reset_load_runtime_100" => {
+                    rt::Ok(Self::ResetLoadRuntime100(request::ResetLoadRuntime100))
+                }
+                "read_stall_event_counter" => {
+                    rt::Ok(Self::ReadStallEventCounter(request::ReadStallEventCounter))
+                }
+                "reset_stall_event_counter" => {
+                    rt::Ok(Self::ResetStallEventCounter(request::ResetStallEventCounter))
+                }
+                "read_power_up_cycles" => {
+                    rt::Ok(Self::ReadPowerUpCycles(request::ReadPowerUpCycles))
+                }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -1904,25 +2717,30 @@ pub mod sd {
                 },
                 reply: rt::Reply::Required,
                 may_retry: matches!(
-                    self, Request::ReadActualPosition | Request::SetVelocity { .. } |
-                    Request::ReadActualVelocity | Request::ReadServoId |
-                    Request::ReadCurrentConsumption | Request::ReadBusVoltages |
-                    Request::ReadExtendedCurrentConsumption | Request::ReadTemperatures |
-                    Request::ReadHumidity | Request::ReadSkippedFramesCounter |
-                    Request::ReadActuatorStatusWord | Request::ReadCurrentZeroOffset |
-                    Request::ReadElectronicSerialNumber { .. } |
-                    Request::ReadProductDescription { .. } |
-                    Request::ReadSoftwareRevision { .. } | Request::ReadHardwareRevision
-                    { .. } | Request::ReadTotalRuntimeHours |
-                    Request::ReadTotalRuntimeMinSec | Request::ReadLoadRuntime024Hours |
-                    Request::ReadLoadRuntime024MinSec | Request::ReadLoadRuntime2549Hours
-                    | Request::ReadLoadRuntime2549MinSec |
-                    Request::ReadLoadRuntime5074Hours |
-                    Request::ReadLoadRuntime5074MinSec |
-                    Request::ReadLoadRuntime7599Hours |
-                    Request::ReadLoadRuntime7599MinSec | Request::ReadLoadRuntime100Hours
-                    | Request::ReadLoadRuntime100MinSec | Request::ReadStallEventCounter
-                    | Request::ReadPowerUpCycles
+                    self, Request::ReadActualPosition(_) | Request::SetVelocity(_) |
+                    Request::ReadActualVelocity(_) | Request::ReadServoId(_) |
+                    Request::ReadCurrentConsumption(_) | Request::ReadBusVoltages(_) |
+                    Request::ReadExtendedCurrentConsumption(_) |
+                    Request::ReadTemperatures(_) | Request::ReadHumidity(_) |
+                    Request::ReadSkippedFramesCounter(_) |
+                    Request::ReadActuatorStatusWord(_) |
+                    Request::ReadCurrentZeroOffset(_) |
+                    Request::ReadElectronicSerialNumber(_) |
+                    Request::ReadProductDescription(_) | Request::ReadSoftwareRevision(_)
+                    | Request::ReadHardwareRevision(_) |
+                    Request::ReadTotalRuntimeHours(_) |
+                    Request::ReadTotalRuntimeMinSec(_) |
+                    Request::ReadLoadRuntime024Hours(_) |
+                    Request::ReadLoadRuntime024MinSec(_) |
+                    Request::ReadLoadRuntime2549Hours(_) |
+                    Request::ReadLoadRuntime2549MinSec(_) |
+                    Request::ReadLoadRuntime5074Hours(_) |
+                    Request::ReadLoadRuntime5074MinSec(_) |
+                    Request::ReadLoadRuntime7599Hours(_) |
+                    Request::ReadLoadRuntime7599MinSec(_) |
+                    Request::ReadLoadRuntime100Hours(_) |
+                    Request::ReadLoadRuntime100MinSec(_) |
+                    Request::ReadStallEventCounter(_) | Request::ReadPowerUpCycles(_)
                 ),
             }
         }
@@ -1931,246 +2749,845 @@ pub mod sd {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::SetPointReply {
+        pub const NAME: &'static str = "set_point_reply";
+        pub const CODE: &'static [u8] = &[0x56];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x56,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("freshness", rt::Int(self.freshness as i64));
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetPointReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualPosition {
+        pub const NAME: &'static str = "actual_position";
+        pub const CODE: &'static [u8] = &[0x49];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x49,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("position", rt::Int(self.position.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::SetVelocityReply {
+        pub const NAME: &'static str = "set_velocity_reply";
+        pub const CODE: &'static [u8] = &[0x57];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x57,
+            1,
+            &[6],
+        );
+        pub const ACTUAL_VELOCITY: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("actual_velocity", rt::Int(self.actual_velocity.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetVelocityReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualVelocity {
+        pub const NAME: &'static str = "actual_velocity";
+        pub const CODE: &'static [u8] = &[0x48];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x48,
+            1,
+            &[6],
+        );
+        pub const ACTUAL_VELOCITY: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("actual_velocity", rt::Int(self.actual_velocity.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualVelocity(*self).encode(address, buf)
+        }
+    }
+    impl response::SetServoIdReply {
+        pub const NAME: &'static str = "set_servo_id_reply";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x55,
+            1,
+            &[6],
+        );
+        pub const NEW_ID: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("new_id", rt::Int(self.new_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetServoIdReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ServoId {
+        pub const NAME: &'static str = "servo_id";
+        pub const CODE: &'static [u8] = &[0x6D];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x6D,
+            1,
+            &[6],
+        );
+        pub const ID: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("id", rt::Int(self.id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ServoId(*self).encode(address, buf)
+        }
+    }
+    impl response::CurrentConsumption {
+        pub const NAME: &'static str = "current_consumption";
+        pub const CODE: &'static [u8] = &[0x30];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x30,
+            1,
+            &[6],
+        );
+        pub const CURRENT: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("current", rt::Int(self.current.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl response::BusVoltages {
+        pub const NAME: &'static str = "bus_voltages";
+        pub const CODE: &'static [u8] = &[0x31];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x31,
+            1,
+            &[6],
+        );
+        pub const POWER_BUS_1_VOLTAGE: rt::Range<usize> = 2..3;
+        pub const POWER_BUS_2_VOLTAGE: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("power_bus_1_voltage", rt::Int(self.power_bus_1_voltage.raw() as i64));
+            f("power_bus_2_voltage", rt::Int(self.power_bus_2_voltage.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::BusVoltages(*self).encode(address, buf)
+        }
+    }
+    impl response::ExtendedCurrentConsumption {
+        pub const NAME: &'static str = "extended_current_consumption";
+        pub const CODE: &'static [u8] = &[0x32];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x32,
+            1,
+            &[6],
+        );
+        pub const CURRENT: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("current", rt::Int(self.current.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ExtendedCurrentConsumption(*self).encode(address, buf)
+        }
+    }
+    impl response::Temperatures {
+        pub const NAME: &'static str = "temperatures";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[6],
+        );
+        pub const MOTOR_TEMPERATURE: rt::Range<usize> = 2..3;
+        pub const PCB_TEMPERATURE: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("motor_temperature", rt::Int(self.motor_temperature.raw() as i64));
+            f("pcb_temperature", rt::Int(self.pcb_temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Temperatures(*self).encode(address, buf)
+        }
+    }
+    impl response::Humidity {
+        pub const NAME: &'static str = "humidity";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x21,
+            1,
+            &[6],
+        );
+        pub const HUMIDITY: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("humidity", rt::Int(self.humidity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Humidity(*self).encode(address, buf)
+        }
+    }
+    impl response::SkippedFramesCounter {
+        pub const NAME: &'static str = "skipped_frames_counter";
+        pub const CODE: &'static [u8] = &[0x38];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x38,
+            1,
+            &[6],
+        );
+        pub const HOST_FRESHNESS_COUNTER: rt::Range<usize> = 2..3;
+        pub const DROPPED_FRAMES: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("host_freshness_counter", rt::Int(self.host_freshness_counter as i64));
+            f("dropped_frames", rt::Int(self.dropped_frames as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SkippedFramesCounter(*self).encode(address, buf)
+        }
+    }
+    impl response::DroppedFramesCounterReset {
+        pub const NAME: &'static str = "dropped_frames_counter_reset";
+        pub const CODE: &'static [u8] = &[0x38];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x38,
+            1,
+            &[6],
+        );
+        pub const HOST_FRESHNESS_COUNTER: rt::Range<usize> = 2..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("host_freshness_counter", rt::Int(self.host_freshness_counter as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DroppedFramesCounterReset(*self).encode(address, buf)
+        }
+    }
+    impl response::ActuatorStatusWord {
+        pub const NAME: &'static str = "actuator_status_word";
+        pub const CODE: &'static [u8] = &[0x41];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x41,
+            1,
+            &[6],
+        );
+        pub const STATUS_BITS: rt::Range<usize> = 2..3;
+        pub const STATUS_ARG2: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status_bits", rt::Int(self.status_bits.raw() as i64));
+            f("status_arg2", rt::Int(self.status_arg2 as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActuatorStatusWord(*self).encode(address, buf)
+        }
+    }
+    impl response::ResetDefaultRoleAndErrorFlagsReply {
+        pub const NAME: &'static str = "reset_default_role_and_error_flags_reply";
+        pub const CODE: &'static [u8] = &[0x5A];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x5A,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ResetDefaultRoleAndErrorFlagsReply(*self).encode(address, buf)
+        }
+    }
+    impl response::SetCurrentPositionAsZeroReply {
+        pub const NAME: &'static str = "set_current_position_as_zero_reply";
+        pub const CODE: &'static [u8] = &[0x4C];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4C,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("zero_offset", rt::Int(self.zero_offset.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetCurrentPositionAsZeroReply(*self).encode(address, buf)
+        }
+    }
+    impl response::CurrentZeroOffset {
+        pub const NAME: &'static str = "current_zero_offset";
+        pub const CODE: &'static [u8] = &[0x65];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x65,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("zero_offset", rt::Int(self.zero_offset.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CurrentZeroOffset(*self).encode(address, buf)
+        }
+    }
+    impl response::ResetZeroOffsetReply {
+        pub const NAME: &'static str = "reset_zero_offset_reply";
+        pub const CODE: &'static [u8] = &[0x64];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x64,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ResetZeroOffsetReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ElectronicSerialNumberCharacter {
+        pub const NAME: &'static str = "electronic_serial_number_character";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[6],
+        );
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ElectronicSerialNumberCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::ProductDescriptionCharacter {
+        pub const NAME: &'static str = "product_description_character";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x11,
+            1,
+            &[6],
+        );
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ProductDescriptionCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::SoftwareRevisionCharacter {
+        pub const NAME: &'static str = "software_revision_character";
+        pub const CODE: &'static [u8] = &[0x12];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x12,
+            1,
+            &[6],
+        );
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SoftwareRevisionCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::HardwareRevisionCharacter {
+        pub const NAME: &'static str = "hardware_revision_character";
+        pub const CODE: &'static [u8] = &[0x13];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x13,
+            1,
+            &[6],
+        );
+        pub const CHARACTER: rt::Range<usize> = 2..3;
+        pub const STRING_LENGTH: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("character", rt::Int(self.character as i64));
+            f("string_length", rt::Int(self.string_length as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::HardwareRevisionCharacter(*self).encode(address, buf)
+        }
+    }
+    impl response::TotalRuntimeHours {
+        pub const NAME: &'static str = "total_runtime_hours";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x22,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::TotalRuntimeHours(*self).encode(address, buf)
+        }
+    }
+    impl response::TotalRuntimeMinSec {
+        pub const NAME: &'static str = "total_runtime_min_sec";
+        pub const CODE: &'static [u8] = &[0x22];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x22,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::TotalRuntimeMinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime024Hours {
+        pub const NAME: &'static str = "load_runtime_0_24_hours";
+        pub const CODE: &'static [u8] = &[0x23];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x23,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime024Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime024MinSec {
+        pub const NAME: &'static str = "load_runtime_0_24_min_sec";
+        pub const CODE: &'static [u8] = &[0x23];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x23,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime024MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime024HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_0_24_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x23];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x23,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime024HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime2549Hours {
+        pub const NAME: &'static str = "load_runtime_25_49_hours";
+        pub const CODE: &'static [u8] = &[0x24];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x24,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime2549Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime2549MinSec {
+        pub const NAME: &'static str = "load_runtime_25_49_min_sec";
+        pub const CODE: &'static [u8] = &[0x24];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x24,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime2549MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime2549HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_25_49_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x24];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x24,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime2549HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime5074Hours {
+        pub const NAME: &'static str = "load_runtime_50_74_hours";
+        pub const CODE: &'static [u8] = &[0x25];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x25,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime5074Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime5074MinSec {
+        pub const NAME: &'static str = "load_runtime_50_74_min_sec";
+        pub const CODE: &'static [u8] = &[0x25];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x25,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime5074MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime5074HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_50_74_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x25];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x25,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime5074HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime7599Hours {
+        pub const NAME: &'static str = "load_runtime_75_99_hours";
+        pub const CODE: &'static [u8] = &[0x26];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x26,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime7599Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime7599MinSec {
+        pub const NAME: &'static str = "load_runtime_75_99_min_sec";
+        pub const CODE: &'static [u8] = &[0x26];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x26,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime7599MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime7599HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_75_99_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x26];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x26,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime7599HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime100Hours {
+        pub const NAME: &'static str = "load_runtime_100_hours";
+        pub const CODE: &'static [u8] = &[0x27];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x27,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_hours", rt::Int(self.runtime_hours as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime100Hours(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime100MinSec {
+        pub const NAME: &'static str = "load_runtime_100_min_sec";
+        pub const CODE: &'static [u8] = &[0x27];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x27,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_MINUTES: rt::Range<usize> = 2..3;
+        pub const RUNTIME_SECONDS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("runtime_minutes", rt::Int(self.runtime_minutes as i64));
+            f("runtime_seconds", rt::Int(self.runtime_seconds as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime100MinSec(*self).encode(address, buf)
+        }
+    }
+    impl response::LoadRuntime100HoursBeforeReset {
+        pub const NAME: &'static str = "load_runtime_100_hours_before_reset";
+        pub const CODE: &'static [u8] = &[0x27];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x27,
+            1,
+            &[6],
+        );
+        pub const RUNTIME_HOURS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "runtime_hours_before_reset",
+                rt::Int(self.runtime_hours_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LoadRuntime100HoursBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::StallEventCounter {
+        pub const NAME: &'static str = "stall_event_counter";
+        pub const CODE: &'static [u8] = &[0x28];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x28,
+            1,
+            &[6],
+        );
+        pub const STALL_EVENTS: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("stall_events", rt::Int(self.stall_events as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StallEventCounter(*self).encode(address, buf)
+        }
+    }
+    impl response::StallEventCounterBeforeReset {
+        pub const NAME: &'static str = "stall_event_counter_before_reset";
+        pub const CODE: &'static [u8] = &[0x28];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x28,
+            1,
+            &[6],
+        );
+        pub const STALL_EVENTS_BEFORE_RESET: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f(
+                "stall_events_before_reset",
+                rt::Int(self.stall_events_before_reset as i64),
+            );
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StallEventCounterBeforeReset(*self).encode(address, buf)
+        }
+    }
+    impl response::PowerUpCycles {
+        pub const NAME: &'static str = "power_up_cycles";
+        pub const CODE: &'static [u8] = &[0x29];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x29,
+            1,
+            &[6],
+        );
+        pub const POWER_UP_CYCLES: rt::Range<usize> = 2..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("power_up_cycles", rt::Int(self.power_up_cycles as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PowerUpCycles(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3.1 Set point response: actuator data freshness counter and actual position (code `0x56`, 6 bytes). Reply to set_point. The actuator data freshness counter is a 4-bit counter decremented by the servo for each reply (erratum sd-e09); the actual position has the set point's format.
-        SetPointReply {
-            /// F = actuator data freshness counter (decremented by the servo for each reply)
-            freshness: u8,
-            /// ABC = actual position (12-bit two's complement) \[°\]
-            position: Angle,
-        },
-        /// §3.2 Actual position (code `0x49`, 6 bytes). Actual position, 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the 12-bit two's-complement position.
-        ActualPosition {
-            /// ABC = actual position (12-bit two's complement) \[°\]
-            position: Angle,
-        },
-        /// §3.3 Set velocity response: actual velocity (code `0x57`, 6 bytes). Reply to set_velocity: actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
-        SetVelocityReply {
-            /// Actual velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
-            actual_velocity: Velocity,
-        },
-        /// §3.4 Actual velocity (code `0x48`, 6 bytes). Actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
-        ActualVelocity {
-            /// Actual velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
-            actual_velocity: Velocity,
-        },
-        /// §3.5 Set servo ID response: new ID (code `0x55`, 6 bytes). Reply to set_servo_id: the new ID, sent twice (erratum sd-e04 on the ID in byte 2).
-        SetServoIdReply {
-            /// New ID: 0x01 ... 0x1E Valid raw range 1..=30.
-            new_id: u8,
-        },
-        /// §3.6 Servo ID (code `0x6D`, 6 bytes). The actuator's ID, sent twice.
-        ServoId {
-            /// ID: 0x01 ... 0x1E Valid raw range 1..=30.
-            id: u8,
-        },
-        /// §3.7 Current consumption (code `0x30`, 6 bytes). Current consumption = Arg. 1 * 0.02 \[A\], sent twice; maximum current value 5.1 A (raw 0xFF).
-        CurrentConsumption {
-            /// Current consumption = Arg. 1 * 0.02 \[A\] \[A\]
-            current: Current,
-        },
-        /// §3.8 Bus voltages (code `0x31`, 6 bytes). Voltages of power bus 1 (X1) and power bus 2 (X2).
-        BusVoltages {
-            /// Power Bus 1 (X1) Voltage = Arg. 1 * 0.2 \[V\] \[V\]
-            power_bus_1_voltage: Voltage,
-            /// Power Bus 2 (X2) Voltage = Arg. 2 * 0.2 \[V\] \[V\]
-            power_bus_2_voltage: Voltage,
-        },
-        /// §3.9 Extended current consumption (code `0x32`, 6 bytes). Current consumption = (Arg. 1 * 256 + Arg. 2) * 0.02 \[A\].
-        ExtendedCurrentConsumption {
-            /// Current consumption, high byte first \[A\]
-            current: Current,
-        },
-        /// §3.10 Temperatures (code `0x20`, 6 bytes). Motor and PCB temperature, \[°C\] = Arg - 50. Valid values are -49 to +204 °C (raw 0x01..0xFE); 0x00 (-50 °C) means no sensor available or below -49 °C, 0xFF (205 °C) means the sensor is defective (erratum sd-e22).
-        Temperatures {
-            /// Motor temperature \[°C\] = Arg. 1 - 50 \[°C\] Valid raw range 1..=254. Raw 0 = no_sensor (-50 °C: no sensor available (or the measured temperature is below -49 °C)). Raw 255 = defective (205 °C: the sensor is defective).
-            motor_temperature: Temperature,
-            /// PCB temperature \[°C\] = Arg. 2 - 50 \[°C\] Valid raw range 1..=254. Raw 0 = no_sensor (-50 °C: no sensor available (or the measured temperature is below -49 °C)). Raw 255 = defective (205 °C: the sensor is defective).
-            pcb_temperature: Temperature,
-        },
-        /// §3.11 Humidity (code `0x21`, 6 bytes). Humidity reading 1...100, sent twice; 0 means no sensor available. The document's table shows Arg. 1 as a fixed 0x00 (erratum sd-e12).
-        Humidity {
-            /// Humidity reading, valid 1...100 \[%\] Valid raw range 1..=100. Raw 0 = no_sensor (no sensor available).
-            humidity: u8,
-        },
-        /// §3.12 Skipped frames counter (code `0x38`, 6 bytes). Reply to read_skipped_frames_counter. Same code and length as the reply to reset_dropped_frames_counter; only the request tells them apart (erratum sd-e19).
-        SkippedFramesCounter {
-            /// Value of host freshness counter (the 4-bit counter of §3.1)
-            host_freshness_counter: u8,
-            /// Number of dropped frames
-            dropped_frames: u8,
-        },
-        /// §3.13 Dropped frames counter reset (code `0x38`, 6 bytes). Reply to reset_dropped_frames_counter: the host freshness counter and 0x00. Same code and length as skipped_frames_counter (a read with no dropped frames looks identical); only the request tells them apart.
-        DroppedFramesCounterReset {
-            /// Value of host freshness counter
-            host_freshness_counter: u8,
-        },
-        /// §3.14 Actuator status word (code `0x41`, 6 bytes). Actuator status word, reply to both read_actuator_status_word and reset_actuator_status_word. Argument 1 holds the status bits; argument 2 is marked "See below" but never described (erratum sd-e15).
-        ActuatorStatusWord {
-            /// Resp. Arg1 bits 0..6; bit 7 is 0
-            status_bits: ActuatorStatusBits,
-            /// Argument 2: not described by the document; kept raw
-            status_arg2: u8,
-        },
-        /// §3.16 Reset default role and error flags response (code `0x5A`, 6 bytes). Reply to reset_default_role_and_error_flags: echoes 0x41 0x53.
-        ResetDefaultRoleAndErrorFlagsReply,
-        /// §3.17 Set current position as zero response: zero offset (code `0x4C`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
-        SetCurrentPositionAsZeroReply {
-            /// ABC = offset relative to the real zero of the encoder (12-bit two's complement; unit of §3.1 positions assumed, erratum sd-e23) \[°\]
-            zero_offset: Angle,
-        },
-        /// §3.18 Current zero offset (code `0x65`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
-        CurrentZeroOffset {
-            /// ABC = offset relative to the real zero of the encoder (12-bit two's complement; unit of §3.1 positions assumed, erratum sd-e23) \[°\]
-            zero_offset: Angle,
-        },
-        /// §3.19 Reset zero offset response (code `0x64`, 6 bytes). Reply to reset_zero_offset: 0x00 0x00.
-        ResetZeroOffsetReply,
-        /// §3.20 Character of serial number string (code `0x10`, 6 bytes). One character of the electronic serial number string and the string's length.
-        ElectronicSerialNumberCharacter {
-            /// Character of serial number string
-            character: u8,
-            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
-            string_length: u8,
-        },
-        /// §3.21 Character of product description string (code `0x11`, 6 bytes). One character of the product description string and the string's length.
-        ProductDescriptionCharacter {
-            /// Character of product description string
-            character: u8,
-            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
-            string_length: u8,
-        },
-        /// §3.22 Character of software revision number string (code `0x12`, 6 bytes). One character of the software revision number string and the string's length.
-        SoftwareRevisionCharacter {
-            /// Character of software revision number string
-            character: u8,
-            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
-            string_length: u8,
-        },
-        /// §3.23 Character of hardware revision number string (code `0x13`, 6 bytes). One character of the hardware revision number string and the string's length.
-        HardwareRevisionCharacter {
-            /// Character of hardware revision number string
-            character: u8,
-            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
-            string_length: u8,
-        },
-        /// §3.24 Total run-time counter \[hours\] (code `0x22`, 6 bytes). Total run-time counter, hours. Same code and length as total_runtime_min_sec (erratum sd-e19).
-        TotalRuntimeHours {
-            /// Total run-time counter \[hours\], high byte first \[h\]
-            runtime_hours: u16,
-        },
-        /// §3.24 Total run-time counter \[min.\] \[sec.\] (code `0x22`, 6 bytes). Total run-time counter, minutes and seconds. Same code and length as total_runtime_hours (erratum sd-e19).
-        TotalRuntimeMinSec {
-            /// Total run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
-            runtime_minutes: u8,
-            /// Total run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
-            runtime_seconds: u8,
-        },
-        /// §3.25 0%...24% load run-time counter \[hours\] (code `0x23`, 6 bytes). 0%...24% load run-time counter, hours. Same code and length as the other 0x23 replies (erratum sd-e19).
-        LoadRuntime024Hours {
-            /// 0%...24% load run-time counter \[hours\], high byte first \[h\]
-            runtime_hours: u16,
-        },
-        /// §3.25 0%...24% load run-time counter \[min.\] \[sec.\] (code `0x23`, 6 bytes). 0%...24% load run-time counter, minutes and seconds. Same code and length as the other 0x23 replies (erratum sd-e19).
-        LoadRuntime024MinSec {
-            /// 0%...24% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
-            runtime_minutes: u8,
-            /// 0%...24% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
-            runtime_seconds: u8,
-        },
-        /// §3.26 0%...24% load run-time counter \[h\] (before reset) (code `0x23`, 6 bytes). Reply to reset_load_runtime_0_24: the hours before the reset. Same code and length as the other 0x23 replies (erratum sd-e19).
-        LoadRuntime024HoursBeforeReset {
-            /// 0%...24% load run-time counter \[h\] (before reset), high byte first \[h\]
-            runtime_hours_before_reset: u16,
-        },
-        /// §3.27 25%...49% load run-time counter \[hours\] (code `0x24`, 6 bytes). 25%...49% load run-time counter, hours. Same code and length as the other 0x24 replies (erratum sd-e19).
-        LoadRuntime2549Hours {
-            /// 25%...49% load run-time counter \[hours\], high byte first \[h\]
-            runtime_hours: u16,
-        },
-        /// §3.27 25%...49% load run-time counter \[min.\] \[sec.\] (code `0x24`, 6 bytes). 25%...49% load run-time counter, minutes and seconds. Same code and length as the other 0x24 replies (erratum sd-e19).
-        LoadRuntime2549MinSec {
-            /// 25%...49% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
-            runtime_minutes: u8,
-            /// 25%...49% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
-            runtime_seconds: u8,
-        },
-        /// §3.28 25%...49% load run-time counter \[h\] (before reset) (code `0x24`, 6 bytes). Reply to reset_load_runtime_25_49: the hours before the reset. Same code and length as the other 0x24 replies (erratum sd-e19).
-        LoadRuntime2549HoursBeforeReset {
-            /// 25%...49% load run-time counter \[h\] (before reset), high byte first \[h\]
-            runtime_hours_before_reset: u16,
-        },
-        /// §3.29 50%...74% load run-time counter \[hours\] (code `0x25`, 6 bytes). 50%...74% load run-time counter, hours. Same code and length as the other 0x25 replies (erratum sd-e19).
-        LoadRuntime5074Hours {
-            /// 50%...74% load run-time counter \[hours\], high byte first \[h\]
-            runtime_hours: u16,
-        },
-        /// §3.29 50%...74% load run-time counter \[min.\] \[sec.\] (code `0x25`, 6 bytes). 50%...74% load run-time counter, minutes and seconds. Same code and length as the other 0x25 replies (erratum sd-e19).
-        LoadRuntime5074MinSec {
-            /// 50%...74% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
-            runtime_minutes: u8,
-            /// 50%...74% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
-            runtime_seconds: u8,
-        },
-        /// §3.30 50%...74% load run-time counter \[h\] (before reset) (code `0x25`, 6 bytes). Reply to reset_load_runtime_50_74: the hours before the reset. Same code and length as the other 0x25 replies (erratum sd-e19).
-        LoadRuntime5074HoursBeforeReset {
-            /// 50%...74% load run-time counter \[h\] (before reset), high byte first \[h\]
-            runtime_hours_before_reset: u16,
-        },
-        /// §3.31 75%...99% load run-time counter \[hours\] (code `0x26`, 6 bytes). 75%...99% load run-time counter, hours. Same code and length as the other 0x26 replies (erratum sd-e19).
-        LoadRuntime7599Hours {
-            /// 75%...99% load run-time counter \[hours\], high byte first \[h\]
-            runtime_hours: u16,
-        },
-        /// §3.31 75%...99% load run-time counter \[min.\] \[sec.\] (code `0x26`, 6 bytes). 75%...99% load run-time counter, minutes and seconds. Same code and length as the other 0x26 replies (erratum sd-e19).
-        LoadRuntime7599MinSec {
-            /// 75%...99% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
-            runtime_minutes: u8,
-            /// 75%...99% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
-            runtime_seconds: u8,
-        },
-        /// §3.32 75%...99% load run-time counter \[h\] (before reset) (code `0x26`, 6 bytes). Reply to reset_load_runtime_75_99: the hours before the reset. Same code and length as the other 0x26 replies (erratum sd-e19).
-        LoadRuntime7599HoursBeforeReset {
-            /// 75%...99% load run-time counter \[h\] (before reset), high byte first \[h\]
-            runtime_hours_before_reset: u16,
-        },
-        /// §3.33 100% load run-time counter \[hours\] (code `0x27`, 6 bytes). 100% load run-time counter, hours. Same code and length as the other 0x27 replies (erratum sd-e19).
-        LoadRuntime100Hours {
-            /// 100% load run-time counter \[hours\], high byte first \[h\]
-            runtime_hours: u16,
-        },
-        /// §3.33 100% load run-time counter \[min.\] \[sec.\] (code `0x27`, 6 bytes). 100% load run-time counter, minutes and seconds. Same code and length as the other 0x27 replies (erratum sd-e19).
-        LoadRuntime100MinSec {
-            /// 100% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
-            runtime_minutes: u8,
-            /// 100% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
-            runtime_seconds: u8,
-        },
-        /// §3.34 100% load run-time counter \[h\] (before reset) (code `0x27`, 6 bytes). Reply to reset_load_runtime_100: the hours before the reset. Same code and length as the other 0x27 replies (erratum sd-e19).
-        LoadRuntime100HoursBeforeReset {
-            /// 100% load run-time counter \[h\] (before reset), high byte first \[h\]
-            runtime_hours_before_reset: u16,
-        },
-        /// §3.35 Stall event counter (code `0x28`, 6 bytes). Stall event counter. Same code and length as stall_event_counter_before_reset (erratum sd-e19).
-        StallEventCounter {
-            /// Stall event counter, high byte first
-            stall_events: u16,
-        },
-        /// §3.36 Stall event counter (before reset) (code `0x28`, 6 bytes). Reply to reset_stall_event_counter: the count before the reset. Same code and length as stall_event_counter (erratum sd-e19).
-        StallEventCounterBeforeReset {
-            /// Stall event counter (before reset), high byte first
-            stall_events_before_reset: u16,
-        },
-        /// §3.37 Number of power up cycles (code `0x29`, 6 bytes). Number of power up cycles.
-        PowerUpCycles {
-            /// Number of power up cycles, high byte first
-            power_up_cycles: u16,
-        },
+        SetPointReply(response::SetPointReply),
+        ActualPosition(response::ActualPosition),
+        SetVelocityReply(response::SetVelocityReply),
+        ActualVelocity(response::ActualVelocity),
+        SetServoIdReply(response::SetServoIdReply),
+        ServoId(response::ServoId),
+        CurrentConsumption(response::CurrentConsumption),
+        BusVoltages(response::BusVoltages),
+        ExtendedCurrentConsumption(response::ExtendedCurrentConsumption),
+        Temperatures(response::Temperatures),
+        Humidity(response::Humidity),
+        SkippedFramesCounter(response::SkippedFramesCounter),
+        DroppedFramesCounterReset(response::DroppedFramesCounterReset),
+        ActuatorStatusWord(response::ActuatorStatusWord),
+        ResetDefaultRoleAndErrorFlagsReply(response::ResetDefaultRoleAndErrorFlagsReply),
+        SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply),
+        CurrentZeroOffset(response::CurrentZeroOffset),
+        ResetZeroOffsetReply(response::ResetZeroOffsetReply),
+        ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter),
+        ProductDescriptionCharacter(response::ProductDescriptionCharacter),
+        SoftwareRevisionCharacter(response::SoftwareRevisionCharacter),
+        HardwareRevisionCharacter(response::HardwareRevisionCharacter),
+        TotalRuntimeHours(response::TotalRuntimeHours),
+        TotalRuntimeMinSec(response::TotalRuntimeMinSec),
+        LoadRuntime024Hours(response::LoadRuntime024Hours),
+        LoadRuntime024MinSec(response::LoadRuntime024MinSec),
+        LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset),
+        LoadRuntime2549Hours(response::LoadRuntime2549Hours),
+        LoadRuntime2549MinSec(response::LoadRuntime2549MinSec),
+        LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset),
+        LoadRuntime5074Hours(response::LoadRuntime5074Hours),
+        LoadRuntime5074MinSec(response::LoadRuntime5074MinSec),
+        LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset),
+        LoadRuntime7599Hours(response::LoadRuntime7599Hours),
+        LoadRuntime7599MinSec(response::LoadRuntime7599MinSec),
+        LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset),
+        LoadRuntime100Hours(response::LoadRuntime100Hours),
+        LoadRuntime100MinSec(response::LoadRuntime100MinSec),
+        LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset),
+        StallEventCounter(response::StallEventCounter),
+        StallEventCounterBeforeReset(response::StallEventCounterBeforeReset),
+        PowerUpCycles(response::PowerUpCycles),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -2221,48 +3638,48 @@ pub mod sd {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SetPointReply { .. } => 0,
-                Self::ActualPosition { .. } => 1,
-                Self::SetVelocityReply { .. } => 2,
-                Self::ActualVelocity { .. } => 3,
-                Self::SetServoIdReply { .. } => 4,
-                Self::ServoId { .. } => 5,
-                Self::CurrentConsumption { .. } => 6,
-                Self::BusVoltages { .. } => 7,
-                Self::ExtendedCurrentConsumption { .. } => 8,
-                Self::Temperatures { .. } => 9,
-                Self::Humidity { .. } => 10,
-                Self::SkippedFramesCounter { .. } => 11,
-                Self::DroppedFramesCounterReset { .. } => 12,
-                Self::ActuatorStatusWord { .. } => 13,
-                Self::ResetDefaultRoleAndErrorFlagsReply => 14,
-                Self::SetCurrentPositionAsZeroReply { .. } => 15,
-                Self::CurrentZeroOffset { .. } => 16,
-                Self::ResetZeroOffsetReply => 17,
-                Self::ElectronicSerialNumberCharacter { .. } => 18,
-                Self::ProductDescriptionCharacter { .. } => 19,
-                Self::SoftwareRevisionCharacter { .. } => 20,
-                Self::HardwareRevisionCharacter { .. } => 21,
-                Self::TotalRuntimeHours { .. } => 22,
-                Self::TotalRuntimeMinSec { .. } => 23,
-                Self::LoadRuntime024Hours { .. } => 24,
-                Self::LoadRuntime024MinSec { .. } => 25,
-                Self::LoadRuntime024HoursBeforeReset { .. } => 26,
-                Self::LoadRuntime2549Hours { .. } => 27,
-                Self::LoadRuntime2549MinSec { .. } => 28,
-                Self::LoadRuntime2549HoursBeforeReset { .. } => 29,
-                Self::LoadRuntime5074Hours { .. } => 30,
-                Self::LoadRuntime5074MinSec { .. } => 31,
-                Self::LoadRuntime5074HoursBeforeReset { .. } => 32,
-                Self::LoadRuntime7599Hours { .. } => 33,
-                Self::LoadRuntime7599MinSec { .. } => 34,
-                Self::LoadRuntime7599HoursBeforeReset { .. } => 35,
-                Self::LoadRuntime100Hours { .. } => 36,
-                Self::LoadRuntime100MinSec { .. } => 37,
-                Self::LoadRuntime100HoursBeforeReset { .. } => 38,
-                Self::StallEventCounter { .. } => 39,
-                Self::StallEventCounterBeforeReset { .. } => 40,
-                Self::PowerUpCycles { .. } => 41,
+                Self::SetPointReply(_) => 0,
+                Self::ActualPosition(_) => 1,
+                Self::SetVelocityReply(_) => 2,
+                Self::ActualVelocity(_) => 3,
+                Self::SetServoIdReply(_) => 4,
+                Self::ServoId(_) => 5,
+                Self::CurrentConsumption(_) => 6,
+                Self::BusVoltages(_) => 7,
+                Self::ExtendedCurrentConsumption(_) => 8,
+                Self::Temperatures(_) => 9,
+                Self::Humidity(_) => 10,
+                Self::SkippedFramesCounter(_) => 11,
+                Self::DroppedFramesCounterReset(_) => 12,
+                Self::ActuatorStatusWord(_) => 13,
+                Self::ResetDefaultRoleAndErrorFlagsReply(_) => 14,
+                Self::SetCurrentPositionAsZeroReply(_) => 15,
+                Self::CurrentZeroOffset(_) => 16,
+                Self::ResetZeroOffsetReply(_) => 17,
+                Self::ElectronicSerialNumberCharacter(_) => 18,
+                Self::ProductDescriptionCharacter(_) => 19,
+                Self::SoftwareRevisionCharacter(_) => 20,
+                Self::HardwareRevisionCharacter(_) => 21,
+                Self::TotalRuntimeHours(_) => 22,
+                Self::TotalRuntimeMinSec(_) => 23,
+                Self::LoadRuntime024Hours(_) => 24,
+                Self::LoadRuntime024MinSec(_) => 25,
+                Self::LoadRuntime024HoursBeforeReset(_) => 26,
+                Self::LoadRuntime2549Hours(_) => 27,
+                Self::LoadRuntime2549MinSec(_) => 28,
+                Self::LoadRuntime2549HoursBeforeReset(_) => 29,
+                Self::LoadRuntime5074Hours(_) => 30,
+                Self::LoadRuntime5074MinSec(_) => 31,
+                Self::LoadRuntime5074HoursBeforeReset(_) => 32,
+                Self::LoadRuntime7599Hours(_) => 33,
+                Self::LoadRuntime7599MinSec(_) => 34,
+                Self::LoadRuntime7599HoursBeforeReset(_) => 35,
+                Self::LoadRuntime100Hours(_) => 36,
+                Self::LoadRuntime100MinSec(_) => 37,
+                Self::LoadRuntime100HoursBeforeReset(_) => 38,
+                Self::StallEventCounter(_) => 39,
+                Self::StallEventCounterBeforeReset(_) => 40,
+                Self::PowerUpCycles(_) => 41,
             }
         }
         /// The spec's snake_case name of this message.
@@ -2279,227 +3696,48 @@ pub mod sd {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetPointReply { freshness: v_freshness, position: v_position } => {
-                    f("freshness", rt::Int(*v_freshness as i64));
-                    f("position", rt::Int(v_position.raw() as i64));
-                }
-                Self::ActualPosition { position: v_position } => {
-                    f("position", rt::Int(v_position.raw() as i64))
-                }
-                Self::SetVelocityReply { actual_velocity: v_actual_velocity } => {
-                    f("actual_velocity", rt::Int(v_actual_velocity.raw() as i64))
-                }
-                Self::ActualVelocity { actual_velocity: v_actual_velocity } => {
-                    f("actual_velocity", rt::Int(v_actual_velocity.raw() as i64))
-                }
-                Self::SetServoIdReply { new_id: v_new_id } => {
-                    f("new_id", rt::Int(*v_new_id as i64))
-                }
-                Self::ServoId { id: v_id } => f("id", rt::Int(*v_id as i64)),
-                Self::CurrentConsumption { current: v_current } => {
-                    f("current", rt::Int(v_current.raw() as i64))
-                }
-                Self::BusVoltages {
-                    power_bus_1_voltage: v_power_bus_1_voltage,
-                    power_bus_2_voltage: v_power_bus_2_voltage,
-                } => {
-                    f(
-                        "power_bus_1_voltage",
-                        rt::Int(v_power_bus_1_voltage.raw() as i64),
-                    );
-                    f(
-                        "power_bus_2_voltage",
-                        rt::Int(v_power_bus_2_voltage.raw() as i64),
-                    );
-                }
-                Self::ExtendedCurrentConsumption { current: v_current } => {
-                    f("current", rt::Int(v_current.raw() as i64))
-                }
-                Self::Temperatures {
-                    motor_temperature: v_motor_temperature,
-                    pcb_temperature: v_pcb_temperature,
-                } => {
-                    f("motor_temperature", rt::Int(v_motor_temperature.raw() as i64));
-                    f("pcb_temperature", rt::Int(v_pcb_temperature.raw() as i64));
-                }
-                Self::Humidity { humidity: v_humidity } => {
-                    f("humidity", rt::Int(*v_humidity as i64))
-                }
-                Self::SkippedFramesCounter {
-                    host_freshness_counter: v_host_freshness_counter,
-                    dropped_frames: v_dropped_frames,
-                } => {
-                    f(
-                        "host_freshness_counter",
-                        rt::Int(*v_host_freshness_counter as i64),
-                    );
-                    f("dropped_frames", rt::Int(*v_dropped_frames as i64));
-                }
-                Self::DroppedFramesCounterReset {
-                    host_freshness_counter: v_host_freshness_counter,
-                } => {
-                    f(
-                        "host_freshness_counter",
-                        rt::Int(*v_host_freshness_counter as i64),
-                    )
-                }
-                Self::ActuatorStatusWord {
-                    status_bits: v_status_bits,
-                    status_arg2: v_status_arg2,
-                } => {
-                    f("status_bits", rt::Int(v_status_bits.raw() as i64));
-                    f("status_arg2", rt::Int(*v_status_arg2 as i64));
-                }
-                Self::SetCurrentPositionAsZeroReply { zero_offset: v_zero_offset } => {
-                    f("zero_offset", rt::Int(v_zero_offset.raw() as i64))
-                }
-                Self::CurrentZeroOffset { zero_offset: v_zero_offset } => {
-                    f("zero_offset", rt::Int(v_zero_offset.raw() as i64))
-                }
-                Self::ElectronicSerialNumberCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
-                    f("character", rt::Int(*v_character as i64));
-                    f("string_length", rt::Int(*v_string_length as i64));
-                }
-                Self::ProductDescriptionCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
-                    f("character", rt::Int(*v_character as i64));
-                    f("string_length", rt::Int(*v_string_length as i64));
-                }
-                Self::SoftwareRevisionCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
-                    f("character", rt::Int(*v_character as i64));
-                    f("string_length", rt::Int(*v_string_length as i64));
-                }
-                Self::HardwareRevisionCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
-                    f("character", rt::Int(*v_character as i64));
-                    f("string_length", rt::Int(*v_string_length as i64));
-                }
-                Self::TotalRuntimeHours { runtime_hours: v_runtime_hours } => {
-                    f("runtime_hours", rt::Int(*v_runtime_hours as i64))
-                }
-                Self::TotalRuntimeMinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
-                    f("runtime_minutes", rt::Int(*v_runtime_minutes as i64));
-                    f("runtime_seconds", rt::Int(*v_runtime_seconds as i64));
-                }
-                Self::LoadRuntime024Hours { runtime_hours: v_runtime_hours } => {
-                    f("runtime_hours", rt::Int(*v_runtime_hours as i64))
-                }
-                Self::LoadRuntime024MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
-                    f("runtime_minutes", rt::Int(*v_runtime_minutes as i64));
-                    f("runtime_seconds", rt::Int(*v_runtime_seconds as i64));
-                }
-                Self::LoadRuntime024HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
-                    f(
-                        "runtime_hours_before_reset",
-                        rt::Int(*v_runtime_hours_before_reset as i64),
-                    )
-                }
-                Self::LoadRuntime2549Hours { runtime_hours: v_runtime_hours } => {
-                    f("runtime_hours", rt::Int(*v_runtime_hours as i64))
-                }
-                Self::LoadRuntime2549MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
-                    f("runtime_minutes", rt::Int(*v_runtime_minutes as i64));
-                    f("runtime_seconds", rt::Int(*v_runtime_seconds as i64));
-                }
-                Self::LoadRuntime2549HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
-                    f(
-                        "runtime_hours_before_reset",
-                        rt::Int(*v_runtime_hours_before_reset as i64),
-                    )
-                }
-                Self::LoadRuntime5074Hours { runtime_hours: v_runtime_hours } => {
-                    f("runtime_hours", rt::Int(*v_runtime_hours as i64))
-                }
-                Self::LoadRuntime5074MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
-                    f("runtime_minutes", rt::Int(*v_runtime_minutes as i64));
-                    f("runtime_seconds", rt::Int(*v_runtime_seconds as i64));
-                }
-                Self::LoadRuntime5074HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
-                    f(
-                        "runtime_hours_before_reset",
-                        rt::Int(*v_runtime_hours_before_reset as i64),
-                    )
-                }
-                Self::LoadRuntime7599Hours { runtime_hours: v_runtime_hours } => {
-                    f("runtime_hours", rt::Int(*v_runtime_hours as i64))
-                }
-                Self::LoadRuntime7599MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
-                    f("runtime_minutes", rt::Int(*v_runtime_minutes as i64));
-                    f("runtime_seconds", rt::Int(*v_runtime_seconds as i64));
-                }
-                Self::LoadRuntime7599HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
-                    f(
-                        "runtime_hours_before_reset",
-                        rt::Int(*v_runtime_hours_before_reset as i64),
-                    )
-                }
-                Self::LoadRuntime100Hours { runtime_hours: v_runtime_hours } => {
-                    f("runtime_hours", rt::Int(*v_runtime_hours as i64))
-                }
-                Self::LoadRuntime100MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
-                    f("runtime_minutes", rt::Int(*v_runtime_minutes as i64));
-                    f("runtime_seconds", rt::Int(*v_runtime_seconds as i64));
-                }
-                Self::LoadRuntime100HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
-                    f(
-                        "runtime_hours_before_reset",
-                        rt::Int(*v_runtime_hours_before_reset as i64),
-                    )
-                }
-                Self::StallEventCounter { stall_events: v_stall_events } => {
-                    f("stall_events", rt::Int(*v_stall_events as i64))
-                }
-                Self::StallEventCounterBeforeReset {
-                    stall_events_before_reset: v_stall_events_before_reset,
-                } => {
-                    f(
-                        "stall_events_before_reset",
-                        rt::Int(*v_stall_events_before_reset as i64),
-                    )
-                }
-                Self::PowerUpCycles { power_up_cycles: v_power_up_cycles } => {
-                    f("power_up_cycles", rt::Int(*v_power_up_cycles as i64))
-                }
+                Self::SetPointReply(m) => m.visit(f),
+                Self::ActualPosition(m) => m.visit(f),
+                Self::SetVelocityReply(m) => m.visit(f),
+                Self::ActualVelocity(m) => m.visit(f),
+                Self::SetServoIdReply(m) => m.visit(f),
+                Self::ServoId(m) => m.visit(f),
+                Self::CurrentConsumption(m) => m.visit(f),
+                Self::BusVoltages(m) => m.visit(f),
+                Self::ExtendedCurrentConsumption(m) => m.visit(f),
+                Self::Temperatures(m) => m.visit(f),
+                Self::Humidity(m) => m.visit(f),
+                Self::SkippedFramesCounter(m) => m.visit(f),
+                Self::DroppedFramesCounterReset(m) => m.visit(f),
+                Self::ActuatorStatusWord(m) => m.visit(f),
+                Self::SetCurrentPositionAsZeroReply(m) => m.visit(f),
+                Self::CurrentZeroOffset(m) => m.visit(f),
+                Self::ElectronicSerialNumberCharacter(m) => m.visit(f),
+                Self::ProductDescriptionCharacter(m) => m.visit(f),
+                Self::SoftwareRevisionCharacter(m) => m.visit(f),
+                Self::HardwareRevisionCharacter(m) => m.visit(f),
+                Self::TotalRuntimeHours(m) => m.visit(f),
+                Self::TotalRuntimeMinSec(m) => m.visit(f),
+                Self::LoadRuntime024Hours(m) => m.visit(f),
+                Self::LoadRuntime024MinSec(m) => m.visit(f),
+                Self::LoadRuntime024HoursBeforeReset(m) => m.visit(f),
+                Self::LoadRuntime2549Hours(m) => m.visit(f),
+                Self::LoadRuntime2549MinSec(m) => m.visit(f),
+                Self::LoadRuntime2549HoursBeforeReset(m) => m.visit(f),
+                Self::LoadRuntime5074Hours(m) => m.visit(f),
+                Self::LoadRuntime5074MinSec(m) => m.visit(f),
+                Self::LoadRuntime5074HoursBeforeReset(m) => m.visit(f),
+                Self::LoadRuntime7599Hours(m) => m.visit(f),
+                Self::LoadRuntime7599MinSec(m) => m.visit(f),
+                Self::LoadRuntime7599HoursBeforeReset(m) => m.visit(f),
+                Self::LoadRuntime100Hours(m) => m.visit(f),
+                Self::LoadRuntime100MinSec(m) => m.visit(f),
+                Self::LoadRuntime100HoursBeforeReset(m) => m.visit(f),
+                Self::StallEventCounter(m) => m.visit(f),
+                Self::StallEventCounterBeforeReset(m) => m.visit(f),
+                Self::PowerUpCycles(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -2514,7 +3752,12 @@ pub mod sd {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::SetPointReply { freshness: v_freshness, position: v_position } => {
+                Self::SetPointReply(
+                    response::SetPointReply {
+                        freshness: v_freshness,
+                        position: v_position,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x56, address]);
                     let field_0: u16 = ((rt::fits("freshness", v_freshness, 0, 15)?
                         as u16) << 12)
@@ -2523,7 +3766,9 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::ActualPosition { position: v_position } => {
+                Self::ActualPosition(
+                    response::ActualPosition { position: v_position },
+                ) => {
                     let out = rt::head(out, &[0x49, address]);
                     let field_0: u16 = (rt::fits(
                         "position",
@@ -2534,17 +3779,23 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::SetVelocityReply { actual_velocity: v_actual_velocity } => {
+                Self::SetVelocityReply(
+                    response::SetVelocityReply { actual_velocity: v_actual_velocity },
+                ) => {
                     let out = rt::head(out, &[0x57, address]);
                     out[2..4].copy_from_slice(&v_actual_velocity.raw().to_be_bytes());
                     out.len()
                 }
-                Self::ActualVelocity { actual_velocity: v_actual_velocity } => {
+                Self::ActualVelocity(
+                    response::ActualVelocity { actual_velocity: v_actual_velocity },
+                ) => {
                     let out = rt::head(out, &[0x48, address]);
                     out[2..4].copy_from_slice(&v_actual_velocity.raw().to_be_bytes());
                     out.len()
                 }
-                Self::SetServoIdReply { new_id: v_new_id } => {
+                Self::SetServoIdReply(
+                    response::SetServoIdReply { new_id: v_new_id },
+                ) => {
                     rt::encode_in_range("new_id", v_new_id, 1, 30)?;
                     let out = rt::head(out, &[0x55, address]);
                     let field_0: u8 = v_new_id;
@@ -2552,7 +3803,7 @@ pub mod sd {
                     out[3] = field_0;
                     out.len()
                 }
-                Self::ServoId { id: v_id } => {
+                Self::ServoId(response::ServoId { id: v_id }) => {
                     rt::encode_in_range("id", v_id, 1, 30)?;
                     let out = rt::head(out, &[0x6D, address]);
                     let field_0: u8 = v_id;
@@ -2560,7 +3811,9 @@ pub mod sd {
                     out[3] = field_0;
                     out.len()
                 }
-                Self::CurrentConsumption { current: v_current } => {
+                Self::CurrentConsumption(
+                    response::CurrentConsumption { current: v_current },
+                ) => {
                     let out = rt::head(out, &[0x30, address]);
                     let field_0: u8 = rt::fits("current", v_current.raw(), 0, 255)?
                         as u8;
@@ -2568,30 +3821,36 @@ pub mod sd {
                     out[3] = field_0;
                     out.len()
                 }
-                Self::BusVoltages {
-                    power_bus_1_voltage: v_power_bus_1_voltage,
-                    power_bus_2_voltage: v_power_bus_2_voltage,
-                } => {
+                Self::BusVoltages(
+                    response::BusVoltages {
+                        power_bus_1_voltage: v_power_bus_1_voltage,
+                        power_bus_2_voltage: v_power_bus_2_voltage,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x31, address]);
                     out[2] = v_power_bus_1_voltage.raw();
                     out[3] = v_power_bus_2_voltage.raw();
                     out.len()
                 }
-                Self::ExtendedCurrentConsumption { current: v_current } => {
+                Self::ExtendedCurrentConsumption(
+                    response::ExtendedCurrentConsumption { current: v_current },
+                ) => {
                     let out = rt::head(out, &[0x32, address]);
                     out[2..4].copy_from_slice(&v_current.raw().to_be_bytes());
                     out.len()
                 }
-                Self::Temperatures {
-                    motor_temperature: v_motor_temperature,
-                    pcb_temperature: v_pcb_temperature,
-                } => {
+                Self::Temperatures(
+                    response::Temperatures {
+                        motor_temperature: v_motor_temperature,
+                        pcb_temperature: v_pcb_temperature,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x20, address]);
                     out[2] = v_motor_temperature.raw();
                     out[3] = v_pcb_temperature.raw();
                     out.len()
                 }
-                Self::Humidity { humidity: v_humidity } => {
+                Self::Humidity(response::Humidity { humidity: v_humidity }) => {
                     rt::encode_in_range_or("humidity", v_humidity, 1, 100, &[0])?;
                     let out = rt::head(out, &[0x21, address]);
                     let field_0: u8 = v_humidity;
@@ -2599,36 +3858,46 @@ pub mod sd {
                     out[3] = field_0;
                     out.len()
                 }
-                Self::SkippedFramesCounter {
-                    host_freshness_counter: v_host_freshness_counter,
-                    dropped_frames: v_dropped_frames,
-                } => {
+                Self::SkippedFramesCounter(
+                    response::SkippedFramesCounter {
+                        host_freshness_counter: v_host_freshness_counter,
+                        dropped_frames: v_dropped_frames,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x38, address]);
                     out[2] = v_host_freshness_counter;
                     out[3] = v_dropped_frames;
                     out.len()
                 }
-                Self::DroppedFramesCounterReset {
-                    host_freshness_counter: v_host_freshness_counter,
-                } => {
+                Self::DroppedFramesCounterReset(
+                    response::DroppedFramesCounterReset {
+                        host_freshness_counter: v_host_freshness_counter,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x38, address]);
                     out[3] = 0x00;
                     out[2] = v_host_freshness_counter;
                     out.len()
                 }
-                Self::ActuatorStatusWord {
-                    status_bits: v_status_bits,
-                    status_arg2: v_status_arg2,
-                } => {
+                Self::ActuatorStatusWord(
+                    response::ActuatorStatusWord {
+                        status_bits: v_status_bits,
+                        status_arg2: v_status_arg2,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x41, address]);
                     out[2] = v_status_bits.raw();
                     out[3] = v_status_arg2;
                     out.len()
                 }
-                Self::ResetDefaultRoleAndErrorFlagsReply => {
-                    rt::head(out, &[0x5A, address, 0x41, 0x53]).len()
-                }
-                Self::SetCurrentPositionAsZeroReply { zero_offset: v_zero_offset } => {
+                Self::ResetDefaultRoleAndErrorFlagsReply(
+                    response::ResetDefaultRoleAndErrorFlagsReply {},
+                ) => rt::head(out, &[0x5A, address, 0x41, 0x53]).len(),
+                Self::SetCurrentPositionAsZeroReply(
+                    response::SetCurrentPositionAsZeroReply {
+                        zero_offset: v_zero_offset,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x4C, address]);
                     let field_0: u16 = (rt::fits(
                         "zero_offset",
@@ -2639,7 +3908,9 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::CurrentZeroOffset { zero_offset: v_zero_offset } => {
+                Self::CurrentZeroOffset(
+                    response::CurrentZeroOffset { zero_offset: v_zero_offset },
+                ) => {
                     let out = rt::head(out, &[0x65, address]);
                     let field_0: u16 = (rt::fits(
                         "zero_offset",
@@ -2650,58 +3921,70 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::ResetZeroOffsetReply => {
+                Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply {}) => {
                     rt::head(out, &[0x64, address, 0x00, 0x00]).len()
                 }
-                Self::ElectronicSerialNumberCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
+                Self::ElectronicSerialNumberCharacter(
+                    response::ElectronicSerialNumberCharacter {
+                        character: v_character,
+                        string_length: v_string_length,
+                    },
+                ) => {
                     rt::encode_in_range("string_length", v_string_length, 0, 32)?;
                     let out = rt::head(out, &[0x10, address]);
                     out[2] = v_character;
                     out[3] = v_string_length;
                     out.len()
                 }
-                Self::ProductDescriptionCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
+                Self::ProductDescriptionCharacter(
+                    response::ProductDescriptionCharacter {
+                        character: v_character,
+                        string_length: v_string_length,
+                    },
+                ) => {
                     rt::encode_in_range("string_length", v_string_length, 0, 32)?;
                     let out = rt::head(out, &[0x11, address]);
                     out[2] = v_character;
                     out[3] = v_string_length;
                     out.len()
                 }
-                Self::SoftwareRevisionCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
+                Self::SoftwareRevisionCharacter(
+                    response::SoftwareRevisionCharacter {
+                        character: v_character,
+                        string_length: v_string_length,
+                    },
+                ) => {
                     rt::encode_in_range("string_length", v_string_length, 0, 32)?;
                     let out = rt::head(out, &[0x12, address]);
                     out[2] = v_character;
                     out[3] = v_string_length;
                     out.len()
                 }
-                Self::HardwareRevisionCharacter {
-                    character: v_character,
-                    string_length: v_string_length,
-                } => {
+                Self::HardwareRevisionCharacter(
+                    response::HardwareRevisionCharacter {
+                        character: v_character,
+                        string_length: v_string_length,
+                    },
+                ) => {
                     rt::encode_in_range("string_length", v_string_length, 0, 32)?;
                     let out = rt::head(out, &[0x13, address]);
                     out[2] = v_character;
                     out[3] = v_string_length;
                     out.len()
                 }
-                Self::TotalRuntimeHours { runtime_hours: v_runtime_hours } => {
+                Self::TotalRuntimeHours(
+                    response::TotalRuntimeHours { runtime_hours: v_runtime_hours },
+                ) => {
                     let out = rt::head(out, &[0x22, address]);
                     out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
                     out.len()
                 }
-                Self::TotalRuntimeMinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
+                Self::TotalRuntimeMinSec(
+                    response::TotalRuntimeMinSec {
+                        runtime_minutes: v_runtime_minutes,
+                        runtime_seconds: v_runtime_seconds,
+                    },
+                ) => {
                     rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
                     rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
                     let out = rt::head(out, &[0x22, address]);
@@ -2709,15 +3992,19 @@ pub mod sd {
                     out[3] = v_runtime_seconds;
                     out.len()
                 }
-                Self::LoadRuntime024Hours { runtime_hours: v_runtime_hours } => {
+                Self::LoadRuntime024Hours(
+                    response::LoadRuntime024Hours { runtime_hours: v_runtime_hours },
+                ) => {
                     let out = rt::head(out, &[0x23, address]);
                     out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime024MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
+                Self::LoadRuntime024MinSec(
+                    response::LoadRuntime024MinSec {
+                        runtime_minutes: v_runtime_minutes,
+                        runtime_seconds: v_runtime_seconds,
+                    },
+                ) => {
                     rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
                     rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
                     let out = rt::head(out, &[0x23, address]);
@@ -2725,23 +4012,29 @@ pub mod sd {
                     out[3] = v_runtime_seconds;
                     out.len()
                 }
-                Self::LoadRuntime024HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
+                Self::LoadRuntime024HoursBeforeReset(
+                    response::LoadRuntime024HoursBeforeReset {
+                        runtime_hours_before_reset: v_runtime_hours_before_reset,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x23, address]);
                     out[2..4]
                         .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime2549Hours { runtime_hours: v_runtime_hours } => {
+                Self::LoadRuntime2549Hours(
+                    response::LoadRuntime2549Hours { runtime_hours: v_runtime_hours },
+                ) => {
                     let out = rt::head(out, &[0x24, address]);
                     out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime2549MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
+                Self::LoadRuntime2549MinSec(
+                    response::LoadRuntime2549MinSec {
+                        runtime_minutes: v_runtime_minutes,
+                        runtime_seconds: v_runtime_seconds,
+                    },
+                ) => {
                     rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
                     rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
                     let out = rt::head(out, &[0x24, address]);
@@ -2749,23 +4042,29 @@ pub mod sd {
                     out[3] = v_runtime_seconds;
                     out.len()
                 }
-                Self::LoadRuntime2549HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
+                Self::LoadRuntime2549HoursBeforeReset(
+                    response::LoadRuntime2549HoursBeforeReset {
+                        runtime_hours_before_reset: v_runtime_hours_before_reset,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x24, address]);
                     out[2..4]
                         .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime5074Hours { runtime_hours: v_runtime_hours } => {
+                Self::LoadRuntime5074Hours(
+                    response::LoadRuntime5074Hours { runtime_hours: v_runtime_hours },
+                ) => {
                     let out = rt::head(out, &[0x25, address]);
                     out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime5074MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
+                Self::LoadRuntime5074MinSec(
+                    response::LoadRuntime5074MinSec {
+                        runtime_minutes: v_runtime_minutes,
+                        runtime_seconds: v_runtime_seconds,
+                    },
+                ) => {
                     rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
                     rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
                     let out = rt::head(out, &[0x25, address]);
@@ -2773,23 +4072,29 @@ pub mod sd {
                     out[3] = v_runtime_seconds;
                     out.len()
                 }
-                Self::LoadRuntime5074HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
+                Self::LoadRuntime5074HoursBeforeReset(
+                    response::LoadRuntime5074HoursBeforeReset {
+                        runtime_hours_before_reset: v_runtime_hours_before_reset,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x25, address]);
                     out[2..4]
                         .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime7599Hours { runtime_hours: v_runtime_hours } => {
+                Self::LoadRuntime7599Hours(
+                    response::LoadRuntime7599Hours { runtime_hours: v_runtime_hours },
+                ) => {
                     let out = rt::head(out, &[0x26, address]);
                     out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime7599MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
+                Self::LoadRuntime7599MinSec(
+                    response::LoadRuntime7599MinSec {
+                        runtime_minutes: v_runtime_minutes,
+                        runtime_seconds: v_runtime_seconds,
+                    },
+                ) => {
                     rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
                     rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
                     let out = rt::head(out, &[0x26, address]);
@@ -2797,23 +4102,29 @@ pub mod sd {
                     out[3] = v_runtime_seconds;
                     out.len()
                 }
-                Self::LoadRuntime7599HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
+                Self::LoadRuntime7599HoursBeforeReset(
+                    response::LoadRuntime7599HoursBeforeReset {
+                        runtime_hours_before_reset: v_runtime_hours_before_reset,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x26, address]);
                     out[2..4]
                         .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime100Hours { runtime_hours: v_runtime_hours } => {
+                Self::LoadRuntime100Hours(
+                    response::LoadRuntime100Hours { runtime_hours: v_runtime_hours },
+                ) => {
                     let out = rt::head(out, &[0x27, address]);
                     out[2..4].copy_from_slice(&v_runtime_hours.to_be_bytes());
                     out.len()
                 }
-                Self::LoadRuntime100MinSec {
-                    runtime_minutes: v_runtime_minutes,
-                    runtime_seconds: v_runtime_seconds,
-                } => {
+                Self::LoadRuntime100MinSec(
+                    response::LoadRuntime100MinSec {
+                        runtime_minutes: v_runtime_minutes,
+                        runtime_seconds: v_runtime_seconds,
+                    },
+                ) => {
                     rt::encode_in_range("runtime_minutes", v_runtime_minutes, 0, 59)?;
                     rt::encode_in_range("runtime_seconds", v_runtime_seconds, 0, 59)?;
                     let out = rt::head(out, &[0x27, address]);
@@ -2821,28 +4132,36 @@ pub mod sd {
                     out[3] = v_runtime_seconds;
                     out.len()
                 }
-                Self::LoadRuntime100HoursBeforeReset {
-                    runtime_hours_before_reset: v_runtime_hours_before_reset,
-                } => {
+                Self::LoadRuntime100HoursBeforeReset(
+                    response::LoadRuntime100HoursBeforeReset {
+                        runtime_hours_before_reset: v_runtime_hours_before_reset,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x27, address]);
                     out[2..4]
                         .copy_from_slice(&v_runtime_hours_before_reset.to_be_bytes());
                     out.len()
                 }
-                Self::StallEventCounter { stall_events: v_stall_events } => {
+                Self::StallEventCounter(
+                    response::StallEventCounter { stall_events: v_stall_events },
+                ) => {
                     let out = rt::head(out, &[0x28, address]);
                     out[2..4].copy_from_slice(&v_stall_events.to_be_bytes());
                     out.len()
                 }
-                Self::StallEventCounterBeforeReset {
-                    stall_events_before_reset: v_stall_events_before_reset,
-                } => {
+                Self::StallEventCounterBeforeReset(
+                    response::StallEventCounterBeforeReset {
+                        stall_events_before_reset: v_stall_events_before_reset,
+                    },
+                ) => {
                     let out = rt::head(out, &[0x28, address]);
                     out[2..4]
                         .copy_from_slice(&v_stall_events_before_reset.to_be_bytes());
                     out.len()
                 }
-                Self::PowerUpCycles { power_up_cycles: v_power_up_cycles } => {
+                Self::PowerUpCycles(
+                    response::PowerUpCycles { power_up_cycles: v_power_up_cycles },
+                ) => {
                     let out = rt::head(out, &[0x29, address]);
                     out[2..4].copy_from_slice(&v_power_up_cycles.to_be_bytes());
                     out.len()
@@ -2902,43 +4221,53 @@ pub mod sd {
             let asked: u64 = request.map_or(!0, Request::replies);
             match rt::code(frame, 0, 1) {
                 0x56 => {
-                    let frame = rt::fixed::<6>(frame, &response::SET_POINT_REPLY)?;
+                    let frame = rt::fixed::<6>(frame, &response::SetPointReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
-                    rt::Ok(Self::SetPointReply {
-                        freshness: (field_0 >> 12) as u8,
-                        position: Angle::from_raw(
-                            (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetPointReply(response::SetPointReply {
+                            freshness: (field_0 >> 12) as u8,
+                            position: Angle::from_raw(
+                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                            ),
+                        }),
+                    )
                 }
                 0x49 => {
-                    let frame = rt::fixed::<6>(frame, &response::ACTUAL_POSITION)?;
+                    let frame = rt::fixed::<6>(frame, &response::ActualPosition::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(&response::ACTUAL_POSITION_ZERO, 2, field_0 >> 12, 0x0)?;
-                    rt::Ok(Self::ActualPosition {
-                        position: Angle::from_raw(
-                            (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::ActualPosition(response::ActualPosition {
+                            position: Angle::from_raw(
+                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                            ),
+                        }),
+                    )
                 }
                 0x57 => {
-                    let frame = rt::fixed::<6>(frame, &response::SET_VELOCITY_REPLY)?;
-                    rt::Ok(Self::SetVelocityReply {
-                        actual_velocity: Velocity::from_raw(
-                            i16::from_be_bytes([frame[2], frame[3]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::SetVelocityReply::DESC)?;
+                    rt::Ok(
+                        Self::SetVelocityReply(response::SetVelocityReply {
+                            actual_velocity: Velocity::from_raw(
+                                i16::from_be_bytes([frame[2], frame[3]]),
+                            ),
+                        }),
+                    )
                 }
                 0x48 => {
-                    let frame = rt::fixed::<6>(frame, &response::ACTUAL_VELOCITY)?;
-                    rt::Ok(Self::ActualVelocity {
-                        actual_velocity: Velocity::from_raw(
-                            i16::from_be_bytes([frame[2], frame[3]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::ActualVelocity::DESC)?;
+                    rt::Ok(
+                        Self::ActualVelocity(response::ActualVelocity {
+                            actual_velocity: Velocity::from_raw(
+                                i16::from_be_bytes([frame[2], frame[3]]),
+                            ),
+                        }),
+                    )
                 }
                 0x55 => {
-                    let frame = rt::fixed::<6>(frame, &response::SET_SERVO_ID_REPLY)?;
+                    let frame = rt::fixed::<6>(frame, &response::SetServoIdReply::DESC)?;
                     rt::in_range(
                         &response::SET_SERVO_ID_REPLY_NEW_ID,
                         2,
@@ -2953,12 +4282,14 @@ pub mod sd {
                         "new_id",
                         frame[2],
                     )?;
-                    rt::Ok(Self::SetServoIdReply {
-                        new_id: frame[2],
-                    })
+                    rt::Ok(
+                        Self::SetServoIdReply(response::SetServoIdReply {
+                            new_id: frame[2],
+                        }),
+                    )
                 }
                 0x6D => {
-                    let frame = rt::fixed::<6>(frame, &response::SERVO_ID)?;
+                    let frame = rt::fixed::<6>(frame, &response::ServoId::DESC)?;
                     rt::in_range(&response::SERVO_ID_ID, 2, frame[2], 1, 30)?;
                     rt::same(
                         &response::SERVO_ID_ID_REPEAT,
@@ -2967,10 +4298,12 @@ pub mod sd {
                         "id",
                         frame[2],
                     )?;
-                    rt::Ok(Self::ServoId { id: frame[2] })
+                    rt::Ok(Self::ServoId(response::ServoId { id: frame[2] }))
                 }
                 0x30 => {
-                    let frame = rt::fixed::<6>(frame, &response::CURRENT_CONSUMPTION)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::CurrentConsumption::DESC)?;
                     rt::same(
                         &response::CURRENT_CONSUMPTION_CURRENT_REPEAT,
                         3,
@@ -2978,36 +4311,44 @@ pub mod sd {
                         "current",
                         frame[2],
                     )?;
-                    rt::Ok(Self::CurrentConsumption {
-                        current: Current::from_raw(frame[2] as u16),
-                    })
+                    rt::Ok(
+                        Self::CurrentConsumption(response::CurrentConsumption {
+                            current: Current::from_raw(frame[2] as u16),
+                        }),
+                    )
                 }
                 0x31 => {
-                    let frame = rt::fixed::<6>(frame, &response::BUS_VOLTAGES)?;
-                    rt::Ok(Self::BusVoltages {
-                        power_bus_1_voltage: Voltage::from_raw(frame[2]),
-                        power_bus_2_voltage: Voltage::from_raw(frame[3]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::BusVoltages::DESC)?;
+                    rt::Ok(
+                        Self::BusVoltages(response::BusVoltages {
+                            power_bus_1_voltage: Voltage::from_raw(frame[2]),
+                            power_bus_2_voltage: Voltage::from_raw(frame[3]),
+                        }),
+                    )
                 }
                 0x32 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::EXTENDED_CURRENT_CONSUMPTION)?;
-                    rt::Ok(Self::ExtendedCurrentConsumption {
-                        current: Current::from_raw(
-                            u16::from_be_bytes([frame[2], frame[3]]),
-                        ),
-                    })
+                    >(frame, &response::ExtendedCurrentConsumption::DESC)?;
+                    rt::Ok(
+                        Self::ExtendedCurrentConsumption(response::ExtendedCurrentConsumption {
+                            current: Current::from_raw(
+                                u16::from_be_bytes([frame[2], frame[3]]),
+                            ),
+                        }),
+                    )
                 }
                 0x20 => {
-                    let frame = rt::fixed::<6>(frame, &response::TEMPERATURES)?;
-                    rt::Ok(Self::Temperatures {
-                        motor_temperature: Temperature::from_raw(frame[2]),
-                        pcb_temperature: Temperature::from_raw(frame[3]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::Temperatures::DESC)?;
+                    rt::Ok(
+                        Self::Temperatures(response::Temperatures {
+                            motor_temperature: Temperature::from_raw(frame[2]),
+                            pcb_temperature: Temperature::from_raw(frame[3]),
+                        }),
+                    )
                 }
                 0x21 => {
-                    let frame = rt::fixed::<6>(frame, &response::HUMIDITY)?;
+                    let frame = rt::fixed::<6>(frame, &response::Humidity::DESC)?;
                     rt::in_range_or(
                         &response::HUMIDITY_HUMIDITY,
                         2,
@@ -3023,25 +4364,29 @@ pub mod sd {
                         "humidity",
                         frame[2],
                     )?;
-                    rt::Ok(Self::Humidity {
-                        humidity: frame[2],
-                    })
+                    rt::Ok(
+                        Self::Humidity(response::Humidity {
+                            humidity: frame[2],
+                        }),
+                    )
                 }
                 0x38 => {
                     let mut g = rt::Group::new(frame, 0x38, request.map(Request::name));
                     g.ambiguous(
                         asked >> 11 & 1 != 0,
-                        &response::SKIPPED_FRAMES_COUNTER,
+                        &response::SkippedFramesCounter::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::SkippedFramesCounter {
-                                host_freshness_counter: frame[2],
-                                dropped_frames: frame[3],
-                            })
+                            rt::Ok(
+                                Self::SkippedFramesCounter(response::SkippedFramesCounter {
+                                    host_freshness_counter: frame[2],
+                                    dropped_frames: frame[3],
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 12 & 1 != 0,
-                        &response::DROPPED_FRAMES_COUNTER_RESET,
+                        &response::DroppedFramesCounterReset::DESC,
                         |frame: &[u8; 6]| {
                             rt::equal(
                                 &response::DROPPED_FRAMES_COUNTER_RESET_ARG2,
@@ -3049,24 +4394,30 @@ pub mod sd {
                                 frame[3],
                                 0x0,
                             )?;
-                            rt::Ok(Self::DroppedFramesCounterReset {
-                                host_freshness_counter: frame[2],
-                            })
+                            rt::Ok(
+                                Self::DroppedFramesCounterReset(response::DroppedFramesCounterReset {
+                                    host_freshness_counter: frame[2],
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::SKIPPED_FRAMES_COUNTER)
+                    g.end(&response::SkippedFramesCounter::DESC)
                 }
                 0x41 => {
-                    let frame = rt::fixed::<6>(frame, &response::ACTUATOR_STATUS_WORD)?;
-                    rt::Ok(Self::ActuatorStatusWord {
-                        status_bits: ActuatorStatusBits::from_raw(frame[2]),
-                        status_arg2: frame[3],
-                    })
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::ActuatorStatusWord::DESC)?;
+                    rt::Ok(
+                        Self::ActuatorStatusWord(response::ActuatorStatusWord {
+                            status_bits: ActuatorStatusBits::from_raw(frame[2]),
+                            status_arg2: frame[3],
+                        }),
+                    )
                 }
                 0x5A => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY)?;
+                    >(frame, &response::ResetDefaultRoleAndErrorFlagsReply::DESC)?;
                     rt::equal(
                         &response::RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1,
                         2,
@@ -3079,12 +4430,16 @@ pub mod sd {
                         frame[3],
                         0x53,
                     )?;
-                    rt::Ok(Self::ResetDefaultRoleAndErrorFlagsReply)
+                    rt::Ok(
+                        Self::ResetDefaultRoleAndErrorFlagsReply(
+                            response::ResetDefaultRoleAndErrorFlagsReply,
+                        ),
+                    )
                 }
                 0x4C => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::SET_CURRENT_POSITION_AS_ZERO_REPLY)?;
+                    >(frame, &response::SetCurrentPositionAsZeroReply::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(
                         &response::SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO,
@@ -3092,14 +4447,18 @@ pub mod sd {
                         field_0 >> 12,
                         0x0,
                     )?;
-                    rt::Ok(Self::SetCurrentPositionAsZeroReply {
-                        zero_offset: Angle::from_raw(
-                            (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
+                            zero_offset: Angle::from_raw(
+                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                            ),
+                        }),
+                    )
                 }
                 0x65 => {
-                    let frame = rt::fixed::<6>(frame, &response::CURRENT_ZERO_OFFSET)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &response::CurrentZeroOffset::DESC)?;
                     let field_0: u16 = u16::from_be_bytes([frame[2], frame[3]]);
                     rt::equal(
                         &response::CURRENT_ZERO_OFFSET_ZERO,
@@ -3107,16 +4466,18 @@ pub mod sd {
                         field_0 >> 12,
                         0x0,
                     )?;
-                    rt::Ok(Self::CurrentZeroOffset {
-                        zero_offset: Angle::from_raw(
-                            (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::CurrentZeroOffset(response::CurrentZeroOffset {
+                            zero_offset: Angle::from_raw(
+                                (((field_0 & 0xFFF) as u16) << 4) as i16 >> 4,
+                            ),
+                        }),
+                    )
                 }
                 0x64 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::RESET_ZERO_OFFSET_REPLY)?;
+                    >(frame, &response::ResetZeroOffsetReply::DESC)?;
                     rt::equal(
                         &response::RESET_ZERO_OFFSET_REPLY_ARG1,
                         2,
@@ -3129,12 +4490,12 @@ pub mod sd {
                         frame[3],
                         0x0,
                     )?;
-                    rt::Ok(Self::ResetZeroOffsetReply)
+                    rt::Ok(Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply))
                 }
                 0x10 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER)?;
+                    >(frame, &response::ElectronicSerialNumberCharacter::DESC)?;
                     rt::in_range(
                         &response::ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH,
                         3,
@@ -3142,15 +4503,17 @@ pub mod sd {
                         0,
                         32,
                     )?;
-                    rt::Ok(Self::ElectronicSerialNumberCharacter {
-                        character: frame[2],
-                        string_length: frame[3],
-                    })
+                    rt::Ok(
+                        Self::ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter {
+                            character: frame[2],
+                            string_length: frame[3],
+                        }),
+                    )
                 }
                 0x11 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::PRODUCT_DESCRIPTION_CHARACTER)?;
+                    >(frame, &response::ProductDescriptionCharacter::DESC)?;
                     rt::in_range(
                         &response::PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH,
                         3,
@@ -3158,15 +4521,17 @@ pub mod sd {
                         0,
                         32,
                     )?;
-                    rt::Ok(Self::ProductDescriptionCharacter {
-                        character: frame[2],
-                        string_length: frame[3],
-                    })
+                    rt::Ok(
+                        Self::ProductDescriptionCharacter(response::ProductDescriptionCharacter {
+                            character: frame[2],
+                            string_length: frame[3],
+                        }),
+                    )
                 }
                 0x12 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::SOFTWARE_REVISION_CHARACTER)?;
+                    >(frame, &response::SoftwareRevisionCharacter::DESC)?;
                     rt::in_range(
                         &response::SOFTWARE_REVISION_CHARACTER_STRING_LENGTH,
                         3,
@@ -3174,15 +4539,17 @@ pub mod sd {
                         0,
                         32,
                     )?;
-                    rt::Ok(Self::SoftwareRevisionCharacter {
-                        character: frame[2],
-                        string_length: frame[3],
-                    })
+                    rt::Ok(
+                        Self::SoftwareRevisionCharacter(response::SoftwareRevisionCharacter {
+                            character: frame[2],
+                            string_length: frame[3],
+                        }),
+                    )
                 }
                 0x13 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::HARDWARE_REVISION_CHARACTER)?;
+                    >(frame, &response::HardwareRevisionCharacter::DESC)?;
                     rt::in_range(
                         &response::HARDWARE_REVISION_CHARACTER_STRING_LENGTH,
                         3,
@@ -3190,25 +4557,29 @@ pub mod sd {
                         0,
                         32,
                     )?;
-                    rt::Ok(Self::HardwareRevisionCharacter {
-                        character: frame[2],
-                        string_length: frame[3],
-                    })
+                    rt::Ok(
+                        Self::HardwareRevisionCharacter(response::HardwareRevisionCharacter {
+                            character: frame[2],
+                            string_length: frame[3],
+                        }),
+                    )
                 }
                 0x22 => {
                     let mut g = rt::Group::new(frame, 0x22, request.map(Request::name));
                     g.ambiguous(
                         asked >> 22 & 1 != 0,
-                        &response::TOTAL_RUNTIME_HOURS,
+                        &response::TotalRuntimeHours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::TotalRuntimeHours {
-                                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::TotalRuntimeHours(response::TotalRuntimeHours {
+                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 23 & 1 != 0,
-                        &response::TOTAL_RUNTIME_MIN_SEC,
+                        &response::TotalRuntimeMinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
                                 &response::TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES,
@@ -3224,28 +4595,32 @@ pub mod sd {
                                 0,
                                 59,
                             )?;
-                            rt::Ok(Self::TotalRuntimeMinSec {
-                                runtime_minutes: frame[2],
-                                runtime_seconds: frame[3],
-                            })
+                            rt::Ok(
+                                Self::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
+                                    runtime_minutes: frame[2],
+                                    runtime_seconds: frame[3],
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::TOTAL_RUNTIME_HOURS)
+                    g.end(&response::TotalRuntimeHours::DESC)
                 }
                 0x23 => {
                     let mut g = rt::Group::new(frame, 0x23, request.map(Request::name));
                     g.ambiguous(
                         asked >> 24 & 1 != 0,
-                        &response::LOAD_RUNTIME_0_24_HOURS,
+                        &response::LoadRuntime024Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime024Hours {
-                                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime024Hours(response::LoadRuntime024Hours {
+                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 25 & 1 != 0,
-                        &response::LOAD_RUNTIME_0_24_MIN_SEC,
+                        &response::LoadRuntime024MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
                                 &response::LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES,
@@ -3261,40 +4636,46 @@ pub mod sd {
                                 0,
                                 59,
                             )?;
-                            rt::Ok(Self::LoadRuntime024MinSec {
-                                runtime_minutes: frame[2],
-                                runtime_seconds: frame[3],
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime024MinSec(response::LoadRuntime024MinSec {
+                                    runtime_minutes: frame[2],
+                                    runtime_seconds: frame[3],
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 26 & 1 != 0,
-                        &response::LOAD_RUNTIME_0_24_HOURS_BEFORE_RESET,
+                        &response::LoadRuntime024HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime024HoursBeforeReset {
-                                runtime_hours_before_reset: u16::from_be_bytes([
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset {
+                                    runtime_hours_before_reset: u16::from_be_bytes([
+                                        frame[2],
+                                        frame[3],
+                                    ]),
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::LOAD_RUNTIME_0_24_HOURS)
+                    g.end(&response::LoadRuntime024Hours::DESC)
                 }
                 0x24 => {
                     let mut g = rt::Group::new(frame, 0x24, request.map(Request::name));
                     g.ambiguous(
                         asked >> 27 & 1 != 0,
-                        &response::LOAD_RUNTIME_25_49_HOURS,
+                        &response::LoadRuntime2549Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime2549Hours {
-                                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime2549Hours(response::LoadRuntime2549Hours {
+                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 28 & 1 != 0,
-                        &response::LOAD_RUNTIME_25_49_MIN_SEC,
+                        &response::LoadRuntime2549MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
                                 &response::LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES,
@@ -3310,40 +4691,46 @@ pub mod sd {
                                 0,
                                 59,
                             )?;
-                            rt::Ok(Self::LoadRuntime2549MinSec {
-                                runtime_minutes: frame[2],
-                                runtime_seconds: frame[3],
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime2549MinSec(response::LoadRuntime2549MinSec {
+                                    runtime_minutes: frame[2],
+                                    runtime_seconds: frame[3],
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 29 & 1 != 0,
-                        &response::LOAD_RUNTIME_25_49_HOURS_BEFORE_RESET,
+                        &response::LoadRuntime2549HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime2549HoursBeforeReset {
-                                runtime_hours_before_reset: u16::from_be_bytes([
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset {
+                                    runtime_hours_before_reset: u16::from_be_bytes([
+                                        frame[2],
+                                        frame[3],
+                                    ]),
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::LOAD_RUNTIME_25_49_HOURS)
+                    g.end(&response::LoadRuntime2549Hours::DESC)
                 }
                 0x25 => {
                     let mut g = rt::Group::new(frame, 0x25, request.map(Request::name));
                     g.ambiguous(
                         asked >> 30 & 1 != 0,
-                        &response::LOAD_RUNTIME_50_74_HOURS,
+                        &response::LoadRuntime5074Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime5074Hours {
-                                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime5074Hours(response::LoadRuntime5074Hours {
+                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 31 & 1 != 0,
-                        &response::LOAD_RUNTIME_50_74_MIN_SEC,
+                        &response::LoadRuntime5074MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
                                 &response::LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES,
@@ -3359,40 +4746,46 @@ pub mod sd {
                                 0,
                                 59,
                             )?;
-                            rt::Ok(Self::LoadRuntime5074MinSec {
-                                runtime_minutes: frame[2],
-                                runtime_seconds: frame[3],
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime5074MinSec(response::LoadRuntime5074MinSec {
+                                    runtime_minutes: frame[2],
+                                    runtime_seconds: frame[3],
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 32 & 1 != 0,
-                        &response::LOAD_RUNTIME_50_74_HOURS_BEFORE_RESET,
+                        &response::LoadRuntime5074HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime5074HoursBeforeReset {
-                                runtime_hours_before_reset: u16::from_be_bytes([
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset {
+                                    runtime_hours_before_reset: u16::from_be_bytes([
+                                        frame[2],
+                                        frame[3],
+                                    ]),
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::LOAD_RUNTIME_50_74_HOURS)
+                    g.end(&response::LoadRuntime5074Hours::DESC)
                 }
                 0x26 => {
                     let mut g = rt::Group::new(frame, 0x26, request.map(Request::name));
                     g.ambiguous(
                         asked >> 33 & 1 != 0,
-                        &response::LOAD_RUNTIME_75_99_HOURS,
+                        &response::LoadRuntime7599Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime7599Hours {
-                                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime7599Hours(response::LoadRuntime7599Hours {
+                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 34 & 1 != 0,
-                        &response::LOAD_RUNTIME_75_99_MIN_SEC,
+                        &response::LoadRuntime7599MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
                                 &response::LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES,
@@ -3408,40 +4801,46 @@ pub mod sd {
                                 0,
                                 59,
                             )?;
-                            rt::Ok(Self::LoadRuntime7599MinSec {
-                                runtime_minutes: frame[2],
-                                runtime_seconds: frame[3],
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime7599MinSec(response::LoadRuntime7599MinSec {
+                                    runtime_minutes: frame[2],
+                                    runtime_seconds: frame[3],
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 35 & 1 != 0,
-                        &response::LOAD_RUNTIME_75_99_HOURS_BEFORE_RESET,
+                        &response::LoadRuntime7599HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime7599HoursBeforeReset {
-                                runtime_hours_before_reset: u16::from_be_bytes([
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset {
+                                    runtime_hours_before_reset: u16::from_be_bytes([
+                                        frame[2],
+                                        frame[3],
+                                    ]),
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::LOAD_RUNTIME_75_99_HOURS)
+                    g.end(&response::LoadRuntime7599Hours::DESC)
                 }
                 0x27 => {
                     let mut g = rt::Group::new(frame, 0x27, request.map(Request::name));
                     g.ambiguous(
                         asked >> 36 & 1 != 0,
-                        &response::LOAD_RUNTIME_100_HOURS,
+                        &response::LoadRuntime100Hours::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime100Hours {
-                                runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime100Hours(response::LoadRuntime100Hours {
+                                    runtime_hours: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 37 & 1 != 0,
-                        &response::LOAD_RUNTIME_100_MIN_SEC,
+                        &response::LoadRuntime100MinSec::DESC,
                         |frame: &[u8; 6]| {
                             rt::in_range(
                                 &response::LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES,
@@ -3457,56 +4856,66 @@ pub mod sd {
                                 0,
                                 59,
                             )?;
-                            rt::Ok(Self::LoadRuntime100MinSec {
-                                runtime_minutes: frame[2],
-                                runtime_seconds: frame[3],
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime100MinSec(response::LoadRuntime100MinSec {
+                                    runtime_minutes: frame[2],
+                                    runtime_seconds: frame[3],
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 38 & 1 != 0,
-                        &response::LOAD_RUNTIME_100_HOURS_BEFORE_RESET,
+                        &response::LoadRuntime100HoursBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::LoadRuntime100HoursBeforeReset {
-                                runtime_hours_before_reset: u16::from_be_bytes([
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                            })
+                            rt::Ok(
+                                Self::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
+                                    runtime_hours_before_reset: u16::from_be_bytes([
+                                        frame[2],
+                                        frame[3],
+                                    ]),
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::LOAD_RUNTIME_100_HOURS)
+                    g.end(&response::LoadRuntime100Hours::DESC)
                 }
                 0x28 => {
                     let mut g = rt::Group::new(frame, 0x28, request.map(Request::name));
                     g.ambiguous(
                         asked >> 39 & 1 != 0,
-                        &response::STALL_EVENT_COUNTER,
+                        &response::StallEventCounter::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::StallEventCounter {
-                                stall_events: u16::from_be_bytes([frame[2], frame[3]]),
-                            })
+                            rt::Ok(
+                                Self::StallEventCounter(response::StallEventCounter {
+                                    stall_events: u16::from_be_bytes([frame[2], frame[3]]),
+                                }),
+                            )
                         },
                     );
                     g.ambiguous(
                         asked >> 40 & 1 != 0,
-                        &response::STALL_EVENT_COUNTER_BEFORE_RESET,
+                        &response::StallEventCounterBeforeReset::DESC,
                         |frame: &[u8; 6]| {
-                            rt::Ok(Self::StallEventCounterBeforeReset {
-                                stall_events_before_reset: u16::from_be_bytes([
-                                    frame[2],
-                                    frame[3],
-                                ]),
-                            })
+                            rt::Ok(
+                                Self::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
+                                    stall_events_before_reset: u16::from_be_bytes([
+                                        frame[2],
+                                        frame[3],
+                                    ]),
+                                }),
+                            )
                         },
                     );
-                    g.end(&response::STALL_EVENT_COUNTER)
+                    g.end(&response::StallEventCounter::DESC)
                 }
                 0x29 => {
-                    let frame = rt::fixed::<6>(frame, &response::POWER_UP_CYCLES)?;
-                    rt::Ok(Self::PowerUpCycles {
-                        power_up_cycles: u16::from_be_bytes([frame[2], frame[3]]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::PowerUpCycles::DESC)?;
+                    rt::Ok(
+                        Self::PowerUpCycles(response::PowerUpCycles {
+                            power_up_cycles: u16::from_be_bytes([frame[2], frame[3]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 2, true)),
             }
@@ -3520,284 +4929,374 @@ pub mod sd {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "set_point_reply" => {
-                    rt::Ok(Self::SetPointReply {
-                        freshness: rt::field_int("freshness", field("freshness"), 0, 15)?
-                            as u8,
-                        position: Angle::from_raw(
-                            rt::field_int("position", field("position"), -2048, 2047)?
-                                as i16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetPointReply(response::SetPointReply {
+                            freshness: rt::field_int(
+                                "freshness",
+                                field("freshness"),
+                                0,
+                                15,
+                            )? as u8,
+                            position: Angle::from_raw(
+                                rt::field_int("position", field("position"), -2048, 2047)?
+                                    as i16,
+                            ),
+                        }),
+                    )
                 }
                 "actual_position" => {
-                    rt::Ok(Self::ActualPosition {
-                        position: Angle::from_raw(
-                            rt::field_int("position", field("position"), -2048, 2047)?
-                                as i16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::ActualPosition(response::ActualPosition {
+                            position: Angle::from_raw(
+                                rt::field_int("position", field("position"), -2048, 2047)?
+                                    as i16,
+                            ),
+                        }),
+                    )
                 }
                 "set_velocity_reply" => {
-                    rt::Ok(Self::SetVelocityReply {
-                        actual_velocity: Velocity::from_raw(
-                            rt::get(&mut field, "actual_velocity")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetVelocityReply(response::SetVelocityReply {
+                            actual_velocity: Velocity::from_raw(
+                                rt::get(&mut field, "actual_velocity")?,
+                            ),
+                        }),
+                    )
                 }
                 "actual_velocity" => {
-                    rt::Ok(Self::ActualVelocity {
-                        actual_velocity: Velocity::from_raw(
-                            rt::get(&mut field, "actual_velocity")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::ActualVelocity(response::ActualVelocity {
+                            actual_velocity: Velocity::from_raw(
+                                rt::get(&mut field, "actual_velocity")?,
+                            ),
+                        }),
+                    )
                 }
                 "set_servo_id_reply" => {
-                    rt::Ok(Self::SetServoIdReply {
-                        new_id: rt::get(&mut field, "new_id")?,
-                    })
+                    rt::Ok(
+                        Self::SetServoIdReply(response::SetServoIdReply {
+                            new_id: rt::get(&mut field, "new_id")?,
+                        }),
+                    )
                 }
                 "servo_id" => {
-                    rt::Ok(Self::ServoId {
-                        id: rt::get(&mut field, "id")?,
-                    })
+                    rt::Ok(
+                        Self::ServoId(response::ServoId {
+                            id: rt::get(&mut field, "id")?,
+                        }),
+                    )
                 }
                 "current_consumption" => {
-                    rt::Ok(Self::CurrentConsumption {
-                        current: Current::from_raw(
-                            (rt::get::<u8>(&mut field, "current")?) as u16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::CurrentConsumption(response::CurrentConsumption {
+                            current: Current::from_raw(
+                                (rt::get::<u8>(&mut field, "current")?) as u16,
+                            ),
+                        }),
+                    )
                 }
                 "bus_voltages" => {
-                    rt::Ok(Self::BusVoltages {
-                        power_bus_1_voltage: Voltage::from_raw(
-                            rt::get(&mut field, "power_bus_1_voltage")?,
-                        ),
-                        power_bus_2_voltage: Voltage::from_raw(
-                            rt::get(&mut field, "power_bus_2_voltage")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::BusVoltages(response::BusVoltages {
+                            power_bus_1_voltage: Voltage::from_raw(
+                                rt::get(&mut field, "power_bus_1_voltage")?,
+                            ),
+                            power_bus_2_voltage: Voltage::from_raw(
+                                rt::get(&mut field, "power_bus_2_voltage")?,
+                            ),
+                        }),
+                    )
                 }
                 "extended_current_consumption" => {
-                    rt::Ok(Self::ExtendedCurrentConsumption {
-                        current: Current::from_raw(rt::get(&mut field, "current")?),
-                    })
+                    rt::Ok(
+                        Self::ExtendedCurrentConsumption(response::ExtendedCurrentConsumption {
+                            current: Current::from_raw(rt::get(&mut field, "current")?),
+                        }),
+                    )
                 }
                 "temperatures" => {
-                    rt::Ok(Self::Temperatures {
-                        motor_temperature: Temperature::from_raw(
-                            rt::get(&mut field, "motor_temperature")?,
-                        ),
-                        pcb_temperature: Temperature::from_raw(
-                            rt::get(&mut field, "pcb_temperature")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::Temperatures(response::Temperatures {
+                            motor_temperature: Temperature::from_raw(
+                                rt::get(&mut field, "motor_temperature")?,
+                            ),
+                            pcb_temperature: Temperature::from_raw(
+                                rt::get(&mut field, "pcb_temperature")?,
+                            ),
+                        }),
+                    )
                 }
                 "humidity" => {
-                    rt::Ok(Self::Humidity {
-                        humidity: rt::get(&mut field, "humidity")?,
-                    })
+                    rt::Ok(
+                        Self::Humidity(response::Humidity {
+                            humidity: rt::get(&mut field, "humidity")?,
+                        }),
+                    )
                 }
                 "skipped_frames_counter" => {
-                    rt::Ok(Self::SkippedFramesCounter {
-                        host_freshness_counter: rt::get(
-                            &mut field,
-                            "host_freshness_counter",
-                        )?,
-                        dropped_frames: rt::get(&mut field, "dropped_frames")?,
-                    })
+                    rt::Ok(
+                        Self::SkippedFramesCounter(response::SkippedFramesCounter {
+                            host_freshness_counter: rt::get(
+                                &mut field,
+                                "host_freshness_counter",
+                            )?,
+                            dropped_frames: rt::get(&mut field, "dropped_frames")?,
+                        }),
+                    )
                 }
                 "dropped_frames_counter_reset" => {
-                    rt::Ok(Self::DroppedFramesCounterReset {
-                        host_freshness_counter: rt::get(
-                            &mut field,
-                            "host_freshness_counter",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::DroppedFramesCounterReset(response::DroppedFramesCounterReset {
+                            host_freshness_counter: rt::get(
+                                &mut field,
+                                "host_freshness_counter",
+                            )?,
+                        }),
+                    )
                 }
                 "actuator_status_word" => {
-                    rt::Ok(Self::ActuatorStatusWord {
-                        status_bits: ActuatorStatusBits::from_raw(
-                            rt::get(&mut field, "status_bits")?,
-                        ),
-                        status_arg2: rt::get(&mut field, "status_arg2")?,
-                    })
+                    rt::Ok(
+                        Self::ActuatorStatusWord(response::ActuatorStatusWord {
+                            status_bits: ActuatorStatusBits::from_raw(
+                                rt::get(&mut field, "status_bits")?,
+                            ),
+                            status_arg2: rt::get(&mut field, "status_arg2")?,
+                        }),
+                    )
                 }
                 "reset_default_role_and_error_flags_reply" => {
-                    rt::Ok(Self::ResetDefaultRoleAndErrorFlagsReply)
+                    rt::Ok(
+                        Self::ResetDefaultRoleAndErrorFlagsReply(
+                            response::ResetDefaultRoleAndErrorFlagsReply,
+                        ),
+                    )
                 }
                 "set_current_position_as_zero_reply" => {
-                    rt::Ok(Self::SetCurrentPositionAsZeroReply {
-                        zero_offset: Angle::from_raw(
-                            rt::field_int(
-                                "zero_offset",
-                                field("zero_offset"),
-                                -2048,
-                                2047,
-                            )? as i16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetCurrentPositionAsZeroReply(response::SetCurrentPositionAsZeroReply {
+                            zero_offset: Angle::from_raw(
+                                rt::field_int(
+                                    "zero_offset",
+                                    field("zero_offset"),
+                                    -2048,
+                                    2047,
+                                )? as i16,
+                            ),
+                        }),
+                    )
                 }
                 "current_zero_offset" => {
-                    rt::Ok(Self::CurrentZeroOffset {
-                        zero_offset: Angle::from_raw(
-                            rt::field_int(
-                                "zero_offset",
-                                field("zero_offset"),
-                                -2048,
-                                2047,
-                            )? as i16,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::CurrentZeroOffset(response::CurrentZeroOffset {
+                            zero_offset: Angle::from_raw(
+                                rt::field_int(
+                                    "zero_offset",
+                                    field("zero_offset"),
+                                    -2048,
+                                    2047,
+                                )? as i16,
+                            ),
+                        }),
+                    )
                 }
-                "reset_zero_offset_reply" => rt::Ok(Self::ResetZeroOffsetReply),
+                "reset_zero_offset_reply" => {
+                    rt::Ok(Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply))
+                }
                 "electronic_serial_number_character" => {
-                    rt::Ok(Self::ElectronicSerialNumberCharacter {
-                        character: rt::get(&mut field, "character")?,
-                        string_length: rt::get(&mut field, "string_length")?,
-                    })
+                    rt::Ok(
+                        Self::ElectronicSerialNumberCharacter(response::ElectronicSerialNumberCharacter {
+                            character: rt::get(&mut field, "character")?,
+                            string_length: rt::get(&mut field, "string_length")?,
+                        }),
+                    )
                 }
                 "product_description_character" => {
-                    rt::Ok(Self::ProductDescriptionCharacter {
-                        character: rt::get(&mut field, "character")?,
-                        string_length: rt::get(&mut field, "string_length")?,
-                    })
+                    rt::Ok(
+                        Self::ProductDescriptionCharacter(response::ProductDescriptionCharacter {
+                            character: rt::get(&mut field, "character")?,
+                            string_length: rt::get(&mut field, "string_length")?,
+                        }),
+                    )
                 }
                 "software_revision_character" => {
-                    rt::Ok(Self::SoftwareRevisionCharacter {
-                        character: rt::get(&mut field, "character")?,
-                        string_length: rt::get(&mut field, "string_length")?,
-                    })
+                    rt::Ok(
+                        Self::SoftwareRevisionCharacter(response::SoftwareRevisionCharacter {
+                            character: rt::get(&mut field, "character")?,
+                            string_length: rt::get(&mut field, "string_length")?,
+                        }),
+                    )
                 }
                 "hardware_revision_character" => {
-                    rt::Ok(Self::HardwareRevisionCharacter {
-                        character: rt::get(&mut field, "character")?,
-                        string_length: rt::get(&mut field, "string_length")?,
-                    })
+                    rt::Ok(
+                        Self::HardwareRevisionCharacter(response::HardwareRevisionCharacter {
+                            character: rt::get(&mut field, "character")?,
+                            string_length: rt::get(&mut field, "string_length")?,
+                        }),
+                    )
                 }
                 "total_runtime_hours" => {
-                    rt::Ok(Self::TotalRuntimeHours {
-                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                    })
+                    rt::Ok(
+                        Self::TotalRuntimeHours(response::TotalRuntimeHours {
+                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                        }),
+                    )
                 }
                 "total_runtime_min_sec" => {
-                    rt::Ok(Self::TotalRuntimeMinSec {
-                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                    })
+                    rt::Ok(
+                        Self::TotalRuntimeMinSec(response::TotalRuntimeMinSec {
+                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                        }),
+                    )
                 }
                 "load_runtime_0_24_hours" => {
-                    rt::Ok(Self::LoadRuntime024Hours {
-                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime024Hours(response::LoadRuntime024Hours {
+                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                        }),
+                    )
                 }
                 "load_runtime_0_24_min_sec" => {
-                    rt::Ok(Self::LoadRuntime024MinSec {
-                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime024MinSec(response::LoadRuntime024MinSec {
+                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                        }),
+                    )
                 }
                 "load_runtime_0_24_hours_before_reset" => {
-                    rt::Ok(Self::LoadRuntime024HoursBeforeReset {
-                        runtime_hours_before_reset: rt::get(
-                            &mut field,
-                            "runtime_hours_before_reset",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime024HoursBeforeReset(response::LoadRuntime024HoursBeforeReset {
+                            runtime_hours_before_reset: rt::get(
+                                &mut field,
+                                "runtime_hours_before_reset",
+                            )?,
+                        }),
+                    )
                 }
                 "load_runtime_25_49_hours" => {
-                    rt::Ok(Self::LoadRuntime2549Hours {
-                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime2549Hours(response::LoadRuntime2549Hours {
+                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                        }),
+                    )
                 }
                 "load_runtime_25_49_min_sec" => {
-                    rt::Ok(Self::LoadRuntime2549MinSec {
-                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime2549MinSec(response::LoadRuntime2549MinSec {
+                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                        }),
+                    )
                 }
                 "load_runtime_25_49_hours_before_reset" => {
-                    rt::Ok(Self::LoadRuntime2549HoursBeforeReset {
-                        runtime_hours_before_reset: rt::get(
-                            &mut field,
-                            "runtime_hours_before_reset",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime2549HoursBeforeReset(response::LoadRuntime2549HoursBeforeReset {
+                            runtime_hours_before_reset: rt::get(
+                                &mut field,
+                                "runtime_hours_before_reset",
+                            )?,
+                        }),
+                    )
                 }
                 "load_runtime_50_74_hours" => {
-                    rt::Ok(Self::LoadRuntime5074Hours {
-                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime5074Hours(response::LoadRuntime5074Hours {
+                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                        }),
+                    )
                 }
                 "load_runtime_50_74_min_sec" => {
-                    rt::Ok(Self::LoadRuntime5074MinSec {
-                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime5074MinSec(response::LoadRuntime5074MinSec {
+                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                        }),
+                    )
                 }
                 "load_runtime_50_74_hours_before_reset" => {
-                    rt::Ok(Self::LoadRuntime5074HoursBeforeReset {
-                        runtime_hours_before_reset: rt::get(
-                            &mut field,
-                            "runtime_hours_before_reset",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime5074HoursBeforeReset(response::LoadRuntime5074HoursBeforeReset {
+                            runtime_hours_before_reset: rt::get(
+                                &mut field,
+                                "runtime_hours_before_reset",
+                            )?,
+                        }),
+                    )
                 }
                 "load_runtime_75_99_hours" => {
-                    rt::Ok(Self::LoadRuntime7599Hours {
-                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime7599Hours(response::LoadRuntime7599Hours {
+                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                        }),
+                    )
                 }
                 "load_runtime_75_99_min_sec" => {
-                    rt::Ok(Self::LoadRuntime7599MinSec {
-                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime7599MinSec(response::LoadRuntime7599MinSec {
+                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                        }),
+                    )
                 }
                 "load_runtime_75_99_hours_before_reset" => {
-                    rt::Ok(Self::LoadRuntime7599HoursBeforeReset {
-                        runtime_hours_before_reset: rt::get(
-                            &mut field,
-                            "runtime_hours_before_reset",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime7599HoursBeforeReset(response::LoadRuntime7599HoursBeforeReset {
+                            runtime_hours_before_reset: rt::get(
+                                &mut field,
+                                "runtime_hours_before_reset",
+                            )?,
+                        }),
+                    )
                 }
                 "load_runtime_100_hours" => {
-                    rt::Ok(Self::LoadRuntime100Hours {
-                        runtime_hours: rt::get(&mut field, "runtime_hours")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime100Hours(response::LoadRuntime100Hours {
+                            runtime_hours: rt::get(&mut field, "runtime_hours")?,
+                        }),
+                    )
                 }
                 "load_runtime_100_min_sec" => {
-                    rt::Ok(Self::LoadRuntime100MinSec {
-                        runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
-                        runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime100MinSec(response::LoadRuntime100MinSec {
+                            runtime_minutes: rt::get(&mut field, "runtime_minutes")?,
+                            runtime_seconds: rt::get(&mut field, "runtime_seconds")?,
+                        }),
+                    )
                 }
                 "load_runtime_100_hours_before_reset" => {
-                    rt::Ok(Self::LoadRuntime100HoursBeforeReset {
-                        runtime_hours_before_reset: rt::get(
-                            &mut field,
-                            "runtime_hours_before_reset",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::LoadRuntime100HoursBeforeReset(response::LoadRuntime100HoursBeforeReset {
+                            runtime_hours_before_reset: rt::get(
+                                &mut field,
+                                "runtime_hours_before_reset",
+                            )?,
+                        }),
+                    )
                 }
                 "stall_event_counter" => {
-                    rt::Ok(Self::StallEventCounter {
-                        stall_events: rt::get(&mut field, "stall_events")?,
-                    })
+                    rt::Ok(
+                        Self::StallEventCounter(response::StallEventCounter {
+                            stall_events: rt::get(&mut field, "stall_events")?,
+                        }),
+                    )
                 }
                 "stall_event_counter_before_reset" => {
-                    rt::Ok(Self::StallEventCounterBeforeReset {
-                        stall_events_before_reset: rt::get(
-                            &mut field,
-                            "stall_events_before_reset",
-                        )?,
-                    })
+                    rt::Ok(
+                        Self::StallEventCounterBeforeReset(response::StallEventCounterBeforeReset {
+                            stall_events_before_reset: rt::get(
+                                &mut field,
+                                "stall_events_before_reset",
+                            )?,
+                        }),
+                    )
                 }
                 "power_up_cycles" => {
-                    rt::Ok(Self::PowerUpCycles {
-                        power_up_cycles: rt::get(&mut field, "power_up_cycles")?,
-                    })
+                    rt::Ok(
+                        Self::PowerUpCycles(response::PowerUpCycles {
+                            power_up_cycles: rt::get(&mut field, "power_up_cycles")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -3932,19 +5431,256 @@ pub mod sd {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Sd>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `set_point`, code 0x76
-        pub const SET_POINT: MessageDesc = MessageDesc::new("set_point", 0x76, 1, &[6]);
-        /// `read_actual_position`, code 0x69
-        pub const READ_ACTUAL_POSITION: MessageDesc = MessageDesc::new(
-            "read_actual_position",
-            0x69,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Set Point Command (code `0x76`, 6 bytes). Set point: move to the given position. The host increments the 4-bit host data freshness counter with every set point command; the actuator checks it against its configured "Freshness Counter Threshold" (0 = no count may be skipped, 1 = one count may be skipped, ..., >= 15 = check disabled) and on a violation loads its set point from the configured "Fail-Safe Position" (erratum sd-e09).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPoint {
+            /// F = host data freshness counter (incremented by the host each transmission)
+            pub freshness: u8,
+            /// ABC = set point position (12-bit two's complement) \[°\]
+            pub position: super::Angle,
+        }
+        /// §3.2 Read Actual Position Command (code `0x69`, 6 bytes). Readout actual position.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadActualPosition;
+        /// §3.3 Set Velocity (code `0x77`, 6 bytes). Set velocity. Set velocity = velocity \[Deg/sec\] * 10, 16-bit two's complement (footnote 1, erratum sd-e10).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetVelocity {
+            /// Set velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
+            pub set_velocity: super::Velocity,
+        }
+        /// §3.4 Read Actual Velocity (code `0x68`, 6 bytes). Readout actual velocity.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadActualVelocity;
+        /// §3.5 Set Servo ID Command (code `0xAA`, 6 bytes). Set servo ID: give the actuator a new ID (0x01..0x1E), sent twice. Accepts the broadcast ID; the document does not say whether it answers a broadcast (erratum sd-e11).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetServoId {
+            /// New ID: 0x01 ... 0x1E Valid raw range 1..=30.
+            pub new_id: u8,
+        }
+        /// §3.6 Read Servo ID Command (code `0xDA`, 6 bytes). Read servo ID. Accepts the broadcast ID, which is how a host learns the ID of a single actuator on the bus; the document does not say whether it answers a broadcast (erratum sd-e11).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadServoId;
+        /// §3.7 Read Current Consumption (code `0xB0`, 6 bytes). Read current consumption (maximum value 5.1 A; above that use read_extended_current_consumption).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadCurrentConsumption;
+        /// §3.8 Read Bus Voltages (code `0xB1`, 6 bytes). Read bus voltages of power bus 1 (X1) and power bus 2 (X2).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadBusVoltages;
+        /// §3.9 Read Extended Current Consumption (code `0xB2`, 6 bytes). Read extended current consumption; used if the current consumption exceeds 5.1 A.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadExtendedCurrentConsumption;
+        /// §3.10 Read Temperatures (code `0xA0`, 6 bytes). Readout of temperature: motor and PCB temperature.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadTemperatures;
+        /// §3.11 Read Humidity (code `0xA1`, 6 bytes). Readout of humidity.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadHumidity;
+        /// §3.12 Read Skipped Frames Counter (code `0x37`, 6 bytes). Read skipped frames counter: the host freshness counter and the number of dropped (skipped) set point frames. Shares code 0x37 with reset_dropped_frames_counter; argument 2 (0x01) selects the readout (erratum sd-e13).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadSkippedFramesCounter;
+        /// §3.13 Reset of the Dropped Frames Counter (code `0x37`, 6 bytes). Reset the dropped frames counter. Argument 2 = 0x02 selects the reset. (The document's description line "Readout the role (master/slave)" is a copy-paste slip, erratum sd-e14.)
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetDroppedFramesCounter;
+        /// §3.14 Read Actuator Status Word (code `0x40`, 6 bytes). Readout actuator status word. Shares code 0x40 with reset_actuator_status_word; argument 2 (0x02) selects the readout.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadActuatorStatusWord;
+        /// §3.15 Reset Actuator Status Word (code `0x40`, 6 bytes). Reset of actuator status word. Argument 2 (0x52) selects the reset.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetActuatorStatusWord;
+        /// §3.16 Reset Default Role and Reset Error Flags (code `0xB4`, 6 bytes). Reset default role and reset error flags ("Access to special actuator features"). The arguments are the fixed key 0x41 0x53, echoed in the reply (erratum sd-e18).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetDefaultRoleAndErrorFlags;
+        /// §3.17 Set Current Position As Zero (code `0x99`, 6 bytes). Set current position as zero; the reply carries the resulting offset relative to the real zero of the encoder.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetCurrentPositionAsZero;
+        /// §3.18 Read Current Zero Offset (code `0x95`, 6 bytes). Report of zero position: the offset relative to the real zero of the encoder.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadCurrentZeroOffset;
+        /// §3.19 Reset Zero Offset (code `0x98`, 6 bytes). Reset zero offset.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetZeroOffset;
+        /// §3.20 Readout of Electronic Serial Number (code `0xF0`, 6 bytes). Readout of electronic serial number, one character per request (erratum sd-e21).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadElectronicSerialNumber {
+            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
+            pub byte_number: u8,
+        }
+        /// §3.21 Readout of Product Description (code `0xF1`, 6 bytes). Readout of product description, one character per request (erratum sd-e21).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadProductDescription {
+            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
+            pub byte_number: u8,
+        }
+        /// §3.22 Readout of Software Revision Number (code `0xF2`, 6 bytes). Readout of software revision number, one character per request (erratum sd-e21).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadSoftwareRevision {
+            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
+            pub byte_number: u8,
+        }
+        /// §3.23 Readout of Hardware Revision Number (code `0xF3`, 6 bytes). Readout of hardware revision number, one character per request (erratum sd-e21).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadHardwareRevision {
+            /// Number of byte (0x00...0x1F) Valid raw range 0..=31.
+            pub byte_number: u8,
+        }
+        /// §3.24 Readout Total Run-time Counter (code `0xA2`, 6 bytes). Readout total run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadTotalRuntimeHours;
+        /// §3.24 Readout Total Run-time Counter (code `0xA2`, 6 bytes). Readout total run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadTotalRuntimeMinSec;
+        /// §3.25 Readout 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime024Hours;
+        /// §3.25 Readout 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Readout 0%...24% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime024MinSec;
+        /// §3.26 Reset 0%...24% Load Run-time Counter (code `0xA3`, 6 bytes). Reset 0%...24% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetLoadRuntime024;
+        /// §3.27 Readout 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime2549Hours;
+        /// §3.27 Readout 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Readout 25%...49% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime2549MinSec;
+        /// §3.28 Reset 25%...49% Load Run-time Counter (code `0xA4`, 6 bytes). Reset 25%...49% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset. The document's heading says "Readout" (erratum sd-e20); the title here is its description line.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetLoadRuntime2549;
+        /// §3.29 Readout 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime5074Hours;
+        /// §3.29 Readout 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Readout 50%...74% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime5074MinSec;
+        /// §3.30 Reset 50%...74% Load Run-time Counter (code `0xA5`, 6 bytes). Reset 50%...74% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetLoadRuntime5074;
+        /// §3.31 Readout 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime7599Hours;
+        /// §3.31 Readout 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Readout 75%...99% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime7599MinSec;
+        /// §3.32 Reset 75%...99% Load Run-time Counter (code `0xA6`, 6 bytes). Reset 75%...99% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetLoadRuntime7599;
+        /// §3.33 Readout of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Readout of 100% load run-time counter, hours part (arguments 0x00 0x00) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime100Hours;
+        /// §3.33 Readout of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Readout of 100% load run-time counter, minutes and seconds part (arguments 0x00 0x01) (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadLoadRuntime100MinSec;
+        /// §3.34 Reset of 100% Load Run-time Counter (code `0xA7`, 6 bytes). Reset of 100% load run-time counter (arguments 0xAA 0x55); replies with the hours before the reset.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetLoadRuntime100;
+        /// §3.35 Readout Stall Event Counter (code `0xA8`, 6 bytes). Readout stall event counter (arguments 0x00 0x00).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadStallEventCounter;
+        /// §3.36 Reset Stall Event Counter (code `0xA8`, 6 bytes). Reset stall event counter (arguments 0xAA 0x55); replies with the count before the reset.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetStallEventCounter;
+        /// §3.37 Readout of Number of Power Up Cycles (code `0xA9`, 6 bytes). Readout of number of power up cycles.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadPowerUpCycles;
         /// `read_actual_position.arg1`
         pub const READ_ACTUAL_POSITION_ARG1: FieldDesc = FieldDesc::new(
             "read_actual_position",
@@ -3954,20 +5690,6 @@ pub mod sd {
         pub const READ_ACTUAL_POSITION_ARG2: FieldDesc = FieldDesc::new(
             "read_actual_position",
             "arg2",
-        );
-        /// `set_velocity`, code 0x77
-        pub const SET_VELOCITY: MessageDesc = MessageDesc::new(
-            "set_velocity",
-            0x77,
-            1,
-            &[6],
-        );
-        /// `read_actual_velocity`, code 0x68
-        pub const READ_ACTUAL_VELOCITY: MessageDesc = MessageDesc::new(
-            "read_actual_velocity",
-            0x68,
-            1,
-            &[6],
         );
         /// `read_actual_velocity.arg1`
         pub const READ_ACTUAL_VELOCITY_ARG1: FieldDesc = FieldDesc::new(
@@ -3979,13 +5701,6 @@ pub mod sd {
             "read_actual_velocity",
             "arg2",
         );
-        /// `set_servo_id`, code 0xAA
-        pub const SET_SERVO_ID: MessageDesc = MessageDesc::new(
-            "set_servo_id",
-            0xAA,
-            1,
-            &[6],
-        );
         /// `set_servo_id.new_id`
         pub const SET_SERVO_ID_NEW_ID: FieldDesc = FieldDesc::new(
             "set_servo_id",
@@ -3995,13 +5710,6 @@ pub mod sd {
         pub const SET_SERVO_ID_NEW_ID_REPEAT: FieldDesc = FieldDesc::new(
             "set_servo_id",
             "new_id_repeat",
-        );
-        /// `read_servo_id`, code 0xDA
-        pub const READ_SERVO_ID: MessageDesc = MessageDesc::new(
-            "read_servo_id",
-            0xDA,
-            1,
-            &[6],
         );
         /// `read_servo_id.arg1`
         pub const READ_SERVO_ID_ARG1: FieldDesc = FieldDesc::new(
@@ -4013,13 +5721,6 @@ pub mod sd {
             "read_servo_id",
             "arg2",
         );
-        /// `read_current_consumption`, code 0xB0
-        pub const READ_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
-            "read_current_consumption",
-            0xB0,
-            1,
-            &[6],
-        );
         /// `read_current_consumption.arg1`
         pub const READ_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
             "read_current_consumption",
@@ -4029,13 +5730,6 @@ pub mod sd {
         pub const READ_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
             "read_current_consumption",
             "arg2",
-        );
-        /// `read_bus_voltages`, code 0xB1
-        pub const READ_BUS_VOLTAGES: MessageDesc = MessageDesc::new(
-            "read_bus_voltages",
-            0xB1,
-            1,
-            &[6],
         );
         /// `read_bus_voltages.arg1`
         pub const READ_BUS_VOLTAGES_ARG1: FieldDesc = FieldDesc::new(
@@ -4047,13 +5741,6 @@ pub mod sd {
             "read_bus_voltages",
             "arg2",
         );
-        /// `read_extended_current_consumption`, code 0xB2
-        pub const READ_EXTENDED_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
-            "read_extended_current_consumption",
-            0xB2,
-            1,
-            &[6],
-        );
         /// `read_extended_current_consumption.arg1`
         pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG1: FieldDesc = FieldDesc::new(
             "read_extended_current_consumption",
@@ -4063,13 +5750,6 @@ pub mod sd {
         pub const READ_EXTENDED_CURRENT_CONSUMPTION_ARG2: FieldDesc = FieldDesc::new(
             "read_extended_current_consumption",
             "arg2",
-        );
-        /// `read_temperatures`, code 0xA0
-        pub const READ_TEMPERATURES: MessageDesc = MessageDesc::new(
-            "read_temperatures",
-            0xA0,
-            1,
-            &[6],
         );
         /// `read_temperatures.arg1`
         pub const READ_TEMPERATURES_ARG1: FieldDesc = FieldDesc::new(
@@ -4081,13 +5761,6 @@ pub mod sd {
             "read_temperatures",
             "arg2",
         );
-        /// `read_humidity`, code 0xA1
-        pub const READ_HUMIDITY: MessageDesc = MessageDesc::new(
-            "read_humidity",
-            0xA1,
-            1,
-            &[6],
-        );
         /// `read_humidity.arg1`
         pub const READ_HUMIDITY_ARG1: FieldDesc = FieldDesc::new(
             "read_humidity",
@@ -4097,13 +5770,6 @@ pub mod sd {
         pub const READ_HUMIDITY_ARG2: FieldDesc = FieldDesc::new(
             "read_humidity",
             "arg2",
-        );
-        /// `read_skipped_frames_counter`, code 0x37
-        pub const READ_SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
-            "read_skipped_frames_counter",
-            0x37,
-            1,
-            &[6],
         );
         /// `read_skipped_frames_counter.arg1`
         pub const READ_SKIPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
@@ -4115,13 +5781,6 @@ pub mod sd {
             "read_skipped_frames_counter",
             "arg2",
         );
-        /// `reset_dropped_frames_counter`, code 0x37
-        pub const RESET_DROPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
-            "reset_dropped_frames_counter",
-            0x37,
-            1,
-            &[6],
-        );
         /// `reset_dropped_frames_counter.arg1`
         pub const RESET_DROPPED_FRAMES_COUNTER_ARG1: FieldDesc = FieldDesc::new(
             "reset_dropped_frames_counter",
@@ -4131,13 +5790,6 @@ pub mod sd {
         pub const RESET_DROPPED_FRAMES_COUNTER_ARG2: FieldDesc = FieldDesc::new(
             "reset_dropped_frames_counter",
             "arg2",
-        );
-        /// `read_actuator_status_word`, code 0x40
-        pub const READ_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
-            "read_actuator_status_word",
-            0x40,
-            1,
-            &[6],
         );
         /// `read_actuator_status_word.arg1`
         pub const READ_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
@@ -4149,13 +5801,6 @@ pub mod sd {
             "read_actuator_status_word",
             "arg2",
         );
-        /// `reset_actuator_status_word`, code 0x40
-        pub const RESET_ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
-            "reset_actuator_status_word",
-            0x40,
-            1,
-            &[6],
-        );
         /// `reset_actuator_status_word.arg1`
         pub const RESET_ACTUATOR_STATUS_WORD_ARG1: FieldDesc = FieldDesc::new(
             "reset_actuator_status_word",
@@ -4165,13 +5810,6 @@ pub mod sd {
         pub const RESET_ACTUATOR_STATUS_WORD_ARG2: FieldDesc = FieldDesc::new(
             "reset_actuator_status_word",
             "arg2",
-        );
-        /// `reset_default_role_and_error_flags`, code 0xB4
-        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS: MessageDesc = MessageDesc::new(
-            "reset_default_role_and_error_flags",
-            0xB4,
-            1,
-            &[6],
         );
         /// `reset_default_role_and_error_flags.arg1`
         pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_ARG1: FieldDesc = FieldDesc::new(
@@ -4183,13 +5821,6 @@ pub mod sd {
             "reset_default_role_and_error_flags",
             "arg2",
         );
-        /// `set_current_position_as_zero`, code 0x99
-        pub const SET_CURRENT_POSITION_AS_ZERO: MessageDesc = MessageDesc::new(
-            "set_current_position_as_zero",
-            0x99,
-            1,
-            &[6],
-        );
         /// `set_current_position_as_zero.arg1`
         pub const SET_CURRENT_POSITION_AS_ZERO_ARG1: FieldDesc = FieldDesc::new(
             "set_current_position_as_zero",
@@ -4199,13 +5830,6 @@ pub mod sd {
         pub const SET_CURRENT_POSITION_AS_ZERO_ARG2: FieldDesc = FieldDesc::new(
             "set_current_position_as_zero",
             "arg2",
-        );
-        /// `read_current_zero_offset`, code 0x95
-        pub const READ_CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
-            "read_current_zero_offset",
-            0x95,
-            1,
-            &[6],
         );
         /// `read_current_zero_offset.arg1`
         pub const READ_CURRENT_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
@@ -4217,13 +5841,6 @@ pub mod sd {
             "read_current_zero_offset",
             "arg2",
         );
-        /// `reset_zero_offset`, code 0x98
-        pub const RESET_ZERO_OFFSET: MessageDesc = MessageDesc::new(
-            "reset_zero_offset",
-            0x98,
-            1,
-            &[6],
-        );
         /// `reset_zero_offset.arg1`
         pub const RESET_ZERO_OFFSET_ARG1: FieldDesc = FieldDesc::new(
             "reset_zero_offset",
@@ -4233,13 +5850,6 @@ pub mod sd {
         pub const RESET_ZERO_OFFSET_ARG2: FieldDesc = FieldDesc::new(
             "reset_zero_offset",
             "arg2",
-        );
-        /// `read_electronic_serial_number`, code 0xF0
-        pub const READ_ELECTRONIC_SERIAL_NUMBER: MessageDesc = MessageDesc::new(
-            "read_electronic_serial_number",
-            0xF0,
-            1,
-            &[6],
         );
         /// `read_electronic_serial_number.arg1`
         pub const READ_ELECTRONIC_SERIAL_NUMBER_ARG1: FieldDesc = FieldDesc::new(
@@ -4251,13 +5861,6 @@ pub mod sd {
             "read_electronic_serial_number",
             "byte_number",
         );
-        /// `read_product_description`, code 0xF1
-        pub const READ_PRODUCT_DESCRIPTION: MessageDesc = MessageDesc::new(
-            "read_product_description",
-            0xF1,
-            1,
-            &[6],
-        );
         /// `read_product_description.arg1`
         pub const READ_PRODUCT_DESCRIPTION_ARG1: FieldDesc = FieldDesc::new(
             "read_product_description",
@@ -4267,13 +5870,6 @@ pub mod sd {
         pub const READ_PRODUCT_DESCRIPTION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
             "read_product_description",
             "byte_number",
-        );
-        /// `read_software_revision`, code 0xF2
-        pub const READ_SOFTWARE_REVISION: MessageDesc = MessageDesc::new(
-            "read_software_revision",
-            0xF2,
-            1,
-            &[6],
         );
         /// `read_software_revision.arg1`
         pub const READ_SOFTWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
@@ -4285,13 +5881,6 @@ pub mod sd {
             "read_software_revision",
             "byte_number",
         );
-        /// `read_hardware_revision`, code 0xF3
-        pub const READ_HARDWARE_REVISION: MessageDesc = MessageDesc::new(
-            "read_hardware_revision",
-            0xF3,
-            1,
-            &[6],
-        );
         /// `read_hardware_revision.arg1`
         pub const READ_HARDWARE_REVISION_ARG1: FieldDesc = FieldDesc::new(
             "read_hardware_revision",
@@ -4301,13 +5890,6 @@ pub mod sd {
         pub const READ_HARDWARE_REVISION_BYTE_NUMBER: FieldDesc = FieldDesc::new(
             "read_hardware_revision",
             "byte_number",
-        );
-        /// `read_total_runtime_hours`, code 0xA2
-        pub const READ_TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
-            "read_total_runtime_hours",
-            0xA2,
-            1,
-            &[6],
         );
         /// `read_total_runtime_hours.arg1`
         pub const READ_TOTAL_RUNTIME_HOURS_ARG1: FieldDesc = FieldDesc::new(
@@ -4319,13 +5901,6 @@ pub mod sd {
             "read_total_runtime_hours",
             "arg2",
         );
-        /// `read_total_runtime_min_sec`, code 0xA2
-        pub const READ_TOTAL_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
-            "read_total_runtime_min_sec",
-            0xA2,
-            1,
-            &[6],
-        );
         /// `read_total_runtime_min_sec.arg1`
         pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
             "read_total_runtime_min_sec",
@@ -4335,13 +5910,6 @@ pub mod sd {
         pub const READ_TOTAL_RUNTIME_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
             "read_total_runtime_min_sec",
             "arg2",
-        );
-        /// `read_load_runtime_0_24_hours`, code 0xA3
-        pub const READ_LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
-            "read_load_runtime_0_24_hours",
-            0xA3,
-            1,
-            &[6],
         );
         /// `read_load_runtime_0_24_hours.arg1`
         pub const READ_LOAD_RUNTIME_0_24_HOURS_ARG1: FieldDesc = FieldDesc::new(
@@ -4353,13 +5921,6 @@ pub mod sd {
             "read_load_runtime_0_24_hours",
             "arg2",
         );
-        /// `read_load_runtime_0_24_min_sec`, code 0xA3
-        pub const READ_LOAD_RUNTIME_0_24_MIN_SEC: MessageDesc = MessageDesc::new(
-            "read_load_runtime_0_24_min_sec",
-            0xA3,
-            1,
-            &[6],
-        );
         /// `read_load_runtime_0_24_min_sec.arg1`
         pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
             "read_load_runtime_0_24_min_sec",
@@ -4369,13 +5930,6 @@ pub mod sd {
         pub const READ_LOAD_RUNTIME_0_24_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
             "read_load_runtime_0_24_min_sec",
             "arg2",
-        );
-        /// `reset_load_runtime_0_24`, code 0xA3
-        pub const RESET_LOAD_RUNTIME_0_24: MessageDesc = MessageDesc::new(
-            "reset_load_runtime_0_24",
-            0xA3,
-            1,
-            &[6],
         );
         /// `reset_load_runtime_0_24.arg1`
         pub const RESET_LOAD_RUNTIME_0_24_ARG1: FieldDesc = FieldDesc::new(
@@ -4387,13 +5941,6 @@ pub mod sd {
             "reset_load_runtime_0_24",
             "arg2",
         );
-        /// `read_load_runtime_25_49_hours`, code 0xA4
-        pub const READ_LOAD_RUNTIME_25_49_HOURS: MessageDesc = MessageDesc::new(
-            "read_load_runtime_25_49_hours",
-            0xA4,
-            1,
-            &[6],
-        );
         /// `read_load_runtime_25_49_hours.arg1`
         pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG1: FieldDesc = FieldDesc::new(
             "read_load_runtime_25_49_hours",
@@ -4403,13 +5950,6 @@ pub mod sd {
         pub const READ_LOAD_RUNTIME_25_49_HOURS_ARG2: FieldDesc = FieldDesc::new(
             "read_load_runtime_25_49_hours",
             "arg2",
-        );
-        /// `read_load_runtime_25_49_min_sec`, code 0xA4
-        pub const READ_LOAD_RUNTIME_25_49_MIN_SEC: MessageDesc = MessageDesc::new(
-            "read_load_runtime_25_49_min_sec",
-            0xA4,
-            1,
-            &[6],
         );
         /// `read_load_runtime_25_49_min_sec.arg1`
         pub const READ_LOAD_RUNTIME_25_49_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
@@ -4421,13 +5961,6 @@ pub mod sd {
             "read_load_runtime_25_49_min_sec",
             "arg2",
         );
-        /// `reset_load_runtime_25_49`, code 0xA4
-        pub const RESET_LOAD_RUNTIME_25_49: MessageDesc = MessageDesc::new(
-            "reset_load_runtime_25_49",
-            0xA4,
-            1,
-            &[6],
-        );
         /// `reset_load_runtime_25_49.arg1`
         pub const RESET_LOAD_RUNTIME_25_49_ARG1: FieldDesc = FieldDesc::new(
             "reset_load_runtime_25_49",
@@ -4437,13 +5970,6 @@ pub mod sd {
         pub const RESET_LOAD_RUNTIME_25_49_ARG2: FieldDesc = FieldDesc::new(
             "reset_load_runtime_25_49",
             "arg2",
-        );
-        /// `read_load_runtime_50_74_hours`, code 0xA5
-        pub const READ_LOAD_RUNTIME_50_74_HOURS: MessageDesc = MessageDesc::new(
-            "read_load_runtime_50_74_hours",
-            0xA5,
-            1,
-            &[6],
         );
         /// `read_load_runtime_50_74_hours.arg1`
         pub const READ_LOAD_RUNTIME_50_74_HOURS_ARG1: FieldDesc = FieldDesc::new(
@@ -4455,13 +5981,6 @@ pub mod sd {
             "read_load_runtime_50_74_hours",
             "arg2",
         );
-        /// `read_load_runtime_50_74_min_sec`, code 0xA5
-        pub const READ_LOAD_RUNTIME_50_74_MIN_SEC: MessageDesc = MessageDesc::new(
-            "read_load_runtime_50_74_min_sec",
-            0xA5,
-            1,
-            &[6],
-        );
         /// `read_load_runtime_50_74_min_sec.arg1`
         pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
             "read_load_runtime_50_74_min_sec",
@@ -4471,13 +5990,6 @@ pub mod sd {
         pub const READ_LOAD_RUNTIME_50_74_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
             "read_load_runtime_50_74_min_sec",
             "arg2",
-        );
-        /// `reset_load_runtime_50_74`, code 0xA5
-        pub const RESET_LOAD_RUNTIME_50_74: MessageDesc = MessageDesc::new(
-            "reset_load_runtime_50_74",
-            0xA5,
-            1,
-            &[6],
         );
         /// `reset_load_runtime_50_74.arg1`
         pub const RESET_LOAD_RUNTIME_50_74_ARG1: FieldDesc = FieldDesc::new(
@@ -4489,13 +6001,6 @@ pub mod sd {
             "reset_load_runtime_50_74",
             "arg2",
         );
-        /// `read_load_runtime_75_99_hours`, code 0xA6
-        pub const READ_LOAD_RUNTIME_75_99_HOURS: MessageDesc = MessageDesc::new(
-            "read_load_runtime_75_99_hours",
-            0xA6,
-            1,
-            &[6],
-        );
         /// `read_load_runtime_75_99_hours.arg1`
         pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG1: FieldDesc = FieldDesc::new(
             "read_load_runtime_75_99_hours",
@@ -4505,13 +6010,6 @@ pub mod sd {
         pub const READ_LOAD_RUNTIME_75_99_HOURS_ARG2: FieldDesc = FieldDesc::new(
             "read_load_runtime_75_99_hours",
             "arg2",
-        );
-        /// `read_load_runtime_75_99_min_sec`, code 0xA6
-        pub const READ_LOAD_RUNTIME_75_99_MIN_SEC: MessageDesc = MessageDesc::new(
-            "read_load_runtime_75_99_min_sec",
-            0xA6,
-            1,
-            &[6],
         );
         /// `read_load_runtime_75_99_min_sec.arg1`
         pub const READ_LOAD_RUNTIME_75_99_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
@@ -4523,13 +6021,6 @@ pub mod sd {
             "read_load_runtime_75_99_min_sec",
             "arg2",
         );
-        /// `reset_load_runtime_75_99`, code 0xA6
-        pub const RESET_LOAD_RUNTIME_75_99: MessageDesc = MessageDesc::new(
-            "reset_load_runtime_75_99",
-            0xA6,
-            1,
-            &[6],
-        );
         /// `reset_load_runtime_75_99.arg1`
         pub const RESET_LOAD_RUNTIME_75_99_ARG1: FieldDesc = FieldDesc::new(
             "reset_load_runtime_75_99",
@@ -4539,13 +6030,6 @@ pub mod sd {
         pub const RESET_LOAD_RUNTIME_75_99_ARG2: FieldDesc = FieldDesc::new(
             "reset_load_runtime_75_99",
             "arg2",
-        );
-        /// `read_load_runtime_100_hours`, code 0xA7
-        pub const READ_LOAD_RUNTIME_100_HOURS: MessageDesc = MessageDesc::new(
-            "read_load_runtime_100_hours",
-            0xA7,
-            1,
-            &[6],
         );
         /// `read_load_runtime_100_hours.arg1`
         pub const READ_LOAD_RUNTIME_100_HOURS_ARG1: FieldDesc = FieldDesc::new(
@@ -4557,13 +6041,6 @@ pub mod sd {
             "read_load_runtime_100_hours",
             "arg2",
         );
-        /// `read_load_runtime_100_min_sec`, code 0xA7
-        pub const READ_LOAD_RUNTIME_100_MIN_SEC: MessageDesc = MessageDesc::new(
-            "read_load_runtime_100_min_sec",
-            0xA7,
-            1,
-            &[6],
-        );
         /// `read_load_runtime_100_min_sec.arg1`
         pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG1: FieldDesc = FieldDesc::new(
             "read_load_runtime_100_min_sec",
@@ -4573,13 +6050,6 @@ pub mod sd {
         pub const READ_LOAD_RUNTIME_100_MIN_SEC_ARG2: FieldDesc = FieldDesc::new(
             "read_load_runtime_100_min_sec",
             "arg2",
-        );
-        /// `reset_load_runtime_100`, code 0xA7
-        pub const RESET_LOAD_RUNTIME_100: MessageDesc = MessageDesc::new(
-            "reset_load_runtime_100",
-            0xA7,
-            1,
-            &[6],
         );
         /// `reset_load_runtime_100.arg1`
         pub const RESET_LOAD_RUNTIME_100_ARG1: FieldDesc = FieldDesc::new(
@@ -4591,13 +6061,6 @@ pub mod sd {
             "reset_load_runtime_100",
             "arg2",
         );
-        /// `read_stall_event_counter`, code 0xA8
-        pub const READ_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
-            "read_stall_event_counter",
-            0xA8,
-            1,
-            &[6],
-        );
         /// `read_stall_event_counter.arg1`
         pub const READ_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
             "read_stall_event_counter",
@@ -4608,13 +6071,6 @@ pub mod sd {
             "read_stall_event_counter",
             "arg2",
         );
-        /// `reset_stall_event_counter`, code 0xA8
-        pub const RESET_STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
-            "reset_stall_event_counter",
-            0xA8,
-            1,
-            &[6],
-        );
         /// `reset_stall_event_counter.arg1`
         pub const RESET_STALL_EVENT_COUNTER_ARG1: FieldDesc = FieldDesc::new(
             "reset_stall_event_counter",
@@ -4624,13 +6080,6 @@ pub mod sd {
         pub const RESET_STALL_EVENT_COUNTER_ARG2: FieldDesc = FieldDesc::new(
             "reset_stall_event_counter",
             "arg2",
-        );
-        /// `read_power_up_cycles`, code 0xA9
-        pub const READ_POWER_UP_CYCLES: MessageDesc = MessageDesc::new(
-            "read_power_up_cycles",
-            0xA9,
-            1,
-            &[6],
         );
         /// `read_power_up_cycles.arg1`
         pub const READ_POWER_UP_CYCLES_ARG1: FieldDesc = FieldDesc::new(
@@ -4643,48 +6092,413 @@ pub mod sd {
             "arg2",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `set_point_reply`, code 0x56
-        pub const SET_POINT_REPLY: MessageDesc = MessageDesc::new(
-            "set_point_reply",
-            0x56,
-            1,
-            &[6],
-        );
-        /// `actual_position`, code 0x49
-        pub const ACTUAL_POSITION: MessageDesc = MessageDesc::new(
-            "actual_position",
-            0x49,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Set point response: actuator data freshness counter and actual position (code `0x56`, 6 bytes). Reply to set_point. The actuator data freshness counter is a 4-bit counter decremented by the servo for each reply (erratum sd-e09); the actual position has the set point's format.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPointReply {
+            /// F = actuator data freshness counter (decremented by the servo for each reply)
+            pub freshness: u8,
+            /// ABC = actual position (12-bit two's complement) \[°\]
+            pub position: super::Angle,
+        }
+        /// §3.2 Actual position (code `0x49`, 6 bytes). Actual position, 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the 12-bit two's-complement position.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ActualPosition {
+            /// ABC = actual position (12-bit two's complement) \[°\]
+            pub position: super::Angle,
+        }
+        /// §3.3 Set velocity response: actual velocity (code `0x57`, 6 bytes). Reply to set_velocity: actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetVelocityReply {
+            /// Actual velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
+            pub actual_velocity: super::Velocity,
+        }
+        /// §3.4 Actual velocity (code `0x48`, 6 bytes). Actual velocity = (Arg. 1 * 256 + Arg. 2) * 0.1 \[Deg/sec\], 16-bit two's complement (erratum sd-e10).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ActualVelocity {
+            /// Actual velocity, high byte first (footnote 1: 16-bit two's complement). \[°/s\]
+            pub actual_velocity: super::Velocity,
+        }
+        /// §3.5 Set servo ID response: new ID (code `0x55`, 6 bytes). Reply to set_servo_id: the new ID, sent twice (erratum sd-e04 on the ID in byte 2).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetServoIdReply {
+            /// New ID: 0x01 ... 0x1E Valid raw range 1..=30.
+            pub new_id: u8,
+        }
+        /// §3.6 Servo ID (code `0x6D`, 6 bytes). The actuator's ID, sent twice.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ServoId {
+            /// ID: 0x01 ... 0x1E Valid raw range 1..=30.
+            pub id: u8,
+        }
+        /// §3.7 Current consumption (code `0x30`, 6 bytes). Current consumption = Arg. 1 * 0.02 \[A\], sent twice; maximum current value 5.1 A (raw 0xFF).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct CurrentConsumption {
+            /// Current consumption = Arg. 1 * 0.02 \[A\] \[A\]
+            pub current: super::Current,
+        }
+        /// §3.8 Bus voltages (code `0x31`, 6 bytes). Voltages of power bus 1 (X1) and power bus 2 (X2).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct BusVoltages {
+            /// Power Bus 1 (X1) Voltage = Arg. 1 * 0.2 \[V\] \[V\]
+            pub power_bus_1_voltage: super::Voltage,
+            /// Power Bus 2 (X2) Voltage = Arg. 2 * 0.2 \[V\] \[V\]
+            pub power_bus_2_voltage: super::Voltage,
+        }
+        /// §3.9 Extended current consumption (code `0x32`, 6 bytes). Current consumption = (Arg. 1 * 256 + Arg. 2) * 0.02 \[A\].
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ExtendedCurrentConsumption {
+            /// Current consumption, high byte first \[A\]
+            pub current: super::Current,
+        }
+        /// §3.10 Temperatures (code `0x20`, 6 bytes). Motor and PCB temperature, \[°C\] = Arg - 50. Valid values are -49 to +204 °C (raw 0x01..0xFE); 0x00 (-50 °C) means no sensor available or below -49 °C, 0xFF (205 °C) means the sensor is defective (erratum sd-e22).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Temperatures {
+            /// Motor temperature \[°C\] = Arg. 1 - 50 \[°C\] Valid raw range 1..=254. Raw 0 = no_sensor (-50 °C: no sensor available (or the measured temperature is below -49 °C)). Raw 255 = defective (205 °C: the sensor is defective).
+            pub motor_temperature: super::Temperature,
+            /// PCB temperature \[°C\] = Arg. 2 - 50 \[°C\] Valid raw range 1..=254. Raw 0 = no_sensor (-50 °C: no sensor available (or the measured temperature is below -49 °C)). Raw 255 = defective (205 °C: the sensor is defective).
+            pub pcb_temperature: super::Temperature,
+        }
+        /// §3.11 Humidity (code `0x21`, 6 bytes). Humidity reading 1...100, sent twice; 0 means no sensor available. The document's table shows Arg. 1 as a fixed 0x00 (erratum sd-e12).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Humidity {
+            /// Humidity reading, valid 1...100 \[%\] Valid raw range 1..=100. Raw 0 = no_sensor (no sensor available).
+            pub humidity: u8,
+        }
+        /// §3.12 Skipped frames counter (code `0x38`, 6 bytes). Reply to read_skipped_frames_counter. Same code and length as the reply to reset_dropped_frames_counter; only the request tells them apart (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SkippedFramesCounter {
+            /// Value of host freshness counter (the 4-bit counter of §3.1)
+            pub host_freshness_counter: u8,
+            /// Number of dropped frames
+            pub dropped_frames: u8,
+        }
+        /// §3.13 Dropped frames counter reset (code `0x38`, 6 bytes). Reply to reset_dropped_frames_counter: the host freshness counter and 0x00. Same code and length as skipped_frames_counter (a read with no dropped frames looks identical); only the request tells them apart.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct DroppedFramesCounterReset {
+            /// Value of host freshness counter
+            pub host_freshness_counter: u8,
+        }
+        /// §3.14 Actuator status word (code `0x41`, 6 bytes). Actuator status word, reply to both read_actuator_status_word and reset_actuator_status_word. Argument 1 holds the status bits; argument 2 is marked "See below" but never described (erratum sd-e15).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ActuatorStatusWord {
+            /// Resp. Arg1 bits 0..6; bit 7 is 0
+            pub status_bits: super::ActuatorStatusBits,
+            /// Argument 2: not described by the document; kept raw
+            pub status_arg2: u8,
+        }
+        /// §3.16 Reset default role and error flags response (code `0x5A`, 6 bytes). Reply to reset_default_role_and_error_flags: echoes 0x41 0x53.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetDefaultRoleAndErrorFlagsReply;
+        /// §3.17 Set current position as zero response: zero offset (code `0x4C`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetCurrentPositionAsZeroReply {
+            /// ABC = offset relative to the real zero of the encoder (12-bit two's complement; unit of §3.1 positions assumed, erratum sd-e23) \[°\]
+            pub zero_offset: super::Angle,
+        }
+        /// §3.18 Current zero offset (code `0x65`, 6 bytes). 0000AAAABBBBCCCC (bit 15...0): 4 zero bits, then the offset relative to the real zero of the encoder (12-bit two's complement).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct CurrentZeroOffset {
+            /// ABC = offset relative to the real zero of the encoder (12-bit two's complement; unit of §3.1 positions assumed, erratum sd-e23) \[°\]
+            pub zero_offset: super::Angle,
+        }
+        /// §3.19 Reset zero offset response (code `0x64`, 6 bytes). Reply to reset_zero_offset: 0x00 0x00.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ResetZeroOffsetReply;
+        /// §3.20 Character of serial number string (code `0x10`, 6 bytes). One character of the electronic serial number string and the string's length.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ElectronicSerialNumberCharacter {
+            /// Character of serial number string
+            pub character: u8,
+            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
+            pub string_length: u8,
+        }
+        /// §3.21 Character of product description string (code `0x11`, 6 bytes). One character of the product description string and the string's length.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ProductDescriptionCharacter {
+            /// Character of product description string
+            pub character: u8,
+            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
+            pub string_length: u8,
+        }
+        /// §3.22 Character of software revision number string (code `0x12`, 6 bytes). One character of the software revision number string and the string's length.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SoftwareRevisionCharacter {
+            /// Character of software revision number string
+            pub character: u8,
+            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
+            pub string_length: u8,
+        }
+        /// §3.23 Character of hardware revision number string (code `0x13`, 6 bytes). One character of the hardware revision number string and the string's length.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct HardwareRevisionCharacter {
+            /// Character of hardware revision number string
+            pub character: u8,
+            /// Length of the string (0x00...0x20) Valid raw range 0..=32.
+            pub string_length: u8,
+        }
+        /// §3.24 Total run-time counter \[hours\] (code `0x22`, 6 bytes). Total run-time counter, hours. Same code and length as total_runtime_min_sec (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct TotalRuntimeHours {
+            /// Total run-time counter \[hours\], high byte first \[h\]
+            pub runtime_hours: u16,
+        }
+        /// §3.24 Total run-time counter \[min.\] \[sec.\] (code `0x22`, 6 bytes). Total run-time counter, minutes and seconds. Same code and length as total_runtime_hours (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct TotalRuntimeMinSec {
+            /// Total run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
+            pub runtime_minutes: u8,
+            /// Total run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
+            pub runtime_seconds: u8,
+        }
+        /// §3.25 0%...24% load run-time counter \[hours\] (code `0x23`, 6 bytes). 0%...24% load run-time counter, hours. Same code and length as the other 0x23 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime024Hours {
+            /// 0%...24% load run-time counter \[hours\], high byte first \[h\]
+            pub runtime_hours: u16,
+        }
+        /// §3.25 0%...24% load run-time counter \[min.\] \[sec.\] (code `0x23`, 6 bytes). 0%...24% load run-time counter, minutes and seconds. Same code and length as the other 0x23 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime024MinSec {
+            /// 0%...24% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
+            pub runtime_minutes: u8,
+            /// 0%...24% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
+            pub runtime_seconds: u8,
+        }
+        /// §3.26 0%...24% load run-time counter \[h\] (before reset) (code `0x23`, 6 bytes). Reply to reset_load_runtime_0_24: the hours before the reset. Same code and length as the other 0x23 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime024HoursBeforeReset {
+            /// 0%...24% load run-time counter \[h\] (before reset), high byte first \[h\]
+            pub runtime_hours_before_reset: u16,
+        }
+        /// §3.27 25%...49% load run-time counter \[hours\] (code `0x24`, 6 bytes). 25%...49% load run-time counter, hours. Same code and length as the other 0x24 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime2549Hours {
+            /// 25%...49% load run-time counter \[hours\], high byte first \[h\]
+            pub runtime_hours: u16,
+        }
+        /// §3.27 25%...49% load run-time counter \[min.\] \[sec.\] (code `0x24`, 6 bytes). 25%...49% load run-time counter, minutes and seconds. Same code and length as the other 0x24 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime2549MinSec {
+            /// 25%...49% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
+            pub runtime_minutes: u8,
+            /// 25%...49% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
+            pub runtime_seconds: u8,
+        }
+        /// §3.28 25%...49% load run-time counter \[h\] (before reset) (code `0x24`, 6 bytes). Reply to reset_load_runtime_25_49: the hours before the reset. Same code and length as the other 0x24 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime2549HoursBeforeReset {
+            /// 25%...49% load run-time counter \[h\] (before reset), high byte first \[h\]
+            pub runtime_hours_before_reset: u16,
+        }
+        /// §3.29 50%...74% load run-time counter \[hours\] (code `0x25`, 6 bytes). 50%...74% load run-time counter, hours. Same code and length as the other 0x25 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime5074Hours {
+            /// 50%...74% load run-time counter \[hours\], high byte first \[h\]
+            pub runtime_hours: u16,
+        }
+        /// §3.29 50%...74% load run-time counter \[min.\] \[sec.\] (code `0x25`, 6 bytes). 50%...74% load run-time counter, minutes and seconds. Same code and length as the other 0x25 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime5074MinSec {
+            /// 50%...74% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
+            pub runtime_minutes: u8,
+            /// 50%...74% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
+            pub runtime_seconds: u8,
+        }
+        /// §3.30 50%...74% load run-time counter \[h\] (before reset) (code `0x25`, 6 bytes). Reply to reset_load_runtime_50_74: the hours before the reset. Same code and length as the other 0x25 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime5074HoursBeforeReset {
+            /// 50%...74% load run-time counter \[h\] (before reset), high byte first \[h\]
+            pub runtime_hours_before_reset: u16,
+        }
+        /// §3.31 75%...99% load run-time counter \[hours\] (code `0x26`, 6 bytes). 75%...99% load run-time counter, hours. Same code and length as the other 0x26 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime7599Hours {
+            /// 75%...99% load run-time counter \[hours\], high byte first \[h\]
+            pub runtime_hours: u16,
+        }
+        /// §3.31 75%...99% load run-time counter \[min.\] \[sec.\] (code `0x26`, 6 bytes). 75%...99% load run-time counter, minutes and seconds. Same code and length as the other 0x26 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime7599MinSec {
+            /// 75%...99% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
+            pub runtime_minutes: u8,
+            /// 75%...99% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
+            pub runtime_seconds: u8,
+        }
+        /// §3.32 75%...99% load run-time counter \[h\] (before reset) (code `0x26`, 6 bytes). Reply to reset_load_runtime_75_99: the hours before the reset. Same code and length as the other 0x26 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime7599HoursBeforeReset {
+            /// 75%...99% load run-time counter \[h\] (before reset), high byte first \[h\]
+            pub runtime_hours_before_reset: u16,
+        }
+        /// §3.33 100% load run-time counter \[hours\] (code `0x27`, 6 bytes). 100% load run-time counter, hours. Same code and length as the other 0x27 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime100Hours {
+            /// 100% load run-time counter \[hours\], high byte first \[h\]
+            pub runtime_hours: u16,
+        }
+        /// §3.33 100% load run-time counter \[min.\] \[sec.\] (code `0x27`, 6 bytes). 100% load run-time counter, minutes and seconds. Same code and length as the other 0x27 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime100MinSec {
+            /// 100% load run-time counter \[min.\] (0x00-0x3B) \[min\] Valid raw range 0..=59.
+            pub runtime_minutes: u8,
+            /// 100% load run-time counter \[sec.\] (0x00-0x3B) \[s\] Valid raw range 0..=59.
+            pub runtime_seconds: u8,
+        }
+        /// §3.34 100% load run-time counter \[h\] (before reset) (code `0x27`, 6 bytes). Reply to reset_load_runtime_100: the hours before the reset. Same code and length as the other 0x27 replies (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LoadRuntime100HoursBeforeReset {
+            /// 100% load run-time counter \[h\] (before reset), high byte first \[h\]
+            pub runtime_hours_before_reset: u16,
+        }
+        /// §3.35 Stall event counter (code `0x28`, 6 bytes). Stall event counter. Same code and length as stall_event_counter_before_reset (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct StallEventCounter {
+            /// Stall event counter, high byte first
+            pub stall_events: u16,
+        }
+        /// §3.36 Stall event counter (before reset) (code `0x28`, 6 bytes). Reply to reset_stall_event_counter: the count before the reset. Same code and length as stall_event_counter (erratum sd-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct StallEventCounterBeforeReset {
+            /// Stall event counter (before reset), high byte first
+            pub stall_events_before_reset: u16,
+        }
+        /// §3.37 Number of power up cycles (code `0x29`, 6 bytes). Number of power up cycles.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct PowerUpCycles {
+            /// Number of power up cycles, high byte first
+            pub power_up_cycles: u16,
+        }
         /// `actual_position.zero`
         pub const ACTUAL_POSITION_ZERO: FieldDesc = FieldDesc::new(
             "actual_position",
             "zero",
-        );
-        /// `set_velocity_reply`, code 0x57
-        pub const SET_VELOCITY_REPLY: MessageDesc = MessageDesc::new(
-            "set_velocity_reply",
-            0x57,
-            1,
-            &[6],
-        );
-        /// `actual_velocity`, code 0x48
-        pub const ACTUAL_VELOCITY: MessageDesc = MessageDesc::new(
-            "actual_velocity",
-            0x48,
-            1,
-            &[6],
-        );
-        /// `set_servo_id_reply`, code 0x55
-        pub const SET_SERVO_ID_REPLY: MessageDesc = MessageDesc::new(
-            "set_servo_id_reply",
-            0x55,
-            1,
-            &[6],
         );
         /// `set_servo_id_reply.new_id`
         pub const SET_SERVO_ID_REPLY_NEW_ID: FieldDesc = FieldDesc::new(
@@ -4696,8 +6510,6 @@ pub mod sd {
             "set_servo_id_reply",
             "new_id_repeat",
         );
-        /// `servo_id`, code 0x6D
-        pub const SERVO_ID: MessageDesc = MessageDesc::new("servo_id", 0x6D, 1, &[6]);
         /// `servo_id.id`
         pub const SERVO_ID_ID: FieldDesc = FieldDesc::new("servo_id", "id");
         /// `servo_id.id_repeat`
@@ -4705,41 +6517,11 @@ pub mod sd {
             "servo_id",
             "id_repeat",
         );
-        /// `current_consumption`, code 0x30
-        pub const CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
-            "current_consumption",
-            0x30,
-            1,
-            &[6],
-        );
         /// `current_consumption.current_repeat`
         pub const CURRENT_CONSUMPTION_CURRENT_REPEAT: FieldDesc = FieldDesc::new(
             "current_consumption",
             "current_repeat",
         );
-        /// `bus_voltages`, code 0x31
-        pub const BUS_VOLTAGES: MessageDesc = MessageDesc::new(
-            "bus_voltages",
-            0x31,
-            1,
-            &[6],
-        );
-        /// `extended_current_consumption`, code 0x32
-        pub const EXTENDED_CURRENT_CONSUMPTION: MessageDesc = MessageDesc::new(
-            "extended_current_consumption",
-            0x32,
-            1,
-            &[6],
-        );
-        /// `temperatures`, code 0x20
-        pub const TEMPERATURES: MessageDesc = MessageDesc::new(
-            "temperatures",
-            0x20,
-            1,
-            &[6],
-        );
-        /// `humidity`, code 0x21
-        pub const HUMIDITY: MessageDesc = MessageDesc::new("humidity", 0x21, 1, &[6]);
         /// `humidity.humidity`
         pub const HUMIDITY_HUMIDITY: FieldDesc = FieldDesc::new("humidity", "humidity");
         /// `humidity.humidity_repeat`
@@ -4747,38 +6529,10 @@ pub mod sd {
             "humidity",
             "humidity_repeat",
         );
-        /// `skipped_frames_counter`, code 0x38
-        pub const SKIPPED_FRAMES_COUNTER: MessageDesc = MessageDesc::new(
-            "skipped_frames_counter",
-            0x38,
-            1,
-            &[6],
-        );
-        /// `dropped_frames_counter_reset`, code 0x38
-        pub const DROPPED_FRAMES_COUNTER_RESET: MessageDesc = MessageDesc::new(
-            "dropped_frames_counter_reset",
-            0x38,
-            1,
-            &[6],
-        );
         /// `dropped_frames_counter_reset.arg2`
         pub const DROPPED_FRAMES_COUNTER_RESET_ARG2: FieldDesc = FieldDesc::new(
             "dropped_frames_counter_reset",
             "arg2",
-        );
-        /// `actuator_status_word`, code 0x41
-        pub const ACTUATOR_STATUS_WORD: MessageDesc = MessageDesc::new(
-            "actuator_status_word",
-            0x41,
-            1,
-            &[6],
-        );
-        /// `reset_default_role_and_error_flags_reply`, code 0x5A
-        pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY: MessageDesc = MessageDesc::new(
-            "reset_default_role_and_error_flags_reply",
-            0x5A,
-            1,
-            &[6],
         );
         /// `reset_default_role_and_error_flags_reply.arg1`
         pub const RESET_DEFAULT_ROLE_AND_ERROR_FLAGS_REPLY_ARG1: FieldDesc = FieldDesc::new(
@@ -4790,36 +6544,15 @@ pub mod sd {
             "reset_default_role_and_error_flags_reply",
             "arg2",
         );
-        /// `set_current_position_as_zero_reply`, code 0x4C
-        pub const SET_CURRENT_POSITION_AS_ZERO_REPLY: MessageDesc = MessageDesc::new(
-            "set_current_position_as_zero_reply",
-            0x4C,
-            1,
-            &[6],
-        );
         /// `set_current_position_as_zero_reply.zero`
         pub const SET_CURRENT_POSITION_AS_ZERO_REPLY_ZERO: FieldDesc = FieldDesc::new(
             "set_current_position_as_zero_reply",
             "zero",
         );
-        /// `current_zero_offset`, code 0x65
-        pub const CURRENT_ZERO_OFFSET: MessageDesc = MessageDesc::new(
-            "current_zero_offset",
-            0x65,
-            1,
-            &[6],
-        );
         /// `current_zero_offset.zero`
         pub const CURRENT_ZERO_OFFSET_ZERO: FieldDesc = FieldDesc::new(
             "current_zero_offset",
             "zero",
-        );
-        /// `reset_zero_offset_reply`, code 0x64
-        pub const RESET_ZERO_OFFSET_REPLY: MessageDesc = MessageDesc::new(
-            "reset_zero_offset_reply",
-            0x64,
-            1,
-            &[6],
         );
         /// `reset_zero_offset_reply.arg1`
         pub const RESET_ZERO_OFFSET_REPLY_ARG1: FieldDesc = FieldDesc::new(
@@ -4831,67 +6564,25 @@ pub mod sd {
             "reset_zero_offset_reply",
             "arg2",
         );
-        /// `electronic_serial_number_character`, code 0x10
-        pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER: MessageDesc = MessageDesc::new(
-            "electronic_serial_number_character",
-            0x10,
-            1,
-            &[6],
-        );
         /// `electronic_serial_number_character.string_length`
         pub const ELECTRONIC_SERIAL_NUMBER_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
             "electronic_serial_number_character",
             "string_length",
-        );
-        /// `product_description_character`, code 0x11
-        pub const PRODUCT_DESCRIPTION_CHARACTER: MessageDesc = MessageDesc::new(
-            "product_description_character",
-            0x11,
-            1,
-            &[6],
         );
         /// `product_description_character.string_length`
         pub const PRODUCT_DESCRIPTION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
             "product_description_character",
             "string_length",
         );
-        /// `software_revision_character`, code 0x12
-        pub const SOFTWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
-            "software_revision_character",
-            0x12,
-            1,
-            &[6],
-        );
         /// `software_revision_character.string_length`
         pub const SOFTWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
             "software_revision_character",
             "string_length",
         );
-        /// `hardware_revision_character`, code 0x13
-        pub const HARDWARE_REVISION_CHARACTER: MessageDesc = MessageDesc::new(
-            "hardware_revision_character",
-            0x13,
-            1,
-            &[6],
-        );
         /// `hardware_revision_character.string_length`
         pub const HARDWARE_REVISION_CHARACTER_STRING_LENGTH: FieldDesc = FieldDesc::new(
             "hardware_revision_character",
             "string_length",
-        );
-        /// `total_runtime_hours`, code 0x22
-        pub const TOTAL_RUNTIME_HOURS: MessageDesc = MessageDesc::new(
-            "total_runtime_hours",
-            0x22,
-            1,
-            &[6],
-        );
-        /// `total_runtime_min_sec`, code 0x22
-        pub const TOTAL_RUNTIME_MIN_SEC: MessageDesc = MessageDesc::new(
-            "total_runtime_min_sec",
-            0x22,
-            1,
-            &[6],
         );
         /// `total_runtime_min_sec.runtime_minutes`
         pub const TOTAL_RUNTIME_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
@@ -4903,20 +6594,6 @@ pub mod sd {
             "total_runtime_min_sec",
             "runtime_seconds",
         );
-        /// `load_runtime_0_24_hours`, code 0x23
-        pub const LOAD_RUNTIME_0_24_HOURS: MessageDesc = MessageDesc::new(
-            "load_runtime_0_24_hours",
-            0x23,
-            1,
-            &[6],
-        );
-        /// `load_runtime_0_24_min_sec`, code 0x23
-        pub const LOAD_RUNTIME_0_24_MIN_SEC: MessageDesc = MessageDesc::new(
-            "load_runtime_0_24_min_sec",
-            0x23,
-            1,
-            &[6],
-        );
         /// `load_runtime_0_24_min_sec.runtime_minutes`
         pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
             "load_runtime_0_24_min_sec",
@@ -4926,27 +6603,6 @@ pub mod sd {
         pub const LOAD_RUNTIME_0_24_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
             "load_runtime_0_24_min_sec",
             "runtime_seconds",
-        );
-        /// `load_runtime_0_24_hours_before_reset`, code 0x23
-        pub const LOAD_RUNTIME_0_24_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
-            "load_runtime_0_24_hours_before_reset",
-            0x23,
-            1,
-            &[6],
-        );
-        /// `load_runtime_25_49_hours`, code 0x24
-        pub const LOAD_RUNTIME_25_49_HOURS: MessageDesc = MessageDesc::new(
-            "load_runtime_25_49_hours",
-            0x24,
-            1,
-            &[6],
-        );
-        /// `load_runtime_25_49_min_sec`, code 0x24
-        pub const LOAD_RUNTIME_25_49_MIN_SEC: MessageDesc = MessageDesc::new(
-            "load_runtime_25_49_min_sec",
-            0x24,
-            1,
-            &[6],
         );
         /// `load_runtime_25_49_min_sec.runtime_minutes`
         pub const LOAD_RUNTIME_25_49_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
@@ -4958,27 +6614,6 @@ pub mod sd {
             "load_runtime_25_49_min_sec",
             "runtime_seconds",
         );
-        /// `load_runtime_25_49_hours_before_reset`, code 0x24
-        pub const LOAD_RUNTIME_25_49_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
-            "load_runtime_25_49_hours_before_reset",
-            0x24,
-            1,
-            &[6],
-        );
-        /// `load_runtime_50_74_hours`, code 0x25
-        pub const LOAD_RUNTIME_50_74_HOURS: MessageDesc = MessageDesc::new(
-            "load_runtime_50_74_hours",
-            0x25,
-            1,
-            &[6],
-        );
-        /// `load_runtime_50_74_min_sec`, code 0x25
-        pub const LOAD_RUNTIME_50_74_MIN_SEC: MessageDesc = MessageDesc::new(
-            "load_runtime_50_74_min_sec",
-            0x25,
-            1,
-            &[6],
-        );
         /// `load_runtime_50_74_min_sec.runtime_minutes`
         pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
             "load_runtime_50_74_min_sec",
@@ -4988,27 +6623,6 @@ pub mod sd {
         pub const LOAD_RUNTIME_50_74_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
             "load_runtime_50_74_min_sec",
             "runtime_seconds",
-        );
-        /// `load_runtime_50_74_hours_before_reset`, code 0x25
-        pub const LOAD_RUNTIME_50_74_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
-            "load_runtime_50_74_hours_before_reset",
-            0x25,
-            1,
-            &[6],
-        );
-        /// `load_runtime_75_99_hours`, code 0x26
-        pub const LOAD_RUNTIME_75_99_HOURS: MessageDesc = MessageDesc::new(
-            "load_runtime_75_99_hours",
-            0x26,
-            1,
-            &[6],
-        );
-        /// `load_runtime_75_99_min_sec`, code 0x26
-        pub const LOAD_RUNTIME_75_99_MIN_SEC: MessageDesc = MessageDesc::new(
-            "load_runtime_75_99_min_sec",
-            0x26,
-            1,
-            &[6],
         );
         /// `load_runtime_75_99_min_sec.runtime_minutes`
         pub const LOAD_RUNTIME_75_99_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
@@ -5020,27 +6634,6 @@ pub mod sd {
             "load_runtime_75_99_min_sec",
             "runtime_seconds",
         );
-        /// `load_runtime_75_99_hours_before_reset`, code 0x26
-        pub const LOAD_RUNTIME_75_99_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
-            "load_runtime_75_99_hours_before_reset",
-            0x26,
-            1,
-            &[6],
-        );
-        /// `load_runtime_100_hours`, code 0x27
-        pub const LOAD_RUNTIME_100_HOURS: MessageDesc = MessageDesc::new(
-            "load_runtime_100_hours",
-            0x27,
-            1,
-            &[6],
-        );
-        /// `load_runtime_100_min_sec`, code 0x27
-        pub const LOAD_RUNTIME_100_MIN_SEC: MessageDesc = MessageDesc::new(
-            "load_runtime_100_min_sec",
-            0x27,
-            1,
-            &[6],
-        );
         /// `load_runtime_100_min_sec.runtime_minutes`
         pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_MINUTES: FieldDesc = FieldDesc::new(
             "load_runtime_100_min_sec",
@@ -5050,34 +6643,6 @@ pub mod sd {
         pub const LOAD_RUNTIME_100_MIN_SEC_RUNTIME_SECONDS: FieldDesc = FieldDesc::new(
             "load_runtime_100_min_sec",
             "runtime_seconds",
-        );
-        /// `load_runtime_100_hours_before_reset`, code 0x27
-        pub const LOAD_RUNTIME_100_HOURS_BEFORE_RESET: MessageDesc = MessageDesc::new(
-            "load_runtime_100_hours_before_reset",
-            0x27,
-            1,
-            &[6],
-        );
-        /// `stall_event_counter`, code 0x28
-        pub const STALL_EVENT_COUNTER: MessageDesc = MessageDesc::new(
-            "stall_event_counter",
-            0x28,
-            1,
-            &[6],
-        );
-        /// `stall_event_counter_before_reset`, code 0x28
-        pub const STALL_EVENT_COUNTER_BEFORE_RESET: MessageDesc = MessageDesc::new(
-            "stall_event_counter_before_reset",
-            0x28,
-            1,
-            &[6],
-        );
-        /// `power_up_cycles`, code 0x29
-        pub const POWER_UP_CYCLES: MessageDesc = MessageDesc::new(
-            "power_up_cycles",
-            0x29,
-            1,
-            &[6],
         );
     }
 }

@@ -142,18 +142,61 @@ pub mod slip_sensor {
             rt::Some(Self(raw as i16))
         }
     }
+    impl request::ReadTemperature {
+        pub const NAME: &'static str = "read_temperature";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::SetThreshold {
+        pub const NAME: &'static str = "set_threshold";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[6],
+        );
+        pub const THRESHOLD: rt::Range<usize> = 1..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("threshold", rt::Int(self.threshold as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetThreshold(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadSamples {
+        pub const NAME: &'static str = "read_samples";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadSamples(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Read temperature (code `0x01`, 4 bytes).
-        ReadTemperature,
-        /// §3.2 Set the alarm threshold (code `0x02`, 6 bytes).
-        SetThreshold { threshold: u16 },
-        /// §3.3 Read the latest samples (code `0x03`, 4 bytes).
-        ReadSamples,
+        ReadTemperature(request::ReadTemperature),
+        SetThreshold(request::SetThreshold),
+        ReadSamples(request::ReadSamples),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -165,9 +208,9 @@ pub mod slip_sensor {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadTemperature => 0,
-                Self::SetThreshold { .. } => 1,
-                Self::ReadSamples => 2,
+                Self::ReadTemperature(_) => 0,
+                Self::SetThreshold(_) => 1,
+                Self::ReadSamples(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -184,11 +227,9 @@ pub mod slip_sensor {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetThreshold { threshold: v_threshold } => {
-                    f("threshold", rt::Int(*v_threshold as i64))
-                }
+                Self::SetThreshold(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -215,13 +256,17 @@ pub mod slip_sensor {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadTemperature => rt::frame_mut::<4>(buf, &[0x01])?.len(),
-                Self::SetThreshold { threshold: v_threshold } => {
+                Self::ReadTemperature(request::ReadTemperature {}) => {
+                    rt::frame_mut::<4>(buf, &[0x01])?.len()
+                }
+                Self::SetThreshold(request::SetThreshold { threshold: v_threshold }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x02])?;
                     out[1..3].copy_from_slice(&v_threshold.to_be_bytes());
                     out.len()
                 }
-                Self::ReadSamples => rt::frame_mut::<4>(buf, &[0x03])?.len(),
+                Self::ReadSamples(request::ReadSamples {}) => {
+                    rt::frame_mut::<4>(buf, &[0x03])?.len()
+                }
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -265,18 +310,20 @@ pub mod slip_sensor {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x01 => {
-                    rt::fixed::<4>(frame, &request::READ_TEMPERATURE)
-                        .map(|_| Self::ReadTemperature)
+                    rt::fixed::<4>(frame, &request::ReadTemperature::DESC)
+                        .map(|_| Self::ReadTemperature(request::ReadTemperature))
                 }
                 0x02 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_THRESHOLD)?;
-                    rt::Ok(Self::SetThreshold {
-                        threshold: u16::from_be_bytes([frame[1], frame[2]]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &request::SetThreshold::DESC)?;
+                    rt::Ok(
+                        Self::SetThreshold(request::SetThreshold {
+                            threshold: u16::from_be_bytes([frame[1], frame[2]]),
+                        }),
+                    )
                 }
                 0x03 => {
-                    rt::fixed::<4>(frame, &request::READ_SAMPLES)
-                        .map(|_| Self::ReadSamples)
+                    rt::fixed::<4>(frame, &request::ReadSamples::DESC)
+                        .map(|_| Self::ReadSamples(request::ReadSamples))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 3, false)),
             }
@@ -289,13 +336,17 @@ pub mod slip_sensor {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_temperature" => rt::Ok(Self::ReadTemperature),
-                "set_threshold" => {
-                    rt::Ok(Self::SetThreshold {
-                        threshold: rt::get(&mut field, "threshold")?,
-                    })
+                "read_temperature" => {
+                    rt::Ok(Self::ReadTemperature(request::ReadTemperature))
                 }
-                "read_samples" => rt::Ok(Self::ReadSamples),
+                "set_threshold" => {
+                    rt::Ok(
+                        Self::SetThreshold(request::SetThreshold {
+                            threshold: rt::get(&mut field, "threshold")?,
+                        }),
+                    )
+                }
+                "read_samples" => rt::Ok(Self::ReadSamples(request::ReadSamples)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -370,21 +421,65 @@ pub mod slip_sensor {
         min: 0,
         max: 8,
     };
+    impl response::Temperature {
+        pub const NAME: &'static str = "temperature";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x81,
+            1,
+            &[6],
+        );
+        pub const TEMPERATURE: rt::Range<usize> = 1..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Temperature(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x82,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Samples {
+        pub const NAME: &'static str = "samples";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 4;
+        pub const MAX_LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x83,
+            1,
+            &[4],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("samples", rt::List(self.samples.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Samples(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 Temperature (code `0x81`, 6 bytes).
-        Temperature {
-            /// \[°C\]
-            temperature: Centidegrees,
-        },
-        /// §4.2 Acknowledge (code `0x82`, 4 bytes).
-        Ack,
-        /// §4.3 Samples (code `0x83`, 4 to 12 bytes).
-        Samples { samples: rt::Repeated<u8, 8> },
+        Temperature(response::Temperature),
+        Ack(response::Ack),
+        Samples(response::Samples),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -396,9 +491,9 @@ pub mod slip_sensor {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Temperature { .. } => 0,
-                Self::Ack => 1,
-                Self::Samples { .. } => 2,
+                Self::Temperature(_) => 0,
+                Self::Ack(_) => 1,
+                Self::Samples(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -412,7 +507,7 @@ pub mod slip_sensor {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Samples { samples: v_samples, .. } => {
+                Self::Samples(response::Samples { samples: v_samples, .. }) => {
                     REPEAT_SAMPLES.base + REPEAT_SAMPLES.bytes_of(v_samples.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -420,14 +515,10 @@ pub mod slip_sensor {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Temperature { temperature: v_temperature } => {
-                    f("temperature", rt::Int(v_temperature.raw() as i64))
-                }
-                Self::Samples { samples: v_samples } => {
-                    f("samples", rt::List(v_samples.elements()))
-                }
+                Self::Temperature(m) => m.visit(f),
+                Self::Samples(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -454,13 +545,15 @@ pub mod slip_sensor {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Temperature { temperature: v_temperature } => {
+                Self::Temperature(
+                    response::Temperature { temperature: v_temperature },
+                ) => {
                     let out = rt::frame_mut::<6>(buf, &[0x81])?;
                     out[1..3].copy_from_slice(&v_temperature.raw().to_be_bytes());
                     out.len()
                 }
-                Self::Ack => rt::frame_mut::<4>(buf, &[0x82])?.len(),
-                Self::Samples { samples: v_samples } => {
+                Self::Ack(response::Ack {}) => rt::frame_mut::<4>(buf, &[0x82])?.len(),
+                Self::Samples(response::Samples { samples: v_samples }) => {
                     let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x83])?;
                     rt::write_elements(v_samples.as_slice(), 1, false, &mut out[1..]);
@@ -537,20 +630,27 @@ pub mod slip_sensor {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 0, 1) {
                 0x81 => {
-                    let frame = rt::fixed::<6>(frame, &response::TEMPERATURE)?;
-                    rt::Ok(Self::Temperature {
-                        temperature: Centidegrees::from_raw(
-                            i16::from_be_bytes([frame[1], frame[2]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::Temperature::DESC)?;
+                    rt::Ok(
+                        Self::Temperature(response::Temperature {
+                            temperature: Centidegrees::from_raw(
+                                i16::from_be_bytes([frame[1], frame[2]]),
+                            ),
+                        }),
+                    )
                 }
-                0x82 => rt::fixed::<4>(frame, &response::ACK).map(|_| Self::Ack),
+                0x82 => {
+                    rt::fixed::<4>(frame, &response::Ack::DESC)
+                        .map(|_| Self::Ack(response::Ack))
+                }
                 0x83 => {
                     let (_, elements, _) = REPEAT_SAMPLES.split::<1>(frame)?;
-                    rt::Ok(Self::Samples {
-                        samples: REPEAT_SAMPLES
-                            .elements::<u8, 8>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::Samples(response::Samples {
+                            samples: REPEAT_SAMPLES
+                                .elements::<u8, 8>(elements, false, false)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 0, 1, 3, true)),
             }
@@ -564,17 +664,21 @@ pub mod slip_sensor {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "temperature" => {
-                    rt::Ok(Self::Temperature {
-                        temperature: Centidegrees::from_raw(
-                            rt::get(&mut field, "temperature")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::Temperature(response::Temperature {
+                            temperature: Centidegrees::from_raw(
+                                rt::get(&mut field, "temperature")?,
+                            ),
+                        }),
+                    )
                 }
-                "ack" => rt::Ok(Self::Ack),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 "samples" => {
-                    rt::Ok(Self::Samples {
-                        samples: rt::list::<u8, 8>(&mut field, "samples", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::Samples(response::Samples {
+                            samples: rt::list::<u8, 8>(&mut field, "samples", 0, 255)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -710,46 +814,54 @@ pub mod slip_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SlipSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `read_temperature`, code 0x01
-        pub const READ_TEMPERATURE: MessageDesc = MessageDesc::new(
-            "read_temperature",
-            0x01,
-            1,
-            &[4],
-        );
-        /// `set_threshold`, code 0x02
-        pub const SET_THRESHOLD: MessageDesc = MessageDesc::new(
-            "set_threshold",
-            0x02,
-            1,
-            &[6],
-        );
-        /// `read_samples`, code 0x03
-        pub const READ_SAMPLES: MessageDesc = MessageDesc::new(
-            "read_samples",
-            0x03,
-            1,
-            &[4],
-        );
+        /// §3.1 Read temperature (code `0x01`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadTemperature;
+        /// §3.2 Set the alarm threshold (code `0x02`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetThreshold {
+            pub threshold: u16,
+        }
+        /// §3.3 Read the latest samples (code `0x03`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadSamples;
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `temperature`, code 0x81
-        pub const TEMPERATURE: MessageDesc = MessageDesc::new(
-            "temperature",
-            0x81,
-            1,
-            &[6],
-        );
-        /// `ack`, code 0x82
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x82, 1, &[4]);
-        /// `samples`, code 0x83
-        pub const SAMPLES: MessageDesc = MessageDesc::new("samples", 0x83, 1, &[4]);
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 Temperature (code `0x81`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Temperature {
+            /// \[°C\]
+            pub temperature: super::Centidegrees,
+        }
+        /// §4.2 Acknowledge (code `0x82`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
+        /// §4.3 Samples (code `0x83`, 4 to 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Samples {
+            pub samples: super::rt::Repeated<u8, 8>,
+        }
         /// `samples.samples`
         pub const SAMPLES_SAMPLES: FieldDesc = FieldDesc::new("samples", "samples");
     }

@@ -68,14 +68,31 @@ pub mod sync_after_code {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01, 0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0102,
+            2,
+            &[6],
+        );
+        pub const REGISTER: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("register", rt::Int(self.register as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Read (code `0x0102`, 6 bytes).
-        Read { register: u8 },
+        Read(request::Read),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -85,7 +102,7 @@ pub mod sync_after_code {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Read { .. } => 0,
+                Self::Read(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -102,11 +119,9 @@ pub mod sync_after_code {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Read { register: v_register } => {
-                    f("register", rt::Int(*v_register as i64))
-                }
+                Self::Read(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -120,7 +135,7 @@ pub mod sync_after_code {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::Read { register: v_register } => {
+                Self::Read(request::Read { register: v_register }) => {
                     let out = rt::head(out, &[0x7E, 0x01, 0x02, 0x7E]);
                     out[4] = v_register;
                     out.len()
@@ -151,8 +166,12 @@ pub mod sync_after_code {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 2) {
                 0x0102 => {
-                    let frame = rt::fixed::<6>(frame, &request::READ)?;
-                    rt::Ok(Self::Read { register: frame[4] })
+                    let frame = rt::fixed::<6>(frame, &request::Read::DESC)?;
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            register: frame[4],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 2, 1, false)),
             }
@@ -166,9 +185,11 @@ pub mod sync_after_code {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read" => {
-                    rt::Ok(Self::Read {
-                        register: rt::get(&mut field, "register")?,
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            register: rt::get(&mut field, "register")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -232,14 +253,31 @@ pub mod sync_after_code {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Value {
+        pub const NAME: &'static str = "value";
+        pub const CODE: &'static [u8] = &[0x81, 0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x8102,
+            2,
+            &[7],
+        );
+        pub const VALUE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Value(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §2 Value (code `0x8102`, 7 bytes).
-        Value { value: u16 },
+        Value(response::Value),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -249,7 +287,7 @@ pub mod sync_after_code {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Value { .. } => 0,
+                Self::Value(_) => 0,
             }
         }
         /// The spec's snake_case name of this message.
@@ -266,9 +304,9 @@ pub mod sync_after_code {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Value { value: v_value } => f("value", rt::Int(*v_value as i64)),
+                Self::Value(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -282,7 +320,7 @@ pub mod sync_after_code {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<7>(buf, &[])?;
             let len = match *self {
-                Self::Value { value: v_value } => {
+                Self::Value(response::Value { value: v_value }) => {
                     let out = rt::head(out, &[0x7E, 0x81, 0x02, 0x7E]);
                     out[4..6].copy_from_slice(&v_value.to_be_bytes());
                     out.len()
@@ -340,10 +378,12 @@ pub mod sync_after_code {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 1, 2) {
                 0x8102 => {
-                    let frame = rt::fixed::<7>(frame, &response::VALUE)?;
-                    rt::Ok(Self::Value {
-                        value: u16::from_be_bytes([frame[4], frame[5]]),
-                    })
+                    let frame = rt::fixed::<7>(frame, &response::Value::DESC)?;
+                    rt::Ok(
+                        Self::Value(response::Value {
+                            value: u16::from_be_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 1, 2, 1, true)),
             }
@@ -357,9 +397,11 @@ pub mod sync_after_code {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "value" => {
-                    rt::Ok(Self::Value {
-                        value: rt::get(&mut field, "value")?,
-                    })
+                    rt::Ok(
+                        Self::Value(response::Value {
+                            value: rt::get(&mut field, "value")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -509,17 +551,28 @@ pub mod sync_after_code {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SyncAfterCode>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::MessageDesc;
-        /// `read`, code 0x0102
-        pub const READ: MessageDesc = MessageDesc::new("read", 0x0102, 2, &[6]);
+        /// §1 Read (code `0x0102`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Read {
+            pub register: u8,
+        }
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::MessageDesc;
-        /// `value`, code 0x8102
-        pub const VALUE: MessageDesc = MessageDesc::new("value", 0x8102, 2, &[7]);
+        /// §2 Value (code `0x8102`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Value {
+            pub value: u16,
+        }
     }
 }

@@ -108,25 +108,67 @@ pub mod syncy {
             rt::Some(Self(raw as i32))
         }
     }
+    impl request::MoveTo {
+        pub const NAME: &'static str = "move_to";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[9],
+        );
+        pub const TARGET: rt::Range<usize> = 5..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveTo(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCounter {
+        pub const NAME: &'static str = "get_counter";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCounter(*self).encode(address, buf)
+        }
+    }
+    impl request::SetPair {
+        pub const NAME: &'static str = "set_pair";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x05,
+            1,
+            &[10],
+        );
+        pub const QUANTITY: rt::Range<usize> = 5..6;
+        pub const LEVEL: rt::Range<usize> = 7..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("level", rt::Int(self.level as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPair(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Move to (code `0x03`, 9 bytes).
-        MoveTo {
-            /// \[mm\] Valid raw range -1000000..=1000000.
-            target: Millimetre,
-        },
-        /// §2 Get counter (code `0x04`, 6 bytes).
-        GetCounter,
-        /// §5 Set pair (code `0x05`, 10 bytes).
-        SetPair {
-            /// Valid raw range 1..=100.
-            quantity: u8,
-            level: u16,
-        },
+        MoveTo(request::MoveTo),
+        GetCounter(request::GetCounter),
+        SetPair(request::SetPair),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -138,9 +180,9 @@ pub mod syncy {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::MoveTo { .. } => 0,
-                Self::GetCounter => 1,
-                Self::SetPair { .. } => 2,
+                Self::MoveTo(_) => 0,
+                Self::GetCounter(_) => 1,
+                Self::SetPair(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -157,15 +199,10 @@ pub mod syncy {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::MoveTo { target: v_target } => {
-                    f("target", rt::Int(v_target.raw() as i64))
-                }
-                Self::SetPair { quantity: v_quantity, level: v_level } => {
-                    f("quantity", rt::Int(*v_quantity as i64));
-                    f("level", rt::Int(*v_level as i64));
-                }
+                Self::MoveTo(m) => m.visit(f),
+                Self::SetPair(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -179,8 +216,8 @@ pub mod syncy {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::MoveTo { target: v_target } => {
-                    rt::encode_broadcast(address, 0xFE, &request::MOVE_TO)?;
+                Self::MoveTo(request::MoveTo { target: v_target }) => {
+                    rt::encode_broadcast(address, 0xFE, &request::MoveTo::DESC)?;
                     rt::encode_in_range("target", v_target.raw(), -1000000, 1000000)?;
                     let out = rt::frame_mut::<
                         9,
@@ -195,12 +232,14 @@ pub mod syncy {
                         );
                     out.len()
                 }
-                Self::GetCounter => {
-                    rt::encode_broadcast(address, 0xFE, &request::GET_COUNTER)?;
+                Self::GetCounter(request::GetCounter {}) => {
+                    rt::encode_broadcast(address, 0xFE, &request::GetCounter::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
-                Self::SetPair { quantity: v_quantity, level: v_level } => {
-                    rt::encode_broadcast(address, 0xFE, &request::SET_PAIR)?;
+                Self::SetPair(
+                    request::SetPair { quantity: v_quantity, level: v_level },
+                ) => {
+                    rt::encode_broadcast(address, 0xFE, &request::SetPair::DESC)?;
                     rt::encode_in_range("quantity", v_quantity, 1, 100)?;
                     let out = rt::frame_mut::<
                         10,
@@ -242,8 +281,8 @@ pub mod syncy {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame, &request::MOVE_TO)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::MOVE_TO)?;
+                    let frame = rt::fixed::<9>(frame, &request::MoveTo::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::MoveTo::DESC)?;
                     let field_0: i32 = rt::i24([frame[5], frame[6], frame[7]], false);
                     rt::in_range(
                         &request::MOVE_TO_TARGET,
@@ -252,18 +291,20 @@ pub mod syncy {
                         -1000000,
                         1000000,
                     )?;
-                    rt::Ok(Self::MoveTo {
-                        target: Millimetre::from_raw(field_0 as i32),
-                    })
+                    rt::Ok(
+                        Self::MoveTo(request::MoveTo {
+                            target: Millimetre::from_raw(field_0 as i32),
+                        }),
+                    )
                 }
                 0x04 => {
-                    let frame = rt::fixed::<6>(frame, &request::GET_COUNTER)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::GET_COUNTER)?;
-                    rt::Ok(Self::GetCounter)
+                    let frame = rt::fixed::<6>(frame, &request::GetCounter::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::GetCounter::DESC)?;
+                    rt::Ok(Self::GetCounter(request::GetCounter))
                 }
                 0x05 => {
-                    let frame = rt::fixed::<10>(frame, &request::SET_PAIR)?;
-                    rt::no_broadcast(frame[2], 0xFE, &request::SET_PAIR)?;
+                    let frame = rt::fixed::<10>(frame, &request::SetPair::DESC)?;
+                    rt::no_broadcast(frame[2], 0xFE, &request::SetPair::DESC)?;
                     rt::in_range(&request::SET_PAIR_QUANTITY, 5, frame[5], 1, 100)?;
                     rt::following(
                         &request::SET_PAIR_DOUBLED,
@@ -273,10 +314,12 @@ pub mod syncy {
                         (2, 1),
                         "2 × quantity",
                     )?;
-                    rt::Ok(Self::SetPair {
-                        quantity: frame[5],
-                        level: u16::from_be_bytes([frame[7], frame[8]]),
-                    })
+                    rt::Ok(
+                        Self::SetPair(request::SetPair {
+                            quantity: frame[5],
+                            level: u16::from_be_bytes([frame[7], frame[8]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
             }
@@ -290,19 +333,23 @@ pub mod syncy {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "move_to" => {
-                    rt::Ok(Self::MoveTo {
-                        target: Millimetre::from_raw(
-                            rt::field_int("target", field("target"), -8388608, 8388607)?
-                                as i32,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::MoveTo(request::MoveTo {
+                            target: Millimetre::from_raw(
+                                rt::field_int("target", field("target"), -8388608, 8388607)?
+                                    as i32,
+                            ),
+                        }),
+                    )
                 }
-                "get_counter" => rt::Ok(Self::GetCounter),
+                "get_counter" => rt::Ok(Self::GetCounter(request::GetCounter)),
                 "set_pair" => {
-                    rt::Ok(Self::SetPair {
-                        quantity: rt::get(&mut field, "quantity")?,
-                        level: rt::get(&mut field, "level")?,
-                    })
+                    rt::Ok(
+                        Self::SetPair(request::SetPair {
+                            quantity: rt::get(&mut field, "quantity")?,
+                            level: rt::get(&mut field, "level")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -368,20 +415,88 @@ pub mod syncy {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Moving {
+        pub const NAME: &'static str = "moving";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x00,
+            1,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Moving(*self).encode(address, buf)
+        }
+    }
+    impl response::Counter {
+        pub const NAME: &'static str = "counter";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[12],
+        );
+        pub const TOTAL: rt::Range<usize> = 5..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("total", rt::Int(self.total as i64));
+            f("tag", rt::Int(self.tag as i64));
+            f("offset", rt::Int(self.offset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Counter(*self).encode(address, buf)
+        }
+    }
+    impl response::SetPairReply {
+        pub const NAME: &'static str = "set_pair_reply";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x05,
+            1,
+            &[8],
+        );
+        pub const QUANTITY: rt::Range<usize> = 5..6;
+        pub const GROUPS: rt::Range<usize> = 6..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("groups", rt::Int(self.groups as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetPairReply(*self).encode(address, buf)
+        }
+    }
+    impl response::SetPairError {
+        pub const NAME: &'static str = "set_pair_error";
+        pub const CODE: &'static [u8] = &[0x85];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x85,
+            1,
+            &[7],
+        );
+        pub const REASON: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("reason", rt::Int(self.reason as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetPairError(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 Moving (code `0x00`, 6 bytes).
-        Moving,
-        /// §4 Counter (code `0x01`, 12 bytes).
-        Counter { total: u32, tag: u8, offset: i32 },
-        /// §6 Pair set (code `0x05`, 8 bytes).
-        SetPairReply { quantity: u8, groups: u8 },
-        /// §7 Pair not set (code `0x85`, 7 bytes).
-        SetPairError { reason: u8 },
+        Moving(response::Moving),
+        Counter(response::Counter),
+        SetPairReply(response::SetPairReply),
+        SetPairError(response::SetPairError),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -394,10 +509,10 @@ pub mod syncy {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Moving => 0,
-                Self::Counter { .. } => 1,
-                Self::SetPairReply { .. } => 2,
-                Self::SetPairError { .. } => 3,
+                Self::Moving(_) => 0,
+                Self::Counter(_) => 1,
+                Self::SetPairReply(_) => 2,
+                Self::SetPairError(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -414,20 +529,11 @@ pub mod syncy {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Counter { total: v_total, tag: v_tag, offset: v_offset } => {
-                    f("total", rt::Int(*v_total as i64));
-                    f("tag", rt::Int(*v_tag as i64));
-                    f("offset", rt::Int(*v_offset as i64));
-                }
-                Self::SetPairReply { quantity: v_quantity, groups: v_groups } => {
-                    f("quantity", rt::Int(*v_quantity as i64));
-                    f("groups", rt::Int(*v_groups as i64));
-                }
-                Self::SetPairError { reason: v_reason } => {
-                    f("reason", rt::Int(*v_reason as i64))
-                }
+                Self::Counter(m) => m.visit(f),
+                Self::SetPairReply(m) => m.visit(f),
+                Self::SetPairError(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -441,10 +547,12 @@ pub mod syncy {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Moving => {
+                Self::Moving(response::Moving {}) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x00])?.len()
                 }
-                Self::Counter { total: v_total, tag: v_tag, offset: v_offset } => {
+                Self::Counter(
+                    response::Counter { total: v_total, tag: v_tag, offset: v_offset },
+                ) => {
                     let out = rt::frame_mut::<
                         12,
                     >(buf, &[0xFF, 0xFF, address, 0x08, 0x01])?;
@@ -462,7 +570,9 @@ pub mod syncy {
                     out[8..11].copy_from_slice(&rt::bytes24(field_1 as u32, false));
                     out.len()
                 }
-                Self::SetPairReply { quantity: v_quantity, groups: v_groups } => {
+                Self::SetPairReply(
+                    response::SetPairReply { quantity: v_quantity, groups: v_groups },
+                ) => {
                     let out = rt::frame_mut::<
                         8,
                     >(buf, &[0xFF, 0xFF, address, 0x04, 0x05])?;
@@ -470,7 +580,7 @@ pub mod syncy {
                     out[6] = v_groups;
                     out.len()
                 }
-                Self::SetPairError { reason: v_reason } => {
+                Self::SetPairError(response::SetPairError { reason: v_reason }) => {
                     let out = rt::frame_mut::<
                         7,
                     >(buf, &[0xFF, 0xFF, address, 0x03, 0x85])?;
@@ -530,28 +640,37 @@ pub mod syncy {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
-                0x00 => rt::fixed::<6>(frame, &response::MOVING).map(|_| Self::Moving),
+                0x00 => {
+                    rt::fixed::<6>(frame, &response::Moving::DESC)
+                        .map(|_| Self::Moving(response::Moving))
+                }
                 0x01 => {
-                    let frame = rt::fixed::<12>(frame, &response::COUNTER)?;
+                    let frame = rt::fixed::<12>(frame, &response::Counter::DESC)?;
                     let field_1: u32 = rt::u24([frame[8], frame[9], frame[10]], false);
-                    rt::Ok(Self::Counter {
-                        total: rt::u24([frame[5], frame[6], frame[7]], false),
-                        tag: ((field_1 >> 20) & 0xF) as u8,
-                        offset: (((field_1 & 0xFFFFF) as u32) << 12) as i32 >> 12,
-                    })
+                    rt::Ok(
+                        Self::Counter(response::Counter {
+                            total: rt::u24([frame[5], frame[6], frame[7]], false),
+                            tag: ((field_1 >> 20) & 0xF) as u8,
+                            offset: (((field_1 & 0xFFFFF) as u32) << 12) as i32 >> 12,
+                        }),
+                    )
                 }
                 0x05 => {
-                    let frame = rt::fixed::<8>(frame, &response::SET_PAIR_REPLY)?;
-                    rt::Ok(Self::SetPairReply {
-                        quantity: frame[5],
-                        groups: frame[6],
-                    })
+                    let frame = rt::fixed::<8>(frame, &response::SetPairReply::DESC)?;
+                    rt::Ok(
+                        Self::SetPairReply(response::SetPairReply {
+                            quantity: frame[5],
+                            groups: frame[6],
+                        }),
+                    )
                 }
                 0x85 => {
-                    let frame = rt::fixed::<7>(frame, &response::SET_PAIR_ERROR)?;
-                    rt::Ok(Self::SetPairError {
-                        reason: frame[5],
-                    })
+                    let frame = rt::fixed::<7>(frame, &response::SetPairError::DESC)?;
+                    rt::Ok(
+                        Self::SetPairError(response::SetPairError {
+                            reason: frame[5],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
             }
@@ -564,30 +683,36 @@ pub mod syncy {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "moving" => rt::Ok(Self::Moving),
+                "moving" => rt::Ok(Self::Moving(response::Moving)),
                 "counter" => {
-                    rt::Ok(Self::Counter {
-                        total: rt::field_int("total", field("total"), 0, 16777215)?
-                            as u32,
-                        tag: rt::field_int("tag", field("tag"), 0, 15)? as u8,
-                        offset: rt::field_int(
-                            "offset",
-                            field("offset"),
-                            -524288,
-                            524287,
-                        )? as i32,
-                    })
+                    rt::Ok(
+                        Self::Counter(response::Counter {
+                            total: rt::field_int("total", field("total"), 0, 16777215)?
+                                as u32,
+                            tag: rt::field_int("tag", field("tag"), 0, 15)? as u8,
+                            offset: rt::field_int(
+                                "offset",
+                                field("offset"),
+                                -524288,
+                                524287,
+                            )? as i32,
+                        }),
+                    )
                 }
                 "set_pair_reply" => {
-                    rt::Ok(Self::SetPairReply {
-                        quantity: rt::get(&mut field, "quantity")?,
-                        groups: rt::get(&mut field, "groups")?,
-                    })
+                    rt::Ok(
+                        Self::SetPairReply(response::SetPairReply {
+                            quantity: rt::get(&mut field, "quantity")?,
+                            groups: rt::get(&mut field, "groups")?,
+                        }),
+                    )
                 }
                 "set_pair_error" => {
-                    rt::Ok(Self::SetPairError {
-                        reason: rt::get(&mut field, "reason")?,
-                    })
+                    rt::Ok(
+                        Self::SetPairError(response::SetPairError {
+                            reason: rt::get(&mut field, "reason")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -638,8 +763,14 @@ pub mod syncy {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (
-                    &Self::SetPairReply { quantity: v_quantity, groups: v_groups, .. },
-                    &Request::SetPair { quantity: r_quantity, .. },
+                    &Self::SetPairReply(
+                        response::SetPairReply {
+                            quantity: v_quantity,
+                            groups: v_groups,
+                            ..
+                        },
+                    ),
+                    &Request::SetPair(request::SetPair { quantity: r_quantity, .. }),
                 ) => {
                     rt::following(
                         &response::SET_PAIR_REPLY_QUANTITY,
@@ -710,7 +841,7 @@ pub mod syncy {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::SetPairError { .. })
+            matches!(response, Response::SetPairError(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
@@ -781,42 +912,77 @@ pub mod syncy {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Syncy>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `move_to`, code 0x03
-        pub const MOVE_TO: MessageDesc = MessageDesc::new("move_to", 0x03, 1, &[9]);
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Move to (code `0x03`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MoveTo {
+            /// \[mm\] Valid raw range -1000000..=1000000.
+            pub target: super::Millimetre,
+        }
+        /// §2 Get counter (code `0x04`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetCounter;
+        /// §5 Set pair (code `0x05`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPair {
+            /// Valid raw range 1..=100.
+            pub quantity: u8,
+            pub level: u16,
+        }
         /// `move_to.target`
         pub const MOVE_TO_TARGET: FieldDesc = FieldDesc::new("move_to", "target");
-        /// `get_counter`, code 0x04
-        pub const GET_COUNTER: MessageDesc = MessageDesc::new(
-            "get_counter",
-            0x04,
-            1,
-            &[6],
-        );
-        /// `set_pair`, code 0x05
-        pub const SET_PAIR: MessageDesc = MessageDesc::new("set_pair", 0x05, 1, &[10]);
         /// `set_pair.quantity`
         pub const SET_PAIR_QUANTITY: FieldDesc = FieldDesc::new("set_pair", "quantity");
         /// `set_pair.doubled`
         pub const SET_PAIR_DOUBLED: FieldDesc = FieldDesc::new("set_pair", "doubled");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `moving`, code 0x00
-        pub const MOVING: MessageDesc = MessageDesc::new("moving", 0x00, 1, &[6]);
-        /// `counter`, code 0x01
-        pub const COUNTER: MessageDesc = MessageDesc::new("counter", 0x01, 1, &[12]);
-        /// `set_pair_reply`, code 0x05
-        pub const SET_PAIR_REPLY: MessageDesc = MessageDesc::new(
-            "set_pair_reply",
-            0x05,
-            1,
-            &[8],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 Moving (code `0x00`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Moving;
+        /// §4 Counter (code `0x01`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Counter {
+            pub total: u32,
+            pub tag: u8,
+            pub offset: i32,
+        }
+        /// §6 Pair set (code `0x05`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPairReply {
+            pub quantity: u8,
+            pub groups: u8,
+        }
+        /// §7 Pair not set (code `0x85`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPairError {
+            pub reason: u8,
+        }
         /// `set_pair_reply.quantity`
         pub const SET_PAIR_REPLY_QUANTITY: FieldDesc = FieldDesc::new(
             "set_pair_reply",
@@ -826,13 +992,6 @@ pub mod syncy {
         pub const SET_PAIR_REPLY_GROUPS: FieldDesc = FieldDesc::new(
             "set_pair_reply",
             "groups",
-        );
-        /// `set_pair_error`, code 0x85
-        pub const SET_PAIR_ERROR: MessageDesc = MessageDesc::new(
-            "set_pair_error",
-            0x85,
-            1,
-            &[7],
         );
     }
 }

@@ -68,21 +68,48 @@ pub mod telemetry_le {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::xor8(bytes)
     }
+    impl request::GetState {
+        pub const NAME: &'static str = "get_state";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetState(*self).encode(address, buf)
+        }
+    }
+    impl request::SetHome {
+        pub const NAME: &'static str = "set_home";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 21;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[21],
+        );
+        pub const LAT: rt::Range<usize> = 4..12;
+        pub const LON: rt::Range<usize> = 12..20;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("lat", rt::Int(rt::raw(self.lat)));
+            f("lon", rt::Int(rt::raw(self.lon)));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetHome(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Get the state (code `0x01`, 5 bytes).
-        GetState,
-        /// §3.2 Set the home position (code `0x02`, 21 bytes).
-        SetHome {
-            /// \[°\] Valid raw range -90.0..=90.0.
-            lat: f64,
-            /// \[°\] Valid raw range -180.0..=180.0.
-            lon: f64,
-        },
+        GetState(request::GetState),
+        SetHome(request::SetHome),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -93,8 +120,8 @@ pub mod telemetry_le {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::GetState => 0,
-                Self::SetHome { .. } => 1,
+                Self::GetState(_) => 0,
+                Self::SetHome(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -111,12 +138,9 @@ pub mod telemetry_le {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetHome { lat: v_lat, lon: v_lon } => {
-                    f("lat", rt::Int(rt::raw(*v_lat)));
-                    f("lon", rt::Int(rt::raw(*v_lon)));
-                }
+                Self::SetHome(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -130,10 +154,10 @@ pub mod telemetry_le {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::GetState => {
+                Self::GetState(request::GetState {}) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x01])?.len()
                 }
-                Self::SetHome { lat: v_lat, lon: v_lon } => {
+                Self::SetHome(request::SetHome { lat: v_lat, lon: v_lon }) => {
                     rt::encode_in_range(
                         "lat",
                         v_lat,
@@ -177,10 +201,11 @@ pub mod telemetry_le {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x01 => {
-                    rt::fixed::<5>(frame, &request::GET_STATE).map(|_| Self::GetState)
+                    rt::fixed::<5>(frame, &request::GetState::DESC)
+                        .map(|_| Self::GetState(request::GetState))
                 }
                 0x02 => {
-                    let frame = rt::fixed::<21>(frame, &request::SET_HOME)?;
+                    let frame = rt::fixed::<21>(frame, &request::SetHome::DESC)?;
                     let field_0: f64 = f64::from_le_bytes([
                         frame[4],
                         frame[5],
@@ -215,10 +240,12 @@ pub mod telemetry_le {
                         rt::f64_raw(-180f64),
                         rt::f64_raw(180f64),
                     )?;
-                    rt::Ok(Self::SetHome {
-                        lat: field_0,
-                        lon: field_1,
-                    })
+                    rt::Ok(
+                        Self::SetHome(request::SetHome {
+                            lat: field_0,
+                            lon: field_1,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
@@ -231,12 +258,14 @@ pub mod telemetry_le {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "get_state" => rt::Ok(Self::GetState),
+                "get_state" => rt::Ok(Self::GetState(request::GetState)),
                 "set_home" => {
-                    rt::Ok(Self::SetHome {
-                        lat: rt::get(&mut field, "lat")?,
-                        lon: rt::get(&mut field, "lon")?,
-                    })
+                    rt::Ok(
+                        Self::SetHome(request::SetHome {
+                            lat: rt::get(&mut field, "lat")?,
+                            lon: rt::get(&mut field, "lon")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -301,28 +330,56 @@ pub mod telemetry_le {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::State {
+        pub const NAME: &'static str = "state";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 41;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x81,
+            1,
+            &[41],
+        );
+        pub const TIME_US: rt::Range<usize> = 4..12;
+        pub const ALTITUDE: rt::Range<usize> = 12..16;
+        pub const LAT: rt::Range<usize> = 16..24;
+        pub const OFFSET: rt::Range<usize> = 24..32;
+        pub const PRESSURE: rt::Range<usize> = 32..36;
+        pub const TOTAL: rt::Range<usize> = 36..40;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("time_us", rt::Int(self.time_us as i64));
+            f("altitude", rt::Int(rt::raw(self.altitude)));
+            f("lat", rt::Int(rt::raw(self.lat)));
+            f("offset", rt::Int(self.offset as i64));
+            f("pressure", rt::Int(rt::raw(self.pressure)));
+            f("total", rt::Int(self.total as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::State(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x82,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 State (code `0x81`, 41 bytes).
-        State {
-            /// \[µs\]
-            time_us: u64,
-            /// \[m\]
-            altitude: f32,
-            /// \[°\]
-            lat: f64,
-            offset: i64,
-            /// \[hPa\] Valid raw range 300.0..=1100.5. Its 16-bit words travel swapped.
-            pressure: f32,
-            /// Its 16-bit words travel swapped.
-            total: u32,
-        },
-        /// §4.2 Acknowledge (code `0x82`, 5 bytes).
-        Ack,
+        State(response::State),
+        Ack(response::Ack),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -333,8 +390,8 @@ pub mod telemetry_le {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::State { .. } => 0,
-                Self::Ack => 1,
+                Self::State(_) => 0,
+                Self::Ack(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -351,23 +408,9 @@ pub mod telemetry_le {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::State {
-                    time_us: v_time_us,
-                    altitude: v_altitude,
-                    lat: v_lat,
-                    offset: v_offset,
-                    pressure: v_pressure,
-                    total: v_total,
-                } => {
-                    f("time_us", rt::Int(*v_time_us as i64));
-                    f("altitude", rt::Int(rt::raw(*v_altitude)));
-                    f("lat", rt::Int(rt::raw(*v_lat)));
-                    f("offset", rt::Int(*v_offset as i64));
-                    f("pressure", rt::Int(rt::raw(*v_pressure)));
-                    f("total", rt::Int(*v_total as i64));
-                }
+                Self::State(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -381,14 +424,16 @@ pub mod telemetry_le {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::State {
-                    time_us: v_time_us,
-                    altitude: v_altitude,
-                    lat: v_lat,
-                    offset: v_offset,
-                    pressure: v_pressure,
-                    total: v_total,
-                } => {
+                Self::State(
+                    response::State {
+                        time_us: v_time_us,
+                        altitude: v_altitude,
+                        lat: v_lat,
+                        offset: v_offset,
+                        pressure: v_pressure,
+                        total: v_total,
+                    },
+                ) => {
                     rt::encode_in_range(
                         "pressure",
                         v_pressure,
@@ -410,7 +455,9 @@ pub mod telemetry_le {
                     }
                     out.len()
                 }
-                Self::Ack => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len(),
+                Self::Ack(response::Ack {}) => {
+                    rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
             rt::Ok(len)
@@ -464,7 +511,7 @@ pub mod telemetry_le {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x81 => {
-                    let frame = rt::fixed::<41>(frame, &response::STATE)?;
+                    let frame = rt::fixed::<41>(frame, &response::State::DESC)?;
                     let field_4: f32 = f32::from_le_bytes([
                         frame[34],
                         frame[35],
@@ -478,53 +525,58 @@ pub mod telemetry_le {
                         rt::f32_raw(300f32),
                         rt::f32_raw(1100.5f32),
                     )?;
-                    rt::Ok(Self::State {
-                        time_us: u64::from_le_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                            frame[11],
-                        ]),
-                        altitude: f32::from_le_bytes([
-                            frame[12],
-                            frame[13],
-                            frame[14],
-                            frame[15],
-                        ]),
-                        lat: f64::from_le_bytes([
-                            frame[16],
-                            frame[17],
-                            frame[18],
-                            frame[19],
-                            frame[20],
-                            frame[21],
-                            frame[22],
-                            frame[23],
-                        ]),
-                        offset: i64::from_le_bytes([
-                            frame[24],
-                            frame[25],
-                            frame[26],
-                            frame[27],
-                            frame[28],
-                            frame[29],
-                            frame[30],
-                            frame[31],
-                        ]),
-                        pressure: field_4,
-                        total: u32::from_le_bytes([
-                            frame[38],
-                            frame[39],
-                            frame[36],
-                            frame[37],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::State(response::State {
+                            time_us: u64::from_le_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                                frame[11],
+                            ]),
+                            altitude: f32::from_le_bytes([
+                                frame[12],
+                                frame[13],
+                                frame[14],
+                                frame[15],
+                            ]),
+                            lat: f64::from_le_bytes([
+                                frame[16],
+                                frame[17],
+                                frame[18],
+                                frame[19],
+                                frame[20],
+                                frame[21],
+                                frame[22],
+                                frame[23],
+                            ]),
+                            offset: i64::from_le_bytes([
+                                frame[24],
+                                frame[25],
+                                frame[26],
+                                frame[27],
+                                frame[28],
+                                frame[29],
+                                frame[30],
+                                frame[31],
+                            ]),
+                            pressure: field_4,
+                            total: u32::from_le_bytes([
+                                frame[38],
+                                frame[39],
+                                frame[36],
+                                frame[37],
+                            ]),
+                        }),
+                    )
                 }
-                0x82 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
+                0x82 => {
+                    rt::fixed::<5>(frame, &response::Ack::DESC)
+                        .map(|_| Self::Ack(response::Ack))
+                }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
         }
@@ -537,16 +589,18 @@ pub mod telemetry_le {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "state" => {
-                    rt::Ok(Self::State {
-                        time_us: rt::get(&mut field, "time_us")?,
-                        altitude: rt::get(&mut field, "altitude")?,
-                        lat: rt::get(&mut field, "lat")?,
-                        offset: rt::get(&mut field, "offset")?,
-                        pressure: rt::get(&mut field, "pressure")?,
-                        total: rt::get(&mut field, "total")?,
-                    })
+                    rt::Ok(
+                        Self::State(response::State {
+                            time_us: rt::get(&mut field, "time_us")?,
+                            altitude: rt::get(&mut field, "altitude")?,
+                            lat: rt::get(&mut field, "lat")?,
+                            offset: rt::get(&mut field, "offset")?,
+                            pressure: rt::get(&mut field, "pressure")?,
+                            total: rt::get(&mut field, "total")?,
+                        }),
+                    )
                 }
-                "ack" => rt::Ok(Self::Ack),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -708,27 +762,59 @@ pub mod telemetry_le {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TelemetryLe>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `get_state`, code 0x01
-        pub const GET_STATE: MessageDesc = MessageDesc::new("get_state", 0x01, 1, &[5]);
-        /// `set_home`, code 0x02
-        pub const SET_HOME: MessageDesc = MessageDesc::new("set_home", 0x02, 1, &[21]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Get the state (code `0x01`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetState;
+        /// §3.2 Set the home position (code `0x02`, 21 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetHome {
+            /// \[°\] Valid raw range -90.0..=90.0.
+            pub lat: f64,
+            /// \[°\] Valid raw range -180.0..=180.0.
+            pub lon: f64,
+        }
         /// `set_home.lat`
         pub const SET_HOME_LAT: FieldDesc = FieldDesc::new("set_home", "lat");
         /// `set_home.lon`
         pub const SET_HOME_LON: FieldDesc = FieldDesc::new("set_home", "lon");
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `state`, code 0x81
-        pub const STATE: MessageDesc = MessageDesc::new("state", 0x81, 1, &[41]);
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 State (code `0x81`, 41 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct State {
+            /// \[µs\]
+            pub time_us: u64,
+            /// \[m\]
+            pub altitude: f32,
+            /// \[°\]
+            pub lat: f64,
+            pub offset: i64,
+            /// \[hPa\] Valid raw range 300.0..=1100.5. Its 16-bit words travel swapped.
+            pub pressure: f32,
+            /// Its 16-bit words travel swapped.
+            pub total: u32,
+        }
+        /// §4.2 Acknowledge (code `0x82`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
         /// `state.pressure`
         pub const STATE_PRESSURE: FieldDesc = FieldDesc::new("state", "pressure");
-        /// `ack`, code 0x82
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x82, 1, &[5]);
     }
 }

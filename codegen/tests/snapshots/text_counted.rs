@@ -103,20 +103,47 @@ pub mod text_counted {
             },
         ],
     };
+    impl request::SetName {
+        pub const NAME: &'static str = "set_name";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetName(*self).encode(address, buf)
+        }
+    }
+    impl request::GetInfo {
+        pub const NAME: &'static str = "get_info";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x21,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetInfo(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Set the device name (code `0x20`, 6 to 22 bytes).
-        SetName {
-            name: rt::Repeated<u8, 16>,
-            /// Valid raw range 0..=7.
-            channel: u8,
-        },
-        /// §2 Read the device information (code `0x21`, 4 bytes).
-        GetInfo,
+        SetName(request::SetName),
+        GetInfo(request::GetInfo),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -127,8 +154,8 @@ pub mod text_counted {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::SetName { .. } => 0,
-                Self::GetInfo => 1,
+                Self::SetName(_) => 0,
+                Self::GetInfo(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -142,7 +169,7 @@ pub mod text_counted {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SetName { name: v_name, .. } => {
+                Self::SetName(request::SetName { name: v_name, .. }) => {
                     LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(v_name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -150,12 +177,9 @@ pub mod text_counted {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetName { name: v_name, channel: v_channel } => {
-                    f("name", rt::Text(v_name.as_slice()));
-                    f("channel", rt::Int(*v_channel as i64));
-                }
+                Self::SetName(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -169,7 +193,7 @@ pub mod text_counted {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SetName { name: v_name, channel: v_channel } => {
+                Self::SetName(request::SetName { name: v_name, channel: v_channel }) => {
                     rt::encode_in_range("channel", v_channel, 0, 7)?;
                     let bytes_0: usize = LISTS_SET_NAME
                         .lists[0]
@@ -190,7 +214,9 @@ pub mod text_counted {
                     rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
                     out.len()
                 }
-                Self::GetInfo => rt::frame_mut::<4>(buf, &[0x7E, address, 0x21])?.len(),
+                Self::GetInfo(request::GetInfo {}) => {
+                    rt::frame_mut::<4>(buf, &[0x7E, address, 0x21])?.len()
+                }
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
             rt::Ok(len)
@@ -224,14 +250,19 @@ pub mod text_counted {
                         0,
                         7,
                     )?;
-                    rt::Ok(Self::SetName {
-                        name: s
-                            .lists[0]
-                            .elements::<u8, 16>(s.elements(0), false, false)?,
-                        channel: frame[4],
-                    })
+                    rt::Ok(
+                        Self::SetName(request::SetName {
+                            name: s
+                                .lists[0]
+                                .elements::<u8, 16>(s.elements(0), false, false)?,
+                            channel: frame[4],
+                        }),
+                    )
                 }
-                0x21 => rt::fixed::<4>(frame, &request::GET_INFO).map(|_| Self::GetInfo),
+                0x21 => {
+                    rt::fixed::<4>(frame, &request::GetInfo::DESC)
+                        .map(|_| Self::GetInfo(request::GetInfo))
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
         }
@@ -244,12 +275,14 @@ pub mod text_counted {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "set_name" => {
-                    rt::Ok(Self::SetName {
-                        name: rt::list_text::<16>(&mut field, "name")?,
-                        channel: rt::get(&mut field, "channel")?,
-                    })
+                    rt::Ok(
+                        Self::SetName(request::SetName {
+                            name: rt::list_text::<16>(&mut field, "name")?,
+                            channel: rt::get(&mut field, "channel")?,
+                        }),
+                    )
                 }
-                "get_info" => rt::Ok(Self::GetInfo),
+                "get_info" => rt::Ok(Self::GetInfo(request::GetInfo)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -348,16 +381,52 @@ pub mod text_counted {
             },
         ],
     };
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[5],
+        );
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::DeviceInfo {
+        pub const NAME: &'static str = "device_info";
+        pub const CODE: &'static [u8] = &[0x21];
+        pub const MIN_LEN: usize = 11;
+        pub const MAX_LEN: usize = 26;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x21,
+            1,
+            &[10],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("serial", rt::Int(self.serial as i64));
+            f("version", rt::Int(self.version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DeviceInfo(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Acknowledge (code `0x20`, 5 bytes).
-        Ack { status: u8 },
-        /// §2 Device information (code `0x21`, 11 to 26 bytes).
-        DeviceInfo { name: rt::Repeated<u8, 16>, serial: u32, version: u8 },
+        Ack(response::Ack),
+        DeviceInfo(response::DeviceInfo),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -368,8 +437,8 @@ pub mod text_counted {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ack { .. } => 0,
-                Self::DeviceInfo { .. } => 1,
+                Self::Ack(_) => 0,
+                Self::DeviceInfo(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -383,7 +452,7 @@ pub mod text_counted {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::DeviceInfo { name: v_name, .. } => {
+                Self::DeviceInfo(response::DeviceInfo { name: v_name, .. }) => {
                     LISTS_DEVICE_INFO.base
                         + LISTS_DEVICE_INFO.lists[0].bytes_of(v_name.len())
                 }
@@ -392,18 +461,10 @@ pub mod text_counted {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Ack { status: v_status } => f("status", rt::Int(*v_status as i64)),
-                Self::DeviceInfo {
-                    name: v_name,
-                    serial: v_serial,
-                    version: v_version,
-                } => {
-                    f("name", rt::Text(v_name.as_slice()));
-                    f("serial", rt::Int(*v_serial as i64));
-                    f("version", rt::Int(*v_version as i64));
-                }
+                Self::Ack(m) => m.visit(f),
+                Self::DeviceInfo(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -416,16 +477,18 @@ pub mod text_counted {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ack { status: v_status } => {
+                Self::Ack(response::Ack { status: v_status }) => {
                     let out = rt::frame_mut::<5>(buf, &[0x7E, address, 0x20])?;
                     out[3] = v_status;
                     out.len()
                 }
-                Self::DeviceInfo {
-                    name: v_name,
-                    serial: v_serial,
-                    version: v_version,
-                } => {
+                Self::DeviceInfo(
+                    response::DeviceInfo {
+                        name: v_name,
+                        serial: v_serial,
+                        version: v_version,
+                    },
+                ) => {
                     let bytes_0: usize = LISTS_DEVICE_INFO
                         .lists[0]
                         .encode_len(v_name.len())? - LISTS_DEVICE_INFO.base;
@@ -497,24 +560,26 @@ pub mod text_counted {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x20 => {
-                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
-                    rt::Ok(Self::Ack { status: frame[3] })
+                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
+                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
                 }
                 0x21 => {
                     let s = LISTS_DEVICE_INFO.split::<10, 1>(frame)?;
                     let frame = &s.frame;
-                    rt::Ok(Self::DeviceInfo {
-                        name: s
-                            .lists[0]
-                            .elements::<u8, 16>(s.elements(0), false, false)?,
-                        serial: u32::from_be_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                        ]),
-                        version: frame[8],
-                    })
+                    rt::Ok(
+                        Self::DeviceInfo(response::DeviceInfo {
+                            name: s
+                                .lists[0]
+                                .elements::<u8, 16>(s.elements(0), false, false)?,
+                            serial: u32::from_be_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                            ]),
+                            version: frame[8],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -528,16 +593,20 @@ pub mod text_counted {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "ack" => {
-                    rt::Ok(Self::Ack {
-                        status: rt::get(&mut field, "status")?,
-                    })
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            status: rt::get(&mut field, "status")?,
+                        }),
+                    )
                 }
                 "device_info" => {
-                    rt::Ok(Self::DeviceInfo {
-                        name: rt::list_text::<16>(&mut field, "name")?,
-                        serial: rt::get(&mut field, "serial")?,
-                        version: rt::get(&mut field, "version")?,
-                    })
+                    rt::Ok(
+                        Self::DeviceInfo(response::DeviceInfo {
+                            name: rt::list_text::<16>(&mut field, "name")?,
+                            serial: rt::get(&mut field, "serial")?,
+                            version: rt::get(&mut field, "version")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -585,9 +654,9 @@ pub mod text_counted {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::SetName`], read from the frame.
+        /// [`request::SetName`], read from the frame.
         SetName { name: rt::ListView<'a, u8>, channel: u8 },
-        /// [`Request::GetInfo`], read from the frame.
+        /// [`request::GetInfo`], read from the frame.
         GetInfo,
     }
     impl<'a> RequestView<'a> {
@@ -625,7 +694,9 @@ pub mod text_counted {
                         channel: frame[4],
                     })
                 }
-                0x21 => rt::fixed::<4>(frame, &request::GET_INFO).map(|_| Self::GetInfo),
+                0x21 => {
+                    rt::fixed::<4>(frame, &request::GetInfo::DESC).map(|_| Self::GetInfo)
+                }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
         }
@@ -644,21 +715,21 @@ pub mod text_counted {
         pub fn to_owned(self) -> Request {
             match self {
                 Self::SetName { name, channel } => {
-                    Request::SetName {
+                    Request::SetName(request::SetName {
                         name: name.to_repeated(),
                         channel,
-                    }
+                    })
                 }
-                Self::GetInfo => Request::GetInfo,
+                Self::GetInfo => Request::GetInfo(request::GetInfo),
             }
         }
     }
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::Ack`], read from the frame.
+        /// [`response::Ack`], read from the frame.
         Ack { status: u8 },
-        /// [`Response::DeviceInfo`], read from the frame.
+        /// [`response::DeviceInfo`], read from the frame.
         DeviceInfo { name: rt::ListView<'a, u8>, serial: u32, version: u8 },
     }
     impl<'a> ResponseView<'a> {
@@ -709,7 +780,7 @@ pub mod text_counted {
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
                 0x20 => {
-                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
+                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 0x21 => {
@@ -743,13 +814,13 @@ pub mod text_counted {
         /// The owned message: each lent list copied.
         pub fn to_owned(self) -> Response {
             match self {
-                Self::Ack { status } => Response::Ack { status },
+                Self::Ack { status } => Response::Ack(response::Ack { status }),
                 Self::DeviceInfo { name, serial, version } => {
-                    Response::DeviceInfo {
+                    Response::DeviceInfo(response::DeviceInfo {
                         name: name.to_repeated(),
                         serial,
                         version,
-                    }
+                    })
                 }
             }
         }
@@ -885,31 +956,52 @@ pub mod text_counted {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TextCounted>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `set_name`, code 0x20
-        pub const SET_NAME: MessageDesc = MessageDesc::new("set_name", 0x20, 1, &[6]);
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Set the device name (code `0x20`, 6 to 22 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetName {
+            pub name: super::rt::Repeated<u8, 16>,
+            /// Valid raw range 0..=7.
+            pub channel: u8,
+        }
+        /// §2 Read the device information (code `0x21`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetInfo;
         /// `set_name.name`
         pub const SET_NAME_NAME: FieldDesc = FieldDesc::new("set_name", "name");
         /// `set_name.channel`
         pub const SET_NAME_CHANNEL: FieldDesc = FieldDesc::new("set_name", "channel");
-        /// `get_info`, code 0x21
-        pub const GET_INFO: MessageDesc = MessageDesc::new("get_info", 0x21, 1, &[4]);
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ack`, code 0x20
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x20, 1, &[5]);
-        /// `device_info`, code 0x21
-        pub const DEVICE_INFO: MessageDesc = MessageDesc::new(
-            "device_info",
-            0x21,
-            1,
-            &[10],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Acknowledge (code `0x20`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ack {
+            pub status: u8,
+        }
+        /// §2 Device information (code `0x21`, 11 to 26 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct DeviceInfo {
+            pub name: super::rt::Repeated<u8, 16>,
+            pub serial: u32,
+            pub version: u8,
+        }
         /// `device_info.name`
         pub const DEVICE_INFO_NAME: FieldDesc = FieldDesc::new("device_info", "name");
     }

@@ -93,22 +93,66 @@ pub mod text_terminated {
             },
         ],
     };
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x28];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x28,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::SetName {
+        pub const NAME: &'static str = "set_name";
+        pub const CODE: &'static [u8] = &[0x2A];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2A,
+            1,
+            &[5],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("channel", rt::Int(self.channel as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetName(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadParameter {
+        pub const NAME: &'static str = "read_parameter";
+        pub const CODE: &'static [u8] = &[0x2C];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2C,
+            1,
+            &[5],
+        );
+        pub const INDEX: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadParameter(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Ask for the device information (code `0x28`, 4 bytes).
-        Ping,
-        /// §2 Set the device name (code `0x2A`, 6 to 22 bytes).
-        SetName {
-            name: rt::Repeated<u8, 16>,
-            /// Valid raw range 0..=7.
-            channel: u8,
-        },
-        /// §3 Read a parameter entry (code `0x2C`, 5 bytes).
-        ReadParameter { index: u8 },
+        Ping(request::Ping),
+        SetName(request::SetName),
+        ReadParameter(request::ReadParameter),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -120,9 +164,9 @@ pub mod text_terminated {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Ping => 0,
-                Self::SetName { .. } => 1,
-                Self::ReadParameter { .. } => 2,
+                Self::Ping(_) => 0,
+                Self::SetName(_) => 1,
+                Self::ReadParameter(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -136,7 +180,7 @@ pub mod text_terminated {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SetName { name: v_name, .. } => {
+                Self::SetName(request::SetName { name: v_name, .. }) => {
                     LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(v_name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -144,15 +188,10 @@ pub mod text_terminated {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetName { name: v_name, channel: v_channel } => {
-                    f("name", rt::Text(v_name.as_slice()));
-                    f("channel", rt::Int(*v_channel as i64));
-                }
-                Self::ReadParameter { index: v_index } => {
-                    f("index", rt::Int(*v_index as i64))
-                }
+                Self::SetName(m) => m.visit(f),
+                Self::ReadParameter(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -166,8 +205,10 @@ pub mod text_terminated {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping => rt::frame_mut::<4>(buf, &[0xC8, 0x02, 0x28])?.len(),
-                Self::SetName { name: v_name, channel: v_channel } => {
+                Self::Ping(request::Ping {}) => {
+                    rt::frame_mut::<4>(buf, &[0xC8, 0x02, 0x28])?.len()
+                }
+                Self::SetName(request::SetName { name: v_name, channel: v_channel }) => {
                     rt::encode_in_range("channel", v_channel, 0, 7)?;
                     LISTS_SET_NAME.lists[0].encode_until(v_name.as_slice())?;
                     let bytes_0: usize = LISTS_SET_NAME
@@ -191,7 +232,7 @@ pub mod text_terminated {
                     rt::put_length(out, 1, 1, false, true, -2)?;
                     out.len()
                 }
-                Self::ReadParameter { index: v_index } => {
+                Self::ReadParameter(request::ReadParameter { index: v_index }) => {
                     let out = rt::frame_mut::<5>(buf, &[0xC8, 0x03, 0x2C])?;
                     out[3] = v_index;
                     out.len()
@@ -220,7 +261,10 @@ pub mod text_terminated {
         #[inline]
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
-                0x28 => rt::fixed::<4>(frame, &request::PING).map(|_| Self::Ping),
+                0x28 => {
+                    rt::fixed::<4>(frame, &request::Ping::DESC)
+                        .map(|_| Self::Ping(request::Ping))
+                }
                 0x2A => {
                     let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
                     let frame = &s.frame;
@@ -231,18 +275,22 @@ pub mod text_terminated {
                         0,
                         7,
                     )?;
-                    rt::Ok(Self::SetName {
-                        name: s
-                            .lists[0]
-                            .elements::<u8, 16>(s.elements(0), false, false)?,
-                        channel: frame[3],
-                    })
+                    rt::Ok(
+                        Self::SetName(request::SetName {
+                            name: s
+                                .lists[0]
+                                .elements::<u8, 16>(s.elements(0), false, false)?,
+                            channel: frame[3],
+                        }),
+                    )
                 }
                 0x2C => {
-                    let frame = rt::fixed::<5>(frame, &request::READ_PARAMETER)?;
-                    rt::Ok(Self::ReadParameter {
-                        index: frame[3],
-                    })
+                    let frame = rt::fixed::<5>(frame, &request::ReadParameter::DESC)?;
+                    rt::Ok(
+                        Self::ReadParameter(request::ReadParameter {
+                            index: frame[3],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, false)),
             }
@@ -255,17 +303,21 @@ pub mod text_terminated {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "ping" => rt::Ok(Self::Ping),
+                "ping" => rt::Ok(Self::Ping(request::Ping)),
                 "set_name" => {
-                    rt::Ok(Self::SetName {
-                        name: rt::list_text::<16>(&mut field, "name")?,
-                        channel: rt::get(&mut field, "channel")?,
-                    })
+                    rt::Ok(
+                        Self::SetName(request::SetName {
+                            name: rt::list_text::<16>(&mut field, "name")?,
+                            channel: rt::get(&mut field, "channel")?,
+                        }),
+                    )
                 }
                 "read_parameter" => {
-                    rt::Ok(Self::ReadParameter {
-                        index: rt::get(&mut field, "index")?,
-                    })
+                    rt::Ok(
+                        Self::ReadParameter(request::ReadParameter {
+                            index: rt::get(&mut field, "index")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -390,30 +442,78 @@ pub mod text_terminated {
             },
         ],
     };
+    impl response::DeviceInfo {
+        pub const NAME: &'static str = "device_info";
+        pub const CODE: &'static [u8] = &[0x29];
+        pub const MIN_LEN: usize = 20;
+        pub const MAX_LEN: usize = 43;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x29,
+            1,
+            &[18],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("name", rt::Text(self.name.as_slice()));
+            f("serial", rt::Int(self.serial as i64));
+            f("hardware", rt::Int(self.hardware as i64));
+            f("firmware", rt::Int(self.firmware as i64));
+            f("parameters", rt::Int(self.parameters as i64));
+            f("version", rt::Int(self.version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DeviceInfo(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x2A];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2A,
+            1,
+            &[5],
+        );
+        pub const STATUS: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Parameter {
+        pub const NAME: &'static str = "parameter";
+        pub const CODE: &'static [u8] = &[0x2B];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 33;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2B,
+            1,
+            &[7],
+        );
+        pub const INDEX: rt::Range<usize> = 3..4;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("label", rt::Text(self.label.as_slice()));
+            f("unit", rt::Text(self.unit.as_slice()));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Parameter(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Device information (code `0x29`, 20 to 43 bytes).
-        DeviceInfo {
-            name: rt::Repeated<u8, 24>,
-            serial: u32,
-            hardware: u32,
-            firmware: u32,
-            parameters: u8,
-            version: u8,
-        },
-        /// §2 Acknowledge (code `0x2A`, 5 bytes).
-        Ack { status: u8 },
-        /// §3 A parameter entry: its name and its unit, each up to a NUL (code `0x2B`, 9 to 33 bytes).
-        Parameter {
-            index: u8,
-            label: rt::Repeated<u8, 16>,
-            unit: rt::Repeated<u8, 8>,
-            value: i16,
-        },
+        DeviceInfo(response::DeviceInfo),
+        Ack(response::Ack),
+        Parameter(response::Parameter),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -425,9 +525,9 @@ pub mod text_terminated {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::DeviceInfo { .. } => 0,
-                Self::Ack { .. } => 1,
-                Self::Parameter { .. } => 2,
+                Self::DeviceInfo(_) => 0,
+                Self::Ack(_) => 1,
+                Self::Parameter(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -441,11 +541,13 @@ pub mod text_terminated {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::DeviceInfo { name: v_name, .. } => {
+                Self::DeviceInfo(response::DeviceInfo { name: v_name, .. }) => {
                     LISTS_DEVICE_INFO.base
                         + LISTS_DEVICE_INFO.lists[0].bytes_of(v_name.len())
                 }
-                Self::Parameter { label: v_label, unit: v_unit, .. } => {
+                Self::Parameter(
+                    response::Parameter { label: v_label, unit: v_unit, .. },
+                ) => {
                     LISTS_PARAMETER.base
                         + LISTS_PARAMETER.lists[0].bytes_of(v_label.len())
                         + LISTS_PARAMETER.lists[1].bytes_of(v_unit.len())
@@ -455,35 +557,11 @@ pub mod text_terminated {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::DeviceInfo {
-                    name: v_name,
-                    serial: v_serial,
-                    hardware: v_hardware,
-                    firmware: v_firmware,
-                    parameters: v_parameters,
-                    version: v_version,
-                } => {
-                    f("name", rt::Text(v_name.as_slice()));
-                    f("serial", rt::Int(*v_serial as i64));
-                    f("hardware", rt::Int(*v_hardware as i64));
-                    f("firmware", rt::Int(*v_firmware as i64));
-                    f("parameters", rt::Int(*v_parameters as i64));
-                    f("version", rt::Int(*v_version as i64));
-                }
-                Self::Ack { status: v_status } => f("status", rt::Int(*v_status as i64)),
-                Self::Parameter {
-                    index: v_index,
-                    label: v_label,
-                    unit: v_unit,
-                    value: v_value,
-                } => {
-                    f("index", rt::Int(*v_index as i64));
-                    f("label", rt::Text(v_label.as_slice()));
-                    f("unit", rt::Text(v_unit.as_slice()));
-                    f("value", rt::Int(*v_value as i64));
-                }
+                Self::DeviceInfo(m) => m.visit(f),
+                Self::Ack(m) => m.visit(f),
+                Self::Parameter(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -496,14 +574,16 @@ pub mod text_terminated {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::DeviceInfo {
-                    name: v_name,
-                    serial: v_serial,
-                    hardware: v_hardware,
-                    firmware: v_firmware,
-                    parameters: v_parameters,
-                    version: v_version,
-                } => {
+                Self::DeviceInfo(
+                    response::DeviceInfo {
+                        name: v_name,
+                        serial: v_serial,
+                        hardware: v_hardware,
+                        firmware: v_firmware,
+                        parameters: v_parameters,
+                        version: v_version,
+                    },
+                ) => {
                     LISTS_DEVICE_INFO.lists[0].encode_until(v_name.as_slice())?;
                     let bytes_0: usize = LISTS_DEVICE_INFO
                         .lists[0]
@@ -530,17 +610,19 @@ pub mod text_terminated {
                     rt::put_length(out, 1, 1, false, true, -2)?;
                     out.len()
                 }
-                Self::Ack { status: v_status } => {
+                Self::Ack(response::Ack { status: v_status }) => {
                     let out = rt::frame_mut::<5>(buf, &[0xC8, 0x03, 0x2A])?;
                     out[3] = v_status;
                     out.len()
                 }
-                Self::Parameter {
-                    index: v_index,
-                    label: v_label,
-                    unit: v_unit,
-                    value: v_value,
-                } => {
+                Self::Parameter(
+                    response::Parameter {
+                        index: v_index,
+                        label: v_label,
+                        unit: v_unit,
+                        value: v_value,
+                    },
+                ) => {
                     LISTS_PARAMETER.lists[0].encode_until(v_label.as_slice())?;
                     let bytes_0: usize = LISTS_PARAMETER
                         .lists[0]
@@ -630,47 +712,53 @@ pub mod text_terminated {
                 0x29 => {
                     let s = LISTS_DEVICE_INFO.split::<18, 1>(frame)?;
                     let frame = &s.frame;
-                    rt::Ok(Self::DeviceInfo {
-                        name: s
-                            .lists[0]
-                            .elements::<u8, 24>(s.elements(0), false, false)?,
-                        serial: u32::from_be_bytes([
-                            frame[3],
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                        ]),
-                        hardware: u32::from_be_bytes([
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                        ]),
-                        firmware: u32::from_be_bytes([
-                            frame[11],
-                            frame[12],
-                            frame[13],
-                            frame[14],
-                        ]),
-                        parameters: frame[15],
-                        version: frame[16],
-                    })
+                    rt::Ok(
+                        Self::DeviceInfo(response::DeviceInfo {
+                            name: s
+                                .lists[0]
+                                .elements::<u8, 24>(s.elements(0), false, false)?,
+                            serial: u32::from_be_bytes([
+                                frame[3],
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                            ]),
+                            hardware: u32::from_be_bytes([
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                            ]),
+                            firmware: u32::from_be_bytes([
+                                frame[11],
+                                frame[12],
+                                frame[13],
+                                frame[14],
+                            ]),
+                            parameters: frame[15],
+                            version: frame[16],
+                        }),
+                    )
                 }
                 0x2A => {
-                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
-                    rt::Ok(Self::Ack { status: frame[3] })
+                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
+                    rt::Ok(Self::Ack(response::Ack { status: frame[3] }))
                 }
                 0x2B => {
                     let s = LISTS_PARAMETER.split::<7, 2>(frame)?;
                     let frame = &s.frame;
-                    rt::Ok(Self::Parameter {
-                        index: frame[3],
-                        label: s
-                            .lists[0]
-                            .elements::<u8, 16>(s.elements(0), false, false)?,
-                        unit: s.lists[1].elements::<u8, 8>(s.elements(1), false, false)?,
-                        value: i16::from_be_bytes([frame[4], frame[5]]),
-                    })
+                    rt::Ok(
+                        Self::Parameter(response::Parameter {
+                            index: frame[3],
+                            label: s
+                                .lists[0]
+                                .elements::<u8, 16>(s.elements(0), false, false)?,
+                            unit: s
+                                .lists[1]
+                                .elements::<u8, 8>(s.elements(1), false, false)?,
+                            value: i16::from_be_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 1, 1, true)),
             }
@@ -684,27 +772,33 @@ pub mod text_terminated {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "device_info" => {
-                    rt::Ok(Self::DeviceInfo {
-                        name: rt::list_text::<24>(&mut field, "name")?,
-                        serial: rt::get(&mut field, "serial")?,
-                        hardware: rt::get(&mut field, "hardware")?,
-                        firmware: rt::get(&mut field, "firmware")?,
-                        parameters: rt::get(&mut field, "parameters")?,
-                        version: rt::get(&mut field, "version")?,
-                    })
+                    rt::Ok(
+                        Self::DeviceInfo(response::DeviceInfo {
+                            name: rt::list_text::<24>(&mut field, "name")?,
+                            serial: rt::get(&mut field, "serial")?,
+                            hardware: rt::get(&mut field, "hardware")?,
+                            firmware: rt::get(&mut field, "firmware")?,
+                            parameters: rt::get(&mut field, "parameters")?,
+                            version: rt::get(&mut field, "version")?,
+                        }),
+                    )
                 }
                 "ack" => {
-                    rt::Ok(Self::Ack {
-                        status: rt::get(&mut field, "status")?,
-                    })
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            status: rt::get(&mut field, "status")?,
+                        }),
+                    )
                 }
                 "parameter" => {
-                    rt::Ok(Self::Parameter {
-                        index: rt::get(&mut field, "index")?,
-                        label: rt::list_text::<16>(&mut field, "label")?,
-                        unit: rt::list_text::<8>(&mut field, "unit")?,
-                        value: rt::get(&mut field, "value")?,
-                    })
+                    rt::Ok(
+                        Self::Parameter(response::Parameter {
+                            index: rt::get(&mut field, "index")?,
+                            label: rt::list_text::<16>(&mut field, "label")?,
+                            unit: rt::list_text::<8>(&mut field, "unit")?,
+                            value: rt::get(&mut field, "value")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -752,11 +846,11 @@ pub mod text_terminated {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::Ping`], read from the frame.
+        /// [`request::Ping`], read from the frame.
         Ping,
-        /// [`Request::SetName`], read from the frame.
+        /// [`request::SetName`], read from the frame.
         SetName { name: rt::ListView<'a, u8>, channel: u8 },
-        /// [`Request::ReadParameter`], read from the frame.
+        /// [`request::ReadParameter`], read from the frame.
         ReadParameter { index: u8 },
     }
     impl<'a> RequestView<'a> {
@@ -780,7 +874,7 @@ pub mod text_terminated {
         #[inline]
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 1) {
-                0x28 => rt::fixed::<4>(frame, &request::PING).map(|_| Self::Ping),
+                0x28 => rt::fixed::<4>(frame, &request::Ping::DESC).map(|_| Self::Ping),
                 0x2A => {
                     let s = LISTS_SET_NAME.split::<5, 1>(frame)?;
                     let frame = &s.frame;
@@ -797,7 +891,7 @@ pub mod text_terminated {
                     })
                 }
                 0x2C => {
-                    let frame = rt::fixed::<5>(frame, &request::READ_PARAMETER)?;
+                    let frame = rt::fixed::<5>(frame, &request::ReadParameter::DESC)?;
                     rt::Ok(Self::ReadParameter {
                         index: frame[3],
                     })
@@ -820,21 +914,23 @@ pub mod text_terminated {
         /// The owned message: each lent list copied.
         pub fn to_owned(self) -> Request {
             match self {
-                Self::Ping => Request::Ping,
+                Self::Ping => Request::Ping(request::Ping),
                 Self::SetName { name, channel } => {
-                    Request::SetName {
+                    Request::SetName(request::SetName {
                         name: name.to_repeated(),
                         channel,
-                    }
+                    })
                 }
-                Self::ReadParameter { index } => Request::ReadParameter { index },
+                Self::ReadParameter { index } => {
+                    Request::ReadParameter(request::ReadParameter { index })
+                }
             }
         }
     }
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::DeviceInfo`], read from the frame.
+        /// [`response::DeviceInfo`], read from the frame.
         DeviceInfo {
             name: rt::ListView<'a, u8>,
             serial: u32,
@@ -843,9 +939,9 @@ pub mod text_terminated {
             parameters: u8,
             version: u8,
         },
-        /// [`Response::Ack`], read from the frame.
+        /// [`response::Ack`], read from the frame.
         Ack { status: u8 },
-        /// [`Response::Parameter`], read from the frame.
+        /// [`response::Parameter`], read from the frame.
         Parameter {
             index: u8,
             label: rt::ListView<'a, u8>,
@@ -929,7 +1025,7 @@ pub mod text_terminated {
                     })
                 }
                 0x2A => {
-                    let frame = rt::fixed::<5>(frame, &response::ACK)?;
+                    let frame = rt::fixed::<5>(frame, &response::Ack::DESC)?;
                     rt::Ok(Self::Ack { status: frame[3] })
                 }
                 0x2B => {
@@ -968,23 +1064,23 @@ pub mod text_terminated {
                     parameters,
                     version,
                 } => {
-                    Response::DeviceInfo {
+                    Response::DeviceInfo(response::DeviceInfo {
                         name: name.to_repeated(),
                         serial,
                         hardware,
                         firmware,
                         parameters,
                         version,
-                    }
+                    })
                 }
-                Self::Ack { status } => Response::Ack { status },
+                Self::Ack { status } => Response::Ack(response::Ack { status }),
                 Self::Parameter { index, label, unit, value } => {
-                    Response::Parameter {
+                    Response::Parameter(response::Parameter {
                         index,
                         label: label.to_repeated(),
                         unit: unit.to_repeated(),
                         value,
-                    }
+                    })
                 }
             }
         }
@@ -1148,42 +1244,76 @@ pub mod text_terminated {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<TextTerminated>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `ping`, code 0x28
-        pub const PING: MessageDesc = MessageDesc::new("ping", 0x28, 1, &[4]);
-        /// `set_name`, code 0x2A
-        pub const SET_NAME: MessageDesc = MessageDesc::new("set_name", 0x2A, 1, &[5]);
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Ask for the device information (code `0x28`, 4 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ping;
+        /// §2 Set the device name (code `0x2A`, 6 to 22 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetName {
+            pub name: super::rt::Repeated<u8, 16>,
+            /// Valid raw range 0..=7.
+            pub channel: u8,
+        }
+        /// §3 Read a parameter entry (code `0x2C`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadParameter {
+            pub index: u8,
+        }
         /// `set_name.name`
         pub const SET_NAME_NAME: FieldDesc = FieldDesc::new("set_name", "name");
         /// `set_name.channel`
         pub const SET_NAME_CHANNEL: FieldDesc = FieldDesc::new("set_name", "channel");
-        /// `read_parameter`, code 0x2C
-        pub const READ_PARAMETER: MessageDesc = MessageDesc::new(
-            "read_parameter",
-            0x2C,
-            1,
-            &[5],
-        );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `device_info`, code 0x29
-        pub const DEVICE_INFO: MessageDesc = MessageDesc::new(
-            "device_info",
-            0x29,
-            1,
-            &[18],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Device information (code `0x29`, 20 to 43 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct DeviceInfo {
+            pub name: super::rt::Repeated<u8, 24>,
+            pub serial: u32,
+            pub hardware: u32,
+            pub firmware: u32,
+            pub parameters: u8,
+            pub version: u8,
+        }
+        /// §2 Acknowledge (code `0x2A`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ack {
+            pub status: u8,
+        }
+        /// §3 A parameter entry: its name and its unit, each up to a NUL (code `0x2B`, 9 to 33 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Parameter {
+            pub index: u8,
+            pub label: super::rt::Repeated<u8, 16>,
+            pub unit: super::rt::Repeated<u8, 8>,
+            pub value: i16,
+        }
         /// `device_info.name`
         pub const DEVICE_INFO_NAME: FieldDesc = FieldDesc::new("device_info", "name");
-        /// `ack`, code 0x2A
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x2A, 1, &[5]);
-        /// `parameter`, code 0x2B
-        pub const PARAMETER: MessageDesc = MessageDesc::new("parameter", 0x2B, 1, &[7]);
         /// `parameter.label`
         pub const PARAMETER_LABEL: FieldDesc = FieldDesc::new("parameter", "label");
         /// `parameter.unit`

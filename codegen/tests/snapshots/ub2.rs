@@ -289,160 +289,789 @@ pub mod ub2 {
             Self(raw)
         }
     }
+    impl request::ReferenceRun {
+        pub const NAME: &'static str = "reference_run";
+        pub const CODE: &'static [u8] = &[0x10, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x1000,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReferenceRun(*self).encode(address, buf)
+        }
+    }
+    impl request::ReferenceRunStatus {
+        pub const NAME: &'static str = "reference_run_status";
+        pub const CODE: &'static [u8] = &[0x10, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x1001,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReferenceRunStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCapacitance {
+        pub const NAME: &'static str = "go_to_capacitance";
+        pub const CODE: &'static [u8] = &[0x20, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2000,
+            2,
+            &[9],
+        );
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCapacitanceStatus {
+        pub const NAME: &'static str = "go_to_capacitance_status";
+        pub const CODE: &'static [u8] = &[0x20, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2001,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCapacitanceStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToFullStepPosition {
+        pub const NAME: &'static str = "go_to_full_step_position";
+        pub const CODE: &'static [u8] = &[0x21, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2100,
+            2,
+            &[7],
+        );
+        pub const TARGET: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToFullStepPositionStatus {
+        pub const NAME: &'static str = "go_to_full_step_position_status";
+        pub const CODE: &'static [u8] = &[0x21, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2101,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToFullStepPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveFullSteps {
+        pub const NAME: &'static str = "move_full_steps";
+        pub const CODE: &'static [u8] = &[0x22, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2200,
+            2,
+            &[7],
+        );
+        pub const STEPS: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("steps", rt::Int(self.steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveFullSteps(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveFullStepsStatus {
+        pub const NAME: &'static str = "move_full_steps_status";
+        pub const CODE: &'static [u8] = &[0x22, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2201,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveFullStepsStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmin {
+        pub const NAME: &'static str = "go_to_cmin";
+        pub const CODE: &'static [u8] = &[0x23, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2300,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmin(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCminStatus {
+        pub const NAME: &'static str = "go_to_cmin_status";
+        pub const CODE: &'static [u8] = &[0x23, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2301,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCminStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmax {
+        pub const NAME: &'static str = "go_to_cmax";
+        pub const CODE: &'static [u8] = &[0x24, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2400,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmax(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmaxStatus {
+        pub const NAME: &'static str = "go_to_cmax_status";
+        pub const CODE: &'static [u8] = &[0x24, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2401,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmaxStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToMicroStepPosition {
+        pub const NAME: &'static str = "go_to_micro_step_position";
+        pub const CODE: &'static [u8] = &[0x25, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2500,
+            2,
+            &[9],
+        );
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToMicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToMicroStepPositionStatus {
+        pub const NAME: &'static str = "go_to_micro_step_position_status";
+        pub const CODE: &'static [u8] = &[0x25, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2501,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToMicroStepPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveMicroSteps {
+        pub const NAME: &'static str = "move_micro_steps";
+        pub const CODE: &'static [u8] = &[0x26, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2600,
+            2,
+            &[9],
+        );
+        pub const STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("steps", rt::Int(self.steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveMicroSteps(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveMicroStepsStatus {
+        pub const NAME: &'static str = "move_micro_steps_status";
+        pub const CODE: &'static [u8] = &[0x26, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2601,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveMicroStepsStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToStoredPosition {
+        pub const NAME: &'static str = "go_to_stored_position";
+        pub const CODE: &'static [u8] = &[0x27, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2700,
+            2,
+            &[6],
+        );
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToStoredPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToStoredPositionStatus {
+        pub const NAME: &'static str = "go_to_stored_position_status";
+        pub const CODE: &'static [u8] = &[0x27, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x2701,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToStoredPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::SetAccelerationSpeedIndex {
+        pub const NAME: &'static str = "set_acceleration_speed_index";
+        pub const CODE: &'static [u8] = &[0x43, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4300,
+            2,
+            &[7],
+        );
+        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
+        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("acceleration_index", rt::Int(self.acceleration_index as i64));
+            f("speed_index", rt::Int(self.speed_index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetAccelerationSpeedIndex(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCurrent {
+        pub const NAME: &'static str = "set_current";
+        pub const CODE: &'static [u8] = &[0x45, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4500,
+            2,
+            &[7],
+        );
+        pub const IDLE_CURRENT: rt::Range<usize> = 4..5;
+        pub const DRIVE_CURRENT: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("idle_current", rt::Int(self.idle_current as i64));
+            f("drive_current", rt::Int(self.drive_current as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCurrent(*self).encode(address, buf)
+        }
+    }
+    impl request::SetSlaveAddress {
+        pub const NAME: &'static str = "set_slave_address";
+        pub const CODE: &'static [u8] = &[0x60, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x6000,
+            2,
+            &[6],
+        );
+        pub const ADDRESS: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetSlaveAddress(*self).encode(address, buf)
+        }
+    }
+    impl request::SetBaudRate {
+        pub const NAME: &'static str = "set_baud_rate";
+        pub const CODE: &'static [u8] = &[0x61, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x6100,
+            2,
+            &[6],
+        );
+        pub const BAUD_RATE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("baud_rate", rt::Int(self.baud_rate.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetBaudRate(*self).encode(address, buf)
+        }
+    }
+    impl request::SetLowerCustomerLimit {
+        pub const NAME: &'static str = "set_lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x72, 0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7201,
+            2,
+            &[9],
+        );
+        pub const LIMIT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("limit", rt::Int(self.limit.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetLowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::SetUpperCustomerLimit {
+        pub const NAME: &'static str = "set_upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x72, 0x02];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7202,
+            2,
+            &[9],
+        );
+        pub const LIMIT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("limit", rt::Int(self.limit.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetUpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::StoreIndexedPosition {
+        pub const NAME: &'static str = "store_indexed_position";
+        pub const CODE: &'static [u8] = &[0x75, 0x00];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7500,
+            2,
+            &[8],
+        );
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const POSITION: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("position", rt::Int(self.position as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::StoreIndexedPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::SetModeOfOperation {
+        pub const NAME: &'static str = "set_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x80, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x8000,
+            2,
+            &[6],
+        );
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetModeOfOperation(*self).encode(address, buf)
+        }
+    }
+    impl request::GetActualCapacitance {
+        pub const NAME: &'static str = "get_actual_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4001,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetActualCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetActualFullStepPosition {
+        pub const NAME: &'static str = "get_actual_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4002,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetActualFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMinimumCapacitance {
+        pub const NAME: &'static str = "get_minimum_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x10];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4010,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMinimumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMaximumCapacitance {
+        pub const NAME: &'static str = "get_maximum_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4011,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMaximumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetAccelerationSpeed {
+        pub const NAME: &'static str = "get_acceleration_speed";
+        pub const CODE: &'static [u8] = &[0x40, 0x21];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4021,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetAccelerationSpeed(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStatus {
+        pub const NAME: &'static str = "get_status";
+        pub const CODE: &'static [u8] = &[0x40, 0x22];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4022,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCCurveIndexedFullStepCapacitance {
+        pub const NAME: &'static str = "get_c_curve_indexed_full_step_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x30];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4030,
+            2,
+            &[7],
+        );
+        pub const INDEX: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCCurveIndexedFullStepCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetControllerTemperature {
+        pub const NAME: &'static str = "get_controller_temperature";
+        pub const CODE: &'static [u8] = &[0x40, 0x32];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4032,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetControllerTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMicroStepPosition {
+        pub const NAME: &'static str = "get_micro_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x36];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4036,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetFirmwareVersion {
+        pub const NAME: &'static str = "get_firmware_version";
+        pub const CODE: &'static [u8] = &[0x40, 0x61];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4061,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetFirmwareVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::GetSerialNumber {
+        pub const NAME: &'static str = "get_serial_number";
+        pub const CODE: &'static [u8] = &[0x40, 0x62];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4062,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetSerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCminNom {
+        pub const NAME: &'static str = "get_cmin_nom";
+        pub const CODE: &'static [u8] = &[0x40, 0x70];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4070,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCminNom(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCmaxNom {
+        pub const NAME: &'static str = "get_cmax_nom";
+        pub const CODE: &'static [u8] = &[0x40, 0x71];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4071,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCmaxNom(*self).encode(address, buf)
+        }
+    }
+    impl request::GetLowerCustomerLimit {
+        pub const NAME: &'static str = "get_lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4072,
+            2,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetLowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetUpperCustomerLimit {
+        pub const NAME: &'static str = "get_upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4072,
+            2,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetUpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetLowerFactoryLimit {
+        pub const NAME: &'static str = "get_lower_factory_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4072,
+            2,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetLowerFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetUpperFactoryLimit {
+        pub const NAME: &'static str = "get_upper_factory_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4072,
+            2,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetUpperFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPresetCapacitance {
+        pub const NAME: &'static str = "get_preset_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x73];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4073,
+            2,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPresetCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPresetFullStepPosition {
+        pub const NAME: &'static str = "get_preset_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x73];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4073,
+            2,
+            &[6],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPresetFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStoredFullStepPosition {
+        pub const NAME: &'static str = "get_stored_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x75];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4075,
+            2,
+            &[6],
+        );
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStoredFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetModeOfOperation {
+        pub const NAME: &'static str = "get_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x40, 0x80];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4080,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetModeOfOperation(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §4.1.1 Triggering the “reference run” (code `0x1000`, 5 bytes). Triggers a full reference run (→ Preset → Cmin → Preset). The preset is a fixed firmware position between Cmin-nom and Cmax-nom; its capacitance and full-step position are read with 0x4073 00 / 0x4073 01 (the document says 0x4070 / 0x4071, ub2-e06).
-        ReferenceRun,
-        /// §4.1.2 Check if “reference run” is completed (code `0x1001`, 5 bytes). Checks whether the full reference run (→ Preset → Cmin → Preset) is completed. May be sent while the capacitor is still moving. Unlike the other checks, the document lists no step-loss reply 0x5400 here (ub2-e31).
-        ReferenceRunStatus,
-        /// §4.2.1 Triggering the movement “Go-To-Capacitance” (code `0x2000`, 9 bytes). Triggers the motorized capacitor to run to the given capacitance.
-        GoToCapacitance {
-            /// Target capacitance C \[0.01 pF\] \[pF\]
-            target: Capacitance,
-        },
-        /// §4.2.2 Check if “Go-To-Capacitance” is completed (code `0x2001`, 5 bytes). Checks whether the movement Go-To-Capacitance is completed. May be sent while the capacitor is still moving.
-        GoToCapacitanceStatus,
-        /// §4.3.1 Triggering the movement “Go-To-Full-Step-Position” (code `0x2100`, 7 bytes). Triggers the motorized capacitor to run to the given absolute full-step position (U16, §3.2).
-        GoToFullStepPosition {
-            /// Absolute full-step position; 0 = Lower Factory Limit \[full-steps\]
-            target: u16,
-        },
-        /// §4.3.2 Check if “Go-To-Full-Step-Position” is completed (code `0x2101`, 5 bytes). Checks whether the movement Go-To-Full-Step-Position is completed. May be sent while the capacitor is still moving.
-        GoToFullStepPositionStatus,
-        /// §4.4.1 Triggering the movement “Move-Full-Steps” (code `0x2200`, 7 bytes). Triggers the motorized capacitor to move the given number of full-steps (I16, §3.2). Positive full-steps run towards Cmax, negative towards Cmin.
-        MoveFullSteps {
-            /// Relative full-steps; positive towards Cmax, negative towards Cmin \[full-steps\]
-            steps: i16,
-        },
-        /// §4.4.2 Check if “Move-Full-Steps” is completed (code `0x2201`, 5 bytes). Checks whether the movement Move-Full-Steps is completed. May be sent while the capacitor is still moving.
-        MoveFullStepsStatus,
-        /// §4.5.1 Triggering the movement “Go-To-Cmin” (code `0x2300`, 5 bytes). Triggers the motorized capacitor to run to the Lower-Customer-Limit (not to the C-curve minimum the name suggests, ub2-e25).
-        GoToCmin,
-        /// §4.5.2 Check if “Go-To-Cmin” is completed (code `0x2301`, 5 bytes). Checks whether the movement Go-To-Cmin is completed. May be sent while the capacitor is still moving.
-        GoToCminStatus,
-        /// §4.6.1 Triggering the movement “Go-To-Cmax” (code `0x2400`, 5 bytes). Triggers the motorized capacitor to run to the Upper-Customer-Limit (not to the C-curve maximum the name suggests, ub2-e25).
-        GoToCmax,
-        /// §4.6.2 Check if “Go-To-Cmax” is completed (code `0x2401`, 5 bytes). Checks whether the movement Go-To-Cmax is completed. May be sent while the capacitor is still moving.
-        GoToCmaxStatus,
-        /// §4.7.1 Triggering the movement “Go-To-Micro-Step-Position” (code `0x2500`, 9 bytes). Triggers the motorized capacitor to run to the given absolute micro-step position (U32, §3.3).
-        GoToMicroStepPosition {
-            /// Absolute micro-step position; 0 = Lower Factory Limit \[micro-steps\]
-            target: u32,
-        },
-        /// §4.7.2 Check if “Go-To-Micro-Step-Position” is completed (code `0x2501`, 5 bytes). Checks whether the movement Go-To-Micro-Step-Position is completed. May be sent while the capacitor is still moving.
-        GoToMicroStepPositionStatus,
-        /// §4.8.1 Triggering the movement “Move-Micro-Steps” (code `0x2600`, 9 bytes). Triggers the motorized capacitor to move the given number of micro-steps (I32, §3.3). Positive micro-steps run towards Cmax, negative towards Cmin.
-        MoveMicroSteps {
-            /// Relative micro-steps; positive towards Cmax, negative towards Cmin \[micro-steps\]
-            steps: i32,
-        },
-        /// §4.8.2 Check if “Move-Micro-Steps” is completed (code `0x2601`, 5 bytes). Checks whether the movement Move-Micro-Steps is completed. May be sent while the capacitor is still moving.
-        MoveMicroStepsStatus,
-        /// §4.9.1 Triggering movement “Go-To-Stored-Position” (code `0x2700`, 6 bytes). Triggers the motorized capacitor to move to the given stored position (stored with Store-Indexed-Position 0x7500, §5.7).
-        GoToStoredPosition {
-            /// Index of stored position \[0 .. 9\] Valid raw range 0..=9.
-            index: u8,
-        },
-        /// §4.9.2 Check if “Go-To-Stored-Position” is completed (code `0x2701`, 5 bytes). Checks whether the movement Go-To-Stored-Position is completed. May be sent while the capacitor is still moving. The document prints no TX example (ub2-e30).
-        GoToStoredPositionStatus,
-        /// §5.1 Set-Acceleration-Speed-Index (code `0x4300`, 7 bytes). Selects the indexed values within the 19-value acceleration and drive-speed vectors \[0...18\] (e.g. index = 4 selects the fifth vector value). Read back with Get-Acceleration-Speed (0x4021).
-        SetAccelerationSpeedIndex {
-            /// First data byte: acceleration, 0 (lowest) ... 18 (highest) Valid raw range 0..=18.
-            acceleration_index: u8,
-            /// Second data byte: driving speed, 0 (lowest) ... 18 (highest) Valid raw range 0..=18.
-            speed_index: u8,
-        },
-        /// §5.2 Set-Current (code `0x4500`, 7 bytes). Sets idle and drive current of the stepper motor. Each can be set from 0 (lowest) to its upper limit I-idle-max / I-drive-max, fixed firmware parameters in \[1...255\]. The reply to a current above its limit is not given (ub2-e08).
-        SetCurrent {
-            /// Byte 1: idle current \[0..I-idle-max\]
-            idle_current: u8,
-            /// Byte 2: drive current \[0..I-drive-max\]
-            drive_current: u8,
-        },
-        /// §5.3 Set-Slave-Address (code `0x6000`, 6 bytes). Sets the address of the connected slave. The document's example ACK still comes from the old address (0x21). Range 0x21..0x40 per §2.2/§2.3; §5.3 says 0x41 (ub2-e02).
-        SetSlaveAddress {
-            /// New slave address \[0x21 ... 0x40\] (document: 0x41, ub2-e02) Valid raw range 33..=64.
-            address: u8,
-        },
-        /// §5.4 Set-Baud-Rate (code `0x6100`, 6 bytes). Sets the RS485 baud rate of the connected module by index (0..7 → 9'600..115'200). The document does not say whether the ACK is sent at the old or the new rate.
-        SetBaudRate {
-            /// Baud rate index RS485 \[0 ... 7\]
-            baud_rate: BaudRateIndex,
-        },
-        /// §5.5 Set-Lower-Customer-Limit (code `0x7201`, 9 bytes). Sets the Lower-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04). (The command table sits under the heading 5.5.1 'Illustration of factory and customer limits', whose figure is not in the text.)
-        SetLowerCustomerLimit {
-            /// Lower customer limit C \[0.01 pF\] \[pF\]
-            limit: Capacitance,
-        },
-        /// §5.6 Set-Upper-Customer-Limit (code `0x7202`, 9 bytes). Sets the Upper-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04).
-        SetUpperCustomerLimit {
-            /// Upper customer limit C \[0.01 pF\] \[pF\]
-            limit: Capacitance,
-        },
-        /// §5.7 Store-Indexed-Position (code `0x7500`, 8 bytes). Stores an indexed full-step position of the capacitor, later used by Go-To-Stored-Position (0x2700) and read by Get-Stored-Full-Step-Position (0x4075).
-        StoreIndexedPosition {
-            /// Byte 1: index \[0 .. 9\] Valid raw range 0..=9.
-            index: u8,
-            /// Bytes 2&3: full-step position \[full-steps\]
-            position: u16,
-        },
-        /// §5.8 Set-Mode-Of-Operation (code `0x8000`, 6 bytes). Sets the Mode-Of-Operation of the motorized capacitor; only while the module is idle (not moving).
-        SetModeOfOperation {
-            /// 0x00 encoder disabled, 0x01 close-loop-control, 0x02 open-loop-control (default)
-            mode: ModeOfOperation,
-        },
-        /// §6.1 Get-Actual-Capacitance (code `0x4001`, 5 bytes). Returns the actual capacitance \[0.01 pF\].
-        GetActualCapacitance,
-        /// §6.2 Get-Actual-Full-Step-Position (code `0x4002`, 5 bytes). Returns the actual full-step position.
-        GetActualFullStepPosition,
-        /// §6.3 Get-Minimum-Capacitance (code `0x4010`, 5 bytes). Returns the minimum capacitance \[0.01 pF\] as per the stored C-curve.
-        GetMinimumCapacitance,
-        /// §6.4 Get-Maximum-Capacitance (code `0x4011`, 5 bytes). Returns the maximum capacitance \[0.01 pF\] as per the stored C-curve.
-        GetMaximumCapacitance,
-        /// §6.5 Get-Acceleration-Speed (code `0x4021`, 5 bytes). Returns the acceleration and speed index of the motorized capacitor (set with 0x4300).
-        GetAccelerationSpeed,
-        /// §6.6 Get-Status (code `0x4022`, 5 bytes). Returns the status (error byte, §6.6.1) of the motorized capacitor. The table header calls it a 'Protected Command', a term the document never defines (ub2-e13). No example is printed (ub2-e30).
-        GetStatus,
-        /// §6.7 Get-C-curve-Indexed-Full-Step-Capacitance (code `0x4030`, 7 bytes). Returns the indexed tuple (full-step position and capacitance) of the C-curve table from EPROM. The C-curve has at most 500 entries.
-        GetCCurveIndexedFullStepCapacitance {
-            /// Index in table \[0...x\]; at most 500 entries, so x ≤ 499 (ub2-e29) Valid raw range 0..=499.
-            index: u16,
-        },
-        /// §6.8 Get-Controller-Temperature (code `0x4032`, 5 bytes). Returns the temperature of the controller-internal temperature sensor (one U8 data byte; conversion formula missing in the document, ub2-e15).
-        GetControllerTemperature,
-        /// §6.9 Get-Micro-Step-Position (code `0x4036`, 5 bytes). Returns the current micro-step position.
-        GetMicroStepPosition,
-        /// §6.10 Get-Firmware Version (code `0x4061`, 5 bytes). Returns the firmware version of the motorized capacitor as 11 ASCII characters.
-        GetFirmwareVersion,
-        /// §6.11 Get-Serial-Number of Capacitor (code `0x4062`, 5 bytes). Returns the serial number of the motorized capacitor as 8 ASCII characters.
-        GetSerialNumber,
-        /// §6.12 Get-C_{min}-nom (code `0x4070`, 5 bytes). Returns the Cmin-nom value (nominal minimum capacitance) \[0.01 pF\].
-        GetCminNom,
-        /// §6.13 Get-C_{max}-nom (code `0x4071`, 5 bytes). Returns the Cmax-nom value (nominal maximum capacitance) \[0.01 pF\].
-        GetCmaxNom,
-        /// §6.14 Get-Lower-Customer-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Customer Limit (0x4072 with index 0x01).
-        GetLowerCustomerLimit,
-        /// §6.15 Get-Upper- Customer -Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Customer Limit (0x4072 with index 0x02).
-        GetUpperCustomerLimit,
-        /// §6.16 Get-Lower-Factory-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Factory Limit (0x4072 with index 0x03); full-step and micro-step position 0 are at this limit.
-        GetLowerFactoryLimit,
-        /// §6.17 Get-Upper-Factory-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Factory Limit (0x4072 with index 0x04).
-        GetUpperFactoryLimit,
-        /// §6.18 Get-Preset-Capacitance (code `0x4073`, 6 bytes). Returns the equivalent capacitance at the preset position (0x4073 with index 0x00).
-        GetPresetCapacitance,
-        /// §6.19 Get-Preset-Full-Step-Position (code `0x4073`, 6 bytes). Returns the equivalent full-step position at the preset position (0x4073 with index 0x01).
-        GetPresetFullStepPosition,
-        /// §6.20 Get-Stored-Full-Step-Position (code `0x4075`, 6 bytes). Returns the stored indexed full-step position (stored with 0x7500) for the requested index.
-        GetStoredFullStepPosition {
-            /// Index \[0 .. 9\] Valid raw range 0..=9.
-            index: u8,
-        },
-        /// §6.21 Get-Mode-Of-Operation (code `0x4080`, 5 bytes). Returns the actual Mode-Of-Operation. The request has no data (the example comment 'for index = 2' is copied from §6.20, ub2-e20).
-        GetModeOfOperation,
+        ReferenceRun(request::ReferenceRun),
+        ReferenceRunStatus(request::ReferenceRunStatus),
+        GoToCapacitance(request::GoToCapacitance),
+        GoToCapacitanceStatus(request::GoToCapacitanceStatus),
+        GoToFullStepPosition(request::GoToFullStepPosition),
+        GoToFullStepPositionStatus(request::GoToFullStepPositionStatus),
+        MoveFullSteps(request::MoveFullSteps),
+        MoveFullStepsStatus(request::MoveFullStepsStatus),
+        GoToCmin(request::GoToCmin),
+        GoToCminStatus(request::GoToCminStatus),
+        GoToCmax(request::GoToCmax),
+        GoToCmaxStatus(request::GoToCmaxStatus),
+        GoToMicroStepPosition(request::GoToMicroStepPosition),
+        GoToMicroStepPositionStatus(request::GoToMicroStepPositionStatus),
+        MoveMicroSteps(request::MoveMicroSteps),
+        MoveMicroStepsStatus(request::MoveMicroStepsStatus),
+        GoToStoredPosition(request::GoToStoredPosition),
+        GoToStoredPositionStatus(request::GoToStoredPositionStatus),
+        SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex),
+        SetCurrent(request::SetCurrent),
+        SetSlaveAddress(request::SetSlaveAddress),
+        SetBaudRate(request::SetBaudRate),
+        SetLowerCustomerLimit(request::SetLowerCustomerLimit),
+        SetUpperCustomerLimit(request::SetUpperCustomerLimit),
+        StoreIndexedPosition(request::StoreIndexedPosition),
+        SetModeOfOperation(request::SetModeOfOperation),
+        GetActualCapacitance(request::GetActualCapacitance),
+        GetActualFullStepPosition(request::GetActualFullStepPosition),
+        GetMinimumCapacitance(request::GetMinimumCapacitance),
+        GetMaximumCapacitance(request::GetMaximumCapacitance),
+        GetAccelerationSpeed(request::GetAccelerationSpeed),
+        GetStatus(request::GetStatus),
+        GetCCurveIndexedFullStepCapacitance(
+            request::GetCCurveIndexedFullStepCapacitance,
+        ),
+        GetControllerTemperature(request::GetControllerTemperature),
+        GetMicroStepPosition(request::GetMicroStepPosition),
+        GetFirmwareVersion(request::GetFirmwareVersion),
+        GetSerialNumber(request::GetSerialNumber),
+        GetCminNom(request::GetCminNom),
+        GetCmaxNom(request::GetCmaxNom),
+        GetLowerCustomerLimit(request::GetLowerCustomerLimit),
+        GetUpperCustomerLimit(request::GetUpperCustomerLimit),
+        GetLowerFactoryLimit(request::GetLowerFactoryLimit),
+        GetUpperFactoryLimit(request::GetUpperFactoryLimit),
+        GetPresetCapacitance(request::GetPresetCapacitance),
+        GetPresetFullStepPosition(request::GetPresetFullStepPosition),
+        GetStoredFullStepPosition(request::GetStoredFullStepPosition),
+        GetModeOfOperation(request::GetModeOfOperation),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -498,53 +1127,53 @@ pub mod ub2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReferenceRun => 0,
-                Self::ReferenceRunStatus => 1,
-                Self::GoToCapacitance { .. } => 2,
-                Self::GoToCapacitanceStatus => 3,
-                Self::GoToFullStepPosition { .. } => 4,
-                Self::GoToFullStepPositionStatus => 5,
-                Self::MoveFullSteps { .. } => 6,
-                Self::MoveFullStepsStatus => 7,
-                Self::GoToCmin => 8,
-                Self::GoToCminStatus => 9,
-                Self::GoToCmax => 10,
-                Self::GoToCmaxStatus => 11,
-                Self::GoToMicroStepPosition { .. } => 12,
-                Self::GoToMicroStepPositionStatus => 13,
-                Self::MoveMicroSteps { .. } => 14,
-                Self::MoveMicroStepsStatus => 15,
-                Self::GoToStoredPosition { .. } => 16,
-                Self::GoToStoredPositionStatus => 17,
-                Self::SetAccelerationSpeedIndex { .. } => 18,
-                Self::SetCurrent { .. } => 19,
-                Self::SetSlaveAddress { .. } => 20,
-                Self::SetBaudRate { .. } => 21,
-                Self::SetLowerCustomerLimit { .. } => 22,
-                Self::SetUpperCustomerLimit { .. } => 23,
-                Self::StoreIndexedPosition { .. } => 24,
-                Self::SetModeOfOperation { .. } => 25,
-                Self::GetActualCapacitance => 26,
-                Self::GetActualFullStepPosition => 27,
-                Self::GetMinimumCapacitance => 28,
-                Self::GetMaximumCapacitance => 29,
-                Self::GetAccelerationSpeed => 30,
-                Self::GetStatus => 31,
-                Self::GetCCurveIndexedFullStepCapacitance { .. } => 32,
-                Self::GetControllerTemperature => 33,
-                Self::GetMicroStepPosition => 34,
-                Self::GetFirmwareVersion => 35,
-                Self::GetSerialNumber => 36,
-                Self::GetCminNom => 37,
-                Self::GetCmaxNom => 38,
-                Self::GetLowerCustomerLimit => 39,
-                Self::GetUpperCustomerLimit => 40,
-                Self::GetLowerFactoryLimit => 41,
-                Self::GetUpperFactoryLimit => 42,
-                Self::GetPresetCapacitance => 43,
-                Self::GetPresetFullStepPosition => 44,
-                Self::GetStoredFullStepPosition { .. } => 45,
-                Self::GetModeOfOperation => 46,
+                Self::ReferenceRun(_) => 0,
+                Self::ReferenceRunStatus(_) => 1,
+                Self::GoToCapacitance(_) => 2,
+                Self::GoToCapacitanceStatus(_) => 3,
+                Self::GoToFullStepPosition(_) => 4,
+                Self::GoToFullStepPositionStatus(_) => 5,
+                Self::MoveFullSteps(_) => 6,
+                Self::MoveFullStepsStatus(_) => 7,
+                Self::GoToCmin(_) => 8,
+                Self::GoToCminStatus(_) => 9,
+                Self::GoToCmax(_) => 10,
+                Self::GoToCmaxStatus(_) => 11,
+                Self::GoToMicroStepPosition(_) => 12,
+                Self::GoToMicroStepPositionStatus(_) => 13,
+                Self::MoveMicroSteps(_) => 14,
+                Self::MoveMicroStepsStatus(_) => 15,
+                Self::GoToStoredPosition(_) => 16,
+                Self::GoToStoredPositionStatus(_) => 17,
+                Self::SetAccelerationSpeedIndex(_) => 18,
+                Self::SetCurrent(_) => 19,
+                Self::SetSlaveAddress(_) => 20,
+                Self::SetBaudRate(_) => 21,
+                Self::SetLowerCustomerLimit(_) => 22,
+                Self::SetUpperCustomerLimit(_) => 23,
+                Self::StoreIndexedPosition(_) => 24,
+                Self::SetModeOfOperation(_) => 25,
+                Self::GetActualCapacitance(_) => 26,
+                Self::GetActualFullStepPosition(_) => 27,
+                Self::GetMinimumCapacitance(_) => 28,
+                Self::GetMaximumCapacitance(_) => 29,
+                Self::GetAccelerationSpeed(_) => 30,
+                Self::GetStatus(_) => 31,
+                Self::GetCCurveIndexedFullStepCapacitance(_) => 32,
+                Self::GetControllerTemperature(_) => 33,
+                Self::GetMicroStepPosition(_) => 34,
+                Self::GetFirmwareVersion(_) => 35,
+                Self::GetSerialNumber(_) => 36,
+                Self::GetCminNom(_) => 37,
+                Self::GetCmaxNom(_) => 38,
+                Self::GetLowerCustomerLimit(_) => 39,
+                Self::GetUpperCustomerLimit(_) => 40,
+                Self::GetLowerFactoryLimit(_) => 41,
+                Self::GetUpperFactoryLimit(_) => 42,
+                Self::GetPresetCapacitance(_) => 43,
+                Self::GetPresetFullStepPosition(_) => 44,
+                Self::GetStoredFullStepPosition(_) => 45,
+                Self::GetModeOfOperation(_) => 46,
             }
         }
         /// The spec's snake_case name of this message.
@@ -561,65 +1190,24 @@ pub mod ub2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::GoToCapacitance { target: v_target } => {
-                    f("target", rt::Int(v_target.raw() as i64))
-                }
-                Self::GoToFullStepPosition { target: v_target } => {
-                    f("target", rt::Int(*v_target as i64))
-                }
-                Self::MoveFullSteps { steps: v_steps } => {
-                    f("steps", rt::Int(*v_steps as i64))
-                }
-                Self::GoToMicroStepPosition { target: v_target } => {
-                    f("target", rt::Int(*v_target as i64))
-                }
-                Self::MoveMicroSteps { steps: v_steps } => {
-                    f("steps", rt::Int(*v_steps as i64))
-                }
-                Self::GoToStoredPosition { index: v_index } => {
-                    f("index", rt::Int(*v_index as i64))
-                }
-                Self::SetAccelerationSpeedIndex {
-                    acceleration_index: v_acceleration_index,
-                    speed_index: v_speed_index,
-                } => {
-                    f("acceleration_index", rt::Int(*v_acceleration_index as i64));
-                    f("speed_index", rt::Int(*v_speed_index as i64));
-                }
-                Self::SetCurrent {
-                    idle_current: v_idle_current,
-                    drive_current: v_drive_current,
-                } => {
-                    f("idle_current", rt::Int(*v_idle_current as i64));
-                    f("drive_current", rt::Int(*v_drive_current as i64));
-                }
-                Self::SetSlaveAddress { address: v_address } => {
-                    f("address", rt::Int(*v_address as i64))
-                }
-                Self::SetBaudRate { baud_rate: v_baud_rate } => {
-                    f("baud_rate", rt::Int(v_baud_rate.raw() as i64))
-                }
-                Self::SetLowerCustomerLimit { limit: v_limit } => {
-                    f("limit", rt::Int(v_limit.raw() as i64))
-                }
-                Self::SetUpperCustomerLimit { limit: v_limit } => {
-                    f("limit", rt::Int(v_limit.raw() as i64))
-                }
-                Self::StoreIndexedPosition { index: v_index, position: v_position } => {
-                    f("index", rt::Int(*v_index as i64));
-                    f("position", rt::Int(*v_position as i64));
-                }
-                Self::SetModeOfOperation { mode: v_mode } => {
-                    f("mode", rt::Int(v_mode.raw() as i64))
-                }
-                Self::GetCCurveIndexedFullStepCapacitance { index: v_index } => {
-                    f("index", rt::Int(*v_index as i64))
-                }
-                Self::GetStoredFullStepPosition { index: v_index } => {
-                    f("index", rt::Int(*v_index as i64))
-                }
+                Self::GoToCapacitance(m) => m.visit(f),
+                Self::GoToFullStepPosition(m) => m.visit(f),
+                Self::MoveFullSteps(m) => m.visit(f),
+                Self::GoToMicroStepPosition(m) => m.visit(f),
+                Self::MoveMicroSteps(m) => m.visit(f),
+                Self::GoToStoredPosition(m) => m.visit(f),
+                Self::SetAccelerationSpeedIndex(m) => m.visit(f),
+                Self::SetCurrent(m) => m.visit(f),
+                Self::SetSlaveAddress(m) => m.visit(f),
+                Self::SetBaudRate(m) => m.visit(f),
+                Self::SetLowerCustomerLimit(m) => m.visit(f),
+                Self::SetUpperCustomerLimit(m) => m.visit(f),
+                Self::StoreIndexedPosition(m) => m.visit(f),
+                Self::SetModeOfOperation(m) => m.visit(f),
+                Self::GetCCurveIndexedFullStepCapacitance(m) => m.visit(f),
+                Self::GetStoredFullStepPosition(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -633,125 +1221,137 @@ pub mod ub2 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReferenceRun => {
+                Self::ReferenceRun(request::ReferenceRun {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x00])?,
                         4,
                         address.wrapping_add(0xBA),
                     )
                 }
-                Self::ReferenceRunStatus => {
+                Self::ReferenceRunStatus(request::ReferenceRunStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x01])?,
                         4,
                         address.wrapping_add(0xBB),
                     )
                 }
-                Self::GoToCapacitance { target: v_target } => {
+                Self::GoToCapacitance(request::GoToCapacitance { target: v_target }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
                     out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA))
                 }
-                Self::GoToCapacitanceStatus => {
+                Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x20, 0x01])?,
                         4,
                         address.wrapping_add(0xCB),
                     )
                 }
-                Self::GoToFullStepPosition { target: v_target } => {
+                Self::GoToFullStepPosition(
+                    request::GoToFullStepPosition { target: v_target },
+                ) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x21, 0x00])?;
                     out[4..6].copy_from_slice(&v_target.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB))
                 }
-                Self::GoToFullStepPositionStatus => {
+                Self::GoToFullStepPositionStatus(
+                    request::GoToFullStepPositionStatus {},
+                ) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x21, 0x01])?,
                         4,
                         address.wrapping_add(0xCC),
                     )
                 }
-                Self::MoveFullSteps { steps: v_steps } => {
+                Self::MoveFullSteps(request::MoveFullSteps { steps: v_steps }) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x22, 0x00])?;
                     out[4..6].copy_from_slice(&v_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC))
                 }
-                Self::MoveFullStepsStatus => {
+                Self::MoveFullStepsStatus(request::MoveFullStepsStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x22, 0x01])?,
                         4,
                         address.wrapping_add(0xCD),
                     )
                 }
-                Self::GoToCmin => {
+                Self::GoToCmin(request::GoToCmin {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x00])?,
                         4,
                         address.wrapping_add(0xCD),
                     )
                 }
-                Self::GoToCminStatus => {
+                Self::GoToCminStatus(request::GoToCminStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x01])?,
                         4,
                         address.wrapping_add(0xCE),
                     )
                 }
-                Self::GoToCmax => {
+                Self::GoToCmax(request::GoToCmax {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x00])?,
                         4,
                         address.wrapping_add(0xCE),
                     )
                 }
-                Self::GoToCmaxStatus => {
+                Self::GoToCmaxStatus(request::GoToCmaxStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x01])?,
                         4,
                         address.wrapping_add(0xCF),
                     )
                 }
-                Self::GoToMicroStepPosition { target: v_target } => {
+                Self::GoToMicroStepPosition(
+                    request::GoToMicroStepPosition { target: v_target },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x25, 0x00])?;
                     out[4..8].copy_from_slice(&v_target.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF))
                 }
-                Self::GoToMicroStepPositionStatus => {
+                Self::GoToMicroStepPositionStatus(
+                    request::GoToMicroStepPositionStatus {},
+                ) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x25, 0x01])?,
                         4,
                         address.wrapping_add(0xD0),
                     )
                 }
-                Self::MoveMicroSteps { steps: v_steps } => {
+                Self::MoveMicroSteps(request::MoveMicroSteps { steps: v_steps }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x26, 0x00])?;
                     out[4..8].copy_from_slice(&v_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0))
                 }
-                Self::MoveMicroStepsStatus => {
+                Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x26, 0x01])?,
                         4,
                         address.wrapping_add(0xD1),
                     )
                 }
-                Self::GoToStoredPosition { index: v_index } => {
+                Self::GoToStoredPosition(
+                    request::GoToStoredPosition { index: v_index },
+                ) => {
                     rt::encode_in_range("index", v_index, 0, 9)?;
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x27, 0x00])?;
                     out[4] = v_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1))
                 }
-                Self::GoToStoredPositionStatus => {
+                Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x27, 0x01])?,
                         4,
                         address.wrapping_add(0xD2),
                     )
                 }
-                Self::SetAccelerationSpeedIndex {
-                    acceleration_index: v_acceleration_index,
-                    speed_index: v_speed_index,
-                } => {
+                Self::SetAccelerationSpeedIndex(
+                    request::SetAccelerationSpeedIndex {
+                        acceleration_index: v_acceleration_index,
+                        speed_index: v_speed_index,
+                    },
+                ) => {
                     rt::encode_in_range(
                         "acceleration_index",
                         v_acceleration_index,
@@ -764,187 +1364,210 @@ pub mod ub2 {
                     out[5] = v_speed_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xED))
                 }
-                Self::SetCurrent {
-                    idle_current: v_idle_current,
-                    drive_current: v_drive_current,
-                } => {
+                Self::SetCurrent(
+                    request::SetCurrent {
+                        idle_current: v_idle_current,
+                        drive_current: v_drive_current,
+                    },
+                ) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x45, 0x00])?;
                     out[4] = v_idle_current;
                     out[5] = v_drive_current;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xEF))
                 }
-                Self::SetSlaveAddress { address: v_address } => {
+                Self::SetSlaveAddress(
+                    request::SetSlaveAddress { address: v_address },
+                ) => {
                     rt::encode_in_range("address", v_address, 33, 64)?;
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x60, 0x00])?;
                     out[4] = v_address;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x0A))
                 }
-                Self::SetBaudRate { baud_rate: v_baud_rate } => {
+                Self::SetBaudRate(request::SetBaudRate { baud_rate: v_baud_rate }) => {
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x61, 0x00])?;
                     out[4] = v_baud_rate.raw();
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x0B))
                 }
-                Self::SetLowerCustomerLimit { limit: v_limit } => {
+                Self::SetLowerCustomerLimit(
+                    request::SetLowerCustomerLimit { limit: v_limit },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x72, 0x01])?;
                     out[4..8].copy_from_slice(&v_limit.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D))
                 }
-                Self::SetUpperCustomerLimit { limit: v_limit } => {
+                Self::SetUpperCustomerLimit(
+                    request::SetUpperCustomerLimit { limit: v_limit },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x72, 0x02])?;
                     out[4..8].copy_from_slice(&v_limit.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1E))
                 }
-                Self::StoreIndexedPosition { index: v_index, position: v_position } => {
+                Self::StoreIndexedPosition(
+                    request::StoreIndexedPosition {
+                        index: v_index,
+                        position: v_position,
+                    },
+                ) => {
                     rt::encode_in_range("index", v_index, 0, 9)?;
                     let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x75, 0x00])?;
                     out[4] = v_index;
                     out[5..7].copy_from_slice(&v_position.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1F))
                 }
-                Self::SetModeOfOperation { mode: v_mode } => {
+                Self::SetModeOfOperation(
+                    request::SetModeOfOperation { mode: v_mode },
+                ) => {
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x80, 0x00])?;
                     out[4] = v_mode.raw();
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A))
                 }
-                Self::GetActualCapacitance => {
+                Self::GetActualCapacitance(request::GetActualCapacitance {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x01])?,
                         4,
                         address.wrapping_add(0xEB),
                     )
                 }
-                Self::GetActualFullStepPosition => {
+                Self::GetActualFullStepPosition(
+                    request::GetActualFullStepPosition {},
+                ) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x02])?,
                         4,
                         address.wrapping_add(0xEC),
                     )
                 }
-                Self::GetMinimumCapacitance => {
+                Self::GetMinimumCapacitance(request::GetMinimumCapacitance {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x10])?,
                         4,
                         address.wrapping_add(0xFA),
                     )
                 }
-                Self::GetMaximumCapacitance => {
+                Self::GetMaximumCapacitance(request::GetMaximumCapacitance {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x11])?,
                         4,
                         address.wrapping_add(0xFB),
                     )
                 }
-                Self::GetAccelerationSpeed => {
+                Self::GetAccelerationSpeed(request::GetAccelerationSpeed {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x21])?,
                         4,
                         address.wrapping_add(0x0B),
                     )
                 }
-                Self::GetStatus => {
+                Self::GetStatus(request::GetStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x22])?,
                         4,
                         address.wrapping_add(0x0C),
                     )
                 }
-                Self::GetCCurveIndexedFullStepCapacitance { index: v_index } => {
+                Self::GetCCurveIndexedFullStepCapacitance(
+                    request::GetCCurveIndexedFullStepCapacitance { index: v_index },
+                ) => {
                     rt::encode_in_range("index", v_index, 0, 499)?;
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x40, 0x30])?;
                     out[4..6].copy_from_slice(&v_index.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1A))
                 }
-                Self::GetControllerTemperature => {
+                Self::GetControllerTemperature(request::GetControllerTemperature {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x32])?,
                         4,
                         address.wrapping_add(0x1C),
                     )
                 }
-                Self::GetMicroStepPosition => {
+                Self::GetMicroStepPosition(request::GetMicroStepPosition {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x36])?,
                         4,
                         address.wrapping_add(0x20),
                     )
                 }
-                Self::GetFirmwareVersion => {
+                Self::GetFirmwareVersion(request::GetFirmwareVersion {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x61])?,
                         4,
                         address.wrapping_add(0x4B),
                     )
                 }
-                Self::GetSerialNumber => {
+                Self::GetSerialNumber(request::GetSerialNumber {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x62])?,
                         4,
                         address.wrapping_add(0x4C),
                     )
                 }
-                Self::GetCminNom => {
+                Self::GetCminNom(request::GetCminNom {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x70])?,
                         4,
                         address.wrapping_add(0x5A),
                     )
                 }
-                Self::GetCmaxNom => {
+                Self::GetCmaxNom(request::GetCmaxNom {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x71])?,
                         4,
                         address.wrapping_add(0x5B),
                     )
                 }
-                Self::GetLowerCustomerLimit => {
+                Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x01])?,
                         5,
                         address.wrapping_add(0x5D),
                     )
                 }
-                Self::GetUpperCustomerLimit => {
+                Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x02])?,
                         5,
                         address.wrapping_add(0x5E),
                     )
                 }
-                Self::GetLowerFactoryLimit => {
+                Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x03])?,
                         5,
                         address.wrapping_add(0x5F),
                     )
                 }
-                Self::GetUpperFactoryLimit => {
+                Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x04])?,
                         5,
                         address.wrapping_add(0x60),
                     )
                 }
-                Self::GetPresetCapacitance => {
+                Self::GetPresetCapacitance(request::GetPresetCapacitance {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x73, 0x00])?,
                         5,
                         address.wrapping_add(0x5D),
                     )
                 }
-                Self::GetPresetFullStepPosition => {
+                Self::GetPresetFullStepPosition(
+                    request::GetPresetFullStepPosition {},
+                ) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x73, 0x01])?,
                         5,
                         address.wrapping_add(0x5E),
                     )
                 }
-                Self::GetStoredFullStepPosition { index: v_index } => {
+                Self::GetStoredFullStepPosition(
+                    request::GetStoredFullStepPosition { index: v_index },
+                ) => {
                     rt::encode_in_range("index", v_index, 0, 9)?;
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x75])?;
                     out[4] = v_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x5F))
                 }
-                Self::GetModeOfOperation => {
+                Self::GetModeOfOperation(request::GetModeOfOperation {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x80])?,
                         4,
@@ -974,95 +1597,117 @@ pub mod ub2 {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x1000 => {
-                    rt::fixed::<5>(frame, &request::REFERENCE_RUN)
-                        .map(|_| Self::ReferenceRun)
+                    rt::fixed::<5>(frame, &request::ReferenceRun::DESC)
+                        .map(|_| Self::ReferenceRun(request::ReferenceRun))
                 }
                 0x1001 => {
-                    rt::fixed::<5>(frame, &request::REFERENCE_RUN_STATUS)
-                        .map(|_| Self::ReferenceRunStatus)
+                    rt::fixed::<5>(frame, &request::ReferenceRunStatus::DESC)
+                        .map(|_| Self::ReferenceRunStatus(request::ReferenceRunStatus))
                 }
                 0x2000 => {
-                    let frame = rt::fixed::<9>(frame, &request::GO_TO_CAPACITANCE)?;
-                    rt::Ok(Self::GoToCapacitance {
-                        target: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<9>(frame, &request::GoToCapacitance::DESC)?;
+                    rt::Ok(
+                        Self::GoToCapacitance(request::GoToCapacitance {
+                            target: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x2001 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_CAPACITANCE_STATUS)
-                        .map(|_| Self::GoToCapacitanceStatus)
+                    rt::fixed::<5>(frame, &request::GoToCapacitanceStatus::DESC)
+                        .map(|_| Self::GoToCapacitanceStatus(
+                            request::GoToCapacitanceStatus,
+                        ))
                 }
                 0x2100 => {
                     let frame = rt::fixed::<
                         7,
-                    >(frame, &request::GO_TO_FULL_STEP_POSITION)?;
-                    rt::Ok(Self::GoToFullStepPosition {
-                        target: u16::from_le_bytes([frame[4], frame[5]]),
-                    })
+                    >(frame, &request::GoToFullStepPosition::DESC)?;
+                    rt::Ok(
+                        Self::GoToFullStepPosition(request::GoToFullStepPosition {
+                            target: u16::from_le_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 0x2101 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_FULL_STEP_POSITION_STATUS)
-                        .map(|_| Self::GoToFullStepPositionStatus)
+                    rt::fixed::<5>(frame, &request::GoToFullStepPositionStatus::DESC)
+                        .map(|_| Self::GoToFullStepPositionStatus(
+                            request::GoToFullStepPositionStatus,
+                        ))
                 }
                 0x2200 => {
-                    let frame = rt::fixed::<7>(frame, &request::MOVE_FULL_STEPS)?;
-                    rt::Ok(Self::MoveFullSteps {
-                        steps: i16::from_le_bytes([frame[4], frame[5]]),
-                    })
+                    let frame = rt::fixed::<7>(frame, &request::MoveFullSteps::DESC)?;
+                    rt::Ok(
+                        Self::MoveFullSteps(request::MoveFullSteps {
+                            steps: i16::from_le_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 0x2201 => {
-                    rt::fixed::<5>(frame, &request::MOVE_FULL_STEPS_STATUS)
-                        .map(|_| Self::MoveFullStepsStatus)
+                    rt::fixed::<5>(frame, &request::MoveFullStepsStatus::DESC)
+                        .map(|_| Self::MoveFullStepsStatus(request::MoveFullStepsStatus))
                 }
                 0x2300 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_CMIN).map(|_| Self::GoToCmin)
+                    rt::fixed::<5>(frame, &request::GoToCmin::DESC)
+                        .map(|_| Self::GoToCmin(request::GoToCmin))
                 }
                 0x2301 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_CMIN_STATUS)
-                        .map(|_| Self::GoToCminStatus)
+                    rt::fixed::<5>(frame, &request::GoToCminStatus::DESC)
+                        .map(|_| Self::GoToCminStatus(request::GoToCminStatus))
                 }
                 0x2400 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_CMAX).map(|_| Self::GoToCmax)
+                    rt::fixed::<5>(frame, &request::GoToCmax::DESC)
+                        .map(|_| Self::GoToCmax(request::GoToCmax))
                 }
                 0x2401 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_CMAX_STATUS)
-                        .map(|_| Self::GoToCmaxStatus)
+                    rt::fixed::<5>(frame, &request::GoToCmaxStatus::DESC)
+                        .map(|_| Self::GoToCmaxStatus(request::GoToCmaxStatus))
                 }
                 0x2500 => {
                     let frame = rt::fixed::<
                         9,
-                    >(frame, &request::GO_TO_MICRO_STEP_POSITION)?;
-                    rt::Ok(Self::GoToMicroStepPosition {
-                        target: u32::from_le_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                        ]),
-                    })
+                    >(frame, &request::GoToMicroStepPosition::DESC)?;
+                    rt::Ok(
+                        Self::GoToMicroStepPosition(request::GoToMicroStepPosition {
+                            target: u32::from_le_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                            ]),
+                        }),
+                    )
                 }
                 0x2501 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_MICRO_STEP_POSITION_STATUS)
-                        .map(|_| Self::GoToMicroStepPositionStatus)
+                    rt::fixed::<5>(frame, &request::GoToMicroStepPositionStatus::DESC)
+                        .map(|_| Self::GoToMicroStepPositionStatus(
+                            request::GoToMicroStepPositionStatus,
+                        ))
                 }
                 0x2600 => {
-                    let frame = rt::fixed::<9>(frame, &request::MOVE_MICRO_STEPS)?;
-                    rt::Ok(Self::MoveMicroSteps {
-                        steps: i32::from_le_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                        ]),
-                    })
+                    let frame = rt::fixed::<9>(frame, &request::MoveMicroSteps::DESC)?;
+                    rt::Ok(
+                        Self::MoveMicroSteps(request::MoveMicroSteps {
+                            steps: i32::from_le_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                            ]),
+                        }),
+                    )
                 }
                 0x2601 => {
-                    rt::fixed::<5>(frame, &request::MOVE_MICRO_STEPS_STATUS)
-                        .map(|_| Self::MoveMicroStepsStatus)
+                    rt::fixed::<5>(frame, &request::MoveMicroStepsStatus::DESC)
+                        .map(|_| Self::MoveMicroStepsStatus(
+                            request::MoveMicroStepsStatus,
+                        ))
                 }
                 0x2700 => {
-                    let frame = rt::fixed::<6>(frame, &request::GO_TO_STORED_POSITION)?;
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::GoToStoredPosition::DESC)?;
                     rt::in_range(
                         &request::GO_TO_STORED_POSITION_INDEX,
                         4,
@@ -1070,18 +1715,22 @@ pub mod ub2 {
                         0,
                         9,
                     )?;
-                    rt::Ok(Self::GoToStoredPosition {
-                        index: frame[4],
-                    })
+                    rt::Ok(
+                        Self::GoToStoredPosition(request::GoToStoredPosition {
+                            index: frame[4],
+                        }),
+                    )
                 }
                 0x2701 => {
-                    rt::fixed::<5>(frame, &request::GO_TO_STORED_POSITION_STATUS)
-                        .map(|_| Self::GoToStoredPositionStatus)
+                    rt::fixed::<5>(frame, &request::GoToStoredPositionStatus::DESC)
+                        .map(|_| Self::GoToStoredPositionStatus(
+                            request::GoToStoredPositionStatus,
+                        ))
                 }
                 0x4300 => {
                     let frame = rt::fixed::<
                         7,
-                    >(frame, &request::SET_ACCELERATION_SPEED_INDEX)?;
+                    >(frame, &request::SetAccelerationSpeedIndex::DESC)?;
                     rt::in_range(
                         &request::SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX,
                         4,
@@ -1096,20 +1745,24 @@ pub mod ub2 {
                         0,
                         18,
                     )?;
-                    rt::Ok(Self::SetAccelerationSpeedIndex {
-                        acceleration_index: frame[4],
-                        speed_index: frame[5],
-                    })
+                    rt::Ok(
+                        Self::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
+                            acceleration_index: frame[4],
+                            speed_index: frame[5],
+                        }),
+                    )
                 }
                 0x4500 => {
-                    let frame = rt::fixed::<7>(frame, &request::SET_CURRENT)?;
-                    rt::Ok(Self::SetCurrent {
-                        idle_current: frame[4],
-                        drive_current: frame[5],
-                    })
+                    let frame = rt::fixed::<7>(frame, &request::SetCurrent::DESC)?;
+                    rt::Ok(
+                        Self::SetCurrent(request::SetCurrent {
+                            idle_current: frame[4],
+                            drive_current: frame[5],
+                        }),
+                    )
                 }
                 0x6000 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_SLAVE_ADDRESS)?;
+                    let frame = rt::fixed::<6>(frame, &request::SetSlaveAddress::DESC)?;
                     rt::in_range(
                         &request::SET_SLAVE_ADDRESS_ADDRESS,
                         4,
@@ -1117,38 +1770,48 @@ pub mod ub2 {
                         33,
                         64,
                     )?;
-                    rt::Ok(Self::SetSlaveAddress {
-                        address: frame[4],
-                    })
+                    rt::Ok(
+                        Self::SetSlaveAddress(request::SetSlaveAddress {
+                            address: frame[4],
+                        }),
+                    )
                 }
                 0x6100 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_BAUD_RATE)?;
-                    rt::Ok(Self::SetBaudRate {
-                        baud_rate: BaudRateIndex::from_raw(frame[4]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &request::SetBaudRate::DESC)?;
+                    rt::Ok(
+                        Self::SetBaudRate(request::SetBaudRate {
+                            baud_rate: BaudRateIndex::from_raw(frame[4]),
+                        }),
+                    )
                 }
                 0x7201 => {
                     let frame = rt::fixed::<
                         9,
-                    >(frame, &request::SET_LOWER_CUSTOMER_LIMIT)?;
-                    rt::Ok(Self::SetLowerCustomerLimit {
-                        limit: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    >(frame, &request::SetLowerCustomerLimit::DESC)?;
+                    rt::Ok(
+                        Self::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
+                            limit: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x7202 => {
                     let frame = rt::fixed::<
                         9,
-                    >(frame, &request::SET_UPPER_CUSTOMER_LIMIT)?;
-                    rt::Ok(Self::SetUpperCustomerLimit {
-                        limit: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    >(frame, &request::SetUpperCustomerLimit::DESC)?;
+                    rt::Ok(
+                        Self::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
+                            limit: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x7500 => {
-                    let frame = rt::fixed::<8>(frame, &request::STORE_INDEXED_POSITION)?;
+                    let frame = rt::fixed::<
+                        8,
+                    >(frame, &request::StoreIndexedPosition::DESC)?;
                     rt::in_range(
                         &request::STORE_INDEXED_POSITION_INDEX,
                         4,
@@ -1156,44 +1819,61 @@ pub mod ub2 {
                         0,
                         9,
                     )?;
-                    rt::Ok(Self::StoreIndexedPosition {
-                        index: frame[4],
-                        position: u16::from_le_bytes([frame[5], frame[6]]),
-                    })
+                    rt::Ok(
+                        Self::StoreIndexedPosition(request::StoreIndexedPosition {
+                            index: frame[4],
+                            position: u16::from_le_bytes([frame[5], frame[6]]),
+                        }),
+                    )
                 }
                 0x8000 => {
-                    let frame = rt::fixed::<6>(frame, &request::SET_MODE_OF_OPERATION)?;
-                    rt::Ok(Self::SetModeOfOperation {
-                        mode: ModeOfOperation::from_raw(frame[4]),
-                    })
+                    let frame = rt::fixed::<
+                        6,
+                    >(frame, &request::SetModeOfOperation::DESC)?;
+                    rt::Ok(
+                        Self::SetModeOfOperation(request::SetModeOfOperation {
+                            mode: ModeOfOperation::from_raw(frame[4]),
+                        }),
+                    )
                 }
                 0x4001 => {
-                    rt::fixed::<5>(frame, &request::GET_ACTUAL_CAPACITANCE)
-                        .map(|_| Self::GetActualCapacitance)
+                    rt::fixed::<5>(frame, &request::GetActualCapacitance::DESC)
+                        .map(|_| Self::GetActualCapacitance(
+                            request::GetActualCapacitance,
+                        ))
                 }
                 0x4002 => {
-                    rt::fixed::<5>(frame, &request::GET_ACTUAL_FULL_STEP_POSITION)
-                        .map(|_| Self::GetActualFullStepPosition)
+                    rt::fixed::<5>(frame, &request::GetActualFullStepPosition::DESC)
+                        .map(|_| Self::GetActualFullStepPosition(
+                            request::GetActualFullStepPosition,
+                        ))
                 }
                 0x4010 => {
-                    rt::fixed::<5>(frame, &request::GET_MINIMUM_CAPACITANCE)
-                        .map(|_| Self::GetMinimumCapacitance)
+                    rt::fixed::<5>(frame, &request::GetMinimumCapacitance::DESC)
+                        .map(|_| Self::GetMinimumCapacitance(
+                            request::GetMinimumCapacitance,
+                        ))
                 }
                 0x4011 => {
-                    rt::fixed::<5>(frame, &request::GET_MAXIMUM_CAPACITANCE)
-                        .map(|_| Self::GetMaximumCapacitance)
+                    rt::fixed::<5>(frame, &request::GetMaximumCapacitance::DESC)
+                        .map(|_| Self::GetMaximumCapacitance(
+                            request::GetMaximumCapacitance,
+                        ))
                 }
                 0x4021 => {
-                    rt::fixed::<5>(frame, &request::GET_ACCELERATION_SPEED)
-                        .map(|_| Self::GetAccelerationSpeed)
+                    rt::fixed::<5>(frame, &request::GetAccelerationSpeed::DESC)
+                        .map(|_| Self::GetAccelerationSpeed(
+                            request::GetAccelerationSpeed,
+                        ))
                 }
                 0x4022 => {
-                    rt::fixed::<5>(frame, &request::GET_STATUS).map(|_| Self::GetStatus)
+                    rt::fixed::<5>(frame, &request::GetStatus::DESC)
+                        .map(|_| Self::GetStatus(request::GetStatus))
                 }
                 0x4030 => {
                     let frame = rt::fixed::<
                         7,
-                    >(frame, &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE)?;
+                    >(frame, &request::GetCCurveIndexedFullStepCapacitance::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX,
@@ -1202,33 +1882,39 @@ pub mod ub2 {
                         0,
                         499,
                     )?;
-                    rt::Ok(Self::GetCCurveIndexedFullStepCapacitance {
-                        index: field_0,
-                    })
+                    rt::Ok(
+                        Self::GetCCurveIndexedFullStepCapacitance(request::GetCCurveIndexedFullStepCapacitance {
+                            index: field_0,
+                        }),
+                    )
                 }
                 0x4032 => {
-                    rt::fixed::<5>(frame, &request::GET_CONTROLLER_TEMPERATURE)
-                        .map(|_| Self::GetControllerTemperature)
+                    rt::fixed::<5>(frame, &request::GetControllerTemperature::DESC)
+                        .map(|_| Self::GetControllerTemperature(
+                            request::GetControllerTemperature,
+                        ))
                 }
                 0x4036 => {
-                    rt::fixed::<5>(frame, &request::GET_MICRO_STEP_POSITION)
-                        .map(|_| Self::GetMicroStepPosition)
+                    rt::fixed::<5>(frame, &request::GetMicroStepPosition::DESC)
+                        .map(|_| Self::GetMicroStepPosition(
+                            request::GetMicroStepPosition,
+                        ))
                 }
                 0x4061 => {
-                    rt::fixed::<5>(frame, &request::GET_FIRMWARE_VERSION)
-                        .map(|_| Self::GetFirmwareVersion)
+                    rt::fixed::<5>(frame, &request::GetFirmwareVersion::DESC)
+                        .map(|_| Self::GetFirmwareVersion(request::GetFirmwareVersion))
                 }
                 0x4062 => {
-                    rt::fixed::<5>(frame, &request::GET_SERIAL_NUMBER)
-                        .map(|_| Self::GetSerialNumber)
+                    rt::fixed::<5>(frame, &request::GetSerialNumber::DESC)
+                        .map(|_| Self::GetSerialNumber(request::GetSerialNumber))
                 }
                 0x4070 => {
-                    rt::fixed::<5>(frame, &request::GET_CMIN_NOM)
-                        .map(|_| Self::GetCminNom)
+                    rt::fixed::<5>(frame, &request::GetCminNom::DESC)
+                        .map(|_| Self::GetCminNom(request::GetCminNom))
                 }
                 0x4071 => {
-                    rt::fixed::<5>(frame, &request::GET_CMAX_NOM)
-                        .map(|_| Self::GetCmaxNom)
+                    rt::fixed::<5>(frame, &request::GetCmaxNom::DESC)
+                        .map(|_| Self::GetCmaxNom(request::GetCmaxNom))
                 }
                 0x4072 => {
                     let mut g = rt::Group::new(frame, 0x4072, rt::None);
@@ -1239,7 +1925,9 @@ pub mod ub2 {
                             frame[4],
                             0x1,
                         )?;
-                        rt::Ok(Self::GetLowerCustomerLimit)
+                        rt::Ok(
+                            Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
@@ -1248,7 +1936,9 @@ pub mod ub2 {
                             frame[4],
                             0x2,
                         )?;
-                        rt::Ok(Self::GetUpperCustomerLimit)
+                        rt::Ok(
+                            Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit),
+                        )
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
@@ -1257,7 +1947,7 @@ pub mod ub2 {
                             frame[4],
                             0x3,
                         )?;
-                        rt::Ok(Self::GetLowerFactoryLimit)
+                        rt::Ok(Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit))
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
@@ -1266,9 +1956,9 @@ pub mod ub2 {
                             frame[4],
                             0x4,
                         )?;
-                        rt::Ok(Self::GetUpperFactoryLimit)
+                        rt::Ok(Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit))
                     });
-                    g.end(&request::GET_LOWER_CUSTOMER_LIMIT)
+                    g.end(&request::GetLowerCustomerLimit::DESC)
                 }
                 0x4073 => {
                     let mut g = rt::Group::new(frame, 0x4073, rt::None);
@@ -1279,7 +1969,7 @@ pub mod ub2 {
                             frame[4],
                             0x0,
                         )?;
-                        rt::Ok(Self::GetPresetCapacitance)
+                        rt::Ok(Self::GetPresetCapacitance(request::GetPresetCapacitance))
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
@@ -1288,14 +1978,18 @@ pub mod ub2 {
                             frame[4],
                             0x1,
                         )?;
-                        rt::Ok(Self::GetPresetFullStepPosition)
+                        rt::Ok(
+                            Self::GetPresetFullStepPosition(
+                                request::GetPresetFullStepPosition,
+                            ),
+                        )
                     });
-                    g.end(&request::GET_PRESET_CAPACITANCE)
+                    g.end(&request::GetPresetCapacitance::DESC)
                 }
                 0x4075 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &request::GET_STORED_FULL_STEP_POSITION)?;
+                    >(frame, &request::GetStoredFullStepPosition::DESC)?;
                     rt::in_range(
                         &request::GET_STORED_FULL_STEP_POSITION_INDEX,
                         4,
@@ -1303,13 +1997,15 @@ pub mod ub2 {
                         0,
                         9,
                     )?;
-                    rt::Ok(Self::GetStoredFullStepPosition {
-                        index: frame[4],
-                    })
+                    rt::Ok(
+                        Self::GetStoredFullStepPosition(request::GetStoredFullStepPosition {
+                            index: frame[4],
+                        }),
+                    )
                 }
                 0x4080 => {
-                    rt::fixed::<5>(frame, &request::GET_MODE_OF_OPERATION)
-                        .map(|_| Self::GetModeOfOperation)
+                    rt::fixed::<5>(frame, &request::GetModeOfOperation::DESC)
+                        .map(|_| Self::GetModeOfOperation(request::GetModeOfOperation))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, false)),
             }
@@ -1322,130 +2018,227 @@ pub mod ub2 {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "reference_run" => rt::Ok(Self::ReferenceRun),
-                "reference_run_status" => rt::Ok(Self::ReferenceRunStatus),
-                "go_to_capacitance" => {
-                    rt::Ok(Self::GoToCapacitance {
-                        target: Capacitance::from_raw(rt::get(&mut field, "target")?),
-                    })
+                "reference_run" => rt::Ok(Self::ReferenceRun(request::ReferenceRun)),
+                "reference_run_status" => {
+                    rt::Ok(Self::ReferenceRunStatus(request::ReferenceRunStatus))
                 }
-                "go_to_capacitance_status" => rt::Ok(Self::GoToCapacitanceStatus),
+                "go_to_capacitance" => {
+                    rt::Ok(
+                        Self::GoToCapacitance(request::GoToCapacitance {
+                            target: Capacitance::from_raw(rt::get(&mut field, "target")?),
+                        }),
+                    )
+                }
+                "go_to_capacitance_status" => {
+                    rt::Ok(Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus))
+                }
                 "go_to_full_step_position" => {
-                    rt::Ok(Self::GoToFullStepPosition {
-                        target: rt::get(&mut field, "target")?,
-                    })
+                    rt::Ok(
+                        Self::GoToFullStepPosition(request::GoToFullStepPosition {
+                            target: rt::get(&mut field, "target")?,
+                        }),
+                    )
                 }
                 "go_to_full_step_position_status" => {
-                    rt::Ok(Self::GoToFullStepPositionStatus)
+                    rt::Ok(
+                        Self::GoToFullStepPositionStatus(
+                            request::GoToFullStepPositionStatus,
+                        ),
+                    )
                 }
                 "move_full_steps" => {
-                    rt::Ok(Self::MoveFullSteps {
-                        steps: rt::get(&mut field, "steps")?,
-                    })
+                    rt::Ok(
+                        Self::MoveFullSteps(request::MoveFullSteps {
+                            steps: rt::get(&mut field, "steps")?,
+                        }),
+                    )
                 }
-                "move_full_steps_status" => rt::Ok(Self::MoveFullStepsStatus),
-                "go_to_cmin" => rt::Ok(Self::GoToCmin),
-                "go_to_cmin_status" => rt::Ok(Self::GoToCminStatus),
-                "go_to_cmax" => rt::Ok(Self::GoToCmax),
-                "go_to_cmax_status" => rt::Ok(Self::GoToCmaxStatus),
+                "move_full_steps_status" => {
+                    rt::Ok(Self::MoveFullStepsStatus(request::MoveFullStepsStatus))
+                }
+                "go_to_cmin" => rt::Ok(Self::GoToCmin(request::GoToCmin)),
+                "go_to_cmin_status" => {
+                    rt::Ok(Self::GoToCminStatus(request::GoToCminStatus))
+                }
+                "go_to_cmax" => rt::Ok(Self::GoToCmax(request::GoToCmax)),
+                "go_to_cmax_status" => {
+                    rt::Ok(Self::GoToCmaxStatus(request::GoToCmaxStatus))
+                }
                 "go_to_micro_step_position" => {
-                    rt::Ok(Self::GoToMicroStepPosition {
-                        target: rt::get(&mut field, "target")?,
-                    })
+                    rt::Ok(
+                        Self::GoToMicroStepPosition(request::GoToMicroStepPosition {
+                            target: rt::get(&mut field, "target")?,
+                        }),
+                    )
                 }
                 "go_to_micro_step_position_status" => {
-                    rt::Ok(Self::GoToMicroStepPositionStatus)
+                    rt::Ok(
+                        Self::GoToMicroStepPositionStatus(
+                            request::GoToMicroStepPositionStatus,
+                        ),
+                    )
                 }
                 "move_micro_steps" => {
-                    rt::Ok(Self::MoveMicroSteps {
-                        steps: rt::get(&mut field, "steps")?,
-                    })
+                    rt::Ok(
+                        Self::MoveMicroSteps(request::MoveMicroSteps {
+                            steps: rt::get(&mut field, "steps")?,
+                        }),
+                    )
                 }
-                "move_micro_steps_status" => rt::Ok(Self::MoveMicroStepsStatus),
+                "move_micro_steps_status" => {
+                    rt::Ok(Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus))
+                }
                 "go_to_stored_position" => {
-                    rt::Ok(Self::GoToStoredPosition {
-                        index: rt::get(&mut field, "index")?,
-                    })
+                    rt::Ok(
+                        Self::GoToStoredPosition(request::GoToStoredPosition {
+                            index: rt::get(&mut field, "index")?,
+                        }),
+                    )
                 }
-                "go_to_stored_position_status" => rt::Ok(Self::GoToStoredPositionStatus),
+                "go_to_stored_position_status" => {
+                    rt::Ok(
+                        Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus),
+                    )
+                }
                 "set_acceleration_speed_index" => {
-                    rt::Ok(Self::SetAccelerationSpeedIndex {
-                        acceleration_index: rt::get(&mut field, "acceleration_index")?,
-                        speed_index: rt::get(&mut field, "speed_index")?,
-                    })
+                    rt::Ok(
+                        Self::SetAccelerationSpeedIndex(request::SetAccelerationSpeedIndex {
+                            acceleration_index: rt::get(
+                                &mut field,
+                                "acceleration_index",
+                            )?,
+                            speed_index: rt::get(&mut field, "speed_index")?,
+                        }),
+                    )
                 }
                 "set_current" => {
-                    rt::Ok(Self::SetCurrent {
-                        idle_current: rt::get(&mut field, "idle_current")?,
-                        drive_current: rt::get(&mut field, "drive_current")?,
-                    })
+                    rt::Ok(
+                        Self::SetCurrent(request::SetCurrent {
+                            idle_current: rt::get(&mut field, "idle_current")?,
+                            drive_current: rt::get(&mut field, "drive_current")?,
+                        }),
+                    )
                 }
                 "set_slave_address" => {
-                    rt::Ok(Self::SetSlaveAddress {
-                        address: rt::get(&mut field, "address")?,
-                    })
+                    rt::Ok(
+                        Self::SetSlaveAddress(request::SetSlaveAddress {
+                            address: rt::get(&mut field, "address")?,
+                        }),
+                    )
                 }
                 "set_baud_rate" => {
-                    rt::Ok(Self::SetBaudRate {
-                        baud_rate: BaudRateIndex::from_raw(
-                            rt::get(&mut field, "baud_rate")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::SetBaudRate(request::SetBaudRate {
+                            baud_rate: BaudRateIndex::from_raw(
+                                rt::get(&mut field, "baud_rate")?,
+                            ),
+                        }),
+                    )
                 }
                 "set_lower_customer_limit" => {
-                    rt::Ok(Self::SetLowerCustomerLimit {
-                        limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
-                    })
+                    rt::Ok(
+                        Self::SetLowerCustomerLimit(request::SetLowerCustomerLimit {
+                            limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
+                        }),
+                    )
                 }
                 "set_upper_customer_limit" => {
-                    rt::Ok(Self::SetUpperCustomerLimit {
-                        limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
-                    })
+                    rt::Ok(
+                        Self::SetUpperCustomerLimit(request::SetUpperCustomerLimit {
+                            limit: Capacitance::from_raw(rt::get(&mut field, "limit")?),
+                        }),
+                    )
                 }
                 "store_indexed_position" => {
-                    rt::Ok(Self::StoreIndexedPosition {
-                        index: rt::get(&mut field, "index")?,
-                        position: rt::get(&mut field, "position")?,
-                    })
+                    rt::Ok(
+                        Self::StoreIndexedPosition(request::StoreIndexedPosition {
+                            index: rt::get(&mut field, "index")?,
+                            position: rt::get(&mut field, "position")?,
+                        }),
+                    )
                 }
                 "set_mode_of_operation" => {
-                    rt::Ok(Self::SetModeOfOperation {
-                        mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
-                    })
+                    rt::Ok(
+                        Self::SetModeOfOperation(request::SetModeOfOperation {
+                            mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
+                        }),
+                    )
                 }
-                "get_actual_capacitance" => rt::Ok(Self::GetActualCapacitance),
+                "get_actual_capacitance" => {
+                    rt::Ok(Self::GetActualCapacitance(request::GetActualCapacitance))
+                }
                 "get_actual_full_step_position" => {
-                    rt::Ok(Self::GetActualFullStepPosition)
+                    rt::Ok(
+                        Self::GetActualFullStepPosition(
+                            request::GetActualFullStepPosition,
+                        ),
+                    )
                 }
-                "get_minimum_capacitance" => rt::Ok(Self::GetMinimumCapacitance),
-                "get_maximum_capacitance" => rt::Ok(Self::GetMaximumCapacitance),
-                "get_acceleration_speed" => rt::Ok(Self::GetAccelerationSpeed),
-                "get_status" => rt::Ok(Self::GetStatus),
+                "get_minimum_capacitance" => {
+                    rt::Ok(Self::GetMinimumCapacitance(request::GetMinimumCapacitance))
+                }
+                "get_maximum_capacitance" => {
+                    rt::Ok(Self::GetMaximumCapacitance(request::GetMaximumCapacitance))
+                }
+                "get_acceleration_speed" => {
+                    rt::Ok(Self::GetAccelerationSpeed(request::GetAccelerationSpeed))
+                }
+                "get_status" => rt::Ok(Self::GetStatus(request::GetStatus)),
                 "get_c_curve_indexed_full_step_capacitance" => {
-                    rt::Ok(Self::GetCCurveIndexedFullStepCapacitance {
-                        index: rt::get(&mut field, "index")?,
-                    })
+                    rt::Ok(
+                        Self::GetCCurveIndexedFullStepCapacitance(request::GetCCurveIndexedFullStepCapacitance {
+                            index: rt::get(&mut field, "index")?,
+                        }),
+                    )
                 }
-                "get_controller_temperature" => rt::Ok(Self::GetControllerTemperature),
-                "get_micro_step_position" => rt::Ok(Self::GetMicroStepPosition),
-                "get_firmware_version" => rt::Ok(Self::GetFirmwareVersion),
-                "get_serial_number" => rt::Ok(Self::GetSerialNumber),
-                "get_cmin_nom" => rt::Ok(Self::GetCminNom),
-                "get_cmax_nom" => rt::Ok(Self::GetCmaxNom),
-                "get_lower_customer_limit" => rt::Ok(Self::GetLowerCustomerLimit),
-                "get_upper_customer_limit" => rt::Ok(Self::GetUpperCustomerLimit),
-                "get_lower_factory_limit" => rt::Ok(Self::GetLowerFactoryLimit),
-                "get_upper_factory_limit" => rt::Ok(Self::GetUpperFactoryLimit),
-                "get_preset_capacitance" => rt::Ok(Self::GetPresetCapacitance),
+                "get_controller_temperature" => {
+                    rt::Ok(
+                        Self::GetControllerTemperature(request::GetControllerTemperature),
+                    )
+                }
+                "get_micro_step_position" => {
+                    rt::Ok(Self::GetMicroStepPosition(request::GetMicroStepPosition))
+                }
+                "get_firmware_version" => {
+                    rt::Ok(Self::GetFirmwareVersion(request::GetFirmwareVersion))
+                }
+                "get_serial_number" => {
+                    rt::Ok(Self::GetSerialNumber(request::GetSerialNumber))
+                }
+                "get_cmin_nom" => rt::Ok(Self::GetCminNom(request::GetCminNom)),
+                "get_cmax_nom" => rt::Ok(Self::GetCmaxNom(request::GetCmaxNom)),
+                "get_lower_customer_limit" => {
+                    rt::Ok(Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit))
+                }
+                "get_upper_customer_limit" => {
+                    rt::Ok(Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit))
+                }
+                "get_lower_factory_limit" => {
+                    rt::Ok(Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit))
+                }
+                "get_upper_factory_limit" => {
+                    rt::Ok(Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit))
+                }
+                "get_preset_capacitance" => {
+                    rt::Ok(Self::GetPresetCapacitance(request::GetPresetCapacitance))
+                }
                 "get_preset_full_step_position" => {
-                    rt::Ok(Self::GetPresetFullStepPosition)
+                    rt::Ok(
+                        Self::GetPresetFullStepPosition(
+                            request::GetPresetFullStepPosition,
+                        ),
+                    )
                 }
                 "get_stored_full_step_position" => {
-                    rt::Ok(Self::GetStoredFullStepPosition {
-                        index: rt::get(&mut field, "index")?,
-                    })
+                    rt::Ok(
+                        Self::GetStoredFullStepPosition(request::GetStoredFullStepPosition {
+                            index: rt::get(&mut field, "index")?,
+                        }),
+                    )
                 }
-                "get_mode_of_operation" => rt::Ok(Self::GetModeOfOperation),
+                "get_mode_of_operation" => {
+                    rt::Ok(Self::GetModeOfOperation(request::GetModeOfOperation))
+                }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -1547,27 +2340,30 @@ pub mod ub2 {
                 },
                 reply: rt::Reply::Required,
                 may_retry: matches!(
-                    self, Request::ReferenceRunStatus | Request::GoToCapacitanceStatus |
-                    Request::GoToFullStepPositionStatus | Request::MoveFullStepsStatus |
-                    Request::GoToCminStatus | Request::GoToCmaxStatus |
-                    Request::GoToMicroStepPositionStatus | Request::MoveMicroStepsStatus
-                    | Request::GoToStoredPositionStatus |
-                    Request::SetAccelerationSpeedIndex { .. } | Request::SetCurrent { ..
-                    } | Request::SetLowerCustomerLimit { .. } |
-                    Request::SetUpperCustomerLimit { .. } | Request::StoreIndexedPosition
-                    { .. } | Request::SetModeOfOperation { .. } |
-                    Request::GetActualCapacitance | Request::GetActualFullStepPosition |
-                    Request::GetMinimumCapacitance | Request::GetMaximumCapacitance |
-                    Request::GetAccelerationSpeed |
-                    Request::GetCCurveIndexedFullStepCapacitance { .. } |
-                    Request::GetControllerTemperature | Request::GetMicroStepPosition |
-                    Request::GetFirmwareVersion | Request::GetSerialNumber |
-                    Request::GetCminNom | Request::GetCmaxNom |
-                    Request::GetLowerCustomerLimit | Request::GetUpperCustomerLimit |
-                    Request::GetLowerFactoryLimit | Request::GetUpperFactoryLimit |
-                    Request::GetPresetCapacitance | Request::GetPresetFullStepPosition |
-                    Request::GetStoredFullStepPosition { .. } |
-                    Request::GetModeOfOperation
+                    self, Request::ReferenceRunStatus(_) |
+                    Request::GoToCapacitanceStatus(_) |
+                    Request::GoToFullStepPositionStatus(_) |
+                    Request::MoveFullStepsStatus(_) | Request::GoToCminStatus(_) |
+                    Request::GoToCmaxStatus(_) | Request::GoToMicroStepPositionStatus(_)
+                    | Request::MoveMicroStepsStatus(_) |
+                    Request::GoToStoredPositionStatus(_) |
+                    Request::SetAccelerationSpeedIndex(_) | Request::SetCurrent(_) |
+                    Request::SetLowerCustomerLimit(_) | Request::SetUpperCustomerLimit(_)
+                    | Request::StoreIndexedPosition(_) | Request::SetModeOfOperation(_) |
+                    Request::GetActualCapacitance(_) |
+                    Request::GetActualFullStepPosition(_) |
+                    Request::GetMinimumCapacitance(_) | Request::GetMaximumCapacitance(_)
+                    | Request::GetAccelerationSpeed(_) |
+                    Request::GetCCurveIndexedFullStepCapacitance(_) |
+                    Request::GetControllerTemperature(_) |
+                    Request::GetMicroStepPosition(_) | Request::GetFirmwareVersion(_) |
+                    Request::GetSerialNumber(_) | Request::GetCminNom(_) |
+                    Request::GetCmaxNom(_) | Request::GetLowerCustomerLimit(_) |
+                    Request::GetUpperCustomerLimit(_) | Request::GetLowerFactoryLimit(_)
+                    | Request::GetUpperFactoryLimit(_) | Request::GetPresetCapacitance(_)
+                    | Request::GetPresetFullStepPosition(_) |
+                    Request::GetStoredFullStepPosition(_) |
+                    Request::GetModeOfOperation(_)
                 ),
             }
         }
@@ -1576,166 +2372,695 @@ pub mod ub2 {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::MovementStarted {
+        pub const NAME: &'static str = "movement_started";
+        pub const CODE: &'static [u8] = &[0x50];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x50,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementStarted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementCompleted {
+        pub const NAME: &'static str = "movement_completed";
+        pub const CODE: &'static [u8] = &[0x51];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x51,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementCompleted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementNotCompleted {
+        pub const NAME: &'static str = "movement_not_completed";
+        pub const CODE: &'static [u8] = &[0x52];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x52,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementNotCompleted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementNotTriggered {
+        pub const NAME: &'static str = "movement_not_triggered";
+        pub const CODE: &'static [u8] = &[0x53];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x53,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementNotTriggered(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementCompletedWithStepLoss {
+        pub const NAME: &'static str = "movement_completed_with_step_loss";
+        pub const CODE: &'static [u8] = &[0x54, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x5400,
+            2,
+            &[9],
+        );
+        pub const LOST_MICRO_STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("lost_micro_steps", rt::Int(self.lost_micro_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementCompletedWithStepLoss(*self).encode(address, buf)
+        }
+    }
+    impl response::NakUnknownCommand {
+        pub const NAME: &'static str = "nak_unknown_command";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakUnknownCommand(*self).encode(address, buf)
+        }
+    }
+    impl response::NakIncompatibleStatus {
+        pub const NAME: &'static str = "nak_incompatible_status";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x91,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakIncompatibleStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::NakChecksumError {
+        pub const NAME: &'static str = "nak_checksum_error";
+        pub const CODE: &'static [u8] = &[0x92];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x92,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakChecksumError(*self).encode(address, buf)
+        }
+    }
+    impl response::NakLimitReached {
+        pub const NAME: &'static str = "nak_limit_reached";
+        pub const CODE: &'static [u8] = &[0x93];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x93,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakLimitReached(*self).encode(address, buf)
+        }
+    }
+    impl response::NakIndexOutOfRange {
+        pub const NAME: &'static str = "nak_index_out_of_range";
+        pub const CODE: &'static [u8] = &[0x94];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x94,
+            1,
+            &[4],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakIndexOutOfRange(*self).encode(address, buf)
+        }
+    }
+    impl response::SetAccelerationSpeedIndexAck {
+        pub const NAME: &'static str = "set_acceleration_speed_index_ack";
+        pub const CODE: &'static [u8] = &[0x43, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4300,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetAccelerationSpeedIndexAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetCurrentAck {
+        pub const NAME: &'static str = "set_current_ack";
+        pub const CODE: &'static [u8] = &[0x45, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4500,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetCurrentAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetSlaveAddressAck {
+        pub const NAME: &'static str = "set_slave_address_ack";
+        pub const CODE: &'static [u8] = &[0x60, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x6000,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetSlaveAddressAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetBaudRateAck {
+        pub const NAME: &'static str = "set_baud_rate_ack";
+        pub const CODE: &'static [u8] = &[0x61, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x6100,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetBaudRateAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetLowerCustomerLimitAck {
+        pub const NAME: &'static str = "set_lower_customer_limit_ack";
+        pub const CODE: &'static [u8] = &[0x72, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7201,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetLowerCustomerLimitAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetUpperCustomerLimitAck {
+        pub const NAME: &'static str = "set_upper_customer_limit_ack";
+        pub const CODE: &'static [u8] = &[0x72, 0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7202,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetUpperCustomerLimitAck(*self).encode(address, buf)
+        }
+    }
+    impl response::StoreIndexedPositionAck {
+        pub const NAME: &'static str = "store_indexed_position_ack";
+        pub const CODE: &'static [u8] = &[0x75, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x7500,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StoreIndexedPositionAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetModeOfOperationAck {
+        pub const NAME: &'static str = "set_mode_of_operation_ack";
+        pub const CODE: &'static [u8] = &[0x80, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x8000,
+            2,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetModeOfOperationAck(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualCapacitance {
+        pub const NAME: &'static str = "actual_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4101,
+            2,
+            &[9],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualFullStepPosition {
+        pub const NAME: &'static str = "actual_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4102,
+            2,
+            &[7],
+        );
+        pub const FULL_STEPS: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::MinimumCapacitance {
+        pub const NAME: &'static str = "minimum_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x10];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4110,
+            2,
+            &[9],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MinimumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::MaximumCapacitance {
+        pub const NAME: &'static str = "maximum_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x11];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4111,
+            2,
+            &[9],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MaximumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::AccelerationSpeed {
+        pub const NAME: &'static str = "acceleration_speed";
+        pub const CODE: &'static [u8] = &[0x41, 0x21];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4121,
+            2,
+            &[7],
+        );
+        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
+        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("acceleration_index", rt::Int(self.acceleration_index as i64));
+            f("speed_index", rt::Int(self.speed_index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AccelerationSpeed(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x41, 0x22];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4122,
+            2,
+            &[7],
+        );
+        pub const ERROR_BITS: rt::Range<usize> = 4..5;
+        pub const RESERVED: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error_bits", rt::Int(self.error_bits.raw() as i64));
+            f("reserved", rt::Int(self.reserved as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::CCurveEntry {
+        pub const NAME: &'static str = "c_curve_entry";
+        pub const CODE: &'static [u8] = &[0x41, 0x30];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4130,
+            2,
+            &[13],
+        );
+        pub const INDEX: rt::Range<usize> = 4..6;
+        pub const FULL_STEPS: rt::Range<usize> = 6..8;
+        pub const CAPACITANCE: rt::Range<usize> = 8..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("full_steps", rt::Int(self.full_steps as i64));
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CCurveEntry(*self).encode(address, buf)
+        }
+    }
+    impl response::ControllerTemperature {
+        pub const NAME: &'static str = "controller_temperature";
+        pub const CODE: &'static [u8] = &[0x41, 0x32];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4132,
+            2,
+            &[6],
+        );
+        pub const TEMPERATURE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ControllerTemperature(*self).encode(address, buf)
+        }
+    }
+    impl response::MicroStepPosition {
+        pub const NAME: &'static str = "micro_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x36];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4136,
+            2,
+            &[9],
+        );
+        pub const MICRO_STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("micro_steps", rt::Int(self.micro_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::FirmwareVersion {
+        pub const NAME: &'static str = "firmware_version";
+        pub const CODE: &'static [u8] = &[0x41, 0x61];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4161,
+            2,
+            &[16],
+        );
+        pub const FIRMWARE_VERSION: rt::Range<usize> = 4..15;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("firmware_version", rt::Text(&self.firmware_version[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::FirmwareVersion(*self).encode(address, buf)
+        }
+    }
+    impl response::SerialNumber {
+        pub const NAME: &'static str = "serial_number";
+        pub const CODE: &'static [u8] = &[0x41, 0x62];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4162,
+            2,
+            &[13],
+        );
+        pub const SERIAL_NUMBER: rt::Range<usize> = 4..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("serial_number", rt::Text(&self.serial_number[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl response::CminNom {
+        pub const NAME: &'static str = "cmin_nom";
+        pub const CODE: &'static [u8] = &[0x41, 0x70];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4170,
+            2,
+            &[9],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CminNom(*self).encode(address, buf)
+        }
+    }
+    impl response::CmaxNom {
+        pub const NAME: &'static str = "cmax_nom";
+        pub const CODE: &'static [u8] = &[0x41, 0x71];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4171,
+            2,
+            &[9],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CmaxNom(*self).encode(address, buf)
+        }
+    }
+    impl response::LowerCustomerLimit {
+        pub const NAME: &'static str = "lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4172,
+            2,
+            &[10],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::UpperCustomerLimit {
+        pub const NAME: &'static str = "upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4172,
+            2,
+            &[10],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::UpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::LowerFactoryLimit {
+        pub const NAME: &'static str = "lower_factory_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4172,
+            2,
+            &[10],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LowerFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::UpperFactoryLimit {
+        pub const NAME: &'static str = "upper_factory_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4172,
+            2,
+            &[10],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::UpperFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::PresetCapacitance {
+        pub const NAME: &'static str = "preset_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x73];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4173,
+            2,
+            &[10],
+        );
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PresetCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::PresetFullStepPosition {
+        pub const NAME: &'static str = "preset_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x73];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4173,
+            2,
+            &[10],
+        );
+        pub const FULL_STEPS: rt::Range<usize> = 5..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PresetFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::StoredFullStepPosition {
+        pub const NAME: &'static str = "stored_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x75];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4175,
+            2,
+            &[8],
+        );
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const FULL_STEPS: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StoredFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualModeOfOperation {
+        pub const NAME: &'static str = "actual_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x41, 0x80];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x4180,
+            2,
+            &[6],
+        );
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualModeOfOperation(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1.1 Command approved Movement started (code `0x50`, 4 bytes). Reply to a movement trigger: command approved, movement started.
-        MovementStarted,
-        /// §4.1.2 Command approved & Movement completed (code `0x51`, 4 bytes). Reply to a completion check: command approved and the movement is completed.
-        MovementCompleted,
-        /// §4.1.2 Command approved & Movement not yet completed (code `0x52`, 4 bytes). Reply to a completion check: command approved, the movement is not yet completed.
-        MovementNotCompleted,
-        /// §4.1.2 Movement has not been triggered (code `0x53`, 4 bytes). Reply to a completion check: the movement has not been triggered.
-        MovementNotTriggered,
-        /// §4.2.2 Movement completed with step-loss (code `0x5400`, 9 bytes). Reply to a completion check: the movement is completed, but steps were lost. The document calls the code 0x5400 (two bytes) and gives no signedness for the 4-byte count; U32 is assumed as for absolute micro-step values (§3.3).
-        MovementCompletedWithStepLoss {
-            /// Number of lost micro-steps \[micro-steps\]
-            lost_micro_steps: u32,
-        },
-        /// §7.1 Not acknowledged / Unknown command (code `0x90`, 4 bytes). The command code (byte 3&4) is not defined.
-        NakUnknownCommand,
-        /// §7.1 Not acknowledged / Incompatible status (code `0x91`, 4 bytes). Current status is not compatible with this command (e.g. §5.8: module not in idle state).
-        NakIncompatibleStatus,
-        /// §7.1 Not acknowledged / Checksum error (code `0x92`, 4 bytes). The checksum is not correct.
-        NakChecksumError,
-        /// §7.2 Not acknowledged / Limit reached (code `0x93`, 4 bytes). Target position outside of customer limits. For movements the command is nevertheless approved and the cap runs till the customer limit; for the limit setters 0x7201/0x7202 it means the requested limit is outside the factory limits and the command is ignored (ub2-e23, ub2-e24). See each command's response_meanings.
-        NakLimitReached,
-        /// §7.1 Not acknowledged / Index out of range (code `0x94`, 4 bytes). The given index is outside of the defined / allowed range (also used for an out-of-range address, baud-rate index or mode). §7.1 lists it for all commands, so it is a common response; the commands whose sections name it say what it means for them (ub2-e22).
-        NakIndexOutOfRange,
-        /// §5.1 Command approved (code `0x4300`, 5 bytes). Set-Acceleration-Speed-Index approved; echoes the command code, no data. No example printed (ub2-e30).
-        SetAccelerationSpeedIndexAck,
-        /// §5.2 Command approved (code `0x4500`, 5 bytes). Set-Current approved; echoes the command code, no data.
-        SetCurrentAck,
-        /// §5.3 Command approved (code `0x6000`, 5 bytes). Set-Slave-Address approved; echoes the command code, no data. The example is sent from the old address.
-        SetSlaveAddressAck,
-        /// §5.4 Command approved (code `0x6100`, 5 bytes). Set-Baud-Rate approved; echoes the command code, no data.
-        SetBaudRateAck,
-        /// §5.5 Command approved (requested limit inside factory limits) (code `0x7201`, 5 bytes). Set-Lower-Customer-Limit approved (requested limit inside factory limits); echoes the command code, no data.
-        SetLowerCustomerLimitAck,
-        /// §5.6 Command approved (code `0x7202`, 5 bytes). Set-Upper-Customer-Limit approved; echoes the command code, no data.
-        SetUpperCustomerLimitAck,
-        /// §5.7 Command approved (code `0x7500`, 5 bytes). Store-Indexed-Position approved; echoes the command code, no data.
-        StoreIndexedPositionAck,
-        /// §5.8 Command approved (code `0x8000`, 5 bytes). Set-Mode-Of-Operation approved; echoes the command code, no data.
-        SetModeOfOperationAck,
-        /// §6.1 Command approved (actual capacitance) (code `0x4101`, 9 bytes). Actual capacitance.
-        ActualCapacitance {
-            /// C \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.2 Command approved (actual full-step position) (code `0x4102`, 7 bytes). Actual full-step position.
-        ActualFullStepPosition {
-            /// Full-steps \[full-steps\]
-            full_steps: u16,
-        },
-        /// §6.3 Command approved (minimum capacitance) (code `0x4110`, 9 bytes). Minimum capacitance Cmin as per the stored C-curve.
-        MinimumCapacitance {
-            /// Cmin \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.4 Command approved (maximum capacitance) (code `0x4111`, 9 bytes). Maximum capacitance Cmax as per the stored C-curve.
-        MaximumCapacitance {
-            /// Cmax \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.5 Command approved (acceleration and speed index) (code `0x4121`, 7 bytes). Acceleration and drive-speed index.
-        AccelerationSpeed {
-            /// Byte 1: acceleration \[0...18\] Valid raw range 0..=18.
-            acceleration_index: u8,
-            /// Byte 2: drive-speed \[0...18\] Valid raw range 0..=18.
-            speed_index: u8,
-        },
-        /// §6.6 Command approved (status) (code `0x4122`, 7 bytes). Status: '2 Byte', byte 1 = error bits (§6.6.1), byte 2 n/a (ub2-e13).
-        Status {
-            /// Byte 1: error bits (§6.6.1)
-            error_bits: StatusErrorBits,
-            /// Byte 2: n/a (not defined by the document)
-            reserved: u8,
-        },
-        /// §6.7 Command approved (C-curve entry) (code `0x4130`, 13 bytes). Indexed C-curve tuple: index, full-step position, capacitance.
-        CCurveEntry {
-            /// Byte 1&2: index in table Valid raw range 0..=499.
-            index: u16,
-            /// Byte 3&4: full-steps \[full-steps\]
-            full_steps: u16,
-            /// Byte 5 to 8: C \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.8 Command approved (controller temperature) (code `0x4132`, 6 bytes). Controller-internal temperature; one data byte converted to U8 (the text also says U16 and omits the formula, ub2-e15).
-        ControllerTemperature {
-            /// Temperature \[°C\] \[°C\]
-            temperature: u8,
-        },
-        /// §6.9 Command approved (micro-step position) (code `0x4136`, 9 bytes). Current micro-step position.
-        MicroStepPosition {
-            /// MicroStep-Position \[micro-steps\]
-            micro_steps: u32,
-        },
-        /// §6.10 Command approved (firmware version) (code `0x4161`, 16 bytes). Firmware version, 11 ASCII characters (e.g. "20100433.00").
-        FirmwareVersion {
-            /// 11 bytes \[ASCII character\]
-            firmware_version: rt::Ascii<11>,
-        },
-        /// §6.11 Command approved (serial number) (code `0x4162`, 13 bytes). Serial number of the capacitor, 8 ASCII characters (e.g. "##654321").
-        SerialNumber {
-            /// 8 bytes \[ASCII character\]
-            serial_number: rt::Ascii<8>,
-        },
-        /// §6.12 Command approved (Cmin-nom) (code `0x4170`, 9 bytes). Nominal minimum capacitance Cmin-nom.
-        CminNom {
-            /// Cmin-nom \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.13 Command approved (Cmax-nom) (code `0x4171`, 9 bytes). Nominal maximum capacitance Cmax-nom (the data column says C_min-nom, ub2-e16).
-        CmaxNom {
-            /// Cmax-nom \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.14 Command approved (lower customer limit) (code `0x4172`, 10 bytes). Capacitance at the Lower Customer Limit: index byte 0x01, then C.
-        LowerCustomerLimit {
-            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.15 Command approved (upper customer limit) (code `0x4172`, 10 bytes). Capacitance at the Upper Customer Limit: index byte 0x02, then C.
-        UpperCustomerLimit {
-            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.16 Command approved (lower factory limit) (code `0x4172`, 10 bytes). Capacitance at the Lower Factory Limit: index byte 0x03, then C.
-        LowerFactoryLimit {
-            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.17 Command approved (upper factory limit) (code `0x4172`, 10 bytes). Capacitance at the Upper Factory Limit: index byte 0x04, then C.
-        UpperFactoryLimit {
-            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.18 Command approved (preset capacitance) (code `0x4173`, 10 bytes). Equivalent capacitance at the preset position: index byte 0x00, then Preset-C.
-        PresetCapacitance {
-            /// Bytes 2 to 5: Preset-C \[0.01 pF\] \[pF\]
-            capacitance: Capacitance,
-        },
-        /// §6.19 Command approved (preset full-step position) (code `0x4173`, 10 bytes). Equivalent full-step position at the preset position: index byte 0x01, then the full-steps in 4 bytes (U32, unlike the 2-byte full-step values of §3.2; ub2-e19).
-        PresetFullStepPosition {
-            /// Bytes 2 to 5: full-steps \[full-steps\]
-            full_steps: u32,
-        },
-        /// §6.20 Command approved (stored full-step position) (code `0x4175`, 8 bytes). Stored indexed full-step position: the requested index, then the full-steps.
-        StoredFullStepPosition {
-            /// Byte 1: index \[0 .. 9\] (repeats the request's index) Valid raw range 0..=9.
-            index: u8,
-            /// Bytes 2&3: full-steps \[full-steps\]
-            full_steps: u16,
-        },
-        /// §6.21 Command approved (Mode-Of-Operation) (code `0x4180`, 6 bytes). The actual Mode-Of-Operation.
-        ActualModeOfOperation {
-            /// 0x00 encoder disabled, 0x01 close-loop-control, 0x02 open-loop-control (default)
-            mode: ModeOfOperation,
-        },
+        MovementStarted(response::MovementStarted),
+        MovementCompleted(response::MovementCompleted),
+        MovementNotCompleted(response::MovementNotCompleted),
+        MovementNotTriggered(response::MovementNotTriggered),
+        MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss),
+        NakUnknownCommand(response::NakUnknownCommand),
+        NakIncompatibleStatus(response::NakIncompatibleStatus),
+        NakChecksumError(response::NakChecksumError),
+        NakLimitReached(response::NakLimitReached),
+        NakIndexOutOfRange(response::NakIndexOutOfRange),
+        SetAccelerationSpeedIndexAck(response::SetAccelerationSpeedIndexAck),
+        SetCurrentAck(response::SetCurrentAck),
+        SetSlaveAddressAck(response::SetSlaveAddressAck),
+        SetBaudRateAck(response::SetBaudRateAck),
+        SetLowerCustomerLimitAck(response::SetLowerCustomerLimitAck),
+        SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck),
+        StoreIndexedPositionAck(response::StoreIndexedPositionAck),
+        SetModeOfOperationAck(response::SetModeOfOperationAck),
+        ActualCapacitance(response::ActualCapacitance),
+        ActualFullStepPosition(response::ActualFullStepPosition),
+        MinimumCapacitance(response::MinimumCapacitance),
+        MaximumCapacitance(response::MaximumCapacitance),
+        AccelerationSpeed(response::AccelerationSpeed),
+        Status(response::Status),
+        CCurveEntry(response::CCurveEntry),
+        ControllerTemperature(response::ControllerTemperature),
+        MicroStepPosition(response::MicroStepPosition),
+        FirmwareVersion(response::FirmwareVersion),
+        SerialNumber(response::SerialNumber),
+        CminNom(response::CminNom),
+        CmaxNom(response::CmaxNom),
+        LowerCustomerLimit(response::LowerCustomerLimit),
+        UpperCustomerLimit(response::UpperCustomerLimit),
+        LowerFactoryLimit(response::LowerFactoryLimit),
+        UpperFactoryLimit(response::UpperFactoryLimit),
+        PresetCapacitance(response::PresetCapacitance),
+        PresetFullStepPosition(response::PresetFullStepPosition),
+        StoredFullStepPosition(response::StoredFullStepPosition),
+        ActualModeOfOperation(response::ActualModeOfOperation),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -1783,45 +3108,45 @@ pub mod ub2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::MovementStarted => 0,
-                Self::MovementCompleted => 1,
-                Self::MovementNotCompleted => 2,
-                Self::MovementNotTriggered => 3,
-                Self::MovementCompletedWithStepLoss { .. } => 4,
-                Self::NakUnknownCommand => 5,
-                Self::NakIncompatibleStatus => 6,
-                Self::NakChecksumError => 7,
-                Self::NakLimitReached => 8,
-                Self::NakIndexOutOfRange => 9,
-                Self::SetAccelerationSpeedIndexAck => 10,
-                Self::SetCurrentAck => 11,
-                Self::SetSlaveAddressAck => 12,
-                Self::SetBaudRateAck => 13,
-                Self::SetLowerCustomerLimitAck => 14,
-                Self::SetUpperCustomerLimitAck => 15,
-                Self::StoreIndexedPositionAck => 16,
-                Self::SetModeOfOperationAck => 17,
-                Self::ActualCapacitance { .. } => 18,
-                Self::ActualFullStepPosition { .. } => 19,
-                Self::MinimumCapacitance { .. } => 20,
-                Self::MaximumCapacitance { .. } => 21,
-                Self::AccelerationSpeed { .. } => 22,
-                Self::Status { .. } => 23,
-                Self::CCurveEntry { .. } => 24,
-                Self::ControllerTemperature { .. } => 25,
-                Self::MicroStepPosition { .. } => 26,
-                Self::FirmwareVersion { .. } => 27,
-                Self::SerialNumber { .. } => 28,
-                Self::CminNom { .. } => 29,
-                Self::CmaxNom { .. } => 30,
-                Self::LowerCustomerLimit { .. } => 31,
-                Self::UpperCustomerLimit { .. } => 32,
-                Self::LowerFactoryLimit { .. } => 33,
-                Self::UpperFactoryLimit { .. } => 34,
-                Self::PresetCapacitance { .. } => 35,
-                Self::PresetFullStepPosition { .. } => 36,
-                Self::StoredFullStepPosition { .. } => 37,
-                Self::ActualModeOfOperation { .. } => 38,
+                Self::MovementStarted(_) => 0,
+                Self::MovementCompleted(_) => 1,
+                Self::MovementNotCompleted(_) => 2,
+                Self::MovementNotTriggered(_) => 3,
+                Self::MovementCompletedWithStepLoss(_) => 4,
+                Self::NakUnknownCommand(_) => 5,
+                Self::NakIncompatibleStatus(_) => 6,
+                Self::NakChecksumError(_) => 7,
+                Self::NakLimitReached(_) => 8,
+                Self::NakIndexOutOfRange(_) => 9,
+                Self::SetAccelerationSpeedIndexAck(_) => 10,
+                Self::SetCurrentAck(_) => 11,
+                Self::SetSlaveAddressAck(_) => 12,
+                Self::SetBaudRateAck(_) => 13,
+                Self::SetLowerCustomerLimitAck(_) => 14,
+                Self::SetUpperCustomerLimitAck(_) => 15,
+                Self::StoreIndexedPositionAck(_) => 16,
+                Self::SetModeOfOperationAck(_) => 17,
+                Self::ActualCapacitance(_) => 18,
+                Self::ActualFullStepPosition(_) => 19,
+                Self::MinimumCapacitance(_) => 20,
+                Self::MaximumCapacitance(_) => 21,
+                Self::AccelerationSpeed(_) => 22,
+                Self::Status(_) => 23,
+                Self::CCurveEntry(_) => 24,
+                Self::ControllerTemperature(_) => 25,
+                Self::MicroStepPosition(_) => 26,
+                Self::FirmwareVersion(_) => 27,
+                Self::SerialNumber(_) => 28,
+                Self::CminNom(_) => 29,
+                Self::CmaxNom(_) => 30,
+                Self::LowerCustomerLimit(_) => 31,
+                Self::UpperCustomerLimit(_) => 32,
+                Self::LowerFactoryLimit(_) => 33,
+                Self::UpperFactoryLimit(_) => 34,
+                Self::PresetCapacitance(_) => 35,
+                Self::PresetFullStepPosition(_) => 36,
+                Self::StoredFullStepPosition(_) => 37,
+                Self::ActualModeOfOperation(_) => 38,
             }
         }
         /// The spec's snake_case name of this message.
@@ -1838,89 +3163,30 @@ pub mod ub2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::MovementCompletedWithStepLoss {
-                    lost_micro_steps: v_lost_micro_steps,
-                } => f("lost_micro_steps", rt::Int(*v_lost_micro_steps as i64)),
-                Self::ActualCapacitance { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::ActualFullStepPosition { full_steps: v_full_steps } => {
-                    f("full_steps", rt::Int(*v_full_steps as i64))
-                }
-                Self::MinimumCapacitance { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::MaximumCapacitance { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::AccelerationSpeed {
-                    acceleration_index: v_acceleration_index,
-                    speed_index: v_speed_index,
-                } => {
-                    f("acceleration_index", rt::Int(*v_acceleration_index as i64));
-                    f("speed_index", rt::Int(*v_speed_index as i64));
-                }
-                Self::Status { error_bits: v_error_bits, reserved: v_reserved } => {
-                    f("error_bits", rt::Int(v_error_bits.raw() as i64));
-                    f("reserved", rt::Int(*v_reserved as i64));
-                }
-                Self::CCurveEntry {
-                    index: v_index,
-                    full_steps: v_full_steps,
-                    capacitance: v_capacitance,
-                } => {
-                    f("index", rt::Int(*v_index as i64));
-                    f("full_steps", rt::Int(*v_full_steps as i64));
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64));
-                }
-                Self::ControllerTemperature { temperature: v_temperature } => {
-                    f("temperature", rt::Int(*v_temperature as i64))
-                }
-                Self::MicroStepPosition { micro_steps: v_micro_steps } => {
-                    f("micro_steps", rt::Int(*v_micro_steps as i64))
-                }
-                Self::FirmwareVersion { firmware_version: v_firmware_version } => {
-                    f("firmware_version", rt::Text(&v_firmware_version[..]))
-                }
-                Self::SerialNumber { serial_number: v_serial_number } => {
-                    f("serial_number", rt::Text(&v_serial_number[..]))
-                }
-                Self::CminNom { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::CmaxNom { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::LowerCustomerLimit { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::UpperCustomerLimit { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::LowerFactoryLimit { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::UpperFactoryLimit { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::PresetCapacitance { capacitance: v_capacitance } => {
-                    f("capacitance", rt::Int(v_capacitance.raw() as i64))
-                }
-                Self::PresetFullStepPosition { full_steps: v_full_steps } => {
-                    f("full_steps", rt::Int(*v_full_steps as i64))
-                }
-                Self::StoredFullStepPosition {
-                    index: v_index,
-                    full_steps: v_full_steps,
-                } => {
-                    f("index", rt::Int(*v_index as i64));
-                    f("full_steps", rt::Int(*v_full_steps as i64));
-                }
-                Self::ActualModeOfOperation { mode: v_mode } => {
-                    f("mode", rt::Int(v_mode.raw() as i64))
-                }
+                Self::MovementCompletedWithStepLoss(m) => m.visit(f),
+                Self::ActualCapacitance(m) => m.visit(f),
+                Self::ActualFullStepPosition(m) => m.visit(f),
+                Self::MinimumCapacitance(m) => m.visit(f),
+                Self::MaximumCapacitance(m) => m.visit(f),
+                Self::AccelerationSpeed(m) => m.visit(f),
+                Self::Status(m) => m.visit(f),
+                Self::CCurveEntry(m) => m.visit(f),
+                Self::ControllerTemperature(m) => m.visit(f),
+                Self::MicroStepPosition(m) => m.visit(f),
+                Self::FirmwareVersion(m) => m.visit(f),
+                Self::SerialNumber(m) => m.visit(f),
+                Self::CminNom(m) => m.visit(f),
+                Self::CmaxNom(m) => m.visit(f),
+                Self::LowerCustomerLimit(m) => m.visit(f),
+                Self::UpperCustomerLimit(m) => m.visit(f),
+                Self::LowerFactoryLimit(m) => m.visit(f),
+                Self::UpperFactoryLimit(m) => m.visit(f),
+                Self::PresetCapacitance(m) => m.visit(f),
+                Self::PresetFullStepPosition(m) => m.visit(f),
+                Self::StoredFullStepPosition(m) => m.visit(f),
+                Self::ActualModeOfOperation(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -1934,156 +3200,170 @@ pub mod ub2 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::MovementStarted => {
+                Self::MovementStarted(response::MovementStarted {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
                         3,
                         address.wrapping_add(0xFA),
                     )
                 }
-                Self::MovementCompleted => {
+                Self::MovementCompleted(response::MovementCompleted {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x51])?,
                         3,
                         address.wrapping_add(0xFB),
                     )
                 }
-                Self::MovementNotCompleted => {
+                Self::MovementNotCompleted(response::MovementNotCompleted {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x52])?,
                         3,
                         address.wrapping_add(0xFC),
                     )
                 }
-                Self::MovementNotTriggered => {
+                Self::MovementNotTriggered(response::MovementNotTriggered {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x53])?,
                         3,
                         address.wrapping_add(0xFD),
                     )
                 }
-                Self::MovementCompletedWithStepLoss {
-                    lost_micro_steps: v_lost_micro_steps,
-                } => {
+                Self::MovementCompletedWithStepLoss(
+                    response::MovementCompletedWithStepLoss {
+                        lost_micro_steps: v_lost_micro_steps,
+                    },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x54, 0x00])?;
                     out[4..8].copy_from_slice(&v_lost_micro_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xFE))
                 }
-                Self::NakUnknownCommand => {
+                Self::NakUnknownCommand(response::NakUnknownCommand {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
                         3,
                         address.wrapping_add(0x3A),
                     )
                 }
-                Self::NakIncompatibleStatus => {
+                Self::NakIncompatibleStatus(response::NakIncompatibleStatus {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x91])?,
                         3,
                         address.wrapping_add(0x3B),
                     )
                 }
-                Self::NakChecksumError => {
+                Self::NakChecksumError(response::NakChecksumError {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x92])?,
                         3,
                         address.wrapping_add(0x3C),
                     )
                 }
-                Self::NakLimitReached => {
+                Self::NakLimitReached(response::NakLimitReached {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x93])?,
                         3,
                         address.wrapping_add(0x3D),
                     )
                 }
-                Self::NakIndexOutOfRange => {
+                Self::NakIndexOutOfRange(response::NakIndexOutOfRange {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<4>(buf, &[0xAA, address, 0x94])?,
                         3,
                         address.wrapping_add(0x3E),
                     )
                 }
-                Self::SetAccelerationSpeedIndexAck => {
+                Self::SetAccelerationSpeedIndexAck(
+                    response::SetAccelerationSpeedIndexAck {},
+                ) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x43, 0x00])?,
                         4,
                         address.wrapping_add(0xED),
                     )
                 }
-                Self::SetCurrentAck => {
+                Self::SetCurrentAck(response::SetCurrentAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x45, 0x00])?,
                         4,
                         address.wrapping_add(0xEF),
                     )
                 }
-                Self::SetSlaveAddressAck => {
+                Self::SetSlaveAddressAck(response::SetSlaveAddressAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x60, 0x00])?,
                         4,
                         address.wrapping_add(0x0A),
                     )
                 }
-                Self::SetBaudRateAck => {
+                Self::SetBaudRateAck(response::SetBaudRateAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x61, 0x00])?,
                         4,
                         address.wrapping_add(0x0B),
                     )
                 }
-                Self::SetLowerCustomerLimitAck => {
+                Self::SetLowerCustomerLimitAck(response::SetLowerCustomerLimitAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x01])?,
                         4,
                         address.wrapping_add(0x1D),
                     )
                 }
-                Self::SetUpperCustomerLimitAck => {
+                Self::SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x02])?,
                         4,
                         address.wrapping_add(0x1E),
                     )
                 }
-                Self::StoreIndexedPositionAck => {
+                Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x75, 0x00])?,
                         4,
                         address.wrapping_add(0x1F),
                     )
                 }
-                Self::SetModeOfOperationAck => {
+                Self::SetModeOfOperationAck(response::SetModeOfOperationAck {}) => {
                     rt::seal_sum8_head(
                         rt::frame_mut::<5>(buf, &[0xAA, address, 0x80, 0x00])?,
                         4,
                         address.wrapping_add(0x2A),
                     )
                 }
-                Self::ActualCapacitance { capacitance: v_capacitance } => {
+                Self::ActualCapacitance(
+                    response::ActualCapacitance { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x01])?;
                     out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xEC))
                 }
-                Self::ActualFullStepPosition { full_steps: v_full_steps } => {
+                Self::ActualFullStepPosition(
+                    response::ActualFullStepPosition { full_steps: v_full_steps },
+                ) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x02])?;
                     out[4..6].copy_from_slice(&v_full_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xED))
                 }
-                Self::MinimumCapacitance { capacitance: v_capacitance } => {
+                Self::MinimumCapacitance(
+                    response::MinimumCapacitance { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x10])?;
                     out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xFB))
                 }
-                Self::MaximumCapacitance { capacitance: v_capacitance } => {
+                Self::MaximumCapacitance(
+                    response::MaximumCapacitance { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x11])?;
                     out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xFC))
                 }
-                Self::AccelerationSpeed {
-                    acceleration_index: v_acceleration_index,
-                    speed_index: v_speed_index,
-                } => {
+                Self::AccelerationSpeed(
+                    response::AccelerationSpeed {
+                        acceleration_index: v_acceleration_index,
+                        speed_index: v_speed_index,
+                    },
+                ) => {
                     rt::encode_in_range(
                         "acceleration_index",
                         v_acceleration_index,
@@ -2096,17 +3376,21 @@ pub mod ub2 {
                     out[5] = v_speed_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x0C))
                 }
-                Self::Status { error_bits: v_error_bits, reserved: v_reserved } => {
+                Self::Status(
+                    response::Status { error_bits: v_error_bits, reserved: v_reserved },
+                ) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x41, 0x22])?;
                     out[4] = v_error_bits.raw();
                     out[5] = v_reserved;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x0D))
                 }
-                Self::CCurveEntry {
-                    index: v_index,
-                    full_steps: v_full_steps,
-                    capacitance: v_capacitance,
-                } => {
+                Self::CCurveEntry(
+                    response::CCurveEntry {
+                        index: v_index,
+                        full_steps: v_full_steps,
+                        capacitance: v_capacitance,
+                    },
+                ) => {
                     rt::encode_in_range("index", v_index, 0, 499)?;
                     let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x30])?;
                     out[4..6].copy_from_slice(&v_index.to_le_bytes());
@@ -2114,89 +3398,113 @@ pub mod ub2 {
                     out[8..12].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1B))
                 }
-                Self::ControllerTemperature { temperature: v_temperature } => {
+                Self::ControllerTemperature(
+                    response::ControllerTemperature { temperature: v_temperature },
+                ) => {
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x41, 0x32])?;
                     out[4] = v_temperature;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D))
                 }
-                Self::MicroStepPosition { micro_steps: v_micro_steps } => {
+                Self::MicroStepPosition(
+                    response::MicroStepPosition { micro_steps: v_micro_steps },
+                ) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x36])?;
                     out[4..8].copy_from_slice(&v_micro_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x21))
                 }
-                Self::FirmwareVersion { firmware_version: v_firmware_version } => {
+                Self::FirmwareVersion(
+                    response::FirmwareVersion { firmware_version: v_firmware_version },
+                ) => {
                     let out = rt::frame_mut::<16>(buf, &[0xAA, address, 0x41, 0x61])?;
                     out[4..15].copy_from_slice(&v_firmware_version.0);
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x4C))
                 }
-                Self::SerialNumber { serial_number: v_serial_number } => {
+                Self::SerialNumber(
+                    response::SerialNumber { serial_number: v_serial_number },
+                ) => {
                     let out = rt::frame_mut::<13>(buf, &[0xAA, address, 0x41, 0x62])?;
                     out[4..12].copy_from_slice(&v_serial_number.0);
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x4D))
                 }
-                Self::CminNom { capacitance: v_capacitance } => {
+                Self::CminNom(response::CminNom { capacitance: v_capacitance }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x70])?;
                     out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x5B))
                 }
-                Self::CmaxNom { capacitance: v_capacitance } => {
+                Self::CmaxNom(response::CmaxNom { capacitance: v_capacitance }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x41, 0x71])?;
                     out[4..8].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x5C))
                 }
-                Self::LowerCustomerLimit { capacitance: v_capacitance } => {
+                Self::LowerCustomerLimit(
+                    response::LowerCustomerLimit { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xAA, address, 0x41, 0x72, 0x01])?;
                     out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
                 }
-                Self::UpperCustomerLimit { capacitance: v_capacitance } => {
+                Self::UpperCustomerLimit(
+                    response::UpperCustomerLimit { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xAA, address, 0x41, 0x72, 0x02])?;
                     out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F))
                 }
-                Self::LowerFactoryLimit { capacitance: v_capacitance } => {
+                Self::LowerFactoryLimit(
+                    response::LowerFactoryLimit { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xAA, address, 0x41, 0x72, 0x03])?;
                     out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 5, address.wrapping_add(0x60))
                 }
-                Self::UpperFactoryLimit { capacitance: v_capacitance } => {
+                Self::UpperFactoryLimit(
+                    response::UpperFactoryLimit { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xAA, address, 0x41, 0x72, 0x04])?;
                     out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 5, address.wrapping_add(0x61))
                 }
-                Self::PresetCapacitance { capacitance: v_capacitance } => {
+                Self::PresetCapacitance(
+                    response::PresetCapacitance { capacitance: v_capacitance },
+                ) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xAA, address, 0x41, 0x73, 0x00])?;
                     out[5..9].copy_from_slice(&v_capacitance.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
                 }
-                Self::PresetFullStepPosition { full_steps: v_full_steps } => {
+                Self::PresetFullStepPosition(
+                    response::PresetFullStepPosition { full_steps: v_full_steps },
+                ) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xAA, address, 0x41, 0x73, 0x01])?;
                     out[5..9].copy_from_slice(&v_full_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F))
                 }
-                Self::StoredFullStepPosition {
-                    index: v_index,
-                    full_steps: v_full_steps,
-                } => {
+                Self::StoredFullStepPosition(
+                    response::StoredFullStepPosition {
+                        index: v_index,
+                        full_steps: v_full_steps,
+                    },
+                ) => {
                     rt::encode_in_range("index", v_index, 0, 9)?;
                     let out = rt::frame_mut::<8>(buf, &[0xAA, address, 0x41, 0x75])?;
                     out[4] = v_index;
                     out[5..7].copy_from_slice(&v_full_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x60))
                 }
-                Self::ActualModeOfOperation { mode: v_mode } => {
+                Self::ActualModeOfOperation(
+                    response::ActualModeOfOperation { mode: v_mode },
+                ) => {
                     let out = rt::frame_mut::<6>(buf, &[0xAA, address, 0x41, 0x80])?;
                     out[4] = v_mode.raw();
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x6B))
@@ -2255,40 +3563,58 @@ pub mod ub2 {
             if frame.len() >= 4 {
                 match rt::code(frame, 2, 1) {
                     0x50 => {
-                        return rt::fixed::<4>(frame, &response::MOVEMENT_STARTED)
-                            .map(|_| Self::MovementStarted);
+                        return rt::fixed::<4>(frame, &response::MovementStarted::DESC)
+                            .map(|_| Self::MovementStarted(response::MovementStarted));
                     }
                     0x51 => {
-                        return rt::fixed::<4>(frame, &response::MOVEMENT_COMPLETED)
-                            .map(|_| Self::MovementCompleted);
+                        return rt::fixed::<4>(frame, &response::MovementCompleted::DESC)
+                            .map(|_| Self::MovementCompleted(
+                                response::MovementCompleted,
+                            ));
                     }
                     0x52 => {
-                        return rt::fixed::<4>(frame, &response::MOVEMENT_NOT_COMPLETED)
-                            .map(|_| Self::MovementNotCompleted);
+                        return rt::fixed::<
+                            4,
+                        >(frame, &response::MovementNotCompleted::DESC)
+                            .map(|_| Self::MovementNotCompleted(
+                                response::MovementNotCompleted,
+                            ));
                     }
                     0x53 => {
-                        return rt::fixed::<4>(frame, &response::MOVEMENT_NOT_TRIGGERED)
-                            .map(|_| Self::MovementNotTriggered);
+                        return rt::fixed::<
+                            4,
+                        >(frame, &response::MovementNotTriggered::DESC)
+                            .map(|_| Self::MovementNotTriggered(
+                                response::MovementNotTriggered,
+                            ));
                     }
                     0x90 => {
-                        return rt::fixed::<4>(frame, &response::NAK_UNKNOWN_COMMAND)
-                            .map(|_| Self::NakUnknownCommand);
+                        return rt::fixed::<4>(frame, &response::NakUnknownCommand::DESC)
+                            .map(|_| Self::NakUnknownCommand(
+                                response::NakUnknownCommand,
+                            ));
                     }
                     0x91 => {
-                        return rt::fixed::<4>(frame, &response::NAK_INCOMPATIBLE_STATUS)
-                            .map(|_| Self::NakIncompatibleStatus);
+                        return rt::fixed::<
+                            4,
+                        >(frame, &response::NakIncompatibleStatus::DESC)
+                            .map(|_| Self::NakIncompatibleStatus(
+                                response::NakIncompatibleStatus,
+                            ));
                     }
                     0x92 => {
-                        return rt::fixed::<4>(frame, &response::NAK_CHECKSUM_ERROR)
-                            .map(|_| Self::NakChecksumError);
+                        return rt::fixed::<4>(frame, &response::NakChecksumError::DESC)
+                            .map(|_| Self::NakChecksumError(response::NakChecksumError));
                     }
                     0x93 => {
-                        return rt::fixed::<4>(frame, &response::NAK_LIMIT_REACHED)
-                            .map(|_| Self::NakLimitReached);
+                        return rt::fixed::<4>(frame, &response::NakLimitReached::DESC)
+                            .map(|_| Self::NakLimitReached(response::NakLimitReached));
                     }
                     0x94 => {
-                        return rt::fixed::<4>(frame, &response::NAK_INDEX_OUT_OF_RANGE)
-                            .map(|_| Self::NakIndexOutOfRange);
+                        return rt::fixed::<4>(frame, &response::NakIndexOutOfRange::DESC)
+                            .map(|_| Self::NakIndexOutOfRange(
+                                response::NakIndexOutOfRange,
+                            ));
                     }
                     _ => {}
                 }
@@ -2300,82 +3626,110 @@ pub mod ub2 {
                 0x5400 => {
                     let frame = rt::fixed::<
                         9,
-                    >(frame, &response::MOVEMENT_COMPLETED_WITH_STEP_LOSS)?;
-                    rt::Ok(Self::MovementCompletedWithStepLoss {
-                        lost_micro_steps: u32::from_le_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                        ]),
-                    })
+                    >(frame, &response::MovementCompletedWithStepLoss::DESC)?;
+                    rt::Ok(
+                        Self::MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss {
+                            lost_micro_steps: u32::from_le_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                            ]),
+                        }),
+                    )
                 }
                 0x4300 => {
-                    rt::fixed::<5>(frame, &response::SET_ACCELERATION_SPEED_INDEX_ACK)
-                        .map(|_| Self::SetAccelerationSpeedIndexAck)
+                    rt::fixed::<5>(frame, &response::SetAccelerationSpeedIndexAck::DESC)
+                        .map(|_| Self::SetAccelerationSpeedIndexAck(
+                            response::SetAccelerationSpeedIndexAck,
+                        ))
                 }
                 0x4500 => {
-                    rt::fixed::<5>(frame, &response::SET_CURRENT_ACK)
-                        .map(|_| Self::SetCurrentAck)
+                    rt::fixed::<5>(frame, &response::SetCurrentAck::DESC)
+                        .map(|_| Self::SetCurrentAck(response::SetCurrentAck))
                 }
                 0x6000 => {
-                    rt::fixed::<5>(frame, &response::SET_SLAVE_ADDRESS_ACK)
-                        .map(|_| Self::SetSlaveAddressAck)
+                    rt::fixed::<5>(frame, &response::SetSlaveAddressAck::DESC)
+                        .map(|_| Self::SetSlaveAddressAck(response::SetSlaveAddressAck))
                 }
                 0x6100 => {
-                    rt::fixed::<5>(frame, &response::SET_BAUD_RATE_ACK)
-                        .map(|_| Self::SetBaudRateAck)
+                    rt::fixed::<5>(frame, &response::SetBaudRateAck::DESC)
+                        .map(|_| Self::SetBaudRateAck(response::SetBaudRateAck))
                 }
                 0x7201 => {
-                    rt::fixed::<5>(frame, &response::SET_LOWER_CUSTOMER_LIMIT_ACK)
-                        .map(|_| Self::SetLowerCustomerLimitAck)
+                    rt::fixed::<5>(frame, &response::SetLowerCustomerLimitAck::DESC)
+                        .map(|_| Self::SetLowerCustomerLimitAck(
+                            response::SetLowerCustomerLimitAck,
+                        ))
                 }
                 0x7202 => {
-                    rt::fixed::<5>(frame, &response::SET_UPPER_CUSTOMER_LIMIT_ACK)
-                        .map(|_| Self::SetUpperCustomerLimitAck)
+                    rt::fixed::<5>(frame, &response::SetUpperCustomerLimitAck::DESC)
+                        .map(|_| Self::SetUpperCustomerLimitAck(
+                            response::SetUpperCustomerLimitAck,
+                        ))
                 }
                 0x7500 => {
-                    rt::fixed::<5>(frame, &response::STORE_INDEXED_POSITION_ACK)
-                        .map(|_| Self::StoreIndexedPositionAck)
+                    rt::fixed::<5>(frame, &response::StoreIndexedPositionAck::DESC)
+                        .map(|_| Self::StoreIndexedPositionAck(
+                            response::StoreIndexedPositionAck,
+                        ))
                 }
                 0x8000 => {
-                    rt::fixed::<5>(frame, &response::SET_MODE_OF_OPERATION_ACK)
-                        .map(|_| Self::SetModeOfOperationAck)
+                    rt::fixed::<5>(frame, &response::SetModeOfOperationAck::DESC)
+                        .map(|_| Self::SetModeOfOperationAck(
+                            response::SetModeOfOperationAck,
+                        ))
                 }
                 0x4101 => {
-                    let frame = rt::fixed::<9>(frame, &response::ACTUAL_CAPACITANCE)?;
-                    rt::Ok(Self::ActualCapacitance {
-                        capacitance: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<
+                        9,
+                    >(frame, &response::ActualCapacitance::DESC)?;
+                    rt::Ok(
+                        Self::ActualCapacitance(response::ActualCapacitance {
+                            capacitance: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x4102 => {
                     let frame = rt::fixed::<
                         7,
-                    >(frame, &response::ACTUAL_FULL_STEP_POSITION)?;
-                    rt::Ok(Self::ActualFullStepPosition {
-                        full_steps: u16::from_le_bytes([frame[4], frame[5]]),
-                    })
+                    >(frame, &response::ActualFullStepPosition::DESC)?;
+                    rt::Ok(
+                        Self::ActualFullStepPosition(response::ActualFullStepPosition {
+                            full_steps: u16::from_le_bytes([frame[4], frame[5]]),
+                        }),
+                    )
                 }
                 0x4110 => {
-                    let frame = rt::fixed::<9>(frame, &response::MINIMUM_CAPACITANCE)?;
-                    rt::Ok(Self::MinimumCapacitance {
-                        capacitance: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<
+                        9,
+                    >(frame, &response::MinimumCapacitance::DESC)?;
+                    rt::Ok(
+                        Self::MinimumCapacitance(response::MinimumCapacitance {
+                            capacitance: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x4111 => {
-                    let frame = rt::fixed::<9>(frame, &response::MAXIMUM_CAPACITANCE)?;
-                    rt::Ok(Self::MaximumCapacitance {
-                        capacitance: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<
+                        9,
+                    >(frame, &response::MaximumCapacitance::DESC)?;
+                    rt::Ok(
+                        Self::MaximumCapacitance(response::MaximumCapacitance {
+                            capacitance: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x4121 => {
-                    let frame = rt::fixed::<7>(frame, &response::ACCELERATION_SPEED)?;
+                    let frame = rt::fixed::<
+                        7,
+                    >(frame, &response::AccelerationSpeed::DESC)?;
                     rt::in_range(
                         &response::ACCELERATION_SPEED_ACCELERATION_INDEX,
                         4,
@@ -2390,85 +3744,107 @@ pub mod ub2 {
                         0,
                         18,
                     )?;
-                    rt::Ok(Self::AccelerationSpeed {
-                        acceleration_index: frame[4],
-                        speed_index: frame[5],
-                    })
+                    rt::Ok(
+                        Self::AccelerationSpeed(response::AccelerationSpeed {
+                            acceleration_index: frame[4],
+                            speed_index: frame[5],
+                        }),
+                    )
                 }
                 0x4122 => {
-                    let frame = rt::fixed::<7>(frame, &response::STATUS)?;
-                    rt::Ok(Self::Status {
-                        error_bits: StatusErrorBits::from_raw(frame[4]),
-                        reserved: frame[5],
-                    })
+                    let frame = rt::fixed::<7>(frame, &response::Status::DESC)?;
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error_bits: StatusErrorBits::from_raw(frame[4]),
+                            reserved: frame[5],
+                        }),
+                    )
                 }
                 0x4130 => {
-                    let frame = rt::fixed::<13>(frame, &response::C_CURVE_ENTRY)?;
+                    let frame = rt::fixed::<13>(frame, &response::CCurveEntry::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(&response::C_CURVE_ENTRY_INDEX, 4, field_0, 0, 499)?;
-                    rt::Ok(Self::CCurveEntry {
-                        index: field_0,
-                        full_steps: u16::from_le_bytes([frame[6], frame[7]]),
-                        capacitance: Capacitance::from_raw(
-                            u32::from_le_bytes([
-                                frame[8],
-                                frame[9],
-                                frame[10],
-                                frame[11],
-                            ]),
-                        ),
-                    })
+                    rt::Ok(
+                        Self::CCurveEntry(response::CCurveEntry {
+                            index: field_0,
+                            full_steps: u16::from_le_bytes([frame[6], frame[7]]),
+                            capacitance: Capacitance::from_raw(
+                                u32::from_le_bytes([
+                                    frame[8],
+                                    frame[9],
+                                    frame[10],
+                                    frame[11],
+                                ]),
+                            ),
+                        }),
+                    )
                 }
                 0x4132 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::CONTROLLER_TEMPERATURE)?;
-                    rt::Ok(Self::ControllerTemperature {
-                        temperature: frame[4],
-                    })
+                    >(frame, &response::ControllerTemperature::DESC)?;
+                    rt::Ok(
+                        Self::ControllerTemperature(response::ControllerTemperature {
+                            temperature: frame[4],
+                        }),
+                    )
                 }
                 0x4136 => {
-                    let frame = rt::fixed::<9>(frame, &response::MICRO_STEP_POSITION)?;
-                    rt::Ok(Self::MicroStepPosition {
-                        micro_steps: u32::from_le_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                        ]),
-                    })
+                    let frame = rt::fixed::<
+                        9,
+                    >(frame, &response::MicroStepPosition::DESC)?;
+                    rt::Ok(
+                        Self::MicroStepPosition(response::MicroStepPosition {
+                            micro_steps: u32::from_le_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                            ]),
+                        }),
+                    )
                 }
                 0x4161 => {
-                    let frame = rt::fixed::<16>(frame, &response::FIRMWARE_VERSION)?;
-                    rt::Ok(Self::FirmwareVersion {
-                        firmware_version: rt::Ascii(
-                            frame[4..15].try_into().unwrap_or([0; 11]),
-                        ),
-                    })
+                    let frame = rt::fixed::<
+                        16,
+                    >(frame, &response::FirmwareVersion::DESC)?;
+                    rt::Ok(
+                        Self::FirmwareVersion(response::FirmwareVersion {
+                            firmware_version: rt::Ascii(
+                                frame[4..15].try_into().unwrap_or([0; 11]),
+                            ),
+                        }),
+                    )
                 }
                 0x4162 => {
-                    let frame = rt::fixed::<13>(frame, &response::SERIAL_NUMBER)?;
-                    rt::Ok(Self::SerialNumber {
-                        serial_number: rt::Ascii(
-                            frame[4..12].try_into().unwrap_or([0; 8]),
-                        ),
-                    })
+                    let frame = rt::fixed::<13>(frame, &response::SerialNumber::DESC)?;
+                    rt::Ok(
+                        Self::SerialNumber(response::SerialNumber {
+                            serial_number: rt::Ascii(
+                                frame[4..12].try_into().unwrap_or([0; 8]),
+                            ),
+                        }),
+                    )
                 }
                 0x4170 => {
-                    let frame = rt::fixed::<9>(frame, &response::CMIN_NOM)?;
-                    rt::Ok(Self::CminNom {
-                        capacitance: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<9>(frame, &response::CminNom::DESC)?;
+                    rt::Ok(
+                        Self::CminNom(response::CminNom {
+                            capacitance: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x4171 => {
-                    let frame = rt::fixed::<9>(frame, &response::CMAX_NOM)?;
-                    rt::Ok(Self::CmaxNom {
-                        capacitance: Capacitance::from_raw(
-                            u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<9>(frame, &response::CmaxNom::DESC)?;
+                    rt::Ok(
+                        Self::CmaxNom(response::CmaxNom {
+                            capacitance: Capacitance::from_raw(
+                                u32::from_le_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x4172 => {
                     let mut g = rt::Group::new(
@@ -2483,11 +3859,13 @@ pub mod ub2 {
                             frame[4],
                             0x1,
                         )?;
-                        rt::Ok(Self::LowerCustomerLimit {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                            ),
-                        })
+                        rt::Ok(
+                            Self::LowerCustomerLimit(response::LowerCustomerLimit {
+                                capacitance: Capacitance::from_raw(
+                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                                ),
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
@@ -2496,11 +3874,13 @@ pub mod ub2 {
                             frame[4],
                             0x2,
                         )?;
-                        rt::Ok(Self::UpperCustomerLimit {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                            ),
-                        })
+                        rt::Ok(
+                            Self::UpperCustomerLimit(response::UpperCustomerLimit {
+                                capacitance: Capacitance::from_raw(
+                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                                ),
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
@@ -2509,11 +3889,13 @@ pub mod ub2 {
                             frame[4],
                             0x3,
                         )?;
-                        rt::Ok(Self::LowerFactoryLimit {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                            ),
-                        })
+                        rt::Ok(
+                            Self::LowerFactoryLimit(response::LowerFactoryLimit {
+                                capacitance: Capacitance::from_raw(
+                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                                ),
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
@@ -2522,13 +3904,15 @@ pub mod ub2 {
                             frame[4],
                             0x4,
                         )?;
-                        rt::Ok(Self::UpperFactoryLimit {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                            ),
-                        })
+                        rt::Ok(
+                            Self::UpperFactoryLimit(response::UpperFactoryLimit {
+                                capacitance: Capacitance::from_raw(
+                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                                ),
+                            }),
+                        )
                     });
-                    g.end(&response::LOWER_CUSTOMER_LIMIT)
+                    g.end(&response::LowerCustomerLimit::DESC)
                 }
                 0x4173 => {
                     let mut g = rt::Group::new(
@@ -2543,11 +3927,13 @@ pub mod ub2 {
                             frame[4],
                             0x0,
                         )?;
-                        rt::Ok(Self::PresetCapacitance {
-                            capacitance: Capacitance::from_raw(
-                                u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
-                            ),
-                        })
+                        rt::Ok(
+                            Self::PresetCapacitance(response::PresetCapacitance {
+                                capacitance: Capacitance::from_raw(
+                                    u32::from_le_bytes([frame[5], frame[6], frame[7], frame[8]]),
+                                ),
+                            }),
+                        )
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
@@ -2556,21 +3942,23 @@ pub mod ub2 {
                             frame[4],
                             0x1,
                         )?;
-                        rt::Ok(Self::PresetFullStepPosition {
-                            full_steps: u32::from_le_bytes([
-                                frame[5],
-                                frame[6],
-                                frame[7],
-                                frame[8],
-                            ]),
-                        })
+                        rt::Ok(
+                            Self::PresetFullStepPosition(response::PresetFullStepPosition {
+                                full_steps: u32::from_le_bytes([
+                                    frame[5],
+                                    frame[6],
+                                    frame[7],
+                                    frame[8],
+                                ]),
+                            }),
+                        )
                     });
-                    g.end(&response::PRESET_CAPACITANCE)
+                    g.end(&response::PresetCapacitance::DESC)
                 }
                 0x4175 => {
                     let frame = rt::fixed::<
                         8,
-                    >(frame, &response::STORED_FULL_STEP_POSITION)?;
+                    >(frame, &response::StoredFullStepPosition::DESC)?;
                     rt::in_range(
                         &response::STORED_FULL_STEP_POSITION_INDEX,
                         4,
@@ -2578,18 +3966,22 @@ pub mod ub2 {
                         0,
                         9,
                     )?;
-                    rt::Ok(Self::StoredFullStepPosition {
-                        index: frame[4],
-                        full_steps: u16::from_le_bytes([frame[5], frame[6]]),
-                    })
+                    rt::Ok(
+                        Self::StoredFullStepPosition(response::StoredFullStepPosition {
+                            index: frame[4],
+                            full_steps: u16::from_le_bytes([frame[5], frame[6]]),
+                        }),
+                    )
                 }
                 0x4180 => {
                     let frame = rt::fixed::<
                         6,
-                    >(frame, &response::ACTUAL_MODE_OF_OPERATION)?;
-                    rt::Ok(Self::ActualModeOfOperation {
-                        mode: ModeOfOperation::from_raw(frame[4]),
-                    })
+                    >(frame, &response::ActualModeOfOperation::DESC)?;
+                    rt::Ok(
+                        Self::ActualModeOfOperation(response::ActualModeOfOperation {
+                            mode: ModeOfOperation::from_raw(frame[4]),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 1, true)),
             }
@@ -2602,163 +3994,254 @@ pub mod ub2 {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "movement_started" => rt::Ok(Self::MovementStarted),
-                "movement_completed" => rt::Ok(Self::MovementCompleted),
-                "movement_not_completed" => rt::Ok(Self::MovementNotCompleted),
-                "movement_not_triggered" => rt::Ok(Self::MovementNotTriggered),
+                "movement_started" => {
+                    rt::Ok(Self::MovementStarted(response::MovementStarted))
+                }
+                "movement_completed" => {
+                    rt::Ok(Self::MovementCompleted(response::MovementCompleted))
+                }
+                "movement_not_completed" => {
+                    rt::Ok(Self::MovementNotCompleted(response::MovementNotCompleted))
+                }
+                "movement_not_triggered" => {
+                    rt::Ok(Self::MovementNotTriggered(response::MovementNotTriggered))
+                }
                 "movement_completed_with_step_loss" => {
-                    rt::Ok(Self::MovementCompletedWithStepLoss {
-                        lost_micro_steps: rt::get(&mut field, "lost_micro_steps")?,
-                    })
+                    rt::Ok(
+                        Self::MovementCompletedWithStepLoss(response::MovementCompletedWithStepLoss {
+                            lost_micro_steps: rt::get(&mut field, "lost_micro_steps")?,
+                        }),
+                    )
                 }
-                "nak_unknown_command" => rt::Ok(Self::NakUnknownCommand),
-                "nak_incompatible_status" => rt::Ok(Self::NakIncompatibleStatus),
-                "nak_checksum_error" => rt::Ok(Self::NakChecksumError),
-                "nak_limit_reached" => rt::Ok(Self::NakLimitReached),
-                "nak_index_out_of_range" => rt::Ok(Self::NakIndexOutOfRange),
+                "nak_unknown_command" => {
+                    rt::Ok(Self::NakUnknownCommand(response::NakUnknownCommand))
+                }
+                "nak_incompatible_status" => {
+                    rt::Ok(Self::NakIncompatibleStatus(response::NakIncompatibleStatus))
+                }
+                "nak_checksum_error" => {
+                    rt::Ok(Self::NakChecksumError(response::NakChecksumError))
+                }
+                "nak_limit_reached" => {
+                    rt::Ok(Self::NakLimitReached(response::NakLimitReached))
+                }
+                "nak_index_out_of_range" => {
+                    rt::Ok(Self::NakIndexOutOfRange(response::NakIndexOutOfRange))
+                }
                 "set_acceleration_speed_index_ack" => {
-                    rt::Ok(Self::SetAccelerationSpeedIndexAck)
-                }
-                "set_current_ack" => rt::Ok(Self::SetCurrentAck),
-                "set_slave_address_ack" => rt::Ok(Self::SetSlaveAddressAck),
-                "set_baud_rate_ack" => rt::Ok(Self::SetBaudRateAck),
-                "set_lower_customer_limit_ack" => rt::Ok(Self::SetLowerCustomerLimitAck),
-                "set_upper_customer_limit_ack" => rt::Ok(Self::SetUpperCustomerLimitAck),
-                "store_indexed_position_ack" => rt::Ok(Self::StoreIndexedPositionAck),
-                "set_mode_of_operation_ack" => rt::Ok(Self::SetModeOfOperationAck),
-                "actual_capacitance" => {
-                    rt::Ok(Self::ActualCapacitance {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
+                    rt::Ok(
+                        Self::SetAccelerationSpeedIndexAck(
+                            response::SetAccelerationSpeedIndexAck,
                         ),
-                    })
+                    )
+                }
+                "set_current_ack" => rt::Ok(Self::SetCurrentAck(response::SetCurrentAck)),
+                "set_slave_address_ack" => {
+                    rt::Ok(Self::SetSlaveAddressAck(response::SetSlaveAddressAck))
+                }
+                "set_baud_rate_ack" => {
+                    rt::Ok(Self::SetBaudRateAck(response::SetBaudRateAck))
+                }
+                "set_lower_customer_limit_ack" => {
+                    rt::Ok(
+                        Self::SetLowerCustomerLimitAck(
+                            response::SetLowerCustomerLimitAck,
+                        ),
+                    )
+                }
+                "set_upper_customer_limit_ack" => {
+                    rt::Ok(
+                        Self::SetUpperCustomerLimitAck(
+                            response::SetUpperCustomerLimitAck,
+                        ),
+                    )
+                }
+                "store_indexed_position_ack" => {
+                    rt::Ok(
+                        Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck),
+                    )
+                }
+                "set_mode_of_operation_ack" => {
+                    rt::Ok(Self::SetModeOfOperationAck(response::SetModeOfOperationAck))
+                }
+                "actual_capacitance" => {
+                    rt::Ok(
+                        Self::ActualCapacitance(response::ActualCapacitance {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "actual_full_step_position" => {
-                    rt::Ok(Self::ActualFullStepPosition {
-                        full_steps: rt::get(&mut field, "full_steps")?,
-                    })
+                    rt::Ok(
+                        Self::ActualFullStepPosition(response::ActualFullStepPosition {
+                            full_steps: rt::get(&mut field, "full_steps")?,
+                        }),
+                    )
                 }
                 "minimum_capacitance" => {
-                    rt::Ok(Self::MinimumCapacitance {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::MinimumCapacitance(response::MinimumCapacitance {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "maximum_capacitance" => {
-                    rt::Ok(Self::MaximumCapacitance {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::MaximumCapacitance(response::MaximumCapacitance {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "acceleration_speed" => {
-                    rt::Ok(Self::AccelerationSpeed {
-                        acceleration_index: rt::get(&mut field, "acceleration_index")?,
-                        speed_index: rt::get(&mut field, "speed_index")?,
-                    })
+                    rt::Ok(
+                        Self::AccelerationSpeed(response::AccelerationSpeed {
+                            acceleration_index: rt::get(
+                                &mut field,
+                                "acceleration_index",
+                            )?,
+                            speed_index: rt::get(&mut field, "speed_index")?,
+                        }),
+                    )
                 }
                 "status" => {
-                    rt::Ok(Self::Status {
-                        error_bits: StatusErrorBits::from_raw(
-                            rt::get(&mut field, "error_bits")?,
-                        ),
-                        reserved: rt::get(&mut field, "reserved")?,
-                    })
+                    rt::Ok(
+                        Self::Status(response::Status {
+                            error_bits: StatusErrorBits::from_raw(
+                                rt::get(&mut field, "error_bits")?,
+                            ),
+                            reserved: rt::get(&mut field, "reserved")?,
+                        }),
+                    )
                 }
                 "c_curve_entry" => {
-                    rt::Ok(Self::CCurveEntry {
-                        index: rt::get(&mut field, "index")?,
-                        full_steps: rt::get(&mut field, "full_steps")?,
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::CCurveEntry(response::CCurveEntry {
+                            index: rt::get(&mut field, "index")?,
+                            full_steps: rt::get(&mut field, "full_steps")?,
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "controller_temperature" => {
-                    rt::Ok(Self::ControllerTemperature {
-                        temperature: rt::get(&mut field, "temperature")?,
-                    })
+                    rt::Ok(
+                        Self::ControllerTemperature(response::ControllerTemperature {
+                            temperature: rt::get(&mut field, "temperature")?,
+                        }),
+                    )
                 }
                 "micro_step_position" => {
-                    rt::Ok(Self::MicroStepPosition {
-                        micro_steps: rt::get(&mut field, "micro_steps")?,
-                    })
+                    rt::Ok(
+                        Self::MicroStepPosition(response::MicroStepPosition {
+                            micro_steps: rt::get(&mut field, "micro_steps")?,
+                        }),
+                    )
                 }
                 "firmware_version" => {
-                    rt::Ok(Self::FirmwareVersion {
-                        firmware_version: rt::text(&mut field, "firmware_version")?,
-                    })
+                    rt::Ok(
+                        Self::FirmwareVersion(response::FirmwareVersion {
+                            firmware_version: rt::text(&mut field, "firmware_version")?,
+                        }),
+                    )
                 }
                 "serial_number" => {
-                    rt::Ok(Self::SerialNumber {
-                        serial_number: rt::text(&mut field, "serial_number")?,
-                    })
+                    rt::Ok(
+                        Self::SerialNumber(response::SerialNumber {
+                            serial_number: rt::text(&mut field, "serial_number")?,
+                        }),
+                    )
                 }
                 "cmin_nom" => {
-                    rt::Ok(Self::CminNom {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::CminNom(response::CminNom {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "cmax_nom" => {
-                    rt::Ok(Self::CmaxNom {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::CmaxNom(response::CmaxNom {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "lower_customer_limit" => {
-                    rt::Ok(Self::LowerCustomerLimit {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::LowerCustomerLimit(response::LowerCustomerLimit {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "upper_customer_limit" => {
-                    rt::Ok(Self::UpperCustomerLimit {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::UpperCustomerLimit(response::UpperCustomerLimit {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "lower_factory_limit" => {
-                    rt::Ok(Self::LowerFactoryLimit {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::LowerFactoryLimit(response::LowerFactoryLimit {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "upper_factory_limit" => {
-                    rt::Ok(Self::UpperFactoryLimit {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::UpperFactoryLimit(response::UpperFactoryLimit {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "preset_capacitance" => {
-                    rt::Ok(Self::PresetCapacitance {
-                        capacitance: Capacitance::from_raw(
-                            rt::get(&mut field, "capacitance")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::PresetCapacitance(response::PresetCapacitance {
+                            capacitance: Capacitance::from_raw(
+                                rt::get(&mut field, "capacitance")?,
+                            ),
+                        }),
+                    )
                 }
                 "preset_full_step_position" => {
-                    rt::Ok(Self::PresetFullStepPosition {
-                        full_steps: rt::get(&mut field, "full_steps")?,
-                    })
+                    rt::Ok(
+                        Self::PresetFullStepPosition(response::PresetFullStepPosition {
+                            full_steps: rt::get(&mut field, "full_steps")?,
+                        }),
+                    )
                 }
                 "stored_full_step_position" => {
-                    rt::Ok(Self::StoredFullStepPosition {
-                        index: rt::get(&mut field, "index")?,
-                        full_steps: rt::get(&mut field, "full_steps")?,
-                    })
+                    rt::Ok(
+                        Self::StoredFullStepPosition(response::StoredFullStepPosition {
+                            index: rt::get(&mut field, "index")?,
+                            full_steps: rt::get(&mut field, "full_steps")?,
+                        }),
+                    )
                 }
                 "actual_mode_of_operation" => {
-                    rt::Ok(Self::ActualModeOfOperation {
-                        mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
-                    })
+                    rt::Ok(
+                        Self::ActualModeOfOperation(response::ActualModeOfOperation {
+                            mode: ModeOfOperation::from_raw(rt::get(&mut field, "mode")?),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -2857,9 +4340,9 @@ pub mod ub2 {
         }
         fn is_nak(response: &Response) -> bool {
             matches!(
-                response, Response::NakUnknownCommand | Response::NakIncompatibleStatus |
-                Response::NakChecksumError | Response::NakLimitReached |
-                Response::NakIndexOutOfRange
+                response, Response::NakUnknownCommand(_) |
+                Response::NakIncompatibleStatus(_) | Response::NakChecksumError(_) |
+                Response::NakLimitReached(_) | Response::NakIndexOutOfRange(_)
             )
         }
         fn checksum_ok(frame: &[u8]) -> bool {
@@ -3003,147 +4486,320 @@ pub mod ub2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ub2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `reference_run`, code 0x1000
-        pub const REFERENCE_RUN: MessageDesc = MessageDesc::new(
-            "reference_run",
-            0x1000,
-            2,
-            &[5],
-        );
-        /// `reference_run_status`, code 0x1001
-        pub const REFERENCE_RUN_STATUS: MessageDesc = MessageDesc::new(
-            "reference_run_status",
-            0x1001,
-            2,
-            &[5],
-        );
-        /// `go_to_capacitance`, code 0x2000
-        pub const GO_TO_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "go_to_capacitance",
-            0x2000,
-            2,
-            &[9],
-        );
-        /// `go_to_capacitance_status`, code 0x2001
-        pub const GO_TO_CAPACITANCE_STATUS: MessageDesc = MessageDesc::new(
-            "go_to_capacitance_status",
-            0x2001,
-            2,
-            &[5],
-        );
-        /// `go_to_full_step_position`, code 0x2100
-        pub const GO_TO_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "go_to_full_step_position",
-            0x2100,
-            2,
-            &[7],
-        );
-        /// `go_to_full_step_position_status`, code 0x2101
-        pub const GO_TO_FULL_STEP_POSITION_STATUS: MessageDesc = MessageDesc::new(
-            "go_to_full_step_position_status",
-            0x2101,
-            2,
-            &[5],
-        );
-        /// `move_full_steps`, code 0x2200
-        pub const MOVE_FULL_STEPS: MessageDesc = MessageDesc::new(
-            "move_full_steps",
-            0x2200,
-            2,
-            &[7],
-        );
-        /// `move_full_steps_status`, code 0x2201
-        pub const MOVE_FULL_STEPS_STATUS: MessageDesc = MessageDesc::new(
-            "move_full_steps_status",
-            0x2201,
-            2,
-            &[5],
-        );
-        /// `go_to_cmin`, code 0x2300
-        pub const GO_TO_CMIN: MessageDesc = MessageDesc::new(
-            "go_to_cmin",
-            0x2300,
-            2,
-            &[5],
-        );
-        /// `go_to_cmin_status`, code 0x2301
-        pub const GO_TO_CMIN_STATUS: MessageDesc = MessageDesc::new(
-            "go_to_cmin_status",
-            0x2301,
-            2,
-            &[5],
-        );
-        /// `go_to_cmax`, code 0x2400
-        pub const GO_TO_CMAX: MessageDesc = MessageDesc::new(
-            "go_to_cmax",
-            0x2400,
-            2,
-            &[5],
-        );
-        /// `go_to_cmax_status`, code 0x2401
-        pub const GO_TO_CMAX_STATUS: MessageDesc = MessageDesc::new(
-            "go_to_cmax_status",
-            0x2401,
-            2,
-            &[5],
-        );
-        /// `go_to_micro_step_position`, code 0x2500
-        pub const GO_TO_MICRO_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "go_to_micro_step_position",
-            0x2500,
-            2,
-            &[9],
-        );
-        /// `go_to_micro_step_position_status`, code 0x2501
-        pub const GO_TO_MICRO_STEP_POSITION_STATUS: MessageDesc = MessageDesc::new(
-            "go_to_micro_step_position_status",
-            0x2501,
-            2,
-            &[5],
-        );
-        /// `move_micro_steps`, code 0x2600
-        pub const MOVE_MICRO_STEPS: MessageDesc = MessageDesc::new(
-            "move_micro_steps",
-            0x2600,
-            2,
-            &[9],
-        );
-        /// `move_micro_steps_status`, code 0x2601
-        pub const MOVE_MICRO_STEPS_STATUS: MessageDesc = MessageDesc::new(
-            "move_micro_steps_status",
-            0x2601,
-            2,
-            &[5],
-        );
-        /// `go_to_stored_position`, code 0x2700
-        pub const GO_TO_STORED_POSITION: MessageDesc = MessageDesc::new(
-            "go_to_stored_position",
-            0x2700,
-            2,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1.1 Triggering the “reference run” (code `0x1000`, 5 bytes). Triggers a full reference run (→ Preset → Cmin → Preset). The preset is a fixed firmware position between Cmin-nom and Cmax-nom; its capacitance and full-step position are read with 0x4073 00 / 0x4073 01 (the document says 0x4070 / 0x4071, ub2-e06).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReferenceRun;
+        /// §4.1.2 Check if “reference run” is completed (code `0x1001`, 5 bytes). Checks whether the full reference run (→ Preset → Cmin → Preset) is completed. May be sent while the capacitor is still moving. Unlike the other checks, the document lists no step-loss reply 0x5400 here (ub2-e31).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReferenceRunStatus;
+        /// §4.2.1 Triggering the movement “Go-To-Capacitance” (code `0x2000`, 9 bytes). Triggers the motorized capacitor to run to the given capacitance.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GoToCapacitance {
+            /// Target capacitance C \[0.01 pF\] \[pF\]
+            pub target: super::Capacitance,
+        }
+        /// §4.2.2 Check if “Go-To-Capacitance” is completed (code `0x2001`, 5 bytes). Checks whether the movement Go-To-Capacitance is completed. May be sent while the capacitor is still moving.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToCapacitanceStatus;
+        /// §4.3.1 Triggering the movement “Go-To-Full-Step-Position” (code `0x2100`, 7 bytes). Triggers the motorized capacitor to run to the given absolute full-step position (U16, §3.2).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GoToFullStepPosition {
+            /// Absolute full-step position; 0 = Lower Factory Limit \[full-steps\]
+            pub target: u16,
+        }
+        /// §4.3.2 Check if “Go-To-Full-Step-Position” is completed (code `0x2101`, 5 bytes). Checks whether the movement Go-To-Full-Step-Position is completed. May be sent while the capacitor is still moving.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToFullStepPositionStatus;
+        /// §4.4.1 Triggering the movement “Move-Full-Steps” (code `0x2200`, 7 bytes). Triggers the motorized capacitor to move the given number of full-steps (I16, §3.2). Positive full-steps run towards Cmax, negative towards Cmin.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MoveFullSteps {
+            /// Relative full-steps; positive towards Cmax, negative towards Cmin \[full-steps\]
+            pub steps: i16,
+        }
+        /// §4.4.2 Check if “Move-Full-Steps” is completed (code `0x2201`, 5 bytes). Checks whether the movement Move-Full-Steps is completed. May be sent while the capacitor is still moving.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct MoveFullStepsStatus;
+        /// §4.5.1 Triggering the movement “Go-To-Cmin” (code `0x2300`, 5 bytes). Triggers the motorized capacitor to run to the Lower-Customer-Limit (not to the C-curve minimum the name suggests, ub2-e25).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToCmin;
+        /// §4.5.2 Check if “Go-To-Cmin” is completed (code `0x2301`, 5 bytes). Checks whether the movement Go-To-Cmin is completed. May be sent while the capacitor is still moving.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToCminStatus;
+        /// §4.6.1 Triggering the movement “Go-To-Cmax” (code `0x2400`, 5 bytes). Triggers the motorized capacitor to run to the Upper-Customer-Limit (not to the C-curve maximum the name suggests, ub2-e25).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToCmax;
+        /// §4.6.2 Check if “Go-To-Cmax” is completed (code `0x2401`, 5 bytes). Checks whether the movement Go-To-Cmax is completed. May be sent while the capacitor is still moving.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToCmaxStatus;
+        /// §4.7.1 Triggering the movement “Go-To-Micro-Step-Position” (code `0x2500`, 9 bytes). Triggers the motorized capacitor to run to the given absolute micro-step position (U32, §3.3).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GoToMicroStepPosition {
+            /// Absolute micro-step position; 0 = Lower Factory Limit \[micro-steps\]
+            pub target: u32,
+        }
+        /// §4.7.2 Check if “Go-To-Micro-Step-Position” is completed (code `0x2501`, 5 bytes). Checks whether the movement Go-To-Micro-Step-Position is completed. May be sent while the capacitor is still moving.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToMicroStepPositionStatus;
+        /// §4.8.1 Triggering the movement “Move-Micro-Steps” (code `0x2600`, 9 bytes). Triggers the motorized capacitor to move the given number of micro-steps (I32, §3.3). Positive micro-steps run towards Cmax, negative towards Cmin.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MoveMicroSteps {
+            /// Relative micro-steps; positive towards Cmax, negative towards Cmin \[micro-steps\]
+            pub steps: i32,
+        }
+        /// §4.8.2 Check if “Move-Micro-Steps” is completed (code `0x2601`, 5 bytes). Checks whether the movement Move-Micro-Steps is completed. May be sent while the capacitor is still moving.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct MoveMicroStepsStatus;
+        /// §4.9.1 Triggering movement “Go-To-Stored-Position” (code `0x2700`, 6 bytes). Triggers the motorized capacitor to move to the given stored position (stored with Store-Indexed-Position 0x7500, §5.7).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GoToStoredPosition {
+            /// Index of stored position \[0 .. 9\] Valid raw range 0..=9.
+            pub index: u8,
+        }
+        /// §4.9.2 Check if “Go-To-Stored-Position” is completed (code `0x2701`, 5 bytes). Checks whether the movement Go-To-Stored-Position is completed. May be sent while the capacitor is still moving. The document prints no TX example (ub2-e30).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GoToStoredPositionStatus;
+        /// §5.1 Set-Acceleration-Speed-Index (code `0x4300`, 7 bytes). Selects the indexed values within the 19-value acceleration and drive-speed vectors \[0...18\] (e.g. index = 4 selects the fifth vector value). Read back with Get-Acceleration-Speed (0x4021).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetAccelerationSpeedIndex {
+            /// First data byte: acceleration, 0 (lowest) ... 18 (highest) Valid raw range 0..=18.
+            pub acceleration_index: u8,
+            /// Second data byte: driving speed, 0 (lowest) ... 18 (highest) Valid raw range 0..=18.
+            pub speed_index: u8,
+        }
+        /// §5.2 Set-Current (code `0x4500`, 7 bytes). Sets idle and drive current of the stepper motor. Each can be set from 0 (lowest) to its upper limit I-idle-max / I-drive-max, fixed firmware parameters in \[1...255\]. The reply to a current above its limit is not given (ub2-e08).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetCurrent {
+            /// Byte 1: idle current \[0..I-idle-max\]
+            pub idle_current: u8,
+            /// Byte 2: drive current \[0..I-drive-max\]
+            pub drive_current: u8,
+        }
+        /// §5.3 Set-Slave-Address (code `0x6000`, 6 bytes). Sets the address of the connected slave. The document's example ACK still comes from the old address (0x21). Range 0x21..0x40 per §2.2/§2.3; §5.3 says 0x41 (ub2-e02).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetSlaveAddress {
+            /// New slave address \[0x21 ... 0x40\] (document: 0x41, ub2-e02) Valid raw range 33..=64.
+            pub address: u8,
+        }
+        /// §5.4 Set-Baud-Rate (code `0x6100`, 6 bytes). Sets the RS485 baud rate of the connected module by index (0..7 → 9'600..115'200). The document does not say whether the ACK is sent at the old or the new rate.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetBaudRate {
+            /// Baud rate index RS485 \[0 ... 7\]
+            pub baud_rate: super::BaudRateIndex,
+        }
+        /// §5.5 Set-Lower-Customer-Limit (code `0x7201`, 9 bytes). Sets the Lower-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04). (The command table sits under the heading 5.5.1 'Illustration of factory and customer limits', whose figure is not in the text.)
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetLowerCustomerLimit {
+            /// Lower customer limit C \[0.01 pF\] \[pF\]
+            pub limit: super::Capacitance,
+        }
+        /// §5.6 Set-Upper-Customer-Limit (code `0x7202`, 9 bytes). Sets the Upper-Customer-Limit of the capacitor; it can only be set within the factory limits (read them with 0x4072 03 / 04).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetUpperCustomerLimit {
+            /// Upper customer limit C \[0.01 pF\] \[pF\]
+            pub limit: super::Capacitance,
+        }
+        /// §5.7 Store-Indexed-Position (code `0x7500`, 8 bytes). Stores an indexed full-step position of the capacitor, later used by Go-To-Stored-Position (0x2700) and read by Get-Stored-Full-Step-Position (0x4075).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct StoreIndexedPosition {
+            /// Byte 1: index \[0 .. 9\] Valid raw range 0..=9.
+            pub index: u8,
+            /// Bytes 2&3: full-step position \[full-steps\]
+            pub position: u16,
+        }
+        /// §5.8 Set-Mode-Of-Operation (code `0x8000`, 6 bytes). Sets the Mode-Of-Operation of the motorized capacitor; only while the module is idle (not moving).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetModeOfOperation {
+            /// 0x00 encoder disabled, 0x01 close-loop-control, 0x02 open-loop-control (default)
+            pub mode: super::ModeOfOperation,
+        }
+        /// §6.1 Get-Actual-Capacitance (code `0x4001`, 5 bytes). Returns the actual capacitance \[0.01 pF\].
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetActualCapacitance;
+        /// §6.2 Get-Actual-Full-Step-Position (code `0x4002`, 5 bytes). Returns the actual full-step position.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetActualFullStepPosition;
+        /// §6.3 Get-Minimum-Capacitance (code `0x4010`, 5 bytes). Returns the minimum capacitance \[0.01 pF\] as per the stored C-curve.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetMinimumCapacitance;
+        /// §6.4 Get-Maximum-Capacitance (code `0x4011`, 5 bytes). Returns the maximum capacitance \[0.01 pF\] as per the stored C-curve.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetMaximumCapacitance;
+        /// §6.5 Get-Acceleration-Speed (code `0x4021`, 5 bytes). Returns the acceleration and speed index of the motorized capacitor (set with 0x4300).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetAccelerationSpeed;
+        /// §6.6 Get-Status (code `0x4022`, 5 bytes). Returns the status (error byte, §6.6.1) of the motorized capacitor. The table header calls it a 'Protected Command', a term the document never defines (ub2-e13). No example is printed (ub2-e30).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetStatus;
+        /// §6.7 Get-C-curve-Indexed-Full-Step-Capacitance (code `0x4030`, 7 bytes). Returns the indexed tuple (full-step position and capacitance) of the C-curve table from EPROM. The C-curve has at most 500 entries.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GetCCurveIndexedFullStepCapacitance {
+            /// Index in table \[0...x\]; at most 500 entries, so x ≤ 499 (ub2-e29) Valid raw range 0..=499.
+            pub index: u16,
+        }
+        /// §6.8 Get-Controller-Temperature (code `0x4032`, 5 bytes). Returns the temperature of the controller-internal temperature sensor (one U8 data byte; conversion formula missing in the document, ub2-e15).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetControllerTemperature;
+        /// §6.9 Get-Micro-Step-Position (code `0x4036`, 5 bytes). Returns the current micro-step position.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetMicroStepPosition;
+        /// §6.10 Get-Firmware Version (code `0x4061`, 5 bytes). Returns the firmware version of the motorized capacitor as 11 ASCII characters.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetFirmwareVersion;
+        /// §6.11 Get-Serial-Number of Capacitor (code `0x4062`, 5 bytes). Returns the serial number of the motorized capacitor as 8 ASCII characters.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetSerialNumber;
+        /// §6.12 Get-C_{min}-nom (code `0x4070`, 5 bytes). Returns the Cmin-nom value (nominal minimum capacitance) \[0.01 pF\].
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetCminNom;
+        /// §6.13 Get-C_{max}-nom (code `0x4071`, 5 bytes). Returns the Cmax-nom value (nominal maximum capacitance) \[0.01 pF\].
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetCmaxNom;
+        /// §6.14 Get-Lower-Customer-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Customer Limit (0x4072 with index 0x01).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetLowerCustomerLimit;
+        /// §6.15 Get-Upper- Customer -Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Customer Limit (0x4072 with index 0x02).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetUpperCustomerLimit;
+        /// §6.16 Get-Lower-Factory-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Lower Factory Limit (0x4072 with index 0x03); full-step and micro-step position 0 are at this limit.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetLowerFactoryLimit;
+        /// §6.17 Get-Upper-Factory-Limit (code `0x4072`, 6 bytes). Returns the capacitance value at the Upper Factory Limit (0x4072 with index 0x04).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetUpperFactoryLimit;
+        /// §6.18 Get-Preset-Capacitance (code `0x4073`, 6 bytes). Returns the equivalent capacitance at the preset position (0x4073 with index 0x00).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetPresetCapacitance;
+        /// §6.19 Get-Preset-Full-Step-Position (code `0x4073`, 6 bytes). Returns the equivalent full-step position at the preset position (0x4073 with index 0x01).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetPresetFullStepPosition;
+        /// §6.20 Get-Stored-Full-Step-Position (code `0x4075`, 6 bytes). Returns the stored indexed full-step position (stored with 0x7500) for the requested index.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GetStoredFullStepPosition {
+            /// Index \[0 .. 9\] Valid raw range 0..=9.
+            pub index: u8,
+        }
+        /// §6.21 Get-Mode-Of-Operation (code `0x4080`, 5 bytes). Returns the actual Mode-Of-Operation. The request has no data (the example comment 'for index = 2' is copied from §6.20, ub2-e20).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetModeOfOperation;
         /// `go_to_stored_position.index`
         pub const GO_TO_STORED_POSITION_INDEX: FieldDesc = FieldDesc::new(
             "go_to_stored_position",
             "index",
-        );
-        /// `go_to_stored_position_status`, code 0x2701
-        pub const GO_TO_STORED_POSITION_STATUS: MessageDesc = MessageDesc::new(
-            "go_to_stored_position_status",
-            0x2701,
-            2,
-            &[5],
-        );
-        /// `set_acceleration_speed_index`, code 0x4300
-        pub const SET_ACCELERATION_SPEED_INDEX: MessageDesc = MessageDesc::new(
-            "set_acceleration_speed_index",
-            0x4300,
-            2,
-            &[7],
         );
         /// `set_acceleration_speed_index.acceleration_index`
         pub const SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
@@ -3155,417 +4811,353 @@ pub mod ub2 {
             "set_acceleration_speed_index",
             "speed_index",
         );
-        /// `set_current`, code 0x4500
-        pub const SET_CURRENT: MessageDesc = MessageDesc::new(
-            "set_current",
-            0x4500,
-            2,
-            &[7],
-        );
-        /// `set_slave_address`, code 0x6000
-        pub const SET_SLAVE_ADDRESS: MessageDesc = MessageDesc::new(
-            "set_slave_address",
-            0x6000,
-            2,
-            &[6],
-        );
         /// `set_slave_address.address`
         pub const SET_SLAVE_ADDRESS_ADDRESS: FieldDesc = FieldDesc::new(
             "set_slave_address",
             "address",
-        );
-        /// `set_baud_rate`, code 0x6100
-        pub const SET_BAUD_RATE: MessageDesc = MessageDesc::new(
-            "set_baud_rate",
-            0x6100,
-            2,
-            &[6],
-        );
-        /// `set_lower_customer_limit`, code 0x7201
-        pub const SET_LOWER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
-            "set_lower_customer_limit",
-            0x7201,
-            2,
-            &[9],
-        );
-        /// `set_upper_customer_limit`, code 0x7202
-        pub const SET_UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
-            "set_upper_customer_limit",
-            0x7202,
-            2,
-            &[9],
-        );
-        /// `store_indexed_position`, code 0x7500
-        pub const STORE_INDEXED_POSITION: MessageDesc = MessageDesc::new(
-            "store_indexed_position",
-            0x7500,
-            2,
-            &[8],
         );
         /// `store_indexed_position.index`
         pub const STORE_INDEXED_POSITION_INDEX: FieldDesc = FieldDesc::new(
             "store_indexed_position",
             "index",
         );
-        /// `set_mode_of_operation`, code 0x8000
-        pub const SET_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
-            "set_mode_of_operation",
-            0x8000,
-            2,
-            &[6],
-        );
-        /// `get_actual_capacitance`, code 0x4001
-        pub const GET_ACTUAL_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "get_actual_capacitance",
-            0x4001,
-            2,
-            &[5],
-        );
-        /// `get_actual_full_step_position`, code 0x4002
-        pub const GET_ACTUAL_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "get_actual_full_step_position",
-            0x4002,
-            2,
-            &[5],
-        );
-        /// `get_minimum_capacitance`, code 0x4010
-        pub const GET_MINIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "get_minimum_capacitance",
-            0x4010,
-            2,
-            &[5],
-        );
-        /// `get_maximum_capacitance`, code 0x4011
-        pub const GET_MAXIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "get_maximum_capacitance",
-            0x4011,
-            2,
-            &[5],
-        );
-        /// `get_acceleration_speed`, code 0x4021
-        pub const GET_ACCELERATION_SPEED: MessageDesc = MessageDesc::new(
-            "get_acceleration_speed",
-            0x4021,
-            2,
-            &[5],
-        );
-        /// `get_status`, code 0x4022
-        pub const GET_STATUS: MessageDesc = MessageDesc::new(
-            "get_status",
-            0x4022,
-            2,
-            &[5],
-        );
-        /// `get_c_curve_indexed_full_step_capacitance`, code 0x4030
-        pub const GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "get_c_curve_indexed_full_step_capacitance",
-            0x4030,
-            2,
-            &[7],
-        );
         /// `get_c_curve_indexed_full_step_capacitance.index`
         pub const GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
             "get_c_curve_indexed_full_step_capacitance",
             "index",
-        );
-        /// `get_controller_temperature`, code 0x4032
-        pub const GET_CONTROLLER_TEMPERATURE: MessageDesc = MessageDesc::new(
-            "get_controller_temperature",
-            0x4032,
-            2,
-            &[5],
-        );
-        /// `get_micro_step_position`, code 0x4036
-        pub const GET_MICRO_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "get_micro_step_position",
-            0x4036,
-            2,
-            &[5],
-        );
-        /// `get_firmware_version`, code 0x4061
-        pub const GET_FIRMWARE_VERSION: MessageDesc = MessageDesc::new(
-            "get_firmware_version",
-            0x4061,
-            2,
-            &[5],
-        );
-        /// `get_serial_number`, code 0x4062
-        pub const GET_SERIAL_NUMBER: MessageDesc = MessageDesc::new(
-            "get_serial_number",
-            0x4062,
-            2,
-            &[5],
-        );
-        /// `get_cmin_nom`, code 0x4070
-        pub const GET_CMIN_NOM: MessageDesc = MessageDesc::new(
-            "get_cmin_nom",
-            0x4070,
-            2,
-            &[5],
-        );
-        /// `get_cmax_nom`, code 0x4071
-        pub const GET_CMAX_NOM: MessageDesc = MessageDesc::new(
-            "get_cmax_nom",
-            0x4071,
-            2,
-            &[5],
-        );
-        /// `get_lower_customer_limit`, code 0x4072
-        pub const GET_LOWER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
-            "get_lower_customer_limit",
-            0x4072,
-            2,
-            &[6],
         );
         /// `get_lower_customer_limit.index`
         pub const GET_LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "get_lower_customer_limit",
             "index",
         );
-        /// `get_upper_customer_limit`, code 0x4072
-        pub const GET_UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
-            "get_upper_customer_limit",
-            0x4072,
-            2,
-            &[6],
-        );
         /// `get_upper_customer_limit.index`
         pub const GET_UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "get_upper_customer_limit",
             "index",
-        );
-        /// `get_lower_factory_limit`, code 0x4072
-        pub const GET_LOWER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
-            "get_lower_factory_limit",
-            0x4072,
-            2,
-            &[6],
         );
         /// `get_lower_factory_limit.index`
         pub const GET_LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "get_lower_factory_limit",
             "index",
         );
-        /// `get_upper_factory_limit`, code 0x4072
-        pub const GET_UPPER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
-            "get_upper_factory_limit",
-            0x4072,
-            2,
-            &[6],
-        );
         /// `get_upper_factory_limit.index`
         pub const GET_UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "get_upper_factory_limit",
             "index",
-        );
-        /// `get_preset_capacitance`, code 0x4073
-        pub const GET_PRESET_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "get_preset_capacitance",
-            0x4073,
-            2,
-            &[6],
         );
         /// `get_preset_capacitance.index`
         pub const GET_PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
             "get_preset_capacitance",
             "index",
         );
-        /// `get_preset_full_step_position`, code 0x4073
-        pub const GET_PRESET_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "get_preset_full_step_position",
-            0x4073,
-            2,
-            &[6],
-        );
         /// `get_preset_full_step_position.index`
         pub const GET_PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
             "get_preset_full_step_position",
             "index",
-        );
-        /// `get_stored_full_step_position`, code 0x4075
-        pub const GET_STORED_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "get_stored_full_step_position",
-            0x4075,
-            2,
-            &[6],
         );
         /// `get_stored_full_step_position.index`
         pub const GET_STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
             "get_stored_full_step_position",
             "index",
         );
-        /// `get_mode_of_operation`, code 0x4080
-        pub const GET_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
-            "get_mode_of_operation",
-            0x4080,
-            2,
-            &[5],
-        );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `movement_started`, code 0x50
-        pub const MOVEMENT_STARTED: MessageDesc = MessageDesc::new(
-            "movement_started",
-            0x50,
-            1,
-            &[4],
-        );
-        /// `movement_completed`, code 0x51
-        pub const MOVEMENT_COMPLETED: MessageDesc = MessageDesc::new(
-            "movement_completed",
-            0x51,
-            1,
-            &[4],
-        );
-        /// `movement_not_completed`, code 0x52
-        pub const MOVEMENT_NOT_COMPLETED: MessageDesc = MessageDesc::new(
-            "movement_not_completed",
-            0x52,
-            1,
-            &[4],
-        );
-        /// `movement_not_triggered`, code 0x53
-        pub const MOVEMENT_NOT_TRIGGERED: MessageDesc = MessageDesc::new(
-            "movement_not_triggered",
-            0x53,
-            1,
-            &[4],
-        );
-        /// `movement_completed_with_step_loss`, code 0x5400
-        pub const MOVEMENT_COMPLETED_WITH_STEP_LOSS: MessageDesc = MessageDesc::new(
-            "movement_completed_with_step_loss",
-            0x5400,
-            2,
-            &[9],
-        );
-        /// `nak_unknown_command`, code 0x90
-        pub const NAK_UNKNOWN_COMMAND: MessageDesc = MessageDesc::new(
-            "nak_unknown_command",
-            0x90,
-            1,
-            &[4],
-        );
-        /// `nak_incompatible_status`, code 0x91
-        pub const NAK_INCOMPATIBLE_STATUS: MessageDesc = MessageDesc::new(
-            "nak_incompatible_status",
-            0x91,
-            1,
-            &[4],
-        );
-        /// `nak_checksum_error`, code 0x92
-        pub const NAK_CHECKSUM_ERROR: MessageDesc = MessageDesc::new(
-            "nak_checksum_error",
-            0x92,
-            1,
-            &[4],
-        );
-        /// `nak_limit_reached`, code 0x93
-        pub const NAK_LIMIT_REACHED: MessageDesc = MessageDesc::new(
-            "nak_limit_reached",
-            0x93,
-            1,
-            &[4],
-        );
-        /// `nak_index_out_of_range`, code 0x94
-        pub const NAK_INDEX_OUT_OF_RANGE: MessageDesc = MessageDesc::new(
-            "nak_index_out_of_range",
-            0x94,
-            1,
-            &[4],
-        );
-        /// `set_acceleration_speed_index_ack`, code 0x4300
-        pub const SET_ACCELERATION_SPEED_INDEX_ACK: MessageDesc = MessageDesc::new(
-            "set_acceleration_speed_index_ack",
-            0x4300,
-            2,
-            &[5],
-        );
-        /// `set_current_ack`, code 0x4500
-        pub const SET_CURRENT_ACK: MessageDesc = MessageDesc::new(
-            "set_current_ack",
-            0x4500,
-            2,
-            &[5],
-        );
-        /// `set_slave_address_ack`, code 0x6000
-        pub const SET_SLAVE_ADDRESS_ACK: MessageDesc = MessageDesc::new(
-            "set_slave_address_ack",
-            0x6000,
-            2,
-            &[5],
-        );
-        /// `set_baud_rate_ack`, code 0x6100
-        pub const SET_BAUD_RATE_ACK: MessageDesc = MessageDesc::new(
-            "set_baud_rate_ack",
-            0x6100,
-            2,
-            &[5],
-        );
-        /// `set_lower_customer_limit_ack`, code 0x7201
-        pub const SET_LOWER_CUSTOMER_LIMIT_ACK: MessageDesc = MessageDesc::new(
-            "set_lower_customer_limit_ack",
-            0x7201,
-            2,
-            &[5],
-        );
-        /// `set_upper_customer_limit_ack`, code 0x7202
-        pub const SET_UPPER_CUSTOMER_LIMIT_ACK: MessageDesc = MessageDesc::new(
-            "set_upper_customer_limit_ack",
-            0x7202,
-            2,
-            &[5],
-        );
-        /// `store_indexed_position_ack`, code 0x7500
-        pub const STORE_INDEXED_POSITION_ACK: MessageDesc = MessageDesc::new(
-            "store_indexed_position_ack",
-            0x7500,
-            2,
-            &[5],
-        );
-        /// `set_mode_of_operation_ack`, code 0x8000
-        pub const SET_MODE_OF_OPERATION_ACK: MessageDesc = MessageDesc::new(
-            "set_mode_of_operation_ack",
-            0x8000,
-            2,
-            &[5],
-        );
-        /// `actual_capacitance`, code 0x4101
-        pub const ACTUAL_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "actual_capacitance",
-            0x4101,
-            2,
-            &[9],
-        );
-        /// `actual_full_step_position`, code 0x4102
-        pub const ACTUAL_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "actual_full_step_position",
-            0x4102,
-            2,
-            &[7],
-        );
-        /// `minimum_capacitance`, code 0x4110
-        pub const MINIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "minimum_capacitance",
-            0x4110,
-            2,
-            &[9],
-        );
-        /// `maximum_capacitance`, code 0x4111
-        pub const MAXIMUM_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "maximum_capacitance",
-            0x4111,
-            2,
-            &[9],
-        );
-        /// `acceleration_speed`, code 0x4121
-        pub const ACCELERATION_SPEED: MessageDesc = MessageDesc::new(
-            "acceleration_speed",
-            0x4121,
-            2,
-            &[7],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1.1 Command approved Movement started (code `0x50`, 4 bytes). Reply to a movement trigger: command approved, movement started.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct MovementStarted;
+        /// §4.1.2 Command approved & Movement completed (code `0x51`, 4 bytes). Reply to a completion check: command approved and the movement is completed.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct MovementCompleted;
+        /// §4.1.2 Command approved & Movement not yet completed (code `0x52`, 4 bytes). Reply to a completion check: command approved, the movement is not yet completed.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct MovementNotCompleted;
+        /// §4.1.2 Movement has not been triggered (code `0x53`, 4 bytes). Reply to a completion check: the movement has not been triggered.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct MovementNotTriggered;
+        /// §4.2.2 Movement completed with step-loss (code `0x5400`, 9 bytes). Reply to a completion check: the movement is completed, but steps were lost. The document calls the code 0x5400 (two bytes) and gives no signedness for the 4-byte count; U32 is assumed as for absolute micro-step values (§3.3).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MovementCompletedWithStepLoss {
+            /// Number of lost micro-steps \[micro-steps\]
+            pub lost_micro_steps: u32,
+        }
+        /// §7.1 Not acknowledged / Unknown command (code `0x90`, 4 bytes). The command code (byte 3&4) is not defined.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct NakUnknownCommand;
+        /// §7.1 Not acknowledged / Incompatible status (code `0x91`, 4 bytes). Current status is not compatible with this command (e.g. §5.8: module not in idle state).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct NakIncompatibleStatus;
+        /// §7.1 Not acknowledged / Checksum error (code `0x92`, 4 bytes). The checksum is not correct.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct NakChecksumError;
+        /// §7.2 Not acknowledged / Limit reached (code `0x93`, 4 bytes). Target position outside of customer limits. For movements the command is nevertheless approved and the cap runs till the customer limit; for the limit setters 0x7201/0x7202 it means the requested limit is outside the factory limits and the command is ignored (ub2-e23, ub2-e24). See each command's response_meanings.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct NakLimitReached;
+        /// §7.1 Not acknowledged / Index out of range (code `0x94`, 4 bytes). The given index is outside of the defined / allowed range (also used for an out-of-range address, baud-rate index or mode). §7.1 lists it for all commands, so it is a common response; the commands whose sections name it say what it means for them (ub2-e22).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct NakIndexOutOfRange;
+        /// §5.1 Command approved (code `0x4300`, 5 bytes). Set-Acceleration-Speed-Index approved; echoes the command code, no data. No example printed (ub2-e30).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetAccelerationSpeedIndexAck;
+        /// §5.2 Command approved (code `0x4500`, 5 bytes). Set-Current approved; echoes the command code, no data.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetCurrentAck;
+        /// §5.3 Command approved (code `0x6000`, 5 bytes). Set-Slave-Address approved; echoes the command code, no data. The example is sent from the old address.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetSlaveAddressAck;
+        /// §5.4 Command approved (code `0x6100`, 5 bytes). Set-Baud-Rate approved; echoes the command code, no data.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetBaudRateAck;
+        /// §5.5 Command approved (requested limit inside factory limits) (code `0x7201`, 5 bytes). Set-Lower-Customer-Limit approved (requested limit inside factory limits); echoes the command code, no data.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetLowerCustomerLimitAck;
+        /// §5.6 Command approved (code `0x7202`, 5 bytes). Set-Upper-Customer-Limit approved; echoes the command code, no data.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetUpperCustomerLimitAck;
+        /// §5.7 Command approved (code `0x7500`, 5 bytes). Store-Indexed-Position approved; echoes the command code, no data.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct StoreIndexedPositionAck;
+        /// §5.8 Command approved (code `0x8000`, 5 bytes). Set-Mode-Of-Operation approved; echoes the command code, no data.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct SetModeOfOperationAck;
+        /// §6.1 Command approved (actual capacitance) (code `0x4101`, 9 bytes). Actual capacitance.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ActualCapacitance {
+            /// C \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.2 Command approved (actual full-step position) (code `0x4102`, 7 bytes). Actual full-step position.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ActualFullStepPosition {
+            /// Full-steps \[full-steps\]
+            pub full_steps: u16,
+        }
+        /// §6.3 Command approved (minimum capacitance) (code `0x4110`, 9 bytes). Minimum capacitance Cmin as per the stored C-curve.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MinimumCapacitance {
+            /// Cmin \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.4 Command approved (maximum capacitance) (code `0x4111`, 9 bytes). Maximum capacitance Cmax as per the stored C-curve.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MaximumCapacitance {
+            /// Cmax \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.5 Command approved (acceleration and speed index) (code `0x4121`, 7 bytes). Acceleration and drive-speed index.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct AccelerationSpeed {
+            /// Byte 1: acceleration \[0...18\] Valid raw range 0..=18.
+            pub acceleration_index: u8,
+            /// Byte 2: drive-speed \[0...18\] Valid raw range 0..=18.
+            pub speed_index: u8,
+        }
+        /// §6.6 Command approved (status) (code `0x4122`, 7 bytes). Status: '2 Byte', byte 1 = error bits (§6.6.1), byte 2 n/a (ub2-e13).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Status {
+            /// Byte 1: error bits (§6.6.1)
+            pub error_bits: super::StatusErrorBits,
+            /// Byte 2: n/a (not defined by the document)
+            pub reserved: u8,
+        }
+        /// §6.7 Command approved (C-curve entry) (code `0x4130`, 13 bytes). Indexed C-curve tuple: index, full-step position, capacitance.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct CCurveEntry {
+            /// Byte 1&2: index in table Valid raw range 0..=499.
+            pub index: u16,
+            /// Byte 3&4: full-steps \[full-steps\]
+            pub full_steps: u16,
+            /// Byte 5 to 8: C \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.8 Command approved (controller temperature) (code `0x4132`, 6 bytes). Controller-internal temperature; one data byte converted to U8 (the text also says U16 and omits the formula, ub2-e15).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ControllerTemperature {
+            /// Temperature \[°C\] \[°C\]
+            pub temperature: u8,
+        }
+        /// §6.9 Command approved (micro-step position) (code `0x4136`, 9 bytes). Current micro-step position.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct MicroStepPosition {
+            /// MicroStep-Position \[micro-steps\]
+            pub micro_steps: u32,
+        }
+        /// §6.10 Command approved (firmware version) (code `0x4161`, 16 bytes). Firmware version, 11 ASCII characters (e.g. "20100433.00").
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct FirmwareVersion {
+            /// 11 bytes \[ASCII character\]
+            pub firmware_version: super::rt::Ascii<11>,
+        }
+        /// §6.11 Command approved (serial number) (code `0x4162`, 13 bytes). Serial number of the capacitor, 8 ASCII characters (e.g. "##654321").
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SerialNumber {
+            /// 8 bytes \[ASCII character\]
+            pub serial_number: super::rt::Ascii<8>,
+        }
+        /// §6.12 Command approved (Cmin-nom) (code `0x4170`, 9 bytes). Nominal minimum capacitance Cmin-nom.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct CminNom {
+            /// Cmin-nom \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.13 Command approved (Cmax-nom) (code `0x4171`, 9 bytes). Nominal maximum capacitance Cmax-nom (the data column says C_min-nom, ub2-e16).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct CmaxNom {
+            /// Cmax-nom \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.14 Command approved (lower customer limit) (code `0x4172`, 10 bytes). Capacitance at the Lower Customer Limit: index byte 0x01, then C.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LowerCustomerLimit {
+            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.15 Command approved (upper customer limit) (code `0x4172`, 10 bytes). Capacitance at the Upper Customer Limit: index byte 0x02, then C.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct UpperCustomerLimit {
+            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.16 Command approved (lower factory limit) (code `0x4172`, 10 bytes). Capacitance at the Lower Factory Limit: index byte 0x03, then C.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct LowerFactoryLimit {
+            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.17 Command approved (upper factory limit) (code `0x4172`, 10 bytes). Capacitance at the Upper Factory Limit: index byte 0x04, then C.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct UpperFactoryLimit {
+            /// Byte 2 to 5: C \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.18 Command approved (preset capacitance) (code `0x4173`, 10 bytes). Equivalent capacitance at the preset position: index byte 0x00, then Preset-C.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct PresetCapacitance {
+            /// Bytes 2 to 5: Preset-C \[0.01 pF\] \[pF\]
+            pub capacitance: super::Capacitance,
+        }
+        /// §6.19 Command approved (preset full-step position) (code `0x4173`, 10 bytes). Equivalent full-step position at the preset position: index byte 0x01, then the full-steps in 4 bytes (U32, unlike the 2-byte full-step values of §3.2; ub2-e19).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct PresetFullStepPosition {
+            /// Bytes 2 to 5: full-steps \[full-steps\]
+            pub full_steps: u32,
+        }
+        /// §6.20 Command approved (stored full-step position) (code `0x4175`, 8 bytes). Stored indexed full-step position: the requested index, then the full-steps.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct StoredFullStepPosition {
+            /// Byte 1: index \[0 .. 9\] (repeats the request's index) Valid raw range 0..=9.
+            pub index: u8,
+            /// Bytes 2&3: full-steps \[full-steps\]
+            pub full_steps: u16,
+        }
+        /// §6.21 Command approved (Mode-Of-Operation) (code `0x4180`, 6 bytes). The actual Mode-Of-Operation.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ActualModeOfOperation {
+            /// 0x00 encoder disabled, 0x01 close-loop-control, 0x02 open-loop-control (default)
+            pub mode: super::ModeOfOperation,
+        }
         /// `acceleration_speed.acceleration_index`
         pub const ACCELERATION_SPEED_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
             "acceleration_speed",
@@ -3576,142 +5168,45 @@ pub mod ub2 {
             "acceleration_speed",
             "speed_index",
         );
-        /// `status`, code 0x4122
-        pub const STATUS: MessageDesc = MessageDesc::new("status", 0x4122, 2, &[7]);
-        /// `c_curve_entry`, code 0x4130
-        pub const C_CURVE_ENTRY: MessageDesc = MessageDesc::new(
-            "c_curve_entry",
-            0x4130,
-            2,
-            &[13],
-        );
         /// `c_curve_entry.index`
         pub const C_CURVE_ENTRY_INDEX: FieldDesc = FieldDesc::new(
             "c_curve_entry",
             "index",
-        );
-        /// `controller_temperature`, code 0x4132
-        pub const CONTROLLER_TEMPERATURE: MessageDesc = MessageDesc::new(
-            "controller_temperature",
-            0x4132,
-            2,
-            &[6],
-        );
-        /// `micro_step_position`, code 0x4136
-        pub const MICRO_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "micro_step_position",
-            0x4136,
-            2,
-            &[9],
-        );
-        /// `firmware_version`, code 0x4161
-        pub const FIRMWARE_VERSION: MessageDesc = MessageDesc::new(
-            "firmware_version",
-            0x4161,
-            2,
-            &[16],
-        );
-        /// `serial_number`, code 0x4162
-        pub const SERIAL_NUMBER: MessageDesc = MessageDesc::new(
-            "serial_number",
-            0x4162,
-            2,
-            &[13],
-        );
-        /// `cmin_nom`, code 0x4170
-        pub const CMIN_NOM: MessageDesc = MessageDesc::new("cmin_nom", 0x4170, 2, &[9]);
-        /// `cmax_nom`, code 0x4171
-        pub const CMAX_NOM: MessageDesc = MessageDesc::new("cmax_nom", 0x4171, 2, &[9]);
-        /// `lower_customer_limit`, code 0x4172
-        pub const LOWER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
-            "lower_customer_limit",
-            0x4172,
-            2,
-            &[10],
         );
         /// `lower_customer_limit.index`
         pub const LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "lower_customer_limit",
             "index",
         );
-        /// `upper_customer_limit`, code 0x4172
-        pub const UPPER_CUSTOMER_LIMIT: MessageDesc = MessageDesc::new(
-            "upper_customer_limit",
-            0x4172,
-            2,
-            &[10],
-        );
         /// `upper_customer_limit.index`
         pub const UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "upper_customer_limit",
             "index",
-        );
-        /// `lower_factory_limit`, code 0x4172
-        pub const LOWER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
-            "lower_factory_limit",
-            0x4172,
-            2,
-            &[10],
         );
         /// `lower_factory_limit.index`
         pub const LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "lower_factory_limit",
             "index",
         );
-        /// `upper_factory_limit`, code 0x4172
-        pub const UPPER_FACTORY_LIMIT: MessageDesc = MessageDesc::new(
-            "upper_factory_limit",
-            0x4172,
-            2,
-            &[10],
-        );
         /// `upper_factory_limit.index`
         pub const UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
             "upper_factory_limit",
             "index",
-        );
-        /// `preset_capacitance`, code 0x4173
-        pub const PRESET_CAPACITANCE: MessageDesc = MessageDesc::new(
-            "preset_capacitance",
-            0x4173,
-            2,
-            &[10],
         );
         /// `preset_capacitance.index`
         pub const PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
             "preset_capacitance",
             "index",
         );
-        /// `preset_full_step_position`, code 0x4173
-        pub const PRESET_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "preset_full_step_position",
-            0x4173,
-            2,
-            &[10],
-        );
         /// `preset_full_step_position.index`
         pub const PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
             "preset_full_step_position",
             "index",
         );
-        /// `stored_full_step_position`, code 0x4175
-        pub const STORED_FULL_STEP_POSITION: MessageDesc = MessageDesc::new(
-            "stored_full_step_position",
-            0x4175,
-            2,
-            &[8],
-        );
         /// `stored_full_step_position.index`
         pub const STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
             "stored_full_step_position",
             "index",
-        );
-        /// `actual_mode_of_operation`, code 0x4180
-        pub const ACTUAL_MODE_OF_OPERATION: MessageDesc = MessageDesc::new(
-            "actual_mode_of_operation",
-            0x4180,
-            2,
-            &[6],
         );
     }
 }

@@ -160,24 +160,65 @@ pub mod ubx_like {
             }
         }
     }
+    impl request::PollRate {
+        pub const NAME: &'static str = "poll_rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0608,
+            2,
+            &[8, 14],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::PollRate(*self).encode(address, buf)
+        }
+    }
+    impl request::SetRate {
+        pub const NAME: &'static str = "set_rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0608,
+            2,
+            &[8, 14],
+        );
+        pub const MEAS_RATE: rt::Range<usize> = 6..8;
+        pub const NAV_RATE: rt::Range<usize> = 8..10;
+        pub const TIME_REF: rt::Range<usize> = 10..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("meas_rate", rt::Int(self.meas_rate as i64));
+            f("nav_rate", rt::Int(self.nav_rate as i64));
+            f("time_ref", rt::Int(self.time_ref.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetRate(*self).encode(address, buf)
+        }
+    }
+    impl request::PollSatellites {
+        pub const NAME: &'static str = "poll_satellites";
+        pub const CODE: &'static [u8] = &[0x01, 0x35];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0135,
+            2,
+            &[8],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::PollSatellites(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3 Poll the navigation rate (CFG-RATE) (code `0x0608`, 8 bytes).
-        PollRate,
-        /// §3 Set the navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
-        SetRate {
-            /// \[ms\] Valid raw range 25..=65535.
-            meas_rate: u16,
-            /// \[cycles\] Valid raw range 1..=127.
-            nav_rate: u16,
-            time_ref: TimeRef,
-        },
-        /// §3 Poll the satellite information (NAV-SAT) (code `0x0135`, 8 bytes).
-        PollSatellites,
+        PollRate(request::PollRate),
+        SetRate(request::SetRate),
+        PollSatellites(request::PollSatellites),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -189,9 +230,9 @@ pub mod ubx_like {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::PollRate => 0,
-                Self::SetRate { .. } => 1,
-                Self::PollSatellites => 2,
+                Self::PollRate(_) => 0,
+                Self::SetRate(_) => 1,
+                Self::PollSatellites(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -208,17 +249,9 @@ pub mod ubx_like {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetRate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
-                    f("meas_rate", rt::Int(*v_meas_rate as i64));
-                    f("nav_rate", rt::Int(*v_nav_rate as i64));
-                    f("time_ref", rt::Int(v_time_ref.raw() as i64));
-                }
+                Self::SetRate(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -232,14 +265,16 @@ pub mod ubx_like {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PollRate => {
+                Self::PollRate(request::PollRate {}) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x00, 0x00])?.len()
                 }
-                Self::SetRate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
+                Self::SetRate(
+                    request::SetRate {
+                        meas_rate: v_meas_rate,
+                        nav_rate: v_nav_rate,
+                        time_ref: v_time_ref,
+                    },
+                ) => {
                     rt::encode_in_range("meas_rate", v_meas_rate, 25, 65535)?;
                     rt::encode_in_range("nav_rate", v_nav_rate, 1, 127)?;
                     let out = rt::frame_mut::<
@@ -250,7 +285,7 @@ pub mod ubx_like {
                     out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
                     out.len()
                 }
-                Self::PollSatellites => {
+                Self::PollSatellites(request::PollSatellites {}) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x01, 0x35, 0x00, 0x00])?.len()
                 }
             };
@@ -280,7 +315,7 @@ pub mod ubx_like {
             match rt::code(frame, 2, 2) {
                 0x0608 => {
                     let mut g = rt::Group::new(frame, 0x0608, rt::None);
-                    g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate));
+                    g.attempt(|_: &[u8; 8]| rt::Ok(Self::PollRate(request::PollRate)));
                     g.attempt(|frame: &[u8; 14]| {
                         let field_0: u16 = u16::from_le_bytes([frame[6], frame[7]]);
                         rt::in_range(
@@ -292,19 +327,21 @@ pub mod ubx_like {
                         )?;
                         let field_1: u16 = u16::from_le_bytes([frame[8], frame[9]]);
                         rt::in_range(&request::SET_RATE_NAV_RATE, 8, field_1, 1, 127)?;
-                        rt::Ok(Self::SetRate {
-                            meas_rate: field_0,
-                            nav_rate: field_1,
-                            time_ref: TimeRef::from_raw(
-                                u16::from_le_bytes([frame[10], frame[11]]),
-                            ),
-                        })
+                        rt::Ok(
+                            Self::SetRate(request::SetRate {
+                                meas_rate: field_0,
+                                nav_rate: field_1,
+                                time_ref: TimeRef::from_raw(
+                                    u16::from_le_bytes([frame[10], frame[11]]),
+                                ),
+                            }),
+                        )
                     });
-                    g.end(&request::POLL_RATE)
+                    g.end(&request::PollRate::DESC)
                 }
                 0x0135 => {
-                    rt::fixed::<8>(frame, &request::POLL_SATELLITES)
-                        .map(|_| Self::PollSatellites)
+                    rt::fixed::<8>(frame, &request::PollSatellites::DESC)
+                        .map(|_| Self::PollSatellites(request::PollSatellites))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, false)),
             }
@@ -317,15 +354,19 @@ pub mod ubx_like {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "poll_rate" => rt::Ok(Self::PollRate),
+                "poll_rate" => rt::Ok(Self::PollRate(request::PollRate)),
                 "set_rate" => {
-                    rt::Ok(Self::SetRate {
-                        meas_rate: rt::get(&mut field, "meas_rate")?,
-                        nav_rate: rt::get(&mut field, "nav_rate")?,
-                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                    })
+                    rt::Ok(
+                        Self::SetRate(request::SetRate {
+                            meas_rate: rt::get(&mut field, "meas_rate")?,
+                            nav_rate: rt::get(&mut field, "nav_rate")?,
+                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                        }),
+                    )
                 }
-                "poll_satellites" => rt::Ok(Self::PollSatellites),
+                "poll_satellites" => {
+                    rt::Ok(Self::PollSatellites(request::PollSatellites))
+                }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -550,42 +591,100 @@ pub mod ubx_like {
             })
         }
     }
+    impl response::Rate {
+        pub const NAME: &'static str = "rate";
+        pub const CODE: &'static [u8] = &[0x06, 0x08];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0608,
+            2,
+            &[14],
+        );
+        pub const MEAS_RATE: rt::Range<usize> = 6..8;
+        pub const NAV_RATE: rt::Range<usize> = 8..10;
+        pub const TIME_REF: rt::Range<usize> = 10..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("meas_rate", rt::Int(self.meas_rate as i64));
+            f("nav_rate", rt::Int(self.nav_rate as i64));
+            f("time_ref", rt::Int(self.time_ref.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Rate(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x05, 0x01];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0501,
+            2,
+            &[10],
+        );
+        pub const CLASS_ID: rt::Range<usize> = 6..7;
+        pub const MSG_ID: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("class_id", rt::Int(self.class_id as i64));
+            f("msg_id", rt::Int(self.msg_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Nak {
+        pub const NAME: &'static str = "nak";
+        pub const CODE: &'static [u8] = &[0x05, 0x00];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0500,
+            2,
+            &[10],
+        );
+        pub const CLASS_ID: rt::Range<usize> = 6..7;
+        pub const MSG_ID: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("class_id", rt::Int(self.class_id as i64));
+            f("msg_id", rt::Int(self.msg_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Nak(*self).encode(address, buf)
+        }
+    }
+    impl response::Satellites {
+        pub const NAME: &'static str = "satellites";
+        pub const CODE: &'static [u8] = &[0x01, 0x35];
+        pub const MIN_LEN: usize = 16;
+        pub const MAX_LEN: usize = 976;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x0135,
+            2,
+            &[16],
+        );
+        pub const ITOW: rt::Range<usize> = 6..10;
+        pub const RESERVED1: rt::Range<usize> = 12..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("itow", rt::Int(self.itow as i64));
+            f("reserved1", rt::Int(self.reserved1 as i64));
+            f("svs", rt::Records(self.svs.records()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Satellites(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §3 Navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
-        Rate {
-            /// \[ms\]
-            meas_rate: u16,
-            /// \[cycles\]
-            nav_rate: u16,
-            time_ref: TimeRef,
-        },
-        /// §4 Message acknowledged (ACK-ACK) (code `0x0501`, 10 bytes).
-        Ack {
-            /// \[cycles\]
-            class_id: u8,
-            /// \[cycles\]
-            msg_id: u8,
-        },
-        /// §4 Message not acknowledged (ACK-NAK) (code `0x0500`, 10 bytes).
-        Nak {
-            /// \[cycles\]
-            class_id: u8,
-            /// \[cycles\]
-            msg_id: u8,
-        },
-        /// §3 Satellite information (NAV-SAT) (code `0x0135`, 16 to 976 bytes).
-        Satellites {
-            /// GPS time of week of the navigation epoch \[ms\]
-            itow: u32,
-            /// \[cycles\]
-            reserved1: u16,
-            svs: rt::Repeated<SatellitesSvs, 80>,
-        },
+        Rate(response::Rate),
+        Ack(response::Ack),
+        Nak(response::Nak),
+        Satellites(response::Satellites),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -598,10 +697,10 @@ pub mod ubx_like {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Rate { .. } => 0,
-                Self::Ack { .. } => 1,
-                Self::Nak { .. } => 2,
-                Self::Satellites { .. } => 3,
+                Self::Rate(_) => 0,
+                Self::Ack(_) => 1,
+                Self::Nak(_) => 2,
+                Self::Satellites(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -615,7 +714,7 @@ pub mod ubx_like {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Satellites { svs: v_svs, .. } => {
+                Self::Satellites(response::Satellites { svs: v_svs, .. }) => {
                     REPEAT_SATELLITES.base + REPEAT_SATELLITES.bytes_of(v_svs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -623,34 +722,12 @@ pub mod ubx_like {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Rate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
-                    f("meas_rate", rt::Int(*v_meas_rate as i64));
-                    f("nav_rate", rt::Int(*v_nav_rate as i64));
-                    f("time_ref", rt::Int(v_time_ref.raw() as i64));
-                }
-                Self::Ack { class_id: v_class_id, msg_id: v_msg_id } => {
-                    f("class_id", rt::Int(*v_class_id as i64));
-                    f("msg_id", rt::Int(*v_msg_id as i64));
-                }
-                Self::Nak { class_id: v_class_id, msg_id: v_msg_id } => {
-                    f("class_id", rt::Int(*v_class_id as i64));
-                    f("msg_id", rt::Int(*v_msg_id as i64));
-                }
-                Self::Satellites {
-                    itow: v_itow,
-                    reserved1: v_reserved1,
-                    svs: v_svs,
-                } => {
-                    f("itow", rt::Int(*v_itow as i64));
-                    f("reserved1", rt::Int(*v_reserved1 as i64));
-                    f("svs", rt::Records(v_svs.records()));
-                }
+                Self::Rate(m) => m.visit(f),
+                Self::Ack(m) => m.visit(f),
+                Self::Nak(m) => m.visit(f),
+                Self::Satellites(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -663,11 +740,13 @@ pub mod ubx_like {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Rate {
-                    meas_rate: v_meas_rate,
-                    nav_rate: v_nav_rate,
-                    time_ref: v_time_ref,
-                } => {
+                Self::Rate(
+                    response::Rate {
+                        meas_rate: v_meas_rate,
+                        nav_rate: v_nav_rate,
+                        time_ref: v_time_ref,
+                    },
+                ) => {
                     let out = rt::frame_mut::<
                         14,
                     >(buf, &[0xB5, 0x62, 0x06, 0x08, 0x06, 0x00])?;
@@ -676,7 +755,7 @@ pub mod ubx_like {
                     out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
                     out.len()
                 }
-                Self::Ack { class_id: v_class_id, msg_id: v_msg_id } => {
+                Self::Ack(response::Ack { class_id: v_class_id, msg_id: v_msg_id }) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xB5, 0x62, 0x05, 0x01, 0x02, 0x00])?;
@@ -684,7 +763,7 @@ pub mod ubx_like {
                     out[7] = v_msg_id;
                     out.len()
                 }
-                Self::Nak { class_id: v_class_id, msg_id: v_msg_id } => {
+                Self::Nak(response::Nak { class_id: v_class_id, msg_id: v_msg_id }) => {
                     let out = rt::frame_mut::<
                         10,
                     >(buf, &[0xB5, 0x62, 0x05, 0x00, 0x02, 0x00])?;
@@ -692,11 +771,13 @@ pub mod ubx_like {
                     out[7] = v_msg_id;
                     out.len()
                 }
-                Self::Satellites {
-                    itow: v_itow,
-                    reserved1: v_reserved1,
-                    svs: v_svs,
-                } => {
+                Self::Satellites(
+                    response::Satellites {
+                        itow: v_itow,
+                        reserved1: v_reserved1,
+                        svs: v_svs,
+                    },
+                ) => {
                     let frame_len = REPEAT_SATELLITES.encode_len(v_svs.len())?;
                     let out = rt::frame_mut_len(
                         buf,
@@ -776,28 +857,34 @@ pub mod ubx_like {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 2, 2) {
                 0x0608 => {
-                    let frame = rt::fixed::<14>(frame, &response::RATE)?;
-                    rt::Ok(Self::Rate {
-                        meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
-                        nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
-                        time_ref: TimeRef::from_raw(
-                            u16::from_le_bytes([frame[10], frame[11]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<14>(frame, &response::Rate::DESC)?;
+                    rt::Ok(
+                        Self::Rate(response::Rate {
+                            meas_rate: u16::from_le_bytes([frame[6], frame[7]]),
+                            nav_rate: u16::from_le_bytes([frame[8], frame[9]]),
+                            time_ref: TimeRef::from_raw(
+                                u16::from_le_bytes([frame[10], frame[11]]),
+                            ),
+                        }),
+                    )
                 }
                 0x0501 => {
-                    let frame = rt::fixed::<10>(frame, &response::ACK)?;
-                    rt::Ok(Self::Ack {
-                        class_id: frame[6],
-                        msg_id: frame[7],
-                    })
+                    let frame = rt::fixed::<10>(frame, &response::Ack::DESC)?;
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            class_id: frame[6],
+                            msg_id: frame[7],
+                        }),
+                    )
                 }
                 0x0500 => {
-                    let frame = rt::fixed::<10>(frame, &response::NAK)?;
-                    rt::Ok(Self::Nak {
-                        class_id: frame[6],
-                        msg_id: frame[7],
-                    })
+                    let frame = rt::fixed::<10>(frame, &response::Nak::DESC)?;
+                    rt::Ok(
+                        Self::Nak(response::Nak {
+                            class_id: frame[6],
+                            msg_id: frame[7],
+                        }),
+                    )
                 }
                 0x0135 => {
                     let (frame, elements, _) = REPEAT_SATELLITES.split::<14>(frame)?;
@@ -807,16 +894,18 @@ pub mod ubx_like {
                         let bytes = <[u8; 12]>::try_from(bytes).unwrap_or([0; 12]);
                         let _ = v_svs.push(SatellitesSvs::read(&bytes, 14 + k * 12)?);
                     }
-                    rt::Ok(Self::Satellites {
-                        itow: u32::from_le_bytes([
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                        ]),
-                        reserved1: u16::from_le_bytes([frame[12], frame[13]]),
-                        svs: v_svs,
-                    })
+                    rt::Ok(
+                        Self::Satellites(response::Satellites {
+                            itow: u32::from_le_bytes([
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                            ]),
+                            reserved1: u16::from_le_bytes([frame[12], frame[13]]),
+                            svs: v_svs,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 2, 2, 2, true)),
             }
@@ -830,30 +919,38 @@ pub mod ubx_like {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "rate" => {
-                    rt::Ok(Self::Rate {
-                        meas_rate: rt::get(&mut field, "meas_rate")?,
-                        nav_rate: rt::get(&mut field, "nav_rate")?,
-                        time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
-                    })
+                    rt::Ok(
+                        Self::Rate(response::Rate {
+                            meas_rate: rt::get(&mut field, "meas_rate")?,
+                            nav_rate: rt::get(&mut field, "nav_rate")?,
+                            time_ref: TimeRef::from_raw(rt::get(&mut field, "time_ref")?),
+                        }),
+                    )
                 }
                 "ack" => {
-                    rt::Ok(Self::Ack {
-                        class_id: rt::get(&mut field, "class_id")?,
-                        msg_id: rt::get(&mut field, "msg_id")?,
-                    })
+                    rt::Ok(
+                        Self::Ack(response::Ack {
+                            class_id: rt::get(&mut field, "class_id")?,
+                            msg_id: rt::get(&mut field, "msg_id")?,
+                        }),
+                    )
                 }
                 "nak" => {
-                    rt::Ok(Self::Nak {
-                        class_id: rt::get(&mut field, "class_id")?,
-                        msg_id: rt::get(&mut field, "msg_id")?,
-                    })
+                    rt::Ok(
+                        Self::Nak(response::Nak {
+                            class_id: rt::get(&mut field, "class_id")?,
+                            msg_id: rt::get(&mut field, "msg_id")?,
+                        }),
+                    )
                 }
                 "satellites" => {
-                    rt::Ok(Self::Satellites {
-                        itow: rt::get(&mut field, "itow")?,
-                        reserved1: rt::get(&mut field, "reserved1")?,
-                        svs: rt::records::<SatellitesSvs, 80>(&mut field, "svs")?,
-                    })
+                    rt::Ok(
+                        Self::Satellites(response::Satellites {
+                            itow: rt::get(&mut field, "itow")?,
+                            reserved1: rt::get(&mut field, "reserved1")?,
+                            svs: rt::records::<SatellitesSvs, 80>(&mut field, "svs")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -945,7 +1042,7 @@ pub mod ubx_like {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::Nak { .. })
+            matches!(response, Response::Nak(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(2) {
@@ -1035,24 +1132,33 @@ pub mod ubx_like {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<UbxLike>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `poll_rate`, code 0x0608
-        pub const POLL_RATE: MessageDesc = MessageDesc::new(
-            "poll_rate",
-            0x0608,
-            2,
-            &[8, 14],
-        );
-        /// `set_rate`, code 0x0608
-        pub const SET_RATE: MessageDesc = MessageDesc::new(
-            "set_rate",
-            0x0608,
-            2,
-            &[8, 14],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 Poll the navigation rate (CFG-RATE) (code `0x0608`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct PollRate;
+        /// §3 Set the navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetRate {
+            /// \[ms\] Valid raw range 25..=65535.
+            pub meas_rate: u16,
+            /// \[cycles\] Valid raw range 1..=127.
+            pub nav_rate: u16,
+            pub time_ref: super::TimeRef,
+        }
+        /// §3 Poll the satellite information (NAV-SAT) (code `0x0135`, 8 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct PollSatellites;
         /// `set_rate.meas_rate`
         pub const SET_RATE_MEAS_RATE: FieldDesc = FieldDesc::new(
             "set_rate",
@@ -1060,30 +1166,56 @@ pub mod ubx_like {
         );
         /// `set_rate.nav_rate`
         pub const SET_RATE_NAV_RATE: FieldDesc = FieldDesc::new("set_rate", "nav_rate");
-        /// `poll_satellites`, code 0x0135
-        pub const POLL_SATELLITES: MessageDesc = MessageDesc::new(
-            "poll_satellites",
-            0x0135,
-            2,
-            &[8],
-        );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `rate`, code 0x0608
-        pub const RATE: MessageDesc = MessageDesc::new("rate", 0x0608, 2, &[14]);
-        /// `ack`, code 0x0501
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0x0501, 2, &[10]);
-        /// `nak`, code 0x0500
-        pub const NAK: MessageDesc = MessageDesc::new("nak", 0x0500, 2, &[10]);
-        /// `satellites`, code 0x0135
-        pub const SATELLITES: MessageDesc = MessageDesc::new(
-            "satellites",
-            0x0135,
-            2,
-            &[16],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §3 Navigation rate (CFG-RATE) (code `0x0608`, 14 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Rate {
+            /// \[ms\]
+            pub meas_rate: u16,
+            /// \[cycles\]
+            pub nav_rate: u16,
+            pub time_ref: super::TimeRef,
+        }
+        /// §4 Message acknowledged (ACK-ACK) (code `0x0501`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Ack {
+            /// \[cycles\]
+            pub class_id: u8,
+            /// \[cycles\]
+            pub msg_id: u8,
+        }
+        /// §4 Message not acknowledged (ACK-NAK) (code `0x0500`, 10 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Nak {
+            /// \[cycles\]
+            pub class_id: u8,
+            /// \[cycles\]
+            pub msg_id: u8,
+        }
+        /// §3 Satellite information (NAV-SAT) (code `0x0135`, 16 to 976 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Satellites {
+            /// GPS time of week of the navigation epoch \[ms\]
+            pub itow: u32,
+            /// \[cycles\]
+            pub reserved1: u16,
+            pub svs: super::rt::Repeated<super::SatellitesSvs, 80>,
+        }
         /// `satellites.svs`
         pub const SATELLITES_SVS: FieldDesc = FieldDesc::new("satellites", "svs");
         /// `satellites.version`

@@ -108,21 +108,61 @@ pub mod unaddressed {
             rt::Some(Self(raw as i16))
         }
     }
+    impl request::ReadTemperature {
+        pub const NAME: &'static str = "read_temperature";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::SetRate {
+        pub const NAME: &'static str = "set_rate";
+        pub const CODE: &'static [u8] = &[0x20];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x20,
+            1,
+            &[7],
+        );
+        pub const RATE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("rate", rt::Int(self.rate as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetRate(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadVersion {
+        pub const NAME: &'static str = "read_version";
+        pub const CODE: &'static [u8] = &[0x30];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x30,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadVersion(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §3.1 Read temperature (code `0x10`, 5 bytes).
-        ReadTemperature,
-        /// §3.2 Set the sample rate (code `0x20`, 7 bytes).
-        SetRate {
-            /// \[Hz\] Valid raw range 1..=1000.
-            rate: u16,
-        },
-        /// §3.3 Read the firmware version (code `0x30`, 5 bytes).
-        ReadVersion,
+        ReadTemperature(request::ReadTemperature),
+        SetRate(request::SetRate),
+        ReadVersion(request::ReadVersion),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -134,9 +174,9 @@ pub mod unaddressed {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadTemperature => 0,
-                Self::SetRate { .. } => 1,
-                Self::ReadVersion => 2,
+                Self::ReadTemperature(_) => 0,
+                Self::SetRate(_) => 1,
+                Self::ReadVersion(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -153,9 +193,9 @@ pub mod unaddressed {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::SetRate { rate: v_rate } => f("rate", rt::Int(*v_rate as i64)),
+                Self::SetRate(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -169,16 +209,16 @@ pub mod unaddressed {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadTemperature => {
+                Self::ReadTemperature(request::ReadTemperature {}) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x10])?.len()
                 }
-                Self::SetRate { rate: v_rate } => {
+                Self::SetRate(request::SetRate { rate: v_rate }) => {
                     rt::encode_in_range("rate", v_rate, 1, 1000)?;
                     let out = rt::frame_mut::<7>(buf, &[0xA5, 0x5A, 0x03, 0x20])?;
                     out[4..6].copy_from_slice(&v_rate.to_le_bytes());
                     out.len()
                 }
-                Self::ReadVersion => {
+                Self::ReadVersion(request::ReadVersion {}) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x30])?.len()
                 }
             };
@@ -207,18 +247,18 @@ pub mod unaddressed {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x10 => {
-                    rt::fixed::<5>(frame, &request::READ_TEMPERATURE)
-                        .map(|_| Self::ReadTemperature)
+                    rt::fixed::<5>(frame, &request::ReadTemperature::DESC)
+                        .map(|_| Self::ReadTemperature(request::ReadTemperature))
                 }
                 0x20 => {
-                    let frame = rt::fixed::<7>(frame, &request::SET_RATE)?;
+                    let frame = rt::fixed::<7>(frame, &request::SetRate::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(&request::SET_RATE_RATE, 4, field_0, 1, 1000)?;
-                    rt::Ok(Self::SetRate { rate: field_0 })
+                    rt::Ok(Self::SetRate(request::SetRate { rate: field_0 }))
                 }
                 0x30 => {
-                    rt::fixed::<5>(frame, &request::READ_VERSION)
-                        .map(|_| Self::ReadVersion)
+                    rt::fixed::<5>(frame, &request::ReadVersion::DESC)
+                        .map(|_| Self::ReadVersion(request::ReadVersion))
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
@@ -231,13 +271,17 @@ pub mod unaddressed {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "read_temperature" => rt::Ok(Self::ReadTemperature),
-                "set_rate" => {
-                    rt::Ok(Self::SetRate {
-                        rate: rt::get(&mut field, "rate")?,
-                    })
+                "read_temperature" => {
+                    rt::Ok(Self::ReadTemperature(request::ReadTemperature))
                 }
-                "read_version" => rt::Ok(Self::ReadVersion),
+                "set_rate" => {
+                    rt::Ok(
+                        Self::SetRate(request::SetRate {
+                            rate: rt::get(&mut field, "rate")?,
+                        }),
+                    )
+                }
+                "read_version" => rt::Ok(Self::ReadVersion(request::ReadVersion)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -302,21 +346,65 @@ pub mod unaddressed {
             Self::COMMANDS[self.index()].3
         }
     }
+    impl response::Temperature {
+        pub const NAME: &'static str = "temperature";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[7],
+        );
+        pub const TEMPERATURE: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Temperature(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0xA0];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xA0,
+            1,
+            &[5],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Version {
+        pub const NAME: &'static str = "version";
+        pub const CODE: &'static [u8] = &[0xB0];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0xB0,
+            1,
+            &[9],
+        );
+        pub const VERSION: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("version", rt::Text(&self.version[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Version(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §4.1 Temperature (code `0x90`, 7 bytes).
-        Temperature {
-            /// \[°C\] Valid raw range -4000..=12500.
-            temperature: Centidegrees,
-        },
-        /// §4.2 Acknowledge (code `0xA0`, 5 bytes).
-        Ack,
-        /// §4.3 Firmware version (code `0xB0`, 9 bytes).
-        Version { version: rt::Ascii<4> },
+        Temperature(response::Temperature),
+        Ack(response::Ack),
+        Version(response::Version),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -328,9 +416,9 @@ pub mod unaddressed {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Temperature { .. } => 0,
-                Self::Ack => 1,
-                Self::Version { .. } => 2,
+                Self::Temperature(_) => 0,
+                Self::Ack(_) => 1,
+                Self::Version(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -347,14 +435,10 @@ pub mod unaddressed {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Temperature { temperature: v_temperature } => {
-                    f("temperature", rt::Int(v_temperature.raw() as i64))
-                }
-                Self::Version { version: v_version } => {
-                    f("version", rt::Text(&v_version[..]))
-                }
+                Self::Temperature(m) => m.visit(f),
+                Self::Version(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -368,7 +452,9 @@ pub mod unaddressed {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Temperature { temperature: v_temperature } => {
+                Self::Temperature(
+                    response::Temperature { temperature: v_temperature },
+                ) => {
                     rt::encode_in_range(
                         "temperature",
                         v_temperature.raw(),
@@ -379,8 +465,10 @@ pub mod unaddressed {
                     out[4..6].copy_from_slice(&v_temperature.raw().to_le_bytes());
                     out.len()
                 }
-                Self::Ack => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len(),
-                Self::Version { version: v_version } => {
+                Self::Ack(response::Ack {}) => {
+                    rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len()
+                }
+                Self::Version(response::Version { version: v_version }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, 0x05, 0xB0])?;
                     out[4..8].copy_from_slice(&v_version.0);
                     out.len()
@@ -438,7 +526,7 @@ pub mod unaddressed {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x90 => {
-                    let frame = rt::fixed::<7>(frame, &response::TEMPERATURE)?;
+                    let frame = rt::fixed::<7>(frame, &response::Temperature::DESC)?;
                     let field_0: i16 = i16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
                         &response::TEMPERATURE_TEMPERATURE,
@@ -447,16 +535,23 @@ pub mod unaddressed {
                         -4000,
                         12500,
                     )?;
-                    rt::Ok(Self::Temperature {
-                        temperature: Centidegrees::from_raw(field_0),
-                    })
+                    rt::Ok(
+                        Self::Temperature(response::Temperature {
+                            temperature: Centidegrees::from_raw(field_0),
+                        }),
+                    )
                 }
-                0xA0 => rt::fixed::<5>(frame, &response::ACK).map(|_| Self::Ack),
+                0xA0 => {
+                    rt::fixed::<5>(frame, &response::Ack::DESC)
+                        .map(|_| Self::Ack(response::Ack))
+                }
                 0xB0 => {
-                    let frame = rt::fixed::<9>(frame, &response::VERSION)?;
-                    rt::Ok(Self::Version {
-                        version: rt::Ascii(frame[4..8].try_into().unwrap_or([0; 4])),
-                    })
+                    let frame = rt::fixed::<9>(frame, &response::Version::DESC)?;
+                    rt::Ok(
+                        Self::Version(response::Version {
+                            version: rt::Ascii(frame[4..8].try_into().unwrap_or([0; 4])),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
@@ -470,17 +565,21 @@ pub mod unaddressed {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "temperature" => {
-                    rt::Ok(Self::Temperature {
-                        temperature: Centidegrees::from_raw(
-                            rt::get(&mut field, "temperature")?,
-                        ),
-                    })
+                    rt::Ok(
+                        Self::Temperature(response::Temperature {
+                            temperature: Centidegrees::from_raw(
+                                rt::get(&mut field, "temperature")?,
+                            ),
+                        }),
+                    )
                 }
-                "ack" => rt::Ok(Self::Ack),
+                "ack" => rt::Ok(Self::Ack(response::Ack)),
                 "version" => {
-                    rt::Ok(Self::Version {
-                        version: rt::text(&mut field, "version")?,
-                    })
+                    rt::Ok(
+                        Self::Version(response::Version {
+                            version: rt::text(&mut field, "version")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -643,47 +742,62 @@ pub mod unaddressed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Unaddressed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_temperature`, code 0x10
-        pub const READ_TEMPERATURE: MessageDesc = MessageDesc::new(
-            "read_temperature",
-            0x10,
-            1,
-            &[5],
-        );
-        /// `set_rate`, code 0x20
-        pub const SET_RATE: MessageDesc = MessageDesc::new("set_rate", 0x20, 1, &[7]);
+        use ::busspec_runtime::FieldDesc;
+        /// §3.1 Read temperature (code `0x10`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadTemperature;
+        /// §3.2 Set the sample rate (code `0x20`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetRate {
+            /// \[Hz\] Valid raw range 1..=1000.
+            pub rate: u16,
+        }
+        /// §3.3 Read the firmware version (code `0x30`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct ReadVersion;
         /// `set_rate.rate`
         pub const SET_RATE_RATE: FieldDesc = FieldDesc::new("set_rate", "rate");
-        /// `read_version`, code 0x30
-        pub const READ_VERSION: MessageDesc = MessageDesc::new(
-            "read_version",
-            0x30,
-            1,
-            &[5],
-        );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `temperature`, code 0x90
-        pub const TEMPERATURE: MessageDesc = MessageDesc::new(
-            "temperature",
-            0x90,
-            1,
-            &[7],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §4.1 Temperature (code `0x90`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Temperature {
+            /// \[°C\] Valid raw range -4000..=12500.
+            pub temperature: super::Centidegrees,
+        }
+        /// §4.2 Acknowledge (code `0xA0`, 5 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Ack;
+        /// §4.3 Firmware version (code `0xB0`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Version {
+            pub version: super::rt::Ascii<4>,
+        }
         /// `temperature.temperature`
         pub const TEMPERATURE_TEMPERATURE: FieldDesc = FieldDesc::new(
             "temperature",
             "temperature",
         );
-        /// `ack`, code 0xA0
-        pub const ACK: MessageDesc = MessageDesc::new("ack", 0xA0, 1, &[5]);
-        /// `version`, code 0xB0
-        pub const VERSION: MessageDesc = MessageDesc::new("version", 0xB0, 1, &[9]);
     }
 }

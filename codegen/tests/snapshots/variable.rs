@@ -83,26 +83,73 @@ pub mod vario {
         min: 1,
         max: 16,
     };
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[9],
+        );
+        pub const FIRST: rt::Range<usize> = 5..7;
+        pub const QUANTITY: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("first", rt::Int(self.first as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::Write {
+        pub const NAME: &'static str = "write";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const MIN_LEN: usize = 10;
+        pub const MAX_LEN: usize = 40;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[8],
+        );
+        pub const QUANTITY: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write(*self).encode(address, buf)
+        }
+    }
+    impl request::Stamp {
+        pub const NAME: &'static str = "stamp";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[9],
+        );
+        pub const TICKS: rt::Range<usize> = 5..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("ticks", rt::Int(self.ticks as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Stamp(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §1 Read (code `0x01`, 9 bytes).
-        Read {
-            first: u16,
-            /// Valid raw range 1..=16.
-            quantity: u8,
-        },
-        /// §2 Write (code `0x02`, 10 to 40 bytes).
-        Write {
-            /// Valid raw range 1..=16.
-            quantity: u8,
-            values: rt::Repeated<u16, 16>,
-        },
-        /// §3 Stamp (code `0x03`, 9 bytes).
-        Stamp { ticks: u32 },
+        Read(request::Read),
+        Write(request::Write),
+        Stamp(request::Stamp),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -114,9 +161,9 @@ pub mod vario {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::Read { .. } => 0,
-                Self::Write { .. } => 1,
-                Self::Stamp { .. } => 2,
+                Self::Read(_) => 0,
+                Self::Write(_) => 1,
+                Self::Stamp(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -130,7 +177,7 @@ pub mod vario {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Write { values: v_values, .. } => {
+                Self::Write(request::Write { values: v_values, .. }) => {
                     REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(v_values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -138,17 +185,11 @@ pub mod vario {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::Read { first: v_first, quantity: v_quantity } => {
-                    f("first", rt::Int(*v_first as i64));
-                    f("quantity", rt::Int(*v_quantity as i64));
-                }
-                Self::Write { quantity: v_quantity, values: v_values } => {
-                    f("quantity", rt::Int(*v_quantity as i64));
-                    f("values", rt::List(v_values.elements()));
-                }
-                Self::Stamp { ticks: v_ticks } => f("ticks", rt::Int(*v_ticks as i64)),
+                Self::Read(m) => m.visit(f),
+                Self::Write(m) => m.visit(f),
+                Self::Stamp(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -161,7 +202,7 @@ pub mod vario {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Read { first: v_first, quantity: v_quantity } => {
+                Self::Read(request::Read { first: v_first, quantity: v_quantity }) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 16)?;
                     let out = rt::frame_mut::<
                         9,
@@ -170,7 +211,9 @@ pub mod vario {
                     out[7] = v_quantity;
                     out.len()
                 }
-                Self::Write { quantity: v_quantity, values: v_values } => {
+                Self::Write(
+                    request::Write { quantity: v_quantity, values: v_values },
+                ) => {
                     rt::encode_in_range("quantity", v_quantity, 1, 16)?;
                     let frame_len = REPEAT_WRITE.encode_len(v_values.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
@@ -189,7 +232,7 @@ pub mod vario {
                     rt::write_elements(v_values.as_slice(), 2, false, &mut out[7..]);
                     out.len()
                 }
-                Self::Stamp { ticks: v_ticks } => {
+                Self::Stamp(request::Stamp { ticks: v_ticks }) => {
                     let out = rt::frame_mut::<
                         9,
                     >(buf, &[0xA5, 0x5A, address, 0x05, 0x03])?;
@@ -228,12 +271,14 @@ pub mod vario {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, &request::READ)?;
+                    let frame = rt::fixed::<9>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::READ_QUANTITY, 7, frame[7], 1, 16)?;
-                    rt::Ok(Self::Read {
-                        first: u16::from_be_bytes([frame[5], frame[6]]),
-                        quantity: frame[7],
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            first: u16::from_be_bytes([frame[5], frame[6]]),
+                            quantity: frame[7],
+                        }),
+                    )
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<7>(frame)?;
@@ -246,16 +291,21 @@ pub mod vario {
                         (2, 1),
                         "2 × quantity",
                     )?;
-                    rt::Ok(Self::Write {
-                        quantity: frame[5],
-                        values: REPEAT_WRITE.elements::<u16, 16>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::Write(request::Write {
+                            quantity: frame[5],
+                            values: REPEAT_WRITE
+                                .elements::<u16, 16>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame, &request::STAMP)?;
-                    rt::Ok(Self::Stamp {
-                        ticks: rt::u24([frame[5], frame[6], frame[7]], false),
-                    })
+                    let frame = rt::fixed::<9>(frame, &request::Stamp::DESC)?;
+                    rt::Ok(
+                        Self::Stamp(request::Stamp {
+                            ticks: rt::u24([frame[5], frame[6], frame[7]], false),
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, false)),
             }
@@ -269,22 +319,28 @@ pub mod vario {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read" => {
-                    rt::Ok(Self::Read {
-                        first: rt::get(&mut field, "first")?,
-                        quantity: rt::get(&mut field, "quantity")?,
-                    })
+                    rt::Ok(
+                        Self::Read(request::Read {
+                            first: rt::get(&mut field, "first")?,
+                            quantity: rt::get(&mut field, "quantity")?,
+                        }),
+                    )
                 }
                 "write" => {
-                    rt::Ok(Self::Write {
-                        quantity: rt::get(&mut field, "quantity")?,
-                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::Write(request::Write {
+                            quantity: rt::get(&mut field, "quantity")?,
+                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                        }),
+                    )
                 }
                 "stamp" => {
-                    rt::Ok(Self::Stamp {
-                        ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
-                            as u32,
-                    })
+                    rt::Ok(
+                        Self::Stamp(request::Stamp {
+                            ticks: rt::field_int("ticks", field("ticks"), 0, 16777215)?
+                                as u32,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -360,18 +416,69 @@ pub mod vario {
         min: 1,
         max: 16,
     };
+    impl response::ReadReply {
+        pub const NAME: &'static str = "read_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 38;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x01,
+            1,
+            &[6],
+        );
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadError {
+        pub const NAME: &'static str = "read_error";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x81,
+            1,
+            &[7],
+        );
+        pub const REASON: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("reason", rt::Int(self.reason as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadError(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteReply {
+        pub const NAME: &'static str = "write_reply";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x02,
+            1,
+            &[7],
+        );
+        pub const STATUS: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteReply(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §1 Read reply (code `0x01`, 8 to 38 bytes).
-        ReadReply { values: rt::Repeated<u16, 16> },
-        /// §1 Read error (code `0x81`, 7 bytes).
-        ReadError { reason: u8 },
-        /// §2 Write reply (code `0x02`, 7 bytes).
-        WriteReply { status: u8 },
+        ReadReply(response::ReadReply),
+        ReadError(response::ReadError),
+        WriteReply(response::WriteReply),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -383,9 +490,9 @@ pub mod vario {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::ReadReply { .. } => 0,
-                Self::ReadError { .. } => 1,
-                Self::WriteReply { .. } => 2,
+                Self::ReadReply(_) => 0,
+                Self::ReadError(_) => 1,
+                Self::WriteReply(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -399,7 +506,7 @@ pub mod vario {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadReply { values: v_values, .. } => {
+                Self::ReadReply(response::ReadReply { values: v_values, .. }) => {
                     REPEAT_READ_REPLY.base + REPEAT_READ_REPLY.bytes_of(v_values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
@@ -407,17 +514,11 @@ pub mod vario {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::ReadReply { values: v_values } => {
-                    f("values", rt::List(v_values.elements()))
-                }
-                Self::ReadError { reason: v_reason } => {
-                    f("reason", rt::Int(*v_reason as i64))
-                }
-                Self::WriteReply { status: v_status } => {
-                    f("status", rt::Int(*v_status as i64))
-                }
+                Self::ReadReply(m) => m.visit(f),
+                Self::ReadError(m) => m.visit(f),
+                Self::WriteReply(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -430,7 +531,7 @@ pub mod vario {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadReply { values: v_values } => {
+                Self::ReadReply(response::ReadReply { values: v_values }) => {
                     let frame_len = REPEAT_READ_REPLY.encode_len(v_values.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0xA5, 0x5A, address])?;
                     rt::put_length(out, 3, 1, false, true, -4)?;
@@ -438,14 +539,14 @@ pub mod vario {
                     rt::write_elements(v_values.as_slice(), 2, false, &mut out[5..]);
                     out.len()
                 }
-                Self::ReadError { reason: v_reason } => {
+                Self::ReadError(response::ReadError { reason: v_reason }) => {
                     let out = rt::frame_mut::<
                         7,
                     >(buf, &[0xA5, 0x5A, address, 0x03, 0x81])?;
                     out[5] = v_reason;
                     out.len()
                 }
-                Self::WriteReply { status: v_status } => {
+                Self::WriteReply(response::WriteReply { status: v_status }) => {
                     let out = rt::frame_mut::<
                         7,
                     >(buf, &[0xA5, 0x5A, address, 0x03, 0x02])?;
@@ -507,22 +608,28 @@ pub mod vario {
             match rt::code(frame, 4, 1) {
                 0x01 => {
                     let (_, elements, _) = REPEAT_READ_REPLY.split::<5>(frame)?;
-                    rt::Ok(Self::ReadReply {
-                        values: REPEAT_READ_REPLY
-                            .elements::<u16, 16>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::ReadReply(response::ReadReply {
+                            values: REPEAT_READ_REPLY
+                                .elements::<u16, 16>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x81 => {
-                    let frame = rt::fixed::<7>(frame, &response::READ_ERROR)?;
-                    rt::Ok(Self::ReadError {
-                        reason: frame[5],
-                    })
+                    let frame = rt::fixed::<7>(frame, &response::ReadError::DESC)?;
+                    rt::Ok(
+                        Self::ReadError(response::ReadError {
+                            reason: frame[5],
+                        }),
+                    )
                 }
                 0x02 => {
-                    let frame = rt::fixed::<7>(frame, &response::WRITE_REPLY)?;
-                    rt::Ok(Self::WriteReply {
-                        status: frame[5],
-                    })
+                    let frame = rt::fixed::<7>(frame, &response::WriteReply::DESC)?;
+                    rt::Ok(
+                        Self::WriteReply(response::WriteReply {
+                            status: frame[5],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 4, 1, 1, true)),
             }
@@ -536,19 +643,25 @@ pub mod vario {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "read_reply" => {
-                    rt::Ok(Self::ReadReply {
-                        values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
-                    })
+                    rt::Ok(
+                        Self::ReadReply(response::ReadReply {
+                            values: rt::list::<u16, 16>(&mut field, "values", 0, 65535)?,
+                        }),
+                    )
                 }
                 "read_error" => {
-                    rt::Ok(Self::ReadError {
-                        reason: rt::get(&mut field, "reason")?,
-                    })
+                    rt::Ok(
+                        Self::ReadError(response::ReadError {
+                            reason: rt::get(&mut field, "reason")?,
+                        }),
+                    )
                 }
                 "write_reply" => {
-                    rt::Ok(Self::WriteReply {
-                        status: rt::get(&mut field, "status")?,
-                    })
+                    rt::Ok(
+                        Self::WriteReply(response::WriteReply {
+                            status: rt::get(&mut field, "status")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -599,8 +712,8 @@ pub mod vario {
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
                 (
-                    &Self::ReadReply { values: v_values, .. },
-                    &Request::Read { quantity: r_quantity, .. },
+                    &Self::ReadReply(response::ReadReply { values: v_values, .. }),
+                    &Request::Read(request::Read { quantity: r_quantity, .. }),
                 ) => {
                     REPEAT_READ_REPLY
                         .follows_request(
@@ -618,11 +731,11 @@ pub mod vario {
     /// A request checked once and read in place: [`Request`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum RequestView<'a> {
-        /// [`Request::Read`], read from the frame.
+        /// [`request::Read`], read from the frame.
         Read { first: u16, quantity: u8 },
-        /// [`Request::Write`], read from the frame.
+        /// [`request::Write`], read from the frame.
         Write { quantity: u8, values: rt::ListView<'a, u16> },
-        /// [`Request::Stamp`], read from the frame.
+        /// [`request::Stamp`], read from the frame.
         Stamp { ticks: u32 },
     }
     impl<'a> RequestView<'a> {
@@ -648,7 +761,7 @@ pub mod vario {
         fn dispatch(frame: &'a [u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 4, 1) {
                 0x01 => {
-                    let frame = rt::fixed::<9>(frame, &request::READ)?;
+                    let frame = rt::fixed::<9>(frame, &request::Read::DESC)?;
                     rt::in_range(&request::READ_QUANTITY, 7, frame[7], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[5], frame[6]]),
@@ -672,7 +785,7 @@ pub mod vario {
                     })
                 }
                 0x03 => {
-                    let frame = rt::fixed::<9>(frame, &request::STAMP)?;
+                    let frame = rt::fixed::<9>(frame, &request::Stamp::DESC)?;
                     rt::Ok(Self::Stamp {
                         ticks: rt::u24([frame[5], frame[6], frame[7]], false),
                     })
@@ -695,25 +808,27 @@ pub mod vario {
         /// The owned message: each lent list copied.
         pub fn to_owned(self) -> Request {
             match self {
-                Self::Read { first, quantity } => Request::Read { first, quantity },
+                Self::Read { first, quantity } => {
+                    Request::Read(request::Read { first, quantity })
+                }
                 Self::Write { quantity, values } => {
-                    Request::Write {
+                    Request::Write(request::Write {
                         quantity,
                         values: values.to_repeated(),
-                    }
+                    })
                 }
-                Self::Stamp { ticks } => Request::Stamp { ticks },
+                Self::Stamp { ticks } => Request::Stamp(request::Stamp { ticks }),
             }
         }
     }
     /// A response checked once and read in place: [`Response`] with each list lent by the frame (`rt::ListView`, `rt::BitsView`) instead of copied. Scalar fields are read (and checked) when the view is made.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub enum ResponseView<'a> {
-        /// [`Response::ReadReply`], read from the frame.
+        /// [`response::ReadReply`], read from the frame.
         ReadReply { values: rt::ListView<'a, u16> },
-        /// [`Response::ReadError`], read from the frame.
+        /// [`response::ReadError`], read from the frame.
         ReadError { reason: u8 },
-        /// [`Response::WriteReply`], read from the frame.
+        /// [`response::WriteReply`], read from the frame.
         WriteReply { status: u8 },
     }
     impl<'a> ResponseView<'a> {
@@ -774,13 +889,13 @@ pub mod vario {
                     })
                 }
                 0x81 => {
-                    let frame = rt::fixed::<7>(frame, &response::READ_ERROR)?;
+                    let frame = rt::fixed::<7>(frame, &response::ReadError::DESC)?;
                     rt::Ok(Self::ReadError {
                         reason: frame[5],
                     })
                 }
                 0x02 => {
-                    let frame = rt::fixed::<7>(frame, &response::WRITE_REPLY)?;
+                    let frame = rt::fixed::<7>(frame, &response::WriteReply::DESC)?;
                     rt::Ok(Self::WriteReply {
                         status: frame[5],
                     })
@@ -804,12 +919,16 @@ pub mod vario {
         pub fn to_owned(self) -> Response {
             match self {
                 Self::ReadReply { values } => {
-                    Response::ReadReply {
+                    Response::ReadReply(response::ReadReply {
                         values: values.to_repeated(),
-                    }
+                    })
                 }
-                Self::ReadError { reason } => Response::ReadError { reason },
-                Self::WriteReply { status } => Response::WriteReply { status },
+                Self::ReadError { reason } => {
+                    Response::ReadError(response::ReadError { reason })
+                }
+                Self::WriteReply { status } => {
+                    Response::WriteReply(response::WriteReply { status })
+                }
             }
         }
         /// Checks every field this response takes from `request` (`follows: {request}` in the
@@ -818,7 +937,7 @@ pub mod vario {
             match (self, request) {
                 (
                     &Self::ReadReply { values: v_values, .. },
-                    &Request::Read { quantity: r_quantity, .. },
+                    &Request::Read(request::Read { quantity: r_quantity, .. }),
                 ) => {
                     REPEAT_READ_REPLY
                         .follows_request(
@@ -880,7 +999,7 @@ pub mod vario {
             request.command()
         }
         fn is_nak(response: &Response) -> bool {
-            matches!(response, Response::ReadError { .. })
+            matches!(response, Response::ReadError(_))
         }
         fn checksum_ok(frame: &[u8]) -> bool {
             match frame.len().checked_sub(1) {
@@ -991,50 +1110,76 @@ pub mod vario {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Vario>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read`, code 0x01
-        pub const READ: MessageDesc = MessageDesc::new("read", 0x01, 1, &[9]);
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Read (code `0x01`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Read {
+            pub first: u16,
+            /// Valid raw range 1..=16.
+            pub quantity: u8,
+        }
+        /// §2 Write (code `0x02`, 10 to 40 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Write {
+            /// Valid raw range 1..=16.
+            pub quantity: u8,
+            pub values: super::rt::Repeated<u16, 16>,
+        }
+        /// §3 Stamp (code `0x03`, 9 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct Stamp {
+            pub ticks: u32,
+        }
         /// `read.quantity`
         pub const READ_QUANTITY: FieldDesc = FieldDesc::new("read", "quantity");
-        /// `write`, code 0x02
-        pub const WRITE: MessageDesc = MessageDesc::new("write", 0x02, 1, &[8]);
         /// `write.values`
         pub const WRITE_VALUES: FieldDesc = FieldDesc::new("write", "values");
         /// `write.quantity`
         pub const WRITE_QUANTITY: FieldDesc = FieldDesc::new("write", "quantity");
         /// `write.byte_count`
         pub const WRITE_BYTE_COUNT: FieldDesc = FieldDesc::new("write", "byte_count");
-        /// `stamp`, code 0x03
-        pub const STAMP: MessageDesc = MessageDesc::new("stamp", 0x03, 1, &[9]);
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `read_reply`, code 0x01
-        pub const READ_REPLY: MessageDesc = MessageDesc::new(
-            "read_reply",
-            0x01,
-            1,
-            &[6],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §1 Read reply (code `0x01`, 8 to 38 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadReply {
+            pub values: super::rt::Repeated<u16, 16>,
+        }
+        /// §1 Read error (code `0x81`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReadError {
+            pub reason: u8,
+        }
+        /// §2 Write reply (code `0x02`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteReply {
+            pub status: u8,
+        }
         /// `read_reply.values`
         pub const READ_REPLY_VALUES: FieldDesc = FieldDesc::new("read_reply", "values");
-        /// `read_error`, code 0x81
-        pub const READ_ERROR: MessageDesc = MessageDesc::new(
-            "read_error",
-            0x81,
-            1,
-            &[7],
-        );
-        /// `write_reply`, code 0x02
-        pub const WRITE_REPLY: MessageDesc = MessageDesc::new(
-            "write_reply",
-            0x02,
-            1,
-            &[7],
-        );
     }
 }

@@ -464,42 +464,173 @@ pub mod vesc {
         min: 0,
         max: 512,
     };
+    impl request::FwVersion {
+        pub const NAME: &'static str = "fw_version";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x00,
+            1,
+            &[7],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::FwVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::WriteNewAppData {
+        pub const NAME: &'static str = "write_new_app_data";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const MIN_LEN: usize = 11;
+        pub const MAX_LEN: usize = 523;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[11],
+        );
+        pub const OFFSET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("offset", rt::Int(self.offset as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::WriteNewAppData(*self).encode(address, buf)
+        }
+    }
+    impl request::GetValues {
+        pub const NAME: &'static str = "get_values";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[7],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetValues(*self).encode(address, buf)
+        }
+    }
+    impl request::SetDuty {
+        pub const NAME: &'static str = "set_duty";
+        pub const CODE: &'static [u8] = &[0x05];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x05,
+            1,
+            &[11],
+        );
+        pub const DUTY: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("duty", rt::Int(self.duty.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetDuty(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCurrent {
+        pub const NAME: &'static str = "set_current";
+        pub const CODE: &'static [u8] = &[0x06];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x06,
+            1,
+            &[11],
+        );
+        pub const CURRENT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("current", rt::Int(self.current.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCurrent(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCurrentBrake {
+        pub const NAME: &'static str = "set_current_brake";
+        pub const CODE: &'static [u8] = &[0x07];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x07,
+            1,
+            &[11],
+        );
+        pub const CURRENT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("current", rt::Int(self.current.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCurrentBrake(*self).encode(address, buf)
+        }
+    }
+    impl request::SetRpm {
+        pub const NAME: &'static str = "set_rpm";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x08,
+            1,
+            &[11],
+        );
+        pub const RPM: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("rpm", rt::Int(self.rpm as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetRpm(*self).encode(address, buf)
+        }
+    }
+    impl request::SetPos {
+        pub const NAME: &'static str = "set_pos";
+        pub const CODE: &'static [u8] = &[0x09];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x09,
+            1,
+            &[11],
+        );
+        pub const POS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("pos", rt::Int(self.pos.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetPos(*self).encode(address, buf)
+        }
+    }
+    impl request::Alive {
+        pub const NAME: &'static str = "alive";
+        pub const CODE: &'static [u8] = &[0x1E];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x1E,
+            1,
+            &[7],
+        );
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Alive(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §commands.c COMM_FW_VERSION (0) (code `0x00`, 7 bytes).
-        FwVersion,
-        /// §commands.c COMM_WRITE_NEW_APP_DATA (3) (code `0x03`, 11 to 523 bytes). A chunk of a firmware image, written at an offset of the new-application flash area: long frames for chunks over 250 bytes.
-        WriteNewAppData { offset: u32, data: rt::Repeated<u8, 512> },
-        /// §commands.c COMM_GET_VALUES (4) (code `0x04`, 7 bytes).
-        GetValues,
-        /// §commands.c COMM_SET_DUTY (5) (code `0x05`, 11 bytes).
-        SetDuty { duty: Duty },
-        /// §commands.c COMM_SET_CURRENT (6) (code `0x06`, 11 bytes).
-        SetCurrent {
-            /// \[A\]
-            current: Milliamps,
-        },
-        /// §commands.c COMM_SET_CURRENT_BRAKE (7) (code `0x07`, 11 bytes).
-        SetCurrentBrake {
-            /// \[A\]
-            current: Milliamps,
-        },
-        /// §commands.c COMM_SET_RPM (8) (code `0x08`, 11 bytes).
-        SetRpm {
-            /// \[ERPM\]
-            rpm: i32,
-        },
-        /// §commands.c COMM_SET_POS (9) (code `0x09`, 11 bytes).
-        SetPos {
-            /// \[°\]
-            pos: MicroDegrees,
-        },
-        /// §commands.c COMM_ALIVE (30) (code `0x1E`, 7 bytes). Keeps the motor running: without a packet for the timeout, the firmware stops it.
-        Alive,
+        FwVersion(request::FwVersion),
+        WriteNewAppData(request::WriteNewAppData),
+        GetValues(request::GetValues),
+        SetDuty(request::SetDuty),
+        SetCurrent(request::SetCurrent),
+        SetCurrentBrake(request::SetCurrentBrake),
+        SetRpm(request::SetRpm),
+        SetPos(request::SetPos),
+        Alive(request::Alive),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -517,15 +648,15 @@ pub mod vesc {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::FwVersion => 0,
-                Self::WriteNewAppData { .. } => 1,
-                Self::GetValues => 2,
-                Self::SetDuty { .. } => 3,
-                Self::SetCurrent { .. } => 4,
-                Self::SetCurrentBrake { .. } => 5,
-                Self::SetRpm { .. } => 6,
-                Self::SetPos { .. } => 7,
-                Self::Alive => 8,
+                Self::FwVersion(_) => 0,
+                Self::WriteNewAppData(_) => 1,
+                Self::GetValues(_) => 2,
+                Self::SetDuty(_) => 3,
+                Self::SetCurrent(_) => 4,
+                Self::SetCurrentBrake(_) => 5,
+                Self::SetRpm(_) => 6,
+                Self::SetPos(_) => 7,
+                Self::Alive(_) => 8,
             }
         }
         /// The spec's snake_case name of this message.
@@ -539,7 +670,7 @@ pub mod vesc {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteNewAppData { data: v_data, .. } => {
+                Self::WriteNewAppData(request::WriteNewAppData { data: v_data, .. }) => {
                     REPEAT_WRITE_NEW_APP_DATA.base
                         + REPEAT_WRITE_NEW_APP_DATA.bytes_of(v_data.len())
                 }
@@ -548,21 +679,14 @@ pub mod vesc {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::WriteNewAppData { offset: v_offset, data: v_data } => {
-                    f("offset", rt::Int(*v_offset as i64));
-                    f("data", rt::List(v_data.elements()));
-                }
-                Self::SetDuty { duty: v_duty } => f("duty", rt::Int(v_duty.raw() as i64)),
-                Self::SetCurrent { current: v_current } => {
-                    f("current", rt::Int(v_current.raw() as i64))
-                }
-                Self::SetCurrentBrake { current: v_current } => {
-                    f("current", rt::Int(v_current.raw() as i64))
-                }
-                Self::SetRpm { rpm: v_rpm } => f("rpm", rt::Int(*v_rpm as i64)),
-                Self::SetPos { pos: v_pos } => f("pos", rt::Int(v_pos.raw() as i64)),
+                Self::WriteNewAppData(m) => m.visit(f),
+                Self::SetDuty(m) => m.visit(f),
+                Self::SetCurrent(m) => m.visit(f),
+                Self::SetCurrentBrake(m) => m.visit(f),
+                Self::SetRpm(m) => m.visit(f),
+                Self::SetPos(m) => m.visit(f),
                 _ => {}
             }
         }
@@ -588,10 +712,12 @@ pub mod vesc {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::FwVersion => {
+                Self::FwVersion(request::FwVersion {}) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x00])?.len()
                 }
-                Self::WriteNewAppData { offset: v_offset, data: v_data } => {
+                Self::WriteNewAppData(
+                    request::WriteNewAppData { offset: v_offset, data: v_data },
+                ) => {
                     let frame_len = REPEAT_WRITE_NEW_APP_DATA.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
                     rt::put_length(out, 1, 2, false, true, -6)?;
@@ -600,35 +726,39 @@ pub mod vesc {
                     rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
                     out.len()
                 }
-                Self::GetValues => {
+                Self::GetValues(request::GetValues {}) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x04])?.len()
                 }
-                Self::SetDuty { duty: v_duty } => {
+                Self::SetDuty(request::SetDuty { duty: v_duty }) => {
                     let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x05])?;
                     out[4..8].copy_from_slice(&v_duty.raw().to_be_bytes());
                     out.len()
                 }
-                Self::SetCurrent { current: v_current } => {
+                Self::SetCurrent(request::SetCurrent { current: v_current }) => {
                     let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x06])?;
                     out[4..8].copy_from_slice(&v_current.raw().to_be_bytes());
                     out.len()
                 }
-                Self::SetCurrentBrake { current: v_current } => {
+                Self::SetCurrentBrake(
+                    request::SetCurrentBrake { current: v_current },
+                ) => {
                     let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x07])?;
                     out[4..8].copy_from_slice(&v_current.raw().to_be_bytes());
                     out.len()
                 }
-                Self::SetRpm { rpm: v_rpm } => {
+                Self::SetRpm(request::SetRpm { rpm: v_rpm }) => {
                     let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x08])?;
                     out[4..8].copy_from_slice(&v_rpm.to_be_bytes());
                     out.len()
                 }
-                Self::SetPos { pos: v_pos } => {
+                Self::SetPos(request::SetPos { pos: v_pos }) => {
                     let out = rt::frame_mut::<11>(buf, &[0x02, 0x00, 0x05, 0x09])?;
                     out[4..8].copy_from_slice(&v_pos.raw().to_be_bytes());
                     out.len()
                 }
-                Self::Alive => rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x1E])?.len(),
+                Self::Alive(request::Alive {}) => {
+                    rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x1E])?.len()
+                }
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), &FRAME);
             rt::Ok(len)
@@ -662,64 +792,86 @@ pub mod vesc {
         fn dispatch(frame: &[u8]) -> rt::DecodeResult<Self> {
             match rt::code(frame, 3, 1) {
                 0x00 => {
-                    rt::fixed::<7>(frame, &request::FW_VERSION).map(|_| Self::FwVersion)
+                    rt::fixed::<7>(frame, &request::FwVersion::DESC)
+                        .map(|_| Self::FwVersion(request::FwVersion))
                 }
                 0x03 => {
                     let (frame, elements, _) = REPEAT_WRITE_NEW_APP_DATA
                         .split::<8>(frame)?;
-                    rt::Ok(Self::WriteNewAppData {
-                        offset: u32::from_be_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                        ]),
-                        data: REPEAT_WRITE_NEW_APP_DATA
-                            .elements::<u8, 512>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::WriteNewAppData(request::WriteNewAppData {
+                            offset: u32::from_be_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                            ]),
+                            data: REPEAT_WRITE_NEW_APP_DATA
+                                .elements::<u8, 512>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x04 => {
-                    rt::fixed::<7>(frame, &request::GET_VALUES).map(|_| Self::GetValues)
+                    rt::fixed::<7>(frame, &request::GetValues::DESC)
+                        .map(|_| Self::GetValues(request::GetValues))
                 }
                 0x05 => {
-                    let frame = rt::fixed::<11>(frame, &request::SET_DUTY)?;
-                    rt::Ok(Self::SetDuty {
-                        duty: Duty::from_raw(
-                            i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<11>(frame, &request::SetDuty::DESC)?;
+                    rt::Ok(
+                        Self::SetDuty(request::SetDuty {
+                            duty: Duty::from_raw(
+                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x06 => {
-                    let frame = rt::fixed::<11>(frame, &request::SET_CURRENT)?;
-                    rt::Ok(Self::SetCurrent {
-                        current: Milliamps::from_raw(
-                            i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<11>(frame, &request::SetCurrent::DESC)?;
+                    rt::Ok(
+                        Self::SetCurrent(request::SetCurrent {
+                            current: Milliamps::from_raw(
+                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x07 => {
-                    let frame = rt::fixed::<11>(frame, &request::SET_CURRENT_BRAKE)?;
-                    rt::Ok(Self::SetCurrentBrake {
-                        current: Milliamps::from_raw(
-                            i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<11>(frame, &request::SetCurrentBrake::DESC)?;
+                    rt::Ok(
+                        Self::SetCurrentBrake(request::SetCurrentBrake {
+                            current: Milliamps::from_raw(
+                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
                 0x08 => {
-                    let frame = rt::fixed::<11>(frame, &request::SET_RPM)?;
-                    rt::Ok(Self::SetRpm {
-                        rpm: i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                    })
+                    let frame = rt::fixed::<11>(frame, &request::SetRpm::DESC)?;
+                    rt::Ok(
+                        Self::SetRpm(request::SetRpm {
+                            rpm: i32::from_be_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                            ]),
+                        }),
+                    )
                 }
                 0x09 => {
-                    let frame = rt::fixed::<11>(frame, &request::SET_POS)?;
-                    rt::Ok(Self::SetPos {
-                        pos: MicroDegrees::from_raw(
-                            i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
-                        ),
-                    })
+                    let frame = rt::fixed::<11>(frame, &request::SetPos::DESC)?;
+                    rt::Ok(
+                        Self::SetPos(request::SetPos {
+                            pos: MicroDegrees::from_raw(
+                                i32::from_be_bytes([frame[4], frame[5], frame[6], frame[7]]),
+                            ),
+                        }),
+                    )
                 }
-                0x1E => rt::fixed::<7>(frame, &request::ALIVE).map(|_| Self::Alive),
+                0x1E => {
+                    rt::fixed::<7>(frame, &request::Alive::DESC)
+                        .map(|_| Self::Alive(request::Alive))
+                }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 3, false)),
             }
         }
@@ -731,40 +883,52 @@ pub mod vesc {
             mut field: impl FnMut(&'static str) -> rt::Option<rt::FieldValue<'v>>,
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
-                "fw_version" => rt::Ok(Self::FwVersion),
+                "fw_version" => rt::Ok(Self::FwVersion(request::FwVersion)),
                 "write_new_app_data" => {
-                    rt::Ok(Self::WriteNewAppData {
-                        offset: rt::get(&mut field, "offset")?,
-                        data: rt::list::<u8, 512>(&mut field, "data", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::WriteNewAppData(request::WriteNewAppData {
+                            offset: rt::get(&mut field, "offset")?,
+                            data: rt::list::<u8, 512>(&mut field, "data", 0, 255)?,
+                        }),
+                    )
                 }
-                "get_values" => rt::Ok(Self::GetValues),
+                "get_values" => rt::Ok(Self::GetValues(request::GetValues)),
                 "set_duty" => {
-                    rt::Ok(Self::SetDuty {
-                        duty: Duty::from_raw(rt::get(&mut field, "duty")?),
-                    })
+                    rt::Ok(
+                        Self::SetDuty(request::SetDuty {
+                            duty: Duty::from_raw(rt::get(&mut field, "duty")?),
+                        }),
+                    )
                 }
                 "set_current" => {
-                    rt::Ok(Self::SetCurrent {
-                        current: Milliamps::from_raw(rt::get(&mut field, "current")?),
-                    })
+                    rt::Ok(
+                        Self::SetCurrent(request::SetCurrent {
+                            current: Milliamps::from_raw(rt::get(&mut field, "current")?),
+                        }),
+                    )
                 }
                 "set_current_brake" => {
-                    rt::Ok(Self::SetCurrentBrake {
-                        current: Milliamps::from_raw(rt::get(&mut field, "current")?),
-                    })
+                    rt::Ok(
+                        Self::SetCurrentBrake(request::SetCurrentBrake {
+                            current: Milliamps::from_raw(rt::get(&mut field, "current")?),
+                        }),
+                    )
                 }
                 "set_rpm" => {
-                    rt::Ok(Self::SetRpm {
-                        rpm: rt::get(&mut field, "rpm")?,
-                    })
+                    rt::Ok(
+                        Self::SetRpm(request::SetRpm {
+                            rpm: rt::get(&mut field, "rpm")?,
+                        }),
+                    )
                 }
                 "set_pos" => {
-                    rt::Ok(Self::SetPos {
-                        pos: MicroDegrees::from_raw(rt::get(&mut field, "pos")?),
-                    })
+                    rt::Ok(
+                        Self::SetPos(request::SetPos {
+                            pos: MicroDegrees::from_raw(rt::get(&mut field, "pos")?),
+                        }),
+                    )
                 }
-                "alive" => rt::Ok(Self::Alive),
+                "alive" => rt::Ok(Self::Alive(request::Alive)),
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
         }
@@ -827,12 +991,12 @@ pub mod vesc {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::SetDuty { .. } => rt::Reply::None,
-                    Request::SetCurrent { .. } => rt::Reply::None,
-                    Request::SetCurrentBrake { .. } => rt::Reply::None,
-                    Request::SetRpm { .. } => rt::Reply::None,
-                    Request::SetPos { .. } => rt::Reply::None,
-                    Request::Alive => rt::Reply::None,
+                    Request::SetDuty(_) => rt::Reply::None,
+                    Request::SetCurrent(_) => rt::Reply::None,
+                    Request::SetCurrentBrake(_) => rt::Reply::None,
+                    Request::SetRpm(_) => rt::Reply::None,
+                    Request::SetPos(_) => rt::Reply::None,
+                    Request::Alive(_) => rt::Reply::None,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -853,62 +1017,111 @@ pub mod vesc {
         min: 0,
         max: 60,
     };
+    impl response::FwVersionReply {
+        pub const NAME: &'static str = "fw_version_reply";
+        pub const CODE: &'static [u8] = &[0x00];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 69;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x00,
+            1,
+            &[9],
+        );
+        pub const FW_MAJOR: rt::Range<usize> = 4..5;
+        pub const FW_MINOR: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("fw_major", rt::Int(self.fw_major as i64));
+            f("fw_minor", rt::Int(self.fw_minor as i64));
+            f("rest", rt::List(self.rest.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::FwVersionReply(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteNewAppDataReply {
+        pub const NAME: &'static str = "write_new_app_data_reply";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x03,
+            1,
+            &[12],
+        );
+        pub const OK: rt::Range<usize> = 4..5;
+        pub const OFFSET: rt::Range<usize> = 5..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("ok", rt::Int(self.ok as i64));
+            f("offset", rt::Int(self.offset as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteNewAppDataReply(*self).encode(address, buf)
+        }
+    }
+    impl response::GetValuesReply {
+        pub const NAME: &'static str = "get_values_reply";
+        pub const CODE: &'static [u8] = &[0x04];
+        pub const LEN: usize = 62;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x04,
+            1,
+            &[62],
+        );
+        pub const TEMP_MOS1: rt::Range<usize> = 4..6;
+        pub const TEMP_MOS2: rt::Range<usize> = 6..8;
+        pub const TEMP_MOS3: rt::Range<usize> = 8..10;
+        pub const TEMP_MOS4: rt::Range<usize> = 10..12;
+        pub const TEMP_MOS5: rt::Range<usize> = 12..14;
+        pub const TEMP_MOS6: rt::Range<usize> = 14..16;
+        pub const TEMP_PCB: rt::Range<usize> = 16..18;
+        pub const CURRENT_MOTOR: rt::Range<usize> = 18..22;
+        pub const CURRENT_IN: rt::Range<usize> = 22..26;
+        pub const DUTY_NOW: rt::Range<usize> = 26..28;
+        pub const RPM: rt::Range<usize> = 28..32;
+        pub const V_IN: rt::Range<usize> = 32..34;
+        pub const AMP_HOURS: rt::Range<usize> = 34..38;
+        pub const AMP_HOURS_CHARGED: rt::Range<usize> = 38..42;
+        pub const WATT_HOURS: rt::Range<usize> = 42..46;
+        pub const WATT_HOURS_CHARGED: rt::Range<usize> = 46..50;
+        pub const TACHOMETER: rt::Range<usize> = 50..54;
+        pub const TACHOMETER_ABS: rt::Range<usize> = 54..58;
+        pub const MC_FAULT_CODE: rt::Range<usize> = 58..59;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temp_mos1", rt::Int(self.temp_mos1.raw() as i64));
+            f("temp_mos2", rt::Int(self.temp_mos2.raw() as i64));
+            f("temp_mos3", rt::Int(self.temp_mos3.raw() as i64));
+            f("temp_mos4", rt::Int(self.temp_mos4.raw() as i64));
+            f("temp_mos5", rt::Int(self.temp_mos5.raw() as i64));
+            f("temp_mos6", rt::Int(self.temp_mos6.raw() as i64));
+            f("temp_pcb", rt::Int(self.temp_pcb.raw() as i64));
+            f("current_motor", rt::Int(self.current_motor.raw() as i64));
+            f("current_in", rt::Int(self.current_in.raw() as i64));
+            f("duty_now", rt::Int(self.duty_now.raw() as i64));
+            f("rpm", rt::Int(self.rpm as i64));
+            f("v_in", rt::Int(self.v_in.raw() as i64));
+            f("amp_hours", rt::Int(self.amp_hours.raw() as i64));
+            f("amp_hours_charged", rt::Int(self.amp_hours_charged.raw() as i64));
+            f("watt_hours", rt::Int(self.watt_hours.raw() as i64));
+            f("watt_hours_charged", rt::Int(self.watt_hours_charged.raw() as i64));
+            f("tachometer", rt::Int(self.tachometer as i64));
+            f("tachometer_abs", rt::Int(self.tachometer_abs as i64));
+            f("mc_fault_code", rt::Int(self.mc_fault_code as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::GetValuesReply(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §commands.c COMM_FW_VERSION (0), answered (code `0x00`, 9 to 69 bytes).
-        FwVersionReply {
-            fw_major: u8,
-            fw_minor: u8,
-            /// The hardware name (NUL-terminated) and what newer firmware adds, as bytes.
-            rest: rt::Repeated<u8, 60>,
-        },
-        /// §commands.c COMM_WRITE_NEW_APP_DATA (3), answered (code `0x03`, 12 bytes).
-        WriteNewAppDataReply {
-            /// Valid raw range 0..=1.
-            ok: u8,
-            offset: u32,
-        },
-        /// §commands.c COMM_GET_VALUES (4), answered (code `0x04`, 62 bytes).
-        GetValuesReply {
-            /// \[°C\]
-            temp_mos1: DeciCelsius,
-            /// \[°C\]
-            temp_mos2: DeciCelsius,
-            /// \[°C\]
-            temp_mos3: DeciCelsius,
-            /// \[°C\]
-            temp_mos4: DeciCelsius,
-            /// \[°C\]
-            temp_mos5: DeciCelsius,
-            /// \[°C\]
-            temp_mos6: DeciCelsius,
-            /// \[°C\]
-            temp_pcb: DeciCelsius,
-            /// \[A\]
-            current_motor: CentiAmps,
-            /// \[A\]
-            current_in: CentiAmps,
-            duty_now: PerMille,
-            /// \[ERPM\]
-            rpm: i32,
-            /// \[V\]
-            v_in: DeciVolts,
-            /// \[Ah\]
-            amp_hours: AmpHours,
-            /// \[Ah\]
-            amp_hours_charged: AmpHours,
-            /// \[Wh\]
-            watt_hours: WattHours,
-            /// \[Wh\]
-            watt_hours_charged: WattHours,
-            tachometer: i32,
-            tachometer_abs: i32,
-            mc_fault_code: u8,
-        },
+        FwVersionReply(response::FwVersionReply),
+        WriteNewAppDataReply(response::WriteNewAppDataReply),
+        GetValuesReply(response::GetValuesReply),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -920,9 +1133,9 @@ pub mod vesc {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::FwVersionReply { .. } => 0,
-                Self::WriteNewAppDataReply { .. } => 1,
-                Self::GetValuesReply { .. } => 2,
+                Self::FwVersionReply(_) => 0,
+                Self::WriteNewAppDataReply(_) => 1,
+                Self::GetValuesReply(_) => 2,
             }
         }
         /// The spec's snake_case name of this message.
@@ -936,7 +1149,7 @@ pub mod vesc {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::FwVersionReply { rest: v_rest, .. } => {
+                Self::FwVersionReply(response::FwVersionReply { rest: v_rest, .. }) => {
                     REPEAT_FW_VERSION_REPLY.base
                         + REPEAT_FW_VERSION_REPLY.bytes_of(v_rest.len())
                 }
@@ -945,62 +1158,11 @@ pub mod vesc {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::FwVersionReply {
-                    fw_major: v_fw_major,
-                    fw_minor: v_fw_minor,
-                    rest: v_rest,
-                } => {
-                    f("fw_major", rt::Int(*v_fw_major as i64));
-                    f("fw_minor", rt::Int(*v_fw_minor as i64));
-                    f("rest", rt::List(v_rest.elements()));
-                }
-                Self::WriteNewAppDataReply { ok: v_ok, offset: v_offset } => {
-                    f("ok", rt::Int(*v_ok as i64));
-                    f("offset", rt::Int(*v_offset as i64));
-                }
-                Self::GetValuesReply {
-                    temp_mos1: v_temp_mos1,
-                    temp_mos2: v_temp_mos2,
-                    temp_mos3: v_temp_mos3,
-                    temp_mos4: v_temp_mos4,
-                    temp_mos5: v_temp_mos5,
-                    temp_mos6: v_temp_mos6,
-                    temp_pcb: v_temp_pcb,
-                    current_motor: v_current_motor,
-                    current_in: v_current_in,
-                    duty_now: v_duty_now,
-                    rpm: v_rpm,
-                    v_in: v_v_in,
-                    amp_hours: v_amp_hours,
-                    amp_hours_charged: v_amp_hours_charged,
-                    watt_hours: v_watt_hours,
-                    watt_hours_charged: v_watt_hours_charged,
-                    tachometer: v_tachometer,
-                    tachometer_abs: v_tachometer_abs,
-                    mc_fault_code: v_mc_fault_code,
-                } => {
-                    f("temp_mos1", rt::Int(v_temp_mos1.raw() as i64));
-                    f("temp_mos2", rt::Int(v_temp_mos2.raw() as i64));
-                    f("temp_mos3", rt::Int(v_temp_mos3.raw() as i64));
-                    f("temp_mos4", rt::Int(v_temp_mos4.raw() as i64));
-                    f("temp_mos5", rt::Int(v_temp_mos5.raw() as i64));
-                    f("temp_mos6", rt::Int(v_temp_mos6.raw() as i64));
-                    f("temp_pcb", rt::Int(v_temp_pcb.raw() as i64));
-                    f("current_motor", rt::Int(v_current_motor.raw() as i64));
-                    f("current_in", rt::Int(v_current_in.raw() as i64));
-                    f("duty_now", rt::Int(v_duty_now.raw() as i64));
-                    f("rpm", rt::Int(*v_rpm as i64));
-                    f("v_in", rt::Int(v_v_in.raw() as i64));
-                    f("amp_hours", rt::Int(v_amp_hours.raw() as i64));
-                    f("amp_hours_charged", rt::Int(v_amp_hours_charged.raw() as i64));
-                    f("watt_hours", rt::Int(v_watt_hours.raw() as i64));
-                    f("watt_hours_charged", rt::Int(v_watt_hours_charged.raw() as i64));
-                    f("tachometer", rt::Int(*v_tachometer as i64));
-                    f("tachometer_abs", rt::Int(*v_tachometer_abs as i64));
-                    f("mc_fault_code", rt::Int(*v_mc_fault_code as i64));
-                }
+                Self::FwVersionReply(m) => m.visit(f),
+                Self::WriteNewAppDataReply(m) => m.visit(f),
+                Self::GetValuesReply(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -1025,11 +1187,13 @@ pub mod vesc {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::FwVersionReply {
-                    fw_major: v_fw_major,
-                    fw_minor: v_fw_minor,
-                    rest: v_rest,
-                } => {
+                Self::FwVersionReply(
+                    response::FwVersionReply {
+                        fw_major: v_fw_major,
+                        fw_minor: v_fw_minor,
+                        rest: v_rest,
+                    },
+                ) => {
                     let frame_len = REPEAT_FW_VERSION_REPLY.encode_len(v_rest.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x02])?;
                     rt::put_length(out, 1, 2, false, true, -6)?;
@@ -1039,34 +1203,38 @@ pub mod vesc {
                     rt::write_elements(v_rest.as_slice(), 1, false, &mut out[6..]);
                     out.len()
                 }
-                Self::WriteNewAppDataReply { ok: v_ok, offset: v_offset } => {
+                Self::WriteNewAppDataReply(
+                    response::WriteNewAppDataReply { ok: v_ok, offset: v_offset },
+                ) => {
                     rt::encode_in_range("ok", v_ok, 0, 1)?;
                     let out = rt::frame_mut::<12>(buf, &[0x02, 0x00, 0x06, 0x03])?;
                     out[4] = v_ok;
                     out[5..9].copy_from_slice(&v_offset.to_be_bytes());
                     out.len()
                 }
-                Self::GetValuesReply {
-                    temp_mos1: v_temp_mos1,
-                    temp_mos2: v_temp_mos2,
-                    temp_mos3: v_temp_mos3,
-                    temp_mos4: v_temp_mos4,
-                    temp_mos5: v_temp_mos5,
-                    temp_mos6: v_temp_mos6,
-                    temp_pcb: v_temp_pcb,
-                    current_motor: v_current_motor,
-                    current_in: v_current_in,
-                    duty_now: v_duty_now,
-                    rpm: v_rpm,
-                    v_in: v_v_in,
-                    amp_hours: v_amp_hours,
-                    amp_hours_charged: v_amp_hours_charged,
-                    watt_hours: v_watt_hours,
-                    watt_hours_charged: v_watt_hours_charged,
-                    tachometer: v_tachometer,
-                    tachometer_abs: v_tachometer_abs,
-                    mc_fault_code: v_mc_fault_code,
-                } => {
+                Self::GetValuesReply(
+                    response::GetValuesReply {
+                        temp_mos1: v_temp_mos1,
+                        temp_mos2: v_temp_mos2,
+                        temp_mos3: v_temp_mos3,
+                        temp_mos4: v_temp_mos4,
+                        temp_mos5: v_temp_mos5,
+                        temp_mos6: v_temp_mos6,
+                        temp_pcb: v_temp_pcb,
+                        current_motor: v_current_motor,
+                        current_in: v_current_in,
+                        duty_now: v_duty_now,
+                        rpm: v_rpm,
+                        v_in: v_v_in,
+                        amp_hours: v_amp_hours,
+                        amp_hours_charged: v_amp_hours_charged,
+                        watt_hours: v_watt_hours,
+                        watt_hours_charged: v_watt_hours_charged,
+                        tachometer: v_tachometer,
+                        tachometer_abs: v_tachometer_abs,
+                        mc_fault_code: v_mc_fault_code,
+                    },
+                ) => {
                     let out = rt::frame_mut::<62>(buf, &[0x02, 0x00, 0x38, 0x04])?;
                     out[4..6].copy_from_slice(&v_temp_mos1.raw().to_be_bytes());
                     out[6..8].copy_from_slice(&v_temp_mos2.raw().to_be_bytes());
@@ -1154,17 +1322,19 @@ pub mod vesc {
                 0x00 => {
                     let (frame, elements, _) = REPEAT_FW_VERSION_REPLY
                         .split::<6>(frame)?;
-                    rt::Ok(Self::FwVersionReply {
-                        fw_major: frame[4],
-                        fw_minor: frame[5],
-                        rest: REPEAT_FW_VERSION_REPLY
-                            .elements::<u8, 60>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::FwVersionReply(response::FwVersionReply {
+                            fw_major: frame[4],
+                            fw_minor: frame[5],
+                            rest: REPEAT_FW_VERSION_REPLY
+                                .elements::<u8, 60>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x03 => {
                     let frame = rt::fixed::<
                         12,
-                    >(frame, &response::WRITE_NEW_APP_DATA_REPLY)?;
+                    >(frame, &response::WriteNewAppDataReply::DESC)?;
                     rt::in_range(
                         &response::WRITE_NEW_APP_DATA_REPLY_OK,
                         4,
@@ -1172,114 +1342,118 @@ pub mod vesc {
                         0,
                         1,
                     )?;
-                    rt::Ok(Self::WriteNewAppDataReply {
-                        ok: frame[4],
-                        offset: u32::from_be_bytes([
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                        ]),
-                    })
+                    rt::Ok(
+                        Self::WriteNewAppDataReply(response::WriteNewAppDataReply {
+                            ok: frame[4],
+                            offset: u32::from_be_bytes([
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                            ]),
+                        }),
+                    )
                 }
                 0x04 => {
-                    let frame = rt::fixed::<62>(frame, &response::GET_VALUES_REPLY)?;
-                    rt::Ok(Self::GetValuesReply {
-                        temp_mos1: DeciCelsius::from_raw(
-                            i16::from_be_bytes([frame[4], frame[5]]),
-                        ),
-                        temp_mos2: DeciCelsius::from_raw(
-                            i16::from_be_bytes([frame[6], frame[7]]),
-                        ),
-                        temp_mos3: DeciCelsius::from_raw(
-                            i16::from_be_bytes([frame[8], frame[9]]),
-                        ),
-                        temp_mos4: DeciCelsius::from_raw(
-                            i16::from_be_bytes([frame[10], frame[11]]),
-                        ),
-                        temp_mos5: DeciCelsius::from_raw(
-                            i16::from_be_bytes([frame[12], frame[13]]),
-                        ),
-                        temp_mos6: DeciCelsius::from_raw(
-                            i16::from_be_bytes([frame[14], frame[15]]),
-                        ),
-                        temp_pcb: DeciCelsius::from_raw(
-                            i16::from_be_bytes([frame[16], frame[17]]),
-                        ),
-                        current_motor: CentiAmps::from_raw(
-                            i32::from_be_bytes([
-                                frame[18],
-                                frame[19],
-                                frame[20],
-                                frame[21],
+                    let frame = rt::fixed::<62>(frame, &response::GetValuesReply::DESC)?;
+                    rt::Ok(
+                        Self::GetValuesReply(response::GetValuesReply {
+                            temp_mos1: DeciCelsius::from_raw(
+                                i16::from_be_bytes([frame[4], frame[5]]),
+                            ),
+                            temp_mos2: DeciCelsius::from_raw(
+                                i16::from_be_bytes([frame[6], frame[7]]),
+                            ),
+                            temp_mos3: DeciCelsius::from_raw(
+                                i16::from_be_bytes([frame[8], frame[9]]),
+                            ),
+                            temp_mos4: DeciCelsius::from_raw(
+                                i16::from_be_bytes([frame[10], frame[11]]),
+                            ),
+                            temp_mos5: DeciCelsius::from_raw(
+                                i16::from_be_bytes([frame[12], frame[13]]),
+                            ),
+                            temp_mos6: DeciCelsius::from_raw(
+                                i16::from_be_bytes([frame[14], frame[15]]),
+                            ),
+                            temp_pcb: DeciCelsius::from_raw(
+                                i16::from_be_bytes([frame[16], frame[17]]),
+                            ),
+                            current_motor: CentiAmps::from_raw(
+                                i32::from_be_bytes([
+                                    frame[18],
+                                    frame[19],
+                                    frame[20],
+                                    frame[21],
+                                ]),
+                            ),
+                            current_in: CentiAmps::from_raw(
+                                i32::from_be_bytes([
+                                    frame[22],
+                                    frame[23],
+                                    frame[24],
+                                    frame[25],
+                                ]),
+                            ),
+                            duty_now: PerMille::from_raw(
+                                i16::from_be_bytes([frame[26], frame[27]]),
+                            ),
+                            rpm: i32::from_be_bytes([
+                                frame[28],
+                                frame[29],
+                                frame[30],
+                                frame[31],
                             ]),
-                        ),
-                        current_in: CentiAmps::from_raw(
-                            i32::from_be_bytes([
-                                frame[22],
-                                frame[23],
-                                frame[24],
-                                frame[25],
+                            v_in: DeciVolts::from_raw(
+                                i16::from_be_bytes([frame[32], frame[33]]),
+                            ),
+                            amp_hours: AmpHours::from_raw(
+                                i32::from_be_bytes([
+                                    frame[34],
+                                    frame[35],
+                                    frame[36],
+                                    frame[37],
+                                ]),
+                            ),
+                            amp_hours_charged: AmpHours::from_raw(
+                                i32::from_be_bytes([
+                                    frame[38],
+                                    frame[39],
+                                    frame[40],
+                                    frame[41],
+                                ]),
+                            ),
+                            watt_hours: WattHours::from_raw(
+                                i32::from_be_bytes([
+                                    frame[42],
+                                    frame[43],
+                                    frame[44],
+                                    frame[45],
+                                ]),
+                            ),
+                            watt_hours_charged: WattHours::from_raw(
+                                i32::from_be_bytes([
+                                    frame[46],
+                                    frame[47],
+                                    frame[48],
+                                    frame[49],
+                                ]),
+                            ),
+                            tachometer: i32::from_be_bytes([
+                                frame[50],
+                                frame[51],
+                                frame[52],
+                                frame[53],
                             ]),
-                        ),
-                        duty_now: PerMille::from_raw(
-                            i16::from_be_bytes([frame[26], frame[27]]),
-                        ),
-                        rpm: i32::from_be_bytes([
-                            frame[28],
-                            frame[29],
-                            frame[30],
-                            frame[31],
-                        ]),
-                        v_in: DeciVolts::from_raw(
-                            i16::from_be_bytes([frame[32], frame[33]]),
-                        ),
-                        amp_hours: AmpHours::from_raw(
-                            i32::from_be_bytes([
-                                frame[34],
-                                frame[35],
-                                frame[36],
-                                frame[37],
+                            tachometer_abs: i32::from_be_bytes([
+                                frame[54],
+                                frame[55],
+                                frame[56],
+                                frame[57],
                             ]),
-                        ),
-                        amp_hours_charged: AmpHours::from_raw(
-                            i32::from_be_bytes([
-                                frame[38],
-                                frame[39],
-                                frame[40],
-                                frame[41],
-                            ]),
-                        ),
-                        watt_hours: WattHours::from_raw(
-                            i32::from_be_bytes([
-                                frame[42],
-                                frame[43],
-                                frame[44],
-                                frame[45],
-                            ]),
-                        ),
-                        watt_hours_charged: WattHours::from_raw(
-                            i32::from_be_bytes([
-                                frame[46],
-                                frame[47],
-                                frame[48],
-                                frame[49],
-                            ]),
-                        ),
-                        tachometer: i32::from_be_bytes([
-                            frame[50],
-                            frame[51],
-                            frame[52],
-                            frame[53],
-                        ]),
-                        tachometer_abs: i32::from_be_bytes([
-                            frame[54],
-                            frame[55],
-                            frame[56],
-                            frame[57],
-                        ]),
-                        mc_fault_code: frame[58],
-                    })
+                            mc_fault_code: frame[58],
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 3, true)),
             }
@@ -1293,64 +1467,74 @@ pub mod vesc {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "fw_version_reply" => {
-                    rt::Ok(Self::FwVersionReply {
-                        fw_major: rt::get(&mut field, "fw_major")?,
-                        fw_minor: rt::get(&mut field, "fw_minor")?,
-                        rest: rt::list::<u8, 60>(&mut field, "rest", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::FwVersionReply(response::FwVersionReply {
+                            fw_major: rt::get(&mut field, "fw_major")?,
+                            fw_minor: rt::get(&mut field, "fw_minor")?,
+                            rest: rt::list::<u8, 60>(&mut field, "rest", 0, 255)?,
+                        }),
+                    )
                 }
                 "write_new_app_data_reply" => {
-                    rt::Ok(Self::WriteNewAppDataReply {
-                        ok: rt::get(&mut field, "ok")?,
-                        offset: rt::get(&mut field, "offset")?,
-                    })
+                    rt::Ok(
+                        Self::WriteNewAppDataReply(response::WriteNewAppDataReply {
+                            ok: rt::get(&mut field, "ok")?,
+                            offset: rt::get(&mut field, "offset")?,
+                        }),
+                    )
                 }
                 "get_values_reply" => {
-                    rt::Ok(Self::GetValuesReply {
-                        temp_mos1: DeciCelsius::from_raw(
-                            rt::get(&mut field, "temp_mos1")?,
-                        ),
-                        temp_mos2: DeciCelsius::from_raw(
-                            rt::get(&mut field, "temp_mos2")?,
-                        ),
-                        temp_mos3: DeciCelsius::from_raw(
-                            rt::get(&mut field, "temp_mos3")?,
-                        ),
-                        temp_mos4: DeciCelsius::from_raw(
-                            rt::get(&mut field, "temp_mos4")?,
-                        ),
-                        temp_mos5: DeciCelsius::from_raw(
-                            rt::get(&mut field, "temp_mos5")?,
-                        ),
-                        temp_mos6: DeciCelsius::from_raw(
-                            rt::get(&mut field, "temp_mos6")?,
-                        ),
-                        temp_pcb: DeciCelsius::from_raw(
-                            rt::get(&mut field, "temp_pcb")?,
-                        ),
-                        current_motor: CentiAmps::from_raw(
-                            rt::get(&mut field, "current_motor")?,
-                        ),
-                        current_in: CentiAmps::from_raw(
-                            rt::get(&mut field, "current_in")?,
-                        ),
-                        duty_now: PerMille::from_raw(rt::get(&mut field, "duty_now")?),
-                        rpm: rt::get(&mut field, "rpm")?,
-                        v_in: DeciVolts::from_raw(rt::get(&mut field, "v_in")?),
-                        amp_hours: AmpHours::from_raw(rt::get(&mut field, "amp_hours")?),
-                        amp_hours_charged: AmpHours::from_raw(
-                            rt::get(&mut field, "amp_hours_charged")?,
-                        ),
-                        watt_hours: WattHours::from_raw(
-                            rt::get(&mut field, "watt_hours")?,
-                        ),
-                        watt_hours_charged: WattHours::from_raw(
-                            rt::get(&mut field, "watt_hours_charged")?,
-                        ),
-                        tachometer: rt::get(&mut field, "tachometer")?,
-                        tachometer_abs: rt::get(&mut field, "tachometer_abs")?,
-                        mc_fault_code: rt::get(&mut field, "mc_fault_code")?,
-                    })
+                    rt::Ok(
+                        Self::GetValuesReply(response::GetValuesReply {
+                            temp_mos1: DeciCelsius::from_raw(
+                                rt::get(&mut field, "temp_mos1")?,
+                            ),
+                            temp_mos2: DeciCelsius::from_raw(
+                                rt::get(&mut field, "temp_mos2")?,
+                            ),
+                            temp_mos3: DeciCelsius::from_raw(
+                                rt::get(&mut field, "temp_mos3")?,
+                            ),
+                            temp_mos4: DeciCelsius::from_raw(
+                                rt::get(&mut field, "temp_mos4")?,
+                            ),
+                            temp_mos5: DeciCelsius::from_raw(
+                                rt::get(&mut field, "temp_mos5")?,
+                            ),
+                            temp_mos6: DeciCelsius::from_raw(
+                                rt::get(&mut field, "temp_mos6")?,
+                            ),
+                            temp_pcb: DeciCelsius::from_raw(
+                                rt::get(&mut field, "temp_pcb")?,
+                            ),
+                            current_motor: CentiAmps::from_raw(
+                                rt::get(&mut field, "current_motor")?,
+                            ),
+                            current_in: CentiAmps::from_raw(
+                                rt::get(&mut field, "current_in")?,
+                            ),
+                            duty_now: PerMille::from_raw(
+                                rt::get(&mut field, "duty_now")?,
+                            ),
+                            rpm: rt::get(&mut field, "rpm")?,
+                            v_in: DeciVolts::from_raw(rt::get(&mut field, "v_in")?),
+                            amp_hours: AmpHours::from_raw(
+                                rt::get(&mut field, "amp_hours")?,
+                            ),
+                            amp_hours_charged: AmpHours::from_raw(
+                                rt::get(&mut field, "amp_hours_charged")?,
+                            ),
+                            watt_hours: WattHours::from_raw(
+                                rt::get(&mut field, "watt_hours")?,
+                            ),
+                            watt_hours_charged: WattHours::from_raw(
+                                rt::get(&mut field, "watt_hours_charged")?,
+                            ),
+                            tachometer: rt::get(&mut field, "tachometer")?,
+                            tachometer_abs: rt::get(&mut field, "tachometer_abs")?,
+                            mc_fault_code: rt::get(&mut field, "mc_fault_code")?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -1483,92 +1667,159 @@ pub mod vesc {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Vesc>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `fw_version`, code 0x00
-        pub const FW_VERSION: MessageDesc = MessageDesc::new(
-            "fw_version",
-            0x00,
-            1,
-            &[7],
-        );
-        /// `write_new_app_data`, code 0x03
-        pub const WRITE_NEW_APP_DATA: MessageDesc = MessageDesc::new(
-            "write_new_app_data",
-            0x03,
-            1,
-            &[11],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §commands.c COMM_FW_VERSION (0) (code `0x00`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct FwVersion;
+        /// §commands.c COMM_WRITE_NEW_APP_DATA (3) (code `0x03`, 11 to 523 bytes). A chunk of a firmware image, written at an offset of the new-application flash area: long frames for chunks over 250 bytes.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteNewAppData {
+            pub offset: u32,
+            pub data: super::rt::Repeated<u8, 512>,
+        }
+        /// §commands.c COMM_GET_VALUES (4) (code `0x04`, 7 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct GetValues;
+        /// §commands.c COMM_SET_DUTY (5) (code `0x05`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetDuty {
+            pub duty: super::Duty,
+        }
+        /// §commands.c COMM_SET_CURRENT (6) (code `0x06`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetCurrent {
+            /// \[A\]
+            pub current: super::Milliamps,
+        }
+        /// §commands.c COMM_SET_CURRENT_BRAKE (7) (code `0x07`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetCurrentBrake {
+            /// \[A\]
+            pub current: super::Milliamps,
+        }
+        /// §commands.c COMM_SET_RPM (8) (code `0x08`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetRpm {
+            /// \[ERPM\]
+            pub rpm: i32,
+        }
+        /// §commands.c COMM_SET_POS (9) (code `0x09`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct SetPos {
+            /// \[°\]
+            pub pos: super::MicroDegrees,
+        }
+        /// §commands.c COMM_ALIVE (30) (code `0x1E`, 7 bytes). Keeps the motor running: without a packet for the timeout, the firmware stops it.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        pub struct Alive;
         /// `write_new_app_data.data`
         pub const WRITE_NEW_APP_DATA_DATA: FieldDesc = FieldDesc::new(
             "write_new_app_data",
             "data",
         );
-        /// `get_values`, code 0x04
-        pub const GET_VALUES: MessageDesc = MessageDesc::new(
-            "get_values",
-            0x04,
-            1,
-            &[7],
-        );
-        /// `set_duty`, code 0x05
-        pub const SET_DUTY: MessageDesc = MessageDesc::new("set_duty", 0x05, 1, &[11]);
-        /// `set_current`, code 0x06
-        pub const SET_CURRENT: MessageDesc = MessageDesc::new(
-            "set_current",
-            0x06,
-            1,
-            &[11],
-        );
-        /// `set_current_brake`, code 0x07
-        pub const SET_CURRENT_BRAKE: MessageDesc = MessageDesc::new(
-            "set_current_brake",
-            0x07,
-            1,
-            &[11],
-        );
-        /// `set_rpm`, code 0x08
-        pub const SET_RPM: MessageDesc = MessageDesc::new("set_rpm", 0x08, 1, &[11]);
-        /// `set_pos`, code 0x09
-        pub const SET_POS: MessageDesc = MessageDesc::new("set_pos", 0x09, 1, &[11]);
-        /// `alive`, code 0x1E
-        pub const ALIVE: MessageDesc = MessageDesc::new("alive", 0x1E, 1, &[7]);
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `fw_version_reply`, code 0x00
-        pub const FW_VERSION_REPLY: MessageDesc = MessageDesc::new(
-            "fw_version_reply",
-            0x00,
-            1,
-            &[9],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §commands.c COMM_FW_VERSION (0), answered (code `0x00`, 9 to 69 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct FwVersionReply {
+            pub fw_major: u8,
+            pub fw_minor: u8,
+            /// The hardware name (NUL-terminated) and what newer firmware adds, as bytes.
+            pub rest: super::rt::Repeated<u8, 60>,
+        }
+        /// §commands.c COMM_WRITE_NEW_APP_DATA (3), answered (code `0x03`, 12 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct WriteNewAppDataReply {
+            /// Valid raw range 0..=1.
+            pub ok: u8,
+            pub offset: u32,
+        }
+        /// §commands.c COMM_GET_VALUES (4), answered (code `0x04`, 62 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct GetValuesReply {
+            /// \[°C\]
+            pub temp_mos1: super::DeciCelsius,
+            /// \[°C\]
+            pub temp_mos2: super::DeciCelsius,
+            /// \[°C\]
+            pub temp_mos3: super::DeciCelsius,
+            /// \[°C\]
+            pub temp_mos4: super::DeciCelsius,
+            /// \[°C\]
+            pub temp_mos5: super::DeciCelsius,
+            /// \[°C\]
+            pub temp_mos6: super::DeciCelsius,
+            /// \[°C\]
+            pub temp_pcb: super::DeciCelsius,
+            /// \[A\]
+            pub current_motor: super::CentiAmps,
+            /// \[A\]
+            pub current_in: super::CentiAmps,
+            pub duty_now: super::PerMille,
+            /// \[ERPM\]
+            pub rpm: i32,
+            /// \[V\]
+            pub v_in: super::DeciVolts,
+            /// \[Ah\]
+            pub amp_hours: super::AmpHours,
+            /// \[Ah\]
+            pub amp_hours_charged: super::AmpHours,
+            /// \[Wh\]
+            pub watt_hours: super::WattHours,
+            /// \[Wh\]
+            pub watt_hours_charged: super::WattHours,
+            pub tachometer: i32,
+            pub tachometer_abs: i32,
+            pub mc_fault_code: u8,
+        }
         /// `fw_version_reply.rest`
         pub const FW_VERSION_REPLY_REST: FieldDesc = FieldDesc::new(
             "fw_version_reply",
             "rest",
         );
-        /// `write_new_app_data_reply`, code 0x03
-        pub const WRITE_NEW_APP_DATA_REPLY: MessageDesc = MessageDesc::new(
-            "write_new_app_data_reply",
-            0x03,
-            1,
-            &[12],
-        );
         /// `write_new_app_data_reply.ok`
         pub const WRITE_NEW_APP_DATA_REPLY_OK: FieldDesc = FieldDesc::new(
             "write_new_app_data_reply",
             "ok",
-        );
-        /// `get_values_reply`, code 0x04
-        pub const GET_VALUES_REPLY: MessageDesc = MessageDesc::new(
-            "get_values_reply",
-            0x04,
-            1,
-            &[62],
         );
     }
 }

@@ -301,33 +301,64 @@ pub mod xbee_api2 {
         min: 0,
         max: 72,
     };
+    impl request::AtCommand {
+        pub const NAME: &'static str = "at_command";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 28;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x08,
+            1,
+            &[8],
+        );
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const COMMAND: rt::Range<usize> = 5..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("command", rt::Text(&self.command[..]));
+            f("parameter", rt::List(self.parameter.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::AtCommand(*self).encode(address, buf)
+        }
+    }
+    impl request::TransmitRequest {
+        pub const NAME: &'static str = "transmit_request";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const MIN_LEN: usize = 18;
+        pub const MAX_LEN: usize = 90;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x10,
+            1,
+            &[18],
+        );
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const DESTINATION64: rt::Range<usize> = 5..13;
+        pub const DESTINATION16: rt::Range<usize> = 13..15;
+        pub const RADIUS: rt::Range<usize> = 15..16;
+        pub const OPTIONS: rt::Range<usize> = 16..17;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("destination64", rt::Int(self.destination64 as i64));
+            f("destination16", rt::Int(self.destination16 as i64));
+            f("radius", rt::Int(self.radius as i64));
+            f("options", rt::Int(self.options as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::TransmitRequest(*self).encode(address, buf)
+        }
+    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Request {
-        /// §0x08 AT Command AT Command (0x08) (code `0x08`, 8 to 28 bytes).
-        AtCommand {
-            /// Matches the response; 0 asks for none.
-            frame_id: u8,
-            /// The two AT command characters.
-            command: rt::Ascii<2>,
-            /// Sets the parameter; none queries it.
-            parameter: rt::Repeated<u8, 20>,
-        },
-        /// §0x10 Transmit Request Transmit Request (0x10) (code `0x10`, 18 to 90 bytes).
-        TransmitRequest {
-            frame_id: u8,
-            /// 64-bit destination address; 0xFFFF broadcasts.
-            destination64: u64,
-            /// 16-bit network address; 0xFFFE if unknown.
-            destination16: u16,
-            /// Broadcast radius in hops; 0: the maximum.
-            radius: u8,
-            options: u8,
-            data: rt::Repeated<u8, 72>,
-        },
+        AtCommand(request::AtCommand),
+        TransmitRequest(request::TransmitRequest),
     }
     impl Request {
         /// Each message's spec name, code and frame length, in spec order.
@@ -338,8 +369,8 @@ pub mod xbee_api2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::AtCommand { .. } => 0,
-                Self::TransmitRequest { .. } => 1,
+                Self::AtCommand(_) => 0,
+                Self::TransmitRequest(_) => 1,
             }
         }
         /// The spec's snake_case name of this message.
@@ -353,11 +384,11 @@ pub mod xbee_api2 {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::AtCommand { parameter: v_parameter, .. } => {
+                Self::AtCommand(request::AtCommand { parameter: v_parameter, .. }) => {
                     REPEAT_AT_COMMAND.base
                         + REPEAT_AT_COMMAND.bytes_of(v_parameter.len())
                 }
-                Self::TransmitRequest { data: v_data, .. } => {
+                Self::TransmitRequest(request::TransmitRequest { data: v_data, .. }) => {
                     REPEAT_TRANSMIT_REQUEST.base
                         + REPEAT_TRANSMIT_REQUEST.bytes_of(v_data.len())
                 }
@@ -366,32 +397,10 @@ pub mod xbee_api2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::AtCommand {
-                    frame_id: v_frame_id,
-                    command: v_command,
-                    parameter: v_parameter,
-                } => {
-                    f("frame_id", rt::Int(*v_frame_id as i64));
-                    f("command", rt::Text(&v_command[..]));
-                    f("parameter", rt::List(v_parameter.elements()));
-                }
-                Self::TransmitRequest {
-                    frame_id: v_frame_id,
-                    destination64: v_destination64,
-                    destination16: v_destination16,
-                    radius: v_radius,
-                    options: v_options,
-                    data: v_data,
-                } => {
-                    f("frame_id", rt::Int(*v_frame_id as i64));
-                    f("destination64", rt::Int(*v_destination64 as i64));
-                    f("destination16", rt::Int(*v_destination16 as i64));
-                    f("radius", rt::Int(*v_radius as i64));
-                    f("options", rt::Int(*v_options as i64));
-                    f("data", rt::List(v_data.elements()));
-                }
+                Self::AtCommand(m) => m.visit(f),
+                Self::TransmitRequest(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -422,11 +431,13 @@ pub mod xbee_api2 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::AtCommand {
-                    frame_id: v_frame_id,
-                    command: v_command,
-                    parameter: v_parameter,
-                } => {
+                Self::AtCommand(
+                    request::AtCommand {
+                        frame_id: v_frame_id,
+                        command: v_command,
+                        parameter: v_parameter,
+                    },
+                ) => {
                     let frame_len = REPEAT_AT_COMMAND.encode_len(v_parameter.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
                     rt::put_length(out, 1, 2, false, true, -4)?;
@@ -436,14 +447,16 @@ pub mod xbee_api2 {
                     rt::write_elements(v_parameter.as_slice(), 1, false, &mut out[7..]);
                     out.len()
                 }
-                Self::TransmitRequest {
-                    frame_id: v_frame_id,
-                    destination64: v_destination64,
-                    destination16: v_destination16,
-                    radius: v_radius,
-                    options: v_options,
-                    data: v_data,
-                } => {
+                Self::TransmitRequest(
+                    request::TransmitRequest {
+                        frame_id: v_frame_id,
+                        destination64: v_destination64,
+                        destination16: v_destination16,
+                        radius: v_radius,
+                        options: v_options,
+                        data: v_data,
+                    },
+                ) => {
                     let frame_len = REPEAT_TRANSMIT_REQUEST.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
                     rt::put_length(out, 1, 2, false, true, -4)?;
@@ -501,34 +514,38 @@ pub mod xbee_api2 {
             match rt::code(frame, 3, 1) {
                 0x08 => {
                     let (frame, elements, _) = REPEAT_AT_COMMAND.split::<7>(frame)?;
-                    rt::Ok(Self::AtCommand {
-                        frame_id: frame[4],
-                        command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
-                        parameter: REPEAT_AT_COMMAND
-                            .elements::<u8, 20>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::AtCommand(request::AtCommand {
+                            frame_id: frame[4],
+                            command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
+                            parameter: REPEAT_AT_COMMAND
+                                .elements::<u8, 20>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x10 => {
                     let (frame, elements, _) = REPEAT_TRANSMIT_REQUEST
                         .split::<17>(frame)?;
-                    rt::Ok(Self::TransmitRequest {
-                        frame_id: frame[4],
-                        destination64: u64::from_be_bytes([
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                            frame[11],
-                            frame[12],
-                        ]),
-                        destination16: u16::from_be_bytes([frame[13], frame[14]]),
-                        radius: frame[15],
-                        options: frame[16],
-                        data: REPEAT_TRANSMIT_REQUEST
-                            .elements::<u8, 72>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::TransmitRequest(request::TransmitRequest {
+                            frame_id: frame[4],
+                            destination64: u64::from_be_bytes([
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                                frame[11],
+                                frame[12],
+                            ]),
+                            destination16: u16::from_be_bytes([frame[13], frame[14]]),
+                            radius: frame[15],
+                            options: frame[16],
+                            data: REPEAT_TRANSMIT_REQUEST
+                                .elements::<u8, 72>(elements, false, false)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, false)),
             }
@@ -542,21 +559,28 @@ pub mod xbee_api2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "at_command" => {
-                    rt::Ok(Self::AtCommand {
-                        frame_id: rt::get(&mut field, "frame_id")?,
-                        command: rt::text(&mut field, "command")?,
-                        parameter: rt::list::<u8, 20>(&mut field, "parameter", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::AtCommand(request::AtCommand {
+                            frame_id: rt::get(&mut field, "frame_id")?,
+                            command: rt::text(&mut field, "command")?,
+                            parameter: rt::list::<
+                                u8,
+                                20,
+                            >(&mut field, "parameter", 0, 255)?,
+                        }),
+                    )
                 }
                 "transmit_request" => {
-                    rt::Ok(Self::TransmitRequest {
-                        frame_id: rt::get(&mut field, "frame_id")?,
-                        destination64: rt::get(&mut field, "destination64")?,
-                        destination16: rt::get(&mut field, "destination16")?,
-                        radius: rt::get(&mut field, "radius")?,
-                        options: rt::get(&mut field, "options")?,
-                        data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::TransmitRequest(request::TransmitRequest {
+                            frame_id: rt::get(&mut field, "frame_id")?,
+                            destination64: rt::get(&mut field, "destination64")?,
+                            destination16: rt::get(&mut field, "destination16")?,
+                            radius: rt::get(&mut field, "radius")?,
+                            options: rt::get(&mut field, "options")?,
+                            data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -613,8 +637,8 @@ pub mod xbee_api2 {
                     answered: c.2,
                 },
                 reply: match self {
-                    Request::AtCommand { .. } => rt::Reply::Optional,
-                    Request::TransmitRequest { .. } => rt::Reply::Optional,
+                    Request::AtCommand(_) => rt::Reply::Optional,
+                    Request::TransmitRequest(_) => rt::Reply::Optional,
                     _ => rt::Reply::Required,
                 },
                 may_retry: c.0.safe_to_repeat(),
@@ -645,36 +669,108 @@ pub mod xbee_api2 {
         min: 0,
         max: 72,
     };
+    impl response::AtResponse {
+        pub const NAME: &'static str = "at_response";
+        pub const CODE: &'static [u8] = &[0x88];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 29;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x88,
+            1,
+            &[9],
+        );
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const COMMAND: rt::Range<usize> = 5..7;
+        pub const STATUS: rt::Range<usize> = 7..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("command", rt::Text(&self.command[..]));
+            f("status", rt::Int(self.status.raw() as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AtResponse(*self).encode(address, buf)
+        }
+    }
+    impl response::TransmitStatus {
+        pub const NAME: &'static str = "transmit_status";
+        pub const CODE: &'static [u8] = &[0x8B];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x8B,
+            1,
+            &[11],
+        );
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const DESTINATION16: rt::Range<usize> = 5..7;
+        pub const RETRIES: rt::Range<usize> = 7..8;
+        pub const DELIVERY: rt::Range<usize> = 8..9;
+        pub const DISCOVERY: rt::Range<usize> = 9..10;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("destination16", rt::Int(self.destination16 as i64));
+            f("retries", rt::Int(self.retries as i64));
+            f("delivery", rt::Int(self.delivery.raw() as i64));
+            f("discovery", rt::Int(self.discovery as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::TransmitStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::ModemStatus {
+        pub const NAME: &'static str = "modem_status";
+        pub const CODE: &'static [u8] = &[0x8A];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x8A,
+            1,
+            &[6],
+        );
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ModemStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::ReceivePacket {
+        pub const NAME: &'static str = "receive_packet";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const MIN_LEN: usize = 16;
+        pub const MAX_LEN: usize = 88;
+        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
+            Self::NAME,
+            0x90,
+            1,
+            &[16],
+        );
+        pub const SOURCE64: rt::Range<usize> = 4..12;
+        pub const SOURCE16: rt::Range<usize> = 12..14;
+        pub const OPTIONS: rt::Range<usize> = 14..15;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("source64", rt::Int(self.source64 as i64));
+            f("source16", rt::Int(self.source16 as i64));
+            f("options", rt::Int(self.options as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReceivePacket(*self).encode(address, buf)
+        }
+    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
     #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
     #[allow(clippy::large_enum_variant)]
     pub enum Response {
-        /// §0x88 AT Command Response AT Command Response (0x88) (code `0x88`, 9 to 29 bytes).
-        AtResponse {
-            frame_id: u8,
-            command: rt::Ascii<2>,
-            status: AtStatus,
-            data: rt::Repeated<u8, 20>,
-        },
-        /// §0x8B Transmit Status Transmit Status (0x8B) (code `0x8B`, 11 bytes).
-        TransmitStatus {
-            frame_id: u8,
-            destination16: u16,
-            retries: u8,
-            delivery: DeliveryStatus,
-            discovery: u8,
-        },
-        /// §0x8A Modem Status Modem Status (0x8A) (code `0x8A`, 6 bytes).
-        ModemStatus { status: ModemStatus },
-        /// §0x90 Receive Packet Receive Packet (0x90) (code `0x90`, 16 to 88 bytes).
-        ReceivePacket {
-            source64: u64,
-            source16: u16,
-            options: u8,
-            data: rt::Repeated<u8, 72>,
-        },
+        AtResponse(response::AtResponse),
+        TransmitStatus(response::TransmitStatus),
+        ModemStatus(response::ModemStatus),
+        ReceivePacket(response::ReceivePacket),
     }
     impl Response {
         /// Each message's spec name, code and frame length, in spec order.
@@ -687,10 +783,10 @@ pub mod xbee_api2 {
         /// This message's row in [`Self::MESSAGES`].
         const fn index(&self) -> usize {
             match *self {
-                Self::AtResponse { .. } => 0,
-                Self::TransmitStatus { .. } => 1,
-                Self::ModemStatus { .. } => 2,
-                Self::ReceivePacket { .. } => 3,
+                Self::AtResponse(_) => 0,
+                Self::TransmitStatus(_) => 1,
+                Self::ModemStatus(_) => 2,
+                Self::ReceivePacket(_) => 3,
             }
         }
         /// The spec's snake_case name of this message.
@@ -704,10 +800,10 @@ pub mod xbee_api2 {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::AtResponse { data: v_data, .. } => {
+                Self::AtResponse(response::AtResponse { data: v_data, .. }) => {
                     REPEAT_AT_RESPONSE.base + REPEAT_AT_RESPONSE.bytes_of(v_data.len())
                 }
-                Self::ReceivePacket { data: v_data, .. } => {
+                Self::ReceivePacket(response::ReceivePacket { data: v_data, .. }) => {
                     REPEAT_RECEIVE_PACKET.base
                         + REPEAT_RECEIVE_PACKET.bytes_of(v_data.len())
                 }
@@ -716,46 +812,12 @@ pub mod xbee_api2 {
         }
         /// Calls `f` with each field's spec name and raw wire value (sign-extended where the
         /// field is signed), in frame order; constant and repeated fields are not visited.
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+        pub fn visit(&self, f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
             match self {
-                Self::AtResponse {
-                    frame_id: v_frame_id,
-                    command: v_command,
-                    status: v_status,
-                    data: v_data,
-                } => {
-                    f("frame_id", rt::Int(*v_frame_id as i64));
-                    f("command", rt::Text(&v_command[..]));
-                    f("status", rt::Int(v_status.raw() as i64));
-                    f("data", rt::List(v_data.elements()));
-                }
-                Self::TransmitStatus {
-                    frame_id: v_frame_id,
-                    destination16: v_destination16,
-                    retries: v_retries,
-                    delivery: v_delivery,
-                    discovery: v_discovery,
-                } => {
-                    f("frame_id", rt::Int(*v_frame_id as i64));
-                    f("destination16", rt::Int(*v_destination16 as i64));
-                    f("retries", rt::Int(*v_retries as i64));
-                    f("delivery", rt::Int(v_delivery.raw() as i64));
-                    f("discovery", rt::Int(*v_discovery as i64));
-                }
-                Self::ModemStatus { status: v_status } => {
-                    f("status", rt::Int(v_status.raw() as i64))
-                }
-                Self::ReceivePacket {
-                    source64: v_source64,
-                    source16: v_source16,
-                    options: v_options,
-                    data: v_data,
-                } => {
-                    f("source64", rt::Int(*v_source64 as i64));
-                    f("source16", rt::Int(*v_source16 as i64));
-                    f("options", rt::Int(*v_options as i64));
-                    f("data", rt::List(v_data.elements()));
-                }
+                Self::AtResponse(m) => m.visit(f),
+                Self::TransmitStatus(m) => m.visit(f),
+                Self::ModemStatus(m) => m.visit(f),
+                Self::ReceivePacket(m) => m.visit(f),
             }
         }
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
@@ -786,12 +848,14 @@ pub mod xbee_api2 {
         ) -> rt::Result<usize, rt::EncodeError> {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::AtResponse {
-                    frame_id: v_frame_id,
-                    command: v_command,
-                    status: v_status,
-                    data: v_data,
-                } => {
+                Self::AtResponse(
+                    response::AtResponse {
+                        frame_id: v_frame_id,
+                        command: v_command,
+                        status: v_status,
+                        data: v_data,
+                    },
+                ) => {
                     let frame_len = REPEAT_AT_RESPONSE.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
                     rt::put_length(out, 1, 2, false, true, -4)?;
@@ -802,13 +866,15 @@ pub mod xbee_api2 {
                     rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
                     out.len()
                 }
-                Self::TransmitStatus {
-                    frame_id: v_frame_id,
-                    destination16: v_destination16,
-                    retries: v_retries,
-                    delivery: v_delivery,
-                    discovery: v_discovery,
-                } => {
+                Self::TransmitStatus(
+                    response::TransmitStatus {
+                        frame_id: v_frame_id,
+                        destination16: v_destination16,
+                        retries: v_retries,
+                        delivery: v_delivery,
+                        discovery: v_discovery,
+                    },
+                ) => {
                     let out = rt::frame_mut::<11>(buf, &[0x7E, 0x00, 0x07, 0x8B])?;
                     out[4] = v_frame_id;
                     out[5..7].copy_from_slice(&v_destination16.to_be_bytes());
@@ -817,17 +883,19 @@ pub mod xbee_api2 {
                     out[9] = v_discovery;
                     out.len()
                 }
-                Self::ModemStatus { status: v_status } => {
+                Self::ModemStatus(response::ModemStatus { status: v_status }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x7E, 0x00, 0x02, 0x8A])?;
                     out[4] = v_status.raw();
                     out.len()
                 }
-                Self::ReceivePacket {
-                    source64: v_source64,
-                    source16: v_source16,
-                    options: v_options,
-                    data: v_data,
-                } => {
+                Self::ReceivePacket(
+                    response::ReceivePacket {
+                        source64: v_source64,
+                        source16: v_source16,
+                        options: v_options,
+                        data: v_data,
+                    },
+                ) => {
                     let frame_len = REPEAT_RECEIVE_PACKET.encode_len(v_data.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x7E])?;
                     rt::put_length(out, 1, 2, false, true, -4)?;
@@ -911,48 +979,56 @@ pub mod xbee_api2 {
             match rt::code(frame, 3, 1) {
                 0x88 => {
                     let (frame, elements, _) = REPEAT_AT_RESPONSE.split::<8>(frame)?;
-                    rt::Ok(Self::AtResponse {
-                        frame_id: frame[4],
-                        command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
-                        status: AtStatus::from_raw(frame[7]),
-                        data: REPEAT_AT_RESPONSE
-                            .elements::<u8, 20>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::AtResponse(response::AtResponse {
+                            frame_id: frame[4],
+                            command: rt::Ascii(frame[5..7].try_into().unwrap_or([0; 2])),
+                            status: AtStatus::from_raw(frame[7]),
+                            data: REPEAT_AT_RESPONSE
+                                .elements::<u8, 20>(elements, false, false)?,
+                        }),
+                    )
                 }
                 0x8B => {
-                    let frame = rt::fixed::<11>(frame, &response::TRANSMIT_STATUS)?;
-                    rt::Ok(Self::TransmitStatus {
-                        frame_id: frame[4],
-                        destination16: u16::from_be_bytes([frame[5], frame[6]]),
-                        retries: frame[7],
-                        delivery: DeliveryStatus::from_raw(frame[8]),
-                        discovery: frame[9],
-                    })
+                    let frame = rt::fixed::<11>(frame, &response::TransmitStatus::DESC)?;
+                    rt::Ok(
+                        Self::TransmitStatus(response::TransmitStatus {
+                            frame_id: frame[4],
+                            destination16: u16::from_be_bytes([frame[5], frame[6]]),
+                            retries: frame[7],
+                            delivery: DeliveryStatus::from_raw(frame[8]),
+                            discovery: frame[9],
+                        }),
+                    )
                 }
                 0x8A => {
-                    let frame = rt::fixed::<6>(frame, &response::MODEM_STATUS)?;
-                    rt::Ok(Self::ModemStatus {
-                        status: ModemStatus::from_raw(frame[4]),
-                    })
+                    let frame = rt::fixed::<6>(frame, &response::ModemStatus::DESC)?;
+                    rt::Ok(
+                        Self::ModemStatus(response::ModemStatus {
+                            status: ModemStatus::from_raw(frame[4]),
+                        }),
+                    )
                 }
                 0x90 => {
                     let (frame, elements, _) = REPEAT_RECEIVE_PACKET.split::<15>(frame)?;
-                    rt::Ok(Self::ReceivePacket {
-                        source64: u64::from_be_bytes([
-                            frame[4],
-                            frame[5],
-                            frame[6],
-                            frame[7],
-                            frame[8],
-                            frame[9],
-                            frame[10],
-                            frame[11],
-                        ]),
-                        source16: u16::from_be_bytes([frame[12], frame[13]]),
-                        options: frame[14],
-                        data: REPEAT_RECEIVE_PACKET
-                            .elements::<u8, 72>(elements, false, false)?,
-                    })
+                    rt::Ok(
+                        Self::ReceivePacket(response::ReceivePacket {
+                            source64: u64::from_be_bytes([
+                                frame[4],
+                                frame[5],
+                                frame[6],
+                                frame[7],
+                                frame[8],
+                                frame[9],
+                                frame[10],
+                                frame[11],
+                            ]),
+                            source16: u16::from_be_bytes([frame[12], frame[13]]),
+                            options: frame[14],
+                            data: REPEAT_RECEIVE_PACKET
+                                .elements::<u8, 72>(elements, false, false)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::unknown_code(frame, 3, 1, 1, true)),
             }
@@ -966,36 +1042,44 @@ pub mod xbee_api2 {
         ) -> rt::Result<Self, rt::FieldError> {
             match name {
                 "at_response" => {
-                    rt::Ok(Self::AtResponse {
-                        frame_id: rt::get(&mut field, "frame_id")?,
-                        command: rt::text(&mut field, "command")?,
-                        status: AtStatus::from_raw(rt::get(&mut field, "status")?),
-                        data: rt::list::<u8, 20>(&mut field, "data", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::AtResponse(response::AtResponse {
+                            frame_id: rt::get(&mut field, "frame_id")?,
+                            command: rt::text(&mut field, "command")?,
+                            status: AtStatus::from_raw(rt::get(&mut field, "status")?),
+                            data: rt::list::<u8, 20>(&mut field, "data", 0, 255)?,
+                        }),
+                    )
                 }
                 "transmit_status" => {
-                    rt::Ok(Self::TransmitStatus {
-                        frame_id: rt::get(&mut field, "frame_id")?,
-                        destination16: rt::get(&mut field, "destination16")?,
-                        retries: rt::get(&mut field, "retries")?,
-                        delivery: DeliveryStatus::from_raw(
-                            rt::get(&mut field, "delivery")?,
-                        ),
-                        discovery: rt::get(&mut field, "discovery")?,
-                    })
+                    rt::Ok(
+                        Self::TransmitStatus(response::TransmitStatus {
+                            frame_id: rt::get(&mut field, "frame_id")?,
+                            destination16: rt::get(&mut field, "destination16")?,
+                            retries: rt::get(&mut field, "retries")?,
+                            delivery: DeliveryStatus::from_raw(
+                                rt::get(&mut field, "delivery")?,
+                            ),
+                            discovery: rt::get(&mut field, "discovery")?,
+                        }),
+                    )
                 }
                 "modem_status" => {
-                    rt::Ok(Self::ModemStatus {
-                        status: ModemStatus::from_raw(rt::get(&mut field, "status")?),
-                    })
+                    rt::Ok(
+                        Self::ModemStatus(response::ModemStatus {
+                            status: ModemStatus::from_raw(rt::get(&mut field, "status")?),
+                        }),
+                    )
                 }
                 "receive_packet" => {
-                    rt::Ok(Self::ReceivePacket {
-                        source64: rt::get(&mut field, "source64")?,
-                        source16: rt::get(&mut field, "source16")?,
-                        options: rt::get(&mut field, "options")?,
-                        data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
-                    })
+                    rt::Ok(
+                        Self::ReceivePacket(response::ReceivePacket {
+                            source64: rt::get(&mut field, "source64")?,
+                            source16: rt::get(&mut field, "source16")?,
+                            options: rt::get(&mut field, "options")?,
+                            data: rt::list::<u8, 72>(&mut field, "data", 0, 255)?,
+                        }),
+                    )
                 }
                 _ => rt::Err(rt::FieldError::UnknownMessage),
             }
@@ -1136,28 +1220,44 @@ pub mod xbee_api2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<XbeeApi2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request and its fields as refusals name them: name, code and the frame
-    /// lengths of its code (`MessageDesc`), and `message.field` (`FieldDesc`).
+    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
+    /// code and the frame lengths of its code), and each field a refusal names
+    /// (`message.field`, `FieldDesc`).
     pub mod request {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `at_command`, code 0x08
-        pub const AT_COMMAND: MessageDesc = MessageDesc::new(
-            "at_command",
-            0x08,
-            1,
-            &[8],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §0x08 AT Command AT Command (0x08) (code `0x08`, 8 to 28 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct AtCommand {
+            /// Matches the response; 0 asks for none.
+            pub frame_id: u8,
+            /// The two AT command characters.
+            pub command: super::rt::Ascii<2>,
+            /// Sets the parameter; none queries it.
+            pub parameter: super::rt::Repeated<u8, 20>,
+        }
+        /// §0x10 Transmit Request Transmit Request (0x10) (code `0x10`, 18 to 90 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct TransmitRequest {
+            pub frame_id: u8,
+            /// 64-bit destination address; 0xFFFF broadcasts.
+            pub destination64: u64,
+            /// 16-bit network address; 0xFFFE if unknown.
+            pub destination16: u16,
+            /// Broadcast radius in hops; 0: the maximum.
+            pub radius: u8,
+            pub options: u8,
+            pub data: super::rt::Repeated<u8, 72>,
+        }
         /// `at_command.parameter`
         pub const AT_COMMAND_PARAMETER: FieldDesc = FieldDesc::new(
             "at_command",
             "parameter",
-        );
-        /// `transmit_request`, code 0x10
-        pub const TRANSMIT_REQUEST: MessageDesc = MessageDesc::new(
-            "transmit_request",
-            0x10,
-            1,
-            &[18],
         );
         /// `transmit_request.data`
         pub const TRANSMIT_REQUEST_DATA: FieldDesc = FieldDesc::new(
@@ -1165,39 +1265,53 @@ pub mod xbee_api2 {
             "data",
         );
     }
-    /// Each response as its refusals name it.
+    /// Each response as a struct of its own, and the fields its refusals name.
     pub mod response {
-        use ::busspec_runtime::{MessageDesc, FieldDesc};
-        /// `at_response`, code 0x88
-        pub const AT_RESPONSE: MessageDesc = MessageDesc::new(
-            "at_response",
-            0x88,
-            1,
-            &[9],
-        );
+        use ::busspec_runtime::FieldDesc;
+        /// §0x88 AT Command Response AT Command Response (0x88) (code `0x88`, 9 to 29 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct AtResponse {
+            pub frame_id: u8,
+            pub command: super::rt::Ascii<2>,
+            pub status: super::AtStatus,
+            pub data: super::rt::Repeated<u8, 20>,
+        }
+        /// §0x8B Transmit Status Transmit Status (0x8B) (code `0x8B`, 11 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct TransmitStatus {
+            pub frame_id: u8,
+            pub destination16: u16,
+            pub retries: u8,
+            pub delivery: super::DeliveryStatus,
+            pub discovery: u8,
+        }
+        /// §0x8A Modem Status Modem Status (0x8A) (code `0x8A`, 6 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ModemStatus {
+            pub status: super::ModemStatus,
+        }
+        /// §0x90 Receive Packet Receive Packet (0x90) (code `0x90`, 16 to 88 bytes).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+        #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+        #[repr(align(4))]
+        pub struct ReceivePacket {
+            pub source64: u64,
+            pub source16: u16,
+            pub options: u8,
+            pub data: super::rt::Repeated<u8, 72>,
+        }
         /// `at_response.data`
         pub const AT_RESPONSE_DATA: FieldDesc = FieldDesc::new("at_response", "data");
-        /// `transmit_status`, code 0x8B
-        pub const TRANSMIT_STATUS: MessageDesc = MessageDesc::new(
-            "transmit_status",
-            0x8B,
-            1,
-            &[11],
-        );
-        /// `modem_status`, code 0x8A
-        pub const MODEM_STATUS: MessageDesc = MessageDesc::new(
-            "modem_status",
-            0x8A,
-            1,
-            &[6],
-        );
-        /// `receive_packet`, code 0x90
-        pub const RECEIVE_PACKET: MessageDesc = MessageDesc::new(
-            "receive_packet",
-            0x90,
-            1,
-            &[16],
-        );
         /// `receive_packet.data`
         pub const RECEIVE_PACKET_DATA: FieldDesc = FieldDesc::new(
             "receive_packet",

@@ -238,210 +238,260 @@ impl SdSim {
         let total = self.config.total_runtime_s + now.as_secs();
         let load = self.load_runtime_s;
         match *request {
-            Q::SetPoint {
+            Q::SetPoint(sd::request::SetPoint {
                 freshness,
                 position,
-            } => {
+            }) => {
                 self.set_point(freshness, position, now);
                 self.actuator_freshness = self.actuator_freshness.wrapping_sub(1) & 0x0F;
-                R::SetPointReply {
+                R::SetPointReply(sd::response::SetPointReply {
                     freshness: self.actuator_freshness,
                     position: self.position_at(now),
-                }
+                })
             }
-            Q::ReadActualPosition => R::ActualPosition {
-                position: self.position_at(now),
-            },
-            Q::SetVelocity { set_velocity } => {
+            Q::ReadActualPosition(sd::request::ReadActualPosition) => {
+                R::ActualPosition(sd::response::ActualPosition {
+                    position: self.position_at(now),
+                })
+            }
+            Q::SetVelocity(sd::request::SetVelocity { set_velocity }) => {
                 let here = self.encoder_position(now);
                 self.position = here;
                 self.since = now;
                 self.velocity = set_velocity.0;
-                R::SetVelocityReply {
+                R::SetVelocityReply(sd::response::SetVelocityReply {
                     actual_velocity: self.actual_velocity(now),
-                }
+                })
             }
-            Q::ReadActualVelocity => R::ActualVelocity {
-                actual_velocity: self.actual_velocity(now),
-            },
-            Q::SetServoId { new_id } => {
+            Q::ReadActualVelocity(sd::request::ReadActualVelocity) => {
+                R::ActualVelocity(sd::response::ActualVelocity {
+                    actual_velocity: self.actual_velocity(now),
+                })
+            }
+            Q::SetServoId(sd::request::SetServoId { new_id }) => {
                 self.id = new_id;
-                R::SetServoIdReply { new_id }
+                R::SetServoIdReply(sd::response::SetServoIdReply { new_id })
             }
-            Q::ReadServoId => R::ServoId { id: self.id },
-            Q::ReadCurrentConsumption => R::CurrentConsumption {
-                current: self.current(now),
-            },
-            Q::ReadBusVoltages => R::BusVoltages {
-                power_bus_1_voltage: self.config.bus_voltages.0,
-                power_bus_2_voltage: self.config.bus_voltages.1,
-            },
-            Q::ReadExtendedCurrentConsumption => R::ExtendedCurrentConsumption {
-                current: self.current(now),
-            },
-            Q::ReadTemperatures => R::Temperatures {
-                motor_temperature: self.config.temperatures.0,
-                pcb_temperature: self.config.temperatures.1,
-            },
-            Q::ReadHumidity => R::Humidity {
+            Q::ReadServoId(sd::request::ReadServoId) => {
+                R::ServoId(sd::response::ServoId { id: self.id })
+            }
+            Q::ReadCurrentConsumption(sd::request::ReadCurrentConsumption) => {
+                R::CurrentConsumption(sd::response::CurrentConsumption {
+                    current: self.current(now),
+                })
+            }
+            Q::ReadBusVoltages(sd::request::ReadBusVoltages) => {
+                R::BusVoltages(sd::response::BusVoltages {
+                    power_bus_1_voltage: self.config.bus_voltages.0,
+                    power_bus_2_voltage: self.config.bus_voltages.1,
+                })
+            }
+            Q::ReadExtendedCurrentConsumption(sd::request::ReadExtendedCurrentConsumption) => {
+                R::ExtendedCurrentConsumption(sd::response::ExtendedCurrentConsumption {
+                    current: self.current(now),
+                })
+            }
+            Q::ReadTemperatures(sd::request::ReadTemperatures) => {
+                R::Temperatures(sd::response::Temperatures {
+                    motor_temperature: self.config.temperatures.0,
+                    pcb_temperature: self.config.temperatures.1,
+                })
+            }
+            Q::ReadHumidity(sd::request::ReadHumidity) => R::Humidity(sd::response::Humidity {
                 humidity: self.config.humidity,
-            },
-            Q::ReadSkippedFramesCounter => R::SkippedFramesCounter {
-                host_freshness_counter: self.host_freshness.unwrap_or(0),
-                dropped_frames: self.dropped_frames,
-            },
-            Q::ResetDroppedFramesCounter => {
-                self.dropped_frames = 0;
-                R::DroppedFramesCounterReset {
+            }),
+            Q::ReadSkippedFramesCounter(sd::request::ReadSkippedFramesCounter) => {
+                R::SkippedFramesCounter(sd::response::SkippedFramesCounter {
                     host_freshness_counter: self.host_freshness.unwrap_or(0),
-                }
+                    dropped_frames: self.dropped_frames,
+                })
             }
-            Q::ReadActuatorStatusWord => R::ActuatorStatusWord {
-                status_bits: self.status_bits,
-                status_arg2: 0,
-            },
-            Q::ResetActuatorStatusWord => {
+            Q::ResetDroppedFramesCounter(sd::request::ResetDroppedFramesCounter) => {
+                self.dropped_frames = 0;
+                R::DroppedFramesCounterReset(sd::response::DroppedFramesCounterReset {
+                    host_freshness_counter: self.host_freshness.unwrap_or(0),
+                })
+            }
+            Q::ReadActuatorStatusWord(sd::request::ReadActuatorStatusWord) => {
+                R::ActuatorStatusWord(sd::response::ActuatorStatusWord {
+                    status_bits: self.status_bits,
+                    status_arg2: 0,
+                })
+            }
+            Q::ResetActuatorStatusWord(sd::request::ResetActuatorStatusWord) => {
                 let before = self.status_bits;
                 self.status_bits = ActuatorStatusBits(0);
-                R::ActuatorStatusWord {
+                R::ActuatorStatusWord(sd::response::ActuatorStatusWord {
                     status_bits: before,
                     status_arg2: 0,
-                }
+                })
             }
-            Q::ResetDefaultRoleAndErrorFlags => {
+            Q::ResetDefaultRoleAndErrorFlags(sd::request::ResetDefaultRoleAndErrorFlags) => {
                 self.status_bits = ActuatorStatusBits(0);
-                R::ResetDefaultRoleAndErrorFlagsReply
+                R::ResetDefaultRoleAndErrorFlagsReply(
+                    sd::response::ResetDefaultRoleAndErrorFlagsReply,
+                )
             }
-            Q::SetCurrentPositionAsZero => {
+            Q::SetCurrentPositionAsZero(sd::request::SetCurrentPositionAsZero) => {
                 let here = self.encoder_position(now);
                 self.zero_offset = here;
-                R::SetCurrentPositionAsZeroReply {
+                R::SetCurrentPositionAsZeroReply(sd::response::SetCurrentPositionAsZeroReply {
                     zero_offset: Angle(here),
-                }
+                })
             }
-            Q::ReadCurrentZeroOffset => R::CurrentZeroOffset {
-                zero_offset: Angle(self.zero_offset),
-            },
-            Q::ResetZeroOffset => {
+            Q::ReadCurrentZeroOffset(sd::request::ReadCurrentZeroOffset) => {
+                R::CurrentZeroOffset(sd::response::CurrentZeroOffset {
+                    zero_offset: Angle(self.zero_offset),
+                })
+            }
+            Q::ResetZeroOffset(sd::request::ResetZeroOffset) => {
                 self.zero_offset = 0;
-                R::ResetZeroOffsetReply
+                R::ResetZeroOffsetReply(sd::response::ResetZeroOffsetReply)
             }
-            Q::ReadElectronicSerialNumber { byte_number } => {
+            Q::ReadElectronicSerialNumber(sd::request::ReadElectronicSerialNumber {
+                byte_number,
+            }) => {
                 let (character, string_length) = self.character(0, byte_number);
-                R::ElectronicSerialNumberCharacter {
+                R::ElectronicSerialNumberCharacter(sd::response::ElectronicSerialNumberCharacter {
                     character,
                     string_length,
-                }
+                })
             }
-            Q::ReadProductDescription { byte_number } => {
+            Q::ReadProductDescription(sd::request::ReadProductDescription { byte_number }) => {
                 let (character, string_length) = self.character(1, byte_number);
-                R::ProductDescriptionCharacter {
+                R::ProductDescriptionCharacter(sd::response::ProductDescriptionCharacter {
                     character,
                     string_length,
-                }
+                })
             }
-            Q::ReadSoftwareRevision { byte_number } => {
+            Q::ReadSoftwareRevision(sd::request::ReadSoftwareRevision { byte_number }) => {
                 let (character, string_length) = self.character(2, byte_number);
-                R::SoftwareRevisionCharacter {
+                R::SoftwareRevisionCharacter(sd::response::SoftwareRevisionCharacter {
                     character,
                     string_length,
-                }
+                })
             }
-            Q::ReadHardwareRevision { byte_number } => {
+            Q::ReadHardwareRevision(sd::request::ReadHardwareRevision { byte_number }) => {
                 let (character, string_length) = self.character(3, byte_number);
-                R::HardwareRevisionCharacter {
+                R::HardwareRevisionCharacter(sd::response::HardwareRevisionCharacter {
                     character,
                     string_length,
-                }
+                })
             }
-            Q::ReadTotalRuntimeHours => R::TotalRuntimeHours {
-                runtime_hours: hours(total),
-            },
-            Q::ReadTotalRuntimeMinSec => {
+            Q::ReadTotalRuntimeHours(sd::request::ReadTotalRuntimeHours) => {
+                R::TotalRuntimeHours(sd::response::TotalRuntimeHours {
+                    runtime_hours: hours(total),
+                })
+            }
+            Q::ReadTotalRuntimeMinSec(sd::request::ReadTotalRuntimeMinSec) => {
                 let (runtime_minutes, runtime_seconds) = min_sec(total);
-                R::TotalRuntimeMinSec {
+                R::TotalRuntimeMinSec(sd::response::TotalRuntimeMinSec {
                     runtime_minutes,
                     runtime_seconds,
-                }
+                })
             }
-            Q::ReadLoadRuntime024Hours => R::LoadRuntime024Hours {
-                runtime_hours: hours(load[0]),
-            },
-            Q::ReadLoadRuntime024MinSec => {
+            Q::ReadLoadRuntime024Hours(sd::request::ReadLoadRuntime024Hours) => {
+                R::LoadRuntime024Hours(sd::response::LoadRuntime024Hours {
+                    runtime_hours: hours(load[0]),
+                })
+            }
+            Q::ReadLoadRuntime024MinSec(sd::request::ReadLoadRuntime024MinSec) => {
                 let (runtime_minutes, runtime_seconds) = min_sec(load[0]);
-                R::LoadRuntime024MinSec {
+                R::LoadRuntime024MinSec(sd::response::LoadRuntime024MinSec {
                     runtime_minutes,
                     runtime_seconds,
-                }
+                })
             }
-            Q::ResetLoadRuntime024 => R::LoadRuntime024HoursBeforeReset {
-                runtime_hours_before_reset: self.reset_load(0),
-            },
-            Q::ReadLoadRuntime2549Hours => R::LoadRuntime2549Hours {
-                runtime_hours: hours(load[1]),
-            },
-            Q::ReadLoadRuntime2549MinSec => {
+            Q::ResetLoadRuntime024(sd::request::ResetLoadRuntime024) => {
+                R::LoadRuntime024HoursBeforeReset(sd::response::LoadRuntime024HoursBeforeReset {
+                    runtime_hours_before_reset: self.reset_load(0),
+                })
+            }
+            Q::ReadLoadRuntime2549Hours(sd::request::ReadLoadRuntime2549Hours) => {
+                R::LoadRuntime2549Hours(sd::response::LoadRuntime2549Hours {
+                    runtime_hours: hours(load[1]),
+                })
+            }
+            Q::ReadLoadRuntime2549MinSec(sd::request::ReadLoadRuntime2549MinSec) => {
                 let (runtime_minutes, runtime_seconds) = min_sec(load[1]);
-                R::LoadRuntime2549MinSec {
+                R::LoadRuntime2549MinSec(sd::response::LoadRuntime2549MinSec {
                     runtime_minutes,
                     runtime_seconds,
-                }
+                })
             }
-            Q::ResetLoadRuntime2549 => R::LoadRuntime2549HoursBeforeReset {
-                runtime_hours_before_reset: self.reset_load(1),
-            },
-            Q::ReadLoadRuntime5074Hours => R::LoadRuntime5074Hours {
-                runtime_hours: hours(load[2]),
-            },
-            Q::ReadLoadRuntime5074MinSec => {
+            Q::ResetLoadRuntime2549(sd::request::ResetLoadRuntime2549) => {
+                R::LoadRuntime2549HoursBeforeReset(sd::response::LoadRuntime2549HoursBeforeReset {
+                    runtime_hours_before_reset: self.reset_load(1),
+                })
+            }
+            Q::ReadLoadRuntime5074Hours(sd::request::ReadLoadRuntime5074Hours) => {
+                R::LoadRuntime5074Hours(sd::response::LoadRuntime5074Hours {
+                    runtime_hours: hours(load[2]),
+                })
+            }
+            Q::ReadLoadRuntime5074MinSec(sd::request::ReadLoadRuntime5074MinSec) => {
                 let (runtime_minutes, runtime_seconds) = min_sec(load[2]);
-                R::LoadRuntime5074MinSec {
+                R::LoadRuntime5074MinSec(sd::response::LoadRuntime5074MinSec {
                     runtime_minutes,
                     runtime_seconds,
-                }
+                })
             }
-            Q::ResetLoadRuntime5074 => R::LoadRuntime5074HoursBeforeReset {
-                runtime_hours_before_reset: self.reset_load(2),
-            },
-            Q::ReadLoadRuntime7599Hours => R::LoadRuntime7599Hours {
-                runtime_hours: hours(load[3]),
-            },
-            Q::ReadLoadRuntime7599MinSec => {
+            Q::ResetLoadRuntime5074(sd::request::ResetLoadRuntime5074) => {
+                R::LoadRuntime5074HoursBeforeReset(sd::response::LoadRuntime5074HoursBeforeReset {
+                    runtime_hours_before_reset: self.reset_load(2),
+                })
+            }
+            Q::ReadLoadRuntime7599Hours(sd::request::ReadLoadRuntime7599Hours) => {
+                R::LoadRuntime7599Hours(sd::response::LoadRuntime7599Hours {
+                    runtime_hours: hours(load[3]),
+                })
+            }
+            Q::ReadLoadRuntime7599MinSec(sd::request::ReadLoadRuntime7599MinSec) => {
                 let (runtime_minutes, runtime_seconds) = min_sec(load[3]);
-                R::LoadRuntime7599MinSec {
+                R::LoadRuntime7599MinSec(sd::response::LoadRuntime7599MinSec {
                     runtime_minutes,
                     runtime_seconds,
-                }
+                })
             }
-            Q::ResetLoadRuntime7599 => R::LoadRuntime7599HoursBeforeReset {
-                runtime_hours_before_reset: self.reset_load(3),
-            },
-            Q::ReadLoadRuntime100Hours => R::LoadRuntime100Hours {
-                runtime_hours: hours(load[4]),
-            },
-            Q::ReadLoadRuntime100MinSec => {
+            Q::ResetLoadRuntime7599(sd::request::ResetLoadRuntime7599) => {
+                R::LoadRuntime7599HoursBeforeReset(sd::response::LoadRuntime7599HoursBeforeReset {
+                    runtime_hours_before_reset: self.reset_load(3),
+                })
+            }
+            Q::ReadLoadRuntime100Hours(sd::request::ReadLoadRuntime100Hours) => {
+                R::LoadRuntime100Hours(sd::response::LoadRuntime100Hours {
+                    runtime_hours: hours(load[4]),
+                })
+            }
+            Q::ReadLoadRuntime100MinSec(sd::request::ReadLoadRuntime100MinSec) => {
                 let (runtime_minutes, runtime_seconds) = min_sec(load[4]);
-                R::LoadRuntime100MinSec {
+                R::LoadRuntime100MinSec(sd::response::LoadRuntime100MinSec {
                     runtime_minutes,
                     runtime_seconds,
-                }
+                })
             }
-            Q::ResetLoadRuntime100 => R::LoadRuntime100HoursBeforeReset {
-                runtime_hours_before_reset: self.reset_load(4),
-            },
-            Q::ReadStallEventCounter => R::StallEventCounter {
-                stall_events: self.stall_events,
-            },
-            Q::ResetStallEventCounter => {
+            Q::ResetLoadRuntime100(sd::request::ResetLoadRuntime100) => {
+                R::LoadRuntime100HoursBeforeReset(sd::response::LoadRuntime100HoursBeforeReset {
+                    runtime_hours_before_reset: self.reset_load(4),
+                })
+            }
+            Q::ReadStallEventCounter(sd::request::ReadStallEventCounter) => {
+                R::StallEventCounter(sd::response::StallEventCounter {
+                    stall_events: self.stall_events,
+                })
+            }
+            Q::ResetStallEventCounter(sd::request::ResetStallEventCounter) => {
                 let before = self.stall_events;
                 self.stall_events = 0;
-                R::StallEventCounterBeforeReset {
+                R::StallEventCounterBeforeReset(sd::response::StallEventCounterBeforeReset {
                     stall_events_before_reset: before,
-                }
+                })
             }
-            Q::ReadPowerUpCycles => R::PowerUpCycles {
-                power_up_cycles: self.config.power_up_cycles,
-            },
+            Q::ReadPowerUpCycles(sd::request::ReadPowerUpCycles) => {
+                R::PowerUpCycles(sd::response::PowerUpCycles {
+                    power_up_cycles: self.config.power_up_cycles,
+                })
+            }
         }
     }
 

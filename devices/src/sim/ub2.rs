@@ -22,7 +22,7 @@
 use std::time::Duration;
 
 use busspec_protocols::ub2::{
-    self, BaudRateIndex, Capacitance, ModeOfOperation, Request, Response, Ub2,
+    self, response, BaudRateIndex, Capacitance, ModeOfOperation, Request, Response, Ub2,
 };
 use busspec_protocols::{DecodeError, Protocol};
 
@@ -334,7 +334,7 @@ impl Ub2Sim {
     /// Starts a movement to `target` (micro-steps), clipped to the customer limits.
     fn start_movement(&mut self, trigger: u8, target: i64, now: Duration) -> Response {
         if self.moving(now) {
-            return Response::NakIncompatibleStatus;
+            return Response::NakIncompatibleStatus(response::NakIncompatibleStatus);
         }
         let here = self.position_at(now);
         let lo = i64::from(self.position_of(self.lower_customer_limit));
@@ -356,15 +356,15 @@ impl Ub2Sim {
             lost_micro_steps: lost,
         });
         if clipped {
-            Response::NakLimitReached
+            Response::NakLimitReached(response::NakLimitReached)
         } else {
-            Response::MovementStarted
+            Response::MovementStarted(response::MovementStarted)
         }
     }
 
     fn reference_run(&mut self, now: Duration) -> Response {
         if self.moving(now) {
-            return Response::NakIncompatibleStatus;
+            return Response::NakIncompatibleStatus(response::NakIncompatibleStatus);
         }
         let here = self.position_at(now);
         let preset = u32::from(self.config.preset_full_steps) * MICRO_STEPS;
@@ -379,23 +379,25 @@ impl Ub2Sim {
             ],
             lost_micro_steps: 0,
         });
-        Response::MovementStarted
+        Response::MovementStarted(response::MovementStarted)
     }
 
     fn completion(&self, trigger: u8, now: Duration) -> Response {
         match &self.movement {
             Some(m) if m.trigger == trigger => {
                 if !m.finished(now) {
-                    Response::MovementNotCompleted
+                    Response::MovementNotCompleted(response::MovementNotCompleted)
                 } else if m.lost_micro_steps > 0 && trigger != 0x10 {
-                    Response::MovementCompletedWithStepLoss {
-                        lost_micro_steps: m.lost_micro_steps,
-                    }
+                    Response::MovementCompletedWithStepLoss(
+                        response::MovementCompletedWithStepLoss {
+                            lost_micro_steps: m.lost_micro_steps,
+                        },
+                    )
                 } else {
-                    Response::MovementCompleted
+                    Response::MovementCompleted(response::MovementCompleted)
                 }
             }
-            _ => Response::MovementNotTriggered,
+            _ => Response::MovementNotTriggered(response::MovementNotTriggered),
         }
     }
 
@@ -407,14 +409,14 @@ impl Ub2Sim {
             c >= self.lower_customer_limit
         };
         if !(inside && ordered) {
-            return Response::NakLimitReached;
+            return Response::NakLimitReached(response::NakLimitReached);
         }
         if lower {
             self.lower_customer_limit = c;
-            Response::SetLowerCustomerLimitAck
+            Response::SetLowerCustomerLimitAck(response::SetLowerCustomerLimitAck)
         } else {
             self.upper_customer_limit = c;
-            Response::SetUpperCustomerLimitAck
+            Response::SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck)
         }
     }
 
@@ -426,202 +428,255 @@ impl Ub2Sim {
         let full = |ms: u32| u16::try_from(ms / MICRO_STEPS).unwrap_or(u16::MAX);
         let steps = |s: i64| s * i64::from(MICRO_STEPS);
         match *request {
-            Q::ReferenceRun => self.reference_run(now),
-            Q::GoToCapacitance { target } => {
+            Q::ReferenceRun(ub2::request::ReferenceRun) => self.reference_run(now),
+            Q::GoToCapacitance(ub2::request::GoToCapacitance { target }) => {
                 let lo = self.lower_customer_limit;
                 let hi = self.upper_customer_limit;
                 let pos = i64::from(self.position_of(target.clamp(lo, hi)));
                 let r = self.start_movement(0x20, pos, now);
-                if r == R::MovementStarted && (target < lo || target > hi) {
-                    R::NakLimitReached
+                if r == R::MovementStarted(ub2::response::MovementStarted)
+                    && (target < lo || target > hi)
+                {
+                    R::NakLimitReached(ub2::response::NakLimitReached)
                 } else {
                     r
                 }
             }
-            Q::GoToFullStepPosition { target } => {
+            Q::GoToFullStepPosition(ub2::request::GoToFullStepPosition { target }) => {
                 self.start_movement(0x21, steps(i64::from(target)), now)
             }
-            Q::MoveFullSteps { steps: s } => {
+            Q::MoveFullSteps(ub2::request::MoveFullSteps { steps: s }) => {
                 self.start_movement(0x22, i64::from(here) + steps(i64::from(s)), now)
             }
-            Q::GoToCmin => {
+            Q::GoToCmin(ub2::request::GoToCmin) => {
                 let to = i64::from(self.position_of(self.lower_customer_limit));
                 self.start_movement(0x23, to, now)
             }
-            Q::GoToCmax => {
+            Q::GoToCmax(ub2::request::GoToCmax) => {
                 let to = i64::from(self.position_of(self.upper_customer_limit));
                 self.start_movement(0x24, to, now)
             }
-            Q::GoToMicroStepPosition { target } => {
+            Q::GoToMicroStepPosition(ub2::request::GoToMicroStepPosition { target }) => {
                 self.start_movement(0x25, i64::from(target), now)
             }
-            Q::MoveMicroSteps { steps: s } => {
+            Q::MoveMicroSteps(ub2::request::MoveMicroSteps { steps: s }) => {
                 self.start_movement(0x26, i64::from(here) + i64::from(s), now)
             }
-            Q::GoToStoredPosition { index } => {
+            Q::GoToStoredPosition(ub2::request::GoToStoredPosition { index }) => {
                 match self.stored_positions.get(usize::from(index)) {
                     Some(&p) => self.start_movement(0x27, steps(i64::from(p)), now),
-                    None => R::NakIndexOutOfRange,
+                    None => R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange),
                 }
             }
-            Q::ReferenceRunStatus => self.completion(0x10, now),
-            Q::GoToCapacitanceStatus => self.completion(0x20, now),
-            Q::GoToFullStepPositionStatus => self.completion(0x21, now),
-            Q::MoveFullStepsStatus => self.completion(0x22, now),
-            Q::GoToCminStatus => self.completion(0x23, now),
-            Q::GoToCmaxStatus => self.completion(0x24, now),
-            Q::GoToMicroStepPositionStatus => self.completion(0x25, now),
-            Q::MoveMicroStepsStatus => self.completion(0x26, now),
-            Q::GoToStoredPositionStatus => self.completion(0x27, now),
-            Q::SetAccelerationSpeedIndex {
+            Q::ReferenceRunStatus(ub2::request::ReferenceRunStatus) => self.completion(0x10, now),
+            Q::GoToCapacitanceStatus(ub2::request::GoToCapacitanceStatus) => {
+                self.completion(0x20, now)
+            }
+            Q::GoToFullStepPositionStatus(ub2::request::GoToFullStepPositionStatus) => {
+                self.completion(0x21, now)
+            }
+            Q::MoveFullStepsStatus(ub2::request::MoveFullStepsStatus) => self.completion(0x22, now),
+            Q::GoToCminStatus(ub2::request::GoToCminStatus) => self.completion(0x23, now),
+            Q::GoToCmaxStatus(ub2::request::GoToCmaxStatus) => self.completion(0x24, now),
+            Q::GoToMicroStepPositionStatus(ub2::request::GoToMicroStepPositionStatus) => {
+                self.completion(0x25, now)
+            }
+            Q::MoveMicroStepsStatus(ub2::request::MoveMicroStepsStatus) => {
+                self.completion(0x26, now)
+            }
+            Q::GoToStoredPositionStatus(ub2::request::GoToStoredPositionStatus) => {
+                self.completion(0x27, now)
+            }
+            Q::SetAccelerationSpeedIndex(ub2::request::SetAccelerationSpeedIndex {
                 acceleration_index,
                 speed_index,
-            } => {
+            }) => {
                 if acceleration_index > 18 || speed_index > 18 {
-                    return R::NakIndexOutOfRange;
+                    return R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange);
                 }
                 self.acceleration_index = acceleration_index;
                 self.speed_index = speed_index;
-                R::SetAccelerationSpeedIndexAck
+                R::SetAccelerationSpeedIndexAck(ub2::response::SetAccelerationSpeedIndexAck)
             }
-            Q::SetCurrent {
+            Q::SetCurrent(ub2::request::SetCurrent {
                 idle_current,
                 drive_current,
-            } => {
+            }) => {
                 if idle_current > self.config.i_idle_max || drive_current > self.config.i_drive_max
                 {
-                    return R::NakIndexOutOfRange;
+                    return R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange);
                 }
                 self.idle_current = idle_current;
                 self.drive_current = drive_current;
-                R::SetCurrentAck
+                R::SetCurrentAck(ub2::response::SetCurrentAck)
             }
-            Q::SetSlaveAddress { address } => {
+            Q::SetSlaveAddress(ub2::request::SetSlaveAddress { address }) => {
                 if !ub2::DEVICE_ADDRESSES.contains(&address) {
-                    return R::NakIndexOutOfRange;
+                    return R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange);
                 }
                 // The ACK still goes out from the old address (§5.3 example); see on_frame.
                 self.address = address;
-                R::SetSlaveAddressAck
+                R::SetSlaveAddressAck(ub2::response::SetSlaveAddressAck)
             }
-            Q::SetBaudRate { baud_rate } => {
+            Q::SetBaudRate(ub2::request::SetBaudRate { baud_rate }) => {
                 if baud_rate.name().is_none() {
-                    return R::NakIndexOutOfRange;
+                    return R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange);
                 }
                 self.baud_rate = baud_rate;
-                R::SetBaudRateAck
+                R::SetBaudRateAck(ub2::response::SetBaudRateAck)
             }
-            Q::SetLowerCustomerLimit { limit } => self.set_limit(true, limit),
-            Q::SetUpperCustomerLimit { limit } => self.set_limit(false, limit),
-            Q::StoreIndexedPosition { index, position } => {
+            Q::SetLowerCustomerLimit(ub2::request::SetLowerCustomerLimit { limit }) => {
+                self.set_limit(true, limit)
+            }
+            Q::SetUpperCustomerLimit(ub2::request::SetUpperCustomerLimit { limit }) => {
+                self.set_limit(false, limit)
+            }
+            Q::StoreIndexedPosition(ub2::request::StoreIndexedPosition { index, position }) => {
                 match self.stored_positions.get_mut(usize::from(index)) {
                     Some(slot) => {
                         *slot = position;
-                        R::StoreIndexedPositionAck
+                        R::StoreIndexedPositionAck(ub2::response::StoreIndexedPositionAck)
                     }
-                    None => R::NakIndexOutOfRange,
+                    None => R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange),
                 }
             }
-            Q::SetModeOfOperation { mode } => {
+            Q::SetModeOfOperation(ub2::request::SetModeOfOperation { mode }) => {
                 if self.moving(now) {
-                    return R::NakIncompatibleStatus;
+                    return R::NakIncompatibleStatus(ub2::response::NakIncompatibleStatus);
                 }
                 if mode.name().is_none() {
-                    return R::NakIndexOutOfRange;
+                    return R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange);
                 }
                 self.mode = mode;
-                R::SetModeOfOperationAck
+                R::SetModeOfOperationAck(ub2::response::SetModeOfOperationAck)
             }
-            Q::GetActualCapacitance => R::ActualCapacitance {
-                capacitance: self.capacitance_at(here),
-            },
-            Q::GetActualFullStepPosition => R::ActualFullStepPosition {
-                full_steps: full(here),
-            },
-            Q::GetMinimumCapacitance => R::MinimumCapacitance {
-                capacitance: self
-                    .config
-                    .c_curve
-                    .iter()
-                    .map(|e| e.1)
-                    .min()
-                    .unwrap_or_default(),
-            },
-            Q::GetMaximumCapacitance => R::MaximumCapacitance {
-                capacitance: self
-                    .config
-                    .c_curve
-                    .iter()
-                    .map(|e| e.1)
-                    .max()
-                    .unwrap_or_default(),
-            },
-            Q::GetAccelerationSpeed => R::AccelerationSpeed {
-                acceleration_index: self.acceleration_index,
-                speed_index: self.speed_index,
-            },
-            Q::GetStatus => {
+            Q::GetActualCapacitance(ub2::request::GetActualCapacitance) => {
+                R::ActualCapacitance(ub2::response::ActualCapacitance {
+                    capacitance: self.capacitance_at(here),
+                })
+            }
+            Q::GetActualFullStepPosition(ub2::request::GetActualFullStepPosition) => {
+                R::ActualFullStepPosition(ub2::response::ActualFullStepPosition {
+                    full_steps: full(here),
+                })
+            }
+            Q::GetMinimumCapacitance(ub2::request::GetMinimumCapacitance) => {
+                R::MinimumCapacitance(ub2::response::MinimumCapacitance {
+                    capacitance: self
+                        .config
+                        .c_curve
+                        .iter()
+                        .map(|e| e.1)
+                        .min()
+                        .unwrap_or_default(),
+                })
+            }
+            Q::GetMaximumCapacitance(ub2::request::GetMaximumCapacitance) => {
+                R::MaximumCapacitance(ub2::response::MaximumCapacitance {
+                    capacitance: self
+                        .config
+                        .c_curve
+                        .iter()
+                        .map(|e| e.1)
+                        .max()
+                        .unwrap_or_default(),
+                })
+            }
+            Q::GetAccelerationSpeed(ub2::request::GetAccelerationSpeed) => {
+                R::AccelerationSpeed(ub2::response::AccelerationSpeed {
+                    acceleration_index: self.acceleration_index,
+                    speed_index: self.speed_index,
+                })
+            }
+            Q::GetStatus(ub2::request::GetStatus) => {
                 let error_bits = self.error_bits;
                 // §6.6.1: "Reset indicator flag will be reset after reading".
                 self.error_bits =
                     ub2::StatusErrorBits(error_bits.0 & !ub2::StatusErrorBits::RESET.0);
-                R::Status {
+                R::Status(ub2::response::Status {
                     error_bits,
                     reserved: 0,
-                }
+                })
             }
-            Q::GetCCurveIndexedFullStepCapacitance { index } => {
-                match self.config.c_curve.get(usize::from(index)) {
-                    Some(&(full_steps, capacitance)) => R::CCurveEntry {
-                        index,
-                        full_steps,
-                        capacitance,
-                    },
-                    None => R::NakIndexOutOfRange,
-                }
+            Q::GetCCurveIndexedFullStepCapacitance(
+                ub2::request::GetCCurveIndexedFullStepCapacitance { index },
+            ) => match self.config.c_curve.get(usize::from(index)) {
+                Some(&(full_steps, capacitance)) => R::CCurveEntry(ub2::response::CCurveEntry {
+                    index,
+                    full_steps,
+                    capacitance,
+                }),
+                None => R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange),
+            },
+            Q::GetControllerTemperature(ub2::request::GetControllerTemperature) => {
+                R::ControllerTemperature(ub2::response::ControllerTemperature {
+                    temperature: self.config.temperature,
+                })
             }
-            Q::GetControllerTemperature => R::ControllerTemperature {
-                temperature: self.config.temperature,
-            },
-            Q::GetMicroStepPosition => R::MicroStepPosition { micro_steps: here },
-            Q::GetFirmwareVersion => R::FirmwareVersion {
-                firmware_version: self.config.firmware_version.into(),
-            },
-            Q::GetSerialNumber => R::SerialNumber {
-                serial_number: self.config.serial_number.into(),
-            },
-            Q::GetCminNom => R::CminNom {
+            Q::GetMicroStepPosition(ub2::request::GetMicroStepPosition) => {
+                R::MicroStepPosition(ub2::response::MicroStepPosition { micro_steps: here })
+            }
+            Q::GetFirmwareVersion(ub2::request::GetFirmwareVersion) => {
+                R::FirmwareVersion(ub2::response::FirmwareVersion {
+                    firmware_version: self.config.firmware_version.into(),
+                })
+            }
+            Q::GetSerialNumber(ub2::request::GetSerialNumber) => {
+                R::SerialNumber(ub2::response::SerialNumber {
+                    serial_number: self.config.serial_number.into(),
+                })
+            }
+            Q::GetCminNom(ub2::request::GetCminNom) => R::CminNom(ub2::response::CminNom {
                 capacitance: self.config.cmin_nom,
-            },
-            Q::GetCmaxNom => R::CmaxNom {
+            }),
+            Q::GetCmaxNom(ub2::request::GetCmaxNom) => R::CmaxNom(ub2::response::CmaxNom {
                 capacitance: self.config.cmax_nom,
-            },
-            Q::GetLowerCustomerLimit => R::LowerCustomerLimit {
-                capacitance: self.lower_customer_limit,
-            },
-            Q::GetUpperCustomerLimit => R::UpperCustomerLimit {
-                capacitance: self.upper_customer_limit,
-            },
-            Q::GetLowerFactoryLimit => R::LowerFactoryLimit {
-                capacitance: self.lower_factory_limit(),
-            },
-            Q::GetUpperFactoryLimit => R::UpperFactoryLimit {
-                capacitance: self.upper_factory_limit(),
-            },
-            Q::GetPresetCapacitance => R::PresetCapacitance {
-                capacitance: self
-                    .capacitance_at(u32::from(self.config.preset_full_steps) * MICRO_STEPS),
-            },
-            Q::GetPresetFullStepPosition => R::PresetFullStepPosition {
-                full_steps: u32::from(self.config.preset_full_steps),
-            },
-            Q::GetStoredFullStepPosition { index } => {
+            }),
+            Q::GetLowerCustomerLimit(ub2::request::GetLowerCustomerLimit) => {
+                R::LowerCustomerLimit(ub2::response::LowerCustomerLimit {
+                    capacitance: self.lower_customer_limit,
+                })
+            }
+            Q::GetUpperCustomerLimit(ub2::request::GetUpperCustomerLimit) => {
+                R::UpperCustomerLimit(ub2::response::UpperCustomerLimit {
+                    capacitance: self.upper_customer_limit,
+                })
+            }
+            Q::GetLowerFactoryLimit(ub2::request::GetLowerFactoryLimit) => {
+                R::LowerFactoryLimit(ub2::response::LowerFactoryLimit {
+                    capacitance: self.lower_factory_limit(),
+                })
+            }
+            Q::GetUpperFactoryLimit(ub2::request::GetUpperFactoryLimit) => {
+                R::UpperFactoryLimit(ub2::response::UpperFactoryLimit {
+                    capacitance: self.upper_factory_limit(),
+                })
+            }
+            Q::GetPresetCapacitance(ub2::request::GetPresetCapacitance) => {
+                R::PresetCapacitance(ub2::response::PresetCapacitance {
+                    capacitance: self
+                        .capacitance_at(u32::from(self.config.preset_full_steps) * MICRO_STEPS),
+                })
+            }
+            Q::GetPresetFullStepPosition(ub2::request::GetPresetFullStepPosition) => {
+                R::PresetFullStepPosition(ub2::response::PresetFullStepPosition {
+                    full_steps: u32::from(self.config.preset_full_steps),
+                })
+            }
+            Q::GetStoredFullStepPosition(ub2::request::GetStoredFullStepPosition { index }) => {
                 match self.stored_positions.get(usize::from(index)) {
-                    Some(&full_steps) => R::StoredFullStepPosition { index, full_steps },
-                    None => R::NakIndexOutOfRange,
+                    Some(&full_steps) => {
+                        R::StoredFullStepPosition(ub2::response::StoredFullStepPosition {
+                            index,
+                            full_steps,
+                        })
+                    }
+                    None => R::NakIndexOutOfRange(ub2::response::NakIndexOutOfRange),
                 }
             }
-            Q::GetModeOfOperation => R::ActualModeOfOperation { mode: self.mode },
+            Q::GetModeOfOperation(ub2::request::GetModeOfOperation) => {
+                R::ActualModeOfOperation(ub2::response::ActualModeOfOperation { mode: self.mode })
+            }
         }
     }
 }
@@ -647,15 +702,19 @@ impl Device for Ub2Sim {
         }
         let response = match Ub2::decode_request(&seen) {
             Ok(d) => self.respond(&d.message, now),
-            Err(DecodeError::ChecksumMismatch { .. }) => Response::NakChecksumError,
+            Err(DecodeError::ChecksumMismatch { .. }) => {
+                Response::NakChecksumError(response::NakChecksumError)
+            }
             // A value the spec's ranges forbid (an index, an address past 0x40, or a number an
             // MSB-first device reads the other way round): §7.1's 0x94, "given index is outside
             // of defined / allowed range".
             Err(DecodeError::InvalidValue { .. } | DecodeError::OutOfRange { .. }) => {
-                Response::NakIndexOutOfRange
+                Response::NakIndexOutOfRange(response::NakIndexOutOfRange)
             }
-            Err(_) if !Ub2::checksum_ok(&seen) => Response::NakChecksumError,
-            Err(_) => Response::NakUnknownCommand,
+            Err(_) if !Ub2::checksum_ok(&seen) => {
+                Response::NakChecksumError(response::NakChecksumError)
+            }
+            Err(_) => Response::NakUnknownCommand(response::NakUnknownCommand),
         };
         let mut out = reply::<Ub2>(&response, me)?;
         if self.msb_first {

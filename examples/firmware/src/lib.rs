@@ -53,11 +53,11 @@ where
         host_freshness: 0,
     };
     for &target in targets {
-        let request = sd::Request::SetPoint {
+        let request = sd::Request::SetPoint(sd::request::SetPoint {
             // The master puts the next counter here.
             freshness: 0,
             position: sd::Angle(target),
-        };
+        });
         let reply = driver.transact(address, request).await?;
         if reply.response.is_some() {
             report.answered += 1;
@@ -68,12 +68,15 @@ where
             .map(|next| next.wrapping_add(15) % 16);
     }
     let reply = driver
-        .transact(address, sd::Request::ReadSkippedFramesCounter)
+        .transact(
+            address,
+            sd::Request::ReadSkippedFramesCounter(sd::request::ReadSkippedFramesCounter),
+        )
         .await?;
-    if let Some(sd::Response::SkippedFramesCounter {
+    if let Some(sd::Response::SkippedFramesCounter(sd::response::SkippedFramesCounter {
         host_freshness_counter,
         dropped_frames,
-    }) = reply.response
+    })) = reply.response
     {
         report.dropped_frames = dropped_frames;
         report.host_freshness = host_freshness_counter;

@@ -52,13 +52,17 @@ where
         after: 0,
         exception: None,
     };
-    let read = |quantity: usize| modbus::Request::ReadHoldingRegisters {
-        starting_address: start,
-        quantity: quantity as u16,
+    let read = |quantity: usize| {
+        modbus::Request::ReadHoldingRegisters(modbus::request::ReadHoldingRegisters {
+            starting_address: start,
+            quantity: quantity as u16,
+        })
     };
     let reply = driver.transact(address, read(count)).await?;
     match reply.response {
-        Some(modbus::Response::ReadHoldingRegistersReply { registers, .. }) => {
+        Some(modbus::Response::ReadHoldingRegistersReply(
+            modbus::response::ReadHoldingRegistersReply { registers, .. },
+        )) => {
             for (slot, r) in report.before.iter_mut().zip(registers.iter()) {
                 *slot = *r;
             }
@@ -69,16 +73,19 @@ where
         }
         None => return Ok(report),
     }
-    let write = modbus::Request::WriteSingleRegister {
+    let write = modbus::Request::WriteSingleRegister(modbus::request::WriteSingleRegister {
         register_address: start,
         register_value: report.before[0].wrapping_add(1),
-    };
+    });
     let reply = driver.transact(address, write).await?;
     if let Some(r) = &reply.response {
         report.exception = exception(r);
     }
     let reply = driver.transact(address, read(1)).await?;
-    if let Some(modbus::Response::ReadHoldingRegistersReply { registers, .. }) = reply.response {
+    if let Some(modbus::Response::ReadHoldingRegistersReply(
+        modbus::response::ReadHoldingRegistersReply { registers, .. },
+    )) = reply.response
+    {
         report.after = registers.first().copied().unwrap_or(0);
     }
     Ok(report)
@@ -86,10 +93,14 @@ where
 
 /// The exception code of an exception reply.
 fn exception(r: &modbus::Response) -> Option<u8> {
-    use modbus::Response::*;
+    use modbus::{response, Response::*};
     match r {
-        ReadHoldingRegistersException { exception_code }
-        | WriteSingleRegisterException { exception_code } => Some(exception_code.raw()),
+        ReadHoldingRegistersException(response::ReadHoldingRegistersException {
+            exception_code,
+        })
+        | WriteSingleRegisterException(response::WriteSingleRegisterException { exception_code }) => {
+            Some(exception_code.raw())
+        }
         _ => None,
     }
 }

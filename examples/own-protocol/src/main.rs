@@ -5,7 +5,7 @@ use busspec_runtime::{DecodeError, Protocol};
 use own_protocol::thermo::{DeciCelsius, Mode, Request, Response, Thermo, MAX_FRAME_LEN};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let request = Request::ReadTemperature;
+    let request = Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature);
     let mut buf = [0u8; MAX_FRAME_LEN];
     let n = request.encode(0x01, &mut buf)?;
     println!("request  {:02X?} {request:?}", &buf[..n]);
@@ -14,11 +14,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rx = [0xA5, 0x01, 0x90, 0x00, 0xD7, 0x00, 0xDC, 0x5A, 0x66, 0x93];
     let reply = Response::decode_reply(&rx, &request)?;
     println!("reply    {:02X?} {:?}", rx, reply.message);
-    if let Response::Temperature {
+    if let Response::Temperature(own_protocol::thermo::response::Temperature {
         measured,
         setpoint,
         humidity,
-    } = reply.message
+    }) = reply.message
     {
         println!(
             "thermostat {}: {} {}, set point {} {}, humidity {} {}",
@@ -33,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     // Every thermostat on the bus to heating: a broadcast, which nobody answers.
-    let heat = Request::SetMode { mode: Mode::Heat };
+    let heat = Request::SetMode(own_protocol::thermo::request::SetMode { mode: Mode::Heat });
     let broadcast = Thermo::BUS
         .broadcast_address
         .ok_or("no broadcast address")?;
@@ -46,9 +46,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // A value that does not fit its wire field (the set point travels as a u16) is refused
     // before it reaches the bus.
-    let frost = Request::SetSetpoint {
+    let frost = Request::SetSetpoint(own_protocol::thermo::request::SetSetpoint {
         setpoint: DeciCelsius::from_value(-1.0).ok_or("not a whole number of tenths")?,
-    };
+    });
     match frost.encode(0x01, &mut buf) {
         Err(e) => println!("encode   {frost:?}: {e}"),
         Ok(n) => return Err(format!("a negative set point encoded: {:02X?}", &buf[..n]).into()),

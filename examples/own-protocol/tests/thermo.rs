@@ -15,21 +15,21 @@ use own_protocol::{with_protocol, PROTOCOLS};
 /// here until the lists below cover it.
 fn request_index(r: &Request) -> usize {
     match r {
-        Request::ReadTemperature => 0,
-        Request::SetSetpoint { .. } => 1,
-        Request::SetMode { .. } => 2,
-        Request::ReadStatus => 3,
+        Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature) => 0,
+        Request::SetSetpoint(_) => 1,
+        Request::SetMode(_) => 2,
+        Request::ReadStatus(own_protocol::thermo::request::ReadStatus) => 3,
     }
 }
 const REQUESTS: usize = 4;
 
 fn response_index(r: &Response) -> usize {
     match r {
-        Response::Temperature { .. } => 0,
-        Response::SetpointAck { .. } => 1,
-        Response::ModeAck { .. } => 2,
-        Response::Status { .. } => 3,
-        Response::Nak { .. } => 4,
+        Response::Temperature(_) => 0,
+        Response::SetpointAck(_) => 1,
+        Response::ModeAck(_) => 2,
+        Response::Status(_) => 3,
+        Response::Nak(_) => 4,
     }
 }
 const RESPONSES: usize = 5;
@@ -37,13 +37,13 @@ const RESPONSES: usize = 5;
 /// Every request, each field over its whole spec range (`set_mode`'s mode is limited to the
 /// four listed modes; responses carry `Unknown` modes too).
 fn requests() -> Vec<Request> {
-    let mut all = vec![Request::ReadTemperature, Request::ReadStatus];
-    all.extend((50..=350).map(|raw| Request::SetSetpoint {
+    let mut all = vec![Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature), Request::ReadStatus(own_protocol::thermo::request::ReadStatus)];
+    all.extend((50..=350).map(|raw| Request::SetSetpoint(own_protocol::thermo::request::SetSetpoint {
         setpoint: DeciCelsius::from_raw(raw),
-    }));
-    all.extend((0..=3u8).map(|raw| Request::SetMode {
+    })));
+    all.extend((0..=3u8).map(|raw| Request::SetMode(own_protocol::thermo::request::SetMode {
         mode: Mode::from_raw(raw),
-    }));
+    })));
     all
 }
 
@@ -52,9 +52,9 @@ fn requests() -> Vec<Request> {
 fn values_outside_a_range_are_refused() {
     let mut buf = [0u8; MAX_FRAME_LEN];
     for raw in 4..=255u8 {
-        let request = Request::SetMode {
+        let request = Request::SetMode(own_protocol::thermo::request::SetMode {
             mode: Mode::from_raw(raw),
-        };
+        });
         assert_eq!(
             request.encode(0x01, &mut buf),
             Err(busspec_runtime::EncodeError::NotInRange {
@@ -73,27 +73,27 @@ fn values_outside_a_range_are_refused() {
 fn responses() -> Vec<Response> {
     let mut all = Vec::new();
     for measured in (-32768..=32767).step_by(97).chain([-32768, -1, 0, 32767]) {
-        all.push(Response::Temperature {
+        all.push(Response::Temperature(own_protocol::thermo::response::Temperature {
             measured: DeciCelsius::from_raw(measured),
             setpoint: DeciCelsius::from_raw(measured + 32768),
             humidity: Humidity::from_raw((measured & 0xFF) as u8 % 201),
-        });
+        }));
     }
-    all.extend((0..=65535).step_by(13).map(|raw| Response::SetpointAck {
+    all.extend((0..=65535).step_by(13).map(|raw| Response::SetpointAck(own_protocol::thermo::response::SetpointAck {
         setpoint: DeciCelsius::from_raw(raw),
-    }));
+    })));
     for raw in 0..=255u8 {
-        all.push(Response::ModeAck {
+        all.push(Response::ModeAck(own_protocol::thermo::response::ModeAck {
             mode: Mode::from_raw(raw),
-        });
-        all.push(Response::Nak {
+        }));
+        all.push(Response::Nak(own_protocol::thermo::response::Nak {
             reason: NakReason::from_raw(raw),
-        });
-        all.push(Response::Status {
+        }));
+        all.push(Response::Status(own_protocol::thermo::response::Status {
             mode: Mode::from_raw(raw % 5),
             flags: StatusBits::from_raw(raw),
             firmware: Ascii(*[b"1.20", b"2.0b", b"    "][raw as usize % 3]),
-        });
+        }));
     }
     all
 }
@@ -129,18 +129,18 @@ fn every_message_round_trips() {
 fn documented_frames_decode_as_documented() {
     // §4.1: "21.5 °C measured, set point 22.0 °C, 45 % humidity", printed
     // `A5 01 90 00D7 00DC 5A 9366`.
-    let request = Request::ReadTemperature;
+    let request = Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature);
     let mut buf = [0u8; MAX_FRAME_LEN];
     let n = request.encode(0x01, &mut buf).unwrap();
     assert_eq!(&buf[..n], [0xA5, 0x01, 0x10, 0x61, 0xBF]);
     let frame = [0xA5, 0x01, 0x90, 0x00, 0xD7, 0x00, 0xDC, 0x5A, 0x66, 0x93];
     let reply = Response::decode_reply(&frame, &request).unwrap();
     assert_eq!(reply.address, 0x01);
-    let Response::Temperature {
+    let Response::Temperature(own_protocol::thermo::response::Temperature {
         measured,
         setpoint,
         humidity,
-    } = reply.message
+    }) = reply.message
     else {
         panic!("not a temperature: {:?}", reply.message);
     };
@@ -156,43 +156,43 @@ fn documented_frames_decode_as_documented() {
     let reply = Response::decode(&frost).unwrap();
     assert_eq!(
         reply.message,
-        Response::Temperature {
+        Response::Temperature(own_protocol::thermo::response::Temperature {
             measured: DeciCelsius::from_value(-5.0).unwrap(),
             setpoint: DeciCelsius::from_value(5.0).unwrap(),
             humidity: Humidity::from_value(90.0).unwrap(),
-        }
+        })
     );
 
     // §4.4: status, heating, firmware "1.20".
     let status = [
         0xA5, 0x01, 0xB0, 0x01, 0x01, 0x31, 0x2E, 0x32, 0x30, 0xFA, 0x30,
     ];
-    let reply = Response::decode_reply(&status, &Request::ReadStatus).unwrap();
+    let reply = Response::decode_reply(&status, &Request::ReadStatus(own_protocol::thermo::request::ReadStatus)).unwrap();
     assert_eq!(
         reply.message,
-        Response::Status {
+        Response::Status(own_protocol::thermo::response::Status {
             mode: Mode::Heat,
             flags: StatusBits::HEATING,
             firmware: Ascii(*b"1.20"),
-        }
+        })
     );
 
     // §4.5: a set point out of range is refused.
     let nak = [0xA5, 0x01, 0xEE, 0x01, 0xFF, 0x48];
-    let setpoint = Request::SetSetpoint {
+    let setpoint = Request::SetSetpoint(own_protocol::thermo::request::SetSetpoint {
         setpoint: DeciCelsius::from_value(22.5).unwrap(),
-    };
+    });
     let reply = Response::decode_reply(&nak, &setpoint).unwrap();
     assert_eq!(
         reply.message,
-        Response::Nak {
+        Response::Nak(own_protocol::thermo::response::Nak {
             reason: NakReason::OutOfRange
-        }
+        })
     );
     assert!(Thermo::is_nak(&reply.message));
     // ... but is no answer to a read.
     assert_eq!(
-        Response::decode_reply(&nak, &Request::ReadTemperature),
+        Response::decode_reply(&nak, &Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature)),
         Err(DecodeError::NotAReply {
             message: "nak",
             request: "read_temperature"
@@ -274,31 +274,31 @@ fn exercise<P: Protocol>(requests: &[P::Request], responses: &[P::Response]) -> 
 #[test]
 fn generic_code_works_with_the_thermostat() {
     let requests = [
-        Request::ReadTemperature,
-        Request::SetSetpoint {
+        Request::ReadTemperature(own_protocol::thermo::request::ReadTemperature),
+        Request::SetSetpoint(own_protocol::thermo::request::SetSetpoint {
             setpoint: DeciCelsius::from_value(22.5).unwrap(),
-        },
-        Request::SetMode { mode: Mode::Auto },
-        Request::ReadStatus,
+        }),
+        Request::SetMode(own_protocol::thermo::request::SetMode { mode: Mode::Auto }),
+        Request::ReadStatus(own_protocol::thermo::request::ReadStatus),
     ];
     let responses = [
-        Response::Temperature {
+        Response::Temperature(own_protocol::thermo::response::Temperature {
             measured: DeciCelsius::from_value(-0.5).unwrap(),
             setpoint: DeciCelsius::from_value(20.0).unwrap(),
             humidity: Humidity::from_value(55.5).unwrap(),
-        },
-        Response::SetpointAck {
+        }),
+        Response::SetpointAck(own_protocol::thermo::response::SetpointAck {
             setpoint: DeciCelsius::from_value(22.5).unwrap(),
-        },
-        Response::ModeAck { mode: Mode::Auto },
-        Response::Status {
+        }),
+        Response::ModeAck(own_protocol::thermo::response::ModeAck { mode: Mode::Auto }),
+        Response::Status(own_protocol::thermo::response::Status {
             mode: Mode::Cool,
             flags: StatusBits::from_raw(0b1010),
             firmware: Ascii(*b"1.20"),
-        },
-        Response::Nak {
+        }),
+        Response::Nak(own_protocol::thermo::response::Nak {
             reason: NakReason::Busy,
-        },
+        }),
     ];
     // 4 requests; set_setpoint and set_mode get an ack or the NAK, the reads one answer each.
     assert_eq!(exercise::<Thermo>(&requests, &responses), 4 + 2 * 6);
@@ -338,12 +338,12 @@ fn the_protocol_constants_are_the_spec() {
         );
     }
     assert_eq!(Thermo::SOURCE.spec_sha256.len(), 64);
-    let heat = Request::SetMode { mode: Mode::Heat };
+    let heat = Request::SetMode(own_protocol::thermo::request::SetMode { mode: Mode::Heat });
     assert_eq!(Thermo::command(&heat).kind, CommandKind::Setter);
     assert!(
         Thermo::command(&heat).broadcast.accepted && !Thermo::command(&heat).broadcast.answered
     );
-    assert!(!Thermo::command(&Request::ReadStatus).broadcast.accepted);
+    assert!(!Thermo::command(&Request::ReadStatus(own_protocol::thermo::request::ReadStatus)).broadcast.accepted);
     let mut fields = Vec::new();
     heat.visit(|name, value| fields.push((name, value == FieldValue::Int(1))));
     assert_eq!(fields, [("mode", true)]);
@@ -382,8 +382,8 @@ fn a_sniffer_reads_both_directions() {
         Event::Request { offset: 1, len: 7, frame },
         Event::Response { offset: 8, len: 7, frame: reply },
         Event::Skipped { offset: 15, len: 1 },
-    ] if frame.message == Request::SetSetpoint { setpoint }
-        && reply.message == Response::SetpointAck { setpoint }));
+    ] if frame.message == Request::SetSetpoint(own_protocol::thermo::request::SetSetpoint { setpoint })
+        && reply.message == Response::SetpointAck(own_protocol::thermo::response::SetpointAck { setpoint })));
     // Told to expect only responses, it skips the request.
     let mut stream = StreamDecoder::<Thermo>::new(Some(Direction::Response));
     let mut events: Vec<_> = stream.feed(&capture).collect();

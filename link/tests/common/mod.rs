@@ -174,31 +174,44 @@ impl Setup {
 pub fn ub2_getter<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
     let dev = Shared::new(Ub2Sim::new(0x21));
     let mut m = make(Setup::new::<Ub2>(vec![Box::new(dev.clone())]));
-    let expected = dev.with(|d| d.respond(&ub2::Request::GetActualCapacitance, Duration::ZERO));
+    let expected = dev.with(|d| {
+        d.respond(
+            &ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance),
+            Duration::ZERO,
+        )
+    });
     assert_eq!(
-        m.transact(0x21, ub2::Request::GetActualCapacitance),
+        m.transact(
+            0x21,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
         Outcome::Reply(Some(expected))
     );
     // A setter, then the getter that reads it back.
-    let set = ub2::Request::SetAccelerationSpeedIndex {
+    let set = ub2::Request::SetAccelerationSpeedIndex(ub2::request::SetAccelerationSpeedIndex {
         acceleration_index: 3,
         speed_index: 4,
-    };
+    });
     assert!(matches!(m.transact(0x21, set), Outcome::Reply(Some(_))));
     assert_eq!(
-        m.transact(0x21, ub2::Request::GetAccelerationSpeed),
-        Outcome::Reply(Some(ub2::Response::AccelerationSpeed {
-            acceleration_index: 3,
-            speed_index: 4
-        }))
+        m.transact(
+            0x21,
+            ub2::Request::GetAccelerationSpeed(ub2::request::GetAccelerationSpeed)
+        ),
+        Outcome::Reply(Some(ub2::Response::AccelerationSpeed(
+            ub2::response::AccelerationSpeed {
+                acceleration_index: 3,
+                speed_index: 4
+            }
+        )))
     );
     assert_eq!(dev.with(|d| (d.acceleration_index, d.speed_index)), (3, 4));
 }
 
 pub fn ub2_byte_order_before_first_movement<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
-    let go = ub2::Request::GoToCapacitance {
+    let go = ub2::Request::GoToCapacitance(ub2::request::GoToCapacitance {
         target: ub2::Capacitance(15000),
-    };
+    });
     let good = Shared::new(Ub2Sim::new(0x21));
     let swapped = Shared::new(Ub2Sim::new(0x22).msb_first(true));
     let mut m = make(Setup::new::<Ub2>(vec![
@@ -207,7 +220,9 @@ pub fn ub2_byte_order_before_first_movement<D: Drive<Ub2>>(make: &mut dyn FnMut(
     ]));
     assert_eq!(
         m.start_movement(0x21, go),
-        Outcome::Reply(Some(ub2::Response::MovementStarted))
+        Outcome::Reply(Some(ub2::Response::MovementStarted(
+            ub2::response::MovementStarted
+        )))
     );
     assert!(good.with(|d| d.movement.is_some()));
     assert_eq!(m.start_movement(0x22, go), Outcome::ByteOrder);
@@ -217,25 +232,41 @@ pub fn ub2_byte_order_before_first_movement<D: Drive<Ub2>>(make: &mut dyn FnMut(
 pub fn ub2_movement_polled_to_completion<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
     let dev = Shared::new(Ub2Sim::new(0x21));
     let mut m = make(Setup::new::<Ub2>(vec![Box::new(dev.clone())]));
-    let go = ub2::Request::GoToFullStepPosition { target: 40 };
+    let go = ub2::Request::GoToFullStepPosition(ub2::request::GoToFullStepPosition { target: 40 });
     let poll = Duration::from_millis(20);
     let report = m
         .run_movement(0x21, Ub2Movement::new(go, poll, Duration::from_secs(20)))
         .expect("the movement completes");
-    assert_eq!(report.started, ub2::Response::MovementStarted);
-    assert_eq!(report.finished, Some(ub2::Response::MovementCompleted));
+    assert_eq!(
+        report.started,
+        ub2::Response::MovementStarted(ub2::response::MovementStarted)
+    );
+    assert_eq!(
+        report.finished,
+        Some(ub2::Response::MovementCompleted(
+            ub2::response::MovementCompleted
+        ))
+    );
     assert!(report.polls >= 1);
     assert_eq!(
-        m.transact(0x21, ub2::Request::GetActualFullStepPosition),
-        Outcome::Reply(Some(ub2::Response::ActualFullStepPosition {
-            full_steps: 40
-        }))
+        m.transact(
+            0x21,
+            ub2::Request::GetActualFullStepPosition(ub2::request::GetActualFullStepPosition)
+        ),
+        Outcome::Reply(Some(ub2::Response::ActualFullStepPosition(
+            ub2::response::ActualFullStepPosition { full_steps: 40 }
+        )))
     );
     // Not a trigger: nothing is sent.
-    let not = Ub2Movement::new(ub2::Request::GetStatus, poll, Duration::ZERO);
+    let not = Ub2Movement::new(
+        ub2::Request::GetStatus(ub2::request::GetStatus),
+        poll,
+        Duration::ZERO,
+    );
     assert!(m.run_movement(0x21, not).is_err());
     // Not done in no time.
-    let far = ub2::Request::GoToFullStepPosition { target: 4000 };
+    let far =
+        ub2::Request::GoToFullStepPosition(ub2::request::GoToFullStepPosition { target: 4000 });
     assert_eq!(
         m.run_movement(0x21, Ub2Movement::new(far, poll, Duration::ZERO))
             .unwrap_err(),
@@ -255,7 +286,9 @@ pub fn sd_move_polled_to_target<D: Drive<Sd>>(make: &mut dyn FnMut(Setup) -> D) 
         .expect("the actuator gets there");
     assert_eq!(
         report.finished,
-        Some(sd::Response::ActualPosition { position: target })
+        Some(sd::Response::ActualPosition(sd::response::ActualPosition {
+            position: target
+        }))
     );
     assert_eq!(dev.with(|d| d.target), 300);
 }
@@ -264,17 +297,26 @@ pub fn ub2_errors<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
     let mut m = make(Setup::new::<Ub2>(vec![Box::new(Ub2Sim::new(0x21))]));
     // Nobody at 0x25; 0x00 is no device address (and UB2 has no broadcast).
     assert_eq!(
-        m.transact(0x25, ub2::Request::GetActualCapacitance),
+        m.transact(
+            0x25,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
         Outcome::NoReply
     );
     assert_eq!(
-        m.transact(0x00, ub2::Request::GetActualCapacitance),
+        m.transact(
+            0x00,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
         Outcome::Address
     );
     // The line is usable afterwards.
     assert!(matches!(
-        m.transact(0x21, ub2::Request::GetActualCapacitance),
-        Outcome::Reply(Some(ub2::Response::ActualCapacitance { .. }))
+        m.transact(
+            0x21,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
+        Outcome::Reply(Some(ub2::Response::ActualCapacitance(_)))
     ));
 }
 
@@ -287,12 +329,15 @@ pub fn ub2_faults_retried_only_where_safe<D: Drive<Ub2>>(make: &mut dyn FnMut(Se
     });
     let mut m = make(Setup::new::<Ub2>(vec![Box::new(dev.clone())]));
     assert!(matches!(
-        m.transact(0x21, ub2::Request::GetActualCapacitance),
-        Outcome::Reply(Some(ub2::Response::ActualCapacitance { .. }))
+        m.transact(
+            0x21,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
+        Outcome::Reply(Some(ub2::Response::ActualCapacitance(_)))
     ));
     // A movement whose reply is garbled is not sent again.
     dev.with(|d| d.corrupt = 1);
-    let go = ub2::Request::GoToFullStepPosition { target: 100 };
+    let go = ub2::Request::GoToFullStepPosition(ub2::request::GoToFullStepPosition { target: 100 });
     assert_eq!(m.transact(0x21, go), Outcome::BadReply);
     assert!(dev.with(|d| d.inner.movement.is_some()));
 }
@@ -306,10 +351,10 @@ pub fn sd_freshness_and_broadcast<D: Drive<Sd>>(make: &mut dyn FnMut(Setup) -> D
         Box::new(b.clone()),
     ]));
     for i in 0..20 {
-        let sp = sd::Request::SetPoint {
+        let sp = sd::Request::SetPoint(sd::request::SetPoint {
             freshness: 0,
             position: sd::Angle(100 + i),
-        };
+        });
         assert!(matches!(m.transact(1, sp), Outcome::Reply(Some(_))), "{i}");
     }
     // Every set point carried the next counter, starting from the device's 9.
@@ -317,15 +362,20 @@ pub fn sd_freshness_and_broadcast<D: Drive<Sd>>(make: &mut dyn FnMut(Setup) -> D
     assert_eq!(a.with(|d| d.host_freshness), Some((9 + 20) % 16));
     assert_eq!(a.with(|d| d.target), 119);
     // A set point to everyone is not answered.
-    let all = sd::Request::SetPoint {
+    let all = sd::Request::SetPoint(sd::request::SetPoint {
         freshness: 0,
         position: sd::Angle(-200),
-    };
+    });
     let broadcast = Sd::BUS.broadcast_address.unwrap();
     assert_eq!(m.transact(broadcast, all), Outcome::Reply(None));
     // The next transaction goes out after the broadcast has been taken in, wherever the
     // devices run.
-    assert!(m.transact(2, sd::Request::ReadActualPosition).is_reply());
+    assert!(m
+        .transact(
+            2,
+            sd::Request::ReadActualPosition(sd::request::ReadActualPosition)
+        )
+        .is_reply());
     assert_eq!(b.with(|d| d.target), -200);
 }
 
@@ -337,11 +387,17 @@ pub fn sd_faults<D: Drive<Sd>>(make: &mut dyn FnMut(Setup) -> D) {
     });
     let mut m = make(Setup::new::<Sd>(vec![Box::new(dev.clone())]));
     assert!(matches!(
-        m.transact(3, sd::Request::ReadActualPosition),
-        Outcome::Reply(Some(sd::Response::ActualPosition { .. }))
+        m.transact(
+            3,
+            sd::Request::ReadActualPosition(sd::request::ReadActualPosition)
+        ),
+        Outcome::Reply(Some(sd::Response::ActualPosition(_)))
     ));
     assert_eq!(
-        m.transact(4, sd::Request::ReadActualPosition),
+        m.transact(
+            4,
+            sd::Request::ReadActualPosition(sd::request::ReadActualPosition)
+        ),
         Outcome::NoReply
     );
 }
@@ -360,12 +416,18 @@ pub fn rs485_echo<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
     let mut m = make(echoing(true));
     for _ in 0..3 {
         assert!(m
-            .transact(0x21, ub2::Request::GetActualCapacitance)
+            .transact(
+                0x21,
+                ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+            )
             .is_reply());
     }
     let mut m = make(echoing(false));
     assert_eq!(
-        m.transact(0x21, ub2::Request::GetActualCapacitance),
+        m.transact(
+            0x21,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
         Outcome::BadReply
     );
 }
@@ -379,7 +441,10 @@ pub fn rs485_collision<D: Drive<Sd>>(make: &mut dyn FnMut(Setup) -> D) {
     s.collide_at = Some(2);
     let mut m = make(s);
     assert_eq!(
-        m.transact(1, sd::Request::ReadActualPosition),
+        m.transact(
+            1,
+            sd::Request::ReadActualPosition(sd::request::ReadActualPosition)
+        ),
         Outcome::Collision { offset: 2 }
     );
 }
@@ -395,13 +460,19 @@ pub fn rs485_driver_enable<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
     };
     let mut m = make(gated(None));
     assert_eq!(
-        m.transact(0x21, ub2::Request::GetActualCapacitance),
+        m.transact(
+            0x21,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
         Outcome::NoReply
     );
     let mut m = make(gated(Some(busspec_link::DriverEnable::Computed)));
     for _ in 0..3 {
         assert!(m
-            .transact(0x21, ub2::Request::GetActualCapacitance)
+            .transact(
+                0x21,
+                ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+            )
             .is_reply());
     }
 }
@@ -419,12 +490,18 @@ pub fn rs485_turnaround<D: Drive<Ub2>>(make: &mut dyn FnMut(Setup) -> D) {
     };
     let mut m = make(slow(Duration::ZERO));
     assert_eq!(
-        m.transact(0x21, ub2::Request::GetActualCapacitance),
+        m.transact(
+            0x21,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        ),
         Outcome::NoReply
     );
     let mut m = make(slow(Duration::from_millis(150)));
     assert!(m
-        .transact(0x21, ub2::Request::GetActualCapacitance)
+        .transact(
+            0x21,
+            ub2::Request::GetActualCapacitance(ub2::request::GetActualCapacitance)
+        )
         .is_reply());
 }
 
@@ -586,7 +663,7 @@ impl ModbusRegisters {
 
 impl Device for ModbusRegisters {
     fn on_frame(&mut self, frame: &[u8], _now: Duration) -> Option<Vec<u8>> {
-        use busspec_protocols::modbus::{ExceptionCode, Request as Q, Response as R};
+        use busspec_protocols::modbus::{self, ExceptionCode, Request as Q, Response as R};
         let d = Modbus::decode_request(frame).ok()?;
         let broadcast = Some(d.address) == Modbus::BUS.broadcast_address;
         if d.address != self.address && !broadcast {
@@ -594,34 +671,40 @@ impl Device for ModbusRegisters {
         }
         self.frames += 1;
         let response = match d.message {
-            Q::ReadHoldingRegisters {
+            Q::ReadHoldingRegisters(modbus::request::ReadHoldingRegisters {
                 starting_address,
                 quantity,
-            } => {
+            }) => {
                 let (start, n) = (usize::from(starting_address), usize::from(quantity));
                 match self.registers.get(start..start + n) {
-                    Some(regs) => R::ReadHoldingRegistersReply {
-                        registers: busspec_protocols::Repeated::from_slice(regs).ok()?,
-                    },
-                    None => R::ReadHoldingRegistersException {
-                        exception_code: ExceptionCode::IllegalDataAddress,
-                    },
+                    Some(regs) => {
+                        R::ReadHoldingRegistersReply(modbus::response::ReadHoldingRegistersReply {
+                            registers: busspec_protocols::Repeated::from_slice(regs).ok()?,
+                        })
+                    }
+                    None => R::ReadHoldingRegistersException(
+                        modbus::response::ReadHoldingRegistersException {
+                            exception_code: ExceptionCode::IllegalDataAddress,
+                        },
+                    ),
                 }
             }
-            Q::WriteSingleRegister {
+            Q::WriteSingleRegister(modbus::request::WriteSingleRegister {
                 register_address,
                 register_value,
-            } => match self.registers.get_mut(usize::from(register_address)) {
+            }) => match self.registers.get_mut(usize::from(register_address)) {
                 Some(r) => {
                     *r = register_value;
-                    R::WriteSingleRegisterReply {
+                    R::WriteSingleRegisterReply(modbus::response::WriteSingleRegisterReply {
                         register_address,
                         register_value,
-                    }
+                    })
                 }
-                None => R::WriteSingleRegisterException {
-                    exception_code: ExceptionCode::IllegalDataAddress,
-                },
+                None => R::WriteSingleRegisterException(
+                    modbus::response::WriteSingleRegisterException {
+                        exception_code: ExceptionCode::IllegalDataAddress,
+                    },
+                ),
             },
             _ => return None,
         };
@@ -640,19 +723,23 @@ impl Device for ModbusRegisters {
 /// again (reads are `retry.safe_kinds`), a write whose reply is lost is not, and a broadcast
 /// write lands unanswered.
 pub fn modbus_by_its_spec<D: Drive<Modbus>>(make: &mut dyn FnMut(Setup) -> D) {
-    use busspec_protocols::modbus::{ExceptionCode, Request as Q, Response as R};
+    use busspec_protocols::modbus::{self, ExceptionCode, Request as Q, Response as R};
     let dev = Shared::new(Flaky {
         inner: ModbusRegisters::new(7),
         mute: 0,
         corrupt: 0,
     });
     let mut m = make(Setup::new::<Modbus>(vec![Box::new(dev.clone())]));
-    let read = |start: u16, quantity: u16| Q::ReadHoldingRegisters {
-        starting_address: start,
-        quantity,
+    let read = |start: u16, quantity: u16| {
+        Q::ReadHoldingRegisters(modbus::request::ReadHoldingRegisters {
+            starting_address: start,
+            quantity,
+        })
     };
-    let regs = |v: &[u16]| R::ReadHoldingRegistersReply {
-        registers: busspec_protocols::Repeated::from_slice(v).unwrap(),
+    let regs = |v: &[u16]| {
+        R::ReadHoldingRegistersReply(modbus::response::ReadHoldingRegistersReply {
+            registers: busspec_protocols::Repeated::from_slice(v).unwrap(),
+        })
     };
     assert_eq!(
         m.transact(7, read(2, 3)),
@@ -661,9 +748,10 @@ pub fn modbus_by_its_spec<D: Drive<Modbus>>(make: &mut dyn FnMut(Setup) -> D) {
     // A refusal is an answer: once, no retry.
     let frames = dev.with(|d| d.inner.frames);
     let refused = m.transact(7, read(9, 2));
-    let exception = R::ReadHoldingRegistersException {
-        exception_code: ExceptionCode::IllegalDataAddress,
-    };
+    let exception =
+        R::ReadHoldingRegistersException(modbus::response::ReadHoldingRegistersException {
+            exception_code: ExceptionCode::IllegalDataAddress,
+        });
     assert_eq!(refused, Outcome::Reply(Some(exception)));
     assert!(Modbus::is_refusal(&read(9, 2), &exception));
     assert_eq!(dev.with(|d| d.inner.frames), frames + 1);
@@ -678,20 +766,20 @@ pub fn modbus_by_its_spec<D: Drive<Modbus>>(make: &mut dyn FnMut(Setup) -> D) {
     // A write whose reply is lost: sent once, the write landed, the master says no reply.
     dev.with(|d| d.mute = 1);
     let frames = dev.with(|d| d.inner.frames);
-    let write = Q::WriteSingleRegister {
+    let write = Q::WriteSingleRegister(modbus::request::WriteSingleRegister {
         register_address: 4,
         register_value: 0xBEEF,
-    };
+    });
     assert_eq!(m.transact(7, write), Outcome::NoReply);
     assert_eq!(
         dev.with(|d| (d.inner.frames, d.inner.registers[4])),
         (frames + 1, 0xBEEF)
     );
     // A broadcast write (address 0): not answered, carried out.
-    let write = Q::WriteSingleRegister {
+    let write = Q::WriteSingleRegister(modbus::request::WriteSingleRegister {
         register_address: 5,
         register_value: 55,
-    };
+    });
     assert_eq!(m.transact(0, write), Outcome::Reply(None));
     // The next request, after the turnaround, reads what it wrote.
     assert_eq!(m.transact(7, read(5, 1)), Outcome::Reply(Some(regs(&[55]))));
