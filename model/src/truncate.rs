@@ -85,22 +85,30 @@ pub fn canonical(p: &Protocol, wire: &[u8]) -> Result<Option<Vec<u8>>, DecodeErr
     let mut out = Vec::with_capacity(payload_at + full + trailer);
     out.extend_from_slice(&wire[..payload_at + n]);
     out.resize(payload_at + full + trailer, 0);
-    if let Some(v) = rule.value(out.len()) {
-        write_uint(
-            v as u64,
-            &mut out[length_at..length_at + width],
-            p.byte_order,
-        );
-    }
-    reseal(p, &mut out);
+    reseal_at_length(p, &mut out);
     Ok(Some(out))
+}
+
+/// `frame`'s length field set to what its length gives (the one length field a truncating
+/// framing has), then its checksum.
+fn reseal_at_length(p: &Protocol, frame: &mut [u8]) {
+    if let Some(rule) = p.framing.length_rule(Direction::Request) {
+        if let Some(v) = rule.value(frame.len()) {
+            write_uint(
+                v as u64,
+                &mut frame[rule.at..rule.at + rule.width],
+                p.byte_order,
+            );
+        }
+    }
+    reseal(p, frame);
 }
 
 /// A frame the IR laid out (its whole payload), as it travels: the payload's trailing zeros
 /// stripped (at least one byte kept), the length field and checksum rewritten. `frame`
 /// itself where the framing does not truncate or nothing is stripped.
 pub fn travel(p: &Protocol, mut frame: Vec<u8>) -> Vec<u8> {
-    let Some((length_at, width, _, _, payload_at)) = parts(p) else {
+    let Some((_, _, _, _, payload_at)) = parts(p) else {
         return frame;
     };
     let trailer = p.framing.trailer_len();
@@ -115,18 +123,7 @@ pub fn travel(p: &Protocol, mut frame: Vec<u8>) -> Vec<u8> {
         return frame;
     }
     frame.drain(payload_at + kept..end);
-    if let Some(v) = p
-        .framing
-        .length_rule(Direction::Request)
-        .and_then(|r| r.value(frame.len()))
-    {
-        write_uint(
-            v as u64,
-            &mut frame[length_at..length_at + width],
-            p.byte_order,
-        );
-    }
-    reseal(p, &mut frame);
+    reseal_at_length(p, &mut frame);
     frame
 }
 
