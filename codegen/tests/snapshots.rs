@@ -121,6 +121,14 @@ fn constant_frame_spec_generates_its_snapshot() {
     );
 }
 
+/// The 16-bit sum negated (JBD's battery management protocol), high byte first, covering from
+/// the code past a header byte (`snapshots_compile.rs` compiles it and holds it to the
+/// interpreter).
+#[test]
+fn sum16_complement_spec_generates_its_snapshot() {
+    check("model/tests/fixtures/valid/jbd_bms.yaml", "jbd_bms.rs");
+}
+
 /// The 8-bit Fletcher checksum of UBX-shaped frames, over code, a 16-bit length and payload
 /// (`snapshots_compile.rs` compiles it and holds it to the interpreter).
 #[test]

@@ -43,6 +43,7 @@ include!("snapshots/text_counted.rs");
 include!("snapshots/text_terminated.rs");
 include!("snapshots/vesc.rs");
 include!("snapshots/mbus.rs");
+include!("snapshots/jbd_bms.rs");
 
 mod agree;
 
@@ -883,6 +884,32 @@ fn fletcher_snapshot_agrees_with_the_interpreter() {
     assert!(t.accepted >= 6 && t.refused > 100, "{t:?}");
     let found = examples_stream_alike::<UbxLike>(&p, 0xF1E7, "ack");
     assert!(found > 50, "only {found} ack frames found");
+}
+
+/// The 16-bit sum negated (JBD's battery management protocol): the examples replay (the
+/// protocol document's request and reply among them), a frame whose checksum is the sum
+/// itself rather than its negation is refused in both engines' words, and both agree on every
+/// frame mutated from the examples and on captures of them.
+#[test]
+fn sum16_complement_snapshot_agrees_with_the_interpreter() {
+    use jbd_bms::{JbdBms, Request};
+    let file = "model/tests/fixtures/valid/jbd_bms.yaml";
+    replay::<JbdBms>(file);
+    let p = fixture(file);
+    assert_eq!(jbd_bms::checksum(&[0x03, 0x00]), 0xFFFD);
+    // DD A5 03 00 with the plain sum 00 03 where the negated one FF FD belongs.
+    let plain = [0xDD, 0xA5, 0x03, 0x00, 0x00, 0x03, 0x77];
+    let g = Request::decode(&plain).map(|_| ());
+    assert_eq!(
+        g.unwrap_err().to_string(),
+        "checksum mismatch at offset 4: expected 0xFFFD, found 0x0003"
+    );
+    let i = busspec_model::interp::decode(&p, Some(Direction::Request), None, &plain);
+    same_text(g, i.map(|_| ()));
+    let t = agree::agree::<JbdBms>(&p);
+    assert!(t.accepted >= 7 && t.refused > 100, "{t:?}");
+    let found = examples_stream_alike::<JbdBms>(&p, 0x1BD5, "read_version");
+    assert!(found > 20, "only {found} read_version frames found");
 }
 
 /// No start byte, no address, no checksum (Maestro's compact protocol): the examples replay,

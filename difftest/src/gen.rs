@@ -995,13 +995,22 @@ fn checksum_yaml(g: &mut G) -> (String, usize) {
     match g.rng.u8(..16) {
         10 => (String::new(), 0),
         // The 16-bit sums.
-        k @ 11..=13 => {
-            let (name, a) = [
-                ("sum16", ChecksumAlgorithm::Sum16),
-                ("fletcher8", ChecksumAlgorithm::Fletcher8),
-                ("fletcher16", ChecksumAlgorithm::Fletcher16),
-            ][usize::from(k - 11)]
-            .clone();
+        11..=13 => {
+            let (name, a) = g
+                .pick(&[
+                    ("sum16", ChecksumAlgorithm::Sum16),
+                    (
+                        "sum16_ones_complement",
+                        ChecksumAlgorithm::Sum16OnesComplement,
+                    ),
+                    (
+                        "sum16_twos_complement",
+                        ChecksumAlgorithm::Sum16TwosComplement,
+                    ),
+                    ("fletcher8", ChecksumAlgorithm::Fletcher8),
+                    ("fletcher16", ChecksumAlgorithm::Fletcher16),
+                ])
+                .clone();
             let y = format!(
                 "algorithm: {name}, width: 16, byte_order: {}, check: {}",
                 order(g),
@@ -1016,6 +1025,11 @@ fn checksum_yaml(g: &mut G) -> (String, usize) {
                     ("lrc", ChecksumAlgorithm::Sum8TwosComplement, 8),
                     ("xor8", ChecksumAlgorithm::Xor8, 8),
                     ("sum16", ChecksumAlgorithm::Sum16, 16),
+                    (
+                        "sum16_twos_complement",
+                        ChecksumAlgorithm::Sum16TwosComplement,
+                        16,
+                    ),
                 ])
                 .clone();
             let mask = g.rng.u64(1..1 << width);
@@ -2978,6 +2992,8 @@ pub fn constructs(p: &ir::Protocol) -> Vec<&'static str> {
         ChecksumAlgorithm::Sum8TwosComplement => "sum8_twos_complement",
         ChecksumAlgorithm::Xor8 => "xor8",
         ChecksumAlgorithm::Sum16 => "sum16",
+        ChecksumAlgorithm::Sum16OnesComplement => "sum16_ones_complement",
+        ChecksumAlgorithm::Sum16TwosComplement => "sum16_twos_complement",
         ChecksumAlgorithm::Fletcher8 => "fletcher8",
         ChecksumAlgorithm::Fletcher16 => "fletcher16",
         ChecksumAlgorithm::Masked(..) => "masked sum",

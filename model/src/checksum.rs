@@ -13,13 +13,20 @@ use crate::ir::{ChecksumAlgorithm, CrcParams};
 /// The ASCII bytes every catalogue check value is computed over.
 pub const CHECK_INPUT: &[u8] = b"123456789";
 
+/// The 16-bit sum of `data`, modulo 65536.
+fn sum16(data: &[u8]) -> u64 {
+    data.iter().fold(0u64, |s, b| (s + u64::from(*b)) & 0xFFFF)
+}
+
 pub fn compute(algorithm: &ChecksumAlgorithm, data: &[u8]) -> u64 {
     match algorithm {
         ChecksumAlgorithm::Sum8 => u64::from(sum8(data)),
         ChecksumAlgorithm::Sum8OnesComplement => u64::from(!sum8(data)),
         ChecksumAlgorithm::Sum8TwosComplement => u64::from(sum8(data).wrapping_neg()),
         ChecksumAlgorithm::Xor8 => u64::from(data.iter().fold(0u8, |s, b| s ^ b)),
-        ChecksumAlgorithm::Sum16 => data.iter().fold(0u64, |s, b| (s + u64::from(*b)) & 0xFFFF),
+        ChecksumAlgorithm::Sum16 => sum16(data),
+        ChecksumAlgorithm::Sum16OnesComplement => !sum16(data) & 0xFFFF,
+        ChecksumAlgorithm::Sum16TwosComplement => sum16(data).wrapping_neg() & 0xFFFF,
         ChecksumAlgorithm::Fletcher8 => {
             let (a, b) = data.iter().fold((0u8, 0u8), |(a, b), x| {
                 let a = a.wrapping_add(*x);
@@ -244,6 +251,34 @@ mod tests {
         let ping = [0x01, 0x04, 0x02, 0x2B, 0x01];
         let prepared = Prepared::new(&ChecksumAlgorithm::Sum8OnesComplement);
         assert_eq!(prepared.compute(&ping), 0xCC);
+    }
+
+    #[test]
+    fn sixteen_bit_complements() {
+        // JBD's battery management protocol: the request DD A5 03 00 FF FD 77 sums its command
+        // and length bytes, 03 00; the reply to it sums from its status byte to its data.
+        assert_eq!(
+            compute(&ChecksumAlgorithm::Sum16TwosComplement, &[0x03, 0x00]),
+            0xFFFD
+        );
+        let reply = [
+            0x00, 0x1B, 0x17, 0x00, 0x00, 0x00, 0x02, 0xD0, 0x03, 0xE8, 0x00, 0x00, 0x20, 0x78,
+            0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x10, 0x48, 0x03, 0x0F, 0x02, 0x0B, 0x76, 0x0B,
+            0x82,
+        ];
+        assert_eq!(
+            compute(&ChecksumAlgorithm::Sum16TwosComplement, &reply),
+            0xFBFF
+        );
+        // Inverted is negated less one; both wrap at 16 bits past 255 bytes of 0xFF.
+        let long = [0xFF; 300];
+        assert_eq!(compute(&ChecksumAlgorithm::Sum16, &long), 300 * 255 % 65536);
+        for data in [&[][..], &[0x03, 0x00], &long] {
+            let neg = compute(&ChecksumAlgorithm::Sum16TwosComplement, data);
+            let inv = compute(&ChecksumAlgorithm::Sum16OnesComplement, data);
+            assert_eq!((neg + 0xFFFF) & 0xFFFF, inv);
+            assert_eq!((compute(&ChecksumAlgorithm::Sum16, data) + neg) & 0xFFFF, 0);
+        }
     }
 
     #[test]

@@ -428,6 +428,10 @@ fn checksum_fn(algorithm: &ChecksumAlgorithm) -> String {
         ChecksumAlgorithm::Sum8TwosComplement => sum("s = (s + b[i]) % 256", "(256 - s) % 256"),
         ChecksumAlgorithm::Xor8 => sum("s = bit32.bxor(s, b[i])", "s"),
         ChecksumAlgorithm::Sum16 => sum("s = (s + b[i]) % 65536", "s"),
+        ChecksumAlgorithm::Sum16OnesComplement => sum("s = (s + b[i]) % 65536", "65535 - s"),
+        ChecksumAlgorithm::Sum16TwosComplement => {
+            sum("s = (s + b[i]) % 65536", "(65536 - s) % 65536")
+        }
         ChecksumAlgorithm::Fletcher8 => "function(b, from, to) local a, c = 0, 0 for i = from, to - 1 do a = (a + b[i]) % 256 c = (c + a) % 256 end return c * 256 + a end".to_owned(),
         ChecksumAlgorithm::Fletcher16 => "function(b, from, to) local a, c = 0, 0 for i = from, to - 1 do a = (a + b[i]) % 255 c = (c + a) % 255 end return c * 256 + a end".to_owned(),
         ChecksumAlgorithm::Crc(c) => {

@@ -953,6 +953,14 @@ fn sum_text(a: &ChecksumAlgorithm) -> (String, &'static str) {
         ),
         ChecksumAlgorithm::Xor8 => ("XOR of the bytes".to_owned(), ""),
         ChecksumAlgorithm::Sum16 => ("16-bit sum of the bytes, modulo 65536".to_owned(), ""),
+        ChecksumAlgorithm::Sum16OnesComplement => (
+            "16-bit sum of the bytes, inverted".to_owned(),
+            "ones' complement; ",
+        ),
+        ChecksumAlgorithm::Sum16TwosComplement => (
+            "16-bit sum of the bytes, negated".to_owned(),
+            "two's complement; ",
+        ),
         ChecksumAlgorithm::Fletcher8 => (
             "8-bit Fletcher: a += byte, b += a, modulo 256; the value b × 256 + a".to_owned(),
             "",

@@ -736,6 +736,10 @@ pub enum ChecksumAlgorithm {
     Xor8,
     /// 16-bit sum of every byte, modulo 65536.
     Sum16,
+    /// The 16-bit sum inverted (ones' complement).
+    Sum16OnesComplement,
+    /// The 16-bit sum negated (two's complement).
+    Sum16TwosComplement,
     /// Two 8-bit running sums modulo 256 (u-blox UBX): `b << 8 | a`.
     Fletcher8,
     /// Fletcher-16: two running sums modulo 255, `b << 8 | a`.
@@ -756,6 +760,8 @@ impl ChecksumAlgorithm {
             ChecksumAlgorithm::Sum8TwosComplement => "sum8_twos_complement".to_owned(),
             ChecksumAlgorithm::Xor8 => "xor8".to_owned(),
             ChecksumAlgorithm::Sum16 => "sum16".to_owned(),
+            ChecksumAlgorithm::Sum16OnesComplement => "sum16_ones_complement".to_owned(),
+            ChecksumAlgorithm::Sum16TwosComplement => "sum16_twos_complement".to_owned(),
             ChecksumAlgorithm::Fletcher8 => "fletcher8".to_owned(),
             ChecksumAlgorithm::Fletcher16 => "fletcher16".to_owned(),
             ChecksumAlgorithm::Crc(_) => "crc".to_owned(),

@@ -438,6 +438,11 @@ pub enum ChecksumAlgorithm {
     Lrc,
     /// 16-bit sum of every byte, modulo 65536.
     Sum16,
+    /// The 16-bit sum, inverted (ones' complement): `!sum`.
+    Sum16OnesComplement,
+    /// The 16-bit sum, negated (two's complement): `-sum`, so the bytes and the checksum's
+    /// value sum to zero modulo 65536 (the JBD battery management protocol's).
+    Sum16TwosComplement,
     /// Two 8-bit running sums modulo 256 (`a += byte; b += a`), u-blox UBX's 8-bit Fletcher:
     /// the value `b << 8 | a`, so `byte_order: little` sends `a` first.
     Fletcher8,

@@ -2479,6 +2479,8 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
         | A::Lrc
         | A::Xor8
         | A::Sum16
+        | A::Sum16OnesComplement
+        | A::Sum16TwosComplement
         | A::Fletcher8
         | A::Fletcher16 => {
             let (name, bits, algorithm) = match c.algorithm {
@@ -2495,6 +2497,16 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
                 A::Lrc => ("lrc", 8, ChecksumAlgorithm::Sum8TwosComplement),
                 A::Xor8 => ("xor8", 8, ChecksumAlgorithm::Xor8),
                 A::Sum16 => ("sum16", 16, ChecksumAlgorithm::Sum16),
+                A::Sum16OnesComplement => (
+                    "sum16_ones_complement",
+                    16,
+                    ChecksumAlgorithm::Sum16OnesComplement,
+                ),
+                A::Sum16TwosComplement => (
+                    "sum16_twos_complement",
+                    16,
+                    ChecksumAlgorithm::Sum16TwosComplement,
+                ),
                 A::Fletcher8 => ("fletcher8", 16, ChecksumAlgorithm::Fletcher8),
                 A::Fletcher16 => ("fletcher16", 16, ChecksumAlgorithm::Fletcher16),
                 _ => ("sum8", 8, ChecksumAlgorithm::Sum8),
@@ -2547,11 +2559,13 @@ fn checksum_params(c: &model::Checksum, byte_order: ByteOrder, sink: &mut Sink) 
                     | ChecksumAlgorithm::Sum8TwosComplement
                     | ChecksumAlgorithm::Xor8
                     | ChecksumAlgorithm::Sum16
+                    | ChecksumAlgorithm::Sum16OnesComplement
+                    | ChecksumAlgorithm::Sum16TwosComplement
             );
             if !sum {
                 sink.error(
                     join(path, "mask"),
-                    "a mask keeps some bits of a sum or XOR (sum8, sum8_ones_complement, sum8_twos_complement, lrc, xor8, sum16), not of this algorithm",
+                    "a mask keeps some bits of a sum or XOR (sum8, sum8_ones_complement, sum8_twos_complement, lrc, xor8, sum16, sum16_ones_complement, sum16_twos_complement), not of this algorithm",
                 );
             }
             let mask = fits(m, "mask", sink);

@@ -692,6 +692,10 @@ const CASES: &[(&str, &[(&str, &str)])] = &[
         &[("framing.checksum.width", "fletcher8 is 16 bits wide")],
     ),
     (
+        "sum16_complement_eight_bits",
+        &[("framing.checksum.width", "sum16_twos_complement is 16 bits wide")],
+    ),
+    (
         "mask_zero",
         &[("framing.checksum.mask", "a mask of 0 keeps no bit")],
     ),

@@ -317,6 +317,16 @@ pub(super) fn sum_checksum(a: &ChecksumAlgorithm) -> Option<(String, TokenStream
             quote!(u16),
             quote!(rt::sum16(bytes)),
         ),
+        ChecksumAlgorithm::Sum16OnesComplement => (
+            "the 16-bit sum of the bytes it covers, inverted",
+            quote!(u16),
+            quote!(!rt::sum16(bytes)),
+        ),
+        ChecksumAlgorithm::Sum16TwosComplement => (
+            "the 16-bit sum of the bytes it covers, negated",
+            quote!(u16),
+            quote!(rt::sum16(bytes).wrapping_neg()),
+        ),
         ChecksumAlgorithm::Fletcher8 => (
             "8-bit Fletcher (modulo 256) of the bytes it covers",
             quote!(u16),
