@@ -79,48 +79,6 @@ pub mod dlt645 {
     pub fn checksum(bytes: &[u8]) -> u8 {
         rt::sum8(bytes)
     }
-    impl request::ReadAddress {
-        pub const NAME: &'static str = "read_address";
-        pub const CODE: &'static [u8] = &[0x13];
-        pub const LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x13,
-            1,
-            &[12],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadAddress(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadData {
-        pub const NAME: &'static str = "read_data";
-        pub const CODE: &'static [u8] = &[0x11];
-        pub const LEN: usize = 16;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x11,
-            1,
-            &[16],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const DATA_ID: rt::Range<usize> = 10..14;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("data_id", rt::Int(self.data_id as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadData(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -169,21 +127,13 @@ pub mod dlt645 {
         ///
         /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
         /// `MAX_FRAME_LEN` bytes holds any frame with them.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let n = PREAMBLE.put(buf)?;
             let len = self.encode_frame(address, &mut buf[n..])?;
             rt::Ok(n + len)
         }
         /// The frame after the preamble, into `buf`.
-        fn encode_frame(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadAddress(
@@ -364,11 +314,7 @@ pub mod dlt645 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -403,78 +349,6 @@ pub mod dlt645 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::AddressReply {
-        pub const NAME: &'static str = "address_reply";
-        pub const CODE: &'static [u8] = &[0x93];
-        pub const LEN: usize = 18;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x93,
-            1,
-            &[18],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const METER_LOW: rt::Range<usize> = 10..13;
-        pub const METER_HIGH: rt::Range<usize> = 13..16;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("meter_low", rt::Int(self.meter_low as i64));
-            f("meter_high", rt::Int(self.meter_high as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AddressReply(*self).encode(address, buf)
-        }
-    }
-    impl response::DataReply {
-        pub const NAME: &'static str = "data_reply";
-        pub const CODE: &'static [u8] = &[0x91];
-        pub const LEN: usize = 20;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x91,
-            1,
-            &[20, 22],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const DATA_ID: rt::Range<usize> = 10..14;
-        pub const VALUE: rt::Range<usize> = 14..18;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("data_id", rt::Int(self.data_id as i64));
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::DataReply(*self).encode(address, buf)
-        }
-    }
-    impl response::MeterNumberReply {
-        pub const NAME: &'static str = "meter_number_reply";
-        pub const CODE: &'static [u8] = &[0x91];
-        pub const LEN: usize = 22;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x91,
-            1,
-            &[20, 22],
-        );
-        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
-        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
-        pub const NUMBER_LOW: rt::Range<usize> = 14..17;
-        pub const NUMBER_HIGH: rt::Range<usize> = 17..20;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address_low", rt::Int(self.address_low as i64));
-            f("address_high", rt::Int(self.address_high as i64));
-            f("number_low", rt::Int(self.number_low as i64));
-            f("number_high", rt::Int(self.number_high as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MeterNumberReply(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -529,21 +403,13 @@ pub mod dlt645 {
         ///
         /// The preamble's wake-up bytes come first (`framing.preamble`); `buf` of
         /// `MAX_FRAME_LEN` bytes holds any frame with them.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let n = PREAMBLE.put(buf)?;
             let len = self.encode_frame(address, &mut buf[n..])?;
             rt::Ok(n + len)
         }
         /// The frame after the preamble, into `buf`.
-        fn encode_frame(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_frame(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::AddressReply(
@@ -744,7 +610,7 @@ pub mod dlt645 {
                     let mut g = rt::Group::new(frame, 0x91, request.map(Request::name));
                     g.attempt(|frame: &[u8; 20]| {
                         let field_3: u32 = rt::bcd(
-                            &response::DATA_REPLY_VALUE,
+                            &response::DataReply::VALUE_DESC,
                             14,
                             u32::from_le_bytes([
                                 frame[14],
@@ -754,7 +620,7 @@ pub mod dlt645 {
                             ]) as u64,
                         )? as u32;
                         rt::in_range(
-                            &response::DATA_REPLY_VALUE,
+                            &response::DataReply::VALUE_DESC,
                             14,
                             field_3,
                             0,
@@ -776,7 +642,7 @@ pub mod dlt645 {
                     });
                     g.attempt(|frame: &[u8; 22]| {
                         rt::equal(
-                            &response::METER_NUMBER_REPLY_DATA_ID,
+                            &response::MeterNumberReply::DATA_ID_DESC,
                             10,
                             u32::from_le_bytes([
                                 frame[10],
@@ -916,11 +782,7 @@ pub mod dlt645 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1044,9 +906,100 @@ pub mod dlt645 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dlt645>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadAddress {
+        pub const NAME: &'static str = "read_address";
+        pub const CODE: &'static [u8] = &[0x13];
+        pub const LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x13, 1, &[12]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadAddress(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadData {
+        pub const NAME: &'static str = "read_data";
+        pub const CODE: &'static [u8] = &[0x11];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x11, 1, &[16]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const DATA_ID: rt::Range<usize> = 10..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("data_id", rt::Int(self.data_id as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadData(*self).encode(address, buf)
+        }
+    }
+    impl response::AddressReply {
+        pub const NAME: &'static str = "address_reply";
+        pub const CODE: &'static [u8] = &[0x93];
+        pub const LEN: usize = 18;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x93, 1, &[18]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const METER_LOW: rt::Range<usize> = 10..13;
+        pub const METER_HIGH: rt::Range<usize> = 13..16;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("meter_low", rt::Int(self.meter_low as i64));
+            f("meter_high", rt::Int(self.meter_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AddressReply(*self).encode(address, buf)
+        }
+    }
+    impl response::DataReply {
+        pub const NAME: &'static str = "data_reply";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 20;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x91, 1, &[20, 22]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const DATA_ID: rt::Range<usize> = 10..14;
+        pub const VALUE: rt::Range<usize> = 14..18;
+        pub const VALUE_DESC: rt::FieldDesc = rt::field(Self::NAME, "value");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("data_id", rt::Int(self.data_id as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::DataReply(*self).encode(address, buf)
+        }
+    }
+    impl response::MeterNumberReply {
+        pub const NAME: &'static str = "meter_number_reply";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 22;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x91, 1, &[20, 22]);
+        pub const ADDRESS_LOW: rt::Range<usize> = 1..4;
+        pub const ADDRESS_HIGH: rt::Range<usize> = 4..7;
+        pub const NUMBER_LOW: rt::Range<usize> = 14..17;
+        pub const NUMBER_HIGH: rt::Range<usize> = 17..20;
+        pub const DATA_ID_DESC: rt::FieldDesc = rt::field(Self::NAME, "data_id");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address_low", rt::Int(self.address_low as i64));
+            f("address_high", rt::Int(self.address_high as i64));
+            f("number_low", rt::Int(self.number_low as i64));
+            f("number_high", rt::Int(self.number_high as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MeterNumberReply(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §7.9 Read the communication address (control code 13H) (code `0x13`, 12 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1073,9 +1026,8 @@ pub mod dlt645 {
             pub data_id: u32,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §7.9 Address reply (control code 93H) (code `0x93`, 18 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1121,12 +1073,5 @@ pub mod dlt645 {
             /// Meter number, high three bytes (BCD digits)
             pub number_high: u32,
         }
-        /// `data_reply.value`
-        pub const DATA_REPLY_VALUE: FieldDesc = FieldDesc::new("data_reply", "value");
-        /// `meter_number_reply.data_id`
-        pub const METER_NUMBER_REPLY_DATA_ID: FieldDesc = FieldDesc::new(
-            "meter_number_reply",
-            "data_id",
-        );
     }
 }

@@ -152,40 +152,6 @@ pub mod dynamixel2_stuffed {
             Self(raw)
         }
     }
-    impl request::Ping {
-        pub const NAME: &'static str = "ping";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[10],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Ping(*self).encode(address, buf)
-        }
-    }
-    impl request::Write4 {
-        pub const NAME: &'static str = "write4";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 16;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[16],
-        );
-        pub const ADDRESS: rt::Range<usize> = 8..10;
-        pub const VALUE: rt::Range<usize> = 10..14;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-            f("value", rt::Int(self.value as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Write4(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -234,21 +200,13 @@ pub mod dynamixel2_stuffed {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Ping(request::Ping {}) => {
@@ -369,11 +327,7 @@ pub mod dynamixel2_stuffed {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -408,46 +362,6 @@ pub mod dynamixel2_stuffed {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::PingStatus {
-        pub const NAME: &'static str = "ping_status";
-        pub const CODE: &'static [u8] = &[0x55];
-        pub const LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x55,
-            1,
-            &[11, 14],
-        );
-        pub const ERROR: rt::Range<usize> = 8..9;
-        pub const MODEL_NUMBER: rt::Range<usize> = 9..11;
-        pub const FIRMWARE_VERSION: rt::Range<usize> = 11..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-            f("model_number", rt::Int(self.model_number as i64));
-            f("firmware_version", rt::Int(self.firmware_version as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PingStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[0x55];
-        pub const LEN: usize = 11;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x55,
-            1,
-            &[11, 14],
-        );
-        pub const ERROR: rt::Range<usize> = 8..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error", rt::Int(self.error.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -498,21 +412,13 @@ pub mod dynamixel2_stuffed {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::PingStatus(
@@ -681,11 +587,7 @@ pub mod dynamixel2_stuffed {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -793,9 +695,63 @@ pub mod dynamixel2_stuffed {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Dynamixel2Stuffed>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Ping {
+        pub const NAME: &'static str = "ping";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[10]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Ping(*self).encode(address, buf)
+        }
+    }
+    impl request::Write4 {
+        pub const NAME: &'static str = "write4";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[16]);
+        pub const ADDRESS: rt::Range<usize> = 8..10;
+        pub const VALUE: rt::Range<usize> = 10..14;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+            f("value", rt::Int(self.value as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write4(*self).encode(address, buf)
+        }
+    }
+    impl response::PingStatus {
+        pub const NAME: &'static str = "ping_status";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[11, 14]);
+        pub const ERROR: rt::Range<usize> = 8..9;
+        pub const MODEL_NUMBER: rt::Range<usize> = 9..11;
+        pub const FIRMWARE_VERSION: rt::Range<usize> = 11..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+            f("model_number", rt::Int(self.model_number as i64));
+            f("firmware_version", rt::Int(self.firmware_version as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PingStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x55];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x55, 1, &[11, 14]);
+        pub const ERROR: rt::Range<usize> = 8..9;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error", rt::Int(self.error.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §Ping Ping (code `0x01`, 10 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -812,7 +768,7 @@ pub mod dynamixel2_stuffed {
             pub value: u32,
         }
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
         /// §Ping Status packet answering Ping (code `0x55`, 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

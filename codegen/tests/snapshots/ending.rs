@@ -70,7 +70,7 @@ pub mod ending {
     }
     /// Where `write.values` sits in the frame and how its elements are counted.
     pub const REPEAT_WRITE: rt::RepeatAt = rt::RepeatAt {
-        field: &request::WRITE_VALUES,
+        field: &request::Write::VALUES_DESC,
         base: 7,
         at: 6,
         width: 2,
@@ -83,64 +83,6 @@ pub mod ending {
         min: 1,
         max: 16,
     };
-    impl request::Read {
-        pub const NAME: &'static str = "read";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[8],
-        );
-        pub const FIRST: rt::Range<usize> = 4..6;
-        pub const QUANTITY: rt::Range<usize> = 6..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("first", rt::Int(self.first as i64));
-            f("quantity", rt::Int(self.quantity as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Read(*self).encode(address, buf)
-        }
-    }
-    impl request::Write {
-        pub const NAME: &'static str = "write";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 39;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[7],
-        );
-        pub const QUANTITY: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("quantity", rt::Int(self.quantity as i64));
-            f("values", rt::List(self.values.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Write(*self).encode(address, buf)
-        }
-    }
-    impl request::Stamp {
-        pub const NAME: &'static str = "stamp";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[8],
-        );
-        pub const TICKS: rt::Range<usize> = 4..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("ticks", rt::Int(self.ticks as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Stamp(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -195,11 +137,7 @@ pub mod ending {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Read(request::Read { first: v_first, quantity: v_quantity }) => {
@@ -269,7 +207,7 @@ pub mod ending {
             match rt::code(frame, 3, 1) {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::READ_QUANTITY, 6, frame[6], 1, 16)?;
+                    rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
                     rt::Ok(
                         Self::Read(request::Read {
                             first: u16::from_be_bytes([frame[4], frame[5]]),
@@ -279,9 +217,9 @@ pub mod ending {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range(&request::WRITE_QUANTITY, 4, frame[4], 1, 16)?;
+                    rt::in_range(&request::Write::QUANTITY_DESC, 4, frame[4], 1, 16)?;
                     rt::following(
-                        &request::WRITE_BYTE_COUNT,
+                        &request::Write::BYTE_COUNT_DESC,
                         5,
                         frame[5],
                         frame[4] as i64,
@@ -361,11 +299,7 @@ pub mod ending {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -405,7 +339,7 @@ pub mod ending {
     }
     /// Where `read_reply.values` sits in the frame and how its elements are counted.
     pub const REPEAT_READ_REPLY: rt::RepeatAt = rt::RepeatAt {
-        field: &response::READ_REPLY_VALUES,
+        field: &response::ReadReply::VALUES_DESC,
         base: 5,
         at: 4,
         width: 2,
@@ -413,60 +347,6 @@ pub mod ending {
         min: 1,
         max: 16,
     };
-    impl response::ReadReply {
-        pub const NAME: &'static str = "read_reply";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const MIN_LEN: usize = 7;
-        pub const MAX_LEN: usize = 37;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[5],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("values", rt::List(self.values.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadReply(*self).encode(address, buf)
-        }
-    }
-    impl response::ReadError {
-        pub const NAME: &'static str = "read_error";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[6],
-        );
-        pub const REASON: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("reason", rt::Int(self.reason as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReadError(*self).encode(address, buf)
-        }
-    }
-    impl response::WriteReply {
-        pub const NAME: &'static str = "write_reply";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[6],
-        );
-        pub const STATUS: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::WriteReply(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -521,11 +401,7 @@ pub mod ending {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadReply(response::ReadReply { values: v_values }) => {
@@ -679,11 +555,7 @@ pub mod ending {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -755,7 +627,7 @@ pub mod ending {
             match rt::code(frame, 3, 1) {
                 0x01 => {
                     let frame = rt::fixed::<8>(frame, &request::Read::DESC)?;
-                    rt::in_range(&request::READ_QUANTITY, 6, frame[6], 1, 16)?;
+                    rt::in_range(&request::Read::QUANTITY_DESC, 6, frame[6], 1, 16)?;
                     rt::Ok(Self::Read {
                         first: u16::from_be_bytes([frame[4], frame[5]]),
                         quantity: frame[6],
@@ -763,9 +635,9 @@ pub mod ending {
                 }
                 0x02 => {
                     let (frame, elements, _) = REPEAT_WRITE.split::<6>(frame)?;
-                    rt::in_range(&request::WRITE_QUANTITY, 4, frame[4], 1, 16)?;
+                    rt::in_range(&request::Write::QUANTITY_DESC, 4, frame[4], 1, 16)?;
                     rt::following(
-                        &request::WRITE_BYTE_COUNT,
+                        &request::Write::BYTE_COUNT_DESC,
                         5,
                         frame[5],
                         frame[4] as i64,
@@ -1073,11 +945,97 @@ pub mod ending {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ending>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[8]);
+        pub const FIRST: rt::Range<usize> = 4..6;
+        pub const QUANTITY: rt::Range<usize> = 6..7;
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("first", rt::Int(self.first as i64));
+            f("quantity", rt::Int(self.quantity as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::Write {
+        pub const NAME: &'static str = "write";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 39;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[7]);
+        pub const QUANTITY: rt::Range<usize> = 4..5;
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
+        pub const QUANTITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "quantity");
+        pub const BYTE_COUNT_DESC: rt::FieldDesc = rt::field(Self::NAME, "byte_count");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("quantity", rt::Int(self.quantity as i64));
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Write(*self).encode(address, buf)
+        }
+    }
+    impl request::Stamp {
+        pub const NAME: &'static str = "stamp";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[8]);
+        pub const TICKS: rt::Range<usize> = 4..7;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("ticks", rt::Int(self.ticks as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Stamp(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadReply {
+        pub const NAME: &'static str = "read_reply";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const MIN_LEN: usize = 7;
+        pub const MAX_LEN: usize = 37;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
+        pub const VALUES_DESC: rt::FieldDesc = rt::field(Self::NAME, "values");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("values", rt::List(self.values.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadReply(*self).encode(address, buf)
+        }
+    }
+    impl response::ReadError {
+        pub const NAME: &'static str = "read_error";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[6]);
+        pub const REASON: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("reason", rt::Int(self.reason as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReadError(*self).encode(address, buf)
+        }
+    }
+    impl response::WriteReply {
+        pub const NAME: &'static str = "write_reply";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[6]);
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::WriteReply(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Read (code `0x01`, 8 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1106,18 +1064,9 @@ pub mod ending {
         pub struct Stamp {
             pub ticks: u32,
         }
-        /// `read.quantity`
-        pub const READ_QUANTITY: FieldDesc = FieldDesc::new("read", "quantity");
-        /// `write.values`
-        pub const WRITE_VALUES: FieldDesc = FieldDesc::new("write", "values");
-        /// `write.quantity`
-        pub const WRITE_QUANTITY: FieldDesc = FieldDesc::new("write", "quantity");
-        /// `write.byte_count`
-        pub const WRITE_BYTE_COUNT: FieldDesc = FieldDesc::new("write", "byte_count");
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §1 Read reply (code `0x01`, 7 to 37 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1142,7 +1091,5 @@ pub mod ending {
         pub struct WriteReply {
             pub status: u8,
         }
-        /// `read_reply.values`
-        pub const READ_REPLY_VALUES: FieldDesc = FieldDesc::new("read_reply", "values");
     }
 }

@@ -237,34 +237,6 @@ pub mod optional_sensor {
             Self(raw)
         }
     }
-    impl request::Read {
-        pub const NAME: &'static str = "read";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::Read(*self).encode(address, buf)
-        }
-    }
-    impl request::LastEvent {
-        pub const NAME: &'static str = "last_event";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::LastEvent(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -305,11 +277,7 @@ pub mod optional_sensor {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
@@ -386,11 +354,7 @@ pub mod optional_sensor {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -486,55 +450,6 @@ pub mod optional_sensor {
         ],
         lengths: &[6, 8],
     };
-    impl response::Reading {
-        pub const NAME: &'static str = "reading";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 14;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[8],
-        );
-        pub const STATUS: rt::Range<usize> = 4..5;
-        pub const TEMPERATURE: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
-            f("temperature", rt::Int(self.temperature.raw() as i64));
-            if let rt::Some(v_humidity) = self.humidity {
-                f("humidity", rt::Int(v_humidity.raw() as i64))
-            }
-            if let rt::Some(v_pressure) = self.pressure {
-                f("pressure", rt::Int(v_pressure as i64))
-            }
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Reading(*self).encode(address, buf)
-        }
-    }
-    impl response::Event {
-        pub const NAME: &'static str = "event";
-        pub const CODE: &'static [u8] = &[0x82];
-        pub const MIN_LEN: usize = 6;
-        pub const MAX_LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x82,
-            1,
-            &[6],
-        );
-        pub const KIND: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("kind", rt::Int(self.kind.raw() as i64));
-            if let rt::Some(v_detail) = self.detail {
-                f("detail", rt::Int(v_detail as i64))
-            }
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Event(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -591,11 +506,7 @@ pub mod optional_sensor {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Reading(
@@ -724,7 +635,7 @@ pub mod optional_sensor {
                     let v_humidity = if s.has(0) {
                         let field_2: u16 = u16::from_be_bytes([frame[7], frame[8]]);
                         rt::in_range(
-                            &response::READING_HUMIDITY,
+                            &response::Reading::HUMIDITY_DESC,
                             s.at(0),
                             field_2,
                             0,
@@ -828,11 +739,7 @@ pub mod optional_sensor {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -986,9 +893,67 @@ pub mod optional_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<OptionalSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::Read {
+        pub const NAME: &'static str = "read";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::Read(*self).encode(address, buf)
+        }
+    }
+    impl request::LastEvent {
+        pub const NAME: &'static str = "last_event";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::LastEvent(*self).encode(address, buf)
+        }
+    }
+    impl response::Reading {
+        pub const NAME: &'static str = "reading";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 14;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[8]);
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub const TEMPERATURE: rt::Range<usize> = 5..7;
+        pub const HUMIDITY_DESC: rt::FieldDesc = rt::field(Self::NAME, "humidity");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+            if let rt::Some(v_humidity) = self.humidity {
+                f("humidity", rt::Int(v_humidity.raw() as i64))
+            }
+            if let rt::Some(v_pressure) = self.pressure {
+                f("pressure", rt::Int(v_pressure as i64))
+            }
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Reading(*self).encode(address, buf)
+        }
+    }
+    impl response::Event {
+        pub const NAME: &'static str = "event";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const MIN_LEN: usize = 6;
+        pub const MAX_LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x82, 1, &[6]);
+        pub const KIND: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("kind", rt::Int(self.kind.raw() as i64));
+            if let rt::Some(v_detail) = self.detail {
+                f("detail", rt::Int(v_detail as i64))
+            }
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Event(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3 Read the sensor (code `0x01`, 5 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -1001,9 +966,8 @@ pub mod optional_sensor {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct LastEvent;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §3 Reading (code `0x81`, 8 to 14 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1028,7 +992,5 @@ pub mod optional_sensor {
             /// On the wire only when `kind` = 2; `None` where it is not.
             pub detail: super::rt::Option<u16>,
         }
-        /// `reading.humidity`
-        pub const READING_HUMIDITY: FieldDesc = FieldDesc::new("reading", "humidity");
     }
 }

@@ -142,52 +142,6 @@ pub mod slip_sensor {
             rt::Some(Self(raw as i16))
         }
     }
-    impl request::ReadTemperature {
-        pub const NAME: &'static str = "read_temperature";
-        pub const CODE: &'static [u8] = &[0x01];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x01,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadTemperature(*self).encode(address, buf)
-        }
-    }
-    impl request::SetThreshold {
-        pub const NAME: &'static str = "set_threshold";
-        pub const CODE: &'static [u8] = &[0x02];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x02,
-            1,
-            &[6],
-        );
-        pub const THRESHOLD: rt::Range<usize> = 1..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("threshold", rt::Int(self.threshold as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetThreshold(*self).encode(address, buf)
-        }
-    }
-    impl request::ReadSamples {
-        pub const NAME: &'static str = "read_samples";
-        pub const CODE: &'static [u8] = &[0x03];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x03,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReadSamples(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -239,21 +193,13 @@ pub mod slip_sensor {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReadTemperature(request::ReadTemperature {}) => {
@@ -369,11 +315,7 @@ pub mod slip_sensor {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -413,7 +355,7 @@ pub mod slip_sensor {
     }
     /// Where `samples.samples` sits in the frame and how its elements are counted.
     pub const REPEAT_SAMPLES: rt::RepeatAt = rt::RepeatAt {
-        field: &response::SAMPLES_SAMPLES,
+        field: &response::Samples::SAMPLES_DESC,
         base: 4,
         at: 1,
         width: 1,
@@ -421,56 +363,6 @@ pub mod slip_sensor {
         min: 0,
         max: 8,
     };
-    impl response::Temperature {
-        pub const NAME: &'static str = "temperature";
-        pub const CODE: &'static [u8] = &[0x81];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x81,
-            1,
-            &[6],
-        );
-        pub const TEMPERATURE: rt::Range<usize> = 1..3;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("temperature", rt::Int(self.temperature.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Temperature(*self).encode(address, buf)
-        }
-    }
-    impl response::Ack {
-        pub const NAME: &'static str = "ack";
-        pub const CODE: &'static [u8] = &[0x82];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x82,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Ack(*self).encode(address, buf)
-        }
-    }
-    impl response::Samples {
-        pub const NAME: &'static str = "samples";
-        pub const CODE: &'static [u8] = &[0x83];
-        pub const MIN_LEN: usize = 4;
-        pub const MAX_LEN: usize = 12;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x83,
-            1,
-            &[4],
-        );
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("samples", rt::List(self.samples.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Samples(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -528,21 +420,13 @@ pub mod slip_sensor {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(&ESCAPING, &plain[..len], buf, |b| u32::from(checksum(b)))
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::Temperature(
@@ -702,11 +586,7 @@ pub mod slip_sensor {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -814,9 +694,76 @@ pub mod slip_sensor {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<SlipSensor>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReadTemperature {
+        pub const NAME: &'static str = "read_temperature";
+        pub const CODE: &'static [u8] = &[0x01];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x01, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::SetThreshold {
+        pub const NAME: &'static str = "set_threshold";
+        pub const CODE: &'static [u8] = &[0x02];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x02, 1, &[6]);
+        pub const THRESHOLD: rt::Range<usize> = 1..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("threshold", rt::Int(self.threshold as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetThreshold(*self).encode(address, buf)
+        }
+    }
+    impl request::ReadSamples {
+        pub const NAME: &'static str = "read_samples";
+        pub const CODE: &'static [u8] = &[0x03];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x03, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReadSamples(*self).encode(address, buf)
+        }
+    }
+    impl response::Temperature {
+        pub const NAME: &'static str = "temperature";
+        pub const CODE: &'static [u8] = &[0x81];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x81, 1, &[6]);
+        pub const TEMPERATURE: rt::Range<usize> = 1..3;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Temperature(*self).encode(address, buf)
+        }
+    }
+    impl response::Ack {
+        pub const NAME: &'static str = "ack";
+        pub const CODE: &'static [u8] = &[0x82];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x82, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Ack(*self).encode(address, buf)
+        }
+    }
+    impl response::Samples {
+        pub const NAME: &'static str = "samples";
+        pub const CODE: &'static [u8] = &[0x83];
+        pub const MIN_LEN: usize = 4;
+        pub const MAX_LEN: usize = 12;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x83, 1, &[4]);
+        pub const SAMPLES_DESC: rt::FieldDesc = rt::field(Self::NAME, "samples");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("samples", rt::List(self.samples.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Samples(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
         /// §3.1 Read temperature (code `0x01`, 4 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -837,9 +784,8 @@ pub mod slip_sensor {
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct ReadSamples;
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1 Temperature (code `0x81`, 6 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -862,7 +808,5 @@ pub mod slip_sensor {
         pub struct Samples {
             pub samples: super::rt::Repeated<u8, 8>,
         }
-        /// `samples.samples`
-        pub const SAMPLES_SAMPLES: FieldDesc = FieldDesc::new("samples", "samples");
     }
 }

@@ -289,734 +289,6 @@ pub mod ub2 {
             Self(raw)
         }
     }
-    impl request::ReferenceRun {
-        pub const NAME: &'static str = "reference_run";
-        pub const CODE: &'static [u8] = &[0x10, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x1000,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReferenceRun(*self).encode(address, buf)
-        }
-    }
-    impl request::ReferenceRunStatus {
-        pub const NAME: &'static str = "reference_run_status";
-        pub const CODE: &'static [u8] = &[0x10, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x1001,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::ReferenceRunStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCapacitance {
-        pub const NAME: &'static str = "go_to_capacitance";
-        pub const CODE: &'static [u8] = &[0x20, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2000,
-            2,
-            &[9],
-        );
-        pub const TARGET: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCapacitanceStatus {
-        pub const NAME: &'static str = "go_to_capacitance_status";
-        pub const CODE: &'static [u8] = &[0x20, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2001,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCapacitanceStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToFullStepPosition {
-        pub const NAME: &'static str = "go_to_full_step_position";
-        pub const CODE: &'static [u8] = &[0x21, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2100,
-            2,
-            &[7],
-        );
-        pub const TARGET: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToFullStepPositionStatus {
-        pub const NAME: &'static str = "go_to_full_step_position_status";
-        pub const CODE: &'static [u8] = &[0x21, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2101,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToFullStepPositionStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveFullSteps {
-        pub const NAME: &'static str = "move_full_steps";
-        pub const CODE: &'static [u8] = &[0x22, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2200,
-            2,
-            &[7],
-        );
-        pub const STEPS: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("steps", rt::Int(self.steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveFullSteps(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveFullStepsStatus {
-        pub const NAME: &'static str = "move_full_steps_status";
-        pub const CODE: &'static [u8] = &[0x22, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2201,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveFullStepsStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCmin {
-        pub const NAME: &'static str = "go_to_cmin";
-        pub const CODE: &'static [u8] = &[0x23, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2300,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCmin(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCminStatus {
-        pub const NAME: &'static str = "go_to_cmin_status";
-        pub const CODE: &'static [u8] = &[0x23, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2301,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCminStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCmax {
-        pub const NAME: &'static str = "go_to_cmax";
-        pub const CODE: &'static [u8] = &[0x24, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2400,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCmax(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToCmaxStatus {
-        pub const NAME: &'static str = "go_to_cmax_status";
-        pub const CODE: &'static [u8] = &[0x24, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2401,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToCmaxStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToMicroStepPosition {
-        pub const NAME: &'static str = "go_to_micro_step_position";
-        pub const CODE: &'static [u8] = &[0x25, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2500,
-            2,
-            &[9],
-        );
-        pub const TARGET: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("target", rt::Int(self.target as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToMicroStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToMicroStepPositionStatus {
-        pub const NAME: &'static str = "go_to_micro_step_position_status";
-        pub const CODE: &'static [u8] = &[0x25, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2501,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToMicroStepPositionStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveMicroSteps {
-        pub const NAME: &'static str = "move_micro_steps";
-        pub const CODE: &'static [u8] = &[0x26, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2600,
-            2,
-            &[9],
-        );
-        pub const STEPS: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("steps", rt::Int(self.steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveMicroSteps(*self).encode(address, buf)
-        }
-    }
-    impl request::MoveMicroStepsStatus {
-        pub const NAME: &'static str = "move_micro_steps_status";
-        pub const CODE: &'static [u8] = &[0x26, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2601,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::MoveMicroStepsStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToStoredPosition {
-        pub const NAME: &'static str = "go_to_stored_position";
-        pub const CODE: &'static [u8] = &[0x27, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2700,
-            2,
-            &[6],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToStoredPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GoToStoredPositionStatus {
-        pub const NAME: &'static str = "go_to_stored_position_status";
-        pub const CODE: &'static [u8] = &[0x27, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x2701,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GoToStoredPositionStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::SetAccelerationSpeedIndex {
-        pub const NAME: &'static str = "set_acceleration_speed_index";
-        pub const CODE: &'static [u8] = &[0x43, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4300,
-            2,
-            &[7],
-        );
-        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
-        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("acceleration_index", rt::Int(self.acceleration_index as i64));
-            f("speed_index", rt::Int(self.speed_index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetAccelerationSpeedIndex(*self).encode(address, buf)
-        }
-    }
-    impl request::SetCurrent {
-        pub const NAME: &'static str = "set_current";
-        pub const CODE: &'static [u8] = &[0x45, 0x00];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4500,
-            2,
-            &[7],
-        );
-        pub const IDLE_CURRENT: rt::Range<usize> = 4..5;
-        pub const DRIVE_CURRENT: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("idle_current", rt::Int(self.idle_current as i64));
-            f("drive_current", rt::Int(self.drive_current as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetCurrent(*self).encode(address, buf)
-        }
-    }
-    impl request::SetSlaveAddress {
-        pub const NAME: &'static str = "set_slave_address";
-        pub const CODE: &'static [u8] = &[0x60, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6000,
-            2,
-            &[6],
-        );
-        pub const ADDRESS: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("address", rt::Int(self.address as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetSlaveAddress(*self).encode(address, buf)
-        }
-    }
-    impl request::SetBaudRate {
-        pub const NAME: &'static str = "set_baud_rate";
-        pub const CODE: &'static [u8] = &[0x61, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6100,
-            2,
-            &[6],
-        );
-        pub const BAUD_RATE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("baud_rate", rt::Int(self.baud_rate.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetBaudRate(*self).encode(address, buf)
-        }
-    }
-    impl request::SetLowerCustomerLimit {
-        pub const NAME: &'static str = "set_lower_customer_limit";
-        pub const CODE: &'static [u8] = &[0x72, 0x01];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7201,
-            2,
-            &[9],
-        );
-        pub const LIMIT: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("limit", rt::Int(self.limit.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetLowerCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::SetUpperCustomerLimit {
-        pub const NAME: &'static str = "set_upper_customer_limit";
-        pub const CODE: &'static [u8] = &[0x72, 0x02];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7202,
-            2,
-            &[9],
-        );
-        pub const LIMIT: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("limit", rt::Int(self.limit.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetUpperCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::StoreIndexedPosition {
-        pub const NAME: &'static str = "store_indexed_position";
-        pub const CODE: &'static [u8] = &[0x75, 0x00];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7500,
-            2,
-            &[8],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub const POSITION: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-            f("position", rt::Int(self.position as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::StoreIndexedPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::SetModeOfOperation {
-        pub const NAME: &'static str = "set_mode_of_operation";
-        pub const CODE: &'static [u8] = &[0x80, 0x00];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8000,
-            2,
-            &[6],
-        );
-        pub const MODE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("mode", rt::Int(self.mode.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::SetModeOfOperation(*self).encode(address, buf)
-        }
-    }
-    impl request::GetActualCapacitance {
-        pub const NAME: &'static str = "get_actual_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4001,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetActualCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetActualFullStepPosition {
-        pub const NAME: &'static str = "get_actual_full_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x02];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4002,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetActualFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetMinimumCapacitance {
-        pub const NAME: &'static str = "get_minimum_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x10];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4010,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetMinimumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetMaximumCapacitance {
-        pub const NAME: &'static str = "get_maximum_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x11];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4011,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetMaximumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetAccelerationSpeed {
-        pub const NAME: &'static str = "get_acceleration_speed";
-        pub const CODE: &'static [u8] = &[0x40, 0x21];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4021,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetAccelerationSpeed(*self).encode(address, buf)
-        }
-    }
-    impl request::GetStatus {
-        pub const NAME: &'static str = "get_status";
-        pub const CODE: &'static [u8] = &[0x40, 0x22];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4022,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetStatus(*self).encode(address, buf)
-        }
-    }
-    impl request::GetCCurveIndexedFullStepCapacitance {
-        pub const NAME: &'static str = "get_c_curve_indexed_full_step_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x30];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4030,
-            2,
-            &[7],
-        );
-        pub const INDEX: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetCCurveIndexedFullStepCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetControllerTemperature {
-        pub const NAME: &'static str = "get_controller_temperature";
-        pub const CODE: &'static [u8] = &[0x40, 0x32];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4032,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetControllerTemperature(*self).encode(address, buf)
-        }
-    }
-    impl request::GetMicroStepPosition {
-        pub const NAME: &'static str = "get_micro_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x36];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4036,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetMicroStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetFirmwareVersion {
-        pub const NAME: &'static str = "get_firmware_version";
-        pub const CODE: &'static [u8] = &[0x40, 0x61];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4061,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetFirmwareVersion(*self).encode(address, buf)
-        }
-    }
-    impl request::GetSerialNumber {
-        pub const NAME: &'static str = "get_serial_number";
-        pub const CODE: &'static [u8] = &[0x40, 0x62];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4062,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetSerialNumber(*self).encode(address, buf)
-        }
-    }
-    impl request::GetCminNom {
-        pub const NAME: &'static str = "get_cmin_nom";
-        pub const CODE: &'static [u8] = &[0x40, 0x70];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4070,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetCminNom(*self).encode(address, buf)
-        }
-    }
-    impl request::GetCmaxNom {
-        pub const NAME: &'static str = "get_cmax_nom";
-        pub const CODE: &'static [u8] = &[0x40, 0x71];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4071,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetCmaxNom(*self).encode(address, buf)
-        }
-    }
-    impl request::GetLowerCustomerLimit {
-        pub const NAME: &'static str = "get_lower_customer_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetLowerCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetUpperCustomerLimit {
-        pub const NAME: &'static str = "get_upper_customer_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetUpperCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetLowerFactoryLimit {
-        pub const NAME: &'static str = "get_lower_factory_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetLowerFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetUpperFactoryLimit {
-        pub const NAME: &'static str = "get_upper_factory_limit";
-        pub const CODE: &'static [u8] = &[0x40, 0x72];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4072,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetUpperFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl request::GetPresetCapacitance {
-        pub const NAME: &'static str = "get_preset_capacitance";
-        pub const CODE: &'static [u8] = &[0x40, 0x73];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4073,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetPresetCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl request::GetPresetFullStepPosition {
-        pub const NAME: &'static str = "get_preset_full_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x73];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4073,
-            2,
-            &[6],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetPresetFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetStoredFullStepPosition {
-        pub const NAME: &'static str = "get_stored_full_step_position";
-        pub const CODE: &'static [u8] = &[0x40, 0x75];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4075,
-            2,
-            &[6],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetStoredFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl request::GetModeOfOperation {
-        pub const NAME: &'static str = "get_mode_of_operation";
-        pub const CODE: &'static [u8] = &[0x40, 0x80];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4080,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::GetModeOfOperation(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1214,11 +486,7 @@ pub mod ub2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::ReferenceRun(request::ReferenceRun {}) => {
@@ -1709,7 +977,7 @@ pub mod ub2 {
                         6,
                     >(frame, &request::GoToStoredPosition::DESC)?;
                     rt::in_range(
-                        &request::GO_TO_STORED_POSITION_INDEX,
+                        &request::GoToStoredPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -1732,14 +1000,14 @@ pub mod ub2 {
                         7,
                     >(frame, &request::SetAccelerationSpeedIndex::DESC)?;
                     rt::in_range(
-                        &request::SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX,
+                        &request::SetAccelerationSpeedIndex::ACCELERATION_INDEX_DESC,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        &request::SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX,
+                        &request::SetAccelerationSpeedIndex::SPEED_INDEX_DESC,
                         5,
                         frame[5],
                         0,
@@ -1764,7 +1032,7 @@ pub mod ub2 {
                 0x6000 => {
                     let frame = rt::fixed::<6>(frame, &request::SetSlaveAddress::DESC)?;
                     rt::in_range(
-                        &request::SET_SLAVE_ADDRESS_ADDRESS,
+                        &request::SetSlaveAddress::ADDRESS_DESC,
                         4,
                         frame[4],
                         33,
@@ -1813,7 +1081,7 @@ pub mod ub2 {
                         8,
                     >(frame, &request::StoreIndexedPosition::DESC)?;
                     rt::in_range(
-                        &request::STORE_INDEXED_POSITION_INDEX,
+                        &request::StoreIndexedPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -1876,7 +1144,7 @@ pub mod ub2 {
                     >(frame, &request::GetCCurveIndexedFullStepCapacitance::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
                     rt::in_range(
-                        &request::GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX,
+                        &request::GetCCurveIndexedFullStepCapacitance::INDEX_DESC,
                         4,
                         field_0,
                         0,
@@ -1920,7 +1188,7 @@ pub mod ub2 {
                     let mut g = rt::Group::new(frame, 0x4072, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_LOWER_CUSTOMER_LIMIT_INDEX,
+                            &request::GetLowerCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -1931,7 +1199,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_UPPER_CUSTOMER_LIMIT_INDEX,
+                            &request::GetUpperCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x2,
@@ -1942,7 +1210,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_LOWER_FACTORY_LIMIT_INDEX,
+                            &request::GetLowerFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x3,
@@ -1951,7 +1219,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_UPPER_FACTORY_LIMIT_INDEX,
+                            &request::GetUpperFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x4,
@@ -1964,7 +1232,7 @@ pub mod ub2 {
                     let mut g = rt::Group::new(frame, 0x4073, rt::None);
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_PRESET_CAPACITANCE_INDEX,
+                            &request::GetPresetCapacitance::INDEX_DESC,
                             4,
                             frame[4],
                             0x0,
@@ -1973,7 +1241,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 6]| {
                         rt::equal(
-                            &request::GET_PRESET_FULL_STEP_POSITION_INDEX,
+                            &request::GetPresetFullStepPosition::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -1991,7 +1259,7 @@ pub mod ub2 {
                         6,
                     >(frame, &request::GetStoredFullStepPosition::DESC)?;
                     rt::in_range(
-                        &request::GET_STORED_FULL_STEP_POSITION_INDEX,
+                        &request::GetStoredFullStepPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -2261,11 +1529,7 @@ pub mod ub2 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -2370,650 +1634,6 @@ pub mod ub2 {
         /// The responses this command may get, bit `i` for row `i` of `Response::MESSAGES`.
         const fn replies(&self) -> u64 {
             Self::COMMANDS[self.index()].3
-        }
-    }
-    impl response::MovementStarted {
-        pub const NAME: &'static str = "movement_started";
-        pub const CODE: &'static [u8] = &[0x50];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x50,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementStarted(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementCompleted {
-        pub const NAME: &'static str = "movement_completed";
-        pub const CODE: &'static [u8] = &[0x51];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x51,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementCompleted(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementNotCompleted {
-        pub const NAME: &'static str = "movement_not_completed";
-        pub const CODE: &'static [u8] = &[0x52];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x52,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementNotCompleted(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementNotTriggered {
-        pub const NAME: &'static str = "movement_not_triggered";
-        pub const CODE: &'static [u8] = &[0x53];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x53,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementNotTriggered(*self).encode(address, buf)
-        }
-    }
-    impl response::MovementCompletedWithStepLoss {
-        pub const NAME: &'static str = "movement_completed_with_step_loss";
-        pub const CODE: &'static [u8] = &[0x54, 0x00];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x5400,
-            2,
-            &[9],
-        );
-        pub const LOST_MICRO_STEPS: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("lost_micro_steps", rt::Int(self.lost_micro_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MovementCompletedWithStepLoss(*self).encode(address, buf)
-        }
-    }
-    impl response::NakUnknownCommand {
-        pub const NAME: &'static str = "nak_unknown_command";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakUnknownCommand(*self).encode(address, buf)
-        }
-    }
-    impl response::NakIncompatibleStatus {
-        pub const NAME: &'static str = "nak_incompatible_status";
-        pub const CODE: &'static [u8] = &[0x91];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x91,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakIncompatibleStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::NakChecksumError {
-        pub const NAME: &'static str = "nak_checksum_error";
-        pub const CODE: &'static [u8] = &[0x92];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x92,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakChecksumError(*self).encode(address, buf)
-        }
-    }
-    impl response::NakLimitReached {
-        pub const NAME: &'static str = "nak_limit_reached";
-        pub const CODE: &'static [u8] = &[0x93];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x93,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakLimitReached(*self).encode(address, buf)
-        }
-    }
-    impl response::NakIndexOutOfRange {
-        pub const NAME: &'static str = "nak_index_out_of_range";
-        pub const CODE: &'static [u8] = &[0x94];
-        pub const LEN: usize = 4;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x94,
-            1,
-            &[4],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::NakIndexOutOfRange(*self).encode(address, buf)
-        }
-    }
-    impl response::SetAccelerationSpeedIndexAck {
-        pub const NAME: &'static str = "set_acceleration_speed_index_ack";
-        pub const CODE: &'static [u8] = &[0x43, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4300,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetAccelerationSpeedIndexAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetCurrentAck {
-        pub const NAME: &'static str = "set_current_ack";
-        pub const CODE: &'static [u8] = &[0x45, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4500,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetCurrentAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetSlaveAddressAck {
-        pub const NAME: &'static str = "set_slave_address_ack";
-        pub const CODE: &'static [u8] = &[0x60, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6000,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetSlaveAddressAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetBaudRateAck {
-        pub const NAME: &'static str = "set_baud_rate_ack";
-        pub const CODE: &'static [u8] = &[0x61, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x6100,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetBaudRateAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetLowerCustomerLimitAck {
-        pub const NAME: &'static str = "set_lower_customer_limit_ack";
-        pub const CODE: &'static [u8] = &[0x72, 0x01];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7201,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetLowerCustomerLimitAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetUpperCustomerLimitAck {
-        pub const NAME: &'static str = "set_upper_customer_limit_ack";
-        pub const CODE: &'static [u8] = &[0x72, 0x02];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7202,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetUpperCustomerLimitAck(*self).encode(address, buf)
-        }
-    }
-    impl response::StoreIndexedPositionAck {
-        pub const NAME: &'static str = "store_indexed_position_ack";
-        pub const CODE: &'static [u8] = &[0x75, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x7500,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StoreIndexedPositionAck(*self).encode(address, buf)
-        }
-    }
-    impl response::SetModeOfOperationAck {
-        pub const NAME: &'static str = "set_mode_of_operation_ack";
-        pub const CODE: &'static [u8] = &[0x80, 0x00];
-        pub const LEN: usize = 5;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8000,
-            2,
-            &[5],
-        );
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SetModeOfOperationAck(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualCapacitance {
-        pub const NAME: &'static str = "actual_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x01];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4101,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualFullStepPosition {
-        pub const NAME: &'static str = "actual_full_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x02];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4102,
-            2,
-            &[7],
-        );
-        pub const FULL_STEPS: rt::Range<usize> = 4..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("full_steps", rt::Int(self.full_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::MinimumCapacitance {
-        pub const NAME: &'static str = "minimum_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x10];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4110,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MinimumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::MaximumCapacitance {
-        pub const NAME: &'static str = "maximum_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x11];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4111,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MaximumCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::AccelerationSpeed {
-        pub const NAME: &'static str = "acceleration_speed";
-        pub const CODE: &'static [u8] = &[0x41, 0x21];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4121,
-            2,
-            &[7],
-        );
-        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
-        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("acceleration_index", rt::Int(self.acceleration_index as i64));
-            f("speed_index", rt::Int(self.speed_index as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AccelerationSpeed(*self).encode(address, buf)
-        }
-    }
-    impl response::Status {
-        pub const NAME: &'static str = "status";
-        pub const CODE: &'static [u8] = &[0x41, 0x22];
-        pub const LEN: usize = 7;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4122,
-            2,
-            &[7],
-        );
-        pub const ERROR_BITS: rt::Range<usize> = 4..5;
-        pub const RESERVED: rt::Range<usize> = 5..6;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("error_bits", rt::Int(self.error_bits.raw() as i64));
-            f("reserved", rt::Int(self.reserved as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::Status(*self).encode(address, buf)
-        }
-    }
-    impl response::CCurveEntry {
-        pub const NAME: &'static str = "c_curve_entry";
-        pub const CODE: &'static [u8] = &[0x41, 0x30];
-        pub const LEN: usize = 13;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4130,
-            2,
-            &[13],
-        );
-        pub const INDEX: rt::Range<usize> = 4..6;
-        pub const FULL_STEPS: rt::Range<usize> = 6..8;
-        pub const CAPACITANCE: rt::Range<usize> = 8..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-            f("full_steps", rt::Int(self.full_steps as i64));
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CCurveEntry(*self).encode(address, buf)
-        }
-    }
-    impl response::ControllerTemperature {
-        pub const NAME: &'static str = "controller_temperature";
-        pub const CODE: &'static [u8] = &[0x41, 0x32];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4132,
-            2,
-            &[6],
-        );
-        pub const TEMPERATURE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("temperature", rt::Int(self.temperature as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ControllerTemperature(*self).encode(address, buf)
-        }
-    }
-    impl response::MicroStepPosition {
-        pub const NAME: &'static str = "micro_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x36];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4136,
-            2,
-            &[9],
-        );
-        pub const MICRO_STEPS: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("micro_steps", rt::Int(self.micro_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::MicroStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::FirmwareVersion {
-        pub const NAME: &'static str = "firmware_version";
-        pub const CODE: &'static [u8] = &[0x41, 0x61];
-        pub const LEN: usize = 16;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4161,
-            2,
-            &[16],
-        );
-        pub const FIRMWARE_VERSION: rt::Range<usize> = 4..15;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("firmware_version", rt::Text(&self.firmware_version[..]));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::FirmwareVersion(*self).encode(address, buf)
-        }
-    }
-    impl response::SerialNumber {
-        pub const NAME: &'static str = "serial_number";
-        pub const CODE: &'static [u8] = &[0x41, 0x62];
-        pub const LEN: usize = 13;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4162,
-            2,
-            &[13],
-        );
-        pub const SERIAL_NUMBER: rt::Range<usize> = 4..12;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("serial_number", rt::Text(&self.serial_number[..]));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::SerialNumber(*self).encode(address, buf)
-        }
-    }
-    impl response::CminNom {
-        pub const NAME: &'static str = "cmin_nom";
-        pub const CODE: &'static [u8] = &[0x41, 0x70];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4170,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CminNom(*self).encode(address, buf)
-        }
-    }
-    impl response::CmaxNom {
-        pub const NAME: &'static str = "cmax_nom";
-        pub const CODE: &'static [u8] = &[0x41, 0x71];
-        pub const LEN: usize = 9;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4171,
-            2,
-            &[9],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 4..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::CmaxNom(*self).encode(address, buf)
-        }
-    }
-    impl response::LowerCustomerLimit {
-        pub const NAME: &'static str = "lower_customer_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LowerCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::UpperCustomerLimit {
-        pub const NAME: &'static str = "upper_customer_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::UpperCustomerLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::LowerFactoryLimit {
-        pub const NAME: &'static str = "lower_factory_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::LowerFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::UpperFactoryLimit {
-        pub const NAME: &'static str = "upper_factory_limit";
-        pub const CODE: &'static [u8] = &[0x41, 0x72];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4172,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::UpperFactoryLimit(*self).encode(address, buf)
-        }
-    }
-    impl response::PresetCapacitance {
-        pub const NAME: &'static str = "preset_capacitance";
-        pub const CODE: &'static [u8] = &[0x41, 0x73];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4173,
-            2,
-            &[10],
-        );
-        pub const CAPACITANCE: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("capacitance", rt::Int(self.capacitance.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PresetCapacitance(*self).encode(address, buf)
-        }
-    }
-    impl response::PresetFullStepPosition {
-        pub const NAME: &'static str = "preset_full_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x73];
-        pub const LEN: usize = 10;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4173,
-            2,
-            &[10],
-        );
-        pub const FULL_STEPS: rt::Range<usize> = 5..9;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("full_steps", rt::Int(self.full_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::PresetFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::StoredFullStepPosition {
-        pub const NAME: &'static str = "stored_full_step_position";
-        pub const CODE: &'static [u8] = &[0x41, 0x75];
-        pub const LEN: usize = 8;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4175,
-            2,
-            &[8],
-        );
-        pub const INDEX: rt::Range<usize> = 4..5;
-        pub const FULL_STEPS: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("index", rt::Int(self.index as i64));
-            f("full_steps", rt::Int(self.full_steps as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::StoredFullStepPosition(*self).encode(address, buf)
-        }
-    }
-    impl response::ActualModeOfOperation {
-        pub const NAME: &'static str = "actual_mode_of_operation";
-        pub const CODE: &'static [u8] = &[0x41, 0x80];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x4180,
-            2,
-            &[6],
-        );
-        pub const MODE: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("mode", rt::Int(self.mode.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ActualModeOfOperation(*self).encode(address, buf)
         }
     }
     ///A response, device to host.
@@ -3193,11 +1813,7 @@ pub mod ub2 {
         /// Encodes the frame for `address` into `buf`; returns the frame length. Refuses what
         /// decode refuses: an address no frame may carry, the broadcast address for a command
         /// that does not accept it, a value outside its field's range.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::MovementStarted(response::MovementStarted {}) => {
@@ -3731,14 +2347,14 @@ pub mod ub2 {
                         7,
                     >(frame, &response::AccelerationSpeed::DESC)?;
                     rt::in_range(
-                        &response::ACCELERATION_SPEED_ACCELERATION_INDEX,
+                        &response::AccelerationSpeed::ACCELERATION_INDEX_DESC,
                         4,
                         frame[4],
                         0,
                         18,
                     )?;
                     rt::in_range(
-                        &response::ACCELERATION_SPEED_SPEED_INDEX,
+                        &response::AccelerationSpeed::SPEED_INDEX_DESC,
                         5,
                         frame[5],
                         0,
@@ -3763,7 +2379,13 @@ pub mod ub2 {
                 0x4130 => {
                     let frame = rt::fixed::<13>(frame, &response::CCurveEntry::DESC)?;
                     let field_0: u16 = u16::from_le_bytes([frame[4], frame[5]]);
-                    rt::in_range(&response::C_CURVE_ENTRY_INDEX, 4, field_0, 0, 499)?;
+                    rt::in_range(
+                        &response::CCurveEntry::INDEX_DESC,
+                        4,
+                        field_0,
+                        0,
+                        499,
+                    )?;
                     rt::Ok(
                         Self::CCurveEntry(response::CCurveEntry {
                             index: field_0,
@@ -3854,7 +2476,7 @@ pub mod ub2 {
                     );
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::LOWER_CUSTOMER_LIMIT_INDEX,
+                            &response::LowerCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -3869,7 +2491,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::UPPER_CUSTOMER_LIMIT_INDEX,
+                            &response::UpperCustomerLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x2,
@@ -3884,7 +2506,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::LOWER_FACTORY_LIMIT_INDEX,
+                            &response::LowerFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x3,
@@ -3899,7 +2521,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::UPPER_FACTORY_LIMIT_INDEX,
+                            &response::UpperFactoryLimit::INDEX_DESC,
                             4,
                             frame[4],
                             0x4,
@@ -3922,7 +2544,7 @@ pub mod ub2 {
                     );
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::PRESET_CAPACITANCE_INDEX,
+                            &response::PresetCapacitance::INDEX_DESC,
                             4,
                             frame[4],
                             0x0,
@@ -3937,7 +2559,7 @@ pub mod ub2 {
                     });
                     g.attempt(|frame: &[u8; 10]| {
                         rt::equal(
-                            &response::PRESET_FULL_STEP_POSITION_INDEX,
+                            &response::PresetFullStepPosition::INDEX_DESC,
                             4,
                             frame[4],
                             0x1,
@@ -3960,7 +2582,7 @@ pub mod ub2 {
                         8,
                     >(frame, &response::StoredFullStepPosition::DESC)?;
                     rt::in_range(
-                        &response::STORED_FULL_STEP_POSITION_INDEX,
+                        &response::StoredFullStepPosition::INDEX_DESC,
                         4,
                         frame[4],
                         0,
@@ -4265,11 +2887,7 @@ pub mod ub2 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -4486,11 +3104,981 @@ pub mod ub2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<Ub2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::ReferenceRun {
+        pub const NAME: &'static str = "reference_run";
+        pub const CODE: &'static [u8] = &[0x10, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1000, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReferenceRun(*self).encode(address, buf)
+        }
+    }
+    impl request::ReferenceRunStatus {
+        pub const NAME: &'static str = "reference_run_status";
+        pub const CODE: &'static [u8] = &[0x10, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x1001, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::ReferenceRunStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCapacitance {
+        pub const NAME: &'static str = "go_to_capacitance";
+        pub const CODE: &'static [u8] = &[0x20, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2000, 2, &[9]);
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCapacitanceStatus {
+        pub const NAME: &'static str = "go_to_capacitance_status";
+        pub const CODE: &'static [u8] = &[0x20, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2001, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCapacitanceStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToFullStepPosition {
+        pub const NAME: &'static str = "go_to_full_step_position";
+        pub const CODE: &'static [u8] = &[0x21, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2100, 2, &[7]);
+        pub const TARGET: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToFullStepPositionStatus {
+        pub const NAME: &'static str = "go_to_full_step_position_status";
+        pub const CODE: &'static [u8] = &[0x21, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2101, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToFullStepPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveFullSteps {
+        pub const NAME: &'static str = "move_full_steps";
+        pub const CODE: &'static [u8] = &[0x22, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2200, 2, &[7]);
+        pub const STEPS: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("steps", rt::Int(self.steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveFullSteps(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveFullStepsStatus {
+        pub const NAME: &'static str = "move_full_steps_status";
+        pub const CODE: &'static [u8] = &[0x22, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2201, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveFullStepsStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmin {
+        pub const NAME: &'static str = "go_to_cmin";
+        pub const CODE: &'static [u8] = &[0x23, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2300, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmin(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCminStatus {
+        pub const NAME: &'static str = "go_to_cmin_status";
+        pub const CODE: &'static [u8] = &[0x23, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2301, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCminStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmax {
+        pub const NAME: &'static str = "go_to_cmax";
+        pub const CODE: &'static [u8] = &[0x24, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2400, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmax(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToCmaxStatus {
+        pub const NAME: &'static str = "go_to_cmax_status";
+        pub const CODE: &'static [u8] = &[0x24, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2401, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToCmaxStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToMicroStepPosition {
+        pub const NAME: &'static str = "go_to_micro_step_position";
+        pub const CODE: &'static [u8] = &[0x25, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2500, 2, &[9]);
+        pub const TARGET: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("target", rt::Int(self.target as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToMicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToMicroStepPositionStatus {
+        pub const NAME: &'static str = "go_to_micro_step_position_status";
+        pub const CODE: &'static [u8] = &[0x25, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2501, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToMicroStepPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveMicroSteps {
+        pub const NAME: &'static str = "move_micro_steps";
+        pub const CODE: &'static [u8] = &[0x26, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2600, 2, &[9]);
+        pub const STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("steps", rt::Int(self.steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveMicroSteps(*self).encode(address, buf)
+        }
+    }
+    impl request::MoveMicroStepsStatus {
+        pub const NAME: &'static str = "move_micro_steps_status";
+        pub const CODE: &'static [u8] = &[0x26, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2601, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::MoveMicroStepsStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToStoredPosition {
+        pub const NAME: &'static str = "go_to_stored_position";
+        pub const CODE: &'static [u8] = &[0x27, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2700, 2, &[6]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToStoredPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GoToStoredPositionStatus {
+        pub const NAME: &'static str = "go_to_stored_position_status";
+        pub const CODE: &'static [u8] = &[0x27, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x2701, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GoToStoredPositionStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::SetAccelerationSpeedIndex {
+        pub const NAME: &'static str = "set_acceleration_speed_index";
+        pub const CODE: &'static [u8] = &[0x43, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4300, 2, &[7]);
+        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
+        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
+        pub const ACCELERATION_INDEX_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "acceleration_index",
+        );
+        pub const SPEED_INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed_index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("acceleration_index", rt::Int(self.acceleration_index as i64));
+            f("speed_index", rt::Int(self.speed_index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetAccelerationSpeedIndex(*self).encode(address, buf)
+        }
+    }
+    impl request::SetCurrent {
+        pub const NAME: &'static str = "set_current";
+        pub const CODE: &'static [u8] = &[0x45, 0x00];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4500, 2, &[7]);
+        pub const IDLE_CURRENT: rt::Range<usize> = 4..5;
+        pub const DRIVE_CURRENT: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("idle_current", rt::Int(self.idle_current as i64));
+            f("drive_current", rt::Int(self.drive_current as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetCurrent(*self).encode(address, buf)
+        }
+    }
+    impl request::SetSlaveAddress {
+        pub const NAME: &'static str = "set_slave_address";
+        pub const CODE: &'static [u8] = &[0x60, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6000, 2, &[6]);
+        pub const ADDRESS: rt::Range<usize> = 4..5;
+        pub const ADDRESS_DESC: rt::FieldDesc = rt::field(Self::NAME, "address");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("address", rt::Int(self.address as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetSlaveAddress(*self).encode(address, buf)
+        }
+    }
+    impl request::SetBaudRate {
+        pub const NAME: &'static str = "set_baud_rate";
+        pub const CODE: &'static [u8] = &[0x61, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6100, 2, &[6]);
+        pub const BAUD_RATE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("baud_rate", rt::Int(self.baud_rate.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetBaudRate(*self).encode(address, buf)
+        }
+    }
+    impl request::SetLowerCustomerLimit {
+        pub const NAME: &'static str = "set_lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x72, 0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7201, 2, &[9]);
+        pub const LIMIT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("limit", rt::Int(self.limit.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetLowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::SetUpperCustomerLimit {
+        pub const NAME: &'static str = "set_upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x72, 0x02];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7202, 2, &[9]);
+        pub const LIMIT: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("limit", rt::Int(self.limit.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetUpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::StoreIndexedPosition {
+        pub const NAME: &'static str = "store_indexed_position";
+        pub const CODE: &'static [u8] = &[0x75, 0x00];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7500, 2, &[8]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const POSITION: rt::Range<usize> = 5..7;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("position", rt::Int(self.position as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::StoreIndexedPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::SetModeOfOperation {
+        pub const NAME: &'static str = "set_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x80, 0x00];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8000, 2, &[6]);
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::SetModeOfOperation(*self).encode(address, buf)
+        }
+    }
+    impl request::GetActualCapacitance {
+        pub const NAME: &'static str = "get_actual_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4001, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetActualCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetActualFullStepPosition {
+        pub const NAME: &'static str = "get_actual_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4002, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetActualFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMinimumCapacitance {
+        pub const NAME: &'static str = "get_minimum_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x10];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4010, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMinimumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMaximumCapacitance {
+        pub const NAME: &'static str = "get_maximum_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x11];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4011, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMaximumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetAccelerationSpeed {
+        pub const NAME: &'static str = "get_acceleration_speed";
+        pub const CODE: &'static [u8] = &[0x40, 0x21];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4021, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetAccelerationSpeed(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStatus {
+        pub const NAME: &'static str = "get_status";
+        pub const CODE: &'static [u8] = &[0x40, 0x22];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4022, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStatus(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCCurveIndexedFullStepCapacitance {
+        pub const NAME: &'static str = "get_c_curve_indexed_full_step_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x30];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4030, 2, &[7]);
+        pub const INDEX: rt::Range<usize> = 4..6;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCCurveIndexedFullStepCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetControllerTemperature {
+        pub const NAME: &'static str = "get_controller_temperature";
+        pub const CODE: &'static [u8] = &[0x40, 0x32];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4032, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetControllerTemperature(*self).encode(address, buf)
+        }
+    }
+    impl request::GetMicroStepPosition {
+        pub const NAME: &'static str = "get_micro_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x36];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4036, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetMicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetFirmwareVersion {
+        pub const NAME: &'static str = "get_firmware_version";
+        pub const CODE: &'static [u8] = &[0x40, 0x61];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4061, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetFirmwareVersion(*self).encode(address, buf)
+        }
+    }
+    impl request::GetSerialNumber {
+        pub const NAME: &'static str = "get_serial_number";
+        pub const CODE: &'static [u8] = &[0x40, 0x62];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4062, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetSerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCminNom {
+        pub const NAME: &'static str = "get_cmin_nom";
+        pub const CODE: &'static [u8] = &[0x40, 0x70];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4070, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCminNom(*self).encode(address, buf)
+        }
+    }
+    impl request::GetCmaxNom {
+        pub const NAME: &'static str = "get_cmax_nom";
+        pub const CODE: &'static [u8] = &[0x40, 0x71];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4071, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetCmaxNom(*self).encode(address, buf)
+        }
+    }
+    impl request::GetLowerCustomerLimit {
+        pub const NAME: &'static str = "get_lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetLowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetUpperCustomerLimit {
+        pub const NAME: &'static str = "get_upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetUpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetLowerFactoryLimit {
+        pub const NAME: &'static str = "get_lower_factory_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetLowerFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetUpperFactoryLimit {
+        pub const NAME: &'static str = "get_upper_factory_limit";
+        pub const CODE: &'static [u8] = &[0x40, 0x72];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4072, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetUpperFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPresetCapacitance {
+        pub const NAME: &'static str = "get_preset_capacitance";
+        pub const CODE: &'static [u8] = &[0x40, 0x73];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4073, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPresetCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl request::GetPresetFullStepPosition {
+        pub const NAME: &'static str = "get_preset_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x73];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4073, 2, &[6]);
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetPresetFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetStoredFullStepPosition {
+        pub const NAME: &'static str = "get_stored_full_step_position";
+        pub const CODE: &'static [u8] = &[0x40, 0x75];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4075, 2, &[6]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetStoredFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl request::GetModeOfOperation {
+        pub const NAME: &'static str = "get_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x40, 0x80];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4080, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::GetModeOfOperation(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementStarted {
+        pub const NAME: &'static str = "movement_started";
+        pub const CODE: &'static [u8] = &[0x50];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x50, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementStarted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementCompleted {
+        pub const NAME: &'static str = "movement_completed";
+        pub const CODE: &'static [u8] = &[0x51];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x51, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementCompleted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementNotCompleted {
+        pub const NAME: &'static str = "movement_not_completed";
+        pub const CODE: &'static [u8] = &[0x52];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x52, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementNotCompleted(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementNotTriggered {
+        pub const NAME: &'static str = "movement_not_triggered";
+        pub const CODE: &'static [u8] = &[0x53];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x53, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementNotTriggered(*self).encode(address, buf)
+        }
+    }
+    impl response::MovementCompletedWithStepLoss {
+        pub const NAME: &'static str = "movement_completed_with_step_loss";
+        pub const CODE: &'static [u8] = &[0x54, 0x00];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x5400, 2, &[9]);
+        pub const LOST_MICRO_STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("lost_micro_steps", rt::Int(self.lost_micro_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MovementCompletedWithStepLoss(*self).encode(address, buf)
+        }
+    }
+    impl response::NakUnknownCommand {
+        pub const NAME: &'static str = "nak_unknown_command";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakUnknownCommand(*self).encode(address, buf)
+        }
+    }
+    impl response::NakIncompatibleStatus {
+        pub const NAME: &'static str = "nak_incompatible_status";
+        pub const CODE: &'static [u8] = &[0x91];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x91, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakIncompatibleStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::NakChecksumError {
+        pub const NAME: &'static str = "nak_checksum_error";
+        pub const CODE: &'static [u8] = &[0x92];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x92, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakChecksumError(*self).encode(address, buf)
+        }
+    }
+    impl response::NakLimitReached {
+        pub const NAME: &'static str = "nak_limit_reached";
+        pub const CODE: &'static [u8] = &[0x93];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x93, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakLimitReached(*self).encode(address, buf)
+        }
+    }
+    impl response::NakIndexOutOfRange {
+        pub const NAME: &'static str = "nak_index_out_of_range";
+        pub const CODE: &'static [u8] = &[0x94];
+        pub const LEN: usize = 4;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x94, 1, &[4]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::NakIndexOutOfRange(*self).encode(address, buf)
+        }
+    }
+    impl response::SetAccelerationSpeedIndexAck {
+        pub const NAME: &'static str = "set_acceleration_speed_index_ack";
+        pub const CODE: &'static [u8] = &[0x43, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4300, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetAccelerationSpeedIndexAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetCurrentAck {
+        pub const NAME: &'static str = "set_current_ack";
+        pub const CODE: &'static [u8] = &[0x45, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4500, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetCurrentAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetSlaveAddressAck {
+        pub const NAME: &'static str = "set_slave_address_ack";
+        pub const CODE: &'static [u8] = &[0x60, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6000, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetSlaveAddressAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetBaudRateAck {
+        pub const NAME: &'static str = "set_baud_rate_ack";
+        pub const CODE: &'static [u8] = &[0x61, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x6100, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetBaudRateAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetLowerCustomerLimitAck {
+        pub const NAME: &'static str = "set_lower_customer_limit_ack";
+        pub const CODE: &'static [u8] = &[0x72, 0x01];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7201, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetLowerCustomerLimitAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetUpperCustomerLimitAck {
+        pub const NAME: &'static str = "set_upper_customer_limit_ack";
+        pub const CODE: &'static [u8] = &[0x72, 0x02];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7202, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetUpperCustomerLimitAck(*self).encode(address, buf)
+        }
+    }
+    impl response::StoreIndexedPositionAck {
+        pub const NAME: &'static str = "store_indexed_position_ack";
+        pub const CODE: &'static [u8] = &[0x75, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x7500, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StoreIndexedPositionAck(*self).encode(address, buf)
+        }
+    }
+    impl response::SetModeOfOperationAck {
+        pub const NAME: &'static str = "set_mode_of_operation_ack";
+        pub const CODE: &'static [u8] = &[0x80, 0x00];
+        pub const LEN: usize = 5;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8000, 2, &[5]);
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SetModeOfOperationAck(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualCapacitance {
+        pub const NAME: &'static str = "actual_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x01];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4101, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualFullStepPosition {
+        pub const NAME: &'static str = "actual_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x02];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4102, 2, &[7]);
+        pub const FULL_STEPS: rt::Range<usize> = 4..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::MinimumCapacitance {
+        pub const NAME: &'static str = "minimum_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x10];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4110, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MinimumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::MaximumCapacitance {
+        pub const NAME: &'static str = "maximum_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x11];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4111, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MaximumCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::AccelerationSpeed {
+        pub const NAME: &'static str = "acceleration_speed";
+        pub const CODE: &'static [u8] = &[0x41, 0x21];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4121, 2, &[7]);
+        pub const ACCELERATION_INDEX: rt::Range<usize> = 4..5;
+        pub const SPEED_INDEX: rt::Range<usize> = 5..6;
+        pub const ACCELERATION_INDEX_DESC: rt::FieldDesc = rt::field(
+            Self::NAME,
+            "acceleration_index",
+        );
+        pub const SPEED_INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "speed_index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("acceleration_index", rt::Int(self.acceleration_index as i64));
+            f("speed_index", rt::Int(self.speed_index as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AccelerationSpeed(*self).encode(address, buf)
+        }
+    }
+    impl response::Status {
+        pub const NAME: &'static str = "status";
+        pub const CODE: &'static [u8] = &[0x41, 0x22];
+        pub const LEN: usize = 7;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4122, 2, &[7]);
+        pub const ERROR_BITS: rt::Range<usize> = 4..5;
+        pub const RESERVED: rt::Range<usize> = 5..6;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("error_bits", rt::Int(self.error_bits.raw() as i64));
+            f("reserved", rt::Int(self.reserved as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::Status(*self).encode(address, buf)
+        }
+    }
+    impl response::CCurveEntry {
+        pub const NAME: &'static str = "c_curve_entry";
+        pub const CODE: &'static [u8] = &[0x41, 0x30];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4130, 2, &[13]);
+        pub const INDEX: rt::Range<usize> = 4..6;
+        pub const FULL_STEPS: rt::Range<usize> = 6..8;
+        pub const CAPACITANCE: rt::Range<usize> = 8..12;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("full_steps", rt::Int(self.full_steps as i64));
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CCurveEntry(*self).encode(address, buf)
+        }
+    }
+    impl response::ControllerTemperature {
+        pub const NAME: &'static str = "controller_temperature";
+        pub const CODE: &'static [u8] = &[0x41, 0x32];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4132, 2, &[6]);
+        pub const TEMPERATURE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("temperature", rt::Int(self.temperature as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ControllerTemperature(*self).encode(address, buf)
+        }
+    }
+    impl response::MicroStepPosition {
+        pub const NAME: &'static str = "micro_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x36];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4136, 2, &[9]);
+        pub const MICRO_STEPS: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("micro_steps", rt::Int(self.micro_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::MicroStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::FirmwareVersion {
+        pub const NAME: &'static str = "firmware_version";
+        pub const CODE: &'static [u8] = &[0x41, 0x61];
+        pub const LEN: usize = 16;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4161, 2, &[16]);
+        pub const FIRMWARE_VERSION: rt::Range<usize> = 4..15;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("firmware_version", rt::Text(&self.firmware_version[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::FirmwareVersion(*self).encode(address, buf)
+        }
+    }
+    impl response::SerialNumber {
+        pub const NAME: &'static str = "serial_number";
+        pub const CODE: &'static [u8] = &[0x41, 0x62];
+        pub const LEN: usize = 13;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4162, 2, &[13]);
+        pub const SERIAL_NUMBER: rt::Range<usize> = 4..12;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("serial_number", rt::Text(&self.serial_number[..]));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::SerialNumber(*self).encode(address, buf)
+        }
+    }
+    impl response::CminNom {
+        pub const NAME: &'static str = "cmin_nom";
+        pub const CODE: &'static [u8] = &[0x41, 0x70];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4170, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CminNom(*self).encode(address, buf)
+        }
+    }
+    impl response::CmaxNom {
+        pub const NAME: &'static str = "cmax_nom";
+        pub const CODE: &'static [u8] = &[0x41, 0x71];
+        pub const LEN: usize = 9;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4171, 2, &[9]);
+        pub const CAPACITANCE: rt::Range<usize> = 4..8;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::CmaxNom(*self).encode(address, buf)
+        }
+    }
+    impl response::LowerCustomerLimit {
+        pub const NAME: &'static str = "lower_customer_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LowerCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::UpperCustomerLimit {
+        pub const NAME: &'static str = "upper_customer_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::UpperCustomerLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::LowerFactoryLimit {
+        pub const NAME: &'static str = "lower_factory_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::LowerFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::UpperFactoryLimit {
+        pub const NAME: &'static str = "upper_factory_limit";
+        pub const CODE: &'static [u8] = &[0x41, 0x72];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4172, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::UpperFactoryLimit(*self).encode(address, buf)
+        }
+    }
+    impl response::PresetCapacitance {
+        pub const NAME: &'static str = "preset_capacitance";
+        pub const CODE: &'static [u8] = &[0x41, 0x73];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4173, 2, &[10]);
+        pub const CAPACITANCE: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("capacitance", rt::Int(self.capacitance.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PresetCapacitance(*self).encode(address, buf)
+        }
+    }
+    impl response::PresetFullStepPosition {
+        pub const NAME: &'static str = "preset_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x73];
+        pub const LEN: usize = 10;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4173, 2, &[10]);
+        pub const FULL_STEPS: rt::Range<usize> = 5..9;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::PresetFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::StoredFullStepPosition {
+        pub const NAME: &'static str = "stored_full_step_position";
+        pub const CODE: &'static [u8] = &[0x41, 0x75];
+        pub const LEN: usize = 8;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4175, 2, &[8]);
+        pub const INDEX: rt::Range<usize> = 4..5;
+        pub const FULL_STEPS: rt::Range<usize> = 5..7;
+        pub const INDEX_DESC: rt::FieldDesc = rt::field(Self::NAME, "index");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("index", rt::Int(self.index as i64));
+            f("full_steps", rt::Int(self.full_steps as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::StoredFullStepPosition(*self).encode(address, buf)
+        }
+    }
+    impl response::ActualModeOfOperation {
+        pub const NAME: &'static str = "actual_mode_of_operation";
+        pub const CODE: &'static [u8] = &[0x41, 0x80];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x4180, 2, &[6]);
+        pub const MODE: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("mode", rt::Int(self.mode.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ActualModeOfOperation(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1.1 Triggering the “reference run” (code `0x1000`, 5 bytes). Triggers a full reference run (→ Preset → Cmin → Preset). The preset is a fixed firmware position between Cmin-nom and Cmax-nom; its capacitance and full-step position are read with 0x4073 00 / 0x4073 01 (the document says 0x4070 / 0x4071, ub2-e06).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -4796,75 +4384,9 @@ pub mod ub2 {
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
         #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
         pub struct GetModeOfOperation;
-        /// `go_to_stored_position.index`
-        pub const GO_TO_STORED_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "go_to_stored_position",
-            "index",
-        );
-        /// `set_acceleration_speed_index.acceleration_index`
-        pub const SET_ACCELERATION_SPEED_INDEX_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
-            "set_acceleration_speed_index",
-            "acceleration_index",
-        );
-        /// `set_acceleration_speed_index.speed_index`
-        pub const SET_ACCELERATION_SPEED_INDEX_SPEED_INDEX: FieldDesc = FieldDesc::new(
-            "set_acceleration_speed_index",
-            "speed_index",
-        );
-        /// `set_slave_address.address`
-        pub const SET_SLAVE_ADDRESS_ADDRESS: FieldDesc = FieldDesc::new(
-            "set_slave_address",
-            "address",
-        );
-        /// `store_indexed_position.index`
-        pub const STORE_INDEXED_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "store_indexed_position",
-            "index",
-        );
-        /// `get_c_curve_indexed_full_step_capacitance.index`
-        pub const GET_C_CURVE_INDEXED_FULL_STEP_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
-            "get_c_curve_indexed_full_step_capacitance",
-            "index",
-        );
-        /// `get_lower_customer_limit.index`
-        pub const GET_LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_lower_customer_limit",
-            "index",
-        );
-        /// `get_upper_customer_limit.index`
-        pub const GET_UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_upper_customer_limit",
-            "index",
-        );
-        /// `get_lower_factory_limit.index`
-        pub const GET_LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_lower_factory_limit",
-            "index",
-        );
-        /// `get_upper_factory_limit.index`
-        pub const GET_UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "get_upper_factory_limit",
-            "index",
-        );
-        /// `get_preset_capacitance.index`
-        pub const GET_PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
-            "get_preset_capacitance",
-            "index",
-        );
-        /// `get_preset_full_step_position.index`
-        pub const GET_PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "get_preset_full_step_position",
-            "index",
-        );
-        /// `get_stored_full_step_position.index`
-        pub const GET_STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "get_stored_full_step_position",
-            "index",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §4.1.1 Command approved Movement started (code `0x50`, 4 bytes). Reply to a movement trigger: command approved, movement started.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -5158,55 +4680,5 @@ pub mod ub2 {
             /// 0x00 encoder disabled, 0x01 close-loop-control, 0x02 open-loop-control (default)
             pub mode: super::ModeOfOperation,
         }
-        /// `acceleration_speed.acceleration_index`
-        pub const ACCELERATION_SPEED_ACCELERATION_INDEX: FieldDesc = FieldDesc::new(
-            "acceleration_speed",
-            "acceleration_index",
-        );
-        /// `acceleration_speed.speed_index`
-        pub const ACCELERATION_SPEED_SPEED_INDEX: FieldDesc = FieldDesc::new(
-            "acceleration_speed",
-            "speed_index",
-        );
-        /// `c_curve_entry.index`
-        pub const C_CURVE_ENTRY_INDEX: FieldDesc = FieldDesc::new(
-            "c_curve_entry",
-            "index",
-        );
-        /// `lower_customer_limit.index`
-        pub const LOWER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "lower_customer_limit",
-            "index",
-        );
-        /// `upper_customer_limit.index`
-        pub const UPPER_CUSTOMER_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "upper_customer_limit",
-            "index",
-        );
-        /// `lower_factory_limit.index`
-        pub const LOWER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "lower_factory_limit",
-            "index",
-        );
-        /// `upper_factory_limit.index`
-        pub const UPPER_FACTORY_LIMIT_INDEX: FieldDesc = FieldDesc::new(
-            "upper_factory_limit",
-            "index",
-        );
-        /// `preset_capacitance.index`
-        pub const PRESET_CAPACITANCE_INDEX: FieldDesc = FieldDesc::new(
-            "preset_capacitance",
-            "index",
-        );
-        /// `preset_full_step_position.index`
-        pub const PRESET_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "preset_full_step_position",
-            "index",
-        );
-        /// `stored_full_step_position.index`
-        pub const STORED_FULL_STEP_POSITION_INDEX: FieldDesc = FieldDesc::new(
-            "stored_full_step_position",
-            "index",
-        );
     }
 }

@@ -283,7 +283,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_command.parameter` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_COMMAND: rt::RepeatAt = rt::RepeatAt {
-        field: &request::AT_COMMAND_PARAMETER,
+        field: &request::AtCommand::PARAMETER_DESC,
         base: 8,
         at: 7,
         width: 1,
@@ -293,7 +293,7 @@ pub mod xbee_api2 {
     };
     /// Where `transmit_request.data` sits in the frame and how its elements are counted.
     pub const REPEAT_TRANSMIT_REQUEST: rt::RepeatAt = rt::RepeatAt {
-        field: &request::TRANSMIT_REQUEST_DATA,
+        field: &request::TransmitRequest::DATA_DESC,
         base: 18,
         at: 17,
         width: 1,
@@ -301,56 +301,6 @@ pub mod xbee_api2 {
         min: 0,
         max: 72,
     };
-    impl request::AtCommand {
-        pub const NAME: &'static str = "at_command";
-        pub const CODE: &'static [u8] = &[0x08];
-        pub const MIN_LEN: usize = 8;
-        pub const MAX_LEN: usize = 28;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x08,
-            1,
-            &[8],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const COMMAND: rt::Range<usize> = 5..7;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("command", rt::Text(&self.command[..]));
-            f("parameter", rt::List(self.parameter.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::AtCommand(*self).encode(address, buf)
-        }
-    }
-    impl request::TransmitRequest {
-        pub const NAME: &'static str = "transmit_request";
-        pub const CODE: &'static [u8] = &[0x10];
-        pub const MIN_LEN: usize = 18;
-        pub const MAX_LEN: usize = 90;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x10,
-            1,
-            &[18],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const DESTINATION64: rt::Range<usize> = 5..13;
-        pub const DESTINATION16: rt::Range<usize> = 13..15;
-        pub const RADIUS: rt::Range<usize> = 15..16;
-        pub const OPTIONS: rt::Range<usize> = 16..17;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("destination64", rt::Int(self.destination64 as i64));
-            f("destination16", rt::Int(self.destination16 as i64));
-            f("radius", rt::Int(self.radius as i64));
-            f("options", rt::Int(self.options as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Request::TransmitRequest(*self).encode(address, buf)
-        }
-    }
     ///A request (command), host to device.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -409,11 +359,7 @@ pub mod xbee_api2 {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(
@@ -424,11 +370,7 @@ pub mod xbee_api2 {
             )
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::AtCommand(
@@ -604,11 +546,7 @@ pub mod xbee_api2 {
             Request::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Request::encode(self, address, buf)
         }
         #[inline]
@@ -651,7 +589,7 @@ pub mod xbee_api2 {
     }
     /// Where `at_response.data` sits in the frame and how its elements are counted.
     pub const REPEAT_AT_RESPONSE: rt::RepeatAt = rt::RepeatAt {
-        field: &response::AT_RESPONSE_DATA,
+        field: &response::AtResponse::DATA_DESC,
         base: 9,
         at: 8,
         width: 1,
@@ -661,7 +599,7 @@ pub mod xbee_api2 {
     };
     /// Where `receive_packet.data` sits in the frame and how its elements are counted.
     pub const REPEAT_RECEIVE_PACKET: rt::RepeatAt = rt::RepeatAt {
-        field: &response::RECEIVE_PACKET_DATA,
+        field: &response::ReceivePacket::DATA_DESC,
         base: 16,
         at: 15,
         width: 1,
@@ -669,98 +607,6 @@ pub mod xbee_api2 {
         min: 0,
         max: 72,
     };
-    impl response::AtResponse {
-        pub const NAME: &'static str = "at_response";
-        pub const CODE: &'static [u8] = &[0x88];
-        pub const MIN_LEN: usize = 9;
-        pub const MAX_LEN: usize = 29;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x88,
-            1,
-            &[9],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const COMMAND: rt::Range<usize> = 5..7;
-        pub const STATUS: rt::Range<usize> = 7..8;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("command", rt::Text(&self.command[..]));
-            f("status", rt::Int(self.status.raw() as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::AtResponse(*self).encode(address, buf)
-        }
-    }
-    impl response::TransmitStatus {
-        pub const NAME: &'static str = "transmit_status";
-        pub const CODE: &'static [u8] = &[0x8B];
-        pub const LEN: usize = 11;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8B,
-            1,
-            &[11],
-        );
-        pub const FRAME_ID: rt::Range<usize> = 4..5;
-        pub const DESTINATION16: rt::Range<usize> = 5..7;
-        pub const RETRIES: rt::Range<usize> = 7..8;
-        pub const DELIVERY: rt::Range<usize> = 8..9;
-        pub const DISCOVERY: rt::Range<usize> = 9..10;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("frame_id", rt::Int(self.frame_id as i64));
-            f("destination16", rt::Int(self.destination16 as i64));
-            f("retries", rt::Int(self.retries as i64));
-            f("delivery", rt::Int(self.delivery.raw() as i64));
-            f("discovery", rt::Int(self.discovery as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::TransmitStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::ModemStatus {
-        pub const NAME: &'static str = "modem_status";
-        pub const CODE: &'static [u8] = &[0x8A];
-        pub const LEN: usize = 6;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x8A,
-            1,
-            &[6],
-        );
-        pub const STATUS: rt::Range<usize> = 4..5;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("status", rt::Int(self.status.raw() as i64));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ModemStatus(*self).encode(address, buf)
-        }
-    }
-    impl response::ReceivePacket {
-        pub const NAME: &'static str = "receive_packet";
-        pub const CODE: &'static [u8] = &[0x90];
-        pub const MIN_LEN: usize = 16;
-        pub const MAX_LEN: usize = 88;
-        pub const DESC: rt::MessageDesc = rt::MessageDesc::new(
-            Self::NAME,
-            0x90,
-            1,
-            &[16],
-        );
-        pub const SOURCE64: rt::Range<usize> = 4..12;
-        pub const SOURCE16: rt::Range<usize> = 12..14;
-        pub const OPTIONS: rt::Range<usize> = 14..15;
-        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
-            f("source64", rt::Int(self.source64 as i64));
-            f("source16", rt::Int(self.source16 as i64));
-            f("options", rt::Int(self.options as i64));
-            f("data", rt::List(self.data.elements()));
-        }
-        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
-            Response::ReceivePacket(*self).encode(address, buf)
-        }
-    }
     ///A response, device to host.
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
     #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -826,11 +672,7 @@ pub mod xbee_api2 {
         ///
         /// The frame is written escaped (`framing.escaping`); `buf` of `MAX_FRAME_LEN`
         /// bytes holds any.
-        pub fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             let mut plain = [0u8; UNESCAPED_LEN];
             let len = self.encode_unescaped(address, &mut plain)?;
             rt::escape_frame(
@@ -841,11 +683,7 @@ pub mod xbee_api2 {
             )
         }
         /// The frame before escaping, into `buf`.
-        fn encode_unescaped(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
                 Self::AtResponse(
@@ -1103,11 +941,7 @@ pub mod xbee_api2 {
             Response::visit(self, f)
         }
         #[inline]
-        fn encode(
-            &self,
-            address: u8,
-            buf: &mut [u8],
-        ) -> rt::Result<usize, rt::EncodeError> {
+        fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             Response::encode(self, address, buf)
         }
         #[inline]
@@ -1220,11 +1054,126 @@ pub mod xbee_api2 {
     pub type StreamDecoder = ::busspec_runtime::stream::StreamDecoder<XbeeApi2>;
     /// What [`StreamDecoder`] finds in a stream.
     pub type Event = ::busspec_runtime::stream::Event<Request, Response>;
-    /// Each request as a struct of its own (its `DESC` names it as refusals do: name,
-    /// code and the frame lengths of its code), and each field a refusal names
-    /// (`message.field`, `FieldDesc`).
+    impl request::AtCommand {
+        pub const NAME: &'static str = "at_command";
+        pub const CODE: &'static [u8] = &[0x08];
+        pub const MIN_LEN: usize = 8;
+        pub const MAX_LEN: usize = 28;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x08, 1, &[8]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const COMMAND: rt::Range<usize> = 5..7;
+        pub const PARAMETER_DESC: rt::FieldDesc = rt::field(Self::NAME, "parameter");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("command", rt::Text(&self.command[..]));
+            f("parameter", rt::List(self.parameter.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::AtCommand(*self).encode(address, buf)
+        }
+    }
+    impl request::TransmitRequest {
+        pub const NAME: &'static str = "transmit_request";
+        pub const CODE: &'static [u8] = &[0x10];
+        pub const MIN_LEN: usize = 18;
+        pub const MAX_LEN: usize = 90;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x10, 1, &[18]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const DESTINATION64: rt::Range<usize> = 5..13;
+        pub const DESTINATION16: rt::Range<usize> = 13..15;
+        pub const RADIUS: rt::Range<usize> = 15..16;
+        pub const OPTIONS: rt::Range<usize> = 16..17;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("destination64", rt::Int(self.destination64 as i64));
+            f("destination16", rt::Int(self.destination16 as i64));
+            f("radius", rt::Int(self.radius as i64));
+            f("options", rt::Int(self.options as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Request::TransmitRequest(*self).encode(address, buf)
+        }
+    }
+    impl response::AtResponse {
+        pub const NAME: &'static str = "at_response";
+        pub const CODE: &'static [u8] = &[0x88];
+        pub const MIN_LEN: usize = 9;
+        pub const MAX_LEN: usize = 29;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x88, 1, &[9]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const COMMAND: rt::Range<usize> = 5..7;
+        pub const STATUS: rt::Range<usize> = 7..8;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("command", rt::Text(&self.command[..]));
+            f("status", rt::Int(self.status.raw() as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::AtResponse(*self).encode(address, buf)
+        }
+    }
+    impl response::TransmitStatus {
+        pub const NAME: &'static str = "transmit_status";
+        pub const CODE: &'static [u8] = &[0x8B];
+        pub const LEN: usize = 11;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8B, 1, &[11]);
+        pub const FRAME_ID: rt::Range<usize> = 4..5;
+        pub const DESTINATION16: rt::Range<usize> = 5..7;
+        pub const RETRIES: rt::Range<usize> = 7..8;
+        pub const DELIVERY: rt::Range<usize> = 8..9;
+        pub const DISCOVERY: rt::Range<usize> = 9..10;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("frame_id", rt::Int(self.frame_id as i64));
+            f("destination16", rt::Int(self.destination16 as i64));
+            f("retries", rt::Int(self.retries as i64));
+            f("delivery", rt::Int(self.delivery.raw() as i64));
+            f("discovery", rt::Int(self.discovery as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::TransmitStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::ModemStatus {
+        pub const NAME: &'static str = "modem_status";
+        pub const CODE: &'static [u8] = &[0x8A];
+        pub const LEN: usize = 6;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x8A, 1, &[6]);
+        pub const STATUS: rt::Range<usize> = 4..5;
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("status", rt::Int(self.status.raw() as i64));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ModemStatus(*self).encode(address, buf)
+        }
+    }
+    impl response::ReceivePacket {
+        pub const NAME: &'static str = "receive_packet";
+        pub const CODE: &'static [u8] = &[0x90];
+        pub const MIN_LEN: usize = 16;
+        pub const MAX_LEN: usize = 88;
+        pub const DESC: rt::MessageDesc = rt::desc(Self::NAME, 0x90, 1, &[16]);
+        pub const SOURCE64: rt::Range<usize> = 4..12;
+        pub const SOURCE16: rt::Range<usize> = 12..14;
+        pub const OPTIONS: rt::Range<usize> = 14..15;
+        pub const DATA_DESC: rt::FieldDesc = rt::field(Self::NAME, "data");
+        pub fn visit(&self, mut f: impl FnMut(&'static str, rt::FieldValue<'_>)) {
+            f("source64", rt::Int(self.source64 as i64));
+            f("source16", rt::Int(self.source16 as i64));
+            f("options", rt::Int(self.options as i64));
+            f("data", rt::List(self.data.elements()));
+        }
+        pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
+            Response::ReceivePacket(*self).encode(address, buf)
+        }
+    }
+    /// Each request as a struct of its own; its constants (`DESC`, which names it as
+    /// refusals do: name, code and the frame lengths of its code; `QUANTITY_DESC`, each
+    /// field a refusal names) and methods are in the `impl` of each.
     pub mod request {
-        use ::busspec_runtime::FieldDesc;
         /// §0x08 AT Command AT Command (0x08) (code `0x08`, 8 to 28 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1254,20 +1203,9 @@ pub mod xbee_api2 {
             pub options: u8,
             pub data: super::rt::Repeated<u8, 72>,
         }
-        /// `at_command.parameter`
-        pub const AT_COMMAND_PARAMETER: FieldDesc = FieldDesc::new(
-            "at_command",
-            "parameter",
-        );
-        /// `transmit_request.data`
-        pub const TRANSMIT_REQUEST_DATA: FieldDesc = FieldDesc::new(
-            "transmit_request",
-            "data",
-        );
     }
-    /// Each response as a struct of its own, and the fields its refusals name.
+    /// Each response as a struct of its own.
     pub mod response {
-        use ::busspec_runtime::FieldDesc;
         /// §0x88 AT Command Response AT Command Response (0x88) (code `0x88`, 9 to 29 bytes).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -1310,12 +1248,5 @@ pub mod xbee_api2 {
             pub options: u8,
             pub data: super::rt::Repeated<u8, 72>,
         }
-        /// `at_response.data`
-        pub const AT_RESPONSE_DATA: FieldDesc = FieldDesc::new("at_response", "data");
-        /// `receive_packet.data`
-        pub const RECEIVE_PACKET_DATA: FieldDesc = FieldDesc::new(
-            "receive_packet",
-            "data",
-        );
     }
 }
