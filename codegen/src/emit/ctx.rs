@@ -495,8 +495,13 @@ pub(super) fn leaf_doc(p: &Protocol, l: &Leaf) -> String {
     s.trim().to_owned()
 }
 
-/// The raw value of a typed value bound to `v`, of the type the value holds.
-pub(super) fn raw_of(ctx: &Ctx, l: &Leaf, v: &Ident) -> Option<(IntType, TokenStream)> {
+/// The raw value of a typed value `v` (a local, or a field read `m.quantity`), of the type the
+/// value holds.
+pub(super) fn raw_of(
+    ctx: &Ctx,
+    l: &Leaf,
+    v: &impl quote::ToTokens,
+) -> Option<(IntType, TokenStream)> {
     match ctx.kind(l) {
         Kind::Int(t) => Some((t, quote!(#v))),
         Kind::Bool => Some((IntType::covering(0, 1), quote!(#v as u8))),

@@ -92,46 +92,36 @@ pub(super) fn emit_messages(ctx: &Ctx, d: Direction) -> TokenStream {
         if m.has_optional() {
             // The frame as long as the optional fields given make it.
             let c = optional_const(m);
-            let (names, given): (Vec<TokenStream>, Vec<TokenStream>) = m
-                .optionals()
-                .map(|(_, f, _)| {
-                    let (n, l) = (ident(&f.name), local(&f.name));
-                    (quote!(#n: #l), quote!(#l.is_some()))
-                })
-                .unzip();
-            len_arms
-                .push(quote!(Self::#v(#dm::#v { #(#names,)* .. }) => #c.frame_len(&[#(#given),*])));
+            let given = m.optionals().map(|(_, f, _)| {
+                let n = ident(&f.name);
+                quote!(m.#n.is_some())
+            });
+            len_arms.push(quote!(Self::#v(m) => #c.frame_len(&[#(#given),*])));
         } else if has_lists(m) {
             let c = lists_const(m);
-            let (names, sum): (Vec<TokenStream>, Vec<TokenStream>) = m
-                .repeats()
-                .enumerate()
-                .map(|(k, (_, f, _))| {
-                    let (n, l, k) = (ident(&f.name), local(&f.name), usize_lit(k));
-                    (quote!(#n: #l), quote!(#c.lists[#k].bytes_of(#l.len())))
-                })
-                .unzip();
-            len_arms.push(quote!(Self::#v(#dm::#v { #(#names,)* .. }) => #c.base #(+ #sum)*));
+            let sum = m.repeats().enumerate().map(|(k, (_, f, _))| {
+                let (n, k) = (ident(&f.name), usize_lit(k));
+                quote!(#c.lists[#k].bytes_of(m.#n.len()))
+            });
+            len_arms.push(quote!(Self::#v(m) => #c.base #(+ #sum)*));
         } else if let Some((f, _)) = m.repeat() {
-            let (n, l, c) = (ident(&f.name), local(&f.name), repeat_const(m));
+            let (n, c) = (ident(&f.name), repeat_const(m));
             let sized = sized_record(m, f).and_then(|(wf, fixed, _)| {
                 let wl = ls
                     .iter()
                     .find(|l| std::ptr::eq(l.field, wf) && l.bits.is_none())?;
-                Some((wl, raw_of(ctx, wl, &local(wl.name))?.1, fixed))
+                let wn = ident(wl.name);
+                Some((raw_of(ctx, wl, &quote!(m.#wn))?.1, fixed))
             });
             match sized {
-                Some((wl, raw, fixed)) => {
+                Some((raw, fixed)) => {
                     // Each record as wide as its width field says.
-                    let (wn, wv, fixed) = (ident(wl.name), local(wl.name), usize_lit(fixed));
-                    len_arms.push(quote!(Self::#v(#dm::#v { #n: #l, #wn: #wv, .. }) => {
-                        let #wv = *#wv;
-                        #c.base + #l.len() * (#fixed + (#raw) as usize)
-                    }));
+                    let fixed = usize_lit(fixed);
+                    len_arms.push(
+                        quote!(Self::#v(m) => #c.base + m.#n.len() * (#fixed + (#raw) as usize)),
+                    );
                 }
-                None => len_arms.push(
-                    quote!(Self::#v(#dm::#v { #n: #l, .. }) => #c.base + #c.bytes_of(#l.len())),
-                ),
+                None => len_arms.push(quote!(Self::#v(m) => #c.base + #c.bytes_of(m.#n.len()))),
             }
         }
         // Each field read where the struct holds it (`self.quantity`), an optional one where

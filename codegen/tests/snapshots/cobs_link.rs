@@ -355,9 +355,7 @@ pub mod cobs_link {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Log(response::Log { entries: v_entries, .. }) => {
-                    REPEAT_LOG.base + REPEAT_LOG.bytes_of(v_entries.len())
-                }
+                Self::Log(m) => REPEAT_LOG.base + REPEAT_LOG.bytes_of(m.entries.len()),
                 _ => Self::MESSAGES[self.index()].2,
             }
         }

@@ -191,14 +191,12 @@ pub mod dynamixel {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Write(request::Write { data: v_data, .. }) => {
-                    REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(v_data.len())
+                Self::Write(m) => REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(m.data.len()),
+                Self::RegWrite(m) => {
+                    REPEAT_REG_WRITE.base + REPEAT_REG_WRITE.bytes_of(m.data.len())
                 }
-                Self::RegWrite(request::RegWrite { data: v_data, .. }) => {
-                    REPEAT_REG_WRITE.base + REPEAT_REG_WRITE.bytes_of(v_data.len())
-                }
-                Self::SyncWrite(request::SyncWrite { blocks: v_blocks, .. }) => {
-                    REPEAT_SYNC_WRITE.base + REPEAT_SYNC_WRITE.bytes_of(v_blocks.len())
+                Self::SyncWrite(m) => {
+                    REPEAT_SYNC_WRITE.base + REPEAT_SYNC_WRITE.bytes_of(m.blocks.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -510,8 +508,8 @@ pub mod dynamixel {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadStatus(response::ReadStatus { data: v_data, .. }) => {
-                    REPEAT_READ_STATUS.base + REPEAT_READ_STATUS.bytes_of(v_data.len())
+                Self::ReadStatus(m) => {
+                    REPEAT_READ_STATUS.base + REPEAT_READ_STATUS.bytes_of(m.data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -694,14 +692,11 @@ pub mod dynamixel {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadStatus(response::ReadStatus { data: v_data, .. }),
-                    &Request::Read(request::Read { length: r_length, .. }),
-                ) => {
+                (Self::ReadStatus(m), Request::Read(r)) => {
                     REPEAT_READ_STATUS
                         .follows_request(
-                            v_data.len(),
-                            r_length as i64,
+                            m.data.len(),
+                            r.length as i64,
                             (1, 1),
                             "length",
                         )?;
@@ -951,14 +946,11 @@ pub mod dynamixel {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadStatus { data: v_data, .. },
-                    &Request::Read(request::Read { length: r_length, .. }),
-                ) => {
+                (&Self::ReadStatus { data: v_data, .. }, Request::Read(r)) => {
                     REPEAT_READ_STATUS
                         .follows_request(
                             v_data.len(),
-                            r_length as i64,
+                            r.length as i64,
                             (1, 1),
                             "length",
                         )?;

@@ -188,15 +188,13 @@ pub mod lists_after {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteBlock(request::WriteBlock { values: v_values, .. }) => {
+                Self::WriteBlock(m) => {
                     LISTS_WRITE_BLOCK.base
-                        + LISTS_WRITE_BLOCK.lists[0].bytes_of(v_values.len())
+                        + LISTS_WRITE_BLOCK.lists[0].bytes_of(m.values.len())
                 }
-                Self::Copy(
-                    request::Copy { sources: v_sources, targets: v_targets, .. },
-                ) => {
-                    LISTS_COPY.base + LISTS_COPY.lists[0].bytes_of(v_sources.len())
-                        + LISTS_COPY.lists[1].bytes_of(v_targets.len())
+                Self::Copy(m) => {
+                    LISTS_COPY.base + LISTS_COPY.lists[0].bytes_of(m.sources.len())
+                        + LISTS_COPY.lists[1].bytes_of(m.targets.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -505,9 +503,9 @@ pub mod lists_after {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::BlockReply(response::BlockReply { values: v_values, .. }) => {
+                Self::BlockReply(m) => {
                     LISTS_BLOCK_REPLY.base
-                        + LISTS_BLOCK_REPLY.lists[0].bytes_of(v_values.len())
+                        + LISTS_BLOCK_REPLY.lists[0].bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -684,14 +682,11 @@ pub mod lists_after {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::BlockReply(response::BlockReply { values: v_values, .. }),
-                    &Request::ReadBlock(request::ReadBlock { quantity: r_quantity, .. }),
-                ) => {
+                (Self::BlockReply(m), Request::ReadBlock(r)) => {
                     REPEAT_BLOCK_REPLY
                         .follows_request(
-                            v_values.len(),
-                            r_quantity as i64,
+                            m.values.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -905,14 +900,11 @@ pub mod lists_after {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::BlockReply { values: v_values, .. },
-                    &Request::ReadBlock(request::ReadBlock { quantity: r_quantity, .. }),
-                ) => {
+                (&Self::BlockReply { values: v_values, .. }, Request::ReadBlock(r)) => {
                     REPEAT_BLOCK_REPLY
                         .follows_request(
                             v_values.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;

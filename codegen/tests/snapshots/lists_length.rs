@@ -237,15 +237,13 @@ pub mod lists_length {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Log(
-                    request::Log { channels: v_channels, samples: v_samples, .. },
-                ) => {
-                    LISTS_LOG.base + LISTS_LOG.lists[0].bytes_of(v_channels.len())
-                        + LISTS_LOG.lists[1].bytes_of(v_samples.len())
+                Self::Log(m) => {
+                    LISTS_LOG.base + LISTS_LOG.lists[0].bytes_of(m.channels.len())
+                        + LISTS_LOG.lists[1].bytes_of(m.samples.len())
                 }
-                Self::SetOutputs(request::SetOutputs { outputs: v_outputs, .. }) => {
+                Self::SetOutputs(m) => {
                     LISTS_SET_OUTPUTS.base
-                        + LISTS_SET_OUTPUTS.lists[0].bytes_of(v_outputs.len())
+                        + LISTS_SET_OUTPUTS.lists[0].bytes_of(m.outputs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

@@ -300,17 +300,13 @@ pub mod modbus {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteMultipleCoils(
-                    request::WriteMultipleCoils { outputs: v_outputs, .. },
-                ) => {
+                Self::WriteMultipleCoils(m) => {
                     REPEAT_WRITE_MULTIPLE_COILS.base
-                        + REPEAT_WRITE_MULTIPLE_COILS.bytes_of(v_outputs.len())
+                        + REPEAT_WRITE_MULTIPLE_COILS.bytes_of(m.outputs.len())
                 }
-                Self::WriteMultipleRegisters(
-                    request::WriteMultipleRegisters { values: v_values, .. },
-                ) => {
+                Self::WriteMultipleRegisters(m) => {
                     REPEAT_WRITE_MULTIPLE_REGISTERS.base
-                        + REPEAT_WRITE_MULTIPLE_REGISTERS.bytes_of(v_values.len())
+                        + REPEAT_WRITE_MULTIPLE_REGISTERS.bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -946,27 +942,21 @@ pub mod modbus {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadCoilsReply(response::ReadCoilsReply { coils: v_coils, .. }) => {
+                Self::ReadCoilsReply(m) => {
                     REPEAT_READ_COILS_REPLY.base
-                        + REPEAT_READ_COILS_REPLY.bytes_of(v_coils.len())
+                        + REPEAT_READ_COILS_REPLY.bytes_of(m.coils.len())
                 }
-                Self::ReadDiscreteInputsReply(
-                    response::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                ) => {
+                Self::ReadDiscreteInputsReply(m) => {
                     REPEAT_READ_DISCRETE_INPUTS_REPLY.base
-                        + REPEAT_READ_DISCRETE_INPUTS_REPLY.bytes_of(v_inputs.len())
+                        + REPEAT_READ_DISCRETE_INPUTS_REPLY.bytes_of(m.inputs.len())
                 }
-                Self::ReadHoldingRegistersReply(
-                    response::ReadHoldingRegistersReply { registers: v_registers, .. },
-                ) => {
+                Self::ReadHoldingRegistersReply(m) => {
                     REPEAT_READ_HOLDING_REGISTERS_REPLY.base
-                        + REPEAT_READ_HOLDING_REGISTERS_REPLY.bytes_of(v_registers.len())
+                        + REPEAT_READ_HOLDING_REGISTERS_REPLY.bytes_of(m.registers.len())
                 }
-                Self::ReadInputRegistersReply(
-                    response::ReadInputRegistersReply { registers: v_registers, .. },
-                ) => {
+                Self::ReadInputRegistersReply(m) => {
                     REPEAT_READ_INPUT_REGISTERS_REPLY.base
-                        + REPEAT_READ_INPUT_REGISTERS_REPLY.bytes_of(v_registers.len())
+                        + REPEAT_READ_INPUT_REGISTERS_REPLY.bytes_of(m.registers.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -1590,234 +1580,151 @@ pub mod modbus {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadCoilsReply(
-                        response::ReadCoilsReply { coils: v_coils, .. },
-                    ),
-                    &Request::ReadCoils(request::ReadCoils { quantity: r_quantity, .. }),
-                ) => {
+                (Self::ReadCoilsReply(m), Request::ReadCoils(r)) => {
                     rt::following(
                         &response::ReadCoilsReply::BYTE_COUNT_DESC,
                         2,
-                        REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
-                        r_quantity as i64,
+                        REPEAT_READ_COILS_REPLY.count_value(m.coils.len()) as u64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_COILS_REPLY
                         .follows_request(
-                            v_coils.len(),
-                            r_quantity as i64,
+                            m.coils.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
-                (
-                    &Self::ReadDiscreteInputsReply(
-                        response::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                    ),
-                    &Request::ReadDiscreteInputs(
-                        request::ReadDiscreteInputs { quantity: r_quantity, .. },
-                    ),
-                ) => {
+                (Self::ReadDiscreteInputsReply(m), Request::ReadDiscreteInputs(r)) => {
                     rt::following(
                         &response::ReadDiscreteInputsReply::BYTE_COUNT_DESC,
                         2,
-                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
+                        REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(m.inputs.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_DISCRETE_INPUTS_REPLY
                         .follows_request(
-                            v_inputs.len(),
-                            r_quantity as i64,
+                            m.inputs.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
-                    &Self::ReadHoldingRegistersReply(
-                        response::ReadHoldingRegistersReply {
-                            registers: v_registers,
-                            ..
-                        },
-                    ),
-                    &Request::ReadHoldingRegisters(
-                        request::ReadHoldingRegisters { quantity: r_quantity, .. },
-                    ),
+                    Self::ReadHoldingRegistersReply(m),
+                    Request::ReadHoldingRegisters(r),
                 ) => {
                     rt::following(
                         &response::ReadHoldingRegistersReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_HOLDING_REGISTERS_REPLY
-                            .count_value(v_registers.len()) as u64,
-                        r_quantity as i64,
+                            .count_value(m.registers.len()) as u64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_HOLDING_REGISTERS_REPLY
                         .follows_request(
-                            v_registers.len(),
-                            r_quantity as i64,
+                            m.registers.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
-                (
-                    &Self::ReadInputRegistersReply(
-                        response::ReadInputRegistersReply { registers: v_registers, .. },
-                    ),
-                    &Request::ReadInputRegisters(
-                        request::ReadInputRegisters { quantity: r_quantity, .. },
-                    ),
-                ) => {
+                (Self::ReadInputRegistersReply(m), Request::ReadInputRegisters(r)) => {
                     rt::following(
                         &response::ReadInputRegistersReply::BYTE_COUNT_DESC,
                         2,
-                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
+                        REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(m.registers.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_INPUT_REGISTERS_REPLY
                         .follows_request(
-                            v_registers.len(),
-                            r_quantity as i64,
+                            m.registers.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
-                (
-                    &Self::WriteSingleCoilReply(
-                        response::WriteSingleCoilReply {
-                            output_address: v_output_address,
-                            output_value: v_output_value,
-                            ..
-                        },
-                    ),
-                    &Request::WriteSingleCoil(
-                        request::WriteSingleCoil {
-                            output_address: r_output_address,
-                            output_value: r_output_value,
-                            ..
-                        },
-                    ),
-                ) => {
+                (Self::WriteSingleCoilReply(m), Request::WriteSingleCoil(r)) => {
                     rt::following(
                         &response::WriteSingleCoilReply::OUTPUT_ADDRESS_DESC,
                         2,
-                        v_output_address,
-                        r_output_address as i64,
+                        m.output_address,
+                        r.output_address as i64,
                         (1, 1),
                         "output_address of the request",
                     )?;
                     rt::following(
                         &response::WriteSingleCoilReply::OUTPUT_VALUE_DESC,
                         4,
-                        v_output_value.raw(),
-                        r_output_value.raw() as i64,
+                        m.output_value.raw(),
+                        r.output_value.raw() as i64,
                         (1, 1),
                         "output_value of the request",
                     )?;
                 }
-                (
-                    &Self::WriteSingleRegisterReply(
-                        response::WriteSingleRegisterReply {
-                            register_address: v_register_address,
-                            register_value: v_register_value,
-                            ..
-                        },
-                    ),
-                    &Request::WriteSingleRegister(
-                        request::WriteSingleRegister {
-                            register_address: r_register_address,
-                            register_value: r_register_value,
-                            ..
-                        },
-                    ),
-                ) => {
+                (Self::WriteSingleRegisterReply(m), Request::WriteSingleRegister(r)) => {
                     rt::following(
                         &response::WriteSingleRegisterReply::REGISTER_ADDRESS_DESC,
                         2,
-                        v_register_address,
-                        r_register_address as i64,
+                        m.register_address,
+                        r.register_address as i64,
                         (1, 1),
                         "register_address of the request",
                     )?;
                     rt::following(
                         &response::WriteSingleRegisterReply::REGISTER_VALUE_DESC,
                         4,
-                        v_register_value,
-                        r_register_value as i64,
+                        m.register_value,
+                        r.register_value as i64,
                         (1, 1),
                         "register_value of the request",
                     )?;
                 }
-                (
-                    &Self::WriteMultipleCoilsReply(
-                        response::WriteMultipleCoilsReply {
-                            starting_address: v_starting_address,
-                            quantity: v_quantity,
-                            ..
-                        },
-                    ),
-                    &Request::WriteMultipleCoils(
-                        request::WriteMultipleCoils {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
-                ) => {
+                (Self::WriteMultipleCoilsReply(m), Request::WriteMultipleCoils(r)) => {
                     rt::following(
                         &response::WriteMultipleCoilsReply::STARTING_ADDRESS_DESC,
                         2,
-                        v_starting_address,
-                        r_starting_address as i64,
+                        m.starting_address,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
                     rt::following(
                         &response::WriteMultipleCoilsReply::QUANTITY_DESC,
                         4,
-                        v_quantity,
-                        r_quantity as i64,
+                        m.quantity,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
                 }
                 (
-                    &Self::WriteMultipleRegistersReply(
-                        response::WriteMultipleRegistersReply {
-                            starting_address: v_starting_address,
-                            quantity: v_quantity,
-                            ..
-                        },
-                    ),
-                    &Request::WriteMultipleRegisters(
-                        request::WriteMultipleRegisters {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
+                    Self::WriteMultipleRegistersReply(m),
+                    Request::WriteMultipleRegisters(r),
                 ) => {
                     rt::following(
                         &response::WriteMultipleRegistersReply::STARTING_ADDRESS_DESC,
                         2,
-                        v_starting_address,
-                        r_starting_address as i64,
+                        m.starting_address,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
                     rt::following(
                         &response::WriteMultipleRegistersReply::QUANTITY_DESC,
                         4,
-                        v_quantity,
-                        r_quantity as i64,
+                        m.quantity,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
@@ -2449,89 +2356,83 @@ pub mod modbus {
             match (self, request) {
                 (
                     &Self::ReadCoilsReply { coils: v_coils, .. },
-                    &Request::ReadCoils(request::ReadCoils { quantity: r_quantity, .. }),
+                    Request::ReadCoils(r),
                 ) => {
                     rt::following(
                         &response::ReadCoilsReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_COILS_REPLY.count_value(v_coils.len()) as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_COILS_REPLY
                         .follows_request(
                             v_coils.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
                     &Self::ReadDiscreteInputsReply { inputs: v_inputs, .. },
-                    &Request::ReadDiscreteInputs(
-                        request::ReadDiscreteInputs { quantity: r_quantity, .. },
-                    ),
+                    Request::ReadDiscreteInputs(r),
                 ) => {
                     rt::following(
                         &response::ReadDiscreteInputsReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_DISCRETE_INPUTS_REPLY.count_value(v_inputs.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;
                     REPEAT_READ_DISCRETE_INPUTS_REPLY
                         .follows_request(
                             v_inputs.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
                     &Self::ReadHoldingRegistersReply { registers: v_registers, .. },
-                    &Request::ReadHoldingRegisters(
-                        request::ReadHoldingRegisters { quantity: r_quantity, .. },
-                    ),
+                    Request::ReadHoldingRegisters(r),
                 ) => {
                     rt::following(
                         &response::ReadHoldingRegistersReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_HOLDING_REGISTERS_REPLY
                             .count_value(v_registers.len()) as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_HOLDING_REGISTERS_REPLY
                         .follows_request(
                             v_registers.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
                 }
                 (
                     &Self::ReadInputRegistersReply { registers: v_registers, .. },
-                    &Request::ReadInputRegisters(
-                        request::ReadInputRegisters { quantity: r_quantity, .. },
-                    ),
+                    Request::ReadInputRegisters(r),
                 ) => {
                     rt::following(
                         &response::ReadInputRegistersReply::BYTE_COUNT_DESC,
                         2,
                         REPEAT_READ_INPUT_REGISTERS_REPLY.count_value(v_registers.len())
                             as u64,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (2, 1),
                         "2 × quantity of the request",
                     )?;
                     REPEAT_READ_INPUT_REGISTERS_REPLY
                         .follows_request(
                             v_registers.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -2542,19 +2443,13 @@ pub mod modbus {
                         output_value: v_output_value,
                         ..
                     },
-                    &Request::WriteSingleCoil(
-                        request::WriteSingleCoil {
-                            output_address: r_output_address,
-                            output_value: r_output_value,
-                            ..
-                        },
-                    ),
+                    Request::WriteSingleCoil(r),
                 ) => {
                     rt::following(
                         &response::WriteSingleCoilReply::OUTPUT_ADDRESS_DESC,
                         2,
                         v_output_address,
-                        r_output_address as i64,
+                        r.output_address as i64,
                         (1, 1),
                         "output_address of the request",
                     )?;
@@ -2562,7 +2457,7 @@ pub mod modbus {
                         &response::WriteSingleCoilReply::OUTPUT_VALUE_DESC,
                         4,
                         v_output_value.raw(),
-                        r_output_value.raw() as i64,
+                        r.output_value.raw() as i64,
                         (1, 1),
                         "output_value of the request",
                     )?;
@@ -2573,19 +2468,13 @@ pub mod modbus {
                         register_value: v_register_value,
                         ..
                     },
-                    &Request::WriteSingleRegister(
-                        request::WriteSingleRegister {
-                            register_address: r_register_address,
-                            register_value: r_register_value,
-                            ..
-                        },
-                    ),
+                    Request::WriteSingleRegister(r),
                 ) => {
                     rt::following(
                         &response::WriteSingleRegisterReply::REGISTER_ADDRESS_DESC,
                         2,
                         v_register_address,
-                        r_register_address as i64,
+                        r.register_address as i64,
                         (1, 1),
                         "register_address of the request",
                     )?;
@@ -2593,7 +2482,7 @@ pub mod modbus {
                         &response::WriteSingleRegisterReply::REGISTER_VALUE_DESC,
                         4,
                         v_register_value,
-                        r_register_value as i64,
+                        r.register_value as i64,
                         (1, 1),
                         "register_value of the request",
                     )?;
@@ -2604,19 +2493,13 @@ pub mod modbus {
                         quantity: v_quantity,
                         ..
                     },
-                    &Request::WriteMultipleCoils(
-                        request::WriteMultipleCoils {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
+                    Request::WriteMultipleCoils(r),
                 ) => {
                     rt::following(
                         &response::WriteMultipleCoilsReply::STARTING_ADDRESS_DESC,
                         2,
                         v_starting_address,
-                        r_starting_address as i64,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
@@ -2624,7 +2507,7 @@ pub mod modbus {
                         &response::WriteMultipleCoilsReply::QUANTITY_DESC,
                         4,
                         v_quantity,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
@@ -2635,19 +2518,13 @@ pub mod modbus {
                         quantity: v_quantity,
                         ..
                     },
-                    &Request::WriteMultipleRegisters(
-                        request::WriteMultipleRegisters {
-                            starting_address: r_starting_address,
-                            quantity: r_quantity,
-                            ..
-                        },
-                    ),
+                    Request::WriteMultipleRegisters(r),
                 ) => {
                     rt::following(
                         &response::WriteMultipleRegistersReply::STARTING_ADDRESS_DESC,
                         2,
                         v_starting_address,
-                        r_starting_address as i64,
+                        r.starting_address as i64,
                         (1, 1),
                         "starting_address of the request",
                     )?;
@@ -2655,7 +2532,7 @@ pub mod modbus {
                         &response::WriteMultipleRegistersReply::QUANTITY_DESC,
                         4,
                         v_quantity,
-                        r_quantity as i64,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;

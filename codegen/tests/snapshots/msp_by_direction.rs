@@ -321,8 +321,8 @@ pub mod msp_by_direction {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::RcReply(response::RcReply { channels: v_channels, .. }) => {
-                    REPEAT_RC_REPLY.base + REPEAT_RC_REPLY.bytes_of(v_channels.len())
+                Self::RcReply(m) => {
+                    REPEAT_RC_REPLY.base + REPEAT_RC_REPLY.bytes_of(m.channels.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

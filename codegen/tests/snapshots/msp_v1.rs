@@ -524,27 +524,21 @@ pub mod msp_v1 {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::Error(response::Error { cmd: v_cmd, .. }),
-                    &Request::ApiVersion(request::ApiVersion { .. }),
-                ) => {
+                (Self::Error(m), Request::ApiVersion(_)) => {
                     rt::following(
                         &response::Error::CMD_DESC,
                         4,
-                        v_cmd,
+                        m.cmd,
                         1 as i64,
                         (1, 1),
                         "cmd of the request",
                     )?;
                 }
-                (
-                    &Self::Error(response::Error { cmd: v_cmd, .. }),
-                    &Request::Attitude(request::Attitude { .. }),
-                ) => {
+                (Self::Error(m), Request::Attitude(_)) => {
                     rt::following(
                         &response::Error::CMD_DESC,
                         4,
-                        v_cmd,
+                        m.cmd,
                         108 as i64,
                         (1, 1),
                         "cmd of the request",

@@ -483,15 +483,11 @@ pub mod optional_sensor {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Reading(
-                    response::Reading { humidity: v_humidity, pressure: v_pressure, .. },
-                ) => {
+                Self::Reading(m) => {
                     OPTIONAL_READING
-                        .frame_len(&[v_humidity.is_some(), v_pressure.is_some()])
+                        .frame_len(&[m.humidity.is_some(), m.pressure.is_some()])
                 }
-                Self::Event(response::Event { detail: v_detail, .. }) => {
-                    OPTIONAL_EVENT.frame_len(&[v_detail.is_some()])
-                }
+                Self::Event(m) => OPTIONAL_EVENT.frame_len(&[m.detail.is_some()]),
                 _ => Self::MESSAGES[self.index()].2,
             }
         }

@@ -454,12 +454,12 @@ pub mod records {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SyncWrite(request::SyncWrite { blocks: v_blocks, .. }) => {
+                Self::SyncWrite(m) => {
                     LISTS_SYNC_WRITE.base
-                        + LISTS_SYNC_WRITE.lists[0].bytes_of(v_blocks.len())
+                        + LISTS_SYNC_WRITE.lists[0].bytes_of(m.blocks.len())
                 }
-                Self::WritePairs(request::WritePairs { pairs: v_pairs, .. }) => {
-                    REPEAT_WRITE_PAIRS.base + REPEAT_WRITE_PAIRS.bytes_of(v_pairs.len())
+                Self::WritePairs(m) => {
+                    REPEAT_WRITE_PAIRS.base + REPEAT_WRITE_PAIRS.bytes_of(m.pairs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -817,9 +817,9 @@ pub mod records {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::StatusReply(response::StatusReply { readings: v_readings, .. }) => {
+                Self::StatusReply(m) => {
                     REPEAT_STATUS_REPLY.base
-                        + REPEAT_STATUS_REPLY.bytes_of(v_readings.len())
+                        + REPEAT_STATUS_REPLY.bytes_of(m.readings.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -997,18 +997,11 @@ pub mod records {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::StatusReply(
-                        response::StatusReply { readings: v_readings, .. },
-                    ),
-                    &Request::ReadStatus(
-                        request::ReadStatus { quantity: r_quantity, .. },
-                    ),
-                ) => {
+                (Self::StatusReply(m), Request::ReadStatus(r)) => {
                     REPEAT_STATUS_REPLY
                         .follows_request(
-                            v_readings.len(),
-                            r_quantity as i64,
+                            m.readings.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;

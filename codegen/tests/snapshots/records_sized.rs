@@ -346,20 +346,12 @@ pub mod records_sized {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SyncWrite(
-                    request::SyncWrite {
-                        blocks: v_blocks,
-                        data_length: v_data_length,
-                        ..
-                    },
-                ) => {
-                    let v_data_length = *v_data_length;
+                Self::SyncWrite(m) => {
                     REPEAT_SYNC_WRITE.base
-                        + v_blocks.len() * (1 + (v_data_length) as usize)
+                        + m.blocks.len() * (1 + (m.data_length) as usize)
                 }
-                Self::Trim(request::Trim { offsets: v_offsets, width: v_width, .. }) => {
-                    let v_width = *v_width;
-                    REPEAT_TRIM.base + v_offsets.len() * (1 + (v_width) as usize)
+                Self::Trim(m) => {
+                    REPEAT_TRIM.base + m.offsets.len() * (1 + (m.width) as usize)
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

@@ -399,8 +399,8 @@ pub mod slip_sensor {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Samples(response::Samples { samples: v_samples, .. }) => {
-                    REPEAT_SAMPLES.base + REPEAT_SAMPLES.bytes_of(v_samples.len())
+                Self::Samples(m) => {
+                    REPEAT_SAMPLES.base + REPEAT_SAMPLES.bytes_of(m.samples.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

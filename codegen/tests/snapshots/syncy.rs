@@ -622,29 +622,20 @@ pub mod syncy {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::SetPairReply(
-                        response::SetPairReply {
-                            quantity: v_quantity,
-                            groups: v_groups,
-                            ..
-                        },
-                    ),
-                    &Request::SetPair(request::SetPair { quantity: r_quantity, .. }),
-                ) => {
+                (Self::SetPairReply(m), Request::SetPair(r)) => {
                     rt::following(
                         &response::SetPairReply::QUANTITY_DESC,
                         5,
-                        v_quantity,
-                        r_quantity as i64,
+                        m.quantity,
+                        r.quantity as i64,
                         (1, 1),
                         "quantity of the request",
                     )?;
                     rt::following(
                         &response::SetPairReply::GROUPS_DESC,
                         6,
-                        v_groups,
-                        r_quantity as i64,
+                        m.groups,
+                        r.quantity as i64,
                         (1, 8),
                         "ceil(quantity / 8) of the request",
                     )?;

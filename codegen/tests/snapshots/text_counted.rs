@@ -136,8 +136,8 @@ pub mod text_counted {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SetName(request::SetName { name: v_name, .. }) => {
-                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(v_name.len())
+                Self::SetName(m) => {
+                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(m.name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -373,9 +373,9 @@ pub mod text_counted {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::DeviceInfo(response::DeviceInfo { name: v_name, .. }) => {
+                Self::DeviceInfo(m) => {
                     LISTS_DEVICE_INFO.base
-                        + LISTS_DEVICE_INFO.lists[0].bytes_of(v_name.len())
+                        + LISTS_DEVICE_INFO.lists[0].bytes_of(m.name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

@@ -129,8 +129,8 @@ pub mod text_terminated {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::SetName(request::SetName { name: v_name, .. }) => {
-                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(v_name.len())
+                Self::SetName(m) => {
+                    LISTS_SET_NAME.base + LISTS_SET_NAME.lists[0].bytes_of(m.name.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -419,16 +419,14 @@ pub mod text_terminated {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::DeviceInfo(response::DeviceInfo { name: v_name, .. }) => {
+                Self::DeviceInfo(m) => {
                     LISTS_DEVICE_INFO.base
-                        + LISTS_DEVICE_INFO.lists[0].bytes_of(v_name.len())
+                        + LISTS_DEVICE_INFO.lists[0].bytes_of(m.name.len())
                 }
-                Self::Parameter(
-                    response::Parameter { label: v_label, unit: v_unit, .. },
-                ) => {
+                Self::Parameter(m) => {
                     LISTS_PARAMETER.base
-                        + LISTS_PARAMETER.lists[0].bytes_of(v_label.len())
-                        + LISTS_PARAMETER.lists[1].bytes_of(v_unit.len())
+                        + LISTS_PARAMETER.lists[0].bytes_of(m.label.len())
+                        + LISTS_PARAMETER.lists[1].bytes_of(m.unit.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

@@ -578,8 +578,8 @@ pub mod ubx_like {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Satellites(response::Satellites { svs: v_svs, .. }) => {
-                    REPEAT_SATELLITES.base + REPEAT_SATELLITES.bytes_of(v_svs.len())
+                Self::Satellites(m) => {
+                    REPEAT_SATELLITES.base + REPEAT_SATELLITES.bytes_of(m.svs.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

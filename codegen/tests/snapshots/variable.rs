@@ -119,8 +119,8 @@ pub mod vario {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::Write(request::Write { values: v_values, .. }) => {
-                    REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(v_values.len())
+                Self::Write(m) => {
+                    REPEAT_WRITE.base + REPEAT_WRITE.bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -386,8 +386,8 @@ pub mod vario {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::ReadReply(response::ReadReply { values: v_values, .. }) => {
-                    REPEAT_READ_REPLY.base + REPEAT_READ_REPLY.bytes_of(v_values.len())
+                Self::ReadReply(m) => {
+                    REPEAT_READ_REPLY.base + REPEAT_READ_REPLY.bytes_of(m.values.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -583,14 +583,11 @@ pub mod vario {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadReply(response::ReadReply { values: v_values, .. }),
-                    &Request::Read(request::Read { quantity: r_quantity, .. }),
-                ) => {
+                (Self::ReadReply(m), Request::Read(r)) => {
                     REPEAT_READ_REPLY
                         .follows_request(
-                            v_values.len(),
-                            r_quantity as i64,
+                            m.values.len(),
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;
@@ -807,14 +804,11 @@ pub mod vario {
         /// spec): [`busspec_runtime::DecodeError::InvalidValue`] names the first that differs.
         pub fn follows_request(&self, request: &Request) -> rt::DecodeResult<()> {
             match (self, request) {
-                (
-                    &Self::ReadReply { values: v_values, .. },
-                    &Request::Read(request::Read { quantity: r_quantity, .. }),
-                ) => {
+                (&Self::ReadReply { values: v_values, .. }, Request::Read(r)) => {
                     REPEAT_READ_REPLY
                         .follows_request(
                             v_values.len(),
-                            r_quantity as i64,
+                            r.quantity as i64,
                             (1, 1),
                             "quantity",
                         )?;

@@ -518,9 +518,9 @@ pub mod vesc {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::WriteNewAppData(request::WriteNewAppData { data: v_data, .. }) => {
+                Self::WriteNewAppData(m) => {
                     REPEAT_WRITE_NEW_APP_DATA.base
-                        + REPEAT_WRITE_NEW_APP_DATA.bytes_of(v_data.len())
+                        + REPEAT_WRITE_NEW_APP_DATA.bytes_of(m.data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -889,9 +889,9 @@ pub mod vesc {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::FwVersionReply(response::FwVersionReply { rest: v_rest, .. }) => {
+                Self::FwVersionReply(m) => {
                     REPEAT_FW_VERSION_REPLY.base
-                        + REPEAT_FW_VERSION_REPLY.bytes_of(v_rest.len())
+                        + REPEAT_FW_VERSION_REPLY.bytes_of(m.rest.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }

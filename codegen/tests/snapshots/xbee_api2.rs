@@ -334,13 +334,13 @@ pub mod xbee_api2 {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::AtCommand(request::AtCommand { parameter: v_parameter, .. }) => {
+                Self::AtCommand(m) => {
                     REPEAT_AT_COMMAND.base
-                        + REPEAT_AT_COMMAND.bytes_of(v_parameter.len())
+                        + REPEAT_AT_COMMAND.bytes_of(m.parameter.len())
                 }
-                Self::TransmitRequest(request::TransmitRequest { data: v_data, .. }) => {
+                Self::TransmitRequest(m) => {
                     REPEAT_TRANSMIT_REQUEST.base
-                        + REPEAT_TRANSMIT_REQUEST.bytes_of(v_data.len())
+                        + REPEAT_TRANSMIT_REQUEST.bytes_of(m.data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
@@ -646,12 +646,12 @@ pub mod xbee_api2 {
         /// The length of this message's frame, in bytes.
         pub const fn frame_len(&self) -> usize {
             match self {
-                Self::AtResponse(response::AtResponse { data: v_data, .. }) => {
-                    REPEAT_AT_RESPONSE.base + REPEAT_AT_RESPONSE.bytes_of(v_data.len())
+                Self::AtResponse(m) => {
+                    REPEAT_AT_RESPONSE.base + REPEAT_AT_RESPONSE.bytes_of(m.data.len())
                 }
-                Self::ReceivePacket(response::ReceivePacket { data: v_data, .. }) => {
+                Self::ReceivePacket(m) => {
                     REPEAT_RECEIVE_PACKET.base
-                        + REPEAT_RECEIVE_PACKET.bytes_of(v_data.len())
+                        + REPEAT_RECEIVE_PACKET.bytes_of(m.data.len())
                 }
                 _ => Self::MESSAGES[self.index()].2,
             }
