@@ -452,9 +452,12 @@ pub(super) fn read_wire(f: &Field, payload_at: usize) -> TokenStream {
 }
 
 /// The pattern binding every field of `m` to its `v_<name>` local (so that no spec name can
-/// shadow the generated code's own variables), or `Self::Name` without fields.
+/// shadow the generated code's own variables), or `Self::Name(_)` without fields.
 pub(super) fn binding(m: &Message, ls: &[Leaf]) -> TokenStream {
     let v = variant(m);
+    if ls.is_empty() {
+        return quote!(Self::#v(_));
+    }
     let own = own_binding(m, ls);
     quote!(Self::#v(#own))
 }

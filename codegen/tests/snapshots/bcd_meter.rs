@@ -156,7 +156,7 @@ pub mod bcd_meter {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadEnergy(request::ReadEnergy {}) => {
+                Self::ReadEnergy(_) => {
                     rt::frame_mut::<5>(buf, &[0x68, address, 0x11])?.len()
                 }
                 Self::SetClock(
@@ -370,9 +370,7 @@ pub mod bcd_meter {
                     out[7] = rt::to_bcd(v_tariff as u64) as u8;
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<5>(buf, &[0x68, address, 0x88])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<5>(buf, &[0x68, address, 0x88])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)

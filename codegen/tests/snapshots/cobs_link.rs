@@ -159,17 +159,13 @@ pub mod cobs_link {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadPosition(request::ReadPosition {}) => {
-                    rt::frame_mut::<4>(buf, &[0x00, 0x10])?.len()
-                }
+                Self::ReadPosition(_) => rt::frame_mut::<4>(buf, &[0x00, 0x10])?.len(),
                 Self::SetSpeed(request::SetSpeed { speed: v_speed }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x02, 0x20])?;
                     out[2..4].copy_from_slice(&v_speed.to_le_bytes());
                     out.len()
                 }
-                Self::ReadLog(request::ReadLog {}) => {
-                    rt::frame_mut::<4>(buf, &[0x00, 0x30])?.len()
-                }
+                Self::ReadLog(_) => rt::frame_mut::<4>(buf, &[0x00, 0x30])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -388,9 +384,7 @@ pub mod cobs_link {
                     out[2..6].copy_from_slice(&v_position.to_le_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<4>(buf, &[0x00, 0xA0])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<4>(buf, &[0x00, 0xA0])?.len(),
                 Self::Log(response::Log { entries: v_entries }) => {
                     let frame_len = REPEAT_LOG.encode_len(v_entries.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[])?;

@@ -148,7 +148,7 @@ pub mod codeless {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
+                Self::Ping(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
                 Self::Read(request::Read { register: v_register }) => {

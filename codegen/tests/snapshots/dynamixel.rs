@@ -218,7 +218,7 @@ pub mod dynamixel {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
+                Self::Ping(_) => {
                     rt::encode_broadcast(address, 0xFE, &request::Ping::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x01])?.len()
                 }
@@ -252,10 +252,10 @@ pub mod dynamixel {
                     rt::write_elements(v_data.as_slice(), 1, true, &mut out[6..]);
                     out.len()
                 }
-                Self::Action(request::Action {}) => {
+                Self::Action(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x05])?.len()
                 }
-                Self::Reset(request::Reset {}) => {
+                Self::Reset(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x06])?.len()
                 }
                 Self::SyncWrite(

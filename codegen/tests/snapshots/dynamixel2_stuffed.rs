@@ -209,7 +209,7 @@ pub mod dynamixel2_stuffed {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
+                Self::Ping(_) => {
                     rt::frame_mut::<
                         10,
                     >(buf, &[0xFF, 0xFF, 0xFD, 0x00, address, 0x03, 0x00, 0x01])?

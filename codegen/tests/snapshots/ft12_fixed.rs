@@ -118,10 +118,8 @@ pub mod ft12_fixed {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::ResetRemoteLink(request::ResetRemoteLink {}) => {
-                    rt::head(out, &[0x10, 0x40, address]).len()
-                }
-                Self::RequestStatusOfLink(request::RequestStatusOfLink {}) => {
+                Self::ResetRemoteLink(_) => rt::head(out, &[0x10, 0x40, address]).len(),
+                Self::RequestStatusOfLink(_) => {
                     rt::encode_broadcast(
                         address,
                         0xFF,
@@ -129,11 +127,11 @@ pub mod ft12_fixed {
                     )?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
-                Self::RequestClass2(request::RequestClass2 {}) => {
+                Self::RequestClass2(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::RequestClass2::DESC)?;
                     rt::head(out, &[0x10, 0x5B, address]).len()
                 }
-                Self::RequestClass2Fcb(request::RequestClass2Fcb {}) => {
+                Self::RequestClass2Fcb(_) => {
                     rt::encode_broadcast(
                         address,
                         0xFF,
@@ -321,15 +319,9 @@ pub mod ft12_fixed {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::Ack(response::Ack {}) => {
-                    rt::head(out, &[0x10, 0x00, address]).len()
-                }
-                Self::Nack(response::Nack {}) => {
-                    rt::head(out, &[0x10, 0x01, address]).len()
-                }
-                Self::StatusOfLink(response::StatusOfLink {}) => {
-                    rt::head(out, &[0x10, 0x0B, address]).len()
-                }
+                Self::Ack(_) => rt::head(out, &[0x10, 0x00, address]).len(),
+                Self::Nack(_) => rt::head(out, &[0x10, 0x01, address]).len(),
+                Self::StatusOfLink(_) => rt::head(out, &[0x10, 0x0B, address]).len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)

@@ -112,10 +112,10 @@ pub mod ft12_variable {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<9>(buf, &[])?;
             let len = match *self {
-                Self::Reset(request::Reset {}) => {
+                Self::Reset(_) => {
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50]).len()
                 }
-                Self::ReadData(request::ReadData {}) => {
+                Self::ReadData(_) => {
                     rt::encode_broadcast(address, 0xFE, &request::ReadData::DESC)?;
                     rt::head(out, &[0x68, 0x03, 0x03, 0x68, 0x7B, address, 0x5B]).len()
                 }

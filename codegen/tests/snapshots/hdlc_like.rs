@@ -164,7 +164,7 @@ pub mod hdlc_like {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadStatus(request::ReadStatus {}) => {
+                Self::ReadStatus(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::ReadStatus::DESC)?;
                     rt::frame_mut::<6>(buf, &[0x7E, address, 0x10])?.len()
                 }
@@ -378,9 +378,7 @@ pub mod hdlc_like {
                     out[3..5].copy_from_slice(&v_state.to_le_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<6>(buf, &[0x7E, address, 0xA0])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<6>(buf, &[0x7E, address, 0xA0])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);
             rt::Ok(len)

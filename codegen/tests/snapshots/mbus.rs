@@ -140,16 +140,16 @@ pub mod mbus {
         fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::SndNke(request::SndNke {}) => {
+                Self::SndNke(_) => {
                     rt::frame_mut::<8>(buf, &[0x68, 0x02, 0x02, 0x68, 0x40, address])?
                         .len()
                 }
-                Self::ReqUd2(request::ReqUd2 {}) => {
+                Self::ReqUd2(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::ReqUd2::DESC)?;
                     rt::frame_mut::<8>(buf, &[0x68, 0x02, 0x02, 0x68, 0x5B, address])?
                         .len()
                 }
-                Self::SndUdReset(request::SndUdReset {}) => {
+                Self::SndUdReset(_) => {
                     rt::frame_mut::<
                         9,
                     >(buf, &[0x68, 0x03, 0x03, 0x68, 0x53, address, 0x50])?

@@ -112,10 +112,8 @@ pub mod mbus_short {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::SndNke(request::SndNke {}) => {
-                    rt::head(out, &[0x10, 0x40, address]).len()
-                }
-                Self::ReqSke(request::ReqSke {}) => {
+                Self::SndNke(_) => rt::head(out, &[0x10, 0x40, address]).len(),
+                Self::ReqSke(_) => {
                     rt::encode_broadcast(address, 0xFF, &request::ReqSke::DESC)?;
                     rt::head(out, &[0x10, 0x49, address]).len()
                 }
@@ -270,9 +268,7 @@ pub mod mbus_short {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::StatusOfLink(response::StatusOfLink {}) => {
-                    rt::head(out, &[0x10, 0x0B, address]).len()
-                }
+                Self::StatusOfLink(_) => rt::head(out, &[0x10, 0x0B, address]).len(),
                 Self::Ack(_) => return rt::put_frame(buf, &[0xE5]),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), &FRAME);

@@ -128,7 +128,7 @@ pub mod meter_floats {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadReadings(request::ReadReadings {}) => {
+                Self::ReadReadings(_) => {
                     rt::encode_broadcast(address, 0x00, &request::ReadReadings::DESC)?;
                     rt::frame_mut::<4>(buf, &[address, 0x04])?.len()
                 }

@@ -549,26 +549,17 @@ pub mod mini {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Started(response::Started {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
-                        3,
-                        address.wrapping_add(0xFA),
-                    )
+                Self::Started(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFA))
                 }
-                Self::Nak(response::Nak {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
-                        3,
-                        address.wrapping_add(0x3A),
-                    )
+                Self::Nak(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3A))
                 }
-                Self::SetModeAck(response::SetModeAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?,
-                        4,
-                        address.wrapping_add(0xDA),
-                    )
+                Self::SetModeAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x30, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xDA))
                 }
                 Self::Status(
                     response::Status {

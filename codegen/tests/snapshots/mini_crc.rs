@@ -132,7 +132,7 @@ pub mod mini_crc {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ReadRuntimeHours(request::ReadRuntimeHours {}) => {
+                Self::ReadRuntimeHours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -140,7 +140,7 @@ pub mod mini_crc {
                     )?;
                     rt::head(out, &[0x69, address, 0x01, 0x00]).len()
                 }
-                Self::ReadRuntimeMinSec(request::ReadRuntimeMinSec {}) => {
+                Self::ReadRuntimeMinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,

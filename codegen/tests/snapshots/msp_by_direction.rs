@@ -155,15 +155,11 @@ pub mod msp_by_direction {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<6>(buf, &[])?;
             let len = match *self {
-                Self::ApiVersion(request::ApiVersion {}) => {
+                Self::ApiVersion(_) => {
                     rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x01]).len()
                 }
-                Self::Rc(request::Rc {}) => {
-                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x69]).len()
-                }
-                Self::Attitude(request::Attitude {}) => {
-                    rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len()
-                }
+                Self::Rc(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x69]).len(),
+                Self::Attitude(_) => rt::head(out, &[0x24, 0x4D, 0x3C, 0x00, 0x6C]).len(),
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 3))), 1, false);
             rt::Ok(len)

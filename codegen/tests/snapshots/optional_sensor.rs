@@ -281,12 +281,8 @@ pub mod optional_sensor {
             rt::encode_address(address, &FRAME)?;
             let out = rt::frame_mut::<5>(buf, &[])?;
             let len = match *self {
-                Self::Read(request::Read {}) => {
-                    rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
-                }
-                Self::LastEvent(request::LastEvent {}) => {
-                    rt::head(out, &[0xA5, address, 0x00, 0x02]).len()
-                }
+                Self::Read(_) => rt::head(out, &[0xA5, address, 0x00, 0x01]).len(),
+                Self::LastEvent(_) => rt::head(out, &[0xA5, address, 0x00, 0x02]).len(),
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 1))), 1, true);
             rt::Ok(len)

@@ -514,7 +514,7 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::ReadActualPosition(request::ReadActualPosition {}) => {
+                Self::ReadActualPosition(_) => {
                     rt::head(out, &[0x69, address, 0x00, 0x00]).len()
                 }
                 Self::SetVelocity(
@@ -524,7 +524,7 @@ pub mod sd {
                     out[2..4].copy_from_slice(&v_set_velocity.raw().to_be_bytes());
                     out.len()
                 }
-                Self::ReadActualVelocity(request::ReadActualVelocity {}) => {
+                Self::ReadActualVelocity(_) => {
                     rt::head(out, &[0x68, address, 0x00, 0x00]).len()
                 }
                 Self::SetServoId(request::SetServoId { new_id: v_new_id }) => {
@@ -535,10 +535,8 @@ pub mod sd {
                     out[3] = field_0;
                     out.len()
                 }
-                Self::ReadServoId(request::ReadServoId {}) => {
-                    rt::head(out, &[0xDA, address, 0x00, 0x00]).len()
-                }
-                Self::ReadCurrentConsumption(request::ReadCurrentConsumption {}) => {
+                Self::ReadServoId(_) => rt::head(out, &[0xDA, address, 0x00, 0x00]).len(),
+                Self::ReadCurrentConsumption(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -546,7 +544,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB0, address, 0x00, 0x00]).len()
                 }
-                Self::ReadBusVoltages(request::ReadBusVoltages {}) => {
+                Self::ReadBusVoltages(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -554,9 +552,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB1, address, 0x00, 0x00]).len()
                 }
-                Self::ReadExtendedCurrentConsumption(
-                    request::ReadExtendedCurrentConsumption {},
-                ) => {
+                Self::ReadExtendedCurrentConsumption(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -564,7 +560,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB2, address, 0x00, 0x00]).len()
                 }
-                Self::ReadTemperatures(request::ReadTemperatures {}) => {
+                Self::ReadTemperatures(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -572,11 +568,11 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA0, address, 0x00, 0x00]).len()
                 }
-                Self::ReadHumidity(request::ReadHumidity {}) => {
+                Self::ReadHumidity(_) => {
                     rt::encode_broadcast(address, 0x1F, &request::ReadHumidity::DESC)?;
                     rt::head(out, &[0xA1, address, 0x00, 0x00]).len()
                 }
-                Self::ReadSkippedFramesCounter(request::ReadSkippedFramesCounter {}) => {
+                Self::ReadSkippedFramesCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -584,9 +580,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x37, address, 0x00, 0x01]).len()
                 }
-                Self::ResetDroppedFramesCounter(
-                    request::ResetDroppedFramesCounter {},
-                ) => {
+                Self::ResetDroppedFramesCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -594,7 +588,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x37, address, 0x00, 0x02]).len()
                 }
-                Self::ReadActuatorStatusWord(request::ReadActuatorStatusWord {}) => {
+                Self::ReadActuatorStatusWord(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -602,7 +596,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x02]).len()
                 }
-                Self::ResetActuatorStatusWord(request::ResetActuatorStatusWord {}) => {
+                Self::ResetActuatorStatusWord(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -610,9 +604,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x40, address, 0xAA, 0x52]).len()
                 }
-                Self::ResetDefaultRoleAndErrorFlags(
-                    request::ResetDefaultRoleAndErrorFlags {},
-                ) => {
+                Self::ResetDefaultRoleAndErrorFlags(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -620,7 +612,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xB4, address, 0x41, 0x53]).len()
                 }
-                Self::SetCurrentPositionAsZero(request::SetCurrentPositionAsZero {}) => {
+                Self::SetCurrentPositionAsZero(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -628,7 +620,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x99, address, 0x00, 0x00]).len()
                 }
-                Self::ReadCurrentZeroOffset(request::ReadCurrentZeroOffset {}) => {
+                Self::ReadCurrentZeroOffset(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -636,7 +628,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0x95, address, 0x00, 0x00]).len()
                 }
-                Self::ResetZeroOffset(request::ResetZeroOffset {}) => {
+                Self::ResetZeroOffset(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -696,7 +688,7 @@ pub mod sd {
                     out[3] = v_byte_number;
                     out.len()
                 }
-                Self::ReadTotalRuntimeHours(request::ReadTotalRuntimeHours {}) => {
+                Self::ReadTotalRuntimeHours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -704,7 +696,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x00]).len()
                 }
-                Self::ReadTotalRuntimeMinSec(request::ReadTotalRuntimeMinSec {}) => {
+                Self::ReadTotalRuntimeMinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -712,7 +704,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA2, address, 0x00, 0x01]).len()
                 }
-                Self::ReadLoadRuntime024Hours(request::ReadLoadRuntime024Hours {}) => {
+                Self::ReadLoadRuntime024Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -720,7 +712,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime024MinSec(request::ReadLoadRuntime024MinSec {}) => {
+                Self::ReadLoadRuntime024MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -728,7 +720,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA3, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime024(request::ResetLoadRuntime024 {}) => {
+                Self::ResetLoadRuntime024(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -736,7 +728,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA3, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime2549Hours(request::ReadLoadRuntime2549Hours {}) => {
+                Self::ReadLoadRuntime2549Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -744,9 +736,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime2549MinSec(
-                    request::ReadLoadRuntime2549MinSec {},
-                ) => {
+                Self::ReadLoadRuntime2549MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -754,7 +744,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA4, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime2549(request::ResetLoadRuntime2549 {}) => {
+                Self::ResetLoadRuntime2549(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -762,7 +752,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA4, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime5074Hours(request::ReadLoadRuntime5074Hours {}) => {
+                Self::ReadLoadRuntime5074Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -770,9 +760,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime5074MinSec(
-                    request::ReadLoadRuntime5074MinSec {},
-                ) => {
+                Self::ReadLoadRuntime5074MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -780,7 +768,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA5, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime5074(request::ResetLoadRuntime5074 {}) => {
+                Self::ResetLoadRuntime5074(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -788,7 +776,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA5, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime7599Hours(request::ReadLoadRuntime7599Hours {}) => {
+                Self::ReadLoadRuntime7599Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -796,9 +784,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime7599MinSec(
-                    request::ReadLoadRuntime7599MinSec {},
-                ) => {
+                Self::ReadLoadRuntime7599MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -806,7 +792,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA6, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime7599(request::ResetLoadRuntime7599 {}) => {
+                Self::ResetLoadRuntime7599(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -814,7 +800,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA6, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadLoadRuntime100Hours(request::ReadLoadRuntime100Hours {}) => {
+                Self::ReadLoadRuntime100Hours(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -822,7 +808,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x00]).len()
                 }
-                Self::ReadLoadRuntime100MinSec(request::ReadLoadRuntime100MinSec {}) => {
+                Self::ReadLoadRuntime100MinSec(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -830,7 +816,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA7, address, 0x00, 0x01]).len()
                 }
-                Self::ResetLoadRuntime100(request::ResetLoadRuntime100 {}) => {
+                Self::ResetLoadRuntime100(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -838,7 +824,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA7, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadStallEventCounter(request::ReadStallEventCounter {}) => {
+                Self::ReadStallEventCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -846,7 +832,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA8, address, 0x00, 0x00]).len()
                 }
-                Self::ResetStallEventCounter(request::ResetStallEventCounter {}) => {
+                Self::ResetStallEventCounter(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -854,7 +840,7 @@ pub mod sd {
                     )?;
                     rt::head(out, &[0xA8, address, 0xAA, 0x55]).len()
                 }
-                Self::ReadPowerUpCycles(request::ReadPowerUpCycles {}) => {
+                Self::ReadPowerUpCycles(_) => {
                     rt::encode_broadcast(
                         address,
                         0x1F,
@@ -2487,9 +2473,9 @@ pub mod sd {
                     out[3] = v_status_arg2;
                     out.len()
                 }
-                Self::ResetDefaultRoleAndErrorFlagsReply(
-                    response::ResetDefaultRoleAndErrorFlagsReply {},
-                ) => rt::head(out, &[0x5A, address, 0x41, 0x53]).len(),
+                Self::ResetDefaultRoleAndErrorFlagsReply(_) => {
+                    rt::head(out, &[0x5A, address, 0x41, 0x53]).len()
+                }
                 Self::SetCurrentPositionAsZeroReply(
                     response::SetCurrentPositionAsZeroReply {
                         zero_offset: v_zero_offset,
@@ -2518,7 +2504,7 @@ pub mod sd {
                     out[2..4].copy_from_slice(&field_0.to_be_bytes());
                     out.len()
                 }
-                Self::ResetZeroOffsetReply(response::ResetZeroOffsetReply {}) => {
+                Self::ResetZeroOffsetReply(_) => {
                     rt::head(out, &[0x64, address, 0x00, 0x00]).len()
                 }
                 Self::ElectronicSerialNumberCharacter(

@@ -202,17 +202,13 @@ pub mod slip_sensor {
         fn encode_unescaped(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadTemperature(request::ReadTemperature {}) => {
-                    rt::frame_mut::<4>(buf, &[0x01])?.len()
-                }
+                Self::ReadTemperature(_) => rt::frame_mut::<4>(buf, &[0x01])?.len(),
                 Self::SetThreshold(request::SetThreshold { threshold: v_threshold }) => {
                     let out = rt::frame_mut::<6>(buf, &[0x02])?;
                     out[1..3].copy_from_slice(&v_threshold.to_be_bytes());
                     out.len()
                 }
-                Self::ReadSamples(request::ReadSamples {}) => {
-                    rt::frame_mut::<4>(buf, &[0x03])?.len()
-                }
+                Self::ReadSamples(_) => rt::frame_mut::<4>(buf, &[0x03])?.len(),
             };
             rt::seal_end(buf, len, |b| u32::from(checksum(b)), &FRAME);
             rt::Ok(len)
@@ -436,7 +432,7 @@ pub mod slip_sensor {
                     out[1..3].copy_from_slice(&v_temperature.raw().to_be_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => rt::frame_mut::<4>(buf, &[0x82])?.len(),
+                Self::Ack(_) => rt::frame_mut::<4>(buf, &[0x82])?.len(),
                 Self::Samples(response::Samples { samples: v_samples }) => {
                     let frame_len = REPEAT_SAMPLES.encode_len(v_samples.len())?;
                     let out = rt::frame_mut_len(buf, frame_len, &[0x83])?;

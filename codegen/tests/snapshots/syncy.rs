@@ -176,7 +176,7 @@ pub mod syncy {
                         );
                     out.len()
                 }
-                Self::GetCounter(request::GetCounter {}) => {
+                Self::GetCounter(_) => {
                     rt::encode_broadcast(address, 0xFE, &request::GetCounter::DESC)?;
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x04])?.len()
                 }
@@ -411,7 +411,7 @@ pub mod syncy {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Moving(response::Moving {}) => {
+                Self::Moving(_) => {
                     rt::frame_mut::<6>(buf, &[0xFF, 0xFF, address, 0x02, 0x00])?.len()
                 }
                 Self::Counter(

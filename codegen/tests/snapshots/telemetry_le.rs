@@ -116,7 +116,7 @@ pub mod telemetry_le {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::GetState(request::GetState {}) => {
+                Self::GetState(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x01])?.len()
                 }
                 Self::SetHome(request::SetHome { lat: v_lat, lon: v_lon }) => {
@@ -367,9 +367,7 @@ pub mod telemetry_le {
                     }
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x82])?.len(),
             };
             rt::seal(buf, len, |b| u32::from(checksum(rt::covered(b, 2))), 1, false);
             rt::Ok(len)

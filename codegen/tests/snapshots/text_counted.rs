@@ -177,7 +177,7 @@ pub mod text_counted {
                     rt::write_elements(v_name.as_slice(), 1, false, &mut out[4..]);
                     out.len()
                 }
-                Self::GetInfo(request::GetInfo {}) => {
+                Self::GetInfo(_) => {
                     rt::frame_mut::<4>(buf, &[0x7E, address, 0x21])?.len()
                 }
             };

@@ -150,9 +150,7 @@ pub mod text_terminated {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::Ping(request::Ping {}) => {
-                    rt::frame_mut::<4>(buf, &[0xC8, 0x02, 0x28])?.len()
-                }
+                Self::Ping(_) => rt::frame_mut::<4>(buf, &[0xC8, 0x02, 0x28])?.len(),
                 Self::SetName(request::SetName { name: v_name, channel: v_channel }) => {
                     rt::encode_in_range("channel", v_channel, 0, 7)?;
                     LISTS_SET_NAME.lists[0].encode_until(v_name.as_slice())?;

@@ -489,31 +489,22 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReferenceRun(request::ReferenceRun {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x00])?,
-                        4,
-                        address.wrapping_add(0xBA),
-                    )
+                Self::ReferenceRun(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xBA))
                 }
-                Self::ReferenceRunStatus(request::ReferenceRunStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x01])?,
-                        4,
-                        address.wrapping_add(0xBB),
-                    )
+                Self::ReferenceRunStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x10, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xBB))
                 }
                 Self::GoToCapacitance(request::GoToCapacitance { target: v_target }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x20, 0x00])?;
                     out[4..8].copy_from_slice(&v_target.raw().to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCA))
                 }
-                Self::GoToCapacitanceStatus(request::GoToCapacitanceStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x20, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCB),
-                    )
+                Self::GoToCapacitanceStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x20, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB))
                 }
                 Self::GoToFullStepPosition(
                     request::GoToFullStepPosition { target: v_target },
@@ -522,54 +513,34 @@ pub mod ub2 {
                     out[4..6].copy_from_slice(&v_target.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCB))
                 }
-                Self::GoToFullStepPositionStatus(
-                    request::GoToFullStepPositionStatus {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x21, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCC),
-                    )
+                Self::GoToFullStepPositionStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x21, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC))
                 }
                 Self::MoveFullSteps(request::MoveFullSteps { steps: v_steps }) => {
                     let out = rt::frame_mut::<7>(buf, &[0xAA, address, 0x22, 0x00])?;
                     out[4..6].copy_from_slice(&v_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCC))
                 }
-                Self::MoveFullStepsStatus(request::MoveFullStepsStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x22, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCD),
-                    )
+                Self::MoveFullStepsStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x22, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCD))
                 }
-                Self::GoToCmin(request::GoToCmin {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x00])?,
-                        4,
-                        address.wrapping_add(0xCD),
-                    )
+                Self::GoToCmin(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCD))
                 }
-                Self::GoToCminStatus(request::GoToCminStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCE),
-                    )
+                Self::GoToCminStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x23, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCE))
                 }
-                Self::GoToCmax(request::GoToCmax {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x00])?,
-                        4,
-                        address.wrapping_add(0xCE),
-                    )
+                Self::GoToCmax(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCE))
                 }
-                Self::GoToCmaxStatus(request::GoToCmaxStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x01])?,
-                        4,
-                        address.wrapping_add(0xCF),
-                    )
+                Self::GoToCmaxStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x24, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF))
                 }
                 Self::GoToMicroStepPosition(
                     request::GoToMicroStepPosition { target: v_target },
@@ -578,26 +549,18 @@ pub mod ub2 {
                     out[4..8].copy_from_slice(&v_target.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xCF))
                 }
-                Self::GoToMicroStepPositionStatus(
-                    request::GoToMicroStepPositionStatus {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x25, 0x01])?,
-                        4,
-                        address.wrapping_add(0xD0),
-                    )
+                Self::GoToMicroStepPositionStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x25, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0))
                 }
                 Self::MoveMicroSteps(request::MoveMicroSteps { steps: v_steps }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xAA, address, 0x26, 0x00])?;
                     out[4..8].copy_from_slice(&v_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD0))
                 }
-                Self::MoveMicroStepsStatus(request::MoveMicroStepsStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x26, 0x01])?,
-                        4,
-                        address.wrapping_add(0xD1),
-                    )
+                Self::MoveMicroStepsStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x26, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1))
                 }
                 Self::GoToStoredPosition(
                     request::GoToStoredPosition { index: v_index },
@@ -607,12 +570,9 @@ pub mod ub2 {
                     out[4] = v_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xD1))
                 }
-                Self::GoToStoredPositionStatus(request::GoToStoredPositionStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x27, 0x01])?,
-                        4,
-                        address.wrapping_add(0xD2),
-                    )
+                Self::GoToStoredPositionStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x27, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xD2))
                 }
                 Self::SetAccelerationSpeedIndex(
                     request::SetAccelerationSpeedIndex {
@@ -689,49 +649,29 @@ pub mod ub2 {
                     out[4] = v_mode.raw();
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A))
                 }
-                Self::GetActualCapacitance(request::GetActualCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x01])?,
-                        4,
-                        address.wrapping_add(0xEB),
-                    )
+                Self::GetActualCapacitance(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEB))
                 }
-                Self::GetActualFullStepPosition(
-                    request::GetActualFullStepPosition {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x02])?,
-                        4,
-                        address.wrapping_add(0xEC),
-                    )
+                Self::GetActualFullStepPosition(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x02])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEC))
                 }
-                Self::GetMinimumCapacitance(request::GetMinimumCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x10])?,
-                        4,
-                        address.wrapping_add(0xFA),
-                    )
+                Self::GetMinimumCapacitance(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x10])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xFA))
                 }
-                Self::GetMaximumCapacitance(request::GetMaximumCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x11])?,
-                        4,
-                        address.wrapping_add(0xFB),
-                    )
+                Self::GetMaximumCapacitance(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x11])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xFB))
                 }
-                Self::GetAccelerationSpeed(request::GetAccelerationSpeed {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x21])?,
-                        4,
-                        address.wrapping_add(0x0B),
-                    )
+                Self::GetAccelerationSpeed(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x21])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0B))
                 }
-                Self::GetStatus(request::GetStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x22])?,
-                        4,
-                        address.wrapping_add(0x0C),
-                    )
+                Self::GetStatus(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x22])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0C))
                 }
                 Self::GetCCurveIndexedFullStepCapacitance(
                     request::GetCCurveIndexedFullStepCapacitance { index: v_index },
@@ -741,91 +681,65 @@ pub mod ub2 {
                     out[4..6].copy_from_slice(&v_index.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x1A))
                 }
-                Self::GetControllerTemperature(request::GetControllerTemperature {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x32])?,
-                        4,
-                        address.wrapping_add(0x1C),
-                    )
+                Self::GetControllerTemperature(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x32])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1C))
                 }
-                Self::GetMicroStepPosition(request::GetMicroStepPosition {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x36])?,
-                        4,
-                        address.wrapping_add(0x20),
-                    )
+                Self::GetMicroStepPosition(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x36])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x20))
                 }
-                Self::GetFirmwareVersion(request::GetFirmwareVersion {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x61])?,
-                        4,
-                        address.wrapping_add(0x4B),
-                    )
+                Self::GetFirmwareVersion(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x61])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x4B))
                 }
-                Self::GetSerialNumber(request::GetSerialNumber {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x62])?,
-                        4,
-                        address.wrapping_add(0x4C),
-                    )
+                Self::GetSerialNumber(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x62])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x4C))
                 }
-                Self::GetCminNom(request::GetCminNom {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x70])?,
-                        4,
-                        address.wrapping_add(0x5A),
-                    )
+                Self::GetCminNom(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x70])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x5A))
                 }
-                Self::GetCmaxNom(request::GetCmaxNom {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x71])?,
-                        4,
-                        address.wrapping_add(0x5B),
-                    )
+                Self::GetCmaxNom(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x71])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x5B))
                 }
-                Self::GetLowerCustomerLimit(request::GetLowerCustomerLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x01])?,
-                        5,
-                        address.wrapping_add(0x5D),
-                    )
+                Self::GetLowerCustomerLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x01])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5D))
                 }
-                Self::GetUpperCustomerLimit(request::GetUpperCustomerLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x02])?,
-                        5,
-                        address.wrapping_add(0x5E),
-                    )
+                Self::GetUpperCustomerLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x02])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
                 }
-                Self::GetLowerFactoryLimit(request::GetLowerFactoryLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x03])?,
-                        5,
-                        address.wrapping_add(0x5F),
-                    )
+                Self::GetLowerFactoryLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x03])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5F))
                 }
-                Self::GetUpperFactoryLimit(request::GetUpperFactoryLimit {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x72, 0x04])?,
-                        5,
-                        address.wrapping_add(0x60),
-                    )
+                Self::GetUpperFactoryLimit(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x72, 0x04])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x60))
                 }
-                Self::GetPresetCapacitance(request::GetPresetCapacitance {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x73, 0x00])?,
-                        5,
-                        address.wrapping_add(0x5D),
-                    )
+                Self::GetPresetCapacitance(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x73, 0x00])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5D))
                 }
-                Self::GetPresetFullStepPosition(
-                    request::GetPresetFullStepPosition {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<6>(buf, &[0xAA, address, 0x40, 0x73, 0x01])?,
-                        5,
-                        address.wrapping_add(0x5E),
-                    )
+                Self::GetPresetFullStepPosition(_) => {
+                    let out = rt::frame_mut::<
+                        6,
+                    >(buf, &[0xAA, address, 0x40, 0x73, 0x01])?;
+                    rt::seal_sum8_head(out, 5, address.wrapping_add(0x5E))
                 }
                 Self::GetStoredFullStepPosition(
                     request::GetStoredFullStepPosition { index: v_index },
@@ -835,12 +749,9 @@ pub mod ub2 {
                     out[4] = v_index;
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0x5F))
                 }
-                Self::GetModeOfOperation(request::GetModeOfOperation {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x80])?,
-                        4,
-                        address.wrapping_add(0x6A),
-                    )
+                Self::GetModeOfOperation(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x40, 0x80])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x6A))
                 }
             };
             rt::Ok(len)
@@ -1816,33 +1727,21 @@ pub mod ub2 {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::MovementStarted(response::MovementStarted {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?,
-                        3,
-                        address.wrapping_add(0xFA),
-                    )
+                Self::MovementStarted(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x50])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFA))
                 }
-                Self::MovementCompleted(response::MovementCompleted {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x51])?,
-                        3,
-                        address.wrapping_add(0xFB),
-                    )
+                Self::MovementCompleted(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x51])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFB))
                 }
-                Self::MovementNotCompleted(response::MovementNotCompleted {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x52])?,
-                        3,
-                        address.wrapping_add(0xFC),
-                    )
+                Self::MovementNotCompleted(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x52])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFC))
                 }
-                Self::MovementNotTriggered(response::MovementNotTriggered {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x53])?,
-                        3,
-                        address.wrapping_add(0xFD),
-                    )
+                Self::MovementNotTriggered(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x53])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0xFD))
                 }
                 Self::MovementCompletedWithStepLoss(
                     response::MovementCompletedWithStepLoss {
@@ -1853,98 +1752,57 @@ pub mod ub2 {
                     out[4..8].copy_from_slice(&v_lost_micro_steps.to_le_bytes());
                     rt::seal_sum8_head(out, 4, address.wrapping_add(0xFE))
                 }
-                Self::NakUnknownCommand(response::NakUnknownCommand {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?,
-                        3,
-                        address.wrapping_add(0x3A),
-                    )
+                Self::NakUnknownCommand(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x90])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3A))
                 }
-                Self::NakIncompatibleStatus(response::NakIncompatibleStatus {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x91])?,
-                        3,
-                        address.wrapping_add(0x3B),
-                    )
+                Self::NakIncompatibleStatus(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x91])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3B))
                 }
-                Self::NakChecksumError(response::NakChecksumError {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x92])?,
-                        3,
-                        address.wrapping_add(0x3C),
-                    )
+                Self::NakChecksumError(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x92])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3C))
                 }
-                Self::NakLimitReached(response::NakLimitReached {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x93])?,
-                        3,
-                        address.wrapping_add(0x3D),
-                    )
+                Self::NakLimitReached(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x93])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3D))
                 }
-                Self::NakIndexOutOfRange(response::NakIndexOutOfRange {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<4>(buf, &[0xAA, address, 0x94])?,
-                        3,
-                        address.wrapping_add(0x3E),
-                    )
+                Self::NakIndexOutOfRange(_) => {
+                    let out = rt::frame_mut::<4>(buf, &[0xAA, address, 0x94])?;
+                    rt::seal_sum8_head(out, 3, address.wrapping_add(0x3E))
                 }
-                Self::SetAccelerationSpeedIndexAck(
-                    response::SetAccelerationSpeedIndexAck {},
-                ) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x43, 0x00])?,
-                        4,
-                        address.wrapping_add(0xED),
-                    )
+                Self::SetAccelerationSpeedIndexAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x43, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xED))
                 }
-                Self::SetCurrentAck(response::SetCurrentAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x45, 0x00])?,
-                        4,
-                        address.wrapping_add(0xEF),
-                    )
+                Self::SetCurrentAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x45, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0xEF))
                 }
-                Self::SetSlaveAddressAck(response::SetSlaveAddressAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x60, 0x00])?,
-                        4,
-                        address.wrapping_add(0x0A),
-                    )
+                Self::SetSlaveAddressAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x60, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0A))
                 }
-                Self::SetBaudRateAck(response::SetBaudRateAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x61, 0x00])?,
-                        4,
-                        address.wrapping_add(0x0B),
-                    )
+                Self::SetBaudRateAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x61, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x0B))
                 }
-                Self::SetLowerCustomerLimitAck(response::SetLowerCustomerLimitAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x01])?,
-                        4,
-                        address.wrapping_add(0x1D),
-                    )
+                Self::SetLowerCustomerLimitAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x01])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1D))
                 }
-                Self::SetUpperCustomerLimitAck(response::SetUpperCustomerLimitAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x02])?,
-                        4,
-                        address.wrapping_add(0x1E),
-                    )
+                Self::SetUpperCustomerLimitAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x72, 0x02])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1E))
                 }
-                Self::StoreIndexedPositionAck(response::StoreIndexedPositionAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x75, 0x00])?,
-                        4,
-                        address.wrapping_add(0x1F),
-                    )
+                Self::StoreIndexedPositionAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x75, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x1F))
                 }
-                Self::SetModeOfOperationAck(response::SetModeOfOperationAck {}) => {
-                    rt::seal_sum8_head(
-                        rt::frame_mut::<5>(buf, &[0xAA, address, 0x80, 0x00])?,
-                        4,
-                        address.wrapping_add(0x2A),
-                    )
+                Self::SetModeOfOperationAck(_) => {
+                    let out = rt::frame_mut::<5>(buf, &[0xAA, address, 0x80, 0x00])?;
+                    rt::seal_sum8_head(out, 4, address.wrapping_add(0x2A))
                 }
                 Self::ActualCapacitance(
                     response::ActualCapacitance { capacitance: v_capacitance },

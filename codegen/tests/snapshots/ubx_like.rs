@@ -211,7 +211,7 @@ pub mod ubx_like {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::PollRate(request::PollRate {}) => {
+                Self::PollRate(_) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x06, 0x08, 0x00, 0x00])?.len()
                 }
                 Self::SetRate(
@@ -231,7 +231,7 @@ pub mod ubx_like {
                     out[10..12].copy_from_slice(&v_time_ref.raw().to_le_bytes());
                     out.len()
                 }
-                Self::PollSatellites(request::PollSatellites {}) => {
+                Self::PollSatellites(_) => {
                     rt::frame_mut::<8>(buf, &[0xB5, 0x62, 0x01, 0x35, 0x00, 0x00])?.len()
                 }
             };

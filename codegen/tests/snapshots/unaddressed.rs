@@ -159,7 +159,7 @@ pub mod unaddressed {
         pub fn encode(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::ReadTemperature(request::ReadTemperature {}) => {
+                Self::ReadTemperature(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x10])?.len()
                 }
                 Self::SetRate(request::SetRate { rate: v_rate }) => {
@@ -168,7 +168,7 @@ pub mod unaddressed {
                     out[4..6].copy_from_slice(&v_rate.to_le_bytes());
                     out.len()
                 }
-                Self::ReadVersion(request::ReadVersion {}) => {
+                Self::ReadVersion(_) => {
                     rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0x30])?.len()
                 }
             };
@@ -357,9 +357,7 @@ pub mod unaddressed {
                     out[4..6].copy_from_slice(&v_temperature.raw().to_le_bytes());
                     out.len()
                 }
-                Self::Ack(response::Ack {}) => {
-                    rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len()
-                }
+                Self::Ack(_) => rt::frame_mut::<5>(buf, &[0xA5, 0x5A, 0x01, 0xA0])?.len(),
                 Self::Version(response::Version { version: v_version }) => {
                     let out = rt::frame_mut::<9>(buf, &[0xA5, 0x5A, 0x05, 0xB0])?;
                     out[4..8].copy_from_slice(&v_version.0);

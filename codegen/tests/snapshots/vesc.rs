@@ -552,7 +552,7 @@ pub mod vesc {
         fn encode_laid_out(&self, address: u8, buf: &mut [u8]) -> rt::EncodeResult {
             rt::encode_address(address, &FRAME)?;
             let len = match *self {
-                Self::FwVersion(request::FwVersion {}) => {
+                Self::FwVersion(_) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x00])?.len()
                 }
                 Self::WriteNewAppData(
@@ -566,7 +566,7 @@ pub mod vesc {
                     rt::write_elements(v_data.as_slice(), 1, false, &mut out[8..]);
                     out.len()
                 }
-                Self::GetValues(request::GetValues {}) => {
+                Self::GetValues(_) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x04])?.len()
                 }
                 Self::SetDuty(request::SetDuty { duty: v_duty }) => {
@@ -596,7 +596,7 @@ pub mod vesc {
                     out[4..8].copy_from_slice(&v_pos.raw().to_be_bytes());
                     out.len()
                 }
-                Self::Alive(request::Alive {}) => {
+                Self::Alive(_) => {
                     rt::frame_mut::<7>(buf, &[0x02, 0x00, 0x01, 0x1E])?.len()
                 }
             };
